@@ -1,0 +1,342 @@
+// Equations of motion (Appell, eq. 10 as corrected in model.md), Newton-Euler joint reactions,
+// the reaction/friction loop (section 4), forward and inverse dynamics, energies.
+//
+// Conventions (model.md, joints table): joint k in order O, B, C, D, D0 joins body i to body j;
+// F_k is the force body i exerts on body j; the friction torque Mf_k acts on j as -Mf_k and on
+// i as +Mf_k. Link 1: F1 at O, -F2 at B. Link 3: F2 at B, -F3 at C. Link 4: F3 at C, -F4 at D.
+// Link 2: F4 at D, F5 at D0.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+
+#include "fivebar/model/friction.h"
+#include "fivebar/model/kinematics.h"
+#include "fivebar/model/params.h"
+#include "fivebar/model/scalar.h"
+#include "fivebar/model/status.h"
+
+namespace fivebar {
+
+/// Settings of an evaluation: singularity margin and the reaction/friction loop.
+struct EvalOptions {
+  double singular_margin = 0.0;  ///< fail with kNearSingular when |sin(th4 - th3)| is below
+  double friction_tol = 1e-13;   ///< stop when max |N^i - N^(i-1)| <= tol * (max N + 1e-300)
+  int friction_max_iter = 50;
+  bool want_reactions = true;    ///< compute F_k even when the scene has no friction
+};
+
+/// Everything one evaluation computes. Forward dynamics fills thdd from the torques; inverse
+/// dynamics fills M1, M2 from thdd.
+template <typename T>
+struct Evaluation {
+  Kinematics<T> kin;
+  Bias<T> bias;
+  Mat2<T> A;                      ///< generalized mass matrix (eq. 10)
+  Vec2<T> thdd;                   ///< (alpha1, alpha2) [rad/s^2]
+  T alpha3{}, alpha4{};           ///< coupler angular accelerations [rad/s^2]
+  T M1{}, M2{};                   ///< motor torques [N m] (input of forward, output of inverse)
+  std::array<Vec2<T>, 5> F;       ///< joint reactions [N]
+  std::array<T, 5> N{}, Mf{}, w{};  ///< |F_k| [N], friction torques [N m], relative rates [rad/s]
+  std::array<int, 5> slip{};      ///< Coulomb sign used at each joint
+  T P_diss{};                     ///< sum Mf_k w_k >= 0 [W]
+  T P_in{};                       ///< M1 w1 + M2 w2 [W]
+  T P_ext{};                      ///< M3 w3 + F . v_P [W]
+  int iterations = 0;             ///< reaction/friction loop iterations
+};
+
+namespace detail {
+
+/// Exact zero including derivative parts: a term is skipped only if it cannot contribute.
+inline bool is_exact_zero(double x) { return x == 0.0; }
+template <typename J>
+auto is_exact_zero(const J& x) -> decltype(x.v.isZero(), bool()) {
+  return is_exact_zero(x.a) && x.v.isZero();
+}
+
+/// External force vector at P: F e(th3 + alpha_F) (model.md erratum 2).
+template <typename T>
+Vec2<T> force_vector(const Kinematics<T>& k, const Loads<T>& L) {
+  using std::cos;
+  using std::sin;
+  if (is_exact_zero(L.F)) return Vec2<T>::Zero();
+  return L.F * rotate(k.e3, T(cos(L.F_angle)), T(sin(L.F_angle)));
+}
+
+/// A (eq. 10) and the friction-free generalized force Q_U + M_d - b.
+template <typename T>
+void mass_and_forces(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& b,
+                     const Loads<T>& L, const Vec2<T>& Fvec, Mat2<T>* A, Vec2<T>* rhs) {
+  // A = sum m_i G_ci^T G_ci + J_i G_i^T G_i, b = sum m_i G_ci^T h_ci + J_i G_i^T h_i
+  A->setZero();
+  (*A)(0, 0) = p.links[0].inertia;
+  (*A)(1, 1) = p.links[1].inertia;
+  *A += p.links[2].inertia * k.G3.transpose() * k.G3 + p.links[3].inertia * k.G4.transpose() * k.G4;
+  Vec2<T> bias = p.links[2].inertia * b.h3 * k.G3.transpose() +
+                 p.links[3].inertia * b.h4 * k.G4.transpose();
+  for (int i = 0; i < 4; ++i) {
+    const T& m = p.links[i].mass;
+    *A += m * k.Gc[i].transpose() * k.Gc[i];
+    bias += m * k.Gc[i].transpose() * b.hc[i];
+  }
+  // M_d = (M1, M2) + M3 G3^T + G_P^T F (eq. 9 with erratum 1), Q_U = -g sum m_i G_yci^T (eq. 8)
+  *rhs = Vec2<T>(L.M1, L.M2) - bias;
+  if (!is_exact_zero(L.M3)) *rhs += L.M3 * k.G3.transpose();
+  if (!is_exact_zero(L.F)) *rhs += k.GP.transpose() * Fvec;
+  if (!is_exact_zero(p.gravity)) {
+    for (int i = 0; i < 4; ++i) *rhs -= p.gravity * p.links[i].mass * k.Gc[i].row(1).transpose();
+  }
+}
+
+/// Relative joint rates w = J_w thd, order O, B, C, D, D0.
+template <typename T>
+std::array<T, 5> relative_rates(const T& w1, const T& w2, const T& w3, const T& w4) {
+  return {w1, w3 - w1, w4 - w3, w2 - w4, w2};
+}
+
+/// J_w^T Mf: the generalized force of the friction torques is Q_f = -J_w^T Mf (eq. 7).
+template <typename T>
+Vec2<T> friction_transpose(const Kinematics<T>& k, const std::array<T, 5>& Mf) {
+  Vec2<T> q(Mf[0] - Mf[1], Mf[4] + Mf[3]);
+  q += (Mf[1] - Mf[2]) * k.G3.transpose() + (Mf[2] - Mf[3]) * k.G4.transpose();
+  return q;
+}
+
+/// Newton-Euler reactions of the five joints for given accelerations thdd and friction torques.
+/// Links 3 and 4: moments about C give two equations in F2 (determinant l3 l4 sin(th4 - th3));
+/// then F3, F4 from the coupler force balances and F1, F5 from the cranks'.
+template <typename T>
+void reactions(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& b, const Loads<T>& L,
+               const Vec2<T>& Fvec, const Vec2<T>& thdd, const std::array<T, 5>& Mf,
+               std::array<Vec2<T>, 5>* F, T* alpha3, T* alpha4) {
+  const T al3 = k.G3.dot(thdd) + b.h3;
+  const T al4 = k.G4.dot(thdd) + b.h4;
+  std::array<Vec2<T>, 4> a;  // centre-of-mass accelerations
+  for (int i = 0; i < 4; ++i) a[i] = k.Gc[i] * thdd + b.hc[i];
+  const Vec2<T> gvec(T(0), -p.gravity);
+  const T& m1 = p.links[0].mass;
+  const T& m2 = p.links[1].mass;
+  const T& m3 = p.links[2].mass;
+  const T& m4 = p.links[3].mass;
+  // force balances: F2 - F3 = R3, F3 - F4 = R4
+  const Vec2<T> R3 = m3 * (a[2] - gvec) - Fvec;
+  const Vec2<T> R4 = m4 * (a[3] - gvec);
+  // link 3 about C: (B-C) x F2 + (P-C) x Fvec + (c3-C) x m3 g + M3 - Mf2 + Mf3
+  //                 = J3 al3 + m3 (c3-C) x a3
+  const Vec2<T> u3 = k.B - k.C, u4 = k.D - k.C;
+  const Vec2<T> q3 = k.c[2] - k.C, q4 = k.c[3] - k.C;
+  const T S3 = p.links[2].inertia * al3 + m3 * cross(q3, Vec2<T>(a[2] - gvec)) -
+               cross(Vec2<T>(k.P - k.C), Fvec) - L.M3 + Mf[1] - Mf[2];
+  // link 4 about C: (D-C) x (-F4) + (c4-C) x m4 g - Mf3 + Mf4 = J4 al4 + m4 (c4-C) x a4,
+  // with F4 = F2 - R3 - R4
+  const T S4 = -p.links[3].inertia * al4 - m4 * cross(q4, Vec2<T>(a[3] - gvec)) - Mf[2] + Mf[3] +
+               cross(u4, Vec2<T>(R3 + R4));
+  // solve u3 x F2 = S3, u4 x F2 = S4
+  const T det = cross(u3, u4);
+  Vec2<T>& F2 = (*F)[1];
+  F2.x() = (S3 * u4.x() - S4 * u3.x()) / det;
+  F2.y() = (S3 * u4.y() - S4 * u3.y()) / det;
+  (*F)[2] = F2 - R3;
+  (*F)[3] = (*F)[2] - R4;
+  // cranks: F1 - F2 + m1 g = m1 a1, F4 + F5 + m2 g = m2 a2
+  (*F)[0] = m1 * (a[0] - gvec) + F2;
+  (*F)[4] = m2 * (a[1] - gvec) - (*F)[3];
+  *alpha3 = al3;
+  *alpha4 = al4;
+}
+
+template <typename T>
+void norms(const std::array<Vec2<T>, 5>& F, std::array<T, 5>* N) {
+  using std::sqrt;
+  for (int j = 0; j < 5; ++j) (*N)[j] = sqrt(F[j].squaredNorm());
+}
+
+/// One relative acceleration per joint (d/dt of w), from the link accelerations.
+template <typename T>
+std::array<T, 5> relative_accelerations(const Vec2<T>& thdd, const T& al3, const T& al4) {
+  return relative_rates(thdd[0], thdd[1], al3, al4);
+}
+
+/// Status for a loop that did not converge.
+inline Status loop_failure(int iterations, double err, double ratio) {
+  std::ostringstream msg;
+  msg << "friction loop did not converge after " << iterations
+      << " iterations (change of |N| " << err << " N, contraction ratio " << ratio
+      << "): friction too large for the reaction forces (r_k * mu too large)";
+  return Status::Error(StatusCode::kFrictionNotConverged, msg.str());
+}
+
+/// Fixed-point resolution of the reaction/friction loop (section 4, steps 1-4, at every call).
+/// `solve(Mf, F)` evaluates reactions for friction torques Mf; phi_k = r_k f_k(w_k) is fixed.
+template <typename T, typename Solve>
+Status friction_loop(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&& solve,
+                     std::array<T, 5>* N, std::array<T, 5>* Mf, std::array<Vec2<T>, 5>* F,
+                     int* iterations) {
+  Mf->fill(T(0));
+  solve(*Mf, F);
+  norms(*F, N);
+  double prev_err = 0.0;
+  for (int it = 1; it <= opt.friction_max_iter; ++it) {
+    for (int j = 0; j < 5; ++j) (*Mf)[j] = phi[j] * (*N)[j];
+    std::array<T, 5> N_old = *N;
+    solve(*Mf, F);
+    norms(*F, N);
+    double err = 0.0, scale = 1e-300;
+    for (int j = 0; j < 5; ++j) {
+      err = std::max(err, std::abs(value_of((*N)[j]) - value_of(N_old[j])));
+      scale = std::max(scale, std::abs(value_of((*N)[j])));
+    }
+    *iterations = it;
+    if (!std::isfinite(err)) return loop_failure(it, err, prev_err > 0 ? err / prev_err : 0.0);
+    if (err <= opt.friction_tol * scale) {
+      // friction torques consistent with the final reactions
+      for (int j = 0; j < 5; ++j) (*Mf)[j] = phi[j] * (*N)[j];
+      return Status::Ok();
+    }
+    // growing changes after the first few iterations: the loop does not contract
+    if (it >= 4 && prev_err > 0.0 && err > prev_err) {
+      return loop_failure(it, err, err / prev_err);
+    }
+    prev_err = err;
+  }
+  return loop_failure(opt.friction_max_iter, prev_err, 0.0);
+}
+
+}  // namespace detail
+
+/// Forward dynamics: thdd from the state (th, thd) and the loads, with the friction loop
+/// resolved. `slip` gives the Coulomb sign of each joint (the integrator's segment mode); pass
+/// nullptr to use sign(w_k), with sign(0) = 0.
+template <typename T>
+Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
+                        const T& w1, const T& w2, const std::array<int, 5>* slip,
+                        const EvalOptions& opt, Evaluation<T>* ev) {
+  Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin);
+  if (!st.ok()) return st;
+  const Kinematics<T>& k = ev->kin;
+  compute_bias(p, k, w1, w2, &ev->bias);
+  const Vec2<T> Fvec = detail::force_vector(k, L);
+  Vec2<T> rhs0;
+  detail::mass_and_forces(p, k, ev->bias, L, Fvec, &ev->A, &rhs0);
+  ev->M1 = L.M1;
+  ev->M2 = L.M2;
+  ev->w = detail::relative_rates(w1, w2, ev->bias.w3, ev->bias.w4);
+  // 2x2 inverse in closed form (A is symmetric positive definite)
+  const Mat2<T>& A = ev->A;
+  const T inv_det = T(1) / (A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0));
+  Mat2<T> Ainv;
+  Ainv << A(1, 1) * inv_det, -A(0, 1) * inv_det, -A(1, 0) * inv_det, A(0, 0) * inv_det;
+  ev->thdd = Ainv * rhs0;
+  ev->iterations = 0;
+  ev->Mf.fill(T(0));
+  ev->P_diss = T(0);
+
+  auto solve = [&](const std::array<T, 5>& Mf, std::array<Vec2<T>, 5>* F) {
+    ev->thdd = Ainv * (rhs0 - detail::friction_transpose(k, Mf));
+    detail::reactions(p, k, ev->bias, L, Fvec, ev->thdd, Mf, F, &ev->alpha3, &ev->alpha4);
+  };
+  if (p.friction.active()) {
+    std::array<T, 5> phi;
+    for (int j = 0; j < 5; ++j) {
+      ev->slip[j] = slip ? (*slip)[j] : sign_of(ev->w[j]);
+      phi[j] = p.friction.pin_radius[j] * friction_law(p.friction, j, ev->w[j], ev->slip[j]);
+    }
+    st = detail::friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations);
+    if (!st.ok()) return st;
+    solve(ev->Mf, &ev->F);  // accelerations and reactions of the converged friction torques
+    detail::norms(ev->F, &ev->N);
+    for (int j = 0; j < 5; ++j) ev->P_diss += ev->Mf[j] * ev->w[j];
+  } else {
+    ev->slip.fill(0);
+    if (opt.want_reactions) {
+      solve(ev->Mf, &ev->F);
+      detail::norms(ev->F, &ev->N);
+    } else {
+      ev->alpha3 = k.G3.dot(ev->thdd) + ev->bias.h3;
+      ev->alpha4 = k.G4.dot(ev->thdd) + ev->bias.h4;
+    }
+  }
+  ev->P_in = L.M1 * w1 + L.M2 * w2;
+  ev->P_ext = L.M3 * ev->bias.w3 + Fvec.dot(k.GP * Vec2<T>(w1, w2));
+  return Status::Ok();
+}
+
+/// Inverse dynamics: M1, M2 and all reactions for a given motion (th, thd, thdd), friction
+/// included. The Coulomb sign is sign(w_k); where w_k = 0 it is the sign of the relative
+/// acceleration (the direction in which the joint starts to slip), unless `slip` is given.
+template <typename T>
+Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
+                        const T& w1, const T& w2, const T& a1, const T& a2,
+                        const std::array<int, 5>* slip, const EvalOptions& opt,
+                        Evaluation<T>* ev) {
+  Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin);
+  if (!st.ok()) return st;
+  const Kinematics<T>& k = ev->kin;
+  compute_bias(p, k, w1, w2, &ev->bias);
+  const Vec2<T> Fvec = detail::force_vector(k, L);
+  ev->thdd = Vec2<T>(a1, a2);
+  ev->w = detail::relative_rates(w1, w2, ev->bias.w3, ev->bias.w4);
+  ev->iterations = 0;
+  ev->Mf.fill(T(0));
+  auto solve = [&](const std::array<T, 5>& Mf, std::array<Vec2<T>, 5>* F) {
+    detail::reactions(p, k, ev->bias, L, Fvec, ev->thdd, Mf, F, &ev->alpha3, &ev->alpha4);
+  };
+  if (p.friction.active()) {
+    solve(ev->Mf, &ev->F);  // alpha3, alpha4 for the relative accelerations
+    const std::array<T, 5> wdot = detail::relative_accelerations(ev->thdd, ev->alpha3, ev->alpha4);
+    std::array<T, 5> phi;
+    for (int j = 0; j < 5; ++j) {
+      int s = sign_of(ev->w[j]);
+      if (s == 0) s = sign_of(wdot[j]);
+      ev->slip[j] = slip ? (*slip)[j] : s;
+      phi[j] = p.friction.pin_radius[j] * friction_law(p.friction, j, ev->w[j], ev->slip[j]);
+    }
+    st = detail::friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations);
+    if (!st.ok()) return st;
+    solve(ev->Mf, &ev->F);
+    detail::norms(ev->F, &ev->N);
+  } else {
+    ev->slip.fill(0);
+    solve(ev->Mf, &ev->F);
+    detail::norms(ev->F, &ev->N);
+  }
+  // crank moments about their fixed pivots O and D0
+  const Vec2<T> gvec(T(0), -p.gravity);
+  const Link<T>& L1 = p.links[0];
+  const Link<T>& L2 = p.links[1];
+  const Vec2<T> D0(p.ground_length, T(0));
+  const T I1 = L1.inertia + L1.mass * L1.com_offset * L1.com_offset;
+  const T I2 = L2.inertia + L2.mass * L2.com_offset * L2.com_offset;
+  ev->M1 = I1 * a1 + ev->Mf[0] - ev->Mf[1] + cross(k.B, ev->F[1]) -
+           cross(k.c[0], Vec2<T>(L1.mass * gvec));
+  ev->M2 = I2 * a2 + ev->Mf[4] + ev->Mf[3] - cross(Vec2<T>(k.D - D0), ev->F[3]) -
+           cross(Vec2<T>(k.c[1] - D0), Vec2<T>(L2.mass * gvec));
+  ev->P_diss = T(0);
+  for (int j = 0; j < 5; ++j) ev->P_diss += ev->Mf[j] * ev->w[j];
+  ev->P_in = ev->M1 * w1 + ev->M2 * w2;
+  ev->P_ext = L.M3 * ev->bias.w3 + Fvec.dot(k.GP * Vec2<T>(w1, w2));
+  return Status::Ok();
+}
+
+/// Kinetic energy sum (m_i |v_ci|^2 + J_i thd_i^2) / 2 = thd^T A thd / 2 [J].
+template <typename T>
+T kinetic_energy(const Params<T>& p, const Kinematics<T>& k, const T& w1, const T& w2) {
+  const Vec2<T> thd(w1, w2);
+  const T w3 = k.G3.dot(thd), w4 = k.G4.dot(thd);
+  T ke = p.links[0].inertia * w1 * w1 + p.links[1].inertia * w2 * w2 +
+         p.links[2].inertia * w3 * w3 + p.links[3].inertia * w4 * w4;
+  for (int i = 0; i < 4; ++i) ke += p.links[i].mass * (k.Gc[i] * thd).squaredNorm();
+  return T(0.5) * ke;
+}
+
+/// Potential energy U = g sum m_i y_ci [J] (eq. 8).
+template <typename T>
+T potential_energy(const Params<T>& p, const Kinematics<T>& k) {
+  T u = T(0);
+  for (int i = 0; i < 4; ++i) u += p.links[i].mass * k.c[i].y();
+  return p.gravity * u;
+}
+
+}  // namespace fivebar

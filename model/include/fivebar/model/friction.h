@@ -1,0 +1,37 @@
+// Joint friction laws f_k(w) (eq. 3): Mf_k = r_k N_k f_k(w_k).
+#pragma once
+
+#include <cmath>
+
+#include "fivebar/model/params.h"
+#include "fivebar/model/scalar.h"
+
+namespace fivebar {
+
+/// Sign of the value part: +1, -1, or 0 at exactly zero (model.md: sign(0) = 0).
+template <typename T>
+int sign_of(const T& x) {
+  const double v = value_of(x);
+  return (v > 0.0) - (v < 0.0);
+}
+
+/// f_k(w) of joint k (0-based, order O, B, C, D, D0). `slip` is the sign that the Coulomb part
+/// takes: the caller passes sign(w) or, inside an integration segment, the segment's slip
+/// direction (so that sign(w) never jumps inside a step). With smoothing_velocity w_s > 0 the
+/// Coulomb part is mu_c tanh(w / w_s) and `slip` is ignored.
+template <typename T>
+T friction_law(const FrictionParams<T>& fp, int k, const T& w, int slip) {
+  using std::tanh;
+  switch (fp.law) {
+    case FrictionLaw::kNone:
+      return T(0);
+    case FrictionLaw::kCoulombViscous: {
+      const T coulomb_sign =
+          value_of(fp.smoothing_velocity) > 0.0 ? T(tanh(w / fp.smoothing_velocity)) : T(double(slip));
+      return fp.coulomb[k] * coulomb_sign + fp.viscous[k] * w;
+    }
+  }
+  return T(0);
+}
+
+}  // namespace fivebar

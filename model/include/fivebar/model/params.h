@@ -1,0 +1,121 @@
+// Parameters of the planar 5R five-bar (model.md, "Geometry and coordinates"), templated on the
+// scalar so that ceres::Jet can carry derivatives with respect to any of them.
+#pragma once
+
+#include <array>
+
+namespace fivebar {
+
+/// Number of joints (O, B, C, D, D0) and of moving links (1: crank O-B, 2: crank D0-D,
+/// 3: coupler B-C, 4: coupler D-C).
+inline constexpr int kJoints = 5;
+inline constexpr int kLinks = 4;
+
+/// Which of the two closures: elbow_up puts C left of the directed line B->D.
+/// Stored as an int (+1 / -1), never as a scalar T, so that Jets never choose a branch.
+enum Assembly : int { kElbowUp = +1, kElbowDown = -1 };
+
+/// Friction law f(w) of a joint; the friction torque is Mf_k = r_k N_k f_k(w_k) (eq. 3).
+enum class FrictionLaw : int {
+  kNone = 0,            ///< no friction: no reaction solve is needed for the motion
+  kCoulombViscous = 1,  ///< f(w) = mu_c sign(w) + mu_v w (the paper's law)
+};
+
+/// One moving link i: length l_i, mass m_i, inertia J_i about its centre of mass, and the centre
+/// of mass at offset r_i, angle alpha_i from the proximal joint (model.md).
+template <typename T>
+struct Link {
+  T length{};
+  T mass{};
+  T inertia{};
+  T com_offset{};
+  T com_angle{};
+
+  template <typename U>
+  Link<U> cast() const {
+    return {U(length), U(mass), U(inertia), U(com_offset), U(com_angle)};
+  }
+};
+
+/// Friction of the five joints, in the order O, B, C, D, D0.
+template <typename T>
+struct FrictionParams {
+  FrictionLaw law = FrictionLaw::kNone;
+  std::array<T, kJoints> pin_radius{};  ///< r_k [m]
+  std::array<T, kJoints> coulomb{};     ///< mu_c,k [-]
+  std::array<T, kJoints> viscous{};     ///< mu_v,k [s/rad]
+  /// w_s [rad/s]: 0 uses the exact sign(w); w_s > 0 replaces sign(w) by tanh(w / w_s), the smooth
+  /// form used where derivatives across w = 0 are needed (identification, optimization).
+  T smoothing_velocity{};
+
+  bool active() const { return law != FrictionLaw::kNone; }
+
+  template <typename U>
+  FrictionParams<U> cast() const {
+    FrictionParams<U> out;
+    out.law = law;
+    for (int k = 0; k < kJoints; ++k) {
+      out.pin_radius[k] = U(pin_radius[k]);
+      out.coulomb[k] = U(coulomb[k]);
+      out.viscous[k] = U(viscous[k]);
+    }
+    out.smoothing_velocity = U(smoothing_velocity);
+    return out;
+  }
+};
+
+/// Every constant of the mechanism (the loads, which depend on time, are in Loads).
+template <typename T>
+struct Params {
+  T ground_length{};                  ///< l0 [m]: O at (0,0), D0 at (l0,0)
+  std::array<Link<T>, kLinks> links;  ///< links 1..4 at index 0..3
+  T point_p{};                        ///< lp [m]: P on link 3, from B
+  int assembly = kElbowUp;            ///< kElbowUp or kElbowDown
+  T gravity{};                        ///< g [m/s^2], along -y
+  FrictionParams<T> friction;
+
+  template <typename U>
+  Params<U> cast() const {
+    Params<U> out;
+    out.ground_length = U(ground_length);
+    for (int i = 0; i < kLinks; ++i) out.links[i] = links[i].template cast<U>();
+    out.point_p = U(point_p);
+    out.assembly = assembly;
+    out.gravity = U(gravity);
+    out.friction = friction.template cast<U>();
+    return out;
+  }
+};
+
+/// External loads at one instant (model.md, M_d): motor torques M1, M2 [N m] on links 1 and 2,
+/// moment M3 [N m] on link 3 (counter-clockwise positive), force of magnitude F [N] at P at the
+/// angle F_angle from the direction of link 3.
+template <typename T>
+struct Loads {
+  T M1{}, M2{}, M3{}, F{}, F_angle{};
+
+  template <typename U>
+  Loads<U> cast() const {
+    return {U(M1), U(M2), U(M3), U(F), U(F_angle)};
+  }
+};
+
+/// The canonical scene of model.md, section 5 (loads at t are in paper_loads()).
+inline Params<double> paper_params() {
+  Params<double> p;
+  p.ground_length = 0.29;
+  p.links[0] = {0.08, 1.0, 0.1, 0.05, 0.0};
+  p.links[1] = {0.05, 1.0, 0.1, 0.03, 0.0};
+  p.links[2] = {0.25, 1.0, 0.1, 0.20, 0.0};
+  p.links[3] = {0.25, 1.0, 0.1, 0.15, 0.0};
+  p.point_p = 0.20;
+  p.assembly = kElbowUp;
+  p.gravity = 9.81;
+  p.friction.law = FrictionLaw::kCoulombViscous;
+  p.friction.pin_radius.fill(0.01);
+  p.friction.coulomb.fill(0.12);
+  p.friction.viscous.fill(0.02);
+  return p;
+}
+
+}  // namespace fivebar

@@ -1,0 +1,50 @@
+// Scalar helpers shared by the templated model: value parts of Jets, small vector types.
+#pragma once
+
+#include <cmath>
+#include <type_traits>
+
+#include <Eigen/Core>
+
+namespace fivebar {
+
+template <typename T>
+using Vec2 = Eigen::Matrix<T, 2, 1>;
+template <typename T>
+using Row2 = Eigen::Matrix<T, 1, 2>;
+template <typename T>
+using Mat2 = Eigen::Matrix<T, 2, 2>;
+
+/// Value part of a scalar: the number itself for double, the real part of a ceres::Jet (also
+/// nested). Stopping tests and branch choices look at this only, never at derivatives.
+inline double value_of(double x) { return x; }
+template <typename J>
+auto value_of(const J& x) -> decltype(value_of(x.a)) {
+  return value_of(x.a);
+}
+
+/// Planar unit vector e(a) = (cos a, sin a) and its derivative e'(a) = (-sin a, cos a).
+template <typename T>
+Vec2<T> unit(const T& a) {
+  using std::cos;
+  using std::sin;
+  return Vec2<T>(cos(a), sin(a));
+}
+template <typename T>
+Vec2<T> perp(const Vec2<T>& v) {
+  return Vec2<T>(-v.y(), v.x());
+}
+
+/// Planar cross product a x b = ax*by - ay*bx.
+template <typename T>
+T cross(const Vec2<T>& a, const Vec2<T>& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+/// Rotates v by the angle whose cosine and sine are c, s.
+template <typename T>
+Vec2<T> rotate(const Vec2<T>& v, const T& c, const T& s) {
+  return Vec2<T>(c * v.x() - s * v.y(), s * v.x() + c * v.y());
+}
+
+}  // namespace fivebar

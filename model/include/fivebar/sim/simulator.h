@@ -1,0 +1,91 @@
+// Forward simulation of a scene with SUNDIALS (CVODE, ARKODE behind it, in model/src/).
+#pragma once
+
+#include <array>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "fivebar/model/params.h"
+#include "fivebar/model/status.h"
+
+namespace fivebar::sim {
+
+/// Integrators offered. Names (method_name / parse_method) are the scene's `simulation.integrator`.
+enum class Method : int {
+  kCvodeAdams = 0,  ///< "cvode_adams": variable-order Adams-Moulton, fixed-point iteration
+  kCvodeBdf,        ///< "cvode_bdf": variable-order BDF, Newton with a dense Jacobian
+  kArkodeErk45,     ///< "arkode_erk45": explicit Dormand-Prince 5(4)
+  kArkodeErk87,     ///< "arkode_erk87": explicit Verner 8(7)
+  kArkodeDirk,      ///< "arkode_dirk": implicit ARK 5(4) (DIRK), Newton with a dense Jacobian
+};
+const char* method_name(Method m);
+/// Parses a method name; false if unknown.
+bool parse_method(const std::string& name, Method* out);
+
+/// Solver settings (scene key `simulation:`), with the defaults that reach the accuracy figures.
+struct Options {
+  double duration = 2.0;      ///< [s]
+  double output_step = 1e-3;  ///< [s] output grid, from dense output
+  Method method = Method::kCvodeAdams;
+  double rtol = 1e-10;
+  double atol = 1e-10;
+  bool locate_switches = true;  ///< root-find every zero of a joint's relative rate and restart
+  long max_steps = 2000000;     ///< over the whole run
+  /// run stops (status kNearSingular) when |sin(th4 - th3)| falls below this
+  double singular_margin = 1e-3;
+  double friction_tol = 1e-13;  ///< relative stopping test of the reaction/friction loop
+  int friction_max_iter = 50;
+};
+
+/// Load function: the loads at time t.
+using LoadFunction = std::function<Loads<double>(double t)>;
+
+/// Initial state of the two cranks.
+struct Initial {
+  double theta1 = 0, theta2 = 0, omega1 = 0, omega2 = 0;
+};
+
+/// One output row: the columns of trajectory.csv (interfaces.md) plus the energy terms.
+struct Row {
+  double t = 0;
+  std::array<double, 4> theta{}, omega{}, alpha{};
+  double M1 = 0, M2 = 0;
+  std::array<double, 5> N{}, Mf{};
+  double P_diss = 0, E_diss = 0, W_in = 0, W_ext = 0;
+  double kinetic = 0, potential = 0;
+};
+
+struct Stats {
+  long rhs_evaluations = 0;
+  long steps = 0;
+  long friction_events = 0;  ///< located zero crossings of a joint's relative rate
+  double wall_time_s = 0;
+};
+
+struct Result {
+  Status status;          ///< not ok: rows hold what was computed up to the failure
+  std::vector<Row> rows;  ///< on the output grid
+  Stats stats;
+};
+
+/// Simulates the mechanism from `initial` over [0, options.duration].
+Result simulate(const Params<double>& params, const LoadFunction& loads, const Initial& initial,
+                const Options& options);
+
+/// Inverse dynamics along a motion: uses t, theta[0..1], omega[0..1], alpha[0..1] of each row and
+/// returns rows with the coupler kinematics, reactions, friction torques, and M1, M2 the torques
+/// that produce the motion under `loads` (whose M1, M2 are ignored). E_diss by the trapezoidal rule.
+Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
+                    const std::vector<Row>& motion, std::vector<Row>* out);
+
+/// Checks of a finished run (summary.json).
+struct RunChecks {
+  /// max_t |d(KE + PE) - W_in - W_ext + E_diss| divided by the largest of |W_in| + |W_ext|,
+  /// E_diss and |d(KE + PE)| over the run (the total work that went through the system)
+  double energy_balance_relative = 0;
+  double inverse_dynamics_max_abs_error = 0;  ///< max |M_inverse - M_input| over the rows [N m]
+};
+RunChecks check_run(const Params<double>& params, const LoadFunction& loads, const Result& result);
+
+}  // namespace fivebar::sim

@@ -1,0 +1,353 @@
+// Event-driven simulation: the friction-aware right-hand side, root finding on the relative joint
+// rates (where sign(w) jumps), restarts at every switch, and output rows on the scene's grid.
+#include "fivebar/sim/simulator.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "fivebar/model/dynamics.h"
+#include "integrator.h"
+
+namespace fivebar::sim {
+
+const char* method_name(Method m) {
+  switch (m) {
+    case Method::kCvodeAdams: return "cvode_adams";
+    case Method::kCvodeBdf: return "cvode_bdf";
+    case Method::kArkodeErk45: return "arkode_erk45";
+    case Method::kArkodeErk87: return "arkode_erk87";
+    case Method::kArkodeDirk: return "arkode_dirk";
+  }
+  return "unknown";
+}
+
+bool parse_method(const std::string& name, Method* out) {
+  for (Method m : {Method::kCvodeAdams, Method::kCvodeBdf, Method::kArkodeErk45,
+                   Method::kArkodeErk87, Method::kArkodeDirk}) {
+    if (name == method_name(m)) {
+      *out = m;
+      return true;
+    }
+  }
+  return false;
+}
+
+namespace {
+
+constexpr int kStates = 7;  // th1, th2, w1, w2, E_diss, W_in, W_ext
+
+/// What the C callbacks see.
+struct Context {
+  const Params<double>* params = nullptr;
+  const LoadFunction* loads = nullptr;
+  EvalOptions eval;
+  bool use_slip = false;                ///< Coulomb sign from the segment's slip directions
+  std::array<int, 5> slip{};            ///< slip direction of each joint in this segment
+  std::array<int, 5> root_joint{};      ///< root function index -> joint
+  int nroots = 0;
+  long rhs_evaluations = 0;
+  Status failure;                       ///< last failure inside a callback
+  double failure_t = 0;
+};
+
+Status at_time(const Status& st, double t, double th1, double th2) {
+  std::ostringstream msg;
+  msg.precision(6);
+  msg << "at t=" << t << " s (theta1=" << th1 << ", theta2=" << th2 << "): " << st.message;
+  return Status::Error(st.code, msg.str());
+}
+
+int rhs(double t, const double* y, double* ydot, void* user) {
+  auto& c = *static_cast<Context*>(user);
+  ++c.rhs_evaluations;
+  Evaluation<double> ev;
+  const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3],
+                                     c.use_slip ? &c.slip : nullptr, c.eval, &ev);
+  if (!st.ok()) {
+    c.failure = at_time(st, t, y[0], y[1]);
+    c.failure_t = t;
+    return 1;  // recoverable: the integrator retries with a smaller step
+  }
+  ydot[0] = y[2];
+  ydot[1] = y[3];
+  ydot[2] = ev.thdd[0];
+  ydot[3] = ev.thdd[1];
+  ydot[4] = ev.P_diss;
+  ydot[5] = ev.P_in;
+  ydot[6] = ev.P_ext;
+  for (int i = 2; i < kStates; ++i) {
+    if (!std::isfinite(ydot[i])) {
+      c.failure = at_time(Status::Error(StatusCode::kSolverFailed, "non-finite acceleration"), t,
+                          y[0], y[1]);
+      return 1;
+    }
+  }
+  return 0;
+}
+
+/// Relative joint rates at a state (needs only the first-order kinematics).
+bool joint_rates(const Params<double>& p, const double* y, std::array<double, 5>* w) {
+  Kinematics<double> k;
+  if (!solve_kinematics(p, y[0], y[1], &k).ok()) return false;
+  const Vec2<double> thd(y[2], y[3]);
+  *w = fivebar::detail::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
+  return true;
+}
+
+int roots(double t, const double* y, double* g, void* user) {
+  auto& c = *static_cast<Context*>(user);
+  std::array<double, 5> w;
+  if (!joint_rates(*c.params, y, &w)) {
+    c.failure = at_time(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t,
+                        y[0], y[1]);
+    return -1;
+  }
+  for (int r = 0; r < c.nroots; ++r) g[r] = w[c.root_joint[r]];
+  return 0;
+}
+
+/// Slip directions for the joints in `undecided` (at rest relative to each other): the direction
+/// of the relative acceleration they get with those directions (model.md; reference README).
+/// A short fixed-point over the sign vector; returns the last evaluation's status.
+Status decide_slip(Context& c, double t, const double* y, const std::array<bool, 5>& undecided) {
+  for (int k = 0; k < 5; ++k) {
+    if (undecided[k]) c.slip[k] = 0;
+  }
+  for (int pass = 0; pass < 6; ++pass) {
+    Evaluation<double> ev;
+    const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &c.slip,
+                                       c.eval, &ev);
+    if (!st.ok()) return at_time(st, t, y[0], y[1]);
+    const auto wdot = fivebar::detail::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
+    bool changed = false;
+    for (int k = 0; k < 5; ++k) {
+      if (!undecided[k]) continue;
+      const int s = sign_of(wdot[k]);
+      if (s != c.slip[k]) {
+        c.slip[k] = s;
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+  return Status::Ok();
+}
+
+/// Root directions: a joint slipping with w > 0 can only cross zero downwards, and vice versa.
+void root_directions(const Context& c, int* dirs) {
+  for (int r = 0; r < c.nroots; ++r) dirs[r] = -c.slip[c.root_joint[r]];
+}
+
+Row make_row(const Context& c, double t, const double* y, const Row* previous, Status* st) {
+  Row row;
+  row.t = t;
+  EvalOptions eval = c.eval;
+  eval.want_reactions = true;
+  eval.singular_margin = 0.0;
+  const Loads<double> L = (*c.loads)(t);
+  Evaluation<double> ev;
+  *st = forward_dynamics(*c.params, L, y[0], y[1], y[2], y[3], c.use_slip ? &c.slip : nullptr,
+                         eval, &ev);
+  if (!st->ok()) {
+    *st = at_time(*st, t, y[0], y[1]);
+    return row;
+  }
+  double th3 = ev.kin.th3, th4 = ev.kin.th4;
+  if (previous) {  // keep the coupler angles continuous (no 2 pi jumps)
+    th3 = previous->theta[2] + std::remainder(th3 - previous->theta[2], 2 * M_PI);
+    th4 = previous->theta[3] + std::remainder(th4 - previous->theta[3], 2 * M_PI);
+  }
+  row.theta = {y[0], y[1], th3, th4};
+  row.omega = {y[2], y[3], ev.bias.w3, ev.bias.w4};
+  row.alpha = {ev.thdd[0], ev.thdd[1], ev.alpha3, ev.alpha4};
+  row.M1 = L.M1;
+  row.M2 = L.M2;
+  for (int k = 0; k < 5; ++k) {
+    row.N[k] = ev.N[k];
+    row.Mf[k] = ev.Mf[k];
+  }
+  row.P_diss = ev.P_diss;
+  row.E_diss = y[4];
+  row.W_in = y[5];
+  row.W_ext = y[6];
+  row.kinetic = kinetic_energy(*c.params, ev.kin, y[2], y[3]);
+  row.potential = potential_energy(*c.params, ev.kin);
+  return row;
+}
+
+}  // namespace
+
+Result simulate(const Params<double>& params, const LoadFunction& loads, const Initial& initial,
+                const Options& options) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  Result result;
+  Context c;
+  c.params = &params;
+  c.loads = &loads;
+  c.eval.singular_margin = options.singular_margin;
+  c.eval.friction_tol = options.friction_tol;
+  c.eval.friction_max_iter = options.friction_max_iter;
+  c.eval.want_reactions = false;  // the motion needs reactions only through friction
+
+  // exact Coulomb sign: each joint with a Coulomb part gets a root function on its rate
+  const bool exact_sign = params.friction.active() && params.friction.smoothing_velocity == 0.0;
+  c.use_slip = exact_sign && options.locate_switches;
+  if (c.use_slip) {
+    for (int k = 0; k < 5; ++k) {
+      if (params.friction.coulomb[k] != 0.0 && params.friction.pin_radius[k] != 0.0) {
+        c.root_joint[c.nroots++] = k;
+      }
+    }
+  }
+
+  double y[kStates] = {initial.theta1, initial.theta2, initial.omega1, initial.omega2, 0, 0, 0};
+  double t = 0.0;
+  if (c.use_slip) {
+    std::array<double, 5> w;
+    if (!joint_rates(params, y, &w)) {
+      result.status = Status::Error(StatusCode::kCannotAssemble,
+                                    "initial pose cannot assemble");
+      return result;
+    }
+    std::array<bool, 5> undecided;
+    for (int k = 0; k < 5; ++k) {
+      c.slip[k] = sign_of(w[k]);
+      undecided[k] = (c.slip[k] == 0);
+    }
+    result.status = decide_slip(c, t, y, undecided);
+    if (!result.status.ok()) return result;
+  }
+
+  detail::OdeProblem prob{kStates, c.nroots, &rhs, &roots, &c};
+  std::unique_ptr<detail::Integrator> integ = detail::make_integrator(prob, options,
+                                                                      options.duration);
+  integ->start(t, y);
+  int dirs[5] = {0, 0, 0, 0, 0};
+  if (c.nroots > 0) {
+    root_directions(c, dirs);
+    integ->set_root_direction(dirs);
+  }
+
+  const long n_out = std::lround(options.duration / options.output_step);
+  result.rows.reserve(n_out + 1);
+  Status st;
+  result.rows.push_back(make_row(c, 0.0, y, nullptr, &st));
+  if (!st.ok()) {
+    result.status = st;
+    return result;
+  }
+  for (long i = 1; i <= n_out && result.status.ok(); ++i) {
+    const double tout = std::min(i * options.output_step, options.duration);
+    while (true) {
+      const auto outcome = integ->advance(tout, y, &t);
+      if (outcome == detail::Integrator::kFailed) {
+        if (!c.failure.ok()) {
+          result.status = c.failure;
+        } else {
+          result.status = at_time(Status::Error(StatusCode::kSolverFailed, integ->error()), t,
+                                  y[0], y[1]);
+        }
+        break;
+      }
+      if (outcome == detail::Integrator::kRoot) {
+        // a joint's relative rate crossed zero: it slips the other way from here on
+        int fired[5] = {0, 0, 0, 0, 0};
+        integ->root_info(fired);
+        std::array<bool, 5> crossed{};
+        for (int r = 0; r < c.nroots; ++r) {
+          if (fired[r] != 0) {
+            crossed[c.root_joint[r]] = true;
+            ++result.stats.friction_events;
+          }
+        }
+        for (int k = 0; k < 5; ++k) {
+          if (crossed[k]) c.slip[k] = -c.slip[k];
+        }
+        integ->start(t, y);
+        root_directions(c, dirs);
+        integ->set_root_direction(dirs);
+        continue;
+      }
+      result.rows.push_back(make_row(c, tout, y, &result.rows.back(), &st));
+      if (!st.ok()) result.status = st;
+      break;
+    }
+  }
+  result.stats.rhs_evaluations = c.rhs_evaluations;
+  result.stats.steps = integ->steps();
+  result.stats.wall_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  return result;
+}
+
+Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
+                    const std::vector<Row>& motion, std::vector<Row>* out) {
+  out->clear();
+  out->reserve(motion.size());
+  EvalOptions eval;
+  for (const Row& m : motion) {
+    const Loads<double> L = loads(m.t);
+    Evaluation<double> ev;
+    const Status st = inverse_dynamics(params, L, m.theta[0], m.theta[1], m.omega[0], m.omega[1],
+                                       m.alpha[0], m.alpha[1], nullptr, eval, &ev);
+    if (!st.ok()) return at_time(st, m.t, m.theta[0], m.theta[1]);
+    Row r = m;
+    double th3 = ev.kin.th3, th4 = ev.kin.th4;
+    if (!out->empty()) {
+      th3 = out->back().theta[2] + std::remainder(th3 - out->back().theta[2], 2 * M_PI);
+      th4 = out->back().theta[3] + std::remainder(th4 - out->back().theta[3], 2 * M_PI);
+    }
+    r.theta[2] = th3;
+    r.theta[3] = th4;
+    r.omega[2] = ev.bias.w3;
+    r.omega[3] = ev.bias.w4;
+    r.alpha[2] = ev.alpha3;
+    r.alpha[3] = ev.alpha4;
+    r.M1 = ev.M1;
+    r.M2 = ev.M2;
+    for (int k = 0; k < 5; ++k) {
+      r.N[k] = ev.N[k];
+      r.Mf[k] = ev.Mf[k];
+    }
+    r.P_diss = ev.P_diss;
+    r.kinetic = kinetic_energy(params, ev.kin, m.omega[0], m.omega[1]);
+    r.potential = potential_energy(params, ev.kin);
+    out->push_back(r);
+  }
+  // dissipated energy along the motion by the trapezoidal rule
+  for (size_t i = 0; i < out->size(); ++i) {
+    (*out)[i].E_diss = i == 0 ? 0.0
+                              : (*out)[i - 1].E_diss + 0.5 * ((*out)[i].P_diss + (*out)[i - 1].P_diss) *
+                                                           ((*out)[i].t - (*out)[i - 1].t);
+  }
+  return Status::Ok();
+}
+
+RunChecks check_run(const Params<double>& params, const LoadFunction& loads, const Result& result) {
+  RunChecks checks;
+  if (result.rows.empty()) return checks;
+  const Row& r0 = result.rows.front();
+  const double e0 = r0.kinetic + r0.potential;
+  double worst = 0.0, scale = 1e-300;
+  for (const Row& r : result.rows) {
+    const double change = r.kinetic + r.potential - e0;
+    worst = std::max(worst, std::abs(change - r.W_in - r.W_ext + r.E_diss));
+    scale = std::max({scale, std::abs(r.W_in) + std::abs(r.W_ext), r.E_diss, std::abs(change)});
+  }
+  checks.energy_balance_relative = worst / scale;
+  std::vector<Row> inv;
+  if (inverse_rows(params, loads, result.rows, &inv).ok()) {
+    for (size_t i = 0; i < inv.size(); ++i) {
+      checks.inverse_dynamics_max_abs_error =
+          std::max({checks.inverse_dynamics_max_abs_error, std::abs(inv[i].M1 - result.rows[i].M1),
+                    std::abs(inv[i].M2 - result.rows[i].M2)});
+    }
+  } else {
+    checks.inverse_dynamics_max_abs_error = INFINITY;
+  }
+  return checks;
+}
+
+}  // namespace fivebar::sim

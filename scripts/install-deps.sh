@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Installs the Debian packages fivebar needs, only those that are missing (idempotent).
+# Usage: scripts/install-deps.sh        (as root, or with sudo available)
+set -euo pipefail
+pkgs=(build-essential cmake pkg-config python3
+      libeigen3-dev libceres-dev libnlopt-cxx-dev libsundials-dev
+      libgtest-dev libgmock-dev libbenchmark-dev libyaml-cpp-dev libcli11-dev libmuparser-dev
+      gnuplot-nox openmpi-bin libopenmpi-dev)
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all packages present"
+  exit 0
+fi
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+echo "install-deps: done"
