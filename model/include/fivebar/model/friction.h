@@ -30,6 +30,18 @@ T friction_law(const FrictionParams<T>& fp, int k, const T& w, int slip) {
           value_of(fp.smoothing_velocity) > 0.0 ? T(tanh(w / fp.smoothing_velocity)) : T(double(slip));
       return fp.coulomb[k] * coulomb_sign + fp.viscous[k] * w;
     }
+    case FrictionLaw::kStribeck: {
+      using std::abs;
+      using std::exp;
+      using std::pow;
+      const T coulomb_sign =
+          value_of(fp.smoothing_velocity) > 0.0 ? T(tanh(w / fp.smoothing_velocity)) : T(double(slip));
+      // |w / w_st|^delta, written so that w = 0 has a finite derivative for delta >= 1
+      const T x = abs(w / fp.stribeck_velocity[k]);
+      const T decay = value_of(x) == 0.0 ? T(1) : exp(-pow(x, fp.stribeck_exponent[k]));
+      const T level = fp.coulomb[k] + (fp.static_coulomb[k] - fp.coulomb[k]) * decay;
+      return level * coulomb_sign + fp.viscous[k] * w;
+    }
   }
   return T(0);
 }

@@ -19,6 +19,8 @@ enum Assembly : int { kElbowUp = +1, kElbowDown = -1 };
 enum class FrictionLaw : int {
   kNone = 0,            ///< no friction: no reaction solve is needed for the motion
   kCoulombViscous = 1,  ///< f(w) = mu_c sign(w) + mu_v w (the paper's law)
+  /// f(w) = (mu_c + (mu_s - mu_c) exp(-|w / w_st|^delta)) sign(w) + mu_v w
+  kStribeck = 2,
 };
 
 /// One moving link i: length l_i, mass m_i, inertia J_i about its centre of mass, and the centre
@@ -44,6 +46,11 @@ struct FrictionParams {
   std::array<T, kJoints> pin_radius{};  ///< r_k [m]
   std::array<T, kJoints> coulomb{};     ///< mu_c,k [-]
   std::array<T, kJoints> viscous{};     ///< mu_v,k [s/rad]
+  /// mu_s,k [-]: static coefficient (Stribeck peak; holding bound of a stuck joint). The scene
+  /// loader sets it to `coulomb` when the scene omits it.
+  std::array<T, kJoints> static_coulomb{};
+  std::array<T, kJoints> stribeck_velocity{};  ///< w_st,k [rad/s] (kStribeck)
+  std::array<T, kJoints> stribeck_exponent{};  ///< delta_k [-] (kStribeck), usually 2
   /// w_s [rad/s]: 0 uses the exact sign(w); w_s > 0 replaces sign(w) by tanh(w / w_s), the smooth
   /// form used where derivatives across w = 0 are needed (identification, optimization).
   T smoothing_velocity{};
@@ -58,6 +65,9 @@ struct FrictionParams {
       out.pin_radius[k] = U(pin_radius[k]);
       out.coulomb[k] = U(coulomb[k]);
       out.viscous[k] = U(viscous[k]);
+      out.static_coulomb[k] = U(static_coulomb[k]);
+      out.stribeck_velocity[k] = U(stribeck_velocity[k]);
+      out.stribeck_exponent[k] = U(stribeck_exponent[k]);
     }
     out.smoothing_velocity = U(smoothing_velocity);
     return out;
@@ -115,6 +125,9 @@ inline Params<double> paper_params() {
   p.friction.pin_radius.fill(0.01);
   p.friction.coulomb.fill(0.12);
   p.friction.viscous.fill(0.02);
+  p.friction.static_coulomb.fill(0.12);
+  p.friction.stribeck_velocity.fill(0.1);
+  p.friction.stribeck_exponent.fill(2.0);
   return p;
 }
 
