@@ -49,13 +49,6 @@ struct Evaluation {
 
 namespace detail {
 
-/// Exact zero including derivative parts: a term is skipped only if it cannot contribute.
-inline bool is_exact_zero(double x) { return x == 0.0; }
-template <typename J>
-auto is_exact_zero(const J& x) -> decltype(x.v.isZero(), bool()) {
-  return is_exact_zero(x.a) && x.v.isZero();
-}
-
 /// External force vector at P: F e(th3 + alpha_F) (model.md erratum 2).
 template <typename T>
 Vec2<T> force_vector(const Kinematics<T>& k, const Loads<T>& L) {

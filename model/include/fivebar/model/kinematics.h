@@ -102,7 +102,11 @@ Status solve_kinematics(const Params<T>& p, const T& th1, const T& th2, Kinemati
   const std::array<const Vec2<T>*, 4> e = {&k->e1, &k->e2, &k->e3, &k->e4};
   for (int i = 0; i < 4; ++i) {
     const T& al = p.links[i].com_angle;
-    k->ec[i] = rotate(*e[i], T(cos(al)), T(sin(al)));
+    if (is_exact_zero(al)) {
+      k->ec[i] = *e[i];  // centre of mass on the link's line: no rotation (hot path)
+    } else {
+      k->ec[i] = rotate(*e[i], T(cos(al)), T(sin(al)));
+    }
   }
   const Vec2<T> D0(p.ground_length, T(0));
   k->c[0] = p.links[0].com_offset * k->ec[0];

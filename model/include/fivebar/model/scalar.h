@@ -23,6 +23,13 @@ auto value_of(const J& x) -> decltype(value_of(x.a)) {
   return value_of(x.a);
 }
 
+/// Exact zero including derivative parts: a term is skipped only if it cannot contribute.
+inline bool is_exact_zero(double x) { return x == 0.0; }
+template <typename J>
+auto is_exact_zero(const J& x) -> decltype(x.v.isZero(), bool()) {
+  return is_exact_zero(x.a) && x.v.isZero();
+}
+
 /// Planar unit vector e(a) = (cos a, sin a) and its derivative e'(a) = (-sin a, cos a).
 template <typename T>
 Vec2<T> unit(const T& a) {

@@ -1,0 +1,54 @@
+// Speed of the model's right-hand side (with and without friction) and of the paper scene.
+//   build/tests/bench/bench_model --benchmark_repetitions=5 --benchmark_report_aggregates_only
+#include <benchmark/benchmark.h>
+
+#include "fivebar/model/dynamics.h"
+#include "fivebar/sim/simulator.h"
+#include "paper.h"
+
+namespace fivebar {
+namespace {
+
+/// One right-hand side as the integrator calls it: forward dynamics with the reaction/friction
+/// loop resolved (friction) or no reaction solve at all (frictionless), loads included.
+void RightHandSide(benchmark::State& state, bool friction) {
+  Params<double> p = paper_params();
+  if (!friction) p.friction.law = FrictionLaw::kNone;
+  EvalOptions opt;
+  opt.want_reactions = false;
+  opt.singular_margin = 1e-3;
+  const std::array<int, 5> slip = {1, -1, 1, 1, -1};
+  double th1 = 1.3, th2 = 2.0, t = 0.31;
+  for (auto _ : state) {
+    Evaluation<double> ev;
+    const Loads<double> L = testing::paper_loads(t);
+    const Status st = forward_dynamics(p, L, th1, th2, 23.0, -31.0, friction ? &slip : nullptr,
+                                       opt, &ev);
+    benchmark::DoNotOptimize(st);
+    benchmark::DoNotOptimize(ev.thdd);
+    benchmark::ClobberMemory();
+  }
+}
+BENCHMARK_CAPTURE(RightHandSide, friction, true);
+BENCHMARK_CAPTURE(RightHandSide, frictionless, false);
+
+/// The paper scene, 2 s on the 1 ms grid, at default settings (no plots, no file output).
+void PaperScene(benchmark::State& state, bool friction) {
+  Params<double> p = paper_params();
+  if (!friction) p.friction.law = FrictionLaw::kNone;
+  const sim::LoadFunction loads = testing::paper_loads;
+  long rhs = 0;
+  for (auto _ : state) {
+    const sim::Result r = sim::simulate(p, loads, testing::paper_initial(), sim::Options{});
+    rhs = r.stats.rhs_evaluations;
+    benchmark::DoNotOptimize(r.rows.data());
+  }
+  state.counters["rhs_evaluations"] = static_cast<double>(rhs);
+}
+BENCHMARK_CAPTURE(PaperScene, friction, true)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(PaperScene, frictionless, false)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace fivebar
+
+BENCHMARK_MAIN();
