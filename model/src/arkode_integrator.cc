@@ -1,5 +1,5 @@
 // ARKODE behind the Integrator interface: ERKStep for the explicit Runge-Kutta pairs
-// (Dormand-Prince 5(4), Verner 8(7)) and ARKStep for the implicit DIRK (ARK5(4)8L[2]SA, Newton
+// (Dormand-Prince 5(4), Verner 6(5), Fehlberg 7(8)) and ARKStep for the implicit DIRK (ARK5(4)8L[2]SA, Newton
 // with a dense Jacobian). The only file that includes ARKODE.
 #include <arkode/arkode_arkstep.h>
 #include <arkode/arkode_erkstep.h>
@@ -24,8 +24,10 @@ class Arkode final : public Integrator {
     if (explicit_) {
       mem_ = ERKStepCreate(&Arkode::rhs, 0.0, y_, ctx_);
       ERKStepSetErrHandlerFn(mem_, &Arkode::on_error, this);
-      ERKStepSetTableNum(mem_, opt.method == Method::kArkodeErk45 ? ARKODE_DORMAND_PRINCE_7_4_5
-                                                                  : ARKODE_VERNER_8_5_6);
+      // ARKODE names tables NAME_stages_embedding_order
+      ERKStepSetTableNum(mem_, opt.method == Method::kArkodeErk45   ? ARKODE_DORMAND_PRINCE_7_4_5
+                               : opt.method == Method::kArkodeErk65 ? ARKODE_VERNER_8_5_6
+                                                                    : ARKODE_FEHLBERG_13_7_8);
       ERKStepSStolerances(mem_, opt.rtol, opt.atol);
       ERKStepSetUserData(mem_, this);
       ERKStepSetMaxNumSteps(mem_, opt.max_steps);

@@ -19,13 +19,13 @@ const char* method_name(Method m) {
     case Method::kArkodeErk45: return "arkode_erk45";
     case Method::kArkodeErk87: return "arkode_erk87";
     case Method::kArkodeDirk: return "arkode_dirk";
+    case Method::kArkodeErk65: return "arkode_erk65";
   }
   return "unknown";
 }
 
 bool parse_method(const std::string& name, Method* out) {
-  for (Method m : {Method::kCvodeAdams, Method::kCvodeBdf, Method::kArkodeErk45,
-                   Method::kArkodeErk87, Method::kArkodeDirk}) {
+  for (Method m : kAllMethods) {
     if (name == method_name(m)) {
       *out = m;
       return true;
@@ -96,8 +96,28 @@ bool joint_rates(const Params<double>& p, const double* y, std::array<double, 5>
   return true;
 }
 
+bool any_stuck(const std::array<int, 5>& slip) {
+  return std::find(slip.begin(), slip.end(), kStuck) != slip.end();
+}
+
+/// Root functions: the relative rate of each slipping joint (zero where sign(w) would jump) and
+/// the holding margin mu_s r N - |holding torque| of each stuck joint (zero at breakaway).
 int roots(double t, const double* y, double* g, void* user) {
   auto& c = *static_cast<Context*>(user);
+  if (any_stuck(c.slip)) {
+    Evaluation<double> ev;
+    const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &c.slip,
+                                       c.eval, &ev);
+    if (!st.ok()) {
+      c.failure = at_time(st, t, y[0], y[1]);
+      return -1;
+    }
+    for (int r = 0; r < c.nroots; ++r) {
+      const int j = c.root_joint[r];
+      g[r] = c.slip[j] == kStuck ? ev.hold_margin[j] : ev.w[j];
+    }
+    return 0;
+  }
   std::array<double, 5> w;
   if (!joint_rates(*c.params, y, &w)) {
     c.failure = at_time(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t,
@@ -108,12 +128,56 @@ int roots(double t, const double* y, double* g, void* user) {
   return 0;
 }
 
+/// Removes the component of the crank rates that moves the stuck joints (after a stick the
+/// located state has |w_k| at the root-finding tolerance; a stuck crank is then exactly at rest).
+void project_rates(const Params<double>& p, const std::array<int, 5>& slip, double* y) {
+  Kinematics<double> k;
+  if (!solve_kinematics(p, y[0], y[1], &k).ok()) return;
+  Vec2<double> thd(y[2], y[3]);
+  int ns = 0;
+  Mat2<double> Js = Mat2<double>::Zero();
+  for (int j = 0; j < 5 && ns < 2; ++j) {
+    if (slip[j] == kStuck) Js.row(ns++) = fivebar::detail::joint_row(k, j);
+  }
+  if (ns == 1) {
+    const Row2<double> J = Js.row(0);
+    thd -= J.transpose() * (J.dot(thd) / J.squaredNorm());
+  } else if (ns == 2) {
+    thd.setZero();  // two independent constraints lock the mechanism
+  }
+  y[2] = thd[0];
+  y[3] = thd[1];
+  if (slip[0] == kStuck) y[2] = 0.0;
+  if (slip[4] == kStuck) y[3] = 0.0;
+}
+
+/// Tries to stick joint j at (t, y): true if friction can hold it (holding margin >= 0).
+/// Otherwise `direction` receives the sign of the holding torque it would need, which is the
+/// direction in which the joint slips.
+bool can_stick(Context& c, double t, const double* y, int j, int* direction) {
+  std::array<int, 5> trial = c.slip;
+  trial[j] = kStuck;
+  Evaluation<double> ev;
+  const Status st =
+      forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &trial, c.eval, &ev);
+  if (!st.ok()) {
+    *direction = -c.slip[j];
+    return false;
+  }
+  *direction = sign_of(ev.Mf[j]);
+  if (*direction == 0) *direction = -c.slip[j];
+  return ev.hold_margin[j] >= 0.0;
+}
+
 /// Slip directions for the joints in `undecided` (at rest relative to each other): the direction
 /// of the relative acceleration they get with those directions (model.md; reference README).
 /// A short fixed-point over the sign vector; returns the last evaluation's status.
 Status decide_slip(Context& c, double t, const double* y, const std::array<bool, 5>& undecided) {
   for (int k = 0; k < 5; ++k) {
     if (undecided[k]) c.slip[k] = 0;
+  }
+  if (std::none_of(undecided.begin(), undecided.end(), [](bool u) { return u; })) {
+    return Status::Ok();
   }
   for (int pass = 0; pass < 6; ++pass) {
     Evaluation<double> ev;
@@ -135,9 +199,13 @@ Status decide_slip(Context& c, double t, const double* y, const std::array<bool,
   return Status::Ok();
 }
 
-/// Root directions: a joint slipping with w > 0 can only cross zero downwards, and vice versa.
+/// Root directions: a joint slipping with w > 0 can only cross zero downwards, and vice versa;
+/// a stuck joint's holding margin breaks away when it falls through zero.
 void root_directions(const Context& c, int* dirs) {
-  for (int r = 0; r < c.nroots; ++r) dirs[r] = -c.slip[c.root_joint[r]];
+  for (int r = 0; r < c.nroots; ++r) {
+    const int s = c.slip[c.root_joint[r]];
+    dirs[r] = s == kStuck ? -1 : -s;
+  }
 }
 
 Row make_row(const Context& c, double t, const double* y, const Row* previous, Status* st) {
@@ -174,7 +242,53 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
   row.W_ext = y[6];
   row.kinetic = kinetic_energy(*c.params, ev.kin, y[2], y[3]);
   row.potential = potential_energy(*c.params, ev.kin);
+  row.mode = c.use_slip ? c.slip : ev.slip;
   return row;
+}
+
+/// Joint modes at a state where the cranks are at rest (all five joints at rest): locked if
+/// friction at the two crank joints can hold the mechanism (the holding torques of five joints
+/// at rest are statically indeterminate; fivebar carries them at the crank joints O and D0,
+/// where the drives act), else one crank stuck, else every joint slips in the direction of its
+/// relative acceleration.
+Status initial_modes(Context& c, double t, const double* y, bool stick) {
+  std::array<double, 5> w;
+  if (!joint_rates(*c.params, y, &w)) {
+    return Status::Error(StatusCode::kCannotAssemble, "initial pose cannot assemble");
+  }
+  std::array<bool, 5> undecided;
+  for (int k = 0; k < 5; ++k) {
+    c.slip[k] = sign_of(w[k]);
+    undecided[k] = (c.slip[k] == 0);
+  }
+  const bool at_rest = y[2] == 0.0 && y[3] == 0.0;
+  if (stick && at_rest) {
+    const bool holds[5] = {c.params->friction.coulomb[0] > 0, false, false, false,
+                           c.params->friction.coulomb[4] > 0};
+    // both cranks stuck: the mechanism is locked
+    if (holds[0] && holds[4]) {
+      c.slip = {kStuck, 0, 0, 0, kStuck};
+      Evaluation<double> ev;
+      const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3],
+                                         &c.slip, c.eval, &ev);
+      if (st.ok() && ev.hold_margin[0] >= 0.0 && ev.hold_margin[4] >= 0.0) return st;
+    }
+    // one crank stuck, the rest slipping
+    for (int j : {0, 4}) {
+      if (!holds[j]) continue;
+      c.slip = {0, 0, 0, 0, 0};
+      c.slip[j] = kStuck;
+      std::array<bool, 5> others = undecided;
+      others[j] = false;
+      if (!decide_slip(c, t, y, others).ok()) continue;
+      Evaluation<double> ev;
+      const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3],
+                                         &c.slip, c.eval, &ev);
+      if (st.ok() && ev.hold_margin[j] >= 0.0) return st;
+    }
+    c.slip = {0, 0, 0, 0, 0};
+  }
+  return decide_slip(c, t, y, undecided);
 }
 
 }  // namespace
@@ -204,19 +318,9 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
 
   double y[kStates] = {initial.theta1, initial.theta2, initial.omega1, initial.omega2, 0, 0, 0};
   double t = 0.0;
+  const bool stick = c.use_slip && options.stick;
   if (c.use_slip) {
-    std::array<double, 5> w;
-    if (!joint_rates(params, y, &w)) {
-      result.status = Status::Error(StatusCode::kCannotAssemble,
-                                    "initial pose cannot assemble");
-      return result;
-    }
-    std::array<bool, 5> undecided;
-    for (int k = 0; k < 5; ++k) {
-      c.slip[k] = sign_of(w[k]);
-      undecided[k] = (c.slip[k] == 0);
-    }
-    result.status = decide_slip(c, t, y, undecided);
+    result.status = initial_modes(c, t, y, stick);
     if (!result.status.ok()) return result;
   }
 
@@ -252,18 +356,44 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
         break;
       }
       if (outcome == detail::Integrator::kRoot) {
-        // a joint's relative rate crossed zero: it slips the other way from here on
+        // a switch: a slipping joint's rate crossed zero, or a stuck joint's margin ran out
         int fired[5] = {0, 0, 0, 0, 0};
         integ->root_info(fired);
-        std::array<bool, 5> crossed{};
+        std::array<bool, 5> unlocked{};
         for (int r = 0; r < c.nroots; ++r) {
-          if (fired[r] != 0) {
-            crossed[c.root_joint[r]] = true;
-            ++result.stats.friction_events;
+          if (fired[r] == 0) continue;
+          const int j = c.root_joint[r];
+          ++result.stats.friction_events;
+          int direction = -c.slip[j];
+          if (c.slip[j] == kStuck) {
+            // breakaway: slip in the direction of the holding torque that could not be carried
+            Evaluation<double> ev;
+            if (forward_dynamics(params, loads(t), y[0], y[1], y[2], y[3], &c.slip, c.eval, &ev)
+                    .ok()) {
+              direction = sign_of(ev.Mf[j]);
+            }
+            const bool was_locked = std::count(c.slip.begin(), c.slip.end(), kStuck) == 2;
+            c.slip[j] = direction != 0 ? direction : 1;
+            ++result.stats.breakaway_events;
+            if (was_locked) {
+              for (int k = 0; k < 5; ++k) unlocked[k] = (c.slip[k] == 0);
+            }
+          } else if (stick && can_stick(c, t, y, j, &direction)) {
+            c.slip[j] = kStuck;
+            ++result.stats.stick_events;
+            if (std::count(c.slip.begin(), c.slip.end(), kStuck) == 2) {
+              for (int k = 0; k < 5; ++k) {
+                if (c.slip[k] != kStuck) c.slip[k] = 0;  // locked: every joint at rest
+              }
+            }
+            project_rates(params, c.slip, y);
+          } else {
+            c.slip[j] = direction;  // reversal: slips the other way from here on
           }
         }
-        for (int k = 0; k < 5; ++k) {
-          if (crossed[k]) c.slip[k] = -c.slip[k];
+        if (std::any_of(unlocked.begin(), unlocked.end(), [](bool u) { return u; })) {
+          result.status = decide_slip(c, t, y, unlocked);
+          if (!result.status.ok()) break;
         }
         integ->start(t, y);
         root_directions(c, dirs);
@@ -340,6 +470,7 @@ RunChecks check_run(const Params<double>& params, const LoadFunction& loads, con
   std::vector<Row> inv;
   if (inverse_rows(params, loads, result.rows, &inv).ok()) {
     for (size_t i = 0; i < inv.size(); ++i) {
+      if (any_stuck(result.rows[i].mode)) continue;
       checks.inverse_dynamics_max_abs_error =
           std::max({checks.inverse_dynamics_max_abs_error, std::abs(inv[i].M1 - result.rows[i].M1),
                     std::abs(inv[i].M2 - result.rows[i].M2)});

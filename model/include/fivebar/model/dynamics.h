@@ -20,6 +20,10 @@
 
 namespace fivebar {
 
+/// Joint mode value for a stuck joint (exact stick-slip): its relative rate is held at zero by a
+/// holding torque solved with the motion. Other modes are the slip direction +1 / -1, or 0.
+inline constexpr int kStuck = 2;
+
 /// Settings of an evaluation: singularity margin and the reaction/friction loop.
 struct EvalOptions {
   double singular_margin = 0.0;  ///< fail with kNearSingular when |sin(th4 - th3)| is below
@@ -40,7 +44,10 @@ struct Evaluation {
   T M1{}, M2{};                   ///< motor torques [N m] (input of forward, output of inverse)
   std::array<Vec2<T>, 5> F;       ///< joint reactions [N]
   std::array<T, 5> N{}, Mf{}, w{};  ///< |F_k| [N], friction torques [N m], relative rates [rad/s]
-  std::array<int, 5> slip{};      ///< Coulomb sign used at each joint
+  std::array<int, 5> slip{};      ///< Coulomb sign used at each joint, or kStuck
+  /// stuck joints: mu_s r_k N_k - |holding torque| (>= 0 while friction can hold the joint);
+  /// the holding torque itself is in Mf
+  std::array<T, 5> hold_margin{};
   T P_diss{};                     ///< sum Mf_k w_k >= 0 [W]
   T P_in{};                       ///< M1 w1 + M2 w2 [W]
   T P_ext{};                      ///< M3 w3 + F . v_P [W]
@@ -87,6 +94,19 @@ void mass_and_forces(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& 
 template <typename T>
 std::array<T, 5> relative_rates(const T& w1, const T& w2, const T& w3, const T& w4) {
   return {w1, w3 - w1, w4 - w3, w2 - w4, w2};
+}
+
+/// Row k of J_w (w = J_w thd): O (1, 0), B G3 - (1, 0), C G4 - G3, D (0, 1) - G4, D0 (0, 1).
+template <typename T>
+Row2<T> joint_row(const Kinematics<T>& k, int j) {
+  const Row2<T> e1(T(1), T(0)), e2(T(0), T(1));
+  switch (j) {
+    case 0: return e1;
+    case 1: return k.G3 - e1;
+    case 2: return k.G4 - k.G3;
+    case 3: return e2 - k.G4;
+    default: return e2;
+  }
 }
 
 /// J_w^T Mf: the generalized force of the friction torques is Q_f = -J_w^T Mf (eq. 7).
@@ -216,30 +236,78 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
   ev->M1 = L.M1;
   ev->M2 = L.M2;
   ev->w = detail::relative_rates(w1, w2, ev->bias.w3, ev->bias.w4);
-  // 2x2 inverse in closed form (A is symmetric positive definite)
   const Mat2<T>& A = ev->A;
-  const T inv_det = T(1) / (A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0));
-  Mat2<T> Ainv;
-  Ainv << A(1, 1) * inv_det, -A(0, 1) * inv_det, -A(1, 0) * inv_det, A(0, 0) * inv_det;
+  const Mat2<T> Ainv = inverse2(A);  // A is symmetric positive definite
   ev->thdd = Ainv * rhs0;
   ev->iterations = 0;
   ev->Mf.fill(T(0));
   ev->P_diss = T(0);
 
+  // stuck joints (mode kStuck): J_k thdd + wb_k = 0, with wb the relative accelerations at
+  // thdd = 0; at most two constraints (two independent ones lock the mechanism)
+  int stuck[2] = {-1, -1}, ns = 0;
+  if (slip) {
+    for (int j = 0; j < 5; ++j) {
+      if ((*slip)[j] == kStuck && ns < 2) stuck[ns++] = j;
+    }
+  }
+  Mat2<T> Js = Mat2<T>::Zero();  // rows of the stuck joints
+  Vec2<T> wb_s = Vec2<T>::Zero();
+  if (ns > 0) {
+    const std::array<T, 5> wb = detail::relative_rates(T(0), T(0), ev->bias.h3, ev->bias.h4);
+    for (int i = 0; i < ns; ++i) {
+      Js.row(i) = detail::joint_row(k, stuck[i]);
+      wb_s[i] = wb[stuck[i]];
+    }
+    if (ns == 2 && std::abs(value_of(det2(Js))) < 1e-12) {
+      return Status::Error(StatusCode::kNearSingular,
+                           "two stuck joints whose constraints are dependent (singular pose)");
+    }
+  }
+  std::array<T, 5> hold{};  // holding torques of the stuck joints
+  // accelerations and reactions for the friction torques Mf of the slipping joints
   auto solve = [&](const std::array<T, 5>& Mf, std::array<Vec2<T>, 5>* F) {
-    ev->thdd = Ainv * (rhs0 - detail::friction_transpose(k, Mf));
-    detail::reactions(p, k, ev->bias, L, Fvec, ev->thdd, Mf, F, &ev->alpha3, &ev->alpha4);
+    std::array<T, 5> Mf_all = Mf;
+    for (int i = 0; i < ns; ++i) Mf_all[stuck[i]] = T(0);
+    const Vec2<T> r = rhs0 - detail::friction_transpose(k, Mf_all);
+    if (ns == 0) {
+      ev->thdd = Ainv * r;
+    } else if (ns == 1) {
+      // [A J^T; J 0] [thdd; lambda] = [r; -wb]
+      const Row2<T> J = Js.row(0);
+      const Vec2<T> Ar = Ainv * r;
+      const T lambda = (J.dot(Ar) + wb_s[0]) / J.dot(Ainv * J.transpose());
+      ev->thdd = Ar - Ainv * (lambda * J.transpose());
+      hold[stuck[0]] = lambda;
+    } else {
+      // locked: thdd from the two constraints, holding torques from A thdd = r - Js^T lambda
+      const Mat2<T> Jinv = inverse2(Js);
+      ev->thdd = -(Jinv * wb_s);
+      const Vec2<T> lambda = Jinv.transpose() * (r - A * ev->thdd);
+      hold[stuck[0]] = lambda[0];
+      hold[stuck[1]] = lambda[1];
+    }
+    for (int i = 0; i < ns; ++i) Mf_all[stuck[i]] = hold[stuck[i]];
+    detail::reactions(p, k, ev->bias, L, Fvec, ev->thdd, Mf_all, F, &ev->alpha3, &ev->alpha4);
   };
   if (p.friction.active()) {
     std::array<T, 5> phi;
     for (int j = 0; j < 5; ++j) {
       ev->slip[j] = slip ? (*slip)[j] : sign_of(ev->w[j]);
-      phi[j] = p.friction.pin_radius[j] * friction_law(p.friction, j, ev->w[j], ev->slip[j]);
+      phi[j] = ev->slip[j] == kStuck
+                   ? T(0)
+                   : p.friction.pin_radius[j] * friction_law(p.friction, j, ev->w[j], ev->slip[j]);
     }
     st = detail::friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations);
     if (!st.ok()) return st;
     solve(ev->Mf, &ev->F);  // accelerations and reactions of the converged friction torques
     detail::norms(ev->F, &ev->N);
+    for (int i = 0; i < ns; ++i) {
+      const int j = stuck[i];
+      using std::abs;
+      ev->Mf[j] = hold[j];
+      ev->hold_margin[j] = holding_bound(p.friction, j) * ev->N[j] - abs(hold[j]);
+    }
     for (int j = 0; j < 5; ++j) ev->P_diss += ev->Mf[j] * ev->w[j];
   } else {
     ev->slip.fill(0);

@@ -46,4 +46,12 @@ T friction_law(const FrictionParams<T>& fp, int k, const T& w, int slip) {
   return T(0);
 }
 
+/// mu_s,k r_k: a stuck joint holds while |holding torque| <= mu_s,k r_k N_k. The static
+/// coefficient falls back to the Coulomb one when it is not set (zero).
+template <typename T>
+T holding_bound(const FrictionParams<T>& fp, int k) {
+  const T& mu_s = value_of(fp.static_coulomb[k]) > 0.0 ? fp.static_coulomb[k] : fp.coulomb[k];
+  return mu_s * fp.pin_radius[k];
+}
+
 }  // namespace fivebar

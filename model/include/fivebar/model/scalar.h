@@ -23,6 +23,19 @@ auto value_of(const J& x) -> decltype(value_of(x.a)) {
   return value_of(x.a);
 }
 
+/// Determinant and inverse of a 2x2 matrix in closed form (no Eigen/LU needed, Jet-friendly).
+template <typename T>
+T det2(const Mat2<T>& m) {
+  return m(0, 0) * m(1, 1) - m(0, 1) * m(1, 0);
+}
+template <typename T>
+Mat2<T> inverse2(const Mat2<T>& m) {
+  const T inv_det = T(1) / det2(m);
+  Mat2<T> out;
+  out << m(1, 1) * inv_det, -m(0, 1) * inv_det, -m(1, 0) * inv_det, m(0, 0) * inv_det;
+  return out;
+}
+
 /// Exact zero including derivative parts: a term is skipped only if it cannot contribute.
 inline bool is_exact_zero(double x) { return x == 0.0; }
 template <typename J>

@@ -15,10 +15,15 @@ namespace fivebar::sim {
 enum class Method : int {
   kCvodeAdams = 0,  ///< "cvode_adams": variable-order Adams-Moulton, fixed-point iteration
   kCvodeBdf,        ///< "cvode_bdf": variable-order BDF, Newton with a dense Jacobian
-  kArkodeErk45,     ///< "arkode_erk45": explicit Dormand-Prince 5(4)
-  kArkodeErk87,     ///< "arkode_erk87": explicit Verner 8(7)
-  kArkodeDirk,      ///< "arkode_dirk": implicit ARK 5(4) (DIRK), Newton with a dense Jacobian
+  kArkodeErk45,     ///< "arkode_erk45": explicit Dormand-Prince 5(4), 7 stages
+  kArkodeErk87,     ///< "arkode_erk87": explicit Fehlberg 7(8), 13 stages
+  kArkodeDirk,      ///< "arkode_dirk": implicit ARK5(4)8L[2]SA DIRK, Newton, dense Jacobian
+  kArkodeErk65,     ///< "arkode_erk65": explicit Verner 6(5), 8 stages
 };
+/// Every method, in the order the work-precision study reports them.
+inline constexpr Method kAllMethods[] = {Method::kCvodeAdams, Method::kCvodeBdf,
+                                         Method::kArkodeErk45, Method::kArkodeErk65,
+                                         Method::kArkodeErk87, Method::kArkodeDirk};
 const char* method_name(Method m);
 /// Parses a method name; false if unknown.
 bool parse_method(const std::string& name, Method* out);
@@ -31,6 +36,9 @@ struct Options {
   double rtol = 1e-10;
   double atol = 1e-10;
   bool locate_switches = true;  ///< root-find every zero of a joint's relative rate and restart
+  /// exact stick-slip (with located switches): a joint whose rate reaches zero sticks while
+  /// |holding torque| <= mu_s r_k N_k, and breaks away when the bound is reached
+  bool stick = true;
   long max_steps = 2000000;     ///< over the whole run
   /// run stops (status kNearSingular) when |sin(th4 - th3)| falls below this
   double singular_margin = 1e-3;
@@ -54,12 +62,15 @@ struct Row {
   std::array<double, 5> N{}, Mf{};
   double P_diss = 0, E_diss = 0, W_in = 0, W_ext = 0;
   double kinetic = 0, potential = 0;
+  std::array<int, 5> mode{};  ///< joint modes: slip direction +1/-1, 0 at rest, 2 stuck
 };
 
 struct Stats {
   long rhs_evaluations = 0;
   long steps = 0;
-  long friction_events = 0;  ///< located zero crossings of a joint's relative rate
+  long friction_events = 0;  ///< located switches: rate zero crossings, sticks, breakaways
+  long stick_events = 0;     ///< of which: a joint stuck
+  long breakaway_events = 0; ///< of which: a stuck joint slipped again
   double wall_time_s = 0;
 };
 
@@ -84,7 +95,9 @@ struct RunChecks {
   /// max_t |d(KE + PE) - W_in - W_ext + E_diss| divided by the largest of |W_in| + |W_ext|,
   /// E_diss and |d(KE + PE)| over the run (the total work that went through the system)
   double energy_balance_relative = 0;
-  double inverse_dynamics_max_abs_error = 0;  ///< max |M_inverse - M_input| over the rows [N m]
+  /// max |M_inverse - M_input| over the rows [N m]; rows with a stuck joint are left out (their
+  /// holding torque is statically indeterminate in inverse dynamics)
+  double inverse_dynamics_max_abs_error = 0;
 };
 RunChecks check_run(const Params<double>& params, const LoadFunction& loads, const Result& result);
 
