@@ -36,7 +36,8 @@ bool parse_method(const std::string& name, Method* out) {
 
 namespace {
 
-constexpr int kStates = 7;  // th1, th2, w1, w2, E_diss, W_in, W_ext
+constexpr int kStates = 7;   // th1, th2, w1, w2, E_diss, W_in, W_ext
+constexpr int kBristle = 7;  // LuGre scenes add z_1..z_5 from here
 
 /// What the C callbacks see.
 struct Context {
@@ -47,6 +48,7 @@ struct Context {
   std::array<int, 5> slip{};            ///< slip direction of each joint in this segment
   std::array<int, 5> root_joint{};      ///< root function index -> joint
   int nroots = 0;
+  bool lugre = false;                   ///< bristle states follow the 7 base states
   long rhs_evaluations = 0;
   Status failure;                       ///< last failure inside a callback
   double failure_t = 0;
@@ -63,13 +65,16 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   auto& c = *static_cast<Context*>(user);
   ++c.rhs_evaluations;
   Evaluation<double> ev;
+  std::array<double, 5> z{};
+  if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
   const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3],
-                                     c.use_slip ? &c.slip : nullptr, c.eval, &ev);
+                                     c.use_slip ? &c.slip : nullptr, c.eval, &ev, &z);
   if (!st.ok()) {
     c.failure = at_time(st, t, y[0], y[1]);
     c.failure_t = t;
     return 1;  // recoverable: the integrator retries with a smaller step
   }
+  if (c.lugre) std::copy(ev.zdot.begin(), ev.zdot.end(), ydot + kBristle);
   ydot[0] = y[2];
   ydot[1] = y[3];
   ydot[2] = ev.thdd[0];
@@ -77,7 +82,7 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   ydot[4] = ev.P_diss;
   ydot[5] = ev.P_in;
   ydot[6] = ev.P_ext;
-  for (int i = 2; i < kStates; ++i) {
+  for (int i = 2; i < (c.lugre ? kStates + 5 : kStates); ++i) {
     if (!std::isfinite(ydot[i])) {
       c.failure = at_time(Status::Error(StatusCode::kSolverFailed, "non-finite acceleration"), t,
                           y[0], y[1]);
@@ -216,8 +221,10 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
   eval.singular_margin = 0.0;
   const Loads<double> L = (*c.loads)(t);
   Evaluation<double> ev;
+  std::array<double, 5> z{};
+  if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
   *st = forward_dynamics(*c.params, L, y[0], y[1], y[2], y[3], c.use_slip ? &c.slip : nullptr,
-                         eval, &ev);
+                         eval, &ev, &z);
   if (!st->ok()) {
     *st = at_time(*st, t, y[0], y[1]);
     return row;
@@ -306,7 +313,8 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
   c.eval.want_reactions = false;  // the motion needs reactions only through friction
 
   // exact Coulomb sign: each joint with a Coulomb part gets a root function on its rate
-  const bool exact_sign = params.friction.active() && params.friction.smoothing_velocity == 0.0;
+  const bool exact_sign = params.friction.active() && params.friction.law != FrictionLaw::kLuGre &&
+                          params.friction.smoothing_velocity == 0.0;
   c.use_slip = exact_sign && options.locate_switches;
   if (c.use_slip) {
     for (int k = 0; k < 5; ++k) {
@@ -316,7 +324,9 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
     }
   }
 
-  double y[kStates] = {initial.theta1, initial.theta2, initial.omega1, initial.omega2, 0, 0, 0};
+  c.lugre = params.friction.law == FrictionLaw::kLuGre;
+  double y[kStates + 5] = {initial.theta1, initial.theta2, initial.omega1, initial.omega2,
+                           0, 0, 0, 0, 0, 0, 0, 0};  // bristles start relaxed
   double t = 0.0;
   const bool stick = c.use_slip && options.stick;
   if (c.use_slip) {
@@ -324,7 +334,7 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
     if (!result.status.ok()) return result;
   }
 
-  detail::OdeProblem prob{kStates, c.nroots, &rhs, &roots, &c};
+  detail::OdeProblem prob{c.lugre ? kStates + 5 : kStates, c.nroots, &rhs, &roots, &c};
   std::unique_ptr<detail::Integrator> integ = detail::make_integrator(prob, options,
                                                                       options.duration);
   integ->start(t, y);

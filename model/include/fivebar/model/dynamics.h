@@ -12,6 +12,8 @@
 #include <cmath>
 #include <sstream>
 
+#include <Eigen/LU>
+
 #include "fivebar/model/friction.h"
 #include "fivebar/model/kinematics.h"
 #include "fivebar/model/params.h"
@@ -48,6 +50,7 @@ struct Evaluation {
   /// stuck joints: mu_s r_k N_k - |holding torque| (>= 0 while friction can hold the joint);
   /// the holding torque itself is in Mf
   std::array<T, 5> hold_margin{};
+  std::array<T, 5> zdot{};        ///< LuGre bristle rates [rad/s] (zero for other laws)
   T P_diss{};                     ///< sum Mf_k w_k >= 0 [W]
   T P_in{};                       ///< M1 w1 + M2 w2 [W]
   T P_ext{};                      ///< M3 w3 + F . v_P [W]
@@ -181,8 +184,50 @@ inline Status loop_failure(int iterations, double err, double ratio) {
   return Status::Error(StatusCode::kFrictionNotConverged, msg.str());
 }
 
-/// Fixed-point resolution of the reaction/friction loop (section 4, steps 1-4, at every call).
-/// `solve(Mf, F)` evaluates reactions for friction torques Mf; phi_k = r_k f_k(w_k) is fixed.
+/// Newton on R(N) = N - |F(phi N)| (F is affine in the friction torques: F = F0 + T Mf, T
+/// from unit probes), from the start N0. Converged: true and N, Mf, F set.
+template <typename T, typename Solve>
+bool friction_newton(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&& solve,
+                     const std::array<Vec2<T>, 5>& F0, const std::array<std::array<Vec2<T>, 5>, 5>& dF,
+                     std::array<T, 5> N, std::array<T, 5>* N_out) {
+  using std::sqrt;
+  for (int it = 0; it < 50; ++it) {
+    std::array<Vec2<T>, 5> F = F0;
+    for (int j = 0; j < 5; ++j) {
+      for (int k = 0; k < 5; ++k) F[k] += dF[j][k] * (phi[j] * N[j]);
+    }
+    Eigen::Matrix<T, 5, 1> R;
+    Eigen::Matrix<T, 5, 5> J = Eigen::Matrix<T, 5, 5>::Identity();
+    for (int k = 0; k < 5; ++k) {
+      const T n = sqrt(F[k].squaredNorm());
+      R[k] = N[k] - n;
+      if (value_of(n) > 0.0) {
+        for (int j = 0; j < 5; ++j) J(k, j) -= F[k].dot(dF[j][k]) * phi[j] / n;
+      }
+    }
+    const Eigen::Matrix<T, 5, 1> step = J.partialPivLu().solve(R);
+    double change = 0.0, scale = 1e-300;
+    for (int k = 0; k < 5; ++k) {
+      N[k] -= step[k];
+      change = std::max(change, std::abs(value_of(step[k])));
+      scale = std::max(scale, std::abs(value_of(N[k])));
+    }
+    if (!std::isfinite(change)) return false;
+    if (change <= opt.friction_tol * scale) {
+      for (int k = 0; k < 5; ++k) {
+        if (value_of(N[k]) < -1e-9 * scale) return false;  // not a magnitude: no solution
+      }
+      *N_out = N;
+      return true;
+    }
+  }
+  return false;
+}
+
+/// Resolution of the reaction/friction loop (section 4, steps 1-4, at every call): a fixed point
+/// on N, which contracts when r_k |f_k| is small against the geometry; where it stops
+/// contracting, Newton from two starts. `solve(Mf, F)` evaluates the reactions for friction
+/// torques Mf; phi_k = r_k f_k(w_k) is fixed.
 template <typename T, typename Solve>
 Status friction_loop(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&& solve,
                      std::array<T, 5>* N, std::array<T, 5>* Mf, std::array<Vec2<T>, 5>* F,
@@ -190,7 +235,9 @@ Status friction_loop(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&
   Mf->fill(T(0));
   solve(*Mf, F);
   norms(*F, N);
-  double prev_err = 0.0;
+  const std::array<Vec2<T>, 5> F0 = *F;
+  double prev_err = 0.0, ratio = 0.0;
+  bool contracting = true;
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
     for (int j = 0; j < 5; ++j) (*Mf)[j] = phi[j] * (*N)[j];
     std::array<T, 5> N_old = *N;
@@ -202,30 +249,77 @@ Status friction_loop(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&
       scale = std::max(scale, std::abs(value_of((*N)[j])));
     }
     *iterations = it;
-    if (!std::isfinite(err)) return loop_failure(it, err, prev_err > 0 ? err / prev_err : 0.0);
+    if (!std::isfinite(err)) {
+      contracting = false;
+      break;
+    }
     if (err <= opt.friction_tol * scale) {
       // friction torques consistent with the final reactions
       for (int j = 0; j < 5; ++j) (*Mf)[j] = phi[j] * (*N)[j];
       return Status::Ok();
     }
+    ratio = prev_err > 0.0 ? err / prev_err : 0.0;
     // growing changes after the first few iterations: the loop does not contract
-    if (it >= 4 && prev_err > 0.0 && err > prev_err) {
-      return loop_failure(it, err, err / prev_err);
+    if (it >= 4 && ratio > 1.0) {
+      contracting = false;
+      break;
     }
     prev_err = err;
   }
-  return loop_failure(opt.friction_max_iter, prev_err, 0.0);
+  // Newton: the affine map Mf -> F from unit probes, then two starts
+  std::array<std::array<Vec2<T>, 5>, 5> dF;
+  for (int j = 0; j < 5; ++j) {
+    std::array<T, 5> unit_torque{};
+    unit_torque[j] = T(1);
+    std::array<Vec2<T>, 5> Fj;
+    solve(unit_torque, &Fj);
+    for (int k = 0; k < 5; ++k) dF[j][k] = Fj[k] - F0[k];
+  }
+  std::array<T, 5> N0, Na, Nb;
+  norms(F0, &N0);
+  const bool a = friction_newton(phi, opt, solve, F0, dF, N0, &Na);
+  std::array<T, 5> N_big = N0;
+  for (auto& n : N_big) n = n * T(100) + T(1);
+  const bool b = friction_newton(phi, opt, solve, F0, dF, N_big, &Nb);
+  std::ostringstream msg;
+  msg << "friction loop: fixed point " << (contracting ? "did not converge" : "does not contract")
+      << " (ratio " << ratio << "); ";
+  if (!a && !b) {
+    msg << "Newton finds no consistent reaction forces: r_k * mu too large for the loads "
+           "(friction would lock the joints)";
+    return Status::Error(StatusCode::kFrictionNotConverged, msg.str());
+  }
+  if (a && b) {
+    double diff = 0.0, scale = 1e-300;
+    for (int j = 0; j < 5; ++j) {
+      diff = std::max(diff, std::abs(value_of(Na[j]) - value_of(Nb[j])));
+      scale = std::max(scale, std::abs(value_of(Na[j])));
+    }
+    if (diff > 1e-6 * scale) {
+      msg << "several consistent reaction forces (max |N| " << scale << " N and differing by "
+          << diff << " N): the motion is not unique (r_k * mu too large)";
+      return Status::Error(StatusCode::kFrictionNotConverged, msg.str());
+    }
+  }
+  *N = a ? Na : Nb;
+  for (int j = 0; j < 5; ++j) (*Mf)[j] = phi[j] * (*N)[j];
+  solve(*Mf, F);
+  norms(*F, N);
+  *iterations = opt.friction_max_iter + 1;  // marks a Newton solve
+  return Status::Ok();
 }
 
 }  // namespace detail
 
 /// Forward dynamics: thdd from the state (th, thd) and the loads, with the friction loop
 /// resolved. `slip` gives the Coulomb sign of each joint (the integrator's segment mode); pass
-/// nullptr to use sign(w_k), with sign(0) = 0.
+/// nullptr to use sign(w_k), with sign(0) = 0. `bristle` holds the LuGre states z (kLuGre only;
+/// nullptr means z = 0).
 template <typename T>
 Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
                         const T& w1, const T& w2, const std::array<int, 5>* slip,
-                        const EvalOptions& opt, Evaluation<T>* ev) {
+                        const EvalOptions& opt, Evaluation<T>* ev,
+                        const std::array<T, 5>* bristle = nullptr) {
   Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin);
   if (!st.ok()) return st;
   const Kinematics<T>& k = ev->kin;
@@ -294,9 +388,14 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
     std::array<T, 5> phi;
     for (int j = 0; j < 5; ++j) {
       ev->slip[j] = slip ? (*slip)[j] : sign_of(ev->w[j]);
-      phi[j] = ev->slip[j] == kStuck
-                   ? T(0)
-                   : p.friction.pin_radius[j] * friction_law(p.friction, j, ev->w[j], ev->slip[j]);
+      if (ev->slip[j] == kStuck) {
+        phi[j] = T(0);
+      } else if (p.friction.law == FrictionLaw::kLuGre) {
+        const T z = bristle ? (*bristle)[j] : T(0);
+        phi[j] = p.friction.pin_radius[j] * lugre_law(p.friction, j, ev->w[j], z, &ev->zdot[j]);
+      } else {
+        phi[j] = p.friction.pin_radius[j] * friction_law(p.friction, j, ev->w[j], ev->slip[j]);
+      }
     }
     st = detail::friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations);
     if (!st.ok()) return st;

@@ -21,6 +21,10 @@ enum class FrictionLaw : int {
   kCoulombViscous = 1,  ///< f(w) = mu_c sign(w) + mu_v w (the paper's law)
   /// f(w) = (mu_c + (mu_s - mu_c) exp(-|w / w_st|^delta)) sign(w) + mu_v w
   kStribeck = 2,
+  /// LuGre: f = sigma0 z + sigma1 dz/dt + sigma2 w, dz/dt = w - sigma0 |w| z / g(w), with the
+  /// Stribeck curve g(w) = mu_c + (mu_s - mu_c) exp(-|w / w_st|^delta); one bristle state z per
+  /// joint [rad], a stiff system for large sigma0
+  kLuGre = 3,
 };
 
 /// One moving link i: length l_i, mass m_i, inertia J_i about its centre of mass, and the centre
@@ -51,6 +55,9 @@ struct FrictionParams {
   std::array<T, kJoints> static_coulomb{};
   std::array<T, kJoints> stribeck_velocity{};  ///< w_st,k [rad/s] (kStribeck)
   std::array<T, kJoints> stribeck_exponent{};  ///< delta_k [-] (kStribeck), usually 2
+  std::array<T, kJoints> sigma0{};  ///< bristle stiffness [1/rad] (kLuGre)
+  std::array<T, kJoints> sigma1{};  ///< bristle damping [s/rad] (kLuGre)
+  std::array<T, kJoints> sigma2{};  ///< viscous coefficient [s/rad] (kLuGre)
   /// w_s [rad/s]: 0 uses the exact sign(w); w_s > 0 replaces sign(w) by tanh(w / w_s), the smooth
   /// form used where derivatives across w = 0 are needed (identification, optimization).
   T smoothing_velocity{};
@@ -68,6 +75,9 @@ struct FrictionParams {
       out.static_coulomb[k] = U(static_coulomb[k]);
       out.stribeck_velocity[k] = U(stribeck_velocity[k]);
       out.stribeck_exponent[k] = U(stribeck_exponent[k]);
+      out.sigma0[k] = U(sigma0[k]);
+      out.sigma1[k] = U(sigma1[k]);
+      out.sigma2[k] = U(sigma2[k]);
     }
     out.smoothing_velocity = U(smoothing_velocity);
     return out;
