@@ -1,0 +1,241 @@
+// fivebar accuracy SCENE [--out DIR] [--set ...] [--repeats N] [--tolerances LIST]
+//                        [--methods LIST] [--reference CSV]
+// Work-precision study: every integrator and friction treatment across tolerances, error against
+// the toolkit's own tight reference vs wall time; work_precision.csv, work_precision.png, and the
+// recommended default from the Pareto front.
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "fivebar/io/command.h"
+#include "fivebar/io/csv.h"
+#include "fivebar/io/errors.h"
+#include "fivebar/io/json.h"
+#include "fivebar/io/loads.h"
+#include "fivebar/io/output.h"
+#include "fivebar/io/plots.h"
+#include "fivebar/io/scene.h"
+#include "fivebar/sim/accuracy.h"
+
+namespace fivebar::io {
+namespace {
+
+struct Args {
+  SceneArgs scene;
+  int repeats = 3;
+  std::vector<double> tolerances;
+  std::vector<std::string> methods;
+  std::string reference;  ///< an external reference CSV (t, theta1..theta4) to check ours against
+  bool no_plots = false;
+};
+
+const std::vector<std::string> kOutputs = {"work_precision.csv", "work_precision.png",
+                                           "work_precision.gnuplot", "summary.json"};
+
+std::string fmt(double x, const char* format = "%.3g") {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, x);
+  return buf;
+}
+
+/// max |d theta| between our reference rows and an external CSV, on the times both have.
+double against_external(const std::string& path, const std::vector<sim::Row>& rows, double step) {
+  const CsvTable table = read_csv(path);
+  const int t_col = table.require("t");
+  int cols[4];
+  for (int k = 0; k < 4; ++k) cols[k] = table.require("theta" + std::to_string(k + 1));
+  double worst = 0.0;
+  long matched = 0;
+  for (const auto& r : table.rows) {
+    const long i = std::lround(r[t_col] / step);
+    if (i < 0 || i >= static_cast<long>(rows.size()) || std::abs(rows[i].t - r[t_col]) > 1e-9) {
+      continue;
+    }
+    ++matched;
+    for (int k = 0; k < 4; ++k) worst = std::max(worst, std::abs(rows[i].theta[k] - r[cols[k]]));
+  }
+  if (matched == 0) throw InputError(path, "t", "no time in common with the scene's output grid");
+  return worst;
+}
+
+std::string plot_script(const sim::WorkPrecision& wp, const std::string& title,
+                        const std::string& terminal) {
+  std::ostringstream s;
+  s << "set terminal " << terminal << " size 1200,850 font ',11'\n"
+    << "set output 'work_precision.png'\n"
+    << "set datafile separator ','\n"
+    << "set logscale xy\nset format x '10^{%L}'\nset format y '10^{%L}'\n"
+    << "set xlabel 'wall time [s] (minimum of repeats)'\n"
+    << "set ylabel 'max |{/Symbol Dq}| over the output grid [rad]'\n"
+    << "set grid\nset key outside right top font ',9'\n"
+    << "set title 'Work-precision: " << title << "'\n";
+  // one line per (method, treatment): filter the CSV rows with awk-free gnuplot ternaries
+  std::vector<std::pair<std::string, std::string>> series;
+  for (const auto& p : wp.points) {
+    const std::pair<std::string, std::string> key{sim::method_name(p.method),
+                                                  sim::treatment_name(p.treatment)};
+    if (std::find(series.begin(), series.end(), key) == series.end()) series.push_back(key);
+  }
+  s << "plot ";
+  const char* dash[] = {"1", "2", "3", "4"};
+  for (size_t i = 0; i < series.size(); ++i) {
+    const auto& [m, t] = series[i];
+    const int ti = t == "exact_located" ? 0 : t == "exact_unlocated" ? 1 : t == "regularized" ? 2 : 3;
+    s << (i ? ", \\\n     " : "") << "'work_precision.csv' using "
+      << "((strcol(1) eq '" << m << "' && strcol(2) eq '" << t
+      << "' && strcol(4) eq 'ok') ? $7 : NaN):5 with linespoints lc " << (i % 6 + 1)
+      << " dt " << dash[ti] << " pt " << (ti + 5) << " title '" << m << " / " << t << "'";
+  }
+  s << "\n";
+  return s.str();
+}
+
+int run(const Args& args) {
+  const Scene scene = load_scene(args.scene.scene, args.scene.sets);
+  const sim::LoadFunction loads = LoadExpressions(scene).function();
+  sim::WorkPrecisionOptions opt;
+  if (args.repeats < 1) throw InputError(scene.path, "--repeats", "must be at least 1");
+  opt.repeats = args.repeats;
+  if (!args.tolerances.empty()) {
+    for (double t : args.tolerances) {
+      if (!(t > 0.0 && t < 1.0)) {
+        throw InputError(scene.path, "--tolerances", fmt(t) + ": a tolerance must be in (0, 1)");
+      }
+    }
+    opt.tolerances = args.tolerances;
+  }
+  if (!args.methods.empty()) {
+    opt.methods.clear();
+    for (const std::string& name : args.methods) {
+      sim::Method m;
+      if (!sim::parse_method(name, &m)) {
+        throw InputError(scene.path, "--methods", "unknown integrator '" + name + "'");
+      }
+      opt.methods.push_back(m);
+    }
+  }
+  if (scene.params.friction.smoothing_velocity > 0.0) {
+    opt.regularization_velocity = scene.params.friction.smoothing_velocity;
+  }
+  OutputDir out(args.scene.out, kOutputs);
+
+  sim::WorkPrecision wp;
+  const Status st = sim::work_precision(scene.params, loads, scene.initial, scene.options, opt, &wp);
+  if (!st.ok()) throw NumericalError(scene.path, "reference", st.message);
+
+  // work_precision.csv
+  std::ostringstream csv;
+  csv << "method,treatment,tolerance,status,error,error_vs_exact,wall_time_s,rhs_evaluations,"
+         "steps,friction_events,pareto,message\n";
+  csv.precision(6);
+  for (const auto& p : wp.points) {
+    std::string msg = p.message;
+    for (char& c : msg) {
+      if (c == ',' || c == '\n') c = ';';
+    }
+    csv << sim::method_name(p.method) << ',' << sim::treatment_name(p.treatment) << ','
+        << p.tolerance << ',' << (p.ok ? "ok" : "failed") << ',' << p.error << ','
+        << p.error_vs_exact << ',' << p.wall_time_s << ',' << p.rhs_evaluations << ',' << p.steps
+        << ',' << p.friction_events << ',' << (p.pareto ? 1 : 0) << ',' << msg << "\n";
+  }
+  write_text_file(out.file("work_precision.csv"), csv.str());
+
+  Json summary = Json::object();
+  summary.set("command", "accuracy");
+  summary.set("scene", scene.path);
+  Json ref = Json::object();
+  ref.set("how", "CVODE Adams and ARKODE Dormand-Prince at rtol = atol = " +
+                     fmt(opt.reference_tolerance) +
+                     ", exact sign with located switches; rows of the Adams run");
+  ref.set("self_difference", wp.exact.self_difference);
+  ref.set("friction_events", wp.exact.stats.friction_events);
+  if (!args.reference.empty()) {
+    const double d = against_external(args.reference, wp.exact.rows, scene.options.output_step);
+    ref.set("external", args.reference);
+    ref.set("max_abs_difference_external", d);
+  }
+  summary.set("reference", std::move(ref));
+  if (!wp.regularized.rows.empty()) {
+    summary.set("regularization_velocity", opt.regularization_velocity);
+    summary.set("regularized_model_error",
+                sim::max_theta_difference(wp.regularized.rows, wp.exact.rows));
+  }
+  Json recs = Json::array();
+  for (const auto& r : wp.recommendations) {
+    Json j = Json::object();
+    j.set("target_error", r.target);
+    j.set("found", r.found);
+    if (r.found) {
+      j.set("integrator", sim::method_name(r.point.method));
+      j.set("treatment", sim::treatment_name(r.point.treatment));
+      j.set("tolerance", r.point.tolerance);
+      j.set("error", r.point.error);
+      j.set("wall_time_s", r.point.wall_time_s);
+    }
+    recs.push(std::move(j));
+  }
+  summary.set("recommendations", std::move(recs));
+  if (!args.no_plots) {
+    const std::string warning =
+        run_gnuplot(out.staging(), "work_precision.gnuplot",
+                    plot_script(wp, std::filesystem::path(scene.path).filename().string(),
+                                gnuplot().terminal));
+    if (!warning.empty()) warn(warning);
+  }
+  write_json_file(out.file("summary.json"), summary);
+  out.commit();
+
+  std::cout << "fivebar accuracy: " << scene.path << ": " << wp.points.size() << " runs\n"
+            << "  reference: Adams vs Dormand-Prince at " << fmt(opt.reference_tolerance)
+            << " differ by " << fmt(wp.exact.self_difference) << " rad";
+  if (!args.reference.empty()) {
+    std::cout << "; vs " << args.reference << ": "
+              << fmt(against_external(args.reference, wp.exact.rows, scene.options.output_step))
+              << " rad";
+  }
+  std::cout << "\n  Pareto front (" << sim::treatment_name(wp.points.front().treatment) << "):\n";
+  for (const auto& p : wp.points) {
+    if (!p.pareto) continue;
+    std::cout << "    " << sim::method_name(p.method) << " tol " << fmt(p.tolerance) << ": error "
+              << fmt(p.error) << " rad in " << fmt(p.wall_time_s * 1e3) << " ms\n";
+  }
+  for (const auto& r : wp.recommendations) {
+    std::cout << "  for " << fmt(r.target) << " rad: ";
+    if (r.found) {
+      std::cout << sim::method_name(r.point.method) << " at rtol = atol = " << fmt(r.point.tolerance)
+                << " (" << fmt(r.point.error) << " rad, " << fmt(r.point.wall_time_s * 1e3)
+                << " ms)\n";
+    } else {
+      std::cout << "not reached\n";
+    }
+  }
+  std::cout << "  wrote " << out.dir() << "/work_precision.csv, work_precision.png, summary.json\n";
+  return 0;
+}
+
+RunFunction setup(CLI::App* app) {
+  auto args = std::make_shared<Args>();
+  add_scene_options(app, &args->scene, "accuracy");
+  app->add_option("--repeats", args->repeats, "runs per point; wall time is their minimum")
+      ->default_val(3);
+  app->add_option("--tolerances", args->tolerances, "rtol = atol values (default 1e-3 .. 1e-12)")
+      ->delimiter(',');
+  app->add_option("--methods", args->methods, "integrators (default: all)")->delimiter(',');
+  app->add_option("--reference", args->reference,
+                  "external reference CSV (t, theta1..theta4) to check the toolkit's own against");
+  app->add_flag("--no-plots", args->no_plots, "do not draw work_precision.png");
+  return [args] { return run(*args); };
+}
+
+const bool kRegistered = register_command(
+    {"accuracy", "work-precision study: error of every integrator and friction treatment vs time",
+     setup});
+
+}  // namespace
+}  // namespace fivebar::io

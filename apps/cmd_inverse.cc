@@ -1,0 +1,222 @@
+// fivebar inverse SCENE --motion MOTION.csv [--out DIR] [--set KEY=VALUE]... [--no-plots]
+// Inverse dynamics along a given motion of the two cranks: the torques M1, M2 that produce it
+// under the scene's other loads, with every joint reaction and friction torque.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "fivebar/io/command.h"
+#include "fivebar/io/csv.h"
+#include "fivebar/io/differences.h"
+#include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
+#include "fivebar/io/json.h"
+#include "fivebar/io/loads.h"
+#include "fivebar/io/output.h"
+#include "fivebar/io/plots.h"
+#include "fivebar/io/scene.h"
+#include "fivebar/sim/simulator.h"
+
+namespace fivebar::io {
+namespace {
+
+struct Args {
+  SceneArgs scene;
+  std::string motion;
+  bool no_plots = false;
+};
+
+const std::vector<std::string> kOutputs = {"trajectory.csv", "summary.json",
+                                           "fig5_inverse_torques.png", "fig6_friction_torques.png",
+                                           "plots.gnuplot"};
+
+// minimum number of samples for the 5-point differences
+constexpr size_t kMinSamplesForDifferences = 5;
+
+// The motion of the two cranks read from a CSV, with where each rate came from.
+struct Motion {
+  std::vector<sim::Row> rows;  // t, theta[0..1], omega[0..1], alpha[0..1] filled
+  std::string omega_source, alpha_source;
+  bool has_torques = false;  // the file has M1, M2 (e.g. a trajectory.csv of simulate)
+  std::vector<double> M1, M2;
+};
+
+Motion read_motion(const std::string& path, const Scene& scene) {
+  const CsvTable table = read_csv(path);
+  const std::vector<double> t = table.column("t");
+  if (t.empty()) throw InputError(path, "(file)", "no data rows after the header");
+  for (size_t i = 1; i < t.size(); ++i) {
+    if (!(t[i] > t[i - 1])) {
+      throw InputError(path, "line " + std::to_string(table.lines[i]) + ", column t",
+                       "t must increase strictly, got " + format_double(t[i]) + " after " +
+                           format_double(t[i - 1]));
+    }
+  }
+  const std::vector<double> theta1 = table.column("theta1"), theta2 = table.column("theta2");
+
+  // each pose must close away from the coupler singularity
+  for (size_t i = 0; i < t.size(); ++i) {
+    const double sine = coupler_sine(scene.params, theta1[i], theta2[i]);
+    if (sine < scene.options.singular_margin) {
+      throw InputError(path, "line " + std::to_string(table.lines[i]),
+                       std::string(sine < 0 ? "the mechanism cannot assemble"
+                                            : "too close to a singular configuration") +
+                           " at theta1 = " + format_double(theta1[i]) +
+                           ", theta2 = " + format_double(theta2[i]));
+    }
+  }
+
+  // rates from the file when it has both columns, else by differences on a uniform grid
+  const bool has_omega = table.has("omega1") && table.has("omega2");
+  const bool has_alpha = table.has("alpha1") && table.has("alpha2");
+  double h = 0;
+  if (!has_omega || !has_alpha) {
+    if (t.size() < kMinSamplesForDifferences) {
+      throw InputError(path, "(file)",
+                       "at least 5 samples are needed to estimate the missing "
+                       "omega/alpha columns by finite differences, got " +
+                           std::to_string(t.size()));
+    }
+    h = uniform_step(t, table.lines, path);
+  }
+  Motion m;
+  std::vector<double> omega1, omega2, alpha1, alpha2;
+  if (has_omega) {
+    omega1 = table.column("omega1");
+    omega2 = table.column("omega2");
+    m.omega_source = "file";
+  } else {
+    omega1 = first_derivative(theta1, h);
+    omega2 = first_derivative(theta2, h);
+    m.omega_source = "5-point central differences of theta";
+  }
+  if (has_alpha) {
+    alpha1 = table.column("alpha1");
+    alpha2 = table.column("alpha2");
+    m.alpha_source = "file";
+  } else if (has_omega) {
+    alpha1 = first_derivative(omega1, h);
+    alpha2 = first_derivative(omega2, h);
+    m.alpha_source = "5-point central differences of omega";
+  } else {
+    alpha1 = second_derivative(theta1, h);
+    alpha2 = second_derivative(theta2, h);
+    m.alpha_source = "5-point central second differences of theta";
+  }
+  m.rows.resize(t.size());
+  for (size_t i = 0; i < t.size(); ++i) {
+    sim::Row& r = m.rows[i];
+    r.t = t[i];
+    r.theta[0] = theta1[i];
+    r.theta[1] = theta2[i];
+    r.omega[0] = omega1[i];
+    r.omega[1] = omega2[i];
+    r.alpha[0] = alpha1[i];
+    r.alpha[1] = alpha2[i];
+  }
+  m.has_torques = table.has("M1") && table.has("M2");
+  if (m.has_torques) {
+    m.M1 = table.column("M1");
+    m.M2 = table.column("M2");
+  }
+  return m;
+}
+
+int run(const Args& args) {
+  const auto start = std::chrono::steady_clock::now();
+  const Scene scene = load_scene(args.scene.scene, args.scene.sets);
+  const sim::LoadFunction loads = LoadExpressions(scene).function();
+  const Motion motion = read_motion(args.motion, scene);
+  OutputDir out(args.scene.out, kOutputs);
+
+  std::vector<sim::Row> rows;
+  const Status status = sim::inverse_rows(scene.params, loads, motion.rows, &rows);
+  if (!status.ok()) throw NumericalError(args.motion, "inverse dynamics", status.message);
+
+  // the file's own torques, when it has them, beside the inverse-dynamics ones
+  std::vector<Column> extra;
+  double max_error = 0, max_m1 = 0, max_m2 = 0;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    max_m1 = std::max(max_m1, std::fabs(rows[i].M1));
+    max_m2 = std::max(max_m2, std::fabs(rows[i].M2));
+    if (motion.has_torques) {
+      max_error = std::max(
+          {max_error, std::fabs(rows[i].M1 - motion.M1[i]), std::fabs(rows[i].M2 - motion.M2[i])});
+    }
+  }
+  if (motion.has_torques) extra = {{"M1_input", motion.M1}, {"M2_input", motion.M2}};
+  write_trajectory_csv(out.file("trajectory.csv"), rows, extra);
+
+  Json summary = Json::object();
+  summary.set("command", "inverse");
+  summary.set("scene", scene.path);
+  summary.set("motion", args.motion);
+  Json sets = Json::array();
+  for (const std::string& s : args.scene.sets) sets.push(s);
+  summary.set("sets", std::move(sets));
+  summary.set("samples", static_cast<long>(rows.size()));
+  summary.set("t_start", rows.front().t);
+  summary.set("t_end", rows.back().t);
+  summary.set("omega_source", motion.omega_source);
+  summary.set("alpha_source", motion.alpha_source);
+  summary.set("rates_estimated", motion.omega_source != "file" || motion.alpha_source != "file");
+  summary.set("friction_model", friction_law_name(scene.params.friction.law));
+  summary.set("max_abs_M1", max_m1);
+  summary.set("max_abs_M2", max_m2);
+  summary.set("E_diss", rows.back().E_diss);
+  if (motion.has_torques) summary.set("inverse_dynamics_max_abs_error", max_error);
+
+  if (!args.no_plots) {
+    const std::string warning =
+        plot_inverse(out.staging(), "trajectory.csv", motion.has_torques,
+                     std::filesystem::path(args.motion).filename().string());
+    if (!warning.empty()) warn(warning);
+  }
+  summary.set("wall_time_s",
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  write_json_file(out.file("summary.json"), summary);
+  const std::vector<std::string> written = out.commit();
+
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "  %zu samples, t = %g .. %g s; max |M1| = %.4g N m, "
+                "max |M2| = %.4g N m, E_diss = %.6g J\n",
+                rows.size(), rows.front().t, rows.back().t, max_m1, max_m2, rows.back().E_diss);
+  std::cout << "fivebar inverse: " << args.motion << " under " << scene.path << "\n" << line;
+  if (motion.omega_source != "file" || motion.alpha_source != "file") {
+    std::cout << "  rates estimated: omega from " << motion.omega_source << ", alpha from "
+              << motion.alpha_source << "\n";
+  }
+  if (motion.has_torques) {
+    std::snprintf(line, sizeof line, "  max |M - M_file| = %.3e N m\n", max_error);
+    std::cout << line;
+  }
+  std::cout << "  wrote " << out.dir() << "/:";
+  for (const std::string& name : written) std::cout << " " << name;
+  std::cout << std::endl;
+  return 0;
+}
+
+RunFunction setup(CLI::App* app) {
+  auto args = std::make_shared<Args>();
+  add_scene_options(app, &args->scene, "inverse");
+  app->add_option("--motion", args->motion,
+                  "CSV with t, theta1, theta2 and optionally omega1, omega2, alpha1, alpha2 "
+                  "(a trajectory.csv of simulate works)")
+      ->type_name("MOTION.csv")
+      ->required();
+  app->add_flag("--no-plots", args->no_plots, "do not draw the figures (gnuplot)");
+  return [args] { return run(*args); };
+}
+
+const bool kRegistered = register_command(
+    {"inverse", "inverse dynamics along a given motion: driving torques, reactions, friction",
+     setup});
+
+}  // namespace
+}  // namespace fivebar::io

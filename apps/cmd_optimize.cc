@@ -1,0 +1,226 @@
+// fivebar optimize SCENE --tasks TASKS.yaml [--out DIR] [--threads N] [--set KEY=VALUE]...
+//   [--method slsqp|mma|ccsaq] [--global] [--starts N] [--objective dissipated_energy|input_energy]
+//   [--control-points N] [--quadrature-points N] [--singular-margin M] [--no-validate] [--no-plots]
+// Minimum-dissipation rest-to-rest trajectories for every task of a tasks file (issue 5):
+// summary.csv (one row per task, the minimum-jerk baseline beside each result), per task
+// DIR/<task>/trajectory.csv, baseline.csv and figures. Under mpirun the tasks are split across
+// ranks and rank 0 writes the same files as a one-process run.
+#include <CLI/CLI.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <unistd.h>
+
+#include "fivebar/io/command.h"
+#include "fivebar/io/errors.h"
+#include "fivebar/io/loads.h"
+#include "fivebar/io/output.h"
+#include "fivebar/io/plots.h"
+#include "fivebar/io/scene.h"
+#include "fivebar/trajectory/batch.h"
+#include "fivebar/trajectory/distributed.h"
+#include "fivebar/trajectory/tasks.h"
+
+namespace fivebar::io {
+namespace {
+
+namespace fs = std::filesystem;
+using trajectory::TaskResult;
+
+struct Args {
+  SceneArgs scene;
+  std::string tasks;
+  int threads = 0;
+  std::string method = "slsqp";
+  std::string objective = "dissipated_energy";
+  bool global = false;
+  int starts = 8;
+  int control_points = 10;
+  int quadrature_points = 12;
+  double singular_margin = 0.1;
+  bool no_validate = false;
+  bool no_plots = false;
+};
+
+// the options of the batch from the command line (InputError on bad values)
+trajectory::BatchOptions batch_options(const Args& a) {
+  trajectory::BatchOptions o;
+  if (!trajectory::parse_method(a.method, &o.optimizer.method)) {
+    throw InputError("command line", "--method", "'" + a.method + "' is not slsqp, mma or ccsaq");
+  }
+  if (!trajectory::parse_objective(a.objective, &o.problem.objective)) {
+    throw InputError("command line", "--objective",
+                     "'" + a.objective + "' is not dissipated_energy or input_energy");
+  }
+  if (a.control_points < 7 || a.control_points > 60) {
+    throw InputError("command line", "--control-points", "expected an integer in [7, 60]");
+  }
+  if (a.quadrature_points < 2 || a.quadrature_points > 64) {
+    throw InputError("command line", "--quadrature-points", "expected an integer in [2, 64]");
+  }
+  if (!(a.singular_margin >= 0 && a.singular_margin < 1)) {
+    throw InputError("command line", "--singular-margin", "expected a number in [0, 1)");
+  }
+  if (a.starts < 1) throw InputError("command line", "--starts", "expected an integer >= 1");
+  o.optimizer.global = a.global;
+  o.optimizer.starts = a.starts;
+  o.problem.control_points = a.control_points;
+  o.problem.quadrature_points = a.quadrature_points;
+  o.problem.singular_margin = a.singular_margin;
+  o.validate = !a.no_validate;
+  return o;
+}
+
+std::vector<trajectory::TaskSpec> read_tasks(const std::string& path) {
+  try {
+    return trajectory::load_tasks(path);
+  } catch (const trajectory::TaskFileError& e) {
+    throw InputError(e.file(), e.key(), e.reason());
+  }
+}
+
+// x and y of point C for each row (extra trajectory.csv columns, for the path figure)
+std::vector<Column> point_c_columns(const Params<double>& p, const std::vector<sim::Row>& rows) {
+  Column x{"x_C", {}}, y{"y_C", {}};
+  for (const sim::Row& r : rows) {
+    x.values.push_back(p.links[0].length * std::cos(r.theta[0]) +
+                       p.links[2].length * std::cos(r.theta[2]));
+    y.values.push_back(p.links[0].length * std::sin(r.theta[0]) +
+                       p.links[2].length * std::sin(r.theta[2]));
+  }
+  return {x, y};
+}
+
+// writes `path` through a temporary name in the same directory, then renames it
+template <typename Write>
+void write_atomic(const fs::path& path, Write&& write) {
+  const fs::path tmp = path.parent_path() / ("." + path.filename().string() + ".partial");
+  write(tmp.string());
+  fs::rename(tmp, path);
+}
+
+std::string plot_script(const std::string& task, double limit, const std::string& terminal) {
+  std::string s = "set datafile separator ','\nset terminal " + terminal +
+                  " size 900,600\nset key autotitle columnhead\nset grid\n";
+  s += "set output 'path_C.png'\nset title '" + task + ": path of C'\nset size ratio -1\n"
+       "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
+       "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 title 'optimal', "
+       "'baseline.csv' using 'x_C':'y_C' with lines dt 2 title 'minimum jerk'\n"
+       "set size noratio\n";
+  s += "set output 'torques.png'\nset title '" + task + ": motor torques'\n"
+       "set xlabel 't [s]'\nset ylabel 'torque [N m]'\n"
+       "plot 'trajectory.csv' using 't':'M1' with lines lw 2 title 'M1', "
+       "'trajectory.csv' using 't':'M2' with lines lw 2 title 'M2', "
+       "'baseline.csv' using 't':'M1' with lines dt 2 title 'M1 minimum jerk', "
+       "'baseline.csv' using 't':'M2' with lines dt 2 title 'M2 minimum jerk'";
+  if (std::isfinite(limit)) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.6g", limit);
+    s += std::string(", ") + buf + " dt 3 lc 'black' title 'limit', -" + buf +
+         " dt 3 lc 'black' notitle";
+  }
+  s += "\nset output 'energy.png'\nset title '" + task +
+       ": dissipated energy'\nset ylabel 'E_diss [J]'\n"
+       "plot 'trajectory.csv' using 't':'E_diss' with lines lw 2 title 'optimal', "
+       "'baseline.csv' using 't':'E_diss' with lines dt 2 title 'minimum jerk'\n";
+  return s;
+}
+
+// trajectory.csv, baseline.csv and the figures of one solved task, in DIR/<task>/
+std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult& r,
+                       const trajectory::BatchOptions& options, bool plots) {
+  const sim::LoadFunction loads = LoadExpressions(scene).function();
+  const trajectory::TrajectoryProblem problem =
+      trajectory::problem_of(scene.params, loads, r, options);
+  std::vector<sim::Row> rows, base;
+  const double step = std::min(scene.options.output_step, r.duration / 10);
+  const Status s1 = problem.rows(r.x.data(), step, &rows);
+  const std::vector<double> x0 = problem.motion().minimum_jerk();
+  const Status s2 = problem.rows(x0.data(), step, &base);
+  if (!s1.ok() || !s2.ok()) return r.task + ": trajectory rows: " + (s1.ok() ? s2 : s1).message;
+  fs::create_directories(dir);
+  write_atomic(dir / "trajectory.csv", [&](const std::string& p) {
+    write_trajectory_csv(p, rows, point_c_columns(problem.params(), rows));
+  });
+  write_atomic(dir / "baseline.csv", [&](const std::string& p) {
+    write_trajectory_csv(p, base, point_c_columns(problem.params(), base));
+  });
+  if (!plots) return "";
+  return run_gnuplot(dir.string(), "plots.gnuplot",
+                     plot_script(r.task, r.torque_limit, gnuplot().terminal));
+}
+
+int run(const Args& args) {
+  const Scene scene = load_scene(args.scene.scene, args.scene.sets);
+  const std::vector<trajectory::TaskSpec> tasks = read_tasks(args.tasks);
+  const trajectory::BatchOptions options = batch_options(args);
+  const int rank = trajectory::process_rank();
+  const bool tty = rank == 0 && isatty(STDERR_FILENO);
+
+  // every task on the pool of threads (and across MPI ranks); a result depends only on its task
+  const int n = static_cast<int>(tasks.size());
+  const std::vector<TaskResult> results = trajectory::run_distributed(
+      n, args.threads,
+      [&](int i) {
+        const sim::LoadFunction loads = LoadExpressions(scene).function();  // this thread's
+        return trajectory::run_task(scene.params, loads, tasks[i], scene.initial, options);
+      },
+      [&](int done, int count) {
+        if (tty) std::cerr << "\roptimize: " << done << "/" << count << " tasks" << std::flush;
+      });
+  if (tty) std::cerr << "\n";
+  if (rank != 0) return 0;
+
+  // per-task files first, summary.csv last (its presence marks a complete run)
+  OutputDir out(args.scene.out, {"summary.csv"});
+  for (const TaskResult& r : results) {
+    if (!r.solved()) continue;
+    const std::string warning = write_task(fs::path(args.scene.out) / r.task, scene, r, options,
+                                           !args.no_plots && gnuplot().available);
+    if (!warning.empty()) warn(warning);
+  }
+  std::string csv = trajectory::csv_line(trajectory::summary_columns());
+  for (const TaskResult& r : results) csv += trajectory::csv_line(trajectory::summary_fields(r));
+  write_text_file(out.file("summary.csv"), csv);
+  out.commit();
+
+  // one line per task on stdout
+  for (const TaskResult& r : results) {
+    std::printf("%-20s %-22s E %.6g J  baseline %.6g J  peak %.4g N m  miss %.3g m  %.3f s\n",
+                r.task.c_str(), r.status.c_str(), r.dissipated_energy,
+                r.baseline_dissipated_energy, r.peak_torque, r.miss_distance, r.wall_time_s);
+  }
+  return 0;
+}
+
+RunFunction setup(CLI::App* app) {
+  auto args = std::make_shared<Args>();
+  add_scene_options(app, &args->scene, "optimize");
+  app->add_option("--tasks", args->tasks, "tasks file (YAML, interfaces.md)")->required();
+  app->add_option("--threads", args->threads, "worker threads (default: all cores)");
+  app->add_option("--method", args->method, "NLopt algorithm: slsqp (default), mma, ccsaq");
+  app->add_option("--objective", args->objective,
+                  "dissipated_energy (default) or input_energy");
+  app->add_flag("--global", args->global,
+                "multi-start: the local method from seeded perturbed starts too, best kept");
+  app->add_option("--starts", args->starts, "starts of --global (default 8)");
+  app->add_option("--control-points", args->control_points,
+                  "B-spline control points per joint (default 10, 4 free)");
+  app->add_option("--quadrature-points", args->quadrature_points,
+                  "Gauss-Legendre points per knot span (default 12)");
+  app->add_option("--singular-margin", args->singular_margin,
+                  "minimum |sin(theta4 - theta3)| along the motion (default 0.1)");
+  app->add_flag("--no-validate", args->no_validate,
+                "skip the forward simulation of the optimal torques (miss_distance)");
+  app->add_flag("--no-plots", args->no_plots, "do not draw figures");
+  return [args] { return run(*args); };
+}
+
+const bool kRegistered =
+    register_command({"optimize", "minimum-dissipation trajectories for a tasks file", setup});
+
+}  // namespace
+}  // namespace fivebar::io

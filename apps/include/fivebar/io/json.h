@@ -1,0 +1,55 @@
+// A small JSON value for run summaries (summary.json, identification.json): objects keep their
+// keys in insertion order; numbers are written in shortest round-trip form, non-finite ones as
+// null (JSON has no NaN).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace fivebar::io {
+
+class Json {
+ public:
+  enum class Type { kNull, kBool, kNumber, kInteger, kString, kArray, kObject };
+
+  Json() = default;  ///< null
+  Json(bool b) : type_(Type::kBool), bool_(b) {}
+  Json(double x) : type_(Type::kNumber), number_(x) {}
+  Json(int i) : type_(Type::kInteger), integer_(i) {}
+  Json(long i) : type_(Type::kInteger), integer_(i) {}
+  Json(long long i) : type_(Type::kInteger), integer_(i) {}
+  Json(unsigned long i) : type_(Type::kInteger), integer_(static_cast<long long>(i)) {}
+  Json(std::string s) : type_(Type::kString), string_(std::move(s)) {}
+  Json(const char* s) : type_(Type::kString), string_(s) {}
+
+  static Json object() { return Json(Type::kObject); }
+  static Json array() { return Json(Type::kArray); }
+
+  /// Object: sets `key` (replacing an existing one in place). Returns *this for chaining.
+  Json& set(const std::string& key, Json value);
+  /// Object: the member `key`, created as null when absent.
+  Json& operator[](const std::string& key);
+  /// Array: appends `value`.
+  Json& push(Json value);
+
+  Type type() const { return type_; }
+  /// Text with `indent` spaces per level; 0 writes one line.
+  std::string dump(int indent = 2) const;
+
+ private:
+  explicit Json(Type t) : type_(t) {}
+  void dump(std::string* out, int indent, int depth) const;
+
+  Type type_ = Type::kNull;
+  bool bool_ = false;
+  double number_ = 0;
+  long long integer_ = 0;
+  std::string string_;
+  std::vector<std::string> keys_;  // object member names, parallel to items_
+  std::vector<Json> items_;        // array elements or object member values
+};
+
+/// `s` as a JSON string literal, quotes included.
+std::string json_quote(const std::string& s);
+
+}  // namespace fivebar::io

@@ -1,0 +1,66 @@
+// Output files of a run: trajectory.csv, text files, and the directory that receives them
+// atomically.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fivebar/io/json.h"
+#include "fivebar/sim/simulator.h"
+
+namespace fivebar::io {
+
+/// The columns of trajectory.csv, in order: those of interfaces.md
+/// (t, theta1..4, omega1..4, alpha1..4, M1, M2, N1..5, Mf1..5, P_diss, E_diss), then W_in, W_ext.
+const std::vector<std::string>& trajectory_columns();
+
+/// An extra column appended after the standard ones (one value per row).
+struct Column {
+  std::string name;
+  std::vector<double> values;
+};
+
+/// Writes rows as trajectory.csv: header trajectory_columns() then `extra` names, one line per
+/// row, every number in shortest round-trip form (as exact as %.17g). Throws InputError on a
+/// write failure or an extra column whose length differs from rows.size().
+void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& rows,
+                          const std::vector<Column>& extra = {});
+
+/// Writes `text` to `path`; throws InputError(`<path>: (write): <errno text>`) on failure.
+void write_text_file(const std::string& path, const std::string& text);
+
+/// Writes json.dump() and a final newline.
+void write_json_file(const std::string& path, const Json& json);
+
+/// The output directory of one run, written atomically.
+///
+/// Files are created in a staging directory DIR/.partial-XXXXXX (file()) and only appear in DIR
+/// at commit(), each by rename(2) within the same file system, summary.json last. The constructor
+/// also deletes from DIR the files named in `outputs` (what this run will write), so after a run
+/// that fails (or is killed) DIR holds none of the previous run's results under those names:
+/// nothing in DIR can be mistaken for the output of the failed run. A staging directory left by
+/// a killed process is hidden (leading dot) and can be deleted.
+class OutputDir {
+ public:
+  /// Creates DIR (and parents) and the staging directory. Throws InputError(`<dir>: --out: ...`).
+  OutputDir(const std::string& dir, const std::vector<std::string>& outputs);
+  /// Without commit(): removes the staging directory and everything in it.
+  ~OutputDir();
+  OutputDir(const OutputDir&) = delete;
+  OutputDir& operator=(const OutputDir&) = delete;
+
+  /// Path of `name` inside the staging directory (where the run writes it).
+  std::string file(const std::string& name) const;
+  const std::string& staging() const { return staging_; }
+  const std::string& dir() const { return dir_; }
+
+  /// Moves every regular file of the staging directory into DIR (replacing files of the same
+  /// name; summary.json last) and removes the staging directory. Returns the names moved, sorted.
+  std::vector<std::string> commit();
+
+ private:
+  std::string dir_, staging_;
+  bool committed_ = false;
+};
+
+}  // namespace fivebar::io

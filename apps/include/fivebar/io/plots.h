@@ -1,0 +1,51 @@
+// Figures with gnuplot, run as a subprocess on a generated script that reads the CSV files of a
+// run. Plots are not essential: every function here reports problems as warnings (returned
+// strings) and never throws.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace fivebar::io {
+
+/// The gnuplot found on PATH (or named by the environment variable FIVEBAR_GNUPLOT), probed once.
+struct Gnuplot {
+  bool available = false;
+  std::string executable;  ///< full path
+  std::string terminal;    ///< "pngcairo" if gnuplot has it, else "png"
+};
+const Gnuplot& gnuplot();
+
+/// Writes `script` to dir/`script_name` and runs gnuplot on it with `dir` as working directory,
+/// so the script reads and writes files by their names in `dir`. Returns "" on success, else a
+/// one-line warning (gnuplot missing, or its first error line).
+std::string run_gnuplot(const std::string& dir, const std::string& script_name,
+                        const std::string& script);
+
+/// The figures of `simulate`, from the files in one directory.
+struct SimulationFigures {
+  std::string trajectory = "trajectory.csv";
+  std::string frictionless;  ///< the frictionless twin's trajectory, or "" when there is none
+  bool inverse = true;       ///< trajectory has M1_inverse, M2_inverse: draw fig5
+  std::string title;         ///< shown in every figure title (e.g. the scene file name)
+};
+
+/// gnuplot script drawing fig2_angles.png, fig3_rates.png, fig4_accelerations.png (theta,
+/// omega, alpha of links 1..4 vs t; friction solid, frictionless twin dashed), and, when
+/// asked, fig5_inverse_torques.png (input M1, M2 against the inverse-dynamics torques and their
+/// difference) and fig6_friction_torques.png (Mf1..Mf5 vs t).
+std::string simulation_plot_script(const SimulationFigures& figures, const std::string& terminal);
+
+/// Draws the figures of simulation_plot_script in `dir` (script kept as dir/plots.gnuplot).
+/// Returns "" or a warning.
+std::string plot_simulation(const std::string& dir, const SimulationFigures& figures);
+
+/// The figures of `inverse`: fig5_inverse_torques.png (M1, M2 of `trajectory`; against the
+/// columns M1_input, M2_input and their difference when `has_input`) and
+/// fig6_friction_torques.png. Returns "" or a warning.
+std::string inverse_plot_script(const std::string& trajectory, bool has_input,
+                                const std::string& title, const std::string& terminal);
+std::string plot_inverse(const std::string& dir, const std::string& trajectory, bool has_input,
+                         const std::string& title);
+
+}  // namespace fivebar::io

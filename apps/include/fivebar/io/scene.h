@@ -1,0 +1,70 @@
+// Scene files (interfaces.md, "Scene file"): YAML in, validated Scene out, and back to YAML.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fivebar/model/params.h"
+#include "fivebar/sim/simulator.h"
+
+namespace fivebar::io {
+
+/// Everything a scene file describes, validated.
+struct Scene {
+  Params<double> params;
+  /// Load expressions of t (muParser syntax, `pi` defined): M1, M2, M3 [N m], F [N].
+  std::string M1 = "0", M2 = "0", M3 = "0", F = "0";
+  double F_angle = 0;  ///< [rad] direction of F measured from link 3
+  sim::Initial initial;
+  sim::Options options;
+  std::string path;  ///< the file it came from, as given (used in every error message)
+};
+
+/// Reads and validates a scene file, after applying `sets` ("dotted.key=value", interfaces.md
+/// `--set`) in order. Keys absent from the file get their documented default (the schema below);
+/// a --set may name such a key. Throws InputError(`<path>: <dotted key>: <reason>`) on a missing
+/// file, malformed YAML (with line and column), an unknown key anywhere, a value of the wrong
+/// type or outside its domain, load expressions that do not compile or are not finite, and an
+/// initial pose that cannot assemble or lies within `simulation.singular_margin` of a singular
+/// configuration.
+///
+/// Schema (R: required; otherwise the default in brackets):
+///   mechanism.ground_length R (> 0)   mechanism.point_p R        mechanism.assembly [elbow_up]
+///   mechanism.links: 4 x {length R (> 0), mass R (> 0), inertia R (> 0), com_offset R (>= 0),
+///                         com_angle [0]}
+///   gravity [9.81]
+///   friction.model [none]: none | coulomb_viscous | stribeck | lugre
+///   friction coefficients, each one number or a list of 5 (O, B, C, D, D0), all >= 0:
+///     pin_radius (> 0), coulomb: R when the model is not none
+///     viscous: R for coulomb_viscous and stribeck [0]
+///     static_coulomb [= coulomb]         stribeck_velocity: R (> 0) for stribeck [0]
+///     stribeck_exponent [2] (> 0)        sigma0: R (> 0) for lugre [0]     sigma1, sigma2 [0]
+///   friction.smoothing_velocity [0] (>= 0)
+///   loads.M1, .M2, .M3, .F ["0"]: expressions of t.   loads.F_angle [0]
+///   initial.theta1, .theta2 R; initial.omega1, .omega2 [0]
+///   simulation.* [sim::Options]: duration (> 0), output_step (in (0, duration]), integrator
+///     (sim::method_name), rtol, atol (in (0, 1)), locate_switches, stick, max_steps (>= 1),
+///     singular_margin (in [0, 1)), friction_tol (in (0, 1)), friction_max_iter (>= 1)
+Scene load_scene(const std::string& path, const std::vector<std::string>& sets = {});
+
+/// Parses a scene from YAML text; `path` only names it in error messages.
+Scene parse_scene(const std::string& yaml_text, const std::string& path,
+                  const std::vector<std::string>& sets = {});
+
+/// Writes a scene as YAML in the layout of datasets/scenes/paper.yaml, every key explicit and
+/// every number in shortest round-trip form: parse_scene(scene_to_yaml(s)) reproduces s.
+std::string scene_to_yaml(const Scene& scene);
+
+/// Name of an integrator (scene key `simulation.integrator`): sim::method_name.
+const char* integrator_name(sim::Method method);
+/// sim::parse_method: false if `name` is not an integrator name.
+bool parse_integrator(const std::string& name, sim::Method* out);
+
+/// Name of a friction law (scene key `friction.model`): none, coulomb_viscous, stribeck, lugre.
+const char* friction_law_name(FrictionLaw law);
+
+/// |sin(th4 - th3)| at (theta1, theta2) from closed-form triangle geometry, or -1 when the
+/// mechanism cannot close there (|BD| outside [|l3 - l4|, l3 + l4]). Independent of the assembly.
+double coupler_sine(const Params<double>& params, double theta1, double theta2);
+
+}  // namespace fivebar::io

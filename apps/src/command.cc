@@ -1,0 +1,52 @@
+#include "fivebar/io/command.h"
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <iostream>
+
+namespace fivebar::io {
+namespace {
+
+// constructed on first use, so that registration from any translation unit's static
+// initializers is safe
+std::vector<Command>& registry() {
+  static std::vector<Command> commands;
+  return commands;
+}
+
+}  // namespace
+
+bool register_command(Command command) {
+  registry().push_back(std::move(command));
+  return true;
+}
+
+std::vector<Command> registered_commands() {
+  std::vector<Command> commands = registry();
+  std::sort(commands.begin(), commands.end(),
+            [](const Command& a, const Command& b) { return a.name < b.name; });
+  return commands;
+}
+
+void add_out_option(CLI::App* app, std::string* out, const std::string& command) {
+  *out = "results/" + command;
+  app->add_option("--out", *out, "directory that receives every output file")
+      ->type_name("DIR")
+      ->capture_default_str();
+}
+
+void add_scene_options(CLI::App* app, SceneArgs* args, const std::string& command) {
+  app->add_option("SCENE", args->scene, "scene file (YAML, see datasets/scenes/)")
+      ->type_name("FILE")
+      ->required();
+  add_out_option(app, &args->out, command);
+  app->add_option("--set", args->sets,
+                  "override one scene value: dotted key, list elements by 0-based index, e.g. "
+                  "--set friction.coulomb=0.2 --set mechanism.links.2.mass=1.5")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);  // one KEY=VALUE per --set
+}
+
+void warn(const std::string& message) { std::cerr << "fivebar: warning: " << message << "\n"; }
+
+}  // namespace fivebar::io

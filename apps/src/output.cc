@@ -1,0 +1,168 @@
+#include "fivebar/io/output.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <system_error>
+
+#include "fivebar/io/errors.h"
+
+namespace fivebar::io {
+namespace fs = std::filesystem;
+
+namespace {
+
+// a FILE* that closes itself
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+using File = std::unique_ptr<std::FILE, FileCloser>;
+
+File open_for_writing(const std::string& path) {
+  File f(std::fopen(path.c_str(), "wb"));
+  if (!f) throw InputError(path, "(write)", std::string("cannot create: ") + std::strerror(errno));
+  return f;
+}
+
+void close_checked(File f, const std::string& path) {
+  std::FILE* raw = f.release();
+  const bool failed = std::ferror(raw) != 0;
+  if (std::fclose(raw) != 0 || failed) {
+    throw InputError(path, "(write)", std::string("write failed: ") + std::strerror(errno));
+  }
+}
+
+// appends x in shortest round-trip form and a separator
+inline void append_number(std::string* line, double x, char sep) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, x);
+  line->append(buf, r.ptr);
+  line->push_back(sep);
+}
+
+}  // namespace
+
+const std::vector<std::string>& trajectory_columns() {
+  static const std::vector<std::string> columns = [] {
+    std::vector<std::string> c = {"t"};
+    for (const char* q : {"theta", "omega", "alpha"}) {
+      for (int i = 1; i <= 4; ++i) c.push_back(q + std::to_string(i));
+    }
+    c.push_back("M1");
+    c.push_back("M2");
+    for (const char* q : {"N", "Mf"}) {
+      for (int k = 1; k <= 5; ++k) c.push_back(q + std::to_string(k));
+    }
+    for (const char* q : {"P_diss", "E_diss", "W_in", "W_ext"}) c.push_back(q);
+    return c;
+  }();
+  return columns;
+}
+
+void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& rows,
+                          const std::vector<Column>& extra) {
+  for (const Column& c : extra) {
+    if (c.values.size() != rows.size()) {
+      throw InputError(path, c.name,
+                       "internal: column has " + std::to_string(c.values.size()) + " values for " +
+                           std::to_string(rows.size()) + " rows");
+    }
+  }
+  File f = open_for_writing(path);
+  std::string line;
+  for (const std::string& name : trajectory_columns()) line += name + ",";
+  for (const Column& c : extra) line += c.name + ",";
+  line.back() = '\n';
+  std::fputs(line.c_str(), f.get());
+
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const sim::Row& r = rows[i];
+    line.clear();
+    append_number(&line, r.t, ',');
+    for (double x : r.theta) append_number(&line, x, ',');
+    for (double x : r.omega) append_number(&line, x, ',');
+    for (double x : r.alpha) append_number(&line, x, ',');
+    append_number(&line, r.M1, ',');
+    append_number(&line, r.M2, ',');
+    for (double x : r.N) append_number(&line, x, ',');
+    for (double x : r.Mf) append_number(&line, x, ',');
+    for (double x : {r.P_diss, r.E_diss, r.W_in, r.W_ext}) append_number(&line, x, ',');
+    for (const Column& c : extra) append_number(&line, c.values[i], ',');
+    line.back() = '\n';
+    std::fwrite(line.data(), 1, line.size(), f.get());
+  }
+  close_checked(std::move(f), path);
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+  File f = open_for_writing(path);
+  std::fwrite(text.data(), 1, text.size(), f.get());
+  close_checked(std::move(f), path);
+}
+
+void write_json_file(const std::string& path, const Json& json) {
+  write_text_file(path, json.dump(2) + "\n");
+}
+
+OutputDir::OutputDir(const std::string& dir, const std::vector<std::string>& outputs) : dir_(dir) {
+  std::error_code ec;
+  fs::create_directories(dir_, ec);
+  if (ec || !fs::is_directory(dir_)) {
+    throw InputError(dir_, "--out",
+                     "cannot create the output directory: " +
+                         (ec ? ec.message() : "a file of that name exists"));
+  }
+  // the previous run's results under the names this run writes
+  for (const std::string& name : outputs) {
+    const fs::path old = fs::path(dir_) / name;
+    if (fs::is_regular_file(old, ec) && !fs::remove(old, ec)) {
+      throw InputError(old.string(), "--out", "cannot remove the previous result: " + ec.message());
+    }
+  }
+  std::string pattern = (fs::path(dir_) / ".partial-XXXXXX").string();
+  if (::mkdtemp(pattern.data()) == nullptr) {
+    throw InputError(dir_, "--out",
+                     std::string("cannot create a staging directory: ") + std::strerror(errno));
+  }
+  staging_ = pattern;
+}
+
+OutputDir::~OutputDir() {
+  if (committed_) return;
+  std::error_code ec;
+  fs::remove_all(staging_, ec);  // best effort: never throw from a destructor
+}
+
+std::string OutputDir::file(const std::string& name) const {
+  return (fs::path(staging_) / name).string();
+}
+
+std::vector<std::string> OutputDir::commit() {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(staging_)) {
+    if (entry.is_regular_file()) names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
+  // summary.json last: its presence marks a complete run
+  std::stable_partition(names.begin(), names.end(),
+                        [](const std::string& n) { return n != "summary.json"; });
+  for (const std::string& name : names) {
+    std::error_code ec;
+    fs::rename(fs::path(staging_) / name, fs::path(dir_) / name, ec);
+    if (ec)
+      throw InputError((fs::path(dir_) / name).string(), "--out",
+                       "cannot move into place: " + ec.message());
+  }
+  std::error_code ec;
+  fs::remove_all(staging_, ec);
+  committed_ = true;
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+}  // namespace fivebar::io

@@ -1,0 +1,802 @@
+// Scene loading: the YAML tree is first flattened into dotted keys checked against the schema,
+// the --set overrides are applied to that flat map (so they work for keys the file omits), and
+// the Scene is then built and validated key by key.
+#include "fivebar/io/scene.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
+#include "fivebar/io/loads.h"
+
+namespace fivebar::io {
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Schema
+
+enum class Kind {
+  kSection,     // a map of keys
+  kLinkList,    // mechanism.links: a list of kLinks maps
+  kNumber,      // a finite double
+  kNumberOr5,   // one number for all joints, or a list of 5 (O, B, C, D, D0)
+  kInteger,     // an integral number
+  kBool,        // true / false
+  kName,        // one of a fixed set of names
+  kExpression,  // a muParser expression of t
+};
+
+struct Field {
+  const char* key;  // dotted; "#" stands for a link index
+  Kind kind;
+};
+
+// every key a scene may contain (interfaces.md, scene.h)
+constexpr Field kSchema[] = {
+    {"mechanism", Kind::kSection},
+    {"mechanism.ground_length", Kind::kNumber},
+    {"mechanism.links", Kind::kLinkList},
+    {"mechanism.links.#", Kind::kSection},
+    {"mechanism.links.#.length", Kind::kNumber},
+    {"mechanism.links.#.mass", Kind::kNumber},
+    {"mechanism.links.#.inertia", Kind::kNumber},
+    {"mechanism.links.#.com_offset", Kind::kNumber},
+    {"mechanism.links.#.com_angle", Kind::kNumber},
+    {"mechanism.point_p", Kind::kNumber},
+    {"mechanism.assembly", Kind::kName},
+    {"gravity", Kind::kNumber},
+    {"friction", Kind::kSection},
+    {"friction.model", Kind::kName},
+    {"friction.pin_radius", Kind::kNumberOr5},
+    {"friction.coulomb", Kind::kNumberOr5},
+    {"friction.viscous", Kind::kNumberOr5},
+    {"friction.static_coulomb", Kind::kNumberOr5},
+    {"friction.stribeck_velocity", Kind::kNumberOr5},
+    {"friction.stribeck_exponent", Kind::kNumberOr5},
+    {"friction.sigma0", Kind::kNumberOr5},
+    {"friction.sigma1", Kind::kNumberOr5},
+    {"friction.sigma2", Kind::kNumberOr5},
+    {"friction.smoothing_velocity", Kind::kNumber},
+    {"loads", Kind::kSection},
+    {"loads.M1", Kind::kExpression},
+    {"loads.M2", Kind::kExpression},
+    {"loads.M3", Kind::kExpression},
+    {"loads.F", Kind::kExpression},
+    {"loads.F_angle", Kind::kNumber},
+    {"initial", Kind::kSection},
+    {"initial.theta1", Kind::kNumber},
+    {"initial.theta2", Kind::kNumber},
+    {"initial.omega1", Kind::kNumber},
+    {"initial.omega2", Kind::kNumber},
+    {"simulation", Kind::kSection},
+    {"simulation.duration", Kind::kNumber},
+    {"simulation.output_step", Kind::kNumber},
+    {"simulation.integrator", Kind::kName},
+    {"simulation.rtol", Kind::kNumber},
+    {"simulation.atol", Kind::kNumber},
+    {"simulation.locate_switches", Kind::kBool},
+    {"simulation.stick", Kind::kBool},
+    {"simulation.max_steps", Kind::kInteger},
+    {"simulation.singular_margin", Kind::kNumber},
+    {"simulation.friction_tol", Kind::kNumber},
+    {"simulation.friction_max_iter", Kind::kInteger},
+};
+
+const Field* find_field(const std::string& schema_key) {
+  for (const Field& f : kSchema) {
+    if (schema_key == f.key) return &f;
+  }
+  return nullptr;
+}
+
+// the keys directly below a section ("" is the top level), for "expected one of" hints
+std::string children_of(const std::string& schema_section) {
+  std::string out;
+  const std::string prefix = schema_section.empty() ? "" : schema_section + ".";
+  for (const Field& f : kSchema) {
+    const std::string key = f.key;
+    if (key.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string rest = key.substr(prefix.size());
+    if (rest.empty() || rest.find('.') != std::string::npos || rest == "#") continue;
+    out += (out.empty() ? "" : ", ") + rest;
+  }
+  return out;
+}
+
+// friction laws by their scene names (friction.model)
+struct LawName {
+  FrictionLaw law;
+  const char* name;
+};
+constexpr LawName kLawNames[] = {{FrictionLaw::kNone, "none"},
+                                 {FrictionLaw::kCoulombViscous, "coulomb_viscous"},
+                                 {FrictionLaw::kStribeck, "stribeck"},
+                                 {FrictionLaw::kLuGre, "lugre"}};
+
+// ---------------------------------------------------------------------------------------------
+// Small string helpers
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> parts;
+  std::string::size_type start = 0;
+  while (true) {
+    const auto pos = s.find(sep, start);
+    parts.push_back(s.substr(start, pos - start));
+    if (pos == std::string::npos) break;
+    start = pos + 1;
+  }
+  return parts;
+}
+
+std::string join(const std::vector<std::string>& parts, size_t n, char sep) {
+  std::string out;
+  for (size_t i = 0; i < n && i < parts.size(); ++i) {
+    out += (i ? std::string(1, sep) : "") + parts[i];
+  }
+  return out;
+}
+
+// a non-negative decimal index such as "2", or -1
+int parse_index(const std::string& s) {
+  if (s.empty() || s.size() > 6) return -1;
+  for (char c : s) {
+    if (c < '0' || c > '9') return -1;
+  }
+  return std::atoi(s.c_str());
+}
+
+// a YAML number: decimal or exponent form, or one of YAML's .inf / .nan spellings
+bool parse_double(const std::string& text, double* out) {
+  const std::string s = trim(text);
+  std::string lower(s);
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (lower == ".nan") {
+    *out = std::nan("");
+    return true;
+  }
+  if (lower == ".inf" || lower == "+.inf" || lower == "-.inf") {
+    *out = lower[0] == '-' ? -HUGE_VAL : HUGE_VAL;
+    return true;
+  }
+  if (s.empty()) return false;
+  char* end = nullptr;
+  *out = std::strtod(s.c_str(), &end);
+  return end == s.c_str() + s.size();
+}
+
+// ---------------------------------------------------------------------------------------------
+// The scene as a flat map of dotted keys
+
+struct Value {
+  std::vector<std::string> items;  // one scalar, or the elements of a list
+  bool list = false;
+  std::string origin;  // " (line 12)" or " (from --set)": appended to messages about the value
+};
+
+class SceneReader {
+ public:
+  explicit SceneReader(std::string path) : path_(std::move(path)) {}
+
+  [[noreturn]] void fail(const std::string& key, const std::string& reason) const {
+    throw InputError(path_, key, reason);
+  }
+
+  // --- the file ---
+
+  void read_root(const YAML::Node& root) {
+    if (root.IsNull()) return;  // an empty file: every required key will be reported missing
+    if (!root.IsMap()) {
+      fail("(top level)", "expected a map of sections (" + children_of("") + "), got " +
+                              type_name(root) + line_of(root));
+    }
+    read_section(root, "", "");
+  }
+
+  // --- the --set overrides ---
+
+  void apply_set(const std::string& assignment) {
+    const auto eq = assignment.find('=');
+    if (eq == std::string::npos || trim(assignment.substr(0, eq)).empty()) {
+      fail("--set", "expected KEY=VALUE, got '" + assignment + "'");
+    }
+    std::string key = trim(assignment.substr(0, eq));
+    const std::string text = trim(assignment.substr(eq + 1));
+    std::vector<std::string> parts = split(key, '.');
+    for (const auto& p : parts) {
+      if (p.empty()) fail(key, "malformed key in --set " + assignment);
+    }
+    const std::string in_set = " in --set " + assignment;
+
+    // a link index must name one of the four links
+    if (parts.size() >= 3 && parts[0] == "mechanism" && parts[1] == "links") {
+      const int i = parse_index(parts[2]);
+      if (i < 0 || i >= kLinks) {
+        fail(join(parts, 3, '.'), "no such link" + in_set + " (links are numbered 0 to " +
+                                      std::to_string(kLinks - 1) + ")");
+      }
+    }
+    const Field* field = find_field(schema_key(parts));
+    // friction.coulomb.3: one element of a per-joint list
+    int element = -1;
+    if (field == nullptr && parts.size() >= 2 && parse_index(parts.back()) >= 0) {
+      std::vector<std::string> parent(parts.begin(), parts.end() - 1);
+      const Field* pf = find_field(schema_key(parent));
+      if (pf != nullptr && pf->kind == Kind::kNumberOr5) {
+        element = parse_index(parts.back());
+        if (element >= kJoints) {
+          fail(key, "no such joint" + in_set + " (joints are numbered 0 to " +
+                        std::to_string(kJoints - 1) + ": O, B, C, D, D0)");
+        }
+        field = pf;
+        parts = parent;
+        key = join(parts, parts.size(), '.');
+      }
+    }
+    if (field == nullptr) fail(key, "unknown key" + in_set + unknown_hint(parts));
+    if (field->kind == Kind::kSection || field->kind == Kind::kLinkList) {
+      fail(key, "is a section, not a value" + in_set);
+    }
+
+    if (element >= 0) {
+      auto it = flat_.find(key);
+      if (it == flat_.end()) {
+        // not in the file: start from the key's default, if it has one
+        const std::vector<std::string> fallback = per_joint_default(key);
+        if (fallback.empty()) {
+          fail(key, "the scene has no value to take element " + std::to_string(element) + " of" +
+                        in_set + "; set the whole key, e.g. " + key + "=[a,b,c,d,e]");
+        }
+        it = flat_.emplace(key, Value{fallback, fallback.size() > 1, ""}).first;
+      }
+      Value& v = it->second;
+      if (!v.list || v.items.size() == 1) v.items.assign(kJoints, v.items.front());
+      if (v.items.size() != static_cast<size_t>(kJoints)) {
+        fail(key, "expected 1 or 5 numbers, got " + std::to_string(v.items.size()) + v.origin);
+      }
+      v.list = true;
+      v.items[element] = text;
+      v.origin = " (from --set)";
+    } else {
+      Value v;
+      v.origin = " (from --set)";
+      if (field->kind == Kind::kNumberOr5 && !text.empty() && text.front() == '[') {
+        // a flow list such as [0.1, 0.1, 0.12, 0.1, 0.1]
+        YAML::Node node;
+        try {
+          node = YAML::Load(text);
+        } catch (const YAML::Exception& e) {
+          fail(key, "malformed list" + in_set + ": " + e.msg);
+        }
+        if (!node.IsSequence()) fail(key, "malformed list" + in_set);
+        v.list = true;
+        for (const auto& item : node) {
+          if (!item.IsScalar()) fail(key, "expected a list of numbers" + in_set);
+          v.items.push_back(item.Scalar());
+        }
+      } else {
+        v.items = {text};
+      }
+      flat_[key] = std::move(v);
+    }
+    if (parts.size() >= 3 && parts[0] == "mechanism" && parts[1] == "links") {
+      link_count_ = std::max(link_count_, parse_index(parts[2]) + 1);
+    }
+  }
+
+  // --- typed access to the flat map, with the value's origin in every message ---
+
+  bool has(const std::string& key) const { return flat_.count(key) != 0; }
+
+  std::string origin(const std::string& key) const {
+    auto it = flat_.find(key);
+    return it == flat_.end() ? "" : it->second.origin;
+  }
+
+  // the single scalar under `key`; fails when it is a list
+  const std::string& scalar(const std::string& key) const {
+    const Value& v = flat_.at(key);
+    if (v.list) fail(key, "expected a single value, got a list" + v.origin);
+    return v.items.front();
+  }
+
+  double number(const std::string& key, std::optional<double> fallback) const {
+    if (!has(key)) {
+      if (!fallback) fail(key, "missing (required)");
+      return *fallback;
+    }
+    return to_number(key, scalar(key), origin(key));
+  }
+
+  double to_number(const std::string& key, const std::string& text,
+                   const std::string& where) const {
+    double x = 0;
+    if (!parse_double(text, &x)) fail(key, "expected a number, got '" + text + "'" + where);
+    if (!std::isfinite(x)) fail(key, "must be a finite number, got " + text + where);
+    return x;
+  }
+
+  long integer(const std::string& key, long fallback) const {
+    if (!has(key)) return fallback;
+    const double x = number(key, std::nullopt);
+    if (x != std::floor(x) || std::fabs(x) > 9e15) {
+      fail(key, "expected an integer, got " + scalar(key) + origin(key));
+    }
+    return static_cast<long>(x);
+  }
+
+  bool boolean(const std::string& key, bool fallback) const {
+    if (!has(key)) return fallback;
+    std::string s = scalar(key);
+    std::transform(s.begin(), s.end(), s.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (s == "true" || s == "yes" || s == "on") return true;
+    if (s == "false" || s == "no" || s == "off") return false;
+    fail(key, "expected true or false, got '" + scalar(key) + "'" + origin(key));
+  }
+
+  std::string text(const std::string& key, const std::string& fallback) const {
+    return has(key) ? trim(scalar(key)) : fallback;
+  }
+
+  // one number for all joints or a list of 5, each checked by `check` (named in `domain`)
+  std::array<double, kJoints> per_joint(const std::string& key, std::optional<double> fallback,
+                                        bool (*check)(double), const char* domain) const {
+    std::array<double, kJoints> out;
+    if (!has(key)) {
+      if (!fallback) {
+        fail(key, "missing (required by friction.model " + text("friction.model", "none") +
+                      "): one number or a list of 5 (O, B, C, D, D0)");
+      }
+      out.fill(*fallback);
+      return out;
+    }
+    const Value& v = flat_.at(key);
+    if (v.items.size() != 1 && v.items.size() != static_cast<size_t>(kJoints)) {
+      fail(key, "expected 1 or 5 numbers, got " + std::to_string(v.items.size()) + v.origin);
+    }
+    for (int k = 0; k < kJoints; ++k) {
+      const bool single = v.items.size() == 1;
+      const std::string item_key = single ? key : key + "." + std::to_string(k);
+      const std::string& item = v.items[single ? 0 : k];
+      out[k] = to_number(item_key, item, v.origin);
+      if (!check(out[k]))
+        fail(item_key, std::string("must be ") + domain + ", got " + item + v.origin);
+    }
+    return out;
+  }
+
+  int link_count() const { return link_count_; }
+  const std::string& link_line() const { return link_line_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  static std::string type_name(const YAML::Node& n) {
+    if (n.IsMap()) return "a map";
+    if (n.IsSequence()) return "a list";
+    if (n.IsNull()) return "nothing";
+    return "'" + n.Scalar() + "'";
+  }
+
+  static std::string line_of(const YAML::Node& n) {
+    const int line = n.Mark().line;
+    return line >= 0 ? " (line " + std::to_string(line + 1) + ")" : "";
+  }
+
+  // the schema key of a dotted key: link indices become "#"
+  static std::string schema_key(const std::vector<std::string>& parts) {
+    std::vector<std::string> p = parts;
+    if (p.size() >= 3 && p[0] == "mechanism" && p[1] == "links") p[2] = "#";
+    return join(p, p.size(), '.');
+  }
+
+  // the default of an optional per-joint key as scene text (see build_scene), or nothing
+  std::vector<std::string> per_joint_default(const std::string& key) const {
+    if (key == "friction.static_coulomb") {
+      auto it = flat_.find("friction.coulomb");  // mu_s defaults to mu_c
+      return it == flat_.end() ? std::vector<std::string>{} : it->second.items;
+    }
+    if (key == "friction.stribeck_exponent") return {"2"};
+    if (key == "friction.stribeck_velocity" || key == "friction.sigma0" ||
+        key == "friction.sigma1" || key == "friction.sigma2") {
+      return {"0"};
+    }
+    return {};
+  }
+
+  // "; expected one of ..." for the deepest known section on the way to an unknown key
+  static std::string unknown_hint(const std::vector<std::string>& parts) {
+    for (size_t n = parts.size() - 1; n > 0; --n) {
+      std::vector<std::string> head(parts.begin(), parts.begin() + n);
+      const Field* f = find_field(schema_key(head));
+      if (f == nullptr) continue;
+      if (f->kind == Kind::kSection) {
+        return "; keys of " + join(head, n, '.') + ": " + children_of(schema_key(head));
+      }
+      if (f->kind == Kind::kLinkList) return "; links are numbered 0 to 3";
+      return "";
+    }
+    return "; top-level keys: " + children_of("");
+  }
+
+  // a YAML map under `key` (dotted) whose schema key is `skey`
+  void read_section(const YAML::Node& node, const std::string& key, const std::string& skey) {
+    if (node.IsNull()) return;  // `friction:` with nothing below
+    if (!node.IsMap()) {
+      fail(key, "expected a map of keys (" + children_of(skey) + "), got " + type_name(node) +
+                    line_of(node));
+    }
+    std::set<std::string> seen;
+    for (const auto& kv : node) {
+      if (!kv.first.IsScalar()) fail(key, "a key must be a name" + line_of(kv.first));
+      const std::string name = kv.first.Scalar();
+      const std::string child = key.empty() ? name : key + "." + name;
+      const std::string schild = skey.empty() ? name : skey + "." + name;
+      if (!seen.insert(name).second) fail(child, "duplicate key" + line_of(kv.first));
+      const Field* field = find_field(schild);
+      if (field == nullptr) {
+        fail(child, "unknown key" + line_of(kv.first) + "; " +
+                        (key.empty() ? "top-level keys" : "keys of " + key) + ": " +
+                        children_of(skey));
+      }
+      read_value(kv.second, child, *field);
+    }
+  }
+
+  void read_value(const YAML::Node& node, const std::string& key, const Field& field) {
+    switch (field.kind) {
+      case Kind::kSection:
+        read_section(node, key, field.key);
+        return;
+      case Kind::kLinkList:
+        if (!node.IsSequence()) {
+          fail(key, "expected a list of " + std::to_string(kLinks) + " links, got " +
+                        type_name(node) + line_of(node));
+        }
+        link_count_ = static_cast<int>(node.size());
+        link_line_ = line_of(node);
+        for (size_t i = 0; i < node.size() && i < static_cast<size_t>(kLinks); ++i) {
+          read_section(node[i], key + "." + std::to_string(i), "mechanism.links.#");
+        }
+        return;
+      default:
+        break;
+    }
+    Value v;
+    v.origin = line_of(node);
+    if (node.IsScalar()) {
+      v.items = {node.Scalar()};
+    } else if (node.IsSequence() && field.kind == Kind::kNumberOr5) {
+      v.list = true;
+      for (const auto& item : node) {
+        if (!item.IsScalar()) fail(key, "expected a list of numbers" + v.origin);
+        v.items.push_back(item.Scalar());
+      }
+    } else if (node.IsNull()) {
+      fail(key, "no value given" + v.origin);
+    } else {
+      fail(key, "expected a single value, got " + type_name(node) + v.origin);
+    }
+    flat_[key] = std::move(v);
+  }
+
+  std::string path_;
+  std::map<std::string, Value> flat_;
+  int link_count_ = 0;
+  std::string link_line_;
+};
+
+bool positive(double x) { return x > 0; }
+bool non_negative(double x) { return x >= 0; }
+
+std::string num(double x) { return format_double(x); }
+
+// builds and validates the Scene from the flat map
+Scene build_scene(const SceneReader& r) {
+  Scene s;
+  s.path = r.path();
+  Params<double>& p = s.params;
+
+  // check: a value with a domain, failing with the key, the domain and the offending value
+  auto require = [&](const std::string& key, double x, bool ok, const std::string& domain) {
+    if (!ok) r.fail(key, "must be " + domain + ", got " + num(x) + r.origin(key));
+  };
+
+  // mechanism
+  p.ground_length = r.number("mechanism.ground_length", std::nullopt);
+  require("mechanism.ground_length", p.ground_length, p.ground_length > 0, "> 0");
+  if (r.link_count() != kLinks) {
+    r.fail("mechanism.links", "expected " + std::to_string(kLinks) + " links, got " +
+                                  std::to_string(r.link_count()) + r.link_line());
+  }
+  for (int i = 0; i < kLinks; ++i) {
+    const std::string k = "mechanism.links." + std::to_string(i) + ".";
+    Link<double>& link = p.links[i];
+    link.length = r.number(k + "length", std::nullopt);
+    require(k + "length", link.length, link.length > 0, "> 0");
+    link.mass = r.number(k + "mass", std::nullopt);
+    require(k + "mass", link.mass, link.mass > 0, "> 0");
+    link.inertia = r.number(k + "inertia", std::nullopt);
+    require(k + "inertia", link.inertia, link.inertia > 0, "> 0");
+    link.com_offset = r.number(k + "com_offset", std::nullopt);
+    require(k + "com_offset", link.com_offset, link.com_offset >= 0, ">= 0");
+    link.com_angle = r.number(k + "com_angle", 0.0);
+  }
+  p.point_p = r.number("mechanism.point_p", std::nullopt);
+  const std::string assembly = r.text("mechanism.assembly", "elbow_up");
+  if (assembly == "elbow_up") {
+    p.assembly = kElbowUp;
+  } else if (assembly == "elbow_down") {
+    p.assembly = kElbowDown;
+  } else {
+    r.fail("mechanism.assembly", "expected elbow_up or elbow_down, got '" + assembly + "'" +
+                                     r.origin("mechanism.assembly"));
+  }
+  p.gravity = r.number("gravity", 9.81);
+
+  // friction: each law's coefficients are required only when that law is on
+  FrictionParams<double>& f = p.friction;
+  const std::string model = r.text("friction.model", "none");
+  bool known_law = false;
+  for (const LawName& l : kLawNames) {
+    if (model == l.name) {
+      f.law = l.law;
+      known_law = true;
+    }
+  }
+  if (!known_law) {
+    std::string names;
+    for (const LawName& l : kLawNames) names += (names.empty() ? "" : ", ") + std::string(l.name);
+    r.fail("friction.model",
+           "expected one of " + names + ", got '" + model + "'" + r.origin("friction.model"));
+  }
+  const bool on = f.active();
+  const bool stribeck = f.law == FrictionLaw::kStribeck;
+  const bool lugre = f.law == FrictionLaw::kLuGre;
+  // `required` when the law uses the key, else `fallback`
+  auto when = [](bool required, double fallback) {
+    return required ? std::nullopt : std::optional<double>(fallback);
+  };
+  f.pin_radius = r.per_joint("friction.pin_radius", when(on, 0.0), on ? positive : non_negative,
+                             on ? "> 0" : ">= 0");
+  f.coulomb = r.per_joint("friction.coulomb", when(on, 0.0), non_negative, ">= 0");
+  f.viscous = r.per_joint("friction.viscous", when(on && !lugre, 0.0), non_negative, ">= 0");
+  // mu_s: the Stribeck peak and the holding bound of a stuck joint; mu_c when omitted
+  f.static_coulomb = f.coulomb;
+  if (r.has("friction.static_coulomb")) {
+    f.static_coulomb = r.per_joint("friction.static_coulomb", std::nullopt, non_negative, ">= 0");
+  }
+  f.stribeck_velocity = r.per_joint("friction.stribeck_velocity", when(stribeck, 0.0),
+                                    stribeck ? positive : non_negative, stribeck ? "> 0" : ">= 0");
+  f.stribeck_exponent = r.per_joint("friction.stribeck_exponent", 2.0, positive, "> 0");
+  f.sigma0 = r.per_joint("friction.sigma0", when(lugre, 0.0), lugre ? positive : non_negative,
+                         lugre ? "> 0" : ">= 0");
+  f.sigma1 = r.per_joint("friction.sigma1", 0.0, non_negative, ">= 0");
+  f.sigma2 = r.per_joint("friction.sigma2", 0.0, non_negative, ">= 0");
+  f.smoothing_velocity = r.number("friction.smoothing_velocity", 0.0);
+  require("friction.smoothing_velocity", f.smoothing_velocity, f.smoothing_velocity >= 0, ">= 0");
+
+  // loads: compiled once here so that a bad expression is reported at load time
+  s.M1 = r.text("loads.M1", "0");
+  s.M2 = r.text("loads.M2", "0");
+  s.M3 = r.text("loads.M3", "0");
+  s.F = r.text("loads.F", "0");
+  s.F_angle = r.number("loads.F_angle", 0.0);
+  static_cast<void>(LoadExpressions(s));
+
+  // initial state
+  s.initial.theta1 = r.number("initial.theta1", std::nullopt);
+  s.initial.theta2 = r.number("initial.theta2", std::nullopt);
+  s.initial.omega1 = r.number("initial.omega1", 0.0);
+  s.initial.omega2 = r.number("initial.omega2", 0.0);
+
+  // solver settings, defaults from sim::Options
+  sim::Options& o = s.options;
+  const sim::Options d;
+  o.duration = r.number("simulation.duration", d.duration);
+  require("simulation.duration", o.duration, o.duration > 0, "> 0");
+  o.output_step = r.number("simulation.output_step", d.output_step);
+  require("simulation.output_step", o.output_step, o.output_step > 0, "> 0");
+  if (o.output_step > o.duration) {
+    r.fail("simulation.output_step", "must not exceed simulation.duration = " + num(o.duration) +
+                                         ", got " + num(o.output_step) +
+                                         r.origin("simulation.output_step"));
+  }
+  const std::string integrator = r.text("simulation.integrator", integrator_name(d.method));
+  if (!parse_integrator(integrator, &o.method)) {
+    std::string names;
+    for (sim::Method m : sim::kAllMethods) {
+      names += (names.empty() ? "" : ", ") + std::string(sim::method_name(m));
+    }
+    r.fail("simulation.integrator", "unknown integrator '" + integrator + "' (known: " + names +
+                                        ")" + r.origin("simulation.integrator"));
+  }
+  o.rtol = r.number("simulation.rtol", d.rtol);
+  require("simulation.rtol", o.rtol, o.rtol > 0 && o.rtol < 1, "in (0, 1)");
+  o.atol = r.number("simulation.atol", d.atol);
+  require("simulation.atol", o.atol, o.atol > 0 && o.atol < 1, "in (0, 1)");
+  o.locate_switches = r.boolean("simulation.locate_switches", d.locate_switches);
+  o.stick = r.boolean("simulation.stick", d.stick);
+  o.max_steps = r.integer("simulation.max_steps", d.max_steps);
+  require("simulation.max_steps", o.max_steps, o.max_steps >= 1, ">= 1");
+  o.singular_margin = r.number("simulation.singular_margin", d.singular_margin);
+  require("simulation.singular_margin", o.singular_margin,
+          o.singular_margin >= 0 && o.singular_margin < 1, "in [0, 1)");
+  o.friction_tol = r.number("simulation.friction_tol", d.friction_tol);
+  require("simulation.friction_tol", o.friction_tol, o.friction_tol > 0 && o.friction_tol < 1,
+          "in (0, 1)");
+  const long max_iter = r.integer("simulation.friction_max_iter", d.friction_max_iter);
+  require("simulation.friction_max_iter", max_iter, max_iter >= 1 && max_iter <= 1000000,
+          "in [1, 1000000]");
+  o.friction_max_iter = static_cast<int>(max_iter);
+
+  // the initial pose must close, away from the coupler singularity (closed-form triangle B C D)
+  const double sine = coupler_sine(p, s.initial.theta1, s.initial.theta2);
+  if (sine < 0) {
+    const double l3 = p.links[2].length, l4 = p.links[3].length;
+    const double bx = p.links[0].length * std::cos(s.initial.theta1);
+    const double by = p.links[0].length * std::sin(s.initial.theta1);
+    const double dx = p.ground_length + p.links[1].length * std::cos(s.initial.theta2);
+    const double dy = p.links[1].length * std::sin(s.initial.theta2);
+    r.fail("initial", "the mechanism cannot assemble at theta1 = " + num(s.initial.theta1) +
+                          ", theta2 = " + num(s.initial.theta2) +
+                          ": |BD| = " + num(std::hypot(dx - bx, dy - by)) +
+                          " m is outside [|l3 - l4|, l3 + l4] = [" + num(std::fabs(l3 - l4)) +
+                          ", " + num(l3 + l4) + "] m");
+  }
+  if (sine < o.singular_margin) {
+    r.fail("initial",
+           "too close to a singular configuration (couplers aligned): |sin(th4 - th3)| "
+           "= " +
+               num(sine) + " < simulation.singular_margin = " + num(o.singular_margin));
+  }
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writing
+
+// a YAML double-quoted scalar
+std::string quoted(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string per_joint_yaml(const std::array<double, kJoints>& v) {
+  if (std::all_of(v.begin(), v.end(), [&](double x) { return x == v[0]; })) return num(v[0]);
+  std::string out = "[";
+  for (int k = 0; k < kJoints; ++k) out += (k ? ", " : "") + num(v[k]);
+  return out + "]";
+}
+
+}  // namespace
+
+const char* integrator_name(sim::Method method) { return sim::method_name(method); }
+
+bool parse_integrator(const std::string& name, sim::Method* out) {
+  return sim::parse_method(name, out);
+}
+
+const char* friction_law_name(FrictionLaw law) {
+  for (const LawName& l : kLawNames) {
+    if (l.law == law) return l.name;
+  }
+  return "unknown";
+}
+
+double coupler_sine(const Params<double>& p, double theta1, double theta2) {
+  // B = l1 e(th1), D = (l0, 0) + l2 e(th2); the triangle B C D has sides l3, l4 and |BD|
+  const double l1 = p.links[0].length, l2 = p.links[1].length;
+  const double l3 = p.links[2].length, l4 = p.links[3].length;
+  const double bd = std::hypot(p.ground_length + l2 * std::cos(theta2) - l1 * std::cos(theta1),
+                               l2 * std::sin(theta2) - l1 * std::sin(theta1));
+  if (bd > l3 + l4 || bd < std::fabs(l3 - l4)) return -1;
+  // the angle at C lies between C->B and C->D, i.e. between e(th3) and e(th4)
+  const double cos_c = (l3 * l3 + l4 * l4 - bd * bd) / (2 * l3 * l4);
+  return std::sqrt(std::max(0.0, 1 - cos_c * cos_c));
+}
+
+Scene parse_scene(const std::string& yaml_text, const std::string& path,
+                  const std::vector<std::string>& sets) {
+  SceneReader reader(path);
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    throw InputError(
+        path,
+        "line " + std::to_string(e.mark.line + 1) + ", column " + std::to_string(e.mark.column + 1),
+        "malformed YAML: " + e.msg);
+  } catch (const YAML::Exception& e) {
+    throw InputError(path, "(file)", std::string("malformed YAML: ") + e.what());
+  }
+  reader.read_root(root);
+  for (const std::string& set : sets) reader.apply_set(set);
+  return build_scene(reader);
+}
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& sets) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad())
+    throw InputError(path, "(file)", std::string("cannot read: ") + std::strerror(errno));
+  return parse_scene(text.str(), path, sets);
+}
+
+std::string scene_to_yaml(const Scene& s) {
+  const Params<double>& p = s.params;
+  const FrictionParams<double>& f = p.friction;
+  const sim::Options& o = s.options;
+  std::ostringstream y;
+  y << "mechanism:\n"
+    << "  ground_length: " << num(p.ground_length) << "\n"
+    << "  links:\n";
+  for (const Link<double>& l : p.links) {
+    y << "    - {length: " << num(l.length) << ", mass: " << num(l.mass)
+      << ", inertia: " << num(l.inertia) << ", com_offset: " << num(l.com_offset)
+      << ", com_angle: " << num(l.com_angle) << "}\n";
+  }
+  y << "  point_p: " << num(p.point_p) << "\n"
+    << "  assembly: " << (p.assembly == kElbowDown ? "elbow_down" : "elbow_up") << "\n"
+    << "gravity: " << num(p.gravity) << "\n"
+    << "friction:\n"
+    << "  model: " << friction_law_name(f.law) << "\n"
+    << "  pin_radius: " << per_joint_yaml(f.pin_radius) << "\n"
+    << "  coulomb: " << per_joint_yaml(f.coulomb) << "\n"
+    << "  viscous: " << per_joint_yaml(f.viscous) << "\n";
+  // the other laws' coefficients, where they differ from their defaults
+  const auto optional = [&y](const char* key, const std::array<double, kJoints>& v,
+                             const std::array<double, kJoints>& fallback) {
+    if (v != fallback) y << "  " << key << ": " << per_joint_yaml(v) << "\n";
+  };
+  std::array<double, kJoints> zeros{}, twos{};
+  twos.fill(2.0);
+  optional("static_coulomb", f.static_coulomb, f.coulomb);
+  optional("stribeck_velocity", f.stribeck_velocity, zeros);
+  optional("stribeck_exponent", f.stribeck_exponent, twos);
+  optional("sigma0", f.sigma0, zeros);
+  optional("sigma1", f.sigma1, zeros);
+  optional("sigma2", f.sigma2, zeros);
+  y << "  smoothing_velocity: " << num(f.smoothing_velocity) << "\n"
+    << "loads:\n"
+    << "  M1: " << quoted(s.M1) << "\n"
+    << "  M2: " << quoted(s.M2) << "\n"
+    << "  M3: " << quoted(s.M3) << "\n"
+    << "  F: " << quoted(s.F) << "\n"
+    << "  F_angle: " << num(s.F_angle) << "\n"
+    << "initial: {theta1: " << num(s.initial.theta1) << ", theta2: " << num(s.initial.theta2)
+    << ", omega1: " << num(s.initial.omega1) << ", omega2: " << num(s.initial.omega2) << "}\n"
+    << "simulation:\n"
+    << "  duration: " << num(o.duration) << "\n"
+    << "  output_step: " << num(o.output_step) << "\n"
+    << "  integrator: " << integrator_name(o.method) << "\n"
+    << "  rtol: " << num(o.rtol) << "\n"
+    << "  atol: " << num(o.atol) << "\n"
+    << "  locate_switches: " << (o.locate_switches ? "true" : "false") << "\n"
+    << "  stick: " << (o.stick ? "true" : "false") << "\n"
+    << "  max_steps: " << o.max_steps << "\n"
+    << "  singular_margin: " << num(o.singular_margin) << "\n"
+    << "  friction_tol: " << num(o.friction_tol) << "\n"
+    << "  friction_max_iter: " << o.friction_max_iter << "\n";
+  return y.str();
+}
+
+}  // namespace fivebar::io

@@ -1,0 +1,125 @@
+// Friction identification from a torque log with Ceres: inverse-dynamics (equation-error) and
+// output-error methods, covariance, identifiability, validation against the log.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "fivebar/identification/parameters.h"
+#include "fivebar/identification/rates.h"
+#include "fivebar/identification/torque_log.h"
+#include "fivebar/model/params.h"
+#include "fivebar/model/status.h"
+#include "fivebar/sim/simulator.h"
+
+namespace fivebar::identification {
+
+enum class Method : int {
+  /// residual = measured - predicted actuator torques (inverse dynamics), Jacobian by ceres::Jet
+  kInverseDynamics = 0,
+  /// residual = measured - simulated crank angles over short windows restarted from the measured
+  /// state and driven by the measured torques; Jacobian by central differences (the simulator is
+  /// not templated on the scalar), so it is slower and its derivatives are approximate
+  kOutputError,
+};
+bool parse_method(const std::string& name, Method* out);
+const char* method_name(Method m);
+
+enum class Loss : int { kNone = 0, kHuber, kCauchy };
+bool parse_loss(const std::string& name, Loss* out);
+const char* loss_name(Loss l);
+
+struct IdentifyOptions {
+  ParameterLayout layout;
+  Method method = Method::kInverseDynamics;
+  Loss loss = Loss::kNone;
+  double loss_scale = 0.1;  ///< [N m] (inverse dynamics) or [rad] (output error): Huber/Cauchy a
+  /// Coulomb sign: < 0 takes the scene's friction.smoothing_velocity; 0 exact sign(w) (a fixed
+  /// datum per sample with measured rates); > 0 tanh(w / w_s) [rad/s]
+  double smoothing_velocity = -1;
+  SgOptions sg;                   ///< rate/acceleration estimation when the log lacks them
+  bool estimate_rates = false;    ///< estimate rates even when the log has them
+  /// drop samples where some joint's |w_k| is below this [rad/s] (their sign is uncertain)
+  double min_rate = 0;
+  int max_iterations = 100;
+  int num_threads = 1;
+  /// start values, in layout order; empty: the scene's values (0.1 / 0.01 / ... where zero)
+  std::vector<double> initial;
+  // output error
+  double window_s = 0.2;   ///< length of each simulated window [s]
+  double sim_rtol = 1e-8;  ///< integrator tolerances inside the windows (rtol = atol)
+  /// central-difference step relative to |x|: large against the integrator noise (~rtol), the
+  /// residual being nearly linear in the coefficients
+  double relative_step = 1e-2;
+};
+
+struct ParameterEstimate {
+  std::string name;
+  double value = 0, std = 0, initial = 0;
+};
+
+/// Identification outcome. `status` not ok: the numerics failed (values may be partial).
+struct IdentifyResult {
+  Status status;
+  ParameterLayout layout;
+  Method method = Method::kInverseDynamics;
+  std::vector<ParameterEstimate> parameters;
+  Eigen::MatrixXd covariance;   ///< s^2 (J^T J)^-1 [units of the parameters squared]
+  Eigen::MatrixXd correlation;  ///< covariance normalised by the standard deviations
+  /// singular values of the Jacobian with columns scaled to unit norm (largest first): a ratio
+  /// near 0 means a combination of parameters the log cannot determine
+  std::vector<double> singular_values;
+  std::vector<std::string> warnings;
+  int samples = 0;       ///< samples in the log
+  int samples_used = 0;  ///< samples that entered the fit
+  int residuals = 0;
+  /// rms of the unweighted residual per actuator [N m] (inverse dynamics: tau - M at the fit)
+  double rms_torque_residual[2] = {0, 0};
+  double rms_torque_residual_initial[2] = {0, 0};  ///< same at the start values
+  double rms_angle_residual[2] = {0, 0};  ///< output error: theta - simulated [rad]
+  double residual_sigma = 0;              ///< sqrt(2 cost / (m - p)) in residual units
+  double wall_time_s = 0;                 ///< solve + covariance
+  int iterations = 0;
+  bool converged = false;
+  std::string solver_message;
+  bool rates_estimated = false, accels_estimated = false;
+  int sg_half_window = 0;  ///< samples, when estimated
+  /// per sample (log order): rates and accelerations used, predicted torques at the fit (inverse
+  /// dynamics of the fitted scene at every sample; NaN where it failed), and whether used
+  std::vector<double> omega1, omega2, alpha1, alpha2, predicted_tau1, predicted_tau2;
+  std::vector<char> used;
+  Params<double> fitted;  ///< the scene's parameters with the identified friction
+};
+
+/// Identifies the friction coefficients of `scene` from `log`. `loads` gives the scene's
+/// non-actuator loads (M3, F, F_angle; its M1, M2 are ignored). Throws LogError for a log that
+/// cannot be used (fewer samples than parameters, poses that do not fit the scene).
+IdentifyResult identify(const Params<double>& scene, const sim::LoadFunction& loads,
+                        const TorqueLog& log, const IdentifyOptions& options);
+
+/// Angles of a simulation of `params` driven by the logged torques (linear between samples)
+/// against the logged angles.
+struct Validation {
+  Status status;             ///< of the full run (not ok: the run stopped early)
+  double full_rms[2] = {0, 0};      ///< [rad] one run from the first sample over the whole log
+  double full_max[2] = {0, 0};      ///< [rad]
+  double full_duration_s = 0;       ///< how far the full run got
+  double window_s = 0;              ///< restart period of the windowed check
+  double window_rms[2] = {0, 0};    ///< [rad] runs restarted from the logged state every window
+  std::vector<double> full_theta1, full_theta2;  ///< simulated at the log's times (NaN after a stop)
+};
+
+/// Simulates `params` with the log's torques from the log's state (rates: `omega1/2`), once over
+/// the whole log and in windows of `window_s` restarted from the logged state.
+Validation validate(const Params<double>& params, const sim::LoadFunction& loads,
+                    const TorqueLog& log, const std::vector<double>& omega1,
+                    const std::vector<double>& omega2, double window_s, double rtol = 1e-9);
+
+/// Loads for the simulator: logged tau1, tau2 (linear in t) as M1, M2 and the scene's M3, F,
+/// F_angle, shifted by t0 (the simulator starts at t = 0).
+sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& scene_loads,
+                               double t0);
+
+}  // namespace fivebar::identification

@@ -1,0 +1,45 @@
+// Synthetic torque logs: simulate a scene, sample, add sensor noise and quantization.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "fivebar/identification/torque_log.h"
+#include "fivebar/model/params.h"
+#include "fivebar/model/status.h"
+#include "fivebar/sim/simulator.h"
+
+namespace fivebar::identification {
+
+struct SynthOptions {
+  double rate_hz = 1000;       ///< sampling rate [Hz]
+  double duration = 10;        ///< [s]
+  double torque_noise = 0;     ///< std of the Gaussian noise on tau1, tau2 [N m]
+  double angle_noise = 0;      ///< std of the Gaussian noise on theta1, theta2 [rad]
+  double rate_noise = 0;       ///< std of the Gaussian noise on omega1, omega2 [rad/s]
+  double quantization = 0;     ///< encoder step [rad]: angles rounded to multiples (0: none)
+  std::uint64_t seed = 1;      ///< std::mt19937_64 seed (same seed, same log)
+  bool with_rates = false;     ///< write omega1, omega2, alpha1, alpha2 (exact, + rate_noise)
+  bool multisine = false;      ///< replace the scene's M1, M2 by multisine_loads
+  sim::Options sim;            ///< solver settings (duration and output_step are overridden)
+};
+
+struct SynthResult {
+  Status status;  ///< not ok: the simulation failed (log empty)
+  TorqueLog log;
+  sim::Stats stats;
+  std::array<int, 5> reversals{};  ///< sign changes of each joint's relative rate (O..D0)
+};
+
+/// Built-in excitation: the scene's M3, F, F_angle with M1, M2 replaced by sums of four sines
+/// (0.3 to 3.1 Hz, Schroeder-like phases) around a bias that balances the scene's mean load, so
+/// that both cranks swing back and forth and every joint's relative rate changes sign.
+sim::LoadFunction multisine_loads(const sim::LoadFunction& scene_loads);
+
+/// Simulates `params` from `initial` under `loads` (or multisine_loads(loads)), samples at
+/// rate_hz, adds noise (torques: the applied M1, M2 plus noise; angles: plus noise, then
+/// quantized). Comments of the log are left empty for the caller.
+SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction& loads,
+                           const sim::Initial& initial, const SynthOptions& options);
+
+}  // namespace fivebar::identification

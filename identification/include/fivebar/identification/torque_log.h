@@ -1,0 +1,81 @@
+// Torque logs (interfaces.md, "Torque log CSV"): reading, validation, writing.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "fivebar/model/params.h"
+
+namespace fivebar::identification {
+
+/// A log that cannot be used: what() is `<file>: <key>: <reason>`, the layout of the apps'
+/// InputError (the key is `line N`, `line N, column NAME`, `header` or `column NAME`).
+class LogError : public std::runtime_error {
+ public:
+  LogError(std::string file, std::string key, std::string reason)
+      : std::runtime_error(file + ": " + key + ": " + reason),
+        file_(std::move(file)),
+        key_(std::move(key)),
+        reason_(std::move(reason)) {}
+  const std::string& file() const { return file_; }
+  const std::string& key() const { return key_; }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string file_, key_, reason_;
+};
+
+/// Measured motion and actuator torques of the two cranks, one entry per sample.
+/// Units: t [s], theta [rad], tau [N m], omega [rad/s], alpha [rad/s^2].
+struct TorqueLog {
+  std::string path;  ///< as given, for messages
+  std::vector<double> t, theta1, theta2, tau1, tau2;
+  std::vector<double> omega1, omega2, alpha1, alpha2;  ///< empty unless has_rates / has_accels
+  bool has_rates = false;   ///< omega1, omega2 came from the file
+  bool has_accels = false;  ///< alpha1, alpha2 came from the file
+  std::vector<int> lines;   ///< 1-based line of each sample in the file
+  std::vector<std::string> comments;  ///< `#` lines, without the leading '#'
+
+  int size() const { return static_cast<int>(t.size()); }
+  double duration() const { return t.empty() ? 0.0 : t.back() - t.front(); }
+};
+
+/// Required columns, then the optional ones (omega1,omega2 and alpha1,alpha2 come in pairs).
+inline const char* const kLogRequired[] = {"t", "theta1", "theta2", "tau1", "tau2"};
+inline const char* const kLogOptional[] = {"omega1", "omega2", "alpha1", "alpha2"};
+
+/// Reads a torque log. Throws LogError naming file, line and/or column and reason for: a missing
+/// or empty file, a missing, unknown or duplicate column, an unpaired omega/alpha column, a row
+/// with the wrong number of fields, a field that is not a finite number (NaN, inf, text), time
+/// not strictly increasing, and angles that look like degrees (see looks_like_degrees).
+TorqueLog read_torque_log(const std::string& path);
+
+/// Parses a log from text (`path` only names it in messages). Same checks as read_torque_log.
+TorqueLog parse_torque_log(const std::string& text, const std::string& path);
+
+/// Empty if the angles of `log` look like radians, else the reason they look like degrees:
+/// (a) with rates in the log, the finite-difference rate of theta is ~180/pi times omega
+/// (least-squares slope within 20 % of 57.3); (b) without rates, a first angle beyond two turns
+/// (|theta_0| > 4 pi: 90 degrees reads as 90 rad), a median |d theta/dt| above 100 rad/s, or a
+/// range above 4 pi within 0.5 s. (A crank of this mechanism may turn continuously, so a large
+/// range over a long log alone is no sign of degrees.)
+std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& theta,
+                               const std::vector<double>* omega);
+
+/// Throws LogError(`<file>: samples: ...`) when the log has fewer samples than `needed`
+/// (e.g. the number of parameters, or of residuals needed to estimate them).
+void require_samples(const TorqueLog& log, int needed, const std::string& what);
+
+/// Throws LogError(`<file>: line N: pose theta1=..., theta2=... cannot assemble ...`) at the first
+/// sample whose pose cannot close with the mechanism of `params`.
+void check_poses(const TorqueLog& log, const Params<double>& params);
+
+/// Writes a log: `#` + each comment line, the header (rates and accelerations when has_rates /
+/// has_accels), then one row per sample in shortest round-trip form. Throws LogError on failure.
+void write_torque_log(const std::string& path, const TorqueLog& log);
+
+/// Shortest text that reads back as exactly x.
+std::string format_number(double x);
+
+}  // namespace fivebar::identification

@@ -1,0 +1,258 @@
+// Torque log CSV: parsing with line/column diagnostics, plausibility checks, writing.
+#include "fivebar/identification/torque_log.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "fivebar/model/kinematics.h"
+
+namespace fivebar::identification {
+namespace {
+
+std::string trim(const std::string& s) {
+  const char* ws = " \t\r\n";
+  const size_t a = s.find_first_not_of(ws);
+  if (a == std::string::npos) return "";
+  const size_t b = s.find_last_not_of(ws);
+  return s.substr(a, b - a + 1);
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::stringstream ss(line);
+  std::string cell;
+  while (std::getline(ss, cell, ',')) out.push_back(trim(cell));
+  if (!line.empty() && line.back() == ',') out.push_back("");
+  return out;
+}
+
+std::string line_key(int line) { return "line " + std::to_string(line); }
+
+std::string fmt(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", x);
+  return buf;
+}
+
+}  // namespace
+
+std::string format_number(double x) {
+  if (std::isnan(x)) return "nan";
+  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
+  char buf[32];
+  for (int prec = 1; prec <= 17; ++prec) {
+    std::snprintf(buf, sizeof buf, "%.*g", prec, x);
+    if (std::strtod(buf, nullptr) == x) break;
+  }
+  return buf;
+}
+
+TorqueLog read_torque_log(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw LogError(path, "(open)", "cannot read the file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse_torque_log(ss.str(), path);
+}
+
+TorqueLog parse_torque_log(const std::string& text, const std::string& path) {
+  TorqueLog log;
+  log.path = path;
+  std::istringstream in(text);
+  std::string raw;
+  std::vector<std::string> names;
+  std::map<std::string, int> index;
+  int line_no = 0;
+  std::vector<std::vector<double>*> target;
+  while (std::getline(in, raw)) {
+    ++line_no;
+    const std::string line = trim(raw);
+    if (line.empty()) continue;
+    if (line[0] == '#') {
+      log.comments.push_back(line.substr(1));
+      continue;
+    }
+    const std::vector<std::string> cells = split(line);
+    if (names.empty()) {
+      // header: required columns, optional pairs, nothing else
+      names = cells;
+      for (size_t j = 0; j < names.size(); ++j) {
+        const std::string& n = names[j];
+        const bool known =
+            std::find(std::begin(kLogRequired), std::end(kLogRequired), n) !=
+                std::end(kLogRequired) ||
+            std::find(std::begin(kLogOptional), std::end(kLogOptional), n) != std::end(kLogOptional);
+        const std::string col = "line " + std::to_string(line_no) + ", column " +
+                                std::to_string(j + 1);
+        if (n.empty()) throw LogError(path, col, "empty column name in the header");
+        if (!known) {
+          throw LogError(path, col,
+                         "unknown column '" + n +
+                             "' (expected t,theta1,theta2,tau1,tau2 and optionally "
+                             "omega1,omega2,alpha1,alpha2)");
+        }
+        if (index.count(n)) throw LogError(path, col, "duplicate column '" + n + "'");
+        index[n] = static_cast<int>(j);
+      }
+      for (const char* r : kLogRequired) {
+        if (!index.count(r)) {
+          throw LogError(path, "header", std::string("missing column '") + r +
+                                             "' (a torque log needs t,theta1,theta2,tau1,tau2)");
+        }
+      }
+      for (auto [a, b] : {std::pair{"omega1", "omega2"}, std::pair{"alpha1", "alpha2"}}) {
+        if (index.count(a) != index.count(b)) {
+          throw LogError(path, "header",
+                         std::string("column '") + (index.count(a) ? a : b) + "' without '" +
+                             (index.count(a) ? b : a) + "' (they come in pairs)");
+        }
+      }
+      log.has_rates = index.count("omega1") > 0;
+      log.has_accels = index.count("alpha1") > 0;
+      target.assign(names.size(), nullptr);
+      std::map<std::string, std::vector<double>*> dest = {
+          {"t", &log.t},           {"theta1", &log.theta1}, {"theta2", &log.theta2},
+          {"tau1", &log.tau1},     {"tau2", &log.tau2},     {"omega1", &log.omega1},
+          {"omega2", &log.omega2}, {"alpha1", &log.alpha1}, {"alpha2", &log.alpha2}};
+      for (size_t j = 0; j < names.size(); ++j) target[j] = dest[names[j]];
+      continue;
+    }
+    if (cells.size() != names.size()) {
+      throw LogError(path, line_key(line_no),
+                     "expected " + std::to_string(names.size()) + " fields, got " +
+                         std::to_string(cells.size()));
+    }
+    for (size_t j = 0; j < cells.size(); ++j) {
+      const std::string& c = cells[j];
+      double v = 0;
+      const char* end = c.data() + c.size();
+      auto res = std::from_chars(c.data(), end, v);
+      if (c.empty() || res.ec != std::errc() || res.ptr != end || !std::isfinite(v)) {
+        throw LogError(path, line_key(line_no) + ", column " + names[j],
+                       "'" + c + "' is not a finite number");
+      }
+      target[j]->push_back(v);
+    }
+    log.lines.push_back(line_no);
+    const int n = log.size();
+    if (n >= 2 && !(log.t[n - 1] > log.t[n - 2])) {
+      throw LogError(path, line_key(line_no) + ", column t",
+                     "time not strictly increasing (" + format_number(log.t[n - 1]) +
+                         " after " + format_number(log.t[n - 2]) + ")");
+    }
+  }
+  if (names.empty()) throw LogError(path, "header", "empty file (no header row)");
+  if (log.size() == 0) throw LogError(path, "samples", "no data rows under the header");
+  // angles in degrees are a common mistake; say so instead of failing later
+  for (int j = 0; j < 2; ++j) {
+    const std::vector<double>& th = j == 0 ? log.theta1 : log.theta2;
+    const std::vector<double>* om = log.has_rates ? (j == 0 ? &log.omega1 : &log.omega2) : nullptr;
+    const std::string why = looks_like_degrees(log, th, om);
+    if (!why.empty()) {
+      throw LogError(path, std::string("column theta") + char('1' + j),
+                     "angles look like degrees, expected radians (" + why + ")");
+    }
+  }
+  return log;
+}
+
+std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& theta,
+                               const std::vector<double>* omega) {
+  const int n = static_cast<int>(theta.size());
+  if (n < 2) return "";
+  if (omega) {
+    // slope of the finite-difference rate against the logged rate
+    double sxy = 0, sxx = 0;
+    for (int i = 0; i + 1 < n; ++i) {
+      const double d = (theta[i + 1] - theta[i]) / (log.t[i + 1] - log.t[i]);
+      const double w = 0.5 * ((*omega)[i] + (*omega)[i + 1]);
+      sxy += d * w;
+      sxx += w * w;
+    }
+    if (sxx > 0) {
+      const double slope = sxy / sxx;
+      if (std::abs(slope / (180.0 / M_PI) - 1.0) < 0.2) {
+        return "d theta/dt is " + fmt(slope) + " times omega, close to 180/pi";
+      }
+    }
+    return "";
+  }
+  // (b) the log starts more than two turns out, or the cranks spin implausibly fast
+  if (std::abs(theta[0]) > 4 * M_PI) {
+    return "the first angle is " + fmt(theta[0]) + ", more than two turns (4 pi)";
+  }
+  std::vector<double> rate(n - 1);
+  for (int i = 0; i + 1 < n; ++i) {
+    rate[i] = std::abs((theta[i + 1] - theta[i]) / (log.t[i + 1] - log.t[i]));
+  }
+  std::nth_element(rate.begin(), rate.begin() + rate.size() / 2, rate.end());
+  const double median_rate = rate[rate.size() / 2];
+  if (median_rate > 100.0) {
+    return "median |d theta/dt| is " + fmt(median_rate) + " > 100 rad/s";
+  }
+  const auto [lo, hi] = std::minmax_element(theta.begin(), theta.end());
+  if (*hi - *lo > 4 * M_PI && log.duration() < 0.5) {
+    return "range " + fmt(*hi - *lo) + " > 4 pi within " + fmt(log.duration()) + " s";
+  }
+  return "";
+}
+
+void require_samples(const TorqueLog& log, int needed, const std::string& what) {
+  if (log.size() < needed) {
+    throw LogError(log.path, "samples",
+                   std::to_string(log.size()) + " samples, fewer than the " +
+                       std::to_string(needed) + " needed (" + what + ")");
+  }
+}
+
+void check_poses(const TorqueLog& log, const Params<double>& params) {
+  Kinematics<double> k;
+  for (int i = 0; i < log.size(); ++i) {
+    const Status st = solve_kinematics(params, log.theta1[i], log.theta2[i], &k, 0.0);
+    if (!st.ok()) {
+      throw LogError(log.path, line_key(log.lines.empty() ? i + 1 : log.lines[i]),
+                     "pose does not fit the scene: " + st.message);
+    }
+  }
+}
+
+void write_torque_log(const std::string& path, const TorqueLog& log) {
+  std::ostringstream out;
+  for (const std::string& c : log.comments) out << "#" << c << "\n";
+  out << "t,theta1,theta2,tau1,tau2";
+  if (log.has_rates) out << ",omega1,omega2";
+  if (log.has_accels) out << ",alpha1,alpha2";
+  out << "\n";
+  for (int i = 0; i < log.size(); ++i) {
+    out << format_number(log.t[i]) << ',' << format_number(log.theta1[i]) << ','
+        << format_number(log.theta2[i]) << ',' << format_number(log.tau1[i]) << ','
+        << format_number(log.tau2[i]);
+    if (log.has_rates) {
+      out << ',' << format_number(log.omega1[i]) << ',' << format_number(log.omega2[i]);
+    }
+    if (log.has_accels) {
+      out << ',' << format_number(log.alpha1[i]) << ',' << format_number(log.alpha2[i]);
+    }
+    out << "\n";
+  }
+  // write beside the target, then rename: no half-written log under the final name
+  const std::string tmp = path + ".partial";
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) throw LogError(path, "(write)", "cannot create the file");
+    f << out.str();
+    f.close();
+    if (!f) throw LogError(path, "(write)", "write failed");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw LogError(path, "(write)", "cannot rename the finished file into place");
+  }
+}
+
+}  // namespace fivebar::identification

@@ -1,0 +1,73 @@
+# End-to-end checks of the `fivebar` command line (run by ctest with cmake -P):
+# exit status 0/1/2/3, exactly one `fivebar: error: <file>: <key>: <why>` line on stderr for every
+# failure, and no complete-looking output after a failed run.
+# Inputs: -DFIVEBAR=<executable> -DSOURCE_DIR=<project root> -DWORK_DIR=<scratch directory>
+cmake_minimum_required(VERSION 3.22)
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR})
+set(paper ${SOURCE_DIR}/datasets/scenes/paper.yaml)
+
+# run_fivebar(<expected exit status> <stderr regex or ""> args...)
+function(run_fivebar expected_status stderr_regex)
+  execute_process(COMMAND ${FIVEBAR} ${ARGN} RESULT_VARIABLE status OUTPUT_VARIABLE out
+                  ERROR_VARIABLE err)
+  if(NOT status EQUAL expected_status)
+    message(FATAL_ERROR "fivebar ${ARGN}: exit status ${status}, expected ${expected_status}\n"
+                        "stderr: ${err}")
+  endif()
+  if(expected_status EQUAL 0)
+    return()
+  endif()
+  # exactly one line, in the contract's format
+  string(REGEX MATCHALL "\n" newlines "${err}")
+  list(LENGTH newlines n)
+  if(NOT n EQUAL 1 OR NOT err MATCHES "^fivebar: error: [^\n]+: [^\n]+: [^\n]+\n$")
+    message(FATAL_ERROR "fivebar ${ARGN}: stderr is not one error line:\n${err}")
+  endif()
+  if(NOT err MATCHES "${stderr_regex}")
+    message(FATAL_ERROR "fivebar ${ARGN}: stderr\n${err}does not match ${stderr_regex}")
+  endif()
+endfunction()
+
+# 2: bad input
+file(READ ${paper} text)
+file(WRITE ${WORK_DIR}/bad.yaml "${text}colour: red\n")
+run_fivebar(2 "^fivebar: error: [^\n]*bad.yaml: colour: unknown key"
+            simulate ${WORK_DIR}/bad.yaml --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "nope.yaml: \\(file\\): cannot open" simulate ${WORK_DIR}/nope.yaml)
+run_fivebar(2 "paper.yaml: friction.coulomb: expected 1 or 5 numbers, got 4"
+            simulate ${paper} --set "friction.coulomb=[1,2,3,4]" --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "paper.yaml: simulation.rtoll: unknown key"
+            simulate ${paper} --set simulation.rtoll=1e-8 --out ${WORK_DIR}/out_bad)
+if(EXISTS ${WORK_DIR}/out_bad)
+  message(FATAL_ERROR "a run rejected for bad input created its output directory")
+endif()
+
+# 1: usage
+run_fivebar(1 "command line: simulate: SCENE is required" simulate)
+run_fivebar(1 "command line: nosuchcommand: unknown subcommand" nosuchcommand)
+run_fivebar(1 "command line: simulate: .*--bogus" simulate ${paper} --bogus)
+
+# 0: a short successful run
+set(out ${WORK_DIR}/out)
+run_fivebar(0 "" simulate ${paper} --set simulation.duration=0.05 --no-plots --out ${out})
+file(STRINGS ${out}/trajectory.csv header LIMIT_COUNT 1)
+string(CONCAT expected "^t,theta1,theta2,theta3,theta4,omega1,omega2,omega3,omega4,"
+       "alpha1,alpha2,alpha3,alpha4,M1,M2,N1,N2,N3,N4,N5,Mf1,Mf2,Mf3,Mf4,Mf5,P_diss,E_diss,")
+if(NOT header MATCHES "${expected}")
+  message(FATAL_ERROR "trajectory.csv header: ${header}")
+endif()
+foreach(f summary.json trajectory_frictionless.csv)
+  if(NOT EXISTS ${out}/${f})
+    message(FATAL_ERROR "successful run did not write ${f}")
+  endif()
+endforeach()
+
+# 3: the numerics fail (the solver runs out of steps); the previous run's results are gone and
+# nothing half-written is left
+run_fivebar(3 "paper.yaml: simulation: " simulate ${paper} --set simulation.max_steps=10
+            --no-plots --out ${out})
+file(GLOB left RELATIVE ${out} ${out}/* ${out}/.partial-*)
+if(left)
+  message(FATAL_ERROR "a failed run left files in its output directory: ${left}")
+endif()

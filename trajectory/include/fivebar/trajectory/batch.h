@@ -1,0 +1,93 @@
+// Batch runs: every task of a tasks file optimized for one design, on a pool of threads, with the
+// minimum-jerk baseline beside each result and a forward-simulation check of the optimal torques.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "fivebar/model/params.h"
+#include "fivebar/sim/simulator.h"
+#include "fivebar/trajectory/optimizer.h"
+#include "fivebar/trajectory/problem.h"
+#include "fivebar/trajectory/tasks.h"
+
+namespace fivebar::trajectory {
+
+struct BatchOptions {
+  ProblemOptions problem;      ///< its torque_limit is replaced by each task's
+  OptimizerOptions optimizer;  ///< its seed is combined with a hash of each task's name
+  /// constraints re-checked after the solve on a grid this many times denser than the nodes
+  int check_factor = 10;
+  /// relative violation (ConstraintCheck::max_violation) above which a result is "infeasible"
+  double feasibility_tol = 1e-3;
+  /// simulate the optimal torques forward from the start state and measure the miss of C
+  bool validate = true;
+  double validation_rtol = 1e-9;  ///< CVODE tolerances of that simulation
+};
+
+/// The outcome of one task (one row of summary.csv). Energies are NaN when not computed.
+struct TaskResult {
+  std::string task;
+  /// ok | max_evaluations | max_time | infeasible | a solver outcome (roundoff_limited ...) |
+  /// a resolution status (goal_out_of_workspace, invalid_duration, ...) | evaluation_failed
+  std::string status;
+  std::string message;
+  std::string solver_status;  ///< outcome_name() of the solve, "" when none ran
+  double duration = 0, torque_limit = 0;
+  std::array<double, 2> start{}, goal{};  ///< resolved joint angles [rad]
+  double dissipated_energy = NAN, baseline_dissipated_energy = NAN;  ///< [J]
+  double input_energy = NAN, baseline_input_energy = NAN;           ///< [J]
+  double objective = NAN;  ///< the minimized quantity [J]
+  double peak_torque = NAN, baseline_peak_torque = NAN;  ///< dense grid [N m]
+  double max_constraint_violation = NAN;  ///< dense grid, relative (ConstraintCheck)
+  double baseline_max_constraint_violation = NAN;
+  double min_coupler_sine = NAN;  ///< dense grid
+  double miss_distance = NAN;     ///< |C(T) simulated - C goal| [m]
+  int evaluations = 0, starts = 0, best_start = 0;
+  double wall_time_s = 0;
+  int control_points = 0;
+  std::vector<double> x;  ///< optimal free control points (empty when no solve ran)
+
+  bool solved() const { return !x.empty(); }
+};
+
+/// Optimizes one task for one design. Never throws for numerical trouble: everything ends up in
+/// the status. `loads` gives M3, F, F_angle (M1, M2 ignored) and must be callable from the
+/// calling thread.
+TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads,
+                    const TaskSpec& task, const sim::Initial& initial,
+                    const BatchOptions& options);
+
+/// The problem a result was solved on (to recompute its trajectory rows or torques).
+TrajectoryProblem problem_of(const Params<double>& params, const sim::LoadFunction& loads,
+                             const TaskResult& result, const BatchOptions& options);
+
+/// Hash of a task name (FNV-1a), mixed into the optimizer seed so that every task has its own
+/// perturbations whatever the order or thread it runs in.
+std::uint64_t task_seed(const std::string& name, std::uint64_t seed);
+
+/// Runs work(i) for i in [0, count) on `threads` threads (<= 0: all cores) and returns the
+/// results in index order. `progress(done, count)` (optional) is called after each item, under a
+/// lock. Each result depends only on i, so the output does not depend on the thread count.
+std::vector<TaskResult> run_parallel(int count, int threads,
+                                     const std::function<TaskResult(int)>& work,
+                                     const std::function<void(int, int)>& progress = {});
+
+/// Columns of summary.csv: those of interfaces.md (task, status, dissipated_energy,
+/// baseline_dissipated_energy, input_energy, peak_torque, max_constraint_violation, wall_time_s),
+/// then baseline_input_energy, baseline_peak_torque, saving_percent (100 (1 - E / E_baseline)),
+/// miss_distance, min_coupler_sine, solver_status, evaluations, starts, best_start, duration,
+/// torque_limit, theta1_start, theta2_start, theta1_goal, theta2_goal, message.
+const std::vector<std::string>& summary_columns();
+/// The fields of one summary.csv row (numbers as %.17g; the message quoted as CSV text).
+std::vector<std::string> summary_fields(const TaskResult& result);
+/// A line of comma-separated fields.
+std::string csv_line(const std::vector<std::string>& fields);
+
+/// Serialization of a result (for MPI transfer): decode(encode(r)) == r, bit for bit.
+std::string encode(const TaskResult& result);
+TaskResult decode(const std::string& bytes);
+
+}  // namespace fivebar::trajectory

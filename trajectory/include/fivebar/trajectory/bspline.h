@@ -1,0 +1,83 @@
+// Clamped B-splines of degree 5 on a uniform knot vector over [0, T], and the rest-to-rest
+// parameterization of a joint motion by them (ends fixed with zero rate and acceleration).
+#pragma once
+
+#include <array>
+#include <vector>
+
+namespace fivebar::trajectory {
+
+/// Degree of every trajectory spline (quintic: continuous acceleration and jerk).
+inline constexpr int kDegree = 5;
+
+/// Values and first two time derivatives of the kDegree + 1 basis functions that are non-zero
+/// at one instant; basis function `first + j` has value d[0][j], rate d[1][j], acceleration
+/// d[2][j].
+struct BasisAt {
+  int first = 0;
+  std::array<std::array<double, kDegree + 1>, 3> d{};
+};
+
+/// Clamped uniform B-spline basis of degree 5 with `n` control points over [0, duration]:
+/// knots 0 (6 times), duration * i / (n - 5) for i = 1..n-6, duration (6 times); n - 5 knot
+/// spans. Requires n >= 6 and duration > 0.
+class ClampedBasis {
+ public:
+  ClampedBasis(int control_points, double duration);
+
+  int size() const { return n_; }
+  double duration() const { return duration_; }
+  int spans() const { return n_ - kDegree; }
+  /// Start and end time of knot span s (0-based, s < spans()).
+  double span_begin(int s) const { return knots_[kDegree + s]; }
+  double span_end(int s) const { return knots_[kDegree + s + 1]; }
+
+  /// Non-zero basis functions and their derivatives [1/s, 1/s^2] at t in [0, duration].
+  BasisAt at(double t) const;
+
+ private:
+  int n_;
+  double duration_;
+  std::vector<double> knots_;
+};
+
+/// A rest-to-rest motion of (th1, th2) from `start` to `goal` [rad] in `duration` [s]: each
+/// angle is a clamped quintic B-spline whose first three control points equal the start and
+/// last three equal the goal, which makes the rate and acceleration zero at both ends. The free
+/// variables are the n - 6 inner control points of th1 followed by those of th2.
+class RestToRest {
+ public:
+  RestToRest(int control_points, double duration, std::array<double, 2> start,
+             std::array<double, 2> goal);
+
+  const ClampedBasis& basis() const { return basis_; }
+  int free_per_joint() const { return basis_.size() - 6; }
+  int num_variables() const { return 2 * free_per_joint(); }
+  const std::array<double, 2>& start() const { return start_; }
+  const std::array<double, 2>& goal() const { return goal_; }
+  double duration() const { return basis_.duration(); }
+
+  /// All n control points of joint j (0: th1, 1: th2) for the free variables x.
+  std::vector<double> control_points(const double* x, int j) const;
+  /// Index of the control point that variable `v` of a joint moves (3 .. n - 4).
+  static int control_index(int v) { return v + 3; }
+
+  /// (th, thd, thdd) of both joints at time t: out[0] = (th1, th2), out[1] rates, out[2]
+  /// accelerations.
+  std::array<std::array<double, 2>, 3> state(const double* x, double t) const;
+
+  /// The free variables that reproduce the minimum-jerk quintic
+  /// th(t) = start + (goal - start) (10 s^3 - 15 s^4 + 6 s^5), s = t / duration. The spline space
+  /// contains every quintic polynomial, so the fit (least squares on 8 n samples) is exact up to
+  /// rounding.
+  std::vector<double> minimum_jerk() const;
+
+ private:
+  ClampedBasis basis_;
+  std::array<double, 2> start_, goal_;
+};
+
+/// Minimum-jerk quintic blend s(u) = 10 u^3 - 15 u^4 + 6 u^5 and its first two derivatives in u.
+std::array<double, 3> minimum_jerk_blend(double u);
+
+}  // namespace fivebar::trajectory

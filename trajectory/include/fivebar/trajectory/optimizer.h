@@ -1,0 +1,53 @@
+// Local (SLSQP, MMA, CCSAQ) and multi-start global minimization of a TrajectoryProblem by NLopt.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fivebar/trajectory/nlopt_status.h"
+#include "fivebar/trajectory/problem.h"
+
+namespace fivebar::trajectory {
+
+/// NLopt algorithms offered (all gradient-based, all handle the inequality constraints).
+enum class Method : int {
+  kSlsqp = 0,  ///< "slsqp": NLOPT_LD_SLSQP, sequential quadratic programming (default)
+  kMma,        ///< "mma": NLOPT_LD_MMA, method of moving asymptotes
+  kCcsaq,      ///< "ccsaq": NLOPT_LD_CCSAQ, conservative convex separable quadratic
+};
+const char* method_name(Method m);
+bool parse_method(const std::string& name, Method* out);
+
+struct OptimizerOptions {
+  Method method = Method::kSlsqp;
+  /// Multi-start: the local method from the given start and from starts - 1 seeded random
+  /// perturbations of it (each a full local solve); the best feasible result wins.
+  bool global = false;
+  int starts = 8;
+  /// Perturbation of the inner control points [rad]: normal with standard deviation
+  /// spread * (|goal - start| + 0.1 rad) per joint.
+  double spread = 0.5;
+  std::uint64_t seed = 1;   ///< seed of the perturbations (results depend on it, never on time)
+  double ftol_rel = 1e-10;  ///< relative objective change that stops a local solve
+  double xtol_rel = 1e-8;   ///< relative step that stops a local solve
+  int max_evaluations = 500;  ///< per local solve
+  double constraint_tol = 1e-8;  ///< NLopt tolerance of each constraint (dimensionless)
+};
+
+struct OptimizeResult {
+  SolverStatus solver;          ///< of the local solve that gave x
+  std::vector<double> x;        ///< the best point (the start when nothing usable came out)
+  double objective = 0;         ///< [J]
+  double max_node_constraint = 0;  ///< max c(x) at the quadrature nodes (<= 0: feasible)
+  int evaluations = 0;          ///< objective evaluations, all starts together
+  int starts = 0;               ///< local solves run
+  int best_start = 0;           ///< which one gave x (0: the given start)
+  Status evaluation;            ///< not ok: even the start could not be evaluated
+};
+
+/// Minimizes problem.objective subject to its constraints, from x0.
+OptimizeResult optimize(const TrajectoryProblem& problem, const std::vector<double>& x0,
+                        const OptimizerOptions& options);
+
+}  // namespace fivebar::trajectory

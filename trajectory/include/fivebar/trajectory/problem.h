@@ -1,0 +1,137 @@
+// The trajectory optimization problem: cost and constraints of a rest-to-rest B-spline motion of
+// the five-bar, evaluated by the friction-aware inverse dynamics, with exact gradients.
+#pragma once
+
+#include <array>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "fivebar/model/dynamics.h"
+#include "fivebar/model/params.h"
+#include "fivebar/model/status.h"
+#include "fivebar/sim/simulator.h"
+#include "fivebar/trajectory/bspline.h"
+
+namespace fivebar::trajectory {
+
+/// What the optimizer minimizes.
+enum class Objective : int {
+  /// E = int sum_k Mf_k w_k dt [J], the energy dissipated in the five joints (model.md).
+  kDissipatedEnergy = 0,
+  /// int |M1 w1| + |M2 w2| dt [J], the energy the motors put in (braking counts as spent), with
+  /// |p| smoothed to sqrt(p^2 + eps^2) - eps, eps = ProblemOptions::power_smoothing.
+  kInputEnergy = 1,
+};
+const char* objective_name(Objective o);
+bool parse_objective(const std::string& name, Objective* out);
+
+/// Discretization and constraint settings.
+struct ProblemOptions {
+  int control_points = 10;      ///< per joint (n >= 7); n - 6 of them are free
+  int quadrature_points = 12;   ///< Gauss-Legendre points per knot span (also constraint points)
+  Objective objective = Objective::kDissipatedEnergy;
+  /// |M1|, |M2| <= torque_limit [N m] at every quadrature point; infinity: no torque constraint
+  double torque_limit = std::numeric_limits<double>::infinity();
+  /// |sin(th4 - th3)| >= singular_margin at every quadrature point (also keeps the assembly)
+  double singular_margin = 0.1;
+  /// w_s [rad/s] of the smooth Coulomb sign tanh(w / w_s) used along the trajectory, when the
+  /// scene's friction.smoothing_velocity is 0 (the exact sign has no derivative at w = 0, and
+  /// every joint starts and ends at rest). A scene value > 0 is used as it is.
+  double smoothing_velocity = 5e-2;
+  double power_smoothing = 1e-2;  ///< eps [W] of the smooth |p| of kInputEnergy
+  double friction_tol = 1e-13;    ///< relative stopping test of the reaction/friction loop
+};
+
+/// The friction parameters actually used along trajectories: `params` with smoothing_velocity
+/// set to options.smoothing_velocity when it is 0 (see ProblemOptions::smoothing_velocity).
+Params<double> smoothed_params(const Params<double>& params, const ProblemOptions& options);
+
+/// Values at the constraint points of one evaluation.
+struct Evaluated {
+  double objective = 0;                  ///< [J]
+  std::vector<double> objective_grad;    ///< d objective / dx, when asked
+  std::vector<double> constraints;       ///< c(x) <= 0, see TrajectoryProblem
+  std::vector<double> constraints_grad;  ///< row-major (constraints x variables), when asked
+};
+
+/// Constraint check on a uniform grid (t = duration i / (points - 1)).
+struct ConstraintCheck {
+  Status status;                ///< not ok: the inverse dynamics failed somewhere on the grid
+  int points = 0;
+  double peak_torque = 0;       ///< max over the grid of max(|M1|, |M2|) [N m]
+  double torque_excess = 0;     ///< max(0, peak_torque - torque_limit) [N m]
+  double min_coupler_sine = 1;  ///< min |sin(th4 - th3)| over the grid
+  /// max(0, torque_excess / torque_limit, (margin - min_coupler_sine) / margin): relative
+  double max_violation = 0;
+};
+
+/// Cost and constraints of one rest-to-rest task for one design.
+///
+/// Time is discretized by composite Gauss-Legendre quadrature: quadrature_points nodes in each
+/// knot span of the spline, where the integrand (a smooth function of the spline's piecewise
+/// polynomial state) is smooth. The same nodes carry the constraints, three per node q:
+///   c[3q]   = (M1 / torque_limit)^2 - 1 <= 0
+///   c[3q+1] = (M2 / torque_limit)^2 - 1 <= 0        (0 - 1 when there is no torque limit)
+///   c[3q+2] = cos^2(C) - (1 - margin^2) <= 0,  cos(C) = (l3^2 + l4^2 - |BD|^2) / (2 l3 l4)
+/// where C is the coupler angle at joint C (|sin C| = |sin(th4 - th3)|). The third constraint is
+/// defined for any (th1, th2), also where the mechanism cannot close, and implies both the margin
+/// and the assembly; the elbow branch cannot change along a motion that keeps |sin C| > 0.
+///
+/// Gradients are exact: the inverse dynamics at each node runs on ceres::Jet<double, 6> seeded
+/// on the node state (th1, th2, w1, w2, a1, a2), and the chain rule through the spline basis
+/// (linear in x) gives the derivatives with respect to the free control points.
+///
+/// Thread-safety: const member functions may be called from several threads at once.
+class TrajectoryProblem {
+ public:
+  /// `loads` gives M3, F, F_angle of the scene at t (its M1, M2 are ignored): the constructor
+  /// samples it at the nodes; check(), rows() and torques() call it at their instants.
+  TrajectoryProblem(const Params<double>& params, const sim::LoadFunction& loads,
+                    const RestToRest& motion, const ProblemOptions& options);
+
+  int num_variables() const { return motion_.num_variables(); }
+  int num_constraints() const { return 3 * static_cast<int>(nodes_.size()); }
+  int num_nodes() const { return static_cast<int>(nodes_.size()); }
+  const RestToRest& motion() const { return motion_; }
+  const ProblemOptions& options() const { return options_; }
+  const Params<double>& params() const { return params_; }
+
+  /// Objective, constraints and (when the flags ask) their gradients at x. Not ok when the
+  /// inverse dynamics fails at a node (cannot assemble, friction loop): out is then unusable.
+  Status evaluate(const double* x, bool want_gradients, Evaluated* out) const;
+  /// Objective only, in double (no Jets).
+  Status objective(const double* x, double* value) const;
+
+  /// Objective and input energy integrated with `points` Gauss-Legendre points per span (for
+  /// the accuracy check against a denser rule).
+  Status energies(const double* x, int points, double* dissipated, double* input) const;
+
+  /// Re-check of the constraints on a uniform grid of `points` instants (inverse dynamics in
+  /// double, ends included).
+  ConstraintCheck check(const double* x, int points) const;
+
+  /// Rows of trajectory.csv (interfaces.md) on a uniform grid of step `step` [s] (ends
+  /// included), from the inverse dynamics of the motion with the smoothed friction.
+  Status rows(const double* x, double step, std::vector<sim::Row>* out) const;
+
+  /// M1, M2 [N m] of the motion at time t (inverse dynamics in double).
+  Status torques(const double* x, double t, double* M1, double* M2) const;
+
+ private:
+  struct Node {
+    double t, weight;
+    BasisAt basis;
+    Loads<double> loads;
+  };
+  // node state (th, thd, thdd of both joints) from x
+  std::array<double, 6> node_state(const double* x, const Node& node) const;
+
+  Params<double> params_;
+  sim::LoadFunction loads_;
+  RestToRest motion_;
+  ProblemOptions options_;
+  std::vector<Node> nodes_;
+};
+
+}  // namespace fivebar::trajectory

@@ -1,0 +1,78 @@
+// Tasks files (interfaces.md, "Tasks file"): YAML in, task specifications out, and their
+// resolution into joint-space rest-to-rest motions for one design.
+#pragma once
+
+#include <array>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "fivebar/model/params.h"
+#include "fivebar/sim/simulator.h"
+
+namespace fivebar::trajectory {
+
+/// A malformed tasks file. what() is `<file>: <key>: <reason>` (the layout of InputError, to
+/// which the command line converts it, exit status 2).
+class TaskFileError : public std::runtime_error {
+ public:
+  TaskFileError(const std::string& file, const std::string& key, const std::string& reason)
+      : std::runtime_error(file + ": " + key + ": " + reason), file_(file), key_(key),
+        reason_(reason) {}
+  const std::string& file() const { return file_; }
+  const std::string& key() const { return key_; }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string file_, key_, reason_;
+};
+
+/// A start or goal: joint angles {theta1, theta2} [rad] or point C {x, y} [m].
+struct Pose {
+  bool cartesian = false;
+  double a = 0, b = 0;  ///< theta1, theta2 or x, y
+};
+
+/// One task as written in the file. Values are not range-checked here: a non-positive duration
+/// or torque limit becomes the task's status in the batch (resolve_task), not a file error.
+struct TaskSpec {
+  std::string name;
+  double duration = 0;  ///< [s], rest to rest
+  Pose start, goal;
+  /// [N m] on |M1| and |M2|; infinity when the file gives none
+  double torque_limit = std::numeric_limits<double>::infinity();
+};
+
+/// Reads a tasks file. Throws TaskFileError for a missing file, malformed YAML (with line and
+/// column), a missing `tasks` list, unknown keys, a task without name, duration, start or goal,
+/// a pose that is not exactly {theta1, theta2} or {x, y}, a value that is not a finite number,
+/// and task names that are empty, repeated or not usable as a directory name
+/// ([A-Za-z0-9_.-], not starting with '.').
+std::vector<TaskSpec> load_tasks(const std::string& path);
+/// The same from YAML text; `path` only names it in messages.
+std::vector<TaskSpec> parse_tasks(const std::string& yaml_text, const std::string& path);
+
+/// A task resolved for one design: joint angles at both ends, or why it cannot be done.
+struct ResolvedTask {
+  /// "ok" or: invalid_duration, invalid_torque_limit, start_cannot_assemble,
+  /// start_out_of_workspace, start_near_singular, goal_cannot_assemble, goal_out_of_workspace,
+  /// goal_near_singular
+  std::string status = "ok";
+  std::string message;
+  std::array<double, 2> start{}, goal{};  ///< (theta1, theta2) [rad]
+  bool ok() const { return status == "ok"; }
+};
+
+/// Resolves `task` for `params`. A Cartesian start is solved in the working mode (the sides of
+/// both legs) of the scene's `initial` pose, a Cartesian goal in that of the task's start; the
+/// goal angles are taken within pi of the start angles. Poses closer than `singular_margin` to
+/// a singular configuration are refused.
+ResolvedTask resolve_task(const Params<double>& params, const TaskSpec& task,
+                          const sim::Initial& initial, double singular_margin);
+
+/// Point C [m] at joint angles (theta1, theta2); false when the mechanism cannot close there.
+bool point_c(const Params<double>& params, double theta1, double theta2,
+             std::array<double, 2>* c);
+
+}  // namespace fivebar::trajectory

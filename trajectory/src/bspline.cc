@@ -1,0 +1,150 @@
+#include "fivebar/trajectory/bspline.h"
+
+#include <algorithm>
+#include <cassert>
+#include <stdexcept>
+
+#include <Eigen/Dense>
+
+namespace fivebar::trajectory {
+
+ClampedBasis::ClampedBasis(int control_points, double duration)
+    : n_(control_points), duration_(duration) {
+  if (n_ < kDegree + 1) throw std::invalid_argument("ClampedBasis: fewer than 6 control points");
+  if (!(duration > 0.0)) throw std::invalid_argument("ClampedBasis: duration must be > 0");
+  // clamped uniform knot vector of n + p + 1 knots
+  knots_.assign(n_ + kDegree + 1, 0.0);
+  const int spans = n_ - kDegree;
+  for (int i = 1; i < spans; ++i) knots_[kDegree + i] = duration * i / spans;
+  for (int i = n_; i < n_ + kDegree + 1; ++i) knots_[i] = duration;
+}
+
+BasisAt ClampedBasis::at(double t) const {
+  constexpr int p = kDegree;
+  t = std::clamp(t, 0.0, duration_);
+  // knot span s with U[s] <= t < U[s+1], the last span closed at t = duration
+  int s = static_cast<int>(std::upper_bound(knots_.begin() + p, knots_.begin() + n_, t) -
+                           knots_.begin()) - 1;
+  s = std::clamp(s, p, n_ - 1);
+  const double* U = knots_.data();
+
+  // basis functions and derivatives (Piegl & Tiller, The NURBS Book, algorithm A2.3)
+  double ndu[p + 1][p + 1];
+  double left[p + 1], right[p + 1];
+  ndu[0][0] = 1.0;
+  for (int j = 1; j <= p; ++j) {
+    left[j] = t - U[s + 1 - j];
+    right[j] = U[s + j] - t;
+    double saved = 0.0;
+    for (int r = 0; r < j; ++r) {
+      ndu[j][r] = right[r + 1] + left[j - r];  // lower triangle: knot differences
+      const double temp = ndu[r][j - 1] / ndu[j][r];
+      ndu[r][j] = saved + right[r + 1] * temp;  // upper triangle: basis functions
+      saved = left[j - r] * temp;
+    }
+    ndu[j][j] = saved;
+  }
+  BasisAt out;
+  out.first = s - p;
+  for (int j = 0; j <= p; ++j) out.d[0][j] = ndu[j][p];
+  constexpr int nd = 2;
+  double a[2][p + 1];
+  for (int r = 0; r <= p; ++r) {
+    int s1 = 0, s2 = 1;
+    a[0][0] = 1.0;
+    for (int k = 1; k <= nd; ++k) {
+      double d = 0.0;
+      const int rk = r - k, pk = p - k;
+      if (r >= k) {
+        a[s2][0] = a[s1][0] / ndu[pk + 1][rk];
+        d = a[s2][0] * ndu[rk][pk];
+      }
+      const int j1 = rk >= -1 ? 1 : -rk;
+      const int j2 = (r - 1 <= pk) ? k - 1 : p - r;
+      for (int j = j1; j <= j2; ++j) {
+        a[s2][j] = (a[s1][j] - a[s1][j - 1]) / ndu[pk + 1][rk + j];
+        d += a[s2][j] * ndu[rk + j][pk];
+      }
+      if (r <= pk) {
+        a[s2][k] = -a[s1][k - 1] / ndu[pk + 1][r];
+        d += a[s2][k] * ndu[r][pk];
+      }
+      out.d[k][r] = d;
+      std::swap(s1, s2);
+    }
+  }
+  // multiply through by p (p - 1) ...
+  double f = p;
+  for (int k = 1; k <= nd; ++k) {
+    for (int j = 0; j <= p; ++j) out.d[k][j] *= f;
+    f *= (p - k);
+  }
+  return out;
+}
+
+RestToRest::RestToRest(int control_points, double duration, std::array<double, 2> start,
+                       std::array<double, 2> goal)
+    : basis_(control_points, duration), start_(start), goal_(goal) {
+  if (control_points < 7) throw std::invalid_argument("RestToRest: fewer than 7 control points");
+}
+
+std::vector<double> RestToRest::control_points(const double* x, int j) const {
+  const int n = basis_.size(), nf = free_per_joint();
+  std::vector<double> c(n);
+  for (int i = 0; i < 3; ++i) {
+    c[i] = start_[j];
+    c[n - 1 - i] = goal_[j];
+  }
+  for (int v = 0; v < nf; ++v) c[control_index(v)] = x[j * nf + v];
+  return c;
+}
+
+std::array<std::array<double, 2>, 3> RestToRest::state(const double* x, double t) const {
+  const BasisAt b = basis_.at(t);
+  std::array<std::array<double, 2>, 3> out{};
+  for (int j = 0; j < 2; ++j) {
+    const std::vector<double> c = control_points(x, j);
+    for (int k = 0; k < 3; ++k) {
+      double s = 0.0;
+      for (int i = 0; i <= kDegree; ++i) s += b.d[k][i] * c[b.first + i];
+      out[k][j] = s;
+    }
+  }
+  return out;
+}
+
+std::array<double, 3> minimum_jerk_blend(double u) {
+  const double u2 = u * u, u3 = u2 * u;
+  return {u3 * (10.0 - 15.0 * u + 6.0 * u2), 30.0 * u2 * (1.0 - 2.0 * u + u2),
+          60.0 * u * (1.0 - 3.0 * u + 2.0 * u2)};
+}
+
+std::vector<double> RestToRest::minimum_jerk() const {
+  // least squares for the inner control points on 8 n samples of each joint's quintic
+  const int n = basis_.size(), nf = free_per_joint(), m = 8 * n;
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, nf);
+  Eigen::MatrixXd rhs(m, 2);
+  for (int r = 0; r < m; ++r) {
+    const double t = duration() * (r + 0.5) / m;
+    const BasisAt b = basis_.at(t);
+    const double s = minimum_jerk_blend(t / duration())[0];
+    for (int j = 0; j < 2; ++j) rhs(r, j) = start_[j] + (goal_[j] - start_[j]) * s;
+    for (int i = 0; i <= kDegree; ++i) {
+      const int c = b.first + i;
+      if (c < 3) {
+        rhs.row(r) -= b.d[0][i] * Eigen::RowVector2d(start_[0], start_[1]);
+      } else if (c > n - 4) {
+        rhs.row(r) -= b.d[0][i] * Eigen::RowVector2d(goal_[0], goal_[1]);
+      } else {
+        A(r, c - 3) += b.d[0][i];
+      }
+    }
+  }
+  const Eigen::MatrixXd sol = A.colPivHouseholderQr().solve(rhs);
+  std::vector<double> x(2 * nf);
+  for (int j = 0; j < 2; ++j)
+    for (int v = 0; v < nf; ++v) x[j * nf + v] = sol(v, j);
+  return x;
+}
+
+}  // namespace fivebar::trajectory

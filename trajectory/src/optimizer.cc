@@ -1,0 +1,237 @@
+// The NLopt driver (NLopt is included only in trajectory/src).
+#include "fivebar/trajectory/optimizer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include <nlopt.hpp>
+
+namespace fivebar::trajectory {
+namespace {
+
+// evaluations shared by the objective and constraint callbacks of one local solve
+class Cache {
+ public:
+  Cache(const TrajectoryProblem& problem, double penalty) : problem_(problem), penalty_(penalty) {}
+
+  const Evaluated& at(const double* x, bool grad) {
+    const int n = problem_.num_variables();
+    const bool same = valid_ && std::equal(x, x + n, x_.begin());
+    if (same && (has_grad_ || !grad)) return value_;
+    x_.assign(x, x + n);
+    valid_ = true;
+    has_grad_ = grad;
+    ++evaluations_;
+    const Status st = problem_.evaluate(x, grad, &value_);
+    if (!st.ok()) {
+      // outside the domain of the model (cannot assemble, friction loop failed): a large flat
+      // penalty makes the line searches step back
+      value_.objective = penalty_;
+      value_.constraints.assign(problem_.num_constraints(), 1.0);
+      value_.objective_grad.assign(n, 0.0);
+      value_.constraints_grad.assign(static_cast<size_t>(problem_.num_constraints()) * n, 0.0);
+    }
+    return value_;
+  }
+  int evaluations() const { return evaluations_; }
+
+ private:
+  const TrajectoryProblem& problem_;
+  double penalty_;
+  std::vector<double> x_;
+  bool valid_ = false, has_grad_ = false;
+  Evaluated value_;
+  int evaluations_ = 0;
+};
+
+double objective_cb(unsigned n, const double* x, double* grad, void* data) {
+  const Evaluated& e = static_cast<Cache*>(data)->at(x, grad != nullptr);
+  if (grad) std::memcpy(grad, e.objective_grad.data(), n * sizeof(double));
+  return e.objective;
+}
+
+void constraints_cb(unsigned m, double* result, unsigned n, const double* x, double* grad,
+                    void* data) {
+  const Evaluated& e = static_cast<Cache*>(data)->at(x, grad != nullptr);
+  std::memcpy(result, e.constraints.data(), m * sizeof(double));
+  if (grad) std::memcpy(grad, e.constraints_grad.data(), static_cast<size_t>(m) * n * sizeof(double));
+}
+
+nlopt::algorithm algorithm(Method m) {
+  switch (m) {
+    case Method::kMma:
+      return nlopt::LD_MMA;
+    case Method::kCcsaq:
+      return nlopt::LD_CCSAQ;
+    case Method::kSlsqp:
+      break;
+  }
+  return nlopt::LD_SLSQP;
+}
+
+struct Local {
+  SolverStatus solver;
+  std::vector<double> x;
+  double objective = std::numeric_limits<double>::infinity();
+  double max_constraint = std::numeric_limits<double>::infinity();
+  int evaluations = 0;
+  bool evaluated = false;
+};
+
+Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x0,
+                  const OptimizerOptions& options, double penalty) {
+  const int n = problem.num_variables(), m = problem.num_constraints();
+  Cache cache(problem, penalty);
+  Local out;
+  out.x = x0;
+  try {
+    nlopt::opt opt(algorithm(options.method), n);
+    // bounds: one turn beyond the span of the motion (MMA and CCSAQ want a bounded box)
+    std::vector<double> lo(n), hi(n);
+    const int nf = problem.motion().free_per_joint();
+    for (int j = 0; j < 2; ++j) {
+      const double a = problem.motion().start()[j], b = problem.motion().goal()[j];
+      for (int v = 0; v < nf; ++v) {
+        lo[j * nf + v] = std::min(a, b) - M_PI;
+        hi[j * nf + v] = std::max(a, b) + M_PI;
+        out.x[j * nf + v] = std::clamp(out.x[j * nf + v], lo[j * nf + v], hi[j * nf + v]);
+      }
+    }
+    opt.set_lower_bounds(lo);
+    opt.set_upper_bounds(hi);
+    opt.set_min_objective(objective_cb, &cache);
+    opt.add_inequality_mconstraint(constraints_cb, &cache,
+                                   std::vector<double>(m, options.constraint_tol));
+    opt.set_ftol_rel(options.ftol_rel);
+    opt.set_xtol_rel(options.xtol_rel);
+    opt.set_maxeval(options.max_evaluations);
+    double f = 0;
+    const nlopt::result r = opt.optimize(out.x, f);
+    out.solver = status_from_result(static_cast<int>(r));
+  } catch (...) {
+    out.solver = status_from_exception(std::current_exception());
+  }
+  out.evaluations = cache.evaluations();
+  // the returned point, evaluated afresh (NLopt may return a point it evaluated earlier)
+  Evaluated e;
+  if (problem.evaluate(out.x.data(), false, &e).ok()) {
+    out.evaluated = true;
+    out.objective = e.objective;
+    out.max_constraint = *std::max_element(e.constraints.begin(), e.constraints.end());
+  }
+  return out;
+}
+
+// deterministic normal deviates: splitmix64 and Box-Muller (no std:: distributions, whose
+// output differs between standard libraries)
+class Normal {
+ public:
+  explicit Normal(std::uint64_t seed) : state_(seed) {}
+  double operator()() {
+    const double u1 = (next() >> 11) * 0x1.0p-53, u2 = (next() >> 11) * 0x1.0p-53;
+    return std::sqrt(-2.0 * std::log(1.0 - u1)) * std::cos(2.0 * M_PI * u2);
+  }
+
+ private:
+  std::uint64_t next() {
+    std::uint64_t z = (state_ += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  }
+  std::uint64_t state_;
+};
+
+// a feasible result beats an infeasible one; then the lower objective
+bool better(const Local& a, const Local& b, double tol) {
+  if (!a.evaluated) return false;
+  if (!b.evaluated) return true;
+  const bool fa = a.solver.usable() && a.max_constraint <= tol;
+  const bool fb = b.solver.usable() && b.max_constraint <= tol;
+  if (fa != fb) return fa;
+  if (!fa) return a.max_constraint < b.max_constraint;
+  return a.objective < b.objective;
+}
+
+}  // namespace
+
+const char* method_name(Method m) {
+  switch (m) {
+    case Method::kMma:
+      return "mma";
+    case Method::kCcsaq:
+      return "ccsaq";
+    case Method::kSlsqp:
+      break;
+  }
+  return "slsqp";
+}
+
+bool parse_method(const std::string& name, Method* out) {
+  if (name == "slsqp") {
+    *out = Method::kSlsqp;
+  } else if (name == "mma") {
+    *out = Method::kMma;
+  } else if (name == "ccsaq") {
+    *out = Method::kCcsaq;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+OptimizeResult optimize(const TrajectoryProblem& problem, const std::vector<double>& x0,
+                        const OptimizerOptions& options) {
+  OptimizeResult result;
+  result.x = x0;
+  double f0 = 0;
+  result.evaluation = problem.objective(x0.data(), &f0);
+  if (!result.evaluation.ok()) {
+    result.solver = {SolverOutcome::kFailure, "start not evaluable: " + result.evaluation.message};
+    return result;
+  }
+  const double penalty = 1e3 * (1.0 + std::abs(f0));
+  const double tol = 10.0 * options.constraint_tol;
+
+  // local solve from the given start
+  Local best = solve_local(problem, x0, options, penalty);
+  result.starts = 1;
+  result.evaluations = best.evaluations;
+
+  // multi-start: seeded perturbations of the start, each polished by the local method
+  if (options.global) {
+    Normal normal(options.seed);
+    const int nf = problem.motion().free_per_joint();
+    for (int s = 1; s < options.starts; ++s) {
+      std::vector<double> xs = x0;
+      for (int j = 0; j < 2; ++j) {
+        const double scale = options.spread * (std::abs(problem.motion().goal()[j] -
+                                                        problem.motion().start()[j]) + 0.1);
+        for (int v = 0; v < nf; ++v) xs[j * nf + v] += scale * normal();
+      }
+      Local local = solve_local(problem, xs, options, penalty);
+      ++result.starts;
+      result.evaluations += local.evaluations;
+      if (better(local, best, tol)) {
+        best = std::move(local);
+        result.best_start = s;
+      }
+    }
+  }
+  result.solver = best.solver;
+  if (best.evaluated) {
+    result.x = best.x;
+    result.objective = best.objective;
+    result.max_node_constraint = best.max_constraint;
+  } else {
+    Evaluated e;
+    problem.evaluate(x0.data(), false, &e);
+    result.objective = f0;
+    result.max_node_constraint = *std::max_element(e.constraints.begin(), e.constraints.end());
+  }
+  return result;
+}
+
+}  // namespace fivebar::trajectory

@@ -1,0 +1,300 @@
+#include "fivebar/trajectory/problem.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <ceres/jet.h>
+
+#include "fivebar/trajectory/quadrature.h"
+
+namespace fivebar::trajectory {
+namespace {
+
+using Jet6 = ceres::Jet<double, 6>;
+
+EvalOptions eval_options(const ProblemOptions& o) {
+  EvalOptions e;
+  e.singular_margin = 0.0;  // the margin is a constraint of the problem, not a failure
+  e.friction_tol = o.friction_tol;
+  return e;
+}
+
+// smooth |p| = sqrt(p^2 + eps^2) - eps
+template <typename T>
+T smooth_abs(const T& p, double eps) {
+  using std::sqrt;
+  return sqrt(p * p + T(eps * eps)) - T(eps);
+}
+
+// integrand of the objective, M1 and M2 at one state (th1, th2, w1, w2, a1, a2)
+template <typename T>
+Status node_values(const Params<T>& p, const Loads<T>& L, const std::array<T, 6>& s,
+                   const ProblemOptions& o, T* f, T* M1, T* M2, T* P_diss = nullptr) {
+  Evaluation<T> ev;
+  const Status st =
+      inverse_dynamics(p, L, s[0], s[1], s[2], s[3], s[4], s[5], nullptr, eval_options(o), &ev);
+  if (!st.ok()) return st;
+  if (o.objective == Objective::kDissipatedEnergy) {
+    *f = ev.P_diss;
+  } else {
+    *f = smooth_abs(T(ev.M1 * s[2]), o.power_smoothing) +
+         smooth_abs(T(ev.M2 * s[3]), o.power_smoothing);
+  }
+  *M1 = ev.M1;
+  *M2 = ev.M2;
+  if (P_diss) *P_diss = ev.P_diss;
+  return Status::Ok();
+}
+
+// c = cos^2(C) - (1 - m^2) at (th1, th2) and its gradient (closed-form triangle B, C, D)
+double coupler_constraint(const Params<double>& p, double th1, double th2, double margin,
+                          double* d1, double* d2, double* abs_sine = nullptr) {
+  const double l1 = p.links[0].length, l2 = p.links[1].length;
+  const double l3 = p.links[2].length, l4 = p.links[3].length;
+  const double Bx = l1 * std::cos(th1), By = l1 * std::sin(th1);
+  const double Dx = p.ground_length + l2 * std::cos(th2), Dy = l2 * std::sin(th2);
+  const double dx = Dx - Bx, dy = Dy - By;
+  const double L2 = dx * dx + dy * dy;
+  const double cosC = (l3 * l3 + l4 * l4 - L2) / (2.0 * l3 * l4);
+  // dL2/dth1 = 2 (D - B) . (-dB/dth1), dL2/dth2 = 2 (D - B) . dD/dth2
+  const double dL1 = -2.0 * (dx * (-By) + dy * Bx);
+  const double dL2 = 2.0 * (dx * (-l2 * std::sin(th2)) + dy * (l2 * std::cos(th2)));
+  const double k = 2.0 * cosC * (-1.0 / (2.0 * l3 * l4));
+  if (d1) *d1 = k * dL1;
+  if (d2) *d2 = k * dL2;
+  if (abs_sine) *abs_sine = cosC * cosC <= 1.0 ? std::sqrt(1.0 - cosC * cosC) : 0.0;
+  return cosC * cosC - (1.0 - margin * margin);
+}
+
+}  // namespace
+
+const char* objective_name(Objective o) {
+  return o == Objective::kInputEnergy ? "input_energy" : "dissipated_energy";
+}
+
+bool parse_objective(const std::string& name, Objective* out) {
+  if (name == "dissipated_energy" || name == "dissipated") {
+    *out = Objective::kDissipatedEnergy;
+  } else if (name == "input_energy" || name == "input") {
+    *out = Objective::kInputEnergy;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+Params<double> smoothed_params(const Params<double>& params, const ProblemOptions& options) {
+  Params<double> p = params;
+  if (!(p.friction.smoothing_velocity > 0.0)) {
+    p.friction.smoothing_velocity = options.smoothing_velocity;
+  }
+  return p;
+}
+
+TrajectoryProblem::TrajectoryProblem(const Params<double>& params, const sim::LoadFunction& loads,
+                                     const RestToRest& motion, const ProblemOptions& options)
+    : params_(smoothed_params(params, options)),
+      loads_(loads),
+      motion_(motion),
+      options_(options) {
+  if (options.quadrature_points < 1) {
+    throw std::invalid_argument("TrajectoryProblem: quadrature_points < 1");
+  }
+  // composite Gauss-Legendre: quadrature_points nodes per knot span
+  const ClampedBasis& basis = motion_.basis();
+  for (int s = 0; s < basis.spans(); ++s) {
+    const Rule rule =
+        gauss_legendre(options.quadrature_points, basis.span_begin(s), basis.span_end(s));
+    for (size_t i = 0; i < rule.nodes.size(); ++i) {
+      Node node;
+      node.t = rule.nodes[i];
+      node.weight = rule.weights[i];
+      node.basis = basis.at(node.t);
+      node.loads = loads_(node.t);
+      nodes_.push_back(node);
+    }
+  }
+}
+
+std::array<double, 6> TrajectoryProblem::node_state(const double* x, const Node& node) const {
+  std::array<double, 6> s{};
+  const int n = motion_.basis().size(), nf = motion_.free_per_joint();
+  for (int j = 0; j < 2; ++j) {
+    for (int i = 0; i <= kDegree; ++i) {
+      const int c = node.basis.first + i;
+      const double cp = c < 3 ? motion_.start()[j]
+                              : (c > n - 4 ? motion_.goal()[j] : x[j * nf + c - 3]);
+      for (int k = 0; k < 3; ++k) s[2 * k + j] += node.basis.d[k][i] * cp;
+    }
+  }
+  return s;
+}
+
+Status TrajectoryProblem::evaluate(const double* x, bool want_gradients, Evaluated* out) const {
+  const int nv = num_variables(), nc = num_constraints(), nf = motion_.free_per_joint();
+  const int n = motion_.basis().size();
+  out->objective = 0.0;
+  out->constraints.assign(nc, 0.0);
+  if (want_gradients) {
+    out->objective_grad.assign(nv, 0.0);
+    out->constraints_grad.assign(static_cast<size_t>(nc) * nv, 0.0);
+  }
+  const double lim = options_.torque_limit;
+  const bool limited = std::isfinite(lim);
+  // the parameters as Jets (a small copy per evaluation, cheap beside the nodes)
+  Params<Jet6> pj;
+  if (want_gradients) pj = params_.cast<Jet6>();
+  for (size_t q = 0; q < nodes_.size(); ++q) {
+    const Node& node = nodes_[q];
+    const std::array<double, 6> s = node_state(x, node);
+    double f, M1, M2;
+    std::array<double, 6> df{}, dM1{}, dM2{};
+    if (want_gradients) {
+      // seed the node state: derivative k of the Jets is d/d s[k]
+      std::array<Jet6, 6> sj;
+      for (int k = 0; k < 6; ++k) sj[k] = Jet6(s[k], k);
+      const Loads<Jet6> lj = node.loads.cast<Jet6>();
+      Jet6 fj, M1j, M2j;
+      const Status st = node_values(pj, lj, sj, options_, &fj, &M1j, &M2j);
+      if (!st.ok()) return st;
+      f = fj.a;
+      M1 = M1j.a;
+      M2 = M2j.a;
+      for (int k = 0; k < 6; ++k) {
+        df[k] = fj.v[k];
+        dM1[k] = M1j.v[k];
+        dM2[k] = M2j.v[k];
+      }
+    } else {
+      const Status st = node_values(params_, node.loads, s, options_, &f, &M1, &M2);
+      if (!st.ok()) return st;
+    }
+    out->objective += node.weight * f;
+
+    // constraints of this node
+    double* c = &out->constraints[3 * q];
+    c[0] = limited ? (M1 / lim) * (M1 / lim) - 1.0 : -1.0;
+    c[1] = limited ? (M2 / lim) * (M2 / lim) - 1.0 : -1.0;
+    double ds1 = 0, ds2 = 0;
+    c[2] = coupler_constraint(params_, s[0], s[1], options_.singular_margin, &ds1, &ds2);
+    if (!want_gradients) continue;
+
+    // chain rule: s[2 k + j] = sum_i basis.d[k][i] * control point (first + i) of joint j
+    const double g1 = limited ? 2.0 * M1 / (lim * lim) : 0.0;
+    const double g2 = limited ? 2.0 * M2 / (lim * lim) : 0.0;
+    double* r0 = &out->constraints_grad[(3 * q) * nv];
+    double* r1 = r0 + nv;
+    double* r2 = r1 + nv;
+    for (int i = 0; i <= kDegree; ++i) {
+      const int cidx = node.basis.first + i;
+      if (cidx < 3 || cidx > n - 4) continue;  // fixed end control points
+      for (int j = 0; j < 2; ++j) {
+        const int v = j * nf + cidx - 3;
+        double gf = 0, gm1 = 0, gm2 = 0;
+        for (int k = 0; k < 3; ++k) {
+          const double b = node.basis.d[k][i];
+          gf += df[2 * k + j] * b;
+          gm1 += dM1[2 * k + j] * b;
+          gm2 += dM2[2 * k + j] * b;
+        }
+        out->objective_grad[v] += node.weight * gf;
+        r0[v] += g1 * gm1;
+        r1[v] += g2 * gm2;
+        r2[v] += (j == 0 ? ds1 : ds2) * node.basis.d[0][i];
+      }
+    }
+  }
+  return Status::Ok();
+}
+
+Status TrajectoryProblem::objective(const double* x, double* value) const {
+  Evaluated e;
+  const Status st = evaluate(x, false, &e);
+  if (st.ok()) *value = e.objective;
+  return st;
+}
+
+Status TrajectoryProblem::energies(const double* x, int points, double* dissipated,
+                                   double* input) const {
+  const ClampedBasis& basis = motion_.basis();
+  ProblemOptions o = options_;
+  o.objective = Objective::kInputEnergy;
+  *dissipated = 0.0;
+  *input = 0.0;
+  for (int s = 0; s < basis.spans(); ++s) {
+    const Rule rule = gauss_legendre(points, basis.span_begin(s), basis.span_end(s));
+    for (size_t i = 0; i < rule.nodes.size(); ++i) {
+      Node node;
+      node.t = rule.nodes[i];
+      node.basis = basis.at(node.t);
+      node.loads = loads_(node.t);
+      const std::array<double, 6> st = node_state(x, node);
+      double f, M1, M2, P;
+      const Status status = node_values(params_, node.loads, st, o, &f, &M1, &M2, &P);
+      if (!status.ok()) return status;
+      *dissipated += rule.weights[i] * P;
+      *input += rule.weights[i] * f;
+    }
+  }
+  return Status::Ok();
+}
+
+ConstraintCheck TrajectoryProblem::check(const double* x, int points) const {
+  ConstraintCheck out;
+  out.points = std::max(points, 2);
+  const double T = motion_.duration();
+  for (int i = 0; i < out.points; ++i) {
+    const double t = T * i / (out.points - 1);
+    const auto s = motion_.state(x, t);
+    double sine = 0;
+    coupler_constraint(params_, s[0][0], s[0][1], options_.singular_margin, nullptr, nullptr,
+                       &sine);
+    out.min_coupler_sine = std::min(out.min_coupler_sine, sine);
+    double M1 = 0, M2 = 0;
+    out.status = torques(x, t, &M1, &M2);
+    if (!out.status.ok()) return out;
+    out.peak_torque = std::max({out.peak_torque, std::abs(M1), std::abs(M2)});
+  }
+  const double lim = options_.torque_limit;
+  out.torque_excess = std::isfinite(lim) ? std::max(0.0, out.peak_torque - lim) : 0.0;
+  double v = 0.0;
+  if (std::isfinite(lim)) v = std::max(v, out.torque_excess / lim);
+  if (options_.singular_margin > 0) {
+    v = std::max(v, (options_.singular_margin - out.min_coupler_sine) / options_.singular_margin);
+  }
+  out.max_violation = v;
+  return out;
+}
+
+Status TrajectoryProblem::torques(const double* x, double t, double* M1, double* M2) const {
+  const auto s = motion_.state(x, t);
+  const Loads<double> L = loads_(t);
+  Evaluation<double> ev;
+  const Status st = inverse_dynamics(params_, L, s[0][0], s[0][1], s[1][0], s[1][1], s[2][0],
+                                     s[2][1], nullptr, eval_options(options_), &ev);
+  if (!st.ok()) return st;
+  *M1 = ev.M1;
+  *M2 = ev.M2;
+  return Status::Ok();
+}
+
+Status TrajectoryProblem::rows(const double* x, double step, std::vector<sim::Row>* out) const {
+  const double T = motion_.duration();
+  const int n = std::max(1, static_cast<int>(std::ceil(T / step - 1e-9)));
+  std::vector<sim::Row> motion(n + 1);
+  for (int i = 0; i <= n; ++i) {
+    sim::Row& r = motion[i];
+    r.t = std::min(T, i * step);
+    if (i == n) r.t = T;
+    const auto s = motion_.state(x, r.t);
+    for (int j = 0; j < 2; ++j) {
+      r.theta[j] = s[0][j];
+      r.omega[j] = s[1][j];
+      r.alpha[j] = s[2][j];
+    }
+  }
+  return sim::inverse_rows(params_, loads_, motion, out);
+}
+
+}  // namespace fivebar::trajectory
