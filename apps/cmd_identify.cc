@@ -304,6 +304,9 @@ int run(const Args& a) {
   solver.set("iterations", res.iterations);
   solver.set("converged", res.converged);
   solver.set("report", res.solver_message);
+  Json costs = Json::array();
+  for (double c : res.iteration_costs) costs.push(c);
+  solver.set("iteration_costs", std::move(costs));
   j.set("solver", std::move(solver));
   if (!a.no_validation) {
     Json v = Json::object();

@@ -1,11 +1,17 @@
 #!/usr/bin/env bash
 # Installs the Debian packages fivebar needs, only those that are missing (idempotent).
 # Usage: scripts/install-deps.sh        (as root, or with sudo available)
+#        FIVEBAR_PEERS=1 scripts/install-deps.sh   also installs the optional peers (MuJoCo 2.2.2,
+#        Simbody 3.7) for tests/bench/peers/ (bench_peers_mujoco, bench_peers_simbody); the default
+#        install does not pull them.
 set -euo pipefail
 pkgs=(build-essential cmake pkg-config python3
       libeigen3-dev libceres-dev libnlopt-cxx-dev libsundials-dev
       libgtest-dev libgmock-dev libbenchmark-dev libyaml-cpp-dev libcli11-dev libmuparser-dev
       gnuplot-nox openmpi-bin libopenmpi-dev)
+if [ "${FIVEBAR_PEERS:-0}" = "1" ]; then
+  pkgs+=(libmujoco-dev libsimbody-dev)
+fi
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

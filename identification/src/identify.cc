@@ -341,6 +341,9 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   out.iterations = static_cast<int>(summary.iterations.size());
   out.converged = summary.termination_type == ceres::CONVERGENCE;
   out.solver_message = summary.BriefReport();
+  for (const ceres::IterationSummary& it : summary.iterations) {
+    out.iteration_costs.push_back(it.cost);
+  }
   if (!summary.IsSolutionUsable()) {
     out.status = Status::Error(StatusCode::kSolverFailed, "Ceres: " + summary.message);
   }

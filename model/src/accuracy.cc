@@ -93,6 +93,7 @@ Status work_precision(const Params<double>& params, const LoadFunction& loads,
         apply(t, options.regularization_velocity, &p, &o);
         o.method = m;
         o.rtol = o.atol = tol;
+        o.full_rows = false;  // the study times the integration, not the reaction post-processing
         PrecisionPoint pt;
         pt.method = m;
         pt.treatment = t;
@@ -122,10 +123,14 @@ Status work_precision(const Params<double>& params, const LoadFunction& loads,
 
   // Pareto front over (wall time, error) among successful points of the scene's treatment
   const Treatment own = treatments.front();
+  // (points at the reference's own tolerance reproduce it and say nothing about the error)
+  auto eligible = [&](const PrecisionPoint& p) {
+    return p.ok && p.treatment == own && p.tolerance > options.reference_tolerance;
+  };
   for (PrecisionPoint& a : out->points) {
-    if (!a.ok || a.treatment != own) continue;
+    if (!eligible(a)) continue;
     a.pareto = std::none_of(out->points.begin(), out->points.end(), [&](const PrecisionPoint& b) {
-      return b.ok && b.treatment == own && b.wall_time_s <= a.wall_time_s && b.error <= a.error &&
+      return eligible(b) && b.wall_time_s <= a.wall_time_s && b.error <= a.error &&
              (b.wall_time_s < a.wall_time_s || b.error < a.error);
     });
   }

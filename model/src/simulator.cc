@@ -49,6 +49,7 @@ struct Context {
   std::array<int, 5> root_joint{};      ///< root function index -> joint
   int nroots = 0;
   bool lugre = false;                   ///< bristle states follow the 7 base states
+  bool full_rows = true;                ///< Options::full_rows
   long rhs_evaluations = 0;
   Status failure;                       ///< last failure inside a callback
   double failure_t = 0;
@@ -213,7 +214,33 @@ void root_directions(const Context& c, int* dirs) {
   }
 }
 
+/// Angles-only row: the closure, the coupler rates and the energy quadratures.
+Row make_angle_row(const Context& c, double t, const double* y, const Row* previous, Status* st) {
+  Row row;
+  row.t = t;
+  Kinematics<double> k;
+  *st = solve_kinematics(*c.params, y[0], y[1], &k);
+  if (!st->ok()) {
+    *st = at_time(*st, t, y[0], y[1]);
+    return row;
+  }
+  double th3 = k.th3, th4 = k.th4;
+  if (previous) {
+    th3 = previous->theta[2] + std::remainder(th3 - previous->theta[2], 2 * M_PI);
+    th4 = previous->theta[3] + std::remainder(th4 - previous->theta[3], 2 * M_PI);
+  }
+  const Vec2<double> thd(y[2], y[3]);
+  row.theta = {y[0], y[1], th3, th4};
+  row.omega = {y[2], y[3], k.G3.dot(thd), k.G4.dot(thd)};
+  row.E_diss = y[4];
+  row.W_in = y[5];
+  row.W_ext = y[6];
+  row.mode = c.slip;
+  return row;
+}
+
 Row make_row(const Context& c, double t, const double* y, const Row* previous, Status* st) {
+  if (!c.full_rows) return make_angle_row(c, t, y, previous, st);
   Row row;
   row.t = t;
   EvalOptions eval = c.eval;
@@ -325,6 +352,7 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
   }
 
   c.lugre = params.friction.law == FrictionLaw::kLuGre;
+  c.full_rows = options.full_rows;
   double y[kStates + 5] = {initial.theta1, initial.theta2, initial.omega1, initial.omega2,
                            0, 0, 0, 0, 0, 0, 0, 0};  // bristles start relaxed
   double t = 0.0;

@@ -84,6 +84,7 @@ struct IdentifyResult {
   int iterations = 0;
   bool converged = false;
   std::string solver_message;
+  std::vector<double> iteration_costs;  ///< Ceres cost at each iteration (iteration 0 first)
   bool rates_estimated = false, accels_estimated = false;
   int sg_half_window = 0;  ///< samples, when estimated
   /// per sample (log order): rates and accelerations used, predicted torques at the fit (inverse

@@ -226,22 +226,43 @@ bool friction_newton(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&
 
 /// Resolution of the reaction/friction loop (section 4, steps 1-4, at every call): a fixed point
 /// on N, which contracts when r_k |f_k| is small against the geometry; where it stops
-/// contracting, Newton from two starts. `solve(Mf, F)` evaluates the reactions for friction
+/// contracting, Newton from two starts. The caller solves once more with the returned Mf. `solve(Mf, F)` evaluates the reactions for friction
 /// torques Mf; phi_k = r_k f_k(w_k) is fixed.
 template <typename T, typename Solve>
 Status friction_loop(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&& solve,
                      std::array<T, 5>* N, std::array<T, 5>* Mf, std::array<Vec2<T>, 5>* F,
                      int* iterations) {
+  // the reactions are affine in the friction torques: F(Mf) = F0 + sum_j dF_j Mf_j, probed once
+  // (one solve per joint with friction), then the iteration costs a 10x5 product
   Mf->fill(T(0));
   solve(*Mf, F);
-  norms(*F, N);
   const std::array<Vec2<T>, 5> F0 = *F;
+  std::array<std::array<Vec2<T>, 5>, 5> dF;
+  for (int j = 0; j < 5; ++j) {
+    if (is_exact_zero(phi[j])) {
+      for (auto& v : dF[j]) v.setZero();
+      continue;
+    }
+    std::array<T, 5> unit_torque{};
+    unit_torque[j] = T(1);
+    std::array<Vec2<T>, 5> Fj;
+    solve(unit_torque, &Fj);
+    for (int k = 0; k < 5; ++k) dF[j][k] = Fj[k] - F0[k];
+  }
+  auto affine = [&](const std::array<T, 5>& torque, std::array<Vec2<T>, 5>* out) {
+    *out = F0;
+    for (int j = 0; j < 5; ++j) {
+      if (is_exact_zero(phi[j])) continue;
+      for (int k = 0; k < 5; ++k) (*out)[k] += dF[j][k] * torque[j];
+    }
+  };
+  norms(F0, N);
   double prev_err = 0.0, ratio = 0.0;
   bool contracting = true;
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
     for (int j = 0; j < 5; ++j) (*Mf)[j] = phi[j] * (*N)[j];
-    std::array<T, 5> N_old = *N;
-    solve(*Mf, F);
+    const std::array<T, 5> N_old = *N;
+    affine(*Mf, F);
     norms(*F, N);
     double err = 0.0, scale = 1e-300;
     for (int j = 0; j < 5; ++j) {
@@ -266,15 +287,7 @@ Status friction_loop(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&
     }
     prev_err = err;
   }
-  // Newton: the affine map Mf -> F from unit probes, then two starts
-  std::array<std::array<Vec2<T>, 5>, 5> dF;
-  for (int j = 0; j < 5; ++j) {
-    std::array<T, 5> unit_torque{};
-    unit_torque[j] = T(1);
-    std::array<Vec2<T>, 5> Fj;
-    solve(unit_torque, &Fj);
-    for (int k = 0; k < 5; ++k) dF[j][k] = Fj[k] - F0[k];
-  }
+  // Newton on the same affine map, from two starts
   std::array<T, 5> N0, Na, Nb;
   norms(F0, &N0);
   const bool a = friction_newton(phi, opt, solve, F0, dF, N0, &Na);

@@ -43,6 +43,9 @@ struct Options {
   /// run stops (status kNearSingular) when |sin(th4 - th3)| falls below this
   double singular_margin = 1e-3;
   double friction_tol = 1e-13;  ///< relative stopping test of the reaction/friction loop
+  /// false: output rows hold only t, theta, omega and the energy quadratures (no accelerations,
+  /// reactions or friction torques): what a work-precision study needs, at a fraction of the cost
+  bool full_rows = true;
   int friction_max_iter = 50;
 };
 

@@ -1,0 +1,199 @@
+// fivebar stress [--out DIR] [--cases LIST] [--methods LIST] [--budget S] [--reduced]
+// The built-in catalogue of stiff and extreme cases (issue 3, deliverable 4), each run with every
+// integrator; each run ends `ok`, `rejected` (the exit code and message a user would get) or
+// `failed`. Writes DIR/stress.csv and DIR/stress.md; exits 0 with no `failed` row, 3 otherwise.
+#include <CLI/CLI.hpp>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <sstream>
+
+#include "fivebar/io/command.h"
+#include "fivebar/io/errors.h"
+#include "fivebar/io/output.h"
+#include "fivebar/sim/stress.h"
+
+namespace fivebar::io {
+namespace {
+
+struct Args {
+  std::string out;
+  std::vector<std::string> cases;
+  std::vector<std::string> methods;
+  double budget = 20.0;
+  bool reduced = false;
+};
+
+const std::vector<std::string> kOutputs = {"stress.csv", "stress.md"};
+
+std::string fmt(double x, const char* format = "%.3g") {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, x);
+  return buf;
+}
+
+/// A number column: empty where the value does not exist (negative marks "none").
+std::string opt_num(double x, const char* format = "%.3g") { return x < 0 ? "" : fmt(x, format); }
+
+/// A CSV field: quoted, inner quotes doubled (messages hold commas).
+std::string csv_field(const std::string& s) {
+  std::string q = "\"";
+  for (char c : s) {
+    if (c == '"') q += '"';
+    q += (c == '\n' ? ' ' : c);
+  }
+  return q + "\"";
+}
+
+/// A markdown table cell: pipes escaped.
+std::string md_cell(const std::string& s) {
+  std::string out;
+  for (char c : s) out += (c == '|' ? std::string("\\|") : std::string(1, c));
+  return out;
+}
+
+std::string stress_csv(const sim::StressReport& report) {
+  std::ostringstream s;
+  s << "case,integrator,status,exit_code,error,energy_balance,wall_time_s,steps,"
+       "rhs_evaluations,final_time,displacement,message\n";
+  for (const auto& r : report.rows) {
+    s << r.case_name << ',' << sim::method_name(r.method) << ','
+      << sim::stress_outcome_name(r.outcome) << ',' << r.exit_code << ','
+      << opt_num(r.error, "%.3e") << ',' << opt_num(r.energy_balance, "%.3e") << ','
+      << fmt(r.wall_time_s, "%.4f") << ',' << r.steps << ',' << r.rhs_evaluations << ','
+      << fmt(r.final_time, "%.6g") << ',' << opt_num(r.displacement, "%.3e") << ','
+      << csv_field(r.message) << '\n';
+  }
+  return s.str();
+}
+
+std::string stress_md(const std::vector<sim::StressCase>& cases, const sim::StressReport& report,
+                      const sim::StressOptions& opt, double total_s) {
+  std::ostringstream s;
+  s << "# fivebar stress\n\n"
+    << "Runs at rtol = atol = 1e-8 on a 1 ms output grid; `error` is max |d theta_1..4| over the "
+       "grid against the case's reference (the same case at rtol = atol = "
+    << fmt(opt.reference_tolerance) << " with the integrator named under each case). `ok` also "
+       "requires finite rows and an energy balance residual <= "
+    << fmt(opt.max_energy_balance) << "; each run is a child process killed after "
+    << fmt(opt.run_budget_s) << " s.\n\n"
+    << "**" << report.count(sim::StressOutcome::kOk) << " ok, "
+    << report.count(sim::StressOutcome::kRejected) << " rejected, "
+    << report.count(sim::StressOutcome::kFailed) << " failed** (" << report.rows.size()
+    << " runs, " << fmt(total_s, "%.1f") << " s)\n";
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const sim::StressCase& c = cases[i];
+    const sim::StressReference& ref = report.references[i];
+    s << "\n## " << c.name << "\n\n" << c.description << ".\n\nReference: "
+      << sim::method_name(ref.method) << " at " << fmt(ref.tolerance) << ": "
+      << (ref.ok ? "ok (" + fmt(ref.wall_time_s, "%.2f") + " s, " + std::to_string(ref.steps) +
+                       " steps)"
+                 : "did not finish: " + md_cell(ref.message))
+      << ".\n\n"
+      << "| integrator | status | exit | error [rad] | energy balance | wall [s] | steps | "
+         "rhs | message |\n|---|---|---|---|---|---|---|---|---|\n";
+    for (const auto& r : report.rows) {
+      if (r.case_name != c.name) continue;
+      s << "| " << sim::method_name(r.method) << " | " << sim::stress_outcome_name(r.outcome)
+        << " | " << r.exit_code << " | " << opt_num(r.error, "%.2e") << " | "
+        << opt_num(r.energy_balance, "%.2e") << " | " << fmt(r.wall_time_s, "%.3f") << " | "
+        << r.steps << " | " << r.rhs_evaluations << " | " << md_cell(r.message) << " |\n";
+    }
+  }
+  return s.str();
+}
+
+int run(const Args& args) {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<sim::StressCase> cases = sim::stress_catalogue(args.reduced);
+  if (!args.cases.empty()) {
+    std::vector<sim::StressCase> chosen;
+    for (const std::string& name : args.cases) {
+      const auto it = std::find_if(cases.begin(), cases.end(),
+                                   [&](const sim::StressCase& c) { return c.name == name; });
+      if (it == cases.end()) throw InputError("stress", "--cases", "unknown case '" + name + "'");
+      chosen.push_back(*it);
+    }
+    cases = std::move(chosen);
+  }
+  sim::StressOptions opt;
+  if (!args.methods.empty()) {
+    opt.methods.clear();
+    for (const std::string& name : args.methods) {
+      sim::Method m;
+      if (!sim::parse_method(name, &m)) {
+        throw InputError("stress", "--methods", "unknown integrator '" + name + "'");
+      }
+      opt.methods.push_back(m);
+    }
+  }
+  if (!(args.budget > 0.0)) throw InputError("stress", "--budget", "must be positive");
+  opt.run_budget_s = args.budget;
+  // progress on a terminal only
+  const bool tty = isatty(STDERR_FILENO);
+  const size_t total = cases.size() * opt.methods.size();
+  size_t done = 0;
+  opt.on_row = [&](const sim::StressRow& r) {
+    ++done;
+    if (tty) {
+      std::cerr << "\r[" << done << "/" << total << "] " << r.case_name << " "
+                << sim::method_name(r.method) << ": " << sim::stress_outcome_name(r.outcome)
+                << "                    " << std::flush;
+    }
+  };
+  OutputDir out(args.out, kOutputs);
+  const sim::StressReport report = sim::run_stress(cases, opt);
+  if (tty) std::cerr << "\n";
+  const double total_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  write_text_file(out.file("stress.csv"), stress_csv(report));
+  write_text_file(out.file("stress.md"), stress_md(cases, report, opt, total_s));
+  out.commit();
+
+  // one line per case: its outcomes by integrator
+  std::cout << "fivebar stress: " << cases.size() << " cases x " << opt.methods.size()
+            << " integrators in " << fmt(total_s, "%.1f") << " s\n";
+  for (const auto& c : cases) {
+    std::map<std::string, int> counts;
+    for (const auto& r : report.rows) {
+      if (r.case_name == c.name) ++counts[sim::stress_outcome_name(r.outcome)];
+    }
+    std::cout << "  " << c.name << ":";
+    for (const auto& [name, n] : counts) std::cout << " " << n << " " << name;
+    std::cout << "\n";
+  }
+  const int failed = report.count(sim::StressOutcome::kFailed);
+  std::cout << "  total: " << report.count(sim::StressOutcome::kOk) << " ok, "
+            << report.count(sim::StressOutcome::kRejected) << " rejected, " << failed
+            << " failed\n  wrote " << out.dir() << "/stress.csv, stress.md\n";
+  if (failed > 0) {
+    throw NumericalError("stress", "failed",
+                         std::to_string(failed) + " run(s) failed: see " + out.dir() +
+                             "/stress.csv");
+  }
+  return 0;
+}
+
+RunFunction setup(CLI::App* app) {
+  auto args = std::make_shared<Args>();
+  add_out_option(app, &args->out, "stress");
+  app->add_option("--cases", args->cases, "only these cases (default: the whole catalogue)")
+      ->delimiter(',');
+  app->add_option("--methods", args->methods, "integrators (default: all)")->delimiter(',');
+  app->add_option("--budget", args->budget, "wall-time limit of one run [s]; beyond: failed")
+      ->capture_default_str();
+  app->add_flag("--reduced", args->reduced, "short durations (the test catalogue)");
+  return [args] { return run(*args); };
+}
+
+const bool kRegistered = register_command(
+    {"stress", "stiff and extreme cases with every integrator: ok, rejected, never failed",
+     setup});
+
+}  // namespace
+}  // namespace fivebar::io
