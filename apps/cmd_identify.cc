@@ -4,7 +4,6 @@
 // deviations, correlation and identifiability, the fitted scene, plots, and a validation run of
 // the fitted scene against the log.
 #include <CLI/CLI.hpp>
-
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -40,10 +39,9 @@ struct Args {
   int sg_order = 5, threads = 1;
 };
 
-const std::vector<std::string> kOutputs = {"identification.json", "scene_fitted.yaml",
-                                           "residuals.csv",       "fig_torques.png",
-                                           "fig_residuals.png",   "fig_residual_vs_rate.png",
-                                           "fig_validation.png",  "plots.gnuplot"};
+const std::vector<std::string> kOutputs = {
+    "identification.json", "scene_fitted.yaml",        "residuals.csv",      "fig_torques.png",
+    "fig_residuals.png",   "fig_residual_vs_rate.png", "fig_validation.png", "plots.gnuplot"};
 
 // `true.<group> = v1,...,v5` comments written by synth-log, by group name
 std::map<std::string, std::vector<double>> read_truth(const id::TorqueLog& log) {
@@ -138,8 +136,8 @@ int run(const Args& a) {
   }
   opt.layout.per_joint = a.per_joint;
   if (!id::parse_method(a.method, &opt.method)) {
-    throw InputError(flags, "--method", "expected inverse-dynamics or output-error, got " +
-                                            a.method);
+    throw InputError(flags, "--method",
+                     "expected inverse-dynamics or output-error, got " + a.method);
   }
   if (!id::parse_loss(a.loss, &opt.loss)) {
     throw InputError(flags, "--loss", "expected none, huber or cauchy, got " + a.loss);
@@ -194,11 +192,10 @@ int run(const Args& a) {
           << format_double(log.theta2[i]) << ',' << format_double(log.tau1[i]) << ','
           << format_double(log.tau2[i]) << ',' << format_double(res.omega1[i]) << ','
           << format_double(res.omega2[i]) << ',' << format_double(res.alpha1[i]) << ','
-          << format_double(res.alpha2[i]) << ',' << format_double(p1) << ','
-          << format_double(p2) << ',' << format_double(log.tau1[i] - p1) << ','
-          << format_double(log.tau2[i] - p2) << ',' << int(res.used[i]) << ','
-          << format_double(a.no_validation ? NAN : val.full_theta1[i]) << ','
-          << format_double(a.no_validation ? NAN : val.full_theta2[i]) << '\n';
+          << format_double(res.alpha2[i]) << ',' << format_double(p1) << ',' << format_double(p2)
+          << ',' << format_double(log.tau1[i] - p1) << ',' << format_double(log.tau2[i] - p2) << ','
+          << int(res.used[i]) << ',' << format_double(a.no_validation ? NAN : val.full_theta1[i])
+          << ',' << format_double(a.no_validation ? NAN : val.full_theta2[i]) << '\n';
     }
     write_text_file(out.file("residuals.csv"), csv.str());
   }
@@ -218,8 +215,9 @@ int run(const Args& a) {
       c << "#   " << p.name << ": " << format_double(p.value) << "\n";
     }
     yaml = c.str() + yaml;
-    res.warnings.push_back("scene_fitted.yaml: the scene format has no Stribeck keys; it holds "
-                           "the Coulomb and viscous parts, the rest is in comments");
+    res.warnings.push_back(
+        "scene_fitted.yaml: the scene format has no Stribeck keys; it holds "
+        "the Coulomb and viscous parts, the rest is in comments");
   } else {
     yaml = scene_to_yaml(fitted);
   }
@@ -267,6 +265,9 @@ int run(const Args& a) {
   }
   j.set("parameters", std::move(params));
   j.set("rms_torque_residual", pair(res.rms_torque_residual[0], res.rms_torque_residual[1]));
+  j.set("residual_noise_floor", pair(res.residual_noise_floor[0], res.residual_noise_floor[1]));
+  j.set("residual_to_noise_ratio", pair(res.rms_torque_residual[0] / res.residual_noise_floor[0],
+                                        res.rms_torque_residual[1] / res.residual_noise_floor[1]));
   j.set("rms_torque_residual_initial",
         pair(res.rms_torque_residual_initial[0], res.rms_torque_residual_initial[1]));
   if (res.method == id::Method::kOutputError) {
@@ -327,9 +328,9 @@ int run(const Args& a) {
     const Gnuplot& g = gnuplot();
     const std::string warning =
         g.available ? run_gnuplot(out.staging(), "plots.gnuplot",
-                                  residual_plot_script(g.terminal,
-                                                       std::filesystem::path(a.log).filename().string(),
-                                                       !a.no_validation))
+                                  residual_plot_script(
+                                      g.terminal, std::filesystem::path(a.log).filename().string(),
+                                      !a.no_validation))
                     : "gnuplot not found on PATH: no figures drawn";
     if (!warning.empty()) warn(warning);
   }
@@ -346,12 +347,14 @@ int run(const Args& a) {
   for (const id::ParameterEstimate& p : res.parameters) {
     std::printf("  %-22s %.6g +- %.2g\n", p.name.c_str(), p.value, p.std);
   }
-  std::printf("  rms torque residual: %.4g, %.4g N m\n", res.rms_torque_residual[0],
-              res.rms_torque_residual[1]);
+  std::printf("  rms torque residual: %.4g, %.4g N m (white-noise floor %.4g, %.4g N m)\n",
+              res.rms_torque_residual[0], res.rms_torque_residual[1], res.residual_noise_floor[0],
+              res.residual_noise_floor[1]);
   if (!a.no_validation) {
-    std::printf("  validation: windowed (%.3g s) rms angle error %.3g, %.3g rad; full run %.3g, "
-                "%.3g rad\n", val.window_s, val.window_rms[0], val.window_rms[1], val.full_rms[0],
-                val.full_rms[1]);
+    std::printf(
+        "  validation: windowed (%.3g s) rms angle error %.3g, %.3g rad; full run %.3g, "
+        "%.3g rad\n",
+        val.window_s, val.window_rms[0], val.window_rms[1], val.full_rms[0], val.full_rms[1]);
   }
   for (const std::string& w : res.warnings) warn(w);
   std::printf("  wrote %s/\n", out.dir().c_str());

@@ -5,7 +5,6 @@
 // simulated, sampled, with seeded Gaussian sensor noise and optional encoder quantization. The
 // `#` header of the log holds the true friction values and the command that made it.
 #include <CLI/CLI.hpp>
-
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -83,14 +82,13 @@ int run(const Args& a) {
 
   // header: provenance, truth, and what the noise was
   identification::TorqueLog& log = res.log;
-  log.comments = {
-      " fivebar synth-log: synthetic torque log (interfaces.md)",
-      " command: " + a.command_line,
-      " scene: " + scene.path,
-      " true.law = " + std::string(identification::law_name(fp.law)),
-      " true.pin_radius = " + joined(fp.pin_radius),
-      " true.coulomb = " + joined(fp.coulomb),
-      " true.viscous = " + joined(fp.viscous)};
+  log.comments = {" fivebar synth-log: synthetic torque log (interfaces.md)",
+                  " command: " + a.command_line,
+                  " scene: " + scene.path,
+                  " true.law = " + std::string(identification::law_name(fp.law)),
+                  " true.pin_radius = " + joined(fp.pin_radius),
+                  " true.coulomb = " + joined(fp.coulomb),
+                  " true.viscous = " + joined(fp.viscous)};
   if (fp.law == FrictionLaw::kStribeck) {
     log.comments.push_back(" true.static_coulomb = " + joined(fp.static_coulomb));
     log.comments.push_back(" true.stribeck_velocity = " + joined(fp.stribeck_velocity));
@@ -102,8 +100,8 @@ int run(const Args& a) {
                          format_double(a.angle_noise) + " rad, rate " +
                          format_double(a.rate_noise) + " rad/s, quantization " +
                          format_double(a.quantization) + " rad, seed " + std::to_string(a.seed));
-  log.comments.push_back(" excitation: " + a.excitation + "; joint reversals (O,B,C,D,D0): " +
-                         rev.str());
+  log.comments.push_back(" excitation: " + a.excitation +
+                         "; joint reversals (O,B,C,D,D0): " + rev.str());
   const std::filesystem::path parent = std::filesystem::path(a.out).parent_path();
   if (!parent.empty()) {
     std::error_code ec;
@@ -115,10 +113,10 @@ int run(const Args& a) {
   } catch (const identification::LogError& e) {
     throw InputError(e.file(), e.key(), e.reason());
   }
-  std::cout << "fivebar synth-log: " << log.size() << " samples over " << log.duration()
-            << " s -> " << a.out << "\n  joint reversals (O,B,C,D,D0): " << rev.str()
-            << "; simulation " << res.stats.wall_time_s << " s, " << res.stats.friction_events
-            << " friction events" << std::endl;
+  std::cout << "fivebar synth-log: " << log.size() << " samples over " << log.duration() << " s -> "
+            << a.out << "\n  joint reversals (O,B,C,D,D0): " << rev.str() << "; simulation "
+            << res.stats.wall_time_s << " s, " << res.stats.friction_events << " friction events"
+            << std::endl;
   return 0;
 }
 
@@ -149,7 +147,8 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--static-coulomb", args->static_coulomb, "stribeck: mu_s of every joint")
       ->capture_default_str();
   app->add_option("--stribeck-velocity", args->stribeck_velocity,
-                  "stribeck: w_st of every joint [rad/s]")->capture_default_str();
+                  "stribeck: w_st of every joint [rad/s]")
+      ->capture_default_str();
   app->add_option("--stribeck-exponent", args->stribeck_exponent, "stribeck: delta")
       ->capture_default_str();
   return [args] {
@@ -159,8 +158,8 @@ RunFunction setup(CLI::App* app) {
     for (const std::string& s : a.sets) cmd += " --set " + s;
     cmd += " --rate " + format_double(a.rate) + " --duration " + format_double(a.duration) +
            " --torque-noise " + format_double(a.torque_noise) + " --angle-noise " +
-           format_double(a.angle_noise) + " --seed " + std::to_string(a.seed) +
-           " --excitation " + a.excitation;
+           format_double(a.angle_noise) + " --seed " + std::to_string(a.seed) + " --excitation " +
+           a.excitation;
     if (a.rate_noise > 0) cmd += " --rate-noise " + format_double(a.rate_noise);
     if (a.quantization > 0) cmd += " --quantization " + format_double(a.quantization);
     if (a.with_rates) cmd += " --with-rates";

@@ -1,6 +1,9 @@
 // Ceres problems of the two identification methods, covariance and identifiability analysis.
 #include "fivebar/identification/identify.h"
 
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -8,35 +11,42 @@
 #include <memory>
 #include <sstream>
 
-#include <ceres/ceres.h>
-#include <Eigen/Dense>
-
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
 
 namespace fivebar::identification {
 
 bool parse_method(const std::string& name, Method* out) {
-  if (name == "inverse-dynamics") *out = Method::kInverseDynamics;
-  else if (name == "output-error") *out = Method::kOutputError;
-  else return false;
+  if (name == "inverse-dynamics")
+    *out = Method::kInverseDynamics;
+  else if (name == "output-error")
+    *out = Method::kOutputError;
+  else
+    return false;
   return true;
 }
 const char* method_name(Method m) {
   return m == Method::kOutputError ? "output-error" : "inverse-dynamics";
 }
 bool parse_loss(const std::string& name, Loss* out) {
-  if (name == "none") *out = Loss::kNone;
-  else if (name == "huber") *out = Loss::kHuber;
-  else if (name == "cauchy") *out = Loss::kCauchy;
-  else return false;
+  if (name == "none")
+    *out = Loss::kNone;
+  else if (name == "huber")
+    *out = Loss::kHuber;
+  else if (name == "cauchy")
+    *out = Loss::kCauchy;
+  else
+    return false;
   return true;
 }
 const char* loss_name(Loss l) {
   switch (l) {
-    case Loss::kNone: return "none";
-    case Loss::kHuber: return "huber";
-    case Loss::kCauchy: return "cauchy";
+    case Loss::kNone:
+      return "none";
+    case Loss::kHuber:
+      return "huber";
+    case Loss::kCauchy:
+      return "cauchy";
   }
   return "none";
 }
@@ -64,9 +74,12 @@ double interp(const std::vector<double>& ts, const std::vector<double>& y, doubl
 
 ceres::LossFunction* make_loss(Loss loss, double scale) {
   switch (loss) {
-    case Loss::kNone: return nullptr;
-    case Loss::kHuber: return new ceres::HuberLoss(scale);
-    case Loss::kCauchy: return new ceres::CauchyLoss(scale);
+    case Loss::kNone:
+      return nullptr;
+    case Loss::kHuber:
+      return new ceres::HuberLoss(scale);
+    case Loss::kCauchy:
+      return new ceres::CauchyLoss(scale);
   }
   return nullptr;
 }
@@ -265,9 +278,10 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   out.samples_used = static_cast<int>(samples.size());
   if (out.samples_used < P + 1) {
     throw LogError(log.path, "samples",
-                   "only " + std::to_string(out.samples_used) + " samples usable (rate threshold "
-                   "and filter edges), fewer than the " + std::to_string(P + 1) + " needed for " +
-                   std::to_string(P) + " parameters");
+                   "only " + std::to_string(out.samples_used) +
+                       " samples usable (rate threshold "
+                       "and filter edges), fewer than the " +
+                       std::to_string(P + 1) + " needed for " + std::to_string(P) + " parameters");
   }
 
   std::vector<double> x = opt.initial.empty() ? default_start(layout) : opt.initial;
@@ -283,10 +297,22 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   ceres::Problem problem(popts);
   if (opt.method == Method::kInverseDynamics) {
     switch (P) {
-      case 2: add_inverse_dynamics_terms<2>(scene, layout, samples, eval, opt.loss, opt.loss_scale, x.data(), &problem); break;
-      case 4: add_inverse_dynamics_terms<4>(scene, layout, samples, eval, opt.loss, opt.loss_scale, x.data(), &problem); break;
-      case 10: add_inverse_dynamics_terms<10>(scene, layout, samples, eval, opt.loss, opt.loss_scale, x.data(), &problem); break;
-      case 20: add_inverse_dynamics_terms<20>(scene, layout, samples, eval, opt.loss, opt.loss_scale, x.data(), &problem); break;
+      case 2:
+        add_inverse_dynamics_terms<2>(scene, layout, samples, eval, opt.loss, opt.loss_scale,
+                                      x.data(), &problem);
+        break;
+      case 4:
+        add_inverse_dynamics_terms<4>(scene, layout, samples, eval, opt.loss, opt.loss_scale,
+                                      x.data(), &problem);
+        break;
+      case 10:
+        add_inverse_dynamics_terms<10>(scene, layout, samples, eval, opt.loss, opt.loss_scale,
+                                       x.data(), &problem);
+        break;
+      case 20:
+        add_inverse_dynamics_terms<20>(scene, layout, samples, eval, opt.loss, opt.loss_scale,
+                                       x.data(), &problem);
+        break;
       default:
         out.status = Status::Error(StatusCode::kInvalidInput, "unsupported parameter count");
         return out;
@@ -332,7 +358,7 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   so.num_threads = opt.num_threads;
   // output error: the simulated residual carries integrator noise (~rtol), so ask less of it
   const bool oe = opt.method == Method::kOutputError;
-  so.function_tolerance = oe ? 1e-7 : 1e-12;
+  so.function_tolerance = oe ? 1e-3 : 1e-12;  // OE cost noise ~1e-4 relative
   so.gradient_tolerance = oe ? 1e-10 : 1e-14;
   so.parameter_tolerance = oe ? 1e-7 : 1e-10;
   so.logging_type = ceres::SILENT;
@@ -358,22 +384,28 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
         "understate the uncertainty");
   }
   if (raw_residuals(&r)) {
-    if (opt.method == Method::kInverseDynamics) rms_pair(r, out.rms_torque_residual);
-    else rms_pair(r, out.rms_angle_residual);
+    if (opt.method == Method::kInverseDynamics)
+      rms_pair(r, out.rms_torque_residual);
+    else
+      rms_pair(r, out.rms_angle_residual);
     if (opt.method == Method::kInverseDynamics) {
-      // time-correlated residuals mean the model misses something (the noise alone is white)
-      double diff2 = 0, all2 = 0;
-      for (size_t i = 2; i < r.size(); ++i) {
-        diff2 += (r[i] - r[i - 2]) * (r[i] - r[i - 2]);
-        all2 += r[i] * r[i];
-      }
-      const double white = std::sqrt(diff2 / 2 / std::max<size_t>(1, r.size() - 2));
-      const double total = std::sqrt(all2 / std::max<size_t>(1, r.size() - 2));
-      if (total > 1.5 * white && total > 0) {
-        out.warnings.push_back(
-            "residuals are correlated in time (rms " + fmt(total) + " N m vs sample-to-sample " +
-            fmt(white) + " N m): the friction law or the rate estimates miss structure of the "
-            "data (see the residual plots)");
+      // the sensor noise alone is white: its level is what sample-to-sample differences see,
+      // taken robustly (1.4826 median |r_i - r_i-1| / sqrt 2) so that the few sharp features of a
+      // mismatch do not raise it; a residual rms well above that has structure the model misses
+      for (int j = 0; j < 2; ++j) {
+        std::vector<double> d;
+        for (size_t i = 2 + j; i < r.size(); i += 2) d.push_back(std::abs(r[i] - r[i - 2]));
+        if (d.empty()) continue;
+        std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+        out.residual_noise_floor[j] = 1.4826 * d[d.size() / 2] / std::sqrt(2.0);
+        const double ratio = out.rms_torque_residual[j] / out.residual_noise_floor[j];
+        if (ratio > 1.1) {
+          out.warnings.push_back(
+              "tau" + std::to_string(j + 1) + " residual rms " + fmt(out.rms_torque_residual[j]) +
+              " N m is " + fmt(ratio) + " times its white-noise floor " +
+              fmt(out.residual_noise_floor[j]) + " N m: the residual has structure the fitted " +
+              "law (or the estimated rates) cannot explain; see fig_residual_vs_rate.png");
+        }
       }
     }
   }
@@ -431,7 +463,8 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
       const Eigen::MatrixXd S = scale.asDiagonal().inverse() * JtJ * scale.asDiagonal().inverse();
       Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S);
       // eigenvalues of J^T J ascending: singular values are their square roots
-      for (int i = P - 1; i >= 0; --i) out.singular_values.push_back(std::sqrt(std::max(0.0, es.eigenvalues()(i))));
+      for (int i = P - 1; i >= 0; --i)
+        out.singular_values.push_back(std::sqrt(std::max(0.0, es.eigenvalues()(i))));
       const double ratio = out.singular_values.back() / out.singular_values.front();
       if (ratio < 1e-3) {
         const Eigen::VectorXd v = es.eigenvectors().col(0);
@@ -463,8 +496,8 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
     if (x[i] <= layout.lower_bound(i) + 1e-12) {
       out.warnings.push_back(names[i] + " is at its lower bound " + fmt(layout.lower_bound(i)));
     } else if (e.std > std::abs(x[i])) {
-      out.warnings.push_back(names[i] + " is poorly determined (std " + fmt(e.std) +
-                             " > value " + fmt(x[i]) + ")");
+      out.warnings.push_back(names[i] + " is poorly determined (std " + fmt(e.std) + " > value " +
+                             fmt(x[i]) + ")");
     }
     out.parameters.push_back(e);
   }
@@ -478,9 +511,9 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   layout.apply(x.data(), &fit_eval.friction);
   for (int i = 0; i < n; ++i) {
     Evaluation<double> ev;
-    const Status st = inverse_dynamics(fit_eval, loads(log.t[i]), log.theta1[i], log.theta2[i],
-                                       out.omega1[i], out.omega2[i], out.alpha1[i],
-                                       out.alpha2[i], nullptr, eval, &ev);
+    const Status st =
+        inverse_dynamics(fit_eval, loads(log.t[i]), log.theta1[i], log.theta2[i], out.omega1[i],
+                         out.omega2[i], out.alpha1[i], out.alpha2[i], nullptr, eval, &ev);
     if (st.ok()) {
       out.predicted_tau1[i] = ev.M1;
       out.predicted_tau2[i] = ev.M2;
@@ -514,8 +547,9 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
     sim::Options o = window_sim_options(rtol);
     o.duration = log.t[i1] - log.t[i0];
     o.output_step = o.duration / (i1 - i0);
-    const sim::Result res = sim::simulate(params, logged_loads(log, loads, log.t[i0]),
-                                          {log.theta1[i0], log.theta2[i0], omega1[i0], omega2[i0]}, o);
+    const sim::Result res =
+        sim::simulate(params, logged_loads(log, loads, log.t[i0]),
+                      {log.theta1[i0], log.theta2[i0], omega1[i0], omega2[i0]}, o);
     std::vector<double> ts, a, b;
     for (const sim::Row& row : res.rows) {
       ts.push_back(row.t);

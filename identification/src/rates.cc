@@ -1,10 +1,9 @@
 // Savitzky-Golay differentiation by local least squares on the actual sample times.
 #include "fivebar/identification/rates.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Dense>
 
 namespace fivebar::identification {
 

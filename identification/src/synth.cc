@@ -50,8 +50,8 @@ SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction
   std::array<int, 5> prev{};
   for (const sim::Row& row : res.rows) {
     // one fixed order of draws per row keeps logs reproducible across options
-    const double n_tau1 = gauss(rng), n_tau2 = gauss(rng), n_th1 = gauss(rng),
-                 n_th2 = gauss(rng), n_w1 = gauss(rng), n_w2 = gauss(rng);
+    const double n_tau1 = gauss(rng), n_tau2 = gauss(rng), n_th1 = gauss(rng), n_th2 = gauss(rng),
+                 n_w1 = gauss(rng), n_w2 = gauss(rng);
     log.t.push_back(row.t);
     log.theta1.push_back(quantize(row.theta[0] + opt.angle_noise * n_th1));
     log.theta2.push_back(quantize(row.theta[1] + opt.angle_noise * n_th2));

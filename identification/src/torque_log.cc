@@ -83,12 +83,12 @@ TorqueLog parse_torque_log(const std::string& text, const std::string& path) {
       names = cells;
       for (size_t j = 0; j < names.size(); ++j) {
         const std::string& n = names[j];
-        const bool known =
-            std::find(std::begin(kLogRequired), std::end(kLogRequired), n) !=
-                std::end(kLogRequired) ||
-            std::find(std::begin(kLogOptional), std::end(kLogOptional), n) != std::end(kLogOptional);
-        const std::string col = "line " + std::to_string(line_no) + ", column " +
-                                std::to_string(j + 1);
+        const bool known = std::find(std::begin(kLogRequired), std::end(kLogRequired), n) !=
+                               std::end(kLogRequired) ||
+                           std::find(std::begin(kLogOptional), std::end(kLogOptional), n) !=
+                               std::end(kLogOptional);
+        const std::string col =
+            "line " + std::to_string(line_no) + ", column " + std::to_string(j + 1);
         if (n.empty()) throw LogError(path, col, "empty column name in the header");
         if (!known) {
           throw LogError(path, col,
@@ -101,8 +101,9 @@ TorqueLog parse_torque_log(const std::string& text, const std::string& path) {
       }
       for (const char* r : kLogRequired) {
         if (!index.count(r)) {
-          throw LogError(path, "header", std::string("missing column '") + r +
-                                             "' (a torque log needs t,theta1,theta2,tau1,tau2)");
+          throw LogError(path, "header",
+                         std::string("missing column '") + r +
+                             "' (a torque log needs t,theta1,theta2,tau1,tau2)");
         }
       }
       for (auto [a, b] : {std::pair{"omega1", "omega2"}, std::pair{"alpha1", "alpha2"}}) {
@@ -142,8 +143,8 @@ TorqueLog parse_torque_log(const std::string& text, const std::string& path) {
     const int n = log.size();
     if (n >= 2 && !(log.t[n - 1] > log.t[n - 2])) {
       throw LogError(path, line_key(line_no) + ", column t",
-                     "time not strictly increasing (" + format_number(log.t[n - 1]) +
-                         " after " + format_number(log.t[n - 2]) + ")");
+                     "time not strictly increasing (" + format_number(log.t[n - 1]) + " after " +
+                         format_number(log.t[n - 2]) + ")");
     }
   }
   if (names.empty()) throw LogError(path, "header", "empty file (no header row)");

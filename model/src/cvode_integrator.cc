@@ -23,7 +23,10 @@ class Cvode final : public Integrator {
     mem_ = CVodeCreate(adams ? CV_ADAMS : CV_BDF, ctx_);
     CVodeSetErrHandlerFn(mem_, &Cvode::on_error, this);
     CVodeInit(mem_, &Cvode::rhs, 0.0, y_);
-    CVodeSStolerances(mem_, opt.rtol, opt.atol);
+    atol_ = N_VNew_Serial(prob.n, ctx_);
+    for (int i = 0; i < prob.n; ++i) NV_Ith_S(atol_, i) = opt.atol * prob.atol_scale[i];
+    CVodeSVtolerances(mem_, opt.rtol, atol_);
+    if (prob.max_step > 0.0) CVodeSetMaxStep(mem_, prob.max_step);
     CVodeSetUserData(mem_, this);
     CVodeSetMaxNumSteps(mem_, opt.max_steps);
     CVodeSetStopTime(mem_, t_end);
@@ -45,6 +48,7 @@ class Cvode final : public Integrator {
     if (ls_) SUNLinSolFree(ls_);
     if (A_) SUNMatDestroy(A_);
     if (nls_) SUNNonlinSolFree(nls_);
+    N_VDestroy(atol_);
     N_VDestroy(y_);
     SUNContext_Free(&ctx_);
   }
@@ -93,6 +97,7 @@ class Cvode final : public Integrator {
   OdeProblem prob_;
   SUNContext ctx_ = nullptr;
   N_Vector y_ = nullptr;
+  N_Vector atol_ = nullptr;
   void* mem_ = nullptr;
   SUNMatrix A_ = nullptr;
   SUNLinearSolver ls_ = nullptr;

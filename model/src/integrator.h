@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "fivebar/sim/simulator.h"
 
@@ -20,6 +21,11 @@ struct OdeProblem {
   RhsFn rhs = nullptr;
   RootFn root = nullptr;
   void* user = nullptr;
+  /// absolute tolerance of each state (size n), scaling Options::atol
+  std::vector<double> atol_scale;
+  /// largest step [s], 0 for none (a step must not jump over a double zero of a joint's rate)
+  double max_step = 0.0;
+  bool stiff_states = false;  ///< the state has stiff components (LuGre bristles)
 };
 
 class Integrator {

@@ -236,6 +236,8 @@ Row make_angle_row(const Context& c, double t, const double* y, const Row* previ
   row.W_in = y[5];
   row.W_ext = y[6];
   row.mode = c.slip;
+  if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, row.bristle.begin());
+  row.has_bristle = c.lugre;
   return row;
 }
 
@@ -277,6 +279,8 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
   row.kinetic = kinetic_energy(*c.params, ev.kin, y[2], y[3]);
   row.potential = potential_energy(*c.params, ev.kin);
   row.mode = c.use_slip ? c.slip : ev.slip;
+  row.bristle = z;
+  row.has_bristle = c.lugre;
   return row;
 }
 
@@ -287,9 +291,10 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
 /// relative acceleration.
 Status initial_modes(Context& c, double t, const double* y, bool stick) {
   std::array<double, 5> w;
-  if (!joint_rates(*c.params, y, &w)) {
-    return Status::Error(StatusCode::kCannotAssemble, "initial pose cannot assemble");
-  }
+  Kinematics<double> k;
+  const Status assembled = solve_kinematics(*c.params, y[0], y[1], &k);
+  if (!assembled.ok()) return Status::Error(assembled.code, "initial pose: " + assembled.message);
+  joint_rates(*c.params, y, &w);
   std::array<bool, 5> undecided;
   for (int k = 0; k < 5; ++k) {
     c.slip[k] = sign_of(w[k]);
@@ -363,6 +368,16 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
   }
 
   detail::OdeProblem prob{c.lugre ? kStates + 5 : kStates, c.nroots, &rhs, &roots, &c};
+  prob.atol_scale.assign(prob.n, 1.0);
+  prob.stiff_states = c.lugre;
+  for (int i = kStates; i < prob.n; ++i) prob.atol_scale[i] = options.bristle_atol_scale;
+  // explicit Runge-Kutta steps grow long (tens of ms at tight tolerances): a rate that touches
+  // zero and comes back within one step would go unseen by the root finder, so with located
+  // switches their step is capped at the output step (measured: `fivebar stress`)
+  const bool explicit_rk = options.method == Method::kArkodeErk45 ||
+                           options.method == Method::kArkodeErk65 ||
+                           options.method == Method::kArkodeErk87;
+  if (c.nroots > 0 && explicit_rk) prob.max_step = options.output_step;
   std::unique_ptr<detail::Integrator> integ = detail::make_integrator(prob, options,
                                                                       options.duration);
   integ->start(t, y);
@@ -383,6 +398,7 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
   for (long i = 1; i <= n_out && result.status.ok(); ++i) {
     const double tout = std::min(i * options.output_step, options.duration);
     while (true) {
+      c.failure = Status::Ok();  // a recovered failure of an earlier step is not this one's
       const auto outcome = integ->advance(tout, y, &t);
       if (outcome == detail::Integrator::kFailed) {
         if (!c.failure.ok()) {
@@ -440,6 +456,15 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
       }
       result.rows.push_back(make_row(c, tout, y, &result.rows.back(), &st));
       if (!st.ok()) result.status = st;
+      if (options.max_wall_time_s > 0.0 &&
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count() >
+              options.max_wall_time_s) {
+        result.status = at_time(
+            Status::Error(StatusCode::kSolverFailed,
+                          "wall-time limit of " + std::to_string(options.max_wall_time_s) +
+                              " s reached (simulation.max_wall_time_s)"),
+            tout, y[0], y[1]);
+      }
       break;
     }
   }
@@ -458,8 +483,11 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
   for (const Row& m : motion) {
     const Loads<double> L = loads(m.t);
     Evaluation<double> ev;
+    // LuGre: the run's bristle states (a motion read from a file has none: steady state)
+    const bool bristles = params.friction.law == FrictionLaw::kLuGre && m.has_bristle;
     const Status st = inverse_dynamics(params, L, m.theta[0], m.theta[1], m.omega[0], m.omega[1],
-                                       m.alpha[0], m.alpha[1], nullptr, eval, &ev);
+                                       m.alpha[0], m.alpha[1], nullptr, eval, &ev,
+                                       bristles ? &m.bristle : nullptr);
     if (!st.ok()) return at_time(st, m.t, m.theta[0], m.theta[1]);
     Row r = m;
     double th3 = ev.kin.th3, th4 = ev.kin.th4;

@@ -134,7 +134,7 @@ Vec2<double> holding_torques(Params<double> p, Loads<double> L, double th1, doub
 
 std::vector<StressCase> stress_catalogue(bool reduced) {
   // durations: the full catalogue, and the reduced one for tests
-  const double d_short = reduced ? 0.2 : 1.0;
+  const double d_short = reduced ? 0.3 : 1.0;
   const double d_long = reduced ? 2.0 : 60.0;
   std::vector<StressCase> cases;
 
@@ -166,14 +166,26 @@ std::vector<StressCase> stress_catalogue(bool reduced) {
   // 3. r_k * mu so large that the fixed-point friction loop stops contracting
   {
     StressCase c = paper_case("friction_newton", "", d_short);
-    c.params.friction.pin_radius.fill(0.15);
-    c.description = "pin radius 0.15 m (15x the paper's): the fixed-point friction loop stops "
-                    "contracting, Newton finds the unique reaction forces";
+    auto& f = c.params.friction;
+    f.pin_radius.fill(0.15);
+    f.coulomb.fill(0.6);
+    f.static_coulomb.fill(0.6);
+    c.description = "pin radius 0.15 m, mu_c = mu_s = 0.6: the fixed-point friction loop stops "
+                    "contracting on much of the motion (measured: 417 of 1001 output rows), "
+                    "Newton finds the unique reaction forces";
     cases.push_back(c);
     c.name = "friction_no_solution";
-    c.params.friction.pin_radius.fill(1.0);
-    c.description = "pin radius 1 m: no (or no unique) consistent reaction forces: must be "
-                    "rejected saying so (exit 3)";
+    f.coulomb.fill(1.0);
+    f.static_coulomb.fill(1.0);
+    c.description = "pin radius 0.15 m, mu_c = 1: no consistent reaction forces at the start: "
+                    "must be rejected saying so (exit 3)";
+    cases.push_back(c);
+    c.name = "friction_several_solutions";
+    f.pin_radius.fill(1.0);
+    f.coulomb.fill(0.12);
+    f.static_coulomb.fill(0.12);
+    c.description = "pin radius 1 m, mu_c = 0.12: several consistent reaction forces after "
+                    "0.25 s: must be rejected saying so (exit 3)";
     cases.push_back(c);
   }
   // 4. a link with a tiny inertia
@@ -181,6 +193,7 @@ std::vector<StressCase> stress_catalogue(bool reduced) {
     StressCase c = paper_case("tiny_inertia", "", d_short);
     c.params.links[0].inertia = 1e-6;
     c.description = "paper scene with J1 = 1e-6 kg m^2 on crank 1";
+    c.max_error = 1e-4;
     cases.push_back(c);
     c.name = "tiny_inertia_light_links";
     for (auto& link : c.params.links) {
@@ -195,7 +208,12 @@ std::vector<StressCase> stress_catalogue(bool reduced) {
       L.F *= 1e-2;
       return L;
     };
-    c.description = "every link J = 1e-6 kg m^2 and m = 10 g, loads scaled by 1e-2";
+    c.description = "every link J = 1e-6 kg m^2 and m = 10 g, loads scaled by 1e-2 (gravity "
+                    "dominated)";
+    // measured: the error shrinks in proportion to the tolerance (arkode_erk87 4e-4 rad at
+    // 1e-8, 5e-6 at 1e-10) while the 1e-12 and 1e-13 references agree to 1e-7: a sensitive
+    // motion, not garbage
+    c.max_error = 1e-3;
     cases.push_back(c);
   }
   // 5. LuGre with a stiff bristle
@@ -209,6 +227,9 @@ std::vector<StressCase> stress_catalogue(bool reduced) {
     f.stribeck_velocity.fill(0.1);
     f.static_coulomb.fill(0.15);
     c.reference_method = Method::kCvodeBdf;
+    // atol = 1e-8 against bristle deflections z ~ mu / sigma0 ~ 1e-6 rad: the runs resolve z to
+    // about 1 %, so their angles are tolerance-limited well above 1e-8
+    c.max_error = 1e-3;
     c.description = "LuGre, sigma0 = 1e5, sigma1 = 3.16, sigma2 = 0.02, w_st = 0.1, mu_s = 0.15: "
                     "stiff; implicit methods must run it, explicit ones may be rejected";
     cases.push_back(c);
@@ -227,8 +248,12 @@ std::vector<StressCase> stress_catalogue(bool reduced) {
   // 7. a long run
   {
     StressCase c = paper_case("long_run_60s", "", d_long);
-    c.description = "the paper scene over " + num(d_long) + " s: energy balance drift";
-    c.max_error = 1e-3;  // error grows along 60 s of forced motion with stick-slip
+    c.description = "the paper scene over " + num(d_long) + " s: energy balance drift over the "
+                    "whole run; error over the first 2 s";
+    // the forced motion is chaotic: cvode_adams at 1e-12 and 1e-13 and cvode_bdf at 1e-12
+    // separate by more than 1e-6 rad after 5-7 s and by tens of radians at 60 s, so the error
+    // is measured where the reference is meaningful
+    c.error_horizon = 2.0;
     cases.push_back(c);
   }
   // 8. a start that cannot assemble
@@ -262,7 +287,8 @@ std::vector<StressCase> stress_catalogue(bool reduced) {
     f.pin_radius.fill(0.05);
     f.coulomb.fill(0.5);
     f.static_coulomb.fill(0.6);
-    c.description = "pin radius 0.05 m, mu_c = 0.5, mu_s = 0.6: repeated stick and breakaway";
+    c.description = "pin radius 0.05 m, mu_c = 0.5, mu_s = 0.6: repeated stick and breakaway "
+                    "(5 sticks, 4 breakaways in 1 s)";
     cases.push_back(c);
   }
   return cases;
@@ -293,6 +319,18 @@ int exit_code_for(const StressCase& c) {
   const Status st =
       solve_kinematics(c.params, c.initial.theta1, c.initial.theta2, &k, c.options.singular_margin);
   return st.ok() ? 3 : 2;
+}
+
+/// max |d theta_1..4| between two runs on the same grid over t <= horizon (all rows if horizon
+/// is negative); infinity if the grids differ.
+double theta_difference(const std::vector<Row>& a, const std::vector<Row>& b, double horizon) {
+  if (a.size() != b.size()) return std::numeric_limits<double>::infinity();
+  double worst = 0.0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (horizon >= 0.0 && a[i].t > horizon + 1e-12) break;
+    for (int k = 0; k < 4; ++k) worst = std::max(worst, std::abs(a[i].theta[k] - b[i].theta[k]));
+  }
+  return worst;
 }
 
 /// Simulates `c` with `method` and classifies the result against `ref` (empty: no reference).
@@ -355,7 +393,7 @@ StressRow evaluate_run(const StressCase& c, Method method, const std::vector<Row
     return fail("finished, but the reference run did not (" + ref_message +
                 "): the result cannot be trusted");
   }
-  row.error = max_theta_difference(r.rows, ref);
+  row.error = theta_difference(r.rows, ref, c.error_horizon);
   if (!(row.error <= c.max_error)) {
     return fail("max |d theta| " + num(row.error) + " rad from the reference, above the case's "
                 "bound " + num(c.max_error) + " (silent garbage)");

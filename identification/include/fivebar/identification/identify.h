@@ -1,11 +1,19 @@
 // Friction identification from a torque log with Ceres: inverse-dynamics (equation-error) and
 // output-error methods, covariance, identifiability, validation against the log.
+//
+// Coulomb sign. The inverse-dynamics residual uses the exact sign(w_k) by default (the scene's
+// smoothing_velocity, normally 0; --smooth-sign overrides). With measured or estimated rates the
+// sign of each joint at each sample is a datum, not a function of the coefficients, so the
+// residual is smooth in them: they enter through Mf_k = r_k N_k f_k(w_k), with N_k itself
+// depending on them through the reaction/friction loop, which ceres::Jet differentiates exactly.
+// tanh(w / w_s) would instead bias the Coulomb coefficient low wherever |w| ~ w_s. Samples whose
+// rate is within the noise of zero can carry the wrong sign: --min-rate drops them and a robust
+// loss (Huber/Cauchy) bounds their weight.
 #pragma once
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "fivebar/identification/parameters.h"
 #include "fivebar/identification/rates.h"
@@ -39,8 +47,8 @@ struct IdentifyOptions {
   /// Coulomb sign: < 0 takes the scene's friction.smoothing_velocity; 0 exact sign(w) (a fixed
   /// datum per sample with measured rates); > 0 tanh(w / w_s) [rad/s]
   double smoothing_velocity = -1;
-  SgOptions sg;                   ///< rate/acceleration estimation when the log lacks them
-  bool estimate_rates = false;    ///< estimate rates even when the log has them
+  SgOptions sg;                 ///< rate/acceleration estimation when the log lacks them
+  bool estimate_rates = false;  ///< estimate rates even when the log has them
   /// drop samples where some joint's |w_k| is below this [rad/s] (their sign is uncertain)
   double min_rate = 0;
   int max_iterations = 100;
@@ -78,6 +86,9 @@ struct IdentifyResult {
   /// rms of the unweighted residual per actuator [N m] (inverse dynamics: tau - M at the fit)
   double rms_torque_residual[2] = {0, 0};
   double rms_torque_residual_initial[2] = {0, 0};  ///< same at the start values
+  /// white-noise level of the torque residual, 1.4826 median |r_i - r_(i-1)| / sqrt 2 [N m]: the
+  /// sensor noise; rms_torque_residual well above it means model mismatch (or rate-estimate bias)
+  double residual_noise_floor[2] = {0, 0};
   double rms_angle_residual[2] = {0, 0};  ///< output error: theta - simulated [rad]
   double residual_sigma = 0;              ///< sqrt(2 cost / (m - p)) in residual units
   double wall_time_s = 0;                 ///< solve + covariance
@@ -103,13 +114,14 @@ IdentifyResult identify(const Params<double>& scene, const sim::LoadFunction& lo
 /// Angles of a simulation of `params` driven by the logged torques (linear between samples)
 /// against the logged angles.
 struct Validation {
-  Status status;             ///< of the full run (not ok: the run stopped early)
-  double full_rms[2] = {0, 0};      ///< [rad] one run from the first sample over the whole log
-  double full_max[2] = {0, 0};      ///< [rad]
-  double full_duration_s = 0;       ///< how far the full run got
-  double window_s = 0;              ///< restart period of the windowed check
-  double window_rms[2] = {0, 0};    ///< [rad] runs restarted from the logged state every window
-  std::vector<double> full_theta1, full_theta2;  ///< simulated at the log's times (NaN after a stop)
+  Status status;                  ///< of the full run (not ok: the run stopped early)
+  double full_rms[2] = {0, 0};    ///< [rad] one run from the first sample over the whole log
+  double full_max[2] = {0, 0};    ///< [rad]
+  double full_duration_s = 0;     ///< how far the full run got
+  double window_s = 0;            ///< restart period of the windowed check
+  double window_rms[2] = {0, 0};  ///< [rad] runs restarted from the logged state every window
+  std::vector<double> full_theta1,
+      full_theta2;  ///< simulated at the log's times (NaN after a stop)
 };
 
 /// Simulates `params` with the log's torques from the log's state (rates: `omega1/2`), once over

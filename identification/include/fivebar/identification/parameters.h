@@ -68,16 +68,22 @@ struct ParameterLayout {
 
 /// Parses `coulomb_viscous` or `stribeck`; false otherwise.
 inline bool parse_law(const std::string& name, FrictionLaw* law) {
-  if (name == "coulomb_viscous") *law = FrictionLaw::kCoulombViscous;
-  else if (name == "stribeck") *law = FrictionLaw::kStribeck;
-  else return false;
+  if (name == "coulomb_viscous")
+    *law = FrictionLaw::kCoulombViscous;
+  else if (name == "stribeck")
+    *law = FrictionLaw::kStribeck;
+  else
+    return false;
   return true;
 }
 inline const char* law_name(FrictionLaw law) {
   switch (law) {
-    case FrictionLaw::kNone: return "none";
-    case FrictionLaw::kCoulombViscous: return "coulomb_viscous";
-    case FrictionLaw::kStribeck: return "stribeck";
+    case FrictionLaw::kNone:
+      return "none";
+    case FrictionLaw::kCoulombViscous:
+      return "coulomb_viscous";
+    case FrictionLaw::kStribeck:
+      return "stribeck";
   }
   return "unknown";
 }

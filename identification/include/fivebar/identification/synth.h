@@ -12,16 +12,16 @@
 namespace fivebar::identification {
 
 struct SynthOptions {
-  double rate_hz = 1000;       ///< sampling rate [Hz]
-  double duration = 10;        ///< [s]
-  double torque_noise = 0;     ///< std of the Gaussian noise on tau1, tau2 [N m]
-  double angle_noise = 0;      ///< std of the Gaussian noise on theta1, theta2 [rad]
-  double rate_noise = 0;       ///< std of the Gaussian noise on omega1, omega2 [rad/s]
-  double quantization = 0;     ///< encoder step [rad]: angles rounded to multiples (0: none)
-  std::uint64_t seed = 1;      ///< std::mt19937_64 seed (same seed, same log)
-  bool with_rates = false;     ///< write omega1, omega2, alpha1, alpha2 (exact, + rate_noise)
-  bool multisine = false;      ///< replace the scene's M1, M2 by multisine_loads
-  sim::Options sim;            ///< solver settings (duration and output_step are overridden)
+  double rate_hz = 1000;    ///< sampling rate [Hz]
+  double duration = 10;     ///< [s]
+  double torque_noise = 0;  ///< std of the Gaussian noise on tau1, tau2 [N m]
+  double angle_noise = 0;   ///< std of the Gaussian noise on theta1, theta2 [rad]
+  double rate_noise = 0;    ///< std of the Gaussian noise on omega1, omega2 [rad/s]
+  double quantization = 0;  ///< encoder step [rad]: angles rounded to multiples (0: none)
+  std::uint64_t seed = 1;   ///< std::mt19937_64 seed (same seed, same log)
+  bool with_rates = false;  ///< write omega1, omega2, alpha1, alpha2 (exact, + rate_noise)
+  bool multisine = false;   ///< replace the scene's M1, M2 by multisine_loads
+  sim::Options sim;         ///< solver settings (duration and output_step are overridden)
 };
 
 struct SynthResult {

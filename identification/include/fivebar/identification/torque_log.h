@@ -32,10 +32,10 @@ struct TorqueLog {
   std::string path;  ///< as given, for messages
   std::vector<double> t, theta1, theta2, tau1, tau2;
   std::vector<double> omega1, omega2, alpha1, alpha2;  ///< empty unless has_rates / has_accels
-  bool has_rates = false;   ///< omega1, omega2 came from the file
-  bool has_accels = false;  ///< alpha1, alpha2 came from the file
-  std::vector<int> lines;   ///< 1-based line of each sample in the file
-  std::vector<std::string> comments;  ///< `#` lines, without the leading '#'
+  bool has_rates = false;                              ///< omega1, omega2 came from the file
+  bool has_accels = false;                             ///< alpha1, alpha2 came from the file
+  std::vector<int> lines;                              ///< 1-based line of each sample in the file
+  std::vector<std::string> comments;                   ///< `#` lines, without the leading '#'
 
   int size() const { return static_cast<int>(t.size()); }
   double duration() const { return t.empty() ? 0.0 : t.back() - t.front(); }

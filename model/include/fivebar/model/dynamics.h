@@ -439,11 +439,13 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
 /// Inverse dynamics: M1, M2 and all reactions for a given motion (th, thd, thdd), friction
 /// included. The Coulomb sign is sign(w_k); where w_k = 0 it is the sign of the relative
 /// acceleration (the direction in which the joint starts to slip), unless `slip` is given.
+/// LuGre needs the bristle states z (`bristle`); without them the bristles are taken at their
+/// steady state z = g(w) sign(w) / sigma0, i.e. the Stribeck law.
 template <typename T>
 Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
                         const T& w1, const T& w2, const T& a1, const T& a2,
                         const std::array<int, 5>* slip, const EvalOptions& opt,
-                        Evaluation<T>* ev) {
+                        Evaluation<T>* ev, const std::array<T, 5>* bristle = nullptr) {
   Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin);
   if (!st.ok()) return st;
   const Kinematics<T>& k = ev->kin;
@@ -464,7 +466,14 @@ Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
       int s = sign_of(ev->w[j]);
       if (s == 0) s = sign_of(wdot[j]);
       ev->slip[j] = slip ? (*slip)[j] : s;
-      phi[j] = p.friction.pin_radius[j] * friction_law(p.friction, j, ev->w[j], ev->slip[j]);
+      if (p.friction.law == FrictionLaw::kLuGre) {
+        const T z = bristle ? (*bristle)[j]
+                            : T(double(s)) * stribeck_level(p.friction, j, ev->w[j]) /
+                                  p.friction.sigma0[j];
+        phi[j] = p.friction.pin_radius[j] * lugre_law(p.friction, j, ev->w[j], z, &ev->zdot[j]);
+      } else {
+        phi[j] = p.friction.pin_radius[j] * friction_law(p.friction, j, ev->w[j], ev->slip[j]);
+      }
     }
     st = detail::friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations);
     if (!st.ok()) return st;

@@ -39,7 +39,11 @@ struct Options {
   /// exact stick-slip (with located switches): a joint whose rate reaches zero sticks while
   /// |holding torque| <= mu_s r_k N_k, and breaks away when the bound is reached
   bool stick = true;
-  long max_steps = 2000000;     ///< over the whole run
+  long max_steps = 2000000;     ///< steps between two output times (SUNDIALS' mxstep)
+  double max_wall_time_s = 0;   ///< stop with kSolverFailed past this wall time (0: no limit)
+  /// LuGre: absolute tolerance of the bristle states z [rad] relative to atol (deflections are
+  /// ~ mu / sigma0, far below the angles)
+  double bristle_atol_scale = 1e-4;
   /// run stops (status kNearSingular) when |sin(th4 - th3)| falls below this
   double singular_margin = 1e-3;
   double friction_tol = 1e-13;  ///< relative stopping test of the reaction/friction loop
@@ -66,6 +70,8 @@ struct Row {
   double P_diss = 0, E_diss = 0, W_in = 0, W_ext = 0;
   double kinetic = 0, potential = 0;
   std::array<int, 5> mode{};  ///< joint modes: slip direction +1/-1, 0 at rest, 2 stuck
+  std::array<double, 5> bristle{};  ///< LuGre bristle states z_k [rad] (zero for other laws)
+  bool has_bristle = false;         ///< bristle holds a simulated state (LuGre runs)
 };
 
 struct Stats {

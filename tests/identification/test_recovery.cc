@@ -1,0 +1,153 @@
+// Identification recovers known friction from synthetic logs, with tolerances derived from the
+// noise: the estimate of a linear-in-the-coefficients least-squares fit is Gaussian around the
+// truth with the reported std (residual variance times (J^T J)^-1), so each test asks for
+// |error| < 4 std (two-sided probability 6e-5 per coefficient; the seeds are fixed, so the
+// outcome is deterministic) plus the absolute targets of issue 4 where they apply.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fivebar/identification/identify.h"
+#include "fivebar/identification/synth.h"
+
+namespace fivebar::identification {
+namespace {
+
+constexpr double kStdBound = 4.0;      // |error| / std, see the file comment
+constexpr double kTorqueNoise = 0.02;  // N m, issue 4
+constexpr double kAngleNoise = 1e-5;   // rad, issue 4
+
+Loads<double> paper_loads(double t) {
+  return {2 + 5 * std::sin(8 * M_PI * t), 3 + 5 * std::cos(M_PI * t), 6.0, 50.0, M_PI / 2};
+}
+const sim::Initial kPaperInitial{M_PI / 2, M_PI / 2, 0.0, 0.0};
+
+TorqueLog make_log(const Params<double>& truth, double duration, bool rates, bool multisine,
+                   double torque_noise = kTorqueNoise, double angle_noise = kAngleNoise,
+                   std::uint64_t seed = 1) {
+  SynthOptions so;
+  so.duration = duration;
+  so.torque_noise = torque_noise;
+  so.angle_noise = angle_noise;
+  so.with_rates = rates;
+  so.multisine = multisine;
+  so.seed = seed;
+  SynthResult r = synthesize_log(truth, paper_loads, kPaperInitial, so);
+  EXPECT_TRUE(r.status.ok()) << r.status.message;
+  r.log.path = "synthetic.csv";
+  return r.log;
+}
+
+void expect_recovered(const IdentifyResult& res, const std::vector<double>& truth, double rel_tol) {
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  ASSERT_EQ(res.parameters.size(), truth.size());
+  for (size_t i = 0; i < truth.size(); ++i) {
+    const ParameterEstimate& p = res.parameters[i];
+    EXPECT_GT(p.std, 0.0) << p.name;
+    EXPECT_LT(std::abs(p.value - truth[i]), kStdBound * p.std)
+        << p.name << " = " << p.value << " +- " << p.std;
+    if (rel_tol > 0) EXPECT_NEAR(p.value, truth[i], rel_tol * truth[i]) << p.name;
+  }
+}
+
+TEST(Recovery, SharedWithRatesWithinOnePercentAndFourStd) {
+  const Params<double> truth = paper_params();
+  const TorqueLog log = make_log(truth, 3.0, true, false);
+  IdentifyOptions opt;
+  const IdentifyResult res = identify(truth, paper_loads, log, opt);
+  expect_recovered(res, {0.12, 0.02}, 0.01);
+  // the residual is the torque noise: its sample std over 6000 residuals is within ~1 %
+  EXPECT_NEAR(res.residual_sigma, kTorqueNoise, 0.03 * kTorqueNoise);
+  EXPECT_NEAR(res.residual_noise_floor[0], kTorqueNoise, 0.05 * kTorqueNoise);
+}
+
+TEST(Recovery, ExactDataGivesTheTruth) {
+  const Params<double> truth = paper_params();
+  const TorqueLog log = make_log(truth, 1.0, true, false, 0.0, 0.0);
+  const IdentifyResult res = identify(truth, paper_loads, log, IdentifyOptions{});
+  ASSERT_TRUE(res.status.ok());
+  // limited by the simulator's tolerances (1e-10) through the logged accelerations
+  EXPECT_NEAR(res.parameters[0].value, 0.12, 1e-6);
+  EXPECT_NEAR(res.parameters[1].value, 0.02, 1e-7);
+}
+
+TEST(Recovery, PerJointDistinctCoefficients) {
+  Params<double> truth = paper_params();
+  truth.friction.coulomb = {0.08, 0.10, 0.12, 0.14, 0.16};
+  truth.friction.viscous = {0.010, 0.015, 0.020, 0.025, 0.030};
+  const TorqueLog log = make_log(truth, 2.0, true, true);
+  IdentifyOptions opt;
+  opt.layout.per_joint = true;
+  const IdentifyResult res = identify(truth, paper_loads, log, opt);
+  std::vector<double> x(truth.friction.coulomb.begin(), truth.friction.coulomb.end());
+  x.insert(x.end(), truth.friction.viscous.begin(), truth.friction.viscous.end());
+  expect_recovered(res, x, 0.0);
+}
+
+TEST(Recovery, AnglesOnlyWithinFivePercent) {
+  // rates and accelerations by Savitzky-Golay: bias from the smoothing dominates, so only the
+  // issue's 5 % target is asserted (the reported std does not cover filter bias)
+  const Params<double> truth = paper_params();
+  const TorqueLog log = make_log(truth, 3.0, false, false);
+  const IdentifyResult res = identify(truth, paper_loads, log, IdentifyOptions{});
+  ASSERT_TRUE(res.status.ok());
+  EXPECT_TRUE(res.rates_estimated);
+  EXPECT_NEAR(res.parameters[0].value, 0.12, 0.05 * 0.12);
+  EXPECT_NEAR(res.parameters[1].value, 0.02, 0.05 * 0.02);
+}
+
+TEST(Recovery, StribeckLogFittedWithCoulombViscousReportsTheMismatch) {
+  Params<double> truth = paper_params();
+  truth.friction.law = FrictionLaw::kStribeck;
+  truth.friction.static_coulomb.fill(0.2);
+  truth.friction.stribeck_velocity.fill(0.5);
+  // 6 s: the multisine's slowest tone (0.31 Hz) needs a few periods to reverse every joint often
+  const TorqueLog log = make_log(truth, 6.0, true, true);
+  const IdentifyResult res = identify(paper_params(), paper_loads, log, IdentifyOptions{});
+  ASSERT_TRUE(res.status.ok());
+  EXPECT_GT(std::max(res.rms_torque_residual[0] / res.residual_noise_floor[0],
+                     res.rms_torque_residual[1] / res.residual_noise_floor[1]),
+            1.1);
+  EXPECT_THAT(res.warnings, ::testing::Contains(::testing::HasSubstr("white-noise floor")));
+  // the matching law finds the Stribeck parameters
+  IdentifyOptions st;
+  st.layout.law = FrictionLaw::kStribeck;
+  const IdentifyResult good = identify(paper_params(), paper_loads, log, st);
+  expect_recovered(good, {0.12, 0.02, 0.2, 0.5}, 0.0);
+}
+
+TEST(Recovery, OutputErrorOnAShortLog) {
+  // numeric derivatives through the simulator; the std it reports treats correlated angle
+  // residuals as independent, so only the 1 % target is asserted
+  const Params<double> truth = paper_params();
+  const TorqueLog log = make_log(truth, 1.0, true, false);
+  IdentifyOptions opt;
+  opt.method = Method::kOutputError;
+  const IdentifyResult res = identify(truth, paper_loads, log, opt);
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_NEAR(res.parameters[0].value, 0.12, 0.01 * 0.12);
+  EXPECT_NEAR(res.parameters[1].value, 0.02, 0.01 * 0.02);
+}
+
+TEST(Synth, SameSeedSameLogOtherSeedOtherLog) {
+  const Params<double> truth = paper_params();
+  const TorqueLog a = make_log(truth, 0.2, false, false, kTorqueNoise, kAngleNoise, 5);
+  const TorqueLog b = make_log(truth, 0.2, false, false, kTorqueNoise, kAngleNoise, 5);
+  const TorqueLog c = make_log(truth, 0.2, false, false, kTorqueNoise, kAngleNoise, 6);
+  EXPECT_EQ(a.tau1, b.tau1);
+  EXPECT_EQ(a.theta2, b.theta2);
+  EXPECT_NE(a.tau1, c.tau1);
+}
+
+TEST(Synth, QuantizationRoundsAngles) {
+  SynthOptions so;
+  so.duration = 0.1;
+  so.quantization = 1e-3;
+  const SynthResult r = synthesize_log(paper_params(), paper_loads, kPaperInitial, so);
+  ASSERT_TRUE(r.status.ok());
+  for (double th : r.log.theta1) EXPECT_NEAR(th / 1e-3, std::round(th / 1e-3), 1e-6);
+}
+
+}  // namespace
+}  // namespace fivebar::identification

@@ -1,0 +1,162 @@
+// Torque-log reading: every kind of bad log gets a message naming file, line/column and reason.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <string>
+
+#include "fivebar/identification/identify.h"
+#include "fivebar/identification/torque_log.h"
+
+namespace fivebar::identification {
+namespace {
+
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
+
+const char* const kHeader = "t,theta1,theta2,tau1,tau2\n";
+
+/// A well-formed log of n samples at 1 kHz with slowly turning cranks (radians).
+std::string good_log(int n, bool rates = false) {
+  std::ostringstream s;
+  s << "# comment line\n" << (rates ? "t,theta1,theta2,tau1,tau2,omega1,omega2\n" : kHeader);
+  for (int i = 0; i < n; ++i) {
+    const double t = i * 1e-3;
+    s << t << "," << 1.5 + 0.5 * t << "," << 1.6 - 0.3 * t << ",1.0,2.0";
+    if (rates) s << ",0.5,-0.3";
+    s << "\n";
+  }
+  return s.str();
+}
+
+TEST(TorqueLog, ReadsAGoodLogWithCommentsAndRates) {
+  const TorqueLog log = parse_torque_log(good_log(10, true), "good.csv");
+  EXPECT_EQ(log.size(), 10);
+  EXPECT_TRUE(log.has_rates);
+  EXPECT_FALSE(log.has_accels);
+  EXPECT_EQ(log.lines.front(), 3);  // comment and header come first
+  EXPECT_EQ(log.comments.size(), 1u);
+}
+
+TEST(TorqueLog, WriteThenReadRoundTrips) {
+  TorqueLog log = parse_torque_log(good_log(5, true), "good.csv");
+  log.comments = {" made by a test"};
+  const std::string path = ::testing::TempDir() + "/roundtrip.csv";
+  write_torque_log(path, log);
+  const TorqueLog back = read_torque_log(path);
+  EXPECT_EQ(back.theta1, log.theta1);
+  EXPECT_EQ(back.omega2, log.omega2);
+  EXPECT_EQ(back.comments, log.comments);
+  std::remove(path.c_str());
+}
+
+TEST(TorqueLog, NaNNamesLineAndColumn) {
+  const std::string text = std::string(kHeader) + "0,1,1,1,1\n0.001,1,1,nan,1\n";
+  EXPECT_THAT([&] { parse_torque_log(text, "bad.csv"); },
+              ThrowsMessage<LogError>(AllOf(HasSubstr("bad.csv: line 3, column tau1"),
+                                            HasSubstr("not a finite number"))));
+}
+
+TEST(TorqueLog, TextInANumberField) {
+  const std::string text = std::string(kHeader) + "0,1,1,1,abc\n";
+  EXPECT_THAT([&] { parse_torque_log(text, "bad.csv"); },
+              ThrowsMessage<LogError>(HasSubstr("bad.csv: line 2, column tau2: 'abc'")));
+}
+
+TEST(TorqueLog, TimeNotStrictlyIncreasing) {
+  const std::string text = std::string(kHeader) + "0,1,1,1,1\n0.001,1,1,1,1\n0.001,1,1,1,1\n";
+  EXPECT_THAT([&] { parse_torque_log(text, "bad.csv"); },
+              ThrowsMessage<LogError>(AllOf(HasSubstr("bad.csv: line 4, column t"),
+                                            HasSubstr("not strictly increasing"))));
+}
+
+TEST(TorqueLog, MissingColumn) {
+  const std::string text = "t,theta1,theta2,tau1\n0,1,1,1\n";
+  EXPECT_THAT([&] { parse_torque_log(text, "bad.csv"); },
+              ThrowsMessage<LogError>(HasSubstr("bad.csv: header: missing column 'tau2'")));
+}
+
+TEST(TorqueLog, UnknownColumn) {
+  const std::string text = "t,theta1,theta2,tau1,tau2,current\n0,1,1,1,1,1\n";
+  EXPECT_THAT([&] { parse_torque_log(text, "bad.csv"); },
+              ThrowsMessage<LogError>(AllOf(HasSubstr("bad.csv: line 1, column 6"),
+                                            HasSubstr("unknown column 'current'"))));
+}
+
+TEST(TorqueLog, UnpairedRateColumn) {
+  const std::string text = "t,theta1,theta2,tau1,tau2,omega1\n0,1,1,1,1,1\n";
+  EXPECT_THAT([&] { parse_torque_log(text, "bad.csv"); },
+              ThrowsMessage<LogError>(HasSubstr("'omega1' without 'omega2'")));
+}
+
+TEST(TorqueLog, WrongFieldCount) {
+  const std::string text = std::string(kHeader) + "0,1,1,1\n";
+  EXPECT_THAT([&] { parse_torque_log(text, "bad.csv"); },
+              ThrowsMessage<LogError>(HasSubstr("bad.csv: line 2: expected 5 fields, got 4")));
+}
+
+TEST(TorqueLog, EmptyFileAndNoRows) {
+  EXPECT_THAT([&] { parse_torque_log("# only a comment\n", "bad.csv"); },
+              ThrowsMessage<LogError>(HasSubstr("bad.csv: header: empty file")));
+  EXPECT_THAT([&] { parse_torque_log(kHeader, "bad.csv"); },
+              ThrowsMessage<LogError>(HasSubstr("bad.csv: samples: no data rows")));
+}
+
+TEST(TorqueLog, MissingFile) {
+  EXPECT_THAT([&] { read_torque_log("/nonexistent/log.csv"); },
+              ThrowsMessage<LogError>(HasSubstr("/nonexistent/log.csv: (open)")));
+}
+
+TEST(TorqueLog, DegreesWithoutRates) {
+  // 90 degrees written as 90: the first angle is beyond two turns
+  std::ostringstream s;
+  s << kHeader;
+  for (int i = 0; i < 20; ++i) s << i * 1e-3 << "," << 90 + 0.01 * i << ",90,1,1\n";
+  EXPECT_THAT([&] { parse_torque_log(s.str(), "deg.csv"); },
+              ThrowsMessage<LogError>(
+                  AllOf(HasSubstr("deg.csv: column theta1"), HasSubstr("look like degrees"))));
+}
+
+TEST(TorqueLog, DegreesWithRates) {
+  // angles in degrees, rates in rad/s: d theta/dt is 57.3 omega
+  std::ostringstream s;
+  s << "t,theta1,theta2,tau1,tau2,omega1,omega2\n";
+  for (int i = 0; i < 50; ++i) {
+    const double t = i * 1e-3, th = 0.5 + 2.0 * t;  // radians, 2 rad/s
+    s << t << "," << th * 180 / M_PI << "," << 0.5 << ",1,1,2.0,0.0\n";
+  }
+  EXPECT_THAT(
+      [&] { parse_torque_log(s.str(), "deg.csv"); },
+      ThrowsMessage<LogError>(AllOf(HasSubstr("deg.csv: column theta1"), HasSubstr("180/pi"))));
+}
+
+TEST(TorqueLog, FewerSamplesThanParameters) {
+  const TorqueLog log = parse_torque_log(good_log(2, true) + "", "short.csv");
+  IdentifyOptions opt;
+  opt.layout.per_joint = true;  // 10 parameters
+  const auto loads = [](double) { return Loads<double>{}; };
+  EXPECT_THAT([&] { identify(paper_params(), loads, log, opt); },
+              ThrowsMessage<LogError>(
+                  AllOf(HasSubstr("short.csv: samples: 2 samples"), HasSubstr("10 parameters"))));
+}
+
+TEST(TorqueLog, PoseThatCannotAssemble) {
+  // short couplers (l3 + l4 = 0.2 m) cannot reach from B = (-0.08, 0) to D = (0.34, 0)
+  Params<double> p = paper_params();
+  p.links[2].length = p.links[3].length = 0.1;
+  p.links[2].com_offset = p.links[3].com_offset = 0.05;
+  p.point_p = 0.05;
+  // B = (0.08, 0), D = (0.24, 0) assembles; the fifth sample does not
+  const std::string text = std::string(kHeader) + "0,0,3.14159,1,1\n0.001,0,3.14159,1,1\n" +
+                           "0.002,0,3.14159,1,1\n0.003,0,3.14159,1,1\n0.004,3.14159,0,1,1\n";
+  const TorqueLog log = parse_torque_log(text, "pose.csv");
+  EXPECT_THAT(
+      [&] { check_poses(log, p); },
+      ThrowsMessage<LogError>(AllOf(HasSubstr("pose.csv: line 6"), HasSubstr("cannot assemble"))));
+}
+
+}  // namespace
+}  // namespace fivebar::identification
