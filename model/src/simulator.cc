@@ -96,7 +96,7 @@ int rhs(double t, const double* y, double* ydot, void* user) {
 /// Relative joint rates at a state (needs only the first-order kinematics).
 bool joint_rates(const Params<double>& p, const double* y, std::array<double, 5>* w) {
   Kinematics<double> k;
-  if (!solve_kinematics(p, y[0], y[1], &k).ok()) return false;
+  if (!solve_kinematics(p, y[0], y[1], &k, 0.0, false).ok()) return false;
   const Vec2<double> thd(y[2], y[3]);
   *w = fivebar::detail::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
   return true;
@@ -247,6 +247,7 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
   row.t = t;
   EvalOptions eval = c.eval;
   eval.want_reactions = true;
+  eval.want_angles = true;
   eval.singular_margin = 0.0;
   const Loads<double> L = (*c.loads)(t);
   Evaluation<double> ev;
@@ -343,6 +344,7 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
   c.eval.friction_tol = options.friction_tol;
   c.eval.friction_max_iter = options.friction_max_iter;
   c.eval.want_reactions = false;  // the motion needs reactions only through friction
+  c.eval.want_angles = false;     // nor the coupler angles themselves
 
   // exact Coulomb sign: each joint with a Coulomb part gets a root function on its rate
   const bool exact_sign = params.friction.active() && params.friction.law != FrictionLaw::kLuGre &&

@@ -47,7 +47,9 @@ void expect_recovered(const IdentifyResult& res, const std::vector<double>& trut
     EXPECT_GT(p.std, 0.0) << p.name;
     EXPECT_LT(std::abs(p.value - truth[i]), kStdBound * p.std)
         << p.name << " = " << p.value << " +- " << p.std;
-    if (rel_tol > 0) EXPECT_NEAR(p.value, truth[i], rel_tol * truth[i]) << p.name;
+    if (rel_tol > 0) {
+      EXPECT_NEAR(p.value, truth[i], rel_tol * truth[i]) << p.name;
+    }
   }
 }
 

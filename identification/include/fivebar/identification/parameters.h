@@ -41,13 +41,17 @@ struct ParameterLayout {
   template <typename T>
   void apply(const T* x, FrictionParams<T>* fp) const {
     fp->law = law;
-    for (int k = 0; k < kJoints; ++k) {
-      const int j = per_joint ? k : 0;
-      fp->coulomb[k] = x[0 * per_group() + j];
-      fp->viscous[k] = x[1 * per_group() + j];
-      if (law == FrictionLaw::kStribeck) {
-        fp->static_coulomb[k] = x[2 * per_group() + j];
-        fp->stribeck_velocity[k] = x[3 * per_group() + j];
+    const std::array<std::array<T, kJoints>*, 4> dst = {&fp->coulomb, &fp->viscous,
+                                                         &fp->static_coulomb,
+                                                         &fp->stribeck_velocity};
+    const int n = size();
+    for (int i = 0; i < n; ++i) {
+      // parameter i sets group i / per_group() at one joint (per joint) or at all five
+      std::array<T, kJoints>& d = *dst[i / per_group()];
+      if (per_joint) {
+        d[i % kJoints] = x[i];
+      } else {
+        d.fill(x[i]);
       }
     }
   }
@@ -84,6 +88,8 @@ inline const char* law_name(FrictionLaw law) {
       return "coulomb_viscous";
     case FrictionLaw::kStribeck:
       return "stribeck";
+    case FrictionLaw::kLuGre:
+      return "lugre";  // simulated by synth-log; not a law identify fits
   }
   return "unknown";
 }

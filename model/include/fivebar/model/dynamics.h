@@ -32,6 +32,7 @@ struct EvalOptions {
   double friction_tol = 1e-13;   ///< stop when max |N^i - N^(i-1)| <= tol * (max N + 1e-300)
   int friction_max_iter = 50;
   bool want_reactions = true;    ///< compute F_k even when the scene has no friction
+  bool want_angles = true;       ///< compute th3, th4 (the dynamics itself needs neither)
 };
 
 /// Everything one evaluation computes. Forward dynamics fills thdd from the torques; inverse
@@ -333,7 +334,7 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
                         const T& w1, const T& w2, const std::array<int, 5>* slip,
                         const EvalOptions& opt, Evaluation<T>* ev,
                         const std::array<T, 5>* bristle = nullptr) {
-  Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin);
+  Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin, opt.want_angles);
   if (!st.ok()) return st;
   const Kinematics<T>& k = ev->kin;
   compute_bias(p, k, w1, w2, &ev->bias);

@@ -47,9 +47,10 @@ struct Hessians {
 /// Closed-form position solve (eq. 4) for the assembly in params, and the G coefficients.
 /// Fails with kCannotAssemble when |BD| is outside [|l3 - l4|, l3 + l4], and with kNearSingular
 /// when |sin(th4 - th3)| < singular_margin (pass 0 to accept any pose that assembles).
+/// `angles` = false skips th3, th4 themselves (two atan2): the dynamics needs only e3, e4.
 template <typename T>
 Status solve_kinematics(const Params<T>& p, const T& th1, const T& th2, Kinematics<T>* k,
-                        double singular_margin = 0.0) {
+                        double singular_margin = 0.0, bool angles = true) {
   using std::atan2;
   using std::cos;
   using std::sin;
@@ -86,8 +87,10 @@ Status solve_kinematics(const Params<T>& p, const T& th1, const T& th2, Kinemati
   k->C = k->B + a * u + h * perp(u);
   k->e3 = (k->C - k->B) / l3;
   k->e4 = (k->C - k->D) / l4;
-  k->th3 = atan2(k->e3.y(), k->e3.x());
-  k->th4 = atan2(k->e4.y(), k->e4.x());
+  if (angles) {
+    k->th3 = atan2(k->e3.y(), k->e3.x());
+    k->th4 = atan2(k->e4.y(), k->e4.x());
+  }
   k->sin43 = cross(k->e3, k->e4);  // sin(th4 - th3)
   if (std::abs(value_of(k->sin43)) < singular_margin) {
     std::ostringstream msg;
