@@ -203,24 +203,7 @@ int run(const Args& a) {
   // scene_fitted.yaml: the input scene with the identified friction
   Scene fitted = scene;
   fitted.params.friction = res.fitted.friction;
-  std::string yaml;
-  if (res.layout.law == FrictionLaw::kStribeck) {
-    // the scene format has no Stribeck keys yet: write the Coulomb-viscous part and the rest
-    // as comments
-    fitted.params.friction.law = FrictionLaw::kCoulombViscous;
-    yaml = scene_to_yaml(fitted);
-    std::ostringstream c;
-    c << "# identified stribeck law (not expressible in the scene format yet):\n";
-    for (const id::ParameterEstimate& p : res.parameters) {
-      c << "#   " << p.name << ": " << format_double(p.value) << "\n";
-    }
-    yaml = c.str() + yaml;
-    res.warnings.push_back(
-        "scene_fitted.yaml: the scene format has no Stribeck keys; it holds "
-        "the Coulomb and viscous parts, the rest is in comments");
-  } else {
-    yaml = scene_to_yaml(fitted);
-  }
+  const std::string yaml = scene_to_yaml(fitted);
   write_text_file(out.file("scene_fitted.yaml"), yaml);
 
   // identification.json

@@ -466,7 +466,7 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
       for (int i = P - 1; i >= 0; --i)
         out.singular_values.push_back(std::sqrt(std::max(0.0, es.eigenvalues()(i))));
       const double ratio = out.singular_values.back() / out.singular_values.front();
-      if (ratio < 1e-3) {
+      if (ratio < 1e-2) {  // condition number above 100 with unit-norm columns
         const Eigen::VectorXd v = es.eigenvectors().col(0);
         std::string who;
         for (int i = 0; i < P; ++i) {
@@ -529,6 +529,19 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
       ++c;
     }
     for (int j = 0; j < 2; ++j) out.rms_torque_residual[j] = std::sqrt(s[j] / std::max(1, c));
+    // the same robust white-noise floor as for inverse dynamics, on the torque residual
+    for (int j = 0; j < 2; ++j) {
+      const std::vector<double>& tau = j == 0 ? log.tau1 : log.tau2;
+      const std::vector<double>& pred = j == 0 ? out.predicted_tau1 : out.predicted_tau2;
+      std::vector<double> d;
+      for (int i = first + 1; i <= last; ++i) {
+        const double e = (tau[i] - pred[i]) - (tau[i - 1] - pred[i - 1]);
+        if (std::isfinite(e)) d.push_back(std::abs(e));
+      }
+      if (d.empty()) continue;
+      std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+      out.residual_noise_floor[j] = 1.4826 * d[d.size() / 2] / std::sqrt(2.0);
+    }
   }
   out.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
   return out;

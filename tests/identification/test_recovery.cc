@@ -132,6 +132,21 @@ TEST(Recovery, OutputErrorOnAShortLog) {
   EXPECT_NEAR(res.parameters[1].value, 0.02, 0.01 * 0.02);
 }
 
+TEST(Identifiability, ShortLogWarnsNamingTheInseparableCoefficients) {
+  // 0.3 s of the paper scene: the cranks barely turn, joints D and D0 load alike
+  const Params<double> truth = paper_params();
+  const TorqueLog log = make_log(truth, 0.3, true, false);
+  IdentifyOptions opt;
+  opt.layout.per_joint = true;
+  const IdentifyResult res = identify(truth, paper_loads, log, opt);
+  ASSERT_TRUE(res.status.ok());
+  EXPECT_THAT(res.warnings,
+              ::testing::Contains(::testing::AllOf(::testing::HasSubstr("cannot separate"),
+                                                   ::testing::HasSubstr("coulomb_4"),
+                                                   ::testing::HasSubstr("coulomb_5"))));
+  EXPECT_GT(res.singular_values.front() / res.singular_values.back(), 100.0);
+}
+
 TEST(Synth, SameSeedSameLogOtherSeedOtherLog) {
   const Params<double> truth = paper_params();
   const TorqueLog a = make_log(truth, 0.2, false, false, kTorqueNoise, kAngleNoise, 5);

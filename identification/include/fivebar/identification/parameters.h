@@ -41,9 +41,8 @@ struct ParameterLayout {
   template <typename T>
   void apply(const T* x, FrictionParams<T>* fp) const {
     fp->law = law;
-    const std::array<std::array<T, kJoints>*, 4> dst = {&fp->coulomb, &fp->viscous,
-                                                         &fp->static_coulomb,
-                                                         &fp->stribeck_velocity};
+    const std::array<std::array<T, kJoints>*, 4> dst = {
+        &fp->coulomb, &fp->viscous, &fp->static_coulomb, &fp->stribeck_velocity};
     const int n = size();
     for (int i = 0; i < n; ++i) {
       // parameter i sets group i / per_group() at one joint (per joint) or at all five

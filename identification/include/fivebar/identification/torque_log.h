@@ -6,24 +6,15 @@
 #include <vector>
 
 #include "fivebar/model/params.h"
+#include "fivebar/model/status.h"
 
 namespace fivebar::identification {
 
-/// A log that cannot be used: what() is `<file>: <key>: <reason>`, the layout of the apps'
-/// InputError (the key is `line N`, `line N, column NAME`, `header` or `column NAME`).
-class LogError : public std::runtime_error {
+/// A log that cannot be used: what() is `<file>: <key>: <reason>` (the key is `line N`,
+/// `line N, column NAME`, `header` or `column NAME`).
+class LogError : public FieldError {
  public:
-  LogError(std::string file, std::string key, std::string reason)
-      : std::runtime_error(file + ": " + key + ": " + reason),
-        file_(std::move(file)),
-        key_(std::move(key)),
-        reason_(std::move(reason)) {}
-  const std::string& file() const { return file_; }
-  const std::string& key() const { return key_; }
-  const std::string& reason() const { return reason_; }
-
- private:
-  std::string file_, key_, reason_;
+  using FieldError::FieldError;
 };
 
 /// Measured motion and actuator torques of the two cranks, one entry per sample.

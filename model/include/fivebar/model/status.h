@@ -1,6 +1,7 @@
 // Outcome of a numerical evaluation: numerical failure is a status with a message, never a NaN.
 #pragma once
 
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -22,6 +23,25 @@ struct Status {
   bool ok() const { return code == StatusCode::kOk; }
   static Status Ok() { return {}; }
   static Status Error(StatusCode c, std::string m) { return {c, std::move(m)}; }
+};
+
+/// An error about one value of one input: what() is `<file>: <key>: <reason>`, the one line a
+/// user sees (`fivebar: error: ...`). The apps' InputError (exit 2) and NumericalError (exit 3)
+/// and the libraries' input errors derive from it.
+class FieldError : public std::runtime_error {
+ public:
+  FieldError(std::string file, std::string key, std::string reason)
+      : std::runtime_error(file + ": " + key + ": " + reason),
+        file_(std::move(file)),
+        key_(std::move(key)),
+        reason_(std::move(reason)) {}
+
+  const std::string& file() const { return file_; }
+  const std::string& key() const { return key_; }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string file_, key_, reason_;
 };
 
 }  // namespace fivebar
