@@ -114,7 +114,8 @@ const std::vector<std::string>& summary_columns() {
       "peak_torque", "max_constraint_violation", "wall_time_s", "baseline_input_energy",
       "baseline_peak_torque", "saving_percent", "miss_distance", "min_coupler_sine",
       "solver_status", "evaluations", "starts", "best_start", "duration", "torque_limit",
-      "theta1_start", "theta2_start", "theta1_goal", "theta2_goal", "message"};
+      "theta1_start", "theta2_start", "theta1_goal", "theta2_goal",
+      "dissipated_energy_exact", "baseline_dissipated_energy_exact", "message"};
   return columns;
 }
 
@@ -128,7 +129,8 @@ std::vector<std::string> summary_fields(const TaskResult& r) {
           num(saving), num(r.miss_distance), num(r.min_coupler_sine), r.solver_status,
           std::to_string(r.evaluations), std::to_string(r.starts), std::to_string(r.best_start),
           num(r.duration), num(r.torque_limit), angle(r.start[0]), angle(r.start[1]),
-          angle(r.goal[0]), angle(r.goal[1]), quoted(r.message)};
+          angle(r.goal[0]), angle(r.goal[1]), num(r.dissipated_energy_exact),
+          num(r.baseline_dissipated_energy_exact), quoted(r.message)};
 }
 
 std::string csv_line(const std::vector<std::string>& fields) {
@@ -255,6 +257,22 @@ TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads
     r.max_constraint_violation = check.max_violation;
     r.min_coupler_sine = check.min_coupler_sine;
 
+    // energies under the scene's own (exact-sign) friction, for the record: the integrand has
+    // kinks where a joint reverses, hence the denser rule
+    {
+      ProblemOptions exact_options = task_problem_options(options, r.torque_limit);
+      exact_options.smoothing_velocity = params.friction.smoothing_velocity;
+      exact_options.quadrature_points = 4 * options.problem.quadrature_points;
+      const TrajectoryProblem exact(params, loads, problem.motion(), exact_options);
+      double e = NAN, unused = NAN;
+      if (exact.energies(r.x.data(), exact_options.quadrature_points, &e, &unused).ok()) {
+        r.dissipated_energy_exact = e;
+      }
+      if (exact.energies(x0.data(), exact_options.quadrature_points, &e, &unused).ok()) {
+        r.baseline_dissipated_energy_exact = e;
+      }
+    }
+
     if (!opt.solver.usable()) {
       r.status = r.solver_status;
       r.message = opt.solver.message;
@@ -327,7 +345,8 @@ std::string encode(const TaskResult& r) {
                    r.dissipated_energy, r.baseline_dissipated_energy, r.input_energy,
                    r.baseline_input_energy, r.objective, r.peak_torque, r.baseline_peak_torque,
                    r.max_constraint_violation, r.baseline_max_constraint_violation,
-                   r.min_coupler_sine, r.miss_distance, r.wall_time_s}) {
+                   r.min_coupler_sine, r.miss_distance, r.wall_time_s,
+                   r.dissipated_energy_exact, r.baseline_dissipated_energy_exact}) {
     w.num(v);
   }
   for (long long v : {r.evaluations, r.starts, r.best_start, r.control_points}) w.integer(v);
@@ -345,7 +364,8 @@ TaskResult decode(const std::string& bytes) {
                     &r.input_energy, &r.baseline_input_energy, &r.objective, &r.peak_torque,
                     &r.baseline_peak_torque, &r.max_constraint_violation,
                     &r.baseline_max_constraint_violation, &r.min_coupler_sine,
-                    &r.miss_distance, &r.wall_time_s}) {
+                    &r.miss_distance, &r.wall_time_s, &r.dissipated_energy_exact,
+                    &r.baseline_dissipated_energy_exact}) {
     *v = rd.num();
   }
   for (int* v : {&r.evaluations, &r.starts, &r.best_start, &r.control_points}) {

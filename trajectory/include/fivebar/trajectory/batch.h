@@ -38,6 +38,9 @@ struct TaskResult {
   double duration = 0, torque_limit = 0;
   std::array<double, 2> start{}, goal{};  ///< resolved joint angles [rad]
   double dissipated_energy = NAN, baseline_dissipated_energy = NAN;  ///< [J]
+  /// the same with the scene's exact Coulomb sign (the optimizer needs the smooth tanh form),
+  /// by a 4x denser Gauss-Legendre rule [J]
+  double dissipated_energy_exact = NAN, baseline_dissipated_energy_exact = NAN;
   double input_energy = NAN, baseline_input_energy = NAN;           ///< [J]
   double objective = NAN;  ///< the minimized quantity [J]
   double peak_torque = NAN, baseline_peak_torque = NAN;  ///< dense grid [N m]
