@@ -113,7 +113,8 @@ TEST(Stress, ExpectedOutcomes) {
 }
 
 TEST(Stress, StuckBelowBreakawayDoesNotMove) {
-  for (const StressRow& r : rows_by_case().at("stick_below_breakaway")) {
+  const auto by_case = rows_by_case();  // (a temporary's .at() would dangle in the loop)
+  for (const StressRow& r : by_case.at("stick_below_breakaway")) {
     ASSERT_EQ(r.outcome, StressOutcome::kOk) << r.message;
     EXPECT_LE(r.displacement, kStuckDisplacement) << method_name(r.method);
   }
