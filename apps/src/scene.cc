@@ -3,6 +3,8 @@
 // the Scene is then built and validated key by key.
 #include "fivebar/io/scene.h"
 
+#include "fivebar/model/kinematics.h"
+
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -701,15 +703,9 @@ const char* friction_law_name(FrictionLaw law) {
 }
 
 double coupler_sine(const Params<double>& p, double theta1, double theta2) {
-  // B = l1 e(th1), D = (l0, 0) + l2 e(th2); the triangle B C D has sides l3, l4 and |BD|
-  const double l1 = p.links[0].length, l2 = p.links[1].length;
-  const double l3 = p.links[2].length, l4 = p.links[3].length;
-  const double bd = std::hypot(p.ground_length + l2 * std::cos(theta2) - l1 * std::cos(theta1),
-                               l2 * std::sin(theta2) - l1 * std::sin(theta1));
-  if (bd > l3 + l4 || bd < std::fabs(l3 - l4)) return -1;
-  // the angle at C lies between C->B and C->D, i.e. between e(th3) and e(th4)
-  const double cos_c = (l3 * l3 + l4 * l4 - bd * bd) / (2 * l3 * l4);
-  return std::sqrt(std::max(0.0, 1 - cos_c * cos_c));
+  Kinematics<double> k;
+  if (!solve_kinematics(p, theta1, theta2, &k, 0.0, false).ok()) return -1;
+  return std::abs(k.sin43);
 }
 
 Scene parse_scene(const std::string& yaml_text, const std::string& path,

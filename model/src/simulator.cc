@@ -214,6 +214,12 @@ void root_directions(const Context& c, int* dirs) {
   }
 }
 
+/// angle continued from the previous row's value (no 2 pi jumps in the output)
+double continued(double angle, const Row* previous, int k) {
+  if (!previous) return angle;
+  return previous->theta[k] + std::remainder(angle - previous->theta[k], 2 * M_PI);
+}
+
 /// Angles-only row: the closure, the coupler rates and the energy quadratures.
 Row make_angle_row(const Context& c, double t, const double* y, const Row* previous, Status* st) {
   Row row;
@@ -224,13 +230,8 @@ Row make_angle_row(const Context& c, double t, const double* y, const Row* previ
     *st = at_time(*st, t, y[0], y[1]);
     return row;
   }
-  double th3 = k.th3, th4 = k.th4;
-  if (previous) {
-    th3 = previous->theta[2] + std::remainder(th3 - previous->theta[2], 2 * M_PI);
-    th4 = previous->theta[3] + std::remainder(th4 - previous->theta[3], 2 * M_PI);
-  }
   const Vec2<double> thd(y[2], y[3]);
-  row.theta = {y[0], y[1], th3, th4};
+  row.theta = {y[0], y[1], continued(k.th3, previous, 2), continued(k.th4, previous, 3)};
   row.omega = {y[2], y[3], k.G3.dot(thd), k.G4.dot(thd)};
   row.E_diss = y[4];
   row.W_in = y[5];
@@ -259,12 +260,8 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
     *st = at_time(*st, t, y[0], y[1]);
     return row;
   }
-  double th3 = ev.kin.th3, th4 = ev.kin.th4;
-  if (previous) {  // keep the coupler angles continuous (no 2 pi jumps)
-    th3 = previous->theta[2] + std::remainder(th3 - previous->theta[2], 2 * M_PI);
-    th4 = previous->theta[3] + std::remainder(th4 - previous->theta[3], 2 * M_PI);
-  }
-  row.theta = {y[0], y[1], th3, th4};
+  row.theta = {y[0], y[1], continued(ev.kin.th3, previous, 2),
+               continued(ev.kin.th4, previous, 3)};
   row.omega = {y[2], y[3], ev.bias.w3, ev.bias.w4};
   row.alpha = {ev.thdd[0], ev.thdd[1], ev.alpha3, ev.alpha4};
   row.M1 = L.M1;
@@ -291,11 +288,12 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
 /// where the drives act), else one crank stuck, else every joint slips in the direction of its
 /// relative acceleration.
 Status initial_modes(Context& c, double t, const double* y, bool stick) {
-  std::array<double, 5> w;
   Kinematics<double> k;
   const Status assembled = solve_kinematics(*c.params, y[0], y[1], &k);
   if (!assembled.ok()) return Status::Error(assembled.code, "initial pose: " + assembled.message);
-  joint_rates(*c.params, y, &w);
+  const Vec2<double> thd(y[2], y[3]);
+  const std::array<double, 5> w =
+      fivebar::detail::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
   std::array<bool, 5> undecided;
   for (int k = 0; k < 5; ++k) {
     c.slip[k] = sign_of(w[k]);
@@ -492,13 +490,9 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
                                        bristles ? &m.bristle : nullptr);
     if (!st.ok()) return at_time(st, m.t, m.theta[0], m.theta[1]);
     Row r = m;
-    double th3 = ev.kin.th3, th4 = ev.kin.th4;
-    if (!out->empty()) {
-      th3 = out->back().theta[2] + std::remainder(th3 - out->back().theta[2], 2 * M_PI);
-      th4 = out->back().theta[3] + std::remainder(th4 - out->back().theta[3], 2 * M_PI);
-    }
-    r.theta[2] = th3;
-    r.theta[3] = th4;
+    const Row* previous = out->empty() ? nullptr : &out->back();
+    r.theta[2] = continued(ev.kin.th3, previous, 2);
+    r.theta[3] = continued(ev.kin.th4, previous, 3);
     r.omega[2] = ev.bias.w3;
     r.omega[3] = ev.bias.w4;
     r.alpha[2] = ev.alpha3;

@@ -176,19 +176,10 @@ std::array<T, 5> relative_accelerations(const Vec2<T>& thdd, const T& al3, const
   return relative_rates(thdd[0], thdd[1], al3, al4);
 }
 
-/// Status for a loop that did not converge.
-inline Status loop_failure(int iterations, double err, double ratio) {
-  std::ostringstream msg;
-  msg << "friction loop did not converge after " << iterations
-      << " iterations (change of |N| " << err << " N, contraction ratio " << ratio
-      << "): friction too large for the reaction forces (r_k * mu too large)";
-  return Status::Error(StatusCode::kFrictionNotConverged, msg.str());
-}
-
-/// Newton on R(N) = N - |F(phi N)| (F is affine in the friction torques: F = F0 + T Mf, T
-/// from unit probes), from the start N0. Converged: true and N, Mf, F set.
-template <typename T, typename Solve>
-bool friction_newton(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&& solve,
+/// Newton on R(N) = N - |F(phi N)| (F is affine in the friction torques: F = F0 + sum_j dF_j
+/// Mf_j, from unit probes), from the start N. Converged: true and *N_out set.
+template <typename T>
+bool friction_newton(const std::array<T, 5>& phi, const EvalOptions& opt,
                      const std::array<Vec2<T>, 5>& F0, const std::array<std::array<Vec2<T>, 5>, 5>& dF,
                      std::array<T, 5> N, std::array<T, 5>* N_out) {
   using std::sqrt;
@@ -291,10 +282,10 @@ Status friction_loop(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&
   // Newton on the same affine map, from two starts
   std::array<T, 5> N0, Na, Nb;
   norms(F0, &N0);
-  const bool a = friction_newton(phi, opt, solve, F0, dF, N0, &Na);
+  const bool a = friction_newton(phi, opt, F0, dF, N0, &Na);
   std::array<T, 5> N_big = N0;
   for (auto& n : N_big) n = n * T(100) + T(1);
-  const bool b = friction_newton(phi, opt, solve, F0, dF, N_big, &Nb);
+  const bool b = friction_newton(phi, opt, F0, dF, N_big, &Nb);
   std::ostringstream msg;
   msg << "friction loop: fixed point " << (contracting ? "did not converge" : "does not contract")
       << " (ratio " << ratio << "); ";

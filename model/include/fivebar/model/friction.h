@@ -36,23 +36,13 @@ T stribeck_level(const FrictionParams<T>& fp, int k, const T& w) {
 template <typename T>
 T friction_law(const FrictionParams<T>& fp, int k, const T& w, int slip) {
   using std::tanh;
-  switch (fp.law) {
-    case FrictionLaw::kNone:
-      return T(0);
-    case FrictionLaw::kCoulombViscous: {
-      const T coulomb_sign =
-          value_of(fp.smoothing_velocity) > 0.0 ? T(tanh(w / fp.smoothing_velocity)) : T(double(slip));
-      return fp.coulomb[k] * coulomb_sign + fp.viscous[k] * w;
-    }
-    case FrictionLaw::kStribeck: {
-      const T coulomb_sign =
-          value_of(fp.smoothing_velocity) > 0.0 ? T(tanh(w / fp.smoothing_velocity)) : T(double(slip));
-      return stribeck_level(fp, k, w) * coulomb_sign + fp.viscous[k] * w;
-    }
-    case FrictionLaw::kLuGre:
-      return T(0);  // needs the bristle state: see lugre_law
+  if (fp.law != FrictionLaw::kCoulombViscous && fp.law != FrictionLaw::kStribeck) {
+    return T(0);  // none; LuGre needs the bristle state: see lugre_law
   }
-  return T(0);
+  const T coulomb_sign =
+      value_of(fp.smoothing_velocity) > 0.0 ? T(tanh(w / fp.smoothing_velocity)) : T(double(slip));
+  const T level = fp.law == FrictionLaw::kStribeck ? stribeck_level(fp, k, w) : fp.coulomb[k];
+  return level * coulomb_sign + fp.viscous[k] * w;
 }
 
 /// LuGre friction coefficient f = sigma0 z + sigma1 zdot + sigma2 w and the bristle rate zdot
