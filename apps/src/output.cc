@@ -7,8 +7,11 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <csignal>
 #include <memory>
+#include <mutex>
 #include <system_error>
+#include <vector>
 
 #include "fivebar/io/errors.h"
 
@@ -109,6 +112,39 @@ void write_json_file(const std::string& path, const Json& json) {
   write_text_file(path, json.dump(2) + "\n");
 }
 
+namespace {
+
+// staging directories of the live OutputDirs: an interrupted run (SIGINT, SIGTERM) removes them
+// before it dies, so no half-written output is left behind
+std::mutex g_staging_mutex;
+std::vector<std::string>* g_staging = new std::vector<std::string>;  // never destroyed
+
+extern "C" void remove_staging_and_die(int sig) {
+  for (const std::string& dir : *g_staging) {
+    std::error_code ec;
+    fs::remove_all(dir, ec);  // not async-signal-safe, but the process is going down anyway
+  }
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+void track_staging(const std::string& dir, bool add) {
+  std::lock_guard<std::mutex> lock(g_staging_mutex);
+  if (add) {
+    static const bool installed = [] {
+      std::signal(SIGINT, remove_staging_and_die);
+      std::signal(SIGTERM, remove_staging_and_die);
+      return true;
+    }();
+    static_cast<void>(installed);
+    g_staging->push_back(dir);
+  } else {
+    g_staging->erase(std::remove(g_staging->begin(), g_staging->end(), dir), g_staging->end());
+  }
+}
+
+}  // namespace
+
 OutputDir::OutputDir(const std::string& dir, const std::vector<std::string>& outputs) : dir_(dir) {
   std::error_code ec;
   fs::create_directories(dir_, ec);
@@ -130,10 +166,12 @@ OutputDir::OutputDir(const std::string& dir, const std::vector<std::string>& out
                      std::string("cannot create a staging directory: ") + std::strerror(errno));
   }
   staging_ = pattern;
+  track_staging(staging_, true);
 }
 
 OutputDir::~OutputDir() {
   if (committed_) return;
+  track_staging(staging_, false);
   std::error_code ec;
   fs::remove_all(staging_, ec);  // best effort: never throw from a destructor
 }
@@ -160,6 +198,7 @@ std::vector<std::string> OutputDir::commit() {
   }
   std::error_code ec;
   fs::remove_all(staging_, ec);
+  track_staging(staging_, false);
   committed_ = true;
   std::sort(names.begin(), names.end());
   return names;
