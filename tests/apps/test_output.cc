@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -11,6 +12,7 @@
 #include "fivebar/io/csv.h"
 #include "fivebar/io/differences.h"
 #include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
 #include "fivebar/io/json.h"
 #include "fivebar/io/output.h"
 
@@ -93,6 +95,28 @@ TEST(TrajectoryCsv, NumbersRoundTripExactly) {
         write_trajectory_csv((dir / "u.csv").string(), rows, {{"x", {1.0}}});
       },
       ::testing::ThrowsMessage<InputError>(HasSubstr("x: internal")));
+}
+
+TEST(Format, ShortestRoundTripAndGridValues) {
+  const double t = 476 * 0.001;  // 0.47600000000000003: one ulp above the double nearest 0.476
+  EXPECT_EQ(format_double(t), "0.47600000000000003");  // exact: reads back as t
+  EXPECT_EQ(std::strtod(format_double(t).c_str(), nullptr), t);
+  EXPECT_EQ(format_grid_value(t), "0.476");
+  EXPECT_EQ(format_grid_value(0.1 + 0.2), "0.3");
+  EXPECT_EQ(format_grid_value(2.0), "2");
+  EXPECT_EQ(format_grid_value(0.0), "0");
+  EXPECT_EQ(format_grid_value(-1e-10), "-1e-10");
+  // a value with no short decimal within one ulp is left exact
+  EXPECT_EQ(format_grid_value(M_PI), format_double(M_PI));
+  EXPECT_EQ(format_grid_value(NAN), "nan");
+  // the t column of trajectory.csv is written that way, the other columns exactly
+  const fs::path dir = scratch("grid");
+  sim::Row row;
+  row.t = t;
+  row.theta[0] = t;
+  write_trajectory_csv((dir / "t.csv").string(), {row});
+  const std::string text = read_file(dir / "t.csv");
+  EXPECT_NE(text.find("\n0.476,0.47600000000000003,"), std::string::npos) << text;
 }
 
 TEST(Json, ObjectsArraysEscapesAndNonFinite) {
