@@ -347,7 +347,7 @@ int run(const Args& a) {
 RunFunction setup(CLI::App* app) {
   auto args = std::make_shared<Args>();
   add_scene_options(app, &args->scene, "identify");
-  app->add_option("--log", args->log, "torque log (CSV, interfaces.md)")
+  app->add_option("--log", args->log, "torque log (CSV, docs/formats.md)")
       ->type_name("LOG.csv")
       ->required();
   app->add_flag("--per-joint", args->per_joint,

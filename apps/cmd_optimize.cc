@@ -199,7 +199,7 @@ int run(const Args& args) {
 RunFunction setup(CLI::App* app) {
   auto args = std::make_shared<Args>();
   add_scene_options(app, &args->scene, "optimize");
-  app->add_option("--tasks", args->tasks, "tasks file (YAML, interfaces.md)")->required();
+  app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");
   app->add_option("--method", args->method, "NLopt algorithm: slsqp (default), mma, ccsaq");
   app->add_option("--objective", args->objective,

@@ -205,7 +205,7 @@ int run(const Args& args) {
 RunFunction setup(CLI::App* app) {
   auto args = std::make_shared<Args>();
   add_scene_options(app, &args->scene, "study");
-  app->add_option("--tasks", args->tasks, "tasks file (YAML, interfaces.md)")->required();
+  app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--sweep", args->sweeps, "KEY=LO:HI:N, a scene key swept over N values")
       ->required();
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");
