@@ -104,7 +104,7 @@ void write_atomic(const fs::path& path, Write&& write) {
 
 std::string plot_script(const std::string& task, double limit, const std::string& terminal) {
   std::string s = "set datafile separator ','\nset terminal " + terminal +
-                  " size 900,600\nset key autotitle columnhead\nset grid\n";
+                  " size 900,600 noenhanced\nset key autotitle columnhead\nset grid\n";
   s += "set output 'path_C.png'\nset title '" + task + ": path of C'\nset size ratio -1\n"
        "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
        "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 title 'optimal', "
@@ -199,7 +199,7 @@ int run(const Args& args) {
 RunFunction setup(CLI::App* app) {
   auto args = std::make_shared<Args>();
   add_scene_options(app, &args->scene, "optimize");
-  app->add_option("--tasks", args->tasks, "tasks file (YAML, interfaces.md)")->required();
+  app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");
   app->add_option("--method", args->method, "NLopt algorithm: slsqp (default), mma, ccsaq");
   app->add_option("--objective", args->objective,

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <charconv>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -14,6 +13,7 @@
 #include <vector>
 
 #include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
 
 namespace fivebar::io {
 namespace fs = std::filesystem;
@@ -42,9 +42,7 @@ void close_checked(File f, const std::string& path) {
 
 // appends x in shortest round-trip form and a separator
 inline void append_number(std::string* line, double x, char sep) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x);
-  line->append(buf, r.ptr);
+  line->append(format_double(x));
   line->push_back(sep);
 }
 
@@ -86,7 +84,8 @@ void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& 
   for (size_t i = 0; i < rows.size(); ++i) {
     const sim::Row& r = rows[i];
     line.clear();
-    append_number(&line, r.t, ',');
+    line.append(format_grid_value(r.t));  // 0.476, not 476 * 0.001 = 0.47600000000000003
+    line.push_back(',');
     for (double x : r.theta) append_number(&line, x, ',');
     for (double x : r.omega) append_number(&line, x, ',');
     for (double x : r.alpha) append_number(&line, x, ',');

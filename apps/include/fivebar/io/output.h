@@ -21,7 +21,8 @@ struct Column {
 };
 
 /// Writes rows as trajectory.csv: header trajectory_columns() then `extra` names, one line per
-/// row, every number in shortest round-trip form (as exact as %.17g). Throws InputError on a
+/// row, every number in shortest round-trip form (as exact as %.17g) except t, which is written
+/// by format_grid_value (0.476 for 476 * 0.001, within one ulp). Throws InputError on a
 /// write failure or an extra column whose length differs from rows.size().
 void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& rows,
                           const std::vector<Column>& extra = {});
