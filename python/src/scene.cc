@@ -5,7 +5,6 @@
 
 #include "bindings.h"
 #include "fivebar/io/errors.h"
-#include "fivebar/io/format.h"
 #include "fivebar/io/output.h"
 
 namespace fivebar::python {
@@ -41,7 +40,7 @@ namespace {
 std::string override_text(const std::string& key, const py::handle& value) {
   if (py::isinstance<py::bool_>(value)) return value.cast<bool>() ? "true" : "false";
   if (py::isinstance<py::int_>(value)) return py::str(value);
-  if (py::isinstance<py::float_>(value)) return io::format_double(value.cast<double>());
+  if (py::isinstance<py::float_>(value)) return py::repr(value);  // shortest round trip
   if (py::isinstance<py::str>(value)) return value.cast<std::string>();
   if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
     std::string text = "[";
