@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <thread>
 
+#include <pybind11/stl.h>
+
 #include "bindings.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
