@@ -21,9 +21,16 @@ namespace py = pybind11;
 struct PyScene {
   io::Scene scene;
   std::shared_ptr<const io::LoadExpressions> loads;
+  /// M3 and F do not depend on t (the loads inverse dynamics uses): constant_loads holds them
+  bool loads_constant = false;
+  Loads<double> constant_loads;
 
   explicit PyScene(io::Scene s)
-      : scene(std::move(s)), loads(std::make_shared<const io::LoadExpressions>(scene)) {}
+      : scene(std::move(s)), loads(std::make_shared<const io::LoadExpressions>(scene)) {
+    using L = io::LoadExpressions;
+    loads_constant = loads->constant(L::kM3) && loads->constant(L::kF);
+    if (loads_constant) constant_loads = (*loads)(0.0);
+  }
 };
 
 /// A float64 NumPy array of the given shape, filled from `data` (copied).

@@ -65,31 +65,33 @@ Failure inverse_range(const Params<double>& p, const io::LoadExpressions* loads,
   return {};
 }
 
+// the ValueError of a bad array argument: what was expected and what came
+[[noreturn]] void bad_array(const char* name, py::ssize_t n, int cols, const std::string& got) {
+  const std::string shape = cols > 0 ? "(N, " + std::to_string(cols) + ")" : "(N,)";
+  throw InputError(name, "(argument)",
+                   "expected a float64 array of shape " + shape +
+                       (n >= 0 ? " with N = " + std::to_string(n) + " (the rows of theta)"
+                               : std::string()) +
+                       ", got " + got);
+}
+
 // `name` as a C-contiguous float64 array of shape (n, cols) (cols 0: shape (n,)); n < 0 takes
 // the array's. Raises ValueError naming the argument and the expected shape.
 py::array_t<double, py::array::c_style> checked_array(const py::object& obj, const char* name,
                                                       py::ssize_t n, int cols) {
-  const std::string shape = cols > 0 ? "(N, " + std::to_string(cols) + ")" : "(N,)";
-  const std::string expected = "expected a float64 array of shape " + shape +
-                               (n >= 0 ? " with N = " + std::to_string(n) + " (the rows of theta)"
-                                       : std::string());
   if (!py::isinstance<py::array>(obj)) {
-    throw InputError(name, "(argument)",
-                     expected + ", got " + std::string(py::str(obj.get_type().attr("__name__"))));
+    bad_array(name, n, cols, py::str(obj.get_type().attr("__name__")));
   }
-  const py::array a = obj.cast<py::array>();
+  const py::array& a = static_cast<const py::array&>(obj);
   if (!a.dtype().is(py::dtype::of<double>())) {
-    throw InputError(name, "(argument)",
-                     expected + ", got dtype " + std::string(py::str(a.dtype())));
+    bad_array(name, n, cols, "dtype " + std::string(py::str(a.dtype())));
   }
-  const int ndim = cols > 0 ? 2 : 1;
-  const bool ok = a.ndim() == ndim && (n < 0 || a.shape(0) == n) &&
+  const bool ok = a.ndim() == (cols > 0 ? 2 : 1) && (n < 0 || a.shape(0) == n) &&
                   (cols == 0 || a.shape(1) == cols);
-  if (!ok) {
-    throw InputError(name, "(argument)",
-                     expected + ", got shape " + std::string(py::str(obj.attr("shape"))));
-  }
-  return py::array_t<double, py::array::c_style>::ensure(a);
+  if (!ok) bad_array(name, n, cols, "shape " + std::string(py::str(obj.attr("shape"))));
+  using Contiguous = py::array_t<double, py::array::c_style>;
+  if (Contiguous::check_(a)) return py::reinterpret_borrow<Contiguous>(a);  // no copy, no call
+  return Contiguous::ensure(a);
 }
 
 // the error of a failed state, in the command line's words (cmd_inverse: a pose that cannot
@@ -117,24 +119,18 @@ py::array_t<double, py::array::c_style> checked_array(const py::object& obj, con
   throw NumericalError(s.scene.path, "inverse dynamics", row + ": " + f.status.message);
 }
 
-// the loads when they do not depend on t (M1, M2 are not used); else nullopt
-bool constant_loads(const PyScene& s, Loads<double>* out) {
-  using io::LoadExpressions;
-  if (!s.loads->constant(LoadExpressions::kM3) || !s.loads->constant(LoadExpressions::kF)) {
-    return false;
-  }
-  *out = (*s.loads)(0.0);
-  return true;
-}
-
 // all states on `threads` threads (0: the machine's cores); the first failure by index
 Failure inverse_all(const PyScene& s, const States& in, const Outputs& out, int threads) {
   EvalOptions eval;
   eval.singular_margin = s.scene.options.singular_margin;
-  Loads<double> constant;
-  const bool fixed = constant_loads(s, &constant);
-  size_t workers = threads > 0 ? size_t(threads) : std::max(1u, std::thread::hardware_concurrency());
-  workers = std::max<size_t>(1, std::min(workers, in.n / kMinStatesPerThread));
+  const bool fixed = s.loads_constant;
+  const Loads<double>& constant = s.constant_loads;
+  // (hardware_concurrency reads /sys: only asked when there is work for two threads)
+  size_t workers = std::max<size_t>(1, in.n / kMinStatesPerThread);
+  if (workers > 1) {
+    workers = std::min<size_t>(
+        workers, threads > 0 ? threads : std::max(1u, std::thread::hardware_concurrency()));
+  }
   if (workers == 1) {
     return inverse_range(s.scene.params, fixed ? nullptr : s.loads.get(), constant, eval, in, out,
                          0, in.n);
@@ -163,10 +159,9 @@ py::dict inverse(const PyScene& s, const py::object& theta, const py::object& om
   const auto om = checked_array(omega, "omega", n, 2);
   const auto al = checked_array(alpha, "alpha", n, 2);
   py::array_t<double, py::array::c_style> times;
-  Loads<double> unused;
   if (!t.is_none()) {
     times = checked_array(t, "t", n, 0);
-  } else if (!constant_loads(s, &unused)) {
+  } else if (!s.loads_constant) {
     throw InputError("t", "(argument)",
                      "the loads of " + s.scene.path +
                          " depend on t (loads.M3 or loads.F): pass t, a float64 array of "
@@ -190,11 +185,11 @@ py::dict inverse(const PyScene& s, const py::object& theta, const py::object& om
 }
 
 // seconds per call of the C++ work behind a one-state fivebar.inverse (inverse_range on one
-// state), the median of `repeats` batches of `calls` calls: the baseline of the overhead figure
+// state), the fastest of `repeats` batches of `calls` calls: the baseline of the overhead figure
 double time_inverse_cpp(const PyScene& s, std::array<double, 6> state, int calls, int repeats) {
   py::gil_scoped_release release;
-  Loads<double> constant;
-  if (!constant_loads(s, &constant)) throw InputError("scene", "loads", "must not depend on t");
+  if (!s.loads_constant) throw InputError("scene", "loads", "must not depend on t");
+  const Loads<double>& constant = s.constant_loads;
   EvalOptions eval;
   eval.singular_margin = s.scene.options.singular_margin;
   const double theta[2] = {state[0], state[1]}, omega[2] = {state[2], state[3]},
@@ -212,8 +207,7 @@ double time_inverse_cpp(const PyScene& s, std::array<double, 6> state, int calls
     times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /
                     calls);
   }
-  std::sort(times.begin(), times.end());
-  return times[times.size() / 2];
+  return *std::min_element(times.begin(), times.end());
 }
 
 }  // namespace
