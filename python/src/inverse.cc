@@ -99,7 +99,7 @@ py::array_t<double, py::array::c_style> checked_array(const py::object& obj, con
 [[noreturn]] void raise_failure(const PyScene& s, const States& in, const Failure& f) {
   const std::string row = "row " + std::to_string(f.index);
   const double th1 = in.theta[2 * f.index], th2 = in.theta[2 * f.index + 1];
-  if (f.status.code == StatusCode::kInvalidInput) {
+  if (!finite_state(in, f.index)) {
     for (const auto& [name, a] : {std::pair{"theta", in.theta}, {"omega", in.omega},
                                    {"alpha", in.alpha}}) {
       if (!std::isfinite(a[2 * f.index]) || !std::isfinite(a[2 * f.index + 1])) {
