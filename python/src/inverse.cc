@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <ctime>
 #include <thread>
 
 #include <pybind11/stl.h>
@@ -185,8 +186,10 @@ py::dict inverse(const PyScene& s, const py::object& theta, const py::object& om
 }
 
 // seconds per call of the C++ work behind a one-state fivebar.inverse (inverse_range on one
-// state), the fastest of `repeats` batches of `calls` calls: the baseline of the overhead figure
-double time_inverse_cpp(const PyScene& s, std::array<double, 6> state, int calls, int repeats) {
+// state), the fastest of `repeats` batches of `calls` calls: the baseline of the overhead figure.
+// `cpu_time`: process CPU time (std::clock) instead of wall time.
+double time_inverse_cpp(const PyScene& s, std::array<double, 6> state, int calls, int repeats,
+                        bool cpu_time) {
   py::gil_scoped_release release;
   if (!s.loads_constant) throw InputError("scene", "loads", "must not depend on t");
   const Loads<double>& constant = s.constant_loads;
@@ -197,15 +200,20 @@ double time_inverse_cpp(const PyScene& s, std::array<double, 6> state, int calls
   double M[2], N[5], Mf[5];
   const States in{theta, omega, alpha, nullptr, 1};
   const Outputs out{M, N, Mf};
+  const auto now = [cpu_time] {
+    return cpu_time ? double(std::clock()) / CLOCKS_PER_SEC
+                    : std::chrono::duration<double>(
+                          std::chrono::steady_clock::now().time_since_epoch())
+                          .count();
+  };
   std::vector<double> times;
   for (int r = 0; r < repeats; ++r) {
-    const auto start = std::chrono::steady_clock::now();
+    const double start = now();
     for (int c = 0; c < calls; ++c) {
       inverse_range(s.scene.params, nullptr, constant, eval, in, out, 0, 1);
       asm volatile("" : : "r"(M) : "memory");  // keep the calls
     }
-    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() /
-                    calls);
+    times.push_back((now() - start) / calls);
   }
   return *std::min_element(times.begin(), times.end());
 }
@@ -221,7 +229,7 @@ void bind_inverse(py::module_& m) {
         "D0). t, shape (N,), gives the time of each state for loads that depend on t. Runs with "
         "the GIL released, on `threads` threads (0: all cores) when N is large.");
   m.def("_time_inverse_cpp", &time_inverse_cpp, py::arg("scene"), py::arg("state"),
-        py::arg("calls") = 20000, py::arg("repeats") = 7,
+        py::arg("calls") = 20000, py::arg("repeats") = 7, py::arg("cpu_time") = false,
         "Benchmark helper: seconds per call of the C++ work of a one-state inverse (state = "
         "(theta1, theta2, omega1, omega2, alpha1, alpha2)).");
 }
