@@ -36,19 +36,22 @@ py::dict rows_dict(const std::vector<sim::Row>& rows) {
 
 namespace {
 
-// one override value as the text of `--set KEY=VALUE`
+// one override value as the text of `--set KEY=VALUE`: numbers (NumPy scalars too) as Python
+// writes them, strings as they are, bools as true/false, lists and 1-D arrays as [a, b, ...]
 std::string override_text(const std::string& key, const py::handle& value) {
   if (py::isinstance<py::bool_>(value)) return value.cast<bool>() ? "true" : "false";
-  if (py::isinstance<py::int_>(value)) return py::str(value);
-  if (py::isinstance<py::float_>(value)) return py::repr(value);  // shortest round trip
   if (py::isinstance<py::str>(value)) return value.cast<std::string>();
-  if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
+  if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value) ||
+      py::isinstance<py::array>(value)) {
     std::string text = "[";
     for (const py::handle item : value) {
       text += (text.size() > 1 ? ", " : "") + override_text(key, item);
     }
     return text + "]";
   }
+  const py::object number = py::reinterpret_borrow<py::object>(value);
+  if (py::hasattr(value, "__index__")) return py::str(py::int_(number));
+  if (py::hasattr(value, "__float__")) return py::repr(py::float_(number));
   throw InputError("overrides", key,
                    "expected a number, a string, a bool or a list of numbers, got " +
                        std::string(py::str(value.get_type().attr("__name__"))));

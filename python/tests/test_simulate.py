@@ -41,3 +41,14 @@ def test_overrides_change_the_scene(root):
     again = fivebar.parse_scene(heavy.to_yaml(), name="heavy.yaml")
     np.testing.assert_array_equal(fivebar.simulate(again)["theta1"], short["theta1"])
     assert base.duration == 2.0
+
+
+def test_numpy_values_as_overrides(root):
+    plain = fivebar.load_scene(root / "datasets/scenes/paper.yaml",
+                               overrides={"friction.coulomb": [0.1, 0.12, 0.12, 0.12, 0.2],
+                                          "simulation.max_steps": 5000})
+    numpy = fivebar.load_scene(root / "datasets/scenes/paper.yaml",
+                               overrides={"friction.coulomb": np.array([0.1, 0.12, 0.12, 0.12,
+                                                                        0.2]),
+                                          "simulation.max_steps": np.int64(5000)})
+    assert numpy.to_yaml() == plain.to_yaml()
