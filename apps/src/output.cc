@@ -89,11 +89,18 @@ void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& 
   line.back() = '\n';
   std::fputs(line.c_str(), f.get());
 
-  std::vector<double> values(trajectory_columns().size());
   for (size_t i = 0; i < rows.size(); ++i) {
+    const sim::Row& r = rows[i];
     line.clear();
-    row_values(rows[i], values.data());
-    for (double x : values) append_number(&line, x, ',');
+    append_number(&line, r.t, ',');
+    for (double x : r.theta) append_number(&line, x, ',');
+    for (double x : r.omega) append_number(&line, x, ',');
+    for (double x : r.alpha) append_number(&line, x, ',');
+    append_number(&line, r.M1, ',');
+    append_number(&line, r.M2, ',');
+    for (double x : r.N) append_number(&line, x, ',');
+    for (double x : r.Mf) append_number(&line, x, ',');
+    for (double x : {r.P_diss, r.E_diss, r.W_in, r.W_ext}) append_number(&line, x, ',');
     for (const Column& c : extra) append_number(&line, c.values[i], ',');
     line.back() = '\n';
     std::fwrite(line.data(), 1, line.size(), f.get());
