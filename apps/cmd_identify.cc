@@ -17,6 +17,7 @@
 #include "fivebar/identification/parameters.h"
 #include "fivebar/identification/torque_log.h"
 #include "fivebar/io/command.h"
+#include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/json.h"
@@ -32,11 +33,9 @@ namespace id = fivebar::identification;
 
 struct Args {
   SceneArgs scene;
-  std::string log, method = "inverse-dynamics", law = "coulomb_viscous", loss = "none";
-  bool per_joint = false, estimate_rates = false, no_plots = false, no_validation = false;
-  bool start_from_scene = false;
-  double loss_scale = 0.1, smooth_sign = -1, min_rate = 0, sg_window = 0.010, window = 0.2;
-  int sg_order = 5, threads = 1;
+  std::string log;
+  IdentifySettings settings;  // everything that reaches the identification itself
+  bool no_plots = false, no_validation = false;
 };
 
 const std::vector<std::string> kOutputs = {
@@ -128,57 +127,16 @@ int run(const Args& a) {
   const auto start = std::chrono::steady_clock::now();
   const Scene scene = load_scene(a.scene.scene, a.scene.sets);
   const sim::LoadFunction loads = LoadExpressions(scene).function();
-  const std::string flags = "command line";
-
-  id::IdentifyOptions opt;
-  if (!id::parse_law(a.law, &opt.layout.law)) {
-    throw InputError(flags, "--law", "expected coulomb_viscous or stribeck, got " + a.law);
-  }
-  opt.layout.per_joint = a.per_joint;
-  if (!id::parse_method(a.method, &opt.method)) {
-    throw InputError(flags, "--method",
-                     "expected inverse-dynamics or output-error, got " + a.method);
-  }
-  if (!id::parse_loss(a.loss, &opt.loss)) {
-    throw InputError(flags, "--loss", "expected none, huber or cauchy, got " + a.loss);
-  }
-  if (!(a.loss_scale > 0)) throw InputError(flags, "--loss-scale", "must be > 0");
-  if (!(a.sg_window > 0) || a.sg_order < 2) {
-    throw InputError(flags, "--sg-window/--sg-order", "window > 0 and order >= 2 required");
-  }
-  if (!(a.window > 0)) throw InputError(flags, "--window", "must be > 0");
-  opt.loss_scale = a.loss_scale;
-  opt.smoothing_velocity = a.smooth_sign;
-  opt.estimate_rates = a.estimate_rates;
-  opt.min_rate = a.min_rate;
-  opt.sg.half_window_s = a.sg_window;
-  opt.sg.order = a.sg_order;
-  opt.num_threads = std::max(1, a.threads);
-  opt.window_s = a.window;
-  if (a.start_from_scene) {
-    FrictionParams<double> fp = scene.params.friction;
-    if (fp.law != FrictionLaw::kStribeck) {
-      fp.static_coulomb = fp.coulomb;
-      fp.stribeck_velocity.fill(0.2);
-    }
-    opt.initial = opt.layout.extract(fp);
-  }
+  const id::IdentifyOptions opt = identify_options(a.settings, scene);
 
   // the log, then the fit; a log that does not fit the scene is bad input (exit 2)
-  id::TorqueLog log;
-  id::IdentifyResult res;
-  try {
-    log = id::read_torque_log(a.log);
-    res = id::identify(scene.params, loads, log, opt);
-  } catch (const id::LogError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
-  }
-  if (!res.status.ok()) throw NumericalError(a.log, "identify", res.status.message);
+  const id::TorqueLog log = read_log(a.log);
+  const id::IdentifyResult res = identify_scene(scene, loads, log, opt);
 
   OutputDir out(a.scene.out, kOutputs);
   id::Validation val;
   if (!a.no_validation) {
-    val = id::validate(res.fitted, loads, log, res.omega1, res.omega2, a.window);
+    val = id::validate(res.fitted, loads, log, res.omega1, res.omega2, a.settings.window);
   }
 
   // residuals.csv: everything the plots need, one row per sample
@@ -350,33 +308,33 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--log", args->log, "torque log (CSV, docs/formats.md)")
       ->type_name("LOG.csv")
       ->required();
-  app->add_flag("--per-joint", args->per_joint,
+  app->add_flag("--per-joint", args->settings.per_joint,
                 "one coefficient per joint (coulomb_1..5, viscous_1..5) instead of shared ones");
-  app->add_option("--method", args->method, "inverse-dynamics | output-error")
+  app->add_option("--method", args->settings.method, "inverse-dynamics | output-error")
       ->capture_default_str();
-  app->add_option("--law", args->law, "friction law to fit: coulomb_viscous | stribeck")
+  app->add_option("--law", args->settings.law, "friction law to fit: coulomb_viscous | stribeck")
       ->capture_default_str();
-  app->add_option("--loss", args->loss, "robust loss: none | huber | cauchy")
+  app->add_option("--loss", args->settings.loss, "robust loss: none | huber | cauchy")
       ->capture_default_str();
-  app->add_option("--loss-scale", args->loss_scale,
+  app->add_option("--loss-scale", args->settings.loss_scale,
                   "scale of the robust loss [N m] (inverse-dynamics) or [rad] (output-error)")
       ->capture_default_str();
-  app->add_option("--smooth-sign", args->smooth_sign,
+  app->add_option("--smooth-sign", args->settings.smooth_sign,
                   "w_s [rad/s]: tanh(w/w_s) for sign(w); 0 exact sign; default: the scene's");
-  app->add_flag("--estimate-rates", args->estimate_rates,
+  app->add_flag("--estimate-rates", args->settings.estimate_rates,
                 "estimate rates from the angles even when the log has them");
-  app->add_option("--sg-window", args->sg_window, "Savitzky-Golay half-window [s]")
+  app->add_option("--sg-window", args->settings.sg_window, "Savitzky-Golay half-window [s]")
       ->capture_default_str();
-  app->add_option("--sg-order", args->sg_order, "Savitzky-Golay polynomial order")
+  app->add_option("--sg-order", args->settings.sg_order, "Savitzky-Golay polynomial order")
       ->capture_default_str();
-  app->add_option("--min-rate", args->min_rate,
+  app->add_option("--min-rate", args->settings.min_rate,
                   "leave out samples where a joint's |relative rate| is below this [rad/s]")
       ->capture_default_str();
-  app->add_option("--window", args->window,
+  app->add_option("--window", args->settings.window,
                   "output-error and validation window [s] (restart from the logged state)")
       ->capture_default_str();
-  app->add_option("--threads", args->threads, "Ceres threads")->capture_default_str();
-  app->add_flag("--start-from-scene", args->start_from_scene,
+  app->add_option("--threads", args->settings.threads, "Ceres threads")->capture_default_str();
+  app->add_flag("--start-from-scene", args->settings.start_from_scene,
                 "start from the scene's friction values (default: neutral values)");
   app->add_flag("--no-plots", args->no_plots, "skip the PNG figures");
   app->add_flag("--no-validation", args->no_validation, "skip the validation runs");

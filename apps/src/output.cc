@@ -48,6 +48,15 @@ inline void append_number(std::string* line, double x, char sep) {
 
 }  // namespace
 
+void row_values(const sim::Row& r, double* out) {
+  *out++ = r.t;
+  for (const auto* a : {&r.theta, &r.omega, &r.alpha}) out = std::copy(a->begin(), a->end(), out);
+  *out++ = r.M1;
+  *out++ = r.M2;
+  for (const auto* a : {&r.N, &r.Mf}) out = std::copy(a->begin(), a->end(), out);
+  for (double x : {r.P_diss, r.E_diss, r.W_in, r.W_ext}) *out++ = x;
+}
+
 const std::vector<std::string>& trajectory_columns() {
   static const std::vector<std::string> columns = [] {
     std::vector<std::string> c = {"t"};

@@ -14,6 +14,10 @@ namespace fivebar::io {
 /// (t, theta1..4, omega1..4, alpha1..4, M1, M2, N1..5, Mf1..5, P_diss, E_diss), then W_in, W_ext.
 const std::vector<std::string>& trajectory_columns();
 
+/// Writes the values of `row` in the order of trajectory_columns() to out[0 ..
+/// trajectory_columns().size() - 1].
+void row_values(const sim::Row& row, double* out);
+
 /// An extra column appended after the standard ones (one value per row).
 struct Column {
   std::string name;
