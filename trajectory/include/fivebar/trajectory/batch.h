@@ -10,6 +10,7 @@
 #include "fivebar/model/params.h"
 #include "fivebar/sim/simulator.h"
 #include "fivebar/trajectory/optimizer.h"
+#include "fivebar/trajectory/path_search.h"
 #include "fivebar/trajectory/problem.h"
 #include "fivebar/trajectory/tasks.h"
 
@@ -25,13 +26,20 @@ struct BatchOptions {
   /// simulate the optimal torques forward from the start state and measure the miss of C
   bool validate = true;
   double validation_rtol = 1e-9;  ///< CVODE tolerances of that simulation
+  /// the search for a feasible initial guess when the minimum-jerk motion leaves the workspace
+  /// or comes nearer than the singular margin to a singular pose (its margin is the problem's)
+  PathSearchOptions path;
+  /// control points tried, in order, for the spline that follows the path found (the first
+  /// whose fit keeps the margin wins); the problem's own count is tried first
+  std::vector<int> path_control_points = {14, 20, 28, 40};
 };
 
 /// The outcome of one task (one row of summary.csv). Energies are NaN when not computed.
 struct TaskResult {
   std::string task;
   /// ok | max_evaluations | max_time | infeasible | a solver outcome (roundoff_limited ...) |
-  /// a resolution status (goal_out_of_workspace, invalid_duration, ...) | evaluation_failed
+  /// a resolution status (goal_out_of_workspace, invalid_duration, ...) | unreachable (no
+  /// path of assemblable, non-singular poses joins start and goal) | evaluation_failed
   std::string status;
   std::string message;
   std::string solver_status;  ///< outcome_name() of the solve, "" when none ran
@@ -50,7 +58,18 @@ struct TaskResult {
   double miss_distance = NAN;     ///< |C(T) simulated - C goal| [m]
   int evaluations = 0, starts = 0, best_start = 0;
   double wall_time_s = 0;
-  int control_points = 0;
+  int control_points = 0;  ///< per joint, of the spline solved (0: none)
+  /// the minimum-jerk baseline: ok (within every constraint on the check grid),
+  /// violates_constraints (closes everywhere, but the torque limit or the singular margin is
+  /// exceeded), cannot_assemble (some pose does not close: no baseline energies),
+  /// evaluation_failed (the inverse dynamics failed otherwise); "" when not evaluated
+  std::string baseline_status;
+  /// where the optimization started: minimum_jerk, or path_search (the minimum-jerk motion left
+  /// the workspace or the margin; a detour through a grid of feasible poses)
+  std::string initial_guess;
+  double initial_dissipated_energy = NAN;  ///< of that start [J] (the detour's energy)
+  double initial_peak_torque = NAN;        ///< of that start, dense grid [N m]
+  double initial_min_coupler_sine = NAN;   ///< of that start, dense grid
   std::vector<double> x;  ///< optimal free control points (empty when no solve ran)
 
   bool solved() const { return !x.empty(); }
@@ -82,7 +101,9 @@ std::vector<TaskResult> run_parallel(int count, int threads,
 /// baseline_dissipated_energy, input_energy, peak_torque, max_constraint_violation, wall_time_s),
 /// then baseline_input_energy, baseline_peak_torque, saving_percent (100 (1 - E / E_baseline)),
 /// miss_distance, min_coupler_sine, solver_status, evaluations, starts, best_start, duration,
-/// torque_limit, theta1_start, theta2_start, theta1_goal, theta2_goal, message.
+/// torque_limit, theta1_start, theta2_start, theta1_goal, theta2_goal, dissipated_energy_exact,
+/// baseline_dissipated_energy_exact, baseline_status, initial_guess, initial_dissipated_energy,
+/// initial_peak_torque, initial_min_coupler_sine, control_points, message.
 const std::vector<std::string>& summary_columns();
 /// The fields of one summary.csv row (numbers as %.17g; the message quoted as CSV text).
 std::vector<std::string> summary_fields(const TaskResult& result);
