@@ -166,11 +166,12 @@ std::string why_unreachable(const Params<double>& params, const Grid& g, const P
            " to a singular pose (|sin(theta4 - theta3)| < margin)";
   }
   int stretched = 0, folded = 0;
-  bool edge = false;
+  std::array<bool, 2> edge = {false, false};
   for (int v = 0; v < g.size(); ++v) {
     if (!seen[v]) continue;
     const int i = v / g.n[1], j = v % g.n[1];
-    edge = edge || i == 0 || j == 0 || i == g.n[0] - 1 || j == g.n[1] - 1;
+    edge[0] = edge[0] || i == 0 || i == g.n[0] - 1;
+    edge[1] = edge[1] || j == 0 || j == g.n[1] - 1;
     for (int di = -1; di <= 1; ++di) {
       for (int dj = -1; dj <= 1; ++dj) {
         if (!g.inside(i + di, j + dj)) continue;
@@ -190,7 +191,11 @@ std::string why_unreachable(const Params<double>& params, const Grid& g, const P
   std::string why = "the goal lies across the singular curve (" + curve +
                     ") that bounds the start's region of the workspace in the " +
                     (params.assembly == kElbowUp ? "elbow_up" : "elbow_down") + " assembly";
-  if (edge) why += "; that region reaches the edge of the searched box (more turns might help)";
+  if (edge[0] || edge[1]) {
+    why += std::string("; that region reaches the box's edge in ") +
+           (edge[0] && edge[1] ? "theta1 and theta2" : (edge[0] ? "theta1" : "theta2")) +
+           " (paths turning further were not searched)";
+  }
   return why;
 }
 

@@ -67,6 +67,27 @@ double coupler_constraint(const Params<double>& p, double th1, double th2, doubl
   return cosC * cosC - (1.0 - margin * margin);
 }
 
+// W_in and W_ext of trajectory rows (inverse_rows leaves them zero): the powers M1 w1 + M2 w2
+// and M3 w3 + F . v_P integrated by the trapezoidal rule, the rule of E_diss in the same rows
+Status add_work(const Params<double>& p, const sim::LoadFunction& loads,
+                std::vector<sim::Row>* rows) {
+  double prev_in = 0, prev_ext = 0;
+  for (size_t i = 0; i < rows->size(); ++i) {
+    sim::Row& r = (*rows)[i];
+    Evaluation<double> ev;
+    const Status st = inverse_dynamics(p, loads(r.t), r.theta[0], r.theta[1], r.omega[0],
+                                       r.omega[1], r.alpha[0], r.alpha[1], nullptr,
+                                       EvalOptions{}, &ev);
+    if (!st.ok()) return st;
+    const double dt = i == 0 ? 0.0 : r.t - (*rows)[i - 1].t;
+    r.W_in = i == 0 ? 0.0 : (*rows)[i - 1].W_in + 0.5 * dt * (prev_in + ev.P_in);
+    r.W_ext = i == 0 ? 0.0 : (*rows)[i - 1].W_ext + 0.5 * dt * (prev_ext + ev.P_ext);
+    prev_in = ev.P_in;
+    prev_ext = ev.P_ext;
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 const char* objective_name(Objective o) {
@@ -294,7 +315,9 @@ Status TrajectoryProblem::rows(const double* x, double step, std::vector<sim::Ro
       r.alpha[j] = s[2][j];
     }
   }
-  return sim::inverse_rows(params_, loads_, motion, out);
+  const Status st = sim::inverse_rows(params_, loads_, motion, out);
+  if (!st.ok()) return st;
+  return add_work(params_, loads_, out);
 }
 
 }  // namespace fivebar::trajectory

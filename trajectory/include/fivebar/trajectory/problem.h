@@ -112,7 +112,9 @@ class TrajectoryProblem {
   ConstraintCheck check(const double* x, int points) const;
 
   /// Rows of trajectory.csv (interfaces.md) on a uniform grid of step `step` [s] (ends
-  /// included), from the inverse dynamics of the motion with the smoothed friction.
+  /// included), from the inverse dynamics of the motion with the smoothed friction. E_diss,
+  /// W_in (M1 w1 + M2 w2) and W_ext (M3 w3 + F . v_P) are integrated by the trapezoidal rule
+  /// on the rows, so that d(KE + PE) = W_in + W_ext - E_diss to that rule's accuracy.
   Status rows(const double* x, double step, std::vector<sim::Row>* out) const;
 
   /// M1, M2 [N m] of the motion at time t (inverse dynamics in double).
