@@ -42,6 +42,7 @@ struct Args {
   int control_points = 10;
   int quadrature_points = 12;
   double singular_margin = 0.1;
+  double path_step = 0.05;
   bool no_validate = false;
   bool no_plots = false;
 };
@@ -66,6 +67,10 @@ trajectory::BatchOptions batch_options(const Args& a) {
     throw InputError("command line", "--singular-margin", "expected a number in [0, 1)");
   }
   if (a.starts < 1) throw InputError("command line", "--starts", "expected an integer >= 1");
+  if (!(a.path_step >= 1e-3 && a.path_step <= 0.5)) {
+    throw InputError("command line", "--path-step", "expected a number in [0.001, 0.5] rad");
+  }
+  o.path.step = a.path_step;
   o.optimizer.global = a.global;
   o.optimizer.starts = a.starts;
   o.problem.control_points = a.control_points;
@@ -257,6 +262,9 @@ RunFunction setup(CLI::App* app) {
                   "Gauss-Legendre points per knot span (default 12)");
   app->add_option("--singular-margin", args->singular_margin,
                   "minimum |sin(theta4 - theta3)| along the motion (default 0.1)");
+  app->add_option("--path-step", args->path_step,
+                  "grid step [rad] of the path search for a feasible start when the "
+                  "minimum-jerk motion cannot close (default 0.05)");
   app->add_flag("--no-validate", args->no_validate,
                 "skip the forward simulation of the optimal torques (miss_distance)");
   app->add_flag("--no-plots", args->no_plots, "do not draw figures");

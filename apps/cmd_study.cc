@@ -38,6 +38,7 @@ struct Args {
   int threads = 0;
   std::string method = "slsqp";
   bool global = false;
+  double path_step = 0.05;
   bool validate = false;
   bool no_plots = false;
 };
@@ -77,6 +78,10 @@ int run(const Args& args) {
     throw InputError("command line", "--method", "'" + args.method + "' is not slsqp, mma or ccsaq");
   }
   options.optimizer.global = args.global;
+  if (!(args.path_step >= 1e-3 && args.path_step <= 0.5)) {
+    throw InputError("command line", "--path-step", "expected a number in [0.001, 0.5] rad");
+  }
+  options.path.step = args.path_step;
   options.validate = args.validate;
 
   // the designs: a scene that cannot close at its initial pose is marked, a bad key is an error
@@ -216,6 +221,8 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");
   app->add_option("--method", args->method, "NLopt algorithm: slsqp (default), mma, ccsaq");
   app->add_flag("--global", args->global, "multi-start optimization of every task");
+  app->add_option("--path-step", args->path_step,
+                  "grid step [rad] of the path search (see optimize; default 0.05)");
   app->add_flag("--validate", args->validate,
                 "simulate the optimal torques forward (miss_distance in study_tasks.csv)");
   app->add_flag("--no-plots", args->no_plots, "do not draw the heatmap");

@@ -236,12 +236,21 @@ JointPath find_joint_path(const Params<double>& params, const Pose2& start, cons
     return out;
   }
   out.status = "unreachable";
+  // the same goal pose whole turns away, nearest to the start: a hint when it can be reached
+  const Pose2 turned = {start[0] + std::remainder(goal[0] - start[0], 2 * M_PI),
+                        start[1] + std::remainder(goal[1] - start[1], 2 * M_PI)};
+  std::string hint;
+  if (distance(turned, goal) > 1e-9 &&
+      !astar(params, make_grid(params, start, turned, o), start, turned, margin).empty()) {
+    hint = "; the same pose at theta = (" + str(turned[0]) + ", " + str(turned[1]) +
+           ") rad (whole turns away) can be reached: give the goal so";
+  }
   out.message = "no path of poses with |sin(theta4 - theta3)| >= " + str(o.margin) +
                 " joins start (" + str(start[0]) + ", " + str(start[1]) + ") and goal (" +
                 str(goal[0]) + ", " + str(goal[1]) + ") rad within theta1 in [" + str(g.lo[0]) +
                 ", " + str(g.lo[0] + (g.n[0] - 1) * g.h[0]) + "], theta2 in [" + str(g.lo[1]) +
                 ", " + str(g.lo[1] + (g.n[1] - 1) * g.h[1]) + "] (grid step " + str(g.h[0]) +
-                " rad): " + why_unreachable(params, g, start, goal, o.margin);
+                " rad): " + why_unreachable(params, g, start, goal, o.margin) + hint;
   return out;
 }
 
