@@ -240,8 +240,10 @@ JointPath find_joint_path(const Params<double>& params, const Pose2& start, cons
   const Pose2 turned = {start[0] + std::remainder(goal[0] - start[0], 2 * M_PI),
                         start[1] + std::remainder(goal[1] - start[1], 2 * M_PI)};
   std::string hint;
-  if (distance(turned, goal) > 1e-9 &&
-      !astar(params, make_grid(params, start, turned, o), start, turned, margin).empty()) {
+  if (distance(turned, goal) > 1e-9 && distance(turned, start) <= 1e-9) {
+    hint = "; the goal is the start pose itself, whole turns away";
+  } else if (distance(turned, goal) > 1e-9 &&
+             !astar(params, make_grid(params, start, turned, o), start, turned, margin).empty()) {
     hint = "; the same pose at theta = (" + str(turned[0]) + ", " + str(turned[1]) +
            ") rad (whole turns away) can be reached: give the goal so";
   }
