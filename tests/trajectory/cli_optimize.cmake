@@ -66,3 +66,30 @@ expect("study stdout: ${out}" out MATCHES "[0-9]+ of 2 designs cannot do every t
 file(STRINGS ${WORK_DIR}/study/study.csv study)
 list(GET study 0 header)
 expect("study.csv header: ${header}" header MATCHES ",best,reason$")
+
+# trajectory.csv torques are those of `fivebar inverse` on the same motion (issue 12.1): the
+# same doubles, hence the same text
+execute_process(COMMAND ${FIVEBAR} inverse ${paper} ${short} --motion ${WORK_DIR}/detour/detour/trajectory.csv
+                        --no-plots --out ${WORK_DIR}/inverse
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("inverse: exit ${status}\n${err}" status EQUAL 0)
+function(torque_columns file out_var)
+  file(STRINGS ${file} lines)
+  list(GET lines 0 header)
+  string(REPLACE "," ";" header "${header}")
+  list(FIND header M1 i1)
+  list(FIND header M2 i2)
+  list(REMOVE_AT lines 0)
+  set(values "")
+  foreach(line IN LISTS lines)
+    string(REPLACE "," ";" fields "${line}")
+    list(GET fields ${i1} m1)
+    list(GET fields ${i2} m2)
+    string(APPEND values "${m1} ${m2}\n")
+  endforeach()
+  set(${out_var} "${values}" PARENT_SCOPE)
+endfunction()
+torque_columns(${WORK_DIR}/detour/detour/trajectory.csv optimized)
+torque_columns(${WORK_DIR}/inverse/trajectory.csv inverse)
+expect("M1, M2 of trajectory.csv differ from fivebar inverse on the same motion"
+       optimized STREQUAL inverse)

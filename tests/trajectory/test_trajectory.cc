@@ -325,6 +325,50 @@ TEST(Rows, WorkColumnsCloseTheEnergyBalance) {
   EXPECT_LT(worst / scale, kTrapezoid);
 }
 
+TEST(ExactLaw, RowsAreTheInverseDynamicsOfTheSceneLaw) {
+  // trajectory.csv torques = what `fivebar inverse` computes on the same motion (issue 12.1):
+  // sim::inverse_rows with the scene's own (exact sign) friction, not the optimizer's tanh
+  BatchOptions options;
+  options.validate = false;
+  const TaskResult r =
+      run_task(paper_params(), paper_loads(), load_tasks(kTasks)[2], paper_initial(), options);
+  ASSERT_TRUE(r.solved()) << r.message;
+  const TrajectoryProblem problem = problem_of(paper_params(), paper_loads(), r, options);
+  std::vector<sim::Row> rows, inverse, smoothed;
+  ASSERT_TRUE(problem.rows(r.x.data(), 1e-3, &rows).ok());
+  ASSERT_TRUE(sim::inverse_rows(paper_params(), paper_loads(), rows, &inverse).ok());
+  ASSERT_TRUE(sim::inverse_rows(problem.params(), paper_loads(), rows, &smoothed).ok());
+  constexpr double kSameCode = 1e-9;  // the contract of issue 12: same motion, same torques
+  double worst = 0, smoothing = 0;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    worst = std::max({worst, std::abs(rows[i].M1 - inverse[i].M1),
+                      std::abs(rows[i].M2 - inverse[i].M2)});
+    smoothing = std::max({smoothing, std::abs(rows[i].M1 - smoothed[i].M1),
+                          std::abs(rows[i].M2 - smoothed[i].M2)});
+  }
+  EXPECT_LE(worst, kSameCode);
+  EXPECT_GT(smoothing, 1e-2);  // the smoothed law differs near rest by ~0.1 N m: not tested twice
+  double M1 = 0, M2 = 0;
+  ASSERT_TRUE(problem.torques(r.x.data(), rows[100].t, &M1, &M2).ok());
+  EXPECT_NEAR(M1, inverse[100].M1, kSameCode);
+}
+
+TEST(ExactLaw, EnergiesAreExactLawWithTheSmoothedBeside) {
+  BatchOptions options;
+  options.validate = false;
+  const TaskResult r =
+      run_task(paper_params(), paper_loads(), load_tasks(kTasks)[3], paper_initial(), options);
+  ASSERT_EQ(r.status, "ok") << r.message;
+  EXPECT_EQ(r.dissipated_energy, r.dissipated_energy_exact);
+  EXPECT_EQ(r.baseline_dissipated_energy, r.baseline_dissipated_energy_exact);
+  // sign(w) dissipates more than tanh(w / w_s) at the same motion (|tanh| < 1)
+  EXPECT_GT(r.dissipated_energy, r.dissipated_energy_smoothed);
+  EXPECT_GT(r.baseline_dissipated_energy, r.baseline_dissipated_energy_smoothed);
+  // ... by less than 1% here: the joints spend little time below w_s = 0.05 rad/s
+  EXPECT_LT(r.dissipated_energy, 1.01 * r.dissipated_energy_smoothed);
+  EXPECT_NEAR(r.objective, r.dissipated_energy_smoothed, 1e-12 * r.objective);
+}
+
 TEST(Tasks, BadTaskIsAStatusNotAnError) {
   TaskSpec t;
   t.name = "x";

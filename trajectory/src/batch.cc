@@ -19,15 +19,19 @@ ProblemOptions task_problem_options(const BatchOptions& options, double torque_l
   return o;
 }
 
-// |C(T) - C goal| of the optimal torques simulated forward from rest at the start
+// |C(T) - C goal| of the optimal torques simulated forward from rest at the start: with the
+// smoothed law the optimizer works on (its torques; consistent with the optimization), or with
+// the scene's exact law and stick-slip (the exact-law torques of trajectory.csv)
 double miss_distance(const TrajectoryProblem& problem, const sim::LoadFunction& loads,
-                     const std::vector<double>& x, const BatchOptions& options,
+                     const std::vector<double>& x, const BatchOptions& options, bool exact,
                      std::string* note) {
   const RestToRest& m = problem.motion();
   const sim::LoadFunction drive = [&](double t) {
     Loads<double> L = loads(t);
     // the optimal torques, from the inverse dynamics of the spline at t (no sampling error)
-    if (!problem.torques(x.data(), t, &L.M1, &L.M2).ok()) L.M1 = L.M2 = NAN;
+    const Status s = exact ? problem.torques(x.data(), t, &L.M1, &L.M2)
+                           : problem.smoothed_torques(x.data(), t, &L.M1, &L.M2);
+    if (!s.ok()) L.M1 = L.M2 = NAN;
     return L;
   };
   sim::Options so;
@@ -37,9 +41,11 @@ double miss_distance(const TrajectoryProblem& problem, const sim::LoadFunction& 
   so.atol = options.validation_rtol;
   so.singular_margin = 1e-3;
   const sim::Initial init{m.start()[0], m.start()[1], 0.0, 0.0};
-  const sim::Result run = sim::simulate(problem.params(), drive, init, so);
+  const sim::Result run =
+      sim::simulate(exact ? problem.exact_params() : problem.params(), drive, init, so);
   if (!run.status.ok() || run.rows.empty()) {
-    *note = "validation simulation failed: " + run.status.message;
+    *note = std::string(exact ? "exact-law " : "") + "validation simulation failed: " +
+            run.status.message;
     return NAN;
   }
   const sim::Row& last = run.rows.back();
@@ -118,7 +124,9 @@ const std::vector<std::string>& summary_columns() {
       "theta1_start", "theta2_start", "theta1_goal", "theta2_goal",
       "dissipated_energy_exact", "baseline_dissipated_energy_exact", "baseline_status",
       "initial_guess", "initial_dissipated_energy", "initial_peak_torque",
-      "initial_min_coupler_sine", "control_points", "message"};
+      "initial_min_coupler_sine", "control_points", "dissipated_energy_smoothed",
+      "baseline_dissipated_energy_smoothed", "input_energy_smoothed",
+      "baseline_input_energy_smoothed", "miss_distance_exact", "message"};
   return columns;
 }
 
@@ -135,7 +143,10 @@ std::vector<std::string> summary_fields(const TaskResult& r) {
           angle(r.goal[0]), angle(r.goal[1]), num(r.dissipated_energy_exact),
           num(r.baseline_dissipated_energy_exact), r.baseline_status, r.initial_guess,
           num(r.initial_dissipated_energy), num(r.initial_peak_torque),
-          num(r.initial_min_coupler_sine), std::to_string(r.control_points), quoted(r.message)};
+          num(r.initial_min_coupler_sine), std::to_string(r.control_points),
+          num(r.dissipated_energy_smoothed), num(r.baseline_dissipated_energy_smoothed),
+          num(r.input_energy_smoothed), num(r.baseline_input_energy_smoothed),
+          num(r.miss_distance_exact), quoted(r.message)};
 }
 
 std::string csv_line(const std::vector<std::string>& fields) {
@@ -167,6 +178,9 @@ int check_points(const TrajectoryProblem& problem, const BatchOptions& options) 
   return options.check_factor * problem.num_nodes() + 1;
 }
 
+// Gauss-Legendre points per span of the exact-law energies
+int exact_points(const BatchOptions& options) { return 4 * options.problem.quadrature_points; }
+
 void add_note(TaskResult* r, const std::string& note) {
   r->message += (r->message.empty() ? "" : "; ") + note;
 }
@@ -183,8 +197,12 @@ void evaluate_baseline(const TrajectoryProblem& problem, const std::vector<doubl
     add_note(r, "minimum-jerk baseline: " + s.message);
     return;
   }
-  r->baseline_dissipated_energy = d;
-  r->baseline_input_energy = in;
+  r->baseline_dissipated_energy_smoothed = d;
+  r->baseline_input_energy_smoothed = in;
+  if (problem.exact_energies(x0.data(), exact_points(options), &d, &in).ok()) {
+    r->baseline_dissipated_energy = r->baseline_dissipated_energy_exact = d;
+    r->baseline_input_energy = in;
+  }
   const ConstraintCheck c = problem.check(x0.data(), check_points(problem, options));
   if (!c.status.ok()) {
     r->baseline_status = "evaluation_failed";
@@ -249,7 +267,7 @@ bool choose_start(const Params<double>& params, const sim::LoadFunction& loads,
   }
   const TrajectoryProblem& p = **problem;
   double d = NAN, in = NAN;
-  if (p.energies(x->data(), options.problem.quadrature_points, &d, &in).ok()) {
+  if (p.exact_energies(x->data(), exact_points(options), &d, &in).ok()) {
     r->initial_dissipated_energy = d;
   }
   const ConstraintCheck c = p.check(x->data(), check_points(p, options));
@@ -264,8 +282,8 @@ void record_energies(const TrajectoryProblem& problem, const BatchOptions& optio
                      TaskResult* r) {
   double d = NAN, in = NAN;
   if (problem.energies(r->x.data(), options.problem.quadrature_points, &d, &in).ok()) {
-    r->dissipated_energy = d;
-    r->input_energy = in;
+    r->dissipated_energy_smoothed = d;
+    r->input_energy_smoothed = in;
   }
   r->objective = options.problem.objective == Objective::kInputEnergy ? in : d;
 }
@@ -321,25 +339,13 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
   return true;
 }
 
-// energies under the scene's own (exact-sign) friction, for the record: the integrand has
-// kinks where a joint reverses, hence the denser rule
-void record_exact_energies(const Params<double>& params, const sim::LoadFunction& loads,
-                           const TrajectoryProblem& problem, const BatchOptions& options,
+// energies under the scene's own friction law (the reported ones)
+void record_exact_energies(const TrajectoryProblem& problem, const BatchOptions& options,
                            TaskResult* r) {
-  ProblemOptions exact_options = task_problem_options(options, r->torque_limit);
-  exact_options.smoothing_velocity = params.friction.smoothing_velocity;
-  exact_options.quadrature_points = 4 * options.problem.quadrature_points;
-  double e = NAN, unused = NAN;
-  const TrajectoryProblem exact(params, loads, problem.motion(), exact_options);
-  if (exact.energies(r->x.data(), exact_options.quadrature_points, &e, &unused).ok()) {
-    r->dissipated_energy_exact = e;
-  }
-  if (r->baseline_status == "cannot_assemble") return;
-  const RestToRest base(options.problem.control_points, r->duration, r->start, r->goal);
-  const TrajectoryProblem exact_base(params, loads, base, exact_options);
-  const std::vector<double> x0 = base.minimum_jerk();
-  if (exact_base.energies(x0.data(), exact_options.quadrature_points, &e, &unused).ok()) {
-    r->baseline_dissipated_energy_exact = e;
+  double d = NAN, in = NAN;
+  if (problem.exact_energies(r->x.data(), exact_points(options), &d, &in).ok()) {
+    r->dissipated_energy = r->dissipated_energy_exact = d;
+    r->input_energy = in;
   }
 }
 
@@ -400,13 +406,16 @@ TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads
     SolverStatus solver;
     ConstraintCheck check;
     if (!solve(params, loads, *problem, x0, options, &r, &solver, &check)) return finish();
-    record_exact_energies(params, loads, *problem, options, &r);
+    record_exact_energies(*problem, options, &r);
     classify(solver, check, options, &r);
 
     // validation: the optimal torques simulated forward must bring C to the goal
     if (options.validate) {
       std::string note;
-      r.miss_distance = miss_distance(*problem, loads, r.x, options, &note);
+      r.miss_distance = miss_distance(*problem, loads, r.x, options, false, &note);
+      if (!note.empty()) add_note(&r, note);
+      note.clear();
+      r.miss_distance_exact = miss_distance(*problem, loads, r.x, options, true, &note);
       if (!note.empty()) add_note(&r, note);
     }
   } catch (const std::exception& e) {
@@ -463,7 +472,9 @@ std::string encode(const TaskResult& r) {
                    r.min_coupler_sine, r.miss_distance, r.wall_time_s,
                    r.dissipated_energy_exact, r.baseline_dissipated_energy_exact,
                    r.initial_dissipated_energy, r.initial_peak_torque,
-                   r.initial_min_coupler_sine}) {
+                   r.initial_min_coupler_sine, r.dissipated_energy_smoothed,
+                   r.baseline_dissipated_energy_smoothed, r.input_energy_smoothed,
+                   r.baseline_input_energy_smoothed, r.miss_distance_exact}) {
     w.num(v);
   }
   for (long long v : {r.evaluations, r.starts, r.best_start, r.control_points}) w.integer(v);
@@ -486,7 +497,10 @@ TaskResult decode(const std::string& bytes) {
                     &r.baseline_max_constraint_violation, &r.min_coupler_sine,
                     &r.miss_distance, &r.wall_time_s, &r.dissipated_energy_exact,
                     &r.baseline_dissipated_energy_exact, &r.initial_dissipated_energy,
-                    &r.initial_peak_torque, &r.initial_min_coupler_sine}) {
+                    &r.initial_peak_torque, &r.initial_min_coupler_sine,
+                    &r.dissipated_energy_smoothed, &r.baseline_dissipated_energy_smoothed,
+                    &r.input_energy_smoothed, &r.baseline_input_energy_smoothed,
+                    &r.miss_distance_exact}) {
     *v = rd.num();
   }
   for (int* v : {&r.evaluations, &r.starts, &r.best_start, &r.control_points}) {
