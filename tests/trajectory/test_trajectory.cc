@@ -252,6 +252,16 @@ TEST(PathSearch, SaysWhyWhenTheGoalIsAcrossTheSingularCurve) {
   EXPECT_THAT(path.message, HasSubstr("elbow_up"));
 }
 
+TEST(PathSearch, GoalsManyTurnsAwayKeepTheGridBounded) {
+  // 200 turns of theta1: the grid step grows so that the box holds at most 1e6 poses (instead of
+  // 3.2e7 at the default step); the answer stays a path or a reason
+  const std::array<double, 2> goal = {kStart[0] + 400 * M_PI, kStart[1]};
+  const JointPath path = find_joint_path(paper_params(), kStart, goal, PathSearchOptions{});
+  // each side rounded up, plus its end pose: (a + 2)(b + 2) <= 1.05 a b for the narrow side b ~ 80
+  EXPECT_LE(path.grid_poses, 1000000 * 1.05);
+  EXPECT_TRUE(path.ok() || !path.message.empty());
+}
+
 TEST(Batch, InfeasibleBaselineIsNotAFailedTask) {
   BatchOptions options;
   options.validate = false;

@@ -55,13 +55,20 @@ struct Grid {
   bool inside(int i, int j) const { return i >= 0 && j >= 0 && i < n[0] && j < n[1]; }
 };
 
+// at most this many poses in a grid (memory and time stay bounded for goals many turns away:
+// the step grows instead)
+constexpr double kMaxGridPoses = 1e6;
+
 Grid make_grid(const Params<double>& params, const Pose2& start, const Pose2& goal,
                const PathSearchOptions& o) {
   Grid g;
+  std::array<double, 2> span{};
+  for (int j = 0; j < 2; ++j) span[j] = std::abs(goal[j] - start[j]) + 2 * o.reach;
+  const double step = std::max(o.step, std::sqrt(span[0] * span[1] / kMaxGridPoses));
   for (int j = 0; j < 2; ++j) {
     g.lo[j] = std::min(start[j], goal[j]) - o.reach;
     const double hi = std::max(start[j], goal[j]) + o.reach;
-    g.n[j] = std::max(2, static_cast<int>(std::ceil((hi - g.lo[j]) / o.step)) + 1);
+    g.n[j] = std::max(2, static_cast<int>(std::ceil((hi - g.lo[j]) / step)) + 1);
     g.h[j] = (hi - g.lo[j]) / (g.n[j] - 1);
   }
   g.sine.resize(g.size());
@@ -142,14 +149,21 @@ std::vector<Pose2> astar(const Params<double>& params, const Grid& g, const Pose
   return path;
 }
 
-// drops via points: from each kept point, straight on to the farthest point still in view
+// drops via points: from each kept point, straight on to the farthest point still in view, at
+// most kLookAhead grid moves on (each test samples the whole segment: unbounded, a long straight
+// path would cost its length squared)
+constexpr size_t kLookAhead = 64;
+
 std::vector<Pose2> shorten(const Params<double>& params, const std::vector<Pose2>& path,
                            double margin, double spacing) {
   std::vector<Pose2> out = {path.front()};
   size_t i = 0;
   while (i + 1 < path.size()) {
     size_t j = i + 1;
-    while (j + 1 < path.size() && segment_clear(params, path[i], path[j + 1], margin, spacing)) ++j;
+    while (j + 1 < path.size() && j + 1 - i <= kLookAhead &&
+           segment_clear(params, path[i], path[j + 1], margin, spacing)) {
+      ++j;
+    }
     out.push_back(path[j]);
     i = j;
   }

@@ -15,7 +15,8 @@
 namespace fivebar::trajectory {
 
 struct PathSearchOptions {
-  double step = 0.05;    ///< grid step in both angles [rad]
+  /// grid step in both angles [rad]; larger when the box would hold more than 1e6 poses
+  double step = 0.05;
   double margin = 0.1;   ///< every pose of the path keeps |sin(th4 - th3)| >= margin
   /// the search first asks for margin + cushion, to leave the spline fit room to cut corners;
   /// the bare margin is the fallback
