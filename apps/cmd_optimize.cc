@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "fivebar/io/command.h"
+#include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/output.h"
@@ -35,58 +36,9 @@ struct Args {
   SceneArgs scene;
   std::string tasks;
   int threads = 0;
-  std::string method = "slsqp";
-  std::string objective = "dissipated_energy";
-  bool global = false;
-  int starts = 8;
-  int control_points = 10;
-  int quadrature_points = 12;
-  double singular_margin = 0.1;
-  double path_step = 0.05;
-  bool no_validate = false;
-  bool no_plots = false;
+  OptimizeSettings settings;  // everything that reaches the optimizer itself
+  bool no_validate = false, no_plots = false;
 };
-
-// the options of the batch from the command line (InputError on bad values)
-trajectory::BatchOptions batch_options(const Args& a) {
-  trajectory::BatchOptions o;
-  if (!trajectory::parse_method(a.method, &o.optimizer.method)) {
-    throw InputError("command line", "--method", "'" + a.method + "' is not slsqp, mma or ccsaq");
-  }
-  if (!trajectory::parse_objective(a.objective, &o.problem.objective)) {
-    throw InputError("command line", "--objective",
-                     "'" + a.objective + "' is not dissipated_energy or input_energy");
-  }
-  if (a.control_points < 7 || a.control_points > 60) {
-    throw InputError("command line", "--control-points", "expected an integer in [7, 60]");
-  }
-  if (a.quadrature_points < 2 || a.quadrature_points > 64) {
-    throw InputError("command line", "--quadrature-points", "expected an integer in [2, 64]");
-  }
-  if (!(a.singular_margin >= 0 && a.singular_margin < 1)) {
-    throw InputError("command line", "--singular-margin", "expected a number in [0, 1)");
-  }
-  if (a.starts < 1) throw InputError("command line", "--starts", "expected an integer >= 1");
-  if (!(a.path_step >= 1e-3 && a.path_step <= 0.5)) {
-    throw InputError("command line", "--path-step", "expected a number in [0.001, 0.5] rad");
-  }
-  o.path.step = a.path_step;
-  o.optimizer.global = a.global;
-  o.optimizer.starts = a.starts;
-  o.problem.control_points = a.control_points;
-  o.problem.quadrature_points = a.quadrature_points;
-  o.problem.singular_margin = a.singular_margin;
-  o.validate = !a.no_validate;
-  return o;
-}
-
-std::vector<trajectory::TaskSpec> read_tasks(const std::string& path) {
-  try {
-    return trajectory::load_tasks(path);
-  } catch (const trajectory::TaskFileError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
-  }
-}
 
 // x and y of point C for each row (extra trajectory.csv columns, for the path figure)
 std::vector<Column> point_c_columns(const Params<double>& p, const std::vector<sim::Row>& rows) {
@@ -116,7 +68,7 @@ std::string plot_script(const std::string& task, double limit, const std::string
                     : std::string();
   };
   std::string s = "set datafile separator ','\nset terminal " + terminal +
-                  " size 900,600\nset key autotitle columnhead\nset grid\n";
+                  " size 900,600 noenhanced\nset key autotitle columnhead\nset grid\n";
   s += "set output 'path_C.png'\nset title '" + task + ": path of C'\nset size ratio -1\n"
        "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
        "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 title 'optimal'" +
@@ -148,26 +100,17 @@ bool baseline_closes(const TaskResult& r) {
 // DIR/<task>/
 std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult& r,
                        const trajectory::BatchOptions& options, bool plots) {
-  const sim::LoadFunction loads = LoadExpressions(scene).function();
-  const trajectory::TrajectoryProblem problem =
-      trajectory::problem_of(scene.params, loads, r, options);
   std::vector<sim::Row> rows, base;
-  const double step = std::min(scene.options.output_step, r.duration / 10);
-  const Status s1 = problem.rows(r.x.data(), step, &rows);
-  if (!s1.ok()) return r.task + ": trajectory rows: " + s1.message;
-  bool baseline = baseline_closes(r);
-  if (baseline) {
-    const std::vector<double> x0 = problem.motion().minimum_jerk();
-    const Status s2 = problem.rows(x0.data(), step, &base);
-    if (!s2.ok()) return r.task + ": baseline rows: " + s2.message;
-  }
+  const Status status = task_rows(scene, r, options, &rows, &base);
+  if (!status.ok()) return r.task + ": trajectory rows: " + status.message;
+  const bool baseline = !base.empty();  // empty when the baseline cannot close
   fs::create_directories(dir);
   write_atomic(dir / "trajectory.csv", [&](const std::string& p) {
-    write_trajectory_csv(p, rows, point_c_columns(problem.params(), rows));
+    write_trajectory_csv(p, rows, point_c_columns(scene.params, rows));
   });
   if (baseline) {
     write_atomic(dir / "baseline.csv", [&](const std::string& p) {
-      write_trajectory_csv(p, base, point_c_columns(problem.params(), base));
+      write_trajectory_csv(p, base, point_c_columns(scene.params, base));
     });
   } else {
     fs::remove(dir / "baseline.csv");  // a stale one from an earlier run would mislead
@@ -202,7 +145,9 @@ bool input_failure(const TaskResult& r) {
 int run(const Args& args) {
   const Scene scene = load_scene(args.scene.scene, args.scene.sets);
   const std::vector<trajectory::TaskSpec> tasks = read_tasks(args.tasks);
-  const trajectory::BatchOptions options = batch_options(args);
+  OptimizeSettings settings = args.settings;
+  settings.validate = !args.no_validate;
+  const trajectory::BatchOptions options = batch_options(settings);
   const int rank = trajectory::process_rank();
   const bool tty = rank == 0 && isatty(STDERR_FILENO);
 
@@ -248,21 +193,22 @@ int run(const Args& args) {
 RunFunction setup(CLI::App* app) {
   auto args = std::make_shared<Args>();
   add_scene_options(app, &args->scene, "optimize");
-  app->add_option("--tasks", args->tasks, "tasks file (YAML, interfaces.md)")->required();
+  app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");
-  app->add_option("--method", args->method, "NLopt algorithm: slsqp (default), mma, ccsaq");
-  app->add_option("--objective", args->objective,
+  app->add_option("--method", args->settings.method,
+                  "NLopt algorithm: slsqp (default), mma, ccsaq");
+  app->add_option("--objective", args->settings.objective,
                   "dissipated_energy (default) or input_energy");
-  app->add_flag("--global", args->global,
+  app->add_flag("--global", args->settings.global,
                 "multi-start: the local method from seeded perturbed starts too, best kept");
-  app->add_option("--starts", args->starts, "starts of --global (default 8)");
-  app->add_option("--control-points", args->control_points,
+  app->add_option("--starts", args->settings.starts, "starts of --global (default 8)");
+  app->add_option("--control-points", args->settings.control_points,
                   "B-spline control points per joint (default 10, 4 free)");
-  app->add_option("--quadrature-points", args->quadrature_points,
+  app->add_option("--quadrature-points", args->settings.quadrature_points,
                   "Gauss-Legendre points per knot span (default 12)");
-  app->add_option("--singular-margin", args->singular_margin,
+  app->add_option("--singular-margin", args->settings.singular_margin,
                   "minimum |sin(theta4 - theta3)| along the motion (default 0.1)");
-  app->add_option("--path-step", args->path_step,
+  app->add_option("--path-step", args->settings.path_step,
                   "grid step [rad] of the path search for a feasible start when the "
                   "minimum-jerk motion cannot close (default 0.05)");
   app->add_flag("--no-validate", args->no_validate,

@@ -14,6 +14,10 @@ namespace fivebar::io {
 /// (t, theta1..4, omega1..4, alpha1..4, M1, M2, N1..5, Mf1..5, P_diss, E_diss), then W_in, W_ext.
 const std::vector<std::string>& trajectory_columns();
 
+/// Writes the values of `row` in the order of trajectory_columns() to out[0 ..
+/// trajectory_columns().size() - 1].
+void row_values(const sim::Row& row, double* out);
+
 /// An extra column appended after the standard ones (one value per row).
 struct Column {
   std::string name;
@@ -21,7 +25,8 @@ struct Column {
 };
 
 /// Writes rows as trajectory.csv: header trajectory_columns() then `extra` names, one line per
-/// row, every number in shortest round-trip form (as exact as %.17g). Throws InputError on a
+/// row, every number in shortest round-trip form (as exact as %.17g) except t, which is written
+/// by format_grid_value (0.476 for 476 * 0.001, within one ulp). Throws InputError on a
 /// write failure or an extra column whose length differs from rows.size().
 void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& rows,
                           const std::vector<Column>& extra = {});

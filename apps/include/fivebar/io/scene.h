@@ -18,6 +18,8 @@ struct Scene {
   sim::Initial initial;
   sim::Options options;
   std::string path;  ///< the file it came from, as given (used in every error message)
+  /// likely unit mistakes (`<path>: <key>: <value> <why>`): load_scene prints them as warnings
+  std::vector<std::string> warnings;
 };
 
 /// Reads and validates a scene file, after applying `sets` ("dotted.key=value", interfaces.md
