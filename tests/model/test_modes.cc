@@ -184,6 +184,33 @@ TEST(Modes, RandomScenesNeverLetFrictionDriveTheMotion) {
   EXPECT_GT(events, 20);  // the sweep exercises switches
 }
 
+// the larger sweep of issue 15 (200 scenes, ~10 s): run with
+//   build/release/tests/model/test_model --gtest_also_run_disabled_tests --gtest_filter='*Sweep200*'
+TEST(Modes, DISABLED_RandomSweep200) {
+  std::mt19937 rng(15);
+  int ok = 0, failed = 0;
+  long events = 0, decisions = 0, sticks = 0, breakaways = 0;
+  for (int i = 0; i < 200; ++i) {
+    const RandomScene s = random_scene(rng);
+    sim::Options o;
+    o.duration = 1.0;
+    const sim::Result r = sim::simulate(s.params, s.loads, s.initial, o);
+    if (!r.status.ok()) {
+      ++failed;
+      std::printf("[ info ] scene %d stopped: %s\n", i, r.status.message.c_str());
+      continue;
+    }
+    expect_consistent(s.params, s.loads, r, "random scene " + std::to_string(i));
+    ++ok;
+    events += r.stats.friction_events;
+    decisions += r.stats.mode_decisions;
+    sticks += r.stats.stick_events;
+    breakaways += r.stats.breakaway_events;
+  }
+  std::printf("[ info ] %d ok, %d stopped; %ld switches, %ld decisions, %ld sticks, %ld breakaways\n",
+              ok, failed, events, decisions, sticks, breakaways);
+}
+
 // issue 15 D: the balance of a conservative run is relative to an energy scale it has
 TEST(Modes, ConservativeRunBalanceIsRelativeToItsEnergy) {
   Params<double> p = paper_params();
