@@ -141,7 +141,7 @@ struct RunChecks {
   /// min over rows and joints of Mf_k w_k [W]: friction never supplies power (not checked for
   /// LuGre, whose bristles store and return energy)
   double friction_power_min = 0;
-  /// thresholds: energy balance max(1e-6, 1e3 rtol); inverse residual 1e-8 N m per N m of peak
+  /// thresholds: energy balance max(1e-6, 1e3 rtol), at most 1e-3; inverse residual 1e-8 N m per N m of peak
   /// input torque (at least 1e-8); friction power -1e-9 W per N m of peak friction torque
   double energy_tol = 0, inverse_tol = 0, power_tol = 0;
   Status verdict;
