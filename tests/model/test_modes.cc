@@ -130,6 +130,63 @@ TEST(Modes, LockedExactlyWhenFrictionCanHold) {
   }
 }
 
+double max_angle_gap(const sim::Result& a, const sim::Result& b) {
+  double gap = 0.0;
+  for (size_t i = 0; i < a.rows.size() && i < b.rows.size(); ++i) {
+    for (int k = 0; k < 4; ++k) gap = std::max(gap, std::abs(a.rows[i].theta[k] - b.rows[i].theta[k]));
+  }
+  return gap;
+}
+
+// review: a lock reached mid-run must break away when friction can no longer hold it, with
+// every integrator (CVODE stepped over the lock margin's zero: nothing moves while locked)
+TEST(Modes, MidRunLockBreaksAwayWithEveryIntegrator) {
+  Params<double> p = paper_params();
+  p.friction.pin_radius.fill(0.05);
+  p.friction.coulomb.fill(0.5);
+  p.friction.static_coulomb.fill(0.5);
+  sim::Options o;
+  o.method = sim::Method::kArkodeErk45;
+  const sim::Result ref = sim::simulate(p, testing::paper_loads, testing::paper_initial(), o);
+  ASSERT_TRUE(ref.status.ok()) << ref.status.message;
+  for (sim::Method m : kAllMethods) {
+    o.method = m;
+    const sim::Result r = sim::simulate(p, testing::paper_loads, testing::paper_initial(), o);
+    expect_consistent(p, testing::paper_loads, r, sim::method_name(m));
+    EXPECT_GT(r.stats.breakaway_events, 0);
+    EXPECT_LT(max_angle_gap(r, ref), 1e-6) << sim::method_name(m);
+    for (const sim::Row& row : r.rows) {  // holding torques within their bounds while stuck
+      for (int k = 0; k < 5; ++k) {
+        if (row.mode[k] != kStuck) continue;
+        ASSERT_LE(std::abs(row.Mf[k]), holding_bound(p.friction, k) * row.N[k] * (1 + 1e-6))
+            << sim::method_name(m) << " t=" << row.t << " joint " << k;
+      }
+    }
+  }
+}
+
+// review: with a joint stuck, another joint's rate can cross zero at a dead point while the
+// mechanism moves; that is not a lock (the rates jumped to zero)
+TEST(Modes, DeadPointWithAStuckJointIsNotALock) {
+  Params<double> p = weightless();
+  p.friction.law = FrictionLaw::kStribeck;
+  p.friction.static_coulomb.fill(0.3);
+  p.friction.stribeck_velocity.fill(0.05);
+  p.friction.stribeck_exponent.fill(2.0);
+  const sim::LoadFunction loads = held_plus(-0.2, 0.0);
+  sim::Options o;
+  o.method = sim::Method::kArkodeErk45;
+  const sim::Result ref = sim::simulate(p, loads, testing::paper_initial(), o);
+  ASSERT_TRUE(ref.status.ok()) << ref.status.message;
+  for (sim::Method m : {sim::Method::kCvodeAdams, sim::Method::kCvodeBdf,
+                        sim::Method::kArkodeErk65, sim::Method::kArkodeDirk}) {
+    o.method = m;
+    const sim::Result r = sim::simulate(p, loads, testing::paper_initial(), o);
+    expect_consistent(p, loads, r, sim::method_name(m));
+    EXPECT_LT(max_angle_gap(r, ref), 1e-5) << sim::method_name(m);  // erk65: 2.3e-6
+  }
+}
+
 /// A seeded random mechanism near the paper's: lengths, masses, COM, per-joint friction, loads.
 struct RandomScene {
   Params<double> params;

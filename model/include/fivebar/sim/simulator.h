@@ -106,8 +106,8 @@ struct Stats {
   /// joint-mode decisions taken (at the start, at every switch and breakaway): each one chooses
   /// the unique consistent combination of slip directions and stuck joints
   long mode_decisions = 0;
-  /// slipping joints whose direction disagreed with the sign of their rate at a decision (a
-  /// switch missed by the detection); always 0 unless the detection is broken
+  /// slipping joints whose direction disagreed with the sign of their rate (beyond 1e-6 rad/s)
+  /// at a decision (a switch missed by the detection); always 0 unless the detection is broken
   long mode_corrections = 0;
   double wall_time_s = 0;
 };
