@@ -77,6 +77,10 @@ struct Context {
   bool stick = false;                   ///< exact stick-slip (Options::stick, with use_slip)
   std::array<int, 5> slip{};            ///< mode of each joint in this segment
   bool locked = false;                  ///< all joints stuck, held as lock_analysis finds
+  /// switches not located, exact sign: a joint whose rate is exactly zero takes the direction
+  /// in which it starts to slip (zero_sign, decided at the start), not sign(0) = 0
+  bool zero_signs = false;
+  std::array<int, 5> zero_sign{};
   std::array<bool, 5> watched{};        ///< joints with a Coulomb part: switch functions
   bool lugre = false;                   ///< bristle states follow the 7 base states
   bool full_rows = true;                ///< Options::full_rows
@@ -97,6 +101,15 @@ const char* joint_name(int k) {
   return names[k];
 }
 
+/// Relative joint rates at a state (needs only the first-order kinematics).
+bool joint_rates(const Params<double>& p, const double* y, std::array<double, 5>* w) {
+  Kinematics<double> k;
+  if (!solve_kinematics(p, y[0], y[1], &k, 0.0, false).ok()) return false;
+  const Vec2<double> thd(y[2], y[3]);
+  *w = fivebar::detail::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
+  return true;
+}
+
 int rhs(double t, const double* y, double* ydot, void* user) {
   auto& c = *static_cast<Context*>(user);
   ++c.rhs_evaluations;
@@ -107,8 +120,14 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   Evaluation<double> ev;
   std::array<double, 5> z{};
   if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
-  const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3],
-                                     c.use_slip ? &c.slip : nullptr, c.eval, &ev, &z);
+  std::array<int, 5> signs{};
+  const std::array<int, 5>* slip = c.use_slip ? &c.slip : nullptr;
+  if (c.zero_signs && joint_rates(*c.params, y, &ev.w)) {
+    for (int k = 0; k < 5; ++k) signs[k] = ev.w[k] != 0.0 ? sign_of(ev.w[k]) : c.zero_sign[k];
+    slip = &signs;
+  }
+  const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], slip,
+                                     c.eval, &ev, &z);
   if (!st.ok()) {
     c.failure = at_time(st, t, y[0], y[1]);
     return 1;  // recoverable: the integrator retries with a smaller step
@@ -129,15 +148,6 @@ int rhs(double t, const double* y, double* ydot, void* user) {
     }
   }
   return 0;
-}
-
-/// Relative joint rates at a state (needs only the first-order kinematics).
-bool joint_rates(const Params<double>& p, const double* y, std::array<double, 5>* w) {
-  Kinematics<double> k;
-  if (!solve_kinematics(p, y[0], y[1], &k, 0.0, false).ok()) return false;
-  const Vec2<double> thd(y[2], y[3]);
-  *w = fivebar::detail::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
-  return true;
 }
 
 bool any_stuck(const std::array<int, 5>& slip) {
@@ -814,6 +824,18 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
     // at the start every watched joint at rest is undecided
     result.status = decide_at(L.c, 0.0, L.y, {}, &result.stats);
     if (!result.status.ok()) return result;
+  } else if (params.friction.active() && params.friction.law != FrictionLaw::kLuGre &&
+             params.friction.smoothing_velocity == 0.0) {
+    // switches not located: joints at rest at the start slip the way they accelerate
+    std::array<double, 5> w{};
+    std::array<bool, 5> rest{};
+    if (joint_rates(params, L.y, &w)) {
+      for (int k = 0; k < 5; ++k) rest[k] = w[k] == 0.0;
+      if (decide_slip_only(L.c, 0.0, L.y, rest).ok()) {
+        L.c.zero_sign = L.c.slip;
+        L.c.zero_signs = true;
+      }
+    }
   }
   detail::OdeProblem prob{L.c.n, &rhs, &L.c, std::vector<double>(L.c.n, 1.0), L.c.lugre};
   for (int i = kStates; i < prob.n; ++i) prob.atol_scale[i] = options.bristle_atol_scale;
