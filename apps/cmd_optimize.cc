@@ -94,6 +94,13 @@ std::vector<Column> point_c_columns(const Params<double>& p, const std::vector<s
   return {x, y};
 }
 
+// `columns` and then the rest rule's (the ends of a rest-to-rest motion are held: docs/hold.md)
+std::vector<Column> with_rest_columns(std::vector<Column> columns,
+                                      const std::vector<sim::Row>& rows) {
+  for (Column& c : rest_columns(rows)) columns.push_back(std::move(c));
+  return columns;
+}
+
 // writes `path` through a temporary name in the same directory, then renames it
 template <typename Write>
 void write_atomic(const fs::path& path, Write&& write) {
@@ -143,10 +150,10 @@ std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult
   if (!s1.ok() || !s2.ok()) return r.task + ": trajectory rows: " + (s1.ok() ? s2 : s1).message;
   fs::create_directories(dir);
   write_atomic(dir / "trajectory.csv", [&](const std::string& p) {
-    write_trajectory_csv(p, rows, point_c_columns(problem.params(), rows));
+    write_trajectory_csv(p, rows, with_rest_columns(point_c_columns(problem.params(), rows), rows));
   });
   write_atomic(dir / "baseline.csv", [&](const std::string& p) {
-    write_trajectory_csv(p, base, point_c_columns(problem.params(), base));
+    write_trajectory_csv(p, base, with_rest_columns(point_c_columns(problem.params(), base), base));
   });
   if (!plots) return "";
   return run_gnuplot(dir.string(), "plots.gnuplot",

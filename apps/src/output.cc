@@ -11,6 +11,7 @@
 #include <system_error>
 
 #include "fivebar/io/errors.h"
+#include "fivebar/model/dynamics.h"
 
 namespace fivebar::io {
 namespace fs = std::filesystem;
@@ -62,6 +63,25 @@ const std::vector<std::string>& trajectory_columns() {
     return c;
   }();
   return columns;
+}
+
+std::vector<Column> rest_columns(const std::vector<sim::Row>& rows) {
+  std::vector<Column> c = {{"at_rest", {}}};
+  for (int k = 1; k <= 5; ++k) c.push_back({"stuck" + std::to_string(k), {}});
+  for (const char* name : {"M1_hold_min", "M1_hold_max", "M2_hold_min", "M2_hold_max"}) {
+    c.push_back({name, {}});
+  }
+  for (const sim::Row& r : rows) {
+    const bool o = r.mode[0] == kStuck, d0 = r.mode[4] == kStuck;
+    c[0].values.push_back(o && d0 ? 1.0 : 0.0);
+    for (int k = 0; k < 5; ++k) c[1 + k].values.push_back(r.mode[k] == kStuck ? 1.0 : 0.0);
+    const double m1 = o ? r.hold_margin[0] : 0.0, m2 = d0 ? r.hold_margin[4] : 0.0;
+    c[6].values.push_back(r.M1 - m1);
+    c[7].values.push_back(r.M1 + m1);
+    c[8].values.push_back(r.M2 - m2);
+    c[9].values.push_back(r.M2 + m2);
+  }
+  return c;
 }
 
 void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& rows,

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/rest.h"
 #include "integrator.h"
 
 namespace fivebar::sim {
@@ -477,9 +478,15 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
 
 Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
                     const std::vector<Row>& motion, std::vector<Row>* out) {
+  return inverse_rows(params, loads, motion, out, RestThresholds{});
+}
+
+Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
+                    const std::vector<Row>& motion, std::vector<Row>* out,
+                    const RestThresholds& rest) {
   out->clear();
   out->reserve(motion.size());
-  EvalOptions eval;
+  const EvalOptions eval = with_rest(EvalOptions{}, rest);
   for (const Row& m : motion) {
     const Loads<double> L = loads(m.t);
     Evaluation<double> ev;
@@ -504,6 +511,8 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
       r.Mf[k] = ev.Mf[k];
     }
     r.P_diss = ev.P_diss;
+    r.mode = ev.slip;
+    r.hold_margin = ev.hold_margin;
     r.kinetic = kinetic_energy(params, ev.kin, m.omega[0], m.omega[1]);
     r.potential = potential_energy(params, ev.kin);
     out->push_back(r);
