@@ -124,10 +124,8 @@ Json pose_json(const Holding<double>& h, const HoldingPolygon& poly, double limi
   return j;
 }
 
-int run_pose(const Args& args, const Scene& scene, const Loads<double>& L, OutputDir* out) {
-  std::array<double, 2> pose = {scene.initial.theta1, scene.initial.theta2};
-  if (!args.pose.empty()) pose = parse_pose(args.pose, scene.path);
-  check_pose(scene, pose[0], pose[1]);
+int run_pose(const Args& args, const Scene& scene, const Loads<double>& L,
+             const std::array<double, 2>& pose) {
   const EvalOptions eval = eval_options(scene);
   Holding<double> h;
   HoldingPolygon poly;
@@ -135,6 +133,8 @@ int run_pose(const Args& args, const Scene& scene, const Loads<double>& L, Outpu
   if (st.ok()) st = holding_polygon(scene.params, L, pose[0], pose[1], eval, h, &poly);
   if (!st.ok()) throw NumericalError(scene.path, "--pose", pose_text(pose[0], pose[1]) + ": " + st.message);
 
+  OutputDir dir(args.scene.out, kOutputs);
+  OutputDir* out = &dir;
   Json j = pose_json(h, poly, args.torque_limit);
   j.set("theta1", pose[0]);
   j.set("theta2", pose[1]);
@@ -170,8 +170,10 @@ int map_cell(const Scene& scene, const Loads<double>& L, double th1, double th2,
   return holding_torques(scene.params, L, th1, th2, eval_options(scene), h).ok() ? 0 : 3;
 }
 
-int run_grid(const Args& args, const Scene& scene, const Loads<double>& L, OutputDir* out) {
+int run_grid(const Args& args, const Scene& scene, const Loads<double>& L) {
   const int n = args.grid;
+  OutputDir dir(args.scene.out, kOutputs);
+  OutputDir* out = &dir;
   std::vector<Column> cols;
   for (const char* name : {"theta1", "theta2", "status", "M1", "M2", "M1_hold_min",
                            "M1_hold_max", "M2_hold_min", "M2_hold_max", "required",
@@ -243,8 +245,12 @@ int run(const Args& args) {
   }
   Loads<double> L = LoadExpressions(scene).function()(args.time);
   L.M1 = L.M2 = 0;  // the unknowns
-  OutputDir out(args.scene.out, kOutputs);
-  return args.grid > 0 ? run_grid(args, scene, L, &out) : run_pose(args, scene, L, &out);
+  if (args.grid > 0) return run_grid(args, scene, L);
+  // the pose is checked before any output exists
+  std::array<double, 2> pose = {scene.initial.theta1, scene.initial.theta2};
+  if (!args.pose.empty()) pose = parse_pose(args.pose, scene.path);
+  check_pose(scene, pose[0], pose[1]);
+  return run_pose(args, scene, L, pose);
 }
 
 RunFunction setup(CLI::App* app) {

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -297,21 +298,22 @@ std::string plot_inverse(const std::string& dir, const std::string& trajectory, 
 std::string hold_map_plot_script(const std::string& map_csv, double torque_limit,
                                  const std::string& title, const std::string& terminal) {
   std::string s = preamble(terminal, "figure of `fivebar hold --grid`");
-  const std::string limit =
-      std::isfinite(torque_limit) ? "crosses: more than the torque limit " +
-                                        std::to_string(torque_limit) + " N m"
-                                  : "no torque limit";
+  char value[32];
+  std::snprintf(value, sizeof value, "%g", torque_limit);
+  const std::string limit = std::isfinite(torque_limit)
+                                ? "crosses: more than the torque limit " + std::string(value) + " N m"
+                                : "no torque limit";
   s += "set datafile missing \"nan\"\n"
        "set xlabel \"{/Symbol q}_1 [rad]\"\nset ylabel \"{/Symbol q}_2 [rad]\"\n"
        "set cblabel \"torque needed to hold [N m]\"\nset palette rgb 33,13,10\n"
-       "set size ratio -1\nunset grid\n";
+       "set size ratio -1\nunset grid\nset xrange [-pi:pi]\nset yrange [-pi:pi]\n";
   s += begin_figure("hold_map.png", "1,1",
                     "Holding torque: max over the two motors of the least |M_i| that holds the "
                     "pose (static friction helping)",
                     limit + "; blank: cannot assemble or singular", title);
   s += "plot " + quote(map_csv) + " using \"theta1\":\"theta2\":\"required\" with image, \\\n"
        "     " + quote(map_csv) +
-       " using \"theta1\":\"theta2\":(column(\"within_limit\") == 0 ? 1 : NaN) "
+       " using \"theta1\":(column(\"within_limit\") == 0 ? column(\"theta2\") : NaN) "
        "with points pt 2 ps 0.6 lc rgb \"black\"\nunset multiplot\n";
   return s;
 }
