@@ -303,8 +303,7 @@ std::string hold_map_plot_script(const std::string& map_csv, double torque_limit
   const std::string limit = std::isfinite(torque_limit)
                                 ? "crosses: more than the torque limit " + std::string(value) + " N m"
                                 : "no torque limit";
-  s += "set datafile missing \"nan\"\n"
-       "set xlabel \"{/Symbol q}_1 [rad]\"\nset ylabel \"{/Symbol q}_2 [rad]\"\n"
+  s += "set xlabel \"{/Symbol q}_1 [rad]\"\nset ylabel \"{/Symbol q}_2 [rad]\"\n"
        "set cblabel \"torque needed to hold [N m]\"\nset palette rgb 33,13,10\n"
        "set size ratio -1\nunset grid\nset xrange [-pi:pi]\nset yrange [-pi:pi]\n";
   s += begin_figure("hold_map.png", "1,1",
