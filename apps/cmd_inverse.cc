@@ -119,12 +119,15 @@ Motion read_motion(const std::string& path, const Scene& scene) {
   // noise of what the rest rule compares with its thresholds: measured from the series given,
   // or propagated from the angles' (or rates') noise through the difference stencils
   const double theta_noise = crank_noise(theta1, theta2);
-  m.rate_noise = has_omega ? crank_noise(omega1, omega2)
+  // given series: never below the rounding of the angles over one step
+  if (h == 0) h = t.size() > 1 ? (t.back() - t.front()) / double(t.size() - 1) : 1.0;
+  const double rounding = std::max(rounding_noise(theta1), rounding_noise(theta2));
+  m.rate_noise = has_omega ? std::max(crank_noise(omega1, omega2), rounding / h)
                            : kFirstDerivativeNoiseGain * theta_noise / h;
   if (has_alpha) {
-    m.acceleration_noise = crank_noise(alpha1, alpha2);
+    m.acceleration_noise = std::max(crank_noise(alpha1, alpha2), rounding / (h * h));
   } else if (has_omega) {
-    m.acceleration_noise = kFirstDerivativeNoiseGain * crank_noise(omega1, omega2) / h;
+    m.acceleration_noise = kFirstDerivativeNoiseGain * m.rate_noise / h;
   } else {
     m.acceleration_noise = kSecondDerivativeNoiseGain * theta_noise / (h * h);
   }

@@ -129,8 +129,14 @@ RestThresholds rest_rule(const TorqueLog& log, const IdentifyResult& out,
     rate_noise = g1 * s;
     accel_noise = g2 * s;
   } else {
-    rate_noise = larger_noise(out.omega1, out.omega2);
-    accel_noise = out.accels_estimated ? g1 * rate_noise : larger_noise(out.alpha1, out.alpha2);
+    // logged series: never below the rounding of the angles over one sample step
+    const int n = log.size();
+    const double h = n > 1 ? (log.t.back() - log.t.front()) / (n - 1) : 1.0;
+    const double rounding = std::max(rounding_noise(log.theta1), rounding_noise(log.theta2));
+    rate_noise = std::max(larger_noise(out.omega1, out.omega2), rounding / h);
+    accel_noise = out.accels_estimated
+                      ? g1 * rate_noise
+                      : std::max(larger_noise(out.alpha1, out.alpha2), rounding / (h * h));
   }
   RestThresholds r = rest_thresholds(rate_noise, accel_noise);
   if (opt.rest_rate_threshold >= 0) r.rate = opt.rest_rate_threshold;
