@@ -16,6 +16,7 @@
 #include "fivebar/io/command.h"
 #include "fivebar/io/csv.h"
 #include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
 #include "fivebar/io/json.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/output.h"
@@ -64,38 +65,6 @@ double against_external(const std::string& path, const std::vector<sim::Row>& ro
   return worst;
 }
 
-std::string plot_script(const sim::WorkPrecision& wp, const std::string& title,
-                        const std::string& terminal) {
-  std::ostringstream s;
-  s << "set terminal " << terminal << " size 1200,850 font ',11'\n"
-    << "set output 'work_precision.png'\n"
-    << "set datafile separator ','\n"
-    << "set logscale xy\nset format x '10^{%L}'\nset format y '10^{%L}'\n"
-    << "set xlabel 'wall time [s] (minimum of repeats)'\n"
-    << "set ylabel 'max |{/Symbol Dq}| over the output grid [rad]'\n"
-    << "set grid\nset key outside right top font ',9'\n"
-    << "set title 'Work-precision: " << title << "'\n";
-  // one line per (method, treatment): filter the CSV rows with awk-free gnuplot ternaries
-  std::vector<std::pair<std::string, std::string>> series;
-  for (const auto& p : wp.points) {
-    const std::pair<std::string, std::string> key{sim::method_name(p.method),
-                                                  sim::treatment_name(p.treatment)};
-    if (std::find(series.begin(), series.end(), key) == series.end()) series.push_back(key);
-  }
-  s << "plot ";
-  const char* dash[] = {"1", "2", "3", "4"};
-  for (size_t i = 0; i < series.size(); ++i) {
-    const auto& [m, t] = series[i];
-    const int ti = t == "exact_located" ? 0 : t == "exact_unlocated" ? 1 : t == "regularized" ? 2 : 3;
-    s << (i ? ", \\\n     " : "") << "'work_precision.csv' using "
-      << "((strcol(1) eq '" << m << "' && strcol(2) eq '" << t
-      << "' && strcol(4) eq 'ok') ? $7 : NaN):5 with linespoints lc " << (i % 6 + 1)
-      << " dt " << dash[ti] << " pt " << (ti + 5) << " title '" << m << " / " << t << "'";
-  }
-  s << "\n";
-  return s.str();
-}
-
 int run(const Args& args) {
   const Scene scene = load_scene(args.scene.scene, args.scene.sets);
   const sim::LoadFunction loads = LoadExpressions(scene).function();
@@ -133,15 +102,15 @@ int run(const Args& args) {
   std::ostringstream csv;
   csv << "method,treatment,tolerance,status,error,error_vs_exact,wall_time_s,rhs_evaluations,"
          "steps,friction_events,pareto,message\n";
-  csv.precision(6);
   for (const auto& p : wp.points) {
     std::string msg = p.message;
     for (char& c : msg) {
       if (c == ',' || c == '\n') c = ';';
     }
     csv << sim::method_name(p.method) << ',' << sim::treatment_name(p.treatment) << ','
-        << p.tolerance << ',' << (p.ok ? "ok" : "failed") << ',' << p.error << ','
-        << p.error_vs_exact << ',' << p.wall_time_s << ',' << p.rhs_evaluations << ',' << p.steps
+        << format_grid_value(p.tolerance) << ',' << (p.ok ? "ok" : "failed") << ','
+        << format_double(p.error) << ',' << format_double(p.error_vs_exact) << ','
+        << format_double(p.wall_time_s) << ',' << p.rhs_evaluations << ',' << p.steps
         << ',' << p.friction_events << ',' << (p.pareto ? 1 : 0) << ',' << msg << "\n";
   }
   write_text_file(out.file("work_precision.csv"), csv.str());
@@ -184,8 +153,9 @@ int run(const Args& args) {
   if (!args.no_plots) {
     const std::string warning =
         run_gnuplot(out.staging(), "work_precision.gnuplot",
-                    plot_script(wp, std::filesystem::path(scene.path).filename().string(),
-                                gnuplot().terminal));
+                    work_precision_plot_script(
+                        wp, std::filesystem::path(scene.path).filename().string(),
+                        gnuplot().terminal));
     if (!warning.empty()) warn(warning);
   }
   write_json_file(out.file("summary.json"), summary);

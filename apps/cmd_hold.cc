@@ -1,9 +1,9 @@
 // fivebar hold SCENE [--pose THETA1,THETA2] [--grid N] [--torque-limit NM] [--time T]
 //                    [--out DIR] [--set KEY=VALUE]... [--no-plots]
 // What torques hold the mechanism still at a pose (rest.h, docs/hold.md): the frictionless
-// equilibrium against gravity and the scene's loads M3, F (at time T), the range of M1, M2 over
-// which static friction at the crank joints holds the pose, and the larger polygon where
-// friction at every joint helps. One pose (default the scene's initial one) -> hold.json; a
+// equilibrium against gravity and the scene's loads M3, F (at time T), the range of M1 and of M2
+// (the other at its equilibrium) over which static friction holds the pose, and the region of
+// (M1, M2) as a polygon. One pose (default the scene's initial one) -> hold.json; a
 // grid of N x N poses over the whole circle of both cranks -> hold_map.csv and hold_map.png.
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -88,9 +88,12 @@ double least_magnitude(double lo, double hi) {
   return std::min(std::fabs(lo), std::fabs(hi));
 }
 
-// torque the motors need to hold: the larger of the two least |M_i| within the crank ranges
+// torque the motors need to hold: the larger of the two least |M_i| that hold with both
+// actuators moved at once, i.e. within the crank joints' bounds (a rectangle inside the region;
+// each actuator's own range assumes the other at its equilibrium)
 double required_torque(const Holding<double>& h) {
-  return std::max(least_magnitude(h.M1_min, h.M1_max), least_magnitude(h.M2_min, h.M2_max));
+  return std::max(least_magnitude(h.M1 - h.bound[0], h.M1 + h.bound[0]),
+                  least_magnitude(h.M2 - h.bound[4], h.M2 + h.bound[4]));
 }
 
 Json pair(double a, double b) {
@@ -113,7 +116,9 @@ Json pose_json(const Holding<double>& h, const HoldingPolygon& poly, double limi
   }
   j.set("N", std::move(N));
   j.set("static_friction_bound", std::move(bound));
-  j.set("stuck_joints", "O, B, C, D, D0 (all at rest; holding carried at O and D0)");
+  j.set("crank_joint_range_M1", pair(h.M1 - h.bound[0], h.M1 + h.bound[0]));
+  j.set("crank_joint_range_M2", pair(h.M2 - h.bound[4], h.M2 + h.bound[4]));
+  j.set("stuck_joints", "O, B, C, D, D0 (all at rest)");
   j.set("required_torque", required_torque(h));
   j.set("holdable_within_limit", required_torque(h) <= limit);
   Json vertices = Json::array();
@@ -148,13 +153,12 @@ int run_pose(const Args& args, const Scene& scene, const Loads<double>& L,
   std::snprintf(line, sizeof line,
                 " at theta1 = %.10g, theta2 = %.10g rad (loads at t = %g s)\n"
                 "  frictionless equilibrium: M1 = %.10f N m, M2 = %.10f N m\n"
-                "  static friction at O, D0 holds M1 in [%.6f, %.6f], M2 in [%.6f, %.6f] N m\n"
-                "  with friction at every joint: M1 in [%.6f, %.6f] at M2 = M2_eq, "
-                "M2 in [%.6f, %.6f] at M1 = M1_eq\n"
+                "  static friction holds M1 in [%.6f, %.6f] (M2 = M2_eq), "
+                "M2 in [%.6f, %.6f] N m (M1 = M1_eq)\n"
+                "  the crank joints alone hold M1 +- %.6f, M2 +- %.6f N m; region: %zu-gon\n"
                 "  torque needed to hold: %.6g N m\n",
-                pose[0], pose[1], args.time, h.M1, h.M2, h.M1_min, h.M1_max,
-                h.M2_min, h.M2_max, poly.M1_min, poly.M1_max, poly.M2_min, poly.M2_max,
-                required_torque(h));
+                pose[0], pose[1], args.time, h.M1, h.M2, h.M1_min, h.M1_max, h.M2_min, h.M2_max,
+                h.bound[0], h.bound[4], poly.vertices.size(), required_torque(h));
   std::cout << "fivebar hold: " << scene.path << line << "  wrote " << out->dir() << "/:";
   for (const std::string& name : written) std::cout << " " << name;
   std::cout << std::endl;

@@ -156,10 +156,9 @@ double torque_error(const std::vector<sim::Row>& rows, const Motion& motion) {
   double worst = 0;
   for (size_t i = 0; motion.has_torques && i < rows.size(); ++i) {
     const sim::Row& r = rows[i];
-    const double m1 = r.mode[0] == kStuck ? r.hold_margin[0] : 0.0;
-    const double m2 = r.mode[4] == kStuck ? r.hold_margin[4] : 0.0;
-    worst = std::max({worst, std::max(0.0, std::fabs(r.M1 - motion.M1[i]) - m1),
-                      std::max(0.0, std::fabs(r.M2 - motion.M2[i]) - m2)});
+    const auto& h = r.hold_range;
+    worst = std::max({worst, std::max({0.0, h[0] - motion.M1[i], motion.M1[i] - h[1]}),
+                      std::max({0.0, h[2] - motion.M2[i], motion.M2[i] - h[3]})});
   }
   return worst;
 }
@@ -208,10 +207,10 @@ RestSummary summarize_rest(const std::vector<sim::Row>& rows) {
     s.M1_hi = std::max(s.M1_hi, r.M1);
     s.M2_lo = std::min(s.M2_lo, r.M2);
     s.M2_hi = std::max(s.M2_hi, r.M2);
-    s.range1_lo = std::max(s.range1_lo, r.M1 - r.hold_margin[0]);
-    s.range1_hi = std::min(s.range1_hi, r.M1 + r.hold_margin[0]);
-    s.range2_lo = std::max(s.range2_lo, r.M2 - r.hold_margin[4]);
-    s.range2_hi = std::min(s.range2_hi, r.M2 + r.hold_margin[4]);
+    s.range1_lo = std::max(s.range1_lo, r.hold_range[0]);
+    s.range1_hi = std::min(s.range1_hi, r.hold_range[1]);
+    s.range2_lo = std::max(s.range2_lo, r.hold_range[2]);
+    s.range2_hi = std::min(s.range2_hi, r.hold_range[3]);
   }
   return s;
 }

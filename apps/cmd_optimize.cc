@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "fivebar/io/command.h"
+#include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/output.h"
@@ -34,53 +35,9 @@ struct Args {
   SceneArgs scene;
   std::string tasks;
   int threads = 0;
-  std::string method = "slsqp";
-  std::string objective = "dissipated_energy";
-  bool global = false;
-  int starts = 8;
-  int control_points = 10;
-  int quadrature_points = 12;
-  double singular_margin = 0.1;
-  bool no_validate = false;
-  bool no_plots = false;
+  OptimizeSettings settings;  // everything that reaches the optimizer itself
+  bool no_validate = false, no_plots = false;
 };
-
-// the options of the batch from the command line (InputError on bad values)
-trajectory::BatchOptions batch_options(const Args& a) {
-  trajectory::BatchOptions o;
-  if (!trajectory::parse_method(a.method, &o.optimizer.method)) {
-    throw InputError("command line", "--method", "'" + a.method + "' is not slsqp, mma or ccsaq");
-  }
-  if (!trajectory::parse_objective(a.objective, &o.problem.objective)) {
-    throw InputError("command line", "--objective",
-                     "'" + a.objective + "' is not dissipated_energy or input_energy");
-  }
-  if (a.control_points < 7 || a.control_points > 60) {
-    throw InputError("command line", "--control-points", "expected an integer in [7, 60]");
-  }
-  if (a.quadrature_points < 2 || a.quadrature_points > 64) {
-    throw InputError("command line", "--quadrature-points", "expected an integer in [2, 64]");
-  }
-  if (!(a.singular_margin >= 0 && a.singular_margin < 1)) {
-    throw InputError("command line", "--singular-margin", "expected a number in [0, 1)");
-  }
-  if (a.starts < 1) throw InputError("command line", "--starts", "expected an integer >= 1");
-  o.optimizer.global = a.global;
-  o.optimizer.starts = a.starts;
-  o.problem.control_points = a.control_points;
-  o.problem.quadrature_points = a.quadrature_points;
-  o.problem.singular_margin = a.singular_margin;
-  o.validate = !a.no_validate;
-  return o;
-}
-
-std::vector<trajectory::TaskSpec> read_tasks(const std::string& path) {
-  try {
-    return trajectory::load_tasks(path);
-  } catch (const trajectory::TaskFileError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
-  }
-}
 
 // x and y of point C for each row (extra trajectory.csv columns, for the path figure)
 std::vector<Column> point_c_columns(const Params<double>& p, const std::vector<sim::Row>& rows) {
@@ -111,7 +68,7 @@ void write_atomic(const fs::path& path, Write&& write) {
 
 std::string plot_script(const std::string& task, double limit, const std::string& terminal) {
   std::string s = "set datafile separator ','\nset terminal " + terminal +
-                  " size 900,600\nset key autotitle columnhead\nset grid\n";
+                  " size 900,600 noenhanced\nset key autotitle columnhead\nset grid\n";
   s += "set output 'path_C.png'\nset title '" + task + ": path of C'\nset size ratio -1\n"
        "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
        "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 title 'optimal', "
@@ -139,21 +96,15 @@ std::string plot_script(const std::string& task, double limit, const std::string
 // trajectory.csv, baseline.csv and the figures of one solved task, in DIR/<task>/
 std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult& r,
                        const trajectory::BatchOptions& options, bool plots) {
-  const sim::LoadFunction loads = LoadExpressions(scene).function();
-  const trajectory::TrajectoryProblem problem =
-      trajectory::problem_of(scene.params, loads, r, options);
   std::vector<sim::Row> rows, base;
-  const double step = std::min(scene.options.output_step, r.duration / 10);
-  const Status s1 = problem.rows(r.x.data(), step, &rows);
-  const std::vector<double> x0 = problem.motion().minimum_jerk();
-  const Status s2 = problem.rows(x0.data(), step, &base);
-  if (!s1.ok() || !s2.ok()) return r.task + ": trajectory rows: " + (s1.ok() ? s2 : s1).message;
+  const Status status = task_rows(scene, r, options, &rows, &base);
+  if (!status.ok()) return r.task + ": trajectory rows: " + status.message;
   fs::create_directories(dir);
   write_atomic(dir / "trajectory.csv", [&](const std::string& p) {
-    write_trajectory_csv(p, rows, with_rest_columns(point_c_columns(problem.params(), rows), rows));
+    write_trajectory_csv(p, rows, with_rest_columns(point_c_columns(scene.params, rows), rows));
   });
   write_atomic(dir / "baseline.csv", [&](const std::string& p) {
-    write_trajectory_csv(p, base, with_rest_columns(point_c_columns(problem.params(), base), base));
+    write_trajectory_csv(p, base, with_rest_columns(point_c_columns(scene.params, base), base));
   });
   if (!plots) return "";
   return run_gnuplot(dir.string(), "plots.gnuplot",
@@ -163,7 +114,9 @@ std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult
 int run(const Args& args) {
   const Scene scene = load_scene(args.scene.scene, args.scene.sets);
   const std::vector<trajectory::TaskSpec> tasks = read_tasks(args.tasks);
-  const trajectory::BatchOptions options = batch_options(args);
+  OptimizeSettings settings = args.settings;
+  settings.validate = !args.no_validate;
+  const trajectory::BatchOptions options = batch_options(settings);
   const int rank = trajectory::process_rank();
   const bool tty = rank == 0 && isatty(STDERR_FILENO);
 
@@ -206,19 +159,20 @@ int run(const Args& args) {
 RunFunction setup(CLI::App* app) {
   auto args = std::make_shared<Args>();
   add_scene_options(app, &args->scene, "optimize");
-  app->add_option("--tasks", args->tasks, "tasks file (YAML, interfaces.md)")->required();
+  app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");
-  app->add_option("--method", args->method, "NLopt algorithm: slsqp (default), mma, ccsaq");
-  app->add_option("--objective", args->objective,
+  app->add_option("--method", args->settings.method,
+                  "NLopt algorithm: slsqp (default), mma, ccsaq");
+  app->add_option("--objective", args->settings.objective,
                   "dissipated_energy (default) or input_energy");
-  app->add_flag("--global", args->global,
+  app->add_flag("--global", args->settings.global,
                 "multi-start: the local method from seeded perturbed starts too, best kept");
-  app->add_option("--starts", args->starts, "starts of --global (default 8)");
-  app->add_option("--control-points", args->control_points,
+  app->add_option("--starts", args->settings.starts, "starts of --global (default 8)");
+  app->add_option("--control-points", args->settings.control_points,
                   "B-spline control points per joint (default 10, 4 free)");
-  app->add_option("--quadrature-points", args->quadrature_points,
+  app->add_option("--quadrature-points", args->settings.quadrature_points,
                   "Gauss-Legendre points per knot span (default 12)");
-  app->add_option("--singular-margin", args->singular_margin,
+  app->add_option("--singular-margin", args->settings.singular_margin,
                   "minimum |sin(theta4 - theta3)| along the motion (default 0.1)");
   app->add_flag("--no-validate", args->no_validate,
                 "skip the forward simulation of the optimal torques (miss_distance)");

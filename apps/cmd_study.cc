@@ -42,12 +42,7 @@ struct Args {
   bool no_plots = false;
 };
 
-std::string num(double v) {
-  if (std::isnan(v)) return "nan";
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
+std::string num(double v) { return format_double(v); }  // shortest round-trip, "nan"
 
 // one design: its scene, or why the scene with its values is unusable
 struct Design {
@@ -183,7 +178,7 @@ int run(const Args& args) {
     }
     write_text_file(out.file("heatmap.dat"), dat);
     const std::string script =
-        "set terminal " + gnuplot().terminal + " size 800,650\nset output 'heatmap.png'\n"
+        "set terminal " + gnuplot().terminal + " size 800,650 noenhanced\nset output 'heatmap.png'\n"
         "set title 'total dissipated energy [J] over " + std::to_string(nt) + " tasks'\n"
         "set xlabel '" + sweeps[0].key + "'\nset ylabel '" + sweeps[1].key + "'\n"
         "set datafile missing 'nan'\nset view map\nunset key\n"
@@ -210,7 +205,7 @@ int run(const Args& args) {
 RunFunction setup(CLI::App* app) {
   auto args = std::make_shared<Args>();
   add_scene_options(app, &args->scene, "study");
-  app->add_option("--tasks", args->tasks, "tasks file (YAML, interfaces.md)")->required();
+  app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--sweep", args->sweeps, "KEY=LO:HI:N, a scene key swept over N values")
       ->required();
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");

@@ -82,7 +82,7 @@ int run(const Args& a) {
 
   // header: provenance, truth, and what the noise was
   identification::TorqueLog& log = res.log;
-  log.comments = {" fivebar synth-log: synthetic torque log (interfaces.md)",
+  log.comments = {" fivebar synth-log: synthetic torque log (format: docs/formats.md)",
                   " command: " + a.command_line,
                   " scene: " + scene.path,
                   " true.law = " + std::string(identification::law_name(fp.law)),

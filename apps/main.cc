@@ -7,6 +7,7 @@
 #include <exception>
 #include <iostream>
 #include <map>
+#include <string>
 
 #include "fivebar/io/command.h"
 #include "fivebar/io/errors.h"
@@ -38,6 +39,8 @@ std::string selected_name(const CLI::App& app) {
 
 int main(int argc, char** argv) {
   CLI::App app{"Dynamics of a planar five-bar mechanism with joint friction.", "fivebar"};
+  app.set_version_flag("--version", std::string("fivebar ") + FIVEBAR_VERSION,
+                       "print the version and exit");
   app.require_subcommand(1);
 
   // every registered subcommand, and what runs it
@@ -64,7 +67,7 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
-    return app.exit(e);  // --help, --help-all (CallForHelp derives from Success): print, exit 0
+    return app.exit(e);  // --help, --help-all, --version (derive from Success): print, exit 0
   } catch (const CLI::ParseError& e) {
     return fail(kUsageError,
                 "command line: " + selected_name(app) + ": " + e.what() + " (see fivebar " +

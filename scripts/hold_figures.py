@@ -6,8 +6,9 @@
    on every row, with a holding range that contains them; angle noise of 1e-12 rad (seeded,
    Gaussian) must change nothing.
 2. `fivebar hold` at that pose; `fivebar simulate` from rest with constant torques inside the
-   range (99 % of its half-width) must move less than 1e-12 rad over 1 s, and just outside
-   (101 %) must break away.
+   ranges (99 % of the way to each end, the other actuator at its equilibrium; and corners of the
+   crank joints' rectangle) must move less than 1e-12 rad over 1 s, and just outside (101 %) must
+   break away.
 
 Usage: python3 scripts/hold_figures.py [--fivebar build/release/apps/fivebar] [--work DIR]
 """
@@ -85,17 +86,22 @@ def simulate_figures(fivebar, work):
         h = json.load(f)
     M1, M2 = h["M1"], h["M2"]
     (lo1, hi1), (lo2, hi2) = h["range_M1"], h["range_M2"]
+    (c1, d1), (c2, d2) = h["crank_joint_range_M1"], h["crank_joint_range_M2"]
     cases = {
         "equilibrium": (M1, M2),
-        "inside (+99%, -99%)": (M1 + 0.99 * (hi1 - M1), M2 - 0.99 * (M2 - lo2)),
-        "inside (-99%, +99%)": (M1 - 0.99 * (M1 - lo1), M2 + 0.99 * (hi2 - M2)),
+        "inside M1 +99%": (M1 + 0.99 * (hi1 - M1), M2),
+        "inside M1 -99%": (M1 - 0.99 * (M1 - lo1), M2),
+        "inside M2 +99%": (M1, M2 + 0.99 * (hi2 - M2)),
+        "inside M2 -99%": (M1, M2 - 0.99 * (M2 - lo2)),
+        "inside crank corner (+99%, -99%)": (M1 + 0.99 * (d1 - M1), M2 - 0.99 * (M2 - c2)),
+        "inside crank corner (-99%, +99%)": (M1 - 0.99 * (M1 - c1), M2 + 0.99 * (d2 - M2)),
         "outside M1 +101%": (M1 + 1.01 * (hi1 - M1), M2),
         "outside M1 -101%": (M1 - 1.01 * (M1 - lo1), M2),
         "outside M2 +101%": (M1, M2 + 1.01 * (hi2 - M2)),
         "outside M2 -101%": (M1, M2 - 1.01 * (M2 - lo2)),
     }
     for name, (a, b) in cases.items():
-        out = f"{work}/sim_{name.split()[0]}_{abs(hash(name)) % 10000}"
+        out = f"{work}/sim_" + "".join(ch if ch.isalnum() else "_" for ch in name)
         run(fivebar, "simulate", SCENE, "--set", f"loads.M1={a!r}", "--set", f"loads.M2={b!r}",
             "--set", "simulation.duration=1", "--out", out, "--no-plots")
         print(f"simulate from rest, {name}: M1 = {a:.12g}, M2 = {b:.12g} N m -> "

@@ -8,7 +8,8 @@ set -euo pipefail
 pkgs=(build-essential cmake pkg-config python3
       libeigen3-dev libceres-dev libnlopt-cxx-dev libsundials-dev
       libgtest-dev libgmock-dev libbenchmark-dev libyaml-cpp-dev libcli11-dev libmuparser-dev
-      gnuplot-nox openmpi-bin libopenmpi-dev)
+      gnuplot-nox openmpi-bin libopenmpi-dev
+      pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-matplotlib)
 if [ "${FIVEBAR_PEERS:-0}" = "1" ]; then
   pkgs+=(libmujoco-dev libsimbody-dev)
 fi

@@ -1,5 +1,11 @@
 #include "fivebar/io/command.h"
 
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <iostream>
@@ -48,5 +54,32 @@ void add_scene_options(CLI::App* app, SceneArgs* args, const std::string& comman
 }
 
 void warn(const std::string& message) { std::cerr << "fivebar: warning: " << message << "\n"; }
+
+namespace {
+double seconds_now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+}  // namespace
+
+Progress::Progress(std::string label, double total, std::string unit)
+    : label_(std::move(label)), unit_(std::move(unit)), total_(total), start_(seconds_now()),
+      terminal_(::isatty(STDERR_FILENO) != 0) {}
+
+Progress::~Progress() {
+  if (shown_) std::cerr << "\r\033[K" << std::flush;
+}
+
+void Progress::update(double done) {
+  if (!terminal_) return;
+  const double now = seconds_now();
+  if (now - start_ < 2.0 || now - last_ < 0.25) return;
+  last_ = now;
+  shown_ = true;
+  const double pct = total_ > 0 ? 100.0 * done / total_ : 0.0;
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "\r\033[K%s: %3.0f%% (%.4g / %.4g%s%s)", label_.c_str(), pct,
+                done, total_, unit_.empty() ? "" : " ", unit_.c_str());
+  std::cerr << buf << std::flush;
+}
 
 }  // namespace fivebar::io

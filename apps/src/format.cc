@@ -2,6 +2,9 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
 
 namespace fivebar::io {
 
@@ -12,6 +15,20 @@ std::string format_double(double x) {
   // shortest round-trip form (std::to_chars without a precision)
   const auto r = std::to_chars(buf, buf + sizeof buf, x);
   return std::string(buf, r.ptr);
+}
+
+std::string format_grid_value(double x) {
+  if (!std::isfinite(x) || x == 0) return format_double(x);
+  // one unit in the last place of x: the rounding error of one multiplication such as i * h
+  const double ulp = std::nextafter(std::fabs(x), std::numeric_limits<double>::infinity()) -
+                     std::fabs(x);
+  char buf[40];
+  for (int digits = 1; digits <= 15; ++digits) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, x);
+    const double back = std::strtod(buf, nullptr);
+    if (std::fabs(back - x) <= ulp) return format_double(back);  // e.g. "0.476"
+  }
+  return format_double(x);
 }
 
 std::string trim(const std::string& s) {

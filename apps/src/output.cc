@@ -2,15 +2,18 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <charconv>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <csignal>
 #include <memory>
+#include <mutex>
 #include <system_error>
+#include <vector>
 
 #include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
 #include "fivebar/model/dynamics.h"
 
 namespace fivebar::io {
@@ -40,13 +43,20 @@ void close_checked(File f, const std::string& path) {
 
 // appends x in shortest round-trip form and a separator
 inline void append_number(std::string* line, double x, char sep) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x);
-  line->append(buf, r.ptr);
+  line->append(format_double(x));
   line->push_back(sep);
 }
 
 }  // namespace
+
+void row_values(const sim::Row& r, double* out) {
+  *out++ = r.t;
+  for (const auto* a : {&r.theta, &r.omega, &r.alpha}) out = std::copy(a->begin(), a->end(), out);
+  *out++ = r.M1;
+  *out++ = r.M2;
+  for (const auto* a : {&r.N, &r.Mf}) out = std::copy(a->begin(), a->end(), out);
+  for (double x : {r.P_diss, r.E_diss, r.W_in, r.W_ext}) *out++ = x;
+}
 
 const std::vector<std::string>& trajectory_columns() {
   static const std::vector<std::string> columns = [] {
@@ -75,11 +85,7 @@ std::vector<Column> rest_columns(const std::vector<sim::Row>& rows) {
     const bool o = r.mode[0] == kStuck, d0 = r.mode[4] == kStuck;
     c[0].values.push_back(o && d0 ? 1.0 : 0.0);
     for (int k = 0; k < 5; ++k) c[1 + k].values.push_back(r.mode[k] == kStuck ? 1.0 : 0.0);
-    const double m1 = o ? r.hold_margin[0] : 0.0, m2 = d0 ? r.hold_margin[4] : 0.0;
-    c[6].values.push_back(r.M1 - m1);
-    c[7].values.push_back(r.M1 + m1);
-    c[8].values.push_back(r.M2 - m2);
-    c[9].values.push_back(r.M2 + m2);
+    for (int i = 0; i < 4; ++i) c[6 + i].values.push_back(r.hold_range[i]);
   }
   return c;
 }
@@ -103,7 +109,8 @@ void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& 
   for (size_t i = 0; i < rows.size(); ++i) {
     const sim::Row& r = rows[i];
     line.clear();
-    append_number(&line, r.t, ',');
+    line.append(format_grid_value(r.t));  // 0.476, not 476 * 0.001 = 0.47600000000000003
+    line.push_back(',');
     for (double x : r.theta) append_number(&line, x, ',');
     for (double x : r.omega) append_number(&line, x, ',');
     for (double x : r.alpha) append_number(&line, x, ',');
@@ -129,6 +136,39 @@ void write_json_file(const std::string& path, const Json& json) {
   write_text_file(path, json.dump(2) + "\n");
 }
 
+namespace {
+
+// staging directories of the live OutputDirs: an interrupted run (SIGINT, SIGTERM) removes them
+// before it dies, so no half-written output is left behind
+std::mutex g_staging_mutex;
+std::vector<std::string>* g_staging = new std::vector<std::string>;  // never destroyed
+
+extern "C" void remove_staging_and_die(int sig) {
+  for (const std::string& dir : *g_staging) {
+    std::error_code ec;
+    fs::remove_all(dir, ec);  // not async-signal-safe, but the process is going down anyway
+  }
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
+void track_staging(const std::string& dir, bool add) {
+  std::lock_guard<std::mutex> lock(g_staging_mutex);
+  if (add) {
+    static const bool installed = [] {
+      std::signal(SIGINT, remove_staging_and_die);
+      std::signal(SIGTERM, remove_staging_and_die);
+      return true;
+    }();
+    static_cast<void>(installed);
+    g_staging->push_back(dir);
+  } else {
+    g_staging->erase(std::remove(g_staging->begin(), g_staging->end(), dir), g_staging->end());
+  }
+}
+
+}  // namespace
+
 OutputDir::OutputDir(const std::string& dir, const std::vector<std::string>& outputs) : dir_(dir) {
   std::error_code ec;
   fs::create_directories(dir_, ec);
@@ -150,10 +190,12 @@ OutputDir::OutputDir(const std::string& dir, const std::vector<std::string>& out
                      std::string("cannot create a staging directory: ") + std::strerror(errno));
   }
   staging_ = pattern;
+  track_staging(staging_, true);
 }
 
 OutputDir::~OutputDir() {
   if (committed_) return;
+  track_staging(staging_, false);
   std::error_code ec;
   fs::remove_all(staging_, ec);  // best effort: never throw from a destructor
 }
@@ -180,6 +222,7 @@ std::vector<std::string> OutputDir::commit() {
   }
   std::error_code ec;
   fs::remove_all(staging_, ec);
+  track_staging(staging_, false);
   committed_ = true;
   std::sort(names.begin(), names.end());
   return names;

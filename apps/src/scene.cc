@@ -3,6 +3,8 @@
 // the Scene is then built and validated key by key.
 #include "fivebar/io/scene.h"
 
+#include "fivebar/io/command.h"
+
 #include "fivebar/model/kinematics.h"
 
 #include <yaml-cpp/yaml.h>
@@ -88,6 +90,7 @@ constexpr Field kSchema[] = {
     {"simulation.integrator", Kind::kName},
     {"simulation.rtol", Kind::kNumber},
     {"simulation.atol", Kind::kNumber},
+    {"simulation.target_error", Kind::kNumber},
     {"simulation.locate_switches", Kind::kBool},
     {"simulation.stick", Kind::kBool},
     {"simulation.max_steps", Kind::kInteger},
@@ -508,6 +511,32 @@ bool non_negative(double x) { return x >= 0; }
 std::string num(double x) { return format_double(x); }
 
 // builds and validates the Scene from the flat map
+
+/// One warning line for each value that is valid but likely a unit mistake (degrees for
+/// radians, millimetres or grams for SI): |theta| > 2 pi, lengths outside 1e-4..10 m, masses
+/// outside 1e-6..1e4 kg.
+void plausibility_warnings(Scene* s) {
+  auto say = [&](const std::string& key, double v, const std::string& why) {
+    s->warnings.push_back(s->path + ": " + key + ": " + num(v) + " " + why);
+  };
+  for (const char* key : {"theta1", "theta2"}) {
+    const double v = std::string(key) == "theta1" ? s->initial.theta1 : s->initial.theta2;
+    if (std::abs(v) > 2 * M_PI) say(std::string("initial.") + key, v, "rad is beyond 2 pi: degrees?");
+  }
+  auto length = [&](const std::string& key, double v) {
+    if (v < 1e-4 || v > 10) say(key, v, "m is outside 1e-4..10 m: millimetres?");
+  };
+  const Params<double>& p = s->params;
+  length("mechanism.ground_length", p.ground_length);
+  if (p.point_p != 0.0) length("mechanism.point_p", std::abs(p.point_p));
+  for (int i = 0; i < kLinks; ++i) {
+    const std::string link = "mechanism.links." + std::to_string(i);
+    length(link + ".length", p.links[i].length);
+    const double m = p.links[i].mass;
+    if (m < 1e-6 || m > 1e4) say(link + ".mass", m, "kg is outside 1e-6..1e4 kg: grams?");
+  }
+}
+
 Scene build_scene(const SceneReader& r) {
   Scene s;
   s.path = r.path();
@@ -631,6 +660,22 @@ Scene build_scene(const SceneReader& r) {
   require("simulation.rtol", o.rtol, o.rtol > 0 && o.rtol < 1, "in (0, 1)");
   o.atol = r.number("simulation.atol", d.atol);
   require("simulation.atol", o.atol, o.atol > 0 && o.atol < 1, "in (0, 1)");
+  // neither tolerance given: `simulate` chooses them to meet target_error (sim::estimate.h)
+  o.auto_tolerance = !r.has("simulation.rtol") && !r.has("simulation.atol");
+  o.target_error = r.number("simulation.target_error", d.target_error);
+  require("simulation.target_error", o.target_error, o.target_error > 0 && o.target_error < 1,
+          "in (0, 1)");
+  // the default integrator: Adams (the work-precision study's choice), BDF for the stiff LuGre
+  if (!r.has("simulation.integrator") && f.law == FrictionLaw::kLuGre) {
+    o.method = sim::Method::kCvodeBdf;
+  }
+  if (sim::output_row_count(o) > sim::kMaxOutputRows) {
+    r.fail("simulation.duration",
+           "duration " + num(o.duration) + " s at output_step " + num(o.output_step) +
+               " s needs " + std::to_string(sim::output_row_count(o)) +
+               " output rows, more than the limit of " + std::to_string(sim::kMaxOutputRows) +
+               " (raise simulation.output_step)");
+  }
   o.locate_switches = r.boolean("simulation.locate_switches", d.locate_switches);
   o.stick = r.boolean("simulation.stick", d.stick);
   o.max_steps = r.integer("simulation.max_steps", d.max_steps);
@@ -672,6 +717,7 @@ Scene build_scene(const SceneReader& r) {
            "= " +
                num(sine) + " < simulation.singular_margin = " + num(o.singular_margin));
   }
+  plausibility_warnings(&s);
   return s;
 }
 
@@ -742,7 +788,9 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& sets) 
   text << in.rdbuf();
   if (in.bad())
     throw InputError(path, "(file)", std::string("cannot read: ") + std::strerror(errno));
-  return parse_scene(text.str(), path, sets);
+  Scene scene = parse_scene(text.str(), path, sets);
+  for (const std::string& w : scene.warnings) warn(w);
+  return scene;
 }
 
 std::string scene_to_yaml(const Scene& s) {
@@ -794,6 +842,7 @@ std::string scene_to_yaml(const Scene& s) {
     << "  integrator: " << integrator_name(o.method) << "\n"
     << "  rtol: " << num(o.rtol) << "\n"
     << "  atol: " << num(o.atol) << "\n"
+    << "  target_error: " << num(o.target_error) << "\n"
     << "  locate_switches: " << (o.locate_switches ? "true" : "false") << "\n"
     << "  stick: " << (o.stick ? "true" : "false") << "\n"
     << "  max_steps: " << o.max_steps << "\n"

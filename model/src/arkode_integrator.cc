@@ -1,119 +1,168 @@
 // ARKODE behind the Integrator interface: ERKStep for the explicit Runge-Kutta pairs
-// (Dormand-Prince 5(4), Verner 6(5), Fehlberg 7(8)) and ARKStep for the implicit DIRK (ARK5(4)8L[2]SA, Newton
-// with a dense Jacobian). The only file that includes ARKODE.
+// (Dormand-Prince 5(4), Verner 6(5), Fehlberg 7(8)) and ARKStep for the implicit DIRK
+// (ARK5(4)8L[2]SA, Newton with a dense Jacobian). The only file that includes ARKODE. Every
+// call's flag is checked; flag names come from ERKStepGetReturnFlagName / ARKStepGetReturnFlagName.
 #include <arkode/arkode_arkstep.h>
 #include <arkode/arkode_erkstep.h>
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#include <algorithm>
+#include <cstring>
 #include <string>
+#include <vector>
 
 #include "integrator.h"
 
 namespace fivebar::sim::detail {
 namespace {
 
+/// One end of the last step: time, state and (lazily) its slope f(t, y).
+struct StepEnd {
+  double t = 0;
+  std::vector<double> y, f;
+  bool has_f = false;
+};
+
 class Arkode final : public Integrator {
  public:
   Arkode(const OdeProblem& prob, const Options& opt, double t_end)
-      : prob_(prob), explicit_(opt.method != Method::kArkodeDirk) {
+      : prob_(prob), explicit_(opt.method != Method::kArkodeDirk), t_end_(t_end) {
     SUNContext_Create(nullptr, &ctx_);
     y_ = N_VNew_Serial(prob.n, ctx_);
     N_VEnableFusedOps_Serial(y_, SUNTRUE);  // fewer vector calls per step: the state is tiny
     N_VConst(0.0, y_);
+    out_ = N_VMake_Serial(prob.n, nullptr, ctx_);
     atol_ = N_VNew_Serial(prob.n, ctx_);
     for (int i = 0; i < prob.n; ++i) NV_Ith_S(atol_, i) = opt.atol * prob.atol_scale[i];
-    if (explicit_) {
-      mem_ = ERKStepCreate(&Arkode::rhs, 0.0, y_, ctx_);
-      ERKStepSetErrHandlerFn(mem_, &Arkode::on_error, this);
-      // ARKODE names tables NAME_stages_embedding_order
-      ERKStepSetTableNum(mem_, opt.method == Method::kArkodeErk45   ? ARKODE_DORMAND_PRINCE_7_4_5
-                               : opt.method == Method::kArkodeErk65 ? ARKODE_VERNER_8_5_6
-                                                                    : ARKODE_FEHLBERG_13_7_8);
-      // dense output: ARKODE's default degree-5 Hermite interpolant. It costs two extra RHS
-      // evaluations per output time, but cubic Hermite or Lagrange lose one to two digits at the
-      // 1 ms grid (measured with `fivebar accuracy`); the order-8 pair's error is bounded by it
-      ERKStepSVtolerances(mem_, opt.rtol, atol_);
-      if (prob.max_step > 0.0) ERKStepSetMaxStep(mem_, prob.max_step);
-      ERKStepSetUserData(mem_, this);
-      ERKStepSetMaxNumSteps(mem_, opt.max_steps);
-      ERKStepSetStopTime(mem_, t_end);
-      if (prob.nroots > 0) {
-        ERKStepRootInit(mem_, prob.nroots, &Arkode::root);
-        ERKStepSetNoInactiveRootWarn(mem_);
-      }
-    } else {
-      mem_ = ARKStepCreate(nullptr, &Arkode::rhs, 0.0, y_, ctx_);
-      ARKStepSetErrHandlerFn(mem_, &Arkode::on_error, this);
-      ARKStepSetTableNum(mem_, ARKODE_ARK548L2SA_DIRK_8_4_5, ARKODE_ERK_NONE);
-      // Lagrange dense output for stiff states, as ARKODE recommends: the Hermite one overshoots
-      // LuGre bristles at output times; elsewhere Hermite is two digits more accurate
-      // (both measured with `fivebar stress` and `fivebar accuracy`)
-      if (prob.stiff_states) ARKStepSetInterpolantType(mem_, ARK_INTERP_LAGRANGE);
-      ARKStepSVtolerances(mem_, opt.rtol, atol_);
-      if (prob.max_step > 0.0) ARKStepSetMaxStep(mem_, prob.max_step);
-      ARKStepSetUserData(mem_, this);
-      ARKStepSetMaxNumSteps(mem_, opt.max_steps);
-      ARKStepSetStopTime(mem_, t_end);
-      A_ = SUNDenseMatrix(prob.n, prob.n, ctx_);
-      ls_ = SUNLinSol_Dense(y_, A_, ctx_);
-      ARKStepSetLinearSolver(mem_, ls_, A_);
-      if (prob.nroots > 0) {
-        ARKStepRootInit(mem_, prob.nroots, &Arkode::root);
-        ARKStepSetNoInactiveRootWarn(mem_);
-      }
+    for (StepEnd* e : {&prev_, &cur_, &cache_}) {
+      e->y.assign(prob.n, 0.0);
+      e->f.assign(prob.n, 0.0);
     }
+    ok_ = explicit_ ? setup_erk(opt) : setup_dirk(opt);
   }
   ~Arkode() override {
-    if (explicit_) {
-      ERKStepFree(&mem_);
-    } else {
-      ARKStepFree(&mem_);
+    if (mem_) {
+      if (explicit_) {
+        ERKStepFree(&mem_);
+      } else {
+        ARKStepFree(&mem_);
+      }
     }
     if (ls_) SUNLinSolFree(ls_);
     if (A_) SUNMatDestroy(A_);
     N_VDestroy(atol_);
     N_VDestroy(y_);
+    N_VDestroy(out_);
     SUNContext_Free(&ctx_);
   }
 
   bool start(double t0, const double* y0) override {
+    if (!ok_) return false;
     steps_before_ += current_steps();
     for (int i = 0; i < prob_.n; ++i) NV_Ith_S(y_, i) = y0[i];
-    const int flag = explicit_ ? ERKStepReInit(mem_, &Arkode::rhs, t0, y_)
-                               : ARKStepReInit(mem_, nullptr, &Arkode::rhs, t0, y_);
-    return flag == ARK_SUCCESS;
-  }
-  void set_root_direction(const int* dirs) override {
+    cur_.t = t0;
+    std::copy(y0, y0 + prob_.n, cur_.y.begin());
+    cur_.has_f = false;
     if (explicit_) {
-      ERKStepSetRootDirection(mem_, const_cast<int*>(dirs));
-    } else {
-      ARKStepSetRootDirection(mem_, const_cast<int*>(dirs));
+      return check(ERKStepReInit(mem_, &Arkode::rhs, t0, y_), "ERKStepReInit") &&
+             check(ERKStepSetStopTime(mem_, t_end_), "ERKStepSetStopTime");
     }
+    return check(ARKStepReInit(mem_, nullptr, &Arkode::rhs, t0, y_), "ARKStepReInit") &&
+           check(ARKStepSetStopTime(mem_, t_end_), "ARKStepSetStopTime");
   }
-  Outcome advance(double tout, double* y, double* t) override {
-    const int flag = explicit_ ? ERKStepEvolve(mem_, tout, y_, t, ARK_NORMAL)
-                               : ARKStepEvolve(mem_, tout, y_, t, ARK_NORMAL);
+  bool step(double* y, double* t) override {
+    std::swap(prev_, cur_);
+    const int flag = explicit_ ? ERKStepEvolve(mem_, t_end_, y_, t, ARK_ONE_STEP)
+                               : ARKStepEvolve(mem_, t_end_, y_, t, ARK_ONE_STEP);
     for (int i = 0; i < prob_.n; ++i) y[i] = NV_Ith_S(y_, i);
-    if (flag == ARK_ROOT_RETURN) return kRoot;
-    if (flag >= 0) return kReached;
-    if (error_.empty()) error_ = "ARKODE flag " + std::to_string(flag);
-    return kFailed;
+    cur_.t = *t;
+    std::copy(y, y + prob_.n, cur_.y.begin());
+    cur_.has_f = false;
+    return check(flag, explicit_ ? "ERKStepEvolve" : "ARKStepEvolve");
   }
-  void root_info(int* which) override {
-    if (explicit_) {
-      ERKStepGetRootInfo(mem_, which);
-    } else {
-      ARKStepGetRootInfo(mem_, which);
+  bool dense(double t, double* y) override {
+    N_VSetArrayPointer(y, out_);  // a view of the caller's array: no allocation per call
+    const int flag = explicit_ ? ERKStepGetDky(mem_, t, 0, out_) : ARKStepGetDky(mem_, t, 0, out_);
+    return check(flag, explicit_ ? "ERKStepGetDky" : "ARKStepGetDky");
+  }
+  bool sample(double t, double* y) override {
+    if (!slope(&prev_) || !slope(&cur_)) return false;
+    // cubic Hermite on [prev, cur]
+    const double h = cur_.t - prev_.t;
+    const double s = h != 0.0 ? (t - prev_.t) / h : 1.0;
+    const double h00 = (1 + 2 * s) * (1 - s) * (1 - s), h10 = s * (1 - s) * (1 - s);
+    const double h01 = s * s * (3 - 2 * s), h11 = -s * s * (1 - s);
+    for (int i = 0; i < prob_.n; ++i) {
+      y[i] = h00 * prev_.y[i] + h * h10 * prev_.f[i] + h01 * cur_.y[i] + h * h11 * cur_.f[i];
     }
+    return true;
   }
   long steps() override { return steps_before_ + current_steps(); }
   std::string error() const override { return error_; }
 
  private:
+  bool setup_erk(const Options& opt) {
+    mem_ = ERKStepCreate(&Arkode::rhs, 0.0, y_, ctx_);
+    if (!mem_) return fail("ERKStepCreate failed");
+    ERKStepSetErrHandlerFn(mem_, &Arkode::on_error, this);
+    // ARKODE names tables NAME_stages_embedding_order. Dense output: ARKODE's default degree-5
+    // Hermite interpolant (two extra right-hand sides per call; cubic Hermite or Lagrange lose
+    // one to two digits at the 1 ms grid, measured with `fivebar accuracy`)
+    const auto table = opt.method == Method::kArkodeErk45   ? ARKODE_DORMAND_PRINCE_7_4_5
+                       : opt.method == Method::kArkodeErk65 ? ARKODE_VERNER_8_5_6
+                                                            : ARKODE_FEHLBERG_13_7_8;
+    return check(ERKStepSetTableNum(mem_, table), "ERKStepSetTableNum") &&
+           check(ERKStepSVtolerances(mem_, opt.rtol, atol_), "ERKStepSVtolerances") &&
+           check(ERKStepSetUserData(mem_, this), "ERKStepSetUserData") &&
+           check(ERKStepSetMaxNumSteps(mem_, opt.max_steps), "ERKStepSetMaxNumSteps");
+  }
+  bool setup_dirk(const Options& opt) {
+    mem_ = ARKStepCreate(nullptr, &Arkode::rhs, 0.0, y_, ctx_);
+    if (!mem_) return fail("ARKStepCreate failed");
+    ARKStepSetErrHandlerFn(mem_, &Arkode::on_error, this);
+    bool ok = check(ARKStepSetTableNum(mem_, ARKODE_ARK548L2SA_DIRK_8_4_5, ARKODE_ERK_NONE),
+                    "ARKStepSetTableNum");
+    // Lagrange dense output for stiff states, as ARKODE recommends: the Hermite one overshoots
+    // LuGre bristles at output times; elsewhere Hermite is two digits more accurate
+    // (both measured with `fivebar stress` and `fivebar accuracy`)
+    if (prob_.stiff_states) {
+      ok = ok && check(ARKStepSetInterpolantType(mem_, ARK_INTERP_LAGRANGE),
+                       "ARKStepSetInterpolantType");
+    }
+    A_ = SUNDenseMatrix(prob_.n, prob_.n, ctx_);
+    ls_ = SUNLinSol_Dense(y_, A_, ctx_);
+    return ok && check(ARKStepSVtolerances(mem_, opt.rtol, atol_), "ARKStepSVtolerances") &&
+           check(ARKStepSetUserData(mem_, this), "ARKStepSetUserData") &&
+           check(ARKStepSetMaxNumSteps(mem_, opt.max_steps), "ARKStepSetMaxNumSteps") &&
+           check(ARKStepSetLinearSolver(mem_, ls_, A_), "ARKStepSetLinearSolver");
+  }
+  bool fail(const char* what) {
+    error_ = what;
+    return false;
+  }
+  bool check(int flag, const char* call) {
+    const char* name = explicit_ ? ERKStepGetReturnFlagName(flag) : ARKStepGetReturnFlagName(flag);
+    return check_flag(flag, call, name, &error_);
+  }
+  /// f(t, y) at one end of the step: from the last right-hand side ARKODE evaluated there (the
+  /// first-same-as-last stage of Dormand-Prince), else evaluated here.
+  bool slope(StepEnd* e) {
+    if (e->has_f) return true;
+    const size_t bytes = sizeof(double) * prob_.n;
+    if (cache_.has_f && cache_.t == e->t && std::memcmp(cache_.y.data(), e->y.data(), bytes) == 0) {
+      e->f = cache_.f;
+    } else if (prob_.rhs(e->t, e->y.data(), e->f.data(), prob_.user) != 0) {
+      error_ = "right-hand side failed at a sampled point";
+      return false;
+    }
+    e->has_f = true;
+    return true;
+  }
   long current_steps() {
     long n = 0;
+    if (!mem_) return 0;
     if (explicit_) {
       ERKStepGetNumSteps(mem_, &n);
     } else {
@@ -123,11 +172,17 @@ class Arkode final : public Integrator {
   }
   static int rhs(realtype t, N_Vector y, N_Vector ydot, void* self) {
     auto* me = static_cast<Arkode*>(self);
-    return me->prob_.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot), me->prob_.user);
-  }
-  static int root(realtype t, N_Vector y, realtype* g, void* self) {
-    auto* me = static_cast<Arkode*>(self);
-    return me->prob_.root(t, N_VGetArrayPointer(y), g, me->prob_.user);
+    const double* yp = N_VGetArrayPointer(y);
+    double* fp = N_VGetArrayPointer(ydot);
+    const int flag = me->prob_.rhs(t, yp, fp, me->prob_.user);
+    StepEnd& c = me->cache_;  // the last evaluation, for slope()
+    c.has_f = flag == 0;
+    if (c.has_f) {
+      c.t = t;
+      std::copy(yp, yp + me->prob_.n, c.y.begin());
+      std::copy(fp, fp + me->prob_.n, c.f.begin());
+    }
+    return flag;
   }
   static void on_error(int code, const char* module, const char* function, char* msg,
                        void* self) {
@@ -138,13 +193,17 @@ class Arkode final : public Integrator {
 
   OdeProblem prob_;
   bool explicit_;
+  double t_end_;
+  bool ok_ = false;
   SUNContext ctx_ = nullptr;
   N_Vector y_ = nullptr;
+  N_Vector out_ = nullptr;  ///< wraps the caller's array for dense output
   N_Vector atol_ = nullptr;
   void* mem_ = nullptr;
   SUNMatrix A_ = nullptr;
   SUNLinearSolver ls_ = nullptr;
   long steps_before_ = 0;
+  StepEnd prev_, cur_, cache_;
   std::string error_;
 };
 

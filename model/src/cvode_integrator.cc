@@ -1,5 +1,6 @@
 // CVODE (Adams with fixed-point iteration, BDF with Newton and a dense Jacobian) behind the
-// Integrator interface. The only file that includes CVODE.
+// Integrator interface. The only file that includes CVODE. Every call's flag is checked; the
+// flag names come from CVodeGetReturnFlagName.
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
 #include <sunlinsol/sunlinsol_dense.h>
@@ -15,78 +16,80 @@ namespace {
 
 class Cvode final : public Integrator {
  public:
-  Cvode(const OdeProblem& prob, const Options& opt, double t_end) : prob_(prob) {
+  Cvode(const OdeProblem& prob, const Options& opt, double t_end) : prob_(prob), t_end_(t_end) {
     SUNContext_Create(nullptr, &ctx_);
     y_ = N_VNew_Serial(prob.n, ctx_);
     N_VEnableFusedOps_Serial(y_, SUNTRUE);  // fewer vector calls per step: the state is tiny
     N_VConst(0.0, y_);
+    out_ = N_VMake_Serial(prob.n, nullptr, ctx_);
     const bool adams = opt.method == Method::kCvodeAdams;
     mem_ = CVodeCreate(adams ? CV_ADAMS : CV_BDF, ctx_);
+    ok_ = mem_ != nullptr;
+    if (!ok_) {
+      error_ = "CVodeCreate failed";
+      return;
+    }
     CVodeSetErrHandlerFn(mem_, &Cvode::on_error, this);
-    CVodeInit(mem_, &Cvode::rhs, 0.0, y_);
+    ok_ = check(CVodeInit(mem_, &Cvode::rhs, 0.0, y_), "CVodeInit");
     atol_ = N_VNew_Serial(prob.n, ctx_);
     for (int i = 0; i < prob.n; ++i) NV_Ith_S(atol_, i) = opt.atol * prob.atol_scale[i];
-    CVodeSVtolerances(mem_, opt.rtol, atol_);
-    if (prob.max_step > 0.0) CVodeSetMaxStep(mem_, prob.max_step);
-    CVodeSetUserData(mem_, this);
-    CVodeSetMaxNumSteps(mem_, opt.max_steps);
-    CVodeSetStopTime(mem_, t_end);
+    ok_ = ok_ && check(CVodeSVtolerances(mem_, opt.rtol, atol_), "CVodeSVtolerances") &&
+          check(CVodeSetUserData(mem_, this), "CVodeSetUserData") &&
+          check(CVodeSetMaxNumSteps(mem_, opt.max_steps), "CVodeSetMaxNumSteps");
     if (adams) {
       nls_ = SUNNonlinSol_FixedPoint(y_, 0, ctx_);
-      CVodeSetNonlinearSolver(mem_, nls_);
+      ok_ = ok_ && check(CVodeSetNonlinearSolver(mem_, nls_), "CVodeSetNonlinearSolver");
     } else {
       A_ = SUNDenseMatrix(prob.n, prob.n, ctx_);
       ls_ = SUNLinSol_Dense(y_, A_, ctx_);
-      CVodeSetLinearSolver(mem_, ls_, A_);
-    }
-    if (prob.nroots > 0) {
-      CVodeRootInit(mem_, prob.nroots, &Cvode::root);
-      CVodeSetNoInactiveRootWarn(mem_);
+      ok_ = ok_ && check(CVodeSetLinearSolver(mem_, ls_, A_), "CVodeSetLinearSolver");
     }
   }
   ~Cvode() override {
-    CVodeFree(&mem_);
+    if (mem_) CVodeFree(&mem_);
     if (ls_) SUNLinSolFree(ls_);
     if (A_) SUNMatDestroy(A_);
     if (nls_) SUNNonlinSolFree(nls_);
-    N_VDestroy(atol_);
+    if (atol_) N_VDestroy(atol_);
     N_VDestroy(y_);
+    N_VDestroy(out_);
     SUNContext_Free(&ctx_);
   }
 
   bool start(double t0, const double* y0) override {
+    if (!ok_) return false;
     steps_before_ += current_steps();
     for (int i = 0; i < prob_.n; ++i) NV_Ith_S(y_, i) = y0[i];
-    return CVodeReInit(mem_, t0, y_) == CV_SUCCESS;
+    // the stop time is cleared once reached and is not kept across a re-initialization
+    return check(CVodeReInit(mem_, t0, y_), "CVodeReInit") &&
+           check(CVodeSetStopTime(mem_, t_end_), "CVodeSetStopTime");
   }
-  void set_root_direction(const int* dirs) override {
-    CVodeSetRootDirection(mem_, const_cast<int*>(dirs));
-  }
-  Outcome advance(double tout, double* y, double* t) override {
-    const int flag = CVode(mem_, tout, y_, t, CV_NORMAL);
+  bool step(double* y, double* t) override {
+    const int flag = CVode(mem_, t_end_, y_, t, CV_ONE_STEP);
     for (int i = 0; i < prob_.n; ++i) y[i] = NV_Ith_S(y_, i);
-    if (flag == CV_ROOT_RETURN) return kRoot;
-    if (flag >= 0) return kReached;  // CV_SUCCESS, CV_TSTOP_RETURN
-    if (error_.empty()) error_ = CVodeGetReturnFlagName(flag);
-    return kFailed;
+    return check(flag, "CVode");
   }
-  void root_info(int* which) override { CVodeGetRootInfo(mem_, which); }
+  bool dense(double t, double* y) override {
+    N_VSetArrayPointer(y, out_);  // a view of the caller's array: no allocation per call
+    const int flag = CVodeGetDky(mem_, t, 0, out_);
+    return check(flag, "CVodeGetDky");
+  }
+  bool sample(double t, double* y) override { return dense(t, y); }
   long steps() override { return steps_before_ + current_steps(); }
   std::string error() const override { return error_; }
 
  private:
+  bool check(int flag, const char* call) {
+    return check_flag(flag, call, CVodeGetReturnFlagName(flag), &error_);
+  }
   long current_steps() {
     long n = 0;
-    CVodeGetNumSteps(mem_, &n);
+    if (mem_) CVodeGetNumSteps(mem_, &n);
     return n;
   }
   static int rhs(realtype t, N_Vector y, N_Vector ydot, void* self) {
     auto* me = static_cast<Cvode*>(self);
     return me->prob_.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot), me->prob_.user);
-  }
-  static int root(realtype t, N_Vector y, realtype* g, void* self) {
-    auto* me = static_cast<Cvode*>(self);
-    return me->prob_.root(t, N_VGetArrayPointer(y), g, me->prob_.user);
   }
   static void on_error(int code, const char* module, const char* function, char* msg,
                        void* self) {
@@ -96,8 +99,11 @@ class Cvode final : public Integrator {
   }
 
   OdeProblem prob_;
+  double t_end_;
+  bool ok_ = false;
   SUNContext ctx_ = nullptr;
   N_Vector y_ = nullptr;
+  N_Vector out_ = nullptr;  ///< wraps the caller's array for dense output
   N_Vector atol_ = nullptr;
   void* mem_ = nullptr;
   SUNMatrix A_ = nullptr;

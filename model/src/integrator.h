@@ -1,5 +1,7 @@
 // Internal: one interface over the SUNDIALS integrators (CVODE in cvode_integrator.cc, ARKODE in
-// arkode_integrator.cc), so the simulator's event loop is written once.
+// arkode_integrator.cc), so the simulator's event loop is written once. The integrators advance
+// one internal step at a time; switch detection (zeros of the joints' relative rates, holding
+// margins) is the simulator's, on the integrators' dense output, identical for every method.
 #pragma once
 
 #include <memory>
@@ -10,36 +12,34 @@
 
 namespace fivebar::sim::detail {
 
-/// ODE right-hand side and root functions with SUNDIALS' return convention:
-/// 0 ok, > 0 recoverable (retry with a smaller step), < 0 fatal.
+/// ODE right-hand side with SUNDIALS' return convention: 0 ok, > 0 recoverable (retry with a
+/// smaller step), < 0 fatal.
 using RhsFn = int (*)(double t, const double* y, double* ydot, void* user);
-using RootFn = int (*)(double t, const double* y, double* g, void* user);
 
 struct OdeProblem {
   int n = 0;
-  int nroots = 0;
   RhsFn rhs = nullptr;
-  RootFn root = nullptr;
   void* user = nullptr;
   /// absolute tolerance of each state (size n), scaling Options::atol
   std::vector<double> atol_scale;
-  /// largest step [s], 0 for none (a step must not jump over a double zero of a joint's rate)
-  double max_step = 0.0;
   bool stiff_states = false;  ///< the state has stiff components (LuGre bristles)
 };
 
 class Integrator {
  public:
-  enum Outcome { kReached = 0, kRoot = 1, kFailed = -1 };
   virtual ~Integrator() = default;
   /// (Re)starts the integration at (t0, y0), forgetting the history (used after every switch).
+  /// False with error() set if SUNDIALS refuses.
   virtual bool start(double t0, const double* y0) = 0;
-  /// Sets the direction of each root function to watch: +1 increasing, -1 decreasing, 0 both.
-  virtual void set_root_direction(const int* dirs) = 0;
-  /// Advances towards tout; y and *t receive the state at tout (dense output) or at a root.
-  virtual Outcome advance(double tout, double* y, double* t) = 0;
-  /// Which root functions fired at the last kRoot (+1/-1 per function, 0 if not).
-  virtual void root_info(int* which) = 0;
+  /// One internal step, never past the end time given at construction; y and *t receive the
+  /// state at the step's end. False with error() set on failure.
+  virtual bool step(double* y, double* t) = 0;
+  /// The integrator's own dense output at t within the last step (accurate to its order).
+  virtual bool dense(double t, double* y) = 0;
+  /// A cheaper interpolant at t within the last step, for scanning switch functions: CVODE's
+  /// dense output (free), or a cubic Hermite from the step's end values and slopes for ARKODE
+  /// (whose degree-5 dense output costs two right-hand sides per call).
+  virtual bool sample(double t, double* y) = 0;
   /// Steps taken since construction, over all starts.
   virtual long steps() = 0;
   /// The solver's message for the last failure.
@@ -55,6 +55,14 @@ inline std::unique_ptr<Integrator> make_integrator(const OdeProblem& prob, const
     return make_cvode(prob, opt, t_end);
   }
   return make_arkode(prob, opt, t_end);
+}
+
+/// Records a failed SUNDIALS call ("CVodeSetMaxStep: CV_ILL_INPUT") in *error unless a more
+/// specific message (from the error handler) is there; returns flag >= 0.
+inline bool check_flag(int flag, const char* call, const char* flag_name, std::string* error) {
+  if (flag >= 0) return true;
+  if (error->empty()) *error = std::string(call) + ": " + (flag_name ? flag_name : "failed");
+  return false;
 }
 
 }  // namespace fivebar::sim::detail

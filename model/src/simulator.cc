@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/lock.h"
 #include "fivebar/model/rest.h"
 #include "integrator.h"
 
@@ -39,21 +41,44 @@ namespace {
 
 constexpr int kStates = 7;   // th1, th2, w1, w2, E_diss, W_in, W_ext
 constexpr int kBristle = 7;  // LuGre scenes add z_1..z_5 from here
+/// interior points of every step at which the switch functions are sampled (a rate that
+/// crosses zero and comes back within one step is seen if it stays across for a quarter step)
+constexpr int kSamples = 3;
+/// a joint whose |w| is below this at a decision is at rest [rad/s] (a located crossing leaves
+/// |w| ~ 1e-13; drift of a stuck coupler joint's rate stays near the integration tolerance)
+constexpr double kRestRate = 1e-9;
+/// a switch function that is exactly zero after a decision (a joint that starts to slip from
+/// rest) is armed once it is positive; before that it fires only below -kUnarmedSlack
+constexpr double kUnarmedSlack = 1e-9;
+/// switches closer than this [s, relative to t] count as one instant; more than
+/// kMaxSwitchesAtOnce of them means the modes chatter (no consistent motion)
+constexpr double kSameInstant = 1e-12;
+constexpr int kMaxSwitchesAtOnce = 64;
 
-/// What the C callbacks see.
+/// Switch functions: one per joint, and the lock margin 1 - s of a locked mechanism (slot 5).
+using Switches = std::array<double, 6>;
+constexpr int kLockSlot = 5;
+/// relaxed consistency, used only when no combination is strictly consistent (at a located
+/// breakaway the accelerations are ~1e-14 and round-off decides their signs):
+/// relative accelerations >= -kSlackAccel [rad/s^2], margins >= -kSlackTorque [N m]
+constexpr double kSlackAccel = 1e-9;
+constexpr double kSlackTorque = 1e-12;
+
+/// What the C callbacks and the event loop see.
 struct Context {
   const Params<double>* params = nullptr;
   const LoadFunction* loads = nullptr;
   EvalOptions eval;
   bool use_slip = false;                ///< Coulomb sign from the segment's slip directions
-  std::array<int, 5> slip{};            ///< slip direction of each joint in this segment
-  std::array<int, 5> root_joint{};      ///< root function index -> joint
-  int nroots = 0;
+  bool stick = false;                   ///< exact stick-slip (Options::stick, with use_slip)
+  std::array<int, 5> slip{};            ///< mode of each joint in this segment
+  bool locked = false;                  ///< all joints stuck, held as lock_analysis finds
+  std::array<bool, 5> watched{};        ///< joints with a Coulomb part: switch functions
   bool lugre = false;                   ///< bristle states follow the 7 base states
   bool full_rows = true;                ///< Options::full_rows
+  int n = kStates;                      ///< state size
   long rhs_evaluations = 0;
   Status failure;                       ///< last failure inside a callback
-  double failure_t = 0;
 };
 
 Status at_time(const Status& st, double t, double th1, double th2) {
@@ -63,9 +88,18 @@ Status at_time(const Status& st, double t, double th1, double th2) {
   return Status::Error(st.code, msg.str());
 }
 
+const char* joint_name(int k) {
+  static const char* names[5] = {"O", "B", "C", "D", "D0"};
+  return names[k];
+}
+
 int rhs(double t, const double* y, double* ydot, void* user) {
   auto& c = *static_cast<Context*>(user);
   ++c.rhs_evaluations;
+  if (c.locked) {  // at rest, held: nothing moves, no power flows
+    std::fill(ydot, ydot + c.n, 0.0);
+    return 0;
+  }
   Evaluation<double> ev;
   std::array<double, 5> z{};
   if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
@@ -73,7 +107,6 @@ int rhs(double t, const double* y, double* ydot, void* user) {
                                      c.use_slip ? &c.slip : nullptr, c.eval, &ev, &z);
   if (!st.ok()) {
     c.failure = at_time(st, t, y[0], y[1]);
-    c.failure_t = t;
     return 1;  // recoverable: the integrator retries with a smaller step
   }
   if (c.lugre) std::copy(ev.zdot.begin(), ev.zdot.end(), ydot + kBristle);
@@ -84,7 +117,7 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   ydot[4] = ev.P_diss;
   ydot[5] = ev.P_in;
   ydot[6] = ev.P_ext;
-  for (int i = 2; i < (c.lugre ? kStates + 5 : kStates); ++i) {
+  for (int i = 2; i < c.n; ++i) {
     if (!std::isfinite(ydot[i])) {
       c.failure = at_time(Status::Error(StatusCode::kSolverFailed, "non-finite acceleration"), t,
                           y[0], y[1]);
@@ -107,84 +140,303 @@ bool any_stuck(const std::array<int, 5>& slip) {
   return std::find(slip.begin(), slip.end(), kStuck) != slip.end();
 }
 
-/// Root functions: the relative rate of each slipping joint (zero where sign(w) would jump) and
-/// the holding margin mu_s r N - |holding torque| of each stuck joint (zero at breakaway).
-int roots(double t, const double* y, double* g, void* user) {
-  auto& c = *static_cast<Context*>(user);
-  if (any_stuck(c.slip)) {
-    Evaluation<double> ev;
-    const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &c.slip,
-                                       c.eval, &ev);
-    if (!st.ok()) {
-      c.failure = at_time(st, t, y[0], y[1]);
-      return -1;
-    }
-    for (int r = 0; r < c.nroots; ++r) {
-      const int j = c.root_joint[r];
-      g[r] = c.slip[j] == kStuck ? ev.hold_margin[j] : ev.w[j];
-    }
-    return 0;
+/// Switch functions: s_k w_k of a slipping joint (positive while its rate keeps the slip
+/// direction) and the holding margin mu_s r_k N_k - |holding torque| of a stuck one
+/// (non-negative while friction holds it); +1 for joints without a Coulomb part.
+Status switch_values(Context& c, double t, const double* y, Switches* g) {
+  g->fill(1.0);
+  if (c.locked) {
+    LockAnalysis lock;
+    const Status st = lock_analysis(*c.params, (*c.loads)(t), y[0], y[1], c.eval, &lock);
+    if (!st.ok()) return at_time(st, t, y[0], y[1]);
+    (*g)[kLockSlot] = 1.0 - lock.ratio;
+    return Status::Ok();
   }
   std::array<double, 5> w;
-  if (!joint_rates(*c.params, y, &w)) {
-    c.failure = at_time(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t,
-                        y[0], y[1]);
-    return -1;
+  Evaluation<double> ev;
+  if (any_stuck(c.slip)) {
+    const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &c.slip,
+                                       c.eval, &ev);
+    if (!st.ok()) return at_time(st, t, y[0], y[1]);
+    w = ev.w;
+  } else if (!joint_rates(*c.params, y, &w)) {
+    return at_time(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t, y[0],
+                   y[1]);
   }
-  for (int r = 0; r < c.nroots; ++r) g[r] = w[c.root_joint[r]];
-  return 0;
+  for (int k = 0; k < 5; ++k) {
+    if (!c.watched[k]) continue;
+    (*g)[k] = c.slip[k] == kStuck ? ev.hold_margin[k] : c.slip[k] * w[k];
+  }
+  return Status::Ok();
 }
 
-/// Removes the component of the crank rates that moves the stuck joints (after a stick the
-/// located state has |w_k| at the root-finding tolerance; a stuck crank is then exactly at rest).
-void project_rates(const Params<double>& p, const std::array<int, 5>& slip, double* y) {
+/// The switch functions' last values and which of them are armed (have been positive since the
+/// last decision: only then does reaching zero mean a switch).
+struct Watch {
+  Switches g{};
+  std::array<bool, 6> armed{};
+};
+using Fired = std::array<bool, 6>;
+
+/// Switch functions that fired at the values g (joints 0..4, the lock in slot 5).
+Fired fired(const Context& c, const Watch& w, const Switches& g) {
+  Fired out{};
+  for (int k = 0; k < 6; ++k) {
+    const bool active = k == kLockSlot ? c.locked : c.watched[k] && !c.locked;
+    if (active) out[k] = w.armed[k] ? g[k] <= 0.0 : g[k] < -kUnarmedSlack;
+  }
+  return out;
+}
+
+template <size_t n>
+bool any_of(const std::array<bool, n>& a) {
+  return std::any_of(a.begin(), a.end(), [](bool b) { return b; });
+}
+
+void advance_watch(Watch* w, const Switches& g) {
+  for (int k = 0; k < 6; ++k) w->armed[k] = w->armed[k] || g[k] > 0.0;
+  w->g = g;
+}
+
+/// Scans the last step (tp, tc] for the first point where a switch function fired: kSamples
+/// interior points of the cheap interpolant (confirmed on the dense output), then the step's
+/// end. Found: true with the bracket [*ta, *tb]. Not found: the watch moves to tc.
+Status scan_step(Context& c, detail::Integrator& integ, double tp, double tc, const double* yc,
+                 Watch* watch, bool* found, double* ta, double* tb) {
+  *found = false;
+  Watch w = *watch;
+  double y[kStates + 5];
+  double t_prev = tp;
+  for (int i = 1; i <= kSamples + 1; ++i) {
+    const bool end = i == kSamples + 1;
+    const double ti = end ? tc : tp + (tc - tp) * i / (kSamples + 1);
+    if (end) {
+      std::copy(yc, yc + c.n, y);
+    } else if (!integ.sample(ti, y)) {  // the right-hand side failed: say why
+      return c.failure.ok() ? Status::Error(StatusCode::kSolverFailed, integ.error()) : c.failure;
+    }
+    Switches g;
+    Status st = switch_values(c, ti, y, &g);
+    if (!st.ok()) return st;
+    if (!end && any_of(fired(c, w, g))) {  // confirm on the accurate interpolant
+      if (!integ.dense(ti, y)) return Status::Error(StatusCode::kSolverFailed, integ.error());
+      st = switch_values(c, ti, y, &g);
+      if (!st.ok()) return st;
+    }
+    if (any_of(fired(c, w, g))) {
+      *found = true;
+      *ta = t_prev;
+      *tb = ti;
+      return Status::Ok();
+    }
+    advance_watch(&w, g);
+    t_prev = ti;
+  }
+  *watch = w;
+  return Status::Ok();
+}
+
+/// Bisection on the dense output of [ta, tb] (nothing fired at ta, something at tb) down to
+/// the time resolution of doubles at tb; y receives the state at the located tb, `which` the
+/// switch functions that fired there.
+Status locate_switch(Context& c, detail::Integrator& integ, const Watch& watch, double ta,
+                     double tb, double* y, double* te, Fired* which) {
+  const double tol = 8 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(tb));
+  Switches g;
+  while (tb - ta > tol) {
+    const double tm = 0.5 * (ta + tb);
+    if (!integ.dense(tm, y)) return Status::Error(StatusCode::kSolverFailed, integ.error());
+    const Status st = switch_values(c, tm, y, &g);
+    if (!st.ok()) return st;
+    (any_of(fired(c, watch, g)) ? tb : ta) = tm;
+  }
+  if (!integ.dense(tb, y)) return Status::Error(StatusCode::kSolverFailed, integ.error());
+  const Status st = switch_values(c, tb, y, &g);
+  if (!st.ok()) return st;
+  *which = fired(c, watch, g);
+  *te = tb;
+  return Status::Ok();
+}
+
+/// Projects the crank rates so that the joints in `mask` do not move (w_k = 0): one
+/// independent constraint leaves one degree of freedom, two (or more) bring the mechanism to
+/// rest. Returns the number of independent constraints. After a located switch |w_k| is at the
+/// location tolerance; projecting makes the decided state exact (a stuck crank exactly at rest).
+int project_rates(const Params<double>& p, const std::array<bool, 5>& mask, double* y) {
   Kinematics<double> k;
-  if (!solve_kinematics(p, y[0], y[1], &k).ok()) return;
+  if (!solve_kinematics(p, y[0], y[1], &k).ok()) return 0;
+  std::vector<Row2<double>> rows;
+  for (int j = 0; j < 5; ++j) {
+    if (mask[j]) rows.push_back(fivebar::detail::joint_row(k, j));
+  }
+  if (rows.empty()) return 0;
   Vec2<double> thd(y[2], y[3]);
-  int ns = 0;
-  Mat2<double> Js = Mat2<double>::Zero();
-  for (int j = 0; j < 5 && ns < 2; ++j) {
-    if (slip[j] == kStuck) Js.row(ns++) = fivebar::detail::joint_row(k, j);
+  // two independent rows: at rest
+  for (size_t a = 0; a < rows.size(); ++a) {
+    for (size_t b = a + 1; b < rows.size(); ++b) {
+      const double det = rows[a][0] * rows[b][1] - rows[a][1] * rows[b][0];
+      if (std::abs(det) > 1e-9 * rows[a].norm() * rows[b].norm()) {
+        y[2] = y[3] = 0.0;
+        return 2;
+      }
+    }
   }
-  if (ns == 1) {
-    const Row2<double> J = Js.row(0);
-    thd -= J.transpose() * (J.dot(thd) / J.squaredNorm());
-  } else if (ns == 2) {
-    thd.setZero();  // two independent constraints lock the mechanism
-  }
-  y[2] = thd[0];
-  y[3] = thd[1];
-  if (slip[0] == kStuck) y[2] = 0.0;
-  if (slip[4] == kStuck) y[3] = 0.0;
+  const auto& J = *std::max_element(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
+    return a.squaredNorm() < b.squaredNorm();
+  });
+  if (J.squaredNorm() == 0.0) return 0;
+  thd -= J.transpose() * (J.dot(thd) / J.squaredNorm());
+  y[2] = mask[0] ? 0.0 : thd[0];  // a crank joint's rate is the crank's: exactly zero
+  y[3] = mask[4] ? 0.0 : thd[1];
+  return 1;
 }
 
-/// Tries to stick joint j at (t, y): true if friction can hold it (holding margin >= 0).
-/// Otherwise `direction` receives the sign of the holding torque it would need, which is the
-/// direction in which the joint slips.
-bool can_stick(Context& c, double t, const double* y, int j, int* direction) {
-  std::array<int, 5> trial = c.slip;
-  trial[j] = kStuck;
+/// Whether the joint modes `slip` are consistent at (t, y) for the joints in `rest`: every
+/// slipping one accelerates in its slip direction (beyond -slack_accel), every stuck one is held
+/// (margin >= -slack_torque).
+bool consistent(Context& c, double t, const double* y, const std::array<int, 5>& slip,
+                const std::array<bool, 5>& rest, double slack_accel, double slack_torque,
+                Vec2<double>* thdd, Status* failure) {
   Evaluation<double> ev;
   const Status st =
-      forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &trial, c.eval, &ev);
+      forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &slip, c.eval, &ev);
   if (!st.ok()) {
-    *direction = -c.slip[j];
+    if (failure->ok()) *failure = st;
     return false;
   }
-  *direction = sign_of(ev.Mf[j]);
-  if (*direction == 0) *direction = -c.slip[j];
-  return ev.hold_margin[j] >= 0.0;
+  const auto wdot = fivebar::detail::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
+  for (int k = 0; k < 5; ++k) {
+    if (!rest[k] || slip[k] == 0) continue;
+    const bool ok = slip[k] == kStuck ? ev.hold_margin[k] >= -slack_torque
+                                      : (slack_accel == 0.0 ? slip[k] * wdot[k] > 0.0
+                                                            : slip[k] * wdot[k] >= -slack_accel);
+    if (!ok) return false;
+  }
+  *thdd = ev.thdd;
+  return true;
 }
 
-/// Slip directions for the joints in `undecided` (at rest relative to each other): the direction
-/// of the relative acceleration they get with those directions (model.md; reference README).
-/// A short fixed-point over the sign vector; returns the last evaluation's status.
-Status decide_slip(Context& c, double t, const double* y, const std::array<bool, 5>& undecided) {
+/// The candidate modes of the joints at rest while the mechanism may move: each slips either
+/// way or is stuck, with at most one stuck joint (two would lock the mechanism: see the lock).
+std::vector<std::array<int, 5>> candidate_modes(const Context& c, const std::array<bool, 5>& rest,
+                                                const std::array<bool, 5>& no_stick) {
+  auto can_hold = [&](int k) {
+    return c.stick && !no_stick[k] && holding_bound(c.params->friction, k) > 0.0;
+  };
+  std::vector<int> idx;
   for (int k = 0; k < 5; ++k) {
-    if (undecided[k]) c.slip[k] = 0;
+    if (rest[k]) idx.push_back(k);
   }
-  if (std::none_of(undecided.begin(), undecided.end(), [](bool u) { return u; })) {
+  int combos = 1;
+  for (size_t i = 0; i < idx.size(); ++i) combos *= 3;
+  std::vector<std::array<int, 5>> out;
+  for (int code = 0; code < combos; ++code) {
+    std::array<int, 5> m = c.slip;
+    int stuck = 0, x = code;
+    bool allowed = true;
+    for (int k : idx) {
+      const int option = x % 3;
+      x /= 3;
+      m[k] = option == 0 ? +1 : option == 1 ? -1 : kStuck;
+      if (option == 2 && (!can_hold(k) || ++stuck > 1)) allowed = false;
+    }
+    if (allowed) out.push_back(m);
+  }
+  return out;
+}
+
+/// The consistent candidates (strictly, or within the slacks) and their accelerations.
+void consistent_candidates(Context& c, double t, const double* y,
+                           const std::vector<std::array<int, 5>>& candidates,
+                           const std::array<bool, 5>& rest, bool relaxed,
+                           std::vector<std::array<int, 5>>* found,
+                           std::vector<Vec2<double>>* accel, Status* failure) {
+  for (const auto& m : candidates) {
+    Vec2<double> thdd;
+    if (!consistent(c, t, y, m, rest, relaxed ? kSlackAccel : 0.0, relaxed ? kSlackTorque : 0.0,
+                    &thdd, failure)) {
+      continue;
+    }
+    found->push_back(m);
+    accel->push_back(thdd);
+  }
+}
+
+std::string rest_list(const std::array<bool, 5>& rest) {
+  std::string out = " (joints at rest:";
+  for (int k = 0; k < 5; ++k) {
+    if (rest[k]) out += std::string(" ") + joint_name(k);
+  }
+  return out + ")";
+}
+
+/// Chooses the modes of the joints in `rest` (at rest, or stuck) so that the motion is
+/// consistent; the other joints slip in the direction of their rate. With every joint at rest
+/// the mechanism may stay locked (lock_analysis). No consistent combination, or several with
+/// different motions (Painleve-type), is an error.
+Status decide_modes(Context& c, double t, const double* y, const std::array<bool, 5>& rest,
+                    const std::array<bool, 5>& no_stick, bool all_rest, bool may_lock,
+                    Stats* stats) {
+  ++stats->mode_decisions;
+  std::array<double, 5> w{};
+  joint_rates(*c.params, y, &w);
+  c.locked = false;
+  for (int k = 0; k < 5; ++k) {
+    if (rest[k]) continue;
+    const int s = sign_of(w[k]);
+    if (c.watched[k] && c.slip[k] != s && c.slip[k] != kStuck && s != 0) ++stats->mode_corrections;
+    c.slip[k] = s;
+  }
+  if (!any_of(rest)) return Status::Ok();
+  bool lock = false;
+  if (all_rest && may_lock && c.stick) {
+    LockAnalysis la;
+    lock = lock_analysis(*c.params, (*c.loads)(t), y[0], y[1], c.eval, &la).ok() && la.ratio <= 1.0;
+  }
+  const auto candidates = candidate_modes(c, rest, no_stick);
+  std::vector<std::array<int, 5>> found;
+  std::vector<Vec2<double>> accel;
+  Status failure;  // the first evaluation that failed (near-singular pose, friction loop)
+  consistent_candidates(c, t, y, candidates, rest, false, &found, &accel, &failure);
+  if (lock && !found.empty()) {
+    return at_time(Status::Error(StatusCode::kSolverFailed,
+                                 "several consistent joint modes: friction can hold the mechanism "
+                                 "at rest, yet it can also start to slip (Painleve-type)" +
+                                     rest_list(rest)),
+                   t, y[0], y[1]);
+  }
+  if (lock) {
+    c.locked = true;
+    c.slip.fill(kStuck);
     return Status::Ok();
+  }
+  const bool relaxed = found.empty();
+  if (relaxed) consistent_candidates(c, t, y, candidates, rest, true, &found, &accel, &failure);
+  if (found.empty() && !failure.ok()) return at_time(failure, t, y[0], y[1]);
+  if (found.empty()) {
+    return at_time(Status::Error(StatusCode::kSolverFailed,
+                                 "no consistent joint modes: neither slip direction nor stick is "
+                                 "consistent with the accelerations" + rest_list(rest)),
+                   t, y[0], y[1]);
+  }
+  const double same = relaxed ? 1e-6 : 1e-9;
+  for (size_t i = 1; i < found.size(); ++i) {
+    if ((accel[i] - accel[0]).norm() > same * (1.0 + accel[0].norm())) {
+      return at_time(Status::Error(StatusCode::kSolverFailed,
+                                   "several consistent joint modes with different motions "
+                                   "(Painleve-type indeterminacy)" + rest_list(rest)),
+                     t, y[0], y[1]);
+    }
+  }
+  c.slip = found.front();
+  return Status::Ok();
+}
+
+/// Without stick (Options::stick = false): the joints at rest slip in the direction of the
+/// relative acceleration they get with those directions (a short fixed point over the signs).
+Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, 5>& rest) {
+  for (int k = 0; k < 5; ++k) {
+    if (rest[k]) c.slip[k] = 0;
   }
   for (int pass = 0; pass < 6; ++pass) {
     Evaluation<double> ev;
@@ -194,25 +446,61 @@ Status decide_slip(Context& c, double t, const double* y, const std::array<bool,
     const auto wdot = fivebar::detail::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
     bool changed = false;
     for (int k = 0; k < 5; ++k) {
-      if (!undecided[k]) continue;
-      const int s = sign_of(wdot[k]);
-      if (s != c.slip[k]) {
-        c.slip[k] = s;
-        changed = true;
-      }
+      if (!rest[k] || sign_of(wdot[k]) == c.slip[k]) continue;
+      c.slip[k] = sign_of(wdot[k]);
+      changed = true;
     }
     if (!changed) break;
   }
   return Status::Ok();
 }
 
-/// Root directions: a joint slipping with w > 0 can only cross zero downwards, and vice versa;
-/// a stuck joint's holding margin breaks away when it falls through zero.
-void root_directions(const Context& c, int* dirs) {
-  for (int r = 0; r < c.nroots; ++r) {
-    const int s = c.slip[c.root_joint[r]];
-    dirs[r] = s == kStuck ? -1 : -s;
+/// Decides the joint modes at (t, y), where the switch functions in `fired_now` just fired
+/// (none at the start). The fired and stuck joints are at rest: the rates are projected so that
+/// they are exactly (if that takes two independent constraints, the whole mechanism is at rest);
+/// any other watched joint whose |w| is then below kRestRate is at rest too.
+Status decide_at(Context& c, double t, double* y, const Fired& fired_now, Stats* stats) {
+  const bool was_locked = c.locked;
+  std::array<bool, 5> fixed{};
+  for (int k = 0; k < 5; ++k) {
+    fixed[k] = was_locked || (c.watched[k] && (fired_now[k] || c.slip[k] == kStuck));
   }
+  const int rank = project_rates(*c.params, fixed, y);
+  std::array<double, 5> w{};
+  if (!joint_rates(*c.params, y, &w)) {
+    return at_time(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t, y[0],
+                   y[1]);
+  }
+  std::array<bool, 5> rest{}, no_stick{};
+  bool all_rest = rank == 2;
+  if (!all_rest) {
+    all_rest = std::all_of(w.begin(), w.end(), [](double v) { return std::abs(v) <= kRestRate; });
+  }
+  for (int k = 0; k < 5; ++k) {
+    if (!c.watched[k]) continue;
+    rest[k] = all_rest || fixed[k] || std::abs(w[k]) <= kRestRate;
+    no_stick[k] = fired_now[k] && c.slip[k] == kStuck;  // a breakaway: that joint slips
+  }
+  const std::array<int, 5> before = c.slip;
+  const Status st =
+      c.stick ? decide_modes(c, t, y, rest, no_stick, all_rest, !fired_now[kLockSlot], stats)
+              : decide_slip_only(c, t, y, rest);
+  if (!st.ok()) return st;
+  for (int k = 0; k < 6; ++k) {
+    if (!fired_now[k]) continue;
+    ++stats->friction_events;
+    if (k == kLockSlot) {
+      ++stats->breakaway_events;
+    } else if (c.slip[k] == kStuck && before[k] != kStuck) {
+      ++stats->stick_events;
+    } else if (c.slip[k] != kStuck && before[k] == kStuck) {
+      ++stats->breakaway_events;
+    }
+  }
+  std::array<bool, 5> stuck{};
+  for (int k = 0; k < 5; ++k) stuck[k] = c.locked || c.slip[k] == kStuck;
+  project_rates(*c.params, stuck, y);
+  return Status::Ok();
 }
 
 /// angle continued from the previous row's value (no 2 pi jumps in the output)
@@ -243,8 +531,30 @@ Row make_angle_row(const Context& c, double t, const double* y, const Row* previ
   return row;
 }
 
+/// Row of a locked mechanism: at rest, its friction torques the holding torques of lock_analysis.
+Row make_locked_row(const Context& c, double t, const double* y, const Row* previous, Status* st) {
+  Row row = make_angle_row(c, t, y, previous, st);
+  if (!st->ok()) return row;
+  const Loads<double> L = (*c.loads)(t);
+  LockAnalysis lock;
+  Kinematics<double> k;
+  *st = lock_analysis(*c.params, L, y[0], y[1], c.eval, &lock);
+  if (st->ok()) *st = solve_kinematics(*c.params, y[0], y[1], &k);
+  if (!st->ok()) {
+    *st = at_time(*st, t, y[0], y[1]);
+    return row;
+  }
+  row.M1 = L.M1;
+  row.M2 = L.M2;
+  row.N = lock.N;
+  row.Mf = lock.hold;
+  row.potential = potential_energy(*c.params, k);
+  return row;
+}
+
 Row make_row(const Context& c, double t, const double* y, const Row* previous, Status* st) {
   if (!c.full_rows) return make_angle_row(c, t, y, previous, st);
+  if (c.locked) return make_locked_row(c, t, y, previous, st);
   Row row;
   row.t = t;
   EvalOptions eval = c.eval;
@@ -283,60 +593,120 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
   return row;
 }
 
-/// Joint modes at a state where the cranks are at rest (all five joints at rest): locked if
-/// friction at the two crank joints can hold the mechanism (the holding torques of five joints
-/// at rest are statically indeterminate; fivebar carries them at the crank joints O and D0,
-/// where the drives act), else one crank stuck, else every joint slips in the direction of its
-/// relative acceleration.
-Status initial_modes(Context& c, double t, const double* y, bool stick) {
-  Kinematics<double> k;
-  const Status assembled = solve_kinematics(*c.params, y[0], y[1], &k);
-  if (!assembled.ok()) return Status::Error(assembled.code, "initial pose: " + assembled.message);
-  const Vec2<double> thd(y[2], y[3]);
-  const std::array<double, 5> w =
-      fivebar::detail::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
-  std::array<bool, 5> undecided;
-  for (int k = 0; k < 5; ++k) {
-    c.slip[k] = sign_of(w[k]);
-    undecided[k] = (c.slip[k] == 0);
+/// The event loop's state: integrator, switch watch, output grid and counters.
+struct Loop {
+  Context c;
+  std::unique_ptr<detail::Integrator> integ;
+  Watch watch;
+  std::vector<double> grid;  ///< output times
+  size_t next = 1;           ///< next output time to write
+  double t = 0.0;
+  double y[kStates + 5] = {};
+  double last_switch = -1.0;
+  int burst = 0;             ///< switches at the same instant in a row
+  long steps_since_row = 0;
+};
+
+/// (Re)starts the integration at the loop's (t, y) with fresh switch functions.
+Status restart(Loop& L) {
+  if (!L.integ->start(L.t, L.y)) {
+    return at_time(Status::Error(StatusCode::kSolverFailed, L.integ->error()), L.t, L.y[0], L.y[1]);
   }
-  const bool at_rest = y[2] == 0.0 && y[3] == 0.0;
-  if (stick && at_rest) {
-    const bool holds[5] = {c.params->friction.coulomb[0] > 0, false, false, false,
-                           c.params->friction.coulomb[4] > 0};
-    // both cranks stuck: the mechanism is locked
-    if (holds[0] && holds[4]) {
-      c.slip = {kStuck, 0, 0, 0, kStuck};
-      Evaluation<double> ev;
-      const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3],
-                                         &c.slip, c.eval, &ev);
-      if (st.ok() && ev.hold_margin[0] >= 0.0 && ev.hold_margin[4] >= 0.0) return st;
-    }
-    // one crank stuck, the rest slipping
-    for (int j : {0, 4}) {
-      if (!holds[j]) continue;
-      c.slip = {0, 0, 0, 0, 0};
-      c.slip[j] = kStuck;
-      std::array<bool, 5> others = undecided;
-      others[j] = false;
-      if (!decide_slip(c, t, y, others).ok()) continue;
-      Evaluation<double> ev;
-      const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3],
-                                         &c.slip, c.eval, &ev);
-      if (st.ok() && ev.hold_margin[j] >= 0.0) return st;
-    }
-    c.slip = {0, 0, 0, 0, 0};
-  }
-  return decide_slip(c, t, y, undecided);
+  L.watch = Watch{};
+  if (!L.c.use_slip) return Status::Ok();
+  Switches g;
+  const Status st = switch_values(L.c, L.t, L.y, &g);
+  if (!st.ok()) return st;
+  advance_watch(&L.watch, g);
+  return Status::Ok();
 }
 
-}  // namespace
+/// Writes the rows of the output times in (.., t_end] from the dense output (the state `y_end`
+/// at t_end itself).
+Status emit_rows(Loop& L, Result* result, double t_end, const double* y_end) {
+  double y[kStates + 5];
+  while (L.next < L.grid.size() && L.grid[L.next] <= t_end) {
+    const double tout = L.grid[L.next];
+    if (tout == t_end) {
+      std::copy(y_end, y_end + L.c.n, y);
+    } else if (!L.integ->dense(tout, y)) {
+      return at_time(Status::Error(StatusCode::kSolverFailed, L.integ->error()), tout, y[0], y[1]);
+    }
+    Status st;
+    result->rows.push_back(make_row(L.c, tout, y, &result->rows.back(), &st));
+    if (!st.ok()) return st;
+    ++L.next;
+    L.steps_since_row = 0;
+  }
+  return Status::Ok();
+}
 
-Result simulate(const Params<double>& params, const LoadFunction& loads, const Initial& initial,
-                const Options& options) {
-  const auto wall_start = std::chrono::steady_clock::now();
-  Result result;
-  Context c;
+/// One integrator step, its switch (located and decided) if any, and the rows it covers.
+Status advance(Loop& L, Result* result, const Options& options) {
+  const double tp = L.t;
+  double yc[kStates + 5], tc = tp;
+  L.c.failure = Status::Ok();  // a recovered failure of an earlier step is not this one's
+  if (!L.integ->step(yc, &tc)) {
+    if (!L.c.failure.ok()) return L.c.failure;
+    return at_time(Status::Error(StatusCode::kSolverFailed, L.integ->error()), tc, yc[0], yc[1]);
+  }
+  if (++L.steps_since_row > options.max_steps) {
+    // steps shrink without end next to a singular pose: say so when that is the cause
+    Kinematics<double> k;
+    const Status near = solve_kinematics(*L.c.params, yc[0], yc[1], &k,
+                                         10 * options.singular_margin, false);
+    const std::string why = near.ok() ? "" : near.message + "; ";
+    return at_time(Status::Error(near.ok() ? StatusCode::kSolverFailed : near.code,
+                                 why + "more than simulation.max_steps = " +
+                                     std::to_string(options.max_steps) +
+                                     " steps between two output times"),
+                   tc, yc[0], yc[1]);
+  }
+  bool found = false;
+  double ta = tp, tb = tc;
+  if (L.c.use_slip) {
+    const Status st = scan_step(L.c, *L.integ, tp, tc, yc, &L.watch, &found, &ta, &tb);
+    if (!st.ok()) return st;
+  }
+  if (!found) {
+    L.t = tc;
+    std::copy(yc, yc + L.c.n, L.y);
+    return emit_rows(L, result, tc, yc);
+  }
+  double ye[kStates + 5], te = tb;
+  Fired which{};
+  Status st = locate_switch(L.c, *L.integ, L.watch, ta, tb, ye, &te, &which);
+  if (!st.ok()) return st;
+  st = emit_rows(L, result, te, ye);
+  if (!st.ok()) return st;
+  L.burst = te - L.last_switch <= kSameInstant * std::max(1.0, te) ? L.burst + 1 : 0;
+  if (L.burst > kMaxSwitchesAtOnce) {
+    return at_time(Status::Error(StatusCode::kSolverFailed,
+                                 "the joint modes chatter: more than " +
+                                     std::to_string(kMaxSwitchesAtOnce) +
+                                     " switches at one instant (no consistent motion)"),
+                   te, ye[0], ye[1]);
+  }
+  L.last_switch = te;
+  L.t = te;
+  std::copy(ye, ye + L.c.n, L.y);
+  st = decide_at(L.c, L.t, L.y, which, &result->stats);
+  return st.ok() ? restart(L) : st;
+}
+
+/// The output times: every output_step from 0, and the duration itself.
+std::vector<double> output_grid(const Options& o) {
+  std::vector<double> grid;
+  const long n = output_row_count(o);
+  grid.reserve(n);
+  for (long i = 0; i + 1 < n; ++i) grid.push_back(i * o.output_step);
+  grid.push_back(o.duration);
+  return grid;
+}
+
+/// The context of a run: which joints have switch functions, state size, evaluation settings.
+void setup_context(Context& c, const Params<double>& params, const LoadFunction& loads,
+                   const Options& options) {
   c.params = &params;
   c.loads = &loads;
   c.eval.singular_margin = options.singular_margin;
@@ -344,137 +714,103 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
   c.eval.friction_max_iter = options.friction_max_iter;
   c.eval.want_reactions = false;  // the motion needs reactions only through friction
   c.eval.want_angles = false;     // nor the coupler angles themselves
-
-  // exact Coulomb sign: each joint with a Coulomb part gets a root function on its rate
+  // exact Coulomb sign: each joint with a Coulomb part gets a switch function on its rate
   const bool exact_sign = params.friction.active() && params.friction.law != FrictionLaw::kLuGre &&
                           params.friction.smoothing_velocity == 0.0;
   c.use_slip = exact_sign && options.locate_switches;
-  if (c.use_slip) {
-    for (int k = 0; k < 5; ++k) {
-      if (params.friction.coulomb[k] != 0.0 && params.friction.pin_radius[k] != 0.0) {
-        c.root_joint[c.nroots++] = k;
-      }
-    }
+  c.stick = c.use_slip && options.stick;
+  for (int k = 0; k < 5; ++k) {
+    c.watched[k] = c.use_slip && params.friction.coulomb[k] != 0.0 &&
+                   params.friction.pin_radius[k] != 0.0;
   }
-
   c.lugre = params.friction.law == FrictionLaw::kLuGre;
   c.full_rows = options.full_rows;
-  double y[kStates + 5] = {initial.theta1, initial.theta2, initial.omega1, initial.omega2,
-                           0, 0, 0, 0, 0, 0, 0, 0};  // bristles start relaxed
-  double t = 0.0;
-  const bool stick = c.use_slip && options.stick;
-  if (c.use_slip) {
-    result.status = initial_modes(c, t, y, stick);
-    if (!result.status.ok()) return result;
-  }
+  c.n = c.lugre ? kStates + 5 : kStates;
+}
 
-  detail::OdeProblem prob{c.lugre ? kStates + 5 : kStates, c.nroots, &rhs, &roots, &c};
-  prob.atol_scale.assign(prob.n, 1.0);
-  prob.stiff_states = c.lugre;
-  for (int i = kStates; i < prob.n; ++i) prob.atol_scale[i] = options.bristle_atol_scale;
-  // explicit Runge-Kutta steps grow long (tens of ms at tight tolerances): a rate that touches
-  // zero and comes back within one step would go unseen by the root finder, so with located
-  // switches their step is capped at the output step (measured: `fivebar stress`)
-  const bool explicit_rk = options.method == Method::kArkodeErk45 ||
-                           options.method == Method::kArkodeErk65 ||
-                           options.method == Method::kArkodeErk87;
-  if (c.nroots > 0 && explicit_rk) prob.max_step = options.output_step;
-  std::unique_ptr<detail::Integrator> integ = detail::make_integrator(prob, options,
-                                                                      options.duration);
-  integ->start(t, y);
-  int dirs[5] = {0, 0, 0, 0, 0};
-  if (c.nroots > 0) {
-    root_directions(c, dirs);
-    integ->set_root_direction(dirs);
-  }
+}  // namespace
 
-  const long n_out = std::lround(options.duration / options.output_step);
-  result.rows.reserve(n_out + 1);
-  Status st;
-  result.rows.push_back(make_row(c, 0.0, y, nullptr, &st));
-  if (!st.ok()) {
-    result.status = st;
+long output_row_count(const Options& o) {
+  if (!(o.output_step > 0.0) || !(o.duration > 0.0)) return 1;
+  const double steps = o.duration / o.output_step;
+  if (!(steps < 1e15)) return std::numeric_limits<long>::max();
+  // the last grid point is the duration: one more row when it is not on the grid
+  const long full = static_cast<long>(std::floor(steps * (1 + 1e-12)));
+  const bool on_grid = std::abs(full * o.output_step - o.duration) <= 1e-9 * o.output_step;
+  return full + (on_grid ? 1 : 2);
+}
+
+Result simulate(const Params<double>& params, const LoadFunction& loads, const Initial& initial,
+                const Options& options) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  Result result;
+  if (output_row_count(options) > kMaxOutputRows) {
+    result.status = Status::Error(StatusCode::kInvalidInput,
+                                  "simulation.duration / simulation.output_step needs " +
+                                      std::to_string(output_row_count(options)) +
+                                      " output rows, more than the limit of " +
+                                      std::to_string(kMaxOutputRows));
     return result;
   }
-  for (long i = 1; i <= n_out && result.status.ok(); ++i) {
-    const double tout = std::min(i * options.output_step, options.duration);
-    while (true) {
-      c.failure = Status::Ok();  // a recovered failure of an earlier step is not this one's
-      const auto outcome = integ->advance(tout, y, &t);
-      if (outcome == detail::Integrator::kFailed) {
-        if (!c.failure.ok()) {
-          result.status = c.failure;
-        } else {
-          result.status = at_time(Status::Error(StatusCode::kSolverFailed, integ->error()), t,
-                                  y[0], y[1]);
-        }
-        break;
-      }
-      if (outcome == detail::Integrator::kRoot) {
-        // a switch: a slipping joint's rate crossed zero, or a stuck joint's margin ran out
-        int fired[5] = {0, 0, 0, 0, 0};
-        integ->root_info(fired);
-        std::array<bool, 5> unlocked{};
-        for (int r = 0; r < c.nroots; ++r) {
-          if (fired[r] == 0) continue;
-          const int j = c.root_joint[r];
-          ++result.stats.friction_events;
-          int direction = -c.slip[j];
-          if (c.slip[j] == kStuck) {
-            // breakaway: slip in the direction of the holding torque that could not be carried
-            Evaluation<double> ev;
-            if (forward_dynamics(params, loads(t), y[0], y[1], y[2], y[3], &c.slip, c.eval, &ev)
-                    .ok()) {
-              direction = sign_of(ev.Mf[j]);
-            }
-            const bool was_locked = std::count(c.slip.begin(), c.slip.end(), kStuck) == 2;
-            c.slip[j] = direction != 0 ? direction : 1;
-            ++result.stats.breakaway_events;
-            if (was_locked) {
-              for (int k = 0; k < 5; ++k) unlocked[k] = (c.slip[k] == 0);
-            }
-          } else if (stick && can_stick(c, t, y, j, &direction)) {
-            c.slip[j] = kStuck;
-            ++result.stats.stick_events;
-            if (std::count(c.slip.begin(), c.slip.end(), kStuck) == 2) {
-              for (int k = 0; k < 5; ++k) {
-                if (c.slip[k] != kStuck) c.slip[k] = 0;  // locked: every joint at rest
-              }
-            }
-            project_rates(params, c.slip, y);
-          } else {
-            c.slip[j] = direction;  // reversal: slips the other way from here on
-          }
-        }
-        if (std::any_of(unlocked.begin(), unlocked.end(), [](bool u) { return u; })) {
-          result.status = decide_slip(c, t, y, unlocked);
-          if (!result.status.ok()) break;
-        }
-        integ->start(t, y);
-        root_directions(c, dirs);
-        integ->set_root_direction(dirs);
-        continue;
-      }
-      result.rows.push_back(make_row(c, tout, y, &result.rows.back(), &st));
-      if (!st.ok()) result.status = st;
-      if (options.max_wall_time_s > 0.0 &&
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count() >
-              options.max_wall_time_s) {
-        result.status = at_time(
-            Status::Error(StatusCode::kSolverFailed,
-                          "wall-time limit of " + std::to_string(options.max_wall_time_s) +
-                              " s reached (simulation.max_wall_time_s)"),
-            tout, y[0], y[1]);
-      }
-      break;
+  Loop L;
+  setup_context(L.c, params, loads, options);
+  L.y[0] = initial.theta1;
+  L.y[1] = initial.theta2;
+  L.y[2] = initial.omega1;
+  L.y[3] = initial.omega2;  // energies and bristles start at zero
+  L.grid = output_grid(options);
+  if (L.c.use_slip) {
+    // at the start every watched joint at rest is undecided
+    result.status = decide_at(L.c, 0.0, L.y, {}, &result.stats);
+    if (!result.status.ok()) return result;
+  }
+  detail::OdeProblem prob{L.c.n, &rhs, &L.c, std::vector<double>(L.c.n, 1.0), L.c.lugre};
+  for (int i = kStates; i < prob.n; ++i) prob.atol_scale[i] = options.bristle_atol_scale;
+  L.integ = detail::make_integrator(prob, options, options.duration);
+  result.rows.reserve(L.grid.size());
+  Status st;
+  result.rows.push_back(make_row(L.c, 0.0, L.y, nullptr, &st));
+  if (st.ok()) st = restart(L);
+  while (st.ok() && L.next < L.grid.size()) {
+    st = advance(L, &result, options);
+    if (options.progress) options.progress(L.t);
+    if (st.ok() && options.max_wall_time_s > 0.0 &&
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count() >
+            options.max_wall_time_s) {
+      st = at_time(Status::Error(StatusCode::kSolverFailed,
+                                 "wall-time limit of " + std::to_string(options.max_wall_time_s) +
+                                     " s reached (simulation.max_wall_time_s)"),
+                   L.t, L.y[0], L.y[1]);
     }
   }
-  result.stats.rhs_evaluations = c.rhs_evaluations;
-  result.stats.steps = integ->steps();
+  result.status = st;
+  result.stats.rhs_evaluations = L.c.rhs_evaluations;
+  result.stats.steps = L.integ->steps();
   result.stats.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return result;
 }
+
+namespace {
+
+/// Row::hold_range of an inverse-dynamics row: the torque itself where the crank moves, M +-
+/// mu_s r N where it is stuck alone, and where both are stuck (the pose at rest) the range of
+/// each over which the mechanism stays locked, the other at its row value (rest.h).
+Status holding_range(const Params<double>& p, const Loads<double>& L, const EvalOptions& eval,
+                     Row* r) {
+  const bool o = r->mode[0] == kStuck, d0 = r->mode[4] == kStuck;
+  const double m1 = o ? r->hold_margin[0] : 0.0, m2 = d0 ? r->hold_margin[4] : 0.0;
+  r->hold_range = {r->M1 - m1, r->M1 + m1, r->M2 - m2, r->M2 + m2};
+  if (!(o && d0 && p.friction.active())) return Status::Ok();
+  Holding<double> h;
+  const Status st = holding_torques(p, L, r->theta[0], r->theta[1], eval, &h);
+  if (!st.ok()) return st;
+  r->hold_range = {r->M1 - (h.M1 - h.M1_min), r->M1 + (h.M1_max - h.M1),
+                   r->M2 - (h.M2 - h.M2_min), r->M2 + (h.M2_max - h.M2)};
+  return Status::Ok();
+}
+
+}  // namespace
 
 Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
                     const std::vector<Row>& motion, std::vector<Row>* out) {
@@ -513,6 +849,8 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
     r.P_diss = ev.P_diss;
     r.mode = ev.slip;
     r.hold_margin = ev.hold_margin;
+    const Status held = holding_range(params, L, eval, &r);
+    if (!held.ok()) return at_time(held, m.t, m.theta[0], m.theta[1]);
     r.kinetic = kinetic_energy(params, ev.kin, m.omega[0], m.omega[1]);
     r.potential = potential_energy(params, ev.kin);
     out->push_back(r);
@@ -526,28 +864,95 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
   return Status::Ok();
 }
 
-RunChecks check_run(const Params<double>& params, const LoadFunction& loads, const Result& result) {
-  RunChecks checks;
-  if (result.rows.empty()) return checks;
-  const Row& r0 = result.rows.front();
+namespace {
+
+/// Energy balance: max |d(KE + PE) - W_in - W_ext + E_diss| over an energy scale every run has,
+/// at least 1e-9 of the mechanism's own (sum of masses x max(g, 1 m/s^2) x sum of lengths), so
+/// that a mechanism at rest does not divide round-off by round-off.
+double energy_balance(const Params<double>& p, const std::vector<Row>& rows) {
+  const Row& r0 = rows.front();
   const double e0 = r0.kinetic + r0.potential;
-  double worst = 0.0, scale = 1e-300;
-  for (const Row& r : result.rows) {
+  double mass = 0.0, length = p.ground_length;
+  for (const auto& link : p.links) {
+    mass += link.mass;
+    length += link.length;
+  }
+  double worst = 0.0, scale = 1e-9 * mass * std::max(p.gravity, 1.0) * length;
+  for (const Row& r : rows) {
     const double change = r.kinetic + r.potential - e0;
     worst = std::max(worst, std::abs(change - r.W_in - r.W_ext + r.E_diss));
-    scale = std::max({scale, std::abs(r.W_in) + std::abs(r.W_ext), r.E_diss, std::abs(change)});
+    scale = std::max({scale, std::abs(r.W_in) + std::abs(r.W_ext), std::abs(r.E_diss),
+                      std::abs(change), r.kinetic, std::abs(r.potential - r0.potential)});
   }
-  checks.energy_balance_relative = worst / scale;
-  std::vector<Row> inv;
-  if (inverse_rows(params, loads, result.rows, &inv).ok()) {
-    for (size_t i = 0; i < inv.size(); ++i) {
-      if (any_stuck(result.rows[i].mode)) continue;
-      checks.inverse_dynamics_max_abs_error =
-          std::max({checks.inverse_dynamics_max_abs_error, std::abs(inv[i].M1 - result.rows[i].M1),
-                    std::abs(inv[i].M2 - result.rows[i].M2)});
+  return worst / scale;
+}
+
+std::string check_failure(const char* what, double value, double tol, double t, int joint) {
+  std::ostringstream msg;
+  msg.precision(3);
+  msg << what << " " << value << " beyond its threshold " << tol << " at t=" << t << " s";
+  if (joint >= 0) msg << ", joint " << joint_name(joint) << " (k=" << joint + 1 << ")";
+  return msg.str();
+}
+
+}  // namespace
+
+RunChecks check_run(const Params<double>& params, const LoadFunction& loads, const Result& result,
+                    double rtol) {
+  RunChecks checks;
+  if (result.rows.empty()) return checks;
+  checks.energy_balance_relative = energy_balance(params, result.rows);
+  double peak_M = 0.0, peak_Mf = 0.0;
+  for (const Row& r : result.rows) {
+    peak_M = std::max({peak_M, std::abs(r.M1), std::abs(r.M2)});
+    for (double mf : r.Mf) peak_Mf = std::max(peak_Mf, std::abs(mf));
+  }
+  checks.energy_tol = std::max(1e-6, 1e3 * rtol);
+  checks.inverse_tol = 1e-8 * std::max(1.0, peak_M);
+  checks.power_tol = 1e-9 * std::max(1.0, peak_Mf);
+  const bool check_power = params.friction.law != FrictionLaw::kLuGre;
+  double t_inv = 0, t_pow = 0;
+  int j_pow = -1;
+  EvalOptions eval;
+  for (const Row& r : result.rows) {
+    for (int k = 0; k < 5 && check_power; ++k) {
+      if (r.mode[k] == kStuck) continue;  // a holding torque times the drift of a held rate
+      const double p = r.Mf[k] * r.omega_rel(k);
+      if (p < checks.friction_power_min) {
+        checks.friction_power_min = p;
+        t_pow = r.t;
+        j_pow = k;
+      }
     }
-  } else {
-    checks.inverse_dynamics_max_abs_error = INFINITY;
+    if (any_stuck(r.mode)) continue;
+    // inverse dynamics with the run's slip directions (a wrong direction shows in the power)
+    Evaluation<double> ev;
+    const bool bristles = params.friction.law == FrictionLaw::kLuGre && r.has_bristle;
+    const Status st = inverse_dynamics(params, loads(r.t), r.theta[0], r.theta[1], r.omega[0],
+                                       r.omega[1], r.alpha[0], r.alpha[1],
+                                       params.friction.active() ? &r.mode : nullptr, eval, &ev,
+                                       bristles ? &r.bristle : nullptr);
+    const double e = st.ok() ? std::max(std::abs(ev.M1 - r.M1), std::abs(ev.M2 - r.M2)) : INFINITY;
+    if (!(e <= checks.inverse_dynamics_max_abs_error)) {
+      checks.inverse_dynamics_max_abs_error = e;
+      t_inv = r.t;
+    }
+  }
+  if (!(checks.energy_balance_relative <= checks.energy_tol)) {
+    checks.verdict = Status::Error(StatusCode::kSolverFailed,
+                                   check_failure("energy balance residual (relative)",
+                                                 checks.energy_balance_relative, checks.energy_tol,
+                                                 result.rows.back().t, -1));
+  } else if (!(checks.inverse_dynamics_max_abs_error <= checks.inverse_tol)) {
+    checks.verdict = Status::Error(
+        StatusCode::kSolverFailed,
+        check_failure("inverse-dynamics residual [N m]", checks.inverse_dynamics_max_abs_error,
+                      checks.inverse_tol, t_inv, -1));
+  } else if (!(checks.friction_power_min >= -checks.power_tol)) {
+    checks.verdict = Status::Error(
+        StatusCode::kSolverFailed,
+        check_failure("friction supplies power: Mf w [W] =", checks.friction_power_min,
+                      -checks.power_tol, t_pow, j_pow));
   }
   return checks;
 }

@@ -170,22 +170,25 @@ std::vector<StressCase> stress_catalogue(bool reduced) {
     f.pin_radius.fill(0.15);
     f.coulomb.fill(0.6);
     f.static_coulomb.fill(0.6);
-    c.description = "pin radius 0.15 m, mu_c = mu_s = 0.6: the fixed-point friction loop stops "
-                    "contracting on much of the motion (measured: 417 of 1001 output rows), "
-                    "Newton finds the unique reaction forces";
+    // started in motion: at rest, friction this large holds the mechanism (lock_analysis)
+    c.initial = {M_PI / 2, M_PI / 2, 5.0, -3.0};
+    c.description = "pin radius 0.15 m, mu_c = mu_s = 0.6, started at rates (5, -3) rad/s: the "
+                    "fixed-point friction loop stops contracting on much of the motion, Newton "
+                    "finds the unique reaction forces";
     cases.push_back(c);
     c.name = "friction_no_solution";
     f.coulomb.fill(1.0);
     f.static_coulomb.fill(1.0);
-    c.description = "pin radius 0.15 m, mu_c = 1: no consistent reaction forces at the start: "
-                    "must be rejected saying so (exit 3)";
+    c.description = "pin radius 0.15 m, mu_c = 1, started at rates (5, -3) rad/s: no consistent "
+                    "reaction forces at the start: must be rejected saying so (exit 3)";
     cases.push_back(c);
     c.name = "friction_several_solutions";
     f.pin_radius.fill(1.0);
     f.coulomb.fill(0.12);
     f.static_coulomb.fill(0.12);
-    c.description = "pin radius 1 m, mu_c = 0.12: several consistent reaction forces after "
-                    "0.25 s: must be rejected saying so (exit 3)";
+    c.initial = {M_PI / 2, M_PI / 2, -3.0, 4.0};
+    c.description = "pin radius 1 m, mu_c = 0.12, started at rates (-3, 4) rad/s: several "
+                    "consistent reaction forces at the start: must be rejected saying so (exit 3)";
     cases.push_back(c);
   }
   // 4. a link with a tiny inertia

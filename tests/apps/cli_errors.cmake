@@ -48,6 +48,12 @@ run_fivebar(1 "command line: simulate: SCENE is required" simulate)
 run_fivebar(1 "command line: nosuchcommand: unknown subcommand" nosuchcommand)
 run_fivebar(1 "command line: simulate: .*--bogus" simulate ${paper} --bogus)
 
+# 0: --version prints "fivebar <major>.<minor>.<patch>" on stdout
+execute_process(COMMAND ${FIVEBAR} --version RESULT_VARIABLE status OUTPUT_VARIABLE out)
+if(NOT status EQUAL 0 OR NOT out MATCHES "^fivebar [0-9]+\\.[0-9]+\\.[0-9]+\n$")
+  message(FATAL_ERROR "fivebar --version: exit status ${status}, stdout '${out}'")
+endif()
+
 # 0: a short successful run
 set(out ${WORK_DIR}/out)
 run_fivebar(0 "" simulate ${paper} --set simulation.duration=0.05 --no-plots --out ${out})

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -11,8 +12,10 @@
 #include "fivebar/io/csv.h"
 #include "fivebar/io/differences.h"
 #include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
 #include "fivebar/io/json.h"
 #include "fivebar/io/output.h"
+#include "fivebar/io/plots.h"
 
 namespace fivebar::io {
 namespace {
@@ -93,6 +96,93 @@ TEST(TrajectoryCsv, NumbersRoundTripExactly) {
         write_trajectory_csv((dir / "u.csv").string(), rows, {{"x", {1.0}}});
       },
       ::testing::ThrowsMessage<InputError>(HasSubstr("x: internal")));
+}
+
+TEST(Format, ShortestRoundTripAndGridValues) {
+  const double t = 476 * 0.001;  // 0.47600000000000003: one ulp above the double nearest 0.476
+  EXPECT_EQ(format_double(t), "0.47600000000000003");  // exact: reads back as t
+  EXPECT_EQ(std::strtod(format_double(t).c_str(), nullptr), t);
+  EXPECT_EQ(format_grid_value(t), "0.476");
+  EXPECT_EQ(format_grid_value(0.1 + 0.2), "0.3");
+  EXPECT_EQ(format_grid_value(2.0), "2");
+  EXPECT_EQ(format_grid_value(0.0), "0");
+  EXPECT_EQ(format_grid_value(-1e-10), "-1e-10");
+  // a value with no short decimal within one ulp is left exact
+  EXPECT_EQ(format_grid_value(M_PI), format_double(M_PI));
+  EXPECT_EQ(format_grid_value(NAN), "nan");
+  // the t column of trajectory.csv is written that way, the other columns exactly
+  const fs::path dir = scratch("grid");
+  sim::Row row;
+  row.t = t;
+  row.theta[0] = t;
+  write_trajectory_csv((dir / "t.csv").string(), {row});
+  const std::string text = read_file(dir / "t.csv");
+  EXPECT_NE(text.find("\n0.476,0.47600000000000003,"), std::string::npos) << text;
+}
+
+// the line of `script` that draws `needle` (a series), or ""
+std::string line_with(const std::string& script, const std::string& needle) {
+  std::stringstream lines(script);
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.find(needle) != std::string::npos) return line;
+  }
+  return "";
+}
+
+// the text between the first `key` and the next blank in `line`
+std::string value_after(const std::string& line, const std::string& key) {
+  const size_t at = line.find(key);
+  if (at == std::string::npos) return "";
+  const size_t start = at + key.size();
+  return line.substr(start, line.find(' ', start) - start);
+}
+
+TEST(Plots, WorkPrecisionColourPerIntegratorDashPerTreatment) {
+  sim::WorkPrecision wp;
+  auto point = [](sim::Method m, sim::Treatment t, double tol, double time, double err) {
+    sim::PrecisionPoint p;
+    p.method = m;
+    p.treatment = t;
+    p.tolerance = tol;
+    p.ok = true;
+    p.wall_time_s = time;
+    p.error = err;
+    return p;
+  };
+  using sim::Method;
+  using sim::Treatment;
+  wp.points = {point(Method::kCvodeAdams, Treatment::kExactLocated, 1e-8, 0.004, 1e-6),
+               point(Method::kCvodeAdams, Treatment::kRegularized, 1e-8, 0.003, 2e-6),
+               point(Method::kArkodeErk45, Treatment::kExactLocated, 1e-8, 0.009, 1e-9),
+               point(Method::kArkodeErk45, Treatment::kRegularized, 1e-8, 0.008, 3e-9)};
+  wp.points[2].pareto = wp.points[0].pareto = true;  // listed out of time order on purpose
+  wp.recommendations = {{1e-6, true, wp.points[0]}, {1e-8, true, wp.points[2]},
+                        {1e-9, true, wp.points[2]}};
+  const std::string s = work_precision_plot_script(wp, "paper_scene.yaml", "pngcairo");
+  EXPECT_NE(s.find("noenhanced"), std::string::npos);
+  // the same colour for an integrator under every treatment, different between integrators
+  const std::string adams_exact = line_with(s, "'cvode_adams' && strcol(2) eq 'exact_located'");
+  const std::string adams_reg = line_with(s, "'cvode_adams' && strcol(2) eq 'regularized'");
+  const std::string erk_exact = line_with(s, "'arkode_erk45' && strcol(2) eq 'exact_located'");
+  ASSERT_FALSE(adams_exact.empty() || adams_reg.empty() || erk_exact.empty()) << s;
+  EXPECT_EQ(value_after(adams_exact, "lc rgb "), value_after(adams_reg, "lc rgb "));
+  EXPECT_NE(value_after(adams_exact, "lc rgb "), value_after(erk_exact, "lc rgb "));
+  // the same dash for a treatment under every integrator, different between treatments
+  EXPECT_EQ(value_after(adams_exact, " dt "), value_after(erk_exact, " dt "));
+  EXPECT_NE(value_after(adams_exact, " dt "), value_after(adams_reg, " dt "));
+  // the Pareto front in order of time, and one label per recommended point
+  EXPECT_NE(s.find("$pareto << EOD\n0.004,1e-06\n0.009,1e-09\nEOD\n"), std::string::npos) << s;
+  EXPECT_NE(s.find("'for 1e-06 rad: cvode_adams at 1e-08'"), std::string::npos) << s;
+  EXPECT_NE(s.find("'for 1e-08, 1e-09 rad: arkode_erk45 at 1e-08'"), std::string::npos) << s;
+}
+
+TEST(Plots, SimulationFiguresUsePlainText) {
+  const std::string s = simulation_plot_script(SimulationFigures{}, "pngcairo");
+  EXPECT_NE(s.find("noenhanced"), std::string::npos);
+  EXPECT_EQ(s.find(" enhanced"), std::string::npos);
+  EXPECT_EQ(s.find("{/Symbol"), std::string::npos);
+  EXPECT_NE(s.find("\"theta1 [rad]\""), std::string::npos);
 }
 
 TEST(Json, ObjectsArraysEscapesAndNonFinite) {

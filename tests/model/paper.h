@@ -1,4 +1,5 @@
-// Test helpers: the canonical paper scene's loads and the reference trajectories of ../shared.
+// Test helpers: the canonical paper scene's loads and the reference trajectories of
+// datasets/reference.
 #pragma once
 
 #include <cmath>
@@ -42,7 +43,7 @@ inline std::map<std::string, std::vector<double>> read_csv(const std::string& pa
 }
 
 inline std::string reference_path(const std::string& name) {
-  return std::string(FIVEBAR_SHARED_DIR) + "/reference/" + name;
+  return std::string(FIVEBAR_REFERENCE_DIR) + "/" + name;
 }
 
 }  // namespace fivebar::testing

@@ -34,7 +34,7 @@ TEST(Kinematics, PaperInitialPose) {
   Params<double> p = paper_params();
   Kinematics<double> k;
   ASSERT_TRUE(solve_kinematics(p, M_PI / 2, M_PI / 2, &k).ok());
-  // first row of ../shared/reference/paper_friction.csv
+  // first row of datasets/reference/paper_friction.csv
   EXPECT_NEAR(k.th3, 0.845181298522063, 1e-13);
   EXPECT_NEAR(k.th4, 2.09024813802233, 1e-13);
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 
+#include "fivebar/model/lock.h"
 #include "fivebar/model/rest.h"
 #include "fivebar/sim/simulator.h"
 #include "paper.h"
@@ -63,10 +64,20 @@ TEST(Rest, PaperPoseHoldingTorquesAreTheFrictionlessEquilibrium) {
   EXPECT_NEAR(h.M2, ev.M2, kTorqueTol);
   EXPECT_NEAR(h.M1, -0.6917, kQuotedTol);
   EXPECT_NEAR(h.M2, -1.4379, kQuotedTol);
-  // the range: mu_s r N at the crank joints on each side
-  EXPECT_NEAR(h.M1_max - h.M1, 0.12 * 0.01 * h.N[0], 1e-15);
-  EXPECT_NEAR(h.M2 - h.M2_min, 0.12 * 0.01 * h.N[4], 1e-15);
-  EXPECT_GT(h.M1_max - h.M1_min, 0.05);  // N_O ~ 43 N: a range of ~0.1 N m, not a point
+  // the static bound of each joint, and a range wider than what the crank joint holds alone
+  for (int k = 0; k < 5; ++k) EXPECT_NEAR(h.bound[k], 0.12 * 0.01 * h.N[k], 1e-15);
+  EXPECT_GT(h.M1_max - h.M1, h.bound[0]);
+  EXPECT_GT(h.M1 - h.M1_min, h.bound[0]);
+  EXPECT_GT(h.M2_max - h.M2, h.bound[4]);
+  EXPECT_GT(h.M2 - h.M2_min, h.bound[4]);
+  // at the range's ends the simulator's lock is exactly saturated (lock.h)
+  for (double M1 : {h.M1_min, h.M1_max}) {
+    LockAnalysis lock;
+    ASSERT_TRUE(lock_analysis(paper_params(), Loads<double>{M1, h.M2, 6.0, 50.0, M_PI / 2},
+                              M_PI / 2, M_PI / 2, EvalOptions{}, &lock)
+                    .ok());
+    EXPECT_NEAR(lock.ratio, 1.0, 1e-12);
+  }
 }
 
 TEST(Rest, NoisyStaticMotionGivesTheEquilibriumNotTheSignOfNoise) {
@@ -107,8 +118,10 @@ TEST(Rest, NoisyStaticMotionGivesTheEquilibriumNotTheSignOfNoise) {
     ASSERT_NEAR(r.M1, h.M1, kTorqueTol) << "t = " << r.t;
     ASSERT_NEAR(r.M2, h.M2, kTorqueTol) << "t = " << r.t;
     for (int k = 0; k < 5; ++k) ASSERT_EQ(r.mode[k], kStuck) << "joint " << k << ", t = " << r.t;
-    ASSERT_NEAR(r.hold_margin[0], h.M1_max - h.M1, kTorqueTol);
-    ASSERT_NEAR(r.hold_margin[4], h.M2_max - h.M2, kTorqueTol);
+    ASSERT_NEAR(r.hold_range[0], h.M1_min, kTorqueTol);
+    ASSERT_NEAR(r.hold_range[1], h.M1_max, kTorqueTol);
+    ASSERT_NEAR(r.hold_range[2], h.M2_min, kTorqueTol);
+    ASSERT_NEAR(r.hold_range[3], h.M2_max, kTorqueTol);
   }
   // the exact rule (only w = 0 at rest) lets the noise pick full kinetic friction instead
   std::vector<sim::Row> exact;
@@ -132,12 +145,16 @@ TEST(Rest, JointAtRestThatAcceleratesSlipsInTheDirectionOfItsAcceleration) {
 TEST(Rest, HoldingTorquesSimulatedForwardKeepThePose) {
   const Params<double> p = paper_params();
   const Holding<double> h = paper_holding();
-  const double inside = 0.99;  // of the range's half-width, on each crank
+  const double inside = 0.99;  // of the range, along each actuator; of the crank bounds, both
   for (const auto& M : {std::array<double, 2>{h.M1, h.M2},
-                        std::array<double, 2>{h.M1 + inside * (h.M1_max - h.M1),
-                                              h.M2 - inside * (h.M2 - h.M2_min)},
-                        std::array<double, 2>{h.M1 - inside * (h.M1 - h.M1_min),
-                                              h.M2 + inside * (h.M2_max - h.M2)}}) {
+                        std::array<double, 2>{h.M1 + inside * (h.M1_max - h.M1), h.M2},
+                        std::array<double, 2>{h.M1 - inside * (h.M1 - h.M1_min), h.M2},
+                        std::array<double, 2>{h.M1, h.M2 + inside * (h.M2_max - h.M2)},
+                        std::array<double, 2>{h.M1, h.M2 - inside * (h.M2 - h.M2_min)},
+                        std::array<double, 2>{h.M1 + inside * h.bound[0],
+                                              h.M2 - inside * h.bound[4]},
+                        std::array<double, 2>{h.M1 - inside * h.bound[0],
+                                              h.M2 + inside * h.bound[4]}}) {
     const sim::Result r = hold(p, M[0], M[1], 1.0);
     ASSERT_TRUE(r.status.ok()) << r.status.message;
     EXPECT_LT(max_displacement(r), kStuckDisplacement) << "M = " << M[0] << ", " << M[1];
@@ -171,20 +188,25 @@ bool inside_polygon(const std::vector<std::array<double, 2>>& poly, double x, do
   return true;
 }
 
-TEST(Rest, PolygonOfAllJointsContainsTheCrankRange) {
+TEST(Rest, PolygonContainsTheRanges) {
   const Params<double> p = paper_params();
   const Holding<double> h = paper_holding();
   HoldingPolygon poly;
   ASSERT_TRUE(
       holding_polygon(p, kPaperStaticLoads, M_PI / 2, M_PI / 2, EvalOptions{}, h, &poly).ok());
   ASSERT_GE(poly.vertices.size(), 4u);
-  for (double x : {h.M1_min, h.M1_max}) {
-    for (double y : {h.M2_min, h.M2_max}) EXPECT_TRUE(inside_polygon(poly.vertices, x, y));
+  // the crank joints' bounds alone: a rectangle inside the region
+  for (double x : {h.M1 - h.bound[0], h.M1 + h.bound[0]}) {
+    for (double y : {h.M2 - h.bound[4], h.M2 + h.bound[4]}) {
+      EXPECT_TRUE(inside_polygon(poly.vertices, x, y));
+    }
   }
-  EXPECT_LT(poly.M1_min, h.M1_min);
-  EXPECT_GT(poly.M1_max, h.M1_max);
-  EXPECT_LT(poly.M2_min, h.M2_min);
-  EXPECT_GT(poly.M2_max, h.M2_max);
+  // the polygon's slices are the lock's ranges, to the straightness of its edges: O(mu r / l)
+  const double edge_tol = 1e-3 * (h.M1_max - h.M1_min);
+  EXPECT_NEAR(poly.M1_min, h.M1_min, edge_tol);
+  EXPECT_NEAR(poly.M1_max, h.M1_max, edge_tol);
+  EXPECT_NEAR(poly.M2_min, h.M2_min, edge_tol);
+  EXPECT_NEAR(poly.M2_max, h.M2_max, edge_tol);
   // the corner with every joint slipping the same way is what the exact rule reported on the
   // issue's static motion (M1 = -0.8055, M2 = -1.5445: kinetic = static coefficient here)
   EXPECT_TRUE(inside_polygon(poly.vertices, -0.8055 + kQuotedTol, -1.5445 + kQuotedTol));
@@ -212,13 +234,17 @@ TEST(Rest, StribeckStaticCoefficientSetsTheRange) {
   p.friction.law = FrictionLaw::kStribeck;
   p.friction.static_coulomb.fill(0.2);  // above coulomb = 0.12
   const Holding<double> h = paper_holding(p);
-  EXPECT_NEAR(h.M1_max - h.M1, 0.2 * 0.01 * h.N[0], 1e-15);
-  // between the kinetic and the static bound: held by static friction
-  const double dM = 0.15 * 0.01 * h.N[0];
+  EXPECT_NEAR(h.bound[0], 0.2 * 0.01 * h.N[0], 1e-15);
+  // the range scales with mu_s, not mu_c
+  const Holding<double> kinetic = paper_holding();
+  EXPECT_NEAR((h.M1_max - h.M1) / (kinetic.M1_max - kinetic.M1), 0.2 / 0.12, 0.01);
+  // between the kinetic and the static range: held by static friction
+  const double dM = 0.15 / 0.2 * (h.M1_max - h.M1);
+  EXPECT_GT(dM, kinetic.M1_max - kinetic.M1);
   const sim::Result r = hold(p, h.M1 + dM, h.M2, 0.5);
   ASSERT_TRUE(r.status.ok()) << r.status.message;
   EXPECT_LT(max_displacement(r), kStuckDisplacement);
-  const sim::Result out = hold(p, h.M1 + 1.01 * 0.2 * 0.01 * h.N[0], h.M2, 0.2);
+  const sim::Result out = hold(p, h.M1 + 1.01 * (h.M1_max - h.M1), h.M2, 0.2);
   ASSERT_TRUE(out.status.ok()) << out.status.message;
   EXPECT_GT(max_displacement(out), kBreakaway);
 }

@@ -1,4 +1,4 @@
-// The simulator against ../shared/reference (independent Newton-Euler + RK8 trajectories), the
+// The simulator against datasets/reference (independent Newton-Euler + RK8 trajectories), the
 // energy balance, and inverse dynamics of the simulated run.
 #include <gtest/gtest.h>
 

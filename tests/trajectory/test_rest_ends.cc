@@ -37,7 +37,8 @@ TEST(RestEnds, TrajectoryEndsAreHeldWithTheHoldingTorques) {
     EXPECT_EQ(r.mode[4], kStuck) << "end " << e;
     EXPECT_NEAR(r.M1, h.M1, kTorqueTol) << "end " << e;
     EXPECT_NEAR(r.M2, h.M2, kTorqueTol) << "end " << e;
-    EXPECT_NEAR(r.hold_margin[0], h.M1_max - h.M1, kTorqueTol) << "end " << e;
+    EXPECT_NEAR(r.hold_range[0], h.M1_min, kTorqueTol) << "end " << e;
+    EXPECT_NEAR(r.hold_range[3], h.M2_max, kTorqueTol) << "end " << e;
     double M1 = 0, M2 = 0;
     ASSERT_TRUE(problem.torques(x.data(), r.t, &M1, &M2).ok());
     EXPECT_NEAR(M1, h.M1, kTorqueTol) << "end " << e;

@@ -1,6 +1,7 @@
 #include "fivebar/trajectory/batch.h"
 
 #include <atomic>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -90,11 +91,14 @@ struct Reader {
   }
 };
 
+// shortest text that reads back exactly (0.3, not %.17g's 0.29999999999999999); the apps'
+// format_double does the same, but this library does not depend on the apps layer
 std::string num(double v) {
   if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
   char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
 }
 
 std::string quoted(const std::string& s) {

@@ -1,5 +1,5 @@
 // The frictionless paper scene in MuJoCo beside fivebar, in one run: error against
-// ../shared/reference/paper_frictionless.csv over the first second and wall time.
+// datasets/reference/paper_frictionless.csv over the first second and wall time.
 //   build-peers/tests/bench/peers/bench_peers_mujoco
 // Model: an MJCF string built here: four bodies on hinges about z (gravity along -y), the loop
 // closed by an equality `connect` at C, inertias set exactly by `inertial`, no geoms (no contacts).

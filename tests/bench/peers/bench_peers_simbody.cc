@@ -1,5 +1,5 @@
 // The frictionless paper scene in Simbody beside fivebar, in one run: error against
-// ../shared/reference/paper_frictionless.csv over the first second and wall time.
+// datasets/reference/paper_frictionless.csv over the first second and wall time.
 //   build-peers/tests/bench/peers/bench_peers_simbody
 // Model: Pin mobilizers for the cranks on ground and for the couplers on the cranks (their q is the
 // relative angle th3 - th1, th4 - th2), the loop closed by Constraint::Ball at C, the loads by a

@@ -49,9 +49,9 @@ inline std::array<double, 4> initial_angles() {
 /// theta1..theta4 on the grid t = 0, 1 ms, ..., 1 s (kOutputs + 1 rows).
 using Trajectory = std::vector<std::array<double, 4>>;
 
-/// The first second of ../shared/reference/paper_frictionless.csv.
+/// The first second of datasets/reference/paper_frictionless.csv.
 inline Trajectory read_reference() {
-  const std::string path = std::string(FIVEBAR_SHARED_DIR) + "/reference/paper_frictionless.csv";
+  const std::string path = std::string(FIVEBAR_REFERENCE_DIR) + "/paper_frictionless.csv";
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot open " + path);
   std::string line;
@@ -198,7 +198,7 @@ inline void print_table(const std::string& peer, const std::vector<Measured>& pe
   std::printf(
       "\nScene: the frictionless paper scene (model.md, section 5), t in [0, 1] s; error: "
       "max over the 1 ms grid of |theta_i - theta_i,ref|, i = 1..4, against "
-      "../shared/reference/paper_frictionless.csv. Wall: minimum over repeated runs in "
+      "datasets/reference/paper_frictionless.csv. Wall: minimum over repeated runs in "
       "this process; %s: the integration only (model built once, outside the timing); "
       "fivebar: a whole sim::simulate call. Speed ratio: peer wall / wall of the fastest "
       "fivebar configuration whose error is at most the peer's.\n",

@@ -56,4 +56,23 @@ void add_out_option(CLI::App* app, std::string* out, const std::string& command)
 /// Prints `fivebar: warning: <message>` on stderr.
 void warn(const std::string& message);
 
+/// Progress of long work on stderr (interfaces.md: only when stderr is a terminal, and only
+/// once the work has taken 2 s): "<label>: 42% (t = 25.2 / 60 s)", updated at most 4 times a
+/// second on one line, cleared when done.
+class Progress {
+ public:
+  Progress(std::string label, double total, std::string unit = "");
+  ~Progress();
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+  /// `done` out of total.
+  void update(double done);
+
+ private:
+  std::string label_, unit_;
+  double total_;
+  double start_, last_ = 0;
+  bool terminal_, shown_ = false;
+};
+
 }  // namespace fivebar::io

@@ -14,6 +14,10 @@ namespace fivebar::io {
 /// (t, theta1..4, omega1..4, alpha1..4, M1, M2, N1..5, Mf1..5, P_diss, E_diss), then W_in, W_ext.
 const std::vector<std::string>& trajectory_columns();
 
+/// Writes the values of `row` in the order of trajectory_columns() to out[0 ..
+/// trajectory_columns().size() - 1].
+void row_values(const sim::Row& row, double* out);
+
 /// An extra column appended after the standard ones (one value per row).
 struct Column {
   std::string name;
@@ -22,13 +26,13 @@ struct Column {
 
 /// The rest columns of inverse dynamics (rest.h), appended to trajectory.csv: at_rest (1 where
 /// both cranks are stuck: the pose held still), stuck1..stuck5 (1 where joint O, B, C, D, D0 is
-/// stuck), M1_hold_min, M1_hold_max, M2_hold_min, M2_hold_max (M -+ mu_s r N of the crank joint
-/// where it is stuck: the torques over which static friction holds it; M itself where the crank
-/// moves, the motion fixing its torque).
+/// stuck), M1_hold_min, M1_hold_max, M2_hold_min, M2_hold_max (sim::Row::hold_range: the torques
+/// over which static friction holds the row; M itself where the crank moves).
 std::vector<Column> rest_columns(const std::vector<sim::Row>& rows);
 
 /// Writes rows as trajectory.csv: header trajectory_columns() then `extra` names, one line per
-/// row, every number in shortest round-trip form (as exact as %.17g). Throws InputError on a
+/// row, every number in shortest round-trip form (as exact as %.17g) except t, which is written
+/// by format_grid_value (0.476 for 476 * 0.001, within one ulp). Throws InputError on a
 /// write failure or an extra column whose length differs from rows.size().
 void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& rows,
                           const std::vector<Column>& extra = {});

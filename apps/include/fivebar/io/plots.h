@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "fivebar/sim/accuracy.h"
+
 namespace fivebar::io {
 
 /// The gnuplot found on PATH (or named by the environment variable FIVEBAR_GNUPLOT), probed once.
@@ -56,5 +58,11 @@ std::string hold_map_plot_script(const std::string& map_csv, double torque_limit
                                  const std::string& title, const std::string& terminal);
 std::string plot_hold_map(const std::string& dir, const std::string& map_csv, double torque_limit,
                           const std::string& title);
+/// gnuplot script of `fivebar accuracy`: work_precision.png from work_precision.csv (in the
+/// same directory), log-log error against wall time, one colour per integrator and one dash type
+/// per friction treatment, the Pareto front (an inline data block, sorted by time) joined and
+/// circled, each recommendation labelled with its target errors, the targets as horizontal lines.
+std::string work_precision_plot_script(const sim::WorkPrecision& wp, const std::string& title,
+                                       const std::string& terminal);
 
 }  // namespace fivebar::io

@@ -22,6 +22,8 @@ struct Scene {
   /// rates and accelerations the command uses
   double rest_rate_threshold = -1, rest_acceleration_threshold = -1;
   std::string path;  ///< the file it came from, as given (used in every error message)
+  /// likely unit mistakes (`<path>: <key>: <value> <why>`): load_scene prints them as warnings
+  std::vector<std::string> warnings;
 };
 
 /// Reads and validates a scene file, after applying `sets` ("dotted.key=value", interfaces.md

@@ -11,21 +11,24 @@
 // direction of its acceleration (model.md, sign(0)). EvalOptions::rest_rate and
 // rest_acceleration switch the rule on; sim::inverse_rows applies it with RestThresholds.
 //
-// The range. Whole mechanism at rest: the five friction torques are statically indeterminate.
-// As in the simulator (README, "Exact stick-slip"), fivebar carries the holding torques at the
-// crank joints O and D0, where the drives act; the reactions then do not depend on M1, M2, and
-// the pose holds exactly on the rectangle M1_eq +- mu_s,O r_O N_O, M2_eq +- mu_s,D0 r_D0 N_D0
-// (what forward simulation honours: inside it the mechanism locks, outside a crank breaks
-// away). With friction at every joint allowed to help, the region is larger: holding_polygon.
+// The range. Whole mechanism at rest: the five friction torques are statically indeterminate;
+// the pose holds while some friction torques within the static bounds carry the torques'
+// excess over the equilibrium (lock.h, the simulator's lock). Holding reports, for each
+// actuator with the other at its equilibrium value, the range over which that holds (what
+// forward simulation honours: inside it the mechanism stays locked, outside it breaks away);
+// holding_polygon the whole region over (M1, M2). A crank stuck alone (the other one moving)
+// holds exactly M +- mu_s r N of its joint: the reactions do not depend on its friction torque.
 #pragma once
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/lock.h"
 #include "fivebar/model/rest_rule.h"
 
 namespace fivebar {
@@ -65,10 +68,42 @@ struct Holding {
   T M1{}, M2{};
   std::array<T, 5> N{};      ///< joint reactions at that equilibrium [N] (O, B, C, D, D0)
   std::array<T, 5> bound{};  ///< mu_s,k r_k N_k [N m] (0 without friction)
-  /// the range over which static friction at the crank joints holds the pose (each actuator
-  /// independently of the other: the reactions do not depend on M1, M2) [N m]
+  /// the range of each actuator, the other at its equilibrium value, over which static friction
+  /// holds the pose [N m]: friction at all five joints, as the simulator's lock (lock.h) decides
+  /// it (double); for other scalars the sub-range M_eq +- bound that the crank joint O (D0) holds
+  /// alone
   T M1_min{}, M1_max{}, M2_min{}, M2_max{};
 };
+
+namespace detail {
+
+/// How far actuator `i` (0: M1, 1: M2) can move from the equilibrium h in direction `sign`
+/// before the locked mechanism breaks away: lock_analysis's ratio reaches 1. The ratio is
+/// homogeneous of degree one in the torque excess for fixed reactions, so d <- d / ratio(d)
+/// converges in a few steps (the reactions change with the holding torques by O(mu r / l)).
+inline Status lock_extent(const Params<double>& p, Loads<double> L, double th1, double th2,
+                          const EvalOptions& opt, const Holding<double>& h, int i, double sign,
+                          double* d) {
+  *d = std::max(h.bound[i == 0 ? 0 : 4], 1e-12 * (1.0 + std::abs(i == 0 ? h.M1 : h.M2)));
+  for (int it = 0; it < 50; ++it) {
+    L.M1 = h.M1 + (i == 0 ? sign * *d : 0.0);
+    L.M2 = h.M2 + (i == 1 ? sign * *d : 0.0);
+    LockAnalysis lock;
+    const Status st = lock_analysis(p, L, th1, th2, opt, &lock);
+    if (!st.ok()) return st;
+    if (!(lock.ratio > 0.0) || !std::isfinite(lock.ratio)) {
+      *d = 0.0;  // no friction resists this direction
+      return Status::Ok();
+    }
+    const double next = *d / lock.ratio;
+    const bool done = std::abs(next - *d) <= 1e-14 * next;
+    *d = next;
+    if (done) return Status::Ok();
+  }
+  return Status::Ok();
+}
+
+}  // namespace detail
 
 /// Frictionless equilibrium and holding range at (th1, th2) under loads L (M1, M2 ignored).
 /// Fails like the kinematics: kCannotAssemble, kNearSingular (opt.singular_margin).
@@ -78,7 +113,7 @@ Status holding_torques(const Params<T>& p, const Loads<T>& L, const T& th1, cons
   const EvalOptions still = with_rest(opt, RestThresholds{0.0, 0.0});
   Evaluation<T> ev;
   const T zero(0);
-  const Status st = inverse_dynamics(p, L, th1, th2, zero, zero, zero, zero, nullptr, still, &ev);
+  Status st = inverse_dynamics(p, L, th1, th2, zero, zero, zero, zero, nullptr, still, &ev);
   if (!st.ok()) return st;
   h->M1 = ev.M1;
   h->M2 = ev.M2;
@@ -86,10 +121,19 @@ Status holding_torques(const Params<T>& p, const Loads<T>& L, const T& th1, cons
   for (int j = 0; j < 5; ++j) {
     h->bound[j] = p.friction.active() ? T(holding_bound(p.friction, j) * ev.N[j]) : zero;
   }
-  h->M1_min = h->M1 - h->bound[0];
-  h->M1_max = h->M1 + h->bound[0];
-  h->M2_min = h->M2 - h->bound[4];
-  h->M2_max = h->M2 + h->bound[4];
+  T ext[4] = {h->bound[0], h->bound[0], h->bound[4], h->bound[4]};  // lower M1, upper M1, ...
+  if constexpr (std::is_same_v<T, double>) {
+    if (p.friction.active()) {
+      for (int e = 0; e < 4; ++e) {
+        st = detail::lock_extent(p, L, th1, th2, opt, *h, e / 2, e % 2 ? 1.0 : -1.0, &ext[e]);
+        if (!st.ok()) return st;
+      }
+    }
+  }
+  h->M1_min = h->M1 - ext[0];
+  h->M1_max = h->M1 + ext[1];
+  h->M2_min = h->M2 - ext[2];
+  h->M2_max = h->M2 + ext[3];
   return Status::Ok();
 }
 

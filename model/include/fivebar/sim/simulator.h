@@ -36,6 +36,11 @@ struct Options {
   Method method = Method::kCvodeAdams;
   double rtol = 1e-10;
   double atol = 1e-10;
+  /// [rad] the global error a run should reach (simulation.target_error); with auto_tolerance
+  /// simulate_to_target chooses rtol = atol to meet it
+  double target_error = 1e-6;
+  /// the scene fixes neither rtol nor atol: simulate_to_target chooses them
+  bool auto_tolerance = false;
   bool locate_switches = true;  ///< root-find every zero of a joint's relative rate and restart
   /// exact stick-slip (with located switches): a joint whose rate reaches zero sticks while
   /// |holding torque| <= mu_s r_k N_k, and breaks away when the bound is reached
@@ -52,7 +57,15 @@ struct Options {
   /// reactions or friction torques): what a work-precision study needs, at a fraction of the cost
   bool full_rows = true;
   int friction_max_iter = 50;
+  /// called after every accepted step with the time reached (the apps show progress; may be empty)
+  std::function<void(double t)> progress;
 };
+
+/// Largest number of output rows a run may produce (about 0.6 GB in memory and as much CSV):
+/// a duration / output_step beyond it is refused as bad input.
+inline constexpr long kMaxOutputRows = 2000000;
+/// Output rows of a run: one per output_step from 0, and the last at the duration.
+long output_row_count(const Options& options);
 
 /// Load function: the loads at time t.
 using LoadFunction = std::function<Loads<double>(double t)>;
@@ -74,9 +87,23 @@ struct Row {
   std::array<double, 5> bristle{};  ///< LuGre bristle states z_k [rad] (zero for other laws)
   bool has_bristle = false;         ///< bristle holds a simulated state (LuGre runs)
   /// inverse_rows, stuck joints (mode 2): mu_s r_k N_k, the friction torque that could be added
-  /// at the joint before it slips [N m]; the holding range of M1 is M1 +- hold_margin[0], of M2
-  /// M2 +- hold_margin[4] (rest.h)
+  /// at that joint alone before it slips [N m] (rest.h)
   std::array<double, 5> hold_margin{};
+  /// inverse_rows: M1_min, M1_max, M2_min, M2_max over which static friction holds the row [N m]:
+  /// M itself where the crank moves, M -+ hold_margin where it is stuck alone, and with both
+  /// cranks stuck (the pose at rest) each actuator's range with the other at its row value
+  /// (friction at all five joints, as the simulator's lock; rest.h)
+  std::array<double, 4> hold_range{};
+  /// relative rate of joint k (0-based, O, B, C, D, D0) from the link rates [rad/s]
+  double omega_rel(int k) const {
+    switch (k) {
+      case 0: return omega[0];
+      case 1: return omega[2] - omega[0];
+      case 2: return omega[3] - omega[2];
+      case 3: return omega[1] - omega[3];
+      default: return omega[1];
+    }
+  }
 };
 
 struct Stats {
@@ -85,6 +112,12 @@ struct Stats {
   long friction_events = 0;  ///< located switches: rate zero crossings, sticks, breakaways
   long stick_events = 0;     ///< of which: a joint stuck
   long breakaway_events = 0; ///< of which: a stuck joint slipped again
+  /// joint-mode decisions taken (at the start, at every switch and breakaway): each one chooses
+  /// the unique consistent combination of slip directions and stuck joints
+  long mode_decisions = 0;
+  /// slipping joints whose direction disagreed with the sign of their rate at a decision (a
+  /// switch missed by the detection); always 0 unless the detection is broken
+  long mode_corrections = 0;
   double wall_time_s = 0;
 };
 
@@ -114,15 +147,25 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
                     const std::vector<Row>& motion, std::vector<Row>* out,
                     const RestThresholds& rest);
 
-/// Checks of a finished run (summary.json).
+/// Checks of a finished run (summary.json). A run whose checks fail is not ok: `verdict` names
+/// the check, the time and the joint.
 struct RunChecks {
   /// max_t |d(KE + PE) - W_in - W_ext + E_diss| divided by the largest of |W_in| + |W_ext|,
-  /// E_diss and |d(KE + PE)| over the run (the total work that went through the system)
+  /// E_diss, |d(KE + PE)|, KE and |PE - PE(0)| over the run (an energy scale every run has)
   double energy_balance_relative = 0;
-  /// max |M_inverse - M_input| over the rows [N m]; rows with a stuck joint are left out (their
-  /// holding torque is statically indeterminate in inverse dynamics)
+  /// max |M_inverse - M_input| over the rows [N m], inverse dynamics with the run's slip
+  /// directions; rows with a stuck joint are left out (their holding torque is statically
+  /// indeterminate in inverse dynamics)
   double inverse_dynamics_max_abs_error = 0;
+  /// min over rows and joints of Mf_k w_k [W]: friction never supplies power (not checked for
+  /// LuGre, whose bristles store and return energy)
+  double friction_power_min = 0;
+  /// thresholds: energy balance max(1e-6, 1e3 rtol); inverse residual 1e-8 N m per N m of peak
+  /// input torque (at least 1e-8); friction power -1e-9 W per N m of peak friction torque
+  double energy_tol = 0, inverse_tol = 0, power_tol = 0;
+  Status verdict;
 };
-RunChecks check_run(const Params<double>& params, const LoadFunction& loads, const Result& result);
+RunChecks check_run(const Params<double>& params, const LoadFunction& loads, const Result& result,
+                    double rtol = 1e-10);
 
 }  // namespace fivebar::sim

@@ -1,0 +1,60 @@
+// The library side of the `identify` and `optimize` subcommands: their settings as plain values,
+// turned into library options with the command line's checks and one-line messages, and the
+// readers that turn library file errors into InputError. The command line (cmd_identify.cc,
+// cmd_optimize.cc) and the Python module (python/) both call these.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fivebar/identification/identify.h"
+#include "fivebar/identification/torque_log.h"
+#include "fivebar/io/scene.h"
+#include "fivebar/trajectory/batch.h"
+#include "fivebar/trajectory/tasks.h"
+
+namespace fivebar::io {
+
+/// `fivebar identify` options (see `fivebar identify --help`), with the command line's defaults.
+struct IdentifySettings {
+  std::string method = "inverse-dynamics", law = "coulomb_viscous", loss = "none";
+  bool per_joint = false, estimate_rates = false, start_from_scene = false;
+  double loss_scale = 0.1, smooth_sign = -1, min_rate = 0, sg_window = 0.010, window = 0.2;
+  int sg_order = 5, threads = 1;
+};
+
+/// The identification options of `settings` for `scene`. Throws
+/// InputError(`command line: --law: ...`) and the like for a value the command line refuses.
+identification::IdentifyOptions identify_options(const IdentifySettings& settings,
+                                                 const Scene& scene);
+
+/// Reads a torque log; a log that cannot be used throws InputError (the LogError's message).
+identification::TorqueLog read_log(const std::string& path);
+
+/// identification::identify for a scene: a log that does not fit the scene throws InputError,
+/// failed numerics NumericalError(`<log>: identify: ...`).
+identification::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& loads,
+                                              const identification::TorqueLog& log,
+                                              const identification::IdentifyOptions& options);
+
+/// `fivebar optimize` options (see `fivebar optimize --help`), with the command line's defaults.
+struct OptimizeSettings {
+  std::string method = "slsqp", objective = "dissipated_energy";
+  bool global = false, validate = true;
+  int starts = 8, control_points = 10, quadrature_points = 12;
+  double singular_margin = 0.1;
+};
+
+/// The batch options of `settings`; throws InputError(`command line: --method: ...`) and the like.
+trajectory::BatchOptions batch_options(const OptimizeSettings& settings);
+
+/// Reads a tasks file; a malformed one throws InputError (the TaskFileError's message).
+std::vector<trajectory::TaskSpec> read_tasks(const std::string& path);
+
+/// The trajectory rows of a solved task and of its minimum-jerk baseline, on the scene's output
+/// step (at most a tenth of the task's duration).
+Status task_rows(const Scene& scene, const trajectory::TaskResult& result,
+                 const trajectory::BatchOptions& options, std::vector<sim::Row>* optimal,
+                 std::vector<sim::Row>* baseline);
+
+}  // namespace fivebar::io

@@ -1,0 +1,124 @@
+#include "fivebar/io/commands.h"
+
+#include <algorithm>
+
+#include "fivebar/io/errors.h"
+#include "fivebar/io/loads.h"
+
+namespace fivebar::io {
+
+namespace id = fivebar::identification;
+
+namespace {
+const char* const kFlags = "command line";
+}  // namespace
+
+id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& scene) {
+  id::IdentifyOptions opt;
+  if (!id::parse_law(a.law, &opt.layout.law)) {
+    throw InputError(kFlags, "--law", "expected coulomb_viscous or stribeck, got " + a.law);
+  }
+  opt.layout.per_joint = a.per_joint;
+  if (!id::parse_method(a.method, &opt.method)) {
+    throw InputError(kFlags, "--method",
+                     "expected inverse-dynamics or output-error, got " + a.method);
+  }
+  if (!id::parse_loss(a.loss, &opt.loss)) {
+    throw InputError(kFlags, "--loss", "expected none, huber or cauchy, got " + a.loss);
+  }
+  if (!(a.loss_scale > 0)) throw InputError(kFlags, "--loss-scale", "must be > 0");
+  if (!(a.sg_window > 0) || a.sg_order < 2) {
+    throw InputError(kFlags, "--sg-window/--sg-order", "window > 0 and order >= 2 required");
+  }
+  if (!(a.window > 0)) throw InputError(kFlags, "--window", "must be > 0");
+  opt.loss_scale = a.loss_scale;
+  opt.smoothing_velocity = a.smooth_sign;
+  opt.estimate_rates = a.estimate_rates;
+  opt.min_rate = a.min_rate;
+  opt.rest_rate_threshold = scene.rest_rate_threshold;  // rest rule; < 0: derived
+  opt.rest_acceleration_threshold = scene.rest_acceleration_threshold;
+  opt.sg.half_window_s = a.sg_window;
+  opt.sg.order = a.sg_order;
+  opt.num_threads = std::max(1, a.threads);
+  opt.window_s = a.window;
+  if (a.start_from_scene) {
+    FrictionParams<double> fp = scene.params.friction;
+    if (fp.law != FrictionLaw::kStribeck) {
+      fp.static_coulomb = fp.coulomb;
+      fp.stribeck_velocity.fill(0.2);
+    }
+    opt.initial = opt.layout.extract(fp);
+  }
+  return opt;
+}
+
+id::TorqueLog read_log(const std::string& path) {
+  try {
+    return id::read_torque_log(path);
+  } catch (const id::LogError& e) {
+    throw InputError(e.file(), e.key(), e.reason());
+  }
+}
+
+id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& loads,
+                                  const id::TorqueLog& log, const id::IdentifyOptions& options) {
+  id::IdentifyResult res;
+  try {
+    res = id::identify(scene.params, loads, log, options);
+  } catch (const id::LogError& e) {
+    throw InputError(e.file(), e.key(), e.reason());
+  }
+  if (!res.status.ok()) throw NumericalError(log.path, "identify", res.status.message);
+  return res;
+}
+
+trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
+  trajectory::BatchOptions o;
+  if (!trajectory::parse_method(a.method, &o.optimizer.method)) {
+    throw InputError(kFlags, "--method", "'" + a.method + "' is not slsqp, mma or ccsaq");
+  }
+  if (!trajectory::parse_objective(a.objective, &o.problem.objective)) {
+    throw InputError(kFlags, "--objective",
+                     "'" + a.objective + "' is not dissipated_energy or input_energy");
+  }
+  if (a.control_points < 7 || a.control_points > 60) {
+    throw InputError(kFlags, "--control-points", "expected an integer in [7, 60]");
+  }
+  if (a.quadrature_points < 2 || a.quadrature_points > 64) {
+    throw InputError(kFlags, "--quadrature-points", "expected an integer in [2, 64]");
+  }
+  if (!(a.singular_margin >= 0 && a.singular_margin < 1)) {
+    throw InputError(kFlags, "--singular-margin", "expected a number in [0, 1)");
+  }
+  if (a.starts < 1) throw InputError(kFlags, "--starts", "expected an integer >= 1");
+  o.optimizer.global = a.global;
+  o.optimizer.starts = a.starts;
+  o.problem.control_points = a.control_points;
+  o.problem.quadrature_points = a.quadrature_points;
+  o.problem.singular_margin = a.singular_margin;
+  o.validate = a.validate;
+  return o;
+}
+
+std::vector<trajectory::TaskSpec> read_tasks(const std::string& path) {
+  try {
+    return trajectory::load_tasks(path);
+  } catch (const trajectory::TaskFileError& e) {
+    throw InputError(e.file(), e.key(), e.reason());
+  }
+}
+
+Status task_rows(const Scene& scene, const trajectory::TaskResult& r,
+                 const trajectory::BatchOptions& options, std::vector<sim::Row>* optimal,
+                 std::vector<sim::Row>* baseline) {
+  const sim::LoadFunction loads = LoadExpressions(scene).function();
+  const trajectory::TrajectoryProblem problem =
+      trajectory::problem_of(scene.params, loads, r, options);
+  const double step = std::min(scene.options.output_step, r.duration / 10);
+  const Status s1 = problem.rows(r.x.data(), step, optimal);
+  if (!s1.ok()) return s1;
+  const std::vector<double> x0 = problem.motion().minimum_jerk();
+  return problem.rows(x0.data(), step, baseline);
+}
+
+}  // namespace fivebar::io

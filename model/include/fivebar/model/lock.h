@@ -1,0 +1,119 @@
+// The mechanism at rest held by joint friction (all five joints stuck: "locked").
+//
+// At rest (thd = 0, thdd = 0) the generalized forces of the loads and gravity Q must be carried
+// by holding torques lambda_k at the five joints: J_w^T lambda = Q, two equations in five
+// unknowns. The holding torques are statically indeterminate; friction holds the mechanism when
+// some lambda has |lambda_k| <= mu_s,k r_k N_k at every joint, N_k the reactions that lambda
+// itself produces. lock_analysis finds the lambda that minimizes the largest ratio
+// s = max_k |lambda_k| / (mu_s,k r_k N_k): the mechanism holds while s <= 1.
+//
+// With N fixed this is a linear program whose dual is two-dimensional: maximize Q . u over
+// sum_k w_k |a_k . u| <= 1 (a_k = J_w^T e_k, w_k = mu_s,k r_k N_k). Its optimum lies on a kink
+// of the constraint, where u is orthogonal to one a_k, so s = max_k |Q . perp(a_k)| /
+// sum_j w_j |a_j . perp(a_k)|, and the primal lambda follows from complementary slackness.
+// N is updated from lambda until it settles (friction changes the reactions little).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "fivebar/model/dynamics.h"
+
+namespace fivebar {
+
+/// Result of lock_analysis at one pose and load.
+struct LockAnalysis {
+  std::array<double, 5> hold{};  ///< holding torques lambda_k [N m] (friction torques Mf_k)
+  std::array<double, 5> N{};     ///< reactions |F_k| with those torques [N]
+  std::array<Vec2<double>, 5> F;  ///< reactions [N]
+  /// max_k |lambda_k| / (mu_s,k r_k N_k) at the optimum (<= 1: friction holds the pose);
+  /// infinite when no joint can resist in some direction the loads push
+  double ratio = 0.0;
+  double alpha3 = 0.0, alpha4 = 0.0;
+};
+
+namespace detail {
+
+/// min over lambda with sum_k a_k lambda_k = q of max_k |lambda_k| / w_k (the dual vertex rule
+/// above); returns the ratio and fills lambda.
+inline double min_max_ratio(const std::array<Vec2<double>, 5>& a, const std::array<double, 5>& w,
+                            const Vec2<double>& q, std::array<double, 5>* lambda) {
+  double best = -1.0;
+  int kbest = -1;
+  for (int k = 0; k < 5; ++k) {
+    if (a[k].squaredNorm() == 0.0) continue;
+    const Vec2<double> u = perp(a[k]);
+    double denom = 0.0;
+    for (int j = 0; j < 5; ++j) denom += w[j] * std::abs(a[j].dot(u));
+    const double num = std::abs(q.dot(u));
+    const double s = num == 0.0 ? 0.0 : denom > 0.0 ? num / denom
+                                                    : std::numeric_limits<double>::infinity();
+    if (s > best) {
+      best = s;
+      kbest = k;
+    }
+  }
+  lambda->fill(0.0);
+  if (kbest < 0 || !std::isfinite(best)) return kbest < 0 ? 0.0 : best;
+  Vec2<double> u = perp(a[kbest]);
+  if (q.dot(u) < 0.0) u = -u;
+  Vec2<double> rest = q;
+  for (int j = 0; j < 5; ++j) {
+    if (j == kbest) continue;
+    const double d = a[j].dot(u);
+    (*lambda)[j] = d > 0.0 ? best * w[j] : d < 0.0 ? -best * w[j] : 0.0;
+    rest -= a[j] * (*lambda)[j];
+  }
+  (*lambda)[kbest] = rest.dot(a[kbest]) / a[kbest].squaredNorm();
+  // the ratio the torques actually reach (differs from the dual's only where columns are parallel)
+  for (int j = 0; j < 5; ++j) {
+    if ((*lambda)[j] == 0.0) continue;
+    best = std::max(best, w[j] > 0.0 ? std::abs((*lambda)[j]) / w[j]
+                                     : std::numeric_limits<double>::infinity());
+  }
+  return best;
+}
+
+}  // namespace detail
+
+/// Holding torques of the locked mechanism at pose (th1, th2), at rest, under loads L.
+inline Status lock_analysis(const Params<double>& p, const Loads<double>& L, double th1,
+                            double th2, const EvalOptions& opt, LockAnalysis* out) {
+  Kinematics<double> k;
+  Status st = solve_kinematics(p, th1, th2, &k, opt.singular_margin, false);
+  if (!st.ok()) return st;
+  Bias<double> b;
+  compute_bias(p, k, 0.0, 0.0, &b);
+  const Vec2<double> Fvec = detail::force_vector(k, L);
+  Mat2<double> A;
+  Vec2<double> q;
+  detail::mass_and_forces(p, k, b, L, Fvec, &A, &q);
+  std::array<Vec2<double>, 5> a;
+  for (int j = 0; j < 5; ++j) {
+    std::array<double, 5> unit{};
+    unit[j] = 1.0;
+    a[j] = detail::friction_transpose(k, unit);
+  }
+  const Vec2<double> zero = Vec2<double>::Zero();
+  out->hold.fill(0.0);
+  for (int it = 0; it < 30; ++it) {
+    detail::reactions(p, k, b, L, Fvec, zero, out->hold, &out->F, &out->alpha3, &out->alpha4);
+    const std::array<double, 5> N_old = out->N;
+    detail::norms(out->F, &out->N);
+    std::array<double, 5> w;
+    for (int j = 0; j < 5; ++j) w[j] = holding_bound(p.friction, j) * out->N[j];
+    out->ratio = detail::min_max_ratio(a, w, q, &out->hold);
+    double change = 0.0, scale = 1e-300;
+    for (int j = 0; j < 5; ++j) {
+      change = std::max(change, std::abs(out->N[j] - N_old[j]));
+      scale = std::max(scale, out->N[j]);
+    }
+    if (!std::isfinite(out->ratio) || (it > 0 && change <= 1e-13 * scale)) break;
+  }
+  detail::reactions(p, k, b, L, Fvec, zero, out->hold, &out->F, &out->alpha3, &out->alpha4);
+  detail::norms(out->F, &out->N);
+  return Status::Ok();
+}
+
+}  // namespace fivebar

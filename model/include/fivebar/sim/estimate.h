@@ -1,0 +1,46 @@
+// Every simulation with an estimate of its own global error: a companion run at a ten times
+// tighter tolerance, and, when the scene leaves the tolerance open, the tolerance chosen to meet
+// simulation.target_error.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fivebar/sim/simulator.h"
+
+namespace fivebar::sim {
+
+/// One tolerance tried: the run at rtol = atol = `rtol` and its estimated error.
+struct Attempt {
+  double rtol = 0;
+  double estimate = 0;  ///< [rad]
+};
+
+struct EstimatedRun {
+  Result run;       ///< the output run (rows as Options::full_rows asks)
+  Options options;  ///< the settings of the output run (tolerances as chosen)
+  /// [rad] max over the output grid and the four link angles of |theta - theta_companion|, the
+  /// companion run being the same method at rtol / 10, atol / 10. For a method whose error is
+  /// proportional to its tolerance this is 0.9 times the run's own error; NaN when the companion
+  /// failed (see note)
+  double estimated_max_error_rad = 0;
+  bool target_met = false;        ///< estimated_max_error_rad <= options.target_error
+  std::vector<Attempt> attempts;  ///< every tolerance tried, in order
+  std::string note;               ///< why the target was not met, or why there is no estimate
+};
+
+/// Largest tolerance simulate_to_target goes down to (rtol = atol): below it round-off in the
+/// right-hand side, not the tolerance, limits the error.
+inline constexpr double kTightestRtol = 1e-13;
+
+/// max over common output times and theta1..theta4 of |a - b| [rad] (rows on the same grid).
+double max_angle_difference(const std::vector<Row>& a, const std::vector<Row>& b);
+
+/// Simulates with an error estimate. With options.auto_tolerance it starts from
+/// rtol = atol = 1e-4 target_error and tightens in proportion to the estimate until the target
+/// is met (at most four tries, never below kTightestRtol); where chaos makes the target
+/// unreachable it stops as soon as the proportional prediction says so, and the note says it.
+EstimatedRun simulate_to_target(const Params<double>& params, const LoadFunction& loads,
+                                const Initial& initial, const Options& options);
+
+}  // namespace fivebar::sim

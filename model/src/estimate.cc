@@ -1,0 +1,85 @@
+// Error estimates by a companion run, and the choice of tolerance for a target error.
+#include "fivebar/sim/estimate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace fivebar::sim {
+
+double max_angle_difference(const std::vector<Row>& a, const std::vector<Row>& b) {
+  const size_t n = std::min(a.size(), b.size());
+  double worst = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 4; ++k) {
+      const double d = std::abs(a[i].theta[k] - b[i].theta[k]);
+      worst = std::isfinite(d) ? std::max(worst, d) : INFINITY;
+    }
+  }
+  return worst;
+}
+
+namespace {
+
+/// The companion of a run: same method, ten times tighter, angles only, no progress.
+double companion_estimate(const Params<double>& params, const LoadFunction& loads,
+                          const Initial& initial, const Options& o, const Result& run,
+                          std::string* note) {
+  Options c = o;
+  c.rtol = o.rtol / 10;
+  c.atol = o.atol / 10;
+  c.full_rows = false;
+  c.progress = nullptr;
+  const Result companion = simulate(params, loads, initial, c);
+  if (!companion.status.ok()) {
+    *note = "no error estimate: the companion run at rtol " + std::to_string(c.rtol) +
+            " failed: " + companion.status.message;
+    return NAN;
+  }
+  return max_angle_difference(run.rows, companion.rows);
+}
+
+std::string fmt(double x) {
+  std::ostringstream s;
+  s.precision(3);
+  s << x;
+  return s.str();
+}
+
+}  // namespace
+
+EstimatedRun simulate_to_target(const Params<double>& params, const LoadFunction& loads,
+                                const Initial& initial, const Options& options) {
+  EstimatedRun out;
+  out.options = options;
+  Options& o = out.options;
+  const double target = o.target_error;
+  if (o.auto_tolerance) o.rtol = o.atol = std::clamp(1e-4 * target, kTightestRtol, 1e-6);
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    out.run = simulate(params, loads, initial, o);
+    if (!out.run.status.ok()) return out;
+    out.note.clear();
+    const double e = companion_estimate(params, loads, initial, o, out.run, &out.note);
+    out.estimated_max_error_rad = e;
+    out.attempts.push_back({o.rtol, e});
+    out.target_met = e <= target;
+    if (!o.auto_tolerance || out.target_met || !std::isfinite(e)) break;
+    // error ~ proportional to the tolerance: the tolerance that would meet the target, with margin
+    const double wanted = o.rtol * 0.3 * target / e;
+    const double at_floor = e * kTightestRtol / o.rtol;  // predicted error at the floor
+    if (o.rtol <= kTightestRtol * 1.01 || (wanted < kTightestRtol && at_floor > 10 * target)) {
+      break;
+    }
+    o.rtol = o.atol = std::max(wanted, kTightestRtol);
+  }
+  if (!out.target_met && out.note.empty()) {
+    out.note = "target_error " + fmt(target) + " rad not met: estimated error " +
+               fmt(out.estimated_max_error_rad) + " rad at rtol " + fmt(o.rtol) +
+               (o.auto_tolerance ? " (tighter tolerances cannot reach it: errors grow "
+                                   "exponentially in this motion)"
+                                 : " (the scene fixes rtol; remove it to let fivebar choose)");
+  }
+  return out;
+}
+
+}  // namespace fivebar::sim

@@ -1,0 +1,48 @@
+// The `fivebar` Python module (pybind11): shared declarations of its source files.
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "fivebar/io/loads.h"
+#include "fivebar/io/scene.h"
+#include "fivebar/sim/simulator.h"
+
+namespace fivebar::python {
+
+namespace py = pybind11;
+
+/// fivebar.Scene: a validated scene with its load expressions compiled once (calls share them;
+/// LoadExpressions is safe to call from several threads).
+struct PyScene {
+  io::Scene scene;
+  std::shared_ptr<const io::LoadExpressions> loads;
+  /// M3 and F do not depend on t (the loads inverse dynamics uses): constant_loads holds them
+  bool loads_constant = false;
+  Loads<double> constant_loads;
+
+  explicit PyScene(io::Scene s)
+      : scene(std::move(s)), loads(std::make_shared<const io::LoadExpressions>(scene)) {
+    using L = io::LoadExpressions;
+    loads_constant = loads->constant(L::kM3) && loads->constant(L::kF);
+    if (loads_constant) constant_loads = (*loads)(0.0);
+  }
+};
+
+/// A float64 NumPy array of the given shape, filled from `data` (copied).
+py::array_t<double> to_array(const std::vector<double>& data, std::vector<py::ssize_t> shape);
+py::array_t<double> to_array(const std::vector<double>& data);
+
+/// The columns of trajectory.csv (io::trajectory_columns) of `rows`, one array each.
+py::dict rows_dict(const std::vector<sim::Row>& rows);
+
+void bind_scene(py::module_& m);     // Scene, load_scene, parse_scene, simulate
+void bind_inverse(py::module_& m);   // inverse, _time_inverse_cpp
+void bind_identify(py::module_& m);  // identify
+void bind_optimize(py::module_& m);  // optimize
+
+}  // namespace fivebar::python

@@ -1,0 +1,183 @@
+// fivebar.identify: friction identification from a torque log, the result as a dict.
+#include <pybind11/stl.h>
+
+#include "bindings.h"
+#include "fivebar/identification/torque_log.h"
+#include "fivebar/io/commands.h"
+#include "fivebar/io/errors.h"
+
+namespace fivebar::python {
+namespace {
+
+namespace id = fivebar::identification;
+
+py::array_t<double> matrix(const Eigen::MatrixXd& a) {
+  py::array_t<double> out({py::ssize_t(a.rows()), py::ssize_t(a.cols())});
+  auto v = out.mutable_unchecked<2>();
+  for (Eigen::Index r = 0; r < a.rows(); ++r) {
+    for (Eigen::Index c = 0; c < a.cols(); ++c) v(r, c) = a(r, c);
+  }
+  return out;
+}
+
+py::array_t<double> pair(const double (&a)[2]) { return to_array({a[0], a[1]}); }
+
+// a log given as a dict of arrays: written as CSV text and parsed, so it gets every check of a
+// log file (columns, finite numbers, increasing t, degrees)
+id::TorqueLog log_from_dict(const py::dict& columns) {
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> values;
+  for (const auto& [key, value] : columns) {
+    names.push_back(py::str(key));
+    values.push_back(value.cast<std::vector<double>>());
+  }
+  std::string text;
+  for (size_t j = 0; j < names.size(); ++j) text += (j ? "," : "") + names[j];
+  text += "\n";
+  const size_t n = values.empty() ? 0 : values[0].size();
+  for (size_t i = 0; i < n; ++i) {
+    for (size_t j = 0; j < names.size(); ++j) {
+      if (values[j].size() != n) {
+        throw InputError("log", names[j], "expected " + std::to_string(n) + " values (as " +
+                                              names[0] + "), got " +
+                                              std::to_string(values[j].size()));
+      }
+      text += (j ? "," : "") + id::format_number(values[j][i]);
+    }
+    text += "\n";
+  }
+  try {
+    return id::parse_torque_log(text, "log");
+  } catch (const id::LogError& e) {
+    throw InputError(e.file(), e.key(), e.reason());
+  }
+}
+
+py::dict validation_dict(const id::Validation& v) {
+  py::dict d;
+  d["full_run_status"] = v.status.ok() ? "ok" : v.status.message;
+  d["full_run_duration_s"] = v.full_duration_s;
+  d["full_run_rms_angle_error"] = pair(v.full_rms);
+  d["full_run_max_angle_error"] = pair(v.full_max);
+  d["window_s"] = v.window_s;
+  d["windowed_rms_angle_error"] = pair(v.window_rms);
+  d["simulated_theta1"] = to_array(v.full_theta1);
+  d["simulated_theta2"] = to_array(v.full_theta2);
+  return d;
+}
+
+// the fields of identification.json, the per-sample arrays of residuals.csv, the fitted scene
+py::dict result_dict(const PyScene& s, const id::IdentifyResult& r, const id::Loss loss) {
+  py::dict d;
+  d["method"] = id::method_name(r.method);
+  d["law"] = id::law_name(r.layout.law);
+  d["per_joint"] = r.layout.per_joint;
+  d["loss"] = id::loss_name(loss);
+  py::list params;
+  for (const id::ParameterEstimate& p : r.parameters) {
+    py::dict e;
+    e["name"] = p.name;
+    e["value"] = p.value;
+    e["std"] = p.std;
+    e["initial"] = p.initial;
+    params.append(e);
+  }
+  d["parameters"] = params;
+  d["covariance"] = matrix(r.covariance);
+  d["correlation"] = matrix(r.correlation);
+  d["singular_values"] = to_array(r.singular_values);
+  d["rms_torque_residual"] = pair(r.rms_torque_residual);
+  d["residual_noise_floor"] = pair(r.residual_noise_floor);
+  d["rms_torque_residual_initial"] = pair(r.rms_torque_residual_initial);
+  if (r.method == id::Method::kOutputError) d["rms_angle_residual"] = pair(r.rms_angle_residual);
+  d["residual_sigma"] = r.residual_sigma;
+  d["samples"] = r.samples;
+  d["samples_used"] = r.samples_used;
+  d["residuals"] = r.residuals;
+  d["rates_estimated"] = r.rates_estimated;
+  d["accelerations_estimated"] = r.accels_estimated;
+  py::dict solver;
+  solver["iterations"] = r.iterations;
+  solver["converged"] = r.converged;
+  solver["report"] = r.solver_message;
+  solver["iteration_costs"] = to_array(r.iteration_costs);
+  d["solver"] = solver;
+  d["warnings"] = r.warnings;
+  d["wall_time_s"] = r.wall_time_s;
+  for (const auto& [name, v] : {std::pair{"omega1", &r.omega1}, {"omega2", &r.omega2},
+                                {"alpha1", &r.alpha1}, {"alpha2", &r.alpha2},
+                                {"predicted_tau1", &r.predicted_tau1},
+                                {"predicted_tau2", &r.predicted_tau2}}) {
+    d[name] = to_array(*v);
+  }
+  py::array_t<bool> used(static_cast<py::ssize_t>(r.used.size()));
+  std::copy(r.used.begin(), r.used.end(), used.mutable_data());
+  d["used"] = used;
+  io::Scene fitted = s.scene;
+  fitted.params.friction = r.fitted.friction;
+  d["fitted_scene"] = PyScene(std::move(fitted));
+  return d;
+}
+
+py::dict identify(const PyScene& s, const py::object& log, const io::IdentifySettings& settings,
+                  bool validate) {
+  const id::IdentifyOptions options = io::identify_options(settings, s.scene);
+  const id::TorqueLog torque_log = py::isinstance<py::dict>(log)
+                                       ? log_from_dict(log.cast<py::dict>())
+                                       : io::read_log(py::str(log));
+  id::IdentifyResult result;
+  id::Validation validation;
+  {
+    py::gil_scoped_release release;
+    const sim::LoadFunction loads = s.loads->function();
+    result = io::identify_scene(s.scene, loads, torque_log, options);
+    if (validate) {
+      validation = id::validate(result.fitted, loads, torque_log, result.omega1, result.omega2,
+                                settings.window);
+    }
+  }
+  py::dict d = result_dict(s, result, options.loss);
+  if (validate) d["validation"] = validation_dict(validation);
+  return d;
+}
+
+}  // namespace
+
+void bind_identify(py::module_& m) {
+  m.def(
+      "identify",
+      [](const PyScene& scene, const py::object& log, const std::string& method,
+         const std::string& law, bool per_joint, const std::string& loss, double loss_scale,
+         double smooth_sign, bool estimate_rates, double min_rate, double sg_window, int sg_order,
+         int threads, bool start_from_scene, bool validate, double window) {
+        io::IdentifySettings st;
+        st.method = method;
+        st.law = law;
+        st.per_joint = per_joint;
+        st.loss = loss;
+        st.loss_scale = loss_scale;
+        st.smooth_sign = smooth_sign;
+        st.estimate_rates = estimate_rates;
+        st.min_rate = min_rate;
+        st.sg_window = sg_window;
+        st.sg_order = sg_order;
+        st.threads = threads;
+        st.start_from_scene = start_from_scene;
+        st.window = window;
+        return identify(scene, log, st, validate);
+      },
+      py::arg("scene"), py::arg("log"), py::kw_only(), py::arg("method") = "inverse-dynamics",
+      py::arg("law") = "coulomb_viscous", py::arg("per_joint") = false, py::arg("loss") = "none",
+      py::arg("loss_scale") = 0.1, py::arg("smooth_sign") = -1.0,
+      py::arg("estimate_rates") = false, py::arg("min_rate") = 0.0, py::arg("sg_window") = 0.010,
+      py::arg("sg_order") = 5, py::arg("threads") = 1, py::arg("start_from_scene") = false,
+      py::arg("validate") = false, py::arg("window") = 0.2,
+      "Identifies the friction coefficients of `scene` from a torque log: a CSV path, or a dict "
+      "of equal-length arrays with the log's columns (t, theta1, theta2, tau1, tau2 and "
+      "optionally omega1, omega2, alpha1, alpha2). Options as `fivebar identify`. Returns the "
+      "fields of identification.json (parameters as a list of {name, value, std, initial}, "
+      "covariance and correlation as arrays, ...), the per-sample rates and predicted torques, "
+      "'fitted_scene' (a fivebar.Scene) and, with validate=True, 'validation'.");
+}
+
+}  // namespace fivebar::python

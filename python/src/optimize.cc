@@ -1,0 +1,98 @@
+// fivebar.optimize: minimum-dissipation rest-to-rest trajectories for a tasks file.
+#include <pybind11/stl.h>
+
+#include <cstdlib>
+
+#include "bindings.h"
+#include "fivebar/io/commands.h"
+#include "fivebar/io/errors.h"
+
+namespace fivebar::python {
+namespace {
+
+// a summary.csv field as a Python value: an integer, a float, or the text itself
+py::object field_value(const std::string& text) {
+  if (text.empty()) return py::str(text);
+  char* end = nullptr;
+  const long long i = std::strtoll(text.c_str(), &end, 10);
+  if (*end == '\0') return py::int_(i);
+  const double x = std::strtod(text.c_str(), &end);
+  if (*end == '\0') return py::float_(x);
+  return py::str(text);
+}
+
+// the row of summary.csv as a dict, the optimal control points and, when asked, the rows
+py::dict task_dict(const PyScene& s, const trajectory::TaskResult& r,
+                   const trajectory::BatchOptions& options, bool trajectories) {
+  py::dict d;
+  const std::vector<std::string>& names = trajectory::summary_columns();
+  const std::vector<std::string> fields = trajectory::summary_fields(r);
+  for (size_t j = 0; j < names.size(); ++j) d[py::str(names[j])] = field_value(fields[j]);
+  d["task"] = r.task;  // text fields as they are (summary.csv quotes the message)
+  d["status"] = r.status;
+  d["solver_status"] = r.solver_status;
+  d["message"] = r.message;
+  d["dissipated_energy_exact"] = r.dissipated_energy_exact;
+  d["baseline_dissipated_energy_exact"] = r.baseline_dissipated_energy_exact;
+  d["x"] = to_array(r.x);
+  if (trajectories && r.solved()) {
+    std::vector<sim::Row> optimal, baseline;
+    const Status st = io::task_rows(s.scene, r, options, &optimal, &baseline);
+    if (!st.ok()) throw NumericalError(s.scene.path, r.task, "trajectory rows: " + st.message);
+    d["trajectory"] = rows_dict(optimal);
+    d["baseline"] = rows_dict(baseline);
+  }
+  return d;
+}
+
+py::dict optimize(const PyScene& s, const std::string& tasks_path,
+                  const io::OptimizeSettings& settings, int threads, bool trajectories) {
+  const std::vector<trajectory::TaskSpec> tasks = io::read_tasks(tasks_path);
+  const trajectory::BatchOptions options = io::batch_options(settings);
+  std::vector<trajectory::TaskResult> results;
+  {
+    py::gil_scoped_release release;
+    results = trajectory::run_parallel(static_cast<int>(tasks.size()), threads, [&](int i) {
+      const sim::LoadFunction loads = io::LoadExpressions(s.scene).function();  // this thread's
+      return trajectory::run_task(s.scene.params, loads, tasks[i], s.scene.initial, options);
+    });
+  }
+  py::dict d;
+  for (const trajectory::TaskResult& r : results) {
+    d[py::str(r.task)] = task_dict(s, r, options, trajectories);
+  }
+  return d;
+}
+
+}  // namespace
+
+void bind_optimize(py::module_& m) {
+  m.def(
+      "optimize",
+      [](const PyScene& scene, const std::string& tasks, int threads, const std::string& method,
+         const std::string& objective, bool global_search, int starts, int control_points,
+         int quadrature_points, double singular_margin, bool validate, bool trajectories) {
+        io::OptimizeSettings st;
+        st.method = method;
+        st.objective = objective;
+        st.global = global_search;
+        st.starts = starts;
+        st.control_points = control_points;
+        st.quadrature_points = quadrature_points;
+        st.singular_margin = singular_margin;
+        st.validate = validate;
+        return optimize(scene, tasks, st, threads, trajectories);
+      },
+      py::arg("scene"), py::arg("tasks"), py::kw_only(), py::arg("threads") = 0,
+      py::arg("method") = "slsqp", py::arg("objective") = "dissipated_energy",
+      py::arg("global_search") = false, py::arg("starts") = 8, py::arg("control_points") = 10,
+      py::arg("quadrature_points") = 12, py::arg("singular_margin") = 0.1,
+      py::arg("validate") = true, py::arg("trajectories") = true,
+      "Optimizes every task of a tasks file (YAML path) for `scene`, on `threads` threads (0: "
+      "all cores). Options as `fivebar optimize` (global_search is --global). Returns {task "
+      "name: dict} with the columns of summary.csv, 'x' (the optimal free control points) and, "
+      "for solved tasks with trajectories=True, 'trajectory' and 'baseline' (the minimum-jerk "
+      "motion), each a dict of arrays keyed by the trajectory.csv columns.");
+}
+
+}  // namespace fivebar::python

@@ -1,0 +1,171 @@
+// fivebar.Scene, fivebar.load_scene, fivebar.parse_scene, fivebar.simulate.
+#include <pybind11/stl.h>
+
+#include <algorithm>
+
+#include "bindings.h"
+#include "fivebar/io/errors.h"
+#include "fivebar/io/output.h"
+
+namespace fivebar::python {
+
+py::array_t<double> to_array(const std::vector<double>& data, std::vector<py::ssize_t> shape) {
+  py::array_t<double> a(shape);
+  std::copy(data.begin(), data.end(), a.mutable_data());
+  return a;
+}
+
+py::array_t<double> to_array(const std::vector<double>& data) {
+  return to_array(data, {static_cast<py::ssize_t>(data.size())});
+}
+
+py::dict rows_dict(const std::vector<sim::Row>& rows) {
+  const std::vector<std::string>& names = io::trajectory_columns();
+  const size_t n = rows.size(), m = names.size();
+  std::vector<double> table(n * m);  // row-major, as the CSV
+  for (size_t i = 0; i < n; ++i) io::row_values(rows[i], &table[i * m]);
+  py::dict d;
+  for (size_t j = 0; j < m; ++j) {
+    py::array_t<double> column(static_cast<py::ssize_t>(n));
+    double* out = column.mutable_data();
+    for (size_t i = 0; i < n; ++i) out[i] = table[i * m + j];
+    d[py::str(names[j])] = std::move(column);
+  }
+  return d;
+}
+
+namespace {
+
+// one override value as the text of `--set KEY=VALUE`: numbers (NumPy scalars too) as Python
+// writes them, strings as they are, bools as true/false, lists and 1-D arrays as [a, b, ...]
+std::string override_text(const std::string& key, const py::handle& value) {
+  if (py::isinstance<py::bool_>(value)) return value.cast<bool>() ? "true" : "false";
+  if (py::isinstance<py::str>(value)) return value.cast<std::string>();
+  if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value) ||
+      py::isinstance<py::array>(value)) {
+    std::string text = "[";
+    for (const py::handle item : value) {
+      text += (text.size() > 1 ? ", " : "") + override_text(key, item);
+    }
+    return text + "]";
+  }
+  const py::object number = py::reinterpret_borrow<py::object>(value);
+  if (py::hasattr(value, "__index__")) return py::str(py::int_(number));
+  if (py::hasattr(value, "__float__")) return py::repr(py::float_(number));
+  throw InputError("overrides", key,
+                   "expected a number, a string, a bool or a list of numbers, got " +
+                       std::string(py::str(value.get_type().attr("__name__"))));
+}
+
+std::vector<std::string> override_sets(const py::object& overrides) {
+  std::vector<std::string> sets;
+  if (overrides.is_none()) return sets;
+  if (!py::isinstance<py::dict>(overrides)) {
+    throw InputError("overrides", "(argument)", "expected a dict {\"dotted.key\": value}");
+  }
+  for (const auto& [key, value] : overrides.cast<py::dict>()) {
+    const std::string k = py::str(key);
+    sets.push_back(k + "=" + override_text(k, value));
+  }
+  return sets;
+}
+
+PyScene load(const std::string& path, const py::object& overrides) {
+  return PyScene(io::load_scene(path, override_sets(overrides)));
+}
+
+PyScene parse(const std::string& text, const std::string& name, const py::object& overrides) {
+  return PyScene(io::parse_scene(text, name, override_sets(overrides)));
+}
+
+py::dict summary(const PyScene& s, const sim::Result& run, const sim::RunChecks& checks) {
+  py::dict j;
+  j["status"] = "ok";
+  j["final_time"] = run.rows.back().t;
+  j["rows"] = run.rows.size();
+  j["energy_balance_relative"] = checks.energy_balance_relative;
+  j["inverse_dynamics_max_abs_error"] = checks.inverse_dynamics_max_abs_error;
+  j["wall_time_s"] = run.stats.wall_time_s;
+  j["rhs_evaluations"] = run.stats.rhs_evaluations;
+  j["steps"] = run.stats.steps;
+  j["friction_events"] = run.stats.friction_events;
+  j["stick_events"] = run.stats.stick_events;
+  j["breakaway_events"] = run.stats.breakaway_events;
+  j["E_diss"] = run.rows.back().E_diss;
+  j["W_in"] = run.rows.back().W_in;
+  j["W_ext"] = run.rows.back().W_ext;
+  j["scene"] = s.scene.path;
+  j["friction_model"] = io::friction_law_name(s.scene.params.friction.law);
+  j["integrator"] = io::integrator_name(s.scene.options.method);
+  j["rtol"] = s.scene.options.rtol;
+  j["atol"] = s.scene.options.atol;
+  return j;
+}
+
+// the run, its checks, the columns of trajectory.csv, the joint modes and the summary
+py::dict simulate(const PyScene& s) {
+  sim::Result run;
+  sim::RunChecks checks;
+  {
+    py::gil_scoped_release release;
+    const sim::LoadFunction loads = s.loads->function();
+    run = sim::simulate(s.scene.params, loads, s.scene.initial, s.scene.options);
+    if (!run.status.ok()) throw NumericalError(s.scene.path, "simulation", run.status.message);
+    if (run.rows.empty()) throw NumericalError(s.scene.path, "simulation", "no output rows");
+    checks = sim::check_run(s.scene.params, loads, run);
+  }
+  py::dict d = rows_dict(run.rows);
+  py::array_t<int> mode({static_cast<py::ssize_t>(run.rows.size()), py::ssize_t(5)});
+  int* m = mode.mutable_data();
+  for (const sim::Row& r : run.rows) m = std::copy(r.mode.begin(), r.mode.end(), m);
+  d["mode"] = std::move(mode);
+  d["summary"] = summary(s, run, checks);
+  return d;
+}
+
+}  // namespace
+
+void bind_scene(py::module_& m) {
+  py::class_<PyScene>(m, "Scene",
+                      "A validated scene (load it with fivebar.load_scene or fivebar.parse_scene).")
+      .def_property_readonly("path", [](const PyScene& s) { return s.scene.path; })
+      .def_property_readonly(
+          "friction_model",
+          [](const PyScene& s) { return io::friction_law_name(s.scene.params.friction.law); })
+      .def_property_readonly(
+          "integrator", [](const PyScene& s) { return io::integrator_name(s.scene.options.method); })
+      .def_property_readonly("duration", [](const PyScene& s) { return s.scene.options.duration; })
+      .def_property_readonly("output_step",
+                             [](const PyScene& s) { return s.scene.options.output_step; })
+      .def_property_readonly("initial",
+                             [](const PyScene& s) {
+                               const sim::Initial& i = s.scene.initial;
+                               py::dict d;
+                               d["theta1"] = i.theta1;
+                               d["theta2"] = i.theta2;
+                               d["omega1"] = i.omega1;
+                               d["omega2"] = i.omega2;
+                               return d;
+                             })
+      .def("to_yaml", [](const PyScene& s) { return io::scene_to_yaml(s.scene); },
+           "The scene as YAML, every key explicit (parse_scene reads it back).")
+      .def("__repr__", [](const PyScene& s) {
+        return "<fivebar.Scene '" + s.scene.path + "' friction " +
+               io::friction_law_name(s.scene.params.friction.law) + ">";
+      });
+
+  m.def("load_scene", &load, py::arg("path"), py::arg("overrides") = py::none(),
+        "Reads and validates a scene file (YAML). overrides: {\"dotted.key\": value}, applied in "
+        "order like `--set KEY=VALUE` (e.g. {\"mechanism.links.2.mass\": 1.5}). Bad input raises "
+        "ValueError with the command line's message.");
+  m.def("parse_scene", &parse, py::arg("text"), py::arg("name") = "<string>",
+        py::arg("overrides") = py::none(),
+        "Parses a scene from YAML text; `name` names it in error messages.");
+  m.def("simulate", &simulate, py::arg("scene"),
+        "Forward simulation. Returns a dict: one float64 array per trajectory.csv column (t, "
+        "theta1..theta4, ..., P_diss, E_diss, W_in, W_ext), 'mode' (N, 5) int joint modes "
+        "(+1/-1 slip direction, 0 at rest, 2 stuck) and 'summary' (the run's checks and "
+        "statistics, as summary.json). Raises fivebar.NumericalError when the run fails.");
+}
+
+}  // namespace fivebar::python

@@ -1,0 +1,47 @@
+"""fivebar.identify and fivebar.optimize return their results as dicts."""
+import numpy as np
+
+import fivebar
+
+
+def test_identify_paper_log(root, paper_scene):
+    result = fivebar.identify(paper_scene, root / "datasets/logs/paper_rates.csv")
+    values = {p["name"]: p for p in result["parameters"]}
+    assert set(values) == {"coulomb", "viscous"}
+    for name, true in (("coulomb", 0.12), ("viscous", 0.02)):
+        p = values[name]
+        assert abs(p["value"] - true) <= 0.01 * true
+        assert abs(p["value"] - true) <= 3 * p["std"]
+    assert result["correlation"].shape == (2, 2)
+    assert result["samples"] == 10001
+    assert result["predicted_tau1"].shape == (10001,)
+    assert result["solver"]["converged"]
+    fitted = result["fitted_scene"]
+    assert isinstance(fitted, fivebar.Scene)
+    assert f"coulomb: {values['coulomb']['value']!r}" in fitted.to_yaml()
+
+
+def test_identify_from_a_dict_of_arrays(root, paper_scene):
+    text = (root / "datasets/logs/paper_rates.csv").read_text().splitlines()
+    lines = [line for line in text if not line.startswith("#")][:3001]
+    log = np.genfromtxt(lines, delimiter=",", names=True)
+    columns = {name: log[name] for name in log.dtype.names}
+    result = fivebar.identify(paper_scene, columns)
+    coulomb = result["parameters"][0]
+    assert coulomb["name"] == "coulomb" and abs(coulomb["value"] - 0.12) < 0.005
+
+
+def test_optimize_one_task(root, paper_scene, tmp_path):
+    tasks = tmp_path / "tasks.yaml"
+    tasks.write_text("tasks:\n  - name: swing_left\n    duration: 0.5\n"
+                     "    start: {theta1: 1.5707963267948966, theta2: 1.5707963267948966}\n"
+                     "    goal: {theta1: 2.6, theta2: 2.2}\n    torque_limit: 30.0\n")
+    result = fivebar.optimize(paper_scene, tasks, threads=1)
+    task = result["swing_left"]
+    assert task["status"] == "ok"
+    assert task["dissipated_energy"] < task["baseline_dissipated_energy"]
+    assert isinstance(task["evaluations"], int)
+    trajectory = task["trajectory"]
+    assert trajectory["t"][-1] == 0.5
+    assert abs(trajectory["theta1"][-1] - 2.6) < 1e-9
+    assert task["baseline"]["M1"].shape == trajectory["M1"].shape

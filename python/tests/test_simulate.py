@@ -1,0 +1,54 @@
+"""fivebar.load_scene and fivebar.simulate against the reference trajectory."""
+import numpy as np
+
+import fivebar
+
+COLUMNS = (["t"] + [f"{q}{i}" for q in ("theta", "omega", "alpha") for i in range(1, 5)]
+           + ["M1", "M2"] + [f"{q}{k}" for q in ("N", "Mf") for k in range(1, 6)]
+           + ["P_diss", "E_diss", "W_in", "W_ext"])
+
+
+def test_columns_are_those_of_trajectory_csv(paper_run):
+    for name in COLUMNS:
+        assert paper_run[name].dtype == np.float64
+        assert paper_run[name].shape == (2001,)
+    assert paper_run["mode"].shape == (2001, 5)
+    summary = paper_run["summary"]
+    assert summary["status"] == "ok"
+    assert summary["friction_events"] == 11
+    assert summary["energy_balance_relative"] < 1e-8
+    assert summary["inverse_dynamics_max_abs_error"] < 1e-8
+
+
+def test_paper_scene_matches_reference(paper_run, root):
+    ref = np.genfromtxt(root / "datasets" / "reference" / "paper_friction.csv", delimiter=",",
+                        names=True)
+    np.testing.assert_allclose(paper_run["t"], ref["t"], rtol=0, atol=1e-12)
+    error = max(np.max(np.abs(paper_run[f"theta{i}"] - ref[f"theta{i}"])) for i in range(1, 5))
+    assert error <= 1e-6, f"max |d theta| = {error:.3g} rad"
+
+
+def test_overrides_change_the_scene(root):
+    base = fivebar.load_scene(root / "datasets/scenes/paper.yaml")
+    heavy = fivebar.load_scene(root / "datasets/scenes/paper.yaml",
+                               overrides={"mechanism.links.2.mass": 1.5,
+                                          "simulation.duration": 0.1,
+                                          "friction.coulomb": [0.1, 0.12, 0.12, 0.12, 0.2]})
+    assert "mass: 1.5" in heavy.to_yaml()
+    assert heavy.duration == 0.1
+    short = fivebar.simulate(heavy)
+    assert short["t"][-1] == 0.1
+    again = fivebar.parse_scene(heavy.to_yaml(), name="heavy.yaml")
+    np.testing.assert_array_equal(fivebar.simulate(again)["theta1"], short["theta1"])
+    assert base.duration == 2.0
+
+
+def test_numpy_values_as_overrides(root):
+    plain = fivebar.load_scene(root / "datasets/scenes/paper.yaml",
+                               overrides={"friction.coulomb": [0.1, 0.12, 0.12, 0.12, 0.2],
+                                          "simulation.max_steps": 5000})
+    numpy = fivebar.load_scene(root / "datasets/scenes/paper.yaml",
+                               overrides={"friction.coulomb": np.array([0.1, 0.12, 0.12, 0.12,
+                                                                        0.2]),
+                                          "simulation.max_steps": np.int64(5000)})
+    assert numpy.to_yaml() == plain.to_yaml()
