@@ -258,6 +258,18 @@ std::vector<StressCase> stress_catalogue(bool reduced) {
     // is measured where the reference is meaningful
     c.error_horizon = 2.0;
     cases.push_back(c);
+    // a hard constant drive: dozens of slip reversals at every joint (a missed one makes
+    // friction supply power, which the run's checks catch)
+    c = paper_case("hard_drive_40", "", d_short);
+    c.loads = [](double t) {
+      Loads<double> L = paper_loads(t);
+      L.M1 = 40.0;
+      L.M2 = -40.0;
+      return L;
+    };
+    c.description = "the paper scene driven by M1 = 40, M2 = -40 N m: fast motion, many reversals";
+    c.error_horizon = 1.0;
+    cases.push_back(c);
   }
   // 8. a start that cannot assemble
   {
@@ -373,11 +385,19 @@ StressRow evaluate_run(const StressCase& c, Method method, const std::vector<Row
                 std::to_string(expected));
   }
   if (!finite) return fail("status ok with non-finite values in the output rows");
-  const RunChecks checks = check_run(c.params, c.loads, r);
+  const RunChecks checks = check_run(c.params, c.loads, r, o.rtol);
   row.energy_balance = checks.energy_balance_relative;
   if (!(row.energy_balance <= opt.max_energy_balance)) {
     return fail("energy balance residual " + num(row.energy_balance) + " above " +
                 num(opt.max_energy_balance));
+  }
+  // the run's own checks: friction never supplies power, inverse dynamics returns the input
+  // (`simulate` exits 3 with that message: a rejection that names its reason)
+  if (!checks.verdict.ok()) {
+    row.outcome = StressOutcome::kRejected;
+    row.exit_code = 3;
+    row.message = "run check failed: " + checks.verdict.message;
+    return row;
   }
   if (c.max_displacement >= 0.0) {
     row.displacement = 0.0;
