@@ -30,17 +30,17 @@ inline RestThresholds rest_thresholds(double rate_noise, double acceleration_noi
 /// Rounding of the values of f: eps max(1, max |f|). A rate or acceleration given with a motion
 /// cannot be known better than the rounding of its angles over one sample step h:
 /// rounding_noise(theta) / h, / h^2 (the floors the apps put under the given series' noise).
-/// Noise standard deviation of a uniformly sampled series f, robustly from its fourth
-/// differences: for white noise of deviation s, d4 = f[i] - 4 f[i+1] + 6 f[i+2] - 4 f[i+3] +
-/// f[i+4] has deviation sqrt(70) s, and the median absolute d4 is 0.6745 of that. A smooth signal
-/// adds h^4 f'''' to d4 (an overestimate where the motion is fast, harmless: the rule only looks
-/// at samples that are nearly at rest). Floored at the rounding of the values, eps max(1, |f|).
 inline double rounding_noise(const std::vector<double>& f) {
   double largest = 1.0;
   for (double x : f) largest = std::max(largest, std::abs(x));
   return std::numeric_limits<double>::epsilon() * largest;
 }
 
+/// Noise standard deviation of a uniformly sampled series f, robustly from its fourth
+/// differences: for white noise of deviation s, d4 = f[i] - 4 f[i+1] + 6 f[i+2] - 4 f[i+3] +
+/// f[i+4] has deviation sqrt(70) s, and the median absolute d4 is 0.6745 of that. A smooth signal
+/// adds h^4 f'''' to d4 (an overestimate where the motion is fast, harmless: the rule only looks
+/// at samples that are nearly at rest). Floored at the rounding of the values, eps max(1, |f|).
 inline double series_noise(const std::vector<double>& f) {
   const double floor = rounding_noise(f);
   if (f.size() < 9) return floor;
