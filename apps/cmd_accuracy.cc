@@ -95,6 +95,8 @@ int run(const Args& args) {
   OutputDir out(args.scene.out, kOutputs);
 
   sim::WorkPrecision wp;
+  Progress progress("accuracy", 1.0);
+  opt.progress = [&progress](int done, int total) { progress.update(double(done) / total); };
   const Status st = sim::work_precision(scene.params, loads, scene.initial, scene.options, opt, &wp);
   if (!st.ok()) throw NumericalError(scene.path, "reference", st.message);
 

@@ -7,6 +7,7 @@
 // ranks and rank 0 writes the same files as a one-process run.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -66,20 +67,24 @@ void write_atomic(const fs::path& path, Write&& write) {
   fs::rename(tmp, path);
 }
 
-std::string plot_script(const std::string& task, double limit, const std::string& terminal) {
+std::string plot_script(const std::string& task, double limit, const std::string& terminal,
+                        bool baseline) {
+  // the minimum-jerk curve beside each optimal one, when the baseline closes
+  auto with_baseline = [&](const std::string& column, const std::string& title) {
+    return baseline ? ", 'baseline.csv' using " + column + " with lines dt 2 title '" + title + "'"
+                    : std::string();
+  };
   std::string s = "set datafile separator ','\nset terminal " + terminal +
                   " size 900,600 noenhanced\nset key autotitle columnhead\nset grid\n";
   s += "set output 'path_C.png'\nset title '" + task + ": path of C'\nset size ratio -1\n"
        "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
-       "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 title 'optimal', "
-       "'baseline.csv' using 'x_C':'y_C' with lines dt 2 title 'minimum jerk'\n"
-       "set size noratio\n";
+       "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 title 'optimal'" +
+       with_baseline("'x_C':'y_C'", "minimum jerk") + "\nset size noratio\n";
   s += "set output 'torques.png'\nset title '" + task + ": motor torques'\n"
        "set xlabel 't [s]'\nset ylabel 'torque [N m]'\n"
        "plot 'trajectory.csv' using 't':'M1' with lines lw 2 title 'M1', "
-       "'trajectory.csv' using 't':'M2' with lines lw 2 title 'M2', "
-       "'baseline.csv' using 't':'M1' with lines dt 2 title 'M1 minimum jerk', "
-       "'baseline.csv' using 't':'M2' with lines dt 2 title 'M2 minimum jerk'";
+       "'trajectory.csv' using 't':'M2' with lines lw 2 title 'M2'" +
+       with_baseline("'t':'M1'", "M1 minimum jerk") + with_baseline("'t':'M2'", "M2 minimum jerk");
   if (std::isfinite(limit)) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.6g", limit);
@@ -88,27 +93,60 @@ std::string plot_script(const std::string& task, double limit, const std::string
   }
   s += "\nset output 'energy.png'\nset title '" + task +
        ": dissipated energy'\nset ylabel 'E_diss [J]'\n"
-       "plot 'trajectory.csv' using 't':'E_diss' with lines lw 2 title 'optimal', "
-       "'baseline.csv' using 't':'E_diss' with lines dt 2 title 'minimum jerk'\n";
+       "plot 'trajectory.csv' using 't':'E_diss' with lines lw 2 title 'optimal'" +
+       with_baseline("'t':'E_diss'", "minimum jerk") + "\n";
   return s;
 }
 
-// trajectory.csv, baseline.csv and the figures of one solved task, in DIR/<task>/
+// the minimum-jerk baseline has rows only when every pose of it closes
+bool baseline_closes(const TaskResult& r) {
+  return r.baseline_status == "ok" || r.baseline_status == "violates_constraints";
+}
+
+// trajectory.csv, baseline.csv (when the baseline closes) and the figures of one solved task, in
+// DIR/<task>/
 std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult& r,
                        const trajectory::BatchOptions& options, bool plots) {
   std::vector<sim::Row> rows, base;
   const Status status = task_rows(scene, r, options, &rows, &base);
   if (!status.ok()) return r.task + ": trajectory rows: " + status.message;
+  const bool baseline = !base.empty();  // empty when the baseline cannot close
   fs::create_directories(dir);
   write_atomic(dir / "trajectory.csv", [&](const std::string& p) {
     write_trajectory_csv(p, rows, with_rest_columns(point_c_columns(scene.params, rows), rows));
   });
-  write_atomic(dir / "baseline.csv", [&](const std::string& p) {
-    write_trajectory_csv(p, base, with_rest_columns(point_c_columns(scene.params, base), base));
-  });
+  if (baseline) {
+    write_atomic(dir / "baseline.csv", [&](const std::string& p) {
+      write_trajectory_csv(p, base, with_rest_columns(point_c_columns(scene.params, base), base));
+    });
+  } else {
+    fs::remove(dir / "baseline.csv");  // a stale one from an earlier run would mislead
+  }
   if (!plots) return "";
   return run_gnuplot(dir.string(), "plots.gnuplot",
-                     plot_script(r.task, r.torque_limit, gnuplot().terminal));
+                     plot_script(r.task, r.torque_limit, gnuplot().terminal, baseline));
+}
+
+// one line per task on stdout, and the reason under each task that did not end ok; the number
+// of tasks that did
+int report(const std::vector<TaskResult>& results) {
+  int ok = 0;
+  for (const TaskResult& r : results) {
+    std::printf("%-20s %-22s E %.6g J  baseline %.6g J  peak %.4g N m  miss %.3g m  %.3f s\n",
+                r.task.c_str(), r.status.c_str(), r.dissipated_energy,
+                r.baseline_dissipated_energy, r.peak_torque, r.miss_distance, r.wall_time_s);
+    if (r.status == "ok") {
+      ++ok;
+    } else {
+      std::printf("  %s: %s\n", r.task.c_str(), r.message.c_str());
+    }
+  }
+  return ok;
+}
+
+// resolution statuses: the task cannot be done by this design (bad input rather than numerics)
+bool input_failure(const TaskResult& r) {
+  return r.control_points == 0 || r.status == "unreachable";
 }
 
 int run(const Args& args) {
@@ -147,11 +185,14 @@ int run(const Args& args) {
   write_text_file(out.file("summary.csv"), csv);
   out.commit();
 
-  // one line per task on stdout
-  for (const TaskResult& r : results) {
-    std::printf("%-20s %-22s E %.6g J  baseline %.6g J  peak %.4g N m  miss %.3g m  %.3f s\n",
-                r.task.c_str(), r.status.c_str(), r.dissipated_energy,
-                r.baseline_dissipated_energy, r.peak_torque, r.miss_distance, r.wall_time_s);
+  // one line per task on stdout; exit non-zero when no task ended ok (outputs kept: they say why)
+  const int ok = report(results);
+  if (ok == 0 && !results.empty()) {
+    const std::string why = "every task failed (" + std::to_string(results.size()) +
+                            "; reasons on stdout and in summary.csv)";
+    const bool input = std::all_of(results.begin(), results.end(), input_failure);
+    if (input) throw InputError(args.tasks, "tasks", why);
+    throw NumericalError(args.tasks, "tasks", why);
   }
   return 0;
 }
@@ -174,6 +215,9 @@ RunFunction setup(CLI::App* app) {
                   "Gauss-Legendre points per knot span (default 12)");
   app->add_option("--singular-margin", args->settings.singular_margin,
                   "minimum |sin(theta4 - theta3)| along the motion (default 0.1)");
+  app->add_option("--path-step", args->settings.path_step,
+                  "grid step [rad] of the path search for a feasible start when the "
+                  "minimum-jerk motion cannot close (default 0.05)");
   app->add_flag("--no-validate", args->no_validate,
                 "skip the forward simulation of the optimal torques (miss_distance)");
   app->add_flag("--no-plots", args->no_plots, "do not draw figures");

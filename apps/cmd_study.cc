@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <optional>
 #include <unistd.h>
@@ -38,6 +39,7 @@ struct Args {
   int threads = 0;
   std::string method = "slsqp";
   bool global = false;
+  double path_step = 0.05;
   bool validate = false;
   bool no_plots = false;
 };
@@ -51,30 +53,20 @@ struct Design {
   std::string error;
 };
 
-int run(const Args& args) {
+std::vector<trajectory::Sweep> parse_sweeps(const std::vector<std::string>& texts) {
   std::vector<trajectory::Sweep> sweeps;
-  for (const std::string& s : args.sweeps) {
+  for (const std::string& s : texts) {
     try {
       sweeps.push_back(trajectory::parse_sweep(s));
     } catch (const std::invalid_argument& e) {
       throw InputError("command line", "--sweep " + s, e.what());
     }
   }
-  const Scene base = load_scene(args.scene.scene, args.scene.sets);
-  std::vector<trajectory::TaskSpec> tasks;
-  try {
-    tasks = trajectory::load_tasks(args.tasks);
-  } catch (const trajectory::TaskFileError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
-  }
-  trajectory::BatchOptions options;
-  if (!trajectory::parse_method(args.method, &options.optimizer.method)) {
-    throw InputError("command line", "--method", "'" + args.method + "' is not slsqp, mma or ccsaq");
-  }
-  options.optimizer.global = args.global;
-  options.validate = args.validate;
+  return sweeps;
+}
 
-  // the designs: a scene that cannot close at its initial pose is marked, a bad key is an error
+// the designs: a scene that cannot close at its initial pose is marked, a bad key is an error
+std::vector<Design> make_designs(const Args& args, const std::vector<trajectory::Sweep>& sweeps) {
   int count = 0;
   try {
     count = trajectory::design_count(sweeps);
@@ -98,8 +90,200 @@ int run(const Args& args) {
       designs[d].error = e.reason();
     }
   }
+  return designs;
+}
 
-  // every (design, task) pair, on the threads and across MPI ranks
+// what the study found, per design
+struct Outcome {
+  std::vector<double> totals;  ///< summed dissipated energy, nan unless every task is ok
+  std::vector<std::string> reasons;  ///< "" for complete designs, else why not (per task)
+  int best = -1;
+};
+
+Outcome summarize(const std::vector<Design>& designs,
+                  const std::vector<trajectory::TaskSpec>& tasks,
+                  const std::vector<TaskResult>& results) {
+  const int count = static_cast<int>(designs.size()), nt = static_cast<int>(tasks.size());
+  Outcome o;
+  o.totals.assign(count, NAN);
+  o.reasons.assign(count, "");
+  for (int d = 0; d < count; ++d) {
+    double total = 0;
+    for (int t = 0; t < nt; ++t) {
+      const TaskResult& r = results[d * nt + t];
+      total += r.dissipated_energy;
+      if (r.status != "ok") {
+        o.reasons[d] += (o.reasons[d].empty() ? "" : " | ") + r.task + ": " + r.status + ": " +
+                        r.message;
+      }
+    }
+    if (!o.reasons[d].empty()) continue;
+    o.totals[d] = total;
+    if (o.best < 0 || total < o.totals[o.best]) o.best = d;
+  }
+  return o;
+}
+
+std::string quoted(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+// study.csv: one row per design, with the reason for designs that cannot do every task
+std::string study_csv(const std::vector<trajectory::Sweep>& sweeps,
+                      const std::vector<Design>& designs,
+                      const std::vector<trajectory::TaskSpec>& tasks,
+                      const std::vector<TaskResult>& results, const Outcome& o) {
+  const int nt = static_cast<int>(tasks.size());
+  std::string csv = "design";
+  for (const auto& s : sweeps) csv += "," + s.key;
+  csv += ",status,tasks_ok,total_dissipated_energy,total_baseline_dissipated_energy,"
+         "saving_percent";
+  for (const auto& t : tasks) csv += ",E_" + t.name;
+  for (const auto& t : tasks) csv += ",status_" + t.name;
+  csv += ",best,reason\n";
+  for (size_t d = 0; d < designs.size(); ++d) {
+    std::string values, energies, statuses;
+    for (double v : designs[d].values) values += "," + format_double(v);
+    int ok = 0;
+    double base_total = 0;
+    for (int t = 0; t < nt; ++t) {
+      const TaskResult& r = results[d * nt + t];
+      ok += r.status == "ok";
+      base_total += r.baseline_dissipated_energy;
+      energies += "," + num(r.dissipated_energy);
+      statuses += "," + r.status;
+    }
+    const bool complete = o.reasons[d].empty();
+    if (!complete) base_total = NAN;
+    const std::string status =
+        complete ? "ok" : (designs[d].scene ? "incomplete" : "design_cannot_assemble");
+    csv += std::to_string(d) + values + "," + status + "," + std::to_string(ok) + "," +
+           num(o.totals[d]) + "," + num(base_total) + "," +
+           num(100.0 * (1.0 - o.totals[d] / base_total)) + energies + statuses + "," +
+           (static_cast<int>(d) == o.best ? "1" : "0") + "," + quoted(o.reasons[d]) + "\n";
+  }
+  return csv;
+}
+
+std::string per_task_csv(const std::vector<trajectory::Sweep>& sweeps,
+                         const std::vector<Design>& designs, int nt,
+                         const std::vector<TaskResult>& results) {
+  std::string header = "design";
+  for (const auto& s : sweeps) header += "," + s.key;
+  std::string csv = header + "," + trajectory::csv_line(trajectory::summary_columns());
+  for (size_t d = 0; d < designs.size(); ++d) {
+    std::string values;
+    for (double v : designs[d].values) values += "," + format_double(v);
+    for (int t = 0; t < nt; ++t) {
+      csv += std::to_string(d) + values + "," +
+             trajectory::csv_line(trajectory::summary_fields(results[d * nt + t]));
+    }
+  }
+  return csv;
+}
+
+// a grid value for gnuplot's `with image`, which wants evenly spaced coordinates: 10 digits
+// drop the rounding noise of lo + (hi - lo) i / (n - 1)
+std::string coordinate(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+// heatmap.png of a two-key study: energies, designs that cannot do every task hatched grey,
+// the best design marked. Returns "" or a warning.
+std::string draw_heatmap(OutputDir* out, const std::vector<trajectory::Sweep>& sweeps,
+                         const std::vector<Design>& designs, const Outcome& o, int nt) {
+  std::string dat, bad;
+  for (int i = 0; i < sweeps[0].n; ++i) {
+    for (int j = 0; j < sweeps[1].n; ++j) {
+      const int d = i * sweeps[1].n + j;
+      const std::string xy = coordinate(sweeps[0].value(i)) + " " + coordinate(sweeps[1].value(j));
+      dat += xy + " " + num(o.totals[d]) + "\n";
+      if (!o.reasons[d].empty()) bad += xy + "\n";
+    }
+    dat += "\n";
+  }
+  write_text_file(out->file("heatmap.dat"), dat);
+  StudyHeatmap h;
+  if (!bad.empty()) {
+    write_text_file(out->file("heatmap_infeasible.dat"), bad);
+    h.infeasible = "heatmap_infeasible.dat";
+  }
+  auto cell = [](const trajectory::Sweep& s) { return s.n > 1 ? (s.hi - s.lo) / (s.n - 1) : 1.0; };
+  h.cell_x = cell(sweeps[0]);
+  h.cell_y = cell(sweeps[1]);
+  h.x_lo = sweeps[0].lo;
+  h.x_hi = sweeps[0].hi;
+  h.y_lo = sweeps[1].lo;
+  h.y_hi = sweeps[1].hi;
+  h.x_key = sweeps[0].key;
+  h.y_key = sweeps[1].key;
+  h.title = "total dissipated energy over " + std::to_string(nt) + (nt == 1 ? " task" : " tasks");
+  if (o.best >= 0) {
+    h.has_best = true;
+    h.best_x = designs[o.best].values[0];
+    h.best_y = designs[o.best].values[1];
+  }
+  return run_gnuplot(out->staging(), "heatmap.gnuplot",
+                     study_heatmap_script(h, gnuplot().terminal));
+}
+
+// stdout: the best design, and how many designs could not do every task, and why
+void report(const std::vector<trajectory::Sweep>& sweeps, const std::vector<Design>& designs,
+            const std::vector<trajectory::TaskSpec>& tasks,
+            const std::vector<TaskResult>& results, const Outcome& o) {
+  const int count = static_cast<int>(designs.size()), nt = static_cast<int>(tasks.size());
+  int infeasible = 0;
+  std::map<std::string, int> why;  // "task: status" -> designs
+  for (int d = 0; d < count; ++d) {
+    if (o.reasons[d].empty()) continue;
+    ++infeasible;
+    for (int t = 0; t < nt; ++t) {
+      const TaskResult& r = results[d * nt + t];
+      if (r.status != "ok") ++why[r.task + ": " + r.status];
+    }
+  }
+  if (o.best < 0) {
+    std::printf("no design completed every task (see study.csv)\n");
+  } else {
+    std::printf("best design %d:", o.best);
+    for (size_t k = 0; k < sweeps.size(); ++k) {
+      std::printf(" %s=%s", sweeps[k].key.c_str(),
+                  format_double(designs[o.best].values[k]).c_str());
+    }
+    std::printf("  total dissipated energy %.6g J over %d tasks\n", o.totals[o.best], nt);
+  }
+  std::printf("%d of %d designs cannot do every task%s\n", infeasible, count,
+              infeasible ? " (reason per design in study.csv):" : "");
+  for (const auto& [reason, n] : why) std::printf("  %-45s %d designs\n", reason.c_str(), n);
+}
+
+int run(const Args& args) {
+  const std::vector<trajectory::Sweep> sweeps = parse_sweeps(args.sweeps);
+  load_scene(args.scene.scene, args.scene.sets);  // bad input in the base scene: exit 2 here
+  std::vector<trajectory::TaskSpec> tasks;
+  try {
+    tasks = trajectory::load_tasks(args.tasks);
+  } catch (const trajectory::TaskFileError& e) {
+    throw InputError(e.file(), e.key(), e.reason());
+  }
+  trajectory::BatchOptions options;
+  if (!trajectory::parse_method(args.method, &options.optimizer.method)) {
+    throw InputError("command line", "--method", "'" + args.method + "' is not slsqp, mma or ccsaq");
+  }
+  options.optimizer.global = args.global;
+  if (!(args.path_step >= 1e-3 && args.path_step <= 0.5)) {
+    throw InputError("command line", "--path-step", "expected a number in [0.001, 0.5] rad");
+  }
+  options.path.step = args.path_step;
+  options.validate = args.validate;
+  const std::vector<Design> designs = make_designs(args, sweeps);
+  const int count = static_cast<int>(designs.size());
+
+  // every (design, task) pair, on the threads and across MPI ranks; progress on stderr
   const int nt = static_cast<int>(tasks.size());
   const int rank = trajectory::process_rank();
   const bool tty = rank == 0 && isatty(STDERR_FILENO);
@@ -125,80 +309,17 @@ int run(const Args& args) {
   if (tty) std::cerr << "\n";
   if (rank != 0) return 0;
 
-  // study.csv: one row per design; study_tasks.csv: one row per design and task
-  std::string header = "design";
-  for (const auto& s : sweeps) header += "," + s.key;
-  std::string study = header + ",status,tasks_ok,total_dissipated_energy,"
-                               "total_baseline_dissipated_energy,saving_percent";
-  for (const auto& t : tasks) study += ",E_" + t.name;
-  for (const auto& t : tasks) study += ",status_" + t.name;
-  study += "\n";
-  std::string per_task = header + "," + trajectory::csv_line(trajectory::summary_columns());
-  int best = -1;
-  std::vector<double> totals(count, NAN);
-  for (int d = 0; d < count; ++d) {
-    std::string values;
-    for (double v : designs[d].values) values += "," + format_double(v);
-    int ok = 0;
-    double total = 0, base_total = 0;
-    std::string energies, statuses;
-    for (int t = 0; t < nt; ++t) {
-      const TaskResult& r = results[d * nt + t];
-      if (r.status == "ok") ++ok;
-      total += r.dissipated_energy;
-      base_total += r.baseline_dissipated_energy;
-      energies += "," + num(r.dissipated_energy);
-      statuses += "," + r.status;
-      per_task += std::to_string(d) + values + "," +
-                  trajectory::csv_line(trajectory::summary_fields(r));
-    }
-    const bool complete = ok == nt;
-    if (!complete) total = base_total = NAN;
-    totals[d] = total;
-    study += std::to_string(d) + values + "," +
-             (complete ? std::string("ok")
-                       : (designs[d].scene ? "incomplete" : "design_cannot_assemble")) +
-             "," + std::to_string(ok) + "," + num(total) + "," + num(base_total) + "," +
-             num(100.0 * (1.0 - total / base_total)) + energies + statuses + "\n";
-    if (complete && (best < 0 || total < totals[best])) best = d;
-  }
+  const Outcome outcome = summarize(designs, tasks, results);
   OutputDir out(args.scene.out, {"study.csv", "study_tasks.csv", "heatmap.png", "heatmap.dat",
-                                 "heatmap.gnuplot"});
-  write_text_file(out.file("study_tasks.csv"), per_task);
+                                 "heatmap_infeasible.dat", "heatmap.gnuplot"});
+  write_text_file(out.file("study_tasks.csv"), per_task_csv(sweeps, designs, nt, results));
   if (sweeps.size() == 2 && !args.no_plots && gnuplot().available) {
-    // heatmap of the total energy of the complete designs (blank where a design failed a task)
-    std::string dat;
-    for (int i = 0; i < sweeps[0].n; ++i) {
-      for (int j = 0; j < sweeps[1].n; ++j) {
-        const int d = i * sweeps[1].n + j;
-        dat += num(sweeps[0].value(i)) + " " + num(sweeps[1].value(j)) + " " + num(totals[d]) +
-               "\n";
-      }
-      dat += "\n";
-    }
-    write_text_file(out.file("heatmap.dat"), dat);
-    const std::string script =
-        "set terminal " + gnuplot().terminal + " size 800,650 noenhanced\nset output 'heatmap.png'\n"
-        "set title 'total dissipated energy [J] over " + std::to_string(nt) + " tasks'\n"
-        "set xlabel '" + sweeps[0].key + "'\nset ylabel '" + sweeps[1].key + "'\n"
-        "set datafile missing 'nan'\nset view map\nunset key\n"
-        "plot 'heatmap.dat' using 1:2:3 with image\n";
-    const std::string warning = run_gnuplot(out.staging(), "heatmap.gnuplot", script);
+    const std::string warning = draw_heatmap(&out, sweeps, designs, outcome, nt);
     if (!warning.empty()) warn(warning);
   }
-  write_text_file(out.file("study.csv"), study);
+  write_text_file(out.file("study.csv"), study_csv(sweeps, designs, tasks, results, outcome));
   out.commit();
-
-  // the best design on stdout
-  if (best < 0) {
-    std::printf("no design completed every task (see study.csv)\n");
-  } else {
-    std::printf("best design %d:", best);
-    for (size_t k = 0; k < sweeps.size(); ++k) {
-      std::printf(" %s=%s", sweeps[k].key.c_str(), format_double(designs[best].values[k]).c_str());
-    }
-    std::printf("  total dissipated energy %.6g J over %d tasks\n", totals[best], nt);
-  }
+  report(sweeps, designs, tasks, results, outcome);
   return 0;
 }
 
@@ -211,6 +332,8 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");
   app->add_option("--method", args->method, "NLopt algorithm: slsqp (default), mma, ccsaq");
   app->add_flag("--global", args->global, "multi-start optimization of every task");
+  app->add_option("--path-step", args->path_step,
+                  "grid step [rad] of the path search (see optimize; default 0.05)");
   app->add_flag("--validate", args->validate,
                 "simulate the optimal torques forward (miss_distance in study_tasks.csv)");
   app->add_flag("--no-plots", args->no_plots, "do not draw the heatmap");

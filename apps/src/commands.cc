@@ -91,6 +91,10 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
     throw InputError(kFlags, "--singular-margin", "expected a number in [0, 1)");
   }
   if (a.starts < 1) throw InputError(kFlags, "--starts", "expected an integer >= 1");
+  if (!(a.path_step >= 1e-3 && a.path_step <= 0.5)) {
+    throw InputError(kFlags, "--path-step", "expected a number in [0.001, 0.5] rad");
+  }
+  o.path.step = a.path_step;
   o.optimizer.global = a.global;
   o.optimizer.starts = a.starts;
   o.problem.control_points = a.control_points;
@@ -117,6 +121,10 @@ Status task_rows(const Scene& scene, const trajectory::TaskResult& r,
   const double step = std::min(scene.options.output_step, r.duration / 10);
   const Status s1 = problem.rows(r.x.data(), step, optimal);
   if (!s1.ok()) return s1;
+  baseline->clear();
+  if (r.baseline_status != "ok" && r.baseline_status != "violates_constraints") {
+    return Status::Ok();  // the baseline does not close: no rows
+  }
   const std::vector<double> x0 = problem.motion().minimum_jerk();
   return problem.rows(x0.data(), step, baseline);
 }

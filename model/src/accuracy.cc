@@ -116,6 +116,11 @@ Status work_precision(const Params<double>& params, const LoadFunction& loads,
           pt.error_vs_exact = max_theta_difference(r.rows, out->exact.rows);
         }
         out->points.push_back(pt);
+        if (options.progress) {
+          options.progress(static_cast<int>(out->points.size()),
+                           static_cast<int>(treatments.size() * options.methods.size() *
+                                            options.tolerances.size()));
+        }
         if (pt.ok && pt.wall_time_s > options.max_run_time_s) break;  // tighter only costs more
       }
     }

@@ -72,6 +72,10 @@ class Arkode final : public Integrator {
     return check(ARKStepReInit(mem_, nullptr, &Arkode::rhs, t0, y_), "ARKStepReInit") &&
            check(ARKStepSetStopTime(mem_, t_end_), "ARKStepSetStopTime");
   }
+  bool set_max_step(double h) override {
+    return explicit_ ? check(ERKStepSetMaxStep(mem_, h), "ERKStepSetMaxStep")
+                     : check(ARKStepSetMaxStep(mem_, h), "ARKStepSetMaxStep");
+  }
   bool step(double* y, double* t) override {
     std::swap(prev_, cur_);
     const int flag = explicit_ ? ERKStepEvolve(mem_, t_end_, y_, t, ARK_ONE_STEP)

@@ -64,6 +64,9 @@ class Cvode final : public Integrator {
     return check(CVodeReInit(mem_, t0, y_), "CVodeReInit") &&
            check(CVodeSetStopTime(mem_, t_end_), "CVodeSetStopTime");
   }
+  bool set_max_step(double h) override {
+    return check(CVodeSetMaxStep(mem_, h), "CVodeSetMaxStep");
+  }
   bool step(double* y, double* t) override {
     const int flag = CVode(mem_, t_end_, y_, t, CV_ONE_STEP);
     for (int i = 0; i < prob_.n; ++i) y[i] = NV_Ith_S(y_, i);

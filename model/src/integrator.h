@@ -31,6 +31,8 @@ class Integrator {
   /// (Re)starts the integration at (t0, y0), forgetting the history (used after every switch).
   /// False with error() set if SUNDIALS refuses.
   virtual bool start(double t0, const double* y0) = 0;
+  /// Largest step [s] from now on (0: none). False with error() set if SUNDIALS refuses.
+  virtual bool set_max_step(double h) = 0;
   /// One internal step, never past the end time given at construction; y and *t receive the
   /// state at the step's end. False with error() set on failure.
   virtual bool step(double* y, double* t) = 0;

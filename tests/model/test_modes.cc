@@ -130,6 +130,63 @@ TEST(Modes, LockedExactlyWhenFrictionCanHold) {
   }
 }
 
+double max_angle_gap(const sim::Result& a, const sim::Result& b) {
+  double gap = 0.0;
+  for (size_t i = 0; i < a.rows.size() && i < b.rows.size(); ++i) {
+    for (int k = 0; k < 4; ++k) gap = std::max(gap, std::abs(a.rows[i].theta[k] - b.rows[i].theta[k]));
+  }
+  return gap;
+}
+
+// review: a lock reached mid-run must break away when friction can no longer hold it, with
+// every integrator (CVODE stepped over the lock margin's zero: nothing moves while locked)
+TEST(Modes, MidRunLockBreaksAwayWithEveryIntegrator) {
+  Params<double> p = paper_params();
+  p.friction.pin_radius.fill(0.05);
+  p.friction.coulomb.fill(0.5);
+  p.friction.static_coulomb.fill(0.5);
+  sim::Options o;
+  o.method = sim::Method::kArkodeErk45;
+  const sim::Result ref = sim::simulate(p, testing::paper_loads, testing::paper_initial(), o);
+  ASSERT_TRUE(ref.status.ok()) << ref.status.message;
+  for (sim::Method m : kAllMethods) {
+    o.method = m;
+    const sim::Result r = sim::simulate(p, testing::paper_loads, testing::paper_initial(), o);
+    expect_consistent(p, testing::paper_loads, r, sim::method_name(m));
+    EXPECT_GT(r.stats.breakaway_events, 0);
+    EXPECT_LT(max_angle_gap(r, ref), 1e-6) << sim::method_name(m);
+    for (const sim::Row& row : r.rows) {  // holding torques within their bounds while stuck
+      for (int k = 0; k < 5; ++k) {
+        if (row.mode[k] != kStuck) continue;
+        ASSERT_LE(std::abs(row.Mf[k]), holding_bound(p.friction, k) * row.N[k] * (1 + 1e-6))
+            << sim::method_name(m) << " t=" << row.t << " joint " << k;
+      }
+    }
+  }
+}
+
+// review: with a joint stuck, another joint's rate can cross zero at a dead point while the
+// mechanism moves; that is not a lock (the rates jumped to zero)
+TEST(Modes, DeadPointWithAStuckJointIsNotALock) {
+  Params<double> p = weightless();
+  p.friction.law = FrictionLaw::kStribeck;
+  p.friction.static_coulomb.fill(0.3);
+  p.friction.stribeck_velocity.fill(0.05);
+  p.friction.stribeck_exponent.fill(2.0);
+  const sim::LoadFunction loads = held_plus(-0.2, 0.0);
+  sim::Options o;
+  o.method = sim::Method::kArkodeErk45;
+  const sim::Result ref = sim::simulate(p, loads, testing::paper_initial(), o);
+  ASSERT_TRUE(ref.status.ok()) << ref.status.message;
+  for (sim::Method m : {sim::Method::kCvodeAdams, sim::Method::kCvodeBdf,
+                        sim::Method::kArkodeErk65, sim::Method::kArkodeDirk}) {
+    o.method = m;
+    const sim::Result r = sim::simulate(p, loads, testing::paper_initial(), o);
+    expect_consistent(p, loads, r, sim::method_name(m));
+    EXPECT_LT(max_angle_gap(r, ref), 1e-5) << sim::method_name(m);  // erk65: 2.3e-6
+  }
+}
+
 /// A seeded random mechanism near the paper's: lengths, masses, COM, per-joint friction, loads.
 struct RandomScene {
   Params<double> params;
@@ -182,6 +239,33 @@ TEST(Modes, RandomScenesNeverLetFrictionDriveTheMotion) {
   }
   EXPECT_GE(ok, 15);
   EXPECT_GT(events, 20);  // the sweep exercises switches
+}
+
+// the larger sweep of issue 15 (200 scenes, ~10 s): run with
+//   build/release/tests/model/test_model --gtest_also_run_disabled_tests --gtest_filter='*Sweep200*'
+TEST(Modes, DISABLED_RandomSweep200) {
+  std::mt19937 rng(15);
+  int ok = 0, failed = 0;
+  long events = 0, decisions = 0, sticks = 0, breakaways = 0;
+  for (int i = 0; i < 200; ++i) {
+    const RandomScene s = random_scene(rng);
+    sim::Options o;
+    o.duration = 1.0;
+    const sim::Result r = sim::simulate(s.params, s.loads, s.initial, o);
+    if (!r.status.ok()) {
+      ++failed;
+      std::printf("[ info ] scene %d stopped: %s\n", i, r.status.message.c_str());
+      continue;
+    }
+    expect_consistent(s.params, s.loads, r, "random scene " + std::to_string(i));
+    ++ok;
+    events += r.stats.friction_events;
+    decisions += r.stats.mode_decisions;
+    sticks += r.stats.stick_events;
+    breakaways += r.stats.breakaway_events;
+  }
+  std::printf("[ info ] %d ok, %d stopped; %ld switches, %ld decisions, %ld sticks, %ld breakaways\n",
+              ok, failed, events, decisions, sticks, breakaways);
 }
 
 // issue 15 D: the balance of a conservative run is relative to an energy scale it has

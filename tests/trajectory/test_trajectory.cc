@@ -11,6 +11,7 @@
 #include "fivebar/trajectory/bspline.h"
 #include "fivebar/trajectory/nlopt_status.h"
 #include "fivebar/trajectory/optimizer.h"
+#include "fivebar/trajectory/path_search.h"
 #include "fivebar/trajectory/problem.h"
 #include "fivebar/trajectory/quadrature.h"
 #include "fivebar/trajectory/sweep.h"
@@ -189,6 +190,193 @@ TEST(Batch, IdenticalForOneAndTwoThreads) {
   for (int i = 0; i < n; ++i) EXPECT_EQ(encode(a[i]), encode(b[i])) << tasks[i].name;
   const TaskResult back = decode(encode(a[0]));
   EXPECT_EQ(encode(back), encode(a[0]));
+}
+
+// the design of issue 17: shorter couplers, whose minimum-jerk motion of the detour task leaves
+// the workspace (|BD| > l3 + l4 near theta1 = 2.3)
+Params<double> short_coupler_params() {
+  Params<double> p = paper_params();
+  for (int i : {2, 3}) {
+    p.links[i].length = 0.17;
+    p.links[i].com_offset = 0.1;
+  }
+  p.point_p = 0.1;
+  return p;
+}
+
+TaskSpec detour_task() {
+  TaskSpec t;
+  t.name = "detour";
+  t.duration = 1.0;
+  t.start = {false, M_PI / 2, M_PI / 2};
+  t.goal = {false, 4.95, 1.6};
+  t.torque_limit = 30.0;
+  return t;
+}
+
+TEST(PathSearch, FindsADetourWhereTheStraightPathCannotClose) {
+  const Params<double> p = short_coupler_params();
+  const std::array<double, 2> goal = {4.95, 1.6};
+  constexpr double kMargin = 0.1;
+  ASSERT_FALSE(segment_clear(p, kStart, goal, 0.0, 0.01));  // the straight path does not close
+  PathSearchOptions o;
+  o.margin = kMargin;
+  const JointPath path = find_joint_path(p, kStart, goal, o);
+  ASSERT_TRUE(path.ok()) << path.message;
+  ASSERT_GE(path.waypoints.size(), 3u);
+  EXPECT_EQ(path.waypoints.front(), kStart);
+  EXPECT_EQ(path.waypoints.back(), goal);
+  for (size_t i = 1; i < path.waypoints.size(); ++i) {
+    EXPECT_TRUE(segment_clear(p, path.waypoints[i - 1], path.waypoints[i], kMargin, 1e-3)) << i;
+  }
+  // the rest-to-rest spline along it keeps the margin with 14 control points
+  const RestToRest motion(14, 1.0, kStart, goal);
+  EXPECT_GE(min_coupler_sine(p, motion, follow_path(motion, path), 2000), kMargin);
+}
+
+TEST(PathSearch, SaysWhyWhenTheGoalIsAcrossTheSingularCurve) {
+  // couplers of 0.13 m: crank 1 cannot turn fully (|BD| would exceed l3 + l4 = 0.26 m), so the
+  // same pose one turn of theta1 further on is out of reach of any continuous motion
+  Params<double> p = paper_params();
+  for (int i : {2, 3}) {
+    p.links[i].length = 0.13;
+    p.links[i].com_offset = 0.06;
+  }
+  p.point_p = 0.06;
+  const std::array<double, 2> start = {0.3, 2.6}, goal = {0.3 + 2 * M_PI, 2.6};
+  ASSERT_GE(coupler_sine(p, start[0], start[1]), 0.1);
+  PathSearchOptions o;
+  const JointPath path = find_joint_path(p, start, goal, o);
+  EXPECT_EQ(path.status, "unreachable");
+  EXPECT_THAT(path.message, HasSubstr("couplers stretched"));
+  EXPECT_THAT(path.message, HasSubstr("elbow_up"));
+}
+
+TEST(PathSearch, GoalsManyTurnsAwayKeepTheGridBounded) {
+  // 200 turns of theta1: the grid step grows so that the box holds at most 1e6 poses (instead of
+  // 3.2e7 at the default step); the answer stays a path or a reason
+  const std::array<double, 2> goal = {kStart[0] + 400 * M_PI, kStart[1]};
+  const JointPath path = find_joint_path(paper_params(), kStart, goal, PathSearchOptions{});
+  // each side rounded up, plus its end pose: (a + 2)(b + 2) <= 1.05 a b for the narrow side b ~ 80
+  EXPECT_LE(path.grid_poses, 1000000 * 1.05);
+  EXPECT_TRUE(path.ok() || !path.message.empty());
+}
+
+TEST(Batch, InfeasibleBaselineIsNotAFailedTask) {
+  BatchOptions options;
+  options.validate = false;
+  const TaskSpec task = detour_task();
+  const TaskResult r = run_task(short_coupler_params(), paper_loads(), task, paper_initial(),
+                                options);
+  ASSERT_EQ(r.status, "ok") << r.message;
+  EXPECT_EQ(r.baseline_status, "cannot_assemble");
+  EXPECT_TRUE(std::isnan(r.baseline_dissipated_energy));
+  EXPECT_EQ(r.initial_guess, "path_search");
+  EXPECT_LE(r.peak_torque, task.torque_limit * (1 + options.feasibility_tol));
+  EXPECT_GE(r.min_coupler_sine, options.problem.singular_margin);
+  EXPECT_LT(r.dissipated_energy, r.initial_dissipated_energy);  // optimized from the detour
+  // the control points of the solve are those the summary reports and problem_of rebuilds
+  EXPECT_EQ(problem_of(short_coupler_params(), paper_loads(), r, options).num_variables(),
+            static_cast<int>(r.x.size()));
+  EXPECT_EQ(decode(encode(r)).initial_guess, "path_search");
+}
+
+TEST(Batch, FeasibleBaselineStartsTheSolve) {
+  BatchOptions options;
+  options.validate = false;
+  const TaskResult r =
+      run_task(paper_params(), paper_loads(), load_tasks(kTasks)[0], paper_initial(), options);
+  ASSERT_EQ(r.status, "ok") << r.message;
+  EXPECT_EQ(r.baseline_status, "ok");
+  EXPECT_EQ(r.initial_guess, "minimum_jerk");
+  EXPECT_EQ(r.initial_dissipated_energy, r.baseline_dissipated_energy);
+  EXPECT_EQ(r.control_points, options.problem.control_points);
+}
+
+TEST(Batch, UnreachableTaskNamesWhy) {
+  // the start pose one turn of theta1 on: the same pose, out of reach of a continuous motion
+  BatchOptions options;
+  options.validate = false;
+  Params<double> p = paper_params();
+  for (int i : {2, 3}) {
+    p.links[i].length = 0.13;
+    p.links[i].com_offset = 0.06;
+  }
+  p.point_p = 0.06;
+  TaskSpec t = detour_task();
+  t.start = {false, 0.3, 2.6};
+  t.goal = {false, 0.3 + 2 * M_PI, 2.6};
+  const TaskResult r = run_task(p, paper_loads(), t, {0.3, 2.6, 0, 0}, options);
+  EXPECT_EQ(r.status, "unreachable");
+  EXPECT_THAT(r.message, HasSubstr("singular curve"));
+  EXPECT_FALSE(r.solved());
+}
+
+TEST(Rows, WorkColumnsCloseTheEnergyBalance) {
+  // d(KE + PE) = W_in + W_ext - E_diss along the rows of an optimized motion
+  BatchOptions options;
+  options.validate = false;
+  const TaskResult r =
+      run_task(paper_params(), paper_loads(), load_tasks(kTasks)[1], paper_initial(), options);
+  ASSERT_TRUE(r.solved()) << r.message;
+  const TrajectoryProblem problem = problem_of(paper_params(), paper_loads(), r, options);
+  std::vector<sim::Row> rows;
+  ASSERT_TRUE(problem.rows(r.x.data(), 1e-3, &rows).ok());
+  const double e0 = rows.front().kinetic + rows.front().potential;
+  double worst = 0, scale = 0;
+  for (const sim::Row& row : rows) {
+    const double change = row.kinetic + row.potential - e0;
+    worst = std::max(worst, std::abs(change - row.W_in - row.W_ext + row.E_diss));
+    scale = std::max({scale, std::abs(row.W_in) + std::abs(row.W_ext), row.E_diss});
+  }
+  EXPECT_GT(std::abs(rows.back().W_in), 0.1);   // not the zeros of before
+  EXPECT_GT(std::abs(rows.back().W_ext), 0.1);
+  constexpr double kTrapezoid = 1e-4;  // trapezoidal rule at 1 ms on a 0.5 s motion: O(1e-6)
+  EXPECT_LT(worst / scale, kTrapezoid);
+}
+
+TEST(ExactLaw, RowsAreTheInverseDynamicsOfTheSceneLaw) {
+  // trajectory.csv torques = what `fivebar inverse` computes on the same motion (issue 12.1):
+  // sim::inverse_rows with the scene's own (exact sign) friction, not the optimizer's tanh
+  BatchOptions options;
+  options.validate = false;
+  const TaskResult r =
+      run_task(paper_params(), paper_loads(), load_tasks(kTasks)[2], paper_initial(), options);
+  ASSERT_TRUE(r.solved()) << r.message;
+  const TrajectoryProblem problem = problem_of(paper_params(), paper_loads(), r, options);
+  std::vector<sim::Row> rows, inverse, smoothed;
+  ASSERT_TRUE(problem.rows(r.x.data(), 1e-3, &rows).ok());
+  ASSERT_TRUE(sim::inverse_rows(paper_params(), paper_loads(), rows, &inverse).ok());
+  ASSERT_TRUE(sim::inverse_rows(problem.params(), paper_loads(), rows, &smoothed).ok());
+  constexpr double kSameCode = 1e-9;  // the contract of issue 12: same motion, same torques
+  double worst = 0, smoothing = 0;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    worst = std::max({worst, std::abs(rows[i].M1 - inverse[i].M1),
+                      std::abs(rows[i].M2 - inverse[i].M2)});
+    smoothing = std::max({smoothing, std::abs(rows[i].M1 - smoothed[i].M1),
+                          std::abs(rows[i].M2 - smoothed[i].M2)});
+  }
+  EXPECT_LE(worst, kSameCode);
+  EXPECT_GT(smoothing, 1e-2);  // the smoothed law differs near rest by ~0.1 N m: not tested twice
+  double M1 = 0, M2 = 0;
+  ASSERT_TRUE(problem.torques(r.x.data(), rows[100].t, &M1, &M2).ok());
+  EXPECT_NEAR(M1, inverse[100].M1, kSameCode);
+}
+
+TEST(ExactLaw, EnergiesAreExactLawWithTheSmoothedBeside) {
+  BatchOptions options;
+  options.validate = false;
+  const TaskResult r =
+      run_task(paper_params(), paper_loads(), load_tasks(kTasks)[3], paper_initial(), options);
+  ASSERT_EQ(r.status, "ok") << r.message;
+  EXPECT_EQ(r.dissipated_energy, r.dissipated_energy_exact);
+  EXPECT_EQ(r.baseline_dissipated_energy, r.baseline_dissipated_energy_exact);
+  // sign(w) dissipates more than tanh(w / w_s) at the same motion (|tanh| < 1)
+  EXPECT_GT(r.dissipated_energy, r.dissipated_energy_smoothed);
+  EXPECT_GT(r.baseline_dissipated_energy, r.baseline_dissipated_energy_smoothed);
+  // ... by less than 1% here: the joints spend little time below w_s = 0.05 rad/s
+  EXPECT_LT(r.dissipated_energy, 1.01 * r.dissipated_energy_smoothed);
+  EXPECT_NEAR(r.objective, r.dissipated_energy_smoothed, 1e-12 * r.objective);
 }
 
 TEST(Tasks, BadTaskIsAStatusNotAnError) {

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -19,15 +20,19 @@ ProblemOptions task_problem_options(const BatchOptions& options, double torque_l
   return o;
 }
 
-// |C(T) - C goal| of the optimal torques simulated forward from rest at the start
+// |C(T) - C goal| of the optimal torques simulated forward from rest at the start: with the
+// smoothed law the optimizer works on (its torques; consistent with the optimization), or with
+// the scene's exact law and stick-slip (the exact-law torques of trajectory.csv)
 double miss_distance(const TrajectoryProblem& problem, const sim::LoadFunction& loads,
-                     const std::vector<double>& x, const BatchOptions& options,
+                     const std::vector<double>& x, const BatchOptions& options, bool exact,
                      std::string* note) {
   const RestToRest& m = problem.motion();
   const sim::LoadFunction drive = [&](double t) {
     Loads<double> L = loads(t);
     // the optimal torques, from the inverse dynamics of the spline at t (no sampling error)
-    if (!problem.torques(x.data(), t, &L.M1, &L.M2).ok()) L.M1 = L.M2 = NAN;
+    const Status s = exact ? problem.torques(x.data(), t, &L.M1, &L.M2)
+                           : problem.smoothed_torques(x.data(), t, &L.M1, &L.M2);
+    if (!s.ok()) L.M1 = L.M2 = NAN;
     return L;
   };
   sim::Options so;
@@ -37,9 +42,11 @@ double miss_distance(const TrajectoryProblem& problem, const sim::LoadFunction& 
   so.atol = options.validation_rtol;
   so.singular_margin = 1e-3;
   const sim::Initial init{m.start()[0], m.start()[1], 0.0, 0.0};
-  const sim::Result run = sim::simulate(problem.params(), drive, init, so);
+  const sim::Result run =
+      sim::simulate(exact ? problem.exact_params() : problem.params(), drive, init, so);
   if (!run.status.ok() || run.rows.empty()) {
-    *note = "validation simulation failed: " + run.status.message;
+    *note = std::string(exact ? "exact-law " : "") + "validation simulation failed: " +
+            run.status.message;
     return NAN;
   }
   const sim::Row& last = run.rows.back();
@@ -119,13 +126,17 @@ const std::vector<std::string>& summary_columns() {
       "baseline_peak_torque", "saving_percent", "miss_distance", "min_coupler_sine",
       "solver_status", "evaluations", "starts", "best_start", "duration", "torque_limit",
       "theta1_start", "theta2_start", "theta1_goal", "theta2_goal",
-      "dissipated_energy_exact", "baseline_dissipated_energy_exact", "message"};
+      "dissipated_energy_exact", "baseline_dissipated_energy_exact", "baseline_status",
+      "initial_guess", "initial_dissipated_energy", "initial_peak_torque",
+      "initial_min_coupler_sine", "control_points", "dissipated_energy_smoothed",
+      "baseline_dissipated_energy_smoothed", "input_energy_smoothed",
+      "baseline_input_energy_smoothed", "miss_distance_exact", "message"};
   return columns;
 }
 
 std::vector<std::string> summary_fields(const TaskResult& r) {
   const double saving = 100.0 * (1.0 - r.dissipated_energy / r.baseline_dissipated_energy);
-  const bool resolved = r.solved() || !std::isnan(r.baseline_dissipated_energy);
+  const bool resolved = r.control_points > 0;
   auto angle = [&](double v) { return resolved ? num(v) : std::string("nan"); };
   return {r.task, r.status, num(r.dissipated_energy), num(r.baseline_dissipated_energy),
           num(r.input_energy), num(r.peak_torque), num(r.max_constraint_violation),
@@ -134,7 +145,12 @@ std::vector<std::string> summary_fields(const TaskResult& r) {
           std::to_string(r.evaluations), std::to_string(r.starts), std::to_string(r.best_start),
           num(r.duration), num(r.torque_limit), angle(r.start[0]), angle(r.start[1]),
           angle(r.goal[0]), angle(r.goal[1]), num(r.dissipated_energy_exact),
-          num(r.baseline_dissipated_energy_exact), quoted(r.message)};
+          num(r.baseline_dissipated_energy_exact), r.baseline_status, r.initial_guess,
+          num(r.initial_dissipated_energy), num(r.initial_peak_torque),
+          num(r.initial_min_coupler_sine), std::to_string(r.control_points),
+          num(r.dissipated_energy_smoothed), num(r.baseline_dissipated_energy_smoothed),
+          num(r.input_energy_smoothed), num(r.baseline_input_energy_smoothed),
+          num(r.miss_distance_exact), quoted(r.message)};
 }
 
 std::string csv_line(const std::vector<std::string>& fields) {
@@ -154,11 +170,212 @@ std::uint64_t task_seed(const std::string& name, std::uint64_t seed) {
 
 TrajectoryProblem problem_of(const Params<double>& params, const sim::LoadFunction& loads,
                              const TaskResult& result, const BatchOptions& options) {
-  const RestToRest motion(options.problem.control_points, result.duration, result.start,
-                          result.goal);
+  const int n = result.control_points > 0 ? result.control_points : options.problem.control_points;
+  const RestToRest motion(n, result.duration, result.start, result.goal);
   return TrajectoryProblem(params, loads, motion,
                            task_problem_options(options, result.torque_limit));
 }
+
+namespace {
+
+int check_points(const TrajectoryProblem& problem, const BatchOptions& options) {
+  return options.check_factor * problem.num_nodes() + 1;
+}
+
+// Gauss-Legendre points per span of the exact-law energies
+int exact_points(const BatchOptions& options) { return 4 * options.problem.quadrature_points; }
+
+void add_note(TaskResult* r, const std::string& note) {
+  r->message += (r->message.empty() ? "" : "; ") + note;
+}
+
+// the minimum-jerk baseline on `problem` (the problem's own control points): energies, checks
+// and baseline_status; a baseline that does not close is a note, not a failure of the task
+void evaluate_baseline(const TrajectoryProblem& problem, const std::vector<double>& x0,
+                       const BatchOptions& options, TaskResult* r) {
+  double d = NAN, in = NAN;
+  const Status s = problem.energies(x0.data(), options.problem.quadrature_points, &d, &in);
+  if (!s.ok()) {
+    r->baseline_status =
+        s.code == StatusCode::kCannotAssemble ? "cannot_assemble" : "evaluation_failed";
+    add_note(r, "minimum-jerk baseline: " + s.message);
+    return;
+  }
+  r->baseline_dissipated_energy_smoothed = d;
+  r->baseline_input_energy_smoothed = in;
+  if (problem.exact_energies(x0.data(), exact_points(options), &d, &in).ok()) {
+    r->baseline_dissipated_energy = r->baseline_dissipated_energy_exact = d;
+    r->baseline_input_energy = in;
+  }
+  const ConstraintCheck c = problem.check(x0.data(), check_points(problem, options));
+  if (!c.status.ok()) {
+    r->baseline_status = "evaluation_failed";
+    add_note(r, "minimum-jerk baseline check: " + c.status.message);
+    return;
+  }
+  r->baseline_peak_torque = c.peak_torque;
+  r->baseline_max_constraint_violation = c.max_violation;
+  r->baseline_status = c.max_violation > options.feasibility_tol ? "violates_constraints" : "ok";
+}
+
+// the detour: the path search, then the fewest control points whose spline keeps the margin
+bool detour_start(const Params<double>& params, const sim::LoadFunction& loads,
+                  const BatchOptions& options, TaskResult* r,
+                  std::optional<TrajectoryProblem>* problem, std::vector<double>* x) {
+  PathSearchOptions po = options.path;
+  po.margin = options.problem.singular_margin;
+  const JointPath path = find_joint_path(params, r->start, r->goal, po);
+  if (!path.ok()) {
+    r->status = path.status;
+    add_note(r, path.message);
+    return false;
+  }
+  std::vector<int> counts = {options.problem.control_points};
+  for (int n : options.path_control_points) {
+    if (n > counts.back()) counts.push_back(n);
+  }
+  double best = -2;
+  for (int n : counts) {
+    const RestToRest motion(n, r->duration, r->start, r->goal);
+    const std::vector<double> guess = follow_path(motion, path);
+    const int points = options.check_factor * motion.basis().spans() *
+                           options.problem.quadrature_points + 1;
+    const double sine = min_coupler_sine(params, motion, guess, points);
+    if (sine <= best) continue;
+    best = sine;
+    r->control_points = n;
+    *x = guess;
+    if (sine >= options.problem.singular_margin) break;
+  }
+  problem->emplace(problem_of(params, loads, *r, options));
+  r->initial_guess = "path_search";
+  add_note(r, "started from a detour of " + std::to_string(path.waypoints.size() - 2) +
+                  " via points found by the path search");
+  return true;
+}
+
+// where the optimization starts: the minimum-jerk motion when it closes with the margin kept,
+// else a detour; false when no path joins start and goal (status and message say why)
+bool choose_start(const Params<double>& params, const sim::LoadFunction& loads,
+                  const BatchOptions& options, TaskResult* r,
+                  std::optional<TrajectoryProblem>* problem, std::vector<double>* x) {
+  problem->emplace(problem_of(params, loads, *r, options));
+  *x = (*problem)->motion().minimum_jerk();
+  evaluate_baseline(**problem, *x, options, r);
+  const double sine = min_coupler_sine(params, (*problem)->motion(), *x,
+                                       check_points(**problem, options));
+  if (sine >= options.problem.singular_margin) {
+    r->initial_guess = "minimum_jerk";
+  } else if (!detour_start(params, loads, options, r, problem, x)) {
+    return false;
+  }
+  const TrajectoryProblem& p = **problem;
+  double d = NAN, in = NAN;
+  if (p.exact_energies(x->data(), exact_points(options), &d, &in).ok()) {
+    r->initial_dissipated_energy = d;
+  }
+  const ConstraintCheck c = p.check(x->data(), check_points(p, options));
+  if (c.status.ok()) {
+    r->initial_peak_torque = c.peak_torque;
+    r->initial_min_coupler_sine = c.min_coupler_sine;
+  }
+  return true;
+}
+
+void record_energies(const TrajectoryProblem& problem, const BatchOptions& options,
+                     TaskResult* r) {
+  double d = NAN, in = NAN;
+  if (problem.energies(r->x.data(), options.problem.quadrature_points, &d, &in).ok()) {
+    r->dissipated_energy_smoothed = d;
+    r->input_energy_smoothed = in;
+  }
+  r->objective = options.problem.objective == Objective::kInputEnergy ? in : d;
+}
+
+// the optimization from x0, then the constraints re-checked on a denser grid; a torque peak
+// between the nodes above the limit is removed by re-solving with the limit lowered by the
+// overshoot (at most twice). False (status set) when nothing usable came out.
+bool solve(const Params<double>& params, const sim::LoadFunction& loads,
+           const TrajectoryProblem& problem, const std::vector<double>& x0,
+           const BatchOptions& options, TaskResult* r, SolverStatus* solver,
+           ConstraintCheck* check) {
+  OptimizerOptions oo = options.optimizer;
+  oo.seed = task_seed(r->task, options.optimizer.seed);
+  const OptimizeResult opt = optimize(problem, x0, oo);
+  *solver = opt.solver;
+  r->solver_status = outcome_name(opt.solver.outcome);
+  r->evaluations = opt.evaluations;
+  r->starts = opt.starts;
+  r->best_start = opt.best_start;
+  if (!opt.evaluation.ok()) {
+    r->status = "evaluation_failed";
+    add_note(r, opt.solver.message);
+    return false;
+  }
+  r->x = opt.x;
+  record_energies(problem, options, r);
+  const int grid = check_points(problem, options);
+  *check = problem.check(r->x.data(), grid);
+  double limit = r->torque_limit;
+  for (int round = 0; round < 2 && check->status.ok() && opt.solver.usable() &&
+                      check->torque_excess > options.feasibility_tol * r->torque_limit;
+       ++round) {
+    limit *= r->torque_limit / check->peak_torque * (1.0 - 0.1 * options.feasibility_tol);
+    const TrajectoryProblem tightened(params, loads, problem.motion(),
+                                      task_problem_options(options, limit));
+    const OptimizeResult again = optimize(tightened, r->x, oo);
+    r->evaluations += again.evaluations;
+    if (!again.solver.usable()) break;
+    const ConstraintCheck c2 = problem.check(again.x.data(), grid);
+    if (!c2.status.ok()) break;
+    r->x = again.x;
+    *check = c2;
+    record_energies(problem, options, r);
+  }
+  if (!check->status.ok()) {
+    r->status = "evaluation_failed";
+    add_note(r, "constraint re-check: " + check->status.message);
+    return false;
+  }
+  r->peak_torque = check->peak_torque;
+  r->max_constraint_violation = check->max_violation;
+  r->min_coupler_sine = check->min_coupler_sine;
+  return true;
+}
+
+// energies under the scene's own friction law (the reported ones)
+void record_exact_energies(const TrajectoryProblem& problem, const BatchOptions& options,
+                           TaskResult* r) {
+  double d = NAN, in = NAN;
+  if (problem.exact_energies(r->x.data(), exact_points(options), &d, &in).ok()) {
+    r->dissipated_energy = r->dissipated_energy_exact = d;
+    r->input_energy = in;
+  }
+}
+
+// the status of a solved task
+void classify(const SolverStatus& solver, const ConstraintCheck& check,
+              const BatchOptions& options, TaskResult* r) {
+  std::string status = "ok", message = solver.message;
+  if (!solver.usable()) {
+    status = r->solver_status;
+  } else if (check.max_violation > options.feasibility_tol) {
+    status = "infeasible";
+    message = "constraints violated on the check grid (relative " +
+              std::to_string(check.max_violation) + "; peak torque " +
+              std::to_string(check.peak_torque) + " N m, min |sin(th4 - th3)| " +
+              std::to_string(check.min_coupler_sine) + ")";
+  } else if (solver.outcome == SolverOutcome::kMaxEvaluations ||
+             solver.outcome == SolverOutcome::kMaxTime) {
+    status = r->solver_status;
+  }
+  r->status = status;
+  const std::string notes = r->message;
+  r->message = message;
+  if (!notes.empty()) add_note(r, notes);
+}
+
+}  // namespace
 
 TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads,
                     const TaskSpec& task, const sim::Initial& initial,
@@ -180,130 +397,34 @@ TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads
   if (!resolved.ok()) {
     r.status = resolved.status;
     r.message = resolved.message;
+    r.control_points = 0;
     return finish();
   }
   r.start = resolved.start;
   r.goal = resolved.goal;
 
   try {
-    const TrajectoryProblem problem = problem_of(params, loads, r, options);
-    const int grid = options.check_factor * problem.num_nodes() + 1;
-
-    // the minimum-jerk baseline (exactly representable by the spline)
-    const std::vector<double> x0 = problem.motion().minimum_jerk();
-    double bd = NAN, bi = NAN;
-    const Status bs = problem.energies(x0.data(), options.problem.quadrature_points, &bd, &bi);
-    if (!bs.ok()) {
-      r.status = "evaluation_failed";
-      r.message = "minimum-jerk baseline: " + bs.message;
-      return finish();
-    }
-    r.baseline_dissipated_energy = bd;
-    r.baseline_input_energy = bi;
-    const ConstraintCheck bc = problem.check(x0.data(), grid);
-    if (bc.status.ok()) {
-      r.baseline_peak_torque = bc.peak_torque;
-      r.baseline_max_constraint_violation = bc.max_violation;
-    }
-
-    // the optimization
-    OptimizerOptions oo = options.optimizer;
-    oo.seed = task_seed(task.name, options.optimizer.seed);
-    const OptimizeResult opt = optimize(problem, x0, oo);
-    r.solver_status = outcome_name(opt.solver.outcome);
-    r.evaluations = opt.evaluations;
-    r.starts = opt.starts;
-    r.best_start = opt.best_start;
-    if (!opt.evaluation.ok()) {
-      r.status = "evaluation_failed";
-      r.message = opt.solver.message;
-      return finish();
-    }
-    r.x = opt.x;
-    r.objective = opt.objective;
-    double d = NAN, in = NAN;
-    const Status es = problem.energies(r.x.data(), options.problem.quadrature_points, &d, &in);
-    if (es.ok()) {
-      r.dissipated_energy = d;
-      r.input_energy = in;
-    }
-
-    // constraints re-checked on a denser grid; a torque peak between the nodes above the limit
-    // is removed by re-solving with the limit lowered by the overshoot (at most twice)
-    ConstraintCheck check = problem.check(r.x.data(), grid);
-    double limit = r.torque_limit;
-    for (int round = 0; round < 2 && check.status.ok() && opt.solver.usable() &&
-                        check.torque_excess > options.feasibility_tol * r.torque_limit;
-         ++round) {
-      limit *= r.torque_limit / check.peak_torque * (1.0 - 0.1 * options.feasibility_tol);
-      const RestToRest motion(options.problem.control_points, r.duration, r.start, r.goal);
-      const TrajectoryProblem tightened(params, loads, motion,
-                                        task_problem_options(options, limit));
-      const OptimizeResult again = optimize(tightened, r.x, oo);
-      r.evaluations += again.evaluations;
-      if (!again.solver.usable()) break;
-      const ConstraintCheck c2 = problem.check(again.x.data(), grid);
-      if (!c2.status.ok()) break;
-      r.x = again.x;
-      check = c2;
-      if (problem.energies(r.x.data(), options.problem.quadrature_points, &d, &in).ok()) {
-        r.dissipated_energy = d;
-        r.input_energy = in;
-      }
-      r.objective = options.problem.objective == Objective::kInputEnergy ? in : d;
-    }
-    if (!check.status.ok()) {
-      r.status = "evaluation_failed";
-      r.message = "constraint re-check: " + check.status.message;
-      return finish();
-    }
-    r.peak_torque = check.peak_torque;
-    r.max_constraint_violation = check.max_violation;
-    r.min_coupler_sine = check.min_coupler_sine;
-
-    // energies under the scene's own (exact-sign) friction, for the record: the integrand has
-    // kinks where a joint reverses, hence the denser rule
-    {
-      ProblemOptions exact_options = task_problem_options(options, r.torque_limit);
-      exact_options.smoothing_velocity = params.friction.smoothing_velocity;
-      exact_options.quadrature_points = 4 * options.problem.quadrature_points;
-      const TrajectoryProblem exact(params, loads, problem.motion(), exact_options);
-      double e = NAN, unused = NAN;
-      if (exact.energies(r.x.data(), exact_options.quadrature_points, &e, &unused).ok()) {
-        r.dissipated_energy_exact = e;
-      }
-      if (exact.energies(x0.data(), exact_options.quadrature_points, &e, &unused).ok()) {
-        r.baseline_dissipated_energy_exact = e;
-      }
-    }
-
-    if (!opt.solver.usable()) {
-      r.status = r.solver_status;
-      r.message = opt.solver.message;
-    } else if (check.max_violation > options.feasibility_tol) {
-      r.status = "infeasible";
-      r.message = "constraints violated on the check grid (relative " +
-                  std::to_string(check.max_violation) + "; peak torque " +
-                  std::to_string(check.peak_torque) + " N m, min |sin(th4 - th3)| " +
-                  std::to_string(check.min_coupler_sine) + ")";
-    } else if (opt.solver.outcome == SolverOutcome::kMaxEvaluations ||
-               opt.solver.outcome == SolverOutcome::kMaxTime) {
-      r.status = r.solver_status;
-      r.message = opt.solver.message;
-    } else {
-      r.status = "ok";
-      r.message = opt.solver.message;
-    }
+    std::optional<TrajectoryProblem> problem;
+    std::vector<double> x0;
+    if (!choose_start(params, loads, options, &r, &problem, &x0)) return finish();
+    SolverStatus solver;
+    ConstraintCheck check;
+    if (!solve(params, loads, *problem, x0, options, &r, &solver, &check)) return finish();
+    record_exact_energies(*problem, options, &r);
+    classify(solver, check, options, &r);
 
     // validation: the optimal torques simulated forward must bring C to the goal
     if (options.validate) {
       std::string note;
-      r.miss_distance = miss_distance(problem, loads, r.x, options, &note);
-      if (!note.empty()) r.message += "; " + note;
+      r.miss_distance = miss_distance(*problem, loads, r.x, options, false, &note);
+      if (!note.empty()) add_note(&r, note);
+      note.clear();
+      r.miss_distance_exact = miss_distance(*problem, loads, r.x, options, true, &note);
+      if (!note.empty()) add_note(&r, note);
     }
   } catch (const std::exception& e) {
     r.status = "failure";
-    r.message = e.what();
+    add_note(&r, e.what());
   }
   return finish();
 }
@@ -344,13 +465,20 @@ std::vector<TaskResult> run_parallel(int count, int threads,
 
 std::string encode(const TaskResult& r) {
   Writer w;
-  for (const std::string* s : {&r.task, &r.status, &r.message, &r.solver_status}) w.text(*s);
+  for (const std::string* s : {&r.task, &r.status, &r.message, &r.solver_status,
+                               &r.baseline_status, &r.initial_guess}) {
+    w.text(*s);
+  }
   for (double v : {r.duration, r.torque_limit, r.start[0], r.start[1], r.goal[0], r.goal[1],
                    r.dissipated_energy, r.baseline_dissipated_energy, r.input_energy,
                    r.baseline_input_energy, r.objective, r.peak_torque, r.baseline_peak_torque,
                    r.max_constraint_violation, r.baseline_max_constraint_violation,
                    r.min_coupler_sine, r.miss_distance, r.wall_time_s,
-                   r.dissipated_energy_exact, r.baseline_dissipated_energy_exact}) {
+                   r.dissipated_energy_exact, r.baseline_dissipated_energy_exact,
+                   r.initial_dissipated_energy, r.initial_peak_torque,
+                   r.initial_min_coupler_sine, r.dissipated_energy_smoothed,
+                   r.baseline_dissipated_energy_smoothed, r.input_energy_smoothed,
+                   r.baseline_input_energy_smoothed, r.miss_distance_exact}) {
     w.num(v);
   }
   for (long long v : {r.evaluations, r.starts, r.best_start, r.control_points}) w.integer(v);
@@ -362,14 +490,21 @@ std::string encode(const TaskResult& r) {
 TaskResult decode(const std::string& bytes) {
   Reader rd{bytes};
   TaskResult r;
-  for (std::string* s : {&r.task, &r.status, &r.message, &r.solver_status}) *s = rd.text();
+  for (std::string* s : {&r.task, &r.status, &r.message, &r.solver_status, &r.baseline_status,
+                         &r.initial_guess}) {
+    *s = rd.text();
+  }
   for (double* v : {&r.duration, &r.torque_limit, &r.start[0], &r.start[1], &r.goal[0],
                     &r.goal[1], &r.dissipated_energy, &r.baseline_dissipated_energy,
                     &r.input_energy, &r.baseline_input_energy, &r.objective, &r.peak_torque,
                     &r.baseline_peak_torque, &r.max_constraint_violation,
                     &r.baseline_max_constraint_violation, &r.min_coupler_sine,
                     &r.miss_distance, &r.wall_time_s, &r.dissipated_energy_exact,
-                    &r.baseline_dissipated_energy_exact}) {
+                    &r.baseline_dissipated_energy_exact, &r.initial_dissipated_energy,
+                    &r.initial_peak_torque, &r.initial_min_coupler_sine,
+                    &r.dissipated_energy_smoothed, &r.baseline_dissipated_energy_smoothed,
+                    &r.input_energy_smoothed, &r.baseline_input_energy_smoothed,
+                    &r.miss_distance_exact}) {
     *v = rd.num();
   }
   for (int* v : {&r.evaluations, &r.starts, &r.best_start, &r.control_points}) {

@@ -119,16 +119,17 @@ std::array<double, 3> minimum_jerk_blend(double u) {
           60.0 * u * (1.0 - 3.0 * u + 2.0 * u2)};
 }
 
-std::vector<double> RestToRest::minimum_jerk() const {
-  // least squares for the inner control points on 8 n samples of each joint's quintic
+std::vector<double> RestToRest::fit(
+    const std::function<std::array<double, 2>(double)>& path) const {
+  // least squares for the inner control points on 8 n samples of each joint's path
   const int n = basis_.size(), nf = free_per_joint(), m = 8 * n;
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, nf);
   Eigen::MatrixXd rhs(m, 2);
   for (int r = 0; r < m; ++r) {
     const double t = duration() * (r + 0.5) / m;
     const BasisAt b = basis_.at(t);
-    const double s = minimum_jerk_blend(t / duration())[0];
-    for (int j = 0; j < 2; ++j) rhs(r, j) = start_[j] + (goal_[j] - start_[j]) * s;
+    const std::array<double, 2> q = path(t);
+    for (int j = 0; j < 2; ++j) rhs(r, j) = q[j];
     for (int i = 0; i <= kDegree; ++i) {
       const int c = b.first + i;
       if (c < 3) {
@@ -145,6 +146,14 @@ std::vector<double> RestToRest::minimum_jerk() const {
   for (int j = 0; j < 2; ++j)
     for (int v = 0; v < nf; ++v) x[j * nf + v] = sol(v, j);
   return x;
+}
+
+std::vector<double> RestToRest::minimum_jerk() const {
+  return fit([this](double t) {
+    const double s = minimum_jerk_blend(t / duration())[0];
+    return std::array<double, 2>{start_[0] + (goal_[0] - start_[0]) * s,
+                                 start_[1] + (goal_[1] - start_[1]) * s};
+  });
 }
 
 }  // namespace fivebar::trajectory

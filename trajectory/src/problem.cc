@@ -6,6 +6,7 @@
 
 #include <ceres/jet.h>
 
+#include "fivebar/model/rest.h"
 #include "fivebar/trajectory/quadrature.h"
 
 namespace fivebar::trajectory {
@@ -67,6 +68,27 @@ double coupler_constraint(const Params<double>& p, double th1, double th2, doubl
   return cosC * cosC - (1.0 - margin * margin);
 }
 
+// W_in and W_ext of trajectory rows (inverse_rows leaves them zero): the powers M1 w1 + M2 w2
+// and M3 w3 + F . v_P integrated by the trapezoidal rule, the rule of E_diss in the same rows
+Status add_work(const Params<double>& p, const sim::LoadFunction& loads,
+                std::vector<sim::Row>* rows) {
+  double prev_in = 0, prev_ext = 0;
+  for (size_t i = 0; i < rows->size(); ++i) {
+    sim::Row& r = (*rows)[i];
+    Evaluation<double> ev;
+    const Status st = inverse_dynamics(p, loads(r.t), r.theta[0], r.theta[1], r.omega[0],
+                                       r.omega[1], r.alpha[0], r.alpha[1], nullptr,
+                                       EvalOptions{}, &ev);
+    if (!st.ok()) return st;
+    const double dt = i == 0 ? 0.0 : r.t - (*rows)[i - 1].t;
+    r.W_in = i == 0 ? 0.0 : (*rows)[i - 1].W_in + 0.5 * dt * (prev_in + ev.P_in);
+    r.W_ext = i == 0 ? 0.0 : (*rows)[i - 1].W_ext + 0.5 * dt * (prev_ext + ev.P_ext);
+    prev_in = ev.P_in;
+    prev_ext = ev.P_ext;
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 const char* objective_name(Objective o) {
@@ -95,6 +117,7 @@ Params<double> smoothed_params(const Params<double>& params, const ProblemOption
 TrajectoryProblem::TrajectoryProblem(const Params<double>& params, const sim::LoadFunction& loads,
                                      const RestToRest& motion, const ProblemOptions& options)
     : params_(smoothed_params(params, options)),
+      exact_params_(params),
       loads_(loads),
       motion_(motion),
       options_(options) {
@@ -217,6 +240,16 @@ Status TrajectoryProblem::objective(const double* x, double* value) const {
 
 Status TrajectoryProblem::energies(const double* x, int points, double* dissipated,
                                    double* input) const {
+  return energies_with(params_, x, points, dissipated, input);
+}
+
+Status TrajectoryProblem::exact_energies(const double* x, int points, double* dissipated,
+                                         double* input) const {
+  return energies_with(exact_params_, x, points, dissipated, input);
+}
+
+Status TrajectoryProblem::energies_with(const Params<double>& params, const double* x,
+                                        int points, double* dissipated, double* input) const {
   const ClampedBasis& basis = motion_.basis();
   ProblemOptions o = options_;
   o.objective = Objective::kInputEnergy;
@@ -231,7 +264,7 @@ Status TrajectoryProblem::energies(const double* x, int points, double* dissipat
       node.loads = loads_(node.t);
       const std::array<double, 6> st = node_state(x, node);
       double f, M1, M2, P;
-      const Status status = node_values(params_, node.loads, st, o, &f, &M1, &M2, &P);
+      const Status status = node_values(params, node.loads, st, o, &f, &M1, &M2, &P);
       if (!status.ok()) return status;
       *dissipated += rule.weights[i] * P;
       *input += rule.weights[i] * f;
@@ -268,11 +301,23 @@ ConstraintCheck TrajectoryProblem::check(const double* x, int points) const {
 }
 
 Status TrajectoryProblem::torques(const double* x, double t, double* M1, double* M2) const {
+  return torques_with(exact_params_, x, t, M1, M2);
+}
+
+Status TrajectoryProblem::smoothed_torques(const double* x, double t, double* M1,
+                                           double* M2) const {
+  return torques_with(params_, x, t, M1, M2);
+}
+
+Status TrajectoryProblem::torques_with(const Params<double>& params, const double* x, double t,
+                                       double* M1, double* M2) const {
   const auto s = motion_.state(x, t);
   const Loads<double> L = loads_(t);
   Evaluation<double> ev;
-  const Status st = inverse_dynamics(params_, L, s[0][0], s[0][1], s[1][0], s[1][1], s[2][0],
-                                     s[2][1], nullptr, eval_options(options_), &ev);
+  // the rest rule (rest.h): at the ends, at rest, the holding torques of `fivebar hold`
+  const Status st = inverse_dynamics(params, L, s[0][0], s[0][1], s[1][0], s[1][1], s[2][0],
+                                     s[2][1], nullptr,
+                                     with_rest(eval_options(options_), RestThresholds{}), &ev);
   if (!st.ok()) return st;
   *M1 = ev.M1;
   *M2 = ev.M2;
@@ -294,7 +339,9 @@ Status TrajectoryProblem::rows(const double* x, double step, std::vector<sim::Ro
       r.alpha[j] = s[2][j];
     }
   }
-  return sim::inverse_rows(params_, loads_, motion, out);
+  const Status st = sim::inverse_rows(exact_params_, loads_, motion, out);
+  if (!st.ok()) return st;
+  return add_work(exact_params_, loads_, out);
 }
 
 }  // namespace fivebar::trajectory

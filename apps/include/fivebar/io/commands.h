@@ -43,6 +43,7 @@ struct OptimizeSettings {
   bool global = false, validate = true;
   int starts = 8, control_points = 10, quadrature_points = 12;
   double singular_margin = 0.1;
+  double path_step = 0.05;  ///< grid step of the path search for a feasible start [rad]
 };
 
 /// The batch options of `settings`; throws InputError(`command line: --method: ...`) and the like.
@@ -52,7 +53,8 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& settings);
 std::vector<trajectory::TaskSpec> read_tasks(const std::string& path);
 
 /// The trajectory rows of a solved task and of its minimum-jerk baseline, on the scene's output
-/// step (at most a tenth of the task's duration).
+/// step (at most a tenth of the task's duration). `baseline` is left empty when the baseline
+/// cannot close (TaskResult::baseline_status neither ok nor violates_constraints).
 Status task_rows(const Scene& scene, const trajectory::TaskResult& result,
                  const trajectory::BatchOptions& options, std::vector<sim::Row>* optimal,
                  std::vector<sim::Row>* baseline);

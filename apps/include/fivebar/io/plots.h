@@ -58,6 +58,26 @@ std::string hold_map_plot_script(const std::string& map_csv, double torque_limit
                                  const std::string& title, const std::string& terminal);
 std::string plot_hold_map(const std::string& dir, const std::string& map_csv, double torque_limit,
                           const std::string& title);
+/// A readable name of a scene key for axis labels, links 1-based as in the README and the
+/// figures, with units: `mechanism.links.2.length` -> "l3: length of link 3 (coupler B-C) [m]".
+/// Keys it does not know come back as they are.
+std::string scene_key_label(const std::string& key);
+
+/// The heatmap of a two-key design study (`study`).
+struct StudyHeatmap {
+  std::string data = "heatmap.dat";  ///< "x y value" rows, blank line between x values; nan blank
+  /// "x y" of the designs that cannot do every task, drawn grey and hatched; "" when none
+  std::string infeasible;
+  double cell_x = 0, cell_y = 0;     ///< grid spacing (the size of a hatched cell)
+  double x_lo = 0, x_hi = 0, y_lo = 0, y_hi = 0;  ///< first and last grid values
+  bool has_best = false;
+  double best_x = 0, best_y = 0;     ///< the best design, marked
+  std::string x_key, y_key;          ///< scene keys of the axes
+  std::string title;
+};
+/// gnuplot script drawing heatmap.png.
+std::string study_heatmap_script(const StudyHeatmap& heatmap, const std::string& terminal);
+
 /// gnuplot script of `fivebar accuracy`: work_precision.png from work_precision.csv (in the
 /// same directory), log-log error against wall time, one colour per integrator and one dash type
 /// per friction treatment, the Pareto front (an inline data block, sorted by time) joined and

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <functional>
 #include <vector>
 
 #include "fivebar/sim/simulator.h"
@@ -41,6 +42,8 @@ struct WorkPrecisionOptions {
   double reference_tolerance = 1e-13;
   /// skip the remaining tolerances of a method once a run takes longer than this [s]
   double max_run_time_s = 5.0;
+  /// called after every point with (points done, points planned); may be empty
+  std::function<void(int done, int total)> progress;
 };
 
 /// The toolkit's own reference: the scene integrated at reference_tolerance by CVODE Adams and

@@ -115,8 +115,8 @@ struct Stats {
   /// joint-mode decisions taken (at the start, at every switch and breakaway): each one chooses
   /// the unique consistent combination of slip directions and stuck joints
   long mode_decisions = 0;
-  /// slipping joints whose direction disagreed with the sign of their rate at a decision (a
-  /// switch missed by the detection); always 0 unless the detection is broken
+  /// slipping joints whose direction disagreed with the sign of their rate (beyond 1e-6 rad/s)
+  /// at a decision (a switch missed by the detection); always 0 unless the detection is broken
   long mode_corrections = 0;
   double wall_time_s = 0;
 };
@@ -160,7 +160,7 @@ struct RunChecks {
   /// min over rows and joints of Mf_k w_k [W]: friction never supplies power (not checked for
   /// LuGre, whose bristles store and return energy)
   double friction_power_min = 0;
-  /// thresholds: energy balance max(1e-6, 1e3 rtol); inverse residual 1e-8 N m per N m of peak
+  /// thresholds: energy balance max(1e-6, 1e3 rtol), at most 1e-3; inverse residual 1e-8 N m per N m of peak
   /// input torque (at least 1e-8); friction power -1e-9 W per N m of peak friction torque
   double energy_tol = 0, inverse_tol = 0, power_tol = 0;
   Status verdict;

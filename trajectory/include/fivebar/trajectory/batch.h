@@ -10,6 +10,7 @@
 #include "fivebar/model/params.h"
 #include "fivebar/sim/simulator.h"
 #include "fivebar/trajectory/optimizer.h"
+#include "fivebar/trajectory/path_search.h"
 #include "fivebar/trajectory/problem.h"
 #include "fivebar/trajectory/tasks.h"
 
@@ -25,32 +26,60 @@ struct BatchOptions {
   /// simulate the optimal torques forward from the start state and measure the miss of C
   bool validate = true;
   double validation_rtol = 1e-9;  ///< CVODE tolerances of that simulation
+  /// the search for a feasible initial guess when the minimum-jerk motion leaves the workspace
+  /// or comes nearer than the singular margin to a singular pose (its margin is the problem's)
+  PathSearchOptions path;
+  /// control points tried, in order, for the spline that follows the path found (the first
+  /// whose fit keeps the margin wins); the problem's own count is tried first
+  std::vector<int> path_control_points = {14, 20, 28, 40};
 };
 
 /// The outcome of one task (one row of summary.csv). Energies are NaN when not computed.
 struct TaskResult {
   std::string task;
   /// ok | max_evaluations | max_time | infeasible | a solver outcome (roundoff_limited ...) |
-  /// a resolution status (goal_out_of_workspace, invalid_duration, ...) | evaluation_failed
+  /// a resolution status (goal_out_of_workspace, invalid_duration, ...) | unreachable (no
+  /// path of assemblable, non-singular poses joins start and goal) | evaluation_failed
   std::string status;
   std::string message;
   std::string solver_status;  ///< outcome_name() of the solve, "" when none ran
   double duration = 0, torque_limit = 0;
   std::array<double, 2> start{}, goal{};  ///< resolved joint angles [rad]
-  double dissipated_energy = NAN, baseline_dissipated_energy = NAN;  ///< [J]
-  /// the same with the scene's exact Coulomb sign (the optimizer needs the smooth tanh form),
-  /// by a 4x denser Gauss-Legendre rule [J]
+  /// under the scene's exact friction law (sign(w), not the optimizer's smooth tanh(w / w_s)),
+  /// by a Gauss-Legendre rule 4x denser than the optimizer's (the integrand has kinks where a
+  /// joint reverses) [J]
+  double dissipated_energy = NAN, baseline_dissipated_energy = NAN;
+  double input_energy = NAN, baseline_input_energy = NAN;
+  /// the same as dissipated_energy / baseline_dissipated_energy (columns kept for scripts)
   double dissipated_energy_exact = NAN, baseline_dissipated_energy_exact = NAN;
-  double input_energy = NAN, baseline_input_energy = NAN;           ///< [J]
+  /// under the smoothed law the optimizer minimizes, on its own rule [J]
+  double dissipated_energy_smoothed = NAN, baseline_dissipated_energy_smoothed = NAN;
+  double input_energy_smoothed = NAN, baseline_input_energy_smoothed = NAN;
   double objective = NAN;  ///< the minimized quantity [J]
   double peak_torque = NAN, baseline_peak_torque = NAN;  ///< dense grid [N m]
   double max_constraint_violation = NAN;  ///< dense grid, relative (ConstraintCheck)
   double baseline_max_constraint_violation = NAN;
   double min_coupler_sine = NAN;  ///< dense grid
-  double miss_distance = NAN;     ///< |C(T) simulated - C goal| [m]
+  /// |C(T) simulated - C goal| [m], the smoothed-law torques simulated with the smoothed law
+  /// (the model the optimizer solved)
+  double miss_distance = NAN;
+  /// the same for the exact-law torques (trajectory.csv) simulated with the scene's exact law
+  /// and stick-slip, open loop [m]
+  double miss_distance_exact = NAN;
   int evaluations = 0, starts = 0, best_start = 0;
   double wall_time_s = 0;
-  int control_points = 0;
+  int control_points = 0;  ///< per joint, of the spline solved (0: none)
+  /// the minimum-jerk baseline: ok (within every constraint on the check grid),
+  /// violates_constraints (closes everywhere, but the torque limit or the singular margin is
+  /// exceeded), cannot_assemble (some pose does not close: no baseline energies),
+  /// evaluation_failed (the inverse dynamics failed otherwise); "" when not evaluated
+  std::string baseline_status;
+  /// where the optimization started: minimum_jerk, or path_search (the minimum-jerk motion left
+  /// the workspace or the margin; a detour through a grid of feasible poses)
+  std::string initial_guess;
+  double initial_dissipated_energy = NAN;  ///< of that start, exact law [J] (the detour's energy)
+  double initial_peak_torque = NAN;        ///< of that start, dense grid [N m]
+  double initial_min_coupler_sine = NAN;   ///< of that start, dense grid
   std::vector<double> x;  ///< optimal free control points (empty when no solve ran)
 
   bool solved() const { return !x.empty(); }
@@ -82,7 +111,12 @@ std::vector<TaskResult> run_parallel(int count, int threads,
 /// baseline_dissipated_energy, input_energy, peak_torque, max_constraint_violation, wall_time_s),
 /// then baseline_input_energy, baseline_peak_torque, saving_percent (100 (1 - E / E_baseline)),
 /// miss_distance, min_coupler_sine, solver_status, evaluations, starts, best_start, duration,
-/// torque_limit, theta1_start, theta2_start, theta1_goal, theta2_goal, message.
+/// torque_limit, theta1_start, theta2_start, theta1_goal, theta2_goal, dissipated_energy_exact,
+/// baseline_dissipated_energy_exact, baseline_status, initial_guess, initial_dissipated_energy,
+/// initial_peak_torque, initial_min_coupler_sine, control_points, dissipated_energy_smoothed,
+/// baseline_dissipated_energy_smoothed, input_energy_smoothed, baseline_input_energy_smoothed,
+/// miss_distance_exact, message. Energies and torques are those of the scene's exact friction law; the *_smoothed
+/// energies those of the smooth law the optimizer works on.
 const std::vector<std::string>& summary_columns();
 /// The fields of one summary.csv row (numbers as %.17g; the message quoted as CSV text).
 std::vector<std::string> summary_fields(const TaskResult& result);

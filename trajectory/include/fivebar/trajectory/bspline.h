@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <vector>
 
 namespace fivebar::trajectory {
@@ -71,6 +72,11 @@ class RestToRest {
   /// contains every quintic polynomial, so the fit (least squares on 8 n samples) is exact up to
   /// rounding.
   std::vector<double> minimum_jerk() const;
+
+  /// The free variables whose spline is the least-squares fit (8 n samples in time) of the
+  /// joint path `path(t)`, t in [0, duration]. The ends stay at rest at start and goal whatever
+  /// the path does there.
+  std::vector<double> fit(const std::function<std::array<double, 2>(double)>& path) const;
 
  private:
   ClampedBasis basis_;

@@ -95,7 +95,11 @@ class TrajectoryProblem {
   int num_nodes() const { return static_cast<int>(nodes_.size()); }
   const RestToRest& motion() const { return motion_; }
   const ProblemOptions& options() const { return options_; }
+  /// the parameters of the cost and constraints (friction smoothed, smoothed_params)
   const Params<double>& params() const { return params_; }
+  /// the parameters as given (the scene's own friction law): those of check(), rows(),
+  /// torques(), which are what the mechanism needs and what `fivebar inverse` computes
+  const Params<double>& exact_params() const { return exact_params_; }
 
   /// Objective, constraints and (when the flags ask) their gradients at x. Not ok when the
   /// inverse dynamics fails at a node (cannot assemble, friction loop): out is then unusable.
@@ -106,17 +110,25 @@ class TrajectoryProblem {
   /// Objective and input energy integrated with `points` Gauss-Legendre points per span (for
   /// the accuracy check against a denser rule).
   Status energies(const double* x, int points, double* dissipated, double* input) const;
+  /// The same with the scene's exact friction law (exact_params()); its integrand has kinks
+  /// where a joint reverses, so ask for more points than energies() needs.
+  Status exact_energies(const double* x, int points, double* dissipated, double* input) const;
 
   /// Re-check of the constraints on a uniform grid of `points` instants (inverse dynamics in
-  /// double, ends included).
+  /// double with the exact law, ends included).
   ConstraintCheck check(const double* x, int points) const;
 
   /// Rows of trajectory.csv (interfaces.md) on a uniform grid of step `step` [s] (ends
-  /// included), from the inverse dynamics of the motion with the smoothed friction.
+  /// included), from sim::inverse_rows with the scene's exact friction law (the torques of
+  /// `fivebar inverse` on the same motion). E_diss,
+  /// W_in (M1 w1 + M2 w2) and W_ext (M3 w3 + F . v_P) are integrated by the trapezoidal rule
+  /// on the rows, so that d(KE + PE) = W_in + W_ext - E_diss to that rule's accuracy.
   Status rows(const double* x, double step, std::vector<sim::Row>* out) const;
 
-  /// M1, M2 [N m] of the motion at time t (inverse dynamics in double).
+  /// M1, M2 [N m] of the motion at time t (inverse dynamics in double, exact law).
   Status torques(const double* x, double t, double* M1, double* M2) const;
+  /// The same with the smoothed law of the cost (params()).
+  Status smoothed_torques(const double* x, double t, double* M1, double* M2) const;
 
  private:
   struct Node {
@@ -124,10 +136,14 @@ class TrajectoryProblem {
     BasisAt basis;
     Loads<double> loads;
   };
+  Status torques_with(const Params<double>& params, const double* x, double t, double* M1,
+                      double* M2) const;
+  Status energies_with(const Params<double>& params, const double* x, int points,
+                       double* dissipated, double* input) const;
   // node state (th, thd, thdd of both joints) from x
   std::array<double, 6> node_state(const double* x, const Node& node) const;
 
-  Params<double> params_;
+  Params<double> params_, exact_params_;
   sim::LoadFunction loads_;
   RestToRest motion_;
   ProblemOptions options_;

@@ -1,0 +1,52 @@
+// Tests of the study figure helpers of fivebar::io (plots.h): axis labels and the heatmap script.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "fivebar/io/plots.h"
+
+namespace fivebar::io {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+TEST(SceneKeyLabel, LinksAreOneBasedWithUnits) {
+  EXPECT_EQ(scene_key_label("mechanism.links.2.length"), "l3: length of link 3 (coupler B-C) [m]");
+  EXPECT_EQ(scene_key_label("mechanism.links.0.length"), "l1: length of link 1 (crank O-B) [m]");
+  EXPECT_EQ(scene_key_label("mechanism.links.3.mass"), "mass of link 4 (coupler D-C) [kg]");
+  EXPECT_EQ(scene_key_label("mechanism.links.1.com_offset"),
+            "centre-of-mass offset of link 2 (crank D0-D) [m]");
+  EXPECT_EQ(scene_key_label("mechanism.point_p"), "lp: distance B-P on link 3 [m]");
+  // keys it does not know, and malformed link indices, come back unchanged
+  EXPECT_EQ(scene_key_label("friction.coulomb"), "friction.coulomb");
+  EXPECT_EQ(scene_key_label("mechanism.links.7.length"), "mechanism.links.7.length");
+  EXPECT_EQ(scene_key_label("mechanism.links.2.colour"), "mechanism.links.2.colour");
+}
+
+TEST(StudyHeatmap, MarksInfeasibleDesignsAndTheBest) {
+  StudyHeatmap h;
+  h.x_key = "mechanism.links.2.length";
+  h.y_key = "mechanism.links.3.length";
+  h.x_lo = 0.15;
+  h.x_hi = 0.35;
+  h.y_lo = 0.15;
+  h.y_hi = 0.35;
+  h.cell_x = h.cell_y = 0.02;
+  h.title = "total";
+  const std::string plain = study_heatmap_script(h, "png");
+  EXPECT_THAT(plain, HasSubstr("set xlabel \"l3: length of link 3 (coupler B-C) [m]\""));
+  EXPECT_THAT(plain, Not(HasSubstr("heatmap_infeasible.dat")));
+  EXPECT_THAT(plain, Not(HasSubstr("best design")));
+  h.infeasible = "heatmap_infeasible.dat";
+  h.has_best = true;
+  h.best_x = 0.28;
+  h.best_y = 0.26;
+  const std::string marked = study_heatmap_script(h, "png");
+  EXPECT_THAT(marked, HasSubstr("'heatmap_infeasible.dat' using 1:2:(0.01):(0.01) with boxxyerror "
+                                "fs pattern"));
+  EXPECT_THAT(marked, HasSubstr("(0.28000000000000003):(0.26000000000000001)"));
+  EXPECT_THAT(marked, HasSubstr("title 'best design'"));
+}
+
+}  // namespace
+}  // namespace fivebar::io

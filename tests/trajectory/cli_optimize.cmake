@@ -1,0 +1,95 @@
+# End-to-end checks of `fivebar optimize` and `fivebar study` (run by ctest with cmake -P):
+# - a task whose minimum-jerk motion cannot close (issue 17) is solved from a detour, exit 0;
+# - when every task fails, exit 2 (the tasks cannot be done by the design) with one error line
+#   on stderr, each failed task's reason on stdout, and summary.csv kept (issue 8.7);
+# - trajectory.csv carries non-zero W_in and W_ext;
+# - study.csv names the reason of every design that cannot do every task (issue 12.4).
+# Inputs: -DFIVEBAR=<executable> -DSOURCE_DIR=<project root> -DWORK_DIR=<scratch directory>
+cmake_minimum_required(VERSION 3.22)
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR})
+set(paper ${SOURCE_DIR}/datasets/scenes/paper.yaml)
+set(short --set mechanism.links.2.length=0.17 --set mechanism.links.3.length=0.17
+          --set mechanism.links.2.com_offset=0.1 --set mechanism.links.3.com_offset=0.1
+          --set mechanism.point_p=0.1)
+
+function(expect what)
+  if(NOT (${ARGN}))
+    message(FATAL_ERROR "${what}")
+  endif()
+endfunction()
+
+# issue 17's task: solved from the path search's detour
+execute_process(COMMAND ${FIVEBAR} optimize ${paper} --tasks ${SOURCE_DIR}/datasets/tasks/detour_tasks.yaml
+                        ${short} --no-plots --no-validate --out ${WORK_DIR}/detour
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("detour: exit ${status}\n${out}${err}" status EQUAL 0)
+file(STRINGS ${WORK_DIR}/detour/summary.csv rows)
+list(GET rows 1 row)
+expect("detour: summary row ${row}" row MATCHES "^detour,ok,.*,cannot_assemble,path_search,")
+expect("detour: a baseline.csv of a baseline that cannot close"
+       NOT EXISTS ${WORK_DIR}/detour/detour/baseline.csv)
+file(STRINGS ${WORK_DIR}/detour/detour/trajectory.csv lines)
+list(GET lines 0 header)
+list(GET lines -1 last)
+string(REPLACE "," ";" header "${header}")
+string(REPLACE "," ";" last "${last}")
+list(FIND header W_in i_in)
+list(FIND header W_ext i_ext)
+list(GET last ${i_in} w_in)
+list(GET last ${i_ext} w_ext)
+expect("trajectory.csv: W_in ${w_in}, W_ext ${w_ext} at the end" NOT w_in EQUAL 0 AND NOT w_ext EQUAL 0)
+
+# every task fails: exit 2, one error line, reasons on stdout, summary.csv kept
+file(WRITE ${WORK_DIR}/far.yaml "tasks:\n"
+     "  - {name: far, duration: 0.5, start: {theta1: 0.3, theta2: 2.6}, goal: {x: 1.0, y: 1.0}}\n"
+     "  - {name: turn, duration: 0.5, start: {theta1: 0.3, theta2: 2.6}, goal: {theta1: 6.5831853, theta2: 2.6}}\n")
+execute_process(COMMAND ${FIVEBAR} optimize ${paper} --tasks ${WORK_DIR}/far.yaml --no-plots
+                        --set mechanism.links.2.length=0.13 --set mechanism.links.3.length=0.13
+                        --set mechanism.links.2.com_offset=0.06 --set mechanism.links.3.com_offset=0.06
+                        --set mechanism.point_p=0.06 --set initial.theta1=0.3 --set initial.theta2=2.6
+                        --out ${WORK_DIR}/far
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("every task failed: exit ${status}\n${out}${err}" status EQUAL 2)
+expect("stderr: ${err}" err MATCHES "^fivebar: error: [^\n]*far.yaml: tasks: every task failed[^\n]*\n$")
+expect("stdout lacks the reasons: ${out}"
+       out MATCHES "far: goal C = \\(1, 1\\) m is out of reach" AND out MATCHES "turn: .*singular curve")
+expect("summary.csv of a failed run is gone" EXISTS ${WORK_DIR}/far/summary.csv)
+
+# study: the reason of each design that cannot do every task, and the count on stdout
+execute_process(COMMAND ${FIVEBAR} study ${paper} --tasks ${SOURCE_DIR}/datasets/tasks/paper_tasks.yaml
+                        --sweep mechanism.links.0.length=0.04:0.08:2 --no-plots --threads 2
+                        --out ${WORK_DIR}/study
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("study: exit ${status}\n${out}${err}" status EQUAL 0)
+expect("study stdout: ${out}" out MATCHES "[0-9]+ of 2 designs cannot do every task")
+file(STRINGS ${WORK_DIR}/study/study.csv study)
+list(GET study 0 header)
+expect("study.csv header: ${header}" header MATCHES ",best,reason$")
+
+# trajectory.csv torques are those of `fivebar inverse` on the same motion (issue 12.1): the
+# same doubles, hence the same text
+execute_process(COMMAND ${FIVEBAR} inverse ${paper} ${short} --motion ${WORK_DIR}/detour/detour/trajectory.csv
+                        --no-plots --out ${WORK_DIR}/inverse
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("inverse: exit ${status}\n${err}" status EQUAL 0)
+function(torque_columns file out_var)
+  file(STRINGS ${file} lines)
+  list(GET lines 0 header)
+  string(REPLACE "," ";" header "${header}")
+  list(FIND header M1 i1)
+  list(FIND header M2 i2)
+  list(REMOVE_AT lines 0)
+  set(values "")
+  foreach(line IN LISTS lines)
+    string(REPLACE "," ";" fields "${line}")
+    list(GET fields ${i1} m1)
+    list(GET fields ${i2} m2)
+    string(APPEND values "${m1} ${m2}\n")
+  endforeach()
+  set(${out_var} "${values}" PARENT_SCOPE)
+endfunction()
+torque_columns(${WORK_DIR}/detour/detour/trajectory.csv optimized)
+torque_columns(${WORK_DIR}/inverse/trajectory.csv inverse)
+expect("M1, M2 of trajectory.csv differ from fivebar inverse on the same motion"
+       optimized STREQUAL inverse)
