@@ -20,6 +20,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/model/dynamics.h"
 #include "fivebar/sim/simulator.h"
 
 namespace fivebar::io {
@@ -44,7 +45,14 @@ struct Motion {
   std::string omega_source, alpha_source;
   bool has_torques = false;  // the file has M1, M2 (e.g. a trajectory.csv of simulate)
   std::vector<double> M1, M2;
+  // noise standard deviations of the rates and accelerations used (rest rule, docs/hold.md)
+  double rate_noise = 0, acceleration_noise = 0;
 };
+
+// larger of the two cranks' series_noise
+double crank_noise(const std::vector<double>& a, const std::vector<double>& b) {
+  return std::max(series_noise(a), series_noise(b));
+}
 
 Motion read_motion(const std::string& path, const Scene& scene) {
   const CsvTable table = read_csv(path);
@@ -108,6 +116,21 @@ Motion read_motion(const std::string& path, const Scene& scene) {
     alpha2 = second_derivative(theta2, h);
     m.alpha_source = "5-point central second differences of theta";
   }
+  // noise of what the rest rule compares with its thresholds: measured from the series given,
+  // or propagated from the angles' (or rates') noise through the difference stencils
+  const double theta_noise = crank_noise(theta1, theta2);
+  // given series: never below the rounding of the angles over one step
+  if (h == 0) h = t.size() > 1 ? (t.back() - t.front()) / double(t.size() - 1) : 1.0;
+  const double rounding = std::max(rounding_noise(theta1), rounding_noise(theta2));
+  m.rate_noise = has_omega ? std::max(crank_noise(omega1, omega2), rounding / h)
+                           : kFirstDerivativeNoiseGain * theta_noise / h;
+  if (has_alpha) {
+    m.acceleration_noise = std::max(crank_noise(alpha1, alpha2), rounding / (h * h));
+  } else if (has_omega) {
+    m.acceleration_noise = kFirstDerivativeNoiseGain * m.rate_noise / h;
+  } else {
+    m.acceleration_noise = kSecondDerivativeNoiseGain * theta_noise / (h * h);
+  }
   m.rows.resize(t.size());
   for (size_t i = 0; i < t.size(); ++i) {
     sim::Row& r = m.rows[i];
@@ -127,6 +150,115 @@ Motion read_motion(const std::string& path, const Scene& scene) {
   return m;
 }
 
+// max over the rows of |M - M_file|; for a stuck crank (any torque within its holding range
+// holds it) the distance of the file's torque to that range
+double torque_error(const std::vector<sim::Row>& rows, const Motion& motion) {
+  double worst = 0;
+  for (size_t i = 0; motion.has_torques && i < rows.size(); ++i) {
+    const sim::Row& r = rows[i];
+    const auto& h = r.hold_range;
+    worst = std::max({worst, std::max({0.0, h[0] - motion.M1[i], motion.M1[i] - h[1]}),
+                      std::max({0.0, h[2] - motion.M2[i], motion.M2[i] - h[3]})});
+  }
+  return worst;
+}
+
+// the thresholds of the rest rule: the scene's, else kRestSigmas deviations of the noise
+struct RestRule {
+  RestThresholds thresholds;
+  std::string source;
+};
+
+RestRule rest_rule(const Scene& scene, const Motion& motion) {
+  RestRule r;
+  r.thresholds = rest_thresholds(motion.rate_noise, motion.acceleration_noise);
+  const bool rate_set = scene.rest_rate_threshold >= 0;
+  const bool accel_set = scene.rest_acceleration_threshold >= 0;
+  if (rate_set) r.thresholds.rate = scene.rest_rate_threshold;
+  if (accel_set) r.thresholds.acceleration = scene.rest_acceleration_threshold;
+  const std::string derived = format_double(kRestSigmas) + " x the estimated noise";
+  r.source = std::string("rate: ") + (rate_set ? "scene" : derived) +
+             "; acceleration: " + (accel_set ? "scene" : derived);
+  return r;
+}
+
+// the rows at rest (both cranks stuck) and what holds them
+struct RestSummary {
+  long rows_at_rest = 0, rows_with_stuck_joint = 0;
+  std::array<long, 5> stuck_rows{};
+  // reported holding torques over the rows at rest, and the intersection of their ranges
+  double M1_lo = INFINITY, M1_hi = -INFINITY, M2_lo = INFINITY, M2_hi = -INFINITY;
+  double range1_lo = -INFINITY, range1_hi = INFINITY, range2_lo = -INFINITY, range2_hi = INFINITY;
+};
+
+RestSummary summarize_rest(const std::vector<sim::Row>& rows) {
+  RestSummary s;
+  for (const sim::Row& r : rows) {
+    bool any = false;
+    for (int k = 0; k < 5; ++k) {
+      const bool stuck = r.mode[k] == kStuck;
+      s.stuck_rows[k] += stuck;
+      any = any || stuck;
+    }
+    s.rows_with_stuck_joint += any;
+    if (r.mode[0] != kStuck || r.mode[4] != kStuck) continue;
+    ++s.rows_at_rest;
+    s.M1_lo = std::min(s.M1_lo, r.M1);
+    s.M1_hi = std::max(s.M1_hi, r.M1);
+    s.M2_lo = std::min(s.M2_lo, r.M2);
+    s.M2_hi = std::max(s.M2_hi, r.M2);
+    s.range1_lo = std::max(s.range1_lo, r.hold_range[0]);
+    s.range1_hi = std::min(s.range1_hi, r.hold_range[1]);
+    s.range2_lo = std::max(s.range2_lo, r.hold_range[2]);
+    s.range2_hi = std::min(s.range2_hi, r.hold_range[3]);
+  }
+  return s;
+}
+
+Json pair(double a, double b) {
+  Json j = Json::array();
+  j.push(a);
+  j.push(b);
+  return j;
+}
+
+Json rest_json(const RestRule& rule, const Motion& motion, const RestSummary& s) {
+  Json j = Json::object();
+  j.set("rate_threshold", rule.thresholds.rate);
+  j.set("acceleration_threshold", rule.thresholds.acceleration);
+  j.set("threshold_source", rule.source);
+  j.set("rate_noise", motion.rate_noise);
+  j.set("acceleration_noise", motion.acceleration_noise);
+  j.set("rows_at_rest", s.rows_at_rest);
+  j.set("rows_with_stuck_joint", s.rows_with_stuck_joint);
+  Json per_joint = Json::array();
+  for (long n : s.stuck_rows) per_joint.push(n);
+  j.set("stuck_rows_per_joint", std::move(per_joint));
+  if (s.rows_at_rest > 0) {
+    j.set("holding_M1", pair(s.M1_lo, s.M1_hi));
+    j.set("holding_M2", pair(s.M2_lo, s.M2_hi));
+    // a constant torque inside these holds every row at rest (empty when lo > hi)
+    j.set("holding_range_M1", pair(s.range1_lo, s.range1_hi));
+    j.set("holding_range_M2", pair(s.range2_lo, s.range2_hi));
+  }
+  return j;
+}
+
+void print_rest(const RestRule& rule, const RestSummary& s) {
+  char line[320];
+  std::snprintf(line, sizeof line,
+                "  at rest: |w| <= %.3g rad/s and |dw/dt| <= %.3g rad/s^2 (%s)\n",
+                rule.thresholds.rate, rule.thresholds.acceleration, rule.source.c_str());
+  std::cout << line;
+  if (s.rows_at_rest == 0) return;
+  std::snprintf(line, sizeof line,
+                "  %ld rows held still: M1 = %.10g N m (holds in [%.6g, %.6g]), "
+                "M2 = %.10g N m (holds in [%.6g, %.6g])\n",
+                s.rows_at_rest, s.M1_lo, s.range1_lo, s.range1_hi, s.M2_lo, s.range2_lo,
+                s.range2_hi);
+  std::cout << line;
+}
+
 int run(const Args& args) {
   const auto start = std::chrono::steady_clock::now();
   const Scene scene = load_scene(args.scene.scene, args.scene.sets);
@@ -134,22 +266,22 @@ int run(const Args& args) {
   const Motion motion = read_motion(args.motion, scene);
   OutputDir out(args.scene.out, kOutputs);
 
+  const RestRule rest = rest_rule(scene, motion);
   std::vector<sim::Row> rows;
-  const Status status = sim::inverse_rows(scene.params, loads, motion.rows, &rows);
+  const Status status =
+      sim::inverse_rows(scene.params, loads, motion.rows, &rows, rest.thresholds);
   if (!status.ok()) throw NumericalError(args.motion, "inverse dynamics", status.message);
 
   // the file's own torques, when it has them, beside the inverse-dynamics ones
   std::vector<Column> extra;
-  double max_error = 0, max_m1 = 0, max_m2 = 0;
-  for (size_t i = 0; i < rows.size(); ++i) {
-    max_m1 = std::max(max_m1, std::fabs(rows[i].M1));
-    max_m2 = std::max(max_m2, std::fabs(rows[i].M2));
-    if (motion.has_torques) {
-      max_error = std::max(
-          {max_error, std::fabs(rows[i].M1 - motion.M1[i]), std::fabs(rows[i].M2 - motion.M2[i])});
-    }
+  double max_m1 = 0, max_m2 = 0;
+  for (const sim::Row& r : rows) {
+    max_m1 = std::max(max_m1, std::fabs(r.M1));
+    max_m2 = std::max(max_m2, std::fabs(r.M2));
   }
+  const double max_error = torque_error(rows, motion);
   if (motion.has_torques) extra = {{"M1_input", motion.M1}, {"M2_input", motion.M2}};
+  for (Column& c : rest_columns(rows)) extra.push_back(std::move(c));
   write_trajectory_csv(out.file("trajectory.csv"), rows, extra);
 
   Json summary = Json::object();
@@ -170,6 +302,8 @@ int run(const Args& args) {
   summary.set("max_abs_M2", max_m2);
   summary.set("E_diss", rows.back().E_diss);
   if (motion.has_torques) summary.set("inverse_dynamics_max_abs_error", max_error);
+  const RestSummary at_rest = summarize_rest(rows);
+  summary.set("rest", rest_json(rest, motion, at_rest));
 
   if (!args.no_plots) {
     const std::string warning =
@@ -193,9 +327,12 @@ int run(const Args& args) {
               << motion.alpha_source << "\n";
   }
   if (motion.has_torques) {
-    std::snprintf(line, sizeof line, "  max |M - M_file| = %.3e N m\n", max_error);
+    std::snprintf(line, sizeof line,
+                  "  max |M - M_file| = %.3e N m (stuck cranks: distance to the holding range)\n",
+                  max_error);
     std::cout << line;
   }
+  print_rest(rest, at_rest);
   std::cout << "  wrote " << out.dir() << "/:";
   for (const std::string& name : written) std::cout << " " << name;
   std::cout << std::endl;

@@ -52,6 +52,13 @@ std::vector<Column> point_c_columns(const Params<double>& p, const std::vector<s
   return {x, y};
 }
 
+// `columns` and then the rest rule's (the ends of a rest-to-rest motion are held: docs/hold.md)
+std::vector<Column> with_rest_columns(std::vector<Column> columns,
+                                      const std::vector<sim::Row>& rows) {
+  for (Column& c : rest_columns(rows)) columns.push_back(std::move(c));
+  return columns;
+}
+
 // writes `path` through a temporary name in the same directory, then renames it
 template <typename Write>
 void write_atomic(const fs::path& path, Write&& write) {
@@ -106,11 +113,11 @@ std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult
   const bool baseline = !base.empty();  // empty when the baseline cannot close
   fs::create_directories(dir);
   write_atomic(dir / "trajectory.csv", [&](const std::string& p) {
-    write_trajectory_csv(p, rows, point_c_columns(scene.params, rows));
+    write_trajectory_csv(p, rows, with_rest_columns(point_c_columns(scene.params, rows), rows));
   });
   if (baseline) {
     write_atomic(dir / "baseline.csv", [&](const std::string& p) {
-      write_trajectory_csv(p, base, point_c_columns(scene.params, base));
+      write_trajectory_csv(p, base, with_rest_columns(point_c_columns(scene.params, base), base));
     });
   } else {
     fs::remove(dir / "baseline.csv");  // a stale one from an earlier run would mislead

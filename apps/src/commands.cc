@@ -35,6 +35,8 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   opt.smoothing_velocity = a.smooth_sign;
   opt.estimate_rates = a.estimate_rates;
   opt.min_rate = a.min_rate;
+  opt.rest_rate_threshold = scene.rest_rate_threshold;  // rest rule; < 0: derived
+  opt.rest_acceleration_threshold = scene.rest_acceleration_threshold;
   opt.sg.half_window_s = a.sg_window;
   opt.sg.order = a.sg_order;
   opt.num_threads = std::max(1, a.threads);

@@ -14,6 +14,7 @@
 
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
+#include "fivebar/model/dynamics.h"
 
 namespace fivebar::io {
 namespace fs = std::filesystem;
@@ -72,6 +73,21 @@ const std::vector<std::string>& trajectory_columns() {
     return c;
   }();
   return columns;
+}
+
+std::vector<Column> rest_columns(const std::vector<sim::Row>& rows) {
+  std::vector<Column> c = {{"at_rest", {}}};
+  for (int k = 1; k <= 5; ++k) c.push_back({"stuck" + std::to_string(k), {}});
+  for (const char* name : {"M1_hold_min", "M1_hold_max", "M2_hold_min", "M2_hold_max"}) {
+    c.push_back({name, {}});
+  }
+  for (const sim::Row& r : rows) {
+    const bool o = r.mode[0] == kStuck, d0 = r.mode[4] == kStuck;
+    c[0].values.push_back(o && d0 ? 1.0 : 0.0);
+    for (int k = 0; k < 5; ++k) c[1 + k].values.push_back(r.mode[k] == kStuck ? 1.0 : 0.0);
+    for (int i = 0; i < 4; ++i) c[6 + i].values.push_back(r.hold_range[i]);
+  }
+  return c;
 }
 
 void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& rows,

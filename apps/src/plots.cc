@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdlib>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -371,6 +373,36 @@ std::string plot_inverse(const std::string& dir, const std::string& trajectory, 
   if (!g.available) return "gnuplot not found on PATH: no figures drawn";
   return run_gnuplot(dir, "plots.gnuplot",
                      inverse_plot_script(trajectory, has_input, title, g.terminal));
+}
+
+std::string hold_map_plot_script(const std::string& map_csv, double torque_limit,
+                                 const std::string& title, const std::string& terminal) {
+  std::string s = preamble(terminal, "figure of `fivebar hold --grid`");
+  char value[32];
+  std::snprintf(value, sizeof value, "%g", torque_limit);
+  const std::string limit = std::isfinite(torque_limit)
+                                ? "crosses: more than the torque limit " + std::string(value) + " N m"
+                                : "no torque limit";
+  s += "set xlabel \"{/Symbol q}_1 [rad]\"\nset ylabel \"{/Symbol q}_2 [rad]\"\n"
+       "set cblabel \"torque needed to hold [N m]\"\nset palette rgb 33,13,10\n"
+       "set size ratio -1\nunset grid\nset xrange [-pi:pi]\nset yrange [-pi:pi]\n";
+  s += begin_figure("hold_map.png", "1,1",
+                    "Holding torque: max over the two motors of the least |M_i| that holds the "
+                    "pose (static friction helping)",
+                    limit + "; blank: cannot assemble or singular", title);
+  s += "plot " + quote(map_csv) + " using \"theta1\":\"theta2\":\"required\" with image, \\\n"
+       "     " + quote(map_csv) +
+       " using \"theta1\":(column(\"within_limit\") == 0 ? column(\"theta2\") : NaN) "
+       "with points pt 2 ps 0.6 lc rgb \"black\"\nunset multiplot\n";
+  return s;
+}
+
+std::string plot_hold_map(const std::string& dir, const std::string& map_csv, double torque_limit,
+                          const std::string& title) {
+  const Gnuplot& g = gnuplot();
+  if (!g.available) return "gnuplot not found on PATH: no figures drawn";
+  return run_gnuplot(dir, "plots.gnuplot",
+                     hold_map_plot_script(map_csv, torque_limit, title, g.terminal));
 }
 
 std::string scene_key_label(const std::string& key) {

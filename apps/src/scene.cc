@@ -97,6 +97,8 @@ constexpr Field kSchema[] = {
     {"simulation.singular_margin", Kind::kNumber},
     {"simulation.friction_tol", Kind::kNumber},
     {"simulation.friction_max_iter", Kind::kInteger},
+    {"simulation.rest_rate_threshold", Kind::kNumber},
+    {"simulation.rest_acceleration_threshold", Kind::kNumber},
 };
 
 const Field* find_field(const std::string& schema_key) {
@@ -688,6 +690,12 @@ Scene build_scene(const SceneReader& r) {
   require("simulation.friction_max_iter", max_iter, max_iter >= 1 && max_iter <= 1000000,
           "in [1, 1000000]");
   o.friction_max_iter = static_cast<int>(max_iter);
+  // rest rule of inverse dynamics (rest.h): absent means derived from the rates' noise
+  s.rest_rate_threshold = r.number("simulation.rest_rate_threshold", -1.0);
+  s.rest_acceleration_threshold = r.number("simulation.rest_acceleration_threshold", -1.0);
+  for (const char* key : {"simulation.rest_rate_threshold", "simulation.rest_acceleration_threshold"}) {
+    if (r.has(key)) require(key, r.number(key, -1.0), r.number(key, -1.0) >= 0, ">= 0");
+  }
 
   // the initial pose must close, away from the coupler singularity (closed-form triangle B C D)
   const double sine = coupler_sine(p, s.initial.theta1, s.initial.theta2);
@@ -841,6 +849,10 @@ std::string scene_to_yaml(const Scene& s) {
     << "  singular_margin: " << num(o.singular_margin) << "\n"
     << "  friction_tol: " << num(o.friction_tol) << "\n"
     << "  friction_max_iter: " << o.friction_max_iter << "\n";
+  if (s.rest_rate_threshold >= 0) y << "  rest_rate_threshold: " << num(s.rest_rate_threshold) << "\n";
+  if (s.rest_acceleration_threshold >= 0) {
+    y << "  rest_acceleration_threshold: " << num(s.rest_acceleration_threshold) << "\n";
+  }
   return y.str();
 }
 

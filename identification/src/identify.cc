@@ -13,6 +13,7 @@
 
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/rest.h"
 
 namespace fivebar::identification {
 
@@ -91,6 +92,56 @@ std::vector<double> default_start(const ParameterLayout& layout) {
   std::vector<double> x(layout.size());
   for (int i = 0; i < layout.size(); ++i) x[i] = kStart[i / layout.per_group()];
   return x;
+}
+
+/// Noise gains of the Savitzky-Golay rate and acceleration at an interior sample (white noise
+/// of deviation s on the angles gives s * gain): the root sum of squares of the filter
+/// coefficients, read off its response to a unit impulse in the middle of the log.
+void sg_noise_gains(const std::vector<double>& t, const SgOptions& sg, double* g1, double* g2) {
+  const int n = static_cast<int>(t.size());
+  const int hw = sg_half_window(sg, (t.back() - t.front()) / std::max(1, n - 1));
+  const int lo = std::max(0, n / 2 - 2 * hw), hi = std::min(n - 1, n / 2 + 2 * hw);
+  const std::vector<double> ts(t.begin() + lo, t.begin() + hi + 1);
+  std::vector<double> x(ts.size(), 0.0), d1, d2;
+  x[n / 2 - lo] = 1.0;
+  savitzky_golay(ts, x, sg, &d1, &d2);
+  *g1 = *g2 = 0.0;
+  for (size_t i = 0; i < ts.size(); ++i) {
+    *g1 += d1[i] * d1[i];
+    *g2 += d2[i] * d2[i];
+  }
+  *g1 = std::sqrt(*g1);
+  *g2 = std::sqrt(*g2);
+}
+
+double larger_noise(const std::vector<double>& a, const std::vector<double>& b) {
+  return std::max(series_noise(a), series_noise(b));
+}
+
+/// Thresholds of the rest rule for this log (IdentifyOptions::rest_rate_threshold).
+RestThresholds rest_rule(const TorqueLog& log, const IdentifyResult& out,
+                         const IdentifyOptions& opt) {
+  double g1 = 0, g2 = 0;
+  if (out.accels_estimated) sg_noise_gains(log.t, opt.sg, &g1, &g2);
+  double rate_noise = 0, accel_noise = 0;
+  if (out.rates_estimated) {
+    const double s = larger_noise(log.theta1, log.theta2);
+    rate_noise = g1 * s;
+    accel_noise = g2 * s;
+  } else {
+    // logged series: never below the rounding of the angles over one sample step
+    const int n = log.size();
+    const double h = n > 1 ? (log.t.back() - log.t.front()) / (n - 1) : 1.0;
+    const double rounding = std::max(rounding_noise(log.theta1), rounding_noise(log.theta2));
+    rate_noise = std::max(larger_noise(out.omega1, out.omega2), rounding / h);
+    accel_noise = out.accels_estimated
+                      ? g1 * rate_noise
+                      : std::max(larger_noise(out.alpha1, out.alpha2), rounding / (h * h));
+  }
+  RestThresholds r = rest_thresholds(rate_noise, accel_noise);
+  if (opt.rest_rate_threshold >= 0) r.rate = opt.rest_rate_threshold;
+  if (opt.rest_acceleration_threshold >= 0) r.acceleration = opt.rest_acceleration_threshold;
+  return r;
 }
 
 template <int P>
@@ -244,10 +295,15 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
                   std::to_string(P) + " parameters + 1" +
                       (out.accels_estimated ? " + the Savitzky-Golay window" : std::string()));
 
-  // samples that enter the fit
+  // samples that enter the fit; the rest rule leaves out samples with a stuck joint and gives a
+  // joint at rest that accelerates the sign of its acceleration
+  const RestThresholds rest = rest_rule(log, out, opt);
+  out.rest_rate_threshold = rest.rate;
+  out.rest_acceleration_threshold = rest.acceleration;
   EvalOptions eval;
   eval.friction_tol = 1e-12;
   eval.friction_max_iter = 100;
+  eval.rest_rate = rest.rate;
   out.used.assign(n, 0);
   std::vector<Sample> samples;
   for (int i = first; i <= last; ++i) {
@@ -271,6 +327,12 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
       bool slow = false;
       for (double wk : w) slow = slow || std::abs(wk) < opt.min_rate;
       if (slow) continue;
+    }
+    std::array<bool, 5> stuck{};
+    if (stuck_joints(scene, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, rest, &stuck).ok() &&
+        std::find(stuck.begin(), stuck.end(), true) != stuck.end()) {
+      ++out.samples_at_rest;
+      continue;
     }
     out.used[i] = 1;
     samples.push_back(s);

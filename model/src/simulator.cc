@@ -10,6 +10,7 @@
 
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/lock.h"
+#include "fivebar/model/rest.h"
 #include "integrator.h"
 
 namespace fivebar::sim {
@@ -864,11 +865,38 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
   return result;
 }
 
+namespace {
+
+/// Row::hold_range of an inverse-dynamics row: the torque itself where the crank moves, M +-
+/// mu_s r N where it is stuck alone, and where both are stuck (the pose at rest) the range of
+/// each over which the mechanism stays locked, the other at its row value (rest.h).
+Status holding_range(const Params<double>& p, const Loads<double>& L, const EvalOptions& eval,
+                     Row* r) {
+  const bool o = r->mode[0] == kStuck, d0 = r->mode[4] == kStuck;
+  const double m1 = o ? r->hold_margin[0] : 0.0, m2 = d0 ? r->hold_margin[4] : 0.0;
+  r->hold_range = {r->M1 - m1, r->M1 + m1, r->M2 - m2, r->M2 + m2};
+  if (!(o && d0 && p.friction.active())) return Status::Ok();
+  Holding<double> h;
+  const Status st = holding_torques(p, L, r->theta[0], r->theta[1], eval, &h);
+  if (!st.ok()) return st;
+  r->hold_range = {r->M1 - (h.M1 - h.M1_min), r->M1 + (h.M1_max - h.M1),
+                   r->M2 - (h.M2 - h.M2_min), r->M2 + (h.M2_max - h.M2)};
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
                     const std::vector<Row>& motion, std::vector<Row>* out) {
+  return inverse_rows(params, loads, motion, out, RestThresholds{});
+}
+
+Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
+                    const std::vector<Row>& motion, std::vector<Row>* out,
+                    const RestThresholds& rest) {
   out->clear();
   out->reserve(motion.size());
-  EvalOptions eval;
+  const EvalOptions eval = with_rest(EvalOptions{}, rest);
   for (const Row& m : motion) {
     const Loads<double> L = loads(m.t);
     Evaluation<double> ev;
@@ -893,6 +921,10 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
       r.Mf[k] = ev.Mf[k];
     }
     r.P_diss = ev.P_diss;
+    r.mode = ev.slip;
+    r.hold_margin = ev.hold_margin;
+    const Status held = holding_range(params, L, eval, &r);
+    if (!held.ok()) return at_time(held, m.t, m.theta[0], m.theta[1]);
     r.kinetic = kinetic_energy(params, ev.kin, m.omega[0], m.omega[1]);
     r.potential = potential_energy(params, ev.kin);
     out->push_back(r);

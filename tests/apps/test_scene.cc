@@ -528,3 +528,26 @@ TEST(SceneYaml, RoundTripsStribeckAndLuGre) {
 
 }  // namespace
 }  // namespace fivebar::io
+
+namespace fivebar::io {
+namespace {
+
+// issue 14: the rest rule's thresholds are optional (-1: derived), >= 0, and round-trip
+TEST(Scene, RestThresholdsDefaultToDerivedAndRoundTrip) {
+  const Scene d = parse_scene(kPaper, "paper.yaml");
+  EXPECT_EQ(d.rest_rate_threshold, -1.0);
+  EXPECT_EQ(d.rest_acceleration_threshold, -1.0);
+  const Scene s = parse_scene(kPaper, "paper.yaml",
+                              {"simulation.rest_rate_threshold=1e-6",
+                               "simulation.rest_acceleration_threshold=0"});
+  EXPECT_EQ(s.rest_rate_threshold, 1e-6);
+  EXPECT_EQ(s.rest_acceleration_threshold, 0.0);
+  const Scene back = parse_scene(scene_to_yaml(s), "back.yaml");
+  EXPECT_EQ(back.rest_rate_threshold, 1e-6);
+  EXPECT_EQ(back.rest_acceleration_threshold, 0.0);
+  expect_error(kPaper, {"simulation.rest_acceleration_threshold=-1e-3"},
+               "simulation.rest_acceleration_threshold", "must be >= 0");
+}
+
+}  // namespace
+}  // namespace fivebar::io

@@ -6,6 +6,7 @@
 
 #include <ceres/jet.h>
 
+#include "fivebar/model/rest.h"
 #include "fivebar/trajectory/quadrature.h"
 
 namespace fivebar::trajectory {
@@ -313,8 +314,10 @@ Status TrajectoryProblem::torques_with(const Params<double>& params, const doubl
   const auto s = motion_.state(x, t);
   const Loads<double> L = loads_(t);
   Evaluation<double> ev;
+  // the rest rule (rest.h): at the ends, at rest, the holding torques of `fivebar hold`
   const Status st = inverse_dynamics(params, L, s[0][0], s[0][1], s[1][0], s[1][1], s[2][0],
-                                     s[2][1], nullptr, eval_options(options_), &ev);
+                                     s[2][1], nullptr,
+                                     with_rest(eval_options(options_), RestThresholds{}), &ev);
   if (!st.ok()) return st;
   *M1 = ev.M1;
   *M2 = ev.M2;

@@ -50,6 +50,14 @@ std::string inverse_plot_script(const std::string& trajectory, bool has_input,
 std::string plot_inverse(const std::string& dir, const std::string& trajectory, bool has_input,
                          const std::string& title);
 
+/// The figure of `hold --grid`: hold_map.png, a heatmap over (theta1, theta2) of the column
+/// `required` of `map_csv` (the torque the motors need to hold each pose), poses that cannot be
+/// held within `torque_limit` (column within_limit = 0) marked with crosses; blank where the
+/// mechanism cannot assemble or is singular. Returns "" or a warning.
+std::string hold_map_plot_script(const std::string& map_csv, double torque_limit,
+                                 const std::string& title, const std::string& terminal);
+std::string plot_hold_map(const std::string& dir, const std::string& map_csv, double torque_limit,
+                          const std::string& title);
 /// A readable name of a scene key for axis labels, links 1-based as in the README and the
 /// figures, with units: `mechanism.links.2.length` -> "l3: length of link 3 (coupler B-C) [m]".
 /// Keys it does not know come back as they are.

@@ -17,6 +17,10 @@ struct Scene {
   double F_angle = 0;  ///< [rad] direction of F measured from link 3
   sim::Initial initial;
   sim::Options options;
+  /// simulation.rest_rate_threshold [rad/s] and rest_acceleration_threshold [rad/s^2]: the rest
+  /// rule of inverse dynamics (rest.h, docs/hold.md); -1 (absent): derived from the noise of the
+  /// rates and accelerations the command uses
+  double rest_rate_threshold = -1, rest_acceleration_threshold = -1;
   std::string path;  ///< the file it came from, as given (used in every error message)
   /// likely unit mistakes (`<path>: <key>: <value> <why>`): load_scene prints them as warnings
   std::vector<std::string> warnings;
@@ -46,7 +50,8 @@ struct Scene {
 ///   initial.theta1, .theta2 R; initial.omega1, .omega2 [0]
 ///   simulation.* [sim::Options]: duration (> 0), output_step (in (0, duration]), integrator
 ///     (sim::method_name), rtol, atol (in (0, 1)), locate_switches, stick, max_steps (>= 1),
-///     singular_margin (in [0, 1)), friction_tol (in (0, 1)), friction_max_iter (>= 1)
+///     singular_margin (in [0, 1)), friction_tol (in (0, 1)), friction_max_iter (>= 1),
+///     rest_rate_threshold, rest_acceleration_threshold (>= 0; [derived], see Scene)
 Scene load_scene(const std::string& path, const std::vector<std::string>& sets = {});
 
 /// Parses a scene from YAML text; `path` only names it in error messages.

@@ -51,6 +51,13 @@ struct IdentifyOptions {
   bool estimate_rates = false;  ///< estimate rates even when the log has them
   /// drop samples where some joint's |w_k| is below this [rad/s] (their sign is uncertain)
   double min_rate = 0;
+  /// Rest rule (fivebar/model/rest.h, docs/hold.md): a sample where some joint is stuck
+  /// (|w_k| <= rate threshold and |dw_k/dt| <= acceleration threshold) holds a static friction
+  /// torque anywhere in [-mu_s r_k N_k, mu_s r_k N_k], not the kinetic law: it is left out of the
+  /// fit. A joint within the rate threshold that accelerates takes the sign of its acceleration.
+  /// < 0: derived, kRestSigmas deviations of the noise of the rates and accelerations used
+  /// (series_noise of the logged series, or of the angles through the Savitzky-Golay gains).
+  double rest_rate_threshold = -1, rest_acceleration_threshold = -1;
   int max_iterations = 100;
   int num_threads = 1;
   /// start values, in layout order; empty: the scene's values (0.1 / 0.01 / ... where zero)
@@ -82,6 +89,8 @@ struct IdentifyResult {
   std::vector<std::string> warnings;
   int samples = 0;       ///< samples in the log
   int samples_used = 0;  ///< samples that entered the fit
+  int samples_at_rest = 0;  ///< samples left out by the rest rule (some joint stuck)
+  double rest_rate_threshold = 0, rest_acceleration_threshold = 0;  ///< as applied
   int residuals = 0;
   /// rms of the unweighted residual per actuator [N m] (inverse dynamics: tau - M at the fit)
   double rms_torque_residual[2] = {0, 0};

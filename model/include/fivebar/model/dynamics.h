@@ -33,6 +33,17 @@ struct EvalOptions {
   int friction_max_iter = 50;
   bool want_reactions = true;    ///< compute F_k even when the scene has no friction
   bool want_angles = true;       ///< compute th3, th4 (the dynamics itself needs neither)
+  /// Rest rule of inverse dynamics (rest.h; forward dynamics ignores both): a joint with
+  /// |w_k| <= rest_rate [rad/s] is at rest, not slipping: its Coulomb sign is that of its relative
+  /// acceleration, or 0 where that is within rest_acceleration. The defaults keep the exact rule
+  /// (only w_k = 0 is at rest).
+  double rest_rate = 0.0;
+  /// < 0: no joint is stuck in inverse dynamics. >= 0 [rad/s^2]: a joint at rest whose
+  /// |d w_k / dt| <= rest_acceleration is stuck (mode kStuck): it carries no friction torque (the
+  /// motors hold the pose: frictionless equilibrium at that joint) and hold_margin_k =
+  /// mu_s r_k N_k is how much friction torque it could add. A crank at rest and not
+  /// accelerating is taken as exactly still (w = dw/dt = 0: the rest of its rates is noise).
+  double rest_acceleration = -1.0;
 };
 
 /// Everything one evaluation computes. Forward dynamics fills thdd from the torques; inverse
@@ -314,6 +325,27 @@ Status friction_loop(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&
   return Status::Ok();
 }
 
+/// Rest rule (EvalOptions::rest_rate, rest_acceleration): a crank whose rate and acceleration
+/// are both within the thresholds stands still; its rate and acceleration become exactly zero.
+template <typename T>
+void still_crank(const EvalOptions& opt, T* w, T* a) {
+  if (std::abs(value_of(*w)) <= opt.rest_rate && std::abs(value_of(*a)) <= opt.rest_acceleration) {
+    *w = T(0);
+    *a = T(0);
+  }
+}
+
+/// Coulomb sign of a joint in inverse dynamics: sign(w) while it slips; at rest (|w| <=
+/// rest_rate) the sign of its relative acceleration wdot (the direction in which it starts to
+/// slip), 0 where |wdot| <= rest_acceleration, or kStuck there when rest_acceleration >= 0.
+template <typename T>
+int inverse_slip(const EvalOptions& opt, const T& w, const T& wdot) {
+  if (std::abs(value_of(w)) > opt.rest_rate) return sign_of(w);
+  const bool still = std::abs(value_of(wdot)) <= std::max(opt.rest_acceleration, 0.0);
+  if (opt.rest_acceleration >= 0.0 && still) return kStuck;
+  return still ? 0 : sign_of(wdot);
+}
+
 }  // namespace detail
 
 /// Forward dynamics: thdd from the state (th, thd) and the loads, with the friction loop
@@ -431,15 +463,24 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
 /// Inverse dynamics: M1, M2 and all reactions for a given motion (th, thd, thdd), friction
 /// included. The Coulomb sign is sign(w_k); where w_k = 0 it is the sign of the relative
 /// acceleration (the direction in which the joint starts to slip), unless `slip` is given.
+/// With the rest rule on (EvalOptions::rest_rate, rest_acceleration; rest.h) "w_k = 0" reads
+/// "|w_k| <= rest_rate", and joints at rest that do not accelerate are stuck (kStuck): no
+/// friction torque, hold_margin_k = mu_s r_k N_k (a `slip` entry kStuck does the same).
 /// LuGre needs the bristle states z (`bristle`); without them the bristles are taken at their
 /// steady state z = g(w) sign(w) / sigma0, i.e. the Stribeck law.
 template <typename T>
 Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
-                        const T& w1, const T& w2, const T& a1, const T& a2,
+                        const T& w1_in, const T& w2_in, const T& a1_in, const T& a2_in,
                         const std::array<int, 5>* slip, const EvalOptions& opt,
                         Evaluation<T>* ev, const std::array<T, 5>* bristle = nullptr) {
   Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin);
   if (!st.ok()) return st;
+  // rest rule: a crank at rest and not accelerating stands exactly still
+  T w1 = w1_in, w2 = w2_in, a1 = a1_in, a2 = a2_in;
+  if (opt.rest_acceleration >= 0.0) {
+    detail::still_crank(opt, &w1, &a1);
+    detail::still_crank(opt, &w2, &a2);
+  }
   const Kinematics<T>& k = ev->kin;
   compute_bias(p, k, w1, w2, &ev->bias);
   const Vec2<T> Fvec = detail::force_vector(k, L);
@@ -455,12 +496,13 @@ Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
     const std::array<T, 5> wdot = detail::relative_accelerations(ev->thdd, ev->alpha3, ev->alpha4);
     std::array<T, 5> phi;
     for (int j = 0; j < 5; ++j) {
-      int s = sign_of(ev->w[j]);
-      if (s == 0) s = sign_of(wdot[j]);
+      const int s = detail::inverse_slip(opt, ev->w[j], wdot[j]);
       ev->slip[j] = slip ? (*slip)[j] : s;
-      if (p.friction.law == FrictionLaw::kLuGre) {
+      if (ev->slip[j] == kStuck) {
+        phi[j] = T(0);  // the motors carry the holding torque (frictionless equilibrium)
+      } else if (p.friction.law == FrictionLaw::kLuGre) {
         const T z = bristle ? (*bristle)[j]
-                            : T(double(s)) * stribeck_level(p.friction, j, ev->w[j]) /
+                            : T(double(s == kStuck ? 0 : s)) * stribeck_level(p.friction, j, ev->w[j]) /
                                   p.friction.sigma0[j];
         phi[j] = p.friction.pin_radius[j] * lugre_law(p.friction, j, ev->w[j], z, &ev->zdot[j]);
       } else {
@@ -471,10 +513,19 @@ Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
     if (!st.ok()) return st;
     solve(ev->Mf, &ev->F);
     detail::norms(ev->F, &ev->N);
+    for (int j = 0; j < 5; ++j) {
+      if (ev->slip[j] == kStuck) ev->hold_margin[j] = holding_bound(p.friction, j) * ev->N[j];
+    }
   } else {
-    ev->slip.fill(0);
     solve(ev->Mf, &ev->F);
     detail::norms(ev->F, &ev->N);
+    // no friction: nothing holds, but joints at rest are still reported (hold_margin 0)
+    const std::array<T, 5> wdot = detail::relative_accelerations(ev->thdd, ev->alpha3, ev->alpha4);
+    for (int j = 0; j < 5; ++j) {
+      const bool stuck = opt.rest_acceleration >= 0.0 &&
+                         detail::inverse_slip(opt, ev->w[j], wdot[j]) == kStuck;
+      ev->slip[j] = stuck ? kStuck : 0;
+    }
   }
   // crank moments about their fixed pivots O and D0
   const Vec2<T> gvec(T(0), -p.gravity);

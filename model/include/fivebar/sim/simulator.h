@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "fivebar/model/params.h"
+#include "fivebar/model/rest_rule.h"
 #include "fivebar/model/status.h"
 
 namespace fivebar::sim {
@@ -85,6 +86,14 @@ struct Row {
   std::array<int, 5> mode{};  ///< joint modes: slip direction +1/-1, 0 at rest, 2 stuck
   std::array<double, 5> bristle{};  ///< LuGre bristle states z_k [rad] (zero for other laws)
   bool has_bristle = false;         ///< bristle holds a simulated state (LuGre runs)
+  /// inverse_rows, stuck joints (mode 2): mu_s r_k N_k, the friction torque that could be added
+  /// at that joint alone before it slips [N m] (rest.h)
+  std::array<double, 5> hold_margin{};
+  /// inverse_rows: M1_min, M1_max, M2_min, M2_max over which static friction holds the row [N m]:
+  /// M itself where the crank moves, M -+ hold_margin where it is stuck alone, and with both
+  /// cranks stuck (the pose at rest) each actuator's range with the other at its row value
+  /// (friction at all five joints, as the simulator's lock; rest.h)
+  std::array<double, 4> hold_range{};
   /// relative rate of joint k (0-based, O, B, C, D, D0) from the link rates [rad/s]
   double omega_rel(int k) const {
     switch (k) {
@@ -127,6 +136,16 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
 /// that produce the motion under `loads` (whose M1, M2 are ignored). E_diss by the trapezoidal rule.
 Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
                     const std::vector<Row>& motion, std::vector<Row>* out);
+
+/// The same with the rest rule of rest.h and these thresholds (the overload above uses the
+/// defaults of RestThresholds, meant for computed rates): a joint with |w_k| <= rest.rate is at
+/// rest; at rest with |dw_k/dt| <= rest.acceleration it is stuck (mode 2, hold_margin set, no
+/// friction torque). A crank stuck this way stands still: the row's torques, reactions and
+/// coupler rates are computed with its rate and acceleration at exactly zero (both cranks: the
+/// frictionless equilibrium of the pose). mode receives each joint's Coulomb sign or 2.
+Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
+                    const std::vector<Row>& motion, std::vector<Row>* out,
+                    const RestThresholds& rest);
 
 /// Checks of a finished run (summary.json). A run whose checks fail is not ok: `verdict` names
 /// the check, the time and the joint.

@@ -1,0 +1,281 @@
+// fivebar hold SCENE [--pose THETA1,THETA2] [--grid N] [--torque-limit NM] [--time T]
+//                    [--out DIR] [--set KEY=VALUE]... [--no-plots]
+// What torques hold the mechanism still at a pose (rest.h, docs/hold.md): the frictionless
+// equilibrium against gravity and the scene's loads M3, F (at time T), the range of M1 and of M2
+// (the other at its equilibrium) over which static friction holds the pose, and the region of
+// (M1, M2) as a polygon. One pose (default the scene's initial one) -> hold.json; a
+// grid of N x N poses over the whole circle of both cranks -> hold_map.csv and hold_map.png.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#include "fivebar/io/command.h"
+#include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
+#include "fivebar/io/json.h"
+#include "fivebar/io/loads.h"
+#include "fivebar/io/output.h"
+#include "fivebar/io/plots.h"
+#include "fivebar/io/scene.h"
+#include "fivebar/model/rest.h"
+
+namespace fivebar::io {
+namespace {
+
+struct Args {
+  SceneArgs scene;
+  std::string pose;  // "theta1,theta2"; empty: the scene's initial pose
+  int grid = 0;      // > 0: map over N x N poses
+  double torque_limit = std::numeric_limits<double>::infinity();
+  double time = 0;  // when the loads M3, F are evaluated
+  bool no_plots = false;
+};
+
+const std::vector<std::string> kOutputs = {"hold.json", "hold_map.csv", "hold_map.png",
+                                           "plots.gnuplot", "summary.json"};
+
+// "a,b" -> two finite numbers, else InputError on --pose
+std::array<double, 2> parse_pose(const std::string& text, const std::string& scene) {
+  std::stringstream in(text);
+  std::array<double, 2> pose{};
+  char comma = 0;
+  std::string rest;
+  if (!(in >> pose[0] >> comma >> pose[1]) || comma != ',' || (in >> rest) ||
+      !std::isfinite(pose[0]) || !std::isfinite(pose[1])) {
+    throw InputError(scene, "--pose", "expected THETA1,THETA2 (two numbers in rad), got '" +
+                                          text + "'");
+  }
+  return pose;
+}
+
+std::string pose_text(double th1, double th2) {
+  return "theta1 = " + format_double(th1) + ", theta2 = " + format_double(th2);
+}
+
+// the one pose of the command: assembles (else exit 2) and is away from the singularity (else 3)
+void check_pose(const Scene& scene, double th1, double th2) {
+  const double sine = coupler_sine(scene.params, th1, th2);
+  if (sine < 0) {
+    throw InputError(scene.path, "--pose", "the mechanism cannot assemble at " +
+                                               pose_text(th1, th2) +
+                                               ": |BD| outside [|l3 - l4|, l3 + l4]");
+  }
+  if (sine < std::max(scene.options.singular_margin, 1e-12)) {
+    throw NumericalError(scene.path, "--pose",
+                         "singular configuration at " + pose_text(th1, th2) +
+                             " (couplers aligned: |sin(th4 - th3)| = " + format_double(sine) +
+                             " < simulation.singular_margin): no finite holding torques");
+  }
+}
+
+EvalOptions eval_options(const Scene& scene) {
+  EvalOptions o;
+  o.singular_margin = scene.options.singular_margin;
+  o.friction_tol = scene.options.friction_tol;
+  o.friction_max_iter = scene.options.friction_max_iter;
+  return o;
+}
+
+// least |M| over [lo, hi]
+double least_magnitude(double lo, double hi) {
+  if (lo <= 0 && hi >= 0) return 0.0;
+  return std::min(std::fabs(lo), std::fabs(hi));
+}
+
+// torque the motors need to hold: the larger of the two least |M_i| that hold with both
+// actuators moved at once, i.e. within the crank joints' bounds (a rectangle inside the region;
+// each actuator's own range assumes the other at its equilibrium)
+double required_torque(const Holding<double>& h) {
+  return std::max(least_magnitude(h.M1 - h.bound[0], h.M1 + h.bound[0]),
+                  least_magnitude(h.M2 - h.bound[4], h.M2 + h.bound[4]));
+}
+
+Json pair(double a, double b) {
+  Json j = Json::array();
+  j.push(a);
+  j.push(b);
+  return j;
+}
+
+Json pose_json(const Holding<double>& h, const HoldingPolygon& poly, double limit) {
+  Json j = Json::object();
+  j.set("M1", h.M1);
+  j.set("M2", h.M2);
+  j.set("range_M1", pair(h.M1_min, h.M1_max));
+  j.set("range_M2", pair(h.M2_min, h.M2_max));
+  Json N = Json::array(), bound = Json::array();
+  for (int k = 0; k < 5; ++k) {
+    N.push(h.N[k]);
+    bound.push(h.bound[k]);
+  }
+  j.set("N", std::move(N));
+  j.set("static_friction_bound", std::move(bound));
+  j.set("crank_joint_range_M1", pair(h.M1 - h.bound[0], h.M1 + h.bound[0]));
+  j.set("crank_joint_range_M2", pair(h.M2 - h.bound[4], h.M2 + h.bound[4]));
+  j.set("stuck_joints", "O, B, C, D, D0 (all at rest)");
+  j.set("required_torque", required_torque(h));
+  j.set("holdable_within_limit", required_torque(h) <= limit);
+  Json vertices = Json::array();
+  for (const auto& v : poly.vertices) vertices.push(pair(v[0], v[1]));
+  j.set("polygon_all_joints", std::move(vertices));
+  j.set("polygon_range_M1_at_M2_eq", pair(poly.M1_min, poly.M1_max));
+  j.set("polygon_range_M2_at_M1_eq", pair(poly.M2_min, poly.M2_max));
+  return j;
+}
+
+int run_pose(const Args& args, const Scene& scene, const Loads<double>& L,
+             const std::array<double, 2>& pose) {
+  const EvalOptions eval = eval_options(scene);
+  Holding<double> h;
+  HoldingPolygon poly;
+  Status st = holding_torques(scene.params, L, pose[0], pose[1], eval, &h);
+  if (st.ok()) st = holding_polygon(scene.params, L, pose[0], pose[1], eval, h, &poly);
+  if (!st.ok()) throw NumericalError(scene.path, "--pose", pose_text(pose[0], pose[1]) + ": " + st.message);
+
+  OutputDir dir(args.scene.out, kOutputs);
+  OutputDir* out = &dir;
+  Json j = pose_json(h, poly, args.torque_limit);
+  j.set("theta1", pose[0]);
+  j.set("theta2", pose[1]);
+  j.set("scene", scene.path);
+  j.set("loads_time", args.time);
+  j.set("torque_limit", args.torque_limit);
+  write_json_file(out->file("hold.json"), j);
+  const std::vector<std::string> written = out->commit();
+
+  char line[1024];
+  std::snprintf(line, sizeof line,
+                " at theta1 = %.10g, theta2 = %.10g rad (loads at t = %g s)\n"
+                "  frictionless equilibrium: M1 = %.10f N m, M2 = %.10f N m\n"
+                "  static friction holds M1 in [%.6f, %.6f] (M2 = M2_eq), "
+                "M2 in [%.6f, %.6f] N m (M1 = M1_eq)\n"
+                "  the crank joints alone hold M1 +- %.6f, M2 +- %.6f N m; region: %zu-gon\n"
+                "  torque needed to hold: %.6g N m\n",
+                pose[0], pose[1], args.time, h.M1, h.M2, h.M1_min, h.M1_max, h.M2_min, h.M2_max,
+                h.bound[0], h.bound[4], poly.vertices.size(), required_torque(h));
+  std::cout << "fivebar hold: " << scene.path << line << "  wrote " << out->dir() << "/:";
+  for (const std::string& name : written) std::cout << " " << name;
+  std::cout << std::endl;
+  return 0;
+}
+
+// status of a map cell: 0 held, 1 cannot assemble, 2 singular, 3 numerics failed
+int map_cell(const Scene& scene, const Loads<double>& L, double th1, double th2,
+             Holding<double>* h) {
+  const double sine = coupler_sine(scene.params, th1, th2);
+  if (sine < 0) return 1;
+  if (sine < std::max(scene.options.singular_margin, 1e-12)) return 2;
+  return holding_torques(scene.params, L, th1, th2, eval_options(scene), h).ok() ? 0 : 3;
+}
+
+int run_grid(const Args& args, const Scene& scene, const Loads<double>& L) {
+  const int n = args.grid;
+  OutputDir dir(args.scene.out, kOutputs);
+  OutputDir* out = &dir;
+  std::vector<Column> cols;
+  for (const char* name : {"theta1", "theta2", "status", "M1", "M2", "M1_hold_min",
+                           "M1_hold_max", "M2_hold_min", "M2_hold_max", "required",
+                           "within_limit"}) {
+    cols.push_back({name, {}});
+  }
+  long held = 0, over = 0, blank = 0;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const double th1 = -M_PI + 2 * M_PI * (i + 0.5) / n, th2 = -M_PI + 2 * M_PI * (j + 0.5) / n;
+      Holding<double> h;
+      const int status = map_cell(scene, L, th1, th2, &h);
+      const bool ok = status == 0;
+      const double req = ok ? required_torque(h) : nan;
+      const bool within = ok && req <= args.torque_limit;
+      held += within;
+      over += ok && !within;
+      blank += !ok;
+      const double values[] = {th1, th2, double(status), ok ? h.M1 : nan, ok ? h.M2 : nan,
+                               ok ? h.M1_min : nan, ok ? h.M1_max : nan, ok ? h.M2_min : nan,
+                               ok ? h.M2_max : nan, req, ok ? double(within) : nan};
+      for (size_t c = 0; c < cols.size(); ++c) cols[c].values.push_back(values[c]);
+    }
+  }
+  std::string csv;
+  for (size_t c = 0; c < cols.size(); ++c) csv += (c ? "," : "") + cols[c].name;
+  for (size_t r = 0; r < cols[0].values.size(); ++r) {
+    csv += "\n";
+    for (size_t c = 0; c < cols.size(); ++c) csv += (c ? "," : "") + format_double(cols[c].values[r]);
+  }
+  write_text_file(out->file("hold_map.csv"), csv + "\n");
+  if (!args.no_plots) {
+    const std::string warning =
+        plot_hold_map(out->staging(), "hold_map.csv", args.torque_limit, scene.path);
+    if (!warning.empty()) warn(warning);
+  }
+  Json j = Json::object();
+  j.set("command", "hold");
+  j.set("scene", scene.path);
+  j.set("grid", n);
+  j.set("loads_time", args.time);
+  j.set("torque_limit", args.torque_limit);
+  j.set("poses_held_within_limit", held);
+  j.set("poses_over_limit", over);
+  j.set("poses_not_assembled_or_singular", blank);
+  write_json_file(out->file("summary.json"), j);
+  const std::vector<std::string> written = out->commit();
+  std::cout << "fivebar hold: " << scene.path << ", " << n << " x " << n << " poses: " << held
+            << " held within the limit, " << over << " over it, " << blank
+            << " cannot assemble or singular\n  wrote " << out->dir() << "/:";
+  for (const std::string& name : written) std::cout << " " << name;
+  std::cout << std::endl;
+  return 0;
+}
+
+int run(const Args& args) {
+  const Scene scene = load_scene(args.scene.scene, args.scene.sets);
+  if (args.grid < 0 || args.grid > 2000) {
+    throw InputError(scene.path, "--grid", "expected 1 to 2000 poses per crank, got " +
+                                               std::to_string(args.grid));
+  }
+  if (args.grid > 0 && !args.pose.empty()) {
+    throw InputError(scene.path, "--pose", "give either --pose or --grid, not both");
+  }
+  if (!(args.torque_limit > 0)) {
+    throw InputError(scene.path, "--torque-limit", "must be > 0, got " +
+                                                       format_double(args.torque_limit));
+  }
+  Loads<double> L = LoadExpressions(scene).function()(args.time);
+  L.M1 = L.M2 = 0;  // the unknowns
+  if (args.grid > 0) return run_grid(args, scene, L);
+  // the pose is checked before any output exists
+  std::array<double, 2> pose = {scene.initial.theta1, scene.initial.theta2};
+  if (!args.pose.empty()) pose = parse_pose(args.pose, scene.path);
+  check_pose(scene, pose[0], pose[1]);
+  return run_pose(args, scene, L, pose);
+}
+
+RunFunction setup(CLI::App* app) {
+  auto args = std::make_shared<Args>();
+  add_scene_options(app, &args->scene, "hold");
+  app->add_option("--pose", args->pose, "the pose to hold (default: the scene's initial pose)")
+      ->type_name("THETA1,THETA2");
+  app->add_option("--grid", args->grid, "map N x N poses over theta1, theta2 in [-pi, pi)")
+      ->type_name("N");
+  app->add_option("--torque-limit", args->torque_limit,
+                  "motor torque limit [N m]: poses that need more are marked on the map")
+      ->type_name("NM");
+  app->add_option("--time", args->time, "time at which the scene's loads M3, F are evaluated")
+      ->type_name("T")
+      ->capture_default_str();
+  app->add_flag("--no-plots", args->no_plots, "do not draw the map (gnuplot)");
+  return [args] { return run(*args); };
+}
+
+const bool kRegistered = register_command(
+    {"hold", "torques that hold a pose at rest, and their range under static friction", setup});
+
+}  // namespace
+}  // namespace fivebar::io

@@ -1,0 +1,78 @@
+# End-to-end checks of issue 14 (run by ctest with cmake -P): `fivebar hold` at a pose and as a
+# map, its bad input (exit 2 for a pose that cannot assemble, 3 for a singular one, one line on
+# stderr, no output), and the rest columns of `fivebar inverse` on a motion held still.
+# Inputs: -DFIVEBAR=<executable> -DSOURCE_DIR=<project root> -DWORK_DIR=<scratch directory>
+cmake_minimum_required(VERSION 3.22)
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR})
+set(paper ${SOURCE_DIR}/datasets/scenes/paper.yaml)
+# couplers of 0.2 m: the mechanism cannot close with the cranks apart, and aligns at |BD| = 0.4 m
+set(short --set mechanism.links.2.length=0.2 --set mechanism.links.3.length=0.2
+          --set mechanism.point_p=0.15)
+
+# run_fivebar(<expected exit status> <stderr regex or ""> args...); stdout in FIVEBAR_OUT
+function(run_fivebar expected_status stderr_regex)
+  execute_process(COMMAND ${FIVEBAR} ${ARGN} RESULT_VARIABLE status OUTPUT_VARIABLE out
+                  ERROR_VARIABLE err)
+  if(NOT status EQUAL expected_status)
+    message(FATAL_ERROR "fivebar ${ARGN}: exit status ${status}, expected ${expected_status}\n"
+                        "stderr: ${err}")
+  endif()
+  set(FIVEBAR_OUT "${out}" PARENT_SCOPE)
+  if(expected_status EQUAL 0)
+    return()
+  endif()
+  string(REGEX MATCHALL "\n" newlines "${err}")
+  list(LENGTH newlines n)
+  if(NOT n EQUAL 1 OR NOT err MATCHES "^fivebar: error: [^\n]+: [^\n]+: [^\n]+\n$")
+    message(FATAL_ERROR "fivebar ${ARGN}: stderr is not one error line:\n${err}")
+  endif()
+  if(NOT err MATCHES "${stderr_regex}")
+    message(FATAL_ERROR "fivebar ${ARGN}: stderr\n${err}does not match ${stderr_regex}")
+  endif()
+endfunction()
+
+function(require_text file regex)
+  file(READ ${file} text)
+  if(NOT text MATCHES "${regex}")
+    message(FATAL_ERROR "${file} does not match ${regex}:\n${text}")
+  endif()
+endfunction()
+
+# one pose: the paper start pose, the frictionless equilibrium of the issue
+run_fivebar(0 "" hold ${paper} --out ${WORK_DIR}/pose)
+require_text(${WORK_DIR}/pose/hold.json "\"M1\": -0\\.69173396")
+require_text(${WORK_DIR}/pose/hold.json "\"M2\": -1\\.43789485")
+
+# bad input: nothing written
+run_fivebar(2 "paper.yaml: --pose: the mechanism cannot assemble at theta1 = 3.14159, theta2 = 0"
+            hold ${paper} ${short} --pose 3.14159,0 --out ${WORK_DIR}/bad)
+run_fivebar(3 "paper.yaml: --pose: singular configuration at theta1 = 3.14159265[0-9]*, theta2 = 0.98032"
+            hold ${paper} ${short} --pose 3.141592653589793,0.9803200132236127
+            --out ${WORK_DIR}/bad)
+run_fivebar(2 "paper.yaml: --pose: expected THETA1,THETA2" hold ${paper} --pose 1.5
+            --out ${WORK_DIR}/bad)
+run_fivebar(2 "paper.yaml: simulation.rest_rate_threshold: must be >= 0"
+            hold ${paper} --set simulation.rest_rate_threshold=-1 --out ${WORK_DIR}/bad)
+if(EXISTS ${WORK_DIR}/bad)
+  message(FATAL_ERROR "a failed hold left ${WORK_DIR}/bad behind")
+endif()
+
+# the map, poses that cannot close left blank
+run_fivebar(0 "" hold ${paper} ${short} --grid 12 --torque-limit 10 --no-plots
+            --out ${WORK_DIR}/map)
+require_text(${WORK_DIR}/map/hold_map.csv "^theta1,theta2,status,M1,M2,")
+require_text(${WORK_DIR}/map/summary.json "\"poses_not_assembled_or_singular\": [1-9]")
+
+# inverse dynamics of the start pose held still for 1 s: every row at rest, equilibrium torques
+set(rows "t,theta1,theta2\n")
+foreach(i RANGE 0 1000)
+  string(APPEND rows "${i}e-3,1.5707963267948966,1.5707963267948966\n")
+endforeach()
+file(WRITE ${WORK_DIR}/static.csv "${rows}")
+run_fivebar(0 "" inverse ${paper} --motion ${WORK_DIR}/static.csv --no-plots
+            --out ${WORK_DIR}/static)
+require_text(${WORK_DIR}/static/summary.json "\"rows_at_rest\": 1001")
+require_text(${WORK_DIR}/static/trajectory.csv
+             "E_diss,W_in,W_ext,at_rest,stuck1,stuck2,stuck3,stuck4,stuck5,M1_hold_min,M1_hold_max,M2_hold_min,M2_hold_max\n")
+require_text(${WORK_DIR}/static/trajectory.csv "\n1,1.5707963267948966,[^\n]*,-0\\.691733963023")
