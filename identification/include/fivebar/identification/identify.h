@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "fivebar/identification/condition.h"
 #include "fivebar/identification/parameters.h"
 #include "fivebar/identification/rates.h"
 #include "fivebar/identification/torque_log.h"
@@ -48,6 +49,16 @@ struct IdentifyOptions {
   /// datum per sample with measured rates); > 0 tanh(w / w_s) [rad/s]
   double smoothing_velocity = -1;
   SgOptions sg;                 ///< rate/acceleration estimation when the log lacks them
+  /// choose the Savitzky-Golay half-window from the data (sg.half_window_s is then ignored): the
+  /// smallest window whose propagated sensor noise in the torque residual stays within the
+  /// torque noise itself (least smoothing bias at a noise level the fit averages out)
+  bool auto_window = true;
+  ConditionOptions condition;   ///< unwrapping and glitch rejection
+  bool check_degrees = true;    ///< tell degrees from radians by the motion (condition.h)
+  /// standard deviations by the sandwich (J^T J)^-1 J^T Sigma J (J^T J)^-1, Sigma from the
+  /// torque noise plus the angle (or rate) noise propagated through the rate estimation
+  /// (errors in variables); false: the residual variance times (J^T J)^-1
+  bool errors_in_variables = true;
   bool estimate_rates = false;  ///< estimate rates even when the log has them
   /// drop samples where some joint's |w_k| is below this [rad/s] (their sign is uncertain)
   double min_rate = 0;
@@ -65,7 +76,12 @@ struct IdentifyOptions {
 
 struct ParameterEstimate {
   std::string name;
-  double value = 0, std = 0, initial = 0;
+  double value = 0;
+  double std = 0;  ///< NaN when not determined (never a silent 0)
+  double initial = 0;
+  /// at a bound (lower bound, or static_coulomb = coulomb): the std, from the unconstrained
+  /// curvature, is not meaningful
+  bool at_bound = false;
 };
 
 /// Identification outcome. `status` not ok: the numerics failed (values may be partial).
@@ -86,8 +102,11 @@ struct IdentifyResult {
   /// rms of the unweighted residual per actuator [N m] (inverse dynamics: tau - M at the fit)
   double rms_torque_residual[2] = {0, 0};
   double rms_torque_residual_initial[2] = {0, 0};  ///< same at the start values
-  /// white-noise level of the torque residual, 1.4826 median |r_i - r_(i-1)| / sqrt 2 [N m]: the
-  /// sensor noise; rms_torque_residual well above it means model mismatch (or rate-estimate bias)
+  /// the torque residual's expected rms from the sensor noise alone [N m]: the logged torque
+  /// noise plus the angle (or rate) noise propagated through the rate estimation and the
+  /// dynamics, floored at 0.1 % of the rms logged torque (noise-free logs); rms_torque_residual
+  /// well above it means structure the fitted law misses. Output error: the torque residual's
+  /// white-noise level, 1.4826 median |r_i - r_(i-1)| / sqrt 2.
   double residual_noise_floor[2] = {0, 0};
   double rms_angle_residual[2] = {0, 0};  ///< output error: theta - simulated [rad]
   double residual_sigma = 0;              ///< sqrt(2 cost / (m - p)) in residual units
@@ -98,6 +117,15 @@ struct IdentifyResult {
   std::vector<double> iteration_costs;  ///< Ceres cost at each iteration (iteration 0 first)
   bool rates_estimated = false, accels_estimated = false;
   int sg_half_window = 0;  ///< samples, when estimated
+  std::string window_choice;  ///< how the half-window was chosen (data-driven or given)
+  /// the log's conditioning: one sentence per thing done (unwrapping, glitches rejected)
+  std::vector<std::string> notes;
+  std::vector<Glitch> glitches;  ///< samples rejected as isolated glitches
+  TorqueLog conditioned_log;     ///< the log as fitted: unwrapped, glitches interpolated
+  int unwrapped[2] = {0, 0};     ///< one-turn jumps undone in theta1, theta2
+  /// robust white-noise std of the logged columns (condition.h) [rad], [N m], [rad/s]
+  double angle_noise[2] = {0, 0}, torque_noise[2] = {0, 0}, rate_noise[2] = {0, 0};
+  std::string std_method;  ///< "errors-in-variables" or "residual-variance"
   /// per sample (log order): rates and accelerations used, predicted torques at the fit (inverse
   /// dynamics of the fitted scene at every sample; NaN where it failed), and whether used
   std::vector<double> omega1, omega2, alpha1, alpha2, predicted_tau1, predicted_tau2;
@@ -106,8 +134,12 @@ struct IdentifyResult {
 };
 
 /// Identifies the friction coefficients of `scene` from `log`. `loads` gives the scene's
-/// non-actuator loads (M3, F, F_angle; its M1, M2 are ignored). Throws LogError for a log that
-/// cannot be used (fewer samples than parameters, poses that do not fit the scene).
+/// non-actuator loads (M3, F, F_angle; its M1, M2 are ignored). The log is first conditioned
+/// (condition.h: unwrapped, isolated glitches rejected). Throws LogError for a log that cannot
+/// be used (fewer samples than parameters, poses that do not fit the scene, angles in degrees,
+/// more than isolated glitches). A numerical failure (an evaluation that fails at the start
+/// values or the solution, a solver that gives up) is a status naming the sample and the reason;
+/// the covariance is computed only on a converged solution.
 IdentifyResult identify(const Params<double>& scene, const sim::LoadFunction& loads,
                         const TorqueLog& log, const IdentifyOptions& options);
 
