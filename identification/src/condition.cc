@@ -50,7 +50,7 @@ bool glitch_signature(const std::vector<double>& z, int i) {
   for (int j : {i - 1, i + 1}) {
     if (!std::isfinite(z[j])) return true;  // an absurd value drowns its neighbours
     const double ratio = -z[j] / z[i];
-    if (!(ratio > 0.3 && ratio < 1.0)) return false;
+    if (!(ratio > 0.45 && ratio < 0.9)) return false;
   }
   return true;
 }

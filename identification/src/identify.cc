@@ -421,8 +421,8 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
 /// The data-driven Savitzky-Golay half-window. Smoothing bias shows in the torque residual as
 /// an excess over the level the sensor noise explains (that level is predicted per window by
 /// propagating the measured noise): the window chosen is the largest whose residual/noise ratio
-/// stays within kWindowExcess of the least ratio over the candidates (which absorbs a
-/// mismatch of the law that no window removes). Candidates from the polynomial's minimum to
+/// stays within kWindowExcess of the reference, 1 or the least ratio over the candidates when
+/// that is above 1 (a mismatch of the law that no window removes). Candidates from the polynomial's minimum to
 /// 50 ms, growing by 25 %, evaluated at the parameters of a preliminary fit (f.x).
 void choose_window(Fit* f, IdentifyResult* out) {
   const TorqueLog& log = f->cond.log;
@@ -438,7 +438,7 @@ void choose_window(Fit* f, IdentifyResult* out) {
   // probes: samples with a centred window for the largest candidate, not glitches
   std::vector<int> probe;
   const int edge = cand.back();
-  const int step = std::max(1, (n - 2 * edge) / 400);
+  const int step = std::max(1, (n - 2 * edge) / 800);
   for (int i = edge; i < n - edge; i += step) {
     if (!f->cond.rejected[i]) probe.push_back(i);
   }
@@ -451,10 +451,25 @@ void choose_window(Fit* f, IdentifyResult* out) {
     window_levels(*f, probe, sg, rms, floor);
     ratio[k] = std::max(rms[0] / floor[0], rms[1] / floor[1]);
     levels[k] = {rms[0], rms[1], floor[0], floor[1]};
+    // smoothing bias only grows with the window: stop once it clearly dominates
+    if (k >= 2 && ratio[k] > 1.5 * std::max(1.0, *std::min_element(ratio.begin(), ratio.begin() + k))) {
+      cand.resize(k + 1);
+      ratio.resize(k + 1);
+      levels.resize(k + 1);
+      break;
+    }
   }
-  const double best = *std::min_element(ratio.begin(), ratio.end());
+  // the reference: 1 when the noise explains the residual (a ratio below 1 is a fluctuation of
+  // the estimate), the least ratio when a mismatch of the law shows at every window
+  const double best = std::max(1.0, *std::min_element(ratio.begin(), ratio.end()));
   size_t chosen = 0;
-  for (size_t k = 0; k < cand.size() && ratio[k] <= best * (1 + kWindowExcess); ++k) chosen = k;
+  for (size_t k = 0; k < cand.size(); ++k) {
+    if (ratio[k] <= best * (1 + kWindowExcess)) chosen = k;
+  }
+  std::string table;
+  for (size_t k = 0; k < cand.size(); ++k) {
+    table += (k ? ", " : "") + std::to_string(cand[k]) + ": " + fmt(ratio[k]);
+  }
   f->sg.half_window_s = cand[chosen] * dt;
   const std::array<double, 4>& l = levels[chosen];
   out->window_choice =
@@ -462,8 +477,7 @@ void choose_window(Fit* f, IdentifyResult* out) {
       fmt(cand[chosen] * dt * 1e3) + " ms), the largest whose torque residual (" + fmt(l[0]) +
       ", " + fmt(l[1]) + " N m) shows no smoothing bias over the level the measured noise " +
       "explains (" + fmt(l[2]) + ", " + fmt(l[3]) + " N m), ratio " + fmt(ratio[chosen]) +
-      " against the least " + fmt(best) + " over " + std::to_string(cand.size()) + " windows of " +
-      std::to_string(cand.front()) + " to " + std::to_string(cand.back()) + " samples";
+      " against the reference " + fmt(best) + " (ratio by half-window: " + table + ")";
 }
 
 /// A quick fit on at most ~1500 of the selected samples (plain least squares) that sets f->x for
