@@ -35,7 +35,7 @@ struct Args {
   std::string log, method = "inverse-dynamics", law = "coulomb_viscous", loss = "none";
   bool per_joint = false, estimate_rates = false, no_plots = false, no_validation = false;
   bool start_from_scene = false, sg_window_given = false, no_unwrap = false, keep_glitches = false;
-  bool classical_std = false;
+  bool classical_std = false, no_delay = false;
   double loss_scale = 0.1, smooth_sign = -1, min_rate = 0, sg_window = 0.010, window = 0.2;
   int sg_order = 5, threads = 1;
 };
@@ -158,6 +158,7 @@ int run(const Args& a) {
   opt.condition.unwrap = !a.no_unwrap;
   opt.condition.reject_glitches = !a.keep_glitches;
   opt.errors_in_variables = !a.classical_std;
+  opt.estimate_delay = !a.no_delay;
   opt.num_threads = std::max(1, a.threads);
   opt.window_s = a.window;
   if (a.start_from_scene) {
@@ -283,6 +284,13 @@ int run(const Args& a) {
   }
   j.set("rate_source", std::move(rates));
   j.set("std_method", res.std_method);
+  if (std::isfinite(res.delay_s)) {
+    Json d = Json::object();
+    d.set("value_s", res.delay_s);  // the logged torques at t + d match the angles at t
+    d.set("std_s", res.delay_std_s);
+    d.set("corrected", res.delay_corrected);
+    j.set("torque_delay", std::move(d));
+  }
   Json cond = Json::object();
   cond.set("unwrapped_turns", pair(res.unwrapped[0], res.unwrapped[1]));
   cond.set("angle_noise", pair(res.angle_noise[0], res.angle_noise[1]));
@@ -333,6 +341,7 @@ int run(const Args& a) {
     v.set("full_run_max_angle_error", pair(val.full_max[0], val.full_max[1]));
     v.set("window_s", val.window_s);
     v.set("windowed_rms_angle_error", pair(val.window_rms[0], val.window_rms[1]));
+    v.set("windows_skipped_over_time_budget", val.windows_skipped);
     j.set("validation", std::move(v));
   }
   Json warnings = Json::array();
@@ -369,6 +378,10 @@ int run(const Args& a) {
     }
   }
   for (const std::string& n : res.notes) std::printf("  log: %s\n", n.c_str());
+  if (std::isfinite(res.delay_s)) {
+    std::printf("  torque delay: %.4g +- %.2g ms%s\n", res.delay_s * 1e3, res.delay_std_s * 1e3,
+                res.delay_corrected ? " (corrected: torques shifted by it)" : " (not significant)");
+  }
   if (res.accels_estimated) std::printf("  rates: %s\n", res.window_choice.c_str());
   std::printf("  rms torque residual: %.4g, %.4g N m (noise floor %.4g, %.4g N m)\n",
               res.rms_torque_residual[0], res.rms_torque_residual[1], res.residual_noise_floor[0],
@@ -426,6 +439,8 @@ RunFunction setup(CLI::App* app) {
   app->add_flag("--classical-std", args->classical_std,
                 "std from the residual variance alone (default: errors in variables, the rate "
                 "estimation's noise included)");
+  app->add_flag("--no-delay", args->no_delay,
+                "do not estimate (and correct) a delay of the torques behind the angles");
   app->add_flag("--no-plots", args->no_plots, "skip the PNG figures");
   app->add_flag("--no-validation", args->no_validation, "skip the validation runs");
   return [args, sg_window] {

@@ -290,8 +290,12 @@ std::string degrees_from_motion(const Params<double>& scene, const sim::LoadFunc
   double rate_rad = 0, rate_deg = 0;
   const double as_rad = torque_mismatch(scene, loads, log, r1, r2, &rate_rad);
   const double as_deg = torque_mismatch(scene, loads, log, d1, d2, &rate_deg);
-  // degrees only when that reading explains the torques several times better than radians
-  if (!(as_deg < 0.25 * as_rad)) return "";
+  // degrees only when that reading explains the torques several times better than radians, and
+  // well in absolute terms (within half the logged torques' median size): a log that neither
+  // reading explains (wrong scene, absurd values) is not called degrees
+  std::vector<double> tau;
+  for (int i = 0; i < n; ++i) tau.push_back(std::max(std::abs(log.tau1[i]), std::abs(log.tau2[i])));
+  if (!(as_deg < 0.25 * as_rad) || !(as_deg < 0.5 * median_abs(tau))) return "";
   return "read as radians, the motion (median crank rate " + fmt(rate_rad) +
          " rad/s) needs torques a median " + fmt(as_rad) +
          " N m away from the logged ones; read as degrees (median rate " + fmt(rate_deg) +

@@ -64,6 +64,8 @@ constexpr double kAbsoluteFloor = 1e-3;
 constexpr double kStructureRatio = 1.15;
 /// window choice: a residual/noise ratio this much above the least one is smoothing bias
 constexpr double kWindowExcess = 0.04;
+/// a torque-to-angle delay beyond this many std is corrected
+constexpr double kDelaySignificance = 3.0;
 
 std::string fmt(double x, int prec = 3) {
   std::ostringstream s;
@@ -462,10 +464,13 @@ void choose_window(Fit* f, IdentifyResult* out) {
   // the reference: 1 when the noise explains the residual (a ratio below 1 is a fluctuation of
   // the estimate), the least ratio when a mismatch of the law shows at every window
   const double best = std::max(1.0, *std::min_element(ratio.begin(), ratio.end()));
+  // the largest window without detectable excess, then one candidate smaller: the bias just
+  // below detection still counts against the std (relative to it, it scales as ~h^3.5)
   size_t chosen = 0;
   for (size_t k = 0; k < cand.size(); ++k) {
     if (ratio[k] <= best * (1 + kWindowExcess)) chosen = k;
   }
+  if (chosen > 0) --chosen;
   std::string table;
   for (size_t k = 0; k < cand.size(); ++k) {
     table += (k ? ", " : "") + std::to_string(cand[k]) + ": " + fmt(ratio[k]);
@@ -474,7 +479,7 @@ void choose_window(Fit* f, IdentifyResult* out) {
   const std::array<double, 4>& l = levels[chosen];
   out->window_choice =
       "data-driven: half-window " + std::to_string(cand[chosen]) + " samples (" +
-      fmt(cand[chosen] * dt * 1e3) + " ms), the largest whose torque residual (" + fmt(l[0]) +
+      fmt(cand[chosen] * dt * 1e3) + " ms), one below the largest whose torque residual (" + fmt(l[0]) +
       ", " + fmt(l[1]) + " N m) shows no smoothing bias over the level the measured noise " +
       "explains (" + fmt(l[2]) + ", " + fmt(l[3]) + " N m), ratio " + fmt(ratio[chosen]) +
       " against the reference " + fmt(best) + " (ratio by half-window: " + table + ")";
@@ -822,6 +827,70 @@ void output_error_levels(const Fit& f, IdentifyResult* out) {
   }
 }
 
+/// Torque-to-angle delay d: one Gauss-Newton step of the fit with d as an extra parameter
+/// (d r_i / d d = tau'(t_i), tau' by Savitzky-Golay on the logged torques), its std from the
+/// errors-in-variables covariance of that augmented step.
+void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<double>& r,
+                    const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
+  const TorqueLog& log = f.cond.log;
+  const int P = static_cast<int>(J.cols()), m = static_cast<int>(J.rows());
+  const double dt = log.duration() / std::max(1, log.size() - 1);
+  SgOptions sg;
+  sg.order = 3;
+  sg.half_window_s = std::max(f.sg.half_window_s, 3 * dt);
+  std::vector<double> g1, g2, unused;
+  savitzky_golay(log.t, log.tau1, sg, &g1, &unused);
+  savitzky_golay(log.t, log.tau2, sg, &g2, &unused);
+  Eigen::MatrixXd Ja(m, P + 1);
+  Ja.leftCols(P) = J;
+  for (size_t u = 0; u < f.index.size(); ++u) {
+    Ja(2 * u, P) = g1[f.index[u]];
+    Ja(2 * u + 1, P) = g2[f.index[u]];
+  }
+  const Eigen::MatrixXd H = Ja.transpose() * Ja;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+  const double emax = es.eigenvalues().maxCoeff(), emin = es.eigenvalues().minCoeff();
+  if (!H.allFinite() || !(emax > 0) || !(emin > 1e-14 * emax)) return;
+  const Eigen::MatrixXd Hinv = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
+                               es.eigenvectors().transpose();
+  const Eigen::VectorXd step = -Hinv * (Ja.transpose() * Eigen::Map<const Eigen::VectorXd>(r.data(), m));
+  Eigen::MatrixXd S = detail::score_covariance(Ja, sens, f.noise, log.size());
+  for (int j = 0; j < 2; ++j) {
+    const double excess = std::max(0.0, std::pow(out->rms_torque_residual[j], 2) -
+                                            std::pow(out->residual_noise_floor[j], 2));
+    for (int row = j; row < m; row += 2) S += excess * Ja.row(row).transpose() * Ja.row(row);
+  }
+  const Eigen::MatrixXd C = Hinv * S * Hinv;
+  out->delay_s = step(P);
+  out->delay_std_s = std::sqrt(C(P, P));
+}
+
+/// `log` with its torques read at t + d (cubic through the four nearest samples, clamped at the
+/// ends): torques that lag the angles by d brought in line.
+TorqueLog shift_torques(const TorqueLog& log, double d) {
+  TorqueLog out = log;
+  const int n = log.size();
+  for (int i = 0; i < n; ++i) {
+    const double t = log.t[i] + d;
+    const int k = static_cast<int>(std::upper_bound(log.t.begin(), log.t.end(), t) - log.t.begin());
+    const int lo = std::clamp(k - 2, 0, std::max(0, n - 4));
+    const int hi = std::min(n, lo + 4);
+    const double tc = std::clamp(t, log.t.front(), log.t.back());
+    double v1 = 0, v2 = 0;
+    for (int a = lo; a < hi; ++a) {
+      double w = 1;
+      for (int b = lo; b < hi; ++b) {
+        if (b != a) w *= (tc - log.t[b]) / (log.t[a] - log.t[b]);
+      }
+      v1 += w * log.tau1[a];
+      v2 += w * log.tau2[a];
+    }
+    out.tau1[i] = v1;
+    out.tau2[i] = v2;
+  }
+  return out;
+}
+
 /// Start values in the internal layout, from the public `initial` (or the neutral defaults).
 bool start_values(Fit* fp, const std::vector<double>& initial, std::vector<double>* x0_public,
                   IdentifyResult* out) {
@@ -945,13 +1014,42 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   f.layout.apply(f.x.data(), &out.fitted.friction);
   predictions(f, &out);
   if (!id) output_error_levels(f, &out);
+  if (id && opt.estimate_delay) {
+    estimate_delay(f, J, r, sens, &out);
+    const double dt = log.duration() / std::max(1, log.size() - 1);
+    if (std::abs(out.delay_s) > kDelaySignificance * out.delay_std_s &&
+        std::abs(out.delay_s) > 0.1 * dt) {
+      // refit on the conditioned log with the torques brought in line with the angles
+      IdentifyOptions again = opt;
+      again.estimate_delay = false;
+      IdentifyResult res = identify(scene_in, loads, shift_torques(f.cond.log, out.delay_s), again);
+      res.samples = out.samples;
+      res.delay_s = out.delay_s;
+      res.delay_std_s = out.delay_std_s;
+      res.delay_corrected = true;
+      res.notes.insert(res.notes.begin(), out.notes.begin(), out.notes.end());
+      res.glitches.insert(res.glitches.begin(), out.glitches.begin(), out.glitches.end());
+      for (int j = 0; j < 2; ++j) res.unwrapped[j] += out.unwrapped[j];
+      std::vector<std::string> w = {"the torques lag the angles by " + fmt(out.delay_s * 1e3) +
+                                    " +- " + fmt(out.delay_std_s * 1e3) +
+                                    " ms (" + fmt(std::abs(out.delay_s) / out.delay_std_s) +
+                                    " std): refitted with the torques shifted by it"};
+      if (!out.glitches.empty()) w.push_back(out.warnings.front());
+      res.warnings.insert(res.warnings.begin(), w.begin(), w.end());
+      res.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
+      return res;
+    }
+  }
   out.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
   return out;
 }
 
 Validation validate(const Params<double>& params, const sim::LoadFunction& loads,
                     const TorqueLog& log, const std::vector<double>& omega1,
-                    const std::vector<double>& omega2, double window_s, double rtol) {
+                    const std::vector<double>& omega2, double window_s, double rtol,
+                    double budget_s) {
+  const auto start = Clock::now();
+  const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
   Validation v;
   v.window_s = window_s;
   const int n = log.size();
@@ -960,6 +1058,9 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
   if (n < 2) return v;
   auto run = [&](int i0, int i1, bool full, double* s2, int* count) {
     sim::Options o = window_sim_options(rtol);
+    // a fitted scene far from the log (absurd logs) can make the simulation crawl: bounded
+    o.max_wall_time_s = std::max(1e-3, (full ? 0.5 : 1.0) * budget_s - elapsed());
+    o.max_steps = 50000;  // per output interval (a sample step): normal runs take a few
     o.duration = log.t[i1] - log.t[i0];
     o.output_step = o.duration / (i1 - i0);
     const sim::Result res =
@@ -998,7 +1099,13 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
   for (int j = 0; j < 2; ++j) v.full_rms[j] = std::sqrt(s2[j] / std::max(1, count));
   double w2[2] = {0, 0};
   int wc = 0;
-  for (auto [i0, i1] : make_windows(log, 0, n - 1, window_s)) run(i0, i1, false, w2, &wc);
+  for (auto [i0, i1] : make_windows(log, 0, n - 1, window_s)) {
+    if (elapsed() > budget_s) {
+      ++v.windows_skipped;
+      continue;
+    }
+    run(i0, i1, false, w2, &wc);
+  }
   for (int j = 0; j < 2; ++j) v.window_rms[j] = std::sqrt(w2[j] / std::max(1, wc));
   return v;
 }

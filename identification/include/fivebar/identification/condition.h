@@ -66,7 +66,7 @@ double robust_std(std::vector<double> v);
 /// are degrees: with rates estimated from the angles, the scene's frictionless inverse dynamics
 /// is compared with the logged torques for both readings (median |tau - M| over the log, and
 /// the median crank rate); degrees are reported only when the degree reading explains the
-/// torques several times better.
+/// torques four times better than radians and to within half their median size.
 std::string degrees_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
                                 const TorqueLog& log);
 

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,11 @@ struct IdentifyOptions {
   /// central-difference step relative to |x|: large against the integrator noise (~rtol), the
   /// residual being nearly linear in the coefficients
   double relative_step = 1e-2;
+  /// inverse dynamics: estimate the delay of the torques behind the angles (separate
+  /// acquisition channels) by one Gauss-Newton step on tau(t + d) - M, with its std; when it is
+  /// significant (over 3 std and over a tenth of a sample) the torques are shifted by it and the
+  /// fit is redone
+  bool estimate_delay = true;
 };
 
 struct ParameterEstimate {
@@ -126,6 +132,10 @@ struct IdentifyResult {
   /// robust white-noise std of the logged columns (condition.h) [rad], [N m], [rad/s]
   double angle_noise[2] = {0, 0}, torque_noise[2] = {0, 0}, rate_noise[2] = {0, 0};
   std::string std_method;  ///< "errors-in-variables" or "residual-variance"
+  /// torque-to-angle delay d [s]: the logged torques at t + d match the angles at t (positive:
+  /// the torques lag); NaN when not estimated. delay_corrected: the fit used torques shifted by d
+  double delay_s = std::numeric_limits<double>::quiet_NaN(), delay_std_s = delay_s;
+  bool delay_corrected = false;
   /// per sample (log order): rates and accelerations used, predicted torques at the fit (inverse
   /// dynamics of the fitted scene at every sample; NaN where it failed), and whether used
   std::vector<double> omega1, omega2, alpha1, alpha2, predicted_tau1, predicted_tau2;
@@ -154,13 +164,16 @@ struct Validation {
   double window_rms[2] = {0, 0};  ///< [rad] runs restarted from the logged state every window
   std::vector<double> full_theta1,
       full_theta2;  ///< simulated at the log's times (NaN after a stop)
+  int windows_skipped = 0;  ///< windows not run: the time budget was spent
 };
 
 /// Simulates `params` with the log's torques from the log's state (rates: `omega1/2`), once over
-/// the whole log and in windows of `window_s` restarted from the logged state.
+/// the whole log and in windows of `window_s` restarted from the logged state, within a wall-time
+/// budget (the full run gets half; windows past the budget are skipped and counted).
 Validation validate(const Params<double>& params, const sim::LoadFunction& loads,
                     const TorqueLog& log, const std::vector<double>& omega1,
-                    const std::vector<double>& omega2, double window_s, double rtol = 1e-9);
+                    const std::vector<double>& omega2, double window_s, double rtol = 1e-9,
+                    double budget_s = 10.0);
 
 /// Loads for the simulator: logged tau1, tau2 (linear in t) as M1, M2 and the scene's M3, F,
 /// F_angle, shifted by t0 (the simulator starts at t = 0).
