@@ -662,7 +662,8 @@ Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P) {
 }
 
 /// Covariance of the internal parameters, only on a converged solution with a full-rank
-/// Jacobian: errors in variables (sandwich) for inverse dynamics, else s^2 (J^T J)^-1.
+/// Jacobian (of the parameters off their bounds): errors in variables (sandwich) for inverse
+/// dynamics, else s^2 (J^T J)^-1.
 void covariance(const Fit& f, const Eigen::MatrixXd& J, const std::vector<detail::Sensitivity>& sens,
                 IdentifyResult* out) {
   const int P = f.layout.size();
@@ -672,7 +673,16 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J, const std::vector<detail
                             "): no covariance, standard deviations not given");
     return;
   }
-  const Eigen::MatrixXd H = J.transpose() * J;
+  // parameters at a bound are held there (active constraints), and parameters without effect
+  // on the residuals are left out: the covariance is that of the others
+  std::vector<int> free;
+  for (int i = 0; i < P; ++i) {
+    if (f.x[i] > f.layout.lower_bound(i) + 1e-12 && J.col(i).squaredNorm() > 0) free.push_back(i);
+  }
+  if (free.empty()) return;
+  Eigen::MatrixXd Jf(J.rows(), free.size());
+  for (size_t a = 0; a < free.size(); ++a) Jf.col(a) = J.col(free[a]);
+  const Eigen::MatrixXd H = Jf.transpose() * Jf;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
   const double emax = es.eigenvalues().maxCoeff(), emin = es.eigenvalues().minCoeff();
   if (!(emax > 0) || !(emin > 1e-14 * emax) || !H.allFinite()) {
@@ -681,22 +691,27 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J, const std::vector<detail
   }
   const Eigen::MatrixXd Hinv = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
                                es.eigenvectors().transpose();
+  const auto scatter = [&](const Eigen::MatrixXd& Cf) {
+    for (size_t a = 0; a < free.size(); ++a) {
+      for (size_t b = 0; b < free.size(); ++b) out->covariance(free[a], free[b]) = Cf(a, b);
+    }
+  };
   const bool eiv = f.opt->errors_in_variables && f.opt->method == Method::kInverseDynamics;
   if (!eiv) {
-    out->covariance = Hinv * (out->residual_sigma * out->residual_sigma);
+    scatter(Hinv * (out->residual_sigma * out->residual_sigma));
     out->std_method = "residual-variance";
     return;
   }
-  Eigen::MatrixXd S = detail::score_covariance(J, sens, f.noise, f.cond.log.size());
+  Eigen::MatrixXd S = detail::score_covariance(Jf, sens, f.noise, f.cond.log.size());
   // residual beyond the modelled noise (model mismatch, unmodelled noise) counted as white
   for (int j = 0; j < 2; ++j) {
     const double excess = std::max(0.0, std::pow(out->rms_torque_residual[j], 2) -
                                             std::pow(out->residual_noise_floor[j], 2));
-    for (int row = j; row < J.rows(); row += 2) {
-      S += excess * J.row(row).transpose() * J.row(row);
+    for (int row = j; row < Jf.rows(); row += 2) {
+      S += excess * Jf.row(row).transpose() * Jf.row(row);
     }
   }
-  out->covariance = Hinv * S * Hinv;
+  scatter(Hinv * S * Hinv);
   out->std_method = "errors-in-variables";
 }
 
@@ -739,7 +754,24 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
   const std::vector<std::string> names = f.layout.names();
   const Eigen::MatrixXd T = to_public(f.layout);
   const Eigen::VectorXd xp = T * Eigen::Map<const Eigen::VectorXd>(f.x.data(), P);
-  out->covariance = T * out->covariance * T.transpose();
+  // to the public parameters; one is determined when every internal one it sums is
+  Eigen::MatrixXd C0 = out->covariance;
+  std::vector<bool> known(P);
+  for (int i = 0; i < P; ++i) known[i] = std::isfinite(C0(i, i));
+  for (int i = 0; i < P; ++i) {
+    for (int j = 0; j < P; ++j) {
+      if (!std::isfinite(C0(i, j))) C0(i, j) = 0;
+    }
+  }
+  out->covariance = T * C0 * T.transpose();
+  for (int i = 0; i < P; ++i) {
+    bool ok = true;
+    for (int j = 0; j < P; ++j) ok = ok && (T(i, j) == 0 || known[j]);
+    if (!ok) {
+      out->covariance.row(i).setConstant(kNaN);
+      out->covariance.col(i).setConstant(kNaN);
+    }
+  }
   out->correlation = Eigen::MatrixXd::Constant(P, P, kNaN);
   for (int i = 0; i < P; ++i) {
     for (int j = 0; j < P; ++j) {
