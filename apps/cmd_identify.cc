@@ -202,9 +202,9 @@ int run(const Args& a) {
           << format_double(res.omega2[i]) << ',' << format_double(res.alpha1[i]) << ','
           << format_double(res.alpha2[i]) << ',' << format_double(p1) << ',' << format_double(p2)
           << ',' << format_double(fitted_log.tau1[i] - p1) << ','
-          << format_double(fitted_log.tau2[i] - p2) << ','
-          << int(res.used[i]) << ',' << format_double(a.no_validation ? NAN : val.full_theta1[i])
-          << ',' << format_double(a.no_validation ? NAN : val.full_theta2[i]) << '\n';
+          << format_double(fitted_log.tau2[i] - p2) << ',' << int(res.used[i]) << ','
+          << format_double(a.no_validation ? NAN : val.full_theta1[i]) << ','
+          << format_double(a.no_validation ? NAN : val.full_theta2[i]) << '\n';
     }
     write_text_file(out.file("residuals.csv"), csv.str());
   }
@@ -278,7 +278,8 @@ int run(const Args& a) {
   rates.set("accelerations", res.accels_estimated ? "savitzky-golay" : "log");
   if (res.accels_estimated) {
     rates.set("sg_half_window_samples", res.sg_half_window);
-    rates.set("sg_half_window_s", res.sg_half_window * log.duration() / std::max(1, log.size() - 1));
+    rates.set("sg_half_window_s",
+              res.sg_half_window * log.duration() / std::max(1, log.size() - 1));
     rates.set("sg_order", opt.sg.order);
     rates.set("window_choice", res.window_choice);
   }

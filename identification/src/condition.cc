@@ -128,9 +128,8 @@ double torque_mismatch(const Params<double>& scene, const sim::LoadFunction& loa
     Evaluation<double> ev;
     const Status st = inverse_dynamics(p, loads(log.t[i]), th1[i], th2[i], w1[i], w2[i], a1[i],
                                        a2[i], nullptr, eval, &ev);
-    mismatch.push_back(st.ok() ? std::max(std::abs(log.tau1[i] - ev.M1),
-                                          std::abs(log.tau2[i] - ev.M2))
-                               : kInf);
+    mismatch.push_back(
+        st.ok() ? std::max(std::abs(log.tau1[i] - ev.M1), std::abs(log.tau2[i] - ev.M2)) : kInf);
     rate.push_back(std::max(std::abs(w1[i]), std::abs(w2[i])));
   }
   *median_rate = median_abs(rate);
@@ -246,7 +245,8 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
       *c.noise = noise_std(loo_deviation(L.t, *c.x));
     }
     if (static_cast<int>(g.size()) > allowed) {
-      std::sort(g.begin(), g.end(), [](const Glitch& a, const Glitch& b) { return a.line < b.line; });
+      std::sort(g.begin(), g.end(),
+                [](const Glitch& a, const Glitch& b) { return a.line < b.line; });
       throw LogError(L.path, std::string("column ") + c.name,
                      std::to_string(g.size()) + " samples leave their neighbours' trend (lines " +
                          line_list(g) + "): more than the " + std::to_string(allowed) +
@@ -263,8 +263,8 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
     for (size_t i = 0; i < out.glitches.size() && i < 5; ++i) {
       const Glitch& g = out.glitches[i];
       what += std::string(i ? "; " : "") + "line " + std::to_string(g.line) + " " + g.column +
-              " = " + fmt(g.value, 6) + " where its neighbours give " + fmt(g.expected, 6) +
-              " (" + fmt(g.sigmas, 2) + " noise std)";
+              " = " + fmt(g.value, 6) + " where its neighbours give " + fmt(g.expected, 6) + " (" +
+              fmt(g.sigmas, 2) + " noise std)";
     }
     if (out.glitches.size() > 5) what += "; ...";
     out.notes.push_back("rejected " + std::to_string(out.glitches.size()) +

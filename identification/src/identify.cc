@@ -12,8 +12,8 @@
 #include <sstream>
 
 #include "fivebar/identification/residual.h"
-#include "noise_model.h"
 #include "fivebar/model/dynamics.h"
+#include "noise_model.h"
 
 namespace fivebar::identification {
 
@@ -187,23 +187,22 @@ sim::Options window_sim_options(double rtol) {
   return o;
 }
 
-
 // ---- stages of identify() ----
 
 /// The state the stages of identify() share.
 struct Fit {
   const IdentifyOptions* opt = nullptr;
   sim::LoadFunction loads;
-  Params<double> scene;     ///< the law to fit and the Coulomb sign form
-  ParameterLayout layout;   ///< internal (Stribeck: static_coulomb as excess over coulomb)
-  ConditionedLog cond;      ///< the log as fitted
+  Params<double> scene;    ///< the law to fit and the Coulomb sign form
+  ParameterLayout layout;  ///< internal (Stribeck: static_coulomb as excess over coulomb)
+  ConditionedLog cond;     ///< the log as fitted
   detail::RateSource source = detail::RateSource::kLogged;
-  SgOptions sg;             ///< as used
-  int first = 0, last = -1; ///< samples with a centred Savitzky-Golay window
+  SgOptions sg;              ///< as used
+  int first = 0, last = -1;  ///< samples with a centred Savitzky-Golay window
   EvalOptions eval;
   std::vector<Sample> samples;
-  std::vector<int> index;   ///< log index of each sample in the fit
-  std::vector<double> x;    ///< internal parameter vector
+  std::vector<int> index;  ///< log index of each sample in the fit
+  std::vector<double> x;   ///< internal parameter vector
   detail::SensorNoise noise;
 };
 
@@ -219,8 +218,8 @@ Eigen::MatrixXd to_public(const ParameterLayout& layout) {
 }
 
 std::string sample_name(const TorqueLog& log, int i) {
-  return "line " + std::to_string(log.lines.empty() ? i + 1 : log.lines[i]) + " (t = " +
-         fmt(log.t[i], 6) + " s)";
+  return "line " + std::to_string(log.lines.empty() ? i + 1 : log.lines[i]) +
+         " (t = " + fmt(log.t[i], 6) + " s)";
 }
 
 /// The scene with the law to fit and the chosen Coulomb sign form.
@@ -352,24 +351,24 @@ Status first_failure(const Fit& f, const std::vector<double>& x, const std::stri
   for (size_t u = 0; u < f.samples.size(); ++u) {
     const Sample& s = f.samples[u];
     Evaluation<double> ev;
-    const Status st = inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr,
-                                       f.eval, &ev);
+    const Status st =
+        inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr, f.eval, &ev);
     std::string why = st.message;
     if (st.ok() && !(std::isfinite(ev.M1) && std::isfinite(ev.M2))) why = "torque not finite";
     if (st.ok() && why.empty()) continue;
     return Status::Error(StatusCode::kSolverFailed,
-                         "inverse dynamics fails at " + sample_name(f.cond.log, f.index[u]) +
-                             " " + at + " (theta " + fmt(s.th1) + ", " + fmt(s.th2) +
-                             " rad, omega " + fmt(s.w1) + ", " + fmt(s.w2) + " rad/s, alpha " +
-                             fmt(s.a1) + ", " + fmt(s.a2) + " rad/s^2): " + why);
+                         "inverse dynamics fails at " + sample_name(f.cond.log, f.index[u]) + " " +
+                             at + " (theta " + fmt(s.th1) + ", " + fmt(s.th2) + " rad, omega " +
+                             fmt(s.w1) + ", " + fmt(s.w2) + " rad/s, alpha " + fmt(s.a1) + ", " +
+                             fmt(s.a2) + " rad/s^2): " + why);
   }
   return Status::Ok();
 }
 
 /// rms residual and expected noise level of each actuator over up to ~200 samples of the fit
 /// (log indices `probe`), with the rates of half-window `sg`, at the parameters f.x.
-void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions& sg,
-                   double rms[2], double floor[2]) {
+void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions& sg, double rms[2],
+                   double floor[2]) {
   const TorqueLog& log = f.cond.log;
   Params<double> p = f.scene;
   f.layout.apply(f.x.data(), &p.friction);
@@ -386,8 +385,10 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
     int lo = 0;
     std::vector<double> d1, d2;
     savitzky_golay_taps(log.t, i, sg, &lo, &d1, &d2);
-    const std::vector<double>& x1 = f.source == detail::RateSource::kFromAngles ? log.theta1 : log.omega1;
-    const std::vector<double>& x2 = f.source == detail::RateSource::kFromAngles ? log.theta2 : log.omega2;
+    const std::vector<double>& x1 =
+        f.source == detail::RateSource::kFromAngles ? log.theta1 : log.omega1;
+    const std::vector<double>& x2 =
+        f.source == detail::RateSource::kFromAngles ? log.theta2 : log.omega2;
     double e1 = 0, e2 = 0, f1 = 0, f2 = 0;
     for (size_t k = 0; k < d1.size(); ++k) {
       e1 += d1[k] * x1[lo + k];
@@ -424,8 +425,8 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
 /// an excess over the level the sensor noise explains (that level is predicted per window by
 /// propagating the measured noise): the window chosen is the largest whose residual/noise ratio
 /// stays within kWindowExcess of the reference, 1 or the least ratio over the candidates when
-/// that is above 1 (a mismatch of the law that no window removes). Candidates from the polynomial's minimum to
-/// 50 ms, growing by 25 %, evaluated at the parameters of a preliminary fit (f.x).
+/// that is above 1 (a mismatch of the law that no window removes). Candidates from the polynomial's
+/// minimum to 50 ms, growing by 25 %, evaluated at the parameters of a preliminary fit (f.x).
 void choose_window(Fit* f, IdentifyResult* out) {
   const TorqueLog& log = f->cond.log;
   const int n = log.size();
@@ -454,7 +455,8 @@ void choose_window(Fit* f, IdentifyResult* out) {
     ratio[k] = std::max(rms[0] / floor[0], rms[1] / floor[1]);
     levels[k] = {rms[0], rms[1], floor[0], floor[1]};
     // smoothing bias only grows with the window: stop once it clearly dominates
-    if (k >= 2 && ratio[k] > 1.5 * std::max(1.0, *std::min_element(ratio.begin(), ratio.begin() + k))) {
+    if (k >= 2 &&
+        ratio[k] > 1.5 * std::max(1.0, *std::min_element(ratio.begin(), ratio.begin() + k))) {
       cand.resize(k + 1);
       ratio.resize(k + 1);
       levels.resize(k + 1);
@@ -479,9 +481,10 @@ void choose_window(Fit* f, IdentifyResult* out) {
   const std::array<double, 4>& l = levels[chosen];
   out->window_choice =
       "data-driven: half-window " + std::to_string(cand[chosen]) + " samples (" +
-      fmt(cand[chosen] * dt * 1e3) + " ms), one below the largest whose torque residual (" + fmt(l[0]) +
-      ", " + fmt(l[1]) + " N m) shows no smoothing bias over the level the measured noise " +
-      "explains (" + fmt(l[2]) + ", " + fmt(l[3]) + " N m), ratio " + fmt(ratio[chosen]) +
+      fmt(cand[chosen] * dt * 1e3) + " ms), one below the largest whose torque residual (" +
+      fmt(l[0]) + ", " + fmt(l[1]) +
+      " N m) shows no smoothing bias over the level the measured noise " + "explains (" +
+      fmt(l[2]) + ", " + fmt(l[3]) + " N m), ratio " + fmt(ratio[chosen]) +
       " against the reference " + fmt(best) + " (ratio by half-window: " + table + ")";
 }
 
@@ -496,11 +499,24 @@ void preliminary_fit(Fit* f) {
   ceres::Problem problem;
   std::vector<double> x = f->x;
   switch (P) {
-    case 2: add_inverse_dynamics_terms<2>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(), &problem); break;
-    case 4: add_inverse_dynamics_terms<4>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(), &problem); break;
-    case 10: add_inverse_dynamics_terms<10>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(), &problem); break;
-    case 20: add_inverse_dynamics_terms<20>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(), &problem); break;
-    default: return;
+    case 2:
+      add_inverse_dynamics_terms<2>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(),
+                                    &problem);
+      break;
+    case 4:
+      add_inverse_dynamics_terms<4>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(),
+                                    &problem);
+      break;
+    case 10:
+      add_inverse_dynamics_terms<10>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(),
+                                     &problem);
+      break;
+    case 20:
+      add_inverse_dynamics_terms<20>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(),
+                                     &problem);
+      break;
+    default:
+      return;
   }
   for (int i = 0; i < P; ++i) problem.SetParameterLowerBound(x.data(), i, f->layout.lower_bound(i));
   ceres::Solver::Options so;
@@ -554,12 +570,14 @@ bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem) {
       problem->AddResidualBlock(cost, make_loss(opt.loss, opt.loss_scale), f->x.data());
     }
   }
-  for (int i = 0; i < P; ++i) problem->SetParameterLowerBound(f->x.data(), i, f->layout.lower_bound(i));
+  for (int i = 0; i < P; ++i)
+    problem->SetParameterLowerBound(f->x.data(), i, f->layout.lower_bound(i));
   return true;
 }
 
 /// Raw (unweighted) residuals; false where an evaluation fails.
-bool raw_residuals(ceres::Problem* problem, std::vector<double>* r, ceres::CRSMatrix* jac = nullptr) {
+bool raw_residuals(ceres::Problem* problem, std::vector<double>* r,
+                   ceres::CRSMatrix* jac = nullptr) {
   ceres::Problem::EvaluateOptions eo;
   eo.apply_loss_function = false;
   double cost = 0;
@@ -589,7 +607,8 @@ void solve(Fit* f, ceres::Problem* problem, IdentifyResult* out, ceres::Solver::
   out->iterations = static_cast<int>(summary->iterations.size());
   out->converged = summary->termination_type == ceres::CONVERGENCE;
   out->solver_message = summary->BriefReport();
-  for (const ceres::IterationSummary& it : summary->iterations) out->iteration_costs.push_back(it.cost);
+  for (const ceres::IterationSummary& it : summary->iterations)
+    out->iteration_costs.push_back(it.cost);
   std::vector<double> r;
   const bool evaluates = raw_residuals(problem, &r);
   bool finite = evaluates;
@@ -664,8 +683,8 @@ Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P) {
 /// Covariance of the internal parameters, only on a converged solution with a full-rank
 /// Jacobian (of the parameters off their bounds): errors in variables (sandwich) for inverse
 /// dynamics, else s^2 (J^T J)^-1.
-void covariance(const Fit& f, const Eigen::MatrixXd& J, const std::vector<detail::Sensitivity>& sens,
-                IdentifyResult* out) {
+void covariance(const Fit& f, const Eigen::MatrixXd& J,
+                const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
   const int P = f.layout.size();
   out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
   if (!out->converged) {
@@ -705,8 +724,8 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J, const std::vector<detail
   Eigen::MatrixXd S = detail::score_covariance(Jf, sens, f.noise, f.cond.log.size());
   // residual beyond the modelled noise (model mismatch, unmodelled noise) counted as white
   for (int j = 0; j < 2; ++j) {
-    const double excess = std::max(0.0, std::pow(out->rms_torque_residual[j], 2) -
-                                            std::pow(out->residual_noise_floor[j], 2));
+    const double excess = std::max(
+        0.0, std::pow(out->rms_torque_residual[j], 2) - std::pow(out->residual_noise_floor[j], 2));
     for (int row = j; row < Jf.rows(); row += 2) {
       S += excess * Jf.row(row).transpose() * Jf.row(row);
     }
@@ -782,8 +801,8 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
   for (int i = 0; i < P; ++i) {
     for (int j = i + 1; j < P; ++j) {
       if (std::abs(out->correlation(i, j)) > 0.98) {
-        out->warnings.push_back("strong correlation " + fmt(out->correlation(i, j)) +
-                                " between " + names[i] + " and " + names[j]);
+        out->warnings.push_back("strong correlation " + fmt(out->correlation(i, j)) + " between " +
+                                names[i] + " and " + names[j]);
       }
     }
   }
@@ -808,8 +827,8 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
       if (out->converged) out->warnings.push_back("std of " + names[i] + " not determined");
       e.std = kNaN;
     } else if (e.std > std::abs(e.value)) {
-      out->warnings.push_back(names[i] + " is poorly determined (std " + fmt(e.std) +
-                              " > value " + fmt(e.value) + ")");
+      out->warnings.push_back(names[i] + " is poorly determined (std " + fmt(e.std) + " > value " +
+                              fmt(e.value) + ")");
     }
     out->parameters.push_back(e);
   }
@@ -885,11 +904,12 @@ void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<do
   if (!H.allFinite() || !(emax > 0) || !(emin > 1e-14 * emax)) return;
   const Eigen::MatrixXd Hinv = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
                                es.eigenvectors().transpose();
-  const Eigen::VectorXd step = -Hinv * (Ja.transpose() * Eigen::Map<const Eigen::VectorXd>(r.data(), m));
+  const Eigen::VectorXd step =
+      -Hinv * (Ja.transpose() * Eigen::Map<const Eigen::VectorXd>(r.data(), m));
   Eigen::MatrixXd S = detail::score_covariance(Ja, sens, f.noise, log.size());
   for (int j = 0; j < 2; ++j) {
-    const double excess = std::max(0.0, std::pow(out->rms_torque_residual[j], 2) -
-                                            std::pow(out->residual_noise_floor[j], 2));
+    const double excess = std::max(
+        0.0, std::pow(out->rms_torque_residual[j], 2) - std::pow(out->residual_noise_floor[j], 2));
     for (int row = j; row < m; row += 2) S += excess * Ja.row(row).transpose() * Ja.row(row);
   }
   const Eigen::MatrixXd C = Hinv * S * Hinv;
@@ -923,6 +943,60 @@ TorqueLog shift_torques(const TorqueLog& log, double d) {
   return out;
 }
 
+/// The fit redone on the conditioned log with the torques shifted by the delay `first` found,
+/// carrying over what the first pass reported about the log.
+IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadFunction& loads,
+                                const TorqueLog& conditioned, const IdentifyOptions& opt,
+                                const IdentifyResult& first) {
+  IdentifyOptions again = opt;
+  again.estimate_delay = false;
+  IdentifyResult res = identify(scene_in, loads, shift_torques(conditioned, first.delay_s), again);
+  res.samples = first.samples;
+  res.delay_s = first.delay_s;
+  res.delay_std_s = first.delay_std_s;
+  res.delay_corrected = true;
+  res.notes.insert(res.notes.begin(), first.notes.begin(), first.notes.end());
+  res.glitches.insert(res.glitches.begin(), first.glitches.begin(), first.glitches.end());
+  for (int j = 0; j < 2; ++j) res.unwrapped[j] += first.unwrapped[j];
+  std::vector<std::string> w = {"the torques lag the angles by " + fmt(first.delay_s * 1e3) +
+                                " +- " + fmt(first.delay_std_s * 1e3) + " ms (" +
+                                fmt(std::abs(first.delay_s) / first.delay_std_s) +
+                                " std): refitted with the torques shifted by it"};
+  if (!first.glitches.empty()) w.push_back(first.warnings.front());
+  res.warnings.insert(res.warnings.begin(), w.begin(), w.end());
+  return res;
+}
+
+/// Rates (logged or Savitzky-Golay), the data-driven window when it applies, the samples of the
+/// fit, and a check that the model evaluates at every one at the start values (false: status).
+bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out) {
+  const IdentifyOptions& opt = *f->opt;
+  const int P = f->layout.size();
+  const bool id = opt.method == Method::kInverseDynamics;
+  const auto rates_and_samples = [&]() {
+    estimate_rates(f, out);
+    require_samples(log, P + 1 + (out->accels_estimated ? 2 * out->sg_half_window : 0),
+                    std::to_string(P) + " parameters + 1" +
+                        (out->accels_estimated ? " + the Savitzky-Golay window" : std::string()));
+    select_samples(f, out);
+    // a sample the model cannot evaluate at the start values is a numerical failure, named
+    if (id) out->status = first_failure(*f, f->x, "at the start values");
+    return out->status.ok();
+  };
+  if (!rates_and_samples()) return false;
+  if (out->accels_estimated && opt.auto_window && id) {
+    const std::vector<double> x_start = f->x;
+    preliminary_fit(f);
+    choose_window(f, out);
+    f->x = x_start;
+    return rates_and_samples();
+  }
+  if (out->accels_estimated) {
+    out->window_choice = "given: half-window " + std::to_string(out->sg_half_window) + " samples";
+  }
+  return true;
+}
+
 /// Start values in the internal layout, from the public `initial` (or the neutral defaults).
 bool start_values(Fit* fp, const std::vector<double>& initial, std::vector<double>* x0_public,
                   IdentifyResult* out) {
@@ -946,7 +1020,6 @@ bool start_values(Fit* fp, const std::vector<double>& initial, std::vector<doubl
 }
 
 }  // namespace
-
 
 sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& scene_loads,
                                double t0) {
@@ -985,30 +1058,11 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   // the log as encoders write it: degrees, wraps, glitches; then rates
   prepare_log(log, &f, &out);
   f.source = !log.has_rates || opt.estimate_rates ? detail::RateSource::kFromAngles
-             : !log.has_accels                   ? detail::RateSource::kAccelsFromRates
-                                                 : detail::RateSource::kLogged;
+             : !log.has_accels                    ? detail::RateSource::kAccelsFromRates
+                                                  : detail::RateSource::kLogged;
   std::vector<double> x0_public;
   if (!start_values(&f, opt.initial, &x0_public, &out)) return out;
-  const auto rates_and_samples = [&]() {
-    estimate_rates(&f, &out);
-    require_samples(log, P + 1 + (out.accels_estimated ? 2 * out.sg_half_window : 0),
-                    std::to_string(P) + " parameters + 1" +
-                        (out.accels_estimated ? " + the Savitzky-Golay window" : std::string()));
-    select_samples(&f, &out);
-    // a sample the model cannot evaluate at the start values is a numerical failure, named
-    if (id) out.status = first_failure(f, f.x, "at the start values");
-    return out.status.ok();
-  };
-  if (!rates_and_samples()) return out;
-  if (out.accels_estimated && opt.auto_window && id) {
-    const std::vector<double> x_start = f.x;
-    preliminary_fit(&f);
-    choose_window(&f, &out);
-    f.x = x_start;
-    if (!rates_and_samples()) return out;
-  } else if (out.accels_estimated) {
-    out.window_choice = "given: half-window " + std::to_string(out.sg_half_window) + " samples";
-  }
+  if (!rates_window_and_samples(log, &f, &out)) return out;
   ceres::Problem problem;
   if (!build_problem(&f, &out, &problem)) {
     out.status = Status::Error(StatusCode::kInvalidInput, "unsupported parameter count");
@@ -1051,23 +1105,7 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
     const double dt = log.duration() / std::max(1, log.size() - 1);
     if (std::abs(out.delay_s) > kDelaySignificance * out.delay_std_s &&
         std::abs(out.delay_s) > 0.1 * dt) {
-      // refit on the conditioned log with the torques brought in line with the angles
-      IdentifyOptions again = opt;
-      again.estimate_delay = false;
-      IdentifyResult res = identify(scene_in, loads, shift_torques(f.cond.log, out.delay_s), again);
-      res.samples = out.samples;
-      res.delay_s = out.delay_s;
-      res.delay_std_s = out.delay_std_s;
-      res.delay_corrected = true;
-      res.notes.insert(res.notes.begin(), out.notes.begin(), out.notes.end());
-      res.glitches.insert(res.glitches.begin(), out.glitches.begin(), out.glitches.end());
-      for (int j = 0; j < 2; ++j) res.unwrapped[j] += out.unwrapped[j];
-      std::vector<std::string> w = {"the torques lag the angles by " + fmt(out.delay_s * 1e3) +
-                                    " +- " + fmt(out.delay_std_s * 1e3) +
-                                    " ms (" + fmt(std::abs(out.delay_s) / out.delay_std_s) +
-                                    " std): refitted with the torques shifted by it"};
-      if (!out.glitches.empty()) w.push_back(out.warnings.front());
-      res.warnings.insert(res.warnings.begin(), w.begin(), w.end());
+      IdentifyResult res = refit_with_delay(scene_in, loads, f.cond.log, opt, out);
       res.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
       return res;
     }

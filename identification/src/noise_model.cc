@@ -7,9 +7,8 @@
 
 namespace fivebar::identification::detail {
 
-bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layout,
-                        const double* x, const Sample& s, const EvalOptions& eval,
-                        Eigen::Matrix<double, 2, 6>* D) {
+bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layout, const double* x,
+                        const Sample& s, const EvalOptions& eval, Eigen::Matrix<double, 2, 6>* D) {
   using J6 = ceres::Jet<double, 6>;
   Params<J6> p = scene.template cast<J6>();
   std::vector<J6> xj(layout.size());
@@ -27,9 +26,8 @@ bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layo
   return D->allFinite();
 }
 
-Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source,
-                        const SgOptions& sg, const SensorNoise& noise,
-                        const Eigen::Matrix<double, 2, 6>& D) {
+Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source, const SgOptions& sg,
+                        const SensorNoise& noise, const Eigen::Matrix<double, 2, 6>& D) {
   Sensitivity out;
   // r = tau - M: d r / d v = -D[:, v]; v = 0,1 theta, 2,3 omega, 4,5 alpha
   auto col = [&](int v) { return Eigen::Vector2d(-D(0, v), -D(1, v)); };

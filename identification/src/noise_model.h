@@ -24,9 +24,8 @@ struct SensorNoise {
 
 /// d M / d (theta1, theta2, omega1, omega2, alpha1, alpha2) at one sample (2 x 6), friction
 /// coefficients x laid out by `layout`; false where the inverse dynamics fails.
-bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layout,
-                        const double* x, const Sample& s, const EvalOptions& eval,
-                        Eigen::Matrix<double, 2, 6>* D);
+bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layout, const double* x,
+                        const Sample& s, const EvalOptions& eval, Eigen::Matrix<double, 2, 6>* D);
 
 /// One sample's noise sensitivities: for each noise channel (0, 1: the differentiated or direct
 /// angle or rate of crank 1, 2; 2, 3: the direct angle when rates are logged) the samples it
@@ -38,9 +37,8 @@ struct Sensitivity {
 };
 
 /// Sensitivities of the residual at log sample i (kinematic Jacobian D) to the sensor noise.
-Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source,
-                        const SgOptions& sg, const SensorNoise& noise,
-                        const Eigen::Matrix<double, 2, 6>& D);
+Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source, const SgOptions& sg,
+                        const SensorNoise& noise, const Eigen::Matrix<double, 2, 6>& D);
 
 /// Variance of the residual of each actuator that the noise in `s` produces.
 Eigen::Vector2d propagated_variance(const Sensitivity& s);

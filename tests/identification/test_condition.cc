@@ -162,12 +162,18 @@ TEST(Fuzz, AbsurdLogsEndInAMessageNeverACrash) {
       std::vector<double>* col[] = {&log.theta1, &log.theta2, &log.tau1, &log.tau2};
       std::vector<double>& v = *col[i % 4];
       switch (k) {
-        case 0: v[i] = (i % 2 ? 1e300 : -1e300); break;
+        case 0:
+          v[i] = (i % 2 ? 1e300 : -1e300);
+          break;
         case 1:
           for (double& th : log.theta1) th = std::atan2(std::sin(th), std::cos(th));
           break;
-        case 2: v[i] += std::pow(10.0, i % 7 - 3); break;
-        case 3: std::fill(log.theta1.begin(), log.theta1.end(), log.theta1[i]); break;
+        case 2:
+          v[i] += std::pow(10.0, i % 7 - 3);
+          break;
+        case 3:
+          std::fill(log.theta1.begin(), log.theta1.end(), log.theta1[i]);
+          break;
         case 4:
           for (int j = i; j < log.size(); ++j) v[j] += 1e6;
           break;
@@ -259,7 +265,9 @@ TEST(Stribeck, StaticNeverBelowKineticAndNoZeroStd) {
   EXPECT_GE(res.parameters[2].value, res.parameters[0].value);
   for (const ParameterEstimate& p : res.parameters) {
     EXPECT_NE(p.std, 0.0) << p.name;
-    if (p.at_bound) EXPECT_TRUE(std::isnan(p.std)) << p.name;
+    if (p.at_bound) {
+      EXPECT_TRUE(std::isnan(p.std)) << p.name;
+    }
   }
 }
 

@@ -26,12 +26,12 @@ struct ConditionOptions {
 
 /// One rejected sample.
 struct Glitch {
-  int index = 0;       ///< sample index (0-based, log order)
-  int line = 0;        ///< line of the file (1-based)
-  std::string column;  ///< theta1, theta2, tau1 or tau2
-  double value = 0;    ///< as logged (after unwrapping)
-  double expected = 0; ///< from its four neighbours
-  double sigmas = 0;   ///< |value - expected| in robust standard deviations
+  int index = 0;        ///< sample index (0-based, log order)
+  int line = 0;         ///< line of the file (1-based)
+  std::string column;   ///< theta1, theta2, tau1 or tau2
+  double value = 0;     ///< as logged (after unwrapping)
+  double expected = 0;  ///< from its four neighbours
+  double sigmas = 0;    ///< |value - expected| in robust standard deviations
 };
 
 /// The log after conditioning, and what was done to it.

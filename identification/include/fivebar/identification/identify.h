@@ -49,13 +49,13 @@ struct IdentifyOptions {
   /// Coulomb sign: < 0 takes the scene's friction.smoothing_velocity; 0 exact sign(w) (a fixed
   /// datum per sample with measured rates); > 0 tanh(w / w_s) [rad/s]
   double smoothing_velocity = -1;
-  SgOptions sg;                 ///< rate/acceleration estimation when the log lacks them
-  /// choose the Savitzky-Golay half-window from the data (sg.half_window_s is then ignored): the
-  /// smallest window whose propagated sensor noise in the torque residual stays within the
-  /// torque noise itself (least smoothing bias at a noise level the fit averages out)
+  SgOptions sg;  ///< rate/acceleration estimation when the log lacks them
+  /// choose the Savitzky-Golay half-window from the data (sg.half_window_s is then ignored):
+  /// after a preliminary fit, one candidate below the largest window whose torque residual shows
+  /// no excess over the level the measured sensor noise explains (docs/identification.md)
   bool auto_window = true;
-  ConditionOptions condition;   ///< unwrapping and glitch rejection
-  bool check_degrees = true;    ///< tell degrees from radians by the motion (condition.h)
+  ConditionOptions condition;  ///< unwrapping and glitch rejection
+  bool check_degrees = true;   ///< tell degrees from radians by the motion (condition.h)
   /// standard deviations by the sandwich (J^T J)^-1 J^T Sigma J (J^T J)^-1, Sigma from the
   /// torque noise plus the angle (or rate) noise propagated through the rate estimation
   /// (errors in variables); false: the residual variance times (J^T J)^-1
@@ -122,7 +122,7 @@ struct IdentifyResult {
   std::string solver_message;
   std::vector<double> iteration_costs;  ///< Ceres cost at each iteration (iteration 0 first)
   bool rates_estimated = false, accels_estimated = false;
-  int sg_half_window = 0;  ///< samples, when estimated
+  int sg_half_window = 0;     ///< samples, when estimated
   std::string window_choice;  ///< how the half-window was chosen (data-driven or given)
   /// the log's conditioning: one sentence per thing done (unwrapping, glitches rejected)
   std::vector<std::string> notes;
@@ -163,7 +163,7 @@ struct Validation {
   double window_s = 0;            ///< restart period of the windowed check
   double window_rms[2] = {0, 0};  ///< [rad] runs restarted from the logged state every window
   std::vector<double> full_theta1,
-      full_theta2;  ///< simulated at the log's times (NaN after a stop)
+      full_theta2;          ///< simulated at the log's times (NaN after a stop)
   int windows_skipped = 0;  ///< windows not run: the time budget was spent
 };
 
