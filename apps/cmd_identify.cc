@@ -280,7 +280,7 @@ int run(const Args& a) {
     rates.set("sg_half_window_samples", res.sg_half_window);
     rates.set("sg_half_window_s",
               res.sg_half_window * log.duration() / std::max(1, log.size() - 1));
-    rates.set("sg_order", opt.sg.order);
+    rates.set("sg_order", res.sg_order);
     rates.set("window_choice", res.window_choice);
   }
   j.set("rate_source", std::move(rates));

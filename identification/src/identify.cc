@@ -284,6 +284,7 @@ void estimate_rates(Fit* f, IdentifyResult* out) {
     savitzky_golay(log.t, log.omega2, f->sg, &out->alpha2, &unused);
   }
   out->sg_half_window = 0;
+  out->sg_order = out->accels_estimated ? f->sg.order : 0;
   if (out->accels_estimated) {
     const double dt = n > 1 ? log.duration() / (n - 1) : 1.0;
     out->sg_half_window = sg_half_window(f->sg, dt);
@@ -478,6 +479,16 @@ void choose_window(Fit* f, IdentifyResult* out) {
     table += (k ? ", " : "") + std::to_string(cand[k]) + ": " + fmt(ratio[k]);
   }
   f->sg.half_window_s = cand[chosen] * dt;
+  // the smallest window of this order already shows (or hides) bias: the log is sampled too
+  // slowly for it, and a higher order over the next smallest span bends better at the kinks
+  std::string raised;
+  if (chosen == 0 && ratio.size() > 1) {
+    f->sg.order += 2;
+    f->sg.half_window_s = (f->sg.order / 2 + 1) * dt;
+    raised = "; the smallest window being the choice, order raised to " +
+             std::to_string(f->sg.order) + " over " + std::to_string(f->sg.order / 2 + 1) +
+             " samples each side";
+  }
   const std::array<double, 4>& l = levels[chosen];
   out->window_choice =
       "data-driven: half-window " + std::to_string(cand[chosen]) + " samples (" +
@@ -485,7 +496,7 @@ void choose_window(Fit* f, IdentifyResult* out) {
       fmt(l[0]) + ", " + fmt(l[1]) +
       " N m) shows no smoothing bias over the level the measured noise " + "explains (" +
       fmt(l[2]) + ", " + fmt(l[3]) + " N m), ratio " + fmt(ratio[chosen]) +
-      " against the reference " + fmt(best) + " (ratio by half-window: " + table + ")";
+      " against the reference " + fmt(best) + " (ratio by half-window: " + table + ")" + raised;
 }
 
 /// A quick fit on at most ~1500 of the selected samples (plain least squares) that sets f->x for

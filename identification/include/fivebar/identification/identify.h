@@ -123,6 +123,7 @@ struct IdentifyResult {
   std::vector<double> iteration_costs;  ///< Ceres cost at each iteration (iteration 0 first)
   bool rates_estimated = false, accels_estimated = false;
   int sg_half_window = 0;     ///< samples, when estimated
+  int sg_order = 0;           ///< Savitzky-Golay polynomial order used, when estimated
   std::string window_choice;  ///< how the half-window was chosen (data-driven or given)
   /// the log's conditioning: one sentence per thing done (unwrapping, glitches rejected)
   std::vector<std::string> notes;
