@@ -134,9 +134,11 @@ int run(const Args& a) {
   const id::IdentifyResult res = identify_scene(scene, loads, log, opt);
 
   OutputDir out(a.scene.out, kOutputs);
+  // validation and residuals on the log as fitted (unwrapped, glitches interpolated)
+  const id::TorqueLog& fitted_log = res.conditioned_log;
   id::Validation val;
   if (!a.no_validation) {
-    val = id::validate(res.fitted, loads, log, res.omega1, res.omega2, a.settings.window);
+    val = id::validate(res.fitted, loads, fitted_log, res.omega1, res.omega2, a.settings.window);
   }
 
   // residuals.csv: everything the plots need, one row per sample
@@ -144,16 +146,17 @@ int run(const Args& a) {
     std::ostringstream csv;
     csv << "t,theta1,theta2,tau1,tau2,omega1,omega2,alpha1,alpha2,predicted_tau1,predicted_tau2,"
            "residual_tau1,residual_tau2,used,simulated_theta1,simulated_theta2\n";
-    for (int i = 0; i < log.size(); ++i) {
+    for (int i = 0; i < fitted_log.size(); ++i) {
       const double p1 = res.predicted_tau1[i], p2 = res.predicted_tau2[i];
-      csv << format_double(log.t[i]) << ',' << format_double(log.theta1[i]) << ','
-          << format_double(log.theta2[i]) << ',' << format_double(log.tau1[i]) << ','
-          << format_double(log.tau2[i]) << ',' << format_double(res.omega1[i]) << ','
+      csv << format_double(fitted_log.t[i]) << ',' << format_double(fitted_log.theta1[i]) << ','
+          << format_double(fitted_log.theta2[i]) << ',' << format_double(fitted_log.tau1[i]) << ','
+          << format_double(fitted_log.tau2[i]) << ',' << format_double(res.omega1[i]) << ','
           << format_double(res.omega2[i]) << ',' << format_double(res.alpha1[i]) << ','
           << format_double(res.alpha2[i]) << ',' << format_double(p1) << ',' << format_double(p2)
-          << ',' << format_double(log.tau1[i] - p1) << ',' << format_double(log.tau2[i] - p2) << ','
-          << int(res.used[i]) << ',' << format_double(a.no_validation ? NAN : val.full_theta1[i])
-          << ',' << format_double(a.no_validation ? NAN : val.full_theta2[i]) << '\n';
+          << ',' << format_double(fitted_log.tau1[i] - p1) << ','
+          << format_double(fitted_log.tau2[i] - p2) << ',' << int(res.used[i]) << ','
+          << format_double(a.no_validation ? NAN : val.full_theta1[i]) << ','
+          << format_double(a.no_validation ? NAN : val.full_theta2[i]) << '\n';
     }
     write_text_file(out.file("residuals.csv"), csv.str());
   }
@@ -181,8 +184,10 @@ int run(const Args& a) {
     Json e = Json::object();
     e.set("name", p.name);
     e.set("value", p.value);
-    e.set("std", p.std);
+    e.set("std", p.std);  // NaN (not determined, or at a bound) is written as null
     e.set("initial", p.initial);
+    e.set("at_bound", p.at_bound);
+    e.set("std_meaningful", std::isfinite(p.std));
     // the truth when the log says it (synth-log): shared = mean over the joints
     const size_t us = p.name.rfind('_');
     const bool indexed = res.layout.per_joint && us != std::string::npos;
@@ -228,9 +233,40 @@ int run(const Args& a) {
   rates.set("accelerations", res.accels_estimated ? "savitzky-golay" : "log");
   if (res.accels_estimated) {
     rates.set("sg_half_window_samples", res.sg_half_window);
-    rates.set("sg_order", opt.sg.order);
+    rates.set("sg_half_window_s",
+              res.sg_half_window * log.duration() / std::max(1, log.size() - 1));
+    rates.set("sg_order", res.sg_order);
+    rates.set("window_choice", res.window_choice);
   }
   j.set("rate_source", std::move(rates));
+  j.set("std_method", res.std_method);
+  if (std::isfinite(res.delay_s)) {
+    Json d = Json::object();
+    d.set("value_s", res.delay_s);  // the logged torques at t + d match the angles at t
+    d.set("std_s", res.delay_std_s);
+    d.set("corrected", res.delay_corrected);
+    j.set("torque_delay", std::move(d));
+  }
+  Json cond = Json::object();
+  cond.set("unwrapped_turns", pair(res.unwrapped[0], res.unwrapped[1]));
+  cond.set("angle_noise", pair(res.angle_noise[0], res.angle_noise[1]));
+  cond.set("torque_noise", pair(res.torque_noise[0], res.torque_noise[1]));
+  if (log.has_rates) cond.set("rate_noise", pair(res.rate_noise[0], res.rate_noise[1]));
+  Json glitches = Json::array();
+  for (const id::Glitch& g : res.glitches) {
+    Json e = Json::object();
+    e.set("line", g.line);
+    e.set("column", g.column);
+    e.set("value", g.value);
+    e.set("expected", g.expected);
+    e.set("noise_std", g.sigmas);
+    glitches.push(std::move(e));
+  }
+  cond.set("rejected_glitches", std::move(glitches));
+  Json notes = Json::array();
+  for (const std::string& n : res.notes) notes.push(n);
+  cond.set("notes", std::move(notes));
+  j.set("log_conditioning", std::move(cond));
   const std::vector<std::string> names = res.layout.names();
   Json corr = Json::array();
   for (int r = 0; r < res.correlation.rows(); ++r) {
@@ -261,6 +297,7 @@ int run(const Args& a) {
     v.set("full_run_max_angle_error", pair(val.full_max[0], val.full_max[1]));
     v.set("window_s", val.window_s);
     v.set("windowed_rms_angle_error", pair(val.window_rms[0], val.window_rms[1]));
+    v.set("windows_skipped_over_time_budget", val.windows_skipped);
     j.set("validation", std::move(v));
   }
   Json warnings = Json::array();
@@ -289,13 +326,24 @@ int run(const Args& a) {
               res.layout.per_joint ? ", per joint" : "", res.samples_used, res.samples,
               res.wall_time_s);
   for (const id::ParameterEstimate& p : res.parameters) {
-    std::printf("  %-22s %.6g +- %.2g\n", p.name.c_str(), p.value, p.std);
+    if (std::isfinite(p.std)) {
+      std::printf("  %-22s %.6g +- %.2g\n", p.name.c_str(), p.value, p.std);
+    } else {
+      std::printf("  %-22s %.6g (std %s)\n", p.name.c_str(), p.value,
+                  p.at_bound ? "not meaningful: at its bound" : "not determined");
+    }
   }
   if (res.samples_at_rest > 0) {
     std::printf("  %d samples at rest left out (|w| <= %.3g rad/s, |dw/dt| <= %.3g rad/s^2)\n",
                 res.samples_at_rest, res.rest_rate_threshold, res.rest_acceleration_threshold);
   }
-  std::printf("  rms torque residual: %.4g, %.4g N m (white-noise floor %.4g, %.4g N m)\n",
+  for (const std::string& n : res.notes) std::printf("  log: %s\n", n.c_str());
+  if (std::isfinite(res.delay_s)) {
+    std::printf("  torque delay: %.4g +- %.2g ms%s\n", res.delay_s * 1e3, res.delay_std_s * 1e3,
+                res.delay_corrected ? " (corrected: torques shifted by it)" : " (not significant)");
+  }
+  if (res.accels_estimated) std::printf("  rates: %s\n", res.window_choice.c_str());
+  std::printf("  rms torque residual: %.4g, %.4g N m (noise floor %.4g, %.4g N m)\n",
               res.rms_torque_residual[0], res.rms_torque_residual[1], res.residual_noise_floor[0],
               res.residual_noise_floor[1]);
   if (!a.no_validation) {
@@ -330,8 +378,9 @@ RunFunction setup(CLI::App* app) {
                   "w_s [rad/s]: tanh(w/w_s) for sign(w); 0 exact sign; default: the scene's");
   app->add_flag("--estimate-rates", args->settings.estimate_rates,
                 "estimate rates from the angles even when the log has them");
-  app->add_option("--sg-window", args->settings.sg_window, "Savitzky-Golay half-window [s]")
-      ->capture_default_str();
+  CLI::Option* sg_window =
+      app->add_option("--sg-window", args->settings.sg_window,
+                      "Savitzky-Golay half-window [s] (default: chosen from the log's noise)");
   app->add_option("--sg-order", args->settings.sg_order, "Savitzky-Golay polynomial order")
       ->capture_default_str();
   app->add_option("--min-rate", args->settings.min_rate,
@@ -343,9 +392,21 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--threads", args->settings.threads, "Ceres threads")->capture_default_str();
   app->add_flag("--start-from-scene", args->settings.start_from_scene,
                 "start from the scene's friction values (default: neutral values)");
+  app->add_flag("--no-unwrap", args->settings.no_unwrap,
+                "keep one-turn (2 pi) jumps of the angles instead of unwrapping them");
+  app->add_flag("--keep-glitches", args->settings.keep_glitches,
+                "fit every sample, isolated glitches included (default: rejected, named)");
+  app->add_flag("--classical-std", args->settings.classical_std,
+                "std from the residual variance alone (default: errors in variables, the rate "
+                "estimation's noise included)");
+  app->add_flag("--no-delay", args->settings.no_delay,
+                "do not estimate (and correct) a delay of the torques behind the angles");
   app->add_flag("--no-plots", args->no_plots, "skip the PNG figures");
   app->add_flag("--no-validation", args->no_validation, "skip the validation runs");
-  return [args] { return run(*args); };
+  return [args, sg_window] {
+    args->settings.sg_window_given = sg_window->count() > 0;
+    return run(*args);
+  };
 }
 
 const bool kRegistered = register_command(

@@ -6,16 +6,26 @@
                  only, output-error), on the paper scene (torque noise 0.02 N m, angle 1e-5 rad).
   coverage:      per-joint fit on logs with distinct coefficients (multisine excitation) over N
                  seeds: the fraction of 95 % intervals (value +- 1.96 std) that cover the truth.
+  coverage-angles: issue 16: angles-only logs (or noisy measured rates) over N seeds, for a case:
+                 shared (paper loads, 1 kHz), shared200 (200 Hz), per-joint (multisine),
+                 stribeck (500 Hz, 6 s), noisy-rates (--with-rates --rate-noise 0.05).
+  fuzz:          issue 16: N seeded corruptions of a short log (1e300, wrapped, spikes, constant
+                 angles, degrees, offsets, ...) through `fivebar identify`; counts the exit
+                 statuses and fails if any run ends by a signal or without its one-line message.
 
 Usage (from the repository root, after building `fivebar`):
   scripts/identification_report.py error-vs-time [--fivebar PATH] [--out DIR]
   scripts/identification_report.py coverage [--seeds 50] [--duration 10] [--fivebar PATH] [--out DIR]
+  scripts/identification_report.py coverage-angles --case shared [--seeds 30] [--duration 2]
+  scripts/identification_report.py fuzz [--runs 1000] [--seed 16]
 Writes DIR/<report>.csv and prints a Markdown table. Logs and runs go to DIR/work/.
 """
 import argparse
 import csv
 import json
+import math
 import os
+import random
 import subprocess
 import sys
 
@@ -104,6 +114,153 @@ def coverage(args):
     return rows, summary
 
 
+CASES = {
+    # name: (synth-log options, identify options, parameters checked)
+    "shared": (["--rate", "1000"], [], None),
+    "shared200": (["--rate", "200"], [], None),
+    "per-joint": (["--excitation", "multisine"] + PER_JOINT_SETS, ["--per-joint"], None),
+    "stribeck": (["--excitation", "multisine", "--rate", "500", "--law", "stribeck",
+                  "--static-coulomb", "0.2", "--stribeck-velocity", "0.5"],
+                 ["--law", "stribeck"], None),
+    "noisy-rates": (["--with-rates", "--rate-noise", "0.05"], [], None),
+}
+
+
+def coverage_angles(args):
+    work = os.path.join(args.out, "work")
+    os.makedirs(work, exist_ok=True)
+    synth_opts, id_opts, _ = CASES[args.case]
+    covered, total, errors, rows = {}, {}, {}, []
+    for seed in range(1, args.seeds + 1):
+        log = os.path.join(work, "%s_%d.csv" % (args.case, seed))
+        synth(args.fivebar, log, args.duration, seed, False, synth_opts)
+        j = identify(args.fivebar, log, os.path.join(work, "run_" + args.case), id_opts)
+        for q in j["parameters"]:
+            std = q["std"] if q["std"] is not None else float("nan")
+            hit = abs(q["error"]) <= 1.96 * std  # a missing std covers nothing
+            covered[q["name"]] = covered.get(q["name"], 0) + int(hit)
+            total[q["name"]] = total.get(q["name"], 0) + 1
+            errors.setdefault(q["name"], []).append(q["relative_error"])
+        rows.append({"seed": seed, "window": j["rate_source"].get("sg_half_window_samples", ""),
+                     "max_abs_error_in_std": "%.2f" % max(
+                         abs(q["error_in_std"]) if q["error_in_std"] is not None else float("inf")
+                         for q in j["parameters"])})
+        os.remove(log)
+        print("  seed %d: %s" % (seed, rows[-1]), file=sys.stderr)
+    summary = []
+    for n in covered:
+        e = errors[n]
+        mean = sum(e) / len(e)
+        summary.append({"parameter": n, "covered": covered[n], "seeds": total[n],
+                        "coverage": "%.3f" % (covered[n] / total[n]),
+                        "mean_rel_error": "%+.4f" % mean,
+                        "max_abs_rel_error": "%.4f" % max(abs(x) for x in e)})
+    hits = sum(covered.values())
+    summary.append({"parameter": "all", "covered": hits, "seeds": sum(total.values()),
+                    "coverage": "%.3f" % (hits / sum(total.values())), "mean_rel_error": "",
+                    "max_abs_rel_error": ""})
+    return rows, summary
+
+
+def corrupt(lines, rng):
+    """One fuzzed log from the data lines of a log (lists of floats: t, theta1, theta2, tau1,
+    tau2): one to three corruptions of the kinds issue 16 names, and a few more."""
+    rows = [list(r) for r in lines]
+    n = len(rows)
+    kinds = []
+    for _ in range(rng.randint(1, 3)):
+        kind = rng.choice(["huge", "wrap", "spike", "constant", "degrees", "offset", "noise",
+                           "scale", "zero_torque", "huge_torque", "spikes", "step"])
+        kinds.append(kind)
+        i, c = rng.randrange(n), rng.choice([1, 2, 3, 4])
+        if kind == "huge":
+            rows[i][c] = rng.choice([1e300, -1e300, 1e308, 1e100, 1e3, 100.0])
+        elif kind == "wrap":
+            for r in rows:
+                for k in (1, 2):
+                    r[k] = math.atan2(math.sin(r[k]), math.cos(r[k]))
+        elif kind == "spike":
+            rows[i][c] += rng.choice([-1, 1]) * 10 ** rng.uniform(-3, 3)
+        elif kind == "spikes":
+            for _ in range(rng.randint(2, 20)):
+                rows[rng.randrange(n)][c] += 10 ** rng.uniform(-2, 2)
+        elif kind == "constant":
+            for r in rows:
+                r[c if c <= 2 else 1] = rows[i][c if c <= 2 else 1]
+        elif kind == "degrees":
+            for r in rows:
+                r[1] *= 180 / math.pi
+                r[2] *= 180 / math.pi
+        elif kind == "offset":
+            for r in rows[i:]:
+                r[c] += rng.choice([2 * math.pi, 4 * math.pi, 1.0, 1e6])
+        elif kind == "noise":
+            s = 10 ** rng.uniform(-4, 1)
+            for r in rows:
+                r[c] += rng.gauss(0, s)
+        elif kind == "scale":
+            f = 10 ** rng.uniform(-3, 3)
+            for r in rows:
+                r[c] *= f
+        elif kind == "zero_torque":
+            for r in rows:
+                r[3] = r[4] = 0.0
+        elif kind == "huge_torque":
+            for r in rows:
+                r[c if c >= 3 else 3] *= 1e150
+        elif kind == "step":
+            for r in rows[i:]:
+                r[c] += 10 ** rng.uniform(-2, 2)
+    return rows, kinds
+
+
+def fuzz(args):
+    work = os.path.join(args.out, "work")
+    os.makedirs(work, exist_ok=True)
+    base = os.path.join(work, "fuzz_base.csv")
+    synth(args.fivebar, base, args.fuzz_duration, 1, False)
+    header, data = [], []
+    with open(base) as f:
+        for line in f:
+            if line.startswith("#") or line.startswith("t,"):
+                header.append(line)
+            else:
+                data.append([float(x) for x in line.split(",")])
+    rng = random.Random(args.seed)
+    counts, bad, rows = {}, [], []
+    log = os.path.join(work, "fuzz.csv")
+    for run_i in range(args.runs):
+        rows_, kinds = corrupt(data, rng)
+        with open(log, "w") as f:
+            f.writelines(header)
+            for r in rows_:
+                f.write(",".join(repr(x) for x in r) + "\n")
+        cmd = [args.fivebar, "identify", SCENE, "--log", log, "--out",
+               os.path.join(work, "fuzz_run"), "--no-plots"]
+        try:
+            r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               timeout=args.timeout)
+            code = r.returncode
+            err = [l for l in r.stderr.splitlines() if l.startswith("fivebar: error: ")]
+        except subprocess.TimeoutExpired:
+            code, err = "timeout", []
+        key = str(code)
+        counts[key] = counts.get(key, 0) + 1
+        ok = code in (0, 2, 3) and (code == 0 or len(err) == 1)
+        if not ok:
+            bad.append((run_i, kinds, code))
+            keep = os.path.join(work, "fuzz_bad_%d.csv" % run_i)
+            os.replace(log, keep)
+            print("  run %d %s: exit %s (kept %s)" % (run_i, kinds, code, keep), file=sys.stderr)
+        rows.append({"run": run_i, "kinds": "+".join(kinds), "exit": code,
+                     "message": err[0][len("fivebar: error: "):] if err else ""})
+        if (run_i + 1) % 100 == 0:
+            print("  %d runs: %s" % (run_i + 1, counts), file=sys.stderr)
+    summary = [{"exit": k, "runs": v} for k, v in sorted(counts.items())]
+    summary.append({"exit": "signal, timeout or no message", "runs": len(bad)})
+    return rows, summary, bad
+
+
 def table(rows):
     keys = list(rows[0].keys())
     out = "| " + " | ".join(keys) + " |\n|" + "---|" * len(keys) + "\n"
@@ -122,7 +279,12 @@ def write_csv(path, rows):
 def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("report", choices=["error-vs-time", "coverage"])
+    ap.add_argument("report", choices=["error-vs-time", "coverage", "coverage-angles", "fuzz"])
+    ap.add_argument("--case", choices=sorted(CASES), default="shared")
+    ap.add_argument("--runs", type=int, default=1000)
+    ap.add_argument("--seed", type=int, default=16)
+    ap.add_argument("--fuzz-duration", type=float, default=0.3)
+    ap.add_argument("--timeout", type=float, default=120)
     ap.add_argument("--fivebar", default="build/release/apps/fivebar")
     ap.add_argument("--out", default="results/identification_report")
     ap.add_argument("--durations", type=float, nargs="+", default=[1, 2, 5, 10])
@@ -135,6 +297,19 @@ def main():
         rows = error_vs_time(args)
         write_csv(os.path.join(args.out, "error_vs_time.csv"), rows)
         print(table(rows))
+    elif args.report == "coverage-angles":
+        rows, summary = coverage_angles(args)
+        write_csv(os.path.join(args.out, "coverage_%s_runs.csv" % args.case), rows)
+        write_csv(os.path.join(args.out, "coverage_%s.csv" % args.case), summary)
+        print(table(summary))
+    elif args.report == "fuzz":
+        rows, summary, bad = fuzz(args)
+        write_csv(os.path.join(args.out, "fuzz_runs.csv"), rows)
+        write_csv(os.path.join(args.out, "fuzz.csv"), summary)
+        print(table(summary))
+        if bad:
+            sys.exit("%d of %d fuzzed runs ended by a signal, a timeout or without a message"
+                     % (len(bad), args.runs))
     else:
         rows, summary = coverage(args)
         write_csv(os.path.join(args.out, "coverage_runs.csv"), rows)

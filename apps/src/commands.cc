@@ -39,6 +39,11 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   opt.rest_acceleration_threshold = scene.rest_acceleration_threshold;
   opt.sg.half_window_s = a.sg_window;
   opt.sg.order = a.sg_order;
+  opt.auto_window = !a.sg_window_given;
+  opt.condition.unwrap = !a.no_unwrap;
+  opt.condition.reject_glitches = !a.keep_glitches;
+  opt.errors_in_variables = !a.classical_std;
+  opt.estimate_delay = !a.no_delay;
   opt.num_threads = std::max(1, a.threads);
   opt.window_s = a.window;
   if (a.start_from_scene) {

@@ -14,6 +14,7 @@
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/rest.h"
+#include "noise_model.h"
 
 namespace fivebar::identification {
 
@@ -56,6 +57,16 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+/// noise-free logs: residual levels below this fraction of the rms logged torque are what a good
+/// torque sensor resolves (0.1 %), not structure
+constexpr double kAbsoluteFloor = 1e-3;
+/// residual rms above this multiple of the expected noise level is structure: the noise levels
+/// are robust estimates good to a few % on a few thousand samples
+constexpr double kStructureRatio = 1.15;
+/// window choice: a residual/noise ratio this much above the least one is smoothing bias
+constexpr double kWindowExcess = 0.04;
+/// a torque-to-angle delay beyond this many std is corrected
+constexpr double kDelaySignificance = 3.0;
 
 std::string fmt(double x, int prec = 3) {
   std::ostringstream s;
@@ -227,6 +238,862 @@ sim::Options window_sim_options(double rtol) {
   return o;
 }
 
+// ---- stages of identify() ----
+
+/// The state the stages of identify() share.
+struct Fit {
+  const IdentifyOptions* opt = nullptr;
+  sim::LoadFunction loads;
+  Params<double> scene;    ///< the law to fit and the Coulomb sign form
+  ParameterLayout layout;  ///< internal (Stribeck: static_coulomb as excess over coulomb)
+  ConditionedLog cond;     ///< the log as fitted
+  detail::RateSource source = detail::RateSource::kLogged;
+  SgOptions sg;              ///< as used
+  int first = 0, last = -1;  ///< samples with a centred Savitzky-Golay window
+  EvalOptions eval;
+  std::vector<Sample> samples;
+  std::vector<int> index;  ///< log index of each sample in the fit
+  std::vector<double> x;   ///< internal parameter vector
+  detail::SensorNoise noise;
+};
+
+/// Linear map from the internal parameter vector to the public one (static_coulomb = coulomb +
+/// excess for Stribeck; identity otherwise).
+Eigen::MatrixXd to_public(const ParameterLayout& layout) {
+  const int P = layout.size(), G = layout.per_group();
+  Eigen::MatrixXd T = Eigen::MatrixXd::Identity(P, P);
+  if (layout.static_as_excess && layout.groups() > 2) {
+    for (int j = 0; j < G; ++j) T(2 * G + j, j) = 1.0;
+  }
+  return T;
+}
+
+std::string sample_name(const TorqueLog& log, int i) {
+  return "line " + std::to_string(log.lines.empty() ? i + 1 : log.lines[i]) +
+         " (t = " + fmt(log.t[i], 6) + " s)";
+}
+
+/// The scene with the law to fit and the chosen Coulomb sign form.
+Params<double> fit_scene(const Params<double>& scene_in, const ParameterLayout& layout,
+                         const IdentifyOptions& opt) {
+  Params<double> scene = scene_in;
+  scene.friction.law = layout.law;
+  if (opt.smoothing_velocity >= 0) scene.friction.smoothing_velocity = opt.smoothing_velocity;
+  if (layout.law == FrictionLaw::kStribeck) {
+    for (int k = 0; k < kJoints; ++k) {
+      if (!(scene.friction.stribeck_exponent[k] > 0)) scene.friction.stribeck_exponent[k] = 2.0;
+    }
+  }
+  return scene;
+}
+
+/// Degrees told by the motion, then unwrapping and glitch rejection, then the poses.
+void prepare_log(const TorqueLog& log, Fit* f, IdentifyResult* out) {
+  if (f->opt->check_degrees && !log.has_rates) {
+    for (int pass = 0; pass < 1; ++pass) {
+      const std::string why = degrees_from_motion(f->scene, f->loads, log);
+      if (!why.empty()) {
+        throw LogError(log.path, "columns theta1, theta2",
+                       "angles look like degrees, expected radians (" + why + ")");
+      }
+    }
+  }
+  f->cond = condition_log(log, f->opt->condition);
+  check_poses(f->cond.log, f->scene);
+  out->notes = f->cond.notes;
+  out->conditioned_log = f->cond.log;
+  out->glitches = f->cond.glitches;
+  for (int j = 0; j < 2; ++j) {
+    out->unwrapped[j] = f->cond.unwrapped[j];
+    out->angle_noise[j] = f->noise.angle[j] = f->cond.angle_noise[j];
+    out->torque_noise[j] = f->noise.torque[j] = f->cond.torque_noise[j];
+    out->rate_noise[j] = f->noise.rate[j] = f->cond.rate_noise[j];
+  }
+  if (!f->cond.glitches.empty()) out->warnings.push_back(f->cond.notes.back());
+}
+
+/// Rates and accelerations: logged, else Savitzky-Golay with f->sg (the edges, where the window
+/// is one-sided, are left out of the fit).
+void estimate_rates(Fit* f, IdentifyResult* out) {
+  const TorqueLog& log = f->cond.log;
+  const int n = log.size();
+  f->first = 0;
+  f->last = n - 1;
+  out->omega1 = log.omega1;
+  out->omega2 = log.omega2;
+  out->alpha1 = log.alpha1;
+  out->alpha2 = log.alpha2;
+  out->rates_estimated = out->accels_estimated = false;
+  std::vector<double> unused;
+  if (f->source == detail::RateSource::kFromAngles) {
+    out->rates_estimated = out->accels_estimated = true;
+    savitzky_golay(log.t, log.theta1, f->sg, &out->omega1, &out->alpha1);
+    savitzky_golay(log.t, log.theta2, f->sg, &out->omega2, &out->alpha2);
+  } else if (f->source == detail::RateSource::kAccelsFromRates) {
+    out->accels_estimated = true;
+    savitzky_golay(log.t, log.omega1, f->sg, &out->alpha1, &unused);
+    savitzky_golay(log.t, log.omega2, f->sg, &out->alpha2, &unused);
+  }
+  out->sg_half_window = 0;
+  out->sg_order = out->accels_estimated ? f->sg.order : 0;
+  if (out->accels_estimated) {
+    const double dt = n > 1 ? log.duration() / (n - 1) : 1.0;
+    out->sg_half_window = sg_half_window(f->sg, dt);
+    f->first = std::min(out->sg_half_window, n);
+    f->last = n - 1 - out->sg_half_window;
+  }
+}
+
+Sample make_sample(const Fit& f, const IdentifyResult& out, int i) {
+  const TorqueLog& log = f.cond.log;
+  Sample s;
+  s.t = log.t[i];
+  s.th1 = log.theta1[i];
+  s.th2 = log.theta2[i];
+  s.w1 = out.omega1[i];
+  s.w2 = out.omega2[i];
+  s.a1 = out.alpha1[i];
+  s.a2 = out.alpha2[i];
+  s.tau1 = log.tau1[i];
+  s.tau2 = log.tau2[i];
+  s.loads = f.loads(s.t);
+  return s;
+}
+
+/// Samples that enter the fit: a centred rate window, not a glitch, above --min-rate.
+void select_samples(Fit* f, IdentifyResult* out) {
+  const TorqueLog& log = f->cond.log;
+  const int P = f->layout.size();
+  out->used.assign(log.size(), 0);
+  f->samples.clear();
+  f->index.clear();
+  // the rest rule (model/rest.h): samples with a stuck joint are left out (their friction is a
+  // holding torque, not the law); a joint at rest that accelerates slips that way
+  const RestThresholds rest = rest_rule(log, *out, *f->opt);
+  out->rest_rate_threshold = rest.rate;
+  out->rest_acceleration_threshold = rest.acceleration;
+  f->eval.rest_rate = rest.rate;
+  out->samples_at_rest = 0;
+  for (int i = f->first; i <= f->last; ++i) {
+    if (f->cond.rejected[i]) continue;
+    const Sample s = make_sample(*f, *out, i);
+    std::array<bool, 5> stuck{};
+    if (stuck_joints(f->scene, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, rest, &stuck).ok() &&
+        std::find(stuck.begin(), stuck.end(), true) != stuck.end()) {
+      ++out->samples_at_rest;
+      continue;
+    }
+    if (f->opt->min_rate > 0) {
+      Kinematics<double> k;
+      if (!solve_kinematics(f->scene, s.th1, s.th2, &k).ok()) continue;
+      Bias<double> b;
+      compute_bias(f->scene, k, s.w1, s.w2, &b);
+      bool slow = false;
+      for (double wk : fivebar::detail::relative_rates(s.w1, s.w2, b.w3, b.w4)) {
+        slow = slow || std::abs(wk) < f->opt->min_rate;
+      }
+      if (slow) continue;
+    }
+    out->used[i] = 1;
+    f->samples.push_back(s);
+    f->index.push_back(i);
+  }
+  out->samples_used = static_cast<int>(f->samples.size());
+  if (out->samples_used < P + 1) {
+    throw LogError(log.path, "samples",
+                   "only " + std::to_string(out->samples_used) +
+                       " samples usable (rate threshold, glitches and filter edges), fewer than "
+                       "the " +
+                       std::to_string(P + 1) + " needed for " + std::to_string(P) + " parameters");
+  }
+}
+
+/// The first sample of the fit whose inverse dynamics fails at the parameters x, as a status
+/// naming it and the reason (ok if none fails).
+Status first_failure(const Fit& f, const std::vector<double>& x, const std::string& at) {
+  Params<double> p = f.scene;
+  f.layout.apply(x.data(), &p.friction);
+  for (size_t u = 0; u < f.samples.size(); ++u) {
+    const Sample& s = f.samples[u];
+    Evaluation<double> ev;
+    const Status st =
+        inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr, f.eval, &ev);
+    std::string why = st.message;
+    if (st.ok() && !(std::isfinite(ev.M1) && std::isfinite(ev.M2))) why = "torque not finite";
+    if (st.ok() && why.empty()) continue;
+    return Status::Error(StatusCode::kSolverFailed,
+                         "inverse dynamics fails at " + sample_name(f.cond.log, f.index[u]) + " " +
+                             at + " (theta " + fmt(s.th1) + ", " + fmt(s.th2) + " rad, omega " +
+                             fmt(s.w1) + ", " + fmt(s.w2) + " rad/s, alpha " + fmt(s.a1) + ", " +
+                             fmt(s.a2) + " rad/s^2): " + why);
+  }
+  return Status::Ok();
+}
+
+/// rms residual and expected noise level of each actuator over up to ~200 samples of the fit
+/// (log indices `probe`), with the rates of half-window `sg`, at the parameters f.x.
+void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions& sg, double rms[2],
+                   double floor[2]) {
+  const TorqueLog& log = f.cond.log;
+  Params<double> p = f.scene;
+  f.layout.apply(f.x.data(), &p.friction);
+  Eigen::Vector2d r2 = Eigen::Vector2d::Zero(), v = Eigen::Vector2d::Zero(), t2 = v;
+  int count = 0;
+  for (int i : probe) {
+    Sample s;
+    s.t = log.t[i];
+    s.th1 = log.theta1[i];
+    s.th2 = log.theta2[i];
+    s.tau1 = log.tau1[i];
+    s.tau2 = log.tau2[i];
+    s.loads = f.loads(s.t);
+    int lo = 0;
+    std::vector<double> d1, d2;
+    savitzky_golay_taps(log.t, i, sg, &lo, &d1, &d2);
+    const std::vector<double>& x1 =
+        f.source == detail::RateSource::kFromAngles ? log.theta1 : log.omega1;
+    const std::vector<double>& x2 =
+        f.source == detail::RateSource::kFromAngles ? log.theta2 : log.omega2;
+    double e1 = 0, e2 = 0, f1 = 0, f2 = 0;
+    for (size_t k = 0; k < d1.size(); ++k) {
+      e1 += d1[k] * x1[lo + k];
+      e2 += d1[k] * x2[lo + k];
+      f1 += d2[k] * x1[lo + k];
+      f2 += d2[k] * x2[lo + k];
+    }
+    if (f.source == detail::RateSource::kFromAngles) {
+      s.w1 = e1, s.w2 = e2, s.a1 = f1, s.a2 = f2;
+    } else {
+      s.w1 = log.omega1[i], s.w2 = log.omega2[i], s.a1 = e1, s.a2 = e2;
+    }
+    Evaluation<double> ev;
+    Eigen::Matrix<double, 2, 6> D;
+    if (!inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr, f.eval, &ev)
+             .ok() ||
+        !detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), s, f.eval, &D)) {
+      continue;
+    }
+    r2 += Eigen::Vector2d(std::pow(s.tau1 - ev.M1, 2), std::pow(s.tau2 - ev.M2, 2));
+    t2 += Eigen::Vector2d(s.tau1 * s.tau1, s.tau2 * s.tau2);
+    v += detail::propagated_variance(detail::sensitivity(log.t, i, f.source, sg, f.noise, D));
+    ++count;
+  }
+  for (int j = 0; j < 2; ++j) {
+    const double c = std::max(1, count);
+    rms[j] = std::sqrt(r2(j) / c);
+    floor[j] = std::max(std::sqrt(f.noise.torque[j] * f.noise.torque[j] + v(j) / c),
+                        kAbsoluteFloor * std::sqrt(t2(j) / c));
+  }
+}
+
+/// The data-driven Savitzky-Golay half-window. Smoothing bias shows in the torque residual as
+/// an excess over the level the sensor noise explains (that level is predicted per window by
+/// propagating the measured noise): the window chosen is the largest whose residual/noise ratio
+/// stays within kWindowExcess of the reference, 1 or the least ratio over the candidates when
+/// that is above 1 (a mismatch of the law that no window removes). Candidates from the polynomial's
+/// minimum to 50 ms, growing by 25 %, evaluated at the parameters of a preliminary fit (f.x).
+void choose_window(Fit* f, IdentifyResult* out) {
+  const TorqueLog& log = f->cond.log;
+  const int n = log.size();
+  const double dt = n > 1 ? log.duration() / (n - 1) : 1.0;
+  const int min_half = f->sg.order / 2 + 1;
+  const int max_half = std::max(min_half, static_cast<int>(std::lround(0.05 / dt)));
+  std::vector<int> cand;
+  for (int m = min_half; m <= max_half; m = std::max(m + 1, static_cast<int>(m * 1.25))) {
+    if (2 * m + 2 < n) cand.push_back(m);
+  }
+  if (cand.empty()) cand.push_back(min_half);
+  // probes: samples with a centred window for the largest candidate, not glitches
+  std::vector<int> probe;
+  const int edge = cand.back();
+  const int step = std::max(1, (n - 2 * edge) / 800);
+  for (int i = edge; i < n - edge; i += step) {
+    if (!f->cond.rejected[i]) probe.push_back(i);
+  }
+  std::vector<double> ratio(cand.size());
+  std::vector<std::array<double, 4>> levels(cand.size());
+  for (size_t k = 0; k < cand.size(); ++k) {
+    SgOptions sg = f->sg;
+    sg.half_window_s = cand[k] * dt;
+    double rms[2], floor[2];
+    window_levels(*f, probe, sg, rms, floor);
+    ratio[k] = std::max(rms[0] / floor[0], rms[1] / floor[1]);
+    levels[k] = {rms[0], rms[1], floor[0], floor[1]};
+    // smoothing bias only grows with the window: stop once it clearly dominates
+    if (k >= 2 &&
+        ratio[k] > 1.5 * std::max(1.0, *std::min_element(ratio.begin(), ratio.begin() + k))) {
+      cand.resize(k + 1);
+      ratio.resize(k + 1);
+      levels.resize(k + 1);
+      break;
+    }
+  }
+  // the reference: 1 when the noise explains the residual (a ratio below 1 is a fluctuation of
+  // the estimate), the least ratio when a mismatch of the law shows at every window
+  const double best = std::max(1.0, *std::min_element(ratio.begin(), ratio.end()));
+  // the largest window without detectable excess, then one candidate smaller: the bias just
+  // below detection still counts against the std (relative to it, it scales as ~h^3.5)
+  size_t chosen = 0;
+  for (size_t k = 0; k < cand.size(); ++k) {
+    if (ratio[k] <= best * (1 + kWindowExcess)) chosen = k;
+  }
+  if (chosen > 0) --chosen;
+  std::string table;
+  for (size_t k = 0; k < cand.size(); ++k) {
+    table += (k ? ", " : "") + std::to_string(cand[k]) + ": " + fmt(ratio[k]);
+  }
+  f->sg.half_window_s = cand[chosen] * dt;
+  // the smallest window of this order already shows (or hides) bias: the log is sampled too
+  // slowly for it, and a higher order over the next smallest span bends better at the kinks
+  std::string raised;
+  if (chosen == 0 && ratio.size() > 1) {
+    f->sg.order += 2;
+    f->sg.half_window_s = (f->sg.order / 2 + 1) * dt;
+    raised = "; the smallest window being the choice, order raised to " +
+             std::to_string(f->sg.order) + " over " + std::to_string(f->sg.order / 2 + 1) +
+             " samples each side";
+  }
+  const std::array<double, 4>& l = levels[chosen];
+  out->window_choice =
+      "data-driven: half-window " + std::to_string(cand[chosen]) + " samples (" +
+      fmt(cand[chosen] * dt * 1e3) + " ms), one below the largest whose torque residual (" +
+      fmt(l[0]) + ", " + fmt(l[1]) +
+      " N m) shows no smoothing bias over the level the measured noise " + "explains (" +
+      fmt(l[2]) + ", " + fmt(l[3]) + " N m), ratio " + fmt(ratio[chosen]) +
+      " against the reference " + fmt(best) + " (ratio by half-window: " + table + ")" + raised;
+}
+
+/// A quick fit on at most ~1500 of the selected samples (plain least squares) that sets f->x for
+/// the window choice; keeps the start values if it fails.
+void preliminary_fit(Fit* f) {
+  const int P = f->layout.size();
+  Fit g = *f;
+  g.samples.clear();
+  const size_t step = std::max<size_t>(1, f->samples.size() / 1500);
+  for (size_t u = 0; u < f->samples.size(); u += step) g.samples.push_back(f->samples[u]);
+  ceres::Problem problem;
+  std::vector<double> x = f->x;
+  switch (P) {
+    case 2:
+      add_inverse_dynamics_terms<2>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(),
+                                    &problem);
+      break;
+    case 4:
+      add_inverse_dynamics_terms<4>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(),
+                                    &problem);
+      break;
+    case 10:
+      add_inverse_dynamics_terms<10>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(),
+                                     &problem);
+      break;
+    case 20:
+      add_inverse_dynamics_terms<20>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(),
+                                     &problem);
+      break;
+    default:
+      return;
+  }
+  for (int i = 0; i < P; ++i) problem.SetParameterLowerBound(x.data(), i, f->layout.lower_bound(i));
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = 20;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  if (summary.IsSolutionUsable()) f->x = x;
+}
+
+/// Adds the residual blocks of the method to `problem`; false for an unsupported size.
+bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem) {
+  const IdentifyOptions& opt = *f->opt;
+  const int P = f->layout.size();
+  if (opt.method == Method::kInverseDynamics) {
+    switch (P) {
+      case 2:
+        add_inverse_dynamics_terms<2>(f->scene, f->layout, f->samples, f->eval, opt.loss,
+                                      opt.loss_scale, f->x.data(), problem);
+        break;
+      case 4:
+        add_inverse_dynamics_terms<4>(f->scene, f->layout, f->samples, f->eval, opt.loss,
+                                      opt.loss_scale, f->x.data(), problem);
+        break;
+      case 10:
+        add_inverse_dynamics_terms<10>(f->scene, f->layout, f->samples, f->eval, opt.loss,
+                                       opt.loss_scale, f->x.data(), problem);
+        break;
+      case 20:
+        add_inverse_dynamics_terms<20>(f->scene, f->layout, f->samples, f->eval, opt.loss,
+                                       opt.loss_scale, f->x.data(), problem);
+        break;
+      default:
+        return false;
+    }
+    out->residuals = 2 * out->samples_used;
+  } else {
+    const sim::Options so = window_sim_options(opt.sim_rtol);
+    // output error: windows over the used range (the rate threshold does not apply)
+    for (auto [i0, i1] : make_windows(f->cond.log, f->first, f->last, opt.window_s)) {
+      auto* w = new WindowResidual(f->scene, f->layout, f->cond.log, f->loads, out->omega1,
+                                   out->omega2, i0, i1, so);
+      ceres::NumericDiffOptions nd;
+      nd.relative_step_size = opt.relative_step;
+      auto* cost = new ceres::DynamicNumericDiffCostFunction<WindowResidual, ceres::CENTRAL>(
+          w, ceres::TAKE_OWNERSHIP, nd);
+      cost->AddParameterBlock(P);
+      cost->SetNumResiduals(w->residuals());
+      out->residuals += w->residuals();
+      problem->AddResidualBlock(cost, make_loss(opt.loss, opt.loss_scale), f->x.data());
+    }
+  }
+  for (int i = 0; i < P; ++i)
+    problem->SetParameterLowerBound(f->x.data(), i, f->layout.lower_bound(i));
+  return true;
+}
+
+/// Raw (unweighted) residuals; false where an evaluation fails.
+bool raw_residuals(ceres::Problem* problem, std::vector<double>* r,
+                   ceres::CRSMatrix* jac = nullptr) {
+  ceres::Problem::EvaluateOptions eo;
+  eo.apply_loss_function = false;
+  double cost = 0;
+  return problem->Evaluate(eo, &cost, r, nullptr, jac);
+}
+
+void rms_pair(const std::vector<double>& r, double* out2) {
+  double s[2] = {0, 0};
+  for (size_t i = 0; i < r.size(); ++i) s[i % 2] += r[i] * r[i];
+  for (int j = 0; j < 2; ++j) out2[j] = std::sqrt(s[j] / std::max<size_t>(1, r.size() / 2));
+}
+
+/// Solves; a solver that gives up or an evaluation that fails is a status naming the sample.
+void solve(Fit* f, ceres::Problem* problem, IdentifyResult* out, ceres::Solver::Summary* summary) {
+  const IdentifyOptions& opt = *f->opt;
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = opt.max_iterations;
+  so.num_threads = opt.num_threads;
+  // output error: the simulated residual carries integrator noise (~rtol), so ask less of it
+  const bool oe = opt.method == Method::kOutputError;
+  so.function_tolerance = oe ? 1e-3 : 1e-12;  // OE cost noise ~1e-4 relative
+  so.gradient_tolerance = oe ? 1e-10 : 1e-14;
+  so.parameter_tolerance = oe ? 1e-7 : 1e-10;
+  so.logging_type = ceres::SILENT;
+  ceres::Solve(so, problem, summary);
+  out->iterations = static_cast<int>(summary->iterations.size());
+  out->converged = summary->termination_type == ceres::CONVERGENCE;
+  out->solver_message = summary->BriefReport();
+  for (const ceres::IterationSummary& it : summary->iterations)
+    out->iteration_costs.push_back(it.cost);
+  std::vector<double> r;
+  const bool evaluates = raw_residuals(problem, &r);
+  bool finite = evaluates;
+  for (double v : r) finite = finite && std::isfinite(v);
+  if (summary->IsSolutionUsable() && finite) return;
+  Status st = f->opt->method == Method::kInverseDynamics
+                  ? first_failure(*f, f->x, "at the solver's last iterate")
+                  : Status::Ok();
+  if (st.ok()) {
+    st = Status::Error(StatusCode::kSolverFailed,
+                       std::string("Ceres: ") +
+                           (finite ? summary->message : "residuals not finite at the solution"));
+  }
+  out->status = st;
+}
+
+/// Sensor-noise sensitivities of every sample of the fit at the parameters f->x.
+std::vector<detail::Sensitivity> noise_sensitivities(const Fit& f) {
+  std::vector<detail::Sensitivity> sens;
+  sens.reserve(f.samples.size());
+  for (size_t u = 0; u < f.samples.size(); ++u) {
+    Eigen::Matrix<double, 2, 6> D;
+    if (!detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), f.samples[u], f.eval, &D)) {
+      D.setZero();
+    }
+    sens.push_back(detail::sensitivity(f.cond.log.t, f.index[u], f.source, f.sg, f.noise, D));
+  }
+  return sens;
+}
+
+/// Residual levels and the structure warning: the rms against the level the sensor noise alone
+/// gives (torque noise plus angle/rate noise through the rate estimation), floored for noise-free
+/// logs at kAbsoluteFloor of the rms logged torque.
+void residual_levels(const Fit& f, const std::vector<double>& r,
+                     const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
+  rms_pair(r, out->rms_torque_residual);
+  const TorqueLog& log = f.cond.log;
+  Eigen::Vector2d prop = Eigen::Vector2d::Zero();
+  for (const detail::Sensitivity& s : sens) prop += detail::propagated_variance(s);
+  prop /= std::max<size_t>(1, sens.size());
+  for (int j = 0; j < 2; ++j) {
+    const std::vector<double>& tau = j == 0 ? log.tau1 : log.tau2;
+    double s2 = 0;
+    for (int i : f.index) s2 += tau[i] * tau[i] / f.index.size();
+    const double noise = std::sqrt(f.noise.torque[j] * f.noise.torque[j] + prop(j));
+    const double floor = kAbsoluteFloor * std::sqrt(s2);
+    out->residual_noise_floor[j] = std::max(noise, floor);
+    const double ratio = out->rms_torque_residual[j] / out->residual_noise_floor[j];
+    if (ratio > kStructureRatio) {
+      out->warnings.push_back(
+          "tau" + std::to_string(j + 1) + " residual rms " + fmt(out->rms_torque_residual[j]) +
+          " N m is " + fmt(ratio) + " times the noise floor " + fmt(out->residual_noise_floor[j]) +
+          " N m (" +
+          (noise >= floor ? "torque noise " + fmt(f.noise.torque[j]) +
+                                " N m with the sensor noise propagated through the rates"
+                          : "0.1 % of the rms logged torque, the log being nearly noise-free") +
+          "): the residual has structure the fitted law (or the estimated rates) cannot "
+          "explain; see fig_residual_vs_rate.png");
+    }
+  }
+}
+
+/// J^T J of the CRS Jacobian and the dense Jacobian itself (2 rows per sample).
+Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P) {
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, P);
+  for (int row = 0; row < crs.num_rows; ++row) {
+    for (int a = crs.rows[row]; a < crs.rows[row + 1]; ++a) J(row, crs.cols[a]) = crs.values[a];
+  }
+  return J;
+}
+
+/// Covariance of the internal parameters, only on a converged solution with a full-rank
+/// Jacobian (of the parameters off their bounds): errors in variables (sandwich) for inverse
+/// dynamics, else s^2 (J^T J)^-1.
+void covariance(const Fit& f, const Eigen::MatrixXd& J,
+                const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
+  const int P = f.layout.size();
+  out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
+  if (!out->converged) {
+    out->warnings.push_back("the solver did not converge (" + out->solver_message +
+                            "): no covariance, standard deviations not given");
+    return;
+  }
+  // parameters at a bound are held there (active constraints), and parameters without effect
+  // on the residuals are left out: the covariance is that of the others
+  std::vector<int> free;
+  for (int i = 0; i < P; ++i) {
+    if (f.x[i] > f.layout.lower_bound(i) + 1e-12 && J.col(i).squaredNorm() > 0) free.push_back(i);
+  }
+  if (free.empty()) return;
+  Eigen::MatrixXd Jf(J.rows(), free.size());
+  for (size_t a = 0; a < free.size(); ++a) Jf.col(a) = J.col(free[a]);
+  const Eigen::MatrixXd H = Jf.transpose() * Jf;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+  const double emax = es.eigenvalues().maxCoeff(), emin = es.eigenvalues().minCoeff();
+  if (!(emax > 0) || !(emin > 1e-14 * emax) || !H.allFinite()) {
+    out->warnings.push_back("covariance could not be computed (Jacobian rank deficient)");
+    return;
+  }
+  const Eigen::MatrixXd Hinv = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
+                               es.eigenvectors().transpose();
+  const auto scatter = [&](const Eigen::MatrixXd& Cf) {
+    for (size_t a = 0; a < free.size(); ++a) {
+      for (size_t b = 0; b < free.size(); ++b) out->covariance(free[a], free[b]) = Cf(a, b);
+    }
+  };
+  const bool eiv = f.opt->errors_in_variables && f.opt->method == Method::kInverseDynamics;
+  if (!eiv) {
+    scatter(Hinv * (out->residual_sigma * out->residual_sigma));
+    out->std_method = "residual-variance";
+    return;
+  }
+  Eigen::MatrixXd S = detail::score_covariance(Jf, sens, f.noise, f.cond.log.size());
+  // residual beyond the modelled noise (model mismatch, unmodelled noise) counted as white
+  for (int j = 0; j < 2; ++j) {
+    const double excess = std::max(
+        0.0, std::pow(out->rms_torque_residual[j], 2) - std::pow(out->residual_noise_floor[j], 2));
+    for (int row = j; row < Jf.rows(); row += 2) {
+      S += excess * Jf.row(row).transpose() * Jf.row(row);
+    }
+  }
+  scatter(Hinv * S * Hinv);
+  out->std_method = "errors-in-variables";
+}
+
+/// Singular values of the (public) Jacobian with unit-norm columns, and the warnings they imply.
+void identifiability(const Eigen::MatrixXd& JtJ, const std::vector<std::string>& names,
+                     IdentifyResult* out) {
+  const int P = static_cast<int>(JtJ.rows());
+  Eigen::VectorXd scale(P);
+  for (int i = 0; i < P; ++i) {
+    scale(i) = std::sqrt(JtJ(i, i));
+    if (!(scale(i) > 0) || !std::isfinite(scale(i))) {
+      out->warnings.push_back("parameter " + names[i] +
+                              " has no effect on the residuals: the log does not excite it");
+      scale(i) = 1;
+    }
+  }
+  const Eigen::MatrixXd S = scale.asDiagonal().inverse() * JtJ * scale.asDiagonal().inverse();
+  if (!S.allFinite()) return;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S);
+  // eigenvalues of J^T J ascending: singular values are their square roots
+  for (int i = P - 1; i >= 0; --i) {
+    out->singular_values.push_back(std::sqrt(std::max(0.0, es.eigenvalues()(i))));
+  }
+  const double ratio = out->singular_values.back() / out->singular_values.front();
+  if (ratio < 1e-2) {  // condition number above 100 with unit-norm columns
+    const Eigen::VectorXd v = es.eigenvectors().col(0);
+    std::string who;
+    for (int i = 0; i < P; ++i) {
+      if (std::abs(v(i)) > 0.3) who += (who.empty() ? "" : ", ") + names[i];
+    }
+    out->warnings.push_back("the log cannot separate " + who +
+                            " (smallest/largest scaled singular value " + fmt(ratio) + ")");
+  }
+}
+
+/// Public estimates, correlation, bounds: a parameter at a bound has no meaningful std (NaN),
+/// and a std that is not > 0 is never reported as a number.
+void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResult* out) {
+  const int P = f.layout.size();
+  const std::vector<std::string> names = f.layout.names();
+  const Eigen::MatrixXd T = to_public(f.layout);
+  const Eigen::VectorXd xp = T * Eigen::Map<const Eigen::VectorXd>(f.x.data(), P);
+  // to the public parameters; one is determined when every internal one it sums is
+  Eigen::MatrixXd C0 = out->covariance;
+  std::vector<bool> known(P);
+  for (int i = 0; i < P; ++i) known[i] = std::isfinite(C0(i, i));
+  for (int i = 0; i < P; ++i) {
+    for (int j = 0; j < P; ++j) {
+      if (!std::isfinite(C0(i, j))) C0(i, j) = 0;
+    }
+  }
+  out->covariance = T * C0 * T.transpose();
+  for (int i = 0; i < P; ++i) {
+    bool ok = true;
+    for (int j = 0; j < P; ++j) ok = ok && (T(i, j) == 0 || known[j]);
+    if (!ok) {
+      out->covariance.row(i).setConstant(kNaN);
+      out->covariance.col(i).setConstant(kNaN);
+    }
+  }
+  out->correlation = Eigen::MatrixXd::Constant(P, P, kNaN);
+  for (int i = 0; i < P; ++i) {
+    for (int j = 0; j < P; ++j) {
+      out->correlation(i, j) =
+          out->covariance(i, j) / std::sqrt(out->covariance(i, i) * out->covariance(j, j));
+    }
+  }
+  for (int i = 0; i < P; ++i) {
+    for (int j = i + 1; j < P; ++j) {
+      if (std::abs(out->correlation(i, j)) > 0.98) {
+        out->warnings.push_back("strong correlation " + fmt(out->correlation(i, j)) + " between " +
+                                names[i] + " and " + names[j]);
+      }
+    }
+  }
+  const bool excess = f.layout.static_as_excess;
+  for (int i = 0; i < P; ++i) {
+    ParameterEstimate e;
+    e.name = names[i];
+    e.value = xp(i);
+    e.std = std::sqrt(out->covariance(i, i));
+    e.initial = x0_public[i];
+    e.at_bound = f.x[i] <= f.layout.lower_bound(i) + 1e-12;
+    const bool static_group = excess && i / f.layout.per_group() == 2;
+    if (e.at_bound) {
+      out->warnings.push_back(
+          names[i] + " is at its bound" +
+          (static_group ? " static_coulomb = coulomb (static friction cannot be below kinetic)"
+                        : " " + fmt(f.layout.lower_bound(i))) +
+          ": its std is not meaningful (not reported); the log may not support this law or "
+          "coefficient");
+      e.std = kNaN;
+    } else if (!(e.std > 0) || !std::isfinite(e.std)) {
+      if (out->converged) out->warnings.push_back("std of " + names[i] + " not determined");
+      e.std = kNaN;
+    } else if (e.std > std::abs(e.value)) {
+      out->warnings.push_back(names[i] + " is poorly determined (std " + fmt(e.std) + " > value " +
+                              fmt(e.value) + ")");
+    }
+    out->parameters.push_back(e);
+  }
+}
+
+/// Predicted torques at every sample of the (conditioned) log, at the fit.
+void predictions(const Fit& f, IdentifyResult* out) {
+  const TorqueLog& log = f.cond.log;
+  const int n = log.size();
+  out->predicted_tau1.assign(n, kNaN);
+  out->predicted_tau2.assign(n, kNaN);
+  Params<double> p = f.scene;
+  f.layout.apply(f.x.data(), &p.friction);
+  for (int i = 0; i < n; ++i) {
+    Evaluation<double> ev;
+    const Status st =
+        inverse_dynamics(p, f.loads(log.t[i]), log.theta1[i], log.theta2[i], out->omega1[i],
+                         out->omega2[i], out->alpha1[i], out->alpha2[i], nullptr, f.eval, &ev);
+    if (st.ok()) {
+      out->predicted_tau1[i] = ev.M1;
+      out->predicted_tau2[i] = ev.M2;
+    }
+  }
+}
+
+/// Output error: the torque residual of the fitted scene and its white-noise level.
+void output_error_levels(const Fit& f, IdentifyResult* out) {
+  const TorqueLog& log = f.cond.log;
+  double s[2] = {0, 0};
+  int c = 0;
+  for (int i = f.first; i <= f.last; ++i) {
+    if (std::isnan(out->predicted_tau1[i])) continue;
+    s[0] += std::pow(log.tau1[i] - out->predicted_tau1[i], 2);
+    s[1] += std::pow(log.tau2[i] - out->predicted_tau2[i], 2);
+    ++c;
+  }
+  for (int j = 0; j < 2; ++j) out->rms_torque_residual[j] = std::sqrt(s[j] / std::max(1, c));
+  for (int j = 0; j < 2; ++j) {
+    const std::vector<double>& tau = j == 0 ? log.tau1 : log.tau2;
+    const std::vector<double>& pred = j == 0 ? out->predicted_tau1 : out->predicted_tau2;
+    std::vector<double> d;
+    for (int i = f.first + 1; i <= f.last; ++i) {
+      const double e = (tau[i] - pred[i]) - (tau[i - 1] - pred[i - 1]);
+      if (std::isfinite(e)) d.push_back(e);
+    }
+    out->residual_noise_floor[j] = robust_std(d) / std::sqrt(2.0);
+  }
+}
+
+/// Torque-to-angle delay d: one Gauss-Newton step of the fit with d as an extra parameter
+/// (d r_i / d d = tau'(t_i), tau' by Savitzky-Golay on the logged torques), its std from the
+/// errors-in-variables covariance of that augmented step.
+void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<double>& r,
+                    const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
+  const TorqueLog& log = f.cond.log;
+  const int P = static_cast<int>(J.cols()), m = static_cast<int>(J.rows());
+  const double dt = log.duration() / std::max(1, log.size() - 1);
+  SgOptions sg;
+  sg.order = 3;
+  sg.half_window_s = std::max(f.sg.half_window_s, 3 * dt);
+  std::vector<double> g1, g2, unused;
+  savitzky_golay(log.t, log.tau1, sg, &g1, &unused);
+  savitzky_golay(log.t, log.tau2, sg, &g2, &unused);
+  Eigen::MatrixXd Ja(m, P + 1);
+  Ja.leftCols(P) = J;
+  for (size_t u = 0; u < f.index.size(); ++u) {
+    Ja(2 * u, P) = g1[f.index[u]];
+    Ja(2 * u + 1, P) = g2[f.index[u]];
+  }
+  const Eigen::MatrixXd H = Ja.transpose() * Ja;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+  const double emax = es.eigenvalues().maxCoeff(), emin = es.eigenvalues().minCoeff();
+  if (!H.allFinite() || !(emax > 0) || !(emin > 1e-14 * emax)) return;
+  const Eigen::MatrixXd Hinv = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
+                               es.eigenvectors().transpose();
+  const Eigen::VectorXd step =
+      -Hinv * (Ja.transpose() * Eigen::Map<const Eigen::VectorXd>(r.data(), m));
+  Eigen::MatrixXd S = detail::score_covariance(Ja, sens, f.noise, log.size());
+  for (int j = 0; j < 2; ++j) {
+    const double excess = std::max(
+        0.0, std::pow(out->rms_torque_residual[j], 2) - std::pow(out->residual_noise_floor[j], 2));
+    for (int row = j; row < m; row += 2) S += excess * Ja.row(row).transpose() * Ja.row(row);
+  }
+  const Eigen::MatrixXd C = Hinv * S * Hinv;
+  out->delay_s = step(P);
+  out->delay_std_s = std::sqrt(C(P, P));
+}
+
+/// `log` with its torques read at t + d (cubic through the four nearest samples, clamped at the
+/// ends): torques that lag the angles by d brought in line.
+TorqueLog shift_torques(const TorqueLog& log, double d) {
+  TorqueLog out = log;
+  const int n = log.size();
+  for (int i = 0; i < n; ++i) {
+    const double t = log.t[i] + d;
+    const int k = static_cast<int>(std::upper_bound(log.t.begin(), log.t.end(), t) - log.t.begin());
+    const int lo = std::clamp(k - 2, 0, std::max(0, n - 4));
+    const int hi = std::min(n, lo + 4);
+    const double tc = std::clamp(t, log.t.front(), log.t.back());
+    double v1 = 0, v2 = 0;
+    for (int a = lo; a < hi; ++a) {
+      double w = 1;
+      for (int b = lo; b < hi; ++b) {
+        if (b != a) w *= (tc - log.t[b]) / (log.t[a] - log.t[b]);
+      }
+      v1 += w * log.tau1[a];
+      v2 += w * log.tau2[a];
+    }
+    out.tau1[i] = v1;
+    out.tau2[i] = v2;
+  }
+  return out;
+}
+
+/// The fit redone on the conditioned log with the torques shifted by the delay `first` found,
+/// carrying over what the first pass reported about the log.
+IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadFunction& loads,
+                                const TorqueLog& conditioned, const IdentifyOptions& opt,
+                                const IdentifyResult& first) {
+  IdentifyOptions again = opt;
+  again.estimate_delay = false;
+  IdentifyResult res = identify(scene_in, loads, shift_torques(conditioned, first.delay_s), again);
+  res.samples = first.samples;
+  res.delay_s = first.delay_s;
+  res.delay_std_s = first.delay_std_s;
+  res.delay_corrected = true;
+  res.notes.insert(res.notes.begin(), first.notes.begin(), first.notes.end());
+  res.glitches.insert(res.glitches.begin(), first.glitches.begin(), first.glitches.end());
+  for (int j = 0; j < 2; ++j) res.unwrapped[j] += first.unwrapped[j];
+  std::vector<std::string> w = {"the torques lag the angles by " + fmt(first.delay_s * 1e3) +
+                                " +- " + fmt(first.delay_std_s * 1e3) + " ms (" +
+                                fmt(std::abs(first.delay_s) / first.delay_std_s) +
+                                " std): refitted with the torques shifted by it"};
+  if (!first.glitches.empty()) w.push_back(first.warnings.front());
+  res.warnings.insert(res.warnings.begin(), w.begin(), w.end());
+  return res;
+}
+
+/// Rates (logged or Savitzky-Golay), the data-driven window when it applies, the samples of the
+/// fit, and a check that the model evaluates at every one at the start values (false: status).
+bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out) {
+  const IdentifyOptions& opt = *f->opt;
+  const int P = f->layout.size();
+  const bool id = opt.method == Method::kInverseDynamics;
+  const auto rates_and_samples = [&]() {
+    estimate_rates(f, out);
+    require_samples(log, P + 1 + (out->accels_estimated ? 2 * out->sg_half_window : 0),
+                    std::to_string(P) + " parameters + 1" +
+                        (out->accels_estimated ? " + the Savitzky-Golay window" : std::string()));
+    select_samples(f, out);
+    // a sample the model cannot evaluate at the start values is a numerical failure, named
+    if (id) out->status = first_failure(*f, f->x, "at the start values");
+    return out->status.ok();
+  };
+  if (!rates_and_samples()) return false;
+  if (out->accels_estimated && opt.auto_window && id) {
+    const std::vector<double> x_start = f->x;
+    preliminary_fit(f);
+    choose_window(f, out);
+    f->x = x_start;
+    return rates_and_samples();
+  }
+  if (out->accels_estimated) {
+    out->window_choice = "given: half-window " + std::to_string(out->sg_half_window) + " samples";
+  }
+  return true;
+}
+
+/// Start values in the internal layout, from the public `initial` (or the neutral defaults).
+bool start_values(Fit* fp, const std::vector<double>& initial, std::vector<double>* x0_public,
+                  IdentifyResult* out) {
+  const Fit& f = *fp;
+  const int P = f.layout.size();
+  ParameterLayout pub = f.layout;
+  pub.static_as_excess = false;
+  *x0_public = initial.empty() ? default_start(pub) : initial;
+  if (static_cast<int>(x0_public->size()) != P) {
+    out->status = Status::Error(StatusCode::kInvalidInput,
+                                "initial values: expected " + std::to_string(P) + " numbers");
+    return false;
+  }
+  const Eigen::VectorXd xi =
+      to_public(f.layout).inverse() * Eigen::Map<const Eigen::VectorXd>(x0_public->data(), P);
+  std::vector<double> x(xi.data(), xi.data() + P);
+  // inside the bounds (a static start below the kinetic one starts at the bound)
+  for (int i = 0; i < P; ++i) x[i] = std::max(x[i], f.layout.lower_bound(i));
+  fp->x = x;
+  return true;
+}
+
 }  // namespace
 
 sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& scene_loads,
@@ -250,359 +1117,72 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   out.layout = opt.layout;
   out.method = opt.method;
   out.samples = log.size();
-  const ParameterLayout& layout = opt.layout;
-  const int P = layout.size();
-  const int n = log.size();
+  Fit f;
+  f.opt = &opt;
+  f.loads = loads;
+  f.layout = opt.layout;
+  f.layout.static_as_excess = opt.layout.law == FrictionLaw::kStribeck;
+  f.scene = fit_scene(scene_in, f.layout, opt);
+  f.sg = opt.sg;
+  f.eval.friction_tol = 1e-12;
+  f.eval.friction_max_iter = 100;
+  const int P = f.layout.size();
+  const bool id = opt.method == Method::kInverseDynamics;
+  require_samples(log, P + 1, std::to_string(P) + " parameters + 1");
 
-  // the scene with the law to fit and the chosen Coulomb sign form
-  Params<double> scene = scene_in;
-  scene.friction.law = layout.law;
-  if (opt.smoothing_velocity >= 0) scene.friction.smoothing_velocity = opt.smoothing_velocity;
-  if (layout.law == FrictionLaw::kStribeck) {
-    for (int k = 0; k < kJoints; ++k) {
-      if (!(scene.friction.stribeck_exponent[k] > 0)) scene.friction.stribeck_exponent[k] = 2.0;
-    }
-  }
-
-  // every logged pose must close with this mechanism
-  check_poses(log, scene);
-
-  // rates and accelerations: logged, else Savitzky-Golay (edges, where the window is one-sided,
-  // are left out of the fit)
-  int first = 0, last = n - 1;
-  out.omega1 = log.omega1;
-  out.omega2 = log.omega2;
-  out.alpha1 = log.alpha1;
-  out.alpha2 = log.alpha2;
-  const double dt = n > 1 ? log.duration() / (n - 1) : 1.0;
-  std::vector<double> unused;
-  if (!log.has_rates || opt.estimate_rates) {
-    out.rates_estimated = out.accels_estimated = true;
-    savitzky_golay(log.t, log.theta1, opt.sg, &out.omega1, &out.alpha1);
-    savitzky_golay(log.t, log.theta2, opt.sg, &out.omega2, &out.alpha2);
-  } else if (!log.has_accels) {
-    out.accels_estimated = true;
-    savitzky_golay(log.t, log.omega1, opt.sg, &out.alpha1, &unused);
-    savitzky_golay(log.t, log.omega2, opt.sg, &out.alpha2, &unused);
-  }
-  if (out.accels_estimated) {
-    out.sg_half_window = sg_half_window(opt.sg, dt);
-    first = out.sg_half_window;
-    last = n - 1 - out.sg_half_window;
-  }
-  const int needed = P + 1 + (out.accels_estimated ? 2 * out.sg_half_window : 0);
-  require_samples(log, needed,
-                  std::to_string(P) + " parameters + 1" +
-                      (out.accels_estimated ? " + the Savitzky-Golay window" : std::string()));
-
-  // samples that enter the fit; the rest rule leaves out samples with a stuck joint and gives a
-  // joint at rest that accelerates the sign of its acceleration
-  const RestThresholds rest = rest_rule(log, out, opt);
-  out.rest_rate_threshold = rest.rate;
-  out.rest_acceleration_threshold = rest.acceleration;
-  EvalOptions eval;
-  eval.friction_tol = 1e-12;
-  eval.friction_max_iter = 100;
-  eval.rest_rate = rest.rate;
-  out.used.assign(n, 0);
-  std::vector<Sample> samples;
-  for (int i = first; i <= last; ++i) {
-    Sample s;
-    s.t = log.t[i];
-    s.th1 = log.theta1[i];
-    s.th2 = log.theta2[i];
-    s.w1 = out.omega1[i];
-    s.w2 = out.omega2[i];
-    s.a1 = out.alpha1[i];
-    s.a2 = out.alpha2[i];
-    s.tau1 = log.tau1[i];
-    s.tau2 = log.tau2[i];
-    s.loads = loads(s.t);
-    if (opt.min_rate > 0) {
-      Kinematics<double> k;
-      solve_kinematics(scene, s.th1, s.th2, &k);
-      Bias<double> b;
-      compute_bias(scene, k, s.w1, s.w2, &b);
-      const auto w = detail::relative_rates(s.w1, s.w2, b.w3, b.w4);
-      bool slow = false;
-      for (double wk : w) slow = slow || std::abs(wk) < opt.min_rate;
-      if (slow) continue;
-    }
-    std::array<bool, 5> stuck{};
-    if (stuck_joints(scene, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, rest, &stuck).ok() &&
-        std::find(stuck.begin(), stuck.end(), true) != stuck.end()) {
-      ++out.samples_at_rest;
-      continue;
-    }
-    out.used[i] = 1;
-    samples.push_back(s);
-  }
-  out.samples_used = static_cast<int>(samples.size());
-  if (out.samples_used < P + 1) {
-    throw LogError(log.path, "samples",
-                   "only " + std::to_string(out.samples_used) +
-                       " samples usable (rate threshold "
-                       "and filter edges), fewer than the " +
-                       std::to_string(P + 1) + " needed for " + std::to_string(P) + " parameters");
-  }
-
-  std::vector<double> x = opt.initial.empty() ? default_start(layout) : opt.initial;
-  if (static_cast<int>(x.size()) != P) {
-    out.status = Status::Error(StatusCode::kInvalidInput,
-                               "initial values: expected " + std::to_string(P) + " numbers");
+  // the log as encoders write it: degrees, wraps, glitches; then rates
+  prepare_log(log, &f, &out);
+  f.source = !log.has_rates || opt.estimate_rates ? detail::RateSource::kFromAngles
+             : !log.has_accels                    ? detail::RateSource::kAccelsFromRates
+                                                  : detail::RateSource::kLogged;
+  std::vector<double> x0_public;
+  if (!start_values(&f, opt.initial, &x0_public, &out)) return out;
+  if (!rates_window_and_samples(log, &f, &out)) return out;
+  ceres::Problem problem;
+  if (!build_problem(&f, &out, &problem)) {
+    out.status = Status::Error(StatusCode::kInvalidInput, "unsupported parameter count");
     return out;
   }
-  const std::vector<double> x0 = x;
-
-  // the problem
-  ceres::Problem::Options popts;
-  ceres::Problem problem(popts);
-  if (opt.method == Method::kInverseDynamics) {
-    switch (P) {
-      case 2:
-        add_inverse_dynamics_terms<2>(scene, layout, samples, eval, opt.loss, opt.loss_scale,
-                                      x.data(), &problem);
-        break;
-      case 4:
-        add_inverse_dynamics_terms<4>(scene, layout, samples, eval, opt.loss, opt.loss_scale,
-                                      x.data(), &problem);
-        break;
-      case 10:
-        add_inverse_dynamics_terms<10>(scene, layout, samples, eval, opt.loss, opt.loss_scale,
-                                       x.data(), &problem);
-        break;
-      case 20:
-        add_inverse_dynamics_terms<20>(scene, layout, samples, eval, opt.loss, opt.loss_scale,
-                                       x.data(), &problem);
-        break;
-      default:
-        out.status = Status::Error(StatusCode::kInvalidInput, "unsupported parameter count");
-        return out;
-    }
-    out.residuals = 2 * out.samples_used;
-  } else {
-    const sim::Options so = window_sim_options(opt.sim_rtol);
-    // output error: windows over the used range (the rate threshold does not apply)
-    for (auto [i0, i1] : make_windows(log, first, last, opt.window_s)) {
-      auto* f = new WindowResidual(scene, layout, log, loads, out.omega1, out.omega2, i0, i1, so);
-      ceres::NumericDiffOptions nd;
-      nd.relative_step_size = opt.relative_step;
-      auto* cost = new ceres::DynamicNumericDiffCostFunction<WindowResidual, ceres::CENTRAL>(
-          f, ceres::TAKE_OWNERSHIP, nd);
-      cost->AddParameterBlock(P);
-      cost->SetNumResiduals(f->residuals());
-      out.residuals += f->residuals();
-      problem.AddResidualBlock(cost, make_loss(opt.loss, opt.loss_scale), x.data());
-    }
-  }
-  for (int i = 0; i < P; ++i) problem.SetParameterLowerBound(x.data(), i, layout.lower_bound(i));
-
-  auto raw_residuals = [&](std::vector<double>* r) {
-    ceres::Problem::EvaluateOptions eo;
-    eo.apply_loss_function = false;
-    double cost = 0;
-    return problem.Evaluate(eo, &cost, r, nullptr, nullptr);
-  };
-  auto rms_pair = [](const std::vector<double>& r, double* out2) {
-    double s[2] = {0, 0};
-    for (size_t i = 0; i < r.size(); ++i) s[i % 2] += r[i] * r[i];
-    for (int j = 0; j < 2; ++j) out2[j] = std::sqrt(s[j] / std::max<size_t>(1, r.size() / 2));
-  };
   std::vector<double> r;
-  if (opt.method == Method::kInverseDynamics && raw_residuals(&r)) {
-    rms_pair(r, out.rms_torque_residual_initial);
-  }
-
-  // solve: nearly linear least squares in the coefficients, a few LM iterations
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = opt.max_iterations;
-  so.num_threads = opt.num_threads;
-  // output error: the simulated residual carries integrator noise (~rtol), so ask less of it
-  const bool oe = opt.method == Method::kOutputError;
-  so.function_tolerance = oe ? 1e-3 : 1e-12;  // OE cost noise ~1e-4 relative
-  so.gradient_tolerance = oe ? 1e-10 : 1e-14;
-  so.parameter_tolerance = oe ? 1e-7 : 1e-10;
-  so.logging_type = ceres::SILENT;
+  if (id && raw_residuals(&problem, &r)) rms_pair(r, out.rms_torque_residual_initial);
   ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
-  out.iterations = static_cast<int>(summary.iterations.size());
-  out.converged = summary.termination_type == ceres::CONVERGENCE;
-  out.solver_message = summary.BriefReport();
-  for (const ceres::IterationSummary& it : summary.iterations) {
-    out.iteration_costs.push_back(it.cost);
-  }
-  if (!summary.IsSolutionUsable()) {
-    out.status = Status::Error(StatusCode::kSolverFailed, "Ceres: " + summary.message);
-  }
+  solve(&f, &problem, &out, &summary);
+  if (!out.status.ok()) return out;
 
-  // residual variance s^2 = 2 cost / (m - p) and raw residuals per actuator
-  const int m = summary.num_residuals;
-  out.residual_sigma = std::sqrt(2.0 * summary.final_cost / std::max(1, m - P));
-  if (oe) {
+  // residual levels, covariance (converged solutions only), identifiability, estimates
+  out.residual_sigma = std::sqrt(2.0 * summary.final_cost / std::max(1, summary.num_residuals - P));
+  if (!id) {
     out.warnings.push_back(
         "output-error standard deviations treat the angle residuals as independent; within a "
         "window they are correlated (they integrate the torque noise), so the reported std "
         "understate the uncertainty");
   }
-  if (raw_residuals(&r)) {
-    if (opt.method == Method::kInverseDynamics)
-      rms_pair(r, out.rms_torque_residual);
-    else
-      rms_pair(r, out.rms_angle_residual);
-    if (opt.method == Method::kInverseDynamics) {
-      // the sensor noise alone is white: its level is what sample-to-sample differences see,
-      // taken robustly (1.4826 median |r_i - r_i-1| / sqrt 2) so that the few sharp features of a
-      // mismatch do not raise it; a residual rms well above that has structure the model misses
-      for (int j = 0; j < 2; ++j) {
-        std::vector<double> d;
-        for (size_t i = 2 + j; i < r.size(); i += 2) d.push_back(std::abs(r[i] - r[i - 2]));
-        if (d.empty()) continue;
-        std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-        out.residual_noise_floor[j] = 1.4826 * d[d.size() / 2] / std::sqrt(2.0);
-        const double ratio = out.rms_torque_residual[j] / out.residual_noise_floor[j];
-        if (ratio > 1.1) {
-          out.warnings.push_back(
-              "tau" + std::to_string(j + 1) + " residual rms " + fmt(out.rms_torque_residual[j]) +
-              " N m is " + fmt(ratio) + " times its white-noise floor " +
-              fmt(out.residual_noise_floor[j]) + " N m: the residual has structure the fitted " +
-              "law (or the estimated rates) cannot explain; see fig_residual_vs_rate.png");
-        }
-      }
-    }
+  ceres::CRSMatrix crs;
+  raw_residuals(&problem, &r, &crs);
+  const Eigen::MatrixXd J = dense(crs, P);
+  std::vector<detail::Sensitivity> sens;
+  if (id) {
+    sens = noise_sensitivities(f);
+    residual_levels(f, r, sens, &out);
+  } else {
+    rms_pair(r, out.rms_angle_residual);
   }
-
-  // covariance scaled by the residual variance
-  out.covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
-  {
-    ceres::Covariance::Options co;
-    co.algorithm_type = ceres::DENSE_SVD;
-    co.null_space_rank = -1;
-    co.min_reciprocal_condition_number = 1e-14;
-    co.num_threads = opt.num_threads;
-    ceres::Covariance cov(co);
-    std::vector<std::pair<const double*, const double*>> blocks = {{x.data(), x.data()}};
-    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> c(P, P);
-    if (cov.Compute(blocks, &problem) && cov.GetCovarianceBlock(x.data(), x.data(), c.data())) {
-      out.covariance = c * (out.residual_sigma * out.residual_sigma);
-    } else {
-      out.warnings.push_back("covariance could not be computed (Jacobian rank deficient)");
-    }
-  }
-  out.correlation = Eigen::MatrixXd::Constant(P, P, kNaN);
-  for (int i = 0; i < P; ++i) {
-    for (int j = 0; j < P; ++j) {
-      out.correlation(i, j) =
-          out.covariance(i, j) / std::sqrt(out.covariance(i, i) * out.covariance(j, j));
-    }
-  }
-
-  // identifiability: singular values of the Jacobian with unit-norm columns
-  const std::vector<std::string> names = layout.names();
-  {
-    ceres::Problem::EvaluateOptions eo;
-    eo.apply_loss_function = false;
-    ceres::CRSMatrix crs;
-    double cost = 0;
-    if (problem.Evaluate(eo, &cost, nullptr, nullptr, &crs)) {
-      Eigen::MatrixXd JtJ = Eigen::MatrixXd::Zero(P, P);
-      for (int row = 0; row < crs.num_rows; ++row) {
-        for (int a = crs.rows[row]; a < crs.rows[row + 1]; ++a) {
-          for (int b = crs.rows[row]; b < crs.rows[row + 1]; ++b) {
-            JtJ(crs.cols[a], crs.cols[b]) += crs.values[a] * crs.values[b];
-          }
-        }
-      }
-      Eigen::VectorXd scale(P);
-      for (int i = 0; i < P; ++i) {
-        scale(i) = std::sqrt(JtJ(i, i));
-        if (!(scale(i) > 0)) {
-          out.warnings.push_back("parameter " + names[i] +
-                                 " has no effect on the residuals: the log does not excite it");
-          scale(i) = 1;
-        }
-      }
-      const Eigen::MatrixXd S = scale.asDiagonal().inverse() * JtJ * scale.asDiagonal().inverse();
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S);
-      // eigenvalues of J^T J ascending: singular values are their square roots
-      for (int i = P - 1; i >= 0; --i)
-        out.singular_values.push_back(std::sqrt(std::max(0.0, es.eigenvalues()(i))));
-      const double ratio = out.singular_values.back() / out.singular_values.front();
-      if (ratio < 1e-2) {  // condition number above 100 with unit-norm columns
-        const Eigen::VectorXd v = es.eigenvectors().col(0);
-        std::string who;
-        for (int i = 0; i < P; ++i) {
-          if (std::abs(v(i)) > 0.3) who += (who.empty() ? "" : ", ") + names[i];
-        }
-        out.warnings.push_back("the log cannot separate " + who +
-                               " (smallest/largest scaled singular value " + fmt(ratio) + ")");
-      }
-    }
-  }
-  for (int i = 0; i < P; ++i) {
-    for (int j = i + 1; j < P; ++j) {
-      if (std::abs(out.correlation(i, j)) > 0.98) {
-        out.warnings.push_back("strong correlation " + fmt(out.correlation(i, j)) + " between " +
-                               names[i] + " and " + names[j]);
-      }
-    }
-  }
-
-  // estimates
-  for (int i = 0; i < P; ++i) {
-    ParameterEstimate e;
-    e.name = names[i];
-    e.value = x[i];
-    e.std = std::sqrt(out.covariance(i, i));
-    e.initial = x0[i];
-    if (x[i] <= layout.lower_bound(i) + 1e-12) {
-      out.warnings.push_back(names[i] + " is at its lower bound " + fmt(layout.lower_bound(i)));
-    } else if (e.std > std::abs(x[i])) {
-      out.warnings.push_back(names[i] + " is poorly determined (std " + fmt(e.std) + " > value " +
-                             fmt(x[i]) + ")");
-    }
-    out.parameters.push_back(e);
-  }
+  covariance(f, J, sens, &out);
+  const Eigen::MatrixXd Tinv = to_public(f.layout).inverse();
+  identifiability(Tinv.transpose() * (J.transpose() * J) * Tinv, f.layout.names(), &out);
+  estimates(f, x0_public, &out);
   out.fitted = scene_in;
-  layout.apply(x.data(), &out.fitted.friction);
-
-  // predicted torques at every sample (the fitted model, same sign convention)
-  out.predicted_tau1.assign(n, kNaN);
-  out.predicted_tau2.assign(n, kNaN);
-  Params<double> fit_eval = scene;
-  layout.apply(x.data(), &fit_eval.friction);
-  for (int i = 0; i < n; ++i) {
-    Evaluation<double> ev;
-    const Status st =
-        inverse_dynamics(fit_eval, loads(log.t[i]), log.theta1[i], log.theta2[i], out.omega1[i],
-                         out.omega2[i], out.alpha1[i], out.alpha2[i], nullptr, eval, &ev);
-    if (st.ok()) {
-      out.predicted_tau1[i] = ev.M1;
-      out.predicted_tau2[i] = ev.M2;
-    }
-  }
-  if (opt.method == Method::kOutputError) {
-    double s[2] = {0, 0};
-    int c = 0;
-    for (int i = first; i <= last; ++i) {
-      if (std::isnan(out.predicted_tau1[i])) continue;
-      s[0] += std::pow(log.tau1[i] - out.predicted_tau1[i], 2);
-      s[1] += std::pow(log.tau2[i] - out.predicted_tau2[i], 2);
-      ++c;
-    }
-    for (int j = 0; j < 2; ++j) out.rms_torque_residual[j] = std::sqrt(s[j] / std::max(1, c));
-    // the same robust white-noise floor as for inverse dynamics, on the torque residual
-    for (int j = 0; j < 2; ++j) {
-      const std::vector<double>& tau = j == 0 ? log.tau1 : log.tau2;
-      const std::vector<double>& pred = j == 0 ? out.predicted_tau1 : out.predicted_tau2;
-      std::vector<double> d;
-      for (int i = first + 1; i <= last; ++i) {
-        const double e = (tau[i] - pred[i]) - (tau[i - 1] - pred[i - 1]);
-        if (std::isfinite(e)) d.push_back(std::abs(e));
-      }
-      if (d.empty()) continue;
-      std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-      out.residual_noise_floor[j] = 1.4826 * d[d.size() / 2] / std::sqrt(2.0);
+  f.layout.apply(f.x.data(), &out.fitted.friction);
+  predictions(f, &out);
+  if (!id) output_error_levels(f, &out);
+  if (id && opt.estimate_delay) {
+    estimate_delay(f, J, r, sens, &out);
+    const double dt = log.duration() / std::max(1, log.size() - 1);
+    if (std::abs(out.delay_s) > kDelaySignificance * out.delay_std_s &&
+        std::abs(out.delay_s) > 0.1 * dt) {
+      IdentifyResult res = refit_with_delay(scene_in, loads, f.cond.log, opt, out);
+      res.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
+      return res;
     }
   }
   out.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
@@ -611,7 +1191,10 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
 
 Validation validate(const Params<double>& params, const sim::LoadFunction& loads,
                     const TorqueLog& log, const std::vector<double>& omega1,
-                    const std::vector<double>& omega2, double window_s, double rtol) {
+                    const std::vector<double>& omega2, double window_s, double rtol,
+                    double budget_s) {
+  const auto start = Clock::now();
+  const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
   Validation v;
   v.window_s = window_s;
   const int n = log.size();
@@ -620,6 +1203,9 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
   if (n < 2) return v;
   auto run = [&](int i0, int i1, bool full, double* s2, int* count) {
     sim::Options o = window_sim_options(rtol);
+    // a fitted scene far from the log (absurd logs) can make the simulation crawl: bounded
+    o.max_wall_time_s = std::max(1e-3, (full ? 0.5 : 1.0) * budget_s - elapsed());
+    o.max_steps = 50000;  // per output interval (a sample step): normal runs take a few
     o.duration = log.t[i1] - log.t[i0];
     o.output_step = o.duration / (i1 - i0);
     const sim::Result res =
@@ -658,7 +1244,13 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
   for (int j = 0; j < 2; ++j) v.full_rms[j] = std::sqrt(s2[j] / std::max(1, count));
   double w2[2] = {0, 0};
   int wc = 0;
-  for (auto [i0, i1] : make_windows(log, 0, n - 1, window_s)) run(i0, i1, false, w2, &wc);
+  for (auto [i0, i1] : make_windows(log, 0, n - 1, window_s)) {
+    if (elapsed() > budget_s) {
+      ++v.windows_skipped;
+      continue;
+    }
+    run(i0, i1, false, w2, &wc);
+  }
   for (int j = 0; j < 2; ++j) v.window_rms[j] = std::sqrt(w2[j] / std::max(1, wc));
   return v;
 }

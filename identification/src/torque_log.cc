@@ -183,23 +183,8 @@ std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& 
     }
     return "";
   }
-  // (b) the log starts more than two turns out, or the cranks spin implausibly fast
-  if (std::abs(theta[0]) > 4 * M_PI) {
-    return "the first angle is " + fmt(theta[0]) + ", more than two turns (4 pi)";
-  }
-  std::vector<double> rate(n - 1);
-  for (int i = 0; i + 1 < n; ++i) {
-    rate[i] = std::abs((theta[i + 1] - theta[i]) / (log.t[i + 1] - log.t[i]));
-  }
-  std::nth_element(rate.begin(), rate.begin() + rate.size() / 2, rate.end());
-  const double median_rate = rate[rate.size() / 2];
-  if (median_rate > 100.0) {
-    return "median |d theta/dt| is " + fmt(median_rate) + " > 100 rad/s";
-  }
-  const auto [lo, hi] = std::minmax_element(theta.begin(), theta.end());
-  if (*hi - *lo > 4 * M_PI && log.duration() < 0.5) {
-    return "range " + fmt(*hi - *lo) + " > 4 pi within " + fmt(log.duration()) + " s";
-  }
+  // without rates the magnitude says nothing (multi-turn angles are radians too): identify
+  // decides from the motion and the scene (degrees_from_motion, condition.h)
   return "";
 }
 

@@ -111,7 +111,7 @@ TEST(Recovery, StribeckLogFittedWithCoulombViscousReportsTheMismatch) {
   EXPECT_GT(std::max(res.rms_torque_residual[0] / res.residual_noise_floor[0],
                      res.rms_torque_residual[1] / res.residual_noise_floor[1]),
             1.1);
-  EXPECT_THAT(res.warnings, ::testing::Contains(::testing::HasSubstr("white-noise floor")));
+  EXPECT_THAT(res.warnings, ::testing::Contains(::testing::HasSubstr("times the noise floor")));
   // the matching law finds the Stribeck parameters
   IdentifyOptions st;
   st.layout.law = FrictionLaw::kStribeck;

@@ -12,9 +12,11 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 #include <vector>
 
+#include "fivebar/identification/condition.h"
 #include "fivebar/identification/parameters.h"
 #include "fivebar/identification/rates.h"
 #include "fivebar/identification/torque_log.h"
@@ -47,7 +49,17 @@ struct IdentifyOptions {
   /// Coulomb sign: < 0 takes the scene's friction.smoothing_velocity; 0 exact sign(w) (a fixed
   /// datum per sample with measured rates); > 0 tanh(w / w_s) [rad/s]
   double smoothing_velocity = -1;
-  SgOptions sg;                 ///< rate/acceleration estimation when the log lacks them
+  SgOptions sg;  ///< rate/acceleration estimation when the log lacks them
+  /// choose the Savitzky-Golay half-window from the data (sg.half_window_s is then ignored):
+  /// after a preliminary fit, one candidate below the largest window whose torque residual shows
+  /// no excess over the level the measured sensor noise explains (docs/identification.md)
+  bool auto_window = true;
+  ConditionOptions condition;  ///< unwrapping and glitch rejection
+  bool check_degrees = true;   ///< tell degrees from radians by the motion (condition.h)
+  /// standard deviations by the sandwich (J^T J)^-1 J^T Sigma J (J^T J)^-1, Sigma from the
+  /// torque noise plus the angle (or rate) noise propagated through the rate estimation
+  /// (errors in variables); false: the residual variance times (J^T J)^-1
+  bool errors_in_variables = true;
   bool estimate_rates = false;  ///< estimate rates even when the log has them
   /// drop samples where some joint's |w_k| is below this [rad/s] (their sign is uncertain)
   double min_rate = 0;
@@ -68,11 +80,21 @@ struct IdentifyOptions {
   /// central-difference step relative to |x|: large against the integrator noise (~rtol), the
   /// residual being nearly linear in the coefficients
   double relative_step = 1e-2;
+  /// inverse dynamics: estimate the delay of the torques behind the angles (separate
+  /// acquisition channels) by one Gauss-Newton step on tau(t + d) - M, with its std; when it is
+  /// significant (over 3 std and over a tenth of a sample) the torques are shifted by it and the
+  /// fit is redone
+  bool estimate_delay = true;
 };
 
 struct ParameterEstimate {
   std::string name;
-  double value = 0, std = 0, initial = 0;
+  double value = 0;
+  double std = 0;  ///< NaN when not determined (never a silent 0)
+  double initial = 0;
+  /// at a bound (lower bound, or static_coulomb = coulomb): the std, from the unconstrained
+  /// curvature, is not meaningful
+  bool at_bound = false;
 };
 
 /// Identification outcome. `status` not ok: the numerics failed (values may be partial).
@@ -95,8 +117,11 @@ struct IdentifyResult {
   /// rms of the unweighted residual per actuator [N m] (inverse dynamics: tau - M at the fit)
   double rms_torque_residual[2] = {0, 0};
   double rms_torque_residual_initial[2] = {0, 0};  ///< same at the start values
-  /// white-noise level of the torque residual, 1.4826 median |r_i - r_(i-1)| / sqrt 2 [N m]: the
-  /// sensor noise; rms_torque_residual well above it means model mismatch (or rate-estimate bias)
+  /// the torque residual's expected rms from the sensor noise alone [N m]: the logged torque
+  /// noise plus the angle (or rate) noise propagated through the rate estimation and the
+  /// dynamics, floored at 0.1 % of the rms logged torque (noise-free logs); rms_torque_residual
+  /// well above it means structure the fitted law misses. Output error: the torque residual's
+  /// white-noise level, 1.4826 median |r_i - r_(i-1)| / sqrt 2.
   double residual_noise_floor[2] = {0, 0};
   double rms_angle_residual[2] = {0, 0};  ///< output error: theta - simulated [rad]
   double residual_sigma = 0;              ///< sqrt(2 cost / (m - p)) in residual units
@@ -106,7 +131,21 @@ struct IdentifyResult {
   std::string solver_message;
   std::vector<double> iteration_costs;  ///< Ceres cost at each iteration (iteration 0 first)
   bool rates_estimated = false, accels_estimated = false;
-  int sg_half_window = 0;  ///< samples, when estimated
+  int sg_half_window = 0;     ///< samples, when estimated
+  int sg_order = 0;           ///< Savitzky-Golay polynomial order used, when estimated
+  std::string window_choice;  ///< how the half-window was chosen (data-driven or given)
+  /// the log's conditioning: one sentence per thing done (unwrapping, glitches rejected)
+  std::vector<std::string> notes;
+  std::vector<Glitch> glitches;  ///< samples rejected as isolated glitches
+  TorqueLog conditioned_log;     ///< the log as fitted: unwrapped, glitches interpolated
+  int unwrapped[2] = {0, 0};     ///< one-turn jumps undone in theta1, theta2
+  /// robust white-noise std of the logged columns (condition.h) [rad], [N m], [rad/s]
+  double angle_noise[2] = {0, 0}, torque_noise[2] = {0, 0}, rate_noise[2] = {0, 0};
+  std::string std_method;  ///< "errors-in-variables" or "residual-variance"
+  /// torque-to-angle delay d [s]: the logged torques at t + d match the angles at t (positive:
+  /// the torques lag); NaN when not estimated. delay_corrected: the fit used torques shifted by d
+  double delay_s = std::numeric_limits<double>::quiet_NaN(), delay_std_s = delay_s;
+  bool delay_corrected = false;
   /// per sample (log order): rates and accelerations used, predicted torques at the fit (inverse
   /// dynamics of the fitted scene at every sample; NaN where it failed), and whether used
   std::vector<double> omega1, omega2, alpha1, alpha2, predicted_tau1, predicted_tau2;
@@ -115,8 +154,12 @@ struct IdentifyResult {
 };
 
 /// Identifies the friction coefficients of `scene` from `log`. `loads` gives the scene's
-/// non-actuator loads (M3, F, F_angle; its M1, M2 are ignored). Throws LogError for a log that
-/// cannot be used (fewer samples than parameters, poses that do not fit the scene).
+/// non-actuator loads (M3, F, F_angle; its M1, M2 are ignored). The log is first conditioned
+/// (condition.h: unwrapped, isolated glitches rejected). Throws LogError for a log that cannot
+/// be used (fewer samples than parameters, poses that do not fit the scene, angles in degrees,
+/// more than isolated glitches). A numerical failure (an evaluation that fails at the start
+/// values or the solution, a solver that gives up) is a status naming the sample and the reason;
+/// the covariance is computed only on a converged solution.
 IdentifyResult identify(const Params<double>& scene, const sim::LoadFunction& loads,
                         const TorqueLog& log, const IdentifyOptions& options);
 
@@ -130,14 +173,17 @@ struct Validation {
   double window_s = 0;            ///< restart period of the windowed check
   double window_rms[2] = {0, 0};  ///< [rad] runs restarted from the logged state every window
   std::vector<double> full_theta1,
-      full_theta2;  ///< simulated at the log's times (NaN after a stop)
+      full_theta2;          ///< simulated at the log's times (NaN after a stop)
+  int windows_skipped = 0;  ///< windows not run: the time budget was spent
 };
 
 /// Simulates `params` with the log's torques from the log's state (rates: `omega1/2`), once over
-/// the whole log and in windows of `window_s` restarted from the logged state.
+/// the whole log and in windows of `window_s` restarted from the logged state, within a wall-time
+/// budget (the full run gets half; windows past the budget are skipped and counted).
 Validation validate(const Params<double>& params, const sim::LoadFunction& loads,
                     const TorqueLog& log, const std::vector<double>& omega1,
-                    const std::vector<double>& omega2, double window_s, double rtol = 1e-9);
+                    const std::vector<double>& omega2, double window_s, double rtol = 1e-9,
+                    double budget_s = 10.0);
 
 /// Loads for the simulator: logged tau1, tau2 (linear in t) as M1, M2 and the scene's M3, F,
 /// F_angle, shifted by t0 (the simulator starts at t = 0).

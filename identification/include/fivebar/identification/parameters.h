@@ -15,6 +15,10 @@ namespace fivebar::identification {
 struct ParameterLayout {
   FrictionLaw law = FrictionLaw::kCoulombViscous;
   bool per_joint = false;
+  /// Stribeck: the static_coulomb entries of the vector hold the excess static_coulomb - coulomb
+  /// (>= 0 by its bound), so that a fit cannot return static friction below kinetic friction.
+  /// identify() solves in this form and reports static_coulomb itself.
+  bool static_as_excess = false;
 
   int groups() const { return law == FrictionLaw::kStribeck ? 4 : 2; }
   int per_group() const { return per_joint ? kJoints : 1; }
@@ -47,10 +51,12 @@ struct ParameterLayout {
     for (int i = 0; i < n; ++i) {
       // parameter i sets group i / per_group() at one joint (per joint) or at all five
       std::array<T, kJoints>& d = *dst[i / per_group()];
+      // static_as_excess: static_coulomb = coulomb (same joint) + excess
+      const T v = static_as_excess && i / per_group() == 2 ? x[i] + x[i - 2 * per_group()] : x[i];
       if (per_joint) {
-        d[i % kJoints] = x[i];
+        d[i % kJoints] = v;
       } else {
-        d.fill(x[i]);
+        d.fill(v);
       }
     }
   }
@@ -64,6 +70,9 @@ struct ParameterLayout {
       for (int k = 0; k < kJoints; ++k) {
         x[g * per_group() + (per_joint ? k : 0)] += (*src[g])[k] / (per_joint ? 1.0 : kJoints);
       }
+    }
+    if (static_as_excess && groups() > 2) {
+      for (int j = 0; j < per_group(); ++j) x[2 * per_group() + j] -= x[j];
     }
     return x;
   }

@@ -30,4 +30,9 @@ int sg_half_window(const SgOptions& options, double dt);
 void savitzky_golay(const std::vector<double>& t, const std::vector<double>& x,
                     const SgOptions& options, std::vector<double>* dx, std::vector<double>* ddx);
 
+/// The weights that savitzky_golay applies at sample i: dx[i] = sum_r d1[r] x[lo + r] and
+/// ddx[i] = sum_r d2[r] x[lo + r] (the filter is linear in x; used to propagate sensor noise).
+void savitzky_golay_taps(const std::vector<double>& t, int i, const SgOptions& options, int* lo,
+                         std::vector<double>* d1, std::vector<double>* d2);
+
 }  // namespace fivebar::identification

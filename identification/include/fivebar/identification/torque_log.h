@@ -45,12 +45,11 @@ TorqueLog read_torque_log(const std::string& path);
 /// Parses a log from text (`path` only names it in messages). Same checks as read_torque_log.
 TorqueLog parse_torque_log(const std::string& text, const std::string& path);
 
-/// Empty if the angles of `log` look like radians, else the reason they look like degrees:
-/// (a) with rates in the log, the finite-difference rate of theta is ~180/pi times omega
-/// (least-squares slope within 20 % of 57.3); (b) without rates, a first angle beyond two turns
-/// (|theta_0| > 4 pi: 90 degrees reads as 90 rad), a median |d theta/dt| above 100 rad/s, or a
-/// range above 4 pi within 0.5 s. (A crank of this mechanism may turn continuously, so a large
-/// range over a long log alone is no sign of degrees.)
+/// Empty if the angles of `log` look like radians, else the reason they look like degrees. Only
+/// with rates in the log: the finite-difference rate of theta is ~180/pi times omega
+/// (least-squares slope within 20 % of 57.3). Without rates the magnitude is no evidence (a crank
+/// that turns continuously gives multi-turn angles; a log cut mid-run starts past 4 pi):
+/// identify tells degrees from the motion against the scene (degrees_from_motion, condition.h).
 std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& theta,
                                const std::vector<double>* omega);
 

@@ -1,0 +1,73 @@
+// Logs as encoders and loggers write them: unwrapping of wrapped angles, rejection of isolated
+// glitches, degrees told from radians by the motion, and robust white-noise levels. Everything
+// here is data: the caller (identify, and through it the app) reports it. docs/identification.md
+// describes the rules for users.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fivebar/identification/torque_log.h"
+#include "fivebar/model/params.h"
+#include "fivebar/sim/simulator.h"
+
+namespace fivebar::identification {
+
+struct ConditionOptions {
+  bool unwrap = true;           ///< undo jumps of one turn (2 pi) between consecutive samples
+  bool reject_glitches = true;  ///< interpolate isolated glitches and leave their samples out
+  /// a sample is a glitch when it leaves the cubic through its four neighbours by more than this
+  /// many robust standard deviations of that leave-one-out deviation (and more than the floor
+  /// of the motion's own curvature, for noise-free logs)
+  double glitch_sigmas = 12.0;
+  /// more glitches than this fraction of one column is not "isolated glitches": LogError
+  double max_glitch_fraction = 0.01;
+};
+
+/// One rejected sample.
+struct Glitch {
+  int index = 0;        ///< sample index (0-based, log order)
+  int line = 0;         ///< line of the file (1-based)
+  std::string column;   ///< theta1, theta2, tau1 or tau2
+  double value = 0;     ///< as logged (after unwrapping)
+  double expected = 0;  ///< from its four neighbours
+  double sigmas = 0;    ///< |value - expected| in robust standard deviations
+};
+
+/// The log after conditioning, and what was done to it.
+struct ConditionedLog {
+  TorqueLog log;               ///< unwrapped angles, glitches replaced by their interpolation
+  std::vector<char> rejected;  ///< per sample: 1 if one of its values was a glitch
+  int unwrapped[2] = {0, 0};   ///< one-turn jumps undone in theta1, theta2
+  std::vector<Glitch> glitches;
+  /// robust white-noise std of the logged columns (leave-one-out cubic deviation, MAD-based)
+  double angle_noise[2] = {0, 0}, torque_noise[2] = {0, 0}, rate_noise[2] = {0, 0};
+  std::vector<std::string> notes;  ///< one sentence per thing done (unwrapping, rejections)
+};
+
+/// Unwraps and cleans `log` (see ConditionOptions). Throws LogError naming the column and the
+/// first lines when a column has more glitches than max_glitch_fraction allows.
+ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& options);
+
+/// Jumps of one turn undone in place: a step that differs from the previous step by 2 pi within
+/// pi/2 is a wrap (encoders that report (-pi, pi] or [0, 2 pi)); returns how many were undone.
+int unwrap_angles(std::vector<double>* theta);
+
+/// Leave-one-out deviation of every sample from the cubic through its four nearest neighbours
+/// (two on each side inside the log, one-sided at the ends), divided by the deviation's noise
+/// gain so that white noise of std s gives deviations of std s. Non-finite results are +inf.
+std::vector<double> loo_deviation(const std::vector<double>& t, const std::vector<double>& x,
+                                  std::vector<double>* expected = nullptr);
+
+/// 1.4826 times the median of |v| (robust std of zero-mean values); 0 for an empty vector.
+double robust_std(std::vector<double> v);
+
+/// Empty if the log's angles read as radians explain its torques, else the evidence that they
+/// are degrees: with rates estimated from the angles, the scene's frictionless inverse dynamics
+/// is compared with the logged torques for both readings (median |tau - M| over the log, and
+/// the median crank rate); degrees are reported only when the degree reading explains the
+/// torques four times better than radians and to within half their median size.
+std::string degrees_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
+                                const TorqueLog& log);
+
+}  // namespace fivebar::identification

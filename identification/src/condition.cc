@@ -1,0 +1,305 @@
+// Log conditioning: unwrapping, isolated-glitch rejection, noise levels, degrees from the motion.
+#include "fivebar/identification/condition.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "fivebar/identification/rates.h"
+#include "fivebar/model/dynamics.h"
+
+namespace fivebar::identification {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::string fmt(double x, int prec = 3) {
+  std::ostringstream s;
+  s.precision(prec);
+  s << x;
+  return s.str();
+}
+
+double median_abs(std::vector<double> v) {
+  if (v.empty()) return 0;
+  for (double& x : v) x = std::isfinite(x) ? std::abs(x) : kInf;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+double noise_std(const std::vector<double>& z);
+
+/// Indices of the four neighbours the leave-one-out cubic of sample i uses.
+std::array<int, 4> neighbours(int i, int n) {
+  if (i < 2) return i == 0 ? std::array<int, 4>{1, 2, 3, 4} : std::array<int, 4>{0, 2, 3, 4};
+  if (i > n - 3) {
+    return i == n - 1 ? std::array<int, 4>{n - 5, n - 4, n - 3, n - 2}
+                      : std::array<int, 4>{n - 5, n - 4, n - 3, n - 1};
+  }
+  return {i - 2, i - 1, i + 1, i + 2};
+}
+
+/// Glitch signature at an interior sample: the deviations of both neighbours have the other sign
+/// and about 2/3 of its size (the cubic gives them weight 4/6); a step between two samples does
+/// not have it (its neighbours deviate by 1/6 and 1/2 of the step).
+bool glitch_signature(const std::vector<double>& z, int i) {
+  const int n = static_cast<int>(z.size());
+  if (i < 3 || i > n - 4) return true;  // at the ends the one-sided fit has no signature
+  if (!std::isfinite(z[i])) return true;
+  for (int j : {i - 1, i + 1}) {
+    if (!std::isfinite(z[j])) return true;  // an absurd value drowns its neighbours
+    const double ratio = -z[j] / z[i];
+    if (!(ratio > 0.45 && ratio < 0.9)) return false;
+  }
+  return true;
+}
+
+/// Rejects isolated glitches of one column in place; returns the glitches found.
+std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double sigmas,
+                                  std::vector<double>* x, double* noise) {
+  std::vector<Glitch> found;
+  const int n = static_cast<int>(x->size());
+  if (n < 8) return found;
+  // the motion's own curvature: second differences, robustly; a noise-free log has kinks
+  // (acceleration jumps at slip reversals) that leave the cubic by ~0.1 of them
+  std::vector<double> d2;
+  for (int i = 1; i + 1 < n; ++i) d2.push_back((*x)[i + 1] - 2 * (*x)[i] + (*x)[i - 1]);
+  const double curvature_floor = 10.0 * median_abs(d2);
+  for (int pass = 0; pass < 4; ++pass) {
+    std::vector<double> expected;
+    const std::vector<double> z = loo_deviation(log.t, *x, &expected);
+    *noise = robust_std(z);
+    const double threshold = std::max(sigmas * *noise, curvature_floor);
+    std::vector<int> hits;
+    for (int i = 0; i < n; ++i) {
+      const double a = std::abs(z[i]);
+      if (!(a > threshold) || threshold <= 0) continue;
+      bool peak = true;
+      for (int j = std::max(0, i - 2); j <= std::min(n - 1, i + 2); ++j) {
+        if (j != i && std::abs(z[j]) > a) peak = false;
+        if (j < i && std::abs(z[j]) == a) peak = false;  // ties: the first one
+      }
+      if (peak && glitch_signature(z, i)) hits.push_back(i);
+    }
+    if (hits.empty()) {
+      *noise = noise_std(z);
+      break;
+    }
+    for (int i : hits) {
+      Glitch g;
+      g.index = i;
+      g.line = log.lines.empty() ? i + 1 : log.lines[i];
+      g.column = name;
+      g.value = (*x)[i];
+      g.expected = expected[i];
+      g.sigmas = *noise > 0 ? std::abs(z[i]) / *noise : kInf;
+      found.push_back(g);
+      (*x)[i] = expected[i];
+    }
+  }
+  return found;
+}
+
+std::string line_list(const std::vector<Glitch>& g, size_t max_shown = 5) {
+  std::string s;
+  for (size_t i = 0; i < g.size() && i < max_shown; ++i) {
+    s += (i ? ", " : "") + std::to_string(g[i].line);
+  }
+  if (g.size() > max_shown) s += ", ...";
+  return s;
+}
+
+/// Median |tau - M| (frictionless inverse dynamics of `scene`) over up to 400 samples of the
+/// angles `th1, th2` (rates by Savitzky-Golay); failed poses count as infinite.
+double torque_mismatch(const Params<double>& scene, const sim::LoadFunction& loads,
+                       const TorqueLog& log, const std::vector<double>& th1,
+                       const std::vector<double>& th2, double* median_rate) {
+  std::vector<double> w1, w2, a1, a2;
+  savitzky_golay(log.t, th1, SgOptions{}, &w1, &a1);
+  savitzky_golay(log.t, th2, SgOptions{}, &w2, &a2);
+  Params<double> p = scene;
+  p.friction.law = FrictionLaw::kNone;
+  const int n = log.size();
+  const int step = std::max(1, n / 400);
+  std::vector<double> mismatch, rate;
+  EvalOptions eval;
+  for (int i = 0; i < n; i += step) {
+    Evaluation<double> ev;
+    const Status st = inverse_dynamics(p, loads(log.t[i]), th1[i], th2[i], w1[i], w2[i], a1[i],
+                                       a2[i], nullptr, eval, &ev);
+    mismatch.push_back(
+        st.ok() ? std::max(std::abs(log.tau1[i] - ev.M1), std::abs(log.tau2[i] - ev.M2)) : kInf);
+    rate.push_back(std::max(std::abs(w1[i]), std::abs(w2[i])));
+  }
+  *median_rate = median_abs(rate);
+  return median_abs(mismatch);
+}
+
+/// White-noise std of leave-one-out deviations: the rms of those within 4 robust std (efficient
+/// like the rms, robust like the median), corrected for the truncation of a Gaussian at 4 std.
+double noise_std(const std::vector<double>& z) {
+  const double s0 = robust_std(z);
+  if (!(s0 > 0)) return 0;
+  double s2 = 0;
+  int c = 0;
+  for (double v : z) {
+    if (std::abs(v) <= 4 * s0) {
+      s2 += v * v;
+      ++c;
+    }
+  }
+  return c ? std::sqrt(s2 / c / 0.99893) : s0;
+}
+
+}  // namespace
+
+double robust_std(std::vector<double> v) { return 1.4826 * median_abs(std::move(v)); }
+
+int unwrap_angles(std::vector<double>* theta) {
+  std::vector<double>& th = *theta;
+  const int n = static_cast<int>(th.size());
+  int count = 0;
+  double offset = 0, prev_raw = n ? th[0] : 0, prev_step = 0;
+  for (int i = 1; i < n; ++i) {
+    const double raw = th[i];
+    const double step = raw - prev_raw;
+    prev_raw = raw;
+    // a wrap: this step is the previous one plus or minus one turn (within a quarter turn)
+    double turns = 0;
+    for (double k : {-1.0, 1.0}) {
+      if (std::abs(step - prev_step - 2 * M_PI * k) < M_PI / 2) turns = k;
+    }
+    if (turns != 0) {
+      offset -= 2 * M_PI * turns;
+      ++count;
+    }
+    const double unwrapped_step = step - 2 * M_PI * turns;
+    // the predictor follows the motion, not absurd steps (those are glitches, handled later)
+    prev_step = std::abs(unwrapped_step) < M_PI / 2 ? unwrapped_step : prev_step;
+    th[i] = raw + offset;
+  }
+  return count;
+}
+
+std::vector<double> loo_deviation(const std::vector<double>& t, const std::vector<double>& x,
+                                  std::vector<double>* expected) {
+  const int n = static_cast<int>(x.size());
+  std::vector<double> z(n, 0.0);
+  if (expected) *expected = x;
+  if (n < 5) return z;
+  for (int i = 0; i < n; ++i) {
+    const std::array<int, 4> nb = neighbours(i, n);
+    // Lagrange weights of the cubic through the four neighbours, evaluated at t_i
+    double w[4], gain2 = 1, pred = 0;
+    for (int a = 0; a < 4; ++a) {
+      w[a] = 1;
+      for (int b = 0; b < 4; ++b) {
+        if (b != a) w[a] *= (t[i] - t[nb[b]]) / (t[nb[a]] - t[nb[b]]);
+      }
+      gain2 += w[a] * w[a];
+      pred += w[a] * x[nb[a]];
+    }
+    const double e = (x[i] - pred) / std::sqrt(gain2);
+    z[i] = std::isfinite(e) ? e : kInf;
+    if (expected) (*expected)[i] = std::isfinite(pred) ? pred : x[i];
+  }
+  return z;
+}
+
+ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) {
+  ConditionedLog out;
+  out.log = log;
+  TorqueLog& L = out.log;
+  const int n = L.size();
+  out.rejected.assign(n, 0);
+  if (opt.unwrap) {
+    out.unwrapped[0] = unwrap_angles(&L.theta1);
+    out.unwrapped[1] = unwrap_angles(&L.theta2);
+    if (out.unwrapped[0] + out.unwrapped[1] > 0) {
+      out.notes.push_back("unwrapped " + std::to_string(out.unwrapped[0]) + " + " +
+                          std::to_string(out.unwrapped[1]) +
+                          " one-turn (2 pi) jumps of theta1, theta2 (angles wrapped by the "
+                          "encoder or logger)");
+    }
+  }
+  struct Column {
+    const char* name;
+    std::vector<double>* x;
+    double* noise;
+  };
+  std::vector<Column> cols = {{"theta1", &L.theta1, &out.angle_noise[0]},
+                              {"theta2", &L.theta2, &out.angle_noise[1]},
+                              {"tau1", &L.tau1, &out.torque_noise[0]},
+                              {"tau2", &L.tau2, &out.torque_noise[1]}};
+  if (L.has_rates) {
+    cols.push_back({"omega1", &L.omega1, &out.rate_noise[0]});
+    cols.push_back({"omega2", &L.omega2, &out.rate_noise[1]});
+  }
+  const int allowed = std::max(2, static_cast<int>(opt.max_glitch_fraction * n));
+  for (const Column& c : cols) {
+    std::vector<Glitch> g;
+    if (opt.reject_glitches) {
+      g = reject_column(L, c.name, opt.glitch_sigmas, c.x, c.noise);
+    } else {
+      *c.noise = noise_std(loo_deviation(L.t, *c.x));
+    }
+    if (static_cast<int>(g.size()) > allowed) {
+      std::sort(g.begin(), g.end(),
+                [](const Glitch& a, const Glitch& b) { return a.line < b.line; });
+      throw LogError(L.path, std::string("column ") + c.name,
+                     std::to_string(g.size()) + " samples leave their neighbours' trend (lines " +
+                         line_list(g) + "): more than the " + std::to_string(allowed) +
+                         " isolated glitches that are rejected; the column is not a smooth "
+                         "measurement");
+    }
+    for (const Glitch& x : g) out.rejected[x.index] = 1;
+    out.glitches.insert(out.glitches.end(), g.begin(), g.end());
+  }
+  if (!out.glitches.empty()) {
+    std::sort(out.glitches.begin(), out.glitches.end(),
+              [](const Glitch& a, const Glitch& b) { return a.line < b.line; });
+    std::string what;
+    for (size_t i = 0; i < out.glitches.size() && i < 5; ++i) {
+      const Glitch& g = out.glitches[i];
+      what += std::string(i ? "; " : "") + "line " + std::to_string(g.line) + " " + g.column +
+              " = " + fmt(g.value, 6) + " where its neighbours give " + fmt(g.expected, 6) + " (" +
+              fmt(g.sigmas, 2) + " noise std)";
+    }
+    if (out.glitches.size() > 5) what += "; ...";
+    out.notes.push_back("rejected " + std::to_string(out.glitches.size()) +
+                        " isolated glitch(es), left out of the fit and interpolated for the "
+                        "rates: " +
+                        what);
+  }
+  return out;
+}
+
+std::string degrees_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
+                                const TorqueLog& log) {
+  const int n = log.size();
+  if (n < 2 * sg_half_window(SgOptions{}, log.duration() / std::max(1, n - 1)) + 2) return "";
+  std::vector<double> r1 = log.theta1, r2 = log.theta2, d1 = log.theta1, d2 = log.theta2;
+  unwrap_angles(&r1);
+  unwrap_angles(&r2);
+  for (std::vector<double>* v : {&d1, &d2}) {
+    for (double& x : *v) x *= M_PI / 180;
+  }
+  unwrap_angles(&d1);
+  unwrap_angles(&d2);
+  double rate_rad = 0, rate_deg = 0;
+  const double as_rad = torque_mismatch(scene, loads, log, r1, r2, &rate_rad);
+  const double as_deg = torque_mismatch(scene, loads, log, d1, d2, &rate_deg);
+  // degrees only when that reading explains the torques several times better than radians, and
+  // well in absolute terms (within half the logged torques' median size): a log that neither
+  // reading explains (wrong scene, absurd values) is not called degrees
+  std::vector<double> tau;
+  for (int i = 0; i < n; ++i) tau.push_back(std::max(std::abs(log.tau1[i]), std::abs(log.tau2[i])));
+  if (!(as_deg < 0.25 * as_rad) || !(as_deg < 0.5 * median_abs(tau))) return "";
+  return "read as radians, the motion (median crank rate " + fmt(rate_rad) +
+         " rad/s) needs torques a median " + fmt(as_rad) +
+         " N m away from the logged ones; read as degrees (median rate " + fmt(rate_deg) +
+         " rad/s), " + fmt(as_deg) + " N m";
+}
+
+}  // namespace fivebar::identification

@@ -1,0 +1,104 @@
+// Sensor noise through rate estimation and inverse dynamics (see noise_model.h).
+#include "noise_model.h"
+
+#include <ceres/jet.h>
+
+#include <cmath>
+
+namespace fivebar::identification::detail {
+
+bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layout, const double* x,
+                        const Sample& s, const EvalOptions& eval, Eigen::Matrix<double, 2, 6>* D) {
+  using J6 = ceres::Jet<double, 6>;
+  Params<J6> p = scene.template cast<J6>();
+  std::vector<J6> xj(layout.size());
+  for (int i = 0; i < layout.size(); ++i) xj[i] = J6(x[i]);
+  layout.apply(xj.data(), &p.friction);
+  const double v[6] = {s.th1, s.th2, s.w1, s.w2, s.a1, s.a2};
+  J6 in[6];
+  for (int k = 0; k < 6; ++k) in[k] = J6(v[k], k);
+  Evaluation<J6> ev;
+  const Status st = inverse_dynamics(p, s.loads.template cast<J6>(), in[0], in[1], in[2], in[3],
+                                     in[4], in[5], nullptr, eval, &ev);
+  if (!st.ok()) return false;
+  D->row(0) = ev.M1.v.transpose();
+  D->row(1) = ev.M2.v.transpose();
+  return D->allFinite();
+}
+
+Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source, const SgOptions& sg,
+                        const SensorNoise& noise, const Eigen::Matrix<double, 2, 6>& D) {
+  Sensitivity out;
+  // r = tau - M: d r / d v = -D[:, v]; v = 0,1 theta, 2,3 omega, 4,5 alpha
+  auto col = [&](int v) { return Eigen::Vector2d(-D(0, v), -D(1, v)); };
+  int lo = i;
+  std::vector<double> d1, d2;
+  if (source != RateSource::kLogged) savitzky_golay_taps(t, i, sg, &lo, &d1, &d2);
+  for (int c = 0; c < 2; ++c) {
+    if (source == RateSource::kFromAngles) {
+      // the angle noise of the window: through omega (d1), alpha (d2) and, at i, theta itself
+      out.lo[c] = lo;
+      out.sigma[c] = noise.angle[c];
+      for (size_t r = 0; r < d1.size(); ++r) {
+        Eigen::Vector2d a = col(2 + c) * d1[r] + col(4 + c) * d2[r];
+        if (lo + static_cast<int>(r) == i) a += col(c);
+        out.coef[c].push_back(a);
+      }
+    } else {
+      // logged rates: their noise directly and through the estimated accelerations (d1)
+      out.lo[c] = source == RateSource::kAccelsFromRates ? lo : i;
+      out.sigma[c] = noise.rate[c];
+      if (source == RateSource::kAccelsFromRates) {
+        for (size_t r = 0; r < d1.size(); ++r) {
+          Eigen::Vector2d a = col(4 + c) * d1[r];
+          if (lo + static_cast<int>(r) == i) a += col(2 + c);
+          out.coef[c].push_back(a);
+        }
+      } else {
+        out.coef[c].push_back(col(2 + c));
+      }
+      // and the angle noise, at i only
+      out.lo[2 + c] = i;
+      out.sigma[2 + c] = noise.angle[c];
+      out.coef[2 + c].push_back(col(c));
+    }
+  }
+  return out;
+}
+
+Eigen::Vector2d propagated_variance(const Sensitivity& s) {
+  Eigen::Vector2d v = Eigen::Vector2d::Zero();
+  for (int c = 0; c < 4; ++c) {
+    for (const Eigen::Vector2d& a : s.coef[c]) v += s.sigma[c] * s.sigma[c] * a.cwiseAbs2();
+  }
+  return v;
+}
+
+Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sensitivity>& sens,
+                                 const SensorNoise& noise, int n) {
+  const int P = static_cast<int>(J.cols());
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(P, P);
+  // g[c](l) = sum over residuals i of J_i^T d r_i / d n_{c,l}: the score's response to one
+  // noise sample, which enters every residual whose window holds it
+  std::vector<Eigen::MatrixXd> g(4, Eigen::MatrixXd::Zero(n, P));
+  for (size_t u = 0; u < sens.size(); ++u) {
+    const Eigen::Matrix<double, 2, Eigen::Dynamic> Ji = J.middleRows(2 * u, 2);
+    for (int j = 0; j < 2; ++j) {
+      const double s2 = noise.torque[j] * noise.torque[j];
+      S += s2 * Ji.row(j).transpose() * Ji.row(j);
+    }
+    for (int c = 0; c < 4; ++c) {
+      const Sensitivity& s = sens[u];
+      for (size_t r = 0; r < s.coef[c].size(); ++r) {
+        g[c].row(s.lo[c] + r) += s.coef[c][r].transpose() * Ji;
+      }
+    }
+  }
+  for (int c = 0; c < 4; ++c) {
+    const double sigma = sens.empty() ? 0.0 : sens.front().sigma[c];
+    if (sigma > 0) S += sigma * sigma * g[c].transpose() * g[c];
+  }
+  return S;
+}
+
+}  // namespace fivebar::identification::detail

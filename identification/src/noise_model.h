@@ -1,0 +1,52 @@
+// Internal to identification: how sensor noise reaches the inverse-dynamics torque residual when
+// rates and accelerations are estimated from the angles (or accelerations from logged rates):
+// the expected residual level, the data-driven Savitzky-Golay window, and the errors-in-variables
+// covariance.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "fivebar/identification/parameters.h"
+#include "fivebar/identification/rates.h"
+#include "fivebar/identification/residual.h"
+#include "fivebar/model/dynamics.h"
+
+namespace fivebar::identification::detail {
+
+/// Where the rates and accelerations of the fit come from.
+enum class RateSource { kLogged, kAccelsFromRates, kFromAngles };
+
+/// Sensor noise std of the logged columns (robust estimates from the log).
+struct SensorNoise {
+  double angle[2] = {0, 0}, rate[2] = {0, 0}, torque[2] = {0, 0};
+};
+
+/// d M / d (theta1, theta2, omega1, omega2, alpha1, alpha2) at one sample (2 x 6), friction
+/// coefficients x laid out by `layout`; false where the inverse dynamics fails.
+bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layout, const double* x,
+                        const Sample& s, const EvalOptions& eval, Eigen::Matrix<double, 2, 6>* D);
+
+/// One sample's noise sensitivities: for each noise channel (0, 1: the differentiated or direct
+/// angle or rate of crank 1, 2; 2, 3: the direct angle when rates are logged) the samples it
+/// comes from and d r / d n (2 rows, one per actuator) for each.
+struct Sensitivity {
+  int lo[4] = {0, 0, 0, 0};
+  std::vector<Eigen::Vector2d> coef[4];
+  double sigma[4] = {0, 0, 0, 0};
+};
+
+/// Sensitivities of the residual at log sample i (kinematic Jacobian D) to the sensor noise.
+Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source, const SgOptions& sg,
+                        const SensorNoise& noise, const Eigen::Matrix<double, 2, 6>& D);
+
+/// Variance of the residual of each actuator that the noise in `s` produces.
+Eigen::Vector2d propagated_variance(const Sensitivity& s);
+
+/// Errors-in-variables score covariance J^T Sigma J: torque noise at every sample plus each noise
+/// sample's effect through all the residuals whose rates it enters. `J` has 2 rows per used
+/// sample (log index `index[u]`), `sens[u]` the sensitivities of used sample u, `n` the log size.
+Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sensitivity>& sens,
+                                 const SensorNoise& noise, int n);
+
+}  // namespace fivebar::identification::detail
