@@ -46,9 +46,9 @@ const std::vector<std::string> kOutputs = {"trajectory.csv",
 /// Runs longer than this [s] skip the frictionless twin unless --twin asks for it: without
 /// friction the paper mechanism keeps gaining energy, and its twin dominates the run time.
 constexpr double kTwinMaxDuration = 20.0;
-/// Figures draw at most about 200 buckets x (first row and extrema) points per curve: beyond, decimated copies
+/// Figures draw at most about 100 buckets x (first row and extrema) points per curve: beyond, decimated copies
 /// trajectory_plot.csv (and trajectory_frictionless_plot.csv) are written and plotted.
-constexpr size_t kPlotBuckets = 200;
+constexpr size_t kPlotBuckets = 100;
 
 std::string fmt(double x, const char* format = "%.4g") {
   char buf[64];
