@@ -1,6 +1,8 @@
 // Torque log CSV: parsing with line/column diagnostics, plausibility checks, writing.
 #include "fivebar/identification/torque_log.h"
 
+#include <cerrno>
+#include <cstring>
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -54,7 +56,7 @@ std::string format_number(double x) {
 
 TorqueLog read_torque_log(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw LogError(path, "(open)", "cannot read the file");
+  if (!in) throw LogError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));
   std::stringstream ss;
   ss << in.rdbuf();
   return parse_torque_log(ss.str(), path);

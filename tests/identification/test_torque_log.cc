@@ -107,7 +107,7 @@ TEST(TorqueLog, EmptyFileAndNoRows) {
 
 TEST(TorqueLog, MissingFile) {
   EXPECT_THAT([&] { read_torque_log("/nonexistent/log.csv"); },
-              ThrowsMessage<LogError>(HasSubstr("/nonexistent/log.csv: (open)")));
+              ThrowsMessage<LogError>(HasSubstr("/nonexistent/log.csv: (file): cannot open")));
 }
 
 TEST(TorqueLog, MultiTurnAnglesAreNotDegrees) {

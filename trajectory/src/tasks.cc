@@ -1,5 +1,7 @@
 #include "fivebar/trajectory/tasks.h"
 
+#include <cerrno>
+#include <cstring>
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -160,7 +162,7 @@ std::vector<TaskSpec> parse_tasks(const std::string& text, const std::string& pa
 
 std::vector<TaskSpec> load_tasks(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw TaskFileError(path, "(file)", "cannot open the tasks file");
+  if (!in) throw TaskFileError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));
   std::stringstream text;
   text << in.rdbuf();
   return parse_tasks(text.str(), path);
