@@ -161,7 +161,7 @@ int run(const Args& args) {
     if (!warning.empty()) warn(warning);
   }
   write_json_file(out.file("summary.json"), summary);
-  out.commit();
+  const std::vector<std::string> written = out.commit();
 
   std::cout << "fivebar accuracy: " << scene.path << ": " << wp.points.size() << " runs\n"
             << "  reference: Adams vs Dormand-Prince at " << fmt(opt.reference_tolerance)
@@ -187,7 +187,7 @@ int run(const Args& args) {
       std::cout << "not reached\n";
     }
   }
-  std::cout << "  wrote " << out.dir() << "/work_precision.csv, work_precision.png, summary.json\n";
+  print_written(out.dir(), written);
   return 0;
 }
 

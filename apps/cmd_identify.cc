@@ -318,7 +318,7 @@ int run(const Args& a) {
   j.set("wall_time_s",
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   write_json_file(out.file("identification.json"), j);
-  out.commit();
+  const std::vector<std::string> written = out.commit();
 
   // console summary
   std::printf("fivebar identify: %s (%s, %s%s), %d/%d samples, %.3f s\n", a.log.c_str(),
@@ -353,7 +353,8 @@ int run(const Args& a) {
         val.window_s, val.window_rms[0], val.window_rms[1], val.full_rms[0], val.full_rms[1]);
   }
   for (const std::string& w : res.warnings) warn(w);
-  std::printf("  wrote %s/\n", out.dir().c_str());
+  std::fflush(stdout);
+  print_written(out.dir(), written);
   return 0;
 }
 

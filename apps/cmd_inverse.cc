@@ -333,9 +333,7 @@ int run(const Args& args) {
     std::cout << line;
   }
   print_rest(rest, at_rest);
-  std::cout << "  wrote " << out.dir() << "/:";
-  for (const std::string& name : written) std::cout << " " << name;
-  std::cout << std::endl;
+  print_written(out.dir(), written);
   return 0;
 }
 

@@ -258,9 +258,7 @@ int run(const Args& args) {
   write_json_file(out.file("summary.json"), summary);
   const std::vector<std::string> written = out.commit();
   print_report(scene, er, checks, twin, twin_checks);
-  std::cout << "  wrote " << out.dir() << "/:";
-  for (const std::string& name : written) std::cout << " " << name;
-  std::cout << std::endl;
+  print_written(out.dir(), written);
   // a run whose own checks fail is not ok: its outputs stay for the user to look at
   if (!checks.verdict.ok()) {
     throw NumericalError(scene.path, "simulation", "run check failed: " + checks.verdict.message);

@@ -153,7 +153,7 @@ int run(const Args& args) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_text_file(out.file("stress.csv"), stress_csv(report));
   write_text_file(out.file("stress.md"), stress_md(cases, report, opt, total_s));
-  out.commit();
+  const std::vector<std::string> written = out.commit();
 
   // one line per case: its outcomes by integrator
   std::cout << "fivebar stress: " << cases.size() << " cases x " << opt.methods.size()
@@ -170,7 +170,8 @@ int run(const Args& args) {
   const int failed = report.count(sim::StressOutcome::kFailed);
   std::cout << "  total: " << report.count(sim::StressOutcome::kOk) << " ok, "
             << report.count(sim::StressOutcome::kRejected) << " rejected, " << failed
-            << " failed\n  wrote " << out.dir() << "/stress.csv, stress.md\n";
+            << " failed\n";
+  print_written(out.dir(), written);
   if (failed > 0) {
     throw NumericalError("stress", "failed",
                          std::to_string(failed) + " run(s) failed: see " + out.dir() +

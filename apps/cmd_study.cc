@@ -318,8 +318,9 @@ int run(const Args& args) {
     if (!warning.empty()) warn(warning);
   }
   write_text_file(out.file("study.csv"), study_csv(sweeps, designs, tasks, results, outcome));
-  out.commit();
+  const std::vector<std::string> written = out.commit();
   report(sweeps, designs, tasks, results, outcome);
+  print_written(out.dir(), written);
   return 0;
 }
 

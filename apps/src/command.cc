@@ -53,6 +53,12 @@ void add_scene_options(CLI::App* app, SceneArgs* args, const std::string& comman
       ->allow_extra_args(false);  // one KEY=VALUE per --set
 }
 
+void print_written(const std::string& dir, const std::vector<std::string>& names) {
+  std::cout << "  wrote " << dir << "/:";
+  for (const std::string& name : names) std::cout << " " << name;
+  std::cout << std::endl;
+}
+
 void warn(const std::string& message) { std::cerr << "fivebar: warning: " << message << "\n"; }
 
 namespace {

@@ -53,6 +53,9 @@ void add_scene_options(CLI::App* app, SceneArgs* args, const std::string& comman
 /// Declares --out DIR (default results/<command>) alone.
 void add_out_option(CLI::App* app, std::string* out, const std::string& command);
 
+/// Prints the closing line of every command on stdout: `  wrote DIR/: name name ...`.
+void print_written(const std::string& dir, const std::vector<std::string>& names);
+
 /// Prints `fivebar: warning: <message>` on stderr.
 void warn(const std::string& message);
 
