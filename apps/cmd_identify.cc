@@ -75,14 +75,18 @@ std::string residual_plot_script(const std::string& terminal, const std::string&
     << (terminal == "pngcairo" ? " font \"sans,11\"" : "") << "\nset grid\nset key top right\n"
     << "set xlabel \"t [s]\"\n"
     << "set style line 1 lc rgb \"#1f5fa8\" lw 1.2\nset style line 2 lc rgb \"#d62728\" lw 1.2\n";
-  s << "set output \"fig_torques.png\"\nset multiplot layout 2,1 title \"measured (blue) and "
-       "predicted (red) actuator torques   "
+  // the first 2 s only: a long log's periods would overlay into one band
+  s << "stats \"residuals.csv\" using \"t\" nooutput\n"
+    << "set xrange [STATS_min:(STATS_max < STATS_min + 2 ? STATS_max : STATS_min + 2)]\n"
+    << "set output \"fig_torques.png\"\nset multiplot layout 2,1 title \"measured (blue) and "
+       "predicted (red) actuator torques, first 2 s   "
     << title << "\" noenhanced\n";
   for (int i = 1; i <= 2; ++i) {
     s << "set ylabel \"tau" << i << " [N m]\"\nplot \"residuals.csv\" using \"t\":\"tau" << i
       << "\" with lines ls 1 title \"measured\", \"\" using \"t\":\"predicted_tau" << i
       << "\" with lines ls 2 title \"predicted\"\n";
   }
+  s << "set autoscale x\n";
   s << "unset multiplot\nset output \"fig_residuals.png\"\nset multiplot layout 2,1 title "
        "\"torque residual measured - predicted (samples in the fit)   "
     << title << "\" noenhanced\n";
