@@ -31,7 +31,7 @@ namespace {
 struct Args {
   SceneArgs scene;
   std::string pose;  // "theta1,theta2"; empty: the scene's initial pose
-  int grid = 0;      // > 0: map over N x N poses
+  int grid = -1;     // > 0: map over N x N poses; -1: not given
   double torque_limit = std::numeric_limits<double>::infinity();
   double time = 0;  // when the loads M3, F are evaluated
   bool no_plots = false;
@@ -47,8 +47,9 @@ std::array<double, 2> parse_pose(const std::string& text, const std::string& sce
   char comma = 0;
   std::string rest;
   if (!(in >> pose[0] >> comma >> pose[1]) || comma != ',' || (in >> rest) ||
-      !std::isfinite(pose[0]) || !std::isfinite(pose[1])) {
-    throw InputError(scene, "--pose", "expected THETA1,THETA2 (two numbers in rad), got '" +
+      !std::isfinite(pose[0]) || !std::isfinite(pose[1]) || std::abs(pose[0]) > 1e3 ||
+      std::abs(pose[1]) > 1e3) {
+    throw InputError(scene, "--pose", "expected THETA1,THETA2 (two numbers in rad, |theta| <= 1000), got '" +
                                           text + "'");
   }
   return pose;
@@ -236,7 +237,7 @@ int run_grid(const Args& args, const Scene& scene, const Loads<double>& L) {
 
 int run(const Args& args) {
   const Scene scene = load_scene(args.scene.scene, args.scene.sets);
-  if (args.grid < 0 || args.grid > 2000) {
+  if (args.grid != -1 && (args.grid < 1 || args.grid > 2000)) {
     throw InputError(scene.path, "--grid", "expected 1 to 2000 poses per crank, got " +
                                                std::to_string(args.grid));
   }

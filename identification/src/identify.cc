@@ -8,8 +8,11 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <memory>
 #include <sstream>
+
+#include <glog/logging.h>
 
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
@@ -1110,8 +1113,23 @@ sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& sc
   };
 }
 
+namespace {
+/// Ceres reports through glog on stderr ("Terminating: ..."); library code never prints: the
+/// outcome is in the summary we return. Once per process, glog is told to keep quiet.
+void quiet_solver_logging() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (!google::IsGoogleLoggingInitialized()) google::InitGoogleLogging("fivebar");
+    FLAGS_minloglevel = google::GLOG_FATAL;
+    FLAGS_stderrthreshold = google::GLOG_FATAL;
+    FLAGS_logtostderr = false;
+  });
+}
+}  // namespace
+
 IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction& loads,
                         const TorqueLog& log, const IdentifyOptions& opt) {
+  quiet_solver_logging();
   const auto start = Clock::now();
   IdentifyResult out;
   out.layout = opt.layout;

@@ -896,6 +896,7 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
                     const RestThresholds& rest) {
   out->clear();
   out->reserve(motion.size());
+  std::vector<double> power_in, power_ext;  // M1 w1 + M2 w2 and M3 w3 + F . v_P [W]
   const EvalOptions eval = with_rest(EvalOptions{}, rest);
   for (const Row& m : motion) {
     const Loads<double> L = loads(m.t);
@@ -928,13 +929,19 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
     r.kinetic = kinetic_energy(params, ev.kin, m.omega[0], m.omega[1]);
     r.potential = potential_energy(params, ev.kin);
     out->push_back(r);
+    power_in.push_back(ev.P_in);
+    power_ext.push_back(ev.P_ext);
   }
-  // dissipated energy along the motion by the trapezoidal rule
-  for (size_t i = 0; i < out->size(); ++i) {
-    (*out)[i].E_diss = i == 0 ? 0.0
-                              : (*out)[i - 1].E_diss + 0.5 * ((*out)[i].P_diss + (*out)[i - 1].P_diss) *
-                                                           ((*out)[i].t - (*out)[i - 1].t);
+  // dissipated energy and the works along the motion by the trapezoidal rule
+  for (size_t i = 1; i < out->size(); ++i) {
+    Row& r = (*out)[i];
+    const Row& q = (*out)[i - 1];
+    const double half_dt = 0.5 * (r.t - q.t);
+    r.E_diss = q.E_diss + half_dt * (r.P_diss + q.P_diss);
+    r.W_in = q.W_in + half_dt * (power_in[i] + power_in[i - 1]);
+    r.W_ext = q.W_ext + half_dt * (power_ext[i] + power_ext[i - 1]);
   }
+  if (!out->empty()) out->front().E_diss = out->front().W_in = out->front().W_ext = 0.0;
   return Status::Ok();
 }
 

@@ -187,6 +187,12 @@ ResolvedTask resolve_task(const Params<double>& params, const TaskSpec& task,
   if (!(task.duration > 0)) {
     return fail("invalid_duration", "duration " + str(task.duration) + " s is not positive");
   }
+  if (task.duration > kMaxTaskDuration) {
+    return fail("invalid_duration", "duration " + str(task.duration) + " s is beyond the " +
+                                        str(kMaxTaskDuration) +
+                                        " s a rest-to-rest task may take (the dense checks and "
+                                        "the validation grow with it)");
+  }
   if (!(task.torque_limit > 0)) {
     return fail("invalid_torque_limit",
                 "torque_limit " + str(task.torque_limit) + " N m is not positive");
@@ -200,6 +206,11 @@ ResolvedTask resolve_task(const Params<double>& params, const TaskSpec& task,
                    std::array<double, 2>* out) -> bool {
     Kinematics<double> k;
     const std::string w = which;
+    if (!(std::abs(pose.a) <= kMaxTaskAngle && std::abs(pose.b) <= kMaxTaskAngle)) {
+      return fail(w + "_invalid", w + ": (" + str(pose.a) + ", " + str(pose.b) +
+                                      ") is beyond |" + str(kMaxTaskAngle) + "| (rad or m)"),
+             false;
+    }
     if (!pose.cartesian) {
       const Status st = solve_kinematics(params, pose.a, pose.b, &k);
       if (!st.ok()) return fail(w + "_cannot_assemble", w + ": " + st.message), false;

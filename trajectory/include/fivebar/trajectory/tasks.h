@@ -36,6 +36,11 @@ struct Pose {
 
 /// One task as written in the file. Values are not range-checked here: a non-positive duration
 /// or torque limit becomes the task's status in the batch (resolve_task), not a file error.
+/// Longest task [s]: the dense checks and the validation grow with the duration.
+inline constexpr double kMaxTaskDuration = 100.0;
+/// Largest |coordinate| of a start or goal [rad, or m for a Cartesian one].
+inline constexpr double kMaxTaskAngle = 1000.0;
+
 struct TaskSpec {
   std::string name;
   double duration = 0;  ///< [s], rest to rest
