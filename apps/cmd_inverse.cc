@@ -49,6 +49,17 @@ struct Motion {
   double rate_noise = 0, acceleration_noise = 0;
 };
 
+// largest |n-th forward difference| of a series (0 when it is too short)
+double max_difference(std::vector<double> f, int n) {
+  for (int k = 0; k < n && !f.empty(); ++k) {
+    for (size_t i = 0; i + 1 < f.size(); ++i) f[i] = f[i + 1] - f[i];
+    f.pop_back();
+  }
+  double worst = 0.0;
+  for (double d : f) worst = std::max(worst, std::abs(d));
+  return worst;
+}
+
 // larger of the two cranks' series_noise
 double crank_noise(const std::vector<double>& a, const std::vector<double>& b) {
   return std::max(series_noise(a), series_noise(b));
@@ -122,14 +133,23 @@ Motion read_motion(const std::string& path, const Scene& scene) {
   // given series: never below the rounding of the angles over one step
   if (h == 0) h = t.size() > 1 ? (t.back() - t.front()) / double(t.size() - 1) : 1.0;
   const double rounding = std::max(rounding_noise(theta1), rounding_noise(theta2));
+  // differentiated angles: also never below the stencils' own truncation error where the
+  // motion has a kink (h^4/30 |f^(5)| for the rate, h^4/90 |f^(6)| for the acceleration, from
+  // the largest 5th and 6th differences): the row before a held pose starts to move would
+  // otherwise read as slipping
+  const double trunc_rate =
+      std::max(max_difference(theta1, 5), max_difference(theta2, 5)) / (30 * h);
+  const double trunc_accel =
+      std::max(max_difference(theta1, 6), max_difference(theta2, 6)) / (90 * h * h);
   m.rate_noise = has_omega ? std::max(crank_noise(omega1, omega2), rounding / h)
-                           : kFirstDerivativeNoiseGain * theta_noise / h;
+                           : std::max(kFirstDerivativeNoiseGain * theta_noise / h, trunc_rate);
   if (has_alpha) {
     m.acceleration_noise = std::max(crank_noise(alpha1, alpha2), rounding / (h * h));
   } else if (has_omega) {
     m.acceleration_noise = kFirstDerivativeNoiseGain * m.rate_noise / h;
   } else {
-    m.acceleration_noise = kSecondDerivativeNoiseGain * theta_noise / (h * h);
+    m.acceleration_noise =
+        std::max(kSecondDerivativeNoiseGain * theta_noise / (h * h), trunc_accel);
   }
   m.rows.resize(t.size());
   for (size_t i = 0; i < t.size(); ++i) {
@@ -251,6 +271,14 @@ void print_rest(const RestRule& rule, const RestSummary& s) {
                 rule.thresholds.rate, rule.thresholds.acceleration, rule.source.c_str());
   std::cout << line;
   if (s.rows_at_rest == 0) return;
+  if (s.M1_hi - s.M1_lo > 1e-9 || s.M2_hi - s.M2_lo > 1e-9) {  // held at several poses
+    std::snprintf(line, sizeof line,
+                  "  %ld rows held still at several poses: M1 in [%.6g, %.6g], M2 in [%.6g, "
+                  "%.6g] N m (each row's range in trajectory.csv)\n",
+                  s.rows_at_rest, s.M1_lo, s.M1_hi, s.M2_lo, s.M2_hi);
+    std::cout << line;
+    return;
+  }
   std::snprintf(line, sizeof line,
                 "  %ld rows held still: M1 = %.10g N m (holds in [%.6g, %.6g]), "
                 "M2 = %.10g N m (holds in [%.6g, %.6g])\n",
