@@ -101,6 +101,40 @@ std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double
   return found;
 }
 
+/// Frozen encoder: three or more equal samples of a moving angle, then a catch-up jump of more
+/// than twice the steps around the run. A real mechanism cannot stop dead and resume, and a
+/// quantized encoder's runs end with a one-count step, not a jump. The run is interpolated
+/// linearly and its samples are rejected, named.
+std::vector<Glitch> reject_frozen(const TorqueLog& log, const char* name, std::vector<double>* x) {
+  std::vector<Glitch> found;
+  std::vector<double>& v = *x;
+  const int n = static_cast<int>(v.size());
+  for (int s = 1; s + 3 < n;) {
+    int e = s;
+    while (e + 1 < n && v[e + 1] == v[s]) ++e;
+    const bool run = e - s >= 2 && e + 2 < n;
+    if (run) {
+      const double before = std::abs(v[s] - v[s - 1]), after = std::abs(v[e + 2] - v[e + 1]);
+      const double jump = std::abs(v[e + 1] - v[e]);
+      if (before > 0 && jump > 2 * std::max(before, after)) {
+        for (int i = s + 1; i <= e; ++i) {  // v[s] is the last good sample of the run
+          Glitch g;
+          g.index = i;
+          g.line = log.lines.empty() ? i + 1 : log.lines[i];
+          g.column = name;
+          g.value = v[i];
+          g.expected = v[s] + (v[e + 1] - v[s]) * (log.t[i] - log.t[s]) / (log.t[e + 1] - log.t[s]);
+          g.sigmas = kInf;
+          found.push_back(g);
+        }
+        for (const Glitch& g : found) v[g.index] = g.expected;
+      }
+    }
+    s = e + 1;
+  }
+  return found;
+}
+
 std::string line_list(const std::vector<Glitch>& g, size_t max_shown = 5) {
   std::string s;
   for (size_t i = 0; i < g.size() && i < max_shown; ++i) {
@@ -240,7 +274,10 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
   for (const Column& c : cols) {
     std::vector<Glitch> g;
     if (opt.reject_glitches) {
-      g = reject_column(L, c.name, opt.glitch_sigmas, c.x, c.noise);
+      g = c.name[0] == 't' && c.name[1] == 'h' ? reject_frozen(L, c.name, c.x)
+                                              : std::vector<Glitch>{};
+      std::vector<Glitch> spikes = reject_column(L, c.name, opt.glitch_sigmas, c.x, c.noise);
+      g.insert(g.end(), spikes.begin(), spikes.end());
     } else {
       *c.noise = noise_std(loo_deviation(L.t, *c.x));
     }

@@ -119,6 +119,17 @@ TEST(Glitch, OneAngleGlitchIsRejectedByLineAndTheFitHolds) {
   for (const ParameterEstimate& p : res.parameters) EXPECT_FALSE(p.at_bound) << p.name;
 }
 
+// review: an encoder frozen for five samples (then catching up) gave coulomb 2.18 +- 0.23, exit 0
+TEST(Glitch, FrozenEncoderIsRejectedByLineAndTheFitHolds) {
+  TorqueLog log = paper_log(1.0);
+  for (int i = 401; i <= 405; ++i) log.theta1[i] = log.theta1[400];
+  const IdentifyResult res = fit(log);
+  expect_truth(res);
+  ASSERT_EQ(res.glitches.size(), 5u);
+  EXPECT_EQ(res.glitches.front().line, log.lines[401]);
+  for (int i = 401; i <= 405; ++i) EXPECT_EQ(res.used[i], 0);
+}
+
 TEST(Glitch, TorqueSpikeAndAbsurdValuesAreRejected) {
   TorqueLog log = paper_log(1.0);
   log.tau2[300] += 2.0;
