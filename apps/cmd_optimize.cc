@@ -76,10 +76,20 @@ std::string plot_script(const std::string& task, double limit, const std::string
   };
   std::string s = "set datafile separator ','\nset terminal " + terminal +
                   " size 900,600 noenhanced\nset key autotitle columnhead\nset grid\n";
+  // the path in true proportions, in a square box around it (a short path along one axis would
+  // otherwise be squeezed into a strip)
+  s += "stats 'trajectory.csv' using 'x_C':'y_C' nooutput\n"
+       "span = 0.6 * (STATS_max_x - STATS_min_x > STATS_max_y - STATS_min_y ? "
+       "STATS_max_x - STATS_min_x : STATS_max_y - STATS_min_y) + 1e-3\n"
+       "cx = (STATS_max_x + STATS_min_x) / 2\ncy = (STATS_max_y + STATS_min_y) / 2\n"
+       "set xrange [cx - span:cx + span]\nset yrange [cy - span:cy + span]\n";
   s += "set output 'path_C.png'\nset title '" + task + ": path of C'\nset size ratio -1\n"
        "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
        "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 title 'optimal'" +
-       with_baseline("'x_C':'y_C'", "minimum jerk") + "\nset size noratio\n";
+       with_baseline("'x_C':'y_C'", "minimum jerk") +
+       "\nset size noratio\nset autoscale xy\n";
+  // room above and below, so that the torque limit lines are not drawn on the border
+  s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
   s += "set output 'torques.png'\nset title '" + task + ": motor torques'\n"
        "set xlabel 't [s]'\nset ylabel 'torque [N m]'\n"
        "plot 'trajectory.csv' using 't':'M1' with lines lw 2 title 'M1', "
@@ -91,7 +101,7 @@ std::string plot_script(const std::string& task, double limit, const std::string
     s += std::string(", ") + buf + " dt 3 lc 'black' title 'limit', -" + buf +
          " dt 3 lc 'black' notitle";
   }
-  s += "\nset output 'energy.png'\nset title '" + task +
+  s += "\nset offsets 0, 0, 0, 0\nset output 'energy.png'\nset title '" + task +
        ": dissipated energy'\nset ylabel 'E_diss [J]'\n"
        "plot 'trajectory.csv' using 't':'E_diss' with lines lw 2 title 'optimal'" +
        with_baseline("'t':'E_diss'", "minimum jerk") + "\n";
