@@ -760,7 +760,13 @@ std::vector<double> output_grid(const Options& o) {
   std::vector<double> grid;
   const long n = output_row_count(o);
   grid.reserve(n);
-  for (long i = 0; i + 1 < n; ++i) grid.push_back(i * o.output_step);
+  // i / rate when the rate is a whole number of rows per second: t = 0.476 prints as 0.476,
+  // where i * 0.001 is the double 0.47600000000000003
+  const double rate = 1.0 / o.output_step;
+  const bool whole = std::abs(rate - std::round(rate)) <= 1e-9 * rate;
+  for (long i = 0; i + 1 < n; ++i) {
+    grid.push_back(whole ? i / std::round(rate) : i * o.output_step);
+  }
   grid.push_back(o.duration);
   return grid;
 }
