@@ -27,8 +27,10 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
     throw InputError(kFlags, "--loss", "expected none, huber or cauchy, got " + a.loss);
   }
   if (!(a.loss_scale > 0)) throw InputError(kFlags, "--loss-scale", "must be > 0");
-  if (!(a.sg_window > 0) || a.sg_order < 2) {
-    throw InputError(kFlags, "--sg-window/--sg-order", "window > 0 and order >= 2 required");
+  if (!(a.sg_window > 0) || a.sg_order < 2 || a.sg_order > 10) {
+    throw InputError(kFlags, "--sg-window/--sg-order",
+                     "window > 0 and order in [2, 10] required, got " +
+                         std::to_string(a.sg_order));
   }
   if (!(a.window > 0)) throw InputError(kFlags, "--window", "must be > 0");
   opt.loss_scale = a.loss_scale;

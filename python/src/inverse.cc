@@ -12,7 +12,9 @@
 #include "bindings.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
+#include "fivebar/model/rest.h"
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/rest.h"
 
 namespace fivebar::python {
 namespace {
@@ -122,7 +124,14 @@ py::array_t<double, py::array::c_style> checked_array(const py::object& obj, con
 
 // all states on `threads` threads (0: the machine's cores); the first failure by index
 Failure inverse_all(const PyScene& s, const States& in, const Outputs& out, int threads) {
-  EvalOptions eval;
+  // the rest rule of `fivebar inverse` (docs/hold.md): thresholds for computed rates, or the
+  // scene's simulation.rest_rate_threshold / rest_acceleration_threshold when it sets them
+  RestThresholds rest;
+  if (s.scene.rest_rate_threshold >= 0) rest.rate = s.scene.rest_rate_threshold;
+  if (s.scene.rest_acceleration_threshold >= 0) {
+    rest.acceleration = s.scene.rest_acceleration_threshold;
+  }
+  EvalOptions eval = with_rest(EvalOptions{}, rest);
   eval.singular_margin = s.scene.options.singular_margin;
   const bool fixed = s.loads_constant;
   const Loads<double>& constant = s.constant_loads;

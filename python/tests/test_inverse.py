@@ -77,3 +77,14 @@ def test_poses_that_cannot_assemble_are_bad_input(root):
         fivebar.inverse(scene, theta, zeros, zeros)
     with pytest.raises(ValueError, match=r"^omega: row 0: expected finite numbers$"):
         fivebar.inverse(scene, theta, np.full((2, 2), np.nan), zeros)
+
+
+def test_a_pose_held_still_gets_its_equilibrium_torques(paper_scene):
+    # rates of +-1e-14 rad/s are rounding, not slip: the rest rule of `fivebar inverse`
+    # (docs/hold.md) holds the pose with the frictionless equilibrium torques on every row
+    rng = np.random.default_rng(0)
+    theta = np.full((11, 2), np.pi / 2)
+    omega = rng.choice([-1.0, 1.0], (11, 2)) * 1e-14
+    alpha = rng.choice([-1.0, 1.0], (11, 2)) * 1e-13
+    M = fivebar.inverse(paper_scene, theta, omega, alpha)["M"]
+    assert np.allclose(M, [-0.6917339630, -1.4378948566], atol=1e-9)
