@@ -49,6 +49,8 @@ constexpr double kTwinMaxDuration = 20.0;
 /// Figures draw at most about 100 buckets x (first row and extrema) points per curve: beyond, decimated copies
 /// trajectory_plot.csv (and trajectory_frictionless_plot.csv) are written and plotted.
 constexpr size_t kPlotBuckets = 100;
+/// runs with more rows than this are drawn from the decimated copy (gnuplot stays fast)
+constexpr size_t kPlotMaxRows = 10000;
 
 std::string fmt(double x, const char* format = "%.4g") {
   char buf[64];
@@ -157,7 +159,7 @@ std::string write_with_plot_copy(const OutputDir& out, const std::string& name,
                                  const std::vector<sim::Row>& rows,
                                  const std::vector<Column>& extra) {
   write_trajectory_csv(out.file(name + ".csv"), rows, extra);
-  if (rows.size() <= 2 * kPlotBuckets) return name + ".csv";
+  if (rows.size() <= kPlotMaxRows) return name + ".csv";
   std::vector<sim::Row> few;
   std::vector<Column> few_extra;
   select_rows(rows, extra, decimation_indices(rows, extra, kPlotBuckets), &few, &few_extra);
