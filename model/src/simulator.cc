@@ -251,22 +251,38 @@ Status scan_step(Context& c, detail::Integrator& integ, double tp, double tc, co
   return Status::Ok();
 }
 
+/// Bisection on the integrator's dense output: `crossed(t, y, &past)` says whether the event
+/// has happened at (t, y); false at *ta, true at *tb. Narrows [*ta, *tb] to the time resolution
+/// of doubles at *tb; y holds the last state evaluated.
+template <typename Crossed>
+Status bisect_dense(detail::Integrator& integ, double* ta, double* tb, double* y,
+                    Crossed&& crossed) {
+  const double tol = 8 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(*tb));
+  while (*tb - *ta > tol) {
+    const double tm = 0.5 * (*ta + *tb);
+    if (!integ.dense(tm, y)) return Status::Error(StatusCode::kSolverFailed, integ.error());
+    bool past = false;
+    const Status st = crossed(tm, y, &past);
+    if (!st.ok()) return st;
+    (past ? *tb : *ta) = tm;
+  }
+  return Status::Ok();
+}
+
 /// Bisection on the dense output of [ta, tb] (nothing fired at ta, something at tb) down to
 /// the time resolution of doubles at tb; y receives the state at the located tb, `which` the
 /// switch functions that fired there.
 Status locate_switch(Context& c, detail::Integrator& integ, const Watch& watch, double ta,
                      double tb, double* y, double* te, Fired* which) {
-  const double tol = 8 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(tb));
   Switches g;
-  while (tb - ta > tol) {
-    const double tm = 0.5 * (ta + tb);
-    if (!integ.dense(tm, y)) return Status::Error(StatusCode::kSolverFailed, integ.error());
-    const Status st = switch_values(c, tm, y, &g);
-    if (!st.ok()) return st;
-    (any_of(fired(c, watch, g)) ? tb : ta) = tm;
-  }
+  Status st = bisect_dense(integ, &ta, &tb, y, [&](double t, const double* yt, bool* past) {
+    const Status s = switch_values(c, t, yt, &g);
+    *past = s.ok() && any_of(fired(c, watch, g));
+    return s;
+  });
+  if (!st.ok()) return st;
   if (!integ.dense(tb, y)) return Status::Error(StatusCode::kSolverFailed, integ.error());
-  const Status st = switch_values(c, tb, y, &g);
+  st = switch_values(c, tb, y, &g);
   if (!st.ok()) return st;
   *which = fired(c, watch, g);
   *te = tb;
@@ -684,12 +700,11 @@ Status stop_at_singular_margin(Loop& L, Result* result, const Options& options, 
   if (!(margin > 0.0) || coupler_sine_at(*L.c.params, yc) >= margin) return Status::Ok();
   double ta = tp, tb = tc, y[kStates + 5];
   std::copy(yc, yc + L.c.n, y);
-  const double tol = 8 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(tb));
-  while (tb - ta > tol) {
-    const double tm = 0.5 * (ta + tb);
-    if (!L.integ->dense(tm, y)) break;
-    (coupler_sine_at(*L.c.params, y) < margin ? tb : ta) = tm;
-  }
+  // (a failed dense output keeps the bracket reached: the run stops here either way)
+  static_cast<void>(bisect_dense(*L.integ, &ta, &tb, y, [&](double, const double* yt, bool* past) {
+    *past = coupler_sine_at(*L.c.params, yt) < margin;
+    return Status::Ok();
+  }));
   if (tb != tc && !L.integ->dense(tb, y)) std::copy(yc, yc + L.c.n, y);
   const Status rows = emit_rows(L, result, ta, y);
   if (!rows.ok()) return rows;

@@ -132,11 +132,7 @@ TEST(Modes, LockedExactlyWhenFrictionCanHold) {
 }
 
 double max_angle_gap(const sim::Result& a, const sim::Result& b) {
-  double gap = 0.0;
-  for (size_t i = 0; i < a.rows.size() && i < b.rows.size(); ++i) {
-    for (int k = 0; k < 4; ++k) gap = std::max(gap, std::abs(a.rows[i].theta[k] - b.rows[i].theta[k]));
-  }
-  return gap;
+  return sim::max_angle_difference(a.rows, b.rows);
 }
 
 // review: a lock reached mid-run must break away when friction can no longer hold it, with
