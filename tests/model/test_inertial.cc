@@ -29,7 +29,9 @@ TEST(Inertial, RoundTripThroughParams) {
     EXPECT_NEAR(q.links[i].mass, p.links[i].mass, 1e-15);
     EXPECT_NEAR(q.links[i].inertia, p.links[i].inertia, 1e-15);
     EXPECT_NEAR(q.links[i].com_offset, p.links[i].com_offset, 1e-15);
-    if (p.links[i].com_offset > 0) EXPECT_NEAR(q.links[i].com_angle, p.links[i].com_angle, 1e-15);
+    if (p.links[i].com_offset > 0) {
+      EXPECT_NEAR(q.links[i].com_angle, p.links[i].com_angle, 1e-15);
+    }
   }
   EXPECT_EQ(inertial_name(5), "mx_2");
 }
