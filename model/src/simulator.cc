@@ -107,7 +107,7 @@ bool joint_rates(const Params<double>& p, const double* y, std::array<double, 5>
   Kinematics<double> k;
   if (!solve_kinematics(p, y[0], y[1], &k, 0.0, false).ok()) return false;
   const Vec2<double> thd(y[2], y[3]);
-  *w = fivebar::detail::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
+  *w = fivebar::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
   return true;
 }
 
@@ -298,7 +298,7 @@ int project_rates(const Params<double>& p, const std::array<bool, 5>& mask, doub
   if (!solve_kinematics(p, y[0], y[1], &k).ok()) return 0;
   std::vector<Row2<double>> rows;
   for (int j = 0; j < 5; ++j) {
-    if (mask[j]) rows.push_back(fivebar::detail::joint_row(k, j));
+    if (mask[j]) rows.push_back(fivebar::joint_row(k, j));
   }
   if (rows.empty()) return 0;
   Vec2<double> thd(y[2], y[3]);
@@ -336,7 +336,7 @@ bool consistent(Context& c, double t, const double* y, const std::array<int, 5>&
     if (failure->ok()) *failure = st;
     return false;
   }
-  const auto wdot = fivebar::detail::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
+  const auto wdot = fivebar::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
   double accel_scale = 1.0, torque_scale = 1.0;
   for (int k = 0; k < 5; ++k) {
     accel_scale = std::max(accel_scale, std::abs(wdot[k]));
@@ -484,7 +484,7 @@ Status decide_slip_only(Context& c, double t, const double* y, const std::array<
     const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &c.slip,
                                        c.eval, &ev);
     if (!st.ok()) return at_time(st, t, y[0], y[1]);
-    const auto wdot = fivebar::detail::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
+    const auto wdot = fivebar::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
     bool changed = false;
     for (int k = 0; k < 5; ++k) {
       if (!rest[k] || sign_of(wdot[k]) == c.slip[k]) continue;
