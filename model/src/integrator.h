@@ -15,6 +15,10 @@ namespace fivebar::sim::detail {
 /// ODE right-hand side with SUNDIALS' return convention: 0 ok, > 0 recoverable (retry with a
 /// smaller step), < 0 fatal.
 using RhsFn = int (*)(double t, const double* y, double* ydot, void* user);
+/// Freezes (on) or releases (off) the state-switched parts of the right-hand side at the state
+/// y: the Coulomb signs taken from the rates when switches are not located. Difference-quotient
+/// Jacobians then see the smooth piece, not a jump divided by a tiny increment.
+using FreezeFn = void (*)(const double* y, bool on, void* user);
 
 struct OdeProblem {
   int n = 0;
@@ -23,6 +27,9 @@ struct OdeProblem {
   /// absolute tolerance of each state (size n), scaling Options::atol
   std::vector<double> atol_scale;
   bool stiff_states = false;  ///< the state has stiff components (LuGre bristles)
+  /// optional (nullptr: the right-hand side is smooth within a segment); implicit methods then
+  /// form their Newton Jacobian with the switched parts frozen
+  FreezeFn freeze = nullptr;
 };
 
 class Integrator {

@@ -82,6 +82,8 @@ struct Context {
   /// in which it starts to slip (zero_sign, decided at the start), not sign(0) = 0
   bool zero_signs = false;
   std::array<int, 5> zero_sign{};
+  bool frozen = false;                  ///< signs frozen for a Newton Jacobian (freeze_signs)
+  std::array<int, 5> frozen_sign{};
   std::array<bool, 5> watched{};        ///< joints with a Coulomb part: switch functions
   bool lugre = false;                   ///< bristle states follow the 7 base states
   bool full_rows = true;                ///< Options::full_rows
@@ -111,6 +113,21 @@ bool joint_rates(const Params<double>& p, const double* y, std::array<double, 5>
   return true;
 }
 
+/// Switches not located (Context::zero_signs): the Coulomb sign of each joint from its rate at y,
+/// or the direction decided at the start where the rate is exactly zero.
+bool state_signs(const Context& c, const double* y, std::array<int, 5>* signs) {
+  std::array<double, 5> w;
+  if (!joint_rates(*c.params, y, &w)) return false;
+  for (int k = 0; k < 5; ++k) (*signs)[k] = w[k] != 0.0 ? sign_of(w[k]) : c.zero_sign[k];
+  return true;
+}
+
+/// OdeProblem::freeze: the signs at y hold for every evaluation until released.
+void freeze_signs(const double* y, bool on, void* user) {
+  auto& c = *static_cast<Context*>(user);
+  c.frozen = on && c.zero_signs && state_signs(c, y, &c.frozen_sign);
+}
+
 int rhs(double t, const double* y, double* ydot, void* user) {
   auto& c = *static_cast<Context*>(user);
   ++c.rhs_evaluations;
@@ -123,8 +140,9 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
   std::array<int, 5> signs{};
   const std::array<int, 5>* slip = c.use_slip ? &c.slip : nullptr;
-  if (c.zero_signs && joint_rates(*c.params, y, &ev.w)) {
-    for (int k = 0; k < 5; ++k) signs[k] = ev.w[k] != 0.0 ? sign_of(ev.w[k]) : c.zero_sign[k];
+  if (c.frozen) {
+    slip = &c.frozen_sign;
+  } else if (c.zero_signs && state_signs(c, y, &signs)) {
     slip = &signs;
   }
   const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], slip,
@@ -860,6 +878,7 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
     }
   }
   detail::OdeProblem prob{L.c.n, &rhs, &L.c, std::vector<double>(L.c.n, 1.0), L.c.lugre};
+  if (L.c.zero_signs) prob.freeze = &freeze_signs;
   for (int i = kStates; i < prob.n; ++i) prob.atol_scale[i] = options.bristle_atol_scale;
   L.integ = detail::make_integrator(prob, options, options.duration);
   result.rows.reserve(L.grid.size());
