@@ -425,6 +425,23 @@ std::string rest_list(const std::array<bool, 5>& rest) {
   return out + ")";
 }
 
+Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, 5>& rest);
+
+/// Stats::sign_rule_inconsistent: whether the rule used before issue 15 (the joints at rest slip
+/// the way they accelerate, iterated, no stick) gives modes that are not consistent here.
+bool sign_rule_inconsistent(Context& c, double t, const double* y,
+                            const std::array<bool, 5>& rest) {
+  const std::array<int, 5> chosen = c.slip;
+  bool inconsistent = true;
+  if (decide_slip_only(c, t, y, rest).ok()) {
+    Vec2<double> thdd;
+    Status failure;
+    inconsistent = !consistent(c, t, y, c.slip, rest, 0.0, 0.0, &thdd, &failure);
+  }
+  c.slip = chosen;
+  return inconsistent;
+}
+
 /// Chooses the modes of the joints in `rest` (at rest, or stuck) so that the motion is
 /// consistent; the other joints slip in the direction of their rate. With every joint at rest
 /// the mechanism may stay locked (lock_analysis). No consistent combination, or several with
@@ -488,6 +505,7 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
     }
   }
   c.slip = found.front();
+  if (sign_rule_inconsistent(c, t, y, rest)) ++stats->sign_rule_inconsistent;
   return Status::Ok();
 }
 
