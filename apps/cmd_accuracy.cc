@@ -22,7 +22,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
-#include "fivebar/sim/accuracy.h"
+#include "fivebar/studies/accuracy.h"
 
 namespace fivebar::io {
 namespace {
@@ -68,7 +68,7 @@ double against_external(const std::string& path, const std::vector<sim::Row>& ro
 int run(const Args& args) {
   const Scene scene = load_scene(args.scene.scene, args.scene.sets);
   const sim::LoadFunction loads = LoadExpressions(scene).function();
-  sim::WorkPrecisionOptions opt;
+  studies::WorkPrecisionOptions opt;
   if (args.repeats < 1) throw InputError(scene.path, "--repeats", "must be at least 1");
   opt.repeats = args.repeats;
   if (!args.tolerances.empty()) {
@@ -94,10 +94,10 @@ int run(const Args& args) {
   }
   OutputDir out(args.scene.out, kOutputs);
 
-  sim::WorkPrecision wp;
+  studies::WorkPrecision wp;
   Progress progress("accuracy", 1.0);
   opt.progress = [&progress](int done, int total) { progress.update(double(done) / total); };
-  const Status st = sim::work_precision(scene.params, loads, scene.initial, scene.options, opt, &wp);
+  const Status st = studies::work_precision(scene.params, loads, scene.initial, scene.options, opt, &wp);
   if (!st.ok()) throw NumericalError(scene.path, "reference", st.message);
 
   // work_precision.csv
@@ -135,7 +135,7 @@ int run(const Args& args) {
   if (!wp.regularized.rows.empty()) {
     summary.set("regularization_velocity", opt.regularization_velocity);
     summary.set("regularized_model_error",
-                sim::max_theta_difference(wp.regularized.rows, wp.exact.rows));
+                studies::max_theta_difference(wp.regularized.rows, wp.exact.rows));
   }
   Json recs = Json::array();
   for (const auto& r : wp.recommendations) {

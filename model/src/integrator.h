@@ -66,12 +66,12 @@ inline std::unique_ptr<Integrator> make_integrator(const OdeProblem& prob, const
   return make_arkode(prob, opt, t_end);
 }
 
-/// Records a failed SUNDIALS call ("CVodeSetMaxStep: CV_ILL_INPUT") in *error unless a more
-/// specific message (from the error handler) is there; returns flag >= 0.
-inline bool check_flag(int flag, const char* call, const char* flag_name, std::string* error) {
-  if (flag >= 0) return true;
-  if (error->empty()) *error = std::string(call) + ": " + (flag_name ? flag_name : "failed");
-  return false;
-}
+/// Records a failed SUNDIALS call in *error: the error handler's message when it gave one, else
+/// "CVodeSetMaxStep: CV_ILL_INPUT", followed by what the flag means for a user of fivebar
+/// (sundials_status.cc, the one place that maps SUNDIALS flags to messages). Returns flag >= 0.
+bool check_flag(int flag, const char* call, const char* flag_name, std::string* error);
+
+/// What a failure flag (by name, CV_ or ARK_ prefix) means and what to try; "" if nothing useful.
+std::string sundials_hint(const std::string& flag_name);
 
 }  // namespace fivebar::sim::detail

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "fivebar/model/dynamics.h"
-#include "fivebar/sim/stress.h"
+#include "fivebar/studies/stress.h"
 
 namespace fivebar::sim {
 namespace {

@@ -1,12 +1,12 @@
 // Work-precision study (issue 3): every integrator x friction treatment x tolerance against the
 // toolkit's own tight reference, timed as the minimum of several runs.
-#include "fivebar/sim/accuracy.h"
+#include "fivebar/studies/accuracy.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-namespace fivebar::sim {
+namespace fivebar::studies {
 
 const char* treatment_name(Treatment t) {
   switch (t) {
@@ -154,4 +154,4 @@ Status work_precision(const Params<double>& params, const LoadFunction& loads,
   return Status::Ok();
 }
 
-}  // namespace fivebar::sim
+}  // namespace fivebar::studies
