@@ -109,7 +109,7 @@ int run(const Args& args) {
     for (char& c : msg) {
       if (c == ',' || c == '\n') c = ';';
     }
-    csv << sim::method_name(p.method) << ',' << sim::treatment_name(p.treatment) << ','
+    csv << sim::method_name(p.method) << ',' << studies::treatment_name(p.treatment) << ','
         << format_grid_value(p.tolerance) << ',' << (p.ok ? "ok" : "failed") << ','
         << format_double(p.error) << ',' << format_double(p.error_vs_exact) << ','
         << format_double(p.wall_time_s) << ',' << p.rhs_evaluations << ',' << p.steps
@@ -144,7 +144,7 @@ int run(const Args& args) {
     j.set("found", r.found);
     if (r.found) {
       j.set("integrator", sim::method_name(r.point.method));
-      j.set("treatment", sim::treatment_name(r.point.treatment));
+      j.set("treatment", studies::treatment_name(r.point.treatment));
       j.set("tolerance", r.point.tolerance);
       j.set("error", r.point.error);
       j.set("wall_time_s", r.point.wall_time_s);
@@ -171,7 +171,7 @@ int run(const Args& args) {
               << fmt(against_external(args.reference, wp.exact.rows, scene.options.output_step))
               << " rad";
   }
-  std::cout << "\n  Pareto front (" << sim::treatment_name(wp.points.front().treatment) << "):\n";
+  std::cout << "\n  Pareto front (" << studies::treatment_name(wp.points.front().treatment) << "):\n";
   for (const auto& p : wp.points) {
     if (!p.pareto) continue;
     std::cout << "    " << sim::method_name(p.method) << " tol " << fmt(p.tolerance) << ": error "

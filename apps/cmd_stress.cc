@@ -63,7 +63,7 @@ std::string stress_csv(const studies::StressReport& report) {
        "rhs_evaluations,final_time,displacement,message\n";
   for (const auto& r : report.rows) {
     s << r.case_name << ',' << sim::method_name(r.method) << ','
-      << sim::stress_outcome_name(r.outcome) << ',' << r.exit_code << ','
+      << studies::stress_outcome_name(r.outcome) << ',' << r.exit_code << ','
       << opt_num(r.error, "%.3e") << ',' << opt_num(r.energy_balance, "%.3e") << ','
       << fmt(r.wall_time_s, "%.4f") << ',' << r.steps << ',' << r.rhs_evaluations << ','
       << fmt(r.final_time, "%.6g") << ',' << opt_num(r.displacement, "%.3e") << ','
@@ -99,7 +99,7 @@ std::string stress_md(const std::vector<studies::StressCase>& cases, const studi
          "rhs | message |\n|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& r : report.rows) {
       if (r.case_name != c.name) continue;
-      s << "| " << sim::method_name(r.method) << " | " << sim::stress_outcome_name(r.outcome)
+      s << "| " << sim::method_name(r.method) << " | " << studies::stress_outcome_name(r.outcome)
         << " | " << r.exit_code << " | " << opt_num(r.error, "%.2e") << " | "
         << opt_num(r.energy_balance, "%.2e") << " | " << fmt(r.wall_time_s, "%.3f") << " | "
         << r.steps << " | " << r.rhs_evaluations << " | " << md_cell(r.message) << " |\n";
@@ -142,7 +142,7 @@ int run(const Args& args) {
     ++done;
     if (tty) {
       std::cerr << "\r[" << done << "/" << total << "] " << r.case_name << " "
-                << sim::method_name(r.method) << ": " << sim::stress_outcome_name(r.outcome)
+                << sim::method_name(r.method) << ": " << studies::stress_outcome_name(r.outcome)
                 << "                    " << std::flush;
     }
   };
@@ -161,7 +161,7 @@ int run(const Args& args) {
   for (const auto& c : cases) {
     std::map<std::string, int> counts;
     for (const auto& r : report.rows) {
-      if (r.case_name == c.name) ++counts[sim::stress_outcome_name(r.outcome)];
+      if (r.case_name == c.name) ++counts[studies::stress_outcome_name(r.outcome)];
     }
     std::cout << "  " << c.name << ":";
     for (const auto& [name, n] : counts) std::cout << " " << n << " " << name;

@@ -484,13 +484,13 @@ std::string work_precision_plot_script(const studies::WorkPrecision& wp, const s
   }
   for (studies::Treatment t : treatments) {
     s << sep << "NaN with linespoints lw 1.5 lc rgb 'black' dt " << treatment_dash(t) << " pt "
-      << treatment_dash(t) + 4 << " title '" << sim::treatment_name(t) << "'";
+      << treatment_dash(t) + 4 << " title '" << studies::treatment_name(t) << "'";
   }
   // the measured series, one per (integrator, treatment), rows with status ok
   for (sim::Method m : methods) {
     for (studies::Treatment t : treatments) {
       s << sep << "'work_precision.csv' using ((strcol(1) eq '" << sim::method_name(m)
-        << "' && strcol(2) eq '" << sim::treatment_name(t)
+        << "' && strcol(2) eq '" << studies::treatment_name(t)
         << "' && strcol(4) eq 'ok') ? $7 : NaN):5 with linespoints lw 1.5 lc rgb '"
         << method_colour(m) << "' dt " << treatment_dash(t) << " pt " << treatment_dash(t) + 4
         << " notitle";

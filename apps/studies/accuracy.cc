@@ -2,6 +2,8 @@
 // toolkit's own tight reference, timed as the minimum of several runs.
 #include "fivebar/studies/accuracy.h"
 
+#include "fivebar/sim/estimate.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -20,11 +22,7 @@ const char* treatment_name(Treatment t) {
 
 double max_theta_difference(const std::vector<Row>& a, const std::vector<Row>& b) {
   if (a.size() != b.size()) return std::numeric_limits<double>::infinity();
-  double worst = 0.0;
-  for (size_t i = 0; i < a.size(); ++i) {
-    for (int k = 0; k < 4; ++k) worst = std::max(worst, std::abs(a[i].theta[k] - b[i].theta[k]));
-  }
-  return worst;
+  return sim::max_angle_difference(a, b);
 }
 
 namespace {

@@ -19,6 +19,7 @@ using sim::Options;
 using sim::Result;
 using sim::LoadFunction;
 using sim::Initial;
+using sim::kAllMethods;
 
 /// One case of the catalogue: a scene built in code, with what a correct run must satisfy.
 struct StressCase {
