@@ -5,6 +5,7 @@
 
 #include "fivebar/io/command.h"
 
+#include "fivebar/model/friction.h"
 #include "fivebar/model/kinematics.h"
 
 #include <yaml-cpp/yaml.h>
@@ -43,12 +44,13 @@ enum class Kind {
 };
 
 struct Field {
-  const char* key;  // dotted; "#" stands for a link index
+  std::string key;  // dotted; "#" stands for a link index
   Kind kind;
 };
 
-// every key a scene may contain (interfaces.md, scene.h)
-constexpr Field kSchema[] = {
+// every key a scene may contain (interfaces.md, scene.h), except the friction coefficients,
+// which come from the friction-law descriptors (friction.h): see schema()
+const Field kBaseSchema[] = {
     {"mechanism", Kind::kSection},
     {"mechanism.ground_length", Kind::kNumber},
     {"mechanism.links", Kind::kLinkList},
@@ -64,14 +66,6 @@ constexpr Field kSchema[] = {
     {"friction", Kind::kSection},
     {"friction.model", Kind::kName},
     {"friction.pin_radius", Kind::kNumberOr5},
-    {"friction.coulomb", Kind::kNumberOr5},
-    {"friction.viscous", Kind::kNumberOr5},
-    {"friction.static_coulomb", Kind::kNumberOr5},
-    {"friction.stribeck_velocity", Kind::kNumberOr5},
-    {"friction.stribeck_exponent", Kind::kNumberOr5},
-    {"friction.sigma0", Kind::kNumberOr5},
-    {"friction.sigma1", Kind::kNumberOr5},
-    {"friction.sigma2", Kind::kNumberOr5},
     {"friction.smoothing_velocity", Kind::kNumber},
     {"loads", Kind::kSection},
     {"loads.M1", Kind::kExpression},
@@ -101,8 +95,24 @@ constexpr Field kSchema[] = {
     {"simulation.rest_acceleration_threshold", Kind::kNumber},
 };
 
+// the whole schema: the base keys with the laws' coefficients after friction.pin_radius
+const std::vector<Field>& schema() {
+  static const std::vector<Field> fields = [] {
+    std::vector<Field> out;
+    for (const Field& f : kBaseSchema) {
+      out.push_back(f);
+      if (f.key != "friction.pin_radius") continue;
+      for (const CoefficientInfo& c : kCoefficientInfo) {
+        out.push_back({std::string("friction.") + c.key, Kind::kNumberOr5});
+      }
+    }
+    return out;
+  }();
+  return fields;
+}
+
 const Field* find_field(const std::string& schema_key) {
-  for (const Field& f : kSchema) {
+  for (const Field& f : schema()) {
     if (schema_key == f.key) return &f;
   }
   return nullptr;
@@ -112,8 +122,8 @@ const Field* find_field(const std::string& schema_key) {
 std::string children_of(const std::string& schema_section) {
   std::string out;
   const std::string prefix = schema_section.empty() ? "" : schema_section + ".";
-  for (const Field& f : kSchema) {
-    const std::string key = f.key;
+  for (const Field& f : schema()) {
+    const std::string& key = f.key;
     if (key.compare(0, prefix.size(), prefix) != 0) continue;
     const std::string rest = key.substr(prefix.size());
     if (rest.empty() || rest.find('.') != std::string::npos || rest == "#") continue;
@@ -122,15 +132,6 @@ std::string children_of(const std::string& schema_section) {
   return out;
 }
 
-// friction laws by their scene names (friction.model)
-struct LawName {
-  FrictionLaw law;
-  const char* name;
-};
-constexpr LawName kLawNames[] = {{FrictionLaw::kNone, "none"},
-                                 {FrictionLaw::kCoulombViscous, "coulomb_viscous"},
-                                 {FrictionLaw::kStribeck, "stribeck"},
-                                 {FrictionLaw::kLuGre, "lugre"}};
 
 // ---------------------------------------------------------------------------------------------
 // Small string helpers
@@ -409,16 +410,19 @@ class SceneReader {
     return join(p, p.size(), '.');
   }
 
-  // the default of an optional per-joint key as scene text (see build_scene), or nothing
+  // the default of a per-joint friction coefficient as scene text (see read_coefficients), or
+  // nothing when the scene's law requires the key or it has no default
   std::vector<std::string> per_joint_default(const std::string& key) const {
-    if (key == "friction.static_coulomb") {
-      auto it = flat_.find("friction.coulomb");  // mu_s defaults to mu_c
-      return it == flat_.end() ? std::vector<std::string>{} : it->second.items;
-    }
-    if (key == "friction.stribeck_exponent") return {"2"};
-    if (key == "friction.stribeck_velocity" || key == "friction.sigma0" ||
-        key == "friction.sigma1" || key == "friction.sigma2") {
-      return {"0"};
+    const LawDescriptor* law = find_law(text("friction.model", "none"));
+    for (const CoefficientInfo& c : kCoefficientInfo) {
+      if (key != std::string("friction.") + c.key) continue;
+      const LawCoefficient* use = law ? law_coefficient(*law, c.id) : nullptr;
+      if (use && use->required) return {};
+      if (c.same_as != c.id) {  // mu_s defaults to mu_c
+        auto it = flat_.find(std::string("friction.") + coefficient_info(c.same_as).key);
+        return it == flat_.end() ? std::vector<std::string>{} : it->second.items;
+      }
+      return {format_double(c.default_value)};
     }
     return {};
   }
@@ -537,6 +541,25 @@ void plausibility_warnings(Scene* s) {
   }
 }
 
+// The coefficients of every law (a scene may carry those of other laws too): required when the
+// scene's law requires them, else their default; > 0 where the law needs it, or where the
+// default itself is positive (the Stribeck exponent), else >= 0.
+void read_coefficients(const SceneReader& r, const LawDescriptor& law, FrictionParams<double>* f) {
+  for (const CoefficientInfo& c : kCoefficientInfo) {  // mu_c before mu_s, which defaults to it
+    const std::string key = std::string("friction.") + c.key;
+    std::array<double, kJoints>& dst = coefficient(*f, c.id);
+    if (!r.has(key) && c.same_as != c.id) {
+      dst = coefficient(*f, c.same_as);
+      continue;
+    }
+    const LawCoefficient* use = law_coefficient(law, c.id);
+    const bool required = use && use->required;
+    const bool pos = use ? use->positive : c.default_value > 0;
+    dst = r.per_joint(key, required ? std::nullopt : std::optional<double>(c.default_value),
+                      pos ? positive : non_negative, pos ? "> 0" : ">= 0");
+  }
+}
+
 Scene build_scene(const SceneReader& r) {
   Scene s;
   s.path = r.path();
@@ -582,42 +605,16 @@ Scene build_scene(const SceneReader& r) {
   // friction: each law's coefficients are required only when that law is on
   FrictionParams<double>& f = p.friction;
   const std::string model = r.text("friction.model", "none");
-  bool known_law = false;
-  for (const LawName& l : kLawNames) {
-    if (model == l.name) {
-      f.law = l.law;
-      known_law = true;
-    }
+  const LawDescriptor* law = find_law(model);
+  if (!law) {
+    r.fail("friction.model", "expected one of " + law_names() + ", got '" + model + "'" +
+                                 r.origin("friction.model"));
   }
-  if (!known_law) {
-    std::string names;
-    for (const LawName& l : kLawNames) names += (names.empty() ? "" : ", ") + std::string(l.name);
-    r.fail("friction.model",
-           "expected one of " + names + ", got '" + model + "'" + r.origin("friction.model"));
-  }
+  f.law = law->law;
   const bool on = f.active();
-  const bool stribeck = f.law == FrictionLaw::kStribeck;
-  const bool lugre = f.law == FrictionLaw::kLuGre;
-  // `required` when the law uses the key, else `fallback`
-  auto when = [](bool required, double fallback) {
-    return required ? std::nullopt : std::optional<double>(fallback);
-  };
-  f.pin_radius = r.per_joint("friction.pin_radius", when(on, 0.0), on ? positive : non_negative,
-                             on ? "> 0" : ">= 0");
-  f.coulomb = r.per_joint("friction.coulomb", when(on, 0.0), non_negative, ">= 0");
-  f.viscous = r.per_joint("friction.viscous", when(on && !lugre, 0.0), non_negative, ">= 0");
-  // mu_s: the Stribeck peak and the holding bound of a stuck joint; mu_c when omitted
-  f.static_coulomb = f.coulomb;
-  if (r.has("friction.static_coulomb")) {
-    f.static_coulomb = r.per_joint("friction.static_coulomb", std::nullopt, non_negative, ">= 0");
-  }
-  f.stribeck_velocity = r.per_joint("friction.stribeck_velocity", when(stribeck, 0.0),
-                                    stribeck ? positive : non_negative, stribeck ? "> 0" : ">= 0");
-  f.stribeck_exponent = r.per_joint("friction.stribeck_exponent", 2.0, positive, "> 0");
-  f.sigma0 = r.per_joint("friction.sigma0", when(lugre, 0.0), lugre ? positive : non_negative,
-                         lugre ? "> 0" : ">= 0");
-  f.sigma1 = r.per_joint("friction.sigma1", 0.0, non_negative, ">= 0");
-  f.sigma2 = r.per_joint("friction.sigma2", 0.0, non_negative, ">= 0");
+  f.pin_radius = r.per_joint("friction.pin_radius", on ? std::nullopt : std::optional<double>(0.0),
+                             on ? positive : non_negative, on ? "> 0" : ">= 0");
+  read_coefficients(r, *law, &f);
   f.smoothing_velocity = r.number("friction.smoothing_velocity", 0.0);
   require("friction.smoothing_velocity", f.smoothing_velocity, f.smoothing_velocity >= 0, ">= 0");
 
@@ -749,12 +746,7 @@ bool parse_integrator(const std::string& name, sim::Method* out) {
   return sim::parse_method(name, out);
 }
 
-const char* friction_law_name(FrictionLaw law) {
-  for (const LawName& l : kLawNames) {
-    if (l.law == law) return l.name;
-  }
-  return "unknown";
-}
+const char* friction_law_name(FrictionLaw law) { return law_descriptor(law).name; }
 
 double coupler_sine(const Params<double>& p, double theta1, double theta2) {
   Kinematics<double> k;
@@ -814,19 +806,15 @@ std::string scene_to_yaml(const Scene& s) {
     << "  pin_radius: " << per_joint_yaml(f.pin_radius) << "\n"
     << "  coulomb: " << per_joint_yaml(f.coulomb) << "\n"
     << "  viscous: " << per_joint_yaml(f.viscous) << "\n";
-  // the other laws' coefficients, where they differ from their defaults
-  const auto optional = [&y](const char* key, const std::array<double, kJoints>& v,
-                             const std::array<double, kJoints>& fallback) {
-    if (v != fallback) y << "  " << key << ": " << per_joint_yaml(v) << "\n";
-  };
-  std::array<double, kJoints> zeros{}, twos{};
-  twos.fill(2.0);
-  optional("static_coulomb", f.static_coulomb, f.coulomb);
-  optional("stribeck_velocity", f.stribeck_velocity, zeros);
-  optional("stribeck_exponent", f.stribeck_exponent, twos);
-  optional("sigma0", f.sigma0, zeros);
-  optional("sigma1", f.sigma1, zeros);
-  optional("sigma2", f.sigma2, zeros);
+  // the other coefficients, where they differ from their defaults
+  for (const CoefficientInfo& c : kCoefficientInfo) {
+    if (c.id == Coefficient::kCoulomb || c.id == Coefficient::kViscous) continue;
+    std::array<double, kJoints> fallback;
+    fallback.fill(c.default_value);
+    if (c.same_as != c.id) fallback = coefficient(f, c.same_as);
+    const std::array<double, kJoints>& v = coefficient(f, c.id);
+    if (v != fallback) y << "  " << c.key << ": " << per_joint_yaml(v) << "\n";
+  }
   y << "  smoothing_velocity: " << num(f.smoothing_velocity) << "\n"
     << "loads:\n"
     << "  M1: " << quoted(s.M1) << "\n"
