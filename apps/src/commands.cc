@@ -101,6 +101,13 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
   if (!(a.path_step >= 1e-3 && a.path_step <= 0.5)) {
     throw InputError(kFlags, "--path-step", "expected a number in [0.001, 0.5] rad");
   }
+  if (!(a.refine_tol > 0 && a.refine_tol < 1)) {
+    throw InputError(kFlags, "--refine-tol", "expected a number in (0, 1)");
+  }
+  o.refine.tol = a.refine_tol;
+  if (!a.refine) o.refine.control_points.clear();
+  if (!a.continuation) o.refine.continuation.clear();
+  o.refine.enabled = a.refine || a.continuation;
   o.path.step = a.path_step;
   o.optimizer.global = a.global;
   o.optimizer.starts = a.starts;

@@ -48,6 +48,10 @@ struct OptimizeSettings {
   int starts = 8, control_points = 10, quadrature_points = 12;
   double singular_margin = 0.1;
   double path_step = 0.05;  ///< grid step of the path search for a feasible start [rad]
+  /// the continuation to the exact law and the refinement of the control points after the
+  /// first solve (--no-refine: the first solve only; --no-continuation: no continuation either)
+  bool refine = true, continuation = true;
+  double refine_tol = 1e-3;  ///< relative energy change that stops the refinement
 };
 
 /// The batch options of `settings`; throws InputError(`command line: --method: ...`) and the like.

@@ -16,6 +16,24 @@
 
 namespace fivebar::trajectory {
 
+/// The continuation to the scene's exact friction law and the refinement of the discretization
+/// that follow the first solve of a task. Each solve is warm-started from the best point so far;
+/// a stage replaces it only when it is feasible on the dense check grid and its exact-law
+/// objective is lower, so no stage can make the result worse.
+struct RefineOptions {
+  bool enabled = true;
+  /// smoothing velocities w_s [rad/s] solved after the first one, in order (continuation on
+  /// w_s towards the exact law, w_s = 0); the last one is the law of the refined solves
+  std::vector<double> continuation = {1e-2, 2e-3, 4e-4};
+  /// control points per joint tried after the first solve's count (only the larger ones),
+  /// until the exact-law objective changes by less than `tol` (relative) from one to the next
+  std::vector<int> control_points = {20, 40, 80};
+  double tol = 1e-3;
+  /// Gauss-Legendre points per knot span of a refined spline: as many nodes in all as the
+  /// first solve's, but at least this many per span
+  int min_quadrature_points = 6;
+};
+
 struct BatchOptions {
   ProblemOptions problem;      ///< its torque_limit is replaced by each task's
   OptimizerOptions optimizer;  ///< its seed is combined with a hash of each task's name
@@ -32,6 +50,9 @@ struct BatchOptions {
   /// control points tried, in order, for the spline that follows the path found (the first
   /// whose fit keeps the margin wins); the problem's own count is tried first
   std::vector<int> path_control_points = {14, 20, 28, 40};
+  /// after the first solve (smoothed law, problem.smoothing_velocity): the continuation to the
+  /// exact law and the refinement of the control points (docs/optimize.md)
+  RefineOptions refine;
 };
 
 /// The outcome of one task (one row of summary.csv). Energies are NaN when not computed.
@@ -81,6 +102,16 @@ struct TaskResult {
   double initial_peak_torque = NAN;        ///< of that start, dense grid [N m]
   double initial_min_coupler_sine = NAN;   ///< of that start, dense grid
   std::vector<double> x;  ///< optimal free control points (empty when no solve ran)
+  /// w_s [rad/s] of the smoothed law of the stage that gave x (its *_smoothed energies)
+  double smoothing_velocity = NAN;
+  /// the continuation, "w_s:E" per stage (E: exact-law objective of the stage's optimum [J],
+  /// "x" after it when the stage did not improve the result), ';'-separated
+  std::string continuation;
+  /// the refinement, "n:E" per control-point count solved, ';'-separated
+  std::string refinement;
+  /// relative change of the exact-law objective between the last two counts solved (< the
+  /// tolerance: converged); NaN when no refinement ran
+  double refinement_change = NAN;
 
   bool solved() const { return !x.empty(); }
 };
