@@ -42,6 +42,7 @@ struct Args {
   double path_step = 0.05;
   bool validate = false;
   bool no_plots = false;
+  bool continuation = false, refine = false;  // of the inner solves (see optimize)
 };
 
 std::string num(double v) { return format_double(v); }  // shortest round-trip, "nan"
@@ -280,6 +281,9 @@ int run(const Args& args) {
   }
   options.path.step = args.path_step;
   options.validate = args.validate;
+  if (!args.continuation) options.refine.continuation.clear();
+  if (!args.refine) options.refine.control_points.clear();
+  options.refine.enabled = args.continuation || args.refine;
   const std::vector<Design> designs = make_designs(args, sweeps);
   const int count = static_cast<int>(designs.size());
 
@@ -337,6 +341,10 @@ RunFunction setup(CLI::App* app) {
                   "grid step [rad] of the path search (see optimize; default 0.05)");
   app->add_flag("--validate", args->validate,
                 "simulate the optimal torques forward (miss_distance in study_tasks.csv)");
+  app->add_flag("--continuation", args->continuation,
+                "inner solves continue towards the exact friction law (see optimize)");
+  app->add_flag("--refine", args->refine,
+                "inner solves refine their control points (see optimize; slow)");
   app->add_flag("--no-plots", args->no_plots, "do not draw the heatmap");
   return [args] { return run(*args); };
 }

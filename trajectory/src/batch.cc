@@ -266,17 +266,46 @@ bool detour_start(const Params<double>& params, const sim::LoadFunction& loads,
   return true;
 }
 
-// where the optimization starts: the minimum-jerk motion when it closes with the margin kept,
-// else a detour; false when no path joins start and goal (status and message say why)
+// a warm start: the same task's optimum for another design, its joint motion moved to this
+// design's ends (minimum-jerk blend of the end offsets), when it keeps the margin
+bool warm_start(const Params<double>& params, const sim::LoadFunction& loads,
+                const BatchOptions& options, const TaskResult& warm, TaskResult* r,
+                std::optional<TrajectoryProblem>* problem, std::vector<double>* x) {
+  if (!warm.solved() || warm.control_points < 7 || warm.duration != r->duration) return false;
+  const RestToRest from(warm.control_points, warm.duration, warm.start, warm.goal);
+  const RestToRest to(warm.control_points, r->duration, r->start, r->goal);
+  std::vector<double> guess = to.fit([&](double t) {
+    std::array<double, 2> th = from.state(warm.x.data(), t)[0];
+    const double b = minimum_jerk_blend(t / r->duration)[0];
+    for (int j = 0; j < 2; ++j) {
+      th[j] += (r->start[j] - warm.start[j]) * (1.0 - b) + (r->goal[j] - warm.goal[j]) * b;
+    }
+    return th;
+  });
+  const int points = options.check_factor * to.basis().spans() *
+                         options.problem.quadrature_points + 1;
+  if (min_coupler_sine(params, to, guess, points) < options.problem.singular_margin) return false;
+  r->control_points = warm.control_points;
+  problem->emplace(problem_of(params, loads, *r, options));
+  *x = std::move(guess);
+  r->initial_guess = "warm_start";
+  return true;
+}
+
+// where the optimization starts: the warm start when given and usable, else the minimum-jerk
+// motion when it closes with the margin kept, else a detour; false when no path joins start
+// and goal (status and message say why)
 bool choose_start(const Params<double>& params, const sim::LoadFunction& loads,
-                  const BatchOptions& options, TaskResult* r,
+                  const BatchOptions& options, const TaskResult* warm, TaskResult* r,
                   std::optional<TrajectoryProblem>* problem, std::vector<double>* x) {
   problem->emplace(problem_of(params, loads, *r, options));
   *x = (*problem)->motion().minimum_jerk();
   evaluate_baseline(**problem, *x, options, r);
   const double sine = min_coupler_sine(params, (*problem)->motion(), *x,
                                        check_points(**problem, options));
-  if (sine >= options.problem.singular_margin) {
+  if (warm && warm_start(params, loads, options, *warm, r, problem, x)) {
+    // started from the neighbouring design's optimum
+  } else if (sine >= options.problem.singular_margin) {
     r->initial_guess = "minimum_jerk";
   } else if (!detour_start(params, loads, options, r, problem, x)) {
     return false;
@@ -379,7 +408,7 @@ void classify(const SolverStatus& solver, const ConstraintCheck& check,
 
 TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads,
                     const TaskSpec& task, const sim::Initial& initial,
-                    const BatchOptions& options) {
+                    const BatchOptions& options, const TaskResult* warm) {
   const auto t0 = std::chrono::steady_clock::now();
   TaskResult r;
   r.task = task.name;
@@ -406,7 +435,7 @@ TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads
   try {
     std::optional<TrajectoryProblem> problem;
     std::vector<double> x0;
-    if (!choose_start(params, loads, options, &r, &problem, &x0)) return finish();
+    if (!choose_start(params, loads, options, warm, &r, &problem, &x0)) return finish();
     SolverStatus solver;
     ConstraintCheck check;
     if (!solve(params, loads, *problem, x0, options, &r, &solver, &check)) return finish();

@@ -118,10 +118,12 @@ struct TaskResult {
 
 /// Optimizes one task for one design. Never throws for numerical trouble: everything ends up in
 /// the status. `loads` gives M3, F, F_angle (M1, M2 ignored) and must be callable from the
-/// calling thread.
+/// calling thread. `warm` (optional): the same task solved for a neighbouring design, whose
+/// optimum, moved to this design's ends, starts the solve when it keeps the singular margin
+/// (initial_guess "warm_start").
 TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads,
                     const TaskSpec& task, const sim::Initial& initial,
-                    const BatchOptions& options);
+                    const BatchOptions& options, const TaskResult* warm = nullptr);
 
 /// The problem a result was solved on (to recompute its trajectory rows or torques).
 TrajectoryProblem problem_of(const Params<double>& params, const sim::LoadFunction& loads,
