@@ -315,7 +315,7 @@ std::string draw_convergence(OutputDir* out, int tasks) {
       "set output 'convergence.png'\nset datafile separator ','\nset grid\n"
       "set title 'design search: total dissipated energy over " + std::to_string(tasks) +
       " tasks'\nset xlabel 'design evaluated'\nset ylabel 'total dissipated energy [J]'\n"
-      "set key top right\nset offsets 0.5, 0.5, graph 0.1, graph 0.1\n"
+      "set key top right\nset xrange [-0.5:*]\nset offsets 0, 0.5, graph 0.1, graph 0.1\n"
       "plot 'design_history.csv' using 'evaluation':'total_energy' with points pt 7 ps 1.2 "
       "title 'design (every task ok)', "
       "'' using 'evaluation':'best_total_energy' with steps lw 2 title 'best so far', "

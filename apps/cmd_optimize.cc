@@ -210,6 +210,7 @@ int run(const Args& args) {
 
 RunFunction setup(CLI::App* app) {
   auto args = std::make_shared<Args>();
+  args->settings.refine = true;  // the optimum of the problem, not of the basis (--no-refine)
   add_scene_options(app, &args->scene, "optimize");
   app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");

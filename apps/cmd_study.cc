@@ -282,7 +282,7 @@ int run(const Args& args) {
   options.path.step = args.path_step;
   options.validate = args.validate;
   if (!args.continuation) options.refine.continuation.clear();
-  if (!args.refine) options.refine.control_points.clear();
+  if (args.refine) options.refine.control_points = trajectory::kRefineLevels;
   options.refine.enabled = args.continuation || args.refine;
   const std::vector<Design> designs = make_designs(args, sweeps);
   const int count = static_cast<int>(designs.size());

@@ -105,7 +105,7 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
     throw InputError(kFlags, "--refine-tol", "expected a number in (0, 1)");
   }
   o.refine.tol = a.refine_tol;
-  if (!a.refine) o.refine.control_points.clear();
+  if (a.refine) o.refine.control_points = trajectory::kRefineLevels;
   if (!a.continuation) o.refine.continuation.clear();
   o.refine.enabled = a.refine || a.continuation;
   o.path.step = a.path_step;

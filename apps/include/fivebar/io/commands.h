@@ -49,8 +49,8 @@ struct OptimizeSettings {
   double singular_margin = 0.1;
   double path_step = 0.05;  ///< grid step of the path search for a feasible start [rad]
   /// the continuation to the exact law and the refinement of the control points after the
-  /// first solve (--no-refine: the first solve only; --no-continuation: no continuation either)
-  bool refine = true, continuation = true;
+  /// first solve (`optimize` turns refine on: --no-refine; --no-continuation)
+  bool refine = false, continuation = true;
   double refine_tol = 1e-3;  ///< relative energy change that stops the refinement
 };
 

@@ -20,14 +20,18 @@ namespace fivebar::trajectory {
 /// that follow the first solve of a task. Each solve is warm-started from the best point so far;
 /// a stage replaces it only when it is feasible on the dense check grid and its exact-law
 /// objective is lower, so no stage can make the result worse.
+/// The refinement levels of `fivebar optimize` (each doubles the knot spans, about).
+inline const std::vector<int> kRefineLevels = {20, 40, 80};
+
 struct RefineOptions {
   bool enabled = true;
   /// smoothing velocities w_s [rad/s] solved after the first one, in order (continuation on
   /// w_s towards the exact law, w_s = 0); the last one is the law of the refined solves
   std::vector<double> continuation = {1e-2, 2e-3, 4e-4};
   /// control points per joint tried after the first solve's count (only the larger ones),
-  /// until the exact-law objective changes by less than `tol` (relative) from one to the next
-  std::vector<int> control_points = {20, 40, 80};
+  /// until the exact-law objective changes by less than `tol` (relative) from one to the next;
+  /// empty: no refinement (`fivebar optimize` uses kRefineLevels)
+  std::vector<int> control_points;
   double tol = 1e-3;
   /// Gauss-Legendre points per knot span of a refined spline: as many nodes in all as the
   /// first solve's, but at least this many per span
