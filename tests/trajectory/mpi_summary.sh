@@ -6,7 +6,7 @@
 set -eu
 mpiexec=$1 fivebar=$2 src=$3 work=$4
 rm -rf "$work" && mkdir -p "$work"
-run() { "$@" "$src/datasets/scenes/paper.yaml" --tasks "$src/datasets/tasks/paper_tasks.yaml" --no-plots > /dev/null; }
+run() { "$@" "$src/datasets/scenes/paper.yaml" --tasks "$src/datasets/tasks/paper_tasks.yaml" --no-plots --no-refine > /dev/null; }
 run "$fivebar" optimize --out "$work/t1" --threads 1
 run "$fivebar" optimize --out "$work/t2" --threads 2
 run "$mpiexec" --allow-run-as-root --oversubscribe -np 2 "$fivebar" optimize --out "$work/mpi" --threads 1

@@ -364,7 +364,17 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
   const Candidate best = options.refine.enabled && feasible(first, options)
                              ? refine(params, loads, first, options, oo, r)
                              : first;
+  // a later stage that improved on a converged first solve but stopped at a limit keeps the
+  // task ok (it is feasible and better); its outcome is noted
+  const bool later = best.control_points != first.control_points ||
+                     best.smoothing_velocity != first.smoothing_velocity;
   *solver = best.solver;
+  if (later && first.solver.outcome == SolverOutcome::kConverged &&
+      best.solver.outcome != SolverOutcome::kConverged) {
+    *solver = first.solver;
+    add_note(r, "the last stage (" + std::to_string(best.control_points) +
+                    " control points) ended: " + best.solver.message);
+  }
   *check = best.check;
   r->solver_status = outcome_name(best.solver.outcome);
   r->x = best.x;
