@@ -21,6 +21,7 @@
 #include <unistd.h>
 
 #include "fivebar/io/command.h"
+#include "fivebar/io/csv.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
@@ -222,12 +223,6 @@ Design Search::evaluate(const std::vector<double>& values) {
   return d;
 }
 
-std::string quoted(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
-
 // design_history.csv: every design evaluated, in order, failures with their reasons
 std::string history_csv(const Search& s) {
   std::string csv = "evaluation";
@@ -245,7 +240,7 @@ std::string history_csv(const Search& s) {
            format_double(d.status == "ok" ? d.total : NAN) + "," + format_double(d.objective) +
            "," + format_double(best);
     for (const TaskResult& r : d.results) csv += "," + format_double(r.dissipated_energy);
-    csv += "," + quoted(d.reason) + "\n";
+    csv += "," + csv_quote(d.reason) + "\n";
   }
   return csv;
 }

@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "fivebar/io/command.h"
+#include "fivebar/io/csv.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
@@ -125,12 +126,6 @@ Outcome summarize(const std::vector<Design>& designs,
   return o;
 }
 
-std::string quoted(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
-
 // study.csv: one row per design, with the reason for designs that cannot do every task
 std::string study_csv(const std::vector<trajectory::Sweep>& sweeps,
                       const std::vector<Design>& designs,
@@ -163,7 +158,7 @@ std::string study_csv(const std::vector<trajectory::Sweep>& sweeps,
     csv += std::to_string(d) + values + "," + status + "," + std::to_string(ok) + "," +
            num(o.totals[d]) + "," + num(base_total) + "," +
            num(100.0 * (1.0 - o.totals[d] / base_total)) + energies + statuses + "," +
-           (static_cast<int>(d) == o.best ? "1" : "0") + "," + quoted(o.reasons[d]) + "\n";
+           (static_cast<int>(d) == o.best ? "1" : "0") + "," + csv_quote(o.reasons[d]) + "\n";
   }
   return csv;
 }

@@ -11,23 +11,14 @@
 #include "fivebar/trajectory/batch.h"
 #include "fivebar/trajectory/design.h"
 #include "fivebar/trajectory/tasks.h"
+#include "paper_fixture.h"
 
 namespace fivebar::trajectory {
 namespace {
 
-const std::string kTasks = std::string(FIVEBAR_SOURCE_DIR) + "/datasets/tasks/paper_tasks.yaml";
-
-sim::LoadFunction paper_loads() {
-  return [](double) {
-    Loads<double> L;
-    L.M3 = 6.0;
-    L.F = 50.0;
-    L.F_angle = M_PI / 2;
-    return L;
-  };
-}
-
-sim::Initial paper_initial() { return {M_PI / 2, M_PI / 2, 0.0, 0.0}; }
+using testing::kTasks;
+using testing::paper_initial;
+using testing::paper_loads;
 
 TaskResult solve(const TaskSpec& task, const BatchOptions& options,
                  const Params<double>& params = paper_params(), const TaskResult* warm = nullptr) {

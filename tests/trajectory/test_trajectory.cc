@@ -16,6 +16,7 @@
 #include "fivebar/trajectory/quadrature.h"
 #include "fivebar/trajectory/sweep.h"
 #include "fivebar/trajectory/tasks.h"
+#include "paper_fixture.h"
 
 namespace fivebar::trajectory {
 namespace {
@@ -23,21 +24,10 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
-const std::string kTasks = std::string(FIVEBAR_SOURCE_DIR) + "/datasets/tasks/paper_tasks.yaml";
+using testing::kTasks;
+using testing::paper_initial;
+using testing::paper_loads;
 const std::array<double, 2> kStart = {M_PI / 2, M_PI / 2};
-
-// loads of the paper scene other than the motors: M3 = 6 N m, F = 50 N at pi/2 from link 3
-sim::LoadFunction paper_loads() {
-  return [](double) {
-    Loads<double> L;
-    L.M3 = 6.0;
-    L.F = 50.0;
-    L.F_angle = M_PI / 2;
-    return L;
-  };
-}
-
-sim::Initial paper_initial() { return {M_PI / 2, M_PI / 2, 0.0, 0.0}; }
 
 TEST(BSpline, RestToRestEndsAndPartitionOfUnity) {
   // ends fixed at start / goal with zero rate and acceleration, for any inner control points
