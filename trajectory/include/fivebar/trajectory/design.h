@@ -14,7 +14,7 @@ namespace fivebar::trajectory {
 
 struct BoxOptions {
   int max_evaluations = 40;    ///< designs evaluated at most (the start included)
-  double initial_step = 0.25;  ///< first trust-region radius, as a fraction of each range
+  double initial_step = 0.4;  ///< first trust-region radius, as a fraction of each range
   double xtol = 1e-3;          ///< stop when a step changes every value by < xtol of its range
   double ftol_rel = 1e-6;      ///< stop when the objective changes by < this (relative)
 };
