@@ -139,7 +139,11 @@ class Search {
 
   // the tasks of one design, warm-started from the best design so far
   Design evaluate(const std::vector<double>& values, bool warm = true);
+  // a design evaluated before (BOBYQA's first point is the start) is not solved again
   double objective(const std::vector<double>& values, bool warm = true) {
+    for (const Design& d : history_) {
+      if (warm && d.values == values) return d.objective;
+    }
     history_.push_back(evaluate(values, warm));
     return history_.back().objective;
   }
@@ -417,8 +421,9 @@ int run(const Args& args) {
     hi.push_back(v.hi);
   }
   const bool tty = trajectory::process_rank() == 0 && isatty(STDERR_FILENO);
+  search.objective(x0);  // the start design first (BOBYQA may start a little inside the box)
   trajectory::BoxOptions bo;
-  bo.max_evaluations = args.max_designs;  // the first is the start design
+  bo.max_evaluations = args.max_designs - 1;  // the start design is one
   const trajectory::BoxResult box = trajectory::minimize_box(
       [&](const std::vector<double>& x) {
         const double f = search.objective(x);
