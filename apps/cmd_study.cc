@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "fivebar/io/command.h"
+#include "fivebar/io/commands.h"
 #include "fivebar/io/csv.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
@@ -260,12 +261,7 @@ void report(const std::vector<trajectory::Sweep>& sweeps, const std::vector<Desi
 int run(const Args& args) {
   const std::vector<trajectory::Sweep> sweeps = parse_sweeps(args.sweeps);
   load_scene(args.scene.scene, args.scene.sets);  // bad input in the base scene: exit 2 here
-  std::vector<trajectory::TaskSpec> tasks;
-  try {
-    tasks = trajectory::load_tasks(args.tasks);
-  } catch (const trajectory::TaskFileError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
-  }
+  const std::vector<trajectory::TaskSpec> tasks = read_tasks(args.tasks);
   trajectory::BatchOptions options;
   if (!trajectory::parse_method(args.method, &options.optimizer.method)) {
     throw InputError("command line", "--method", "'" + args.method + "' is not slsqp, mma or ccsaq");

@@ -4,6 +4,7 @@
 
 #include "fivebar/io/errors.h"
 #include "fivebar/io/loads.h"
+#include "fivebar/io/tasks_file.h"
 
 namespace fivebar::io {
 
@@ -118,13 +119,7 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
   return o;
 }
 
-std::vector<trajectory::TaskSpec> read_tasks(const std::string& path) {
-  try {
-    return trajectory::load_tasks(path);
-  } catch (const trajectory::TaskFileError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
-  }
-}
+std::vector<trajectory::TaskSpec> read_tasks(const std::string& path) { return load_tasks(path); }
 
 Status task_rows(const Scene& scene, const trajectory::TaskResult& r,
                  const trajectory::BatchOptions& options, std::vector<sim::Row>* optimal,

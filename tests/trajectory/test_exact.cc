@@ -16,7 +16,7 @@
 namespace fivebar::trajectory {
 namespace {
 
-using testing::kTasks;
+using testing::paper_tasks;
 using testing::paper_initial;
 using testing::paper_loads;
 
@@ -28,7 +28,7 @@ TaskResult solve(const TaskSpec& task, const BatchOptions& options,
 TEST(Continuation, ReachesTheExactLawEnergy) {
   // swing_right: at w_s = 0.05 rad/s the smoothed law is 3e-4 (relative) off the exact one;
   // the continuation must end where both agree and lower the exact-law energy
-  const TaskSpec task = load_tasks(kTasks)[1];
+  const TaskSpec task = paper_tasks()[1];
   BatchOptions first;
   first.validate = false;
   first.refine.enabled = false;
@@ -46,7 +46,7 @@ TEST(Continuation, ReachesTheExactLawEnergy) {
 }
 
 TEST(Refinement, StopsWhenTheEnergyChangesLessThanTheTolerance) {
-  const TaskSpec task = load_tasks(kTasks)[0];  // swing_left
+  const TaskSpec task = paper_tasks()[0];  // swing_left
   BatchOptions options;
   options.validate = false;
   options.refine.continuation.clear();
@@ -67,7 +67,7 @@ TEST(Refinement, StopsWhenTheEnergyChangesLessThanTheTolerance) {
 }
 
 TEST(WarmStart, FromANeighbouringDesign) {
-  const TaskSpec task = load_tasks(kTasks)[2];  // reach_right, a Cartesian goal
+  const TaskSpec task = paper_tasks()[2];  // reach_right, a Cartesian goal
   BatchOptions options;
   options.validate = false;
   options.refine.enabled = false;

@@ -57,7 +57,7 @@ struct OptimizeSettings {
 /// The batch options of `settings`; throws InputError(`command line: --method: ...`) and the like.
 trajectory::BatchOptions batch_options(const OptimizeSettings& settings);
 
-/// Reads a tasks file; a malformed one throws InputError (the TaskFileError's message).
+/// Reads a tasks file (io::load_tasks); a malformed one throws InputError.
 std::vector<trajectory::TaskSpec> read_tasks(const std::string& path);
 
 /// The trajectory rows of a solved task and of its minimum-jerk baseline, on the scene's output
