@@ -152,8 +152,9 @@ std::vector<TaskResult> run_parallel(int count, int threads,
 /// baseline_dissipated_energy_exact, baseline_status, initial_guess, initial_dissipated_energy,
 /// initial_peak_torque, initial_min_coupler_sine, control_points, dissipated_energy_smoothed,
 /// baseline_dissipated_energy_smoothed, input_energy_smoothed, baseline_input_energy_smoothed,
-/// miss_distance_exact, message. Energies and torques are those of the scene's exact friction law; the *_smoothed
-/// energies those of the smooth law the optimizer works on.
+/// miss_distance_exact, smoothing_velocity, refinement_change, continuation, refinement, message.
+/// Energies and torques are those of the scene's exact friction law; the *_smoothed energies
+/// those of the smooth law of the winning stage.
 const std::vector<std::string>& summary_columns();
 /// The fields of one summary.csv row (numbers as %.17g; the message quoted as CSV text).
 std::vector<std::string> summary_fields(const TaskResult& result);
