@@ -9,6 +9,7 @@
 
 #include "fivebar/io/errors.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/model/friction.h"
 
 namespace fivebar::io {
 namespace {
@@ -547,6 +548,43 @@ TEST(Scene, RestThresholdsDefaultToDerivedAndRoundTrip) {
   EXPECT_EQ(back.rest_acceleration_threshold, 0.0);
   expect_error(kPaper, {"simulation.rest_acceleration_threshold=-1e-3"},
                "simulation.rest_acceleration_threshold", "must be >= 0");
+}
+
+// Issue 9: the friction keys come from the law descriptors (friction.h). For every law, each of
+// its coefficients (per joint, distinct values) round-trips through scene_to_yaml, and each
+// coefficient it requires is reported missing, naming the law, when absent.
+TEST(SceneLaws, EveryDescriptorCoefficientRoundTripsAndIsRequiredWhereTheLawSaysSo) {
+  for (const LawDescriptor& law : kLaws) {
+    if (law.law == FrictionLaw::kNone) continue;
+    SCOPED_TRACE(law.name);
+    std::string friction = "friction:\n  model: " + std::string(law.name) + "\n  pin_radius: 0.01\n";
+    for (int i = 0; i < law.count; ++i) {
+      const CoefficientInfo& c = coefficient_info(law.coefficients[i].id);
+      const double base = 0.1 * (i + 1);
+      friction += "  " + std::string(c.key) + ": [" + std::to_string(base) + ", " +
+                  std::to_string(base + 0.01) + ", " + std::to_string(base + 0.02) + ", " +
+                  std::to_string(base + 0.03) + ", " + std::to_string(base + 0.04) + "]\n";
+    }
+    const std::string paper_friction =
+        "friction:\n  model: coulomb_viscous\n  pin_radius: 0.01\n  coulomb: 0.12\n  viscous: 0.02\n";
+    const std::string yaml = with(paper_friction, friction);
+    const Scene a = parse_scene(yaml, "law.yaml", {});
+    const Scene b = parse_scene(scene_to_yaml(a), "law_again.yaml", {});
+    EXPECT_EQ(a.params.friction.law, law.law);
+    for (int i = 0; i < law.count; ++i) {
+      const Coefficient id = law.coefficients[i].id;
+      EXPECT_NEAR(coefficient(a.params.friction, id)[3], 0.1 * (i + 1) + 0.03, 1e-15);
+      EXPECT_EQ(coefficient(b.params.friction, id), coefficient(a.params.friction, id));
+      if (!law.coefficients[i].required) continue;
+      const std::string key = coefficient_info(id).key;
+      const auto line_start = yaml.find("  " + key + ": [");
+      const auto line_end = yaml.find('\n', line_start);
+      std::string missing = yaml;
+      missing.erase(line_start, line_end - line_start + 1);
+      expect_error(missing, {}, "friction." + key,
+                   "required by friction.model " + std::string(law.name));
+    }
+  }
 }
 
 }  // namespace
