@@ -129,7 +129,7 @@ std::optional<sim::Result> run_twin(const Scene& scene, const sim::LoadFunction&
   o.progress = nullptr;
   sim::Result twin = sim::simulate(frictionless, loads, scene.initial, o);
   if (twin.status.ok()) {
-    *checks = sim::check_run(frictionless, loads, twin, o.rtol);
+    *checks = sim::check_run(frictionless, loads, twin, o.rtol, o.atol);
   } else {
     warn(scene.path + ": frictionless twin: " + twin.status.message +
          " (trajectory_frictionless.csv not written)");
@@ -232,7 +232,7 @@ int run(const Args& args) {
   const sim::Result& run = er.run;
   if (!run.status.ok()) throw NumericalError(scene.path, "simulation", run.status.message);
   if (run.rows.empty()) throw NumericalError(scene.path, "simulation", "no output rows");
-  const sim::RunChecks checks = sim::check_run(scene.params, loads, run, er.options.rtol);
+  const sim::RunChecks checks = sim::check_run(scene.params, loads, run, er.options.rtol, er.options.atol);
   std::optional<sim::RunChecks> twin_checks;
   const std::optional<sim::Result> twin =
       run_twin(scene, loads, er.options, args.twin, &twin_checks);

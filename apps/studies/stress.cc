@@ -385,7 +385,7 @@ StressRow evaluate_run(const StressCase& c, Method method, const std::vector<Row
                 std::to_string(expected));
   }
   if (!finite) return fail("status ok with non-finite values in the output rows");
-  const sim::RunChecks checks = sim::check_run(c.params, c.loads, r, o.rtol);
+  const sim::RunChecks checks = sim::check_run(c.params, c.loads, r, o.rtol, o.atol);
   row.energy_balance = checks.energy_balance_relative;
   if (!(row.energy_balance <= opt.max_energy_balance)) {
     return fail("energy balance residual " + num(row.energy_balance) + " above " +

@@ -21,10 +21,18 @@ double max_angle_difference(const std::vector<Row>& a, const std::vector<Row>& b
 
 namespace {
 
-/// The companion of a run: same method, ten times tighter, angles only, no progress.
+std::string fmt(double x) {
+  std::ostringstream s;
+  s.precision(3);
+  s << x;
+  return s.str();
+}
+
+/// The companion of a run: same method, ten times tighter, angles only, no progress. When the
+/// companion finds the joint modes indeterminate, *indeterminate receives its status.
 double companion_estimate(const Params<double>& params, const LoadFunction& loads,
                           const Initial& initial, const Options& o, const Result& run,
-                          std::string* note) {
+                          std::string* note, Status* indeterminate) {
   Options c = o;
   c.rtol = o.rtol / 10;
   c.atol = o.atol / 10;
@@ -32,18 +40,12 @@ double companion_estimate(const Params<double>& params, const LoadFunction& load
   c.progress = nullptr;
   const Result companion = simulate(params, loads, initial, c);
   if (!companion.status.ok()) {
-    *note = "no error estimate: the companion run at rtol " + std::to_string(c.rtol) +
+    *note = "no error estimate: the companion run at rtol " + fmt(c.rtol) +
             " failed: " + companion.status.message;
+    if (companion.status.code == StatusCode::kIndeterminateModes) *indeterminate = companion.status;
     return NAN;
   }
   return max_angle_difference(run.rows, companion.rows);
-}
-
-std::string fmt(double x) {
-  std::ostringstream s;
-  s.precision(3);
-  s << x;
-  return s.str();
 }
 
 }  // namespace
@@ -59,7 +61,18 @@ EstimatedRun simulate_to_target(const Params<double>& params, const LoadFunction
     out.run = simulate(params, loads, initial, o);
     if (!out.run.status.ok()) return out;
     out.note.clear();
-    const double e = companion_estimate(params, loads, initial, o, out.run, &out.note);
+    Status indeterminate;
+    const double e =
+        companion_estimate(params, loads, initial, o, out.run, &out.note, &indeterminate);
+    if (!indeterminate.ok()) {
+      // the same motion at a tighter tolerance meets a pose where the joint modes are not
+      // determined: this run's answer is not unique either (it only stepped past that pose)
+      out.run.status = Status::Error(
+          StatusCode::kIndeterminateModes,
+          "the check run at rtol " + fmt(o.rtol / 10) + " found the joint modes indeterminate, "
+          "so this motion is not determined by the model: " + indeterminate.message);
+      return out;
+    }
     out.estimated_max_error_rad = e;
     out.attempts.push_back({o.rtol, e});
     out.target_met = e <= target;

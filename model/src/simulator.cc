@@ -78,6 +78,7 @@ struct Context {
   bool stick = false;                   ///< exact stick-slip (Options::stick, with use_slip)
   std::array<int, 5> slip{};            ///< mode of each joint in this segment
   bool locked = false;                  ///< all joints stuck, held as lock_analysis finds
+  bool decided = false;                 ///< the modes have been decided once (at the start)
   /// switches not located, exact sign: a joint whose rate is exactly zero takes the direction
   /// in which it starts to slip (zero_sign, decided at the start), not sign(0) = 0
   bool zero_signs = false;
@@ -450,19 +451,7 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
                     const std::array<bool, 5>& no_stick, bool all_rest, bool may_lock,
                     Stats* stats) {
   ++stats->mode_decisions;
-  std::array<double, 5> w{};
-  joint_rates(*c.params, y, &w);
   c.locked = false;
-  for (int k = 0; k < 5; ++k) {
-    if (rest[k]) continue;
-    const int s = sign_of(w[k]);
-    // (a joint crossing zero within ~1e-12 s of the one that fired reads a few 1e-9 rad/s against
-    // its slip: its direction follows its rate, and that is no missed switch)
-    if (c.watched[k] && c.slip[k] != s && c.slip[k] != kStuck && std::abs(w[k]) > kRestProjection) {
-      ++stats->mode_corrections;
-    }
-    c.slip[k] = s;
-  }
   if (!any_of(rest)) return Status::Ok();
   bool lock = false;
   if (all_rest && may_lock && c.stick) {
@@ -475,7 +464,7 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
   Status failure;  // the first evaluation that failed (near-singular pose, friction loop)
   consistent_candidates(c, t, y, candidates, rest, false, &found, &accel, &failure);
   if (lock && !found.empty()) {
-    return at_time(Status::Error(StatusCode::kSolverFailed,
+    return at_time(Status::Error(StatusCode::kIndeterminateModes,
                                  "several consistent joint modes: friction can hold the mechanism "
                                  "at rest, yet it can also start to slip (Painleve-type)" +
                                      rest_list(rest)),
@@ -490,7 +479,7 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
   if (relaxed) consistent_candidates(c, t, y, candidates, rest, true, &found, &accel, &failure);
   if (found.empty() && !failure.ok()) return at_time(failure, t, y[0], y[1]);
   if (found.empty()) {
-    return at_time(Status::Error(StatusCode::kSolverFailed,
+    return at_time(Status::Error(StatusCode::kIndeterminateModes,
                                  "no consistent joint modes: neither slip direction nor stick is "
                                  "consistent with the accelerations" + rest_list(rest)),
                    t, y[0], y[1]);
@@ -498,7 +487,7 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
   const double same = relaxed ? 1e-6 : 1e-9;
   for (size_t i = 1; i < found.size(); ++i) {
     if ((accel[i] - accel[0]).norm() > same * (1.0 + accel[0].norm())) {
-      return at_time(Status::Error(StatusCode::kSolverFailed,
+      return at_time(Status::Error(StatusCode::kIndeterminateModes,
                                    "several consistent joint modes with different motions "
                                    "(Painleve-type indeterminacy)" + rest_list(rest)),
                      t, y[0], y[1]);
@@ -511,6 +500,8 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
 
 /// Without stick (Options::stick = false): the joints at rest slip in the direction of the
 /// relative acceleration they get with those directions (a short fixed point over the signs).
+/// When no slip directions are consistent (friction could hold a joint: only stick can model
+/// that), an error with the joints, instead of chattering between the two directions.
 Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, 5>& rest) {
   for (int k = 0; k < 5; ++k) {
     if (rest[k]) c.slip[k] = 0;
@@ -529,7 +520,34 @@ Status decide_slip_only(Context& c, double t, const double* y, const std::array<
     }
     if (!changed) break;
   }
-  return Status::Ok();
+  Vec2<double> thdd;
+  Status failure;
+  if (consistent(c, t, y, c.slip, rest, kSlackAccel, kSlackTorque, &thdd, &failure)) {
+    return Status::Ok();
+  }
+  if (!failure.ok()) return at_time(failure, t, y[0], y[1]);
+  return at_time(Status::Error(StatusCode::kIndeterminateModes,
+                               "no consistent slip directions with simulation.stick = false: "
+                               "friction can hold a joint here, which only stick-slip models "
+                               "(simulation.stick = true)" + rest_list(rest)),
+                 t, y[0], y[1]);
+}
+
+/// The joints that are not at rest slip in the direction of their rate. At a decision after the
+/// first, a slipping joint found moving against its slip direction is a switch the detection
+/// missed (Stats::mode_corrections); a joint crossing zero within ~1e-12 s of the one that
+/// fired reads a few 1e-9 rad/s against its slip, and that is no missed switch.
+void slip_moving_joints(Context& c, const std::array<bool, 5>& rest,
+                        const std::array<double, 5>& w, Stats* stats) {
+  for (int k = 0; k < 5; ++k) {
+    if (rest[k]) continue;
+    const int s = sign_of(w[k]);
+    if (c.decided && c.watched[k] && c.slip[k] != s && c.slip[k] != kStuck &&
+        std::abs(w[k]) > kRestProjection) {
+      ++stats->mode_corrections;
+    }
+    c.slip[k] = s;
+  }
 }
 
 /// Decides the joint modes at (t, y), where the switch functions in `fired_now` just fired
@@ -559,6 +577,8 @@ Status decide_at(Context& c, double t, double* y, const Fired& fired_now, Stats*
     no_stick[k] = fired_now[k] && c.slip[k] == kStuck;  // a breakaway: that joint slips
   }
   const std::array<int, 5> before = c.slip;
+  slip_moving_joints(c, rest, w, stats);
+  c.decided = true;
   const Status st =
       c.stick ? decide_modes(c, t, y, rest, no_stick, all_rest, !fired_now[kLockSlot], stats)
               : decide_slip_only(c, t, y, rest);
@@ -642,8 +662,12 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
   Evaluation<double> ev;
   std::array<double, 5> z{};
   if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
-  *st = forward_dynamics(*c.params, L, y[0], y[1], y[2], y[3], c.use_slip ? &c.slip : nullptr,
-                         eval, &ev, &z);
+  // the signs the right-hand side uses (rhs): the segment's, or from the rates when switches
+  // are not located (with the start's decided direction where a rate is exactly zero)
+  std::array<int, 5> signs{};
+  const std::array<int, 5>* slip = c.use_slip ? &c.slip : nullptr;
+  if (c.zero_signs && state_signs(c, y, &signs)) slip = &signs;
+  *st = forward_dynamics(*c.params, L, y[0], y[1], y[2], y[3], slip, eval, &ev, &z);
   if (!st->ok()) {
     *st = at_time(*st, t, y[0], y[1]);
     return row;
@@ -1008,7 +1032,7 @@ namespace {
 /// Energy balance: max |d(KE + PE) - W_in - W_ext + E_diss| over an energy scale every run has,
 /// at least 1e-9 of the mechanism's own (sum of masses x max(g, 1 m/s^2) x sum of lengths), so
 /// that a mechanism at rest does not divide round-off by round-off.
-double energy_balance(const Params<double>& p, const std::vector<Row>& rows) {
+double energy_balance(const Params<double>& p, const std::vector<Row>& rows, double* scale_out) {
   const Row& r0 = rows.front();
   const double e0 = r0.kinetic + r0.potential;
   double mass = 0.0, length = p.ground_length;
@@ -1023,6 +1047,7 @@ double energy_balance(const Params<double>& p, const std::vector<Row>& rows) {
     scale = std::max({scale, std::abs(r.W_in) + std::abs(r.W_ext), std::abs(r.E_diss),
                       std::abs(change), r.kinetic, std::abs(r.potential - r0.potential)});
   }
+  *scale_out = scale;
   return worst / scale;
 }
 
@@ -1037,16 +1062,17 @@ std::string check_failure(const char* what, double value, double tol, double t, 
 }  // namespace
 
 RunChecks check_run(const Params<double>& params, const LoadFunction& loads, const Result& result,
-                    double rtol) {
+                    double rtol, double atol) {
   RunChecks checks;
   if (result.rows.empty()) return checks;
-  checks.energy_balance_relative = energy_balance(params, result.rows);
+  checks.energy_balance_relative = energy_balance(params, result.rows, &checks.energy_scale);
   double peak_M = 0.0, peak_Mf = 0.0;
   for (const Row& r : result.rows) {
     peak_M = std::max({peak_M, std::abs(r.M1), std::abs(r.M2)});
     for (double mf : r.Mf) peak_Mf = std::max(peak_Mf, std::abs(mf));
   }
-  checks.energy_tol = std::min(1e-3, std::max(1e-6, 1e3 * rtol));
+  checks.energy_tol = std::max(std::min(1e-3, std::max(1e-6, 1e3 * rtol)),
+                               100.0 * (atol < 0 ? rtol : atol) / checks.energy_scale);
   checks.inverse_tol = 1e-8 * std::max(1.0, peak_M);
   checks.power_tol = 1e-9 * std::max(1.0, peak_Mf);
   const bool check_power = params.friction.law != FrictionLaw::kLuGre;

@@ -14,6 +14,9 @@ enum class StatusCode : int {
   kFrictionNotConverged,  ///< the reaction/friction loop did not converge
   kInvalidInput,          ///< a value out of its domain (NaN, non-positive length, ...)
   kSolverFailed,          ///< the integrator or optimizer gave up
+  /// no consistent joint modes, or several with different motions (Painleve-type): the motion
+  /// of the model is not determined at that instant
+  kIndeterminateModes,
 };
 
 struct Status {

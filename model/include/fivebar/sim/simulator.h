@@ -163,12 +163,16 @@ struct RunChecks {
   /// min over rows and joints of Mf_k w_k [W]: friction never supplies power (not checked for
   /// LuGre, whose bristles store and return energy)
   double friction_power_min = 0;
-  /// thresholds: energy balance max(1e-6, 1e3 rtol), at most 1e-3; inverse residual 1e-8 N m per N m of peak
-  /// input torque (at least 1e-8); friction power -1e-9 W per N m of peak friction torque
+  /// thresholds: energy balance max(1e-6, 1e3 rtol), at most 1e-3, and never below 100 atol [J]
+  /// over the run's energy scale (the energy quadratures are integrated to atol); inverse residual
+  /// 1e-8 N m per N m of peak input torque (at least 1e-8); friction power -1e-9 W per N m of
+  /// peak friction torque
   double energy_tol = 0, inverse_tol = 0, power_tol = 0;
+  double energy_scale = 0;  ///< [J] the scale the balance is relative to
   Status verdict;
 };
+/// `atol` < 0: the same as rtol (the scenes' usual rtol = atol).
 RunChecks check_run(const Params<double>& params, const LoadFunction& loads, const Result& result,
-                    double rtol = 1e-10);
+                    double rtol = 1e-10, double atol = -1);
 
 }  // namespace fivebar::sim
