@@ -42,7 +42,12 @@ bool parse_loss(const std::string& name, Loss* out);
 const char* loss_name(Loss l);
 
 struct IdentifyOptions {
+  /// the parameter groups (friction; with layout.inertia the 16 standard inertial parameters)
   ParameterLayout layout;
+  /// group inertia: relative std of the Gaussian prior that holds the inertial parameters the
+  /// log cannot determine at the scene's values (m: relative * m; m c_x, m c_y: relative * m *
+  /// link length; J_O: relative * J_O). Must be > 0.
+  double inertia_prior = 0.2;
   Method method = Method::kInverseDynamics;
   Loss loss = Loss::kNone;
   double loss_scale = 0.1;  ///< [N m] (inverse dynamics) or [rad] (output error): Huber/Cauchy a
@@ -72,7 +77,8 @@ struct IdentifyOptions {
   double rest_rate_threshold = -1, rest_acceleration_threshold = -1;
   int max_iterations = 100;
   int num_threads = 1;
-  /// start values, in layout order; empty: the scene's values (0.1 / 0.01 / ... where zero)
+  /// start values of the friction coefficients, in layout order (or of every parameter);
+  /// empty: neutral values (0.1 / 0.01 / ...). The inertial parameters start at the scene's.
   std::vector<double> initial;
   // output error
   double window_s = 0.2;   ///< length of each simulated window [s]
@@ -95,6 +101,25 @@ struct ParameterEstimate {
   /// at a bound (lower bound, or static_coulomb = coulomb): the std, from the unconstrained
   /// curvature, is not meaningful
   bool at_bound = false;
+};
+
+/// Group inertia: what the log determines of the 16 standard inertial parameters.
+struct InertialReport {
+  bool estimated = false;
+  double prior_relative = 0;
+  /// singular values of the regressor d r / d pi scaled by the prior std and the noise level
+  /// (largest first): above 3, the log determines that direction to better than a third of its
+  /// prior std; below 1, the prior holds it
+  std::vector<double> information;
+  int rank = 0;  ///< directions the log determines (information > 3)
+  /// the base (identifiable) combinations, e.g. "J_1 + 0.0064 m_3", with value and std
+  struct Combination {
+    std::string text;
+    double value = 0, std = 0;
+  };
+  std::vector<Combination> base;
+  std::vector<std::string> at_prior;  ///< parameters left at their prior (posterior std > prior/2)
+  bool consistent = true;             ///< every link m > 0 and inertia about the COM > 0
 };
 
 /// Identification outcome. `status` not ok: the numerics failed (values may be partial).
@@ -150,7 +175,8 @@ struct IdentifyResult {
   /// dynamics of the fitted scene at every sample; NaN where it failed), and whether used
   std::vector<double> omega1, omega2, alpha1, alpha2, predicted_tau1, predicted_tau2;
   std::vector<char> used;
-  Params<double> fitted;  ///< the scene's parameters with the identified friction
+  Params<double> fitted;  ///< the scene's parameters with the identified friction (and links)
+  InertialReport inertial;  ///< group inertia
 };
 
 /// Identifies the friction coefficients of `scene` from `log`. `loads` gives the scene's
