@@ -189,6 +189,7 @@ Json parameters_json(const id::IdentifyResult& res, const id::TorqueLog& log, bo
     e.set("initial", p.initial);
     e.set("at_bound", p.at_bound);
     e.set("std_meaningful", std::isfinite(p.std));
+    if (i < res.cramer_rao_std.size()) e.set("cramer_rao_std", res.cramer_rao_std[i]);
     double tv = 0;
     if (true_value(truth, res.layout, int(i), p.name, &tv)) {
       e.set("true", tv);

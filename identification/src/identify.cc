@@ -883,11 +883,21 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& H
   }
   scatter(Hinv * S * Hinv);
   out->std_method = "errors-in-variables";
+  // Cramer-Rao bound for white torque noise alone (the logged level; angle noise ignored): a
+  // lower bound the reported std should approach when the rates are logged
+  const double st2 = std::max(f.noise.torque[0], f.noise.torque[1]);
+  if (st2 > 0) {
+    const Eigen::MatrixXd Hc = Jf.transpose() * Jf / (st2 * st2) + Hpf / s2;
+    const Eigen::MatrixXd Cc = Hc.ldlt().solve(Eigen::MatrixXd::Identity(Hc.rows(), Hc.cols()));
+    out->cramer_rao_std.assign(P, kNaN);
+    for (size_t a = 0; a < free.size(); ++a) out->cramer_rao_std[free[a]] = std::sqrt(Cc(a, a));
+  }
 }
 
 /// Singular values of the (public) Jacobian with unit-norm columns, and the warnings they imply.
-void identifiability(const Eigen::MatrixXd& JtJ, const std::vector<std::string>& names,
+void identifiability(const Eigen::MatrixXd& JtJ, const ParameterLayout& layout,
                      IdentifyResult* out) {
+  const std::vector<std::string> names = layout.names();
   const int P = static_cast<int>(JtJ.rows());
   Eigen::VectorXd scale(P);
   for (int i = 0; i < P; ++i) {
@@ -909,10 +919,12 @@ void identifiability(const Eigen::MatrixXd& JtJ, const std::vector<std::string>&
   if (ratio < 1e-2) {  // condition number above 100 with unit-norm columns
     const Eigen::VectorXd v = es.eigenvectors().col(0);
     std::string who;
+    bool friction = false;  // inertial-only directions: the inertial report covers them
     for (int i = 0; i < P; ++i) {
       if (std::abs(v(i)) > 0.3) who += (who.empty() ? "" : ", ") + names[i];
+      friction = friction || (std::abs(v(i)) > 0.3 && !layout.is_inertial(i));
     }
-    out->warnings.push_back("the log cannot separate " + who +
+    if (friction) out->warnings.push_back("the log cannot separate " + who +
                             " (smallest/largest scaled singular value " + fmt(ratio) + ")");
   }
 }
@@ -1265,8 +1277,7 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
   const Eigen::MatrixXd Hp = prior_information(f);
   covariance(f, an->J, Hp, an->sens, out);
   const Eigen::MatrixXd Tinv = to_public(f.layout).inverse();
-  identifiability(Tinv.transpose() * (an->J.transpose() * an->J + Hp) * Tinv, f.layout.names(),
-                  out);
+  identifiability(Tinv.transpose() * (an->J.transpose() * an->J + Hp) * Tinv, f.layout, out);
   estimates(f, x0_public, out);
   if (f.layout.inertia) inertial_stage(f, an->J, out);
 }

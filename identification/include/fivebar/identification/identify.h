@@ -129,6 +129,9 @@ struct IdentifyResult {
   Method method = Method::kInverseDynamics;
   std::vector<ParameterEstimate> parameters;
   Eigen::MatrixXd covariance;   ///< s^2 (J^T J)^-1 [units of the parameters squared]
+  /// per parameter (internal layout = public except Stribeck's static_coulomb): the Cramer-Rao
+  /// bound for white torque noise at the logged level, the angle noise ignored; NaN when unknown
+  std::vector<double> cramer_rao_std;
   Eigen::MatrixXd correlation;  ///< covariance normalised by the standard deviations
   /// singular values of the Jacobian with columns scaled to unit norm (largest first): a ratio
   /// near 0 means a combination of parameters the log cannot determine
