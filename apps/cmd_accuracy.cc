@@ -22,7 +22,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
-#include "fivebar/sim/accuracy.h"
+#include "fivebar/studies/accuracy.h"
 
 namespace fivebar::io {
 namespace {
@@ -68,7 +68,7 @@ double against_external(const std::string& path, const std::vector<sim::Row>& ro
 int run(const Args& args) {
   const Scene scene = load_scene(args.scene.scene, args.scene.sets);
   const sim::LoadFunction loads = LoadExpressions(scene).function();
-  sim::WorkPrecisionOptions opt;
+  studies::WorkPrecisionOptions opt;
   if (args.repeats < 1) throw InputError(scene.path, "--repeats", "must be at least 1");
   opt.repeats = args.repeats;
   if (!args.tolerances.empty()) {
@@ -94,10 +94,10 @@ int run(const Args& args) {
   }
   OutputDir out(args.scene.out, kOutputs);
 
-  sim::WorkPrecision wp;
+  studies::WorkPrecision wp;
   Progress progress("accuracy", 1.0);
   opt.progress = [&progress](int done, int total) { progress.update(double(done) / total); };
-  const Status st = sim::work_precision(scene.params, loads, scene.initial, scene.options, opt, &wp);
+  const Status st = studies::work_precision(scene.params, loads, scene.initial, scene.options, opt, &wp);
   if (!st.ok()) throw NumericalError(scene.path, "reference", st.message);
 
   // work_precision.csv
@@ -109,7 +109,7 @@ int run(const Args& args) {
     for (char& c : msg) {
       if (c == ',' || c == '\n') c = ';';
     }
-    csv << sim::method_name(p.method) << ',' << sim::treatment_name(p.treatment) << ','
+    csv << sim::method_name(p.method) << ',' << studies::treatment_name(p.treatment) << ','
         << format_grid_value(p.tolerance) << ',' << (p.ok ? "ok" : "failed") << ','
         << format_double(p.error) << ',' << format_double(p.error_vs_exact) << ','
         << format_double(p.wall_time_s) << ',' << p.rhs_evaluations << ',' << p.steps
@@ -135,7 +135,7 @@ int run(const Args& args) {
   if (!wp.regularized.rows.empty()) {
     summary.set("regularization_velocity", opt.regularization_velocity);
     summary.set("regularized_model_error",
-                sim::max_theta_difference(wp.regularized.rows, wp.exact.rows));
+                studies::max_theta_difference(wp.regularized.rows, wp.exact.rows));
   }
   Json recs = Json::array();
   for (const auto& r : wp.recommendations) {
@@ -144,7 +144,7 @@ int run(const Args& args) {
     j.set("found", r.found);
     if (r.found) {
       j.set("integrator", sim::method_name(r.point.method));
-      j.set("treatment", sim::treatment_name(r.point.treatment));
+      j.set("treatment", studies::treatment_name(r.point.treatment));
       j.set("tolerance", r.point.tolerance);
       j.set("error", r.point.error);
       j.set("wall_time_s", r.point.wall_time_s);
@@ -171,7 +171,7 @@ int run(const Args& args) {
               << fmt(against_external(args.reference, wp.exact.rows, scene.options.output_step))
               << " rad";
   }
-  std::cout << "\n  Pareto front (" << sim::treatment_name(wp.points.front().treatment) << "):\n";
+  std::cout << "\n  Pareto front (" << studies::treatment_name(wp.points.front().treatment) << "):\n";
   for (const auto& p : wp.points) {
     if (!p.pareto) continue;
     std::cout << "    " << sim::method_name(p.method) << " tol " << fmt(p.tolerance) << ": error "

@@ -86,6 +86,7 @@ Json run_json(const sim::Result& run, const sim::RunChecks* checks) {
   j.set("stick_events", run.stats.stick_events);
   j.set("breakaway_events", run.stats.breakaway_events);
   j.set("mode_decisions", run.stats.mode_decisions);
+  j.set("sign_rule_inconsistent", run.stats.sign_rule_inconsistent);
   j.set("mode_corrections", run.stats.mode_corrections);
   if (!run.rows.empty()) {
     j.set("E_diss", run.rows.back().E_diss);

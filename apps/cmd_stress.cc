@@ -16,7 +16,7 @@
 #include "fivebar/io/command.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/output.h"
-#include "fivebar/sim/stress.h"
+#include "fivebar/studies/stress.h"
 
 namespace fivebar::io {
 namespace {
@@ -57,13 +57,13 @@ std::string md_cell(const std::string& s) {
   return out;
 }
 
-std::string stress_csv(const sim::StressReport& report) {
+std::string stress_csv(const studies::StressReport& report) {
   std::ostringstream s;
   s << "case,integrator,status,exit_code,error,energy_balance,wall_time_s,steps,"
        "rhs_evaluations,final_time,displacement,message\n";
   for (const auto& r : report.rows) {
     s << r.case_name << ',' << sim::method_name(r.method) << ','
-      << sim::stress_outcome_name(r.outcome) << ',' << r.exit_code << ','
+      << studies::stress_outcome_name(r.outcome) << ',' << r.exit_code << ','
       << opt_num(r.error, "%.3e") << ',' << opt_num(r.energy_balance, "%.3e") << ','
       << fmt(r.wall_time_s, "%.4f") << ',' << r.steps << ',' << r.rhs_evaluations << ','
       << fmt(r.final_time, "%.6g") << ',' << opt_num(r.displacement, "%.3e") << ','
@@ -72,8 +72,8 @@ std::string stress_csv(const sim::StressReport& report) {
   return s.str();
 }
 
-std::string stress_md(const std::vector<sim::StressCase>& cases, const sim::StressReport& report,
-                      const sim::StressOptions& opt, double total_s) {
+std::string stress_md(const std::vector<studies::StressCase>& cases, const studies::StressReport& report,
+                      const studies::StressOptions& opt, double total_s) {
   std::ostringstream s;
   s << "# fivebar stress\n\n"
     << "Runs at rtol = atol = 1e-8 on a 1 ms output grid; `error` is max |d theta_1..4| over the "
@@ -82,13 +82,13 @@ std::string stress_md(const std::vector<sim::StressCase>& cases, const sim::Stre
        "requires finite rows and an energy balance residual <= "
     << fmt(opt.max_energy_balance) << "; each run is a child process killed after "
     << fmt(opt.run_budget_s) << " s.\n\n"
-    << "**" << report.count(sim::StressOutcome::kOk) << " ok, "
-    << report.count(sim::StressOutcome::kRejected) << " rejected, "
-    << report.count(sim::StressOutcome::kFailed) << " failed** (" << report.rows.size()
+    << "**" << report.count(studies::StressOutcome::kOk) << " ok, "
+    << report.count(studies::StressOutcome::kRejected) << " rejected, "
+    << report.count(studies::StressOutcome::kFailed) << " failed** (" << report.rows.size()
     << " runs, " << fmt(total_s, "%.1f") << " s)\n";
   for (size_t i = 0; i < cases.size(); ++i) {
-    const sim::StressCase& c = cases[i];
-    const sim::StressReference& ref = report.references[i];
+    const studies::StressCase& c = cases[i];
+    const studies::StressReference& ref = report.references[i];
     s << "\n## " << c.name << "\n\n" << c.description << ".\n\nReference: "
       << sim::method_name(ref.method) << " at " << fmt(ref.tolerance) << ": "
       << (ref.ok ? "ok (" + fmt(ref.wall_time_s, "%.2f") + " s, " + std::to_string(ref.steps) +
@@ -99,7 +99,7 @@ std::string stress_md(const std::vector<sim::StressCase>& cases, const sim::Stre
          "rhs | message |\n|---|---|---|---|---|---|---|---|---|\n";
     for (const auto& r : report.rows) {
       if (r.case_name != c.name) continue;
-      s << "| " << sim::method_name(r.method) << " | " << sim::stress_outcome_name(r.outcome)
+      s << "| " << sim::method_name(r.method) << " | " << studies::stress_outcome_name(r.outcome)
         << " | " << r.exit_code << " | " << opt_num(r.error, "%.2e") << " | "
         << opt_num(r.energy_balance, "%.2e") << " | " << fmt(r.wall_time_s, "%.3f") << " | "
         << r.steps << " | " << r.rhs_evaluations << " | " << md_cell(r.message) << " |\n";
@@ -110,18 +110,18 @@ std::string stress_md(const std::vector<sim::StressCase>& cases, const sim::Stre
 
 int run(const Args& args) {
   const auto start = std::chrono::steady_clock::now();
-  std::vector<sim::StressCase> cases = sim::stress_catalogue(args.reduced);
+  std::vector<studies::StressCase> cases = studies::stress_catalogue(args.reduced);
   if (!args.cases.empty()) {
-    std::vector<sim::StressCase> chosen;
+    std::vector<studies::StressCase> chosen;
     for (const std::string& name : args.cases) {
       const auto it = std::find_if(cases.begin(), cases.end(),
-                                   [&](const sim::StressCase& c) { return c.name == name; });
+                                   [&](const studies::StressCase& c) { return c.name == name; });
       if (it == cases.end()) throw InputError("stress", "--cases", "unknown case '" + name + "'");
       chosen.push_back(*it);
     }
     cases = std::move(chosen);
   }
-  sim::StressOptions opt;
+  studies::StressOptions opt;
   if (!args.methods.empty()) {
     opt.methods.clear();
     for (const std::string& name : args.methods) {
@@ -138,16 +138,16 @@ int run(const Args& args) {
   const bool tty = isatty(STDERR_FILENO);
   const size_t total = cases.size() * opt.methods.size();
   size_t done = 0;
-  opt.on_row = [&](const sim::StressRow& r) {
+  opt.on_row = [&](const studies::StressRow& r) {
     ++done;
     if (tty) {
       std::cerr << "\r[" << done << "/" << total << "] " << r.case_name << " "
-                << sim::method_name(r.method) << ": " << sim::stress_outcome_name(r.outcome)
+                << sim::method_name(r.method) << ": " << studies::stress_outcome_name(r.outcome)
                 << "                    " << std::flush;
     }
   };
   OutputDir out(args.out, kOutputs);
-  const sim::StressReport report = sim::run_stress(cases, opt);
+  const studies::StressReport report = studies::run_stress(cases, opt);
   if (tty) std::cerr << "\n";
   const double total_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -161,15 +161,15 @@ int run(const Args& args) {
   for (const auto& c : cases) {
     std::map<std::string, int> counts;
     for (const auto& r : report.rows) {
-      if (r.case_name == c.name) ++counts[sim::stress_outcome_name(r.outcome)];
+      if (r.case_name == c.name) ++counts[studies::stress_outcome_name(r.outcome)];
     }
     std::cout << "  " << c.name << ":";
     for (const auto& [name, n] : counts) std::cout << " " << n << " " << name;
     std::cout << "\n";
   }
-  const int failed = report.count(sim::StressOutcome::kFailed);
-  std::cout << "  total: " << report.count(sim::StressOutcome::kOk) << " ok, "
-            << report.count(sim::StressOutcome::kRejected) << " rejected, " << failed
+  const int failed = report.count(studies::StressOutcome::kFailed);
+  std::cout << "  total: " << report.count(studies::StressOutcome::kOk) << " ok, "
+            << report.count(studies::StressOutcome::kRejected) << " rejected, " << failed
             << " failed\n";
   print_written(out.dir(), written);
   if (failed > 0) {

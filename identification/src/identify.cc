@@ -431,7 +431,7 @@ void select_samples(Fit* f, IdentifyResult* out) {
       Bias<double> b;
       compute_bias(f->scene, k, s.w1, s.w2, &b);
       bool slow = false;
-      for (double wk : fivebar::detail::relative_rates(s.w1, s.w2, b.w3, b.w4)) {
+      for (double wk : fivebar::relative_rates(s.w1, s.w2, b.w3, b.w4)) {
         slow = slow || std::abs(wk) < f->opt->min_rate;
       }
       if (slow) continue;

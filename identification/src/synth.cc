@@ -65,7 +65,7 @@ SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction
     }
     log.lines.push_back(log.size() + 1);
     // joint reversals: sign changes of w_k = (w1, w3 - w1, w4 - w3, w2 - w4, w2)
-    const auto w = detail::relative_rates(row.omega[0], row.omega[1], row.omega[2], row.omega[3]);
+    const auto w = relative_rates(row.omega[0], row.omega[1], row.omega[2], row.omega[3]);
     for (int k = 0; k < 5; ++k) {
       const int s = (w[k] > 0) - (w[k] < 0);
       if (s != 0 && prev[k] != 0 && s != prev[k]) ++out.reversals[k];

@@ -9,6 +9,8 @@
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -17,6 +19,8 @@
 
 namespace fivebar::sim::detail {
 namespace {
+
+constexpr int kMaxErrTestFails = 20;  ///< per step (ARKODE's default is 7)
 
 /// One end of the last step: time, state and (lazily) its slope f(t, y).
 struct StepEnd {
@@ -120,7 +124,10 @@ class Arkode final : public Integrator {
     return check(ERKStepSetTableNum(mem_, table), "ERKStepSetTableNum") &&
            check(ERKStepSVtolerances(mem_, opt.rtol, atol_), "ERKStepSVtolerances") &&
            check(ERKStepSetUserData(mem_, this), "ERKStepSetUserData") &&
-           check(ERKStepSetMaxNumSteps(mem_, opt.max_steps), "ERKStepSetMaxNumSteps");
+           check(ERKStepSetMaxNumSteps(mem_, opt.max_steps), "ERKStepSetMaxNumSteps") &&
+           // a kink that is not located (switches not located) costs a high-order pair more
+           // than ARKODE's default 7 error-test failures to step over at tight tolerances
+           check(ERKStepSetMaxErrTestFails(mem_, kMaxErrTestFails), "ERKStepSetMaxErrTestFails");
   }
   bool setup_dirk(const Options& opt) {
     mem_ = ARKStepCreate(nullptr, &Arkode::rhs, 0.0, y_, ctx_);
@@ -140,7 +147,9 @@ class Arkode final : public Integrator {
     return ok && check(ARKStepSVtolerances(mem_, opt.rtol, atol_), "ARKStepSVtolerances") &&
            check(ARKStepSetUserData(mem_, this), "ARKStepSetUserData") &&
            check(ARKStepSetMaxNumSteps(mem_, opt.max_steps), "ARKStepSetMaxNumSteps") &&
-           check(ARKStepSetLinearSolver(mem_, ls_, A_), "ARKStepSetLinearSolver");
+           check(ARKStepSetMaxErrTestFails(mem_, kMaxErrTestFails), "ARKStepSetMaxErrTestFails") &&
+           check(ARKStepSetLinearSolver(mem_, ls_, A_), "ARKStepSetLinearSolver") &&
+           (!prob_.freeze || check(ARKStepSetJacFn(mem_, &Arkode::jacobian), "ARKStepSetJacFn"));
   }
   bool fail(const char* what) {
     error_ = what;
@@ -187,6 +196,33 @@ class Arkode final : public Integrator {
       std::copy(fp, fp + me->prob_.n, c.f.begin());
     }
     return flag;
+  }
+  /// Newton Jacobian by forward differences with the switched parts of the right-hand side
+  /// frozen at y (OdeProblem::freeze). ARKODE's own difference quotients would divide a Coulomb
+  /// sign flip by an increment of ~1e-20 where a rate is near zero: the huge Jacobian then makes
+  /// every Newton update tiny, and stage values that do not solve their equations pass the
+  /// convergence test (angles inconsistent with rates, issue 15 case C).
+  static int jacobian(realtype t, N_Vector y, N_Vector, SUNMatrix J, void* self, N_Vector tmp1,
+                      N_Vector tmp2, N_Vector) {
+    auto* me = static_cast<Arkode*>(self);
+    const int n = me->prob_.n;
+    double* yp = N_VGetArrayPointer(y);
+    double* f0 = N_VGetArrayPointer(tmp1);
+    double* f1 = N_VGetArrayPointer(tmp2);
+    me->prob_.freeze(yp, true, me->prob_.user);
+    int flag = me->prob_.rhs(t, yp, f0, me->prob_.user);
+    const double root_eps = std::sqrt(std::numeric_limits<double>::epsilon());
+    for (int j = 0; j < n && flag == 0; ++j) {
+      const double yj = yp[j];
+      const double h = root_eps * std::max(std::abs(yj), 1.0);
+      yp[j] = yj + h;
+      flag = me->prob_.rhs(t, yp, f1, me->prob_.user);
+      yp[j] = yj;
+      double* col = SUNDenseMatrix_Column(J, j);
+      for (int i = 0; i < n; ++i) col[i] = (f1[i] - f0[i]) / h;
+    }
+    me->prob_.freeze(yp, false, me->prob_.user);
+    return flag == 0 ? 0 : 1;  // > 0: recoverable, ARKODE retries with a smaller step
   }
   static void on_error(int code, const char* module, const char* function, char* msg,
                        void* self) {

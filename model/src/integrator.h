@@ -15,6 +15,10 @@ namespace fivebar::sim::detail {
 /// ODE right-hand side with SUNDIALS' return convention: 0 ok, > 0 recoverable (retry with a
 /// smaller step), < 0 fatal.
 using RhsFn = int (*)(double t, const double* y, double* ydot, void* user);
+/// Freezes (on) or releases (off) the state-switched parts of the right-hand side at the state
+/// y: the Coulomb signs taken from the rates when switches are not located. Difference-quotient
+/// Jacobians then see the smooth piece, not a jump divided by a tiny increment.
+using FreezeFn = void (*)(const double* y, bool on, void* user);
 
 struct OdeProblem {
   int n = 0;
@@ -23,6 +27,9 @@ struct OdeProblem {
   /// absolute tolerance of each state (size n), scaling Options::atol
   std::vector<double> atol_scale;
   bool stiff_states = false;  ///< the state has stiff components (LuGre bristles)
+  /// optional (nullptr: the right-hand side is smooth within a segment); implicit methods then
+  /// form their Newton Jacobian with the switched parts frozen
+  FreezeFn freeze = nullptr;
 };
 
 class Integrator {
@@ -59,12 +66,12 @@ inline std::unique_ptr<Integrator> make_integrator(const OdeProblem& prob, const
   return make_arkode(prob, opt, t_end);
 }
 
-/// Records a failed SUNDIALS call ("CVodeSetMaxStep: CV_ILL_INPUT") in *error unless a more
-/// specific message (from the error handler) is there; returns flag >= 0.
-inline bool check_flag(int flag, const char* call, const char* flag_name, std::string* error) {
-  if (flag >= 0) return true;
-  if (error->empty()) *error = std::string(call) + ": " + (flag_name ? flag_name : "failed");
-  return false;
-}
+/// Records a failed SUNDIALS call in *error: the error handler's message when it gave one, else
+/// "CVodeSetMaxStep: CV_ILL_INPUT", followed by what the flag means for a user of fivebar
+/// (sundials_status.cc, the one place that maps SUNDIALS flags to messages). Returns flag >= 0.
+bool check_flag(int flag, const char* call, const char* flag_name, std::string* error);
+
+/// What a failure flag (by name, CV_ or ARK_ prefix) means and what to try; "" if nothing useful.
+std::string sundials_hint(const std::string& flag_name);
 
 }  // namespace fivebar::sim::detail

@@ -82,6 +82,8 @@ struct Context {
   /// in which it starts to slip (zero_sign, decided at the start), not sign(0) = 0
   bool zero_signs = false;
   std::array<int, 5> zero_sign{};
+  bool frozen = false;                  ///< signs frozen for a Newton Jacobian (freeze_signs)
+  std::array<int, 5> frozen_sign{};
   std::array<bool, 5> watched{};        ///< joints with a Coulomb part: switch functions
   bool lugre = false;                   ///< bristle states follow the 7 base states
   bool full_rows = true;                ///< Options::full_rows
@@ -107,8 +109,23 @@ bool joint_rates(const Params<double>& p, const double* y, std::array<double, 5>
   Kinematics<double> k;
   if (!solve_kinematics(p, y[0], y[1], &k, 0.0, false).ok()) return false;
   const Vec2<double> thd(y[2], y[3]);
-  *w = fivebar::detail::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
+  *w = fivebar::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
   return true;
+}
+
+/// Switches not located (Context::zero_signs): the Coulomb sign of each joint from its rate at y,
+/// or the direction decided at the start where the rate is exactly zero.
+bool state_signs(const Context& c, const double* y, std::array<int, 5>* signs) {
+  std::array<double, 5> w;
+  if (!joint_rates(*c.params, y, &w)) return false;
+  for (int k = 0; k < 5; ++k) (*signs)[k] = w[k] != 0.0 ? sign_of(w[k]) : c.zero_sign[k];
+  return true;
+}
+
+/// OdeProblem::freeze: the signs at y hold for every evaluation until released.
+void freeze_signs(const double* y, bool on, void* user) {
+  auto& c = *static_cast<Context*>(user);
+  c.frozen = on && c.zero_signs && state_signs(c, y, &c.frozen_sign);
 }
 
 int rhs(double t, const double* y, double* ydot, void* user) {
@@ -123,8 +140,9 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
   std::array<int, 5> signs{};
   const std::array<int, 5>* slip = c.use_slip ? &c.slip : nullptr;
-  if (c.zero_signs && joint_rates(*c.params, y, &ev.w)) {
-    for (int k = 0; k < 5; ++k) signs[k] = ev.w[k] != 0.0 ? sign_of(ev.w[k]) : c.zero_sign[k];
+  if (c.frozen) {
+    slip = &c.frozen_sign;
+  } else if (c.zero_signs && state_signs(c, y, &signs)) {
     slip = &signs;
   }
   const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], slip,
@@ -298,7 +316,7 @@ int project_rates(const Params<double>& p, const std::array<bool, 5>& mask, doub
   if (!solve_kinematics(p, y[0], y[1], &k).ok()) return 0;
   std::vector<Row2<double>> rows;
   for (int j = 0; j < 5; ++j) {
-    if (mask[j]) rows.push_back(fivebar::detail::joint_row(k, j));
+    if (mask[j]) rows.push_back(fivebar::joint_row(k, j));
   }
   if (rows.empty()) return 0;
   Vec2<double> thd(y[2], y[3]);
@@ -336,7 +354,7 @@ bool consistent(Context& c, double t, const double* y, const std::array<int, 5>&
     if (failure->ok()) *failure = st;
     return false;
   }
-  const auto wdot = fivebar::detail::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
+  const auto wdot = fivebar::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
   double accel_scale = 1.0, torque_scale = 1.0;
   for (int k = 0; k < 5; ++k) {
     accel_scale = std::max(accel_scale, std::abs(wdot[k]));
@@ -407,6 +425,23 @@ std::string rest_list(const std::array<bool, 5>& rest) {
   return out + ")";
 }
 
+Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, 5>& rest);
+
+/// Stats::sign_rule_inconsistent: whether the rule used before issue 15 (the joints at rest slip
+/// the way they accelerate, iterated, no stick) gives modes that are not consistent here.
+bool sign_rule_inconsistent(Context& c, double t, const double* y,
+                            const std::array<bool, 5>& rest) {
+  const std::array<int, 5> chosen = c.slip;
+  bool inconsistent = true;
+  if (decide_slip_only(c, t, y, rest).ok()) {
+    Vec2<double> thdd;
+    Status failure;
+    inconsistent = !consistent(c, t, y, c.slip, rest, 0.0, 0.0, &thdd, &failure);
+  }
+  c.slip = chosen;
+  return inconsistent;
+}
+
 /// Chooses the modes of the joints in `rest` (at rest, or stuck) so that the motion is
 /// consistent; the other joints slip in the direction of their rate. With every joint at rest
 /// the mechanism may stay locked (lock_analysis). No consistent combination, or several with
@@ -470,6 +505,7 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
     }
   }
   c.slip = found.front();
+  if (sign_rule_inconsistent(c, t, y, rest)) ++stats->sign_rule_inconsistent;
   return Status::Ok();
 }
 
@@ -484,7 +520,7 @@ Status decide_slip_only(Context& c, double t, const double* y, const std::array<
     const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &c.slip,
                                        c.eval, &ev);
     if (!st.ok()) return at_time(st, t, y[0], y[1]);
-    const auto wdot = fivebar::detail::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
+    const auto wdot = fivebar::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
     bool changed = false;
     for (int k = 0; k < 5; ++k) {
       if (!rest[k] || sign_of(wdot[k]) == c.slip[k]) continue;
@@ -860,6 +896,7 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
     }
   }
   detail::OdeProblem prob{L.c.n, &rhs, &L.c, std::vector<double>(L.c.n, 1.0), L.c.lugre};
+  if (L.c.zero_signs) prob.freeze = &freeze_signs;
   for (int i = kStates; i < prob.n; ++i) prob.atol_scale[i] = options.bristle_atol_scale;
   L.integ = detail::make_integrator(prob, options, options.duration);
   result.rows.reserve(L.grid.size());

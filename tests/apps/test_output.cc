@@ -139,9 +139,9 @@ std::string value_after(const std::string& line, const std::string& key) {
 }
 
 TEST(Plots, WorkPrecisionColourPerIntegratorDashPerTreatment) {
-  sim::WorkPrecision wp;
-  auto point = [](sim::Method m, sim::Treatment t, double tol, double time, double err) {
-    sim::PrecisionPoint p;
+  studies::WorkPrecision wp;
+  auto point = [](sim::Method m, studies::Treatment t, double tol, double time, double err) {
+    studies::PrecisionPoint p;
     p.method = m;
     p.treatment = t;
     p.tolerance = tol;
@@ -151,7 +151,7 @@ TEST(Plots, WorkPrecisionColourPerIntegratorDashPerTreatment) {
     return p;
   };
   using sim::Method;
-  using sim::Treatment;
+  using studies::Treatment;
   wp.points = {point(Method::kCvodeAdams, Treatment::kExactLocated, 1e-8, 0.004, 1e-6),
                point(Method::kCvodeAdams, Treatment::kRegularized, 1e-8, 0.003, 2e-6),
                point(Method::kArkodeErk45, Treatment::kExactLocated, 1e-8, 0.009, 1e-9),

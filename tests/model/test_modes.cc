@@ -76,6 +76,36 @@ TEST(Modes, LongRunEveryIntegrator) {
   }
 }
 
+// issue 15 C: arkode_dirk with switches not located ended 5e-3 rad off, its angles inconsistent
+// with its rates (ARKODE's difference-quotient Jacobian divided a Coulomb sign flip by ~1e-20).
+// Every method now agrees with the located reference to 1e-6 rad, except Fehlberg 7(8), whose
+// error control steps over unlocated kinks less well: its own error estimate must say so.
+TEST(Modes, SwitchesNotLocatedAgreeWithLocatedOnes) {
+  const Params<double> p = paper_params();
+  sim::Options ref_opt;
+  ref_opt.method = sim::Method::kCvodeBdf;
+  ref_opt.duration = 0.3;
+  ref_opt.rtol = ref_opt.atol = 1e-12;
+  const sim::Result ref = sim::simulate(p, testing::paper_loads, testing::paper_initial(), ref_opt);
+  ASSERT_TRUE(ref.status.ok()) << ref.status.message;
+  for (sim::Method m : kAllMethods) {
+    SCOPED_TRACE(sim::method_name(m));
+    sim::Options o = ref_opt;
+    o.method = m;
+    o.locate_switches = false;
+    const sim::EstimatedRun e =
+        sim::simulate_to_target(p, testing::paper_loads, testing::paper_initial(), o);
+    if (!e.run.status.ok()) {
+      ADD_FAILURE() << e.run.status.message;
+      continue;
+    }
+    EXPECT_TRUE(sim::check_run(p, testing::paper_loads, e.run).verdict.ok());
+    const double diff = sim::max_angle_difference(e.run.rows, ref.rows);
+    EXPECT_LT(diff, m == sim::Method::kArkodeErk87 ? 1e-4 : 1e-6);
+    EXPECT_LT(diff, std::max(1e-8, 3.0 * e.estimated_max_error_rad));
+  }
+}
+
 /// The weightless paper mechanism held by the crank torques that balance the 50 N force, plus
 /// (dM1, dM2): stick_below_breakaway.yaml.
 sim::LoadFunction held_plus(double dM1, double dM2) {
@@ -243,7 +273,7 @@ TEST(Modes, RandomScenesNeverLetFrictionDriveTheMotion) {
 TEST(Modes, DISABLED_RandomSweep200) {
   std::mt19937 rng(15);
   int ok = 0, failed = 0;
-  long events = 0, decisions = 0, sticks = 0, breakaways = 0;
+  long events = 0, decisions = 0, sticks = 0, breakaways = 0, naive_wrong = 0;
   for (int i = 0; i < 200; ++i) {
     const RandomScene s = random_scene(rng);
     sim::Options o;
@@ -260,9 +290,11 @@ TEST(Modes, DISABLED_RandomSweep200) {
     decisions += r.stats.mode_decisions;
     sticks += r.stats.stick_events;
     breakaways += r.stats.breakaway_events;
+    naive_wrong += r.stats.sign_rule_inconsistent;
   }
-  std::printf("[ info ] %d ok, %d stopped; %ld switches, %ld decisions, %ld sticks, %ld breakaways\n",
-              ok, failed, events, decisions, sticks, breakaways);
+  std::printf("[ info ] %d ok, %d stopped; %ld switches, %ld decisions, %ld sticks, %ld breakaways;"
+              " %ld decisions where the sign-of-acceleration rule was inconsistent\n",
+              ok, failed, events, decisions, sticks, breakaways, naive_wrong);
 }
 
 // issue 15 D: the balance of a conservative run is relative to an energy scale it has

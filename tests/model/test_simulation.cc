@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "fivebar/sim/accuracy.h"
+#include "fivebar/sim/estimate.h"
 #include "fivebar/sim/simulator.h"
 #include "paper.h"
 
@@ -112,7 +112,7 @@ TEST(LuGre, StiffBristlesIntegrateWithBdfAndBalanceEnergy) {
   const sim::Result coulomb =
       sim::simulate(paper_params(), testing::paper_loads, testing::paper_initial(), copt);
   ASSERT_TRUE(coulomb.status.ok());
-  const double diff = sim::max_theta_difference(r.rows, coulomb.rows);
+  const double diff = sim::max_angle_difference(r.rows, coulomb.rows);
   EXPECT_LT(diff, 0.05);
   std::printf("[ info ] lugre: steps=%ld rhs=%ld balance=%.2e |theta - theta_coulomb|=%.2e\n",
               r.stats.steps, r.stats.rhs_evaluations, checks.energy_balance_relative, diff);

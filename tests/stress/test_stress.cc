@@ -9,9 +9,9 @@
 #include <string>
 
 #include "fivebar/model/dynamics.h"
-#include "fivebar/sim/stress.h"
+#include "fivebar/studies/stress.h"
 
-namespace fivebar::sim {
+namespace fivebar::studies {
 namespace {
 
 using ::testing::AnyOf;
@@ -149,4 +149,4 @@ TEST(Stress, FrictionNewtonCaseNeedsNewton) {
 }
 
 }  // namespace
-}  // namespace fivebar::sim
+}  // namespace fivebar::studies

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "fivebar/sim/accuracy.h"
+#include "fivebar/studies/accuracy.h"
 
 namespace fivebar::io {
 
@@ -82,7 +82,7 @@ std::string study_heatmap_script(const StudyHeatmap& heatmap, const std::string&
 /// same directory), log-log error against wall time, one colour per integrator and one dash type
 /// per friction treatment, the Pareto front (an inline data block, sorted by time) joined and
 /// circled, each recommendation labelled with its target errors, the targets as horizontal lines.
-std::string work_precision_plot_script(const sim::WorkPrecision& wp, const std::string& title,
+std::string work_precision_plot_script(const studies::WorkPrecision& wp, const std::string& title,
                                        const std::string& terminal);
 
 }  // namespace fivebar::io

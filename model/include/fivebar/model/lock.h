@@ -85,22 +85,22 @@ inline Status lock_analysis(const Params<double>& p, const Loads<double>& L, dou
   if (!st.ok()) return st;
   Bias<double> b;
   compute_bias(p, k, 0.0, 0.0, &b);
-  const Vec2<double> Fvec = detail::force_vector(k, L);
+  const Vec2<double> Fvec = force_vector(k, L);
   Mat2<double> A;
   Vec2<double> q;
-  detail::mass_and_forces(p, k, b, L, Fvec, &A, &q);
+  mass_and_forces(p, k, b, L, Fvec, &A, &q);
   std::array<Vec2<double>, 5> a;
   for (int j = 0; j < 5; ++j) {
     std::array<double, 5> unit{};
     unit[j] = 1.0;
-    a[j] = detail::friction_transpose(k, unit);
+    a[j] = friction_transpose(k, unit);
   }
   const Vec2<double> zero = Vec2<double>::Zero();
   out->hold.fill(0.0);
   for (int it = 0; it < 30; ++it) {
-    detail::reactions(p, k, b, L, Fvec, zero, out->hold, &out->F, &out->alpha3, &out->alpha4);
+    reactions(p, k, b, L, Fvec, zero, out->hold, &out->F, &out->alpha3, &out->alpha4);
     const std::array<double, 5> N_old = out->N;
-    detail::norms(out->F, &out->N);
+    reaction_norms(out->F, &out->N);
     std::array<double, 5> w;
     for (int j = 0; j < 5; ++j) w[j] = holding_bound(p.friction, j) * out->N[j];
     out->ratio = detail::min_max_ratio(a, w, q, &out->hold);
@@ -111,8 +111,8 @@ inline Status lock_analysis(const Params<double>& p, const Loads<double>& L, dou
     }
     if (!std::isfinite(out->ratio) || (it > 0 && change <= 1e-13 * scale)) break;
   }
-  detail::reactions(p, k, b, L, Fvec, zero, out->hold, &out->F, &out->alpha3, &out->alpha4);
-  detail::norms(out->F, &out->N);
+  reactions(p, k, b, L, Fvec, zero, out->hold, &out->F, &out->alpha3, &out->alpha4);
+  reaction_norms(out->F, &out->N);
   return Status::Ok();
 }
 

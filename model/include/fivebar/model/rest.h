@@ -51,8 +51,8 @@ inline Status stuck_joints(const Params<double>& p, double th1, double th2, doub
   Bias<double> b;
   compute_bias(p, k, w1, w2, &b);
   const Vec2<double> thdd(a1, a2);
-  const auto w = detail::relative_rates(w1, w2, b.w3, b.w4);
-  const auto wdot = detail::relative_accelerations(thdd, k.G3.dot(thdd) + b.h3,
+  const auto w = relative_rates(w1, w2, b.w3, b.w4);
+  const auto wdot = relative_accelerations(thdd, k.G3.dot(thdd) + b.h3,
                                                    k.G4.dot(thdd) + b.h4);
   for (int j = 0; j < 5; ++j) {
     (*stuck)[j] = std::abs(w[j]) <= rest.rate && std::abs(wdot[j]) <= rest.acceleration;
@@ -209,11 +209,11 @@ inline Status holding_polygon(const Params<double>& p, const Loads<double>& L, d
   if (!st.ok()) return st;
   Bias<double> b;
   compute_bias(p, k, 0.0, 0.0, &b);
-  const Vec2<double> Fvec = detail::force_vector(k, L);
+  const Vec2<double> Fvec = force_vector(k, L);
   const Vec2<double> thdd = Vec2<double>::Zero();
   double al3 = 0, al4 = 0;
   auto solve = [&](const std::array<double, 5>& Mf, std::array<Vec2<double>, 5>* F) {
-    detail::reactions(p, k, b, L, Fvec, thdd, Mf, F, &al3, &al4);
+    reactions(p, k, b, L, Fvec, thdd, Mf, F, &al3, &al4);
   };
   std::vector<std::array<double, 2>> corners;
   for (int pattern = 0; pattern < 32; ++pattern) {
@@ -224,9 +224,9 @@ inline Status holding_polygon(const Params<double>& p, const Loads<double>& L, d
     }
     std::array<Vec2<double>, 5> F;
     int iterations = 0;
-    st = detail::friction_loop(phi, opt, solve, &N, &Mf, &F, &iterations);
+    st = friction_loop(phi, opt, solve, &N, &Mf, &F, &iterations);
     if (!st.ok()) return st;
-    const Vec2<double> M = Vec2<double>(h.M1, h.M2) + detail::friction_transpose(k, Mf);
+    const Vec2<double> M = Vec2<double>(h.M1, h.M2) + friction_transpose(k, Mf);
     corners.push_back({M[0], M[1]});
   }
   out->vertices = detail::convex_hull(corners);

@@ -8,7 +8,7 @@
 //             rows, an ok status with garbage, a rejection without a message.
 // Runs are isolated in child processes (fork) so that a crash or hang of one run is a `failed`
 // row, not the end of the study.
-#include "fivebar/sim/stress.h"
+#include "fivebar/studies/stress.h"
 
 #include <poll.h>
 #include <signal.h>
@@ -24,9 +24,9 @@
 
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/kinematics.h"
-#include "fivebar/sim/accuracy.h"
+#include "fivebar/studies/accuracy.h"
 
-namespace fivebar::sim {
+namespace fivebar::studies {
 
 const char* stress_outcome_name(StressOutcome outcome) {
   switch (outcome) {
@@ -385,7 +385,7 @@ StressRow evaluate_run(const StressCase& c, Method method, const std::vector<Row
                 std::to_string(expected));
   }
   if (!finite) return fail("status ok with non-finite values in the output rows");
-  const RunChecks checks = check_run(c.params, c.loads, r, o.rtol);
+  const sim::RunChecks checks = sim::check_run(c.params, c.loads, r, o.rtol);
   row.energy_balance = checks.energy_balance_relative;
   if (!(row.energy_balance <= opt.max_energy_balance)) {
     return fail("energy balance residual " + num(row.energy_balance) + " above " +
@@ -687,4 +687,4 @@ StressReport run_stress(const std::vector<StressCase>& cases, const StressOption
   return report;
 }
 
-}  // namespace fivebar::sim
+}  // namespace fivebar::studies

@@ -1,12 +1,14 @@
 // Work-precision study (issue 3): every integrator x friction treatment x tolerance against the
 // toolkit's own tight reference, timed as the minimum of several runs.
-#include "fivebar/sim/accuracy.h"
+#include "fivebar/studies/accuracy.h"
+
+#include "fivebar/sim/estimate.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-namespace fivebar::sim {
+namespace fivebar::studies {
 
 const char* treatment_name(Treatment t) {
   switch (t) {
@@ -20,11 +22,7 @@ const char* treatment_name(Treatment t) {
 
 double max_theta_difference(const std::vector<Row>& a, const std::vector<Row>& b) {
   if (a.size() != b.size()) return std::numeric_limits<double>::infinity();
-  double worst = 0.0;
-  for (size_t i = 0; i < a.size(); ++i) {
-    for (int k = 0; k < 4; ++k) worst = std::max(worst, std::abs(a[i].theta[k] - b[i].theta[k]));
-  }
-  return worst;
+  return sim::max_angle_difference(a, b);
 }
 
 namespace {
@@ -154,4 +152,4 @@ Status work_precision(const Params<double>& params, const LoadFunction& loads,
   return Status::Ok();
 }
 
-}  // namespace fivebar::sim
+}  // namespace fivebar::studies

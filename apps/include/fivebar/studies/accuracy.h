@@ -7,7 +7,17 @@
 
 #include "fivebar/sim/simulator.h"
 
-namespace fivebar::sim {
+namespace fivebar::studies {
+
+// the simulation types the studies are made of
+using sim::Method;
+using sim::Row;
+using sim::Stats;
+using sim::Options;
+using sim::Result;
+using sim::LoadFunction;
+using sim::Initial;
+using sim::kAllMethods;
 
 /// How the Coulomb sign is integrated.
 enum class Treatment : int {
@@ -75,4 +85,4 @@ Status work_precision(const Params<double>& params, const LoadFunction& loads,
                       const Initial& initial, const Options& base,
                       const WorkPrecisionOptions& options, WorkPrecision* out);
 
-}  // namespace fivebar::sim
+}  // namespace fivebar::studies

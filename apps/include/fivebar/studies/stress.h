@@ -9,7 +9,17 @@
 
 #include "fivebar/sim/simulator.h"
 
-namespace fivebar::sim {
+namespace fivebar::studies {
+
+// the simulation types the studies are made of
+using sim::Method;
+using sim::Row;
+using sim::Stats;
+using sim::Options;
+using sim::Result;
+using sim::LoadFunction;
+using sim::Initial;
+using sim::kAllMethods;
 
 /// One case of the catalogue: a scene built in code, with what a correct run must satisfy.
 struct StressCase {
@@ -94,4 +104,4 @@ struct StressReport {
 /// Runs every case with every method of `options` and classifies each run.
 StressReport run_stress(const std::vector<StressCase>& cases, const StressOptions& options);
 
-}  // namespace fivebar::sim
+}  // namespace fivebar::studies

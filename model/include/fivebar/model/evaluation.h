@@ -1,0 +1,59 @@
+// What one evaluation of the dynamics takes (EvalOptions) and computes (Evaluation).
+#pragma once
+
+#include <array>
+
+#include "fivebar/model/kinematics.h"
+#include "fivebar/model/params.h"
+#include "fivebar/model/scalar.h"
+
+namespace fivebar {
+
+/// Joint mode value for a stuck joint (exact stick-slip): its relative rate is held at zero by a
+/// holding torque solved with the motion. Other modes are the slip direction +1 / -1, or 0.
+inline constexpr int kStuck = 2;
+
+/// Settings of an evaluation: singularity margin and the reaction/friction loop.
+struct EvalOptions {
+  double singular_margin = 0.0;  ///< fail with kNearSingular when |sin(th4 - th3)| is below
+  double friction_tol = 1e-13;   ///< stop when max |N^i - N^(i-1)| <= tol * (max N + 1e-300)
+  int friction_max_iter = 50;
+  bool want_reactions = true;    ///< compute F_k even when the scene has no friction
+  bool want_angles = true;       ///< compute th3, th4 (the dynamics itself needs neither)
+  /// Rest rule of inverse dynamics (rest.h; forward dynamics ignores both): a joint with
+  /// |w_k| <= rest_rate [rad/s] is at rest, not slipping: its Coulomb sign is that of its relative
+  /// acceleration, or 0 where that is within rest_acceleration. The defaults keep the exact rule
+  /// (only w_k = 0 is at rest).
+  double rest_rate = 0.0;
+  /// < 0: no joint is stuck in inverse dynamics. >= 0 [rad/s^2]: a joint at rest whose
+  /// |d w_k / dt| <= rest_acceleration is stuck (mode kStuck): it carries no friction torque (the
+  /// motors hold the pose: frictionless equilibrium at that joint) and hold_margin_k =
+  /// mu_s r_k N_k is how much friction torque it could add. A crank at rest and not
+  /// accelerating is taken as exactly still (w = dw/dt = 0: the rest of its rates is noise).
+  double rest_acceleration = -1.0;
+};
+
+/// Everything one evaluation computes. Forward dynamics fills thdd from the torques; inverse
+/// dynamics fills M1, M2 from thdd.
+template <typename T>
+struct Evaluation {
+  Kinematics<T> kin;
+  Bias<T> bias;
+  Mat2<T> A;                      ///< generalized mass matrix (eq. 10)
+  Vec2<T> thdd;                   ///< (alpha1, alpha2) [rad/s^2]
+  T alpha3{}, alpha4{};           ///< coupler angular accelerations [rad/s^2]
+  T M1{}, M2{};                   ///< motor torques [N m] (input of forward, output of inverse)
+  std::array<Vec2<T>, 5> F;       ///< joint reactions [N]
+  std::array<T, 5> N{}, Mf{}, w{};  ///< |F_k| [N], friction torques [N m], relative rates [rad/s]
+  std::array<int, 5> slip{};      ///< Coulomb sign used at each joint, or kStuck
+  /// stuck joints: mu_s r_k N_k - |holding torque| (>= 0 while friction can hold the joint);
+  /// the holding torque itself is in Mf
+  std::array<T, 5> hold_margin{};
+  std::array<T, 5> zdot{};        ///< LuGre bristle rates [rad/s] (zero for other laws)
+  T P_diss{};                     ///< sum Mf_k w_k >= 0 [W]
+  T P_in{};                       ///< M1 w1 + M2 w2 [W]
+  T P_ext{};                      ///< M3 w3 + F . v_P [W]
+  int iterations = 0;             ///< reaction/friction loop iterations
+};
+
+}  // namespace fivebar

@@ -1,0 +1,67 @@
+// Newton-Euler joint reactions for given accelerations and friction torques.
+// Conventions (model.md, joints table): joint k in order O, B, C, D, D0 joins body i to body j;
+// F_k is the force body i exerts on body j; the friction torque Mf_k acts on j as -Mf_k and on
+// i as +Mf_k. Link 1: F1 at O, -F2 at B. Link 3: F2 at B, -F3 at C. Link 4: F3 at C, -F4 at D.
+// Link 2: F4 at D, F5 at D0.
+#pragma once
+
+#include <array>
+#include <cmath>
+
+#include "fivebar/model/kinematics.h"
+#include "fivebar/model/params.h"
+#include "fivebar/model/scalar.h"
+
+namespace fivebar {
+
+/// Newton-Euler reactions of the five joints for given accelerations thdd and friction torques.
+/// Links 3 and 4: moments about C give two equations in F2 (determinant l3 l4 sin(th4 - th3));
+/// then F3, F4 from the coupler force balances and F1, F5 from the cranks'.
+template <typename T>
+void reactions(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& b, const Loads<T>& L,
+               const Vec2<T>& Fvec, const Vec2<T>& thdd, const std::array<T, 5>& Mf,
+               std::array<Vec2<T>, 5>* F, T* alpha3, T* alpha4) {
+  const T al3 = k.G3.dot(thdd) + b.h3;
+  const T al4 = k.G4.dot(thdd) + b.h4;
+  std::array<Vec2<T>, 4> a;  // centre-of-mass accelerations
+  for (int i = 0; i < 4; ++i) a[i] = k.Gc[i] * thdd + b.hc[i];
+  const Vec2<T> gvec(T(0), -p.gravity);
+  const T& m1 = p.links[0].mass;
+  const T& m2 = p.links[1].mass;
+  const T& m3 = p.links[2].mass;
+  const T& m4 = p.links[3].mass;
+  // force balances: F2 - F3 = R3, F3 - F4 = R4
+  const Vec2<T> R3 = m3 * (a[2] - gvec) - Fvec;
+  const Vec2<T> R4 = m4 * (a[3] - gvec);
+  // link 3 about C: (B-C) x F2 + (P-C) x Fvec + (c3-C) x m3 g + M3 - Mf2 + Mf3
+  //                 = J3 al3 + m3 (c3-C) x a3
+  const Vec2<T> u3 = k.B - k.C, u4 = k.D - k.C;
+  const Vec2<T> q3 = k.c[2] - k.C, q4 = k.c[3] - k.C;
+  const T S3 = p.links[2].inertia * al3 + m3 * cross(q3, Vec2<T>(a[2] - gvec)) -
+               cross(Vec2<T>(k.P - k.C), Fvec) - L.M3 + Mf[1] - Mf[2];
+  // link 4 about C: (D-C) x (-F4) + (c4-C) x m4 g - Mf3 + Mf4 = J4 al4 + m4 (c4-C) x a4,
+  // with F4 = F2 - R3 - R4
+  const T S4 = -p.links[3].inertia * al4 - m4 * cross(q4, Vec2<T>(a[3] - gvec)) - Mf[2] + Mf[3] +
+               cross(u4, Vec2<T>(R3 + R4));
+  // solve u3 x F2 = S3, u4 x F2 = S4
+  const T det = cross(u3, u4);
+  Vec2<T>& F2 = (*F)[1];
+  F2.x() = (S3 * u4.x() - S4 * u3.x()) / det;
+  F2.y() = (S3 * u4.y() - S4 * u3.y()) / det;
+  (*F)[2] = F2 - R3;
+  (*F)[3] = (*F)[2] - R4;
+  // cranks: F1 - F2 + m1 g = m1 a1, F4 + F5 + m2 g = m2 a2
+  (*F)[0] = m1 * (a[0] - gvec) + F2;
+  (*F)[4] = m2 * (a[1] - gvec) - (*F)[3];
+  *alpha3 = al3;
+  *alpha4 = al4;
+}
+
+/// |F_k| of the five joints.
+template <typename T>
+void reaction_norms(const std::array<Vec2<T>, 5>& F, std::array<T, 5>* N) {
+  using std::sqrt;
+  for (int j = 0; j < 5; ++j) (*N)[j] = sqrt(F[j].squaredNorm());
+}
+
+}  // namespace fivebar
