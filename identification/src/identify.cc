@@ -1369,6 +1369,8 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
   const int n = log.size();
   v.full_theta1.assign(n, kNaN);
   v.full_theta2.assign(n, kNaN);
+  v.window_theta1.assign(n, kNaN);
+  v.window_theta2.assign(n, kNaN);
   if (n < 2) return v;
   auto run = [&](int i0, int i1, bool full, double* s2, int* count) {
     sim::Options o = window_sim_options(rtol);
@@ -1399,9 +1401,13 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
       s2[0] += e1 * e1;
       s2[1] += e2 * e2;
       ++*count;
+      (full ? v.full_theta1 : v.window_theta1)[i] = interp(ts, a, tt);
+      (full ? v.full_theta2 : v.window_theta2)[i] = interp(ts, b, tt);
       if (full) {
-        v.full_theta1[i] = interp(ts, a, tt);
-        v.full_theta2[i] = interp(ts, b, tt);
+        if (std::isnan(v.divergence_time_s) &&
+            std::max(std::abs(e1), std::abs(e2)) > Validation::kDivergedAngle) {
+          v.divergence_time_s = tt;
+        }
         v.full_max[0] = std::max(v.full_max[0], std::abs(e1));
         v.full_max[1] = std::max(v.full_max[1], std::abs(e2));
       }

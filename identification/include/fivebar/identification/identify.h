@@ -203,6 +203,13 @@ struct Validation {
   double window_rms[2] = {0, 0};  ///< [rad] runs restarted from the logged state every window
   std::vector<double> full_theta1,
       full_theta2;          ///< simulated at the log's times (NaN after a stop)
+  /// the windowed runs at the log's times (each window restarted from the logged state; NaN
+  /// where no window ran)
+  std::vector<double> window_theta1, window_theta2;
+  /// when the full run first departs from the log by more than kDivergedAngle (NaN: never):
+  /// on chaotic motion any model or noise error grows until the run leaves the log
+  double divergence_time_s = std::numeric_limits<double>::quiet_NaN();
+  static constexpr double kDivergedAngle = 0.1;  ///< [rad]
   int windows_skipped = 0;  ///< windows not run: the time budget was spent
 };
 
