@@ -12,13 +12,12 @@
 #include "fivebar/identification/residual.h"
 #include "fivebar/identification/synth.h"
 #include "inertia.h"
+#include "random_samples.h"
 
 namespace fivebar::identification {
 namespace {
 
-Loads<double> paper_loads(double t) {
-  return {2 + 5 * std::sin(8 * M_PI * t), 3 + 5 * std::cos(M_PI * t), 6.0, 50.0, M_PI / 2};
-}
+using testing::paper_loads;
 
 /// The paper mechanism with masses, COM offsets and inertias 3-6 % off (the CAD-mismatch log
 /// of docs/identification.md).
@@ -59,27 +58,6 @@ TEST(InertiaLayout, NamesSizesAndRoundTrip) {
   EXPECT_FALSE(parse_groups("", &layout, &bad));
 }
 
-/// Samples of the paper mechanism at random motions, torques from the true mechanism.
-std::vector<Sample> samples(const Params<double>& truth, int n) {
-  std::mt19937_64 rng(11);
-  std::uniform_real_distribution<double> angle(0.5, 2.5), rate(-8, 8), acc(-50, 50);
-  std::vector<Sample> out;
-  while (static_cast<int>(out.size()) < n) {
-    Sample s{0.1 * out.size(), angle(rng), angle(rng), rate(rng), rate(rng), acc(rng), acc(rng)};
-    s.loads = paper_loads(s.t);
-    Evaluation<double> ev;
-    if (!inverse_dynamics(truth, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr,
-                          EvalOptions{}, &ev)
-             .ok()) {
-      continue;
-    }
-    s.tau1 = ev.M1 + 0.3;
-    s.tau2 = ev.M2 - 0.2;
-    out.push_back(s);
-  }
-  return out;
-}
-
 /// The structured residual equals the full model's, in value and in every Jet derivative.
 template <int P>
 void check_structured(const ParameterLayout& layout) {
@@ -92,7 +70,7 @@ void check_structured(const ParameterLayout& layout) {
   using J = ceres::Jet<double, P>;
   std::vector<J> xj(P);
   for (int i = 0; i < P; ++i) xj[i] = J(x[i], i);
-  for (const Sample& s : samples(cad_truth(), 8)) {
+  for (const Sample& s : testing::random_samples(cad_truth(), 8, 11)) {
     SampleStructure st;
     ASSERT_TRUE(sample_structure(scene, s, eval, &st));
     const StructuredResidual fast(scene, layout, st, s, eval);
