@@ -1319,6 +1319,11 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   IdentifyResult out;
   Fit f;
   init_fit(scene_in, loads, log, opt, &f, &out);
+  if (f.layout.inertia && opt.method != Method::kInverseDynamics) {
+    out.status = Status::Error(StatusCode::kInvalidInput,
+                               "the inertia group needs the inverse-dynamics method");
+    return out;
+  }
   const int P = f.layout.size();
   require_samples(log, P + 1, std::to_string(P) + " parameters + 1");
 
