@@ -25,6 +25,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/model/inertial.h"
 
 namespace fivebar::io {
 namespace {
@@ -42,7 +43,7 @@ const std::vector<std::string> kOutputs = {
     "identification.json", "scene_fitted.yaml",        "residuals.csv",      "fig_torques.png",
     "fig_residuals.png",   "fig_residual_vs_rate.png", "fig_validation.png", "plots.gnuplot"};
 
-// `true.<group> = v1,...,v5` comments written by synth-log, by group name
+// `true.<group> = v1,...,v5` comments (and `true.inertial = ` 16 values) written by synth-log, by group name
 std::map<std::string, std::vector<double>> read_truth(const id::TorqueLog& log) {
   std::map<std::string, std::vector<double>> truth;
   for (const std::string& c : log.comments) {
@@ -62,7 +63,7 @@ std::map<std::string, std::vector<double>> read_truth(const id::TorqueLog& log) 
         break;
       }
     }
-    if (v.size() == kJoints) truth[key] = v;
+    if (v.size() == kJoints || v.size() == kInertialParams) truth[key] = v;
   }
   return truth;
 }
@@ -106,14 +107,17 @@ std::string residual_plot_script(const std::string& terminal, const std::string&
   }
   s << "unset multiplot\n";
   if (validation) {
+    // the windowed runs (restarted from the logged state) are the meaningful check on chaotic
+    // motion; the full run, which leaves the log once errors have grown, is drawn thin
     s << "set xlabel \"t [s]\"\nset output \"fig_validation.png\"\nset multiplot layout 2,1 "
-         "title \"validation: logged angles (blue) and the fitted scene driven by the logged "
-         "torques (red)   "
+         "title \"validation: logged angles (blue), the fitted scene driven by the logged "
+         "torques restarted from the log every window (red), one run over the whole log (grey)   "
       << title << "\" noenhanced\n";
     for (int i = 1; i <= 2; ++i) {
       s << "set ylabel \"theta" << i << " [rad]\"\nplot \"residuals.csv\" using \"t\":\"theta" << i
-        << "\" with lines ls 1 title \"log\", \"\" using \"t\":\"simulated_theta" << i
-        << "\" with lines ls 2 title \"fitted scene\"\n";
+        << "\" with lines ls 1 title \"log\", \"\" using \"t\":\"windowed_theta" << i
+        << "\" with lines ls 2 title \"fitted scene, windowed\", \"\" using \"t\":\"simulated_theta"
+        << i << "\" with lines lc rgb \"#999999\" lw 0.6 title \"full run\"\n";
     }
     s << "unset multiplot\n";
   }
@@ -127,130 +131,111 @@ Json pair(double a, double b) {
   return j;
 }
 
-int run(const Args& a) {
-  const auto start = std::chrono::steady_clock::now();
-  const Scene scene = load_scene(a.scene.scene, a.scene.sets);
-  const sim::LoadFunction loads = LoadExpressions(scene).function();
-  const id::IdentifyOptions opt = identify_options(a.settings, scene);
-
-  // the log, then the fit; a log that does not fit the scene is bad input (exit 2)
-  const id::TorqueLog log = read_log(a.log);
-  const id::IdentifyResult res = identify_scene(scene, loads, log, opt);
-
-  OutputDir out(a.scene.out, kOutputs);
-  // validation and residuals on the log as fitted (unwrapped, glitches interpolated)
-  const id::TorqueLog& fitted_log = res.conditioned_log;
-  id::Validation val;
-  if (!a.no_validation) {
-    val = id::validate(res.fitted, loads, fitted_log, res.omega1, res.omega2, a.settings.window);
-  }
-
-  // residuals.csv: everything the plots need, one row per sample
-  {
-    std::ostringstream csv;
-    csv << "t,theta1,theta2,tau1,tau2,omega1,omega2,alpha1,alpha2,predicted_tau1,predicted_tau2,"
-           "residual_tau1,residual_tau2,used,simulated_theta1,simulated_theta2\n";
-    for (int i = 0; i < fitted_log.size(); ++i) {
-      const double p1 = res.predicted_tau1[i], p2 = res.predicted_tau2[i];
-      csv << format_double(fitted_log.t[i]) << ',' << format_double(fitted_log.theta1[i]) << ','
-          << format_double(fitted_log.theta2[i]) << ',' << format_double(fitted_log.tau1[i]) << ','
-          << format_double(fitted_log.tau2[i]) << ',' << format_double(res.omega1[i]) << ','
-          << format_double(res.omega2[i]) << ',' << format_double(res.alpha1[i]) << ','
-          << format_double(res.alpha2[i]) << ',' << format_double(p1) << ',' << format_double(p2)
-          << ',' << format_double(fitted_log.tau1[i] - p1) << ','
-          << format_double(fitted_log.tau2[i] - p2) << ',' << int(res.used[i]) << ','
-          << format_double(a.no_validation ? NAN : val.full_theta1[i]) << ','
-          << format_double(a.no_validation ? NAN : val.full_theta2[i]) << '\n';
+/// residuals.csv: everything the plots need, one row per sample.
+void write_residuals(const Args& a, const id::IdentifyResult& res, const id::Validation& val,
+                     OutputDir* out) {
+  const id::TorqueLog& log = res.conditioned_log;
+  std::ostringstream csv;
+  csv << "t,theta1,theta2,tau1,tau2,omega1,omega2,alpha1,alpha2,predicted_tau1,predicted_tau2,"
+         "residual_tau1,residual_tau2,used,simulated_theta1,simulated_theta2,windowed_theta1,"
+         "windowed_theta2\n";
+  for (int i = 0; i < log.size(); ++i) {
+    const double p1 = res.predicted_tau1[i], p2 = res.predicted_tau2[i];
+    const double row[] = {log.t[i],          log.theta1[i],    log.theta2[i],    log.tau1[i],
+                          log.tau2[i],       res.omega1[i],    res.omega2[i],    res.alpha1[i],
+                          res.alpha2[i],     p1,               p2,               log.tau1[i] - p1,
+                          log.tau2[i] - p2,  double(res.used[i]),
+                          a.no_validation ? NAN : val.full_theta1[i],
+                          a.no_validation ? NAN : val.full_theta2[i],
+                          a.no_validation ? NAN : val.window_theta1[i],
+                          a.no_validation ? NAN : val.window_theta2[i]};
+    for (size_t k = 0; k < std::size(row); ++k) {
+      csv << (k ? "," : "") << (k == 13 ? std::to_string(int(row[k])) : format_double(row[k]));
     }
-    write_text_file(out.file("residuals.csv"), csv.str());
+    csv << '\n';
   }
+  write_text_file(out->file("residuals.csv"), csv.str());
+}
 
-  // scene_fitted.yaml: the input scene with the identified friction
-  Scene fitted = scene;
-  fitted.params.friction = res.fitted.friction;
-  const std::string yaml = scene_to_yaml(fitted);
-  write_text_file(out.file("scene_fitted.yaml"), yaml);
+/// The true value of a parameter when the log's header says it (synth-log; shared friction: the
+/// mean over the joints); false otherwise.
+bool true_value(const std::map<std::string, std::vector<double>>& truth,
+                const id::ParameterLayout& layout, int i, const std::string& name, double* tv) {
+  if (layout.is_inertial(i)) {
+    auto it = truth.find("inertial");
+    if (it == truth.end()) return false;
+    *tv = it->second[i - layout.inertia_offset()];
+    return true;
+  }
+  const size_t us = name.rfind('_');
+  const bool indexed = layout.per_joint && us != std::string::npos;
+  auto it = truth.find(indexed ? name.substr(0, us) : name);
+  if (it == truth.end() || it->second.size() != size_t(kJoints)) return false;
+  *tv = 0;
+  if (indexed) {
+    *tv = it->second[std::stoi(name.substr(us + 1)) - 1];
+  } else {
+    for (double v : it->second) *tv += v / kJoints;
+  }
+  return true;
+}
 
-  // identification.json
+/// "parameters": value, std, truth and errors when the log states the truth.
+Json parameters_json(const id::IdentifyResult& res, const id::TorqueLog& log, bool* have_truth) {
   const std::map<std::string, std::vector<double>> truth = read_truth(log);
-  Json j = Json::object();
-  j.set("command", "identify");
-  j.set("scene", scene.path);
-  j.set("log", a.log);
-  j.set("method", id::method_name(res.method));
-  j.set("law", id::law_name(res.layout.law));
-  j.set("per_joint", res.layout.per_joint);
-  j.set("loss", id::loss_name(opt.loss));
-  if (opt.loss != id::Loss::kNone) j.set("loss_scale", opt.loss_scale);
   Json params = Json::array();
-  bool have_truth = !truth.empty();
-  for (const id::ParameterEstimate& p : res.parameters) {
+  *have_truth = !truth.empty();
+  for (size_t i = 0; i < res.parameters.size(); ++i) {
+    const id::ParameterEstimate& p = res.parameters[i];
     Json e = Json::object();
     e.set("name", p.name);
+    e.set("unit", res.layout.unit(int(i)));
     e.set("value", p.value);
     e.set("std", p.std);  // NaN (not determined, or at a bound) is written as null
     e.set("initial", p.initial);
     e.set("at_bound", p.at_bound);
     e.set("std_meaningful", std::isfinite(p.std));
-    // the truth when the log says it (synth-log): shared = mean over the joints
-    const size_t us = p.name.rfind('_');
-    const bool indexed = res.layout.per_joint && us != std::string::npos;
-    const std::string group = indexed ? p.name.substr(0, us) : p.name;
-    auto it = truth.find(group);
-    if (it != truth.end()) {
-      double tv = 0;
-      if (indexed) {
-        tv = it->second[std::stoi(p.name.substr(us + 1)) - 1];
-      } else {
-        for (double v : it->second) tv += v / kJoints;
-      }
+    if (i < res.cramer_rao_std.size()) e.set("cramer_rao_std", res.cramer_rao_std[i]);
+    double tv = 0;
+    if (true_value(truth, res.layout, int(i), p.name, &tv)) {
       e.set("true", tv);
       e.set("error", p.value - tv);
       e.set("relative_error", tv != 0 ? (p.value - tv) / tv : NAN);
       e.set("error_in_std", (p.value - tv) / p.std);
     } else {
-      have_truth = false;
+      *have_truth = false;
     }
     params.push(std::move(e));
   }
-  j.set("parameters", std::move(params));
-  j.set("rms_torque_residual", pair(res.rms_torque_residual[0], res.rms_torque_residual[1]));
-  j.set("residual_noise_floor", pair(res.residual_noise_floor[0], res.residual_noise_floor[1]));
-  j.set("residual_to_noise_ratio", pair(res.rms_torque_residual[0] / res.residual_noise_floor[0],
-                                        res.rms_torque_residual[1] / res.residual_noise_floor[1]));
-  j.set("rms_torque_residual_initial",
-        pair(res.rms_torque_residual_initial[0], res.rms_torque_residual_initial[1]));
-  if (res.method == id::Method::kOutputError) {
-    j.set("rms_angle_residual", pair(res.rms_angle_residual[0], res.rms_angle_residual[1]));
-    j.set("window_s", opt.window_s);
+  return params;
+}
+
+/// "inertial": what the log determines of the 16 standard inertial parameters.
+Json inertial_json(const id::InertialReport& r) {
+  Json j = Json::object();
+  j.set("prior_relative_std", r.prior_relative);
+  j.set("determined_directions", r.rank);
+  Json info = Json::array();
+  for (double v : r.information) info.push(v);
+  j.set("information_singular_values", std::move(info));
+  Json base = Json::array();
+  for (const id::InertialReport::Combination& c : r.base) {
+    Json e = Json::object();
+    e.set("combination", c.text);
+    e.set("value", c.value);
+    e.set("std", c.std);
+    base.push(std::move(e));
   }
-  j.set("residual_sigma", res.residual_sigma);
-  j.set("samples", res.samples);
-  j.set("samples_used", res.samples_used);
-  j.set("samples_at_rest", res.samples_at_rest);  // left out: some joint stuck (docs/hold.md)
-  j.set("rest_rate_threshold", res.rest_rate_threshold);
-  j.set("rest_acceleration_threshold", res.rest_acceleration_threshold);
-  j.set("residuals", res.residuals);
-  j.set("truth_in_log", have_truth);
-  Json rates = Json::object();
-  rates.set("rates", res.rates_estimated ? "savitzky-golay" : "log");
-  rates.set("accelerations", res.accels_estimated ? "savitzky-golay" : "log");
-  if (res.accels_estimated) {
-    rates.set("sg_half_window_samples", res.sg_half_window);
-    rates.set("sg_half_window_s",
-              res.sg_half_window * log.duration() / std::max(1, log.size() - 1));
-    rates.set("sg_order", res.sg_order);
-    rates.set("window_choice", res.window_choice);
-  }
-  j.set("rate_source", std::move(rates));
-  j.set("std_method", res.std_method);
-  if (std::isfinite(res.delay_s)) {
-    Json d = Json::object();
-    d.set("value_s", res.delay_s);  // the logged torques at t + d match the angles at t
-    d.set("std_s", res.delay_std_s);
-    d.set("corrected", res.delay_corrected);
-    j.set("torque_delay", std::move(d));
-  }
+  j.set("base_combinations", std::move(base));
+  Json at = Json::array();
+  for (const std::string& n : r.at_prior) at.push(n);
+  j.set("left_at_prior", std::move(at));
+  j.set("physically_consistent", r.consistent);
+  return j;
+}
+
+/// Log conditioning: unwrapping, noise levels, glitches, notes.
+Json conditioning_json(const id::IdentifyResult& res, const id::TorqueLog& log) {
   Json cond = Json::object();
   cond.set("unwrapped_turns", pair(res.unwrapped[0], res.unwrapped[1]));
   cond.set("angle_noise", pair(res.angle_noise[0], res.angle_noise[1]));
@@ -270,21 +255,47 @@ int run(const Args& a) {
   Json notes = Json::array();
   for (const std::string& n : res.notes) notes.push(n);
   cond.set("notes", std::move(notes));
-  j.set("log_conditioning", std::move(cond));
-  const std::vector<std::string> names = res.layout.names();
+  return cond;
+}
+
+/// Rates, std method and torque delay.
+void rates_json(const id::IdentifyResult& res, const id::TorqueLog& log, Json* j) {
+  Json rates = Json::object();
+  rates.set("rates", res.rates_estimated ? "savitzky-golay" : "log");
+  rates.set("accelerations", res.accels_estimated ? "savitzky-golay" : "log");
+  if (res.accels_estimated) {
+    rates.set("sg_half_window_samples", res.sg_half_window);
+    rates.set("sg_half_window_s",
+              res.sg_half_window * log.duration() / std::max(1, log.size() - 1));
+    rates.set("sg_order", res.sg_order);
+    rates.set("window_choice", res.window_choice);
+  }
+  j->set("rate_source", std::move(rates));
+  j->set("std_method", res.std_method);
+  if (std::isfinite(res.delay_s)) {
+    Json d = Json::object();
+    d.set("value_s", res.delay_s);  // the logged torques at t + d match the angles at t
+    d.set("std_s", res.delay_std_s);
+    d.set("corrected", res.delay_corrected);
+    j->set("torque_delay", std::move(d));
+  }
+}
+
+/// Correlation, singular values, solver summary.
+void solver_json(const id::IdentifyResult& res, Json* j) {
   Json corr = Json::array();
   for (int r = 0; r < res.correlation.rows(); ++r) {
     Json row = Json::array();
     for (int c = 0; c < res.correlation.cols(); ++c) row.push(res.correlation(r, c));
     corr.push(std::move(row));
   }
-  j.set("correlation", std::move(corr));
+  j->set("correlation", std::move(corr));
   Json sv = Json::array();
   for (double s : res.singular_values) sv.push(s);
-  j.set("singular_values", std::move(sv));
-  j.set("condition_number", res.singular_values.empty()
-                                ? NAN
-                                : res.singular_values.front() / res.singular_values.back());
+  j->set("singular_values", std::move(sv));
+  j->set("condition_number", res.singular_values.empty()
+                                 ? NAN
+                                 : res.singular_values.front() / res.singular_values.back());
   Json solver = Json::object();
   solver.set("iterations", res.iterations);
   solver.set("converged", res.converged);
@@ -292,49 +303,101 @@ int run(const Args& a) {
   Json costs = Json::array();
   for (double c : res.iteration_costs) costs.push(c);
   solver.set("iteration_costs", std::move(costs));
-  j.set("solver", std::move(solver));
-  if (!a.no_validation) {
-    Json v = Json::object();
-    v.set("full_run_status", val.status.ok() ? "ok" : val.status.message);
-    v.set("full_run_duration_s", val.full_duration_s);
-    v.set("full_run_rms_angle_error", pair(val.full_rms[0], val.full_rms[1]));
-    v.set("full_run_max_angle_error", pair(val.full_max[0], val.full_max[1]));
-    v.set("window_s", val.window_s);
-    v.set("windowed_rms_angle_error", pair(val.window_rms[0], val.window_rms[1]));
-    v.set("windows_skipped_over_time_budget", val.windows_skipped);
-    j.set("validation", std::move(v));
+  j->set("solver", std::move(solver));
+}
+
+/// One line on the full run: where it leaves the log and why that is expected.
+std::string full_run_note(const id::Validation& val) {
+  if (std::isnan(val.divergence_time_s)) return "the full run follows the log throughout";
+  char buf[400];
+  std::snprintf(buf, sizeof buf,
+                "the full run leaves the log after %.3g s (angle error > %.2g rad): on chaotic "
+                "motion any model or noise error grows, so only the windowed check (restarted "
+                "from the log every %.3g s) measures the fit",
+                val.divergence_time_s, id::Validation::kDivergedAngle, val.window_s);
+  return buf;
+}
+
+Json validation_json(const id::Validation& val) {
+  Json v = Json::object();
+  v.set("full_run_note", full_run_note(val));
+  v.set("full_run_divergence_time_s", val.divergence_time_s);
+  v.set("full_run_status", val.status.ok() ? "ok" : val.status.message);
+  v.set("full_run_duration_s", val.full_duration_s);
+  v.set("full_run_rms_angle_error", pair(val.full_rms[0], val.full_rms[1]));
+  v.set("full_run_max_angle_error", pair(val.full_max[0], val.full_max[1]));
+  v.set("window_s", val.window_s);
+  v.set("windowed_rms_angle_error", pair(val.window_rms[0], val.window_rms[1]));
+  v.set("windows_skipped_over_time_budget", val.windows_skipped);
+  return v;
+}
+
+/// identification.json (without the total wall time).
+Json identification_json(const Args& a, const Scene& scene, const id::IdentifyOptions& opt,
+                         const id::TorqueLog& log, const id::IdentifyResult& res,
+                         const id::Validation& val) {
+  Json j = Json::object();
+  j.set("command", "identify");
+  j.set("scene", scene.path);
+  j.set("log", a.log);
+  j.set("method", id::method_name(res.method));
+  j.set("law", id::law_name(res.layout.law));
+  j.set("per_joint", res.layout.per_joint);
+  j.set("estimate", a.settings.estimate);
+  j.set("loss", id::loss_name(opt.loss));
+  if (opt.loss != id::Loss::kNone) j.set("loss_scale", opt.loss_scale);
+  bool have_truth = false;
+  j.set("parameters", parameters_json(res, log, &have_truth));
+  if (res.inertial.estimated) j.set("inertial", inertial_json(res.inertial));
+  j.set("rms_torque_residual", pair(res.rms_torque_residual[0], res.rms_torque_residual[1]));
+  j.set("residual_noise_floor", pair(res.residual_noise_floor[0], res.residual_noise_floor[1]));
+  j.set("residual_to_noise_ratio", pair(res.rms_torque_residual[0] / res.residual_noise_floor[0],
+                                        res.rms_torque_residual[1] / res.residual_noise_floor[1]));
+  j.set("rms_torque_residual_initial",
+        pair(res.rms_torque_residual_initial[0], res.rms_torque_residual_initial[1]));
+  if (res.method == id::Method::kOutputError) {
+    j.set("rms_angle_residual", pair(res.rms_angle_residual[0], res.rms_angle_residual[1]));
+    j.set("window_s", opt.window_s);
   }
+  j.set("residual_sigma", res.residual_sigma);
+  j.set("samples", res.samples);
+  j.set("samples_used", res.samples_used);
+  j.set("samples_at_rest", res.samples_at_rest);  // left out: some joint stuck (docs/hold.md)
+  j.set("rest_rate_threshold", res.rest_rate_threshold);
+  j.set("rest_acceleration_threshold", res.rest_acceleration_threshold);
+  j.set("residuals", res.residuals);
+  j.set("truth_in_log", have_truth);
+  rates_json(res, log, &j);
+  j.set("log_conditioning", conditioning_json(res, log));
+  solver_json(res, &j);
+  if (!a.no_validation) j.set("validation", validation_json(val));
   Json warnings = Json::array();
   for (const std::string& w : res.warnings) warnings.push(w);
   j.set("warnings", std::move(warnings));
   j.set("identification_wall_time_s", res.wall_time_s);
+  return j;
+}
 
-  if (!a.no_plots) {
-    const Gnuplot& g = gnuplot();
-    const std::string warning =
-        g.available ? run_gnuplot(out.staging(), "plots.gnuplot",
-                                  residual_plot_script(
-                                      g.terminal, std::filesystem::path(a.log).filename().string(),
-                                      !a.no_validation))
-                    : "gnuplot not found on PATH: no figures drawn";
-    if (!warning.empty()) warn(warning);
-  }
-  j.set("wall_time_s",
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  write_json_file(out.file("identification.json"), j);
-  const std::vector<std::string> written = out.commit();
-
-  // console summary
-  std::printf("fivebar identify: %s (%s, %s%s), %d/%d samples, %.3f s\n", a.log.c_str(),
+/// The console summary.
+void print_summary(const Args& a, const id::IdentifyResult& res, const id::Validation& val) {
+  std::printf("fivebar identify: %s (%s, %s%s%s), %d/%d samples, %.3f s\n", a.log.c_str(),
               id::method_name(res.method), id::law_name(res.layout.law),
-              res.layout.per_joint ? ", per joint" : "", res.samples_used, res.samples,
-              res.wall_time_s);
+              res.layout.per_joint ? ", per joint" : "",
+              res.layout.inertia ? ", with the inertial parameters" : "", res.samples_used,
+              res.samples, res.wall_time_s);
   for (const id::ParameterEstimate& p : res.parameters) {
     if (std::isfinite(p.std)) {
       std::printf("  %-22s %.6g +- %.2g\n", p.name.c_str(), p.value, p.std);
     } else {
       std::printf("  %-22s %.6g (std %s)\n", p.name.c_str(), p.value,
                   p.at_bound ? "not meaningful: at its bound" : "not determined");
+    }
+  }
+  if (res.inertial.estimated) {
+    std::printf("  inertial: the log determines %d of 16 directions; base combinations:\n",
+                res.inertial.rank);
+    for (const id::InertialReport::Combination& c : res.inertial.base) {
+      std::printf("    %-60s = %.6g +- %.2g\n", c.text.c_str(), c.value, c.std);
     }
   }
   if (res.samples_at_rest > 0) {
@@ -351,13 +414,56 @@ int run(const Args& a) {
               res.rms_torque_residual[0], res.rms_torque_residual[1], res.residual_noise_floor[0],
               res.residual_noise_floor[1]);
   if (!a.no_validation) {
-    std::printf(
-        "  validation: windowed (%.3g s) rms angle error %.3g, %.3g rad; full run %.3g, "
-        "%.3g rad\n",
-        val.window_s, val.window_rms[0], val.window_rms[1], val.full_rms[0], val.full_rms[1]);
+    std::printf("  validation: windowed (%.3g s) rms angle error %.3g, %.3g rad\n", val.window_s,
+                val.window_rms[0], val.window_rms[1]);
+    std::printf("  full run: rms angle error %.3g, %.3g rad; %s\n", val.full_rms[0],
+                val.full_rms[1], full_run_note(val).c_str());
   }
   for (const std::string& w : res.warnings) warn(w);
   std::fflush(stdout);
+}
+
+int run(const Args& a) {
+  const auto start = std::chrono::steady_clock::now();
+  const Scene scene = load_scene(a.scene.scene, a.scene.sets);
+  const sim::LoadFunction loads = LoadExpressions(scene).function();
+  const id::IdentifyOptions opt = identify_options(a.settings, scene);
+
+  // the log, then the fit; a log that does not fit the scene is bad input (exit 2)
+  const id::TorqueLog log = read_log(a.log);
+  const id::IdentifyResult res = identify_scene(scene, loads, log, opt);
+
+  OutputDir out(a.scene.out, kOutputs);
+  // validation and residuals on the log as fitted (unwrapped, glitches interpolated)
+  id::Validation val;
+  if (!a.no_validation) {
+    val = id::validate(res.fitted, loads, res.conditioned_log, res.omega1, res.omega2,
+                       a.settings.window);
+  }
+  write_residuals(a, res, val, &out);
+
+  // scene_fitted.yaml: the input scene with the identified friction (and links: group inertia)
+  Scene fitted = scene;
+  fitted.params.friction = res.fitted.friction;
+  fitted.params.links = res.fitted.links;
+  write_text_file(out.file("scene_fitted.yaml"), scene_to_yaml(fitted));
+
+  Json j = identification_json(a, scene, opt, log, res, val);
+  if (!a.no_plots) {
+    const Gnuplot& g = gnuplot();
+    const std::string warning =
+        g.available ? run_gnuplot(out.staging(), "plots.gnuplot",
+                                  residual_plot_script(
+                                      g.terminal, std::filesystem::path(a.log).filename().string(),
+                                      !a.no_validation))
+                    : "gnuplot not found on PATH: no figures drawn";
+    if (!warning.empty()) warn(warning);
+  }
+  j.set("wall_time_s",
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  write_json_file(out.file("identification.json"), j);
+  const std::vector<std::string> written = out.commit();
+  print_summary(a, res, val);
   print_written(out.dir(), written);
   return 0;
 }
@@ -368,6 +474,14 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--log", args->log, "torque log (CSV, docs/formats.md)")
       ->type_name("LOG.csv")
       ->required();
+  app->add_option("--estimate", args->settings.estimate,
+                  "parameter groups to estimate, comma-separated: friction (always), inertia "
+                  "(the links' 16 standard inertial parameters)")
+      ->capture_default_str();
+  app->add_option("--inertia-prior", args->settings.inertia_prior,
+                  "relative std of the prior holding the inertial parameters the log cannot "
+                  "determine at the scene's values (> 0)")
+      ->capture_default_str();
   app->add_flag("--per-joint", args->settings.per_joint,
                 "one coefficient per joint (coulomb_1..5, viscous_1..5) instead of shared ones");
   app->add_option("--method", args->settings.method, "inverse-dynamics | output-error")

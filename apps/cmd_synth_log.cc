@@ -17,6 +17,7 @@
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/model/inertial.h"
 
 namespace fivebar::io {
 namespace {
@@ -89,6 +90,11 @@ int run(const Args& a) {
                   " true.pin_radius = " + joined(fp.pin_radius),
                   " true.coulomb = " + joined(fp.coulomb),
                   " true.viscous = " + joined(fp.viscous)};
+  // the links' standard inertial parameters (model/inertial.h), for `identify --estimate inertia`
+  const std::array<double, kInertialParams> pi = standard_inertial(scene.params);
+  std::string inertial;
+  for (int i = 0; i < kInertialParams; ++i) inertial += (i ? "," : "") + format_double(pi[i]);
+  log.comments.push_back(" true.inertial = " + inertial);
   if (fp.law == FrictionLaw::kStribeck) {
     log.comments.push_back(" true.static_coulomb = " + joined(fp.static_coulomb));
     log.comments.push_back(" true.stribeck_velocity = " + joined(fp.stribeck_velocity));

@@ -9,6 +9,12 @@
   coverage-angles: issue 16: angles-only logs (or noisy measured rates) over N seeds, for a case:
                  shared (paper loads, 1 kHz), shared200 (200 Hz), per-joint (multisine),
                  stribeck (500 Hz, 6 s), noisy-rates (--with-rates --rate-noise 0.05).
+  coverage-inertia: issue 10: logs whose true links are 3-6 % off the scene (CAD_MISMATCH_SETS),
+                 identified with the nominal scene and --estimate friction,inertia, over N seeds,
+                 --case shared (paper loads) or per-joint (multisine, distinct coefficients):
+                 coverage of the 95 % intervals of the friction coefficients (and of the
+                 inertial parameters), |error| <= 3 std, reported std against the Cramer-Rao
+                 bound and against the spread over the seeds, wall time.
   fuzz:          issue 16: N seeded corruptions of a short log (1e300, wrapped, spikes, constant
                  angles, degrees, offsets, ...) through `fivebar identify`; counts the exit
                  statuses and fails if any run ends by a signal or without its one-line message.
@@ -17,6 +23,7 @@ Usage (from the repository root, after building `fivebar`):
   scripts/identification_report.py error-vs-time [--fivebar PATH] [--out DIR]
   scripts/identification_report.py coverage [--seeds 50] [--duration 10] [--fivebar PATH] [--out DIR]
   scripts/identification_report.py coverage-angles --case shared [--seeds 30] [--duration 2]
+  scripts/identification_report.py coverage-inertia --case per-joint [--seeds 50] [--duration 10]
   scripts/identification_report.py fuzz [--runs 1000] [--seed 16]
 Writes DIR/<report>.csv and prints a Markdown table. Logs and runs go to DIR/work/.
 """
@@ -32,6 +39,15 @@ import sys
 SCENE = "datasets/scenes/paper.yaml"
 PER_JOINT_SETS = ["--set", "friction.coulomb=[0.08,0.10,0.12,0.14,0.16]",
                   "--set", "friction.viscous=[0.010,0.015,0.020,0.025,0.030]"]
+
+# the true mechanism of a CAD-mismatch log: masses, COM offsets and inertias 3-6 % off paper.yaml
+CAD_MISMATCH_SETS = sum([["--set", kv] for kv in [
+    "mechanism.links.0.mass=1.04", "mechanism.links.1.mass=0.95",
+    "mechanism.links.2.mass=1.05", "mechanism.links.3.mass=0.96",
+    "mechanism.links.0.inertia=0.106", "mechanism.links.1.inertia=0.095",
+    "mechanism.links.2.inertia=0.104", "mechanism.links.3.inertia=0.103",
+    "mechanism.links.0.com_offset=0.052", "mechanism.links.1.com_offset=0.0285",
+    "mechanism.links.2.com_offset=0.19", "mechanism.links.3.com_offset=0.156"]], [])
 
 
 def run(cmd):
@@ -111,6 +127,63 @@ def coverage(args):
     hits = sum(covered.values())
     summary.append({"parameter": "all", "covered": hits, "seeds": sum(total.values()),
                     "coverage": "%.3f" % (hits / sum(total.values()))})
+    return rows, summary
+
+
+def coverage_inertia(args):
+    work = os.path.join(args.out, "work")
+    os.makedirs(work, exist_ok=True)
+    per_joint = args.case == "per-joint"
+    synth_extra = CAD_MISMATCH_SETS + (["--excitation", "multisine"] + PER_JOINT_SETS
+                                       if per_joint else [])
+    id_extra = ["--estimate", "friction,inertia"] + (["--per-joint"] if per_joint else [])
+    stats, rows = {}, []
+    for seed in range(1, args.seeds + 1):
+        log = os.path.join(work, "cad_%d.csv" % seed)
+        synth(args.fivebar, log, args.duration, seed, True, synth_extra)
+        j = identify(args.fivebar, log, os.path.join(work, "run"), id_extra)
+        within3 = True
+        for q in j["parameters"]:
+            e = stats.setdefault(q["name"], {"hit": 0, "n": 0, "values": [], "std": [],
+                                             "crb": [], "inertial": "_" in q["name"] and
+                                             q["name"].split("_")[0] in ("m", "mx", "my", "J")})
+            e["n"] += 1
+            e["hit"] += int(abs(q["error"]) <= 1.96 * q["std"])
+            e["values"].append(q["value"] - q["true"])
+            e["std"].append(q["std"])
+            e["crb"].append(q.get("cramer_rao_std") or float("nan"))
+            if not e["inertial"]:
+                within3 = within3 and abs(q["error"]) <= 3 * q["std"]
+        friction = [q for q in j["parameters"] if not stats[q["name"]]["inertial"]]
+        rows.append({"seed": seed, "wall_time_s": round(j["identification_wall_time_s"], 3),
+                     "friction_within_3_std": within3,
+                     "max_abs_friction_error_in_std": "%.2f" % max(abs(q["error_in_std"])
+                                                                   for q in friction),
+                     "residual_to_noise": "%.3f" % max(j["residual_to_noise_ratio"])})
+        os.remove(log)
+        print("  seed %d: %s" % (seed, rows[-1]), file=sys.stderr)
+    summary = []
+    for group in (False, True):
+        hits = n = 0
+        for name, e in stats.items():
+            if e["inertial"] != group:
+                continue
+            mean_std = sum(e["std"]) / len(e["std"])
+            spread = math.sqrt(sum(v * v for v in e["values"]) / len(e["values"]))
+            summary.append({"parameter": name, "coverage": "%.3f" % (e["hit"] / e["n"]),
+                            "mean_std": "%.3g" % mean_std,
+                            "rms_error_over_seeds": "%.3g" % spread,
+                            "std_over_cramer_rao": "%.2f" % (mean_std / (sum(e["crb"]) /
+                                                                         len(e["crb"])))})
+            hits += e["hit"]
+            n += e["n"]
+        summary.append({"parameter": "all inertial" if group else "all friction",
+                        "coverage": "%.3f" % (hits / n), "mean_std": "",
+                        "rms_error_over_seeds": "", "std_over_cramer_rao": ""})
+    times = sorted(r["wall_time_s"] for r in rows)
+    summary.append({"parameter": "wall time s (median, max)",
+                    "coverage": "%.2f, %.2f" % (times[len(times) // 2], times[-1]),
+                    "mean_std": "", "rms_error_over_seeds": "", "std_over_cramer_rao": ""})
     return rows, summary
 
 
@@ -279,8 +352,10 @@ def write_csv(path, rows):
 def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("report", choices=["error-vs-time", "coverage", "coverage-angles", "fuzz"])
-    ap.add_argument("--case", choices=sorted(CASES), default="shared")
+    ap.add_argument("report", choices=["error-vs-time", "coverage", "coverage-angles",
+                                       "coverage-inertia", "fuzz"])
+    ap.add_argument("--case", choices=sorted(CASES), default="shared",
+                    help="coverage-angles: any; coverage-inertia: shared or per-joint")
     ap.add_argument("--runs", type=int, default=1000)
     ap.add_argument("--seed", type=int, default=16)
     ap.add_argument("--fuzz-duration", type=float, default=0.3)
@@ -302,6 +377,13 @@ def main():
         write_csv(os.path.join(args.out, "coverage_%s_runs.csv" % args.case), rows)
         write_csv(os.path.join(args.out, "coverage_%s.csv" % args.case), summary)
         print(table(summary))
+    elif args.report == "coverage-inertia":
+        rows, summary = coverage_inertia(args)
+        write_csv(os.path.join(args.out, "coverage_inertia_%s_runs.csv" % args.case), rows)
+        write_csv(os.path.join(args.out, "coverage_inertia_%s.csv" % args.case), summary)
+        print(table(summary))
+        print("runs with every friction coefficient within 3 std: %d / %d"
+              % (sum(r["friction_within_3_std"] for r in rows), len(rows)))
     elif args.report == "fuzz":
         rows, summary, bad = fuzz(args)
         write_csv(os.path.join(args.out, "fuzz_runs.csv"), rows)

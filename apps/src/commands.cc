@@ -1,6 +1,7 @@
 #include "fivebar/io/commands.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "fivebar/io/errors.h"
 #include "fivebar/io/loads.h"
@@ -20,12 +21,24 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
     throw InputError(kFlags, "--law", "expected coulomb_viscous or stribeck, got " + a.law);
   }
   opt.layout.per_joint = a.per_joint;
+  std::string bad;
+  if (!id::parse_groups(a.estimate, &opt.layout, &bad)) {
+    throw InputError(kFlags, "--estimate",
+                     "unknown group '" + bad + "' (expected friction, inertia, comma-separated)");
+  }
+  if (!(a.inertia_prior > 0) || !std::isfinite(a.inertia_prior)) {
+    throw InputError(kFlags, "--inertia-prior", "must be > 0 (a relative std, e.g. 0.2)");
+  }
+  opt.inertia_prior = a.inertia_prior;
   if (!id::parse_method(a.method, &opt.method)) {
     throw InputError(kFlags, "--method",
                      "expected inverse-dynamics or output-error, got " + a.method);
   }
   if (!id::parse_loss(a.loss, &opt.loss)) {
     throw InputError(kFlags, "--loss", "expected none, huber or cauchy, got " + a.loss);
+  }
+  if (opt.layout.inertia && opt.method != id::Method::kInverseDynamics) {
+    throw InputError(kFlags, "--estimate", "group inertia needs --method inverse-dynamics");
   }
   if (!(a.loss_scale > 0)) throw InputError(kFlags, "--loss-scale", "must be > 0");
   if (!(a.sg_window > 0) || a.sg_order < 2 || a.sg_order > 10) {

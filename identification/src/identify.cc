@@ -17,6 +17,7 @@
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/rest.h"
+#include "inertia.h"
 #include "noise_model.h"
 
 namespace fivebar::identification {
@@ -103,8 +104,8 @@ ceres::LossFunction* make_loss(Loss loss, double scale) {
 /// Stribeck velocity 0.2 rad/s.
 std::vector<double> default_start(const ParameterLayout& layout) {
   static const double kStart[] = {0.1, 0.01, 0.15, 0.2};
-  std::vector<double> x(layout.size());
-  for (int i = 0; i < layout.size(); ++i) x[i] = kStart[i / layout.per_group()];
+  std::vector<double> x(layout.friction_size());
+  for (int i = 0; i < layout.friction_size(); ++i) x[i] = kStart[i / layout.per_group()];
   return x;
 }
 
@@ -158,13 +159,23 @@ RestThresholds rest_rule(const TorqueLog& log, const IdentifyResult& out,
   return r;
 }
 
+/// The inverse-dynamics residual blocks, one per sample: from the sample's structure
+/// (residual.h: the Jets carry only the P active parameters through a five-number loop), or the
+/// full model where the structure cannot be read off.
 template <int P>
 void add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayout& layout,
                                 const std::vector<Sample>& samples, const EvalOptions& eval,
                                 Loss loss, double loss_scale, double* x, ceres::Problem* problem) {
   for (const Sample& s : samples) {
-    auto* cost = new ceres::AutoDiffCostFunction<InverseDynamicsResidual, 2, P>(
-        new InverseDynamicsResidual(scene, layout, s, eval));
+    SampleStructure st;
+    ceres::CostFunction* cost = nullptr;
+    if (sample_structure(scene, s, eval, &st)) {
+      cost = new ceres::AutoDiffCostFunction<StructuredResidual, 2, P>(
+          new StructuredResidual(scene, layout, st, s, eval));
+    } else {
+      cost = new ceres::AutoDiffCostFunction<InverseDynamicsResidual, 2, P>(
+          new InverseDynamicsResidual(scene, layout, s, eval));
+    }
     problem->AddResidualBlock(cost, make_loss(loss, loss_scale), x);
   }
 }
@@ -185,7 +196,7 @@ class WindowResidual {
 
   bool operator()(double const* const* x, double* r) const {
     Params<double> p = scene_;
-    layout_.apply(x[0], &p.friction);
+    layout_.apply(x[0], &p);
     const sim::Result res = sim::simulate(p, loads_, initial_, sim_);
     if (!res.status.ok() || res.rows.size() < 2) return false;
     std::vector<double> ts, a, b;
@@ -258,7 +269,35 @@ struct Fit {
   std::vector<int> index;  ///< log index of each sample in the fit
   std::vector<double> x;   ///< internal parameter vector
   detail::SensorNoise noise;
+  detail::InertialPrior prior;  ///< group inertia
+  /// the torque residual's noise level that weighs the prior against the data [N m]
+  double prior_scale = 1;
 };
+
+/// Calls f(std::integral_constant<int, P>) for the parameter counts the layouts give (friction
+/// 2, 4, 10, 20, each with or without the 16 inertial parameters); false for another count.
+template <typename F>
+bool with_size(int P, F&& f) {
+  switch (P) {
+    case 2: f(std::integral_constant<int, 2>()); return true;
+    case 4: f(std::integral_constant<int, 4>()); return true;
+    case 10: f(std::integral_constant<int, 10>()); return true;
+    case 20: f(std::integral_constant<int, 20>()); return true;
+    case 18: f(std::integral_constant<int, 18>()); return true;
+    case 26: f(std::integral_constant<int, 26>()); return true;
+    case 36: f(std::integral_constant<int, 36>()); return true;
+    default: return false;
+  }
+}
+
+/// Group inertia: the prior and consistency residuals (inertia.h) on the parameter block x.
+void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem) {
+  if (!f->layout.inertia) return;
+  problem->AddResidualBlock(detail::inertial_prior_cost(f->prior, f->layout.size(),
+                                                        f->layout.inertia_offset(),
+                                                        &f->prior_scale),
+                            nullptr, x);
+}
 
 /// Linear map from the internal parameter vector to the public one (static_coulomb = coulomb +
 /// excess for Stribeck; identity otherwise).
@@ -415,7 +454,7 @@ void select_samples(Fit* f, IdentifyResult* out) {
 /// naming it and the reason (ok if none fails).
 Status first_failure(const Fit& f, const std::vector<double>& x, const std::string& at) {
   Params<double> p = f.scene;
-  f.layout.apply(x.data(), &p.friction);
+  f.layout.apply(x.data(), &p);
   for (size_t u = 0; u < f.samples.size(); ++u) {
     const Sample& s = f.samples[u];
     Evaluation<double> ev;
@@ -439,7 +478,7 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
                    double floor[2]) {
   const TorqueLog& log = f.cond.log;
   Params<double> p = f.scene;
-  f.layout.apply(f.x.data(), &p.friction);
+  f.layout.apply(f.x.data(), &p);
   Eigen::Vector2d r2 = Eigen::Vector2d::Zero(), v = Eigen::Vector2d::Zero(), t2 = v;
   int count = 0;
   for (int i : probe) {
@@ -576,26 +615,12 @@ void preliminary_fit(Fit* f) {
   for (size_t u = 0; u < f->samples.size(); u += step) g.samples.push_back(f->samples[u]);
   ceres::Problem problem;
   std::vector<double> x = f->x;
-  switch (P) {
-    case 2:
-      add_inverse_dynamics_terms<2>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(),
-                                    &problem);
-      break;
-    case 4:
-      add_inverse_dynamics_terms<4>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(),
-                                    &problem);
-      break;
-    case 10:
-      add_inverse_dynamics_terms<10>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(),
-                                     &problem);
-      break;
-    case 20:
-      add_inverse_dynamics_terms<20>(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(),
-                                     &problem);
-      break;
-    default:
-      return;
-  }
+  const bool sized = with_size(P, [&](auto n) {
+    add_inverse_dynamics_terms<decltype(n)::value>(g.scene, g.layout, g.samples, g.eval,
+                                                   Loss::kNone, 1, x.data(), &problem);
+  });
+  if (!sized) return;
+  add_inertial_prior(f, x.data(), &problem);
   for (int i = 0; i < P; ++i) problem.SetParameterLowerBound(x.data(), i, f->layout.lower_bound(i));
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
@@ -611,26 +636,13 @@ bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem) {
   const IdentifyOptions& opt = *f->opt;
   const int P = f->layout.size();
   if (opt.method == Method::kInverseDynamics) {
-    switch (P) {
-      case 2:
-        add_inverse_dynamics_terms<2>(f->scene, f->layout, f->samples, f->eval, opt.loss,
-                                      opt.loss_scale, f->x.data(), problem);
-        break;
-      case 4:
-        add_inverse_dynamics_terms<4>(f->scene, f->layout, f->samples, f->eval, opt.loss,
-                                      opt.loss_scale, f->x.data(), problem);
-        break;
-      case 10:
-        add_inverse_dynamics_terms<10>(f->scene, f->layout, f->samples, f->eval, opt.loss,
-                                       opt.loss_scale, f->x.data(), problem);
-        break;
-      case 20:
-        add_inverse_dynamics_terms<20>(f->scene, f->layout, f->samples, f->eval, opt.loss,
-                                       opt.loss_scale, f->x.data(), problem);
-        break;
-      default:
-        return false;
-    }
+    const bool sized = with_size(P, [&](auto n) {
+      add_inverse_dynamics_terms<decltype(n)::value>(f->scene, f->layout, f->samples, f->eval,
+                                                     opt.loss, opt.loss_scale, f->x.data(),
+                                                     problem);
+    });
+    if (!sized) return false;
+    add_inertial_prior(f, f->x.data(), problem);
     out->residuals = 2 * out->samples_used;
   } else {
     const sim::Options so = window_sim_options(opt.sim_rtol);
@@ -682,7 +694,7 @@ void solve(Fit* f, ceres::Problem* problem, IdentifyResult* out, ceres::Solver::
   so.parameter_tolerance = oe ? 1e-7 : 1e-10;
   so.logging_type = ceres::SILENT;
   ceres::Solve(so, problem, summary);
-  out->iterations = static_cast<int>(summary->iterations.size());
+  out->iterations += static_cast<int>(summary->iterations.size());
   out->converged = summary->termination_type == ceres::CONVERGENCE;
   out->solver_message = summary->BriefReport();
   for (const ceres::IterationSummary& it : summary->iterations)
@@ -720,9 +732,10 @@ std::vector<detail::Sensitivity> noise_sensitivities(const Fit& f) {
 /// Residual levels and the structure warning: the rms against the level the sensor noise alone
 /// gives (torque noise plus angle/rate noise through the rate estimation), floored for noise-free
 /// logs at kAbsoluteFloor of the rms logged torque.
-void residual_levels(const Fit& f, const std::vector<double>& r,
-                     const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
-  rms_pair(r, out->rms_torque_residual);
+/// The residual's expected level from the sensor noise (noise[j]) and the floor for noise-free
+/// logs (absolute[j], kAbsoluteFloor of the rms logged torque); floor[j] the larger.
+void noise_floor(const Fit& f, const std::vector<detail::Sensitivity>& sens, double floor[2],
+                 double noise[2] = nullptr, double absolute[2] = nullptr) {
   const TorqueLog& log = f.cond.log;
   Eigen::Vector2d prop = Eigen::Vector2d::Zero();
   for (const detail::Sensitivity& s : sens) prop += detail::propagated_variance(s);
@@ -731,9 +744,21 @@ void residual_levels(const Fit& f, const std::vector<double>& r,
     const std::vector<double>& tau = j == 0 ? log.tau1 : log.tau2;
     double s2 = 0;
     for (int i : f.index) s2 += tau[i] * tau[i] / f.index.size();
-    const double noise = std::sqrt(f.noise.torque[j] * f.noise.torque[j] + prop(j));
-    const double floor = kAbsoluteFloor * std::sqrt(s2);
-    out->residual_noise_floor[j] = std::max(noise, floor);
+    const double n = std::sqrt(f.noise.torque[j] * f.noise.torque[j] + prop(j));
+    const double a = kAbsoluteFloor * std::sqrt(s2);
+    floor[j] = std::max(n, a);
+    if (noise != nullptr) noise[j] = n;
+    if (absolute != nullptr) absolute[j] = a;
+  }
+}
+
+void residual_levels(const Fit& f, const std::vector<double>& r,
+                     const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
+  rms_pair(r, out->rms_torque_residual);
+  double noises[2], floors[2];
+  noise_floor(f, sens, out->residual_noise_floor, noises, floors);
+  for (int j = 0; j < 2; ++j) {
+    const double noise = noises[j], floor = floors[j];
     const double ratio = out->rms_torque_residual[j] / out->residual_noise_floor[j];
     if (ratio > kStructureRatio) {
       out->warnings.push_back(
@@ -758,10 +783,48 @@ Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P) {
   return J;
 }
 
+/// The prior's information in J^T J units (group inertia: s^2 / sigma_i^2 on the diagonal of the
+/// inertial parameters, s the prior's noise level; zero elsewhere).
+Eigen::MatrixXd prior_information(const Fit& f) {
+  const int P = f.layout.size();
+  Eigen::MatrixXd Hp = Eigen::MatrixXd::Zero(P, P);
+  if (!f.layout.inertia) return Hp;
+  for (int i = 0; i < kInertialParams; ++i) {
+    const int k = f.layout.inertia_offset() + i;
+    Hp(k, k) = std::pow(f.prior_scale / f.prior.sigma[i], 2);
+  }
+  return Hp;
+}
+
+/// Group inertia: base combinations, the parameters left at their prior (a warning), consistency.
+void inertial_stage(const Fit& f, const Eigen::MatrixXd& J, IdentifyResult* out) {
+  const int off = f.layout.inertia_offset();
+  InertialReport& rep = out->inertial;
+  rep.estimated = true;
+  rep.prior_relative = f.opt->inertia_prior;
+  const Eigen::MatrixXd C = out->covariance.block(off, off, kInertialParams, kInertialParams);
+  if (!C.allFinite()) return;
+  const std::vector<double> pi(f.x.begin() + off, f.x.end());
+  detail::inertial_report(J.middleCols(off, kInertialParams), f.prior, f.prior_scale, pi, C, &rep);
+  if (!rep.at_prior.empty()) {
+    std::string list;
+    for (const std::string& n : rep.at_prior) list += (list.empty() ? "" : ", ") + n;
+    out->warnings.push_back(
+        "the log determines " + std::to_string(rep.rank) + " of the 16 inertial directions; " +
+        "left at their prior (the scene's values, relative std " + fmt(rep.prior_relative) +
+        "): " + list);
+  }
+  if (!rep.consistent) {
+    out->warnings.push_back(
+        "the fitted inertial parameters are not physically consistent (some link has m <= 0 or "
+        "an inertia about its COM <= 0)");
+  }
+}
+
 /// Covariance of the internal parameters, only on a converged solution with a full-rank
 /// Jacobian (of the parameters off their bounds): errors in variables (sandwich) for inverse
 /// dynamics, else s^2 (J^T J)^-1.
-void covariance(const Fit& f, const Eigen::MatrixXd& J,
+void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& Hp,
                 const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
   const int P = f.layout.size();
   out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
@@ -777,9 +840,16 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J,
     if (f.x[i] > f.layout.lower_bound(i) + 1e-12 && J.col(i).squaredNorm() > 0) free.push_back(i);
   }
   if (free.empty()) return;
-  Eigen::MatrixXd Jf(J.rows(), free.size());
-  for (size_t a = 0; a < free.size(); ++a) Jf.col(a) = J.col(free[a]);
-  const Eigen::MatrixXd H = Jf.transpose() * Jf;
+  Eigen::MatrixXd Jf(J.rows(), free.size()), Hpf(free.size(), free.size());
+  for (size_t a = 0; a < free.size(); ++a) {
+    Jf.col(a) = J.col(free[a]);
+    for (size_t b = 0; b < free.size(); ++b) Hpf(a, b) = Hp(free[a], free[b]);
+  }
+  // the prior (group inertia) as a pseudo-observation of noise level s: information Hp = s^2 /
+  // sigma^2, score covariance s^2 Hp; the covariance is then the posterior one (a direction the
+  // log cannot determine gets its prior std, the CAD error it may carry)
+  const double s2 = f.prior_scale * f.prior_scale;
+  const Eigen::MatrixXd H = Jf.transpose() * Jf + Hpf;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
   const double emax = es.eigenvalues().maxCoeff(), emin = es.eigenvalues().minCoeff();
   if (!(emax > 0) || !(emin > 1e-14 * emax) || !H.allFinite()) {
@@ -795,11 +865,14 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J,
   };
   const bool eiv = f.opt->errors_in_variables && f.opt->method == Method::kInverseDynamics;
   if (!eiv) {
-    scatter(Hinv * (out->residual_sigma * out->residual_sigma));
+    const double sig2 = out->residual_sigma * out->residual_sigma;
+    // the prior at the residual's level: H = J^T J + sig2 / sigma^2
+    const Eigen::MatrixXd H2 = Jf.transpose() * Jf + Hpf * (sig2 / s2);
+    scatter(H2.ldlt().solve(Eigen::MatrixXd::Identity(H2.rows(), H2.cols())) * sig2);
     out->std_method = "residual-variance";
     return;
   }
-  Eigen::MatrixXd S = detail::score_covariance(Jf, sens, f.noise, f.cond.log.size());
+  Eigen::MatrixXd S = detail::score_covariance(Jf, sens, f.noise, f.cond.log.size()) + s2 * Hpf;
   // residual beyond the modelled noise (model mismatch, unmodelled noise) counted as white
   for (int j = 0; j < 2; ++j) {
     const double excess = std::max(
@@ -810,11 +883,21 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J,
   }
   scatter(Hinv * S * Hinv);
   out->std_method = "errors-in-variables";
+  // Cramer-Rao bound for white torque noise alone (the logged level; angle noise ignored): a
+  // lower bound the reported std should approach when the rates are logged
+  const double st2 = std::max(f.noise.torque[0], f.noise.torque[1]);
+  if (st2 > 0) {
+    const Eigen::MatrixXd Hc = Jf.transpose() * Jf / (st2 * st2) + Hpf / s2;
+    const Eigen::MatrixXd Cc = Hc.ldlt().solve(Eigen::MatrixXd::Identity(Hc.rows(), Hc.cols()));
+    out->cramer_rao_std.assign(P, kNaN);
+    for (size_t a = 0; a < free.size(); ++a) out->cramer_rao_std[free[a]] = std::sqrt(Cc(a, a));
+  }
 }
 
 /// Singular values of the (public) Jacobian with unit-norm columns, and the warnings they imply.
-void identifiability(const Eigen::MatrixXd& JtJ, const std::vector<std::string>& names,
+void identifiability(const Eigen::MatrixXd& JtJ, const ParameterLayout& layout,
                      IdentifyResult* out) {
+  const std::vector<std::string> names = layout.names();
   const int P = static_cast<int>(JtJ.rows());
   Eigen::VectorXd scale(P);
   for (int i = 0; i < P; ++i) {
@@ -836,10 +919,12 @@ void identifiability(const Eigen::MatrixXd& JtJ, const std::vector<std::string>&
   if (ratio < 1e-2) {  // condition number above 100 with unit-norm columns
     const Eigen::VectorXd v = es.eigenvectors().col(0);
     std::string who;
+    bool friction = false;  // inertial-only directions: the inertial report covers them
     for (int i = 0; i < P; ++i) {
       if (std::abs(v(i)) > 0.3) who += (who.empty() ? "" : ", ") + names[i];
+      friction = friction || (std::abs(v(i)) > 0.3 && !layout.is_inertial(i));
     }
-    out->warnings.push_back("the log cannot separate " + who +
+    if (friction) out->warnings.push_back("the log cannot separate " + who +
                             " (smallest/largest scaled singular value " + fmt(ratio) + ")");
   }
 }
@@ -878,6 +963,8 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
   }
   for (int i = 0; i < P; ++i) {
     for (int j = i + 1; j < P; ++j) {
+      // inertial pairs: the base combinations say which the log separates
+      if (f.layout.is_inertial(i) && f.layout.is_inertial(j)) continue;
       if (std::abs(out->correlation(i, j)) > 0.98) {
         out->warnings.push_back("strong correlation " + fmt(out->correlation(i, j)) + " between " +
                                 names[i] + " and " + names[j]);
@@ -904,7 +991,7 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
     } else if (!(e.std > 0) || !std::isfinite(e.std)) {
       if (out->converged) out->warnings.push_back("std of " + names[i] + " not determined");
       e.std = kNaN;
-    } else if (e.std > std::abs(e.value)) {
+    } else if (e.std > std::abs(e.value) && !f.layout.is_inertial(i)) {
       out->warnings.push_back(names[i] + " is poorly determined (std " + fmt(e.std) + " > value " +
                               fmt(e.value) + ")");
     }
@@ -919,7 +1006,7 @@ void predictions(const Fit& f, IdentifyResult* out) {
   out->predicted_tau1.assign(n, kNaN);
   out->predicted_tau2.assign(n, kNaN);
   Params<double> p = f.scene;
-  f.layout.apply(f.x.data(), &p.friction);
+  f.layout.apply(f.x.data(), &p);
   for (int i = 0; i < n; ++i) {
     Evaluation<double> ev;
     const Status st =
@@ -1083,6 +1170,10 @@ bool start_values(Fit* fp, const std::vector<double>& initial, std::vector<doubl
   ParameterLayout pub = f.layout;
   pub.static_as_excess = false;
   *x0_public = initial.empty() ? default_start(pub) : initial;
+  if (pub.inertia && static_cast<int>(x0_public->size()) == pub.friction_size()) {
+    const std::array<double, kInertialParams> pi = standard_inertial(f.scene);
+    x0_public->insert(x0_public->end(), pi.begin(), pi.end());
+  }
   if (static_cast<int>(x0_public->size()) != P) {
     out->status = Status::Error(StatusCode::kInvalidInput,
                                 "initial values: expected " + std::to_string(P) + " numbers");
@@ -1095,6 +1186,100 @@ bool start_values(Fit* fp, const std::vector<double>& initial, std::vector<doubl
   for (int i = 0; i < P; ++i) x[i] = std::max(x[i], f.layout.lower_bound(i));
   fp->x = x;
   return true;
+}
+
+
+/// The fit's shared state from the options: the internal layout, the scene with the law to fit,
+/// the inertial prior.
+void init_fit(const Params<double>& scene_in, const sim::LoadFunction& loads, const TorqueLog& log,
+              const IdentifyOptions& opt, Fit* f, IdentifyResult* out) {
+  out->layout = opt.layout;
+  out->method = opt.method;
+  out->samples = log.size();
+  f->opt = &opt;
+  f->loads = loads;
+  f->layout = opt.layout;
+  f->layout.static_as_excess = opt.layout.law == FrictionLaw::kStribeck;
+  f->scene = fit_scene(scene_in, f->layout, opt);
+  f->sg = opt.sg;
+  f->eval.friction_tol = 1e-12;
+  f->eval.friction_max_iter = 100;
+  if (f->layout.inertia) f->prior = detail::inertial_prior(scene_in, opt.inertia_prior);
+}
+
+/// The prior's weight before the fit: the logged torque noise (refined after a first solve).
+double initial_prior_scale(const Fit& f) {
+  const double s = std::max(f.noise.torque[0], f.noise.torque[1]);
+  return s > 0 ? s : 1e-3;
+}
+
+/// What the stages after the solve share: the data residuals and their Jacobian at the fit, and
+/// the sensor-noise sensitivities (inverse dynamics).
+struct Analysis {
+  std::vector<double> r;
+  Eigen::MatrixXd J;
+  std::vector<detail::Sensitivity> sens;
+};
+
+/// Data residuals and Jacobian (the prior's rows, added last, left out).
+void data_residuals(ceres::Problem* problem, int P, int m, Analysis* an) {
+  ceres::CRSMatrix crs;
+  raw_residuals(problem, &an->r, &crs);
+  an->r.resize(m);
+  an->J = dense(crs, P).topRows(m);
+}
+
+/// Solves. Group inertia: the prior's weight is then set to the residual's noise level (the torque
+/// noise plus the angle noise through the rates) and, if that differs, the fit is refined.
+bool solve_stage(Fit* f, ceres::Problem* problem, IdentifyResult* out,
+                 ceres::Solver::Summary* summary, Analysis* an) {
+  const bool id = f->opt->method == Method::kInverseDynamics;
+  const int P = f->layout.size();
+  data_residuals(problem, P, out->residuals, an);
+  if (id) rms_pair(an->r, out->rms_torque_residual_initial);
+  solve(f, problem, out, summary);
+  if (!out->status.ok()) return false;
+  if (id) an->sens = noise_sensitivities(*f);
+  if (id && f->layout.inertia) {
+    double floor[2];
+    noise_floor(*f, an->sens, floor);
+    const double s = std::max(floor[0], floor[1]);
+    if (s > 1.2 * f->prior_scale || s < f->prior_scale / 1.2) {
+      f->prior_scale = s;
+      solve(f, problem, out, summary);
+      if (!out->status.ok()) return false;
+      an->sens = noise_sensitivities(*f);
+    }
+  }
+  data_residuals(problem, P, out->residuals, an);
+  return true;
+}
+
+/// Residual levels, covariance (converged solutions only), identifiability, estimates, and the
+/// inertial report.
+void analyse(const Fit& f, const std::vector<double>& x0_public,
+             const ceres::Solver::Summary& summary, Analysis* an, IdentifyResult* out) {
+  const int P = f.layout.size();
+  const bool id = f.opt->method == Method::kInverseDynamics;
+  out->residual_sigma =
+      std::sqrt(2.0 * summary.final_cost / std::max(1, summary.num_residuals - P));
+  if (!id) {
+    out->warnings.push_back(
+        "output-error standard deviations treat the angle residuals as independent; within a "
+        "window they are correlated (they integrate the torque noise), so the reported std "
+        "understate the uncertainty");
+  }
+  if (id) {
+    residual_levels(f, an->r, an->sens, out);
+  } else {
+    rms_pair(an->r, out->rms_angle_residual);
+  }
+  const Eigen::MatrixXd Hp = prior_information(f);
+  covariance(f, an->J, Hp, an->sens, out);
+  const Eigen::MatrixXd Tinv = to_public(f.layout).inverse();
+  identifiability(Tinv.transpose() * (an->J.transpose() * an->J + Hp) * Tinv, f.layout, out);
+  estimates(f, x0_public, out);
+  if (f.layout.inertia) inertial_stage(f, an->J, out);
 }
 
 }  // namespace
@@ -1132,20 +1317,14 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   quiet_solver_logging();
   const auto start = Clock::now();
   IdentifyResult out;
-  out.layout = opt.layout;
-  out.method = opt.method;
-  out.samples = log.size();
   Fit f;
-  f.opt = &opt;
-  f.loads = loads;
-  f.layout = opt.layout;
-  f.layout.static_as_excess = opt.layout.law == FrictionLaw::kStribeck;
-  f.scene = fit_scene(scene_in, f.layout, opt);
-  f.sg = opt.sg;
-  f.eval.friction_tol = 1e-12;
-  f.eval.friction_max_iter = 100;
+  init_fit(scene_in, loads, log, opt, &f, &out);
+  if (f.layout.inertia && opt.method != Method::kInverseDynamics) {
+    out.status = Status::Error(StatusCode::kInvalidInput,
+                               "the inertia group needs the inverse-dynamics method");
+    return out;
+  }
   const int P = f.layout.size();
-  const bool id = opt.method == Method::kInverseDynamics;
   require_samples(log, P + 1, std::to_string(P) + " parameters + 1");
 
   // the log as encoders write it: degrees, wraps, glitches; then rates
@@ -1155,46 +1334,23 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
                                                   : detail::RateSource::kLogged;
   std::vector<double> x0_public;
   if (!start_values(&f, opt.initial, &x0_public, &out)) return out;
+  f.prior_scale = initial_prior_scale(f);
   if (!rates_window_and_samples(log, &f, &out)) return out;
   ceres::Problem problem;
   if (!build_problem(&f, &out, &problem)) {
     out.status = Status::Error(StatusCode::kInvalidInput, "unsupported parameter count");
     return out;
   }
-  std::vector<double> r;
-  if (id && raw_residuals(&problem, &r)) rms_pair(r, out.rms_torque_residual_initial);
   ceres::Solver::Summary summary;
-  solve(&f, &problem, &out, &summary);
-  if (!out.status.ok()) return out;
-
-  // residual levels, covariance (converged solutions only), identifiability, estimates
-  out.residual_sigma = std::sqrt(2.0 * summary.final_cost / std::max(1, summary.num_residuals - P));
-  if (!id) {
-    out.warnings.push_back(
-        "output-error standard deviations treat the angle residuals as independent; within a "
-        "window they are correlated (they integrate the torque noise), so the reported std "
-        "understate the uncertainty");
-  }
-  ceres::CRSMatrix crs;
-  raw_residuals(&problem, &r, &crs);
-  const Eigen::MatrixXd J = dense(crs, P);
-  std::vector<detail::Sensitivity> sens;
-  if (id) {
-    sens = noise_sensitivities(f);
-    residual_levels(f, r, sens, &out);
-  } else {
-    rms_pair(r, out.rms_angle_residual);
-  }
-  covariance(f, J, sens, &out);
-  const Eigen::MatrixXd Tinv = to_public(f.layout).inverse();
-  identifiability(Tinv.transpose() * (J.transpose() * J) * Tinv, f.layout.names(), &out);
-  estimates(f, x0_public, &out);
+  Analysis an;
+  if (!solve_stage(&f, &problem, &out, &summary, &an)) return out;
+  analyse(f, x0_public, summary, &an, &out);
   out.fitted = scene_in;
-  f.layout.apply(f.x.data(), &out.fitted.friction);
+  f.layout.apply(f.x.data(), &out.fitted);
   predictions(f, &out);
-  if (!id) output_error_levels(f, &out);
-  if (id && opt.estimate_delay) {
-    estimate_delay(f, J, r, sens, &out);
+  if (opt.method == Method::kOutputError) output_error_levels(f, &out);
+  if (opt.method == Method::kInverseDynamics && opt.estimate_delay) {
+    estimate_delay(f, an.J, an.r, an.sens, &out);
     const double dt = log.duration() / std::max(1, log.size() - 1);
     if (std::abs(out.delay_s) > kDelaySignificance * out.delay_std_s &&
         std::abs(out.delay_s) > 0.1 * dt) {
@@ -1218,6 +1374,8 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
   const int n = log.size();
   v.full_theta1.assign(n, kNaN);
   v.full_theta2.assign(n, kNaN);
+  v.window_theta1.assign(n, kNaN);
+  v.window_theta2.assign(n, kNaN);
   if (n < 2) return v;
   auto run = [&](int i0, int i1, bool full, double* s2, int* count) {
     sim::Options o = window_sim_options(rtol);
@@ -1248,9 +1406,13 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
       s2[0] += e1 * e1;
       s2[1] += e2 * e2;
       ++*count;
+      (full ? v.full_theta1 : v.window_theta1)[i] = interp(ts, a, tt);
+      (full ? v.full_theta2 : v.window_theta2)[i] = interp(ts, b, tt);
       if (full) {
-        v.full_theta1[i] = interp(ts, a, tt);
-        v.full_theta2[i] = interp(ts, b, tt);
+        if (std::isnan(v.divergence_time_s) &&
+            std::max(std::abs(e1), std::abs(e2)) > Validation::kDivergedAngle) {
+          v.divergence_time_s = tt;
+        }
         v.full_max[0] = std::max(v.full_max[0], std::abs(e1));
         v.full_max[1] = std::max(v.full_max[1], std::abs(e2));
       }

@@ -13,7 +13,7 @@ bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layo
   Params<J6> p = scene.template cast<J6>();
   std::vector<J6> xj(layout.size());
   for (int i = 0; i < layout.size(); ++i) xj[i] = J6(x[i]);
-  layout.apply(xj.data(), &p.friction);
+  layout.apply(xj.data(), &p);
   const double v[6] = {s.th1, s.th2, s.w1, s.w2, s.a1, s.a2};
   J6 in[6];
   for (int k = 0; k < 6; ++k) in[k] = J6(v[k], k);

@@ -63,6 +63,8 @@ py::dict validation_dict(const id::Validation& v) {
   d["windowed_rms_angle_error"] = pair(v.window_rms);
   d["simulated_theta1"] = to_array(v.full_theta1);
   d["simulated_theta2"] = to_array(v.full_theta2);
+  d["windowed_theta1"] = to_array(v.window_theta1);
+  d["windowed_theta2"] = to_array(v.window_theta2);
   return d;
 }
 

@@ -39,6 +39,15 @@ run_fivebar(2 "paper.yaml: friction.coulomb: expected 1 or 5 numbers, got 4"
             simulate ${paper} --set "friction.coulomb=[1,2,3,4]" --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "paper.yaml: simulation.rtoll: unknown key"
             simulate ${paper} --set simulation.rtoll=1e-8 --out ${WORK_DIR}/out_bad)
+# identify --estimate: an unknown group, a prior <= 0 (the log is never read)
+set(log ${SOURCE_DIR}/datasets/logs/paper_rates.csv)
+run_fivebar(2 "command line: --estimate: unknown group 'inertias'"
+            identify ${paper} --log ${log} --estimate friction,inertias --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --inertia-prior: must be > 0"
+            identify ${paper} --log ${log} --estimate friction,inertia --inertia-prior 0
+            --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --inertia-prior: must be > 0"
+            identify ${paper} --log ${log} --inertia-prior -0.1 --out ${WORK_DIR}/out_bad)
 if(EXISTS ${WORK_DIR}/out_bad)
   message(FATAL_ERROR "a run rejected for bad input created its output directory")
 endif()

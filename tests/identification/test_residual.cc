@@ -9,6 +9,7 @@
 
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
+#include "random_samples.h"
 
 namespace fivebar::identification {
 namespace {
@@ -16,38 +17,8 @@ namespace {
 // central differences with step h have error ~ h^2 |r'''| + eps |r| / h; h = 1e-5 relative
 constexpr double kDerivTol = 1e-6;
 
-Loads<double> paper_loads(double t) {
-  return {2 + 5 * std::sin(8 * M_PI * t), 3 + 5 * std::cos(M_PI * t), 6.0, 50.0, M_PI / 2};
-}
-
-/// Random samples: poses, rates (away from 0 so exact sign is fixed), accelerations; torques
-/// from the inverse dynamics at `truth` plus an offset so the residual is not zero.
-std::vector<Sample> random_samples(const Params<double>& truth, int n) {
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> angle(0.5, 2.5), rate(-8, 8), acc(-50, 50);
-  std::vector<Sample> out;
-  while (static_cast<int>(out.size()) < n) {
-    Sample s;
-    s.t = 0.1 * out.size();
-    s.th1 = angle(rng);
-    s.th2 = angle(rng);
-    s.w1 = rate(rng);
-    s.w2 = rate(rng);
-    s.a1 = acc(rng);
-    s.a2 = acc(rng);
-    s.loads = paper_loads(s.t);
-    Evaluation<double> ev;
-    if (!inverse_dynamics(truth, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr,
-                          EvalOptions{}, &ev)
-             .ok()) {
-      continue;
-    }
-    s.tau1 = ev.M1 + 0.3;
-    s.tau2 = ev.M2 - 0.2;
-    out.push_back(s);
-  }
-  return out;
-}
+using testing::paper_loads;
+using testing::random_samples;
 
 template <int P>
 void check_jet_against_differences(const ParameterLayout& layout, double smoothing) {

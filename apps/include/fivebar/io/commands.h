@@ -18,6 +18,9 @@ namespace fivebar::io {
 /// `fivebar identify` options (see `fivebar identify --help`), with the command line's defaults.
 struct IdentifySettings {
   std::string method = "inverse-dynamics", law = "coulomb_viscous", loss = "none";
+  /// --estimate: parameter groups, comma-separated (friction, inertia)
+  std::string estimate = "friction";
+  double inertia_prior = 0.2;  ///< --inertia-prior: relative std of the inertial prior
   bool per_joint = false, estimate_rates = false, start_from_scene = false;
   /// log conditioning and error bars (docs/identification.md): --sg-window given (else the
   /// window is chosen from the log), --no-unwrap, --keep-glitches, --classical-std, --no-delay

@@ -42,7 +42,12 @@ bool parse_loss(const std::string& name, Loss* out);
 const char* loss_name(Loss l);
 
 struct IdentifyOptions {
+  /// the parameter groups (friction; with layout.inertia the 16 standard inertial parameters)
   ParameterLayout layout;
+  /// group inertia: relative std of the Gaussian prior that holds the inertial parameters the
+  /// log cannot determine at the scene's values (m: relative * m; m c_x, m c_y: relative * m *
+  /// link length; J_O: relative * J_O). Must be > 0.
+  double inertia_prior = 0.2;
   Method method = Method::kInverseDynamics;
   Loss loss = Loss::kNone;
   double loss_scale = 0.1;  ///< [N m] (inverse dynamics) or [rad] (output error): Huber/Cauchy a
@@ -72,7 +77,8 @@ struct IdentifyOptions {
   double rest_rate_threshold = -1, rest_acceleration_threshold = -1;
   int max_iterations = 100;
   int num_threads = 1;
-  /// start values, in layout order; empty: the scene's values (0.1 / 0.01 / ... where zero)
+  /// start values of the friction coefficients, in layout order (or of every parameter);
+  /// empty: neutral values (0.1 / 0.01 / ...). The inertial parameters start at the scene's.
   std::vector<double> initial;
   // output error
   double window_s = 0.2;   ///< length of each simulated window [s]
@@ -97,6 +103,25 @@ struct ParameterEstimate {
   bool at_bound = false;
 };
 
+/// Group inertia: what the log determines of the 16 standard inertial parameters.
+struct InertialReport {
+  bool estimated = false;
+  double prior_relative = 0;
+  /// singular values of the regressor d r / d pi scaled by the prior std and the noise level
+  /// (largest first): above 3, the log determines that direction to better than a third of its
+  /// prior std; below 1, the prior holds it
+  std::vector<double> information;
+  int rank = 0;  ///< directions the log determines (information > 3)
+  /// the base (identifiable) combinations, e.g. "J_1 + 0.0064 m_3", with value and std
+  struct Combination {
+    std::string text;
+    double value = 0, std = 0;
+  };
+  std::vector<Combination> base;
+  std::vector<std::string> at_prior;  ///< parameters left at their prior (posterior std > prior/2)
+  bool consistent = true;             ///< every link m > 0 and inertia about the COM > 0
+};
+
 /// Identification outcome. `status` not ok: the numerics failed (values may be partial).
 struct IdentifyResult {
   Status status;
@@ -104,6 +129,9 @@ struct IdentifyResult {
   Method method = Method::kInverseDynamics;
   std::vector<ParameterEstimate> parameters;
   Eigen::MatrixXd covariance;   ///< s^2 (J^T J)^-1 [units of the parameters squared]
+  /// per parameter (internal layout = public except Stribeck's static_coulomb): the Cramer-Rao
+  /// bound for white torque noise at the logged level, the angle noise ignored; NaN when unknown
+  std::vector<double> cramer_rao_std;
   Eigen::MatrixXd correlation;  ///< covariance normalised by the standard deviations
   /// singular values of the Jacobian with columns scaled to unit norm (largest first): a ratio
   /// near 0 means a combination of parameters the log cannot determine
@@ -150,7 +178,8 @@ struct IdentifyResult {
   /// dynamics of the fitted scene at every sample; NaN where it failed), and whether used
   std::vector<double> omega1, omega2, alpha1, alpha2, predicted_tau1, predicted_tau2;
   std::vector<char> used;
-  Params<double> fitted;  ///< the scene's parameters with the identified friction
+  Params<double> fitted;  ///< the scene's parameters with the identified friction (and links)
+  InertialReport inertial;  ///< group inertia
 };
 
 /// Identifies the friction coefficients of `scene` from `log`. `loads` gives the scene's
@@ -174,6 +203,13 @@ struct Validation {
   double window_rms[2] = {0, 0};  ///< [rad] runs restarted from the logged state every window
   std::vector<double> full_theta1,
       full_theta2;          ///< simulated at the log's times (NaN after a stop)
+  /// the windowed runs at the log's times (each window restarted from the logged state; NaN
+  /// where no window ran)
+  std::vector<double> window_theta1, window_theta2;
+  /// when the full run first departs from the log by more than kDivergedAngle (NaN: never):
+  /// on chaotic motion any model or noise error grows until the run leaves the log
+  double divergence_time_s = std::numeric_limits<double>::quiet_NaN();
+  static constexpr double kDivergedAngle = 0.1;  ///< [rad]
   int windows_skipped = 0;  ///< windows not run: the time budget was spent
 };
 

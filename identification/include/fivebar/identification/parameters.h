@@ -1,9 +1,14 @@
-// The friction coefficients that identification estimates, and how they map onto the model.
+// The parameters that identification estimates, in groups, and how they map onto the model:
+// the friction coefficients, then (group `inertia`) the 16 standard inertial parameters of the
+// links (model/inertial.h). `fivebar excite` designs excitations for the same groups.
 #pragma once
 
+#include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
+#include "fivebar/model/inertial.h"
 #include "fivebar/model/params.h"
 
 namespace fivebar::identification {
@@ -12,9 +17,15 @@ namespace fivebar::identification {
 /// static_coulomb, stribeck_velocity (the exponent stays at the scene's value). Shared: one
 /// value per group for all five joints (names `coulomb`, `viscous`, ...); per joint: five per
 /// group (`coulomb_1`..`coulomb_5` in joint order O, B, C, D, D0).
+///
+/// Groups and vector order: friction first (always, size friction_size()), then, when `inertia`,
+/// the 16 standard inertial parameters m_1, mx_1, my_1, J_1, ..., J_4 (inertial.h: per link
+/// mass [kg], first moments m c_x, m c_y [kg m] in the link frame, inertia about the proximal
+/// joint [kg m^2]).
 struct ParameterLayout {
   FrictionLaw law = FrictionLaw::kCoulombViscous;
   bool per_joint = false;
+  bool inertia = false;  ///< group `inertia`: the 16 standard inertial parameters follow
   /// Stribeck: the static_coulomb entries of the vector hold the excess static_coulomb - coulomb
   /// (>= 0 by its bound), so that a fit cannot return static friction below kinetic friction.
   /// identify() solves in this form and reports static_coulomb itself.
@@ -22,7 +33,10 @@ struct ParameterLayout {
 
   int groups() const { return law == FrictionLaw::kStribeck ? 4 : 2; }
   int per_group() const { return per_joint ? kJoints : 1; }
-  int size() const { return groups() * per_group(); }
+  int friction_size() const { return groups() * per_group(); }
+  int inertia_offset() const { return friction_size(); }
+  int size() const { return friction_size() + (inertia ? kInertialParams : 0); }
+  bool is_inertial(int i) const { return inertia && i >= inertia_offset(); }
 
   /// Names of the parameters (interfaces.md: coulomb, viscous; coulomb_1..5, viscous_1..5).
   std::vector<std::string> names() const {
@@ -35,11 +49,47 @@ struct ParameterLayout {
                                 : std::string(kGroups[g]));
       }
     }
+    if (inertia) {
+      for (int i = 0; i < kInertialParams; ++i) out.push_back(inertial_name(i));
+    }
     return out;
   }
 
-  /// Lower bound of each parameter: 0 for the coefficients, a small positive Stribeck velocity.
-  double lower_bound(int i) const { return i / per_group() == 3 ? 1e-4 : 0.0; }
+  /// Unit of parameter i.
+  std::string unit(int i) const {
+    if (is_inertial(i)) return inertial_unit(i - inertia_offset());
+    const int g = i / per_group();
+    return g == 1 ? "N m s/rad (per N m of load)" : g == 3 ? "rad/s" : "1 (per N m of load)";
+  }
+
+  /// Lower bound of each parameter: 0 for the friction coefficients, a small positive Stribeck
+  /// velocity, a small positive mass (m > 0); the first moments and J_O are unbounded (the
+  /// inertia about the COM is kept > 0 by identify()'s consistency term).
+  double lower_bound(int i) const {
+    if (is_inertial(i)) {
+      return (i - inertia_offset()) % kInertialPerLink == 0 ? 1e-6
+                                                            : -std::numeric_limits<double>::max();
+    }
+    return i / per_group() == 3 ? 1e-4 : 0.0;
+  }
+
+  /// Writes the parameter vector x into `p`: its friction (law set to `law`) and, with the
+  /// inertia group, its links' mass, COM and inertia.
+  template <typename T>
+  void apply(const T* x, Params<T>* p) const {
+    apply(x, &p->friction);
+    if (inertia) set_standard_inertial(x + inertia_offset(), p);
+  }
+
+  /// The parameter vector of `p` (friction as extract(p.friction), then its inertial parameters).
+  std::vector<double> extract(const Params<double>& p) const {
+    std::vector<double> x = extract(p.friction);
+    if (inertia) {
+      const std::array<double, kInertialParams> pi = standard_inertial(p);
+      x.insert(x.end(), pi.begin(), pi.end());
+    }
+    return x;
+  }
 
   /// Writes the parameter vector x into the friction of `fp` (law set to `law`).
   template <typename T>
@@ -47,7 +97,7 @@ struct ParameterLayout {
     fp->law = law;
     const std::array<std::array<T, kJoints>*, 4> dst = {
         &fp->coulomb, &fp->viscous, &fp->static_coulomb, &fp->stribeck_velocity};
-    const int n = size();
+    const int n = friction_size();
     for (int i = 0; i < n; ++i) {
       // parameter i sets group i / per_group() at one joint (per joint) or at all five
       std::array<T, kJoints>& d = *dst[i / per_group()];
@@ -61,9 +111,9 @@ struct ParameterLayout {
     }
   }
 
-  /// The parameter vector of `fp` (shared: the mean over the joints).
+  /// The friction part of the parameter vector of `fp` (shared: the mean over the joints).
   std::vector<double> extract(const FrictionParams<double>& fp) const {
-    std::vector<double> x(size(), 0.0);
+    std::vector<double> x(friction_size(), 0.0);
     const std::array<const std::array<double, kJoints>*, 4> src = {
         &fp.coulomb, &fp.viscous, &fp.static_coulomb, &fp.stribeck_velocity};
     for (int g = 0; g < groups(); ++g) {
@@ -77,6 +127,25 @@ struct ParameterLayout {
     return x;
   }
 };
+
+/// Parses a comma-separated list of groups (`friction`, `inertia`) into `layout`; friction is
+/// always estimated. False on an unknown or empty group, naming it in `bad`.
+inline bool parse_groups(const std::string& list, ParameterLayout* layout, std::string* bad) {
+  layout->inertia = false;
+  size_t pos = 0;
+  while (true) {
+    const size_t comma = list.find(',', pos);
+    const std::string g = list.substr(pos, comma == std::string::npos ? comma : comma - pos);
+    if (g == "inertia") {
+      layout->inertia = true;
+    } else if (g != "friction") {
+      *bad = g;
+      return false;
+    }
+    if (comma == std::string::npos) return true;
+    pos = comma + 1;
+  }
+}
 
 /// Parses `coulomb_viscous` or `stribeck`; false otherwise.
 inline bool parse_law(const std::string& name, FrictionLaw* law) {

@@ -1,10 +1,14 @@
 // Inverse-dynamics residual of one log sample, templated on the scalar for ceres::Jet.
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
+#include <cmath>
 
 #include "fivebar/identification/parameters.h"
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/friction.h"
+#include "fivebar/model/inertial.h"
 #include "fivebar/model/params.h"
 
 namespace fivebar::identification {
@@ -30,7 +34,7 @@ class InverseDynamicsResidual {
   template <typename T>
   bool operator()(const T* x, T* r) const {
     Params<T> p = scene_.template cast<T>();
-    layout_.apply(x, &p.friction);
+    layout_.apply(x, &p);
     Evaluation<T> ev;
     const Status st = inverse_dynamics(p, s_.loads.template cast<T>(), T(s_.th1), T(s_.th2),
                                        T(s_.w1), T(s_.w2), T(s_.a1), T(s_.a2), nullptr, eval_, &ev);
@@ -47,6 +51,108 @@ class InverseDynamicsResidual {
   ParameterLayout layout_;
   Sample s_;
   EvalOptions eval_;
+};
+
+/// The structure of one sample's inverse dynamics, in which the residual is cheap to evaluate.
+/// For the sample's motion the reactions are affine in the standard inertial parameters pi and
+/// in the friction torques Mf, and so are the actuator torques:
+///   F = A pi + b + dF Mf,   (M1, M2) = Y pi + c + G Mf,   Mf_k = phi_k(x) N_k,  N_k = |F_k|,
+/// with phi_k = r_k f_k(w_k) the friction law at the sample's relative rate w_k and Coulomb sign.
+/// The reaction/friction loop is then a fixed point on N in five numbers, with no reaction
+/// solves: the Jets carry only the active parameters through it.
+struct SampleStructure {
+  Eigen::Matrix<double, 10, kInertialParams> A;
+  Eigen::Matrix<double, 10, 1> b;
+  Eigen::Matrix<double, 10, kJoints> dF;
+  Eigen::Matrix<double, 2, kInertialParams> Y;
+  Eigen::Vector2d c;
+  Eigen::Matrix<double, 2, kJoints> G;
+  std::array<int, kJoints> slip{};  ///< Coulomb sign per joint (kStuck: no friction torque)
+  std::array<double, kJoints> w{};  ///< relative rates [rad/s]
+};
+
+/// The structure of sample s in `scene` (its pin radii, smoothing, geometry and loads; pi and
+/// the coefficients free). False where it cannot be read off reliably (a joint whose
+/// friction-free reaction nearly vanishes, or an evaluation failure): use
+/// InverseDynamicsResidual there.
+bool sample_structure(const Params<double>& scene, const Sample& s, const EvalOptions& eval,
+                      SampleStructure* out);
+
+/// The same residual as InverseDynamicsResidual, from the sample's structure: equal to the
+/// loop tolerance, and an order of magnitude cheaper with Jets.
+class StructuredResidual {
+ public:
+  StructuredResidual(const Params<double>& scene, const ParameterLayout& layout,
+                     const SampleStructure& st, const Sample& s, const EvalOptions& eval)
+      : friction_(scene.friction),
+        pi0_(standard_inertial(scene)),
+        layout_(layout),
+        st_(st),
+        tau_{s.tau1, s.tau2},
+        tol_(eval.friction_tol),
+        max_iter_(eval.friction_max_iter) {
+    friction_.law = layout.law;
+  }
+
+  template <typename T>
+  bool operator()(const T* x, T* r) const {
+    using std::sqrt;
+    FrictionParams<T> fp = friction_.template cast<T>();
+    layout_.apply(x, &fp);
+    std::array<T, kInertialParams> pi;
+    for (int i = 0; i < kInertialParams; ++i) {
+      pi[i] = layout_.inertia ? x[layout_.inertia_offset() + i] : T(pi0_[i]);
+    }
+    std::array<T, kJoints> phi;
+    for (int j = 0; j < kJoints; ++j) {
+      phi[j] = st_.slip[j] == kStuck
+                   ? T(0)
+                   : fp.pin_radius[j] * friction_law(fp, j, T(st_.w[j]), st_.slip[j]);
+    }
+    std::array<T, 10> F0;
+    for (int a = 0; a < 10; ++a) {
+      F0[a] = T(st_.b(a));
+      for (int i = 0; i < kInertialParams; ++i) F0[a] += st_.A(a, i) * pi[i];
+    }
+    std::array<T, kJoints> N, Mf;
+    for (int k = 0; k < kJoints; ++k) N[k] = sqrt(F0[2 * k] * F0[2 * k] + F0[2 * k + 1] * F0[2 * k + 1]);
+    bool converged = false;
+    for (int it = 0; it < max_iter_ && !converged; ++it) {
+      for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j];
+      double change = 0, scale = 1e-300;
+      for (int k = 0; k < kJoints; ++k) {
+        T fx = F0[2 * k], fy = F0[2 * k + 1];
+        for (int j = 0; j < kJoints; ++j) {
+          fx += st_.dF(2 * k, j) * Mf[j];
+          fy += st_.dF(2 * k + 1, j) * Mf[j];
+        }
+        const T n = sqrt(fx * fx + fy * fy);
+        change = std::max(change, std::abs(value_of(n) - value_of(N[k])));
+        scale = std::max(scale, std::abs(value_of(n)));
+        N[k] = n;
+      }
+      if (!std::isfinite(change)) return false;
+      converged = change <= tol_ * scale;
+    }
+    if (!converged) return false;  // Ceres rejects the step (the loop does not contract here)
+    for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j];
+    for (int a = 0; a < 2; ++a) {
+      T m = T(st_.c(a));
+      for (int i = 0; i < kInertialParams; ++i) m += st_.Y(a, i) * pi[i];
+      for (int j = 0; j < kJoints; ++j) m += st_.G(a, j) * Mf[j];
+      r[a] = T(tau_[a]) - m;
+    }
+    return true;
+  }
+
+ private:
+  FrictionParams<double> friction_;
+  std::array<double, kInertialParams> pi0_;
+  ParameterLayout layout_;
+  SampleStructure st_;
+  double tau_[2];
+  double tol_;
+  int max_iter_;
 };
 
 }  // namespace fivebar::identification

@@ -1,0 +1,45 @@
+// Internal to identification: the inertial group (ParameterLayout::inertia). The prior that holds
+// what the log cannot determine at the scene's values, the physical-consistency term, and the
+// base (identifiable) combinations of the 16 standard inertial parameters.
+#pragma once
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "fivebar/identification/identify.h"
+#include "fivebar/model/inertial.h"
+
+namespace fivebar::identification::detail {
+
+/// Gaussian prior on the standard inertial parameters: centre the scene's values, std
+/// `relative` times a per-link scale (m: m; mx, my: m times the link length; J: J_O), so a
+/// first moment that is 0 in the scene still has a prior of the size of the link.
+struct InertialPrior {
+  std::array<double, kInertialParams> centre{}, sigma{};
+  /// the consistency term keeps the inertia about each link's COM above this [kg m^2]
+  std::array<double, kLinks> min_com_inertia{};
+};
+InertialPrior inertial_prior(const Params<double>& scene, double relative);
+
+/// Residuals (16 prior + 4 consistency) on the inertial part of the parameter vector (size P,
+/// inertial parameters from `offset`): r_i = s (pi_i - centre_i) / sigma_i, s = *noise_scale
+/// (the torque residual's noise level, so the prior weighs as 1/sigma^2 against the data), and
+/// per link a stiff hinge that is 0 while the inertia about the COM stays above its minimum.
+/// `noise_scale` is read at every evaluation: identify() refines it after a first solve.
+ceres::CostFunction* inertial_prior_cost(const InertialPrior& prior, int P, int offset,
+                                         const double* noise_scale);
+
+/// Posterior analysis of the inertial parameters: the regressor W = d r / d pi (data rows), the
+/// prior std and the noise level s. Directions whose prior-scaled singular value
+/// (sigma_k(W diag(sigma) / s)) is above kDeterminedRatio are determined by the log; the base
+/// combinations are read off a column-pivoted QR of the scaled regressor at that rank.
+constexpr double kDeterminedRatio = 3.0;
+void inertial_report(const Eigen::MatrixXd& W, const InertialPrior& prior, double s,
+                     const std::vector<double>& pi, const Eigen::MatrixXd& covariance,
+                     InertialReport* out);
+
+}  // namespace fivebar::identification::detail
