@@ -17,6 +17,8 @@
 #include "fivebar/trajectory/sweep.h"
 #include "fivebar/trajectory/tasks.h"
 
+#include "paper.h"
+
 namespace fivebar::trajectory {
 namespace {
 
@@ -28,16 +30,10 @@ const std::array<double, 2> kStart = {M_PI / 2, M_PI / 2};
 
 // loads of the paper scene other than the motors: M3 = 6 N m, F = 50 N at pi/2 from link 3
 sim::LoadFunction paper_loads() {
-  return [](double) {
-    Loads<double> L;
-    L.M3 = 6.0;
-    L.F = 50.0;
-    L.F_angle = M_PI / 2;
-    return L;
-  };
+  return [](double) { return testing::paper_static_loads(); };
 }
 
-sim::Initial paper_initial() { return {M_PI / 2, M_PI / 2, 0.0, 0.0}; }
+using testing::paper_initial;
 
 TEST(BSpline, RestToRestEndsAndPartitionOfUnity) {
   // ends fixed at start / goal with zero rate and acceleration, for any inner control points

@@ -6,18 +6,9 @@
 #include <vector>
 
 #include "fivebar/sim/simulator.h"
+#include "fivebar/studies/types.h"
 
 namespace fivebar::studies {
-
-// the simulation types the studies are made of
-using sim::Method;
-using sim::Row;
-using sim::Stats;
-using sim::Options;
-using sim::Result;
-using sim::LoadFunction;
-using sim::Initial;
-using sim::kAllMethods;
 
 /// How the Coulomb sign is integrated.
 enum class Treatment : int {

@@ -1,0 +1,18 @@
+// The simulation types the numerics studies (accuracy, stress) are made of.
+#pragma once
+
+#include "fivebar/sim/simulator.h"
+
+namespace fivebar::studies {
+
+// the simulation types the studies are made of
+using sim::Method;
+using sim::Row;
+using sim::Stats;
+using sim::Options;
+using sim::Result;
+using sim::LoadFunction;
+using sim::Initial;
+using sim::kAllMethods;
+
+}  // namespace fivebar::studies
