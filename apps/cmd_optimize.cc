@@ -210,6 +210,7 @@ int run(const Args& args) {
 
 RunFunction setup(CLI::App* app) {
   auto args = std::make_shared<Args>();
+  args->settings.refine = true;  // the optimum of the problem, not of the basis (--no-refine)
   add_scene_options(app, &args->scene, "optimize");
   app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");
@@ -229,6 +230,12 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--path-step", args->settings.path_step,
                   "grid step [rad] of the path search for a feasible start when the "
                   "minimum-jerk motion cannot close (default 0.05)");
+  app->add_flag("--no-refine", [args](int64_t) { args->settings.refine = false; },
+                "no refinement of the control points after the first solve");
+  app->add_flag("--no-continuation", [args](int64_t) { args->settings.continuation = false; },
+                "no continuation on the smoothing velocity towards the exact law");
+  app->add_option("--refine-tol", args->settings.refine_tol,
+                  "relative energy change that ends the refinement (default 1e-3)");
   app->add_flag("--no-validate", args->no_validate,
                 "skip the forward simulation of the optimal torques (miss_distance)");
   app->add_flag("--no-plots", args->no_plots, "do not draw figures");

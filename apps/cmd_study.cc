@@ -16,6 +16,8 @@
 #include <unistd.h>
 
 #include "fivebar/io/command.h"
+#include "fivebar/io/commands.h"
+#include "fivebar/io/csv.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
@@ -42,6 +44,7 @@ struct Args {
   double path_step = 0.05;
   bool validate = false;
   bool no_plots = false;
+  bool continuation = false, refine = false;  // of the inner solves (see optimize)
 };
 
 std::string num(double v) { return format_double(v); }  // shortest round-trip, "nan"
@@ -124,12 +127,6 @@ Outcome summarize(const std::vector<Design>& designs,
   return o;
 }
 
-std::string quoted(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
-
 // study.csv: one row per design, with the reason for designs that cannot do every task
 std::string study_csv(const std::vector<trajectory::Sweep>& sweeps,
                       const std::vector<Design>& designs,
@@ -162,7 +159,7 @@ std::string study_csv(const std::vector<trajectory::Sweep>& sweeps,
     csv += std::to_string(d) + values + "," + status + "," + std::to_string(ok) + "," +
            num(o.totals[d]) + "," + num(base_total) + "," +
            num(100.0 * (1.0 - o.totals[d] / base_total)) + energies + statuses + "," +
-           (static_cast<int>(d) == o.best ? "1" : "0") + "," + quoted(o.reasons[d]) + "\n";
+           (static_cast<int>(d) == o.best ? "1" : "0") + "," + csv_quote(o.reasons[d]) + "\n";
   }
   return csv;
 }
@@ -264,12 +261,7 @@ void report(const std::vector<trajectory::Sweep>& sweeps, const std::vector<Desi
 int run(const Args& args) {
   const std::vector<trajectory::Sweep> sweeps = parse_sweeps(args.sweeps);
   load_scene(args.scene.scene, args.scene.sets);  // bad input in the base scene: exit 2 here
-  std::vector<trajectory::TaskSpec> tasks;
-  try {
-    tasks = trajectory::load_tasks(args.tasks);
-  } catch (const trajectory::TaskFileError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
-  }
+  const std::vector<trajectory::TaskSpec> tasks = read_tasks(args.tasks);
   trajectory::BatchOptions options;
   if (!trajectory::parse_method(args.method, &options.optimizer.method)) {
     throw InputError("command line", "--method", "'" + args.method + "' is not slsqp, mma or ccsaq");
@@ -280,6 +272,9 @@ int run(const Args& args) {
   }
   options.path.step = args.path_step;
   options.validate = args.validate;
+  if (!args.continuation) options.refine.continuation.clear();
+  if (args.refine) options.refine.control_points = trajectory::kRefineLevels;
+  options.refine.enabled = args.continuation || args.refine;
   const std::vector<Design> designs = make_designs(args, sweeps);
   const int count = static_cast<int>(designs.size());
 
@@ -337,6 +332,10 @@ RunFunction setup(CLI::App* app) {
                   "grid step [rad] of the path search (see optimize; default 0.05)");
   app->add_flag("--validate", args->validate,
                 "simulate the optimal torques forward (miss_distance in study_tasks.csv)");
+  app->add_flag("--continuation", args->continuation,
+                "inner solves continue towards the exact friction law (see optimize)");
+  app->add_flag("--refine", args->refine,
+                "inner solves refine their control points (see optimize; slow)");
   app->add_flag("--no-plots", args->no_plots, "do not draw the heatmap");
   return [args] { return run(*args); };
 }

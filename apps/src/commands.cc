@@ -4,6 +4,7 @@
 
 #include "fivebar/io/errors.h"
 #include "fivebar/io/loads.h"
+#include "fivebar/io/tasks_file.h"
 
 namespace fivebar::io {
 
@@ -101,6 +102,13 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
   if (!(a.path_step >= 1e-3 && a.path_step <= 0.5)) {
     throw InputError(kFlags, "--path-step", "expected a number in [0.001, 0.5] rad");
   }
+  if (!(a.refine_tol > 0 && a.refine_tol < 1)) {
+    throw InputError(kFlags, "--refine-tol", "expected a number in (0, 1)");
+  }
+  o.refine.tol = a.refine_tol;
+  if (a.refine) o.refine.control_points = trajectory::kRefineLevels;
+  if (!a.continuation) o.refine.continuation.clear();
+  o.refine.enabled = a.refine || a.continuation;
   o.path.step = a.path_step;
   o.optimizer.global = a.global;
   o.optimizer.starts = a.starts;
@@ -111,13 +119,7 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
   return o;
 }
 
-std::vector<trajectory::TaskSpec> read_tasks(const std::string& path) {
-  try {
-    return trajectory::load_tasks(path);
-  } catch (const trajectory::TaskFileError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
-  }
-}
+std::vector<trajectory::TaskSpec> read_tasks(const std::string& path) { return load_tasks(path); }
 
 Status task_rows(const Scene& scene, const trajectory::TaskResult& r,
                  const trajectory::BatchOptions& options, std::vector<sim::Row>* optimal,

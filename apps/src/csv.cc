@@ -61,4 +61,10 @@ CsvTable read_csv(const std::string& path) {
   return table;
 }
 
+std::string csv_quote(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
 }  // namespace fivebar::io

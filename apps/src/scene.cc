@@ -5,6 +5,7 @@
 
 #include "fivebar/io/command.h"
 
+#include "fivebar/model/friction.h"
 #include "fivebar/model/kinematics.h"
 
 #include <yaml-cpp/yaml.h>
@@ -43,12 +44,13 @@ enum class Kind {
 };
 
 struct Field {
-  const char* key;  // dotted; "#" stands for a link index
+  std::string key;  // dotted; "#" stands for a link index
   Kind kind;
 };
 
-// every key a scene may contain (interfaces.md, scene.h)
-constexpr Field kSchema[] = {
+// every key a scene may contain (interfaces.md, scene.h), except the friction coefficients,
+// which come from the friction-law descriptors (friction.h): see schema()
+const Field kBaseSchema[] = {
     {"mechanism", Kind::kSection},
     {"mechanism.ground_length", Kind::kNumber},
     {"mechanism.links", Kind::kLinkList},
@@ -64,14 +66,6 @@ constexpr Field kSchema[] = {
     {"friction", Kind::kSection},
     {"friction.model", Kind::kName},
     {"friction.pin_radius", Kind::kNumberOr5},
-    {"friction.coulomb", Kind::kNumberOr5},
-    {"friction.viscous", Kind::kNumberOr5},
-    {"friction.static_coulomb", Kind::kNumberOr5},
-    {"friction.stribeck_velocity", Kind::kNumberOr5},
-    {"friction.stribeck_exponent", Kind::kNumberOr5},
-    {"friction.sigma0", Kind::kNumberOr5},
-    {"friction.sigma1", Kind::kNumberOr5},
-    {"friction.sigma2", Kind::kNumberOr5},
     {"friction.smoothing_velocity", Kind::kNumber},
     {"loads", Kind::kSection},
     {"loads.M1", Kind::kExpression},
@@ -101,8 +95,24 @@ constexpr Field kSchema[] = {
     {"simulation.rest_acceleration_threshold", Kind::kNumber},
 };
 
+// the whole schema: the base keys with the laws' coefficients after friction.pin_radius
+const std::vector<Field>& schema() {
+  static const std::vector<Field> fields = [] {
+    std::vector<Field> out;
+    for (const Field& f : kBaseSchema) {
+      out.push_back(f);
+      if (f.key != "friction.pin_radius") continue;
+      for (const CoefficientInfo& c : kCoefficientInfo) {
+        out.push_back({std::string("friction.") + c.key, Kind::kNumberOr5});
+      }
+    }
+    return out;
+  }();
+  return fields;
+}
+
 const Field* find_field(const std::string& schema_key) {
-  for (const Field& f : kSchema) {
+  for (const Field& f : schema()) {
     if (schema_key == f.key) return &f;
   }
   return nullptr;
@@ -112,8 +122,8 @@ const Field* find_field(const std::string& schema_key) {
 std::string children_of(const std::string& schema_section) {
   std::string out;
   const std::string prefix = schema_section.empty() ? "" : schema_section + ".";
-  for (const Field& f : kSchema) {
-    const std::string key = f.key;
+  for (const Field& f : schema()) {
+    const std::string& key = f.key;
     if (key.compare(0, prefix.size(), prefix) != 0) continue;
     const std::string rest = key.substr(prefix.size());
     if (rest.empty() || rest.find('.') != std::string::npos || rest == "#") continue;
@@ -122,15 +132,6 @@ std::string children_of(const std::string& schema_section) {
   return out;
 }
 
-// friction laws by their scene names (friction.model)
-struct LawName {
-  FrictionLaw law;
-  const char* name;
-};
-constexpr LawName kLawNames[] = {{FrictionLaw::kNone, "none"},
-                                 {FrictionLaw::kCoulombViscous, "coulomb_viscous"},
-                                 {FrictionLaw::kStribeck, "stribeck"},
-                                 {FrictionLaw::kLuGre, "lugre"}};
 
 // ---------------------------------------------------------------------------------------------
 // Small string helpers
@@ -226,7 +227,21 @@ class SceneReader {
       if (p.empty()) fail(key, "malformed key in --set " + assignment);
     }
     const std::string in_set = " in --set " + assignment;
+    int element = -1;
+    const Field* field = resolve_set_key(in_set, &parts, &key, &element);
+    if (element >= 0) {
+      set_element(key, element, text, in_set);
+    } else {
+      set_value(key, *field, text, in_set);
+    }
+  }
 
+  // the schema field of a --set key; friction.coulomb.3 names element 3 of a per-joint list
+  // (*element, and *parts / *key lose the index)
+  const Field* resolve_set_key(const std::string& in_set, std::vector<std::string>* parts_io,
+                               std::string* key_io, int* element) const {
+    std::vector<std::string>& parts = *parts_io;
+    std::string& key = *key_io;
     // a link index must name one of the four links
     if (parts.size() >= 3 && parts[0] == "mechanism" && parts[1] == "links") {
       const int i = parse_index(parts[2]);
@@ -236,14 +251,12 @@ class SceneReader {
       }
     }
     const Field* field = find_field(schema_key(parts));
-    // friction.coulomb.3: one element of a per-joint list
-    int element = -1;
     if (field == nullptr && parts.size() >= 2 && parse_index(parts.back()) >= 0) {
       std::vector<std::string> parent(parts.begin(), parts.end() - 1);
       const Field* pf = find_field(schema_key(parent));
       if (pf != nullptr && pf->kind == Kind::kNumberOr5) {
-        element = parse_index(parts.back());
-        if (element >= kJoints) {
+        *element = parse_index(parts.back());
+        if (*element >= kJoints) {
           fail(key, "no such joint" + in_set + " (joints are numbered 0 to " +
                         std::to_string(kJoints - 1) + ": O, B, C, D, D0)");
         }
@@ -256,52 +269,55 @@ class SceneReader {
     if (field->kind == Kind::kSection || field->kind == Kind::kLinkList) {
       fail(key, "is a section, not a value" + in_set);
     }
-
-    if (element >= 0) {
-      auto it = flat_.find(key);
-      if (it == flat_.end()) {
-        // not in the file: start from the key's default, if it has one
-        const std::vector<std::string> fallback = per_joint_default(key);
-        if (fallback.empty()) {
-          fail(key, "the scene has no value to take element " + std::to_string(element) + " of" +
-                        in_set + "; set the whole key, e.g. " + key + "=[a,b,c,d,e]");
-        }
-        it = flat_.emplace(key, Value{fallback, fallback.size() > 1, ""}).first;
-      }
-      Value& v = it->second;
-      if (!v.list || v.items.size() == 1) v.items.assign(kJoints, v.items.front());
-      if (v.items.size() != static_cast<size_t>(kJoints)) {
-        fail(key, "expected 1 or 5 numbers, got " + std::to_string(v.items.size()) + v.origin);
-      }
-      v.list = true;
-      v.items[element] = text;
-      v.origin = " (from --set)";
-    } else {
-      Value v;
-      v.origin = " (from --set)";
-      if (field->kind == Kind::kNumberOr5 && !text.empty() && text.front() == '[') {
-        // a flow list such as [0.1, 0.1, 0.12, 0.1, 0.1]
-        YAML::Node node;
-        try {
-          node = YAML::Load(text);
-        } catch (const YAML::Exception& e) {
-          fail(key, "malformed list" + in_set + ": " + e.msg);
-        }
-        if (!node.IsSequence()) fail(key, "malformed list" + in_set);
-        v.list = true;
-        for (const auto& item : node) {
-          if (!item.IsScalar()) fail(key, "expected a list of numbers" + in_set);
-          v.items.push_back(item.Scalar());
-        }
-      } else {
-        v.items = {text};
-      }
-      flat_[key] = std::move(v);
-    }
-    if (parts.size() >= 3 && parts[0] == "mechanism" && parts[1] == "links") {
-      link_count_ = std::max(link_count_, parse_index(parts[2]) + 1);
-    }
+    return field;
   }
+
+  // one element of a per-joint list, starting from the file's value or the key's default
+  void set_element(const std::string& key, int element, const std::string& text,
+                   const std::string& in_set) {
+    auto it = flat_.find(key);
+    if (it == flat_.end()) {
+      const std::vector<std::string> fallback = per_joint_default(key);
+      if (fallback.empty()) {
+        fail(key, "the scene has no value to take element " + std::to_string(element) + " of" +
+                      in_set + "; set the whole key, e.g. " + key + "=[a,b,c,d,e]");
+      }
+      it = flat_.emplace(key, Value{fallback, fallback.size() > 1, ""}).first;
+    }
+    Value& v = it->second;
+    if (!v.list || v.items.size() == 1) v.items.assign(kJoints, v.items.front());
+    if (v.items.size() != static_cast<size_t>(kJoints)) {
+      fail(key, "expected 1 or 5 numbers, got " + std::to_string(v.items.size()) + v.origin);
+    }
+    v.list = true;
+    v.items[element] = text;
+    v.origin = " (from --set)";
+  }
+
+  // a whole value: a scalar, or a flow list such as [0.1, 0.1, 0.12, 0.1, 0.1]
+  void set_value(const std::string& key, const Field& field, const std::string& text,
+                 const std::string& in_set) {
+    Value v;
+    v.origin = " (from --set)";
+    if (field.kind == Kind::kNumberOr5 && !text.empty() && text.front() == '[') {
+      YAML::Node node;
+      try {
+        node = YAML::Load(text);
+      } catch (const YAML::Exception& e) {
+        fail(key, "malformed list" + in_set + ": " + e.msg);
+      }
+      if (!node.IsSequence()) fail(key, "malformed list" + in_set);
+      v.list = true;
+      for (const auto& item : node) {
+        if (!item.IsScalar()) fail(key, "expected a list of numbers" + in_set);
+        v.items.push_back(item.Scalar());
+      }
+    } else {
+      v.items = {text};
+    }
+    flat_[key] = std::move(v);
+  }
+
 
   // --- typed access to the flat map, with the value's origin in every message ---
 
@@ -409,16 +425,19 @@ class SceneReader {
     return join(p, p.size(), '.');
   }
 
-  // the default of an optional per-joint key as scene text (see build_scene), or nothing
+  // the default of a per-joint friction coefficient as scene text (see read_coefficients), or
+  // nothing when the scene's law requires the key or it has no default
   std::vector<std::string> per_joint_default(const std::string& key) const {
-    if (key == "friction.static_coulomb") {
-      auto it = flat_.find("friction.coulomb");  // mu_s defaults to mu_c
-      return it == flat_.end() ? std::vector<std::string>{} : it->second.items;
-    }
-    if (key == "friction.stribeck_exponent") return {"2"};
-    if (key == "friction.stribeck_velocity" || key == "friction.sigma0" ||
-        key == "friction.sigma1" || key == "friction.sigma2") {
-      return {"0"};
+    const LawDescriptor* law = find_law(text("friction.model", "none"));
+    for (const CoefficientInfo& c : kCoefficientInfo) {
+      if (key != std::string("friction.") + c.key) continue;
+      const LawCoefficient* use = law ? law_coefficient(*law, c.id) : nullptr;
+      if (use && use->required) return {};
+      if (c.same_as != c.id) {  // mu_s defaults to mu_c
+        auto it = flat_.find(std::string("friction.") + coefficient_info(c.same_as).key);
+        return it == flat_.end() ? std::vector<std::string>{} : it->second.items;
+      }
+      return {format_double(c.default_value)};
     }
     return {};
   }
@@ -537,19 +556,35 @@ void plausibility_warnings(Scene* s) {
   }
 }
 
-Scene build_scene(const SceneReader& r) {
-  Scene s;
-  s.path = r.path();
-  Params<double>& p = s.params;
+// The coefficients of every law (a scene may carry those of other laws too): required when the
+// scene's law requires them, else their default; > 0 where the law needs it, or where the
+// default itself is positive (the Stribeck exponent), else >= 0.
+void read_coefficients(const SceneReader& r, const LawDescriptor& law, FrictionParams<double>* f) {
+  for (const CoefficientInfo& c : kCoefficientInfo) {  // mu_c before mu_s, which defaults to it
+    const std::string key = std::string("friction.") + c.key;
+    std::array<double, kJoints>& dst = coefficient(*f, c.id);
+    if (!r.has(key) && c.same_as != c.id) {
+      dst = coefficient(*f, c.same_as);
+      continue;
+    }
+    const LawCoefficient* use = law_coefficient(law, c.id);
+    const bool required = use && use->required;
+    const bool pos = use ? use->positive : c.default_value > 0;
+    dst = r.per_joint(key, required ? std::nullopt : std::optional<double>(c.default_value),
+                      pos ? positive : non_negative, pos ? "> 0" : ">= 0");
+  }
+}
 
-  // check: a value with a domain, failing with the key, the domain and the offending value
-  auto require = [&](const std::string& key, double x, bool ok, const std::string& domain) {
-    if (!ok) r.fail(key, "must be " + domain + ", got " + num(x) + r.origin(key));
-  };
+// check: a value with a domain, failing with the key, the domain and the offending value
+void require(const SceneReader& r, const std::string& key, double x, bool ok,
+             const std::string& domain) {
+  if (!ok) r.fail(key, "must be " + domain + ", got " + num(x) + r.origin(key));
+}
 
-  // mechanism
+void read_mechanism(const SceneReader& r, Params<double>* out) {
+  Params<double>& p = *out;
   p.ground_length = r.number("mechanism.ground_length", std::nullopt);
-  require("mechanism.ground_length", p.ground_length, p.ground_length > 0, "> 0");
+  require(r, "mechanism.ground_length", p.ground_length, p.ground_length > 0, "> 0");
   if (r.link_count() != kLinks) {
     r.fail("mechanism.links", "expected " + std::to_string(kLinks) + " links, got " +
                                   std::to_string(r.link_count()) + r.link_line());
@@ -558,13 +593,13 @@ Scene build_scene(const SceneReader& r) {
     const std::string k = "mechanism.links." + std::to_string(i) + ".";
     Link<double>& link = p.links[i];
     link.length = r.number(k + "length", std::nullopt);
-    require(k + "length", link.length, link.length > 0, "> 0");
+    require(r, k + "length", link.length, link.length > 0, "> 0");
     link.mass = r.number(k + "mass", std::nullopt);
-    require(k + "mass", link.mass, link.mass > 0, "> 0");
+    require(r, k + "mass", link.mass, link.mass > 0, "> 0");
     link.inertia = r.number(k + "inertia", std::nullopt);
-    require(k + "inertia", link.inertia, link.inertia > 0, "> 0");
+    require(r, k + "inertia", link.inertia, link.inertia > 0, "> 0");
     link.com_offset = r.number(k + "com_offset", std::nullopt);
-    require(k + "com_offset", link.com_offset, link.com_offset >= 0, ">= 0");
+    require(r, k + "com_offset", link.com_offset, link.com_offset >= 0, ">= 0");
     link.com_angle = r.number(k + "com_angle", 0.0);
   }
   p.point_p = r.number("mechanism.point_p", std::nullopt);
@@ -579,49 +614,30 @@ Scene build_scene(const SceneReader& r) {
   }
   p.gravity = r.number("gravity", 9.81);
 
-  // friction: each law's coefficients are required only when that law is on
-  FrictionParams<double>& f = p.friction;
-  const std::string model = r.text("friction.model", "none");
-  bool known_law = false;
-  for (const LawName& l : kLawNames) {
-    if (model == l.name) {
-      f.law = l.law;
-      known_law = true;
-    }
-  }
-  if (!known_law) {
-    std::string names;
-    for (const LawName& l : kLawNames) names += (names.empty() ? "" : ", ") + std::string(l.name);
-    r.fail("friction.model",
-           "expected one of " + names + ", got '" + model + "'" + r.origin("friction.model"));
-  }
-  const bool on = f.active();
-  const bool stribeck = f.law == FrictionLaw::kStribeck;
-  const bool lugre = f.law == FrictionLaw::kLuGre;
-  // `required` when the law uses the key, else `fallback`
-  auto when = [](bool required, double fallback) {
-    return required ? std::nullopt : std::optional<double>(fallback);
-  };
-  f.pin_radius = r.per_joint("friction.pin_radius", when(on, 0.0), on ? positive : non_negative,
-                             on ? "> 0" : ">= 0");
-  f.coulomb = r.per_joint("friction.coulomb", when(on, 0.0), non_negative, ">= 0");
-  f.viscous = r.per_joint("friction.viscous", when(on && !lugre, 0.0), non_negative, ">= 0");
-  // mu_s: the Stribeck peak and the holding bound of a stuck joint; mu_c when omitted
-  f.static_coulomb = f.coulomb;
-  if (r.has("friction.static_coulomb")) {
-    f.static_coulomb = r.per_joint("friction.static_coulomb", std::nullopt, non_negative, ">= 0");
-  }
-  f.stribeck_velocity = r.per_joint("friction.stribeck_velocity", when(stribeck, 0.0),
-                                    stribeck ? positive : non_negative, stribeck ? "> 0" : ">= 0");
-  f.stribeck_exponent = r.per_joint("friction.stribeck_exponent", 2.0, positive, "> 0");
-  f.sigma0 = r.per_joint("friction.sigma0", when(lugre, 0.0), lugre ? positive : non_negative,
-                         lugre ? "> 0" : ">= 0");
-  f.sigma1 = r.per_joint("friction.sigma1", 0.0, non_negative, ">= 0");
-  f.sigma2 = r.per_joint("friction.sigma2", 0.0, non_negative, ">= 0");
-  f.smoothing_velocity = r.number("friction.smoothing_velocity", 0.0);
-  require("friction.smoothing_velocity", f.smoothing_velocity, f.smoothing_velocity >= 0, ">= 0");
+}
 
-  // loads: compiled once here so that a bad expression is reported at load time
+// friction: each law's coefficients are required only when that law is on
+void read_friction(const SceneReader& r, FrictionParams<double>* out) {
+  FrictionParams<double>& f = *out;
+  const std::string model = r.text("friction.model", "none");
+  const LawDescriptor* law = find_law(model);
+  if (!law) {
+    r.fail("friction.model", "expected one of " + law_names() + ", got '" + model + "'" +
+                                 r.origin("friction.model"));
+  }
+  f.law = law->law;
+  const bool on = f.active();
+  f.pin_radius = r.per_joint("friction.pin_radius", on ? std::nullopt : std::optional<double>(0.0),
+                             on ? positive : non_negative, on ? "> 0" : ">= 0");
+  read_coefficients(r, *law, &f);
+  f.smoothing_velocity = r.number("friction.smoothing_velocity", 0.0);
+  require(r, "friction.smoothing_velocity", f.smoothing_velocity, f.smoothing_velocity >= 0, ">= 0");
+
+}
+
+// loads (compiled once here so that a bad expression is reported at load time), initial state
+void read_loads_and_initial(const SceneReader& r, Scene* out) {
+  Scene& s = *out;
   s.M1 = r.text("loads.M1", "0");
   s.M2 = r.text("loads.M2", "0");
   s.M3 = r.text("loads.M3", "0");
@@ -635,13 +651,16 @@ Scene build_scene(const SceneReader& r) {
   s.initial.omega1 = r.number("initial.omega1", 0.0);
   s.initial.omega2 = r.number("initial.omega2", 0.0);
 
-  // solver settings, defaults from sim::Options
-  sim::Options& o = s.options;
+}
+
+// solver settings, defaults from sim::Options: tolerances and integrator
+void read_integration(const SceneReader& r, FrictionLaw law, sim::Options* out) {
+  sim::Options& o = *out;
   const sim::Options d;
   o.duration = r.number("simulation.duration", d.duration);
-  require("simulation.duration", o.duration, o.duration > 0, "> 0");
+  require(r, "simulation.duration", o.duration, o.duration > 0, "> 0");
   o.output_step = r.number("simulation.output_step", d.output_step);
-  require("simulation.output_step", o.output_step, o.output_step > 0, "> 0");
+  require(r, "simulation.output_step", o.output_step, o.output_step > 0, "> 0");
   if (o.output_step > o.duration) {
     r.fail("simulation.output_step", "must not exceed simulation.duration = " + num(o.duration) +
                                          ", got " + num(o.output_step) +
@@ -657,16 +676,16 @@ Scene build_scene(const SceneReader& r) {
                                         ")" + r.origin("simulation.integrator"));
   }
   o.rtol = r.number("simulation.rtol", d.rtol);
-  require("simulation.rtol", o.rtol, o.rtol > 0 && o.rtol < 1, "in (0, 1)");
+  require(r, "simulation.rtol", o.rtol, o.rtol > 0 && o.rtol < 1, "in (0, 1)");
   o.atol = r.number("simulation.atol", d.atol);
-  require("simulation.atol", o.atol, o.atol > 0 && o.atol < 1, "in (0, 1)");
+  require(r, "simulation.atol", o.atol, o.atol > 0 && o.atol < 1, "in (0, 1)");
   // neither tolerance given: `simulate` chooses them to meet target_error (sim::estimate.h)
   o.auto_tolerance = !r.has("simulation.rtol") && !r.has("simulation.atol");
   o.target_error = r.number("simulation.target_error", d.target_error);
-  require("simulation.target_error", o.target_error, o.target_error > 0 && o.target_error < 1,
+  require(r, "simulation.target_error", o.target_error, o.target_error > 0 && o.target_error < 1,
           "in (0, 1)");
   // the default integrator: Adams (the work-precision study's choice), BDF for the stiff LuGre
-  if (!r.has("simulation.integrator") && f.law == FrictionLaw::kLuGre) {
+  if (!r.has("simulation.integrator") && law == FrictionLaw::kLuGre) {
     o.method = sim::Method::kCvodeBdf;
   }
   if (sim::output_row_count(o) > sim::kMaxOutputRows) {
@@ -676,47 +695,66 @@ Scene build_scene(const SceneReader& r) {
                " output rows, more than the limit of " + std::to_string(sim::kMaxOutputRows) +
                " (raise simulation.output_step)");
   }
+}
+
+// solver settings: switches, limits, the friction loop and the rest rule
+void read_solver_limits(const SceneReader& r, Scene* out) {
+  Scene& s = *out;
+  sim::Options& o = s.options;
+  const sim::Options d;
   o.locate_switches = r.boolean("simulation.locate_switches", d.locate_switches);
   o.stick = r.boolean("simulation.stick", d.stick);
   o.max_steps = r.integer("simulation.max_steps", d.max_steps);
-  require("simulation.max_steps", o.max_steps, o.max_steps >= 1, ">= 1");
+  require(r, "simulation.max_steps", o.max_steps, o.max_steps >= 1, ">= 1");
   o.singular_margin = r.number("simulation.singular_margin", d.singular_margin);
-  require("simulation.singular_margin", o.singular_margin,
+  require(r, "simulation.singular_margin", o.singular_margin,
           o.singular_margin >= 0 && o.singular_margin < 1, "in [0, 1)");
   o.friction_tol = r.number("simulation.friction_tol", d.friction_tol);
-  require("simulation.friction_tol", o.friction_tol, o.friction_tol > 0 && o.friction_tol < 1,
+  require(r, "simulation.friction_tol", o.friction_tol, o.friction_tol > 0 && o.friction_tol < 1,
           "in (0, 1)");
   const long max_iter = r.integer("simulation.friction_max_iter", d.friction_max_iter);
-  require("simulation.friction_max_iter", max_iter, max_iter >= 1 && max_iter <= 1000000,
+  require(r, "simulation.friction_max_iter", max_iter, max_iter >= 1 && max_iter <= 1000000,
           "in [1, 1000000]");
   o.friction_max_iter = static_cast<int>(max_iter);
   // rest rule of inverse dynamics (rest.h): absent means derived from the rates' noise
   s.rest_rate_threshold = r.number("simulation.rest_rate_threshold", -1.0);
   s.rest_acceleration_threshold = r.number("simulation.rest_acceleration_threshold", -1.0);
   for (const char* key : {"simulation.rest_rate_threshold", "simulation.rest_acceleration_threshold"}) {
-    if (r.has(key)) require(key, r.number(key, -1.0), r.number(key, -1.0) >= 0, ">= 0");
+    if (r.has(key)) require(r, key, r.number(key, -1.0), r.number(key, -1.0) >= 0, ">= 0");
   }
 
-  // the initial pose must close, away from the coupler singularity (closed-form triangle B C D)
-  const double sine = coupler_sine(p, s.initial.theta1, s.initial.theta2);
-  if (sine < 0) {
+}
+
+// the initial pose must close, away from the coupler singularity (the model's closure)
+void check_initial_pose(const SceneReader& r, const Scene& s) {
+  const Params<double>& p = s.params;
+  Kinematics<double> k;
+  if (!solve_kinematics(p, s.initial.theta1, s.initial.theta2, &k, 0.0, false).ok()) {
     const double l3 = p.links[2].length, l4 = p.links[3].length;
-    const double bx = p.links[0].length * std::cos(s.initial.theta1);
-    const double by = p.links[0].length * std::sin(s.initial.theta1);
-    const double dx = p.ground_length + p.links[1].length * std::cos(s.initial.theta2);
-    const double dy = p.links[1].length * std::sin(s.initial.theta2);
     r.fail("initial", "the mechanism cannot assemble at theta1 = " + num(s.initial.theta1) +
                           ", theta2 = " + num(s.initial.theta2) +
-                          ": |BD| = " + num(std::hypot(dx - bx, dy - by)) +
+                          ": |BD| = " + num((k.D - k.B).norm()) +
                           " m is outside [|l3 - l4|, l3 + l4] = [" + num(std::fabs(l3 - l4)) +
                           ", " + num(l3 + l4) + "] m");
   }
-  if (sine < o.singular_margin) {
+  const double sine = std::abs(k.sin43);
+  if (sine < s.options.singular_margin) {
     r.fail("initial",
            "too close to a singular configuration (couplers aligned): |sin(th4 - th3)| "
            "= " +
-               num(sine) + " < simulation.singular_margin = " + num(o.singular_margin));
+               num(sine) + " < simulation.singular_margin = " + num(s.options.singular_margin));
   }
+}
+
+Scene build_scene(const SceneReader& r) {
+  Scene s;
+  s.path = r.path();
+  read_mechanism(r, &s.params);
+  read_friction(r, &s.params.friction);
+  read_loads_and_initial(r, &s);
+  read_integration(r, s.params.friction.law, &s.options);
+  read_solver_limits(r, &s);
+  check_initial_pose(r, s);
   plausibility_warnings(&s);
   return s;
 }
@@ -749,12 +787,7 @@ bool parse_integrator(const std::string& name, sim::Method* out) {
   return sim::parse_method(name, out);
 }
 
-const char* friction_law_name(FrictionLaw law) {
-  for (const LawName& l : kLawNames) {
-    if (l.law == law) return l.name;
-  }
-  return "unknown";
-}
+const char* friction_law_name(FrictionLaw law) { return law_descriptor(law).name; }
 
 double coupler_sine(const Params<double>& p, double theta1, double theta2) {
   Kinematics<double> k;
@@ -814,19 +847,15 @@ std::string scene_to_yaml(const Scene& s) {
     << "  pin_radius: " << per_joint_yaml(f.pin_radius) << "\n"
     << "  coulomb: " << per_joint_yaml(f.coulomb) << "\n"
     << "  viscous: " << per_joint_yaml(f.viscous) << "\n";
-  // the other laws' coefficients, where they differ from their defaults
-  const auto optional = [&y](const char* key, const std::array<double, kJoints>& v,
-                             const std::array<double, kJoints>& fallback) {
-    if (v != fallback) y << "  " << key << ": " << per_joint_yaml(v) << "\n";
-  };
-  std::array<double, kJoints> zeros{}, twos{};
-  twos.fill(2.0);
-  optional("static_coulomb", f.static_coulomb, f.coulomb);
-  optional("stribeck_velocity", f.stribeck_velocity, zeros);
-  optional("stribeck_exponent", f.stribeck_exponent, twos);
-  optional("sigma0", f.sigma0, zeros);
-  optional("sigma1", f.sigma1, zeros);
-  optional("sigma2", f.sigma2, zeros);
+  // the other coefficients, where they differ from their defaults
+  for (const CoefficientInfo& c : kCoefficientInfo) {
+    if (c.id == Coefficient::kCoulomb || c.id == Coefficient::kViscous) continue;
+    std::array<double, kJoints> fallback;
+    fallback.fill(c.default_value);
+    if (c.same_as != c.id) fallback = coefficient(f, c.same_as);
+    const std::array<double, kJoints>& v = coefficient(f, c.id);
+    if (v != fallback) y << "  " << c.key << ": " << per_joint_yaml(v) << "\n";
+  }
   y << "  smoothing_velocity: " << num(f.smoothing_velocity) << "\n"
     << "loads:\n"
     << "  M1: " << quoted(s.M1) << "\n"

@@ -8,7 +8,6 @@
 
 #include "bindings.h"
 #include "fivebar/io/errors.h"
-#include "fivebar/trajectory/tasks.h"
 
 namespace fivebar::python {
 namespace {
@@ -25,8 +24,6 @@ void register_errors(py::module_& m) {
     } catch (const fivebar::NumericalError& e) {
       numerical(e.what());
     } catch (const fivebar::FieldError& e) {
-      PyErr_SetString(PyExc_ValueError, e.what());
-    } catch (const trajectory::TaskFileError& e) {
       PyErr_SetString(PyExc_ValueError, e.what());
     }
   });

@@ -32,6 +32,8 @@ py::dict task_dict(const PyScene& s, const trajectory::TaskResult& r,
   d["status"] = r.status;
   d["solver_status"] = r.solver_status;
   d["message"] = r.message;
+  d["continuation"] = r.continuation;  // "w_s:E;..." of the stages (docs/optimize.md)
+  d["refinement"] = r.refinement;
   d["dissipated_energy_exact"] = r.dissipated_energy_exact;
   d["baseline_dissipated_energy_exact"] = r.baseline_dissipated_energy_exact;
   d["x"] = to_array(r.x);

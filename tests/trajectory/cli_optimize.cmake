@@ -21,7 +21,7 @@ endfunction()
 
 # issue 17's task: solved from the path search's detour
 execute_process(COMMAND ${FIVEBAR} optimize ${paper} --tasks ${SOURCE_DIR}/datasets/tasks/detour_tasks.yaml
-                        ${short} --no-plots --no-validate --out ${WORK_DIR}/detour
+                        ${short} --no-plots --no-validate --no-refine --out ${WORK_DIR}/detour
                 RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
 expect("detour: exit ${status}\n${out}${err}" status EQUAL 0)
 file(STRINGS ${WORK_DIR}/detour/summary.csv rows)

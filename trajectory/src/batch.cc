@@ -12,9 +12,13 @@
 #include <thread>
 
 #include "fivebar/sim/bytes.h"
+#include "stage.h"
 
 namespace fivebar::trajectory {
 namespace {
+
+// the exact-law validation ends this fraction of the duration before the end
+constexpr double kValidationEndGap = 1e-4;
 
 ProblemOptions task_problem_options(const BatchOptions& options, double torque_limit) {
   ProblemOptions o = options.problem;
@@ -38,8 +42,10 @@ double miss_distance(const TrajectoryProblem& problem, const sim::LoadFunction& 
     return L;
   };
   sim::Options so;
-  so.duration = m.duration();
-  so.output_step = m.duration() / 50;
+  // the exact law stops a fraction short of the end: there every joint comes to rest at once
+  // and the simulator's joint modes are degenerate (docs/optimize.md, "Validation")
+  so.duration = exact ? m.duration() * (1.0 - kValidationEndGap) : m.duration();
+  so.output_step = so.duration / 50;
   so.rtol = options.validation_rtol;
   so.atol = options.validation_rtol;
   so.singular_margin = 1e-3;
@@ -52,9 +58,11 @@ double miss_distance(const TrajectoryProblem& problem, const sim::LoadFunction& 
     return NAN;
   }
   const sim::Row& last = run.rows.back();
+  // the planned pose at the end of the run (the goal itself when it runs to the end)
+  const std::array<double, 2> planned = m.state(x.data(), last.t)[0];
   std::array<double, 2> c{}, goal{};
   if (!point_c(problem.params(), last.theta[0], last.theta[1], &c) ||
-      !point_c(problem.params(), m.goal()[0], m.goal()[1], &goal)) {
+      !point_c(problem.params(), planned[0], planned[1], &goal)) {
     *note = "validation simulation ended where the mechanism cannot close";
     return NAN;
   }
@@ -95,7 +103,8 @@ const std::vector<std::string>& summary_columns() {
       "initial_guess", "initial_dissipated_energy", "initial_peak_torque",
       "initial_min_coupler_sine", "control_points", "dissipated_energy_smoothed",
       "baseline_dissipated_energy_smoothed", "input_energy_smoothed",
-      "baseline_input_energy_smoothed", "miss_distance_exact", "message"};
+      "baseline_input_energy_smoothed", "miss_distance_exact", "smoothing_velocity",
+      "refinement_change", "continuation", "refinement", "message"};
   return columns;
 }
 
@@ -115,7 +124,8 @@ std::vector<std::string> summary_fields(const TaskResult& r) {
           num(r.initial_min_coupler_sine), std::to_string(r.control_points),
           num(r.dissipated_energy_smoothed), num(r.baseline_dissipated_energy_smoothed),
           num(r.input_energy_smoothed), num(r.baseline_input_energy_smoothed),
-          num(r.miss_distance_exact), quoted(r.message)};
+          num(r.miss_distance_exact), num(r.smoothing_velocity), num(r.refinement_change),
+          quoted(r.continuation), quoted(r.refinement), quoted(r.message)};
 }
 
 std::string csv_line(const std::vector<std::string>& fields) {
@@ -137,8 +147,9 @@ TrajectoryProblem problem_of(const Params<double>& params, const sim::LoadFuncti
                              const TaskResult& result, const BatchOptions& options) {
   const int n = result.control_points > 0 ? result.control_points : options.problem.control_points;
   const RestToRest motion(n, result.duration, result.start, result.goal);
-  return TrajectoryProblem(params, loads, motion,
-                           task_problem_options(options, result.torque_limit));
+  ProblemOptions o = task_problem_options(options, result.torque_limit);
+  if (result.smoothing_velocity > 0) o.smoothing_velocity = result.smoothing_velocity;
+  return TrajectoryProblem(params, loads, motion, o);
 }
 
 namespace {
@@ -219,17 +230,46 @@ bool detour_start(const Params<double>& params, const sim::LoadFunction& loads,
   return true;
 }
 
-// where the optimization starts: the minimum-jerk motion when it closes with the margin kept,
-// else a detour; false when no path joins start and goal (status and message say why)
+// a warm start: the same task's optimum for another design, its joint motion moved to this
+// design's ends (minimum-jerk blend of the end offsets), when it keeps the margin
+bool warm_start(const Params<double>& params, const sim::LoadFunction& loads,
+                const BatchOptions& options, const TaskResult& warm, TaskResult* r,
+                std::optional<TrajectoryProblem>* problem, std::vector<double>* x) {
+  if (!warm.solved() || warm.control_points < 7 || warm.duration != r->duration) return false;
+  const RestToRest from(warm.control_points, warm.duration, warm.start, warm.goal);
+  const RestToRest to(warm.control_points, r->duration, r->start, r->goal);
+  std::vector<double> guess = to.fit([&](double t) {
+    std::array<double, 2> th = from.state(warm.x.data(), t)[0];
+    const double b = minimum_jerk_blend(t / r->duration)[0];
+    for (int j = 0; j < 2; ++j) {
+      th[j] += (r->start[j] - warm.start[j]) * (1.0 - b) + (r->goal[j] - warm.goal[j]) * b;
+    }
+    return th;
+  });
+  const int points = options.check_factor * to.basis().spans() *
+                         options.problem.quadrature_points + 1;
+  if (min_coupler_sine(params, to, guess, points) < options.problem.singular_margin) return false;
+  r->control_points = warm.control_points;
+  problem->emplace(problem_of(params, loads, *r, options));
+  *x = std::move(guess);
+  r->initial_guess = "warm_start";
+  return true;
+}
+
+// where the optimization starts: the warm start when given and usable, else the minimum-jerk
+// motion when it closes with the margin kept, else a detour; false when no path joins start
+// and goal (status and message say why)
 bool choose_start(const Params<double>& params, const sim::LoadFunction& loads,
-                  const BatchOptions& options, TaskResult* r,
+                  const BatchOptions& options, const TaskResult* warm, TaskResult* r,
                   std::optional<TrajectoryProblem>* problem, std::vector<double>* x) {
   problem->emplace(problem_of(params, loads, *r, options));
   *x = (*problem)->motion().minimum_jerk();
   evaluate_baseline(**problem, *x, options, r);
   const double sine = min_coupler_sine(params, (*problem)->motion(), *x,
                                        check_points(**problem, options));
-  if (sine >= options.problem.singular_margin) {
+  if (warm && warm_start(params, loads, options, *warm, r, problem, x)) {
+    // started from the neighbouring design's optimum
+  } else if (sine >= options.problem.singular_margin) {
     r->initial_guess = "minimum_jerk";
   } else if (!detour_start(params, loads, options, r, problem, x)) {
     return false;
@@ -247,6 +287,7 @@ bool choose_start(const Params<double>& params, const sim::LoadFunction& loads,
   return true;
 }
 
+// the energies of r->x: smoothed (the law of its stage) and exact
 void record_energies(const TrajectoryProblem& problem, const BatchOptions& options,
                      TaskResult* r) {
   double d = NAN, in = NAN;
@@ -255,48 +296,55 @@ void record_energies(const TrajectoryProblem& problem, const BatchOptions& optio
     r->input_energy_smoothed = in;
   }
   r->objective = options.problem.objective == Objective::kInputEnergy ? in : d;
+  d = in = NAN;
+  if (problem.exact_energies(r->x.data(), exact_points(options), &d, &in).ok()) {
+    r->dissipated_energy = r->dissipated_energy_exact = d;
+    r->input_energy = in;
+  }
 }
 
-// the optimization from x0, then the constraints re-checked on a denser grid; a torque peak
-// between the nodes above the limit is removed by re-solving with the limit lowered by the
-// overshoot (at most twice). False (status set) when nothing usable came out.
+// the first solve from x0 (multi-start when asked), then the continuation to the exact law and
+// the refinement; the best stage's point goes into r. False (status set) when nothing usable
+// came out.
 bool solve(const Params<double>& params, const sim::LoadFunction& loads,
            const TrajectoryProblem& problem, const std::vector<double>& x0,
            const BatchOptions& options, TaskResult* r, SolverStatus* solver,
            ConstraintCheck* check) {
   OptimizerOptions oo = options.optimizer;
   oo.seed = task_seed(r->task, options.optimizer.seed);
-  const OptimizeResult opt = optimize(problem, x0, oo);
-  *solver = opt.solver;
-  r->solver_status = outcome_name(opt.solver.outcome);
-  r->evaluations = opt.evaluations;
-  r->starts = opt.starts;
-  r->best_start = opt.best_start;
-  if (!opt.evaluation.ok()) {
+  const Candidate first = solve_stage(params, loads, problem.motion(),
+                                      problem.options().smoothing_velocity, x0, options,
+                                      r->torque_limit, oo);
+  r->evaluations = first.evaluations;
+  r->starts = first.starts;
+  r->best_start = first.best_start;
+  if (!first.evaluation.ok()) {
+    r->solver_status = outcome_name(first.solver.outcome);
     r->status = "evaluation_failed";
-    add_note(r, opt.solver.message);
+    add_note(r, first.solver.message);
     return false;
   }
-  r->x = opt.x;
-  record_energies(problem, options, r);
-  const int grid = check_points(problem, options);
-  *check = problem.check(r->x.data(), grid);
-  double limit = r->torque_limit;
-  for (int round = 0; round < 2 && check->status.ok() && opt.solver.usable() &&
-                      check->torque_excess > options.feasibility_tol * r->torque_limit;
-       ++round) {
-    limit *= r->torque_limit / check->peak_torque * (1.0 - 0.1 * options.feasibility_tol);
-    const TrajectoryProblem tightened(params, loads, problem.motion(),
-                                      task_problem_options(options, limit));
-    const OptimizeResult again = optimize(tightened, r->x, oo);
-    r->evaluations += again.evaluations;
-    if (!again.solver.usable()) break;
-    const ConstraintCheck c2 = problem.check(again.x.data(), grid);
-    if (!c2.status.ok()) break;
-    r->x = again.x;
-    *check = c2;
-    record_energies(problem, options, r);
+  oo.global = false;  // the later stages polish from a warm start
+  const Candidate best = options.refine.enabled && feasible(first, options)
+                             ? refine(params, loads, first, options, oo, r)
+                             : first;
+  // a later stage that improved on a converged first solve but stopped at a limit keeps the
+  // task ok (it is feasible and better); its outcome is noted
+  const bool later = best.control_points != first.control_points ||
+                     best.smoothing_velocity != first.smoothing_velocity;
+  *solver = best.solver;
+  if (later && first.solver.outcome == SolverOutcome::kConverged &&
+      best.solver.outcome != SolverOutcome::kConverged) {
+    *solver = first.solver;
+    add_note(r, "the last stage (" + std::to_string(best.control_points) +
+                    " control points) ended: " + best.solver.message);
   }
+  *check = best.check;
+  r->solver_status = outcome_name(best.solver.outcome);
+  r->x = best.x;
+  r->control_points = best.control_points;
+  r->smoothing_velocity = best.smoothing_velocity;
+  record_energies(problem_of(params, loads, *r, options), options, r);
   if (!check->status.ok()) {
     r->status = "evaluation_failed";
     add_note(r, "constraint re-check: " + check->status.message);
@@ -306,16 +354,6 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
   r->max_constraint_violation = check->max_violation;
   r->min_coupler_sine = check->min_coupler_sine;
   return true;
-}
-
-// energies under the scene's own friction law (the reported ones)
-void record_exact_energies(const TrajectoryProblem& problem, const BatchOptions& options,
-                           TaskResult* r) {
-  double d = NAN, in = NAN;
-  if (problem.exact_energies(r->x.data(), exact_points(options), &d, &in).ok()) {
-    r->dissipated_energy = r->dissipated_energy_exact = d;
-    r->input_energy = in;
-  }
 }
 
 // the status of a solved task
@@ -344,7 +382,7 @@ void classify(const SolverStatus& solver, const ConstraintCheck& check,
 
 TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads,
                     const TaskSpec& task, const sim::Initial& initial,
-                    const BatchOptions& options) {
+                    const BatchOptions& options, const TaskResult* warm) {
   const auto t0 = std::chrono::steady_clock::now();
   TaskResult r;
   r.task = task.name;
@@ -371,11 +409,10 @@ TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads
   try {
     std::optional<TrajectoryProblem> problem;
     std::vector<double> x0;
-    if (!choose_start(params, loads, options, &r, &problem, &x0)) return finish();
+    if (!choose_start(params, loads, options, warm, &r, &problem, &x0)) return finish();
     SolverStatus solver;
     ConstraintCheck check;
     if (!solve(params, loads, *problem, x0, options, &r, &solver, &check)) return finish();
-    record_exact_energies(*problem, options, &r);
     classify(solver, check, options, &r);
 
     // validation: the optimal torques simulated forward must bring C to the goal
@@ -431,7 +468,8 @@ std::vector<TaskResult> run_parallel(int count, int threads,
 std::string encode(const TaskResult& r) {
   sim::ByteWriter w;
   for (const std::string* s : {&r.task, &r.status, &r.message, &r.solver_status,
-                               &r.baseline_status, &r.initial_guess}) {
+                               &r.baseline_status, &r.initial_guess, &r.continuation,
+                               &r.refinement}) {
     w.put_string(*s);
   }
   for (double v : {r.duration, r.torque_limit, r.start[0], r.start[1], r.goal[0], r.goal[1],
@@ -443,7 +481,8 @@ std::string encode(const TaskResult& r) {
                    r.initial_dissipated_energy, r.initial_peak_torque,
                    r.initial_min_coupler_sine, r.dissipated_energy_smoothed,
                    r.baseline_dissipated_energy_smoothed, r.input_energy_smoothed,
-                   r.baseline_input_energy_smoothed, r.miss_distance_exact}) {
+                   r.baseline_input_energy_smoothed, r.miss_distance_exact,
+                   r.smoothing_velocity, r.refinement_change}) {
     w.put(v);
   }
   for (long long v : {r.evaluations, r.starts, r.best_start, r.control_points}) w.put(v);
@@ -456,7 +495,7 @@ TaskResult decode(const std::string& bytes) {
   sim::ByteReader rd(bytes);
   TaskResult r;
   for (std::string* s : {&r.task, &r.status, &r.message, &r.solver_status, &r.baseline_status,
-                         &r.initial_guess}) {
+                         &r.initial_guess, &r.continuation, &r.refinement}) {
     *s = rd.take_string(kTruncated);
   }
   for (double* v : {&r.duration, &r.torque_limit, &r.start[0], &r.start[1], &r.goal[0],
@@ -469,7 +508,7 @@ TaskResult decode(const std::string& bytes) {
                     &r.initial_peak_torque, &r.initial_min_coupler_sine,
                     &r.dissipated_energy_smoothed, &r.baseline_dissipated_energy_smoothed,
                     &r.input_energy_smoothed, &r.baseline_input_energy_smoothed,
-                    &r.miss_distance_exact}) {
+                    &r.miss_distance_exact, &r.smoothing_velocity, &r.refinement_change}) {
     *v = rd.take<double>(kTruncated);
   }
   for (int* v : {&r.evaluations, &r.starts, &r.best_start, &r.control_points}) {

@@ -114,4 +114,33 @@ std::vector<TaskResult> run_distributed(int count, int threads,
 #endif
 }
 
+void broadcast_results(std::vector<TaskResult>* results) {
+  if (process_count() == 1) return;
+#ifdef FIVEBAR_HAVE_MPI
+  std::string bytes;
+  std::vector<long long> lengths;
+  if (process_rank() == 0) {
+    for (const TaskResult& r : *results) {
+      const std::string e = encode(r);
+      lengths.push_back(static_cast<long long>(e.size()));
+      bytes += e;
+    }
+  }
+  long long sizes[2] = {static_cast<long long>(lengths.size()),
+                        static_cast<long long>(bytes.size())};
+  MPI_Bcast(sizes, 2, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
+  lengths.resize(static_cast<size_t>(sizes[0]));
+  bytes.resize(static_cast<size_t>(sizes[1]));
+  MPI_Bcast(lengths.data(), static_cast<int>(sizes[0]), MPI_LONG_LONG, 0, MPI_COMM_WORLD);
+  MPI_Bcast(bytes.data(), static_cast<int>(sizes[1]), MPI_CHAR, 0, MPI_COMM_WORLD);
+  if (process_rank() == 0) return;
+  results->clear();
+  size_t pos = 0;
+  for (long long n : lengths) {
+    results->push_back(decode(bytes.substr(pos, static_cast<size_t>(n))));
+    pos += static_cast<size_t>(n);
+  }
+#endif
+}
+
 }  // namespace fivebar::trajectory

@@ -48,12 +48,16 @@ struct OptimizeSettings {
   int starts = 8, control_points = 10, quadrature_points = 12;
   double singular_margin = 0.1;
   double path_step = 0.05;  ///< grid step of the path search for a feasible start [rad]
+  /// the continuation to the exact law and the refinement of the control points after the
+  /// first solve (`optimize` turns refine on: --no-refine; --no-continuation)
+  bool refine = false, continuation = true;
+  double refine_tol = 1e-3;  ///< relative energy change that stops the refinement
 };
 
 /// The batch options of `settings`; throws InputError(`command line: --method: ...`) and the like.
 trajectory::BatchOptions batch_options(const OptimizeSettings& settings);
 
-/// Reads a tasks file; a malformed one throws InputError (the TaskFileError's message).
+/// Reads a tasks file (io::load_tasks); a malformed one throws InputError.
 std::vector<trajectory::TaskSpec> read_tasks(const std::string& path);
 
 /// The trajectory rows of a solved task and of its minimum-jerk baseline, on the scene's output

@@ -22,4 +22,7 @@ struct CsvTable : identification::CsvTable {
 /// or a field that is not a finite number.
 CsvTable read_csv(const std::string& path);
 
+/// `s` as one CSV field: in double quotes, a quote doubled (RFC 4180).
+std::string csv_quote(const std::string& s);
+
 }  // namespace fivebar::io

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cmath>
+#include <string>
 
 #include "fivebar/model/params.h"
 #include "fivebar/model/scalar.h"
@@ -61,6 +62,164 @@ template <typename T>
 T holding_bound(const FrictionParams<T>& fp, int k) {
   const T& mu_s = value_of(fp.static_coulomb[k]) > 0.0 ? fp.static_coulomb[k] : fp.coulomb[k];
   return mu_s * fp.pin_radius[k];
+}
+
+// ---------------------------------------------------------------------------------------------
+// Friction laws as descriptors: everything the scene schema and writer, identification and the
+// synthetic-log header need to know about a law and its coefficients comes from here. A new law
+// adds its enum value and coefficient arrays (params.h), its entry below and its f(w) in this file.
+
+/// The per-joint coefficient arrays of FrictionParams, by id (order: scene writer order).
+enum class Coefficient : int {
+  kCoulomb = 0,
+  kViscous,
+  kStaticCoulomb,
+  kStribeckVelocity,
+  kStribeckExponent,
+  kSigma0,
+  kSigma1,
+  kSigma2,
+};
+inline constexpr int kCoefficients = 8;
+
+/// The array of coefficient `c` in `fp`.
+template <typename T>
+std::array<T, kJoints>& coefficient(FrictionParams<T>& fp, Coefficient c) {
+  switch (c) {
+    case Coefficient::kCoulomb: return fp.coulomb;
+    case Coefficient::kViscous: return fp.viscous;
+    case Coefficient::kStaticCoulomb: return fp.static_coulomb;
+    case Coefficient::kStribeckVelocity: return fp.stribeck_velocity;
+    case Coefficient::kStribeckExponent: return fp.stribeck_exponent;
+    case Coefficient::kSigma0: return fp.sigma0;
+    case Coefficient::kSigma1: return fp.sigma1;
+    case Coefficient::kSigma2: return fp.sigma2;
+  }
+  return fp.coulomb;  // unreachable
+}
+template <typename T>
+const std::array<T, kJoints>& coefficient(const FrictionParams<T>& fp, Coefficient c) {
+  return coefficient(const_cast<FrictionParams<T>&>(fp), c);
+}
+
+/// One coefficient: its scene key (`friction.<key>`, also the identification name stem), symbol,
+/// unit and meaning, and its value when a scene omits it.
+struct CoefficientInfo {
+  Coefficient id;
+  const char* key;
+  const char* symbol;
+  const char* unit;
+  const char* meaning;
+  double default_value;  ///< when omitted (and not `same_as`)
+  /// when omitted, the value of this coefficient instead (mu_s defaults to mu_c); or itself
+  Coefficient same_as;
+};
+
+inline constexpr CoefficientInfo kCoefficientInfo[kCoefficients] = {
+    {Coefficient::kCoulomb, "coulomb", "mu_c", "-", "kinetic (Coulomb) coefficient", 0.0,
+     Coefficient::kCoulomb},
+    {Coefficient::kViscous, "viscous", "mu_v", "s/rad", "viscous coefficient", 0.0,
+     Coefficient::kViscous},
+    {Coefficient::kStaticCoulomb, "static_coulomb", "mu_s", "-",
+     "static coefficient: Stribeck peak and holding bound of a stuck joint", 0.0,
+     Coefficient::kCoulomb},
+    {Coefficient::kStribeckVelocity, "stribeck_velocity", "w_st", "rad/s", "Stribeck velocity",
+     0.0, Coefficient::kStribeckVelocity},
+    {Coefficient::kStribeckExponent, "stribeck_exponent", "delta", "-", "Stribeck exponent", 2.0,
+     Coefficient::kStribeckExponent},
+    {Coefficient::kSigma0, "sigma0", "sigma0", "1/rad", "LuGre bristle stiffness", 0.0,
+     Coefficient::kSigma0},
+    {Coefficient::kSigma1, "sigma1", "sigma1", "s/rad", "LuGre bristle damping", 0.0,
+     Coefficient::kSigma1},
+    {Coefficient::kSigma2, "sigma2", "sigma2", "s/rad", "LuGre viscous coefficient", 0.0,
+     Coefficient::kSigma2},
+};
+
+inline const CoefficientInfo& coefficient_info(Coefficient c) {
+  return kCoefficientInfo[static_cast<int>(c)];
+}
+
+/// How a law uses one coefficient.
+struct LawCoefficient {
+  Coefficient id;
+  bool required;      ///< the scene must give it when the law is on
+  bool positive;      ///< must be > 0 (else >= 0)
+  bool identifiable;  ///< `identify` estimates it for this law
+};
+
+/// A friction law f(w, z) of Mf_k = r_k N_k f_k(w_k).
+struct LawDescriptor {
+  FrictionLaw law;
+  const char* name;     ///< scene name (friction.model) and identify --law name
+  const char* formula;  ///< f(w) in the notation of docs/model.md
+  const LawCoefficient* coefficients;
+  int count;
+  int states_per_joint;  ///< extra ODE states per joint (LuGre: the bristle deflection z)
+  bool coulomb_sign;     ///< has a sign(w) jump: switches located, stick-slip
+};
+
+inline constexpr LawCoefficient kCoulombViscousCoefficients[] = {
+    {Coefficient::kCoulomb, true, false, true},
+    {Coefficient::kViscous, true, false, true},
+    {Coefficient::kStaticCoulomb, false, false, false},
+};
+inline constexpr LawCoefficient kStribeckCoefficients[] = {
+    {Coefficient::kCoulomb, true, false, true},
+    {Coefficient::kViscous, true, false, true},
+    {Coefficient::kStaticCoulomb, false, false, true},
+    {Coefficient::kStribeckVelocity, true, true, true},
+    {Coefficient::kStribeckExponent, false, true, false},
+};
+inline constexpr LawCoefficient kLuGreCoefficients[] = {
+    {Coefficient::kCoulomb, true, false, false},
+    {Coefficient::kStaticCoulomb, false, false, false},
+    {Coefficient::kStribeckVelocity, false, false, false},
+    {Coefficient::kStribeckExponent, false, true, false},
+    {Coefficient::kSigma0, true, true, false},
+    {Coefficient::kSigma1, false, false, false},
+    {Coefficient::kSigma2, false, false, false},
+};
+
+inline constexpr LawDescriptor kLaws[] = {
+    {FrictionLaw::kNone, "none", "0", nullptr, 0, 0, false},
+    {FrictionLaw::kCoulombViscous, "coulomb_viscous", "mu_c sign(w) + mu_v w",
+     kCoulombViscousCoefficients, 3, 0, true},
+    {FrictionLaw::kStribeck, "stribeck",
+     "(mu_c + (mu_s - mu_c) exp(-|w / w_st|^delta)) sign(w) + mu_v w", kStribeckCoefficients, 5,
+     0, true},
+    {FrictionLaw::kLuGre, "lugre",
+     "sigma0 z + sigma1 dz/dt + sigma2 w, dz/dt = w - sigma0 |w| z / g(w)", kLuGreCoefficients, 7,
+     1, false},
+};
+
+inline const LawDescriptor& law_descriptor(FrictionLaw law) {
+  for (const LawDescriptor& d : kLaws) {
+    if (d.law == law) return d;
+  }
+  return kLaws[0];
+}
+
+/// The law named `name` (scene / command-line name), or nullptr.
+inline const LawDescriptor* find_law(const std::string& name) {
+  for (const LawDescriptor& d : kLaws) {
+    if (name == d.name) return &d;
+  }
+  return nullptr;
+}
+
+/// "none, coulomb_viscous, stribeck, lugre": for "expected one of" messages.
+inline std::string law_names() {
+  std::string out;
+  for (const LawDescriptor& d : kLaws) out += (out.empty() ? "" : ", ") + std::string(d.name);
+  return out;
+}
+
+/// How `law` uses coefficient `c`, or nullptr when it does not.
+inline const LawCoefficient* law_coefficient(const LawDescriptor& law, Coefficient c) {
+  for (int i = 0; i < law.count; ++i) {
+    if (law.coefficients[i].id == c) return &law.coefficients[i];
+  }
+  return nullptr;
 }
 
 }  // namespace fivebar

@@ -16,6 +16,28 @@
 
 namespace fivebar::trajectory {
 
+/// The continuation to the scene's exact friction law and the refinement of the discretization
+/// that follow the first solve of a task. Each solve is warm-started from the best point so far;
+/// a stage replaces it only when it is feasible on the dense check grid and its exact-law
+/// objective is lower, so no stage can make the result worse.
+/// The refinement levels of `fivebar optimize` (each doubles the knot spans, about).
+inline const std::vector<int> kRefineLevels = {20, 40, 80};
+
+struct RefineOptions {
+  bool enabled = true;
+  /// smoothing velocities w_s [rad/s] solved after the first one, in order (continuation on
+  /// w_s towards the exact law, w_s = 0); the last one is the law of the refined solves
+  std::vector<double> continuation = {5e-3, 4e-4};
+  /// control points per joint tried after the first solve's count (only the larger ones),
+  /// until the exact-law objective changes by less than `tol` (relative) from one to the next;
+  /// empty: no refinement (`fivebar optimize` uses kRefineLevels)
+  std::vector<int> control_points;
+  double tol = 1e-3;
+  /// Gauss-Legendre points per knot span of a refined spline: as many nodes in all as the
+  /// first solve's, but at least this many per span
+  int min_quadrature_points = 6;
+};
+
 struct BatchOptions {
   ProblemOptions problem;      ///< its torque_limit is replaced by each task's
   OptimizerOptions optimizer;  ///< its seed is combined with a hash of each task's name
@@ -32,6 +54,9 @@ struct BatchOptions {
   /// control points tried, in order, for the spline that follows the path found (the first
   /// whose fit keeps the margin wins); the problem's own count is tried first
   std::vector<int> path_control_points = {14, 20, 28, 40};
+  /// after the first solve (smoothed law, problem.smoothing_velocity): the continuation to the
+  /// exact law and the refinement of the control points (docs/optimize.md)
+  RefineOptions refine;
 };
 
 /// The outcome of one task (one row of summary.csv). Energies are NaN when not computed.
@@ -81,16 +106,28 @@ struct TaskResult {
   double initial_peak_torque = NAN;        ///< of that start, dense grid [N m]
   double initial_min_coupler_sine = NAN;   ///< of that start, dense grid
   std::vector<double> x;  ///< optimal free control points (empty when no solve ran)
+  /// w_s [rad/s] of the smoothed law of the stage that gave x (its *_smoothed energies)
+  double smoothing_velocity = NAN;
+  /// the continuation, "w_s:E" per stage (E: exact-law objective of the stage's optimum [J],
+  /// "x" after it when the stage did not improve the result), ';'-separated
+  std::string continuation;
+  /// the refinement, "n:E" per control-point count solved, ';'-separated
+  std::string refinement;
+  /// relative change of the exact-law objective between the last two counts solved (< the
+  /// tolerance: converged); NaN when no refinement ran
+  double refinement_change = NAN;
 
   bool solved() const { return !x.empty(); }
 };
 
 /// Optimizes one task for one design. Never throws for numerical trouble: everything ends up in
 /// the status. `loads` gives M3, F, F_angle (M1, M2 ignored) and must be callable from the
-/// calling thread.
+/// calling thread. `warm` (optional): the same task solved for a neighbouring design, whose
+/// optimum, moved to this design's ends, starts the solve when it keeps the singular margin
+/// (initial_guess "warm_start").
 TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads,
                     const TaskSpec& task, const sim::Initial& initial,
-                    const BatchOptions& options);
+                    const BatchOptions& options, const TaskResult* warm = nullptr);
 
 /// The problem a result was solved on (to recompute its trajectory rows or torques).
 TrajectoryProblem problem_of(const Params<double>& params, const sim::LoadFunction& loads,
@@ -115,8 +152,9 @@ std::vector<TaskResult> run_parallel(int count, int threads,
 /// baseline_dissipated_energy_exact, baseline_status, initial_guess, initial_dissipated_energy,
 /// initial_peak_torque, initial_min_coupler_sine, control_points, dissipated_energy_smoothed,
 /// baseline_dissipated_energy_smoothed, input_energy_smoothed, baseline_input_energy_smoothed,
-/// miss_distance_exact, message. Energies and torques are those of the scene's exact friction law; the *_smoothed
-/// energies those of the smooth law the optimizer works on.
+/// miss_distance_exact, smoothing_velocity, refinement_change, continuation, refinement, message.
+/// Energies and torques are those of the scene's exact friction law; the *_smoothed energies
+/// those of the smooth law of the winning stage.
 const std::vector<std::string>& summary_columns();
 /// The fields of one summary.csv row (numbers as %.17g; the message quoted as CSV text).
 std::vector<std::string> summary_fields(const TaskResult& result);

@@ -25,4 +25,8 @@ std::vector<TaskResult> run_distributed(int count, int threads,
                                         const std::function<TaskResult(int)>& work,
                                         const std::function<void(int, int)>& progress = {});
 
+/// Sends rank 0's `results` to every rank (a no-op in one process), so that every rank can take
+/// the same decision from them (the outer loop of `fivebar design`).
+void broadcast_results(std::vector<TaskResult>* results);
+
 }  // namespace fivebar::trajectory

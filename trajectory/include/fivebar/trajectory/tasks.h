@@ -1,10 +1,10 @@
-// Tasks files (interfaces.md, "Tasks file"): YAML in, task specifications out, and their
-// resolution into joint-space rest-to-rest motions for one design.
+// Task specifications (interfaces.md, "Tasks file"; the YAML is read by the command line,
+// fivebar/io/tasks_file.h) and their resolution into joint-space rest-to-rest motions for one
+// design.
 #pragma once
 
 #include <array>
 #include <limits>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -12,21 +12,6 @@
 #include "fivebar/sim/simulator.h"
 
 namespace fivebar::trajectory {
-
-/// A malformed tasks file. what() is `<file>: <key>: <reason>` (the layout of InputError, to
-/// which the command line converts it, exit status 2).
-class TaskFileError : public std::runtime_error {
- public:
-  TaskFileError(const std::string& file, const std::string& key, const std::string& reason)
-      : std::runtime_error(file + ": " + key + ": " + reason), file_(file), key_(key),
-        reason_(reason) {}
-  const std::string& file() const { return file_; }
-  const std::string& key() const { return key_; }
-  const std::string& reason() const { return reason_; }
-
- private:
-  std::string file_, key_, reason_;
-};
 
 /// A start or goal: joint angles {theta1, theta2} [rad] or point C {x, y} [m].
 struct Pose {
@@ -48,15 +33,6 @@ struct TaskSpec {
   /// [N m] on |M1| and |M2|; infinity when the file gives none
   double torque_limit = std::numeric_limits<double>::infinity();
 };
-
-/// Reads a tasks file. Throws TaskFileError for a missing file, malformed YAML (with line and
-/// column), a missing `tasks` list, unknown keys, a task without name, duration, start or goal,
-/// a pose that is not exactly {theta1, theta2} or {x, y}, a value that is not a finite number,
-/// and task names that are empty, repeated or not usable as a directory name
-/// ([A-Za-z0-9_.-], not starting with '.').
-std::vector<TaskSpec> load_tasks(const std::string& path);
-/// The same from YAML text; `path` only names it in messages.
-std::vector<TaskSpec> parse_tasks(const std::string& yaml_text, const std::string& path);
 
 /// A task resolved for one design: joint angles at both ends, or why it cannot be done.
 struct ResolvedTask {

@@ -1,0 +1,64 @@
+// Tasks files (apps/src/tasks_file.cc): the YAML of interfaces.md read into task structs, and
+// every malformed file named by file, key and reason.
+#include <cmath>
+#include <string>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "fivebar/io/errors.h"
+#include "fivebar/io/tasks_file.h"
+
+namespace fivebar::io {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::ThrowsMessage;
+
+TEST(Tasks, MalformedFilesNameFileKeyAndReason) {
+  const std::string ok_task =
+      "  - {name: a, duration: 0.5, start: {theta1: 1.5, theta2: 1.5}, goal: {x: 0.2, y: 0.22}}\n";
+  auto parse = [](const std::string& text) { return parse_tasks(text, "t.yaml"); };
+  EXPECT_THAT([&] { parse("tasks: [\n"); },
+              ThrowsMessage<InputError>(HasSubstr("t.yaml: (yaml): line")));
+  EXPECT_THAT([&] { parse("task: []\n"); },
+              ThrowsMessage<InputError>(HasSubstr("t.yaml: task: unknown key")));
+  EXPECT_THAT([&] { parse("tasks: []\n"); },
+              ThrowsMessage<InputError>(HasSubstr("t.yaml: tasks: expected a non-empty")));
+  EXPECT_THAT([&] { parse("tasks:\n" + ok_task + ok_task); },
+              ThrowsMessage<InputError>(HasSubstr("tasks.1.name: duplicate task name 'a'")));
+  EXPECT_THAT([&] { parse("tasks:\n  - {name: a, start: {x: 0, y: 0}, goal: {x: 0, y: 0}}\n"); },
+              ThrowsMessage<InputError>(HasSubstr("tasks.0.duration: missing")));
+  EXPECT_THAT(
+      [&] {
+        parse("tasks:\n  - {name: a, duration: fast, start: {x: 0, y: 0}, goal: {x: 0, y: 0}}\n");
+      },
+      ThrowsMessage<InputError>(HasSubstr("tasks.0.duration: expected a number, got 'fast'")));
+  EXPECT_THAT(
+      [&] {
+        parse("tasks:\n  - {name: a, duration: 1, start: {x: 0, theta2: 0}, goal: {x: 0, y: 0}}\n");
+      },
+      ThrowsMessage<InputError>(HasSubstr("tasks.0.start: expected {theta1")));
+  EXPECT_THAT(
+      [&] {
+        parse("tasks:\n  - {name: a/b, duration: 1, start: {x: 0, y: 0}, goal: {x: 0, y: 0}}\n");
+      },
+      ThrowsMessage<InputError>(HasSubstr("tasks.0.name: 'a/b' is not usable")));
+  EXPECT_THAT([&] { load_tasks("/nonexistent/tasks.yaml"); },
+              ThrowsMessage<InputError>(HasSubstr("/nonexistent/tasks.yaml: (file)")));
+  EXPECT_EQ(parse("tasks:\n" + ok_task).size(), 1u);
+}
+
+TEST(Tasks, ShippedFileReadsIntoStructs) {
+  const auto tasks = load_tasks(std::string(FIVEBAR_SOURCE_DIR) + "/datasets/tasks/paper_tasks.yaml");
+  ASSERT_EQ(tasks.size(), 5u);
+  EXPECT_EQ(tasks[2].name, "reach_right");
+  EXPECT_TRUE(tasks[2].goal.cartesian);
+  EXPECT_EQ(tasks[2].goal.a, 0.20);
+  EXPECT_EQ(tasks[2].torque_limit, 20.0);
+  EXPECT_EQ(tasks[4].duration, 0.3);
+  EXPECT_TRUE(tasks[4].start.cartesian);
+}
+
+}  // namespace
+}  // namespace fivebar::io

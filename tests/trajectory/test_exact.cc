@@ -1,0 +1,105 @@
+// Issue 12: the continuation to the exact friction law, the refinement of the control points,
+// warm starts from a neighbouring design, and the outer loop of `fivebar design`.
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "fivebar/model/dynamics.h"
+#include "fivebar/trajectory/batch.h"
+#include "fivebar/trajectory/design.h"
+#include "fivebar/trajectory/tasks.h"
+#include "paper_fixture.h"
+
+namespace fivebar::trajectory {
+namespace {
+
+using testing::paper_tasks;
+using testing::paper_initial;
+using testing::paper_loads;
+
+TaskResult solve(const TaskSpec& task, const BatchOptions& options,
+                 const Params<double>& params = paper_params(), const TaskResult* warm = nullptr) {
+  return run_task(params, paper_loads(), task, paper_initial(), options, warm);
+}
+
+TEST(Continuation, ReachesTheExactLawEnergy) {
+  // swing_right: at w_s = 0.05 rad/s the smoothed law is 3e-4 (relative) off the exact one;
+  // the continuation must end where both agree and lower the exact-law energy
+  const TaskSpec task = paper_tasks()[1];
+  BatchOptions first;
+  first.validate = false;
+  first.refine.enabled = false;
+  BatchOptions cont = first;
+  cont.refine.enabled = true;
+  const TaskResult a = solve(task, first), b = solve(task, cont);
+  ASSERT_EQ(a.status, "ok") << a.message;
+  ASSERT_EQ(b.status, "ok") << b.message;
+  EXPECT_GT(std::abs(a.dissipated_energy_smoothed / a.dissipated_energy - 1.0), 2e-4);
+  EXPECT_EQ(b.smoothing_velocity, cont.refine.continuation.back());
+  EXPECT_LT(std::abs(b.dissipated_energy_smoothed / b.dissipated_energy - 1.0), 2e-5);
+  EXPECT_LT(b.dissipated_energy, a.dissipated_energy * (1.0 - 1e-4));
+  EXPECT_EQ(std::count(b.continuation.begin(), b.continuation.end(), ';'),
+            static_cast<long>(cont.refine.continuation.size()));
+}
+
+TEST(Refinement, StopsWhenTheEnergyChangesLessThanTheTolerance) {
+  const TaskSpec task = paper_tasks()[0];  // swing_left
+  BatchOptions options;
+  options.validate = false;
+  options.refine.continuation.clear();
+  options.refine.control_points = {14, 20};
+  options.refine.tol = 2e-2;  // 10 -> 14 changes the energy by about 1%: stop at 14
+  const TaskResult r = solve(task, options);
+  ASSERT_EQ(r.status, "ok") << r.message;
+  EXPECT_EQ(r.control_points, 14) << r.refinement;
+  EXPECT_LT(r.refinement_change, options.refine.tol);
+  EXPECT_EQ(r.refinement.rfind("10:", 0), 0u) << r.refinement;
+  // a tolerance no level meets: every level is solved, and the change says so
+  options.refine.tol = 1e-6;
+  const TaskResult all = solve(task, options);
+  ASSERT_EQ(all.status, "ok") << all.message;
+  EXPECT_EQ(all.control_points, 20) << all.refinement;
+  EXPECT_GT(all.refinement_change, options.refine.tol);
+  EXPECT_LT(all.dissipated_energy, r.dissipated_energy);
+}
+
+TEST(WarmStart, FromANeighbouringDesign) {
+  const TaskSpec task = paper_tasks()[2];  // reach_right, a Cartesian goal
+  BatchOptions options;
+  options.validate = false;
+  options.refine.enabled = false;
+  const TaskResult base = solve(task, options);
+  ASSERT_EQ(base.status, "ok") << base.message;
+  Params<double> p = paper_params();
+  p.links[1].length = 0.052;  // the goal's joint angles move
+  const TaskResult cold = solve(task, options, p), warm = solve(task, options, p, &base);
+  ASSERT_EQ(warm.status, "ok") << warm.message;
+  EXPECT_EQ(warm.initial_guess, "warm_start");
+  EXPECT_NE(warm.goal[1], base.goal[1]);
+  EXPECT_NEAR(warm.dissipated_energy, cold.dissipated_energy, 1e-3 * cold.dissipated_energy);
+  EXPECT_LT(warm.evaluations, cold.evaluations);
+}
+
+TEST(DesignBox, FindsInteriorAndBoundMinima) {
+  int calls = 0;
+  auto f = [&](const std::vector<double>& x) {
+    ++calls;
+    return (x[0] - 0.3) * (x[0] - 0.3) + 2.0 * (x[1] - 1.5) * (x[1] - 1.5);
+  };
+  BoxOptions o;
+  o.max_evaluations = 60;
+  o.xtol = 1e-6;
+  // the minimum in x[1] lies beyond the upper bound 1.0
+  const BoxResult r = minimize_box(f, {0.0, 0.0}, {1.0, 1.0}, {0.8, 0.2}, o);
+  ASSERT_TRUE(r.solver.usable()) << r.solver.message;
+  EXPECT_NEAR(r.x[0], 0.3, 1e-3);
+  EXPECT_NEAR(r.x[1], 1.0, 1e-6);
+  EXPECT_EQ(r.evaluations, calls);
+  EXPECT_LE(calls, o.max_evaluations);
+}
+
+}  // namespace
+}  // namespace fivebar::trajectory

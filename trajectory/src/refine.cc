@@ -1,0 +1,160 @@
+// Stages of a task's solve: the first (smoothed) solve, the continuation on the smoothing
+// velocity towards the scene's exact friction law, and the refinement of the control points.
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+
+#include "stage.h"
+
+namespace fivebar::trajectory {
+namespace {
+
+// the problem of a stage: finer splines get fewer quadrature points per knot span (as many
+// nodes in all as the first solve's, at least options.refine.min_quadrature_points per span)
+ProblemOptions stage_options(const BatchOptions& options, const RestToRest& motion, double ws,
+                             double torque_limit) {
+  ProblemOptions o = options.problem;
+  o.smoothing_velocity = ws;
+  o.torque_limit = torque_limit;
+  const int base_spans = std::max(1, options.problem.control_points - kDegree);
+  const int spans = motion.basis().spans();
+  if (spans > base_spans) {
+    const int q = (o.quadrature_points * base_spans + spans - 1) / spans;
+    o.quadrature_points = std::max(std::min(options.refine.min_quadrature_points,
+                                            o.quadrature_points), q);
+  }
+  return o;
+}
+
+// exact-law value of the objective the problem minimizes, Gauss-Legendre 4x denser than its rule
+double exact_objective(const TrajectoryProblem& problem, const std::vector<double>& x,
+                       const BatchOptions& options) {
+  double d = NAN, in = NAN;
+  if (!problem.exact_energies(x.data(), 4 * options.problem.quadrature_points, &d, &in).ok()) {
+    return NAN;
+  }
+  return options.problem.objective == Objective::kInputEnergy ? in : d;
+}
+
+// a is better than b: feasible beats infeasible, then the lower exact-law objective
+bool better(const Candidate& a, const Candidate& b, const BatchOptions& options) {
+  const bool fa = feasible(a, options), fb = feasible(b, options);
+  if (fa != fb) return fa;
+  return fa && a.exact < b.exact;
+}
+
+std::string short_num(double v) {
+  if (!std::isfinite(v)) return "nan";
+  char buf[40];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 7);
+  return std::string(buf, r.ptr);
+}
+
+// "key:E" (exact-law objective), "x" appended when the stage did not improve the result
+void log_stage(std::string* log, double key, const Candidate& c, bool kept) {
+  *log += (log->empty() ? "" : ";") + short_num(key) + ":" + short_num(c.exact) +
+          (kept ? "" : "x");
+}
+
+}  // namespace
+
+bool feasible(const Candidate& c, const BatchOptions& options) {
+  return c.solved() && c.solver.usable() && c.check.status.ok() &&
+         c.check.max_violation <= options.feasibility_tol && std::isfinite(c.exact);
+}
+
+Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loads,
+                      const RestToRest& motion, double ws, const std::vector<double>& x0,
+                      const BatchOptions& options, double torque_limit,
+                      const OptimizerOptions& optimizer) {
+  Candidate c;
+  c.control_points = motion.basis().size();
+  c.smoothing_velocity = ws;
+  const TrajectoryProblem problem(params, loads, motion, stage_options(options, motion, ws, torque_limit));
+  const OptimizeResult opt = optimize(problem, x0, optimizer);
+  c.solver = opt.solver;
+  c.evaluation = opt.evaluation;
+  c.evaluations = opt.evaluations;
+  c.starts = opt.starts;
+  c.best_start = opt.best_start;
+  if (!opt.evaluation.ok()) return c;
+  c.x = opt.x;
+  const int grid = options.check_factor * problem.num_nodes() + 1;
+  c.check = problem.check(c.x.data(), grid);
+  // a torque peak between the nodes: re-solve with the limit lowered by the overshoot
+  double limit = torque_limit;
+  for (int round = 0; round < 2 && c.check.status.ok() && opt.solver.usable() &&
+                      c.check.torque_excess > options.feasibility_tol * torque_limit;
+       ++round) {
+    limit *= torque_limit / c.check.peak_torque * (1.0 - 0.1 * options.feasibility_tol);
+    const TrajectoryProblem tightened(params, loads, motion, stage_options(options, motion, ws, limit));
+    const OptimizeResult again = optimize(tightened, c.x, optimizer);
+    c.evaluations += again.evaluations;
+    if (!again.solver.usable()) break;
+    const ConstraintCheck c2 = problem.check(again.x.data(), grid);
+    if (!c2.status.ok()) break;
+    c.x = again.x;
+    c.check = c2;
+  }
+  if (c.check.status.ok()) c.exact = exact_objective(problem, c.x, options);
+  return c;
+}
+
+namespace {
+
+// the continuation on w_s from `best`, each stage warm-started from the last usable point
+Candidate continuation(const Params<double>& params, const sim::LoadFunction& loads,
+                       Candidate best, const BatchOptions& options,
+                       const OptimizerOptions& optimizer, TaskResult* r) {
+  const RestToRest motion(best.control_points, r->duration, r->start, r->goal);
+  std::vector<double> warm = best.x;
+  log_stage(&r->continuation, best.smoothing_velocity, best, true);
+  for (double ws : options.refine.continuation) {
+    Candidate c = solve_stage(params, loads, motion, ws, warm, options, r->torque_limit,
+                              optimizer);
+    r->evaluations += c.evaluations;
+    if (c.solved() && c.solver.usable()) warm = c.x;
+    const bool kept = better(c, best, options);
+    log_stage(&r->continuation, ws, c, kept);
+    if (kept) best = std::move(c);
+  }
+  return best;
+}
+
+// the free variables of a spline of n control points fitted to the motion of `c`
+std::vector<double> refit(const Candidate& c, int n, const TaskResult& r) {
+  const RestToRest from(c.control_points, r.duration, r.start, r.goal);
+  const RestToRest to(n, r.duration, r.start, r.goal);
+  return to.fit([&](double t) { return from.state(c.x.data(), t)[0]; });
+}
+
+}  // namespace
+
+Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
+                 const Candidate& first, const BatchOptions& options,
+                 const OptimizerOptions& optimizer, TaskResult* r) {
+  // a scene whose own law is smoothed is solved exactly by the first stage
+  const bool smooth_law = params.friction.smoothing_velocity > 0.0;
+  Candidate best = smooth_law ? first : continuation(params, loads, first, options, optimizer, r);
+  if (!feasible(best, options)) return best;
+  const double ws = best.smoothing_velocity;
+  double previous = best.exact;
+  log_stage(&r->refinement, best.control_points, best, true);
+  for (int n : options.refine.control_points) {
+    if (n <= best.control_points) continue;
+    const RestToRest motion(n, r->duration, r->start, r->goal);
+    Candidate c = solve_stage(params, loads, motion, ws, refit(best, n, *r), options,
+                              r->torque_limit, optimizer);
+    r->evaluations += c.evaluations;
+    const bool kept = better(c, best, options);
+    log_stage(&r->refinement, n, c, kept);
+    if (!feasible(c, options)) continue;
+    r->refinement_change = std::abs(c.exact - previous) / std::abs(previous);
+    previous = c.exact;
+    if (kept) best = std::move(c);
+    if (r->refinement_change < options.refine.tol) break;
+  }
+  return best;
+}
+
+}  // namespace fivebar::trajectory
