@@ -33,7 +33,9 @@ struct Args {
 const std::vector<std::string> kOutputs = {"stress.csv", "stress.md"};
 
 /// A number column: empty where the value does not exist (negative marks "none").
-std::string opt_num(double x, const char* format = "%.3g") { return x < 0 ? "" : format_printf(x, format); }
+std::string opt_num(double x, const char* format = "%.3g") {
+  return x < 0 ? "" : format_printf(x, format);
+}
 
 /// A CSV field: quoted, inner quotes doubled (messages hold commas).
 std::string csv_field(const std::string& s) {
@@ -73,10 +75,12 @@ std::string stress_md(const std::vector<studies::StressCase>& cases, const studi
   s << "# fivebar stress\n\n"
     << "Runs at rtol = atol = 1e-8 on a 1 ms output grid; `error` is max |d theta_1..4| over the "
        "grid against the case's reference (the same case at rtol = atol = "
-    << format_printf(opt.reference_tolerance, "%.3g") << " with the integrator named under each case). `ok` also "
+    << format_printf(opt.reference_tolerance, "%.3g")
+    << " with the integrator named under each case). `ok` also "
        "requires finite rows and an energy balance residual <= "
-    << format_printf(opt.max_energy_balance, "%.3g") << "; each run is a child process killed after "
-    << format_printf(opt.run_budget_s, "%.3g") << " s.\n\n"
+    << format_printf(opt.max_energy_balance, "%.3g")
+    << "; each run is a child process killed after " << format_printf(opt.run_budget_s, "%.3g")
+    << " s.\n\n"
     << "**" << report.count(studies::StressOutcome::kOk) << " ok, "
     << report.count(studies::StressOutcome::kRejected) << " rejected, "
     << report.count(studies::StressOutcome::kFailed) << " failed** (" << report.rows.size()
@@ -84,10 +88,11 @@ std::string stress_md(const std::vector<studies::StressCase>& cases, const studi
   for (size_t i = 0; i < cases.size(); ++i) {
     const studies::StressCase& c = cases[i];
     const studies::StressReference& ref = report.references[i];
-    s << "\n## " << c.name << "\n\n" << c.description << ".\n\nReference: "
-      << sim::method_name(ref.method) << " at " << format_printf(ref.tolerance, "%.3g") << ": "
-      << (ref.ok ? "ok (" + format_printf(ref.wall_time_s, "%.2f") + " s, " + std::to_string(ref.steps) +
-                       " steps)"
+    s << "\n## " << c.name << "\n\n"
+      << c.description << ".\n\nReference: " << sim::method_name(ref.method) << " at "
+      << format_printf(ref.tolerance, "%.3g") << ": "
+      << (ref.ok ? "ok (" + format_printf(ref.wall_time_s, "%.2f") + " s, " +
+                       std::to_string(ref.steps) + " steps)"
                  : "did not finish: " + md_cell(ref.message))
       << ".\n\n"
       << "| integrator | status | exit | error [rad] | energy balance | wall [s] | steps | "
@@ -96,8 +101,8 @@ std::string stress_md(const std::vector<studies::StressCase>& cases, const studi
       if (r.case_name != c.name) continue;
       s << "| " << sim::method_name(r.method) << " | " << studies::stress_outcome_name(r.outcome)
         << " | " << r.exit_code << " | " << opt_num(r.error, "%.2e") << " | "
-        << opt_num(r.energy_balance, "%.2e") << " | " << format_printf(r.wall_time_s, "%.3f") << " | "
-        << r.steps << " | " << r.rhs_evaluations << " | " << md_cell(r.message) << " |\n";
+        << opt_num(r.energy_balance, "%.2e") << " | " << format_printf(r.wall_time_s, "%.3f")
+        << " | " << r.steps << " | " << r.rhs_evaluations << " | " << md_cell(r.message) << " |\n";
     }
   }
   return s.str();

@@ -143,7 +143,8 @@ void near_singular_start_cases(double d_short, std::vector<StressCase>* cases) {
   c.params = stretchable_params();
   const double sine = 5e-4;  // couplers 5e-4 rad from alignment
   c.initial = {M_PI, theta2_at_sine(c.params, sine), 0.0, 0.0};
-  c.description = "couplers " + format_significant(sine, 4) + " rad from alignment at the start (l3 = l4 = 0.2 m)"
+  c.description = "couplers " + format_significant(sine, 4) +
+                  " rad from alignment at the start (l3 = l4 = 0.2 m)"
                   "; must be rejected by singular_margin = 1e-3 (exit 2)";
   cases->push_back(c);
   c.name = "near_singular_start_margin_1e-5";
@@ -251,7 +252,8 @@ StressCase drive_200hz_case(double d_short) {
 /// A long run.
 void long_run_cases(double d_short, double d_long, std::vector<StressCase>* cases) {
   StressCase c = paper_case("long_run_60s", "", d_long);
-  c.description = "the paper scene over " + format_significant(d_long, 4) + " s: energy balance drift over the "
+  c.description = "the paper scene over " + format_significant(d_long, 4) +
+                  " s: energy balance drift over the "
                   "whole run; error over the first 2 s";
   // the forced motion is chaotic: cvode_adams at 1e-12 and 1e-13 and cvode_bdf at 1e-12
   // separate by more than 1e-6 rad after 5-7 s and by tens of radians at 60 s, so the error
@@ -427,8 +429,8 @@ StressRow evaluate_run(const StressCase& c, Method method, const std::vector<Row
       }
     }
     if (!(row.displacement <= c.max_displacement)) {
-      return fail("moved " + format_significant(row.displacement, 4) + " rad below breakaway (bound " +
-                  format_significant(c.max_displacement, 4) + ")");
+      return fail("moved " + format_significant(row.displacement, 4) +
+                  " rad below breakaway (bound " + format_significant(c.max_displacement, 4) + ")");
     }
   }
   if (ref.empty()) {
@@ -437,8 +439,10 @@ StressRow evaluate_run(const StressCase& c, Method method, const std::vector<Row
   }
   row.error = theta_difference(r.rows, ref, c.error_horizon);
   if (!(row.error <= c.max_error)) {
-    return fail("max |d theta| " + format_significant(row.error, 4) + " rad from the reference, above the case's "
-                "bound " + format_significant(c.max_error, 4) + " (silent garbage)");
+    return fail("max |d theta| " + format_significant(row.error, 4) +
+                " rad from the reference, above the case's "
+                "bound " +
+                format_significant(c.max_error, 4) + " (silent garbage)");
   }
   row.outcome = StressOutcome::kOk;
   row.exit_code = 0;
@@ -542,7 +546,8 @@ ChildOutcome run_child(const std::function<std::string()>& work, double budget_s
   while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
   if (timed_out) {
-    out.problem = "no result within the wall-time budget of " + format_significant(budget_s, 4) + " s (killed)";
+    out.problem = "no result within the wall-time budget of " + format_significant(budget_s, 4) +
+                  " s (killed)";
   } else if (WIFSIGNALED(status)) {
     out.problem = "crashed with signal " + std::to_string(WTERMSIG(status)) + " (" +
                   strsignal(WTERMSIG(status)) + ")";

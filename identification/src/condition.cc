@@ -294,8 +294,9 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
     for (size_t i = 0; i < out.glitches.size() && i < 5; ++i) {
       const Glitch& g = out.glitches[i];
       what += std::string(i ? "; " : "") + "line " + std::to_string(g.line) + " " + g.column +
-              " = " + format_significant(g.value, 6) + " where its neighbours give " + format_significant(g.expected, 6) + " (" +
-              format_significant(g.sigmas, 2) + " noise std)";
+              " = " + format_significant(g.value, 6) + " where its neighbours give " +
+              format_significant(g.expected, 6) + " (" + format_significant(g.sigmas, 2) +
+              " noise std)";
     }
     if (out.glitches.size() > 5) what += "; ...";
     out.notes.push_back("rejected " + std::to_string(out.glitches.size()) +
@@ -329,8 +330,8 @@ std::string degrees_from_motion(const Params<double>& scene, const sim::LoadFunc
   if (!(as_deg < 0.25 * as_rad) || !(as_deg < 0.5 * median_abs(tau))) return "";
   return "read as radians, the motion (median crank rate " + format_significant(rate_rad, 3) +
          " rad/s) needs torques a median " + format_significant(as_rad, 3) +
-         " N m away from the logged ones; read as degrees (median rate " + format_significant(rate_deg, 3) +
-         " rad/s), " + format_significant(as_deg, 3) + " N m";
+         " N m away from the logged ones; read as degrees (median rate " +
+         format_significant(rate_deg, 3) + " rad/s), " + format_significant(as_deg, 3) + " N m";
 }
 
 }  // namespace fivebar::identification

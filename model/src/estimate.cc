@@ -69,7 +69,8 @@ EstimatedRun simulate_to_target(const Params<double>& params, const LoadFunction
   }
   if (!out.target_met && out.note.empty()) {
     out.note = "target_error " + format_significant(target, 3) + " rad not met: estimated error " +
-               format_significant(out.estimated_max_error_rad, 3) + " rad at rtol " + format_significant(o.rtol, 3) +
+               format_significant(out.estimated_max_error_rad, 3) + " rad at rtol " +
+               format_significant(o.rtol, 3) +
                (o.auto_tolerance ? " (tighter tolerances cannot reach it: errors grow "
                                    "exponentially in this motion)"
                                  : " (the scene fixes rtol; remove it to let fivebar choose)");
