@@ -39,12 +39,6 @@ struct Args {
 const std::vector<std::string> kOutputs = {"work_precision.csv", "work_precision.png",
                                            "work_precision.gnuplot", "summary.json"};
 
-std::string fmt(double x, const char* format = "%.3g") {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, format, x);
-  return buf;
-}
-
 /// max |d theta| between our reference rows and an external CSV, on the times both have.
 double against_external(const std::string& path, const std::vector<sim::Row>& rows, double step) {
   const CsvTable table = read_csv(path);
@@ -65,16 +59,16 @@ double against_external(const std::string& path, const std::vector<sim::Row>& ro
   return worst;
 }
 
-int run(const Args& args) {
-  const Scene scene = load_scene(args.scene.scene, args.scene.sets);
-  const sim::LoadFunction loads = LoadExpressions(scene).function();
+/// The study's options from the command line; throws InputError naming the flag.
+studies::WorkPrecisionOptions study_options(const Args& args, const Scene& scene) {
   studies::WorkPrecisionOptions opt;
   if (args.repeats < 1) throw InputError(scene.path, "--repeats", "must be at least 1");
   opt.repeats = args.repeats;
   if (!args.tolerances.empty()) {
     for (double t : args.tolerances) {
       if (!(t > 0.0 && t < 1.0)) {
-        throw InputError(scene.path, "--tolerances", fmt(t) + ": a tolerance must be in (0, 1)");
+        throw InputError(scene.path, "--tolerances",
+                         format_significant(t, 3) + ": a tolerance must be in (0, 1)");
       }
     }
     opt.tolerances = args.tolerances;
@@ -92,15 +86,11 @@ int run(const Args& args) {
   if (scene.params.friction.smoothing_velocity > 0.0) {
     opt.regularization_velocity = scene.params.friction.smoothing_velocity;
   }
-  OutputDir out(args.scene.out, kOutputs);
+  return opt;
+}
 
-  studies::WorkPrecision wp;
-  Progress progress("accuracy", 1.0);
-  opt.progress = [&progress](int done, int total) { progress.update(double(done) / total); };
-  const Status st = studies::work_precision(scene.params, loads, scene.initial, scene.options, opt, &wp);
-  if (!st.ok()) throw NumericalError(scene.path, "reference", st.message);
-
-  // work_precision.csv
+/// work_precision.csv: one row per point.
+std::string work_precision_csv(const studies::WorkPrecision& wp) {
   std::ostringstream csv;
   csv << "method,treatment,tolerance,status,error,error_vs_exact,wall_time_s,rhs_evaluations,"
          "steps,friction_events,pareto,message\n";
@@ -115,28 +105,11 @@ int run(const Args& args) {
         << format_double(p.wall_time_s) << ',' << p.rhs_evaluations << ',' << p.steps
         << ',' << p.friction_events << ',' << (p.pareto ? 1 : 0) << ',' << msg << "\n";
   }
-  write_text_file(out.file("work_precision.csv"), csv.str());
+  return csv.str();
+}
 
-  Json summary = Json::object();
-  summary.set("command", "accuracy");
-  summary.set("scene", scene.path);
-  Json ref = Json::object();
-  ref.set("how", "CVODE Adams and ARKODE Dormand-Prince at rtol = atol = " +
-                     fmt(opt.reference_tolerance) +
-                     ", exact sign with located switches; rows of the Adams run");
-  ref.set("self_difference", wp.exact.self_difference);
-  ref.set("friction_events", wp.exact.stats.friction_events);
-  if (!args.reference.empty()) {
-    const double d = against_external(args.reference, wp.exact.rows, scene.options.output_step);
-    ref.set("external", args.reference);
-    ref.set("max_abs_difference_external", d);
-  }
-  summary.set("reference", std::move(ref));
-  if (!wp.regularized.rows.empty()) {
-    summary.set("regularization_velocity", opt.regularization_velocity);
-    summary.set("regularized_model_error",
-                studies::max_theta_difference(wp.regularized.rows, wp.exact.rows));
-  }
+/// summary.json's recommendations: the fastest Pareto point within each target error.
+Json recommendations_json(const studies::WorkPrecision& wp) {
   Json recs = Json::array();
   for (const auto& r : wp.recommendations) {
     Json j = Json::object();
@@ -151,7 +124,83 @@ int run(const Args& args) {
     }
     recs.push(std::move(j));
   }
-  summary.set("recommendations", std::move(recs));
+  return recs;
+}
+
+/// summary.json: the reference (and its distance to --reference), the regularization's own
+/// model error, the recommendations.
+Json summary_json(const Args& args, const Scene& scene, const studies::WorkPrecisionOptions& opt,
+                  const studies::WorkPrecision& wp) {
+  Json summary = Json::object();
+  summary.set("command", "accuracy");
+  summary.set("scene", scene.path);
+  Json ref = Json::object();
+  ref.set("how", "CVODE Adams and ARKODE Dormand-Prince at rtol = atol = " +
+                     format_significant(opt.reference_tolerance, 3) +
+                     ", exact sign with located switches; rows of the Adams run");
+  ref.set("self_difference", wp.exact.self_difference);
+  ref.set("friction_events", wp.exact.stats.friction_events);
+  if (!args.reference.empty()) {
+    const double d = against_external(args.reference, wp.exact.rows, scene.options.output_step);
+    ref.set("external", args.reference);
+    ref.set("max_abs_difference_external", d);
+  }
+  summary.set("reference", std::move(ref));
+  if (!wp.regularized.rows.empty()) {
+    summary.set("regularization_velocity", opt.regularization_velocity);
+    summary.set("regularized_model_error",
+                studies::max_theta_difference(wp.regularized.rows, wp.exact.rows));
+  }
+  summary.set("recommendations", recommendations_json(wp));
+  return summary;
+}
+
+/// The console report: the reference's self-difference, the Pareto front, the recommendations.
+void print_report(const Args& args, const Scene& scene, const studies::WorkPrecisionOptions& opt,
+                  const studies::WorkPrecision& wp) {
+  const auto g3 = [](double x) { return format_significant(x, 3); };
+  std::cout << "fivebar accuracy: " << scene.path << ": " << wp.points.size() << " runs\n"
+            << "  reference: Adams vs Dormand-Prince at " << g3(opt.reference_tolerance)
+            << " differ by " << g3(wp.exact.self_difference) << " rad";
+  if (!args.reference.empty()) {
+    std::cout << "; vs " << args.reference << ": "
+              << g3(against_external(args.reference, wp.exact.rows, scene.options.output_step))
+              << " rad";
+  }
+  std::cout << "\n  Pareto front (" << studies::treatment_name(wp.points.front().treatment)
+            << "):\n";
+  for (const auto& p : wp.points) {
+    if (!p.pareto) continue;
+    std::cout << "    " << sim::method_name(p.method) << " tol " << g3(p.tolerance) << ": error "
+              << g3(p.error) << " rad in " << g3(p.wall_time_s * 1e3) << " ms\n";
+  }
+  for (const auto& r : wp.recommendations) {
+    std::cout << "  for " << g3(r.target) << " rad: ";
+    if (r.found) {
+      std::cout << sim::method_name(r.point.method) << " at rtol = atol = "
+                << g3(r.point.tolerance) << " (" << g3(r.point.error) << " rad, "
+                << g3(r.point.wall_time_s * 1e3) << " ms)\n";
+    } else {
+      std::cout << "not reached\n";
+    }
+  }
+}
+
+int run(const Args& args) {
+  const Scene scene = load_scene(args.scene.scene, args.scene.sets);
+  const sim::LoadFunction loads = LoadExpressions(scene).function();
+  studies::WorkPrecisionOptions opt = study_options(args, scene);
+  OutputDir out(args.scene.out, kOutputs);
+
+  studies::WorkPrecision wp;
+  Progress progress("accuracy", 1.0);
+  opt.progress = [&progress](int done, int total) { progress.update(double(done) / total); };
+  const Status st =
+      studies::work_precision(scene.params, loads, scene.initial, scene.options, opt, &wp);
+  if (!st.ok()) throw NumericalError(scene.path, "reference", st.message);
+
+  write_text_file(out.file("work_precision.csv"), work_precision_csv(wp));
+  const Json summary = summary_json(args, scene, opt, wp);
   if (!args.no_plots) {
     const std::string warning =
         run_gnuplot(out.staging(), "work_precision.gnuplot",
@@ -162,31 +211,7 @@ int run(const Args& args) {
   }
   write_json_file(out.file("summary.json"), summary);
   const std::vector<std::string> written = out.commit();
-
-  std::cout << "fivebar accuracy: " << scene.path << ": " << wp.points.size() << " runs\n"
-            << "  reference: Adams vs Dormand-Prince at " << fmt(opt.reference_tolerance)
-            << " differ by " << fmt(wp.exact.self_difference) << " rad";
-  if (!args.reference.empty()) {
-    std::cout << "; vs " << args.reference << ": "
-              << fmt(against_external(args.reference, wp.exact.rows, scene.options.output_step))
-              << " rad";
-  }
-  std::cout << "\n  Pareto front (" << studies::treatment_name(wp.points.front().treatment) << "):\n";
-  for (const auto& p : wp.points) {
-    if (!p.pareto) continue;
-    std::cout << "    " << sim::method_name(p.method) << " tol " << fmt(p.tolerance) << ": error "
-              << fmt(p.error) << " rad in " << fmt(p.wall_time_s * 1e3) << " ms\n";
-  }
-  for (const auto& r : wp.recommendations) {
-    std::cout << "  for " << fmt(r.target) << " rad: ";
-    if (r.found) {
-      std::cout << sim::method_name(r.point.method) << " at rtol = atol = " << fmt(r.point.tolerance)
-                << " (" << fmt(r.point.error) << " rad, " << fmt(r.point.wall_time_s * 1e3)
-                << " ms)\n";
-    } else {
-      std::cout << "not reached\n";
-    }
-  }
+  print_report(args, scene, opt, wp);
   print_written(out.dir(), written);
   return 0;
 }

@@ -65,9 +65,8 @@ double crank_noise(const std::vector<double>& a, const std::vector<double>& b) {
   return std::max(series_noise(a), series_noise(b));
 }
 
-Motion read_motion(const std::string& path, const Scene& scene) {
-  const CsvTable table = read_csv(path);
-  const std::vector<double> t = table.column("t");
+// time must increase strictly from row to row
+void check_times(const std::string& path, const CsvTable& table, const std::vector<double>& t) {
   if (t.empty()) throw InputError(path, "(file)", "no data rows after the header");
   for (size_t i = 1; i < t.size(); ++i) {
     if (!(t[i] > t[i - 1])) {
@@ -76,10 +75,12 @@ Motion read_motion(const std::string& path, const Scene& scene) {
                            format_double(t[i - 1]));
     }
   }
-  const std::vector<double> theta1 = table.column("theta1"), theta2 = table.column("theta2");
+}
 
-  // each pose must close away from the coupler singularity
-  for (size_t i = 0; i < t.size(); ++i) {
+// each pose must close away from the coupler singularity
+void check_motion_poses(const std::string& path, const CsvTable& table, const Scene& scene,
+                        const std::vector<double>& theta1, const std::vector<double>& theta2) {
+  for (size_t i = 0; i < theta1.size(); ++i) {
     const double sine = coupler_sine(scene.params, theta1[i], theta2[i]);
     if (sine < scene.options.singular_margin) {
       throw InputError(path, "line " + std::to_string(table.lines[i]),
@@ -89,78 +90,104 @@ Motion read_motion(const std::string& path, const Scene& scene) {
                            ", theta2 = " + format_double(theta2[i]));
     }
   }
+}
 
-  // rates from the file when it has both columns, else by differences on a uniform grid
-  const bool has_omega = table.has("omega1") && table.has("omega2");
-  const bool has_alpha = table.has("alpha1") && table.has("alpha2");
+// the crank series of a motion file: angles, and rates and accelerations from the file or by
+// differences on the uniform step h (0 when every series comes from the file)
+struct CrankSeries {
+  std::vector<double> t, theta1, theta2, omega1, omega2, alpha1, alpha2;
+  bool has_omega = false, has_alpha = false;
   double h = 0;
-  if (!has_omega || !has_alpha) {
-    if (t.size() < kMinSamplesForDifferences) {
+};
+
+// rates from the file when it has both columns, else by differences on a uniform grid
+void derive_rates(const std::string& path, const CsvTable& table, CrankSeries* c, Motion* m) {
+  c->has_omega = table.has("omega1") && table.has("omega2");
+  c->has_alpha = table.has("alpha1") && table.has("alpha2");
+  if (!c->has_omega || !c->has_alpha) {
+    if (c->t.size() < kMinSamplesForDifferences) {
       throw InputError(path, "(file)",
                        "at least 5 samples are needed to estimate the missing "
                        "omega/alpha columns by finite differences, got " +
-                           std::to_string(t.size()));
+                           std::to_string(c->t.size()));
     }
-    h = uniform_step(t, table.lines, path);
+    c->h = uniform_step(c->t, table.lines, path);
   }
-  Motion m;
-  std::vector<double> omega1, omega2, alpha1, alpha2;
-  if (has_omega) {
-    omega1 = table.column("omega1");
-    omega2 = table.column("omega2");
-    m.omega_source = "file";
+  if (c->has_omega) {
+    c->omega1 = table.column("omega1");
+    c->omega2 = table.column("omega2");
+    m->omega_source = "file";
   } else {
-    omega1 = first_derivative(theta1, h);
-    omega2 = first_derivative(theta2, h);
-    m.omega_source = "5-point central differences of theta";
+    c->omega1 = first_derivative(c->theta1, c->h);
+    c->omega2 = first_derivative(c->theta2, c->h);
+    m->omega_source = "5-point central differences of theta";
   }
-  if (has_alpha) {
-    alpha1 = table.column("alpha1");
-    alpha2 = table.column("alpha2");
-    m.alpha_source = "file";
-  } else if (has_omega) {
-    alpha1 = first_derivative(omega1, h);
-    alpha2 = first_derivative(omega2, h);
-    m.alpha_source = "5-point central differences of omega";
+  if (c->has_alpha) {
+    c->alpha1 = table.column("alpha1");
+    c->alpha2 = table.column("alpha2");
+    m->alpha_source = "file";
+  } else if (c->has_omega) {
+    c->alpha1 = first_derivative(c->omega1, c->h);
+    c->alpha2 = first_derivative(c->omega2, c->h);
+    m->alpha_source = "5-point central differences of omega";
   } else {
-    alpha1 = second_derivative(theta1, h);
-    alpha2 = second_derivative(theta2, h);
-    m.alpha_source = "5-point central second differences of theta";
+    c->alpha1 = second_derivative(c->theta1, c->h);
+    c->alpha2 = second_derivative(c->theta2, c->h);
+    m->alpha_source = "5-point central second differences of theta";
   }
-  // noise of what the rest rule compares with its thresholds: measured from the series given,
-  // or propagated from the angles' (or rates') noise through the difference stencils
-  const double theta_noise = crank_noise(theta1, theta2);
+}
+
+// noise of what the rest rule compares with its thresholds: measured from the series given,
+// or propagated from the angles' (or rates') noise through the difference stencils
+void estimate_noise(const CrankSeries& c, Motion* m) {
+  const double theta_noise = crank_noise(c.theta1, c.theta2);
   // given series: never below the rounding of the angles over one step
-  if (h == 0) h = t.size() > 1 ? (t.back() - t.front()) / double(t.size() - 1) : 1.0;
-  const double rounding = std::max(rounding_noise(theta1), rounding_noise(theta2));
+  double h = c.h;
+  const size_t n = c.t.size();
+  if (h == 0) h = n > 1 ? (c.t.back() - c.t.front()) / double(n - 1) : 1.0;
+  const double rounding = std::max(rounding_noise(c.theta1), rounding_noise(c.theta2));
   // differentiated angles: also never below the stencils' own truncation error where the
   // motion has a kink (h^4/30 |f^(5)| for the rate, h^4/90 |f^(6)| for the acceleration, from
   // the largest 5th and 6th differences): the row before a held pose starts to move would
   // otherwise read as slipping
   const double trunc_rate =
-      std::max(max_difference(theta1, 5), max_difference(theta2, 5)) / (30 * h);
+      std::max(max_difference(c.theta1, 5), max_difference(c.theta2, 5)) / (30 * h);
   const double trunc_accel =
-      std::max(max_difference(theta1, 6), max_difference(theta2, 6)) / (90 * h * h);
-  m.rate_noise = has_omega ? std::max(crank_noise(omega1, omega2), rounding / h)
-                           : std::max(kFirstDerivativeNoiseGain * theta_noise / h, trunc_rate);
-  if (has_alpha) {
-    m.acceleration_noise = std::max(crank_noise(alpha1, alpha2), rounding / (h * h));
-  } else if (has_omega) {
-    m.acceleration_noise = kFirstDerivativeNoiseGain * m.rate_noise / h;
+      std::max(max_difference(c.theta1, 6), max_difference(c.theta2, 6)) / (90 * h * h);
+  m->rate_noise = c.has_omega
+                      ? std::max(crank_noise(c.omega1, c.omega2), rounding / h)
+                      : std::max(kFirstDerivativeNoiseGain * theta_noise / h, trunc_rate);
+  if (c.has_alpha) {
+    m->acceleration_noise = std::max(crank_noise(c.alpha1, c.alpha2), rounding / (h * h));
+  } else if (c.has_omega) {
+    m->acceleration_noise = kFirstDerivativeNoiseGain * m->rate_noise / h;
   } else {
-    m.acceleration_noise =
+    m->acceleration_noise =
         std::max(kSecondDerivativeNoiseGain * theta_noise / (h * h), trunc_accel);
   }
-  m.rows.resize(t.size());
-  for (size_t i = 0; i < t.size(); ++i) {
+}
+
+Motion read_motion(const std::string& path, const Scene& scene) {
+  const CsvTable table = read_csv(path);
+  CrankSeries c;
+  c.t = table.column("t");
+  check_times(path, table, c.t);
+  c.theta1 = table.column("theta1");
+  c.theta2 = table.column("theta2");
+  check_motion_poses(path, table, scene, c.theta1, c.theta2);
+  Motion m;
+  derive_rates(path, table, &c, &m);
+  estimate_noise(c, &m);
+  m.rows.resize(c.t.size());
+  for (size_t i = 0; i < c.t.size(); ++i) {
     sim::Row& r = m.rows[i];
-    r.t = t[i];
-    r.theta[0] = theta1[i];
-    r.theta[1] = theta2[i];
-    r.omega[0] = omega1[i];
-    r.omega[1] = omega2[i];
-    r.alpha[0] = alpha1[i];
-    r.alpha[1] = alpha2[i];
+    r.t = c.t[i];
+    r.theta[0] = c.theta1[i];
+    r.theta[1] = c.theta2[i];
+    r.omega[0] = c.omega1[i];
+    r.omega[1] = c.omega2[i];
+    r.alpha[0] = c.alpha1[i];
+    r.alpha[1] = c.alpha2[i];
   }
   m.has_torques = table.has("M1") && table.has("M2");
   if (m.has_torques) {
@@ -205,7 +232,7 @@ RestRule rest_rule(const Scene& scene, const Motion& motion) {
 // the rows at rest (both cranks stuck) and what holds them
 struct RestSummary {
   long rows_at_rest = 0, rows_with_stuck_joint = 0;
-  std::array<long, 5> stuck_rows{};
+  std::array<long, kJoints> stuck_rows{};
   // reported holding torques over the rows at rest, and the intersection of their ranges
   double M1_lo = INFINITY, M1_hi = -INFINITY, M2_lo = INFINITY, M2_hi = -INFINITY;
   double range1_lo = -INFINITY, range1_hi = INFINITY, range2_lo = -INFINITY, range2_hi = INFINITY;
@@ -215,7 +242,7 @@ RestSummary summarize_rest(const std::vector<sim::Row>& rows) {
   RestSummary s;
   for (const sim::Row& r : rows) {
     bool any = false;
-    for (int k = 0; k < 5; ++k) {
+    for (int k = 0; k < kJoints; ++k) {
       const bool stuck = r.mode[k] == kStuck;
       s.stuck_rows[k] += stuck;
       any = any || stuck;

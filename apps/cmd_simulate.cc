@@ -52,12 +52,6 @@ constexpr size_t kPlotBuckets = 100;
 /// runs with more rows than this are drawn from the decimated copy (gnuplot stays fast)
 constexpr size_t kPlotMaxRows = 10000;
 
-std::string fmt(double x, const char* format = "%.4g") {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, format, x);
-  return buf;
-}
-
 // the statistics and final energies of one run
 Json run_json(const sim::Result& run, const sim::RunChecks* checks) {
   Json j = Json::object();
@@ -119,8 +113,8 @@ std::optional<sim::Result> run_twin(const Scene& scene, const sim::LoadFunction&
                                     std::optional<sim::RunChecks>* checks) {
   if (!scene.params.friction.active()) return std::nullopt;
   if (options.duration > kTwinMaxDuration && !forced) {
-    std::cout << "  frictionless twin skipped: runs over " << fmt(kTwinMaxDuration)
-              << " s draw it only with --twin\n";
+    std::cout << "  frictionless twin skipped: runs over "
+              << format_printf(kTwinMaxDuration, "%.4g") << " s draw it only with --twin\n";
     return std::nullopt;
   }
   Params<double> frictionless = scene.params;
@@ -193,28 +187,31 @@ void print_report(const Scene& scene, const sim::EstimatedRun& er, const sim::Ru
   const sim::Row& last = run.rows.back();
   std::cout << "fivebar simulate: " << scene.path << " (friction "
             << friction_law_name(scene.params.friction.law) << "), " << integrator_name(o.method)
-            << " rtol " << fmt(o.rtol) << " atol " << fmt(o.atol)
-            << (o.auto_tolerance ? " (chosen for target_error " + fmt(o.target_error) + " rad)"
-                                 : "")
+            << " rtol " << format_printf(o.rtol, "%.4g") << " atol "
+            << format_printf(o.atol, "%.4g")
+            << (o.auto_tolerance
+                    ? " (chosen for target_error " + format_printf(o.target_error, "%.4g") + " rad)"
+                    : "")
             << "\n"
-            << "  t = 0 .. " << fmt(last.t) << " s, " << run.rows.size() << " rows; "
-            << run.stats.steps << " steps, " << run.stats.rhs_evaluations << " rhs evaluations, "
-            << run.stats.friction_events << " friction events, "
-            << fmt(run.stats.wall_time_s, "%.3f") << " s\n"
-            << "  estimated error: " << fmt(er.estimated_max_error_rad, "%.2e") << " rad"
+            << "  t = 0 .. " << format_printf(last.t, "%.4g") << " s, " << run.rows.size()
+            << " rows; " << run.stats.steps << " steps, " << run.stats.rhs_evaluations
+            << " rhs evaluations, " << run.stats.friction_events << " friction events, "
+            << format_printf(run.stats.wall_time_s, "%.3f") << " s\n"
+            << "  estimated error: " << format_printf(er.estimated_max_error_rad, "%.2e") << " rad"
             << (er.target_met ? " (target met)" : "") << "\n";
   if (!er.note.empty()) std::cout << "  note: " << er.note << "\n";
-  std::cout << "  energy: W_in " << fmt(last.W_in, "%.6g") << " J, W_ext "
-            << fmt(last.W_ext, "%.6g") << " J, E_diss " << fmt(last.E_diss, "%.6g")
-            << " J; balance residual " << fmt(checks.energy_balance_relative, "%.2e")
-            << " (relative)\n"
+  std::cout << "  energy: W_in " << format_printf(last.W_in, "%.6g") << " J, W_ext "
+            << format_printf(last.W_ext, "%.6g") << " J, E_diss "
+            << format_printf(last.E_diss, "%.6g") << " J; balance residual "
+            << format_printf(checks.energy_balance_relative, "%.2e") << " (relative)\n"
             << "  inverse dynamics: max |M - M_input| = "
-            << fmt(checks.inverse_dynamics_max_abs_error, "%.2e") << " N m; min friction power "
-            << fmt(checks.friction_power_min, "%.2e") << " W\n";
+            << format_printf(checks.inverse_dynamics_max_abs_error, "%.2e")
+            << " N m; min friction power " << format_printf(checks.friction_power_min, "%.2e")
+            << " W\n";
   if (twin && twin->status.ok()) {
     std::cout << "  frictionless twin: " << twin->stats.steps << " steps, "
-              << fmt(twin->stats.wall_time_s, "%.3f") << " s, balance residual "
-              << fmt(twin_checks->energy_balance_relative, "%.2e") << "\n";
+              << format_printf(twin->stats.wall_time_s, "%.3f") << " s, balance residual "
+              << format_printf(twin_checks->energy_balance_relative, "%.2e") << "\n";
   }
 }
 

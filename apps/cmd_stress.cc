@@ -15,6 +15,7 @@
 
 #include "fivebar/io/command.h"
 #include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
 #include "fivebar/io/output.h"
 #include "fivebar/studies/stress.h"
 
@@ -31,14 +32,10 @@ struct Args {
 
 const std::vector<std::string> kOutputs = {"stress.csv", "stress.md"};
 
-std::string fmt(double x, const char* format = "%.3g") {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, format, x);
-  return buf;
-}
-
 /// A number column: empty where the value does not exist (negative marks "none").
-std::string opt_num(double x, const char* format = "%.3g") { return x < 0 ? "" : fmt(x, format); }
+std::string opt_num(double x, const char* format = "%.3g") {
+  return x < 0 ? "" : format_printf(x, format);
+}
 
 /// A CSV field: quoted, inner quotes doubled (messages hold commas).
 std::string csv_field(const std::string& s) {
@@ -65,8 +62,8 @@ std::string stress_csv(const studies::StressReport& report) {
     s << r.case_name << ',' << sim::method_name(r.method) << ','
       << studies::stress_outcome_name(r.outcome) << ',' << r.exit_code << ','
       << opt_num(r.error, "%.3e") << ',' << opt_num(r.energy_balance, "%.3e") << ','
-      << fmt(r.wall_time_s, "%.4f") << ',' << r.steps << ',' << r.rhs_evaluations << ','
-      << fmt(r.final_time, "%.6g") << ',' << opt_num(r.displacement, "%.3e") << ','
+      << format_printf(r.wall_time_s, "%.4f") << ',' << r.steps << ',' << r.rhs_evaluations << ','
+      << format_printf(r.final_time, "%.6g") << ',' << opt_num(r.displacement, "%.3e") << ','
       << csv_field(r.message) << '\n';
   }
   return s.str();
@@ -78,21 +75,24 @@ std::string stress_md(const std::vector<studies::StressCase>& cases, const studi
   s << "# fivebar stress\n\n"
     << "Runs at rtol = atol = 1e-8 on a 1 ms output grid; `error` is max |d theta_1..4| over the "
        "grid against the case's reference (the same case at rtol = atol = "
-    << fmt(opt.reference_tolerance) << " with the integrator named under each case). `ok` also "
+    << format_printf(opt.reference_tolerance, "%.3g")
+    << " with the integrator named under each case). `ok` also "
        "requires finite rows and an energy balance residual <= "
-    << fmt(opt.max_energy_balance) << "; each run is a child process killed after "
-    << fmt(opt.run_budget_s) << " s.\n\n"
+    << format_printf(opt.max_energy_balance, "%.3g")
+    << "; each run is a child process killed after " << format_printf(opt.run_budget_s, "%.3g")
+    << " s.\n\n"
     << "**" << report.count(studies::StressOutcome::kOk) << " ok, "
     << report.count(studies::StressOutcome::kRejected) << " rejected, "
     << report.count(studies::StressOutcome::kFailed) << " failed** (" << report.rows.size()
-    << " runs, " << fmt(total_s, "%.1f") << " s)\n";
+    << " runs, " << format_printf(total_s, "%.1f") << " s)\n";
   for (size_t i = 0; i < cases.size(); ++i) {
     const studies::StressCase& c = cases[i];
     const studies::StressReference& ref = report.references[i];
-    s << "\n## " << c.name << "\n\n" << c.description << ".\n\nReference: "
-      << sim::method_name(ref.method) << " at " << fmt(ref.tolerance) << ": "
-      << (ref.ok ? "ok (" + fmt(ref.wall_time_s, "%.2f") + " s, " + std::to_string(ref.steps) +
-                       " steps)"
+    s << "\n## " << c.name << "\n\n"
+      << c.description << ".\n\nReference: " << sim::method_name(ref.method) << " at "
+      << format_printf(ref.tolerance, "%.3g") << ": "
+      << (ref.ok ? "ok (" + format_printf(ref.wall_time_s, "%.2f") + " s, " +
+                       std::to_string(ref.steps) + " steps)"
                  : "did not finish: " + md_cell(ref.message))
       << ".\n\n"
       << "| integrator | status | exit | error [rad] | energy balance | wall [s] | steps | "
@@ -101,8 +101,8 @@ std::string stress_md(const std::vector<studies::StressCase>& cases, const studi
       if (r.case_name != c.name) continue;
       s << "| " << sim::method_name(r.method) << " | " << studies::stress_outcome_name(r.outcome)
         << " | " << r.exit_code << " | " << opt_num(r.error, "%.2e") << " | "
-        << opt_num(r.energy_balance, "%.2e") << " | " << fmt(r.wall_time_s, "%.3f") << " | "
-        << r.steps << " | " << r.rhs_evaluations << " | " << md_cell(r.message) << " |\n";
+        << opt_num(r.energy_balance, "%.2e") << " | " << format_printf(r.wall_time_s, "%.3f")
+        << " | " << r.steps << " | " << r.rhs_evaluations << " | " << md_cell(r.message) << " |\n";
     }
   }
   return s.str();
@@ -157,7 +157,7 @@ int run(const Args& args) {
 
   // one line per case: its outcomes by integrator
   std::cout << "fivebar stress: " << cases.size() << " cases x " << opt.methods.size()
-            << " integrators in " << fmt(total_s, "%.1f") << " s\n";
+            << " integrators in " << format_printf(total_s, "%.1f") << " s\n";
   for (const auto& c : cases) {
     std::map<std::string, int> counts;
     for (const auto& r : report.rows) {

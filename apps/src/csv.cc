@@ -1,38 +1,14 @@
 #include "fivebar/io/csv.h"
 
 #include <cerrno>
-#include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <set>
+#include <sstream>
 
 #include "fivebar/io/errors.h"
-#include "fivebar/io/format.h"
 
 namespace fivebar::io {
-namespace {
-
-std::vector<std::string> split_fields(const std::string& line) {
-  std::vector<std::string> fields;
-  std::string::size_type start = 0;
-  while (true) {
-    const auto pos = line.find(',', start);
-    fields.push_back(trim(line.substr(start, pos - start)));
-    if (pos == std::string::npos) break;
-    start = pos + 1;
-  }
-  return fields;
-}
-
-}  // namespace
-
-int CsvTable::find(const std::string& name) const {
-  for (size_t j = 0; j < columns.size(); ++j) {
-    if (columns[j] == name) return static_cast<int>(j);
-  }
-  return -1;
-}
 
 int CsvTable::require(const std::string& name) const {
   const int j = find(name);
@@ -56,50 +32,32 @@ std::vector<double> CsvTable::column(const std::string& name) const {
 CsvTable read_csv(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));
-  CsvTable table;
-  table.path = path;
-  std::string line;
-  int number = 0;
-  bool header = false;
-  while (std::getline(in, line)) {
-    ++number;
-    const std::string text = trim(line);
-    if (text.empty() || text[0] == '#') continue;
-    const std::string where = "line " + std::to_string(number);
-    std::vector<std::string> fields = split_fields(text);
-    if (!header) {
-      // the first non-comment line names the columns
-      std::set<std::string> seen;
-      for (const auto& f : fields) {
-        if (f.empty()) throw InputError(path, where, "empty column name in the header");
-        if (!seen.insert(f).second) throw InputError(path, where, "duplicate column '" + f + "'");
-      }
-      table.columns = std::move(fields);
-      header = true;
-      continue;
-    }
-    if (fields.size() != table.columns.size()) {
-      throw InputError(path, where,
-                       "expected " + std::to_string(table.columns.size()) + " fields, got " +
-                           std::to_string(fields.size()));
-    }
-    std::vector<double> row(fields.size());
-    for (size_t j = 0; j < fields.size(); ++j) {
-      const char* s = fields[j].c_str();
-      char* end = nullptr;
-      row[j] = std::strtod(s, &end);
-      const std::string key = where + ", column " + table.columns[j];
-      if (fields[j].empty() || end != s + fields[j].size()) {
-        throw InputError(path, key, "not a number: '" + fields[j] + "'");
-      }
-      if (!std::isfinite(row[j])) throw InputError(path, key, "not finite: " + fields[j]);
-    }
-    table.rows.push_back(std::move(row));
-    table.lines.push_back(number);
-  }
-  if (in.bad())
+  std::stringstream text;
+  text << in.rdbuf();
+  if (in.bad()) {
     throw InputError(path, "(file)", std::string("cannot read: ") + std::strerror(errno));
-  if (!header) throw InputError(path, "(file)", "empty: no header row");
+  }
+  identification::CsvRules rules;
+  rules.header = [&path](const std::vector<std::string>& names, int line) {
+    // the first non-comment line names the columns
+    const std::string where = "line " + std::to_string(line);
+    std::set<std::string> seen;
+    for (const auto& f : names) {
+      if (f.empty()) throw InputError(path, where, "empty column name in the header");
+      if (!seen.insert(f).second) throw InputError(path, where, "duplicate column '" + f + "'");
+    }
+  };
+  rules.bad_number = [](const std::string& field, bool number) {
+    return number ? "not finite: " + field : "not a number: '" + field + "'";
+  };
+  CsvTable table;
+  try {
+    static_cast<identification::CsvTable&>(table) =
+        identification::parse_csv(text.str(), path, rules);
+  } catch (const identification::LogError& e) {
+    throw InputError(e.file(), e.key(), e.reason());
+  }
+  if (table.header_line == 0) throw InputError(path, "(file)", "empty: no header row");
   return table;
 }
 

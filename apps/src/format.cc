@@ -31,6 +31,12 @@ std::string format_grid_value(double x) {
   return format_double(x);
 }
 
+std::string format_printf(double x, const char* format) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, x);
+  return buf;
+}
+
 std::string trim(const std::string& s) {
   const char* blanks = " \t\r\n";
   const auto first = s.find_first_not_of(blanks);

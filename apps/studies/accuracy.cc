@@ -59,6 +59,76 @@ Status reference(const Params<double>& p, const LoadFunction& loads, const Initi
   return Status::Ok();
 }
 
+/// One point of the study: the run of method `m` at tolerance `tol` under treatment `t`, timed
+/// as the minimum of options.repeats runs (fewer when a run fails or exceeds max_run_time_s),
+/// with its error against the treatment's own reference and against the exact one.
+PrecisionPoint measure_point(const Params<double>& params, const LoadFunction& loads,
+                             const Initial& initial, const Options& base,
+                             const WorkPrecisionOptions& options, Treatment t, Method m,
+                             double tol, const WorkPrecision& refs) {
+  Params<double> p = params;
+  Options o = base;
+  apply(t, options.regularization_velocity, &p, &o);
+  o.method = m;
+  o.rtol = o.atol = tol;
+  o.full_rows = false;  // the study times the integration, not the reaction post-processing
+  PrecisionPoint pt;
+  pt.method = m;
+  pt.treatment = t;
+  pt.tolerance = tol;
+  pt.wall_time_s = std::numeric_limits<double>::infinity();
+  Result r;
+  for (int rep = 0; rep < std::max(1, options.repeats); ++rep) {
+    r = simulate(p, loads, initial, o);
+    pt.wall_time_s = std::min(pt.wall_time_s, r.stats.wall_time_s);
+    if (!r.status.ok() || r.stats.wall_time_s > options.max_run_time_s) break;
+  }
+  pt.ok = r.status.ok();
+  pt.message = r.status.message;
+  pt.rhs_evaluations = r.stats.rhs_evaluations;
+  pt.steps = r.stats.steps;
+  pt.friction_events = r.stats.friction_events;
+  if (pt.ok) {
+    const Reference& own = t == Treatment::kRegularized ? refs.regularized : refs.exact;
+    pt.error = max_theta_difference(r.rows, own.rows);
+    pt.error_vs_exact = max_theta_difference(r.rows, refs.exact.rows);
+  }
+  return pt;
+}
+
+/// Pareto front over (wall time, error) among the successful points of treatment `own`; points
+/// at the reference's own tolerance reproduce it and say nothing about the error.
+void mark_pareto(Treatment own, double reference_tolerance, std::vector<PrecisionPoint>* points) {
+  auto eligible = [&](const PrecisionPoint& p) {
+    return p.ok && p.treatment == own && p.tolerance > reference_tolerance;
+  };
+  for (PrecisionPoint& a : *points) {
+    if (!eligible(a)) continue;
+    a.pareto = std::none_of(points->begin(), points->end(), [&](const PrecisionPoint& b) {
+      return eligible(b) && b.wall_time_s <= a.wall_time_s && b.error <= a.error &&
+             (b.wall_time_s < a.wall_time_s || b.error < a.error);
+    });
+  }
+}
+
+/// The fastest Pareto point within each target error.
+std::vector<WorkPrecision::Recommendation> recommend(const std::vector<PrecisionPoint>& points) {
+  std::vector<WorkPrecision::Recommendation> out;
+  for (double target : {1e-6, 1e-8, 1e-9}) {
+    WorkPrecision::Recommendation rec;
+    rec.target = target;
+    for (const PrecisionPoint& p : points) {
+      if (p.pareto && p.error <= target &&
+          (!rec.found || p.wall_time_s < rec.point.wall_time_s)) {
+        rec.point = p;
+        rec.found = true;
+      }
+    }
+    out.push_back(rec);
+  }
+  return out;
+}
+
 }  // namespace
 
 Status work_precision(const Params<double>& params, const LoadFunction& loads,
@@ -66,8 +136,7 @@ Status work_precision(const Params<double>& params, const LoadFunction& loads,
                       const WorkPrecisionOptions& options, WorkPrecision* out) {
   *out = WorkPrecision{};
   // treatments: the three of an exact-sign law, else the scene's own
-  const bool exact_sign = params.friction.active() && params.friction.law != FrictionLaw::kLuGre &&
-                          params.friction.smoothing_velocity == 0.0;
+  const bool exact_sign = sim::exact_sign(params.friction);
   std::vector<Treatment> treatments;
   if (exact_sign) {
     treatments = {Treatment::kExactLocated, Treatment::kExactUnlocated, Treatment::kRegularized};
@@ -83,72 +152,21 @@ Status work_precision(const Params<double>& params, const LoadFunction& loads,
     if (!st.ok()) return st;
   }
 
+  const int total =
+      static_cast<int>(treatments.size() * options.methods.size() * options.tolerances.size());
   for (Treatment t : treatments) {
     for (Method m : options.methods) {
       for (double tol : options.tolerances) {
-        Params<double> p = params;
-        Options o = base;
-        apply(t, options.regularization_velocity, &p, &o);
-        o.method = m;
-        o.rtol = o.atol = tol;
-        o.full_rows = false;  // the study times the integration, not the reaction post-processing
-        PrecisionPoint pt;
-        pt.method = m;
-        pt.treatment = t;
-        pt.tolerance = tol;
-        pt.wall_time_s = std::numeric_limits<double>::infinity();
-        Result r;
-        for (int rep = 0; rep < std::max(1, options.repeats); ++rep) {
-          r = simulate(p, loads, initial, o);
-          pt.wall_time_s = std::min(pt.wall_time_s, r.stats.wall_time_s);
-          if (!r.status.ok() || r.stats.wall_time_s > options.max_run_time_s) break;
-        }
-        pt.ok = r.status.ok();
-        pt.message = r.status.message;
-        pt.rhs_evaluations = r.stats.rhs_evaluations;
-        pt.steps = r.stats.steps;
-        pt.friction_events = r.stats.friction_events;
-        if (pt.ok) {
-          const Reference& own = t == Treatment::kRegularized ? out->regularized : out->exact;
-          pt.error = max_theta_difference(r.rows, own.rows);
-          pt.error_vs_exact = max_theta_difference(r.rows, out->exact.rows);
-        }
+        const PrecisionPoint pt =
+            measure_point(params, loads, initial, base, options, t, m, tol, *out);
         out->points.push_back(pt);
-        if (options.progress) {
-          options.progress(static_cast<int>(out->points.size()),
-                           static_cast<int>(treatments.size() * options.methods.size() *
-                                            options.tolerances.size()));
-        }
+        if (options.progress) options.progress(static_cast<int>(out->points.size()), total);
         if (pt.ok && pt.wall_time_s > options.max_run_time_s) break;  // tighter only costs more
       }
     }
   }
-
-  // Pareto front over (wall time, error) among successful points of the scene's treatment
-  const Treatment own = treatments.front();
-  // (points at the reference's own tolerance reproduce it and say nothing about the error)
-  auto eligible = [&](const PrecisionPoint& p) {
-    return p.ok && p.treatment == own && p.tolerance > options.reference_tolerance;
-  };
-  for (PrecisionPoint& a : out->points) {
-    if (!eligible(a)) continue;
-    a.pareto = std::none_of(out->points.begin(), out->points.end(), [&](const PrecisionPoint& b) {
-      return eligible(b) && b.wall_time_s <= a.wall_time_s && b.error <= a.error &&
-             (b.wall_time_s < a.wall_time_s || b.error < a.error);
-    });
-  }
-  for (double target : {1e-6, 1e-8, 1e-9}) {
-    WorkPrecision::Recommendation rec;
-    rec.target = target;
-    for (const PrecisionPoint& p : out->points) {
-      if (p.pareto && p.error <= target &&
-          (!rec.found || p.wall_time_s < rec.point.wall_time_s)) {
-        rec.point = p;
-        rec.found = true;
-      }
-    }
-    out->recommendations.push_back(rec);
-  }
+  mark_pareto(treatments.front(), options.reference_tolerance, &out->points);
+  out->recommendations = recommend(out->points);
   return Status::Ok();
 }
 

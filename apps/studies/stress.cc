@@ -23,7 +23,9 @@
 #include <sstream>
 
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/format.h"
 #include "fivebar/model/kinematics.h"
+#include "fivebar/sim/bytes.h"
 #include "fivebar/studies/accuracy.h"
 
 namespace fivebar::studies {
@@ -55,13 +57,6 @@ namespace {
 constexpr long kStepsPerOutput = 500;
 /// rtol = atol of the catalogue's runs.
 constexpr double kRunTolerance = 1e-8;
-
-std::string num(double x) {
-  std::ostringstream s;
-  s.precision(4);
-  s << x;
-  return s.str();
-}
 
 /// The paper's loads (model.md, section 5).
 Loads<double> paper_loads(double t) {
@@ -132,180 +127,206 @@ Vec2<double> holding_torques(Params<double> p, Loads<double> L, double th1, doub
 
 }  // namespace
 
+namespace {
+
+/// Every joint with pin radius `radius` [m], mu_c = `coulomb` and mu_s = `static_coulomb`.
+void set_pin_friction(FrictionParams<double>* f, double radius, double coulomb,
+                      double static_coulomb) {
+  f->pin_radius.fill(radius);
+  f->coulomb.fill(coulomb);
+  f->static_coulomb.fill(static_coulomb);
+}
+
+/// Couplers within 1e-3 rad of alignment at the start.
+void near_singular_start_cases(double d_short, std::vector<StressCase>* cases) {
+  StressCase c = paper_case("near_singular_start", "", d_short);
+  c.params = stretchable_params();
+  const double sine = 5e-4;  // couplers 5e-4 rad from alignment
+  c.initial = {M_PI, theta2_at_sine(c.params, sine), 0.0, 0.0};
+  c.description = "couplers " + format_significant(sine, 4) +
+                  " rad from alignment at the start (l3 = l4 = 0.2 m)"
+                  "; must be rejected by singular_margin = 1e-3 (exit 2)";
+  cases->push_back(c);
+  c.name = "near_singular_start_margin_1e-5";
+  c.options.singular_margin = 1e-5;
+  c.description = "the same start with singular_margin lowered to 1e-5: runs, or stops cleanly "
+                  "at the margin";
+  c.max_error = 1e-3;  // the motion starts next to a singularity: sensitive to the start
+  cases->push_back(c);
+}
+
+/// Constant torques stretch the couplers straight.
+StressCase driven_through_singularity_case(double d_short) {
+  StressCase c = paper_case("driven_through_singularity", "", d_short);
+  c.params = stretchable_params();
+  c.loads = [](double) { return Loads<double>{10.0, -10.0, 0.0, 0.0, 0.0}; };
+  c.description = "M1 = +10, M2 = -10 N m pull B and D apart until the couplers are straight "
+                  "(l3 = l4 = 0.2 m): must stop with time and pose (exit 3)";
+  return c;
+}
+
+/// r_k * mu so large that the fixed-point friction loop stops contracting.
+void friction_loop_cases(double d_short, std::vector<StressCase>* cases) {
+  StressCase c = paper_case("friction_newton", "", d_short);
+  auto& f = c.params.friction;
+  set_pin_friction(&f, 0.15, 0.6, 0.6);
+  // started in motion: at rest, friction this large holds the mechanism (lock_analysis)
+  c.initial = {M_PI / 2, M_PI / 2, 5.0, -3.0};
+  c.description = "pin radius 0.15 m, mu_c = mu_s = 0.6, started at rates (5, -3) rad/s: the "
+                  "fixed-point friction loop stops contracting on much of the motion, Newton "
+                  "finds the unique reaction forces";
+  cases->push_back(c);
+  c.name = "friction_no_solution";
+  set_pin_friction(&f, 0.15, 1.0, 1.0);
+  c.description = "pin radius 0.15 m, mu_c = 1, started at rates (5, -3) rad/s: no consistent "
+                  "reaction forces at the start: must be rejected saying so (exit 3)";
+  cases->push_back(c);
+  c.name = "friction_several_solutions";
+  set_pin_friction(&f, 1.0, 0.12, 0.12);
+  c.initial = {M_PI / 2, M_PI / 2, -3.0, 4.0};
+  c.description = "pin radius 1 m, mu_c = 0.12, started at rates (-3, 4) rad/s: several "
+                  "consistent reaction forces at the start: must be rejected saying so (exit 3)";
+  cases->push_back(c);
+}
+
+/// A link with a tiny inertia.
+void tiny_inertia_cases(double d_short, std::vector<StressCase>* cases) {
+  StressCase c = paper_case("tiny_inertia", "", d_short);
+  c.params.links[0].inertia = 1e-6;
+  c.description = "paper scene with J1 = 1e-6 kg m^2 on crank 1";
+  c.max_error = 1e-4;
+  cases->push_back(c);
+  c.name = "tiny_inertia_light_links";
+  for (auto& link : c.params.links) {
+    link.inertia = 1e-6;
+    link.mass = 1e-2;
+  }
+  c.loads = [](double t) {
+    Loads<double> L = paper_loads(t);
+    L.M1 *= 1e-2;
+    L.M2 *= 1e-2;
+    L.M3 *= 1e-2;
+    L.F *= 1e-2;
+    return L;
+  };
+  c.description = "every link J = 1e-6 kg m^2 and m = 10 g, loads scaled by 1e-2 (gravity "
+                  "dominated)";
+  // measured: the error shrinks in proportion to the tolerance (arkode_erk87 4e-4 rad at
+  // 1e-8, 5e-6 at 1e-10) while the 1e-12 and 1e-13 references agree to 1e-7: a sensitive
+  // motion, not garbage
+  c.max_error = 1e-3;
+  cases->push_back(c);
+}
+
+/// LuGre with a stiff bristle.
+StressCase lugre_stiff_case(double d_short) {
+  StressCase c = paper_case("lugre_stiff", "", d_short);
+  auto& f = c.params.friction;
+  f.law = FrictionLaw::kLuGre;
+  f.sigma0.fill(1e5);
+  f.sigma1.fill(std::sqrt(1e5) * 1e-2);
+  f.sigma2.fill(0.02);
+  f.stribeck_velocity.fill(0.1);
+  f.static_coulomb.fill(0.15);
+  c.reference_method = Method::kCvodeBdf;
+  // atol = 1e-8 against bristle deflections z ~ mu / sigma0 ~ 1e-6 rad: the runs resolve z to
+  // about 1 %, so their angles are tolerance-limited well above 1e-8
+  c.max_error = 1e-3;
+  c.description = "LuGre, sigma0 = 1e5, sigma1 = 3.16, sigma2 = 0.02, w_st = 0.1, mu_s = 0.15: "
+                  "stiff; implicit methods must run it, explicit ones may be rejected";
+  return c;
+}
+
+/// A 200 Hz drive.
+StressCase drive_200hz_case(double d_short) {
+  StressCase c = paper_case("drive_200hz", "", d_short);
+  c.loads = [](double t) {
+    Loads<double> L = paper_loads(t);
+    L.M1 = 2.0 + 5.0 * std::sin(2.0 * M_PI * 200.0 * t);
+    return L;
+  };
+  c.description = "paper scene with M1 = 2 + 5 sin(2 pi 200 t)";
+  return c;
+}
+
+/// A long run.
+void long_run_cases(double d_short, double d_long, std::vector<StressCase>* cases) {
+  StressCase c = paper_case("long_run_60s", "", d_long);
+  c.description = "the paper scene over " + format_significant(d_long, 4) +
+                  " s: energy balance drift over the "
+                  "whole run; error over the first 2 s";
+  // the forced motion is chaotic: cvode_adams at 1e-12 and 1e-13 and cvode_bdf at 1e-12
+  // separate by more than 1e-6 rad after 5-7 s and by tens of radians at 60 s, so the error
+  // is measured where the reference is meaningful
+  c.error_horizon = 2.0;
+  cases->push_back(c);
+  // a hard constant drive: dozens of slip reversals at every joint (a missed one makes
+  // friction supply power, which the run's checks catch)
+  c = paper_case("hard_drive_40", "", d_short);
+  c.loads = [](double t) {
+    Loads<double> L = paper_loads(t);
+    L.M1 = 40.0;
+    L.M2 = -40.0;
+    return L;
+  };
+  c.description = "the paper scene driven by M1 = 40, M2 = -40 N m: fast motion, many reversals";
+  c.error_horizon = 1.0;
+  cases->push_back(c);
+}
+
+/// A start that cannot assemble.
+StressCase unassemblable_start_case(double d_short) {
+  StressCase c = paper_case("unassemblable_start", "", d_short);
+  c.params = stretchable_params();
+  c.initial = {M_PI, 0.0, 0.0, 0.0};
+  c.description = "|BD| = 0.42 m > l3 + l4 = 0.4 m at the start: must be rejected (exit 2)";
+  return c;
+}
+
+/// A drive below breakaway: exact stick holds the mechanism still.
+StressCase stick_below_breakaway_case(double d_short) {
+  StressCase c = paper_case("stick_below_breakaway", "", d_short);
+  c.params.gravity = 0.0;  // the 50 N force at P loads the joints: hold bound ~0.06 N m
+  const Loads<double> force{0.0, 0.0, 0.0, 50.0, M_PI / 2};
+  const Vec2<double> eq = holding_torques(c.params, force, M_PI / 2, M_PI / 2);
+  c.loads = [eq](double t) {
+    // equilibrium torques plus an excess below the holding bound, oscillating
+    return Loads<double>{eq[0] + 0.02 * std::sin(5.0 * t), eq[1] - 0.02 * std::sin(5.0 * t),
+                         0.0, 50.0, M_PI / 2};
+  };
+  c.max_displacement = 1e-12;
+  c.description = "weightless paper scene held by torques 0.02 N m off equilibrium (below "
+                  "breakaway): must not move (< 1e-12 rad)";
+  return c;
+}
+
+/// Huge friction with stick-slip.
+StressCase huge_friction_stick_case(double d_short) {
+  StressCase c = paper_case("huge_friction_stick",
+                            "pin radius 0.05 m, mu_c = 0.5, mu_s = 0.6: repeated stick and "
+                            "breakaway (5 sticks, 4 breakaways in 1 s)",
+                            d_short);
+  set_pin_friction(&c.params.friction, 0.05, 0.5, 0.6);
+  return c;
+}
+
+}  // namespace
+
 std::vector<StressCase> stress_catalogue(bool reduced) {
   // durations: the full catalogue, and the reduced one for tests
   const double d_short = reduced ? 0.3 : 1.0;
   const double d_long = reduced ? 2.0 : 60.0;
   std::vector<StressCase> cases;
-
-  // 1. couplers within 1e-3 rad of alignment at the start
-  {
-    StressCase c = paper_case("near_singular_start", "", d_short);
-    c.params = stretchable_params();
-    const double sine = 5e-4;  // couplers 5e-4 rad from alignment
-    c.initial = {M_PI, theta2_at_sine(c.params, sine), 0.0, 0.0};
-    c.description = "couplers " + num(sine) + " rad from alignment at the start (l3 = l4 = 0.2 m)"
-                    "; must be rejected by singular_margin = 1e-3 (exit 2)";
-    cases.push_back(c);
-    c.name = "near_singular_start_margin_1e-5";
-    c.options.singular_margin = 1e-5;
-    c.description = "the same start with singular_margin lowered to 1e-5: runs, or stops cleanly "
-                    "at the margin";
-    c.max_error = 1e-3;  // the motion starts next to a singularity: sensitive to the start
-    cases.push_back(c);
-  }
-  // 2. constant torques stretch the couplers straight
-  {
-    StressCase c = paper_case("driven_through_singularity", "", d_short);
-    c.params = stretchable_params();
-    c.loads = [](double) { return Loads<double>{10.0, -10.0, 0.0, 0.0, 0.0}; };
-    c.description = "M1 = +10, M2 = -10 N m pull B and D apart until the couplers are straight "
-                    "(l3 = l4 = 0.2 m): must stop with time and pose (exit 3)";
-    cases.push_back(c);
-  }
-  // 3. r_k * mu so large that the fixed-point friction loop stops contracting
-  {
-    StressCase c = paper_case("friction_newton", "", d_short);
-    auto& f = c.params.friction;
-    f.pin_radius.fill(0.15);
-    f.coulomb.fill(0.6);
-    f.static_coulomb.fill(0.6);
-    // started in motion: at rest, friction this large holds the mechanism (lock_analysis)
-    c.initial = {M_PI / 2, M_PI / 2, 5.0, -3.0};
-    c.description = "pin radius 0.15 m, mu_c = mu_s = 0.6, started at rates (5, -3) rad/s: the "
-                    "fixed-point friction loop stops contracting on much of the motion, Newton "
-                    "finds the unique reaction forces";
-    cases.push_back(c);
-    c.name = "friction_no_solution";
-    f.coulomb.fill(1.0);
-    f.static_coulomb.fill(1.0);
-    c.description = "pin radius 0.15 m, mu_c = 1, started at rates (5, -3) rad/s: no consistent "
-                    "reaction forces at the start: must be rejected saying so (exit 3)";
-    cases.push_back(c);
-    c.name = "friction_several_solutions";
-    f.pin_radius.fill(1.0);
-    f.coulomb.fill(0.12);
-    f.static_coulomb.fill(0.12);
-    c.initial = {M_PI / 2, M_PI / 2, -3.0, 4.0};
-    c.description = "pin radius 1 m, mu_c = 0.12, started at rates (-3, 4) rad/s: several "
-                    "consistent reaction forces at the start: must be rejected saying so (exit 3)";
-    cases.push_back(c);
-  }
-  // 4. a link with a tiny inertia
-  {
-    StressCase c = paper_case("tiny_inertia", "", d_short);
-    c.params.links[0].inertia = 1e-6;
-    c.description = "paper scene with J1 = 1e-6 kg m^2 on crank 1";
-    c.max_error = 1e-4;
-    cases.push_back(c);
-    c.name = "tiny_inertia_light_links";
-    for (auto& link : c.params.links) {
-      link.inertia = 1e-6;
-      link.mass = 1e-2;
-    }
-    c.loads = [](double t) {
-      Loads<double> L = paper_loads(t);
-      L.M1 *= 1e-2;
-      L.M2 *= 1e-2;
-      L.M3 *= 1e-2;
-      L.F *= 1e-2;
-      return L;
-    };
-    c.description = "every link J = 1e-6 kg m^2 and m = 10 g, loads scaled by 1e-2 (gravity "
-                    "dominated)";
-    // measured: the error shrinks in proportion to the tolerance (arkode_erk87 4e-4 rad at
-    // 1e-8, 5e-6 at 1e-10) while the 1e-12 and 1e-13 references agree to 1e-7: a sensitive
-    // motion, not garbage
-    c.max_error = 1e-3;
-    cases.push_back(c);
-  }
-  // 5. LuGre with a stiff bristle
-  {
-    StressCase c = paper_case("lugre_stiff", "", d_short);
-    auto& f = c.params.friction;
-    f.law = FrictionLaw::kLuGre;
-    f.sigma0.fill(1e5);
-    f.sigma1.fill(std::sqrt(1e5) * 1e-2);
-    f.sigma2.fill(0.02);
-    f.stribeck_velocity.fill(0.1);
-    f.static_coulomb.fill(0.15);
-    c.reference_method = Method::kCvodeBdf;
-    // atol = 1e-8 against bristle deflections z ~ mu / sigma0 ~ 1e-6 rad: the runs resolve z to
-    // about 1 %, so their angles are tolerance-limited well above 1e-8
-    c.max_error = 1e-3;
-    c.description = "LuGre, sigma0 = 1e5, sigma1 = 3.16, sigma2 = 0.02, w_st = 0.1, mu_s = 0.15: "
-                    "stiff; implicit methods must run it, explicit ones may be rejected";
-    cases.push_back(c);
-  }
-  // 6. a 200 Hz drive
-  {
-    StressCase c = paper_case("drive_200hz", "", d_short);
-    c.loads = [](double t) {
-      Loads<double> L = paper_loads(t);
-      L.M1 = 2.0 + 5.0 * std::sin(2.0 * M_PI * 200.0 * t);
-      return L;
-    };
-    c.description = "paper scene with M1 = 2 + 5 sin(2 pi 200 t)";
-    cases.push_back(c);
-  }
-  // 7. a long run
-  {
-    StressCase c = paper_case("long_run_60s", "", d_long);
-    c.description = "the paper scene over " + num(d_long) + " s: energy balance drift over the "
-                    "whole run; error over the first 2 s";
-    // the forced motion is chaotic: cvode_adams at 1e-12 and 1e-13 and cvode_bdf at 1e-12
-    // separate by more than 1e-6 rad after 5-7 s and by tens of radians at 60 s, so the error
-    // is measured where the reference is meaningful
-    c.error_horizon = 2.0;
-    cases.push_back(c);
-    // a hard constant drive: dozens of slip reversals at every joint (a missed one makes
-    // friction supply power, which the run's checks catch)
-    c = paper_case("hard_drive_40", "", d_short);
-    c.loads = [](double t) {
-      Loads<double> L = paper_loads(t);
-      L.M1 = 40.0;
-      L.M2 = -40.0;
-      return L;
-    };
-    c.description = "the paper scene driven by M1 = 40, M2 = -40 N m: fast motion, many reversals";
-    c.error_horizon = 1.0;
-    cases.push_back(c);
-  }
-  // 8. a start that cannot assemble
-  {
-    StressCase c = paper_case("unassemblable_start", "", d_short);
-    c.params = stretchable_params();
-    c.initial = {M_PI, 0.0, 0.0, 0.0};
-    c.description = "|BD| = 0.42 m > l3 + l4 = 0.4 m at the start: must be rejected (exit 2)";
-    cases.push_back(c);
-  }
-  // 9. a drive below breakaway: exact stick holds the mechanism still
-  {
-    StressCase c = paper_case("stick_below_breakaway", "", d_short);
-    c.params.gravity = 0.0;  // the 50 N force at P loads the joints: hold bound ~0.06 N m
-    const Loads<double> force{0.0, 0.0, 0.0, 50.0, M_PI / 2};
-    const Vec2<double> eq = holding_torques(c.params, force, M_PI / 2, M_PI / 2);
-    c.loads = [eq](double t) {
-      // equilibrium torques plus an excess below the holding bound, oscillating
-      return Loads<double>{eq[0] + 0.02 * std::sin(5.0 * t), eq[1] - 0.02 * std::sin(5.0 * t),
-                           0.0, 50.0, M_PI / 2};
-    };
-    c.max_displacement = 1e-12;
-    c.description = "weightless paper scene held by torques 0.02 N m off equilibrium (below "
-                    "breakaway): must not move (< 1e-12 rad)";
-    cases.push_back(c);
-  }
-  // 10. huge friction with stick-slip
-  {
-    StressCase c = paper_case("huge_friction_stick", "", d_short);
-    auto& f = c.params.friction;
-    f.pin_radius.fill(0.05);
-    f.coulomb.fill(0.5);
-    f.static_coulomb.fill(0.6);
-    c.description = "pin radius 0.05 m, mu_c = 0.5, mu_s = 0.6: repeated stick and breakaway "
-                    "(5 sticks, 4 breakaways in 1 s)";
-    cases.push_back(c);
-  }
+  near_singular_start_cases(d_short, &cases);
+  cases.push_back(driven_through_singularity_case(d_short));
+  friction_loop_cases(d_short, &cases);
+  tiny_inertia_cases(d_short, &cases);
+  cases.push_back(lugre_stiff_case(d_short));
+  cases.push_back(drive_200hz_case(d_short));
+  long_run_cases(d_short, d_long, &cases);
+  cases.push_back(unassemblable_start_case(d_short));
+  cases.push_back(stick_below_breakaway_case(d_short));
+  cases.push_back(huge_friction_stick_case(d_short));
   return cases;
 }
 
@@ -322,7 +343,7 @@ bool row_finite(const Row& r) {
   for (int i = 0; i < 4; ++i) {
     ok = ok && std::isfinite(r.theta[i]) && std::isfinite(r.omega[i]) && std::isfinite(r.alpha[i]);
   }
-  for (int k = 0; k < 5; ++k) ok = ok && std::isfinite(r.N[k]) && std::isfinite(r.Mf[k]);
+  for (int k = 0; k < kJoints; ++k) ok = ok && std::isfinite(r.N[k]) && std::isfinite(r.Mf[k]);
   return ok;
 }
 
@@ -388,8 +409,8 @@ StressRow evaluate_run(const StressCase& c, Method method, const std::vector<Row
   const sim::RunChecks checks = sim::check_run(c.params, c.loads, r, o.rtol, o.atol);
   row.energy_balance = checks.energy_balance_relative;
   if (!(row.energy_balance <= opt.max_energy_balance)) {
-    return fail("energy balance residual " + num(row.energy_balance) + " above " +
-                num(opt.max_energy_balance));
+    return fail("energy balance residual " + format_significant(row.energy_balance, 4) + " above " +
+                format_significant(opt.max_energy_balance, 4));
   }
   // the run's own checks: friction never supplies power, inverse dynamics returns the input
   // (`simulate` exits 3 with that message: a rejection that names its reason)
@@ -408,8 +429,8 @@ StressRow evaluate_run(const StressCase& c, Method method, const std::vector<Row
       }
     }
     if (!(row.displacement <= c.max_displacement)) {
-      return fail("moved " + num(row.displacement) + " rad below breakaway (bound " +
-                  num(c.max_displacement) + ")");
+      return fail("moved " + format_significant(row.displacement, 4) +
+                  " rad below breakaway (bound " + format_significant(c.max_displacement, 4) + ")");
     }
   }
   if (ref.empty()) {
@@ -418,8 +439,10 @@ StressRow evaluate_run(const StressCase& c, Method method, const std::vector<Row
   }
   row.error = theta_difference(r.rows, ref, c.error_horizon);
   if (!(row.error <= c.max_error)) {
-    return fail("max |d theta| " + num(row.error) + " rad from the reference, above the case's "
-                "bound " + num(c.max_error) + " (silent garbage)");
+    return fail("max |d theta| " + format_significant(row.error, 4) +
+                " rad from the reference, above the case's "
+                "bound " +
+                format_significant(c.max_error, 4) + " (silent garbage)");
   }
   row.outcome = StressOutcome::kOk;
   row.exit_code = 0;
@@ -430,45 +453,8 @@ StressRow evaluate_run(const StressCase& c, Method method, const std::vector<Row
 // Child processes: the result of a run comes back through a pipe as a flat byte string
 // ---------------------------------------------------------------------------------------------
 
-class Writer {
- public:
-  template <typename T>
-  void put(const T& x) {
-    const char* p = reinterpret_cast<const char*>(&x);
-    bytes_.append(p, sizeof(T));
-  }
-  void put_string(const std::string& s) {
-    put<long>(static_cast<long>(s.size()));
-    bytes_.append(s);
-  }
-  const std::string& bytes() const { return bytes_; }
-
- private:
-  std::string bytes_;
-};
-
-class Reader {
- public:
-  explicit Reader(const std::string& bytes) : bytes_(bytes) {}
-  template <typename T>
-  bool get(T* x) {
-    if (pos_ + sizeof(T) > bytes_.size()) return false;
-    std::memcpy(x, bytes_.data() + pos_, sizeof(T));
-    pos_ += sizeof(T);
-    return true;
-  }
-  bool get_string(std::string* s) {
-    long n = 0;
-    if (!get(&n) || n < 0 || pos_ + static_cast<size_t>(n) > bytes_.size()) return false;
-    s->assign(bytes_, pos_, n);
-    pos_ += n;
-    return true;
-  }
-
- private:
-  const std::string& bytes_;
-  size_t pos_ = 0;
-};
+using Writer = sim::ByteWriter;
+using Reader = sim::ByteReader;
 
 void write_row(Writer* w, const StressRow& r) {
   w->put(static_cast<int>(r.outcome));
@@ -560,7 +546,8 @@ ChildOutcome run_child(const std::function<std::string()>& work, double budget_s
   while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
   }
   if (timed_out) {
-    out.problem = "no result within the wall-time budget of " + num(budget_s) + " s (killed)";
+    out.problem = "no result within the wall-time budget of " + format_significant(budget_s, 4) +
+                  " s (killed)";
   } else if (WIFSIGNALED(status)) {
     out.problem = "crashed with signal " + std::to_string(WTERMSIG(status)) + " (" +
                   strsignal(WTERMSIG(status)) + ")";

@@ -8,18 +8,12 @@
 
 #include "fivebar/identification/rates.h"
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/format.h"
 
 namespace fivebar::identification {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-std::string fmt(double x, int prec = 3) {
-  std::ostringstream s;
-  s.precision(prec);
-  s << x;
-  return s.str();
-}
 
 double median_abs(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -300,8 +294,9 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
     for (size_t i = 0; i < out.glitches.size() && i < 5; ++i) {
       const Glitch& g = out.glitches[i];
       what += std::string(i ? "; " : "") + "line " + std::to_string(g.line) + " " + g.column +
-              " = " + fmt(g.value, 6) + " where its neighbours give " + fmt(g.expected, 6) + " (" +
-              fmt(g.sigmas, 2) + " noise std)";
+              " = " + format_significant(g.value, 6) + " where its neighbours give " +
+              format_significant(g.expected, 6) + " (" + format_significant(g.sigmas, 2) +
+              " noise std)";
     }
     if (out.glitches.size() > 5) what += "; ...";
     out.notes.push_back("rejected " + std::to_string(out.glitches.size()) +
@@ -333,10 +328,10 @@ std::string degrees_from_motion(const Params<double>& scene, const sim::LoadFunc
   std::vector<double> tau;
   for (int i = 0; i < n; ++i) tau.push_back(std::max(std::abs(log.tau1[i]), std::abs(log.tau2[i])));
   if (!(as_deg < 0.25 * as_rad) || !(as_deg < 0.5 * median_abs(tau))) return "";
-  return "read as radians, the motion (median crank rate " + fmt(rate_rad) +
-         " rad/s) needs torques a median " + fmt(as_rad) +
-         " N m away from the logged ones; read as degrees (median rate " + fmt(rate_deg) +
-         " rad/s), " + fmt(as_deg) + " N m";
+  return "read as radians, the motion (median crank rate " + format_significant(rate_rad, 3) +
+         " rad/s) needs torques a median " + format_significant(as_rad, 3) +
+         " N m away from the logged ones; read as degrees (median rate " +
+         format_significant(rate_deg, 3) + " rad/s), " + format_significant(as_deg, 3) + " N m";
 }
 
 }  // namespace fivebar::identification

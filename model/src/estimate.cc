@@ -1,6 +1,8 @@
 // Error estimates by a companion run, and the choice of tolerance for a target error.
 #include "fivebar/sim/estimate.h"
 
+#include "fivebar/model/format.h"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -86,8 +88,9 @@ EstimatedRun simulate_to_target(const Params<double>& params, const LoadFunction
     o.rtol = o.atol = std::max(wanted, kTightestRtol);
   }
   if (!out.target_met && out.note.empty()) {
-    out.note = "target_error " + fmt(target) + " rad not met: estimated error " +
-               fmt(out.estimated_max_error_rad) + " rad at rtol " + fmt(o.rtol) +
+    out.note = "target_error " + format_significant(target, 3) + " rad not met: estimated error " +
+               format_significant(out.estimated_max_error_rad, 3) + " rad at rtol " +
+               format_significant(o.rtol, 3) +
                (o.auto_tolerance ? " (tighter tolerances cannot reach it: errors grow "
                                    "exponentially in this motion)"
                                  : " (the scene fixes rtol; remove it to let fivebar choose)");

@@ -9,12 +9,12 @@
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/synth.h"
 
+#include "paper.h"
+
 namespace fivebar::identification {
 namespace {
 
-Loads<double> paper_loads(double t) {
-  return {2 + 5 * std::sin(8 * M_PI * t), 3 + 5 * std::cos(M_PI * t), 6.0, 50.0, M_PI / 2};
-}
+using testing::paper_loads;
 
 // args: log duration [s], with rates (1) or angles only (0), method (0 inverse dynamics, 1 output
 // error)
@@ -26,7 +26,7 @@ void BM_Identify(benchmark::State& state) {
   so.angle_noise = 1e-5;
   so.with_rates = state.range(1) != 0;
   const Params<double> truth = paper_params();
-  const SynthResult log = synthesize_log(truth, paper_loads, {M_PI / 2, M_PI / 2, 0, 0}, so);
+  const SynthResult log = synthesize_log(truth, paper_loads, testing::paper_initial(), so);
   IdentifyOptions opt;
   opt.method = state.range(2) ? Method::kOutputError : Method::kInverseDynamics;
   IdentifyResult res;

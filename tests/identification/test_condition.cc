@@ -11,6 +11,8 @@
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/synth.h"
 
+#include "paper.h"
+
 namespace fivebar::identification {
 namespace {
 
@@ -28,10 +30,8 @@ constexpr double kStdBound = 4.0;
 // fuzzed logs per run: enough kinds and combinations to reach every refusal path, a few seconds
 constexpr int kTrials = 10;
 
-Loads<double> paper_loads(double t) {
-  return {2 + 5 * std::sin(8 * M_PI * t), 3 + 5 * std::cos(M_PI * t), 6.0, 50.0, M_PI / 2};
-}
-const sim::Initial kPaperInitial{M_PI / 2, M_PI / 2, 0.0, 0.0};
+using testing::paper_loads;
+const sim::Initial kPaperInitial = testing::paper_initial();
 
 TorqueLog paper_log(double duration, double torque_noise = 0.02, double angle_noise = 1e-5,
                     std::uint64_t seed = 1) {

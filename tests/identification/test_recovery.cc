@@ -11,6 +11,8 @@
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/synth.h"
 
+#include "paper.h"
+
 namespace fivebar::identification {
 namespace {
 
@@ -18,10 +20,8 @@ constexpr double kStdBound = 4.0;      // |error| / std, see the file comment
 constexpr double kTorqueNoise = 0.02;  // N m, issue 4
 constexpr double kAngleNoise = 1e-5;   // rad, issue 4
 
-Loads<double> paper_loads(double t) {
-  return {2 + 5 * std::sin(8 * M_PI * t), 3 + 5 * std::cos(M_PI * t), 6.0, 50.0, M_PI / 2};
-}
-const sim::Initial kPaperInitial{M_PI / 2, M_PI / 2, 0.0, 0.0};
+using testing::paper_loads;
+const sim::Initial kPaperInitial = testing::paper_initial();
 
 TorqueLog make_log(const Params<double>& truth, double duration, bool rates, bool multisine,
                    double torque_noise = kTorqueNoise, double angle_noise = kAngleNoise,

@@ -11,6 +11,8 @@
 #include "fivebar/model/dynamics.h"
 #include "random_samples.h"
 
+#include "paper.h"
+
 namespace fivebar::identification {
 namespace {
 

@@ -12,6 +12,8 @@
 #include "fivebar/identification/synth.h"
 #include "fivebar/model/rest.h"
 
+#include "paper.h"
+
 namespace fivebar::identification {
 namespace {
 
@@ -19,9 +21,7 @@ constexpr double kStdBound = 4.0;      // |error| / std, as in test_recovery.cc
 constexpr double kTorqueNoise = 0.02;  // N m, issue 4
 constexpr int kHeld = 1000;            // samples held still (1 s at 1 kHz)
 
-Loads<double> paper_loads(double t) {
-  return {2 + 5 * std::sin(8 * M_PI * t), 3 + 5 * std::cos(M_PI * t), 6.0, 50.0, M_PI / 2};
-}
+using testing::paper_loads;
 
 // 1 s held at the start pose with the frictionless equilibrium torques, then 2 s of the paper
 // scene's motion (rates and accelerations logged, torque noise on both parts)
@@ -32,7 +32,7 @@ TorqueLog held_then_moving(const Params<double>& truth) {
   so.with_rates = true;
   so.seed = 14;
   const SynthResult moving =
-      synthesize_log(truth, paper_loads, sim::Initial{M_PI / 2, M_PI / 2, 0.0, 0.0}, so);
+      synthesize_log(truth, paper_loads, testing::paper_initial(), so);
   EXPECT_TRUE(moving.status.ok()) << moving.status.message;
   Holding<double> h;
   EXPECT_TRUE(holding_torques(truth, paper_loads(0), M_PI / 2, M_PI / 2, EvalOptions{}, &h).ok());

@@ -105,6 +105,22 @@ TEST(TorqueLog, EmptyFileAndNoRows) {
               ThrowsMessage<LogError>(HasSubstr("bad.csv: samples: no data rows")));
 }
 
+TEST(Csv, OneParserKeepsCommentsLinesAndHeader) {
+  // the parser under read_torque_log and the apps' io::read_csv (tests/apps/test_output.cc)
+  const CsvTable t =
+      parse_csv("# made by hand\n\n t , theta1 \n0,1\n# mid\n0.5, 2 \n", "m.csv");
+  EXPECT_EQ(t.header_line, 3);
+  EXPECT_EQ(t.columns, (std::vector<std::string>{"t", "theta1"}));
+  EXPECT_EQ(t.lines, (std::vector<int>{4, 6}));
+  EXPECT_EQ(t.rows.back(), (std::vector<double>{0.5, 2.0}));
+  EXPECT_EQ(t.comments, (std::vector<std::string>{" made by hand", " mid"}));
+  EXPECT_EQ(parse_csv("# only a comment\n", "m.csv").header_line, 0);
+  EXPECT_THAT([&] { parse_csv("t,theta1\n0,\n", "m.csv"); },
+              ThrowsMessage<LogError>(HasSubstr("m.csv: line 2, column theta1: '' is not a")));
+  EXPECT_THAT([&] { parse_csv("t,theta1\n0,1,\n", "m.csv"); },
+              ThrowsMessage<LogError>(HasSubstr("m.csv: line 2: expected 2 fields, got 3")));
+}
+
 TEST(TorqueLog, MissingFile) {
   EXPECT_THAT([&] { read_torque_log("/nonexistent/log.csv"); },
               ThrowsMessage<LogError>(HasSubstr("/nonexistent/log.csv: (file): cannot open")));

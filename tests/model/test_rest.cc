@@ -21,7 +21,7 @@ constexpr double kQuotedTol = 5e-5;
 // a crank that breaks away moves visibly within 0.2 s (measured: ~1e-4 rad at 1% over the bound)
 constexpr double kBreakaway = 1e-7;
 
-const Loads<double> kPaperStaticLoads{0.0, 0.0, 6.0, 50.0, M_PI / 2};
+const Loads<double> kPaperStaticLoads = testing::paper_static_loads();
 
 Holding<double> paper_holding(const Params<double>& p = paper_params()) {
   Holding<double> h;
@@ -30,15 +30,7 @@ Holding<double> paper_holding(const Params<double>& p = paper_params()) {
   return h;
 }
 
-double max_displacement(const sim::Result& r) {
-  double worst = 0.0;
-  for (const sim::Row& row : r.rows) {
-    for (int k = 0; k < 2; ++k) {
-      worst = std::max(worst, std::abs(row.theta[k] - r.rows.front().theta[k]));
-    }
-  }
-  return worst;
-}
+double max_displacement(const sim::Result& r) { return testing::max_displacement(r, kDof); }
 
 // simulate from rest at the paper pose with constant M1, M2 (and the paper's M3, F)
 sim::Result hold(const Params<double>& p, double M1, double M2, double duration) {
@@ -46,7 +38,7 @@ sim::Result hold(const Params<double>& p, double M1, double M2, double duration)
   opt.duration = duration;
   opt.output_step = 1e-3;
   const sim::LoadFunction loads = [=](double) {
-    return Loads<double>{M1, M2, 6.0, 50.0, M_PI / 2};
+    return testing::paper_static_loads(M1, M2);
   };
   return sim::simulate(p, loads, testing::paper_initial(), opt);
 }
@@ -73,7 +65,7 @@ TEST(Rest, PaperPoseHoldingTorquesAreTheFrictionlessEquilibrium) {
   // at the range's ends the simulator's lock is exactly saturated (lock.h)
   for (double M1 : {h.M1_min, h.M1_max}) {
     LockAnalysis lock;
-    ASSERT_TRUE(lock_analysis(paper_params(), Loads<double>{M1, h.M2, 6.0, 50.0, M_PI / 2},
+    ASSERT_TRUE(lock_analysis(paper_params(), testing::paper_static_loads(M1, h.M2),
                               M_PI / 2, M_PI / 2, EvalOptions{}, &lock)
                     .ok());
     EXPECT_NEAR(lock.ratio, 1.0, 1e-12);

@@ -43,15 +43,7 @@ sim::LoadFunction drive(double dM1, double dM2, double omega) {
   };
 }
 
-double max_displacement(const sim::Result& r) {
-  double worst = 0.0;
-  for (const sim::Row& row : r.rows) {
-    for (int k = 0; k < 4; ++k) {
-      worst = std::max(worst, std::abs(row.theta[k] - r.rows.front().theta[k]));
-    }
-  }
-  return worst;
-}
+double max_displacement(const sim::Result& r) { return testing::max_displacement(r, 4); }
 
 TEST(Stick, DriveBelowBreakawayDoesNotMove) {
   sim::Options opt;

@@ -8,6 +8,7 @@
 #include "fivebar/model/dynamics.h"
 #include "fivebar/sim/simulator.h"
 #include "fivebar/trajectory/tasks.h"
+#include "paper.h"
 
 namespace fivebar::trajectory::testing {
 
@@ -24,15 +25,9 @@ inline std::vector<TaskSpec> paper_tasks() {
 
 // loads of the paper scene other than the motors: M3 = 6 N m, F = 50 N at pi/2 from link 3
 inline sim::LoadFunction paper_loads() {
-  return [](double) {
-    Loads<double> L;
-    L.M3 = 6.0;
-    L.F = 50.0;
-    L.F_angle = M_PI / 2;
-    return L;
-  };
+  return [](double) { return fivebar::testing::paper_static_loads(); };
 }
 
-inline sim::Initial paper_initial() { return {M_PI / 2, M_PI / 2, 0.0, 0.0}; }
+using fivebar::testing::paper_initial;
 
 }  // namespace fivebar::trajectory::testing

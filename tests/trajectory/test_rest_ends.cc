@@ -10,6 +10,8 @@
 #include "fivebar/trajectory/bspline.h"
 #include "fivebar/trajectory/problem.h"
 
+#include "paper.h"
+
 namespace fivebar::trajectory {
 namespace {
 
@@ -17,7 +19,7 @@ namespace {
 constexpr double kTorqueTol = 1e-9;
 
 TEST(RestEnds, TrajectoryEndsAreHeldWithTheHoldingTorques) {
-  const sim::LoadFunction loads = [](double) { return Loads<double>{0, 0, 6.0, 50.0, M_PI / 2}; };
+  const sim::LoadFunction loads = [](double) { return testing::paper_static_loads(); };
   const std::array<double, 2> start = {M_PI / 2, M_PI / 2}, goal = {2.4, 2.0};
   const double duration = 0.5;
   const TrajectoryProblem problem(paper_params(), loads, RestToRest(10, duration, start, goal),

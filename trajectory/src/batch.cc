@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "fivebar/sim/bytes.h"
 #include "stage.h"
 
 namespace fivebar::trajectory {
@@ -68,44 +69,7 @@ double miss_distance(const TrajectoryProblem& problem, const sim::LoadFunction& 
   return std::hypot(c[0] - goal[0], c[1] - goal[1]);
 }
 
-// byte writer and reader for encode / decode
-struct Writer {
-  std::string out;
-  void num(double v) { out.append(reinterpret_cast<const char*>(&v), sizeof v); }
-  void integer(long long v) { out.append(reinterpret_cast<const char*>(&v), sizeof v); }
-  void text(const std::string& s) {
-    integer(static_cast<long long>(s.size()));
-    out += s;
-  }
-};
-struct Reader {
-  const std::string& in;
-  size_t pos = 0;
-  void need(size_t n) {
-    if (pos + n > in.size()) throw std::runtime_error("decode: truncated TaskResult");
-  }
-  double num() {
-    double v;
-    need(sizeof v);
-    std::memcpy(&v, in.data() + pos, sizeof v);
-    pos += sizeof v;
-    return v;
-  }
-  long long integer() {
-    long long v;
-    need(sizeof v);
-    std::memcpy(&v, in.data() + pos, sizeof v);
-    pos += sizeof v;
-    return v;
-  }
-  std::string text() {
-    const size_t n = static_cast<size_t>(integer());
-    need(n);
-    std::string s = in.substr(pos, n);
-    pos += n;
-    return s;
-  }
-};
+constexpr const char* kTruncated = "decode: truncated TaskResult";
 
 // shortest text that reads back exactly (0.3, not %.17g's 0.29999999999999999); the apps'
 // format_double does the same, but this library does not depend on the apps layer
@@ -502,11 +466,11 @@ std::vector<TaskResult> run_parallel(int count, int threads,
 }
 
 std::string encode(const TaskResult& r) {
-  Writer w;
+  sim::ByteWriter w;
   for (const std::string* s : {&r.task, &r.status, &r.message, &r.solver_status,
                                &r.baseline_status, &r.initial_guess, &r.continuation,
                                &r.refinement}) {
-    w.text(*s);
+    w.put_string(*s);
   }
   for (double v : {r.duration, r.torque_limit, r.start[0], r.start[1], r.goal[0], r.goal[1],
                    r.dissipated_energy, r.baseline_dissipated_energy, r.input_energy,
@@ -519,20 +483,20 @@ std::string encode(const TaskResult& r) {
                    r.baseline_dissipated_energy_smoothed, r.input_energy_smoothed,
                    r.baseline_input_energy_smoothed, r.miss_distance_exact,
                    r.smoothing_velocity, r.refinement_change}) {
-    w.num(v);
+    w.put(v);
   }
-  for (long long v : {r.evaluations, r.starts, r.best_start, r.control_points}) w.integer(v);
-  w.integer(static_cast<long long>(r.x.size()));
-  for (double v : r.x) w.num(v);
-  return w.out;
+  for (long long v : {r.evaluations, r.starts, r.best_start, r.control_points}) w.put(v);
+  w.put(static_cast<long long>(r.x.size()));
+  for (double v : r.x) w.put(v);
+  return w.bytes();
 }
 
 TaskResult decode(const std::string& bytes) {
-  Reader rd{bytes};
+  sim::ByteReader rd(bytes);
   TaskResult r;
   for (std::string* s : {&r.task, &r.status, &r.message, &r.solver_status, &r.baseline_status,
                          &r.initial_guess, &r.continuation, &r.refinement}) {
-    *s = rd.text();
+    *s = rd.take_string(kTruncated);
   }
   for (double* v : {&r.duration, &r.torque_limit, &r.start[0], &r.start[1], &r.goal[0],
                     &r.goal[1], &r.dissipated_energy, &r.baseline_dissipated_energy,
@@ -545,13 +509,13 @@ TaskResult decode(const std::string& bytes) {
                     &r.dissipated_energy_smoothed, &r.baseline_dissipated_energy_smoothed,
                     &r.input_energy_smoothed, &r.baseline_input_energy_smoothed,
                     &r.miss_distance_exact, &r.smoothing_velocity, &r.refinement_change}) {
-    *v = rd.num();
+    *v = rd.take<double>(kTruncated);
   }
   for (int* v : {&r.evaluations, &r.starts, &r.best_start, &r.control_points}) {
-    *v = static_cast<int>(rd.integer());
+    *v = static_cast<int>(rd.take<long long>(kTruncated));
   }
-  r.x.resize(static_cast<size_t>(rd.integer()));
-  for (double& v : r.x) v = rd.num();
+  r.x.resize(static_cast<size_t>(rd.take<long long>(kTruncated)));
+  for (double& v : r.x) v = rd.take<double>(kTruncated);
   return r;
 }
 

@@ -18,6 +18,7 @@
 #include "fivebar/model/kinematics.h"
 #include "fivebar/model/params.h"
 #include "fivebar/sim/simulator.h"
+#include "paper.h"
 
 namespace fivebar::peers {
 
@@ -27,9 +28,7 @@ inline constexpr int kOutputs = 1000;        ///< grid points after t = 0
 
 /// Loads of the canonical scene (model.md, section 5): M1, M2 on the cranks, M3 on link 3,
 /// F = 50 N at P perpendicular to link 3 (direction e(th3 + pi/2)).
-inline Loads<double> paper_loads(double t) {
-  return {2 + 5 * std::sin(8 * M_PI * t), 3 + 5 * std::cos(M_PI * t), 6.0, 50.0, M_PI / 2};
-}
+using testing::paper_loads;
 
 /// The scene's frictionless parameters (friction.law = kNone).
 inline Params<double> frictionless_params() {
@@ -118,7 +117,7 @@ inline Trajectory fivebar_run(sim::Method method, double tol, sim::Result* out =
   o.method = method;
   o.rtol = o.atol = tol;
   sim::Result r = sim::simulate(frictionless_params(), paper_loads,
-                                sim::Initial{M_PI / 2, M_PI / 2, 0.0, 0.0}, o);
+                                testing::paper_initial(), o);
   Trajectory tr;
   if (!r.status.ok()) return tr;
   for (const sim::Row& row : r.rows) tr.push_back(row.theta);

@@ -4,18 +4,12 @@
 #include <string>
 #include <vector>
 
+#include "fivebar/identification/torque_log.h"
+
 namespace fivebar::io {
 
-/// A numeric table read from a CSV file.
-struct CsvTable {
-  std::string path;                       ///< as given, for error messages
-  std::vector<std::string> columns;       ///< header names, blanks trimmed
-  std::vector<std::vector<double>> rows;  ///< rows[i][j]: row i, column j
-  std::vector<int> lines;                 ///< 1-based line number in the file of each row
-
-  /// Index of column `name`, or -1.
-  int find(const std::string& name) const;
-  bool has(const std::string& name) const { return find(name) >= 0; }
+/// A numeric table read from a CSV file (parsed by identification::parse_csv, the one parser).
+struct CsvTable : identification::CsvTable {
   /// Index of column `name`; throws InputError(`<path>: header: missing column 'name' ...`).
   int require(const std::string& name) const;
   /// The values of column `name` (require()d).

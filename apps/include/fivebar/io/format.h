@@ -4,6 +4,8 @@
 
 #include <string>
 
+#include "fivebar/model/format.h"  // format_significant, format_number
+
 namespace fivebar::io {
 
 /// Shortest text that reads back as exactly `x` ("0.29", "1e-10", "1.5707963267948966");
@@ -16,6 +18,10 @@ std::string format_double(double x);
 /// last place of `x` ("0.476"); format_double(x) when there is none. Reading the text back may
 /// therefore give x's neighbouring double: use format_double where exactness matters.
 std::string format_grid_value(double x);
+
+/// `x` through one printf conversion of a double, such as "%.3e" or "%.4f" (table columns and
+/// reports with a fixed layout); format_significant(x, digits) for "%.<digits>g".
+std::string format_printf(double x, const char* format);
 
 /// `s` without leading and trailing blanks (space, tab, CR, LF).
 std::string trim(const std::string& s);

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "fivebar/sim/simulator.h"
-#include "fivebar/studies/sim_types.h"
+#include "fivebar/studies/types.h"
 
 namespace fivebar::studies {
 

@@ -1,10 +1,12 @@
 // Torque logs (interfaces.md, "Torque log CSV"): reading, validation, writing.
 #pragma once
 
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "fivebar/model/format.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/status.h"
 
@@ -16,6 +18,40 @@ class LogError : public FieldError {
  public:
   using FieldError::FieldError;
 };
+
+/// A numeric table parsed from CSV text: `#` comment lines, blank lines, one header row, then
+/// rows of finite numbers. The one CSV parser of the toolkit: torque logs here, motion files and
+/// reference trajectories in the apps (io::read_csv).
+struct CsvTable {
+  std::string path;                       ///< as given, for messages
+  std::vector<std::string> columns;       ///< header names, blanks trimmed
+  std::vector<std::vector<double>> rows;  ///< rows[i][j]: row i, column j
+  std::vector<int> lines;                 ///< 1-based line number in the text of each row
+  std::vector<std::string> comments;      ///< `#` lines, trimmed, without the leading '#'
+  int header_line = 0;                    ///< line of the header; 0 when the text has none
+
+  /// Index of column `name`, or -1.
+  int find(const std::string& name) const;
+  bool has(const std::string& name) const { return find(name) >= 0; }
+};
+
+/// What a format requires of a CSV beyond the parser's own checks, and how it words a bad field.
+/// Every hook is optional and may throw its own error.
+struct CsvRules {
+  /// Checks the header names (on line `line`) before any row is read.
+  std::function<void(const std::vector<std::string>& names, int line)> header;
+  /// The reason for a field that is not a finite number (`number`: it reads as a number, just
+  /// not a finite one); default "'<field>' is not a finite number".
+  std::function<std::string(const std::string& field, bool number)> bad_number;
+  /// Checks the table each time a row has been added (e.g. time increasing).
+  std::function<void(const CsvTable& table)> row;
+};
+
+/// Parses CSV text (`path` only names it in messages). Throws LogError(`<path>: line N: expected
+/// K fields, got M`) for a row of the wrong length and LogError(`<path>: line N, column NAME:
+/// <bad_number>`) for a field that is not a finite number (strtod syntax), besides whatever the
+/// rules' hooks throw. Text without a header row gives a table with header_line = 0.
+CsvTable parse_csv(const std::string& text, const std::string& path, const CsvRules& rules = {});
 
 /// Measured motion and actuator torques of the two cranks, one entry per sample.
 /// Units: t [s], theta [rad], tau [N m], omega [rad/s], alpha [rad/s^2].
@@ -65,7 +101,7 @@ void check_poses(const TorqueLog& log, const Params<double>& params);
 /// has_accels), then one row per sample in shortest round-trip form. Throws LogError on failure.
 void write_torque_log(const std::string& path, const TorqueLog& log);
 
-/// Shortest text that reads back as exactly x.
-std::string format_number(double x);
+/// Shortest text that reads back as exactly x (fivebar/model/format.h).
+using fivebar::format_number;
 
 }  // namespace fivebar::identification

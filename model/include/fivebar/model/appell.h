@@ -52,7 +52,7 @@ void mass_and_forces(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& 
 
 /// Relative joint rates w = J_w thd, order O, B, C, D, D0.
 template <typename T>
-std::array<T, 5> relative_rates(const T& w1, const T& w2, const T& w3, const T& w4) {
+std::array<T, kJoints> relative_rates(const T& w1, const T& w2, const T& w3, const T& w4) {
   return {w1, w3 - w1, w4 - w3, w2 - w4, w2};
 }
 
@@ -71,7 +71,7 @@ Row2<T> joint_row(const Kinematics<T>& k, int j) {
 
 /// J_w^T Mf: the generalized force of the friction torques is Q_f = -J_w^T Mf (eq. 7).
 template <typename T>
-Vec2<T> friction_transpose(const Kinematics<T>& k, const std::array<T, 5>& Mf) {
+Vec2<T> friction_transpose(const Kinematics<T>& k, const std::array<T, kJoints>& Mf) {
   Vec2<T> q(Mf[0] - Mf[1], Mf[4] + Mf[3]);
   q += (Mf[1] - Mf[2]) * k.G3.transpose() + (Mf[2] - Mf[3]) * k.G4.transpose();
   return q;
@@ -79,7 +79,7 @@ Vec2<T> friction_transpose(const Kinematics<T>& k, const std::array<T, 5>& Mf) {
 
 /// One relative acceleration per joint (d/dt of w), from the link accelerations.
 template <typename T>
-std::array<T, 5> relative_accelerations(const Vec2<T>& thdd, const T& al3, const T& al4) {
+std::array<T, kJoints> relative_accelerations(const Vec2<T>& thdd, const T& al3, const T& al4) {
   return relative_rates(thdd[0], thdd[1], al3, al4);
 }
 

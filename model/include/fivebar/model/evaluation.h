@@ -43,13 +43,14 @@ struct Evaluation {
   Vec2<T> thdd;                   ///< (alpha1, alpha2) [rad/s^2]
   T alpha3{}, alpha4{};           ///< coupler angular accelerations [rad/s^2]
   T M1{}, M2{};                   ///< motor torques [N m] (input of forward, output of inverse)
-  std::array<Vec2<T>, 5> F;       ///< joint reactions [N]
-  std::array<T, 5> N{}, Mf{}, w{};  ///< |F_k| [N], friction torques [N m], relative rates [rad/s]
-  std::array<int, 5> slip{};      ///< Coulomb sign used at each joint, or kStuck
+  std::array<Vec2<T>, kJoints> F;       ///< joint reactions [N]
+  std::array<T, kJoints> N{}, Mf{},
+      w{};  ///< |F_k| [N], friction torques [N m], relative rates [rad/s]
+  std::array<int, kJoints> slip{};      ///< Coulomb sign used at each joint, or kStuck
   /// stuck joints: mu_s r_k N_k - |holding torque| (>= 0 while friction can hold the joint);
   /// the holding torque itself is in Mf
-  std::array<T, 5> hold_margin{};
-  std::array<T, 5> zdot{};        ///< LuGre bristle rates [rad/s] (zero for other laws)
+  std::array<T, kJoints> hold_margin{};
+  std::array<T, kJoints> zdot{};        ///< LuGre bristle rates [rad/s] (zero for other laws)
   T P_diss{};                     ///< sum Mf_k w_k >= 0 [W]
   T P_in{};                       ///< M1 w1 + M2 w2 [W]
   T P_ext{};                      ///< M3 w3 + F . v_P [W]

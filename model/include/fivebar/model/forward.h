@@ -22,26 +22,26 @@ namespace detail {
 /// relative accelerations at thdd = 0. At most two (two independent ones lock the mechanism).
 template <typename T>
 struct StuckJoints {
-  int joint[2] = {-1, -1};
+  int joint[kDof] = {-1, -1};
   int count = 0;
   Mat2<T> J = Mat2<T>::Zero();     ///< rows of the stuck joints
   Vec2<T> wb = Vec2<T>::Zero();    ///< their relative accelerations at thdd = 0
 };
 
 template <typename T>
-Status stuck_joints(const Kinematics<T>& k, const Bias<T>& bias, const std::array<int, 5>* slip,
-                    StuckJoints<T>* s) {
+Status stuck_joints(const Kinematics<T>& k, const Bias<T>& bias,
+                    const std::array<int, kJoints>* slip, StuckJoints<T>* s) {
   if (!slip) return Status::Ok();
-  for (int j = 0; j < 5; ++j) {
-    if ((*slip)[j] == kStuck && s->count < 2) s->joint[s->count++] = j;
+  for (int j = 0; j < kJoints; ++j) {
+    if ((*slip)[j] == kStuck && s->count < kDof) s->joint[s->count++] = j;
   }
   if (s->count == 0) return Status::Ok();
-  const std::array<T, 5> wb = relative_rates(T(0), T(0), bias.h3, bias.h4);
+  const std::array<T, kJoints> wb = relative_rates(T(0), T(0), bias.h3, bias.h4);
   for (int i = 0; i < s->count; ++i) {
     s->J.row(i) = joint_row(k, s->joint[i]);
     s->wb[i] = wb[s->joint[i]];
   }
-  if (s->count == 2 && std::abs(value_of(det2(s->J))) < 1e-12) {
+  if (s->count == kDof && std::abs(value_of(det2(s->J))) < 1e-12) {
     return Status::Error(StatusCode::kNearSingular,
                          "two stuck joints whose constraints are dependent (singular pose)");
   }
@@ -52,7 +52,7 @@ Status stuck_joints(const Kinematics<T>& k, const Bias<T>& bias, const std::arra
 /// slipping joints included); the holding torques go to hold[joint].
 template <typename T>
 Vec2<T> constrained_accelerations(const Mat2<T>& A, const Mat2<T>& Ainv, const Vec2<T>& r,
-                                  const StuckJoints<T>& s, std::array<T, 5>* hold) {
+                                  const StuckJoints<T>& s, std::array<T, kJoints>* hold) {
   if (s.count == 0) return Ainv * r;
   if (s.count == 1) {
     // [A J^T; J 0] [thdd; lambda] = [r; -wb]
@@ -73,10 +73,12 @@ Vec2<T> constrained_accelerations(const Mat2<T>& A, const Mat2<T>& Ainv, const V
 
 /// phi_k = r_k f_k(w_k) of every joint, and the slip sign used (ev->slip); stuck joints get 0.
 template <typename T>
-std::array<T, 5> forward_friction_arms(const Params<T>& p, const std::array<int, 5>* slip,
-                                       const std::array<T, 5>* bristle, Evaluation<T>* ev) {
-  std::array<T, 5> phi;
-  for (int j = 0; j < 5; ++j) {
+std::array<T, kJoints> forward_friction_arms(const Params<T>& p,
+                                             const std::array<int, kJoints>* slip,
+                                             const std::array<T, kJoints>* bristle,
+                                             Evaluation<T>* ev) {
+  std::array<T, kJoints> phi;
+  for (int j = 0; j < kJoints; ++j) {
     ev->slip[j] = slip ? (*slip)[j] : sign_of(ev->w[j]);
     if (ev->slip[j] == kStuck) {
       phi[j] = T(0);
@@ -98,9 +100,9 @@ std::array<T, 5> forward_friction_arms(const Params<T>& p, const std::array<int,
 /// nullptr means z = 0).
 template <typename T>
 Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
-                        const T& w1, const T& w2, const std::array<int, 5>* slip,
+                        const T& w1, const T& w2, const std::array<int, kJoints>* slip,
                         const EvalOptions& opt, Evaluation<T>* ev,
-                        const std::array<T, 5>* bristle = nullptr) {
+                        const std::array<T, kJoints>* bristle = nullptr) {
   Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin, opt.want_angles);
   if (!st.ok()) return st;
   const Kinematics<T>& k = ev->kin;
@@ -119,10 +121,10 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
   detail::StuckJoints<T> stuck;
   st = detail::stuck_joints(k, ev->bias, slip, &stuck);
   if (!st.ok()) return st;
-  std::array<T, 5> hold{};  // holding torques of the stuck joints
+  std::array<T, kJoints> hold{};  // holding torques of the stuck joints
   // accelerations and reactions for the friction torques Mf of the slipping joints
-  auto solve = [&](const std::array<T, 5>& Mf, std::array<Vec2<T>, 5>* F) {
-    std::array<T, 5> Mf_all = Mf;
+  auto solve = [&](const std::array<T, kJoints>& Mf, std::array<Vec2<T>, kJoints>* F) {
+    std::array<T, kJoints> Mf_all = Mf;
     for (int i = 0; i < stuck.count; ++i) Mf_all[stuck.joint[i]] = T(0);
     const Vec2<T> r = rhs0 - friction_transpose(k, Mf_all);
     ev->thdd = detail::constrained_accelerations(ev->A, Ainv, r, stuck, &hold);
@@ -130,7 +132,7 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
     reactions(p, k, ev->bias, L, Fvec, ev->thdd, Mf_all, F, &ev->alpha3, &ev->alpha4);
   };
   if (p.friction.active()) {
-    const std::array<T, 5> phi = detail::forward_friction_arms(p, slip, bristle, ev);
+    const std::array<T, kJoints> phi = detail::forward_friction_arms(p, slip, bristle, ev);
     st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations);
     if (!st.ok()) return st;
     solve(ev->Mf, &ev->F);  // accelerations and reactions of the converged friction torques
@@ -141,7 +143,7 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
       ev->Mf[j] = hold[j];
       ev->hold_margin[j] = holding_bound(p.friction, j) * ev->N[j] - abs(hold[j]);
     }
-    for (int j = 0; j < 5; ++j) ev->P_diss += ev->Mf[j] * ev->w[j];
+    for (int j = 0; j < kJoints; ++j) ev->P_diss += ev->Mf[j] * ev->w[j];
   } else {
     ev->slip.fill(0);
     if (opt.want_reactions) {

@@ -24,36 +24,36 @@ namespace detail {
 /// once (one solve per joint with friction); each loop iteration then costs a 10x5 product.
 template <typename T>
 struct AffineReactions {
-  std::array<Vec2<T>, 5> F0;
-  std::array<std::array<Vec2<T>, 5>, 5> dF;
-  std::array<bool, 5> active{};  ///< joints with friction (phi_j not exactly zero)
+  std::array<Vec2<T>, kJoints> F0;
+  std::array<std::array<Vec2<T>, kJoints>, kJoints> dF;
+  std::array<bool, kJoints> active{};  ///< joints with friction (phi_j not exactly zero)
 
-  void operator()(const std::array<T, 5>& torque, std::array<Vec2<T>, 5>* out) const {
+  void operator()(const std::array<T, kJoints>& torque, std::array<Vec2<T>, kJoints>* out) const {
     *out = F0;
-    for (int j = 0; j < 5; ++j) {
+    for (int j = 0; j < kJoints; ++j) {
       if (!active[j]) continue;
-      for (int k = 0; k < 5; ++k) (*out)[k] += dF[j][k] * torque[j];
+      for (int k = 0; k < kJoints; ++k) (*out)[k] += dF[j][k] * torque[j];
     }
   }
 };
 
 /// Probes `solve(Mf, F)` at Mf = 0 and at a unit torque per active joint.
 template <typename T, typename Solve>
-AffineReactions<T> probe_reactions(const std::array<T, 5>& phi, Solve& solve) {
+AffineReactions<T> probe_reactions(const std::array<T, kJoints>& phi, Solve& solve) {
   AffineReactions<T> map;
-  const std::array<T, 5> zero{};
+  const std::array<T, kJoints> zero{};
   solve(zero, &map.F0);
-  for (int j = 0; j < 5; ++j) {
+  for (int j = 0; j < kJoints; ++j) {
     map.active[j] = !is_exact_zero(phi[j]);
     if (!map.active[j]) {
       for (auto& v : map.dF[j]) v.setZero();
       continue;
     }
-    std::array<T, 5> unit_torque{};
+    std::array<T, kJoints> unit_torque{};
     unit_torque[j] = T(1);
-    std::array<Vec2<T>, 5> Fj;
+    std::array<Vec2<T>, kJoints> Fj;
     solve(unit_torque, &Fj);
-    for (int k = 0; k < 5; ++k) map.dF[j][k] = Fj[k] - map.F0[k];
+    for (int k = 0; k < kJoints; ++k) map.dF[j][k] = Fj[k] - map.F0[k];
   }
   return map;
 }
@@ -61,35 +61,36 @@ AffineReactions<T> probe_reactions(const std::array<T, 5>& phi, Solve& solve) {
 /// Newton on R(N) = N - |F(phi N)| (F is affine in the friction torques: F = F0 + sum_j dF_j
 /// Mf_j, from unit probes), from the start N. Converged: true and *N_out set.
 template <typename T>
-bool friction_newton(const std::array<T, 5>& phi, const EvalOptions& opt,
-                     const AffineReactions<T>& map, std::array<T, 5> N, std::array<T, 5>* N_out) {
+bool friction_newton(const std::array<T, kJoints>& phi, const EvalOptions& opt,
+                     const AffineReactions<T>& map, std::array<T, kJoints> N,
+                     std::array<T, kJoints>* N_out) {
   const auto& F0 = map.F0;
   const auto& dF = map.dF;
   using std::sqrt;
   for (int it = 0; it < 50; ++it) {
-    std::array<Vec2<T>, 5> F = F0;
-    for (int j = 0; j < 5; ++j) {
-      for (int k = 0; k < 5; ++k) F[k] += dF[j][k] * (phi[j] * N[j]);
+    std::array<Vec2<T>, kJoints> F = F0;
+    for (int j = 0; j < kJoints; ++j) {
+      for (int k = 0; k < kJoints; ++k) F[k] += dF[j][k] * (phi[j] * N[j]);
     }
-    Eigen::Matrix<T, 5, 1> R;
-    Eigen::Matrix<T, 5, 5> J = Eigen::Matrix<T, 5, 5>::Identity();
-    for (int k = 0; k < 5; ++k) {
+    Eigen::Matrix<T, kJoints, 1> R;
+    Eigen::Matrix<T, kJoints, kJoints> J = Eigen::Matrix<T, kJoints, kJoints>::Identity();
+    for (int k = 0; k < kJoints; ++k) {
       const T n = sqrt(F[k].squaredNorm());
       R[k] = N[k] - n;
       if (value_of(n) > 0.0) {
-        for (int j = 0; j < 5; ++j) J(k, j) -= F[k].dot(dF[j][k]) * phi[j] / n;
+        for (int j = 0; j < kJoints; ++j) J(k, j) -= F[k].dot(dF[j][k]) * phi[j] / n;
       }
     }
-    const Eigen::Matrix<T, 5, 1> step = J.partialPivLu().solve(R);
+    const Eigen::Matrix<T, kJoints, 1> step = J.partialPivLu().solve(R);
     double change = 0.0, scale = 1e-300;
-    for (int k = 0; k < 5; ++k) {
+    for (int k = 0; k < kJoints; ++k) {
       N[k] -= step[k];
       change = std::max(change, std::abs(value_of(step[k])));
       scale = std::max(scale, std::abs(value_of(N[k])));
     }
     if (!std::isfinite(change)) return false;
     if (change <= opt.friction_tol * scale) {
-      for (int k = 0; k < 5; ++k) {
+      for (int k = 0; k < kJoints; ++k) {
         if (value_of(N[k]) < -1e-9 * scale) return false;  // not a magnitude: no solution
       }
       *N_out = N;
@@ -103,21 +104,21 @@ bool friction_newton(const std::array<T, 5>& phi, const EvalOptions& opt,
 /// consistent); otherwise *contracting tells whether it was still contracting, *ratio the last
 /// ratio of successive changes.
 template <typename T>
-bool friction_fixed_point(const std::array<T, 5>& phi, const EvalOptions& opt,
-                          const AffineReactions<T>& map, std::array<T, 5>* N,
-                          std::array<T, 5>* Mf, std::array<Vec2<T>, 5>* F, int* iterations,
-                          bool* contracting, double* ratio) {
+bool friction_fixed_point(const std::array<T, kJoints>& phi, const EvalOptions& opt,
+                          const AffineReactions<T>& map, std::array<T, kJoints>* N,
+                          std::array<T, kJoints>* Mf, std::array<Vec2<T>, kJoints>* F,
+                          int* iterations, bool* contracting, double* ratio) {
   reaction_norms(map.F0, N);
   double prev_err = 0.0;
   *contracting = true;
   *ratio = 0.0;
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
-    for (int j = 0; j < 5; ++j) (*Mf)[j] = phi[j] * (*N)[j];
-    const std::array<T, 5> N_old = *N;
+    for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
+    const std::array<T, kJoints> N_old = *N;
     map(*Mf, F);
     reaction_norms(*F, N);
     double err = 0.0, scale = 1e-300;
-    for (int j = 0; j < 5; ++j) {
+    for (int j = 0; j < kJoints; ++j) {
       err = std::max(err, std::abs(value_of((*N)[j]) - value_of(N_old[j])));
       scale = std::max(scale, std::abs(value_of((*N)[j])));
     }
@@ -128,7 +129,7 @@ bool friction_fixed_point(const std::array<T, 5>& phi, const EvalOptions& opt,
     }
     if (err <= opt.friction_tol * scale) {
       // friction torques consistent with the final reactions
-      for (int j = 0; j < 5; ++j) (*Mf)[j] = phi[j] * (*N)[j];
+      for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
       return true;
     }
     *ratio = prev_err > 0.0 ? err / prev_err : 0.0;
@@ -145,13 +146,13 @@ bool friction_fixed_point(const std::array<T, 5>& phi, const EvalOptions& opt,
 /// Newton on the same affine map from two starts (|F0| and a large one): the unique consistent
 /// N, or an error saying that there is none or more than one.
 template <typename T>
-Status friction_newton_fallback(const std::array<T, 5>& phi, const EvalOptions& opt,
+Status friction_newton_fallback(const std::array<T, kJoints>& phi, const EvalOptions& opt,
                                 const AffineReactions<T>& map, bool contracting, double ratio,
-                                std::array<T, 5>* N) {
-  std::array<T, 5> N0, Na, Nb;
+                                std::array<T, kJoints>* N) {
+  std::array<T, kJoints> N0, Na, Nb;
   reaction_norms(map.F0, &N0);
   const bool a = friction_newton(phi, opt, map, N0, &Na);
-  std::array<T, 5> N_big = N0;
+  std::array<T, kJoints> N_big = N0;
   for (auto& n : N_big) n = n * T(100) + T(1);
   const bool b = friction_newton(phi, opt, map, N_big, &Nb);
   std::ostringstream msg;
@@ -164,7 +165,7 @@ Status friction_newton_fallback(const std::array<T, 5>& phi, const EvalOptions& 
   }
   if (a && b) {
     double diff = 0.0, scale = 1e-300;
-    for (int j = 0; j < 5; ++j) {
+    for (int j = 0; j < kJoints; ++j) {
       diff = std::max(diff, std::abs(value_of(Na[j]) - value_of(Nb[j])));
       scale = std::max(scale, std::abs(value_of(Na[j])));
     }
@@ -185,9 +186,9 @@ Status friction_newton_fallback(const std::array<T, 5>& phi, const EvalOptions& 
 /// contracting, Newton from two starts. `solve(Mf, F)` evaluates the reactions for friction
 /// torques Mf; phi_k = r_k f_k(w_k) is fixed. The caller solves once more with the returned Mf.
 template <typename T, typename Solve>
-Status friction_loop(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&& solve,
-                     std::array<T, 5>* N, std::array<T, 5>* Mf, std::array<Vec2<T>, 5>* F,
-                     int* iterations) {
+Status friction_loop(const std::array<T, kJoints>& phi, const EvalOptions& opt, Solve&& solve,
+                     std::array<T, kJoints>* N, std::array<T, kJoints>* Mf,
+                     std::array<Vec2<T>, kJoints>* F, int* iterations) {
   Mf->fill(T(0));
   const detail::AffineReactions<T> map = detail::probe_reactions(phi, solve);
   bool contracting = true;
@@ -197,7 +198,7 @@ Status friction_loop(const std::array<T, 5>& phi, const EvalOptions& opt, Solve&
   }
   const Status st = detail::friction_newton_fallback(phi, opt, map, contracting, ratio, N);
   if (!st.ok()) return st;
-  for (int j = 0; j < 5; ++j) (*Mf)[j] = phi[j] * (*N)[j];
+  for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
   solve(*Mf, F);
   reaction_norms(*F, N);
   *iterations = opt.friction_max_iter + 1;  // marks a Newton solve

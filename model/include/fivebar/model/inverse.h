@@ -44,12 +44,12 @@ int inverse_slip(const EvalOptions& opt, const T& w, const T& wdot) {
 /// rest rule's sign unless `slip` is given; stuck joints get 0 (the motors carry the holding
 /// torque: frictionless equilibrium there).
 template <typename T>
-std::array<T, 5> inverse_friction_arms(const Params<T>& p, const EvalOptions& opt,
-                                       const std::array<T, 5>& wdot,
-                                       const std::array<int, 5>* slip,
-                                       const std::array<T, 5>* bristle, Evaluation<T>* ev) {
-  std::array<T, 5> phi;
-  for (int j = 0; j < 5; ++j) {
+std::array<T, kJoints> inverse_friction_arms(const Params<T>& p, const EvalOptions& opt,
+                                       const std::array<T, kJoints>& wdot,
+                                       const std::array<int, kJoints>* slip,
+                                       const std::array<T, kJoints>* bristle, Evaluation<T>* ev) {
+  std::array<T, kJoints> phi;
+  for (int j = 0; j < kJoints; ++j) {
     const int s = inverse_slip(opt, ev->w[j], wdot[j]);
     ev->slip[j] = slip ? (*slip)[j] : s;
     if (ev->slip[j] == kStuck) {
@@ -57,8 +57,8 @@ std::array<T, 5> inverse_friction_arms(const Params<T>& p, const EvalOptions& op
     } else if (p.friction.law == FrictionLaw::kLuGre) {
       // without bristle states: their steady state z = g(w) sign(w) / sigma0 (Stribeck)
       const T z = bristle ? (*bristle)[j]
-                          : T(double(s == kStuck ? 0 : s)) * stribeck_level(p.friction, j, ev->w[j]) /
-                                p.friction.sigma0[j];
+                          : T(double(s == kStuck ? 0 : s)) *
+                                stribeck_level(p.friction, j, ev->w[j]) / p.friction.sigma0[j];
       phi[j] = p.friction.pin_radius[j] * lugre_law(p.friction, j, ev->w[j], z, &ev->zdot[j]);
     } else {
       phi[j] = p.friction.pin_radius[j] * friction_law(p.friction, j, ev->w[j], ev->slip[j]);
@@ -96,8 +96,8 @@ void crank_torques(const Params<T>& p, const T& a1, const T& a2, Evaluation<T>* 
 template <typename T>
 Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
                         const T& w1_in, const T& w2_in, const T& a1_in, const T& a2_in,
-                        const std::array<int, 5>* slip, const EvalOptions& opt,
-                        Evaluation<T>* ev, const std::array<T, 5>* bristle = nullptr) {
+                        const std::array<int, kJoints>* slip, const EvalOptions& opt,
+                        Evaluation<T>* ev, const std::array<T, kJoints>* bristle = nullptr) {
   Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin);
   if (!st.ok()) return st;
   // rest rule: a crank at rest and not accelerating stands exactly still
@@ -113,24 +113,25 @@ Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
   ev->w = relative_rates(w1, w2, ev->bias.w3, ev->bias.w4);
   ev->iterations = 0;
   ev->Mf.fill(T(0));
-  auto solve = [&](const std::array<T, 5>& Mf, std::array<Vec2<T>, 5>* F) {
+  auto solve = [&](const std::array<T, kJoints>& Mf, std::array<Vec2<T>, kJoints>* F) {
     reactions(p, k, ev->bias, L, Fvec, ev->thdd, Mf, F, &ev->alpha3, &ev->alpha4);
   };
   solve(ev->Mf, &ev->F);  // alpha3, alpha4 for the relative accelerations
-  const std::array<T, 5> wdot = relative_accelerations(ev->thdd, ev->alpha3, ev->alpha4);
+  const std::array<T, kJoints> wdot = relative_accelerations(ev->thdd, ev->alpha3, ev->alpha4);
   if (p.friction.active()) {
-    const std::array<T, 5> phi = detail::inverse_friction_arms(p, opt, wdot, slip, bristle, ev);
+    const std::array<T, kJoints> phi =
+        detail::inverse_friction_arms(p, opt, wdot, slip, bristle, ev);
     st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations);
     if (!st.ok()) return st;
     solve(ev->Mf, &ev->F);
     reaction_norms(ev->F, &ev->N);
-    for (int j = 0; j < 5; ++j) {
+    for (int j = 0; j < kJoints; ++j) {
       if (ev->slip[j] == kStuck) ev->hold_margin[j] = holding_bound(p.friction, j) * ev->N[j];
     }
   } else {
     reaction_norms(ev->F, &ev->N);
     // no friction: nothing holds, but joints at rest are still reported (hold_margin 0)
-    for (int j = 0; j < 5; ++j) {
+    for (int j = 0; j < kJoints; ++j) {
       const bool stuck = opt.rest_acceleration >= 0.0 &&
                          detail::inverse_slip(opt, ev->w[j], wdot[j]) == kStuck;
       ev->slip[j] = stuck ? kStuck : 0;
@@ -138,7 +139,7 @@ Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
   }
   detail::crank_torques(p, a1, a2, ev);
   ev->P_diss = T(0);
-  for (int j = 0; j < 5; ++j) ev->P_diss += ev->Mf[j] * ev->w[j];
+  for (int j = 0; j < kJoints; ++j) ev->P_diss += ev->Mf[j] * ev->w[j];
   ev->P_in = ev->M1 * w1 + ev->M2 * w2;
   ev->P_ext = L.M3 * ev->bias.w3 + Fvec.dot(k.GP * Vec2<T>(w1, w2));
   return Status::Ok();

@@ -44,27 +44,37 @@ struct Hessians {
   std::array<Mat2<T>, 2> HP;                 ///< H_xP, H_yP
 };
 
-/// Closed-form position solve (eq. 4) for the assembly in params, and the G coefficients.
-/// Fails with kCannotAssemble when |BD| is outside [|l3 - l4|, l3 + l4], and with kNearSingular
-/// when |sin(th4 - th3)| < singular_margin (pass 0 to accept any pose that assembles).
-/// `angles` = false skips th3, th4 themselves (two atan2): the dynamics needs only e3, e4.
+/// Message of a pose that cannot close: |BD| outside [|l3 - l4|, l3 + l4] (cold path).
+inline Status cannot_assemble_status(double th1, double th2, double L2, double l3, double l4) {
+  std::ostringstream msg;
+  msg << "cannot assemble at theta1=" << th1 << ", theta2=" << th2 << ": |BD|=" << std::sqrt(L2)
+      << " outside [" << std::abs(l3 - l4) << ", " << l3 + l4 << "]";
+  return Status::Error(StatusCode::kCannotAssemble, msg.str());
+}
+
+/// Message of a pose within the singular margin (cold path).
+inline Status near_singular_status(double th1, double th2, double sine, double margin) {
+  std::ostringstream msg;
+  msg << "near-singular pose at theta1=" << th1 << ", theta2=" << th2
+      << ": |sin(theta4 - theta3)|=" << sine << " < margin " << margin;
+  return Status::Error(StatusCode::kNearSingular, msg.str());
+}
+
+/// Loop closure (eq. 4): B and D from the crank angles, then C from the triangle B, C, D, the
+/// coupler directions e3, e4 (and th3, th4 when `angles`) and sin43. Fails as solve_kinematics.
 template <typename T>
-Status solve_kinematics(const Params<T>& p, const T& th1, const T& th2, Kinematics<T>* k,
-                        double singular_margin = 0.0, bool angles = true) {
+Status close_loop(const Params<T>& p, const T& th1, const T& th2, Kinematics<T>* k,
+                  double singular_margin, bool angles) {
   using std::atan2;
-  using std::cos;
-  using std::sin;
   using std::sqrt;
-  const T& l1 = p.links[0].length;
-  const T& l2 = p.links[1].length;
   const T& l3 = p.links[2].length;
   const T& l4 = p.links[3].length;
   k->th1 = th1;
   k->th2 = th2;
   k->e1 = unit(th1);
   k->e2 = unit(th2);
-  k->B = l1 * k->e1;
-  k->D = Vec2<T>(p.ground_length, T(0)) + l2 * k->e2;
+  k->B = p.links[0].length * k->e1;
+  k->D = Vec2<T>(p.ground_length, T(0)) + p.links[1].length * k->e2;
 
   // triangle B, C, D: foot of C on BD at distance a from B, height h
   const Vec2<T> d = k->D - k->B;
@@ -72,11 +82,7 @@ Status solve_kinematics(const Params<T>& p, const T& th1, const T& th2, Kinemati
   const double L2v = value_of(L2);
   const double l3v = value_of(l3), l4v = value_of(l4);
   if (!(L2v > 0.0) || L2v > (l3v + l4v) * (l3v + l4v) || L2v < (l3v - l4v) * (l3v - l4v)) {
-    std::ostringstream msg;
-    msg << "cannot assemble at theta1=" << value_of(th1) << ", theta2=" << value_of(th2)
-        << ": |BD|=" << std::sqrt(L2v) << " outside [" << std::abs(l3v - l4v) << ", "
-        << l3v + l4v << "]";
-    return Status::Error(StatusCode::kCannotAssemble, msg.str());
+    return cannot_assemble_status(value_of(th1), value_of(th2), L2v, l3v, l4v);
   }
   const T L = sqrt(L2);
   const Vec2<T> u = d / L;
@@ -93,14 +99,18 @@ Status solve_kinematics(const Params<T>& p, const T& th1, const T& th2, Kinemati
   }
   k->sin43 = cross(k->e3, k->e4);  // sin(th4 - th3)
   if (std::abs(value_of(k->sin43)) < singular_margin) {
-    std::ostringstream msg;
-    msg << "near-singular pose at theta1=" << value_of(th1) << ", theta2=" << value_of(th2)
-        << ": |sin(theta4 - theta3)|=" << std::abs(value_of(k->sin43)) << " < margin "
-        << singular_margin;
-    return Status::Error(StatusCode::kNearSingular, msg.str());
+    return near_singular_status(value_of(th1), value_of(th2), std::abs(value_of(k->sin43)),
+                         singular_margin);
   }
-  k->P = k->B + p.point_p * k->e3;
+  return Status::Ok();
+}
 
+/// The load point P and the centres of mass c[0..3] with their directions ec (closed loop).
+template <typename T>
+void place_points(const Params<T>& p, Kinematics<T>* k) {
+  using std::cos;
+  using std::sin;
+  k->P = k->B + p.point_p * k->e3;
   // centres of mass: e(th_i + alpha_i) = rotation of e_i by alpha_i
   const std::array<const Vec2<T>*, 4> e = {&k->e1, &k->e2, &k->e3, &k->e4};
   for (int i = 0; i < 4; ++i) {
@@ -116,11 +126,15 @@ Status solve_kinematics(const Params<T>& p, const T& th1, const T& th2, Kinemati
   k->c[1] = D0 + p.links[1].com_offset * k->ec[1];
   k->c[2] = k->B + p.links[2].com_offset * k->ec[2];
   k->c[3] = k->D + p.links[3].com_offset * k->ec[3];
+}
 
-  // first-order coefficients (section 2.2.2): l3 s w3 = (vD - vB).e4, l4 s w4 = (vD - vB).e3
-  const Vec2<T> dB1 = l1 * perp(k->e1);  // dB/dth1
-  const Vec2<T> dD2 = l2 * perp(k->e2);  // dD/dth2
-  const T s3 = l3 * k->sin43, s4 = l4 * k->sin43;
+/// First-order influence coefficients G3, G4, Gc, GP (section 2.2.2) of a closed pose.
+template <typename T>
+void first_order_coefficients(const Params<T>& p, Kinematics<T>* k) {
+  // l3 s w3 = (vD - vB).e4, l4 s w4 = (vD - vB).e3
+  const Vec2<T> dB1 = p.links[0].length * perp(k->e1);  // dB/dth1
+  const Vec2<T> dD2 = p.links[1].length * perp(k->e2);  // dD/dth2
+  const T s3 = p.links[2].length * k->sin43, s4 = p.links[3].length * k->sin43;
   k->G3 << -dB1.dot(k->e4) / s3, dD2.dot(k->e4) / s3;
   k->G4 << -dB1.dot(k->e3) / s4, dD2.dot(k->e3) / s4;
 
@@ -135,6 +149,19 @@ Status solve_kinematics(const Params<T>& p, const T& th1, const T& th2, Kinemati
   k->Gc[3].col(1) += dD2;
   k->GP = p.point_p * perp(k->e3) * k->G3;
   k->GP.col(0) += dB1;
+}
+
+/// Closed-form position solve (eq. 4) for the assembly in params, and the G coefficients.
+/// Fails with kCannotAssemble when |BD| is outside [|l3 - l4|, l3 + l4], and with kNearSingular
+/// when |sin(th4 - th3)| < singular_margin (pass 0 to accept any pose that assembles).
+/// `angles` = false skips th3, th4 themselves (two atan2): the dynamics needs only e3, e4.
+template <typename T>
+Status solve_kinematics(const Params<T>& p, const T& th1, const T& th2, Kinematics<T>* k,
+                        double singular_margin = 0.0, bool angles = true) {
+  Status st = close_loop(p, th1, th2, k, singular_margin, angles);
+  if (!st.ok()) return st;
+  place_points(p, k);
+  first_order_coefficients(p, k);
   return Status::Ok();
 }
 

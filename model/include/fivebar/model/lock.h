@@ -24,9 +24,9 @@ namespace fivebar {
 
 /// Result of lock_analysis at one pose and load.
 struct LockAnalysis {
-  std::array<double, 5> hold{};  ///< holding torques lambda_k [N m] (friction torques Mf_k)
-  std::array<double, 5> N{};     ///< reactions |F_k| with those torques [N]
-  std::array<Vec2<double>, 5> F;  ///< reactions [N]
+  std::array<double, kJoints> hold{};  ///< holding torques lambda_k [N m] (friction torques Mf_k)
+  std::array<double, kJoints> N{};     ///< reactions |F_k| with those torques [N]
+  std::array<Vec2<double>, kJoints> F;  ///< reactions [N]
   /// max_k |lambda_k| / (mu_s,k r_k N_k) at the optimum (<= 1: friction holds the pose);
   /// infinite when no joint can resist in some direction the loads push
   double ratio = 0.0;
@@ -37,15 +37,16 @@ namespace detail {
 
 /// min over lambda with sum_k a_k lambda_k = q of max_k |lambda_k| / w_k (the dual vertex rule
 /// above); returns the ratio and fills lambda.
-inline double min_max_ratio(const std::array<Vec2<double>, 5>& a, const std::array<double, 5>& w,
-                            const Vec2<double>& q, std::array<double, 5>* lambda) {
+inline double min_max_ratio(const std::array<Vec2<double>, kJoints>& a,
+                            const std::array<double, kJoints>& w, const Vec2<double>& q,
+                            std::array<double, kJoints>* lambda) {
   double best = -1.0;
   int kbest = -1;
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < kJoints; ++k) {
     if (a[k].squaredNorm() == 0.0) continue;
     const Vec2<double> u = perp(a[k]);
     double denom = 0.0;
-    for (int j = 0; j < 5; ++j) denom += w[j] * std::abs(a[j].dot(u));
+    for (int j = 0; j < kJoints; ++j) denom += w[j] * std::abs(a[j].dot(u));
     const double num = std::abs(q.dot(u));
     const double s = num == 0.0 ? 0.0 : denom > 0.0 ? num / denom
                                                     : std::numeric_limits<double>::infinity();
@@ -59,7 +60,7 @@ inline double min_max_ratio(const std::array<Vec2<double>, 5>& a, const std::arr
   Vec2<double> u = perp(a[kbest]);
   if (q.dot(u) < 0.0) u = -u;
   Vec2<double> rest = q;
-  for (int j = 0; j < 5; ++j) {
+  for (int j = 0; j < kJoints; ++j) {
     if (j == kbest) continue;
     const double d = a[j].dot(u);
     (*lambda)[j] = d > 0.0 ? best * w[j] : d < 0.0 ? -best * w[j] : 0.0;
@@ -67,7 +68,7 @@ inline double min_max_ratio(const std::array<Vec2<double>, 5>& a, const std::arr
   }
   (*lambda)[kbest] = rest.dot(a[kbest]) / a[kbest].squaredNorm();
   // the ratio the torques actually reach (differs from the dual's only where columns are parallel)
-  for (int j = 0; j < 5; ++j) {
+  for (int j = 0; j < kJoints; ++j) {
     if ((*lambda)[j] == 0.0) continue;
     best = std::max(best, w[j] > 0.0 ? std::abs((*lambda)[j]) / w[j]
                                      : std::numeric_limits<double>::infinity());
@@ -89,9 +90,9 @@ inline Status lock_analysis(const Params<double>& p, const Loads<double>& L, dou
   Mat2<double> A;
   Vec2<double> q;
   mass_and_forces(p, k, b, L, Fvec, &A, &q);
-  std::array<Vec2<double>, 5> a;
-  for (int j = 0; j < 5; ++j) {
-    std::array<double, 5> unit{};
+  std::array<Vec2<double>, kJoints> a;
+  for (int j = 0; j < kJoints; ++j) {
+    std::array<double, kJoints> unit{};
     unit[j] = 1.0;
     a[j] = friction_transpose(k, unit);
   }
@@ -99,13 +100,13 @@ inline Status lock_analysis(const Params<double>& p, const Loads<double>& L, dou
   out->hold.fill(0.0);
   for (int it = 0; it < 30; ++it) {
     reactions(p, k, b, L, Fvec, zero, out->hold, &out->F, &out->alpha3, &out->alpha4);
-    const std::array<double, 5> N_old = out->N;
+    const std::array<double, kJoints> N_old = out->N;
     reaction_norms(out->F, &out->N);
-    std::array<double, 5> w;
-    for (int j = 0; j < 5; ++j) w[j] = holding_bound(p.friction, j) * out->N[j];
+    std::array<double, kJoints> w;
+    for (int j = 0; j < kJoints; ++j) w[j] = holding_bound(p.friction, j) * out->N[j];
     out->ratio = detail::min_max_ratio(a, w, q, &out->hold);
     double change = 0.0, scale = 1e-300;
-    for (int j = 0; j < 5; ++j) {
+    for (int j = 0; j < kJoints; ++j) {
       change = std::max(change, std::abs(out->N[j] - N_old[j]));
       scale = std::max(scale, out->N[j]);
     }

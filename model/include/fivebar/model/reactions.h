@@ -19,8 +19,8 @@ namespace fivebar {
 /// then F3, F4 from the coupler force balances and F1, F5 from the cranks'.
 template <typename T>
 void reactions(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& b, const Loads<T>& L,
-               const Vec2<T>& Fvec, const Vec2<T>& thdd, const std::array<T, 5>& Mf,
-               std::array<Vec2<T>, 5>* F, T* alpha3, T* alpha4) {
+               const Vec2<T>& Fvec, const Vec2<T>& thdd, const std::array<T, kJoints>& Mf,
+               std::array<Vec2<T>, kJoints>* F, T* alpha3, T* alpha4) {
   const T al3 = k.G3.dot(thdd) + b.h3;
   const T al4 = k.G4.dot(thdd) + b.h4;
   std::array<Vec2<T>, 4> a;  // centre-of-mass accelerations
@@ -59,9 +59,9 @@ void reactions(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& b, con
 
 /// |F_k| of the five joints.
 template <typename T>
-void reaction_norms(const std::array<Vec2<T>, 5>& F, std::array<T, 5>* N) {
+void reaction_norms(const std::array<Vec2<T>, kJoints>& F, std::array<T, kJoints>* N) {
   using std::sqrt;
-  for (int j = 0; j < 5; ++j) (*N)[j] = sqrt(F[j].squaredNorm());
+  for (int j = 0; j < kJoints; ++j) (*N)[j] = sqrt(F[j].squaredNorm());
 }
 
 }  // namespace fivebar

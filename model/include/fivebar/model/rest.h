@@ -44,7 +44,7 @@ inline EvalOptions with_rest(EvalOptions opt, const RestThresholds& rest) {
 /// |w_k| <= rest.rate and |dw_k/dt| <= rest.acceleration. Fails like the kinematics.
 inline Status stuck_joints(const Params<double>& p, double th1, double th2, double w1, double w2,
                            double a1, double a2, const RestThresholds& rest,
-                           std::array<bool, 5>* stuck) {
+                           std::array<bool, kJoints>* stuck) {
   Kinematics<double> k;
   const Status st = solve_kinematics(p, th1, th2, &k);
   if (!st.ok()) return st;
@@ -54,7 +54,7 @@ inline Status stuck_joints(const Params<double>& p, double th1, double th2, doub
   const auto w = relative_rates(w1, w2, b.w3, b.w4);
   const auto wdot = relative_accelerations(thdd, k.G3.dot(thdd) + b.h3,
                                                    k.G4.dot(thdd) + b.h4);
-  for (int j = 0; j < 5; ++j) {
+  for (int j = 0; j < kJoints; ++j) {
     (*stuck)[j] = std::abs(w[j]) <= rest.rate && std::abs(wdot[j]) <= rest.acceleration;
   }
   return Status::Ok();
@@ -66,8 +66,8 @@ struct Holding {
   /// frictionless equilibrium [N m]: the torques that hold the pose with no friction torque at
   /// any joint; friction can supply the rest of any torque within the range below
   T M1{}, M2{};
-  std::array<T, 5> N{};      ///< joint reactions at that equilibrium [N] (O, B, C, D, D0)
-  std::array<T, 5> bound{};  ///< mu_s,k r_k N_k [N m] (0 without friction)
+  std::array<T, kJoints> N{};      ///< joint reactions at that equilibrium [N] (O, B, C, D, D0)
+  std::array<T, kJoints> bound{};  ///< mu_s,k r_k N_k [N m] (0 without friction)
   /// the range of each actuator, the other at its equilibrium value, over which static friction
   /// holds the pose [N m]: friction at all five joints, as the simulator's lock (lock.h) decides
   /// it (double); for other scalars the sub-range M_eq +- bound that the crank joint O (D0) holds
@@ -118,7 +118,7 @@ Status holding_torques(const Params<T>& p, const Loads<T>& L, const T& th1, cons
   h->M1 = ev.M1;
   h->M2 = ev.M2;
   h->N = ev.N;
-  for (int j = 0; j < 5; ++j) {
+  for (int j = 0; j < kJoints; ++j) {
     h->bound[j] = p.friction.active() ? T(holding_bound(p.friction, j) * ev.N[j]) : zero;
   }
   T ext[4] = {h->bound[0], h->bound[0], h->bound[4], h->bound[4]};  // lower M1, upper M1, ...
@@ -212,17 +212,17 @@ inline Status holding_polygon(const Params<double>& p, const Loads<double>& L, d
   const Vec2<double> Fvec = force_vector(k, L);
   const Vec2<double> thdd = Vec2<double>::Zero();
   double al3 = 0, al4 = 0;
-  auto solve = [&](const std::array<double, 5>& Mf, std::array<Vec2<double>, 5>* F) {
+  auto solve = [&](const std::array<double, kJoints>& Mf, std::array<Vec2<double>, kJoints>* F) {
     reactions(p, k, b, L, Fvec, thdd, Mf, F, &al3, &al4);
   };
   std::vector<std::array<double, 2>> corners;
   for (int pattern = 0; pattern < 32; ++pattern) {
-    std::array<double, 5> phi{}, N{}, Mf{};
-    for (int j = 0; j < 5; ++j) {
+    std::array<double, kJoints> phi{}, N{}, Mf{};
+    for (int j = 0; j < kJoints; ++j) {
       const double sign = (pattern >> j) & 1 ? 1.0 : -1.0;
       phi[j] = p.friction.active() ? sign * holding_bound(p.friction, j) : 0.0;
     }
-    std::array<Vec2<double>, 5> F;
+    std::array<Vec2<double>, kJoints> F;
     int iterations = 0;
     st = friction_loop(phi, opt, solve, &N, &Mf, &F, &iterations);
     if (!st.ok()) return st;

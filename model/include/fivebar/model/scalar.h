@@ -8,6 +8,9 @@
 
 namespace fivebar {
 
+/// Degrees of freedom of the five-bar: the two crank angles (th1, th2).
+inline constexpr int kDof = 2;
+
 template <typename T>
 using Vec2 = Eigen::Matrix<T, 2, 1>;
 template <typename T>

@@ -29,6 +29,13 @@ const char* method_name(Method m);
 /// Parses a method name; false if unknown.
 bool parse_method(const std::string& name, Method* out);
 
+/// True when the friction uses the exact sign(w) with switch functions: an active law other
+/// than LuGre (which has its own states) with friction.smoothing_velocity = 0 (no tanh).
+inline bool exact_sign(const FrictionParams<double>& friction) {
+  return friction.active() && friction.law != FrictionLaw::kLuGre &&
+         friction.smoothing_velocity == 0.0;
+}
+
 /// Solver settings (scene key `simulation:`), with the defaults that reach the accuracy figures.
 struct Options {
   double duration = 2.0;      ///< [s]

@@ -1,10 +1,11 @@
-// The simulation types the numerics studies are made of, under their short names.
+// The simulation types the numerics studies (accuracy, stress) are made of.
 #pragma once
 
 #include "fivebar/sim/simulator.h"
 
 namespace fivebar::studies {
 
+// the simulation types the studies are made of
 using sim::Method;
 using sim::Row;
 using sim::Stats;
