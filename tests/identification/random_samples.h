@@ -8,12 +8,11 @@
 
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
+#include "paper.h"
 
 namespace fivebar::identification::testing {
 
-inline Loads<double> paper_loads(double t) {
-  return {2 + 5 * std::sin(8 * M_PI * t), 3 + 5 * std::cos(M_PI * t), 6.0, 50.0, M_PI / 2};
-}
+using ::fivebar::testing::paper_loads;
 
 /// Random samples: poses, rates (away from 0 so exact sign is fixed), accelerations; torques
 /// from the inverse dynamics at `truth` plus an offset so the residual is not zero.
