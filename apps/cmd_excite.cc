@@ -37,11 +37,11 @@ namespace id = fivebar::identification;
 struct Args {
   SceneArgs scene;
   double duration = 10, torque_limit = NAN, torque_noise = 0.02, rate = 1000;
-  double singular_margin = 0.1, reversal_rate = 0.2, spread = 0.05, drift_spread = 1, ramp = 0.5;
-  std::string estimate = "friction", criterion = "d-optimal", method = "slsqp", start = "multisine";
+  double singular_margin = 0.1, reversal_rate = 0.2, spread = 2, drift_spread = 2, ramp = 1;
+  std::string estimate = "friction", criterion = "d-optimal", method = "mma", start = "swing";
   std::string theta1_range, theta2_range;
   bool per_joint = false, no_plots = false, no_baseline = false;
-  int periods = 1, harmonics = 40, design_samples = 1000, starts = 4, max_evaluations = 150;
+  int periods = 4, harmonics = 5, design_samples = 600, starts = 2, max_evaluations = 80;
   int min_reversals = 6;
   unsigned long long seed = 1;
 };
@@ -119,8 +119,8 @@ id::ExcitationOptions options_of(const Args& a, const Scene& scene, const LoadEx
                      "expected a list of friction, inertia, actuator (each once), got '" + bad + "'");
   }
   o.groups.per_joint = a.per_joint;
-  if (a.start != "multisine" && a.start != "rest") {
-    throw InputError(kFlags, "--start", "expected multisine or rest, got " + a.start);
+  if (a.start != "multisine" && a.start != "rest" && a.start != "swing") {
+    throw InputError(kFlags, "--start", "expected swing, multisine or rest, got " + a.start);
   }
   if (a.criterion == "d-optimal") {
     o.criterion = id::Criterion::kDOptimal;
@@ -285,7 +285,8 @@ trajectory::GeneralResult solve_design(const id::ExcitationProblem& problem, con
   gp.m = problem.num_constraints();
   const int pj = problem.motion().per_joint();
   for (int v = 0; v < gp.n; ++v) {
-    const double bound = problem.motion().harmonic_of(v % pj) == 0 ? 60.0 : 3.0;  // rad/s, rad
+    const int l = problem.motion().harmonic_of(v % pj);
+    const double bound = l == 0 ? 60.0 : 40.0 / l;  // drift [rad/s], amplitude [rad]
     gp.lower.push_back(-bound);
     gp.upper.push_back(bound);
   }
@@ -352,9 +353,15 @@ Design design(const Scene& scene, const LoadExpressions& loads, id::ExcitationOp
   const std::array<double, 2> start = {scene.initial.theta1, scene.initial.theta2};
   Design d;
   const id::FourierMotion motion(o.harmonics, o.duration / o.periods, o.ramp, start);
-  const std::vector<double> base =
-      ms ? motion.fit(ms->log.t, ms->log.theta1, ms->log.theta2)
-         : std::vector<double>(motion.num_variables(), 0.0);
+  std::vector<double> base(motion.num_variables(), 0.0);
+  if (a.start == "multisine") {
+    base = motion.fit(ms->log.t, ms->log.theta1, ms->log.theta2);
+  } else if (a.start == "swing") {
+    // both cranks swing together through a large angle once per period (peak rate 30 rad/s
+    // before the start is scaled to the limits): b_1 of each crank
+    const double amplitude = 30.0 * motion.period() / (2 * M_PI);
+    for (int j = 0; j < 2; ++j) base[j * motion.per_joint() + motion.harmonics() + 1] = -amplitude;
+  }
   std::vector<std::vector<double>> starts = make_starts(motion, a, base);
   for (int round = 0; round < 4; ++round) {
     const id::ExcitationProblem problem(scene.params, loads, start, o);
@@ -475,7 +482,9 @@ int run(const Args& a) {
   OutputDir out(a.scene.out, kOutputs);
   const id::DesignParameters dp = id::design_parameters(scene.params, o.groups);
   std::unique_ptr<Multisine> ms;
-  if (!a.no_baseline || a.start == "multisine") ms = std::make_unique<Multisine>(multisine(scene, loads, dp, a));
+  if (!a.no_baseline || a.start == "multisine") {
+    ms = std::make_unique<Multisine>(multisine(scene, loads, dp, a));
+  }
   const Design d = design(scene, loads, o, a, a.start == "multisine" ? ms.get() : nullptr);
   std::string why;
   const std::string status = design_status(d, o, &why);
@@ -534,7 +543,9 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]")
       ->capture_default_str();
   app->add_option("--ramp", a->ramp, "fade-in from rest [s]")->capture_default_str();
-  app->add_option("--start", a->start, "first start: multisine (its motion fitted) | rest")
+  app->add_option("--start", a->start,
+                  "first start: swing (both cranks swing together) | multisine (its motion "
+                  "fitted) | rest")
       ->capture_default_str();
   app->add_option("--method", a->method, "slsqp | mma | ccsaq")->capture_default_str();
   app->add_option("--max-evaluations", a->max_evaluations, "per local solve")->capture_default_str();

@@ -162,7 +162,7 @@ class ExcitationProblem {
   const std::vector<double>& times() const { return times_; }
 
   /// Objective and constraints at x; with `grad`, their gradients: the Jacobian J_i by Jets, its
-  /// derivative along the six motion variables by central differences of that Jet Jacobian (at
+  /// derivative along the six motion variables by forward differences of that Jet Jacobian (at
   /// fixed slip signs), chained through the linear Fourier basis.
   Status evaluate(const std::vector<double>& x, bool grad, DesignValue* out) const;
 
