@@ -248,6 +248,7 @@ void write_std_csv(const std::string& path, const id::DesignParameters& dp,
 Json report_json(const id::DesignParameters& dp, const id::ExcitationReport& r) {
   Json j = Json::object();
   j.set("peak_torque", r.peak_torque);
+  j.set("peak_torque_time", r.peak_time);
   j.set("min_coupler_sine", r.min_sine);
   Json rev = Json::array();
   for (int k : r.reversals) rev.push(k);
@@ -379,7 +380,17 @@ Design design(const Scene& scene, const LoadExpressions& loads, id::ExcitationOp
     d.rounds = round;
     d.torque_margin = o.torque_margin;
     if (d.report.peak_torque <= o.torque_limit) break;
-    o.torque_margin = 1.0 - (1.0 - o.torque_margin) * o.torque_limit / d.report.peak_torque * 0.998;
+    // constrain where the torque peaked between design samples, and tighten the margin a little
+    const id::ExcitationReport& g = d.report;
+    for (size_t i = 1; i + 1 < g.t.size(); ++i) {
+      const double m = std::max(std::abs(g.M1[i]), std::abs(g.M2[i]));
+      const double before = std::max(std::abs(g.M1[i - 1]), std::abs(g.M2[i - 1]));
+      const double after = std::max(std::abs(g.M1[i + 1]), std::abs(g.M2[i + 1]));
+      if (m > o.torque_limit * (1 - o.torque_margin) && m >= before && m >= after) {
+        o.extra_times.push_back(g.t[i]);
+      }
+    }
+    o.torque_margin = 1.0 - (1.0 - o.torque_margin) * std::sqrt(o.torque_limit / g.peak_torque);
     starts = {r.x};
   }
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -488,11 +499,15 @@ int run(const Args& a) {
   const Design d = design(scene, loads, o, a, a.start == "multisine" ? ms.get() : nullptr);
   std::string why;
   const std::string status = design_status(d, o, &why);
-  if (status != "ok") {
-    throw NumericalError(scene.path, "excite", "status " + status + ": the design " + why +
-                                                   " (solver: " + d.solve.solver.message + ")");
-  }
   const id::ExcitationReport* base = a.no_baseline ? nullptr : &ms->report;
+  if (status != "ok") {
+    // only the summary, which says what was missed; no excitation that could be mistaken for one
+    write_json_file(out.file("excitation.json"), summary_json(a, o, dp, d, status, base));
+    out.commit();
+    throw NumericalError(scene.path, "excite", "status " + status + ": the design " + why +
+                                                   " (solver: " + d.solve.solver.message +
+                                                   "; excitation.json written)");
+  }
   write_excitation_csv(out.file("excitation.csv"), d.report);
   write_std_csv(out.file("predicted_std.csv"), dp, d.report, base);
   write_json_file(out.file("excitation.json"), summary_json(a, o, dp, d, status, base));

@@ -269,6 +269,8 @@ ExcitationProblem::ExcitationProblem(const Params<double>& scene,
   int n = std::max(8, options.design_samples);
   if (n % std::max(1, options.periods) == 0) ++n;
   for (int i = 0; i < n; ++i) times_.push_back(options.duration * (i + 0.5) / n);
+  objective_samples_ = n;
+  for (double t : options.extra_times) times_.push_back(t);
 }
 
 int ExcitationProblem::per_sample_constraints() const {
@@ -462,10 +464,11 @@ Status ExcitationProblem::evaluate(const std::vector<double>& x, bool grad, Desi
   }
   std::vector<std::vector<std::array<double, 3>>> basis(N);
   for (int i = 0; i < N; ++i) motion_.basis(times_[i], &basis[i]);
-  // Fisher of the log: each design sample stands for rate_hz * duration / N log samples
-  const double weight = opt_.rate_hz * opt_.duration / N;
-  std::vector<Eigen::MatrixXd> Js(N);
-  for (int i = 0; i < N; ++i) Js[i] = all[i].v.J;
+  // Fisher of the log: each design sample stands for rate_hz * duration / N0 log samples
+  const int N0 = objective_samples_;
+  const double weight = opt_.rate_hz * opt_.duration / N0;
+  std::vector<Eigen::MatrixXd> Js(N0);
+  for (int i = 0; i < N0; ++i) Js[i] = all[i].v.J;
   const Eigen::MatrixXd F = weight * fisher_information(Js, opt_.torque_noise);
   Eigen::MatrixXd G;
   out->objective = criterion_value(F, grad ? &G : nullptr);
@@ -478,7 +481,7 @@ Status ExcitationProblem::evaluate(const std::vector<double>& x, bool grad, Desi
   std::vector<double> raw(static_cast<size_t>(N) * ps), raw_grad(grad ? raw.size() * n : 0, 0.0);
   for (int i = 0; i < N; ++i) {
     add_sample_constraints(i, all[i], grad, basis[i], &raw, &raw_grad);
-    if (!grad) continue;
+    if (!grad || i >= N0) continue;
     // d Phi / d s_c = 2 w / sigma^2 sum (J G) .* dJ/ds_c
     const Eigen::MatrixXd JG = all[i].v.J * G;
     std::array<double, 6> ds{};
@@ -526,7 +529,11 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
   for (int i = 0; i < N; ++i) {
     out->M1[i] = terms[i].M1;
     out->M2[i] = terms[i].M2;
-    out->peak_torque = std::max({out->peak_torque, std::abs(terms[i].M1), std::abs(terms[i].M2)});
+    const double peak = std::max(std::abs(terms[i].M1), std::abs(terms[i].M2));
+    if (peak > out->peak_torque) {
+      out->peak_torque = peak;
+      out->peak_time = t[i];
+    }
     out->min_sine = std::min(out->min_sine, terms[i].sine);
     Js[i] = terms[i].J;
     rates[i] = terms[i].w;

@@ -56,6 +56,16 @@ expect_error(3, "reversals_unreachable", base + ["--min-reversals", "1000"], bad
 if os.path.exists(bad):
     failures.append("a run rejected for bad input created its output directory")
 
+# a design that cannot reach the reversals asked (at most 6 with 3 harmonics over 1 period):
+# exit 3 with the status, the summary says so, and no excitation.csv
+missed = os.path.join(WORK, "missed")
+expect_error(3, "status reversals_not_met", ["excite", PAPER, "--out", missed, "--torque-limit", "13.4",
+             "--duration", "2", "--periods", "1", "--harmonics", "3", "--design-samples", "120",
+             "--starts", "1", "--max-evaluations", "15", "--min-reversals", "6", "--no-plots",
+             "--no-baseline", "--method", "slsqp"], missed)
+if json.load(open(os.path.join(missed, "excitation.json")))["status"] != "reversals_not_met":
+    failures.append("excitation.json of a missed design does not say reversals_not_met")
+
 # a small design
 out = os.path.join(WORK, "design")
 limit, margin = 13.4, 0.1
@@ -63,7 +73,7 @@ code, stdout, err = run(["excite", PAPER, "--out", out, "--torque-limit", str(li
                          "--duration", "2", "--periods", "1", "--harmonics", "3",
                          "--design-samples", "120", "--starts", "1", "--max-evaluations", "15",
                          "--min-reversals", "1", "--theta1-range", "0.5:3", "--no-plots",
-                         "--no-baseline", "--start", "rest"])
+                         "--no-baseline", "--start", "swing", "--method", "slsqp"])
 if code != 0:
     failures.append("small design: exit %d: %s" % (code, err))
 else:

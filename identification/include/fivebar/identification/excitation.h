@@ -118,6 +118,9 @@ struct ExcitationOptions {
   int harmonics = 5;              ///< H of FourierMotion
   double ramp = 1.0;              ///< [s] fade-in from rest (FourierMotion)
   int design_samples = 400;       ///< samples of the objective and constraints over the duration
+  /// further instants where the constraints (not the objective) are sampled, e.g. where a
+  /// previous design's torque peaked between the design samples [s]
+  std::vector<double> extra_times;
   double torque_limit = 0;        ///< |M1|, |M2| <= this [N m]
   double torque_margin = 0.01;    ///< the design keeps |M| <= (1 - margin) torque_limit
   int constraint_blocks = 40;     ///< blocks of samples per aggregated constraint
@@ -158,7 +161,7 @@ class ExcitationProblem {
   const ExcitationOptions& options() const { return opt_; }
   int num_variables() const { return motion_.num_variables(); }
   int num_constraints() const;
-  /// Design sample times (over the duration, midpoints of equal cells).
+  /// Design sample times (over the duration, midpoints of equal cells), then the extra times.
   const std::vector<double>& times() const { return times_; }
 
   /// Objective and constraints at x; with `grad`, their gradients: the Jacobian J_i by Jets, its
@@ -190,6 +193,7 @@ class ExcitationProblem {
   FourierMotion motion_;
   DesignParameters dp_;
   std::vector<double> times_;
+  int objective_samples_ = 0;  ///< the first ones of times_ (the extra times only constrain)
 };
 
 /// The motion on a uniform grid t = i / rate_hz, i = 0 .. duration * rate_hz, with its torques
@@ -202,7 +206,7 @@ struct ExcitationReport {
   Eigen::MatrixXd covariance;  ///< its (pseudo-)inverse
   std::vector<double> std_dev, relative_std;  ///< relative: std / |nominal| (NaN for 0)
   std::array<int, 5> reversals{};
-  double peak_torque = 0, min_sine = 1, condition_number = 0, log_det_scaled = 0;
+  double peak_torque = 0, peak_time = 0, min_sine = 1, condition_number = 0, log_det_scaled = 0;
   std::array<double, 2> theta_min{}, theta_max{};
 };
 
