@@ -47,6 +47,21 @@ std::string joined(const std::array<double, kJoints>& v) {
   return s;
 }
 
+// Writes the log to `path`, creating its directory.
+void write_log(const std::string& path, const identification::TorqueLog& log) {
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  if (!parent.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(parent, ec);
+    if (ec) throw InputError(path, "--out", "cannot create the directory: " + ec.message());
+  }
+  try {
+    identification::write_torque_log(path, log);
+  } catch (const identification::LogError& e) {
+    throw InputError(e.file(), e.key(), e.reason());
+  }
+}
+
 // The log of a position-controlled mechanism following MOTION.csv (columns t, theta1, theta2,
 // omega1, omega2, alpha1, alpha2, as excitation.csv of `fivebar excite`): inverse dynamics of
 // the scene at every row, then the same noise as a simulated log.
@@ -168,17 +183,7 @@ int run(const Args& a) {
                          format_double(a.quantization) + " rad, seed " + std::to_string(a.seed));
   log.comments.push_back(" excitation: " + (a.motion.empty() ? a.excitation : "motion " + a.motion) +
                          "; joint reversals (O,B,C,D,D0): " + rev.str());
-  const std::filesystem::path parent = std::filesystem::path(a.out).parent_path();
-  if (!parent.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(parent, ec);
-    if (ec) throw InputError(a.out, "--out", "cannot create the directory: " + ec.message());
-  }
-  try {
-    identification::write_torque_log(a.out, log);
-  } catch (const identification::LogError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
-  }
+  write_log(a.out, log);
   std::cout << "fivebar synth-log: " << log.size() << " samples over " << log.duration() << " s -> "
             << a.out << "\n  joint reversals (O,B,C,D,D0): " << rev.str() << "; simulation "
             << res.stats.wall_time_s << " s, " << res.stats.friction_events << " friction events"
