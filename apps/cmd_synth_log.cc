@@ -1,23 +1,31 @@
 // fivebar synth-log SCENE --out LOG.csv [--rate HZ] [--duration S] [--torque-noise NM]
 //   [--angle-noise RAD] [--seed N] [--quantization RAD] [--excitation scene|multisine]
-//   [--with-rates] [--law coulomb_viscous|stribeck] [--set KEY=VALUE]...
+//   [--with-rates] [--law coulomb_viscous|stribeck] [--motion MOTION.csv] [--set KEY=VALUE]...
 // A synthetic torque log (interfaces.md, "Torque log CSV") for testing identification: the scene
 // simulated, sampled, with seeded Gaussian sensor noise and optional encoder quantization. The
-// `#` header of the log holds the true friction values and the command that made it.
+// `#` header of the log holds the true friction values and the command that made it. With
+// --motion (e.g. the excitation.csv of `fivebar excite`), the log is that of a position-controlled
+// mechanism following the given motion: the torques by inverse dynamics, plus the noise.
 #include <CLI/CLI.hpp>
+#include <array>
+#include <cmath>
+#include <random>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <sstream>
 
+#include "fivebar/identification/excitation.h"
 #include "fivebar/identification/parameters.h"
 #include "fivebar/identification/synth.h"
 #include "fivebar/io/command.h"
+#include "fivebar/io/csv.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/scene.h"
 #include "fivebar/model/inertial.h"
+#include "fivebar/model/dynamics.h"
 
 namespace fivebar::io {
 namespace {
@@ -28,7 +36,7 @@ struct Args {
   double rate = 1000, duration = 10, torque_noise = 0.02, angle_noise = 1e-5, rate_noise = 0;
   double quantization = 0;
   unsigned long long seed = 1;
-  std::string excitation = "scene", law;
+  std::string excitation = "scene", law, motion;
   double static_coulomb = 0.18, stribeck_velocity = 0.1, stribeck_exponent = 2.0;
   bool with_rates = false;
   std::string command_line;
@@ -38,6 +46,75 @@ std::string joined(const std::array<double, kJoints>& v) {
   std::string s;
   for (int k = 0; k < kJoints; ++k) s += (k ? "," : "") + format_double(v[k]);
   return s;
+}
+
+// Writes the log to `path`, creating its directory.
+void write_log(const std::string& path, const identification::TorqueLog& log) {
+  const std::filesystem::path parent = std::filesystem::path(path).parent_path();
+  if (!parent.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(parent, ec);
+    if (ec) throw InputError(path, "--out", "cannot create the directory: " + ec.message());
+  }
+  try {
+    identification::write_torque_log(path, log);
+  } catch (const identification::LogError& e) {
+    throw InputError(e.file(), e.key(), e.reason());
+  }
+}
+
+// The log of a position-controlled mechanism following MOTION.csv (columns t, theta1, theta2,
+// omega1, omega2, alpha1, alpha2, as excitation.csv of `fivebar excite`): inverse dynamics of
+// the scene at every row, then the same noise as a simulated log.
+identification::SynthResult motion_log(const Scene& scene, const LoadExpressions& loads,
+                                       const std::string& path,
+                                       const identification::SynthOptions& so) {
+  const CsvTable table = read_csv(path);
+  const std::vector<double> t = table.column("t"), th1 = table.column("theta1"),
+                            th2 = table.column("theta2"), w1 = table.column("omega1"),
+                            w2 = table.column("omega2"), a1 = table.column("alpha1"),
+                            a2 = table.column("alpha2");
+  if (t.empty()) throw InputError(path, "(file)", "no data rows after the header");
+  identification::SynthResult out;
+  std::mt19937_64 rng(so.seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  identification::TorqueLog& log = out.log;
+  log.has_rates = log.has_accels = so.with_rates;
+  std::vector<std::array<double, 5>> rates;
+  for (size_t i = 0; i < t.size(); ++i) {
+    if (i > 0 && !(t[i] > t[i - 1])) {
+      throw InputError(path, "line " + std::to_string(table.lines[i]) + ", column t",
+                       "t must increase strictly");
+    }
+    Evaluation<double> ev;
+    const Status st = inverse_dynamics(scene.params, loads(t[i]), th1[i], th2[i], w1[i], w2[i],
+                                       a1[i], a2[i], nullptr, EvalOptions{}, &ev);
+    if (!st.ok()) {
+      throw NumericalError(path, "line " + std::to_string(table.lines[i]),
+                           "inverse dynamics: " + st.message);
+    }
+    // the draw order of synthesize_log: tau1, tau2, theta1, theta2, omega1, omega2
+    const double n_tau1 = gauss(rng), n_tau2 = gauss(rng), n_th1 = gauss(rng), n_th2 = gauss(rng),
+                 n_w1 = gauss(rng), n_w2 = gauss(rng);
+    auto quantize = [&](double x) {
+      return so.quantization > 0 ? so.quantization * std::round(x / so.quantization) : x;
+    };
+    log.t.push_back(t[i]);
+    log.theta1.push_back(quantize(th1[i] + so.angle_noise * n_th1));
+    log.theta2.push_back(quantize(th2[i] + so.angle_noise * n_th2));
+    log.tau1.push_back(ev.M1 + so.torque_noise * n_tau1);
+    log.tau2.push_back(ev.M2 + so.torque_noise * n_tau2);
+    if (so.with_rates) {
+      log.omega1.push_back(w1[i] + so.rate_noise * n_w1);
+      log.omega2.push_back(w2[i] + so.rate_noise * n_w2);
+      log.alpha1.push_back(a1[i]);
+      log.alpha2.push_back(a2[i]);
+    }
+    log.lines.push_back(log.size() + 1);
+    rates.push_back({ev.w[0], ev.w[1], ev.w[2], ev.w[3], ev.w[4]});
+  }
+  out.reversals = identification::count_reversals(rates);
+  return out;
 }
 
 int run(const Args& a) {
@@ -77,8 +154,12 @@ int run(const Args& a) {
   so.with_rates = a.with_rates;
   so.multisine = a.excitation == "multisine";
   so.sim = scene.options;
+  if (!a.motion.empty() && a.excitation != "scene") {
+    throw InputError(flag_file, "--motion", "cannot be combined with --excitation " + a.excitation);
+  }
   identification::SynthResult res =
-      identification::synthesize_log(scene.params, loads, scene.initial, so);
+      a.motion.empty() ? identification::synthesize_log(scene.params, loads, scene.initial, so)
+                       : motion_log(scene, LoadExpressions(scene), a.motion, so);
   if (!res.status.ok()) throw NumericalError(scene.path, "simulation", res.status.message);
 
   // header: provenance, truth, and what the noise was
@@ -106,19 +187,9 @@ int run(const Args& a) {
                          format_double(a.angle_noise) + " rad, rate " +
                          format_double(a.rate_noise) + " rad/s, quantization " +
                          format_double(a.quantization) + " rad, seed " + std::to_string(a.seed));
-  log.comments.push_back(" excitation: " + a.excitation +
+  log.comments.push_back(" excitation: " + (a.motion.empty() ? a.excitation : "motion " + a.motion) +
                          "; joint reversals (O,B,C,D,D0): " + rev.str());
-  const std::filesystem::path parent = std::filesystem::path(a.out).parent_path();
-  if (!parent.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(parent, ec);
-    if (ec) throw InputError(a.out, "--out", "cannot create the directory: " + ec.message());
-  }
-  try {
-    identification::write_torque_log(a.out, log);
-  } catch (const identification::LogError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
-  }
+  write_log(a.out, log);
   std::cout << "fivebar synth-log: " << log.size() << " samples over " << log.duration() << " s -> "
             << a.out << "\n  joint reversals (O,B,C,D,D0): " << rev.str() << "; simulation "
             << res.stats.wall_time_s << " s, " << res.stats.friction_events << " friction events"
@@ -148,6 +219,11 @@ RunFunction setup(CLI::App* app) {
                   "scene: the scene's M1, M2; multisine: built-in excitation reversing every joint")
       ->capture_default_str();
   app->add_flag("--with-rates", args->with_rates, "write omega1,omega2,alpha1,alpha2 (exact)");
+  app->add_option("--motion", args->motion,
+                  "follow this motion (t,theta1,theta2,omega1,omega2,alpha1,alpha2; e.g. "
+                  "excitation.csv of excite): torques by inverse dynamics; its grid replaces "
+                  "--rate and --duration")
+      ->type_name("MOTION.csv");
   app->add_option("--law", args->law,
                   "friction law of the log, overriding the scene's: coulomb_viscous | stribeck");
   app->add_option("--static-coulomb", args->static_coulomb, "stribeck: mu_s of every joint")
@@ -166,6 +242,7 @@ RunFunction setup(CLI::App* app) {
            " --torque-noise " + format_double(a.torque_noise) + " --angle-noise " +
            format_double(a.angle_noise) + " --seed " + std::to_string(a.seed) + " --excitation " +
            a.excitation;
+    if (!a.motion.empty()) cmd += " --motion " + a.motion;
     if (a.rate_noise > 0) cmd += " --rate-noise " + format_double(a.rate_noise);
     if (a.quantization > 0) cmd += " --quantization " + format_double(a.quantization);
     if (a.with_rates) cmd += " --with-rates";

@@ -503,3 +503,48 @@ std::string work_precision_plot_script(const studies::WorkPrecision& wp, const s
 }
 
 }  // namespace fivebar::io
+
+namespace fivebar::io {
+
+std::string excitation_plot_script(const ExcitationFigures& f, const std::string& terminal) {
+  std::string s = preamble(terminal, "figures of `fivebar excite`");
+  char limit[32];
+  std::snprintf(limit, sizeof limit, "%g", f.torque_limit);
+  s += begin_figure("fig_motion.png", "3,1", "Designed excitation: crank angles, rates, accelerations",
+                    "blue: theta1/omega1/alpha1, red dashed: crank 2", f.title);
+  const char* rows[3][3] = {{"(a) crank angles", "theta [rad]", "theta"},
+                            {"(b) crank rates", "omega [rad/s]", "omega"},
+                            {"(c) crank accelerations", "alpha [rad/s^2]", "alpha"}};
+  for (const auto& r : rows) {
+    s += panel(r[0], r[1]) + "plot " + curve(f.excitation, std::string(r[2]) + "1", 1) + ", \\\n     " +
+         curve(f.excitation, std::string(r[2]) + "2", 2) + "\n";
+  }
+  s += "unset multiplot\n";
+  s += begin_figure("fig_torques.png", "2,1", "Designed excitation: motor torques (inverse dynamics)",
+                    std::string("green: the torque limit +-") + limit + " N m", f.title);
+  for (int i = 1; i <= 2; ++i) {
+    const std::string n = std::to_string(i);
+    s += panel("(" + std::string(i == 1 ? "a" : "b") + ") M" + n, "M" + n + " [N m]") + "plot " +
+         curve(f.excitation, "M" + n, 1) + ", " + limit + " with lines ls 3, -" + limit +
+         " with lines ls 3\n";
+  }
+  s += "unset multiplot\n";
+  // predicted relative std per parameter, designed motion beside the multi-sine
+  s += "\nset output 'fig_std.png'\nset title " +
+       quote("Predicted relative std (Cramer-Rao) per parameter: designed (blue) vs multi-sine (red)" +
+             (f.title.empty() ? "" : "\n" + f.title)) +
+       "\nset style data histograms\nset style histogram clustered gap 1\n"
+       "set style fill solid 0.8 border -1\nset logscale y\nset ylabel \"std / |value|\"\n"
+       "set xlabel \"\"\nset xtics rotate by -60\nset key top left\n"
+       "plot " + quote(f.std_csv) + " using \"relative_std\":xtic(1) title \"designed\" lc rgb "
+       "\"#1f5fa8\", '' using \"multisine_relative_std\" title \"multi-sine\" lc rgb \"#d62728\"\n";
+  return s;
+}
+
+std::string plot_excitation(const std::string& dir, const ExcitationFigures& figures) {
+  const Gnuplot& g = gnuplot();
+  if (!g.available) return "gnuplot not found on PATH: no figures drawn";
+  return run_gnuplot(dir, "plots.gnuplot", excitation_plot_script(figures, g.terminal));
+}
+
+}  // namespace fivebar::io

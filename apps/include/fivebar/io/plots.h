@@ -85,4 +85,18 @@ std::string study_heatmap_script(const StudyHeatmap& heatmap, const std::string&
 std::string work_precision_plot_script(const studies::WorkPrecision& wp, const std::string& title,
                                        const std::string& terminal);
 
+/// The figures of `excite`: fig_motion.png (angles, rates, accelerations of the cranks),
+/// fig_torques.png (M1, M2 against the torque limit) from `excitation`, and fig_std.png (the
+/// predicted relative std of each parameter, designed motion beside the multi-sine) from
+/// `std_csv` (columns name, relative_std, multisine_relative_std).
+struct ExcitationFigures {
+  std::string excitation = "excitation.csv";
+  std::string std_csv = "predicted_std.csv";
+  double torque_limit = 0;
+  std::string title;
+};
+std::string excitation_plot_script(const ExcitationFigures& figures, const std::string& terminal);
+/// Draws them in `dir` (script kept as dir/plots.gnuplot). Returns "" or a warning.
+std::string plot_excitation(const std::string& dir, const ExcitationFigures& figures);
+
 }  // namespace fivebar::io

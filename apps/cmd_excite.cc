@@ -1,0 +1,577 @@
+// fivebar excite SCENE --duration S --torque-limit NM [--estimate friction,inertia,actuator]
+//   [--per-joint] [--criterion d-optimal|condition] [--theta1-range LO:HI] [--theta2-range LO:HI]
+//   [--out DIR] [--set KEY=VALUE]...
+// Excitation design (issue 11, docs/excite.md): a periodic Fourier motion of the two cranks that
+// maximizes the information a torque log along it gives on the chosen parameters (D-optimal, or
+// the condition number), within the torque limit, away from the singular poses, with every
+// joint reversing; compared with the built-in multi-sine of synth-log.
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <random>
+#include <sstream>
+
+#include "fivebar/identification/excitation.h"
+#include "fivebar/identification/synth.h"
+#include "fivebar/io/command.h"
+#include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
+#include "fivebar/io/json.h"
+#include "fivebar/io/loads.h"
+#include "fivebar/io/output.h"
+#include "fivebar/io/plots.h"
+#include "fivebar/io/scene.h"
+#include "fivebar/model/rest.h"
+#include "fivebar/trajectory/nlopt_minimize.h"
+
+namespace fivebar::io {
+namespace {
+
+namespace id = fivebar::identification;
+
+struct Args {
+  SceneArgs scene;
+  double duration = 10, torque_limit = NAN, torque_noise = 0.02, rate = 1000;
+  double singular_margin = 0.1, reversal_rate = 0.2, spread = 2, drift_spread = 2, ramp = 1;
+  std::string estimate = "friction", criterion = "d-optimal", method = "mma", start = "swing";
+  std::string theta1_range, theta2_range;
+  bool per_joint = false, no_plots = false, no_baseline = false;
+  int periods = 4, harmonics = 5, design_samples = 600, starts = 2, max_evaluations = 80;
+  int min_reversals = 6;
+  unsigned long long seed = 1;
+};
+
+const std::vector<std::string> kOutputs = {"excitation.csv", "predicted_std.csv", "excitation.json",
+                                           "fig_motion.png", "fig_torques.png", "fig_std.png",
+                                           "plots.gnuplot"};
+const char* const kFlags = "command line";
+
+// "LO:HI" -> (lo, hi), bad input otherwise
+std::array<double, 2> parse_range(const std::string& text, const std::string& flag) {
+  const size_t colon = text.find(':');
+  try {
+    if (colon == std::string::npos) throw std::invalid_argument("no colon");
+    size_t used = 0;
+    const double lo = std::stod(text.substr(0, colon), &used);
+    const double hi = std::stod(text.substr(colon + 1));
+    if (!(lo < hi) || !std::isfinite(lo) || !std::isfinite(hi)) throw std::invalid_argument("");
+    return {lo, hi};
+  } catch (const std::exception&) {
+    throw InputError(kFlags, flag, "expected LO:HI in radians with LO < HI, got '" + text + "'");
+  }
+}
+
+// the checks of bad input (exit 2) that need the scene
+void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads,
+                 id::ExcitationOptions* o) {
+  if (!(a.duration > 0) || !std::isfinite(a.duration)) {
+    throw InputError(kFlags, "--duration", "must be > 0, got " + format_double(a.duration));
+  }
+  if (!(a.torque_limit > 0) || !std::isfinite(a.torque_limit)) {
+    throw InputError(kFlags, "--torque-limit", "must be > 0 N m, got " + format_double(a.torque_limit));
+  }
+  if (!(a.torque_noise > 0)) throw InputError(kFlags, "--torque-noise", "must be > 0");
+  if (!(a.rate > 0)) throw InputError(kFlags, "--rate", "must be > 0");
+  if (a.periods < 1 || a.harmonics < 1 || a.design_samples < 16 || a.starts < 1 ||
+      !(a.ramp >= 0 && a.ramp < a.duration)) {
+    throw InputError(kFlags, "--periods/--harmonics/--design-samples/--starts/--ramp",
+                     "need periods >= 1, harmonics >= 1, design samples >= 16, starts >= 1, "
+                     "0 <= ramp < duration");
+  }
+  const std::array<double, 2> start = {scene.initial.theta1, scene.initial.theta2};
+  const std::string* ranges[2] = {&a.theta1_range, &a.theta2_range};
+  for (int j = 0; j < 2; ++j) {
+    if (ranges[j]->empty()) continue;
+    const std::string flag = "--theta" + std::to_string(j + 1) + "-range";
+    const std::array<double, 2> r = parse_range(*ranges[j], flag);
+    if (start[j] < r[0] || start[j] > r[1]) {
+      throw InputError(kFlags, flag,
+                       "the range " + *ranges[j] + " excludes the start pose theta" +
+                           std::to_string(j + 1) + " = " + format_double(start[j]) + " rad");
+    }
+    o->theta_lo[j] = r[0];
+    o->theta_hi[j] = r[1];
+  }
+  // the motion starts at rest at the start pose: the motors must at least hold it there
+  Holding<double> h;
+  const Status st = holding_torques(scene.params, loads(0.0), start[0], start[1], EvalOptions{}, &h);
+  if (!st.ok()) throw InputError(scene.path, "initial", st.message);
+  const double need = std::max(std::abs(h.M1), std::abs(h.M2));
+  if (need >= a.torque_limit * (1.0 - o->torque_margin)) {
+    throw InputError(kFlags, "--torque-limit",
+                     format_double(a.torque_limit) + " N m is below what holding the start pose needs (" +
+                         "M1 = " + format_double(h.M1) + ", M2 = " + format_double(h.M2) +
+                         " N m at rest, plus the design's " +
+                         format_double(100 * o->torque_margin) + " % margin)");
+  }
+}
+
+id::ExcitationOptions options_of(const Args& a, const Scene& scene, const LoadExpressions& loads) {
+  id::ExcitationOptions o;
+  std::string bad;
+  if (!id::parse_groups(a.estimate, &o.groups, &bad)) {
+    throw InputError(kFlags, "--estimate",
+                     "expected a list of friction, inertia, actuator (each once), got '" + bad + "'");
+  }
+  o.groups.per_joint = a.per_joint;
+  if (a.start != "multisine" && a.start != "rest" && a.start != "swing") {
+    throw InputError(kFlags, "--start", "expected swing, multisine or rest, got " + a.start);
+  }
+  if (a.criterion == "d-optimal") {
+    o.criterion = id::Criterion::kDOptimal;
+  } else if (a.criterion == "condition") {
+    o.criterion = id::Criterion::kCondition;
+  } else {
+    throw InputError(kFlags, "--criterion", "expected d-optimal or condition, got " + a.criterion);
+  }
+  o.duration = a.duration;
+  o.periods = a.periods;
+  o.harmonics = a.harmonics;
+  o.ramp = a.ramp;
+  o.design_samples = a.design_samples;
+  o.torque_limit = a.torque_limit;
+  o.torque_noise = a.torque_noise;
+  o.rate_hz = a.rate;
+  o.singular_margin = std::max(a.singular_margin, scene.options.singular_margin);
+  o.reversal_rate = a.reversal_rate;
+  o.min_reversals = a.min_reversals;
+  check_input(a, scene, loads, &o);
+  return o;
+}
+
+// seeded starts: the first is `base` (the multi-sine's motion fitted by the basis, or rest),
+// the others base plus normal perturbations (drift: drift_spread rad/s; harmonic l: spread / l rad)
+std::vector<std::vector<double>> make_starts(const id::FourierMotion& m, const Args& a,
+                                             const std::vector<double>& base) {
+  std::mt19937_64 rng(a.seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  std::vector<std::vector<double>> starts = {base};
+  const int pj = m.per_joint();
+  for (int s = 1; s < a.starts; ++s) {
+    std::vector<double> x = base;
+    for (int j = 0; j < 2; ++j) {
+      for (int v = 0; v < pj; ++v) {
+        const int l = m.harmonic_of(v);
+        x[j * pj + v] += l == 0 ? a.drift_spread * gauss(rng) : a.spread * gauss(rng) / l;
+      }
+    }
+    starts.push_back(x);
+  }
+  return starts;
+}
+
+// the states of the designed motion on the log's grid t = i / rate
+void design_grid(const id::FourierMotion& m, const std::vector<double>& x, double duration,
+                 double rate, std::vector<double>* t, std::vector<id::MotionState>* s) {
+  const long n = std::lround(std::floor(duration * rate + 1e-9));
+  for (long i = 0; i <= n; ++i) {
+    t->push_back(i / rate);
+    s->push_back(m.state(x, t->back()));
+  }
+}
+
+// the built-in multi-sine of synth-log (noise-free, exact rates) on the same grid
+struct Multisine {
+  id::TorqueLog log;
+  id::ExcitationReport report;
+};
+
+Multisine multisine(const Scene& scene, const LoadExpressions& loads, const id::DesignParameters& dp,
+                    const Args& a) {
+  id::SynthOptions so;
+  so.rate_hz = a.rate;
+  so.duration = a.duration;
+  so.with_rates = true;
+  so.multisine = true;
+  so.sim = scene.options;
+  id::SynthResult res = id::synthesize_log(scene.params, loads.function(), scene.initial, so);
+  if (!res.status.ok()) throw NumericalError(scene.path, "multisine", res.status.message);
+  Multisine m;
+  m.log = std::move(res.log);
+  const id::TorqueLog& log = m.log;
+  std::vector<id::MotionState> states;
+  for (size_t i = 0; i < log.size(); ++i) {
+    states.push_back({log.theta1[i], log.theta2[i], log.omega1[i], log.omega2[i], log.alpha1[i],
+                      log.alpha2[i]});
+  }
+  const Status st =
+      id::evaluate_motion(scene.params, dp, loads, log.t, states, a.torque_noise, &m.report);
+  if (!st.ok()) throw NumericalError(scene.path, "multisine", st.message);
+  // the multi-sine's peak is that of its applied torques (the log's, noise-free)
+  m.report.peak_torque = 0;
+  for (size_t i = 0; i < log.size(); ++i) {
+    m.report.peak_torque = std::max({m.report.peak_torque, std::abs(log.tau1[i]), std::abs(log.tau2[i])});
+  }
+  return m;
+}
+
+double worst(const std::vector<double>& v, int begin, int end) {
+  double w = 0;
+  for (int i = begin; i < end; ++i) {
+    if (std::isfinite(v[i]) || std::isinf(v[i])) w = std::max(w, v[i]);
+  }
+  return w;
+}
+
+void write_excitation_csv(const std::string& path, const id::ExcitationReport& r) {
+  std::ostringstream s;
+  s << "t,theta1,theta2,omega1,omega2,alpha1,alpha2,M1,M2\n";
+  for (size_t i = 0; i < r.t.size(); ++i) {
+    const id::MotionState& m = r.states[i];
+    s << format_grid_value(r.t[i]);
+    for (double v : {m.th1, m.th2, m.w1, m.w2, m.a1, m.a2, r.M1[i], r.M2[i]}) {
+      s << ',' << format_double(v);
+    }
+    s << '\n';
+  }
+  write_text_file(path, s.str());
+}
+
+void write_std_csv(const std::string& path, const id::DesignParameters& dp,
+                   const id::ExcitationReport& r, const id::ExcitationReport* base) {
+  std::ostringstream s;
+  s << "name,value,std,relative_std,multisine_std,multisine_relative_std\n";
+  for (int i = 0; i < dp.size(); ++i) {
+    s << dp.names[i] << ',' << format_double(dp.nominal[i]) << ',' << format_double(r.std_dev[i])
+      << ',' << format_double(r.relative_std[i]) << ','
+      << format_double(base ? base->std_dev[i] : NAN) << ','
+      << format_double(base ? base->relative_std[i] : NAN) << '\n';
+  }
+  write_text_file(path, s.str());
+}
+
+Json report_json(const id::DesignParameters& dp, const id::ExcitationReport& r) {
+  Json j = Json::object();
+  j.set("peak_torque", r.peak_torque);
+  j.set("peak_torque_time", r.peak_time);
+  j.set("min_coupler_sine", r.min_sine);
+  Json rev = Json::array();
+  for (int k : r.reversals) rev.push(k);
+  j.set("reversals", rev);
+  j.set("theta1_range", Json::array().push(r.theta_min[0]).push(r.theta_max[0]));
+  j.set("theta2_range", Json::array().push(r.theta_min[1]).push(r.theta_max[1]));
+  j.set("log_det_scaled_fisher", r.log_det_scaled);
+  j.set("condition_number_scaled", r.condition_number);
+  j.set("worst_relative_std_friction", worst(r.relative_std, 0, dp.friction));
+  j.set("worst_relative_std", worst(r.relative_std, 0, dp.size()));
+  Json params = Json::array();
+  for (int i = 0; i < dp.size(); ++i) {
+    params.push(Json::object()
+                    .set("name", dp.names[i])
+                    .set("value", dp.nominal[i])
+                    .set("std", r.std_dev[i])
+                    .set("relative_std", r.relative_std[i]));
+  }
+  j.set("parameters", params);
+  return j;
+}
+
+struct Design {
+  trajectory::GeneralResult solve;
+  id::ExcitationReport report;
+  double seconds = 0;
+  int rounds = 0;           // local solves with a tightened torque margin after the first
+  double torque_margin = 0;  // the margin of the last round
+};
+
+trajectory::GeneralResult solve_design(const id::ExcitationProblem& problem, const Args& a,
+                                       const std::vector<std::vector<double>>& starts) {
+  trajectory::GeneralProblem gp;
+  gp.n = problem.num_variables();
+  gp.m = problem.num_constraints();
+  const int pj = problem.motion().per_joint();
+  for (int v = 0; v < gp.n; ++v) {
+    const int l = problem.motion().harmonic_of(v % pj);
+    const double bound = l == 0 ? 60.0 : 40.0 / l;  // drift [rad/s], amplitude [rad]
+    gp.lower.push_back(-bound);
+    gp.upper.push_back(bound);
+  }
+  gp.evaluate = [&problem](const std::vector<double>& x, bool grad, double* f,
+                           std::vector<double>* df, std::vector<double>* c,
+                           std::vector<double>* dc) {
+    id::DesignValue v;
+    if (!problem.evaluate(x, grad, &v).ok()) return false;
+    *f = v.objective;
+    *df = std::move(v.objective_grad);
+    *c = std::move(v.constraints);
+    *dc = std::move(v.constraints_grad);
+    return std::isfinite(*f);
+  };
+  trajectory::GeneralOptions go;
+  if (!trajectory::parse_method(a.method, &go.method)) {
+    throw InputError(kFlags, "--method", "expected slsqp, mma or ccsaq, got " + a.method);
+  }
+  go.max_evaluations = a.max_evaluations;
+  go.ftol_rel = 1e-6;
+  go.xtol_rel = 1e-6;
+  go.constraint_tol = 1e-6;
+  return trajectory::minimize_multistart(gp, starts, go);
+}
+
+// the designed motion on the log's grid, with its Fisher information
+id::ExcitationReport on_grid(const Scene& scene, const LoadExpressions& loads,
+                             const id::ExcitationProblem& problem, const std::vector<double>& x) {
+  const id::ExcitationOptions& o = problem.options();
+  std::vector<double> t;
+  std::vector<id::MotionState> states;
+  design_grid(problem.motion(), x, o.duration, o.rate_hz, &t, &states);
+  id::ExcitationReport r;
+  const Status st = id::evaluate_motion(scene.params, problem.parameters(), loads, t, states,
+                                        o.torque_noise, &r);
+  if (!st.ok()) throw NumericalError(scene.path, "excite", "designed motion: " + st.message);
+  return r;
+}
+
+// a start scaled towards the torque and singularity limits: the largest factor in (0, 1] (by
+// bisection) at which the per-sample constraints hold, so that no local solve starts far outside
+std::vector<double> scaled_start(const id::ExcitationProblem& problem, const std::vector<double>& x) {
+  const int per_samples = problem.num_constraints() - 2 * kJoints;  // reversal rows come last
+  auto fits = [&](double s) {
+    std::vector<double> xs = x;
+    for (double& v : xs) v *= s;
+    id::DesignValue val;
+    if (!problem.evaluate(xs, false, &val).ok()) return false;
+    return *std::max_element(val.constraints.begin(), val.constraints.begin() + per_samples) <= 0;
+  };
+  if (fits(1.0)) return x;
+  double lo = 0, hi = 1;
+  for (int it = 0; it < 10; ++it) (fits(0.5 * (lo + hi)) ? lo : hi) = 0.5 * (lo + hi);
+  std::vector<double> xs = x;
+  for (double& v : xs) v *= lo;
+  return xs;
+}
+
+// multi-start design; while the log's grid shows a torque peak above the limit (between the
+// design samples), the margin is tightened by the excess and the best design solved again
+Design design(const Scene& scene, const LoadExpressions& loads, id::ExcitationOptions o,
+              const Args& a, const Multisine* ms) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::array<double, 2> start = {scene.initial.theta1, scene.initial.theta2};
+  Design d;
+  const id::FourierMotion motion(o.harmonics, o.duration / o.periods, o.ramp, start);
+  std::vector<double> base(motion.num_variables(), 0.0);
+  if (a.start == "multisine") {
+    base = motion.fit(ms->log.t, ms->log.theta1, ms->log.theta2);
+  } else if (a.start == "swing") {
+    // both cranks swing together through a large angle once per period (peak rate 30 rad/s
+    // before the start is scaled to the limits): b_1 of each crank
+    const double amplitude = 30.0 * motion.period() / (2 * M_PI);
+    for (int j = 0; j < 2; ++j) base[j * motion.per_joint() + motion.harmonics() + 1] = -amplitude;
+  }
+  std::vector<std::vector<double>> starts = make_starts(motion, a, base);
+  for (int round = 0; round < 4; ++round) {
+    const id::ExcitationProblem problem(scene.params, loads, start, o);
+    if (round == 0) {
+      for (std::vector<double>& x : starts) x = scaled_start(problem, x);
+    }
+    trajectory::GeneralResult r = solve_design(problem, a, starts);
+    if (!r.evaluated) {
+      throw NumericalError(scene.path, "excite",
+                           "no start could be evaluated (" + r.solver.message + ")");
+    }
+    if (round > 0) r.evaluations += d.solve.evaluations;
+    d.solve = r;
+    d.report = on_grid(scene, loads, problem, r.x);
+    d.rounds = round;
+    d.torque_margin = o.torque_margin;
+    if (d.report.peak_torque <= o.torque_limit) break;
+    // constrain where the torque peaked between design samples, and tighten the margin a little
+    const id::ExcitationReport& g = d.report;
+    for (size_t i = 1; i + 1 < g.t.size(); ++i) {
+      const double m = std::max(std::abs(g.M1[i]), std::abs(g.M2[i]));
+      const double before = std::max(std::abs(g.M1[i - 1]), std::abs(g.M2[i - 1]));
+      const double after = std::max(std::abs(g.M1[i + 1]), std::abs(g.M2[i + 1]));
+      if (m > o.torque_limit * (1 - o.torque_margin) && m >= before && m >= after) {
+        o.extra_times.push_back(g.t[i]);
+      }
+    }
+    o.torque_margin = 1.0 - (1.0 - o.torque_margin) * std::sqrt(o.torque_limit / g.peak_torque);
+    starts = {r.x};
+  }
+  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return d;
+}
+
+// the design's own checks on the log's grid: status "ok" or what it misses
+std::string design_status(const Design& d, const id::ExcitationOptions& o, std::string* why) {
+  const id::ExcitationReport& r = d.report;
+  static const char* const kJointNames[] = {"O", "B", "C", "D", "D0"};
+  for (int k = 0; k < kJoints; ++k) {
+    if (r.reversals[k] < o.min_reversals) {
+      *why = "joint " + std::string(kJointNames[k]) + " reverses " + std::to_string(r.reversals[k]) +
+             " times, fewer than --min-reversals " + std::to_string(o.min_reversals);
+      return "reversals_not_met";
+    }
+  }
+  if (r.peak_torque > o.torque_limit * (1 + 1e-9)) {
+    *why = "peak torque " + format_double(r.peak_torque) + " N m above the limit";
+    return "torque_limit_exceeded";
+  }
+  if (r.min_sine < o.singular_margin * (1 - 1e-3)) {
+    *why = "min coupler sine " + format_double(r.min_sine) + " below the singularity margin";
+    return "singular_margin_violated";
+  }
+  for (int j = 0; j < 2; ++j) {
+    if (std::isfinite(o.theta_lo[j]) &&
+        (r.theta_min[j] < o.theta_lo[j] - 1e-9 || r.theta_max[j] > o.theta_hi[j] + 1e-9)) {
+      *why = "theta" + std::to_string(j + 1) + " leaves its range";
+      return "angle_range_violated";
+    }
+  }
+  return "ok";
+}
+
+Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::DesignParameters& dp,
+                  const Design& d, const std::string& status, const id::ExcitationReport* base) {
+  Json j = Json::object();
+  j.set("status", status);
+  j.set("estimate", a.estimate);
+  j.set("per_joint", a.per_joint);
+  j.set("criterion", a.criterion);
+  j.set("duration_s", o.duration);
+  j.set("rate_hz", o.rate_hz);
+  j.set("torque_limit", o.torque_limit);
+  j.set("torque_noise", o.torque_noise);
+  j.set("singular_margin", o.singular_margin);
+  j.set("min_reversals", o.min_reversals);
+  j.set("basis", "drift plus finite Fourier series, " + std::to_string(o.harmonics) +
+                     " harmonics, " + std::to_string(o.periods) + " periods, faded in from rest over " +
+                     format_double(o.ramp) + " s");
+  Json sol = Json::object();
+  sol.set("method", a.method);
+  sol.set("outcome", trajectory::outcome_name(d.solve.solver.outcome));
+  sol.set("message", d.solve.solver.message);
+  sol.set("objective", d.solve.objective);
+  sol.set("max_design_constraint", d.solve.max_constraint);
+  sol.set("evaluations", d.solve.evaluations);
+  sol.set("starts", a.starts);
+  sol.set("best_start", d.solve.best_start);
+  Json so = Json::array();
+  for (double v : d.solve.start_objectives) so.push(v);
+  sol.set("start_objectives", so);
+  Json sc = Json::array();
+  for (double v : d.solve.start_max_constraint) sc.push(v);
+  sol.set("start_max_constraint", sc);
+  sol.set("design_time_s", d.seconds);
+  sol.set("margin_rounds", d.rounds);
+  sol.set("final_torque_margin", d.torque_margin);
+  j.set("solver", sol);
+  Json coeffs = Json::array();
+  for (double v : d.solve.x) coeffs.push(v);
+  j.set("fourier_coefficients", coeffs);
+  j.set("designed", report_json(dp, d.report));
+  if (base) {
+    j.set("multisine", report_json(dp, *base));
+    const double wd = worst(d.report.relative_std, 0, dp.friction);
+    const double wb = worst(base->relative_std, 0, dp.friction);
+    j.set("worst_friction_relative_std_ratio_multisine_over_designed", wb / wd);
+    j.set("worst_relative_std_ratio_multisine_over_designed",
+          worst(base->relative_std, 0, dp.size()) / worst(d.report.relative_std, 0, dp.size()));
+  }
+  return j;
+}
+
+int run(const Args& a) {
+  Scene scene = load_scene(a.scene.scene, a.scene.sets);
+  for (const std::string& w : scene.warnings) warn(w);
+  const LoadExpressions loads(scene);
+  const id::ExcitationOptions o = options_of(a, scene, loads);
+  // a trigonometric polynomial of degree H changes sign at most 2 H times per period
+  const int most = 2 * o.harmonics * o.periods;
+  if (o.min_reversals > most) {
+    throw NumericalError(kFlags, "--min-reversals",
+                         "status reversals_unreachable: " + std::to_string(o.min_reversals) +
+                             " reversals cannot be met by " + std::to_string(o.harmonics) +
+                             " harmonics over " + std::to_string(o.periods) +
+                             " periods (at most " + std::to_string(most) + ")");
+  }
+  OutputDir out(a.scene.out, kOutputs);
+  const id::DesignParameters dp = id::design_parameters(scene.params, o.groups);
+  std::unique_ptr<Multisine> ms;
+  if (!a.no_baseline || a.start == "multisine") {
+    ms = std::make_unique<Multisine>(multisine(scene, loads, dp, a));
+  }
+  const Design d = design(scene, loads, o, a, a.start == "multisine" ? ms.get() : nullptr);
+  std::string why;
+  const std::string status = design_status(d, o, &why);
+  const id::ExcitationReport* base = a.no_baseline ? nullptr : &ms->report;
+  if (status != "ok") {
+    // only the summary, which says what was missed; no excitation that could be mistaken for one
+    write_json_file(out.file("excitation.json"), summary_json(a, o, dp, d, status, base));
+    out.commit();
+    throw NumericalError(scene.path, "excite", "status " + status + ": the design " + why +
+                                                   " (solver: " + d.solve.solver.message +
+                                                   "; excitation.json written)");
+  }
+  write_excitation_csv(out.file("excitation.csv"), d.report);
+  write_std_csv(out.file("predicted_std.csv"), dp, d.report, base);
+  write_json_file(out.file("excitation.json"), summary_json(a, o, dp, d, status, base));
+  if (!a.no_plots) {
+    ExcitationFigures f;
+    f.torque_limit = o.torque_limit;
+    f.title = scene.path;
+    const std::string w = plot_excitation(out.staging(), f);
+    if (!w.empty()) warn(w);
+  }
+  const double wd = worst(d.report.relative_std, 0, dp.size());
+  std::cout << "fivebar excite: " << status << " in " << format_double(std::round(d.seconds * 100) / 100)
+            << " s; worst predicted relative std " << format_double(wd);
+  if (base) std::cout << " (multi-sine " << format_double(worst(base->relative_std, 0, dp.size())) << ")";
+  std::cout << "; peak torque " << format_double(d.report.peak_torque) << " N m" << std::endl;
+  print_written(out.dir(), out.commit());
+  return 0;
+}
+
+RunFunction setup(CLI::App* app) {
+  auto a = std::make_shared<Args>();
+  add_scene_options(app, &a->scene, "excite");
+  app->add_option("--duration", a->duration, "length of the motion [s]")->capture_default_str();
+  app->add_option("--torque-limit", a->torque_limit, "|M1|, |M2| at most this [N m]")->required();
+  app->add_option("--estimate", a->estimate, "parameter groups: friction,inertia,actuator")
+      ->capture_default_str();
+  app->add_flag("--per-joint", a->per_joint, "five friction coefficients of each kind");
+  app->add_option("--criterion", a->criterion, "d-optimal | condition")->capture_default_str();
+  app->add_option("--theta1-range", a->theta1_range, "allowed theta1 [rad], LO:HI");
+  app->add_option("--theta2-range", a->theta2_range, "allowed theta2 [rad], LO:HI");
+  app->add_option("--singular-margin", a->singular_margin, "least |sin(theta4 - theta3)|")
+      ->capture_default_str();
+  app->add_option("--min-reversals", a->min_reversals, "sign changes of every joint's rate")
+      ->capture_default_str();
+  app->add_option("--reversal-rate", a->reversal_rate, "every joint reaches +- this [rad/s]")
+      ->capture_default_str();
+  app->add_option("--torque-noise", a->torque_noise, "std of the logged torques [N m]")
+      ->capture_default_str();
+  app->add_option("--rate", a->rate, "sampling rate of the log [Hz]")->capture_default_str();
+  app->add_option("--periods", a->periods, "periods of the motion")->capture_default_str();
+  app->add_option("--harmonics", a->harmonics, "Fourier harmonics per crank")->capture_default_str();
+  app->add_option("--design-samples", a->design_samples, "samples of the design objective")
+      ->capture_default_str();
+  app->add_option("--starts", a->starts, "multi-start: local solves")->capture_default_str();
+  app->add_option("--seed", a->seed, "seed of the starts")->capture_default_str();
+  app->add_option("--spread", a->spread, "Fourier amplitudes of the random starts [rad]")
+      ->capture_default_str();
+  app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]")
+      ->capture_default_str();
+  app->add_option("--ramp", a->ramp, "fade-in from rest [s]")->capture_default_str();
+  app->add_option("--start", a->start,
+                  "first start: swing (both cranks swing together) | multisine (its motion "
+                  "fitted) | rest")
+      ->capture_default_str();
+  app->add_option("--method", a->method, "slsqp | mma | ccsaq")->capture_default_str();
+  app->add_option("--max-evaluations", a->max_evaluations, "per local solve")->capture_default_str();
+  app->add_flag("--no-baseline", a->no_baseline, "skip the multi-sine comparison");
+  app->add_flag("--no-plots", a->no_plots, "skip the PNG figures");
+  return [a] { return run(*a); };
+}
+
+const bool kRegistered = register_command(
+    {"excite", "design an excitation motion that identifies the parameters best (D-optimal)",
+     setup});
+
+}  // namespace
+}  // namespace fivebar::io

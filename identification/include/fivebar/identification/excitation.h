@@ -1,0 +1,223 @@
+// Excitation design (issue 11): the Fisher information that a motion of the two cranks gives on
+// the parameters identification estimates, by Jets, and the design problem around it (a periodic
+// finite Fourier motion, D-optimal or condition-number objective, torque, singularity, angle and
+// reversal constraints). The NLopt driver lives in trajectory/ (nlopt_minimize.h); the command
+// in apps/cmd_excite.cc joins the two.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "fivebar/identification/parameters.h"
+#include "fivebar/model/dynamics.h"
+#include "fivebar/model/params.h"
+#include "fivebar/model/status.h"
+
+namespace fivebar::identification {
+
+/// The parameter groups an excitation is designed for (identify --estimate).
+struct DesignGroups {
+  bool friction = true;   ///< coulomb, viscous (shared, or per joint)
+  bool inertia = false;   ///< the 16 standard inertial parameters (model/inertial.h)
+  bool actuator = false;  ///< per actuator: torque offset, Coulomb, viscous (load-independent)
+  bool per_joint = false;
+};
+
+/// Parses "friction,inertia,actuator" (any non-empty subset, any order); false on an unknown
+/// or repeated name (with the offending word in *bad).
+bool parse_groups(const std::string& list, DesignGroups* groups, std::string* bad);
+
+/// Number of actuator parameters per actuator: offset, coulomb, viscous.
+inline constexpr int kActuatorPerMotor = 3;
+
+/// The parameters of a design, in vector order: friction (ParameterLayout order), inertial
+/// (m_1, mx_1, ...), actuator (offset_1, coulomb_act_1, viscous_act_1, offset_2, ...).
+struct DesignParameters {
+  ParameterLayout layout;  ///< the friction layout (coulomb_viscous)
+  int friction = 0, inertial = 0, actuator = 0;
+  std::vector<std::string> names;
+  std::vector<double> nominal;  ///< values at the scene (actuator: 0)
+  /// the scale of each parameter in the objective: |nominal|, or for a zero nominal a typical
+  /// size (actuator offset and Coulomb 0.1 N m, viscous 0.01 N m s/rad; inertial 1e-3 in SI)
+  std::vector<double> scale;
+  int size() const { return static_cast<int>(names.size()); }
+  int jet_size() const { return friction + inertial; }
+};
+DesignParameters design_parameters(const Params<double>& scene, const DesignGroups& groups);
+
+/// One sample of a motion: pose, rates and accelerations of the two cranks.
+struct MotionState {
+  double th1 = 0, th2 = 0, w1 = 0, w2 = 0, a1 = 0, a2 = 0;
+};
+
+/// What one sample gives: the Jacobian of the measured torques (M1, M2) with respect to the
+/// design parameters (2 x P, by Jets; the actuator columns in closed form), the torques
+/// themselves (actuator terms at their nominal 0), the coupler sine |sin(th4 - th3)| and the
+/// relative rates of the five joints.
+struct SampleTerms {
+  Eigen::MatrixXd J;
+  double M1 = 0, M2 = 0, sine = 0;
+  std::array<double, 5> w{};
+  std::array<int, 5> slip{};
+};
+
+/// Evaluates one sample. `slip` (nullptr: sign of each rate) fixes the Coulomb signs, so that
+/// derivatives along the motion are those of one slip pattern. Fails where the pose cannot
+/// assemble or the friction loop has no solution.
+Status sample_terms(const Params<double>& scene, const DesignParameters& dp, const Loads<double>& loads,
+                    const MotionState& s, const std::array<int, 5>* slip, SampleTerms* out);
+
+/// The Fisher information sum_i J_i^T J_i / sigma^2 of a motion, with its sample terms.
+Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians, double sigma);
+
+/// The designed motion of each crank: a drift (a steady rotation) plus a finite Fourier series,
+/// faded in from rest at the start pose by a ramp r(t) (quintic smoothstep over `ramp` seconds,
+/// then 1):
+///   th(t) = th0 + r(t) (c t + sum_{l=1..H} a_l sin(l w t) + b_l (cos(l w t) - 1)),
+/// w = 2 pi / period. After the ramp the rates and accelerations are periodic; r(0) = r'(0) =
+/// r''(0) = 0 makes the motion start at rest at th0 with zero acceleration whatever the
+/// coefficients. Free variables per crank: c [rad/s], a_1..a_H, b_1..b_H [rad]; th1's first.
+class FourierMotion {
+ public:
+  FourierMotion(int harmonics, double period, double ramp, std::array<double, 2> start);
+  int harmonics() const { return h_; }
+  double period() const { return period_; }
+  double ramp() const { return ramp_; }
+  int per_joint() const { return 2 * h_ + 1; }
+  int num_variables() const { return 2 * per_joint(); }
+  /// Harmonic of variable v of a crank (0 for the drift).
+  int harmonic_of(int v) const { return v == 0 ? 0 : (v - 1) % h_ + 1; }
+  const std::array<double, 2>& start() const { return start_; }
+  /// d th^(k)(t) / d x_v for one crank (k = 0, 1, 2: angle, rate, acceleration), v < per_joint().
+  void basis(double t, std::vector<std::array<double, 3>>* d) const;
+  MotionState state(const std::vector<double>& x, double t) const;
+  /// The variables whose motion is the least-squares fit of the angles th1(t), th2(t) sampled at
+  /// `t` (e.g. another excitation, as a start for the design).
+  std::vector<double> fit(const std::vector<double>& t, const std::vector<double>& th1,
+                          const std::vector<double>& th2) const;
+
+ private:
+  int h_;
+  double period_, ramp_;
+  std::array<double, 2> start_;
+};
+
+/// The design's objective.
+enum class Criterion : int {
+  kDOptimal = 0,   ///< maximize log det of the scaled, regularized Fisher information
+  kCondition = 1,  ///< minimize log of its condition number
+};
+
+struct ExcitationOptions {
+  double duration = 10;           ///< [s]
+  int periods = 4;                ///< periods of the motion in the duration
+  int harmonics = 5;              ///< H of FourierMotion
+  double ramp = 1.0;              ///< [s] fade-in from rest (FourierMotion)
+  int design_samples = 400;       ///< samples of the objective and constraints over the duration
+  /// further instants where the constraints (not the objective) are sampled, e.g. where a
+  /// previous design's torque peaked between the design samples [s]
+  std::vector<double> extra_times;
+  double torque_limit = 0;        ///< |M1|, |M2| <= this [N m]
+  double torque_margin = 0.01;    ///< the design keeps |M| <= (1 - margin) torque_limit
+  int constraint_blocks = 40;     ///< blocks of samples per aggregated constraint
+  double aggregation_sharpness = 300;  ///< rho of the KS aggregation (overestimate <= ln(n)/rho)
+  double singular_margin = 0.1;   ///< |sin(th4 - th3)| >= this
+  double torque_noise = 0.02;     ///< std of the torque noise [N m] (the Fisher's sigma)
+  double rate_hz = 1000;          ///< the log's sampling rate (the Fisher is scaled to it)
+  /// optional angle ranges [rad]: lo < hi, NaN when absent
+  std::array<double, 2> theta_lo{NAN, NAN}, theta_hi{NAN, NAN};
+  double reversal_rate = 0.2;     ///< every joint's rate reaches +- this [rad/s] (smooth max)
+  int min_reversals = 4;          ///< sign changes of every relative rate, checked after design
+  double regularization = 1e-6;   ///< times the mean eigenvalue, added to the scaled Fisher
+  Criterion criterion = Criterion::kDOptimal;
+  DesignGroups groups;
+};
+
+/// Value and gradient of the design objective (to minimize) and constraints (<= 0).
+struct DesignValue {
+  double objective = 0;
+  std::vector<double> objective_grad;
+  std::vector<double> constraints;       ///< num_constraints()
+  std::vector<double> constraints_grad;  ///< row-major m x n
+};
+
+/// The design problem. Variables: FourierMotion's. Constraints, scaled to be dimensionless: at
+/// every design sample |M_j| / limit - (1 - margin) <= 0 (two per crank), 1 - sine / margin <= 0,
+/// the angle ranges when given, each kind aggregated over constraint_blocks blocks of
+/// consecutive samples by a Kreisselmeier-Steinhauser upper bound of the block's maximum (few
+/// constraints keep the NLopt subproblems cheap); for every joint, a smooth lower bound of the
+/// maximum of +-w_k at least reversal_rate.
+class ExcitationProblem {
+ public:
+  ExcitationProblem(const Params<double>& scene, std::function<Loads<double>(double)> loads,
+                    std::array<double, 2> start, const ExcitationOptions& options);
+
+  const FourierMotion& motion() const { return motion_; }
+  const DesignParameters& parameters() const { return dp_; }
+  const ExcitationOptions& options() const { return opt_; }
+  int num_variables() const { return motion_.num_variables(); }
+  int num_constraints() const;
+  /// Design sample times (over the duration, midpoints of equal cells), then the extra times.
+  const std::vector<double>& times() const { return times_; }
+
+  /// Objective and constraints at x; with `grad`, their gradients: the Jacobian J_i by Jets, its
+  /// derivative along the six motion variables by forward differences of that Jet Jacobian (at
+  /// fixed slip signs), chained through the linear Fourier basis.
+  Status evaluate(const std::vector<double>& x, bool grad, DesignValue* out) const;
+
+  /// The objective of a Fisher matrix (scaled and regularized as in evaluate) and dPhi/dF.
+  double criterion_value(const Eigen::MatrixXd& F, Eigen::MatrixXd* dF) const;
+
+ private:
+  struct Derivs;
+  Status sample(const std::vector<double>& x, int i, bool grad, Derivs* d) const;
+  void add_sample_constraints(int i, const Derivs& d, bool grad,
+                              const std::vector<std::array<double, 3>>& basis,
+                              std::vector<double>* raw, std::vector<double>* raw_grad) const;
+  void aggregate(const std::vector<double>& raw, const std::vector<double>& raw_grad, bool grad,
+                 DesignValue* out) const;
+  int constraint_kinds() const;
+  int blocks() const;
+  void add_reversal_constraints(const std::vector<Derivs>& all, bool grad,
+                                const std::vector<std::vector<std::array<double, 3>>>& basis,
+                                DesignValue* out) const;
+  int per_sample_constraints() const;
+
+  Params<double> scene_;
+  std::function<Loads<double>(double)> loads_;
+  ExcitationOptions opt_;
+  FourierMotion motion_;
+  DesignParameters dp_;
+  std::vector<double> times_;
+  int objective_samples_ = 0;  ///< the first ones of times_ (the extra times only constrain)
+};
+
+/// The motion on a uniform grid t = i / rate_hz, i = 0 .. duration * rate_hz, with its torques
+/// and per-sample terms, and what it gives: predicted covariance, std, reversal counts.
+struct ExcitationReport {
+  std::vector<double> t;
+  std::vector<MotionState> states;
+  std::vector<double> M1, M2;
+  Eigen::MatrixXd fisher;      ///< unscaled, 1 / sigma^2 sum J^T J
+  Eigen::MatrixXd covariance;  ///< its (pseudo-)inverse
+  std::vector<double> std_dev, relative_std;  ///< relative: std / |nominal| (NaN for 0)
+  std::array<int, 5> reversals{};
+  double peak_torque = 0, peak_time = 0, min_sine = 1, condition_number = 0, log_det_scaled = 0;
+  std::array<double, 2> theta_min{}, theta_max{};
+};
+
+/// Evaluates a motion given as states on a grid (the design's, or any logged motion). Loads at
+/// each time from `loads`. Fails on the first sample that cannot be evaluated.
+Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
+                       const std::function<Loads<double>(double)>& loads,
+                       const std::vector<double>& t, const std::vector<MotionState>& states,
+                       double torque_noise, ExcitationReport* out);
+
+/// Sign changes of each joint's relative rate over a sequence of rate samples.
+std::array<int, 5> count_reversals(const std::vector<std::array<double, 5>>& rates);
+
+}  // namespace fivebar::identification

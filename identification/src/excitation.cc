@@ -1,0 +1,573 @@
+// Excitation design: Fisher information by Jets, the Fourier motion, the design problem.
+#include "fivebar/identification/excitation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <thread>
+
+#include <ceres/jet.h>
+#include <Eigen/Dense>
+
+#include "fivebar/model/inertial.h"
+
+namespace fivebar::identification {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// Runs f(i) for i in [0, n) on up to two threads (the machine's budget), in contiguous chunks.
+template <typename F>
+void parallel_for(int n, F&& f) {
+  const int workers = std::min(2, std::max(1, static_cast<int>(std::thread::hardware_concurrency())));
+  if (workers == 1 || n < 64) {
+    for (int i = 0; i < n; ++i) f(i);
+    return;
+  }
+  const int half = n / 2;
+  std::thread other([&] {
+    for (int i = half; i < n; ++i) f(i);
+  });
+  for (int i = 0; i < half; ++i) f(i);
+  other.join();
+}
+
+/// The Jet part of sample_terms: friction and inertial columns of dM/dparameter.
+template <int N>
+Status jet_columns(const Params<double>& scene, const DesignParameters& dp, const Loads<double>& L,
+                   const MotionState& s, const std::array<int, 5>* slip, SampleTerms* out) {
+  using J = ceres::Jet<double, N>;
+  Params<J> p = scene.template cast<J>();
+  std::vector<J> x(std::max(1, dp.jet_size()));
+  for (int i = 0; i < dp.jet_size(); ++i) x[i] = J(dp.nominal[i], i);
+  if (dp.friction > 0) dp.layout.apply(x.data(), &p.friction);
+  if (dp.inertial > 0) set_standard_inertial(x.data() + dp.friction, &p);
+  EvalOptions eo;
+  eo.want_angles = false;
+  Evaluation<J> ev;
+  const Status st = inverse_dynamics(p, L.template cast<J>(), J(s.th1), J(s.th2), J(s.w1), J(s.w2),
+                                     J(s.a1), J(s.a2), slip, eo, &ev);
+  if (!st.ok()) return st;
+  out->M1 = ev.M1.a;
+  out->M2 = ev.M2.a;
+  for (int c = 0; c < dp.jet_size(); ++c) {
+    out->J(0, c) = ev.M1.v[c];
+    out->J(1, c) = ev.M2.v[c];
+  }
+  out->sine = std::abs(ev.kin.sin43.a);
+  for (int k = 0; k < 5; ++k) out->w[k] = ev.w[k].a;
+  out->slip = ev.slip;
+  return Status::Ok();
+}
+
+/// Actuator columns in closed form: tau_j = M_j + offset_j + Fc_j sign(w_j) + Fv_j w_j.
+void actuator_columns(const DesignParameters& dp, const MotionState& s, SampleTerms* out) {
+  if (dp.actuator == 0) return;
+  const int c0 = dp.friction + dp.inertial;
+  const double w[2] = {s.w1, s.w2};
+  for (int j = 0; j < 2; ++j) {
+    const int c = c0 + kActuatorPerMotor * j;
+    out->J(j, c) = 1.0;
+    out->J(j, c + 1) = (w[j] > 0) - (w[j] < 0);
+    out->J(j, c + 2) = w[j];
+  }
+}
+
+/// Smooth lower bound of max_i v_i: the log-mean-exp (never above the maximum).
+double soft_max(const std::vector<double>& v, double rho, std::vector<double>* weights) {
+  const double m = *std::max_element(v.begin(), v.end());
+  double sum = 0;
+  weights->resize(v.size());
+  for (size_t i = 0; i < v.size(); ++i) sum += ((*weights)[i] = std::exp(rho * (v[i] - m)));
+  for (double& w : *weights) w /= sum;
+  return m + std::log(sum / v.size()) / rho;
+}
+
+}  // namespace
+
+bool parse_groups(const std::string& list, DesignGroups* g, std::string* bad) {
+  g->friction = g->inertia = g->actuator = false;
+  std::stringstream ss(list);
+  std::string word;
+  int count = 0;
+  while (std::getline(ss, word, ',')) {
+    bool* flag = word == "friction"  ? &g->friction
+                 : word == "inertia"  ? &g->inertia
+                 : word == "actuator" ? &g->actuator
+                                      : nullptr;
+    if (flag == nullptr || *flag) {
+      *bad = word;
+      return false;
+    }
+    *flag = true;
+    ++count;
+  }
+  if (count == 0) *bad = list;
+  return count > 0;
+}
+
+DesignParameters design_parameters(const Params<double>& scene, const DesignGroups& g) {
+  DesignParameters dp;
+  dp.layout.law = FrictionLaw::kCoulombViscous;
+  dp.layout.per_joint = g.per_joint;
+  auto add = [&](const std::string& name, double nominal, double typical) {
+    dp.names.push_back(name);
+    dp.nominal.push_back(nominal);
+    dp.scale.push_back(std::abs(nominal) > 0 ? std::abs(nominal) : typical);
+  };
+  if (g.friction) {
+    const std::vector<std::string> names = dp.layout.names();
+    const std::vector<double> x = dp.layout.extract(scene.friction);
+    for (size_t i = 0; i < names.size(); ++i) add(names[i], x[i], 1e-3);
+    dp.friction = static_cast<int>(names.size());
+  }
+  if (g.inertia) {
+    const std::array<double, kInertialParams> pi = standard_inertial(scene);
+    for (int i = 0; i < kInertialParams; ++i) add(inertial_name(i), pi[i], 1e-3);
+    dp.inertial = kInertialParams;
+  }
+  if (g.actuator) {
+    for (int j = 1; j <= 2; ++j) {
+      add("offset_" + std::to_string(j), 0.0, 0.1);
+      add("actuator_coulomb_" + std::to_string(j), 0.0, 0.1);
+      add("actuator_viscous_" + std::to_string(j), 0.0, 0.01);
+    }
+    dp.actuator = 2 * kActuatorPerMotor;
+  }
+  return dp;
+}
+
+Status sample_terms(const Params<double>& scene, const DesignParameters& dp, const Loads<double>& L,
+                    const MotionState& s, const std::array<int, 5>* slip, SampleTerms* out) {
+  out->J = Eigen::MatrixXd::Zero(2, dp.size());
+  Status st;
+  switch (dp.jet_size()) {
+    case 0:
+    case 1:
+      st = jet_columns<1>(scene, dp, L, s, slip, out);
+      break;
+    case 2:
+      st = jet_columns<2>(scene, dp, L, s, slip, out);
+      break;
+    case 10:
+      st = jet_columns<10>(scene, dp, L, s, slip, out);
+      break;
+    case 16:
+      st = jet_columns<16>(scene, dp, L, s, slip, out);
+      break;
+    case 18:
+      st = jet_columns<18>(scene, dp, L, s, slip, out);
+      break;
+    default:
+      st = jet_columns<26>(scene, dp, L, s, slip, out);
+      break;
+  }
+  if (!st.ok()) return st;
+  actuator_columns(dp, s, out);
+  return Status::Ok();
+}
+
+Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians, double sigma) {
+  if (jacobians.empty()) return {};
+  const int P = static_cast<int>(jacobians.front().cols());
+  Eigen::MatrixXd F = Eigen::MatrixXd::Zero(P, P);
+  for (const Eigen::MatrixXd& J : jacobians) F.noalias() += J.transpose() * J;
+  return F / (sigma * sigma);
+}
+
+std::array<int, 5> count_reversals(const std::vector<std::array<double, 5>>& rates) {
+  std::array<int, 5> out{}, prev{};
+  for (const auto& w : rates) {
+    for (int k = 0; k < 5; ++k) {
+      const int s = (w[k] > 0) - (w[k] < 0);
+      if (s != 0 && prev[k] != 0 && s != prev[k]) ++out[k];
+      if (s != 0) prev[k] = s;
+    }
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fourier motion
+
+FourierMotion::FourierMotion(int harmonics, double period, double ramp, std::array<double, 2> start)
+    : h_(std::max(1, harmonics)), period_(period), ramp_(ramp), start_(start) {}
+
+void FourierMotion::basis(double t, std::vector<std::array<double, 3>>* d) const {
+  const double w = 2 * M_PI / period_;
+  d->assign(per_joint(), {0, 0, 0});
+  // the shapes psi_v and their first two derivatives
+  (*d)[0] = {t, 1, 0};
+  for (int l = 1; l <= h_; ++l) {
+    const double sl = std::sin(l * w * t), cl = std::cos(l * w * t), lw = l * w;
+    (*d)[l] = {sl, lw * cl, -lw * lw * sl};
+    (*d)[h_ + l] = {cl - 1, -lw * sl, -lw * lw * cl};
+  }
+  // times the ramp r: (r psi)' = r' psi + r psi', (r psi)'' = r'' psi + 2 r' psi' + r psi''
+  double r = 1, r1 = 0, r2 = 0;
+  if (ramp_ > 0 && t < ramp_) {
+    const double u = std::max(0.0, t / ramp_);
+    r = u * u * u * (10 + u * (-15 + 6 * u));
+    r1 = 30 * u * u * (1 + u * (-2 + u)) / ramp_;
+    r2 = 60 * u * (1 + u * (-3 + 2 * u)) / (ramp_ * ramp_);
+  }
+  for (auto& v : *d) v = {r * v[0], r1 * v[0] + r * v[1], r2 * v[0] + 2 * r1 * v[1] + r * v[2]};
+}
+
+MotionState FourierMotion::state(const std::vector<double>& x, double t) const {
+  std::vector<std::array<double, 3>> d;
+  basis(t, &d);
+  std::array<std::array<double, 3>, 2> q{};
+  for (int j = 0; j < 2; ++j) {
+    q[j][0] = start_[j];
+    for (int v = 0; v < per_joint(); ++v) {
+      for (int k = 0; k < 3; ++k) q[j][k] += x[j * per_joint() + v] * d[v][k];
+    }
+  }
+  return {q[0][0], q[1][0], q[0][1], q[1][1], q[0][2], q[1][2]};
+}
+
+std::vector<double> FourierMotion::fit(const std::vector<double>& t, const std::vector<double>& th1,
+                                       const std::vector<double>& th2) const {
+  const int n = static_cast<int>(t.size()), pj = per_joint();
+  Eigen::MatrixXd A(n, pj);
+  Eigen::MatrixXd b(n, 2);
+  std::vector<std::array<double, 3>> d;
+  for (int i = 0; i < n; ++i) {
+    basis(t[i], &d);
+    for (int v = 0; v < pj; ++v) A(i, v) = d[v][0];
+    b(i, 0) = th1[i] - start_[0];
+    b(i, 1) = th2[i] - start_[1];
+  }
+  const Eigen::MatrixXd c = A.colPivHouseholderQr().solve(b);
+  std::vector<double> x(num_variables());
+  for (int j = 0; j < 2; ++j) {
+    for (int v = 0; v < pj; ++v) x[j * pj + v] = c(v, j);
+  }
+  return x;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Design problem
+
+struct ExcitationProblem::Derivs {
+  SampleTerms v;                            // at the sample
+  std::array<SampleTerms, 6> d;             // d/ds of J, M, sine, w (s: th1, th2, w1, w2, a1, a2)
+  MotionState s;
+};
+
+ExcitationProblem::ExcitationProblem(const Params<double>& scene,
+                                     std::function<Loads<double>(double)> loads,
+                                     std::array<double, 2> start, const ExcitationOptions& options)
+    : scene_(scene),
+      loads_(std::move(loads)),
+      opt_(options),
+      motion_(options.harmonics, options.duration / std::max(1, options.periods), options.ramp, start),
+      dp_(design_parameters(scene, options.groups)) {
+  // a count that is not a multiple of the periods samples every period at other phases
+  int n = std::max(8, options.design_samples);
+  if (n % std::max(1, options.periods) == 0) ++n;
+  for (int i = 0; i < n; ++i) times_.push_back(options.duration * (i + 0.5) / n);
+  objective_samples_ = n;
+  for (double t : options.extra_times) times_.push_back(t);
+}
+
+int ExcitationProblem::per_sample_constraints() const {
+  int c = 5;  // +-M1, +-M2, sine
+  for (int j = 0; j < 2; ++j) c += std::isfinite(opt_.theta_lo[j]) ? 2 : 0;
+  return c;
+}
+
+int ExcitationProblem::constraint_kinds() const {
+  int k = 2;  // torque, sine
+  for (int j = 0; j < 2; ++j) k += std::isfinite(opt_.theta_lo[j]) ? 1 : 0;
+  return k;
+}
+
+int ExcitationProblem::blocks() const {
+  return std::max(1, std::min(static_cast<int>(times_.size()), opt_.constraint_blocks));
+}
+
+int ExcitationProblem::num_constraints() const { return blocks() * constraint_kinds() + 2 * kJoints; }
+
+void ExcitationProblem::aggregate(const std::vector<double>& raw, const std::vector<double>& raw_grad,
+                                  bool grad, DesignValue* out) const {
+  const int N = static_cast<int>(times_.size()), n = num_variables(), ps = per_sample_constraints();
+  const int nb = blocks(), kinds = constraint_kinds();
+  // kind of each per-sample row: +-M1, +-M2 -> torque; sine; theta1 range; theta2 range
+  std::vector<int> kind(ps);
+  for (int r = 0; r < ps; ++r) kind[r] = r < 4 ? 0 : r == 4 ? 1 : 2 + (r - 5) / 2;
+  if (ps > 5 && !std::isfinite(opt_.theta_lo[0])) {
+    for (int r = 5; r < ps; ++r) kind[r] = 2;
+  }
+  const double rho = opt_.aggregation_sharpness;
+  for (int b = 0; b < nb; ++b) {
+    const int i0 = b * N / nb, i1 = (b + 1) * N / nb;
+    for (int k = 0; k < kinds; ++k) {
+      std::vector<int> rows;
+      double top = -std::numeric_limits<double>::infinity();
+      for (int i = i0; i < i1; ++i) {
+        for (int r = 0; r < ps; ++r) {
+          if (kind[r] != k) continue;
+          rows.push_back(i * ps + r);
+          top = std::max(top, raw[i * ps + r]);
+        }
+      }
+      // KS upper bound of the block's maximum: top + log(sum exp(rho (g - top))) / rho
+      double sum = 0;
+      for (int q : rows) sum += std::exp(rho * (raw[q] - top));
+      const int row = b * kinds + k;
+      out->constraints[row] = top + std::log(sum) / rho;
+      if (!grad) continue;
+      double* g = &out->constraints_grad[static_cast<size_t>(row) * n];
+      for (int q : rows) {
+        const double wq = std::exp(rho * (raw[q] - top)) / sum;
+        for (int v = 0; v < n; ++v) g[v] += wq * raw_grad[static_cast<size_t>(q) * n + v];
+      }
+    }
+  }
+}
+
+Status ExcitationProblem::sample(const std::vector<double>& x, int i, bool grad, Derivs* d) const {
+  d->s = motion_.state(x, times_[i]);
+  const Loads<double> L = loads_(times_[i]);
+  Status st = sample_terms(scene_, dp_, L, d->s, nullptr, &d->v);
+  if (!st.ok() || !grad) return st;
+  const std::array<double, 6> base = {d->s.th1, d->s.th2, d->s.w1, d->s.w2, d->s.a1, d->s.a2};
+  for (int c = 0; c < 6; ++c) {
+    // forward differences (one Jet evaluation per motion variable) at the sample's slip signs
+    const double h = 1e-7 * std::max(1.0, std::abs(base[c]));
+    std::array<double, 6> b = base;
+    b[c] += h;
+    SampleTerms plus;
+    st = sample_terms(scene_, dp_, L, {b[0], b[1], b[2], b[3], b[4], b[5]}, &d->v.slip, &plus);
+    if (!st.ok()) return st;
+    SampleTerms& o = d->d[c];
+    o.J = (plus.J - d->v.J) / h;
+    o.M1 = (plus.M1 - d->v.M1) / h;
+    o.M2 = (plus.M2 - d->v.M2) / h;
+    o.sine = (plus.sine - d->v.sine) / h;
+    for (int k = 0; k < 5; ++k) o.w[k] = (plus.w[k] - d->v.w[k]) / h;
+  }
+  return Status::Ok();
+}
+
+double ExcitationProblem::criterion_value(const Eigen::MatrixXd& F, Eigen::MatrixXd* dF) const {
+  const int P = static_cast<int>(F.rows());
+  const Eigen::VectorXd scale = Eigen::Map<const Eigen::VectorXd>(dp_.scale.data(), P);
+  const Eigen::MatrixXd Fs = scale.asDiagonal() * F * scale.asDiagonal();
+  const double lambda = opt_.regularization * Fs.trace() / P;
+  const Eigen::MatrixXd R = Fs + lambda * Eigen::MatrixXd::Identity(P, P);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(R);
+  const Eigen::VectorXd ev = es.eigenvalues().cwiseMax(1e-300);
+  const Eigen::MatrixXd& V = es.eigenvectors();
+  double value = 0;
+  Eigen::MatrixXd W;  // d value / d R
+  if (opt_.criterion == Criterion::kDOptimal) {
+    value = -ev.array().log().sum() / P;  // minimize -log det / P
+    W = -(V * ev.cwiseInverse().asDiagonal() * V.transpose()) / P;
+  } else {
+    value = std::log(ev(P - 1) / ev(0));
+    W = V.col(P - 1) * V.col(P - 1).transpose() / ev(P - 1) - V.col(0) * V.col(0).transpose() / ev(0);
+  }
+  if (dF) {
+    // R = Fs + lambda(Fs) I with lambda = reg tr(Fs) / P; then Fs = S F S
+    const Eigen::MatrixXd Ws =
+        W + (opt_.regularization / P) * W.trace() * Eigen::MatrixXd::Identity(P, P);
+    *dF = scale.asDiagonal() * Ws * scale.asDiagonal();
+  }
+  return value;
+}
+
+void ExcitationProblem::add_sample_constraints(int i, const Derivs& d, bool grad,
+                                               const std::vector<std::array<double, 3>>& basis,
+                                               std::vector<double>* raw,
+                                               std::vector<double>* raw_grad) const {
+  const int n = num_variables(), pj = motion_.per_joint();
+  const double lim = opt_.torque_limit, keep = 1.0 - opt_.torque_margin;
+  // value and d/ds (six motion variables) of every constraint of this sample
+  std::vector<std::pair<double, std::array<double, 6>>> cs;
+  auto of = [&](auto member, double a, double b) {  // a * member / b - ...
+    std::array<double, 6> g{};
+    for (int c = 0; c < 6; ++c) g[c] = a * member(d.d[c]) / b;
+    return g;
+  };
+  auto m1 = [](const SampleTerms& t) { return t.M1; };
+  auto m2 = [](const SampleTerms& t) { return t.M2; };
+  auto sine = [](const SampleTerms& t) { return t.sine; };
+  cs.push_back({d.v.M1 / lim - keep, of(m1, 1, lim)});
+  cs.push_back({-d.v.M1 / lim - keep, of(m1, -1, lim)});
+  cs.push_back({d.v.M2 / lim - keep, of(m2, 1, lim)});
+  cs.push_back({-d.v.M2 / lim - keep, of(m2, -1, lim)});
+  cs.push_back({1.0 - d.v.sine / opt_.singular_margin, of(sine, -1, opt_.singular_margin)});
+  const double th[2] = {d.s.th1, d.s.th2};
+  for (int j = 0; j < 2; ++j) {
+    if (!std::isfinite(opt_.theta_lo[j])) continue;
+    const double span = opt_.theta_hi[j] - opt_.theta_lo[j];
+    std::array<double, 6> g{};
+    g[j] = 1.0 / span;
+    cs.push_back({(th[j] - opt_.theta_hi[j]) / span, g});
+    g[j] = -1.0 / span;
+    cs.push_back({(opt_.theta_lo[j] - th[j]) / span, g});
+  }
+  const int row0 = i * per_sample_constraints();
+  for (size_t r = 0; r < cs.size(); ++r) {
+    (*raw)[row0 + r] = cs[r].first;
+    if (!grad) continue;
+    double* g = &(*raw_grad)[(row0 + r) * n];
+    for (int j = 0; j < 2; ++j) {
+      for (int v = 0; v < pj; ++v) {
+        // s = (th1, th2, w1, w2, a1, a2): crank j's angle, rate, acceleration at 0+j, 2+j, 4+j
+        g[j * pj + v] = cs[r].second[j] * basis[v][0] + cs[r].second[2 + j] * basis[v][1] +
+                        cs[r].second[4 + j] * basis[v][2];
+      }
+    }
+  }
+}
+
+void ExcitationProblem::add_reversal_constraints(
+    const std::vector<Derivs>& all, bool grad,
+    const std::vector<std::vector<std::array<double, 3>>>& basis, DesignValue* out) const {
+  const int n = num_variables(), pj = motion_.per_joint();
+  const int row0 = blocks() * constraint_kinds();
+  const double vr = opt_.reversal_rate, rho = 10.0 / vr;
+  for (int k = 0; k < kJoints; ++k) {
+    for (int sgn : {+1, -1}) {
+      std::vector<double> v(all.size()), wts;
+      for (size_t i = 0; i < all.size(); ++i) v[i] = sgn * all[i].v.w[k];
+      const double sm = soft_max(v, rho, &wts);
+      const int row = row0 + 2 * k + (sgn > 0 ? 0 : 1);
+      out->constraints[row] = 1.0 - sm / vr;
+      if (!grad) continue;
+      double* g = &out->constraints_grad[static_cast<size_t>(row) * n];
+      for (size_t i = 0; i < all.size(); ++i) {
+        for (int j = 0; j < 2; ++j) {
+          for (int q = 0; q < pj; ++q) {
+            double dw = 0;
+            for (int o = 0; o < 3; ++o) dw += all[i].d[2 * o + j].w[k] * basis[i][q][o];
+            g[j * pj + q] -= wts[i] * sgn * dw / vr;
+          }
+        }
+      }
+    }
+  }
+}
+
+Status ExcitationProblem::evaluate(const std::vector<double>& x, bool grad, DesignValue* out) const {
+  const int N = static_cast<int>(times_.size()), n = num_variables(), m = num_constraints();
+  std::vector<Derivs> all(N);
+  std::vector<Status> status(N);
+  parallel_for(N, [&](int i) { status[i] = sample(x, i, grad, &all[i]); });
+  for (int i = 0; i < N; ++i) {
+    if (!status[i].ok()) return status[i];
+  }
+  std::vector<std::vector<std::array<double, 3>>> basis(N);
+  for (int i = 0; i < N; ++i) motion_.basis(times_[i], &basis[i]);
+  // Fisher of the log: each design sample stands for rate_hz * duration / N0 log samples
+  const int N0 = objective_samples_;
+  const double weight = opt_.rate_hz * opt_.duration / N0;
+  std::vector<Eigen::MatrixXd> Js(N0);
+  for (int i = 0; i < N0; ++i) Js[i] = all[i].v.J;
+  const Eigen::MatrixXd F = weight * fisher_information(Js, opt_.torque_noise);
+  Eigen::MatrixXd G;
+  out->objective = criterion_value(F, grad ? &G : nullptr);
+  out->constraints.assign(m, 0.0);
+  out->objective_grad.assign(n, 0.0);
+  out->constraints_grad.assign(grad ? static_cast<size_t>(m) * n : 0, 0.0);
+  const double c = 2.0 * weight / (opt_.torque_noise * opt_.torque_noise);
+  const int pj = motion_.per_joint();
+  const int ps = per_sample_constraints();
+  std::vector<double> raw(static_cast<size_t>(N) * ps), raw_grad(grad ? raw.size() * n : 0, 0.0);
+  for (int i = 0; i < N; ++i) {
+    add_sample_constraints(i, all[i], grad, basis[i], &raw, &raw_grad);
+    if (!grad || i >= N0) continue;
+    // d Phi / d s_c = 2 w / sigma^2 sum (J G) .* dJ/ds_c
+    const Eigen::MatrixXd JG = all[i].v.J * G;
+    std::array<double, 6> ds{};
+    for (int cc = 0; cc < 6; ++cc) ds[cc] = c * JG.cwiseProduct(all[i].d[cc].J).sum();
+    for (int j = 0; j < 2; ++j) {
+      for (int v = 0; v < pj; ++v) {
+        out->objective_grad[j * pj + v] += ds[j] * basis[i][v][0] + ds[2 + j] * basis[i][v][1] +
+                                           ds[4 + j] * basis[i][v][2];
+      }
+    }
+  }
+  aggregate(raw, raw_grad, grad, out);
+  add_reversal_constraints(all, grad, basis, out);
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Evaluation of a motion on a grid
+
+Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
+                       const std::function<Loads<double>(double)>& loads,
+                       const std::vector<double>& t, const std::vector<MotionState>& states,
+                       double torque_noise, ExcitationReport* out) {
+  const int N = static_cast<int>(t.size());
+  std::vector<SampleTerms> terms(N);
+  std::vector<Status> status(N);
+  parallel_for(N, [&](int i) {
+    status[i] = sample_terms(scene, dp, loads(t[i]), states[i], nullptr, &terms[i]);
+  });
+  for (int i = 0; i < N; ++i) {
+    if (!status[i].ok()) {
+      std::ostringstream msg;
+      msg << "at t = " << t[i] << " s: " << status[i].message;
+      return Status::Error(status[i].code, msg.str());
+    }
+  }
+  out->t = t;
+  out->states = states;
+  out->M1.resize(N);
+  out->M2.resize(N);
+  std::vector<Eigen::MatrixXd> Js(N);
+  std::vector<std::array<double, 5>> rates(N);
+  out->theta_min = {states[0].th1, states[0].th2};
+  out->theta_max = out->theta_min;
+  for (int i = 0; i < N; ++i) {
+    out->M1[i] = terms[i].M1;
+    out->M2[i] = terms[i].M2;
+    const double peak = std::max(std::abs(terms[i].M1), std::abs(terms[i].M2));
+    if (peak > out->peak_torque) {
+      out->peak_torque = peak;
+      out->peak_time = t[i];
+    }
+    out->min_sine = std::min(out->min_sine, terms[i].sine);
+    Js[i] = terms[i].J;
+    rates[i] = terms[i].w;
+    const double th[2] = {states[i].th1, states[i].th2};
+    for (int j = 0; j < 2; ++j) {
+      out->theta_min[j] = std::min(out->theta_min[j], th[j]);
+      out->theta_max[j] = std::max(out->theta_max[j], th[j]);
+    }
+  }
+  out->reversals = count_reversals(rates);
+  out->fisher = fisher_information(Js, torque_noise);
+  const int P = dp.size();
+  const Eigen::VectorXd scale = Eigen::Map<const Eigen::VectorXd>(dp.scale.data(), P);
+  const Eigen::MatrixXd Fs = scale.asDiagonal() * out->fisher * scale.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Fs);
+  const Eigen::VectorXd ev = es.eigenvalues();
+  out->condition_number = ev(0) > 0 ? ev(P - 1) / ev(0) : kNaN;
+  out->log_det_scaled = ev(0) > 0 ? ev.array().log().sum() : -std::numeric_limits<double>::infinity();
+  // covariance: pseudo-inverse of the scaled Fisher (directions below 1e-14 of the largest are
+  // unidentifiable: their parameters get an infinite std)
+  Eigen::VectorXd inv(P);
+  for (int i = 0; i < P; ++i) inv(i) = ev(i) > 1e-14 * ev(P - 1) ? 1.0 / ev(i) : 0.0;
+  const Eigen::MatrixXd Cs = es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
+  out->covariance = scale.asDiagonal() * Cs * scale.asDiagonal();
+  out->std_dev.assign(P, kNaN);
+  out->relative_std.assign(P, kNaN);
+  for (int i = 0; i < P; ++i) {
+    bool lost = false;
+    for (int e = 0; e < P; ++e) lost = lost || (inv(e) == 0 && std::abs(es.eigenvectors()(i, e)) > 1e-6);
+    out->std_dev[i] = lost ? std::numeric_limits<double>::infinity()
+                           : std::sqrt(std::max(0.0, out->covariance(i, i)));
+    if (dp.nominal[i] != 0) out->relative_std[i] = out->std_dev[i] / std::abs(dp.nominal[i]);
+  }
+  return Status::Ok();
+}
+
+}  // namespace fivebar::identification

@@ -1,0 +1,127 @@
+#!/usr/bin/env python3
+"""End-to-end checks of `fivebar excite` and `synth-log --motion` (issue 11).
+
+Usage: cli_excite.py FIVEBAR PAPER_YAML WORK_DIR
+
+Bad input exits 2 with one error line and writes nothing; an unreachable reversal count exits 3
+with a status; a small design honours its constraints (torque limit, singularity margin, angle
+range, reversals) on the 1 kHz grid, its rates and accelerations are those of its angles, and
+synth-log --motion along it reproduces its torques.
+"""
+import csv
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+
+FIVEBAR, PAPER, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
+failures = []
+
+
+def run(args):
+    p = subprocess.run([FIVEBAR] + args, capture_output=True, text=True)
+    return p.returncode, p.stdout, p.stderr
+
+
+def expect_error(status, pattern, args, out_dir=None):
+    code, _, err = run(args)
+    lines = err.strip("\n").split("\n")
+    if code != status or len(lines) != 1 or not lines[0].startswith("fivebar: error: ") \
+            or pattern not in lines[0]:
+        failures.append("%s: exit %d, stderr %r (expected %d and '%s')" % (args, code, err, status, pattern))
+    if out_dir and os.path.exists(os.path.join(out_dir, "excitation.csv")):
+        failures.append("%s: wrote excitation.csv after failing" % args)
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = [l for l in f if not l.startswith("#")]
+    return list(csv.DictReader(rows))
+
+
+shutil.rmtree(WORK, ignore_errors=True)
+os.makedirs(WORK)
+bad = os.path.join(WORK, "bad")
+base = ["excite", PAPER, "--out", bad, "--torque-limit", "13.4"]
+expect_error(2, "--duration: must be > 0", base + ["--duration", "0"], bad)
+expect_error(2, "--duration: must be > 0", base + ["--duration", "-3"], bad)
+expect_error(2, "below what holding the start pose needs",
+             ["excite", PAPER, "--out", bad, "--torque-limit", "0.5"], bad)
+expect_error(2, "excludes the start pose theta1", base + ["--theta1-range", "2:3"], bad)
+expect_error(2, "--theta2-range: expected LO:HI", base + ["--theta2-range", "3:2"], bad)
+expect_error(2, "--estimate", base + ["--estimate", "friction,mass"], bad)
+expect_error(3, "reversals_unreachable", base + ["--min-reversals", "1000"], bad)
+if os.path.exists(bad):
+    failures.append("a run rejected for bad input created its output directory")
+
+# a design that cannot reach the reversals asked (at most 6 with 3 harmonics over 1 period):
+# exit 3 with the status, the summary says so, and no excitation.csv
+missed = os.path.join(WORK, "missed")
+expect_error(3, "status reversals_not_met", ["excite", PAPER, "--out", missed, "--torque-limit", "13.4",
+             "--duration", "2", "--periods", "1", "--harmonics", "3", "--design-samples", "120",
+             "--starts", "1", "--max-evaluations", "15", "--min-reversals", "6", "--no-plots",
+             "--no-baseline", "--method", "slsqp"], missed)
+if json.load(open(os.path.join(missed, "excitation.json")))["status"] != "reversals_not_met":
+    failures.append("excitation.json of a missed design does not say reversals_not_met")
+
+# a small design
+out = os.path.join(WORK, "design")
+limit, margin = 13.4, 0.1
+code, stdout, err = run(["excite", PAPER, "--out", out, "--torque-limit", str(limit),
+                         "--duration", "2", "--periods", "1", "--harmonics", "3",
+                         "--design-samples", "120", "--starts", "1", "--max-evaluations", "15",
+                         "--min-reversals", "1", "--theta1-range", "0.5:3", "--no-plots",
+                         "--no-baseline", "--start", "swing", "--method", "slsqp"])
+if code != 0:
+    failures.append("small design: exit %d: %s" % (code, err))
+else:
+    rows = read_csv(os.path.join(out, "excitation.csv"))
+    col = {k: [float(r[k]) for r in rows] for k in rows[0]}
+    t = col["t"]
+    if len(t) != 2001 or abs(t[1] - 0.001) > 1e-12 or t[0] != 0:
+        failures.append("excitation.csv is not a 1 kHz grid over 2 s (%d rows)" % len(t))
+    h = 0.001
+    ramp = 0.5  # the default fade-in: the jerk jumps there (stencils skip it)
+    for i in range(2, len(t) - 2, 7):
+        if abs(t[i] - ramp) < 0.003:
+            continue
+        for q, w in (("theta1", "omega1"), ("theta2", "omega2"), ("omega1", "alpha1"),
+                     ("omega2", "alpha2")):
+            f = col[q]
+            d = (f[i - 2] - 8 * f[i - 1] + 8 * f[i + 1] - f[i + 2]) / (12 * h)
+            if abs(d - col[w][i]) > 1e-6 * (1 + abs(d)) + 1e-4:
+                failures.append("row %d: %s = %g, d %s/dt = %g" % (i, w, col[w][i], q, d))
+                break
+    peak = max(max(abs(x) for x in col["M1"]), max(abs(x) for x in col["M2"]))
+    if peak > limit:
+        failures.append("peak torque %g above the limit %g" % (peak, limit))
+    if min(col["theta1"]) < 0.5 or max(col["theta1"]) > 3:
+        failures.append("theta1 leaves --theta1-range 0.5:3")
+    j = json.load(open(os.path.join(out, "excitation.json")))
+    d = j["designed"]
+    if j["status"] != "ok" or d["min_coupler_sine"] < margin * (1 - 1e-3) or min(d["reversals"]) < 1:
+        failures.append("design summary: status %s, min sine %g, reversals %s" %
+                        (j["status"], d["min_coupler_sine"], d["reversals"]))
+    std = read_csv(os.path.join(out, "predicted_std.csv"))
+    if [r["name"] for r in std] != ["coulomb", "viscous"] or not all(float(r["std"]) > 0 for r in std):
+        failures.append("predicted_std.csv: %s" % std)
+    # synth-log along the motion, noise-free: the torques of excitation.csv
+    log = os.path.join(WORK, "log.csv")
+    code, _, err = run(["synth-log", PAPER, "--motion", os.path.join(out, "excitation.csv"),
+                        "--out", log, "--torque-noise", "0", "--angle-noise", "0", "--with-rates"])
+    if code != 0:
+        failures.append("synth-log --motion: exit %d: %s" % (code, err))
+    else:
+        lrows = read_csv(log)
+        worst = max(max(abs(float(a["tau1"]) - b), abs(float(a["tau2"]) - c))
+                    for a, b, c in zip(lrows, col["M1"], col["M2"]))
+        if len(lrows) != len(t) or worst > 1e-9:
+            failures.append("synth-log --motion: %d rows, torques differ by %g" % (len(lrows), worst))
+    expect_error(2, "missing column", ["synth-log", PAPER, "--motion", PAPER.replace("paper.yaml", "../logs/paper_angles.csv"),
+                                       "--out", os.path.join(WORK, "log2.csv")])
+
+for f in failures:
+    print("FAIL:", f)
+sys.exit(1 if failures else 0)

@@ -1,0 +1,156 @@
+// Excitation design (issue 11): the Jet Jacobian and Fisher matrix against finite differences,
+// the design gradient against finite differences, the Fourier motion's consistency.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "fivebar/identification/excitation.h"
+#include "fivebar/model/inertial.h"
+
+namespace fivebar::identification {
+namespace {
+
+Loads<double> paper_loads(double) { return {0.0, 0.0, 6.0, 50.0, M_PI / 2}; }
+
+Params<double> per_joint_scene() {
+  Params<double> p = paper_params();
+  p.friction.coulomb = {0.08, 0.10, 0.12, 0.14, 0.16};
+  p.friction.viscous = {0.010, 0.015, 0.020, 0.025, 0.030};
+  return p;
+}
+
+// M1, M2 at a parameter vector x (friction, then inertial), by plain double inverse dynamics
+std::array<double, 2> torques(const Params<double>& scene, const DesignParameters& dp,
+                              const std::vector<double>& x, const MotionState& s,
+                              const std::array<int, 5>& slip) {
+  Params<double> p = scene;
+  if (dp.friction > 0) dp.layout.apply(x.data(), &p.friction);
+  if (dp.inertial > 0) set_standard_inertial(x.data() + dp.friction, &p);
+  Evaluation<double> ev;
+  EXPECT_TRUE(inverse_dynamics(p, paper_loads(0), s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, &slip,
+                               EvalOptions{}, &ev)
+                  .ok());
+  return {ev.M1, ev.M2};
+}
+
+TEST(Excitation, JetJacobianMatchesFiniteDifferences) {
+  const Params<double> scene = per_joint_scene();
+  DesignGroups g;
+  g.per_joint = true;
+  g.inertia = true;
+  g.actuator = true;
+  const DesignParameters dp = design_parameters(scene, g);
+  ASSERT_EQ(dp.size(), 10 + 16 + 6);
+  const MotionState s{1.4, 1.9, 2.5, -3.0, 20.0, 15.0};
+  SampleTerms t;
+  ASSERT_TRUE(sample_terms(scene, dp, paper_loads(0), s, nullptr, &t).ok());
+  for (int c = 0; c < dp.jet_size(); ++c) {
+    std::vector<double> xp = dp.nominal, xm = dp.nominal;
+    const double h = 1e-6 * std::max(1e-3, std::abs(dp.nominal[c]));
+    xp[c] += h;
+    xm[c] -= h;
+    const auto mp = torques(scene, dp, xp, s, t.slip), mm = torques(scene, dp, xm, s, t.slip);
+    for (int r = 0; r < 2; ++r) {
+      const double fd = (mp[r] - mm[r]) / (2 * h);
+      EXPECT_NEAR(t.J(r, c), fd, 1e-6 * (1 + std::abs(fd))) << dp.names[c] << " row " << r;
+    }
+  }
+  // actuator columns: offset 1, Coulomb sign(w), viscous w, on their own motor only
+  const int a = dp.friction + dp.inertial;
+  EXPECT_EQ(t.J(0, a), 1.0);
+  EXPECT_EQ(t.J(0, a + 1), 1.0);
+  EXPECT_EQ(t.J(0, a + 2), 2.5);
+  EXPECT_EQ(t.J(1, a + 4), -1.0);
+  EXPECT_EQ(t.J(1, a + 5), -3.0);
+  EXPECT_EQ(t.J(1, a), 0.0);
+  // the Fisher matrix is J^T J / sigma^2 summed
+  const Eigen::MatrixXd F = fisher_information({t.J, t.J}, 0.5);
+  EXPECT_NEAR(F(3, 7), 2 * 4 * t.J.col(3).dot(t.J.col(7)), 1e-12 * (1 + std::abs(F(3, 7))));
+}
+
+TEST(Excitation, FourierMotionIsConsistentAndStartsAtRest) {
+  const FourierMotion m(5, 2.5, 0.7, {1.5, 1.7});
+  std::vector<double> x(m.num_variables());
+  for (size_t i = 0; i < x.size(); ++i) x[i] = 0.05 * std::sin(1.0 + 3.0 * i);
+  const MotionState s0 = m.state(x, 0.0);
+  EXPECT_DOUBLE_EQ(s0.th1, 1.5);
+  EXPECT_DOUBLE_EQ(s0.th2, 1.7);
+  EXPECT_NEAR(s0.w1, 0, 1e-12);
+  EXPECT_NEAR(s0.w2, 0, 1e-12);
+  EXPECT_NEAR(s0.a1, 0, 1e-10);
+  EXPECT_NEAR(s0.a2, 0, 1e-10);
+  // after the ramp, rates and accelerations repeat every period
+  const MotionState s1 = m.state(x, 1.3), s2 = m.state(x, 3.8);
+  EXPECT_NEAR(s1.w1, s2.w1, 1e-10);
+  EXPECT_NEAR(s1.a2, s2.a2, 1e-9);
+  for (double t : {0.3, 0.69, 0.71, 1.1, 2.2}) {
+    const double h = 1e-5;
+    const MotionState a = m.state(x, t - h), b = m.state(x, t + h), c = m.state(x, t);
+    EXPECT_NEAR(c.w1, (b.th1 - a.th1) / (2 * h), 1e-7);
+    EXPECT_NEAR(c.w2, (b.th2 - a.th2) / (2 * h), 1e-7);
+    EXPECT_NEAR(c.a1, (b.w1 - a.w1) / (2 * h), 1e-6);
+    EXPECT_NEAR(c.a2, (b.w2 - a.w2) / (2 * h), 1e-6);
+  }
+}
+
+TEST(Excitation, DesignGradientMatchesFiniteDifferences) {
+  ExcitationOptions o;
+  o.duration = 2;
+  o.periods = 1;
+  o.harmonics = 3;
+  o.ramp = 0.5;
+  o.design_samples = 40;
+  o.torque_limit = 20;
+  o.groups.per_joint = true;
+  for (Criterion c : {Criterion::kDOptimal, Criterion::kCondition}) {
+    o.criterion = c;
+    const ExcitationProblem problem(per_joint_scene(), paper_loads, {M_PI / 2, M_PI / 2}, o);
+    std::vector<double> x = {0.5, 0.10, -0.05, 0.04, 0.02, -0.08, 0.06,
+                             -0.7, 0.03, -0.02, 0.05, 0.01, 0.02, -0.04};
+    ASSERT_EQ(problem.num_variables(), static_cast<int>(x.size()));
+    DesignValue v;
+    ASSERT_TRUE(problem.evaluate(x, true, &v).ok());
+    const int n = problem.num_variables(), m = problem.num_constraints();
+    for (int i = 0; i < n; ++i) {
+      std::vector<double> xp = x, xm = x;
+      const double h = 1e-6;
+      xp[i] += h;
+      xm[i] -= h;
+      DesignValue vp, vm;
+      ASSERT_TRUE(problem.evaluate(xp, false, &vp).ok());
+      ASSERT_TRUE(problem.evaluate(xm, false, &vm).ok());
+      const double fd = (vp.objective - vm.objective) / (2 * h);
+      EXPECT_NEAR(v.objective_grad[i], fd, 1e-4 * (1 + std::abs(fd))) << "variable " << i;
+      for (int r = 0; r < m; ++r) {
+        const double cfd = (vp.constraints[r] - vm.constraints[r]) / (2 * h);
+        EXPECT_NEAR(v.constraints_grad[static_cast<size_t>(r) * n + i], cfd, 1e-4 * (1 + std::abs(cfd)))
+            << "constraint " << r << " variable " << i;
+      }
+    }
+  }
+}
+
+TEST(Excitation, ReversalsAreCounted) {
+  std::vector<std::array<double, 5>> w = {
+      {1, 1, 0, -1, 1}, {0, -1, 0, 1, 1}, {-1, 1, 0, -1, 1}, {2, 1, 0, 1, 1}};
+  const std::array<int, 5> r = count_reversals(w);
+  EXPECT_EQ(r[0], 2);  // 1, 0, -1, 2: a zero between is not a reversal of its own
+  EXPECT_EQ(r[1], 2);
+  EXPECT_EQ(r[2], 0);
+  EXPECT_EQ(r[3], 3);
+  EXPECT_EQ(r[4], 0);
+}
+
+TEST(Excitation, GroupsParse) {
+  DesignGroups g;
+  std::string bad;
+  EXPECT_TRUE(parse_groups("friction,inertia", &g, &bad));
+  EXPECT_TRUE(g.friction && g.inertia && !g.actuator);
+  EXPECT_FALSE(parse_groups("friction,friction", &g, &bad));
+  EXPECT_EQ(bad, "friction");
+  EXPECT_FALSE(parse_groups("mass", &g, &bad));
+  EXPECT_EQ(bad, "mass");
+}
+
+}  // namespace
+}  // namespace fivebar::identification

@@ -1,0 +1,164 @@
+// The general multi-start NLopt driver (NLopt is included only in trajectory/src).
+#include "fivebar/trajectory/nlopt_minimize.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include <nlopt.hpp>
+
+namespace fivebar::trajectory {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// one evaluation shared by the objective and constraint callbacks at the same point
+class Cache {
+ public:
+  Cache(const GeneralProblem& p, double penalty) : p_(p), penalty_(penalty) {}
+  void at(const double* x, bool grad) {
+    const bool same = valid_ && std::equal(x, x + p_.n, x_.begin());
+    if (same && (has_grad_ || !grad)) return;
+    x_.assign(x, x + p_.n);
+    valid_ = true;
+    has_grad_ = grad;
+    ++evaluations;
+    if (!p_.evaluate(x_, grad, &f, &df, &c, &dc)) {
+      f = penalty_;  // outside the model's domain: a flat penalty makes line searches step back
+      df.assign(p_.n, 0.0);
+      c.assign(p_.m, 1.0);
+      dc.assign(static_cast<size_t>(p_.m) * p_.n, 0.0);
+    }
+  }
+  double f = 0;
+  std::vector<double> df, c, dc;
+  int evaluations = 0;
+
+ private:
+  const GeneralProblem& p_;
+  double penalty_;
+  std::vector<double> x_;
+  bool valid_ = false, has_grad_ = false;
+};
+
+double objective_cb(unsigned n, const double* x, double* grad, void* data) {
+  Cache* cache = static_cast<Cache*>(data);
+  cache->at(x, grad != nullptr);
+  if (grad) std::memcpy(grad, cache->df.data(), n * sizeof(double));
+  return cache->f;
+}
+
+void constraints_cb(unsigned m, double* result, unsigned n, const double* x, double* grad,
+                    void* data) {
+  Cache* cache = static_cast<Cache*>(data);
+  cache->at(x, grad != nullptr);
+  std::memcpy(result, cache->c.data(), m * sizeof(double));
+  if (grad) std::memcpy(grad, cache->dc.data(), static_cast<size_t>(m) * n * sizeof(double));
+}
+
+nlopt::algorithm algorithm(Method m) {
+  switch (m) {
+    case Method::kMma:
+      return nlopt::LD_MMA;
+    case Method::kCcsaq:
+      return nlopt::LD_CCSAQ;
+    case Method::kSlsqp:
+      break;
+  }
+  return nlopt::LD_SLSQP;
+}
+
+struct Local {
+  SolverStatus solver;
+  std::vector<double> x;
+  double objective = kNaN, max_constraint = kNaN;
+  bool evaluated = false;
+  int evaluations = 0;
+};
+
+Local solve_local(const GeneralProblem& p, std::vector<double> x, const GeneralOptions& o,
+                  double penalty) {
+  Cache cache(p, penalty);
+  Local out;
+  for (int i = 0; i < p.n; ++i) x[i] = std::clamp(x[i], p.lower[i], p.upper[i]);
+  try {
+    nlopt::opt opt(algorithm(o.method), p.n);
+    opt.set_lower_bounds(p.lower);
+    opt.set_upper_bounds(p.upper);
+    opt.set_min_objective(objective_cb, &cache);
+    opt.add_inequality_mconstraint(constraints_cb, &cache,
+                                   std::vector<double>(p.m, o.constraint_tol));
+    opt.set_ftol_rel(o.ftol_rel);
+    opt.set_xtol_rel(o.xtol_rel);
+    opt.set_maxeval(o.max_evaluations);
+    if (o.max_time_s > 0) opt.set_maxtime(o.max_time_s);
+    double f = 0;
+    out.solver = status_from_result(static_cast<int>(opt.optimize(x, f)));
+  } catch (...) {
+    out.solver = status_from_exception(std::current_exception());
+  }
+  out.x = x;
+  out.evaluations = cache.evaluations;
+  // the returned point, evaluated afresh (NLopt may return a point it evaluated earlier)
+  double f = 0;
+  std::vector<double> df, c, dc;
+  if (p.evaluate(x, false, &f, &df, &c, &dc)) {
+    out.evaluated = true;
+    out.objective = f;
+    out.max_constraint = c.empty() ? 0.0 : *std::max_element(c.begin(), c.end());
+  }
+  return out;
+}
+
+// a feasible result beats an infeasible one; then the lower objective
+bool better(const Local& a, const Local& b, double tol) {
+  if (!a.evaluated) return false;
+  if (!b.evaluated) return true;
+  const bool fa = a.solver.usable() && a.max_constraint <= tol;
+  const bool fb = b.solver.usable() && b.max_constraint <= tol;
+  if (fa != fb) return fa;
+  if (!fa) return a.max_constraint < b.max_constraint;
+  return a.objective < b.objective;
+}
+
+}  // namespace
+
+GeneralResult minimize_multistart(const GeneralProblem& problem,
+                                  const std::vector<std::vector<double>>& starts,
+                                  const GeneralOptions& options) {
+  GeneralResult result;
+  if (starts.empty()) {
+    result.solver = {SolverOutcome::kInvalidArgument, "no start given"};
+    return result;
+  }
+  result.x = starts.front();
+  double f0 = 0;
+  std::vector<double> df, c, dc;
+  const bool ok0 = problem.evaluate(starts.front(), false, &f0, &df, &c, &dc);
+  const double penalty = 1e3 * (1.0 + (ok0 ? std::abs(f0) : 1.0));
+  const double tol = 10.0 * options.constraint_tol;
+  Local best;
+  for (size_t s = 0; s < starts.size(); ++s) {
+    Local local = solve_local(problem, starts[s], options, penalty);
+    result.evaluations += local.evaluations;
+    result.start_objectives.push_back(local.evaluated ? local.objective : kNaN);
+    result.start_max_constraint.push_back(local.max_constraint);
+    result.start_feasible.push_back(local.evaluated && local.solver.usable() &&
+                                    local.max_constraint <= tol);
+    if (s == 0 || better(local, best, tol)) {
+      best = std::move(local);
+      result.best_start = static_cast<int>(s);
+    }
+  }
+  result.solver = best.solver;
+  result.evaluated = best.evaluated;
+  if (best.evaluated) {
+    result.x = best.x;
+    result.objective = best.objective;
+    result.max_constraint = best.max_constraint;
+  }
+  return result;
+}
+
+}  // namespace fivebar::trajectory
