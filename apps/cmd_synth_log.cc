@@ -24,6 +24,7 @@
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/model/friction.h"
 #include "fivebar/model/inertial.h"
 #include "fivebar/model/dynamics.h"
 
@@ -176,10 +177,13 @@ int run(const Args& a) {
   std::string inertial;
   for (int i = 0; i < kInertialParams; ++i) inertial += (i ? "," : "") + format_double(pi[i]);
   log.comments.push_back(" true.inertial = " + inertial);
-  if (fp.law == FrictionLaw::kStribeck) {
-    log.comments.push_back(" true.static_coulomb = " + joined(fp.static_coulomb));
-    log.comments.push_back(" true.stribeck_velocity = " + joined(fp.stribeck_velocity));
-    log.comments.push_back(" true.stribeck_exponent = " + joined(fp.stribeck_exponent));
+  // the law's other coefficients, from its descriptor (friction.h)
+  const LawDescriptor& law = law_descriptor(fp.law);
+  for (int i = 0; i < law.count; ++i) {
+    const Coefficient c = law.coefficients[i].id;
+    if (c == Coefficient::kCoulomb || c == Coefficient::kViscous) continue;
+    log.comments.push_back(" true." + std::string(coefficient_info(c).key) + " = " +
+                           joined(coefficient(fp, c)));
   }
   std::ostringstream rev;
   for (int k = 0; k < kJoints; ++k) rev << (k ? "," : "") << res.reversals[k];

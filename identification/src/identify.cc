@@ -304,8 +304,10 @@ void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem) {
 Eigen::MatrixXd to_public(const ParameterLayout& layout) {
   const int P = layout.size(), G = layout.per_group();
   Eigen::MatrixXd T = Eigen::MatrixXd::Identity(P, P);
-  if (layout.static_as_excess && layout.groups() > 2) {
-    for (int j = 0; j < G; ++j) T(2 * G + j, j) = 1.0;
+  const int g_static = layout.group_of(Coefficient::kStaticCoulomb);
+  const int g_coulomb = layout.group_of(Coefficient::kCoulomb);
+  if (layout.static_as_excess && g_static >= 0) {
+    for (int j = 0; j < G; ++j) T(g_static * G + j, g_coulomb * G + j) = 1.0;
   }
   return T;
 }
@@ -979,7 +981,9 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
     e.std = std::sqrt(out->covariance(i, i));
     e.initial = x0_public[i];
     e.at_bound = f.x[i] <= f.layout.lower_bound(i) + 1e-12;
-    const bool static_group = excess && i / f.layout.per_group() == 2;
+    const bool static_group =
+        excess && i < f.layout.friction_size() &&
+        f.layout.group(i / f.layout.per_group()) == Coefficient::kStaticCoulomb;
     if (e.at_bound) {
       out->warnings.push_back(
           names[i] + " is at its bound" +

@@ -8,13 +8,15 @@
 #include <string>
 #include <vector>
 
+#include "fivebar/model/friction.h"
 #include "fivebar/model/inertial.h"
 #include "fivebar/model/params.h"
 
 namespace fivebar::identification {
 
-/// Which coefficients are free. Groups, in order: coulomb, viscous, and for kStribeck also
-/// static_coulomb, stribeck_velocity (the exponent stays at the scene's value). Shared: one
+/// Which coefficients are free: the identifiable coefficients of the law's descriptor
+/// (friction.h), in its order: coulomb, viscous, and for kStribeck also static_coulomb,
+/// stribeck_velocity (the exponent stays at the scene's value). Shared: one
 /// value per group for all five joints (names `coulomb`, `viscous`, ...); per joint: five per
 /// group (`coulomb_1`..`coulomb_5` in joint order O, B, C, D, D0).
 ///
@@ -31,7 +33,27 @@ struct ParameterLayout {
   /// identify() solves in this form and reports static_coulomb itself.
   bool static_as_excess = false;
 
-  int groups() const { return law == FrictionLaw::kStribeck ? 4 : 2; }
+  /// The coefficient of friction group g (0 <= g < groups()).
+  Coefficient group(int g) const {
+    const LawDescriptor& d = law_descriptor(law);
+    for (int i = 0, n = 0; i < d.count; ++i) {
+      if (d.coefficients[i].identifiable && n++ == g) return d.coefficients[i].id;
+    }
+    return Coefficient::kCoulomb;  // unreachable for g < groups()
+  }
+  int groups() const {
+    const LawDescriptor& d = law_descriptor(law);
+    int n = 0;
+    for (int i = 0; i < d.count; ++i) n += d.coefficients[i].identifiable;
+    return n;
+  }
+  /// The group of coefficient c, or -1.
+  int group_of(Coefficient c) const {
+    for (int g = 0; g < groups(); ++g) {
+      if (group(g) == c) return g;
+    }
+    return -1;
+  }
   int per_group() const { return per_joint ? kJoints : 1; }
   int friction_size() const { return groups() * per_group(); }
   int inertia_offset() const { return friction_size(); }
@@ -40,13 +62,11 @@ struct ParameterLayout {
 
   /// Names of the parameters (interfaces.md: coulomb, viscous; coulomb_1..5, viscous_1..5).
   std::vector<std::string> names() const {
-    static const char* const kGroups[] = {"coulomb", "viscous", "static_coulomb",
-                                          "stribeck_velocity"};
     std::vector<std::string> out;
     for (int g = 0; g < groups(); ++g) {
+      const std::string key = coefficient_info(group(g)).key;
       for (int j = 0; j < per_group(); ++j) {
-        out.push_back(per_joint ? std::string(kGroups[g]) + "_" + std::to_string(j + 1)
-                                : std::string(kGroups[g]));
+        out.push_back(per_joint ? key + "_" + std::to_string(j + 1) : key);
       }
     }
     if (inertia) {
@@ -58,8 +78,9 @@ struct ParameterLayout {
   /// Unit of parameter i.
   std::string unit(int i) const {
     if (is_inertial(i)) return inertial_unit(i - inertia_offset());
-    const int g = i / per_group();
-    return g == 1 ? "N m s/rad (per N m of load)" : g == 3 ? "rad/s" : "1 (per N m of load)";
+    const std::string u = coefficient_info(group(i / per_group())).unit;
+    // f multiplies r_k N_k: a coefficient is per N m of load torque
+    return u == "rad/s" ? u : (u == "-" ? "1" : "N m " + u) + " (per N m of load)";
   }
 
   /// Lower bound of each parameter: 0 for the friction coefficients, a small positive Stribeck
@@ -70,7 +91,8 @@ struct ParameterLayout {
       return (i - inertia_offset()) % kInertialPerLink == 0 ? 1e-6
                                                             : -std::numeric_limits<double>::max();
     }
-    return i / per_group() == 3 ? 1e-4 : 0.0;
+    const LawCoefficient* c = law_coefficient(law_descriptor(law), group(i / per_group()));
+    return c && c->positive ? 1e-4 : 0.0;
   }
 
   /// Writes the parameter vector x into `p`: its friction (law set to `law`) and, with the
@@ -95,14 +117,17 @@ struct ParameterLayout {
   template <typename T>
   void apply(const T* x, FrictionParams<T>* fp) const {
     fp->law = law;
-    const std::array<std::array<T, kJoints>*, 4> dst = {
-        &fp->coulomb, &fp->viscous, &fp->static_coulomb, &fp->stribeck_velocity};
     const int n = friction_size();
+    const int g_static = group_of(Coefficient::kStaticCoulomb);
+    const int g_coulomb = group_of(Coefficient::kCoulomb);
     for (int i = 0; i < n; ++i) {
       // parameter i sets group i / per_group() at one joint (per joint) or at all five
-      std::array<T, kJoints>& d = *dst[i / per_group()];
+      const int g = i / per_group();
+      std::array<T, kJoints>& d = coefficient(*fp, group(g));
       // static_as_excess: static_coulomb = coulomb (same joint) + excess
-      const T v = static_as_excess && i / per_group() == 2 ? x[i] + x[i - 2 * per_group()] : x[i];
+      const T v = static_as_excess && g == g_static
+                      ? x[i] + x[i - (g_static - g_coulomb) * per_group()]
+                      : x[i];
       if (per_joint) {
         d[i % kJoints] = v;
       } else {
@@ -114,15 +139,18 @@ struct ParameterLayout {
   /// The friction part of the parameter vector of `fp` (shared: the mean over the joints).
   std::vector<double> extract(const FrictionParams<double>& fp) const {
     std::vector<double> x(friction_size(), 0.0);
-    const std::array<const std::array<double, kJoints>*, 4> src = {
-        &fp.coulomb, &fp.viscous, &fp.static_coulomb, &fp.stribeck_velocity};
     for (int g = 0; g < groups(); ++g) {
+      const std::array<double, kJoints>& src = coefficient(fp, group(g));
       for (int k = 0; k < kJoints; ++k) {
-        x[g * per_group() + (per_joint ? k : 0)] += (*src[g])[k] / (per_joint ? 1.0 : kJoints);
+        x[g * per_group() + (per_joint ? k : 0)] += src[k] / (per_joint ? 1.0 : kJoints);
       }
     }
-    if (static_as_excess && groups() > 2) {
-      for (int j = 0; j < per_group(); ++j) x[2 * per_group() + j] -= x[j];
+    const int g_static = group_of(Coefficient::kStaticCoulomb);
+    const int g_coulomb = group_of(Coefficient::kCoulomb);
+    if (static_as_excess && g_static >= 0) {
+      for (int j = 0; j < per_group(); ++j) {
+        x[g_static * per_group() + j] -= x[g_coulomb * per_group() + j];
+      }
     }
     return x;
   }
@@ -147,28 +175,17 @@ inline bool parse_groups(const std::string& list, ParameterLayout* layout, std::
   }
 }
 
-/// Parses `coulomb_viscous` or `stribeck`; false otherwise.
+/// Parses the name of a law that identify fits (one with identifiable coefficients, friction.h);
+/// false otherwise.
 inline bool parse_law(const std::string& name, FrictionLaw* law) {
-  if (name == "coulomb_viscous")
-    *law = FrictionLaw::kCoulombViscous;
-  else if (name == "stribeck")
-    *law = FrictionLaw::kStribeck;
-  else
-    return false;
+  const LawDescriptor* d = find_law(name);
+  if (!d) return false;
+  bool identifiable = false;
+  for (int i = 0; i < d->count; ++i) identifiable = identifiable || d->coefficients[i].identifiable;
+  if (!identifiable) return false;
+  *law = d->law;
   return true;
 }
-inline const char* law_name(FrictionLaw law) {
-  switch (law) {
-    case FrictionLaw::kNone:
-      return "none";
-    case FrictionLaw::kCoulombViscous:
-      return "coulomb_viscous";
-    case FrictionLaw::kStribeck:
-      return "stribeck";
-    case FrictionLaw::kLuGre:
-      return "lugre";  // simulated by synth-log; not a law identify fits
-  }
-  return "unknown";
-}
+inline const char* law_name(FrictionLaw law) { return law_descriptor(law).name; }
 
 }  // namespace fivebar::identification
