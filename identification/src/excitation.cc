@@ -36,7 +36,7 @@ void parallel_for(int n, F&& f) {
 /// The Jet part of sample_terms: friction and inertial columns of dM/dparameter.
 template <int N>
 Status jet_columns(const Params<double>& scene, const DesignParameters& dp, const Loads<double>& L,
-                   const MotionState& s, const std::array<int, 5>* slip, SampleTerms* out) {
+                   const MotionState& s, const JointModes* slip, SampleTerms* out) {
   using J = ceres::Jet<double, N>;
   Params<J> p = scene.template cast<J>();
   std::vector<J> x(std::max(1, dp.jet_size()));
@@ -139,7 +139,7 @@ DesignParameters design_parameters(const Params<double>& scene, const DesignGrou
 }
 
 Status sample_terms(const Params<double>& scene, const DesignParameters& dp, const Loads<double>& L,
-                    const MotionState& s, const std::array<int, 5>* slip, SampleTerms* out) {
+                    const MotionState& s, const JointModes* slip, SampleTerms* out) {
   out->J = Eigen::MatrixXd::Zero(2, dp.size());
   Status st;
   switch (dp.jet_size()) {

@@ -76,12 +76,12 @@ bool sample_structure(const Params<double>& scene, const Sample& s, const EvalOp
   for (int j = 0; j < kJoints; ++j) {
     out->slip[j] = ev.slip[j];
     out->w[j] = ev.w[j].a;
-    const bool acts = ev.slip[j] != kStuck && ev.slip[j] != 0;
+    const bool acts = ev.slip[j] != kStuck && ev.slip[j] != JointMode::kRest;
     // a joint without a Coulomb sign but moving: its viscous torque needs the full model
-    if (!acts && ev.slip[j] == 0 && out->w[j] != 0 && scene.friction.pin_radius[j] != 0) {
+    if (!acts && ev.slip[j] == JointMode::kRest && out->w[j] != 0 && scene.friction.pin_radius[j] != 0) {
       return false;
     }
-    const double scale = acts ? ev.slip[j] * ev.N[j].a : 0.0;
+    const double scale = acts ? coulomb_sign(ev.slip[j]) * ev.N[j].a : 0.0;
     if (acts && std::abs(scale) < 1e-9 * nmax) return false;
     for (int k = 0; k < kJoints; ++k) {
       out->dF(2 * k, j) = acts ? ev.F[k].x().v[j] / scale : 0.0;

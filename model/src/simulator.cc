@@ -76,15 +76,15 @@ struct Context {
   EvalOptions eval;
   bool use_slip = false;                ///< Coulomb sign from the segment's slip directions
   bool stick = false;                   ///< exact stick-slip (Options::stick, with use_slip)
-  std::array<int, 5> slip{};            ///< mode of each joint in this segment
+  JointModes slip{};            ///< mode of each joint in this segment
   bool locked = false;                  ///< all joints stuck, held as lock_analysis finds
   bool decided = false;                 ///< the modes have been decided once (at the start)
   /// switches not located, exact sign: a joint whose rate is exactly zero takes the direction
   /// in which it starts to slip (zero_sign, decided at the start), not sign(0) = 0
   bool zero_signs = false;
-  std::array<int, 5> zero_sign{};
+  JointModes zero_sign{};
   bool frozen = false;                  ///< signs frozen for a Newton Jacobian (freeze_signs)
-  std::array<int, 5> frozen_sign{};
+  JointModes frozen_sign{};
   std::array<bool, 5> watched{};        ///< joints with a Coulomb part: switch functions
   bool lugre = false;                   ///< bristle states follow the 7 base states
   bool full_rows = true;                ///< Options::full_rows
@@ -116,10 +116,10 @@ bool joint_rates(const Params<double>& p, const double* y, std::array<double, 5>
 
 /// Switches not located (Context::zero_signs): the Coulomb sign of each joint from its rate at y,
 /// or the direction decided at the start where the rate is exactly zero.
-bool state_signs(const Context& c, const double* y, std::array<int, 5>* signs) {
+bool state_signs(const Context& c, const double* y, JointModes* signs) {
   std::array<double, 5> w;
   if (!joint_rates(*c.params, y, &w)) return false;
-  for (int k = 0; k < 5; ++k) (*signs)[k] = w[k] != 0.0 ? sign_of(w[k]) : c.zero_sign[k];
+  for (int k = 0; k < 5; ++k) (*signs)[k] = w[k] != 0.0 ? slip_mode(sign_of(w[k])) : c.zero_sign[k];
   return true;
 }
 
@@ -139,8 +139,8 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   Evaluation<double> ev;
   std::array<double, 5> z{};
   if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
-  std::array<int, 5> signs{};
-  const std::array<int, 5>* slip = c.use_slip ? &c.slip : nullptr;
+  JointModes signs{};
+  const JointModes* slip = c.use_slip ? &c.slip : nullptr;
   if (c.frozen) {
     slip = &c.frozen_sign;
   } else if (c.zero_signs && state_signs(c, y, &signs)) {
@@ -170,7 +170,7 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   return 0;
 }
 
-bool any_stuck(const std::array<int, 5>& slip) {
+bool any_stuck(const JointModes& slip) {
   return std::find(slip.begin(), slip.end(), kStuck) != slip.end();
 }
 
@@ -199,7 +199,7 @@ Status switch_values(Context& c, double t, const double* y, Switches* g) {
   }
   for (int k = 0; k < 5; ++k) {
     if (!c.watched[k]) continue;
-    (*g)[k] = c.slip[k] == kStuck ? ev.hold_margin[k] : c.slip[k] * w[k];
+    (*g)[k] = c.slip[k] == kStuck ? ev.hold_margin[k] : coulomb_sign(c.slip[k]) * w[k];
   }
   return Status::Ok();
 }
@@ -345,7 +345,7 @@ int project_rates(const Params<double>& p, const std::array<bool, 5>& mask, doub
 /// Whether the joint modes `slip` are consistent at (t, y) for the joints in `rest`: every
 /// slipping one accelerates in its slip direction (beyond -slack_accel), every stuck one is held
 /// (margin >= -slack_torque).
-bool consistent(Context& c, double t, const double* y, const std::array<int, 5>& slip,
+bool consistent(Context& c, double t, const double* y, const JointModes& slip,
                 const std::array<bool, 5>& rest, double slack_accel, double slack_torque,
                 Vec2<double>* thdd, Status* failure) {
   Evaluation<double> ev;
@@ -362,10 +362,10 @@ bool consistent(Context& c, double t, const double* y, const std::array<int, 5>&
     torque_scale = std::max(torque_scale, std::abs(ev.Mf[k]));
   }
   for (int k = 0; k < 5; ++k) {
-    if (!rest[k] || slip[k] == 0) continue;
+    if (!rest[k] || slip[k] == JointMode::kRest) continue;
     const bool ok = slip[k] == kStuck ? ev.hold_margin[k] >= -slack_torque * torque_scale
-                                      : (slack_accel == 0.0 ? slip[k] * wdot[k] > 0.0
-                                                            : slip[k] * wdot[k] >= -slack_accel * accel_scale);
+                                      : (slack_accel == 0.0 ? coulomb_sign(slip[k]) * wdot[k] > 0.0
+                                                            : coulomb_sign(slip[k]) * wdot[k] >= -slack_accel * accel_scale);
     if (!ok) return false;
   }
   *thdd = ev.thdd;
@@ -374,7 +374,7 @@ bool consistent(Context& c, double t, const double* y, const std::array<int, 5>&
 
 /// The candidate modes of the joints at rest while the mechanism may move: each slips either
 /// way or is stuck, with at most one stuck joint (two would lock the mechanism: see the lock).
-std::vector<std::array<int, 5>> candidate_modes(const Context& c, const std::array<bool, 5>& rest,
+std::vector<JointModes> candidate_modes(const Context& c, const std::array<bool, 5>& rest,
                                                 const std::array<bool, 5>& no_stick) {
   auto can_hold = [&](int k) {
     return c.stick && !no_stick[k] && holding_bound(c.params->friction, k) > 0.0;
@@ -385,15 +385,17 @@ std::vector<std::array<int, 5>> candidate_modes(const Context& c, const std::arr
   }
   int combos = 1;
   for (size_t i = 0; i < idx.size(); ++i) combos *= 3;
-  std::vector<std::array<int, 5>> out;
+  std::vector<JointModes> out;
   for (int code = 0; code < combos; ++code) {
-    std::array<int, 5> m = c.slip;
+    JointModes m = c.slip;
     int stuck = 0, x = code;
     bool allowed = true;
     for (int k : idx) {
       const int option = x % 3;
       x /= 3;
-      m[k] = option == 0 ? +1 : option == 1 ? -1 : kStuck;
+      m[k] = option == 0 ? JointMode::kSlipPositive
+             : option == 1 ? JointMode::kSlipNegative
+                           : kStuck;
       if (option == 2 && (!can_hold(k) || ++stuck > 1)) allowed = false;
     }
     if (allowed) out.push_back(m);
@@ -403,9 +405,9 @@ std::vector<std::array<int, 5>> candidate_modes(const Context& c, const std::arr
 
 /// The consistent candidates (strictly, or within the slacks) and their accelerations.
 void consistent_candidates(Context& c, double t, const double* y,
-                           const std::vector<std::array<int, 5>>& candidates,
+                           const std::vector<JointModes>& candidates,
                            const std::array<bool, 5>& rest, bool relaxed,
-                           std::vector<std::array<int, 5>>* found,
+                           std::vector<JointModes>* found,
                            std::vector<Vec2<double>>* accel, Status* failure) {
   for (const auto& m : candidates) {
     Vec2<double> thdd;
@@ -432,7 +434,7 @@ Status decide_slip_only(Context& c, double t, const double* y, const std::array<
 /// the way they accelerate, iterated, no stick) gives modes that are not consistent here.
 bool sign_rule_inconsistent(Context& c, double t, const double* y,
                             const std::array<bool, 5>& rest) {
-  const std::array<int, 5> chosen = c.slip;
+  const JointModes chosen = c.slip;
   bool inconsistent = true;
   if (decide_slip_only(c, t, y, rest).ok()) {
     Vec2<double> thdd;
@@ -459,7 +461,7 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
     lock = lock_analysis(*c.params, (*c.loads)(t), y[0], y[1], c.eval, &la).ok() && la.ratio <= 1.0;
   }
   const auto candidates = candidate_modes(c, rest, no_stick);
-  std::vector<std::array<int, 5>> found;
+  std::vector<JointModes> found;
   std::vector<Vec2<double>> accel;
   Status failure;  // the first evaluation that failed (near-singular pose, friction loop)
   consistent_candidates(c, t, y, candidates, rest, false, &found, &accel, &failure);
@@ -504,7 +506,7 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
 /// that), an error with the joints, instead of chattering between the two directions.
 Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, 5>& rest) {
   for (int k = 0; k < 5; ++k) {
-    if (rest[k]) c.slip[k] = 0;
+    if (rest[k]) c.slip[k] = JointMode::kRest;
   }
   for (int pass = 0; pass < 6; ++pass) {
     Evaluation<double> ev;
@@ -514,8 +516,8 @@ Status decide_slip_only(Context& c, double t, const double* y, const std::array<
     const auto wdot = fivebar::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
     bool changed = false;
     for (int k = 0; k < 5; ++k) {
-      if (!rest[k] || sign_of(wdot[k]) == c.slip[k]) continue;
-      c.slip[k] = sign_of(wdot[k]);
+      if (!rest[k] || slip_mode(sign_of(wdot[k])) == c.slip[k]) continue;
+      c.slip[k] = slip_mode(sign_of(wdot[k]));
       changed = true;
     }
     if (!changed) break;
@@ -541,7 +543,7 @@ void slip_moving_joints(Context& c, const std::array<bool, 5>& rest,
                         const std::array<double, 5>& w, Stats* stats) {
   for (int k = 0; k < 5; ++k) {
     if (rest[k]) continue;
-    const int s = sign_of(w[k]);
+    const JointMode s = slip_mode(sign_of(w[k]));
     if (c.decided && c.watched[k] && c.slip[k] != s && c.slip[k] != kStuck &&
         std::abs(w[k]) > kRestProjection) {
       ++stats->mode_corrections;
@@ -576,7 +578,7 @@ Status decide_at(Context& c, double t, double* y, const Fired& fired_now, Stats*
     rest[k] = all_rest || fixed[k] || std::abs(w[k]) <= kRestRate;
     no_stick[k] = fired_now[k] && c.slip[k] == kStuck;  // a breakaway: that joint slips
   }
-  const std::array<int, 5> before = c.slip;
+  const JointModes before = c.slip;
   slip_moving_joints(c, rest, w, stats);
   c.decided = true;
   const Status st =
@@ -664,8 +666,8 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
   if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
   // the signs the right-hand side uses (rhs): the segment's, or from the rates when switches
   // are not located (with the start's decided direction where a rate is exactly zero)
-  std::array<int, 5> signs{};
-  const std::array<int, 5>* slip = c.use_slip ? &c.slip : nullptr;
+  JointModes signs{};
+  const JointModes* slip = c.use_slip ? &c.slip : nullptr;
   if (c.zero_signs && state_signs(c, y, &signs)) slip = &signs;
   *st = forward_dynamics(*c.params, L, y[0], y[1], y[2], y[3], slip, eval, &ev, &z);
   if (!st->ok()) {

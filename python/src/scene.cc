@@ -112,12 +112,14 @@ py::dict simulate(const PyScene& s) {
     run = sim::simulate(s.scene.params, loads, s.scene.initial, s.scene.options);
     if (!run.status.ok()) throw NumericalError(s.scene.path, "simulation", run.status.message);
     if (run.rows.empty()) throw NumericalError(s.scene.path, "simulation", "no output rows");
-    checks = sim::check_run(s.scene.params, loads, run);
+    checks = sim::check_run(s.scene.params, loads, run, s.scene.options.rtol, s.scene.options.atol);
   }
   py::dict d = rows_dict(run.rows);
   py::array_t<int> mode({static_cast<py::ssize_t>(run.rows.size()), py::ssize_t(5)});
   int* m = mode.mutable_data();
-  for (const sim::Row& r : run.rows) m = std::copy(r.mode.begin(), r.mode.end(), m);
+  for (const sim::Row& r : run.rows) {
+    for (JointMode jm : r.mode) *m++ = static_cast<int>(jm);  // -1, 0, +1 slip; 2 stuck
+  }
   d["mode"] = std::move(mode);
   d["summary"] = summary(s, run, checks);
   return d;

@@ -18,7 +18,7 @@ void RightHandSide(benchmark::State& state, bool friction) {
   opt.want_reactions = false;
   opt.want_angles = false;  // as the simulator's right-hand side
   opt.singular_margin = 1e-3;
-  const std::array<int, 5> slip = {1, -1, 1, 1, -1};
+  const JointModes slip = {JointMode::kSlipPositive, JointMode::kSlipNegative, JointMode::kSlipPositive, JointMode::kSlipPositive, JointMode::kSlipNegative};
   double th1 = 1.3, th2 = 2.0, t = 0.31;
   for (auto _ : state) {
     Evaluation<double> ev;

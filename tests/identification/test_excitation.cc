@@ -22,7 +22,7 @@ Params<double> per_joint_scene() {
 // M1, M2 at a parameter vector x (friction, then inertial), by plain double inverse dynamics
 std::array<double, 2> torques(const Params<double>& scene, const DesignParameters& dp,
                               const std::vector<double>& x, const MotionState& s,
-                              const std::array<int, 5>& slip) {
+                              const JointModes& slip) {
   Params<double> p = scene;
   if (dp.friction > 0) dp.layout.apply(x.data(), &p.friction);
   if (dp.inertial > 0) set_standard_inertial(x.data() + dp.friction, &p);

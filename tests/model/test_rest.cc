@@ -129,8 +129,8 @@ TEST(Rest, JointAtRestThatAcceleratesSlipsInTheDirectionOfItsAcceleration) {
   m.alpha = {40.0, -30.0, 0, 0};  // a turnaround: at rest, accelerating
   std::vector<sim::Row> rows;
   ASSERT_TRUE(sim::inverse_rows(p, testing::paper_loads, {m}, &rows).ok());
-  EXPECT_EQ(rows[0].mode[0], 1);
-  EXPECT_EQ(rows[0].mode[4], -1);
+  EXPECT_EQ(rows[0].mode[0], JointMode::kSlipPositive);
+  EXPECT_EQ(rows[0].mode[4], JointMode::kSlipNegative);
   EXPECT_GT(std::abs(rows[0].Mf[0]), 0.01);  // kinetic friction, not a holding torque
 }
 

@@ -62,14 +62,14 @@ struct SampleTerms {
   Eigen::MatrixXd J;
   double M1 = 0, M2 = 0, sine = 0;
   std::array<double, 5> w{};
-  std::array<int, 5> slip{};
+  JointModes slip{};
 };
 
 /// Evaluates one sample. `slip` (nullptr: sign of each rate) fixes the Coulomb signs, so that
 /// derivatives along the motion are those of one slip pattern. Fails where the pose cannot
 /// assemble or the friction loop has no solution.
 Status sample_terms(const Params<double>& scene, const DesignParameters& dp, const Loads<double>& loads,
-                    const MotionState& s, const std::array<int, 5>* slip, SampleTerms* out);
+                    const MotionState& s, const JointModes* slip, SampleTerms* out);
 
 /// The Fisher information sum_i J_i^T J_i / sigma^2 of a motion, with its sample terms.
 Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians, double sigma);

@@ -67,7 +67,7 @@ struct SampleStructure {
   Eigen::Matrix<double, 2, kInertialParams> Y;
   Eigen::Vector2d c;
   Eigen::Matrix<double, 2, kJoints> G;
-  std::array<int, kJoints> slip{};  ///< Coulomb sign per joint (kStuck: no friction torque)
+  JointModes slip{};  ///< mode per joint (kStuck: no friction torque)
   std::array<double, kJoints> w{};  ///< relative rates [rad/s]
 };
 
@@ -107,7 +107,7 @@ class StructuredResidual {
     for (int j = 0; j < kJoints; ++j) {
       phi[j] = st_.slip[j] == kStuck
                    ? T(0)
-                   : fp.pin_radius[j] * friction_law(fp, j, T(st_.w[j]), st_.slip[j]);
+                   : fp.pin_radius[j] * friction_law(fp, j, T(st_.w[j]), coulomb_sign(st_.slip[j]));
     }
     std::array<T, 10> F0;
     for (int a = 0; a < 10; ++a) {

@@ -11,7 +11,21 @@ namespace fivebar {
 
 /// Joint mode value for a stuck joint (exact stick-slip): its relative rate is held at zero by a
 /// holding torque solved with the motion. Other modes are the slip direction +1 / -1, or 0.
-inline constexpr int kStuck = 2;
+enum class JointMode : int {
+  kSlipNegative = -1,  ///< slipping with w_k < 0: Coulomb sign -1
+  kRest = 0,           ///< no Coulomb friction (w_k = 0 in the exact law; no friction law)
+  kSlipPositive = 1,   ///< slipping with w_k > 0: Coulomb sign +1
+  kStuck = 2,          ///< held: w_k = 0 kept by a holding torque within mu_s r_k N_k
+};
+inline constexpr JointMode kStuck = JointMode::kStuck;
+using JointModes = std::array<JointMode, kJoints>;
+
+/// The Coulomb sign a mode gives: +1, -1, or 0 (at rest, or stuck: no Coulomb term).
+inline int coulomb_sign(JointMode m) { return m == kStuck ? 0 : static_cast<int>(m); }
+/// The slip mode of a sign (+1, -1, 0).
+inline JointMode slip_mode(int sign) {
+  return sign > 0 ? JointMode::kSlipPositive : sign < 0 ? JointMode::kSlipNegative : JointMode::kRest;
+}
 
 /// Settings of an evaluation: singularity margin and the reaction/friction loop.
 struct EvalOptions {
@@ -46,7 +60,7 @@ struct Evaluation {
   std::array<Vec2<T>, kJoints> F;       ///< joint reactions [N]
   std::array<T, kJoints> N{}, Mf{},
       w{};  ///< |F_k| [N], friction torques [N m], relative rates [rad/s]
-  std::array<int, kJoints> slip{};      ///< Coulomb sign used at each joint, or kStuck
+  JointModes slip{};      ///< Coulomb sign used at each joint, or kStuck
   /// stuck joints: mu_s r_k N_k - |holding torque| (>= 0 while friction can hold the joint);
   /// the holding torque itself is in Mf
   std::array<T, kJoints> hold_margin{};

@@ -30,7 +30,7 @@ struct StuckJoints {
 
 template <typename T>
 Status stuck_joints(const Kinematics<T>& k, const Bias<T>& bias,
-                    const std::array<int, kJoints>* slip, StuckJoints<T>* s) {
+                    const JointModes* slip, StuckJoints<T>* s) {
   if (!slip) return Status::Ok();
   for (int j = 0; j < kJoints; ++j) {
     if ((*slip)[j] == kStuck && s->count < kDof) s->joint[s->count++] = j;
@@ -74,19 +74,20 @@ Vec2<T> constrained_accelerations(const Mat2<T>& A, const Mat2<T>& Ainv, const V
 /// phi_k = r_k f_k(w_k) of every joint, and the slip sign used (ev->slip); stuck joints get 0.
 template <typename T>
 std::array<T, kJoints> forward_friction_arms(const Params<T>& p,
-                                             const std::array<int, kJoints>* slip,
+                                             const JointModes* slip,
                                              const std::array<T, kJoints>* bristle,
                                              Evaluation<T>* ev) {
   std::array<T, kJoints> phi;
   for (int j = 0; j < kJoints; ++j) {
-    ev->slip[j] = slip ? (*slip)[j] : sign_of(ev->w[j]);
+    ev->slip[j] = slip ? (*slip)[j] : slip_mode(sign_of(ev->w[j]));
     if (ev->slip[j] == kStuck) {
       phi[j] = T(0);
     } else if (p.friction.law == FrictionLaw::kLuGre) {
       const T z = bristle ? (*bristle)[j] : T(0);
       phi[j] = p.friction.pin_radius[j] * lugre_law(p.friction, j, ev->w[j], z, &ev->zdot[j]);
     } else {
-      phi[j] = p.friction.pin_radius[j] * friction_law(p.friction, j, ev->w[j], ev->slip[j]);
+      phi[j] = p.friction.pin_radius[j] *
+               friction_law(p.friction, j, ev->w[j], coulomb_sign(ev->slip[j]));
     }
   }
   return phi;
@@ -100,7 +101,7 @@ std::array<T, kJoints> forward_friction_arms(const Params<T>& p,
 /// nullptr means z = 0).
 template <typename T>
 Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
-                        const T& w1, const T& w2, const std::array<int, kJoints>* slip,
+                        const T& w1, const T& w2, const JointModes* slip,
                         const EvalOptions& opt, Evaluation<T>* ev,
                         const std::array<T, kJoints>* bristle = nullptr) {
   Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin, opt.want_angles);
@@ -145,7 +146,7 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
     }
     for (int j = 0; j < kJoints; ++j) ev->P_diss += ev->Mf[j] * ev->w[j];
   } else {
-    ev->slip.fill(0);
+    ev->slip.fill(JointMode::kRest);
     if (opt.want_reactions) {
       solve(ev->Mf, &ev->F);
       reaction_norms(ev->F, &ev->N);

@@ -33,11 +33,11 @@ void still_crank(const EvalOptions& opt, T* w, T* a) {
 /// rest_rate) the sign of its relative acceleration wdot (the direction in which it starts to
 /// slip), 0 where |wdot| <= rest_acceleration, or kStuck there when rest_acceleration >= 0.
 template <typename T>
-int inverse_slip(const EvalOptions& opt, const T& w, const T& wdot) {
-  if (std::abs(value_of(w)) > opt.rest_rate) return sign_of(w);
+JointMode inverse_slip(const EvalOptions& opt, const T& w, const T& wdot) {
+  if (std::abs(value_of(w)) > opt.rest_rate) return slip_mode(sign_of(w));
   const bool still = std::abs(value_of(wdot)) <= std::max(opt.rest_acceleration, 0.0);
   if (opt.rest_acceleration >= 0.0 && still) return kStuck;
-  return still ? 0 : sign_of(wdot);
+  return still ? JointMode::kRest : slip_mode(sign_of(wdot));
 }
 
 /// phi_k = r_k f_k(w_k) of every joint in inverse dynamics and the slip used (ev->slip): the
@@ -46,22 +46,22 @@ int inverse_slip(const EvalOptions& opt, const T& w, const T& wdot) {
 template <typename T>
 std::array<T, kJoints> inverse_friction_arms(const Params<T>& p, const EvalOptions& opt,
                                        const std::array<T, kJoints>& wdot,
-                                       const std::array<int, kJoints>* slip,
+                                       const JointModes* slip,
                                        const std::array<T, kJoints>* bristle, Evaluation<T>* ev) {
   std::array<T, kJoints> phi;
   for (int j = 0; j < kJoints; ++j) {
-    const int s = inverse_slip(opt, ev->w[j], wdot[j]);
+    const JointMode s = inverse_slip(opt, ev->w[j], wdot[j]);
     ev->slip[j] = slip ? (*slip)[j] : s;
     if (ev->slip[j] == kStuck) {
       phi[j] = T(0);
     } else if (p.friction.law == FrictionLaw::kLuGre) {
       // without bristle states: their steady state z = g(w) sign(w) / sigma0 (Stribeck)
       const T z = bristle ? (*bristle)[j]
-                          : T(double(s == kStuck ? 0 : s)) *
+                          : T(double(coulomb_sign(s))) *
                                 stribeck_level(p.friction, j, ev->w[j]) / p.friction.sigma0[j];
       phi[j] = p.friction.pin_radius[j] * lugre_law(p.friction, j, ev->w[j], z, &ev->zdot[j]);
     } else {
-      phi[j] = p.friction.pin_radius[j] * friction_law(p.friction, j, ev->w[j], ev->slip[j]);
+      phi[j] = p.friction.pin_radius[j] * friction_law(p.friction, j, ev->w[j], coulomb_sign(ev->slip[j]));
     }
   }
   return phi;
@@ -96,7 +96,7 @@ void crank_torques(const Params<T>& p, const T& a1, const T& a2, Evaluation<T>* 
 template <typename T>
 Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
                         const T& w1_in, const T& w2_in, const T& a1_in, const T& a2_in,
-                        const std::array<int, kJoints>* slip, const EvalOptions& opt,
+                        const JointModes* slip, const EvalOptions& opt,
                         Evaluation<T>* ev, const std::array<T, kJoints>* bristle = nullptr) {
   Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin);
   if (!st.ok()) return st;
@@ -134,7 +134,7 @@ Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
     for (int j = 0; j < kJoints; ++j) {
       const bool stuck = opt.rest_acceleration >= 0.0 &&
                          detail::inverse_slip(opt, ev->w[j], wdot[j]) == kStuck;
-      ev->slip[j] = stuck ? kStuck : 0;
+      ev->slip[j] = stuck ? kStuck : JointMode::kRest;
     }
   }
   detail::crank_torques(p, a1, a2, ev);

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "fivebar/model/evaluation.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/rest_rule.h"
 #include "fivebar/model/status.h"
@@ -90,7 +91,7 @@ struct Row {
   std::array<double, 5> N{}, Mf{};
   double P_diss = 0, E_diss = 0, W_in = 0, W_ext = 0;
   double kinetic = 0, potential = 0;
-  std::array<int, 5> mode{};  ///< joint modes: slip direction +1/-1, 0 at rest, 2 stuck
+  JointModes mode{};  ///< joint modes (written as ints: slip direction +1/-1, 0 at rest, 2 stuck)
   std::array<double, 5> bristle{};  ///< LuGre bristle states z_k [rad] (zero for other laws)
   bool has_bristle = false;         ///< bristle holds a simulated state (LuGre runs)
   /// inverse_rows, stuck joints (mode 2): mu_s r_k N_k, the friction torque that could be added
