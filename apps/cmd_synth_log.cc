@@ -118,6 +118,31 @@ identification::SynthResult motion_log(const Scene& scene, const LoadExpressions
   return out;
 }
 
+// header: provenance and the truth (the law's coefficients from its descriptor, friction.h, and
+// the links' standard inertial parameters, model/inertial.h, for `identify --estimate inertia`)
+std::vector<std::string> truth_header(const Args& a, const Scene& scene) {
+  const FrictionParams<double>& fp = scene.params.friction;
+  std::vector<std::string> out = {" fivebar synth-log: synthetic torque log (format: docs/formats.md)",
+                                  " command: " + a.command_line,
+                                  " scene: " + scene.path,
+                                  " true.law = " + std::string(identification::law_name(fp.law)),
+                                  " true.pin_radius = " + joined(fp.pin_radius),
+                                  " true.coulomb = " + joined(fp.coulomb),
+                                  " true.viscous = " + joined(fp.viscous)};
+  const std::array<double, kInertialParams> pi = standard_inertial(scene.params);
+  std::string inertial;
+  for (int i = 0; i < kInertialParams; ++i) inertial += (i ? "," : "") + format_double(pi[i]);
+  out.push_back(" true.inertial = " + inertial);
+  const LawDescriptor& law = law_descriptor(fp.law);
+  for (int i = 0; i < law.count; ++i) {
+    const Coefficient c = law.coefficients[i].id;
+    if (c == Coefficient::kCoulomb || c == Coefficient::kViscous) continue;
+    out.push_back(" true." + std::string(coefficient_info(c).key) + " = " +
+                  joined(coefficient(fp, c)));
+  }
+  return out;
+}
+
 int run(const Args& a) {
   Scene scene = load_scene(a.scene, a.sets);
   const sim::LoadFunction loads = LoadExpressions(scene).function();
@@ -163,28 +188,8 @@ int run(const Args& a) {
                        : motion_log(scene, LoadExpressions(scene), a.motion, so);
   if (!res.status.ok()) throw NumericalError(scene.path, "simulation", res.status.message);
 
-  // header: provenance, truth, and what the noise was
   identification::TorqueLog& log = res.log;
-  log.comments = {" fivebar synth-log: synthetic torque log (format: docs/formats.md)",
-                  " command: " + a.command_line,
-                  " scene: " + scene.path,
-                  " true.law = " + std::string(identification::law_name(fp.law)),
-                  " true.pin_radius = " + joined(fp.pin_radius),
-                  " true.coulomb = " + joined(fp.coulomb),
-                  " true.viscous = " + joined(fp.viscous)};
-  // the links' standard inertial parameters (model/inertial.h), for `identify --estimate inertia`
-  const std::array<double, kInertialParams> pi = standard_inertial(scene.params);
-  std::string inertial;
-  for (int i = 0; i < kInertialParams; ++i) inertial += (i ? "," : "") + format_double(pi[i]);
-  log.comments.push_back(" true.inertial = " + inertial);
-  // the law's other coefficients, from its descriptor (friction.h)
-  const LawDescriptor& law = law_descriptor(fp.law);
-  for (int i = 0; i < law.count; ++i) {
-    const Coefficient c = law.coefficients[i].id;
-    if (c == Coefficient::kCoulomb || c == Coefficient::kViscous) continue;
-    log.comments.push_back(" true." + std::string(coefficient_info(c).key) + " = " +
-                           joined(coefficient(fp, c)));
-  }
+  log.comments = truth_header(a, scene);
   std::ostringstream rev;
   for (int k = 0; k < kJoints; ++k) rev << (k ? "," : "") << res.reversals[k];
   log.comments.push_back(" noise: torque " + format_double(a.torque_noise) + " N m, angle " +
