@@ -8,6 +8,8 @@
 
 #include <nlopt.hpp>
 
+#include "nlopt_algorithm.h"
+
 namespace fivebar::trajectory {
 namespace {
 
@@ -57,18 +59,6 @@ void constraints_cb(unsigned m, double* result, unsigned n, const double* x, dou
   if (grad) std::memcpy(grad, cache->dc.data(), static_cast<size_t>(m) * n * sizeof(double));
 }
 
-nlopt::algorithm algorithm(Method m) {
-  switch (m) {
-    case Method::kMma:
-      return nlopt::LD_MMA;
-    case Method::kCcsaq:
-      return nlopt::LD_CCSAQ;
-    case Method::kSlsqp:
-      break;
-  }
-  return nlopt::LD_SLSQP;
-}
-
 struct Local {
   SolverStatus solver;
   std::vector<double> x;
@@ -83,7 +73,7 @@ Local solve_local(const GeneralProblem& p, std::vector<double> x, const GeneralO
   Local out;
   for (int i = 0; i < p.n; ++i) x[i] = std::clamp(x[i], p.lower[i], p.upper[i]);
   try {
-    nlopt::opt opt(algorithm(o.method), p.n);
+    nlopt::opt opt(nlopt_algorithm(o.method), p.n);
     opt.set_lower_bounds(p.lower);
     opt.set_upper_bounds(p.upper);
     opt.set_min_objective(objective_cb, &cache);

@@ -8,6 +8,8 @@
 
 #include <nlopt.hpp>
 
+#include "nlopt_algorithm.h"
+
 namespace fivebar::trajectory {
 namespace {
 
@@ -59,18 +61,6 @@ void constraints_cb(unsigned m, double* result, unsigned n, const double* x, dou
   if (grad) std::memcpy(grad, e.constraints_grad.data(), static_cast<size_t>(m) * n * sizeof(double));
 }
 
-nlopt::algorithm algorithm(Method m) {
-  switch (m) {
-    case Method::kMma:
-      return nlopt::LD_MMA;
-    case Method::kCcsaq:
-      return nlopt::LD_CCSAQ;
-    case Method::kSlsqp:
-      break;
-  }
-  return nlopt::LD_SLSQP;
-}
-
 struct Local {
   SolverStatus solver;
   std::vector<double> x;
@@ -87,7 +77,7 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
   Local out;
   out.x = x0;
   try {
-    nlopt::opt opt(algorithm(options.method), n);
+    nlopt::opt opt(nlopt_algorithm(options.method), n);
     // bounds: one turn beyond the span of the motion (MMA and CCSAQ want a bounded box)
     std::vector<double> lo(n), hi(n);
     const int nf = problem.motion().free_per_joint();
