@@ -37,12 +37,20 @@ T stribeck_level(const FrictionParams<T>& fp, int k, const T& w) {
 template <typename T>
 T friction_law(const FrictionParams<T>& fp, int k, const T& w, int slip) {
   using std::tanh;
-  if (fp.law != FrictionLaw::kCoulombViscous && fp.law != FrictionLaw::kStribeck) {
+  using std::abs;
+  using std::pow;
+  if (fp.law == FrictionLaw::kNone || fp.law == FrictionLaw::kLuGre) {
     return T(0);  // none; LuGre needs the bristle state: see lugre_law
   }
   const T coulomb_sign =
       value_of(fp.smoothing_velocity) > 0.0 ? T(tanh(w / fp.smoothing_velocity)) : T(double(slip));
   const T level = fp.law == FrictionLaw::kStribeck ? stribeck_level(fp, k, w) : fp.coulomb[k];
+  if (fp.law == FrictionLaw::kPowerViscous) {
+    // |w|^n sign(w); at w = 0 exactly the term is 0 (pow's derivative there is not finite)
+    const T viscous =
+        value_of(w) == 0.0 ? T(0) : pow(abs(w), fp.viscous_exponent[k]) * (w / abs(w));
+    return level * coulomb_sign + fp.viscous[k] * viscous;
+  }
   return level * coulomb_sign + fp.viscous[k] * w;
 }
 
@@ -79,8 +87,9 @@ enum class Coefficient : int {
   kSigma0,
   kSigma1,
   kSigma2,
+  kViscousExponent,
 };
-inline constexpr int kCoefficients = 8;
+inline constexpr int kCoefficients = 9;
 
 /// The array of coefficient `c` in `fp`.
 template <typename T>
@@ -94,6 +103,7 @@ std::array<T, kJoints>& coefficient(FrictionParams<T>& fp, Coefficient c) {
     case Coefficient::kSigma0: return fp.sigma0;
     case Coefficient::kSigma1: return fp.sigma1;
     case Coefficient::kSigma2: return fp.sigma2;
+    case Coefficient::kViscousExponent: return fp.viscous_exponent;
   }
   return fp.coulomb;  // unreachable
 }
@@ -133,6 +143,8 @@ inline constexpr CoefficientInfo kCoefficientInfo[kCoefficients] = {
      Coefficient::kSigma1},
     {Coefficient::kSigma2, "sigma2", "sigma2", "s/rad", "LuGre viscous coefficient", 0.0,
      Coefficient::kSigma2},
+    {Coefficient::kViscousExponent, "viscous_exponent", "n", "-", "exponent of the viscous rate",
+     1.0, Coefficient::kViscousExponent},
 };
 
 inline const CoefficientInfo& coefficient_info(Coefficient c) {
@@ -180,6 +192,13 @@ inline constexpr LawCoefficient kLuGreCoefficients[] = {
     {Coefficient::kSigma2, false, false, false},
 };
 
+inline constexpr LawCoefficient kPowerViscousCoefficients[] = {
+    {Coefficient::kCoulomb, true, false, true},
+    {Coefficient::kViscous, true, false, true},
+    {Coefficient::kStaticCoulomb, false, false, false},
+    {Coefficient::kViscousExponent, true, true, false},
+};
+
 inline constexpr LawDescriptor kLaws[] = {
     {FrictionLaw::kNone, "none", "0", nullptr, 0, 0, false},
     {FrictionLaw::kCoulombViscous, "coulomb_viscous", "mu_c sign(w) + mu_v w",
@@ -190,6 +209,8 @@ inline constexpr LawDescriptor kLaws[] = {
     {FrictionLaw::kLuGre, "lugre",
      "sigma0 z + sigma1 dz/dt + sigma2 w, dz/dt = w - sigma0 |w| z / g(w)", kLuGreCoefficients, 7,
      1, false},
+    {FrictionLaw::kPowerViscous, "power_viscous", "mu_c sign(w) + mu_v |w|^n sign(w)",
+     kPowerViscousCoefficients, 4, 0, true},
 };
 
 inline const LawDescriptor& law_descriptor(FrictionLaw law) {

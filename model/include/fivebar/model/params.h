@@ -25,6 +25,9 @@ enum class FrictionLaw : int {
   /// Stribeck curve g(w) = mu_c + (mu_s - mu_c) exp(-|w / w_st|^delta); one bristle state z per
   /// joint [rad], a stiff system for large sigma0
   kLuGre = 3,
+  /// f(w) = mu_c sign(w) + mu_v |w|^n sign(w): viscous friction growing as a power n of the rate
+  /// (n = 1 is kCoulombViscous; n < 1 for shear-thinning lubricants)
+  kPowerViscous = 4,
 };
 
 /// One moving link i: length l_i, mass m_i, inertia J_i about its centre of mass, and the centre
@@ -58,6 +61,7 @@ struct FrictionParams {
   std::array<T, kJoints> sigma0{};  ///< bristle stiffness [1/rad] (kLuGre)
   std::array<T, kJoints> sigma1{};  ///< bristle damping [s/rad] (kLuGre)
   std::array<T, kJoints> sigma2{};  ///< viscous coefficient [s/rad] (kLuGre)
+  std::array<T, kJoints> viscous_exponent{};  ///< n_k [-] (kPowerViscous); mu_v then in (s/rad)^n
   /// w_s [rad/s]: 0 uses the exact sign(w); w_s > 0 replaces sign(w) by tanh(w / w_s), the smooth
   /// form used where derivatives across w = 0 are needed (identification, optimization).
   T smoothing_velocity{};
@@ -78,6 +82,7 @@ struct FrictionParams {
       out.sigma0[k] = U(sigma0[k]);
       out.sigma1[k] = U(sigma1[k]);
       out.sigma2[k] = U(sigma2[k]);
+      out.viscous_exponent[k] = U(viscous_exponent[k]);
     }
     out.smoothing_velocity = U(smoothing_velocity);
     return out;
