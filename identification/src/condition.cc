@@ -95,6 +95,65 @@ std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double
   return found;
 }
 
+/// Absurd values: samples farther from the column's median than 1000 times its interquartile
+/// range (at least 1 in the column's unit), or jumping away and back by more than 1000 median
+/// steps. No cubic can judge them (a 1e300 spike overflows every
+/// leave-one-out fit that uses it, and near the ends it drowns the sample that is really wrong),
+/// so they are replaced first, by linear interpolation between the nearest sane samples.
+std::vector<Glitch> reject_absurd(const TorqueLog& log, const char* name, std::vector<double>* x) {
+  std::vector<Glitch> found;
+  std::vector<double>& v = *x;
+  const int n = static_cast<int>(v.size());
+  std::vector<double> sorted = v;
+  std::sort(sorted.begin(), sorted.end());
+  if (n < 8) return found;
+  const double median = sorted[n / 2];
+  const double spread = std::max(sorted[(3 * n) / 4] - sorted[n / 4], 1.0);
+  // and isolated jumps: steps to and from the sample (one step at the ends, where no cubic can
+  // tell which side is wrong) beyond 1000 times the median step
+  std::vector<double> steps;
+  for (int i = 1; i < n; ++i) steps.push_back(std::abs(v[i] - v[i - 1]));
+  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
+  const double jump = 1e3 * std::max(steps[steps.size() / 2], 1e-12);
+  auto step_ok = [&](int a, int b) { return std::abs(v[b] - v[a]) <= jump; };
+  auto jumps = [&](int i) {
+    // at an end: the jump to the neighbour, whose own next step is sane (else the neighbour is
+    // the spike)
+    if (i == 0) return !step_ok(0, 1) && step_ok(1, 2);
+    if (i == n - 1) return !step_ok(n - 2, n - 1) && step_ok(n - 3, n - 2);
+    return !step_ok(i - 1, i) && !step_ok(i, i + 1) && (v[i] - v[i - 1]) * (v[i + 1] - v[i]) < 0;
+  };
+  std::vector<char> bad(n, 0);
+  for (int i = 0; i < n; ++i) bad[i] = !(std::abs(v[i] - median) <= 1e3 * spread) || jumps(i);
+  for (int i = 0; i < n; ++i) {
+    if (!bad[i]) continue;
+    int a = i - 1, b = i + 1;
+    while (a >= 0 && bad[a]) --a;
+    while (b < n && bad[b]) ++b;
+    double expected = median;
+    if (a >= 0 && b < n) {
+      expected = v[a] + (v[b] - v[a]) * (log.t[i] - log.t[a]) / (log.t[b] - log.t[a]);
+    } else if (a >= 0 || b < n) {
+      // at an end: the line through the two nearest sane samples on the one side
+      const int p = a >= 0 ? a : b, dir = a >= 0 ? -1 : 1;
+      int q = p + dir;
+      while (q >= 0 && q < n && bad[q]) q += dir;
+      expected = q >= 0 && q < n ? v[p] + (v[p] - v[q]) * (log.t[i] - log.t[p]) / (log.t[p] - log.t[q])
+                                 : v[p];
+    }
+    Glitch g;
+    g.index = i;
+    g.line = log.lines.empty() ? i + 1 : log.lines[i];
+    g.column = name;
+    g.value = v[i];
+    g.expected = expected;
+    g.sigmas = kInf;
+    found.push_back(g);
+  }
+  for (const Glitch& g : found) v[g.index] = g.expected;
+  return found;
+}
+
 /// Frozen encoder: three or more equal samples of a moving angle, then a catch-up jump of more
 /// than twice the steps around the run. A real mechanism cannot stop dead and resume, and a
 /// quantized encoder's runs end with a one-count step, not a jump. The run is interpolated
@@ -268,8 +327,11 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
   for (const Column& c : cols) {
     std::vector<Glitch> g;
     if (opt.reject_glitches) {
-      g = c.name[0] == 't' && c.name[1] == 'h' ? reject_frozen(L, c.name, c.x)
-                                              : std::vector<Glitch>{};
+      g = reject_absurd(L, c.name, c.x);
+      if (c.name[0] == 't' && c.name[1] == 'h') {
+        std::vector<Glitch> frozen = reject_frozen(L, c.name, c.x);
+        g.insert(g.end(), frozen.begin(), frozen.end());
+      }
       std::vector<Glitch> spikes = reject_column(L, c.name, opt.glitch_sigmas, c.x, c.noise);
       g.insert(g.end(), spikes.begin(), spikes.end());
     } else {

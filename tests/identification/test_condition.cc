@@ -119,6 +119,25 @@ TEST(Glitch, OneAngleGlitchIsRejectedByLineAndTheFitHolds) {
   for (const ParameterEstimate& p : res.parameters) EXPECT_FALSE(p.at_bound) << p.name;
 }
 
+// issue 16: a spike in the first or last samples (1e300 overflowed every one-sided cubic:
+// "only 0 samples usable"; 100 rad on the last sample gave coulomb 5.6, exit 0) is rejected by
+// line and the fit holds
+TEST(Glitch, SpikesAtTheEndsAreRejectedByLine) {
+  const TorqueLog clean = paper_log(1.0);
+  const int n = clean.size();
+  for (int i : {0, 1, 3, n - 2, n - 1}) {
+    for (double value : {1e300, 100.0}) {
+      SCOPED_TRACE("sample " + std::to_string(i) + " = " + std::to_string(value));
+      TorqueLog log = clean;
+      log.theta1[i] = value;
+      const IdentifyResult res = fit(log);
+      expect_truth(res);
+      ASSERT_GE(res.glitches.size(), 1u);
+      EXPECT_EQ(res.glitches[0].line, log.lines[i]);
+    }
+  }
+}
+
 // review: an encoder frozen for five samples (then catching up) gave coulomb 2.18 +- 0.23, exit 0
 TEST(Glitch, FrozenEncoderIsRejectedByLineAndTheFitHolds) {
   TorqueLog log = paper_log(1.0);
