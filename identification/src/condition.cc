@@ -104,9 +104,9 @@ std::vector<Glitch> reject_absurd(const TorqueLog& log, const char* name, std::v
   std::vector<Glitch> found;
   std::vector<double>& v = *x;
   const int n = static_cast<int>(v.size());
+  if (n < 8) return found;
   std::vector<double> sorted = v;
   std::sort(sorted.begin(), sorted.end());
-  if (n < 8) return found;
   const double median = sorted[n / 2];
   const double spread = std::max(sorted[(3 * n) / 4] - sorted[n / 4], 1.0);
   // and isolated jumps: steps to and from the sample (one step at the ends, where no cubic can

@@ -176,18 +176,6 @@ Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians
   return F / (sigma * sigma);
 }
 
-std::array<int, 5> count_reversals(const std::vector<std::array<double, 5>>& rates) {
-  std::array<int, 5> out{}, prev{};
-  for (const auto& w : rates) {
-    for (int k = 0; k < 5; ++k) {
-      const int s = (w[k] > 0) - (w[k] < 0);
-      if (s != 0 && prev[k] != 0 && s != prev[k]) ++out[k];
-      if (s != 0) prev[k] = s;
-    }
-  }
-  return out;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Fourier motion
 

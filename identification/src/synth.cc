@@ -47,7 +47,8 @@ SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction
   auto quantize = [&](double x) {
     return opt.quantization > 0 ? opt.quantization * std::round(x / opt.quantization) : x;
   };
-  std::array<int, 5> prev{};
+  std::vector<std::array<double, 5>> rates;
+  rates.reserve(res.rows.size());
   for (const sim::Row& row : res.rows) {
     // one fixed order of draws per row keeps logs reproducible across options
     const double n_tau1 = gauss(rng), n_tau2 = gauss(rng), n_th1 = gauss(rng), n_th2 = gauss(rng),
@@ -65,10 +66,18 @@ SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction
     }
     log.lines.push_back(log.size() + 1);
     // joint reversals: sign changes of w_k = (w1, w3 - w1, w4 - w3, w2 - w4, w2)
-    const auto w = relative_rates(row.omega[0], row.omega[1], row.omega[2], row.omega[3]);
+    rates.push_back(relative_rates(row.omega[0], row.omega[1], row.omega[2], row.omega[3]));
+  }
+  out.reversals = count_reversals(rates);
+  return out;
+}
+
+std::array<int, 5> count_reversals(const std::vector<std::array<double, 5>>& rates) {
+  std::array<int, 5> out{}, prev{};
+  for (const auto& w : rates) {
     for (int k = 0; k < 5; ++k) {
       const int s = (w[k] > 0) - (w[k] < 0);
-      if (s != 0 && prev[k] != 0 && s != prev[k]) ++out.reversals[k];
+      if (s != 0 && prev[k] != 0 && s != prev[k]) ++out[k];
       if (s != 0) prev[k] = s;
     }
   }

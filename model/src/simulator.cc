@@ -129,6 +129,15 @@ void freeze_signs(const double* y, bool on, void* user) {
   c.frozen = on && c.zero_signs && state_signs(c, y, &c.frozen_sign);
 }
 
+/// The joint modes the right-hand side uses at y: frozen for a Newton Jacobian; from the rates
+/// when switches are not located (with the start's decided direction where a rate is exactly
+/// zero); else the segment's (nullptr: sign(w) for laws without located switches).
+const JointModes* rhs_modes(const Context& c, const double* y, JointModes* buf) {
+  if (c.frozen) return &c.frozen_sign;
+  if (c.zero_signs && state_signs(c, y, buf)) return buf;
+  return c.use_slip ? &c.slip : nullptr;
+}
+
 int rhs(double t, const double* y, double* ydot, void* user) {
   auto& c = *static_cast<Context*>(user);
   ++c.rhs_evaluations;
@@ -139,15 +148,9 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   Evaluation<double> ev;
   std::array<double, 5> z{};
   if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
-  JointModes signs{};
-  const JointModes* slip = c.use_slip ? &c.slip : nullptr;
-  if (c.frozen) {
-    slip = &c.frozen_sign;
-  } else if (c.zero_signs && state_signs(c, y, &signs)) {
-    slip = &signs;
-  }
-  const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], slip,
-                                     c.eval, &ev, &z);
+  JointModes signs;
+  const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3],
+                                     rhs_modes(c, y, &signs), c.eval, &ev, &z);
   if (!st.ok()) {
     c.failure = at_time(st, t, y[0], y[1]);
     return 1;  // recoverable: the integrator retries with a smaller step
@@ -664,12 +667,9 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
   Evaluation<double> ev;
   std::array<double, 5> z{};
   if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
-  // the signs the right-hand side uses (rhs): the segment's, or from the rates when switches
-  // are not located (with the start's decided direction where a rate is exactly zero)
-  JointModes signs{};
-  const JointModes* slip = c.use_slip ? &c.slip : nullptr;
-  if (c.zero_signs && state_signs(c, y, &signs)) slip = &signs;
-  *st = forward_dynamics(*c.params, L, y[0], y[1], y[2], y[3], slip, eval, &ev, &z);
+  JointModes signs;  // the modes the right-hand side uses
+  *st = forward_dynamics(*c.params, L, y[0], y[1], y[2], y[3], rhs_modes(c, y, &signs), eval, &ev,
+                         &z);
   if (!st->ok()) {
     *st = at_time(*st, t, y[0], y[1]);
     return row;

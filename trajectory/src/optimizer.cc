@@ -134,17 +134,6 @@ class Normal {
   std::uint64_t state_;
 };
 
-// a feasible result beats an infeasible one; then the lower objective
-bool better(const Local& a, const Local& b, double tol) {
-  if (!a.evaluated) return false;
-  if (!b.evaluated) return true;
-  const bool fa = a.solver.usable() && a.max_constraint <= tol;
-  const bool fb = b.solver.usable() && b.max_constraint <= tol;
-  if (fa != fb) return fa;
-  if (!fa) return a.max_constraint < b.max_constraint;
-  return a.objective < b.objective;
-}
-
 }  // namespace
 
 const char* method_name(Method m) {

@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 
 #include "fivebar/identification/parameters.h"
+#include "fivebar/identification/synth.h"
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/status.h"
@@ -217,7 +218,5 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
                        const std::vector<double>& t, const std::vector<MotionState>& states,
                        double torque_noise, ExcitationReport* out);
 
-/// Sign changes of each joint's relative rate over a sequence of rate samples.
-std::array<int, 5> count_reversals(const std::vector<std::array<double, 5>>& rates);
 
 }  // namespace fivebar::identification

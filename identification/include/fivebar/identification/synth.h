@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <vector>
 #include <cstdint>
 
 #include "fivebar/identification/torque_log.h"
@@ -41,5 +42,9 @@ sim::LoadFunction multisine_loads(const sim::LoadFunction& scene_loads);
 /// quantized). Comments of the log are left empty for the caller.
 SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction& loads,
                            const sim::Initial& initial, const SynthOptions& options);
+
+/// Sign changes of each joint's relative rate over a sequence of rate samples (zeros keep the
+/// previous sign).
+std::array<int, 5> count_reversals(const std::vector<std::array<double, 5>>& rates);
 
 }  // namespace fivebar::identification
