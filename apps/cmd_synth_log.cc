@@ -24,6 +24,7 @@
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/torque_log_file.h"
 #include "fivebar/model/friction.h"
 #include "fivebar/model/inertial.h"
 #include "fivebar/model/dynamics.h"
@@ -58,7 +59,7 @@ void write_log(const std::string& path, const identification::TorqueLog& log) {
     if (ec) throw InputError(path, "--out", "cannot create the directory: " + ec.message());
   }
   try {
-    identification::write_torque_log(path, log);
+    io::write_torque_log(path, log);
   } catch (const identification::LogError& e) {
     throw InputError(e.file(), e.key(), e.reason());
   }

@@ -6,6 +6,7 @@
 #include "fivebar/io/errors.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/tasks_file.h"
+#include "fivebar/io/torque_log_file.h"
 
 namespace fivebar::io {
 
@@ -75,7 +76,7 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
 
 id::TorqueLog read_log(const std::string& path) {
   try {
-    return id::read_torque_log(path);
+    return io::read_torque_log(path);
   } catch (const id::LogError& e) {
     throw InputError(e.file(), e.key(), e.reason());
   }
