@@ -41,6 +41,27 @@ def read_csv(path):
     return list(csv.DictReader(rows))
 
 
+def design_columns(label, out, args):
+    """Runs excite into out; the columns of its excitation.csv (None when it failed)."""
+    code, _, err = run(["excite", PAPER, "--out", out] + args)
+    if code != 0:
+        failures.append("%s: exit %d: %s" % (label, code, err))
+        return None
+    rows = read_csv(os.path.join(out, "excitation.csv"))
+    return {k: [float(r[k]) for r in rows] for k in rows[0]}
+
+
+def motion_log_error(out, log, col):
+    """synth-log --motion along out/excitation.csv, noise-free: (exit, rows, largest torque
+    difference from the motion's M1, M2)."""
+    code, _, err = run(["synth-log", PAPER, "--motion", os.path.join(out, "excitation.csv"),
+                        "--out", log, "--torque-noise", "0", "--angle-noise", "0", "--with-rates"])
+    lrows = read_csv(log) if code == 0 else []
+    worst = max([max(abs(float(a["tau1"]) - b), abs(float(a["tau2"]) - c))
+                 for a, b, c in zip(lrows, col["M1"], col["M2"])] or [float("inf")])
+    return code, len(lrows), worst
+
+
 shutil.rmtree(WORK, ignore_errors=True)
 os.makedirs(WORK)
 bad = os.path.join(WORK, "bad")
@@ -72,16 +93,11 @@ if json.load(open(os.path.join(missed, "excitation.json")))["status"] != "revers
 # a small design
 out = os.path.join(WORK, "design")
 limit, margin = 13.4, 0.1
-code, stdout, err = run(["excite", PAPER, "--out", out, "--torque-limit", str(limit),
-                         "--duration", "2", "--periods", "1", "--harmonics", "3",
-                         "--design-samples", "120", "--starts", "1", "--max-evaluations", "15",
-                         "--min-reversals", "1", "--theta1-range", "0.5:3", "--no-plots",
-                         "--no-baseline", "--start", "swing", "--method", "slsqp"])
-if code != 0:
-    failures.append("small design: exit %d: %s" % (code, err))
-else:
-    rows = read_csv(os.path.join(out, "excitation.csv"))
-    col = {k: [float(r[k]) for r in rows] for k in rows[0]}
+col = design_columns("small design", out, [
+    "--torque-limit", str(limit), "--duration", "2", "--periods", "1", "--harmonics", "3",
+    "--design-samples", "120", "--starts", "1", "--max-evaluations", "15", "--min-reversals", "1",
+    "--theta1-range", "0.5:3", "--no-plots", "--no-baseline", "--start", "swing", "--method", "slsqp"])
+if col:
     t = col["t"]
     if len(t) != 2001 or abs(t[1] - 0.001) > 1e-12 or t[0] != 0:
         failures.append("excitation.csv is not a 1 kHz grid over 2 s (%d rows)" % len(t))
@@ -111,31 +127,20 @@ else:
     if [r["name"] for r in std] != ["coulomb", "viscous"] or not all(float(r["std"]) > 0 for r in std):
         failures.append("predicted_std.csv: %s" % std)
     # synth-log along the motion, noise-free: the torques of excitation.csv
-    log = os.path.join(WORK, "log.csv")
-    code, _, err = run(["synth-log", PAPER, "--motion", os.path.join(out, "excitation.csv"),
-                        "--out", log, "--torque-noise", "0", "--angle-noise", "0", "--with-rates"])
-    if code != 0:
-        failures.append("synth-log --motion: exit %d: %s" % (code, err))
-    else:
-        lrows = read_csv(log)
-        worst = max(max(abs(float(a["tau1"]) - b), abs(float(a["tau2"]) - c))
-                    for a, b, c in zip(lrows, col["M1"], col["M2"]))
-        if len(lrows) != len(t) or worst > 1e-9:
-            failures.append("synth-log --motion: %d rows, torques differ by %g" % (len(lrows), worst))
+    code, n, worst = motion_log_error(out, os.path.join(WORK, "log.csv"), col)
+    if code != 0 or n != len(t) or worst > 1e-9:
+        failures.append("synth-log --motion: exit %d, %d rows, torques differ by %g" % (code, n, worst))
     expect_error(2, "missing column", ["synth-log", PAPER, "--motion", PAPER.replace("paper.yaml", "../logs/paper_angles.csv"),
                                        "--out", os.path.join(WORK, "log2.csv")])
 
 # a small torque-driven design (--family torque): the free motion under clipped tone torques
 tout = os.path.join(WORK, "torque")
-code, stdout, err = run(["excite", PAPER, "--out", tout, "--torque-limit", str(limit),
-                         "--duration", "2", "--family", "torque", "--criterion", "worst-std",
-                         "--per-joint", "--design-samples", "100", "--max-evaluations", "13",
-                         "--min-reversals", "1", "--no-plots", "--seed", "2"])
-if code != 0:
-    failures.append("torque design: exit %d: %s" % (code, err))
-else:
-    rows = read_csv(os.path.join(tout, "excitation.csv"))
-    col = {k: [float(r[k]) for r in rows] for k in rows[0]}
+col = design_columns("torque design", tout, [
+    "--torque-limit", str(limit), "--duration", "2", "--family", "torque", "--criterion",
+    "worst-std", "--per-joint", "--design-samples", "100", "--max-evaluations", "13",
+    "--min-reversals", "1", "--no-plots", "--seed", "2"])
+if col:
+    rows = col["t"]
     # the rates and accelerations are the derivatives of the angles and rates, except next to
     # the events of the free motion (a joint reversing makes the acceleration jump): a few rows
     h, off, checked = 0.001, {"theta": 0, "omega": 0}, 0
@@ -159,13 +164,8 @@ else:
     # never worse than its first start, the multi-sine's tones, on the design's objective
     if j["solver"]["objective"] > j["solver"]["start_objectives"][0] + 1e-12:
         failures.append("torque design worse than the multi-sine start: %s" % j["solver"])
-    log = os.path.join(WORK, "tlog.csv")
-    code, _, err = run(["synth-log", PAPER, "--motion", os.path.join(tout, "excitation.csv"),
-                        "--out", log, "--torque-noise", "0", "--angle-noise", "0", "--with-rates"])
-    lrows = read_csv(log) if code == 0 else []
-    worst = max([max(abs(float(a["tau1"]) - b), abs(float(a["tau2"]) - c))
-                 for a, b, c in zip(lrows, col["M1"], col["M2"])] or [1.0])
-    if code != 0 or worst > 1e-9:
+    code, n, worst = motion_log_error(tout, os.path.join(WORK, "tlog.csv"), col)
+    if code != 0 or n != len(rows) or worst > 1e-9:
         failures.append("synth-log --motion along the torque design: exit %d, torques differ by %g" % (code, worst))
 
 for f in failures:
