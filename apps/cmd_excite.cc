@@ -80,7 +80,7 @@ void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads
   if (!(a.torque_noise > 0)) throw InputError(kFlags, "--torque-noise", "must be > 0");
   if (!(a.rate > 0)) throw InputError(kFlags, "--rate", "must be > 0");
   if (a.periods < 1 || a.harmonics < 1 || a.design_samples < 16 || a.starts < 1 ||
-      !(a.ramp >= 0 && a.ramp < a.duration)) {
+      !(a.family == "torque" || (a.ramp >= 0 && a.ramp < a.duration))) {
     throw InputError(kFlags, "--periods/--harmonics/--design-samples/--starts/--ramp",
                      "need periods >= 1, harmonics >= 1, design samples >= 16, starts >= 1, "
                      "0 <= ramp < duration");

@@ -133,6 +133,12 @@ if col:
     expect_error(2, "missing column", ["synth-log", PAPER, "--motion", PAPER.replace("paper.yaml", "../logs/paper_angles.csv"),
                                        "--out", os.path.join(WORK, "log2.csv")])
 
+# the torque family cannot meet 1000 reversals in 1 s: exit 3 with the status, no excitation.csv
+tmiss = os.path.join(WORK, "torque_missed")
+expect_error(3, "status reversals_not_met", ["excite", PAPER, "--out", tmiss, "--torque-limit", "13.4",
+             "--duration", "1", "--family", "torque", "--design-samples", "50", "--max-evaluations", "9",
+             "--min-reversals", "1000", "--no-plots", "--no-baseline"], tmiss)
+
 # a small torque-driven design (--family torque): the free motion under clipped tone torques
 tout = os.path.join(WORK, "torque")
 col = design_columns("torque design", tout, [
