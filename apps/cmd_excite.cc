@@ -500,7 +500,7 @@ Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::Desig
                        format_double(o.ramp) + " s");
   }
   Json sol = Json::object();
-  sol.set("method", a.method);
+  sol.set("method", a.family == "torque" ? "evolution_strategy" : a.method);
   sol.set("outcome", trajectory::outcome_name(d.solve.solver.outcome));
   sol.set("message", d.solve.solver.message);
   sol.set("objective", d.solve.objective);
