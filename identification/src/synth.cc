@@ -2,29 +2,17 @@
 #include "fivebar/identification/synth.h"
 
 #include <cmath>
+#include <limits>
 #include <random>
 
+#include "fivebar/identification/torque_excitation.h"
 #include "fivebar/model/dynamics.h"
 
 namespace fivebar::identification {
 
 sim::LoadFunction multisine_loads(const sim::LoadFunction& scene_loads) {
-  return [scene_loads](double t) {
-    Loads<double> L = scene_loads(t);
-    // four tones per motor, distinct between motors; amplitudes [N m], frequencies [Hz]
-    static const double kF1[] = {0.31, 0.83, 1.7, 3.1}, kF2[] = {0.43, 1.1, 2.3, 2.9};
-    static const double kA[] = {4.0, 3.0, 2.0, 1.5};
-    double m1 = 0, m2 = 0;
-    for (int j = 0; j < 4; ++j) {
-      // Schroeder phases keep the crest factor low
-      const double ph = M_PI * j * (j + 1) / 4.0;
-      m1 += kA[j] * std::sin(2 * M_PI * kF1[j] * t + ph);
-      m2 += kA[j] * std::sin(2 * M_PI * kF2[j] * t + ph + 1.0);
-    }
-    L.M1 = 2.0 + m1;
-    L.M2 = 3.0 + m2;
-    return L;
-  };
+  // four tones per motor around a bias (torque_excitation.cc); never clipped
+  return ToneTorques(4, std::numeric_limits<double>::infinity()).loads(multisine_tones(), scene_loads);
 }
 
 SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction& loads,
