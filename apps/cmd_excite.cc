@@ -40,7 +40,8 @@ struct Args {
   double duration = 10, torque_limit = NAN, torque_noise = 0.02, rate = 1000;
   double singular_margin = 0.1, reversal_rate = 0.2, spread = 2, drift_spread = 2, ramp = 1;
   std::string estimate = "friction", criterion = "d-optimal", method = "mma", start = "swing";
-  std::string family = "fourier";
+  std::string family = "torque";
+  std::vector<std::string> family_only;  ///< options given that apply to the other family
   std::string theta1_range, theta2_range;
   bool per_joint = false, no_plots = false, no_baseline = false;
   int periods = 4, harmonics = 5, design_samples = 600, starts = 2, max_evaluations = 0, tones = 6;
@@ -136,6 +137,11 @@ id::ExcitationOptions options_of(const Args& a, const Scene& scene, const LoadEx
   }
   if (a.family != "fourier" && a.family != "torque") {
     throw InputError(kFlags, "--family", "expected fourier or torque, got " + a.family);
+  }
+  if (!a.family_only.empty()) {
+    throw InputError(kFlags, a.family_only.front(),
+                     "applies to --family " + std::string(a.family == "torque" ? "fourier" : "torque") +
+                         " only (this design uses --family " + a.family + ")");
   }
   if (a.tones < 1 || a.max_evaluations < 0) {
     throw InputError(kFlags, "--tones/--max-evaluations", "need tones >= 1, max evaluations >= 0");
@@ -601,7 +607,9 @@ RunFunction setup(CLI::App* app) {
                   "motion under tone torques clipped at the limit (evolution strategy from the "
                   "multi-sine)")
       ->capture_default_str();
-  app->add_option("--tones", a->tones, "torque family: tones per motor")->capture_default_str();
+  std::vector<CLI::Option*> fourier, torque;  // the options of one family only
+  torque.push_back(
+      app->add_option("--tones", a->tones, "torque family: tones per motor")->capture_default_str());
   app->add_option("--theta1-range", a->theta1_range, "allowed theta1 [rad], LO:HI");
   app->add_option("--theta2-range", a->theta2_range, "allowed theta2 [rad], LO:HI");
   app->add_option("--singular-margin", a->singular_margin, "least |sin(theta4 - theta3)|")
@@ -613,28 +621,40 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--torque-noise", a->torque_noise, "std of the logged torques [N m]")
       ->capture_default_str();
   app->add_option("--rate", a->rate, "sampling rate of the log [Hz]")->capture_default_str();
-  app->add_option("--periods", a->periods, "periods of the motion")->capture_default_str();
-  app->add_option("--harmonics", a->harmonics, "Fourier harmonics per crank")->capture_default_str();
+  fourier.push_back(app->add_option("--periods", a->periods, "periods of the motion")->capture_default_str());
+  fourier.push_back(app->add_option("--harmonics", a->harmonics, "Fourier harmonics per crank")
+                        ->capture_default_str());
   app->add_option("--design-samples", a->design_samples, "samples of the design objective")
       ->capture_default_str();
-  app->add_option("--starts", a->starts, "multi-start: local solves")->capture_default_str();
+  fourier.push_back(
+      app->add_option("--starts", a->starts, "multi-start: local solves")->capture_default_str());
   app->add_option("--seed", a->seed, "seed of the starts")->capture_default_str();
-  app->add_option("--spread", a->spread, "Fourier amplitudes of the random starts [rad]")
-      ->capture_default_str();
-  app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]")
-      ->capture_default_str();
-  app->add_option("--ramp", a->ramp, "fade-in from rest [s]")->capture_default_str();
-  app->add_option("--start", a->start,
-                  "first start: swing (both cranks swing together) | multisine (its motion "
-                  "fitted) | rest")
-      ->capture_default_str();
-  app->add_option("--method", a->method, "slsqp | mma | ccsaq")->capture_default_str();
+  fourier.push_back(
+      app->add_option("--spread", a->spread, "Fourier amplitudes of the random starts [rad]")
+          ->capture_default_str());
+  fourier.push_back(
+      app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]")
+          ->capture_default_str());
+  fourier.push_back(
+      app->add_option("--ramp", a->ramp, "fade-in from rest [s]")->capture_default_str());
+  fourier.push_back(app->add_option("--start", a->start,
+                                    "first start: swing (both cranks swing together) | multisine "
+                                    "(its motion fitted) | rest")
+                        ->capture_default_str());
+  fourier.push_back(
+      app->add_option("--method", a->method, "slsqp | mma | ccsaq")->capture_default_str());
   app->add_option("--max-evaluations", a->max_evaluations,
                   "fourier: per local solve (0: 80); torque: simulations in the search (0: 160)")
       ->capture_default_str();
   app->add_flag("--no-baseline", a->no_baseline, "skip the multi-sine comparison");
   app->add_flag("--no-plots", a->no_plots, "skip the PNG figures");
-  return [a] { return run(*a); };
+  // the options a user gave that the chosen family does not use: bad input, not ignored
+  return [a, fourier, torque] {
+    for (const CLI::Option* o : a->family == "torque" ? fourier : torque) {
+      if (o->count() > 0) a->family_only.push_back(o->get_name());
+    }
+    return run(*a);
+  };
 }
 
 const bool kRegistered = register_command(

@@ -73,7 +73,11 @@ expect_error(2, "below what holding the start pose needs",
 expect_error(2, "excludes the start pose theta1", base + ["--theta1-range", "2:3"], bad)
 expect_error(2, "--theta2-range: expected LO:HI", base + ["--theta2-range", "3:2"], bad)
 expect_error(2, "--estimate", base + ["--estimate", "friction,mass"], bad)
-expect_error(3, "reversals_unreachable", base + ["--min-reversals", "1000"], bad)
+expect_error(3, "reversals_unreachable", base + ["--family", "fourier", "--min-reversals", "1000"], bad)
+# an option of the other family is bad input, not silently ignored (the default family is torque)
+expect_error(2, "--harmonics: applies to --family fourier only", base + ["--harmonics", "3"], bad)
+expect_error(2, "--tones: applies to --family torque only",
+             base + ["--family", "fourier", "--tones", "3"], bad)
 expect_error(2, "--family: expected fourier or torque", base + ["--family", "spline"], bad)
 expect_error(2, "expected d-optimal, condition or worst-std", base + ["--criterion", "a-optimal"], bad)
 expect_error(2, "--duration: must be > 0", base + ["--duration", "0", "--family", "torque"], bad)
@@ -84,7 +88,7 @@ if os.path.exists(bad):
 # exit 3 with the status, the summary says so, and no excitation.csv
 missed = os.path.join(WORK, "missed")
 expect_error(3, "status reversals_not_met", ["excite", PAPER, "--out", missed, "--torque-limit", "13.4",
-             "--duration", "2", "--periods", "1", "--harmonics", "3", "--design-samples", "120",
+             "--family", "fourier", "--duration", "2", "--periods", "1", "--harmonics", "3", "--design-samples", "120",
              "--starts", "1", "--max-evaluations", "15", "--min-reversals", "6", "--no-plots",
              "--no-baseline", "--method", "slsqp"], missed)
 if json.load(open(os.path.join(missed, "excitation.json")))["status"] != "reversals_not_met":
@@ -94,7 +98,8 @@ if json.load(open(os.path.join(missed, "excitation.json")))["status"] != "revers
 out = os.path.join(WORK, "design")
 limit, margin = 13.4, 0.1
 col = design_columns("small design", out, [
-    "--torque-limit", str(limit), "--duration", "2", "--periods", "1", "--harmonics", "3",
+    "--torque-limit", str(limit), "--family", "fourier", "--duration", "2", "--periods", "1",
+    "--harmonics", "3",
     "--design-samples", "120", "--starts", "1", "--max-evaluations", "15", "--min-reversals", "1",
     "--theta1-range", "0.5:3", "--no-plots", "--no-baseline", "--start", "swing", "--method", "slsqp"])
 if col:
