@@ -75,6 +75,8 @@ constexpr double kDelaySignificance = 3.0;
 /// output error: below this many windows the block sandwich's std are themselves uncertain
 /// (their relative error is about 1 / sqrt(2 (windows - 1)), 24 % for 10 windows)
 constexpr int kFewWindows = 10;
+/// logged rates this much noisier than the angles' (through the noisiest window) are not used
+constexpr double kNoisierRates = 2.0;
 
 std::string fmt(double x, int prec = 3) {
   std::ostringstream s;
@@ -1259,6 +1261,30 @@ double initial_prior_scale(const Fit& f) {
   return s > 0 ? s : 1e-3;
 }
 
+/// Logged rates noisier than those the angles give, even through the noisiest Savitzky-Golay
+/// window of the choice (order 5 over 3 samples each side): their noise enters the friction's
+/// sign and viscous terms and the reactions (errors in variables), so the rates and
+/// accelerations are estimated from the angles instead, with a note saying so.
+bool angles_give_better_rates(const Fit& f, IdentifyResult* out) {
+  const TorqueLog& log = f.cond.log;
+  const double dt = log.duration() / std::max(1, log.size() - 1);
+  SgOptions sg = f.sg;
+  sg.half_window_s = (sg.order / 2 + 1) * dt;
+  double g1 = 0, g2 = 0;
+  sg_noise_gains(log.t, sg, &g1, &g2);
+  double from_angles[2];
+  for (int j = 0; j < 2; ++j) {
+    from_angles[j] = g1 * f.noise.angle[j];
+    if (!(f.noise.rate[j] > kNoisierRates * from_angles[j])) return false;
+  }
+  out->notes.push_back("the logged rates (noise " + fmt(f.noise.rate[0]) + ", " +
+                       fmt(f.noise.rate[1]) + " rad/s) are noisier than rates estimated from the "
+                       "angles (at most " + fmt(from_angles[0]) + ", " + fmt(from_angles[1]) +
+                       " rad/s): rates and accelerations estimated from the angles, the logged "
+                       "rates not used");
+  return true;
+}
+
 /// What the stages after the solve share: the data residuals and their Jacobian at the fit, and
 /// the sensor-noise sensitivities (inverse dynamics).
 struct Analysis {
@@ -1378,6 +1404,9 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   f.source = !log.has_rates || opt.estimate_rates ? detail::RateSource::kFromAngles
              : !log.has_accels                    ? detail::RateSource::kAccelsFromRates
                                                   : detail::RateSource::kLogged;
+  if (f.source != detail::RateSource::kFromAngles && angles_give_better_rates(f, &out)) {
+    f.source = detail::RateSource::kFromAngles;
+  }
   std::vector<double> x0_public;
   if (!start_values(&f, opt.initial, &x0_public, &out)) return out;
   f.prior_scale = initial_prior_scale(f);
