@@ -519,7 +519,7 @@ RunFunction setup(CLI::App* app) {
                 "fit every sample, isolated glitches included (default: rejected, named)");
   app->add_flag("--classical-std", args->settings.classical_std,
                 "std from the residual variance alone (default: errors in variables, the rate "
-                "estimation's noise included)");
+                "estimation's noise included; output error: the window sandwich)");
   app->add_flag("--no-delay", args->settings.no_delay,
                 "do not estimate (and correct) a delay of the torques behind the angles");
   app->add_flag("--no-plots", args->no_plots, "skip the PNG figures");
