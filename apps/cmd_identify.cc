@@ -272,6 +272,7 @@ void rates_json(const id::IdentifyResult& res, const id::TorqueLog& log, Json* j
   }
   j->set("rate_source", std::move(rates));
   j->set("std_method", res.std_method);
+  if (!res.std_detail.empty()) j->set("std_detail", res.std_detail);
   if (std::isfinite(res.delay_s)) {
     Json d = Json::object();
     d.set("value_s", res.delay_s);  // the logged torques at t + d match the angles at t
@@ -410,6 +411,7 @@ void print_summary(const Args& a, const id::IdentifyResult& res, const id::Valid
                 res.delay_corrected ? " (corrected: torques shifted by it)" : " (not significant)");
   }
   if (res.accels_estimated) std::printf("  rates: %s\n", res.window_choice.c_str());
+  if (!res.std_detail.empty()) std::printf("  std: %s\n", res.std_detail.c_str());
   std::printf("  rms torque residual: %.4g, %.4g N m (noise floor %.4g, %.4g N m)\n",
               res.rms_torque_residual[0], res.rms_torque_residual[1], res.residual_noise_floor[0],
               res.residual_noise_floor[1]);
@@ -517,7 +519,7 @@ RunFunction setup(CLI::App* app) {
                 "fit every sample, isolated glitches included (default: rejected, named)");
   app->add_flag("--classical-std", args->settings.classical_std,
                 "std from the residual variance alone (default: errors in variables, the rate "
-                "estimation's noise included)");
+                "estimation's noise included; output error: the window sandwich)");
   app->add_flag("--no-delay", args->settings.no_delay,
                 "do not estimate (and correct) a delay of the torques behind the angles");
   app->add_flag("--no-plots", args->no_plots, "skip the PNG figures");

@@ -17,6 +17,7 @@
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/rest.h"
+#include "covariance.h"
 #include "inertia.h"
 #include "noise_model.h"
 
@@ -71,6 +72,11 @@ constexpr double kStructureRatio = 1.15;
 constexpr double kWindowExcess = 0.04;
 /// a torque-to-angle delay beyond this many std is corrected
 constexpr double kDelaySignificance = 3.0;
+/// output error: below this many windows the block sandwich's std are themselves uncertain
+/// (their relative error is about 1 / sqrt(2 (windows - 1)), 24 % for 10 windows)
+constexpr int kFewWindows = 10;
+/// logged rates this much noisier than the angles' (through the noisiest window) are not used
+constexpr double kNoisierRates = 2.0;
 
 std::string fmt(double x, int prec = 3) {
   std::ostringstream s;
@@ -823,11 +829,45 @@ void inertial_stage(const Fit& f, const Eigen::MatrixXd& J, IdentifyResult* out)
   }
 }
 
+/// Output error: the block sandwich over the windows (covariance.h), whose residuals are
+/// correlated within a window (they integrate the torque noise from the logged start) and
+/// independent between windows. Empty when too few windows carry residuals (a warning).
+Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
+                                  const std::vector<double>& r, IdentifyResult* out) {
+  std::vector<int> sizes;
+  for (auto [i0, i1] : make_windows(f.cond.log, f.first, f.last, f.opt->window_s)) {
+    sizes.push_back(2 * (i1 - i0));
+  }
+  const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
+  const detail::BlockCovariance bc = detail::block_sandwich(Jf, rv, sizes);
+  if (bc.covariance.size() == 0) {
+    out->warnings.push_back("output error: " + std::to_string(sizes.size()) +
+                            " windows are too few to estimate the correlated residuals' "
+                            "covariance: standard deviations not given (use a longer log or a "
+                            "shorter --window)");
+    return {};
+  }
+  const auto [lo, hi] = std::minmax_element(bc.inflation.begin(), bc.inflation.end());
+  out->std_method = "window-sandwich";
+  out->std_detail = "block sandwich over the residuals of " + std::to_string(bc.blocks) +
+                    " windows (correlated within a window, independent between windows): " +
+                    fmt(*lo) + "-" + fmt(*hi) +
+                    " times the std that treats the angle residuals as independent";
+  if (bc.blocks < kFewWindows) {
+    out->warnings.push_back("output error: the std come from the residuals of only " +
+                            std::to_string(bc.blocks) +
+                            " windows and are themselves uncertain (a longer log, or a shorter "
+                            "--window, gives more)");
+  }
+  return bc.covariance;
+}
+
 /// Covariance of the internal parameters, only on a converged solution with a full-rank
 /// Jacobian (of the parameters off their bounds): errors in variables (sandwich) for inverse
-/// dynamics, else s^2 (J^T J)^-1.
+/// dynamics, the window sandwich for output error, else s^2 (J^T J)^-1.
 void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& Hp,
-                const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
+                const std::vector<detail::Sensitivity>& sens, const std::vector<double>& r,
+                IdentifyResult* out) {
   const int P = f.layout.size();
   out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
   if (!out->converged) {
@@ -865,8 +905,12 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& H
       for (size_t b = 0; b < free.size(); ++b) out->covariance(free[a], free[b]) = Cf(a, b);
     }
   };
-  const bool eiv = f.opt->errors_in_variables && f.opt->method == Method::kInverseDynamics;
-  if (!eiv) {
+  if (f.opt->errors_in_variables && f.opt->method == Method::kOutputError) {
+    const Eigen::MatrixXd Cw = window_covariance(f, Jf, r, out);
+    if (Cw.size() > 0) scatter(Cw);
+    return;
+  }
+  if (!f.opt->errors_in_variables) {
     const double sig2 = out->residual_sigma * out->residual_sigma;
     // the prior at the residual's level: H = J^T J + sig2 / sigma^2
     const Eigen::MatrixXd H2 = Jf.transpose() * Jf + Hpf * (sig2 / s2);
@@ -1217,6 +1261,30 @@ double initial_prior_scale(const Fit& f) {
   return s > 0 ? s : 1e-3;
 }
 
+/// Logged rates noisier than those the angles give, even through the noisiest Savitzky-Golay
+/// window of the choice (order 5 over 3 samples each side): their noise enters the friction's
+/// sign and viscous terms and the reactions (errors in variables), so the rates and
+/// accelerations are estimated from the angles instead, with a note saying so.
+bool angles_give_better_rates(const Fit& f, IdentifyResult* out) {
+  const TorqueLog& log = f.cond.log;
+  const double dt = log.duration() / std::max(1, log.size() - 1);
+  SgOptions sg = f.sg;
+  sg.half_window_s = (sg.order / 2 + 1) * dt;
+  double g1 = 0, g2 = 0;
+  sg_noise_gains(log.t, sg, &g1, &g2);
+  double from_angles[2];
+  for (int j = 0; j < 2; ++j) {
+    from_angles[j] = g1 * f.noise.angle[j];
+    if (!(f.noise.rate[j] > kNoisierRates * from_angles[j])) return false;
+  }
+  out->notes.push_back("the logged rates (noise " + fmt(f.noise.rate[0]) + ", " +
+                       fmt(f.noise.rate[1]) + " rad/s) are noisier than rates estimated from the "
+                       "angles (at most " + fmt(from_angles[0]) + ", " + fmt(from_angles[1]) +
+                       " rad/s): rates and accelerations estimated from the angles, the logged "
+                       "rates not used");
+  return true;
+}
+
 /// What the stages after the solve share: the data residuals and their Jacobian at the fit, and
 /// the sensor-noise sensitivities (inverse dynamics).
 struct Analysis {
@@ -1267,7 +1335,7 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
   const bool id = f.opt->method == Method::kInverseDynamics;
   out->residual_sigma =
       std::sqrt(2.0 * summary.final_cost / std::max(1, summary.num_residuals - P));
-  if (!id) {
+  if (!id && !f.opt->errors_in_variables) {
     out->warnings.push_back(
         "output-error standard deviations treat the angle residuals as independent; within a "
         "window they are correlated (they integrate the torque noise), so the reported std "
@@ -1279,7 +1347,7 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
     rms_pair(an->r, out->rms_angle_residual);
   }
   const Eigen::MatrixXd Hp = prior_information(f);
-  covariance(f, an->J, Hp, an->sens, out);
+  covariance(f, an->J, Hp, an->sens, an->r, out);
   const Eigen::MatrixXd Tinv = to_public(f.layout).inverse();
   identifiability(Tinv.transpose() * (an->J.transpose() * an->J + Hp) * Tinv, f.layout, out);
   estimates(f, x0_public, out);
@@ -1336,6 +1404,9 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   f.source = !log.has_rates || opt.estimate_rates ? detail::RateSource::kFromAngles
              : !log.has_accels                    ? detail::RateSource::kAccelsFromRates
                                                   : detail::RateSource::kLogged;
+  if (f.source != detail::RateSource::kFromAngles && angles_give_better_rates(f, &out)) {
+    f.source = detail::RateSource::kFromAngles;
+  }
   std::vector<double> x0_public;
   if (!start_values(&f, opt.initial, &x0_public, &out)) return out;
   f.prior_scale = initial_prior_scale(f);
