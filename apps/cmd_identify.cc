@@ -449,10 +449,12 @@ int run(const Args& a) {
   }
   write_residuals(a, res, val, &out);
 
-  // scene_fitted.yaml: the input scene with the identified friction (and links: group inertia)
+  // scene_fitted.yaml: the input scene with the identified friction (and links: group inertia;
+  // actuators: group actuator)
   Scene fitted = scene;
   fitted.params.friction = res.fitted.friction;
   fitted.params.links = res.fitted.links;
+  fitted.params.actuators = res.fitted.actuators;
   write_text_file(out.file("scene_fitted.yaml"), scene_to_yaml(fitted));
 
   Json j = identification_json(a, scene, opt, log, res, val);

@@ -47,7 +47,8 @@ expect_error(2, "--actuator-coulomb: must be >= 0",
 expect_error(2, "actuators.M1.coulomb", ["simulate", PAPER, "--set", "friction.model=none",
                                           "--set", "actuators.M1.coulomb=0.1", "--out", os.path.join(WORK, "bad")])
 
-code, out, err = run(["synth-log", PAPER, "--out", log, "--duration", "2", "--seed", "4", "--with-rates",
+code, out, err = run(["synth-log", PAPER, "--out", log, "--duration", "4", "--seed", "4", "--with-rates",
+                      "--excitation", "multisine",
                       "--torque-offset", "0.05,0", "--actuator-coulomb", "0.03,0.02",
                       "--actuator-viscous", "0.002,0.001"])
 if code != 0:

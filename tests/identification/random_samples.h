@@ -46,10 +46,12 @@ inline std::vector<Sample> random_samples(const Params<double>& truth, int n,
   return out;
 }
 
-/// A paper-loads log of `truth` with rates logged: torque noise 0.02 N m, angle noise 1e-5 rad.
+/// A paper-loads log of `truth` with rates logged: torque noise 0.02 N m, angle noise 1e-5 rad
+/// (multisine: the built-in excitation, which reverses both cranks, replaces M1, M2).
 inline TorqueLog rated_log(const Params<double>& truth, double duration, std::uint64_t seed,
-                           const char* path) {
+                           const char* path, bool multisine = false) {
   SynthOptions so;
+  so.multisine = multisine;
   so.duration = duration;
   so.torque_noise = 0.02;
   so.angle_noise = 1e-5;
