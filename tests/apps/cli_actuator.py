@@ -49,13 +49,13 @@ expect_error(2, "actuators.M1.coulomb", ["simulate", PAPER, "--set", "friction.m
 
 code, out, err = run(["synth-log", PAPER, "--out", log, "--duration", "4", "--seed", "4", "--with-rates",
                       "--excitation", "multisine",
-                      "--torque-offset", "0.05,0", "--actuator-coulomb", "0.03,0.02",
-                      "--actuator-viscous", "0.002,0.001"])
+                      "--torque-offset", "0.05,0", "--actuator-coulomb", "0.02,0.02",
+                      "--actuator-viscous", "0.001,0.001"])
 if code != 0:
     failures.append("synth-log: exit %d %s" % (code, err))
 with open(log) as f:
     header = [l for l in f if l.startswith("#")]
-for want in ["true.offset = 0.05,0", "true.actuator_coulomb = 0.03,0.02", "true.actuator_viscous = 0.002,0.001"]:
+for want in ["true.offset = 0.05,0", "true.actuator_coulomb = 0.02,0.02", "true.actuator_viscous = 0.001,0.001"]:
     if not any(want in l for l in header):
         failures.append("header lacks '%s'" % want)
 

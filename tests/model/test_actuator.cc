@@ -9,6 +9,7 @@
 #include <random>
 
 #include "fivebar/model/dynamics.h"
+#include "fivebar/sim/estimate.h"
 #include "fivebar/sim/simulator.h"
 #include "paper.h"
 
