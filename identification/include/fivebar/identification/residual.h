@@ -20,8 +20,9 @@ struct Sample {
   Loads<double> loads;
 };
 
-/// r = (tau1 - o1 - M1(x), tau2 - o2 - M2(x)) [N m] (o: the torque sensors' offsets), M from the friction-aware inverse dynamics
-/// (dynamics.h, the reaction/friction loop resolved inside) with the friction coefficients x laid
+/// r = (tau1 - o1 - M1(x), tau2 - o2 - M2(x)) [N m] (o: the torque sensors' offsets), M from
+/// the friction-aware inverse dynamics (dynamics.h, the reaction/friction loop resolved inside,
+/// the actuators' friction included) with the friction coefficients x laid
 /// out by `layout` and every other constant from `scene`. With exact sign (smoothing_velocity 0)
 /// the Coulomb sign of each joint is sign(w_k) of the sample's rates: data, not a function of x,
 /// so r is smooth in x. `operator()` accepts double and ceres::Jet.
