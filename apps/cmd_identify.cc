@@ -63,7 +63,7 @@ std::map<std::string, std::vector<double>> read_truth(const id::TorqueLog& log) 
         break;
       }
     }
-    if (v.size() == kJoints || v.size() == kInertialParams) truth[key] = v;
+    if (v.size() == kJoints || v.size() == kInertialParams || v.size() == kActuators) truth[key] = v;
   }
   return truth;
 }
@@ -161,6 +161,13 @@ void write_residuals(const Args& a, const id::IdentifyResult& res, const id::Val
 /// mean over the joints); false otherwise.
 bool true_value(const std::map<std::string, std::vector<double>>& truth,
                 const id::ParameterLayout& layout, int i, const std::string& name, double* tv) {
+  if (layout.is_actuator(i)) {  // true.offset = A,B; true.actuator_coulomb = ...
+    const size_t cut = name.rfind('_');
+    auto it = truth.find(name.substr(0, cut));
+    if (it == truth.end() || it->second.size() != size_t(kActuators)) return false;
+    *tv = it->second[std::stoi(name.substr(cut + 1)) - 1];
+    return true;
+  }
   if (layout.is_inertial(i)) {
     auto it = truth.find("inertial");
     if (it == truth.end()) return false;
@@ -444,10 +451,12 @@ int run(const Args& a) {
   }
   write_residuals(a, res, val, &out);
 
-  // scene_fitted.yaml: the input scene with the identified friction (and links: group inertia)
+  // scene_fitted.yaml: the input scene with the identified friction (and links: group inertia;
+  // actuators: group actuator)
   Scene fitted = scene;
   fitted.params.friction = res.fitted.friction;
   fitted.params.links = res.fitted.links;
+  fitted.params.actuators = res.fitted.actuators;
   write_text_file(out.file("scene_fitted.yaml"), scene_to_yaml(fitted));
 
   Json j = identification_json(a, scene, opt, log, res, val);
@@ -478,7 +487,8 @@ RunFunction setup(CLI::App* app) {
       ->required();
   app->add_option("--estimate", args->settings.estimate,
                   "parameter groups to estimate, comma-separated: friction (always), inertia "
-                  "(the links' 16 standard inertial parameters)")
+                  "(the links' 16 standard inertial parameters), actuator (per motor the "
+                  "torque-sensor offset and the load-independent Coulomb + viscous friction)")
       ->capture_default_str();
   app->add_option("--inertia-prior", args->settings.inertia_prior,
                   "relative std of the prior holding the inertial parameters the log cannot "

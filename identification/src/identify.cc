@@ -193,7 +193,7 @@ class WindowResidual {
                  const sim::LoadFunction& loads, const std::vector<double>& w1,
                  const std::vector<double>& w2, int i0, int i1, const sim::Options& sim)
       : scene_(scene), layout_(layout), log_(log), i0_(i0), i1_(i1), sim_(sim) {
-    loads_ = logged_loads(log, loads, log.t[i0]);
+    loads_ = logged_loads(log, loads, log.t[i0], scene.actuators.offset);
     initial_ = {log.theta1[i0], log.theta2[i0], w1[i0], w2[i0]};
     sim_.duration = log.t[i1] - log.t[i0];
     sim_.output_step = sim_.duration / (i1 - i0);
@@ -281,7 +281,8 @@ struct Fit {
 };
 
 /// Calls f(std::integral_constant<int, P>) for the parameter counts the layouts give (friction
-/// 2, 4, 10, 20, each with or without the 16 inertial parameters); false for another count.
+/// 2, 4, 10, 20, each with or without the 16 inertial parameters, and with the 6 actuator terms
+/// except after per-joint Stribeck with inertia); false for another count.
 template <typename F>
 bool with_size(int P, F&& f) {
   switch (P) {
@@ -292,6 +293,11 @@ bool with_size(int P, F&& f) {
     case 18: f(std::integral_constant<int, 18>()); return true;
     case 26: f(std::integral_constant<int, 26>()); return true;
     case 36: f(std::integral_constant<int, 36>()); return true;
+    // with the 6 actuator terms
+    case 8: f(std::integral_constant<int, 8>()); return true;
+    case 16: f(std::integral_constant<int, 16>()); return true;
+    case 24: f(std::integral_constant<int, 24>()); return true;
+    case 32: f(std::integral_constant<int, 32>()); return true;
     default: return false;
   }
 }
@@ -523,7 +529,8 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
         !detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), s, f.eval, &D)) {
       continue;
     }
-    r2 += Eigen::Vector2d(std::pow(s.tau1 - ev.M1, 2), std::pow(s.tau2 - ev.M2, 2));
+    const auto& o = p.actuators.offset;  // measured = motor + offset
+    r2 += Eigen::Vector2d(std::pow(s.tau1 - o[0] - ev.M1, 2), std::pow(s.tau2 - o[1] - ev.M2, 2));
     t2 += Eigen::Vector2d(s.tau1 * s.tau1, s.tau2 * s.tau2);
     v += detail::propagated_variance(detail::sensitivity(log.t, i, f.source, sg, f.noise, D));
     ++count;
@@ -961,17 +968,25 @@ void identifiability(const Eigen::MatrixXd& JtJ, const ParameterLayout& layout,
   for (int i = P - 1; i >= 0; --i) {
     out->singular_values.push_back(std::sqrt(std::max(0.0, es.eigenvalues()(i))));
   }
-  const double ratio = out->singular_values.back() / out->singular_values.front();
-  if (ratio < 1e-2) {  // condition number above 100 with unit-norm columns
-    const Eigen::VectorXd v = es.eigenvectors().col(0);
+  // every direction with a condition above 100 (unit-norm columns): the smallest is reported
+  // when it involves a friction or actuator term (inertial-only directions: the inertial report
+  // covers them), the others when they involve an actuator term
+  for (int d = 0; d < P; ++d) {
+    const double ratio = out->singular_values[P - 1 - d] / out->singular_values.front();
+    if (!(ratio < 1e-2)) break;
+    const Eigen::VectorXd v = es.eigenvectors().col(d);
     std::string who;
-    bool friction = false;  // inertial-only directions: the inertial report covers them
+    bool friction = false, motor = false;
     for (int i = 0; i < P; ++i) {
-      if (std::abs(v(i)) > 0.3) who += (who.empty() ? "" : ", ") + names[i];
-      friction = friction || (std::abs(v(i)) > 0.3 && !layout.is_inertial(i));
+      if (!(std::abs(v(i)) > 0.3)) continue;
+      who += (who.empty() ? "" : ", ") + names[i];
+      friction = friction || !layout.is_inertial(i);
+      motor = motor || layout.is_actuator(i);
     }
-    if (friction) out->warnings.push_back("the log cannot separate " + who +
-                            " (smallest/largest scaled singular value " + fmt(ratio) + ")");
+    if (d == 0 ? friction : motor) {
+      out->warnings.push_back("the log cannot separate " + who +
+                              " (smallest/largest scaled singular value " + fmt(ratio) + ")");
+    }
   }
 }
 
@@ -1061,8 +1076,8 @@ void predictions(const Fit& f, IdentifyResult* out) {
         inverse_dynamics(p, f.loads(log.t[i]), log.theta1[i], log.theta2[i], out->omega1[i],
                          out->omega2[i], out->alpha1[i], out->alpha2[i], nullptr, f.eval, &ev);
     if (st.ok()) {
-      out->predicted_tau1[i] = ev.M1;
-      out->predicted_tau2[i] = ev.M2;
+      out->predicted_tau1[i] = ev.M1 + p.actuators.offset[0];  // as the sensor reads it
+      out->predicted_tau2[i] = ev.M2 + p.actuators.offset[1];
     }
   }
 }
@@ -1218,9 +1233,10 @@ bool start_values(Fit* fp, const std::vector<double>& initial, std::vector<doubl
   ParameterLayout pub = f.layout;
   pub.static_as_excess = false;
   *x0_public = initial.empty() ? default_start(pub) : initial;
-  if (pub.inertia && static_cast<int>(x0_public->size()) == pub.friction_size()) {
-    const std::array<double, kInertialParams> pi = standard_inertial(f.scene);
-    x0_public->insert(x0_public->end(), pi.begin(), pi.end());
+  if (static_cast<int>(x0_public->size()) == pub.friction_size()) {
+    // the other groups start at the scene's values
+    const std::vector<double> rest = pub.extract(f.scene);
+    x0_public->insert(x0_public->end(), rest.begin() + pub.friction_size(), rest.end());
   }
   if (static_cast<int>(x0_public->size()) != P) {
     out->status = Status::Error(StatusCode::kInvalidInput,
@@ -1357,15 +1373,15 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
 }  // namespace
 
 sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& scene_loads,
-                               double t0) {
+                               double t0, std::array<double, kActuators> offset) {
   // the simulator calls in nearly increasing t: no shared state, just a binary search
   const std::vector<double>* t = &log.t;
   const std::vector<double>* tau1 = &log.tau1;
   const std::vector<double>* tau2 = &log.tau2;
-  return [t, tau1, tau2, scene_loads, t0](double s) {
+  return [t, tau1, tau2, scene_loads, t0, offset](double s) {
     Loads<double> L = scene_loads(t0 + s);
-    L.M1 = interp(*t, *tau1, t0 + s);
-    L.M2 = interp(*t, *tau2, t0 + s);
+    L.M1 = interp(*t, *tau1, t0 + s) - offset[0];
+    L.M2 = interp(*t, *tau2, t0 + s) - offset[1];
     return L;
   };
 }
@@ -1391,9 +1407,10 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   IdentifyResult out;
   Fit f;
   init_fit(scene_in, loads, log, opt, &f, &out);
-  if (f.layout.inertia && opt.method != Method::kInverseDynamics) {
+  if ((f.layout.inertia || f.layout.actuator) && opt.method != Method::kInverseDynamics) {
     out.status = Status::Error(StatusCode::kInvalidInput,
-                               "the inertia group needs the inverse-dynamics method");
+                               std::string("the ") + (f.layout.inertia ? "inertia" : "actuator") +
+                                   " group needs the inverse-dynamics method");
     return out;
   }
   const int P = f.layout.size();
@@ -1460,7 +1477,7 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
     o.duration = log.t[i1] - log.t[i0];
     o.output_step = o.duration / (i1 - i0);
     const sim::Result res =
-        sim::simulate(params, logged_loads(log, loads, log.t[i0]),
+        sim::simulate(params, logged_loads(log, loads, log.t[i0], params.actuators.offset),
                       {log.theta1[i0], log.theta2[i0], omega1[i0], omega2[i0]}, o);
     std::vector<double> ts, a, b;
     for (const sim::Row& row : res.rows) {

@@ -44,8 +44,9 @@ SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction
     log.t.push_back(row.t);
     log.theta1.push_back(quantize(row.theta[0] + opt.angle_noise * n_th1));
     log.theta2.push_back(quantize(row.theta[1] + opt.angle_noise * n_th2));
-    log.tau1.push_back(row.M1 + opt.torque_noise * n_tau1);
-    log.tau2.push_back(row.M2 + opt.torque_noise * n_tau2);
+    // the sensors read the motor torque plus their offset (ActuatorParams)
+    log.tau1.push_back(row.M1 + params.actuators.offset[0] + opt.torque_noise * n_tau1);
+    log.tau2.push_back(row.M2 + params.actuators.offset[1] + opt.torque_noise * n_tau2);
     if (opt.with_rates) {
       log.omega1.push_back(row.omega[0] + opt.rate_noise * n_w1);
       log.omega2.push_back(row.omega[1] + opt.rate_noise * n_w2);

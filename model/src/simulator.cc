@@ -380,7 +380,7 @@ bool consistent(Context& c, double t, const double* y, const JointModes& slip,
 std::vector<JointModes> candidate_modes(const Context& c, const std::array<bool, 5>& rest,
                                                 const std::array<bool, 5>& no_stick) {
   auto can_hold = [&](int k) {
-    return c.stick && !no_stick[k] && holding_bound(c.params->friction, k) > 0.0;
+    return c.stick && !no_stick[k] && fivebar::can_hold(*c.params, k);
   };
   std::vector<int> idx;
   for (int k = 0; k < 5; ++k) {

@@ -224,9 +224,9 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
                     const std::vector<double>& omega2, double window_s, double rtol = 1e-9,
                     double budget_s = 10.0);
 
-/// Loads for the simulator: logged tau1, tau2 (linear in t) as M1, M2 and the scene's M3, F,
-/// F_angle, shifted by t0 (the simulator starts at t = 0).
+/// Loads for the simulator: logged tau1, tau2 (linear in t) less the sensors' `offset` as M1, M2
+/// and the scene's M3, F, F_angle, shifted by t0 (the simulator starts at t = 0).
 sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& scene_loads,
-                               double t0);
+                               double t0, std::array<double, kActuators> offset = {0.0, 0.0});
 
 }  // namespace fivebar::identification
