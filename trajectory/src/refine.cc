@@ -143,8 +143,13 @@ Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
   for (int n : options.refine.control_points) {
     if (n <= best.control_points) continue;
     const RestToRest motion(n, r->duration, r->start, r->goal);
+    // finer splines need more SLSQP iterations: the budget grows with the variables
+    OptimizerOptions level = optimizer;
+    level.max_evaluations = std::max(optimizer.max_evaluations,
+                                     options.refine.evaluations_per_variable *
+                                         motion.num_variables());
     Candidate c = solve_stage(params, loads, motion, ws, refit(best, n, *r), options,
-                              r->torque_limit, optimizer);
+                              r->torque_limit, level);
     r->evaluations += c.evaluations;
     const bool kept = better(c, best, options);
     log_stage(&r->refinement, n, c, kept);
