@@ -155,21 +155,12 @@ Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
   if (!feasible(best, options)) return best;
   const double ws = best.smoothing_velocity;
   double previous = best.exact;
-  Candidate warm = best;
   log_stage(&r->refinement, best.control_points, best, true);
   for (int n : options.refine.control_points) {
     if (n <= best.control_points) continue;
     const RestToRest motion(n, r->duration, r->start, r->goal);
-    // finer splines need more SLSQP iterations: the budget grows with the variables
-    OptimizerOptions level = optimizer;
-    level.max_evaluations = std::max(optimizer.max_evaluations,
-                                     options.refine.evaluations_per_variable *
-                                         motion.num_variables());
-    Candidate c = solve_stage(params, loads, motion, ws, refit(warm, n, *r), options,
-                              r->torque_limit, level);
-    // the next level starts from this one's optimum even when the dense check rejects it (a
-    // torque peak between the nodes): it is the nearest point of the finer problem
-    if (c.solved() && c.solver.usable()) warm = c;
+    Candidate c = solve_stage(params, loads, motion, ws, refit(best, n, *r), options,
+                              r->torque_limit, optimizer);
     r->evaluations += c.evaluations;
     const bool kept = better(c, best, options);
     log_stage(&r->refinement, n, c, kept);

@@ -39,9 +39,6 @@ struct RefineOptions {
   /// Gauss-Legendre points per knot span of a refined spline: as many nodes in all as the
   /// first solve's, but at least this many per span
   int min_quadrature_points = 6;
-  /// evaluation limit of a refined level's solve: at least this many per free variable (the
-  /// optimizer's max_evaluations when larger)
-  int evaluations_per_variable = 10;
 };
 
 struct BatchOptions {
