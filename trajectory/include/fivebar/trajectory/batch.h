@@ -38,7 +38,7 @@ struct RefineOptions {
   double tol = 1e-3;
   /// Gauss-Legendre points per knot span of a refined spline: as many nodes in all as the
   /// first solve's, but at least this many per span
-  int min_quadrature_points = 6;
+  int min_quadrature_points = 8;
 };
 
 struct BatchOptions {
