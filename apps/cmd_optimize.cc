@@ -234,6 +234,12 @@ RunFunction setup(CLI::App* app) {
                 "no refinement of the control points after the first solve");
   app->add_flag("--no-continuation", [args](int64_t) { args->settings.continuation = false; },
                 "no continuation on the smoothing velocity towards the exact law");
+  app->add_option("--max-evaluations", args->settings.max_evaluations,
+                  "objective evaluations per local solve (default 500)");
+  app->add_option("--refine-levels", args->settings.refine_levels,
+                  "control points per joint of the refinement levels, increasing "
+                  "(default 25,45,85: each doubles the knot spans of the last)")
+      ->delimiter(',');
   app->add_option("--refine-tol", args->settings.refine_tol,
                   "relative energy change that ends the refinement (default 1e-3)");
   app->add_flag("--no-validate", args->no_validate,

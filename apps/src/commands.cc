@@ -116,6 +116,10 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
     throw InputError(kFlags, "--singular-margin", "expected a number in [0, 1)");
   }
   if (a.starts < 1) throw InputError(kFlags, "--starts", "expected an integer >= 1");
+  if (a.max_evaluations < 10) {
+    throw InputError(kFlags, "--max-evaluations", "expected an integer >= 10");
+  }
+  o.optimizer.max_evaluations = a.max_evaluations;
   if (!(a.path_step >= 1e-3 && a.path_step <= 0.5)) {
     throw InputError(kFlags, "--path-step", "expected a number in [0.001, 0.5] rad");
   }
@@ -123,7 +127,17 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
     throw InputError(kFlags, "--refine-tol", "expected a number in (0, 1)");
   }
   o.refine.tol = a.refine_tol;
-  if (a.refine) o.refine.control_points = trajectory::kRefineLevels;
+  for (size_t i = 0; i < a.refine_levels.size(); ++i) {
+    if (a.refine_levels[i] < 8 || a.refine_levels[i] > 400 ||
+        (i > 0 && a.refine_levels[i] <= a.refine_levels[i - 1])) {
+      throw InputError(kFlags, "--refine-levels",
+                       "expected increasing integers in [8, 400], comma-separated");
+    }
+  }
+  if (a.refine) {
+    o.refine.control_points =
+        a.refine_levels.empty() ? trajectory::kRefineLevels : a.refine_levels;
+  }
   if (!a.continuation) o.refine.continuation.clear();
   o.refine.enabled = a.refine || a.continuation;
   o.path.step = a.path_step;

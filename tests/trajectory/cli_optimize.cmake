@@ -93,3 +93,14 @@ torque_columns(${WORK_DIR}/detour/detour/trajectory.csv optimized)
 torque_columns(${WORK_DIR}/inverse/trajectory.csv inverse)
 expect("M1, M2 of trajectory.csv differ from fivebar inverse on the same motion"
        optimized STREQUAL inverse)
+
+# --refine-levels and --max-evaluations: bad values exit 2 with one line naming the option
+foreach(bad "--refine-levels;45,25" "--refine-levels;4" "--max-evaluations;3")
+  execute_process(COMMAND ${FIVEBAR} optimize ${paper} --tasks ${SOURCE_DIR}/datasets/tasks/paper_tasks.yaml
+                          ${bad} --no-plots --out ${WORK_DIR}/bad_levels
+                  RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  list(GET bad 0 option)
+  expect("${bad}: exit ${status}\n${out}${err}" status EQUAL 2)
+  expect("${bad}: stderr ${err}" err MATCHES "${option}")
+  expect("${bad}: output written" NOT EXISTS ${WORK_DIR}/bad_levels/summary.csv)
+endforeach()

@@ -1,5 +1,6 @@
 // Tests of fivebar::trajectory: splines, quadrature, exact gradients, the optimizer, tasks files
 // and batch determinism.
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -163,6 +164,58 @@ TEST(Optimizer, TightTorqueLimitIsRespected) {
   ASSERT_EQ(r.status, "ok") << r.message;
   EXPECT_LE(r.max_constraint_violation, options.feasibility_tol);
   EXPECT_LE(r.peak_torque, task.torque_limit * (1 + options.feasibility_tol));
+}
+
+TEST(Optimizer, ScreenedConstraintsGiveTheUnscreenedOptimum) {
+  // screening hands NLopt only the rows near activity; rows the result violates are added and
+  // the solve resumed: the answer keeps every row and is the same optimum (seeded, no timing).
+  // swing_right with 25 control points rides its torque limit, which the minimum-jerk start
+  // stays far below (most active rows are left out at first)
+  const TaskSpec task = paper_tasks()[1];
+  const ResolvedTask rt = resolve_task(paper_params(), task, paper_initial(), 0.1);
+  ASSERT_TRUE(rt.ok());
+  ProblemOptions po;
+  po.torque_limit = task.torque_limit;
+  po.quadrature_points = 6;
+  const TrajectoryProblem p(paper_params(), paper_loads(),
+                            RestToRest(25, task.duration, rt.start, rt.goal), po);
+  const std::vector<double> x0 = p.motion().minimum_jerk();
+  Evaluated e0;
+  ASSERT_TRUE(p.evaluate(x0.data(), false, &e0).ok());
+  EXPECT_LT(*std::max_element(e0.constraints.begin(), e0.constraints.end()), -0.5);
+  OptimizerOptions all, screened;
+  all.screen = 0.0;
+  screened.screen = 0.5;
+  const OptimizeResult a = optimize(p, x0, all), b = optimize(p, x0, screened);
+  ASSERT_TRUE(a.solver.usable()) << a.solver.message;
+  ASSERT_TRUE(b.solver.usable()) << b.solver.message;
+  EXPECT_LE(b.max_node_constraint, 10 * screened.constraint_tol);
+  EXPECT_GT(b.max_node_constraint, -1e-3);  // rows left out at the start are active now
+  EXPECT_NEAR(b.objective, a.objective, 2e-3 * a.objective);
+}
+
+TEST(BSpline, RefitOnNestedKnotsIsExact) {
+  // the default refinement levels double the knot spans (10 -> 25 -> 45 -> 85 control points):
+  // the least-squares refit of a coarse spline into the finer space is knot insertion, exact
+  const RestToRest coarse(10, 0.5, kStart, {0.7, 0.6});
+  std::vector<double> x = coarse.minimum_jerk();
+  for (size_t i = 0; i < x.size(); ++i) x[i] += 0.1 * std::sin(1.0 + 2.0 * i);
+  std::vector<int> levels = {10};
+  levels.insert(levels.end(), kRefineLevels.begin(), kRefineLevels.end());
+  for (size_t k = 1; k < levels.size(); ++k) {
+    EXPECT_EQ((levels[k] - kDegree) % (levels[k - 1] - kDegree), 0) << levels[k];
+    const RestToRest fine(levels[k], 0.5, kStart, {0.7, 0.6});
+    const std::vector<double> y = fine.fit([&](double t) { return coarse.state(x.data(), t)[0]; });
+    double worst = 0.0;
+    for (int i = 0; i <= 1000; ++i) {
+      const double t = 0.5 * i / 1000;
+      const auto a = coarse.state(x.data(), t), b = fine.state(y.data(), t);
+      for (int d = 0; d < 3; ++d) {
+        for (int j = 0; j < 2; ++j) worst = std::max(worst, std::abs(a[d][j] - b[d][j]));
+      }
+    }
+    EXPECT_LT(worst, 1e-7) << levels[k];  // accelerations of hundreds of rad/s^2
+  }
 }
 
 TEST(Batch, IdenticalForOneAndTwoThreads) {

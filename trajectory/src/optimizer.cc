@@ -54,11 +54,21 @@ double objective_cb(unsigned n, const double* x, double* grad, void* data) {
   return e.objective;
 }
 
+// the constraint rows handed to NLopt (all of them, or the screened subset)
+struct Rows {
+  Cache* cache;
+  const std::vector<int>* rows;
+};
+
 void constraints_cb(unsigned m, double* result, unsigned n, const double* x, double* grad,
                     void* data) {
-  const Evaluated& e = static_cast<Cache*>(data)->at(x, grad != nullptr);
-  std::memcpy(result, e.constraints.data(), m * sizeof(double));
-  if (grad) std::memcpy(grad, e.constraints_grad.data(), static_cast<size_t>(m) * n * sizeof(double));
+  const Rows& r = *static_cast<Rows*>(data);
+  const Evaluated& e = r.cache->at(x, grad != nullptr);
+  for (unsigned i = 0; i < m; ++i) {
+    const size_t row = static_cast<size_t>((*r.rows)[i]);
+    result[i] = e.constraints[row];
+    if (grad) std::memcpy(grad + i * n, &e.constraints_grad[row * n], n * sizeof(double));
+  }
 }
 
 struct Local {
@@ -68,12 +78,15 @@ struct Local {
   double max_constraint = std::numeric_limits<double>::infinity();
   int evaluations = 0;
   bool evaluated = false;
+  std::vector<double> constraints;  ///< every constraint at x (when evaluated)
 };
 
+// one local solve under the constraint rows `rows` (indices into the problem's constraints)
 Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x0,
-                  const OptimizerOptions& options, double penalty) {
-  const int n = problem.num_variables(), m = problem.num_constraints();
+                  const OptimizerOptions& options, double penalty, const std::vector<int>& rows) {
+  const int n = problem.num_variables(), m = static_cast<int>(rows.size());
   Cache cache(problem, penalty);
+  Rows selected{&cache, &rows};
   Local out;
   out.x = x0;
   try {
@@ -92,8 +105,10 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
     opt.set_lower_bounds(lo);
     opt.set_upper_bounds(hi);
     opt.set_min_objective(objective_cb, &cache);
-    opt.add_inequality_mconstraint(constraints_cb, &cache,
-                                   std::vector<double>(m, options.constraint_tol));
+    if (m > 0) {
+      opt.add_inequality_mconstraint(constraints_cb, &selected,
+                                     std::vector<double>(m, options.constraint_tol));
+    }
     opt.set_ftol_rel(options.ftol_rel);
     opt.set_xtol_rel(options.xtol_rel);
     opt.set_maxeval(options.max_evaluations);
@@ -110,7 +125,49 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
     out.evaluated = true;
     out.objective = e.objective;
     out.max_constraint = *std::max_element(e.constraints.begin(), e.constraints.end());
+    out.constraints = std::move(e.constraints);
   }
+  return out;
+}
+
+// A local solve under the constraints that matter (OptimizerOptions::screen): the rows with
+// c > -screen at the start; every row that the result violates or nears is added and the solve
+// resumed from there, until no row left out is violated (at most 4 rounds, the last with every
+// row). screen <= 0: every row from the start.
+Local solve_screened(const TrajectoryProblem& problem, const std::vector<double>& x0,
+                     const OptimizerOptions& options, double penalty) {
+  const int m = problem.num_constraints();
+  std::vector<int> all(m);
+  for (int i = 0; i < m; ++i) all[i] = i;
+  Evaluated e;
+  if (!(options.screen > 0) || !problem.evaluate(x0.data(), false, &e).ok()) {
+    return solve_local(problem, x0, options, penalty, all);
+  }
+  std::vector<char> in(m, 0);
+  for (int i = 0; i < m; ++i) in[i] = e.constraints[i] > -options.screen;
+  std::vector<double> x = x0;
+  int evaluations = 0;
+  Local out;
+  for (int round = 0; round < 4; ++round) {
+    std::vector<int> rows;
+    for (int i = 0; i < m; ++i) {
+      if (in[i] || round == 3) rows.push_back(i);
+    }
+    OptimizerOptions budget = options;  // the rounds share the evaluation limit
+    budget.max_evaluations = std::max(1, options.max_evaluations - evaluations);
+    out = solve_local(problem, x, budget, penalty, rows);
+    evaluations += out.evaluations;
+    if (!out.evaluated || static_cast<int>(rows.size()) == m) break;
+    bool violated = false;
+    for (int i = 0; i < m; ++i) {
+      if (in[i] || !(out.constraints[i] > -options.screen)) continue;
+      in[i] = 1;
+      violated = violated || out.constraints[i] > options.constraint_tol;
+    }
+    if (!violated || evaluations >= options.max_evaluations) break;
+    x = out.x;
+  }
+  out.evaluations = evaluations;
   return out;
 }
 
@@ -175,7 +232,7 @@ OptimizeResult optimize(const TrajectoryProblem& problem, const std::vector<doub
   const double tol = 10.0 * options.constraint_tol;
 
   // local solve from the given start
-  Local best = solve_local(problem, x0, options, penalty);
+  Local best = solve_screened(problem, x0, options, penalty);
   result.starts = 1;
   result.evaluations = best.evaluations;
 
@@ -190,7 +247,7 @@ OptimizeResult optimize(const TrajectoryProblem& problem, const std::vector<doub
                                                         problem.motion().start()[j]) + 0.1);
         for (int v = 0; v < nf; ++v) xs[j * nf + v] += scale * normal();
       }
-      Local local = solve_local(problem, xs, options, penalty);
+      Local local = solve_screened(problem, xs, options, penalty);
       ++result.starts;
       result.evaluations += local.evaluations;
       if (better(local, best, tol)) {

@@ -9,6 +9,9 @@
 namespace fivebar::trajectory {
 namespace {
 
+// re-solves with a lowered torque limit when the dense check finds a peak between the nodes
+constexpr int kTightenRounds = 2;
+
 // the problem of a stage: finer splines get fewer quadrature points per knot span (as many
 // nodes in all as the first solve's, at least options.refine.min_quadrature_points per span)
 ProblemOptions stage_options(const BatchOptions& options, const RestToRest& motion, double ws,
@@ -56,6 +59,19 @@ void log_stage(std::string* log, double key, const Candidate& c, bool kept) {
           (kept ? "" : "x");
 }
 
+// why a candidate is not feasible (feasible() below)
+std::string why_infeasible(const Candidate& c, const BatchOptions& options) {
+  if (!c.solved()) return "not solved";
+  if (!c.solver.usable()) return "solver: " + c.solver.message;
+  if (!c.check.status.ok()) return "check: " + c.check.status.message;
+  if (c.check.max_violation > options.feasibility_tol) {
+    return "violation " + short_num(c.check.max_violation) + " on the check grid (peak " +
+           short_num(c.check.peak_torque) + " N m, min sine " +
+           short_num(c.check.min_coupler_sine) + ")";
+  }
+  return "exact-law energy not finite";
+}
+
 }  // namespace
 
 bool feasible(const Candidate& c, const BatchOptions& options) {
@@ -83,7 +99,7 @@ Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loa
   c.check = problem.check(c.x.data(), grid);
   // a torque peak between the nodes: re-solve with the limit lowered by the overshoot
   double limit = torque_limit;
-  for (int round = 0; round < 2 && c.check.status.ok() && opt.solver.usable() &&
+  for (int round = 0; round < kTightenRounds && c.check.status.ok() && opt.solver.usable() &&
                       c.check.torque_excess > options.feasibility_tol * torque_limit;
        ++round) {
     limit *= torque_limit / c.check.peak_torque * (1.0 - 0.1 * options.feasibility_tol);
@@ -148,7 +164,11 @@ Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
     r->evaluations += c.evaluations;
     const bool kept = better(c, best, options);
     log_stage(&r->refinement, n, c, kept);
-    if (!feasible(c, options)) continue;
+    if (!feasible(c, options)) {
+      r->message += std::string(r->message.empty() ? "" : "; ") + "refinement level " +
+                    std::to_string(n) + " not kept: " + why_infeasible(c, options);
+      continue;
+    }
     r->refinement_change = std::abs(c.exact - previous) / std::abs(previous);
     previous = c.exact;
     if (kept) best = std::move(c);

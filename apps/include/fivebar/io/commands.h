@@ -49,12 +49,16 @@ struct OptimizeSettings {
   std::string method = "slsqp", objective = "dissipated_energy";
   bool global = false, validate = true;
   int starts = 8, control_points = 10, quadrature_points = 12;
+  int max_evaluations = 500;  ///< per local solve (--max-evaluations)
   double singular_margin = 0.1;
   double path_step = 0.05;  ///< grid step of the path search for a feasible start [rad]
   /// the continuation to the exact law and the refinement of the control points after the
   /// first solve (`optimize` turns refine on: --no-refine; --no-continuation)
   bool refine = false, continuation = true;
   double refine_tol = 1e-3;  ///< relative energy change that stops the refinement
+  /// control points per joint of the refinement levels (--refine-levels; empty: the default
+  /// trajectory::kRefineLevels)
+  std::vector<int> refine_levels;
 };
 
 /// The batch options of `settings`; throws InputError(`command line: --method: ...`) and the like.

@@ -20,8 +20,11 @@ namespace fivebar::trajectory {
 /// that follow the first solve of a task. Each solve is warm-started from the best point so far;
 /// a stage replaces it only when it is feasible on the dense check grid and its exact-law
 /// objective is lower, so no stage can make the result worse.
-/// The refinement levels of `fivebar optimize` (each doubles the knot spans, about).
-inline const std::vector<int> kRefineLevels = {20, 40, 80};
+/// The refinement levels of `fivebar optimize`: from the first solve's 10 control points (5
+/// knot spans) each level doubles the spans of the last (20, 40, 80 spans), so that every coarser
+/// spline lies in the finer space and the warm start of a level is the last optimum itself
+/// (knot insertion: the least-squares refit reproduces it to rounding).
+inline const std::vector<int> kRefineLevels = {25, 45, 85};
 
 struct RefineOptions {
   bool enabled = true;
@@ -35,7 +38,7 @@ struct RefineOptions {
   double tol = 1e-3;
   /// Gauss-Legendre points per knot span of a refined spline: as many nodes in all as the
   /// first solve's, but at least this many per span
-  int min_quadrature_points = 6;
+  int min_quadrature_points = 8;
 };
 
 struct BatchOptions {

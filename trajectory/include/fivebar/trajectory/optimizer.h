@@ -33,6 +33,10 @@ struct OptimizerOptions {
   double xtol_rel = 1e-8;   ///< relative step that stops a local solve
   int max_evaluations = 500;  ///< per local solve
   double constraint_tol = 1e-8;  ///< NLopt tolerance of each constraint (dimensionless)
+  /// Constraint screening: NLopt sees only the rows with c > -screen at the start (c of
+  /// TrajectoryProblem, dimensionless); rows the result violates or nears are added and the
+  /// solve resumed (the answer satisfies every row). 0: every row from the start.
+  double screen = 0.5;
 };
 
 struct OptimizeResult {
