@@ -18,6 +18,7 @@
 
 #include "fivebar/identification/excitation.h"
 #include "fivebar/identification/synth.h"
+#include "fivebar/identification/torque_excitation.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
@@ -39,9 +40,11 @@ struct Args {
   double duration = 10, torque_limit = NAN, torque_noise = 0.02, rate = 1000;
   double singular_margin = 0.1, reversal_rate = 0.2, spread = 2, drift_spread = 2, ramp = 1;
   std::string estimate = "friction", criterion = "d-optimal", method = "mma", start = "swing";
+  std::string family = "torque";
+  std::vector<std::string> family_only;  ///< options given that apply to the other family
   std::string theta1_range, theta2_range;
   bool per_joint = false, no_plots = false, no_baseline = false;
-  int periods = 4, harmonics = 5, design_samples = 600, starts = 2, max_evaluations = 80;
+  int periods = 4, harmonics = 5, design_samples = 600, starts = 2, max_evaluations = 0, tones = 6;
   int min_reversals = 6;
   unsigned long long seed = 1;
 };
@@ -78,7 +81,7 @@ void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads
   if (!(a.torque_noise > 0)) throw InputError(kFlags, "--torque-noise", "must be > 0");
   if (!(a.rate > 0)) throw InputError(kFlags, "--rate", "must be > 0");
   if (a.periods < 1 || a.harmonics < 1 || a.design_samples < 16 || a.starts < 1 ||
-      !(a.ramp >= 0 && a.ramp < a.duration)) {
+      !(a.family == "torque" || (a.ramp >= 0 && a.ramp < a.duration))) {
     throw InputError(kFlags, "--periods/--harmonics/--design-samples/--starts/--ramp",
                      "need periods >= 1, harmonics >= 1, design samples >= 16, starts >= 1, "
                      "0 <= ramp < duration");
@@ -126,8 +129,22 @@ id::ExcitationOptions options_of(const Args& a, const Scene& scene, const LoadEx
     o.criterion = id::Criterion::kDOptimal;
   } else if (a.criterion == "condition") {
     o.criterion = id::Criterion::kCondition;
+  } else if (a.criterion == "worst-std") {
+    o.criterion = id::Criterion::kWorstStd;
   } else {
-    throw InputError(kFlags, "--criterion", "expected d-optimal or condition, got " + a.criterion);
+    throw InputError(kFlags, "--criterion",
+                     "expected d-optimal, condition or worst-std, got " + a.criterion);
+  }
+  if (a.family != "fourier" && a.family != "torque") {
+    throw InputError(kFlags, "--family", "expected fourier or torque, got " + a.family);
+  }
+  if (!a.family_only.empty()) {
+    throw InputError(kFlags, a.family_only.front(),
+                     "applies to --family " + std::string(a.family == "torque" ? "fourier" : "torque") +
+                         " only (this design uses --family " + a.family + ")");
+  }
+  if (a.tones < 1 || a.max_evaluations < 0) {
+    throw InputError(kFlags, "--tones/--max-evaluations", "need tones >= 1, max evaluations >= 0");
   }
   o.duration = a.duration;
   o.periods = a.periods;
@@ -306,7 +323,7 @@ trajectory::GeneralResult solve_design(const id::ExcitationProblem& problem, con
   if (!trajectory::parse_method(a.method, &go.method)) {
     throw InputError(kFlags, "--method", "expected slsqp, mma or ccsaq, got " + a.method);
   }
-  go.max_evaluations = a.max_evaluations;
+  go.max_evaluations = a.max_evaluations > 0 ? a.max_evaluations : 80;
   go.ftol_rel = 1e-6;
   go.xtol_rel = 1e-6;
   go.constraint_tol = 1e-6;
@@ -397,6 +414,46 @@ Design design(const Scene& scene, const LoadExpressions& loads, id::ExcitationOp
   return d;
 }
 
+// the torque-driven design (--family torque): an evolution strategy over tone torques from the
+// multi-sine's, then the best on the log's grid
+Design design_torque(const Scene& scene, const LoadExpressions& loads, const id::ExcitationOptions& o,
+                     const Args& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  id::TorqueDesignOptions to;
+  to.excitation = o;
+  to.tones = a.tones;
+  to.max_evaluations = a.max_evaluations > 0 ? a.max_evaluations : 160;
+  to.seed = a.seed;
+  to.sim = scene.options;
+  const std::array<double, 2> start = {scene.initial.theta1, scene.initial.theta2};
+  const std::vector<double> x0 = id::resize_tones(id::multisine_tones(), 4, a.tones);
+  const id::ToneTorques tones(a.tones, o.torque_limit);
+  const id::TorqueDesignResult r = id::design_torque_excitation(
+      scene.params, loads.function(), start, to, id::tone_starts(tones, x0));
+  if (!r.best.status.ok()) {
+    throw NumericalError(scene.path, "excite", "the start (multi-sine tones) failed: " + r.best.status.message);
+  }
+  id::TorqueCandidate g =
+      id::evaluate_tones(scene.params, loads.function(), start, to, r.best.x, 1.0 / o.rate_hz);
+  if (!g.status.ok()) throw NumericalError(scene.path, "excite", "designed motion: " + g.status.message);
+  Design d;
+  d.report = std::move(g.report);
+  trajectory::GeneralResult& s = d.solve;
+  s.solver.outcome = trajectory::SolverOutcome::kMaxEvaluations;
+  s.solver.message = "evolution strategy: " + std::to_string(r.evaluations) + " simulations, " +
+                     std::to_string(r.improvements) + " improving generations";
+  s.x = r.best.x;
+  s.objective = r.best.objective;
+  s.evaluated = true;
+  s.evaluations = r.evaluations;
+  s.best_start = r.best_start;
+  s.start_objectives = r.start_objectives;
+  for (bool f : r.start_feasible) s.start_max_constraint.push_back(f ? 0.0 : 1.0);
+  s.max_constraint = r.best.feasible ? 0.0 : 1.0;
+  d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return d;
+}
+
 // the design's own checks on the log's grid: status "ok" or what it misses
 std::string design_status(const Design& d, const id::ExcitationOptions& o, std::string* why) {
   const id::ExcitationReport& r = d.report;
@@ -439,11 +496,17 @@ Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::Desig
   j.set("torque_noise", o.torque_noise);
   j.set("singular_margin", o.singular_margin);
   j.set("min_reversals", o.min_reversals);
-  j.set("basis", "drift plus finite Fourier series, " + std::to_string(o.harmonics) +
-                     " harmonics, " + std::to_string(o.periods) + " periods, faded in from rest over " +
-                     format_double(o.ramp) + " s");
+  j.set("family", a.family);
+  if (a.family == "torque") {
+    j.set("basis", "free motion under tone torques clipped at the limit, " + std::to_string(a.tones) +
+                       " tones per motor (bias, amplitude, frequency, phase)");
+  } else {
+    j.set("basis", "drift plus finite Fourier series, " + std::to_string(o.harmonics) +
+                       " harmonics, " + std::to_string(o.periods) + " periods, faded in from rest over " +
+                       format_double(o.ramp) + " s");
+  }
   Json sol = Json::object();
-  sol.set("method", a.method);
+  sol.set("method", a.family == "torque" ? "evolution_strategy" : a.method);
   sol.set("outcome", trajectory::outcome_name(d.solve.solver.outcome));
   sol.set("message", d.solve.solver.message);
   sol.set("objective", d.solve.objective);
@@ -463,7 +526,7 @@ Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::Desig
   j.set("solver", sol);
   Json coeffs = Json::array();
   for (double v : d.solve.x) coeffs.push(v);
-  j.set("fourier_coefficients", coeffs);
+  j.set(a.family == "torque" ? "torque_tones" : "fourier_coefficients", coeffs);
   j.set("designed", report_json(dp, d.report));
   if (base) {
     j.set("multisine", report_json(dp, *base));
@@ -483,7 +546,7 @@ int run(const Args& a) {
   const id::ExcitationOptions o = options_of(a, scene, loads);
   // a trigonometric polynomial of degree H changes sign at most 2 H times per period
   const int most = 2 * o.harmonics * o.periods;
-  if (o.min_reversals > most) {
+  if (a.family == "fourier" && o.min_reversals > most) {
     throw NumericalError(kFlags, "--min-reversals",
                          "status reversals_unreachable: " + std::to_string(o.min_reversals) +
                              " reversals cannot be met by " + std::to_string(o.harmonics) +
@@ -496,7 +559,9 @@ int run(const Args& a) {
   if (!a.no_baseline || a.start == "multisine") {
     ms = std::make_unique<Multisine>(multisine(scene, loads, dp, a));
   }
-  const Design d = design(scene, loads, o, a, a.start == "multisine" ? ms.get() : nullptr);
+  const Design d = a.family == "torque"
+                       ? design_torque(scene, loads, o, a)
+                       : design(scene, loads, o, a, a.start == "multisine" ? ms.get() : nullptr);
   std::string why;
   const std::string status = design_status(d, o, &why);
   const id::ExcitationReport* base = a.no_baseline ? nullptr : &ms->report;
@@ -535,7 +600,16 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--estimate", a->estimate, "parameter groups: friction,inertia,actuator")
       ->capture_default_str();
   app->add_flag("--per-joint", a->per_joint, "five friction coefficients of each kind");
-  app->add_option("--criterion", a->criterion, "d-optimal | condition")->capture_default_str();
+  app->add_option("--criterion", a->criterion, "d-optimal | condition | worst-std")
+      ->capture_default_str();
+  app->add_option("--family", a->family,
+                  "fourier: position-controlled Fourier motion (gradient, NLopt) | torque: free "
+                  "motion under tone torques clipped at the limit (evolution strategy from the "
+                  "multi-sine)")
+      ->capture_default_str();
+  std::vector<CLI::Option*> fourier, torque;  // the options of one family only
+  torque.push_back(
+      app->add_option("--tones", a->tones, "torque family: tones per motor")->capture_default_str());
   app->add_option("--theta1-range", a->theta1_range, "allowed theta1 [rad], LO:HI");
   app->add_option("--theta2-range", a->theta2_range, "allowed theta2 [rad], LO:HI");
   app->add_option("--singular-margin", a->singular_margin, "least |sin(theta4 - theta3)|")
@@ -547,26 +621,40 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--torque-noise", a->torque_noise, "std of the logged torques [N m]")
       ->capture_default_str();
   app->add_option("--rate", a->rate, "sampling rate of the log [Hz]")->capture_default_str();
-  app->add_option("--periods", a->periods, "periods of the motion")->capture_default_str();
-  app->add_option("--harmonics", a->harmonics, "Fourier harmonics per crank")->capture_default_str();
+  fourier.push_back(app->add_option("--periods", a->periods, "periods of the motion")->capture_default_str());
+  fourier.push_back(app->add_option("--harmonics", a->harmonics, "Fourier harmonics per crank")
+                        ->capture_default_str());
   app->add_option("--design-samples", a->design_samples, "samples of the design objective")
       ->capture_default_str();
-  app->add_option("--starts", a->starts, "multi-start: local solves")->capture_default_str();
+  fourier.push_back(
+      app->add_option("--starts", a->starts, "multi-start: local solves")->capture_default_str());
   app->add_option("--seed", a->seed, "seed of the starts")->capture_default_str();
-  app->add_option("--spread", a->spread, "Fourier amplitudes of the random starts [rad]")
+  fourier.push_back(
+      app->add_option("--spread", a->spread, "Fourier amplitudes of the random starts [rad]")
+          ->capture_default_str());
+  fourier.push_back(
+      app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]")
+          ->capture_default_str());
+  fourier.push_back(
+      app->add_option("--ramp", a->ramp, "fade-in from rest [s]")->capture_default_str());
+  fourier.push_back(app->add_option("--start", a->start,
+                                    "first start: swing (both cranks swing together) | multisine "
+                                    "(its motion fitted) | rest")
+                        ->capture_default_str());
+  fourier.push_back(
+      app->add_option("--method", a->method, "slsqp | mma | ccsaq")->capture_default_str());
+  app->add_option("--max-evaluations", a->max_evaluations,
+                  "fourier: per local solve (0: 80); torque: simulations in the search (0: 160)")
       ->capture_default_str();
-  app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]")
-      ->capture_default_str();
-  app->add_option("--ramp", a->ramp, "fade-in from rest [s]")->capture_default_str();
-  app->add_option("--start", a->start,
-                  "first start: swing (both cranks swing together) | multisine (its motion "
-                  "fitted) | rest")
-      ->capture_default_str();
-  app->add_option("--method", a->method, "slsqp | mma | ccsaq")->capture_default_str();
-  app->add_option("--max-evaluations", a->max_evaluations, "per local solve")->capture_default_str();
   app->add_flag("--no-baseline", a->no_baseline, "skip the multi-sine comparison");
   app->add_flag("--no-plots", a->no_plots, "skip the PNG figures");
-  return [a] { return run(*a); };
+  // the options a user gave that the chosen family does not use: bad input, not ignored
+  return [a, fourier, torque] {
+    for (const CLI::Option* o : a->family == "torque" ? fourier : torque) {
+      if (o->count() > 0) a->family_only.push_back(o->get_name());
+    }
+    return run(*a);
+  };
 }
 
 const bool kRegistered = register_command(

@@ -63,7 +63,7 @@ std::map<std::string, std::vector<double>> read_truth(const id::TorqueLog& log) 
         break;
       }
     }
-    if (v.size() == kJoints || v.size() == kInertialParams) truth[key] = v;
+    if (v.size() == kJoints || v.size() == kInertialParams || v.size() == kActuators) truth[key] = v;
   }
   return truth;
 }
@@ -161,6 +161,13 @@ void write_residuals(const Args& a, const id::IdentifyResult& res, const id::Val
 /// mean over the joints); false otherwise.
 bool true_value(const std::map<std::string, std::vector<double>>& truth,
                 const id::ParameterLayout& layout, int i, const std::string& name, double* tv) {
+  if (layout.is_actuator(i)) {  // true.offset = A,B; true.actuator_coulomb = ...
+    const size_t cut = name.rfind('_');
+    auto it = truth.find(name.substr(0, cut));
+    if (it == truth.end() || it->second.size() != size_t(kActuators)) return false;
+    *tv = it->second[std::stoi(name.substr(cut + 1)) - 1];
+    return true;
+  }
   if (layout.is_inertial(i)) {
     auto it = truth.find("inertial");
     if (it == truth.end()) return false;
@@ -272,6 +279,7 @@ void rates_json(const id::IdentifyResult& res, const id::TorqueLog& log, Json* j
   }
   j->set("rate_source", std::move(rates));
   j->set("std_method", res.std_method);
+  if (!res.std_detail.empty()) j->set("std_detail", res.std_detail);
   if (std::isfinite(res.delay_s)) {
     Json d = Json::object();
     d.set("value_s", res.delay_s);  // the logged torques at t + d match the angles at t
@@ -417,6 +425,7 @@ void print_summary(const Args& a, const id::IdentifyResult& res, const id::Valid
                 res.delay_corrected ? " (corrected: torques shifted by it)" : " (not significant)");
   }
   if (res.accels_estimated) std::printf("  rates: %s\n", res.window_choice.c_str());
+  if (!res.std_detail.empty()) std::printf("  std: %s\n", res.std_detail.c_str());
   std::printf("  rms torque residual: %.4g, %.4g N m (noise floor %.4g, %.4g N m)\n",
               res.rms_torque_residual[0], res.rms_torque_residual[1], res.residual_noise_floor[0],
               res.residual_noise_floor[1]);
@@ -449,10 +458,12 @@ int run(const Args& a) {
   }
   write_residuals(a, res, val, &out);
 
-  // scene_fitted.yaml: the input scene with the identified friction (and links: group inertia)
+  // scene_fitted.yaml: the input scene with the identified friction (and links: group inertia;
+  // actuators: group actuator)
   Scene fitted = scene;
   fitted.params.friction = res.fitted.friction;
   fitted.params.links = res.fitted.links;
+  fitted.params.actuators = res.fitted.actuators;
   write_text_file(out.file("scene_fitted.yaml"), scene_to_yaml(fitted));
 
   Json j = identification_json(a, scene, opt, log, res, val);
@@ -483,7 +494,8 @@ RunFunction setup(CLI::App* app) {
       ->required();
   app->add_option("--estimate", args->settings.estimate,
                   "parameter groups to estimate, comma-separated: friction (always), inertia "
-                  "(the links' 16 standard inertial parameters)")
+                  "(the links' 16 standard inertial parameters), actuator (per motor the "
+                  "torque-sensor offset and the load-independent Coulomb + viscous friction)")
       ->capture_default_str();
   app->add_option("--inertia-prior", args->settings.inertia_prior,
                   "relative std of the prior holding the inertial parameters the log cannot "
@@ -527,7 +539,7 @@ RunFunction setup(CLI::App* app) {
                 "left out, the filter smears the acceleration jump there)");
   app->add_flag("--classical-std", args->settings.classical_std,
                 "std from the residual variance alone (default: errors in variables, the rate "
-                "estimation's noise included)");
+                "estimation's noise included; output error: the window sandwich)");
   app->add_flag("--no-delay", args->settings.no_delay,
                 "do not estimate (and correct) a delay of the torques behind the angles");
   app->add_flag("--no-plots", args->no_plots, "skip the PNG figures");

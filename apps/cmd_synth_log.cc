@@ -1,6 +1,7 @@
 // fivebar synth-log SCENE --out LOG.csv [--rate HZ] [--duration S] [--torque-noise NM]
 //   [--angle-noise RAD] [--seed N] [--quantization RAD] [--excitation scene|multisine]
 //   [--with-rates] [--law coulomb_viscous|stribeck] [--motion MOTION.csv] [--set KEY=VALUE]...
+//   [--torque-offset A,B] [--actuator-coulomb A,B] [--actuator-viscous A,B]
 // A synthetic torque log (interfaces.md, "Torque log CSV") for testing identification: the scene
 // simulated, sampled, with seeded Gaussian sensor noise and optional encoder quantization. The
 // `#` header of the log holds the true friction values and the command that made it. With
@@ -24,6 +25,8 @@
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/torque_log_file.h"
+#include "fivebar/model/actuator.h"
 #include "fivebar/model/friction.h"
 #include "fivebar/model/inertial.h"
 #include "fivebar/model/dynamics.h"
@@ -40,6 +43,8 @@ struct Args {
   std::string excitation = "scene", law, motion;
   double static_coulomb = 0.18, stribeck_velocity = 0.1, stribeck_exponent = 2.0;
   bool with_rates = false;
+  /// actuator terms (tau1, tau2), overriding the scene's `actuators:` when given
+  std::vector<double> torque_offset, actuator_coulomb, actuator_viscous;
   std::string command_line;
 };
 
@@ -58,7 +63,7 @@ void write_log(const std::string& path, const identification::TorqueLog& log) {
     if (ec) throw InputError(path, "--out", "cannot create the directory: " + ec.message());
   }
   try {
-    identification::write_torque_log(path, log);
+    io::write_torque_log(path, log);
   } catch (const identification::LogError& e) {
     throw InputError(e.file(), e.key(), e.reason());
   }
@@ -103,8 +108,9 @@ identification::SynthResult motion_log(const Scene& scene, const LoadExpressions
     log.t.push_back(t[i]);
     log.theta1.push_back(quantize(th1[i] + so.angle_noise * n_th1));
     log.theta2.push_back(quantize(th2[i] + so.angle_noise * n_th2));
-    log.tau1.push_back(ev.M1 + so.torque_noise * n_tau1);
-    log.tau2.push_back(ev.M2 + so.torque_noise * n_tau2);
+    const std::array<double, kActuators>& offset = scene.params.actuators.offset;
+    log.tau1.push_back(ev.M1 + offset[0] + so.torque_noise * n_tau1);
+    log.tau2.push_back(ev.M2 + offset[1] + so.torque_noise * n_tau2);
     if (so.with_rates) {
       log.omega1.push_back(w1[i] + so.rate_noise * n_w1);
       log.omega2.push_back(w2[i] + so.rate_noise * n_w2);
@@ -133,6 +139,13 @@ std::vector<std::string> truth_header(const Args& a, const Scene& scene) {
   std::string inertial;
   for (int i = 0; i < kInertialParams; ++i) inertial += (i ? "," : "") + format_double(pi[i]);
   out.push_back(" true.inertial = " + inertial);
+  const ActuatorParams<double>& act = scene.params.actuators;
+  const std::array<double, kActuators>* terms[] = {&act.offset, &act.coulomb, &act.viscous};
+  for (int g = 0; g < 3; ++g) {  // true.offset, true.actuator_coulomb, true.actuator_viscous
+    const std::string name = identification::actuator_term_name(g * kActuators);
+    out.push_back(" true." + name.substr(0, name.size() - 2) + " = " +
+                  format_double((*terms[g])[0]) + "," + format_double((*terms[g])[1]));
+  }
   const LawDescriptor& law = law_descriptor(fp.law);
   for (int i = 0; i < law.count; ++i) {
     const Coefficient c = law.coefficients[i].id;
@@ -141,6 +154,32 @@ std::vector<std::string> truth_header(const Args& a, const Scene& scene) {
                   joined(coefficient(fp, c)));
   }
   return out;
+}
+
+// --torque-offset, --actuator-coulomb, --actuator-viscous: two values (tau1, tau2) each
+void set_actuators(const Args& a, Scene* scene) {
+  ActuatorParams<double>& act = scene->params.actuators;
+  const std::pair<const char*, const std::vector<double>*> given[] = {
+      {"--torque-offset", &a.torque_offset},
+      {"--actuator-coulomb", &a.actuator_coulomb},
+      {"--actuator-viscous", &a.actuator_viscous}};
+  std::array<double, kActuators>* dst[] = {&act.offset, &act.coulomb, &act.viscous};
+  for (int g = 0; g < 3; ++g) {
+    const std::vector<double>& v = *given[g].second;
+    if (v.empty()) continue;
+    if (v.size() != kActuators) {
+      throw InputError("command line", given[g].first,
+                       "expected two values A,B (tau1, tau2), got " + std::to_string(v.size()));
+    }
+    if (g > 0 && !(v[0] >= 0 && v[1] >= 0)) {
+      throw InputError("command line", given[g].first, "must be >= 0");
+    }
+    *dst[g] = {v[0], v[1]};
+  }
+  if (actuator_friction_active(act) && !law_descriptor(scene->params.friction.law).coulomb_sign) {
+    throw InputError("command line", "--actuator-coulomb/--actuator-viscous",
+                     "actuator friction needs a friction law with a Coulomb sign");
+  }
 }
 
 int run(const Args& a) {
@@ -169,6 +208,7 @@ int run(const Args& a) {
       fp.stribeck_exponent.fill(a.stribeck_exponent);
     }
   }
+  set_actuators(a, &scene);
   identification::SynthOptions so;
   so.rate_hz = a.rate;
   so.duration = a.duration;
@@ -233,6 +273,18 @@ RunFunction setup(CLI::App* app) {
                   "excitation.csv of excite): torques by inverse dynamics; its grid replaces "
                   "--rate and --duration")
       ->type_name("MOTION.csv");
+  app->add_option("--torque-offset", args->torque_offset,
+                  "torque-sensor offsets of tau1, tau2 [N m] (measured = motor + offset)")
+      ->type_name("A,B")
+      ->delimiter(',');
+  app->add_option("--actuator-coulomb", args->actuator_coulomb,
+                  "load-independent Coulomb friction of the motors at O, D0 [N m]")
+      ->type_name("A,B")
+      ->delimiter(',');
+  app->add_option("--actuator-viscous", args->actuator_viscous,
+                  "viscous friction of the motors at O, D0 [N m s/rad]")
+      ->type_name("A,B")
+      ->delimiter(',');
   app->add_option("--law", args->law,
                   "friction law of the log, overriding the scene's: coulomb_viscous | stribeck");
   app->add_option("--static-coulomb", args->static_coulomb, "stribeck: mu_s of every joint")
@@ -255,6 +307,13 @@ RunFunction setup(CLI::App* app) {
     if (a.rate_noise > 0) cmd += " --rate-noise " + format_double(a.rate_noise);
     if (a.quantization > 0) cmd += " --quantization " + format_double(a.quantization);
     if (a.with_rates) cmd += " --with-rates";
+    const std::pair<const char*, const std::vector<double>*> pairs[] = {
+        {" --torque-offset ", &a.torque_offset},
+        {" --actuator-coulomb ", &a.actuator_coulomb},
+        {" --actuator-viscous ", &a.actuator_viscous}};
+    for (const auto& [flag, v] : pairs) {
+      if (v->size() == 2) cmd += flag + format_double((*v)[0]) + "," + format_double((*v)[1]);
+    }
     if (!a.law.empty()) cmd += " --law " + a.law;
     if (a.law == "stribeck") {
       cmd += " --static-coulomb " + format_double(a.static_coulomb) + " --stribeck-velocity " +

@@ -75,6 +75,8 @@ def main():
     ap.add_argument("--duration", type=float, default=10.0)
     ap.add_argument("--torque-noise", type=float, default=0.02)
     ap.add_argument("--out", default="results/excite_mc")
+    ap.add_argument("--motions", default="designed,multisine",
+                    help="which motions to run (designed, multisine or both)")
     args = ap.parse_args()
     work = os.path.join(args.out, "work")
     os.makedirs(work, exist_ok=True)
@@ -82,6 +84,8 @@ def main():
         predicted = {r["name"]: r for r in csv.DictReader(f)}
     rows = []
     for motion, column in (("designed", "std"), ("multisine", "multisine_std")):
+        if motion not in args.motions.split(","):
+            continue
         est = estimates(args, motion, work)
         for name in est[0]:
             if name not in predicted:

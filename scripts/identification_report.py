@@ -8,7 +8,10 @@
                  seeds: the fraction of 95 % intervals (value +- 1.96 std) that cover the truth.
   coverage-angles: issue 16: angles-only logs (or noisy measured rates) over N seeds, for a case:
                  shared (paper loads, 1 kHz), shared200 (200 Hz), per-joint (multisine),
-                 stribeck (500 Hz, 6 s), noisy-rates (--with-rates --rate-noise 0.05).
+                 stribeck (500 Hz, 6 s), noisy-rates (--with-rates --rate-noise 0.05),
+                 output-error (issue 10: --method output-error, rates logged; output-error-angles
+                 from angles only). Also reports the mean error in reported std (the bias) and
+                 the rms of the errors in reported std (1 when the std are honest).
   coverage-inertia: issue 10: logs whose true links are 3-6 % off the scene (CAD_MISMATCH_SETS),
                  identified with the nominal scene and --estimate friction,inertia, over N seeds,
                  --case shared (paper loads) or per-joint (multisine, distinct coefficients):
@@ -196,6 +199,9 @@ CASES = {
                   "--static-coulomb", "0.2", "--stribeck-velocity", "0.5"],
                  ["--law", "stribeck"], None),
     "noisy-rates": (["--with-rates", "--rate-noise", "0.05"], [], None),
+    # issue 10: the output-error method (windows of 0.2 s restarted from the logged state)
+    "output-error": (["--with-rates"], ["--method", "output-error"], None),
+    "output-error-angles": ([], ["--method", "output-error"], None),
 }
 
 
@@ -204,34 +210,47 @@ def coverage_angles(args):
     os.makedirs(work, exist_ok=True)
     synth_opts, id_opts, _ = CASES[args.case]
     covered, total, errors, rows = {}, {}, {}, []
+    in_std = {}
     for seed in range(1, args.seeds + 1):
         log = os.path.join(work, "%s_%d.csv" % (args.case, seed))
         synth(args.fivebar, log, args.duration, seed, False, synth_opts)
-        j = identify(args.fivebar, log, os.path.join(work, "run_" + args.case), id_opts)
+        j = identify(args.fivebar, log, os.path.join(work, "run_" + args.case),
+                     id_opts + args.identify_args.split())
         for q in j["parameters"]:
             std = q["std"] if q["std"] is not None else float("nan")
             hit = abs(q["error"]) <= 1.96 * std  # a missing std covers nothing
             covered[q["name"]] = covered.get(q["name"], 0) + int(hit)
             total[q["name"]] = total.get(q["name"], 0) + 1
             errors.setdefault(q["name"], []).append(q["relative_error"])
+            in_std.setdefault(q["name"], []).append(q["error"] / std)
         rows.append({"seed": seed, "window": j["rate_source"].get("sg_half_window_samples", ""),
+                     "wall_time_s": round(j["identification_wall_time_s"], 3),
+                     "std_method": j.get("std_method", ""),
                      "max_abs_error_in_std": "%.2f" % max(
                          abs(q["error_in_std"]) if q["error_in_std"] is not None else float("inf")
                          for q in j["parameters"])})
+        rows[-1].update({"error_in_std_" + q["name"]: "%.2f" % (q["error"] / (q["std"] or math.nan))
+                         for q in j["parameters"]})
         os.remove(log)
         print("  seed %d: %s" % (seed, rows[-1]), file=sys.stderr)
     summary = []
     for n in covered:
         e = errors[n]
         mean = sum(e) / len(e)
+        z = in_std[n]
         summary.append({"parameter": n, "covered": covered[n], "seeds": total[n],
                         "coverage": "%.3f" % (covered[n] / total[n]),
                         "mean_rel_error": "%+.4f" % mean,
-                        "max_abs_rel_error": "%.4f" % max(abs(x) for x in e)})
+                        "max_abs_rel_error": "%.4f" % max(abs(x) for x in e),
+                        # the bias in reported std, and the rms of the errors in reported std
+                        # (1 when the std are honest)
+                        "mean_error_in_std": "%+.2f" % (sum(z) / len(z)),
+                        "rms_error_in_std": "%.2f" % math.sqrt(sum(x * x for x in z) / len(z))})
     hits = sum(covered.values())
     summary.append({"parameter": "all", "covered": hits, "seeds": sum(total.values()),
                     "coverage": "%.3f" % (hits / sum(total.values())), "mean_rel_error": "",
-                    "max_abs_rel_error": ""})
+                    "max_abs_rel_error": "", "mean_error_in_std": "",
+                    "rms_error_in_std": ""})
     return rows, summary
 
 
@@ -356,6 +375,8 @@ def main():
                                        "coverage-inertia", "fuzz"])
     ap.add_argument("--case", choices=sorted(CASES), default="shared",
                     help="coverage-angles: any; coverage-inertia: shared or per-joint")
+    ap.add_argument("--identify-args", default="",
+                    help="coverage-angles: more options for identify (e.g. '--classical-std')")
     ap.add_argument("--runs", type=int, default=1000)
     ap.add_argument("--seed", type=int, default=16)
     ap.add_argument("--fuzz-duration", type=float, default=0.3)

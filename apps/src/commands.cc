@@ -6,6 +6,7 @@
 #include "fivebar/io/errors.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/tasks_file.h"
+#include "fivebar/io/torque_log_file.h"
 
 namespace fivebar::io {
 
@@ -24,7 +25,8 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   std::string bad;
   if (!id::parse_groups(a.estimate, &opt.layout, &bad)) {
     throw InputError(kFlags, "--estimate",
-                     "unknown group '" + bad + "' (expected friction, inertia, comma-separated)");
+                     "unknown group '" + bad +
+                         "' (expected friction, inertia, actuator, comma-separated)");
   }
   if (!(a.inertia_prior > 0) || !std::isfinite(a.inertia_prior)) {
     throw InputError(kFlags, "--inertia-prior", "must be > 0 (a relative std, e.g. 0.2)");
@@ -37,8 +39,10 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   if (!id::parse_loss(a.loss, &opt.loss)) {
     throw InputError(kFlags, "--loss", "expected none, huber or cauchy, got " + a.loss);
   }
-  if (opt.layout.inertia && opt.method != id::Method::kInverseDynamics) {
-    throw InputError(kFlags, "--estimate", "group inertia needs --method inverse-dynamics");
+  if ((opt.layout.inertia || opt.layout.actuator) && opt.method != id::Method::kInverseDynamics) {
+    throw InputError(kFlags, "--estimate",
+                     std::string("group ") + (opt.layout.inertia ? "inertia" : "actuator") +
+                         " needs --method inverse-dynamics");
   }
   if (!(a.loss_scale > 0)) throw InputError(kFlags, "--loss-scale", "must be > 0");
   if (!(a.sg_window > 0) || a.sg_order < 2 || a.sg_order > 10) {
@@ -76,7 +80,7 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
 
 id::TorqueLog read_log(const std::string& path) {
   try {
-    return id::read_torque_log(path);
+    return io::read_torque_log(path);
   } catch (const id::LogError& e) {
     throw InputError(e.file(), e.key(), e.reason());
   }

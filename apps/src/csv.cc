@@ -1,6 +1,8 @@
 #include "fivebar/io/csv.h"
 
 #include <cerrno>
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <set>
@@ -9,6 +11,93 @@
 #include "fivebar/io/errors.h"
 
 namespace fivebar::io {
+namespace {
+
+using identification::LogError;
+
+std::string trim(const std::string& s) {
+  const char* ws = " \t\r\n";
+  const size_t a = s.find_first_not_of(ws);
+  if (a == std::string::npos) return "";
+  const size_t b = s.find_last_not_of(ws);
+  return s.substr(a, b - a + 1);
+}
+
+// the fields of a line, blanks trimmed; a trailing comma gives a last, empty field
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> fields;
+  std::string::size_type start = 0;
+  while (true) {
+    const auto pos = line.find(',', start);
+    fields.push_back(trim(line.substr(start, pos - start)));
+    if (pos == std::string::npos) break;
+    start = pos + 1;
+  }
+  return fields;
+}
+
+std::string line_key(int line) { return "line " + std::to_string(line); }
+
+// one data row of a CSV: every field a finite number
+std::vector<double> parse_row(const CsvTable& table, const std::vector<std::string>& fields,
+                              int line_no, const CsvRules& rules) {
+  if (fields.size() != table.columns.size()) {
+    throw LogError(table.path, line_key(line_no),
+                   "expected " + std::to_string(table.columns.size()) + " fields, got " +
+                       std::to_string(fields.size()));
+  }
+  std::vector<double> row(fields.size());
+  for (size_t j = 0; j < fields.size(); ++j) {
+    const std::string& f = fields[j];
+    char* end = nullptr;
+    row[j] = std::strtod(f.c_str(), &end);
+    const bool number = !f.empty() && end == f.c_str() + f.size();
+    if (!number || !std::isfinite(row[j])) {
+      throw LogError(table.path, line_key(line_no) + ", column " + table.columns[j],
+                     rules.bad_number ? rules.bad_number(f, number)
+                                      : "'" + f + "' is not a finite number");
+    }
+  }
+  return row;
+}
+
+}  // namespace
+
+int CsvTable::find(const std::string& name) const {
+  for (size_t j = 0; j < columns.size(); ++j) {
+    if (columns[j] == name) return static_cast<int>(j);
+  }
+  return -1;
+}
+
+CsvTable parse_csv(const std::string& text, const std::string& path, const CsvRules& rules) {
+  CsvTable table;
+  table.path = path;
+  std::istringstream in(text);
+  std::string raw;
+  int line_no = 0;
+  while (std::getline(in, raw)) {
+    ++line_no;
+    const std::string line = trim(raw);
+    if (line.empty()) continue;
+    if (line[0] == '#') {
+      table.comments.push_back(line.substr(1));
+      continue;
+    }
+    std::vector<std::string> fields = split(line);
+    if (table.header_line == 0) {
+      if (rules.header) rules.header(fields, line_no);
+      table.columns = std::move(fields);
+      table.header_line = line_no;
+      continue;
+    }
+    table.rows.push_back(parse_row(table, fields, line_no, rules));
+    table.lines.push_back(line_no);
+    if (rules.row) rules.row(table);
+  }
+  return table;
+}
+
 
 int CsvTable::require(const std::string& name) const {
   const int j = find(name);
@@ -37,7 +126,7 @@ CsvTable read_csv(const std::string& path) {
   if (in.bad()) {
     throw InputError(path, "(file)", std::string("cannot read: ") + std::strerror(errno));
   }
-  identification::CsvRules rules;
+  CsvRules rules;
   rules.header = [&path](const std::vector<std::string>& names, int line) {
     // the first non-comment line names the columns
     const std::string where = "line " + std::to_string(line);
@@ -52,8 +141,7 @@ CsvTable read_csv(const std::string& path) {
   };
   CsvTable table;
   try {
-    static_cast<identification::CsvTable&>(table) =
-        identification::parse_csv(text.str(), path, rules);
+    table = parse_csv(text.str(), path, rules);
   } catch (const identification::LogError& e) {
     throw InputError(e.file(), e.key(), e.reason());
   }

@@ -5,6 +5,7 @@
 
 #include "fivebar/io/command.h"
 
+#include "fivebar/model/actuator.h"
 #include "fivebar/model/friction.h"
 #include "fivebar/model/kinematics.h"
 
@@ -67,6 +68,15 @@ const Field kBaseSchema[] = {
     {"friction.model", Kind::kName},
     {"friction.pin_radius", Kind::kNumberOr5},
     {"friction.smoothing_velocity", Kind::kNumber},
+    {"actuators", Kind::kSection},
+    {"actuators.M1", Kind::kSection},
+    {"actuators.M1.offset", Kind::kNumber},
+    {"actuators.M1.coulomb", Kind::kNumber},
+    {"actuators.M1.viscous", Kind::kNumber},
+    {"actuators.M2", Kind::kSection},
+    {"actuators.M2.offset", Kind::kNumber},
+    {"actuators.M2.coulomb", Kind::kNumber},
+    {"actuators.M2.viscous", Kind::kNumber},
     {"loads", Kind::kSection},
     {"loads.M1", Kind::kExpression},
     {"loads.M2", Kind::kExpression},
@@ -635,6 +645,26 @@ void read_friction(const SceneReader& r, FrictionParams<double>* out) {
 
 }
 
+// actuators: per motor (M1 at O, M2 at D0) a sensor offset and a load-independent friction,
+// which needs a joint friction law with a Coulomb sign (the stick-slip logic is the joint's)
+void read_actuators(const SceneReader& r, FrictionLaw law, ActuatorParams<double>* out) {
+  for (int a = 0; a < kActuators; ++a) {
+    const std::string k = std::string("actuators.M") + std::to_string(a + 1) + ".";
+    out->offset[a] = r.number(k + "offset", 0.0);
+    out->coulomb[a] = r.number(k + "coulomb", 0.0);
+    out->viscous[a] = r.number(k + "viscous", 0.0);
+    require(r, k + "coulomb", out->coulomb[a], out->coulomb[a] >= 0, ">= 0");
+    require(r, k + "viscous", out->viscous[a], out->viscous[a] >= 0, ">= 0");
+  }
+  if (!actuator_friction_active(*out) || law_descriptor(law).coulomb_sign) return;
+  const int a = out->coulomb[0] > 0 || out->viscous[0] > 0 ? 0 : 1;
+  const std::string key = std::string("actuators.M") + std::to_string(a + 1) +
+                          (out->coulomb[a] > 0 ? ".coulomb" : ".viscous");
+  r.fail(key, std::string("actuator friction needs a friction.model with a Coulomb sign (") +
+                  "coulomb_viscous, stribeck, power_viscous), got '" + law_descriptor(law).name +
+                  "'" + r.origin(key));
+}
+
 // loads (compiled once here so that a bad expression is reported at load time), initial state
 void read_loads_and_initial(const SceneReader& r, Scene* out) {
   Scene& s = *out;
@@ -751,6 +781,7 @@ Scene build_scene(const SceneReader& r) {
   s.path = r.path();
   read_mechanism(r, &s.params);
   read_friction(r, &s.params.friction);
+  read_actuators(r, s.params.friction.law, &s.params.actuators);
   read_loads_and_initial(r, &s);
   read_integration(r, s.params.friction.law, &s.options);
   read_solver_limits(r, &s);
@@ -856,8 +887,16 @@ std::string scene_to_yaml(const Scene& s) {
     const std::array<double, kJoints>& v = coefficient(f, c.id);
     if (v != fallback) y << "  " << c.key << ": " << per_joint_yaml(v) << "\n";
   }
-  y << "  smoothing_velocity: " << num(f.smoothing_velocity) << "\n"
-    << "loads:\n"
+  y << "  smoothing_velocity: " << num(f.smoothing_velocity) << "\n";
+  const ActuatorParams<double>& act = p.actuators;
+  if (act.offset != ActuatorParams<double>().offset || actuator_friction_active(act)) {
+    y << "actuators:\n";
+    for (int a = 0; a < kActuators; ++a) {
+      y << "  M" << a + 1 << ": {offset: " << num(act.offset[a]) << ", coulomb: "
+        << num(act.coulomb[a]) << ", viscous: " << num(act.viscous[a]) << "}\n";
+    }
+  }
+  y << "loads:\n"
     << "  M1: " << quoted(s.M1) << "\n"
     << "  M2: " << quoted(s.M2) << "\n"
     << "  M3: " << quoted(s.M3) << "\n"

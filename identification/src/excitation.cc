@@ -342,27 +342,62 @@ Status ExcitationProblem::sample(const std::vector<double>& x, int i, bool grad,
 }
 
 double ExcitationProblem::criterion_value(const Eigen::MatrixXd& F, Eigen::MatrixXd* dF) const {
+  return design_criterion(F, dp_.scale, dp_.nominal, opt_.regularization, opt_.criterion, dF);
+}
+
+namespace {
+
+/// log of a p-norm of the diagonal of R^-1 over the parameters with a non-zero nominal, halved
+/// (a std), and its derivative with respect to R
+double worst_std_value(const Eigen::MatrixXd& Rinv, const std::vector<double>& nominal,
+                       Eigen::MatrixXd* W) {
+  constexpr double kP = 16;
+  const int P = static_cast<int>(Rinv.rows());
+  const bool any = std::any_of(nominal.begin(), nominal.end(), [](double v) { return v != 0; });
+  double top = 0;
+  for (int i = 0; i < P; ++i) {
+    if (!any || nominal[i] != 0) top = std::max(top, Rinv(i, i));
+  }
+  double sum = 0;
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(P);
+  for (int i = 0; i < P; ++i) {
+    if (any && nominal[i] == 0) continue;
+    c(i) = std::pow(Rinv(i, i) / top, kP - 1);
+    sum += c(i) * Rinv(i, i) / top;
+  }
+  // value = 0.5 log (sum v^p)^(1/p); dvalue/dv_i = 0.5 v_i^(p-1) / sum v^p; dv_i/dR = -Rinv e_i e_i' Rinv
+  c *= 0.5 / (sum * top);
+  *W = -(Rinv * c.asDiagonal() * Rinv);
+  return 0.5 * (std::log(top) + std::log(sum) / kP);
+}
+
+}  // namespace
+
+double design_criterion(const Eigen::MatrixXd& F, const std::vector<double>& scale_v,
+                        const std::vector<double>& nominal, double regularization,
+                        Criterion criterion, Eigen::MatrixXd* dF) {
   const int P = static_cast<int>(F.rows());
-  const Eigen::VectorXd scale = Eigen::Map<const Eigen::VectorXd>(dp_.scale.data(), P);
+  const Eigen::VectorXd scale = Eigen::Map<const Eigen::VectorXd>(scale_v.data(), P);
   const Eigen::MatrixXd Fs = scale.asDiagonal() * F * scale.asDiagonal();
-  const double lambda = opt_.regularization * Fs.trace() / P;
+  const double lambda = regularization * Fs.trace() / P;
   const Eigen::MatrixXd R = Fs + lambda * Eigen::MatrixXd::Identity(P, P);
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(R);
   const Eigen::VectorXd ev = es.eigenvalues().cwiseMax(1e-300);
   const Eigen::MatrixXd& V = es.eigenvectors();
   double value = 0;
   Eigen::MatrixXd W;  // d value / d R
-  if (opt_.criterion == Criterion::kDOptimal) {
+  if (criterion == Criterion::kDOptimal) {
     value = -ev.array().log().sum() / P;  // minimize -log det / P
     W = -(V * ev.cwiseInverse().asDiagonal() * V.transpose()) / P;
-  } else {
+  } else if (criterion == Criterion::kCondition) {
     value = std::log(ev(P - 1) / ev(0));
     W = V.col(P - 1) * V.col(P - 1).transpose() / ev(P - 1) - V.col(0) * V.col(0).transpose() / ev(0);
+  } else {
+    value = worst_std_value(V * ev.cwiseInverse().asDiagonal() * V.transpose(), nominal, &W);
   }
   if (dF) {
     // R = Fs + lambda(Fs) I with lambda = reg tr(Fs) / P; then Fs = S F S
-    const Eigen::MatrixXd Ws =
-        W + (opt_.regularization / P) * W.trace() * Eigen::MatrixXd::Identity(P, P);
+    const Eigen::MatrixXd Ws = W + (regularization / P) * W.trace() * Eigen::MatrixXd::Identity(P, P);
     *dF = scale.asDiagonal() * Ws * scale.asDiagonal();
   }
   return value;

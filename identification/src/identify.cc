@@ -17,6 +17,7 @@
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/rest.h"
+#include "covariance.h"
 #include "inertia.h"
 #include "noise_model.h"
 
@@ -71,6 +72,11 @@ constexpr double kStructureRatio = 1.15;
 constexpr double kWindowExcess = 0.04;
 /// a torque-to-angle delay beyond this many std is corrected
 constexpr double kDelaySignificance = 3.0;
+/// output error: below this many windows the block sandwich's std are themselves uncertain
+/// (their relative error is about 1 / sqrt(2 (windows - 1)), 24 % for 10 windows)
+constexpr int kFewWindows = 10;
+/// logged rates this much noisier than the angles' (through the noisiest window) are not used
+constexpr double kNoisierRates = 2.0;
 
 std::string fmt(double x, int prec = 3) {
   std::ostringstream s;
@@ -187,7 +193,7 @@ class WindowResidual {
                  const sim::LoadFunction& loads, const std::vector<double>& w1,
                  const std::vector<double>& w2, int i0, int i1, const sim::Options& sim)
       : scene_(scene), layout_(layout), log_(log), i0_(i0), i1_(i1), sim_(sim) {
-    loads_ = logged_loads(log, loads, log.t[i0]);
+    loads_ = logged_loads(log, loads, log.t[i0], scene.actuators.offset);
     initial_ = {log.theta1[i0], log.theta2[i0], w1[i0], w2[i0]};
     sim_.duration = log.t[i1] - log.t[i0];
     sim_.output_step = sim_.duration / (i1 - i0);
@@ -278,7 +284,8 @@ struct Fit {
 };
 
 /// Calls f(std::integral_constant<int, P>) for the parameter counts the layouts give (friction
-/// 2, 4, 10, 20, each with or without the 16 inertial parameters); false for another count.
+/// 2, 4, 10, 20, each with or without the 16 inertial parameters, and with the 6 actuator terms
+/// except after per-joint Stribeck with inertia); false for another count.
 template <typename F>
 bool with_size(int P, F&& f) {
   switch (P) {
@@ -289,6 +296,11 @@ bool with_size(int P, F&& f) {
     case 18: f(std::integral_constant<int, 18>()); return true;
     case 26: f(std::integral_constant<int, 26>()); return true;
     case 36: f(std::integral_constant<int, 36>()); return true;
+    // with the 6 actuator terms
+    case 8: f(std::integral_constant<int, 8>()); return true;
+    case 16: f(std::integral_constant<int, 16>()); return true;
+    case 24: f(std::integral_constant<int, 24>()); return true;
+    case 32: f(std::integral_constant<int, 32>()); return true;
     default: return false;
   }
 }
@@ -592,7 +604,8 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
         !detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), s, f.eval, &D)) {
       continue;
     }
-    r2 += Eigen::Vector2d(std::pow(s.tau1 - ev.M1, 2), std::pow(s.tau2 - ev.M2, 2));
+    const auto& o = p.actuators.offset;  // measured = motor + offset
+    r2 += Eigen::Vector2d(std::pow(s.tau1 - o[0] - ev.M1, 2), std::pow(s.tau2 - o[1] - ev.M2, 2));
     t2 += Eigen::Vector2d(s.tau1 * s.tau1, s.tau2 * s.tau2);
     v += detail::propagated_variance(detail::sensitivity(log.t, i, f.source, sg, f.noise, D));
     ++count;
@@ -902,11 +915,45 @@ void inertial_stage(const Fit& f, const Eigen::MatrixXd& J, IdentifyResult* out)
   }
 }
 
+/// Output error: the block sandwich over the windows (covariance.h), whose residuals are
+/// correlated within a window (they integrate the torque noise from the logged start) and
+/// independent between windows. Empty when too few windows carry residuals (a warning).
+Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
+                                  const std::vector<double>& r, IdentifyResult* out) {
+  std::vector<int> sizes;
+  for (auto [i0, i1] : make_windows(f.cond.log, f.first, f.last, f.opt->window_s)) {
+    sizes.push_back(2 * (i1 - i0));
+  }
+  const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
+  const detail::BlockCovariance bc = detail::block_sandwich(Jf, rv, sizes);
+  if (bc.covariance.size() == 0) {
+    out->warnings.push_back("output error: " + std::to_string(sizes.size()) +
+                            " windows are too few to estimate the correlated residuals' "
+                            "covariance: standard deviations not given (use a longer log or a "
+                            "shorter --window)");
+    return {};
+  }
+  const auto [lo, hi] = std::minmax_element(bc.inflation.begin(), bc.inflation.end());
+  out->std_method = "window-sandwich";
+  out->std_detail = "block sandwich over the residuals of " + std::to_string(bc.blocks) +
+                    " windows (correlated within a window, independent between windows): " +
+                    fmt(*lo) + "-" + fmt(*hi) +
+                    " times the std that treats the angle residuals as independent";
+  if (bc.blocks < kFewWindows) {
+    out->warnings.push_back("output error: the std come from the residuals of only " +
+                            std::to_string(bc.blocks) +
+                            " windows and are themselves uncertain (a longer log, or a shorter "
+                            "--window, gives more)");
+  }
+  return bc.covariance;
+}
+
 /// Covariance of the internal parameters, only on a converged solution with a full-rank
 /// Jacobian (of the parameters off their bounds): errors in variables (sandwich) for inverse
-/// dynamics, else s^2 (J^T J)^-1.
+/// dynamics, the window sandwich for output error, else s^2 (J^T J)^-1.
 void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& Hp,
-                const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
+                const std::vector<detail::Sensitivity>& sens, const std::vector<double>& r,
+                IdentifyResult* out) {
   const int P = f.layout.size();
   out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
   if (!out->converged) {
@@ -944,8 +991,12 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& H
       for (size_t b = 0; b < free.size(); ++b) out->covariance(free[a], free[b]) = Cf(a, b);
     }
   };
-  const bool eiv = f.opt->errors_in_variables && f.opt->method == Method::kInverseDynamics;
-  if (!eiv) {
+  if (f.opt->errors_in_variables && f.opt->method == Method::kOutputError) {
+    const Eigen::MatrixXd Cw = window_covariance(f, Jf, r, out);
+    if (Cw.size() > 0) scatter(Cw);
+    return;
+  }
+  if (!f.opt->errors_in_variables) {
     const double sig2 = out->residual_sigma * out->residual_sigma;
     // the prior at the residual's level: H = J^T J + sig2 / sigma^2
     const Eigen::MatrixXd H2 = Jf.transpose() * Jf + Hpf * (sig2 / s2);
@@ -996,17 +1047,25 @@ void identifiability(const Eigen::MatrixXd& JtJ, const ParameterLayout& layout,
   for (int i = P - 1; i >= 0; --i) {
     out->singular_values.push_back(std::sqrt(std::max(0.0, es.eigenvalues()(i))));
   }
-  const double ratio = out->singular_values.back() / out->singular_values.front();
-  if (ratio < 1e-2) {  // condition number above 100 with unit-norm columns
-    const Eigen::VectorXd v = es.eigenvectors().col(0);
+  // every direction with a condition above 100 (unit-norm columns): the smallest is reported
+  // when it involves a friction or actuator term (inertial-only directions: the inertial report
+  // covers them), the others when they involve an actuator term
+  for (int d = 0; d < P; ++d) {
+    const double ratio = out->singular_values[P - 1 - d] / out->singular_values.front();
+    if (!(ratio < 1e-2)) break;
+    const Eigen::VectorXd v = es.eigenvectors().col(d);
     std::string who;
-    bool friction = false;  // inertial-only directions: the inertial report covers them
+    bool friction = false, motor = false;
     for (int i = 0; i < P; ++i) {
-      if (std::abs(v(i)) > 0.3) who += (who.empty() ? "" : ", ") + names[i];
-      friction = friction || (std::abs(v(i)) > 0.3 && !layout.is_inertial(i));
+      if (!(std::abs(v(i)) > 0.3)) continue;
+      who += (who.empty() ? "" : ", ") + names[i];
+      friction = friction || !layout.is_inertial(i);
+      motor = motor || layout.is_actuator(i);
     }
-    if (friction) out->warnings.push_back("the log cannot separate " + who +
-                            " (smallest/largest scaled singular value " + fmt(ratio) + ")");
+    if (d == 0 ? friction : motor) {
+      out->warnings.push_back("the log cannot separate " + who +
+                              " (smallest/largest scaled singular value " + fmt(ratio) + ")");
+    }
   }
 }
 
@@ -1096,8 +1155,8 @@ void predictions(const Fit& f, IdentifyResult* out) {
         inverse_dynamics(p, f.loads(log.t[i]), log.theta1[i], log.theta2[i], out->omega1[i],
                          out->omega2[i], out->alpha1[i], out->alpha2[i], nullptr, f.eval, &ev);
     if (st.ok()) {
-      out->predicted_tau1[i] = ev.M1;
-      out->predicted_tau2[i] = ev.M2;
+      out->predicted_tau1[i] = ev.M1 + p.actuators.offset[0];  // as the sensor reads it
+      out->predicted_tau2[i] = ev.M2 + p.actuators.offset[1];
     }
   }
 }
@@ -1266,9 +1325,10 @@ bool start_values(Fit* fp, const std::vector<double>& initial, std::vector<doubl
   ParameterLayout pub = f.layout;
   pub.static_as_excess = false;
   *x0_public = initial.empty() ? default_start(pub) : initial;
-  if (pub.inertia && static_cast<int>(x0_public->size()) == pub.friction_size()) {
-    const std::array<double, kInertialParams> pi = standard_inertial(f.scene);
-    x0_public->insert(x0_public->end(), pi.begin(), pi.end());
+  if (static_cast<int>(x0_public->size()) == pub.friction_size()) {
+    // the other groups start at the scene's values
+    const std::vector<double> rest = pub.extract(f.scene);
+    x0_public->insert(x0_public->end(), rest.begin() + pub.friction_size(), rest.end());
   }
   if (static_cast<int>(x0_public->size()) != P) {
     out->status = Status::Error(StatusCode::kInvalidInput,
@@ -1307,6 +1367,30 @@ void init_fit(const Params<double>& scene_in, const sim::LoadFunction& loads, co
 double initial_prior_scale(const Fit& f) {
   const double s = std::max(f.noise.torque[0], f.noise.torque[1]);
   return s > 0 ? s : 1e-3;
+}
+
+/// Logged rates noisier than those the angles give, even through the noisiest Savitzky-Golay
+/// window of the choice (order 5 over 3 samples each side): their noise enters the friction's
+/// sign and viscous terms and the reactions (errors in variables), so the rates and
+/// accelerations are estimated from the angles instead, with a note saying so.
+bool angles_give_better_rates(const Fit& f, IdentifyResult* out) {
+  const TorqueLog& log = f.cond.log;
+  const double dt = log.duration() / std::max(1, log.size() - 1);
+  SgOptions sg = f.sg;
+  sg.half_window_s = (sg.order / 2 + 1) * dt;
+  double g1 = 0, g2 = 0;
+  sg_noise_gains(log.t, sg, &g1, &g2);
+  double from_angles[2];
+  for (int j = 0; j < 2; ++j) {
+    from_angles[j] = g1 * f.noise.angle[j];
+    if (!(f.noise.rate[j] > kNoisierRates * from_angles[j])) return false;
+  }
+  out->notes.push_back("the logged rates (noise " + fmt(f.noise.rate[0]) + ", " +
+                       fmt(f.noise.rate[1]) + " rad/s) are noisier than rates estimated from the "
+                       "angles (at most " + fmt(from_angles[0]) + ", " + fmt(from_angles[1]) +
+                       " rad/s): rates and accelerations estimated from the angles, the logged "
+                       "rates not used");
+  return true;
 }
 
 /// What the stages after the solve share: the data residuals and their Jacobian at the fit, and
@@ -1359,7 +1443,7 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
   const bool id = f.opt->method == Method::kInverseDynamics;
   out->residual_sigma =
       std::sqrt(2.0 * summary.final_cost / std::max(1, summary.num_residuals - P));
-  if (!id) {
+  if (!id && !f.opt->errors_in_variables) {
     out->warnings.push_back(
         "output-error standard deviations treat the angle residuals as independent; within a "
         "window they are correlated (they integrate the torque noise), so the reported std "
@@ -1371,7 +1455,7 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
     rms_pair(an->r, out->rms_angle_residual);
   }
   const Eigen::MatrixXd Hp = prior_information(f);
-  covariance(f, an->J, Hp, an->sens, out);
+  covariance(f, an->J, Hp, an->sens, an->r, out);
   const Eigen::MatrixXd Tinv = to_public(f.layout).inverse();
   identifiability(Tinv.transpose() * (an->J.transpose() * an->J + Hp) * Tinv, f.layout, out);
   estimates(f, x0_public, out);
@@ -1381,15 +1465,15 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
 }  // namespace
 
 sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& scene_loads,
-                               double t0) {
+                               double t0, std::array<double, kActuators> offset) {
   // the simulator calls in nearly increasing t: no shared state, just a binary search
   const std::vector<double>* t = &log.t;
   const std::vector<double>* tau1 = &log.tau1;
   const std::vector<double>* tau2 = &log.tau2;
-  return [t, tau1, tau2, scene_loads, t0](double s) {
+  return [t, tau1, tau2, scene_loads, t0, offset](double s) {
     Loads<double> L = scene_loads(t0 + s);
-    L.M1 = interp(*t, *tau1, t0 + s);
-    L.M2 = interp(*t, *tau2, t0 + s);
+    L.M1 = interp(*t, *tau1, t0 + s) - offset[0];
+    L.M2 = interp(*t, *tau2, t0 + s) - offset[1];
     return L;
   };
 }
@@ -1415,9 +1499,10 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   IdentifyResult out;
   Fit f;
   init_fit(scene_in, loads, log, opt, &f, &out);
-  if (f.layout.inertia && opt.method != Method::kInverseDynamics) {
+  if ((f.layout.inertia || f.layout.actuator) && opt.method != Method::kInverseDynamics) {
     out.status = Status::Error(StatusCode::kInvalidInput,
-                               "the inertia group needs the inverse-dynamics method");
+                               std::string("the ") + (f.layout.inertia ? "inertia" : "actuator") +
+                                   " group needs the inverse-dynamics method");
     return out;
   }
   const int P = f.layout.size();
@@ -1428,6 +1513,9 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   f.source = !log.has_rates || opt.estimate_rates ? detail::RateSource::kFromAngles
              : !log.has_accels                    ? detail::RateSource::kAccelsFromRates
                                                   : detail::RateSource::kLogged;
+  if (f.source != detail::RateSource::kFromAngles && angles_give_better_rates(f, &out)) {
+    f.source = detail::RateSource::kFromAngles;
+  }
   std::vector<double> x0_public;
   if (!start_values(&f, opt.initial, &x0_public, &out)) return out;
   f.prior_scale = initial_prior_scale(f);
@@ -1481,7 +1569,7 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
     o.duration = log.t[i1] - log.t[i0];
     o.output_step = o.duration / (i1 - i0);
     const sim::Result res =
-        sim::simulate(params, logged_loads(log, loads, log.t[i0]),
+        sim::simulate(params, logged_loads(log, loads, log.t[i0], params.actuators.offset),
                       {log.theta1[i0], log.theta2[i0], omega1[i0], omega2[i0]}, o);
     std::vector<double> ts, a, b;
     for (const sim::Row& row : res.rows) {

@@ -16,6 +16,7 @@ bool frictionless(const Params<double>& scene, const Sample& s, const EvalOption
                   const std::array<double, kInertialParams>& pi, Eigen::Matrix<double, 12, 1>* out) {
   Params<double> p = scene;
   p.friction.law = FrictionLaw::kNone;
+  p.actuators = ActuatorParams<double>();  // StructuredResidual adds the actuator terms
   set_standard_inertial(pi.data(), &p);
   Evaluation<double> ev;
   if (!inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr, eval, &ev)
@@ -60,6 +61,7 @@ bool sample_structure(const Params<double>& scene, const Sample& s, const EvalOp
   Params<J5> p = scene.cast<J5>();
   p.friction.law = FrictionLaw::kCoulombViscous;
   p.friction.smoothing_velocity = J5(0);
+  p.actuators = ActuatorParams<J5>();
   for (int j = 0; j < kJoints; ++j) {
     p.friction.coulomb[j] = J5(1);
     p.friction.viscous[j] = J5(0);

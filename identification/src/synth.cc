@@ -2,29 +2,17 @@
 #include "fivebar/identification/synth.h"
 
 #include <cmath>
+#include <limits>
 #include <random>
 
+#include "fivebar/identification/torque_excitation.h"
 #include "fivebar/model/dynamics.h"
 
 namespace fivebar::identification {
 
 sim::LoadFunction multisine_loads(const sim::LoadFunction& scene_loads) {
-  return [scene_loads](double t) {
-    Loads<double> L = scene_loads(t);
-    // four tones per motor, distinct between motors; amplitudes [N m], frequencies [Hz]
-    static const double kF1[] = {0.31, 0.83, 1.7, 3.1}, kF2[] = {0.43, 1.1, 2.3, 2.9};
-    static const double kA[] = {4.0, 3.0, 2.0, 1.5};
-    double m1 = 0, m2 = 0;
-    for (int j = 0; j < 4; ++j) {
-      // Schroeder phases keep the crest factor low
-      const double ph = M_PI * j * (j + 1) / 4.0;
-      m1 += kA[j] * std::sin(2 * M_PI * kF1[j] * t + ph);
-      m2 += kA[j] * std::sin(2 * M_PI * kF2[j] * t + ph + 1.0);
-    }
-    L.M1 = 2.0 + m1;
-    L.M2 = 3.0 + m2;
-    return L;
-  };
+  // four tones per motor around a bias (torque_excitation.cc); never clipped
+  return ToneTorques(4, std::numeric_limits<double>::infinity()).loads(multisine_tones(), scene_loads);
 }
 
 SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction& loads,
@@ -56,8 +44,9 @@ SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction
     log.t.push_back(row.t);
     log.theta1.push_back(quantize(row.theta[0] + opt.angle_noise * n_th1));
     log.theta2.push_back(quantize(row.theta[1] + opt.angle_noise * n_th2));
-    log.tau1.push_back(row.M1 + opt.torque_noise * n_tau1);
-    log.tau2.push_back(row.M2 + opt.torque_noise * n_tau2);
+    // the sensors read the motor torque plus their offset (ActuatorParams)
+    log.tau1.push_back(row.M1 + params.actuators.offset[0] + opt.torque_noise * n_tau1);
+    log.tau2.push_back(row.M2 + params.actuators.offset[1] + opt.torque_noise * n_tau2);
     if (opt.with_rates) {
       log.omega1.push_back(row.omega[0] + opt.rate_noise * n_w1);
       log.omega2.push_back(row.omega[1] + opt.rate_noise * n_w2);

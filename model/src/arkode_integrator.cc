@@ -5,7 +5,6 @@
 #include <arkode/arkode_arkstep.h>
 #include <arkode/arkode_erkstep.h>
 #include <nvector/nvector_serial.h>
-#include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include <algorithm>
@@ -15,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "integrator.h"
+#include "sundials_common.h"
 
 namespace fivebar::sim::detail {
 namespace {
@@ -32,14 +31,7 @@ struct StepEnd {
 class Arkode final : public Integrator {
  public:
   Arkode(const OdeProblem& prob, const Options& opt, double t_end)
-      : prob_(prob), explicit_(opt.method != Method::kArkodeDirk), t_end_(t_end) {
-    SUNContext_Create(nullptr, &ctx_);
-    y_ = N_VNew_Serial(prob.n, ctx_);
-    N_VEnableFusedOps_Serial(y_, SUNTRUE);  // fewer vector calls per step: the state is tiny
-    N_VConst(0.0, y_);
-    out_ = N_VMake_Serial(prob.n, nullptr, ctx_);
-    atol_ = N_VNew_Serial(prob.n, ctx_);
-    for (int i = 0; i < prob.n; ++i) NV_Ith_S(atol_, i) = opt.atol * prob.atol_scale[i];
+      : prob_(prob), explicit_(opt.method != Method::kArkodeDirk), t_end_(t_end), sc_(prob, opt) {
     for (StepEnd* e : {&prev_, &cur_, &cache_}) {
       e->y.assign(prob.n, 0.0);
       e->f.assign(prob.n, 0.0);
@@ -54,26 +46,20 @@ class Arkode final : public Integrator {
         ARKStepFree(&mem_);
       }
     }
-    if (ls_) SUNLinSolFree(ls_);
-    if (A_) SUNMatDestroy(A_);
-    N_VDestroy(atol_);
-    N_VDestroy(y_);
-    N_VDestroy(out_);
-    SUNContext_Free(&ctx_);
   }
 
   bool start(double t0, const double* y0) override {
     if (!ok_) return false;
-    steps_before_ += current_steps();
-    for (int i = 0; i < prob_.n; ++i) NV_Ith_S(y_, i) = y0[i];
+    sc_.steps_before += current_steps();
+    sc_.load(y0, prob_.n);
     cur_.t = t0;
     std::copy(y0, y0 + prob_.n, cur_.y.begin());
     cur_.has_f = false;
     if (explicit_) {
-      return check(ERKStepReInit(mem_, &Arkode::rhs, t0, y_), "ERKStepReInit") &&
+      return check(ERKStepReInit(mem_, &Arkode::rhs, t0, sc_.y), "ERKStepReInit") &&
              check(ERKStepSetStopTime(mem_, t_end_), "ERKStepSetStopTime");
     }
-    return check(ARKStepReInit(mem_, nullptr, &Arkode::rhs, t0, y_), "ARKStepReInit") &&
+    return check(ARKStepReInit(mem_, nullptr, &Arkode::rhs, t0, sc_.y), "ARKStepReInit") &&
            check(ARKStepSetStopTime(mem_, t_end_), "ARKStepSetStopTime");
   }
   bool set_max_step(double h) override {
@@ -82,17 +68,18 @@ class Arkode final : public Integrator {
   }
   bool step(double* y, double* t) override {
     std::swap(prev_, cur_);
-    const int flag = explicit_ ? ERKStepEvolve(mem_, t_end_, y_, t, ARK_ONE_STEP)
-                               : ARKStepEvolve(mem_, t_end_, y_, t, ARK_ONE_STEP);
-    for (int i = 0; i < prob_.n; ++i) y[i] = NV_Ith_S(y_, i);
+    const int flag = explicit_ ? ERKStepEvolve(mem_, t_end_, sc_.y, t, ARK_ONE_STEP)
+                               : ARKStepEvolve(mem_, t_end_, sc_.y, t, ARK_ONE_STEP);
+    sc_.store(y, prob_.n);
     cur_.t = *t;
     std::copy(y, y + prob_.n, cur_.y.begin());
     cur_.has_f = false;
     return check(flag, explicit_ ? "ERKStepEvolve" : "ARKStepEvolve");
   }
   bool dense(double t, double* y) override {
-    N_VSetArrayPointer(y, out_);  // a view of the caller's array: no allocation per call
-    const int flag = explicit_ ? ERKStepGetDky(mem_, t, 0, out_) : ARKStepGetDky(mem_, t, 0, out_);
+    N_VSetArrayPointer(y, sc_.out);  // a view of the caller's array: no allocation per call
+    const int flag = explicit_ ? ERKStepGetDky(mem_, t, 0, sc_.out)
+                               : ARKStepGetDky(mem_, t, 0, sc_.out);
     return check(flag, explicit_ ? "ERKStepGetDky" : "ARKStepGetDky");
   }
   bool sample(double t, double* y) override {
@@ -107,14 +94,14 @@ class Arkode final : public Integrator {
     }
     return true;
   }
-  long steps() override { return steps_before_ + current_steps(); }
-  std::string error() const override { return error_; }
+  long steps() override { return sc_.steps_before + current_steps(); }
+  std::string error() const override { return sc_.error; }
 
  private:
   bool setup_erk(const Options& opt) {
-    mem_ = ERKStepCreate(&Arkode::rhs, 0.0, y_, ctx_);
+    mem_ = ERKStepCreate(&Arkode::rhs, 0.0, sc_.y, sc_.ctx);
     if (!mem_) return fail("ERKStepCreate failed");
-    ERKStepSetErrHandlerFn(mem_, &Arkode::on_error, this);
+    ERKStepSetErrHandlerFn(mem_, &SundialsCommon::on_error, &sc_);
     // ARKODE names tables NAME_stages_embedding_order. Dense output: ARKODE's default degree-5
     // Hermite interpolant (two extra right-hand sides per call; cubic Hermite or Lagrange lose
     // one to two digits at the 1 ms grid, measured with `fivebar accuracy`)
@@ -122,7 +109,7 @@ class Arkode final : public Integrator {
                        : opt.method == Method::kArkodeErk65 ? ARKODE_VERNER_8_5_6
                                                             : ARKODE_FEHLBERG_13_7_8;
     return check(ERKStepSetTableNum(mem_, table), "ERKStepSetTableNum") &&
-           check(ERKStepSVtolerances(mem_, opt.rtol, atol_), "ERKStepSVtolerances") &&
+           check(ERKStepSVtolerances(mem_, opt.rtol, sc_.atol), "ERKStepSVtolerances") &&
            check(ERKStepSetUserData(mem_, this), "ERKStepSetUserData") &&
            check(ERKStepSetMaxNumSteps(mem_, opt.max_steps), "ERKStepSetMaxNumSteps") &&
            // a kink that is not located (switches not located) costs a high-order pair more
@@ -130,9 +117,9 @@ class Arkode final : public Integrator {
            check(ERKStepSetMaxErrTestFails(mem_, kMaxErrTestFails), "ERKStepSetMaxErrTestFails");
   }
   bool setup_dirk(const Options& opt) {
-    mem_ = ARKStepCreate(nullptr, &Arkode::rhs, 0.0, y_, ctx_);
+    mem_ = ARKStepCreate(nullptr, &Arkode::rhs, 0.0, sc_.y, sc_.ctx);
     if (!mem_) return fail("ARKStepCreate failed");
-    ARKStepSetErrHandlerFn(mem_, &Arkode::on_error, this);
+    ARKStepSetErrHandlerFn(mem_, &SundialsCommon::on_error, &sc_);
     bool ok = check(ARKStepSetTableNum(mem_, ARKODE_ARK548L2SA_DIRK_8_4_5, ARKODE_ERK_NONE),
                     "ARKStepSetTableNum");
     // Lagrange dense output for stiff states, as ARKODE recommends: the Hermite one overshoots
@@ -142,22 +129,21 @@ class Arkode final : public Integrator {
       ok = ok && check(ARKStepSetInterpolantType(mem_, ARK_INTERP_LAGRANGE),
                        "ARKStepSetInterpolantType");
     }
-    A_ = SUNDenseMatrix(prob_.n, prob_.n, ctx_);
-    ls_ = SUNLinSol_Dense(y_, A_, ctx_);
-    return ok && check(ARKStepSVtolerances(mem_, opt.rtol, atol_), "ARKStepSVtolerances") &&
+    sc_.make_dense_solver(prob_.n);
+    return ok && check(ARKStepSVtolerances(mem_, opt.rtol, sc_.atol), "ARKStepSVtolerances") &&
            check(ARKStepSetUserData(mem_, this), "ARKStepSetUserData") &&
            check(ARKStepSetMaxNumSteps(mem_, opt.max_steps), "ARKStepSetMaxNumSteps") &&
            check(ARKStepSetMaxErrTestFails(mem_, kMaxErrTestFails), "ARKStepSetMaxErrTestFails") &&
-           check(ARKStepSetLinearSolver(mem_, ls_, A_), "ARKStepSetLinearSolver") &&
+           check(ARKStepSetLinearSolver(mem_, sc_.ls, sc_.A), "ARKStepSetLinearSolver") &&
            (!prob_.freeze || check(ARKStepSetJacFn(mem_, &Arkode::jacobian), "ARKStepSetJacFn"));
   }
   bool fail(const char* what) {
-    error_ = what;
+    sc_.error = what;
     return false;
   }
   bool check(int flag, const char* call) {
     const char* name = explicit_ ? ERKStepGetReturnFlagName(flag) : ARKStepGetReturnFlagName(flag);
-    return check_flag(flag, call, name, &error_);
+    return check_flag(flag, call, name, &sc_.error);
   }
   /// f(t, y) at one end of the step: from the last right-hand side ARKODE evaluated there (the
   /// first-same-as-last stage of Dormand-Prince), else evaluated here.
@@ -167,7 +153,7 @@ class Arkode final : public Integrator {
     if (cache_.has_f && cache_.t == e->t && std::memcmp(cache_.y.data(), e->y.data(), bytes) == 0) {
       e->f = cache_.f;
     } else if (prob_.rhs(e->t, e->y.data(), e->f.data(), prob_.user) != 0) {
-      error_ = "right-hand side failed at a sampled point";
+      sc_.error = "right-hand side failed at a sampled point";
       return false;
     }
     e->has_f = true;
@@ -224,27 +210,13 @@ class Arkode final : public Integrator {
     me->prob_.freeze(yp, false, me->prob_.user);
     return flag == 0 ? 0 : 1;  // > 0: recoverable, ARKODE retries with a smaller step
   }
-  static void on_error(int code, const char* module, const char* function, char* msg,
-                       void* self) {
-    if (code < 0) {
-      static_cast<Arkode*>(self)->error_ = std::string(module) + "/" + function + ": " + msg;
-    }
-  }
-
   OdeProblem prob_;
   bool explicit_;
   double t_end_;
+  SundialsCommon sc_;
   bool ok_ = false;
-  SUNContext ctx_ = nullptr;
-  N_Vector y_ = nullptr;
-  N_Vector out_ = nullptr;  ///< wraps the caller's array for dense output
-  N_Vector atol_ = nullptr;
   void* mem_ = nullptr;
-  SUNMatrix A_ = nullptr;
-  SUNLinearSolver ls_ = nullptr;
-  long steps_before_ = 0;
   StepEnd prev_, cur_, cache_;
-  std::string error_;
 };
 
 }  // namespace

@@ -380,7 +380,7 @@ bool consistent(Context& c, double t, const double* y, const JointModes& slip,
 std::vector<JointModes> candidate_modes(const Context& c, const std::array<bool, 5>& rest,
                                                 const std::array<bool, 5>& no_stick) {
   auto can_hold = [&](int k) {
-    return c.stick && !no_stick[k] && holding_bound(c.params->friction, k) > 0.0;
+    return c.stick && !no_stick[k] && fivebar::can_hold(*c.params, k);
   };
   std::vector<int> idx;
   for (int k = 0; k < 5; ++k) {
@@ -654,6 +654,22 @@ Row make_locked_row(const Context& c, double t, const double* y, const Row* prev
   return row;
 }
 
+/// The passive links' angles (continued from the previous row), rates and accelerations, the
+/// reactions, friction torques and dissipated power of an evaluation, into a row.
+void set_evaluated(const Evaluation<double>& ev, const Row* previous, Row* row) {
+  row->theta[2] = continued(ev.kin.th3, previous, 2);
+  row->theta[3] = continued(ev.kin.th4, previous, 3);
+  row->omega[2] = ev.bias.w3;
+  row->omega[3] = ev.bias.w4;
+  row->alpha[2] = ev.alpha3;
+  row->alpha[3] = ev.alpha4;
+  for (int k = 0; k < kJoints; ++k) {
+    row->N[k] = ev.N[k];
+    row->Mf[k] = ev.Mf[k];
+  }
+  row->P_diss = ev.P_diss;
+}
+
 Row make_row(const Context& c, double t, const double* y, const Row* previous, Status* st) {
   if (!c.full_rows) return make_angle_row(c, t, y, previous, st);
   if (c.locked) return make_locked_row(c, t, y, previous, st);
@@ -674,17 +690,15 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
     *st = at_time(*st, t, y[0], y[1]);
     return row;
   }
-  row.theta = {y[0], y[1], continued(ev.kin.th3, previous, 2),
-               continued(ev.kin.th4, previous, 3)};
-  row.omega = {y[2], y[3], ev.bias.w3, ev.bias.w4};
-  row.alpha = {ev.thdd[0], ev.thdd[1], ev.alpha3, ev.alpha4};
+  row.theta[0] = y[0];
+  row.theta[1] = y[1];
+  row.omega[0] = y[2];
+  row.omega[1] = y[3];
+  row.alpha[0] = ev.thdd[0];
+  row.alpha[1] = ev.thdd[1];
+  set_evaluated(ev, previous, &row);
   row.M1 = L.M1;
   row.M2 = L.M2;
-  for (int k = 0; k < 5; ++k) {
-    row.N[k] = ev.N[k];
-    row.Mf[k] = ev.Mf[k];
-  }
-  row.P_diss = ev.P_diss;
   row.E_diss = y[4];
   row.W_in = y[5];
   row.W_ext = y[6];
@@ -993,19 +1007,9 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
     if (!st.ok()) return at_time(st, m.t, m.theta[0], m.theta[1]);
     Row r = m;
     const Row* previous = out->empty() ? nullptr : &out->back();
-    r.theta[2] = continued(ev.kin.th3, previous, 2);
-    r.theta[3] = continued(ev.kin.th4, previous, 3);
-    r.omega[2] = ev.bias.w3;
-    r.omega[3] = ev.bias.w4;
-    r.alpha[2] = ev.alpha3;
-    r.alpha[3] = ev.alpha4;
+    set_evaluated(ev, previous, &r);
     r.M1 = ev.M1;
     r.M2 = ev.M2;
-    for (int k = 0; k < 5; ++k) {
-      r.N[k] = ev.N[k];
-      r.Mf[k] = ev.Mf[k];
-    }
-    r.P_diss = ev.P_diss;
     r.mode = ev.slip;
     r.hold_margin = ev.hold_margin;
     const Status held = holding_range(params, L, eval, &r);

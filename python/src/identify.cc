@@ -2,7 +2,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.h"
-#include "fivebar/identification/torque_log.h"
+#include "fivebar/io/torque_log_file.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
 
@@ -47,7 +47,7 @@ id::TorqueLog log_from_dict(const py::dict& columns) {
     text += "\n";
   }
   try {
-    return id::parse_torque_log(text, "log");
+    return io::parse_torque_log(text, "log");
   } catch (const id::LogError& e) {
     throw InputError(e.file(), e.key(), e.reason());
   }

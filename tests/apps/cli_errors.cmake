@@ -7,27 +7,7 @@ file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
 set(paper ${SOURCE_DIR}/datasets/scenes/paper.yaml)
 
-# run_fivebar(<expected exit status> <stderr regex or ""> args...)
-function(run_fivebar expected_status stderr_regex)
-  execute_process(COMMAND ${FIVEBAR} ${ARGN} RESULT_VARIABLE status OUTPUT_VARIABLE out
-                  ERROR_VARIABLE err)
-  if(NOT status EQUAL expected_status)
-    message(FATAL_ERROR "fivebar ${ARGN}: exit status ${status}, expected ${expected_status}\n"
-                        "stderr: ${err}")
-  endif()
-  if(expected_status EQUAL 0)
-    return()
-  endif()
-  # exactly one line, in the contract's format
-  string(REGEX MATCHALL "\n" newlines "${err}")
-  list(LENGTH newlines n)
-  if(NOT n EQUAL 1 OR NOT err MATCHES "^fivebar: error: [^\n]+: [^\n]+: [^\n]+\n$")
-    message(FATAL_ERROR "fivebar ${ARGN}: stderr is not one error line:\n${err}")
-  endif()
-  if(NOT err MATCHES "${stderr_regex}")
-    message(FATAL_ERROR "fivebar ${ARGN}: stderr\n${err}does not match ${stderr_regex}")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/run_fivebar.cmake)
 
 # 2: bad input
 file(READ ${paper} text)

@@ -41,6 +41,27 @@ def read_csv(path):
     return list(csv.DictReader(rows))
 
 
+def design_columns(label, out, args):
+    """Runs excite into out; the columns of its excitation.csv (None when it failed)."""
+    code, _, err = run(["excite", PAPER, "--out", out] + args)
+    if code != 0:
+        failures.append("%s: exit %d: %s" % (label, code, err))
+        return None
+    rows = read_csv(os.path.join(out, "excitation.csv"))
+    return {k: [float(r[k]) for r in rows] for k in rows[0]}
+
+
+def motion_log_error(out, log, col):
+    """synth-log --motion along out/excitation.csv, noise-free: (exit, rows, largest torque
+    difference from the motion's M1, M2)."""
+    code, _, err = run(["synth-log", PAPER, "--motion", os.path.join(out, "excitation.csv"),
+                        "--out", log, "--torque-noise", "0", "--angle-noise", "0", "--with-rates"])
+    lrows = read_csv(log) if code == 0 else []
+    worst = max([max(abs(float(a["tau1"]) - b), abs(float(a["tau2"]) - c))
+                 for a, b, c in zip(lrows, col["M1"], col["M2"])] or [float("inf")])
+    return code, len(lrows), worst
+
+
 shutil.rmtree(WORK, ignore_errors=True)
 os.makedirs(WORK)
 bad = os.path.join(WORK, "bad")
@@ -52,7 +73,14 @@ expect_error(2, "below what holding the start pose needs",
 expect_error(2, "excludes the start pose theta1", base + ["--theta1-range", "2:3"], bad)
 expect_error(2, "--theta2-range: expected LO:HI", base + ["--theta2-range", "3:2"], bad)
 expect_error(2, "--estimate", base + ["--estimate", "friction,mass"], bad)
-expect_error(3, "reversals_unreachable", base + ["--min-reversals", "1000"], bad)
+expect_error(3, "reversals_unreachable", base + ["--family", "fourier", "--min-reversals", "1000"], bad)
+# an option of the other family is bad input, not silently ignored (the default family is torque)
+expect_error(2, "--harmonics: applies to --family fourier only", base + ["--harmonics", "3"], bad)
+expect_error(2, "--tones: applies to --family torque only",
+             base + ["--family", "fourier", "--tones", "3"], bad)
+expect_error(2, "--family: expected fourier or torque", base + ["--family", "spline"], bad)
+expect_error(2, "expected d-optimal, condition or worst-std", base + ["--criterion", "a-optimal"], bad)
+expect_error(2, "--duration: must be > 0", base + ["--duration", "0", "--family", "torque"], bad)
 if os.path.exists(bad):
     failures.append("a run rejected for bad input created its output directory")
 
@@ -60,7 +88,7 @@ if os.path.exists(bad):
 # exit 3 with the status, the summary says so, and no excitation.csv
 missed = os.path.join(WORK, "missed")
 expect_error(3, "status reversals_not_met", ["excite", PAPER, "--out", missed, "--torque-limit", "13.4",
-             "--duration", "2", "--periods", "1", "--harmonics", "3", "--design-samples", "120",
+             "--family", "fourier", "--duration", "2", "--periods", "1", "--harmonics", "3", "--design-samples", "120",
              "--starts", "1", "--max-evaluations", "15", "--min-reversals", "6", "--no-plots",
              "--no-baseline", "--method", "slsqp"], missed)
 if json.load(open(os.path.join(missed, "excitation.json")))["status"] != "reversals_not_met":
@@ -69,16 +97,12 @@ if json.load(open(os.path.join(missed, "excitation.json")))["status"] != "revers
 # a small design
 out = os.path.join(WORK, "design")
 limit, margin = 13.4, 0.1
-code, stdout, err = run(["excite", PAPER, "--out", out, "--torque-limit", str(limit),
-                         "--duration", "2", "--periods", "1", "--harmonics", "3",
-                         "--design-samples", "120", "--starts", "1", "--max-evaluations", "15",
-                         "--min-reversals", "1", "--theta1-range", "0.5:3", "--no-plots",
-                         "--no-baseline", "--start", "swing", "--method", "slsqp"])
-if code != 0:
-    failures.append("small design: exit %d: %s" % (code, err))
-else:
-    rows = read_csv(os.path.join(out, "excitation.csv"))
-    col = {k: [float(r[k]) for r in rows] for k in rows[0]}
+col = design_columns("small design", out, [
+    "--torque-limit", str(limit), "--family", "fourier", "--duration", "2", "--periods", "1",
+    "--harmonics", "3",
+    "--design-samples", "120", "--starts", "1", "--max-evaluations", "15", "--min-reversals", "1",
+    "--theta1-range", "0.5:3", "--no-plots", "--no-baseline", "--start", "swing", "--method", "slsqp"])
+if col:
     t = col["t"]
     if len(t) != 2001 or abs(t[1] - 0.001) > 1e-12 or t[0] != 0:
         failures.append("excitation.csv is not a 1 kHz grid over 2 s (%d rows)" % len(t))
@@ -108,19 +132,52 @@ else:
     if [r["name"] for r in std] != ["coulomb", "viscous"] or not all(float(r["std"]) > 0 for r in std):
         failures.append("predicted_std.csv: %s" % std)
     # synth-log along the motion, noise-free: the torques of excitation.csv
-    log = os.path.join(WORK, "log.csv")
-    code, _, err = run(["synth-log", PAPER, "--motion", os.path.join(out, "excitation.csv"),
-                        "--out", log, "--torque-noise", "0", "--angle-noise", "0", "--with-rates"])
-    if code != 0:
-        failures.append("synth-log --motion: exit %d: %s" % (code, err))
-    else:
-        lrows = read_csv(log)
-        worst = max(max(abs(float(a["tau1"]) - b), abs(float(a["tau2"]) - c))
-                    for a, b, c in zip(lrows, col["M1"], col["M2"]))
-        if len(lrows) != len(t) or worst > 1e-9:
-            failures.append("synth-log --motion: %d rows, torques differ by %g" % (len(lrows), worst))
+    code, n, worst = motion_log_error(out, os.path.join(WORK, "log.csv"), col)
+    if code != 0 or n != len(t) or worst > 1e-9:
+        failures.append("synth-log --motion: exit %d, %d rows, torques differ by %g" % (code, n, worst))
     expect_error(2, "missing column", ["synth-log", PAPER, "--motion", PAPER.replace("paper.yaml", "../logs/paper_angles.csv"),
                                        "--out", os.path.join(WORK, "log2.csv")])
+
+# the torque family cannot meet 1000 reversals in 1 s: exit 3 with the status, no excitation.csv
+tmiss = os.path.join(WORK, "torque_missed")
+expect_error(3, "status reversals_not_met", ["excite", PAPER, "--out", tmiss, "--torque-limit", "13.4",
+             "--duration", "1", "--family", "torque", "--design-samples", "50", "--max-evaluations", "9",
+             "--min-reversals", "1000", "--no-plots", "--no-baseline"], tmiss)
+
+# a small torque-driven design (--family torque): the free motion under clipped tone torques
+tout = os.path.join(WORK, "torque")
+col = design_columns("torque design", tout, [
+    "--torque-limit", str(limit), "--duration", "2", "--family", "torque", "--criterion",
+    "worst-std", "--per-joint", "--design-samples", "100", "--max-evaluations", "13",
+    "--min-reversals", "1", "--no-plots", "--seed", "2"])
+if col:
+    rows = col["t"]
+    # the rates and accelerations are the derivatives of the angles and rates, except next to
+    # the events of the free motion (a joint reversing makes the acceleration jump): a few rows
+    h, off, checked = 0.001, {"theta": 0, "omega": 0}, 0
+    for i in range(2, len(rows) - 2, 3):
+        checked += 1
+        for q, w, tol in (("theta1", "omega1", 1e-5), ("theta2", "omega2", 1e-5),
+                          ("omega1", "alpha1", 1e-3), ("omega2", "alpha2", 1e-3)):
+            f = col[q]
+            d = (f[i - 2] - 8 * f[i - 1] + 8 * f[i + 1] - f[i + 2]) / (12 * h)
+            if abs(d - col[w][i]) > tol * (1 + abs(d)) + 1e-4:
+                off[q[:5]] += 1
+    if off["theta"] > 0.03 * checked or off["omega"] > 0.15 * checked:
+        failures.append("torque design: of %d rows, %d rates and %d accelerations are not derivatives"
+                        % (checked, off["theta"], off["omega"]))
+    peak = max(max(abs(x) for x in col["M1"]), max(abs(x) for x in col["M2"]))
+    j = json.load(open(os.path.join(tout, "excitation.json")))
+    if peak > limit * (1 + 1e-9) or j["status"] != "ok" or j["family"] != "torque" \
+            or min(j["designed"]["reversals"]) < 1 or j["designed"]["min_coupler_sine"] < margin:
+        failures.append("torque design: peak %g, status %s, reversals %s" %
+                        (peak, j["status"], j["designed"]["reversals"]))
+    # never worse than its first start, the multi-sine's tones, on the design's objective
+    if j["solver"]["objective"] > j["solver"]["start_objectives"][0] + 1e-12:
+        failures.append("torque design worse than the multi-sine start: %s" % j["solver"])
+    code, n, worst = motion_log_error(tout, os.path.join(WORK, "tlog.csv"), col)
+    if code != 0 or n != len(rows) or worst > 1e-9:
+        failures.append("synth-log --motion along the torque design: exit %d, torques differ by %g" % (code, worst))
 
 for f in failures:
     print("FAIL:", f)

@@ -10,27 +10,7 @@ set(paper ${SOURCE_DIR}/datasets/scenes/paper.yaml)
 set(short --set mechanism.links.2.length=0.2 --set mechanism.links.3.length=0.2
           --set mechanism.point_p=0.15)
 
-# run_fivebar(<expected exit status> <stderr regex or ""> args...); stdout in FIVEBAR_OUT
-function(run_fivebar expected_status stderr_regex)
-  execute_process(COMMAND ${FIVEBAR} ${ARGN} RESULT_VARIABLE status OUTPUT_VARIABLE out
-                  ERROR_VARIABLE err)
-  if(NOT status EQUAL expected_status)
-    message(FATAL_ERROR "fivebar ${ARGN}: exit status ${status}, expected ${expected_status}\n"
-                        "stderr: ${err}")
-  endif()
-  set(FIVEBAR_OUT "${out}" PARENT_SCOPE)
-  if(expected_status EQUAL 0)
-    return()
-  endif()
-  string(REGEX MATCHALL "\n" newlines "${err}")
-  list(LENGTH newlines n)
-  if(NOT n EQUAL 1 OR NOT err MATCHES "^fivebar: error: [^\n]+: [^\n]+: [^\n]+\n$")
-    message(FATAL_ERROR "fivebar ${ARGN}: stderr is not one error line:\n${err}")
-  endif()
-  if(NOT err MATCHES "${stderr_regex}")
-    message(FATAL_ERROR "fivebar ${ARGN}: stderr\n${err}does not match ${stderr_regex}")
-  endif()
-endfunction()
+include(${CMAKE_CURRENT_LIST_DIR}/run_fivebar.cmake)
 
 function(require_text file regex)
   file(READ ${file} text)

@@ -457,6 +457,9 @@ void expect_same(const Scene& a, const Scene& b) {
   EXPECT_EQ(a.params.friction.sigma1, b.params.friction.sigma1);
   EXPECT_EQ(a.params.friction.sigma2, b.params.friction.sigma2);
   EXPECT_EQ(a.params.friction.smoothing_velocity, b.params.friction.smoothing_velocity);
+  EXPECT_EQ(a.params.actuators.offset, b.params.actuators.offset);
+  EXPECT_EQ(a.params.actuators.coulomb, b.params.actuators.coulomb);
+  EXPECT_EQ(a.params.actuators.viscous, b.params.actuators.viscous);
   EXPECT_EQ(a.M1, b.M1);
   EXPECT_EQ(a.M2, b.M2);
   EXPECT_EQ(a.M3, b.M3);
@@ -585,6 +588,36 @@ TEST(SceneLaws, EveryDescriptorCoefficientRoundTripsAndIsRequiredWhereTheLawSays
                    "required by friction.model " + std::string(law.name));
     }
   }
+}
+
+// the actuators: section (per motor offset, Coulomb, viscous), written back only when present
+TEST(SceneYaml, RoundTripsTheActuators) {
+  const Scene a = parse_scene(kPaper + "actuators:\n  M1: {offset: 0.05, coulomb: 0.03}\n",
+                              "p.yaml", {"actuators.M2.viscous=0.0015"});
+  EXPECT_EQ(a.params.actuators.offset[0], 0.05);
+  EXPECT_EQ(a.params.actuators.offset[1], 0.0);
+  EXPECT_EQ(a.params.actuators.coulomb[0], 0.03);
+  EXPECT_EQ(a.params.actuators.viscous[1], 0.0015);
+  const std::string yaml = scene_to_yaml(a);
+  EXPECT_THAT(yaml, HasSubstr("actuators:\n  M1: {offset: 0.05, coulomb: 0.03, viscous: 0}"));
+  const Scene b = parse_scene(yaml, "written.yaml");
+  expect_same(a, b);
+  EXPECT_EQ(scene_to_yaml(b), yaml);
+  // absent: defaults 0, and nothing written
+  const Scene plain = parse_scene(kPaper, "p.yaml");
+  EXPECT_EQ(plain.params.actuators.coulomb, (std::array<double, 2>{0.0, 0.0}));
+  EXPECT_THAT(scene_to_yaml(plain), ::testing::Not(HasSubstr("actuators")));
+}
+
+TEST(SceneErrors, ActuatorValues) {
+  expect_error(kPaper, {"actuators.M1.coulomb=-0.1"}, "actuators.M1.coulomb", ">= 0");
+  expect_error(kPaper, {"actuators.M2.viscous=-1"}, "actuators.M2.viscous", ">= 0");
+  expect_error(kPaper, {"actuators.M3.offset=1"}, "actuators.M3.offset", "M1, M2");
+  // friction that needs a Coulomb sign for its stick-slip logic
+  expect_error(kPaper, {"friction.model=none", "actuators.M2.coulomb=0.1"},
+               "actuators.M2.coulomb", "Coulomb sign");
+  // an offset alone is a sensor property: fine without friction
+  EXPECT_NO_THROW(parse_scene(kPaper, "p.yaml", {"friction.model=none", "actuators.M1.offset=1"}));
 }
 
 }  // namespace

@@ -11,9 +11,10 @@ namespace {
 
 /// One right-hand side as the integrator calls it: forward dynamics with the reaction/friction
 /// loop resolved (friction) or no reaction solve at all (frictionless), loads included.
-void RightHandSide(benchmark::State& state, bool friction) {
+void RightHandSide(benchmark::State& state, bool friction, bool actuators = false) {
   Params<double> p = paper_params();
   if (!friction) p.friction.law = FrictionLaw::kNone;
+  if (actuators) p.actuators.coulomb = p.actuators.viscous = {0.03, 0.002};  // the motors' friction
   EvalOptions opt;
   opt.want_reactions = false;
   opt.want_angles = false;  // as the simulator's right-hand side
@@ -32,6 +33,7 @@ void RightHandSide(benchmark::State& state, bool friction) {
 }
 BENCHMARK_CAPTURE(RightHandSide, friction, true);
 BENCHMARK_CAPTURE(RightHandSide, frictionless, false);
+BENCHMARK_CAPTURE(RightHandSide, actuators, true, true);
 
 /// The paper scene, 2 s on the 1 ms grid, at default settings (no plots, no file output).
 void PaperScene(benchmark::State& state, bool friction) {

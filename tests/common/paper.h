@@ -6,10 +6,12 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "fivebar/model/kinematics.h"
 #include "fivebar/model/params.h"
 #include "fivebar/sim/simulator.h"
 
@@ -27,6 +29,27 @@ inline Loads<double> paper_static_loads(double M1 = 0.0, double M2 = 0.0) {
 }
 
 inline sim::Initial paper_initial() { return {M_PI / 2, M_PI / 2, 0.0, 0.0}; }
+
+/// A state of the cranks with random loads (rates to 40 rad/s, torques to 10 N m, F to 50 N).
+struct RandomState {
+  double th1, th2, w1, w2;
+  Loads<double> loads;
+};
+
+/// n random states of `p` whose pose assembles at least `margin` away from the singularity.
+inline std::vector<RandomState> random_states(const Params<double>& p, int n, uint64_t seed,
+                                              double margin = 0.1) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI), rate(-40, 40), torque(-10, 10);
+  std::vector<RandomState> out;
+  while (static_cast<int>(out.size()) < n) {
+    RandomState s{angle(rng), angle(rng), rate(rng), rate(rng),
+                  {torque(rng), torque(rng), torque(rng), 5 * torque(rng), angle(rng)}};
+    Kinematics<double> k;
+    if (solve_kinematics(p, s.th1, s.th2, &k, margin).ok()) out.push_back(s);
+  }
+  return out;
+}
 
 /// Largest |theta_k(t) - theta_k(0)| over the rows of a run, for the first `angles` angles.
 inline double max_displacement(const sim::Result& r, int angles) {

@@ -1,4 +1,5 @@
-// Test helper shared by the residual tests: random samples of the paper mechanism.
+// Test helpers shared by the identification tests: random samples of the paper mechanism, and
+// synthetic logs of it.
 #pragma once
 
 #include <cmath>
@@ -7,6 +8,7 @@
 #include <vector>
 
 #include "fivebar/identification/residual.h"
+#include "fivebar/identification/synth.h"
 #include "fivebar/model/dynamics.h"
 #include "paper.h"
 
@@ -42,6 +44,22 @@ inline std::vector<Sample> random_samples(const Params<double>& truth, int n,
     out.push_back(s);
   }
   return out;
+}
+
+/// A paper-loads log of `truth` with rates logged: torque noise 0.02 N m, angle noise 1e-5 rad
+/// (multisine: the built-in excitation, which reverses both cranks, replaces M1, M2).
+inline TorqueLog rated_log(const Params<double>& truth, double duration, std::uint64_t seed,
+                           const char* path, bool multisine = false) {
+  SynthOptions so;
+  so.multisine = multisine;
+  so.duration = duration;
+  so.torque_noise = 0.02;
+  so.angle_noise = 1e-5;
+  so.with_rates = true;
+  so.seed = seed;
+  SynthResult r = synthesize_log(truth, paper_loads, {M_PI / 2, M_PI / 2, 0, 0}, so);
+  r.log.path = path;
+  return r.status.ok() ? r.log : TorqueLog{};
 }
 
 }  // namespace fivebar::identification::testing

@@ -3,8 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "fivebar/identification/excitation.h"
+#include "fivebar/identification/synth.h"
+#include "fivebar/identification/torque_excitation.h"
 #include "fivebar/model/inertial.h"
 
 namespace fivebar::identification {
@@ -102,7 +105,7 @@ TEST(Excitation, DesignGradientMatchesFiniteDifferences) {
   o.design_samples = 40;
   o.torque_limit = 20;
   o.groups.per_joint = true;
-  for (Criterion c : {Criterion::kDOptimal, Criterion::kCondition}) {
+  for (Criterion c : {Criterion::kDOptimal, Criterion::kCondition, Criterion::kWorstStd}) {
     o.criterion = c;
     const ExcitationProblem problem(per_joint_scene(), paper_loads, {M_PI / 2, M_PI / 2}, o);
     std::vector<double> x = {0.5, 0.10, -0.05, 0.04, 0.02, -0.08, 0.06,
@@ -150,6 +153,81 @@ TEST(Excitation, GroupsParse) {
   EXPECT_EQ(bad, "friction");
   EXPECT_FALSE(parse_groups("mass", &g, &bad));
   EXPECT_EQ(bad, "mass");
+}
+
+TEST(Excitation, WorstStdCriterionIsTheWorstRelativeStd) {
+  // a diagonal Fisher: the scaled variances are 1 / (s_i^2 F_ii); the criterion is about the
+  // log of the largest std (a p-norm, p = 16, over the parameters with a non-zero value)
+  const std::vector<double> scale = {0.1, 0.02, 1.0}, nominal = {0.1, 0.02, 0.0};
+  Eigen::MatrixXd F = Eigen::MatrixXd::Zero(3, 3);
+  F.diagonal() << 1e6, 1e8, 1.0;  // rel. std 1e-2, 5e-3; the third (value 0) is left out
+  const double v = design_criterion(F, scale, nominal, 0.0, Criterion::kWorstStd, nullptr);
+  EXPECT_GT(v, std::log(1e-2));
+  EXPECT_LT(v, std::log(1e-2) + std::log(2.0) / 32 + 1e-12);
+}
+
+TEST(Excitation, ToneTorquesAreClippedAndContainTheMultisine) {
+  const ToneTorques tones(4, 5.0);
+  const std::vector<double> x = multisine_tones();
+  ASSERT_EQ(static_cast<int>(x.size()), tones.num_variables());
+  const sim::LoadFunction scene = [](double) { return Loads<double>{0.0, 0.0, 6.0, 50.0, M_PI / 2}; };
+  const sim::LoadFunction ms = multisine_loads(scene), clipped = tones.loads(x, scene);
+  const ToneTorques free(4, std::numeric_limits<double>::infinity());
+  int clips = 0;
+  for (double t = 0; t < 3; t += 0.01) {
+    EXPECT_EQ(ms(t).M1, free.torque(x, 0, t));
+    EXPECT_EQ(ms(t).M2, free.torque(x, 1, t));
+    EXPECT_EQ(clipped(t).M3, 6.0);
+    EXPECT_LE(std::abs(clipped(t).M1), 5.0);
+    EXPECT_LE(std::abs(clipped(t).M2), 5.0);
+    clips += std::abs(tones.raw(x, 0, t)) > 5.0 ? 1 : 0;
+  }
+  EXPECT_GT(clips, 0);
+  // more tones: the extra ones silent, the motion the same
+  const std::vector<double> y = resize_tones(x, 4, 6);
+  const ToneTorques six(6, 5.0);
+  for (double t : {0.1, 1.3, 2.7}) EXPECT_DOUBLE_EQ(six.raw(y, 1, t), tones.raw(x, 1, t));
+}
+
+TEST(Excitation, TorqueDesignIsSeededAndNeverWorseThanItsFirstStart) {
+  TorqueDesignOptions o;
+  o.excitation.duration = 1.5;
+  o.excitation.design_samples = 150;
+  o.excitation.torque_limit = 13.4;
+  o.excitation.min_reversals = 0;  // the crank O does not reverse within 1.5 s
+  o.excitation.groups.per_joint = true;
+  o.excitation.criterion = Criterion::kWorstStd;
+  o.max_evaluations = 13;
+  o.seed = 3;
+  const sim::LoadFunction scene = [](double) { return Loads<double>{0.0, 0.0, 6.0, 50.0, M_PI / 2}; };
+  const ToneTorques tones(4, 13.4);
+  const std::vector<std::vector<double>> starts = tone_starts(tones, multisine_tones());
+  ASSERT_EQ(starts.size(), 9u);
+  EXPECT_EQ(starts[0], multisine_tones());
+  const std::array<double, 2> start = {M_PI / 2, M_PI / 2};
+  const TorqueDesignResult a = design_torque_excitation(per_joint_scene(), scene, start, o, starts);
+  const TorqueDesignResult b = design_torque_excitation(per_joint_scene(), scene, start, o, starts);
+  ASSERT_TRUE(a.best.status.ok()) << a.best.status.message;
+  EXPECT_EQ(a.evaluations, 13);
+  EXPECT_EQ(a.best.x, b.best.x);
+  EXPECT_EQ(a.best.objective, b.best.objective);
+  for (size_t i = 0; i < starts.size(); ++i) {
+    if (a.start_feasible[i]) {
+      EXPECT_LE(a.best.objective, a.start_objectives[i]);
+    }
+  }
+  EXPECT_TRUE(a.best.feasible);
+  // asking more reversals than 1.5 s can give: no candidate is feasible, the search says so
+  o.excitation.min_reversals = 1000;
+  o.max_evaluations = 9;
+  EXPECT_FALSE(design_torque_excitation(per_joint_scene(), scene, start, o, starts).best.feasible);
+  EXPECT_LE(a.best.peak_applied, 13.4);
+  // the report's torques (inverse dynamics along the simulated motion) are the applied ones
+  const ExcitationReport& r = a.best.report;
+  for (size_t i = 0; i < r.t.size(); ++i) {
+    EXPECT_NEAR(r.M1[i], a.best.tau1[i], 1e-6) << "t = " << r.t[i];
+    EXPECT_NEAR(r.M2[i], a.best.tau2[i], 1e-6) << "t = " << r.t[i];
+  }
 }
 
 }  // namespace

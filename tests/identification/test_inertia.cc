@@ -64,6 +64,9 @@ void check_structured(const ParameterLayout& layout) {
   const Params<double> scene = paper_params();
   std::vector<double> x = layout.extract(cad_truth());
   for (int i = 0; i < layout.friction_size(); ++i) x[i] = 0.05 + 0.03 * i;
+  for (int i = 0; layout.actuator && i < kActuatorTerms; ++i) {
+    x[layout.actuator_offset() + i] = 0.01 * (i + 1);  // offsets, Coulomb, viscous
+  }
   EvalOptions eval;
   eval.friction_tol = 1e-14;
   eval.friction_max_iter = 200;
@@ -93,6 +96,10 @@ TEST(StructuredResidual, MatchesTheFullModelSharedWithInertia) {
 }
 TEST(StructuredResidual, MatchesTheFullModelPerJoint) {
   check_structured<10>({FrictionLaw::kCoulombViscous, true, false});
+}
+TEST(StructuredResidual, MatchesTheFullModelWithActuators) {
+  check_structured<24>({FrictionLaw::kCoulombViscous, false, true, true});
+  check_structured<16>({FrictionLaw::kCoulombViscous, true, false, true});
 }
 
 TEST(InertialPrior, ZeroAtTheSceneAndAHingeOnTheComInertia) {
@@ -158,16 +165,7 @@ TEST(InertialReport, BaseCombinationsAndParametersLeftAtThePrior) {
 }
 
 TorqueLog cad_log(double duration, std::uint64_t seed) {
-  SynthOptions so;
-  so.duration = duration;
-  so.torque_noise = 0.02;
-  so.angle_noise = 1e-5;
-  so.with_rates = true;
-  so.seed = seed;
-  SynthResult r = synthesize_log(cad_truth(), paper_loads, {M_PI / 2, M_PI / 2, 0, 0}, so);
-  EXPECT_TRUE(r.status.ok()) << r.status.message;
-  r.log.path = "cad.csv";
-  return r.log;
+  return testing::rated_log(cad_truth(), duration, seed, "cad.csv");
 }
 
 TEST(InertiaRecovery, FrictionFromACadMismatchLog) {

@@ -16,23 +16,8 @@ namespace {
 // independent formulation solved by a 22x22 QR: agreement to roundoff of O(100) quantities
 constexpr double kCrossCheckTol = 1e-9;
 
-struct State {
-  double th1, th2, w1, w2;
-  Loads<double> loads;
-};
-
-std::vector<State> random_states(const Params<double>& p, int n, uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> angle(-M_PI, M_PI), rate(-40, 40), torque(-10, 10);
-  std::vector<State> out;
-  while (static_cast<int>(out.size()) < n) {
-    State s{angle(rng), angle(rng), rate(rng), rate(rng),
-            {torque(rng), torque(rng), torque(rng), 5 * torque(rng), angle(rng)}};
-    Kinematics<double> k;
-    if (solve_kinematics(p, s.th1, s.th2, &k, 0.1).ok()) out.push_back(s);
-  }
-  return out;
-}
+using State = testing::RandomState;
+using testing::random_states;
 
 /// Newton-Euler in maximal coordinates: unknowns are the 4 link accelerations (a_cx, a_cy, alpha)
 /// and the 5 joint forces; equations are the 12 body equations about the centres of mass and the

@@ -325,6 +325,37 @@ TEST(Rows, WorkColumnsCloseTheEnergyBalance) {
   EXPECT_LT(worst / scale, kTrapezoid);
 }
 
+// the motors' load-independent friction (actuators:) is part of what optimize minimizes and of
+// the torques and energies it reports: more dissipation than without, the balance still closes
+TEST(Actuators, OptimizeHonoursTheMotorFriction) {
+  BatchOptions options;
+  options.validate = false;
+  Params<double> motors = paper_params();
+  motors.actuators.coulomb = {0.1, 0.1};
+  motors.actuators.viscous = {0.01, 0.01};
+  const TaskResult bare =
+      run_task(paper_params(), paper_loads(), paper_tasks()[1], paper_initial(), options);
+  const TaskResult r = run_task(motors, paper_loads(), paper_tasks()[1], paper_initial(), options);
+  ASSERT_TRUE(bare.solved()) << bare.message;
+  ASSERT_TRUE(r.solved()) << r.message;
+  EXPECT_GT(r.dissipated_energy, bare.dissipated_energy + 0.01);
+  const TrajectoryProblem problem = problem_of(motors, paper_loads(), r, options);
+  std::vector<sim::Row> rows, inverse;
+  ASSERT_TRUE(problem.rows(r.x.data(), 1e-3, &rows).ok());
+  ASSERT_TRUE(sim::inverse_rows(motors, paper_loads(), rows, &inverse).ok());
+  const double e0 = rows.front().kinetic + rows.front().potential;
+  double worst = 0, scale = 0, same = 0;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const sim::Row& row = rows[i];
+    worst = std::max(worst, std::abs(row.kinetic + row.potential - e0 - row.W_in - row.W_ext +
+                                     row.E_diss));
+    scale = std::max({scale, std::abs(row.W_in) + std::abs(row.W_ext), row.E_diss});
+    same = std::max(same, std::abs(row.M1 - inverse[i].M1));
+  }
+  EXPECT_LT(worst / scale, 1e-4);  // trapezoidal rule at 1 ms
+  EXPECT_LE(same, 1e-9);
+}
+
 TEST(ExactLaw, RowsAreTheInverseDynamicsOfTheSceneLaw) {
   // trajectory.csv torques = what `fivebar inverse` computes on the same motion (issue 12.1):
   // sim::inverse_rows with the scene's own (exact sign) friction, not the optimizer's tanh

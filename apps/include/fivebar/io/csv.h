@@ -1,6 +1,7 @@
 // Reading numeric CSV files with a header row (motion files, torque logs).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -8,13 +9,43 @@
 
 namespace fivebar::io {
 
-/// A numeric table read from a CSV file (parsed by identification::parse_csv, the one parser).
-struct CsvTable : identification::CsvTable {
+/// A numeric table parsed from CSV text: `#` comment lines, blank lines, one header row, then
+/// rows of finite numbers. The one CSV parser of the toolkit: torque logs (torque_log_file.h), motion
+/// files and reference trajectories (read_csv).
+struct CsvTable {
+  std::string path;                       ///< as given, for messages
+  std::vector<std::string> columns;       ///< header names, blanks trimmed
+  std::vector<std::vector<double>> rows;  ///< rows[i][j]: row i, column j
+  std::vector<int> lines;                 ///< 1-based line number in the text of each row
+  std::vector<std::string> comments;      ///< `#` lines, trimmed, without the leading '#'
+  int header_line = 0;                    ///< line of the header; 0 when the text has none
+
+  /// Index of column `name`, or -1.
+  int find(const std::string& name) const;
+  bool has(const std::string& name) const { return find(name) >= 0; }
   /// Index of column `name`; throws InputError(`<path>: header: missing column 'name' ...`).
   int require(const std::string& name) const;
   /// The values of column `name` (require()d).
   std::vector<double> column(const std::string& name) const;
 };
+
+/// What a format requires of a CSV beyond the parser's own checks, and how it words a bad field.
+/// Every hook is optional and may throw its own error.
+struct CsvRules {
+  /// Checks the header names (on line `line`) before any row is read.
+  std::function<void(const std::vector<std::string>& names, int line)> header;
+  /// The reason for a field that is not a finite number (`number`: it reads as a number, just
+  /// not a finite one); default "'<field>' is not a finite number".
+  std::function<std::string(const std::string& field, bool number)> bad_number;
+  /// Checks the table each time a row has been added (e.g. time increasing).
+  std::function<void(const CsvTable& table)> row;
+};
+
+/// Parses CSV text (`path` only names it in messages). Throws identification::LogError(`<path>: line N: expected
+/// K fields, got M`) for a row of the wrong length and LogError(`<path>: line N, column NAME:
+/// <bad_number>`) for a field that is not a finite number (strtod syntax), besides whatever the
+/// rules' hooks throw. Text without a header row gives a table with header_line = 0.
+CsvTable parse_csv(const std::string& text, const std::string& path, const CsvRules& rules = {});
 
 /// Reads a CSV of finite numbers under a header row. Blank lines and lines starting with '#'
 /// are skipped. Throws InputError naming the file, the line and column and the reason for a

@@ -111,7 +111,17 @@ class FourierMotion {
 enum class Criterion : int {
   kDOptimal = 0,   ///< maximize log det of the scaled, regularized Fisher information
   kCondition = 1,  ///< minimize log of its condition number
+  /// minimize the log of the worst relative std (a p-norm, p = 16, of the scaled variances of
+  /// the parameters with a non-zero value; all of them when every value is zero)
+  kWorstStd = 2,
 };
+
+/// The criterion of a Fisher matrix F (to minimize): scaled by `scale` (S F S), regularized by
+/// regularization * trace / P times the identity; with dF, its derivative dPhi/dF. `nominal`
+/// chooses the parameters of kWorstStd.
+double design_criterion(const Eigen::MatrixXd& F, const std::vector<double>& scale,
+                        const std::vector<double>& nominal, double regularization,
+                        Criterion criterion, Eigen::MatrixXd* dF);
 
 struct ExcitationOptions {
   double duration = 10;           ///< [s]

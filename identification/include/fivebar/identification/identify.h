@@ -177,7 +177,10 @@ struct IdentifyResult {
   int unwrapped[2] = {0, 0};     ///< one-turn jumps undone in theta1, theta2
   /// robust white-noise std of the logged columns (condition.h) [rad], [N m], [rad/s]
   double angle_noise[2] = {0, 0}, torque_noise[2] = {0, 0}, rate_noise[2] = {0, 0};
-  std::string std_method;  ///< "errors-in-variables" or "residual-variance"
+  /// "errors-in-variables" (inverse dynamics), "window-sandwich" (output error) or
+  /// "residual-variance" (--classical-std)
+  std::string std_method;
+  std::string std_detail;  ///< one sentence on how the std were formed, when there is more to say
   /// torque-to-angle delay d [s]: the logged torques at t + d match the angles at t (positive:
   /// the torques lag); NaN when not estimated. delay_corrected: the fit used torques shifted by d
   double delay_s = std::numeric_limits<double>::quiet_NaN(), delay_std_s = delay_s;
@@ -229,9 +232,9 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
                     const std::vector<double>& omega2, double window_s, double rtol = 1e-9,
                     double budget_s = 10.0);
 
-/// Loads for the simulator: logged tau1, tau2 (linear in t) as M1, M2 and the scene's M3, F,
-/// F_angle, shifted by t0 (the simulator starts at t = 0).
+/// Loads for the simulator: logged tau1, tau2 (linear in t) less the sensors' `offset` as M1, M2
+/// and the scene's M3, F, F_angle, shifted by t0 (the simulator starts at t = 0).
 sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& scene_loads,
-                               double t0);
+                               double t0, std::array<double, kActuators> offset = {0.0, 0.0});
 
 }  // namespace fivebar::identification

@@ -14,6 +14,16 @@
 
 namespace fivebar::identification {
 
+/// The actuator group: offset, Coulomb and viscous friction of each of the two actuators.
+inline constexpr int kActuatorTerms = 3 * kActuators;
+
+/// Name of actuator term i (0..5): offset_1, offset_2, actuator_coulomb_1, actuator_coulomb_2,
+/// actuator_viscous_1, actuator_viscous_2 (1: tau1 / M1 at O, 2: tau2 / M2 at D0).
+inline std::string actuator_term_name(int i) {
+  static const char* kStem[] = {"offset_", "actuator_coulomb_", "actuator_viscous_"};
+  return kStem[i / kActuators] + std::to_string(i % kActuators + 1);
+}
+
 /// Which coefficients are free: the identifiable coefficients of the law's descriptor
 /// (friction.h), in its order: coulomb, viscous, and for kStribeck also static_coulomb,
 /// stribeck_velocity (the exponent stays at the scene's value). Shared: one
@@ -23,11 +33,14 @@ namespace fivebar::identification {
 /// Groups and vector order: friction first (always, size friction_size()), then, when `inertia`,
 /// the 16 standard inertial parameters m_1, mx_1, my_1, J_1, ..., J_4 (inertial.h: per link
 /// mass [kg], first moments m c_x, m c_y [kg m] in the link frame, inertia about the proximal
-/// joint [kg m^2]).
+/// joint [kg m^2]), then, when `actuator`, the 6 actuator terms (kActuatorTerms):
+/// offset_1, offset_2 [N m] (torque-sensor biases of tau1, tau2), actuator_coulomb_1, _2 [N m]
+/// and actuator_viscous_1, _2 [N m s/rad] (the motors' load-independent friction at O, D0).
 struct ParameterLayout {
   FrictionLaw law = FrictionLaw::kCoulombViscous;
   bool per_joint = false;
   bool inertia = false;  ///< group `inertia`: the 16 standard inertial parameters follow
+  bool actuator = false;  ///< group `actuator`: the 6 actuator terms follow
   /// Stribeck: the static_coulomb entries of the vector hold the excess static_coulomb - coulomb
   /// (>= 0 by its bound), so that a fit cannot return static friction below kinetic friction.
   /// identify() solves in this form and reports static_coulomb itself.
@@ -57,8 +70,12 @@ struct ParameterLayout {
   int per_group() const { return per_joint ? kJoints : 1; }
   int friction_size() const { return groups() * per_group(); }
   int inertia_offset() const { return friction_size(); }
-  int size() const { return friction_size() + (inertia ? kInertialParams : 0); }
-  bool is_inertial(int i) const { return inertia && i >= inertia_offset(); }
+  int actuator_offset() const { return inertia_offset() + (inertia ? kInertialParams : 0); }
+  int size() const { return actuator_offset() + (actuator ? kActuatorTerms : 0); }
+  bool is_inertial(int i) const {
+    return inertia && i >= inertia_offset() && i < actuator_offset();
+  }
+  bool is_actuator(int i) const { return actuator && i >= actuator_offset(); }
 
   /// Names of the parameters (interfaces.md: coulomb, viscous; coulomb_1..5, viscous_1..5).
   std::vector<std::string> names() const {
@@ -72,12 +89,16 @@ struct ParameterLayout {
     if (inertia) {
       for (int i = 0; i < kInertialParams; ++i) out.push_back(inertial_name(i));
     }
+    if (actuator) {
+      for (int i = 0; i < kActuatorTerms; ++i) out.push_back(actuator_term_name(i));
+    }
     return out;
   }
 
   /// Unit of parameter i.
   std::string unit(int i) const {
     if (is_inertial(i)) return inertial_unit(i - inertia_offset());
+    if (is_actuator(i)) return (i - actuator_offset()) / kActuators == 2 ? "N m s/rad" : "N m";
     const std::string u = coefficient_info(group(i / per_group())).unit;
     // f multiplies r_k N_k: a coefficient is per N m of load torque
     return u == "rad/s" ? u : (u == "-" ? "1" : "N m " + u) + " (per N m of load)";
@@ -87,6 +108,9 @@ struct ParameterLayout {
   /// velocity, a small positive mass (m > 0); the first moments and J_O are unbounded (the
   /// inertia about the COM is kept > 0 by identify()'s consistency term).
   double lower_bound(int i) const {
+    if (is_actuator(i)) {  // offsets are signed; friction coefficients >= 0
+      return i - actuator_offset() < kActuators ? -std::numeric_limits<double>::max() : 0.0;
+    }
     if (is_inertial(i)) {
       return (i - inertia_offset()) % kInertialPerLink == 0 ? 1e-6
                                                             : -std::numeric_limits<double>::max();
@@ -101,6 +125,17 @@ struct ParameterLayout {
   void apply(const T* x, Params<T>* p) const {
     apply(x, &p->friction);
     if (inertia) set_standard_inertial(x + inertia_offset(), p);
+    if (actuator) apply_actuators(x + actuator_offset(), &p->actuators);
+  }
+
+  /// Writes the 6 actuator terms (offsets, Coulomb, viscous; kActuatorTerms order) into `a`.
+  template <typename T>
+  static void apply_actuators(const T* x, ActuatorParams<T>* a) {
+    for (int k = 0; k < kActuators; ++k) {
+      a->offset[k] = x[k];
+      a->coulomb[k] = x[kActuators + k];
+      a->viscous[k] = x[2 * kActuators + k];
+    }
   }
 
   /// The parameter vector of `p` (friction as extract(p.friction), then its inertial parameters).
@@ -109,6 +144,12 @@ struct ParameterLayout {
     if (inertia) {
       const std::array<double, kInertialParams> pi = standard_inertial(p);
       x.insert(x.end(), pi.begin(), pi.end());
+    }
+    if (actuator) {
+      const ActuatorParams<double>& a = p.actuators;
+      x.insert(x.end(), a.offset.begin(), a.offset.end());
+      x.insert(x.end(), a.coulomb.begin(), a.coulomb.end());
+      x.insert(x.end(), a.viscous.begin(), a.viscous.end());
     }
     return x;
   }
@@ -156,16 +197,19 @@ struct ParameterLayout {
   }
 };
 
-/// Parses a comma-separated list of groups (`friction`, `inertia`) into `layout`; friction is
-/// always estimated. False on an unknown or empty group, naming it in `bad`.
+/// Parses a comma-separated list of groups (`friction`, `inertia`, `actuator`) into `layout`;
+/// friction is always estimated. False on an unknown or empty group, naming it in `bad`.
 inline bool parse_groups(const std::string& list, ParameterLayout* layout, std::string* bad) {
   layout->inertia = false;
+  layout->actuator = false;
   size_t pos = 0;
   while (true) {
     const size_t comma = list.find(',', pos);
     const std::string g = list.substr(pos, comma == std::string::npos ? comma : comma - pos);
     if (g == "inertia") {
       layout->inertia = true;
+    } else if (g == "actuator") {
+      layout->actuator = true;
     } else if (g != "friction") {
       *bad = g;
       return false;

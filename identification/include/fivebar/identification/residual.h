@@ -20,8 +20,9 @@ struct Sample {
   Loads<double> loads;
 };
 
-/// r = (tau1 - M1(x), tau2 - M2(x)) [N m], M from the friction-aware inverse dynamics
-/// (dynamics.h, the reaction/friction loop resolved inside) with the friction coefficients x laid
+/// r = (tau1 - o1 - M1(x), tau2 - o2 - M2(x)) [N m] (o: the torque sensors' offsets), M from
+/// the friction-aware inverse dynamics (dynamics.h, the reaction/friction loop resolved inside,
+/// the actuators' friction included) with the friction coefficients x laid
 /// out by `layout` and every other constant from `scene`. With exact sign (smoothing_velocity 0)
 /// the Coulomb sign of each joint is sign(w_k) of the sample's rates: data, not a function of x,
 /// so r is smooth in x. `operator()` accepts double and ceres::Jet.
@@ -39,8 +40,9 @@ class InverseDynamicsResidual {
     const Status st = inverse_dynamics(p, s_.loads.template cast<T>(), T(s_.th1), T(s_.th2),
                                        T(s_.w1), T(s_.w2), T(s_.a1), T(s_.a2), nullptr, eval_, &ev);
     if (!st.ok()) return false;  // Ceres rejects the step (e.g. the friction loop diverged)
-    r[0] = T(s_.tau1) - ev.M1;
-    r[1] = T(s_.tau2) - ev.M2;
+    // measured = motor torque + the sensor's offset
+    r[0] = T(s_.tau1) - p.actuators.offset[0] - ev.M1;
+    r[1] = T(s_.tau2) - p.actuators.offset[1] - ev.M2;
     return true;
   }
 
@@ -85,6 +87,7 @@ class StructuredResidual {
   StructuredResidual(const Params<double>& scene, const ParameterLayout& layout,
                      const SampleStructure& st, const Sample& s, const EvalOptions& eval)
       : friction_(scene.friction),
+        actuators_(scene.actuators),
         pi0_(standard_inertial(scene)),
         layout_(layout),
         st_(st),
@@ -99,6 +102,13 @@ class StructuredResidual {
     using std::sqrt;
     FrictionParams<T> fp = friction_.template cast<T>();
     layout_.apply(x, &fp);
+    ActuatorParams<T> act = actuators_.template cast<T>();
+    if (layout_.actuator) ParameterLayout::apply_actuators(x + layout_.actuator_offset(), &act);
+    std::array<T, kJoints> motor{};  // actuator friction: a load-independent Mf term
+    for (int j = 0; j < kJoints; ++j) {
+      if (st_.slip[j] == kStuck || st_.slip[j] == JointMode::kRest) continue;
+      motor[j] = actuator_friction(fp, act, j, T(st_.w[j]), coulomb_sign(st_.slip[j]));
+    }
     std::array<T, kInertialParams> pi;
     for (int i = 0; i < kInertialParams; ++i) {
       pi[i] = layout_.inertia ? x[layout_.inertia_offset() + i] : T(pi0_[i]);
@@ -118,7 +128,7 @@ class StructuredResidual {
     for (int k = 0; k < kJoints; ++k) N[k] = sqrt(F0[2 * k] * F0[2 * k] + F0[2 * k + 1] * F0[2 * k + 1]);
     bool converged = false;
     for (int it = 0; it < max_iter_ && !converged; ++it) {
-      for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j];
+      for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j] + motor[j];
       double change = 0, scale = 1e-300;
       for (int k = 0; k < kJoints; ++k) {
         T fx = F0[2 * k], fy = F0[2 * k + 1];
@@ -135,9 +145,9 @@ class StructuredResidual {
       converged = change <= tol_ * scale;
     }
     if (!converged) return false;  // Ceres rejects the step (the loop does not contract here)
-    for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j];
+    for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j] + motor[j];
     for (int a = 0; a < 2; ++a) {
-      T m = T(st_.c(a));
+      T m = T(st_.c(a)) + act.offset[a];
       for (int i = 0; i < kInertialParams; ++i) m += st_.Y(a, i) * pi[i];
       for (int j = 0; j < kJoints; ++j) m += st_.G(a, j) * Mf[j];
       r[a] = T(tau_[a]) - m;
@@ -147,6 +157,7 @@ class StructuredResidual {
 
  private:
   FrictionParams<double> friction_;
+  ActuatorParams<double> actuators_;
   std::array<double, kInertialParams> pi0_;
   ParameterLayout layout_;
   SampleStructure st_;

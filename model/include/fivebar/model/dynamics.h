@@ -9,6 +9,7 @@
 //   energy.h        kinetic and potential energy
 #pragma once
 
+#include "fivebar/model/actuator.h"
 #include "fivebar/model/appell.h"
 #include "fivebar/model/energy.h"
 #include "fivebar/model/evaluation.h"

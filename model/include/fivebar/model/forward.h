@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 
+#include "fivebar/model/actuator.h"
 #include "fivebar/model/appell.h"
 #include "fivebar/model/evaluation.h"
 #include "fivebar/model/friction.h"
@@ -134,7 +135,10 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
   };
   if (p.friction.active()) {
     const std::array<T, kJoints> phi = detail::forward_friction_arms(p, slip, bristle, ev);
-    st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations);
+    std::array<T, kJoints> act;
+    const bool motors = actuator_torques(p, ev->w, ev->slip, &act);
+    st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
+                       motors ? &act : nullptr);
     if (!st.ok()) return st;
     solve(ev->Mf, &ev->F);  // accelerations and reactions of the converged friction torques
     reaction_norms(ev->F, &ev->N);
@@ -142,7 +146,7 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
       const int j = stuck.joint[i];
       using std::abs;
       ev->Mf[j] = hold[j];
-      ev->hold_margin[j] = holding_bound(p.friction, j) * ev->N[j] - abs(hold[j]);
+      ev->hold_margin[j] = holding_capacity(p, j, ev->N[j]) - abs(hold[j]);
     }
     for (int j = 0; j < kJoints; ++j) ev->P_diss += ev->Mf[j] * ev->w[j];
   } else {

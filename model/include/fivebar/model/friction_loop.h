@@ -179,30 +179,49 @@ Status friction_newton_fallback(const std::array<T, kJoints>& phi, const EvalOpt
   return Status::Ok();
 }
 
-}  // namespace detail
-
-/// Resolution of the reaction/friction loop (section 4, steps 1-4, at every call): a fixed point
-/// on N, which contracts when r_k |f_k| is small against the geometry; where it stops
-/// contracting, Newton from two starts. `solve(Mf, F)` evaluates the reactions for friction
-/// torques Mf; phi_k = r_k f_k(w_k) is fixed. The caller solves once more with the returned Mf.
+/// The loop of friction_loop below for the load-dependent torques phi_k N_k alone.
 template <typename T, typename Solve>
-Status friction_loop(const std::array<T, kJoints>& phi, const EvalOptions& opt, Solve&& solve,
-                     std::array<T, kJoints>* N, std::array<T, kJoints>* Mf,
-                     std::array<Vec2<T>, kJoints>* F, int* iterations) {
+Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions& opt,
+                           Solve&& solve, std::array<T, kJoints>* N, std::array<T, kJoints>* Mf,
+                           std::array<Vec2<T>, kJoints>* F, int* iterations) {
   Mf->fill(T(0));
-  const detail::AffineReactions<T> map = detail::probe_reactions(phi, solve);
+  const AffineReactions<T> map = probe_reactions(phi, solve);
   bool contracting = true;
   double ratio = 0.0;
-  if (detail::friction_fixed_point(phi, opt, map, N, Mf, F, iterations, &contracting, &ratio)) {
+  if (friction_fixed_point(phi, opt, map, N, Mf, F, iterations, &contracting, &ratio)) {
     return Status::Ok();
   }
-  const Status st = detail::friction_newton_fallback(phi, opt, map, contracting, ratio, N);
+  const Status st = friction_newton_fallback(phi, opt, map, contracting, ratio, N);
   if (!st.ok()) return st;
   for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
   solve(*Mf, F);
   reaction_norms(*F, N);
   *iterations = opt.friction_max_iter + 1;  // marks a Newton solve
   return Status::Ok();
+}
+
+}  // namespace detail
+
+/// Resolution of the reaction/friction loop (section 4, steps 1-4, at every call): a fixed point
+/// on N, which contracts when r_k |f_k| is small against the geometry; where it stops
+/// contracting, Newton from two starts. `solve(Mf, F)` evaluates the reactions for friction
+/// torques Mf; phi_k = r_k f_k(w_k) is fixed. `extra` (may be null) adds load-independent
+/// torques (the actuators' friction, actuator.h): Mf_k = phi_k N_k + extra_k. The caller solves
+/// once more with the returned Mf.
+template <typename T, typename Solve>
+Status friction_loop(const std::array<T, kJoints>& phi, const EvalOptions& opt, Solve&& solve,
+                     std::array<T, kJoints>* N, std::array<T, kJoints>* Mf,
+                     std::array<Vec2<T>, kJoints>* F, int* iterations,
+                     const std::array<T, kJoints>* extra = nullptr) {
+  if (!extra) return detail::joint_friction_loop(phi, opt, solve, N, Mf, F, iterations);
+  auto shifted = [&](const std::array<T, kJoints>& M, std::array<Vec2<T>, kJoints>* out) {
+    std::array<T, kJoints> all = M;
+    for (int j = 0; j < kJoints; ++j) all[j] += (*extra)[j];
+    solve(all, out);
+  };
+  const Status st = detail::joint_friction_loop(phi, opt, shifted, N, Mf, F, iterations);
+  for (int j = 0; j < kJoints; ++j) (*Mf)[j] += (*extra)[j];
+  return st;
 }
 
 }  // namespace fivebar

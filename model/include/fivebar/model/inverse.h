@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 
+#include "fivebar/model/actuator.h"
 #include "fivebar/model/appell.h"
 #include "fivebar/model/evaluation.h"
 #include "fivebar/model/friction.h"
@@ -121,12 +122,15 @@ Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
   if (p.friction.active()) {
     const std::array<T, kJoints> phi =
         detail::inverse_friction_arms(p, opt, wdot, slip, bristle, ev);
-    st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations);
+    std::array<T, kJoints> act;
+    const bool motors = actuator_torques(p, ev->w, ev->slip, &act);
+    st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
+                       motors ? &act : nullptr);
     if (!st.ok()) return st;
     solve(ev->Mf, &ev->F);
     reaction_norms(ev->F, &ev->N);
     for (int j = 0; j < kJoints; ++j) {
-      if (ev->slip[j] == kStuck) ev->hold_margin[j] = holding_bound(p.friction, j) * ev->N[j];
+      if (ev->slip[j] == kStuck) ev->hold_margin[j] = holding_capacity(p, j, ev->N[j]);
     }
   } else {
     reaction_norms(ev->F, &ev->N);

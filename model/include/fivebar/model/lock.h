@@ -103,7 +103,7 @@ inline Status lock_analysis(const Params<double>& p, const Loads<double>& L, dou
     const std::array<double, kJoints> N_old = out->N;
     reaction_norms(out->F, &out->N);
     std::array<double, kJoints> w;
-    for (int j = 0; j < kJoints; ++j) w[j] = holding_bound(p.friction, j) * out->N[j];
+    for (int j = 0; j < kJoints; ++j) w[j] = holding_capacity(p, j, out->N[j]);
     out->ratio = detail::min_max_ratio(a, w, q, &out->hold);
     double change = 0.0, scale = 1e-300;
     for (int j = 0; j < kJoints; ++j) {

@@ -89,6 +89,31 @@ struct FrictionParams {
   }
 };
 
+/// Number of actuators: the motors at O (torque M1, on link 1) and at D0 (M2, on link 2).
+inline constexpr int kActuators = 2;
+
+/// The two actuators (index 0: M1 at joint O; 1: M2 at joint D0), docs/scene.md `actuators:`.
+/// The motor/gearbox friction c_a sign(w) + v_a w is load-independent and adds to the friction
+/// torque of the driven joint (O or D0); the offset is a torque-sensor bias that enters only
+/// measured torques (measured = motor torque + offset), never the dynamics.
+template <typename T>
+struct ActuatorParams {
+  std::array<T, kActuators> offset{};   ///< sensor bias [N m]
+  std::array<T, kActuators> coulomb{};  ///< c_a [N m]
+  std::array<T, kActuators> viscous{};  ///< v_a [N m s/rad]
+
+  template <typename U>
+  ActuatorParams<U> cast() const {
+    ActuatorParams<U> out;
+    for (int a = 0; a < kActuators; ++a) {
+      out.offset[a] = U(offset[a]);
+      out.coulomb[a] = U(coulomb[a]);
+      out.viscous[a] = U(viscous[a]);
+    }
+    return out;
+  }
+};
+
 /// Every constant of the mechanism (the loads, which depend on time, are in Loads).
 template <typename T>
 struct Params {
@@ -98,6 +123,7 @@ struct Params {
   int assembly = kElbowUp;            ///< kElbowUp or kElbowDown
   T gravity{};                        ///< g [m/s^2], along -y
   FrictionParams<T> friction;
+  ActuatorParams<T> actuators;  ///< motor friction and torque-sensor offsets (default none)
 
   template <typename U>
   Params<U> cast() const {
@@ -108,6 +134,7 @@ struct Params {
     out.assembly = assembly;
     out.gravity = U(gravity);
     out.friction = friction.template cast<U>();
+    out.actuators = actuators.template cast<U>();
     return out;
   }
 };

@@ -67,7 +67,8 @@ struct Holding {
   /// any joint; friction can supply the rest of any torque within the range below
   T M1{}, M2{};
   std::array<T, kJoints> N{};      ///< joint reactions at that equilibrium [N] (O, B, C, D, D0)
-  std::array<T, kJoints> bound{};  ///< mu_s,k r_k N_k [N m] (0 without friction)
+  /// mu_s,k r_k N_k [N m], plus the actuator's Coulomb c_a at O, D0 (0 without friction)
+  std::array<T, kJoints> bound{};
   /// the range of each actuator, the other at its equilibrium value, over which static friction
   /// holds the pose [N m]: friction at all five joints, as the simulator's lock (lock.h) decides
   /// it (double); for other scalars the sub-range M_eq +- bound that the crank joint O (D0) holds
@@ -119,7 +120,7 @@ Status holding_torques(const Params<T>& p, const Loads<T>& L, const T& th1, cons
   h->M2 = ev.M2;
   h->N = ev.N;
   for (int j = 0; j < kJoints; ++j) {
-    h->bound[j] = p.friction.active() ? T(holding_bound(p.friction, j) * ev.N[j]) : zero;
+    h->bound[j] = p.friction.active() ? T(holding_capacity(p, j, ev.N[j])) : zero;
   }
   T ext[4] = {h->bound[0], h->bound[0], h->bound[4], h->bound[4]};  // lower M1, upper M1, ...
   if constexpr (std::is_same_v<T, double>) {
@@ -217,14 +218,15 @@ inline Status holding_polygon(const Params<double>& p, const Loads<double>& L, d
   };
   std::vector<std::array<double, 2>> corners;
   for (int pattern = 0; pattern < 32; ++pattern) {
-    std::array<double, kJoints> phi{}, N{}, Mf{};
+    std::array<double, kJoints> phi{}, N{}, Mf{}, motor{};  // motor: actuator Coulomb c_a
     for (int j = 0; j < kJoints; ++j) {
       const double sign = (pattern >> j) & 1 ? 1.0 : -1.0;
       phi[j] = p.friction.active() ? sign * holding_bound(p.friction, j) : 0.0;
+      motor[j] = p.friction.active() ? sign * holding_capacity(p, j, 0.0) : 0.0;
     }
     std::array<Vec2<double>, kJoints> F;
     int iterations = 0;
-    st = friction_loop(phi, opt, solve, &N, &Mf, &F, &iterations);
+    st = friction_loop(phi, opt, solve, &N, &Mf, &F, &iterations, &motor);
     if (!st.ok()) return st;
     const Vec2<double> M = Vec2<double>(h.M1, h.M2) + friction_transpose(k, Mf);
     corners.push_back({M[0], M[1]});

@@ -9,9 +9,17 @@
 
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/torque_log.h"
+#include "fivebar/io/csv.h"
+#include "fivebar/io/torque_log_file.h"
 
 namespace fivebar::identification {
 namespace {
+
+using io::CsvTable;
+using io::parse_csv;
+using io::parse_torque_log;
+using io::read_torque_log;
+using io::write_torque_log;
 
 using ::testing::AllOf;
 using ::testing::HasSubstr;

@@ -1,0 +1,108 @@
+// Torque-driven excitation design (issue 11, `excite --family torque`): the motor torques are
+// sums of tones clipped at the torque limit, the motion is the mechanism's free response to them
+// (the simulator), and a seeded evolution strategy chooses the tones for information. The
+// built-in multi-sine of synth-log is one member of the family (multisine_tones) and the first
+// start, so the design is never worse than it on the design's objective.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "fivebar/identification/excitation.h"
+#include "fivebar/model/params.h"
+#include "fivebar/model/status.h"
+#include "fivebar/sim/simulator.h"
+
+namespace fivebar::identification {
+
+/// Motor torques M_j(t) = clip(b_j + sum_k a_jk sin(2 pi f_jk t + phi_jk), +-limit), j = 1, 2.
+/// Variables per motor: b, a_1..a_K, f_1..f_K [Hz], phi_1..phi_K [rad]; motor 1's first.
+class ToneTorques {
+ public:
+  ToneTorques(int tones, double limit) : k_(tones), limit_(limit) {}
+  int tones() const { return k_; }
+  double limit() const { return limit_; }
+  int per_motor() const { return 1 + 3 * k_; }
+  int num_variables() const { return 2 * per_motor(); }
+  /// The unclipped sum of motor j (0, 1) at t.
+  double raw(const std::vector<double>& x, int j, double t) const;
+  /// The applied torque: raw clipped at +-limit.
+  double torque(const std::vector<double>& x, int j, double t) const;
+  /// The scene's loads with M1, M2 replaced by the torques of x.
+  sim::LoadFunction loads(const std::vector<double>& x, const sim::LoadFunction& scene) const;
+  /// A typical step of each variable for the search (torques: limit / 4, frequencies 0.3 Hz,
+  /// phases 1 rad).
+  std::vector<double> steps() const;
+  /// Keeps biases in [-limit, limit], amplitudes in [0, 4 limit], frequencies in [0.02, 8] Hz.
+  void bound(std::vector<double>* x) const;
+
+ private:
+  int k_;
+  double limit_;
+};
+
+/// The variables of synth-log's built-in multi-sine (4 tones per motor, no clip reached at its
+/// 13.4 N m peak): multisine_loads is ToneTorques(4, infinity) at these.
+std::vector<double> multisine_tones();
+
+/// `x` with `tones` tones per motor: the extra tones at zero amplitude (frequencies spread above
+/// the given ones), or the first `tones` ones.
+std::vector<double> resize_tones(const std::vector<double>& x, int from, int tones);
+
+struct TorqueDesignOptions {
+  ExcitationOptions excitation;  ///< limits, noise, criterion, groups, duration, design_samples
+  int tones = 4;
+  int max_evaluations = 160;   ///< simulations in the search (the first is the start)
+  int offspring = 4;           ///< candidates per generation (evaluated two at a time)
+  double step = 0.3;           ///< initial mutation, in units of ToneTorques::steps()
+  std::uint64_t seed = 1;
+  sim::Options sim;            ///< the scene's solver settings (duration, output step overridden)
+};
+
+/// One motion of the family on a grid: the simulated motion with its Fisher information,
+/// torques by inverse dynamics, reversal counts, coupler sine and angle ranges (`report`), the
+/// applied torques, and the design's objective (the criterion; NaN when the run failed).
+struct TorqueCandidate {
+  std::vector<double> x;
+  Status status;
+  double objective = 0;
+  bool feasible = false;
+  ExcitationReport report;
+  std::vector<double> tau1, tau2;  ///< applied torques
+  double peak_applied = 0;         ///< max |tau1|, |tau2|
+};
+
+/// Simulates the tones of x from rest at `start` over the duration with output every `step`
+/// seconds, evaluates the design's criterion on that grid and its constraints (reversals >=
+/// min_reversals, coupler sine >= singular margin (the run stops there), angle ranges).
+TorqueCandidate evaluate_tones(const Params<double>& scene, const sim::LoadFunction& scene_loads,
+                               std::array<double, 2> start, const TorqueDesignOptions& options,
+                               const std::vector<double>& x, double step);
+
+struct TorqueDesignResult {
+  TorqueCandidate best;
+  int best_start = 0;  ///< the start the search went on from
+  std::vector<double> start_objectives;
+  std::vector<bool> start_feasible;
+  int evaluations = 0, improvements = 0;
+};
+
+/// The starts of the search from x0 (the multi-sine's tones): x0 itself first, then x0 with its
+/// amplitudes times 1, 3, 10 (clipped at the limit: towards bang-bang torques) and its
+/// frequencies times 1, 0.7, 0.5 (longer spins between reversals): 9 starts.
+std::vector<std::vector<double>> tone_starts(const ToneTorques& tones, const std::vector<double>& x0);
+
+/// The search: every start is evaluated, then an elitist (1 + lambda) evolution strategy goes on
+/// from the best one (normal mutations scaled by steps(), step size grown by 1.5 after an
+/// improving generation and shrunk by 0.8 otherwise), seeded, on the design grid
+/// (design_samples over the duration). Deterministic for a seed whatever the threads. The best
+/// feasible candidate wins (feasible before infeasible; among infeasible, the smaller miss).
+TorqueDesignResult design_torque_excitation(const Params<double>& scene,
+                                            const sim::LoadFunction& scene_loads,
+                                            std::array<double, 2> start,
+                                            const TorqueDesignOptions& options,
+                                            const std::vector<std::vector<double>>& starts);
+
+}  // namespace fivebar::identification

@@ -1,0 +1,247 @@
+// Torque-driven excitation design: tone torques, their free motion, a seeded evolution strategy.
+#include "fivebar/identification/torque_excitation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <random>
+#include <thread>
+
+namespace fivebar::identification {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// synth-log's multi-sine: four tones per motor [Hz], amplitudes [N m], Schroeder-like phases
+// (motor 2's shifted by 1 rad), biases 2 and 3 N m
+constexpr double kMultisineF1[] = {0.31, 0.83, 1.7, 3.1}, kMultisineF2[] = {0.43, 1.1, 2.3, 2.9};
+constexpr double kMultisineA[] = {4.0, 3.0, 2.0, 1.5};
+constexpr double kMultisineBias[] = {2.0, 3.0};
+
+// how far a candidate misses the constraints (0: feasible; infinity: the run failed)
+double violation(const TorqueCandidate& c, const ExcitationOptions& o) {
+  if (!c.status.ok() || !std::isfinite(c.objective)) return kInf;
+  double v = 0;
+  const ExcitationReport& r = c.report;
+  for (int k : r.reversals) v += std::max(0, o.min_reversals - k);
+  if (r.min_sine < o.singular_margin) v += 1 + o.singular_margin - r.min_sine;
+  for (int j = 0; j < 2; ++j) {
+    if (!std::isfinite(o.theta_lo[j])) continue;
+    v += std::max(0.0, o.theta_lo[j] - r.theta_min[j]) + std::max(0.0, r.theta_max[j] - o.theta_hi[j]);
+  }
+  return v;
+}
+
+// a beats b: feasible first, then the lower objective; among infeasible ones the smaller miss
+bool better(const TorqueCandidate& a, double va, const TorqueCandidate& b, double vb) {
+  if ((va == 0) != (vb == 0)) return va == 0;
+  if (va > 0) return va < vb;
+  return a.objective < b.objective;
+}
+
+}  // namespace
+
+double ToneTorques::raw(const std::vector<double>& x, int j, double t) const {
+  const double* v = x.data() + j * per_motor();
+  double m = 0;
+  for (int k = 0; k < k_; ++k) m += v[1 + k] * std::sin(2 * M_PI * v[1 + k_ + k] * t + v[1 + 2 * k_ + k]);
+  return v[0] + m;
+}
+
+double ToneTorques::torque(const std::vector<double>& x, int j, double t) const {
+  return std::clamp(raw(x, j, t), -limit_, limit_);
+}
+
+sim::LoadFunction ToneTorques::loads(const std::vector<double>& x, const sim::LoadFunction& scene) const {
+  return [self = *this, x, scene](double t) {
+    Loads<double> L = scene(t);
+    L.M1 = self.torque(x, 0, t);
+    L.M2 = self.torque(x, 1, t);
+    return L;
+  };
+}
+
+std::vector<double> ToneTorques::steps() const {
+  std::vector<double> s;
+  for (int j = 0; j < 2; ++j) {
+    s.push_back(limit_ / 4);
+    for (int k = 0; k < k_; ++k) s.push_back(limit_ / 4);
+    for (int k = 0; k < k_; ++k) s.push_back(0.3);
+    for (int k = 0; k < k_; ++k) s.push_back(1.0);
+  }
+  return s;
+}
+
+void ToneTorques::bound(std::vector<double>* x) const {
+  for (int j = 0; j < 2; ++j) {
+    double* v = x->data() + j * per_motor();
+    v[0] = std::clamp(v[0], -limit_, limit_);
+    for (int k = 0; k < k_; ++k) {
+      v[1 + k] = std::clamp(v[1 + k], 0.0, 4 * limit_);
+      v[1 + k_ + k] = std::clamp(v[1 + k_ + k], 0.02, 8.0);
+    }
+  }
+}
+
+std::vector<double> multisine_tones() {
+  std::vector<double> x;
+  for (int j = 0; j < 2; ++j) {
+    const double* f = j == 0 ? kMultisineF1 : kMultisineF2;
+    x.push_back(kMultisineBias[j]);
+    for (int k = 0; k < 4; ++k) x.push_back(kMultisineA[k]);
+    for (int k = 0; k < 4; ++k) x.push_back(f[k]);
+    for (int k = 0; k < 4; ++k) x.push_back(M_PI * k * (k + 1) / 4.0 + (j == 0 ? 0.0 : 1.0));
+  }
+  return x;
+}
+
+std::vector<double> resize_tones(const std::vector<double>& x, int from, int tones) {
+  std::vector<double> y;
+  for (int j = 0; j < 2; ++j) {
+    const double* v = x.data() + j * (1 + 3 * from);
+    y.push_back(v[0]);
+    for (int part = 0; part < 3; ++part) {
+      for (int k = 0; k < tones; ++k) {
+        if (k < from) {
+          y.push_back(v[1 + part * from + k]);
+        } else {
+          // a silent tone (amplitude 0) at a frequency above the given ones, phase 0
+          const double top = from > 0 ? v[1 + from + from - 1] : 1.0;
+          y.push_back(part == 0 ? 0.0 : part == 1 ? top * (1.0 + 0.37 * (k - from + 1)) : 0.0);
+        }
+      }
+    }
+  }
+  return y;
+}
+
+TorqueCandidate evaluate_tones(const Params<double>& scene, const sim::LoadFunction& scene_loads,
+                               std::array<double, 2> start, const TorqueDesignOptions& options,
+                               const std::vector<double>& x, double step) {
+  const ExcitationOptions& o = options.excitation;
+  const ToneTorques tones(options.tones, o.torque_limit);
+  TorqueCandidate c;
+  c.x = x;
+  c.objective = std::numeric_limits<double>::quiet_NaN();
+  sim::Options so = options.sim;
+  so.duration = o.duration;
+  so.output_step = step;
+  so.singular_margin = std::max(so.singular_margin, o.singular_margin);
+  sim::Initial init;
+  init.theta1 = start[0];
+  init.theta2 = start[1];
+  const sim::Result res = sim::simulate(scene, tones.loads(x, scene_loads), init, so);
+  c.status = res.status;
+  if (!res.status.ok()) return c;
+  std::vector<double> t;
+  std::vector<MotionState> states;
+  for (const sim::Row& r : res.rows) {
+    t.push_back(r.t);
+    states.push_back({r.theta[0], r.theta[1], r.omega[0], r.omega[1], r.alpha[0], r.alpha[1]});
+    c.tau1.push_back(r.M1);
+    c.tau2.push_back(r.M2);
+    c.peak_applied = std::max({c.peak_applied, std::abs(r.M1), std::abs(r.M2)});
+  }
+  const DesignParameters dp = design_parameters(scene, o.groups);
+  c.status = evaluate_motion(scene, dp, [&scene_loads](double s) { return scene_loads(s); }, t,
+                             states, o.torque_noise, &c.report);
+  if (!c.status.ok()) return c;
+  // each grid sample stands for rate * duration / samples samples of the log
+  const double weight = o.rate_hz * o.duration / static_cast<double>(t.size());
+  c.objective = design_criterion(weight * c.report.fisher, dp.scale, dp.nominal, o.regularization,
+                                 o.criterion, nullptr);
+  c.feasible = violation(c, o) == 0;
+  return c;
+}
+
+std::vector<std::vector<double>> tone_starts(const ToneTorques& tones, const std::vector<double>& x0) {
+  std::vector<std::vector<double>> starts;
+  const int K = tones.tones(), pm = tones.per_motor();
+  for (double amplitude : {1.0, 3.0, 10.0}) {
+    for (double frequency : {1.0, 0.7, 0.5}) {
+      std::vector<double> x = x0;
+      for (int j = 0; j < 2; ++j) {
+        for (int k = 0; k < K; ++k) {
+          x[j * pm + 1 + k] *= amplitude;
+          x[j * pm + 1 + K + k] *= frequency;
+        }
+      }
+      tones.bound(&x);
+      starts.push_back(x);
+    }
+  }
+  return starts;
+}
+
+namespace {
+
+// evaluates every point, two at a time (results in order, whatever the threads)
+std::vector<TorqueCandidate> evaluate_all(
+    const std::vector<std::vector<double>>& xs,
+    const std::function<TorqueCandidate(const std::vector<double>&)>& eval) {
+  std::vector<TorqueCandidate> cs(xs.size());
+  std::thread other([&] {
+    for (size_t i = 1; i < xs.size(); i += 2) cs[i] = eval(xs[i]);
+  });
+  for (size_t i = 0; i < xs.size(); i += 2) cs[i] = eval(xs[i]);
+  other.join();
+  return cs;
+}
+
+}  // namespace
+
+TorqueDesignResult design_torque_excitation(const Params<double>& scene,
+                                            const sim::LoadFunction& scene_loads,
+                                            std::array<double, 2> start,
+                                            const TorqueDesignOptions& options,
+                                            const std::vector<std::vector<double>>& starts) {
+  const ExcitationOptions& o = options.excitation;
+  const ToneTorques tones(options.tones, o.torque_limit);
+  const double step = o.duration / std::max(16, o.design_samples);
+  const std::function<TorqueCandidate(const std::vector<double>&)> eval = [&](const std::vector<double>& x) {
+    return evaluate_tones(scene, scene_loads, start, options, x, step);
+  };
+  TorqueDesignResult out;
+  std::vector<TorqueCandidate> first = evaluate_all(starts, eval);
+  out.evaluations = static_cast<int>(first.size());
+  double vbest = kInf;
+  for (size_t i = 0; i < first.size(); ++i) {
+    const double v = violation(first[i], o);
+    out.start_objectives.push_back(first[i].objective);
+    out.start_feasible.push_back(v == 0);
+    if (i == 0 || better(first[i], v, out.best, vbest)) {
+      out.best = std::move(first[i]);
+      out.best_start = static_cast<int>(i);
+      vbest = v;
+    }
+  }
+  std::mt19937_64 rng(options.seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  const std::vector<double> s = tones.steps();
+  double sigma = options.step;
+  const int lambda = std::max(1, options.offspring);
+  while (out.evaluations + lambda <= options.max_evaluations) {
+    std::vector<std::vector<double>> ys(lambda, out.best.x);
+    for (std::vector<double>& y : ys) {
+      for (size_t v = 0; v < y.size(); ++v) y[v] += sigma * s[v] * gauss(rng);
+      tones.bound(&y);
+    }
+    std::vector<TorqueCandidate> cs = evaluate_all(ys, eval);
+    out.evaluations += lambda;
+    bool improved = false;
+    for (TorqueCandidate& c : cs) {
+      const double vc = violation(c, o);
+      if (better(c, vc, out.best, vbest)) {
+        out.best = std::move(c);
+        vbest = vc;
+        improved = true;
+      }
+    }
+    out.improvements += improved ? 1 : 0;
+    sigma = std::clamp(sigma * (improved ? 1.5 : 0.8), 0.01, 2.0);
+  }
+  return out;
+}
+
+}  // namespace fivebar::identification
