@@ -371,6 +371,8 @@ Json identification_json(const Args& a, const Scene& scene, const id::IdentifyOp
   j.set("samples", res.samples);
   j.set("samples_used", res.samples_used);
   j.set("samples_at_rest", res.samples_at_rest);  // left out: some joint stuck (docs/hold.md)
+  j.set("slip_reversals", res.slip_reversals);
+  j.set("samples_near_reversals", res.samples_near_reversals);  // window spans a reversal
   j.set("rest_rate_threshold", res.rest_rate_threshold);
   j.set("rest_acceleration_threshold", res.rest_acceleration_threshold);
   j.set("residuals", res.residuals);
@@ -411,6 +413,11 @@ void print_summary(const Args& a, const id::IdentifyResult& res, const id::Valid
   if (res.samples_at_rest > 0) {
     std::printf("  %d samples at rest left out (|w| <= %.3g rad/s, |dw/dt| <= %.3g rad/s^2)\n",
                 res.samples_at_rest, res.rest_rate_threshold, res.rest_acceleration_threshold);
+  }
+  if (res.samples_near_reversals > 0) {
+    std::printf("  %d samples left out whose Savitzky-Golay window spans one of the %d slip "
+                "reversals (--keep-reversals keeps them)\n",
+                res.samples_near_reversals, res.slip_reversals);
   }
   for (const std::string& n : res.notes) std::printf("  log: %s\n", n.c_str());
   if (std::isfinite(res.delay_s)) {
@@ -527,6 +534,9 @@ RunFunction setup(CLI::App* app) {
                 "keep one-turn (2 pi) jumps of the angles instead of unwrapping them");
   app->add_flag("--keep-glitches", args->settings.keep_glitches,
                 "fit every sample, isolated glitches included (default: rejected, named)");
+  app->add_flag("--keep-reversals", args->settings.keep_reversals,
+                "fit the samples whose Savitzky-Golay window spans a slip reversal (default: "
+                "left out, the filter smears the acceleration jump there)");
   app->add_flag("--classical-std", args->settings.classical_std,
                 "std from the residual variance alone (default: errors in variables, the rate "
                 "estimation's noise included; output error: the window sandwich)");

@@ -62,6 +62,7 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   opt.auto_window = !a.sg_window_given;
   opt.condition.unwrap = !a.no_unwrap;
   opt.condition.reject_glitches = !a.keep_glitches;
+  opt.exclude_reversals = !a.keep_reversals;
   opt.errors_in_variables = !a.classical_std;
   opt.estimate_delay = !a.no_delay;
   opt.num_threads = std::max(1, a.threads);

@@ -1,6 +1,7 @@
 // Log conditioning: unwrapping, isolated-glitch rejection, noise levels, degrees from the motion.
 #include "fivebar/identification/condition.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -49,6 +50,41 @@ bool glitch_signature(const std::vector<double>& z, int i) {
   return true;
 }
 
+/// Which sample near an end is the glitch. There the leave-one-out cubic extrapolates, and one
+/// bad sample among the first four makes its neighbours deviate about as much as itself (a
+/// glitch on sample 1 gives sample 0 the same deviation): the culprit is the sample whose
+/// removal lets a cubic fit the other seven of the eight end samples best. `hit` is the sample
+/// flagged; returns the culprit and its value from that fit.
+int end_culprit(const std::vector<double>& t, const std::vector<double>& x, int hit,
+                double* expected) {
+  const int n = static_cast<int>(x.size());
+  const bool start = hit < n / 2;
+  const int base = start ? 0 : n - 8;
+  const double scale = (t[base + 7] - t[base]) / 7;
+  double best = std::numeric_limits<double>::infinity();
+  int culprit = hit;
+  *expected = x[hit];
+  for (int c = 0; c < 4; ++c) {
+    const int j = start ? c : n - 1 - c;
+    Eigen::MatrixXd V(7, 4);
+    Eigen::VectorXd y(7);
+    for (int r = 0, k = base; k < base + 8; ++k) {
+      if (k == j) continue;
+      const double u = (t[k] - t[j]) / scale;
+      V.row(r) << 1, u, u * u, u * u * u;
+      y(r++) = x[k] - x[j == base ? base + 1 : base];  // offset: keeps multi-turn angles exact
+    }
+    const Eigen::Vector4d c4 = V.colPivHouseholderQr().solve(y);
+    const double rms = (V * c4 - y).norm();
+    if (rms < best) {
+      best = rms;
+      culprit = j;
+      *expected = c4(0) + x[j == base ? base + 1 : base];  // the cubic at t_j (u = 0)
+    }
+  }
+  return culprit;
+}
+
 /// Rejects isolated glitches of one column in place; returns the glitches found.
 std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double sigmas,
                                   std::vector<double>* x, double* noise) {
@@ -83,13 +119,14 @@ std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double
     for (int i : hits) {
       Glitch g;
       g.index = i;
-      g.line = log.lines.empty() ? i + 1 : log.lines[i];
-      g.column = name;
-      g.value = (*x)[i];
       g.expected = expected[i];
-      g.sigmas = *noise > 0 ? std::abs(z[i]) / *noise : kInf;
+      if ((i < 3 || i > n - 4) && std::isfinite(z[i])) g.index = end_culprit(log.t, *x, i, &g.expected);
+      g.line = log.lines.empty() ? g.index + 1 : log.lines[g.index];
+      g.column = name;
+      g.value = (*x)[g.index];
+      g.sigmas = *noise > 0 ? std::abs(g.value - g.expected) / *noise : kInf;
       found.push_back(g);
-      (*x)[i] = expected[i];
+      (*x)[g.index] = g.expected;
     }
   }
   return found;
@@ -300,6 +337,9 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
   TorqueLog& L = out.log;
   const int n = L.size();
   out.rejected.assign(n, 0);
+  for (int i : opt.rejected_before) {
+    if (i >= 0 && i < n) out.rejected[i] = 1;
+  }
   if (opt.unwrap) {
     out.unwrapped[0] = unwrap_angles(&L.theta1);
     out.unwrapped[1] = unwrap_angles(&L.theta2);

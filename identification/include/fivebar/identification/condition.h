@@ -22,6 +22,9 @@ struct ConditionOptions {
   double glitch_sigmas = 12.0;
   /// more glitches than this fraction of one column is not "isolated glitches": LogError
   double max_glitch_fraction = 0.01;
+  /// samples already rejected (by index; a refit of a log conditioned before, whose glitches
+  /// were interpolated and no longer show): left out of the fit like glitches
+  std::vector<int> rejected_before;
 };
 
 /// One rejected sample.

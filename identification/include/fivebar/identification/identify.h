@@ -86,6 +86,11 @@ struct IdentifyOptions {
   /// central-difference step relative to |x|: large against the integrator noise (~rtol), the
   /// residual being nearly linear in the coefficients
   double relative_step = 1e-2;
+  /// accelerations estimated by Savitzky-Golay (inverse dynamics): leave out the samples whose
+  /// filter window spans a slip reversal of some joint (a sign change of its relative rate),
+  /// where the accelerations jump and the filter smears the jump (a bias of the Coulomb
+  /// coefficients that no window is small enough to remove; docs/identification.md)
+  bool exclude_reversals = true;
   /// inverse dynamics: estimate the delay of the torques behind the angles (separate
   /// acquisition channels) by one Gauss-Newton step on tau(t + d) - M, with its std; when it is
   /// significant (over 3 std and over a tenth of a sample) the torques are shifted by it and the
@@ -140,6 +145,9 @@ struct IdentifyResult {
   int samples = 0;       ///< samples in the log
   int samples_used = 0;  ///< samples that entered the fit
   int samples_at_rest = 0;  ///< samples left out by the rest rule (some joint stuck)
+  /// IdentifyOptions::exclude_reversals: sign changes of the joints' relative rates found, and
+  /// the samples left out because their Savitzky-Golay window spans one
+  int slip_reversals = 0, samples_near_reversals = 0;
   double rest_rate_threshold = 0, rest_acceleration_threshold = 0;  ///< as applied
   int residuals = 0;
   /// rms of the unweighted residual per actuator [N m] (inverse dynamics: tau - M at the fit)
