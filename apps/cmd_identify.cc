@@ -454,7 +454,7 @@ int run(const Args& a) {
   id::Validation val;
   if (!a.no_validation) {
     val = id::validate(res.fitted, loads, res.conditioned_log, res.omega1, res.omega2,
-                       a.settings.window);
+                       res.window_s);
   }
   write_residuals(a, res, val, &out);
 
@@ -525,8 +525,8 @@ RunFunction setup(CLI::App* app) {
                   "leave out samples where a joint's |relative rate| is below this [rad/s]")
       ->capture_default_str();
   app->add_option("--window", args->settings.window,
-                  "output-error and validation window [s] (restart from the logged state)")
-      ->capture_default_str();
+                  "output-error and validation window [s] (restart from the logged state); "
+                  "default 0.2, shortened so that the log has at least 20 windows");
   app->add_option("--threads", args->settings.threads, "Ceres threads")->capture_default_str();
   app->add_flag("--start-from-scene", args->settings.start_from_scene,
                 "start from the scene's friction values (default: neutral values)");

@@ -50,7 +50,9 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
                      "window > 0 and order in [2, 10] required, got " +
                          std::to_string(a.sg_order));
   }
-  if (!(a.window > 0)) throw InputError(kFlags, "--window", "must be > 0");
+  if (!(a.window >= 0) || !std::isfinite(a.window)) {
+    throw InputError(kFlags, "--window", "must be > 0 (0: the default)");
+  }
   opt.loss_scale = a.loss_scale;
   opt.smoothing_velocity = a.smooth_sign;
   opt.estimate_rates = a.estimate_rates;

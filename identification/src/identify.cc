@@ -741,7 +741,7 @@ bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem) {
   } else {
     const sim::Options so = window_sim_options(opt.sim_rtol);
     // output error: windows over the used range (the rate threshold does not apply)
-    for (auto [i0, i1] : make_windows(f->cond.log, f->first, f->last, opt.window_s)) {
+    for (auto [i0, i1] : make_windows(f->cond.log, f->first, f->last, out->window_s)) {
       auto* w = new WindowResidual(f->scene, f->layout, f->cond.log, f->loads, out->omega1,
                                    out->omega2, i0, i1, so);
       ceres::NumericDiffOptions nd;
@@ -921,7 +921,7 @@ void inertial_stage(const Fit& f, const Eigen::MatrixXd& J, IdentifyResult* out)
 Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
                                   const std::vector<double>& r, IdentifyResult* out) {
   std::vector<int> sizes;
-  for (auto [i0, i1] : make_windows(f.cond.log, f.first, f.last, f.opt->window_s)) {
+  for (auto [i0, i1] : make_windows(f.cond.log, f.first, f.last, out->window_s)) {
     sizes.push_back(2 * (i1 - i0));
   }
   const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
@@ -1352,6 +1352,7 @@ void init_fit(const Params<double>& scene_in, const sim::LoadFunction& loads, co
   out->layout = opt.layout;
   out->method = opt.method;
   out->samples = log.size();
+  out->window_s = output_error_window(opt.window_s, log.duration());
   f->opt = &opt;
   f->loads = loads;
   f->layout = opt.layout;
@@ -1491,6 +1492,10 @@ void quiet_solver_logging() {
   });
 }
 }  // namespace
+
+double output_error_window(double window_s, double duration) {
+  return window_s > 0 ? window_s : std::min(0.2, duration / 20);
+}
 
 IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction& loads,
                         const TorqueLog& log, const IdentifyOptions& opt) {

@@ -135,7 +135,7 @@ py::dict identify(const PyScene& s, const py::object& log, const io::IdentifySet
     result = io::identify_scene(s.scene, loads, torque_log, options);
     if (validate) {
       validation = id::validate(result.fitted, loads, torque_log, result.omega1, result.omega2,
-                                settings.window);
+                                result.window_s);
     }
   }
   py::dict d = result_dict(s, result, options.loss);
@@ -173,7 +173,7 @@ void bind_identify(py::module_& m) {
       py::arg("loss_scale") = 0.1, py::arg("smooth_sign") = -1.0,
       py::arg("estimate_rates") = false, py::arg("min_rate") = 0.0, py::arg("sg_window") = 0.010,
       py::arg("sg_order") = 5, py::arg("threads") = 1, py::arg("start_from_scene") = false,
-      py::arg("validate") = false, py::arg("window") = 0.2,
+      py::arg("validate") = false, py::arg("window") = 0.0,
       "Identifies the friction coefficients of `scene` from a torque log: a CSV path, or a dict "
       "of equal-length arrays with the log's columns (t, theta1, theta2, tau1, tau2 and "
       "optionally omega1, omega2, alpha1, alpha2). Options as `fivebar identify`. Returns the "

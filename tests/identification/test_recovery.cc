@@ -121,8 +121,9 @@ TEST(Recovery, StribeckLogFittedWithCoulombViscousReportsTheMismatch) {
 
 TEST(Recovery, OutputErrorOnAShortLog) {
   // numeric derivatives through the simulator; the std come from the window sandwich
-  // (covariance.h, its formula checked in test_covariance.cc): 5 windows of 0.2 s, few enough
-  // for the warning that these std are themselves uncertain
+  // (covariance.h, its formula checked in test_covariance.cc). By default a 1 s log gets 20
+  // windows of 0.05 s (output_error_window); 5 windows of 0.2 s are few enough for the warning
+  // that these std are themselves uncertain
   const Params<double> truth = paper_params();
   const TorqueLog log = make_log(truth, 1.0, true, false);
   IdentifyOptions opt;
@@ -130,9 +131,16 @@ TEST(Recovery, OutputErrorOnAShortLog) {
   const IdentifyResult res = identify(truth, paper_loads, log, opt);
   ASSERT_TRUE(res.status.ok()) << res.status.message;
   EXPECT_EQ(res.std_method, "window-sandwich");
-  EXPECT_THAT(res.std_detail, ::testing::HasSubstr("5 windows"));
-  EXPECT_THAT(res.warnings, ::testing::Contains(::testing::HasSubstr("only 5 windows")));
+  EXPECT_DOUBLE_EQ(res.window_s, 0.05);
+  EXPECT_THAT(res.std_detail, ::testing::HasSubstr("20 windows"));
+  EXPECT_THAT(res.warnings, ::testing::Not(::testing::Contains(::testing::HasSubstr("windows"))));
   expect_recovered(res, {0.12, 0.02}, 0.01);
+  opt.window_s = 0.2;
+  const IdentifyResult few = identify(truth, paper_loads, log, opt);
+  ASSERT_TRUE(few.status.ok()) << few.status.message;
+  EXPECT_THAT(few.std_detail, ::testing::HasSubstr("5 windows"));
+  EXPECT_THAT(few.warnings, ::testing::Contains(::testing::HasSubstr("only 5 windows")));
+  expect_recovered(few, {0.12, 0.02}, 0.01);
 }
 
 TEST(Recovery, NoisyLoggedRatesGiveWayToTheAngles) {

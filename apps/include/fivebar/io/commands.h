@@ -27,7 +27,7 @@ struct IdentifySettings {
   bool sg_window_given = false, no_unwrap = false, keep_glitches = false;
   bool keep_reversals = false;
   bool classical_std = false, no_delay = false;
-  double loss_scale = 0.1, smooth_sign = -1, min_rate = 0, sg_window = 0.010, window = 0.2;
+  double loss_scale = 0.1, smooth_sign = -1, min_rate = 0, sg_window = 0.010, window = 0;
   int sg_order = 5, threads = 1;
 };
 
