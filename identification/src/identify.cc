@@ -403,19 +403,26 @@ void estimate_rates(Fit* f, IdentifyResult* out) {
   }
 }
 
-Sample make_sample(const Fit& f, const IdentifyResult& out, int i) {
+/// Sample i of the conditioned log: time, angles, torques and loads (rates left at 0).
+Sample logged_sample(const Fit& f, int i) {
   const TorqueLog& log = f.cond.log;
   Sample s;
   s.t = log.t[i];
   s.th1 = log.theta1[i];
   s.th2 = log.theta2[i];
+  s.tau1 = log.tau1[i];
+  s.tau2 = log.tau2[i];
+  s.loads = f.loads(s.t);
+  return s;
+}
+
+/// Sample i with the fit's rates and accelerations.
+Sample make_sample(const Fit& f, const IdentifyResult& out, int i) {
+  Sample s = logged_sample(f, i);
   s.w1 = out.omega1[i];
   s.w2 = out.omega2[i];
   s.a1 = out.alpha1[i];
   s.a2 = out.alpha2[i];
-  s.tau1 = log.tau1[i];
-  s.tau2 = log.tau2[i];
-  s.loads = f.loads(s.t);
   return s;
 }
 
@@ -571,13 +578,7 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
   Eigen::Vector2d r2 = Eigen::Vector2d::Zero(), v = Eigen::Vector2d::Zero(), t2 = v;
   int count = 0;
   for (int i : probe) {
-    Sample s;
-    s.t = log.t[i];
-    s.th1 = log.theta1[i];
-    s.th2 = log.theta2[i];
-    s.tau1 = log.tau1[i];
-    s.tau2 = log.tau2[i];
-    s.loads = f.loads(s.t);
+    Sample s = logged_sample(f, i);
     int lo = 0;
     std::vector<double> d1, d2;
     savitzky_golay_taps(log.t, i, sg, &lo, &d1, &d2);

@@ -12,6 +12,7 @@
 #include "fivebar/identification/synth.h"
 
 #include "paper.h"
+#include "synthetic_log.h"
 
 namespace fivebar::identification {
 namespace {
@@ -40,10 +41,7 @@ TorqueLog paper_log(double duration, double torque_noise = 0.02, double angle_no
   so.torque_noise = torque_noise;
   so.angle_noise = angle_noise;
   so.seed = seed;
-  SynthResult r = synthesize_log(paper_params(), paper_loads, kPaperInitial, so);
-  EXPECT_TRUE(r.status.ok()) << r.status.message;
-  r.log.path = "log.csv";
-  return r.log;
+  return testing::synthetic_paper_log(paper_params(), so, "log.csv");
 }
 
 IdentifyResult fit(const TorqueLog& log, IdentifyOptions opt = {}) {

@@ -12,6 +12,7 @@
 #include "fivebar/identification/synth.h"
 
 #include "paper.h"
+#include "synthetic_log.h"
 
 namespace fivebar::identification {
 namespace {
@@ -33,10 +34,7 @@ TorqueLog make_log(const Params<double>& truth, double duration, bool rates, boo
   so.with_rates = rates;
   so.multisine = multisine;
   so.seed = seed;
-  SynthResult r = synthesize_log(truth, paper_loads, kPaperInitial, so);
-  EXPECT_TRUE(r.status.ok()) << r.status.message;
-  r.log.path = "synthetic.csv";
-  return r.log;
+  return testing::synthetic_paper_log(truth, so, "synthetic.csv");
 }
 
 void expect_recovered(const IdentifyResult& res, const std::vector<double>& truth, double rel_tol) {

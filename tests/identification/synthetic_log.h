@@ -1,0 +1,24 @@
+// A synthetic torque log of the paper scene's loads and start (the fixture of tests/common),
+// for the identification tests.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include "fivebar/identification/synth.h"
+#include "paper.h"
+
+namespace fivebar::testing {
+
+/// synth-log of `truth` under the paper loads from the paper start; a failed synthesis fails
+/// the calling test (and returns what was made).
+inline identification::TorqueLog synthetic_paper_log(const Params<double>& truth,
+                                                     const identification::SynthOptions& so,
+                                                     const char* path) {
+  identification::SynthResult r =
+      identification::synthesize_log(truth, paper_loads, paper_initial(), so);
+  EXPECT_TRUE(r.status.ok()) << r.status.message;
+  r.log.path = path;
+  return r.log;
+}
+
+}  // namespace fivebar::testing
