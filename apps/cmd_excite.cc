@@ -79,7 +79,23 @@ void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads
     throw InputError(kFlags, "--torque-limit", "must be > 0 N m, got " + format_double(a.torque_limit));
   }
   if (!(a.torque_noise > 0)) throw InputError(kFlags, "--torque-noise", "must be > 0");
-  if (!(a.rate > 0)) throw InputError(kFlags, "--rate", "must be > 0");
+  if (!(a.rate > 0) || !std::isfinite(a.rate)) {
+    throw InputError(kFlags, "--rate", "must be > 0, got " + format_double(a.rate));
+  }
+  if (a.rate * a.duration > 1e7) {
+    throw InputError(kFlags, "--rate", "--rate x --duration gives more than 1e7 samples");
+  }
+  if (!(a.singular_margin >= 0 && a.singular_margin < 1)) {
+    throw InputError(kFlags, "--singular-margin",
+                     "expected a number in [0, 1), got " + format_double(a.singular_margin));
+  }
+  if (a.min_reversals < 0) {
+    throw InputError(kFlags, "--min-reversals", "must be >= 0, got " + std::to_string(a.min_reversals));
+  }
+  if (!(a.reversal_rate > 0) || !std::isfinite(a.reversal_rate)) {
+    throw InputError(kFlags, "--reversal-rate",
+                     "must be > 0 rad/s, got " + format_double(a.reversal_rate));
+  }
   if (a.periods < 1 || a.harmonics < 1 || a.design_samples < 16 || a.starts < 1 ||
       !(a.family == "torque" || (a.ramp >= 0 && a.ramp < a.duration))) {
     throw InputError(kFlags, "--periods/--harmonics/--design-samples/--starts/--ramp",
@@ -105,6 +121,11 @@ void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads
   const Status st = holding_torques(scene.params, loads(0.0), start[0], start[1], EvalOptions{}, &h);
   if (!st.ok()) throw InputError(scene.path, "initial", st.message);
   const double need = std::max(std::abs(h.M1), std::abs(h.M2));
+  if (!std::isfinite(need)) {
+    throw InputError(scene.path, "loads",
+                     "holding the start pose needs torques that are not finite (M1 = " +
+                         format_double(h.M1) + ", M2 = " + format_double(h.M2) + " N m)");
+  }
   if (need >= a.torque_limit * (1.0 - o->torque_margin)) {
     throw InputError(kFlags, "--torque-limit",
                      format_double(a.torque_limit) + " N m is below what holding the start pose needs (" +
@@ -565,6 +586,11 @@ int run(const Args& a) {
   std::string why;
   const std::string status = design_status(d, o, &why);
   const id::ExcitationReport* base = a.no_baseline ? nullptr : &ms->report;
+  if (base && base->peak_torque > o.torque_limit * (1 + 1e-9)) {
+    warn("the multi-sine baseline peaks at " + format_double(base->peak_torque) +
+         " N m, above --torque-limit " + format_double(o.torque_limit) +
+         " N m: the comparison is with a motion this limit does not allow");
+  }
   if (status != "ok") {
     // only the summary, which says what was missed; no excitation that could be mistaken for one
     write_json_file(out.file("excitation.json"), summary_json(a, o, dp, d, status, base));
@@ -616,8 +642,9 @@ RunFunction setup(CLI::App* app) {
       ->capture_default_str();
   app->add_option("--min-reversals", a->min_reversals, "sign changes of every joint's rate")
       ->capture_default_str();
-  app->add_option("--reversal-rate", a->reversal_rate, "every joint reaches +- this [rad/s]")
-      ->capture_default_str();
+  fourier.push_back(app->add_option("--reversal-rate", a->reversal_rate,
+                                    "fourier: every joint reaches +- this [rad/s]")
+                        ->capture_default_str());
   app->add_option("--torque-noise", a->torque_noise, "std of the logged torques [N m]")
       ->capture_default_str();
   app->add_option("--rate", a->rate, "sampling rate of the log [Hz]")->capture_default_str();

@@ -76,6 +76,12 @@ expect_error(2, "--estimate", base + ["--estimate", "friction,mass"], bad)
 expect_error(3, "reversals_unreachable", base + ["--family", "fourier", "--min-reversals", "1000"], bad)
 # an option of the other family is bad input, not silently ignored (the default family is torque)
 expect_error(2, "--harmonics: applies to --family fourier only", base + ["--harmonics", "3"], bad)
+expect_error(2, "--singular-margin: expected a number in", base + ["--singular-margin", "nan"], bad)
+expect_error(2, "--min-reversals: must be >= 0", base + ["--min-reversals", "-1"], bad)
+expect_error(2, "--reversal-rate: must be > 0", base + ["--family", "fourier", "--reversal-rate", "0"], bad)
+expect_error(2, "--reversal-rate: applies to --family fourier only", base + ["--reversal-rate", "1"], bad)
+expect_error(2, "loads: holding the start pose needs torques that are not finite",
+             base + ["--set", "loads.M3=1e300"], bad)
 expect_error(2, "--tones: applies to --family torque only",
              base + ["--family", "fourier", "--tones", "3"], bad)
 expect_error(2, "--family: expected fourier or torque", base + ["--family", "spline"], bad)
