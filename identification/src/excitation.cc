@@ -141,28 +141,20 @@ DesignParameters design_parameters(const Params<double>& scene, const DesignGrou
 Status sample_terms(const Params<double>& scene, const DesignParameters& dp, const Loads<double>& L,
                     const MotionState& s, const JointModes* slip, SampleTerms* out) {
   out->J = Eigen::MatrixXd::Zero(2, dp.size());
-  Status st;
-  switch (dp.jet_size()) {
-    case 0:
-    case 1:
-      st = jet_columns<1>(scene, dp, L, s, slip, out);
+  // the Jet widths instantiated: the active parameters of each group combination
+  using Columns = Status (*)(const Params<double>&, const DesignParameters&, const Loads<double>&,
+                             const MotionState&, const JointModes*, SampleTerms*);
+  static const std::pair<int, Columns> kWidths[] = {
+      {1, &jet_columns<1>},   {2, &jet_columns<2>},   {10, &jet_columns<10>},
+      {16, &jet_columns<16>}, {18, &jet_columns<18>}, {26, &jet_columns<26>}};
+  Columns columns = &jet_columns<26>;  // the widest: every group
+  for (const auto& [width, fn] : kWidths) {
+    if (dp.jet_size() <= width) {
+      columns = fn;
       break;
-    case 2:
-      st = jet_columns<2>(scene, dp, L, s, slip, out);
-      break;
-    case 10:
-      st = jet_columns<10>(scene, dp, L, s, slip, out);
-      break;
-    case 16:
-      st = jet_columns<16>(scene, dp, L, s, slip, out);
-      break;
-    case 18:
-      st = jet_columns<18>(scene, dp, L, s, slip, out);
-      break;
-    default:
-      st = jet_columns<26>(scene, dp, L, s, slip, out);
-      break;
+    }
   }
+  const Status st = columns(scene, dp, L, s, slip, out);
   if (!st.ok()) return st;
   actuator_columns(dp, s, out);
   return Status::Ok();
