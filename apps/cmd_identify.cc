@@ -365,7 +365,7 @@ Json identification_json(const Args& a, const Scene& scene, const id::IdentifyOp
         pair(res.rms_torque_residual_initial[0], res.rms_torque_residual_initial[1]));
   if (res.method == id::Method::kOutputError) {
     j.set("rms_angle_residual", pair(res.rms_angle_residual[0], res.rms_angle_residual[1]));
-    j.set("window_s", opt.window_s);
+    j.set("window_s", res.window_s);
   }
   j.set("residual_sigma", res.residual_sigma);
   j.set("samples", res.samples);

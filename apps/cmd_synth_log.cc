@@ -171,6 +171,9 @@ void set_actuators(const Args& a, Scene* scene) {
       throw InputError("command line", given[g].first,
                        "expected two values A,B (tau1, tau2), got " + std::to_string(v.size()));
     }
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1])) {
+      throw InputError("command line", given[g].first, "values must be finite numbers");
+    }
     if (g > 0 && !(v[0] >= 0 && v[1] >= 0)) {
       throw InputError("command line", given[g].first, "must be >= 0");
     }

@@ -1494,6 +1494,20 @@ void quiet_solver_logging() {
 }
 }  // namespace
 
+/// A law fitted without static friction: the fitted scene's static Coulomb coefficient (the
+/// holding bound) follows the fitted Coulomb where the scene's followed its own (its default),
+/// and is never left below it (static friction below kinetic is not physical).
+void follow_static_coulomb(const ParameterLayout& layout, const Params<double>& scene,
+                           Params<double>* fitted) {
+  if (layout.group_of(Coefficient::kStaticCoulomb) >= 0) return;
+  FrictionParams<double>& fp = fitted->friction;
+  for (int k = 0; k < kJoints; ++k) {
+    if (fp.static_coulomb[k] == scene.friction.coulomb[k] || fp.static_coulomb[k] < fp.coulomb[k]) {
+      fp.static_coulomb[k] = fp.coulomb[k];
+    }
+  }
+}
+
 double output_error_window(double window_s, double duration) {
   return window_s > 0 ? window_s : std::min(0.2, duration / 20);
 }
@@ -1537,6 +1551,7 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   analyse(f, x0_public, summary, &an, &out);
   out.fitted = scene_in;
   f.layout.apply(f.x.data(), &out.fitted);
+  follow_static_coulomb(f.layout, scene_in, &out.fitted);
   predictions(f, &out);
   if (opt.method == Method::kOutputError) output_error_levels(f, &out);
   if (opt.method == Method::kInverseDynamics && opt.estimate_delay) {

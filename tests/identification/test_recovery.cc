@@ -141,6 +141,22 @@ TEST(Recovery, OutputErrorOnAShortLog) {
   expect_recovered(few, {0.12, 0.02}, 0.01);
 }
 
+// review: the fitted scene of a law without static friction held the nominal scene's static
+// coefficient (its holding bound), 0.2 against a fitted Coulomb of 0.12
+TEST(Recovery, FittedSceneStaticCoulombFollowsTheFittedCoulomb) {
+  const TorqueLog log = make_log(paper_params(), 1.0, true, false);
+  Params<double> nominal = paper_params();
+  nominal.friction.coulomb.fill(0.2);
+  nominal.friction.static_coulomb.fill(0.2);  // the default: follows coulomb
+  nominal.friction.static_coulomb[4] = 0.5;   // set apart from it: kept
+  const IdentifyResult res = identify(nominal, paper_loads, log, IdentifyOptions{});
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  const FrictionParams<double>& fp = res.fitted.friction;
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(fp.static_coulomb[k], fp.coulomb[k]) << k;
+  EXPECT_EQ(fp.static_coulomb[4], 0.5);
+  EXPECT_NEAR(fp.coulomb[0], 0.12, 0.01);
+}
+
 TEST(Recovery, NoisyLoggedRatesGiveWayToTheAngles) {
   // rates logged with 0.05 rad/s of noise: the angles (1e-5 rad) give better rates, so the fit
   // estimates them from the angles and says so
