@@ -22,6 +22,7 @@
 #include "fivebar/io/format.h"
 #include "fivebar/io/json.h"
 #include "fivebar/io/loads.h"
+#include "fivebar/io/log_truth.h"
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
@@ -42,31 +43,6 @@ struct Args {
 const std::vector<std::string> kOutputs = {
     "identification.json", "scene_fitted.yaml",        "residuals.csv",      "fig_torques.png",
     "fig_residuals.png",   "fig_residual_vs_rate.png", "fig_validation.png", "plots.gnuplot"};
-
-// `true.<group> = v1,...,v5` comments (and `true.inertial = ` 16 values) written by synth-log, by group name
-std::map<std::string, std::vector<double>> read_truth(const id::TorqueLog& log) {
-  std::map<std::string, std::vector<double>> truth;
-  for (const std::string& c : log.comments) {
-    const std::string line = trim(c);
-    if (line.rfind("true.", 0) != 0) continue;
-    const size_t eq = line.find('=');
-    if (eq == std::string::npos) continue;
-    const std::string key = trim(line.substr(5, eq - 5));
-    std::stringstream ss(line.substr(eq + 1));
-    std::string cell;
-    std::vector<double> v;
-    while (std::getline(ss, cell, ',')) {
-      try {
-        v.push_back(std::stod(cell));
-      } catch (...) {
-        v.clear();
-        break;
-      }
-    }
-    if (v.size() == kJoints || v.size() == kInertialParams || v.size() == kActuators) truth[key] = v;
-  }
-  return truth;
-}
 
 std::string residual_plot_script(const std::string& terminal, const std::string& title,
                                  bool validation) {
@@ -157,39 +133,9 @@ void write_residuals(const Args& a, const id::IdentifyResult& res, const id::Val
   write_text_file(out->file("residuals.csv"), csv.str());
 }
 
-/// The true value of a parameter when the log's header says it (synth-log; shared friction: the
-/// mean over the joints); false otherwise.
-bool true_value(const std::map<std::string, std::vector<double>>& truth,
-                const id::ParameterLayout& layout, int i, const std::string& name, double* tv) {
-  if (layout.is_actuator(i)) {  // true.offset = A,B; true.actuator_coulomb = ...
-    const size_t cut = name.rfind('_');
-    auto it = truth.find(name.substr(0, cut));
-    if (it == truth.end() || it->second.size() != size_t(kActuators)) return false;
-    *tv = it->second[std::stoi(name.substr(cut + 1)) - 1];
-    return true;
-  }
-  if (layout.is_inertial(i)) {
-    auto it = truth.find("inertial");
-    if (it == truth.end()) return false;
-    *tv = it->second[i - layout.inertia_offset()];
-    return true;
-  }
-  const size_t us = name.rfind('_');
-  const bool indexed = layout.per_joint && us != std::string::npos;
-  auto it = truth.find(indexed ? name.substr(0, us) : name);
-  if (it == truth.end() || it->second.size() != size_t(kJoints)) return false;
-  *tv = 0;
-  if (indexed) {
-    *tv = it->second[std::stoi(name.substr(us + 1)) - 1];
-  } else {
-    for (double v : it->second) *tv += v / kJoints;
-  }
-  return true;
-}
-
 /// "parameters": value, std, truth and errors when the log states the truth.
 Json parameters_json(const id::IdentifyResult& res, const id::TorqueLog& log, bool* have_truth) {
-  const std::map<std::string, std::vector<double>> truth = read_truth(log);
+  const LogTruth truth = read_truth(log.comments);
   Json params = Json::array();
   *have_truth = !truth.empty();
   for (size_t i = 0; i < res.parameters.size(); ++i) {

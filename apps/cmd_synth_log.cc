@@ -24,6 +24,7 @@
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
+#include "fivebar/io/log_truth.h"
 #include "fivebar/io/scene.h"
 #include "fivebar/io/torque_log_file.h"
 #include "fivebar/model/actuator.h"
@@ -47,12 +48,6 @@ struct Args {
   std::vector<double> torque_offset, actuator_coulomb, actuator_viscous;
   std::string command_line;
 };
-
-std::string joined(const std::array<double, kJoints>& v) {
-  std::string s;
-  for (int k = 0; k < kJoints; ++k) s += (k ? "," : "") + format_double(v[k]);
-  return s;
-}
 
 // Writes the log to `path`, creating its directory.
 void write_log(const std::string& path, const identification::TorqueLog& log) {
@@ -124,35 +119,11 @@ identification::SynthResult motion_log(const Scene& scene, const LoadExpressions
   return out;
 }
 
-// header: provenance and the truth (the law's coefficients from its descriptor, friction.h, and
-// the links' standard inertial parameters, model/inertial.h, for `identify --estimate inertia`)
+// header: provenance and the truth (fivebar/io/log_truth.h, which identify reads back)
 std::vector<std::string> truth_header(const Args& a, const Scene& scene) {
-  const FrictionParams<double>& fp = scene.params.friction;
   std::vector<std::string> out = {" fivebar synth-log: synthetic torque log (format: docs/formats.md)",
-                                  " command: " + a.command_line,
-                                  " scene: " + scene.path,
-                                  " true.law = " + std::string(identification::law_name(fp.law)),
-                                  " true.pin_radius = " + joined(fp.pin_radius),
-                                  " true.coulomb = " + joined(fp.coulomb),
-                                  " true.viscous = " + joined(fp.viscous)};
-  const std::array<double, kInertialParams> pi = standard_inertial(scene.params);
-  std::string inertial;
-  for (int i = 0; i < kInertialParams; ++i) inertial += (i ? "," : "") + format_double(pi[i]);
-  out.push_back(" true.inertial = " + inertial);
-  const ActuatorParams<double>& act = scene.params.actuators;
-  const std::array<double, kActuators>* terms[] = {&act.offset, &act.coulomb, &act.viscous};
-  for (int g = 0; g < 3; ++g) {  // true.offset, true.actuator_coulomb, true.actuator_viscous
-    const std::string name = identification::actuator_term_name(g * kActuators);
-    out.push_back(" true." + name.substr(0, name.size() - 2) + " = " +
-                  format_double((*terms[g])[0]) + "," + format_double((*terms[g])[1]));
-  }
-  const LawDescriptor& law = law_descriptor(fp.law);
-  for (int i = 0; i < law.count; ++i) {
-    const Coefficient c = law.coefficients[i].id;
-    if (c == Coefficient::kCoulomb || c == Coefficient::kViscous) continue;
-    out.push_back(" true." + std::string(coefficient_info(c).key) + " = " +
-                  joined(coefficient(fp, c)));
-  }
+                                  " command: " + a.command_line, " scene: " + scene.path};
+  for (const std::string& line : truth_lines(scene.params)) out.push_back(line);
   return out;
 }
 

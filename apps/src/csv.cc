@@ -9,19 +9,12 @@
 #include <sstream>
 
 #include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
 
 namespace fivebar::io {
 namespace {
 
 using identification::LogError;
-
-std::string trim(const std::string& s) {
-  const char* ws = " \t\r\n";
-  const size_t a = s.find_first_not_of(ws);
-  if (a == std::string::npos) return "";
-  const size_t b = s.find_last_not_of(ws);
-  return s.substr(a, b - a + 1);
-}
 
 // the fields of a line, blanks trimmed; a trailing comma gives a last, empty field
 std::vector<std::string> split(const std::string& line) {

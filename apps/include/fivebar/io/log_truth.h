@@ -1,0 +1,32 @@
+// The truth a synthetic torque log states in its header (`# true.<name> = v1,v2,...`), written
+// by `synth-log` and read back by `identify` to report each estimate's error. One place for
+// both directions, so the names always match the identification's parameter names.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "fivebar/identification/parameters.h"
+#include "fivebar/model/params.h"
+
+namespace fivebar::io {
+
+/// The `true.*` values by name: the law's coefficients (five per joint), `inertial` (the 16
+/// standard inertial parameters), `offset`, `actuator_coulomb`, `actuator_viscous` (two each).
+using LogTruth = std::map<std::string, std::vector<double>>;
+
+/// The header lines (without the leading '#') that state the truth of `params`: the law, pin
+/// radii, every coefficient of its law (from its descriptor, friction.h), the links' standard
+/// inertial parameters (model/inertial.h) and the actuator terms.
+std::vector<std::string> truth_lines(const Params<double>& params);
+
+/// The `true.*` values of a log's comment lines; lines that do not parse are skipped.
+LogTruth read_truth(const std::vector<std::string>& comments);
+
+/// The true value of parameter i (named `name`) of `layout`, when `truth` states it (shared
+/// friction: the mean over the joints); false otherwise.
+bool true_value(const LogTruth& truth, const identification::ParameterLayout& layout, int i,
+                const std::string& name, double* value);
+
+}  // namespace fivebar::io

@@ -1,0 +1,98 @@
+#include "fivebar/io/log_truth.h"
+
+#include <array>
+#include <sstream>
+
+#include "fivebar/io/format.h"
+#include "fivebar/model/friction.h"
+#include "fivebar/model/inertial.h"
+
+namespace fivebar::io {
+namespace id = fivebar::identification;
+namespace {
+
+template <size_t N>
+std::string joined(const std::array<double, N>& v) {
+  std::string s;
+  for (size_t k = 0; k < N; ++k) s += (k ? "," : "") + format_double(v[k]);
+  return s;
+}
+
+}  // namespace
+
+std::vector<std::string> truth_lines(const Params<double>& params) {
+  const FrictionParams<double>& fp = params.friction;
+  std::vector<std::string> out = {" true.law = " + std::string(id::law_name(fp.law)),
+                                  " true.pin_radius = " + joined(fp.pin_radius),
+                                  " true.coulomb = " + joined(fp.coulomb),
+                                  " true.viscous = " + joined(fp.viscous),
+                                  " true.inertial = " + joined(standard_inertial(params))};
+  const ActuatorParams<double>& act = params.actuators;
+  const std::array<double, kActuators>* terms[] = {&act.offset, &act.coulomb, &act.viscous};
+  for (int g = 0; g < 3; ++g) {  // true.offset, true.actuator_coulomb, true.actuator_viscous
+    const std::string name = id::actuator_term_name(g * kActuators);
+    out.push_back(" true." + name.substr(0, name.size() - 2) + " = " + joined(*terms[g]));
+  }
+  const LawDescriptor& law = law_descriptor(fp.law);
+  for (int i = 0; i < law.count; ++i) {
+    const Coefficient c = law.coefficients[i].id;
+    if (c == Coefficient::kCoulomb || c == Coefficient::kViscous) continue;
+    out.push_back(" true." + std::string(coefficient_info(c).key) + " = " +
+                  joined(coefficient(fp, c)));
+  }
+  return out;
+}
+
+LogTruth read_truth(const std::vector<std::string>& comments) {
+  LogTruth truth;
+  for (const std::string& c : comments) {
+    const std::string line = trim(c);
+    if (line.rfind("true.", 0) != 0) continue;
+    const size_t eq = line.find('=');
+    if (eq == std::string::npos) continue;
+    const std::string key = trim(line.substr(5, eq - 5));
+    std::stringstream ss(line.substr(eq + 1));
+    std::string cell;
+    std::vector<double> v;
+    while (std::getline(ss, cell, ',')) {
+      try {
+        v.push_back(std::stod(cell));
+      } catch (...) {
+        v.clear();
+        break;
+      }
+    }
+    if (v.size() == kJoints || v.size() == kInertialParams || v.size() == kActuators) truth[key] = v;
+  }
+  return truth;
+}
+
+bool true_value(const LogTruth& truth, const id::ParameterLayout& layout, int i,
+                const std::string& name, double* value) {
+  if (layout.is_actuator(i)) {  // true.offset = A,B; true.actuator_coulomb = ...
+    const size_t cut = name.rfind('_');
+    auto it = truth.find(name.substr(0, cut));
+    if (it == truth.end() || it->second.size() != size_t(kActuators)) return false;
+    *value = it->second[std::stoi(name.substr(cut + 1)) - 1];
+    return true;
+  }
+  if (layout.is_inertial(i)) {
+    auto it = truth.find("inertial");
+    if (it == truth.end()) return false;
+    *value = it->second[i - layout.inertia_offset()];
+    return true;
+  }
+  const size_t us = name.rfind('_');
+  const bool indexed = layout.per_joint && us != std::string::npos;
+  auto it = truth.find(indexed ? name.substr(0, us) : name);
+  if (it == truth.end() || it->second.size() != size_t(kJoints)) return false;
+  *value = 0;
+  if (indexed) {
+    *value = it->second[std::stoi(name.substr(us + 1)) - 1];
+  } else {
+    for (double v : it->second) *value += v / kJoints;
+  }
+  return true;
+}
+
+}  // namespace fivebar::io

@@ -1,0 +1,58 @@
+// The truth header of synthetic logs: what synth-log writes, identify reads back under the
+// identification's parameter names.
+#include <gtest/gtest.h>
+
+#include "fivebar/io/log_truth.h"
+#include "fivebar/model/inertial.h"
+
+namespace fivebar::io {
+namespace {
+
+TEST(LogTruth, EveryWrittenValueReadsBackUnderItsParameterName) {
+  Params<double> p = paper_params();
+  p.friction.law = FrictionLaw::kStribeck;
+  p.friction.coulomb = {0.11, 0.12, 0.13, 0.14, 0.15};
+  p.friction.static_coulomb.fill(0.2);
+  p.friction.stribeck_velocity.fill(0.5);
+  p.actuators.offset = {0.05, -0.01};
+  p.actuators.coulomb = {0.03, 0.02};
+  std::vector<std::string> comments = {" command: fivebar synth-log ...", " true.broken = a,b"};
+  for (const std::string& line : truth_lines(p)) comments.push_back(line);
+  const LogTruth truth = read_truth(comments);
+  EXPECT_EQ(truth.count("broken"), 0u);
+  ASSERT_EQ(truth.at("coulomb").size(), size_t(kJoints));
+  EXPECT_EQ(truth.at("coulomb")[3], 0.14);
+  EXPECT_EQ(truth.at("static_coulomb")[0], 0.2);
+  EXPECT_EQ(truth.at("inertial")[5], standard_inertial(p)[5]);
+
+  identification::ParameterLayout layout;
+  layout.law = FrictionLaw::kStribeck;
+  layout.per_joint = true;
+  layout.inertia = true;
+  layout.actuator = true;
+  int checked = 0;
+  const std::vector<std::string> names = layout.names();
+  for (int i = 0; i < layout.size(); ++i) {
+    double v = 0;
+    const std::string& name = names[i];
+    ASSERT_TRUE(true_value(truth, layout, i, name, &v)) << name;
+    if (name == "coulomb_4") {
+      EXPECT_EQ(v, 0.14);
+    }
+    if (name == "offset_2") {
+      EXPECT_EQ(v, -0.01);
+    }
+    if (name == "actuator_coulomb_1") {
+      EXPECT_EQ(v, 0.03);
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 30);
+  layout.per_joint = false;  // shared: the mean over the joints
+  double mean = 0;
+  ASSERT_TRUE(true_value(truth, layout, 0, "coulomb", &mean));
+  EXPECT_NEAR(mean, 0.13, 1e-15);
+}
+
+}  // namespace
+}  // namespace fivebar::io
