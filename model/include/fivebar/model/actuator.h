@@ -27,18 +27,14 @@ bool actuator_friction_active(const ActuatorParams<T>& a) {
   return false;
 }
 
-/// c_a sign + v_a w of the actuator driving joint k (0 for the undriven joints): the Coulomb
-/// sign is the joint's (`slip`, a coulomb_sign), or tanh(w / w_s) with the joint law's
-/// smoothing velocity w_s > 0, as in friction_law.
+/// c_a sign + v_a w of the actuator driving joint k (0 for the undriven joints), the Coulomb
+/// direction taken as the joint law's (coulomb_direction: `slip`, or smoothed).
 template <typename T>
 T actuator_friction(const FrictionParams<T>& fp, const ActuatorParams<T>& act, int k, const T& w,
                     int slip) {
-  using std::tanh;
   const int a = joint_actuator(k);
   if (a < 0) return T(0);
-  const T& ws = fp.smoothing_velocity;
-  const T sign = value_of(ws) > 0.0 ? T(tanh(w / ws)) : T(double(slip));
-  return act.coulomb[a] * sign + act.viscous[a] * w;
+  return act.coulomb[a] * coulomb_direction(fp, w, slip) + act.viscous[a] * w;
 }
 
 /// The actuator friction torques of the five joints at relative rates w in modes `slip` (zero at

@@ -30,20 +30,28 @@ T stribeck_level(const FrictionParams<T>& fp, int k, const T& w) {
   return fp.coulomb[k] + (mu_s - fp.coulomb[k]) * decay;
 }
 
+/// The direction the Coulomb part takes: `slip` (a coulomb_sign), or tanh(w / w_s) when the
+/// smoothing velocity w_s > 0 (then `slip` is ignored). Shared by the joint laws and the
+/// actuators' friction (actuator.h).
+template <typename T>
+T coulomb_direction(const FrictionParams<T>& fp, const T& w, int slip) {
+  using std::tanh;
+  return value_of(fp.smoothing_velocity) > 0.0 ? T(tanh(w / fp.smoothing_velocity))
+                                               : T(double(slip));
+}
+
 /// f_k(w) of joint k (0-based, order O, B, C, D, D0). `slip` is the sign that the Coulomb part
 /// takes: the caller passes sign(w) or, inside an integration segment, the segment's slip
 /// direction (so that sign(w) never jumps inside a step). With smoothing_velocity w_s > 0 the
 /// Coulomb part is mu_c tanh(w / w_s) and `slip` is ignored.
 template <typename T>
 T friction_law(const FrictionParams<T>& fp, int k, const T& w, int slip) {
-  using std::tanh;
   using std::abs;
   using std::pow;
   if (fp.law == FrictionLaw::kNone || fp.law == FrictionLaw::kLuGre) {
     return T(0);  // none; LuGre needs the bristle state: see lugre_law
   }
-  const T coulomb_sign =
-      value_of(fp.smoothing_velocity) > 0.0 ? T(tanh(w / fp.smoothing_velocity)) : T(double(slip));
+  const T coulomb_sign = coulomb_direction(fp, w, slip);
   const T level = fp.law == FrictionLaw::kStribeck ? stribeck_level(fp, k, w) : fp.coulomb[k];
   if (fp.law == FrictionLaw::kPowerViscous) {
     // |w|^n sign(w); at w = 0 exactly the term is 0 (pow's derivative there is not finite)
