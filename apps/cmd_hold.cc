@@ -111,7 +111,7 @@ Json pose_json(const Holding<double>& h, const HoldingPolygon& poly, double limi
   j.set("range_M1", pair(h.M1_min, h.M1_max));
   j.set("range_M2", pair(h.M2_min, h.M2_max));
   Json N = Json::array(), bound = Json::array();
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < kJoints; ++k) {
     N.push(h.N[k]);
     bound.push(h.bound[k]);
   }

@@ -81,7 +81,7 @@ identification::SynthResult motion_log(const Scene& scene, const LoadExpressions
   std::normal_distribution<double> gauss(0.0, 1.0);
   identification::TorqueLog& log = out.log;
   log.has_rates = log.has_accels = so.with_rates;
-  std::vector<std::array<double, 5>> rates;
+  std::vector<std::array<double, kJoints>> rates;
   for (size_t i = 0; i < t.size(); ++i) {
     if (i > 0 && !(t[i] > t[i - 1])) {
       throw InputError(path, "line " + std::to_string(table.lines[i]) + ", column t",

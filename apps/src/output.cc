@@ -84,7 +84,7 @@ std::vector<Column> rest_columns(const std::vector<sim::Row>& rows) {
   for (const sim::Row& r : rows) {
     const bool o = r.mode[0] == kStuck, d0 = r.mode[4] == kStuck;
     c[0].values.push_back(o && d0 ? 1.0 : 0.0);
-    for (int k = 0; k < 5; ++k) c[1 + k].values.push_back(r.mode[k] == kStuck ? 1.0 : 0.0);
+    for (int k = 0; k < kJoints; ++k) c[1 + k].values.push_back(r.mode[k] == kStuck ? 1.0 : 0.0);
     for (int i = 0; i < 4; ++i) c[6 + i].values.push_back(r.hold_range[i]);
   }
   return c;

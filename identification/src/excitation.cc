@@ -56,7 +56,7 @@ Status jet_columns(const Params<double>& scene, const DesignParameters& dp, cons
     out->J(1, c) = ev.M2.v[c];
   }
   out->sine = std::abs(ev.kin.sin43.a);
-  for (int k = 0; k < 5; ++k) out->w[k] = ev.w[k].a;
+  for (int k = 0; k < kJoints; ++k) out->w[k] = ev.w[k].a;
   out->slip = ev.slip;
   return Status::Ok();
 }
@@ -328,7 +328,7 @@ Status ExcitationProblem::sample(const std::vector<double>& x, int i, bool grad,
     o.M1 = (plus.M1 - d->v.M1) / h;
     o.M2 = (plus.M2 - d->v.M2) / h;
     o.sine = (plus.sine - d->v.sine) / h;
-    for (int k = 0; k < 5; ++k) o.w[k] = (plus.w[k] - d->v.w[k]) / h;
+    for (int k = 0; k < kJoints; ++k) o.w[k] = (plus.w[k] - d->v.w[k]) / h;
   }
   return Status::Ok();
 }
@@ -538,7 +538,7 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
   out->M1.resize(N);
   out->M2.resize(N);
   std::vector<Eigen::MatrixXd> Js(N);
-  std::vector<std::array<double, 5>> rates(N);
+  std::vector<std::array<double, kJoints>> rates(N);
   out->theta_min = {states[0].th1, states[0].th2};
   out->theta_max = out->theta_min;
   for (int i = 0; i < N; ++i) {

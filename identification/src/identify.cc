@@ -515,7 +515,7 @@ void select_samples(Fit* f, IdentifyResult* out) {
       continue;
     }
     const Sample s = make_sample(*f, *out, i);
-    std::array<bool, 5> stuck{};
+    std::array<bool, kJoints> stuck{};
     if (stuck_joints(f->scene, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, rest, &stuck).ok() &&
         std::find(stuck.begin(), stuck.end(), true) != stuck.end()) {
       ++out->samples_at_rest;

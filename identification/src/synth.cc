@@ -35,7 +35,7 @@ SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction
   auto quantize = [&](double x) {
     return opt.quantization > 0 ? opt.quantization * std::round(x / opt.quantization) : x;
   };
-  std::vector<std::array<double, 5>> rates;
+  std::vector<std::array<double, kJoints>> rates;
   rates.reserve(res.rows.size());
   for (const sim::Row& row : res.rows) {
     // one fixed order of draws per row keeps logs reproducible across options
@@ -61,10 +61,10 @@ SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction
   return out;
 }
 
-std::array<int, 5> count_reversals(const std::vector<std::array<double, 5>>& rates) {
-  std::array<int, 5> out{}, prev{};
+std::array<int, kJoints> count_reversals(const std::vector<std::array<double, kJoints>>& rates) {
+  std::array<int, kJoints> out{}, prev{};
   for (const auto& w : rates) {
-    for (int k = 0; k < 5; ++k) {
+    for (int k = 0; k < kJoints; ++k) {
       const int s = (w[k] > 0) - (w[k] < 0);
       if (s != 0 && prev[k] != 0 && s != prev[k]) ++out[k];
       if (s != 0) prev[k] = s;

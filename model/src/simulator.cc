@@ -85,7 +85,7 @@ struct Context {
   JointModes zero_sign{};
   bool frozen = false;                  ///< signs frozen for a Newton Jacobian (freeze_signs)
   JointModes frozen_sign{};
-  std::array<bool, 5> watched{};        ///< joints with a Coulomb part: switch functions
+  std::array<bool, kJoints> watched{};        ///< joints with a Coulomb part: switch functions
   bool lugre = false;                   ///< bristle states follow the 7 base states
   bool full_rows = true;                ///< Options::full_rows
   int n = kStates;                      ///< state size
@@ -106,7 +106,7 @@ const char* joint_name(int k) {
 }
 
 /// Relative joint rates at a state (needs only the first-order kinematics).
-bool joint_rates(const Params<double>& p, const double* y, std::array<double, 5>* w) {
+bool joint_rates(const Params<double>& p, const double* y, std::array<double, kJoints>* w) {
   Kinematics<double> k;
   if (!solve_kinematics(p, y[0], y[1], &k, 0.0, false).ok()) return false;
   const Vec2<double> thd(y[2], y[3]);
@@ -117,9 +117,9 @@ bool joint_rates(const Params<double>& p, const double* y, std::array<double, 5>
 /// Switches not located (Context::zero_signs): the Coulomb sign of each joint from its rate at y,
 /// or the direction decided at the start where the rate is exactly zero.
 bool state_signs(const Context& c, const double* y, JointModes* signs) {
-  std::array<double, 5> w;
+  std::array<double, kJoints> w;
   if (!joint_rates(*c.params, y, &w)) return false;
-  for (int k = 0; k < 5; ++k) (*signs)[k] = w[k] != 0.0 ? slip_mode(sign_of(w[k])) : c.zero_sign[k];
+  for (int k = 0; k < kJoints; ++k) (*signs)[k] = w[k] != 0.0 ? slip_mode(sign_of(w[k])) : c.zero_sign[k];
   return true;
 }
 
@@ -146,7 +146,7 @@ int rhs(double t, const double* y, double* ydot, void* user) {
     return 0;
   }
   Evaluation<double> ev;
-  std::array<double, 5> z{};
+  std::array<double, kJoints> z{};
   if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
   JointModes signs;
   const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3],
@@ -189,7 +189,7 @@ Status switch_values(Context& c, double t, const double* y, Switches* g) {
     (*g)[kLockSlot] = 1.0 - lock.ratio;
     return Status::Ok();
   }
-  std::array<double, 5> w;
+  std::array<double, kJoints> w;
   Evaluation<double> ev;
   if (any_stuck(c.slip)) {
     const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &c.slip,
@@ -200,7 +200,7 @@ Status switch_values(Context& c, double t, const double* y, Switches* g) {
     return at_time(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t, y[0],
                    y[1]);
   }
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < kJoints; ++k) {
     if (!c.watched[k]) continue;
     (*g)[k] = c.slip[k] == kStuck ? ev.hold_margin[k] : coulomb_sign(c.slip[k]) * w[k];
   }
@@ -315,11 +315,11 @@ Status locate_switch(Context& c, detail::Integrator& integ, const Watch& watch, 
 /// independent constraint leaves one degree of freedom, two (or more) bring the mechanism to
 /// rest. Returns the number of independent constraints. After a located switch |w_k| is at the
 /// location tolerance; projecting makes the decided state exact (a stuck crank exactly at rest).
-int project_rates(const Params<double>& p, const std::array<bool, 5>& mask, double* y) {
+int project_rates(const Params<double>& p, const std::array<bool, kJoints>& mask, double* y) {
   Kinematics<double> k;
   if (!solve_kinematics(p, y[0], y[1], &k).ok()) return 0;
   std::vector<Row2<double>> rows;
-  for (int j = 0; j < 5; ++j) {
+  for (int j = 0; j < kJoints; ++j) {
     if (mask[j]) rows.push_back(fivebar::joint_row(k, j));
   }
   if (rows.empty()) return 0;
@@ -349,7 +349,7 @@ int project_rates(const Params<double>& p, const std::array<bool, 5>& mask, doub
 /// slipping one accelerates in its slip direction (beyond -slack_accel), every stuck one is held
 /// (margin >= -slack_torque).
 bool consistent(Context& c, double t, const double* y, const JointModes& slip,
-                const std::array<bool, 5>& rest, double slack_accel, double slack_torque,
+                const std::array<bool, kJoints>& rest, double slack_accel, double slack_torque,
                 Vec2<double>* thdd, Status* failure) {
   Evaluation<double> ev;
   const Status st =
@@ -360,11 +360,11 @@ bool consistent(Context& c, double t, const double* y, const JointModes& slip,
   }
   const auto wdot = fivebar::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
   double accel_scale = 1.0, torque_scale = 1.0;
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < kJoints; ++k) {
     accel_scale = std::max(accel_scale, std::abs(wdot[k]));
     torque_scale = std::max(torque_scale, std::abs(ev.Mf[k]));
   }
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < kJoints; ++k) {
     if (!rest[k] || slip[k] == JointMode::kRest) continue;
     const bool ok = slip[k] == kStuck ? ev.hold_margin[k] >= -slack_torque * torque_scale
                                       : (slack_accel == 0.0 ? coulomb_sign(slip[k]) * wdot[k] > 0.0
@@ -377,13 +377,13 @@ bool consistent(Context& c, double t, const double* y, const JointModes& slip,
 
 /// The candidate modes of the joints at rest while the mechanism may move: each slips either
 /// way or is stuck, with at most one stuck joint (two would lock the mechanism: see the lock).
-std::vector<JointModes> candidate_modes(const Context& c, const std::array<bool, 5>& rest,
-                                                const std::array<bool, 5>& no_stick) {
+std::vector<JointModes> candidate_modes(const Context& c, const std::array<bool, kJoints>& rest,
+                                                const std::array<bool, kJoints>& no_stick) {
   auto can_hold = [&](int k) {
     return c.stick && !no_stick[k] && fivebar::can_hold(*c.params, k);
   };
   std::vector<int> idx;
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < kJoints; ++k) {
     if (rest[k]) idx.push_back(k);
   }
   int combos = 1;
@@ -409,7 +409,7 @@ std::vector<JointModes> candidate_modes(const Context& c, const std::array<bool,
 /// The consistent candidates (strictly, or within the slacks) and their accelerations.
 void consistent_candidates(Context& c, double t, const double* y,
                            const std::vector<JointModes>& candidates,
-                           const std::array<bool, 5>& rest, bool relaxed,
+                           const std::array<bool, kJoints>& rest, bool relaxed,
                            std::vector<JointModes>* found,
                            std::vector<Vec2<double>>* accel, Status* failure) {
   for (const auto& m : candidates) {
@@ -423,20 +423,20 @@ void consistent_candidates(Context& c, double t, const double* y,
   }
 }
 
-std::string rest_list(const std::array<bool, 5>& rest) {
+std::string rest_list(const std::array<bool, kJoints>& rest) {
   std::string out = " (joints at rest:";
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < kJoints; ++k) {
     if (rest[k]) out += std::string(" ") + joint_name(k);
   }
   return out + ")";
 }
 
-Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, 5>& rest);
+Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, kJoints>& rest);
 
 /// Stats::sign_rule_inconsistent: whether the rule used before issue 15 (the joints at rest slip
 /// the way they accelerate, iterated, no stick) gives modes that are not consistent here.
 bool sign_rule_inconsistent(Context& c, double t, const double* y,
-                            const std::array<bool, 5>& rest) {
+                            const std::array<bool, kJoints>& rest) {
   const JointModes chosen = c.slip;
   bool inconsistent = true;
   if (decide_slip_only(c, t, y, rest).ok()) {
@@ -452,8 +452,8 @@ bool sign_rule_inconsistent(Context& c, double t, const double* y,
 /// consistent; the other joints slip in the direction of their rate. With every joint at rest
 /// the mechanism may stay locked (lock_analysis). No consistent combination, or several with
 /// different motions (Painleve-type), is an error.
-Status decide_modes(Context& c, double t, const double* y, const std::array<bool, 5>& rest,
-                    const std::array<bool, 5>& no_stick, bool all_rest, bool may_lock,
+Status decide_modes(Context& c, double t, const double* y, const std::array<bool, kJoints>& rest,
+                    const std::array<bool, kJoints>& no_stick, bool all_rest, bool may_lock,
                     Stats* stats) {
   ++stats->mode_decisions;
   c.locked = false;
@@ -507,8 +507,8 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
 /// relative acceleration they get with those directions (a short fixed point over the signs).
 /// When no slip directions are consistent (friction could hold a joint: only stick can model
 /// that), an error with the joints, instead of chattering between the two directions.
-Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, 5>& rest) {
-  for (int k = 0; k < 5; ++k) {
+Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, kJoints>& rest) {
+  for (int k = 0; k < kJoints; ++k) {
     if (rest[k]) c.slip[k] = JointMode::kRest;
   }
   for (int pass = 0; pass < 6; ++pass) {
@@ -518,7 +518,7 @@ Status decide_slip_only(Context& c, double t, const double* y, const std::array<
     if (!st.ok()) return at_time(st, t, y[0], y[1]);
     const auto wdot = fivebar::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
     bool changed = false;
-    for (int k = 0; k < 5; ++k) {
+    for (int k = 0; k < kJoints; ++k) {
       if (!rest[k] || slip_mode(sign_of(wdot[k])) == c.slip[k]) continue;
       c.slip[k] = slip_mode(sign_of(wdot[k]));
       changed = true;
@@ -542,9 +542,9 @@ Status decide_slip_only(Context& c, double t, const double* y, const std::array<
 /// first, a slipping joint found moving against its slip direction is a switch the detection
 /// missed (Stats::mode_corrections); a joint crossing zero within ~1e-12 s of the one that
 /// fired reads a few 1e-9 rad/s against its slip, and that is no missed switch.
-void slip_moving_joints(Context& c, const std::array<bool, 5>& rest,
-                        const std::array<double, 5>& w, Stats* stats) {
-  for (int k = 0; k < 5; ++k) {
+void slip_moving_joints(Context& c, const std::array<bool, kJoints>& rest,
+                        const std::array<double, kJoints>& w, Stats* stats) {
+  for (int k = 0; k < kJoints; ++k) {
     if (rest[k]) continue;
     const JointMode s = slip_mode(sign_of(w[k]));
     if (c.decided && c.watched[k] && c.slip[k] != s && c.slip[k] != kStuck &&
@@ -561,22 +561,22 @@ void slip_moving_joints(Context& c, const std::array<bool, 5>& rest,
 /// any other watched joint whose |w| is then below kRestRate is at rest too.
 Status decide_at(Context& c, double t, double* y, const Fired& fired_now, Stats* stats) {
   const bool was_locked = c.locked;
-  std::array<bool, 5> fixed{};
-  for (int k = 0; k < 5; ++k) {
+  std::array<bool, kJoints> fixed{};
+  for (int k = 0; k < kJoints; ++k) {
     fixed[k] = was_locked || (c.watched[k] && (fired_now[k] || c.slip[k] == kStuck));
   }
   const int rank = project_rates(*c.params, fixed, y);
-  std::array<double, 5> w{};
+  std::array<double, kJoints> w{};
   if (!joint_rates(*c.params, y, &w)) {
     return at_time(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t, y[0],
                    y[1]);
   }
-  std::array<bool, 5> rest{}, no_stick{};
+  std::array<bool, kJoints> rest{}, no_stick{};
   bool all_rest = rank == 2;
   if (!all_rest) {
     all_rest = std::all_of(w.begin(), w.end(), [](double v) { return std::abs(v) <= kRestRate; });
   }
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < kJoints; ++k) {
     if (!c.watched[k]) continue;
     rest[k] = all_rest || fixed[k] || std::abs(w[k]) <= kRestRate;
     no_stick[k] = fired_now[k] && c.slip[k] == kStuck;  // a breakaway: that joint slips
@@ -599,8 +599,8 @@ Status decide_at(Context& c, double t, double* y, const Fired& fired_now, Stats*
       ++stats->breakaway_events;
     }
   }
-  std::array<bool, 5> stuck{};
-  for (int k = 0; k < 5; ++k) stuck[k] = c.locked || c.slip[k] == kStuck;
+  std::array<bool, kJoints> stuck{};
+  for (int k = 0; k < kJoints; ++k) stuck[k] = c.locked || c.slip[k] == kStuck;
   project_rates(*c.params, stuck, y);
   return Status::Ok();
 }
@@ -681,7 +681,7 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
   eval.singular_margin = 0.0;
   const Loads<double> L = (*c.loads)(t);
   Evaluation<double> ev;
-  std::array<double, 5> z{};
+  std::array<double, kJoints> z{};
   if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
   JointModes signs;  // the modes the right-hand side uses
   *st = forward_dynamics(*c.params, L, y[0], y[1], y[2], y[3], rhs_modes(c, y, &signs), eval, &ev,
@@ -878,7 +878,7 @@ void setup_context(Context& c, const Params<double>& params, const LoadFunction&
                           params.friction.smoothing_velocity == 0.0;
   c.use_slip = exact_sign && options.locate_switches;
   c.stick = c.use_slip && options.stick;
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < kJoints; ++k) {
     c.watched[k] = c.use_slip && params.friction.coulomb[k] != 0.0 &&
                    params.friction.pin_radius[k] != 0.0;
   }
@@ -925,10 +925,10 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
   } else if (params.friction.active() && params.friction.law != FrictionLaw::kLuGre &&
              params.friction.smoothing_velocity == 0.0) {
     // switches not located: joints at rest at the start slip the way they accelerate
-    std::array<double, 5> w{};
-    std::array<bool, 5> rest{};
+    std::array<double, kJoints> w{};
+    std::array<bool, kJoints> rest{};
     if (joint_rates(params, L.y, &w)) {
-      for (int k = 0; k < 5; ++k) rest[k] = w[k] == 0.0;
+      for (int k = 0; k < kJoints; ++k) rest[k] = w[k] == 0.0;
       if (decide_slip_only(L.c, 0.0, L.y, rest).ok()) {
         L.c.zero_sign = L.c.slip;
         L.c.zero_signs = true;

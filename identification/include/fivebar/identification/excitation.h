@@ -62,7 +62,7 @@ struct MotionState {
 struct SampleTerms {
   Eigen::MatrixXd J;
   double M1 = 0, M2 = 0, sine = 0;
-  std::array<double, 5> w{};
+  std::array<double, kJoints> w{};
   JointModes slip{};
 };
 
@@ -216,7 +216,7 @@ struct ExcitationReport {
   Eigen::MatrixXd fisher;      ///< unscaled, 1 / sigma^2 sum J^T J
   Eigen::MatrixXd covariance;  ///< its (pseudo-)inverse
   std::vector<double> std_dev, relative_std;  ///< relative: std / |nominal| (NaN for 0)
-  std::array<int, 5> reversals{};
+  std::array<int, kJoints> reversals{};
   double peak_torque = 0, peak_time = 0, min_sine = 1, condition_number = 0, log_det_scaled = 0;
   std::array<double, 2> theta_min{}, theta_max{};
 };

@@ -29,7 +29,7 @@ struct SynthResult {
   Status status;  ///< not ok: the simulation failed (log empty)
   TorqueLog log;
   sim::Stats stats;
-  std::array<int, 5> reversals{};  ///< sign changes of each joint's relative rate (O..D0)
+  std::array<int, kJoints> reversals{};  ///< sign changes of each joint's relative rate (O..D0)
 };
 
 /// Built-in excitation: the scene's M3, F, F_angle with M1, M2 replaced by sums of four sines
@@ -45,6 +45,6 @@ SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction
 
 /// Sign changes of each joint's relative rate over a sequence of rate samples (zeros keep the
 /// previous sign).
-std::array<int, 5> count_reversals(const std::vector<std::array<double, 5>>& rates);
+std::array<int, kJoints> count_reversals(const std::vector<std::array<double, kJoints>>& rates);
 
 }  // namespace fivebar::identification

@@ -88,15 +88,15 @@ struct Row {
   double t = 0;
   std::array<double, 4> theta{}, omega{}, alpha{};
   double M1 = 0, M2 = 0;
-  std::array<double, 5> N{}, Mf{};
+  std::array<double, kJoints> N{}, Mf{};
   double P_diss = 0, E_diss = 0, W_in = 0, W_ext = 0;
   double kinetic = 0, potential = 0;
   JointModes mode{};  ///< joint modes (written as ints: slip direction +1/-1, 0 at rest, 2 stuck)
-  std::array<double, 5> bristle{};  ///< LuGre bristle states z_k [rad] (zero for other laws)
+  std::array<double, kJoints> bristle{};  ///< LuGre bristle states z_k [rad] (zero for other laws)
   bool has_bristle = false;         ///< bristle holds a simulated state (LuGre runs)
   /// inverse_rows, stuck joints (mode 2): mu_s r_k N_k, the friction torque that could be added
   /// at that joint alone before it slips [N m] (rest.h)
-  std::array<double, 5> hold_margin{};
+  std::array<double, kJoints> hold_margin{};
   /// inverse_rows: M1_min, M1_max, M2_min, M2_max over which static friction holds the row [N m]:
   /// M itself where the crank moves, M -+ hold_margin where it is stuck alone, and with both
   /// cranks stuck (the pose at rest) each actuator's range with the other at its row value
