@@ -78,12 +78,8 @@ constexpr int kFewWindows = 10;
 /// logged rates this much noisier than the angles' (through the noisiest window) are not used
 constexpr double kNoisierRates = 2.0;
 
-std::string fmt(double x, int prec = 3) {
-  std::ostringstream s;
-  s.precision(prec);
-  s << x;
-  return s.str();
-}
+/// Messages' numbers: 3 significant digits unless said (format_significant, model/format.h).
+std::string fmt(double x, int digits = 3) { return format_significant(x, digits); }
 
 /// Linear interpolation of y(t) on the sorted grid ts (clamped at the ends).
 double interp(const std::vector<double>& ts, const std::vector<double>& y, double t) {
@@ -267,6 +263,7 @@ struct Fit {
   Params<double> scene;    ///< the law to fit and the Coulomb sign form
   ParameterLayout layout;  ///< internal (Stribeck: static_coulomb as excess over coulomb)
   ConditionedLog cond;     ///< the log as fitted
+  std::vector<int> window_sizes;  ///< output error: residuals of each window, in problem order
   detail::RateSource source = detail::RateSource::kLogged;
   SgOptions sg;              ///< as used
   int first = 0, last = -1;  ///< samples with a centred Savitzky-Golay window
@@ -752,6 +749,7 @@ bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem) {
       cost->AddParameterBlock(P);
       cost->SetNumResiduals(w->residuals());
       out->residuals += w->residuals();
+      f->window_sizes.push_back(w->residuals());
       problem->AddResidualBlock(cost, make_loss(opt.loss, opt.loss_scale), f->x.data());
     }
   }
@@ -921,10 +919,7 @@ void inertial_stage(const Fit& f, const Eigen::MatrixXd& J, IdentifyResult* out)
 /// independent between windows. Empty when too few windows carry residuals (a warning).
 Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
                                   const std::vector<double>& r, IdentifyResult* out) {
-  std::vector<int> sizes;
-  for (auto [i0, i1] : make_windows(f.cond.log, f.first, f.last, out->window_s)) {
-    sizes.push_back(2 * (i1 - i0));
-  }
+  const std::vector<int>& sizes = f.window_sizes;
   const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
   const detail::BlockCovariance bc = detail::block_sandwich(Jf, rv, sizes);
   if (bc.covariance.size() == 0) {
@@ -1417,8 +1412,12 @@ bool solve_stage(Fit* f, ceres::Problem* problem, IdentifyResult* out,
                  ceres::Solver::Summary* summary, Analysis* an) {
   const bool id = f->opt->method == Method::kInverseDynamics;
   const int P = f->layout.size();
-  data_residuals(problem, P, out->residuals, an);
-  if (id) rms_pair(an->r, out->rms_torque_residual_initial);
+  if (id) {  // the residual level at the start (the Jacobian is needed only after the solve)
+    std::vector<double> r0;
+    raw_residuals(problem, &r0);
+    r0.resize(out->residuals);
+    rms_pair(r0, out->rms_torque_residual_initial);
+  }
   solve(f, problem, out, summary);
   if (!out->status.ok()) return false;
   if (id) an->sens = noise_sensitivities(*f);

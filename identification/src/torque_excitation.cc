@@ -144,7 +144,7 @@ TorqueCandidate evaluate_tones(const Params<double>& scene, const sim::LoadFunct
     c.peak_applied = std::max({c.peak_applied, std::abs(r.M1), std::abs(r.M2)});
   }
   const DesignParameters dp = design_parameters(scene, o.groups);
-  c.status = evaluate_motion(scene, dp, [&scene_loads](double s) { return scene_loads(s); }, t,
+  c.status = evaluate_motion(scene, dp, scene_loads, t,
                              states, o.torque_noise, &c.report);
   if (!c.status.ok()) return c;
   // each grid sample stands for rate * duration / samples samples of the log

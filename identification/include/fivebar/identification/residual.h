@@ -93,9 +93,7 @@ class StructuredResidual {
         st_(st),
         tau_{s.tau1, s.tau2},
         tol_(eval.friction_tol),
-        max_iter_(eval.friction_max_iter) {
-    friction_.law = layout.law;
-  }
+        max_iter_(eval.friction_max_iter) {}
 
   template <typename T>
   bool operator()(const T* x, T* r) const {
@@ -105,9 +103,10 @@ class StructuredResidual {
     ActuatorParams<T> act = actuators_.template cast<T>();
     if (layout_.actuator) ParameterLayout::apply_actuators(x + layout_.actuator_offset(), &act);
     std::array<T, kJoints> motor{};  // actuator friction: a load-independent Mf term
-    for (int j = 0; j < kJoints; ++j) {
-      if (st_.slip[j] == kStuck || st_.slip[j] == JointMode::kRest) continue;
-      motor[j] = actuator_friction(fp, act, j, T(st_.w[j]), coulomb_sign(st_.slip[j]));
+    for (int a = 0; a < kActuators; ++a) {  // as actuator_torques (actuator.h)
+      const int k = actuator_joint(a);
+      if (st_.slip[k] == kStuck) continue;
+      motor[k] = actuator_friction(fp, act, k, T(st_.w[k]), coulomb_sign(st_.slip[k]));
     }
     std::array<T, kInertialParams> pi;
     for (int i = 0; i < kInertialParams; ++i) {
