@@ -58,13 +58,7 @@ struct Vary {
 
 double parse_bound(const std::string& text, const std::string& what, const std::string& arg) {
   double v = NAN;
-  try {
-    size_t used = 0;
-    v = std::stod(trim(text), &used);
-    if (used != trim(text).size()) v = NAN;
-  } catch (const std::exception&) {
-  }
-  if (!std::isfinite(v)) {
+  if (!parse_finite(text, &v)) {
     throw InputError(kFlags, "--vary " + arg, what + " '" + text + "' is not a finite number");
   }
   return v;

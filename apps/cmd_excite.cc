@@ -57,16 +57,12 @@ const char* const kFlags = "command line";
 // "LO:HI" -> (lo, hi), bad input otherwise
 std::array<double, 2> parse_range(const std::string& text, const std::string& flag) {
   const size_t colon = text.find(':');
-  try {
-    if (colon == std::string::npos) throw std::invalid_argument("no colon");
-    size_t used = 0;
-    const double lo = std::stod(text.substr(0, colon), &used);
-    const double hi = std::stod(text.substr(colon + 1));
-    if (!(lo < hi) || !std::isfinite(lo) || !std::isfinite(hi)) throw std::invalid_argument("");
-    return {lo, hi};
-  } catch (const std::exception&) {
+  double lo = NAN, hi = NAN;
+  if (colon == std::string::npos || !parse_finite(text.substr(0, colon), &lo) ||
+      !parse_finite(text.substr(colon + 1), &hi) || !(lo < hi)) {
     throw InputError(kFlags, flag, "expected LO:HI in radians with LO < HI, got '" + text + "'");
   }
+  return {lo, hi};
 }
 
 // the checks of bad input (exit 2) that need the scene
@@ -449,13 +445,14 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   const std::array<double, 2> start = {scene.initial.theta1, scene.initial.theta2};
   const std::vector<double> x0 = id::resize_tones(id::multisine_tones(), 4, a.tones);
   const id::ToneTorques tones(a.tones, o.torque_limit);
+  const sim::LoadFunction scene_loads = loads.function();  // compiled once for both calls
   const id::TorqueDesignResult r = id::design_torque_excitation(
-      scene.params, loads.function(), start, to, id::tone_starts(tones, x0));
+      scene.params, scene_loads, start, to, id::tone_starts(tones, x0));
   if (!r.best.status.ok()) {
     throw NumericalError(scene.path, "excite", "the start (multi-sine tones) failed: " + r.best.status.message);
   }
   id::TorqueCandidate g =
-      id::evaluate_tones(scene.params, loads.function(), start, to, r.best.x, 1.0 / o.rate_hz);
+      id::evaluate_tones(scene.params, scene_loads, start, to, r.best.x, 1.0 / o.rate_hz);
   if (!g.status.ok()) throw NumericalError(scene.path, "excite", "designed motion: " + g.status.message);
   Design d;
   d.report = std::move(g.report);

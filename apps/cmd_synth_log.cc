@@ -67,7 +67,7 @@ void write_log(const std::string& path, const identification::TorqueLog& log) {
 // The log of a position-controlled mechanism following MOTION.csv (columns t, theta1, theta2,
 // omega1, omega2, alpha1, alpha2, as excitation.csv of `fivebar excite`): inverse dynamics of
 // the scene at every row, then the same noise as a simulated log.
-identification::SynthResult motion_log(const Scene& scene, const LoadExpressions& loads,
+identification::SynthResult motion_log(const Scene& scene, const sim::LoadFunction& loads,
                                        const std::string& path,
                                        const identification::SynthOptions& so) {
   const CsvTable table = read_csv(path);
@@ -199,7 +199,7 @@ int run(const Args& a) {
   }
   identification::SynthResult res =
       a.motion.empty() ? identification::synthesize_log(scene.params, loads, scene.initial, so)
-                       : motion_log(scene, LoadExpressions(scene), a.motion, so);
+                       : motion_log(scene, loads, a.motion, so);
   if (!res.status.ok()) throw NumericalError(scene.path, "simulation", res.status.message);
 
   identification::TorqueLog& log = res.log;

@@ -32,7 +32,9 @@ def run(cmd):
 
 
 def identify(args, log, work):
-    cmd = [args.fivebar, "identify", args.scene, "--log", log, "--out", work, "--no-plots"]
+    # only the estimates are read: no validation runs
+    cmd = [args.fivebar, "identify", args.scene, "--log", log, "--out", work, "--no-plots",
+           "--no-validation"]
     if args.per_joint:
         cmd.append("--per-joint")
     if args.estimate:

@@ -44,4 +44,14 @@ std::string trim(const std::string& s) {
   return s.substr(first, s.find_last_not_of(blanks) - first + 1);
 }
 
+bool parse_finite(const std::string& text, double* v) {
+  const std::string s = trim(text);
+  if (s.empty()) return false;
+  char* end = nullptr;
+  const double x = std::strtod(s.c_str(), &end);
+  if (end != s.c_str() + s.size() || !std::isfinite(x)) return false;
+  *v = x;
+  return true;
+}
+
 }  // namespace fivebar::io

@@ -72,6 +72,7 @@ expect_error(2, "below what holding the start pose needs",
              ["excite", PAPER, "--out", bad, "--torque-limit", "0.5"], bad)
 expect_error(2, "excludes the start pose theta1", base + ["--theta1-range", "2:3"], bad)
 expect_error(2, "--theta2-range: expected LO:HI", base + ["--theta2-range", "3:2"], bad)
+expect_error(2, "--theta1-range: expected LO:HI", base + ["--theta1-range", "1x:2"], bad)
 expect_error(2, "--estimate", base + ["--estimate", "friction,mass"], bad)
 expect_error(3, "reversals_unreachable", base + ["--family", "fourier", "--min-reversals", "1000"], bad)
 # an option of the other family is bad input, not silently ignored (the default family is torque)

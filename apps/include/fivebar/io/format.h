@@ -26,4 +26,7 @@ std::string format_printf(double x, const char* format);
 /// `s` without leading and trailing blanks (space, tab, CR, LF).
 std::string trim(const std::string& s);
 
+/// The whole of `text` (blanks trimmed) as a finite number: true and *v set, else false.
+bool parse_finite(const std::string& text, double* v);
+
 }  // namespace fivebar::io
