@@ -284,8 +284,7 @@ Json report_json(const id::DesignParameters& dp, const id::ExcitationReport& r) 
   j.set("peak_torque", r.peak_torque);
   j.set("peak_torque_time", r.peak_time);
   j.set("min_coupler_sine", r.min_sine);
-  Json rev = Json::array();
-  for (int k : r.reversals) rev.push(k);
+  Json rev = Json::array_of(r.reversals);
   j.set("reversals", rev);
   j.set("theta1_range", Json::array().push(r.theta_min[0]).push(r.theta_max[0]));
   j.set("theta2_range", Json::array().push(r.theta_min[1]).push(r.theta_max[1]));
@@ -532,18 +531,15 @@ Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::Desig
   sol.set("evaluations", d.solve.evaluations);
   sol.set("starts", a.starts);
   sol.set("best_start", d.solve.best_start);
-  Json so = Json::array();
-  for (double v : d.solve.start_objectives) so.push(v);
+  Json so = Json::array_of(d.solve.start_objectives);
   sol.set("start_objectives", so);
-  Json sc = Json::array();
-  for (double v : d.solve.start_max_constraint) sc.push(v);
+  Json sc = Json::array_of(d.solve.start_max_constraint);
   sol.set("start_max_constraint", sc);
   sol.set("design_time_s", d.seconds);
   sol.set("margin_rounds", d.rounds);
   sol.set("final_torque_margin", d.torque_margin);
   j.set("solver", sol);
-  Json coeffs = Json::array();
-  for (double v : d.solve.x) coeffs.push(v);
+  Json coeffs = Json::array_of(d.solve.x);
   j.set(a.family == "torque" ? "torque_tones" : "fourier_coefficients", coeffs);
   j.set("designed", report_json(dp, d.report));
   if (base) {

@@ -168,8 +168,7 @@ Json inertial_json(const id::InertialReport& r) {
   Json j = Json::object();
   j.set("prior_relative_std", r.prior_relative);
   j.set("determined_directions", r.rank);
-  Json info = Json::array();
-  for (double v : r.information) info.push(v);
+  Json info = Json::array_of(r.information);
   j.set("information_singular_values", std::move(info));
   Json base = Json::array();
   for (const id::InertialReport::Combination& c : r.base) {
@@ -180,8 +179,7 @@ Json inertial_json(const id::InertialReport& r) {
     base.push(std::move(e));
   }
   j.set("base_combinations", std::move(base));
-  Json at = Json::array();
-  for (const std::string& n : r.at_prior) at.push(n);
+  Json at = Json::array_of(r.at_prior);
   j.set("left_at_prior", std::move(at));
   j.set("physically_consistent", r.consistent);
   return j;
@@ -205,8 +203,7 @@ Json conditioning_json(const id::IdentifyResult& res, const id::TorqueLog& log) 
     glitches.push(std::move(e));
   }
   cond.set("rejected_glitches", std::move(glitches));
-  Json notes = Json::array();
-  for (const std::string& n : res.notes) notes.push(n);
+  Json notes = Json::array_of(res.notes);
   cond.set("notes", std::move(notes));
   return cond;
 }
@@ -244,8 +241,7 @@ void solver_json(const id::IdentifyResult& res, Json* j) {
     corr.push(std::move(row));
   }
   j->set("correlation", std::move(corr));
-  Json sv = Json::array();
-  for (double s : res.singular_values) sv.push(s);
+  Json sv = Json::array_of(res.singular_values);
   j->set("singular_values", std::move(sv));
   j->set("condition_number", res.singular_values.empty()
                                  ? NAN
@@ -254,8 +250,7 @@ void solver_json(const id::IdentifyResult& res, Json* j) {
   solver.set("iterations", res.iterations);
   solver.set("converged", res.converged);
   solver.set("report", res.solver_message);
-  Json costs = Json::array();
-  for (double c : res.iteration_costs) costs.push(c);
+  Json costs = Json::array_of(res.iteration_costs);
   solver.set("iteration_costs", std::move(costs));
   j->set("solver", std::move(solver));
 }
@@ -327,8 +322,7 @@ Json identification_json(const Args& a, const Scene& scene, const id::IdentifyOp
   j.set("log_conditioning", conditioning_json(res, log));
   solver_json(res, &j);
   if (!a.no_validation) j.set("validation", validation_json(val));
-  Json warnings = Json::array();
-  for (const std::string& w : res.warnings) warnings.push(w);
+  Json warnings = Json::array_of(res.warnings);
   j.set("warnings", std::move(warnings));
   j.set("identification_wall_time_s", res.wall_time_s);
   return j;

@@ -278,8 +278,7 @@ Json rest_json(const RestRule& rule, const Motion& motion, const RestSummary& s)
   j.set("acceleration_noise", motion.acceleration_noise);
   j.set("rows_at_rest", s.rows_at_rest);
   j.set("rows_with_stuck_joint", s.rows_with_stuck_joint);
-  Json per_joint = Json::array();
-  for (long n : s.stuck_rows) per_joint.push(n);
+  Json per_joint = Json::array_of(s.stuck_rows);
   j.set("stuck_rows_per_joint", std::move(per_joint));
   if (s.rows_at_rest > 0) {
     j.set("holding_M1", pair(s.M1_lo, s.M1_hi));
@@ -343,8 +342,7 @@ int run(const Args& args) {
   summary.set("command", "inverse");
   summary.set("scene", scene.path);
   summary.set("motion", args.motion);
-  Json sets = Json::array();
-  for (const std::string& s : args.scene.sets) sets.push(s);
+  Json sets = Json::array_of(args.scene.sets);
   summary.set("sets", std::move(sets));
   summary.set("samples", static_cast<long>(rows.size()));
   summary.set("t_start", rows.front().t);

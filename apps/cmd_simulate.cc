@@ -166,8 +166,7 @@ void settings_json(const Args& args, const Scene& scene, const sim::Options& o, 
   Json& summary = *out;
   summary.set("command", "simulate");
   summary.set("scene", scene.path);
-  Json sets = Json::array();
-  for (const std::string& s : args.scene.sets) sets.push(s);
+  Json sets = Json::array_of(args.scene.sets);
   summary.set("sets", std::move(sets));
   summary.set("friction_model", friction_law_name(scene.params.friction.law));
   summary.set("integrator", integrator_name(o.method));

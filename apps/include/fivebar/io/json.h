@@ -24,6 +24,13 @@ class Json {
 
   static Json object() { return Json(Type::kObject); }
   static Json array() { return Json(Type::kArray); }
+  /// An array of the elements of `range` (numbers or strings), in order.
+  template <class Range>
+  static Json array_of(const Range& range) {
+    Json a = array();
+    for (const auto& v : range) a.push(Json(v));
+    return a;
+  }
 
   /// Object: sets `key` (replacing an existing one in place). Returns *this for chaining.
   Json& set(const std::string& key, Json value);
