@@ -10,7 +10,6 @@
 #include <CLI/CLI.hpp>
 #include <array>
 #include <cmath>
-#include <random>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -76,12 +75,7 @@ identification::SynthResult motion_log(const Scene& scene, const sim::LoadFuncti
                             w2 = table.column("omega2"), a1 = table.column("alpha1"),
                             a2 = table.column("alpha2");
   if (t.empty()) throw InputError(path, "(file)", "no data rows after the header");
-  identification::SynthResult out;
-  std::mt19937_64 rng(so.seed);
-  std::normal_distribution<double> gauss(0.0, 1.0);
-  identification::TorqueLog& log = out.log;
-  log.has_rates = log.has_accels = so.with_rates;
-  std::vector<std::array<double, kJoints>> rates;
+  std::vector<sim::Row> rows(t.size());
   for (size_t i = 0; i < t.size(); ++i) {
     if (i > 0 && !(t[i] > t[i - 1])) {
       throw InputError(path, "line " + std::to_string(table.lines[i]) + ", column t",
@@ -94,28 +88,16 @@ identification::SynthResult motion_log(const Scene& scene, const sim::LoadFuncti
       throw NumericalError(path, "line " + std::to_string(table.lines[i]),
                            "inverse dynamics: " + st.message);
     }
-    // the draw order of synthesize_log: tau1, tau2, theta1, theta2, omega1, omega2
-    const double n_tau1 = gauss(rng), n_tau2 = gauss(rng), n_th1 = gauss(rng), n_th2 = gauss(rng),
-                 n_w1 = gauss(rng), n_w2 = gauss(rng);
-    auto quantize = [&](double x) {
-      return so.quantization > 0 ? so.quantization * std::round(x / so.quantization) : x;
-    };
-    log.t.push_back(t[i]);
-    log.theta1.push_back(quantize(th1[i] + so.angle_noise * n_th1));
-    log.theta2.push_back(quantize(th2[i] + so.angle_noise * n_th2));
-    const std::array<double, kActuators>& offset = scene.params.actuators.offset;
-    log.tau1.push_back(ev.M1 + offset[0] + so.torque_noise * n_tau1);
-    log.tau2.push_back(ev.M2 + offset[1] + so.torque_noise * n_tau2);
-    if (so.with_rates) {
-      log.omega1.push_back(w1[i] + so.rate_noise * n_w1);
-      log.omega2.push_back(w2[i] + so.rate_noise * n_w2);
-      log.alpha1.push_back(a1[i]);
-      log.alpha2.push_back(a2[i]);
-    }
-    log.lines.push_back(log.size() + 1);
-    rates.push_back({ev.w[0], ev.w[1], ev.w[2], ev.w[3], ev.w[4]});
+    sim::Row& r = rows[i];
+    r.t = t[i];
+    r.theta = {th1[i], th2[i], 0, 0};
+    r.omega = {w1[i], w2[i], ev.bias.w3, ev.bias.w4};
+    r.alpha = {a1[i], a2[i], 0, 0};
+    r.M1 = ev.M1;
+    r.M2 = ev.M2;
   }
-  out.reversals = identification::count_reversals(rates);
+  identification::SynthResult out;
+  identification::sample_log(scene.params, rows, so, &out);  // the sensors, as synthesize_log's
   return out;
 }
 

@@ -28,16 +28,22 @@ SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction
     out.status = res.status;
     return out;
   }
+  sample_log(params, res.rows, opt, &out);
+  return out;
+}
+
+void sample_log(const Params<double>& params, const std::vector<sim::Row>& rows,
+                const SynthOptions& opt, SynthResult* out) {
   std::mt19937_64 rng(opt.seed);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  TorqueLog& log = out.log;
+  TorqueLog& log = out->log;
   log.has_rates = log.has_accels = opt.with_rates;
   auto quantize = [&](double x) {
     return opt.quantization > 0 ? opt.quantization * std::round(x / opt.quantization) : x;
   };
   std::vector<std::array<double, kJoints>> rates;
-  rates.reserve(res.rows.size());
-  for (const sim::Row& row : res.rows) {
+  rates.reserve(rows.size());
+  for (const sim::Row& row : rows) {
     // one fixed order of draws per row keeps logs reproducible across options
     const double n_tau1 = gauss(rng), n_tau2 = gauss(rng), n_th1 = gauss(rng), n_th2 = gauss(rng),
                  n_w1 = gauss(rng), n_w2 = gauss(rng);
@@ -57,8 +63,7 @@ SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction
     // joint reversals: sign changes of w_k = (w1, w3 - w1, w4 - w3, w2 - w4, w2)
     rates.push_back(relative_rates(row.omega[0], row.omega[1], row.omega[2], row.omega[3]));
   }
-  out.reversals = count_reversals(rates);
-  return out;
+  out->reversals = count_reversals(rates);
 }
 
 std::array<int, kJoints> count_reversals(const std::vector<std::array<double, kJoints>>& rates) {

@@ -43,6 +43,13 @@ sim::LoadFunction multisine_loads(const sim::LoadFunction& scene_loads);
 SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction& loads,
                            const sim::Initial& initial, const SynthOptions& options);
 
+/// The log a sensor records along `rows` (t, theta1..2, omega1..4, alpha1..2, M1, M2), into
+/// out->log and out->reversals: noise in one fixed order of draws per row (tau1, tau2, theta1,
+/// theta2, omega1, omega2, from opt.seed), torques plus the actuators' offsets, angles
+/// quantized. Used by synthesize_log and for a given motion (`synth-log --motion`).
+void sample_log(const Params<double>& params, const std::vector<sim::Row>& rows,
+                const SynthOptions& opt, SynthResult* out);
+
 /// Sign changes of each joint's relative rate over a sequence of rate samples (zeros keep the
 /// previous sign).
 std::array<int, kJoints> count_reversals(const std::vector<std::array<double, kJoints>>& rates);
