@@ -274,18 +274,14 @@ Json design_json(const Search& s, int best, const trajectory::BoxResult& box, do
   }
   j.set("values", values);
   j.set("total_energy", d.total);
-  Json tasks = Json::array();
-  for (const TaskResult& r : d.results) {
-    Json t = Json::object();
-    t.set("task", r.task);
-    t.set("status", r.status);
-    t.set("dissipated_energy", r.dissipated_energy);
-    t.set("baseline_dissipated_energy", r.baseline_dissipated_energy);
-    t.set("peak_torque", r.peak_torque);
-    t.set("min_coupler_sine", r.min_coupler_sine);
-    tasks.push(t);
-  }
-  j.set("tasks", tasks);
+  j.set("tasks", Json::array_of(d.results, [](const TaskResult& r) {
+          return Json::object({{"task", r.task},
+                               {"status", r.status},
+                               {"dissipated_energy", r.dissipated_energy},
+                               {"baseline_dissipated_energy", r.baseline_dissipated_energy},
+                               {"peak_torque", r.peak_torque},
+                               {"min_coupler_sine", r.min_coupler_sine}});
+        }));
   j.set("bounds", bounds);
   j.set("start_values", start_values);
   j.set("start_total_energy", start.status == "ok" ? start.total : NAN);

@@ -37,15 +37,21 @@ namespace id = fivebar::identification;
 
 struct Args {
   SceneArgs scene;
-  double duration = 10, torque_limit = NAN, torque_noise = 0.02, rate = 1000;
-  double singular_margin = 0.1, reversal_rate = 0.2, spread = 2, drift_spread = 2, ramp = 1;
+  /// the design's settings bound to the options directly (the command's defaults below)
+  id::ExcitationOptions design = [] {
+    id::ExcitationOptions o;
+    o.torque_limit = NAN;
+    o.design_samples = 600;
+    o.min_reversals = 6;
+    return o;
+  }();
+  double spread = 2, drift_spread = 2;
   std::string estimate = "friction", criterion = "d-optimal", method = "mma", start = "swing";
   std::string family = "torque";
   std::vector<std::string> family_only;  ///< options given that apply to the other family
   std::string theta1_range, theta2_range;
   bool per_joint = false, no_plots = false, no_baseline = false;
-  int periods = 4, harmonics = 5, design_samples = 600, starts = 2, max_evaluations = 0, tones = 6;
-  int min_reversals = 6;
+  int starts = 2, max_evaluations = 0, tones = 6;
   unsigned long long seed = 1;
 };
 
@@ -68,32 +74,32 @@ std::array<double, 2> parse_range(const std::string& text, const std::string& fl
 // the checks of bad input (exit 2) that need the scene
 void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads,
                  id::ExcitationOptions* o) {
-  if (!(a.duration > 0) || !std::isfinite(a.duration)) {
-    throw InputError(kFlags, "--duration", "must be > 0, got " + format_double(a.duration));
+  if (!(a.design.duration > 0) || !std::isfinite(a.design.duration)) {
+    throw InputError(kFlags, "--duration", "must be > 0, got " + format_double(a.design.duration));
   }
-  if (!(a.torque_limit > 0) || !std::isfinite(a.torque_limit)) {
-    throw InputError(kFlags, "--torque-limit", "must be > 0 N m, got " + format_double(a.torque_limit));
+  if (!(a.design.torque_limit > 0) || !std::isfinite(a.design.torque_limit)) {
+    throw InputError(kFlags, "--torque-limit", "must be > 0 N m, got " + format_double(a.design.torque_limit));
   }
-  if (!(a.torque_noise > 0)) throw InputError(kFlags, "--torque-noise", "must be > 0");
-  if (!(a.rate > 0) || !std::isfinite(a.rate)) {
-    throw InputError(kFlags, "--rate", "must be > 0, got " + format_double(a.rate));
+  if (!(a.design.torque_noise > 0)) throw InputError(kFlags, "--torque-noise", "must be > 0");
+  if (!(a.design.rate_hz > 0) || !std::isfinite(a.design.rate_hz)) {
+    throw InputError(kFlags, "--rate", "must be > 0, got " + format_double(a.design.rate_hz));
   }
-  if (a.rate * a.duration > 1e7) {
+  if (a.design.rate_hz * a.design.duration > 1e7) {
     throw InputError(kFlags, "--rate", "--rate x --duration gives more than 1e7 samples");
   }
-  if (!(a.singular_margin >= 0 && a.singular_margin < 1)) {
+  if (!(a.design.singular_margin >= 0 && a.design.singular_margin < 1)) {
     throw InputError(kFlags, "--singular-margin",
-                     "expected a number in [0, 1), got " + format_double(a.singular_margin));
+                     "expected a number in [0, 1), got " + format_double(a.design.singular_margin));
   }
-  if (a.min_reversals < 0) {
-    throw InputError(kFlags, "--min-reversals", "must be >= 0, got " + std::to_string(a.min_reversals));
+  if (a.design.min_reversals < 0) {
+    throw InputError(kFlags, "--min-reversals", "must be >= 0, got " + std::to_string(a.design.min_reversals));
   }
-  if (!(a.reversal_rate > 0) || !std::isfinite(a.reversal_rate)) {
+  if (!(a.design.reversal_rate > 0) || !std::isfinite(a.design.reversal_rate)) {
     throw InputError(kFlags, "--reversal-rate",
-                     "must be > 0 rad/s, got " + format_double(a.reversal_rate));
+                     "must be > 0 rad/s, got " + format_double(a.design.reversal_rate));
   }
-  if (a.periods < 1 || a.harmonics < 1 || a.design_samples < 16 || a.starts < 1 ||
-      !(a.family == "torque" || (a.ramp >= 0 && a.ramp < a.duration))) {
+  if (a.design.periods < 1 || a.design.harmonics < 1 || a.design.design_samples < 16 || a.starts < 1 ||
+      !(a.family == "torque" || (a.design.ramp >= 0 && a.design.ramp < a.design.duration))) {
     throw InputError(kFlags, "--periods/--harmonics/--design-samples/--starts/--ramp",
                      "need periods >= 1, harmonics >= 1, design samples >= 16, starts >= 1, "
                      "0 <= ramp < duration");
@@ -122,9 +128,9 @@ void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads
                      "holding the start pose needs torques that are not finite (M1 = " +
                          format_double(h.M1) + ", M2 = " + format_double(h.M2) + " N m)");
   }
-  if (need >= a.torque_limit * (1.0 - o->torque_margin)) {
+  if (need >= a.design.torque_limit * (1.0 - o->torque_margin)) {
     throw InputError(kFlags, "--torque-limit",
-                     format_double(a.torque_limit) + " N m is below what holding the start pose needs (" +
+                     format_double(a.design.torque_limit) + " N m is below what holding the start pose needs (" +
                          "M1 = " + format_double(h.M1) + ", M2 = " + format_double(h.M2) +
                          " N m at rest, plus the design's " +
                          format_double(100 * o->torque_margin) + " % margin)");
@@ -132,7 +138,7 @@ void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads
 }
 
 id::ExcitationOptions options_of(const Args& a, const Scene& scene, const LoadExpressions& loads) {
-  id::ExcitationOptions o;
+  id::ExcitationOptions o = a.design;
   std::string bad;
   if (!id::parse_groups(a.estimate, &o.groups, &bad)) {
     throw InputError(kFlags, "--estimate",
@@ -163,17 +169,7 @@ id::ExcitationOptions options_of(const Args& a, const Scene& scene, const LoadEx
   if (a.tones < 1 || a.max_evaluations < 0) {
     throw InputError(kFlags, "--tones/--max-evaluations", "need tones >= 1, max evaluations >= 0");
   }
-  o.duration = a.duration;
-  o.periods = a.periods;
-  o.harmonics = a.harmonics;
-  o.ramp = a.ramp;
-  o.design_samples = a.design_samples;
-  o.torque_limit = a.torque_limit;
-  o.torque_noise = a.torque_noise;
-  o.rate_hz = a.rate;
-  o.singular_margin = std::max(a.singular_margin, scene.options.singular_margin);
-  o.reversal_rate = a.reversal_rate;
-  o.min_reversals = a.min_reversals;
+  o.singular_margin = std::max(a.design.singular_margin, scene.options.singular_margin);
   check_input(a, scene, loads, &o);
   return o;
 }
@@ -218,8 +214,8 @@ struct Multisine {
 Multisine multisine(const Scene& scene, const LoadExpressions& loads, const id::DesignParameters& dp,
                     const Args& a) {
   id::SynthOptions so;
-  so.rate_hz = a.rate;
-  so.duration = a.duration;
+  so.rate_hz = a.design.rate_hz;
+  so.duration = a.design.duration;
   so.with_rates = true;
   so.multisine = true;
   so.sim = scene.options;
@@ -234,7 +230,7 @@ Multisine multisine(const Scene& scene, const LoadExpressions& loads, const id::
                       log.alpha2[i]});
   }
   const Status st =
-      id::evaluate_motion(scene.params, dp, loads, log.t, states, a.torque_noise, &m.report);
+      id::evaluate_motion(scene.params, dp, loads, log.t, states, a.design.torque_noise, &m.report);
   if (!st.ok()) throw NumericalError(scene.path, "multisine", st.message);
   // the multi-sine's peak is that of its applied torques (the log's, noise-free)
   m.report.peak_torque = 0;
@@ -502,18 +498,17 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o, std::
 
 Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::DesignParameters& dp,
                   const Design& d, const std::string& status, const id::ExcitationReport* base) {
-  Json j = Json::object();
-  j.set("status", status);
-  j.set("estimate", a.estimate);
-  j.set("per_joint", a.per_joint);
-  j.set("criterion", a.criterion);
-  j.set("duration_s", o.duration);
-  j.set("rate_hz", o.rate_hz);
-  j.set("torque_limit", o.torque_limit);
-  j.set("torque_noise", o.torque_noise);
-  j.set("singular_margin", o.singular_margin);
-  j.set("min_reversals", o.min_reversals);
-  j.set("family", a.family);
+  Json j = Json::object({{"status", status},
+                          {"estimate", a.estimate},
+                          {"per_joint", a.per_joint},
+                          {"criterion", a.criterion},
+                          {"duration_s", o.duration},
+                          {"rate_hz", o.rate_hz},
+                          {"torque_limit", o.torque_limit},
+                          {"torque_noise", o.torque_noise},
+                          {"singular_margin", o.singular_margin},
+                          {"min_reversals", o.min_reversals},
+                          {"family", a.family}});
   if (a.family == "torque") {
     j.set("basis", "free motion under tone torques clipped at the limit, " + std::to_string(a.tones) +
                        " tones per motor (bias, amplitude, frequency, phase)");
@@ -522,23 +517,20 @@ Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::Desig
                        " harmonics, " + std::to_string(o.periods) + " periods, faded in from rest over " +
                        format_double(o.ramp) + " s");
   }
-  Json sol = Json::object();
-  sol.set("method", a.family == "torque" ? "evolution_strategy" : a.method);
-  sol.set("outcome", trajectory::outcome_name(d.solve.solver.outcome));
-  sol.set("message", d.solve.solver.message);
-  sol.set("objective", d.solve.objective);
-  sol.set("max_design_constraint", d.solve.max_constraint);
-  sol.set("evaluations", d.solve.evaluations);
-  sol.set("starts", a.starts);
-  sol.set("best_start", d.solve.best_start);
-  Json so = Json::array_of(d.solve.start_objectives);
-  sol.set("start_objectives", so);
-  Json sc = Json::array_of(d.solve.start_max_constraint);
-  sol.set("start_max_constraint", sc);
-  sol.set("design_time_s", d.seconds);
-  sol.set("margin_rounds", d.rounds);
-  sol.set("final_torque_margin", d.torque_margin);
-  j.set("solver", sol);
+  j.set("solver",
+        Json::object({{"method", a.family == "torque" ? "evolution_strategy" : a.method},
+                      {"outcome", trajectory::outcome_name(d.solve.solver.outcome)},
+                      {"message", d.solve.solver.message},
+                      {"objective", d.solve.objective},
+                      {"max_design_constraint", d.solve.max_constraint},
+                      {"evaluations", d.solve.evaluations},
+                      {"starts", a.starts},
+                      {"best_start", d.solve.best_start},
+                      {"start_objectives", Json::array_of(d.solve.start_objectives)},
+                      {"start_max_constraint", Json::array_of(d.solve.start_max_constraint)},
+                      {"design_time_s", d.seconds},
+                      {"margin_rounds", d.rounds},
+                      {"final_torque_margin", d.torque_margin}}));
   Json coeffs = Json::array_of(d.solve.x);
   j.set(a.family == "torque" ? "torque_tones" : "fourier_coefficients", coeffs);
   j.set("designed", report_json(dp, d.report));
@@ -614,8 +606,8 @@ int run(const Args& a) {
 RunFunction setup(CLI::App* app) {
   auto a = std::make_shared<Args>();
   add_scene_options(app, &a->scene, "excite");
-  app->add_option("--duration", a->duration, "length of the motion [s]")->capture_default_str();
-  app->add_option("--torque-limit", a->torque_limit, "|M1|, |M2| at most this [N m]")->required();
+  app->add_option("--duration", a->design.duration, "length of the motion [s]")->capture_default_str();
+  app->add_option("--torque-limit", a->design.torque_limit, "|M1|, |M2| at most this [N m]")->required();
   app->add_option("--estimate", a->estimate, "parameter groups: friction,inertia,actuator")
       ->capture_default_str();
   app->add_flag("--per-joint", a->per_joint, "five friction coefficients of each kind");
@@ -631,20 +623,20 @@ RunFunction setup(CLI::App* app) {
       app->add_option("--tones", a->tones, "torque family: tones per motor")->capture_default_str());
   app->add_option("--theta1-range", a->theta1_range, "allowed theta1 [rad], LO:HI");
   app->add_option("--theta2-range", a->theta2_range, "allowed theta2 [rad], LO:HI");
-  app->add_option("--singular-margin", a->singular_margin, "least |sin(theta4 - theta3)|")
+  app->add_option("--singular-margin", a->design.singular_margin, "least |sin(theta4 - theta3)|")
       ->capture_default_str();
-  app->add_option("--min-reversals", a->min_reversals, "sign changes of every joint's rate")
+  app->add_option("--min-reversals", a->design.min_reversals, "sign changes of every joint's rate")
       ->capture_default_str();
-  fourier.push_back(app->add_option("--reversal-rate", a->reversal_rate,
+  fourier.push_back(app->add_option("--reversal-rate", a->design.reversal_rate,
                                     "fourier: every joint reaches +- this [rad/s]")
                         ->capture_default_str());
-  app->add_option("--torque-noise", a->torque_noise, "std of the logged torques [N m]")
+  app->add_option("--torque-noise", a->design.torque_noise, "std of the logged torques [N m]")
       ->capture_default_str();
-  app->add_option("--rate", a->rate, "sampling rate of the log [Hz]")->capture_default_str();
-  fourier.push_back(app->add_option("--periods", a->periods, "periods of the motion")->capture_default_str());
-  fourier.push_back(app->add_option("--harmonics", a->harmonics, "Fourier harmonics per crank")
+  app->add_option("--rate", a->design.rate_hz, "sampling rate of the log [Hz]")->capture_default_str();
+  fourier.push_back(app->add_option("--periods", a->design.periods, "periods of the motion")->capture_default_str());
+  fourier.push_back(app->add_option("--harmonics", a->design.harmonics, "Fourier harmonics per crank")
                         ->capture_default_str());
-  app->add_option("--design-samples", a->design_samples, "samples of the design objective")
+  app->add_option("--design-samples", a->design.design_samples, "samples of the design objective")
       ->capture_default_str();
   fourier.push_back(
       app->add_option("--starts", a->starts, "multi-start: local solves")->capture_default_str());
@@ -656,7 +648,7 @@ RunFunction setup(CLI::App* app) {
       app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]")
           ->capture_default_str());
   fourier.push_back(
-      app->add_option("--ramp", a->ramp, "fade-in from rest [s]")->capture_default_str());
+      app->add_option("--ramp", a->design.ramp, "fade-in from rest [s]")->capture_default_str());
   fourier.push_back(app->add_option("--start", a->start,
                                     "first start: swing (both cranks swing together) | multisine "
                                     "(its motion fitted) | rest")

@@ -170,15 +170,9 @@ Json inertial_json(const id::InertialReport& r) {
   j.set("determined_directions", r.rank);
   Json info = Json::array_of(r.information);
   j.set("information_singular_values", std::move(info));
-  Json base = Json::array();
-  for (const id::InertialReport::Combination& c : r.base) {
-    Json e = Json::object();
-    e.set("combination", c.text);
-    e.set("value", c.value);
-    e.set("std", c.std);
-    base.push(std::move(e));
-  }
-  j.set("base_combinations", std::move(base));
+  j.set("base_combinations", Json::array_of(r.base, [](const id::InertialReport::Combination& c) {
+          return Json::object({{"combination", c.text}, {"value", c.value}, {"std", c.std}});
+        }));
   Json at = Json::array_of(r.at_prior);
   j.set("left_at_prior", std::move(at));
   j.set("physically_consistent", r.consistent);
@@ -192,17 +186,10 @@ Json conditioning_json(const id::IdentifyResult& res, const id::TorqueLog& log) 
   cond.set("angle_noise", pair(res.angle_noise[0], res.angle_noise[1]));
   cond.set("torque_noise", pair(res.torque_noise[0], res.torque_noise[1]));
   if (log.has_rates) cond.set("rate_noise", pair(res.rate_noise[0], res.rate_noise[1]));
-  Json glitches = Json::array();
-  for (const id::Glitch& g : res.glitches) {
-    Json e = Json::object();
-    e.set("line", g.line);
-    e.set("column", g.column);
-    e.set("value", g.value);
-    e.set("expected", g.expected);
-    e.set("noise_std", g.sigmas);
-    glitches.push(std::move(e));
-  }
-  cond.set("rejected_glitches", std::move(glitches));
+  cond.set("rejected_glitches", Json::array_of(res.glitches, [](const id::Glitch& g) {
+             return Json::object({{"line", g.line}, {"column", g.column}, {"value", g.value},
+                                  {"expected", g.expected}, {"noise_std", g.sigmas}});
+           }));
   Json notes = Json::array_of(res.notes);
   cond.set("notes", std::move(notes));
   return cond;

@@ -163,19 +163,17 @@ std::string write_with_plot_copy(const OutputDir& out, const std::string& name,
 }
 
 void settings_json(const Args& args, const Scene& scene, const sim::Options& o, Json* out) {
-  Json& summary = *out;
-  summary.set("command", "simulate");
-  summary.set("scene", scene.path);
-  Json sets = Json::array_of(args.scene.sets);
-  summary.set("sets", std::move(sets));
-  summary.set("friction_model", friction_law_name(scene.params.friction.law));
-  summary.set("integrator", integrator_name(o.method));
-  summary.set("rtol", o.rtol);
-  summary.set("atol", o.atol);
-  summary.set("locate_switches", o.locate_switches);
-  summary.set("stick", o.stick);
-  summary.set("duration", o.duration);
-  summary.set("output_step", o.output_step);
+  out->set({{"command", "simulate"},
+            {"scene", scene.path},
+            {"sets", Json::array_of(args.scene.sets)},
+            {"friction_model", friction_law_name(scene.params.friction.law)},
+            {"integrator", integrator_name(o.method)},
+            {"rtol", o.rtol},
+            {"atol", o.atol},
+            {"locate_switches", o.locate_switches},
+            {"stick", o.stick},
+            {"duration", o.duration},
+            {"output_step", o.output_step}});
 }
 
 void print_report(const Scene& scene, const sim::EstimatedRun& er, const sim::RunChecks& checks,

@@ -37,12 +37,15 @@ namespace {
 struct Args {
   std::string scene, out;
   std::vector<std::string> sets;
-  double rate = 1000, duration = 10, torque_noise = 0.02, angle_noise = 1e-5, rate_noise = 0;
-  double quantization = 0;
-  unsigned long long seed = 1;
+  /// sampling, noise and seed, bound to the options directly (the command's defaults below)
+  identification::SynthOptions so = [] {
+    identification::SynthOptions o;
+    o.torque_noise = 0.02;
+    o.angle_noise = 1e-5;
+    return o;
+  }();
   std::string excitation = "scene", law, motion;
   double static_coulomb = 0.18, stribeck_velocity = 0.1, stribeck_exponent = 2.0;
-  bool with_rates = false;
   /// actuator terms (tau1, tau2), overriding the scene's `actuators:` when given
   std::vector<double> torque_offset, actuator_coulomb, actuator_viscous;
   std::string command_line;
@@ -142,9 +145,9 @@ int run(const Args& a) {
   Scene scene = load_scene(a.scene, a.sets);
   const sim::LoadFunction loads = LoadExpressions(scene).function();
   const std::string flag_file = "command line";
-  if (!(a.rate > 0)) throw InputError(flag_file, "--rate", "must be > 0");
-  if (!(a.duration > 0)) throw InputError(flag_file, "--duration", "must be > 0");
-  if (a.torque_noise < 0 || a.angle_noise < 0 || a.rate_noise < 0 || a.quantization < 0) {
+  if (!(a.so.rate_hz > 0)) throw InputError(flag_file, "--rate", "must be > 0");
+  if (!(a.so.duration > 0)) throw InputError(flag_file, "--duration", "must be > 0");
+  if (a.so.torque_noise < 0 || a.so.angle_noise < 0 || a.so.rate_noise < 0 || a.so.quantization < 0) {
     throw InputError(flag_file, "--*-noise/--quantization", "must be >= 0");
   }
   if (a.excitation != "scene" && a.excitation != "multisine") {
@@ -165,15 +168,7 @@ int run(const Args& a) {
     }
   }
   set_actuators(a, &scene);
-  identification::SynthOptions so;
-  so.rate_hz = a.rate;
-  so.duration = a.duration;
-  so.torque_noise = a.torque_noise;
-  so.angle_noise = a.angle_noise;
-  so.rate_noise = a.rate_noise;
-  so.quantization = a.quantization;
-  so.seed = a.seed;
-  so.with_rates = a.with_rates;
+  identification::SynthOptions so = a.so;
   so.multisine = a.excitation == "multisine";
   so.sim = scene.options;
   if (!a.motion.empty() && a.excitation != "scene") {
@@ -188,10 +183,10 @@ int run(const Args& a) {
   log.comments = truth_header(a, scene);
   std::ostringstream rev;
   for (int k = 0; k < kJoints; ++k) rev << (k ? "," : "") << res.reversals[k];
-  log.comments.push_back(" noise: torque " + format_double(a.torque_noise) + " N m, angle " +
-                         format_double(a.angle_noise) + " rad, rate " +
-                         format_double(a.rate_noise) + " rad/s, quantization " +
-                         format_double(a.quantization) + " rad, seed " + std::to_string(a.seed));
+  log.comments.push_back(" noise: torque " + format_double(a.so.torque_noise) + " N m, angle " +
+                         format_double(a.so.angle_noise) + " rad, rate " +
+                         format_double(a.so.rate_noise) + " rad/s, quantization " +
+                         format_double(a.so.quantization) + " rad, seed " + std::to_string(a.so.seed));
   log.comments.push_back(" excitation: " + (a.motion.empty() ? a.excitation : "motion " + a.motion) +
                          "; joint reversals (O,B,C,D,D0): " + rev.str());
   write_log(a.out, log);
@@ -209,21 +204,21 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--set", args->sets, "override one scene value (KEY=VALUE)")
       ->type_name("KEY=VALUE")
       ->allow_extra_args(false);
-  app->add_option("--rate", args->rate, "sampling rate [Hz]")->capture_default_str();
-  app->add_option("--duration", args->duration, "[s]")->capture_default_str();
-  app->add_option("--torque-noise", args->torque_noise, "Gaussian std on tau1, tau2 [N m]")
+  app->add_option("--rate", args->so.rate_hz, "sampling rate [Hz]")->capture_default_str();
+  app->add_option("--duration", args->so.duration, "[s]")->capture_default_str();
+  app->add_option("--torque-noise", args->so.torque_noise, "Gaussian std on tau1, tau2 [N m]")
       ->capture_default_str();
-  app->add_option("--angle-noise", args->angle_noise, "Gaussian std on theta1, theta2 [rad]")
+  app->add_option("--angle-noise", args->so.angle_noise, "Gaussian std on theta1, theta2 [rad]")
       ->capture_default_str();
-  app->add_option("--rate-noise", args->rate_noise, "Gaussian std on omega1, omega2 [rad/s]")
+  app->add_option("--rate-noise", args->so.rate_noise, "Gaussian std on omega1, omega2 [rad/s]")
       ->capture_default_str();
-  app->add_option("--seed", args->seed, "std::mt19937_64 seed")->capture_default_str();
-  app->add_option("--quantization", args->quantization, "encoder step [rad] (0: none)")
+  app->add_option("--seed", args->so.seed, "std::mt19937_64 seed")->capture_default_str();
+  app->add_option("--quantization", args->so.quantization, "encoder step [rad] (0: none)")
       ->capture_default_str();
   app->add_option("--excitation", args->excitation,
                   "scene: the scene's M1, M2; multisine: built-in excitation reversing every joint")
       ->capture_default_str();
-  app->add_flag("--with-rates", args->with_rates, "write omega1,omega2,alpha1,alpha2 (exact)");
+  app->add_flag("--with-rates", args->so.with_rates, "write omega1,omega2,alpha1,alpha2 (exact)");
   app->add_option("--motion", args->motion,
                   "follow this motion (t,theta1,theta2,omega1,omega2,alpha1,alpha2; e.g. "
                   "excitation.csv of excite): torques by inverse dynamics; its grid replaces "
@@ -255,14 +250,14 @@ RunFunction setup(CLI::App* app) {
     const Args& a = *args;
     std::string cmd = "fivebar synth-log " + a.scene + " --out " + a.out;
     for (const std::string& s : a.sets) cmd += " --set " + s;
-    cmd += " --rate " + format_double(a.rate) + " --duration " + format_double(a.duration) +
-           " --torque-noise " + format_double(a.torque_noise) + " --angle-noise " +
-           format_double(a.angle_noise) + " --seed " + std::to_string(a.seed) + " --excitation " +
+    cmd += " --rate " + format_double(a.so.rate_hz) + " --duration " + format_double(a.so.duration) +
+           " --torque-noise " + format_double(a.so.torque_noise) + " --angle-noise " +
+           format_double(a.so.angle_noise) + " --seed " + std::to_string(a.so.seed) + " --excitation " +
            a.excitation;
     if (!a.motion.empty()) cmd += " --motion " + a.motion;
-    if (a.rate_noise > 0) cmd += " --rate-noise " + format_double(a.rate_noise);
-    if (a.quantization > 0) cmd += " --quantization " + format_double(a.quantization);
-    if (a.with_rates) cmd += " --with-rates";
+    if (a.so.rate_noise > 0) cmd += " --rate-noise " + format_double(a.so.rate_noise);
+    if (a.so.quantization > 0) cmd += " --quantization " + format_double(a.so.quantization);
+    if (a.so.with_rates) cmd += " --with-rates";
     const std::pair<const char*, const std::vector<double>*> pairs[] = {
         {" --torque-offset ", &a.torque_offset},
         {" --actuator-coulomb ", &a.actuator_coulomb},

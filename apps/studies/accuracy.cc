@@ -3,6 +3,7 @@
 #include "fivebar/studies/accuracy.h"
 
 #include "fivebar/sim/estimate.h"
+#include "fivebar/model/names.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,13 +12,11 @@
 namespace fivebar::studies {
 
 const char* treatment_name(Treatment t) {
-  switch (t) {
-    case Treatment::kExactLocated: return "exact_located";
-    case Treatment::kExactUnlocated: return "exact_unlocated";
-    case Treatment::kRegularized: return "regularized";
-    case Treatment::kAsScene: return "as_scene";
-  }
-  return "unknown";
+  static constexpr Named<Treatment> kNames[] = {{Treatment::kExactLocated, "exact_located"},
+                                                {Treatment::kExactUnlocated, "exact_unlocated"},
+                                                {Treatment::kRegularized, "regularized"},
+                                                {Treatment::kAsScene, "as_scene"}};
+  return name_in(kNames, t);
 }
 
 double max_theta_difference(const std::vector<Row>& a, const std::vector<Row>& b) {

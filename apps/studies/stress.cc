@@ -24,6 +24,7 @@
 
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/format.h"
+#include "fivebar/model/names.h"
 #include "fivebar/model/kinematics.h"
 #include "fivebar/sim/bytes.h"
 #include "fivebar/studies/accuracy.h"
@@ -31,12 +32,10 @@
 namespace fivebar::studies {
 
 const char* stress_outcome_name(StressOutcome outcome) {
-  switch (outcome) {
-    case StressOutcome::kOk: return "ok";
-    case StressOutcome::kRejected: return "rejected";
-    case StressOutcome::kFailed: return "failed";
-  }
-  return "unknown";
+  static constexpr Named<StressOutcome> kNames[] = {{StressOutcome::kOk, "ok"},
+                                                    {StressOutcome::kRejected, "rejected"},
+                                                    {StressOutcome::kFailed, "failed"}};
+  return name_in(kNames, outcome);
 }
 
 int StressReport::count(StressOutcome outcome) const {

@@ -16,6 +16,7 @@
 
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/names.h"
 #include "fivebar/model/rest.h"
 #include "covariance.h"
 #include "inertia.h"
@@ -23,40 +24,17 @@
 
 namespace fivebar::identification {
 
-bool parse_method(const std::string& name, Method* out) {
-  if (name == "inverse-dynamics")
-    *out = Method::kInverseDynamics;
-  else if (name == "output-error")
-    *out = Method::kOutputError;
-  else
-    return false;
-  return true;
-}
-const char* method_name(Method m) {
-  return m == Method::kOutputError ? "output-error" : "inverse-dynamics";
-}
-bool parse_loss(const std::string& name, Loss* out) {
-  if (name == "none")
-    *out = Loss::kNone;
-  else if (name == "huber")
-    *out = Loss::kHuber;
-  else if (name == "cauchy")
-    *out = Loss::kCauchy;
-  else
-    return false;
-  return true;
-}
-const char* loss_name(Loss l) {
-  switch (l) {
-    case Loss::kNone:
-      return "none";
-    case Loss::kHuber:
-      return "huber";
-    case Loss::kCauchy:
-      return "cauchy";
-  }
-  return "none";
-}
+namespace {
+constexpr Named<Method> kMethodNames[] = {{Method::kInverseDynamics, "inverse-dynamics"},
+                                          {Method::kOutputError, "output-error"}};
+constexpr Named<Loss> kLossNames[] = {
+    {Loss::kNone, "none"}, {Loss::kHuber, "huber"}, {Loss::kCauchy, "cauchy"}};
+}  // namespace
+
+bool parse_method(const std::string& name, Method* out) { return parse_in(kMethodNames, name, out); }
+const char* method_name(Method m) { return name_in(kMethodNames, m); }
+bool parse_loss(const std::string& name, Loss* out) { return parse_in(kLossNames, name, out); }
+const char* loss_name(Loss l) { return name_in(kLossNames, l); }
 
 namespace {
 

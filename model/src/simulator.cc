@@ -10,32 +10,22 @@
 
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/lock.h"
+#include "fivebar/model/names.h"
 #include "fivebar/model/rest.h"
 #include "integrator.h"
 
 namespace fivebar::sim {
 
-const char* method_name(Method m) {
-  switch (m) {
-    case Method::kCvodeAdams: return "cvode_adams";
-    case Method::kCvodeBdf: return "cvode_bdf";
-    case Method::kArkodeErk45: return "arkode_erk45";
-    case Method::kArkodeErk87: return "arkode_erk87";
-    case Method::kArkodeDirk: return "arkode_dirk";
-    case Method::kArkodeErk65: return "arkode_erk65";
-  }
-  return "unknown";
-}
+namespace {
+constexpr Named<Method> kMethodNames[] = {
+    {Method::kCvodeAdams, "cvode_adams"},   {Method::kCvodeBdf, "cvode_bdf"},
+    {Method::kArkodeErk45, "arkode_erk45"}, {Method::kArkodeErk87, "arkode_erk87"},
+    {Method::kArkodeDirk, "arkode_dirk"},   {Method::kArkodeErk65, "arkode_erk65"}};
+}  // namespace
 
-bool parse_method(const std::string& name, Method* out) {
-  for (Method m : kAllMethods) {
-    if (name == method_name(m)) {
-      *out = m;
-      return true;
-    }
-  }
-  return false;
-}
+const char* method_name(Method m) { return name_in(kMethodNames, m); }
+
+bool parse_method(const std::string& name, Method* out) { return parse_in(kMethodNames, name, out); }
 
 namespace {
 

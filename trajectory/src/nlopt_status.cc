@@ -5,58 +5,52 @@
 
 #include <nlopt.hpp>
 
+#include "fivebar/model/names.h"
+
 namespace fivebar::trajectory {
 
-const char* outcome_name(SolverOutcome outcome) {
-  switch (outcome) {
-    case SolverOutcome::kConverged:
-      return "converged";
-    case SolverOutcome::kMaxEvaluations:
-      return "max_evaluations";
-    case SolverOutcome::kMaxTime:
-      return "max_time";
-    case SolverOutcome::kRoundoffLimited:
-      return "roundoff_limited";
-    case SolverOutcome::kForcedStop:
-      return "forced_stop";
-    case SolverOutcome::kInvalidArgument:
-      return "invalid_argument";
-    case SolverOutcome::kOutOfMemory:
-      return "out_of_memory";
-    case SolverOutcome::kFailure:
-      return "failure";
-  }
-  return "failure";
-}
+namespace {
+
+constexpr Named<SolverOutcome> kOutcomeNames[] = {
+    {SolverOutcome::kConverged, "converged"},
+    {SolverOutcome::kMaxEvaluations, "max_evaluations"},
+    {SolverOutcome::kMaxTime, "max_time"},
+    {SolverOutcome::kRoundoffLimited, "roundoff_limited"},
+    {SolverOutcome::kForcedStop, "forced_stop"},
+    {SolverOutcome::kInvalidArgument, "invalid_argument"},
+    {SolverOutcome::kOutOfMemory, "out_of_memory"},
+    {SolverOutcome::kFailure, "failure"}};
+
+/// What each NLopt result means for the caller, and the message it gets.
+struct ResultMeaning {
+  nlopt::result result;
+  SolverOutcome outcome;
+  const char* message;
+};
+
+constexpr ResultMeaning kResults[] = {
+    {nlopt::SUCCESS, SolverOutcome::kConverged, "converged"},
+    {nlopt::STOPVAL_REACHED, SolverOutcome::kConverged, "converged: objective reached stopval"},
+    {nlopt::FTOL_REACHED, SolverOutcome::kConverged,
+     "converged: relative objective change below ftol"},
+    {nlopt::XTOL_REACHED, SolverOutcome::kConverged, "converged: relative step below xtol"},
+    {nlopt::MAXEVAL_REACHED, SolverOutcome::kMaxEvaluations,
+     "stopped at the evaluation limit before convergence"},
+    {nlopt::MAXTIME_REACHED, SolverOutcome::kMaxTime, "stopped at the time limit before convergence"},
+    {nlopt::ROUNDOFF_LIMITED, SolverOutcome::kRoundoffLimited,
+     "roundoff limited: no further progress possible at double precision"},
+    {nlopt::FORCED_STOP, SolverOutcome::kForcedStop, "forced stop"},
+    {nlopt::INVALID_ARGS, SolverOutcome::kInvalidArgument, "invalid arguments given to NLopt"},
+    {nlopt::OUT_OF_MEMORY, SolverOutcome::kOutOfMemory, "NLopt ran out of memory"},
+    {nlopt::FAILURE, SolverOutcome::kFailure, "NLopt failure"}};
+
+}  // namespace
+
+const char* outcome_name(SolverOutcome outcome) { return name_in(kOutcomeNames, outcome, "failure"); }
 
 SolverStatus status_from_result(int code) {
-  switch (static_cast<nlopt::result>(code)) {
-    case nlopt::SUCCESS:
-      return {SolverOutcome::kConverged, "converged"};
-    case nlopt::STOPVAL_REACHED:
-      return {SolverOutcome::kConverged, "converged: objective reached stopval"};
-    case nlopt::FTOL_REACHED:
-      return {SolverOutcome::kConverged, "converged: relative objective change below ftol"};
-    case nlopt::XTOL_REACHED:
-      return {SolverOutcome::kConverged, "converged: relative step below xtol"};
-    case nlopt::MAXEVAL_REACHED:
-      return {SolverOutcome::kMaxEvaluations,
-              "stopped at the evaluation limit before convergence"};
-    case nlopt::MAXTIME_REACHED:
-      return {SolverOutcome::kMaxTime, "stopped at the time limit before convergence"};
-    case nlopt::ROUNDOFF_LIMITED:
-      return {SolverOutcome::kRoundoffLimited,
-              "roundoff limited: no further progress possible at double precision"};
-    case nlopt::FORCED_STOP:
-      return {SolverOutcome::kForcedStop, "forced stop"};
-    case nlopt::INVALID_ARGS:
-      return {SolverOutcome::kInvalidArgument, "invalid arguments given to NLopt"};
-    case nlopt::OUT_OF_MEMORY:
-      return {SolverOutcome::kOutOfMemory, "NLopt ran out of memory"};
-    case nlopt::FAILURE:
-      return {SolverOutcome::kFailure, "NLopt failure"};
-    default:
-      break;
+  for (const ResultMeaning& r : kResults) {
+    if (static_cast<int>(r.result) == code) return {r.outcome, r.message};
   }
   return {SolverOutcome::kFailure, "unknown NLopt result " + std::to_string(code)};
 }

@@ -8,6 +8,7 @@
 
 #include <nlopt.hpp>
 
+#include "fivebar/model/names.h"
 #include "nlopt_algorithm.h"
 
 namespace fivebar::trajectory {
@@ -193,30 +194,14 @@ class Normal {
 
 }  // namespace
 
-const char* method_name(Method m) {
-  switch (m) {
-    case Method::kMma:
-      return "mma";
-    case Method::kCcsaq:
-      return "ccsaq";
-    case Method::kSlsqp:
-      break;
-  }
-  return "slsqp";
-}
+namespace {
+constexpr Named<Method> kMethodNames[] = {
+    {Method::kSlsqp, "slsqp"}, {Method::kMma, "mma"}, {Method::kCcsaq, "ccsaq"}};
+}  // namespace
 
-bool parse_method(const std::string& name, Method* out) {
-  if (name == "slsqp") {
-    *out = Method::kSlsqp;
-  } else if (name == "mma") {
-    *out = Method::kMma;
-  } else if (name == "ccsaq") {
-    *out = Method::kCcsaq;
-  } else {
-    return false;
-  }
-  return true;
-}
+const char* method_name(Method m) { return name_in(kMethodNames, m, "slsqp"); }
+
+bool parse_method(const std::string& name, Method* out) { return parse_in(kMethodNames, name, out); }
 
 OptimizeResult optimize(const TrajectoryProblem& problem, const std::vector<double>& x0,
                         const OptimizerOptions& options) {

@@ -7,6 +7,7 @@
 #include <ceres/jet.h>
 
 #include "fivebar/model/rest.h"
+#include "fivebar/model/names.h"
 #include "fivebar/trajectory/quadrature.h"
 
 namespace fivebar::trajectory {
@@ -91,19 +92,17 @@ Status add_work(const Params<double>& p, const sim::LoadFunction& loads,
 
 }  // namespace
 
-const char* objective_name(Objective o) {
-  return o == Objective::kInputEnergy ? "input_energy" : "dissipated_energy";
-}
+namespace {
+constexpr Named<Objective> kObjectiveNames[] = {{Objective::kDissipatedEnergy, "dissipated_energy"},
+                                                {Objective::kInputEnergy, "input_energy"},
+                                                {Objective::kDissipatedEnergy, "dissipated"},
+                                                {Objective::kInputEnergy, "input"}};
+}  // namespace
+
+const char* objective_name(Objective o) { return name_in(kObjectiveNames, o); }
 
 bool parse_objective(const std::string& name, Objective* out) {
-  if (name == "dissipated_energy" || name == "dissipated") {
-    *out = Objective::kDissipatedEnergy;
-  } else if (name == "input_energy" || name == "input") {
-    *out = Objective::kInputEnergy;
-  } else {
-    return false;
-  }
-  return true;
+  return parse_in(kObjectiveNames, name, out);
 }
 
 Params<double> smoothed_params(const Params<double>& params, const ProblemOptions& options) {

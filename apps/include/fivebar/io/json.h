@@ -3,7 +3,9 @@
 // null (JSON has no NaN).
 #pragma once
 
+#include <initializer_list>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace fivebar::io {
@@ -23,6 +25,12 @@ class Json {
   Json(const char* s) : type_(Type::kString), string_(s) {}
 
   static Json object() { return Json(Type::kObject); }
+  /// An object with these members, in order: Json::object({{"line", 12}, {"value", 0.5}}).
+  static Json object(std::initializer_list<std::pair<std::string, Json>> members) {
+    Json o = object();
+    o.set(members);
+    return o;
+  }
   static Json array() { return Json(Type::kArray); }
   /// An array of the elements of `range` (numbers or strings), in order.
   template <class Range>
@@ -31,9 +39,21 @@ class Json {
     for (const auto& v : range) a.push(Json(v));
     return a;
   }
+  /// An array of to_json(element) for the elements of `range`, in order.
+  template <class Range, class ToJson>
+  static Json array_of(const Range& range, ToJson to_json) {
+    Json a = array();
+    for (const auto& v : range) a.push(to_json(v));
+    return a;
+  }
 
   /// Object: sets `key` (replacing an existing one in place). Returns *this for chaining.
   Json& set(const std::string& key, Json value);
+  /// Object: sets these members in order, as set(key, value) each.
+  Json& set(std::initializer_list<std::pair<std::string, Json>> members) {
+    for (const auto& [key, value] : members) set(key, value);
+    return *this;
+  }
   /// Object: the member `key`, created as null when absent.
   Json& operator[](const std::string& key);
   /// Array: appends `value`.
