@@ -434,8 +434,6 @@ int run(const Args& args) {
 
 RunFunction setup(CLI::App* app) {
   auto args = std::make_shared<Args>();
-  args->settings.refine = false;        // the inner solves of a design search: first solve
-  args->settings.continuation = false;  // only, as in `study` (--refine, --continuation)
   add_scene_options(app, &args->scene, "design");
   app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--vary", args->varies,
@@ -444,16 +442,8 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");
   app->add_option("--max-designs", args->max_designs,
                   "designs evaluated at most, the start included (default 40)");
-  app->add_option("--method", args->settings.method,
-                  "NLopt algorithm of the inner solves: slsqp (default), mma, ccsaq");
-  app->add_option("--path-step", args->settings.path_step,
-                  "grid step [rad] of the path search (see optimize; default 0.05)");
-  app->add_flag("--continuation", args->settings.continuation,
-                "inner solves continue towards the exact friction law (see optimize)");
-  app->add_flag("--refine", args->settings.refine,
-                "inner solves refine their control points (see optimize; slow)");
+  add_inner_solve_options(app, &args->settings);
   app->add_flag("--no-plots", args->no_plots, "do not draw convergence.png");
-  args->settings.validate = false;
   return [args] { return run(*args); };
 }
 

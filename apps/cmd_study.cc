@@ -39,12 +39,8 @@ struct Args {
   std::string tasks;
   std::vector<std::string> sweeps;
   int threads = 0;
-  std::string method = "slsqp";
-  bool global = false;
-  double path_step = 0.05;
-  bool validate = false;
+  OptimizeSettings settings;  ///< of the inner solves (see optimize)
   bool no_plots = false;
-  bool continuation = false, refine = false;  // of the inner solves (see optimize)
 };
 
 std::string num(double v) { return format_double(v); }  // shortest round-trip, "nan"
@@ -262,19 +258,7 @@ int run(const Args& args) {
   const std::vector<trajectory::Sweep> sweeps = parse_sweeps(args.sweeps);
   load_scene(args.scene.scene, args.scene.sets);  // bad input in the base scene: exit 2 here
   const std::vector<trajectory::TaskSpec> tasks = read_tasks(args.tasks);
-  trajectory::BatchOptions options;
-  if (!trajectory::parse_method(args.method, &options.optimizer.method)) {
-    throw InputError("command line", "--method", "'" + args.method + "' is not slsqp, mma or ccsaq");
-  }
-  options.optimizer.global = args.global;
-  if (!(args.path_step >= 1e-3 && args.path_step <= 0.5)) {
-    throw InputError("command line", "--path-step", "expected a number in [0.001, 0.5] rad");
-  }
-  options.path.step = args.path_step;
-  options.validate = args.validate;
-  if (!args.continuation) options.refine.continuation.clear();
-  if (args.refine) options.refine.control_points = trajectory::kRefineLevels;
-  options.refine.enabled = args.continuation || args.refine;
+  const trajectory::BatchOptions options = batch_options(args.settings);
   const std::vector<Design> designs = make_designs(args, sweeps);
   const int count = static_cast<int>(designs.size());
 
@@ -326,16 +310,10 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--sweep", args->sweeps, "KEY=LO:HI:N, a scene key swept over N values")
       ->required();
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");
-  app->add_option("--method", args->method, "NLopt algorithm: slsqp (default), mma, ccsaq");
-  app->add_flag("--global", args->global, "multi-start optimization of every task");
-  app->add_option("--path-step", args->path_step,
-                  "grid step [rad] of the path search (see optimize; default 0.05)");
-  app->add_flag("--validate", args->validate,
+  add_inner_solve_options(app, &args->settings);
+  app->add_flag("--global", args->settings.global, "multi-start optimization of every task");
+  app->add_flag("--validate", args->settings.validate,
                 "simulate the optimal torques forward (miss_distance in study_tasks.csv)");
-  app->add_flag("--continuation", args->continuation,
-                "inner solves continue towards the exact friction law (see optimize)");
-  app->add_flag("--refine", args->refine,
-                "inner solves refine their control points (see optimize; slow)");
   app->add_flag("--no-plots", args->no_plots, "do not draw the heatmap");
   return [args] { return run(*args); };
 }

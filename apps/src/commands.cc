@@ -1,5 +1,6 @@
 #include "fivebar/io/commands.h"
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
 
@@ -98,6 +99,20 @@ id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& l
   }
   if (!res.status.ok()) throw NumericalError(log.path, "identify", res.status.message);
   return res;
+}
+
+void add_inner_solve_options(CLI::App* app, OptimizeSettings* s) {
+  s->refine = false;
+  s->continuation = false;
+  s->validate = false;
+  app->add_option("--method", s->method,
+                  "NLopt algorithm of the inner solves: slsqp (default), mma, ccsaq");
+  app->add_option("--path-step", s->path_step,
+                  "grid step [rad] of the path search (see optimize; default 0.05)");
+  app->add_flag("--continuation", s->continuation,
+                "inner solves continue towards the exact friction law (see optimize)");
+  app->add_flag("--refine", s->refine,
+                "inner solves refine their control points (see optimize; slow)");
 }
 
 trajectory::BatchOptions batch_options(const OptimizeSettings& a) {

@@ -13,6 +13,10 @@
 #include "fivebar/trajectory/batch.h"
 #include "fivebar/trajectory/tasks.h"
 
+namespace CLI {
+class App;
+}  // namespace CLI
+
 namespace fivebar::io {
 
 /// `fivebar identify` options (see `fivebar identify --help`), with the command line's defaults.
@@ -61,6 +65,11 @@ struct OptimizeSettings {
   /// trajectory::kRefineLevels)
   std::vector<int> refine_levels;
 };
+
+/// The options of the inner trajectory solves of `study` and `design` (--method, --path-step,
+/// --continuation, --refine), into `settings`, whose defaults become theirs: a first solve only,
+/// no continuation, no refinement and no validation unless asked for.
+void add_inner_solve_options(CLI::App* app, OptimizeSettings* settings);
 
 /// The batch options of `settings`; throws InputError(`command line: --method: ...`) and the like.
 trajectory::BatchOptions batch_options(const OptimizeSettings& settings);
