@@ -141,14 +141,8 @@ std::string value_after(const std::string& line, const std::string& key) {
 TEST(Plots, WorkPrecisionColourPerIntegratorDashPerTreatment) {
   studies::WorkPrecision wp;
   auto point = [](sim::Method m, studies::Treatment t, double tol, double time, double err) {
-    studies::PrecisionPoint p;
-    p.method = m;
-    p.treatment = t;
-    p.tolerance = tol;
-    p.ok = true;
-    p.wall_time_s = time;
-    p.error = err;
-    return p;
+    // method, treatment, tolerance, ok, message, error, error_vs_exact, wall time
+    return studies::PrecisionPoint{m, t, tol, true, "", err, 0, time};
   };
   using sim::Method;
   using studies::Treatment;
