@@ -9,6 +9,18 @@
 
 namespace fivebar::testing {
 
+/// The sampling and noise of a test log: `duration` s at 1 kHz, Gaussian noise on the torques
+/// and angles, the seed.
+inline identification::SynthOptions log_options(double duration, double torque_noise,
+                                                double angle_noise, std::uint64_t seed) {
+  identification::SynthOptions so;
+  so.duration = duration;
+  so.torque_noise = torque_noise;
+  so.angle_noise = angle_noise;
+  so.seed = seed;
+  return so;
+}
+
 /// synth-log of `truth` under the paper loads from the paper start; a failed synthesis fails
 /// the calling test (and returns what was made).
 inline identification::TorqueLog synthetic_paper_log(const Params<double>& truth,

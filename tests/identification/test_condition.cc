@@ -36,12 +36,8 @@ const sim::Initial kPaperInitial = testing::paper_initial();
 
 TorqueLog paper_log(double duration, double torque_noise = 0.02, double angle_noise = 1e-5,
                     std::uint64_t seed = 1) {
-  SynthOptions so;
-  so.duration = duration;
-  so.torque_noise = torque_noise;
-  so.angle_noise = angle_noise;
-  so.seed = seed;
-  return testing::synthetic_paper_log(paper_params(), so, "log.csv");
+  return testing::synthetic_paper_log(
+      paper_params(), testing::log_options(duration, torque_noise, angle_noise, seed), "log.csv");
 }
 
 IdentifyResult fit(const TorqueLog& log, IdentifyOptions opt = {}) {

@@ -27,13 +27,9 @@ const sim::Initial kPaperInitial = testing::paper_initial();
 TorqueLog make_log(const Params<double>& truth, double duration, bool rates, bool multisine,
                    double torque_noise = kTorqueNoise, double angle_noise = kAngleNoise,
                    std::uint64_t seed = 1) {
-  SynthOptions so;
-  so.duration = duration;
-  so.torque_noise = torque_noise;
-  so.angle_noise = angle_noise;
+  SynthOptions so = testing::log_options(duration, torque_noise, angle_noise, seed);
   so.with_rates = rates;
   so.multisine = multisine;
-  so.seed = seed;
   return testing::synthetic_paper_log(truth, so, "synthetic.csv");
 }
 
