@@ -26,8 +26,8 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   std::string bad;
   if (!id::parse_groups(a.estimate, &opt.layout, &bad)) {
     throw InputError(kFlags, "--estimate",
-                     "unknown group '" + bad +
-                         "' (expected friction, inertia, actuator, comma-separated)");
+                     "'" + bad + "' is not a group or is given twice (expected friction, inertia, " +
+                         "actuator, each at most once, comma-separated)");
   }
   if (!(a.inertia_prior > 0) || !std::isfinite(a.inertia_prior)) {
     throw InputError(kFlags, "--inertia-prior", "must be > 0 (a relative std, e.g. 0.2)");

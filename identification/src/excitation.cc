@@ -87,24 +87,12 @@ double soft_max(const std::vector<double>& v, double rho, std::vector<double>* w
 }  // namespace
 
 bool parse_groups(const std::string& list, DesignGroups* g, std::string* bad) {
-  g->friction = g->inertia = g->actuator = false;
-  std::stringstream ss(list);
-  std::string word;
-  int count = 0;
-  while (std::getline(ss, word, ',')) {
-    bool* flag = word == "friction"  ? &g->friction
-                 : word == "inertia"  ? &g->inertia
-                 : word == "actuator" ? &g->actuator
-                                      : nullptr;
-    if (flag == nullptr || *flag) {
-      *bad = word;
-      return false;
-    }
-    *flag = true;
-    ++count;
-  }
-  if (count == 0) *bad = list;
-  return count > 0;
+  std::array<bool, 3> on{};
+  if (!parse_group_list(list, &on, bad)) return false;
+  g->friction = on[0];
+  g->inertia = on[1];
+  g->actuator = on[2];
+  return true;
 }
 
 DesignParameters design_parameters(const Params<double>& scene, const DesignGroups& g) {

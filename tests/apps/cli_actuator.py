@@ -62,7 +62,7 @@ for want in ["true.offset = 0.05,0", "true.actuator_coulomb = 0.02,0.02", "true.
 expect_error(2, "group actuator needs --method inverse-dynamics",
              ["identify", PAPER, "--log", log, "--estimate", "friction,actuator", "--method", "output-error",
               "--out", os.path.join(WORK, "bad")])
-expect_error(2, "unknown group 'actuators'",
+expect_error(2, "'actuators' is not a group",
              ["identify", PAPER, "--log", log, "--estimate", "friction,actuators", "--out", os.path.join(WORK, "bad")])
 
 fit = os.path.join(WORK, "fit")

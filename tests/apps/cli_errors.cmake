@@ -21,7 +21,7 @@ run_fivebar(2 "paper.yaml: simulation.rtoll: unknown key"
             simulate ${paper} --set simulation.rtoll=1e-8 --out ${WORK_DIR}/out_bad)
 # identify --estimate: an unknown group, a prior <= 0 (the log is never read)
 set(log ${SOURCE_DIR}/datasets/logs/paper_rates.csv)
-run_fivebar(2 "command line: --estimate: unknown group 'inertias'"
+run_fivebar(2 "command line: --estimate: 'inertias' is not a group"
             identify ${paper} --log ${log} --estimate friction,inertias --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "command line: --inertia-prior: must be > 0"
             identify ${paper} --log ${log} --estimate friction,inertia --inertia-prior 0

@@ -43,6 +43,11 @@ TEST(ActuatorLayout, NamesSizesBoundsAndRoundTrip) {
   EXPECT_EQ(p.actuators.viscous, truth.actuators.viscous);
   EXPECT_FALSE(parse_groups("friction,actuators", &layout, &bad));
   EXPECT_EQ(bad, "actuators");
+  // identify and excite read --estimate alike: a group twice is refused, not silently merged
+  EXPECT_FALSE(parse_groups("friction,friction", &layout, &bad));
+  EXPECT_EQ(bad, "friction");
+  EXPECT_TRUE(parse_groups("inertia", &layout, &bad));  // friction is implied for identify
+  EXPECT_TRUE(layout.inertia);
 }
 
 /// A multisine log of the paper mechanism `truth` (rates logged): both cranks reverse, which

@@ -3,6 +3,7 @@
 // links (model/inertial.h). `fivebar excite` designs excitations for the same groups.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -197,26 +198,37 @@ struct ParameterLayout {
   }
 };
 
-/// Parses a comma-separated list of groups (`friction`, `inertia`, `actuator`) into `layout`;
-/// friction is always estimated. False on an unknown or empty group, naming it in `bad`.
-inline bool parse_groups(const std::string& list, ParameterLayout* layout, std::string* bad) {
-  layout->inertia = false;
-  layout->actuator = false;
+/// Parses a comma-separated list of parameter groups (`friction`, `inertia`, `actuator`, each
+/// at most once, any order) into the three flags (groups listed: true). False on an unknown,
+/// repeated or empty group, naming it in `bad` (the whole list when it names none).
+inline bool parse_group_list(const std::string& list, std::array<bool, 3>* friction_inertia_actuator,
+                             std::string* bad) {
+  std::array<bool, 3>& on = *friction_inertia_actuator;
+  on = {false, false, false};
+  static const char* const kNames[3] = {"friction", "inertia", "actuator"};
   size_t pos = 0;
   while (true) {
     const size_t comma = list.find(',', pos);
     const std::string g = list.substr(pos, comma == std::string::npos ? comma : comma - pos);
-    if (g == "inertia") {
-      layout->inertia = true;
-    } else if (g == "actuator") {
-      layout->actuator = true;
-    } else if (g != "friction") {
-      *bad = g;
+    int k = 0;
+    while (k < 3 && g != kNames[k]) ++k;
+    if (k == 3 || on[k]) {
+      *bad = list.empty() ? list : g;
       return false;
     }
+    on[k] = true;
     if (comma == std::string::npos) return true;
     pos = comma + 1;
   }
+}
+
+/// The groups of `list` (parse_group_list) into `layout`; friction is always estimated.
+inline bool parse_groups(const std::string& list, ParameterLayout* layout, std::string* bad) {
+  std::array<bool, 3> on{};
+  if (!parse_group_list(list, &on, bad)) return false;
+  layout->inertia = on[1];
+  layout->actuator = on[2];
+  return true;
 }
 
 /// Parses the name of a law that identify fits (one with identifiable coefficients, friction.h);
