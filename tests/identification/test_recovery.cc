@@ -113,6 +113,64 @@ TEST(Recovery, StribeckLogFittedWithCoulombViscousReportsTheMismatch) {
   expect_recovered(good, {0.12, 0.02, 0.2, 0.5}, 0.0);
 }
 
+/// A Stribeck log (static 0.2, Stribeck velocity 0.5 rad/s) at 500 Hz on the multisine, angles
+/// only, as `coverage-angles --case stribeck` makes it.
+TorqueLog stribeck_angles_log(double torque_noise, double angle_noise) {
+  Params<double> truth = paper_params();
+  truth.friction.law = FrictionLaw::kStribeck;
+  truth.friction.static_coulomb.fill(0.2);
+  truth.friction.stribeck_velocity.fill(0.5);
+  SynthOptions so;
+  so.rate_hz = 500;
+  so.duration = 6.0;
+  so.torque_noise = torque_noise;
+  so.angle_noise = angle_noise;
+  so.multisine = true;
+  return testing::synthetic_paper_log(truth, so, "stribeck.csv");
+}
+
+IdentifyOptions stribeck_options() {
+  IdentifyOptions opt;
+  opt.layout.law = FrictionLaw::kStribeck;
+  opt.estimate_delay = false;
+  return opt;
+}
+
+TEST(Recovery, StribeckStartsFromSeveralVelocities) {
+  // noise-free angles through the smallest window: from the neutral start (0.2 rad/s) the fit
+  // used to end at the velocity's bound (static_coulomb 0.191 undetermined); the least cost over
+  // the starts finds the peak
+  const TorqueLog log = stribeck_angles_log(0, 0);
+  IdentifyOptions opt = stribeck_options();
+  opt.auto_window = false;
+  opt.sg.half_window_s = 0.006;
+  const IdentifyResult res = identify(paper_params(), paper_loads, log, opt);
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_NEAR(res.parameters[2].value, 0.2, 0.01);
+  EXPECT_NEAR(res.parameters[3].value, 0.5, 0.025);
+  EXPECT_FALSE(res.parameters[3].at_bound);
+}
+
+TEST(Recovery, StribeckKeepsOutReversalsAndTheSecondWindow) {
+  // noise-free: every window shows the filter's bias, so the order is raised; the samples near
+  // reversals still go (kept, the smeared peak read as static_coulomb 0.130)
+  IdentifyResult res = identify(paper_params(), paper_loads, stribeck_angles_log(0, 0),
+                                stribeck_options());
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_EQ(res.sg_order, 7);
+  EXPECT_GT(res.samples_near_reversals, 0);
+  EXPECT_NEAR(res.parameters[2].value, 0.2, 0.004);
+  // noisy angles: the second window (4 samples) is unbiased; the back-off used to land on the
+  // smallest and raise the order (noisier accelerations); now order 5 over 4 samples
+  res = identify(paper_params(), paper_loads, stribeck_angles_log(kTorqueNoise, kAngleNoise),
+                 stribeck_options());
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_EQ(res.sg_order, 5);
+  EXPECT_EQ(res.sg_half_window, 4);
+  EXPECT_GT(res.samples_near_reversals, 0);
+  expect_recovered(res, {0.12, 0.02, 0.2, 0.5}, 0.0);
+}
+
 TEST(Recovery, OutputErrorOnAShortLog) {
   // numeric derivatives through the simulator; the std come from the window sandwich
   // (covariance.h, its formula checked in test_covariance.cc). By default a 1 s log gets 20
