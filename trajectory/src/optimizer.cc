@@ -4,11 +4,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 
 #include <nlopt.hpp>
 
 #include "nlopt_algorithm.h"
+#include "precondition.h"
 
 namespace fivebar::trajectory {
 namespace {
@@ -27,6 +30,11 @@ class Cache {
     has_grad_ = grad;
     ++evaluations_;
     const Status st = problem_.evaluate(x, grad, &value_);
+    if (st.ok()) {
+      double mc = -1e9;
+      for (double c : value_.constraints) mc = std::max(mc, c);
+      trace.push_back({value_.objective, mc});
+    }
     if (!st.ok()) {
       // outside the domain of the model (cannot assemble, friction loop failed): a large flat
       // penalty makes the line searches step back
@@ -38,6 +46,7 @@ class Cache {
     return value_;
   }
   int evaluations() const { return evaluations_; }
+  std::vector<std::pair<double, double>> trace;
 
  private:
   const TrajectoryProblem& problem_;
@@ -48,26 +57,45 @@ class Cache {
   int evaluations_ = 0;
 };
 
+// the variables NLopt sees: x itself, or y with x = origin + T y (a Preconditioner); and the
+// constraint rows handed to it (all of them, or the screened subset)
+struct View {
+  Cache* cache;
+  const std::vector<int>* rows;
+  const Preconditioner* pre;  // null: x itself
+  Eigen::VectorXd origin, x;
+
+  const Evaluated& at(const double* y, unsigned n, bool grad) {
+    if (!pre) return cache->at(y, grad);
+    x = origin + pre->T * Eigen::Map<const Eigen::VectorXd>(y, n);
+    return cache->at(x.data(), grad);
+  }
+  // a gradient with respect to x (n values) as one with respect to the variables NLopt sees
+  void chain(const double* g, unsigned n, double* out) const {
+    if (!pre) {
+      std::memcpy(out, g, n * sizeof(double));
+      return;
+    }
+    Eigen::Map<Eigen::VectorXd>(out, n).noalias() =
+        pre->T.transpose() * Eigen::Map<const Eigen::VectorXd>(g, n);
+  }
+};
+
 double objective_cb(unsigned n, const double* x, double* grad, void* data) {
-  const Evaluated& e = static_cast<Cache*>(data)->at(x, grad != nullptr);
-  if (grad) std::memcpy(grad, e.objective_grad.data(), n * sizeof(double));
+  View& v = *static_cast<View*>(data);
+  const Evaluated& e = v.at(x, n, grad != nullptr);
+  if (grad) v.chain(e.objective_grad.data(), n, grad);
   return e.objective;
 }
 
-// the constraint rows handed to NLopt (all of them, or the screened subset)
-struct Rows {
-  Cache* cache;
-  const std::vector<int>* rows;
-};
-
 void constraints_cb(unsigned m, double* result, unsigned n, const double* x, double* grad,
                     void* data) {
-  const Rows& r = *static_cast<Rows*>(data);
-  const Evaluated& e = r.cache->at(x, grad != nullptr);
+  View& v = *static_cast<View*>(data);
+  const Evaluated& e = v.at(x, n, grad != nullptr);
   for (unsigned i = 0; i < m; ++i) {
-    const size_t row = static_cast<size_t>((*r.rows)[i]);
+    const size_t row = static_cast<size_t>((*v.rows)[i]);
     result[i] = e.constraints[row];
-    if (grad) std::memcpy(grad + i * n, &e.constraints_grad[row * n], n * sizeof(double));
+    if (grad) v.chain(&e.constraints_grad[row * n], n, grad + i * n);
   }
 }
 
@@ -83,10 +111,11 @@ struct Local {
 
 // one local solve under the constraint rows `rows` (indices into the problem's constraints)
 Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x0,
-                  const OptimizerOptions& options, double penalty, const std::vector<int>& rows) {
+                  const OptimizerOptions& options, double penalty, const std::vector<int>& rows,
+                  const Preconditioner* pre) {
   const int n = problem.num_variables(), m = static_cast<int>(rows.size());
   Cache cache(problem, penalty);
-  Rows selected{&cache, &rows};
+  View view{&cache, &rows, pre && pre->active ? pre : nullptr, {}, {}};
   Local out;
   out.x = x0;
   try {
@@ -102,23 +131,50 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
         out.x[j * nf + v] = std::clamp(out.x[j * nf + v], lo[j * nf + v], hi[j * nf + v]);
       }
     }
-    opt.set_lower_bounds(lo);
-    opt.set_upper_bounds(hi);
-    opt.set_min_objective(objective_cb, &cache);
+    std::vector<double> y = out.x;
+    if (view.pre) {
+      // y = 0 at the start; the box (never reached by SLSQP's steps in practice) is left out
+      view.origin = Eigen::Map<const Eigen::VectorXd>(out.x.data(), n);
+      y.assign(n, 0.0);
+    } else {
+      opt.set_lower_bounds(lo);
+      opt.set_upper_bounds(hi);
+    }
+    opt.set_min_objective(objective_cb, &view);
     if (m > 0) {
-      opt.add_inequality_mconstraint(constraints_cb, &selected,
+      opt.add_inequality_mconstraint(constraints_cb, &view,
                                      std::vector<double>(m, options.constraint_tol));
     }
     opt.set_ftol_rel(options.ftol_rel);
     opt.set_xtol_rel(options.xtol_rel);
     opt.set_maxeval(options.max_evaluations);
     double f = 0;
-    const nlopt::result r = opt.optimize(out.x, f);
+    const nlopt::result r = opt.optimize(y, f);
     out.solver = status_from_result(static_cast<int>(r));
+    if (view.pre) {
+      const Eigen::VectorXd x = view.origin + view.pre->T * Eigen::Map<const Eigen::VectorXd>(y.data(), n);
+      out.x.assign(x.data(), x.data() + n);
+    } else {
+      out.x = y;
+    }
   } catch (...) {
     out.solver = status_from_exception(std::current_exception());
   }
   out.evaluations = cache.evaluations();
+  if (std::getenv("FB_TRACE") && n > 60) {
+    double fin = 1e9;
+    for (auto& t : cache.trace) if (t.second < 1e-6) fin = std::min(fin, t.first);
+    int i5 = -1, i6 = -1, i4 = -1, i3 = -1;
+    for (size_t i = 0; i < cache.trace.size(); ++i) {
+      auto& t = cache.trace[i];
+      if (t.second > 1e-6) continue;
+      if (i3 < 0 && t.first < fin * (1 + 1e-3)) i3 = i;
+      if (i4 < 0 && t.first < fin * (1 + 1e-4)) i4 = i;
+      if (i5 < 0 && t.first < fin * (1 + 1e-5)) i5 = i;
+      if (i6 < 0 && t.first < fin * (1 + 1e-6)) i6 = i;
+    }
+    std::fprintf(stderr, "TRACE n=%d m=%d evals=%d start=%.7g fin=%.7g i3=%d i4=%d i5=%d i6=%d\n", n, m, out.evaluations, cache.trace.empty() ? 0.0 : cache.trace[0].first, fin, i3, i4, i5, i6);
+  }
   // the returned point, evaluated afresh (NLopt may return a point it evaluated earlier)
   Evaluated e;
   if (problem.evaluate(out.x.data(), false, &e).ok()) {
@@ -139,14 +195,21 @@ Local solve_screened(const TrajectoryProblem& problem, const std::vector<double>
   const int m = problem.num_constraints();
   std::vector<int> all(m);
   for (int i = 0; i < m; ++i) all[i] = i;
+  Preconditioner pre;
+  if (options.precondition && options.method == Method::kSlsqp &&
+      problem.num_variables() >= options.precondition_min_variables) {
+    pre = objective_preconditioner(problem, x0);
+  }
   Evaluated e;
   if (!(options.screen > 0) || !problem.evaluate(x0.data(), false, &e).ok()) {
-    return solve_local(problem, x0, options, penalty, all);
+    Local out = solve_local(problem, x0, options, penalty, all, &pre);
+    out.evaluations += pre.evaluations;
+    return out;
   }
   std::vector<char> in(m, 0);
   for (int i = 0; i < m; ++i) in[i] = e.constraints[i] > -options.screen;
   std::vector<double> x = x0;
-  int evaluations = 0;
+  int evaluations = pre.evaluations;
   Local out;
   for (int round = 0; round < 4; ++round) {
     std::vector<int> rows;
@@ -155,7 +218,7 @@ Local solve_screened(const TrajectoryProblem& problem, const std::vector<double>
     }
     OptimizerOptions budget = options;  // the rounds share the evaluation limit
     budget.max_evaluations = std::max(1, options.max_evaluations - evaluations);
-    out = solve_local(problem, x, budget, penalty, rows);
+    out = solve_local(problem, x, budget, penalty, rows, &pre);
     evaluations += out.evaluations;
     if (!out.evaluated || static_cast<int>(rows.size()) == m) break;
     bool violated = false;

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
 
 #include "stage.h"
 
@@ -83,6 +86,7 @@ Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loa
                       const RestToRest& motion, double ws, const std::vector<double>& x0,
                       const BatchOptions& options, double torque_limit,
                       const OptimizerOptions& optimizer) {
+  const std::clock_t t0 = std::clock();
   Candidate c;
   c.control_points = motion.basis().size();
   c.smoothing_velocity = ws;
@@ -113,6 +117,7 @@ Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loa
     c.check = c2;
   }
   if (c.check.status.ok()) c.exact = exact_objective(problem, c.x, options);
+  if (std::getenv("FB_DEBUG")) std::fprintf(stderr, "DBG stage n=%d ws=%g evals=%d first=%d exact=%.7g viol=%.3g cpu=%.3f %s\n", c.control_points, ws, c.evaluations, opt.evaluations, c.exact, c.check.max_violation, double(std::clock()-t0)/CLOCKS_PER_SEC, c.solver.message.c_str());
   return c;
 }
 
@@ -125,7 +130,12 @@ Candidate continuation(const Params<double>& params, const sim::LoadFunction& lo
   const RestToRest motion(best.control_points, r->duration, r->start, r->goal);
   std::vector<double> warm = best.x;
   log_stage(&r->continuation, best.smoothing_velocity, best, true);
-  for (double ws : options.refine.continuation) {
+  std::vector<double> cont = options.refine.continuation;
+  if (const char* e = std::getenv("FB_CONT")) {
+    cont.clear();
+    for (const char* q = e; *q;) { char* end; cont.push_back(std::strtod(q, &end)); q = *end ? end + 1 : end; }
+  }
+  for (double ws : cont) {
     Candidate c = solve_stage(params, loads, motion, ws, warm, options, r->torque_limit,
                               optimizer);
     r->evaluations += c.evaluations;
@@ -146,14 +156,15 @@ std::vector<double> refit(const Candidate& c, int n, const TaskResult& r) {
 
 }  // namespace
 
-Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
-                 const Candidate& first, const BatchOptions& options,
-                 const OptimizerOptions& optimizer, TaskResult* r) {
-  // a scene whose own law is smoothed is solved exactly by the first stage
-  const bool smooth_law = params.friction.smoothing_velocity > 0.0;
-  Candidate best = smooth_law ? first : continuation(params, loads, first, options, optimizer, r);
-  if (!feasible(best, options)) return best;
-  const double ws = best.smoothing_velocity;
+namespace {
+
+// the refinement of the control points of `best` (options.refine.control_points), every level
+// solved under the smoothed law of `best`
+Candidate refinement(const Params<double>& params, const sim::LoadFunction& loads,
+                     Candidate best, const BatchOptions& options,
+                     const OptimizerOptions& optimizer, TaskResult* r) {
+  double ws = best.smoothing_velocity;
+  if (std::getenv("FB_RWS")) ws = std::atof(std::getenv("FB_RWS"));
   double previous = best.exact;
   log_stage(&r->refinement, best.control_points, best, true);
   for (int n : options.refine.control_points) {
@@ -174,6 +185,21 @@ Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
     if (kept) best = std::move(c);
     if (r->refinement_change < options.refine.tol) break;
   }
+  return best;
+}
+
+}  // namespace
+
+Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
+                 const Candidate& first, const BatchOptions& options,
+                 const OptimizerOptions& optimizer, TaskResult* r) {
+  // the levels under the first solve's smoothed law, whose landscape has no kinks at the
+  // reversals, then the continuation to the exact law on the finest spline kept (a scene whose
+  // own law is smoothed is solved exactly by the first law)
+  if (!feasible(first, options)) return first;
+  Candidate best = refinement(params, loads, first, options, optimizer, r);
+  const bool smooth_law = params.friction.smoothing_velocity > 0.0;
+  if (!smooth_law) best = continuation(params, loads, best, options, optimizer, r);
   return best;
 }
 
