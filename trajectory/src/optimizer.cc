@@ -4,8 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <cstdio>
-#include <cstdlib>
 #include <limits>
 
 #include <nlopt.hpp>
@@ -30,11 +28,6 @@ class Cache {
     has_grad_ = grad;
     ++evaluations_;
     const Status st = problem_.evaluate(x, grad, &value_);
-    if (st.ok()) {
-      double mc = -1e9;
-      for (double c : value_.constraints) mc = std::max(mc, c);
-      trace.push_back({value_.objective, mc});
-    }
     if (!st.ok()) {
       // outside the domain of the model (cannot assemble, friction loop failed): a large flat
       // penalty makes the line searches step back
@@ -46,7 +39,6 @@ class Cache {
     return value_;
   }
   int evaluations() const { return evaluations_; }
-  std::vector<std::pair<double, double>> trace;
 
  private:
   const TrajectoryProblem& problem_;
@@ -76,8 +68,13 @@ struct View {
       std::memcpy(out, g, n * sizeof(double));
       return;
     }
-    Eigen::Map<Eigen::VectorXd>(out, n).noalias() =
-        pre->T.transpose() * Eigen::Map<const Eigen::VectorXd>(g, n);
+    // T^T g, by the columns of T^T (rows of T) where g is non-zero: a constraint row depends
+    // on the 12 control points around its node only
+    Eigen::Map<Eigen::VectorXd> o(out, n);
+    o.setZero();
+    for (unsigned k = 0; k < n; ++k) {
+      if (g[k] != 0.0) o += g[k] * pre->Tt.col(k);
+    }
   }
 };
 
@@ -152,7 +149,8 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
     const nlopt::result r = opt.optimize(y, f);
     out.solver = status_from_result(static_cast<int>(r));
     if (view.pre) {
-      const Eigen::VectorXd x = view.origin + view.pre->T * Eigen::Map<const Eigen::VectorXd>(y.data(), n);
+      const Eigen::VectorXd x =
+          view.origin + view.pre->T * Eigen::Map<const Eigen::VectorXd>(y.data(), n);
       out.x.assign(x.data(), x.data() + n);
     } else {
       out.x = y;
@@ -161,20 +159,6 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
     out.solver = status_from_exception(std::current_exception());
   }
   out.evaluations = cache.evaluations();
-  if (std::getenv("FB_TRACE") && n > 60) {
-    double fin = 1e9;
-    for (auto& t : cache.trace) if (t.second < 1e-6) fin = std::min(fin, t.first);
-    int i5 = -1, i6 = -1, i4 = -1, i3 = -1;
-    for (size_t i = 0; i < cache.trace.size(); ++i) {
-      auto& t = cache.trace[i];
-      if (t.second > 1e-6) continue;
-      if (i3 < 0 && t.first < fin * (1 + 1e-3)) i3 = i;
-      if (i4 < 0 && t.first < fin * (1 + 1e-4)) i4 = i;
-      if (i5 < 0 && t.first < fin * (1 + 1e-5)) i5 = i;
-      if (i6 < 0 && t.first < fin * (1 + 1e-6)) i6 = i;
-    }
-    std::fprintf(stderr, "TRACE n=%d m=%d evals=%d start=%.7g fin=%.7g i3=%d i4=%d i5=%d i6=%d\n", n, m, out.evaluations, cache.trace.empty() ? 0.0 : cache.trace[0].first, fin, i3, i4, i5, i6);
-  }
   // the returned point, evaluated afresh (NLopt may return a point it evaluated earlier)
   Evaluated e;
   if (problem.evaluate(out.x.data(), false, &e).ok()) {
@@ -186,6 +170,16 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
   return out;
 }
 
+// the preconditioner of a solve from x0, when the options ask for one (inactive otherwise)
+Preconditioner preconditioner_of(const TrajectoryProblem& problem, const std::vector<double>& x0,
+                                 const OptimizerOptions& options) {
+  if (!options.precondition || options.method != Method::kSlsqp ||
+      problem.num_variables() < options.precondition_min_variables) {
+    return {};
+  }
+  return objective_preconditioner(problem, x0);
+}
+
 // A local solve under the constraints that matter (OptimizerOptions::screen): the rows with
 // c > -screen at the start; every row that the result violates or nears is added and the solve
 // resumed from there, until no row left out is violated (at most 4 rounds, the last with every
@@ -195,14 +189,13 @@ Local solve_screened(const TrajectoryProblem& problem, const std::vector<double>
   const int m = problem.num_constraints();
   std::vector<int> all(m);
   for (int i = 0; i < m; ++i) all[i] = i;
-  Preconditioner pre;
-  if (options.precondition && options.method == Method::kSlsqp &&
-      problem.num_variables() >= options.precondition_min_variables) {
-    pre = objective_preconditioner(problem, x0);
-  }
+  // one preconditioner for every round (its evaluations count in the limit)
+  const Preconditioner pre = preconditioner_of(problem, x0, options);
+  OptimizerOptions budget = options;
+  budget.max_evaluations = std::max(1, options.max_evaluations - pre.evaluations);
   Evaluated e;
   if (!(options.screen > 0) || !problem.evaluate(x0.data(), false, &e).ok()) {
-    Local out = solve_local(problem, x0, options, penalty, all, &pre);
+    Local out = solve_local(problem, x0, budget, penalty, all, &pre);
     out.evaluations += pre.evaluations;
     return out;
   }
@@ -216,8 +209,7 @@ Local solve_screened(const TrajectoryProblem& problem, const std::vector<double>
     for (int i = 0; i < m; ++i) {
       if (in[i] || round == 3) rows.push_back(i);
     }
-    OptimizerOptions budget = options;  // the rounds share the evaluation limit
-    budget.max_evaluations = std::max(1, options.max_evaluations - evaluations);
+    budget.max_evaluations = std::max(1, options.max_evaluations - evaluations);  // shared
     out = solve_local(problem, x, budget, penalty, rows, &pre);
     evaluations += out.evaluations;
     if (!out.evaluated || static_cast<int>(rows.size()) == m) break;

@@ -8,7 +8,7 @@ namespace {
 
 constexpr int kBand = kDegree;       // control points more than kBand apart share no knot span
 constexpr double kStep = 1e-7;       // difference step of the control points [rad]
-constexpr double kFloor = 1e-8;      // smallest |eigenvalue| kept, relative to the largest      // smallest |eigenvalue| kept, relative to the largest
+constexpr double kFloor = 1e-8;      // smallest |eigenvalue| kept, relative to the largest
 
 // T = V |D|^(-1/2) of the symmetric part of H
 bool scaling_of(const Eigen::MatrixXd& H, Eigen::MatrixXd* T) {
@@ -55,6 +55,7 @@ Preconditioner objective_preconditioner(const TrajectoryProblem& problem,
     }
   }
   p.active = scaling_of(H, &p.T);
+  if (p.active) p.Tt = p.T.transpose();
   return p;
 }
 

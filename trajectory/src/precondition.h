@@ -18,7 +18,8 @@ namespace fivebar::trajectory {
 
 struct Preconditioner {
   bool active = false;
-  Eigen::MatrixXd T;  ///< x - origin = T y (nv x nv)
+  Eigen::MatrixXd T;   ///< x - origin = T y (nv x nv)
+  Eigen::MatrixXd Tt;  ///< T transposed (its columns are the rows of T)
   int evaluations = 0;  ///< problem evaluations spent to build it
 };
 

@@ -3,9 +3,6 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
-#include <ctime>
 
 #include "stage.h"
 
@@ -86,7 +83,6 @@ Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loa
                       const RestToRest& motion, double ws, const std::vector<double>& x0,
                       const BatchOptions& options, double torque_limit,
                       const OptimizerOptions& optimizer) {
-  const std::clock_t t0 = std::clock();
   Candidate c;
   c.control_points = motion.basis().size();
   c.smoothing_velocity = ws;
@@ -117,7 +113,6 @@ Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loa
     c.check = c2;
   }
   if (c.check.status.ok()) c.exact = exact_objective(problem, c.x, options);
-  if (std::getenv("FB_DEBUG")) std::fprintf(stderr, "DBG stage n=%d ws=%g evals=%d first=%d exact=%.7g viol=%.3g cpu=%.3f %s\n", c.control_points, ws, c.evaluations, opt.evaluations, c.exact, c.check.max_violation, double(std::clock()-t0)/CLOCKS_PER_SEC, c.solver.message.c_str());
   return c;
 }
 
@@ -130,12 +125,7 @@ Candidate continuation(const Params<double>& params, const sim::LoadFunction& lo
   const RestToRest motion(best.control_points, r->duration, r->start, r->goal);
   std::vector<double> warm = best.x;
   log_stage(&r->continuation, best.smoothing_velocity, best, true);
-  std::vector<double> cont = options.refine.continuation;
-  if (const char* e = std::getenv("FB_CONT")) {
-    cont.clear();
-    for (const char* q = e; *q;) { char* end; cont.push_back(std::strtod(q, &end)); q = *end ? end + 1 : end; }
-  }
-  for (double ws : cont) {
+  for (double ws : options.refine.continuation) {
     Candidate c = solve_stage(params, loads, motion, ws, warm, options, r->torque_limit,
                               optimizer);
     r->evaluations += c.evaluations;
@@ -163,8 +153,7 @@ namespace {
 Candidate refinement(const Params<double>& params, const sim::LoadFunction& loads,
                      Candidate best, const BatchOptions& options,
                      const OptimizerOptions& optimizer, TaskResult* r) {
-  double ws = best.smoothing_velocity;
-  if (std::getenv("FB_RWS")) ws = std::atof(std::getenv("FB_RWS"));
+  const double ws = best.smoothing_velocity;
   double previous = best.exact;
   log_stage(&r->refinement, best.control_points, best, true);
   for (int n : options.refine.control_points) {
