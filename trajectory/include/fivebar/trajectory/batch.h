@@ -33,7 +33,7 @@ struct RefineOptions {
   bool enabled = true;
   /// smoothing velocities w_s [rad/s] solved after the refinement, on its finest spline, in
   /// order (continuation on w_s towards the exact law, w_s = 0)
-  std::vector<double> continuation = {5e-3, 4e-4};
+  std::vector<double> continuation = {4e-4};
   /// control points per joint tried after the first solve's count (only the larger ones),
   /// until the exact-law objective changes by less than `tol` (relative) from one to the next;
   /// empty: no refinement (`fivebar optimize` uses kRefineLevels)
