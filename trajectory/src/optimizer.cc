@@ -10,6 +10,7 @@
 
 #include "fivebar/model/names.h"
 #include "nlopt_algorithm.h"
+#include "precondition.h"
 
 namespace fivebar::trajectory {
 namespace {
@@ -49,26 +50,50 @@ class Cache {
   int evaluations_ = 0;
 };
 
+// the variables NLopt sees: x itself, or y with x = origin + T y (a Preconditioner); and the
+// constraint rows handed to it (all of them, or the screened subset)
+struct View {
+  Cache* cache;
+  const std::vector<int>* rows;
+  const Preconditioner* pre;  // null: x itself
+  Eigen::VectorXd origin, x;
+
+  const Evaluated& at(const double* y, unsigned n, bool grad) {
+    if (!pre) return cache->at(y, grad);
+    x = origin + pre->T * Eigen::Map<const Eigen::VectorXd>(y, n);
+    return cache->at(x.data(), grad);
+  }
+  // a gradient with respect to x (n values) as one with respect to the variables NLopt sees
+  void chain(const double* g, unsigned n, double* out) const {
+    if (!pre) {
+      std::memcpy(out, g, n * sizeof(double));
+      return;
+    }
+    // T^T g, by the columns of T^T (rows of T) where g is non-zero: a constraint row depends
+    // on the 12 control points around its node only
+    Eigen::Map<Eigen::VectorXd> o(out, n);
+    o.setZero();
+    for (unsigned k = 0; k < n; ++k) {
+      if (g[k] != 0.0) o += g[k] * pre->Tt.col(k);
+    }
+  }
+};
+
 double objective_cb(unsigned n, const double* x, double* grad, void* data) {
-  const Evaluated& e = static_cast<Cache*>(data)->at(x, grad != nullptr);
-  if (grad) std::memcpy(grad, e.objective_grad.data(), n * sizeof(double));
+  View& v = *static_cast<View*>(data);
+  const Evaluated& e = v.at(x, n, grad != nullptr);
+  if (grad) v.chain(e.objective_grad.data(), n, grad);
   return e.objective;
 }
 
-// the constraint rows handed to NLopt (all of them, or the screened subset)
-struct Rows {
-  Cache* cache;
-  const std::vector<int>* rows;
-};
-
 void constraints_cb(unsigned m, double* result, unsigned n, const double* x, double* grad,
                     void* data) {
-  const Rows& r = *static_cast<Rows*>(data);
-  const Evaluated& e = r.cache->at(x, grad != nullptr);
+  View& v = *static_cast<View*>(data);
+  const Evaluated& e = v.at(x, n, grad != nullptr);
   for (unsigned i = 0; i < m; ++i) {
-    const size_t row = static_cast<size_t>((*r.rows)[i]);
+    const size_t row = static_cast<size_t>((*v.rows)[i]);
     result[i] = e.constraints[row];
-    if (grad) std::memcpy(grad + i * n, &e.constraints_grad[row * n], n * sizeof(double));
+    if (grad) v.chain(&e.constraints_grad[row * n], n, grad + i * n);
   }
 }
 
@@ -84,10 +109,11 @@ struct Local {
 
 // one local solve under the constraint rows `rows` (indices into the problem's constraints)
 Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x0,
-                  const OptimizerOptions& options, double penalty, const std::vector<int>& rows) {
+                  const OptimizerOptions& options, double penalty, const std::vector<int>& rows,
+                  const Preconditioner* pre) {
   const int n = problem.num_variables(), m = static_cast<int>(rows.size());
   Cache cache(problem, penalty);
-  Rows selected{&cache, &rows};
+  View view{&cache, &rows, pre && pre->active ? pre : nullptr, {}, {}};
   Local out;
   out.x = x0;
   try {
@@ -103,19 +129,33 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
         out.x[j * nf + v] = std::clamp(out.x[j * nf + v], lo[j * nf + v], hi[j * nf + v]);
       }
     }
-    opt.set_lower_bounds(lo);
-    opt.set_upper_bounds(hi);
-    opt.set_min_objective(objective_cb, &cache);
+    std::vector<double> y = out.x;
+    if (view.pre) {
+      // y = 0 at the start; the box (never reached by SLSQP's steps in practice) is left out
+      view.origin = Eigen::Map<const Eigen::VectorXd>(out.x.data(), n);
+      y.assign(n, 0.0);
+    } else {
+      opt.set_lower_bounds(lo);
+      opt.set_upper_bounds(hi);
+    }
+    opt.set_min_objective(objective_cb, &view);
     if (m > 0) {
-      opt.add_inequality_mconstraint(constraints_cb, &selected,
+      opt.add_inequality_mconstraint(constraints_cb, &view,
                                      std::vector<double>(m, options.constraint_tol));
     }
     opt.set_ftol_rel(options.ftol_rel);
     opt.set_xtol_rel(options.xtol_rel);
     opt.set_maxeval(options.max_evaluations);
     double f = 0;
-    const nlopt::result r = opt.optimize(out.x, f);
+    const nlopt::result r = opt.optimize(y, f);
     out.solver = status_from_result(static_cast<int>(r));
+    if (view.pre) {
+      const Eigen::VectorXd x =
+          view.origin + view.pre->T * Eigen::Map<const Eigen::VectorXd>(y.data(), n);
+      out.x.assign(x.data(), x.data() + n);
+    } else {
+      out.x = y;
+    }
   } catch (...) {
     out.solver = status_from_exception(std::current_exception());
   }
@@ -131,6 +171,16 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
   return out;
 }
 
+// the preconditioner of a solve from x0, when the options ask for one (inactive otherwise)
+Preconditioner preconditioner_of(const TrajectoryProblem& problem, const std::vector<double>& x0,
+                                 const OptimizerOptions& options) {
+  if (!options.precondition || options.method != Method::kSlsqp ||
+      problem.num_variables() < options.precondition_min_variables) {
+    return {};
+  }
+  return objective_preconditioner(problem, x0);
+}
+
 // A local solve under the constraints that matter (OptimizerOptions::screen): the rows with
 // c > -screen at the start; every row that the result violates or nears is added and the solve
 // resumed from there, until no row left out is violated (at most 4 rounds, the last with every
@@ -140,23 +190,28 @@ Local solve_screened(const TrajectoryProblem& problem, const std::vector<double>
   const int m = problem.num_constraints();
   std::vector<int> all(m);
   for (int i = 0; i < m; ++i) all[i] = i;
+  // one preconditioner for every round (its evaluations count in the limit)
+  const Preconditioner pre = preconditioner_of(problem, x0, options);
+  OptimizerOptions budget = options;
+  budget.max_evaluations = std::max(1, options.max_evaluations - pre.evaluations);
   Evaluated e;
   if (!(options.screen > 0) || !problem.evaluate(x0.data(), false, &e).ok()) {
-    return solve_local(problem, x0, options, penalty, all);
+    Local out = solve_local(problem, x0, budget, penalty, all, &pre);
+    out.evaluations += pre.evaluations;
+    return out;
   }
   std::vector<char> in(m, 0);
   for (int i = 0; i < m; ++i) in[i] = e.constraints[i] > -options.screen;
   std::vector<double> x = x0;
-  int evaluations = 0;
+  int evaluations = pre.evaluations;
   Local out;
   for (int round = 0; round < 4; ++round) {
     std::vector<int> rows;
     for (int i = 0; i < m; ++i) {
       if (in[i] || round == 3) rows.push_back(i);
     }
-    OptimizerOptions budget = options;  // the rounds share the evaluation limit
-    budget.max_evaluations = std::max(1, options.max_evaluations - evaluations);
-    out = solve_local(problem, x, budget, penalty, rows);
+    budget.max_evaluations = std::max(1, options.max_evaluations - evaluations);  // shared
+    out = solve_local(problem, x, budget, penalty, rows, &pre);
     evaluations += out.evaluations;
     if (!out.evaluated || static_cast<int>(rows.size()) == m) break;
     bool violated = false;

@@ -146,13 +146,13 @@ std::vector<double> refit(const Candidate& c, int n, const TaskResult& r) {
 
 }  // namespace
 
-Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
-                 const Candidate& first, const BatchOptions& options,
-                 const OptimizerOptions& optimizer, TaskResult* r) {
-  // a scene whose own law is smoothed is solved exactly by the first stage
-  const bool smooth_law = params.friction.smoothing_velocity > 0.0;
-  Candidate best = smooth_law ? first : continuation(params, loads, first, options, optimizer, r);
-  if (!feasible(best, options)) return best;
+namespace {
+
+// the refinement of the control points of `best` (options.refine.control_points), every level
+// solved under the smoothed law of `best`
+Candidate refinement(const Params<double>& params, const sim::LoadFunction& loads,
+                     Candidate best, const BatchOptions& options,
+                     const OptimizerOptions& optimizer, TaskResult* r) {
   const double ws = best.smoothing_velocity;
   double previous = best.exact;
   log_stage(&r->refinement, best.control_points, best, true);
@@ -174,6 +174,21 @@ Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
     if (kept) best = std::move(c);
     if (r->refinement_change < options.refine.tol) break;
   }
+  return best;
+}
+
+}  // namespace
+
+Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
+                 const Candidate& first, const BatchOptions& options,
+                 const OptimizerOptions& optimizer, TaskResult* r) {
+  // the levels under the first solve's smoothed law, whose landscape has no kinks at the
+  // reversals, then the continuation to the exact law on the finest spline kept (a scene whose
+  // own law is smoothed is solved exactly by the first law)
+  if (!feasible(first, options)) return first;
+  Candidate best = refinement(params, loads, first, options, optimizer, r);
+  const bool smooth_law = params.friction.smoothing_velocity > 0.0;
+  if (!smooth_law) best = continuation(params, loads, best, options, optimizer, r);
   return best;
 }
 

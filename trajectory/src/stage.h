@@ -34,9 +34,10 @@ Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loa
                       const BatchOptions& options, double torque_limit,
                       const OptimizerOptions& optimizer);
 
-/// The continuation of `first` towards the exact law (options.refine.continuation), then the
-/// refinement of its control points; the best feasible candidate of all stages. The stages are
-/// described in r->continuation, r->refinement and r->refinement_change.
+/// The refinement of the control points of `first` under its smoothed law, then the
+/// continuation of the finest spline kept towards the exact law (options.refine.continuation);
+/// the best feasible candidate of all stages (`first` itself when it is not feasible). The
+/// stages are described in r->continuation, r->refinement and r->refinement_change.
 Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
                  const Candidate& first, const BatchOptions& options,
                  const OptimizerOptions& optimizer, TaskResult* r);

@@ -16,8 +16,11 @@
 
 namespace fivebar::trajectory {
 
-/// The continuation to the scene's exact friction law and the refinement of the discretization
-/// that follow the first solve of a task. Each solve is warm-started from the best point so far;
+/// The refinement of the discretization and the continuation to the scene's exact friction law
+/// that follow the first solve of a task: the refinement levels are solved under the first
+/// solve's smoothed law (no kinks where a joint reverses: the levels find lower basins than
+/// under the near-exact law), then the continuation runs on the finest spline kept. Each solve
+/// is warm-started from the best point so far;
 /// a stage replaces it only when it is feasible on the dense check grid and its exact-law
 /// objective is lower, so no stage can make the result worse.
 /// The refinement levels of `fivebar optimize`: from the first solve's 10 control points (5
@@ -28,9 +31,9 @@ inline const std::vector<int> kRefineLevels = {25, 45, 85};
 
 struct RefineOptions {
   bool enabled = true;
-  /// smoothing velocities w_s [rad/s] solved after the first one, in order (continuation on
-  /// w_s towards the exact law, w_s = 0); the last one is the law of the refined solves
-  std::vector<double> continuation = {5e-3, 4e-4};
+  /// smoothing velocities w_s [rad/s] solved after the refinement, on its finest spline, in
+  /// order (continuation on w_s towards the exact law, w_s = 0)
+  std::vector<double> continuation = {4e-4};
   /// control points per joint tried after the first solve's count (only the larger ones),
   /// until the exact-law objective changes by less than `tol` (relative) from one to the next;
   /// empty: no refinement (`fivebar optimize` uses kRefineLevels)

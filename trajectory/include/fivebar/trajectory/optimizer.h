@@ -37,6 +37,12 @@ struct OptimizerOptions {
   /// TrajectoryProblem, dimensionless); rows the result violates or nears are added and the
   /// solve resumed (the answer satisfies every row). 0: every row from the start.
   double screen = 0.5;
+  /// SLSQP on problems of at least precondition_min_variables variables works in y,
+  /// x = x0 + T y, where T^T H T = +-I for the Hessian H of the objective at the start (by
+  /// differences of exact gradients, about 23 evaluations): SLSQP's quasi-Newton matrix starts
+  /// at the identity, which in x is far from H on a refined spline.
+  bool precondition = true;
+  int precondition_min_variables = 30;
 };
 
 struct OptimizeResult {

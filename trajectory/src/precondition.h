@@ -1,0 +1,36 @@
+// A linear change of variables x = origin + T y that makes the Hessian of the objective of a
+// TrajectoryProblem near the identity at the start of a solve (internal to the library).
+//
+// SLSQP starts its quasi-Newton matrix at the identity. On a refined spline (80 to 160
+// variables) the Hessian is far from it (control points of a fine spline act on the
+// accelerations through 1/h^2), and SLSQP spends hundreds of iterations rebuilding it, again at
+// every restart (each refinement level, each screening round, each tightened re-solve). In y
+// the start is close to Newton's step.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "fivebar/trajectory/problem.h"
+
+namespace fivebar::trajectory {
+
+struct Preconditioner {
+  bool active = false;
+  Eigen::MatrixXd T;   ///< x - origin = T y (nv x nv)
+  Eigen::MatrixXd Tt;  ///< T transposed (its columns are the rows of T)
+  int evaluations = 0;  ///< problem evaluations spent to build it
+};
+
+/// T = V |D|^(-1/2) of the symmetric eigen-decomposition V D V^T of the Hessian of the
+/// objective at x0, by differences of its exact gradients (Curtis-Powell-Reid grouping: the
+/// Hessian is banded, control points more than 5 apart never share a knot span, so 11 groups per
+/// joint suffice: 22 evaluations with gradients). |D| is floored at 1e-8 max |D|. The
+/// constraints' curvature is left out: with multipliers estimated at the start (least squares on
+/// the near-active rows) the refined solves took more iterations, not fewer. Inactive when x0
+/// cannot be evaluated.
+Preconditioner objective_preconditioner(const TrajectoryProblem& problem,
+                                         const std::vector<double>& x0);
+
+}  // namespace fivebar::trajectory
