@@ -9,6 +9,7 @@
 #include <cmath>
 #include <sstream>
 #include <type_traits>
+#include <utility>
 
 #include <Eigen/LU>
 
@@ -199,6 +200,36 @@ struct LoopSolution {
   int iterations = 0;
 };
 
+/// J^-1 r for a double matrix J and a right-hand side r of Jets: Gaussian elimination with
+/// partial pivoting, its row operations applied to r (no Jet-valued matrix, no general LU).
+template <typename T>
+std::array<T, kJoints> solve_with_double_matrix(Eigen::Matrix<double, kJoints, kJoints> J,
+                                                std::array<T, kJoints> r) {
+  for (int c = 0; c < kJoints; ++c) {
+    int pivot = c;
+    for (int i = c + 1; i < kJoints; ++i) {
+      if (std::abs(J(i, c)) > std::abs(J(pivot, c))) pivot = i;
+    }
+    if (pivot != c) {
+      J.row(c).swap(J.row(pivot));
+      std::swap(r[c], r[pivot]);
+    }
+    for (int i = c + 1; i < kJoints; ++i) {
+      const double f = J(i, c) / J(c, c);
+      if (f == 0.0) continue;
+      J.row(i) -= f * J.row(c);
+      r[i] -= f * r[c];
+    }
+  }
+  for (int c = kJoints - 1; c >= 0; --c) {
+    for (int j = c + 1; j < kJoints; ++j) {
+      if (J(c, j) != 0.0) r[c] -= J(c, j) * r[j];
+    }
+    r[c] = r[c] / J(c, c);
+  }
+  return r;
+}
+
 /// The Jet derivatives of the loop's solution by the implicit function theorem. The loop solves
 /// N = G(N, p) = |F(phi N)|; with N* the double solution, one Newton step in Jets from N*,
 /// N = N* + (I - G_N)^-1 (G(N*, p) - N*), gives the value (refined) and dN/dp =
@@ -225,11 +256,8 @@ void friction_loop_implicit(const std::array<T, kJoints>& phi, const LoopSolutio
       if (sol.map.active[j]) J(k, j) -= Fk.dot(sol.map.dF[j][k]) * value_of(phi[j]) / value_of(n);
     }
   }
-  const Eigen::Matrix<double, kJoints, kJoints> Jinv = J.partialPivLu().inverse();
-  std::array<T, kJoints> dN;  // N - N*
+  const std::array<T, kJoints> dN = solve_with_double_matrix(J, r);  // N - N*
   for (int k = 0; k < kJoints; ++k) {
-    dN[k] = Jinv(k, 0) * r[0];
-    for (int j = 1; j < kJoints; ++j) dN[k] += Jinv(k, j) * r[j];
     (*N)[k] = dN[k] + sol.N[k];
     (*Mf)[k] = phi[k] * (*N)[k];
   }

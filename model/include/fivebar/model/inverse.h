@@ -125,7 +125,8 @@ Status inverse_pass(const Params<T>& p, const Loads<T>& L, const T& th1, const T
     st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
                        motors ? &act : nullptr, loop);
     if (!st.ok()) return st;
-    solve(ev->Mf, &ev->F);
+    // the implicit derivative (Jets) returns F of the final Mf already (F is affine in Mf)
+    if (std::is_same_v<T, double> || !loop || !loop->set) solve(ev->Mf, &ev->F);
     reaction_norms(ev->F, &ev->N);
     for (int j = 0; j < kJoints; ++j) {
       if (ev->slip[j] == kStuck) ev->hold_margin[j] = holding_capacity(p, j, ev->N[j]);
