@@ -45,6 +45,10 @@ struct EvalOptions {
   /// mu_s r_k N_k is how much friction torque it could add. A crank at rest and not
   /// accelerating is taken as exactly still (w = dw/dt = 0: the rest of its rates is noise).
   double rest_acceleration = -1.0;
+  /// Jets (inverse_dynamics, forward_dynamics with friction): solve the friction loop in double
+  /// and take its derivatives from one Newton step in Jets at the solution (implicit function
+  /// theorem, friction_loop.h); false iterates the whole loop in Jets (the reference).
+  bool implicit_loop_derivative = true;
 };
 
 /// Everything one evaluation computes. Forward dynamics fills thdd from the torques; inverse

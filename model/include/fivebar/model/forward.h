@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cmath>
+#include <type_traits>
 
 #include "fivebar/model/actuator.h"
 #include "fivebar/model/appell.h"
@@ -94,17 +95,13 @@ std::array<T, kJoints> forward_friction_arms(const Params<T>& p,
   return phi;
 }
 
-}  // namespace detail
-
-/// Forward dynamics: thdd from the state (th, thd) and the loads, with the friction loop
-/// resolved. `slip` gives the Coulomb sign of each joint (the integrator's segment mode); pass
-/// nullptr to use sign(w_k), with sign(0) = 0. `bristle` holds the LuGre states z (kLuGre only;
-/// nullptr means z = 0).
+/// forward_dynamics below; `loop` as in friction_loop (records the double solution, or
+/// differentiates it in Jets).
 template <typename T>
-Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
-                        const T& w1, const T& w2, const JointModes* slip,
-                        const EvalOptions& opt, Evaluation<T>* ev,
-                        const std::array<T, kJoints>* bristle = nullptr) {
+Status forward_pass(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
+                    const T& w1, const T& w2, const JointModes* slip, const EvalOptions& opt,
+                    Evaluation<T>* ev, const std::array<T, kJoints>* bristle,
+                    LoopSolution* loop) {
   Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin, opt.want_angles);
   if (!st.ok()) return st;
   const Kinematics<T>& k = ev->kin;
@@ -120,8 +117,8 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
   ev->iterations = 0;
   ev->Mf.fill(T(0));
   ev->P_diss = T(0);
-  detail::StuckJoints<T> stuck;
-  st = detail::stuck_joints(k, ev->bias, slip, &stuck);
+  StuckJoints<T> stuck;
+  st = stuck_joints(k, ev->bias, slip, &stuck);
   if (!st.ok()) return st;
   std::array<T, kJoints> hold{};  // holding torques of the stuck joints
   // accelerations and reactions for the friction torques Mf of the slipping joints
@@ -129,16 +126,16 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
     std::array<T, kJoints> Mf_all = Mf;
     for (int i = 0; i < stuck.count; ++i) Mf_all[stuck.joint[i]] = T(0);
     const Vec2<T> r = rhs0 - friction_transpose(k, Mf_all);
-    ev->thdd = detail::constrained_accelerations(ev->A, Ainv, r, stuck, &hold);
+    ev->thdd = constrained_accelerations(ev->A, Ainv, r, stuck, &hold);
     for (int i = 0; i < stuck.count; ++i) Mf_all[stuck.joint[i]] = hold[stuck.joint[i]];
     reactions(p, k, ev->bias, L, Fvec, ev->thdd, Mf_all, F, &ev->alpha3, &ev->alpha4);
   };
   if (p.friction.active()) {
-    const std::array<T, kJoints> phi = detail::forward_friction_arms(p, slip, bristle, ev);
+    const std::array<T, kJoints> phi = forward_friction_arms(p, slip, bristle, ev);
     std::array<T, kJoints> act;
     const bool motors = actuator_torques(p, ev->w, ev->slip, &act);
     st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
-                       motors ? &act : nullptr);
+                       motors ? &act : nullptr, loop);
     if (!st.ok()) return st;
     solve(ev->Mf, &ev->F);  // accelerations and reactions of the converged friction torques
     reaction_norms(ev->F, &ev->N);
@@ -162,6 +159,34 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
   ev->P_in = L.M1 * w1 + L.M2 * w2;
   ev->P_ext = L.M3 * ev->bias.w3 + Fvec.dot(k.GP * Vec2<T>(w1, w2));
   return Status::Ok();
+}
+
+}  // namespace detail
+
+/// Forward dynamics: thdd from the state (th, thd) and the loads, with the friction loop
+/// resolved. `slip` gives the Coulomb sign of each joint (the integrator's segment mode); pass
+/// nullptr to use sign(w_k), with sign(0) = 0. `bristle` holds the LuGre states z (kLuGre only;
+/// nullptr means z = 0).
+template <typename T>
+Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
+                        const T& w1, const T& w2, const JointModes* slip,
+                        const EvalOptions& opt, Evaluation<T>* ev,
+                        const std::array<T, kJoints>* bristle = nullptr) {
+  if constexpr (!std::is_same_v<T, double>) {
+    if (p.friction.active() && opt.implicit_loop_derivative) {
+      // the double shadow decides the modes and solves the loop; the Jets differentiate it
+      detail::LoopSolution loop;
+      Evaluation<double> vd;
+      std::array<double, kJoints> zd;
+      const Status st = detail::forward_pass(
+          p.template cast<double>(), L.template cast<double>(), value_of(th1), value_of(th2),
+          value_of(w1), value_of(w2), slip, opt, &vd, detail::array_values(bristle, &zd), &loop);
+      if (!st.ok()) return st;
+      return detail::forward_pass(p, L, th1, th2, w1, w2, &vd.slip, opt, ev, bristle, &loop);
+    }
+  }
+  return detail::forward_pass(p, L, th1, th2, w1, w2, slip, opt, ev, bristle,
+                              static_cast<detail::LoopSolution*>(nullptr));
 }
 
 }  // namespace fivebar

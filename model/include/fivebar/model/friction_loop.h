@@ -8,6 +8,8 @@
 #include <array>
 #include <cmath>
 #include <sstream>
+#include <type_traits>
+#include <utility>
 
 #include <Eigen/LU>
 
@@ -179,24 +181,125 @@ Status friction_newton_fallback(const std::array<T, kJoints>& phi, const EvalOpt
   return Status::Ok();
 }
 
-/// The loop of friction_loop below for the load-dependent torques phi_k N_k alone.
+/// The value parts of x in *out (the double shadow of a Jet evaluation); null stays null.
+template <typename T>
+const std::array<double, kJoints>* array_values(const std::array<T, kJoints>* x,
+                                                std::array<double, kJoints>* out) {
+  if (!x) return nullptr;
+  for (int j = 0; j < kJoints; ++j) (*out)[j] = value_of((*x)[j]);
+  return out;
+}
+
+/// The converged friction loop of a double evaluation, kept for the Jet evaluation of the same
+/// point (implicit derivative, friction_loop_implicit): the consistent N, the affine map of the
+/// reactions and the loop's iteration count (friction_max_iter + 1: a Newton solve).
+struct LoopSolution {
+  bool set = false;
+  std::array<double, kJoints> N{};
+  AffineReactions<double> map;
+  int iterations = 0;
+};
+
+/// J^-1 r for a double matrix J and a right-hand side r of Jets: Gaussian elimination with
+/// partial pivoting, its row operations applied to r (no Jet-valued matrix, no general LU).
+template <typename T>
+std::array<T, kJoints> solve_with_double_matrix(Eigen::Matrix<double, kJoints, kJoints> J,
+                                                std::array<T, kJoints> r) {
+  for (int c = 0; c < kJoints; ++c) {
+    int pivot = c;
+    for (int i = c + 1; i < kJoints; ++i) {
+      if (std::abs(J(i, c)) > std::abs(J(pivot, c))) pivot = i;
+    }
+    if (pivot != c) {
+      J.row(c).swap(J.row(pivot));
+      std::swap(r[c], r[pivot]);
+    }
+    for (int i = c + 1; i < kJoints; ++i) {
+      const double f = J(i, c) / J(c, c);
+      if (f == 0.0) continue;
+      J.row(i) -= f * J.row(c);
+      r[i] -= f * r[c];
+    }
+  }
+  for (int c = kJoints - 1; c >= 0; --c) {
+    for (int j = c + 1; j < kJoints; ++j) {
+      if (J(c, j) != 0.0) r[c] -= J(c, j) * r[j];
+    }
+    r[c] = r[c] / J(c, c);
+  }
+  return r;
+}
+
+/// The Jet derivatives of the loop's solution by the implicit function theorem. The loop solves
+/// N = G(N, p) = |F(phi N)|; with N* the double solution, one Newton step in Jets from N*,
+/// N = N* + (I - G_N)^-1 (G(N*, p) - N*), gives the value (refined) and dN/dp =
+/// (I - G_N)^-1 G_p: one Jet solve of the reactions at phi N* instead of the Jet probes and
+/// iterations. G_N (double) comes from the double map at the reactions F(phi N*).
+template <typename T, typename Solve>
+void friction_loop_implicit(const std::array<T, kJoints>& phi, const LoopSolution& sol,
+                            Solve& solve, std::array<T, kJoints>* N, std::array<T, kJoints>* Mf,
+                            std::array<Vec2<T>, kJoints>* F, int* iterations) {
+  std::array<T, kJoints> M;
+  for (int j = 0; j < kJoints; ++j) M[j] = phi[j] * sol.N[j];
+  std::array<Vec2<T>, kJoints> Fs;
+  solve(M, &Fs);
+  // I - G_N at F(phi N*), in double; r = G(N*, p) - N* in Jets
+  Eigen::Matrix<double, kJoints, kJoints> J = Eigen::Matrix<double, kJoints, kJoints>::Identity();
+  std::array<T, kJoints> r;
+  for (int k = 0; k < kJoints; ++k) {
+    using std::sqrt;
+    const T n = sqrt(Fs[k].squaredNorm());
+    r[k] = n - sol.N[k];
+    if (!(value_of(n) > 0.0)) continue;
+    const Vec2<double> Fk(value_of(Fs[k].x()), value_of(Fs[k].y()));
+    for (int j = 0; j < kJoints; ++j) {
+      if (sol.map.active[j]) J(k, j) -= Fk.dot(sol.map.dF[j][k]) * value_of(phi[j]) / value_of(n);
+    }
+  }
+  const std::array<T, kJoints> dN = solve_with_double_matrix(J, r);  // N - N*
+  for (int k = 0; k < kJoints; ++k) {
+    (*N)[k] = dN[k] + sol.N[k];
+    (*Mf)[k] = phi[k] * (*N)[k];
+  }
+  // F is affine in the friction torques: F(phi N) = F(phi N*) + sum_j dF_j phi_j (N_j - N*_j)
+  *F = Fs;
+  for (int j = 0; j < kJoints; ++j) {
+    if (!sol.map.active[j]) continue;
+    const T dM = phi[j] * dN[j];
+    for (int k = 0; k < kJoints; ++k) (*F)[k] += sol.map.dF[j][k] * dM;
+  }
+  *iterations = sol.iterations;
+}
+
+/// The loop of friction_loop below for the load-dependent torques phi_k N_k alone. `loop`
+/// (may be null): a double evaluation records its solution there; a Jet evaluation given a
+/// recorded solution differentiates it (friction_loop_implicit) instead of iterating in Jets.
 template <typename T, typename Solve>
 Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions& opt,
                            Solve&& solve, std::array<T, kJoints>* N, std::array<T, kJoints>* Mf,
-                           std::array<Vec2<T>, kJoints>* F, int* iterations) {
+                           std::array<Vec2<T>, kJoints>* F, int* iterations,
+                           LoopSolution* loop = nullptr) {
+  if constexpr (!std::is_same_v<T, double>) {
+    if (loop && loop->set) {
+      friction_loop_implicit(phi, *loop, solve, N, Mf, F, iterations);
+      return Status::Ok();
+    }
+  }
   Mf->fill(T(0));
   const AffineReactions<T> map = probe_reactions(phi, solve);
   bool contracting = true;
   double ratio = 0.0;
-  if (friction_fixed_point(phi, opt, map, N, Mf, F, iterations, &contracting, &ratio)) {
-    return Status::Ok();
+  if (!friction_fixed_point(phi, opt, map, N, Mf, F, iterations, &contracting, &ratio)) {
+    const Status st = friction_newton_fallback(phi, opt, map, contracting, ratio, N);
+    if (!st.ok()) return st;
+    for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
+    solve(*Mf, F);
+    reaction_norms(*F, N);
+    *iterations = opt.friction_max_iter + 1;  // marks a Newton solve
   }
-  const Status st = friction_newton_fallback(phi, opt, map, contracting, ratio, N);
-  if (!st.ok()) return st;
-  for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
-  solve(*Mf, F);
-  reaction_norms(*F, N);
-  *iterations = opt.friction_max_iter + 1;  // marks a Newton solve
+  if constexpr (std::is_same_v<T, double>) {
+    if (loop) *loop = LoopSolution{true, *N, map, *iterations};
+  }
   return Status::Ok();
 }
 
@@ -207,19 +310,20 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
 /// contracting, Newton from two starts. `solve(Mf, F)` evaluates the reactions for friction
 /// torques Mf; phi_k = r_k f_k(w_k) is fixed. `extra` (may be null) adds load-independent
 /// torques (the actuators' friction, actuator.h): Mf_k = phi_k N_k + extra_k. The caller solves
-/// once more with the returned Mf.
+/// once more with the returned Mf. `loop`: see joint_friction_loop (the implicit derivative).
 template <typename T, typename Solve>
 Status friction_loop(const std::array<T, kJoints>& phi, const EvalOptions& opt, Solve&& solve,
                      std::array<T, kJoints>* N, std::array<T, kJoints>* Mf,
                      std::array<Vec2<T>, kJoints>* F, int* iterations,
-                     const std::array<T, kJoints>* extra = nullptr) {
-  if (!extra) return detail::joint_friction_loop(phi, opt, solve, N, Mf, F, iterations);
+                     const std::array<T, kJoints>* extra = nullptr,
+                     detail::LoopSolution* loop = nullptr) {
+  if (!extra) return detail::joint_friction_loop(phi, opt, solve, N, Mf, F, iterations, loop);
   auto shifted = [&](const std::array<T, kJoints>& M, std::array<Vec2<T>, kJoints>* out) {
     std::array<T, kJoints> all = M;
     for (int j = 0; j < kJoints; ++j) all[j] += (*extra)[j];
     solve(all, out);
   };
-  const Status st = detail::joint_friction_loop(phi, opt, shifted, N, Mf, F, iterations);
+  const Status st = detail::joint_friction_loop(phi, opt, shifted, N, Mf, F, iterations, loop);
   for (int j = 0; j < kJoints; ++j) (*Mf)[j] += (*extra)[j];
   return st;
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <type_traits>
 
 #include "fivebar/model/actuator.h"
 #include "fivebar/model/appell.h"
@@ -84,6 +85,69 @@ void crank_torques(const Params<T>& p, const T& a1, const T& a2, Evaluation<T>* 
            cross(Vec2<T>(k.c[1] - D0), Vec2<T>(L2.mass * gvec));
 }
 
+/// inverse_dynamics below; `loop` as in friction_loop (records the double solution, or
+/// differentiates it in Jets).
+template <typename T>
+Status inverse_pass(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
+                    const T& w1_in, const T& w2_in, const T& a1_in, const T& a2_in,
+                    const JointModes* slip, const EvalOptions& opt, Evaluation<T>* ev,
+                    const std::array<T, kJoints>* bristle, LoopSolution* loop) {
+  Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin);
+  if (!st.ok()) return st;
+  // rest rule: a crank at rest and not accelerating stands exactly still
+  T w1 = w1_in, w2 = w2_in, a1 = a1_in, a2 = a2_in;
+  if (opt.rest_acceleration >= 0.0) {
+    still_crank(opt, &w1, &a1);
+    still_crank(opt, &w2, &a2);
+  }
+  const Kinematics<T>& k = ev->kin;
+  compute_bias(p, k, w1, w2, &ev->bias);
+  const Vec2<T> Fvec = force_vector(k, L);
+  ev->thdd = Vec2<T>(a1, a2);
+  ev->w = relative_rates(w1, w2, ev->bias.w3, ev->bias.w4);
+  ev->iterations = 0;
+  ev->Mf.fill(T(0));
+  auto solve = [&](const std::array<T, kJoints>& Mf, std::array<Vec2<T>, kJoints>* F) {
+    reactions(p, k, ev->bias, L, Fvec, ev->thdd, Mf, F, &ev->alpha3, &ev->alpha4);
+  };
+  if (p.friction.active()) {  // alpha3, alpha4 for the relative accelerations (as reactions)
+    ev->alpha3 = k.G3.dot(ev->thdd) + ev->bias.h3;
+    ev->alpha4 = k.G4.dot(ev->thdd) + ev->bias.h4;
+  } else {
+    solve(ev->Mf, &ev->F);
+  }
+  const std::array<T, kJoints> wdot = relative_accelerations(ev->thdd, ev->alpha3, ev->alpha4);
+  if (p.friction.active()) {
+    const std::array<T, kJoints> phi =
+        inverse_friction_arms(p, opt, wdot, slip, bristle, ev);
+    std::array<T, kJoints> act;
+    const bool motors = actuator_torques(p, ev->w, ev->slip, &act);
+    st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
+                       motors ? &act : nullptr, loop);
+    if (!st.ok()) return st;
+    // the implicit derivative (Jets) returns F of the final Mf already (F is affine in Mf)
+    if (std::is_same_v<T, double> || !loop || !loop->set) solve(ev->Mf, &ev->F);
+    reaction_norms(ev->F, &ev->N);
+    for (int j = 0; j < kJoints; ++j) {
+      if (ev->slip[j] == kStuck) ev->hold_margin[j] = holding_capacity(p, j, ev->N[j]);
+    }
+  } else {
+    reaction_norms(ev->F, &ev->N);
+    // no friction: nothing holds, but joints at rest are still reported (hold_margin 0)
+    for (int j = 0; j < kJoints; ++j) {
+      const bool stuck = opt.rest_acceleration >= 0.0 &&
+                         inverse_slip(opt, ev->w[j], wdot[j]) == kStuck;
+      ev->slip[j] = stuck ? kStuck : JointMode::kRest;
+    }
+  }
+  crank_torques(p, a1, a2, ev);
+  ev->P_diss = T(0);
+  for (int j = 0; j < kJoints; ++j) ev->P_diss += ev->Mf[j] * ev->w[j];
+  ev->P_in = ev->M1 * w1 + ev->M2 * w2;
+  ev->P_ext = L.M3 * ev->bias.w3 + Fvec.dot(k.GP * Vec2<T>(w1, w2));
+  return Status::Ok();
+}
+
 }  // namespace detail
 
 /// Inverse dynamics: M1, M2 and all reactions for a given motion (th, thd, thdd), friction
@@ -96,57 +160,26 @@ void crank_torques(const Params<T>& p, const T& a1, const T& a2, Evaluation<T>* 
 /// steady state z = g(w) sign(w) / sigma0, i.e. the Stribeck law.
 template <typename T>
 Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
-                        const T& w1_in, const T& w2_in, const T& a1_in, const T& a2_in,
+                        const T& w1, const T& w2, const T& a1, const T& a2,
                         const JointModes* slip, const EvalOptions& opt,
                         Evaluation<T>* ev, const std::array<T, kJoints>* bristle = nullptr) {
-  Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin);
-  if (!st.ok()) return st;
-  // rest rule: a crank at rest and not accelerating stands exactly still
-  T w1 = w1_in, w2 = w2_in, a1 = a1_in, a2 = a2_in;
-  if (opt.rest_acceleration >= 0.0) {
-    detail::still_crank(opt, &w1, &a1);
-    detail::still_crank(opt, &w2, &a2);
-  }
-  const Kinematics<T>& k = ev->kin;
-  compute_bias(p, k, w1, w2, &ev->bias);
-  const Vec2<T> Fvec = force_vector(k, L);
-  ev->thdd = Vec2<T>(a1, a2);
-  ev->w = relative_rates(w1, w2, ev->bias.w3, ev->bias.w4);
-  ev->iterations = 0;
-  ev->Mf.fill(T(0));
-  auto solve = [&](const std::array<T, kJoints>& Mf, std::array<Vec2<T>, kJoints>* F) {
-    reactions(p, k, ev->bias, L, Fvec, ev->thdd, Mf, F, &ev->alpha3, &ev->alpha4);
-  };
-  solve(ev->Mf, &ev->F);  // alpha3, alpha4 for the relative accelerations
-  const std::array<T, kJoints> wdot = relative_accelerations(ev->thdd, ev->alpha3, ev->alpha4);
-  if (p.friction.active()) {
-    const std::array<T, kJoints> phi =
-        detail::inverse_friction_arms(p, opt, wdot, slip, bristle, ev);
-    std::array<T, kJoints> act;
-    const bool motors = actuator_torques(p, ev->w, ev->slip, &act);
-    st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
-                       motors ? &act : nullptr);
-    if (!st.ok()) return st;
-    solve(ev->Mf, &ev->F);
-    reaction_norms(ev->F, &ev->N);
-    for (int j = 0; j < kJoints; ++j) {
-      if (ev->slip[j] == kStuck) ev->hold_margin[j] = holding_capacity(p, j, ev->N[j]);
-    }
-  } else {
-    reaction_norms(ev->F, &ev->N);
-    // no friction: nothing holds, but joints at rest are still reported (hold_margin 0)
-    for (int j = 0; j < kJoints; ++j) {
-      const bool stuck = opt.rest_acceleration >= 0.0 &&
-                         detail::inverse_slip(opt, ev->w[j], wdot[j]) == kStuck;
-      ev->slip[j] = stuck ? kStuck : JointMode::kRest;
+  if constexpr (!std::is_same_v<T, double>) {
+    if (p.friction.active() && opt.implicit_loop_derivative) {
+      // the double shadow decides the modes and solves the loop; the Jets differentiate it
+      detail::LoopSolution loop;
+      Evaluation<double> vd;
+      std::array<double, kJoints> zd;
+      const Status st = detail::inverse_pass(
+          p.template cast<double>(), L.template cast<double>(), value_of(th1), value_of(th2),
+          value_of(w1), value_of(w2), value_of(a1), value_of(a2), slip, opt, &vd,
+          detail::array_values(bristle, &zd), &loop);
+      if (!st.ok()) return st;
+      return detail::inverse_pass(p, L, th1, th2, w1, w2, a1, a2, &vd.slip, opt, ev, bristle,
+                                  &loop);
     }
   }
-  detail::crank_torques(p, a1, a2, ev);
-  ev->P_diss = T(0);
-  for (int j = 0; j < kJoints; ++j) ev->P_diss += ev->Mf[j] * ev->w[j];
-  ev->P_in = ev->M1 * w1 + ev->M2 * w2;
-  ev->P_ext = L.M3 * ev->bias.w3 + Fvec.dot(k.GP * Vec2<T>(w1, w2));
-  return Status::Ok();
+  return detail::inverse_pass(p, L, th1, th2, w1, w2, a1, a2, slip, opt, ev, bristle,
+                              static_cast<detail::LoopSolution*>(nullptr));
 }
 
 }  // namespace fivebar

@@ -3,8 +3,21 @@
 #pragma once
 
 #include <array>
+#include <type_traits>
+
+#include "fivebar/model/scalar.h"
 
 namespace fivebar {
+
+/// U(x); a Jet cast to double keeps its value part (the double shadow of a Jet evaluation).
+template <typename U, typename T>
+U scalar_cast(const T& x) {
+  if constexpr (std::is_same_v<U, double> && !std::is_same_v<T, double>) {
+    return value_of(x);
+  } else {
+    return U(x);
+  }
+}
 
 /// Number of joints (O, B, C, D, D0) and of moving links (1: crank O-B, 2: crank D0-D,
 /// 3: coupler B-C, 4: coupler D-C).
@@ -42,7 +55,8 @@ struct Link {
 
   template <typename U>
   Link<U> cast() const {
-    return {U(length), U(mass), U(inertia), U(com_offset), U(com_angle)};
+    return {scalar_cast<U>(length), scalar_cast<U>(mass), scalar_cast<U>(inertia),
+            scalar_cast<U>(com_offset), scalar_cast<U>(com_angle)};
   }
 };
 
@@ -73,18 +87,18 @@ struct FrictionParams {
     FrictionParams<U> out;
     out.law = law;
     for (int k = 0; k < kJoints; ++k) {
-      out.pin_radius[k] = U(pin_radius[k]);
-      out.coulomb[k] = U(coulomb[k]);
-      out.viscous[k] = U(viscous[k]);
-      out.static_coulomb[k] = U(static_coulomb[k]);
-      out.stribeck_velocity[k] = U(stribeck_velocity[k]);
-      out.stribeck_exponent[k] = U(stribeck_exponent[k]);
-      out.sigma0[k] = U(sigma0[k]);
-      out.sigma1[k] = U(sigma1[k]);
-      out.sigma2[k] = U(sigma2[k]);
-      out.viscous_exponent[k] = U(viscous_exponent[k]);
+      out.pin_radius[k] = scalar_cast<U>(pin_radius[k]);
+      out.coulomb[k] = scalar_cast<U>(coulomb[k]);
+      out.viscous[k] = scalar_cast<U>(viscous[k]);
+      out.static_coulomb[k] = scalar_cast<U>(static_coulomb[k]);
+      out.stribeck_velocity[k] = scalar_cast<U>(stribeck_velocity[k]);
+      out.stribeck_exponent[k] = scalar_cast<U>(stribeck_exponent[k]);
+      out.sigma0[k] = scalar_cast<U>(sigma0[k]);
+      out.sigma1[k] = scalar_cast<U>(sigma1[k]);
+      out.sigma2[k] = scalar_cast<U>(sigma2[k]);
+      out.viscous_exponent[k] = scalar_cast<U>(viscous_exponent[k]);
     }
-    out.smoothing_velocity = U(smoothing_velocity);
+    out.smoothing_velocity = scalar_cast<U>(smoothing_velocity);
     return out;
   }
 };
@@ -106,9 +120,9 @@ struct ActuatorParams {
   ActuatorParams<U> cast() const {
     ActuatorParams<U> out;
     for (int a = 0; a < kActuators; ++a) {
-      out.offset[a] = U(offset[a]);
-      out.coulomb[a] = U(coulomb[a]);
-      out.viscous[a] = U(viscous[a]);
+      out.offset[a] = scalar_cast<U>(offset[a]);
+      out.coulomb[a] = scalar_cast<U>(coulomb[a]);
+      out.viscous[a] = scalar_cast<U>(viscous[a]);
     }
     return out;
   }
@@ -128,11 +142,11 @@ struct Params {
   template <typename U>
   Params<U> cast() const {
     Params<U> out;
-    out.ground_length = U(ground_length);
+    out.ground_length = scalar_cast<U>(ground_length);
     for (int i = 0; i < kLinks; ++i) out.links[i] = links[i].template cast<U>();
-    out.point_p = U(point_p);
+    out.point_p = scalar_cast<U>(point_p);
     out.assembly = assembly;
-    out.gravity = U(gravity);
+    out.gravity = scalar_cast<U>(gravity);
     out.friction = friction.template cast<U>();
     out.actuators = actuators.template cast<U>();
     return out;
@@ -148,7 +162,8 @@ struct Loads {
 
   template <typename U>
   Loads<U> cast() const {
-    return {U(M1), U(M2), U(M3), U(F), U(F_angle)};
+    return {scalar_cast<U>(M1), scalar_cast<U>(M2), scalar_cast<U>(M3), scalar_cast<U>(F),
+            scalar_cast<U>(F_angle)};
   }
 };
 
