@@ -1285,19 +1285,46 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
                                 const TorqueLog& conditioned, const IdentifyOptions& opt,
                                 const IdentifyResult& first) {
   IdentifyOptions again = opt;
-  again.estimate_delay = false;
+  again.delay_refits = opt.delay_refits - 1;
+  again.estimate_delay = again.delay_refits > 0;
   for (const Glitch& g : first.glitches) again.condition.rejected_before.push_back(g.index);
+  // samples whose shifted torque would lie beyond the log's ends have none: left out
+  const double tol = 1e-9 * std::max(1.0, conditioned.duration());
+  int beyond = 0;
+  for (int i = 0; i < conditioned.size(); ++i) {
+    const double t = conditioned.t[i] + first.delay_s;
+    if (t > conditioned.t.back() + tol || t < conditioned.t.front() - tol) {
+      again.condition.rejected_before.push_back(i);
+      ++beyond;
+    }
+  }
   IdentifyResult res = identify(scene_in, loads, shift_torques(conditioned, first.delay_s), again);
+  // the refit estimated the delay left after the shift (and corrected it when significant): the
+  // total is their sum, with the std of the last estimate
+  if (res.delay_corrected) res.warnings.erase(res.warnings.begin());
   res.samples = first.samples;
-  res.delay_s = first.delay_s;
-  res.delay_std_s = first.delay_std_s;
+  res.delay_s = first.delay_s + (again.estimate_delay ? res.delay_s : 0.0);
+  res.delay_std_s = again.estimate_delay ? res.delay_std_s : first.delay_std_s;
   res.delay_corrected = true;
   res.notes.insert(res.notes.begin(), first.notes.begin(), first.notes.end());
+  // one note for the whole chain of refits (a deeper refit's count is included in this one)
+  const char* const kBeyond = " samples at an end of the log left out: their torques, shifted by "
+                              "the delay, fall beyond the log";
+  int total_beyond = beyond;
+  for (auto it = res.notes.begin(); it != res.notes.end();) {
+    if (it->find(kBeyond) == std::string::npos) {
+      ++it;
+      continue;
+    }
+    total_beyond += std::stoi(*it);
+    it = res.notes.erase(it);
+  }
+  if (total_beyond > 0) res.notes.push_back(std::to_string(total_beyond) + kBeyond);
   res.glitches.insert(res.glitches.begin(), first.glitches.begin(), first.glitches.end());
   for (int j = 0; j < 2; ++j) res.unwrapped[j] += first.unwrapped[j];
-  std::vector<std::string> w = {"the torques lag the angles by " + fmt(first.delay_s * 1e3) +
-                                " +- " + fmt(first.delay_std_s * 1e3) + " ms (" +
-                                fmt(std::abs(first.delay_s) / first.delay_std_s) +
+  std::vector<std::string> w = {"the torques lag the angles by " + fmt(res.delay_s * 1e3) +
+                                " +- " + fmt(res.delay_std_s * 1e3) + " ms (" +
+                                fmt(std::abs(res.delay_s) / res.delay_std_s) +
                                 " std): refitted with the torques shifted by it"};
   if (!first.glitches.empty()) w.push_back(first.warnings.front());
   res.warnings.insert(res.warnings.begin(), w.begin(), w.end());

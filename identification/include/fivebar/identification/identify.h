@@ -97,8 +97,10 @@ struct IdentifyOptions {
   /// inverse dynamics: estimate the delay of the torques behind the angles (separate
   /// acquisition channels) by one Gauss-Newton step on tau(t + d) - M, with its std; when it is
   /// significant (over 3 std and over a tenth of a sample) the torques are shifted by it and the
-  /// fit is redone
+  /// fit is redone, which estimates the remaining delay again (Gauss-Newton iterations on d)
   bool estimate_delay = true;
+  /// refits at most for the delay: each one shifts the torques by the total delay found so far
+  int delay_refits = 4;
 };
 
 struct ParameterEstimate {
