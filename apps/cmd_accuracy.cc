@@ -27,6 +27,10 @@
 namespace fivebar::io {
 namespace {
 
+// the one line of `fivebar --help`
+constexpr char kSummary[] =
+    "work-precision study: error of every integrator and friction treatment vs time";
+
 struct Args {
   SceneArgs scene;
   int repeats = 3;
@@ -230,9 +234,7 @@ RunFunction setup(CLI::App* app) {
   return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command(
-    {"accuracy", "work-precision study: error of every integrator and friction treatment vs time",
-     setup});
+const bool kRegistered = register_command({"accuracy", kSummary, setup});
 
 }  // namespace
 }  // namespace fivebar::io

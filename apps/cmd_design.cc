@@ -9,6 +9,8 @@
 // design.json, scene.yaml (the winning scene), design_history.csv, design_tasks.csv and
 // convergence.png. Tasks of one design run on the threads and across MPI ranks; every rank
 // runs the same outer loop, rank 0 writes the files.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 
 #include <chrono>
@@ -18,11 +20,10 @@
 #include <map>
 #include <memory>
 #include <optional>
-#include <unistd.h>
 
 #include "fivebar/io/command.h"
-#include "fivebar/io/csv.h"
 #include "fivebar/io/commands.h"
+#include "fivebar/io/csv.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/json.h"
@@ -36,6 +37,9 @@
 
 namespace fivebar::io {
 namespace {
+
+// the one line of `fivebar --help`
+constexpr char kSummary[] = "continuous design optimization of scene keys over a tasks file";
 
 using trajectory::TaskResult;
 const char* const kFlags = "command line";
@@ -447,8 +451,7 @@ RunFunction setup(CLI::App* app) {
   return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command(
-    {"design", "continuous design optimization of scene keys over a tasks file", setup});
+const bool kRegistered = register_command({"design", kSummary, setup});
 
 }  // namespace
 }  // namespace fivebar::io

@@ -33,6 +33,10 @@
 namespace fivebar::io {
 namespace {
 
+// the one line of `fivebar --help`
+constexpr char kSummary[] =
+    "design an excitation motion that identifies the parameters best (D-optimal)";
+
 namespace id = fivebar::identification;
 
 struct Args {
@@ -632,10 +636,13 @@ RunFunction setup(CLI::App* app) {
                         ->capture_default_str());
   app->add_option("--torque-noise", a->design.torque_noise, "std of the logged torques [N m]")
       ->capture_default_str();
-  app->add_option("--rate", a->design.rate_hz, "sampling rate of the log [Hz]")->capture_default_str();
-  fourier.push_back(app->add_option("--periods", a->design.periods, "periods of the motion")->capture_default_str());
-  fourier.push_back(app->add_option("--harmonics", a->design.harmonics, "Fourier harmonics per crank")
+  app->add_option("--rate", a->design.rate_hz, "sampling rate of the log [Hz]")
+      ->capture_default_str();
+  fourier.push_back(app->add_option("--periods", a->design.periods, "periods of the motion")
                         ->capture_default_str());
+  fourier.push_back(
+      app->add_option("--harmonics", a->design.harmonics, "Fourier harmonics per crank")
+          ->capture_default_str());
   app->add_option("--design-samples", a->design.design_samples, "samples of the design objective")
       ->capture_default_str();
   fourier.push_back(
@@ -669,9 +676,7 @@ RunFunction setup(CLI::App* app) {
   };
 }
 
-const bool kRegistered = register_command(
-    {"excite", "design an excitation motion that identifies the parameters best (D-optimal)",
-     setup});
+const bool kRegistered = register_command({"excite", kSummary, setup});
 
 }  // namespace
 }  // namespace fivebar::io

@@ -28,6 +28,10 @@
 namespace fivebar::io {
 namespace {
 
+// the one line of `fivebar --help`
+constexpr char kSummary[] =
+    "torques that hold a pose at rest, and their range under static friction";
+
 struct Args {
   SceneArgs scene;
   std::string pose;  // "theta1,theta2"; empty: the scene's initial pose
@@ -275,8 +279,7 @@ RunFunction setup(CLI::App* app) {
   return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command(
-    {"hold", "torques that hold a pose at rest, and their range under static friction", setup});
+const bool kRegistered = register_command({"hold", kSummary, setup});
 
 }  // namespace
 }  // namespace fivebar::io

@@ -31,6 +31,9 @@
 namespace fivebar::io {
 namespace {
 
+// the one line of `fivebar --help`
+constexpr char kSummary[] = "identify joint friction from a torque log (Ceres), with error bars";
+
 namespace id = fivebar::identification;
 
 struct Args {
@@ -387,11 +390,7 @@ int run(const Args& a) {
 
   // scene_fitted.yaml: the input scene with the identified friction (and links: group inertia;
   // actuators: group actuator)
-  Scene fitted = scene;
-  fitted.params.friction = res.fitted.friction;
-  fitted.params.links = res.fitted.links;
-  fitted.params.actuators = res.fitted.actuators;
-  write_text_file(out.file("scene_fitted.yaml"), scene_to_yaml(fitted));
+  write_text_file(out.file("scene_fitted.yaml"), scene_to_yaml(fitted_scene(scene, res)));
 
   Json j = identification_json(a, scene, opt, log, res, val);
   if (!a.no_plots) {
@@ -477,8 +476,7 @@ RunFunction setup(CLI::App* app) {
   };
 }
 
-const bool kRegistered = register_command(
-    {"identify", "identify joint friction from a torque log (Ceres), with error bars", setup});
+const bool kRegistered = register_command({"identify", kSummary, setup});
 
 }  // namespace
 }  // namespace fivebar::io

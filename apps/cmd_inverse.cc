@@ -26,6 +26,10 @@
 namespace fivebar::io {
 namespace {
 
+// the one line of `fivebar --help`
+constexpr char kSummary[] =
+    "inverse dynamics along a given motion: driving torques, reactions, friction";
+
 struct Args {
   SceneArgs scene;
   std::string motion;
@@ -402,9 +406,7 @@ RunFunction setup(CLI::App* app) {
   return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command(
-    {"inverse", "inverse dynamics along a given motion: driving torques, reactions, friction",
-     setup});
+const bool kRegistered = register_command({"inverse", kSummary, setup});
 
 }  // namespace
 }  // namespace fivebar::io

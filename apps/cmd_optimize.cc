@@ -5,6 +5,8 @@
 // summary.csv (one row per task, the minimum-jerk baseline beside each result), per task
 // DIR/<task>/trajectory.csv, baseline.csv and figures. Under mpirun the tasks are split across
 // ranks and rank 0 writes the same files as a one-process run.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -13,7 +15,6 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <unistd.h>
 
 #include "fivebar/io/command.h"
 #include "fivebar/io/commands.h"
@@ -28,6 +29,9 @@
 
 namespace fivebar::io {
 namespace {
+
+// the one line of `fivebar --help`
+constexpr char kSummary[] = "minimum-dissipation trajectories for a tasks file";
 
 namespace fs = std::filesystem;
 using trajectory::TaskResult;
@@ -248,8 +252,7 @@ RunFunction setup(CLI::App* app) {
   return [args] { return run(*args); };
 }
 
-const bool kRegistered =
-    register_command({"optimize", "minimum-dissipation trajectories for a tasks file", setup});
+const bool kRegistered = register_command({"optimize", kSummary, setup});
 
 }  // namespace
 }  // namespace fivebar::io

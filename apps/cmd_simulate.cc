@@ -24,6 +24,10 @@
 namespace fivebar::io {
 namespace {
 
+// the one line of `fivebar --help`
+constexpr char kSummary[] =
+    "simulate a scene (and its frictionless twin); trajectory, checks, figures 2-6";
+
 struct Args {
   SceneArgs scene;
   bool no_plots = false;
@@ -46,8 +50,9 @@ const std::vector<std::string> kOutputs = {"trajectory.csv",
 /// Runs longer than this [s] skip the frictionless twin unless --twin asks for it: without
 /// friction the paper mechanism keeps gaining energy, and its twin dominates the run time.
 constexpr double kTwinMaxDuration = 20.0;
-/// Figures draw at most about 100 buckets x (first row and extrema) points per curve: beyond, decimated copies
-/// trajectory_plot.csv (and trajectory_frictionless_plot.csv) are written and plotted.
+/// Figures draw at most about 100 buckets x (first row and extrema) points per curve: beyond,
+/// decimated copies trajectory_plot.csv (and trajectory_frictionless_plot.csv) are written and
+/// plotted.
 constexpr size_t kPlotBuckets = 100;
 /// runs with more rows than this are drawn from the decimated copy (gnuplot stays fast)
 constexpr size_t kPlotMaxRows = 10000;
@@ -272,9 +277,7 @@ RunFunction setup(CLI::App* app) {
   return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command(
-    {"simulate", "simulate a scene (and its frictionless twin); trajectory, checks, figures 2-6",
-     setup});
+const bool kRegistered = register_command({"simulate", kSummary, setup});
 
 }  // namespace
 }  // namespace fivebar::io

@@ -2,9 +2,9 @@
 // The built-in catalogue of stiff and extreme cases (issue 3, deliverable 4), each run with every
 // integrator; each run ends `ok`, `rejected` (the exit code and message a user would get) or
 // `failed`. Writes DIR/stress.csv and DIR/stress.md; exits 0 with no `failed` row, 3 otherwise.
-#include <CLI/CLI.hpp>
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -21,6 +21,10 @@
 
 namespace fivebar::io {
 namespace {
+
+// the one line of `fivebar --help`
+constexpr char kSummary[] =
+    "stiff and extreme cases with every integrator: ok, rejected, never failed";
 
 struct Args {
   std::string out;
@@ -192,9 +196,7 @@ RunFunction setup(CLI::App* app) {
   return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command(
-    {"stress", "stiff and extreme cases with every integrator: ok, rejected, never failed",
-     setup});
+const bool kRegistered = register_command({"stress", kSummary, setup});
 
 }  // namespace
 }  // namespace fivebar::io

@@ -5,6 +5,8 @@
 // in study.csv, not dropped. Writes study.csv (one row per design), study_tasks.csv (one row per
 // design and task), heatmap.png for two sweeps, and prints the best design. Under mpirun the
 // (design, task) pairs are split across ranks; rank 0 writes the files.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 
 #include <cmath>
@@ -13,7 +15,6 @@
 #include <map>
 #include <memory>
 #include <optional>
-#include <unistd.h>
 
 #include "fivebar/io/command.h"
 #include "fivebar/io/commands.h"
@@ -31,6 +32,9 @@
 
 namespace fivebar::io {
 namespace {
+
+// the one line of `fivebar --help`
+constexpr char kSummary[] = "design study: optimize every task for a grid of designs";
 
 using trajectory::TaskResult;
 
@@ -318,8 +322,7 @@ RunFunction setup(CLI::App* app) {
   return [args] { return run(*args); };
 }
 
-const bool kRegistered =
-    register_command({"study", "design study: optimize every task for a grid of designs", setup});
+const bool kRegistered = register_command({"study", kSummary, setup});
 
 }  // namespace
 }  // namespace fivebar::io

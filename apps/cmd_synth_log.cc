@@ -27,12 +27,15 @@
 #include "fivebar/io/scene.h"
 #include "fivebar/io/torque_log_file.h"
 #include "fivebar/model/actuator.h"
+#include "fivebar/model/dynamics.h"
 #include "fivebar/model/friction.h"
 #include "fivebar/model/inertial.h"
-#include "fivebar/model/dynamics.h"
 
 namespace fivebar::io {
 namespace {
+
+// the one line of `fivebar --help`
+constexpr char kSummary[] = "write a synthetic torque log of a scene (true friction in its header)";
 
 struct Args {
   std::string scene, out;
@@ -276,8 +279,7 @@ RunFunction setup(CLI::App* app) {
   };
 }
 
-const bool kRegistered = register_command(
-    {"synth-log", "write a synthetic torque log of a scene (true friction in its header)", setup});
+const bool kRegistered = register_command({"synth-log", kSummary, setup});
 
 }  // namespace
 }  // namespace fivebar::io

@@ -101,6 +101,14 @@ id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& l
   return res;
 }
 
+Scene fitted_scene(const Scene& scene, const id::IdentifyResult& result) {
+  Scene fitted = scene;
+  fitted.params.friction = result.fitted.friction;
+  fitted.params.links = result.fitted.links;
+  fitted.params.actuators = result.fitted.actuators;
+  return fitted;
+}
+
 void add_inner_solve_options(CLI::App* app, OptimizeSettings* s) {
   s->refine = false;
   s->continuation = false;

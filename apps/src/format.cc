@@ -1,21 +1,15 @@
 #include "fivebar/io/format.h"
 
-#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
 
+#include "fivebar/model/format.h"
+
 namespace fivebar::io {
 
-std::string format_double(double x) {
-  if (std::isnan(x)) return "nan";
-  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
-  char buf[32];
-  // shortest round-trip form (std::to_chars without a precision)
-  const auto r = std::to_chars(buf, buf + sizeof buf, x);
-  return std::string(buf, r.ptr);
-}
+std::string format_double(double x) { return format_shortest(x); }
 
 std::string format_grid_value(double x) {
   if (!std::isfinite(x) || x == 0) return format_double(x);

@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -333,9 +333,8 @@ std::string simulation_plot_script(const SimulationFigures& f, const std::string
 }
 
 std::string plot_simulation(const std::string& dir, const SimulationFigures& figures) {
-  const Gnuplot& g = gnuplot();
-  if (!g.available) return "gnuplot not found on PATH: no figures drawn";
-  return run_gnuplot(dir, "plots.gnuplot", simulation_plot_script(figures, g.terminal));
+  // run_gnuplot says so when gnuplot is missing (the terminal is "" then)
+  return run_gnuplot(dir, "plots.gnuplot", simulation_plot_script(figures, gnuplot().terminal));
 }
 
 std::string inverse_plot_script(const std::string& trajectory, bool has_input,
@@ -369,10 +368,9 @@ std::string inverse_plot_script(const std::string& trajectory, bool has_input,
 
 std::string plot_inverse(const std::string& dir, const std::string& trajectory, bool has_input,
                          const std::string& title) {
-  const Gnuplot& g = gnuplot();
-  if (!g.available) return "gnuplot not found on PATH: no figures drawn";
+  // run_gnuplot says so when gnuplot is missing (the terminal is "" then)
   return run_gnuplot(dir, "plots.gnuplot",
-                     inverse_plot_script(trajectory, has_input, title, g.terminal));
+                     inverse_plot_script(trajectory, has_input, title, gnuplot().terminal));
 }
 
 std::string hold_map_plot_script(const std::string& map_csv, double torque_limit,
@@ -399,10 +397,9 @@ std::string hold_map_plot_script(const std::string& map_csv, double torque_limit
 
 std::string plot_hold_map(const std::string& dir, const std::string& map_csv, double torque_limit,
                           const std::string& title) {
-  const Gnuplot& g = gnuplot();
-  if (!g.available) return "gnuplot not found on PATH: no figures drawn";
+  // run_gnuplot says so when gnuplot is missing (the terminal is "" then)
   return run_gnuplot(dir, "plots.gnuplot",
-                     hold_map_plot_script(map_csv, torque_limit, title, g.terminal));
+                     hold_map_plot_script(map_csv, torque_limit, title, gnuplot().terminal));
 }
 
 std::string scene_key_label(const std::string& key) {
@@ -542,9 +539,8 @@ std::string excitation_plot_script(const ExcitationFigures& f, const std::string
 }
 
 std::string plot_excitation(const std::string& dir, const ExcitationFigures& figures) {
-  const Gnuplot& g = gnuplot();
-  if (!g.available) return "gnuplot not found on PATH: no figures drawn";
-  return run_gnuplot(dir, "plots.gnuplot", excitation_plot_script(figures, g.terminal));
+  // run_gnuplot says so when gnuplot is missing (the terminal is "" then)
+  return run_gnuplot(dir, "plots.gnuplot", excitation_plot_script(figures, gnuplot().terminal));
 }
 
 }  // namespace fivebar::io

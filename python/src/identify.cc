@@ -2,9 +2,10 @@
 #include <pybind11/stl.h>
 
 #include "bindings.h"
-#include "fivebar/io/torque_log_file.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
+#include "fivebar/io/torque_log_file.h"
+#include "keywords.h"
 
 namespace fivebar::python {
 namespace {
@@ -98,6 +99,12 @@ py::dict result_dict(const PyScene& s, const id::IdentifyResult& r, const id::Lo
   d["residuals"] = r.residuals;
   d["rates_estimated"] = r.rates_estimated;
   d["accelerations_estimated"] = r.accels_estimated;
+  if (r.accels_estimated) {  // the Savitzky-Golay window used (rate_source in the JSON)
+    d["sg_half_window_s"] =
+        r.sg_half_window * r.conditioned_log.duration() / std::max(1, r.conditioned_log.size() - 1);
+    d["sg_order"] = r.sg_order;
+  }
+  d["std_method"] = r.std_method;
   py::dict solver;
   solver["iterations"] = r.iterations;
   solver["converged"] = r.converged;
@@ -115,9 +122,7 @@ py::dict result_dict(const PyScene& s, const id::IdentifyResult& r, const id::Lo
   py::array_t<bool> used(static_cast<py::ssize_t>(r.used.size()));
   std::copy(r.used.begin(), r.used.end(), used.mutable_data());
   d["used"] = used;
-  io::Scene fitted = s.scene;
-  fitted.params.friction = r.fitted.friction;
-  d["fitted_scene"] = PyScene(std::move(fitted));
+  d["fitted_scene"] = PyScene(io::fitted_scene(s.scene, r));
   return d;
 }
 
@@ -134,8 +139,9 @@ py::dict identify(const PyScene& s, const py::object& log, const io::IdentifySet
     const sim::LoadFunction loads = s.loads->function();
     result = io::identify_scene(s.scene, loads, torque_log, options);
     if (validate) {
-      validation = id::validate(result.fitted, loads, torque_log, result.omega1, result.omega2,
-                                result.window_s);
+      // on the log as fitted (unwrapped, glitches interpolated), as `fivebar identify`
+      validation = id::validate(result.fitted, loads, result.conditioned_log, result.omega1,
+                                result.omega2, result.window_s);
     }
   }
   py::dict d = result_dict(s, result, options.loss);
@@ -143,43 +149,53 @@ py::dict identify(const PyScene& s, const py::object& log, const io::IdentifySet
   return d;
 }
 
+// the keywords of fivebar.identify: the options of `fivebar identify`, with _ for -
+const Keywords<io::IdentifySettings> kIdentifyKeywords = {
+    {"method", &io::IdentifySettings::method},
+    {"law", &io::IdentifySettings::law},
+    {"estimate", &io::IdentifySettings::estimate},
+    {"inertia_prior", &io::IdentifySettings::inertia_prior},
+    {"per_joint", &io::IdentifySettings::per_joint},
+    {"loss", &io::IdentifySettings::loss},
+    {"loss_scale", &io::IdentifySettings::loss_scale},
+    {"smooth_sign", &io::IdentifySettings::smooth_sign},
+    {"estimate_rates", &io::IdentifySettings::estimate_rates},
+    {"min_rate", &io::IdentifySettings::min_rate},
+    {"sg_window", &io::IdentifySettings::sg_window},
+    {"sg_order", &io::IdentifySettings::sg_order},
+    {"window", &io::IdentifySettings::window},
+    {"threads", &io::IdentifySettings::threads},
+    {"start_from_scene", &io::IdentifySettings::start_from_scene},
+    {"no_unwrap", &io::IdentifySettings::no_unwrap},
+    {"keep_glitches", &io::IdentifySettings::keep_glitches},
+    {"keep_reversals", &io::IdentifySettings::keep_reversals},
+    {"classical_std", &io::IdentifySettings::classical_std},
+    {"no_delay", &io::IdentifySettings::no_delay},
+};
+
 }  // namespace
 
 void bind_identify(py::module_& m) {
   m.def(
       "identify",
-      [](const PyScene& scene, const py::object& log, const std::string& method,
-         const std::string& law, bool per_joint, const std::string& loss, double loss_scale,
-         double smooth_sign, bool estimate_rates, double min_rate, double sg_window, int sg_order,
-         int threads, bool start_from_scene, bool validate, double window) {
+      [](const PyScene& scene, const py::object& log, const py::kwargs& kw) {
         io::IdentifySettings st;
-        st.method = method;
-        st.law = law;
-        st.per_joint = per_joint;
-        st.loss = loss;
-        st.loss_scale = loss_scale;
-        st.smooth_sign = smooth_sign;
-        st.estimate_rates = estimate_rates;
-        st.min_rate = min_rate;
-        st.sg_window = sg_window;
-        st.sg_order = sg_order;
-        st.threads = threads;
-        st.start_from_scene = start_from_scene;
-        st.window = window;
-        return identify(scene, log, st, validate);
+        apply_keywords("identify", kw, kIdentifyKeywords, {"validate"}, &st);
+        st.sg_window_given = kw.contains("sg_window");  // else chosen from the log
+        return identify(scene, log, st, own_keyword(kw, "validate", false));
       },
-      py::arg("scene"), py::arg("log"), py::kw_only(), py::arg("method") = "inverse-dynamics",
-      py::arg("law") = "coulomb_viscous", py::arg("per_joint") = false, py::arg("loss") = "none",
-      py::arg("loss_scale") = 0.1, py::arg("smooth_sign") = -1.0,
-      py::arg("estimate_rates") = false, py::arg("min_rate") = 0.0, py::arg("sg_window") = 0.010,
-      py::arg("sg_order") = 5, py::arg("threads") = 1, py::arg("start_from_scene") = false,
-      py::arg("validate") = false, py::arg("window") = 0.0,
-      "Identifies the friction coefficients of `scene` from a torque log: a CSV path, or a dict "
-      "of equal-length arrays with the log's columns (t, theta1, theta2, tau1, tau2 and "
-      "optionally omega1, omega2, alpha1, alpha2). Options as `fivebar identify`. Returns the "
-      "fields of identification.json (parameters as a list of {name, value, std, initial}, "
-      "covariance and correlation as arrays, ...), the per-sample rates and predicted torques, "
-      "'fitted_scene' (a fivebar.Scene) and, with validate=True, 'validation'.");
+      py::arg("scene"), py::arg("log"),
+      ("Identifies the friction coefficients of `scene` from a torque log: a CSV path, or a dict "
+       "of equal-length arrays with the log's columns (t, theta1, theta2, tau1, tau2 and "
+       "optionally omega1, omega2, alpha1, alpha2). Keyword options are those of `fivebar "
+       "identify` with _ for - (sg_window: the Savitzky-Golay half-window [s], chosen from the "
+       "log when not given), and validate=False: " +
+       keyword_defaults(io::IdentifySettings{}, kIdentifyKeywords) +
+       ". Returns the fields of identification.json (parameters as a list of {name, value, std, "
+       "initial}, covariance and correlation as arrays, ...), the per-sample rates and "
+       "predicted torques, 'fitted_scene' (a fivebar.Scene) and, with validate=True, "
+       "'validation'.")
+          .c_str());
 }
 
 }  // namespace fivebar::python

@@ -6,6 +6,7 @@
 #include "bindings.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
+#include "keywords.h"
 
 namespace fivebar::python {
 namespace {
@@ -66,35 +67,46 @@ py::dict optimize(const PyScene& s, const std::string& tasks_path,
   return d;
 }
 
+// the keywords of fivebar.optimize: the options of `fivebar optimize`, with _ for -
+const Keywords<io::OptimizeSettings> kOptimizeKeywords = {
+    {"method", &io::OptimizeSettings::method},
+    {"objective", &io::OptimizeSettings::objective},
+    {"global_search", &io::OptimizeSettings::global},
+    {"starts", &io::OptimizeSettings::starts},
+    {"control_points", &io::OptimizeSettings::control_points},
+    {"quadrature_points", &io::OptimizeSettings::quadrature_points},
+    {"max_evaluations", &io::OptimizeSettings::max_evaluations},
+    {"singular_margin", &io::OptimizeSettings::singular_margin},
+    {"path_step", &io::OptimizeSettings::path_step},
+    {"refine", &io::OptimizeSettings::refine},
+    {"continuation", &io::OptimizeSettings::continuation},
+    {"refine_tol", &io::OptimizeSettings::refine_tol},
+    {"refine_levels", &io::OptimizeSettings::refine_levels},
+    {"validate", &io::OptimizeSettings::validate},
+};
+
 }  // namespace
 
 void bind_optimize(py::module_& m) {
   m.def(
       "optimize",
-      [](const PyScene& scene, const std::string& tasks, int threads, const std::string& method,
-         const std::string& objective, bool global_search, int starts, int control_points,
-         int quadrature_points, double singular_margin, bool validate, bool trajectories) {
+      [](const PyScene& scene, const std::string& tasks, const py::kwargs& kw) {
         io::OptimizeSettings st;
-        st.method = method;
-        st.objective = objective;
-        st.global = global_search;
-        st.starts = starts;
-        st.control_points = control_points;
-        st.quadrature_points = quadrature_points;
-        st.singular_margin = singular_margin;
-        st.validate = validate;
-        return optimize(scene, tasks, st, threads, trajectories);
+        apply_keywords("optimize", kw, kOptimizeKeywords, {"threads", "trajectories"}, &st);
+        return optimize(scene, tasks, st, own_keyword(kw, "threads", 0),
+                        own_keyword(kw, "trajectories", true));
       },
-      py::arg("scene"), py::arg("tasks"), py::kw_only(), py::arg("threads") = 0,
-      py::arg("method") = "slsqp", py::arg("objective") = "dissipated_energy",
-      py::arg("global_search") = false, py::arg("starts") = 8, py::arg("control_points") = 10,
-      py::arg("quadrature_points") = 12, py::arg("singular_margin") = 0.1,
-      py::arg("validate") = true, py::arg("trajectories") = true,
-      "Optimizes every task of a tasks file (YAML path) for `scene`, on `threads` threads (0: "
-      "all cores). Options as `fivebar optimize` (global_search is --global). Returns {task "
-      "name: dict} with the columns of summary.csv, 'x' (the optimal free control points) and, "
-      "for solved tasks with trajectories=True, 'trajectory' and 'baseline' (the minimum-jerk "
-      "motion), each a dict of arrays keyed by the trajectory.csv columns.");
+      py::arg("scene"), py::arg("tasks"),
+      ("Optimizes every task of a tasks file (YAML path) for `scene`. Keyword options are those "
+       "of `fivebar optimize` with _ for - (global_search is --global; refine=False: the "
+       "command line refines, Python by default does not), threads=0 (all cores) and "
+       "trajectories=True: " +
+       keyword_defaults(io::OptimizeSettings{}, kOptimizeKeywords) +
+       ". Returns {task name: dict} with the columns of summary.csv, 'x' (the optimal free "
+       "control points) and, for solved tasks with trajectories=True, 'trajectory' and "
+       "'baseline' (the minimum-jerk motion), each a dict of arrays keyed by the trajectory.csv "
+       "columns.")
+          .c_str());
 }
 
 }  // namespace fivebar::python

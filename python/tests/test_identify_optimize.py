@@ -45,3 +45,19 @@ def test_optimize_one_task(root, paper_scene, tmp_path):
     assert trajectory["t"][-1] == 0.5
     assert abs(trajectory["theta1"][-1] - 2.6) < 1e-9
     assert task["baseline"]["M1"].shape == trajectory["M1"].shape
+
+
+def test_identify_options_are_the_command_lines(root, paper_scene):
+    # a given sg_window is used (not the window chosen from the log); unknown options are refused
+    log = root / "datasets/logs/paper_angles.csv"
+    chosen = fivebar.identify(paper_scene, log)
+    given = fivebar.identify(paper_scene, log, sg_window=0.02)
+    assert given["sg_half_window_s"] != chosen["sg_half_window_s"]
+    assert abs(given["sg_half_window_s"] - 0.02) < 1e-3
+    try:
+        fivebar.identify(paper_scene, log, sg_windw=0.02)
+    except TypeError as e:
+        assert "sg_windw" in str(e)
+    else:
+        raise AssertionError("an unknown option was accepted")
+    assert "no_delay=False" in fivebar.identify.__doc__

@@ -9,8 +9,10 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "fivebar/model/friction.h"
 #include "fivebar/model/kinematics.h"
 #include "fivebar/model/params.h"
 #include "fivebar/sim/simulator.h"
@@ -29,6 +31,15 @@ inline Loads<double> paper_static_loads(double M1 = 0.0, double M2 = 0.0) {
 }
 
 inline sim::Initial paper_initial() { return {M_PI / 2, M_PI / 2, 0.0, 0.0}; }
+
+/// `p` under friction `law`, each listed coefficient set on every joint, e.g.
+/// with_law(p, FrictionLaw::kStribeck, {{Coefficient::kStaticCoulomb, 0.2}}).
+inline Params<double> with_law(Params<double> p, FrictionLaw law,
+                               std::initializer_list<std::pair<Coefficient, double>> values) {
+  p.friction.law = law;
+  for (const auto& [c, v] : values) coefficient(p.friction, c).fill(v);
+  return p;
+}
 
 /// A state of the cranks with random loads (rates to 40 rad/s, torques to 10 N m, F to 50 N).
 struct RandomState {

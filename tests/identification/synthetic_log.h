@@ -21,6 +21,13 @@ inline identification::SynthOptions log_options(double duration, double torque_n
   return so;
 }
 
+/// The paper scene under the Stribeck law of the tests and `coverage-angles --case stribeck`:
+/// static Coulomb 0.2 (kinetic 0.12), Stribeck velocity 0.5 rad/s.
+inline Params<double> stribeck_truth() {
+  return with_law(paper_params(), FrictionLaw::kStribeck,
+                  {{Coefficient::kStaticCoulomb, 0.2}, {Coefficient::kStribeckVelocity, 0.5}});
+}
+
 /// synth-log of `truth` under the paper loads from the paper start; a failed synthesis fails
 /// the calling test (and returns what was made).
 inline identification::TorqueLog synthetic_paper_log(const Params<double>& truth,

@@ -306,10 +306,7 @@ TEST(NoiseFloor, QuietOnCleanAndNoiseFreeLogsOfTheRightLaw) {
 
 TEST(Stribeck, StaticNeverBelowKineticAndNoZeroStd) {
   // angles only at 500 Hz: the fit that used to return static 0.015 < kinetic 0.12
-  Params<double> truth = paper_params();
-  truth.friction.law = FrictionLaw::kStribeck;
-  truth.friction.static_coulomb.fill(0.2);
-  truth.friction.stribeck_velocity.fill(0.5);
+  const Params<double> truth = testing::stribeck_truth();
   SynthOptions so;
   so.duration = 3.0;
   so.rate_hz = 500;

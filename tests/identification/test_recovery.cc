@@ -94,10 +94,7 @@ TEST(Recovery, AnglesOnlyWithinFivePercent) {
 }
 
 TEST(Recovery, StribeckLogFittedWithCoulombViscousReportsTheMismatch) {
-  Params<double> truth = paper_params();
-  truth.friction.law = FrictionLaw::kStribeck;
-  truth.friction.static_coulomb.fill(0.2);
-  truth.friction.stribeck_velocity.fill(0.5);
+  const Params<double> truth = testing::stribeck_truth();
   // 6 s: the multisine's slowest tone (0.31 Hz) needs a few periods to reverse every joint often
   const TorqueLog log = make_log(truth, 6.0, true, true);
   const IdentifyResult res = identify(paper_params(), paper_loads, log, IdentifyOptions{});
@@ -116,10 +113,7 @@ TEST(Recovery, StribeckLogFittedWithCoulombViscousReportsTheMismatch) {
 /// A Stribeck log (static 0.2, Stribeck velocity 0.5 rad/s) at 500 Hz on the multisine, angles
 /// only, as `coverage-angles --case stribeck` makes it.
 TorqueLog stribeck_angles_log(double torque_noise, double angle_noise) {
-  Params<double> truth = paper_params();
-  truth.friction.law = FrictionLaw::kStribeck;
-  truth.friction.static_coulomb.fill(0.2);
-  truth.friction.stribeck_velocity.fill(0.5);
+  const Params<double> truth = testing::stribeck_truth();
   SynthOptions so;
   so.rate_hz = 500;
   so.duration = 6.0;

@@ -195,11 +195,10 @@ TEST(Modes, MidRunLockBreaksAwayWithEveryIntegrator) {
 // review: with a joint stuck, another joint's rate can cross zero at a dead point while the
 // mechanism moves; that is not a lock (the rates jumped to zero)
 TEST(Modes, DeadPointWithAStuckJointIsNotALock) {
-  Params<double> p = weightless();
-  p.friction.law = FrictionLaw::kStribeck;
-  p.friction.static_coulomb.fill(0.3);
-  p.friction.stribeck_velocity.fill(0.05);
-  p.friction.stribeck_exponent.fill(2.0);
+  const Params<double> p = testing::with_law(weightless(), FrictionLaw::kStribeck,
+                                             {{Coefficient::kStaticCoulomb, 0.3},
+                                              {Coefficient::kStribeckVelocity, 0.05},
+                                              {Coefficient::kStribeckExponent, 2.0}});
   const sim::LoadFunction loads = held_plus(-0.2, 0.0);
   sim::Options o;
   o.method = sim::Method::kArkodeErk45;
@@ -246,6 +245,13 @@ RandomScene random_scene(std::mt19937& rng) {
   return s;
 }
 
+// one second of a random scene under the default options
+sim::Result run_for_a_second(const RandomScene& s) {
+  sim::Options o;
+  o.duration = 1.0;
+  return sim::simulate(s.params, s.loads, s.initial, o);
+}
+
 // issue 15 property test: seeded random scenes with breakaways from rest, sticks and reversals;
 // a run either passes its checks, or stops with a status that names why
 TEST(Modes, RandomScenesNeverLetFrictionDriveTheMotion) {
@@ -253,9 +259,7 @@ TEST(Modes, RandomScenesNeverLetFrictionDriveTheMotion) {
   int ok = 0, events = 0;
   for (int i = 0; i < 20; ++i) {
     const RandomScene s = random_scene(rng);
-    sim::Options o;
-    o.duration = 1.0;
-    const sim::Result r = sim::simulate(s.params, s.loads, s.initial, o);
+    const sim::Result r = run_for_a_second(s);
     if (!r.status.ok()) {
       EXPECT_FALSE(r.status.message.empty());
       continue;
@@ -269,16 +273,15 @@ TEST(Modes, RandomScenesNeverLetFrictionDriveTheMotion) {
 }
 
 // the larger sweep of issue 15 (200 scenes, ~10 s): run with
-//   build/release/tests/model/test_model --gtest_also_run_disabled_tests --gtest_filter='*Sweep200*'
+//   build/release/tests/model/test_model --gtest_also_run_disabled_tests
+//   --gtest_filter='*Sweep200*'
 TEST(Modes, DISABLED_RandomSweep200) {
   std::mt19937 rng(15);
   int ok = 0, failed = 0;
   long events = 0, decisions = 0, sticks = 0, breakaways = 0, naive_wrong = 0;
   for (int i = 0; i < 200; ++i) {
     const RandomScene s = random_scene(rng);
-    sim::Options o;
-    o.duration = 1.0;
-    const sim::Result r = sim::simulate(s.params, s.loads, s.initial, o);
+    const sim::Result r = run_for_a_second(s);
     if (!r.status.ok()) {
       ++failed;
       std::printf("[ info ] scene %d stopped: %s\n", i, r.status.message.c_str());

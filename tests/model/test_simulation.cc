@@ -93,12 +93,11 @@ TEST(PaperSceneTight, MatchesReferenceToTenNanoradians) {
 // mechanical energy balance closes (E_diss is then the work absorbed by the friction elements,
 // dissipated or stored in the bristles), and the motion stays near the Coulomb-viscous one
 TEST(LuGre, StiffBristlesIntegrateWithBdfAndBalanceEnergy) {
-  Params<double> p = paper_params();
-  p.friction.law = FrictionLaw::kLuGre;
-  p.friction.sigma0.fill(1e4);
-  p.friction.sigma1.fill(100.0);
-  p.friction.sigma2.fill(0.02);
-  p.friction.static_coulomb.fill(0.12);
+  const Params<double> p = testing::with_law(paper_params(), FrictionLaw::kLuGre,
+                                             {{Coefficient::kSigma0, 1e4},
+                                              {Coefficient::kSigma1, 100.0},
+                                              {Coefficient::kSigma2, 0.02},
+                                              {Coefficient::kStaticCoulomb, 0.12}});
   sim::Options opt;
   opt.duration = 0.5;
   opt.method = sim::Method::kCvodeBdf;

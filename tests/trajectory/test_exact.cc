@@ -1,11 +1,11 @@
 // Issue 12: the continuation to the exact friction law, the refinement of the control points,
 // warm starts from a neighbouring design, and the outer loop of `fivebar design`.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "fivebar/model/dynamics.h"
 #include "fivebar/trajectory/batch.h"
@@ -16,9 +16,10 @@
 namespace fivebar::trajectory {
 namespace {
 
-using testing::paper_tasks;
 using testing::paper_initial;
 using testing::paper_loads;
+using testing::paper_tasks;
+using testing::task_problem;
 
 TaskResult solve(const TaskSpec& task, const BatchOptions& options,
                  const Params<double>& params = paper_params(), const TaskResult* warm = nullptr) {
@@ -50,13 +51,7 @@ TEST(Optimizer, PreconditionedSlsqpReachesTheSameOptimumInFewerEvaluations) {
   // the variables that make the objective's Hessian at the start +-I ends at the optimum of the
   // plain solve in a fraction of its evaluations (counts are deterministic, no timing)
   const TaskSpec task = paper_tasks()[0];  // swing_left
-  const ResolvedTask rt = resolve_task(paper_params(), task, paper_initial(), 0.1);
-  ASSERT_TRUE(rt.ok());
-  ProblemOptions po;
-  po.torque_limit = task.torque_limit;
-  po.quadrature_points = 8;
-  const TrajectoryProblem p(paper_params(), paper_loads(),
-                            RestToRest(45, task.duration, rt.start, rt.goal), po);
+  const TrajectoryProblem p = task_problem(task, 45, 8);
   const std::vector<double> x0 = p.motion().minimum_jerk();
   OptimizerOptions plain, pre;
   plain.precondition = false;

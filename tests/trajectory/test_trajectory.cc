@@ -1,12 +1,12 @@
 // Tests of fivebar::trajectory: splines, quadrature, exact gradients, the optimizer, tasks files
 // and batch determinism.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
-
-#include <gmock/gmock.h>
-#include <gtest/gtest.h>
 
 #include "fivebar/trajectory/batch.h"
 #include "fivebar/trajectory/bspline.h"
@@ -25,9 +25,11 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::ThrowsMessage;
 
-using testing::paper_tasks;
 using testing::paper_initial;
 using testing::paper_loads;
+using testing::optimized_rows;
+using testing::paper_tasks;
+using testing::task_problem;
 const std::array<double, 2> kStart = {M_PI / 2, M_PI / 2};
 
 TEST(BSpline, RestToRestEndsAndPartitionOfUnity) {
@@ -172,13 +174,7 @@ TEST(Optimizer, ScreenedConstraintsGiveTheUnscreenedOptimum) {
   // swing_right with 25 control points rides its torque limit, which the minimum-jerk start
   // stays far below (most active rows are left out at first)
   const TaskSpec task = paper_tasks()[1];
-  const ResolvedTask rt = resolve_task(paper_params(), task, paper_initial(), 0.1);
-  ASSERT_TRUE(rt.ok());
-  ProblemOptions po;
-  po.torque_limit = task.torque_limit;
-  po.quadrature_points = 6;
-  const TrajectoryProblem p(paper_params(), paper_loads(),
-                            RestToRest(25, task.duration, rt.start, rt.goal), po);
+  const TrajectoryProblem p = task_problem(task, 25, 6);
   const std::vector<double> x0 = p.motion().minimum_jerk();
   Evaluated e0;
   ASSERT_TRUE(p.evaluate(x0.data(), false, &e0).ok());
@@ -357,14 +353,8 @@ TEST(Batch, UnreachableTaskNamesWhy) {
 
 TEST(Rows, WorkColumnsCloseTheEnergyBalance) {
   // d(KE + PE) = W_in + W_ext - E_diss along the rows of an optimized motion
-  BatchOptions options;
-  options.validate = false;
-  const TaskResult r =
-      run_task(paper_params(), paper_loads(), paper_tasks()[1], paper_initial(), options);
-  ASSERT_TRUE(r.solved()) << r.message;
-  const TrajectoryProblem problem = problem_of(paper_params(), paper_loads(), r, options);
   std::vector<sim::Row> rows;
-  ASSERT_TRUE(problem.rows(r.x.data(), 1e-3, &rows).ok());
+  ASSERT_NO_FATAL_FAILURE(optimized_rows(paper_tasks()[1], &rows));
   const double e0 = rows.front().kinetic + rows.front().potential;
   double worst = 0, scale = 0;
   for (const sim::Row& row : rows) {

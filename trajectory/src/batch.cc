@@ -1,7 +1,6 @@
 #include "fivebar/trajectory/batch.h"
 
 #include <atomic>
-#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +10,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "fivebar/model/format.h"
 #include "fivebar/sim/bytes.h"
 #include "stage.h"
 
@@ -71,15 +71,8 @@ double miss_distance(const TrajectoryProblem& problem, const sim::LoadFunction& 
 
 constexpr const char* kTruncated = "decode: truncated TaskResult";
 
-// shortest text that reads back exactly (0.3, not %.17g's 0.29999999999999999); the apps'
-// format_double does the same, but this library does not depend on the apps layer
-std::string num(double v) {
-  if (std::isnan(v)) return "nan";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  char buf[40];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
+// shortest text that reads back exactly (0.3, not %.17g's 0.29999999999999999)
+std::string num(double v) { return format_shortest(v); }
 
 std::string quoted(const std::string& s) {
   std::string out = "\"";

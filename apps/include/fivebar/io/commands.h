@@ -49,6 +49,10 @@ identification::IdentifyResult identify_scene(const Scene& scene, const sim::Loa
                                               const identification::TorqueLog& log,
                                               const identification::IdentifyOptions& options);
 
+/// The scene with what identify fitted: the friction, the links (group inertia) and the motors
+/// (group actuator). scene_fitted.yaml and fivebar.identify's 'fitted_scene'.
+Scene fitted_scene(const Scene& scene, const identification::IdentifyResult& result);
+
 /// `fivebar optimize` options (see `fivebar optimize --help`), with the command line's defaults.
 struct OptimizeSettings {
   std::string method = "slsqp", objective = "dissipated_energy";

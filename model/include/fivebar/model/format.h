@@ -2,6 +2,7 @@
 // their own writers in apps/src/format.cc and use these two as well).
 #pragma once
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -26,6 +27,16 @@ inline std::string format_number(double x) {
     if (std::strtod(buf, nullptr) == x) break;
   }
   return buf;
+}
+
+/// Shortest text that reads back as exactly x (std::to_chars: "0.3", "1e-05", "100000");
+/// "nan", "inf", "-inf" for non-finite values. The files' number format.
+inline std::string format_shortest(double x) {
+  if (std::isnan(x)) return "nan";
+  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
+  char buf[40];
+  const auto r = std::to_chars(buf, buf + sizeof buf, x);
+  return std::string(buf, r.ptr);
 }
 
 }  // namespace fivebar

@@ -163,23 +163,13 @@ Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
                         const T& w1, const T& w2, const T& a1, const T& a2,
                         const JointModes* slip, const EvalOptions& opt,
                         Evaluation<T>* ev, const std::array<T, kJoints>* bristle = nullptr) {
-  if constexpr (!std::is_same_v<T, double>) {
-    if (p.friction.active() && opt.implicit_loop_derivative) {
-      // the double shadow decides the modes and solves the loop; the Jets differentiate it
-      detail::LoopSolution loop;
-      Evaluation<double> vd;
-      std::array<double, kJoints> zd;
-      const Status st = detail::inverse_pass(
-          p.template cast<double>(), L.template cast<double>(), value_of(th1), value_of(th2),
-          value_of(w1), value_of(w2), value_of(a1), value_of(a2), slip, opt, &vd,
-          detail::array_values(bristle, &zd), &loop);
-      if (!st.ok()) return st;
-      return detail::inverse_pass(p, L, th1, th2, w1, w2, a1, a2, &vd.slip, opt, ev, bristle,
-                                  &loop);
-    }
-  }
-  return detail::inverse_pass(p, L, th1, th2, w1, w2, a1, a2, slip, opt, ev, bristle,
-                              static_cast<detail::LoopSolution*>(nullptr));
+  return detail::with_loop_shadow(
+      p, L, slip, opt, ev, bristle,
+      [&](const auto& pp, const auto& LL, const auto& v, const JointModes* s, auto* e,
+          const auto* z, detail::LoopSolution* loop) {
+        return detail::inverse_pass(pp, LL, v(th1), v(th2), v(w1), v(w2), v(a1), v(a2), s, opt,
+                                    e, z, loop);
+      });
 }
 
 }  // namespace fivebar
