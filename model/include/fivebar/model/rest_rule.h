@@ -36,20 +36,42 @@ inline double rounding_noise(const std::vector<double>& f) {
   return std::numeric_limits<double>::epsilon() * largest;
 }
 
-/// Noise standard deviation of a uniformly sampled series f, robustly from its fourth
-/// differences: for white noise of deviation s, d4 = f[i] - 4 f[i+1] + 6 f[i+2] - 4 f[i+3] +
-/// f[i+4] has deviation sqrt(70) s, and the median absolute d4 is 0.6745 of that. A smooth signal
-/// adds h^4 f'''' to d4 (an overestimate where the motion is fast, harmless: the rule only looks
-/// at samples that are nearly at rest). Floored at the rounding of the values, eps max(1, |f|).
+/// Highest difference order series_noise looks at, and the ratio of successive orders' estimates
+/// at or above which it takes them as consistent with white noise.
+inline constexpr int kNoiseMaxOrder = 8;
+inline constexpr double kNoiseFlatRatio = 0.9;
+
+/// Noise standard deviation of a uniformly sampled series f, robustly from its differences. For
+/// white noise of deviation s, the k-th difference d_k has deviation sqrt(C(2k, k)) s and the
+/// median |d_k| is 0.6745 of that, so s_k = median |d_k| / (0.6745 sqrt(C(2k, k))) estimates s
+/// at every order k. A deterministic signal adds to every s_k (median |d + n| >= median |n| for
+/// symmetric unimodal noise), by about h^k |f^(k)| / sqrt(C(2k, k)): a finely sampled motion's
+/// share falls by a large factor from one order to the next (to zero within the pieces of a
+/// polynomial of degree < k), white noise's stays put. So the estimate is s_k at the first order
+/// k (1..8) whose successor does not fall below kNoiseFlatRatio s_k: the lowest order that is
+/// consistent with white noise, where the motion's share has gone. White noise gives s_1 (no
+/// bias); the rates of a quintic spline at 1 ms (quartic pieces) give s_5, 6.6e-7 rad/s on the
+/// swing_right optimum where s_4 reads 9.2e-5 (docs/hold.md, docs/figures-optimization.md).
+/// Noise whose spectrum falls toward the Nyquist frequency (filtered rates) is read lower than
+/// its deviation, at any order. Orders with fewer than 5 differences are not used. Floored at
+/// the rounding of the values, eps max(1, |f|).
 inline double series_noise(const std::vector<double>& f) {
   const double floor = rounding_noise(f);
   if (f.size() < 9) return floor;
-  std::vector<double> d(f.size() - 4);
-  for (size_t i = 0; i + 4 < f.size(); ++i) {
-    d[i] = std::abs(f[i] - 4.0 * f[i + 1] + 6.0 * f[i + 2] - 4.0 * f[i + 3] + f[i + 4]);
+  std::vector<double> d = f, work;
+  double previous = 0.0, binomial = 1.0;  // s_(k-1); C(2k, k)
+  for (int k = 1; k <= kNoiseMaxOrder && d.size() >= 6; ++k) {
+    for (size_t i = 0; i + 1 < d.size(); ++i) d[i] = d[i + 1] - d[i];
+    d.pop_back();
+    binomial *= 2.0 * (2 * k - 1) / k;
+    work = d;  // the median |d_k| (the upper one for an even count)
+    for (double& x : work) x = std::abs(x);
+    std::nth_element(work.begin(), work.begin() + work.size() / 2, work.end());
+    const double s = work[work.size() / 2] / 0.6745 / std::sqrt(binomial);
+    if (k > 1 && s >= kNoiseFlatRatio * previous) break;
+    previous = s;
   }
-  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
-  return std::max(floor, d[d.size() / 2] / 0.6745 / std::sqrt(70.0));
+  return std::max(floor, previous);
 }
 
 }  // namespace fivebar
