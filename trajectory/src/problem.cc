@@ -230,6 +230,77 @@ Status TrajectoryProblem::evaluate(const double* x, bool want_gradients, Evaluat
   return Status::Ok();
 }
 
+int TrajectoryProblem::variable_of(int c, int j) const {
+  const int n = motion_.basis().size();
+  return c < 3 || c > n - 4 ? -1 : j * motion_.free_per_joint() + c - 3;
+}
+
+Status TrajectoryProblem::node_gradient(const Params<Jet6>& pj, const Node& node,
+                                        const std::array<double, 6>& s, double* f,
+                                        std::array<double, 6>* df) const {
+  std::array<Jet6, 6> sj;
+  for (int k = 0; k < 6; ++k) sj[k] = Jet6(s[k], k);
+  Jet6 fj, M1j, M2j;
+  const Status st = node_values(pj, node.loads.cast<Jet6>(), sj, options_, &fj, &M1j, &M2j);
+  if (!st.ok()) return st;
+  *f = fj.a;
+  for (int k = 0; k < 6; ++k) (*df)[k] = fj.v[k];
+  return Status::Ok();
+}
+
+Status TrajectoryProblem::node_hessian(const Params<Jet6>& pj, const Node& node,
+                                       const std::array<double, 6>& s,
+                                       std::array<std::array<double, 6>, 6>* hs) const {
+  constexpr double kStep = 1e-7;  // relative difference step of the node state
+  double f = 0;
+  std::array<double, 6> g0{}, g{};
+  Status st = node_gradient(pj, node, s, &f, &g0);
+  for (int k = 0; k < 6 && st.ok(); ++k) {
+    std::array<double, 6> sk = s;
+    const double h = kStep * std::max(1.0, std::abs(s[k]));
+    sk[k] += h;
+    st = node_gradient(pj, node, sk, &f, &g);
+    for (int i = 0; i < 6; ++i) (*hs)[i][k] = (g[i] - g0[i]) / h;
+  }
+  if (!st.ok()) return st;
+  for (int i = 0; i < 6; ++i) {
+    for (int k = 0; k < i; ++k) (*hs)[i][k] = (*hs)[k][i] = 0.5 * ((*hs)[i][k] + (*hs)[k][i]);
+  }
+  return Status::Ok();
+}
+
+Status TrajectoryProblem::objective_hessian(const double* x, std::vector<double>* hessian) const {
+  const int nv = num_variables();
+  hessian->assign(static_cast<size_t>(nv) * nv, 0.0);
+  const Params<Jet6> pj = params_.cast<Jet6>();
+  for (const Node& node : nodes_) {
+    std::array<std::array<double, 6>, 6> hs{};
+    const Status st = node_hessian(pj, node, node_state(x, node), &hs);
+    if (!st.ok()) return st;
+    // s[2 k + j] = sum_i d[k][i] cp(j, first + i): H[v][v'] += w sum_kk' d[k][i] hs d[k'][i']
+    for (int i = 0; i <= kDegree; ++i) {
+      for (int j = 0; j < 2; ++j) {
+        const int v = variable_of(node.basis.first + i, j);
+        if (v < 0) continue;
+        for (int i2 = 0; i2 <= kDegree; ++i2) {
+          for (int j2 = 0; j2 < 2; ++j2) {
+            const int v2 = variable_of(node.basis.first + i2, j2);
+            if (v2 < 0) continue;
+            double sum = 0;
+            for (int k = 0; k < 3; ++k) {
+              for (int k2 = 0; k2 < 3; ++k2) {
+                sum += node.basis.d[k][i] * hs[2 * k + j][2 * k2 + j2] * node.basis.d[k2][i2];
+              }
+            }
+            (*hessian)[static_cast<size_t>(v) * nv + v2] += node.weight * sum;
+          }
+        }
+      }
+    }
+  }
+  return Status::Ok();
+}
+
 Status TrajectoryProblem::objective(const double* x, double* value) const {
   Evaluated e;
   const Status st = evaluate(x, false, &e);

@@ -43,6 +43,15 @@ struct OptimizerOptions {
   /// at the identity, which in x is far from H on a refined spline.
   bool precondition = true;
   int precondition_min_variables = 30;
+  /// Stall test of a local solve: it stops when each of the last stall_iterations iterations
+  /// (evaluations with gradients) satisfied the rows handed to NLopt within
+  /// stall_feasibility_tol and together they lowered the best such objective by less than
+  /// stall_rtol of it; the best such point is returned. ftol_rel (1e-10) asks for far more
+  /// than the refinement's 0.1 % and the 0.3 % of the figures: the last iterations of a refined
+  /// solve spent hundreds of evaluations on changes below 1e-6. 0: no stall test.
+  double stall_rtol = 1e-6;
+  int stall_iterations = 10;
+  double stall_feasibility_tol = 1e-6;
 };
 
 struct OptimizeResult {

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <ceres/jet.h>
+
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/status.h"
@@ -106,6 +108,11 @@ class TrajectoryProblem {
   Status evaluate(const double* x, bool want_gradients, Evaluated* out) const;
   /// Objective only, in double (no Jets).
   Status objective(const double* x, double* value) const;
+  /// Hessian of the objective at x (num_variables()^2 values, row-major, symmetric):
+  /// sum over the nodes of weight B^T H_s B, H_s the 6 x 6 Hessian of the integrand in the node
+  /// state by forward differences of its exact (Jet) gradient, B the spline's linear map from
+  /// the free control points to the node state. Costs about 7 evaluations with gradients.
+  Status objective_hessian(const double* x, std::vector<double>* hessian) const;
 
   /// Objective and input energy integrated with `points` Gauss-Legendre points per span (for
   /// the accuracy check against a denser rule).
@@ -142,6 +149,16 @@ class TrajectoryProblem {
                        double* dissipated, double* input) const;
   // node state (th, thd, thdd of both joints) from x
   std::array<double, 6> node_state(const double* x, const Node& node) const;
+  // integrand f at state s and its exact gradient in s
+  Status node_gradient(const Params<ceres::Jet<double, 6>>& pj, const Node& node,
+                       const std::array<double, 6>& s, double* f,
+                       std::array<double, 6>* df) const;
+  // 6 x 6 Hessian of the integrand in the node state (forward differences of node_gradient)
+  Status node_hessian(const Params<ceres::Jet<double, 6>>& pj, const Node& node,
+                      const std::array<double, 6>& s,
+                      std::array<std::array<double, 6>, 6>* hs) const;
+  // free variable of control point c of joint j, or -1 for the fixed end points
+  int variable_of(int c, int j) const;
 
   Params<double> params_, exact_params_;
   sim::LoadFunction loads_;
