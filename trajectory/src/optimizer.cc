@@ -28,14 +28,16 @@ class Cache {
     valid_ = true;
     has_grad_ = grad;
     ++evaluations_;
-    const Status st = problem_.evaluate(x, grad, &value_);
+    const Status st = grad ? problem_.evaluate_local(x, &value_)
+                           : problem_.evaluate(x, false, &value_);
     if (!st.ok()) {
       // outside the domain of the model (cannot assemble, friction loop failed): a large flat
       // penalty makes the line searches step back
       value_.objective = penalty_;
       value_.constraints.assign(problem_.num_constraints(), 1.0);
       value_.objective_grad.assign(n, 0.0);
-      value_.constraints_grad.assign(static_cast<size_t>(problem_.num_constraints()) * n, 0.0);
+      value_.constraints_grad_local.assign(
+          static_cast<size_t>(problem_.num_constraints()) * kLocalVariables, 0.0);
     }
     return value_;
   }
@@ -92,6 +94,7 @@ struct View {
   const Preconditioner* pre;  // null: x itself
   Eigen::VectorXd origin, x;
   Stall* stall;
+  const std::vector<std::array<int, kLocalVariables>>* node_vars;
 
   const Evaluated& at(const double* y, unsigned n, bool grad) {
     const double* px = y;
@@ -103,6 +106,22 @@ struct View {
     const Evaluated& e = cache->at(px, grad);
     if (cache->evaluations() != before) stall->record(px, static_cast<int>(n), e, *rows, grad);
     return e;
+  }
+  // the local gradient of constraint row `row` (Evaluated::constraints_grad_local) as a dense
+  // one with respect to the variables NLopt sees
+  void chain_row(const Evaluated& e, int row, unsigned n, double* out) const {
+    const std::array<int, kLocalVariables>& vars = (*node_vars)[row / 3];
+    const double* g = &e.constraints_grad_local[static_cast<size_t>(row) * kLocalVariables];
+    std::fill(out, out + n, 0.0);
+    Eigen::Map<Eigen::VectorXd> o(out, n);
+    for (int l = 0; l < kLocalVariables; ++l) {
+      if (vars[l] < 0 || g[l] == 0.0) continue;
+      if (pre) {
+        o += g[l] * pre->Tt.col(vars[l]);
+      } else {
+        out[vars[l]] += g[l];
+      }
+    }
   }
   // a gradient with respect to x (n values) as one with respect to the variables NLopt sees
   void chain(const double* g, unsigned n, double* out) const {
@@ -134,7 +153,7 @@ void constraints_cb(unsigned m, double* result, unsigned n, const double* x, dou
   for (unsigned i = 0; i < m; ++i) {
     const size_t row = static_cast<size_t>((*v.rows)[i]);
     result[i] = e.constraints[row];
-    if (grad) v.chain(&e.constraints_grad[row * n], n, grad + i * n);
+    if (grad) v.chain_row(e, static_cast<int>(row), n, grad + i * n);
   }
 }
 
@@ -197,7 +216,9 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
   stall.rtol = options.stall_rtol;
   stall.window = options.stall_iterations;
   stall.feasible_tol = options.stall_feasibility_tol;
-  View view{&cache, &rows, pre && pre->active ? pre : nullptr, {}, {}, &stall};
+  std::vector<std::array<int, kLocalVariables>> node_vars(problem.num_nodes());
+  for (int q = 0; q < problem.num_nodes(); ++q) node_vars[q] = problem.node_variables(q);
+  View view{&cache, &rows, pre && pre->active ? pre : nullptr, {}, {}, &stall, &node_vars};
   Local out;
   out.x = x0;
   int code = 0;
