@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <thread>
 
 #include <ceres/jet.h>
 
@@ -14,6 +15,9 @@ namespace fivebar::trajectory {
 namespace {
 
 using Jet6 = ceres::Jet<double, 6>;
+
+// fewer nodes than this per thread are evaluated on fewer threads (a thread costs ~20 us)
+constexpr int kMinNodesPerThread = 32;
 
 EvalOptions eval_options(const ProblemOptions& o) {
   EvalOptions e;
@@ -191,9 +195,11 @@ Status TrajectoryProblem::node_pass(const Params<Jet6>* pj, const Node& node,
 }
 
 // the gradients of node q by the chain rule, s[2 k + j] = sum_i basis.d[k][i] cp(j, first + i):
-// the objective's added into out, the three constraint rows' in the form `how` asks
+// the objective's share in local form (12 values), the three constraint rows' in the form `how`
+// asks
 void TrajectoryProblem::node_gradients(int q, const NodeValues& v, double ds1, double ds2,
-                                       Gradients how, Evaluated* out) const {
+                                       Gradients how, double* objective_grad,
+                                       Evaluated* out) const {
   const Node& node = nodes_[q];
   const int nv = num_variables();
   const double lim = options_.torque_limit;
@@ -211,7 +217,7 @@ void TrajectoryProblem::node_gradients(int q, const NodeValues& v, double ds1, d
       gm1 += v.dM1[2 * k + j] * b;
       gm2 += v.dM2[2 * k + j] * b;
     }
-    out->objective_grad[var] += node.weight * gf;
+    objective_grad[l] = node.weight * gf;
     const double row[3] = {g1 * gm1, g2 * gm2, (j == 0 ? ds1 : ds2) * node.basis.d[0][i]};
     for (int r = 0; r < 3; ++r) {
       if (how == Gradients::kDense) {
@@ -223,34 +229,66 @@ void TrajectoryProblem::node_gradients(int q, const NodeValues& v, double ds1, d
   }
 }
 
-Status TrajectoryProblem::evaluate_as(const double* x, Gradients how, Evaluated* out) const {
-  const int nv = num_variables(), nc = num_constraints();
-  out->objective = 0.0;
-  out->constraints.assign(nc, 0.0);
-  if (how != Gradients::kNone) out->objective_grad.assign(nv, 0.0);
-  if (how == Gradients::kDense) out->constraints_grad.assign(static_cast<size_t>(nc) * nv, 0.0);
-  if (how == Gradients::kLocal) {
-    out->constraints_grad_local.assign(static_cast<size_t>(nc) * kLocalVariables, 0.0);
-  }
+// the nodes [begin, end) of one evaluation: the constraints and their gradients (each row
+// belongs to one node), and each node's share of the objective and of its gradient, which
+// evaluate_as() sums in node order (the same numbers for any number of threads)
+Status TrajectoryProblem::evaluate_nodes(const double* x, Gradients how, int begin, int end,
+                                         std::vector<double>* shares, Evaluated* out) const {
   const double lim = options_.torque_limit;
   const bool limited = std::isfinite(lim);
   // the parameters as Jets (a small copy per evaluation, cheap beside the nodes)
   Params<Jet6> pj;
   if (how != Gradients::kNone) pj = params_.cast<Jet6>();
-  for (size_t q = 0; q < nodes_.size(); ++q) {
+  for (int q = begin; q < end; ++q) {
     const Node& node = nodes_[q];
     const std::array<double, 6> s = node_state(x, node);
     NodeValues v;
     const Status st = node_pass(how == Gradients::kNone ? nullptr : &pj, node, s, &v);
     if (!st.ok()) return st;
-    out->objective += node.weight * v.f;
+    double* share = &(*shares)[static_cast<size_t>(q) * (1 + kLocalVariables)];
+    share[0] = node.weight * v.f;
     // constraints of this node
     double* c = &out->constraints[3 * q];
     c[0] = limited ? (v.M1 / lim) * (v.M1 / lim) - 1.0 : -1.0;
     c[1] = limited ? (v.M2 / lim) * (v.M2 / lim) - 1.0 : -1.0;
     double ds1 = 0, ds2 = 0;
     c[2] = coupler_constraint(params_, s[0], s[1], options_.singular_margin, &ds1, &ds2);
-    if (how != Gradients::kNone) node_gradients(static_cast<int>(q), v, ds1, ds2, how, out);
+    if (how != Gradients::kNone) node_gradients(q, v, ds1, ds2, how, share + 1, out);
+  }
+  return Status::Ok();
+}
+
+Status TrajectoryProblem::evaluate_as(const double* x, Gradients how, Evaluated* out) const {
+  const int nv = num_variables(), nc = num_constraints(), nn = num_nodes();
+  out->constraints.assign(nc, 0.0);
+  if (how == Gradients::kDense) out->constraints_grad.assign(static_cast<size_t>(nc) * nv, 0.0);
+  if (how == Gradients::kLocal) {
+    out->constraints_grad_local.assign(static_cast<size_t>(nc) * kLocalVariables, 0.0);
+  }
+  std::vector<double> shares(static_cast<size_t>(nn) * (1 + kLocalVariables), 0.0);
+  // contiguous blocks of nodes, one per thread (this one takes the first)
+  const int threads = std::max(1, std::min(options_.threads, nn / kMinNodesPerThread));
+  std::vector<Status> status(threads);
+  std::vector<std::thread> pool;
+  auto block = [&](int k) {
+    status[k] = evaluate_nodes(x, how, nn * k / threads, nn * (k + 1) / threads, &shares, out);
+  };
+  for (int k = 1; k < threads; ++k) pool.emplace_back(block, k);
+  block(0);
+  for (std::thread& t : pool) t.join();
+  for (const Status& st : status) {
+    if (!st.ok()) return st;
+  }
+  out->objective = 0.0;
+  if (how != Gradients::kNone) out->objective_grad.assign(nv, 0.0);
+  for (int q = 0; q < nn; ++q) {
+    const double* share = &shares[static_cast<size_t>(q) * (1 + kLocalVariables)];
+    out->objective += share[0];
+    if (how == Gradients::kNone) continue;
+    const std::array<int, kLocalVariables> vars = node_variables(q);
+    for (int l = 0; l < kLocalVariables; ++l) {
+      if (vars[l] >= 0) out->objective_grad[vars[l]] += share[1 + l];
+    }
   }
   return Status::Ok();
 }

@@ -43,6 +43,10 @@ struct ProblemOptions {
   double smoothing_velocity = 5e-2;
   double power_smoothing = 1e-2;  ///< eps [W] of the smooth |p| of kInputEnergy
   double friction_tol = 1e-13;    ///< relative stopping test of the reaction/friction loop
+  /// threads of one evaluation (contiguous blocks of nodes; at least 32 nodes each). The
+  /// objective and its gradient are summed in node order afterwards: the same numbers for any
+  /// count.
+  int threads = 1;
 };
 
 /// The friction parameters actually used along trajectories: `params` with smoothing_velocity
@@ -165,7 +169,9 @@ class TrajectoryProblem {
   Status node_pass(const Params<ceres::Jet<double, 6>>* pj, const Node& node,
                    const std::array<double, 6>& s, NodeValues* v) const;
   void node_gradients(int q, const NodeValues& v, double ds1, double ds2, Gradients how,
-                      Evaluated* out) const;
+                      double* objective_grad, Evaluated* out) const;
+  Status evaluate_nodes(const double* x, Gradients how, int begin, int end,
+                        std::vector<double>* shares, Evaluated* out) const;
   Status torques_with(const Params<double>& params, const double* x, double t, double* M1,
                       double* M2) const;
   Status energies_with(const Params<double>& params, const double* x, int points,
