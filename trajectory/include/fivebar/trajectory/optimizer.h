@@ -41,9 +41,9 @@ struct OptimizerOptions {
   /// evaluations.)
   double screen = 0.75;
   /// SLSQP on problems of at least precondition_min_variables variables works in y,
-  /// x = x0 + T y, where T^T H T = +-I for the Hessian H of the objective at the start (by
-  /// differences of exact gradients, about 23 evaluations): SLSQP's quasi-Newton matrix starts
-  /// at the identity, which in x is far from H on a refined spline.
+  /// x = x0 + T y, where T^T H T = +-I for the Hessian H of the objective at the start
+  /// (TrajectoryProblem::objective_hessian, node by node, about 7 evaluations): SLSQP's
+  /// quasi-Newton matrix starts at the identity, which in x is far from H on a refined spline.
   bool precondition = true;
   int precondition_min_variables = 30;
   /// Stall test of a local solve: it stops when each of the last stall_iterations iterations
