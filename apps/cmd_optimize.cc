@@ -218,6 +218,8 @@ RunFunction setup(CLI::App* app) {
   add_scene_options(app, &args->scene, "optimize");
   app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");
+  app->add_option("--node-threads", args->settings.node_threads,
+                  "threads of each evaluation inside a task (default 1; same results)");
   app->add_option("--method", args->settings.method,
                   "NLopt algorithm: slsqp (default), mma, ccsaq");
   app->add_option("--objective", args->settings.objective,
@@ -242,7 +244,7 @@ RunFunction setup(CLI::App* app) {
                   "objective evaluations per local solve (default 500)");
   app->add_option("--refine-levels", args->settings.refine_levels,
                   "control points per joint of the refinement levels, increasing "
-                  "(default 25,45,85: each doubles the knot spans of the last)")
+                  "(default 45,85: from the first solve's 5 knot spans to 40, then 80)")
       ->delimiter(',');
   app->add_option("--refine-tol", args->settings.refine_tol,
                   "relative energy change that ends the refinement (default 1e-3)");

@@ -146,6 +146,10 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
     throw InputError(kFlags, "--max-evaluations", "expected an integer >= 10");
   }
   o.optimizer.max_evaluations = a.max_evaluations;
+  if (a.node_threads < 1 || a.node_threads > 64) {
+    throw InputError(kFlags, "--node-threads", "expected an integer in [1, 64]");
+  }
+  o.problem.threads = a.node_threads;
   if (!(a.path_step >= 1e-3 && a.path_step <= 0.5)) {
     throw InputError(kFlags, "--path-step", "expected a number in [0.001, 0.5] rad");
   }

@@ -20,10 +20,11 @@ using fivebar::paper_params;
 // the problem of swing_right with n control points at the last continuation stage, and the
 // minimum-jerk start
 struct Setup {
-  explicit Setup(int n, int quadrature_points) {
+  explicit Setup(int n, int quadrature_points, int threads = 1) {
     ProblemOptions o;
     o.control_points = n;
     o.quadrature_points = quadrature_points;
+    o.threads = threads;
     o.torque_limit = 30.0;
     o.smoothing_velocity = 4e-4;
     const TaskSpec task = fixture::paper_tasks()[1];
@@ -56,6 +57,28 @@ void BM_EvaluateValueOnly(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_EvaluateValueOnly)->Args({10, 12})->Args({85, 6})->Unit(benchmark::kMicrosecond);
+
+// the optimizer's form (constraint gradients local); args: control points, GL points, threads
+void BM_EvaluateLocal(benchmark::State& state) {
+  const Setup s(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)),
+                static_cast<int>(state.range(2)));
+  Evaluated e;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(s.problem->evaluate_local(s.x.data(), &e));
+  }
+}
+BENCHMARK(BM_EvaluateLocal)->Args({85, 6, 1})->Args({85, 6, 2})->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
+
+// the objective's Hessian of the preconditioner (node by node)
+void BM_Hessian(benchmark::State& state) {
+  const Setup s(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  std::vector<double> h;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(s.problem->objective_hessian(s.x.data(), &h));
+  }
+}
+BENCHMARK(BM_Hessian)->Args({45, 6})->Args({85, 6})->Unit(benchmark::kMicrosecond);
 
 // a whole task (arg: index in paper_tasks.yaml); arg 1: 0 first solve and continuation,
 // 1 the refined default of `fivebar optimize`

@@ -28,14 +28,16 @@ class Cache {
     valid_ = true;
     has_grad_ = grad;
     ++evaluations_;
-    const Status st = problem_.evaluate(x, grad, &value_);
+    const Status st = grad ? problem_.evaluate_local(x, &value_)
+                           : problem_.evaluate(x, false, &value_);
     if (!st.ok()) {
       // outside the domain of the model (cannot assemble, friction loop failed): a large flat
       // penalty makes the line searches step back
       value_.objective = penalty_;
       value_.constraints.assign(problem_.num_constraints(), 1.0);
       value_.objective_grad.assign(n, 0.0);
-      value_.constraints_grad.assign(static_cast<size_t>(problem_.num_constraints()) * n, 0.0);
+      value_.constraints_grad_local.assign(
+          static_cast<size_t>(problem_.num_constraints()) * kLocalVariables, 0.0);
     }
     return value_;
   }
@@ -50,6 +52,40 @@ class Cache {
   int evaluations_ = 0;
 };
 
+// The stall test (OptimizerOptions::stall_rtol): the best point that satisfies the rows handed
+// to NLopt, and the run stopped when the last `window` iterations (evaluations with gradients)
+// were all such points and lowered the best objective by less than rtol of it.
+struct Stall {
+  double rtol = 0, feasible_tol = 0;
+  int window = 0;
+  nlopt::opt* opt = nullptr;
+  std::vector<double> best_x;
+  double best_f = std::numeric_limits<double>::infinity();
+  std::vector<double> history;  // best_f at each iteration
+  int feasible_run = 0;
+  bool stalled = false;
+
+  void record(const double* x, int n, const Evaluated& e, const std::vector<int>& rows,
+              bool iteration) {
+    double cv = -std::numeric_limits<double>::infinity();
+    for (int r : rows) cv = std::max(cv, e.constraints[r]);
+    const bool ok = cv <= feasible_tol && std::isfinite(e.objective);
+    if (ok && e.objective < best_f) {
+      best_f = e.objective;
+      best_x.assign(x, x + n);
+    }
+    if (!iteration || !(rtol > 0) || stalled) return;
+    feasible_run = ok ? feasible_run + 1 : 0;
+    history.push_back(best_f);
+    const size_t k = history.size();
+    if (feasible_run >= window && k > static_cast<size_t>(window) &&
+        history[k - 1 - window] - best_f <= rtol * std::abs(best_f)) {
+      stalled = true;
+      if (opt) opt->force_stop();
+    }
+  }
+};
+
 // the variables NLopt sees: x itself, or y with x = origin + T y (a Preconditioner); and the
 // constraint rows handed to it (all of them, or the screened subset)
 struct View {
@@ -57,11 +93,35 @@ struct View {
   const std::vector<int>* rows;
   const Preconditioner* pre;  // null: x itself
   Eigen::VectorXd origin, x;
+  Stall* stall;
+  const std::vector<std::array<int, kLocalVariables>>* node_vars;
 
   const Evaluated& at(const double* y, unsigned n, bool grad) {
-    if (!pre) return cache->at(y, grad);
-    x = origin + pre->T * Eigen::Map<const Eigen::VectorXd>(y, n);
-    return cache->at(x.data(), grad);
+    const double* px = y;
+    if (pre) {
+      x = origin + pre->T * Eigen::Map<const Eigen::VectorXd>(y, n);
+      px = x.data();
+    }
+    const int before = cache->evaluations();
+    const Evaluated& e = cache->at(px, grad);
+    if (cache->evaluations() != before) stall->record(px, static_cast<int>(n), e, *rows, grad);
+    return e;
+  }
+  // the local gradient of constraint row `row` (Evaluated::constraints_grad_local) as a dense
+  // one with respect to the variables NLopt sees
+  void chain_row(const Evaluated& e, int row, unsigned n, double* out) const {
+    const std::array<int, kLocalVariables>& vars = (*node_vars)[row / 3];
+    const double* g = &e.constraints_grad_local[static_cast<size_t>(row) * kLocalVariables];
+    std::fill(out, out + n, 0.0);
+    Eigen::Map<Eigen::VectorXd> o(out, n);
+    for (int l = 0; l < kLocalVariables; ++l) {
+      if (vars[l] < 0 || g[l] == 0.0) continue;
+      if (pre) {
+        o += g[l] * pre->Tt.col(vars[l]);
+      } else {
+        out[vars[l]] += g[l];
+      }
+    }
   }
   // a gradient with respect to x (n values) as one with respect to the variables NLopt sees
   void chain(const double* g, unsigned n, double* out) const {
@@ -93,7 +153,7 @@ void constraints_cb(unsigned m, double* result, unsigned n, const double* x, dou
   for (unsigned i = 0; i < m; ++i) {
     const size_t row = static_cast<size_t>((*v.rows)[i]);
     result[i] = e.constraints[row];
-    if (grad) v.chain(&e.constraints_grad[row * n], n, grad + i * n);
+    if (grad) v.chain_row(e, static_cast<int>(row), n, grad + i * n);
   }
 }
 
@@ -107,29 +167,69 @@ struct Local {
   std::vector<double> constraints;  ///< every constraint at x (when evaluated)
 };
 
+// the box of the variables: one turn beyond the span of the motion (MMA and CCSAQ want a
+// bounded box); x is clamped into it
+void box_of(const TrajectoryProblem& problem, std::vector<double>* lo, std::vector<double>* hi,
+            std::vector<double>* x) {
+  const int n = problem.num_variables(), nf = problem.motion().free_per_joint();
+  lo->resize(n);
+  hi->resize(n);
+  for (int j = 0; j < 2; ++j) {
+    const double a = problem.motion().start()[j], b = problem.motion().goal()[j];
+    for (int v = 0; v < nf; ++v) {
+      (*lo)[j * nf + v] = std::min(a, b) - M_PI;
+      (*hi)[j * nf + v] = std::max(a, b) + M_PI;
+      (*x)[j * nf + v] = std::clamp((*x)[j * nf + v], (*lo)[j * nf + v], (*hi)[j * nf + v]);
+    }
+  }
+}
+
+// the outcome of a run NLopt ended (code) or that threw (error); a run the stall test stopped
+// ends at the stall's best point
+void finish_run(const View& view, const Stall& stall, int code, std::exception_ptr error,
+                const std::vector<double>& y, Local* out) {
+  out->solver = error ? status_from_exception(error) : status_from_result(code);
+  if (stall.stalled && !stall.best_x.empty()) {
+    out->solver = {SolverOutcome::kConverged,
+                   "converged: objective lowered by less than the stall tolerance over the last "
+                   "iterations"};
+    out->x = stall.best_x;
+  } else if (error) {
+    return;
+  } else if (view.pre) {
+    const int n = static_cast<int>(y.size());
+    const Eigen::VectorXd x =
+        view.origin + view.pre->T * Eigen::Map<const Eigen::VectorXd>(y.data(), n);
+    out->x.assign(x.data(), x.data() + n);
+  } else {
+    out->x = y;
+  }
+}
+
 // one local solve under the constraint rows `rows` (indices into the problem's constraints)
 Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x0,
                   const OptimizerOptions& options, double penalty, const std::vector<int>& rows,
                   const Preconditioner* pre) {
   const int n = problem.num_variables(), m = static_cast<int>(rows.size());
   Cache cache(problem, penalty);
-  View view{&cache, &rows, pre && pre->active ? pre : nullptr, {}, {}};
+  Stall stall;
+  stall.rtol = options.stall_rtol;
+  stall.window = options.stall_iterations;
+  stall.feasible_tol = options.stall_feasibility_tol;
+  std::vector<std::array<int, kLocalVariables>> node_vars(problem.num_nodes());
+  for (int q = 0; q < problem.num_nodes(); ++q) node_vars[q] = problem.node_variables(q);
+  View view{&cache, &rows, pre && pre->active ? pre : nullptr, {}, {}, &stall, &node_vars};
   Local out;
   out.x = x0;
+  int code = 0;
+  std::exception_ptr error;
+  std::vector<double> y;
   try {
     nlopt::opt opt(nlopt_algorithm(options.method), n);
-    // bounds: one turn beyond the span of the motion (MMA and CCSAQ want a bounded box)
-    std::vector<double> lo(n), hi(n);
-    const int nf = problem.motion().free_per_joint();
-    for (int j = 0; j < 2; ++j) {
-      const double a = problem.motion().start()[j], b = problem.motion().goal()[j];
-      for (int v = 0; v < nf; ++v) {
-        lo[j * nf + v] = std::min(a, b) - M_PI;
-        hi[j * nf + v] = std::max(a, b) + M_PI;
-        out.x[j * nf + v] = std::clamp(out.x[j * nf + v], lo[j * nf + v], hi[j * nf + v]);
-      }
-    }
-    std::vector<double> y = out.x;
+    stall.opt = &opt;
+    std::vector<double> lo, hi;
+    box_of(problem, &lo, &hi, &out.x);
+    y = out.x;
     if (view.pre) {
       // y = 0 at the start; the box (never reached by SLSQP's steps in practice) is left out
       view.origin = Eigen::Map<const Eigen::VectorXd>(out.x.data(), n);
@@ -147,18 +247,11 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
     opt.set_xtol_rel(options.xtol_rel);
     opt.set_maxeval(options.max_evaluations);
     double f = 0;
-    const nlopt::result r = opt.optimize(y, f);
-    out.solver = status_from_result(static_cast<int>(r));
-    if (view.pre) {
-      const Eigen::VectorXd x =
-          view.origin + view.pre->T * Eigen::Map<const Eigen::VectorXd>(y.data(), n);
-      out.x.assign(x.data(), x.data() + n);
-    } else {
-      out.x = y;
-    }
+    code = static_cast<int>(opt.optimize(y, f));
   } catch (...) {
-    out.solver = status_from_exception(std::current_exception());
+    error = std::current_exception();
   }
+  finish_run(view, stall, code, error, y, &out);
   out.evaluations = cache.evaluations();
   // the returned point, evaluated afresh (NLopt may return a point it evaluated earlier)
   Evaluated e;

@@ -6,8 +6,9 @@
 namespace fivebar::trajectory {
 namespace {
 
-constexpr int kBand = kDegree;       // control points more than kBand apart share no knot span
-constexpr double kStep = 1e-7;       // difference step of the control points [rad]
+// the cost of TrajectoryProblem::objective_hessian in evaluations with gradients (7 Jet passes
+// over the nodes), counted in the evaluation limit
+constexpr int kHessianEvaluations = 7;
 constexpr double kFloor = 1e-8;      // smallest |eigenvalue| kept, relative to the largest
 
 // T = V |D|^(-1/2) of the symmetric part of H
@@ -28,32 +29,11 @@ bool scaling_of(const Eigen::MatrixXd& H, Eigen::MatrixXd* T) {
 Preconditioner objective_preconditioner(const TrajectoryProblem& problem,
                                          const std::vector<double>& x0) {
   Preconditioner p;
-  const int nv = problem.num_variables(), nf = problem.motion().free_per_joint();
-  Evaluated e;
-  p.evaluations = 1;
-  if (nv == 0 || !problem.evaluate(x0.data(), true, &e).ok()) return p;
-  const Eigen::Map<const Eigen::VectorXd> g0(e.objective_grad.data(), nv);
-  const int groups = std::min(nf, 2 * kBand + 1);
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(nv, nv);
-  for (int j = 0; j < 2; ++j) {
-    for (int group = 0; group < groups; ++group) {
-      std::vector<double> x = x0;
-      for (int i = group; i < nf; i += groups) x[j * nf + i] += kStep;
-      Evaluated ep;
-      ++p.evaluations;
-      if (!problem.evaluate(x.data(), true, &ep).ok()) return p;
-      const Eigen::VectorXd d =
-          (Eigen::Map<const Eigen::VectorXd>(ep.objective_grad.data(), nv) - g0) / kStep;
-      // row r sees the one perturbed control point of this group within the band around it
-      for (int r = 0; r < nv; ++r) {
-        const int ir = r % nf;
-        const int below = ir - ((ir - group) % groups + groups) % groups;
-        for (int i : {below, below + groups}) {
-          if (i >= 0 && i < nf && std::abs(i - ir) <= kBand) H(r, j * nf + i) = d[r];
-        }
-      }
-    }
-  }
+  const int nv = problem.num_variables();
+  p.evaluations = kHessianEvaluations;
+  std::vector<double> h;
+  if (nv == 0 || !problem.objective_hessian(x0.data(), &h).ok()) return p;
+  const Eigen::MatrixXd H = Eigen::Map<const Eigen::MatrixXd>(h.data(), nv, nv);
   p.active = scaling_of(H, &p.T);
   if (p.active) p.Tt = p.T.transpose();
   return p;

@@ -24,9 +24,9 @@ struct Preconditioner {
 };
 
 /// T = V |D|^(-1/2) of the symmetric eigen-decomposition V D V^T of the Hessian of the
-/// objective at x0, by differences of its exact gradients (Curtis-Powell-Reid grouping: the
-/// Hessian is banded, control points more than 5 apart never share a knot span, so 11 groups per
-/// joint suffice: 22 evaluations with gradients). |D| is floored at 1e-8 max |D|. The
+/// objective at x0 (TrajectoryProblem::objective_hessian: node by node, the 6 x 6 Hessian of
+/// the integrand by differences of its exact gradient, mapped through the spline basis; about 7
+/// evaluations with gradients, counted as 7). |D| is floored at 1e-8 max |D|. The
 /// constraints' curvature is left out: with multipliers estimated at the start (least squares on
 /// the near-active rows) the refined solves took more iterations, not fewer. Inactive when x0
 /// cannot be evaluated.

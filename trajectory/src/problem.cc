@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <thread>
 
 #include <ceres/jet.h>
 
@@ -14,6 +15,9 @@ namespace fivebar::trajectory {
 namespace {
 
 using Jet6 = ceres::Jet<double, 6>;
+
+// fewer nodes than this per thread are evaluated on fewer threads (a thread costs ~20 us)
+constexpr int kMinNodesPerThread = 32;
 
 EvalOptions eval_options(const ProblemOptions& o) {
   EvalOptions e;
@@ -154,76 +158,203 @@ std::array<double, 6> TrajectoryProblem::node_state(const double* x, const Node&
 }
 
 Status TrajectoryProblem::evaluate(const double* x, bool want_gradients, Evaluated* out) const {
-  const int nv = num_variables(), nc = num_constraints(), nf = motion_.free_per_joint();
-  const int n = motion_.basis().size();
-  out->objective = 0.0;
-  out->constraints.assign(nc, 0.0);
-  if (want_gradients) {
-    out->objective_grad.assign(nv, 0.0);
-    out->constraints_grad.assign(static_cast<size_t>(nc) * nv, 0.0);
+  return evaluate_as(x, want_gradients ? Gradients::kDense : Gradients::kNone, out);
+}
+
+Status TrajectoryProblem::evaluate_local(const double* x, Evaluated* out) const {
+  return evaluate_as(x, Gradients::kLocal, out);
+}
+
+std::array<int, kLocalVariables> TrajectoryProblem::node_variables(int node) const {
+  std::array<int, kLocalVariables> v{};
+  for (int i = 0; i <= kDegree; ++i) {
+    for (int j = 0; j < 2; ++j) v[2 * i + j] = variable_of(nodes_[node].basis.first + i, j);
   }
+  return v;
+}
+
+// one node: integrand, torques and (Jets) their gradients in the node state
+Status TrajectoryProblem::node_pass(const Params<Jet6>* pj, const Node& node,
+                                   const std::array<double, 6>& s, NodeValues* v) const {
+  if (!pj) return node_values(params_, node.loads, s, options_, &v->f, &v->M1, &v->M2);
+  // seed the node state: derivative k of the Jets is d/d s[k]
+  std::array<Jet6, 6> sj;
+  for (int k = 0; k < 6; ++k) sj[k] = Jet6(s[k], k);
+  Jet6 fj, M1j, M2j;
+  const Status st = node_values(*pj, node.loads.cast<Jet6>(), sj, options_, &fj, &M1j, &M2j);
+  if (!st.ok()) return st;
+  v->f = fj.a;
+  v->M1 = M1j.a;
+  v->M2 = M2j.a;
+  for (int k = 0; k < 6; ++k) {
+    v->df[k] = fj.v[k];
+    v->dM1[k] = M1j.v[k];
+    v->dM2[k] = M2j.v[k];
+  }
+  return Status::Ok();
+}
+
+// the gradients of node q by the chain rule, s[2 k + j] = sum_i basis.d[k][i] cp(j, first + i):
+// the objective's share in local form (12 values), the three constraint rows' in the form `how`
+// asks
+void TrajectoryProblem::node_gradients(int q, const NodeValues& v, double ds1, double ds2,
+                                       Gradients how, double* objective_grad,
+                                       Evaluated* out) const {
+  const Node& node = nodes_[q];
+  const int nv = num_variables();
+  const double lim = options_.torque_limit;
+  const bool limited = std::isfinite(lim);
+  const double g1 = limited ? 2.0 * v.M1 / (lim * lim) : 0.0;
+  const double g2 = limited ? 2.0 * v.M2 / (lim * lim) : 0.0;
+  const std::array<int, kLocalVariables> vars = node_variables(q);
+  for (int l = 0; l < kLocalVariables; ++l) {
+    const int i = l / 2, j = l % 2, var = vars[l];
+    if (var < 0) continue;  // fixed end control points
+    double gf = 0, gm1 = 0, gm2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const double b = node.basis.d[k][i];
+      gf += v.df[2 * k + j] * b;
+      gm1 += v.dM1[2 * k + j] * b;
+      gm2 += v.dM2[2 * k + j] * b;
+    }
+    objective_grad[l] = node.weight * gf;
+    const double row[3] = {g1 * gm1, g2 * gm2, (j == 0 ? ds1 : ds2) * node.basis.d[0][i]};
+    for (int r = 0; r < 3; ++r) {
+      if (how == Gradients::kDense) {
+        out->constraints_grad[static_cast<size_t>(3 * q + r) * nv + var] += row[r];
+      } else {
+        out->constraints_grad_local[static_cast<size_t>(3 * q + r) * kLocalVariables + l] = row[r];
+      }
+    }
+  }
+}
+
+// the nodes [begin, end) of one evaluation: the constraints and their gradients (each row
+// belongs to one node), and each node's share of the objective and of its gradient, which
+// evaluate_as() sums in node order (the same numbers for any number of threads)
+Status TrajectoryProblem::evaluate_nodes(const double* x, Gradients how, int begin, int end,
+                                         std::vector<double>* shares, Evaluated* out) const {
   const double lim = options_.torque_limit;
   const bool limited = std::isfinite(lim);
   // the parameters as Jets (a small copy per evaluation, cheap beside the nodes)
   Params<Jet6> pj;
-  if (want_gradients) pj = params_.cast<Jet6>();
-  for (size_t q = 0; q < nodes_.size(); ++q) {
+  if (how != Gradients::kNone) pj = params_.cast<Jet6>();
+  for (int q = begin; q < end; ++q) {
     const Node& node = nodes_[q];
     const std::array<double, 6> s = node_state(x, node);
-    double f, M1, M2;
-    std::array<double, 6> df{}, dM1{}, dM2{};
-    if (want_gradients) {
-      // seed the node state: derivative k of the Jets is d/d s[k]
-      std::array<Jet6, 6> sj;
-      for (int k = 0; k < 6; ++k) sj[k] = Jet6(s[k], k);
-      const Loads<Jet6> lj = node.loads.cast<Jet6>();
-      Jet6 fj, M1j, M2j;
-      const Status st = node_values(pj, lj, sj, options_, &fj, &M1j, &M2j);
-      if (!st.ok()) return st;
-      f = fj.a;
-      M1 = M1j.a;
-      M2 = M2j.a;
-      for (int k = 0; k < 6; ++k) {
-        df[k] = fj.v[k];
-        dM1[k] = M1j.v[k];
-        dM2[k] = M2j.v[k];
-      }
-    } else {
-      const Status st = node_values(params_, node.loads, s, options_, &f, &M1, &M2);
-      if (!st.ok()) return st;
-    }
-    out->objective += node.weight * f;
-
+    NodeValues v;
+    const Status st = node_pass(how == Gradients::kNone ? nullptr : &pj, node, s, &v);
+    if (!st.ok()) return st;
+    double* share = &(*shares)[static_cast<size_t>(q) * (1 + kLocalVariables)];
+    share[0] = node.weight * v.f;
     // constraints of this node
     double* c = &out->constraints[3 * q];
-    c[0] = limited ? (M1 / lim) * (M1 / lim) - 1.0 : -1.0;
-    c[1] = limited ? (M2 / lim) * (M2 / lim) - 1.0 : -1.0;
+    c[0] = limited ? (v.M1 / lim) * (v.M1 / lim) - 1.0 : -1.0;
+    c[1] = limited ? (v.M2 / lim) * (v.M2 / lim) - 1.0 : -1.0;
     double ds1 = 0, ds2 = 0;
     c[2] = coupler_constraint(params_, s[0], s[1], options_.singular_margin, &ds1, &ds2);
-    if (!want_gradients) continue;
+    if (how != Gradients::kNone) node_gradients(q, v, ds1, ds2, how, share + 1, out);
+  }
+  return Status::Ok();
+}
 
-    // chain rule: s[2 k + j] = sum_i basis.d[k][i] * control point (first + i) of joint j
-    const double g1 = limited ? 2.0 * M1 / (lim * lim) : 0.0;
-    const double g2 = limited ? 2.0 * M2 / (lim * lim) : 0.0;
-    double* r0 = &out->constraints_grad[(3 * q) * nv];
-    double* r1 = r0 + nv;
-    double* r2 = r1 + nv;
+Status TrajectoryProblem::evaluate_as(const double* x, Gradients how, Evaluated* out) const {
+  const int nv = num_variables(), nc = num_constraints(), nn = num_nodes();
+  out->constraints.assign(nc, 0.0);
+  if (how == Gradients::kDense) out->constraints_grad.assign(static_cast<size_t>(nc) * nv, 0.0);
+  if (how == Gradients::kLocal) {
+    out->constraints_grad_local.assign(static_cast<size_t>(nc) * kLocalVariables, 0.0);
+  }
+  std::vector<double> shares(static_cast<size_t>(nn) * (1 + kLocalVariables), 0.0);
+  // contiguous blocks of nodes, one per thread (this one takes the first)
+  const int threads = std::max(1, std::min(options_.threads, nn / kMinNodesPerThread));
+  std::vector<Status> status(threads);
+  std::vector<std::thread> pool;
+  auto block = [&](int k) {
+    status[k] = evaluate_nodes(x, how, nn * k / threads, nn * (k + 1) / threads, &shares, out);
+  };
+  for (int k = 1; k < threads; ++k) pool.emplace_back(block, k);
+  block(0);
+  for (std::thread& t : pool) t.join();
+  for (const Status& st : status) {
+    if (!st.ok()) return st;
+  }
+  out->objective = 0.0;
+  if (how != Gradients::kNone) out->objective_grad.assign(nv, 0.0);
+  for (int q = 0; q < nn; ++q) {
+    const double* share = &shares[static_cast<size_t>(q) * (1 + kLocalVariables)];
+    out->objective += share[0];
+    if (how == Gradients::kNone) continue;
+    const std::array<int, kLocalVariables> vars = node_variables(q);
+    for (int l = 0; l < kLocalVariables; ++l) {
+      if (vars[l] >= 0) out->objective_grad[vars[l]] += share[1 + l];
+    }
+  }
+  return Status::Ok();
+}
+
+int TrajectoryProblem::variable_of(int c, int j) const {
+  const int n = motion_.basis().size();
+  return c < 3 || c > n - 4 ? -1 : j * motion_.free_per_joint() + c - 3;
+}
+
+Status TrajectoryProblem::node_gradient(const Params<Jet6>& pj, const Node& node,
+                                        const std::array<double, 6>& s, double* f,
+                                        std::array<double, 6>* df) const {
+  NodeValues v;
+  const Status st = node_pass(&pj, node, s, &v);
+  *f = v.f;
+  *df = v.df;
+  return st;
+}
+
+Status TrajectoryProblem::node_hessian(const Params<Jet6>& pj, const Node& node,
+                                       const std::array<double, 6>& s,
+                                       std::array<std::array<double, 6>, 6>* hs) const {
+  constexpr double kStep = 1e-7;  // relative difference step of the node state
+  double f = 0;
+  std::array<double, 6> g0{}, g{};
+  Status st = node_gradient(pj, node, s, &f, &g0);
+  for (int k = 0; k < 6 && st.ok(); ++k) {
+    std::array<double, 6> sk = s;
+    const double h = kStep * std::max(1.0, std::abs(s[k]));
+    sk[k] += h;
+    st = node_gradient(pj, node, sk, &f, &g);
+    for (int i = 0; i < 6; ++i) (*hs)[i][k] = (g[i] - g0[i]) / h;
+  }
+  if (!st.ok()) return st;
+  for (int i = 0; i < 6; ++i) {
+    for (int k = 0; k < i; ++k) (*hs)[i][k] = (*hs)[k][i] = 0.5 * ((*hs)[i][k] + (*hs)[k][i]);
+  }
+  return Status::Ok();
+}
+
+Status TrajectoryProblem::objective_hessian(const double* x, std::vector<double>* hessian) const {
+  const int nv = num_variables();
+  hessian->assign(static_cast<size_t>(nv) * nv, 0.0);
+  const Params<Jet6> pj = params_.cast<Jet6>();
+  for (const Node& node : nodes_) {
+    std::array<std::array<double, 6>, 6> hs{};
+    const Status st = node_hessian(pj, node, node_state(x, node), &hs);
+    if (!st.ok()) return st;
+    // s[2 k + j] = sum_i d[k][i] cp(j, first + i): H[v][v'] += w sum_kk' d[k][i] hs d[k'][i']
     for (int i = 0; i <= kDegree; ++i) {
-      const int cidx = node.basis.first + i;
-      if (cidx < 3 || cidx > n - 4) continue;  // fixed end control points
       for (int j = 0; j < 2; ++j) {
-        const int v = j * nf + cidx - 3;
-        double gf = 0, gm1 = 0, gm2 = 0;
-        for (int k = 0; k < 3; ++k) {
-          const double b = node.basis.d[k][i];
-          gf += df[2 * k + j] * b;
-          gm1 += dM1[2 * k + j] * b;
-          gm2 += dM2[2 * k + j] * b;
+        const int v = variable_of(node.basis.first + i, j);
+        if (v < 0) continue;
+        for (int i2 = 0; i2 <= kDegree; ++i2) {
+          for (int j2 = 0; j2 < 2; ++j2) {
+            const int v2 = variable_of(node.basis.first + i2, j2);
+            if (v2 < 0) continue;
+            double sum = 0;
+            for (int k = 0; k < 3; ++k) {
+              for (int k2 = 0; k2 < 3; ++k2) {
+                sum += node.basis.d[k][i] * hs[2 * k + j][2 * k2 + j2] * node.basis.d[k2][i2];
+              }
+            }
+            (*hessian)[static_cast<size_t>(v) * nv + v2] += node.weight * sum;
+          }
         }
-        out->objective_grad[v] += node.weight * gf;
-        r0[v] += g1 * gm1;
-        r1[v] += g2 * gm2;
-        r2[v] += (j == 0 ? ds1 : ds2) * node.basis.d[0][i];
       }
     }
   }

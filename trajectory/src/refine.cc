@@ -125,9 +125,13 @@ Candidate continuation(const Params<double>& params, const sim::LoadFunction& lo
   const RestToRest motion(best.control_points, r->duration, r->start, r->goal);
   std::vector<double> warm = best.x;
   log_stage(&r->continuation, best.smoothing_velocity, best, true);
+  // a polish: its solves get the continuation's own evaluation limit
+  OptimizerOptions polish = optimizer;
+  polish.max_evaluations =
+      std::min(optimizer.max_evaluations, options.refine.continuation_max_evaluations);
   for (double ws : options.refine.continuation) {
     Candidate c = solve_stage(params, loads, motion, ws, warm, options, r->torque_limit,
-                              optimizer);
+                              polish);
     r->evaluations += c.evaluations;
     if (c.solved() && c.solver.usable()) warm = c.x;
     const bool kept = better(c, best, options);

@@ -59,6 +59,9 @@ struct OptimizeSettings {
   bool global = false, validate = true;
   int starts = 8, control_points = 10, quadrature_points = 12;
   int max_evaluations = 500;  ///< per local solve (--max-evaluations)
+  /// threads of one evaluation inside a task (--node-threads; trajectory::ProblemOptions::
+  /// threads): the results do not depend on it
+  int node_threads = 1;
   double singular_margin = 0.1;
   double path_step = 0.05;  ///< grid step of the path search for a feasible start [rad]
   /// the continuation to the exact law and the refinement of the control points after the

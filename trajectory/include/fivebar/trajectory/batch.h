@@ -24,16 +24,21 @@ namespace fivebar::trajectory {
 /// a stage replaces it only when it is feasible on the dense check grid and its exact-law
 /// objective is lower, so no stage can make the result worse.
 /// The refinement levels of `fivebar optimize`: from the first solve's 10 control points (5
-/// knot spans) each level doubles the spans of the last (20, 40, 80 spans), so that every coarser
-/// spline lies in the finer space and the warm start of a level is the last optimum itself
-/// (knot insertion: the least-squares refit reproduces it to rounding).
-inline const std::vector<int> kRefineLevels = {25, 45, 85};
+/// knot spans) to 40, then 80 spans, so that every coarser spline lies in the finer space and
+/// the warm start of a level is the last optimum itself (knot insertion: the least-squares
+/// refit reproduces it to rounding). A level of 20 spans in between (25 control points) cost
+/// more than it saved in the 45-point solves (docs/figures-optimization.md).
+inline const std::vector<int> kRefineLevels = {45, 85};
 
 struct RefineOptions {
   bool enabled = true;
   /// smoothing velocities w_s [rad/s] solved after the refinement, on its finest spline, in
   /// order (continuation on w_s towards the exact law, w_s = 0)
   std::vector<double> continuation = {4e-4};
+  /// evaluation limit of each solve of the continuation (at most OptimizerOptions::
+  /// max_evaluations): a polish of an optimum whose smoothed and exact-law energies differ by
+  /// 1e-4 to 1e-3 (relative), where SLSQP crawls on the near-kinks of the law (docs/optimize.md)
+  int continuation_max_evaluations = 100;
   /// control points per joint tried after the first solve's count (only the larger ones),
   /// until the exact-law objective changes by less than `tol` (relative) from one to the next;
   /// empty: no refinement (`fivebar optimize` uses kRefineLevels)
@@ -41,7 +46,7 @@ struct RefineOptions {
   double tol = 1e-3;
   /// Gauss-Legendre points per knot span of a refined spline: as many nodes in all as the
   /// first solve's, but at least this many per span
-  int min_quadrature_points = 8;
+  int min_quadrature_points = 6;
 };
 
 struct BatchOptions {

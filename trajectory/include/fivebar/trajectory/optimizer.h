@@ -34,15 +34,27 @@ struct OptimizerOptions {
   int max_evaluations = 500;  ///< per local solve
   double constraint_tol = 1e-8;  ///< NLopt tolerance of each constraint (dimensionless)
   /// Constraint screening: NLopt sees only the rows with c > -screen at the start (c of
-  /// TrajectoryProblem, dimensionless); rows the result violates or nears are added and the
-  /// solve resumed (the answer satisfies every row). 0: every row from the start.
-  double screen = 0.5;
+  /// TrajectoryProblem, dimensionless: 0.75 keeps the torques above half the limit); rows the
+  /// result violates or nears are added and the solve resumed (the answer satisfies every row).
+  /// 0: every row from the start. (0.5 made round 0 of swing_right's refined solves leave out
+  /// rows whose torques then reached 1.9 times the limit, and cost a resumed solve of 50-120
+  /// evaluations.)
+  double screen = 0.75;
   /// SLSQP on problems of at least precondition_min_variables variables works in y,
-  /// x = x0 + T y, where T^T H T = +-I for the Hessian H of the objective at the start (by
-  /// differences of exact gradients, about 23 evaluations): SLSQP's quasi-Newton matrix starts
-  /// at the identity, which in x is far from H on a refined spline.
+  /// x = x0 + T y, where T^T H T = +-I for the Hessian H of the objective at the start
+  /// (TrajectoryProblem::objective_hessian, node by node, about 7 evaluations): SLSQP's
+  /// quasi-Newton matrix starts at the identity, which in x is far from H on a refined spline.
   bool precondition = true;
   int precondition_min_variables = 30;
+  /// Stall test of a local solve: it stops when each of the last stall_iterations iterations
+  /// (evaluations with gradients) satisfied the rows handed to NLopt within
+  /// stall_feasibility_tol and together they lowered the best such objective by less than
+  /// stall_rtol of it; the best such point is returned. ftol_rel (1e-10) asks for far more
+  /// than the refinement's 0.1 % and the 0.3 % of the figures: the last iterations of a refined
+  /// solve spent hundreds of evaluations on changes below 1e-6. 0: no stall test.
+  double stall_rtol = 1e-6;
+  int stall_iterations = 10;
+  double stall_feasibility_tol = 1e-6;
 };
 
 struct OptimizeResult {

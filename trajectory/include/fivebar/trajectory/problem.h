@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <ceres/jet.h>
+
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/status.h"
@@ -41,6 +43,10 @@ struct ProblemOptions {
   double smoothing_velocity = 5e-2;
   double power_smoothing = 1e-2;  ///< eps [W] of the smooth |p| of kInputEnergy
   double friction_tol = 1e-13;    ///< relative stopping test of the reaction/friction loop
+  /// threads of one evaluation (contiguous blocks of nodes; at least 32 nodes each). The
+  /// objective and its gradient are summed in node order afterwards: the same numbers for any
+  /// count.
+  int threads = 1;
 };
 
 /// The friction parameters actually used along trajectories: `params` with smoothing_velocity
@@ -53,7 +59,13 @@ struct Evaluated {
   std::vector<double> objective_grad;    ///< d objective / dx, when asked
   std::vector<double> constraints;       ///< c(x) <= 0, see TrajectoryProblem
   std::vector<double> constraints_grad;  ///< row-major (constraints x variables), when asked
+  /// the same in local form (TrajectoryProblem::evaluate_local): row r depends on the 12 free
+  /// variables node_variables(r / 3) only; d c_r / d those at [12 r, 12 r + 12)
+  std::vector<double> constraints_grad_local;
 };
+
+/// control points (6) times joints (2) that one node's state depends on
+constexpr int kLocalVariables = 2 * (kDegree + 1);
 
 /// Constraint check on a uniform grid (t = duration i / (points - 1)).
 struct ConstraintCheck {
@@ -104,8 +116,20 @@ class TrajectoryProblem {
   /// Objective, constraints and (when the flags ask) their gradients at x. Not ok when the
   /// inverse dynamics fails at a node (cannot assemble, friction loop): out is then unusable.
   Status evaluate(const double* x, bool want_gradients, Evaluated* out) const;
+  /// The same with gradients, those of the constraints in local form (constraints_grad_local;
+  /// constraints_grad is left as it was): a row of the dense form has 12 non-zeros of up to
+  /// 300 (160 variables at 85 control points), and the dense form is 2.4 MB to clear.
+  Status evaluate_local(const double* x, Evaluated* out) const;
+  /// The free variables of the local gradients of node `node`'s rows: entry 2 i + j is control
+  /// point i of the node's six of joint j, -1 where it is a fixed end point.
+  std::array<int, kLocalVariables> node_variables(int node) const;
   /// Objective only, in double (no Jets).
   Status objective(const double* x, double* value) const;
+  /// Hessian of the objective at x (num_variables()^2 values, row-major, symmetric):
+  /// sum over the nodes of weight B^T H_s B, H_s the 6 x 6 Hessian of the integrand in the node
+  /// state by forward differences of its exact (Jet) gradient, B the spline's linear map from
+  /// the free control points to the node state. Costs about 7 evaluations with gradients.
+  Status objective_hessian(const double* x, std::vector<double>* hessian) const;
 
   /// Objective and input energy integrated with `points` Gauss-Legendre points per span (for
   /// the accuracy check against a denser rule).
@@ -136,12 +160,34 @@ class TrajectoryProblem {
     BasisAt basis;
     Loads<double> loads;
   };
+  enum class Gradients { kNone, kDense, kLocal };
+  struct NodeValues {
+    double f = 0, M1 = 0, M2 = 0;
+    std::array<double, 6> df{}, dM1{}, dM2{};  ///< in the node state (with Jets)
+  };
+  Status evaluate_as(const double* x, Gradients how, Evaluated* out) const;
+  Status node_pass(const Params<ceres::Jet<double, 6>>* pj, const Node& node,
+                   const std::array<double, 6>& s, NodeValues* v) const;
+  void node_gradients(int q, const NodeValues& v, double ds1, double ds2, Gradients how,
+                      double* objective_grad, Evaluated* out) const;
+  Status evaluate_nodes(const double* x, Gradients how, int begin, int end,
+                        std::vector<double>* shares, Evaluated* out) const;
   Status torques_with(const Params<double>& params, const double* x, double t, double* M1,
                       double* M2) const;
   Status energies_with(const Params<double>& params, const double* x, int points,
                        double* dissipated, double* input) const;
   // node state (th, thd, thdd of both joints) from x
   std::array<double, 6> node_state(const double* x, const Node& node) const;
+  // integrand f at state s and its exact gradient in s
+  Status node_gradient(const Params<ceres::Jet<double, 6>>& pj, const Node& node,
+                       const std::array<double, 6>& s, double* f,
+                       std::array<double, 6>* df) const;
+  // 6 x 6 Hessian of the integrand in the node state (forward differences of node_gradient)
+  Status node_hessian(const Params<ceres::Jet<double, 6>>& pj, const Node& node,
+                      const std::array<double, 6>& s,
+                      std::array<std::array<double, 6>, 6>* hs) const;
+  // free variable of control point c of joint j, or -1 for the fixed end points
+  int variable_of(int c, int j) const;
 
   Params<double> params_, exact_params_;
   sim::LoadFunction loads_;
