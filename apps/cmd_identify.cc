@@ -151,6 +151,15 @@ Json parameters_json(const id::IdentifyResult& res, const id::TorqueLog& log, bo
     e.set("initial", p.initial);
     e.set("at_bound", p.at_bound);
     e.set("std_meaningful", std::isfinite(p.std));
+    // the 95 % interval: Wald (value +- ci_quantile std) or profile likelihood; null where there
+    // is none, or (ci95_unbounded) where the profile found no end on that side
+    e.set("ci95_low", p.ci_low);
+    e.set("ci95_high", p.ci_high);
+    e.set("ci95_method", p.ci_method);
+    if (std::isinf(p.ci_low) || std::isinf(p.ci_high)) {
+      e.set("ci95_unbounded", std::isinf(p.ci_low) ? (std::isinf(p.ci_high) ? "both" : "low")
+                                                   : "high");
+    }
     if (i < res.cramer_rao_std.size()) e.set("cramer_rao_std", res.cramer_rao_std[i]);
     double tv = 0;
     if (true_value(truth, res.layout, int(i), p.name, &tv)) {
@@ -212,6 +221,9 @@ void rates_json(const id::IdentifyResult& res, const id::TorqueLog& log, Json* j
   }
   j->set("rate_source", std::move(rates));
   j->set("std_method", res.std_method);
+  j->set("ci95_quantile", res.ci_quantile);  // the Wald intervals' half-width in std
+  if (res.ci_dof > 0) j->set("ci95_dof", res.ci_dof);  // Student's t degrees of freedom
+  if (res.profile_refits > 0) j->set("profile_refits", res.profile_refits);
   if (!res.std_detail.empty()) j->set("std_detail", res.std_detail);
   if (std::isfinite(res.delay_s)) {
     Json d = Json::object();
@@ -326,7 +338,10 @@ void print_summary(const Args& a, const id::IdentifyResult& res, const id::Valid
               res.layout.inertia ? ", with the inertial parameters" : "", res.samples_used,
               res.samples, res.wall_time_s);
   for (const id::ParameterEstimate& p : res.parameters) {
-    if (std::isfinite(p.std)) {
+    if (std::isfinite(p.std) && p.ci_method == "profile-likelihood") {
+      std::printf("  %-22s %.6g +- %.2g, 95 %% profile interval [%.4g, %.4g]\n", p.name.c_str(),
+                  p.value, p.std, p.ci_low, p.ci_high);
+    } else if (std::isfinite(p.std)) {
       std::printf("  %-22s %.6g +- %.2g\n", p.name.c_str(), p.value, p.std);
     } else {
       std::printf("  %-22s %.6g (std %s)\n", p.name.c_str(), p.value,

@@ -11,7 +11,9 @@
                  stribeck (500 Hz, 6 s), noisy-rates (--with-rates --rate-noise 0.05),
                  output-error (issue 10: --method output-error, rates logged; output-error-angles
                  from angles only). Also reports the mean error in reported std (the bias) and
-                 the rms of the errors in reported std (1 when the std are honest).
+                 the rms of the errors in reported std (1 when the std are honest). An interval
+                 covers when the reported ci95_low..ci95_high (profile likelihood or Wald with
+                 the reported quantile) holds the truth; value +- 1.96 std without them.
   coverage-inertia: issue 10: logs whose true links are 3-6 % off the scene (CAD_MISMATCH_SETS),
                  identified with the nominal scene and --estimate friction,inertia, over N seeds,
                  --case shared (paper loads) or per-joint (multisine, distinct coefficients):
@@ -115,7 +117,7 @@ def coverage(args):
         j = identify(args.fivebar, log, os.path.join(work, "run"), ["--per-joint"])
         within3 = True
         for q in j["parameters"]:
-            hit = abs(q["error"]) <= 1.96 * q["std"]
+            hit = covers(q, q["std"])
             covered[q["name"]] = covered.get(q["name"], 0) + int(hit)
             total[q["name"]] = total.get(q["name"], 0) + 1
             within3 = within3 and abs(q["error"]) <= 3 * q["std"]
@@ -151,7 +153,7 @@ def coverage_inertia(args):
                                              "crb": [], "inertial": "_" in q["name"] and
                                              q["name"].split("_")[0] in ("m", "mx", "my", "J")})
             e["n"] += 1
-            e["hit"] += int(abs(q["error"]) <= 1.96 * q["std"])
+            e["hit"] += int(covers(q, q["std"]))
             e["values"].append(q["value"] - q["true"])
             e["std"].append(q["std"])
             e["crb"].append(q.get("cramer_rao_std") or float("nan"))
@@ -205,6 +207,19 @@ CASES = {
 }
 
 
+def covers(q, std):
+    """Whether the reported 95 % interval of parameter q covers its true value: ci95_low..
+    ci95_high when identification.json gives them (null with ci95_unbounded: open on that side),
+    else value +- 1.96 std. A missing std covers nothing."""
+    if q.get("ci95_method"):
+        open_side = q.get("ci95_unbounded", "")
+        low = -math.inf if open_side in ("low", "both") else q["ci95_low"]
+        high = math.inf if open_side in ("high", "both") else q["ci95_high"]
+        if low is not None and high is not None:
+            return low <= q["true"] <= high
+    return abs(q["error"]) <= 1.96 * std
+
+
 def coverage_angles(args):
     work = os.path.join(args.out, "work")
     os.makedirs(work, exist_ok=True)
@@ -218,7 +233,7 @@ def coverage_angles(args):
                      id_opts + args.identify_args.split())
         for q in j["parameters"]:
             std = q["std"] if q["std"] is not None else float("nan")
-            hit = abs(q["error"]) <= 1.96 * std  # a missing std covers nothing
+            hit = covers(q, std)
             covered[q["name"]] = covered.get(q["name"], 0) + int(hit)
             total[q["name"]] = total.get(q["name"], 0) + 1
             errors.setdefault(q["name"], []).append(q["relative_error"])

@@ -22,6 +22,7 @@
 #include "covariance.h"
 #include "inertia.h"
 #include "noise_model.h"
+#include "profile.h"
 
 namespace fivebar::identification {
 
@@ -964,6 +965,10 @@ Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
   }
   const auto [lo, hi] = std::minmax_element(bc.inflation.begin(), bc.inflation.end());
   out->std_method = "window-sandwich";
+  // the variance is estimated from G independent windows: Student's t with G - 1 degrees of
+  // freedom for the 95 % intervals (the cluster-robust standard; 2.09 for 20 windows)
+  out->ci_dof = bc.blocks - 1;
+  out->ci_quantile = detail::t_quantile_975(out->ci_dof);
   out->std_detail = "block sandwich over the residuals of " + std::to_string(bc.blocks) +
                     " windows (correlated within a window, independent between windows): " +
                     fmt(*lo) + "-" + fmt(*hi) +
@@ -982,9 +987,10 @@ Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
 /// dynamics, the window sandwich for output error, else s^2 (J^T J)^-1.
 void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& Hp,
                 const std::vector<detail::Sensitivity>& sens, const std::vector<double>& r,
-                IdentifyResult* out) {
+                IdentifyResult* out, Eigen::MatrixXd* hinv) {
   const int P = f.layout.size();
   out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
+  *hinv = out->covariance;  // (J^T J + Hp)^-1 of the free parameters
   if (!out->converged) {
     out->warnings.push_back("the solver did not converge (" + out->solver_message +
                             "): no covariance, standard deviations not given");
@@ -1015,11 +1021,13 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& H
   }
   const Eigen::MatrixXd Hinv = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
                                es.eigenvectors().transpose();
-  const auto scatter = [&](const Eigen::MatrixXd& Cf) {
+  const auto scatter_into = [&](const Eigen::MatrixXd& Cf, Eigen::MatrixXd* C) {
     for (size_t a = 0; a < free.size(); ++a) {
-      for (size_t b = 0; b < free.size(); ++b) out->covariance(free[a], free[b]) = Cf(a, b);
+      for (size_t b = 0; b < free.size(); ++b) (*C)(free[a], free[b]) = Cf(a, b);
     }
   };
+  const auto scatter = [&](const Eigen::MatrixXd& Cf) { scatter_into(Cf, &out->covariance); };
+  scatter_into(Hinv, hinv);  // the profile intervals' noise scale (intervals)
   if (f.opt->errors_in_variables && f.opt->method == Method::kOutputError) {
     const Eigen::MatrixXd Cw = window_covariance(f, Jf, r, out);
     if (Cw.size() > 0) scatter(Cw);
@@ -1456,6 +1464,8 @@ struct Analysis {
   std::vector<double> r;
   Eigen::MatrixXd J;
   std::vector<detail::Sensitivity> sens;
+  /// (J^T J + Hp)^-1 over the parameters off their bounds (internal layout; NaN elsewhere)
+  Eigen::MatrixXd Hinv;
 };
 
 /// Data residuals and Jacobian (the prior's rows, added last, left out).
@@ -1517,11 +1527,148 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
     rms_pair(an->r, out->rms_angle_residual);
   }
   const Eigen::MatrixXd Hp = prior_information(f);
-  covariance(f, an->J, Hp, an->sens, an->r, out);
+  covariance(f, an->J, Hp, an->sens, an->r, out, &an->Hinv);
   const Eigen::MatrixXd Tinv = to_public(f.layout).inverse();
   identifiability(Tinv.transpose() * (an->J.transpose() * an->J + Hp) * Tinv, f.layout, out);
   estimates(f, x0_public, out);
   if (f.layout.inertia) inertial_stage(f, an->J, out);
+}
+
+
+// ---- 95 % intervals ----
+
+/// Whether public parameter i gets a profile-likelihood interval: a nonlinear coefficient of the
+/// Stribeck law (static_coulomb, stribeck_velocity: a peak's height and width trade off, and
+/// the cost is far from quadratic in them), or a friction or actuator term whose Wald interval
+/// reaches below its lower bound (values the law cannot take, where the curvature at the fit
+/// says little). Only with a std, off its bounds; not the inertial parameters.
+bool wants_profile(const ParameterLayout& layout, int i, const ParameterEstimate& e) {
+  if (e.at_bound || !std::isfinite(e.std) || layout.is_inertial(i)) return false;
+  if (layout.law == FrictionLaw::kStribeck && i < layout.friction_size()) {
+    const Coefficient c = layout.group(i / layout.per_group());
+    if (c == Coefficient::kStaticCoulomb || c == Coefficient::kStribeckVelocity) return true;
+  }
+  return e.ci_low < layout.lower_bound(i);
+}
+
+/// The re-fits of a profile: every residual block of the fit's problem (no robust loss), on the
+/// coordinates y other than y_i, y_i held at theta. x = M y: for static_coulomb (internally
+/// coulomb + excess) y are the public parameters and each joint's coulomb is bounded above by
+/// the static value (static >= kinetic); otherwise y are the internal parameters.
+class ProfileFits {
+ public:
+  ProfileFits(const Fit& f, ceres::Problem* problem, int i) : f_(f), i_(i) {
+    const int P = f.layout.size();
+    const Eigen::MatrixXd T = to_public(f.layout);
+    const bool stat = f.layout.static_as_excess && i < f.layout.friction_size() &&
+                      f.layout.group(i / f.layout.per_group()) == Coefficient::kStaticCoulomb;
+    const Eigen::MatrixXd M = stat ? Eigen::MatrixXd(T.inverse()) : Eigen::MatrixXd::Identity(P, P);
+    const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(f.x.data(), P);
+    const Eigen::VectorXd y = stat ? Eigen::VectorXd(T * x) : x;
+    value_ = theta_ = y(i);
+    Eigen::MatrixXd B(P, P - 1);
+    for (int k = 0, c = 0; k < P; ++k) {
+      if (k != i) B.col(c) = M.col(k), z_hat_.push_back(y(k)), ++c;
+    }
+    std::vector<ceres::ResidualBlockId> blocks;
+    problem->GetResidualBlocks(&blocks);
+    z_ = z_hat_;
+    for (ceres::ResidualBlockId id : blocks) {
+      reduced_.AddResidualBlock(new detail::AffineCost(problem->GetCostFunctionForResidualBlock(id),
+                                                       M.col(i), B, &theta_),
+                                nullptr, z_.data());
+    }
+    for (int k = 0; k < P; ++k) {
+      if (k != i) reduced_.SetParameterLowerBound(z_.data(), k < i ? k : k - 1, f.layout.lower_bound(k));
+    }
+    if (stat) coulomb_ = f.layout.group_of(Coefficient::kCoulomb) * f.layout.per_group() +
+                         i % f.layout.per_group();
+    double cost = 0;
+    reduced_.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
+    cost_hat_ = cost;
+    start_[0] = start_[1] = z_hat_;
+  }
+  double value() const { return value_; }
+
+  /// The least cost with y_i = theta, warm-started from the last re-fit on `side`, minus the
+  /// fit's; NaN when the re-fit fails.
+  double rise(double theta, int side) {
+    std::vector<double>& start = start_[side > 0];
+    theta_ = theta;
+    std::copy(start.begin(), start.end(), z_.begin());
+    if (coulomb_ >= 0) {  // static >= kinetic: the coulomb of the joint below the static value
+      z_[coulomb_] = std::min(z_[coulomb_], theta);
+      reduced_.SetParameterUpperBound(z_.data(), coulomb_, theta);
+    }
+    ceres::Solver::Options so = solver_options(*f_.opt);
+    so.max_num_iterations = 50;
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &reduced_, &summary);
+    if (!summary.IsSolutionUsable() || !std::isfinite(summary.final_cost)) return kNaN;
+    start = z_;
+    return summary.final_cost - cost_hat_;
+  }
+
+ private:
+  const Fit& f_;
+  int i_;
+  int coulomb_ = -1;  ///< static profile: index (in z) of the same joint's coulomb
+  double theta_ = 0, value_ = 0, cost_hat_ = 0;
+  std::vector<double> z_hat_, z_;
+  std::vector<double> start_[2];
+  ceres::Problem reduced_;
+};
+
+/// The profile-likelihood interval of public parameter i: the values whose re-fit raises the
+/// cost by at most q^2 / 2 times its noise scale V_ii / Hinv_ii (V the reported covariance, Hinv
+/// that of J^T J: for a quadratic cost this is exactly value +- q std, so the interval agrees
+/// with the covariance model wherever the Wald interval is right). Warnings for an open side.
+void profile_parameter(const Fit& f, ceres::Problem* problem, const Analysis& an, int i,
+                       IdentifyResult* out) {
+  ParameterEstimate& e = out->parameters[i];
+  const Eigen::VectorXd t = to_public(f.layout).row(i).transpose();
+  const Eigen::MatrixXd Hinv = an.Hinv.unaryExpr([](double v) { return std::isfinite(v) ? v : 0.0; });
+  const double h = t.dot(Hinv * t), q = out->ci_quantile;
+  if (!(h > 0)) return;
+  const double threshold = 0.5 * q * q * e.std * e.std / h;
+  ProfileFits fits(f, problem, i);
+  const auto rise = [&](double theta, int side) { return fits.rise(theta, side); };
+  const detail::ProfileInterval pi =
+      detail::profile_interval(rise, e.value, q * e.std, threshold, f.layout.lower_bound(i),
+                               std::numeric_limits<double>::infinity(), 0.02 * e.std);
+  out->profile_refits += pi.refits;
+  if (pi.low.failed || pi.high.failed) {
+    out->warnings.push_back("the profile-likelihood interval of " + e.name +
+                            " failed (a re-fit did not converge): the Wald interval is reported");
+    return;
+  }
+  e.ci_low = pi.low.value;
+  e.ci_high = pi.high.value;
+  e.ci_method = "profile-likelihood";
+  for (const detail::ProfileEnd* end : {&pi.low, &pi.high}) {
+    if (!end->unbounded) continue;
+    out->warnings.push_back(
+        "the log does not bound " + e.name + (end == &pi.low ? " from below" : " from above") +
+        ": its profile-likelihood 95 % interval is open on that side (the cost stays within the "
+        "95 % threshold up to 32 times the Wald half-width)");
+  }
+}
+
+/// 95 % intervals of the public parameters: Wald, value +- ci_quantile std; profile likelihood
+/// where wants_profile (inverse dynamics without a robust loss, converged).
+void intervals(const Fit& f, ceres::Problem* problem, const Analysis& an, IdentifyResult* out) {
+  for (ParameterEstimate& e : out->parameters) {
+    if (!std::isfinite(e.std)) continue;
+    e.ci_low = e.value - out->ci_quantile * e.std;
+    e.ci_high = e.value + out->ci_quantile * e.std;
+    e.ci_method = "wald";
+  }
+  if (f.opt->method != Method::kInverseDynamics || f.opt->loss != Loss::kNone || !out->converged) {
+    return;
+  }
+  for (int i = 0; i < static_cast<int>(out->parameters.size()); ++i) {
+    if (wants_profile(f.layout, i, out->parameters[i])) profile_parameter(f, problem, an, i, out);
+  }
 }
 
 }  // namespace
@@ -1609,6 +1756,7 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   Analysis an;
   if (!solve_stage(&f, &problem, &out, &summary, &an)) return out;
   analyse(f, x0_public, summary, &an, &out);
+  intervals(f, &problem, an, &out);
   out.fitted = scene_in;
   f.layout.apply(f.x.data(), &out.fitted);
   follow_static_coulomb(f.layout, scene_in, &out.fitted);

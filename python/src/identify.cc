@@ -83,6 +83,9 @@ py::dict result_dict(const PyScene& s, const id::IdentifyResult& r, const id::Lo
     e["value"] = p.value;
     e["std"] = p.std;
     e["initial"] = p.initial;
+    e["ci95_low"] = p.ci_low;  // the 95 % interval (identification.json)
+    e["ci95_high"] = p.ci_high;
+    e["ci95_method"] = p.ci_method;
     params.append(e);
   }
   d["parameters"] = params;

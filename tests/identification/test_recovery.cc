@@ -165,6 +165,44 @@ TEST(Recovery, StribeckKeepsOutReversalsAndTheSecondWindow) {
   expect_recovered(res, {0.12, 0.02, 0.2, 0.5}, 0.0);
 }
 
+TEST(Recovery, StribeckProfileIntervalCoversWhereTheWaldIntervalDoesNot) {
+  // seed 25 of `coverage-angles --case stribeck`: the fit is a wide, low peak (static 0.125 +-
+  // 0.005, velocity 2.7 rad/s) for the true 0.2 and 0.5: the Wald interval of static_coulomb
+  // misses the truth by 14 std. The cost barely rises along the trade-off between the peak's
+  // height and width: the profile interval holds the truth (and is open above: the log cannot
+  // rule out a taller, narrower peak), with a warning saying so
+  SynthOptions so;
+  so.rate_hz = 500;
+  so.duration = 6.0;
+  so.torque_noise = kTorqueNoise;
+  so.angle_noise = kAngleNoise;
+  so.multisine = true;
+  so.seed = 25;
+  Params<double> truth = paper_params();
+  truth.friction.law = FrictionLaw::kStribeck;
+  truth.friction.static_coulomb.fill(0.2);
+  truth.friction.stribeck_velocity.fill(0.5);
+  const TorqueLog log = testing::synthetic_paper_log(truth, so, "stribeck25.csv");
+  const IdentifyResult res = identify(paper_params(), paper_loads, log, stribeck_options());
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  const ParameterEstimate& st = res.parameters[2];
+  ASSERT_EQ(st.name, "static_coulomb");
+  EXPECT_GT(std::abs(st.value - 0.2), 1.96 * st.std);  // Wald misses
+  EXPECT_EQ(st.ci_method, "profile-likelihood");
+  EXPECT_LE(st.ci_low, 0.2);
+  EXPECT_GE(st.ci_high, 0.2);
+  // static >= kinetic holds in every re-fit: the interval stays above any plausible coulomb
+  EXPECT_GT(st.ci_low, 0.11);
+  EXPECT_EQ(res.parameters[3].ci_method, "profile-likelihood");
+  EXPECT_LE(res.parameters[3].ci_low, 0.5);
+  EXPECT_GE(res.parameters[3].ci_high, 0.5);
+  EXPECT_THAT(res.warnings, ::testing::Contains(::testing::HasSubstr("does not bound")));
+  // the linear coefficients keep their Wald interval, value +- 1.96 std
+  EXPECT_EQ(res.parameters[0].ci_method, "wald");
+  EXPECT_NEAR(res.parameters[0].ci_high - res.parameters[0].value, 1.96 * res.parameters[0].std,
+              1e-3 * res.parameters[0].std);
+}
+
 TEST(Recovery, OutputErrorOnAShortLog) {
   // numeric derivatives through the simulator; the std come from the window sandwich
   // (covariance.h, its formula checked in test_covariance.cc). By default a 1 s log gets 20
@@ -179,6 +217,11 @@ TEST(Recovery, OutputErrorOnAShortLog) {
   EXPECT_EQ(res.std_method, "window-sandwich");
   EXPECT_DOUBLE_EQ(res.window_s, 0.05);
   EXPECT_THAT(res.std_detail, ::testing::HasSubstr("20 windows"));
+  // Student's t with 19 degrees of freedom for the 95 % intervals of the window sandwich
+  EXPECT_EQ(res.ci_dof, 19);
+  EXPECT_NEAR(res.ci_quantile, 2.093, 1e-3);
+  EXPECT_NEAR(res.parameters[0].ci_high - res.parameters[0].value,
+              res.ci_quantile * res.parameters[0].std, 1e-9);
   EXPECT_THAT(res.warnings, ::testing::Not(::testing::Contains(::testing::HasSubstr("windows"))));
   expect_recovered(res, {0.12, 0.02}, 0.01);
   opt.window_s = 0.2;

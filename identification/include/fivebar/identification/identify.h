@@ -111,6 +111,13 @@ struct ParameterEstimate {
   /// at a bound (lower bound, or static_coulomb = coulomb): the std, from the unconstrained
   /// curvature, is not meaningful
   bool at_bound = false;
+  /// 95 % interval [ci_low, ci_high]: NaN when no std; -inf / +inf on a side where the profile
+  /// found no end (the cost never rose enough: the log does not bound the parameter there)
+  double ci_low = std::numeric_limits<double>::quiet_NaN(), ci_high = ci_low;
+  /// "wald" (value +- IdentifyResult::ci_quantile std) or "profile-likelihood" (the re-fits with
+  /// the parameter fixed whose cost rises by at most the quantile's square over 2 times the
+  /// parameter's noise scale, docs/identification.md "Intervals"); empty when no interval
+  std::string ci_method;
 };
 
 /// Group inertia: what the log determines of the 16 standard inertial parameters.
@@ -187,6 +194,11 @@ struct IdentifyResult {
   /// "residual-variance" (--classical-std)
   std::string std_method;
   std::string std_detail;  ///< one sentence on how the std were formed, when there is more to say
+  /// half-width of the Wald 95 % intervals in std: the normal 1.96, or Student's t with
+  /// ci_dof = G - 1 degrees of freedom for the window sandwich over G windows (0: normal)
+  double ci_quantile = 1.959963984540054;
+  int ci_dof = 0;
+  int profile_refits = 0;  ///< re-fits spent on profile-likelihood intervals
   /// torque-to-angle delay d [s]: the logged torques at t + d match the angles at t (positive:
   /// the torques lag); NaN when not estimated. delay_corrected: the fit used torques shifted by d
   double delay_s = std::numeric_limits<double>::quiet_NaN(), delay_std_s = delay_s;
