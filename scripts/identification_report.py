@@ -14,6 +14,15 @@
                  the rms of the errors in reported std (1 when the std are honest). An interval
                  covers when the reported ci95_low..ci95_high (profile likelihood or Wald with
                  the reported quantile) holds the truth; value +- 1.96 std without them.
+  fixed-motion:  issue 16: Monte Carlo on one fixed motion: a noise-free log of the case is
+                 written once, then only the noise is redrawn (Python's random, seeded by --seed:
+                 white Gaussian torque noise --torque-noise, angle noise --angle-noise; logged
+                 rates, if the case has them, stay exact) over
+                 --draws logs, each identified as coverage-angles does. Reports coverage, the
+                 mean and rms of error/std, the spread over the draws against the mean reported
+                 std, the quantiles of error/std and the tail counts (|z| > 2.5, > 2.8) against
+                 those of a standard normal: whether the reported std is honest, without the
+                 luck of a few seeds.
   coverage-inertia: issue 10: logs whose true links are 3-6 % off the scene (CAD_MISMATCH_SETS),
                  identified with the nominal scene and --estimate friction,inertia, over N seeds,
                  --case shared (paper loads) or per-joint (multisine, distinct coefficients):
@@ -28,6 +37,7 @@ Usage (from the repository root, after building `fivebar`):
   scripts/identification_report.py error-vs-time [--fivebar PATH] [--out DIR]
   scripts/identification_report.py coverage [--seeds 50] [--duration 10] [--fivebar PATH] [--out DIR]
   scripts/identification_report.py coverage-angles --case shared [--seeds 30] [--duration 2]
+  scripts/identification_report.py fixed-motion --case shared [--draws 300] [--duration 2]
   scripts/identification_report.py coverage-inertia --case per-joint [--seeds 50] [--duration 10]
   scripts/identification_report.py fuzz [--runs 1000] [--seed 16]
 Writes DIR/<report>.csv and prints a Markdown table. Logs and runs go to DIR/work/.
@@ -201,6 +211,10 @@ CASES = {
                   "--static-coulomb", "0.2", "--stribeck-velocity", "0.5"],
                  ["--law", "stribeck"], None),
     "noisy-rates": (["--with-rates", "--rate-noise", "0.05"], [], None),
+    # issue 16 diagnosis: the shared case's torque noise alone (exact angles; the draws of a seed
+    # are the same as in `shared`), and with exact logged rates (plain least squares)
+    "torque-noise-only": (["--angle-noise", "0"], [], None),
+    "exact-rates": (["--with-rates", "--angle-noise", "0"], [], None),
     # issue 10: the output-error method (windows of 0.2 s restarted from the logged state)
     "output-error": (["--with-rates"], ["--method", "output-error"], None),
     "output-error-angles": ([], ["--method", "output-error"], None),
@@ -226,7 +240,7 @@ def coverage_angles(args):
     synth_opts, id_opts, _ = CASES[args.case]
     covered, total, errors, rows = {}, {}, {}, []
     in_std = {}
-    for seed in range(1, args.seeds + 1):
+    for seed in range(args.first_seed, args.first_seed + args.seeds):
         log = os.path.join(work, "%s_%d.csv" % (args.case, seed))
         synth(args.fivebar, log, args.duration, seed, False, synth_opts)
         j = identify(args.fivebar, log, os.path.join(work, "run_" + args.case),
@@ -260,13 +274,93 @@ def coverage_angles(args):
                         # the bias in reported std, and the rms of the errors in reported std
                         # (1 when the std are honest)
                         "mean_error_in_std": "%+.2f" % (sum(z) / len(z)),
-                        "rms_error_in_std": "%.2f" % math.sqrt(sum(x * x for x in z) / len(z))})
+                        "rms_error_in_std": "%.2f" % math.sqrt(sum(x * x for x in z) / len(z)),
+                        "abs_z_over_2.8": sum(abs(x) > 2.8 for x in z)})
     hits = sum(covered.values())
     summary.append({"parameter": "all", "covered": hits, "seeds": sum(total.values()),
                     "coverage": "%.3f" % (hits / sum(total.values())), "mean_rel_error": "",
                     "max_abs_rel_error": "", "mean_error_in_std": "",
-                    "rms_error_in_std": ""})
+                    "rms_error_in_std": "", "abs_z_over_2.8": ""})
     return rows, summary
+
+
+def z_tail(k):
+    """P(|Z| > k) for a standard normal Z."""
+    return math.erfc(k / math.sqrt(2))
+
+
+def fixed_motion_summary(name, errors, stds, hits):
+    """One row of the fixed-motion report: coverage, error/std statistics and tails."""
+    n = len(errors)
+    z = sorted(e / s for e, s in zip(errors, stds))
+    mean_e = sum(errors) / n
+    spread = math.sqrt(sum((e - mean_e) ** 2 for e in errors) / (n - 1))
+    q = lambda f: z[min(n - 1, int(f * n))]
+    return {"parameter": name, "draws": n, "coverage": "%.3f" % (hits / n),
+            "mean_z": "%+.2f" % (sum(z) / n),
+            "rms_z": "%.2f" % math.sqrt(sum(x * x for x in z) / n),
+            "spread_over_mean_std": "%.3f" % (spread / (sum(stds) / n)),
+            "z_1_5_50_95_99_pct": " ".join("%.2f" % q(f) for f in (0.01, 0.05, 0.5, 0.95, 0.99)),
+            "abs_z_over_2.5": "%d (normal %.1f)" % (sum(abs(x) > 2.5 for x in z), n * z_tail(2.5)),
+            "abs_z_over_2.8": "%d (normal %.1f)" % (sum(abs(x) > 2.8 for x in z), n * z_tail(2.8))}
+
+
+def noisy_copy(header, data, rng, torque_noise, angle_noise):
+    """The lines of a log: the noise-free rows with fresh Gaussian noise on angles and torques."""
+    out = list(header)
+    for r in data:
+        r = list(r)
+        for c, s in ((3, torque_noise), (4, torque_noise), (1, angle_noise), (2, angle_noise)):
+            if s > 0:
+                r[c] += s * rng.gauss(0.0, 1.0)
+        out.append(",".join(repr(x) for x in r) + "\n")
+    return out
+
+
+def fixed_motion(args):
+    work = os.path.join(args.out, "work")
+    os.makedirs(work, exist_ok=True)
+    synth_opts, id_opts, _ = CASES[args.case]
+    # the case's motion without noise (its own noise options dropped: only the draws here count)
+    noise_opts = ("--torque-noise", "--angle-noise", "--rate-noise")
+    synth_opts = [o for i, o in enumerate(synth_opts)
+                  if o not in noise_opts and (i == 0 or synth_opts[i - 1] not in noise_opts)]
+    base = os.path.join(work, "fixed_%s_clean.csv" % args.case)
+    synth(args.fivebar, base, args.duration, 1, False,
+          synth_opts + ["--torque-noise", "0", "--angle-noise", "0"])
+    header, data = read_log(base)
+    rng = random.Random(args.seed)
+    errors, stds, hits, rows = {}, {}, {}, []
+    log = os.path.join(work, "fixed_%s.csv" % args.case)
+    for draw in range(args.draws):
+        with open(log, "w") as f:
+            f.writelines(noisy_copy(header, data, rng, args.torque_noise, args.angle_noise))
+        j = identify(args.fivebar, log, os.path.join(work, "run_fixed_" + args.case),
+                     id_opts + args.identify_args.split())
+        row = {"draw": draw, "window": j["rate_source"].get("sg_half_window_samples", "")}
+        for q in j["parameters"]:
+            std = q["std"] if q["std"] is not None else float("nan")
+            errors.setdefault(q["name"], []).append(q["error"])
+            stds.setdefault(q["name"], []).append(std)
+            hits[q["name"]] = hits.get(q["name"], 0) + int(covers(q, std))
+            row["error_in_std_" + q["name"]] = "%.3f" % (q["error"] / std)
+        rows.append(row)
+        if (draw + 1) % 50 == 0:
+            print("  %d draws" % (draw + 1), file=sys.stderr)
+    summary = [fixed_motion_summary(n, errors[n], stds[n], hits[n]) for n in errors]
+    return rows, summary
+
+
+def read_log(path):
+    """A log's header lines and its data rows (lists of floats)."""
+    header, data = [], []
+    with open(path) as f:
+        for line in f:
+            if line.startswith("#") or line.startswith("t,"):
+                header.append(line)
+            else:
+                data.append([float(x) for x in line.split(",")])
+    return header, data
 
 
 def corrupt(lines, rng):
@@ -326,13 +420,7 @@ def fuzz(args):
     os.makedirs(work, exist_ok=True)
     base = os.path.join(work, "fuzz_base.csv")
     synth(args.fivebar, base, args.fuzz_duration, 1, False)
-    header, data = [], []
-    with open(base) as f:
-        for line in f:
-            if line.startswith("#") or line.startswith("t,"):
-                header.append(line)
-            else:
-                data.append([float(x) for x in line.split(",")])
+    header, data = read_log(base)
     rng = random.Random(args.seed)
     counts, bad, rows = {}, [], []
     log = os.path.join(work, "fuzz.csv")
@@ -387,11 +475,11 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("report", choices=["error-vs-time", "coverage", "coverage-angles",
-                                       "coverage-inertia", "fuzz"])
+                                       "coverage-inertia", "fixed-motion", "fuzz"])
     ap.add_argument("--case", choices=sorted(CASES), default="shared",
                     help="coverage-angles: any; coverage-inertia: shared or per-joint")
     ap.add_argument("--identify-args", default="",
-                    help="coverage-angles: more options for identify (e.g. '--classical-std')")
+                    help="coverage-angles, fixed-motion: more options for identify (e.g. '--classical-std')")
     ap.add_argument("--runs", type=int, default=1000)
     ap.add_argument("--seed", type=int, default=16)
     ap.add_argument("--fuzz-duration", type=float, default=0.3)
@@ -401,6 +489,10 @@ def main():
     ap.add_argument("--durations", type=float, nargs="+", default=[1, 2, 5, 10])
     ap.add_argument("--max-output-error-duration", type=float, default=10)
     ap.add_argument("--seeds", type=int, default=50)
+    ap.add_argument("--first-seed", type=int, default=1, help="coverage-angles: seeds from this one")
+    ap.add_argument("--draws", type=int, default=300, help="fixed-motion: noise draws")
+    ap.add_argument("--torque-noise", type=float, default=0.02, help="fixed-motion [N m]")
+    ap.add_argument("--angle-noise", type=float, default=1e-5, help="fixed-motion [rad]")
     ap.add_argument("--duration", type=float, default=10)
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
@@ -412,6 +504,11 @@ def main():
         rows, summary = coverage_angles(args)
         write_csv(os.path.join(args.out, "coverage_%s_runs.csv" % args.case), rows)
         write_csv(os.path.join(args.out, "coverage_%s.csv" % args.case), summary)
+        print(table(summary))
+    elif args.report == "fixed-motion":
+        rows, summary = fixed_motion(args)
+        write_csv(os.path.join(args.out, "fixed_motion_%s_runs.csv" % args.case), rows)
+        write_csv(os.path.join(args.out, "fixed_motion_%s.csv" % args.case), summary)
         print(table(summary))
     elif args.report == "coverage-inertia":
         rows, summary = coverage_inertia(args)
