@@ -112,15 +112,16 @@ TEST(Recovery, StribeckLogFittedWithCoulombViscousReportsTheMismatch) {
 
 /// A Stribeck log (static 0.2, Stribeck velocity 0.5 rad/s) at 500 Hz on the multisine, angles
 /// only, as `coverage-angles --case stribeck` makes it.
-TorqueLog stribeck_angles_log(double torque_noise, double angle_noise) {
-  const Params<double> truth = testing::stribeck_truth();
+TorqueLog stribeck_angles_log(double torque_noise, double angle_noise,
+                              std::uint64_t seed = 1) {
   SynthOptions so;
   so.rate_hz = 500;
   so.duration = 6.0;
   so.torque_noise = torque_noise;
   so.angle_noise = angle_noise;
   so.multisine = true;
-  return testing::synthetic_paper_log(truth, so, "stribeck.csv");
+  so.seed = seed;
+  return testing::synthetic_paper_log(testing::stribeck_truth(), so, "stribeck.csv");
 }
 
 IdentifyOptions stribeck_options() {
@@ -171,18 +172,7 @@ TEST(Recovery, StribeckProfileIntervalCoversWhereTheWaldIntervalDoesNot) {
   // misses the truth by 14 std. The cost barely rises along the trade-off between the peak's
   // height and width: the profile interval holds the truth (and is open above: the log cannot
   // rule out a taller, narrower peak), with a warning saying so
-  SynthOptions so;
-  so.rate_hz = 500;
-  so.duration = 6.0;
-  so.torque_noise = kTorqueNoise;
-  so.angle_noise = kAngleNoise;
-  so.multisine = true;
-  so.seed = 25;
-  Params<double> truth = paper_params();
-  truth.friction.law = FrictionLaw::kStribeck;
-  truth.friction.static_coulomb.fill(0.2);
-  truth.friction.stribeck_velocity.fill(0.5);
-  const TorqueLog log = testing::synthetic_paper_log(truth, so, "stribeck25.csv");
+  const TorqueLog log = stribeck_angles_log(kTorqueNoise, kAngleNoise, 25);
   const IdentifyResult res = identify(paper_params(), paper_loads, log, stribeck_options());
   ASSERT_TRUE(res.status.ok()) << res.status.message;
   const ParameterEstimate& st = res.parameters[2];
