@@ -471,6 +471,17 @@ def write_csv(path, rows):
         w.writerows(rows)
 
 
+# reports that write a per-run table and a summary: function, file stem (with the case), and
+# the per-run column counting runs within 3 std with what it counts
+SUMMARY_REPORTS = {
+    "coverage": (coverage, "coverage", ("all_within_3_std", "coefficient")),
+    "coverage-angles": (coverage_angles, "coverage_%s", None),
+    "fixed-motion": (fixed_motion, "fixed_motion_%s", None),
+    "coverage-inertia": (coverage_inertia, "coverage_inertia_%s",
+                         ("friction_within_3_std", "friction coefficient")),
+}
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -500,23 +511,6 @@ def main():
         rows = error_vs_time(args)
         write_csv(os.path.join(args.out, "error_vs_time.csv"), rows)
         print(table(rows))
-    elif args.report == "coverage-angles":
-        rows, summary = coverage_angles(args)
-        write_csv(os.path.join(args.out, "coverage_%s_runs.csv" % args.case), rows)
-        write_csv(os.path.join(args.out, "coverage_%s.csv" % args.case), summary)
-        print(table(summary))
-    elif args.report == "fixed-motion":
-        rows, summary = fixed_motion(args)
-        write_csv(os.path.join(args.out, "fixed_motion_%s_runs.csv" % args.case), rows)
-        write_csv(os.path.join(args.out, "fixed_motion_%s.csv" % args.case), summary)
-        print(table(summary))
-    elif args.report == "coverage-inertia":
-        rows, summary = coverage_inertia(args)
-        write_csv(os.path.join(args.out, "coverage_inertia_%s_runs.csv" % args.case), rows)
-        write_csv(os.path.join(args.out, "coverage_inertia_%s.csv" % args.case), summary)
-        print(table(summary))
-        print("runs with every friction coefficient within 3 std: %d / %d"
-              % (sum(r["friction_within_3_std"] for r in rows), len(rows)))
     elif args.report == "fuzz":
         rows, summary, bad = fuzz(args)
         write_csv(os.path.join(args.out, "fuzz_runs.csv"), rows)
@@ -526,12 +520,15 @@ def main():
             sys.exit("%d of %d fuzzed runs ended by a signal, a timeout or without a message"
                      % (len(bad), args.runs))
     else:
-        rows, summary = coverage(args)
-        write_csv(os.path.join(args.out, "coverage_runs.csv"), rows)
-        write_csv(os.path.join(args.out, "coverage.csv"), summary)
+        report, stem, within3 = SUMMARY_REPORTS[args.report]
+        rows, summary = report(args)
+        stem = stem % args.case if "%s" in stem else stem
+        write_csv(os.path.join(args.out, stem + "_runs.csv"), rows)
+        write_csv(os.path.join(args.out, stem + ".csv"), summary)
         print(table(summary))
-        print("runs with every coefficient within 3 std: %d / %d"
-              % (sum(r["all_within_3_std"] for r in rows), len(rows)))
+        if within3:
+            print("runs with every %s within 3 std: %d / %d"
+                  % (within3[1], sum(r[within3[0]] for r in rows), len(rows)))
 
 
 if __name__ == "__main__":
