@@ -41,6 +41,11 @@ inline Params<double> with_law(Params<double> p, FrictionLaw law,
   return p;
 }
 
+/// The cranks' angles [rad], rates [rad/s] and accelerations [rad/s^2]: a point of a motion.
+struct MotionState {
+  double th1, th2, w1, w2, a1, a2;
+};
+
 /// A state of the cranks with random loads (rates to 40 rad/s, torques to 10 N m, F to 50 N).
 struct RandomState {
   double th1, th2, w1, w2;

@@ -20,9 +20,7 @@ using Jet6 = ceres::Jet<double, 6>;
 constexpr double kValueTol = 1e-12;
 constexpr double kDerivativeTol = 1e-9;
 
-struct State6 {
-  double th1, th2, w1, w2, a1, a2;
-};
+using State6 = testing::MotionState;
 
 EvalOptions reference_options(EvalOptions o) {
   o.implicit_loop_derivative = false;

@@ -16,9 +16,7 @@ using Jet2 = ceres::Jet<double, 2>;
 constexpr double kExactTol = 1e-10;
 constexpr double kDifferenceTol = 1e-6;
 
-struct Pose {
-  double th1, th2, w1, w2, a1, a2;
-};
+using Pose = testing::MotionState;
 const Pose kPoses[] = {{M_PI / 2, M_PI / 2, 3.0, -4.0, 20.0, -7.0},
                        {2.1, 0.9, -12.0, 25.0, -40.0, 60.0},
                        {0.7, 1.9, 30.0, 8.0, 5.0, 15.0}};
