@@ -52,7 +52,7 @@ struct OptimizerOptions {
   /// stall_rtol of it; the best such point is returned. ftol_rel (1e-10) asks for far more
   /// than the refinement's 0.1 % and the 0.3 % of the figures: the last iterations of a refined
   /// solve spent hundreds of evaluations on changes below 1e-6. 0: no stall test.
-  double stall_rtol = 1e-6;
+  double stall_rtol = 1e-5;
   int stall_iterations = 10;
   double stall_feasibility_tol = 1e-6;
 };
