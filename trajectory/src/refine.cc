@@ -129,6 +129,7 @@ Candidate continuation(const Params<double>& params, const sim::LoadFunction& lo
   OptimizerOptions polish = optimizer;
   polish.max_evaluations =
       std::min(optimizer.max_evaluations, options.refine.continuation_max_evaluations);
+  polish.stall_rtol = std::max(optimizer.stall_rtol, options.refine.continuation_stall_rtol);
   for (double ws : options.refine.continuation) {
     Candidate c = solve_stage(params, loads, motion, ws, warm, options, r->torque_limit,
                               polish);
