@@ -342,7 +342,7 @@ Local solve_screened(const TrajectoryProblem& problem, const std::vector<double>
       if (in[i] || round == 3) rows.push_back(i);
     }
     budget.max_evaluations = std::max(1, options.max_evaluations - evaluations);  // shared
-    out = solve_local(problem, x, budget, penalty, rows, &pre, round == 0 ? &in : nullptr);
+    out = solve_local(problem, x, budget, penalty, rows, &pre, round == 0 && options.screen_early_end ? &in : nullptr);
     evaluations += out.evaluations;
     if (!out.evaluated || static_cast<int>(rows.size()) == m) break;
     bool violated = out.escaped;
