@@ -39,6 +39,8 @@ struct RefineOptions {
   /// max_evaluations): a polish of an optimum whose smoothed and exact-law energies differ by
   /// 1e-4 to 1e-3 (relative), where SLSQP crawls on the near-kinks of the law (docs/optimize.md)
   int continuation_max_evaluations = 100;
+  /// stall tolerance of the continuation's solves (OptimizerOptions::stall_rtol, when larger)
+  double continuation_stall_rtol = 1e-4;
   /// control points per joint tried after the first solve's count (only the larger ones),
   /// until the exact-law objective changes by less than `tol` (relative) from one to the next;
   /// empty: no refinement (`fivebar optimize` uses kRefineLevels)

@@ -40,19 +40,22 @@ struct OptimizerOptions {
   /// rows whose torques then reached 1.9 times the limit, and cost a resumed solve of 50-120
   /// evaluations.)
   double screen = 0.75;
+  /// the first screening round ends at its first new best point that violates a row left out
+  /// (it would converge to a point the next round rejects); false: it runs to its end
+  bool screen_early_end = true;
   /// SLSQP on problems of at least precondition_min_variables variables works in y,
   /// x = x0 + T y, where T^T H T = +-I for the Hessian H of the objective at the start
   /// (TrajectoryProblem::objective_hessian, node by node, about 7 evaluations): SLSQP's
   /// quasi-Newton matrix starts at the identity, which in x is far from H on a refined spline.
   bool precondition = true;
   int precondition_min_variables = 30;
-  /// Stall test of a local solve: it stops when each of the last stall_iterations iterations
-  /// (evaluations with gradients) satisfied the rows handed to NLopt within
-  /// stall_feasibility_tol and together they lowered the best such objective by less than
-  /// stall_rtol of it; the best such point is returned. ftol_rel (1e-10) asks for far more
+  /// Stall test of a local solve: it stops when the last stall_iterations iterations
+  /// (evaluations with gradients) that satisfied the rows handed to NLopt within
+  /// stall_feasibility_tol together lowered the best such objective by less than stall_rtol of
+  /// it, and the others among them were no more than as many; the best such point is returned. ftol_rel (1e-10) asks for far more
   /// than the refinement's 0.1 % and the 0.3 % of the figures: the last iterations of a refined
   /// solve spent hundreds of evaluations on changes below 1e-6. 0: no stall test.
-  double stall_rtol = 1e-6;
+  double stall_rtol = 1e-5;
   int stall_iterations = 10;
   double stall_feasibility_tol = 1e-6;
 };
