@@ -66,7 +66,9 @@ int CsvTable::find(const std::string& name) const {
 CsvTable parse_csv(const std::string& text, const std::string& path, const CsvRules& rules) {
   CsvTable table;
   table.path = path;
-  std::istringstream in(text);
+  // a UTF-8 byte-order mark (as spreadsheet programs write) is not part of the first line
+  const bool bom = text.rfind("\xEF\xBB\xBF", 0) == 0;
+  std::istringstream in(bom ? text.substr(3) : text);
   std::string raw;
   int line_no = 0;
   while (std::getline(in, raw)) {

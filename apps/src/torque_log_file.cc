@@ -68,7 +68,8 @@ void check_log_time(const CsvTable& table) {
                      " after " + format_number(table.rows[n - 2][t]) + ")");
 }
 
-// angles in degrees are a common mistake; say so instead of failing later
+// angles in degrees and rates in other units are common mistakes; say so instead of failing
+// later
 void check_log_units(const TorqueLog& log) {
   for (int j = 0; j < fivebar::kDof; ++j) {
     const std::vector<double>& th = j == 0 ? log.theta1 : log.theta2;
@@ -77,6 +78,12 @@ void check_log_units(const TorqueLog& log) {
     if (!why.empty()) {
       throw LogError(log.path, std::string("column theta") + char('1' + j),
                      "angles look like degrees, expected radians (" + why + ")");
+    }
+    const std::string off = om ? identification::rates_mismatch(log, th, *om) : "";
+    if (!off.empty()) {
+      throw LogError(log.path, std::string("column omega") + char('1' + j),
+                     "rates do not match the angles: " + off +
+                         "; expected rad/s of the same crank, positive counter-clockwise");
     }
   }
 }

@@ -1330,9 +1330,12 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
   if (total_beyond > 0) res.notes.push_back(std::to_string(total_beyond) + kBeyond);
   res.glitches.insert(res.glitches.begin(), first.glitches.begin(), first.glitches.end());
   for (int j = 0; j < 2; ++j) res.unwrapped[j] += first.unwrapped[j];
-  std::vector<std::string> w = {"the torques lag the angles by " + fmt(res.delay_s * 1e3) +
-                                " +- " + fmt(res.delay_std_s * 1e3) + " ms (" +
-                                fmt(std::abs(res.delay_s) / res.delay_std_s) +
+  // the significance that decided the correction is the first estimate's (the refit's std is
+  // that of the delay left after the shift)
+  std::vector<std::string> w = {std::string("the torques ") + (res.delay_s < 0 ? "lead" : "lag") +
+                                " the angles by " + fmt(std::abs(res.delay_s) * 1e3) + " +- " +
+                                fmt(res.delay_std_s * 1e3) + " ms (first estimate " +
+                                fmt(std::abs(first.delay_s) / first.delay_std_s) +
                                 " std): refitted with the torques shifted by it"};
   if (!first.glitches.empty()) w.push_back(first.warnings.front());
   res.warnings.insert(res.warnings.begin(), w.begin(), w.end());

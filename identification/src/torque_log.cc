@@ -1,6 +1,7 @@
 // Torque logs: plausibility checks (units, sample count, poses that assemble).
 #include "fivebar/identification/torque_log.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "fivebar/model/kinematics.h"
@@ -31,6 +32,28 @@ std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& 
   // without rates the magnitude says nothing (multi-turn angles are radians too): identify
   // decides from the motion and the scene (degrees_from_motion, condition.h)
   return "";
+}
+
+std::string rates_mismatch(const TorqueLog& log, const std::vector<double>& theta,
+                           const std::vector<double>& omega) {
+  const int n = static_cast<int>(theta.size());
+  double peak = 0;
+  for (double w : omega) peak = std::max(peak, std::abs(w));
+  // the ratio of the finite-difference rate (one-turn jumps removed) to the logged rate, where
+  // the crank moves: its median is 1 for rates in rad/s of the same crank and sign
+  std::vector<double> ratio;
+  for (int i = 0; i + 1 < n; ++i) {
+    const double w = 0.5 * (omega[i] + omega[i + 1]);
+    if (!(std::abs(w) > 0.1 * peak)) continue;
+    const double d = std::remainder(theta[i + 1] - theta[i], 2 * M_PI) / (log.t[i + 1] - log.t[i]);
+    ratio.push_back(d / w);
+  }
+  if (ratio.size() < 10) return "";
+  std::nth_element(ratio.begin(), ratio.begin() + ratio.size() / 2, ratio.end());
+  const double median = ratio[ratio.size() / 2];
+  if (std::abs(median - 1.0) <= 0.1) return "";
+  return "d theta/dt is a median " + format_significant(median, 3) +
+         " times the logged rate where the crank moves (expected 1)";
 }
 
 void require_samples(const TorqueLog& log, int needed, const std::string& what) {

@@ -49,6 +49,33 @@ TEST(TorqueLog, ReadsAGoodLogWithCommentsAndRates) {
   EXPECT_EQ(log.comments.size(), 1u);
 }
 
+TEST(TorqueLog, AByteOrderMarkIsNotPartOfTheFirstLine) {
+  // spreadsheet programs start UTF-8 files with EF BB BF: before a comment or before the header
+  const TorqueLog with_comment = parse_torque_log("\xEF\xBB\xBF" + good_log(10), "bom.csv");
+  EXPECT_EQ(with_comment.size(), 10);
+  EXPECT_EQ(with_comment.comments.size(), 1u);
+  const std::string no_comment = good_log(10).substr(good_log(10).find('\n') + 1);
+  EXPECT_EQ(parse_torque_log("\xEF\xBB\xBF" + no_comment, "bom.csv").size(), 10);
+}
+
+TEST(TorqueLog, RatesThatDoNotMatchTheAnglesNameTheColumn) {
+  // rates of the opposite sign, or in rpm: the log is refused with the column and the ratio
+  std::string flipped = good_log(50, true), rpm = good_log(50, true);
+  for (size_t at = 0; (at = flipped.find(",0.5,-0.3", at)) != std::string::npos; ++at) {
+    flipped.replace(at, 9, ",-0.5,0.3");
+  }
+  for (size_t at = 0; (at = rpm.find(",0.5,-0.3", at)) != std::string::npos; ++at) {
+    rpm.replace(at, 9, ",4.775,-0.3");
+  }
+  EXPECT_THAT([&] { parse_torque_log(flipped, "flipped.csv"); },
+              ThrowsMessage<std::runtime_error>(AllOf(HasSubstr("flipped.csv"),
+                                                      HasSubstr("column omega1"),
+                                                      HasSubstr("a median -1 times"))));
+  EXPECT_THAT([&] { parse_torque_log(rpm, "rpm.csv"); },
+              ThrowsMessage<std::runtime_error>(HasSubstr("column omega1")));
+  EXPECT_NO_THROW(parse_torque_log(good_log(50, true), "good.csv"));
+}
+
 TEST(TorqueLog, WriteThenReadRoundTrips) {
   TorqueLog log = parse_torque_log(good_log(5, true), "good.csv");
   log.comments = {" made by a test"};

@@ -46,6 +46,13 @@ inline const char* const kLogOptional[] = {"omega1", "omega2", "alpha1", "alpha2
 std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& theta,
                                const std::vector<double>* omega);
 
+/// Empty if the logged rates `omega` agree with the angles `theta`, else why not: the median
+/// ratio of the finite-difference rate (one-turn jumps removed) to omega, over the samples where
+/// |omega| exceeds a tenth of its peak, is more than 10 % from 1 (rates in other units, of the
+/// opposite sign, or of the other crank).
+std::string rates_mismatch(const TorqueLog& log, const std::vector<double>& theta,
+                           const std::vector<double>& omega);
+
 /// Throws LogError(`<file>: samples: ...`) when the log has fewer samples than `needed`
 /// (e.g. the number of parameters, or of residuals needed to estimate them).
 void require_samples(const TorqueLog& log, int needed, const std::string& what);
