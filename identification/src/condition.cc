@@ -386,7 +386,15 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
                          " isolated glitches that are rejected; the column is not a smooth "
                          "measurement");
     }
-    for (const Glitch& x : g) out.rejected[x.index] = 1;
+    for (Glitch& x : g) {
+      out.rejected[x.index] = 1;
+      if (c.x == &L.theta1 || c.x == &L.theta2) {
+        // quoted as in the file: the turn the unwrapping added is taken off both values
+        const double in_file = (c.x == &L.theta1 ? log.theta1 : log.theta2)[x.index];
+        x.expected += in_file - x.value;
+        x.value = in_file;
+      }
+    }
     out.glitches.insert(out.glitches.end(), g.begin(), g.end());
   }
   if (!out.glitches.empty()) {

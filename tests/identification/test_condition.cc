@@ -113,6 +113,23 @@ TEST(Glitch, OneAngleGlitchIsRejectedByLineAndTheFitHolds) {
   for (const ParameterEstimate& p : res.parameters) EXPECT_FALSE(p.at_bound) << p.name;
 }
 
+TEST(Glitch, AWrappedAngleGlitchIsQuotedAsInTheFile) {
+  // wrapped to (-pi, pi] with a glitch past the first wrap: the value quoted is the file's, and
+  // the neighbours' value is in the same turn (not the unwrapped, multi-turn one)
+  TorqueLog log = paper_log(1.0);
+  for (double& th : log.theta1) th = std::atan2(std::sin(th), std::cos(th));
+  int at = 1;
+  while (at < log.size() - 1 && std::abs(log.theta1[at] - log.theta1[at - 1]) < M_PI) ++at;
+  ASSERT_LT(at + 100, log.size()) << "theta1 never wraps";
+  at += 100;
+  log.theta1[at] += 0.1;
+  const IdentifyResult res = fit(log);
+  expect_truth(res);
+  ASSERT_EQ(res.glitches.size(), 1u);
+  EXPECT_EQ(res.glitches[0].value, log.theta1[at]);
+  EXPECT_NEAR(res.glitches[0].expected, log.theta1[at] - 0.1, 1e-3);
+}
+
 // issue 16: a spike in the first or last samples (1e300 overflowed every one-sided cubic:
 // "only 0 samples usable"; 100 rad on the last sample gave coulomb 5.6, exit 0) is rejected by
 // line and the fit holds

@@ -32,8 +32,8 @@ struct Glitch {
   int index = 0;        ///< sample index (0-based, log order)
   int line = 0;         ///< line of the file (1-based)
   std::string column;   ///< theta1, theta2, tau1 or tau2
-  double value = 0;     ///< as logged (after unwrapping)
-  double expected = 0;  ///< from its four neighbours
+  double value = 0;     ///< as in the file (angles: before unwrapping)
+  double expected = 0;  ///< from its four neighbours (angles: in the same turn as value)
   double sigmas = 0;    ///< |value - expected| in robust standard deviations
 };
 
