@@ -50,8 +50,6 @@ constexpr double kAbsoluteFloor = 1e-3;
 constexpr double kStructureRatio = 1.15;
 /// window choice: a residual/noise ratio this much above the least one is smoothing bias
 constexpr double kWindowExcess = 0.04;
-/// The smoothing bias allowed on a friction estimate, as a fraction of its std (bias_window).
-constexpr double kBiasFraction = 0.2;
 /// a torque-to-angle delay beyond this many std is corrected
 constexpr double kDelaySignificance = 3.0;
 /// output error: below this many windows the block sandwich's std are themselves uncertain
@@ -622,136 +620,6 @@ std::vector<int> window_candidates(int n, double dt, int order) {
   return cand;
 }
 
-/// Plain least squares on `samples` from f->x (at most 20 iterations, the inertial prior kept):
-/// the solution in *x; with s2, the residual variance s^2; with sd, also the standard deviations
-/// s^2 (J^T J)^-1. False when the solution is not usable.
-bool quick_fit(Fit* f, const std::vector<Sample>& samples, std::vector<double>* x,
-               double* s2 = nullptr, std::vector<double>* sd = nullptr) {
-  const int P = f->layout.size();
-  ceres::Problem problem;
-  *x = f->x;
-  const bool sized = with_size(P, [&](auto n) {
-    add_inverse_dynamics_terms<decltype(n)::value>(f->scene, f->layout, samples, f->eval,
-                                                   Loss::kNone, 1, x->data(), &problem);
-  });
-  if (!sized) return false;
-  add_inertial_prior(f, x->data(), &problem);
-  for (int i = 0; i < P; ++i) problem.SetParameterLowerBound(x->data(), i, f->layout.lower_bound(i));
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = 20;
-  so.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
-  if (!summary.IsSolutionUsable()) return false;
-  const int m = 2 * static_cast<int>(samples.size());
-  if (s2 != nullptr) *s2 = 2 * summary.final_cost / std::max(1, m - P);
-  if (sd == nullptr) return true;
-  ceres::Problem::EvaluateOptions eo;
-  eo.apply_loss_function = false;
-  double cost = 0;
-  std::vector<double> r;
-  ceres::CRSMatrix jac;
-  if (!problem.Evaluate(eo, &cost, &r, nullptr, &jac)) return false;
-  Eigen::MatrixXd jtj = Eigen::MatrixXd::Zero(P, P);
-  for (int row = 0; row < jac.num_rows; ++row) {
-    for (int a = jac.rows[row]; a < jac.rows[row + 1]; ++a) {
-      for (int b = jac.rows[row]; b < jac.rows[row + 1]; ++b) {
-        jtj(jac.cols[a], jac.cols[b]) += jac.values[a] * jac.values[b];
-      }
-    }
-  }
-  const Eigen::MatrixXd cov = (2 * cost / std::max(1, m - P)) * jtj.completeOrthogonalDecomposition().pseudoInverse();
-  sd->resize(P);
-  for (int i = 0; i < P; ++i) (*sd)[i] = std::sqrt(std::max(0.0, cov(i, i)));
-  return true;
-}
-
-/// The preliminary fit's samples (at most ~1500) with the rates and accelerations of the
-/// Savitzky-Golay filter of half-width hw samples; only samples whose window of half-width
-/// hw_max is centred and spans no slip reversal, so that every window sees the same samples.
-std::vector<Sample> samples_at_window(const Fit& f, int hw, int hw_max, double dt) {
-  const TorqueLog& log = f.cond.log;
-  SgOptions sg = f.sg;
-  sg.half_window_s = hw * dt;
-  std::vector<double> w[2], a[2];
-  const bool angles = f.source == detail::RateSource::kFromAngles;
-  const std::vector<double>* x[2] = {angles ? &log.theta1 : &log.omega1,
-                                     angles ? &log.theta2 : &log.omega2};
-  for (int j = 0; j < 2; ++j) {
-    std::vector<double> d1, d2;
-    savitzky_golay(log.t, *x[j], sg, &d1, &d2);
-    w[j] = angles ? d1 : *x[j];
-    a[j] = angles ? d2 : d1;
-  }
-  std::vector<Sample> out;
-  const size_t step = std::max<size_t>(1, f.samples.size() / 1500);
-  for (size_t u = 0; u < f.samples.size(); u += step) {
-    const int i = f.index[u];
-    if (i < hw_max || i > log.size() - 1 - hw_max || spans_reversal(f, i, hw_max)) continue;
-    Sample s = f.samples[u];
-    s.w1 = w[0][i];
-    s.w2 = w[1][i];
-    s.a1 = a[0][i];
-    s.a2 = a[1][i];
-    out.push_back(s);
-  }
-  return out;
-}
-
-/// The smoothing bias of the friction estimates, judged on the estimates themselves: refitted
-/// (quick_fit, same samples) at the candidate half-windows cand[1..top], each friction
-/// coefficient follows theta(h) = theta_0 + b h^p, p = order - 1 (the leading error of an
-/// order-5 filter's second derivative grows as h^4 where the motion is smooth). b is fitted by
-/// least squares weighted by each window's variance, and the window returned is the largest
-/// k <= limit whose predicted bias |b| h_k^p stays within kBiasFraction of the std at h_k for
-/// every friction coefficient (at least index 1: the smallest window interpolates the noise).
-/// -1 when the refits fail.
-int bias_window(Fit* f, const std::vector<int>& cand, size_t top, size_t limit, double dt) {
-  const int F = f->layout.friction_size();
-  const double p = f->sg.order - 1;
-  std::vector<std::vector<double>> x(top + 1), sd(top + 1);
-  std::vector<double> s2(top + 1, 0.0);
-  size_t used = 0;
-  // every window's std from the largest's Jacobian (the regressors barely change with the
-  // window) and its own residual variance, for the ~all samples of the fit (the refits use
-  // at most ~1500 of them)
-  for (size_t k = 1; k <= top; ++k) {
-    const std::vector<Sample> samples = samples_at_window(*f, cand[k], cand[top], dt);
-    used = samples.size();
-    if (!quick_fit(f, samples, &x[k], &s2[k], k == top ? &sd[top] : nullptr)) {
-      return -1;
-    }
-  }
-  const double scale = std::sqrt(used / static_cast<double>(std::max<size_t>(1, f->samples.size())));
-  for (size_t k = 1; k <= top; ++k) {
-    sd[k].resize(F);
-    for (int j = 0; j < F; ++j) sd[k][j] = sd[top][j] * std::sqrt(s2[k] / s2[top]) * scale;
-  }
-  std::vector<double> b(F, 0.0);
-  for (int j = 0; j < F; ++j) {
-    Eigen::MatrixXd a(top, 2);
-    Eigen::VectorXd y(top);
-    for (size_t k = 1; k <= top; ++k) {
-      const double wt = sd[k][j] > 0 ? 1 / sd[k][j] : 0;
-      a(k - 1, 0) = wt;
-      a(k - 1, 1) = wt * std::pow(cand[k] / static_cast<double>(cand[top]), p);
-      y(k - 1) = wt * x[k][j];
-    }
-    b[j] = a.colPivHouseholderQr().solve(y)(1);
-  }
-  size_t chosen = 1;
-  for (size_t k = 1; k <= limit; ++k) {
-    bool small = true;
-    for (int j = 0; j < F; ++j) {
-      const double bias = b[j] * std::pow(cand[k] / static_cast<double>(cand[top]), p);
-      small = small && std::abs(bias) <= kBiasFraction * sd[top][j];
-    }
-    if (small) chosen = k;
-  }
-  return static_cast<int>(chosen);
-}
-
 void choose_window(Fit* f, IdentifyResult* out) {
   const TorqueLog& log = f->cond.log;
   const int n = log.size();
@@ -802,15 +670,8 @@ void choose_window(Fit* f, IdentifyResult* out) {
   // Measured on Stribeck logs at 500 Hz (30 seeds), whose second window was still unbiased:
   // backed off to the smallest, coverage of static_coulomb 0.77; at the second, 0.90.
   const bool undersampled = chosen == 0 && ratio.size() > 1;
-  // below the detection of the residual, the estimates' own drift over the windows sets how
-  // far below (bias_window); one candidate below when the refits fail
-  const size_t limit = chosen;
-  const int by_bias = chosen > 1 && cand.size() > 3
-                          ? bias_window(f, cand, std::min(chosen + 1, cand.size() - 1), chosen, dt)
-                          : -1;
   const bool backed_off = chosen > 1;
-  if (by_bias >= 0) chosen = by_bias;
-  else if (backed_off) --chosen;
+  if (backed_off) --chosen;
   std::string table;
   for (size_t k = 0; k < cand.size(); ++k) {
     table += (k ? ", " : "") + std::to_string(cand[k]) + ": " + fmt(ratio[k]);
@@ -829,10 +690,7 @@ void choose_window(Fit* f, IdentifyResult* out) {
   const std::array<double, 4>& l = levels[chosen];
   out->window_choice =
       "data-driven: half-window " + std::to_string(cand[chosen]) + " samples (" +
-      fmt(cand[chosen] * dt * 1e3) + " ms), " + (by_bias >= 0 ? "the largest at most " + std::to_string(cand[limit]) +
-                          " samples whose friction estimates' predicted smoothing bias (their "
-                          "drift over the windows) is within " + fmt(kBiasFraction) +
-                          " std, " : backed_off ? "one below " : "") +
+      fmt(cand[chosen] * dt * 1e3) + " ms), " + (backed_off ? "one below " : "") +
       "the largest whose torque residual (" +
       fmt(l[0]) + ", " + fmt(l[1]) +
       " N m) shows no smoothing bias over the level the measured noise " + "explains (" +
