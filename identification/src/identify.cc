@@ -1737,6 +1737,7 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   }
   const int P = f.layout.size();
   require_samples(log, P + 1, std::to_string(P) + " parameters + 1");
+  require_uniform_sampling(log);
 
   // the log as encoders write it: degrees, wraps, glitches; then rates
   prepare_log(log, &f, &out);

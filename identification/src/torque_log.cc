@@ -64,6 +64,32 @@ void require_samples(const TorqueLog& log, int needed, const std::string& what) 
   }
 }
 
+void require_uniform_sampling(const TorqueLog& log) {
+  const int n = log.size();
+  if (n < 3) return;
+  std::vector<double> steps;
+  for (int i = 0; i + 1 < n; ++i) steps.push_back(log.t[i + 1] - log.t[i]);
+  std::vector<double> sorted = steps;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  int off = 0, first = -1;
+  for (int i = 0; i + 1 < n; ++i) {
+    if (std::abs(steps[i] - median) <= kSamplingTolerance * median) continue;
+    if (first < 0) first = i;
+    ++off;
+  }
+  if (off == 0) return;
+  const int line = log.lines.empty() ? first + 2 : log.lines[first + 1];
+  throw LogError(log.path, "line " + std::to_string(line) + ", column t",
+                 "sampling not uniform: " + std::to_string(off) + " of " +
+                     std::to_string(n - 1) + " time steps differ from the median step " +
+                     format_significant(median, 4) + " s by more than " +
+                     format_significant(100 * kSamplingTolerance, 2) + " % (here " +
+                     format_significant(steps[first], 4) +
+                     " s); the rate estimates and the rest rule need a uniform grid: resample "
+                     "the log, or cut it at the gap");
+}
+
 void check_poses(const TorqueLog& log, const Params<double>& params) {
   Kinematics<double> k;
   for (int i = 0; i < log.size(); ++i) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <random>
 
 #include "fivebar/identification/condition.h"
@@ -128,6 +129,37 @@ TEST(Glitch, AWrappedAngleGlitchIsQuotedAsInTheFile) {
   ASSERT_EQ(res.glitches.size(), 1u);
   EXPECT_EQ(res.glitches[0].value, log.theta1[at]);
   EXPECT_NEAR(res.glitches[0].expected, log.theta1[at] - 0.1, 1e-3);
+}
+
+TEST(Sampling, NonUniformLogsAreRefusedNamingTheLine) {
+  // alternating 1 and 2 ms steps (every third row dropped) fitted 3 of 1501 samples with exit 0;
+  // a 200 ms gap biased Coulomb silently: both are refused with the first line off the grid
+  const TorqueLog log = paper_log(1.0);
+  TorqueLog alternating = log, gap = log;
+  const auto keep = [](TorqueLog* l, const std::function<bool(int)>& kept) {
+    TorqueLog out = *l;
+    out.t.clear(), out.theta1.clear(), out.theta2.clear(), out.tau1.clear(), out.tau2.clear();
+    out.lines.clear();
+    for (int i = 0; i < l->size(); ++i) {
+      if (!kept(i)) continue;
+      out.t.push_back(l->t[i]), out.theta1.push_back(l->theta1[i]);
+      out.theta2.push_back(l->theta2[i]), out.tau1.push_back(l->tau1[i]);
+      out.tau2.push_back(l->tau2[i]), out.lines.push_back(l->lines[i]);
+    }
+    *l = out;
+  };
+  keep(&alternating, [](int i) { return i < 500 || i % 3 != 1; });
+  keep(&gap, [](int i) { return i < 400 || i >= 600; });
+  EXPECT_THAT([&] { fit(alternating); },
+              ThrowsMessage<LogError>(AllOf(HasSubstr("sampling not uniform"),
+                                            HasSubstr("line " + std::to_string(log.lines[503])))));
+  EXPECT_THAT([&] { fit(gap); }, ThrowsMessage<LogError>(AllOf(
+                                     HasSubstr("sampling not uniform"),
+                                     HasSubstr("line " + std::to_string(log.lines[600])))));
+  // jitter well within the tolerance is accepted
+  TorqueLog jitter = log;
+  for (int i = 1; i < jitter.size(); i += 2) jitter.t[i] += 1e-5;
+  expect_truth(fit(jitter));
 }
 
 // issue 16: a spike in the first or last samples (1e300 overflowed every one-sided cubic:

@@ -53,6 +53,15 @@ std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& 
 std::string rates_mismatch(const TorqueLog& log, const std::vector<double>& theta,
                            const std::vector<double>& omega);
 
+/// Largest relative departure of a time step from the median step that identify accepts.
+inline constexpr double kSamplingTolerance = 0.25;
+
+/// Throws LogError(`<file>: line N, column t: sampling not uniform ...`) when a time step of the
+/// log differs from the median step by more than kSamplingTolerance of it (a gap, dropped rows,
+/// alternating steps, strong jitter): the Savitzky-Golay rates and the rest rule's noise estimate
+/// assume a uniform grid.
+void require_uniform_sampling(const TorqueLog& log);
+
 /// Throws LogError(`<file>: samples: ...`) when the log has fewer samples than `needed`
 /// (e.g. the number of parameters, or of residuals needed to estimate them).
 void require_samples(const TorqueLog& log, int needed, const std::string& what);
