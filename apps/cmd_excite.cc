@@ -229,7 +229,7 @@ Multisine multisine(const Scene& scene, const LoadExpressions& loads, const id::
   m.log = std::move(res.log);
   const id::TorqueLog& log = m.log;
   std::vector<id::MotionState> states;
-  for (size_t i = 0; i < log.size(); ++i) {
+  for (int i = 0; i < log.size(); ++i) {
     states.push_back({log.theta1[i], log.theta2[i], log.omega1[i], log.omega2[i], log.alpha1[i],
                       log.alpha2[i]});
   }
@@ -238,7 +238,7 @@ Multisine multisine(const Scene& scene, const LoadExpressions& loads, const id::
   if (!st.ok()) throw NumericalError(scene.path, "multisine", st.message);
   // the multi-sine's peak is that of its applied torques (the log's, noise-free)
   m.report.peak_torque = 0;
-  for (size_t i = 0; i < log.size(); ++i) {
+  for (int i = 0; i < log.size(); ++i) {
     m.report.peak_torque = std::max({m.report.peak_torque, std::abs(log.tau1[i]), std::abs(log.tau2[i])});
   }
   return m;

@@ -112,11 +112,6 @@ std::string plot_script(const std::string& task, double limit, const std::string
   return s;
 }
 
-// the minimum-jerk baseline has rows only when every pose of it closes
-bool baseline_closes(const TaskResult& r) {
-  return r.baseline_status == "ok" || r.baseline_status == "violates_constraints";
-}
-
 // trajectory.csv, baseline.csv (when the baseline closes) and the figures of one solved task, in
 // DIR/<task>/
 std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult& r,

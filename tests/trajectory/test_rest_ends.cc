@@ -139,8 +139,11 @@ TEST(RestNoise, PlannedRowsEqualInverseWithThresholdsFromTheirNoise) {
                       std::abs(inverse[i].M2 - rows[i].M2)});
     }
     // the fourth differences (the estimate before) put slow rows near the ends at rest
-    if (fourth) EXPECT_GT(gap, 1e-3);
-    if (!fourth) EXPECT_LE(gap, kTorqueTol);
+    if (fourth) {
+      EXPECT_GT(gap, 1e-3);
+    } else {
+      EXPECT_LE(gap, kTorqueTol);
+    }
   }
 }
 
