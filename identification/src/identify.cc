@@ -1537,7 +1537,6 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
   if (f.layout.inertia) inertial_stage(f, an->J, out);
 }
 
-
 // ---- 95 % intervals ----
 
 /// Whether public parameter i gets a profile-likelihood interval: a nonlinear coefficient of the
@@ -1560,7 +1559,7 @@ bool wants_profile(const ParameterLayout& layout, int i, const ParameterEstimate
 /// the static value (static >= kinetic); otherwise y are the internal parameters.
 class ProfileFits {
  public:
-  ProfileFits(const Fit& f, ceres::Problem* problem, int i) : f_(f), i_(i) {
+  ProfileFits(const Fit& f, ceres::Problem* problem, int i) : f_(f) {
     const int P = f.layout.size();
     const Eigen::MatrixXd T = to_public(f.layout);
     const bool stat = f.layout.static_as_excess && i < f.layout.friction_size() &&
@@ -1568,7 +1567,7 @@ class ProfileFits {
     const Eigen::MatrixXd M = stat ? Eigen::MatrixXd(T.inverse()) : Eigen::MatrixXd::Identity(P, P);
     const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(f.x.data(), P);
     const Eigen::VectorXd y = stat ? Eigen::VectorXd(T * x) : x;
-    value_ = theta_ = y(i);
+    theta_ = y(i);
     Eigen::MatrixXd B(P, P - 1);
     for (int k = 0, c = 0; k < P; ++k) {
       if (k != i) B.col(c) = M.col(k), z_hat_.push_back(y(k)), ++c;
@@ -1591,7 +1590,6 @@ class ProfileFits {
     cost_hat_ = cost;
     start_[0] = start_[1] = z_hat_;
   }
-  double value() const { return value_; }
 
   /// The least cost with y_i = theta, warm-started from the last re-fit on `side`, minus the
   /// fit's; NaN when the re-fit fails.
@@ -1614,9 +1612,8 @@ class ProfileFits {
 
  private:
   const Fit& f_;
-  int i_;
   int coulomb_ = -1;  ///< static profile: index (in z) of the same joint's coulomb
-  double theta_ = 0, value_ = 0, cost_hat_ = 0;
+  double theta_ = 0, cost_hat_ = 0;
   std::vector<double> z_hat_, z_;
   std::vector<double> start_[2];
   ceres::Problem reduced_;

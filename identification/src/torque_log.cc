@@ -34,6 +34,16 @@ std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& 
   return "";
 }
 
+namespace {
+
+/// The median of v (the upper one for an even count); v non-empty.
+double median_of(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
 std::string rates_mismatch(const TorqueLog& log, const std::vector<double>& theta,
                            const std::vector<double>& omega) {
   const int n = static_cast<int>(theta.size());
@@ -49,8 +59,7 @@ std::string rates_mismatch(const TorqueLog& log, const std::vector<double>& thet
     ratio.push_back(d / w);
   }
   if (ratio.size() < 10) return "";
-  std::nth_element(ratio.begin(), ratio.begin() + ratio.size() / 2, ratio.end());
-  const double median = ratio[ratio.size() / 2];
+  const double median = median_of(ratio);
   if (std::abs(median - 1.0) <= 0.1) return "";
   return "d theta/dt is a median " + format_significant(median, 3) +
          " times the logged rate where the crank moves (expected 1)";
@@ -69,9 +78,7 @@ void require_uniform_sampling(const TorqueLog& log) {
   if (n < 3) return;
   std::vector<double> steps;
   for (int i = 0; i + 1 < n; ++i) steps.push_back(log.t[i + 1] - log.t[i]);
-  std::vector<double> sorted = steps;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double median = sorted[sorted.size() / 2];
+  const double median = median_of(steps);
   int off = 0, first = -1;
   for (int i = 0; i + 1 < n; ++i) {
     if (std::abs(steps[i] - median) <= kSamplingTolerance * median) continue;
