@@ -99,15 +99,11 @@ std::string work_precision_csv(const studies::WorkPrecision& wp) {
   csv << "method,treatment,tolerance,status,error,error_vs_exact,wall_time_s,rhs_evaluations,"
          "steps,friction_events,pareto,message\n";
   for (const auto& p : wp.points) {
-    std::string msg = p.message;
-    for (char& c : msg) {
-      if (c == ',' || c == '\n') c = ';';
-    }
     csv << sim::method_name(p.method) << ',' << studies::treatment_name(p.treatment) << ','
         << format_grid_value(p.tolerance) << ',' << (p.ok ? "ok" : "failed") << ','
         << format_double(p.error) << ',' << format_double(p.error_vs_exact) << ','
         << format_double(p.wall_time_s) << ',' << p.rhs_evaluations << ',' << p.steps
-        << ',' << p.friction_events << ',' << (p.pareto ? 1 : 0) << ',' << msg << "\n";
+        << ',' << p.friction_events << ',' << (p.pareto ? 1 : 0) << ',' << csv_quote(p.message) << "\n";
   }
   return csv.str();
 }
@@ -214,10 +210,7 @@ int run(const Args& args) {
     if (!warning.empty()) warn(warning);
   }
   write_json_file(out.file("summary.json"), summary);
-  const std::vector<std::string> written = out.commit();
-  print_report(args, scene, opt, wp);
-  print_written(out.dir(), written);
-  return 0;
+  return finish_run(&out, [&] { print_report(args, scene, opt, wp); });
 }
 
 RunFunction setup(CLI::App* app) {

@@ -386,10 +386,7 @@ int write_outputs(const Args& args, const Search& search, const trajectory::BoxR
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   write_json_file(out.file("design.json"), design_json(search, best, box, seconds));
-  const std::vector<std::string> written = out.commit();
-  report(search, best, box);
-  print_written(out.dir(), written);
-  return 0;
+  return finish_run(&out, [&] { report(search, best, box); });
 }
 
 int run(const Args& args) {

@@ -421,10 +421,7 @@ int run(const Args& a) {
   j.set("wall_time_s",
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   write_json_file(out.file("identification.json"), j);
-  const std::vector<std::string> written = out.commit();
-  print_summary(a, res, val);
-  print_written(out.dir(), written);
-  return 0;
+  return finish_run(&out, [&] { print_summary(a, res, val); });
 }
 
 RunFunction setup(CLI::App* app) {

@@ -371,27 +371,25 @@ int run(const Args& args) {
   summary.set("wall_time_s",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   write_json_file(out.file("summary.json"), summary);
-  const std::vector<std::string> written = out.commit();
-
-  char line[256];
-  std::snprintf(line, sizeof line,
-                "  %zu samples, t = %g .. %g s; max |M1| = %.4g N m, "
-                "max |M2| = %.4g N m, E_diss = %.6g J\n",
-                rows.size(), rows.front().t, rows.back().t, max_m1, max_m2, rows.back().E_diss);
-  std::cout << "fivebar inverse: " << args.motion << " under " << scene.path << "\n" << line;
-  if (motion.omega_source != "file" || motion.alpha_source != "file") {
-    std::cout << "  rates estimated: omega from " << motion.omega_source << ", alpha from "
-              << motion.alpha_source << "\n";
-  }
-  if (motion.has_torques) {
+  return finish_run(&out, [&] {
+    char line[256];
     std::snprintf(line, sizeof line,
-                  "  max |M - M_file| = %.3e N m (stuck cranks: distance to the holding range)\n",
-                  max_error);
-    std::cout << line;
-  }
-  print_rest(rest, at_rest);
-  print_written(out.dir(), written);
-  return 0;
+                  "  %zu samples, t = %g .. %g s; max |M1| = %.4g N m, "
+                  "max |M2| = %.4g N m, E_diss = %.6g J\n",
+                  rows.size(), rows.front().t, rows.back().t, max_m1, max_m2, rows.back().E_diss);
+    std::cout << "fivebar inverse: " << args.motion << " under " << scene.path << "\n" << line;
+    if (motion.omega_source != "file" || motion.alpha_source != "file") {
+      std::cout << "  rates estimated: omega from " << motion.omega_source << ", alpha from "
+                << motion.alpha_source << "\n";
+    }
+    if (motion.has_torques) {
+      std::snprintf(line, sizeof line,
+                    "  max |M - M_file| = %.3e N m (stuck cranks: distance to the holding range)\n",
+                    max_error);
+      std::cout << line;
+    }
+    print_rest(rest, at_rest);
+  });
 }
 
 RunFunction setup(CLI::App* app) {

@@ -192,11 +192,9 @@ int run(const Args& args) {
   std::string csv = trajectory::csv_line(trajectory::summary_columns());
   for (const TaskResult& r : results) csv += trajectory::csv_line(trajectory::summary_fields(r));
   write_text_file(out.file("summary.csv"), csv);
-  const std::vector<std::string> written = out.commit();
-
   // one line per task on stdout; exit non-zero when no task ended ok (outputs kept: they say why)
-  const int ok = report(results);
-  print_written(out.dir(), written);
+  int ok = 0;
+  finish_run(&out, [&] { ok = report(results); });
   if (ok == 0 && !results.empty()) {
     const std::string why = "every task failed (" + std::to_string(results.size()) +
                             "; reasons on stdout and in summary.csv)";

@@ -258,9 +258,7 @@ int run(const Args& args) {
   summary.set("total_wall_time_s",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   write_json_file(out.file("summary.json"), summary);
-  const std::vector<std::string> written = out.commit();
-  print_report(scene, er, checks, twin, twin_checks);
-  print_written(out.dir(), written);
+  finish_run(&out, [&] { print_report(scene, er, checks, twin, twin_checks); });
   // a run whose own checks fail is not ok: its outputs stay for the user to look at
   if (!checks.verdict.ok()) {
     throw NumericalError(scene.path, "simulation", "run check failed: " + checks.verdict.message);

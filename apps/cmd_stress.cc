@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "fivebar/io/command.h"
+#include "fivebar/io/csv.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/output.h"
@@ -41,16 +42,6 @@ std::string opt_num(double x, const char* format = "%.3g") {
   return x < 0 ? "" : format_printf(x, format);
 }
 
-/// A CSV field: quoted, inner quotes doubled (messages hold commas).
-std::string csv_field(const std::string& s) {
-  std::string q = "\"";
-  for (char c : s) {
-    if (c == '"') q += '"';
-    q += (c == '\n' ? ' ' : c);
-  }
-  return q + "\"";
-}
-
 /// A markdown table cell: pipes escaped.
 std::string md_cell(const std::string& s) {
   std::string out;
@@ -68,7 +59,7 @@ std::string stress_csv(const studies::StressReport& report) {
       << opt_num(r.error, "%.3e") << ',' << opt_num(r.energy_balance, "%.3e") << ','
       << format_printf(r.wall_time_s, "%.4f") << ',' << r.steps << ',' << r.rhs_evaluations << ','
       << format_printf(r.final_time, "%.6g") << ',' << opt_num(r.displacement, "%.3e") << ','
-      << csv_field(r.message) << '\n';
+      << csv_quote(r.message) << '\n';
   }
   return s.str();
 }
@@ -110,6 +101,25 @@ std::string stress_md(const std::vector<studies::StressCase>& cases, const studi
     }
   }
   return s.str();
+}
+
+/// One line per case on stdout, its outcomes by integrator, and the totals.
+void print_report(const std::vector<studies::StressCase>& cases, const studies::StressOptions& opt,
+                  const studies::StressReport& report, double total_s) {
+  std::cout << "fivebar stress: " << cases.size() << " cases x " << opt.methods.size()
+            << " integrators in " << format_printf(total_s, "%.1f") << " s\n";
+  for (const auto& c : cases) {
+    std::map<std::string, int> counts;
+    for (const auto& r : report.rows) {
+      if (r.case_name == c.name) ++counts[studies::stress_outcome_name(r.outcome)];
+    }
+    std::cout << "  " << c.name << ":";
+    for (const auto& [name, n] : counts) std::cout << " " << n << " " << name;
+    std::cout << "\n";
+  }
+  std::cout << "  total: " << report.count(studies::StressOutcome::kOk) << " ok, "
+            << report.count(studies::StressOutcome::kRejected) << " rejected, "
+            << report.count(studies::StressOutcome::kFailed) << " failed\n";
 }
 
 int run(const Args& args) {
@@ -157,25 +167,8 @@ int run(const Args& args) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   write_text_file(out.file("stress.csv"), stress_csv(report));
   write_text_file(out.file("stress.md"), stress_md(cases, report, opt, total_s));
-  const std::vector<std::string> written = out.commit();
-
-  // one line per case: its outcomes by integrator
-  std::cout << "fivebar stress: " << cases.size() << " cases x " << opt.methods.size()
-            << " integrators in " << format_printf(total_s, "%.1f") << " s\n";
-  for (const auto& c : cases) {
-    std::map<std::string, int> counts;
-    for (const auto& r : report.rows) {
-      if (r.case_name == c.name) ++counts[studies::stress_outcome_name(r.outcome)];
-    }
-    std::cout << "  " << c.name << ":";
-    for (const auto& [name, n] : counts) std::cout << " " << n << " " << name;
-    std::cout << "\n";
-  }
+  finish_run(&out, [&] { print_report(cases, opt, report, total_s); });
   const int failed = report.count(studies::StressOutcome::kFailed);
-  std::cout << "  total: " << report.count(studies::StressOutcome::kOk) << " ok, "
-            << report.count(studies::StressOutcome::kRejected) << " rejected, " << failed
-            << " failed\n";
-  print_written(out.dir(), written);
   if (failed > 0) {
     throw NumericalError("stress", "failed",
                          std::to_string(failed) + " run(s) failed: see " + out.dir() +

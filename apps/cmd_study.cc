@@ -301,10 +301,7 @@ int run(const Args& args) {
     if (!warning.empty()) warn(warning);
   }
   write_text_file(out.file("study.csv"), study_csv(sweeps, designs, tasks, results, outcome));
-  const std::vector<std::string> written = out.commit();
-  report(sweeps, designs, tasks, results, outcome);
-  print_written(out.dir(), written);
-  return 0;
+  return finish_run(&out, [&] { report(sweeps, designs, tasks, results, outcome); });
 }
 
 RunFunction setup(CLI::App* app) {

@@ -1,4 +1,5 @@
 #include "fivebar/io/command.h"
+#include "fivebar/io/output.h"
 
 #include <unistd.h>
 
@@ -57,6 +58,13 @@ void print_written(const std::string& dir, const std::vector<std::string>& names
   std::cout << "  wrote " << dir << "/:";
   for (const std::string& name : names) std::cout << " " << name;
   std::cout << std::endl;
+}
+
+int finish_run(OutputDir* out, const std::function<void()>& report) {
+  const std::vector<std::string> written = out->commit();
+  report();
+  print_written(out->dir(), written);
+  return 0;
 }
 
 void warn(const std::string& message) { std::cerr << "fivebar: warning: " << message << "\n"; }

@@ -146,7 +146,10 @@ CsvTable read_csv(const std::string& path) {
 
 std::string csv_quote(const std::string& s) {
   std::string out = "\"";
-  for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  for (char c : s) {
+    if (c == '"') out += '"';
+    out += c == '\n' ? ' ' : c;
+  }
   return out + "\"";
 }
 

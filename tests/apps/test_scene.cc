@@ -191,47 +191,57 @@ TEST(SceneErrors, WrongNumberOfLinks) {
                "mechanism.links", "expected 4 links, got 3");
 }
 
-TEST(SceneErrors, WrongListLength) {
-  expect_error(with("coulomb: 0.12", "coulomb: [0.12, 0.12, 0.12, 0.12]"), "friction.coulomb",
-               "expected 1 or 5 numbers, got 4");
-  expect_error(with("viscous: 0.02", "viscous: [0.02, 0.02, 0.02, 0.02, 0.02, 0.02]"),
-               "friction.viscous", "expected 1 or 5 numbers, got 6");
-}
+/// One edit of the paper scene and the error it must give: exactly `key`, a reason containing
+/// `reason`.
+struct BadEdit {
+  const char* from;
+  const char* to;
+  const char* key;
+  const char* reason;
+};
 
-TEST(SceneErrors, NonPositiveLengthMassInertia) {
-  expect_error(with("ground_length: 0.29", "ground_length: 0"), "mechanism.ground_length",
-               "must be > 0, got 0");
-  expect_error(with("{length: 0.08,", "{length: -0.08,"), "mechanism.links.0.length",
-               "must be > 0, got -0.08");
-  expect_error(with("{length: 0.05, mass: 1.0,", "{length: 0.05, mass: 0,"),
-               "mechanism.links.1.mass", "must be > 0");
-  expect_error(with("inertia: 0.1, com_offset: 0.20", "inertia: -0.1, com_offset: 0.20"),
-               "mechanism.links.2.inertia", "must be > 0");
-}
+const BadEdit kBadEdits[] = {
+    // wrong list length
+    {"coulomb: 0.12", "coulomb: [0.12, 0.12, 0.12, 0.12]", "friction.coulomb",
+     "expected 1 or 5 numbers, got 4"},
+    {"viscous: 0.02", "viscous: [0.02, 0.02, 0.02, 0.02, 0.02, 0.02]", "friction.viscous",
+     "expected 1 or 5 numbers, got 6"},
+    // lengths, masses, inertias must be positive
+    {"ground_length: 0.29", "ground_length: 0", "mechanism.ground_length", "must be > 0, got 0"},
+    {"{length: 0.08,", "{length: -0.08,", "mechanism.links.0.length", "must be > 0, got -0.08"},
+    {"{length: 0.05, mass: 1.0,", "{length: 0.05, mass: 0,", "mechanism.links.1.mass",
+     "must be > 0"},
+    {"inertia: 0.1, com_offset: 0.20", "inertia: -0.1, com_offset: 0.20",
+     "mechanism.links.2.inertia", "must be > 0"},
+    // centre-of-mass offsets must not be negative
+    {"com_offset: 0.15", "com_offset: -0.15", "mechanism.links.3.com_offset",
+     "must be >= 0, got -0.15"},
+    // NaN or Inf anywhere
+    {"gravity: 9.81", "gravity: .nan", "gravity", "must be a finite number"},
+    {"theta1: 1.5707963267948966", "theta1: .inf", "initial.theta1", "must be a finite number"},
+    {"F_angle: 1.5707963267948966", "F_angle: -.inf", "loads.F_angle", "must be a finite number"},
+    {"coulomb: 0.12", "coulomb: [0.12, 0.12, nan, 0.12, 0.12]", "friction.coulomb.2",
+     "must be a finite number"},
+    {"{duration: 2.0", "{duration: inf", "simulation.duration", "must be a finite number"},
+    // friction coefficients must not be negative
+    {"viscous: 0.02", "viscous: -0.02", "friction.viscous", "must be >= 0"},
+    {"coulomb: 0.12", "coulomb: [0.12, 0.12, 0.12, -0.1, 0.12]", "friction.coulomb.3",
+     "must be >= 0, got -0.1"},
+    {"  viscous: 0.02", "  viscous: 0.02\n  smoothing_velocity: -1", "friction.smoothing_velocity",
+     "must be >= 0"},
+    // the duration and the output step
+    {"{duration: 2.0,", "{duration: 0,", "simulation.duration", "must be > 0, got 0"},
+    {"{duration: 2.0,", "{duration: -1,", "simulation.duration", "must be > 0"},
+    {"output_step: 0.001", "output_step: 0", "simulation.output_step", "must be > 0"},
+    {"output_step: 0.001", "output_step: 3", "simulation.output_step",
+     "must not exceed simulation.duration = 2, got 3"},
+};
 
-TEST(SceneErrors, NegativeComOffset) {
-  expect_error(with("com_offset: 0.15", "com_offset: -0.15"), "mechanism.links.3.com_offset",
-               "must be >= 0, got -0.15");
-}
-
-TEST(SceneErrors, NanOrInfAnywhere) {
-  expect_error(with("gravity: 9.81", "gravity: .nan"), "gravity", "must be a finite number");
-  expect_error(with("theta1: 1.5707963267948966", "theta1: .inf"), "initial.theta1",
-               "must be a finite number");
-  expect_error(with("F_angle: 1.5707963267948966", "F_angle: -.inf"), "loads.F_angle",
-               "must be a finite number");
-  expect_error(with("coulomb: 0.12", "coulomb: [0.12, 0.12, nan, 0.12, 0.12]"),
-               "friction.coulomb.2", "must be a finite number");
-  expect_error(with("{duration: 2.0", "{duration: inf"), "simulation.duration",
-               "must be a finite number");
-}
-
-TEST(SceneErrors, NegativeFrictionCoefficients) {
-  expect_error(with("viscous: 0.02", "viscous: -0.02"), "friction.viscous", "must be >= 0");
-  expect_error(with("coulomb: 0.12", "coulomb: [0.12, 0.12, 0.12, -0.1, 0.12]"),
-               "friction.coulomb.3", "must be >= 0, got -0.1");
-  expect_error(with("  viscous: 0.02", "  viscous: 0.02\n  smoothing_velocity: -1"),
-               "friction.smoothing_velocity", "must be >= 0");
+TEST(SceneErrors, BadValuesNameTheKeyAndTheReason) {
+  for (const BadEdit& bad : kBadEdits) {
+    SCOPED_TRACE(std::string(bad.from) + " -> " + bad.to);
+    expect_error(with(bad.from, bad.to), bad.key, bad.reason);
+  }
 }
 
 TEST(SceneErrors, PinRadiusMustBePositiveWhenFrictionIsOn) {
@@ -294,16 +304,6 @@ TEST(Scene, FrictionLawsAndTheirDefaults) {
   EXPECT_EQ(l.params.friction.sigma0[0], 1e5);
   EXPECT_EQ(l.params.friction.viscous[0], 0.0);
   EXPECT_EQ(friction_law_name(FrictionLaw::kLuGre), std::string("lugre"));
-}
-
-TEST(SceneErrors, DurationAndOutputStep) {
-  expect_error(with("{duration: 2.0,", "{duration: 0,"), "simulation.duration",
-               "must be > 0, got 0");
-  expect_error(with("{duration: 2.0,", "{duration: -1,"), "simulation.duration", "must be > 0");
-  expect_error(with("output_step: 0.001", "output_step: 0"), "simulation.output_step",
-               "must be > 0");
-  expect_error(with("output_step: 0.001", "output_step: 3"), "simulation.output_step",
-               "must not exceed simulation.duration = 2, got 3");
 }
 
 TEST(SceneErrors, SolverSettings) {

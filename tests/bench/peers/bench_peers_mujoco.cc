@@ -129,13 +129,11 @@ Trajectory mujoco_run(mjModel* m, mjData* d, const Config& c) {
     return std::array<double, 4>{th0[0] + q1, th0[1] + q2, th0[2] + q1 + d->qpos[g_ids.qpos[2]],
                                  th0[3] + q2 + d->qpos[g_ids.qpos[3]]};
   };
-  Trajectory tr;
-  tr.reserve(kOutputs + 1);
-  tr.push_back(angles());
-  for (int i = 1; i <= kOutputs; ++i) {
-    for (int k = 0; k < per_output; ++k) mj_step(m, d);
-    tr.push_back(angles());
-  }
+  Trajectory tr = on_output_grid(
+      [&](int) {
+        for (int k = 0; k < per_output; ++k) mj_step(m, d);
+      },
+      angles);
   // MuJoCo resets the state on a diverged acceleration and goes on: report no trajectory instead
   for (int w = 0; w < mjNWARNING; ++w) {
     if (d->warning[w].number > 0) return {};
@@ -146,71 +144,62 @@ Trajectory mujoco_run(mjModel* m, mjData* d, const Config& c) {
 }  // namespace
 }  // namespace fivebar::peers
 
-int main() {
+/// The MuJoCo rows: the model's defaults, then ever stiffer constraint settings.
+std::vector<fivebar::peers::Measured> mujoco_rows(const fivebar::peers::Trajectory& ref) {
   using namespace fivebar::peers;
-  try {
-    const Trajectory ref = read_reference();
-    mjModel* m = load_model(mjcf());
-    mjData* d = mj_makeData(m);
-    g_ids.link3 = mj_name2id(m, mjOBJ_BODY, "link3");
-    const char* joints[4] = {"O", "D0", "B", "D"};
-    for (int j = 0; j < 4; ++j) {
-      const int id = mj_name2id(m, mjOBJ_JOINT, joints[j]);
-      g_ids.qpos[j] = m->jnt_qposadr[id];
-      if (j == 0) g_ids.dof_o = m->jnt_dofadr[id];
-      if (j == 1) g_ids.dof_d0 = m->jnt_dofadr[id];
-    }
-    g_ids.lp = frictionless_params().point_p;
-    mjcb_control = apply_loads;
-
-    // MuJoCo's defaults: solref (0.02, 1), solimp (0.9, 0.95, 0.001, 0.5, 2), tolerance 1e-8
-    const double def_ref[2] = {0.02, 1};
-    const double def_imp[5] = {0.9, 0.95, 0.001, 0.5, 2};
-    const double hard_imp[5] = {0.9999, 0.9999, 0.001, 0.5, 2};
-    std::vector<Config> configs;
-    auto add = [&](const char* label, int integ, double dt, const double* ref2, const double* imp,
-                   bool refsafe, double tol) {
-      Config c{label, integ, dt, {ref2[0], ref2[1]}, {}, refsafe, tol, 100};
-      for (int i = 0; i < 5; ++i) c.solimp[i] = imp[i];
-      configs.push_back(c);
-    };
-    add("defaults: Euler, dt 1 ms, solref 0.02 1, solimp 0.9 0.95", mjINT_EULER, 1e-3, def_ref,
-        def_imp, true, 1e-8);
-    add("RK4, dt 1e-4, default solref/solimp", mjINT_RK4, 1e-4, def_ref, def_imp, true, 1e-8);
-    const double ref_1e4[2] = {2e-4, 1};
-    add("RK4, dt 1e-4, solref 2e-4 1, solimp 0.9999 0.9999, tol 1e-15", mjINT_RK4, 1e-4, ref_1e4,
-        hard_imp, true, 1e-15);
-    const double ref_1e5[2] = {2e-5, 1};
-    add("RK4, dt 1e-5, solref 2e-5 1, solimp 0.9999 0.9999, tol 1e-15", mjINT_RK4, 1e-5, ref_1e5,
-        hard_imp, true, 1e-15);
-    const double ref_1e5b[2] = {1e-5, 1};
-    add("RK4, dt 1e-5, solref 1e-5 1 (refsafe off), solimp 0.9999 0.9999, tol 1e-15", mjINT_RK4,
-        1e-5, ref_1e5b, hard_imp, false, 1e-15);
-    // best found: solref below 2 dt needs refsafe off; solimp 0.9999 is MuJoCo's cap (mjMAXIMP);
-    // solref 2e-6 at dt 1e-5 is unstable; o_solref/o_solimp (override) act on contacts only
-    const double ref_5e6[2] = {5e-6, 1};
-    add("RK4, dt 1e-5, solref 5e-6 1 (refsafe off), solimp 0.9999 0.9999, tol 1e-15", mjINT_RK4,
-        1e-5, ref_5e6, hard_imp, false, 1e-15);
-    add("RK4, dt 5e-6, solref 5e-6 1 (refsafe off), solimp 0.9999 0.9999, tol 1e-15", mjINT_RK4,
-        5e-6, ref_5e6, hard_imp, false, 1e-15);
-
-    std::vector<Measured> peer_rows;
-    for (const Config& c : configs) {
-      Measured r;
-      r.engine = "MuJoCo 2.2.2";
-      r.settings = c.label;
-      r.error = max_error(mujoco_run(m, d, c), ref);
-      r.wall = min_wall([&] { mujoco_run(m, d, c); });
-      peer_rows.push_back(r);
-      std::fprintf(stderr, "mujoco: %s: error %.3e rad, %.3f ms\n", c.label, r.error, 1e3 * r.wall);
-    }
-    mj_deleteData(d);
-    mj_deleteModel(m);
-    const std::vector<Measured> fivebar_rows = measure_fivebar(ref);
-    print_table("MuJoCo", peer_rows, fivebar_rows);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_peers_mujoco: %s\n", e.what());
-    return 1;
+  mjModel* m = load_model(mjcf());
+  mjData* d = mj_makeData(m);
+  g_ids.link3 = mj_name2id(m, mjOBJ_BODY, "link3");
+  const char* joints[4] = {"O", "D0", "B", "D"};
+  for (int j = 0; j < 4; ++j) {
+    const int id = mj_name2id(m, mjOBJ_JOINT, joints[j]);
+    g_ids.qpos[j] = m->jnt_qposadr[id];
+    if (j == 0) g_ids.dof_o = m->jnt_dofadr[id];
+    if (j == 1) g_ids.dof_d0 = m->jnt_dofadr[id];
   }
-  return 0;
+  g_ids.lp = frictionless_params().point_p;
+  mjcb_control = apply_loads;
+
+  // MuJoCo's defaults: solref (0.02, 1), solimp (0.9, 0.95, 0.001, 0.5, 2), tolerance 1e-8
+  const double def_ref[2] = {0.02, 1};
+  const double def_imp[5] = {0.9, 0.95, 0.001, 0.5, 2};
+  const double hard_imp[5] = {0.9999, 0.9999, 0.001, 0.5, 2};
+  std::vector<Config> configs;
+  auto add = [&](const char* label, int integ, double dt, const double* ref2, const double* imp,
+                 bool refsafe, double tol) {
+    Config c{label, integ, dt, {ref2[0], ref2[1]}, {}, refsafe, tol, 100};
+    for (int i = 0; i < 5; ++i) c.solimp[i] = imp[i];
+    configs.push_back(c);
+  };
+  add("defaults: Euler, dt 1 ms, solref 0.02 1, solimp 0.9 0.95", mjINT_EULER, 1e-3, def_ref,
+      def_imp, true, 1e-8);
+  add("RK4, dt 1e-4, default solref/solimp", mjINT_RK4, 1e-4, def_ref, def_imp, true, 1e-8);
+  const double ref_1e4[2] = {2e-4, 1};
+  add("RK4, dt 1e-4, solref 2e-4 1, solimp 0.9999 0.9999, tol 1e-15", mjINT_RK4, 1e-4, ref_1e4,
+      hard_imp, true, 1e-15);
+  const double ref_1e5[2] = {2e-5, 1};
+  add("RK4, dt 1e-5, solref 2e-5 1, solimp 0.9999 0.9999, tol 1e-15", mjINT_RK4, 1e-5, ref_1e5,
+      hard_imp, true, 1e-15);
+  const double ref_1e5b[2] = {1e-5, 1};
+  add("RK4, dt 1e-5, solref 1e-5 1 (refsafe off), solimp 0.9999 0.9999, tol 1e-15", mjINT_RK4,
+      1e-5, ref_1e5b, hard_imp, false, 1e-15);
+  // best found: solref below 2 dt needs refsafe off; solimp 0.9999 is MuJoCo's cap (mjMAXIMP);
+  // solref 2e-6 at dt 1e-5 is unstable; o_solref/o_solimp (override) act on contacts only
+  const double ref_5e6[2] = {5e-6, 1};
+  add("RK4, dt 1e-5, solref 5e-6 1 (refsafe off), solimp 0.9999 0.9999, tol 1e-15", mjINT_RK4,
+      1e-5, ref_5e6, hard_imp, false, 1e-15);
+  add("RK4, dt 5e-6, solref 5e-6 1 (refsafe off), solimp 0.9999 0.9999, tol 1e-15", mjINT_RK4,
+      5e-6, ref_5e6, hard_imp, false, 1e-15);
+
+  std::vector<Measured> peer_rows;
+  for (const Config& c : configs) {
+    const Measured r = measure("MuJoCo 2.2.2", c.label, ref, [&] { return mujoco_run(m, d, c); });
+    peer_rows.push_back(r);
+    std::fprintf(stderr, "mujoco: %s: error %.3e rad, %.3f ms\n", c.label, r.error, 1e3 * r.wall);
+  }
+  mj_deleteData(d);
+  mj_deleteModel(m);
+  return peer_rows;
 }
+
+int main() { return fivebar::peers::run_peer_bench("bench_peers_mujoco", "MuJoCo", mujoco_rows); }

@@ -120,13 +120,8 @@ Trajectory simbody_run(const SimbodyFiveBar& fb, const Config& c, int* steps = n
   integ->setInternalStepLimit(100000000);
   SimTK::TimeStepper ts(fb.system, *integ);
   ts.initialize(fb.initial);
-  Trajectory tr;
-  tr.reserve(kOutputs + 1);
-  tr.push_back(fb.angles(ts.getState()));
-  for (int i = 1; i <= kOutputs; ++i) {
-    ts.stepTo(kOutputStep * i);
-    tr.push_back(fb.angles(ts.getState()));
-  }
+  Trajectory tr = on_output_grid([&](int i) { ts.stepTo(kOutputStep * i); },
+                                 [&] { return fb.angles(ts.getState()); });
   if (steps) *steps = integ->getNumStepsTaken();
   return tr;
 }
@@ -134,39 +129,32 @@ Trajectory simbody_run(const SimbodyFiveBar& fb, const Config& c, int* steps = n
 }  // namespace
 }  // namespace fivebar::peers
 
-int main() {
+/// The Simbody rows: Runge-Kutta-Merson from its defaults to tight accuracies, and Feldberg.
+std::vector<fivebar::peers::Measured> simbody_rows(const fivebar::peers::Trajectory& ref) {
   using namespace fivebar::peers;
-  try {
-    const Trajectory ref = read_reference();
-    SimbodyFiveBar fb;
-    const Config configs[] = {
-        {Kind::kRkMerson, 0, 0, "RungeKuttaMerson, defaults (accuracy 1e-3)"},
-        {Kind::kRkMerson, 1e-6, 1e-8, "RungeKuttaMerson, accuracy 1e-6, constraint tol 1e-8"},
-        {Kind::kRkMerson, 1e-8, 1e-10, "RungeKuttaMerson, accuracy 1e-8, constraint tol 1e-10"},
-        {Kind::kRkMerson, 1e-10, 1e-12, "RungeKuttaMerson, accuracy 1e-10, constraint tol 1e-12"},
-        {Kind::kRkFeldberg, 1e-10, 1e-12,
-         "RungeKuttaFeldberg, accuracy 1e-10, constraint tol 1e-12"},
-        {Kind::kRkMerson, 1e-12, 1e-14, "RungeKuttaMerson, accuracy 1e-12, constraint tol 1e-14"},
-    };
-    std::vector<Measured> peer_rows;
-    for (const Config& c : configs) {
-      Measured m;
-      m.engine = "Simbody 3.7";
-      m.settings = c.label;
-      int steps = 0;
-      m.error = max_error(simbody_run(fb, c, &steps), ref);
-      m.wall = min_wall([&] { simbody_run(fb, c); });
-      m.note = std::to_string(steps) + " steps";
-      m.settings += " (" + m.note + ")";
-      peer_rows.push_back(m);
-      std::fprintf(stderr, "simbody: %s: error %.3e rad, %.3f ms\n", m.settings.c_str(), m.error,
-                   1e3 * m.wall);
-    }
-    const std::vector<Measured> fivebar_rows = measure_fivebar(ref);
-    print_table("Simbody", peer_rows, fivebar_rows);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_peers_simbody: %s\n", e.what());
-    return 1;
+  SimbodyFiveBar fb;
+  const Config configs[] = {
+      {Kind::kRkMerson, 0, 0, "RungeKuttaMerson, defaults (accuracy 1e-3)"},
+      {Kind::kRkMerson, 1e-6, 1e-8, "RungeKuttaMerson, accuracy 1e-6, constraint tol 1e-8"},
+      {Kind::kRkMerson, 1e-8, 1e-10, "RungeKuttaMerson, accuracy 1e-8, constraint tol 1e-10"},
+      {Kind::kRkMerson, 1e-10, 1e-12, "RungeKuttaMerson, accuracy 1e-10, constraint tol 1e-12"},
+      {Kind::kRkFeldberg, 1e-10, 1e-12,
+       "RungeKuttaFeldberg, accuracy 1e-10, constraint tol 1e-12"},
+      {Kind::kRkMerson, 1e-12, 1e-14, "RungeKuttaMerson, accuracy 1e-12, constraint tol 1e-14"},
+  };
+  std::vector<Measured> peer_rows;
+  for (const Config& c : configs) {
+    int steps = 0;
+    Measured m = measure("Simbody 3.7", c.label, ref, [&] { return simbody_run(fb, c, &steps); });
+    m.note = std::to_string(steps) + " steps";
+    m.settings += " (" + m.note + ")";
+    peer_rows.push_back(m);
+    std::fprintf(stderr, "simbody: %s: error %.3e rad, %.3f ms\n", m.settings.c_str(), m.error,
+                 1e3 * m.wall);
   }
-  return 0;
+  return peer_rows;
+}
+
+int main() {
+  return fivebar::peers::run_peer_bench("bench_peers_simbody", "Simbody", simbody_rows);
 }

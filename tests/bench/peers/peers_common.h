@@ -109,6 +109,32 @@ struct Measured {
   std::string note;         ///< e.g. the engine's own statistics
 };
 
+/// A run on the output grid: `angles()` at t = 0, then after each `advance(i)`, which steps the
+/// engine to t = i kOutputStep (kOutputs + 1 rows).
+template <typename Advance, typename Angles>
+Trajectory on_output_grid(Advance&& advance, Angles&& angles) {
+  Trajectory tr;
+  tr.reserve(kOutputs + 1);
+  tr.push_back(angles());
+  for (int i = 1; i <= kOutputs; ++i) {
+    advance(i);
+    tr.push_back(angles());
+  }
+  return tr;
+}
+
+/// One configuration measured: its error against `ref` and its minimum wall time; `run` returns
+/// the trajectory (empty when the engine failed).
+inline Measured measure(const std::string& engine, const std::string& settings,
+                        const Trajectory& ref, const std::function<Trajectory()>& run) {
+  Measured m;
+  m.engine = engine;
+  m.settings = settings;
+  m.error = max_error(run(), ref);
+  m.wall = min_wall([&] { run(); });
+  return m;
+}
+
 /// fivebar on the same scene: sim::simulate over [0, 1] s on the 1 ms grid.
 inline Trajectory fivebar_run(sim::Method method, double tol, sim::Result* out = nullptr) {
   sim::Options o;
@@ -131,14 +157,10 @@ inline std::vector<Measured> measure_fivebar(const Trajectory& ref) {
   const std::pair<sim::Method, const char*> methods[] = {{sim::Method::kCvodeAdams, "cvode_adams"}};
   for (const auto& [method, name] : methods) {
     for (double tol : {1e-6, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14}) {
-      Measured m;
-      m.engine = "fivebar";
       char buf[96];
       std::snprintf(buf, sizeof buf, "%s, rtol = atol = %.0e", name, tol);
-      m.settings = buf;
       sim::Result r;
-      m.error = max_error(fivebar_run(method, tol, &r), ref);
-      m.wall = min_wall([&] { fivebar_run(method, tol); });
+      Measured m = measure("fivebar", buf, ref, [&] { return fivebar_run(method, tol, &r); });
       std::snprintf(buf, sizeof buf, "%ld steps, %ld rhs", r.stats.steps, r.stats.rhs_evaluations);
       m.note = buf;
       out.push_back(m);
@@ -207,6 +229,21 @@ inline void print_table(const std::string& peer, const std::vector<Measured>& pe
       "depends on the joint reaction N_k, which the engine only knows after solving the "
       "step, so the scene with friction is fivebar-only.\n",
       peer.c_str());
+}
+
+/// The body of a peer benchmark's main(): the peer's rows measured against the reference, then
+/// fivebar's, then the table; an exception is reported on stderr with exit 1.
+inline int run_peer_bench(const char* program, const std::string& peer,
+                          const std::function<std::vector<Measured>(const Trajectory&)>& peer_rows) {
+  try {
+    const Trajectory ref = read_reference();
+    const std::vector<Measured> rows = peer_rows(ref);
+    print_table(peer, rows, measure_fivebar(ref));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n", program, e.what());
+    return 1;
+  }
+  return 0;
 }
 
 }  // namespace fivebar::peers

@@ -24,6 +24,8 @@ class App;
 
 namespace fivebar::io {
 
+class OutputDir;
+
 /// Runs a parsed subcommand; returns the exit status (0).
 using RunFunction = std::function<int()>;
 
@@ -55,6 +57,11 @@ void add_out_option(CLI::App* app, std::string* out, const std::string& command)
 
 /// Prints the closing line of every command on stdout: `  wrote DIR/: name name ...`.
 void print_written(const std::string& dir, const std::vector<std::string>& names);
+
+/// The end of a successful run: commits `out`, then prints `report()` (the command's summary on
+/// stdout, after the commit, so that it never describes files that were not written) and the
+/// closing line of print_written. Returns 0, the run's exit status.
+int finish_run(OutputDir* out, const std::function<void()>& report);
 
 /// Prints `fivebar: warning: <message>` on stderr.
 void warn(const std::string& message);

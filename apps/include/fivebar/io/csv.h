@@ -53,7 +53,8 @@ CsvTable parse_csv(const std::string& text, const std::string& path, const CsvRu
 /// or a field that is not a finite number.
 CsvTable read_csv(const std::string& path);
 
-/// `s` as one CSV field: in double quotes, a quote doubled (RFC 4180).
+/// `s` as one CSV field: in double quotes, a quote doubled (RFC 4180), a newline written as a
+/// space (one record per line).
 std::string csv_quote(const std::string& s);
 
 }  // namespace fivebar::io
