@@ -95,17 +95,18 @@ studies::WorkPrecisionOptions study_options(const Args& args, const Scene& scene
 
 /// work_precision.csv: one row per point.
 std::string work_precision_csv(const studies::WorkPrecision& wp) {
-  std::ostringstream csv;
-  csv << "method,treatment,tolerance,status,error,error_vs_exact,wall_time_s,rhs_evaluations,"
-         "steps,friction_events,pareto,message\n";
+  std::string csv = csv_line({"method", "treatment", "tolerance", "status", "error",
+                               "error_vs_exact", "wall_time_s", "rhs_evaluations", "steps",
+                               "friction_events", "pareto", "message"});
   for (const auto& p : wp.points) {
-    csv << sim::method_name(p.method) << ',' << studies::treatment_name(p.treatment) << ','
-        << format_grid_value(p.tolerance) << ',' << (p.ok ? "ok" : "failed") << ','
-        << format_double(p.error) << ',' << format_double(p.error_vs_exact) << ','
-        << format_double(p.wall_time_s) << ',' << p.rhs_evaluations << ',' << p.steps
-        << ',' << p.friction_events << ',' << (p.pareto ? 1 : 0) << ',' << csv_quote(p.message) << "\n";
+    csv += csv_line({sim::method_name(p.method), studies::treatment_name(p.treatment),
+                     format_grid_value(p.tolerance), p.ok ? "ok" : "failed",
+                     format_double(p.error), format_double(p.error_vs_exact),
+                     format_double(p.wall_time_s), std::to_string(p.rhs_evaluations),
+                     std::to_string(p.steps), std::to_string(p.friction_events),
+                     p.pareto ? "1" : "0", csv_quote(p.message)});
   }
-  return csv.str();
+  return csv;
 }
 
 /// summary.json's recommendations: the fastest Pareto point within each target error.
@@ -213,9 +214,9 @@ int run(const Args& args) {
   return finish_run(&out, [&] { print_report(args, scene, opt, wp); });
 }
 
-RunFunction setup(CLI::App* app) {
-  auto args = std::make_shared<Args>();
+void add_options(CLI::App* app, Args* args) {
   add_scene_options(app, &args->scene, "accuracy");
+  add_plots_flag(app, &args->no_plots, "work_precision.png");
   app->add_option("--repeats", args->repeats, "runs per point; wall time is their minimum")
       ->default_val(3);
   app->add_option("--tolerances", args->tolerances, "rtol = atol values (default 1e-3 .. 1e-12)")
@@ -223,11 +224,9 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--methods", args->methods, "integrators (default: all)")->delimiter(',');
   app->add_option("--reference", args->reference,
                   "external reference CSV (t, theta1..theta4) to check the toolkit's own against");
-  app->add_flag("--no-plots", args->no_plots, "do not draw work_precision.png");
-  return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command({"accuracy", kSummary, setup});
+const bool kRegistered = register_command(command_of("accuracy", kSummary, add_options, run));
 
 }  // namespace
 }  // namespace fivebar::io

@@ -251,13 +251,13 @@ std::string history_csv(const Search& s) {
 std::string tasks_csv(const Search& s) {
   std::string csv = "evaluation";
   for (const Vary& v : s.varies()) csv += "," + v.key;
-  csv += "," + trajectory::csv_line(trajectory::summary_columns());
+  csv += "," + csv_line(trajectory::summary_columns());
   for (size_t i = 0; i < s.history().size(); ++i) {
     std::string values;
     for (double v : s.history()[i].values) values += "," + format_double(v);
     for (const TaskResult& r : s.history()[i].results) {
       csv += std::to_string(i) + values + "," +
-             trajectory::csv_line(trajectory::summary_fields(r));
+             csv_line(trajectory::summary_fields(r));
     }
   }
   return csv;
@@ -433,9 +433,9 @@ int run(const Args& args) {
   return write_outputs(args, search, box, t0);
 }
 
-RunFunction setup(CLI::App* app) {
-  auto args = std::make_shared<Args>();
+void add_options(CLI::App* app, Args* args) {
   add_scene_options(app, &args->scene, "design");
+  add_plots_flag(app, &args->no_plots, "convergence.png");
   app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--vary", args->varies,
                   "KEY=LO:HI, a number of the mechanism varied within [LO, HI]")
@@ -444,11 +444,9 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--max-designs", args->max_designs,
                   "designs evaluated at most, the start included (default 40)");
   add_inner_solve_options(app, &args->settings);
-  app->add_flag("--no-plots", args->no_plots, "do not draw convergence.png");
-  return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command({"design", kSummary, setup});
+const bool kRegistered = register_command(command_of("design", kSummary, add_options, run));
 
 }  // namespace
 }  // namespace fivebar::io

@@ -610,63 +610,47 @@ int run(const Args& a) {
 RunFunction setup(CLI::App* app) {
   auto a = std::make_shared<Args>();
   add_scene_options(app, &a->scene, "excite");
-  app->add_option("--duration", a->design.duration, "length of the motion [s]")->capture_default_str();
-  app->add_option("--torque-limit", a->design.torque_limit, "|M1|, |M2| at most this [N m]")->required();
-  app->add_option("--estimate", a->estimate, "parameter groups: friction,inertia,actuator")
-      ->capture_default_str();
+  add_plots_flag(app, &a->no_plots, "the figures");
+  app->option_defaults()->always_capture_default();  // the options below show their defaults
+  app->add_option("--duration", a->design.duration, "length of the motion [s]");
+  app->add_option("--torque-limit", a->design.torque_limit, "|M1|, |M2| at most this [N m]")
+      ->default_str("")
+      ->required();
+  app->add_option("--estimate", a->estimate, "parameter groups: friction,inertia,actuator");
   app->add_flag("--per-joint", a->per_joint, "five friction coefficients of each kind");
-  app->add_option("--criterion", a->criterion, "d-optimal | condition | worst-std")
-      ->capture_default_str();
+  app->add_option("--criterion", a->criterion, "d-optimal | condition | worst-std");
   app->add_option("--family", a->family,
                   "fourier: position-controlled Fourier motion (gradient, NLopt) | torque: free "
                   "motion under tone torques clipped at the limit (evolution strategy from the "
-                  "multi-sine)")
-      ->capture_default_str();
+                  "multi-sine)");
   std::vector<CLI::Option*> fourier, torque;  // the options of one family only
-  torque.push_back(
-      app->add_option("--tones", a->tones, "torque family: tones per motor")->capture_default_str());
+  torque.push_back(app->add_option("--tones", a->tones, "torque family: tones per motor"));
   app->add_option("--theta1-range", a->theta1_range, "allowed theta1 [rad], LO:HI");
   app->add_option("--theta2-range", a->theta2_range, "allowed theta2 [rad], LO:HI");
-  app->add_option("--singular-margin", a->design.singular_margin, "least |sin(theta4 - theta3)|")
-      ->capture_default_str();
-  app->add_option("--min-reversals", a->design.min_reversals, "sign changes of every joint's rate")
-      ->capture_default_str();
+  app->add_option("--singular-margin", a->design.singular_margin, "least |sin(theta4 - theta3)|");
+  app->add_option("--min-reversals", a->design.min_reversals, "sign changes of every joint's rate");
   fourier.push_back(app->add_option("--reversal-rate", a->design.reversal_rate,
-                                    "fourier: every joint reaches +- this [rad/s]")
-                        ->capture_default_str());
-  app->add_option("--torque-noise", a->design.torque_noise, "std of the logged torques [N m]")
-      ->capture_default_str();
-  app->add_option("--rate", a->design.rate_hz, "sampling rate of the log [Hz]")
-      ->capture_default_str();
-  fourier.push_back(app->add_option("--periods", a->design.periods, "periods of the motion")
-                        ->capture_default_str());
+                                    "fourier: every joint reaches +- this [rad/s]"));
+  app->add_option("--torque-noise", a->design.torque_noise, "std of the logged torques [N m]");
+  app->add_option("--rate", a->design.rate_hz, "sampling rate of the log [Hz]");
+  fourier.push_back(app->add_option("--periods", a->design.periods, "periods of the motion"));
   fourier.push_back(
-      app->add_option("--harmonics", a->design.harmonics, "Fourier harmonics per crank")
-          ->capture_default_str());
-  app->add_option("--design-samples", a->design.design_samples, "samples of the design objective")
-      ->capture_default_str();
+      app->add_option("--harmonics", a->design.harmonics, "Fourier harmonics per crank"));
+  app->add_option("--design-samples", a->design.design_samples, "samples of the design objective");
+  fourier.push_back(app->add_option("--starts", a->starts, "multi-start: local solves"));
+  app->add_option("--seed", a->seed, "seed of the starts");
   fourier.push_back(
-      app->add_option("--starts", a->starts, "multi-start: local solves")->capture_default_str());
-  app->add_option("--seed", a->seed, "seed of the starts")->capture_default_str();
+      app->add_option("--spread", a->spread, "Fourier amplitudes of the random starts [rad]"));
   fourier.push_back(
-      app->add_option("--spread", a->spread, "Fourier amplitudes of the random starts [rad]")
-          ->capture_default_str());
-  fourier.push_back(
-      app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]")
-          ->capture_default_str());
-  fourier.push_back(
-      app->add_option("--ramp", a->design.ramp, "fade-in from rest [s]")->capture_default_str());
+      app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]"));
+  fourier.push_back(app->add_option("--ramp", a->design.ramp, "fade-in from rest [s]"));
   fourier.push_back(app->add_option("--start", a->start,
                                     "first start: swing (both cranks swing together) | multisine "
-                                    "(its motion fitted) | rest")
-                        ->capture_default_str());
-  fourier.push_back(
-      app->add_option("--method", a->method, "slsqp | mma | ccsaq")->capture_default_str());
+                                    "(its motion fitted) | rest"));
+  fourier.push_back(app->add_option("--method", a->method, "slsqp | mma | ccsaq"));
   app->add_option("--max-evaluations", a->max_evaluations,
-                  "fourier: per local solve (0: 80); torque: simulations in the search (0: 160)")
-      ->capture_default_str();
+                  "fourier: per local solve (0: 80); torque: simulations in the search (0: 160)");
   app->add_flag("--no-baseline", a->no_baseline, "skip the multi-sine comparison");
-  app->add_flag("--no-plots", a->no_plots, "skip the PNG figures");
   // the options a user gave that the chosen family does not use: bad input, not ignored
   return [a, fourier, torque] {
     for (const CLI::Option* o : a->family == "torque" ? fourier : torque) {

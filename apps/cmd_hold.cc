@@ -262,9 +262,9 @@ int run(const Args& args) {
   return run_pose(args, scene, L, pose);
 }
 
-RunFunction setup(CLI::App* app) {
-  auto args = std::make_shared<Args>();
+void add_options(CLI::App* app, Args* args) {
   add_scene_options(app, &args->scene, "hold");
+  add_plots_flag(app, &args->no_plots, "the map");
   app->add_option("--pose", args->pose, "the pose to hold (default: the scene's initial pose)")
       ->type_name("THETA1,THETA2");
   app->add_option("--grid", args->grid, "map N x N poses over theta1, theta2 in [-pi, pi)")
@@ -275,11 +275,9 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--time", args->time, "time at which the scene's loads M3, F are evaluated")
       ->type_name("T")
       ->capture_default_str();
-  app->add_flag("--no-plots", args->no_plots, "do not draw the map (gnuplot)");
-  return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command({"hold", kSummary, setup});
+const bool kRegistered = register_command(command_of("hold", kSummary, add_options, run));
 
 }  // namespace
 }  // namespace fivebar::io

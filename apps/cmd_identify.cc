@@ -427,45 +427,42 @@ int run(const Args& a) {
 RunFunction setup(CLI::App* app) {
   auto args = std::make_shared<Args>();
   add_scene_options(app, &args->scene, "identify");
+  add_plots_flag(app, &args->no_plots, "the figures");
+  app->option_defaults()->always_capture_default();  // the options below show their defaults
   app->add_option("--log", args->log, "torque log (CSV, docs/formats.md)")
       ->type_name("LOG.csv")
       ->required();
   app->add_option("--estimate", args->settings.estimate,
                   "parameter groups to estimate, comma-separated: friction (always), inertia "
                   "(the links' 16 standard inertial parameters), actuator (per motor the "
-                  "torque-sensor offset and the load-independent Coulomb + viscous friction)")
-      ->capture_default_str();
+                  "torque-sensor offset and the load-independent Coulomb + viscous friction)");
   app->add_option("--inertia-prior", args->settings.inertia_prior,
                   "relative std of the prior holding the inertial parameters the log cannot "
-                  "determine at the scene's values (> 0)")
-      ->capture_default_str();
+                  "determine at the scene's values (> 0)");
   app->add_flag("--per-joint", args->settings.per_joint,
                 "one coefficient per joint (coulomb_1..5, viscous_1..5) instead of shared ones");
-  app->add_option("--method", args->settings.method, "inverse-dynamics | output-error")
-      ->capture_default_str();
-  app->add_option("--law", args->settings.law, "friction law to fit: coulomb_viscous | stribeck")
-      ->capture_default_str();
-  app->add_option("--loss", args->settings.loss, "robust loss: none | huber | cauchy")
-      ->capture_default_str();
+  app->add_option("--method", args->settings.method, "inverse-dynamics | output-error");
+  app->add_option("--law", args->settings.law, "friction law to fit: coulomb_viscous | stribeck");
+  app->add_option("--loss", args->settings.loss, "robust loss: none | huber | cauchy");
   app->add_option("--loss-scale", args->settings.loss_scale,
-                  "scale of the robust loss [N m] (inverse-dynamics) or [rad] (output-error)")
-      ->capture_default_str();
+                  "scale of the robust loss [N m] (inverse-dynamics) or [rad] (output-error)");
   app->add_option("--smooth-sign", args->settings.smooth_sign,
-                  "w_s [rad/s]: tanh(w/w_s) for sign(w); 0 exact sign; default: the scene's");
+                  "w_s [rad/s]: tanh(w/w_s) for sign(w); 0 exact sign; default: the scene's")
+      ->default_str("");  // the defaults in words: their stored values are sentinels
   app->add_flag("--estimate-rates", args->settings.estimate_rates,
                 "estimate rates from the angles even when the log has them");
   CLI::Option* sg_window =
       app->add_option("--sg-window", args->settings.sg_window,
-                      "Savitzky-Golay half-window [s] (default: chosen from the log's noise)");
-  app->add_option("--sg-order", args->settings.sg_order, "Savitzky-Golay polynomial order")
-      ->capture_default_str();
+                      "Savitzky-Golay half-window [s] (default: chosen from the log's noise)")
+          ->default_str("");
+  app->add_option("--sg-order", args->settings.sg_order, "Savitzky-Golay polynomial order");
   app->add_option("--min-rate", args->settings.min_rate,
-                  "leave out samples where a joint's |relative rate| is below this [rad/s]")
-      ->capture_default_str();
+                  "leave out samples where a joint's |relative rate| is below this [rad/s]");
   app->add_option("--window", args->settings.window,
                   "output-error and validation window [s] (restart from the logged state); "
-                  "default 0.2, shortened so that the log has at least 20 windows");
-  app->add_option("--threads", args->settings.threads, "Ceres threads")->capture_default_str();
+                  "default 0.2, shortened so that the log has at least 20 windows")
+      ->default_str("");
+  app->add_option("--threads", args->settings.threads, "Ceres threads");
   app->add_flag("--start-from-scene", args->settings.start_from_scene,
                 "start from the scene's friction values (default: neutral values)");
   app->add_flag("--no-unwrap", args->settings.no_unwrap,
@@ -480,7 +477,6 @@ RunFunction setup(CLI::App* app) {
                 "estimation's noise included; output error: the window sandwich)");
   app->add_flag("--no-delay", args->settings.no_delay,
                 "do not estimate (and correct) a delay of the torques behind the angles");
-  app->add_flag("--no-plots", args->no_plots, "skip the PNG figures");
   app->add_flag("--no-validation", args->no_validation, "skip the validation runs");
   return [args, sg_window] {
     args->settings.sg_window_given = sg_window->count() > 0;

@@ -392,19 +392,17 @@ int run(const Args& args) {
   });
 }
 
-RunFunction setup(CLI::App* app) {
-  auto args = std::make_shared<Args>();
+void add_options(CLI::App* app, Args* args) {
   add_scene_options(app, &args->scene, "inverse");
+  add_plots_flag(app, &args->no_plots, "the figures");
   app->add_option("--motion", args->motion,
                   "CSV with t, theta1, theta2 and optionally omega1, omega2, alpha1, alpha2 "
                   "(a trajectory.csv of simulate works)")
       ->type_name("MOTION.csv")
       ->required();
-  app->add_flag("--no-plots", args->no_plots, "do not draw the figures (gnuplot)");
-  return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command({"inverse", kSummary, setup});
+const bool kRegistered = register_command(command_of("inverse", kSummary, add_options, run));
 
 }  // namespace
 }  // namespace fivebar::io

@@ -17,6 +17,7 @@
 #include <memory>
 
 #include "fivebar/io/command.h"
+#include "fivebar/io/csv.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/loads.h"
@@ -189,8 +190,8 @@ int run(const Args& args) {
                                            !args.no_plots && gnuplot().available);
     if (!warning.empty()) warn(warning);
   }
-  std::string csv = trajectory::csv_line(trajectory::summary_columns());
-  for (const TaskResult& r : results) csv += trajectory::csv_line(trajectory::summary_fields(r));
+  std::string csv = csv_line(trajectory::summary_columns());
+  for (const TaskResult& r : results) csv += csv_line(trajectory::summary_fields(r));
   write_text_file(out.file("summary.csv"), csv);
   // one line per task on stdout; exit non-zero when no task ended ok (outputs kept: they say why)
   int ok = 0;
@@ -205,10 +206,10 @@ int run(const Args& args) {
   return 0;
 }
 
-RunFunction setup(CLI::App* app) {
-  auto args = std::make_shared<Args>();
+void add_options(CLI::App* app, Args* args) {
   args->settings.refine = true;  // the optimum of the problem, not of the basis (--no-refine)
   add_scene_options(app, &args->scene, "optimize");
+  add_plots_flag(app, &args->no_plots, "the figures");
   app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--threads", args->threads, "worker threads (default: all cores)");
   app->add_option("--node-threads", args->settings.node_threads,
@@ -243,11 +244,9 @@ RunFunction setup(CLI::App* app) {
                   "relative energy change that ends the refinement (default 1e-3)");
   app->add_flag("--no-validate", args->no_validate,
                 "skip the forward simulation of the optimal torques (miss_distance)");
-  app->add_flag("--no-plots", args->no_plots, "do not draw figures");
-  return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command({"optimize", kSummary, setup});
+const bool kRegistered = register_command(command_of("optimize", kSummary, add_options, run));
 
 }  // namespace
 }  // namespace fivebar::io

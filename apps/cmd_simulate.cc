@@ -266,16 +266,14 @@ int run(const Args& args) {
   return 0;
 }
 
-RunFunction setup(CLI::App* app) {
-  auto args = std::make_shared<Args>();
+void add_options(CLI::App* app, Args* args) {
   add_scene_options(app, &args->scene, "simulate");
-  app->add_flag("--no-plots", args->no_plots, "do not draw the figures (gnuplot)");
+  add_plots_flag(app, &args->no_plots, "the figures");
   app->add_flag("--twin", args->twin,
                 "also run the frictionless twin on runs longer than 20 s (always on shorter runs)");
-  return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command({"simulate", kSummary, setup});
+const bool kRegistered = register_command(command_of("simulate", kSummary, add_options, run));
 
 }  // namespace
 }  // namespace fivebar::io

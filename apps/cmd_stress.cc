@@ -50,18 +50,18 @@ std::string md_cell(const std::string& s) {
 }
 
 std::string stress_csv(const studies::StressReport& report) {
-  std::ostringstream s;
-  s << "case,integrator,status,exit_code,error,energy_balance,wall_time_s,steps,"
-       "rhs_evaluations,final_time,displacement,message\n";
+  std::string csv = csv_line({"case", "integrator", "status", "exit_code", "error",
+                               "energy_balance", "wall_time_s", "steps", "rhs_evaluations",
+                               "final_time", "displacement", "message"});
   for (const auto& r : report.rows) {
-    s << r.case_name << ',' << sim::method_name(r.method) << ','
-      << studies::stress_outcome_name(r.outcome) << ',' << r.exit_code << ','
-      << opt_num(r.error, "%.3e") << ',' << opt_num(r.energy_balance, "%.3e") << ','
-      << format_printf(r.wall_time_s, "%.4f") << ',' << r.steps << ',' << r.rhs_evaluations << ','
-      << format_printf(r.final_time, "%.6g") << ',' << opt_num(r.displacement, "%.3e") << ','
-      << csv_quote(r.message) << '\n';
+    csv += csv_line({r.case_name, sim::method_name(r.method),
+                     studies::stress_outcome_name(r.outcome), std::to_string(r.exit_code),
+                     opt_num(r.error, "%.3e"), opt_num(r.energy_balance, "%.3e"),
+                     format_printf(r.wall_time_s, "%.4f"), std::to_string(r.steps),
+                     std::to_string(r.rhs_evaluations), format_printf(r.final_time, "%.6g"),
+                     opt_num(r.displacement, "%.3e"), csv_quote(r.message)});
   }
-  return s.str();
+  return csv;
 }
 
 std::string stress_md(const std::vector<studies::StressCase>& cases, const studies::StressReport& report,
@@ -177,8 +177,7 @@ int run(const Args& args) {
   return 0;
 }
 
-RunFunction setup(CLI::App* app) {
-  auto args = std::make_shared<Args>();
+void add_options(CLI::App* app, Args* args) {
   add_out_option(app, &args->out, "stress");
   app->add_option("--cases", args->cases, "only these cases (default: the whole catalogue)")
       ->delimiter(',');
@@ -186,10 +185,9 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--budget", args->budget, "wall-time limit of one run [s]; beyond: failed")
       ->capture_default_str();
   app->add_flag("--reduced", args->reduced, "short durations (the test catalogue)");
-  return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command({"stress", kSummary, setup});
+const bool kRegistered = register_command(command_of("stress", kSummary, add_options, run));
 
 }  // namespace
 }  // namespace fivebar::io

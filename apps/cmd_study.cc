@@ -169,13 +169,13 @@ std::string per_task_csv(const std::vector<trajectory::Sweep>& sweeps,
                          const std::vector<TaskResult>& results) {
   std::string header = "design";
   for (const auto& s : sweeps) header += "," + s.key;
-  std::string csv = header + "," + trajectory::csv_line(trajectory::summary_columns());
+  std::string csv = header + "," + csv_line(trajectory::summary_columns());
   for (size_t d = 0; d < designs.size(); ++d) {
     std::string values;
     for (double v : designs[d].values) values += "," + format_double(v);
     for (int t = 0; t < nt; ++t) {
       csv += std::to_string(d) + values + "," +
-             trajectory::csv_line(trajectory::summary_fields(results[d * nt + t]));
+             csv_line(trajectory::summary_fields(results[d * nt + t]));
     }
   }
   return csv;
@@ -304,9 +304,9 @@ int run(const Args& args) {
   return finish_run(&out, [&] { report(sweeps, designs, tasks, results, outcome); });
 }
 
-RunFunction setup(CLI::App* app) {
-  auto args = std::make_shared<Args>();
+void add_options(CLI::App* app, Args* args) {
   add_scene_options(app, &args->scene, "study");
+  add_plots_flag(app, &args->no_plots, "the heatmap");
   app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--sweep", args->sweeps, "KEY=LO:HI:N, a scene key swept over N values")
       ->required();
@@ -315,11 +315,9 @@ RunFunction setup(CLI::App* app) {
   app->add_flag("--global", args->settings.global, "multi-start optimization of every task");
   app->add_flag("--validate", args->settings.validate,
                 "simulate the optimal torques forward (miss_distance in study_tasks.csv)");
-  app->add_flag("--no-plots", args->no_plots, "do not draw the heatmap");
-  return [args] { return run(*args); };
 }
 
-const bool kRegistered = register_command({"study", kSummary, setup});
+const bool kRegistered = register_command(command_of("study", kSummary, add_options, run));
 
 }  // namespace
 }  // namespace fivebar::io

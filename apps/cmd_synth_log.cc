@@ -115,26 +115,36 @@ std::vector<std::string> truth_header(const Args& a, const Scene& scene) {
   return out;
 }
 
-// --torque-offset, --actuator-coulomb, --actuator-viscous: two values (tau1, tau2) each
+/// The actuator options: two values (tau1, tau2) each, in the order of set_actuators' targets.
+struct ActuatorOption {
+  const char* flag;
+  std::vector<double> Args::*values;
+  const char* help;
+};
+const ActuatorOption kActuatorOptions[] = {
+    {"--torque-offset", &Args::torque_offset,
+     "torque-sensor offsets of tau1, tau2 [N m] (measured = motor + offset)"},
+    {"--actuator-coulomb", &Args::actuator_coulomb,
+     "load-independent Coulomb friction of the motors at O, D0 [N m]"},
+    {"--actuator-viscous", &Args::actuator_viscous,
+     "viscous friction of the motors at O, D0 [N m s/rad]"}};
+
+// the scene's actuator terms overridden by the options given
 void set_actuators(const Args& a, Scene* scene) {
   ActuatorParams<double>& act = scene->params.actuators;
-  const std::pair<const char*, const std::vector<double>*> given[] = {
-      {"--torque-offset", &a.torque_offset},
-      {"--actuator-coulomb", &a.actuator_coulomb},
-      {"--actuator-viscous", &a.actuator_viscous}};
   std::array<double, kActuators>* dst[] = {&act.offset, &act.coulomb, &act.viscous};
   for (int g = 0; g < 3; ++g) {
-    const std::vector<double>& v = *given[g].second;
+    const std::vector<double>& v = a.*kActuatorOptions[g].values;
     if (v.empty()) continue;
     if (v.size() != kActuators) {
-      throw InputError("command line", given[g].first,
+      throw InputError("command line", kActuatorOptions[g].flag,
                        "expected two values A,B (tau1, tau2), got " + std::to_string(v.size()));
     }
     if (!std::isfinite(v[0]) || !std::isfinite(v[1])) {
-      throw InputError("command line", given[g].first, "values must be finite numbers");
+      throw InputError("command line", kActuatorOptions[g].flag, "values must be finite numbers");
     }
     if (g > 0 && !(v[0] >= 0 && v[1] >= 0)) {
-      throw InputError("command line", given[g].first, "must be >= 0");
+      throw InputError("command line", kActuatorOptions[g].flag, "must be >= 0");
     }
     *dst[g] = {v[0], v[1]};
   }
@@ -207,66 +217,52 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--set", args->sets, "override one scene value (KEY=VALUE)")
       ->type_name("KEY=VALUE")
       ->allow_extra_args(false);
-  app->add_option("--rate", args->so.rate_hz, "sampling rate [Hz]")->capture_default_str();
-  app->add_option("--duration", args->so.duration, "[s]")->capture_default_str();
-  app->add_option("--torque-noise", args->so.torque_noise, "Gaussian std on tau1, tau2 [N m]")
-      ->capture_default_str();
-  app->add_option("--angle-noise", args->so.angle_noise, "Gaussian std on theta1, theta2 [rad]")
-      ->capture_default_str();
-  app->add_option("--rate-noise", args->so.rate_noise, "Gaussian std on omega1, omega2 [rad/s]")
-      ->capture_default_str();
-  app->add_option("--seed", args->so.seed, "std::mt19937_64 seed")->capture_default_str();
-  app->add_option("--quantization", args->so.quantization, "encoder step [rad] (0: none)")
-      ->capture_default_str();
-  app->add_option("--excitation", args->excitation,
-                  "scene: the scene's M1, M2; multisine: built-in excitation reversing every joint")
-      ->capture_default_str();
+  app->option_defaults()->always_capture_default();  // the options below show their defaults
+  app->add_option("--rate", args->so.rate_hz, "sampling rate [Hz]");
+  app->add_option("--duration", args->so.duration, "[s]");
+  app->add_option("--torque-noise", args->so.torque_noise, "Gaussian std on tau1, tau2 [N m]");
+  app->add_option("--angle-noise", args->so.angle_noise, "Gaussian std on theta1, theta2 [rad]");
+  app->add_option("--rate-noise", args->so.rate_noise, "Gaussian std on omega1, omega2 [rad/s]");
+  app->add_option("--seed", args->so.seed, "std::mt19937_64 seed");
+  app->add_option("--quantization", args->so.quantization, "encoder step [rad] (0: none)");
+  app->add_option(
+      "--excitation", args->excitation,
+      "scene: the scene's M1, M2; multisine: built-in excitation reversing every joint");
   app->add_flag("--with-rates", args->so.with_rates, "write omega1,omega2,alpha1,alpha2 (exact)");
   app->add_option("--motion", args->motion,
                   "follow this motion (t,theta1,theta2,omega1,omega2,alpha1,alpha2; e.g. "
                   "excitation.csv of excite): torques by inverse dynamics; its grid replaces "
                   "--rate and --duration")
       ->type_name("MOTION.csv");
-  app->add_option("--torque-offset", args->torque_offset,
-                  "torque-sensor offsets of tau1, tau2 [N m] (measured = motor + offset)")
-      ->type_name("A,B")
-      ->delimiter(',');
-  app->add_option("--actuator-coulomb", args->actuator_coulomb,
-                  "load-independent Coulomb friction of the motors at O, D0 [N m]")
-      ->type_name("A,B")
-      ->delimiter(',');
-  app->add_option("--actuator-viscous", args->actuator_viscous,
-                  "viscous friction of the motors at O, D0 [N m s/rad]")
-      ->type_name("A,B")
-      ->delimiter(',');
+  for (const ActuatorOption& o : kActuatorOptions) {
+    app->add_option(o.flag, (*args).*o.values, o.help)
+        ->type_name("A,B")
+        ->default_str("")  // not given: the scene's
+        ->delimiter(',');
+  }
   app->add_option("--law", args->law,
                   "friction law of the log, overriding the scene's: coulomb_viscous | stribeck");
-  app->add_option("--static-coulomb", args->static_coulomb, "stribeck: mu_s of every joint")
-      ->capture_default_str();
+  app->add_option("--static-coulomb", args->static_coulomb, "stribeck: mu_s of every joint");
   app->add_option("--stribeck-velocity", args->stribeck_velocity,
-                  "stribeck: w_st of every joint [rad/s]")
-      ->capture_default_str();
-  app->add_option("--stribeck-exponent", args->stribeck_exponent, "stribeck: delta")
-      ->capture_default_str();
+                  "stribeck: w_st of every joint [rad/s]");
+  app->add_option("--stribeck-exponent", args->stribeck_exponent, "stribeck: delta");
   return [args] {
     // the command that regenerates this log, every option explicit
     const Args& a = *args;
     std::string cmd = "fivebar synth-log " + a.scene + " --out " + a.out;
     for (const std::string& s : a.sets) cmd += " --set " + s;
-    cmd += " --rate " + format_double(a.so.rate_hz) + " --duration " + format_double(a.so.duration) +
-           " --torque-noise " + format_double(a.so.torque_noise) + " --angle-noise " +
-           format_double(a.so.angle_noise) + " --seed " + std::to_string(a.so.seed) + " --excitation " +
-           a.excitation;
+    cmd += " --rate " + format_double(a.so.rate_hz) + " --duration " +
+           format_double(a.so.duration) + " --torque-noise " + format_double(a.so.torque_noise) +
+           " --angle-noise " + format_double(a.so.angle_noise) + " --seed " +
+           std::to_string(a.so.seed) + " --excitation " + a.excitation;
     if (!a.motion.empty()) cmd += " --motion " + a.motion;
     if (a.so.rate_noise > 0) cmd += " --rate-noise " + format_double(a.so.rate_noise);
     if (a.so.quantization > 0) cmd += " --quantization " + format_double(a.so.quantization);
     if (a.so.with_rates) cmd += " --with-rates";
-    const std::pair<const char*, const std::vector<double>*> pairs[] = {
-        {" --torque-offset ", &a.torque_offset},
-        {" --actuator-coulomb ", &a.actuator_coulomb},
-        {" --actuator-viscous ", &a.actuator_viscous}};
-    for (const auto& [flag, v] : pairs) {
-      if (v->size() == 2) cmd += flag + format_double((*v)[0]) + "," + format_double((*v)[1]);
+    for (const ActuatorOption& o : kActuatorOptions) {
+      const std::vector<double>& v = a.*o.values;
+      if (v.size() == 2)
+        cmd += " " + std::string(o.flag) + " " + format_double(v[0]) + "," + format_double(v[1]);
     }
     if (!a.law.empty()) cmd += " --law " + a.law;
     if (a.law == "stribeck") {

@@ -54,6 +54,10 @@ void add_scene_options(CLI::App* app, SceneArgs* args, const std::string& comman
       ->allow_extra_args(false);  // one KEY=VALUE per --set
 }
 
+void add_plots_flag(CLI::App* app, bool* no_plots, const std::string& figures) {
+  app->add_flag("--no-plots", *no_plots, "do not draw " + figures + " (PNG, with gnuplot)");
+}
+
 void print_written(const std::string& dir, const std::vector<std::string>& names) {
   std::cout << "  wrote " << dir << "/:";
   for (const std::string& name : names) std::cout << " " << name;

@@ -144,6 +144,12 @@ CsvTable read_csv(const std::string& path) {
   return table;
 }
 
+std::string csv_line(const std::vector<std::string>& fields) {
+  std::string line;
+  for (size_t i = 0; i < fields.size(); ++i) line += (i ? "," : "") + fields[i];
+  return line + "\n";
+}
+
 std::string csv_quote(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {

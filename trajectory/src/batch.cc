@@ -121,12 +121,6 @@ std::vector<std::string> summary_fields(const TaskResult& r) {
           quoted(r.continuation), quoted(r.refinement), quoted(r.message)};
 }
 
-std::string csv_line(const std::vector<std::string>& fields) {
-  std::string line;
-  for (size_t i = 0; i < fields.size(); ++i) line += (i ? "," : "") + fields[i];
-  return line + "\n";
-}
-
 std::uint64_t task_seed(const std::string& name, std::uint64_t seed) {
   std::uint64_t h = 0xcbf29ce484222325ULL;
   for (unsigned char c : name) {

@@ -233,8 +233,9 @@ inline void print_table(const std::string& peer, const std::vector<Measured>& pe
 
 /// The body of a peer benchmark's main(): the peer's rows measured against the reference, then
 /// fivebar's, then the table; an exception is reported on stderr with exit 1.
-inline int run_peer_bench(const char* program, const std::string& peer,
-                          const std::function<std::vector<Measured>(const Trajectory&)>& peer_rows) {
+inline int run_peer_bench(
+    const char* program, const std::string& peer,
+    const std::function<std::vector<Measured>(const Trajectory&)>& peer_rows) {
   try {
     const Trajectory ref = read_reference();
     const std::vector<Measured> rows = peer_rows(ref);

@@ -2,20 +2,24 @@
 // with a static initializer, so adding one never touches main.cc:
 //
 //   namespace {
-//   fivebar::io::RunFunction setup(CLI::App* app) {
-//     auto args = std::make_shared<Args>();
-//     app->add_option(...);                      // declare the options
-//     return [args] { return run(*args); };      // run after parsing
+//   struct Args { ... };                                 // what the options fill
+//   int run(const Args& args) { ... }                    // runs after parsing
+//   void add_options(CLI::App* app, Args* args) {
+//     app->add_option(...);                              // declare the options
 //   }
-//   const bool kRegistered = fivebar::io::register_command({"name", "one line", setup});
+//   const bool kRegistered =
+//       register_command(command_of("name", "one line", add_options, run));
 //   }  // namespace
 //
-// A run returns 0 on success and reports failure by throwing InputError (exit 2) or
-// NumericalError (exit 3); main() prints the one-line message.
+// A command whose run needs more than its Args (an option object, say) writes its own
+// Command::setup. A run returns 0 on success and reports failure by throwing InputError (exit 2)
+// or NumericalError (exit 3); main() prints the one-line message.
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace CLI {
@@ -36,6 +40,18 @@ struct Command {
   std::function<RunFunction(CLI::App* app)> setup;
 };
 
+/// The Command of a subcommand whose options fill an `Args` and whose run takes them: the
+/// arguments live as long as the parsed command.
+template <typename Args>
+Command command_of(std::string name, std::string description,
+                   void (*add_options)(CLI::App*, Args*), int (*run)(const Args&)) {
+  return {std::move(name), std::move(description), [add_options, run](CLI::App* app) {
+            auto args = std::make_shared<Args>();
+            add_options(app, args.get());
+            return RunFunction([args, run] { return run(*args); });
+          }};
+}
+
 /// Adds a command to the registry; returns true (for use in a static initializer).
 bool register_command(Command command);
 
@@ -51,6 +67,9 @@ struct SceneArgs {
 
 /// Declares SCENE, --out and --set on `app` (a subcommand named `command`).
 void add_scene_options(CLI::App* app, SceneArgs* args, const std::string& command);
+
+/// Declares --no-plots, which skips drawing `figures` (the PNG files gnuplot draws).
+void add_plots_flag(CLI::App* app, bool* no_plots, const std::string& figures);
 
 /// Declares --out DIR (default results/<command>) alone.
 void add_out_option(CLI::App* app, std::string* out, const std::string& command);

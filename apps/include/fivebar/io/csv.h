@@ -53,6 +53,10 @@ CsvTable parse_csv(const std::string& text, const std::string& path, const CsvRu
 /// or a field that is not a finite number.
 CsvTable read_csv(const std::string& path);
 
+/// One CSV line: the fields joined by commas, and a newline (fields are written as given: quote
+/// text that may hold commas with csv_quote).
+std::string csv_line(const std::vector<std::string>& fields);
+
 /// `s` as one CSV field: in double quotes, a quote doubled (RFC 4180), a newline written as a
 /// space (one record per line).
 std::string csv_quote(const std::string& s);

@@ -171,8 +171,6 @@ std::vector<TaskResult> run_parallel(int count, int threads,
 const std::vector<std::string>& summary_columns();
 /// The fields of one summary.csv row (numbers as %.17g; the message quoted as CSV text).
 std::vector<std::string> summary_fields(const TaskResult& result);
-/// A line of comma-separated fields.
-std::string csv_line(const std::vector<std::string>& fields);
 
 /// Serialization of a result (for MPI transfer): decode(encode(r)) == r, bit for bit.
 std::string encode(const TaskResult& result);
