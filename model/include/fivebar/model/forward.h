@@ -123,6 +123,11 @@ Status forward_pass(const Params<T>& p, const Loads<T>& L, const T& th1, const T
   std::array<T, kJoints> hold{};  // holding torques of the stuck joints
   // accelerations and reactions for the friction torques Mf of the slipping joints
   auto solve = [&](const std::array<T, kJoints>& Mf, std::array<Vec2<T>, kJoints>* F) {
+    if (stuck.count == 0) {  // every joint slips or rests: no holding torque (the common case)
+      ev->thdd = Ainv * (rhs0 - friction_transpose(k, Mf));
+      reactions(p, k, ev->bias, L, Fvec, ev->thdd, Mf, F, &ev->alpha3, &ev->alpha4);
+      return;
+    }
     std::array<T, kJoints> Mf_all = Mf;
     for (int i = 0; i < stuck.count; ++i) Mf_all[stuck.joint[i]] = T(0);
     const Vec2<T> r = rhs0 - friction_transpose(k, Mf_all);
