@@ -1,7 +1,6 @@
 // Issue 12, the solve time: the node-wise Hessian of the preconditioner, the local form of the
 // constraint gradients, evaluations on several threads, and the stall test of local solves.
 // Counts and numbers only (deterministic), no timing.
-#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -156,61 +155,6 @@ TEST(Optimizer, ScreeningEndsItsFirstRoundEarlyAtTheSameOptimum) {
   EXPECT_LE(b.max_node_constraint, 10 * early.constraint_tol);
   EXPECT_LT(b.objective, a.objective * (1 + 1e-4)) << a.objective << " " << b.objective;
   EXPECT_LT(b.evaluations, a.evaluations) << a.evaluations << " " << b.evaluations;
-}
-
-TEST(Problem, SlowVariablesAreTheControlPointsWhereACrankTurnsSlowly) {
-  const Swing s(25, 0.05);
-  const TrajectoryProblem& p = *s.problem;
-  const int nv = p.num_variables();
-  EXPECT_TRUE(p.slow_variables(s.x.data(), 0.0, 2).empty());
-  EXPECT_EQ(static_cast<int>(p.slow_variables(s.x.data(), 1e9, 0).size()), nv);
-  // the rest-to-rest ends turn slowly: some variables, not all
-  const double rate = 0.3;
-  const std::vector<int> v0 = p.slow_variables(s.x.data(), rate, 0);
-  const std::vector<int> v2 = p.slow_variables(s.x.data(), rate, 2);
-  ASSERT_FALSE(v0.empty());
-  EXPECT_LT(v0.size(), v2.size());
-  EXPECT_LT(static_cast<int>(v2.size()), nv);
-  EXPECT_TRUE(std::is_sorted(v2.begin(), v2.end()));
-  EXPECT_TRUE(std::includes(v2.begin(), v2.end(), v0.begin(), v0.end()));
-  // both joints of each control point; the first free ones (the start, at rest) among them
-  const int nf = p.motion().free_per_joint();
-  for (int v : v0) {
-    const int other = v < nf ? v + nf : v - nf;
-    EXPECT_TRUE(std::binary_search(v0.begin(), v0.end(), other)) << v;
-  }
-  EXPECT_EQ(v0.front(), 0);
-  EXPECT_TRUE(std::binary_search(v0.begin(), v0.end(), nf - 1));  // the goal, at rest
-}
-
-TEST(Optimizer, FreeVariablesMoveAloneAndAllFreeIsTheFullSolve) {
-  // swing_right at 25 control points under the near-exact law, from a perturbed start
-  const Swing s(25, 4e-4);
-  const TrajectoryProblem& p = *s.problem;
-  OptimizerOptions full, all, some;
-  for (int v = 0; v < p.num_variables(); ++v) all.free_variables.push_back(v);
-  some.free_variables = p.slow_variables(s.x.data(), 0.3, 2);
-  ASSERT_LT(some.free_variables.size(), all.free_variables.size());
-  const OptimizeResult a = optimize(p, s.x, full), b = optimize(p, s.x, all),
-                       c = optimize(p, s.x, some);
-  ASSERT_TRUE(a.solver.usable()) << a.solver.message;
-  // every variable free: the same preconditioner, the same solve
-  EXPECT_EQ(a.x, b.x);
-  EXPECT_EQ(a.evaluations, b.evaluations);
-  // some free: the others stay where they were, the objective falls, the rows hold
-  ASSERT_TRUE(c.solver.usable()) << c.solver.message;
-  double f0 = 0;
-  ASSERT_TRUE(p.objective(s.x.data(), &f0).ok());
-  EXPECT_LT(c.objective, f0);
-  EXPECT_LE(c.max_node_constraint, 10 * some.constraint_tol);
-  std::vector<char> is_free(p.num_variables(), 0);
-  for (int v : some.free_variables) is_free[v] = 1;
-  int moved = 0;
-  for (int v = 0; v < p.num_variables(); ++v) {
-    if (!is_free[v]) EXPECT_EQ(c.x[v], s.x[v]) << v;
-    moved += is_free[v] && c.x[v] != s.x[v];
-  }
-  EXPECT_GT(moved, 0);
 }
 
 TEST(Batch, NodeThreadsGiveTheSameResult) {

@@ -113,9 +113,8 @@ struct Stall {
   }
 };
 
-// the variables NLopt sees: x itself, or y with x = origin + T y (a Preconditioner; y has
-// T.cols() values, fewer than x when some variables are held); and the constraint rows handed
-// to it (all of them, or the screened subset)
+// the variables NLopt sees: x itself, or y with x = origin + T y (a Preconditioner); and the
+// constraint rows handed to it (all of them, or the screened subset)
 struct View {
   Cache* cache;
   const std::vector<int>* rows;
@@ -123,7 +122,6 @@ struct View {
   Eigen::VectorXd origin, x;
   Stall* stall;
   const std::vector<std::array<int, kLocalVariables>>* node_vars;
-  int nx;  // the problem's variables
 
   const Evaluated& at(const double* y, unsigned n, bool grad) {
     const double* px = y;
@@ -133,7 +131,7 @@ struct View {
     }
     const int before = cache->evaluations();
     const Evaluated& e = cache->at(px, grad);
-    if (cache->evaluations() != before) stall->record(px, nx, e, *rows, grad);
+    if (cache->evaluations() != before) stall->record(px, static_cast<int>(n), e, *rows, grad);
     return e;
   }
   // the local gradient of constraint row `row` (Evaluated::constraints_grad_local) as a dense
@@ -162,7 +160,7 @@ struct View {
     // on the 12 control points around its node only
     Eigen::Map<Eigen::VectorXd> o(out, n);
     o.setZero();
-    for (int k = 0; k < nx; ++k) {
+    for (unsigned k = 0; k < n; ++k) {
       if (g[k] != 0.0) o += g[k] * pre->Tt.col(k);
     }
   }
@@ -236,7 +234,7 @@ void finish_run(const View& view, const Stall& stall, int code, std::exception_p
     const int n = static_cast<int>(y.size());
     const Eigen::VectorXd x =
         view.origin + view.pre->T * Eigen::Map<const Eigen::VectorXd>(y.data(), n);
-    out->x.assign(x.data(), x.data() + x.size());
+    out->x.assign(x.data(), x.data() + n);
   } else {
     out->x = y;
   }
@@ -255,15 +253,14 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
   if (static_cast<int>(rows.size()) < problem.num_constraints()) stall.screened = screened;
   std::vector<std::array<int, kLocalVariables>> node_vars(problem.num_nodes());
   for (int q = 0; q < problem.num_nodes(); ++q) node_vars[q] = problem.node_variables(q);
-  View view{&cache, &rows, pre && pre->active ? pre : nullptr, {}, {}, &stall, &node_vars, n};
-  const int ny = view.pre ? static_cast<int>(view.pre->T.cols()) : n;
+  View view{&cache, &rows, pre && pre->active ? pre : nullptr, {}, {}, &stall, &node_vars};
   Local out;
   out.x = x0;
   int code = 0;
   std::exception_ptr error;
   std::vector<double> y;
   try {
-    nlopt::opt opt(nlopt_algorithm(options.method), ny);
+    nlopt::opt opt(nlopt_algorithm(options.method), n);
     stall.opt = &opt;
     std::vector<double> lo, hi;
     box_of(problem, &lo, &hi, &out.x);
@@ -271,7 +268,7 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
     if (view.pre) {
       // y = 0 at the start; the box (never reached by SLSQP's steps in practice) is left out
       view.origin = Eigen::Map<const Eigen::VectorXd>(out.x.data(), n);
-      y.assign(ny, 0.0);
+      y.assign(n, 0.0);
     } else {
       opt.set_lower_bounds(lo);
       opt.set_upper_bounds(hi);
@@ -305,29 +302,11 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
 // the preconditioner of a solve from x0, when the options ask for one (inactive otherwise)
 Preconditioner preconditioner_of(const TrajectoryProblem& problem, const std::vector<double>& x0,
                                  const OptimizerOptions& options) {
-  if (!options.free_variables.empty()) {
-    return free_preconditioner(problem, x0, options.free_variables);
-  }
   if (!options.precondition || options.method != Method::kSlsqp ||
       problem.num_variables() < options.precondition_min_variables) {
     return {};
   }
   return objective_preconditioner(problem, x0);
-}
-
-// which constraint rows depend on a variable the solve may move (every row when all are free):
-// the others are constant and left out
-std::vector<char> movable_rows(const TrajectoryProblem& problem, const std::vector<int>& free) {
-  const int m = problem.num_constraints();
-  if (free.empty()) return std::vector<char>(m, 1);
-  std::vector<char> is_free(problem.num_variables(), 0), movable(m, 0);
-  for (int v : free) is_free[v] = 1;
-  for (int q = 0; q < problem.num_nodes(); ++q) {
-    for (int v : problem.node_variables(q)) {
-      if (v >= 0 && is_free[v]) movable[3 * q] = movable[3 * q + 1] = movable[3 * q + 2] = 1;
-    }
-  }
-  return movable;
 }
 
 // A local solve under the constraints that matter (OptimizerOptions::screen): the rows with
@@ -340,11 +319,8 @@ std::vector<char> movable_rows(const TrajectoryProblem& problem, const std::vect
 Local solve_screened(const TrajectoryProblem& problem, const std::vector<double>& x0,
                      const OptimizerOptions& options, double penalty) {
   const int m = problem.num_constraints();
-  const std::vector<char> movable = movable_rows(problem, options.free_variables);
-  std::vector<int> all;
-  for (int i = 0; i < m; ++i) {
-    if (movable[i]) all.push_back(i);
-  }
+  std::vector<int> all(m);
+  for (int i = 0; i < m; ++i) all[i] = i;
   // one preconditioner for every round (its evaluations count in the limit)
   const Preconditioner pre = preconditioner_of(problem, x0, options);
   OptimizerOptions budget = options;
@@ -356,19 +332,19 @@ Local solve_screened(const TrajectoryProblem& problem, const std::vector<double>
     return out;
   }
   std::vector<char> in(m, 0);
-  for (int i = 0; i < m; ++i) in[i] = !movable[i] || e.constraints[i] > -options.screen;
+  for (int i = 0; i < m; ++i) in[i] = e.constraints[i] > -options.screen;
   std::vector<double> x = x0;
   int evaluations = pre.evaluations;
   Local out;
   for (int round = 0; round < 4; ++round) {
     std::vector<int> rows;
     for (int i = 0; i < m; ++i) {
-      if (movable[i] && (in[i] || round == 3)) rows.push_back(i);
+      if (in[i] || round == 3) rows.push_back(i);
     }
     budget.max_evaluations = std::max(1, options.max_evaluations - evaluations);  // shared
     out = solve_local(problem, x, budget, penalty, rows, &pre, round == 0 && options.screen_early_end ? &in : nullptr);
     evaluations += out.evaluations;
-    if (!out.evaluated || rows.size() == all.size()) break;
+    if (!out.evaluated || static_cast<int>(rows.size()) == m) break;
     bool violated = out.escaped;
     for (int i = 0; i < m; ++i) {
       if (in[i] || !(out.constraints[i] > -options.screen)) continue;
@@ -435,17 +411,12 @@ OptimizeResult optimize(const TrajectoryProblem& problem, const std::vector<doub
   if (options.global) {
     Normal normal(options.seed);
     const int nf = problem.motion().free_per_joint();
-    std::vector<char> held(2 * nf, options.free_variables.empty() ? 0 : 1);
-    for (int v : options.free_variables) held[v] = 0;
     for (int s = 1; s < options.starts; ++s) {
       std::vector<double> xs = x0;
       for (int j = 0; j < 2; ++j) {
         const double scale = options.spread * (std::abs(problem.motion().goal()[j] -
                                                         problem.motion().start()[j]) + 0.1);
-        for (int v = 0; v < nf; ++v) {
-          const double d = scale * normal();  // drawn for every variable (same seeds)
-          if (!held[j * nf + v]) xs[j * nf + v] += d;
-        }
+        for (int v = 0; v < nf; ++v) xs[j * nf + v] += scale * normal();
       }
       Local local = solve_screened(problem, xs, options, penalty);
       ++result.starts;

@@ -39,33 +39,4 @@ Preconditioner objective_preconditioner(const TrajectoryProblem& problem,
   return p;
 }
 
-Preconditioner free_preconditioner(const TrajectoryProblem& problem,
-                                   const std::vector<double>& x0, const std::vector<int>& free) {
-  Preconditioner p;
-  const int nv = problem.num_variables(), k = static_cast<int>(free.size());
-  p.evaluations = kHessianEvaluations;
-  p.active = true;
-  p.T = Eigen::MatrixXd::Zero(nv, k);
-  std::vector<double> h;
-  Eigen::MatrixXd Tf;
-  bool scaled = false;
-  if (problem.objective_hessian(x0.data(), &h).ok()) {
-    const Eigen::Map<const Eigen::MatrixXd> H(h.data(), nv, nv);
-    Eigen::MatrixXd Hf(k, k);
-    for (int a = 0; a < k; ++a) {
-      for (int b = 0; b < k; ++b) Hf(a, b) = H(free[a], free[b]);
-    }
-    scaled = scaling_of(Hf, &Tf);
-  }
-  for (int a = 0; a < k; ++a) {
-    if (scaled) {
-      p.T.row(free[a]) = Tf.row(a);
-    } else {
-      p.T(free[a], a) = 1.0;
-    }
-  }
-  p.Tt = p.T.transpose();
-  return p;
-}
-
 }  // namespace fivebar::trajectory

@@ -18,7 +18,7 @@ namespace fivebar::trajectory {
 
 struct Preconditioner {
   bool active = false;
-  Eigen::MatrixXd T;   ///< x - origin = T y (nv x k: k = nv, or the free variables)
+  Eigen::MatrixXd T;   ///< x - origin = T y (nv x nv)
   Eigen::MatrixXd Tt;  ///< T transposed (its columns are the rows of T)
   int evaluations = 0;  ///< problem evaluations spent to build it
 };
@@ -32,12 +32,5 @@ struct Preconditioner {
 /// cannot be evaluated.
 Preconditioner objective_preconditioner(const TrajectoryProblem& problem,
                                          const std::vector<double>& x0);
-
-/// The same restricted to the variables `free` (increasing indices): T (nv x k) scales the
-/// Hessian's principal submatrix of the free variables, its rows of the others are zero. When
-/// the Hessian cannot be evaluated or scaled, T selects the free variables unscaled (active:
-/// NLopt must still see k variables only).
-Preconditioner free_preconditioner(const TrajectoryProblem& problem,
-                                   const std::vector<double>& x0, const std::vector<int>& free);
 
 }  // namespace fivebar::trajectory

@@ -141,13 +141,6 @@ TrajectoryProblem::TrajectoryProblem(const Params<double>& params, const sim::Lo
       nodes_.push_back(node);
     }
   }
-  if (options.gradient_variables.empty()) return;
-  std::vector<char> wanted(num_variables(), 0);
-  for (int v : options.gradient_variables) wanted[v] = 1;
-  for (int q = 0; q < num_nodes(); ++q) {
-    const std::array<int, kLocalVariables> vars = node_variables(q);
-    nodes_[q].jets = std::any_of(vars.begin(), vars.end(), [&](int v) { return v >= 0 && wanted[v]; });
-  }
 }
 
 std::array<double, 6> TrajectoryProblem::node_state(const double* x, const Node& node) const {
@@ -178,27 +171,6 @@ std::array<int, kLocalVariables> TrajectoryProblem::node_variables(int node) con
     for (int j = 0; j < 2; ++j) v[2 * i + j] = variable_of(nodes_[node].basis.first + i, j);
   }
   return v;
-}
-
-std::vector<int> TrajectoryProblem::slow_variables(const double* x, double rate,
-                                                  int margin) const {
-  const int n = motion_.basis().size();
-  std::vector<char> near(n, 0);
-  for (const Node& node : nodes_) {
-    const std::array<double, 6> s = node_state(x, node);
-    if (!(std::abs(s[2]) < rate || std::abs(s[3]) < rate)) continue;
-    const int lo = std::max(0, node.basis.first - margin);
-    const int hi = std::min(n - 1, node.basis.first + kDegree + margin);
-    for (int c = lo; c <= hi; ++c) near[c] = 1;
-  }
-  std::vector<int> out;
-  for (int j = 0; j < 2; ++j) {
-    for (int c = 0; c < n; ++c) {
-      const int v = variable_of(c, j);
-      if (near[c] && v >= 0) out.push_back(v);
-    }
-  }
-  return out;
 }
 
 // one node: integrand, torques and (Jets) their gradients in the node state
@@ -271,8 +243,7 @@ Status TrajectoryProblem::evaluate_nodes(const double* x, Gradients how, int beg
     const Node& node = nodes_[q];
     const std::array<double, 6> s = node_state(x, node);
     NodeValues v;
-    const bool jets = how != Gradients::kNone && node.jets;
-    const Status st = node_pass(jets ? &pj : nullptr, node, s, &v);
+    const Status st = node_pass(how == Gradients::kNone ? nullptr : &pj, node, s, &v);
     if (!st.ok()) return st;
     double* share = &(*shares)[static_cast<size_t>(q) * (1 + kLocalVariables)];
     share[0] = node.weight * v.f;
@@ -363,7 +334,6 @@ Status TrajectoryProblem::objective_hessian(const double* x, std::vector<double>
   hessian->assign(static_cast<size_t>(nv) * nv, 0.0);
   const Params<Jet6> pj = params_.cast<Jet6>();
   for (const Node& node : nodes_) {
-    if (!node.jets) continue;  // no wanted variable: its share is outside the wanted block
     std::array<std::array<double, 6>, 6> hs{};
     const Status st = node_hessian(pj, node, node_state(x, node), &hs);
     if (!st.ok()) return st;

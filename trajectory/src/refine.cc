@@ -136,20 +136,9 @@ Candidate continuation(const Params<double>& params, const sim::LoadFunction& lo
   polish.max_evaluations =
       std::min(optimizer.max_evaluations, options.refine.continuation_max_evaluations);
   polish.stall_rtol = std::max(optimizer.stall_rtol, options.refine.continuation_stall_rtol);
-  double from = best.smoothing_velocity;
-  BatchOptions held = options;
   for (double ws : options.refine.continuation) {
-    polish.free_variables.clear();
-    if (options.refine.continuation_slow_factor > 0) {
-      const TrajectoryProblem p(params, loads, motion,
-                                stage_options(options, motion, from, r->torque_limit));
-      polish.free_variables = p.slow_variables(
-          warm.data(), options.refine.continuation_slow_factor * from,
-          options.refine.continuation_margin);
-    }
-    held.problem.gradient_variables = polish.free_variables;
-    from = ws;
-    Candidate c = solve_stage(params, loads, motion, ws, warm, held, r->torque_limit, polish);
+    Candidate c = solve_stage(params, loads, motion, ws, warm, options, r->torque_limit,
+                              polish);
     r->evaluations += c.evaluations;
     if (c.solved() && c.solver.usable()) warm = c.x;
     const bool kept = better(c, best, options);

@@ -41,12 +41,6 @@ struct RefineOptions {
   int continuation_max_evaluations = 100;
   /// stall tolerance of the continuation's solves (OptimizerOptions::stall_rtol, when larger)
   double continuation_stall_rtol = 1e-4;
-  /// the continuation's solves move only the control points that act where a crank turns
-  /// slower than this multiple of the w_s it starts from, and continuation_margin more on
-  /// either side (TrajectoryProblem::slow_variables): elsewhere the two laws agree to
-  /// 1 - tanh(6) = 1.2e-5 and the others stay; 0: the whole spline
-  double continuation_slow_factor = 6.0;
-  int continuation_margin = 2;
   /// control points per joint tried after the first solve's count (only the larger ones),
   /// until the exact-law objective changes by less than `tol` (relative) from one to the next;
   /// empty: no refinement (`fivebar optimize` uses kRefineLevels)

@@ -58,10 +58,6 @@ struct OptimizerOptions {
   double stall_rtol = 1e-5;
   int stall_iterations = 10;
   double stall_feasibility_tol = 1e-6;
-  /// The variables a solve may move (indices, increasing); the others stay at the start's
-  /// values. Empty: all of them. NLopt then works in the free variables alone (through the
-  /// preconditioner's T, n x k, or a selection when there is none): its dense QP is k wide.
-  std::vector<int> free_variables;
 };
 
 struct OptimizeResult {

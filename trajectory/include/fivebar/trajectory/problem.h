@@ -47,11 +47,6 @@ struct ProblemOptions {
   /// objective and its gradient are summed in node order afterwards: the same numbers for any
   /// count.
   int threads = 1;
-  /// The variables whose derivatives are wanted (increasing; empty: all). A node whose state
-  /// depends on none of them is evaluated in double, without Jets, and its torques' and
-  /// integrand's derivatives are left zero (a solve that holds the other variables:
-  /// OptimizerOptions::free_variables).
-  std::vector<int> gradient_variables;
 };
 
 /// The friction parameters actually used along trajectories: `params` with smoothing_velocity
@@ -128,10 +123,6 @@ class TrajectoryProblem {
   /// The free variables of the local gradients of node `node`'s rows: entry 2 i + j is control
   /// point i of the node's six of joint j, -1 where it is a fixed end point.
   std::array<int, kLocalVariables> node_variables(int node) const;
-  /// The variables (increasing) of the control points that act on a node where either crank
-  /// turns slower than `rate` [rad/s] at x, with `margin` more control points on either side,
-  /// both joints: where the smoothed friction law differs from the exact one.
-  std::vector<int> slow_variables(const double* x, double rate, int margin) const;
   /// Objective only, in double (no Jets).
   Status objective(const double* x, double* value) const;
   /// Hessian of the objective at x (num_variables()^2 values, row-major, symmetric):
@@ -168,7 +159,6 @@ class TrajectoryProblem {
     double t, weight;
     BasisAt basis;
     Loads<double> loads;
-    bool jets = true;  // depends on a variable of options.gradient_variables
   };
   enum class Gradients { kNone, kDense, kLocal };
   struct NodeValues {
