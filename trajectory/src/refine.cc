@@ -136,6 +136,8 @@ Candidate continuation(const Params<double>& params, const sim::LoadFunction& lo
   polish.max_evaluations =
       std::min(optimizer.max_evaluations, options.refine.continuation_max_evaluations);
   polish.stall_rtol = std::max(optimizer.stall_rtol, options.refine.continuation_stall_rtol);
+  polish.stall_iterations =
+      std::min(optimizer.stall_iterations, options.refine.continuation_stall_iterations);
   for (double ws : options.refine.continuation) {
     Candidate c = solve_stage(params, loads, motion, ws, warm, options, r->torque_limit,
                               polish);
