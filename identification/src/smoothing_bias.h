@@ -21,9 +21,10 @@ namespace fivebar::identification::detail {
 /// acceleration's leading error (order 5: degree 6; the rate's, degree 7, is smaller by two
 /// powers of the window). Measured on the paper log (2 s, 1 kHz, angle noise 1e-5 rad, predicted
 /// viscous bias at half-window 12 samples, noise-free -9.55e-6 by refitting): with degree 6 over
-/// +-24 samples, -9.70e-6 noise-free and -7.8e-6, -8.1e-6 on two noisy draws; with degree 8 the
-/// noise-free prediction is as good (-9.65e-6) but the noisy draws scatter by +-1.5e-5 (the two
-/// extra coefficients cost far more in noise than they gain in bias).
+/// +-2 times the residual rule's window, -9.70e-6 noise-free and -7.8e-6, -8.1e-6 on two noisy
+/// logs; with degree 8 the noise-free prediction is as good (-9.65e-6) but the noisy logs scatter
+/// by +-1.5e-5 (the two extra coefficients cost far more in noise than they gain in bias;
+/// docs/figures-logs.md, round bias16).
 constexpr int kReconExtra = 1;
 
 /// The terms of degree order + 1 .. order + kReconExtra of the least-squares polynomial of degree
