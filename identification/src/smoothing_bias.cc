@@ -1,0 +1,91 @@
+// Predicted Savitzky-Golay smoothing bias of the fitted coefficients (see smoothing_bias.h).
+#include "smoothing_bias.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+namespace fivebar::identification::detail {
+
+Eigen::VectorXd high_order_terms(const std::vector<double>& t, const std::vector<double>& x, int i,
+                                 int a, int b, double dt, int order) {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(kReconExtra);
+  const int deg = std::min(order + kReconExtra, b - a);
+  if (deg <= order) return out;
+  // the offsets scaled by the window's reach keep the powers near 1 (conditioning)
+  const double reach = std::max({i - a, b - i, 1}) * dt;
+  Eigen::MatrixXd V(b - a + 1, deg + 1);
+  Eigen::VectorXd y(b - a + 1);
+  for (int r = 0; r <= b - a; ++r) {
+    const double u = (t[a + r] - t[i]) / reach;
+    double p = 1.0;
+    for (int c = 0; c <= deg; ++c, p *= u) V(r, c) = p;
+    y(r) = x[a + r];
+  }
+  const Eigen::VectorXd coef = V.colPivHouseholderQr().solve(y);
+  for (int k = order + 1; k <= deg; ++k) {
+    out(k - order - 1) = coef(k) * std::pow(dt / reach, k);  // per ((t - t_i) / dt)^k
+  }
+  return out;
+}
+
+void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen::VectorXd* r2) {
+  const int m = sg_half_window(sg, dt);
+  std::vector<double> tu(2 * m + 1);
+  for (int r = 0; r <= 2 * m; ++r) tu[r] = (r - m) * dt;
+  int lo = 0;
+  std::vector<double> d1, d2;
+  savitzky_golay_taps(tu, m, sg, &lo, &d1, &d2);
+  r1->setZero(kReconExtra);
+  r2->setZero(kReconExtra);
+  for (int e = 0; e < kReconExtra; ++e) {
+    const int k = sg.order + 1 + e;
+    for (size_t r = 0; r < d1.size(); ++r) {
+      const double p = std::pow(static_cast<double>(lo + static_cast<int>(r) - m), k);
+      (*r1)(e) += d1[r] * p;
+      (*r2)(e) += d2[r] * p;
+    }
+  }
+}
+
+bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
+                    const std::vector<char>& keep, const SgOptions& sg, Eigen::VectorXd* bias,
+                    Eigen::VectorXd* std) {
+  if (in.source != RateSource::kFromAngles || t.size() < 2) return false;
+  const int P = static_cast<int>(in.J.cols());
+  const int kept = static_cast<int>(std::count(keep.begin(), keep.end(), 1));
+  if (kept < P + 1) return false;
+  const double dt = (t.back() - t.front()) / (static_cast<double>(t.size()) - 1);
+  Eigen::VectorXd r1, r2;
+  filter_response(sg, dt, &r1, &r2);
+  Eigen::MatrixXd J(2 * kept, P);
+  Eigen::VectorXd dM(2 * kept);
+  std::vector<Sensitivity> sens;
+  sens.reserve(kept);
+  for (size_t u = 0, k = 0; u < keep.size(); ++u) {
+    if (!keep[u]) continue;
+    Eigen::Vector2d m = Eigen::Vector2d::Zero();
+    for (int c = 0; c < 2; ++c) {
+      m += in.D[u].col(2 + c) * in.terms[c][u].dot(r1) + in.D[u].col(4 + c) * in.terms[c][u].dot(r2);
+    }
+    dM.segment<2>(2 * k) = m;
+    J.middleRows(2 * k, 2) = in.J.middleRows(2 * u, 2);
+    sens.push_back(sensitivity(t, in.index[u], in.source, sg, in.noise, in.D[u]));
+    ++k;
+  }
+  const Eigen::MatrixXd H = J.transpose() * J + in.Hp;
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(H);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
+  const Eigen::MatrixXd Hinv = ldlt.solve(Eigen::MatrixXd::Identity(P, P));
+  // the model's torque M is off by dM where the residual r = tau - M is evaluated with biased
+  // rates; the Gauss-Newton step from the truth moves x by (J^T J)^-1 J^T dM (J = d r / d x)
+  const Eigen::VectorXd b = in.T * (Hinv * (J.transpose() * dM));
+  const Eigen::MatrixXd S = score_covariance(J, sens, in.noise, static_cast<int>(t.size())) +
+                            in.s2 * in.Hp;
+  const Eigen::MatrixXd C = in.T * Hinv * S * Hinv * in.T.transpose();
+  *bias = b.head(in.friction_size);
+  *std = C.diagonal().head(in.friction_size).cwiseMax(0.0).cwiseSqrt();
+  return bias->allFinite() && std->allFinite();
+}
+
+}  // namespace fivebar::identification::detail

@@ -1,0 +1,60 @@
+// Internal to identification: the bias that Savitzky-Golay smoothing puts on the fitted
+// coefficients, predicted deterministically. The filter of order p keeps polynomials up to degree
+// p exactly, so its error on a smooth motion comes from the motion's higher terms. These are read
+// off a local polynomial reconstruction of degree p + kReconExtra over a wider window (where the
+// angle noise averages out), the filter is applied to them (equivalently: the filter applied to
+// the reconstruction minus the reconstruction's exact derivatives), and the rate and acceleration
+// errors are propagated through the inverse dynamics to the coefficients (one Gauss-Newton step
+// from the truth). Nothing is refitted, so the prediction has no window-to-window noise; its own
+// noise comes from the angle noise through the reconstruction, small against the std.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "fivebar/identification/rates.h"
+#include "noise_model.h"
+
+namespace fivebar::identification::detail {
+
+/// Degrees above the filter's order that the reconstruction carries: one, the term of the
+/// acceleration's leading error (order 5: degree 6; the rate's, degree 7, is smaller by two
+/// powers of the window). Measured on the paper log (2 s, 1 kHz, angle noise 1e-5 rad, predicted
+/// viscous bias at half-window 12 samples, noise-free -9.55e-6 by refitting): with degree 6 over
+/// +-2 times the residual rule's window, -9.70e-6 noise-free and -7.8e-6, -8.1e-6 on two noisy
+/// logs; with degree 8 the noise-free prediction is as good (-9.65e-6) but the noisy logs scatter
+/// by +-1.5e-5 (the two extra coefficients cost far more in noise than they gain in bias;
+/// docs/figures-logs.md, round bias16).
+constexpr int kReconExtra = 1;
+
+/// The terms of degree order + 1 .. order + kReconExtra of the least-squares polynomial of degree
+/// order + kReconExtra through x over the samples [a, b] (fewer where b - a is too short), as
+/// coefficients of ((t - t_i) / dt)^k.
+Eigen::VectorXd high_order_terms(const std::vector<double>& t, const std::vector<double>& x, int i,
+                                 int a, int b, double dt, int order);
+
+/// The filter's rate (r1) and acceleration (r2) response to ((t - t_i) / dt)^k for k = order + 1
+/// .. order + kReconExtra, on a uniform grid of step dt (it reproduces lower degrees exactly).
+void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen::VectorXd* r2);
+
+/// What the prediction needs about the samples of a fit, at its parameters.
+struct BiasInputs {
+  std::vector<int> index;  ///< log index of each sample
+  Eigen::MatrixXd J;       ///< d residual / d x (internal layout), 2 rows per sample
+  std::vector<Eigen::Matrix<double, 2, 6>> D;  ///< kinematic Jacobians (noise_model.h)
+  std::vector<Eigen::VectorXd> terms[2];       ///< high_order_terms of each crank's angle
+  Eigen::MatrixXd Hp;  ///< prior information (J^T J units) and its score scale s2
+  double s2 = 0;
+  Eigen::MatrixXd T;  ///< internal to public parameters
+  int friction_size = 0;
+  RateSource source = RateSource::kFromAngles;
+  SensorNoise noise;
+};
+
+/// Predicted smoothing bias and errors-in-variables std of the public friction coefficients for
+/// the filter `sg`, over the samples u with keep[u] (false when too few or singular).
+bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
+                    const std::vector<char>& keep, const SgOptions& sg, Eigen::VectorXd* bias,
+                    Eigen::VectorXd* std);
+
+}  // namespace fivebar::identification::detail
