@@ -156,7 +156,7 @@ std::vector<int> pair_hits(const std::vector<double>& t, const std::vector<doubl
 
 /// Rejects isolated glitches of one column in place; returns the glitches found.
 std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double sigmas,
-                                  std::vector<double>* x, double* noise) {
+                                  std::vector<double>* x, double* noise, double min_threshold) {
   std::vector<Glitch> found;
   const int n = static_cast<int>(x->size());
   if (n < 8) return found;
@@ -164,7 +164,7 @@ std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double
   // (acceleration jumps at slip reversals) that leave the cubic by ~0.1 of them
   std::vector<double> d2;
   for (int i = 1; i + 1 < n; ++i) d2.push_back((*x)[i + 1] - 2 * (*x)[i] + (*x)[i - 1]);
-  const double curvature_floor = 10.0 * median_abs(d2);
+  const double curvature_floor = std::max(10.0 * median_abs(d2), min_threshold);
   for (int pass = 0; pass < 4; ++pass) {
     std::vector<double> expected;
     const std::vector<double> z = loo_deviation(log.t, *x, &expected);
@@ -514,7 +514,17 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
         // before the spikes: a step's two sides would read as a bad pair there
         refuse_steps(L, c.name, *c.x, opt.glitch_sigmas);
       }
-      std::vector<Glitch> spikes = reject_column(L, c.name, opt.glitch_sigmas, c.x, c.noise);
+      // logged accelerations are often exact or nearly (computed, not measured): their real
+      // fast changes (a Stribeck peak crossed in a few samples) would read as glitches, so a
+      // glitch must also leave the cubic by a quarter of the column's interquartile range
+      double floor = 0;
+      if (c.name[0] == 'a') {
+        std::vector<double> v = *c.x;
+        std::sort(v.begin(), v.end());
+        floor = v.empty() ? 0.0 : 0.25 * (v[(3 * v.size()) / 4] - v[v.size() / 4]);
+      }
+      std::vector<Glitch> spikes =
+          reject_column(L, c.name, opt.glitch_sigmas, c.x, c.noise, floor);
       g.insert(g.end(), spikes.begin(), spikes.end());
     } else {
       *c.noise = noise_std(loo_deviation(L.t, *c.x));

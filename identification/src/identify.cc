@@ -1589,8 +1589,7 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
 /// two adjacent bad samples, an acceleration spike, a step in an angle gave Coulomb 0 with exit 0
 /// and only the generic warnings): the fit is driven by samples the law cannot explain. One
 /// warning names the coefficients, the ratio, the lines of the largest residuals (in units of
-/// the floor) and what to do; a residual whose bulk sits on the floor while a few samples carry
-/// its rms is called outliers, else a scene or law that does not match.
+/// the floor) and the likely causes.
 void bound_and_misfit_warning(const Fit& f, const Analysis& an, IdentifyResult* out) {
   std::string at;
   for (int i = 0; i < f.layout.friction_size(); ++i) {
@@ -1602,10 +1601,8 @@ void bound_and_misfit_warning(const Fit& f, const Analysis& an, IdentifyResult* 
   if (at.empty() || !(ratio > kMisfitRatio)) return;
   const size_t m = f.index.size();
   std::vector<std::pair<double, int>> q(m);  // per sample: residual in floors, log index
-  std::vector<double> bulk(m);
   for (size_t u = 0; u < m; ++u) {
     q[u] = {std::hypot(an.r[2 * u] / fl[0], an.r[2 * u + 1] / fl[1]) / std::sqrt(2.0), f.index[u]};
-    bulk[u] = q[u].first;
   }
   const size_t top = std::min<size_t>(3, m);
   std::partial_sort(q.begin(), q.begin() + top, q.end(), std::greater<>());
@@ -1614,17 +1611,15 @@ void bound_and_misfit_warning(const Fit& f, const Analysis& an, IdentifyResult* 
     lines += (k ? ", " : "") + sample_name(f.cond.log, q[k].second) + " (" + fmt(q[k].first, 2) +
              " times)";
   }
-  // on the floor, the norm of two unit Gaussians over sqrt 2 has a robust_std of 1.23
-  const bool outliers = robust_std(bulk) < 2.0 && ratio > 3 * robust_std(bulk);
+  // which cause cannot be told from the residual: a glitch that drags a coefficient to its bound
+  // leaves the whole residual off the floor, as a wrong scene does
   out->warnings.push_back(
       at + " at its bound while the torque residual is " + fmt(ratio) +
       " times the noise floor: the fit is driven by samples the law cannot explain (largest at " +
-      lines + "). " +
-      (outliers ? "The bulk of the residual sits on the noise floor: most likely glitches the "
-                  "rejection missed; check those lines, or refit with --loss cauchy"
-                : "Most likely the scene (masses, geometry, loads) or the law does not match the "
-                  "log; try --estimate friction,inertia or another --law") +
-      ". A coefficient at its bound has no meaningful std; do not use this fit as it is");
+      lines + "). Likely causes: glitches the rejection missed (check those lines; --loss cauchy "
+      "fits past them), or a scene (masses, geometry, loads) or law that does not match the log "
+      "(--estimate friction,inertia, another --law). A coefficient at its bound has no "
+      "meaningful std; do not use this fit as it is");
 }
 
 // ---- model checks (misfit.h) ----
