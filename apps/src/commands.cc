@@ -45,11 +45,14 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
                      std::string("group ") + (opt.layout.inertia ? "inertia" : "actuator") +
                          " needs --method inverse-dynamics");
   }
-  if (!(a.loss_scale > 0)) throw InputError(kFlags, "--loss-scale", "must be > 0");
-  if (!(a.sg_window > 0) || a.sg_order < 2 || a.sg_order > 10) {
-    throw InputError(kFlags, "--sg-window/--sg-order",
-                     "window > 0 and order in [2, 10] required, got " +
-                         std::to_string(a.sg_order));
+  if (!(a.loss_scale >= 0) || !std::isfinite(a.loss_scale)) {
+    throw InputError(kFlags, "--loss-scale", "must be > 0 (0: from the noise floor, the default)");
+  }
+  if (!(a.sg_window > 0) || !std::isfinite(a.sg_window)) {
+    throw InputError(kFlags, "--sg-window", "must be > 0 [s], got " + format_number(a.sg_window));
+  }
+  if (a.sg_order < 2 || a.sg_order > 10) {
+    throw InputError(kFlags, "--sg-order", "must be in [2, 10], got " + std::to_string(a.sg_order));
   }
   if (!(a.window >= 0) || !std::isfinite(a.window)) {
     throw InputError(kFlags, "--window", "must be > 0 (0: the default)");

@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -91,6 +92,10 @@ void check_log_units(const TorqueLog& log) {
 }  // namespace
 
 TorqueLog read_torque_log(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw LogError(path, "(file)", "is a directory, expected a CSV file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw LogError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));
   std::stringstream ss;

@@ -3,6 +3,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -24,6 +25,28 @@ double median_abs(std::vector<double> v) {
 }
 
 double noise_std(const std::vector<double>& z);
+
+/// Units of logged angles other than radians that the motion can reveal, with their factor to
+/// radians: degrees, turns, gradians, and the counts of common encoder resolutions.
+struct AngleUnit {
+  const char* name;
+  double to_rad;
+};
+constexpr AngleUnit kAngleUnits[] = {
+    {"degrees", M_PI / 180},
+    {"turns", 2 * M_PI},
+    {"gradians", M_PI / 200},
+    {"encoder counts (1000 per turn)", 2 * M_PI / 1000},
+    {"encoder counts (1024 per turn)", 2 * M_PI / 1024},
+    {"encoder counts (2000 per turn)", 2 * M_PI / 2000},
+    {"encoder counts (2048 per turn)", 2 * M_PI / 2048},
+    {"encoder counts (4000 per turn)", 2 * M_PI / 4000},
+    {"encoder counts (4096 per turn)", 2 * M_PI / 4096},
+    {"encoder counts (8192 per turn)", 2 * M_PI / 8192},
+    {"encoder counts (10000 per turn)", 2 * M_PI / 10000},
+    {"encoder counts (16384 per turn)", 2 * M_PI / 16384},
+    {"encoder counts (65536 per turn)", 2 * M_PI / 65536},
+};
 
 /// Indices of the four neighbours the leave-one-out cubic of sample i uses.
 std::array<int, 4> neighbours(int i, int n) {
@@ -85,9 +108,55 @@ int end_culprit(const std::vector<double>& t, const std::vector<double>& x, int 
   return culprit;
 }
 
+/// Adjacent pairs of bad samples (review: two adjacent +0.1 rad samples gave Coulomb 0 with exit
+/// 0): each sample of the pair is in the other's leave-one-out stencil, which hides both. The
+/// pair (i, i + 1) is predicted by the cubic through i - 2, i - 1, i + 2, i + 3; it is a glitch
+/// when both deviations (over their noise gain) pass `threshold` with the same sign and the pair
+/// is the largest among its overlapping neighbours. (A step between two samples deviates with
+/// opposite signs, or, straddled, leaves the pairs beside it larger: find_steps.) Returns the
+/// first sample of each pair, and the two predictions in `expected`.
+std::vector<int> pair_hits(const std::vector<double>& t, const std::vector<double>& x,
+                           double threshold, std::vector<std::array<double, 2>>* expected) {
+  const int n = static_cast<int>(x.size());
+  std::vector<double> score(n, 0.0);
+  std::vector<std::array<double, 2>> pred(n, {0.0, 0.0});
+  for (int i = 2; i + 3 < n; ++i) {
+    const int nb[4] = {i - 2, i - 1, i + 2, i + 3};
+    double e[2];
+    for (int q = 0; q < 2; ++q) {
+      double gain2 = 1, p = 0;
+      for (int a = 0; a < 4; ++a) {
+        double w = 1;
+        for (int b = 0; b < 4; ++b) {
+          if (b != a) w *= (t[i + q] - t[nb[b]]) / (t[nb[a]] - t[nb[b]]);
+        }
+        gain2 += w * w;
+        p += w * (x[nb[a]] - x[i]);  // offset: keeps multi-turn angles exact
+      }
+      pred[i][q] = p + x[i];
+      e[q] = (x[i + q] - pred[i][q]) / std::sqrt(gain2);
+    }
+    if (std::isfinite(e[0]) && std::isfinite(e[1]) && e[0] * e[1] > 0) {
+      score[i] = std::min(std::abs(e[0]), std::abs(e[1]));
+    }
+  }
+  std::vector<int> hits;
+  for (int i = 2; i + 3 < n; ++i) {
+    if (!(score[i] > threshold) || threshold <= 0) continue;
+    bool peak = true;
+    for (int j = std::max(0, i - 2); j <= std::min(n - 1, i + 2); ++j) {
+      if (j != i && (score[j] > score[i] || (j < i && score[j] == score[i]))) peak = false;
+    }
+    if (!peak) continue;
+    hits.push_back(i);
+    expected->push_back(pred[i]);
+  }
+  return hits;
+}
+
 /// Rejects isolated glitches of one column in place; returns the glitches found.
 std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double sigmas,
-                                  std::vector<double>* x, double* noise) {
+                                  std::vector<double>* x, double* noise, double min_threshold) {
   std::vector<Glitch> found;
   const int n = static_cast<int>(x->size());
   if (n < 8) return found;
@@ -95,7 +164,7 @@ std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double
   // (acceleration jumps at slip reversals) that leave the cubic by ~0.1 of them
   std::vector<double> d2;
   for (int i = 1; i + 1 < n; ++i) d2.push_back((*x)[i + 1] - 2 * (*x)[i] + (*x)[i - 1]);
-  const double curvature_floor = 10.0 * median_abs(d2);
+  const double curvature_floor = std::max(10.0 * median_abs(d2), min_threshold);
   for (int pass = 0; pass < 4; ++pass) {
     std::vector<double> expected;
     const std::vector<double> z = loo_deviation(log.t, *x, &expected);
@@ -113,6 +182,23 @@ std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double
       if (peak && glitch_signature(z, i)) hits.push_back(i);
     }
     if (hits.empty()) {
+      // no single glitch left: adjacent pairs, each hiding the other from the leave-one-out
+      std::vector<std::array<double, 2>> pair_expected;
+      const std::vector<int> pairs = pair_hits(log.t, *x, threshold, &pair_expected);
+      for (size_t k = 0; k < pairs.size(); ++k) {
+        for (int q = 0; q < 2; ++q) {
+          Glitch g;
+          g.index = pairs[k] + q;
+          g.expected = pair_expected[k][q];
+          g.line = log.lines.empty() ? g.index + 1 : log.lines[g.index];
+          g.column = name;
+          g.value = (*x)[g.index];
+          g.sigmas = *noise > 0 ? std::abs(g.value - g.expected) / *noise : kInf;
+          found.push_back(g);
+        }
+        for (int q = 0; q < 2; ++q) (*x)[pairs[k] + q] = pair_expected[k][q];
+      }
+      if (!pairs.empty()) continue;
       *noise = noise_std(z);
       break;
     }
@@ -225,6 +311,37 @@ std::vector<Glitch> reject_frozen(const TorqueLog& log, const char* name, std::v
   return found;
 }
 
+/// Steps of an angle between two samples (an encoder slip or reset): an isolated spike of the
+/// first differences d_k = x_(k+1) - x_k, found like a glitch of d (leave-one-out cubic, the
+/// glitch signature on both neighbours, beyond `sigmas` robust std and the floor of the motion's
+/// own third differences). A glitch of x gives d a +g, -g doublet and an adjacent pair +g, 0,
+/// -g: neither has the signature. Returns the index of the first sample after each step.
+std::vector<int> find_steps(const std::vector<double>& t, const std::vector<double>& x,
+                            double sigmas, std::vector<double>* sizes) {
+  std::vector<int> found;
+  const int n = static_cast<int>(x.size());
+  if (n < 12) return found;
+  std::vector<double> d, tm, d2;
+  for (int k = 0; k + 1 < n; ++k) {
+    d.push_back(x[k + 1] - x[k]);
+    tm.push_back(0.5 * (t[k] + t[k + 1]));
+  }
+  for (size_t k = 1; k + 1 < d.size(); ++k) d2.push_back(d[k + 1] - 2 * d[k] + d[k - 1]);
+  std::vector<double> expected;
+  const std::vector<double> z = loo_deviation(tm, d, &expected);
+  const double threshold = std::max(sigmas * robust_std(z), 10.0 * median_abs(d2));
+  const int m = static_cast<int>(d.size());
+  for (int k = 3; k + 4 < m; ++k) {
+    const double a = std::abs(z[k]);
+    if (!(a > threshold) || threshold <= 0 || !std::isfinite(a)) continue;
+    if (std::abs(z[k - 1]) >= a || std::abs(z[k + 1]) > a) continue;
+    if (!glitch_signature(z, k)) continue;
+    found.push_back(k + 1);
+    sizes->push_back(d[k] - expected[k]);
+  }
+  return found;
+}
+
 std::string line_list(const std::vector<Glitch>& g, size_t max_shown = 5) {
   std::string s;
   for (size_t i = 0; i < g.size() && i < max_shown; ++i) {
@@ -274,6 +391,25 @@ double noise_std(const std::vector<double>& z) {
     }
   }
   return c ? std::sqrt(s2 / c / 0.99893) : s0;
+}
+
+/// Throws LogError naming the first line after a step of the angle column `x` (find_steps):
+/// which side is right cannot be told, and either side fitted with the other gives the rates a
+/// spike and the poses an offset.
+void refuse_steps(const TorqueLog& log, const char* name, const std::vector<double>& x,
+                  double sigmas) {
+  std::vector<double> sizes;
+  const std::vector<int> steps = find_steps(log.t, x, sigmas, &sizes);
+  if (steps.empty()) return;
+  const int i = steps.front();
+  const int line = log.lines.empty() ? i + 1 : log.lines[i];
+  const int before = log.lines.empty() ? i : log.lines[i - 1];
+  throw LogError(log.path, "line " + std::to_string(line) + ", column " + name,
+                 "the angle steps by " + format_significant(sizes.front(), 3) +
+                     " rad from line " + std::to_string(before) +
+                     " and stays there (" + std::to_string(steps.size()) +
+                     " such step(s)): an encoder slip or reset, not a motion; correct the "
+                     "offset or cut the log at the step");
 }
 
 }  // namespace
@@ -363,6 +499,10 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
     cols.push_back({"omega1", &L.omega1, &out.rate_noise[0]});
     cols.push_back({"omega2", &L.omega2, &out.rate_noise[1]});
   }
+  if (L.has_accels) {  // review: one alpha spike gave Coulomb 0 at its bound with exit 0
+    cols.push_back({"alpha1", &L.alpha1, &out.accel_noise[0]});
+    cols.push_back({"alpha2", &L.alpha2, &out.accel_noise[1]});
+  }
   const int allowed = std::max(2, static_cast<int>(opt.max_glitch_fraction * n));
   for (const Column& c : cols) {
     std::vector<Glitch> g;
@@ -371,8 +511,20 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
       if (c.name[0] == 't' && c.name[1] == 'h') {
         std::vector<Glitch> frozen = reject_frozen(L, c.name, c.x);
         g.insert(g.end(), frozen.begin(), frozen.end());
+        // before the spikes: a step's two sides would read as a bad pair there
+        refuse_steps(L, c.name, *c.x, opt.glitch_sigmas);
       }
-      std::vector<Glitch> spikes = reject_column(L, c.name, opt.glitch_sigmas, c.x, c.noise);
+      // logged accelerations are often exact or nearly (computed, not measured): their real
+      // fast changes (a Stribeck peak crossed in a few samples) would read as glitches, so a
+      // glitch must also leave the cubic by a quarter of the column's interquartile range
+      double floor = 0;
+      if (c.name[0] == 'a') {
+        std::vector<double> v = *c.x;
+        std::sort(v.begin(), v.end());
+        floor = v.empty() ? 0.0 : 0.25 * (v[(3 * v.size()) / 4] - v[v.size() / 4]);
+      }
+      std::vector<Glitch> spikes =
+          reject_column(L, c.name, opt.glitch_sigmas, c.x, c.noise, floor);
       g.insert(g.end(), spikes.begin(), spikes.end());
     } else {
       *c.noise = noise_std(loo_deviation(L.t, *c.x));
@@ -397,6 +549,10 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
     }
     out.glitches.insert(out.glitches.end(), g.begin(), g.end());
   }
+  for (int j = 0; j < 2; ++j) {
+    if (opt.torque_noise[j] > 0) out.torque_noise[j] = opt.torque_noise[j];
+  }
+  out.torque_variance_factor = opt.torque_variance_factor;
   if (!out.glitches.empty()) {
     std::sort(out.glitches.begin(), out.glitches.end(),
               [](const Glitch& a, const Glitch& b) { return a.line < b.line; });
@@ -417,31 +573,44 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
   return out;
 }
 
-std::string degrees_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
-                                const TorqueLog& log) {
+std::string angle_units_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
+                                    const TorqueLog& log, std::string* unit) {
   const int n = log.size();
   if (n < 2 * sg_half_window(SgOptions{}, log.duration() / std::max(1, n - 1)) + 2) return "";
-  std::vector<double> r1 = log.theta1, r2 = log.theta2, d1 = log.theta1, d2 = log.theta2;
+  std::vector<double> r1 = log.theta1, r2 = log.theta2;
   unwrap_angles(&r1);
   unwrap_angles(&r2);
-  for (std::vector<double>* v : {&d1, &d2}) {
-    for (double& x : *v) x *= M_PI / 180;
-  }
-  unwrap_angles(&d1);
-  unwrap_angles(&d2);
-  double rate_rad = 0, rate_deg = 0;
+  double rate_rad = 0;
   const double as_rad = torque_mismatch(scene, loads, log, r1, r2, &rate_rad);
-  const double as_deg = torque_mismatch(scene, loads, log, d1, d2, &rate_deg);
-  // degrees only when that reading explains the torques several times better than radians, and
-  // well in absolute terms (within half the logged torques' median size): a log that neither
-  // reading explains (wrong scene, absurd values) is not called degrees
+  // the reading that explains the torques best
+  double best = kInf, best_rate = 0;
+  std::string best_unit;
+  for (const AngleUnit& u : kAngleUnits) {
+    std::vector<double> a1 = log.theta1, a2 = log.theta2;
+    for (std::vector<double>* v : {&a1, &a2}) {
+      for (double& x : *v) x *= u.to_rad;
+    }
+    unwrap_angles(&a1);
+    unwrap_angles(&a2);
+    double rate = 0;
+    const double m = torque_mismatch(scene, loads, log, a1, a2, &rate);
+    if (m < best) {
+      best = m;
+      best_rate = rate;
+      best_unit = u.name;
+    }
+  }
+  // another unit only when that reading explains the torques several times better than
+  // radians, and well in absolute terms (within half the logged torques' median size): a log
+  // that no reading explains (wrong scene, absurd values) is not called another unit
   std::vector<double> tau;
   for (int i = 0; i < n; ++i) tau.push_back(std::max(std::abs(log.tau1[i]), std::abs(log.tau2[i])));
-  if (!(as_deg < 0.25 * as_rad) || !(as_deg < 0.5 * median_abs(tau))) return "";
+  if (!(best < 0.25 * as_rad) || !(best < 0.5 * median_abs(tau))) return "";
+  *unit = best_unit;
   return "read as radians, the motion (median crank rate " + format_significant(rate_rad, 3) +
          " rad/s) needs torques a median " + format_significant(as_rad, 3) +
-         " N m away from the logged ones; read as degrees (median rate " +
-         format_significant(rate_deg, 3) + " rad/s), " + format_significant(as_deg, 3) + " N m";
+         " N m away from the logged ones; read as " + best_unit + " (median rate " +
+         format_significant(best_rate, 3) + " rad/s), " + format_significant(best, 3) + " N m";
 }
 
 }  // namespace fivebar::identification

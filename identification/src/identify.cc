@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <mutex>
@@ -21,6 +22,7 @@
 #include "fivebar/model/rest.h"
 #include "covariance.h"
 #include "inertia.h"
+#include "misfit.h"
 #include "noise_model.h"
 #include "profile.h"
 #include "smoothing_bias.h"
@@ -51,6 +53,11 @@ constexpr double kAbsoluteFloor = 1e-3;
 constexpr double kStructureRatio = 1.15;
 /// window choice: a residual/noise ratio this much above the least one is smoothing bias
 constexpr double kWindowExcess = 0.04;
+/// a friction coefficient at its bound with the residual this many times its noise floor is a fit
+/// driven by samples the law cannot explain (bound_and_misfit_warning)
+constexpr double kMisfitRatio = 3.0;
+/// inertia_check: a friction move beyond this many std (its own, or the move's) is a warning
+constexpr double kFreedMove = 3.0;
 /// a torque-to-angle delay beyond this many std is corrected
 constexpr double kDelaySignificance = 3.0;
 /// output error: below this many windows the block sandwich's std are themselves uncertain
@@ -264,6 +271,7 @@ struct Fit {
   /// predicted smoothing bias of the public friction coefficients at the chosen window
   /// (limit_smoothing_bias; empty when not predicted), taken off the estimates
   Eigen::VectorXd smoothing_bias;
+  double loss_scale = 0;  ///< the robust loss's scale as applied (choose_loss_scale)
 };
 
 /// Calls f(std::integral_constant<int, P>) for the parameter counts the layouts give (friction
@@ -331,13 +339,13 @@ Params<double> fit_scene(const Params<double>& scene_in, const ParameterLayout& 
 
 /// Degrees told by the motion, then unwrapping and glitch rejection, then the poses.
 void prepare_log(const TorqueLog& log, Fit* f, IdentifyResult* out) {
-  if (f->opt->check_degrees && !log.has_rates) {
-    for (int pass = 0; pass < 1; ++pass) {
-      const std::string why = degrees_from_motion(f->scene, f->loads, log);
-      if (!why.empty()) {
-        throw LogError(log.path, "columns theta1, theta2",
-                       "angles look like degrees, expected radians (" + why + ")");
-      }
+  // with rates too: degrees with deg/s rates agree with each other (review)
+  if (f->opt->check_degrees) {
+    std::string unit;
+    const std::string why = angle_units_from_motion(f->scene, f->loads, log, &unit);
+    if (!why.empty()) {
+      throw LogError(log.path, "columns theta1, theta2",
+                     "angles look like " + unit + ", expected radians (" + why + ")");
     }
   }
   f->cond = condition_log(log, f->opt->condition);
@@ -735,7 +743,7 @@ bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem) {
   if (opt.method == Method::kInverseDynamics) {
     const bool sized = with_size(P, [&](auto n) {
       add_inverse_dynamics_terms<decltype(n)::value>(f->scene, f->layout, f->samples, f->eval,
-                                                     opt.loss, opt.loss_scale, f->x.data(),
+                                                     opt.loss, f->loss_scale, f->x.data(),
                                                      problem);
     });
     if (!sized) return false;
@@ -755,7 +763,7 @@ bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem) {
       cost->SetNumResiduals(w->residuals());
       out->residuals += w->residuals();
       f->window_sizes.push_back(w->residuals());
-      problem->AddResidualBlock(cost, make_loss(opt.loss, opt.loss_scale), f->x.data());
+      problem->AddResidualBlock(cost, make_loss(opt.loss, f->loss_scale), f->x.data());
     }
   }
   for (int i = 0; i < P; ++i)
@@ -875,12 +883,38 @@ void noise_floor(const Fit& f, const std::vector<detail::Sensitivity>& sens, dou
     const std::vector<double>& tau = j == 0 ? log.tau1 : log.tau2;
     double s2 = 0;
     for (int i : f.index) s2 += tau[i] * tau[i] / f.index.size();
-    const double n = std::sqrt(f.noise.torque[j] * f.noise.torque[j] + prop(j));
+    // the torques' per-sample noise (after a delay's shift, smoothed by the interpolation)
+    const double t2 = f.noise.torque[j] * f.noise.torque[j] * f.cond.torque_variance_factor;
+    const double n = std::sqrt(t2 + prop(j));
     const double a = kAbsoluteFloor * std::sqrt(s2);
     floor[j] = std::max(n, a);
     if (noise != nullptr) noise[j] = n;
     if (absolute != nullptr) absolute[j] = a;
   }
+}
+
+/// The robust loss's scale: as given, else (0) from the noise: inverse dynamics kLossScaleHuber or
+/// kLossScaleCauchy times a sample's expected residual level at the start values (the two
+/// actuators' noise floors in quadrature: the loss sees the block's norm), output error 0.1 rad.
+/// Costs one pass of noise_sensitivities over the samples.
+void choose_loss_scale(Fit* f, IdentifyResult* out) {
+  const IdentifyOptions& opt = *f->opt;
+  f->loss_scale = opt.loss_scale;
+  if (opt.loss != Loss::kNone && !(opt.loss_scale > 0)) {
+    f->loss_scale = 0.1;
+    if (opt.method == Method::kInverseDynamics) {
+      double floor[2];
+      noise_floor(*f, noise_sensitivities(*f), floor);
+      const double level = std::hypot(floor[0], floor[1]);
+      const double k = opt.loss == Loss::kHuber ? kLossScaleHuber : kLossScaleCauchy;
+      if (level > 0 && std::isfinite(level)) f->loss_scale = k * level;
+      out->notes.push_back(std::string(loss_name(opt.loss)) + " loss at scale " +
+                           fmt(f->loss_scale) + " N m: " + fmt(k, 4) +
+                           " times the residual's noise level per sample " + fmt(level) +
+                           " N m (--loss-scale sets it)");
+    }
+  }
+  out->loss_scale = opt.loss == Loss::kNone ? 0.0 : f->loss_scale;
 }
 
 void residual_levels(const Fit& f, const std::vector<double>& r,
@@ -1399,17 +1433,21 @@ void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<do
 }
 
 /// `log` with its torques read at t + d (cubic through the four nearest samples, clamped at the
-/// ends): torques that lag the angles by d brought in line.
-TorqueLog shift_torques(const TorqueLog& log, double d) {
+/// ends): torques that lag the angles by d brought in line. The interpolation smooths their
+/// noise: *variance_factor is the sum of the squared weights at the middle sample (0.64 for half
+/// a sample), the per-sample variance left of white noise; its low-frequency level, which the
+/// std of the coefficients see, is unchanged (the weights sum to 1).
+TorqueLog shift_torques(const TorqueLog& log, double d, double* variance_factor) {
   TorqueLog out = log;
   const int n = log.size();
+  *variance_factor = 1;
   for (int i = 0; i < n; ++i) {
     const double t = log.t[i] + d;
     const int k = static_cast<int>(std::upper_bound(log.t.begin(), log.t.end(), t) - log.t.begin());
     const int lo = std::clamp(k - 2, 0, std::max(0, n - 4));
     const int hi = std::min(n, lo + 4);
     const double tc = std::clamp(t, log.t.front(), log.t.back());
-    double v1 = 0, v2 = 0;
+    double v1 = 0, v2 = 0, g = 0;
     for (int a = lo; a < hi; ++a) {
       double w = 1;
       for (int b = lo; b < hi; ++b) {
@@ -1417,7 +1455,9 @@ TorqueLog shift_torques(const TorqueLog& log, double d) {
       }
       v1 += w * log.tau1[a];
       v2 += w * log.tau2[a];
+      g += w * w;
     }
+    if (i == n / 2) *variance_factor = g;
     out.tau1[i] = v1;
     out.tau2[i] = v2;
   }
@@ -1443,7 +1483,15 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
       ++beyond;
     }
   }
-  IdentifyResult res = identify(scene_in, loads, shift_torques(conditioned, first.delay_s), again);
+  // the shift smooths the torques' noise, which the refit would then measure too small (review:
+  // a 0.5 ms lag gave std 22 % small and a false structure warning): it keeps the noise measured
+  // before (the level the coefficients' std see) and scales the per-sample level by the
+  // interpolation's sum of squared weights (a product over a chain of refits, approximately)
+  double factor = 1;
+  const TorqueLog shifted = shift_torques(conditioned, first.delay_s, &factor);
+  for (int j = 0; j < 2; ++j) again.condition.torque_noise[j] = first.torque_noise[j];
+  again.condition.torque_variance_factor = opt.condition.torque_variance_factor * factor;
+  IdentifyResult res = identify(scene_in, loads, shifted, again);
   // the refit estimated the delay left after the shift (and corrected it when significant): the
   // total is their sum, with the std of the last estimate
   if (res.delay_corrected) res.warnings.erase(res.warnings.begin());
@@ -1675,6 +1723,132 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
   if (f.layout.inertia) inertial_stage(f, an->J, out);
 }
 
+/// A friction coefficient at its bound while the residual is far above the noise floor (review:
+/// two adjacent bad samples, an acceleration spike, a step in an angle gave Coulomb 0 with exit 0
+/// and only the generic warnings): the fit is driven by samples the law cannot explain. One
+/// warning names the coefficients, the ratio, the lines of the largest residuals (in units of
+/// the floor) and the likely causes.
+void bound_and_misfit_warning(const Fit& f, const Analysis& an, IdentifyResult* out) {
+  std::string at;
+  for (int i = 0; i < f.layout.friction_size(); ++i) {
+    if (out->parameters[i].at_bound) at += (at.empty() ? "" : ", ") + out->parameters[i].name;
+  }
+  const double* fl = out->residual_noise_floor;
+  const double ratio = std::max(out->rms_torque_residual[0] / fl[0],
+                                out->rms_torque_residual[1] / fl[1]);
+  if (at.empty() || !(ratio > kMisfitRatio)) return;
+  const size_t m = f.index.size();
+  std::vector<std::pair<double, int>> q(m);  // per sample: residual in floors, log index
+  for (size_t u = 0; u < m; ++u) {
+    q[u] = {std::hypot(an.r[2 * u] / fl[0], an.r[2 * u + 1] / fl[1]) / std::sqrt(2.0), f.index[u]};
+  }
+  const size_t top = std::min<size_t>(3, m);
+  std::partial_sort(q.begin(), q.begin() + top, q.end(), std::greater<>());
+  std::string lines;
+  for (size_t k = 0; k < top; ++k) {
+    lines += (k ? ", " : "") + sample_name(f.cond.log, q[k].second) + " (" + fmt(q[k].first, 2) +
+             " times)";
+  }
+  // which cause cannot be told from the residual: a glitch that drags a coefficient to its bound
+  // leaves the whole residual off the floor, as a wrong scene does
+  out->warnings.push_back(
+      at + " at its bound while the torque residual is " + fmt(ratio) +
+      " times the noise floor: the fit is driven by samples the law cannot explain (largest at " +
+      lines + "). Likely causes: glitches the rejection missed (check those lines; --loss cauchy "
+      "fits past them), or a scene (masses, geometry, loads) or law that does not match the log "
+      "(--estimate friction,inertia, another --law). A coefficient at its bound has no "
+      "meaningful std; do not use this fit as it is");
+}
+
+// ---- model checks (misfit.h) ----
+
+/// The fit's residual blocks under `layout2` on the parameter vector *x2 (kept alive by the
+/// caller, who may change it between evaluations); false for an unsupported size.
+bool check_problem(const Fit& f, const ParameterLayout& layout2, std::vector<double>* x2,
+                   ceres::Problem* problem) {
+  return with_size(layout2.size(), [&](auto n) {
+    add_inverse_dynamics_terms<decltype(n)::value>(f.scene, layout2, f.samples, f.eval,
+                                                   Loss::kNone, 1, x2->data(), problem);
+  });
+}
+
+/// The Jacobian of `problem`'s residuals (P parameters) at its current values, rows whitened by
+/// the noise floors `fl`, and the whitened residual; false if an evaluation fails.
+bool whitened_jacobian(ceres::Problem* problem, int P, const double fl[2], Eigen::MatrixXd* J,
+                       Eigen::VectorXd* r) {
+  std::vector<double> rv;
+  ceres::CRSMatrix crs;
+  if (!raw_residuals(problem, &rv, &crs)) return false;
+  *J = dense(crs, P);
+  *r = Eigen::Map<const Eigen::VectorXd>(rv.data(), rv.size());
+  for (Eigen::Index row = 0; row < J->rows(); ++row) {
+    J->row(row) /= fl[row % 2];
+    (*r)(row) /= fl[row % 2];
+  }
+  return J->allFinite() && r->allFinite();
+}
+
+/// The fit's vector under `layout2`, which differs from f.layout in its friction part or by the
+/// inertial group: `friction` then the scene's inertial parameters (or the fitted ones), then
+/// the fitted actuator terms.
+std::vector<double> with_layout(const Fit& f, const ParameterLayout& layout2,
+                                std::vector<double> friction) {
+  const auto mid = f.x.begin() + f.layout.friction_size();
+  if (f.layout.inertia) {
+    friction.insert(friction.end(), mid, mid + kInertialParams);
+  } else if (layout2.inertia) {
+    const detail::InertialPrior prior = detail::inertial_prior(f.scene, f.opt->inertia_prior);
+    friction.insert(friction.end(), prior.centre.begin(), prior.centre.end());
+  }
+  if (f.layout.actuator) friction.insert(friction.end(), f.x.end() - kActuatorTerms, f.x.end());
+  return friction;
+}
+
+/// Wrong masses or inertias (review: masses 4-5 % off gave Coulomb +10 %, 6 std, without a
+/// word): one linearized refit with the 16 inertial parameters free under the prior of
+/// --estimate inertia. A friction coefficient that would move by more than kFreedMove times the
+/// larger of its std and the std of the move (what the noise alone gives it) is a warning. Costs
+/// one evaluation of the residual's Jacobian with 16 more columns.
+void inertia_check(const Fit& f, IdentifyResult* out) {
+  const int nf = f.layout.friction_size();
+  if (f.layout.inertia || !out->converged) return;
+  ParameterLayout l2 = f.layout;
+  l2.inertia = true;
+  Eigen::MatrixXd J;
+  Eigen::VectorXd r;
+  std::vector<double> x2 = with_layout(f, l2, std::vector<double>(f.x.begin(), f.x.begin() + nf));
+  ceres::Problem problem;
+  if (!check_problem(f, l2, &x2, &problem) ||
+      !whitened_jacobian(&problem, l2.size(), out->residual_noise_floor, &J, &r)) {
+    return;
+  }
+  const detail::InertialPrior prior = detail::inertial_prior(f.scene, f.opt->inertia_prior);
+  std::vector<int> fitted, extra;
+  Eigen::VectorXd info(kInertialParams);
+  for (int i = 0; i < l2.size(); ++i) (l2.is_inertial(i) ? extra : fitted).push_back(i);
+  for (int k = 0; k < kInertialParams; ++k) info(k) = 1.0 / std::pow(prior.sigma[k], 2);
+  const detail::FreedStep fs = detail::freed_step(J, r, fitted, extra, info);
+  if (!fs.ok) return;
+  const Eigen::MatrixXd T = to_public(f.layout).topLeftCorner(nf, nf);
+  const Eigen::VectorXd move = T * fs.fitted_step.head(nf);
+  const Eigen::MatrixXd cov = T * fs.fitted_cov.topLeftCorner(nf, nf) * T.transpose();
+  std::string moved;
+  for (int i = 0; i < nf; ++i) {
+    const ParameterEstimate& e = out->parameters[i];
+    if (e.at_bound) return;  // a fit at a bound has its own warning
+    const double sd = std::max(std::sqrt(std::max(0.0, cov(i, i))), e.std);
+    if (!(std::abs(move(i)) > kFreedMove * sd)) continue;
+    moved += (moved.empty() ? "" : ", ") + e.name + " from " + fmt(e.value) + " to " +
+             fmt(e.value + move(i)) + " (" + fmt(std::abs(move(i)) / sd, 2) + " std)";
+  }
+  if (moved.empty()) return;
+  out->warnings.push_back(
+      "with the links' inertial parameters free (one linearized refit, prior std " +
+      fmt(f.opt->inertia_prior) + " of the scene's values) the friction would move: " + moved +
+      ". The scene's masses or inertias may not match the mechanism; try --estimate "
+      "friction,inertia");
+}
+
 // ---- 95 % intervals ----
 
 /// Whether public parameter i gets a profile-likelihood interval: a nonlinear coefficient of the
@@ -1886,6 +2060,7 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   if (!start_values(&f, opt.initial, &x0_public, &out)) return out;
   f.prior_scale = initial_prior_scale(f);
   if (!rates_window_and_samples(log, &f, &out)) return out;
+  choose_loss_scale(&f, &out);
   ceres::Problem problem;
   if (!build_problem(&f, &out, &problem)) {
     out.status = Status::Error(StatusCode::kInvalidInput, "unsupported parameter count");
@@ -1895,6 +2070,10 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   Analysis an;
   if (!solve_stage(&f, &problem, &out, &summary, &an)) return out;
   analyse(f, x0_public, summary, &an, &out);
+  if (opt.method == Method::kInverseDynamics) {
+    bound_and_misfit_warning(f, an, &out);
+    inertia_check(f, &out);
+  }
   intervals(f, &problem, an, &out);
   correct_smoothing_bias(&f, &out);
   out.fitted = scene_in;

@@ -30,7 +30,7 @@ std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& 
     return "";
   }
   // without rates the magnitude says nothing (multi-turn angles are radians too): identify
-  // decides from the motion and the scene (degrees_from_motion, condition.h)
+  // decides from the motion and the scene (angle_units_from_motion, condition.h)
   return "";
 }
 

@@ -1,6 +1,8 @@
 // fivebar.identify: friction identification from a torque log, the result as a dict.
 #include <pybind11/stl.h>
 
+#include <cmath>
+
 #include "bindings.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
@@ -69,6 +71,28 @@ py::dict validation_dict(const id::Validation& v) {
   return d;
 }
 
+// identification.json's log_conditioning: unwrapping, noise levels, glitches rejected, notes
+py::dict conditioning_dict(const id::IdentifyResult& r) {
+  py::dict c;
+  c["unwrapped_turns"] = py::make_tuple(r.unwrapped[0], r.unwrapped[1]);
+  c["angle_noise"] = pair(r.angle_noise);
+  c["torque_noise"] = pair(r.torque_noise);
+  if (r.conditioned_log.has_rates) c["rate_noise"] = pair(r.rate_noise);
+  py::list glitches;
+  for (const id::Glitch& g : r.glitches) {
+    py::dict e;
+    e["line"] = g.line;
+    e["column"] = g.column;
+    e["value"] = g.value;
+    e["expected"] = g.expected;
+    e["noise_std"] = g.sigmas;
+    glitches.append(e);
+  }
+  c["rejected_glitches"] = glitches;
+  c["notes"] = r.notes;
+  return c;
+}
+
 // the fields of identification.json, the per-sample arrays of residuals.csv, the fitted scene
 py::dict result_dict(const PyScene& s, const id::IdentifyResult& r, const id::Loss loss) {
   py::dict d;
@@ -106,6 +130,15 @@ py::dict result_dict(const PyScene& s, const id::IdentifyResult& r, const id::Lo
     d["sg_half_window_s"] =
         r.sg_half_window * r.conditioned_log.duration() / std::max(1, r.conditioned_log.size() - 1);
     d["sg_order"] = r.sg_order;
+    d["window_choice"] = r.window_choice;  // how the half-window was chosen
+  }
+  d["log_conditioning"] = conditioning_dict(r);
+  if (std::isfinite(r.delay_s)) {  // the logged torques at t + d match the angles at t
+    py::dict delay;
+    delay["value_s"] = r.delay_s;
+    delay["std_s"] = r.delay_std_s;
+    delay["corrected"] = r.delay_corrected;
+    d["torque_delay"] = delay;
   }
   d["std_method"] = r.std_method;
   py::dict solver;

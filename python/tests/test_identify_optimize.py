@@ -61,3 +61,22 @@ def test_identify_options_are_the_command_lines(root, paper_scene):
     else:
         raise AssertionError("an unknown option was accepted")
     assert "no_delay=False" in fivebar.identify.__doc__
+
+
+def test_identify_has_the_log_conditioning_delay_and_window_choice(root, paper_scene):
+    # review: the dict lacked log_conditioning, torque_delay and window_choice, which
+    # identification.json has; a glitch put into the log is named by its line there
+    text = (root / "datasets/logs/paper_angles.csv").read_text().splitlines()
+    lines = [line for line in text if not line.startswith("#")][:2001]
+    log = np.genfromtxt(lines, delimiter=",", names=True)
+    columns = {name: np.array(log[name]) for name in log.dtype.names}
+    columns["theta1"][700] += 0.1
+    result = fivebar.identify(paper_scene, columns)
+    cond = result["log_conditioning"]
+    assert set(cond) >= {"unwrapped_turns", "angle_noise", "torque_noise", "rejected_glitches",
+                         "notes"}
+    assert [(g["line"], g["column"]) for g in cond["rejected_glitches"]] == [(702, "theta1")]
+    assert cond["torque_noise"].shape == (2,) and cond["torque_noise"][0] > 0
+    delay = result["torque_delay"]
+    assert set(delay) == {"value_s", "std_s", "corrected"} and delay["std_s"] > 0
+    assert result["window_choice"]  # the text is that of identification.json

@@ -31,7 +31,8 @@ struct IdentifySettings {
   bool sg_window_given = false, no_unwrap = false, keep_glitches = false;
   bool keep_reversals = false;
   bool classical_std = false, no_delay = false;
-  double loss_scale = 0.1, smooth_sign = -1, min_rate = 0, sg_window = 0.010, window = 0;
+  /// loss_scale 0: the robust loss's scale follows the residual's noise floor (IdentifyOptions)
+  double loss_scale = 0, smooth_sign = -1, min_rate = 0, sg_window = 0.010, window = 0;
   int sg_order = 5, threads = 1;
 };
 

@@ -25,13 +25,19 @@ struct ConditionOptions {
   /// samples already rejected (by index; a refit of a log conditioned before, whose glitches
   /// were interpolated and no longer show): left out of the fit like glitches
   std::vector<int> rejected_before;
+  /// > 0: the torques' white-noise std as measured before they were shifted for a delay (the
+  /// shift's interpolation smooths the noise, which the leave-one-out estimate then finds too
+  /// small); torque_variance_factor: what is left of its variance per sample (the sum of the
+  /// interpolation's squared weights), 1 for a log as logged
+  double torque_noise[2] = {0, 0};
+  double torque_variance_factor = 1;
 };
 
 /// One rejected sample.
 struct Glitch {
   int index = 0;        ///< sample index (0-based, log order)
   int line = 0;         ///< line of the file (1-based)
-  std::string column;   ///< theta1, theta2, tau1 or tau2
+  std::string column;   ///< theta1, theta2, tau1, tau2 (omega1/2, alpha1/2 when logged)
   double value = 0;     ///< as in the file (angles: before unwrapping)
   double expected = 0;  ///< from its four neighbours (angles: in the same turn as value)
   double sigmas = 0;    ///< |value - expected| in robust standard deviations
@@ -45,11 +51,17 @@ struct ConditionedLog {
   std::vector<Glitch> glitches;
   /// robust white-noise std of the logged columns (leave-one-out cubic deviation, MAD-based)
   double angle_noise[2] = {0, 0}, torque_noise[2] = {0, 0}, rate_noise[2] = {0, 0};
+  double accel_noise[2] = {0, 0};  ///< of logged accelerations (their glitches are rejected too)
+  /// per-sample variance of the torque noise over torque_noise^2 (ConditionOptions)
+  double torque_variance_factor = 1;
   std::vector<std::string> notes;  ///< one sentence per thing done (unwrapping, rejections)
 };
 
-/// Unwraps and cleans `log` (see ConditionOptions). Throws LogError naming the column and the
-/// first lines when a column has more glitches than max_glitch_fraction allows.
+/// Unwraps and cleans `log` (see ConditionOptions): single glitches, then adjacent pairs of bad
+/// samples (predicted from the two samples on each side), in every logged column. Throws
+/// LogError naming the column and the first lines when a column has more glitches than
+/// max_glitch_fraction allows, and naming the line when an angle steps between two samples and
+/// stays there (an encoder slip or reset: which side is right cannot be told).
 ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& options);
 
 /// Jumps of one turn undone in place: a step that differs from the previous step by 2 pi within
@@ -66,11 +78,12 @@ std::vector<double> loo_deviation(const std::vector<double>& t, const std::vecto
 double robust_std(std::vector<double> v);
 
 /// Empty if the log's angles read as radians explain its torques, else the evidence that they
-/// are degrees: with rates estimated from the angles, the scene's frictionless inverse dynamics
-/// is compared with the logged torques for both readings (median |tau - M| over the log, and
-/// the median crank rate); degrees are reported only when the degree reading explains the
-/// torques four times better than radians and to within half their median size.
-std::string degrees_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
-                                const TorqueLog& log);
+/// are in another unit, which is set in `unit` (degrees, turns, gradians, or the counts of a
+/// common encoder resolution): with rates estimated from the angles, the scene's frictionless
+/// inverse dynamics is compared with the logged torques for each reading (median |tau - M| over
+/// the log, and the median crank rate); another unit is reported only when its reading explains
+/// the torques four times better than radians and to within half their median size.
+std::string angle_units_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
+                                    const TorqueLog& log, std::string* unit);
 
 }  // namespace fivebar::identification

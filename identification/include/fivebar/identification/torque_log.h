@@ -42,7 +42,7 @@ inline const char* const kLogOptional[] = {"omega1", "omega2", "alpha1", "alpha2
 /// with rates in the log: the finite-difference rate of theta is ~180/pi times omega
 /// (least-squares slope within 20 % of 57.3). Without rates the magnitude is no evidence (a crank
 /// that turns continuously gives multi-turn angles; a log cut mid-run starts past 4 pi):
-/// identify tells degrees from the motion against the scene (degrees_from_motion, condition.h).
+/// identify tells degrees from the motion against the scene (angle_units_from_motion, condition.h).
 std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& theta,
                                const std::vector<double>* omega);
 

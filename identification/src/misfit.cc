@@ -1,0 +1,42 @@
+// One linearized refit with further parameters freed (misfit.h).
+#include "misfit.h"
+
+#include <Eigen/Dense>
+
+namespace fivebar::identification::detail {
+namespace {
+
+/// Inverse of a symmetric positive definite matrix; false when it is not (numerically).
+bool spd_inverse(const Eigen::MatrixXd& A, Eigen::MatrixXd* inv) {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(A);
+  if (es.info() != Eigen::Success || A.size() == 0) return false;
+  const Eigen::VectorXd ev = es.eigenvalues();
+  if (!(ev.minCoeff() > 1e-12 * ev.maxCoeff()) || !(ev.maxCoeff() > 0)) return false;
+  *inv = es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+  return inv->allFinite();
+}
+
+}  // namespace
+
+FreedStep freed_step(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                     const std::vector<int>& fitted, const std::vector<int>& extra,
+                     const Eigen::VectorXd& prior) {
+  FreedStep out;
+  const int nf = static_cast<int>(fitted.size()), ne = static_cast<int>(extra.size());
+  Eigen::MatrixXd Ja(J.rows(), nf + ne);
+  for (int k = 0; k < nf; ++k) Ja.col(k) = J.col(fitted[k]);
+  for (int k = 0; k < ne; ++k) Ja.col(nf + k) = J.col(extra[k]);
+  Eigen::MatrixXd A = Ja.transpose() * Ja;
+  for (int k = 0; k < ne; ++k) A(nf + k, nf + k) += prior(k);
+  Eigen::MatrixXd C, Cf;
+  if (!spd_inverse(A, &C) || !spd_inverse(A.topLeftCorner(nf, nf), &Cf)) return out;
+  const Eigen::VectorXd step = -C * (Ja.transpose() * r);
+  out.fitted_step = step.head(nf);
+  out.fitted_cov = C.topLeftCorner(nf, nf) - Cf;
+  out.extra_step = step.tail(ne);
+  out.extra_std = C.bottomRightCorner(ne, ne).diagonal().cwiseMax(0.0).cwiseSqrt();
+  out.ok = true;
+  return out;
+}
+
+}  // namespace fivebar::identification::detail

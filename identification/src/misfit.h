@@ -1,0 +1,29 @@
+// Internal to identification: a cheap check of the model behind a fit. One linearized refit with
+// further parameters freed (the links' inertial parameters) tells whether the log asks for them:
+// identify() warns when the fitted friction would move by more than its noise allows (the
+// scene's masses do not match).
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace fivebar::identification::detail {
+
+/// One Gauss-Newton step from a fit with extra parameters freed. J: the Jacobian of the residual
+/// r at the fit, rows whitened to unit noise, over the fitted parameters (columns `fitted`) and
+/// the extra ones (columns `extra`, with prior information prior(k) = 1 / prior variance on
+/// extra[k] in whitened units; 0: none).
+struct FreedStep {
+  bool ok = false;  ///< false: the augmented normal matrix is singular
+  /// the step of the fitted parameters, and its covariance when the extra parameters are at
+  /// their values (the augmented minus the restricted covariance: the test of Hausman)
+  Eigen::VectorXd fitted_step;
+  Eigen::MatrixXd fitted_cov;
+  /// the step of the extra parameters and their (augmented, posterior) std
+  Eigen::VectorXd extra_step, extra_std;
+};
+FreedStep freed_step(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                     const std::vector<int>& fitted, const std::vector<int>& extra,
+                     const Eigen::VectorXd& prior);
+
+}  // namespace fivebar::identification::detail
