@@ -442,7 +442,8 @@ RunFunction setup(CLI::App* app) {
   app->add_flag("--per-joint", args->settings.per_joint,
                 "one coefficient per joint (coulomb_1..5, viscous_1..5) instead of shared ones");
   app->add_option("--method", args->settings.method, "inverse-dynamics | output-error");
-  app->add_option("--law", args->settings.law, "friction law to fit: coulomb_viscous | stribeck");
+  app->add_option("--law", args->settings.law,
+                  "friction law to fit: " + identification::identifiable_law_names());
   app->add_option("--loss", args->settings.loss, "robust loss: none | huber | cauchy");
   app->add_option("--loss-scale", args->settings.loss_scale,
                   "scale of the robust loss [N m] (inverse-dynamics) or [rad] (output-error); "

@@ -42,10 +42,10 @@ std::string opt_num(double x, const char* format = "%.3g") {
   return x < 0 ? "" : format_printf(x, format);
 }
 
-/// A markdown table cell: pipes escaped.
+/// A markdown table cell: pipes escaped, a newline written as a space (one row per line).
 std::string md_cell(const std::string& s) {
   std::string out;
-  for (char c : s) out += (c == '|' ? std::string("\\|") : std::string(1, c));
+  for (char c : s) out += c == '|' ? std::string("\\|") : std::string(1, c == '\n' ? ' ' : c);
   return out;
 }
 

@@ -115,6 +115,18 @@ std::vector<std::string> truth_header(const Args& a, const Scene& scene) {
   return out;
 }
 
+/// `s` as one POSIX shell word: as is when it is made of safe characters, else in single quotes
+/// (load expressions such as `loads.M1=2 + t` hold spaces), so that the `# command:` line re-runs.
+std::string shell_word(const std::string& s) {
+  const bool safe = !s.empty() && s.find_first_not_of(
+                                      "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                      "0123456789_-+=.,/:@%") == std::string::npos;
+  if (safe) return s;
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
 /// The actuator options: two values (tau1, tau2) each, in the order of set_actuators' targets.
 struct ActuatorOption {
   const char* flag;
@@ -171,7 +183,7 @@ int run(const Args& a) {
   if (!a.law.empty()) {
     FrictionLaw law;
     if (!identification::parse_law(a.law, &law)) {
-      throw InputError(flag_file, "--law", "expected coulomb_viscous or stribeck, got " + a.law);
+      throw InputError(flag_file, "--law", "expected " + identification::identifiable_law_names() + ", got " + a.law);
     }
     fp.law = law;
     if (law == FrictionLaw::kStribeck) {
@@ -241,7 +253,8 @@ RunFunction setup(CLI::App* app) {
         ->delimiter(',');
   }
   app->add_option("--law", args->law,
-                  "friction law of the log, overriding the scene's: coulomb_viscous | stribeck");
+                  "friction law of the log, overriding the scene's: " +
+                      identification::identifiable_law_names());
   app->add_option("--static-coulomb", args->static_coulomb, "stribeck: mu_s of every joint");
   app->add_option("--stribeck-velocity", args->stribeck_velocity,
                   "stribeck: w_st of every joint [rad/s]");
@@ -249,13 +262,13 @@ RunFunction setup(CLI::App* app) {
   return [args] {
     // the command that regenerates this log, every option explicit
     const Args& a = *args;
-    std::string cmd = "fivebar synth-log " + a.scene + " --out " + a.out;
-    for (const std::string& s : a.sets) cmd += " --set " + s;
+    std::string cmd = "fivebar synth-log " + shell_word(a.scene) + " --out " + shell_word(a.out);
+    for (const std::string& s : a.sets) cmd += " --set " + shell_word(s);
     cmd += " --rate " + format_double(a.so.rate_hz) + " --duration " +
            format_double(a.so.duration) + " --torque-noise " + format_double(a.so.torque_noise) +
            " --angle-noise " + format_double(a.so.angle_noise) + " --seed " +
            std::to_string(a.so.seed) + " --excitation " + a.excitation;
-    if (!a.motion.empty()) cmd += " --motion " + a.motion;
+    if (!a.motion.empty()) cmd += " --motion " + shell_word(a.motion);
     if (a.so.rate_noise > 0) cmd += " --rate-noise " + format_double(a.so.rate_noise);
     if (a.so.quantization > 0) cmd += " --quantization " + format_double(a.so.quantization);
     if (a.so.with_rates) cmd += " --with-rates";

@@ -20,7 +20,7 @@ const char* const kFlags = "command line";
 id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& scene) {
   id::IdentifyOptions opt;
   if (!id::parse_law(a.law, &opt.layout.law)) {
-    throw InputError(kFlags, "--law", "expected coulomb_viscous or stribeck, got " + a.law);
+    throw InputError(kFlags, "--law", "expected " + id::identifiable_law_names() + ", got " + a.law);
   }
   opt.layout.per_joint = a.per_joint;
   std::string bad;

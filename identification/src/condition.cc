@@ -467,6 +467,78 @@ std::vector<double> loo_deviation(const std::vector<double>& t, const std::vecto
   return z;
 }
 
+namespace {
+
+/// One column of the log that is checked for glitches, with where its noise estimate goes.
+struct NoisyColumn {
+  const char* name;
+  std::vector<double>* x;
+  double* noise;
+};
+
+/// The columns checked for glitches: angles and torques, and the logged rates and
+/// accelerations when the log has them.
+std::vector<NoisyColumn> noisy_columns(ConditionedLog* out) {
+  TorqueLog& L = out->log;
+  std::vector<NoisyColumn> cols = {{"theta1", &L.theta1, &out->angle_noise[0]},
+                                   {"theta2", &L.theta2, &out->angle_noise[1]},
+                                   {"tau1", &L.tau1, &out->torque_noise[0]},
+                                   {"tau2", &L.tau2, &out->torque_noise[1]}};
+  if (L.has_rates) {
+    cols.push_back({"omega1", &L.omega1, &out->rate_noise[0]});
+    cols.push_back({"omega2", &L.omega2, &out->rate_noise[1]});
+  }
+  if (L.has_accels) {  // review: one alpha spike gave Coulomb 0 at its bound with exit 0
+    cols.push_back({"alpha1", &L.alpha1, &out->accel_noise[0]});
+    cols.push_back({"alpha2", &L.alpha2, &out->accel_noise[1]});
+  }
+  return cols;
+}
+
+/// The glitches of one column (absurd values, frozen angles, spikes), repaired in place; a step
+/// in an angle is refused. Sets the column's noise estimate.
+std::vector<Glitch> column_glitches(const TorqueLog& L, const NoisyColumn& c,
+                                    const ConditionOptions& opt) {
+  std::vector<Glitch> g = reject_absurd(L, c.name, c.x);
+  if (c.name[0] == 't' && c.name[1] == 'h') {
+    std::vector<Glitch> frozen = reject_frozen(L, c.name, c.x);
+    g.insert(g.end(), frozen.begin(), frozen.end());
+    // before the spikes: a step's two sides would read as a bad pair there
+    refuse_steps(L, c.name, *c.x, opt.glitch_sigmas);
+  }
+  // logged accelerations are often exact or nearly (computed, not measured): their real fast
+  // changes (a Stribeck peak crossed in a few samples) would read as glitches, so a glitch must
+  // also leave the cubic by a quarter of the column's interquartile range
+  double floor = 0;
+  if (c.name[0] == 'a') {
+    std::vector<double> v = *c.x;
+    std::sort(v.begin(), v.end());
+    floor = v.empty() ? 0.0 : 0.25 * (v[(3 * v.size()) / 4] - v[v.size() / 4]);
+  }
+  std::vector<Glitch> spikes = reject_column(L, c.name, opt.glitch_sigmas, c.x, c.noise, floor);
+  g.insert(g.end(), spikes.begin(), spikes.end());
+  return g;
+}
+
+bool by_line(const Glitch& a, const Glitch& b) { return a.line < b.line; }
+
+/// The note that lists the rejected glitches (the first five).
+std::string glitch_note(const std::vector<Glitch>& glitches) {
+  std::string what;
+  for (size_t i = 0; i < glitches.size() && i < 5; ++i) {
+    const Glitch& g = glitches[i];
+    what += std::string(i ? "; " : "") + "line " + std::to_string(g.line) + " " + g.column +
+            " = " + format_significant(g.value, 6) + " where its neighbours give " +
+            format_significant(g.expected, 6) + " (" + format_significant(g.sigmas, 2) +
+            " noise std)";
+  }
+  if (glitches.size() > 5) what += "; ...";
+  return "rejected " + std::to_string(glitches.size()) +
+         " isolated glitch(es), left out of the fit and interpolated for the rates: " + what;
+}
+
+}  // namespace
+
 ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) {
   ConditionedLog out;
   out.log = log;
@@ -486,52 +558,16 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
                           "encoder or logger)");
     }
   }
-  struct Column {
-    const char* name;
-    std::vector<double>* x;
-    double* noise;
-  };
-  std::vector<Column> cols = {{"theta1", &L.theta1, &out.angle_noise[0]},
-                              {"theta2", &L.theta2, &out.angle_noise[1]},
-                              {"tau1", &L.tau1, &out.torque_noise[0]},
-                              {"tau2", &L.tau2, &out.torque_noise[1]}};
-  if (L.has_rates) {
-    cols.push_back({"omega1", &L.omega1, &out.rate_noise[0]});
-    cols.push_back({"omega2", &L.omega2, &out.rate_noise[1]});
-  }
-  if (L.has_accels) {  // review: one alpha spike gave Coulomb 0 at its bound with exit 0
-    cols.push_back({"alpha1", &L.alpha1, &out.accel_noise[0]});
-    cols.push_back({"alpha2", &L.alpha2, &out.accel_noise[1]});
-  }
   const int allowed = std::max(2, static_cast<int>(opt.max_glitch_fraction * n));
-  for (const Column& c : cols) {
+  for (const NoisyColumn& c : noisy_columns(&out)) {
     std::vector<Glitch> g;
     if (opt.reject_glitches) {
-      g = reject_absurd(L, c.name, c.x);
-      if (c.name[0] == 't' && c.name[1] == 'h') {
-        std::vector<Glitch> frozen = reject_frozen(L, c.name, c.x);
-        g.insert(g.end(), frozen.begin(), frozen.end());
-        // before the spikes: a step's two sides would read as a bad pair there
-        refuse_steps(L, c.name, *c.x, opt.glitch_sigmas);
-      }
-      // logged accelerations are often exact or nearly (computed, not measured): their real
-      // fast changes (a Stribeck peak crossed in a few samples) would read as glitches, so a
-      // glitch must also leave the cubic by a quarter of the column's interquartile range
-      double floor = 0;
-      if (c.name[0] == 'a') {
-        std::vector<double> v = *c.x;
-        std::sort(v.begin(), v.end());
-        floor = v.empty() ? 0.0 : 0.25 * (v[(3 * v.size()) / 4] - v[v.size() / 4]);
-      }
-      std::vector<Glitch> spikes =
-          reject_column(L, c.name, opt.glitch_sigmas, c.x, c.noise, floor);
-      g.insert(g.end(), spikes.begin(), spikes.end());
+      g = column_glitches(L, c, opt);
     } else {
       *c.noise = noise_std(loo_deviation(L.t, *c.x));
     }
     if (static_cast<int>(g.size()) > allowed) {
-      std::sort(g.begin(), g.end(),
-                [](const Glitch& a, const Glitch& b) { return a.line < b.line; });
+      std::sort(g.begin(), g.end(), by_line);
       throw LogError(L.path, std::string("column ") + c.name,
                      std::to_string(g.size()) + " samples leave their neighbours' trend (lines " +
                          line_list(g) + "): more than the " + std::to_string(allowed) +
@@ -554,21 +590,8 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
   }
   out.torque_variance_factor = opt.torque_variance_factor;
   if (!out.glitches.empty()) {
-    std::sort(out.glitches.begin(), out.glitches.end(),
-              [](const Glitch& a, const Glitch& b) { return a.line < b.line; });
-    std::string what;
-    for (size_t i = 0; i < out.glitches.size() && i < 5; ++i) {
-      const Glitch& g = out.glitches[i];
-      what += std::string(i ? "; " : "") + "line " + std::to_string(g.line) + " " + g.column +
-              " = " + format_significant(g.value, 6) + " where its neighbours give " +
-              format_significant(g.expected, 6) + " (" + format_significant(g.sigmas, 2) +
-              " noise std)";
-    }
-    if (out.glitches.size() > 5) what += "; ...";
-    out.notes.push_back("rejected " + std::to_string(out.glitches.size()) +
-                        " isolated glitch(es), left out of the fit and interpolated for the "
-                        "rates: " +
-                        what);
+    std::sort(out.glitches.begin(), out.glitches.end(), by_line);
+    out.notes.push_back(glitch_note(out.glitches));
   }
   return out;
 }

@@ -142,8 +142,8 @@ class Arkode final : public Integrator {
     return false;
   }
   bool check(int flag, const char* call) {
-    const char* name = explicit_ ? ERKStepGetReturnFlagName(flag) : ARKStepGetReturnFlagName(flag);
-    return check_flag(flag, call, name, &sc_.error);
+    return check_flag(flag, call, explicit_ ? &ERKStepGetReturnFlagName : &ARKStepGetReturnFlagName,
+                      &sc_.error);
   }
   /// f(t, y) at one end of the step: from the last right-hand side ARKODE evaluated there (the
   /// first-same-as-last stage of Dormand-Prince), else evaluated here.

@@ -68,7 +68,7 @@ class Cvode final : public Integrator {
 
  private:
   bool check(int flag, const char* call) {
-    return check_flag(flag, call, CVodeGetReturnFlagName(flag), &sc_.error);
+    return check_flag(flag, call, &CVodeGetReturnFlagName, &sc_.error);
   }
   long current_steps() {
     long n = 0;

@@ -69,7 +69,9 @@ inline std::unique_ptr<Integrator> make_integrator(const OdeProblem& prob, const
 /// Records a failed SUNDIALS call in *error: the error handler's message when it gave one, else
 /// "CVodeSetMaxStep: CV_ILL_INPUT", followed by what the flag means for a user of fivebar
 /// (sundials_status.cc, the one place that maps SUNDIALS flags to messages). Returns flag >= 0.
-bool check_flag(int flag, const char* call, const char* flag_name, std::string* error);
+/// `flag_name` is the module's *GetReturnFlagName, whose string SUNDIALS allocates: it is called
+/// for failures only, and the string freed.
+bool check_flag(int flag, const char* call, char* (*flag_name)(long int), std::string* error);
 
 /// What a failure flag (by name, CV_ or ARK_ prefix) means and what to try; "" if nothing useful.
 std::string sundials_hint(const std::string& flag_name);

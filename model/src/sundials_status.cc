@@ -1,6 +1,7 @@
 // SUNDIALS return flags as messages a user can act on: the one place that maps them (as
 // trajectory/src/nlopt_status.cc does for NLopt). CVODE and ARKODE share the flag names after
 // their prefix (CV_TOO_MUCH_WORK, ARK_TOO_MUCH_WORK), so one table serves both.
+#include <cstdlib>
 #include <string>
 
 #include "integrator.h"
@@ -40,9 +41,11 @@ std::string sundials_hint(const std::string& flag_name) {
   return "";
 }
 
-bool check_flag(int flag, const char* call, const char* flag_name, std::string* error) {
+bool check_flag(int flag, const char* call, char* (*flag_name)(long int), std::string* error) {
   if (flag >= 0) return true;
-  const std::string name = flag_name ? flag_name : "failed";
+  char* raw = flag_name ? flag_name(flag) : nullptr;  // malloc'd by SUNDIALS
+  const std::string name = raw ? raw : "failed";
+  std::free(raw);
   if (error->empty()) *error = std::string(call) + ": " + name;
   const std::string hint = sundials_hint(name);
   if (!hint.empty() && error->find(hint) == std::string::npos) *error += " (" + hint + ")";

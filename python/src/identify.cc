@@ -80,13 +80,9 @@ py::dict conditioning_dict(const id::IdentifyResult& r) {
   if (r.conditioned_log.has_rates) c["rate_noise"] = pair(r.rate_noise);
   py::list glitches;
   for (const id::Glitch& g : r.glitches) {
-    py::dict e;
-    e["line"] = g.line;
-    e["column"] = g.column;
-    e["value"] = g.value;
-    e["expected"] = g.expected;
-    e["noise_std"] = g.sigmas;
-    glitches.append(e);
+    glitches.append(py::dict(py::arg("line") = g.line, py::arg("column") = g.column,
+                             py::arg("value") = g.value, py::arg("expected") = g.expected,
+                             py::arg("noise_std") = g.sigmas));
   }
   c["rejected_glitches"] = glitches;
   c["notes"] = r.notes;
@@ -102,15 +98,11 @@ py::dict result_dict(const PyScene& s, const id::IdentifyResult& r, const id::Lo
   d["loss"] = id::loss_name(loss);
   py::list params;
   for (const id::ParameterEstimate& p : r.parameters) {
-    py::dict e;
-    e["name"] = p.name;
-    e["value"] = p.value;
-    e["std"] = p.std;
-    e["initial"] = p.initial;
-    e["ci95_low"] = p.ci_low;  // the 95 % interval (identification.json)
-    e["ci95_high"] = p.ci_high;
-    e["ci95_method"] = p.ci_method;
-    params.append(e);
+    // with the 95 % interval of identification.json
+    params.append(py::dict(py::arg("name") = p.name, py::arg("value") = p.value,
+                           py::arg("std") = p.std, py::arg("initial") = p.initial,
+                           py::arg("ci95_low") = p.ci_low, py::arg("ci95_high") = p.ci_high,
+                           py::arg("ci95_method") = p.ci_method));
   }
   d["parameters"] = params;
   d["covariance"] = matrix(r.covariance);

@@ -233,14 +233,28 @@ inline bool parse_groups(const std::string& list, ParameterLayout* layout, std::
 
 /// Parses the name of a law that identify fits (one with identifiable coefficients, friction.h);
 /// false otherwise.
+/// True when the law has a coefficient identify can fit.
+inline bool law_is_identifiable(const LawDescriptor& d) {
+  for (int i = 0; i < d.count; ++i) {
+    if (d.coefficients[i].identifiable) return true;
+  }
+  return false;
+}
+
 inline bool parse_law(const std::string& name, FrictionLaw* law) {
   const LawDescriptor* d = find_law(name);
-  if (!d) return false;
-  bool identifiable = false;
-  for (int i = 0; i < d->count; ++i) identifiable = identifiable || d->coefficients[i].identifiable;
-  if (!identifiable) return false;
+  if (!d || !law_is_identifiable(*d)) return false;
   *law = d->law;
   return true;
+}
+
+/// "coulomb_viscous | stribeck | ...": the laws parse_law accepts, from their descriptors.
+inline std::string identifiable_law_names() {
+  std::string out;
+  for (const LawDescriptor& d : kLaws) {
+    if (law_is_identifiable(d)) out += (out.empty() ? "" : " | ") + std::string(d.name);
+  }
+  return out;
 }
 inline const char* law_name(FrictionLaw law) { return law_descriptor(law).name; }
 
