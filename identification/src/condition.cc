@@ -73,6 +73,36 @@ bool glitch_signature(const std::vector<double>& z, int i) {
   return true;
 }
 
+/// Residual sum of squares of samples i - 4 .. i + 4 of `x` about their least-squares fit by a
+/// cubic in t plus one more column, `column(k, u)` at sample k (u: its time from t_i in mean
+/// sample steps).
+template <class Column>
+double rss_with(const std::vector<double>& t, const std::vector<double>& x, int i,
+                Column column) {
+  Eigen::Matrix<double, 9, 5> V;
+  Eigen::Matrix<double, 9, 1> y;
+  const double h = (t[i + 4] - t[i - 4]) / 8;
+  for (int r = 0; r < 9; ++r) {
+    const int k = i - 4 + r;
+    const double u = (t[k] - t[i]) / h;
+    V.row(r) << 1, u, u * u, u * u * u, column(k, u);
+    y(r) = x[k] - x[i - 4];  // offset: keeps multi-turn angles exact
+  }
+  return (V * V.colPivHouseholderQr().solve(y) - y).squaredNorm();
+}
+
+/// Whether a kink at interior sample i (the slope changing there: a joint breaking away from
+/// rest, seen in its logged rate) explains the samples around i at least half as well as a
+/// glitch of i does. A kink's leave-one-out deviations have the glitch signature's shape (its
+/// neighbours deviate by -1/2 of it, against -2/3 for a glitch), so only a fit tells them apart.
+bool kink_explains(const std::vector<double>& t, const std::vector<double>& x, int i) {
+  const int n = static_cast<int>(x.size());
+  if (i < 4 || i + 4 >= n) return false;
+  const double glitch = rss_with(t, x, i, [i](int k, double) { return k == i ? 1.0 : 0.0; });
+  const double kink = rss_with(t, x, i, [](int, double u) { return std::max(0.0, u); });
+  return !(glitch < 0.5 * kink);
+}
+
 /// Which sample near an end is the glitch. There the leave-one-out cubic extrapolates, and one
 /// bad sample among the first four makes its neighbours deviate about as much as itself (a
 /// glitch on sample 1 gives sample 0 the same deviation): the culprit is the sample whose
@@ -108,13 +138,34 @@ int end_culprit(const std::vector<double>& t, const std::vector<double>& x, int 
   return culprit;
 }
 
+/// Whether the pair (i, i + 1) is one side of a step rather than two bad samples: both samples
+/// continue the line through one side's two neighbours (i - 2, i - 1 or i + 2, i + 3) to within
+/// half their deviation from the cubic across the pair. A step between i + 1 and i + 2 (a
+/// breakaway's jump of the logged acceleration, a torque flipping with the friction) leaves the
+/// cubic by 0.3 and 0.7 of the step with one sign, as a glitch pair does; but a glitch pair
+/// leaves both sides' lines.
+bool continues_one_side(const std::vector<double>& t, const std::vector<double>& x, int i,
+                        const std::array<double, 2>& cubic) {
+  for (int side : {-1, 1}) {
+    const int a = side < 0 ? i - 2 : i + 2, b = a + 1;
+    bool along = true;
+    for (int q = 0; q < 2; ++q) {
+      const double line = x[a] + (x[b] - x[a]) * (t[i + q] - t[a]) / (t[b] - t[a]);
+      along = along && std::abs(x[i + q] - line) < 0.5 * std::abs(x[i + q] - cubic[q]);
+    }
+    if (along) return true;
+  }
+  return false;
+}
+
 /// Adjacent pairs of bad samples (review: two adjacent +0.1 rad samples gave Coulomb 0 with exit
 /// 0): each sample of the pair is in the other's leave-one-out stencil, which hides both. The
 /// pair (i, i + 1) is predicted by the cubic through i - 2, i - 1, i + 2, i + 3; it is a glitch
-/// when both deviations (over their noise gain) pass `threshold` with the same sign and the pair
-/// is the largest among its overlapping neighbours. (A step between two samples deviates with
-/// opposite signs, or, straddled, leaves the pairs beside it larger: find_steps.) Returns the
-/// first sample of each pair, and the two predictions in `expected`.
+/// when both deviations (over their noise gain) pass `threshold` with the same sign, the pair
+/// is the largest among its overlapping neighbours, and it does not continue one side
+/// (continues_one_side: the pairs beside a step). A step straddled by the pair deviates with
+/// opposite signs. Returns the first sample of each pair, and the two predictions in
+/// `expected`.
 std::vector<int> pair_hits(const std::vector<double>& t, const std::vector<double>& x,
                            double threshold, std::vector<std::array<double, 2>>* expected) {
   const int n = static_cast<int>(x.size());
@@ -136,7 +187,8 @@ std::vector<int> pair_hits(const std::vector<double>& t, const std::vector<doubl
       pred[i][q] = p + x[i];
       e[q] = (x[i + q] - pred[i][q]) / std::sqrt(gain2);
     }
-    if (std::isfinite(e[0]) && std::isfinite(e[1]) && e[0] * e[1] > 0) {
+    if (std::isfinite(e[0]) && std::isfinite(e[1]) && e[0] * e[1] > 0 &&
+        !continues_one_side(t, x, i, pred[i])) {
       score[i] = std::min(std::abs(e[0]), std::abs(e[1]));
     }
   }
@@ -179,7 +231,7 @@ std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double
         if (j != i && std::abs(z[j]) > a) peak = false;
         if (j < i && std::abs(z[j]) == a) peak = false;  // ties: the first one
       }
-      if (peak && glitch_signature(z, i)) hits.push_back(i);
+      if (peak && glitch_signature(z, i) && !kink_explains(log.t, *x, i)) hits.push_back(i);
     }
     if (hits.empty()) {
       // no single glitch left: adjacent pairs, each hiding the other from the leave-one-out

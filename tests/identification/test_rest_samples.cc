@@ -72,11 +72,12 @@ TEST(RestSamples, HeldSamplesAreLeftOutAndDoNotBiasTheFit) {
   const TorqueLog log = held_then_moving(truth);
   const IdentifyResult res = identify(truth, paper_loads, log, IdentifyOptions{});
   ASSERT_TRUE(res.status.ok()) << res.status.message;
-  // the logged acceleration steps from 0 to the moving log's at the breakaway: since rev16 the
-  // glitch check of logged accelerations reads the step as a glitch and leaves its few samples
-  // out (4 here; a known false positive, docs/figures-logs.md "Round rev16"); every other held
-  // sample is at rest
-  EXPECT_GE(res.samples_at_rest, kHeld - 8);
+  // at the breakaway the logged acceleration steps from 0, the logged rate has a kink and the
+  // torques step by 0.8 N m: none of them is a glitch (24 samples were rejected as glitches
+  // before the kink and step-side checks of condition.cc), and every held sample is at rest
+  EXPECT_TRUE(res.glitches.empty()) << res.glitches.size() << " glitches, the first on line "
+                                    << res.glitches.front().line;
+  EXPECT_GE(res.samples_at_rest, kHeld);
   EXPECT_LT(res.samples_at_rest, kHeld + 20);  // the moving part is not at rest
   for (const ParameterEstimate& p : res.parameters) {
     const double t = p.name == "coulomb" ? 0.12 : 0.02;
