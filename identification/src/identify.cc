@@ -1069,28 +1069,44 @@ void limit_smoothing_bias(Fit* f, IdentifyResult* out) {
 }
 
 /// The predicted smoothing bias at the chosen window (f->smoothing_bias) taken off the friction
-/// estimates, their intervals and the fitted parameters (coefficients at a bound stay there). Its
-/// own error, from the angle noise through the reconstruction, is a small part of the bias (over
-/// two noisy paper logs at half-window 8: 0.078 and 0.136 std predicted for 0.088 measured), so a
-/// few hundredths of the std, and is not added to the std.
+/// estimates, their intervals and the fitted parameters. Coefficients at a bound, or whose std
+/// the log does not determine, are left as fitted, and no correction takes a coefficient past
+/// its bound (a Stribeck static_coulomb stays >= coulomb): the correction is limited there, and
+/// says so. Its own error, from the angle noise through the reconstruction, is a small part of
+/// the bias (over two noisy paper logs at half-window 8: 0.078 and 0.136 std predicted for 0.088
+/// measured), so a few hundredths of the std, and is not added to the std.
 void correct_smoothing_bias(Fit* f, IdentifyResult* out) {
   const Eigen::VectorXd& b = f->smoothing_bias;
   const int P = f->layout.size();
   if (b.size() == 0 || static_cast<int>(out->parameters.size()) < b.size()) return;
   Eigen::VectorXd shift = Eigen::VectorXd::Zero(P);
+  for (int p = 0; p < b.size(); ++p) {
+    const ParameterEstimate& e = out->parameters[p];
+    if (!e.at_bound && std::isfinite(e.std) && std::isfinite(b(p))) shift(p) = b(p);
+  }
+  if (shift.isZero(0.0)) return;
+  const Eigen::MatrixXd T = to_public(f->layout);
+  const Eigen::VectorXd dx = T.inverse() * shift;
+  Eigen::VectorXd x_old(P), x_new(P);
+  for (int i = 0; i < P; ++i) {
+    x_old(i) = f->x[i];
+    f->x[i] = std::max(f->layout.lower_bound(i), f->x[i] - dx(i));
+    x_new(i) = f->x[i];
+  }
+  const Eigen::VectorXd applied = T * (x_old - x_new);  // the shift each public value took
   std::string list;
   for (int p = 0; p < b.size(); ++p) {
+    if (shift(p) == 0 && applied(p) == 0) continue;
     ParameterEstimate& e = out->parameters[p];
-    if (e.at_bound || !std::isfinite(b(p))) continue;
-    shift(p) = b(p);
-    e.value -= b(p);
-    e.ci_low -= b(p);  // an open side (+-inf) stays open
-    e.ci_high -= b(p);
-    list += (list.empty() ? "" : ", ") + e.name + " " + fmt(-b(p));
+    e.value -= applied(p);
+    e.ci_low -= applied(p);  // an open side (+-inf) stays open
+    e.ci_high -= applied(p);
+    list += (list.empty() ? "" : ", ") + e.name + " " + fmt(-applied(p));
+    if (std::abs(applied(p) - shift(p)) > 1e-12 * std::abs(shift(p))) {
+      list += " (limited by its bound: predicted " + fmt(-shift(p)) + ")";
+    }
   }
   if (list.empty()) return;
-  const Eigen::VectorXd dx = to_public(f->layout).inverse() * shift;
-  for (int i = 0; i < P; ++i) f->x[i] = std::max(f->layout.lower_bound(i), f->x[i] - dx(i));
   out->window_choice += "; the predicted bias at it taken off the estimates (" + list + ")";
 }
 

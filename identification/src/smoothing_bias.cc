@@ -76,6 +76,10 @@ bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
   const Eigen::MatrixXd H = J.transpose() * J + in.Hp;
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(H);
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
+  // a log that does not determine some parameter (a Stribeck law fitted to a Coulomb-viscous
+  // log) makes H singular to rounding: its solve would be a bias of millions, not a prediction
+  const Eigen::VectorXd d = ldlt.vectorD().cwiseAbs();
+  if (!(d.minCoeff() > 1e-12 * d.maxCoeff())) return false;
   const Eigen::MatrixXd Hinv = ldlt.solve(Eigen::MatrixXd::Identity(P, P));
   // the model's torque M is off by dM where the residual r = tau - M is evaluated with biased
   // rates; the Gauss-Newton step from the truth moves x by (J^T J)^-1 J^T dM (J = d r / d x)
