@@ -440,7 +440,8 @@ void add_options(CLI::App* app, Args* args) {
   app->add_option("--vary", args->varies,
                   "KEY=LO:HI, a number of the mechanism varied within [LO, HI]")
       ->required();
-  app->add_option("--threads", args->threads, "worker threads (default: all cores)");
+  app->add_option("--threads", args->threads, "worker threads (default: all cores)")
+      ->check(CLI::Range(0, 1024));
   app->add_option("--max-designs", args->max_designs,
                   "designs evaluated at most, the start included (default 40)");
   add_inner_solve_options(app, &args->settings);

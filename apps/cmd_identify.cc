@@ -465,7 +465,8 @@ RunFunction setup(CLI::App* app) {
                   "output-error and validation window [s] (restart from the logged state); "
                   "default 0.2, shortened so that the log has at least 20 windows")
       ->default_str("");
-  app->add_option("--threads", args->settings.threads, "Ceres threads");
+  app->add_option("--threads", args->settings.threads, "Ceres threads")
+      ->check(CLI::Range(1, 1024));
   app->add_flag("--start-from-scene", args->settings.start_from_scene,
                 "start from the scene's friction values (default: neutral values)");
   app->add_flag("--no-unwrap", args->settings.no_unwrap,

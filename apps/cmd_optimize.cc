@@ -211,7 +211,8 @@ void add_options(CLI::App* app, Args* args) {
   add_scene_options(app, &args->scene, "optimize");
   add_plots_flag(app, &args->no_plots, "the figures");
   app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
-  app->add_option("--threads", args->threads, "worker threads (default: all cores)");
+  app->add_option("--threads", args->threads, "worker threads (default: all cores)")
+      ->check(CLI::Range(0, 1024));
   app->add_option("--node-threads", args->settings.node_threads,
                   "threads of each evaluation inside a task (default 1; same results)");
   app->add_option("--method", args->settings.method,

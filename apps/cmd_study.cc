@@ -310,7 +310,8 @@ void add_options(CLI::App* app, Args* args) {
   app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--sweep", args->sweeps, "KEY=LO:HI:N, a scene key swept over N values")
       ->required();
-  app->add_option("--threads", args->threads, "worker threads (default: all cores)");
+  app->add_option("--threads", args->threads, "worker threads (default: all cores)")
+      ->check(CLI::Range(0, 1024));
   add_inner_solve_options(app, &args->settings);
   app->add_flag("--global", args->settings.global, "multi-start optimization of every task");
   app->add_flag("--validate", args->settings.validate,

@@ -8,6 +8,7 @@
 // --motion (e.g. the excitation.csv of `fivebar excite`), the log is that of a position-controlled
 // mechanism following the given motion: the torques by inverse dynamics, plus the noise.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
@@ -187,6 +188,13 @@ int run(const Args& a) {
     }
     fp.law = law;
     if (law == FrictionLaw::kStribeck) {
+      const double kinetic = *std::max_element(fp.coulomb.begin(), fp.coulomb.end());
+      if (a.static_coulomb < kinetic) {
+        throw InputError(flag_file, "--static-coulomb",
+                         format_double(a.static_coulomb) + " is below the scene's Coulomb "
+                         "(kinetic) coefficient " + format_double(kinetic) +
+                         ": static friction is at least the kinetic (identify fits it so)");
+      }
       fp.static_coulomb.fill(a.static_coulomb);
       fp.stribeck_velocity.fill(a.stribeck_velocity);
       fp.stribeck_exponent.fill(a.stribeck_exponent);

@@ -218,7 +218,8 @@ void bind_identify(py::module_& m) {
        "optionally omega1, omega2, alpha1, alpha2). Keyword options are those of `fivebar "
        "identify` with _ for - (sg_window: the Savitzky-Golay half-window [s], chosen from the "
        "log when not given), and validate=False: " +
-       keyword_defaults(io::IdentifySettings{}, kIdentifyKeywords) +
+       keyword_defaults(io::IdentifySettings{}, kIdentifyKeywords,
+                        {{"sg_window", "(chosen from the log)"}}) +
        ". Returns the fields of identification.json (parameters as a list of {name, value, std, "
        "initial}, covariance and correlation as arrays, ...), the per-sample rates and "
        "predicted torques, 'fitted_scene' (a fivebar.Scene) and, with validate=True, "

@@ -7,6 +7,7 @@
 #include <pybind11/stl.h>
 
 #include <initializer_list>
+#include <utility>
 #include <string>
 #include <variant>
 #include <vector>
@@ -40,12 +41,18 @@ inline std::string python_text(const std::vector<int>& v) {
 
 /// "name=default, ..." of a table, from a default-constructed S (for the docstrings).
 template <class S>
-std::string keyword_defaults(const S& defaults, Keywords<S> keywords) {
+std::string keyword_defaults(
+    const S& defaults, Keywords<S> keywords,
+    std::initializer_list<std::pair<const char*, const char*>> shown_as = {}) {
   std::string out;
   for (const Keyword<S>& k : keywords) {
     if (!out.empty()) out += ", ";
     out += k.name;
-    out += "=" + std::visit([&](auto m) { return python_text(defaults.*m); }, k.member);
+    std::string value = std::visit([&](auto m) { return python_text(defaults.*m); }, k.member);
+    for (const auto& [name, text] : shown_as) {
+      if (std::string(name) == k.name) value = text;  // a default that is not a constant
+    }
+    out += "=" + value;
   }
   return out;
 }
