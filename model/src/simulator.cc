@@ -945,9 +945,11 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
                    L.t, L.y[0], L.y[1]);
     }
   }
+  if (!L.integ->steps(&result.stats.steps) && st.ok()) {
+    st = Status::Error(StatusCode::kSolverFailed, L.integ->error());
+  }
   result.status = st;
   result.stats.rhs_evaluations = L.c.rhs_evaluations;
-  result.stats.steps = L.integ->steps();
   result.stats.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return result;
