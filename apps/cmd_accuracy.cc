@@ -47,8 +47,8 @@ const std::vector<std::string> kOutputs = {"work_precision.csv", "work_precision
 double against_external(const std::string& path, const std::vector<sim::Row>& rows, double step) {
   const CsvTable table = read_csv(path);
   const int t_col = table.require("t");
-  int cols[4];
-  for (int k = 0; k < 4; ++k) cols[k] = table.require("theta" + std::to_string(k + 1));
+  int cols[kLinks];
+  for (int k = 0; k < kLinks; ++k) cols[k] = table.require("theta" + std::to_string(k + 1));
   double worst = 0.0;
   long matched = 0;
   for (const auto& r : table.rows) {
@@ -57,7 +57,9 @@ double against_external(const std::string& path, const std::vector<sim::Row>& ro
       continue;
     }
     ++matched;
-    for (int k = 0; k < 4; ++k) worst = std::max(worst, std::abs(rows[i].theta[k] - r[cols[k]]));
+    for (int k = 0; k < kLinks; ++k) {
+      worst = std::max(worst, std::abs(rows[i].theta[k] - r[cols[k]]));
+    }
   }
   if (matched == 0) throw InputError(path, "t", "no time in common with the scene's output grid");
   return worst;

@@ -110,7 +110,7 @@ void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads
   }
   const std::array<double, 2> start = {scene.initial.theta1, scene.initial.theta2};
   const std::string* ranges[2] = {&a.theta1_range, &a.theta2_range};
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kDof; ++j) {
     if (ranges[j]->empty()) continue;
     const std::string flag = "--theta" + std::to_string(j + 1) + "-range";
     const std::array<double, 2> r = parse_range(*ranges[j], flag);
@@ -188,7 +188,7 @@ std::vector<std::vector<double>> make_starts(const id::FourierMotion& m, const A
   const int pj = m.per_joint();
   for (int s = 1; s < a.starts; ++s) {
     std::vector<double> x = base;
-    for (int j = 0; j < 2; ++j) {
+    for (int j = 0; j < kDof; ++j) {
       for (int v = 0; v < pj; ++v) {
         const int l = m.harmonic_of(v);
         x[j * pj + v] += l == 0 ? a.drift_spread * gauss(rng) : a.spread * gauss(rng) / l;
@@ -394,7 +394,9 @@ Design design(const Scene& scene, const LoadExpressions& loads, id::ExcitationOp
     // both cranks swing together through a large angle once per period (peak rate 30 rad/s
     // before the start is scaled to the limits): b_1 of each crank
     const double amplitude = 30.0 * motion.period() / (2 * M_PI);
-    for (int j = 0; j < 2; ++j) base[j * motion.per_joint() + motion.harmonics() + 1] = -amplitude;
+    for (int j = 0; j < kDof; ++j) {
+      base[j * motion.per_joint() + motion.harmonics() + 1] = -amplitude;
+    }
   }
   std::vector<std::vector<double>> starts = make_starts(motion, a, base);
   for (int round = 0; round < 4; ++round) {
@@ -490,7 +492,7 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o, std::
     *why = "min coupler sine " + format_double(r.min_sine) + " below the singularity margin";
     return "singular_margin_violated";
   }
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kDof; ++j) {
     if (std::isfinite(o.theta_lo[j]) &&
         (r.theta_min[j] < o.theta_lo[j] - 1e-9 || r.theta_max[j] > o.theta_hi[j] + 1e-9)) {
       *why = "theta" + std::to_string(j + 1) + " leaves its range";

@@ -15,6 +15,23 @@ namespace id = fivebar::identification;
 
 namespace {
 const char* const kFlags = "command line";
+
+/// The scene's friction as the start of a fit of `law`: the coefficients the scene's law
+/// identifies keep their values; of the others, one that defaults to another takes its value
+/// (static_coulomb: coulomb) and one that only the fitted law identifies its neutral start
+/// (CoefficientInfo::start: the Stribeck velocity 0.2 rad/s).
+FrictionParams<double> start_from(FrictionParams<double> fp, FrictionLaw law) {
+  const LawDescriptor& scene_law = law_descriptor(fp.law);
+  for (const CoefficientInfo& c : kCoefficientInfo) {  // coulomb before static_coulomb
+    if (identifies(scene_law, c.id)) continue;
+    if (c.same_as != c.id) {
+      coefficient(fp, c.id) = coefficient(fp, c.same_as);
+    } else if (identifies(law_descriptor(law), c.id)) {
+      coefficient(fp, c.id).fill(c.start);
+    }
+  }
+  return fp;
+}
 }  // namespace
 
 id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& scene) {
@@ -74,12 +91,7 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   opt.num_threads = std::max(1, a.threads);
   opt.window_s = a.window;
   if (a.start_from_scene) {
-    FrictionParams<double> fp = scene.params.friction;
-    if (fp.law != FrictionLaw::kStribeck) {
-      fp.static_coulomb = fp.coulomb;
-      fp.stribeck_velocity.fill(0.2);
-    }
-    opt.initial = opt.layout.extract(fp);
+    opt.initial = opt.layout.extract(start_from(scene.params.friction, opt.layout.law));
   }
   return opt;
 }

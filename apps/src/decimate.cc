@@ -11,7 +11,7 @@ std::vector<double> plotted(const std::vector<sim::Row>& rows, const std::vector
   const sim::Row& r = rows[i];
   std::vector<double> v;
   v.reserve(32 + extra.size());
-  for (int k = 0; k < 4; ++k) v.insert(v.end(), {r.theta[k], r.omega[k], r.alpha[k]});
+  for (int k = 0; k < kLinks; ++k) v.insert(v.end(), {r.theta[k], r.omega[k], r.alpha[k]});
   for (int k = 0; k < kJoints; ++k) v.insert(v.end(), {r.N[k], r.Mf[k]});
   v.insert(v.end(), {r.M1, r.M2, r.P_diss, r.E_diss});
   for (const Column& c : extra) v.push_back(c.values[i]);

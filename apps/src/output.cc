@@ -62,12 +62,12 @@ const std::vector<std::string>& trajectory_columns() {
   static const std::vector<std::string> columns = [] {
     std::vector<std::string> c = {"t"};
     for (const char* q : {"theta", "omega", "alpha"}) {
-      for (int i = 1; i <= 4; ++i) c.push_back(q + std::to_string(i));
+      for (int i = 1; i <= kLinks; ++i) c.push_back(q + std::to_string(i));
     }
     c.push_back("M1");
     c.push_back("M2");
     for (const char* q : {"N", "Mf"}) {
-      for (int k = 1; k <= 5; ++k) c.push_back(q + std::to_string(k));
+      for (int k = 1; k <= kJoints; ++k) c.push_back(q + std::to_string(k));
     }
     for (const char* q : {"P_diss", "E_diss", "W_in", "W_ext"}) c.push_back(q);
     return c;
@@ -77,7 +77,7 @@ const std::vector<std::string>& trajectory_columns() {
 
 std::vector<Column> rest_columns(const std::vector<sim::Row>& rows) {
   std::vector<Column> c = {{"at_rest", {}}};
-  for (int k = 1; k <= 5; ++k) c.push_back({"stuck" + std::to_string(k), {}});
+  for (int k = 1; k <= kJoints; ++k) c.push_back({"stuck" + std::to_string(k), {}});
   for (const char* name : {"M1_hold_min", "M1_hold_max", "M2_hold_min", "M2_hold_max"}) {
     c.push_back({name, {}});
   }

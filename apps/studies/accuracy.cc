@@ -135,7 +135,7 @@ Status work_precision(const Params<double>& params, const LoadFunction& loads,
                       const WorkPrecisionOptions& options, WorkPrecision* out) {
   *out = WorkPrecision{};
   // treatments: the three of an exact-sign law, else the scene's own
-  const bool exact_sign = sim::exact_sign(params.friction);
+  const bool exact_sign = fivebar::exact_sign(params.friction);
   std::vector<Treatment> treatments;
   if (exact_sign) {
     treatments = {Treatment::kExactLocated, Treatment::kExactUnlocated, Treatment::kRegularized};

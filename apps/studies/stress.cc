@@ -339,7 +339,7 @@ bool row_finite(const Row& r) {
   bool ok = std::isfinite(r.t) && std::isfinite(r.M1) && std::isfinite(r.M2) &&
             std::isfinite(r.P_diss) && std::isfinite(r.E_diss) && std::isfinite(r.W_in) &&
             std::isfinite(r.W_ext) && std::isfinite(r.kinetic) && std::isfinite(r.potential);
-  for (int i = 0; i < 4; ++i) {
+  for (int i = 0; i < kLinks; ++i) {
     ok = ok && std::isfinite(r.theta[i]) && std::isfinite(r.omega[i]) && std::isfinite(r.alpha[i]);
   }
   for (int k = 0; k < kJoints; ++k) ok = ok && std::isfinite(r.N[k]) && std::isfinite(r.Mf[k]);
@@ -363,7 +363,9 @@ double theta_difference(const std::vector<Row>& a, const std::vector<Row>& b, do
   double worst = 0.0;
   for (size_t i = 0; i < a.size(); ++i) {
     if (horizon >= 0.0 && a[i].t > horizon + 1e-12) break;
-    for (int k = 0; k < 4; ++k) worst = std::max(worst, std::abs(a[i].theta[k] - b[i].theta[k]));
+    for (int k = 0; k < kLinks; ++k) {
+      worst = std::max(worst, std::abs(a[i].theta[k] - b[i].theta[k]));
+    }
   }
   return worst;
 }
@@ -422,7 +424,7 @@ StressRow evaluate_run(const StressCase& c, Method method, const std::vector<Row
   if (c.max_displacement >= 0.0) {
     row.displacement = 0.0;
     for (const Row& x : r.rows) {
-      for (int i = 0; i < 4; ++i) {
+      for (int i = 0; i < kLinks; ++i) {
         row.displacement =
             std::max(row.displacement, std::abs(x.theta[i] - r.rows.front().theta[i]));
       }

@@ -66,7 +66,7 @@ void actuator_columns(const DesignParameters& dp, const MotionState& s, SampleTe
   if (dp.actuator == 0) return;
   const int c0 = dp.friction + dp.inertial;
   const double w[2] = {s.w1, s.w2};
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kActuators; ++j) {
     const int c = c0 + kActuatorPerMotor * j;
     out->J(j, c) = 1.0;
     out->J(j, c + 1) = (w[j] > 0) - (w[j] < 0);
@@ -187,7 +187,7 @@ MotionState FourierMotion::state(const std::vector<double>& x, double t) const {
   std::vector<std::array<double, 3>> d;
   basis(t, &d);
   std::array<std::array<double, 3>, 2> q{};
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kDof; ++j) {
     q[j][0] = start_[j];
     for (int v = 0; v < per_joint(); ++v) {
       for (int k = 0; k < 3; ++k) q[j][k] += x[j * per_joint() + v] * d[v][k];
@@ -210,7 +210,7 @@ std::vector<double> FourierMotion::fit(const std::vector<double>& t, const std::
   }
   const Eigen::MatrixXd c = A.colPivHouseholderQr().solve(b);
   std::vector<double> x(num_variables());
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kDof; ++j) {
     for (int v = 0; v < pj; ++v) x[j * pj + v] = c(v, j);
   }
   return x;
@@ -243,13 +243,13 @@ ExcitationProblem::ExcitationProblem(const Params<double>& scene,
 
 int ExcitationProblem::per_sample_constraints() const {
   int c = 5;  // +-M1, +-M2, sine
-  for (int j = 0; j < 2; ++j) c += std::isfinite(opt_.theta_lo[j]) ? 2 : 0;
+  for (int j = 0; j < kDof; ++j) c += std::isfinite(opt_.theta_lo[j]) ? 2 : 0;
   return c;
 }
 
 int ExcitationProblem::constraint_kinds() const {
   int k = 2;  // torque, sine
-  for (int j = 0; j < 2; ++j) k += std::isfinite(opt_.theta_lo[j]) ? 1 : 0;
+  for (int j = 0; j < kDof; ++j) k += std::isfinite(opt_.theta_lo[j]) ? 1 : 0;
   return k;
 }
 
@@ -405,7 +405,7 @@ void ExcitationProblem::add_sample_constraints(int i, const Derivs& d, bool grad
   cs.push_back({-d.v.M2 / lim - keep, of(m2, -1, lim)});
   cs.push_back({1.0 - d.v.sine / opt_.singular_margin, of(sine, -1, opt_.singular_margin)});
   const double th[2] = {d.s.th1, d.s.th2};
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kDof; ++j) {
     if (!std::isfinite(opt_.theta_lo[j])) continue;
     const double span = opt_.theta_hi[j] - opt_.theta_lo[j];
     std::array<double, 6> g{};
@@ -419,7 +419,7 @@ void ExcitationProblem::add_sample_constraints(int i, const Derivs& d, bool grad
     (*raw)[row0 + r] = cs[r].first;
     if (!grad) continue;
     double* g = &(*raw_grad)[(row0 + r) * n];
-    for (int j = 0; j < 2; ++j) {
+    for (int j = 0; j < kDof; ++j) {
       for (int v = 0; v < pj; ++v) {
         // s = (th1, th2, w1, w2, a1, a2): crank j's angle, rate, acceleration at 0+j, 2+j, 4+j
         g[j * pj + v] = cs[r].second[j] * basis[v][0] + cs[r].second[2 + j] * basis[v][1] +
@@ -445,7 +445,7 @@ void ExcitationProblem::add_reversal_constraints(
       if (!grad) continue;
       double* g = &out->constraints_grad[static_cast<size_t>(row) * n];
       for (size_t i = 0; i < all.size(); ++i) {
-        for (int j = 0; j < 2; ++j) {
+        for (int j = 0; j < kDof; ++j) {
           for (int q = 0; q < pj; ++q) {
             double dw = 0;
             for (int o = 0; o < 3; ++o) dw += all[i].d[2 * o + j].w[k] * basis[i][q][o];
@@ -489,7 +489,7 @@ Status ExcitationProblem::evaluate(const std::vector<double>& x, bool grad, Desi
     const Eigen::MatrixXd JG = all[i].v.J * G;
     std::array<double, 6> ds{};
     for (int cc = 0; cc < 6; ++cc) ds[cc] = c * JG.cwiseProduct(all[i].d[cc].J).sum();
-    for (int j = 0; j < 2; ++j) {
+    for (int j = 0; j < kDof; ++j) {
       for (int v = 0; v < pj; ++v) {
         out->objective_grad[j * pj + v] += ds[j] * basis[i][v][0] + ds[2 + j] * basis[i][v][1] +
                                            ds[4 + j] * basis[i][v][2];
@@ -541,7 +541,7 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
     Js[i] = terms[i].J;
     rates[i] = terms[i].w;
     const double th[2] = {states[i].th1, states[i].th2};
-    for (int j = 0; j < 2; ++j) {
+    for (int j = 0; j < kDof; ++j) {
       out->theta_min[j] = std::min(out->theta_min[j], th[j]);
       out->theta_max[j] = std::max(out->theta_max[j], th[j]);
     }

@@ -92,12 +92,13 @@ ceres::LossFunction* make_loss(Loss loss, double scale) {
   return nullptr;
 }
 
-/// Neutral start values, independent of the scene: coulomb 0.1, viscous 0.01, static 0.15,
-/// Stribeck velocity 0.2 rad/s.
+/// Neutral start values, independent of the scene: each coefficient's CoefficientInfo::start
+/// (coulomb 0.1, viscous 0.01, static 0.15, Stribeck velocity 0.2 rad/s).
 std::vector<double> default_start(const ParameterLayout& layout) {
-  static const double kStart[] = {0.1, 0.01, 0.15, 0.2};
   std::vector<double> x(layout.friction_size());
-  for (int i = 0; i < layout.friction_size(); ++i) x[i] = kStart[i / layout.per_group()];
+  for (int i = 0; i < layout.friction_size(); ++i) {
+    x[i] = coefficient_info(layout.group(i / layout.per_group())).start;
+  }
   return x;
 }
 
@@ -329,9 +330,14 @@ Params<double> fit_scene(const Params<double>& scene_in, const ParameterLayout& 
   Params<double> scene = scene_in;
   scene.friction.law = layout.law;
   if (opt.smoothing_velocity >= 0) scene.friction.smoothing_velocity = opt.smoothing_velocity;
-  if (layout.law == FrictionLaw::kStribeck) {
-    for (int k = 0; k < kJoints; ++k) {
-      if (!(scene.friction.stribeck_exponent[k] > 0)) scene.friction.stribeck_exponent[k] = 2.0;
+  // a fixed coefficient the law needs > 0 (the Stribeck exponent) that the scene leaves unset
+  // takes its default
+  const LawDescriptor& d = law_descriptor(layout.law);
+  for (int i = 0; i < d.count; ++i) {
+    const LawCoefficient& c = d.coefficients[i];
+    if (!c.positive || c.identifiable) continue;
+    for (double& v : coefficient(scene.friction, c.id)) {
+      if (!(v > 0)) v = coefficient_info(c.id).default_value;
     }
   }
   return scene;
@@ -465,7 +471,8 @@ int reversal_half_window(Fit* f, IdentifyResult* out) {
   // them out would leave the smooth parts' bias alone
   // (Coulomb-viscous only: a Stribeck peak lives at the reversals, and smeared it reads as no
   // peak: on a noise-free 500 Hz log, static_coulomb 0.130 for 0.2 with them, 0.199 without)
-  const bool raised = f->sg.order > f->opt->sg.order && f->layout.law != FrictionLaw::kStribeck;
+  const bool raised = f->sg.order > f->opt->sg.order &&
+                      f->layout.group_of(Coefficient::kStaticCoulomb) < 0;  // no fitted peak
   if (!out->accels_estimated || !f->opt->exclude_reversals ||
       f->opt->method != Method::kInverseDynamics || raised) {
     return 0;
@@ -1625,7 +1632,7 @@ void init_fit(const Params<double>& scene_in, const sim::LoadFunction& loads, co
   f->opt = &opt;
   f->loads = loads;
   f->layout = opt.layout;
-  f->layout.static_as_excess = opt.layout.law == FrictionLaw::kStribeck;
+  f->layout.static_as_excess = f->layout.group_of(Coefficient::kStaticCoulomb) >= 0;
   f->scene = fit_scene(scene_in, f->layout, opt);
   f->sg = opt.sg;
   f->eval.friction_tol = 1e-12;
@@ -1874,9 +1881,10 @@ void inertia_check(const Fit& f, IdentifyResult* out) {
 /// says little). Only with a std, off its bounds; not the inertial parameters.
 bool wants_profile(const ParameterLayout& layout, int i, const ParameterEstimate& e) {
   if (e.at_bound || !std::isfinite(e.std) || layout.is_inertial(i)) return false;
-  if (layout.law == FrictionLaw::kStribeck && i < layout.friction_size()) {
-    const Coefficient c = layout.group(i / layout.per_group());
-    if (c == Coefficient::kStaticCoulomb || c == Coefficient::kStribeckVelocity) return true;
+  if (i < layout.friction_size()) {
+    const LawCoefficient* c =
+        law_coefficient(law_descriptor(layout.law), layout.group(i / layout.per_group()));
+    if (c && c->profiled) return true;
   }
   return e.ci_low < layout.lower_bound(i);
 }

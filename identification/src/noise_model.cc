@@ -34,7 +34,7 @@ Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source, 
   int lo = i;
   std::vector<double> d1, d2;
   if (source != RateSource::kLogged) savitzky_golay_taps(t, i, sg, &lo, &d1, &d2);
-  for (int c = 0; c < 2; ++c) {
+  for (int c = 0; c < kDof; ++c) {
     if (source == RateSource::kFromAngles) {
       // the angle noise of the window: through omega (d1), alpha (d2) and, at i, theta itself
       out.lo[c] = lo;
@@ -83,7 +83,7 @@ Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sen
   std::vector<Eigen::MatrixXd> g(4, Eigen::MatrixXd::Zero(n, P));
   for (size_t u = 0; u < sens.size(); ++u) {
     const Eigen::Matrix<double, 2, Eigen::Dynamic> Ji = J.middleRows(2 * u, 2);
-    for (int j = 0; j < 2; ++j) {
+    for (int j = 0; j < kActuators; ++j) {
       const double s2 = noise.torque[j] * noise.torque[j];
       S += s2 * Ji.row(j).transpose() * Ji.row(j);
     }

@@ -65,7 +65,7 @@ bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
   for (size_t u = 0, k = 0; u < keep.size(); ++u) {
     if (!keep[u]) continue;
     Eigen::Vector2d m = Eigen::Vector2d::Zero();
-    for (int c = 0; c < 2; ++c) {
+    for (int c = 0; c < kDof; ++c) {
       m += in.D[u].col(2 + c) * in.terms[c][u].dot(r1) + in.D[u].col(4 + c) * in.terms[c][u].dot(r2);
     }
     dM.segment<2>(2 * k) = m;

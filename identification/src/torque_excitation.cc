@@ -26,7 +26,7 @@ double violation(const TorqueCandidate& c, const ExcitationOptions& o) {
   const ExcitationReport& r = c.report;
   for (int k : r.reversals) v += std::max(0, o.min_reversals - k);
   if (r.min_sine < o.singular_margin) v += 1 + o.singular_margin - r.min_sine;
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kDof; ++j) {
     if (!std::isfinite(o.theta_lo[j])) continue;
     v += std::max(0.0, o.theta_lo[j] - r.theta_min[j]) + std::max(0.0, r.theta_max[j] - o.theta_hi[j]);
   }
@@ -64,7 +64,7 @@ sim::LoadFunction ToneTorques::loads(const std::vector<double>& x, const sim::Lo
 
 std::vector<double> ToneTorques::steps() const {
   std::vector<double> s;
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kActuators; ++j) {
     s.push_back(limit_ / 4);
     for (int k = 0; k < k_; ++k) s.push_back(limit_ / 4);
     for (int k = 0; k < k_; ++k) s.push_back(0.3);
@@ -74,7 +74,7 @@ std::vector<double> ToneTorques::steps() const {
 }
 
 void ToneTorques::bound(std::vector<double>* x) const {
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kActuators; ++j) {
     double* v = x->data() + j * per_motor();
     v[0] = std::clamp(v[0], -limit_, limit_);
     for (int k = 0; k < k_; ++k) {
@@ -86,7 +86,7 @@ void ToneTorques::bound(std::vector<double>* x) const {
 
 std::vector<double> multisine_tones() {
   std::vector<double> x;
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kActuators; ++j) {
     const double* f = j == 0 ? kMultisineF1 : kMultisineF2;
     x.push_back(kMultisineBias[j]);
     for (int k = 0; k < 4; ++k) x.push_back(kMultisineA[k]);
@@ -98,7 +98,7 @@ std::vector<double> multisine_tones() {
 
 std::vector<double> resize_tones(const std::vector<double>& x, int from, int tones) {
   std::vector<double> y;
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kActuators; ++j) {
     const double* v = x.data() + j * (1 + 3 * from);
     y.push_back(v[0]);
     for (int part = 0; part < 3; ++part) {
@@ -161,7 +161,7 @@ std::vector<std::vector<double>> tone_starts(const ToneTorques& tones, const std
   for (double amplitude : {1.0, 3.0, 10.0}) {
     for (double frequency : {1.0, 0.7, 0.5}) {
       std::vector<double> x = x0;
-      for (int j = 0; j < 2; ++j) {
+      for (int j = 0; j < kActuators; ++j) {
         for (int k = 0; k < K; ++k) {
           x[j * pm + 1 + k] *= amplitude;
           x[j * pm + 1 + K + k] *= frequency;

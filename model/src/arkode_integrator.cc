@@ -36,7 +36,7 @@ class Arkode final : public Integrator {
       e->y.assign(prob.n, 0.0);
       e->f.assign(prob.n, 0.0);
     }
-    ok_ = explicit_ ? setup_erk(opt) : setup_dirk(opt);
+    ok_ = sc_.ready && (explicit_ ? setup_erk(opt) : setup_dirk(opt));
   }
   ~Arkode() override {
     if (mem_) {
@@ -49,8 +49,9 @@ class Arkode final : public Integrator {
   }
 
   bool start(double t0, const double* y0) override {
-    if (!ok_) return false;
-    sc_.steps_before += current_steps();
+    long n = 0;
+    if (!ok_ || !current_steps(&n)) return false;
+    sc_.steps_before += n;
     sc_.load(y0, prob_.n);
     cur_.t = t0;
     std::copy(y0, y0 + prob_.n, cur_.y.begin());
@@ -94,14 +95,21 @@ class Arkode final : public Integrator {
     }
     return true;
   }
-  long steps() override { return sc_.steps_before + current_steps(); }
+  bool steps(long* n) override {
+    if (!current_steps(n)) return false;
+    *n += sc_.steps_before;
+    return true;
+  }
   std::string error() const override { return sc_.error; }
 
  private:
   bool setup_erk(const Options& opt) {
     mem_ = ERKStepCreate(&Arkode::rhs, 0.0, sc_.y, sc_.ctx);
-    if (!mem_) return fail("ERKStepCreate failed");
-    ERKStepSetErrHandlerFn(mem_, &SundialsCommon::on_error, &sc_);
+    if (!check_created(mem_, "ERKStepCreate", &sc_.error) ||
+        !check(ERKStepSetErrHandlerFn(mem_, &SundialsCommon::on_error, &sc_),
+               "ERKStepSetErrHandlerFn")) {
+      return false;
+    }
     // ARKODE names tables NAME_stages_embedding_order. Dense output: ARKODE's default degree-5
     // Hermite interpolant (two extra right-hand sides per call; cubic Hermite or Lagrange lose
     // one to two digits at the 1 ms grid, measured with `fivebar accuracy`)
@@ -118,9 +126,10 @@ class Arkode final : public Integrator {
   }
   bool setup_dirk(const Options& opt) {
     mem_ = ARKStepCreate(nullptr, &Arkode::rhs, 0.0, sc_.y, sc_.ctx);
-    if (!mem_) return fail("ARKStepCreate failed");
-    ARKStepSetErrHandlerFn(mem_, &SundialsCommon::on_error, &sc_);
-    bool ok = check(ARKStepSetTableNum(mem_, ARKODE_ARK548L2SA_DIRK_8_4_5, ARKODE_ERK_NONE),
+    if (!check_created(mem_, "ARKStepCreate", &sc_.error)) return false;
+    bool ok = check(ARKStepSetErrHandlerFn(mem_, &SundialsCommon::on_error, &sc_),
+                    "ARKStepSetErrHandlerFn") &&
+              check(ARKStepSetTableNum(mem_, ARKODE_ARK548L2SA_DIRK_8_4_5, ARKODE_ERK_NONE),
                     "ARKStepSetTableNum");
     // Lagrange dense output for stiff states, as ARKODE recommends: the Hermite one overshoots
     // LuGre bristles at output times; elsewhere Hermite is two digits more accurate
@@ -129,21 +138,17 @@ class Arkode final : public Integrator {
       ok = ok && check(ARKStepSetInterpolantType(mem_, ARK_INTERP_LAGRANGE),
                        "ARKStepSetInterpolantType");
     }
-    sc_.make_dense_solver(prob_.n);
-    return ok && check(ARKStepSVtolerances(mem_, opt.rtol, sc_.atol), "ARKStepSVtolerances") &&
+    return ok && sc_.make_dense_solver(prob_.n) &&
+           check(ARKStepSVtolerances(mem_, opt.rtol, sc_.atol), "ARKStepSVtolerances") &&
            check(ARKStepSetUserData(mem_, this), "ARKStepSetUserData") &&
            check(ARKStepSetMaxNumSteps(mem_, opt.max_steps), "ARKStepSetMaxNumSteps") &&
            check(ARKStepSetMaxErrTestFails(mem_, kMaxErrTestFails), "ARKStepSetMaxErrTestFails") &&
            check(ARKStepSetLinearSolver(mem_, sc_.ls, sc_.A), "ARKStepSetLinearSolver") &&
            (!prob_.freeze || check(ARKStepSetJacFn(mem_, &Arkode::jacobian), "ARKStepSetJacFn"));
   }
-  bool fail(const char* what) {
-    sc_.error = what;
-    return false;
-  }
   bool check(int flag, const char* call) {
     return check_flag(flag, call, explicit_ ? &ERKStepGetReturnFlagName : &ARKStepGetReturnFlagName,
-                      &sc_.error);
+                      &sc_.solver_message, &sc_.error);
   }
   /// f(t, y) at one end of the step: from the last right-hand side ARKODE evaluated there (the
   /// first-same-as-last stage of Dormand-Prince), else evaluated here.
@@ -159,15 +164,12 @@ class Arkode final : public Integrator {
     e->has_f = true;
     return true;
   }
-  long current_steps() {
-    long n = 0;
-    if (!mem_) return 0;
-    if (explicit_) {
-      ERKStepGetNumSteps(mem_, &n);
-    } else {
-      ARKStepGetNumSteps(mem_, &n);
-    }
-    return n;
+  /// Steps since the last (re)start; 0 before the solver exists.
+  bool current_steps(long* n) {
+    *n = 0;
+    if (!mem_) return true;
+    return explicit_ ? check(ERKStepGetNumSteps(mem_, n), "ERKStepGetNumSteps")
+                     : check(ARKStepGetNumSteps(mem_, n), "ARKStepGetNumSteps");
   }
   static int rhs(realtype t, N_Vector y, N_Vector ydot, void* self) {
     auto* me = static_cast<Arkode*>(self);

@@ -16,25 +16,7 @@ class Cvode final : public Integrator {
  public:
   Cvode(const OdeProblem& prob, const Options& opt, double t_end)
       : prob_(prob), t_end_(t_end), sc_(prob, opt) {
-    const bool adams = opt.method == Method::kCvodeAdams;
-    mem_ = CVodeCreate(adams ? CV_ADAMS : CV_BDF, sc_.ctx);
-    ok_ = mem_ != nullptr;
-    if (!ok_) {
-      sc_.error = "CVodeCreate failed";
-      return;
-    }
-    CVodeSetErrHandlerFn(mem_, &SundialsCommon::on_error, &sc_);
-    ok_ = check(CVodeInit(mem_, &Cvode::rhs, 0.0, sc_.y), "CVodeInit") &&
-          check(CVodeSVtolerances(mem_, opt.rtol, sc_.atol), "CVodeSVtolerances") &&
-          check(CVodeSetUserData(mem_, this), "CVodeSetUserData") &&
-          check(CVodeSetMaxNumSteps(mem_, opt.max_steps), "CVodeSetMaxNumSteps");
-    if (adams) {
-      nls_ = SUNNonlinSol_FixedPoint(sc_.y, 0, sc_.ctx);
-      ok_ = ok_ && check(CVodeSetNonlinearSolver(mem_, nls_), "CVodeSetNonlinearSolver");
-    } else {
-      sc_.make_dense_solver(prob.n);
-      ok_ = ok_ && check(CVodeSetLinearSolver(mem_, sc_.ls, sc_.A), "CVodeSetLinearSolver");
-    }
+    ok_ = sc_.ready && setup(opt, opt.method == Method::kCvodeAdams);
   }
   ~Cvode() override {
     if (mem_) CVodeFree(&mem_);
@@ -42,8 +24,9 @@ class Cvode final : public Integrator {
   }
 
   bool start(double t0, const double* y0) override {
-    if (!ok_) return false;
-    sc_.steps_before += current_steps();
+    long n = 0;
+    if (!ok_ || !current_steps(&n)) return false;
+    sc_.steps_before += n;
     sc_.load(y0, prob_.n);
     // the stop time is cleared once reached and is not kept across a re-initialization
     return check(CVodeReInit(mem_, t0, sc_.y), "CVodeReInit") &&
@@ -63,17 +46,40 @@ class Cvode final : public Integrator {
     return check(flag, "CVodeGetDky");
   }
   bool sample(double t, double* y) override { return dense(t, y); }
-  long steps() override { return sc_.steps_before + current_steps(); }
+  bool steps(long* n) override {
+    if (!current_steps(n)) return false;
+    *n += sc_.steps_before;
+    return true;
+  }
   std::string error() const override { return sc_.error; }
 
  private:
-  bool check(int flag, const char* call) {
-    return check_flag(flag, call, &CVodeGetReturnFlagName, &sc_.error);
+  bool setup(const Options& opt, bool adams) {
+    mem_ = CVodeCreate(adams ? CV_ADAMS : CV_BDF, sc_.ctx);
+    if (!check_created(mem_, "CVodeCreate", &sc_.error) ||
+        !check(CVodeSetErrHandlerFn(mem_, &SundialsCommon::on_error, &sc_),
+               "CVodeSetErrHandlerFn") ||
+        !check(CVodeInit(mem_, &Cvode::rhs, 0.0, sc_.y), "CVodeInit") ||
+        !check(CVodeSVtolerances(mem_, opt.rtol, sc_.atol), "CVodeSVtolerances") ||
+        !check(CVodeSetUserData(mem_, this), "CVodeSetUserData") ||
+        !check(CVodeSetMaxNumSteps(mem_, opt.max_steps), "CVodeSetMaxNumSteps")) {
+      return false;
+    }
+    if (adams) {
+      nls_ = SUNNonlinSol_FixedPoint(sc_.y, 0, sc_.ctx);
+      return check_created(nls_, "SUNNonlinSol_FixedPoint", &sc_.error) &&
+             check(CVodeSetNonlinearSolver(mem_, nls_), "CVodeSetNonlinearSolver");
+    }
+    return sc_.make_dense_solver(prob_.n) &&
+           check(CVodeSetLinearSolver(mem_, sc_.ls, sc_.A), "CVodeSetLinearSolver");
   }
-  long current_steps() {
-    long n = 0;
-    if (mem_) CVodeGetNumSteps(mem_, &n);
-    return n;
+  bool check(int flag, const char* call) {
+    return check_flag(flag, call, &CVodeGetReturnFlagName, &sc_.solver_message, &sc_.error);
+  }
+  /// Steps since the last (re)start; 0 before the solver exists.
+  bool current_steps(long* n) {
+    *n = 0;
+    return !mem_ || check(CVodeGetNumSteps(mem_, n), "CVodeGetNumSteps");
   }
   static int rhs(realtype t, N_Vector y, N_Vector ydot, void* self) {
     auto* me = static_cast<Cvode*>(self);

@@ -13,7 +13,7 @@ double max_angle_difference(const std::vector<Row>& a, const std::vector<Row>& b
   const size_t n = std::min(a.size(), b.size());
   double worst = 0.0;
   for (size_t i = 0; i < n; ++i) {
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < kLinks; ++k) {
       const double d = std::abs(a[i].theta[k] - b[i].theta[k]);
       worst = std::isfinite(d) ? std::max(worst, d) : INFINITY;
     }

@@ -49,8 +49,9 @@ class Integrator {
   /// dense output (free), or a cubic Hermite from the step's end values and slopes for ARKODE
   /// (whose degree-5 dense output costs two right-hand sides per call).
   virtual bool sample(double t, double* y) = 0;
-  /// Steps taken since construction, over all starts.
-  virtual long steps() = 0;
+  /// Steps taken since construction, over all starts. False with error() set if SUNDIALS
+  /// refuses the count.
+  virtual bool steps(long* n) = 0;
   /// The solver's message for the last failure.
   virtual std::string error() const = 0;
 };
@@ -66,12 +67,26 @@ inline std::unique_ptr<Integrator> make_integrator(const OdeProblem& prob, const
   return make_arkode(prob, opt, t_end);
 }
 
-/// Records a failed SUNDIALS call in *error: the error handler's message when it gave one, else
-/// "CVodeSetMaxStep: CV_ILL_INPUT", followed by what the flag means for a user of fivebar
-/// (sundials_status.cc, the one place that maps SUNDIALS flags to messages). Returns flag >= 0.
-/// `flag_name` is the module's *GetReturnFlagName, whose string SUNDIALS allocates: it is called
-/// for failures only, and the string freed.
-bool check_flag(int flag, const char* call, char* (*flag_name)(long int), std::string* error);
+// The checks below are the only place that words SUNDIALS failures (sundials_status.cc). Each
+// keeps the first failure in *error (a later one is a consequence) and returns whether the call
+// succeeded.
+
+/// A solver call's flag (< 0: failure). The message names the call and the flag by its SUNDIALS
+/// name, then the error handler's text if it gave one, then what the flag means for a user of
+/// fivebar: "CVode returned CV_TOO_MUCH_WORK (CVODE/CVode: At t = ..., mxstep steps taken before
+/// reaching tout.): the step limit simulation.max_steps was reached: ...". `flag_name` is the
+/// module's *GetReturnFlagName, whose string SUNDIALS allocates: it is called for failures only,
+/// and the string freed. `solver_message` holds the error handler's text (SundialsCommon::
+/// on_error) and is cleared.
+bool check_flag(int flag, const char* call, char* (*flag_name)(long int),
+                std::string* solver_message, std::string* error);
+
+/// A constructor's result (N_VNew_Serial, SUNDenseMatrix, CVodeCreate, ...): null is a failure.
+bool check_created(const void* object, const char* call, std::string* error);
+
+/// A call outside the solvers that returns 0 on success (SUNContext_Create,
+/// N_VEnableFusedOps_Serial): SUNDIALS has no names for these codes.
+bool check_call(int flag, const char* call, std::string* error);
 
 /// What a failure flag (by name, CV_ or ARK_ prefix) means and what to try; "" if nothing useful.
 std::string sundials_hint(const std::string& flag_name);

@@ -30,7 +30,12 @@ bool parse_method(const std::string& name, Method* out) { return parse_in(kMetho
 namespace {
 
 constexpr int kStates = 7;   // th1, th2, w1, w2, E_diss, W_in, W_ext
-constexpr int kBristle = 7;  // LuGre scenes add z_1..z_5 from here
+/// a law with internal states (LawDescriptor::states_per_joint: LuGre's bristles z_1..z_5) adds
+/// them from here
+constexpr int kBristle = kStates;
+/// the longest state: the base states and the internal states of the law that has the most
+constexpr int kMaxStates = kStates + kJoints * kMaxStatesPerJoint;
+static_assert(kMaxStatesPerJoint <= 1, "forward_dynamics carries one internal state per joint");
 /// interior points of every step at which the switch functions are sampled (a rate that
 /// crosses zero and comes back within one step is seen if it stays across for a quarter step)
 constexpr int kSamples = 3;
@@ -76,7 +81,7 @@ struct Context {
   bool frozen = false;                  ///< signs frozen for a Newton Jacobian (freeze_signs)
   JointModes frozen_sign{};
   std::array<bool, kJoints> watched{};        ///< joints with a Coulomb part: switch functions
-  bool lugre = false;                   ///< bristle states follow the 7 base states
+  bool law_states = false;  ///< the law's internal states (LuGre bristles) follow the base states
   bool full_rows = true;                ///< Options::full_rows
   int n = kStates;                      ///< state size
   long rhs_evaluations = 0;
@@ -91,7 +96,7 @@ Status at_time(const Status& st, double t, double th1, double th2) {
 }
 
 const char* joint_name(int k) {
-  static const char* names[5] = {"O", "B", "C", "D", "D0"};
+  static const char* names[kJoints] = {"O", "B", "C", "D", "D0"};
   return names[k];
 }
 
@@ -137,7 +142,7 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   }
   Evaluation<double> ev;
   std::array<double, kJoints> z{};
-  if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
+  if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, z.begin());
   JointModes signs;
   const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3],
                                      rhs_modes(c, y, &signs), c.eval, &ev, &z);
@@ -145,7 +150,7 @@ int rhs(double t, const double* y, double* ydot, void* user) {
     c.failure = at_time(st, t, y[0], y[1]);
     return 1;  // recoverable: the integrator retries with a smaller step
   }
-  if (c.lugre) std::copy(ev.zdot.begin(), ev.zdot.end(), ydot + kBristle);
+  if (c.law_states) std::copy(ev.zdot.begin(), ev.zdot.end(), ydot + kBristle);
   ydot[0] = y[2];
   ydot[1] = y[3];
   ydot[2] = ev.thdd[0];
@@ -232,7 +237,7 @@ Status scan_step(Context& c, detail::Integrator& integ, double tp, double tc, co
                  Watch* watch, bool* found, double* ta, double* tb) {
   *found = false;
   Watch w = *watch;
-  double y[kStates + 5];
+  double y[kMaxStates];
   double t_prev = tp;
   for (int i = 1; i <= kSamples + 1; ++i) {
     const bool end = i == kSamples + 1;
@@ -618,8 +623,8 @@ Row make_angle_row(const Context& c, double t, const double* y, const Row* previ
   row.W_in = y[5];
   row.W_ext = y[6];
   row.mode = c.slip;
-  if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, row.bristle.begin());
-  row.has_bristle = c.lugre;
+  if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, row.bristle.begin());
+  row.has_bristle = c.law_states;
   return row;
 }
 
@@ -672,7 +677,7 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
   const Loads<double> L = (*c.loads)(t);
   Evaluation<double> ev;
   std::array<double, kJoints> z{};
-  if (c.lugre) std::copy(y + kBristle, y + kBristle + 5, z.begin());
+  if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, z.begin());
   JointModes signs;  // the modes the right-hand side uses
   *st = forward_dynamics(*c.params, L, y[0], y[1], y[2], y[3], rhs_modes(c, y, &signs), eval, &ev,
                          &z);
@@ -696,7 +701,7 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
   row.potential = potential_energy(*c.params, ev.kin);
   row.mode = c.use_slip ? c.slip : ev.slip;
   row.bristle = z;
-  row.has_bristle = c.lugre;
+  row.has_bristle = c.law_states;
   return row;
 }
 
@@ -708,7 +713,7 @@ struct Loop {
   std::vector<double> grid;  ///< output times
   size_t next = 1;           ///< next output time to write
   double t = 0.0;
-  double y[kStates + 5] = {};
+  double y[kMaxStates] = {};
   double last_switch = -1.0;
   int burst = 0;             ///< switches at the same instant in a row
   long steps_since_row = 0;
@@ -733,7 +738,7 @@ Status restart(Loop& L, const Options& options) {
 /// Writes the rows of the output times in (.., t_end] from the dense output (the state `y_end`
 /// at t_end itself).
 Status emit_rows(Loop& L, Result* result, double t_end, const double* y_end) {
-  double y[kStates + 5];
+  double y[kMaxStates];
   while (L.next < L.grid.size() && L.grid[L.next] <= t_end) {
     const double tout = L.grid[L.next];
     if (tout == t_end) {
@@ -764,7 +769,7 @@ Status stop_at_singular_margin(Loop& L, Result* result, const Options& options, 
                                double tc, const double* yc) {
   const double margin = options.singular_margin;
   if (!(margin > 0.0) || coupler_sine_at(*L.c.params, yc) >= margin) return Status::Ok();
-  double ta = tp, tb = tc, y[kStates + 5];
+  double ta = tp, tb = tc, y[kMaxStates];
   std::copy(yc, yc + L.c.n, y);
   // (a failed dense output keeps the bracket reached: the run stops here either way)
   static_cast<void>(bisect_dense(*L.integ, &ta, &tb, y, [&](double, const double* yt, bool* past) {
@@ -783,7 +788,7 @@ Status stop_at_singular_margin(Loop& L, Result* result, const Options& options, 
 /// One integrator step, its switch (located and decided) if any, and the rows it covers.
 Status advance(Loop& L, Result* result, const Options& options) {
   const double tp = L.t;
-  double yc[kStates + 5], tc = tp;
+  double yc[kMaxStates], tc = tp;
   L.c.failure = Status::Ok();  // a recovered failure of an earlier step is not this one's
   if (!L.integ->step(yc, &tc)) {
     if (!L.c.failure.ok()) return L.c.failure;
@@ -815,7 +820,7 @@ Status advance(Loop& L, Result* result, const Options& options) {
     std::copy(yc, yc + L.c.n, L.y);
     return emit_rows(L, result, tc, yc);
   }
-  double ye[kStates + 5], te = tb;
+  double ye[kMaxStates], te = tb;
   Fired which{};
   Status st = locate_switch(L.c, *L.integ, L.watch, ta, tb, ye, &te, &which);
   if (!st.ok()) return st;
@@ -864,17 +869,16 @@ void setup_context(Context& c, const Params<double>& params, const LoadFunction&
   c.eval.want_reactions = false;  // the motion needs reactions only through friction
   c.eval.want_angles = false;     // nor the coupler angles themselves
   // exact Coulomb sign: each joint with a Coulomb part gets a switch function on its rate
-  const bool exact_sign = params.friction.active() && params.friction.law != FrictionLaw::kLuGre &&
-                          params.friction.smoothing_velocity == 0.0;
-  c.use_slip = exact_sign && options.locate_switches;
+  c.use_slip = exact_sign(params.friction) && options.locate_switches;
   c.stick = c.use_slip && options.stick;
   for (int k = 0; k < kJoints; ++k) {
     c.watched[k] = c.use_slip && params.friction.coulomb[k] != 0.0 &&
                    params.friction.pin_radius[k] != 0.0;
   }
-  c.lugre = params.friction.law == FrictionLaw::kLuGre;
+  const int law_states = law_descriptor(params.friction.law).states_per_joint;
+  c.law_states = law_states > 0;
   c.full_rows = options.full_rows;
-  c.n = c.lugre ? kStates + 5 : kStates;
+  c.n = kStates + kJoints * law_states;
 }
 
 }  // namespace
@@ -912,8 +916,7 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
     // at the start every watched joint at rest is undecided
     result.status = decide_at(L.c, 0.0, L.y, {}, &result.stats);
     if (!result.status.ok()) return result;
-  } else if (params.friction.active() && params.friction.law != FrictionLaw::kLuGre &&
-             params.friction.smoothing_velocity == 0.0) {
+  } else if (exact_sign(params.friction)) {
     // switches not located: joints at rest at the start slip the way they accelerate
     std::array<double, kJoints> w{};
     std::array<bool, kJoints> rest{};
@@ -925,7 +928,7 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
       }
     }
   }
-  detail::OdeProblem prob{L.c.n, &rhs, &L.c, std::vector<double>(L.c.n, 1.0), L.c.lugre};
+  detail::OdeProblem prob{L.c.n, &rhs, &L.c, std::vector<double>(L.c.n, 1.0), L.c.law_states};
   if (L.c.zero_signs) prob.freeze = &freeze_signs;
   for (int i = kStates; i < prob.n; ++i) prob.atol_scale[i] = options.bristle_atol_scale;
   L.integ = detail::make_integrator(prob, options, options.duration);
@@ -945,9 +948,11 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
                    L.t, L.y[0], L.y[1]);
     }
   }
+  if (!L.integ->steps(&result.stats.steps) && st.ok()) {
+    st = Status::Error(StatusCode::kSolverFailed, L.integ->error());
+  }
   result.status = st;
   result.stats.rhs_evaluations = L.c.rhs_evaluations;
-  result.stats.steps = L.integ->steps();
   result.stats.wall_time_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return result;
@@ -990,7 +995,7 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
     const Loads<double> L = loads(m.t);
     Evaluation<double> ev;
     // LuGre: the run's bristle states (a motion read from a file has none: steady state)
-    const bool bristles = params.friction.law == FrictionLaw::kLuGre && m.has_bristle;
+    const bool bristles = law_descriptor(params.friction.law).states_per_joint > 0 && m.has_bristle;
     const Status st = inverse_dynamics(params, L, m.theta[0], m.theta[1], m.omega[0], m.omega[1],
                                        m.alpha[0], m.alpha[1], nullptr, eval, &ev,
                                        bristles ? &m.bristle : nullptr);
@@ -1071,12 +1076,13 @@ RunChecks check_run(const Params<double>& params, const LoadFunction& loads, con
                                100.0 * (atol < 0 ? rtol : atol) / checks.energy_scale);
   checks.inverse_tol = 1e-8 * std::max(1.0, peak_M);
   checks.power_tol = 1e-9 * std::max(1.0, peak_Mf);
-  const bool check_power = params.friction.law != FrictionLaw::kLuGre;
+  // not with internal states (LuGre's bristles store and return energy)
+  const bool check_power = law_descriptor(params.friction.law).states_per_joint == 0;
   double t_inv = 0, t_pow = 0;
   int j_pow = -1;
   EvalOptions eval;
   for (const Row& r : result.rows) {
-    for (int k = 0; k < 5 && check_power; ++k) {
+    for (int k = 0; k < kJoints && check_power; ++k) {
       if (r.mode[k] == kStuck) continue;  // a holding torque times the drift of a held rate
       const double p = r.Mf[k] * r.omega_rel(k);
       if (p < checks.friction_power_min) {
@@ -1088,7 +1094,7 @@ RunChecks check_run(const Params<double>& params, const LoadFunction& loads, con
     if (any_stuck(r.mode)) continue;
     // inverse dynamics with the run's slip directions (a wrong direction shows in the power)
     Evaluation<double> ev;
-    const bool bristles = params.friction.law == FrictionLaw::kLuGre && r.has_bristle;
+    const bool bristles = law_descriptor(params.friction.law).states_per_joint > 0 && r.has_bristle;
     const Status st = inverse_dynamics(params, loads(r.t), r.theta[0], r.theta[1], r.omega[0],
                                        r.omega[1], r.alpha[0], r.alpha[1],
                                        params.friction.active() ? &r.mode : nullptr, eval, &ev,

@@ -6,27 +6,40 @@
 namespace fivebar::sim::detail {
 
 SundialsCommon::SundialsCommon(const OdeProblem& prob, const Options& opt) {
-  SUNContext_Create(nullptr, &ctx);
+  if (!check_call(SUNContext_Create(nullptr, &ctx), "SUNContext_Create", &error)) {
+    ctx = nullptr;
+    return;
+  }
   y = N_VNew_Serial(prob.n, ctx);
-  N_VEnableFusedOps_Serial(y, SUNTRUE);  // fewer vector calls per step: the state is tiny
-  N_VConst(0.0, y);
   out = N_VMake_Serial(prob.n, nullptr, ctx);
   atol = N_VNew_Serial(prob.n, ctx);
+  if (!check_created(y, "N_VNew_Serial", &error) || !check_created(out, "N_VMake_Serial", &error) ||
+      !check_created(atol, "N_VNew_Serial", &error) ||
+      // fewer vector calls per step: the state is tiny
+      !check_call(N_VEnableFusedOps_Serial(y, SUNTRUE), "N_VEnableFusedOps_Serial", &error)) {
+    return;
+  }
+  N_VConst(0.0, y);
   for (int i = 0; i < prob.n; ++i) NV_Ith_S(atol, i) = opt.atol * prob.atol_scale[i];
+  ready = true;
 }
 
+// The frees' flags are not checked: a destructor has no one to tell, and SUNDIALS fails them only
+// for a null argument, which the guards exclude.
 SundialsCommon::~SundialsCommon() {
   if (ls) SUNLinSolFree(ls);
   if (A) SUNMatDestroy(A);
-  N_VDestroy(atol);
-  N_VDestroy(y);
-  N_VDestroy(out);
-  SUNContext_Free(&ctx);
+  if (atol) N_VDestroy(atol);
+  if (y) N_VDestroy(y);
+  if (out) N_VDestroy(out);
+  if (ctx) SUNContext_Free(&ctx);
 }
 
-void SundialsCommon::make_dense_solver(int n) {
+bool SundialsCommon::make_dense_solver(int n) {
   A = SUNDenseMatrix(n, n, ctx);
+  if (!check_created(A, "SUNDenseMatrix", &error)) return false;
   ls = SUNLinSol_Dense(y, A, ctx);
+  return check_created(ls, "SUNLinSol_Dense", &error);
 }
 
 void SundialsCommon::load(const double* y0, int n) {
@@ -40,7 +53,8 @@ void SundialsCommon::store(double* yout, int n) const {
 void SundialsCommon::on_error(int code, const char* module, const char* function, char* msg,
                               void* self) {
   if (code < 0) {
-    static_cast<SundialsCommon*>(self)->error = std::string(module) + "/" + function + ": " + msg;
+    static_cast<SundialsCommon*>(self)->solver_message =
+        std::string(module) + "/" + function + ": " + msg;
   }
 }
 

@@ -41,14 +41,36 @@ std::string sundials_hint(const std::string& flag_name) {
   return "";
 }
 
-bool check_flag(int flag, const char* call, char* (*flag_name)(long int), std::string* error) {
+bool check_flag(int flag, const char* call, char* (*flag_name)(long int),
+                std::string* solver_message, std::string* error) {
   if (flag >= 0) return true;
   char* raw = flag_name ? flag_name(flag) : nullptr;  // malloc'd by SUNDIALS
-  const std::string name = raw ? raw : "failed";
+  const std::string name = raw ? raw : "flag " + std::to_string(flag);
   std::free(raw);
-  if (error->empty()) *error = std::string(call) + ": " + name;
-  const std::string hint = sundials_hint(name);
-  if (!hint.empty() && error->find(hint) == std::string::npos) *error += " (" + hint + ")";
+  if (error->empty()) {
+    *error = std::string(call) + " returned " + name;
+    if (!solver_message->empty()) *error += " (" + *solver_message + ")";
+    const std::string hint = sundials_hint(name);
+    if (!hint.empty()) *error += ": " + hint;
+  }
+  solver_message->clear();
+  return false;
+}
+
+bool check_created(const void* object, const char* call, std::string* error) {
+  if (object) return true;
+  if (error->empty()) {
+    *error = std::string(call) + " returned no object (out of memory, or a size SUNDIALS rejects)";
+  }
+  return false;
+}
+
+bool check_call(int flag, const char* call, std::string* error) {
+  if (flag == 0) return true;
+  if (error->empty()) {
+    *error = std::string(call) + " failed (code " + std::to_string(flag) +
+             ": out of memory, or an argument SUNDIALS rejects)";
+  }
   return false;
 }
 

@@ -206,7 +206,7 @@ double time_inverse_cpp(const PyScene& s, std::array<double, 6> state, int calls
   eval.singular_margin = s.scene.options.singular_margin;
   const double theta[2] = {state[0], state[1]}, omega[2] = {state[2], state[3]},
                alpha[2] = {state[4], state[5]};
-  double M[2], N[5], Mf[5];
+  double M[kActuators], N[kJoints], Mf[kJoints];
   const States in{theta, omega, alpha, nullptr, 1};
   const Outputs out{M, N, Mf};
   const auto now = [cpu_time] {

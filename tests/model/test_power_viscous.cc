@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/friction.h"
 #include "fivebar/sim/estimate.h"
 #include "fivebar/sim/simulator.h"
 #include "paper.h"
@@ -32,6 +33,52 @@ TEST(PowerViscous, ExponentOneIsTheCoulombViscousLaw) {
   ASSERT_TRUE(a.status.ok()) << a.status.message;
   ASSERT_TRUE(b.status.ok()) << b.status.message;
   EXPECT_EQ(sim::max_angle_difference(a.rows, b.rows), 0.0);
+}
+
+// A library caller who only switches the law of paper_params() (leaving n at FrictionParams'
+// default) gets the law a scene that omits viscous_exponent gets: n = 1, the linear law, not
+// mu_v sign(w) (the default was 0 before; issue 9 review).
+TEST(PowerViscous, DefaultExponentIsTheDescriptorsAndLinear) {
+  Params<double> pv = paper_params();
+  pv.friction.law = FrictionLaw::kPowerViscous;
+  for (double n : pv.friction.viscous_exponent) {
+    EXPECT_EQ(n, coefficient_info(Coefficient::kViscousExponent).default_value);
+  }
+  for (int k = 0; k < kJoints; ++k) {
+    for (double w : {-2.5, -0.3, 0.7, 4.0}) {
+      EXPECT_EQ(friction_law(pv.friction, k, w, sign_of(w)),
+                friction_law(paper_params().friction, k, w, sign_of(w)))
+          << "joint " << k << ", w = " << w;
+    }
+  }
+}
+
+// Every coefficient that a scene may omit starts, in a default FrictionParams, at the value the
+// descriptors give for an omitted key (those that default to another coefficient aside).
+TEST(FrictionDescriptors, FrictionParamsDefaultsAreTheDescriptors) {
+  const FrictionParams<double> fp;
+  for (const CoefficientInfo& c : kCoefficientInfo) {
+    if (c.same_as != c.id) continue;
+    for (double v : coefficient(fp, c.id)) EXPECT_EQ(v, c.default_value) << c.key;
+  }
+}
+
+// The simulator's exact-sign test and state layout come from the descriptor: laws with a sign
+// jump have no internal state, LuGre has one per joint and no sign jump.
+TEST(FrictionDescriptors, SignJumpAndInternalStates) {
+  for (const LawDescriptor& d : kLaws) {
+    FrictionParams<double> fp;
+    fp.law = d.law;
+    EXPECT_EQ(exact_sign(fp), d.coulomb_sign) << d.name;
+    fp.smoothing_velocity = 0.01;
+    EXPECT_FALSE(exact_sign(fp)) << d.name;
+    EXPECT_LE(d.states_per_joint, kMaxStatesPerJoint) << d.name;
+    if (d.coulomb_sign) {
+      EXPECT_EQ(d.states_per_joint, 0) << d.name;
+    }
+  }
+  EXPECT_EQ(law_descriptor(FrictionLaw::kLuGre).states_per_joint, 1);
+  EXPECT_FALSE(law_descriptor(FrictionLaw::kNone).coulomb_sign);
 }
 
 TEST(PowerViscous, FrictionNeverSuppliesPower) {

@@ -145,7 +145,7 @@ class StructuredResidual {
     }
     if (!converged) return false;  // Ceres rejects the step (the loop does not contract here)
     for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j] + motor[j];
-    for (int a = 0; a < 2; ++a) {
+    for (int a = 0; a < kActuators; ++a) {
       T m = T(st_.c(a)) + act.offset[a];
       for (int i = 0; i < kInertialParams; ++i) m += st_.Y(a, i) * pi[i];
       for (int j = 0; j < kJoints; ++j) m += st_.G(a, j) * Mf[j];

@@ -36,7 +36,7 @@ void mass_and_forces(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& 
   *A += p.links[2].inertia * k.G3.transpose() * k.G3 + p.links[3].inertia * k.G4.transpose() * k.G4;
   Vec2<T> bias = p.links[2].inertia * b.h3 * k.G3.transpose() +
                  p.links[3].inertia * b.h4 * k.G4.transpose();
-  for (int i = 0; i < 4; ++i) {
+  for (int i = 0; i < kLinks; ++i) {
     const T& m = p.links[i].mass;
     *A += m * k.Gc[i].transpose() * k.Gc[i];
     bias += m * k.Gc[i].transpose() * b.hc[i];
@@ -46,7 +46,9 @@ void mass_and_forces(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& 
   if (!is_exact_zero(L.M3)) *rhs += L.M3 * k.G3.transpose();
   if (!is_exact_zero(L.F)) *rhs += k.GP.transpose() * Fvec;
   if (!is_exact_zero(p.gravity)) {
-    for (int i = 0; i < 4; ++i) *rhs -= p.gravity * p.links[i].mass * k.Gc[i].row(1).transpose();
+    for (int i = 0; i < kLinks; ++i) {
+      *rhs -= p.gravity * p.links[i].mass * k.Gc[i].row(1).transpose();
+    }
   }
 }
 

@@ -14,7 +14,7 @@ T kinetic_energy(const Params<T>& p, const Kinematics<T>& k, const T& w1, const 
   const T w3 = k.G3.dot(thd), w4 = k.G4.dot(thd);
   T ke = p.links[0].inertia * w1 * w1 + p.links[1].inertia * w2 * w2 +
          p.links[2].inertia * w3 * w3 + p.links[3].inertia * w4 * w4;
-  for (int i = 0; i < 4; ++i) ke += p.links[i].mass * (k.Gc[i] * thd).squaredNorm();
+  for (int i = 0; i < kLinks; ++i) ke += p.links[i].mass * (k.Gc[i] * thd).squaredNorm();
   return T(0.5) * ke;
 }
 
@@ -22,7 +22,7 @@ T kinetic_energy(const Params<T>& p, const Kinematics<T>& k, const T& w1, const 
 template <typename T>
 T potential_energy(const Params<T>& p, const Kinematics<T>& k) {
   T u = T(0);
-  for (int i = 0; i < 4; ++i) u += p.links[i].mass * k.c[i].y();
+  for (int i = 0; i < kLinks; ++i) u += p.links[i].mass * k.c[i].y();
   return p.gravity * u;
 }
 

@@ -121,7 +121,8 @@ const std::array<T, kJoints>& coefficient(const FrictionParams<T>& fp, Coefficie
 }
 
 /// One coefficient: its scene key (`friction.<key>`, also the identification name stem), symbol,
-/// unit and meaning, and its value when a scene omits it.
+/// unit and meaning, its value when a scene omits it (also FrictionParams' default), and where
+/// identification starts it when it is fitted.
 struct CoefficientInfo {
   Coefficient id;
   const char* key;
@@ -131,28 +132,29 @@ struct CoefficientInfo {
   double default_value;  ///< when omitted (and not `same_as`)
   /// when omitted, the value of this coefficient instead (mu_s defaults to mu_c); or itself
   Coefficient same_as;
+  double start;  ///< identification's neutral start, independent of the scene
 };
 
 inline constexpr CoefficientInfo kCoefficientInfo[kCoefficients] = {
     {Coefficient::kCoulomb, "coulomb", "mu_c", "-", "kinetic (Coulomb) coefficient", 0.0,
-     Coefficient::kCoulomb},
+     Coefficient::kCoulomb, 0.1},
     {Coefficient::kViscous, "viscous", "mu_v", "s/rad", "viscous coefficient", 0.0,
-     Coefficient::kViscous},
+     Coefficient::kViscous, 0.01},
     {Coefficient::kStaticCoulomb, "static_coulomb", "mu_s", "-",
      "static coefficient: Stribeck peak and holding bound of a stuck joint", 0.0,
-     Coefficient::kCoulomb},
+     Coefficient::kCoulomb, 0.15},
     {Coefficient::kStribeckVelocity, "stribeck_velocity", "w_st", "rad/s", "Stribeck velocity",
-     0.0, Coefficient::kStribeckVelocity},
-    {Coefficient::kStribeckExponent, "stribeck_exponent", "delta", "-", "Stribeck exponent", 2.0,
-     Coefficient::kStribeckExponent},
+     0.0, Coefficient::kStribeckVelocity, 0.2},
+    {Coefficient::kStribeckExponent, "stribeck_exponent", "delta", "-", "Stribeck exponent",
+     kDefaultStribeckExponent, Coefficient::kStribeckExponent, kDefaultStribeckExponent},
     {Coefficient::kSigma0, "sigma0", "sigma0", "1/rad", "LuGre bristle stiffness", 0.0,
-     Coefficient::kSigma0},
+     Coefficient::kSigma0, 0.0},
     {Coefficient::kSigma1, "sigma1", "sigma1", "s/rad", "LuGre bristle damping", 0.0,
-     Coefficient::kSigma1},
+     Coefficient::kSigma1, 0.0},
     {Coefficient::kSigma2, "sigma2", "sigma2", "s/rad", "LuGre viscous coefficient", 0.0,
-     Coefficient::kSigma2},
+     Coefficient::kSigma2, 0.0},
     {Coefficient::kViscousExponent, "viscous_exponent", "n", "-", "exponent of the viscous rate",
-     1.0, Coefficient::kViscousExponent},
+     kDefaultViscousExponent, Coefficient::kViscousExponent, kDefaultViscousExponent},
 };
 
 inline const CoefficientInfo& coefficient_info(Coefficient c) {
@@ -165,6 +167,9 @@ struct LawCoefficient {
   bool required;      ///< the scene must give it when the law is on
   bool positive;      ///< must be > 0 (else >= 0)
   bool identifiable;  ///< `identify` estimates it for this law
+  /// `identify` gives it a profile-likelihood interval, not only a Wald one: the cost is far
+  /// from quadratic in it (the Stribeck peak's height and width trade off)
+  bool profiled;
 };
 
 /// A friction law f(w, z) of Mf_k = r_k N_k f_k(w_k).
@@ -175,36 +180,39 @@ struct LawDescriptor {
   const LawCoefficient* coefficients;
   int count;
   int states_per_joint;  ///< extra ODE states per joint (LuGre: the bristle deflection z)
-  bool coulomb_sign;     ///< has a sign(w) jump: switches located, stick-slip
+  /// has a sign(w) jump (no internal state decides the friction's direction): with the exact
+  /// sign, switches are located and joints stick
+  bool coulomb_sign;
 };
 
+// {id, required, positive, identifiable, profiled}
 inline constexpr LawCoefficient kCoulombViscousCoefficients[] = {
-    {Coefficient::kCoulomb, true, false, true},
-    {Coefficient::kViscous, true, false, true},
-    {Coefficient::kStaticCoulomb, false, false, false},
+    {Coefficient::kCoulomb, true, false, true, false},
+    {Coefficient::kViscous, true, false, true, false},
+    {Coefficient::kStaticCoulomb, false, false, false, false},
 };
 inline constexpr LawCoefficient kStribeckCoefficients[] = {
-    {Coefficient::kCoulomb, true, false, true},
-    {Coefficient::kViscous, true, false, true},
-    {Coefficient::kStaticCoulomb, false, false, true},
-    {Coefficient::kStribeckVelocity, true, true, true},
-    {Coefficient::kStribeckExponent, false, true, false},
+    {Coefficient::kCoulomb, true, false, true, false},
+    {Coefficient::kViscous, true, false, true, false},
+    {Coefficient::kStaticCoulomb, false, false, true, true},
+    {Coefficient::kStribeckVelocity, true, true, true, true},
+    {Coefficient::kStribeckExponent, false, true, false, false},
 };
 inline constexpr LawCoefficient kLuGreCoefficients[] = {
-    {Coefficient::kCoulomb, true, false, false},
-    {Coefficient::kStaticCoulomb, false, false, false},
-    {Coefficient::kStribeckVelocity, false, false, false},
-    {Coefficient::kStribeckExponent, false, true, false},
-    {Coefficient::kSigma0, true, true, false},
-    {Coefficient::kSigma1, false, false, false},
-    {Coefficient::kSigma2, false, false, false},
+    {Coefficient::kCoulomb, true, false, false, false},
+    {Coefficient::kStaticCoulomb, false, false, false, false},
+    {Coefficient::kStribeckVelocity, false, false, false, false},
+    {Coefficient::kStribeckExponent, false, true, false, false},
+    {Coefficient::kSigma0, true, true, false, false},
+    {Coefficient::kSigma1, false, false, false, false},
+    {Coefficient::kSigma2, false, false, false, false},
 };
 
 inline constexpr LawCoefficient kPowerViscousCoefficients[] = {
-    {Coefficient::kCoulomb, true, false, true},
-    {Coefficient::kViscous, true, false, true},
-    {Coefficient::kStaticCoulomb, false, false, false},
-    {Coefficient::kViscousExponent, true, true, false},
+    {Coefficient::kCoulomb, true, false, true, false},
+    {Coefficient::kViscous, true, false, true, false},
+    {Coefficient::kStaticCoulomb, false, false, false, false},
+    {Coefficient::kViscousExponent, true, true, false, false},
 };
 
 inline constexpr LawDescriptor kLaws[] = {
@@ -221,11 +229,26 @@ inline constexpr LawDescriptor kLaws[] = {
      kPowerViscousCoefficients, 4, 0, true},
 };
 
-inline const LawDescriptor& law_descriptor(FrictionLaw law) {
+inline constexpr const LawDescriptor& law_descriptor(FrictionLaw law) {
   for (const LawDescriptor& d : kLaws) {
     if (d.law == law) return d;
   }
   return kLaws[0];
+}
+
+/// The most ODE states any law adds per joint (the simulator's state array holds kJoints times
+/// as many after the mechanism's).
+constexpr int max_states_per_joint() {
+  int n = 0;
+  for (const LawDescriptor& d : kLaws) n = d.states_per_joint > n ? d.states_per_joint : n;
+  return n;
+}
+inline constexpr int kMaxStatesPerJoint = max_states_per_joint();
+
+/// The exact Coulomb sign(w) is used, with switch functions on the joints' rates: a law with a
+/// sign jump (LawDescriptor::coulomb_sign) and smoothing_velocity = 0 (no tanh).
+inline bool exact_sign(const FrictionParams<double>& friction) {
+  return law_descriptor(friction.law).coulomb_sign && friction.smoothing_velocity == 0.0;
 }
 
 /// The law named `name` (scene / command-line name), or nullptr.
@@ -249,6 +272,12 @@ inline const LawCoefficient* law_coefficient(const LawDescriptor& law, Coefficie
     if (law.coefficients[i].id == c) return &law.coefficients[i];
   }
   return nullptr;
+}
+
+/// Whether `law` identifies coefficient c (`identify` estimates it).
+inline bool identifies(const LawDescriptor& law, Coefficient c) {
+  const LawCoefficient* use = law_coefficient(law, c);
+  return use && use->identifiable;
 }
 
 }  // namespace fivebar

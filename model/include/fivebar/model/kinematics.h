@@ -17,31 +17,31 @@ namespace fivebar {
 template <typename T>
 struct Kinematics {
   T th1{}, th2{}, th3{}, th4{};
-  Vec2<T> e1, e2, e3, e4;      ///< unit vectors along links 1..4 (e(th_i))
-  Vec2<T> B, C, D, P;          ///< joint and load points [m]
-  std::array<Vec2<T>, 4> c;    ///< centres of mass of links 1..4 [m]
-  std::array<Vec2<T>, 4> ec;   ///< e(th_i + alpha_i): direction to each centre of mass
-  T sin43{};                   ///< sin(th4 - th3); zero at the singular poses
-  Row2<T> G3, G4;              ///< dth3/dth, dth4/dth [rad/rad]
-  std::array<Mat2<T>, 4> Gc;   ///< d c_i / dth: row 0 = G_xci, row 1 = G_yci [m/rad]
-  Mat2<T> GP;                  ///< d P / dth [m/rad]
+  Vec2<T> e1, e2, e3, e4;          ///< unit vectors along links 1..4 (e(th_i))
+  Vec2<T> B, C, D, P;              ///< joint and load points [m]
+  std::array<Vec2<T>, kLinks> c;   ///< centres of mass of links 1..4 [m]
+  std::array<Vec2<T>, kLinks> ec;  ///< e(th_i + alpha_i): direction to each centre of mass
+  T sin43{};                       ///< sin(th4 - th3); zero at the singular poses
+  Row2<T> G3, G4;                  ///< dth3/dth, dth4/dth [rad/rad]
+  std::array<Mat2<T>, kLinks> Gc;  ///< d c_i / dth: row 0 = G_xci, row 1 = G_yci [m/rad]
+  Mat2<T> GP;                      ///< d P / dth [m/rad]
 };
 
 /// Velocity-dependent accelerations thd^T H thd (the part of xddot not proportional to thdd).
 template <typename T>
 struct Bias {
-  T w3{}, w4{};                 ///< link rates of the couplers [rad/s]
-  T h3{}, h4{};                 ///< thd^T H_3 thd, thd^T H_4 thd [rad/s^2]
-  std::array<Vec2<T>, 4> hc;    ///< thd^T H_ci thd for x and y [m/s^2]
-  Vec2<T> hP;                   ///< thd^T H_P thd [m/s^2]
+  T w3{}, w4{};                    ///< link rates of the couplers [rad/s]
+  T h3{}, h4{};                    ///< thd^T H_3 thd, thd^T H_4 thd [rad/s^2]
+  std::array<Vec2<T>, kLinks> hc;  ///< thd^T H_ci thd for x and y [m/s^2]
+  Vec2<T> hP;                      ///< thd^T H_P thd [m/s^2]
 };
 
 /// Second-order influence coefficients (Hessians with respect to (th1, th2)).
 template <typename T>
 struct Hessians {
   Mat2<T> H3, H4;
-  std::array<std::array<Mat2<T>, 2>, 4> Hc;  ///< Hc[i][0] = H_xci, Hc[i][1] = H_yci
-  std::array<Mat2<T>, 2> HP;                 ///< H_xP, H_yP
+  std::array<std::array<Mat2<T>, 2>, kLinks> Hc;  ///< Hc[i][0] = H_xci, Hc[i][1] = H_yci
+  std::array<Mat2<T>, 2> HP;                      ///< H_xP, H_yP
 };
 
 /// Message of a pose that cannot close: |BD| outside [|l3 - l4|, l3 + l4] (cold path).
@@ -112,8 +112,8 @@ void place_points(const Params<T>& p, Kinematics<T>* k) {
   using std::sin;
   k->P = k->B + p.point_p * k->e3;
   // centres of mass: e(th_i + alpha_i) = rotation of e_i by alpha_i
-  const std::array<const Vec2<T>*, 4> e = {&k->e1, &k->e2, &k->e3, &k->e4};
-  for (int i = 0; i < 4; ++i) {
+  const std::array<const Vec2<T>*, kLinks> e = {&k->e1, &k->e2, &k->e3, &k->e4};
+  for (int i = 0; i < kLinks; ++i) {
     const T& al = p.links[i].com_angle;
     if (is_exact_zero(al)) {
       k->ec[i] = *e[i];  // centre of mass on the link's line: no rotation (hot path)

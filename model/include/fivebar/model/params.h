@@ -24,6 +24,21 @@ U scalar_cast(const T& x) {
 inline constexpr int kJoints = 5;
 inline constexpr int kLinks = 4;
 
+/// Defaults of the friction coefficients whose default is not zero: FrictionParams starts with
+/// them, and the law descriptors (friction.h, kCoefficientInfo) give them as the value a scene may
+/// omit, so that a library caller who switches the law of paper_params() gets the same law as a
+/// scene that omits them.
+inline constexpr double kDefaultStribeckExponent = 2.0;  ///< delta: a Gaussian Stribeck peak
+inline constexpr double kDefaultViscousExponent = 1.0;   ///< n: linear viscous friction
+
+/// An array of kJoints copies of v.
+template <typename T>
+std::array<T, kJoints> joint_array(double v) {
+  std::array<T, kJoints> a;
+  a.fill(T(v));
+  return a;
+}
+
 /// Which of the two closures: elbow_up puts C left of the directed line B->D.
 /// Stored as an int (+1 / -1), never as a scalar T, so that Jets never choose a branch.
 enum Assembly : int { kElbowUp = +1, kElbowDown = -1 };
@@ -71,11 +86,13 @@ struct FrictionParams {
   /// loader sets it to `coulomb` when the scene omits it.
   std::array<T, kJoints> static_coulomb{};
   std::array<T, kJoints> stribeck_velocity{};  ///< w_st,k [rad/s] (kStribeck)
-  std::array<T, kJoints> stribeck_exponent{};  ///< delta_k [-] (kStribeck), usually 2
+  /// delta_k [-] (kStribeck, and LuGre's g(w))
+  std::array<T, kJoints> stribeck_exponent = joint_array<T>(kDefaultStribeckExponent);
   std::array<T, kJoints> sigma0{};  ///< bristle stiffness [1/rad] (kLuGre)
   std::array<T, kJoints> sigma1{};  ///< bristle damping [s/rad] (kLuGre)
   std::array<T, kJoints> sigma2{};  ///< viscous coefficient [s/rad] (kLuGre)
-  std::array<T, kJoints> viscous_exponent{};  ///< n_k [-] (kPowerViscous); mu_v then in (s/rad)^n
+  /// n_k [-] (kPowerViscous); mu_v then in (s/rad)^n
+  std::array<T, kJoints> viscous_exponent = joint_array<T>(kDefaultViscousExponent);
   /// w_s [rad/s]: 0 uses the exact sign(w); w_s > 0 replaces sign(w) by tanh(w / w_s), the smooth
   /// form used where derivatives across w = 0 are needed (identification, optimization).
   T smoothing_velocity{};

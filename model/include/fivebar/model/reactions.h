@@ -23,8 +23,8 @@ void reactions(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& b, con
                std::array<Vec2<T>, kJoints>* F, T* alpha3, T* alpha4) {
   const T al3 = k.G3.dot(thdd) + b.h3;
   const T al4 = k.G4.dot(thdd) + b.h4;
-  std::array<Vec2<T>, 4> a;  // centre-of-mass accelerations
-  for (int i = 0; i < 4; ++i) a[i] = k.Gc[i] * thdd + b.hc[i];
+  std::array<Vec2<T>, kLinks> a;  // centre-of-mass accelerations
+  for (int i = 0; i < kLinks; ++i) a[i] = k.Gc[i] * thdd + b.hc[i];
   const Vec2<T> gvec(T(0), -p.gravity);
   const T& m1 = p.links[0].mass;
   const T& m2 = p.links[1].mass;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "fivebar/model/evaluation.h"
+#include "fivebar/model/friction.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/rest_rule.h"
 #include "fivebar/model/status.h"
@@ -29,13 +30,6 @@ inline constexpr Method kAllMethods[] = {Method::kCvodeAdams, Method::kCvodeBdf,
 const char* method_name(Method m);
 /// Parses a method name; false if unknown.
 bool parse_method(const std::string& name, Method* out);
-
-/// True when the friction uses the exact sign(w) with switch functions: an active law other
-/// than LuGre (which has its own states) with friction.smoothing_velocity = 0 (no tanh).
-inline bool exact_sign(const FrictionParams<double>& friction) {
-  return friction.active() && friction.law != FrictionLaw::kLuGre &&
-         friction.smoothing_velocity == 0.0;
-}
 
 /// Solver settings (scene key `simulation:`), with the defaults that reach the accuracy figures.
 struct Options {
@@ -86,7 +80,7 @@ struct Initial {
 /// One output row: the columns of trajectory.csv (interfaces.md) plus the energy terms.
 struct Row {
   double t = 0;
-  std::array<double, 4> theta{}, omega{}, alpha{};
+  std::array<double, kLinks> theta{}, omega{}, alpha{};  ///< links 1..4
   double M1 = 0, M2 = 0;
   std::array<double, kJoints> N{}, Mf{};
   double P_diss = 0, E_diss = 0, W_in = 0, W_ext = 0;
