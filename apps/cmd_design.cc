@@ -31,6 +31,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/summary_csv.h"
 #include "fivebar/trajectory/batch.h"
 #include "fivebar/trajectory/design.h"
 #include "fivebar/trajectory/distributed.h"
@@ -251,13 +252,13 @@ std::string history_csv(const Search& s) {
 std::string tasks_csv(const Search& s) {
   std::string csv = "evaluation";
   for (const Vary& v : s.varies()) csv += "," + v.key;
-  csv += "," + csv_line(trajectory::summary_columns());
+  csv += "," + csv_line(summary_columns());
   for (size_t i = 0; i < s.history().size(); ++i) {
     std::string values;
     for (double v : s.history()[i].values) values += "," + format_double(v);
     for (const TaskResult& r : s.history()[i].results) {
       csv += std::to_string(i) + values + "," +
-             csv_line(trajectory::summary_fields(r));
+             csv_line(summary_fields(r));
     }
   }
   return csv;

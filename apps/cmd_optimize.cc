@@ -24,6 +24,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/summary_csv.h"
 #include "fivebar/trajectory/batch.h"
 #include "fivebar/trajectory/distributed.h"
 #include "fivebar/trajectory/tasks.h"
@@ -45,14 +46,15 @@ struct Args {
   bool no_validate = false, no_plots = false;
 };
 
-// x and y of point C for each row (extra trajectory.csv columns, for the path figure)
+// x and y of point C for each row (extra trajectory.csv columns, for the path figure), from the
+// model's loop closure; nan where a row's pose cannot close
 std::vector<Column> point_c_columns(const Params<double>& p, const std::vector<sim::Row>& rows) {
   Column x{"x_C", {}}, y{"y_C", {}};
   for (const sim::Row& r : rows) {
-    x.values.push_back(p.links[0].length * std::cos(r.theta[0]) +
-                       p.links[2].length * std::cos(r.theta[2]));
-    y.values.push_back(p.links[0].length * std::sin(r.theta[0]) +
-                       p.links[2].length * std::sin(r.theta[2]));
+    std::array<double, 2> c{NAN, NAN};
+    if (!trajectory::point_c(p, r.theta[0], r.theta[1], &c)) c = {NAN, NAN};
+    x.values.push_back(c[0]);
+    y.values.push_back(c[1]);
   }
   return {x, y};
 }
@@ -190,8 +192,8 @@ int run(const Args& args) {
                                            !args.no_plots && gnuplot().available);
     if (!warning.empty()) warn(warning);
   }
-  std::string csv = csv_line(trajectory::summary_columns());
-  for (const TaskResult& r : results) csv += csv_line(trajectory::summary_fields(r));
+  std::string csv = csv_line(summary_columns());
+  for (const TaskResult& r : results) csv += csv_line(summary_fields(r));
   write_text_file(out.file("summary.csv"), csv);
   // one line per task on stdout; exit non-zero when no task ended ok (outputs kept: they say why)
   int ok = 0;

@@ -25,6 +25,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/summary_csv.h"
 #include "fivebar/trajectory/batch.h"
 #include "fivebar/trajectory/distributed.h"
 #include "fivebar/trajectory/sweep.h"
@@ -46,8 +47,6 @@ struct Args {
   OptimizeSettings settings;  ///< of the inner solves (see optimize)
   bool no_plots = false;
 };
-
-std::string num(double v) { return format_double(v); }  // shortest round-trip, "nan"
 
 // one design: its scene, or why the scene with its values is unusable
 struct Design {
@@ -149,7 +148,7 @@ std::string study_csv(const std::vector<trajectory::Sweep>& sweeps,
       const TaskResult& r = results[d * nt + t];
       ok += r.status == "ok";
       base_total += r.baseline_dissipated_energy;
-      energies += "," + num(r.dissipated_energy);
+      energies += "," + format_double(r.dissipated_energy);
       statuses += "," + r.status;
     }
     const bool complete = o.reasons[d].empty();
@@ -157,8 +156,8 @@ std::string study_csv(const std::vector<trajectory::Sweep>& sweeps,
     const std::string status =
         complete ? "ok" : (designs[d].scene ? "incomplete" : "design_cannot_assemble");
     csv += std::to_string(d) + values + "," + status + "," + std::to_string(ok) + "," +
-           num(o.totals[d]) + "," + num(base_total) + "," +
-           num(100.0 * (1.0 - o.totals[d] / base_total)) + energies + statuses + "," +
+           format_double(o.totals[d]) + "," + format_double(base_total) + "," +
+           format_double(100.0 * (1.0 - o.totals[d] / base_total)) + energies + statuses + "," +
            (static_cast<int>(d) == o.best ? "1" : "0") + "," + csv_quote(o.reasons[d]) + "\n";
   }
   return csv;
@@ -169,24 +168,16 @@ std::string per_task_csv(const std::vector<trajectory::Sweep>& sweeps,
                          const std::vector<TaskResult>& results) {
   std::string header = "design";
   for (const auto& s : sweeps) header += "," + s.key;
-  std::string csv = header + "," + csv_line(trajectory::summary_columns());
+  std::string csv = header + "," + csv_line(summary_columns());
   for (size_t d = 0; d < designs.size(); ++d) {
     std::string values;
     for (double v : designs[d].values) values += "," + format_double(v);
     for (int t = 0; t < nt; ++t) {
       csv += std::to_string(d) + values + "," +
-             csv_line(trajectory::summary_fields(results[d * nt + t]));
+             csv_line(summary_fields(results[d * nt + t]));
     }
   }
   return csv;
-}
-
-// a grid value for gnuplot's `with image`, which wants evenly spaced coordinates: 10 digits
-// drop the rounding noise of lo + (hi - lo) i / (n - 1)
-std::string coordinate(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
-  return buf;
 }
 
 // heatmap.png of a two-key study: energies, designs that cannot do every task hatched grey,
@@ -197,8 +188,11 @@ std::string draw_heatmap(OutputDir* out, const std::vector<trajectory::Sweep>& s
   for (int i = 0; i < sweeps[0].n; ++i) {
     for (int j = 0; j < sweeps[1].n; ++j) {
       const int d = i * sweeps[1].n + j;
-      const std::string xy = coordinate(sweeps[0].value(i)) + " " + coordinate(sweeps[1].value(j));
-      dat += xy + " " + num(o.totals[d]) + "\n";
+      // gnuplot's `with image` wants evenly spaced coordinates: 10 digits drop the rounding
+      // noise of lo + (hi - lo) i / (n - 1)
+      const std::string xy = format_significant(sweeps[0].value(i), 10) + " " +
+                             format_significant(sweeps[1].value(j), 10);
+      dat += xy + " " + format_double(o.totals[d]) + "\n";
       if (!o.reasons[d].empty()) bad += xy + "\n";
     }
     dat += "\n";

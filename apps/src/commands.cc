@@ -66,7 +66,7 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
     throw InputError(kFlags, "--loss-scale", "must be > 0 (0: from the noise floor, the default)");
   }
   if (!(a.sg_window > 0) || !std::isfinite(a.sg_window)) {
-    throw InputError(kFlags, "--sg-window", "must be > 0 [s], got " + format_number(a.sg_window));
+    throw InputError(kFlags, "--sg-window", "must be > 0 [s], got " + format_shortest(a.sg_window));
   }
   if (a.sg_order < 2 || a.sg_order > 10) {
     throw InputError(kFlags, "--sg-order", "must be in [2, 10], got " + std::to_string(a.sg_order));

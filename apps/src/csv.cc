@@ -154,7 +154,7 @@ std::string csv_quote(const std::string& s) {
   std::string out = "\"";
   for (char c : s) {
     if (c == '"') out += '"';
-    out += c == '\n' ? ' ' : c;
+    out += (c == '\n' || c == '\r') ? ' ' : c;
   }
   return out + "\"";
 }

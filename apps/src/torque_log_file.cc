@@ -65,8 +65,8 @@ void check_log_time(const CsvTable& table) {
   const int t = table.find("t");
   if (n < 2 || table.rows[n - 1][t] > table.rows[n - 2][t]) return;
   throw LogError(table.path, line_key(table.lines.back()) + ", column t",
-                 "time not strictly increasing (" + format_number(table.rows[n - 1][t]) +
-                     " after " + format_number(table.rows[n - 2][t]) + ")");
+                 "time not strictly increasing (" + format_shortest(table.rows[n - 1][t]) +
+                     " after " + format_shortest(table.rows[n - 2][t]) + ")");
 }
 
 // angles in degrees and rates in other units are common mistakes; say so instead of failing
@@ -139,14 +139,14 @@ void write_torque_log(const std::string& path, const TorqueLog& log) {
   if (log.has_accels) out << ",alpha1,alpha2";
   out << "\n";
   for (int i = 0; i < log.size(); ++i) {
-    out << format_number(log.t[i]) << ',' << format_number(log.theta1[i]) << ','
-        << format_number(log.theta2[i]) << ',' << format_number(log.tau1[i]) << ','
-        << format_number(log.tau2[i]);
+    out << format_shortest(log.t[i]) << ',' << format_shortest(log.theta1[i]) << ','
+        << format_shortest(log.theta2[i]) << ',' << format_shortest(log.tau1[i]) << ','
+        << format_shortest(log.tau2[i]);
     if (log.has_rates) {
-      out << ',' << format_number(log.omega1[i]) << ',' << format_number(log.omega2[i]);
+      out << ',' << format_shortest(log.omega1[i]) << ',' << format_shortest(log.omega2[i]);
     }
     if (log.has_accels) {
-      out << ',' << format_number(log.alpha1[i]) << ',' << format_number(log.alpha2[i]);
+      out << ',' << format_shortest(log.alpha1[i]) << ',' << format_shortest(log.alpha2[i]);
     }
     out << "\n";
   }

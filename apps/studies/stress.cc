@@ -57,12 +57,6 @@ constexpr long kStepsPerOutput = 500;
 /// rtol = atol of the catalogue's runs.
 constexpr double kRunTolerance = 1e-8;
 
-/// The paper's loads (model.md, section 5).
-Loads<double> paper_loads(double t) {
-  return {2.0 + 5.0 * std::sin(8.0 * M_PI * t), 3.0 + 5.0 * std::cos(M_PI * t), 6.0, 50.0,
-          M_PI / 2};
-}
-
 Options run_options(double duration) {
   Options o;
   o.duration = duration;

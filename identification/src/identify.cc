@@ -68,9 +68,6 @@ constexpr double kNoisierRates = 2.0;
 /// Stribeck law: further start values of the Stribeck velocity [rad/s] (best_stribeck_start)
 constexpr double kStribeckStarts[] = {0.05, 0.5, 2.0};
 
-/// Messages' numbers: 3 significant digits unless said (format_significant, model/format.h).
-std::string fmt(double x, int digits = 3) { return format_significant(x, digits); }
-
 /// Linear interpolation of y(t) on the sorted grid ts (clamped at the ends).
 double interp(const std::vector<double>& ts, const std::vector<double>& y, double t) {
   if (t <= ts.front()) return y.front();
@@ -321,7 +318,7 @@ Eigen::MatrixXd to_public(const ParameterLayout& layout) {
 
 std::string sample_name(const TorqueLog& log, int i) {
   return "line " + std::to_string(log.lines.empty() ? i + 1 : log.lines[i]) +
-         " (t = " + fmt(log.t[i], 6) + " s)";
+         " (t = " + format_significant(log.t[i], 6) + " s)";
 }
 
 /// The scene with the law to fit and the chosen Coulomb sign form.
@@ -560,11 +557,12 @@ Status first_failure(const Fit& f, const std::vector<double>& x, const std::stri
     std::string why = st.message;
     if (st.ok() && !(std::isfinite(ev.M1) && std::isfinite(ev.M2))) why = "torque not finite";
     if (st.ok() && why.empty()) continue;
-    return Status::Error(StatusCode::kSolverFailed,
-                         "inverse dynamics fails at " + sample_name(f.cond.log, f.index[u]) + " " +
-                             at + " (theta " + fmt(s.th1) + ", " + fmt(s.th2) + " rad, omega " +
-                             fmt(s.w1) + ", " + fmt(s.w2) + " rad/s, alpha " + fmt(s.a1) + ", " +
-                             fmt(s.a2) + " rad/s^2): " + why);
+    return Status::Error(
+        StatusCode::kSolverFailed,
+        "inverse dynamics fails at " + sample_name(f.cond.log, f.index[u]) + " " + at + " (theta " +
+            format_significant(s.th1) + ", " + format_significant(s.th2) + " rad, omega " +
+            format_significant(s.w1) + ", " + format_significant(s.w2) + " rad/s, alpha " +
+            format_significant(s.a1) + ", " + format_significant(s.a2) + " rad/s^2): " + why);
   }
   return Status::Ok();
 }
@@ -693,7 +691,7 @@ void choose_window(Fit* f, IdentifyResult* out) {
   if (backed_off) --chosen;
   std::string table;
   for (size_t k = 0; k < cand.size(); ++k) {
-    table += (k ? ", " : "") + std::to_string(cand[k]) + ": " + fmt(ratio[k]);
+    table += (k ? ", " : "") + std::to_string(cand[k]) + ": " + format_significant(ratio[k]);
   }
   f->sg.half_window_s = cand[chosen] * dt;
   // every window but the smallest of this order shows bias: the log is sampled too slowly for
@@ -707,14 +705,15 @@ void choose_window(Fit* f, IdentifyResult* out) {
              " samples each side";
   }
   const std::array<double, 4>& l = levels[chosen];
-  out->window_choice =
-      "data-driven: half-window " + std::to_string(cand[chosen]) + " samples (" +
-      fmt(cand[chosen] * dt * 1e3) + " ms), " + (backed_off ? "one below " : "") +
-      "the largest whose torque residual (" +
-      fmt(l[0]) + ", " + fmt(l[1]) +
-      " N m) shows no smoothing bias over the level the measured noise " + "explains (" +
-      fmt(l[2]) + ", " + fmt(l[3]) + " N m), ratio " + fmt(ratio[chosen]) +
-      " against the reference " + fmt(best) + " (ratio by half-window: " + table + ")" + raised;
+  out->window_choice = "data-driven: half-window " + std::to_string(cand[chosen]) + " samples (" +
+                       format_significant(cand[chosen] * dt * 1e3) + " ms), " +
+                       (backed_off ? "one below " : "") + "the largest whose torque residual (" +
+                       format_significant(l[0]) + ", " + format_significant(l[1]) +
+                       " N m) shows no smoothing bias over the level the measured noise " +
+                       "explains (" + format_significant(l[2]) + ", " + format_significant(l[3]) +
+                       " N m), ratio " + format_significant(ratio[chosen]) +
+                       " against the reference " + format_significant(best) +
+                       " (ratio by half-window: " + table + ")" + raised;
 }
 
 /// A quick fit on at most ~1500 of the selected samples (plain least squares) that sets f->x for
@@ -916,9 +915,9 @@ void choose_loss_scale(Fit* f, IdentifyResult* out) {
       const double k = opt.loss == Loss::kHuber ? kLossScaleHuber : kLossScaleCauchy;
       if (level > 0 && std::isfinite(level)) f->loss_scale = k * level;
       out->notes.push_back(std::string(loss_name(opt.loss)) + " loss at scale " +
-                           fmt(f->loss_scale) + " N m: " + fmt(k, 4) +
-                           " times the residual's noise level per sample " + fmt(level) +
-                           " N m (--loss-scale sets it)");
+                           format_significant(f->loss_scale) + " N m: " + format_significant(k, 4) +
+                           " times the residual's noise level per sample " +
+                           format_significant(level) + " N m (--loss-scale sets it)");
     }
   }
   out->loss_scale = opt.loss == Loss::kNone ? 0.0 : f->loss_scale;
@@ -934,10 +933,10 @@ void residual_levels(const Fit& f, const std::vector<double>& r,
     const double ratio = out->rms_torque_residual[j] / out->residual_noise_floor[j];
     if (ratio > kStructureRatio) {
       out->warnings.push_back(
-          "tau" + std::to_string(j + 1) + " residual rms " + fmt(out->rms_torque_residual[j]) +
-          " N m is " + fmt(ratio) + " times the noise floor " + fmt(out->residual_noise_floor[j]) +
-          " N m (" +
-          (noise >= floor ? "torque noise " + fmt(f.noise.torque[j]) +
+          "tau" + std::to_string(j + 1) + " residual rms " +
+          format_significant(out->rms_torque_residual[j]) + " N m is " + format_significant(ratio) +
+          " times the noise floor " + format_significant(out->residual_noise_floor[j]) + " N m (" +
+          (noise >= floor ? "torque noise " + format_significant(f.noise.torque[j]) +
                                 " N m with the sensor noise propagated through the rates"
                           : "0.1 % of the rms logged torque, the log being nearly noise-free") +
           "): the residual has structure the fitted law (or the estimated rates) cannot "
@@ -1055,7 +1054,7 @@ void limit_smoothing_bias(Fit* f, IdentifyResult* out) {
     for (int p = 0; p < bias.size(); ++p) {
       if (std(p) > 0) worst = std::max(worst, std::abs(bias(p)) / std(p));
     }
-    table += (table.empty() ? "" : ", ") + std::to_string(m) + ": " + fmt(worst);
+    table += (table.empty() ? "" : ", ") + std::to_string(m) + ": " + format_significant(worst);
     if (k == rule) at_rule = bias;
     if (worst <= kBiasFraction) chosen = k, at_chosen = bias;
   }
@@ -1066,9 +1065,9 @@ void limit_smoothing_bias(Fit* f, IdentifyResult* out) {
   out->window_choice +=
       "; then half-window " + std::to_string(cand[pick]) + " samples, " +
       (chosen < 0 ? "the rule's (no window down to " + std::to_string(cand[1]) +
-                        " samples keeps it within " + fmt(kBiasFraction) + " std)"
+                        " samples keeps it within " + format_significant(kBiasFraction) + " std)"
                   : "the largest up to the rule's whose predicted smoothing bias is within " +
-                        fmt(kBiasFraction) + " std of every friction coefficient") +
+                        format_significant(kBiasFraction) + " std of every friction coefficient") +
       " (predicted |bias| / std by half-window, the motion's higher terms from local polynomials "
       "of degree " +
       std::to_string(f->sg.order + detail::kReconExtra) + " over +-" +
@@ -1108,9 +1107,9 @@ void correct_smoothing_bias(Fit* f, IdentifyResult* out) {
     e.value -= applied(p);
     e.ci_low -= applied(p);  // an open side (+-inf) stays open
     e.ci_high -= applied(p);
-    list += (list.empty() ? "" : ", ") + e.name + " " + fmt(-applied(p));
+    list += (list.empty() ? "" : ", ") + e.name + " " + format_significant(-applied(p));
     if (std::abs(applied(p) - shift(p)) > 1e-12 * std::abs(shift(p))) {
-      list += " (limited by its bound: predicted " + fmt(-shift(p)) + ")";
+      list += " (limited by its bound: predicted " + format_significant(-shift(p)) + ")";
     }
   }
   if (list.empty()) return;
@@ -1130,10 +1129,10 @@ void inertial_stage(const Fit& f, const Eigen::MatrixXd& J, IdentifyResult* out)
   if (!rep.at_prior.empty()) {
     std::string list;
     for (const std::string& n : rep.at_prior) list += (list.empty() ? "" : ", ") + n;
-    out->warnings.push_back(
-        "the log determines " + std::to_string(rep.rank) + " of the 16 inertial directions; " +
-        "left at their prior (the scene's values, relative std " + fmt(rep.prior_relative) +
-        "): " + list);
+    out->warnings.push_back("the log determines " + std::to_string(rep.rank) +
+                            " of the 16 inertial directions; " +
+                            "left at their prior (the scene's values, relative std " +
+                            format_significant(rep.prior_relative) + "): " + list);
   }
   if (!rep.consistent) {
     out->warnings.push_back(
@@ -1165,7 +1164,7 @@ Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
   out->ci_quantile = detail::t_quantile_975(out->ci_dof);
   out->std_detail = "block sandwich over the residuals of " + std::to_string(bc.blocks) +
                     " windows (correlated within a window, independent between windows): " +
-                    fmt(*lo) + "-" + fmt(*hi) +
+                    format_significant(*lo) + "-" + format_significant(*hi) +
                     " times the std that treats the angle residuals as independent";
   if (bc.blocks < kFewWindows) {
     out->warnings.push_back("output error: the std come from the residuals of only " +
@@ -1295,7 +1294,8 @@ void identifiability(const Eigen::MatrixXd& JtJ, const ParameterLayout& layout,
     }
     if (d == 0 ? friction : motor) {
       out->warnings.push_back("the log cannot separate " + who +
-                              " (smallest/largest scaled singular value " + fmt(ratio) + ")");
+                              " (smallest/largest scaled singular value " +
+                              format_significant(ratio) + ")");
     }
   }
 }
@@ -1337,8 +1337,8 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
       // inertial pairs: the base combinations say which the log separates
       if (f.layout.is_inertial(i) && f.layout.is_inertial(j)) continue;
       if (std::abs(out->correlation(i, j)) > 0.98) {
-        out->warnings.push_back("strong correlation " + fmt(out->correlation(i, j)) + " between " +
-                                names[i] + " and " + names[j]);
+        out->warnings.push_back("strong correlation " + format_significant(out->correlation(i, j)) +
+                                " between " + names[i] + " and " + names[j]);
       }
     }
   }
@@ -1357,7 +1357,7 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
       out->warnings.push_back(
           names[i] + " is at its bound" +
           (static_group ? " static_coulomb = coulomb (static friction cannot be below kinetic)"
-                        : " " + fmt(f.layout.lower_bound(i))) +
+                        : " " + format_significant(f.layout.lower_bound(i))) +
           ": its std is not meaningful (not reported); the log may not support this law or "
           "coefficient");
       e.std = kNaN;
@@ -1365,8 +1365,8 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
       if (out->converged) out->warnings.push_back("std of " + names[i] + " not determined");
       e.std = kNaN;
     } else if (e.std > std::abs(e.value) && !f.layout.is_inertial(i)) {
-      out->warnings.push_back(names[i] + " is poorly determined (std " + fmt(e.std) + " > value " +
-                              fmt(e.value) + ")");
+      out->warnings.push_back(names[i] + " is poorly determined (std " + format_significant(e.std) +
+                              " > value " + format_significant(e.value) + ")");
     }
     out->parameters.push_back(e);
   }
@@ -1541,9 +1541,10 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
   // the significance that decided the correction is the first estimate's (the refit's std is
   // that of the delay left after the shift)
   std::vector<std::string> w = {std::string("the torques ") + (res.delay_s < 0 ? "lead" : "lag") +
-                                " the angles by " + fmt(std::abs(res.delay_s) * 1e3) + " +- " +
-                                fmt(res.delay_std_s * 1e3) + " ms (first estimate " +
-                                fmt(std::abs(first.delay_s) / first.delay_std_s) +
+                                " the angles by " +
+                                format_significant(std::abs(res.delay_s) * 1e3) + " +- " +
+                                format_significant(res.delay_std_s * 1e3) + " ms (first estimate " +
+                                format_significant(std::abs(first.delay_s) / first.delay_std_s) +
                                 " std): refitted with the torques shifted by it"};
   if (!first.glitches.empty()) w.push_back(first.warnings.front());
   res.warnings.insert(res.warnings.begin(), w.begin(), w.end());
@@ -1662,9 +1663,12 @@ bool angles_give_better_rates(const Fit& f, IdentifyResult* out) {
     from_angles[j] = g1 * f.noise.angle[j];
     if (!(f.noise.rate[j] > kNoisierRates * from_angles[j])) return false;
   }
-  out->notes.push_back("the logged rates (noise " + fmt(f.noise.rate[0]) + ", " +
-                       fmt(f.noise.rate[1]) + " rad/s) are noisier than rates estimated from the "
-                       "angles (at most " + fmt(from_angles[0]) + ", " + fmt(from_angles[1]) +
+  out->notes.push_back("the logged rates (noise " + format_significant(f.noise.rate[0]) + ", " +
+                       format_significant(f.noise.rate[1]) +
+                       " rad/s) are noisier than rates estimated from the "
+                       "angles (at most " +
+                       format_significant(from_angles[0]) + ", " +
+                       format_significant(from_angles[1]) +
                        " rad/s): rates and accelerations estimated from the angles, the logged "
                        "rates not used");
   return true;
@@ -1769,13 +1773,13 @@ void bound_and_misfit_warning(const Fit& f, const Analysis& an, IdentifyResult* 
   std::partial_sort(q.begin(), q.begin() + top, q.end(), std::greater<>());
   std::string lines;
   for (size_t k = 0; k < top; ++k) {
-    lines += (k ? ", " : "") + sample_name(f.cond.log, q[k].second) + " (" + fmt(q[k].first, 2) +
-             " times)";
+    lines += (k ? ", " : "") + sample_name(f.cond.log, q[k].second) + " (" +
+             format_significant(q[k].first, 2) + " times)";
   }
   // which cause cannot be told from the residual: a glitch that drags a coefficient to its bound
   // leaves the whole residual off the floor, as a wrong scene does
   out->warnings.push_back(
-      at + " at its bound while the torque residual is " + fmt(ratio) +
+      at + " at its bound while the torque residual is " + format_significant(ratio) +
       " times the noise floor: the fit is driven by samples the law cannot explain (largest at " +
       lines + "). Likely causes: glitches the rejection missed (check those lines; --loss cauchy "
       "fits past them), or a scene (masses, geometry, loads) or law that does not match the log "
@@ -1861,13 +1865,15 @@ void inertia_check(const Fit& f, IdentifyResult* out) {
     if (e.at_bound) return;  // a fit at a bound has its own warning
     const double sd = std::max(std::sqrt(std::max(0.0, cov(i, i))), e.std);
     if (!(std::abs(move(i)) > kFreedMove * sd)) continue;
-    moved += (moved.empty() ? "" : ", ") + e.name + " from " + fmt(e.value) + " to " +
-             fmt(e.value + move(i)) + " (" + fmt(std::abs(move(i)) / sd, 2) + " std)";
+    moved += (moved.empty() ? "" : ", ") + e.name + " from " + format_significant(e.value) +
+             " to " + format_significant(e.value + move(i)) + " (" +
+             format_significant(std::abs(move(i)) / sd, 2) + " std)";
   }
   if (moved.empty()) return;
   out->warnings.push_back(
       "with the links' inertial parameters free (one linearized refit, prior std " +
-      fmt(f.opt->inertia_prior) + " of the scene's values) the friction would move: " + moved +
+      format_significant(f.opt->inertia_prior) +
+      " of the scene's values) the friction would move: " + moved +
       ". The scene's masses or inertias may not match the mechanism; try --estimate "
       "friction,inertia");
 }

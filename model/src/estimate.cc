@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 
 namespace fivebar::sim {
 
@@ -23,13 +22,6 @@ double max_angle_difference(const std::vector<Row>& a, const std::vector<Row>& b
 
 namespace {
 
-std::string fmt(double x) {
-  std::ostringstream s;
-  s.precision(3);
-  s << x;
-  return s.str();
-}
-
 /// The companion of a run: same method, ten times tighter, angles only, no progress. When the
 /// companion finds the joint modes indeterminate, *indeterminate receives its status.
 double companion_estimate(const Params<double>& params, const LoadFunction& loads,
@@ -42,7 +34,7 @@ double companion_estimate(const Params<double>& params, const LoadFunction& load
   c.progress = nullptr;
   const Result companion = simulate(params, loads, initial, c);
   if (!companion.status.ok()) {
-    *note = "no error estimate: the companion run at rtol " + fmt(c.rtol) +
+    *note = "no error estimate: the companion run at rtol " + format_significant(c.rtol) +
             " failed: " + companion.status.message;
     if (companion.status.code == StatusCode::kIndeterminateModes) *indeterminate = companion.status;
     return NAN;
@@ -71,8 +63,10 @@ EstimatedRun simulate_to_target(const Params<double>& params, const LoadFunction
       // determined: this run's answer is not unique either (it only stepped past that pose)
       out.run.status = Status::Error(
           StatusCode::kIndeterminateModes,
-          "the check run at rtol " + fmt(o.rtol / 10) + " found the joint modes indeterminate, "
-          "so this motion is not determined by the model: " + indeterminate.message);
+          "the check run at rtol " + format_significant(o.rtol / 10) +
+              " found the joint modes indeterminate, so this motion is not determined by the "
+              "model: " +
+              indeterminate.message);
       return out;
     }
     out.estimated_max_error_rad = e;

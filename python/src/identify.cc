@@ -45,7 +45,7 @@ id::TorqueLog log_from_dict(const py::dict& columns) {
                                               names[0] + "), got " +
                                               std::to_string(values[j].size()));
       }
-      text += (j ? "," : "") + id::format_number(values[j][i]);
+      text += (j ? "," : "") + format_shortest(values[j][i]);
     }
     text += "\n";
   }

@@ -6,6 +6,7 @@
 #include "bindings.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
+#include "fivebar/io/summary_csv.h"
 #include "keywords.h"
 
 namespace fivebar::python {
@@ -26,8 +27,8 @@ py::object field_value(const std::string& text) {
 py::dict task_dict(const PyScene& s, const trajectory::TaskResult& r,
                    const trajectory::BatchOptions& options, bool trajectories) {
   py::dict d;
-  const std::vector<std::string>& names = trajectory::summary_columns();
-  const std::vector<std::string> fields = trajectory::summary_fields(r);
+  const std::vector<std::string>& names = io::summary_columns();
+  const std::vector<std::string> fields = io::summary_fields(r);
   for (size_t j = 0; j < names.size(); ++j) d[py::str(names[j])] = field_value(fields[j]);
   d["task"] = r.task;  // text fields as they are (summary.csv quotes the message)
   d["status"] = r.status;

@@ -10,6 +10,7 @@
 #include "fivebar/io/loads.h"
 #include "fivebar/io/scene.h"
 #include "fivebar/sim/estimate.h"
+#include "paper.h"
 
 namespace fivebar::io {
 namespace {
@@ -18,20 +19,10 @@ const std::string kRoot = FIVEBAR_SOURCE_DIR;
 
 /// theta1..theta4 of a reference CSV, one array per row.
 std::vector<std::array<double, 4>> reference_angles(const std::string& name) {
-  std::ifstream in(kRoot + "/datasets/reference/" + name);
-  std::string line;
-  std::vector<std::array<double, 4>> out;
-  std::getline(in, line);  // header: t, theta1..theta4, ...
-  while (std::getline(in, line)) {
-    std::stringstream ss(line);
-    std::string cell;
-    std::getline(ss, cell, ',');
-    std::array<double, 4> th{};
-    for (double& x : th) {
-      std::getline(ss, cell, ',');
-      x = std::stod(cell);
-    }
-    out.push_back(th);
+  auto cols = testing::read_csv(kRoot + "/datasets/reference/" + name);
+  std::vector<std::array<double, 4>> out(cols["theta1"].size());
+  for (size_t i = 0; i < out.size(); ++i) {
+    out[i] = {cols["theta1"][i], cols["theta2"][i], cols["theta3"][i], cols["theta4"][i]};
   }
   return out;
 }

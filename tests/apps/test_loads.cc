@@ -8,6 +8,7 @@
 
 #include "fivebar/io/errors.h"
 #include "fivebar/io/loads.h"
+#include "paper.h"
 
 namespace fivebar::io {
 namespace {
@@ -17,19 +18,19 @@ using ::testing::HasSubstr;
 // muParser evaluates in double precision: a few roundings of sin/cos arguments
 constexpr double kTol = 1e-12;
 
-LoadExpressions paper_loads() {
+LoadExpressions paper_expressions() {
   return LoadExpressions({"2 + 5*sin(8*pi*t)", "3 + 5*cos(pi*t)", "6", "50"}, M_PI / 2,
                          "paper.yaml");
 }
 
-double paper_M1(double t) { return 2 + 5 * std::sin(8 * M_PI * t); }
-double paper_M2(double t) { return 3 + 5 * std::cos(M_PI * t); }
+// the loads of these expressions as the fixture writes them (common/paper.h)
+using fivebar::testing::paper_loads;
 
 TEST(Loads, PaperValues) {
-  const LoadExpressions loads = paper_loads();
+  const LoadExpressions loads = paper_expressions();
   const Loads<double> l = loads(0.0625);  // 8 pi t = pi/2
   EXPECT_NEAR(l.M1, 7.0, kTol);
-  EXPECT_NEAR(l.M2, paper_M2(0.0625), kTol);
+  EXPECT_NEAR(l.M2, paper_loads(0.0625).M2, kTol);
   EXPECT_EQ(l.M3, 6.0);
   EXPECT_EQ(l.F, 50.0);
   EXPECT_EQ(l.F_angle, M_PI / 2);
@@ -37,7 +38,7 @@ TEST(Loads, PaperValues) {
 }
 
 TEST(Loads, ConstantExpressionsAreDetected) {
-  const LoadExpressions loads = paper_loads();
+  const LoadExpressions loads = paper_expressions();
   EXPECT_FALSE(loads.constant(LoadExpressions::kM1));
   EXPECT_FALSE(loads.constant(LoadExpressions::kM2));
   EXPECT_TRUE(loads.constant(LoadExpressions::kM3));
@@ -87,17 +88,17 @@ TEST(Loads, FromScene) {
 }
 
 TEST(Loads, CopiesAreIndependent) {
-  auto original = std::make_unique<LoadExpressions>(paper_loads());
+  auto original = std::make_unique<LoadExpressions>(paper_expressions());
   LoadExpressions copy = *original;
   LoadExpressions assigned({"0", "0", "0", "0"}, 0, "z.yaml");
   assigned = copy;
   // interleaved calls at different t: each copy has its own `t`
   for (double t : {0.01, 0.33, 0.7, 1.9}) {
     const double other = 1.0 - t;
-    EXPECT_NEAR((*original)(t).M1, paper_M1(t), kTol);
-    EXPECT_NEAR(copy(other).M1, paper_M1(other), kTol);
-    EXPECT_NEAR((*original)(t).M2, paper_M2(t), kTol);
-    EXPECT_NEAR(assigned(t / 2).M2, paper_M2(t / 2), kTol);
+    EXPECT_NEAR((*original)(t).M1, paper_loads(t).M1, kTol);
+    EXPECT_NEAR(copy(other).M1, paper_loads(other).M1, kTol);
+    EXPECT_NEAR((*original)(t).M2, paper_loads(t).M2, kTol);
+    EXPECT_NEAR(assigned(t / 2).M2, paper_loads(t / 2).M2, kTol);
   }
   // a copy outlives its original, and so does a LoadFunction made from it
   const sim::LoadFunction f = original->function();
@@ -105,9 +106,9 @@ TEST(Loads, CopiesAreIndependent) {
   EXPECT_NEAR(copy(0.0625).M1, 7.0, kTol);
   EXPECT_NEAR(f(0.0625).M1, 7.0, kTol);
   const sim::LoadFunction g = f;  // std::function copy: copies the expressions
-  EXPECT_NEAR(g(0.2).M2, paper_M2(0.2), kTol);
+  EXPECT_NEAR(g(0.2).M2, paper_loads(0.2).M2, kTol);
   LoadExpressions moved = std::move(copy);
-  EXPECT_NEAR(moved(0.2).M1, paper_M1(0.2), kTol);
+  EXPECT_NEAR(moved(0.2).M1, paper_loads(0.2).M1, kTol);
 }
 
 // each thread checks many evaluations against the closed form
@@ -115,14 +116,15 @@ void hammer(const std::function<Loads<double>(double)>& f, int seed, int* failur
   for (int i = 0; i < 20000; ++i) {
     const double t = 1e-4 * ((i * 7919 + seed * 104729) % 20000);
     const Loads<double> l = f(t);
-    if (std::fabs(l.M1 - paper_M1(t)) > kTol || std::fabs(l.M2 - paper_M2(t)) > kTol) {
+    const Loads<double> want = paper_loads(t);
+    if (std::fabs(l.M1 - want.M1) > kTol || std::fabs(l.M2 - want.M2) > kTol) {
       ++*failures;
     }
   }
 }
 
 TEST(Loads, ThreadsWithTheirOwnCopies) {
-  const sim::LoadFunction f = paper_loads().function();
+  const sim::LoadFunction f = paper_expressions().function();
   std::vector<int> failures(4, 0);
   std::vector<std::thread> threads;
   for (int k = 0; k < 4; ++k) {
@@ -133,7 +135,7 @@ TEST(Loads, ThreadsWithTheirOwnCopies) {
 }
 
 TEST(Loads, ThreadsSharingOneObject) {
-  const LoadExpressions shared = paper_loads();
+  const LoadExpressions shared = paper_expressions();
   const auto call = [&shared](double t) { return shared(t); };
   std::vector<int> failures(4, 0);
   std::vector<std::thread> threads;

@@ -8,6 +8,7 @@
 #include <map>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -19,15 +20,18 @@
 
 namespace fivebar::testing {
 
-/// Loads of the canonical scene (model.md, section 5).
-inline Loads<double> paper_loads(double t) {
-  return {2 + 5 * std::sin(8 * M_PI * t), 3 + 5 * std::cos(M_PI * t), 6.0, 50.0, M_PI / 2};
-}
+/// Loads of the canonical scene (model.md, section 5): the model's own (params.h).
+using fivebar::paper_loads;
 
 /// The canonical scene's loads other than the motor torques M1, M2: M3 = 6 N m, F = 50 N at
 /// pi/2 from link 3.
 inline Loads<double> paper_static_loads(double M1 = 0.0, double M2 = 0.0) {
   return {M1, M2, 6.0, 50.0, M_PI / 2};
+}
+
+/// paper_static_loads at every time, as the libraries take loads (motor torques zero).
+inline sim::LoadFunction paper_static_load_function() {
+  return [](double) { return paper_static_loads(); };
 }
 
 inline sim::Initial paper_initial() { return {M_PI / 2, M_PI / 2, 0.0, 0.0}; }
@@ -78,12 +82,13 @@ inline double max_displacement(const sim::Result& r, int angles) {
   return worst;
 }
 
-#ifdef FIVEBAR_REFERENCE_DIR
-
-/// A CSV file with a header row, as columns by name.
+/// The one CSV reader of the tests and benchmarks (the apps' parse_csv is what the apps tests
+/// exercise): a file with a header row as columns by name; `#` and blank lines skipped. Throws
+/// std::runtime_error naming the file when it cannot be opened or a field is not a number.
 inline std::map<std::string, std::vector<double>> read_csv(const std::string& path) {
-  std::map<std::string, std::vector<double>> cols;
   std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open " + path);
+  std::map<std::string, std::vector<double>> cols;
   std::string line;
   std::vector<std::string> names;
   while (std::getline(in, line)) {
@@ -95,11 +100,18 @@ inline std::map<std::string, std::vector<double>> read_csv(const std::string& pa
       continue;
     }
     for (size_t i = 0; std::getline(ss, cell, ',') && i < names.size(); ++i) {
-      cols[names[i]].push_back(std::stod(cell));
+      try {
+        cols[names[i]].push_back(std::stod(cell));
+      } catch (const std::exception&) {
+        throw std::runtime_error(path + ": column " + names[i] + ": '" + cell +
+                                 "' is not a number");
+      }
     }
   }
   return cols;
 }
+
+#ifdef FIVEBAR_REFERENCE_DIR
 
 inline std::string reference_path(const std::string& name) {
   return std::string(FIVEBAR_REFERENCE_DIR) + "/" + name;

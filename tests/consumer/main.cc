@@ -4,6 +4,7 @@
 
 #include "fivebar/identification/torque_log.h"
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/format.h"
 #include "fivebar/trajectory/tasks.h"
 
 int main() {
@@ -17,6 +18,6 @@ int main() {
   const bool closes = fivebar::trajectory::point_c(p, 1.5707963267948966, 1.5707963267948966, &c);
   if (!st.ok() || !closes) return 1;
   std::printf("M1 %s N m, M2 %.6g N m, C = (%.6g, %.6g) m\n",
-              fivebar::identification::format_number(ev.M1).c_str(), ev.M2, c[0], c[1]);
+              fivebar::format_shortest(ev.M1).c_str(), ev.M2, c[0], c[1]);
   return 0;
 }

@@ -9,11 +9,13 @@
 #include "fivebar/identification/synth.h"
 #include "fivebar/identification/torque_excitation.h"
 #include "fivebar/model/inertial.h"
+#include "paper.h"
 
 namespace fivebar::identification {
 namespace {
 
-Loads<double> paper_loads(double) { return {0.0, 0.0, 6.0, 50.0, M_PI / 2}; }
+using fivebar::testing::paper_static_load_function;
+using fivebar::testing::paper_static_loads;
 
 Params<double> per_joint_scene() {
   Params<double> p = paper_params();
@@ -30,8 +32,8 @@ std::array<double, 2> torques(const Params<double>& scene, const DesignParameter
   if (dp.friction > 0) dp.layout.apply(x.data(), &p.friction);
   if (dp.inertial > 0) set_standard_inertial(x.data() + dp.friction, &p);
   Evaluation<double> ev;
-  EXPECT_TRUE(inverse_dynamics(p, paper_loads(0), s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, &slip,
-                               EvalOptions{}, &ev)
+  EXPECT_TRUE(inverse_dynamics(p, paper_static_loads(), s.th1, s.th2, s.w1, s.w2, s.a1, s.a2,
+                               &slip, EvalOptions{}, &ev)
                   .ok());
   return {ev.M1, ev.M2};
 }
@@ -46,14 +48,14 @@ TEST(Excitation, JetJacobianMatchesFiniteDifferences) {
   ASSERT_EQ(dp.size(), 10 + 16 + 6);
   const MotionState s{1.4, 1.9, 2.5, -3.0, 20.0, 15.0};
   SampleTerms t;
-  ASSERT_TRUE(sample_terms(scene, dp, paper_loads(0), s, nullptr, &t).ok());
+  ASSERT_TRUE(sample_terms(scene, dp, paper_static_loads(), s, nullptr, &t).ok());
   for (int c = 0; c < dp.jet_size(); ++c) {
     std::vector<double> xp = dp.nominal, xm = dp.nominal;
     const double h = 1e-6 * std::max(1e-3, std::abs(dp.nominal[c]));
     xp[c] += h;
     xm[c] -= h;
     const auto mp = torques(scene, dp, xp, s, t.slip), mm = torques(scene, dp, xm, s, t.slip);
-    for (int r = 0; r < 2; ++r) {
+    for (int r = 0; r < kDof; ++r) {
       const double fd = (mp[r] - mm[r]) / (2 * h);
       EXPECT_NEAR(t.J(r, c), fd, 1e-6 * (1 + std::abs(fd))) << dp.names[c] << " row " << r;
     }
@@ -107,7 +109,8 @@ TEST(Excitation, DesignGradientMatchesFiniteDifferences) {
   o.groups.per_joint = true;
   for (Criterion c : {Criterion::kDOptimal, Criterion::kCondition, Criterion::kWorstStd}) {
     o.criterion = c;
-    const ExcitationProblem problem(per_joint_scene(), paper_loads, {M_PI / 2, M_PI / 2}, o);
+    const ExcitationProblem problem(per_joint_scene(), paper_static_load_function(),
+                                    {M_PI / 2, M_PI / 2}, o);
     std::vector<double> x = {0.5, 0.10, -0.05, 0.04, 0.02, -0.08, 0.06,
                              -0.7, 0.03, -0.02, 0.05, 0.01, 0.02, -0.04};
     ASSERT_EQ(problem.num_variables(), static_cast<int>(x.size()));
@@ -134,9 +137,9 @@ TEST(Excitation, DesignGradientMatchesFiniteDifferences) {
 }
 
 TEST(Excitation, ReversalsAreCounted) {
-  std::vector<std::array<double, 5>> w = {
+  std::vector<std::array<double, kJoints>> w = {
       {1, 1, 0, -1, 1}, {0, -1, 0, 1, 1}, {-1, 1, 0, -1, 1}, {2, 1, 0, 1, 1}};
-  const std::array<int, 5> r = count_reversals(w);
+  const std::array<int, kJoints> r = count_reversals(w);
   EXPECT_EQ(r[0], 2);  // 1, 0, -1, 2: a zero between is not a reversal of its own
   EXPECT_EQ(r[1], 2);
   EXPECT_EQ(r[2], 0);
@@ -170,7 +173,7 @@ TEST(Excitation, ToneTorquesAreClippedAndContainTheMultisine) {
   const ToneTorques tones(4, 5.0);
   const std::vector<double> x = multisine_tones();
   ASSERT_EQ(static_cast<int>(x.size()), tones.num_variables());
-  const sim::LoadFunction scene = [](double) { return Loads<double>{0.0, 0.0, 6.0, 50.0, M_PI / 2}; };
+  const sim::LoadFunction scene = paper_static_load_function();
   const sim::LoadFunction ms = multisine_loads(scene), clipped = tones.loads(x, scene);
   const ToneTorques free(4, std::numeric_limits<double>::infinity());
   int clips = 0;
@@ -199,7 +202,7 @@ TEST(Excitation, TorqueDesignIsSeededAndNeverWorseThanItsFirstStart) {
   o.excitation.criterion = Criterion::kWorstStd;
   o.max_evaluations = 13;
   o.seed = 3;
-  const sim::LoadFunction scene = [](double) { return Loads<double>{0.0, 0.0, 6.0, 50.0, M_PI / 2}; };
+  const sim::LoadFunction scene = paper_static_load_function();
   const ToneTorques tones(4, 13.4);
   const std::vector<std::vector<double>> starts = tone_starts(tones, multisine_tones());
   ASSERT_EQ(starts.size(), 9u);

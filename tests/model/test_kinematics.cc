@@ -39,22 +39,31 @@ TEST(Kinematics, PaperInitialPose) {
   EXPECT_NEAR(k.th4, 2.09024813802233, 1e-13);
 }
 
-TEST(Kinematics, LoopClosesOnBothAssemblies) {
+/// f(p, th1, th2, k) at 200 seeded random closed poses of each assembly of the paper mechanism.
+template <typename F>
+void for_closed_poses(F&& f) {
   for (int assembly : {kElbowUp, kElbowDown}) {
     Params<double> p = paper_params();
     p.assembly = assembly;
     for (auto [th1, th2] : random_poses(p, 200)) {
       Kinematics<double> k;
       ASSERT_TRUE(solve_kinematics(p, th1, th2, &k).ok());
-      const Vec2<double> B = p.links[0].length * unit(th1);
-      const Vec2<double> D = Vec2<double>(p.ground_length, 0) + p.links[1].length * unit(th2);
-      const Vec2<double> C3 = B + p.links[2].length * unit(k.th3);
-      const Vec2<double> C4 = D + p.links[3].length * unit(k.th4);
-      EXPECT_LT((C3 - C4).norm(), kClosureTol);
-      // elbow_up: C on the left of B->D
-      EXPECT_EQ(cross(Vec2<double>(D - B), Vec2<double>(C3 - B)) > 0, assembly == kElbowUp);
+      f(p, th1, th2, k);
     }
   }
+}
+
+TEST(Kinematics, LoopClosesOnBothAssemblies) {
+  for_closed_poses([](const Params<double>& p, double th1, double th2,
+                      const Kinematics<double>& k) {
+    const Vec2<double> B = p.links[0].length * unit(th1);
+    const Vec2<double> D = Vec2<double>(p.ground_length, 0) + p.links[1].length * unit(th2);
+    const Vec2<double> C3 = B + p.links[2].length * unit(k.th3);
+    const Vec2<double> C4 = D + p.links[3].length * unit(k.th4);
+    EXPECT_LT((C3 - C4).norm(), kClosureTol);
+    // elbow_up: C on the left of B->D
+    EXPECT_EQ(cross(Vec2<double>(D - B), Vec2<double>(C3 - B)) > 0, p.assembly == kElbowUp);
+  });
 }
 
 TEST(Kinematics, ReportsPosesThatCannotAssemble) {
@@ -164,6 +173,40 @@ TEST(Kinematics, BiasEqualsQuadraticFormOfHessians) {
       for (int c = 0; c < 2; ++c) EXPECT_NEAR(b.hc[i][c], w.dot(H.Hc[i][c] * w), 1e-12 * scale);
     }
   }
+}
+
+// the optimizer's coupler cosine: cos(th4 - th3) of the closed loop, its gradient against
+// central differences, and a value beyond 1 where the loop cannot close
+TEST(Kinematics, CouplerCosineMatchesTheClosedLoop) {
+  for_closed_poses([](const Params<double>& p, double th1, double th2,
+                      const Kinematics<double>& k) {
+    Row2<double> g;
+    const double c = coupler_cosine(p, th1, th2, &g);
+    EXPECT_NEAR(c, std::cos(k.th4 - k.th3), kClosureTol);
+    EXPECT_NEAR(c * c + k.sin43 * k.sin43, 1.0, kClosureTol);
+    auto cosine = [&](double a, double b) { return coupler_cosine(p, a, b); };
+    const double d1 = (cosine(th1 + kStep, th2) - cosine(th1 - kStep, th2)) / (2 * kStep);
+    const double d2 = (cosine(th1, th2 + kStep) - cosine(th1, th2 - kStep)) / (2 * kStep);
+    EXPECT_NEAR(g[0], d1, kFirstOrderTol);
+    EXPECT_NEAR(g[1], d2, kFirstOrderTol);
+  });
+  Params<double> p = paper_params();
+  p.links[2].length = p.links[3].length = 0.05;  // cannot span |BD| ~ 0.29
+  EXPECT_GT(std::abs(coupler_cosine(p, M_PI / 2, M_PI / 2)), 1.0);
+}
+
+// inverse position: the crank angles of a closed pose's point C, in its legs' working modes,
+// close back to the same angles (modulo 2 pi); a point out of reach is refused
+TEST(Kinematics, CrankAnglesInvertTheLoopClosure) {
+  for_closed_poses([](const Params<double>& p, double th1, double th2,
+                      const Kinematics<double>& k) {
+    std::array<double, 2> th{};
+    ASSERT_TRUE(crank_angles(p, k.C, leg_modes(p, k), &th));
+    EXPECT_NEAR(std::remainder(th[0] - th1, 2 * M_PI), 0.0, 1e-12);
+    EXPECT_NEAR(std::remainder(th[1] - th2, 2 * M_PI), 0.0, 1e-12);
+  });
+  std::array<double, 2> th{};
+  EXPECT_FALSE(crank_angles(paper_params(), Vec2<double>(2.0, 2.0), {1, 1}, &th));
 }
 
 }  // namespace

@@ -29,9 +29,7 @@ inline std::vector<TaskSpec> paper_tasks() {
 }
 
 // loads of the paper scene other than the motors: M3 = 6 N m, F = 50 N at pi/2 from link 3
-inline sim::LoadFunction paper_loads() {
-  return [](double) { return fivebar::testing::paper_static_loads(); };
-}
+inline sim::LoadFunction paper_loads() { return fivebar::testing::paper_static_load_function(); }
 
 using fivebar::testing::paper_initial;
 

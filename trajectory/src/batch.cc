@@ -10,7 +10,6 @@
 #include <stdexcept>
 #include <thread>
 
-#include "fivebar/model/format.h"
 #include "fivebar/sim/bytes.h"
 #include "stage.h"
 
@@ -71,55 +70,7 @@ double miss_distance(const TrajectoryProblem& problem, const sim::LoadFunction& 
 
 constexpr const char* kTruncated = "decode: truncated TaskResult";
 
-// shortest text that reads back exactly (0.3, not %.17g's 0.29999999999999999)
-std::string num(double v) { return format_shortest(v); }
-
-std::string quoted(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"') out += '"';
-    out += (c == '\n' || c == '\r') ? ' ' : c;
-  }
-  return out + "\"";
-}
-
 }  // namespace
-
-const std::vector<std::string>& summary_columns() {
-  static const std::vector<std::string> columns = {
-      "task", "status", "dissipated_energy", "baseline_dissipated_energy", "input_energy",
-      "peak_torque", "max_constraint_violation", "wall_time_s", "baseline_input_energy",
-      "baseline_peak_torque", "saving_percent", "miss_distance", "min_coupler_sine",
-      "solver_status", "evaluations", "starts", "best_start", "duration", "torque_limit",
-      "theta1_start", "theta2_start", "theta1_goal", "theta2_goal",
-      "dissipated_energy_exact", "baseline_dissipated_energy_exact", "baseline_status",
-      "initial_guess", "initial_dissipated_energy", "initial_peak_torque",
-      "initial_min_coupler_sine", "control_points", "dissipated_energy_smoothed",
-      "baseline_dissipated_energy_smoothed", "input_energy_smoothed",
-      "baseline_input_energy_smoothed", "miss_distance_exact", "smoothing_velocity",
-      "refinement_change", "continuation", "refinement", "message"};
-  return columns;
-}
-
-std::vector<std::string> summary_fields(const TaskResult& r) {
-  const double saving = 100.0 * (1.0 - r.dissipated_energy / r.baseline_dissipated_energy);
-  const bool resolved = r.control_points > 0;
-  auto angle = [&](double v) { return resolved ? num(v) : std::string("nan"); };
-  return {r.task, r.status, num(r.dissipated_energy), num(r.baseline_dissipated_energy),
-          num(r.input_energy), num(r.peak_torque), num(r.max_constraint_violation),
-          num(r.wall_time_s), num(r.baseline_input_energy), num(r.baseline_peak_torque),
-          num(saving), num(r.miss_distance), num(r.min_coupler_sine), r.solver_status,
-          std::to_string(r.evaluations), std::to_string(r.starts), std::to_string(r.best_start),
-          num(r.duration), num(r.torque_limit), angle(r.start[0]), angle(r.start[1]),
-          angle(r.goal[0]), angle(r.goal[1]), num(r.dissipated_energy_exact),
-          num(r.baseline_dissipated_energy_exact), r.baseline_status, r.initial_guess,
-          num(r.initial_dissipated_energy), num(r.initial_peak_torque),
-          num(r.initial_min_coupler_sine), std::to_string(r.control_points),
-          num(r.dissipated_energy_smoothed), num(r.baseline_dissipated_energy_smoothed),
-          num(r.input_energy_smoothed), num(r.baseline_input_energy_smoothed),
-          num(r.miss_distance_exact), num(r.smoothing_velocity), num(r.refinement_change),
-          quoted(r.continuation), quoted(r.refinement), quoted(r.message)};
-}
 
 std::uint64_t task_seed(const std::string& name, std::uint64_t seed) {
   std::uint64_t h = 0xcbf29ce484222325ULL;
@@ -228,7 +179,7 @@ bool warm_start(const Params<double>& params, const sim::LoadFunction& loads,
   std::vector<double> guess = to.fit([&](double t) {
     std::array<double, 2> th = from.state(warm.x.data(), t)[0];
     const double b = minimum_jerk_blend(t / r->duration)[0];
-    for (int j = 0; j < 2; ++j) {
+    for (int j = 0; j < kDof; ++j) {
       th[j] += (r->start[j] - warm.start[j]) * (1.0 - b) + (r->goal[j] - warm.goal[j]) * b;
     }
     return th;

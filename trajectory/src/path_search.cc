@@ -5,9 +5,10 @@
 #include <functional>
 #include <limits>
 #include <queue>
-#include <sstream>
+#include <string>
 #include <unordered_map>
 
+#include "fivebar/model/format.h"
 #include "fivebar/model/kinematics.h"
 
 namespace fivebar::trajectory {
@@ -35,13 +36,6 @@ double pose_sine(const Params<double>& params, double th1, double th2, Why* why 
 
 double distance(const Pose2& a, const Pose2& b) { return std::hypot(a[0] - b[0], a[1] - b[1]); }
 
-std::string str(double x) {
-  std::ostringstream s;
-  s.precision(4);
-  s << x;
-  return s.str();
-}
-
 // the grid: nodes (i, j) at lo + (i h0, j h1), the coupler sine of each computed once
 struct Grid {
   std::array<double, 2> lo{}, h{};
@@ -63,9 +57,9 @@ Grid make_grid(const Params<double>& params, const Pose2& start, const Pose2& go
                const PathSearchOptions& o) {
   Grid g;
   std::array<double, 2> span{};
-  for (int j = 0; j < 2; ++j) span[j] = std::abs(goal[j] - start[j]) + 2 * o.reach;
+  for (int j = 0; j < kDof; ++j) span[j] = std::abs(goal[j] - start[j]) + 2 * o.reach;
   const double step = std::max(o.step, std::sqrt(span[0] * span[1] / kMaxGridPoses));
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kDof; ++j) {
     g.lo[j] = std::min(start[j], goal[j]) - o.reach;
     const double hi = std::max(start[j], goal[j]) + o.reach;
     g.n[j] = std::max(2, static_cast<int>(std::ceil((hi - g.lo[j]) / step)) + 1);
@@ -176,7 +170,7 @@ std::string why_unreachable(const Params<double>& params, const Grid& g, const P
   const double eps = 1e-9;  // any pose that closes
   std::vector<char> seen(g.size() + 2, 0);
   if (!astar(params, g, start, goal, eps, &seen).empty()) {
-    return "every path passes nearer than the margin " + str(margin) +
+    return "every path passes nearer than the margin " + format_significant(margin, 4) +
            " to a singular pose (|sin(theta4 - theta3)| < margin)";
   }
   int stretched = 0, folded = 0;
@@ -197,10 +191,13 @@ std::string why_unreachable(const Params<double>& params, const Grid& g, const P
   }
   const double l3 = params.links[2].length, l4 = params.links[3].length;
   std::string curve;
-  if (stretched > 0) curve = "couplers stretched, |BD| = l3 + l4 = " + str(l3 + l4) + " m";
+  if (stretched > 0) {
+    curve = "couplers stretched, |BD| = l3 + l4 = " + format_significant(l3 + l4, 4) + " m";
+  }
   if (folded > 0) {
-    curve += (curve.empty() ? "" : "; ") +
-             ("couplers folded, |BD| = |l3 - l4| = " + str(std::abs(l3 - l4)) + " m");
+    curve +=
+        (curve.empty() ? "" : "; ") +
+        ("couplers folded, |BD| = |l3 - l4| = " + format_significant(std::abs(l3 - l4), 4) + " m");
   }
   std::string why = "the goal lies across the singular curve (" + curve +
                     ") that bounds the start's region of the workspace in the " +
@@ -258,15 +255,20 @@ JointPath find_joint_path(const Params<double>& params, const Pose2& start, cons
     hint = "; the goal is the start pose itself, whole turns away";
   } else if (distance(turned, goal) > 1e-9 &&
              !astar(params, make_grid(params, start, turned, o), start, turned, margin).empty()) {
-    hint = "; the same pose at theta = (" + str(turned[0]) + ", " + str(turned[1]) +
+    hint = "; the same pose at theta = (" + format_significant(turned[0], 4) + ", " +
+           format_significant(turned[1], 4) +
            ") rad (whole turns away) can be reached: give the goal so";
   }
-  out.message = "no path of poses with |sin(theta4 - theta3)| >= " + str(o.margin) +
-                " joins start (" + str(start[0]) + ", " + str(start[1]) + ") and goal (" +
-                str(goal[0]) + ", " + str(goal[1]) + ") rad within theta1 in [" + str(g.lo[0]) +
-                ", " + str(g.lo[0] + (g.n[0] - 1) * g.h[0]) + "], theta2 in [" + str(g.lo[1]) +
-                ", " + str(g.lo[1] + (g.n[1] - 1) * g.h[1]) + "] (grid step " + str(g.h[0]) +
-                " rad): " + why_unreachable(params, g, start, goal, o.margin) + hint;
+  out.message =
+      "no path of poses with |sin(theta4 - theta3)| >= " + format_significant(o.margin, 4) +
+      " joins start (" + format_significant(start[0], 4) + ", " + format_significant(start[1], 4) +
+      ") and goal (" + format_significant(goal[0], 4) + ", " + format_significant(goal[1], 4) +
+      ") rad within theta1 in [" + format_significant(g.lo[0], 4) + ", " +
+      format_significant(g.lo[0] + (g.n[0] - 1) * g.h[0], 4) + "], theta2 in [" +
+      format_significant(g.lo[1], 4) + ", " +
+      format_significant(g.lo[1] + (g.n[1] - 1) * g.h[1], 4) + "] (grid step " +
+      format_significant(g.h[0], 4) +
+      " rad): " + why_unreachable(params, g, start, goal, o.margin) + hint;
   return out;
 }
 

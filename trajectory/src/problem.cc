@@ -7,8 +7,9 @@
 
 #include <ceres/jet.h>
 
-#include "fivebar/model/rest.h"
+#include "fivebar/model/kinematics.h"
 #include "fivebar/model/names.h"
+#include "fivebar/model/rest.h"
 #include "fivebar/trajectory/quadrature.h"
 
 namespace fivebar::trajectory {
@@ -53,22 +54,14 @@ Status node_values(const Params<T>& p, const Loads<T>& L, const std::array<T, 6>
   return Status::Ok();
 }
 
-// c = cos^2(C) - (1 - m^2) at (th1, th2) and its gradient (closed-form triangle B, C, D)
+// c = cos^2(C) - (1 - m^2) at (th1, th2), with C the coupler angle at C, and its gradient
+// (the model's coupler_cosine: smooth through the singular poses); |sin C| when asked
 double coupler_constraint(const Params<double>& p, double th1, double th2, double margin,
                           double* d1, double* d2, double* abs_sine = nullptr) {
-  const double l1 = p.links[0].length, l2 = p.links[1].length;
-  const double l3 = p.links[2].length, l4 = p.links[3].length;
-  const double Bx = l1 * std::cos(th1), By = l1 * std::sin(th1);
-  const double Dx = p.ground_length + l2 * std::cos(th2), Dy = l2 * std::sin(th2);
-  const double dx = Dx - Bx, dy = Dy - By;
-  const double L2 = dx * dx + dy * dy;
-  const double cosC = (l3 * l3 + l4 * l4 - L2) / (2.0 * l3 * l4);
-  // dL2/dth1 = 2 (D - B) . (-dB/dth1), dL2/dth2 = 2 (D - B) . dD/dth2
-  const double dL1 = -2.0 * (dx * (-By) + dy * Bx);
-  const double dL2 = 2.0 * (dx * (-l2 * std::sin(th2)) + dy * (l2 * std::cos(th2)));
-  const double k = 2.0 * cosC * (-1.0 / (2.0 * l3 * l4));
-  if (d1) *d1 = k * dL1;
-  if (d2) *d2 = k * dL2;
+  Row2<double> g;
+  const double cosC = coupler_cosine(p, th1, th2, d1 || d2 ? &g : nullptr);
+  if (d1) *d1 = 2.0 * cosC * g[0];
+  if (d2) *d2 = 2.0 * cosC * g[1];
   if (abs_sine) *abs_sine = cosC * cosC <= 1.0 ? std::sqrt(1.0 - cosC * cosC) : 0.0;
   return cosC * cosC - (1.0 - margin * margin);
 }
@@ -146,7 +139,7 @@ TrajectoryProblem::TrajectoryProblem(const Params<double>& params, const sim::Lo
 std::array<double, 6> TrajectoryProblem::node_state(const double* x, const Node& node) const {
   std::array<double, 6> s{};
   const int n = motion_.basis().size(), nf = motion_.free_per_joint();
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kDof; ++j) {
     for (int i = 0; i <= kDegree; ++i) {
       const int c = node.basis.first + i;
       const double cp = c < 3 ? motion_.start()[j]
@@ -168,7 +161,7 @@ Status TrajectoryProblem::evaluate_local(const double* x, Evaluated* out) const 
 std::array<int, kLocalVariables> TrajectoryProblem::node_variables(int node) const {
   std::array<int, kLocalVariables> v{};
   for (int i = 0; i <= kDegree; ++i) {
-    for (int j = 0; j < 2; ++j) v[2 * i + j] = variable_of(nodes_[node].basis.first + i, j);
+    for (int j = 0; j < kDof; ++j) v[2 * i + j] = variable_of(nodes_[node].basis.first + i, j);
   }
   return v;
 }
@@ -339,11 +332,11 @@ Status TrajectoryProblem::objective_hessian(const double* x, std::vector<double>
     if (!st.ok()) return st;
     // s[2 k + j] = sum_i d[k][i] cp(j, first + i): H[v][v'] += w sum_kk' d[k][i] hs d[k'][i']
     for (int i = 0; i <= kDegree; ++i) {
-      for (int j = 0; j < 2; ++j) {
+      for (int j = 0; j < kDof; ++j) {
         const int v = variable_of(node.basis.first + i, j);
         if (v < 0) continue;
         for (int i2 = 0; i2 <= kDegree; ++i2) {
-          for (int j2 = 0; j2 < 2; ++j2) {
+          for (int j2 = 0; j2 < kDof; ++j2) {
             const int v2 = variable_of(node.basis.first + i2, j2);
             if (v2 < 0) continue;
             double sum = 0;
@@ -463,7 +456,7 @@ Status TrajectoryProblem::rows(const double* x, double step, std::vector<sim::Ro
     r.t = std::min(T, i * step);
     if (i == n) r.t = T;
     const auto s = motion_.state(x, r.t);
-    for (int j = 0; j < 2; ++j) {
+    for (int j = 0; j < kDof; ++j) {
       r.theta[j] = s[0][j];
       r.omega[j] = s[1][j];
       r.alpha[j] = s[2][j];

@@ -1,9 +1,10 @@
 // Stages of a task's solve: the first (smoothed) solve, the continuation on the smoothing
 // velocity towards the scene's exact friction law, and the refinement of the control points.
 #include <algorithm>
-#include <charconv>
 #include <cmath>
+#include <string>
 
+#include "fivebar/model/format.h"
 #include "stage.h"
 
 namespace fivebar::trajectory {
@@ -50,17 +51,10 @@ bool better(const Candidate& a, const Candidate& b, const BatchOptions& options)
   return fa && a.exact < b.exact;
 }
 
-std::string short_num(double v) {
-  if (!std::isfinite(v)) return "nan";
-  char buf[40];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 7);
-  return std::string(buf, r.ptr);
-}
-
 // "key:E" (exact-law objective), "x" appended when the stage did not improve the result
 void log_stage(std::string* log, double key, const Candidate& c, bool kept) {
-  *log += (log->empty() ? "" : ";") + short_num(key) + ":" + short_num(c.exact) +
-          (kept ? "" : "x");
+  *log += (log->empty() ? "" : ";") + format_significant(key, 7) + ":" +
+          format_significant(c.exact, 7) + (kept ? "" : "x");
 }
 
 // why a candidate is not feasible (feasible() below)
@@ -69,9 +63,9 @@ std::string why_infeasible(const Candidate& c, const BatchOptions& options) {
   if (!c.solver.usable()) return "solver: " + c.solver.message;
   if (!c.check.status.ok()) return "check: " + c.check.status.message;
   if (c.check.max_violation > options.feasibility_tol) {
-    return "violation " + short_num(c.check.max_violation) + " on the check grid (peak " +
-           short_num(c.check.peak_torque) + " N m, min sine " +
-           short_num(c.check.min_coupler_sine) + ")";
+    return "violation " + format_significant(c.check.max_violation, 7) +
+           " on the check grid (peak " + format_significant(c.check.peak_torque, 7) +
+           " N m, min sine " + format_significant(c.check.min_coupler_sine, 7) + ")";
   }
   return "exact-law energy not finite";
 }

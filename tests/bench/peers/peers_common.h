@@ -8,9 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <functional>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -51,24 +49,16 @@ using Trajectory = std::vector<std::array<double, 4>>;
 /// The first second of datasets/reference/paper_frictionless.csv.
 inline Trajectory read_reference() {
   const std::string path = std::string(FIVEBAR_REFERENCE_DIR) + "/paper_frictionless.csv";
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open " + path);
-  std::string line;
-  std::getline(in, line);  // header: t, theta1..theta4, ...
+  auto cols = testing::read_csv(path);
+  const std::vector<double>& t = cols["t"];
+  if (static_cast<int>(t.size()) < kOutputs + 1) throw std::runtime_error(path + ": too short");
   Trajectory ref;
-  while (std::getline(in, line) && static_cast<int>(ref.size()) <= kOutputs) {
-    std::stringstream ss(line);
-    std::string cell;
-    std::array<double, 5> v{};
-    for (double& x : v) {
-      std::getline(ss, cell, ',');
-      x = std::stod(cell);
+  for (int i = 0; i <= kOutputs; ++i) {
+    if (std::abs(t[i] - kOutputStep * i) > 1e-9) {
+      throw std::runtime_error(path + ": grid is not 1 ms");
     }
-    const double t_expected = kOutputStep * static_cast<double>(ref.size());
-    if (std::abs(v[0] - t_expected) > 1e-9) throw std::runtime_error(path + ": grid is not 1 ms");
-    ref.push_back({v[1], v[2], v[3], v[4]});
+    ref.push_back({cols["theta1"][i], cols["theta2"][i], cols["theta3"][i], cols["theta4"][i]});
   }
-  if (static_cast<int>(ref.size()) != kOutputs + 1) throw std::runtime_error(path + ": too short");
   return ref;
 }
 

@@ -57,8 +57,8 @@ CsvTable read_csv(const std::string& path);
 /// text that may hold commas with csv_quote).
 std::string csv_line(const std::vector<std::string>& fields);
 
-/// `s` as one CSV field: in double quotes, a quote doubled (RFC 4180), a newline written as a
-/// space (one record per line).
+/// `s` as one CSV field: in double quotes, a quote doubled (RFC 4180), a line feed or carriage
+/// return written as a space (one record per line).
 std::string csv_quote(const std::string& s);
 
 }  // namespace fivebar::io

@@ -70,7 +70,4 @@ void require_samples(const TorqueLog& log, int needed, const std::string& what);
 /// sample whose pose cannot close with the mechanism of `params`.
 void check_poses(const TorqueLog& log, const Params<double>& params);
 
-/// Shortest text that reads back as exactly x (fivebar/model/format.h).
-using fivebar::format_number;
-
 }  // namespace fivebar::identification

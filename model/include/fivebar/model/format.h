@@ -1,31 +1,23 @@
-// Numbers as text for the libraries' messages and files (libraries never print; the apps have
-// their own writers in apps/src/format.cc and use these two as well).
+// Numbers as text, the one place for the whole toolkit (model, identification, trajectory, apps
+// and python): format_shortest for numbers that are read back (files), format_significant for
+// numbers a person reads (messages, notes, figure scripts). Libraries never print; apps/src/
+// format.cc adds the apps' table and grid forms on top of these two.
 #pragma once
 
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 
 namespace fivebar {
 
-/// `x` with `digits` significant digits, as printf's %g ("0.000123", "1.5e+03", "nan").
-inline std::string format_significant(double x, int digits) {
+/// `x` with `digits` significant digits, as printf's %g ("0.000123", "1.5e+03", "inf"): the
+/// numbers of messages and notes (3 digits unless the message needs more). Every NaN is "nan"
+/// (printf writes "-nan" for the NaN that x86 arithmetic such as inf - inf makes).
+inline std::string format_significant(double x, int digits = 3) {
+  if (std::isnan(x)) return "nan";
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.*g", digits, x);
-  return buf;
-}
-
-/// Shortest %g text that reads back as exactly x; "nan", "inf", "-inf" for non-finite values.
-inline std::string format_number(double x) {
-  if (std::isnan(x)) return "nan";
-  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
-  char buf[32];
-  for (int prec = 1; prec <= 17; ++prec) {
-    std::snprintf(buf, sizeof buf, "%.*g", prec, x);
-    if (std::strtod(buf, nullptr) == x) break;
-  }
   return buf;
 }
 

@@ -2,6 +2,7 @@
 // (paper section 2.2; model.md "Geometry and coordinates").
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <sstream>
@@ -60,6 +61,18 @@ inline Status near_singular_status(double th1, double th2, double sine, double m
   return Status::Error(StatusCode::kNearSingular, msg.str());
 }
 
+/// The cranks of a pose, the first step of the loop closure: th1, th2, e1, e2 and the crank ends
+/// B = l1 e1, D = D0 + l2 e2 (every pose has them, closed or not).
+template <typename T>
+void place_cranks(const Params<T>& p, const T& th1, const T& th2, Kinematics<T>* k) {
+  k->th1 = th1;
+  k->th2 = th2;
+  k->e1 = unit(th1);
+  k->e2 = unit(th2);
+  k->B = p.links[0].length * k->e1;
+  k->D = Vec2<T>(p.ground_length, T(0)) + p.links[1].length * k->e2;
+}
+
 /// Loop closure (eq. 4): B and D from the crank angles, then C from the triangle B, C, D, the
 /// coupler directions e3, e4 (and th3, th4 when `angles`) and sin43. Fails as solve_kinematics.
 template <typename T>
@@ -69,12 +82,7 @@ Status close_loop(const Params<T>& p, const T& th1, const T& th2, Kinematics<T>*
   using std::sqrt;
   const T& l3 = p.links[2].length;
   const T& l4 = p.links[3].length;
-  k->th1 = th1;
-  k->th2 = th2;
-  k->e1 = unit(th1);
-  k->e2 = unit(th2);
-  k->B = p.links[0].length * k->e1;
-  k->D = Vec2<T>(p.ground_length, T(0)) + p.links[1].length * k->e2;
+  place_cranks(p, th1, th2, k);
 
   // triangle B, C, D: foot of C on BD at distance a from B, height h
   const Vec2<T> d = k->D - k->B;
@@ -103,6 +111,69 @@ Status close_loop(const Params<T>& p, const T& th1, const T& th2, Kinematics<T>*
                          singular_margin);
   }
   return Status::Ok();
+}
+
+/// cos(th4 - th3), the cosine of the coupler angle at C, from |BD| by the law of cosines on the
+/// triangle B, C, D, and when asked its gradient with respect to (th1, th2) [1/rad]. Defined at
+/// every pose (|cos| > 1 where the loop cannot close) and smooth through the singular poses,
+/// where G3 and G4 are not: sin^2(th4 - th3) = 1 - cos^2 is the trajectory optimizer's
+/// singular-margin constraint.
+template <typename T>
+T coupler_cosine(const Params<T>& p, const T& th1, const T& th2, Row2<T>* gradient = nullptr) {
+  const T& l3 = p.links[2].length;
+  const T& l4 = p.links[3].length;
+  Kinematics<T> k;
+  place_cranks(p, th1, th2, &k);
+  const Vec2<T> d = k.D - k.B;
+  const T cosine = (l3 * l3 + l4 * l4 - d.squaredNorm()) / (T(2) * l3 * l4);
+  if (gradient) {
+    // d|BD|^2/dth1 = -2 (D - B) . dB/dth1, d|BD|^2/dth2 = 2 (D - B) . dD/dth2
+    const T dL1 = T(-2) * d.dot(p.links[0].length * perp(k.e1));
+    const T dL2 = T(2) * d.dot(p.links[1].length * perp(k.e2));
+    const T c = T(-1) / (T(2) * l3 * l4);
+    *gradient << c * dL1, c * dL2;
+  }
+  return cosine;
+}
+
+/// The side of each leg at a closed pose, +1 or -1: sign((B - O) x (C - B)) for the left leg and
+/// sign((D - D0) x (C - D)) for the right one (the working modes crank_angles keeps).
+inline std::array<int, 2> leg_modes(const Params<double>& p, const Kinematics<double>& k) {
+  const Vec2<double> D0(p.ground_length, 0.0);
+  const double s1 = cross(Vec2<double>(k.B), Vec2<double>(k.C - k.B));
+  const double s2 = cross(Vec2<double>(k.D - D0), Vec2<double>(k.C - k.D));
+  return {s1 >= 0 ? 1 : -1, s2 >= 0 ? 1 : -1};
+}
+
+/// The crank angle th of one leg (crank of length l from `base`, coupler of length r) that puts
+/// the leg's end at C with the leg on the side `mode` (+1 or -1, as leg_modes); false if the leg
+/// cannot reach C. th is atan2 -+ acos, so within [-2 pi, 2 pi].
+inline bool leg_angle(const Vec2<double>& base, double l, const Vec2<double>& C, double r,
+                      int mode, double* th) {
+  const Vec2<double> d = C - base;
+  const double L = d.norm();
+  if (!(L > 0) || L > l + r || L < std::abs(l - r)) return false;
+  const double phi = std::atan2(d.y(), d.x());
+  const double beta = std::acos(std::clamp((l * l + L * L - r * r) / (2 * l * L), -1.0, 1.0));
+  for (double cand : {phi + beta, phi - beta}) {
+    const Vec2<double> K = base + l * unit(cand);
+    const int side = cross(Vec2<double>(K - base), Vec2<double>(C - K)) >= 0 ? 1 : -1;
+    if (side == mode) {
+      *th = cand;
+      return true;
+    }
+  }
+  return false;
+}
+
+/// Inverse position analysis: the crank angles that put point C at `C` with the legs in the
+/// working modes `modes` (leg_modes); false when a leg cannot reach C. Whether the scene's
+/// assembly closes back to the same C is the caller's check (close_loop).
+inline bool crank_angles(const Params<double>& p, const Vec2<double>& C,
+                         const std::array<int, 2>& modes, std::array<double, 2>* th) {
+  const Vec2<double> O(0, 0), D0(p.ground_length, 0);
+  return leg_angle(O, p.links[0].length, C, p.links[2].length, modes[0], &(*th)[0]) &&
+         leg_angle(D0, p.links[1].length, C, p.links[3].length, modes[1], &(*th)[1]);
 }
 
 /// The load point P and the centres of mass c[0..3] with their directions ec (closed loop).

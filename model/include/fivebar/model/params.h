@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <type_traits>
 
 #include "fivebar/model/scalar.h"
@@ -203,6 +204,13 @@ inline Params<double> paper_params() {
   p.friction.stribeck_velocity.fill(0.1);
   p.friction.stribeck_exponent.fill(2.0);
   return p;
+}
+
+/// The canonical scene's loads at time t [s] (model.md, section 5; the loads of
+/// datasets/scenes/paper.yaml): M1 = 2 + 5 sin(8 pi t), M2 = 3 + 5 cos(pi t), M3 = 6 [N m],
+/// F = 50 N at pi/2 from link 3.
+inline Loads<double> paper_loads(double t) {
+  return {2 + 5 * std::sin(8 * M_PI * t), 3 + 5 * std::cos(M_PI * t), 6.0, 50.0, M_PI / 2};
 }
 
 }  // namespace fivebar

@@ -161,21 +161,6 @@ std::vector<TaskResult> run_parallel(int count, int threads,
                                      const std::function<TaskResult(int)>& work,
                                      const std::function<void(int, int)>& progress = {});
 
-/// Columns of summary.csv: those of interfaces.md (task, status, dissipated_energy,
-/// baseline_dissipated_energy, input_energy, peak_torque, max_constraint_violation, wall_time_s),
-/// then baseline_input_energy, baseline_peak_torque, saving_percent (100 (1 - E / E_baseline)),
-/// miss_distance, min_coupler_sine, solver_status, evaluations, starts, best_start, duration,
-/// torque_limit, theta1_start, theta2_start, theta1_goal, theta2_goal, dissipated_energy_exact,
-/// baseline_dissipated_energy_exact, baseline_status, initial_guess, initial_dissipated_energy,
-/// initial_peak_torque, initial_min_coupler_sine, control_points, dissipated_energy_smoothed,
-/// baseline_dissipated_energy_smoothed, input_energy_smoothed, baseline_input_energy_smoothed,
-/// miss_distance_exact, smoothing_velocity, refinement_change, continuation, refinement, message.
-/// Energies and torques are those of the scene's exact friction law; the *_smoothed energies
-/// those of the smooth law of the winning stage.
-const std::vector<std::string>& summary_columns();
-/// The fields of one summary.csv row (numbers as %.17g; the message quoted as CSV text).
-std::vector<std::string> summary_fields(const TaskResult& result);
-
 /// Serialization of a result (for MPI transfer): decode(encode(r)) == r, bit for bit.
 std::string encode(const TaskResult& result);
 TaskResult decode(const std::string& bytes);
