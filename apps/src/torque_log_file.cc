@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -9,7 +10,10 @@
 #include <map>
 #include <sstream>
 
+#include "fivebar/identification/condition.h"
+#include "fivebar/identification/rates.h"
 #include "fivebar/io/csv.h"
+#include "fivebar/model/format.h"
 #include "fivebar/model/scalar.h"
 
 namespace fivebar::io {
@@ -69,6 +73,61 @@ void check_log_time(const CsvTable& table) {
                      " after " + format_shortest(table.rows[n - 2][t]) + ")");
 }
 
+double median_of(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// A logged rate (order 1) or acceleration (order 2) against the angles' own (unwrapped,
+// Savitzky-Golay, the one-sided edges left out): for accelerations, their median ratio where
+// the crank accelerates (deg/s^2 reads 0.0175); for both, a median offset over a stretch of a
+// tenth of the log (at least 100 samples) beyond 5 % of the column's median size and 8 std
+// of that median (review: alpha1 + 50 and omega1 + 1 rad/s from mid-log were fitted, exit 0,
+// with a spurious delay). Empty when they agree.
+std::string derivative_mismatch(const TorqueLog& log, std::vector<double> theta,
+                                const std::vector<double>& logged, int order) {
+  const int n = static_cast<int>(theta.size());
+  if (n < 20) return "";
+  identification::unwrap_angles(&theta);
+  std::vector<double> w, a;
+  const identification::SgOptions sg;
+  identification::savitzky_golay(log.t, theta, sg, &w, &a);
+  const std::vector<double>& own = order == 1 ? w : a;
+  const int edge = identification::sg_half_window(sg, log.duration() / (n - 1));
+  std::vector<double> size;
+  for (int i = edge; i < n - edge; ++i) size.push_back(std::abs(logged[i]));
+  if (size.size() < 20) return "";
+  const double typical = median_of(size);
+  const char* unit = order == 1 ? " rad/s" : " rad/s^2";
+  if (order == 2) {
+    std::vector<double> ratio;
+    for (int i = edge; i < n - edge; ++i) {
+      if (std::abs(logged[i]) > typical) ratio.push_back(own[i] / logged[i]);
+    }
+    const double r = ratio.size() < 10 ? 1.0 : median_of(ratio);
+    if (!(std::abs(r - 1) <= 0.25)) {
+      return "the angles' second derivative is a median " + format_significant(r, 3) +
+             " times the logged acceleration where the crank accelerates (expected 1)";
+    }
+  }
+  const int span = std::max(100, (n - 2 * edge) / 10);
+  for (int lo = edge; lo + span <= n - edge; lo += span) {
+    std::vector<double> d;
+    for (int i = lo; i < lo + span; ++i) d.push_back(logged[i] - own[i]);
+    const double m = median_of(d);
+    for (double& x : d) x -= m;
+    const double std_of_median = 1.25 * identification::robust_std(d) / std::sqrt(span);
+    if (std::abs(m) > 0.05 * typical && std::abs(m) > 8 * std_of_median) {
+      auto line = [&](int i) { return log.lines.empty() ? i + 1 : log.lines[i]; };
+      return "over lines " + std::to_string(line(lo)) + "-" + std::to_string(line(lo + span - 1)) +
+             " the logged values are a median " +
+             format_significant(m, 3) + unit + " off the angles' (the column's median size is " +
+             format_significant(typical, 3) + unit + "): an offset, or another quantity";
+    }
+  }
+  return "";
+}
+
 // angles in degrees and rates in other units are common mistakes; say so instead of failing
 // later
 void check_log_units(const TorqueLog& log) {
@@ -85,6 +144,18 @@ void check_log_units(const TorqueLog& log) {
       throw LogError(log.path, std::string("column omega") + char('1' + j),
                      "rates do not match the angles: " + off +
                          "; expected rad/s of the same crank, positive counter-clockwise");
+    }
+    const std::string w_off = om ? derivative_mismatch(log, th, *om, 1) : "";
+    if (!w_off.empty()) {
+      throw LogError(log.path, std::string("column omega") + char('1' + j),
+                     "rates do not match the angles: " + w_off);
+    }
+    const std::vector<double>* al = log.has_accels ? (j == 0 ? &log.alpha1 : &log.alpha2) : nullptr;
+    const std::string a_off = al ? derivative_mismatch(log, th, *al, 2) : "";
+    if (!a_off.empty()) {
+      throw LogError(log.path, std::string("column alpha") + char('1' + j),
+                     "accelerations do not match the angles: " + a_off +
+                         "; expected rad/s^2 of the same crank, positive counter-clockwise");
     }
   }
 }

@@ -1496,14 +1496,23 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
   again.delay_refits = opt.delay_refits - 1;
   again.estimate_delay = again.delay_refits > 0;
   for (const Glitch& g : first.glitches) again.condition.rejected_before.push_back(g.index);
-  // samples whose shifted torque would lie beyond the log's ends have none: left out
+  // samples whose shifted torque would lie beyond the samples that have torques have none: left
+  // out. In a chain of refits those are the log's ends less the end blocks an earlier refit left
+  // out (its shifted torques there were clamped), and only the samples not left out before are
+  // counted (review: "2238 samples left out" of 2001)
+  const int n = conditioned.size();
+  const std::vector<int>& before = opt.condition.rejected_before;
+  auto left_out = [&](int i) { return std::find(before.begin(), before.end(), i) != before.end(); };
+  int lo = 0, hi = n - 1;
+  while (lo < hi && left_out(lo)) ++lo;
+  while (hi > lo && left_out(hi)) --hi;
   const double tol = 1e-9 * std::max(1.0, conditioned.duration());
   int beyond = 0;
-  for (int i = 0; i < conditioned.size(); ++i) {
+  for (int i = 0; i < n; ++i) {
     const double t = conditioned.t[i] + first.delay_s;
-    if (t > conditioned.t.back() + tol || t < conditioned.t.front() - tol) {
+    if (t > conditioned.t[hi] + tol || t < conditioned.t[lo] - tol) {
       again.condition.rejected_before.push_back(i);
-      ++beyond;
+      beyond += !left_out(i);
     }
   }
   // the shift smooths the torques' noise, which the refit would then measure too small (review:
@@ -1519,8 +1528,11 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
   // total is their sum, with the std of the last estimate
   if (res.delay_corrected) res.warnings.erase(res.warnings.begin());
   res.samples = first.samples;
-  res.delay_s = first.delay_s + (again.estimate_delay ? res.delay_s : 0.0);
-  res.delay_std_s = again.estimate_delay ? res.delay_std_s : first.delay_std_s;
+  // (a refit whose estimate is not finite keeps the first: review, "lag by nan +- nan ms")
+  const bool refit_estimate =
+      again.estimate_delay && std::isfinite(res.delay_s) && std::isfinite(res.delay_std_s);
+  res.delay_s = first.delay_s + (refit_estimate ? res.delay_s : 0.0);
+  res.delay_std_s = refit_estimate ? res.delay_std_s : first.delay_std_s;
   res.delay_corrected = true;
   res.notes.insert(res.notes.begin(), first.notes.begin(), first.notes.end());
   // one note for the whole chain of refits (a deeper refit's count is included in this one)
