@@ -51,8 +51,8 @@ struct Args {
 std::vector<Column> point_c_columns(const Params<double>& p, const std::vector<sim::Row>& rows) {
   Column x{"x_C", {}}, y{"y_C", {}};
   for (const sim::Row& r : rows) {
-    std::array<double, 2> c{NAN, NAN};
-    if (!trajectory::point_c(p, r.theta[0], r.theta[1], &c)) c = {NAN, NAN};
+    std::array<double, 2> c{NAN, NAN};  // left so when the pose cannot close
+    trajectory::point_c(p, r.theta[0], r.theta[1], &c);
     x.values.push_back(c[0]);
     y.values.push_back(c[1]);
   }
