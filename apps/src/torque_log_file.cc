@@ -102,7 +102,7 @@ std::string derivative_mismatch(const TorqueLog& log, std::vector<double> theta,
   if (order == 2) {
     std::vector<double> ratio;
     for (int i = edge; i < n - edge; ++i) {
-      if (std::abs(logged[i]) > typical) ratio.push_back(own[i] / logged[i]);
+      if (std::abs(logged[i]) >= typical && logged[i] != 0) ratio.push_back(own[i] / logged[i]);
     }
     const double r = ratio.size() < 10 ? 1.0 : median_of(ratio);
     if (!(std::abs(r - 1) <= 0.25)) {

@@ -77,6 +77,35 @@ TEST(TorqueLog, RatesThatDoNotMatchTheAnglesNameTheColumn) {
   EXPECT_NO_THROW(parse_torque_log(good_log(50, true), "good.csv"));
 }
 
+/// A log of n samples at 1 kHz with uniformly accelerating cranks (alpha 2 rad/s^2 and -1.2),
+/// its logged accelerations scaled by `scale` and offset by `offset` from sample `from` on.
+std::string accelerating_log(int n, double scale, double offset = 0, int from = 0) {
+  std::ostringstream s;
+  s.precision(17);
+  s << "t,theta1,theta2,tau1,tau2,omega1,omega2,alpha1,alpha2\n";
+  for (int i = 0; i < n; ++i) {
+    const double t = i * 1e-3;
+    s << t << "," << 1.5 + 0.5 * t + t * t << "," << 1.6 - 0.3 * t - 0.6 * t * t << ",1.0,2.0,"
+      << 0.5 + 2 * t << "," << -0.3 - 1.2 * t << "," << 2 * scale + (i >= from ? offset : 0)
+      << "," << -1.2 * scale << "\n";
+  }
+  return s.str();
+}
+
+// review (finding 8): accelerations in deg/s^2, or offset from mid-log, were fitted (both
+// coefficients at their bounds, "lag by nan ms"); they are refused naming the column and what
+// was seen
+TEST(TorqueLog, AccelerationsThatDoNotMatchTheAnglesNameTheColumn) {
+  EXPECT_NO_THROW(parse_torque_log(accelerating_log(1000, 1.0), "good.csv"));
+  EXPECT_THAT([&] { parse_torque_log(accelerating_log(1000, 180 / M_PI), "deg.csv"); },
+              ThrowsMessage<std::runtime_error>(
+                  AllOf(HasSubstr("deg.csv"), HasSubstr("column alpha1"),
+                        HasSubstr("a median 0.0175 times the logged acceleration"))));
+  EXPECT_THAT([&] { parse_torque_log(accelerating_log(1000, 1.0, 0.4, 500), "offset.csv"); },
+              ThrowsMessage<std::runtime_error>(
+                  AllOf(HasSubstr("column alpha1"), HasSubstr("a median 0.4 rad/s^2 off"))));
+}
+
 TEST(TorqueLog, WriteThenReadRoundTrips) {
   TorqueLog log = parse_torque_log(good_log(5, true), "good.csv");
   log.comments = {" made by a test"};
