@@ -2,6 +2,8 @@
 #include "misfit.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
 
 namespace fivebar::identification::detail {
 namespace {
@@ -35,6 +37,14 @@ FreedStep freed_step(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
   out.fitted_cov = C.topLeftCorner(nf, nf) - Cf;
   out.extra_step = step.tail(ne);
   out.extra_std = C.bottomRightCorner(ne, ne).diagonal().cwiseMax(0.0).cwiseSqrt();
+  out.drop = -step.dot(Ja.transpose() * r);
+  // S = (A_ee - P) - A_ef A_ff^-1 A_fe; (S + P)^-1 is the extras' block of C
+  const Eigen::MatrixXd Afe = A.topRightCorner(nf, ne);
+  Eigen::MatrixXd S = A.bottomRightCorner(ne, ne) - Afe.transpose() * Cf * Afe;
+  S.diagonal() -= prior;
+  const Eigen::MatrixXd M = C.bottomRightCorner(ne, ne) * S;
+  out.drop_mean = M.trace();
+  out.drop_sd = std::sqrt(std::max(0.0, 2.0 * (M * M).trace()));
   out.ok = true;
   return out;
 }

@@ -21,6 +21,12 @@ struct FreedStep {
   Eigen::MatrixXd fitted_cov;
   /// the step of the extra parameters and their (augmented, posterior) std
   Eigen::VectorXd extra_step, extra_std;
+  /// the decrease of the whitened cost |r|^2 (+ the extras' prior) by the step, and its mean and
+  /// std when r is white noise of unit deviation (the score statistic: g' (S + P)^-1 g' with S
+  /// the information on the extras left by the fitted ones, P the prior; mean tr M, variance
+  /// 2 tr M^2 for M = (S + P)^-1 S; without a prior chi-square with as many degrees of freedom as
+  /// extras)
+  double drop = 0, drop_mean = 0, drop_sd = 0;
 };
 FreedStep freed_step(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
                      const std::vector<int>& fitted, const std::vector<int>& extra,
