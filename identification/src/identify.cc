@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <functional>
 #include <iterator>
 #include <limits>
@@ -59,9 +58,6 @@ constexpr double kWindowExcess = 0.04;
 constexpr double kMisfitRatio = 3.0;
 /// model_check: a friction move beyond this many std (its own, or the move's) is a warning
 constexpr double kFreedMove = 3.0;
-/// model_check: a cause (inertias, angle offsets) is evidenced when freeing its parameters lowers
-/// the whitened cost by more than this many std above what the noise alone gives
-constexpr double kCauseZ = 8.0;
 /// a torque-to-angle delay beyond this many std is corrected
 constexpr double kDelaySignificance = 3.0;
 /// output error: below this many windows the block sandwich's std are themselves uncertain
@@ -494,24 +490,50 @@ int reversal_half_window(Fit* f, IdentifyResult* out) {
   return 0;
 }
 
-/// The rest rule at sample s (model/rest.h) with each joint's thresholds scaled by the gain of its
-/// relative rate on the cranks' rates (its row of J_w, at least 1): the thresholds are set for one
-/// crank's noise, and an inner joint's relative rate combines both. True (the sample is left out)
-/// when a joint is stuck, or at rest by its own threshold but not by the model's (whose rule would
-/// take the sign of that joint's rate, which is noise, for its friction).
-bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds& rest) {
-  Kinematics<double> k;
-  if (!solve_kinematics(p, s.th1, s.th2, &k).ok()) return false;
+/// Relative rates and accelerations of the joints (O, B, C, D, D0) at the angles (th1, th2) and
+/// the sample's rates and accelerations, and the kinematics there; false if the pose fails.
+bool joint_motion(const Params<double>& p, double th1, double th2, const Sample& s,
+                  std::array<double, kJoints>* w, std::array<double, kJoints>* wdot,
+                  Kinematics<double>* k) {
+  if (!solve_kinematics(p, th1, th2, k).ok()) return false;
   Bias<double> b;
-  compute_bias(p, k, s.w1, s.w2, &b);
+  compute_bias(p, *k, s.w1, s.w2, &b);
   const Vec2<double> thdd(s.a1, s.a2);
-  const auto w = relative_rates(s.w1, s.w2, b.w3, b.w4);
-  const auto wdot =
-      relative_accelerations(thdd, k.G3.dot(thdd) + b.h3, k.G4.dot(thdd) + b.h4);
+  *w = relative_rates(s.w1, s.w2, b.w3, b.w4);
+  *wdot = relative_accelerations(thdd, k->G3.dot(thdd) + b.h3, k->G4.dot(thdd) + b.h4);
+  return true;
+}
+
+/// The rest rule at sample s (model/rest.h) with each joint's thresholds set for its own noise:
+/// the rates' noise through its row of J_w (the thresholds are set for one crank's rate; an
+/// inner joint's relative rate combines both), in quadrature with the angle noise `angle_noise`
+/// through the kinematics (with exact logged rates and 1e-5 rad on the angles, a stuck inner
+/// joint of the paper mechanism reads ~1e-5 rad/s). True (the sample is left out) when a joint
+/// is stuck, or at rest by its own threshold but not by the model's (whose rule would take the
+/// sign of that joint's rate, which is noise, for its friction).
+bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds& rest,
+                 double angle_noise) {
+  Kinematics<double> k, kd;
+  std::array<double, kJoints> w, wdot, dw[2], dwdot[2], w2, wdot2;
+  if (!joint_motion(p, s.th1, s.th2, s, &w, &wdot, &k)) return false;
+  constexpr double h = 1e-7;  // [rad]: the angles' derivatives by forward differences
+  for (int c = 0; c < 2 && angle_noise > 0; ++c) {
+    if (!joint_motion(p, s.th1 + (c == 0 ? h : 0), s.th2 + (c == 1 ? h : 0), s, &w2, &wdot2, &kd))
+      return false;
+    for (int j = 0; j < kJoints; ++j) {
+      dw[c][j] = (w2[j] - w[j]) / h;
+      dwdot[c][j] = (wdot2[j] - wdot[j]) / h;
+    }
+  }
   for (int j = 0; j < kJoints; ++j) {
     const double g = std::max(1.0, joint_row(k, j).norm());
-    if (std::abs(w[j]) > g * rest.rate) continue;
-    if (std::abs(wdot[j]) <= g * rest.acceleration || std::abs(w[j]) > rest.rate) return true;
+    const double a = angle_noise > 0 ? kRestSigmas * angle_noise : 0.0;
+    const double rate =
+        std::hypot(g * rest.rate, a > 0 ? a * std::hypot(dw[0][j], dw[1][j]) : 0.0);
+    const double accel = std::hypot(g * rest.acceleration,
+                                    a > 0 ? a * std::hypot(dwdot[0][j], dwdot[1][j]) : 0.0);
+    if (std::abs(w[j]) > rate) continue;
+    if (std::abs(wdot[j]) <= accel || std::abs(w[j]) > rest.rate) return true;
   }
   return false;
 }
@@ -545,7 +567,7 @@ void select_samples(Fit* f, IdentifyResult* out) {
       continue;
     }
     const Sample s = make_sample(*f, *out, i);
-    if (held_sample(f->scene, s, rest)) {
+    if (held_sample(f->scene, s, rest, std::max(f->noise.angle[0], f->noise.angle[1]))) {
       ++out->samples_at_rest;
       continue;
     }
@@ -598,8 +620,8 @@ Status first_failure(const Fit& f, const std::vector<double>& x, const std::stri
 
 /// rms residual and expected noise level of each actuator over up to ~200 samples of the fit
 /// (log indices `probe`), with the rates of half-window `sg`, at the parameters f.x.
-void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions& sg, double rms[2],
-                   double floor[2]) {
+void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions& sg,
+                   const RestThresholds& rest, double rms[2], double floor[2]) {
   const TorqueLog& log = f.cond.log;
   Params<double> p = f.scene;
   f.layout.apply(f.x.data(), &p);
@@ -626,6 +648,8 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
     } else {
       s.w1 = log.omega1[i], s.w2 = log.omega2[i], s.a1 = e1, s.a2 = e2;
     }
+    // a held joint's friction is a static torque, not the law: at every window a misfit
+    if (held_sample(f.scene, s, rest, std::max(f.noise.angle[0], f.noise.angle[1]))) continue;
     Evaluation<double> ev;
     Eigen::Matrix<double, 2, 6> D;
     if (!inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr, f.eval, &ev)
@@ -688,7 +712,7 @@ void choose_window(Fit* f, IdentifyResult* out) {
     // needs too (measured: judged without them, the per-joint multisine fits chose 7-8 samples
     // instead of 4-6 and the coverage of their 95 % intervals fell from 0.97 to 0.90)
     double rms[2], floor[2];
-    window_levels(*f, probe, sg, rms, floor);
+    window_levels(*f, probe, sg, rest_rule(log, *out, *f->opt, sg), rms, floor);
     ratio[k] = std::max(rms[0] / floor[0], rms[1] / floor[1]);
     levels[k] = {rms[0], rms[1], floor[0], floor[1]};
     // smoothing bias only grows with the window: stop once it clearly dominates
@@ -1899,11 +1923,6 @@ std::string friction_moves(const Fit& f, const IdentifyResult& out, const detail
   return moved;
 }
 
-/// How far a freed step's cost decrease is above what noise alone gives it, in its std.
-double drop_z(const detail::FreedStep& fs) {
-  return fs.ok && fs.drop_sd > 0 ? (fs.drop - fs.drop_mean) / fs.drop_sd : 0.0;
-}
-
 /// The residual's Jacobian at the fit, whitened by the noise floors, with the links' 16 inertial
 /// parameters (columns `inertia`, prior information in `info`) and the two angle offsets
 /// (columns `offsets`) added to the fitted ones (`fitted`); false if an evaluation fails.
@@ -1922,7 +1941,9 @@ bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
   }
   J->resize(Ji.rows(), Ji.cols() + 2);
   *J << Ji, Jo;
-  for (int i = 0; i < l2.size(); ++i) idx[l2.is_inertial(i) && !f.layout.inertia ? 1 : 0].push_back(i);
+  for (int i = 0; i < l2.size(); ++i) {
+    idx[l2.is_inertial(i) && !f.layout.inertia ? 1 : 0].push_back(i);
+  }
   idx[2] = {l2.size(), l2.size() + 1};
   const detail::InertialPrior prior = detail::inertial_prior(f.scene, f.opt->inertia_prior);
   info->resize(kInertialParams);
@@ -1933,12 +1954,12 @@ bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
 /// Wrong masses or inertias, or an encoder's zero offset (review: masses +-5 % gave Coulomb
 /// +5 %, 10 std, without a word; theta1 + 0.005 rad gave Coulomb -8 %, 14 std, blamed on the
 /// masses): linearized refits at the fit with the 16 inertial parameters free (under the prior
-/// of --estimate inertia), the two angle offsets free, and both. A cause whose parameters lower
-/// the whitened cost by more than kCauseZ std above what noise gives them, also with the other
-/// cause free, and would move a friction coefficient beyond kFreedMove of its std, is a warning
-/// naming it. Without such evidence, the earlier rule: the inertias' move beyond kFreedMove times
-/// the larger of the estimate's std and the move's own. Costs one Jacobian with 16 more columns
-/// and four evaluations of the residual.
+/// of --estimate inertia), the two angle offsets free, and both. A cause the log evidences
+/// (detail::model_causes, misfit.h: its parameters lower the whitened cost by more than kCauseZ
+/// std above what noise gives them, also with the other cause free) that would move a friction
+/// coefficient beyond kFreedMove of its std is a warning naming it. Without such evidence, the
+/// earlier rule: the inertias' move beyond kFreedMove times the larger of the estimate's std and
+/// the move's own. Costs one Jacobian with 16 more columns and four evaluations of the residual.
 void model_check(const Fit& f, IdentifyResult* out) {
   if (!out->converged) return;
   Eigen::MatrixXd J;
@@ -1956,18 +1977,8 @@ void model_check(const Fit& f, IdentifyResult* out) {
     fi = detail::freed_step(J, r, idx[0], idx[1], info);
     fb = detail::freed_step(J, r, idx[0], both, info_both);
   }
-  // each cause beyond noise, and also beyond what the other cause's parameters explain
-  const auto beyond = [](const detail::FreedStep& one, double extra) {
-    return drop_z(one) > kCauseZ && one.drop_sd > 0 &&
-           (extra - one.drop_mean) / one.drop_sd > kCauseZ;
-  };
-  const bool offset = fo.ok && beyond(fo, inertia ? fb.drop - fi.drop : fo.drop);
-  const bool masses = inertia && fi.ok && fb.ok && beyond(fi, fb.drop - fo.drop);
-  if (std::getenv("FL16_DEBUG")) {
-    out->notes.push_back("DEBUG model_check: offsets drop " + fmt(fo.drop) + " mean " + fmt(fo.drop_mean) + " sd " + fmt(fo.drop_sd) + " z " + fmt(drop_z(fo)) + " step " + fmt(fo.extra_step(0)) + "," + fmt(fo.extra_step(1)) +
-      "; inertia drop " + fmt(fi.drop) + " mean " + fmt(fi.drop_mean) + " sd " + fmt(fi.drop_sd) + " z " + fmt(drop_z(fi)) + "; both " + fmt(fb.drop) + "; O|I z " + fmt((fb.drop - fi.drop - fo.drop_mean)/fo.drop_sd) + " I|O z " + fmt((fb.drop - fo.drop - fi.drop_mean)/fi.drop_sd) +
-      "; moves O [" + friction_moves(f, *out, fo, false) + "] I [" + friction_moves(f, *out, fi, false) + "]");
-  }
+  const detail::Causes causes = detail::model_causes(fi, fo, fb);
+  const bool offset = causes.offsets, masses = causes.inertia;
   std::string moved;
   if (offset && !(moved = friction_moves(f, *out, fo, false)).empty()) {
     out->warnings.push_back(

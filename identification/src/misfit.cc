@@ -49,4 +49,21 @@ FreedStep freed_step(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
   return out;
 }
 
+Causes model_causes(const FreedStep& inertia, const FreedStep& offsets, const FreedStep& both) {
+  Causes c;
+  const auto z = [](const FreedStep& fs, double drop) {
+    return fs.ok && fs.drop_sd > 0 ? (drop - fs.drop_mean) / fs.drop_sd : 0.0;
+  };
+  c.z_offsets = z(offsets, offsets.drop);
+  c.z_inertia = z(inertia, inertia.drop);
+  // with the inertias in the check, each cause must also show beyond the other's parameters
+  // (both freed failing: the two causes cannot be told apart, neither is named)
+  const bool pair = inertia.ok && both.ok;
+  c.z_offsets_given = !inertia.ok ? c.z_offsets : pair ? z(offsets, both.drop - inertia.drop) : 0;
+  c.z_inertia_given = pair && offsets.ok ? z(inertia, both.drop - offsets.drop) : 0.0;
+  c.offsets = c.z_offsets > kCauseZ && c.z_offsets_given > kCauseZ;
+  c.inertia = pair && c.z_inertia > kCauseZ && c.z_inertia_given > kCauseZ;
+  return c;
+}
+
 }  // namespace fivebar::identification::detail
