@@ -56,7 +56,7 @@ constexpr double kWindowExcess = 0.04;
 /// a friction coefficient at its bound with the residual this many times its noise floor is a fit
 /// driven by samples the law cannot explain (bound_and_misfit_warning)
 constexpr double kMisfitRatio = 3.0;
-/// inertia_check: a friction move beyond this many std (its own, or the move's) is a warning
+/// model_check: a friction move beyond this many std (its own, or the move's) is a warning
 constexpr double kFreedMove = 3.0;
 /// a torque-to-angle delay beyond this many std is corrected
 constexpr double kDelaySignificance = 3.0;
@@ -124,10 +124,15 @@ double larger_noise(const std::vector<double>& a, const std::vector<double>& b) 
 }
 
 /// Thresholds of the rest rule for this log (IdentifyOptions::rest_rate_threshold).
+/// The Savitzky-Golay noise gains are those of the window in use, `sg` (the data-driven one once
+/// chosen: at 3 samples each side the rate noise is 6 times that at the default 10, and stuck
+/// joints escaped the rule). Logged rates: never below the model's thresholds for computed rates
+/// (RestThresholds{}): noise-free rates from a simulation keep a stuck joint's relative rate only
+/// to its integration tolerance (synth-log: ~1e-10 rad/s, where the rounding reads 5e-13).
 RestThresholds rest_rule(const TorqueLog& log, const IdentifyResult& out,
-                         const IdentifyOptions& opt) {
+                         const IdentifyOptions& opt, const SgOptions& sg) {
   double g1 = 0, g2 = 0;
-  if (out.accels_estimated) sg_noise_gains(log.t, opt.sg, &g1, &g2);
+  if (out.accels_estimated) sg_noise_gains(log.t, sg, &g1, &g2);
   double rate_noise = 0, accel_noise = 0;
   if (out.rates_estimated) {
     const double s = larger_noise(log.theta1, log.theta2);
@@ -144,6 +149,11 @@ RestThresholds rest_rule(const TorqueLog& log, const IdentifyResult& out,
                       : std::max(larger_noise(out.alpha1, out.alpha2), rounding / (h * h));
   }
   RestThresholds r = rest_thresholds(rate_noise, accel_noise);
+  if (!out.rates_estimated) {
+    const RestThresholds computed;
+    r.rate = std::max(r.rate, computed.rate);
+    r.acceleration = std::max(r.acceleration, computed.acceleration);
+  }
   if (opt.rest_rate_threshold >= 0) r.rate = opt.rest_rate_threshold;
   if (opt.rest_acceleration_threshold >= 0) r.acceleration = opt.rest_acceleration_threshold;
   return r;
@@ -484,6 +494,54 @@ int reversal_half_window(Fit* f, IdentifyResult* out) {
   return 0;
 }
 
+/// Relative rates and accelerations of the joints (O, B, C, D, D0) at the angles (th1, th2) and
+/// the sample's rates and accelerations, and the kinematics there; false if the pose fails.
+bool joint_motion(const Params<double>& p, double th1, double th2, const Sample& s,
+                  std::array<double, kJoints>* w, std::array<double, kJoints>* wdot,
+                  Kinematics<double>* k) {
+  if (!solve_kinematics(p, th1, th2, k).ok()) return false;
+  Bias<double> b;
+  compute_bias(p, *k, s.w1, s.w2, &b);
+  const Vec2<double> thdd(s.a1, s.a2);
+  *w = relative_rates(s.w1, s.w2, b.w3, b.w4);
+  *wdot = relative_accelerations(thdd, k->G3.dot(thdd) + b.h3, k->G4.dot(thdd) + b.h4);
+  return true;
+}
+
+/// The rest rule at sample s (model/rest.h) with each joint's thresholds set for its own noise:
+/// the rates' noise through its row of J_w (the thresholds are set for one crank's rate; an
+/// inner joint's relative rate combines both), in quadrature with the angle noise `angle_noise`
+/// through the kinematics (with exact logged rates and 1e-5 rad on the angles, a stuck inner
+/// joint of the paper mechanism reads ~1e-5 rad/s). True (the sample is left out) when a joint
+/// is stuck, or at rest by its own threshold but not by the model's (whose rule would take the
+/// sign of that joint's rate, which is noise, for its friction).
+bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds& rest,
+                 double angle_noise) {
+  Kinematics<double> k, kd;
+  std::array<double, kJoints> w, wdot, dw[2], dwdot[2], w2, wdot2;
+  if (!joint_motion(p, s.th1, s.th2, s, &w, &wdot, &k)) return false;
+  constexpr double h = 1e-7;  // [rad]: the angles' derivatives by forward differences
+  for (int c = 0; c < 2 && angle_noise > 0; ++c) {
+    if (!joint_motion(p, s.th1 + (c == 0 ? h : 0), s.th2 + (c == 1 ? h : 0), s, &w2, &wdot2, &kd))
+      return false;
+    for (int j = 0; j < kJoints; ++j) {
+      dw[c][j] = (w2[j] - w[j]) / h;
+      dwdot[c][j] = (wdot2[j] - wdot[j]) / h;
+    }
+  }
+  for (int j = 0; j < kJoints; ++j) {
+    const double g = std::max(1.0, joint_row(k, j).norm());
+    const double a = angle_noise > 0 ? kRestSigmas * angle_noise : 0.0;
+    const double rate =
+        std::hypot(g * rest.rate, a > 0 ? a * std::hypot(dw[0][j], dw[1][j]) : 0.0);
+    const double accel = std::hypot(g * rest.acceleration,
+                                    a > 0 ? a * std::hypot(dwdot[0][j], dwdot[1][j]) : 0.0);
+    if (std::abs(w[j]) > rate) continue;
+    if (std::abs(wdot[j]) <= accel || std::abs(w[j]) > rest.rate) return true;
+  }
+  return false;
+}
+
 /// Samples that enter the fit: a centred rate window, not a glitch, above --min-rate.
 void select_samples(Fit* f, IdentifyResult* out) {
   const TorqueLog& log = f->cond.log;
@@ -493,7 +551,7 @@ void select_samples(Fit* f, IdentifyResult* out) {
   f->index.clear();
   // the rest rule (model/rest.h): samples with a stuck joint are left out (their friction is a
   // holding torque, not the law); a joint at rest that accelerates slips that way
-  const RestThresholds rest = rest_rule(log, *out, *f->opt);
+  const RestThresholds rest = rest_rule(log, *out, *f->opt, f->sg);
   out->rest_rate_threshold = rest.rate;
   out->rest_acceleration_threshold = rest.acceleration;
   f->eval.rest_rate = rest.rate;
@@ -513,9 +571,7 @@ void select_samples(Fit* f, IdentifyResult* out) {
       continue;
     }
     const Sample s = make_sample(*f, *out, i);
-    std::array<bool, kJoints> stuck{};
-    if (stuck_joints(f->scene, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, rest, &stuck).ok() &&
-        std::find(stuck.begin(), stuck.end(), true) != stuck.end()) {
+    if (held_sample(f->scene, s, rest, std::max(f->noise.angle[0], f->noise.angle[1]))) {
       ++out->samples_at_rest;
       continue;
     }
@@ -569,8 +625,8 @@ Status first_failure(const Fit& f, const std::vector<double>& x, const std::stri
 
 /// rms residual and expected noise level of each actuator over up to ~200 samples of the fit
 /// (log indices `probe`), with the rates of half-window `sg`, at the parameters f.x.
-void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions& sg, double rms[2],
-                   double floor[2]) {
+void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions& sg,
+                   const RestThresholds& rest, double rms[2], double floor[2]) {
   const TorqueLog& log = f.cond.log;
   Params<double> p = f.scene;
   f.layout.apply(f.x.data(), &p);
@@ -597,6 +653,8 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
     } else {
       s.w1 = log.omega1[i], s.w2 = log.omega2[i], s.a1 = e1, s.a2 = e2;
     }
+    // a held joint's friction is a static torque, not the law: at every window a misfit
+    if (held_sample(f.scene, s, rest, std::max(f.noise.angle[0], f.noise.angle[1]))) continue;
     Evaluation<double> ev;
     Eigen::Matrix<double, 2, 6> D;
     if (!inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr, f.eval, &ev)
@@ -659,7 +717,7 @@ void choose_window(Fit* f, IdentifyResult* out) {
     // needs too (measured: judged without them, the per-joint multisine fits chose 7-8 samples
     // instead of 4-6 and the coverage of their 95 % intervals fell from 0.97 to 0.90)
     double rms[2], floor[2];
-    window_levels(*f, probe, sg, rms, floor);
+    window_levels(*f, probe, sg, rest_rule(log, *out, *f->opt, sg), rms, floor);
     ratio[k] = std::max(rms[0] / floor[0], rms[1] / floor[1]);
     levels[k] = {rms[0], rms[1], floor[0], floor[1]};
     // smoothing bias only grows with the window: stop once it clearly dominates
@@ -1843,51 +1901,133 @@ std::vector<double> with_layout(const Fit& f, const ParameterLayout& layout2,
   return friction;
 }
 
-/// Wrong masses or inertias (review: masses 4-5 % off gave Coulomb +10 %, 6 std, without a
-/// word): one linearized refit with the 16 inertial parameters free under the prior of
-/// --estimate inertia. A friction coefficient that would move by more than kFreedMove times the
-/// larger of its std and the std of the move (what the noise alone gives it) is a warning. Costs
-/// one evaluation of the residual's Jacobian with 16 more columns.
-void inertia_check(const Fit& f, IdentifyResult* out) {
-  const int nf = f.layout.friction_size();
-  if (f.layout.inertia || !out->converged) return;
-  ParameterLayout l2 = f.layout;
-  l2.inertia = true;
-  Eigen::MatrixXd J;
-  Eigen::VectorXd r;
-  std::vector<double> x2 = with_layout(f, l2, std::vector<double>(f.x.begin(), f.x.begin() + nf));
-  ceres::Problem problem;
-  if (!check_problem(f, l2, &x2, &problem) ||
-      !whitened_jacobian(&problem, l2.size(), out->residual_noise_floor, &J, &r)) {
-    return;
+/// Columns of the residual's Jacobian on offsets d of the logged angles (theta1, theta2 read d
+/// more than the scene's angles: the model is evaluated at theta - d), by central differences at
+/// the fit, rows whitened by the floors `fl`; false if an evaluation fails.
+bool offset_columns(const Fit& f, const double fl[2], Eigen::MatrixXd* Jo) {
+  constexpr double h = 1e-6;  // [rad]
+  const int m = 2 * static_cast<int>(f.samples.size());
+  Jo->setZero(m, 2);
+  for (int c = 0; c < 2; ++c) {
+    for (double sgn : {1.0, -1.0}) {
+      std::vector<Sample> shifted = f.samples;
+      for (Sample& s : shifted) (c == 0 ? s.th1 : s.th2) -= sgn * h;
+      std::vector<double> x = f.x, r;
+      ceres::Problem problem;
+      const bool sized = with_size(f.layout.size(), [&](auto n) {
+        add_inverse_dynamics_terms<decltype(n)::value>(f.scene, f.layout, shifted, f.eval,
+                                                       Loss::kNone, 1, x.data(), &problem);
+      });
+      if (!sized || !raw_residuals(&problem, &r) || static_cast<int>(r.size()) != m) return false;
+      for (int row = 0; row < m; ++row) (*Jo)(row, c) += sgn * r[row] / (2 * h * fl[row % 2]);
+    }
   }
-  const detail::InertialPrior prior = detail::inertial_prior(f.scene, f.opt->inertia_prior);
-  std::vector<int> fitted, extra;
-  Eigen::VectorXd info(kInertialParams);
-  for (int i = 0; i < l2.size(); ++i) (l2.is_inertial(i) ? extra : fitted).push_back(i);
-  for (int k = 0; k < kInertialParams; ++k) info(k) = 1.0 / std::pow(prior.sigma[k], 2);
-  const detail::FreedStep fs = detail::freed_step(J, r, fitted, extra, info);
-  if (!fs.ok) return;
+  return Jo->allFinite();
+}
+
+/// The friction coefficients a freed step moves beyond kFreedMove std, as "name from a to b
+/// (k std)": the std of the estimate, or with `own` the larger of it and the move's own std (the
+/// test of Hausman); empty if none moves so, or one is at its bound (which has its own warning).
+std::string friction_moves(const Fit& f, const IdentifyResult& out, const detail::FreedStep& fs,
+                           bool own) {
+  const int nf = f.layout.friction_size();
   const Eigen::MatrixXd T = to_public(f.layout).topLeftCorner(nf, nf);
   const Eigen::VectorXd move = T * fs.fitted_step.head(nf);
   const Eigen::MatrixXd cov = T * fs.fitted_cov.topLeftCorner(nf, nf) * T.transpose();
   std::string moved;
   for (int i = 0; i < nf; ++i) {
-    const ParameterEstimate& e = out->parameters[i];
-    if (e.at_bound) return;  // a fit at a bound has its own warning
-    const double sd = std::max(std::sqrt(std::max(0.0, cov(i, i))), e.std);
+    const ParameterEstimate& e = out.parameters[i];
+    if (e.at_bound) return "";
+    const double sd = own ? std::max(std::sqrt(std::max(0.0, cov(i, i))), e.std) : e.std;
     if (!(std::abs(move(i)) > kFreedMove * sd)) continue;
     moved += (moved.empty() ? "" : ", ") + e.name + " from " + format_significant(e.value) +
              " to " + format_significant(e.value + move(i)) + " (" +
              format_significant(std::abs(move(i)) / sd, 2) + " std)";
   }
-  if (moved.empty()) return;
-  out->warnings.push_back(
-      "with the links' inertial parameters free (one linearized refit, prior std " +
-      format_significant(f.opt->inertia_prior) +
-      " of the scene's values) the friction would move: " + moved +
-      ". The scene's masses or inertias may not match the mechanism; try --estimate "
-      "friction,inertia");
+  return moved;
+}
+
+/// The residual's Jacobian at the fit, whitened by the noise floors, with the links' 16 inertial
+/// parameters (columns `inertia`, prior information in `info`) and the two angle offsets
+/// (columns `offsets`) added to the fitted ones (`fitted`); false if an evaluation fails.
+bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J, Eigen::VectorXd* r,
+                    std::vector<int> idx[3], Eigen::VectorXd* info) {
+  const int nf = f.layout.friction_size();
+  ParameterLayout l2 = f.layout;
+  l2.inertia = true;
+  std::vector<double> x2 = with_layout(f, l2, std::vector<double>(f.x.begin(), f.x.begin() + nf));
+  ceres::Problem problem;
+  Eigen::MatrixXd Ji, Jo;
+  if (!check_problem(f, l2, &x2, &problem) ||
+      !whitened_jacobian(&problem, l2.size(), out.residual_noise_floor, &Ji, r) ||
+      !offset_columns(f, out.residual_noise_floor, &Jo) || Jo.rows() != Ji.rows()) {
+    return false;
+  }
+  J->resize(Ji.rows(), Ji.cols() + 2);
+  *J << Ji, Jo;
+  for (int i = 0; i < l2.size(); ++i) {
+    idx[l2.is_inertial(i) && !f.layout.inertia ? 1 : 0].push_back(i);
+  }
+  idx[2] = {l2.size(), l2.size() + 1};
+  const detail::InertialPrior prior = detail::inertial_prior(f.scene, f.opt->inertia_prior);
+  info->resize(kInertialParams);
+  for (int k = 0; k < kInertialParams; ++k) (*info)(k) = 1.0 / std::pow(prior.sigma[k], 2);
+  return true;
+}
+
+/// Wrong masses or inertias, or an encoder's zero offset (review: masses +-5 % gave Coulomb
+/// +5 %, 10 std, without a word; theta1 + 0.005 rad gave Coulomb -8 %, 14 std, blamed on the
+/// masses): linearized refits at the fit with the 16 inertial parameters free (under the prior
+/// of --estimate inertia), the two angle offsets free, and both. A cause the log evidences
+/// (detail::model_causes, misfit.h: its parameters lower the whitened cost by more than kCauseZ
+/// std above what noise gives them, also with the other cause free) that would move a friction
+/// coefficient beyond kFreedMove of its std is a warning naming it. Without such evidence, the
+/// earlier rule: the inertias' move beyond kFreedMove times the larger of the estimate's std and
+/// the move's own. Costs one Jacobian with 16 more columns and four evaluations of the residual.
+void model_check(const Fit& f, IdentifyResult* out) {
+  if (!out->converged) return;
+  Eigen::MatrixXd J;
+  Eigen::VectorXd r, info;
+  std::vector<int> idx[3];  // fitted, inertial, offsets
+  if (!check_jacobian(f, *out, &J, &r, idx, &info)) return;
+  const bool inertia = !idx[1].empty();
+  std::vector<int> both = idx[1];
+  both.insert(both.end(), idx[2].begin(), idx[2].end());
+  Eigen::VectorXd info_both = Eigen::VectorXd::Zero(both.size());
+  if (inertia) info_both.head(kInertialParams) = info;
+  const detail::FreedStep fo = detail::freed_step(J, r, idx[0], idx[2], Eigen::Vector2d::Zero());
+  detail::FreedStep fi, fb;
+  if (inertia) {
+    fi = detail::freed_step(J, r, idx[0], idx[1], info);
+    fb = detail::freed_step(J, r, idx[0], both, info_both);
+  }
+  const detail::Causes causes = detail::model_causes(fi, fo, fb);
+  const bool offset = causes.offsets, masses = causes.inertia;
+  std::string moved;
+  if (offset && !(moved = friction_moves(f, *out, fo, false)).empty()) {
+    out->warnings.push_back(
+        "with offsets of the logged angles free (one linearized refit) the residual falls by " +
+        format_significant(fo.drop - fo.drop_mean, 3) + " (noise alone: " +
+        format_significant(fo.drop_mean, 2) + " +- " + format_significant(fo.drop_sd, 2) +
+        ") and the friction would move: " + moved + ". theta1, theta2 " + "read " +
+        format_significant(fo.extra_step(0)) + ", " + format_significant(fo.extra_step(1)) +
+        " rad (+- " + format_significant(fo.extra_std(0), 2) + ", " +
+        format_significant(fo.extra_std(1), 2) + ") more than the scene's " +
+        "angles: an encoder's zero may be off; subtract the offsets from the logged angles");
+  }
+  const bool old_rule = !offset && !masses && inertia && fi.ok;
+  if ((masses || old_rule) && !(moved = friction_moves(f, *out, fi, old_rule)).empty()) {
+    out->warnings.push_back(
+        "with the links' inertial parameters free (one linearized refit, prior std " +
+        format_significant(f.opt->inertia_prior) + " of the scene's values) " +
+        (masses ? "the residual falls by " + format_significant(fi.drop - fi.drop_mean, 3) +
+                      " (noise alone: " + format_significant(fi.drop_mean, 2) + " +- " +
+                      format_significant(fi.drop_sd, 2) + ") and "
+                : std::string()) +
+        "the friction would move: " + moved +
+        ". The scene's masses or inertias may not match the mechanism; try --estimate "
+        "friction,inertia");
+  }
 }
 
 // ---- 95 % intervals ----
@@ -2114,7 +2254,7 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   analyse(f, x0_public, summary, &an, &out);
   if (opt.method == Method::kInverseDynamics) {
     bound_and_misfit_warning(f, an, &out);
-    inertia_check(f, &out);
+    model_check(f, &out);
   }
   intervals(f, &problem, an, &out);
   correct_smoothing_bias(&f, &out);

@@ -2,6 +2,8 @@
 #include "misfit.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
 
 namespace fivebar::identification::detail {
 namespace {
@@ -35,8 +37,33 @@ FreedStep freed_step(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
   out.fitted_cov = C.topLeftCorner(nf, nf) - Cf;
   out.extra_step = step.tail(ne);
   out.extra_std = C.bottomRightCorner(ne, ne).diagonal().cwiseMax(0.0).cwiseSqrt();
+  out.drop = -step.dot(Ja.transpose() * r);
+  // S = (A_ee - P) - A_ef A_ff^-1 A_fe; (S + P)^-1 is the extras' block of C
+  const Eigen::MatrixXd Afe = A.topRightCorner(nf, ne);
+  Eigen::MatrixXd S = A.bottomRightCorner(ne, ne) - Afe.transpose() * Cf * Afe;
+  S.diagonal() -= prior;
+  const Eigen::MatrixXd M = C.bottomRightCorner(ne, ne) * S;
+  out.drop_mean = M.trace();
+  out.drop_sd = std::sqrt(std::max(0.0, 2.0 * (M * M).trace()));
   out.ok = true;
   return out;
+}
+
+Causes model_causes(const FreedStep& inertia, const FreedStep& offsets, const FreedStep& both) {
+  Causes c;
+  const auto z = [](const FreedStep& fs, double drop) {
+    return fs.ok && fs.drop_sd > 0 ? (drop - fs.drop_mean) / fs.drop_sd : 0.0;
+  };
+  c.z_offsets = z(offsets, offsets.drop);
+  c.z_inertia = z(inertia, inertia.drop);
+  // with the inertias in the check, each cause must also show beyond the other's parameters
+  // (both freed failing: the two causes cannot be told apart, neither is named)
+  const bool pair = inertia.ok && both.ok;
+  c.z_offsets_given = !inertia.ok ? c.z_offsets : pair ? z(offsets, both.drop - inertia.drop) : 0;
+  c.z_inertia_given = pair && offsets.ok ? z(inertia, both.drop - offsets.drop) : 0.0;
+  c.offsets = c.z_offsets > kCauseZ && c.z_offsets_given > kCauseZ;
+  c.inertia = pair && c.z_inertia > kCauseZ && c.z_inertia_given > kCauseZ;
+  return c;
 }
 
 }  // namespace fivebar::identification::detail

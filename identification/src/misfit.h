@@ -21,7 +21,26 @@ struct FreedStep {
   Eigen::MatrixXd fitted_cov;
   /// the step of the extra parameters and their (augmented, posterior) std
   Eigen::VectorXd extra_step, extra_std;
+  /// the decrease of the whitened cost |r|^2 (+ the extras' prior) by the step, and its mean and
+  /// std when r is white noise of unit deviation (the score statistic: g' (S + P)^-1 g' with S
+  /// the information on the extras left by the fitted ones, P the prior; mean tr M, variance
+  /// 2 tr M^2 for M = (S + P)^-1 S; without a prior chi-square with as many degrees of freedom as
+  /// extras)
+  double drop = 0, drop_mean = 0, drop_sd = 0;
 };
+/// Which cause the log evidences, from three freed steps at one fit: the inertial parameters
+/// free (`inertia`), the two angle offsets free (`offsets`), both (`both`; `inertia` and `both`
+/// not ok when the inertias are fitted already). A cause is evidenced when freeing its
+/// parameters lowers the cost by more than kCauseZ std above what noise alone gives (drop_mean,
+/// drop_sd), and also beyond what the other cause's parameters lower it by.
+inline constexpr double kCauseZ = 8.0;
+struct Causes {
+  bool offsets = false, inertia = false;
+  /// (drop - mean) / sd alone and given the other cause
+  double z_offsets = 0, z_inertia = 0, z_offsets_given = 0, z_inertia_given = 0;
+};
+Causes model_causes(const FreedStep& inertia, const FreedStep& offsets, const FreedStep& both);
+
 FreedStep freed_step(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
                      const std::vector<int>& fitted, const std::vector<int>& extra,
                      const Eigen::VectorXd& prior);
