@@ -585,6 +585,19 @@ TEST(NoiseFloor, QuietOnCleanAndNoiseFreeLogsOfTheRightLaw) {
   }
 }
 
+/// A Stribeck fit (on the paper scene) of a log synthesized from `truth` with `so`.
+IdentifyResult stribeck_fit(const Params<double>& truth, const SynthOptions& so) {
+  const SynthResult s = synthesize_log(truth, paper_loads, kPaperInitial, so);
+  if (!s.status.ok()) {
+    IdentifyResult failed;
+    failed.status = s.status;
+    return failed;
+  }
+  IdentifyOptions opt;
+  opt.layout.law = FrictionLaw::kStribeck;
+  return identify(paper_params(), paper_loads, s.log, opt);
+}
+
 TEST(Stribeck, StaticNeverBelowKineticAndNoZeroStd) {
   // angles only at 500 Hz: the fit that used to return static 0.015 < kinetic 0.12
   const Params<double> truth = testing::stribeck_truth();
@@ -595,11 +608,7 @@ TEST(Stribeck, StaticNeverBelowKineticAndNoZeroStd) {
   so.angle_noise = 1e-5;
   so.multisine = true;
   so.seed = 4;
-  SynthResult s = synthesize_log(truth, paper_loads, kPaperInitial, so);
-  ASSERT_TRUE(s.status.ok());
-  IdentifyOptions opt;
-  opt.layout.law = FrictionLaw::kStribeck;
-  const IdentifyResult res = identify(paper_params(), paper_loads, s.log, opt);
+  const IdentifyResult res = stribeck_fit(truth, so);
   ASSERT_TRUE(res.status.ok()) << res.status.message;
   EXPECT_GE(res.parameters[2].value, res.parameters[0].value);
   for (const ParameterEstimate& p : res.parameters) {
@@ -616,11 +625,7 @@ TEST(Stribeck, StaticNeverBelowKineticAndNoZeroStd) {
 TEST(Stribeck, AnUndeterminedStaticCoefficientGetsNoBiasCorrection) {
   SynthOptions so = testing::log_options(6.0, 0.02, 1e-5, 3);
   so.rate_hz = 500;
-  SynthResult s = synthesize_log(paper_params(), paper_loads, kPaperInitial, so);
-  ASSERT_TRUE(s.status.ok());
-  IdentifyOptions opt;
-  opt.layout.law = FrictionLaw::kStribeck;
-  const IdentifyResult res = identify(paper_params(), paper_loads, s.log, opt);
+  const IdentifyResult res = stribeck_fit(paper_params(), so);
   ASSERT_TRUE(res.status.ok()) << res.status.message;
   EXPECT_GE(res.parameters[2].value, res.parameters[0].value);
   EXPECT_LT(res.parameters[2].value, 10.0);
