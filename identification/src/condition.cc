@@ -893,7 +893,7 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
     }
     out.glitches.insert(out.glitches.end(), g.begin(), g.end());
   }
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kActuators; ++j) {
     if (opt.torque_noise[j] > 0) out.torque_noise[j] = opt.torque_noise[j];
   }
   out.torque_variance_factor = opt.torque_variance_factor;

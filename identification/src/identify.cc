@@ -366,7 +366,7 @@ void prepare_log(const TorqueLog& log, Fit* f, IdentifyResult* out) {
   out->notes = f->cond.notes;
   out->conditioned_log = f->cond.log;
   out->glitches = f->cond.glitches;
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kDof; ++j) {
     out->unwrapped[j] = f->cond.unwrapped[j];
     out->angle_noise[j] = f->noise.angle[j] = f->cond.angle_noise[j];
     out->torque_noise[j] = f->noise.torque[j] = f->cond.torque_noise[j];
@@ -668,7 +668,7 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
     v += detail::propagated_variance(detail::sensitivity(log.t, i, f.source, sg, f.noise, D));
     ++count;
   }
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kActuators; ++j) {
     const double c = std::max(1, count);
     rms[j] = std::sqrt(r2(j) / c);
     floor[j] = std::max(std::sqrt(f.noise.torque[j] * f.noise.torque[j] + v(j) / c),
@@ -847,7 +847,8 @@ bool raw_residuals(ceres::Problem* problem, std::vector<double>* r,
 void rms_pair(const std::vector<double>& r, double* out2) {
   double s[2] = {0, 0};
   for (size_t i = 0; i < r.size(); ++i) s[i % 2] += r[i] * r[i];
-  for (int j = 0; j < 2; ++j) out2[j] = std::sqrt(s[j] / std::max<size_t>(1, r.size() / 2));
+  for (int j = 0; j < kActuators; ++j)
+    out2[j] = std::sqrt(s[j] / std::max<size_t>(1, r.size() / 2));
 }
 
 ceres::Solver::Options solver_options(const IdentifyOptions& opt) {
@@ -943,7 +944,7 @@ void noise_floor(const Fit& f, const std::vector<detail::Sensitivity>& sens, dou
   Eigen::Vector2d prop = Eigen::Vector2d::Zero();
   for (const detail::Sensitivity& s : sens) prop += detail::propagated_variance(s);
   prop /= std::max<size_t>(1, sens.size());
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kActuators; ++j) {
     const std::vector<double>& tau = j == 0 ? log.tau1 : log.tau2;
     double s2 = 0;
     for (int i : f.index) s2 += tau[i] * tau[i] / f.index.size();
@@ -986,7 +987,7 @@ void residual_levels(const Fit& f, const std::vector<double>& r,
   rms_pair(r, out->rms_torque_residual);
   double noises[2], floors[2];
   noise_floor(f, sens, out->residual_noise_floor, noises, floors);
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kActuators; ++j) {
     const double noise = noises[j], floor = floors[j];
     const double ratio = out->rms_torque_residual[j] / out->residual_noise_floor[j];
     if (ratio > kStructureRatio) {
@@ -1294,7 +1295,7 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& H
   }
   Eigen::MatrixXd S = detail::score_covariance(Jf, sens, f.noise, f.cond.log.size()) + s2 * Hpf;
   // residual beyond the modelled noise (model mismatch, unmodelled noise) counted as white
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kActuators; ++j) {
     const double excess = std::max(
         0.0, std::pow(out->rms_torque_residual[j], 2) - std::pow(out->residual_noise_floor[j], 2));
     for (int row = j; row < Jf.rows(); row += 2) {
@@ -1461,8 +1462,9 @@ void output_error_levels(const Fit& f, IdentifyResult* out) {
     s[1] += std::pow(log.tau2[i] - out->predicted_tau2[i], 2);
     ++c;
   }
-  for (int j = 0; j < 2; ++j) out->rms_torque_residual[j] = std::sqrt(s[j] / std::max(1, c));
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kActuators; ++j)
+    out->rms_torque_residual[j] = std::sqrt(s[j] / std::max(1, c));
+  for (int j = 0; j < kActuators; ++j) {
     const std::vector<double>& tau = j == 0 ? log.tau1 : log.tau2;
     const std::vector<double>& pred = j == 0 ? out->predicted_tau1 : out->predicted_tau2;
     std::vector<double> d;
@@ -1503,7 +1505,7 @@ void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<do
   const Eigen::VectorXd step =
       -Hinv * (Ja.transpose() * Eigen::Map<const Eigen::VectorXd>(r.data(), m));
   Eigen::MatrixXd S = detail::score_covariance(Ja, sens, f.noise, log.size());
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kActuators; ++j) {
     const double excess = std::max(
         0.0, std::pow(out->rms_torque_residual[j], 2) - std::pow(out->residual_noise_floor[j], 2));
     for (int row = j; row < m; row += 2) S += excess * Ja.row(row).transpose() * Ja.row(row);
@@ -1579,7 +1581,7 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
   // interpolation's sum of squared weights (a product over a chain of refits, approximately)
   double factor = 1;
   const TorqueLog shifted = shift_torques(conditioned, first.delay_s, &factor);
-  for (int j = 0; j < 2; ++j) again.condition.torque_noise[j] = first.torque_noise[j];
+  for (int j = 0; j < kActuators; ++j) again.condition.torque_noise[j] = first.torque_noise[j];
   again.condition.torque_variance_factor = opt.condition.torque_variance_factor * factor;
   IdentifyResult res = identify(scene_in, loads, shifted, again);
   // the refit estimated the delay left after the shift (and corrected it when significant): the
@@ -1607,7 +1609,7 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
   }
   if (total_beyond > 0) res.notes.push_back(std::to_string(total_beyond) + kBeyond);
   res.glitches.insert(res.glitches.begin(), first.glitches.begin(), first.glitches.end());
-  for (int j = 0; j < 2; ++j) res.unwrapped[j] += first.unwrapped[j];
+  for (int j = 0; j < kDof; ++j) res.unwrapped[j] += first.unwrapped[j];
   // the significance that decided the correction is the first estimate's (the refit's std is
   // that of the delay left after the shift)
   std::vector<std::string> w = {std::string("the torques ") + (res.delay_s < 0 ? "lead" : "lag") +
@@ -1729,7 +1731,7 @@ bool angles_give_better_rates(const Fit& f, IdentifyResult* out) {
   double g1 = 0, g2 = 0;
   sg_noise_gains(log.t, sg, &g1, &g2);
   double from_angles[2];
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kDof; ++j) {
     from_angles[j] = g1 * f.noise.angle[j];
     if (!(f.noise.rate[j] > kNoisierRates * from_angles[j])) return false;
   }
@@ -2335,7 +2337,7 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
   double s2[2] = {0, 0};
   int count = 0;
   run(0, n - 1, true, s2, &count);
-  for (int j = 0; j < 2; ++j) v.full_rms[j] = std::sqrt(s2[j] / std::max(1, count));
+  for (int j = 0; j < kActuators; ++j) v.full_rms[j] = std::sqrt(s2[j] / std::max(1, count));
   double w2[2] = {0, 0};
   int wc = 0;
   for (auto [i0, i1] : make_windows(log, 0, n - 1, window_s)) {
@@ -2345,7 +2347,7 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
     }
     run(i0, i1, false, w2, &wc);
   }
-  for (int j = 0; j < 2; ++j) v.window_rms[j] = std::sqrt(w2[j] / std::max(1, wc));
+  for (int j = 0; j < kActuators; ++j) v.window_rms[j] = std::sqrt(w2[j] / std::max(1, wc));
   return v;
 }
 

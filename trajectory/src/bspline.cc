@@ -6,6 +6,8 @@
 
 #include <Eigen/Dense>
 
+#include "fivebar/model/scalar.h"
+
 namespace fivebar::trajectory {
 
 ClampedBasis::ClampedBasis(int control_points, double duration)
@@ -102,7 +104,7 @@ std::vector<double> RestToRest::control_points(const double* x, int j) const {
 std::array<std::array<double, 2>, 3> RestToRest::state(const double* x, double t) const {
   const BasisAt b = basis_.at(t);
   std::array<std::array<double, 2>, 3> out{};
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kDof; ++j) {
     const std::vector<double> c = control_points(x, j);
     for (int k = 0; k < 3; ++k) {
       double s = 0.0;
@@ -129,7 +131,7 @@ std::vector<double> RestToRest::fit(
     const double t = duration() * (r + 0.5) / m;
     const BasisAt b = basis_.at(t);
     const std::array<double, 2> q = path(t);
-    for (int j = 0; j < 2; ++j) rhs(r, j) = q[j];
+    for (int j = 0; j < kDof; ++j) rhs(r, j) = q[j];
     for (int i = 0; i <= kDegree; ++i) {
       const int c = b.first + i;
       if (c < 3) {
@@ -143,7 +145,7 @@ std::vector<double> RestToRest::fit(
   }
   const Eigen::MatrixXd sol = A.colPivHouseholderQr().solve(rhs);
   std::vector<double> x(2 * nf);
-  for (int j = 0; j < 2; ++j)
+  for (int j = 0; j < kDof; ++j)
     for (int v = 0; v < nf; ++v) x[j * nf + v] = sol(v, j);
   return x;
 }

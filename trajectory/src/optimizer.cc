@@ -202,7 +202,7 @@ void box_of(const TrajectoryProblem& problem, std::vector<double>* lo, std::vect
   const int n = problem.num_variables(), nf = problem.motion().free_per_joint();
   lo->resize(n);
   hi->resize(n);
-  for (int j = 0; j < 2; ++j) {
+  for (int j = 0; j < kDof; ++j) {
     const double a = problem.motion().start()[j], b = problem.motion().goal()[j];
     for (int v = 0; v < nf; ++v) {
       (*lo)[j * nf + v] = std::min(a, b) - M_PI;
@@ -413,7 +413,7 @@ OptimizeResult optimize(const TrajectoryProblem& problem, const std::vector<doub
     const int nf = problem.motion().free_per_joint();
     for (int s = 1; s < options.starts; ++s) {
       std::vector<double> xs = x0;
-      for (int j = 0; j < 2; ++j) {
+      for (int j = 0; j < kDof; ++j) {
         const double scale = options.spread * (std::abs(problem.motion().goal()[j] -
                                                         problem.motion().start()[j]) + 0.1);
         for (int v = 0; v < nf; ++v) xs[j * nf + v] += scale * normal();
