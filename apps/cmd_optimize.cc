@@ -139,18 +139,24 @@ std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult
                      plot_script(r.task, r.torque_limit, gnuplot().terminal, baseline));
 }
 
-// one line per task on stdout, and the reason under each task that did not end ok; the number
-// of tasks that did
-int report(const std::vector<TaskResult>& results) {
+// one line per task on stdout; under it, the reason when the task did not end ok, and a note
+// when it did but its refinement ran out of levels before the energy settled; the number of
+// tasks that ended ok
+int report(const std::vector<TaskResult>& results, double refine_tol) {
   int ok = 0;
   for (const TaskResult& r : results) {
     std::printf("%-20s %-22s E %.6g J  baseline %.6g J  peak %.4g N m  miss %.3g m  %.3f s\n",
                 r.task.c_str(), r.status.c_str(), r.dissipated_energy,
                 r.baseline_dissipated_energy, r.peak_torque, r.miss_distance, r.wall_time_s);
-    if (r.status == "ok") {
-      ++ok;
-    } else {
+    if (r.status != "ok") {
       std::printf("  %s: %s\n", r.task.c_str(), r.message.c_str());
+      continue;
+    }
+    ++ok;
+    if (r.refinement_change >= refine_tol) {
+      std::printf("  %s: note: discretization not converged, the energy changed %.2g%% at the "
+                  "last refinement (%s); add a finer level with --refine-levels\n",
+                  r.task.c_str(), 100.0 * r.refinement_change, r.refinement.c_str());
     }
   }
   return ok;
@@ -197,7 +203,7 @@ int run(const Args& args) {
   write_text_file(out.file("summary.csv"), csv);
   // one line per task on stdout; exit non-zero when no task ended ok (outputs kept: they say why)
   int ok = 0;
-  finish_run(&out, [&] { ok = report(results); });
+  finish_run(&out, [&] { ok = report(results, options.refine.tol); });
   if (ok == 0 && !results.empty()) {
     const std::string why = "every task failed (" + std::to_string(results.size()) +
                             "; reasons on stdout and in summary.csv)";

@@ -96,6 +96,7 @@ TEST(Refinement, StopsWhenTheEnergyChangesLessThanTheTolerance) {
   ASSERT_EQ(r.status, "ok") << r.message;
   EXPECT_EQ(r.control_points, 14) << r.refinement;
   EXPECT_LT(r.refinement_change, options.refine.tol);
+  EXPECT_EQ(r.message.find("discretization not converged"), std::string::npos) << r.message;
   EXPECT_EQ(r.refinement.rfind("10:", 0), 0u) << r.refinement;
   // a tolerance no level meets: every level is solved, and the change says so
   options.refine.tol = 1e-6;
@@ -103,6 +104,7 @@ TEST(Refinement, StopsWhenTheEnergyChangesLessThanTheTolerance) {
   ASSERT_EQ(all.status, "ok") << all.message;
   EXPECT_EQ(all.control_points, 20) << all.refinement;
   EXPECT_GT(all.refinement_change, options.refine.tol);
+  EXPECT_NE(all.message.find("discretization not converged"), std::string::npos) << all.message;
   EXPECT_LT(all.dissipated_energy, r.dissipated_energy);
 }
 
