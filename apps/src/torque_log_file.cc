@@ -128,6 +128,24 @@ std::string derivative_mismatch(const TorqueLog& log, std::vector<double> theta,
   return "";
 }
 
+// Time stamps in milliseconds (or sample counts) read as seconds make a 1 kHz log a 1 Hz one,
+// whose motion is 1000 times slower: every estimate is then wrong, with warnings that do not
+// say why (issue 16 review). A five-bar's dynamics cannot be identified from samples 0.5 s
+// apart, so a median step that long is refused, naming the likely unit.
+constexpr double kLongestTimeStep = 0.5;  // [s]
+
+void check_log_time_unit(const TorqueLog& log) {
+  if (log.t.size() < 2) return;
+  std::vector<double> steps(log.t.size() - 1);
+  for (size_t i = 0; i + 1 < log.t.size(); ++i) steps[i] = log.t[i + 1] - log.t[i];
+  const double step = median_of(steps);
+  if (!(step >= kLongestTimeStep)) return;
+  throw LogError(log.path, "column t",
+                 "median time step " + format_significant(step, 3) +
+                     ": t must be in seconds, and a five-bar's log samples at tens of Hz or "
+                     "more; these stamps look like milliseconds, microseconds or sample counts");
+}
+
 // angles in degrees and rates in other units are common mistakes; say so instead of failing
 // later
 void check_log_units(const TorqueLog& log) {
@@ -198,6 +216,7 @@ TorqueLog parse_torque_log(const std::string& text, const std::string& path) {
     column->reserve(table.rows.size());
     for (const auto& row : table.rows) column->push_back(row[j]);
   }
+  check_log_time_unit(log);
   check_log_units(log);
   return log;
 }

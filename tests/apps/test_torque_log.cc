@@ -133,6 +133,8 @@ const BadLog kBadLogs[] = {
     {"time not increasing",
      std::string(kHeader) + "0,1,1,1,1\n0.001,1,1,1,1\n0.001,1,1,1,1\n",
      {"bad.csv: line 4, column t", "not strictly increasing"}},
+    {"time in milliseconds", std::string(kHeader) + "0,1,1,1,1\n1,1,1,1,1\n2,1,1,1,1\n",
+     {"bad.csv: column t", "median time step 1:", "look like milliseconds"}},
     {"missing column", "t,theta1,theta2,tau1\n0,1,1,1\n",
      {"bad.csv: header: missing column 'tau2'"}},
     {"unknown column", "t,theta1,theta2,tau1,tau2,current\n0,1,1,1,1,1\n",
