@@ -17,13 +17,15 @@ namespace {
 const char* const kFlags = "command line";
 
 /// The scene's friction as the start of a fit of `law`: the coefficients the scene's law
-/// identifies keep their values; of the others, one that defaults to another takes its value
-/// (static_coulomb: coulomb) and one that only the fitted law identifies its neutral start
+/// identifies or requires keep their values (a LuGre scene identifies none, and requires its
+/// coulomb); of the others, one that defaults to another takes its value (static_coulomb:
+/// coulomb) and one that only the fitted law identifies its neutral start
 /// (CoefficientInfo::start: the Stribeck velocity 0.2 rad/s).
 FrictionParams<double> start_from(FrictionParams<double> fp, FrictionLaw law) {
   const LawDescriptor& scene_law = law_descriptor(fp.law);
   for (const CoefficientInfo& c : kCoefficientInfo) {  // coulomb before static_coulomb
-    if (identifies(scene_law, c.id)) continue;
+    const LawCoefficient* use = law_coefficient(scene_law, c.id);
+    if (use && (use->identifiable || use->required)) continue;
     if (c.same_as != c.id) {
       coefficient(fp, c.id) = coefficient(fp, c.same_as);
     } else if (identifies(law_descriptor(law), c.id)) {
