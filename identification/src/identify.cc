@@ -514,11 +514,16 @@ bool joint_motion(const Params<double>& p, double th1, double th2, const Sample&
 /// through the kinematics (with exact logged rates and 1e-5 rad on the angles, a stuck inner
 /// joint of the paper mechanism reads ~1e-5 rad/s). True (the sample is left out) when a joint
 /// is stuck, or at rest by its own threshold but not by the model's (whose rule would take the
-/// sign of that joint's rate, which is noise, for its friction).
+/// sign of that joint's rate, which is noise, for its friction). The crank rates' noise also
+/// reaches an inner joint's relative acceleration, through the velocity products of the
+/// kinematics: its change when a crank's rate moves by the rate threshold joins that joint's
+/// acceleration threshold (review: with logged rates 0.001 rad/s noisy and exact logged
+/// accelerations, those products read ~1e-6 rad/s^2 on a mechanism at rest, above the 1e-7
+/// threshold; stuck inner joints took the sign of that noise, coulomb -25 to -56 std).
 bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds& rest,
                  double angle_noise) {
   Kinematics<double> k, kd;
-  std::array<double, kJoints> w, wdot, dw[2], dwdot[2], w2, wdot2;
+  std::array<double, kJoints> w, wdot, dw[2], dwdot[2], w2, wdot2, rate_term{};
   if (!joint_motion(p, s.th1, s.th2, s, &w, &wdot, &k)) return false;
   constexpr double h = 1e-7;  // [rad]: the angles' derivatives by forward differences
   for (int c = 0; c < 2 && angle_noise > 0; ++c) {
@@ -529,13 +534,20 @@ bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds&
       dwdot[c][j] = (wdot2[j] - wdot[j]) / h;
     }
   }
+  for (int c = 0; c < 2 && rest.rate > 0; ++c) {
+    Sample moved = s;
+    (c == 0 ? moved.w1 : moved.w2) += rest.rate;
+    if (!joint_motion(p, s.th1, s.th2, moved, &w2, &wdot2, &kd)) return false;
+    for (int j = 0; j < kJoints; ++j) rate_term[j] = std::hypot(rate_term[j], wdot2[j] - wdot[j]);
+  }
   for (int j = 0; j < kJoints; ++j) {
     const double g = std::max(1.0, joint_row(k, j).norm());
     const double a = angle_noise > 0 ? kRestSigmas * angle_noise : 0.0;
     const double rate =
         std::hypot(g * rest.rate, a > 0 ? a * std::hypot(dw[0][j], dw[1][j]) : 0.0);
-    const double accel = std::hypot(g * rest.acceleration,
-                                    a > 0 ? a * std::hypot(dwdot[0][j], dwdot[1][j]) : 0.0);
+    const double accel =
+        std::hypot(std::hypot(g * rest.acceleration, rate_term[j]),
+                   a > 0 ? a * std::hypot(dwdot[0][j], dwdot[1][j]) : 0.0);
     if (std::abs(w[j]) > rate) continue;
     if (std::abs(wdot[j]) <= accel || std::abs(w[j]) > rest.rate) return true;
   }
