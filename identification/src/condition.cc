@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -73,22 +74,48 @@ bool glitch_signature(const std::vector<double>& z, int i) {
   return true;
 }
 
-/// Residual sum of squares of samples i - 4 .. i + 4 of `x` about their least-squares fit by a
-/// cubic in t plus one more column, `column(k, u)` at sample k (u: its time from t_i in mean
-/// sample steps).
-template <class Column>
-double rss_with(const std::vector<double>& t, const std::vector<double>& x, int i,
-                Column column) {
-  Eigen::Matrix<double, 9, 5> V;
-  Eigen::Matrix<double, 9, 1> y;
-  const double h = (t[i + 4] - t[i - 4]) / 8;
-  for (int r = 0; r < 9; ++r) {
-    const int k = i - 4 + r;
-    const double u = (t[k] - t[i]) / h;
-    V.row(r) << 1, u, u * u, u * u * u, column(k, u);
-    y(r) = x[k] - x[i - 4];  // offset: keeps multi-turn angles exact
+/// One column beyond the cubic of a local fit: its value at sample k, u the sample's scaled time.
+using FitColumn = std::function<double(int k, double u)>;
+
+/// A local least-squares cubic (fit_cubic): its coefficients, residuals and frame.
+struct LocalCubic {
+  Eigen::VectorXd coef;      ///< of 1, u, u^2, u^3, then the extra column if any
+  Eigen::VectorXd residual;  ///< fit minus sample, one per fitted sample in order of index
+  double t0 = 0, step = 1, x0 = 0;
+  /// the cubic (extra column left out) at sample k of `t`, in the column's units
+  double at(const std::vector<double>& t, int k) const {
+    const double u = (t[k] - t0) / step;
+    return Eigen::RowVector4d(1, u, u * u, u * u * u).dot(coef.head<4>()) + x0;
   }
-  return (V * V.colPivHouseholderQr().solve(y) - y).squaredNorm();
+};
+
+/// The least-squares fit of samples lo..hi of `x`, less those in `out`, by a cubic in
+/// u = (t - t[centre]) / (mean sample step over lo..hi), plus `column` when given. Fitted to
+/// x - x[ref]: the offset keeps multi-turn angles exact.
+LocalCubic fit_cubic(const std::vector<double>& t, const std::vector<double>& x, int lo, int hi,
+                     const std::vector<int>& out, int centre, int ref,
+                     const FitColumn& column = {}) {
+  LocalCubic fit;
+  fit.t0 = t[centre];
+  fit.step = (t[hi] - t[lo]) / (hi - lo);
+  fit.x0 = x[ref];
+  const int cols = column ? 5 : 4;
+  std::vector<int> rows;
+  for (int k = lo; k <= hi; ++k) {
+    if (std::find(out.begin(), out.end(), k) == out.end()) rows.push_back(k);
+  }
+  Eigen::MatrixXd V(rows.size(), cols);
+  Eigen::VectorXd y(rows.size());
+  for (size_t r = 0; r < rows.size(); ++r) {
+    const int k = rows[r];
+    const double u = (t[k] - fit.t0) / fit.step;
+    V.row(r).head(4) << 1, u, u * u, u * u * u;
+    if (column) V(r, 4) = column(k, u);
+    y(r) = x[k] - fit.x0;
+  }
+  fit.coef = V.colPivHouseholderQr().solve(y);
+  fit.residual = V * fit.coef - y;
+  return fit;
 }
 
 /// Whether a kink at interior sample i (the slope changing there: a joint breaking away from
@@ -98,8 +125,12 @@ double rss_with(const std::vector<double>& t, const std::vector<double>& x, int 
 bool kink_explains(const std::vector<double>& t, const std::vector<double>& x, int i) {
   const int n = static_cast<int>(x.size());
   if (i < 4 || i + 4 >= n) return false;
-  const double glitch = rss_with(t, x, i, [i](int k, double) { return k == i ? 1.0 : 0.0; });
-  const double kink = rss_with(t, x, i, [](int, double u) { return std::max(0.0, u); });
+  // residual sum of squares of samples i - 4 .. i + 4 about a cubic plus `column`
+  auto rss = [&](const FitColumn& column) {
+    return fit_cubic(t, x, i - 4, i + 4, {}, i, i - 4, column).residual.squaredNorm();
+  };
+  const double glitch = rss([i](int k, double) { return k == i ? 1.0 : 0.0; });
+  const double kink = rss([](int, double u) { return std::max(0.0, u); });
   return !(glitch < 0.5 * kink);
 }
 
@@ -113,26 +144,17 @@ int end_culprit(const std::vector<double>& t, const std::vector<double>& x, int 
   const int n = static_cast<int>(x.size());
   const bool start = hit < n / 2;
   const int base = start ? 0 : n - 8;
-  const double scale = (t[base + 7] - t[base]) / 7;
   double best = std::numeric_limits<double>::infinity();
   int culprit = hit;
   *expected = x[hit];
   for (int c = 0; c < 4; ++c) {
     const int j = start ? c : n - 1 - c;
-    Eigen::MatrixXd V(7, 4);
-    Eigen::VectorXd y(7);
-    for (int r = 0, k = base; k < base + 8; ++k) {
-      if (k == j) continue;
-      const double u = (t[k] - t[j]) / scale;
-      V.row(r) << 1, u, u * u, u * u * u;
-      y(r++) = x[k] - x[j == base ? base + 1 : base];  // offset: keeps multi-turn angles exact
-    }
-    const Eigen::Vector4d c4 = V.colPivHouseholderQr().solve(y);
-    const double rms = (V * c4 - y).norm();
+    const LocalCubic fit = fit_cubic(t, x, base, base + 7, {j}, j, j == base ? base + 1 : base);
+    const double rms = fit.residual.norm();
     if (rms < best) {
       best = rms;
       culprit = j;
-      *expected = c4(0) + x[j == base ? base + 1 : base];  // the cubic at t_j (u = 0)
+      *expected = fit.coef(0) + fit.x0;  // the cubic at t_j (u = 0)
     }
   }
   return culprit;
@@ -155,26 +177,13 @@ bool fit_end(const std::vector<double>& t, const std::vector<double>& x, bool st
   const int n = static_cast<int>(x.size());
   const int base = start ? 0 : n - kEndWindow;
   const int ref = start ? base + kEndWindow - 1 : base;  // farthest from the end: never bad
-  const double scale = (t[base + kEndWindow - 1] - t[base]) / (kEndWindow - 1);
-  const int m = kEndWindow - static_cast<int>(bad.size());
-  Eigen::MatrixXd V(m, 4);
-  Eigen::VectorXd y(m);
-  auto row = [&](int k) {
-    const double u = (t[k] - t[ref]) / scale;
-    return Eigen::RowVector4d(1, u, u * u, u * u * u);
-  };
-  for (int r = 0, k = base; k < base + kEndWindow; ++k) {
-    if (std::find(bad.begin(), bad.end(), k) != bad.end()) continue;
-    V.row(r) = row(k);
-    y(r++) = x[k] - x[ref];  // offset: keeps multi-turn angles exact
-  }
-  const Eigen::Vector4d c = V.colPivHouseholderQr().solve(y);
-  const Eigen::VectorXd r = V * c - y;
+  const LocalCubic cubic = fit_cubic(t, x, base, base + kEndWindow - 1, bad, ref, ref);
+  const Eigen::VectorXd& r = cubic.residual;
   if (!r.allFinite() || !(r.cwiseAbs().maxCoeff() <= tolerance)) return false;
   fit->bad = bad;
   fit->expected.clear();
   for (int k : bad) {
-    const double e = row(k).dot(c) + x[ref];
+    const double e = cubic.at(t, k);
     if (!(std::abs(x[k] - e) > threshold)) return false;
     fit->expected.push_back(e);
   }
@@ -606,30 +615,17 @@ constexpr int kRunSide = 6;
 /// `expected`, the cubic at the run's samples.
 double run_fit(const std::vector<double>& t, const std::vector<double>& x, int a, int b,
                double* offset, std::vector<double>* expected) {
-  const int cols = offset ? 5 : 4;
-  Eigen::MatrixXd V(2 * kRunSide, cols);
-  Eigen::VectorXd y(2 * kRunSide);
-  const double scale = (t[b + kRunSide] - t[a - kRunSide]) / (b - a + 2 * kRunSide);
-  auto row = [&](int k, double side) {
-    const double u = (t[k] - t[a]) / scale;
-    Eigen::RowVectorXd r(cols);
-    r.head(4) << 1, u, u * u, u * u * u;
-    if (offset) r(4) = side;
-    return r;
-  };
-  for (int q = 0; q < kRunSide; ++q) {
-    V.row(q) = row(a - kRunSide + q, 0);
-    y(q) = x[a - kRunSide + q] - x[a - 1];  // offset: keeps multi-turn angles exact
-    V.row(kRunSide + q) = row(b + 1 + q, 1);
-    y(kRunSide + q) = x[b + 1 + q] - x[a - 1];
-  }
-  const Eigen::VectorXd c = V.colPivHouseholderQr().solve(y);
-  if (offset) *offset = c(4);
+  std::vector<int> run;
+  for (int k = a; k <= b; ++k) run.push_back(k);
+  const FitColumn step = [b](int k, double) { return k > b ? 1.0 : 0.0; };
+  const LocalCubic fit =
+      fit_cubic(t, x, a - kRunSide, b + kRunSide, run, a, a - 1, offset ? step : FitColumn());
+  if (offset) *offset = fit.coef(4);
   if (expected) {
     expected->clear();
-    for (int k = a; k <= b; ++k) expected->push_back(row(k, 0).head(4).dot(c.head(4)) + x[a - 1]);
+    for (int k = a; k <= b; ++k) expected->push_back(fit.at(t, k));
   }
-  const Eigen::VectorXd r = V * c - y;
+  const Eigen::VectorXd& r = fit.residual;
   return r.allFinite() ? r.cwiseAbs().maxCoeff() : kInf;
 }
 
