@@ -131,17 +131,38 @@ std::string derivative_mismatch(const TorqueLog& log, std::vector<double> theta,
 // Time stamps in milliseconds (or sample counts) read as seconds make a 1 kHz log a 1 Hz one,
 // whose motion is 1000 times slower: every estimate is then wrong, with warnings that do not
 // say why (issue 16 review). A five-bar's dynamics cannot be identified from samples 0.5 s
-// apart, so a median step that long is refused, naming the likely unit.
+// apart, so a median step that long is refused, naming the likely unit; so is a step of 0.05 s
+// or more under which neither crank ever turns faster than 0.05 rad/s (millisecond stamps of a
+// 2 to 20 kHz log: review of 2026-11-24, a 5 kHz log read as 5 Hz gave viscous 21.5).
 constexpr double kLongestTimeStep = 0.5;  // [s]
+constexpr double kSlowTimeStep = 0.05;    // [s]
+constexpr double kSlowestMotion = 0.05;   // [rad/s]
+
+// the largest crank rate of the log by first differences, unwrapped [rad/s]
+double fastest_crank(const TorqueLog& log) {
+  double fastest = 0;
+  for (const std::vector<double>* th : {&log.theta1, &log.theta2}) {
+    for (size_t i = 0; i + 1 < th->size(); ++i) {
+      const double d = std::remainder((*th)[i + 1] - (*th)[i], 2 * M_PI);
+      fastest = std::max(fastest, std::abs(d) / (log.t[i + 1] - log.t[i]));
+    }
+  }
+  return fastest;
+}
 
 void check_log_time_unit(const TorqueLog& log) {
   if (log.t.size() < 2) return;
   std::vector<double> steps(log.t.size() - 1);
   for (size_t i = 0; i + 1 < log.t.size(); ++i) steps[i] = log.t[i + 1] - log.t[i];
   const double step = median_of(steps);
-  if (!(step >= kLongestTimeStep)) return;
+  if (!(step >= kSlowTimeStep)) return;
+  const bool slow = !(step >= kLongestTimeStep) && fastest_crank(log) < kSlowestMotion;
+  if (!(step >= kLongestTimeStep) && !slow) return;
   throw LogError(log.path, "column t",
                  "median time step " + format_significant(step, 3) +
+                     (slow ? " under which no crank turns faster than " +
+                                 format_significant(kSlowestMotion) + " rad/s"
+                           : std::string()) +
                      ": t must be in seconds, and a five-bar's log samples at tens of Hz or "
                      "more; these stamps look like milliseconds, microseconds or sample counts");
 }
