@@ -1975,6 +1975,84 @@ bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
   return true;
 }
 
+/// The sum of the squared taps through which a noise channel (an angle, or a logged rate) reaches
+/// the estimated acceleration at log sample i (noise of std s on the channel: s^2 times it on the
+/// acceleration): the Savitzky-Golay d2 of the angles, or d1 of logged rates; 0 when the
+/// accelerations are logged (their own noise is not modelled).
+double accel_tap_power(const Fit& f, int i) {
+  if (f.source == detail::RateSource::kLogged) return 0.0;
+  int lo = i;
+  std::vector<double> d1, d2;
+  savitzky_golay_taps(f.cond.log.t, i, f.sg, &lo, &d1, &d2);
+  const std::vector<double>& d = f.source == detail::RateSource::kFromAngles ? d2 : d1;
+  double power = 0;
+  for (double w : d) power += w * w;
+  return power;
+}
+
+/// d J / d alpha_c and d r / d alpha_c (c: crank 1, 2; each moved at every sample at once) of
+/// the whitened Jacobian on the fitted and inertial parameters (check_jacobian's columns but the
+/// offsets') and of the whitened residual, by forward differences from J, r at the fit (the
+/// residual is nearly linear in the accelerations: only the load-dependent friction is not);
+/// false if an evaluation fails.
+bool accel_derivatives(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
+                       const Eigen::VectorXd& r, Eigen::MatrixXd dJ[2], Eigen::VectorXd dr[2]) {
+  constexpr double h = 1e-2;  // [rad/s^2]
+  ParameterLayout l2 = f.layout;
+  l2.inertia = true;
+  Fit g = f;
+  for (int c = 0; c < kDof; ++c) {
+    for (size_t u = 0; u < f.samples.size(); ++u) {
+      g.samples[u].a1 = f.samples[u].a1 + (c == 0 ? h : 0.0);
+      g.samples[u].a2 = f.samples[u].a2 + (c == 1 ? h : 0.0);
+    }
+    const auto friction_end = f.x.begin() + f.layout.friction_size();
+    std::vector<double> x2 = with_layout(g, l2, std::vector<double>(f.x.begin(), friction_end));
+    ceres::Problem problem;
+    Eigen::MatrixXd Jh;
+    Eigen::VectorXd rh;
+    if (!check_problem(g, l2, &x2, &problem) ||
+        !whitened_jacobian(&problem, l2.size(), out.residual_noise_floor, &Jh, &rh) ||
+        Jh.rows() != J.rows() || Jh.cols() > J.cols()) {
+      return false;
+    }
+    dJ[c] = (Jh - J.leftCols(Jh.cols())) / h;
+    dr[c] = (rh - r) / h;
+  }
+  return true;
+}
+
+/// The expectation of the check's score J' r (J: check_jacobian's columns, b: one entry each)
+/// that the noise of estimated accelerations gives when the model holds. That noise is in the
+/// residual (-M(q) times the acceleration's) and, through the accelerations the inverse dynamics
+/// is evaluated at, in the inertial columns too (errors in variables), so E[J' r] = sum over
+/// samples and cranks c of sigma_c^2 m_c dJ_c' dr_c (dJ_c, dr_c: accel_derivatives; m_c: the sum
+/// of the squared acceleration taps, accel_tap_power). It grows with the log's length while the
+/// score's noise grows with its square root (review: clean 10 s logs dropped the cost by 104
+/// against 15 +- 5.3 from white noise). Left out as measured negligible on a clean 10 s log of
+/// the paper scene: the rate noise's path (under 1 % of the acceleration's on every column) and
+/// the offset columns' bias (below 0.03 of their score's std). Zero when the accelerations are
+/// logged. Costs two Jacobians on the fitted and inertial parameters.
+bool score_bias(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
+                const Eigen::VectorXd& r, Eigen::VectorXd* b) {
+  b->setZero(J.cols());
+  // the std of each crank's noise channel
+  const double* sigma = f.source == detail::RateSource::kFromAngles ? f.noise.angle : f.noise.rate;
+  if (f.source == detail::RateSource::kLogged || !(sigma[0] > 0 || sigma[1] > 0)) return true;
+  Eigen::MatrixXd dJ[2];
+  Eigen::VectorXd dr[2];
+  if (!accel_derivatives(f, out, J, r, dJ, dr)) return false;
+  for (size_t u = 0; u < f.samples.size(); ++u) {
+    const Eigen::Index row = 2 * static_cast<Eigen::Index>(u);
+    const double m = accel_tap_power(f, f.index[u]);
+    for (int c = 0; c < kDof; ++c) {
+      b->head(dJ[c].cols()) += sigma[c] * sigma[c] * m * dJ[c].middleRows(row, 2).transpose() *
+                               dr[c].segment(row, 2);
+    }
+  }
+  return b->allFinite();
+}
+
 /// Wrong masses or inertias, or an encoder's zero offset (review: masses +-5 % gave Coulomb
 /// +5 %, 10 std, without a word; theta1 + 0.005 rad gave Coulomb -8 %, 14 std, blamed on the
 /// masses): linearized refits at the fit with the 16 inertial parameters free (under the prior
@@ -1983,23 +2061,27 @@ bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
 /// std above what noise gives them, also with the other cause free) that would move a friction
 /// coefficient beyond kFreedMove of its std is a warning naming it. Without such evidence, the
 /// earlier rule: the inertias' move beyond kFreedMove times the larger of the estimate's std and
-/// the move's own. Costs one Jacobian with 16 more columns and four evaluations of the residual.
+/// the move's own. The score is taken net of what the noise of estimated accelerations puts in it
+/// (score_bias: without, clean angles-only logs of 6 s and more warned). Costs one Jacobian with
+/// 16 more columns and four evaluations of the residual, and two more such Jacobians when the
+/// accelerations are estimated.
 void model_check(const Fit& f, IdentifyResult* out) {
   if (!out->converged) return;
   Eigen::MatrixXd J;
-  Eigen::VectorXd r, info;
+  Eigen::VectorXd r, info, bias;
   std::vector<int> idx[3];  // fitted, inertial, offsets
-  if (!check_jacobian(f, *out, &J, &r, idx, &info)) return;
+  if (!check_jacobian(f, *out, &J, &r, idx, &info) || !score_bias(f, *out, J, r, &bias)) return;
   const bool inertia = !idx[1].empty();
   std::vector<int> both = idx[1];
   both.insert(both.end(), idx[2].begin(), idx[2].end());
   Eigen::VectorXd info_both = Eigen::VectorXd::Zero(both.size());
   if (inertia) info_both.head(kInertialParams) = info;
-  const detail::FreedStep fo = detail::freed_step(J, r, idx[0], idx[2], Eigen::Vector2d::Zero());
+  const detail::FreedStep fo =
+      detail::freed_step(J, r, idx[0], idx[2], Eigen::Vector2d::Zero(), bias);
   detail::FreedStep fi, fb;
   if (inertia) {
-    fi = detail::freed_step(J, r, idx[0], idx[1], info);
-    fb = detail::freed_step(J, r, idx[0], both, info_both);
+    fi = detail::freed_step(J, r, idx[0], idx[1], info, bias);
+    fb = detail::freed_step(J, r, idx[0], both, info_both, bias);
   }
   const detail::Causes causes = detail::model_causes(fi, fo, fb);
   const bool offset = causes.offsets, masses = causes.inertia;

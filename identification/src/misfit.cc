@@ -22,22 +22,28 @@ bool spd_inverse(const Eigen::MatrixXd& A, Eigen::MatrixXd* inv) {
 
 FreedStep freed_step(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
                      const std::vector<int>& fitted, const std::vector<int>& extra,
-                     const Eigen::VectorXd& prior) {
+                     const Eigen::VectorXd& prior, const Eigen::VectorXd& bias) {
   FreedStep out;
   const int nf = static_cast<int>(fitted.size()), ne = static_cast<int>(extra.size());
   Eigen::MatrixXd Ja(J.rows(), nf + ne);
-  for (int k = 0; k < nf; ++k) Ja.col(k) = J.col(fitted[k]);
-  for (int k = 0; k < ne; ++k) Ja.col(nf + k) = J.col(extra[k]);
+  Eigen::VectorXd ba = Eigen::VectorXd::Zero(nf + ne);
+  for (int k = 0; k < nf + ne; ++k) {
+    const int c = k < nf ? fitted[k] : extra[k - nf];
+    Ja.col(k) = J.col(c);
+    if (bias.size() > 0) ba(k) = bias(c);
+  }
   Eigen::MatrixXd A = Ja.transpose() * Ja;
   for (int k = 0; k < ne; ++k) A(nf + k, nf + k) += prior(k);
   Eigen::MatrixXd C, Cf;
   if (!spd_inverse(A, &C) || !spd_inverse(A.topLeftCorner(nf, nf), &Cf)) return out;
-  const Eigen::VectorXd step = -C * (Ja.transpose() * r);
-  out.fitted_step = step.head(nf);
+  // the centred score, the augmented step and the restricted one (fitted parameters alone)
+  const Eigen::VectorXd g = Ja.transpose() * r - ba;
+  const Eigen::VectorXd step = -C * g, step_f = -Cf * g.head(nf);
+  out.fitted_step = step.head(nf) - step_f;
   out.fitted_cov = C.topLeftCorner(nf, nf) - Cf;
   out.extra_step = step.tail(ne);
   out.extra_std = C.bottomRightCorner(ne, ne).diagonal().cwiseMax(0.0).cwiseSqrt();
-  out.drop = -step.dot(Ja.transpose() * r);
+  out.drop = -step.dot(g) + step_f.dot(g.head(nf));
   // S = (A_ee - P) - A_ef A_ff^-1 A_fe; (S + P)^-1 is the extras' block of C
   const Eigen::MatrixXd Afe = A.topRightCorner(nf, ne);
   Eigen::MatrixXd S = A.bottomRightCorner(ne, ne) - Afe.transpose() * Cf * Afe;

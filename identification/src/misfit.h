@@ -12,7 +12,11 @@ namespace fivebar::identification::detail {
 /// One Gauss-Newton step from a fit with extra parameters freed. J: the Jacobian of the residual
 /// r at the fit, rows whitened to unit noise, over the fitted parameters (columns `fitted`) and
 /// the extra ones (columns `extra`, with prior information prior(k) = 1 / prior variance on
-/// extra[k] in whitened units; 0: none).
+/// extra[k] in whitened units; 0: none). `bias` (empty: none; else one entry per column of J):
+/// the score J' r's expectation when the model holds, taken off it (errors in variables: noise
+/// that enters both the columns and the residual). The step, the move of the fitted parameters
+/// and the drop are those beyond the restricted refit (the fitted parameters alone), which is
+/// nothing when J' r is 0 on them and there is no bias.
 struct FreedStep {
   bool ok = false;  ///< false: the augmented normal matrix is singular
   /// the step of the fitted parameters, and its covariance when the extra parameters are at
@@ -43,6 +47,6 @@ Causes model_causes(const FreedStep& inertia, const FreedStep& offsets, const Fr
 
 FreedStep freed_step(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
                      const std::vector<int>& fitted, const std::vector<int>& extra,
-                     const Eigen::VectorXd& prior);
+                     const Eigen::VectorXd& prior, const Eigen::VectorXd& bias = {});
 
 }  // namespace fivebar::identification::detail

@@ -70,6 +70,22 @@ TEST(ModelCheck, LogsOfTheSceneAreQuiet) {
   }
 }
 
+// review (branch eiv17): clean angles-only logs of 6 s and more warned of the masses (synth-log
+// seed 1, 6 s: with the inertias free the cost fell by 56 against 14 +- 5.2 from noise alone):
+// the noise of the Savitzky-Golay accelerations is both in the residual and in the inertial
+// columns, so the score is not centred and its excess grows with the log's length (errors in
+// variables). Fails without score_bias.
+TEST(ModelCheck, ALongAnglesOnlyLogOfTheSceneIsQuiet) {
+  const IdentifyResult res = identify(
+      paper_params(), paper_loads,
+      testing::synthetic_paper_log(paper_params(), testing::log_options(6.0, 0.02, 1e-5, 1),
+                                   "model_check_long.csv"),
+      options());
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_FALSE(has_warning(res, kMassWarning));
+  EXPECT_FALSE(has_warning(res, kOffsetWarning));
+}
+
 // datasets/scenes/stick_below_breakaway.yaml with M1 rising by 0.5 N m/s from 0.01 N m above
 // the equilibrium: the mechanism breaks away from rest, and joint D stays stuck for most of the
 // log (synth-log's exact rates give it ~1e-10 rad/s, above the 2.6e-12 that their rounding sets)
