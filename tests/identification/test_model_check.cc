@@ -50,6 +50,18 @@ TEST(ModelCheck, AnEncoderZeroOffsetIsNamed) {
   EXPECT_FALSE(has_warning(res, kMassWarning));
 }
 
+// review of 2026-11-24 (A4): crank 1's inertia 10 % over the scene's put coulomb at its bound 0
+// and viscous 23 std off, with the bound's warning only; the evidenced cause is named anyway
+TEST(ModelCheck, AnInertiaOffTheSceneIsNamedWhenACoefficientIsAtItsBound) {
+  Params<double> truth = paper_params();
+  truth.links[0].inertia *= 1.1;
+  const IdentifyResult res = identify(paper_params(), paper_loads, paper_log(truth, 1), options());
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  ASSERT_TRUE(res.parameters[0].at_bound) << res.parameters[0].value;
+  EXPECT_TRUE(has_warning(res, kMassWarning));
+  EXPECT_TRUE(has_warning(res, "at its bound, so the fit cannot say"));
+}
+
 // review finding 3: link masses +-5 % gave Coulomb +5 % (10 std) without a word
 TEST(ModelCheck, MassesOffTheSceneAreNamed) {
   Params<double> truth = paper_params();
