@@ -156,11 +156,11 @@ void check_log_time_unit(const TorqueLog& log) {
   for (size_t i = 0; i + 1 < log.t.size(); ++i) steps[i] = log.t[i + 1] - log.t[i];
   const double step = median_of(steps);
   if (!(step >= kSlowTimeStep)) return;
-  const bool slow = !(step >= kLongestTimeStep) && fastest_crank(log) < kSlowestMotion;
-  if (!(step >= kLongestTimeStep) && !slow) return;
+  const bool shorter = !(step >= kLongestTimeStep);  // then refused only without motion
+  if (shorter && !(fastest_crank(log) < kSlowestMotion)) return;
   throw LogError(log.path, "column t",
                  "median time step " + format_significant(step, 3) +
-                     (slow ? " under which no crank turns faster than " +
+                     (shorter ? " under which no crank turns faster than " +
                                  format_significant(kSlowestMotion) + " rad/s"
                            : std::string()) +
                      ": t must be in seconds, and a five-bar's log samples at tens of Hz or "

@@ -494,17 +494,14 @@ int reversal_half_window(Fit* f, IdentifyResult* out) {
   return 0;
 }
 
-/// Relative rates and accelerations of the joints (O, B, C, D, D0) at the angles (th1, th2) and
-/// the sample's rates and accelerations, and the kinematics there; false if the pose fails.
-bool joint_motion(const Params<double>& p, double th1, double th2, const Sample& s,
-                  std::array<double, kJoints>* w, std::array<double, kJoints>* wdot,
-                  Kinematics<double>* k) {
+/// Relative rates of the joints (O, B, C, D, D0) at the angles (th1, th2) and the sample's crank
+/// rates, and the kinematics there; false if the pose fails.
+bool joint_rates(const Params<double>& p, double th1, double th2, const Sample& s,
+                 std::array<double, kJoints>* w, Kinematics<double>* k) {
   if (!solve_kinematics(p, th1, th2, k).ok()) return false;
   Bias<double> b;
   compute_bias(p, *k, s.w1, s.w2, &b);
-  const Vec2<double> thdd(s.a1, s.a2);
   *w = relative_rates(s.w1, s.w2, b.w3, b.w4);
-  *wdot = relative_accelerations(thdd, k->G3.dot(thdd) + b.h3, k->G4.dot(thdd) + b.h4);
   return true;
 }
 
@@ -522,11 +519,11 @@ bool joint_motion(const Params<double>& p, double th1, double th2, const Sample&
 bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds& rest,
                  double angle_noise) {
   Kinematics<double> k, kd;
-  std::array<double, kJoints> w, wdot, dw[2], w2, wdot2;
-  if (!joint_motion(p, s.th1, s.th2, s, &w, &wdot, &k)) return false;
+  std::array<double, kJoints> w, dw[2], w2;
+  if (!joint_rates(p, s.th1, s.th2, s, &w, &k)) return false;
   constexpr double h = 1e-7;  // [rad]: the angles' derivatives by forward differences
   for (int c = 0; c < 2 && angle_noise > 0; ++c) {
-    if (!joint_motion(p, s.th1 + (c == 0 ? h : 0), s.th2 + (c == 1 ? h : 0), s, &w2, &wdot2, &kd))
+    if (!joint_rates(p, s.th1 + (c == 0 ? h : 0), s.th2 + (c == 1 ? h : 0), s, &w2, &kd))
       return false;
     for (int j = 0; j < kJoints; ++j) dw[c][j] = (w2[j] - w[j]) / h;
   }
