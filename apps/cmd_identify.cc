@@ -326,6 +326,10 @@ Json identification_json(const Args& a, const Scene& scene, const id::IdentifyOp
   if (!a.no_validation) j.set("validation", validation_json(val));
   Json warnings = Json::array_of(res.warnings);
   j.set("warnings", std::move(warnings));
+  j.set("model_check", Json::array_of(res.model_check, [](const id::IdentifyResult::MisfitCause& c) {
+          return Json::object({{"cause", c.name}, {"drop", c.drop}, {"z", c.z},
+                               {"z_given", c.z_given}, {"named", c.named}});
+        }));
   j.set("identification_wall_time_s", res.wall_time_s);
   return j;
 }

@@ -4,6 +4,7 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
+#include <array>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -1961,11 +1962,32 @@ std::string friction_clause(const Fit& f, const IdentifyResult& out, const detai
          "would move";
 }
 
+/// Columns of the whitened residual's Jacobian (r: the whitened residual at the fit, fl: the
+/// noise floors) on errors of the torque readings, tau_c = (1 + g_c) M_c + o_c: the offsets
+/// o1, o2 (left out when the fit has them, --estimate actuator) then the gains g1, g2, with M_c
+/// the fitted model's torque (tau_c - o_c - r_c).
+Eigen::MatrixXd torque_columns(const Fit& f, const Eigen::VectorXd& r, const double fl[2]) {
+  const int k0 = f.layout.actuator ? 0 : kDof;
+  const double* o = f.layout.actuator ? &f.x[f.layout.actuator_offset()] : nullptr;
+  Eigen::MatrixXd Jt = Eigen::MatrixXd::Zero(r.size(), k0 + kDof);
+  for (size_t u = 0; u < f.samples.size(); ++u) {
+    for (int c = 0; c < kDof; ++c) {
+      const Eigen::Index row = 2 * static_cast<Eigen::Index>(u) + c;
+      const double tau = c == 0 ? f.samples[u].tau1 : f.samples[u].tau2;
+      const double model = tau - (o ? o[c] : 0.0) - r(row) * fl[c];
+      if (k0 > 0) Jt(row, c) = -1.0 / fl[c];
+      Jt(row, k0 + c) = -model / fl[c];
+    }
+  }
+  return Jt;
+}
+
 /// The residual's Jacobian at the fit, whitened by the noise floors, with the links' 16 inertial
-/// parameters (columns `inertia`, prior information in `info`) and the two angle offsets
-/// (columns `offsets`) added to the fitted ones (`fitted`); false if an evaluation fails.
+/// parameters (columns idx[1], prior information in `info`), the two angle offsets (idx[2])
+/// and the torque readings' offsets and gains (idx[3], torque_columns) added to the fitted ones
+/// (idx[0]); false if an evaluation fails.
 bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J, Eigen::VectorXd* r,
-                    std::vector<int> idx[3], Eigen::VectorXd* info) {
+                    std::vector<int> idx[4], Eigen::VectorXd* info) {
   const int nf = f.layout.friction_size();
   ParameterLayout l2 = f.layout;
   l2.inertia = true;
@@ -1977,12 +1999,14 @@ bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
       !offset_columns(f, out.residual_noise_floor, &Jo) || Jo.rows() != Ji.rows()) {
     return false;
   }
-  J->resize(Ji.rows(), Ji.cols() + 2);
-  *J << Ji, Jo;
+  const Eigen::MatrixXd Jt = torque_columns(f, *r, out.residual_noise_floor);
+  J->resize(Ji.rows(), Ji.cols() + 2 + Jt.cols());
+  *J << Ji, Jo, Jt;
   for (int i = 0; i < l2.size(); ++i) {
     idx[l2.is_inertial(i) && !f.layout.inertia ? 1 : 0].push_back(i);
   }
   idx[2] = {l2.size(), l2.size() + 1};
+  for (Eigen::Index k = 0; k < Jt.cols(); ++k) idx[3].push_back(l2.size() + 2 + k);
   const detail::InertialPrior prior = detail::inertial_prior(f.scene, f.opt->inertia_prior);
   info->resize(kInertialParams);
   for (int k = 0; k < kInertialParams; ++k) (*info)(k) = 1.0 / std::pow(prior.sigma[k], 2);
@@ -2045,7 +2069,8 @@ bool accel_derivatives(const Fit& f, const IdentifyResult& out, const Eigen::Mat
 /// score's noise grows with its square root (review: clean 10 s logs dropped the cost by 104
 /// against 15 +- 5.3 from white noise). Left out as measured negligible on a clean 10 s log of
 /// the paper scene: the rate noise's path (under 1 % of the acceleration's on every column) and
-/// the offset columns' bias (below 0.03 of their score's std). Zero when the accelerations are
+/// the offset columns' bias (below 0.03 of their score's std). The torque gains' columns carry
+/// the model's torque, so the same noise biases them too. Zero when the accelerations are
 /// logged. Costs two Jacobians on the fitted and inertial parameters.
 bool score_bias(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
                 const Eigen::VectorXd& r, Eigen::VectorXd* b) {
@@ -2056,71 +2081,206 @@ bool score_bias(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& 
   Eigen::MatrixXd dJ[2];
   Eigen::VectorXd dr[2];
   if (!accel_derivatives(f, out, J, r, dJ, dr)) return false;
+  // the torque gains' columns (the last two, torque_columns) hold minus the model's torque,
+  // whose derivative in the accelerations is the residual's: dr_c on their crank's rows
+  const Eigen::Index gains = J.cols() - kDof;
   for (size_t u = 0; u < f.samples.size(); ++u) {
     const Eigen::Index row = 2 * static_cast<Eigen::Index>(u);
     const double m = accel_tap_power(f, f.index[u]);
     for (int c = 0; c < kDof; ++c) {
-      b->head(dJ[c].cols()) += sigma[c] * sigma[c] * m * dJ[c].middleRows(row, 2).transpose() *
-                               dr[c].segment(row, 2);
+      const double v = sigma[c] * sigma[c] * m;
+      b->head(dJ[c].cols()) += v * dJ[c].middleRows(row, 2).transpose() * dr[c].segment(row, 2);
+      b->segment(gains, kDof) += v * dr[c].segment(row, 2).cwiseAbs2();
     }
   }
   return b->allFinite();
 }
 
-/// Wrong masses or inertias, or an encoder's zero offset (review: masses +-5 % gave Coulomb
-/// +5 %, 10 std, without a word; theta1 + 0.005 rad gave Coulomb -8 %, 14 std, blamed on the
-/// masses): linearized refits at the fit with the 16 inertial parameters free (under the prior
-/// of --estimate inertia), the two angle offsets free, and both. A cause the log evidences
-/// (detail::model_causes, misfit.h: its parameters lower the whitened cost by more than kCauseZ
-/// std above what noise gives them, also with the other cause free) that would move a friction
-/// coefficient beyond kFreedMove of its std is a warning naming it. Without such evidence, the
-/// earlier rule: the inertias' move beyond kFreedMove times the larger of the estimate's std and
-/// the move's own. The score is taken net of what the noise of estimated accelerations puts in it
-/// (score_bias: without, clean angles-only logs of 6 s and more warned). Costs one Jacobian with
-/// 16 more columns and four evaluations of the residual, and two more such Jacobians when the
+/// The candidate causes of model_check, in the order of check_jacobian's idx[1..3].
+enum CauseId { kCauseInertia, kCauseAngles, kCauseTorque, kCauseCount };
+
+/// The freed step with the columns of every cause in `mask` (bit id: CauseId) freed together.
+detail::FreedStep freed_set(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                            const std::vector<int> idx[4], const Eigen::VectorXd& info,
+                            const Eigen::VectorXd& bias, unsigned mask) {
+  std::vector<int> cols;
+  std::vector<double> prior;
+  for (int id = 0; id < kCauseCount; ++id) {
+    if (!(mask & (1u << id))) continue;
+    const std::vector<int>& c = idx[id + 1];
+    cols.insert(cols.end(), c.begin(), c.end());
+    for (size_t e = 0; e < c.size(); ++e) {
+      prior.push_back(id == kCauseInertia ? info(static_cast<Eigen::Index>(e)) : 0.0);
+    }
+  }
+  const Eigen::Map<const Eigen::VectorXd> p(prior.data(), static_cast<Eigen::Index>(prior.size()));
+  return detail::freed_step(J, r, idx[0], cols, p, bias);
+}
+
+/// model_check's freed steps: each candidate cause whose columns the check has (the inertias
+/// only when they are not fitted) freed alone, all of them together, and the causes the log
+/// evidences (detail::model_causes: each beyond what the others' parameters explain).
+struct CauseSteps {
+  std::array<detail::FreedStep, kCauseCount> alone;  ///< not ok: no candidate
+  detail::FreedStep all;
+  std::vector<IdentifyResult::MisfitCause> report;  ///< IdentifyResult::model_check
+  std::array<bool, kCauseCount> named{};
+  std::array<double, kCauseCount> z{};  ///< evidence alone [std of noise's]
+  bool any() const { return named[0] || named[1] || named[2]; }
+};
+
+IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedStep& fs,
+                                         double z, double z_given, bool named) {
+  return {name, fs.drop - fs.drop_mean, z, z_given, named};
+}
+
+CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                       const std::vector<int> idx[4], const Eigen::VectorXd& info,
+                       const Eigen::VectorXd& bias) {
+  static const char* kNames[] = {"inertia", "angle_offsets", "torque_readings"};
+  unsigned present = 0;
+  std::vector<int> ids;
+  std::vector<detail::FreedStep> alone, all_but;
+  for (int id = 0; id < kCauseCount; ++id) {
+    if (idx[id + 1].empty()) continue;
+    present |= 1u << id;
+    ids.push_back(id);
+    alone.push_back(freed_set(J, r, idx, info, bias, 1u << id));
+  }
+  CauseSteps cs;
+  cs.all = freed_set(J, r, idx, info, bias, present);
+  for (int id : ids) all_but.push_back(freed_set(J, r, idx, info, bias, present & ~(1u << id)));
+  const detail::Causes c = detail::model_causes(alone, cs.all, all_but);
+  for (size_t k = 0; k < ids.size(); ++k) {
+    cs.alone[ids[k]] = alone[k];
+    cs.named[ids[k]] = c.named[k];
+    cs.z[ids[k]] = c.z[k];
+    cs.report.push_back(misfit_cause(kNames[ids[k]], alone[k], c.z[k], c.z_given[k], c.named[k]));
+  }
+  const double z_all = cs.all.ok && cs.all.drop_sd > 0
+                           ? (cs.all.drop - cs.all.drop_mean) / cs.all.drop_sd : 0.0;
+  cs.report.push_back(misfit_cause("any", cs.all, z_all, z_all, false));
+  return cs;
+}
+
+/// "falls by D (noise alone: m +- s)" of a freed step
+std::string drop_clause(const detail::FreedStep& fs) {
+  return "the residual falls by " + format_significant(fs.drop - fs.drop_mean, 3) +
+         " (noise alone: " + format_significant(fs.drop_mean, 2) + " +- " +
+         format_significant(fs.drop_sd, 2) + ")";
+}
+
+/// "a, b (+- sa, sb)" of extras k and k + 1 of a freed step, each times `scale`
+std::string pair_clause(const detail::FreedStep& fs, int k, double scale) {
+  return format_significant(scale * fs.extra_step(k)) + ", " +
+         format_significant(scale * fs.extra_step(k + 1)) + " (+- " +
+         format_significant(scale * fs.extra_std(k), 2) + ", " +
+         format_significant(scale * fs.extra_std(k + 1), 2) + ")";
+}
+
+/// model_check's warning on the torque readings (review of 2026-11-24, A2 and A3: a torque
+/// sensor's offset was blamed on the masses, and a 3 % gain error was silent at +13 to +18 std):
+/// the offsets o_c and gains g_c of tau_c = (1 + g_c) M_c + o_c the log evidences, and what to do
+/// about each one that is beyond kFreedMove of its std.
+std::string torque_warning(const Fit& f, const detail::FreedStep& fs, const std::string& moved) {
+  const int k0 = f.layout.actuator ? 0 : kDof;  // offsets first, unless fitted
+  const auto beyond = [&](int k) {
+    return std::abs(fs.extra_step(k)) > kFreedMove * fs.extra_std(k) ||
+           std::abs(fs.extra_step(k + 1)) > kFreedMove * fs.extra_std(k + 1);
+  };
+  std::string w = "with offsets and gains of the logged torques free (one linearized refit) " +
+                  drop_clause(fs) + " and " + moved + ". tau1, tau2 read ";
+  if (k0 > 0) w += pair_clause(fs, 0, 1.0) + " N m more than the model and ";
+  w += pair_clause(fs, k0, 100.0) + " % more in proportion to it: a torque sensor's ";
+  std::vector<std::string> advice;
+  if (k0 > 0 && beyond(0)) advice.push_back("zero may be off; try --estimate friction,actuator");
+  if (beyond(k0)) {
+    advice.push_back("gain may be off; divide the logged torques by 1 + the gain above, or "
+                     "check the torque constants");
+  }
+  if (advice.empty()) advice.push_back("zero or gain may be off");
+  return w + advice[0] + (advice.size() > 1 ? "; its " + advice[1] : "");
+}
+
+/// The candidate cause with the strongest evidence alone (kCauseCount: none)
+int strongest_cause(const CauseSteps& cs) {
+  int best = kCauseCount;
+  for (int id = 0; id < kCauseCount; ++id) {
+    if (cs.alone[id].ok && (best == kCauseCount || cs.z[id] > cs.z[best])) best = id;
+  }
+  return best;
+}
+
+/// model_check's warning when a candidate cause alone is evidenced and would move the friction,
+/// but no cause stands out beyond the others' parameters (on a 2 s angles-only log of the paper
+/// scene, a torque offset of 0.1 N m on tau1 gave coulomb +24 std without a word: the offsets'
+/// evidence, 14 std alone, was 4.7 std beyond the inertias' and the encoders' zeros')
+std::string unresolved_warning(const CauseSteps& cs, int strongest, const std::string& moved) {
+  static const char* kWhat[] = {"the links' inertial parameters", "the encoders' zeros",
+                                "the torque sensors' offsets and gains"};
+  std::vector<IdentifyResult::MisfitCause> causes(cs.report.begin(), cs.report.end() - 1);
+  std::sort(causes.begin(), causes.end(), [](const auto& a, const auto& b) { return a.z > b.z; });
+  std::string each;
+  for (const IdentifyResult::MisfitCause& c : causes) {
+    each += (each.empty() ? "" : ", ") + c.name + " " + format_significant(c.z, 2);
+  }
+  return "the friction law does not absorb a misfit of the log: with " +
+         std::string(kWhat[strongest]) + " free (one linearized refit) " +
+         drop_clause(cs.alone[strongest]) + " and " + moved +
+         ", but the log cannot tell that cause from the others (evidence of each alone, in "
+         "std: " + each + "). Check the scene's masses (--estimate friction,inertia), the "
+         "encoders' zeros and the torque sensors (--estimate friction,actuator), or log a "
+         "longer motion";
+}
+
+/// Wrong masses or inertias, an encoder's zero offset, or a torque sensor's offset or gain
+/// (review: masses +-5 % gave Coulomb +5 %, 10 std, without a word; theta1 + 0.005 rad gave
+/// Coulomb -8 %, 14 std, blamed on the masses; a torque offset was blamed on the masses):
+/// linearized refits at the fit with the 16 inertial parameters free (under the prior of
+/// --estimate inertia), the two angle offsets free, the torque readings' offsets and gains free,
+/// and combinations (cause_steps). A cause the log evidences (detail::model_causes, misfit.h: its
+/// parameters lower the whitened cost by more than kCauseZ std above what noise gives them, also
+/// with the other causes free) that would move a friction coefficient beyond kFreedMove of its
+/// std is a warning naming it. Without such evidence, the earlier rule: the inertias' move
+/// beyond kFreedMove times the larger of the estimate's std and the move's own. The score is
+/// taken net of what the noise of estimated accelerations puts in it (score_bias: without, clean
+/// angles-only logs of 6 s and more warned). Costs one Jacobian with 16 more columns, four
+/// evaluations of the residual and a few small solves, and two more such Jacobians when the
 /// accelerations are estimated.
 void model_check(const Fit& f, IdentifyResult* out) {
   if (!out->converged) return;
   Eigen::MatrixXd J;
   Eigen::VectorXd r, info, bias;
-  std::vector<int> idx[3];  // fitted, inertial, offsets
+  std::vector<int> idx[4];  // fitted, inertial, angle offsets, torque offsets and gains
   if (!check_jacobian(f, *out, &J, &r, idx, &info) || !score_bias(f, *out, J, r, &bias)) return;
-  const bool inertia = !idx[1].empty();
-  std::vector<int> both = idx[1];
-  both.insert(both.end(), idx[2].begin(), idx[2].end());
-  Eigen::VectorXd info_both = Eigen::VectorXd::Zero(both.size());
-  if (inertia) info_both.head(kInertialParams) = info;
-  const detail::FreedStep fo =
-      detail::freed_step(J, r, idx[0], idx[2], Eigen::Vector2d::Zero(), bias);
-  detail::FreedStep fi, fb;
-  if (inertia) {
-    fi = detail::freed_step(J, r, idx[0], idx[1], info, bias);
-    fb = detail::freed_step(J, r, idx[0], both, info_both, bias);
-  }
-  const detail::Causes causes = detail::model_causes(fi, fo, fb);
-  const bool offset = causes.offsets, masses = causes.inertia;
+  const CauseSteps cs = cause_steps(J, r, idx, info, bias);
+  out->model_check = cs.report;
+  const detail::FreedStep &fo = cs.alone[kCauseAngles], &fi = cs.alone[kCauseInertia],
+                          &ft = cs.alone[kCauseTorque];
   std::string moved;
-  if (offset && !(moved = friction_clause(f, *out, fo, false, true)).empty()) {
+  if (cs.named[kCauseAngles] && !(moved = friction_clause(f, *out, fo, false, true)).empty()) {
     out->warnings.push_back(
-        "with offsets of the logged angles free (one linearized refit) the residual falls by " +
-        format_significant(fo.drop - fo.drop_mean, 3) + " (noise alone: " +
-        format_significant(fo.drop_mean, 2) + " +- " + format_significant(fo.drop_sd, 2) +
-        ") and " + moved + ". theta1, theta2 " + "read " +
-        format_significant(fo.extra_step(0)) + ", " + format_significant(fo.extra_step(1)) +
-        " rad (+- " + format_significant(fo.extra_std(0), 2) + ", " +
-        format_significant(fo.extra_std(1), 2) + ") more than the scene's " +
-        "angles: an encoder's zero may be off; subtract the offsets from the logged angles");
+        "with offsets of the logged angles free (one linearized refit) " + drop_clause(fo) +
+        " and " + moved + ". theta1, theta2 read " + pair_clause(fo, 0, 1.0) +
+        " rad more than the scene's angles: an encoder's zero may be off; subtract the offsets "
+        "from the logged angles");
   }
-  const bool old_rule = !offset && !masses && inertia && fi.ok;
+  if (cs.named[kCauseTorque] && !(moved = friction_clause(f, *out, ft, false, true)).empty()) {
+    out->warnings.push_back(torque_warning(f, ft, moved));
+  }
+  const bool masses = cs.named[kCauseInertia];
+  const int top = strongest_cause(cs);
+  if (!cs.any() && top < kCauseCount && cs.z[top] > detail::kCauseZ &&
+      !(moved = friction_clause(f, *out, cs.alone[top], false, true)).empty()) {
+    out->warnings.push_back(unresolved_warning(cs, top, moved));
+    return;
+  }
+  const bool old_rule = !cs.any() && !idx[1].empty() && fi.ok;
   if ((masses || old_rule) && !(moved = friction_clause(f, *out, fi, old_rule, masses)).empty()) {
     out->warnings.push_back(
         "with the links' inertial parameters free (one linearized refit, prior std " +
         format_significant(f.opt->inertia_prior) + " of the scene's values) " +
-        (masses ? "the residual falls by " + format_significant(fi.drop - fi.drop_mean, 3) +
-                      " (noise alone: " + format_significant(fi.drop_mean, 2) + " +- " +
-                      format_significant(fi.drop_sd, 2) + ") and "
-                : std::string()) +
-        moved +
+        (masses ? drop_clause(fi) + " and " : std::string()) + moved +
         ". The scene's masses or inertias may not match the mechanism; try --estimate "
         "friction,inertia");
   }

@@ -55,20 +55,26 @@ FreedStep freed_step(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
   return out;
 }
 
-Causes model_causes(const FreedStep& inertia, const FreedStep& offsets, const FreedStep& both) {
-  Causes c;
+Causes model_causes(const std::vector<FreedStep>& alone, const FreedStep& all,
+                    const std::vector<FreedStep>& all_but) {
   const auto z = [](const FreedStep& fs, double drop) {
     return fs.ok && fs.drop_sd > 0 ? (drop - fs.drop_mean) / fs.drop_sd : 0.0;
   };
-  c.z_offsets = z(offsets, offsets.drop);
-  c.z_inertia = z(inertia, inertia.drop);
-  // with the inertias in the check, each cause must also show beyond the other's parameters
-  // (both freed failing: the two causes cannot be told apart, neither is named)
-  const bool pair = inertia.ok && both.ok;
-  c.z_offsets_given = !inertia.ok ? c.z_offsets : pair ? z(offsets, both.drop - inertia.drop) : 0;
-  c.z_inertia_given = pair && offsets.ok ? z(inertia, both.drop - offsets.drop) : 0.0;
-  c.offsets = c.z_offsets > kCauseZ && c.z_offsets_given > kCauseZ;
-  c.inertia = pair && c.z_inertia > kCauseZ && c.z_inertia_given > kCauseZ;
+  const size_t n = alone.size();
+  Causes c;
+  c.named.assign(n, false);
+  c.z.assign(n, 0.0);
+  c.z_given.assign(n, 0.0);
+  for (size_t k = 0; k < n; ++k) {
+    c.z[k] = z(alone[k], alone[k].drop);
+    // with other causes in the check, each must also show beyond their parameters
+    if (n == 1) {
+      c.z_given[k] = c.z[k];
+    } else if (all.ok && k < all_but.size() && all_but[k].ok) {
+      c.z_given[k] = z(alone[k], all.drop - all_but[k].drop);
+    }
+    c.named[k] = c.z[k] > kCauseZ && c.z_given[k] > kCauseZ;
+  }
   return c;
 }
 

@@ -32,18 +32,21 @@ struct FreedStep {
   /// extras)
   double drop = 0, drop_mean = 0, drop_sd = 0;
 };
-/// Which cause the log evidences, from three freed steps at one fit: the inertial parameters
-/// free (`inertia`), the two angle offsets free (`offsets`), both (`both`; `inertia` and `both`
-/// not ok when the inertias are fitted already). A cause is evidenced when freeing its
+/// Which causes the log evidences, from freed steps at one fit: each candidate cause's
+/// parameters freed alone (`alone[k]`: the links' inertial parameters, the two angle offsets,
+/// the torque readings' offsets and gains), all of them together (`all`) and all but cause k
+/// (`all_but[k]`; with one cause, neither is used). A cause is evidenced when freeing its
 /// parameters lowers the cost by more than kCauseZ std above what noise alone gives (drop_mean,
-/// drop_sd), and also beyond what the other cause's parameters lower it by.
+/// drop_sd), and also beyond what the other causes' parameters lower it by (all minus all_but;
+/// a step not ok there: the causes cannot be told apart, none is named).
 inline constexpr double kCauseZ = 8.0;
 struct Causes {
-  bool offsets = false, inertia = false;
-  /// (drop - mean) / sd alone and given the other cause
-  double z_offsets = 0, z_inertia = 0, z_offsets_given = 0, z_inertia_given = 0;
+  std::vector<bool> named;
+  /// (drop - mean) / sd alone, and given the other causes
+  std::vector<double> z, z_given;
 };
-Causes model_causes(const FreedStep& inertia, const FreedStep& offsets, const FreedStep& both);
+Causes model_causes(const std::vector<FreedStep>& alone, const FreedStep& all,
+                    const std::vector<FreedStep>& all_but);
 
 FreedStep freed_step(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
                      const std::vector<int>& fitted, const std::vector<int>& extra,

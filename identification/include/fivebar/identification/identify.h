@@ -164,6 +164,20 @@ struct IdentifyResult {
   /// near 0 means a combination of parameters the log cannot determine
   std::vector<double> singular_values;
   std::vector<std::string> warnings;
+  /// The model check's candidate causes of a misfit the friction law cannot absorb, each tried
+  /// by one linearized refit with its parameters freed: "inertia" (the links' 16 inertial
+  /// parameters, when not estimated), "angle_offsets" (the encoders' zeros), "torque_readings"
+  /// (the torque sensors' offsets, when not estimated, and gains); and "any", all of them
+  /// together. Empty when the check did not run (the fit did not converge).
+  struct MisfitCause {
+    std::string name;
+    double drop = 0;     ///< fall of the whitened cost, net of what noise alone gives
+    double z = 0;        ///< that fall in std of noise's
+    double z_given = 0;  ///< the same beyond the other causes' parameters ("any": z)
+    bool named = false;  ///< evidenced (z and z_given above 8): a warning names it when the
+                         ///< friction would move
+  };
+  std::vector<MisfitCause> model_check;
   int samples = 0;       ///< samples in the log
   int samples_used = 0;  ///< samples that entered the fit
   int samples_at_rest = 0;  ///< samples left out by the rest rule (some joint stuck)
