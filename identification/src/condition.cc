@@ -220,43 +220,46 @@ bool end_repair(const std::vector<double>& t, const std::vector<double>& x, bool
   return false;
 }
 
-/// Whether the pair (i, i + 1) is one side of a step rather than two bad samples: both samples
-/// continue the line through one side's two neighbours (i - 2, i - 1 or i + 2, i + 3) to within
-/// half their deviation from the cubic across the pair. A step between i + 1 and i + 2 (a
-/// breakaway's jump of the logged acceleration, a torque flipping with the friction) leaves the
-/// cubic by 0.3 and 0.7 of the step with one sign, as a glitch pair does; but a glitch pair
-/// leaves both sides' lines.
+/// Whether the run (i .. i + len - 1) is the two sides of a step or a kink rather than bad
+/// samples: its first samples continue the line through the left neighbours (i - 2, i - 1) and
+/// the others the line through the right ones (i + len, i + len + 1), each to within half its
+/// deviation from the cubic across the run (all on one side: the run is one side of a step).
+/// A step or a kink inside or beside the run (a breakaway's jump of the logged acceleration,
+/// the kink of its logged rate, a torque flipping with the friction) leaves the cubic with one
+/// sign, as a glitch run does; but a glitch run leaves both sides' lines.
 bool continues_one_side(const std::vector<double>& t, const std::vector<double>& x, int i,
-                        const std::array<double, 2>& cubic) {
-  for (int side : {-1, 1}) {
-    const int a = side < 0 ? i - 2 : i + 2, b = a + 1;
-    bool along = true;
-    for (int q = 0; q < 2; ++q) {
-      const double line = x[a] + (x[b] - x[a]) * (t[i + q] - t[a]) / (t[b] - t[a]);
-      along = along && std::abs(x[i + q] - line) < 0.5 * std::abs(x[i + q] - cubic[q]);
-    }
-    if (along) return true;
+                        int len, const std::vector<double>& cubic) {
+  const auto along = [&](int q, int a) {
+    const double line = x[a] + (x[a + 1] - x[a]) * (t[i + q] - t[a]) / (t[a + 1] - t[a]);
+    return std::abs(x[i + q] - line) < 0.5 * std::abs(x[i + q] - cubic[q]);
+  };
+  for (int split = 0; split <= len; ++split) {  // samples before `split` on the left line
+    bool sides = true;
+    for (int q = 0; q < len && sides; ++q) sides = along(q, q < split ? i - 2 : i + len);
+    if (sides) return true;
   }
   return false;
 }
 
-/// Adjacent pairs of bad samples (review: two adjacent +0.1 rad samples gave Coulomb 0 with exit
-/// 0): each sample of the pair is in the other's leave-one-out stencil, which hides both. The
-/// pair (i, i + 1) is predicted by the cubic through i - 2, i - 1, i + 2, i + 3; it is a glitch
-/// when both deviations (over their noise gain) pass `threshold` with the same sign, the pair
-/// is the largest among its overlapping neighbours, and it does not continue one side
-/// (continues_one_side: the pairs beside a step). A step straddled by the pair deviates with
-/// opposite signs. Returns the first sample of each pair, and the two predictions in
-/// `expected`.
-std::vector<int> pair_hits(const std::vector<double>& t, const std::vector<double>& x,
-                           double threshold, std::vector<std::array<double, 2>>* expected) {
+/// Runs of `len` adjacent bad samples (2: review of issue 16, two adjacent +0.1 rad samples gave
+/// Coulomb 0 with exit 0; 3: review of 2026-11-24, A5, a 3-sample torque burst of 1.5 N m gave
+/// Coulomb +3 std with the noise floor doubled). Each sample of a run is in the others'
+/// leave-one-out stencils, which hides them all. The run (i .. i + len - 1) is predicted by the
+/// cubic through i - 2, i - 1, i + len, i + len + 1; it is a glitch when every deviation (over
+/// its noise gain) passes `threshold` with the same sign, the run is the largest among its
+/// overlapping neighbours, and it does not continue one side (continues_one_side: the runs
+/// beside a step). A step straddled by the run deviates with opposite signs. Returns the first
+/// sample of each run, and the run's predictions in `expected`.
+std::vector<int> run_hits(const std::vector<double>& t, const std::vector<double>& x, int len,
+                          double threshold, std::vector<std::vector<double>>* expected) {
   const int n = static_cast<int>(x.size());
   std::vector<double> score(n, 0.0);
-  std::vector<std::array<double, 2>> pred(n, {0.0, 0.0});
-  for (int i = 2; i + 3 < n; ++i) {
-    const int nb[4] = {i - 2, i - 1, i + 2, i + 3};
-    double e[2];
-    for (int q = 0; q < 2; ++q) {
+  std::vector<std::vector<double>> pred(n, std::vector<double>(len, 0.0));
+  for (int i = 2; i + len + 1 < n; ++i) {
+    const int nb[4] = {i - 2, i - 1, i + len, i + len + 1};
+    double lo = kInf;
+    int sign = 0;
+    for (int q = 0; q < len; ++q) {
       double gain2 = 1, p = 0;
       for (int a = 0; a < 4; ++a) {
         double w = 1;
@@ -267,18 +270,19 @@ std::vector<int> pair_hits(const std::vector<double>& t, const std::vector<doubl
         p += w * (x[nb[a]] - x[i]);  // offset: keeps multi-turn angles exact
       }
       pred[i][q] = p + x[i];
-      e[q] = (x[i + q] - pred[i][q]) / std::sqrt(gain2);
+      const double e = (x[i + q] - pred[i][q]) / std::sqrt(gain2);
+      const int sq = e > 0 ? 1 : e < 0 ? -1 : 0;
+      if (!std::isfinite(e) || sq == 0 || (q > 0 && sq != sign)) lo = -1;
+      sign = sq;
+      lo = std::min(lo, std::abs(e));
     }
-    if (std::isfinite(e[0]) && std::isfinite(e[1]) && e[0] * e[1] > 0 &&
-        !continues_one_side(t, x, i, pred[i])) {
-      score[i] = std::min(std::abs(e[0]), std::abs(e[1]));
-    }
+    if (lo > 0 && !continues_one_side(t, x, i, len, pred[i])) score[i] = lo;
   }
   std::vector<int> hits;
-  for (int i = 2; i + 3 < n; ++i) {
+  for (int i = 2; i + len + 1 < n; ++i) {
     if (!(score[i] > threshold) || threshold <= 0) continue;
     bool peak = true;
-    for (int j = std::max(0, i - 2); j <= std::min(n - 1, i + 2); ++j) {
+    for (int j = std::max(0, i - len); j <= std::min(n - 1, i + len); ++j) {
       if (j != i && (score[j] > score[i] || (j < i && score[j] == score[i]))) peak = false;
     }
     if (!peak) continue;
@@ -305,6 +309,10 @@ Glitch make_glitch(const TorqueLog& log, const char* name, const std::vector<dou
 /// of a column is compared with the deviation over it everywhere, so that the ends (gain ~8.4)
 /// are judged like the inside (review: a +100 spike of alpha1 on the last line was kept).
 const double kInteriorGain = std::sqrt(70.0 / 36.0);
+
+/// A burst of up to this many samples that leaves the trend and returns is a glitch run (a step
+/// of an angle, glitch_run; adjacent glitches of any column, run_hits).
+constexpr int kMaxRun = 3;
 
 /// Leave-one-out hits of one pass: beyond `noise_threshold` (in noise std, `z`) and, by its
 /// deviation from `expected` over kInteriorGain, beyond `floor`; the largest within two samples,
@@ -386,6 +394,25 @@ void merge_repeats(std::vector<Glitch>* found, double noise) {
   *found = std::move(merged);
 }
 
+/// Repairs in place the shortest runs of adjacent glitches (run_hits) of lengths shortest to
+/// longest that are found, appending them to `found`; returns their length (0: none found).
+int repair_runs(const TorqueLog& log, const char* name, int shortest, int longest,
+                double threshold, double noise, std::vector<double>* x,
+                std::vector<Glitch>* found) {
+  for (int len = shortest; len <= longest; ++len) {
+    std::vector<std::vector<double>> expected;
+    const std::vector<int> runs = run_hits(log.t, *x, len, threshold, &expected);
+    for (size_t k = 0; k < runs.size(); ++k) {
+      for (int q = 0; q < len; ++q) {
+        found->push_back(make_glitch(log, name, *x, runs[k] + q, expected[k][q], noise));
+      }
+      for (int q = 0; q < len; ++q) (*x)[runs[k] + q] = expected[k][q];
+    }
+    if (!runs.empty()) return len;
+  }
+  return 0;
+}
+
 /// Rejects isolated glitches of one column in place; returns the glitches found.
 std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double sigmas,
                                   std::vector<double>* x, double* noise, double min_threshold) {
@@ -406,21 +433,15 @@ std::vector<Glitch> reject_column(const TorqueLog& log, const char* name, double
         single_hits(log.t, *x, z, expected, sigmas * *noise, curvature_floor);
     if (hits.empty()) {
       // no single glitch left: adjacent pairs, each hiding the other from the leave-one-out
-      std::vector<std::array<double, 2>> pair_expected;
-      const std::vector<int> pairs = pair_hits(log.t, *x, threshold, &pair_expected);
-      for (size_t k = 0; k < pairs.size(); ++k) {
-        for (int q = 0; q < 2; ++q) {
-          found.push_back(
-              make_glitch(log, name, *x, pairs[k] + q, pair_expected[k][q], *noise));
-        }
-        for (int q = 0; q < 2; ++q) (*x)[pairs[k] + q] = pair_expected[k][q];
-      }
+      int len = repair_runs(log, name, 2, 2, threshold, *noise, x, &found);
       // and a pair at an end, where neither has a two-sided stencil
       bool ends = false;
       for (bool start : {true, false}) {
         ends = repair_end(log, name, start, threshold, *noise, x, &found) || ends;
       }
-      if (!pairs.empty() || ends) continue;
+      // then, with neither, longer runs (a pair at an end would pass for one)
+      if (len == 0 && !ends) len = repair_runs(log, name, 3, kMaxRun, threshold, *noise, x, &found);
+      if (len > 0 || ends) continue;
       *noise = noise_std(z);
       break;
     }
@@ -605,8 +626,6 @@ double noise_std(const std::vector<double>& z) {
   return c ? std::sqrt(s2 / c / 0.99893) : s0;
 }
 
-/// A burst of up to this many samples that leaves the trend and returns is a glitch run.
-constexpr int kMaxRun = 3;
 /// Samples on each side of a run that judge it.
 constexpr int kRunSide = 6;
 

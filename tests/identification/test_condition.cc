@@ -298,6 +298,34 @@ TEST(Glitch, APairOfBadSamplesAtTheEndsIsRejectedByLine) {
   }
 }
 
+// review of 2026-11-24 (A5): a burst of three samples on a torque channel (+1.5 N m, 75 noise
+// std) was neither rejected nor named, and gave Coulomb +3.2 std with the noise floor of tau1
+// raised from 0.14 to 0.20 N m. It is a glitch run, rejected by its own lines, at two places and
+// on both channels; the noise floor is that of the clean log.
+TEST(Glitch, ATorqueBurstOfThreeSamplesIsRejectedByLine) {
+  const TorqueLog clean = paper_log(2.0);
+  const IdentifyResult reference = fit(clean);
+  for (int first : {1000, 1500}) {
+    for (bool second : {false, true}) {
+      SCOPED_TRACE("samples from " + std::to_string(first) + (second ? ", tau2" : ", tau1"));
+      TorqueLog log = clean;
+      std::vector<double>& tau = second ? log.tau2 : log.tau1;
+      for (int i = first; i < first + 3; ++i) tau[i] += 1.5;
+      const IdentifyResult res = fit(log);
+      expect_truth(res);
+      ASSERT_EQ(res.glitches.size(), 3u);
+      for (int q = 0; q < 3; ++q) {
+        EXPECT_EQ(res.glitches[q].line, log.lines[first + q]);
+        EXPECT_EQ(res.glitches[q].column, second ? "tau2" : "tau1");
+      }
+      for (int c = 0; c < 2; ++c) {
+        EXPECT_NEAR(res.residual_noise_floor[c], reference.residual_noise_floor[c],
+                    0.05 * reference.residual_noise_floor[c]);
+      }
+    }
+  }
+}
+
 // review (finding 7): a burst of three +0.1 rad samples, a +0.1/-0.1 doublet and two swapped
 // rows were each refused as a step that "stays there"; they are glitch runs, rejected by line.
 // A longer burst is still refused, saying that the angle comes back.
