@@ -327,8 +327,10 @@ Json identification_json(const Args& a, const Scene& scene, const id::IdentifyOp
   Json warnings = Json::array_of(res.warnings);
   j.set("warnings", std::move(warnings));
   j.set("model_check", Json::array_of(res.model_check, [](const id::IdentifyResult::MisfitCause& c) {
-          return Json::object({{"cause", c.name}, {"drop", c.drop}, {"z", c.z},
-                               {"z_given", c.z_given}, {"named", c.named}});
+          const auto num = [&](double v) { return c.checked && std::isfinite(v) ? Json(v) : Json(); };
+          return Json::object({{"cause", c.name}, {"checked", c.checked}, {"drop", num(c.drop)},
+                               {"z", num(c.z)}, {"z_given", num(c.z_given)},
+                               {"explained", num(c.explained)}, {"evidenced", c.evidenced}});
         }));
   j.set("identification_wall_time_s", res.wall_time_s);
   return j;

@@ -153,7 +153,11 @@ int report(const std::vector<TaskResult>& results, double refine_tol) {
       continue;
     }
     ++ok;
-    if (r.refinement_change >= refine_tol) {
+    if (r.refinement_limited) {
+      std::printf("  %s: note: discretization not shown converged, the finest level stopped at "
+                  "its evaluation limit (%s); raise --max-evaluations\n",
+                  r.task.c_str(), r.refinement.c_str());
+    } else if (r.discretization_unsettled(refine_tol)) {
       std::printf("  %s: note: discretization not converged, the energy changed %.2g%% at the "
                   "last refinement (%s); add a finer level with --refine-levels\n",
                   r.task.c_str(), 100.0 * r.refinement_change, r.refinement.c_str());

@@ -20,6 +20,7 @@ namespace fivebar::io {
 namespace {
 
 using identification::kLogOptional;
+using identification::median_of;
 using identification::kLogRequired;
 using identification::LogError;
 using identification::TorqueLog;
@@ -73,10 +74,6 @@ void check_log_time(const CsvTable& table) {
                      " after " + format_shortest(table.rows[n - 2][t]) + ")");
 }
 
-double median_of(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 // A logged rate (order 1) or acceleration (order 2) against the angles' own (unwrapped,
 // Savitzky-Golay, the one-sided edges left out): for accelerations, their median ratio where
@@ -151,10 +148,7 @@ double fastest_crank(const TorqueLog& log) {
 }
 
 void check_log_time_unit(const TorqueLog& log) {
-  if (log.t.size() < 2) return;
-  std::vector<double> steps(log.t.size() - 1);
-  for (size_t i = 0; i + 1 < log.t.size(); ++i) steps[i] = log.t[i + 1] - log.t[i];
-  const double step = median_of(steps);
+  const double step = identification::median_time_step(log);
   if (!(step >= kSlowTimeStep)) return;
   const bool shorter = !(step >= kLongestTimeStep);  // then refused only without motion
   if (shorter && !(fastest_crank(log) < kSlowestMotion)) return;

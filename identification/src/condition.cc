@@ -21,8 +21,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 double median_abs(std::vector<double> v) {
   if (v.empty()) return 0;
   for (double& x : v) x = std::isfinite(x) ? std::abs(x) : kInf;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
+  return median_of(std::move(v));
 }
 
 double noise_std(const std::vector<double>& z);
@@ -469,8 +468,7 @@ std::vector<Glitch> reject_absurd(const TorqueLog& log, const char* name, std::v
   // tell which side is wrong) beyond 1000 times the median step
   std::vector<double> steps;
   for (int i = 1; i < n; ++i) steps.push_back(std::abs(v[i] - v[i - 1]));
-  std::nth_element(steps.begin(), steps.begin() + steps.size() / 2, steps.end());
-  const double jump = 1e3 * std::max(steps[steps.size() / 2], 1e-12);
+  const double jump = 1e3 * std::max(median_of(std::move(steps)), 1e-12);
   auto step_ok = [&](int a, int b) { return std::abs(v[b] - v[a]) <= jump; };
   auto jumps = [&](int i) {
     // at an end: the jump to the neighbour, whose own next step is sane (else the neighbour is

@@ -34,15 +34,17 @@ std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& 
   return "";
 }
 
-namespace {
-
-/// The median of v (the upper one for an even count); v non-empty.
 double median_of(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   return v[v.size() / 2];
 }
 
-}  // namespace
+double median_time_step(const TorqueLog& log) {
+  if (log.t.size() < 2) return NAN;
+  std::vector<double> steps(log.t.size() - 1);
+  for (size_t i = 0; i + 1 < log.t.size(); ++i) steps[i] = log.t[i + 1] - log.t[i];
+  return median_of(std::move(steps));
+}
 
 std::string rates_mismatch(const TorqueLog& log, const std::vector<double>& theta,
                            const std::vector<double>& omega) {
@@ -76,12 +78,10 @@ void require_samples(const TorqueLog& log, int needed, const std::string& what) 
 void require_uniform_sampling(const TorqueLog& log) {
   const int n = log.size();
   if (n < 3) return;
-  std::vector<double> steps;
-  for (int i = 0; i + 1 < n; ++i) steps.push_back(log.t[i + 1] - log.t[i]);
-  const double median = median_of(steps);
+  const double median = median_time_step(log);
   int off = 0, first = -1;
   for (int i = 0; i + 1 < n; ++i) {
-    if (std::abs(steps[i] - median) <= kSamplingTolerance * median) continue;
+    if (std::abs(log.t[i + 1] - log.t[i] - median) <= kSamplingTolerance * median) continue;
     if (first < 0) first = i;
     ++off;
   }
@@ -92,7 +92,7 @@ void require_uniform_sampling(const TorqueLog& log) {
                      std::to_string(n - 1) + " time steps differ from the median step " +
                      format_significant(median, 4) + " s by more than " +
                      format_significant(100 * kSamplingTolerance, 2) + " % (here " +
-                     format_significant(steps[first], 4) +
+                     format_significant(log.t[first + 1] - log.t[first], 4) +
                      " s); the rate estimates and the rest rule need a uniform grid: resample "
                      "the log, or cut it at the gap");
 }

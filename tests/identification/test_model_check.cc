@@ -82,8 +82,8 @@ TorqueLog paper_log_with_rates(std::uint64_t seed) {
 }
 
 constexpr const char* kTorqueZero = "a torque sensor's zero may be off";
-constexpr const char* kTorqueGain = "gain may be off";
-constexpr const char* kUnresolved = "the friction law does not absorb a misfit of the log";
+constexpr const char* kTorqueGain = "a torque sensor's gain may be off";
+constexpr const char* kUnresolved = "the friction estimates absorbed a model error the log cannot attribute";
 
 TEST(ModelCheck, ATorqueSensorOffsetIsNamed) {
   TorqueLog log = paper_log_with_rates(2);
@@ -116,6 +116,37 @@ TEST(ModelCheck, AMisfitWhoseCauseTheLogCannotTellIsStillTold) {
   EXPECT_FALSE(has_warning(res, kMassWarning));
   ASSERT_EQ(res.model_check.size(), 4u);
   EXPECT_EQ(res.model_check.back().name, "any");
+}
+
+// review of 2026-11-24 (helper-46, finding 2): per-joint Coulomb friction fitted with the shared
+// law leaves the residual 4 to 5 times its floor; every cause reduced it by thousands of std
+// and the torque sensors were blamed. None of them explains half the misfit beyond the others
+TEST(ModelCheck, AMisfitOfTheLawIsNotBlamedOnTheSensors) {
+  Params<double> truth = paper_params();
+  truth.friction.coulomb = {0.1, 0.2, 0.15, 0.12, 0.18};
+  SynthOptions so = testing::log_options(2.0, 0.02, 1e-5, 1);
+  so.with_rates = true;
+  const TorqueLog log = testing::synthetic_paper_log(truth, so, "model_check_law.csv");
+  const IdentifyResult res = identify(paper_params(), paper_loads, log, options());
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_FALSE(has_warning(res, kTorqueZero));
+  EXPECT_FALSE(has_warning(res, kTorqueGain));
+  EXPECT_FALSE(has_warning(res, kOffsetWarning));
+  EXPECT_FALSE(has_warning(res, kMassWarning));
+}
+
+// finding 7: on a 0.05 s log (25 samples against 22 freed columns) the check read offsets of
+// 43 N m; below 10 residuals per column it does not run
+TEST(ModelCheck, DoesNotRunOnAFewSamples) {
+  const IdentifyResult res = identify(
+      paper_params(), paper_loads,
+      testing::synthetic_paper_log(paper_params(), testing::log_options(0.05, 0.02, 1e-5, 1),
+                                   "model_check_short.csv"),
+      options());
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_TRUE(res.model_check.empty());
+  EXPECT_FALSE(has_warning(res, kTorqueZero));
+  EXPECT_FALSE(has_warning(res, kTorqueGain));
 }
 
 TEST(ModelCheck, LogsOfTheSceneAreQuiet) {

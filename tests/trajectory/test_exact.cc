@@ -108,6 +108,22 @@ TEST(Refinement, StopsWhenTheEnergyChangesLessThanTheTolerance) {
   EXPECT_LT(all.dissipated_energy, r.dissipated_energy);
 }
 
+// helper deg12 (2026-11-24): a level whose solve stopped at its evaluation limit ended within
+// the tolerance of the level before and passed for converged; it shows nothing, and says so
+TEST(Refinement, ALevelStoppedAtItsLimitDoesNotShowConvergence) {
+  const TaskSpec task = paper_tasks()[0];  // swing_left
+  BatchOptions options;
+  options.validate = false;
+  options.refine.continuation.clear();
+  options.refine.control_points = {14};
+  options.refine.tol = 0.5;  // any change passes: only the limit can keep it open
+  options.optimizer.max_evaluations = 12;
+  const TaskResult r = solve(task, options);
+  ASSERT_TRUE(r.refinement_limited) << r.refinement << " " << r.message;
+  EXPECT_TRUE(r.discretization_unsettled(options.refine.tol));
+  EXPECT_NE(r.message.find("discretization not shown converged"), std::string::npos) << r.message;
+}
+
 TEST(WarmStart, FromANeighbouringDesign) {
   const TaskSpec task = paper_tasks()[2];  // reach_right, a Cartesian goal
   BatchOptions options;

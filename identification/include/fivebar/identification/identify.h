@@ -168,14 +168,20 @@ struct IdentifyResult {
   /// by one linearized refit with its parameters freed: "inertia" (the links' 16 inertial
   /// parameters, when not estimated), "angle_offsets" (the encoders' zeros), "torque_readings"
   /// (the torque sensors' offsets, when not estimated, and gains); and "any", all of them
-  /// together. Empty when the check did not run (the fit did not converge).
+  /// together. Empty when the check did not run (the fit did not converge, the output-error
+  /// method, or fewer than 10 residuals per parameter of the check).
   struct MisfitCause {
     std::string name;
-    double drop = 0;     ///< fall of the whitened cost, net of what noise alone gives
-    double z = 0;        ///< that fall in std of noise's
-    double z_given = 0;  ///< the same beyond the other causes' parameters ("any": z)
-    bool named = false;  ///< evidenced (z and z_given above 8): a warning names it when the
-                         ///< friction would move
+    bool checked = false;  ///< false: the refit is singular, the log cannot separate these
+                           ///< parameters from the friction (drop and z mean nothing)
+    double drop = 0;       ///< fall of the whitened cost, net of what noise alone gives
+    double z = 0;          ///< that fall in std of noise's
+    double z_given = 0;    ///< the same beyond the other causes' parameters ("any": z)
+    /// the fraction of the residual's excess over its noise floor that the fall removes (NaN:
+    /// no excess)
+    double explained = 0;
+    bool evidenced = false;  ///< z and z_given above 8, and half the excess explained when there
+                             ///< is one: a warning names it when the friction would move
   };
   std::vector<MisfitCause> model_check;
   int samples = 0;       ///< samples in the log

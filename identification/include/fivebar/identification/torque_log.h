@@ -53,6 +53,12 @@ std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& 
 std::string rates_mismatch(const TorqueLog& log, const std::vector<double>& theta,
                            const std::vector<double>& omega);
 
+/// The median of v (the upper one for an even count); v non-empty.
+double median_of(std::vector<double> v);
+
+/// The median time step of the log [s] (the upper one for an even count); NaN below 2 samples.
+double median_time_step(const TorqueLog& log);
+
 /// Largest relative departure of a time step from the median step that identify accepts.
 inline constexpr double kSamplingTolerance = 0.25;
 

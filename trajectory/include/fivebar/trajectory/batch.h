@@ -134,7 +134,16 @@ struct TaskResult {
   /// tolerance: converged); NaN when no refinement ran
   double refinement_change = NAN;
 
+  /// the last level's solve stopped at its evaluation (or time) limit: its change shows nothing
+  bool refinement_limited = false;
+
   bool solved() const { return !x.empty(); }
+  /// the refinement's levels ran out before the energy changed by less than `tol` (its
+  /// RefineOptions::tol), or the last one stopped at its limit: the result is the optimum of
+  /// the finest basis at best, not yet shown to be the problem's
+  bool discretization_unsettled(double tol) const {
+    return refinement_change >= tol || refinement_limited;
+  }
 };
 
 /// Optimizes one task for one design. Never throws for numerical trouble: everything ends up in
