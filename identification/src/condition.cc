@@ -227,7 +227,7 @@ bool end_repair(const std::vector<double>& t, const std::vector<double>& x, bool
 /// the kink of its logged rate, a torque flipping with the friction) leaves the cubic with one
 /// sign, as a glitch run does; but a glitch run leaves both sides' lines.
 bool continues_one_side(const std::vector<double>& t, const std::vector<double>& x, int i,
-                        int len, const std::vector<double>& cubic) {
+                        int len, const double* cubic) {
   const auto along = [&](int q, int a) {
     const double line = x[a] + (x[a + 1] - x[a]) * (t[i + q] - t[a]) / (t[a + 1] - t[a]);
     return std::abs(x[i + q] - line) < 0.5 * std::abs(x[i + q] - cubic[q]);
@@ -253,7 +253,7 @@ std::vector<int> run_hits(const std::vector<double>& t, const std::vector<double
                           double threshold, std::vector<std::vector<double>>* expected) {
   const int n = static_cast<int>(x.size());
   std::vector<double> score(n, 0.0);
-  std::vector<std::vector<double>> pred(n, std::vector<double>(len, 0.0));
+  std::vector<double> pred(static_cast<size_t>(n) * len, 0.0);  // run i: pred[i * len + q]
   for (int i = 2; i + len + 1 < n; ++i) {
     const int nb[4] = {i - 2, i - 1, i + len, i + len + 1};
     double lo = kInf;
@@ -268,14 +268,17 @@ std::vector<int> run_hits(const std::vector<double>& t, const std::vector<double
         gain2 += w * w;
         p += w * (x[nb[a]] - x[i]);  // offset: keeps multi-turn angles exact
       }
-      pred[i][q] = p + x[i];
-      const double e = (x[i + q] - pred[i][q]) / std::sqrt(gain2);
+      double& at = pred[static_cast<size_t>(i) * len + q];
+      at = p + x[i];
+      const double e = (x[i + q] - at) / std::sqrt(gain2);
       const int sq = e > 0 ? 1 : e < 0 ? -1 : 0;
       if (!std::isfinite(e) || sq == 0 || (q > 0 && sq != sign)) lo = -1;
       sign = sq;
       lo = std::min(lo, std::abs(e));
     }
-    if (lo > 0 && !continues_one_side(t, x, i, len, pred[i])) score[i] = lo;
+    if (lo > 0 && !continues_one_side(t, x, i, len, &pred[static_cast<size_t>(i) * len])) {
+      score[i] = lo;
+    }
   }
   std::vector<int> hits;
   for (int i = 2; i + len + 1 < n; ++i) {
@@ -286,7 +289,8 @@ std::vector<int> run_hits(const std::vector<double>& t, const std::vector<double
     }
     if (!peak) continue;
     hits.push_back(i);
-    expected->push_back(pred[i]);
+    const auto first = pred.begin() + static_cast<std::ptrdiff_t>(i) * len;
+    expected->emplace_back(first, first + len);
   }
   return hits;
 }

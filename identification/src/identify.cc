@@ -2178,11 +2178,23 @@ constexpr double kExplainsAll = 0.9;
 struct CauseSteps {
   std::array<detail::FreedStep, kCauseCount> alone;  ///< not ok: no candidate
   detail::FreedStep all;
-  std::vector<IdentifyResult::MisfitCause> report;  ///< IdentifyResult::model_check
-  std::array<bool, kCauseCount> named{};
-  std::array<double, kCauseCount> z{};  ///< evidence alone [std of noise's]
-  bool any() const { return named[0] || named[1] || named[2]; }
+  std::vector<IdentifyResult::MisfitCause> report;  ///< IdentifyResult::model_check ("any" last)
+  std::array<int, kCauseCount> slot{-1, -1, -1};    ///< each cause's entry in `report`
+  bool named(int id) const { return slot[id] >= 0 && report[slot[id]].evidenced; }
+  /// evidence alone [std of noise's]
+  double z(int id) const { return slot[id] >= 0 ? report[slot[id]].z : 0.0; }
+  bool any() const { return named(0) || named(1) || named(2); }
 };
+
+/// model_check's candidate causes by CauseId: the name in identification.json, and the words
+struct CauseText {
+  const char* name;
+  const char* what;
+};
+constexpr CauseText kCauseText[kCauseCount] = {
+    {"inertia", "the links' inertial parameters"},
+    {"angle_offsets", "the encoders' zeros"},
+    {"torque_readings", "the torque sensors' offsets and gains"}};
 
 IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedStep& fs,
                                          double z, double z_given, double excess) {
@@ -2199,7 +2211,6 @@ IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedSt
 CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
                        const std::vector<int> idx[4], const Eigen::VectorXd& info,
                        const Eigen::VectorXd& bias, bool attributable) {
-  static const char* kNames[] = {"inertia", "angle_offsets", "torque_readings"};
   const double excess = r.squaredNorm() - static_cast<double>(r.size());
   unsigned present = 0;
   std::vector<int> ids;
@@ -2215,17 +2226,16 @@ CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
   for (int id : ids) all_but.push_back(freed_set(J, r, idx, info, bias, present & ~(1u << id)));
   const detail::Causes c = detail::model_causes(alone, cs.all, all_but);
   for (size_t k = 0; k < ids.size(); ++k) {
-    IdentifyResult::MisfitCause m = misfit_cause(kNames[ids[k]], alone[k], c.z[k], c.z_given[k], excess);
+    IdentifyResult::MisfitCause m =
+        misfit_cause(kCauseText[ids[k]].name, alone[k], c.z[k], c.z_given[k], excess);
     m.evidenced = c.named[k] &&
                   !(excess > kExcessShows * r.size() && m.explained < kExplainedExcess) &&
                   (attributable || m.explained >= kExplainsAll);
     cs.alone[ids[k]] = alone[k];
-    cs.named[ids[k]] = m.evidenced;
-    cs.z[ids[k]] = c.z[k];
+    cs.slot[ids[k]] = static_cast<int>(cs.report.size());
     cs.report.push_back(m);
   }
-  const double z_all = cs.all.ok && cs.all.drop_sd > 0
-                           ? (cs.all.drop - cs.all.drop_mean) / cs.all.drop_sd : 0.0;
+  const double z_all = detail::evidence(cs.all, cs.all.drop);
   cs.report.push_back(misfit_cause("any", cs.all, z_all, z_all, excess));
   return cs;
 }
@@ -2289,7 +2299,7 @@ std::string torque_warning(const TorqueColumns& tc, const detail::FreedStep& fs,
 int strongest_cause(const CauseSteps& cs) {
   int best = kCauseCount;
   for (int id = 0; id < kCauseCount; ++id) {
-    if (cs.alone[id].ok && (best == kCauseCount || cs.z[id] > cs.z[best])) best = id;
+    if (cs.alone[id].ok && (best == kCauseCount || cs.z(id) > cs.z(best))) best = id;
   }
   return best;
 }
@@ -2302,8 +2312,6 @@ int strongest_cause(const CauseSteps& cs) {
 /// evidence, 14 std alone, was 4.7 std beyond the inertias' and the encoders' zeros')
 std::string unresolved_warning(const CauseSteps& cs, int strongest, const std::string& moved,
                                bool rates_biased) {
-  static const char* kWhat[] = {"the links' inertial parameters", "the encoders' zeros",
-                                "the torque sensors' offsets and gains"};
   std::vector<IdentifyResult::MisfitCause> causes(cs.report.begin(), cs.report.end() - 1);
   std::sort(causes.begin(), causes.end(), [](const auto& a, const auto& b) { return a.z > b.z; });
   std::string each;
@@ -2311,7 +2319,7 @@ std::string unresolved_warning(const CauseSteps& cs, int strongest, const std::s
     each += (each.empty() ? "" : ", ") + c.name + " " + format_significant(c.z, 2);
   }
   return "the friction estimates absorbed a model error the log cannot attribute: with " +
-         std::string(kWhat[strongest]) + " free (one linearized refit) " +
+         std::string(kCauseText[strongest].what) + " free (one linearized refit) " +
          drop_clause(cs.alone[strongest]) + " and " + moved +
          ", but no cause stands out from the others or explains the misfit (evidence of each "
          "alone, in std: " + each + "). Check the friction law (--per-joint, --law), the "
@@ -2351,19 +2359,19 @@ void model_check(const Fit& f, IdentifyResult* out) {
   const detail::FreedStep &fo = cs.alone[kCauseAngles], &fi = cs.alone[kCauseInertia],
                           &ft = cs.alone[kCauseTorque];
   std::string moved;
-  if (cs.named[kCauseAngles] && !(moved = friction_clause(f, *out, fo, false, true)).empty()) {
+  if (cs.named(kCauseAngles) && !(moved = friction_clause(f, *out, fo, false, true)).empty()) {
     out->warnings.push_back(
         "with offsets of the logged angles free (one linearized refit) " + drop_clause(fo) +
         " and " + moved + ". theta1, theta2 read " + pair_clause(fo, 0, 1.0) +
         " rad more than the scene's angles: an encoder's zero may be off; subtract the offsets "
         "from the logged angles");
   }
-  if (cs.named[kCauseTorque] && !(moved = friction_clause(f, *out, ft, false, true)).empty()) {
+  if (cs.named(kCauseTorque) && !(moved = friction_clause(f, *out, ft, false, true)).empty()) {
     out->warnings.push_back(torque_warning(tc, ft, moved));
   }
-  const bool masses = cs.named[kCauseInertia];
+  const bool masses = cs.named(kCauseInertia);
   const int top = strongest_cause(cs);
-  if (!cs.any() && top < kCauseCount && cs.z[top] > detail::kCauseZ &&
+  if (!cs.any() && top < kCauseCount && cs.z(top) > detail::kCauseZ &&
       !(moved = friction_clause(f, *out, cs.alone[top], false, true)).empty()) {
     out->warnings.push_back(unresolved_warning(cs, top, moved, f.rates_biased));
     return;

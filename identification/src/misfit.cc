@@ -57,21 +57,18 @@ FreedStep freed_step(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
 
 Causes model_causes(const std::vector<FreedStep>& alone, const FreedStep& all,
                     const std::vector<FreedStep>& all_but) {
-  const auto z = [](const FreedStep& fs, double drop) {
-    return fs.ok && fs.drop_sd > 0 ? (drop - fs.drop_mean) / fs.drop_sd : 0.0;
-  };
   const size_t n = alone.size();
   Causes c;
   c.named.assign(n, false);
   c.z.assign(n, 0.0);
   c.z_given.assign(n, 0.0);
   for (size_t k = 0; k < n; ++k) {
-    c.z[k] = z(alone[k], alone[k].drop);
+    c.z[k] = evidence(alone[k], alone[k].drop);
     // with other causes in the check, each must also show beyond their parameters
     if (n == 1) {
       c.z_given[k] = c.z[k];
     } else if (all.ok && k < all_but.size() && all_but[k].ok) {
-      c.z_given[k] = z(alone[k], all.drop - all_but[k].drop);
+      c.z_given[k] = evidence(alone[k], all.drop - all_but[k].drop);
     }
     c.named[k] = c.z[k] > kCauseZ && c.z_given[k] > kCauseZ;
   }

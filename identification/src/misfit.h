@@ -40,6 +40,11 @@ struct FreedStep {
 /// drop_sd), and also beyond what the other causes' parameters lower it by (all minus all_but;
 /// a step not ok there: the causes cannot be told apart, none is named).
 inline constexpr double kCauseZ = 8.0;
+/// A fall `drop` of the whitened cost in std of what noise alone gives the parameters `fs` frees
+/// ((drop - mean) / sd; 0 when the step is not ok).
+inline double evidence(const FreedStep& fs, double drop) {
+  return fs.ok && fs.drop_sd > 0 ? (drop - fs.drop_mean) / fs.drop_sd : 0.0;
+}
 struct Causes {
   std::vector<bool> named;
   /// (drop - mean) / sd alone, and given the other causes

@@ -306,8 +306,7 @@ void classify(const SolverStatus& solver, const ConstraintCheck& check,
               std::to_string(check.max_violation) + "; peak torque " +
               std::to_string(check.peak_torque) + " N m, min |sin(th4 - th3)| " +
               std::to_string(check.min_coupler_sine) + ")";
-  } else if (solver.outcome == SolverOutcome::kMaxEvaluations ||
-             solver.outcome == SolverOutcome::kMaxTime) {
+  } else if (solver.limited()) {
     status = r->solver_status;
   }
   r->status = status;

@@ -199,8 +199,7 @@ Candidate refinement(const Params<double>& params, const sim::LoadFunction& load
     r->refinement_change = std::abs(c.exact - previous) / std::abs(previous);
     // a level stopped at its limit may sit anywhere above its basis's optimum (deg12: a
     // 325-point level ended 1.5e-6 from the 165-point one and passed for converged)
-    r->refinement_limited = c.solver.outcome == SolverOutcome::kMaxEvaluations ||
-                            c.solver.outcome == SolverOutcome::kMaxTime;
+    r->refinement_limited = c.solver.limited();
     previous = c.exact;
     if (kept) best = std::move(c);
     if (r->refinement_change < options.refine.tol && !r->refinement_limited) break;

@@ -27,6 +27,10 @@ struct SolverStatus {
     return outcome == SolverOutcome::kConverged || outcome == SolverOutcome::kMaxEvaluations ||
            outcome == SolverOutcome::kMaxTime || outcome == SolverOutcome::kRoundoffLimited;
   }
+  /// The run stopped at its evaluation or time limit, not converged.
+  bool limited() const {
+    return outcome == SolverOutcome::kMaxEvaluations || outcome == SolverOutcome::kMaxTime;
+  }
 };
 
 /// Short lowercase name of an outcome (summary.csv `solver_status`): converged,
