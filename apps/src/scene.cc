@@ -845,6 +845,18 @@ Scene parse_scene(const std::string& yaml_text, const std::string& path,
   return build_scene(reader);
 }
 
+std::vector<std::string> scene_keys(bool sections) {
+  std::vector<std::string> keys;
+  for (const Field& f : schema()) {
+    if (!sections && (f.kind == Kind::kSection || f.kind == Kind::kLinkList)) continue;
+    std::string key = f.key;
+    const size_t hash = key.find('#');
+    if (hash != std::string::npos) key[hash] = 'N';
+    keys.push_back(key);
+  }
+  return keys;
+}
+
 Scene load_scene(const std::string& path, const std::vector<std::string>& sets) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));

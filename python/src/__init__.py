@@ -3,20 +3,104 @@
     import fivebar
     scene = fivebar.load_scene("datasets/scenes/paper.yaml",
                                overrides={"mechanism.links.2.mass": 1.5})
-    run = fivebar.simulate(scene)          # dict of NumPy arrays, trajectory.csv columns
+    run = fivebar.simulate(scene, duration=1.0)   # trajectory.csv columns, summary.json
+    run.theta1, run.summary.estimated_max_error_rad
     inv = fivebar.inverse(scene, theta, omega, alpha)   # (N, 2) arrays -> M, N, Mf
+    fit = fivebar.identify(scene, "log.csv")
+    fit.parameters["coulomb"].value, fit.condition_number
 
-Bad input raises ValueError with the command line's one-line message; failed numerics raise
-fivebar.NumericalError. See docs/python.md.
+Results are dicts whose keys also read as attributes; the fields of the command line's JSON
+files are all there. Bad input raises ValueError with the command line's one-line message;
+failed numerics raise fivebar.NumericalError; what the command line prints as a warning goes
+through warnings.warn with the category fivebar.FivebarWarning. See docs/python.md.
 """
 import os as _os
+import warnings as _warnings
+
+import numpy as _np
 
 from . import _core
-from ._core import NumericalError, Scene, inverse, simulate
+from ._core import NumericalError, Scene
 
-__all__ = ["NumericalError", "Scene", "load_scene", "parse_scene", "simulate", "inverse",
-           "identify", "optimize"]
+__all__ = ["FivebarWarning", "NumericalError", "Parameters", "Record", "Scene", "load_scene",
+           "parse_scene", "simulate", "inverse", "identify", "optimize"]
 __version__ = "0.1.0"
+
+
+class FivebarWarning(UserWarning):
+    """What `fivebar` prints as `fivebar: warning: ...`: the run gave a result to read with care
+    (a scene value in suspicious units, a parameter the log does not determine, a run check that
+    failed, ...). Filter it like any warning: warnings.simplefilter("error", FivebarWarning)."""
+
+
+class Record(dict):
+    """A result: a dict whose keys also read as attributes (run.summary.steps is
+    run["summary"]["steps"]). Keys that are not identifiers are read with [...]."""
+
+    __slots__ = ()
+
+    def __getattr__(self, name):
+        try:
+            return self[name]
+        except KeyError:
+            raise AttributeError(f"no field '{name}' (fields: {', '.join(self)})") from None
+
+    def __dir__(self):
+        return sorted(set(super().__dir__()) | {k for k in self if k.isidentifier()})
+
+
+class Parameters(list):
+    """The estimated parameters in their order, also by name:
+    fit.parameters[0] and fit.parameters["coulomb"] are the same Record (name, unit, value, std,
+    ci95_low, ci95_high, ...). keys(), items() and `name in parameters` work as for a dict."""
+
+    def __getitem__(self, key):
+        if isinstance(key, str):
+            for p in self:
+                if p["name"] == key:
+                    return p
+            raise KeyError(f"no parameter '{key}' (parameters: {', '.join(self.keys())})")
+        return super().__getitem__(key)
+
+    def __contains__(self, key):
+        return key in self.keys() if isinstance(key, str) else super().__contains__(key)
+
+    def keys(self):
+        return [p["name"] for p in self]
+
+    def items(self):
+        return [(p["name"], p) for p in self]
+
+    def get(self, name, default=None):
+        return self[name] if name in self else default
+
+
+def _record(value):
+    """dicts as Records (nested too), lists of them as lists, 'parameters' as Parameters."""
+    if isinstance(value, dict):
+        out = Record((k, _record(v)) for k, v in value.items())
+        if isinstance(out.get("parameters"), list):
+            dict.__setitem__(out, "parameters", Parameters(out["parameters"]))
+        return out
+    if isinstance(value, list):
+        return [_record(v) for v in value]
+    return value
+
+
+def _warn(messages, stacklevel=3):
+    for message in messages:
+        _warnings.warn(message, FivebarWarning, stacklevel=stacklevel)
+
+
+def _floats(value):
+    """`value` as a float64 array (lists, tuples, int and float32 arrays converted); a value
+    NumPy cannot convert is passed on as it is, for the error naming the argument."""
+    if value is None:
+        return None
+    try:
+        return _np.asarray(value, dtype=_np.float64)
+    except (TypeError, ValueError):
+        return value
 
 
 def load_scene(path, overrides=None):
@@ -24,14 +108,72 @@ def load_scene(path, overrides=None):
 
     overrides: {"dotted.key": value} applied in order like the command line's
     `--set KEY=VALUE` (list elements by 0-based index: "mechanism.links.2.mass").
-    Raises ValueError (the command line's message) on bad input.
+    Raises ValueError (the command line's message) on bad input; likely unit mistakes come as
+    FivebarWarning.
     """
-    return _core.load_scene(_os.fspath(path), overrides)
+    scene = _core.load_scene(_os.fspath(path), overrides)
+    _warn(scene.warnings)
+    return scene
 
 
 def parse_scene(text, name="<string>", overrides=None):
     """Parses a scene from YAML text; `name` names it in error messages."""
-    return _core.parse_scene(text, name, overrides)
+    scene = _core.parse_scene(text, name, overrides)
+    _warn(scene.warnings)
+    return scene
+
+
+def _scene_replace(self, overrides=None, /, **keys):
+    """A copy of the scene with some values changed, checked as a scene file is.
+
+    scene.replace({"simulation.duration": 1.0, "mechanism.links.2.mass": 1.5}) or, with "__"
+    for ".", scene.replace(simulation__duration=1.0). The scene itself is not changed.
+    """
+    merged = dict(overrides or {})
+    merged.update((k.replace("__", "."), v) for k, v in keys.items())
+    scene = self._replace(merged)
+    _warn(scene.warnings)
+    return scene
+
+
+Scene.replace = _scene_replace
+Scene.with_ = _scene_replace
+
+
+def simulate(scene, overrides=None, *, twin=False, **simulation):
+    """Forward simulation of `scene`, as `fivebar simulate` (error estimate included).
+
+    Keywords change the scene's `simulation.*` keys for this run: simulate(scene,
+    duration=1.0, rtol=1e-9); `overrides` ({"dotted.key": value}) changes any key.
+    twin=True also runs the frictionless twin ('frictionless', summary.frictionless).
+    Returns a Record: one float64 array per trajectory.csv column (t, theta1..theta4, ...,
+    E_diss, W_in, W_ext), 'mode' (N, 5) int joint modes (+1/-1 slip, 0 at rest, 2 stuck) and
+    'summary' (every field of summary.json). A run whose own checks fail has
+    summary.status 'failed' and warns (FivebarWarning); a run that fails raises
+    fivebar.NumericalError.
+    """
+    if overrides or simulation:
+        merged = dict(overrides or {})
+        merged.update(("simulation." + k, v) for k, v in simulation.items())
+        scene = scene.replace(merged)
+    run = _record(_core.simulate(scene, twin))
+    summary = run["summary"]
+    _warn([f"{scene.path}: {s['message']}" for s in (summary, summary.get("frictionless"))
+           if s and s.get("status") != "ok" and "message" in s], stacklevel=2)
+    return run
+
+
+def inverse(scene, theta, omega, alpha, t=None, threads=0):
+    """Friction-aware inverse dynamics of N states.
+
+    theta, omega, alpha: (N, 2) arrays of cranks 1 and 2 (anything np.asarray converts to
+    float64: lists, int or float32 arrays); t: (N,) times, needed when loads.M3 or loads.F
+    depend on t. Returns a Record {'M': (N, 2) driving torques [N m], 'N': (N, 5) joint
+    reaction magnitudes [N], 'Mf': (N, 5) friction torques [N m]} (joints O, B, C, D, D0).
+    Runs with the GIL released, on `threads` threads (0: all cores) when N is large.
+    """
+    return Record(_core.inverse(scene, _floats(theta), _floats(omega), _floats(alpha),
+                                _floats(t), threads))
 
 
 def identify(scene, log, **options):
@@ -39,12 +181,17 @@ def identify(scene, log, **options):
 
     Keyword options as `fivebar identify` (method, law, per_joint, loss, loss_scale,
     smooth_sign, estimate_rates, min_rate, sg_window, sg_order, threads, start_from_scene,
-    window) plus validate=False. Returns a dict (identification.json's fields, per-sample
-    arrays, 'fitted_scene').
+    window) plus validate=False. Returns a Record with every field of identification.json
+    (parameters also by name: fit.parameters["coulomb"].std), the covariance, the per-sample
+    arrays and 'fitted_scene'. Its warnings also go through warnings.warn (FivebarWarning).
     """
-    if not isinstance(log, dict):
+    if isinstance(log, dict):
+        log = {k: _floats(v) for k, v in log.items()}
+    else:
         log = _os.fspath(log)
-    return _core.identify(scene, log, **options)
+    fit = _record(_core.identify(scene, log, **options))
+    _warn(fit["warnings"], stacklevel=2)
+    return fit
 
 
 def optimize(scene, tasks, **options):

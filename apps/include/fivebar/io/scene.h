@@ -54,6 +54,10 @@ struct Scene {
 ///     rest_rate_threshold, rest_acceleration_threshold (>= 0; [derived], see Scene)
 Scene load_scene(const std::string& path, const std::vector<std::string>& sets = {});
 
+/// Every key the schema accepts (dotted, `N` for a link index: "mechanism.links.N.mass"), in
+/// schema order. `sections`: the maps and lists that hold other keys ("mechanism.links") too.
+std::vector<std::string> scene_keys(bool sections = false);
+
 /// Parses a scene from YAML text; `path` only names it in error messages.
 Scene parse_scene(const std::string& yaml_text, const std::string& path,
                   const std::vector<std::string>& sets = {});
