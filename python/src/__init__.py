@@ -159,7 +159,7 @@ def simulate(scene, overrides=None, *, twin=False, **simulation):
     run = _record(_core.simulate(scene, twin))
     summary = run["summary"]
     _warn([f"{scene.path}: {s['message']}" for s in (summary, summary.get("frictionless"))
-           if s and s.get("status") != "ok" and "message" in s], stacklevel=2)
+           if s and s.get("status") != "ok" and "message" in s])
     return run
 
 
@@ -190,7 +190,7 @@ def identify(scene, log, **options):
     else:
         log = _os.fspath(log)
     fit = _record(_core.identify(scene, log, **options))
-    _warn(fit["warnings"], stacklevel=2)
+    _warn(fit["warnings"])
     return fit
 
 
