@@ -14,6 +14,7 @@ files are all there. Bad input raises ValueError with the command line's one-lin
 failed numerics raise fivebar.NumericalError; what the command line prints as a warning goes
 through warnings.warn with the category fivebar.FivebarWarning. See docs/python.md.
 """
+import json as _json
 import os as _os
 import warnings as _warnings
 
@@ -103,6 +104,11 @@ def _floats(value):
         return value
 
 
+def _plain(value):
+    """NumPy scalars and arrays as Python numbers and lists (for json.dumps)."""
+    return value.tolist() if hasattr(value, "tolist") else str(value)
+
+
 def load_scene(path, overrides=None):
     """Reads and validates a scene file (YAML).
 
@@ -117,7 +123,11 @@ def load_scene(path, overrides=None):
 
 
 def parse_scene(text, name="<string>", overrides=None):
-    """Parses a scene from YAML text; `name` names it in error messages."""
+    """Parses a scene from YAML text, or builds it from a dict of the same structure
+    ({"mechanism": {"ground_length": 0.29, "links": [...]}, ...}); `name` names it in error
+    messages. Checked as a scene file is (ValueError with the command line's message)."""
+    if isinstance(text, dict):
+        text = _json.dumps(text, default=_plain)  # JSON is YAML: one parser, every check
     scene = _core.parse_scene(text, name, overrides)
     _warn(scene.warnings)
     return scene

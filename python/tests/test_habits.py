@@ -31,6 +31,24 @@ def test_scene_replace_changes_a_copy(paper_scene):
         paper_scene.replace(simulation__duration=-1.0)
 
 
+def test_a_scene_built_from_a_dict(paper_scene):
+    link = {"length": 0.25, "mass": 1.0, "inertia": 0.1, "com_offset": 0.2}
+    data = {"mechanism": {"ground_length": 0.29, "point_p": 0.2,
+                          "links": [dict(link, length=0.08, com_offset=0.05),
+                                    dict(link, length=0.05, com_offset=0.03), link,
+                                    dict(link, com_offset=0.15)]},
+            "friction": {"model": "coulomb_viscous", "pin_radius": 0.01, "coulomb": 0.12,
+                         "viscous": np.float64(0.02)},
+            "loads": {"M1": "2 + 5*sin(8*pi*t)", "M2": "3 + 5*cos(pi*t)", "M3": "6", "F": "50",
+                      "F_angle": np.pi / 2},
+            "initial": {"theta1": np.pi / 2, "theta2": np.pi / 2}}
+    scene = fivebar.parse_scene(data, name="mine")
+    assert scene.to_yaml() == paper_scene.to_yaml()
+    data["mechanism"]["links"][0]["mass"] = -1.0
+    with pytest.raises(ValueError, match=r"^mine: mechanism.links.0.mass: "):
+        fivebar.parse_scene(data, name="mine")
+
+
 def test_simulate_takes_simulation_keywords(paper_scene):
     run = fivebar.simulate(paper_scene, duration=0.2, output_step=0.01)
     assert run.t[-1] == pytest.approx(0.2) and len(run.t) == 21
