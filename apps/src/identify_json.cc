@@ -42,8 +42,8 @@ Json parameters_json(const id::IdentifyResult& res, const id::TorqueLog& log, bo
     e.set("ci95_high", p.ci_high);
     e.set("ci95_method", p.ci_method);
     if (std::isinf(p.ci_low) || std::isinf(p.ci_high)) {
-      e.set("ci95_unbounded", std::isinf(p.ci_low) ? (std::isinf(p.ci_high) ? "both" : "low")
-                                                   : "high");
+      e.set("ci95_unbounded",
+            std::isinf(p.ci_low) ? (std::isinf(p.ci_high) ? "both" : "low") : "high");
     }
     if (i < res.cramer_rao_std.size()) e.set("cramer_rao_std", res.cramer_rao_std[i]);
     double tv = 0;
@@ -84,8 +84,11 @@ Json conditioning_json(const id::IdentifyResult& res, const id::TorqueLog& log) 
   cond.set("torque_noise", pair(res.torque_noise[0], res.torque_noise[1]));
   if (log.has_rates) cond.set("rate_noise", pair(res.rate_noise[0], res.rate_noise[1]));
   cond.set("rejected_glitches", Json::array_of(res.glitches, [](const id::Glitch& g) {
-             return Json::object({{"line", g.line}, {"column", g.column}, {"value", g.value},
-                                  {"expected", g.expected}, {"noise_std", g.sigmas}});
+             return Json::object({{"line", g.line},
+                                  {"column", g.column},
+                                  {"value", g.value},
+                                  {"expected", g.expected},
+                                  {"noise_std", g.sigmas}});
            }));
   Json notes = Json::array_of(res.notes);
   cond.set("notes", std::move(notes));
@@ -106,7 +109,7 @@ void rates_json(const id::IdentifyResult& res, const id::TorqueLog& log, Json* j
   }
   j->set("rate_source", std::move(rates));
   j->set("std_method", res.std_method);
-  j->set("ci95_quantile", res.ci_quantile);  // the Wald intervals' half-width in std
+  j->set("ci95_quantile", res.ci_quantile);            // the Wald intervals' half-width in std
   if (res.ci_dof > 0) j->set("ci95_dof", res.ci_dof);  // Student's t degrees of freedom
   if (res.profile_refits > 0) j->set("profile_refits", res.profile_refits);
   if (!res.std_detail.empty()) j->set("std_detail", res.std_detail);
@@ -210,12 +213,17 @@ Json identification_json(const IdentifyRun& run, const id::TorqueLog& log,
   if (validation) j.set("validation", validation_json(*validation));
   Json warnings = Json::array_of(res.warnings);
   j.set("warnings", std::move(warnings));
-  j.set("model_check", Json::array_of(res.model_check, [](const id::IdentifyResult::MisfitCause& c) {
-          const auto num = [&](double v) { return c.checked && std::isfinite(v) ? Json(v) : Json(); };
-          return Json::object({{"cause", c.name}, {"checked", c.checked}, {"drop", num(c.drop)},
-                               {"z", num(c.z)}, {"z_given", num(c.z_given)},
-                               {"explained", num(c.explained)}, {"evidenced", c.evidenced}});
-        }));
+  j.set(
+      "model_check", Json::array_of(res.model_check, [](const id::IdentifyResult::MisfitCause& c) {
+        const auto num = [&](double v) { return c.checked && std::isfinite(v) ? Json(v) : Json(); };
+        return Json::object({{"cause", c.name},
+                             {"checked", c.checked},
+                             {"drop", num(c.drop)},
+                             {"z", num(c.z)},
+                             {"z_given", num(c.z_given)},
+                             {"explained", num(c.explained)},
+                             {"evidenced", c.evidenced}});
+      }));
   j.set("identification_wall_time_s", res.wall_time_s);
   return j;
 }

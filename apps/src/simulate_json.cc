@@ -83,7 +83,8 @@ TwinRun frictionless_twin(const Scene& scene, const sim::LoadFunction& loads,
   sim::Options o = options;
   o.progress = nullptr;
   TwinRun twin{sim::simulate(frictionless, loads, scene.initial, o), std::nullopt};
-  if (twin.run.status.ok()) twin.checks = sim::check_run(frictionless, loads, twin.run, o.rtol, o.atol);
+  if (twin.run.status.ok())
+    twin.checks = sim::check_run(frictionless, loads, twin.run, o.rtol, o.atol);
   return twin;
 }
 
@@ -93,7 +94,8 @@ Json simulation_summary_json(const Scene& scene, const std::vector<std::string>&
   Json summary = run_json(run.run, &checks);
   estimate_json(run, &summary);
   settings_json(sets, scene, run.options, &summary);
-  if (twin) summary.set("frictionless", run_json(twin->run, twin->checks ? &*twin->checks : nullptr));
+  if (twin)
+    summary.set("frictionless", run_json(twin->run, twin->checks ? &*twin->checks : nullptr));
   return summary;
 }
 

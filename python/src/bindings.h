@@ -29,7 +29,9 @@ struct PyScene {
   Loads<double> constant_loads;
 
   explicit PyScene(io::Scene s, std::vector<std::string> overrides = {})
-      : scene(std::move(s)), sets(std::move(overrides)), loads(std::make_shared<const io::LoadExpressions>(scene)) {
+      : scene(std::move(s)),
+        sets(std::move(overrides)),
+        loads(std::make_shared<const io::LoadExpressions>(scene)) {
     using L = io::LoadExpressions;
     loads_constant = loads->constant(L::kM3) && loads->constant(L::kF);
     if (loads_constant) constant_loads = (*loads)(0.0);

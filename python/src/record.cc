@@ -67,7 +67,8 @@ py::object to_python(const Json& j) {
     }
     case Json::Type::kObject: {
       py::dict d;
-      for (size_t i = 0; i < j.keys().size(); ++i) d[py::str(j.keys()[i])] = to_python(j.items()[i]);
+      for (size_t i = 0; i < j.keys().size(); ++i)
+        d[py::str(j.keys()[i])] = to_python(j.items()[i]);
       return std::move(d);
     }
   }

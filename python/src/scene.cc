@@ -124,7 +124,8 @@ py::dict simulate(const PyScene& s, bool twin) {
     for (JointMode jm : r.mode) *m++ = static_cast<int>(jm);  // -1, 0, +1 slip; 2 stuck
   }
   d["mode"] = std::move(mode);
-  if (frictionless && frictionless->run.status.ok()) d["frictionless"] = rows_dict(frictionless->run.rows);
+  if (frictionless && frictionless->run.status.ok())
+    d["frictionless"] = rows_dict(frictionless->run.rows);
   py::dict summary = to_python(io::simulation_summary_json(
       s.scene, s.sets, er, checks, frictionless ? &*frictionless : nullptr));
   summary["total_wall_time_s"] =
@@ -143,7 +144,8 @@ void bind_scene(py::module_& m) {
           "friction_model",
           [](const PyScene& s) { return io::friction_law_name(s.scene.params.friction.law); })
       .def_property_readonly(
-          "integrator", [](const PyScene& s) { return io::integrator_name(s.scene.options.method); })
+          "integrator",
+          [](const PyScene& s) { return io::integrator_name(s.scene.options.method); })
       .def_property_readonly("duration", [](const PyScene& s) { return s.scene.options.duration; })
       .def_property_readonly("output_step",
                              [](const PyScene& s) { return s.scene.options.output_step; })
@@ -160,8 +162,9 @@ void bind_scene(py::module_& m) {
       .def_property_readonly("sets", [](const PyScene& s) { return s.sets; })
       .def_property_readonly("warnings", [](const PyScene& s) { return s.scene.warnings; })
       .def("_replace", &replace, py::arg("overrides"))
-      .def("to_yaml", [](const PyScene& s) { return io::scene_to_yaml(s.scene); },
-           "The scene as YAML, every key explicit (parse_scene reads it back).")
+      .def(
+          "to_yaml", [](const PyScene& s) { return io::scene_to_yaml(s.scene); },
+          "The scene as YAML, every key explicit (parse_scene reads it back).")
       .def("__repr__", [](const PyScene& s) {
         return "<fivebar.Scene '" + s.scene.path + "' friction " +
                io::friction_law_name(s.scene.params.friction.law) + ">";
