@@ -93,7 +93,7 @@ def page(fivebar, command, summary):
            help_text(fivebar, command).rstrip(), "```", ""]
     out += ["## Outputs", ""]
     if files:
-        out += ["Written into `--out DIR` (a previous run's copies of these names are removed "
+        out += ["The files it may write into `--out DIR` (a previous run's copies are removed "
                 "first; nothing is written when the input is bad):", ""]
         out += [f"- `{name}`" for name in files]
         out += [f"- {more}" for more in MORE_OUTPUTS.get(command, [])]
