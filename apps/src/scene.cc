@@ -857,14 +857,18 @@ std::vector<std::string> scene_keys(bool sections) {
   return keys;
 }
 
-Scene load_scene(const std::string& path, const std::vector<std::string>& sets) {
+Scene read_scene(const std::string& path, const std::vector<std::string>& sets) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad())
     throw InputError(path, "(file)", std::string("cannot read: ") + std::strerror(errno));
-  Scene scene = parse_scene(text.str(), path, sets);
+  return parse_scene(text.str(), path, sets);
+}
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& sets) {
+  Scene scene = read_scene(path, sets);
   for (const std::string& w : scene.warnings) warn(w);
   return scene;
 }

@@ -16,6 +16,7 @@ through warnings.warn with the category fivebar.FivebarWarning. See docs/python.
 """
 import json as _json
 import os as _os
+import re as _re
 import warnings as _warnings
 
 import numpy as _np
@@ -49,6 +50,15 @@ class Record(dict):
     def __dir__(self):
         return sorted(set(super().__dir__()) | {k for k in self if k.isidentifier()})
 
+    def copy(self):
+        return Record(self)
+
+    def to_json(self, **dumps_options):
+        """The record as JSON text, in the form of the command line's files: arrays as lists,
+        nan as null, a Scene as its YAML text. json.dumps(record) itself refuses the NumPy
+        arrays; dumps_options go to json.dumps (indent=2, ...)."""
+        return _json.dumps(_jsonable(self), **dumps_options)
+
 
 class Parameters(list):
     """The estimated parameters in their order, also by name:
@@ -72,6 +82,9 @@ class Parameters(list):
     def items(self):
         return [(p["name"], p) for p in self]
 
+    def values(self):
+        return list(self)
+
     def get(self, name, default=None):
         return self[name] if name in self else default
 
@@ -85,6 +98,22 @@ def _record(value):
         return out
     if isinstance(value, list):
         return [_record(v) for v in value]
+    return value
+
+
+def _jsonable(value):
+    """value with NumPy arrays and numbers as lists and Python numbers, nan and inf as None
+    (null, as the command line writes a number that is not determined), a Scene as its YAML."""
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, _np.ndarray)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, _np.generic):
+        value = value.item()
+    if isinstance(value, float) and not _np.isfinite(value):
+        return None
+    if isinstance(value, Scene):
+        return value.to_yaml()
     return value
 
 
@@ -109,6 +138,28 @@ def _plain(value):
     return value.tolist() if hasattr(value, "tolist") else str(value)
 
 
+def _override_values(overrides):
+    """{"dotted.key": value} with NumPy scalars and arrays (0-d included) as Python numbers and
+    lists; other values are passed on as they are, for the error naming the key."""
+    if not isinstance(overrides, dict):
+        return overrides
+    return {k: v.tolist() if isinstance(v, (_np.ndarray, _np.generic)) else v
+            for k, v in overrides.items()}
+
+
+def _log_columns(log):
+    """A torque log given as {column: array}: each column a 1-D float64 array."""
+    columns = {}
+    for name, values in log.items():
+        array = _floats(values)
+        if not isinstance(array, _np.ndarray) or array.ndim != 1:
+            shape = array.shape if isinstance(array, _np.ndarray) else type(values).__name__
+            raise ValueError(f"log: {name}: (argument): expected a 1-D array of numbers, "
+                             f"got {shape}")
+        columns[name] = array
+    return columns
+
+
 def load_scene(path, overrides=None):
     """Reads and validates a scene file (YAML).
 
@@ -117,7 +168,7 @@ def load_scene(path, overrides=None):
     Raises ValueError (the command line's message) on bad input; likely unit mistakes come as
     FivebarWarning.
     """
-    scene = _core.load_scene(_os.fspath(path), overrides)
+    scene = _core.load_scene(_os.fspath(path), _override_values(overrides))
     _warn(scene.warnings)
     return scene
 
@@ -128,7 +179,12 @@ def parse_scene(text, name="<string>", overrides=None):
     messages. Checked as a scene file is (ValueError with the command line's message)."""
     if isinstance(text, dict):
         text = _json.dumps(text, default=_plain)  # JSON is YAML: one parser, every check
-    scene = _core.parse_scene(text, name, overrides)
+        try:
+            scene = _core.parse_scene(text, name, _override_values(overrides))
+        except ValueError as e:  # the line numbers of that one-line text mean nothing here
+            raise ValueError(_re.sub(r" \(line \d+\)", "", str(e))) from None
+    else:
+        scene = _core.parse_scene(text, name, _override_values(overrides))
     _warn(scene.warnings)
     return scene
 
@@ -141,7 +197,7 @@ def _scene_replace(self, overrides=None, /, **keys):
     """
     merged = dict(overrides or {})
     merged.update((k.replace("__", "."), v) for k, v in keys.items())
-    scene = self._replace(merged)
+    scene = self._replace(_override_values(merged))
     _warn(scene.warnings)
     return scene
 
@@ -196,7 +252,7 @@ def identify(scene, log, **options):
     arrays and 'fitted_scene'. Its warnings also go through warnings.warn (FivebarWarning).
     """
     if isinstance(log, dict):
-        log = {k: _floats(v) for k, v in log.items()}
+        log = _log_columns(log)
     else:
         log = _os.fspath(log)
     fit = _record(_core.identify(scene, log, **options))

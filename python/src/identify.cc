@@ -2,6 +2,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "bindings.h"
@@ -23,6 +24,18 @@ py::array_t<double> matrix(const Eigen::MatrixXd& a) {
     for (Eigen::Index c = 0; c < a.cols(); ++c) v(r, c) = a(r, c);
   }
   return out;
+}
+
+// a key of the CSV text log_from_dict writes ("line 12, column tau1") as the arrays' place
+// ("row 10, column tau1": 0-based, the header is line 1); the header's line as "columns"
+std::string array_key(const std::string& key) {
+  const std::string prefix = "line ";
+  if (key.compare(0, prefix.size(), prefix) != 0) return key;
+  size_t end = prefix.size();
+  while (end < key.size() && std::isdigit(static_cast<unsigned char>(key[end]))) ++end;
+  const int line = std::stoi(key.substr(prefix.size(), end - prefix.size()));
+  if (line <= 1) return "columns";
+  return "row " + std::to_string(line - 2) + key.substr(end);
 }
 
 // a log given as a dict of arrays: written as CSV text and parsed, so it gets every check of a
@@ -52,7 +65,7 @@ id::TorqueLog log_from_dict(const py::dict& columns) {
   try {
     return io::parse_torque_log(text, "log");
   } catch (const id::LogError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
+    throw InputError(e.file(), array_key(e.key()), e.reason());
   }
 }
 

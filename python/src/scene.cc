@@ -76,7 +76,7 @@ std::vector<std::string> override_sets(const py::object& overrides) {
 
 PyScene load(const std::string& path, const py::object& overrides) {
   std::vector<std::string> sets = override_sets(overrides);
-  io::Scene scene = io::load_scene(path, sets);
+  io::Scene scene = io::read_scene(path, sets);  // warnings: warnings.warn in __init__.py
   return PyScene(std::move(scene), std::move(sets));
 }
 
@@ -165,6 +165,15 @@ void bind_scene(py::module_& m) {
       .def(
           "to_yaml", [](const PyScene& s) { return io::scene_to_yaml(s.scene); },
           "The scene as YAML, every key explicit (parse_scene reads it back).")
+      .def(py::pickle(  // as its YAML (every key explicit), its name and its overrides
+          [](const PyScene& s) {
+            return py::make_tuple(io::scene_to_yaml(s.scene), s.scene.path, s.sets);
+          },
+          [](const py::tuple& state) {
+            io::Scene scene =
+                io::parse_scene(state[0].cast<std::string>(), state[1].cast<std::string>());
+            return PyScene(std::move(scene), state[2].cast<std::vector<std::string>>());
+          }))
       .def("__repr__", [](const PyScene& s) {
         return "<fivebar.Scene '" + s.scene.path + "' friction " +
                io::friction_law_name(s.scene.params.friction.law) + ">";
