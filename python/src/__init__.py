@@ -15,6 +15,7 @@ failed numerics raise fivebar.NumericalError; what the command line prints as a 
 through warnings.warn with the category fivebar.FivebarWarning. See docs/python.md.
 """
 import json as _json
+from collections.abc import Mapping as _Mapping
 import os as _os
 import re as _re
 import warnings as _warnings
@@ -148,7 +149,13 @@ def _override_values(overrides):
 
 
 def _log_columns(log):
-    """A torque log given as {column: array}: each column a 1-D float64 array."""
+    """A torque log given as {column: array} or as a NumPy structured array (np.genfromtxt(...,
+    names=True)): each column a 1-D float64 array."""
+    if isinstance(log, _np.ndarray):
+        if not log.dtype.names:
+            raise ValueError("log: (argument): expected a CSV path, a dict of arrays or a "
+                             f"structured array with named columns, got an array of {log.dtype}")
+        log = {name: log[name] for name in log.dtype.names}
     columns = {}
     for name, values in log.items():
         array = _floats(values)
@@ -243,7 +250,9 @@ def inverse(scene, theta, omega, alpha, t=None, threads=0):
 
 
 def identify(scene, log, **options):
-    """Friction coefficients of `scene` from a torque log (CSV path or dict of arrays).
+    """Friction coefficients of `scene` from a torque log: a CSV path, a dict of arrays or a
+    NumPy structured array (np.genfromtxt(path, delimiter=",", names=True, skip_header=k), k
+    the '#' lines above the header).
 
     Keyword options as `fivebar identify` (method, law, per_joint, loss, loss_scale,
     smooth_sign, estimate_rates, min_rate, sg_window, sg_order, threads, start_from_scene,
@@ -251,7 +260,7 @@ def identify(scene, log, **options):
     (parameters also by name: fit.parameters["coulomb"].std), the covariance, the per-sample
     arrays and 'fitted_scene'. Its warnings also go through warnings.warn (FivebarWarning).
     """
-    if isinstance(log, dict):
+    if isinstance(log, (_Mapping, _np.ndarray)):
         log = _log_columns(log)
     else:
         log = _os.fspath(log)

@@ -56,7 +56,7 @@ def simulate(scene: Scene, overrides: Optional[Mapping[str, Value]] = None, *,
              twin: bool = False, **simulation: Value) -> Record: ...
 def inverse(scene: Scene, theta: ArrayLike, omega: ArrayLike, alpha: ArrayLike,
             t: Optional[ArrayLike] = None, threads: int = 0) -> Record: ...
-def identify(scene: Scene, log: Union[str, PathLike[str], Mapping[str, ArrayLike]], *,
+def identify(scene: Scene, log: Union[str, PathLike[str], Mapping[str, ArrayLike], np.ndarray], *,
              validate: bool = False, method: str = ..., law: str = ..., estimate: str = ...,
              inertia_prior: float = ..., per_joint: bool = ..., loss: str = ...,
              loss_scale: float = ..., smooth_sign: float = ..., estimate_rates: bool = ...,

@@ -180,3 +180,14 @@ def test_the_stub_names_what_the_module_has():
         real = inspect.signature(getattr(fivebar, name)).parameters
         named = [p for p, v in real.items() if v.kind != inspect.Parameter.VAR_KEYWORD]
         assert stubbed[:len(named)] == named, name  # identify's stub names its **options
+
+
+def test_a_log_as_a_structured_array(paper_scene, root):
+    path = root / "datasets/logs/paper_angles.csv"
+    comments = sum(line.startswith("#") for line in path.read_text().splitlines())
+    table = np.genfromtxt(path, delimiter=",", names=True, skip_header=comments)
+    from_table = fivebar.identify(paper_scene, table)
+    from_file = fivebar.identify(paper_scene, path)
+    assert from_table.parameters["coulomb"].value == from_file.parameters["coulomb"].value
+    with pytest.raises(ValueError, match="structured array with named columns"):
+        fivebar.identify(paper_scene, np.zeros((10, 5)))
