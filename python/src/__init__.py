@@ -274,9 +274,10 @@ def optimize(scene, tasks, **options):
 
     Keyword options as `fivebar optimize` (threads, method, objective, global_search, starts,
     control_points, quadrature_points, singular_margin, validate) plus trajectories=True.
-    Returns {task name: dict of summary.csv fields, 'x', 'trajectory', 'baseline'}.
+    Returns a Record {task name: Record of summary.csv fields, 'x', 'trajectory', 'baseline'}
+    (best.reach_right.trajectory.M1; task names that are not identifiers with [...]).
     """
-    return _core.optimize(scene, _os.fspath(tasks), **options)
+    return _record(_core.optimize(scene, _os.fspath(tasks), **options))
 
 
 identify.__doc__ += "\n" + (_core.identify.__doc__ or "")
