@@ -18,6 +18,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/simulate_json.h"
 #include "fivebar/sim/estimate.h"
 #include "fivebar/sim/simulator.h"
 
@@ -57,80 +58,18 @@ constexpr size_t kPlotBuckets = 100;
 /// runs with more rows than this are drawn from the decimated copy (gnuplot stays fast)
 constexpr size_t kPlotMaxRows = 10000;
 
-// the statistics and final energies of one run
-Json run_json(const sim::Result& run, const sim::RunChecks* checks) {
-  Json j = Json::object();
-  const bool ok = run.status.ok() && (checks == nullptr || checks->verdict.ok());
-  j.set("status", ok ? "ok" : "failed");
-  if (!run.status.ok()) j.set("message", run.status.message);
-  if (run.status.ok() && checks && !checks->verdict.ok()) {
-    j.set("message", "run check failed: " + checks->verdict.message);
-  }
-  j.set("final_time", run.rows.empty() ? 0.0 : run.rows.back().t);
-  j.set("rows", static_cast<long>(run.rows.size()));
-  if (checks != nullptr) {
-    j.set("energy_balance_relative", checks->energy_balance_relative);
-    j.set("inverse_dynamics_max_abs_error", checks->inverse_dynamics_max_abs_error);
-    j.set("friction_power_min", checks->friction_power_min);
-    Json tol = Json::object();
-    tol.set("energy_balance_relative", checks->energy_tol);
-    tol.set("inverse_dynamics_max_abs_error", checks->inverse_tol);
-    tol.set("friction_power_min", -checks->power_tol);
-    j.set("check_thresholds", std::move(tol));
-  }
-  j.set("wall_time_s", run.stats.wall_time_s);
-  j.set("rhs_evaluations", run.stats.rhs_evaluations);
-  j.set("steps", run.stats.steps);
-  j.set("friction_events", run.stats.friction_events);
-  j.set("stick_events", run.stats.stick_events);
-  j.set("breakaway_events", run.stats.breakaway_events);
-  j.set("mode_decisions", run.stats.mode_decisions);
-  j.set("sign_rule_inconsistent", run.stats.sign_rule_inconsistent);
-  j.set("mode_corrections", run.stats.mode_corrections);
-  if (!run.rows.empty()) {
-    j.set("E_diss", run.rows.back().E_diss);
-    j.set("W_in", run.rows.back().W_in);
-    j.set("W_ext", run.rows.back().W_ext);
-  }
-  return j;
-}
-
-// the error estimate and how the tolerance was chosen
-void estimate_json(const sim::EstimatedRun& er, Json* summary) {
-  summary->set("estimated_max_error_rad", er.estimated_max_error_rad);
-  summary->set("target_error", er.options.target_error);
-  summary->set("target_met", er.target_met);
-  summary->set("tolerance_choice", er.options.auto_tolerance ? "auto" : "scene");
-  Json tried = Json::array();
-  for (const sim::Attempt& a : er.attempts) {
-    Json t = Json::object();
-    t.set("rtol", a.rtol);
-    t.set("estimated_max_error_rad", a.estimate);
-    tried.push(std::move(t));
-  }
-  summary->set("tolerances_tried", std::move(tried));
-  if (!er.note.empty()) summary->set("estimate_note", er.note);
-}
-
 // the frictionless twin for figures 2-4; its failure is reported but does not fail the run
-std::optional<sim::Result> run_twin(const Scene& scene, const sim::LoadFunction& loads,
-                                    const sim::Options& options, bool forced,
-                                    std::optional<sim::RunChecks>* checks) {
+std::optional<TwinRun> run_twin(const Scene& scene, const sim::LoadFunction& loads,
+                                const sim::Options& options, bool forced) {
   if (!scene.params.friction.active()) return std::nullopt;
   if (options.duration > kTwinMaxDuration && !forced) {
     std::cout << "  frictionless twin skipped: runs over "
               << format_printf(kTwinMaxDuration, "%.4g") << " s draw it only with --twin\n";
     return std::nullopt;
   }
-  Params<double> frictionless = scene.params;
-  frictionless.friction.law = FrictionLaw::kNone;
-  sim::Options o = options;
-  o.progress = nullptr;
-  sim::Result twin = sim::simulate(frictionless, loads, scene.initial, o);
-  if (twin.status.ok()) {
-    *checks = sim::check_run(frictionless, loads, twin, o.rtol, o.atol);
-  } else {
-    warn(scene.path + ": frictionless twin: " + twin.status.message +
+  TwinRun twin = frictionless_twin(scene, loads, options);
+  if (!twin.run.status.ok()) {
+    warn(scene.path + ": frictionless twin: " + twin.run.status.message +
          " (trajectory_frictionless.csv not written)");
   }
   return twin;
@@ -167,23 +106,8 @@ std::string write_with_plot_copy(const OutputDir& out, const std::string& name,
   return name + "_plot.csv";
 }
 
-void settings_json(const Args& args, const Scene& scene, const sim::Options& o, Json* out) {
-  out->set({{"command", "simulate"},
-            {"scene", scene.path},
-            {"sets", Json::array_of(args.scene.sets)},
-            {"friction_model", friction_law_name(scene.params.friction.law)},
-            {"integrator", integrator_name(o.method)},
-            {"rtol", o.rtol},
-            {"atol", o.atol},
-            {"locate_switches", o.locate_switches},
-            {"stick", o.stick},
-            {"duration", o.duration},
-            {"output_step", o.output_step}});
-}
-
 void print_report(const Scene& scene, const sim::EstimatedRun& er, const sim::RunChecks& checks,
-                  const std::optional<sim::Result>& twin,
-                  const std::optional<sim::RunChecks>& twin_checks) {
+                  const std::optional<TwinRun>& twin) {
   const sim::Result& run = er.run;
   const sim::Options& o = er.options;
   const sim::Row& last = run.rows.back();
@@ -210,10 +134,10 @@ void print_report(const Scene& scene, const sim::EstimatedRun& er, const sim::Ru
             << format_printf(checks.inverse_dynamics_max_abs_error, "%.2e")
             << " N m; min friction power " << format_printf(checks.friction_power_min, "%.2e")
             << " W\n";
-  if (twin && twin->status.ok()) {
-    std::cout << "  frictionless twin: " << twin->stats.steps << " steps, "
-              << format_printf(twin->stats.wall_time_s, "%.3f") << " s, balance residual "
-              << format_printf(twin_checks->energy_balance_relative, "%.2e") << "\n";
+  if (twin && twin->run.status.ok()) {
+    std::cout << "  frictionless twin: " << twin->run.stats.steps << " steps, "
+              << format_printf(twin->run.stats.wall_time_s, "%.3f") << " s, balance residual "
+              << format_printf(twin->checks->energy_balance_relative, "%.2e") << "\n";
   }
 }
 
@@ -232,23 +156,19 @@ int run(const Args& args) {
   if (!run.status.ok()) throw NumericalError(scene.path, "simulation", run.status.message);
   if (run.rows.empty()) throw NumericalError(scene.path, "simulation", "no output rows");
   const sim::RunChecks checks = sim::check_run(scene.params, loads, run, er.options.rtol, er.options.atol);
-  std::optional<sim::RunChecks> twin_checks;
-  const std::optional<sim::Result> twin =
-      run_twin(scene, loads, er.options, args.twin, &twin_checks);
-  const bool twin_ok = twin && twin->status.ok();
+  const std::optional<TwinRun> twin = run_twin(scene, loads, er.options, args.twin);
+  const bool twin_ok = twin && twin->run.status.ok();
 
   const std::vector<Column> extra = inverse_columns(scene, loads, run.rows);
   SimulationFigures figures;
   figures.trajectory = write_with_plot_copy(out, "trajectory", run.rows, extra);
   if (twin_ok) {
-    figures.frictionless = write_with_plot_copy(out, "trajectory_frictionless", twin->rows, {});
+    figures.frictionless = write_with_plot_copy(out, "trajectory_frictionless", twin->run.rows, {});
   }
 
   // summary.json: the run's checks and statistics, its estimate, its settings, then the twin
-  Json summary = run_json(run, &checks);
-  estimate_json(er, &summary);
-  settings_json(args, scene, er.options, &summary);
-  if (twin) summary.set("frictionless", run_json(*twin, twin_checks ? &*twin_checks : nullptr));
+  Json summary =
+      simulation_summary_json(scene, args.scene.sets, er, checks, twin ? &*twin : nullptr);
   if (!args.no_plots) {  // figures: not essential, a failure is a warning
     figures.inverse = !extra.empty();
     figures.title = std::filesystem::path(scene.path).filename().string();
@@ -258,7 +178,7 @@ int run(const Args& args) {
   summary.set("total_wall_time_s",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   write_json_file(out.file("summary.json"), summary);
-  finish_run(&out, [&] { print_report(scene, er, checks, twin, twin_checks); });
+  finish_run(&out, [&] { print_report(scene, er, checks, twin); });
   // a run whose own checks fail is not ok: its outputs stay for the user to look at
   if (!checks.verdict.ok()) {
     throw NumericalError(scene.path, "simulation", "run check failed: " + checks.verdict.message);

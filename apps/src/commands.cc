@@ -76,6 +76,15 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   if (!(a.window >= 0) || !std::isfinite(a.window)) {
     throw InputError(kFlags, "--window", "must be > 0 (0: the default)");
   }
+  if (!std::isfinite(a.smooth_sign) || (a.smooth_sign < 0 && a.smooth_sign != -1)) {
+    throw InputError(
+        kFlags, "--smooth-sign",
+        "must be >= 0 [rad/s] (0: the exact sign), got " + format_shortest(a.smooth_sign));
+  }
+  if (!(a.min_rate >= 0) || !std::isfinite(a.min_rate)) {
+    throw InputError(kFlags, "--min-rate",
+                     "must be >= 0 [rad/s], got " + format_shortest(a.min_rate));
+  }
   opt.loss_scale = a.loss_scale;
   opt.smoothing_velocity = a.smooth_sign;
   opt.estimate_rates = a.estimate_rates;

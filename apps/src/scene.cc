@@ -845,14 +845,30 @@ Scene parse_scene(const std::string& yaml_text, const std::string& path,
   return build_scene(reader);
 }
 
-Scene load_scene(const std::string& path, const std::vector<std::string>& sets) {
+std::vector<std::string> scene_keys(bool sections) {
+  std::vector<std::string> keys;
+  for (const Field& f : schema()) {
+    if (!sections && (f.kind == Kind::kSection || f.kind == Kind::kLinkList)) continue;
+    std::string key = f.key;
+    const size_t hash = key.find('#');
+    if (hash != std::string::npos) key[hash] = 'N';
+    keys.push_back(key);
+  }
+  return keys;
+}
+
+Scene read_scene(const std::string& path, const std::vector<std::string>& sets) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad())
     throw InputError(path, "(file)", std::string("cannot read: ") + std::strerror(errno));
-  Scene scene = parse_scene(text.str(), path, sets);
+  return parse_scene(text.str(), path, sets);
+}
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& sets) {
+  Scene scene = read_scene(path, sets);
   for (const std::string& w : scene.warnings) warn(w);
   return scene;
 }

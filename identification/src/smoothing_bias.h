@@ -24,7 +24,7 @@ namespace fivebar::identification::detail {
 /// +-2 times the residual rule's window, -9.70e-6 noise-free and -7.8e-6, -8.1e-6 on two noisy
 /// logs; with degree 8 the noise-free prediction is as good (-9.65e-6) but the noisy logs scatter
 /// by +-1.5e-5 (the two extra coefficients cost far more in noise than they gain in bias;
-/// docs/figures-logs.md, round bias16).
+/// docs/dev/figures-logs.md, round bias16).
 constexpr int kReconExtra = 1;
 
 /// The terms of degree order + 1 .. order + kReconExtra of the least-squares polynomial of degree

@@ -1,11 +1,14 @@
 // fivebar.identify: friction identification from a torque log, the result as a dict.
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "bindings.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
+#include "fivebar/io/identify_json.h"
 #include "fivebar/io/torque_log_file.h"
 #include "keywords.h"
 
@@ -23,7 +26,17 @@ py::array_t<double> matrix(const Eigen::MatrixXd& a) {
   return out;
 }
 
-py::array_t<double> pair(const double (&a)[2]) { return to_array({a[0], a[1]}); }
+// a key of the CSV text log_from_dict writes ("line 12, column tau1") as the arrays' place
+// ("row 10, column tau1": 0-based, the header is line 1); the header's line as "columns"
+std::string array_key(const std::string& key) {
+  const std::string prefix = "line ";
+  if (key.compare(0, prefix.size(), prefix) != 0) return key;
+  size_t end = prefix.size();
+  while (end < key.size() && std::isdigit(static_cast<unsigned char>(key[end]))) ++end;
+  const int line = std::stoi(key.substr(prefix.size(), end - prefix.size()));
+  if (line <= 1) return "columns";
+  return "row " + std::to_string(line - 2) + key.substr(end);
+}
 
 // a log given as a dict of arrays: written as CSV text and parsed, so it gets every check of a
 // log file (columns, finite numbers, increasing t, degrees)
@@ -52,94 +65,33 @@ id::TorqueLog log_from_dict(const py::dict& columns) {
   try {
     return io::parse_torque_log(text, "log");
   } catch (const id::LogError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
+    throw InputError(e.file(), array_key(e.key()), e.reason());
   }
 }
 
-py::dict validation_dict(const id::Validation& v) {
-  py::dict d;
-  d["full_run_status"] = v.status.ok() ? "ok" : v.status.message;
-  d["full_run_duration_s"] = v.full_duration_s;
-  d["full_run_rms_angle_error"] = pair(v.full_rms);
-  d["full_run_max_angle_error"] = pair(v.full_max);
-  d["window_s"] = v.window_s;
-  d["windowed_rms_angle_error"] = pair(v.window_rms);
-  d["simulated_theta1"] = to_array(v.full_theta1);
-  d["simulated_theta2"] = to_array(v.full_theta2);
-  d["windowed_theta1"] = to_array(v.window_theta1);
-  d["windowed_theta2"] = to_array(v.window_theta2);
-  return d;
+// the simulated angles of the validation runs (residuals.csv's columns), beside its record
+void add_validation_arrays(const id::Validation& v, py::dict* validation) {
+  (*validation)["simulated_theta1"] = to_array(v.full_theta1);
+  (*validation)["simulated_theta2"] = to_array(v.full_theta2);
+  (*validation)["windowed_theta1"] = to_array(v.window_theta1);
+  (*validation)["windowed_theta2"] = to_array(v.window_theta2);
 }
 
-// identification.json's log_conditioning: unwrapping, noise levels, glitches rejected, notes
-py::dict conditioning_dict(const id::IdentifyResult& r) {
-  py::dict c;
-  c["unwrapped_turns"] = py::make_tuple(r.unwrapped[0], r.unwrapped[1]);
-  c["angle_noise"] = pair(r.angle_noise);
-  c["torque_noise"] = pair(r.torque_noise);
-  if (r.conditioned_log.has_rates) c["rate_noise"] = pair(r.rate_noise);
-  py::list glitches;
-  for (const id::Glitch& g : r.glitches) {
-    glitches.append(py::dict(py::arg("line") = g.line, py::arg("column") = g.column,
-                             py::arg("value") = g.value, py::arg("expected") = g.expected,
-                             py::arg("noise_std") = g.sigmas));
-  }
-  c["rejected_glitches"] = glitches;
-  c["notes"] = r.notes;
-  return c;
-}
-
-// the fields of identification.json, the per-sample arrays of residuals.csv, the fitted scene
-py::dict result_dict(const PyScene& s, const id::IdentifyResult& r, const id::Loss loss) {
-  py::dict d;
-  d["method"] = id::method_name(r.method);
-  d["law"] = id::law_name(r.layout.law);
-  d["per_joint"] = r.layout.per_joint;
-  d["loss"] = id::loss_name(loss);
-  py::list params;
-  for (const id::ParameterEstimate& p : r.parameters) {
-    // with the 95 % interval of identification.json
-    params.append(py::dict(py::arg("name") = p.name, py::arg("value") = p.value,
-                           py::arg("std") = p.std, py::arg("initial") = p.initial,
-                           py::arg("ci95_low") = p.ci_low, py::arg("ci95_high") = p.ci_high,
-                           py::arg("ci95_method") = p.ci_method));
-  }
-  d["parameters"] = params;
+// identification.json's record (io::identification_json), plus what only Python returns: the
+// covariance, the rate estimation's settings flat, the per-sample arrays of residuals.csv, and
+// the fitted scene
+py::dict result_dict(const PyScene& s, const io::IdentifyRun& run, const id::TorqueLog& log,
+                     const id::IdentifyResult& r, const id::Validation* validation) {
+  py::dict d = to_python(io::identification_json(run, log, r, validation));
   d["covariance"] = matrix(r.covariance);
-  d["correlation"] = matrix(r.correlation);
-  d["singular_values"] = to_array(r.singular_values);
-  d["rms_torque_residual"] = pair(r.rms_torque_residual);
-  d["residual_noise_floor"] = pair(r.residual_noise_floor);
-  d["rms_torque_residual_initial"] = pair(r.rms_torque_residual_initial);
-  if (r.method == id::Method::kOutputError) d["rms_angle_residual"] = pair(r.rms_angle_residual);
-  d["residual_sigma"] = r.residual_sigma;
-  d["samples"] = r.samples;
-  d["samples_used"] = r.samples_used;
-  d["residuals"] = r.residuals;
   d["rates_estimated"] = r.rates_estimated;
   d["accelerations_estimated"] = r.accels_estimated;
-  if (r.accels_estimated) {  // the Savitzky-Golay window used (rate_source in the JSON)
+  if (r.accels_estimated) {  // rate_source's window, as the Python results had it
     d["sg_half_window_s"] =
         r.sg_half_window * r.conditioned_log.duration() / std::max(1, r.conditioned_log.size() - 1);
     d["sg_order"] = r.sg_order;
-    d["window_choice"] = r.window_choice;  // how the half-window was chosen
+    d["window_choice"] = r.window_choice;
   }
-  d["log_conditioning"] = conditioning_dict(r);
-  if (std::isfinite(r.delay_s)) {  // the logged torques at t + d match the angles at t
-    py::dict delay;
-    delay["value_s"] = r.delay_s;
-    delay["std_s"] = r.delay_std_s;
-    delay["corrected"] = r.delay_corrected;
-    d["torque_delay"] = delay;
-  }
-  d["std_method"] = r.std_method;
-  py::dict solver;
-  solver["iterations"] = r.iterations;
-  solver["converged"] = r.converged;
-  solver["report"] = r.solver_message;
-  solver["iteration_costs"] = to_array(r.iteration_costs);
-  d["solver"] = solver;
-  d["warnings"] = r.warnings;
   d["wall_time_s"] = r.wall_time_s;
   for (const auto& [name, v] : {std::pair{"omega1", &r.omega1}, {"omega2", &r.omega2},
                                 {"alpha1", &r.alpha1}, {"alpha2", &r.alpha2},
@@ -150,6 +102,10 @@ py::dict result_dict(const PyScene& s, const id::IdentifyResult& r, const id::Lo
   py::array_t<bool> used(static_cast<py::ssize_t>(r.used.size()));
   std::copy(r.used.begin(), r.used.end(), used.mutable_data());
   d["used"] = used;
+  if (validation) {
+    py::dict v = d["validation"];
+    add_validation_arrays(*validation, &v);
+  }
   d["fitted_scene"] = PyScene(io::fitted_scene(s.scene, r));
   return d;
 }
@@ -172,9 +128,10 @@ py::dict identify(const PyScene& s, const py::object& log, const io::IdentifySet
                                 result.omega2, result.window_s);
     }
   }
-  py::dict d = result_dict(s, result, options.loss);
-  if (validate) d["validation"] = validation_dict(validation);
-  return d;
+  const io::IdentifyRun run{s.scene.path,
+                            py::isinstance<py::dict>(log) ? "(arrays)" : std::string(py::str(log)),
+                            settings.estimate, options.loss};
+  return result_dict(s, run, torque_log, result, validate ? &validation : nullptr);
 }
 
 // the keywords of fivebar.identify: the options of `fivebar identify`, with _ for -
@@ -220,10 +177,11 @@ void bind_identify(py::module_& m) {
        "log when not given), and validate=False: " +
        keyword_defaults(io::IdentifySettings{}, kIdentifyKeywords,
                         {{"sg_window", "(chosen from the log)"}}) +
-       ". Returns the fields of identification.json (parameters as a list of {name, value, std, "
-       "initial}, covariance and correlation as arrays, ...), the per-sample rates and "
-       "predicted torques, 'fitted_scene' (a fivebar.Scene) and, with validate=True, "
-       "'validation'.")
+       ". Returns every field of identification.json (parameters as a list of {name, unit, value, "
+       "std, initial, ci95_low, ci95_high, true, error, ...}, correlation as an array, "
+       "condition_number, residual_to_noise_ratio, model_check, truth_in_log, ...), the "
+       "covariance, the per-sample rates and predicted torques, 'fitted_scene' (a "
+       "fivebar.Scene) and, with validate=True, 'validation'.")
           .c_str());
 }
 

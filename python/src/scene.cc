@@ -2,10 +2,14 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <chrono>
+#include <optional>
 
 #include "bindings.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/output.h"
+#include "fivebar/io/simulate_json.h"
+#include "fivebar/sim/estimate.h"
 
 namespace fivebar::python {
 
@@ -71,49 +75,48 @@ std::vector<std::string> override_sets(const py::object& overrides) {
 }
 
 PyScene load(const std::string& path, const py::object& overrides) {
-  return PyScene(io::load_scene(path, override_sets(overrides)));
+  std::vector<std::string> sets = override_sets(overrides);
+  io::Scene scene = io::read_scene(path, sets);  // warnings: warnings.warn in __init__.py
+  return PyScene(std::move(scene), std::move(sets));
 }
 
 PyScene parse(const std::string& text, const std::string& name, const py::object& overrides) {
-  return PyScene(io::parse_scene(text, name, override_sets(overrides)));
+  std::vector<std::string> sets = override_sets(overrides);
+  io::Scene scene = io::parse_scene(text, name, sets);
+  return PyScene(std::move(scene), std::move(sets));
 }
 
-py::dict summary(const PyScene& s, const sim::Result& run, const sim::RunChecks& checks) {
-  py::dict j;
-  j["status"] = "ok";
-  j["final_time"] = run.rows.back().t;
-  j["rows"] = run.rows.size();
-  j["energy_balance_relative"] = checks.energy_balance_relative;
-  j["inverse_dynamics_max_abs_error"] = checks.inverse_dynamics_max_abs_error;
-  j["wall_time_s"] = run.stats.wall_time_s;
-  j["rhs_evaluations"] = run.stats.rhs_evaluations;
-  j["steps"] = run.stats.steps;
-  j["friction_events"] = run.stats.friction_events;
-  j["stick_events"] = run.stats.stick_events;
-  j["breakaway_events"] = run.stats.breakaway_events;
-  j["E_diss"] = run.rows.back().E_diss;
-  j["W_in"] = run.rows.back().W_in;
-  j["W_ext"] = run.rows.back().W_ext;
-  j["scene"] = s.scene.path;
-  j["friction_model"] = io::friction_law_name(s.scene.params.friction.law);
-  j["integrator"] = io::integrator_name(s.scene.options.method);
-  j["rtol"] = s.scene.options.rtol;
-  j["atol"] = s.scene.options.atol;
-  return j;
+// a copy of the scene with more overrides: the scene as YAML (every key explicit) parsed again
+// under its own name with them, so it gets every check of a scene file
+PyScene replace(const PyScene& s, const py::object& overrides) {
+  std::vector<std::string> more = override_sets(overrides);
+  io::Scene scene = io::parse_scene(io::scene_to_yaml(s.scene), s.scene.path, more);
+  std::vector<std::string> sets = s.sets;
+  sets.insert(sets.end(), more.begin(), more.end());
+  return PyScene(std::move(scene), std::move(sets));
 }
 
-// the run, its checks, the columns of trajectory.csv, the joint modes and the summary
-py::dict simulate(const PyScene& s) {
-  sim::Result run;
+// the run with its error estimate (as `fivebar simulate`), its checks, the columns of
+// trajectory.csv, the joint modes and summary.json's record; `twin`: the frictionless twin too
+// (its rows as 'frictionless', its record as summary['frictionless']) when the scene has friction
+py::dict simulate(const PyScene& s, bool twin) {
+  const auto start = std::chrono::steady_clock::now();
+  sim::EstimatedRun er;
   sim::RunChecks checks;
+  std::optional<io::TwinRun> frictionless;
   {
     py::gil_scoped_release release;
     const sim::LoadFunction loads = s.loads->function();
-    run = sim::simulate(s.scene.params, loads, s.scene.initial, s.scene.options);
+    er = sim::simulate_to_target(s.scene.params, loads, s.scene.initial, s.scene.options);
+    const sim::Result& run = er.run;
     if (!run.status.ok()) throw NumericalError(s.scene.path, "simulation", run.status.message);
     if (run.rows.empty()) throw NumericalError(s.scene.path, "simulation", "no output rows");
-    checks = sim::check_run(s.scene.params, loads, run, s.scene.options.rtol, s.scene.options.atol);
+    checks = sim::check_run(s.scene.params, loads, run, er.options.rtol, er.options.atol);
+    if (twin && s.scene.params.friction.active()) {
+      frictionless = io::frictionless_twin(s.scene, loads, er.options);
+    }
   }
+  const sim::Result& run = er.run;
   py::dict d = rows_dict(run.rows);
   py::array_t<int> mode({static_cast<py::ssize_t>(run.rows.size()), py::ssize_t(5)});
   int* m = mode.mutable_data();
@@ -121,7 +124,13 @@ py::dict simulate(const PyScene& s) {
     for (JointMode jm : r.mode) *m++ = static_cast<int>(jm);  // -1, 0, +1 slip; 2 stuck
   }
   d["mode"] = std::move(mode);
-  d["summary"] = summary(s, run, checks);
+  if (frictionless && frictionless->run.status.ok())
+    d["frictionless"] = rows_dict(frictionless->run.rows);
+  py::dict summary = to_python(io::simulation_summary_json(
+      s.scene, s.sets, er, checks, frictionless ? &*frictionless : nullptr));
+  summary["total_wall_time_s"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  d["summary"] = summary;
   return d;
 }
 
@@ -135,7 +144,8 @@ void bind_scene(py::module_& m) {
           "friction_model",
           [](const PyScene& s) { return io::friction_law_name(s.scene.params.friction.law); })
       .def_property_readonly(
-          "integrator", [](const PyScene& s) { return io::integrator_name(s.scene.options.method); })
+          "integrator",
+          [](const PyScene& s) { return io::integrator_name(s.scene.options.method); })
       .def_property_readonly("duration", [](const PyScene& s) { return s.scene.options.duration; })
       .def_property_readonly("output_step",
                              [](const PyScene& s) { return s.scene.options.output_step; })
@@ -149,8 +159,21 @@ void bind_scene(py::module_& m) {
                                d["omega2"] = i.omega2;
                                return d;
                              })
-      .def("to_yaml", [](const PyScene& s) { return io::scene_to_yaml(s.scene); },
-           "The scene as YAML, every key explicit (parse_scene reads it back).")
+      .def_property_readonly("sets", [](const PyScene& s) { return s.sets; })
+      .def_property_readonly("warnings", [](const PyScene& s) { return s.scene.warnings; })
+      .def("_replace", &replace, py::arg("overrides"))
+      .def(
+          "to_yaml", [](const PyScene& s) { return io::scene_to_yaml(s.scene); },
+          "The scene as YAML, every key explicit (parse_scene reads it back).")
+      .def(py::pickle(  // as its YAML (every key explicit), its name and its overrides
+          [](const PyScene& s) {
+            return py::make_tuple(io::scene_to_yaml(s.scene), s.scene.path, s.sets);
+          },
+          [](const py::tuple& state) {
+            io::Scene scene =
+                io::parse_scene(state[0].cast<std::string>(), state[1].cast<std::string>());
+            return PyScene(std::move(scene), state[2].cast<std::vector<std::string>>());
+          }))
       .def("__repr__", [](const PyScene& s) {
         return "<fivebar.Scene '" + s.scene.path + "' friction " +
                io::friction_law_name(s.scene.params.friction.law) + ">";
@@ -163,11 +186,13 @@ void bind_scene(py::module_& m) {
   m.def("parse_scene", &parse, py::arg("text"), py::arg("name") = "<string>",
         py::arg("overrides") = py::none(),
         "Parses a scene from YAML text; `name` names it in error messages.");
-  m.def("simulate", &simulate, py::arg("scene"),
-        "Forward simulation. Returns a dict: one float64 array per trajectory.csv column (t, "
-        "theta1..theta4, ..., P_diss, E_diss, W_in, W_ext), 'mode' (N, 5) int joint modes "
-        "(+1/-1 slip direction, 0 at rest, 2 stuck) and 'summary' (the run's checks and "
-        "statistics, as summary.json). Raises fivebar.NumericalError when the run fails.");
+  m.def("simulate", &simulate, py::arg("scene"), py::arg("twin") = false,
+        "Forward simulation, with the error estimate of `fivebar simulate`. Returns a dict: one "
+        "float64 array per trajectory.csv column (t, theta1..theta4, ..., P_diss, E_diss, W_in, "
+        "W_ext), 'mode' (N, 5) int joint modes (+1/-1 slip direction, 0 at rest, 2 stuck) and "
+        "'summary' (every field of summary.json). twin=True also runs the frictionless twin "
+        "('frictionless': its columns; summary['frictionless']). Raises fivebar.NumericalError "
+        "when the run fails.");
 }
 
 }  // namespace fivebar::python

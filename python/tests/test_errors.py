@@ -61,6 +61,11 @@ def test_identify_errors_match_the_command_line(cli, root, paper_scene):
         fivebar.identify(paper_scene, "no_such_log.csv")
     status, message = cli_error(cli, root, "identify", PAPER, "--log", "no_such_log.csv")
     assert status == 2 and str(missing.value) == message
+    with pytest.raises(ValueError) as not_a_number:
+        fivebar.identify(paper_scene, root / "datasets/logs/paper_rates.csv", min_rate=float("nan"))
+    status, message = cli_error(cli, root, "identify", PAPER, "--log",
+                                "datasets/logs/paper_rates.csv", "--min-rate", "nan")
+    assert status == 2 and str(not_a_number.value) == message
 
 
 def test_optimize_errors_match_the_command_line(cli, root, paper_scene):

@@ -45,6 +45,7 @@ def test_optimize_one_task(root, paper_scene, tmp_path):
     assert trajectory["t"][-1] == 0.5
     assert abs(trajectory["theta1"][-1] - 2.6) < 1e-9
     assert task["baseline"]["M1"].shape == trajectory["M1"].shape
+    assert result.swing_left.trajectory.M1 is trajectory["M1"]  # Records, as simulate's
 
 
 def test_identify_options_are_the_command_lines(root, paper_scene):

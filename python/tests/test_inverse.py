@@ -44,11 +44,11 @@ def test_time_dependent_loads_need_t(root, paper_run):
 
 @pytest.mark.parametrize("argument, value, message", [
     ("theta", np.zeros((3, 3)), r"^theta: \(argument\): expected a float64 array of shape \(N, 2\), got shape \(3, 3\)$"),
-    ("theta", np.zeros((3, 2), dtype=np.int64), r"^theta: \(argument\): expected a float64 array of shape \(N, 2\), got dtype int64$"),
-    ("theta", [[1.0, 2.0]], r"^theta: \(argument\): expected a float64 array of shape \(N, 2\), got list$"),
+    ("theta", [["a", "b"]], r"^theta: \(argument\): expected a float64 array of shape \(N, 2\), got list$"),
+    ("theta", [[1.0, 2.0]], r"^omega: \(argument\): expected a float64 array of shape \(N, 2\) with N = 1 \(the rows of theta\), got shape \(3, 2\)$"),
     ("omega", np.zeros((4, 2)), r"^omega: \(argument\): expected a float64 array of shape \(N, 2\) with N = 3 \(the rows of theta\), got shape \(4, 2\)$"),
     ("alpha", np.zeros(6), r"^alpha: \(argument\): expected a float64 array of shape \(N, 2\) with N = 3"),
-    ("alpha", np.zeros((3, 2), dtype=np.float32), r"^alpha: \(argument\): .* got dtype float32$"),
+    ("alpha", np.full((3, 2), "x"), r"^alpha: \(argument\): .* got dtype <U1$"),
     ("t", np.zeros((3, 1)), r"^t: \(argument\): expected a float64 array of shape \(N,\) with N = 3"),
 ])
 def test_bad_arrays_raise_value_error(paper_scene, argument, value, message):
@@ -57,6 +57,18 @@ def test_bad_arrays_raise_value_error(paper_scene, argument, value, message):
     args[argument] = value
     with pytest.raises(ValueError, match=message):
         fivebar.inverse(paper_scene, **args)
+
+
+def test_lists_and_other_dtypes_are_converted(paper_scene, paper_run):
+    theta, omega, alpha = (a[:5] for a in states(paper_run))
+    expected = fivebar.inverse(paper_scene, theta, omega, alpha)["M"]
+    as_lists = fivebar.inverse(paper_scene, theta.tolist(), omega.tolist(), alpha.tolist())
+    np.testing.assert_array_equal(as_lists.M, expected)
+    single = fivebar.inverse(paper_scene, theta.astype(np.float32), omega.astype(np.float32),
+                             alpha.astype(np.float32))
+    np.testing.assert_allclose(single.M, expected, rtol=1e-4, atol=1e-4)
+    zeros = np.zeros((1, 2), dtype=np.int64)
+    assert fivebar.inverse(paper_scene, [[1, 2]], zeros, zeros).M.shape == (1, 2)
 
 
 def test_non_contiguous_arrays_are_accepted(paper_scene, paper_run):

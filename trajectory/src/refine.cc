@@ -157,7 +157,7 @@ namespace {
 
 // the message's note when the levels ran out before the energy settled: the answer is then the
 // optimum of the finest basis, not yet of the problem (on the shipped swing_right task the
-// energy still fell 0.43% from 85 to 165 control points: docs/figures-optimization.md)
+// energy still fell 0.43% from 85 to 165 control points: docs/dev/figures-optimization.md)
 void note_unconverged(const BatchOptions& options, TaskResult* r) {
   if (!r->discretization_unsettled(options.refine.tol)) return;  // converged, or no level solved
   if (r->refinement_limited) {

@@ -60,6 +60,16 @@ class Json {
   Json& push(Json value);
 
   Type type() const { return type_; }
+  /// Readers of each type (for the Python module, which turns a record into Python objects):
+  /// the value of a bool, a number (an integer as double), an integer or a string.
+  bool boolean() const { return bool_; }
+  double number() const { return type_ == Type::kInteger ? double(integer_) : number_; }
+  long long integer() const { return integer_; }
+  const std::string& string() const { return string_; }
+  /// Object: member names, parallel to items(). Array: empty.
+  const std::vector<std::string>& keys() const { return keys_; }
+  /// Array elements, or object member values.
+  const std::vector<Json>& items() const { return items_; }
   /// Text with `indent` spaces per level; 0 writes one line.
   std::string dump(int indent = 2) const;
 

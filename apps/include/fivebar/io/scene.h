@@ -22,7 +22,8 @@ struct Scene {
   /// rates and accelerations the command uses
   double rest_rate_threshold = -1, rest_acceleration_threshold = -1;
   std::string path;  ///< the file it came from, as given (used in every error message)
-  /// likely unit mistakes (`<path>: <key>: <value> <why>`): load_scene prints them as warnings
+  /// likely unit mistakes (`<path>: <key>: <value> <why>`): load_scene prints them as warnings,
+  /// read_scene leaves them here
   std::vector<std::string> warnings;
 };
 
@@ -53,6 +54,14 @@ struct Scene {
 ///     singular_margin (in [0, 1)), friction_tol (in (0, 1)), friction_max_iter (>= 1),
 ///     rest_rate_threshold, rest_acceleration_threshold (>= 0; [derived], see Scene)
 Scene load_scene(const std::string& path, const std::vector<std::string>& sets = {});
+
+/// load_scene without printing the warnings (they stay in Scene::warnings): for callers that
+/// report them their own way, as the Python module does through warnings.warn.
+Scene read_scene(const std::string& path, const std::vector<std::string>& sets = {});
+
+/// Every key the schema accepts (dotted, `N` for a link index: "mechanism.links.N.mass"), in
+/// schema order. `sections`: the maps and lists that hold other keys ("mechanism.links") too.
+std::vector<std::string> scene_keys(bool sections = false);
 
 /// Parses a scene from YAML text; `path` only names it in error messages.
 Scene parse_scene(const std::string& yaml_text, const std::string& path,

@@ -51,7 +51,7 @@ inline constexpr double kNoiseFlatRatio = 0.9;
 /// k (1..8) whose successor does not fall below kNoiseFlatRatio s_k: the lowest order that is
 /// consistent with white noise, where the motion's share has gone. White noise gives s_1 (no
 /// bias); the rates of a quintic spline at 1 ms (quartic pieces) give s_5, 6.6e-7 rad/s on the
-/// swing_right optimum where s_4 reads 9.2e-5 (docs/hold.md, docs/figures-optimization.md).
+/// swing_right optimum where s_4 reads 9.2e-5 (docs/hold.md, docs/dev/figures-optimization.md).
 /// Noise whose spectrum falls toward the Nyquist frequency (filtered rates) is read lower than
 /// its deviation, at any order. Orders with fewer than 5 differences are not used. Floored at
 /// the rounding of the values, eps max(1, |f|).

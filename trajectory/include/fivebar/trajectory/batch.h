@@ -27,7 +27,7 @@ namespace fivebar::trajectory {
 /// knot spans) to 40, then 80 spans, so that every coarser spline lies in the finer space and
 /// the warm start of a level is the last optimum itself (knot insertion: the least-squares
 /// refit reproduces it to rounding). A level of 20 spans in between (25 control points) cost
-/// more than it saved in the 45-point solves (docs/figures-optimization.md).
+/// more than it saved in the 45-point solves (docs/dev/figures-optimization.md).
 inline const std::vector<int> kRefineLevels = {45, 85};
 
 struct RefineOptions {
@@ -43,7 +43,7 @@ struct RefineOptions {
   double continuation_stall_rtol = 1e-4;
   /// and its window (OptimizerOptions::stall_iterations, when smaller): 5 instead of 10 took
   /// the five shipped tasks from 1067 to 938 evaluations, their energies up by 0 to 0.017%
-  /// (docs/figures-optimization.md, issue 12 sixth pass)
+  /// (docs/dev/figures-optimization.md, issue 12 sixth pass)
   int continuation_stall_iterations = 5;
   /// control points per joint tried after the first solve's count (only the larger ones),
   /// until the exact-law objective changes by less than `tol` (relative) from one to the next;
