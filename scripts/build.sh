@@ -1,11 +1,18 @@
 #!/usr/bin/env bash
 # Installs what is missing, then configures and builds fivebar (Release, build/release, -j2),
-# the Python module included, and points Debian's /usr/bin/python3 at that module (docs/python.md).
+# and points Debian's /usr/bin/python3 at the Python module of this build (docs/python.md).
+# Usage: scripts/build.sh [TARGET...]   the named CMake targets only (scripts/paper.sh: the
+#        executable and the Python module); without arguments everything, tests and benchmarks
+#        included (scripts/test.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
+echo "build: configuring (cmake --preset release)"
 cmake --preset release >/dev/null
-cmake --build --preset release
+targets=()
+for t in "$@"; do targets+=(--target "$t"); done
+echo "build: compiling ${*:-everything} on 2 cores (progress in [ %] below)"
+cmake --build --preset release "${targets[@]}"
 
 # `import fivebar` from any directory: a .pth file in Debian's site directory for locally
 # installed packages names build/release/python (the module of this build, not a copy)
