@@ -3,8 +3,8 @@
 //   [--control-points N] [--quadrature-points N] [--singular-margin M] [--no-validate] [--no-plots]
 // Minimum-dissipation rest-to-rest trajectories for every task of a tasks file (issue 5):
 // summary.csv (one row per task, the minimum-jerk baseline beside each result), per task
-// DIR/<task>/trajectory.csv, baseline.csv and figures. Under mpirun the tasks are split across
-// ranks and rank 0 writes the same files as a one-process run.
+// DIR/<task>/trajectory.csv, baseline.csv, animation.html and figures. Under mpirun the tasks are
+// split across ranks and rank 0 writes the same files as a one-process run.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -16,6 +16,7 @@
 #include <iostream>
 #include <memory>
 
+#include "fivebar/io/animation.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/csv.h"
 #include "fivebar/io/commands.h"
@@ -115,8 +116,8 @@ std::string plot_script(const std::string& task, double limit, const std::string
   return s;
 }
 
-// trajectory.csv, baseline.csv (when the baseline closes) and the figures of one solved task, in
-// DIR/<task>/
+// trajectory.csv, baseline.csv (when the baseline closes), animation.html and the figures of one
+// solved task, in DIR/<task>/
 std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult& r,
                        const trajectory::BatchOptions& options, bool plots) {
   std::vector<sim::Row> rows, base;
@@ -134,6 +135,17 @@ std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult
   } else {
     fs::remove(dir / "baseline.csv");  // a stale one from an earlier run would mislead
   }
+  AnimationInput animation;
+  animation.title = r.task + ", " + fs::path(scene.path).filename().string();
+  animation.label = "optimal motion";
+  animation.motion = animation_track(rows);
+  if (baseline) {
+    animation.ghost = animation_track(base);
+    animation.ghost_label = "minimum jerk (baseline)";
+  }
+  write_atomic(dir / "animation.html", [&](const std::string& p) {
+    write_text_file(p, animation_html(scene, animation));
+  });
   if (!plots) return "";
   return run_gnuplot(dir.string(), "plots.gnuplot",
                      plot_script(r.task, r.torque_limit, gnuplot().terminal, baseline));
