@@ -90,14 +90,21 @@ std::string plot_script(const std::string& task, double limit, const std::string
        "span = 0.6 * (STATS_max_x - STATS_min_x > STATS_max_y - STATS_min_y ? "
        "STATS_max_x - STATS_min_x : STATS_max_y - STATS_min_y) + 1e-3\n"
        "cx = (STATS_max_x + STATS_min_x) / 2\ncy = (STATS_max_y + STATS_min_y) / 2\n"
+       "last = STATS_records - 1\n"
        "set xrange [cx - span:cx + span]\nset yrange [cy - span:cy + span]\n";
   s += "set output 'path_C.png'\nset title '" + task + ": path of C'\nset size ratio -1\n"
        "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
+       "set key outside right top\n"
        "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 title 'optimal'" +
        with_baseline("'x_C':'y_C'", "minimum jerk") +
+       // the ends: the first and the last row
+       ", 'trajectory.csv' using ($0 == 0 ? column('x_C') : NaN):'y_C' with points pt 7 ps 2.5 "
+       "lc 'dark-green' title 'start', 'trajectory.csv' using ($0 == last ? column('x_C') : "
+       "NaN):'y_C' with points pt 5 ps 2.5 lc 'black' title 'goal'"
        "\nset size noratio\nset autoscale xy\n";
   // room above and below, so that the torque limit lines are not drawn on the border
   s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
+  // the key beside the plot: the torques fill the band between the limits
   s += "set output 'torques.png'\nset title '" + task + ": motor torques'\n"
        "set xlabel 't [s]'\nset ylabel 'torque [N m]'\n"
        "plot 'trajectory.csv' using 't':'M1' with lines lw 2 title 'M1', "

@@ -123,9 +123,30 @@ std::string preamble(const std::string& terminal, const char* what) {
     << "set xlabel \"t [s]\"\n"
     << "set style line 1 lc rgb \"#1f5fa8\" lw 1.6\n"
     << "set style line 2 lc rgb \"#d62728\" lw 1.6 dt 2\n"
-    << "set style line 3 lc rgb \"#2c8c3c\" lw 1.6\n";
+    << "set style line 3 lc rgb \"#2c8c3c\" lw 1.6\n"
+    << "set style line 4 lc rgb \"#9ecae1\" lw 5\n"
+    // a tick step giving about 4 steps over a range r (gnuplot's own choice crowds a small
+    // panel with 10 or more); 1 for an empty range
+    << "nicetic(r) = (r <= 0 ? 1 : (nt_s = 10.0**floor(log10(r/4.0)), nt_f = r/4.0/nt_s, "
+       "nt_f < 1.5 ? nt_s : nt_f < 3.5 ? 2*nt_s : nt_f < 7.5 ? 5*nt_s : 10*nt_s))\n";
   return s.str();
 }
+
+// the range lo..hi of column `column` over `files` (gnuplot variables), and y tics of about 4
+// steps over it
+std::string y_range_stats(const std::vector<std::string>& files, const std::string& column) {
+  std::string s = "set autoscale y\n";  // stats skips the points outside a set range
+  for (size_t i = 0; i < files.size(); ++i) {
+    s += "stats " + quote(files[i]) + " using " + quote(column) + " nooutput\n";
+    s += i == 0 ? "lo = STATS_min; hi = STATS_max\n"
+                : "lo = (STATS_min < lo ? STATS_min : lo); hi = (STATS_max > hi ? STATS_max : hi)\n";
+  }
+  return s + "set ytics nicetic(hi - lo)\n";
+}
+
+// room above the curves for the in-panel key (top) and a margin below, so that no peak lies on
+// the frame
+constexpr char kKeyRoom[] = "set offsets 0, 0, graph 0.3, graph 0.08\n";
 
 // `set output` and `set multiplot` of one figure: the figure's name on the first title line,
 // the line styles and the run's name on the second
@@ -134,7 +155,8 @@ std::string begin_figure(const std::string& file, const std::string& layout,
                          const std::string& title) {
   std::string second = legend;
   if (!title.empty()) second += (second.empty() ? "" : "      ") + title;
-  return "\nset output " + quote(file) + "\nset multiplot layout " + layout + " title " +
+  return "\nset output " + quote(file) + "\nset multiplot " +
+         (layout.empty() ? "" : "layout " + layout + " ") + "title " +
          quote(figure + (second.empty() ? "" : "\n" + second)) + " font \",13\" noenhanced\n";
 }
 
@@ -155,17 +177,65 @@ std::string difference(const std::string& file, const std::string& a, const std:
          ")) with lines ls " + std::to_string(style);
 }
 
-// figure 6: friction torque of each joint, one panel per joint (paper Fig. 6)
+// figure 6: friction torque of each joint, one panel per joint (paper Fig. 6), and the total
+// dissipated power
 std::string friction_figure(const std::string& trajectory, const std::string& title) {
-  std::string s = begin_figure("fig6_friction_torques.png", "3,2",
-                               "Fig. 6  Friction torque of each joint", "", title);
-  const char* joints[] = {"(a) joint 1: O", "(b) joint 2: B", "(c) joint 3: C", "(d) joint 4: D",
-                          "(e) joint 5: D0"};
+  std::string s = begin_figure(
+      "fig6_friction_torques.png", "3,2", "Fig. 6  Friction torque of each joint",
+      "Mf_k has the sign of the joint's relative rate w_k (friction opposes it; it acts on the "
+      "distal body as -Mf_k), so Mf_k w_k >= 0",
+      title);
+  const char* joints[] = {"(a) joint O: ground / crank O-B, w1 = omega1",
+                          "(b) joint B: crank O-B / coupler B-C, w2 = omega3 - omega1",
+                          "(c) joint C: coupler B-C / coupler D-C, w3 = omega4 - omega3",
+                          "(d) joint D: coupler D-C / crank D0-D, w4 = omega2 - omega4",
+                          "(e) joint D0: ground / crank D0-D, w5 = omega2"};
+  s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
   for (int k = 1; k <= kJoints; ++k) {
-    s += panel(joints[k - 1], "Mf" + std::to_string(k) + " [N m]") + "plot " +
-         curve(trajectory, "Mf" + std::to_string(k), 1) + "\n";
+    const std::string column = "Mf" + std::to_string(k);
+    s += y_range_stats({trajectory}, column) + panel(joints[k - 1], column + " [N m]") + "plot " +
+         curve(trajectory, column, 1) + "\n";
   }
-  return s + "unset multiplot\n";
+  s += y_range_stats({trajectory}, "P_diss") +
+       panel("(f) total dissipated power P_diss = sum_k Mf_k w_k", "P_diss [W]") + "plot " +
+       curve(trajectory, "P_diss", 3) + "\n";
+  return s + "set ytics autofreq\nset offsets 0, 0, 0, 0\nunset multiplot\n";
+}
+
+// figure 5: torques M1, M2 of `reference` (thick, light) under those of `computed` (dashed, on
+// top), large, and their difference computed - reference in two small panels below; `%` in a
+// column pattern stands for 1 or 2
+std::string torque_check_figure(const std::string& trajectory, const std::string& reference,
+                                const std::string& computed, const std::string& reference_name,
+                                const std::string& figure, const std::string& title) {
+  auto column = [](std::string pattern, int i) {
+    return pattern.replace(pattern.find('%'), 1, std::to_string(i));
+  };
+  std::string s = begin_figure("fig5_inverse_torques.png", "", figure,
+                               "(c), (d): inverse dynamics - " + reference_name, title);
+  s += "set key top left horizontal opaque box samplen 4 font \",10\"\n" + std::string(kKeyRoom);
+  for (int i = 1; i <= 2; ++i) {
+    const std::string ref = column(reference, i), comp = column(computed, i);
+    s += "set size 0.5, 0.6\nset origin " + std::string(i == 1 ? "0" : "0.5") + ", 0.32\n" +
+         y_range_stats({trajectory}, ref) +
+         panel(std::string(i == 1 ? "(a)" : "(b)") + " driving torque M" + std::to_string(i),
+               "M" + std::to_string(i) + " [N m]") +
+         "plot " + quote(trajectory) + " using \"t\":" + quote(ref) + " with lines ls 4 title " +
+         quote(reference_name) + ", \\\n     " + curve(trajectory, comp, 2) +
+         " title \"inverse dynamics\"\n";
+  }
+  s += "unset key\nset offsets 0, 0, graph 0.1, graph 0.1\nset format y \"%.0e\"\n";
+  for (int i = 1; i <= 2; ++i) {
+    const std::string n = std::to_string(i);
+    s += "set autoscale y\nstats " + quote(trajectory) + " using (column(" +
+         quote(column(computed, i)) + ") - column(" + quote(column(reference, i)) +
+         ")) nooutput\nset ytics nicetic(STATS_max - STATS_min)\n";
+    s += "set size 0.5, 0.3\nset origin " + std::string(i == 1 ? "0" : "0.5") + ", 0\n" +
+         panel(std::string(i == 1 ? "(c)" : "(d)") + " difference, M" + n, "dM" + n + " [N m]") +
+         "plot " + difference(trajectory, column(computed, i), column(reference, i), 3) + "\n";
+  }
+  return s + "set format y \"%g\"\nset ytics autofreq\nset size 1, 1\nset origin 0, 0\n"
+             "unset multiplot\n";
 }
 
 // one colour per integrator (the order of sim::kAllMethods)
@@ -283,51 +353,52 @@ std::string run_gnuplot(const std::string& dir, const std::string& script_name,
 std::string simulation_plot_script(const SimulationFigures& f, const std::string& terminal) {
   std::string s = preamble(terminal, "figures of `fivebar simulate`");
   const bool twin = !f.frictionless.empty();
-  const char* links[] = {"(a) link 1", "(b) link 2", "(c) link 3", "(d) link 4"};
+  const char* links[] = {"(a) link 1: crank O-B", "(b) link 2: crank D0-D",
+                         "(c) link 3: coupler B-C", "(d) link 4: coupler D-C"};
 
   // figures 2-4: one panel per link, friction solid, frictionless twin dashed (paper Figs. 2-4)
   struct Quantity {
     const char *file, *figure, *column, *unit;
+    bool clip;  ///< the y range is the friction run's: the twin's larger excursions leave it
   };
   const Quantity quantities[] = {
-      {"fig2_angles.png", "Fig. 2  Angular displacement of each link", "theta", "rad"},
-      {"fig3_rates.png", "Fig. 3  Angular velocity of each link", "omega", "rad/s"},
-      {"fig4_accelerations.png", "Fig. 4  Angular acceleration of each link", "alpha", "rad/s^2"},
+      {"fig2_angles.png", "Fig. 2  Angular displacement of each link", "theta", "rad", false},
+      {"fig3_rates.png", "Fig. 3  Angular velocity of each link", "omega", "rad/s", false},
+      {"fig4_accelerations.png", "Fig. 4  Angular acceleration of each link", "alpha", "rad/s^2",
+       true},
   };
+  s += "set key top left horizontal opaque box samplen 4 font \",10\"\n";
   for (const Quantity& q : quantities) {
+    const bool clip = q.clip && twin;
     s += begin_figure(q.file, "2,2",
                       std::string(q.figure) + (twin ? ", with and without joint friction" : ""),
-                      twin ? "solid: with joint friction, dashed: frictionless" : "", f.title);
+                      clip ? "y range of the run with friction: the frictionless twin's larger "
+                             "swings leave the panels"
+                           : "",
+                      f.title);
+    s += kKeyRoom;
     for (int i = 1; i <= 4; ++i) {
-      const std::string n = std::to_string(i);
-      s += panel(links[i - 1], q.column + n + " [" + q.unit + "]") + "plot " +
-           curve(f.trajectory, q.column + n, 1);
-      if (twin) s += ", \\\n     " + curve(f.frictionless, q.column + n, 2);
+      const std::string column = q.column + std::to_string(i);
+      s += y_range_stats(clip ? std::vector<std::string>{f.trajectory}
+                              : twin ? std::vector<std::string>{f.trajectory, f.frictionless}
+                                     : std::vector<std::string>{f.trajectory},
+                         column);
+      if (clip) s += "set yrange [lo - 0.08 * (hi - lo):hi + 0.4 * (hi - lo)]\n";
+      s += panel(links[i - 1], column + " [" + q.unit + "]") + "plot " +
+           curve(f.trajectory, column, 1) + " title \"with joint friction\"";
+      if (twin) s += ", \\\n     " + curve(f.frictionless, column, 2) + " title \"frictionless\"";
       s += "\n";
     }
-    s += "unset multiplot\n";
+    s += "set autoscale y\nunset multiplot\n";
   }
 
   // figure 5: input torques against the inverse dynamics of the computed motion (paper Fig. 5)
   if (f.inverse) {
-    s += begin_figure("fig5_inverse_torques.png", "2,2",
-                      "Fig. 5  Inverse dynamics: the input torques recomputed from the motion",
-                      "solid: input, dashed: inverse dynamics", f.title);
-    for (int i = 1; i <= 2; ++i) {
-      const std::string n = std::to_string(i);
-      s += panel(std::string(i == 1 ? "(a)" : "(b)") + " driving torque M" + n,
-                 "M" + n + " [N m]") +
-           "plot " + curve(f.trajectory, "M" + n, 1) + ", \\\n     " +
-           curve(f.trajectory, "M" + n + "_inverse", 2) + "\n";
-    }
-    for (int i = 1; i <= 2; ++i) {
-      const std::string n = std::to_string(i);
-      s += panel(std::string(i == 1 ? "(c)" : "(d)") + " inverse dynamics - input, M" + n,
-                 "dM" + n + " [N m]") +
-           "plot " + difference(f.trajectory, "M" + n + "_inverse", "M" + n, 3) + "\n";
-    }
-    s += "unset multiplot\n";
+    s += torque_check_figure(f.trajectory, "M%", "M%_inverse", "input",
+                             "Fig. 5  Inverse dynamics: the input torques recomputed from the motion",
+                             f.title);
   }
+  s += "unset key\nset ytics autofreq\nset offsets 0, 0, 0, 0\n";
 
   return s + friction_figure(f.trajectory, f.title);
 }
@@ -342,26 +413,18 @@ std::string inverse_plot_script(const std::string& trajectory, bool has_input,
   std::string s = preamble(terminal, "figures of `fivebar inverse`");
 
   // figure 5: the inverse-dynamics torques, against the motion file's torques when it has them
-  s += begin_figure("fig5_inverse_torques.png", has_input ? "2,2" : "2,1",
-                    "Fig. 5  Inverse dynamics: the torques that produce the given motion",
-                    has_input ? "solid: motion file, dashed: inverse dynamics" : "", title);
+  const std::string figure = "Fig. 5  Inverse dynamics: the torques that produce the given motion";
+  if (has_input) return s + torque_check_figure(trajectory, "M%_input", "M%", "motion file",
+                                                figure, title) + friction_figure(trajectory, title);
+  s += begin_figure("fig5_inverse_torques.png", "2,1", figure, "", title);
+  s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
   for (int i = 1; i <= 2; ++i) {
     const std::string n = std::to_string(i);
-    s +=
-        panel(std::string(i == 1 ? "(a)" : "(b)") + " driving torque M" + n, "M" + n + " [N m]") +
-        "plot ";
-    if (has_input) s += curve(trajectory, "M" + n + "_input", 1) + ", \\\n     ";
-    s += curve(trajectory, "M" + n, has_input ? 2 : 1) + "\n";
+    s += y_range_stats({trajectory}, "M" + n) +
+         panel(std::string(i == 1 ? "(a)" : "(b)") + " driving torque M" + n, "M" + n + " [N m]") +
+         "plot " + curve(trajectory, "M" + n, 1) + "\n";
   }
-  if (has_input) {
-    for (int i = 1; i <= 2; ++i) {
-      const std::string n = std::to_string(i);
-      s += panel(std::string(i == 1 ? "(c)" : "(d)") + " inverse dynamics - motion file, M" + n,
-                 "dM" + n + " [N m]") +
-           "plot " + difference(trajectory, "M" + n, "M" + n + "_input", 3) + "\n";
-    }
-  }
-  s += "unset multiplot\n";
+  s += "set ytics autofreq\nset offsets 0, 0, 0, 0\nunset multiplot\n";
 
   return s + friction_figure(trajectory, title);
 }
