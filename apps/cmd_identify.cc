@@ -58,6 +58,7 @@ std::string residual_plot_script(const std::string& terminal, const std::string&
   // the first 2 s only: a long log's periods would overlay into one band
   s << "stats \"residuals.csv\" using \"t\" nooutput\n"
     << "set xrange [STATS_min:(STATS_max < STATS_min + 2 ? STATS_max : STATS_min + 2)]\n"
+    << "set key top left horizontal opaque box\n"
     << "set output \"fig_torques.png\"\nset multiplot layout 2,1 title \"measured (blue points, "
        "drawn over the model) and predicted (red line) actuator torques, first 2 s   "
     << title << "\" noenhanced\n";
@@ -69,12 +70,13 @@ std::string residual_plot_script(const std::string& terminal, const std::string&
       << "stats \"residuals.csv\" using ($0 >= 5 && $0 < n_rows - 5 ? column(\"predicted_tau" << i
       << "\") : NaN) nooutput\nlo = (STATS_min < lo ? STATS_min : lo); "
          "hi = (STATS_max > hi ? STATS_max : hi)\n"
-      << "set yrange [lo - 0.08 * (hi - lo):hi + 0.08 * (hi - lo)]\n";
-    s << "set ylabel \"tau" << i << " [N m]\"\nplot \"residuals.csv\" using \"t\":\"predicted_tau" << i
-      << "\" with lines lc rgb \"#e37b7b\" lw 1.5 title \"predicted (fitted model)\", \"\" using "
-         "\"t\":\"tau" << i << "\" with points pt 7 ps 0.35 lc rgb \"#1f5fa8\" title \"measured\"\n";
+      << "set yrange [lo - 0.08 * (hi - lo):hi + 0.3 * (hi - lo)]\n";  // room for the key
+    s << "set ylabel \"tau" << i << " [N m]\"\nplot \"residuals.csv\" using \"t\":\"predicted_tau"
+      << i << "\" with lines lc rgb \"#e37b7b\" lw 1.5 title \"predicted (fitted model)\", \"\" "
+      << "using \"t\":\"tau" << i
+      << "\" with points pt 7 ps 0.35 lc rgb \"#1f5fa8\" title \"measured\"\n";
   }
-  s << "set autoscale y\n";
+  s << "set autoscale y\nset key top right noopaque nobox vertical\n";
   s << "set autoscale x\n";
   s << "unset multiplot\nset output \"fig_residuals.png\"\nset multiplot layout 2,1 title "
        "\"torque residual measured - predicted (samples in the fit)   "
@@ -105,10 +107,11 @@ std::string residual_plot_script(const std::string& terminal, const std::string&
       << title << "\" noenhanced\n";
     for (int i = 1; i <= 2; ++i) {
       const std::string n = std::to_string(i);
-      const std::string windowed = "(column(\"windowed_theta" + n + "\") - column(\"theta" + n + "\"))";
+      const std::string windowed =
+          "(column(\"windowed_theta" + n + "\") - column(\"theta" + n + "\"))";
       s << "set autoscale y\nstats \"residuals.csv\" using " << windowed << " nooutput\n"
         << "r = (STATS_max - STATS_min > 0 ? STATS_max - STATS_min : 1e-9)\n"
-        << "set yrange [STATS_min - 0.1 * r:STATS_max + 0.1 * r]\n"
+        << "set yrange [STATS_min - 0.1 * r:STATS_max + 0.35 * r]\n"  // room for the key
         << "set ylabel \"theta" << n << " error [rad]\"\nplot \"residuals.csv\" using \"t\":"
         << windowed << " with lines ls 2 title \"fitted scene, windowed - log\", \"\" using \"t\":"
         << "(column(\"simulated_theta" << n << "\") - column(\"theta" << n << "\")) with lines "

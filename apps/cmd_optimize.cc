@@ -78,8 +78,10 @@ void write_atomic(const fs::path& path, Write&& write) {
 std::string plot_script(const std::string& task, double limit, const std::string& terminal,
                         bool baseline) {
   // the minimum-jerk curve beside each optimal one, when the baseline closes
-  auto with_baseline = [&](const std::string& column, const std::string& title) {
-    return baseline ? ", 'baseline.csv' using " + column + " with lines dt 2 title '" + title + "'"
+  auto with_baseline = [&](const std::string& column, const std::string& title,
+                           const std::string& colour) {
+    return baseline ? ", 'baseline.csv' using " + column + " with lines dt 2 lc rgb '" + colour +
+                          "' title '" + title + "'"
                     : std::string();
   };
   std::string s = "set datafile separator ','\nset terminal " + terminal +
@@ -95,8 +97,8 @@ std::string plot_script(const std::string& task, double limit, const std::string
   s += "set output 'path_C.png'\nset title '" + task + ": path of C'\nset size ratio -1\n"
        "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
        "set key outside right top\n"
-       "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 title 'optimal'" +
-       with_baseline("'x_C':'y_C'", "minimum jerk") +
+       "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 lc rgb '#1f5fa8' title 'optimal'" +
+       with_baseline("'x_C':'y_C'", "minimum jerk", "#777777") +
        // the ends: the first and the last row
        ", 'trajectory.csv' using ($0 == 0 ? column('x_C') : NaN):'y_C' with points pt 7 ps 2.5 "
        "lc 'dark-green' title 'start', 'trajectory.csv' using ($0 == last ? column('x_C') : "
@@ -107,9 +109,10 @@ std::string plot_script(const std::string& task, double limit, const std::string
   // the key beside the plot: the torques fill the band between the limits
   s += "set output 'torques.png'\nset title '" + task + ": motor torques'\n"
        "set xlabel 't [s]'\nset ylabel 'torque [N m]'\n"
-       "plot 'trajectory.csv' using 't':'M1' with lines lw 2 title 'M1', "
-       "'trajectory.csv' using 't':'M2' with lines lw 2 title 'M2'" +
-       with_baseline("'t':'M1'", "M1 minimum jerk") + with_baseline("'t':'M2'", "M2 minimum jerk");
+       "plot 'trajectory.csv' using 't':'M1' with lines lw 2 lc rgb '#1f5fa8' title 'M1', "
+       "'trajectory.csv' using 't':'M2' with lines lw 2 lc rgb '#d62728' title 'M2'" +
+       with_baseline("'t':'M1'", "M1 minimum jerk", "#1f5fa8") +
+       with_baseline("'t':'M2'", "M2 minimum jerk", "#d62728");
   if (std::isfinite(limit)) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.6g", limit);
@@ -118,8 +121,8 @@ std::string plot_script(const std::string& task, double limit, const std::string
   }
   s += "\nset offsets 0, 0, 0, 0\nset output 'energy.png'\nset title '" + task +
        ": dissipated energy'\nset ylabel 'E_diss [J]'\n"
-       "plot 'trajectory.csv' using 't':'E_diss' with lines lw 2 title 'optimal'" +
-       with_baseline("'t':'E_diss'", "minimum jerk") + "\n";
+       "plot 'trajectory.csv' using 't':'E_diss' with lines lw 2 lc rgb '#1f5fa8' title 'optimal'" +
+       with_baseline("'t':'E_diss'", "minimum jerk", "#777777") + "\n";
   return s;
 }
 
