@@ -400,9 +400,12 @@ std::string simulation_plot_script(const SimulationFigures& f, const std::string
     const bool clip = q.clip && twin;
     s += begin_figure(q.file, "2,2",
                       std::string(q.figure) + (twin ? ", with and without joint friction" : ""),
-                      clip ? "y range of the run with friction: the frictionless twin's larger "
-                             "swings leave the panels"
-                           : "",
+                      std::string(twin ? "blue solid: with joint friction, red dashed: "
+                                         "frictionless twin"
+                                       : "") +
+                          (clip ? "; y range of the run with friction (the twin's larger swings "
+                                  "leave the panels)"
+                                : ""),
                       f.title);
     s += kKeyRoom;
     for (int i = 1; i <= 4; ++i) {
