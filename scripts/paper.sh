@@ -5,13 +5,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 echo "paper: [1/2] installing what is missing and building fivebar and its Python module"
-targets=(fivebar)
-# the Python module, when this configuration builds it (FIVEBAR_BUILD_PYTHON, pybind11 found)
-bash scripts/install-deps.sh
-cmake --preset release >/dev/null
-if cmake --build --preset release --target help 2>/dev/null | grep -q fivebar_python; then
-  targets+=(fivebar_python)
-fi
-bash scripts/build.sh "${targets[@]}"
+bash scripts/build.sh fivebar fivebar_python
 echo "paper: [2/2] simulating datasets/scenes/paper.yaml -> results/paper/"
 ./build/release/apps/fivebar simulate datasets/scenes/paper.yaml --out results/paper
