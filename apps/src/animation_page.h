@@ -104,14 +104,19 @@ const DATA = /*FIVEBAR_DATA*/null;
   function X(p) { return [ox + (p[0] - box[0]) * scale, oy + (box[3] - p[1]) * scale]; }
 
   function colour(v) {  // viridis of sqrt(v), v in [0, 1]
-    const x = Math.sqrt(Math.min(Math.max(v, 0), 1)) * (VIRIDIS.length - 1), k = Math.min(Math.floor(x), VIRIDIS.length - 2);
+    const x = Math.sqrt(Math.min(Math.max(v, 0), 1)) * (VIRIDIS.length - 1);
+    const k = Math.min(Math.floor(x), VIRIDIS.length - 2);
     const f = x - k, a = VIRIDIS[k], b = VIRIDIS[k + 1];
-    return "rgb(" + [0, 1, 2].map(function (c) { return Math.round(a[c] + f * (b[c] - a[c])); }).join(",") + ")";
+    const rgb = [0, 1, 2].map(function (c) { return Math.round(a[c] + f * (b[c] - a[c])); });
+    return "rgb(" + rgb.join(",") + ")";
   }
   function fmt(x, d) { return x === null ? "-" : Number(x).toPrecision(d || 4); }
   function index(tr, t) {  // last sample at or before t
     let lo = 0, hi = tr.t.length - 1;
-    while (lo < hi) { const mid = (lo + hi + 1) >> 1; if (tr.t[mid] <= t) lo = mid; else hi = mid - 1; }
+    while (lo < hi) {
+      const mid = (lo + hi + 1) >> 1;
+      if (tr.t[mid] <= t) lo = mid; else hi = mid - 1;
+    }
     return lo;
   }
   function line(a, b, style, width, dash) {
@@ -149,7 +154,9 @@ const DATA = /*FIVEBAR_DATA*/null;
     if (!gh) return;
     const q = pose(gh, index(gh, t));
     if (!q) return;
-    LINKS.forEach(function (L) { line(X(q[L[2]]), X(q[L[3]]), "rgba(120,120,120,0.45)", 5, [8, 5]); });
+    LINKS.forEach(function (L) {
+      line(X(q[L[2]]), X(q[L[3]]), "rgba(120,120,120,0.45)", 5, [8, 5]);
+    });
     JOINTS.forEach(function (k) {
       const p = X(q[k]); ctx.strokeStyle = "rgba(120,120,120,0.6)"; ctx.lineWidth = 1.5;
       ctx.beginPath(); ctx.arc(p[0], p[1], 6, 0, 2 * Math.PI); ctx.stroke();
@@ -224,20 +231,38 @@ const DATA = /*FIVEBAR_DATA*/null;
       if (m.stuck[i] & (1 << j)) ctx.strokeRect(x - 10, y - 10, 20, 20);
     });
     let y = 224;
-    const item = function (draw, text) { draw(y); ctx.fillStyle = "#000"; ctx.font = "12px sans-serif"; ctx.fillText(text, x0 + 34, y + 4); y += 22; };
-    LINKS.forEach(function (L) { item(function (yy) { line([x0, yy], [x0 + 26, yy], L[1], 6); }, L[0]); });
-    item(function (yy) { ctx.strokeStyle = "#000"; ctx.lineWidth = 3; ctx.strokeRect(x0 + 6, yy - 8, 16, 16); }, "stuck joint (w = 0)");
-    item(function (yy) { line([x0, yy], [x0 + 22, yy], "#b00000", 3); arrowHead([x0 + 28, yy], 0, 10, "#b00000"); }, "F at P (length ~ |F|)");
+    const item = function (draw, text) {  // a sample drawn at height y, its text beside it
+      draw(y);
+      ctx.fillStyle = "#000"; ctx.font = "12px sans-serif"; ctx.fillText(text, x0 + 34, y + 4);
+      y += 22;
+    };
+    LINKS.forEach(function (L) {
+      item(function (yy) { line([x0, yy], [x0 + 26, yy], L[1], 6); }, L[0]);
+    });
+    item(function (yy) {
+      ctx.strokeStyle = "#000"; ctx.lineWidth = 3; ctx.strokeRect(x0 + 6, yy - 8, 16, 16);
+    }, "stuck joint (w = 0)");
+    item(function (yy) {
+      line([x0, yy], [x0 + 22, yy], "#b00000", 3); arrowHead([x0 + 28, yy], 0, 10, "#b00000");
+    }, "F at P (length ~ |F|)");
     item(function (yy) { line([x0, yy], [x0 + 26, yy], "#888", 1); }, "path of P");
-    item(function (yy) { ctx.strokeStyle = "#555"; ctx.lineWidth = 2; ctx.beginPath(); ctx.arc(x0 + 13, yy, 8, 0, 5); ctx.stroke(); }, "torques, ccw positive");
-    if (gh) item(function (yy) { line([x0, yy], [x0 + 26, yy], "rgba(120,120,120,0.6)", 5, [8, 5]); }, DATA.ghost_label);
+    item(function (yy) {
+      ctx.strokeStyle = "#555"; ctx.lineWidth = 2;
+      ctx.beginPath(); ctx.arc(x0 + 13, yy, 8, 0, 5); ctx.stroke();
+    }, "torques, ccw positive");
+    if (gh) {
+      item(function (yy) {
+        line([x0, yy], [x0 + 26, yy], "rgba(120,120,120,0.6)", 5, [8, 5]);
+      }, DATA.ghost_label);
+    }
   }
   function energies(i) {
     const dE = m.W_in[i] + m.W_ext[i] - m.E_diss[i];
     const p = [1, 2, 3, 4, 5].reduce(function (s, k) { return s + (m["p" + k][i] || 0); }, 0);
     return "t = " + m.t[i].toFixed(4) + " s   (frame " + (i + 1) + " of " + n + ")\n" +
       "W_in " + fmt(m.W_in[i], 5) + " J   W_ext " + fmt(m.W_ext[i], 5) + " J   E_diss " +
-      fmt(m.E_diss[i], 5) + " J   change of KE + PE " + fmt(dE, 5) + " J   P_diss " + fmt(p, 4) + " W\n" +
+      fmt(m.E_diss[i], 5) + " J   change of KE + PE " + fmt(dE, 5) + " J   P_diss " +
+      fmt(p, 4) + " W\n" +
       "M1 " + fmt(m.M1[i], 4) + " N m   M2 " + fmt(m.M2[i], 4) + " N m   M3 " + fmt(m.M3[i], 4) +
       " N m   F " + fmt(m.F[i], 4) + " N";
   }
@@ -248,8 +273,10 @@ const DATA = /*FIVEBAR_DATA*/null;
   slider.max = String(n - 1);
   document.getElementById("title").textContent = DATA.title + ": " + DATA.label;
   document.getElementById("note").textContent = "Drawn to scale, y up. " + n + " frames of " +
-    m.samples + " samples (" + (n < m.samples ? "decimated" : "all") + "); joint colours by the square root of the friction power, from 0 to the 98th percentile of the " +
-    "joints' friction powers over the run (" + fmt(pMax, 3) + " W; peak " + fmt(pPeak, 3) + " W). Add #t=0.5 to the address to open at t = 0.5 s.";
+    m.samples + " samples (" + (n < m.samples ? "decimated" : "all") + "); joint colours by " +
+    "the square root of the friction power, from 0 to the 98th percentile of the joints' " +
+    "friction powers over the run (" + fmt(pMax, 3) + " W; peak " + fmt(pPeak, 3) + " W). " +
+    "Add #t=0.5 to the address to open at t = 0.5 s.";
 
   function draw() {
     const i = index(m, t);
