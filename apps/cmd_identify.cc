@@ -57,14 +57,25 @@ std::string residual_plot_script(const std::string& terminal, const std::string&
   // the first 2 s only: a long log's periods would overlay into one band
   s << "stats \"residuals.csv\" using \"t\" nooutput\n"
     << "set xrange [STATS_min:(STATS_max < STATS_min + 2 ? STATS_max : STATS_min + 2)]\n"
-    << "set output \"fig_torques.png\"\nset multiplot layout 2,1 title \"measured (blue) and "
-       "predicted (red) actuator torques, first 2 s   "
+    << "set key top left horizontal opaque box\n"
+    << "set output \"fig_torques.png\"\nset multiplot layout 2,1 title \"measured (blue points, "
+       "drawn over the model) and predicted (red line) actuator torques, first 2 s   "
     << title << "\" noenhanced\n";
   for (int i = 1; i <= 2; ++i) {
-    s << "set ylabel \"tau" << i << " [N m]\"\nplot \"residuals.csv\" using \"t\":\"tau" << i
-      << "\" with lines ls 1 title \"measured\", \"\" using \"t\":\"predicted_tau" << i
-      << "\" with lines ls 2 title \"predicted\"\n";
+    // the y range of the measurement and of the prediction away from the ends (where the rates
+    // and accelerations of a log are estimated one-sided: one sample can be far off)
+    s << "set autoscale y\nstats \"residuals.csv\" using \"tau" << i << "\" nooutput\n"
+      << "lo = STATS_min; hi = STATS_max; n_rows = STATS_records\n"
+      << "stats \"residuals.csv\" using ($0 >= 5 && $0 < n_rows - 5 ? column(\"predicted_tau" << i
+      << "\") : NaN) nooutput\nlo = (STATS_min < lo ? STATS_min : lo); "
+         "hi = (STATS_max > hi ? STATS_max : hi)\n"
+      << "set yrange [lo - 0.08 * (hi - lo):hi + 0.3 * (hi - lo)]\n";  // room for the key
+    s << "set ylabel \"tau" << i << " [N m]\"\nplot \"residuals.csv\" using \"t\":\"predicted_tau"
+      << i << "\" with lines lc rgb \"#e37b7b\" lw 1.5 title \"predicted (fitted model)\", \"\" "
+      << "using \"t\":\"tau" << i
+      << "\" with points pt 7 ps 0.35 lc rgb \"#1f5fa8\" title \"measured\"\n";
   }
+  s << "set autoscale y\nset key top right noopaque nobox vertical\n";
   s << "set autoscale x\n";
   s << "unset multiplot\nset output \"fig_residuals.png\"\nset multiplot layout 2,1 title "
        "\"torque residual measured - predicted (samples in the fit)   "
@@ -86,17 +97,26 @@ std::string residual_plot_script(const std::string& terminal, const std::string&
   s << "unset multiplot\n";
   if (validation) {
     // the windowed runs (restarted from the logged state) are the meaningful check on chaotic
-    // motion; the full run, which leaves the log once errors have grown, is drawn thin
+    // motion: their error sets the y range; the full run, which leaves the log once errors have
+    // grown, is drawn thin and may leave the panel
     s << "set xlabel \"t [s]\"\nset output \"fig_validation.png\"\nset multiplot layout 2,1 "
-         "title \"validation: logged angles (blue), the fitted scene driven by the logged "
-         "torques restarted from the log every window (red), one run over the whole log (grey)   "
+         "title \"validation: angle error of the fitted scene driven by the logged torques, "
+         "restarted from the log every window (red), and of one run over the whole log (grey, "
+         "may leave the panel)   "
       << title << "\" noenhanced\n";
     for (int i = 1; i <= 2; ++i) {
-      s << "set ylabel \"theta" << i << " [rad]\"\nplot \"residuals.csv\" using \"t\":\"theta" << i
-        << "\" with lines ls 1 title \"log\", \"\" using \"t\":\"windowed_theta" << i
-        << "\" with lines ls 2 title \"fitted scene, windowed\", \"\" using \"t\":\"simulated_theta"
-        << i << "\" with lines lc rgb \"#999999\" lw 0.6 title \"full run\"\n";
+      const std::string n = std::to_string(i);
+      const std::string windowed =
+          "(column(\"windowed_theta" + n + "\") - column(\"theta" + n + "\"))";
+      s << "set autoscale y\nstats \"residuals.csv\" using " << windowed << " nooutput\n"
+        << "r = (STATS_max - STATS_min > 0 ? STATS_max - STATS_min : 1e-9)\n"
+        << "set yrange [STATS_min - 0.1 * r:STATS_max + 0.35 * r]\n"  // room for the key
+        << "set ylabel \"theta" << n << " error [rad]\"\nplot \"residuals.csv\" using \"t\":"
+        << windowed << " with lines ls 2 title \"fitted scene, windowed - log\", \"\" using \"t\":"
+        << "(column(\"simulated_theta" << n << "\") - column(\"theta" << n << "\")) with lines "
+        << "lc rgb \"#999999\" lw 0.6 title \"full run - log\"\n";
     }
+    s << "set autoscale y\n";
     s << "unset multiplot\n";
   }
   return s.str();

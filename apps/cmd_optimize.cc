@@ -3,8 +3,8 @@
 //   [--control-points N] [--quadrature-points N] [--singular-margin M] [--no-validate] [--no-plots]
 // Minimum-dissipation rest-to-rest trajectories for every task of a tasks file (issue 5):
 // summary.csv (one row per task, the minimum-jerk baseline beside each result), per task
-// DIR/<task>/trajectory.csv, baseline.csv and figures. Under mpirun the tasks are split across
-// ranks and rank 0 writes the same files as a one-process run.
+// DIR/<task>/trajectory.csv, baseline.csv, animation.html and figures. Under mpirun the tasks are
+// split across ranks and rank 0 writes the same files as a one-process run.
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -16,6 +16,7 @@
 #include <iostream>
 #include <memory>
 
+#include "fivebar/io/animation.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/csv.h"
 #include "fivebar/io/commands.h"
@@ -77,8 +78,10 @@ void write_atomic(const fs::path& path, Write&& write) {
 std::string plot_script(const std::string& task, double limit, const std::string& terminal,
                         bool baseline) {
   // the minimum-jerk curve beside each optimal one, when the baseline closes
-  auto with_baseline = [&](const std::string& column, const std::string& title) {
-    return baseline ? ", 'baseline.csv' using " + column + " with lines dt 2 title '" + title + "'"
+  auto with_baseline = [&](const std::string& column, const std::string& title,
+                           const std::string& colour) {
+    return baseline ? ", 'baseline.csv' using " + column + " with lines dt 2 lc rgb '" + colour +
+                          "' title '" + title + "'"
                     : std::string();
   };
   std::string s = "set datafile separator ','\nset terminal " + terminal +
@@ -89,19 +92,27 @@ std::string plot_script(const std::string& task, double limit, const std::string
        "span = 0.6 * (STATS_max_x - STATS_min_x > STATS_max_y - STATS_min_y ? "
        "STATS_max_x - STATS_min_x : STATS_max_y - STATS_min_y) + 1e-3\n"
        "cx = (STATS_max_x + STATS_min_x) / 2\ncy = (STATS_max_y + STATS_min_y) / 2\n"
+       "last = STATS_records - 1\n"
        "set xrange [cx - span:cx + span]\nset yrange [cy - span:cy + span]\n";
   s += "set output 'path_C.png'\nset title '" + task + ": path of C'\nset size ratio -1\n"
        "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
-       "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 title 'optimal'" +
-       with_baseline("'x_C':'y_C'", "minimum jerk") +
+       "set key outside right top\n"
+       "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 lc rgb '#1f5fa8' title 'optimal'" +
+       with_baseline("'x_C':'y_C'", "minimum jerk", "#777777") +
+       // the ends: the first and the last row
+       ", 'trajectory.csv' using ($0 == 0 ? column('x_C') : NaN):'y_C' with points pt 7 ps 2.5 "
+       "lc 'dark-green' title 'start', 'trajectory.csv' using ($0 == last ? column('x_C') : "
+       "NaN):'y_C' with points pt 5 ps 2.5 lc 'black' title 'goal'"
        "\nset size noratio\nset autoscale xy\n";
   // room above and below, so that the torque limit lines are not drawn on the border
   s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
+  // the key beside the plot: the torques fill the band between the limits
   s += "set output 'torques.png'\nset title '" + task + ": motor torques'\n"
        "set xlabel 't [s]'\nset ylabel 'torque [N m]'\n"
-       "plot 'trajectory.csv' using 't':'M1' with lines lw 2 title 'M1', "
-       "'trajectory.csv' using 't':'M2' with lines lw 2 title 'M2'" +
-       with_baseline("'t':'M1'", "M1 minimum jerk") + with_baseline("'t':'M2'", "M2 minimum jerk");
+       "plot 'trajectory.csv' using 't':'M1' with lines lw 2 lc rgb '#1f5fa8' title 'M1', "
+       "'trajectory.csv' using 't':'M2' with lines lw 2 lc rgb '#d62728' title 'M2'" +
+       with_baseline("'t':'M1'", "M1 minimum jerk", "#1f5fa8") +
+       with_baseline("'t':'M2'", "M2 minimum jerk", "#d62728");
   if (std::isfinite(limit)) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.6g", limit);
@@ -110,13 +121,13 @@ std::string plot_script(const std::string& task, double limit, const std::string
   }
   s += "\nset offsets 0, 0, 0, 0\nset output 'energy.png'\nset title '" + task +
        ": dissipated energy'\nset ylabel 'E_diss [J]'\n"
-       "plot 'trajectory.csv' using 't':'E_diss' with lines lw 2 title 'optimal'" +
-       with_baseline("'t':'E_diss'", "minimum jerk") + "\n";
+       "plot 'trajectory.csv' using 't':'E_diss' with lines lw 2 lc rgb '#1f5fa8' title 'optimal'" +
+       with_baseline("'t':'E_diss'", "minimum jerk", "#777777") + "\n";
   return s;
 }
 
-// trajectory.csv, baseline.csv (when the baseline closes) and the figures of one solved task, in
-// DIR/<task>/
+// trajectory.csv, baseline.csv (when the baseline closes), animation.html and the figures of one
+// solved task, in DIR/<task>/
 std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult& r,
                        const trajectory::BatchOptions& options, bool plots) {
   std::vector<sim::Row> rows, base;
@@ -134,6 +145,17 @@ std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult
   } else {
     fs::remove(dir / "baseline.csv");  // a stale one from an earlier run would mislead
   }
+  AnimationInput animation;
+  animation.title = r.task + ", " + fs::path(scene.path).filename().string();
+  animation.label = "optimal motion";
+  animation.motion = animation_track(rows);
+  if (baseline) {
+    animation.ghost = animation_track(base);
+    animation.ghost_label = "minimum jerk (baseline)";
+  }
+  write_atomic(dir / "animation.html", [&](const std::string& p) {
+    write_text_file(p, animation_html(scene, animation));
+  });
   if (!plots) return "";
   return run_gnuplot(dir.string(), "plots.gnuplot",
                      plot_script(r.task, r.torque_limit, gnuplot().terminal, baseline));

@@ -1,6 +1,7 @@
 // fivebar simulate SCENE [--out DIR] [--set KEY=VALUE]... [--no-plots]
 // Forward simulation of a scene, with its frictionless twin when the scene has friction, the
-// run checks (energy balance, inverse dynamics), trajectory CSVs, summary.json and figures 2-6.
+// run checks (energy balance, inverse dynamics), trajectory CSVs, summary.json, figures 2-6 and
+// animation.html.
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
@@ -9,6 +10,7 @@
 #include <memory>
 #include <optional>
 
+#include "fivebar/io/animation.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/decimate.h"
 #include "fivebar/io/errors.h"
@@ -46,7 +48,8 @@ const std::vector<std::string> kOutputs = {"trajectory.csv",
                                            "fig4_accelerations.png",
                                            "fig5_inverse_torques.png",
                                            "fig6_friction_torques.png",
-                                           "plots.gnuplot"};
+                                           "plots.gnuplot",
+                                           "animation.html"};
 
 /// Runs longer than this [s] skip the frictionless twin unless --twin asks for it: without
 /// friction the paper mechanism keeps gaining energy, and its twin dominates the run time.
@@ -165,6 +168,10 @@ int run(const Args& args) {
   if (twin_ok) {
     figures.frictionless = write_with_plot_copy(out, "trajectory_frictionless", twin->run.rows, {});
   }
+  AnimationInput animation;
+  animation.title = std::filesystem::path(scene.path).filename().string();
+  animation.motion = animation_track(run.rows);
+  write_text_file(out.file("animation.html"), animation_html(scene, animation));
 
   // summary.json: the run's checks and statistics, its estimate, its settings, then the twin
   Json summary =

@@ -1,11 +1,29 @@
 #!/usr/bin/env bash
 # Installs what is missing, then configures and builds fivebar (Release, build/release, -j2),
-# the Python module included, and points Debian's /usr/bin/python3 at that module (docs/python.md).
+# and points Debian's /usr/bin/python3 at the Python module of this build (docs/python.md).
+# Usage: scripts/build.sh [TARGET...]   the named CMake targets only (scripts/paper.sh: the
+#        executable and the Python module); without arguments everything, tests and benchmarks
+#        included (scripts/test.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
+echo "build: configuring (cmake --preset release)"
 cmake --preset release >/dev/null
-cmake --build --preset release
+targets=()
+if [ $# -gt 0 ]; then
+  # a named target this configuration does not define (the Python module without pybind11,
+  # FIVEBAR_BUILD_PYTHON=OFF) is left out with a note
+  known=$(cmake --build --preset release --target help 2>/dev/null)
+  for t in "$@"; do
+    if grep -q "^\.\.\. $t\b" <<<"$known"; then
+      targets+=(--target "$t")
+    else
+      echo "build: target $t is not configured here: skipped"
+    fi
+  done
+fi
+echo "build: compiling ${*:-everything} on 2 cores (progress in [ %] below)"
+cmake --build --preset release "${targets[@]}"
 
 # `import fivebar` from any directory: a .pth file in Debian's site directory for locally
 # installed packages names build/release/python (the module of this build, not a copy)

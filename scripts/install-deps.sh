@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Installs the Debian packages fivebar needs, only those that are missing (idempotent).
 # Usage: scripts/install-deps.sh        (as root, or with sudo available)
+#        FIVEBAR_TEST_DEPS=1 scripts/install-deps.sh   also installs what only the test suite
+#        uses: Debian's chromium, which opens animation.html headless (scripts/test.sh sets it;
+#        scripts/paper.sh does not)
 #        FIVEBAR_PEERS=1 scripts/install-deps.sh   also installs the optional peers (MuJoCo 2.2.2,
 #        Simbody 3.7) for tests/bench/peers/ (bench_peers_mujoco, bench_peers_simbody); the default
 #        install does not pull them.
@@ -10,6 +13,9 @@ pkgs=(build-essential cmake pkg-config python3
       libgtest-dev libgmock-dev libbenchmark-dev libyaml-cpp-dev libcli11-dev libmuparser-dev
       gnuplot-nox openmpi-bin libopenmpi-dev
       pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-matplotlib)
+if [ "${FIVEBAR_TEST_DEPS:-0}" = "1" ]; then
+  pkgs+=(chromium)
+fi
 if [ "${FIVEBAR_PEERS:-0}" = "1" ]; then
   pkgs+=(libmujoco-dev libsimbody-dev)
 fi

@@ -123,9 +123,31 @@ std::string preamble(const std::string& terminal, const char* what) {
     << "set xlabel \"t [s]\"\n"
     << "set style line 1 lc rgb \"#1f5fa8\" lw 1.6\n"
     << "set style line 2 lc rgb \"#d62728\" lw 1.6 dt 2\n"
-    << "set style line 3 lc rgb \"#2c8c3c\" lw 1.6\n";
+    << "set style line 3 lc rgb \"#2c8c3c\" lw 1.6\n"
+    << "set style line 4 lc rgb \"#9ecae1\" lw 5\n"
+    // a tick step giving about 4 steps over a range r (gnuplot's own choice crowds a small
+    // panel with 10 or more); 1 for an empty range
+    << "nicetic(r) = (r <= 0 ? 1 : (nt_s = 10.0**floor(log10(r/4.0)), nt_f = r/4.0/nt_s, "
+       "nt_f < 1.5 ? nt_s : nt_f < 3.5 ? 2*nt_s : nt_f < 7.5 ? 5*nt_s : 10*nt_s))\n";
   return s.str();
 }
+
+// the range lo..hi of column `column` over `files` (gnuplot variables), and y tics of about 4
+// steps over it
+std::string y_range_stats(const std::vector<std::string>& files, const std::string& column) {
+  std::string s = "set autoscale y\n";  // stats skips the points outside a set range
+  for (size_t i = 0; i < files.size(); ++i) {
+    s += "stats " + quote(files[i]) + " using " + quote(column) + " nooutput\n";
+    s += i == 0 ? "lo = STATS_min; hi = STATS_max\n"
+                : "lo = (STATS_min < lo ? STATS_min : lo); "
+                  "hi = (STATS_max > hi ? STATS_max : hi)\n";
+  }
+  return s + "set ytics nicetic(hi - lo)\n";
+}
+
+// room above the curves for the in-panel key (top) and a margin below, so that no peak lies on
+// the frame
+constexpr char kKeyRoom[] = "set offsets 0, 0, graph 0.3, graph 0.08\n";
 
 // `set output` and `set multiplot` of one figure: the figure's name on the first title line,
 // the line styles and the run's name on the second
@@ -134,7 +156,8 @@ std::string begin_figure(const std::string& file, const std::string& layout,
                          const std::string& title) {
   std::string second = legend;
   if (!title.empty()) second += (second.empty() ? "" : "      ") + title;
-  return "\nset output " + quote(file) + "\nset multiplot layout " + layout + " title " +
+  return "\nset output " + quote(file) + "\nset multiplot " +
+         (layout.empty() ? "" : "layout " + layout + " ") + "title " +
          quote(figure + (second.empty() ? "" : "\n" + second)) + " font \",13\" noenhanced\n";
 }
 
@@ -155,17 +178,65 @@ std::string difference(const std::string& file, const std::string& a, const std:
          ")) with lines ls " + std::to_string(style);
 }
 
-// figure 6: friction torque of each joint, one panel per joint (paper Fig. 6)
+// figure 6: friction torque of each joint, one panel per joint (paper Fig. 6), and the total
+// dissipated power
 std::string friction_figure(const std::string& trajectory, const std::string& title) {
-  std::string s = begin_figure("fig6_friction_torques.png", "3,2",
-                               "Fig. 6  Friction torque of each joint", "", title);
-  const char* joints[] = {"(a) joint 1: O", "(b) joint 2: B", "(c) joint 3: C", "(d) joint 4: D",
-                          "(e) joint 5: D0"};
+  std::string s = begin_figure(
+      "fig6_friction_torques.png", "3,2", "Fig. 6  Friction torque of each joint",
+      "Mf_k has the sign of the joint's relative rate w_k (friction opposes it; it acts on the "
+      "distal body as -Mf_k), so Mf_k w_k >= 0",
+      title);
+  const char* joints[] = {"(a) joint O: ground / crank O-B, w1 = omega1",
+                          "(b) joint B: crank O-B / coupler B-C, w2 = omega3 - omega1",
+                          "(c) joint C: coupler B-C / coupler D-C, w3 = omega4 - omega3",
+                          "(d) joint D: coupler D-C / crank D0-D, w4 = omega2 - omega4",
+                          "(e) joint D0: ground / crank D0-D, w5 = omega2"};
+  s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
   for (int k = 1; k <= kJoints; ++k) {
-    s += panel(joints[k - 1], "Mf" + std::to_string(k) + " [N m]") + "plot " +
-         curve(trajectory, "Mf" + std::to_string(k), 1) + "\n";
+    const std::string column = "Mf" + std::to_string(k);
+    s += y_range_stats({trajectory}, column) + panel(joints[k - 1], column + " [N m]") + "plot " +
+         curve(trajectory, column, 1) + "\n";
   }
-  return s + "unset multiplot\n";
+  s += y_range_stats({trajectory}, "P_diss") +
+       panel("(f) total dissipated power P_diss = sum_k Mf_k w_k", "P_diss [W]") + "plot " +
+       curve(trajectory, "P_diss", 3) + "\n";
+  return s + "set ytics autofreq\nset offsets 0, 0, 0, 0\nunset multiplot\n";
+}
+
+// figure 5: torques M1, M2 of `reference` (thick, light) under those of `computed` (dashed, on
+// top), large, and their difference computed - reference in two small panels below; `%` in a
+// column pattern stands for 1 or 2
+std::string torque_check_figure(const std::string& trajectory, const std::string& reference,
+                                const std::string& computed, const std::string& reference_name,
+                                const std::string& figure, const std::string& title) {
+  auto column = [](std::string pattern, int i) {
+    return pattern.replace(pattern.find('%'), 1, std::to_string(i));
+  };
+  std::string s = begin_figure("fig5_inverse_torques.png", "", figure,
+                               "(c), (d): inverse dynamics - " + reference_name, title);
+  s += "set key top left horizontal opaque box samplen 4 font \",10\"\n" + std::string(kKeyRoom);
+  for (int i = 1; i <= 2; ++i) {
+    const std::string ref = column(reference, i), comp = column(computed, i);
+    s += "set size 0.5, 0.6\nset origin " + std::string(i == 1 ? "0" : "0.5") + ", 0.32\n" +
+         y_range_stats({trajectory}, ref) +
+         panel(std::string(i == 1 ? "(a)" : "(b)") + " driving torque M" + std::to_string(i),
+               "M" + std::to_string(i) + " [N m]") +
+         "plot " + quote(trajectory) + " using \"t\":" + quote(ref) + " with lines ls 4 title " +
+         quote(reference_name) + ", \\\n     " + curve(trajectory, comp, 2) +
+         " title \"inverse dynamics\"\n";
+  }
+  s += "unset key\nset offsets 0, 0, graph 0.1, graph 0.1\nset format y \"%.0e\"\n";
+  for (int i = 1; i <= 2; ++i) {
+    const std::string n = std::to_string(i);
+    s += "set autoscale y\nstats " + quote(trajectory) + " using (column(" +
+         quote(column(computed, i)) + ") - column(" + quote(column(reference, i)) +
+         ")) nooutput\nset ytics nicetic(STATS_max - STATS_min)\n";
+    s += "set size 0.5, 0.3\nset origin " + std::string(i == 1 ? "0" : "0.5") + ", 0\n" +
+         panel(std::string(i == 1 ? "(c)" : "(d)") + " difference, M" + n, "dM" + n + " [N m]") +
+         "plot " + difference(trajectory, column(computed, i), column(reference, i), 3) + "\n";
+  }
+  return s + "set format y \"%g\"\nset ytics autofreq\nset size 1, 1\nset origin 0, 0\n"
+             "unset multiplot\n";
 }
 
 // one colour per integrator (the order of sim::kAllMethods)
@@ -183,33 +254,46 @@ int treatment_dash(studies::Treatment t) {
   }
 }
 
-// gnuplot settings of the figure: log axes, plain-text labels, the target errors as lines
+// gnuplot settings of the figure: log axes with the same ranges in every panel, plain-text
+// labels, the target errors as lines, one panel per friction treatment and one for the key
 std::string plot_header(const studies::WorkPrecision& wp, const std::string& title,
-                        const std::string& terminal) {
+                        const std::string& terminal, int panels) {
+  double t_lo = INFINITY, t_hi = 0, e_lo = INFINITY, e_hi = 0;
+  for (const auto& p : wp.points) {
+    if (!p.ok || !(p.wall_time_s > 0) || !(p.error > 0)) continue;
+    t_lo = std::min(t_lo, p.wall_time_s), t_hi = std::max(t_hi, p.wall_time_s);
+    e_lo = std::min(e_lo, p.error), e_hi = std::max(e_hi, p.error);
+  }
   std::ostringstream s;
   s << "# Generated by fivebar accuracy. Redraw with `gnuplot work_precision.gnuplot` here.\n"
-    << "set terminal " << terminal << " size 1300,900 noenhanced font ',11'\n"
+    << "set terminal " << terminal << " size 1400,1000 noenhanced font ',11'\n"
     << "set output 'work_precision.png'\n"
     << "set datafile separator ','\n"
     << "set logscale xy\nset format x '%.0e'\nset format y '%.0e'\n"
     << "set xlabel 'wall time [s] (minimum of the repeats)'\n"
     << "set ylabel 'max |d theta| over the output grid [rad]'\n"
-    << "set grid\nset key outside right top font ',10'\n"
-    << "set title 'Work-precision: " << title
-    << "   (colour: integrator, dash: friction treatment)'\n";
+    << "set grid\nunset key\n";
+  if (t_hi > 0) {
+    s << "set xrange [" << format_significant(t_lo / 1.5, 3) << ":"
+      << format_significant(t_hi * 1.5, 3) << "]\nset yrange ["
+      << format_significant(e_lo / 3, 3) << ":" << format_significant(e_hi * 3, 3) << "]\n";
+  }
   for (const auto& r : wp.recommendations) {
     s << "set arrow from graph 0, first " << format_double(r.target) << " to graph 1, first "
       << format_double(r.target) << " nohead dt 4 lc rgb '#999999'\n";
   }
+  s << "set multiplot layout " << (panels + 2) / 2 << ",2 title 'Work-precision: " << title
+    << "   (one panel per friction treatment; colour: integrator; grey: the Pareto front of all "
+       "points; dotted: the target errors)' font ',13'\n";
   return s.str();
 }
 
-// the recommendations: a labelled mark on the chosen point of each target error (targets that
-// share a point share its label)
-std::string recommendation_labels(const studies::WorkPrecision& wp) {
-  std::ostringstream s;
+// the recommendations, each point once (targets that share a point share it): the texts for
+// the key panel ("1: for 1e-08, 1e-09 rad: arkode_erk45 at 1e-08") and the points
+std::vector<std::pair<std::string, studies::PrecisionPoint>> recommended_points(
+    const studies::WorkPrecision& wp) {
+  std::vector<std::pair<std::string, studies::PrecisionPoint>> out;
   const auto& recs = wp.recommendations;
-  int tag = 1;
   for (size_t i = 0; i < recs.size(); ++i) {
     if (!recs[i].found) continue;
     const studies::PrecisionPoint& p = recs[i].point;
@@ -217,15 +301,29 @@ std::string recommendation_labels(const studies::WorkPrecision& wp) {
       return r.found && r.point.method == p.method && r.point.treatment == p.treatment &&
              r.point.tolerance == p.tolerance;
     };
-    if (std::any_of(recs.begin(), recs.begin() + i, same)) continue;  // labelled already
+    if (std::any_of(recs.begin(), recs.begin() + i, same)) continue;  // listed already
     std::string targets;
     for (size_t j = i; j < recs.size(); ++j) {
       if (same(recs[j])) targets += (targets.empty() ? "" : ", ") + format_double(recs[j].target);
     }
-    s << "set label " << tag++ << " 'for " << targets << " rad: " << sim::method_name(p.method)
-      << " at " << format_grid_value(p.tolerance) << "' at first "
-      << format_double(p.wall_time_s) << ", first " << format_double(p.error)
-      << " front point pt 7 ps 2.2 lc rgb 'black' offset 1.5,-1 font ',10'\n";
+    out.emplace_back(std::to_string(out.size() + 1) + ": for " + targets + " rad: " +
+                         sim::method_name(p.method) + " at " + format_grid_value(p.tolerance) +
+                         " (" + studies::treatment_name(p.treatment) + ")",
+                     p);
+  }
+  return out;
+}
+
+// the numbered marks of the recommended points of treatment `t` (labels: unset after the panel)
+std::string recommendation_marks(const studies::WorkPrecision& wp, studies::Treatment t) {
+  std::ostringstream s;
+  const auto points = recommended_points(wp);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const studies::PrecisionPoint& p = points[i].second;
+    if (p.treatment != t) continue;
+    s << "set label " << i + 1 << " '" << i + 1 << "' at first " << format_double(p.wall_time_s)
+      << ", first " << format_double(p.error)
+      << " front point pt 7 ps 2.2 lc rgb 'black' offset 1.2,-1.2 font ',13'\n";
   }
   return s.str();
 }
@@ -283,51 +381,54 @@ std::string run_gnuplot(const std::string& dir, const std::string& script_name,
 std::string simulation_plot_script(const SimulationFigures& f, const std::string& terminal) {
   std::string s = preamble(terminal, "figures of `fivebar simulate`");
   const bool twin = !f.frictionless.empty();
-  const char* links[] = {"(a) link 1", "(b) link 2", "(c) link 3", "(d) link 4"};
+  const char* links[] = {"(a) link 1: crank O-B", "(b) link 2: crank D0-D",
+                         "(c) link 3: coupler B-C", "(d) link 4: coupler D-C"};
 
   // figures 2-4: one panel per link, friction solid, frictionless twin dashed (paper Figs. 2-4)
   struct Quantity {
     const char *file, *figure, *column, *unit;
+    bool clip;  ///< the y range is the friction run's: the twin's larger excursions leave it
   };
   const Quantity quantities[] = {
-      {"fig2_angles.png", "Fig. 2  Angular displacement of each link", "theta", "rad"},
-      {"fig3_rates.png", "Fig. 3  Angular velocity of each link", "omega", "rad/s"},
-      {"fig4_accelerations.png", "Fig. 4  Angular acceleration of each link", "alpha", "rad/s^2"},
+      {"fig2_angles.png", "Fig. 2  Angular displacement of each link", "theta", "rad", false},
+      {"fig3_rates.png", "Fig. 3  Angular velocity of each link", "omega", "rad/s", false},
+      {"fig4_accelerations.png", "Fig. 4  Angular acceleration of each link", "alpha", "rad/s^2",
+       true},
   };
+  s += "set key top left horizontal opaque box samplen 4 font \",10\"\n";
   for (const Quantity& q : quantities) {
+    const bool clip = q.clip && twin;
     s += begin_figure(q.file, "2,2",
                       std::string(q.figure) + (twin ? ", with and without joint friction" : ""),
-                      twin ? "solid: with joint friction, dashed: frictionless" : "", f.title);
+                      std::string(twin ? "blue solid: with joint friction, red dashed: "
+                                         "frictionless twin"
+                                       : "") +
+                          (clip ? "; y range of the run with friction (the twin's larger swings "
+                                  "leave the panels)"
+                                : ""),
+                      f.title);
+    s += kKeyRoom;
     for (int i = 1; i <= 4; ++i) {
-      const std::string n = std::to_string(i);
-      s += panel(links[i - 1], q.column + n + " [" + q.unit + "]") + "plot " +
-           curve(f.trajectory, q.column + n, 1);
-      if (twin) s += ", \\\n     " + curve(f.frictionless, q.column + n, 2);
+      const std::string column = q.column + std::to_string(i);
+      s += y_range_stats(clip ? std::vector<std::string>{f.trajectory}
+                              : twin ? std::vector<std::string>{f.trajectory, f.frictionless}
+                                     : std::vector<std::string>{f.trajectory},
+                         column);
+      if (clip) s += "set yrange [lo - 0.08 * (hi - lo):hi + 0.4 * (hi - lo)]\n";
+      s += panel(links[i - 1], column + " [" + q.unit + "]") + "plot " +
+           curve(f.trajectory, column, 1) + " title \"with joint friction\"";
+      if (twin) s += ", \\\n     " + curve(f.frictionless, column, 2) + " title \"frictionless\"";
       s += "\n";
     }
-    s += "unset multiplot\n";
+    s += "set autoscale y\nunset multiplot\n";
   }
 
   // figure 5: input torques against the inverse dynamics of the computed motion (paper Fig. 5)
   if (f.inverse) {
-    s += begin_figure("fig5_inverse_torques.png", "2,2",
-                      "Fig. 5  Inverse dynamics: the input torques recomputed from the motion",
-                      "solid: input, dashed: inverse dynamics", f.title);
-    for (int i = 1; i <= 2; ++i) {
-      const std::string n = std::to_string(i);
-      s += panel(std::string(i == 1 ? "(a)" : "(b)") + " driving torque M" + n,
-                 "M" + n + " [N m]") +
-           "plot " + curve(f.trajectory, "M" + n, 1) + ", \\\n     " +
-           curve(f.trajectory, "M" + n + "_inverse", 2) + "\n";
-    }
-    for (int i = 1; i <= 2; ++i) {
-      const std::string n = std::to_string(i);
-      s += panel(std::string(i == 1 ? "(c)" : "(d)") + " inverse dynamics - input, M" + n,
-                 "dM" + n + " [N m]") +
-           "plot " + difference(f.trajectory, "M" + n + "_inverse", "M" + n, 3) + "\n";
-    }
-    s += "unset multiplot\n";
+    const char* figure = "Fig. 5  Inverse dynamics: the input torques recomputed from the motion";
+    s += torque_check_figure(f.trajectory, "M%", "M%_inverse", "input", figure, f.title);
   }
+  s += "unset key\nset ytics autofreq\nset offsets 0, 0, 0, 0\n";
 
   return s + friction_figure(f.trajectory, f.title);
 }
@@ -342,26 +443,18 @@ std::string inverse_plot_script(const std::string& trajectory, bool has_input,
   std::string s = preamble(terminal, "figures of `fivebar inverse`");
 
   // figure 5: the inverse-dynamics torques, against the motion file's torques when it has them
-  s += begin_figure("fig5_inverse_torques.png", has_input ? "2,2" : "2,1",
-                    "Fig. 5  Inverse dynamics: the torques that produce the given motion",
-                    has_input ? "solid: motion file, dashed: inverse dynamics" : "", title);
+  const std::string figure = "Fig. 5  Inverse dynamics: the torques that produce the given motion";
+  if (has_input) return s + torque_check_figure(trajectory, "M%_input", "M%", "motion file",
+                                                figure, title) + friction_figure(trajectory, title);
+  s += begin_figure("fig5_inverse_torques.png", "2,1", figure, "", title);
+  s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
   for (int i = 1; i <= 2; ++i) {
     const std::string n = std::to_string(i);
-    s +=
-        panel(std::string(i == 1 ? "(a)" : "(b)") + " driving torque M" + n, "M" + n + " [N m]") +
-        "plot ";
-    if (has_input) s += curve(trajectory, "M" + n + "_input", 1) + ", \\\n     ";
-    s += curve(trajectory, "M" + n, has_input ? 2 : 1) + "\n";
+    s += y_range_stats({trajectory}, "M" + n) +
+         panel(std::string(i == 1 ? "(a)" : "(b)") + " driving torque M" + n, "M" + n + " [N m]") +
+         "plot " + curve(trajectory, "M" + n, 1) + "\n";
   }
-  if (has_input) {
-    for (int i = 1; i <= 2; ++i) {
-      const std::string n = std::to_string(i);
-      s += panel(std::string(i == 1 ? "(c)" : "(d)") + " inverse dynamics - motion file, M" + n,
-                 "dM" + n + " [N m]") +
-           "plot " + difference(trajectory, "M" + n, "M" + n + "_input", 3) + "\n";
-    }
-  }
-  s += "unset multiplot\n";
+  s += "set ytics autofreq\nset offsets 0, 0, 0, 0\nunset multiplot\n";
 
   return s + friction_figure(trajectory, title);
 }
@@ -467,32 +560,36 @@ std::string work_precision_plot_script(const studies::WorkPrecision& wp, const s
     }
   }
   std::ostringstream s;
-  s << plot_header(wp, title, terminal) << pareto_block(wp) << recommendation_labels(wp)
-    << "plot ";
-  // the legend: one entry per colour and one per dash, drawn by empty series
-  const char* sep = "";
-  for (sim::Method m : methods) {
-    s << sep << "NaN with lines lw 2.5 lc rgb '" << method_colour(m) << "' title '"
-      << sim::method_name(m) << "'";
-    sep = ", \\\n     ";
-  }
+  s << plot_header(wp, title, terminal, static_cast<int>(treatments.size())) << pareto_block(wp);
+  // one panel per treatment: its measured series, one per integrator (rows with status ok), the
+  // Pareto front of all points, and the recommended points of this treatment numbered
   for (studies::Treatment t : treatments) {
-    s << sep << "NaN with linespoints lw 1.5 lc rgb 'black' dt " << treatment_dash(t) << " pt "
-      << treatment_dash(t) + 4 << " title '" << studies::treatment_name(t) << "'";
-  }
-  // the measured series, one per (integrator, treatment), rows with status ok
-  for (sim::Method m : methods) {
-    for (studies::Treatment t : treatments) {
-      s << sep << "'work_precision.csv' using ((strcol(1) eq '" << sim::method_name(m)
+    s << "set title 'friction: " << studies::treatment_name(t) << "'\n"
+      << recommendation_marks(wp, t) << "plot ";
+    for (sim::Method m : methods) {
+      s << "'work_precision.csv' using ((strcol(1) eq '" << sim::method_name(m)
         << "' && strcol(2) eq '" << studies::treatment_name(t)
         << "' && strcol(4) eq 'ok') ? $7 : NaN):5 with linespoints lw 1.5 lc rgb '"
-        << method_colour(m) << "' dt " << treatment_dash(t) << " pt " << treatment_dash(t) + 4
-        << " notitle";
+        << method_colour(m) << "' dt " << treatment_dash(t) << " pt 7 ps 0.8 notitle, \\\n     ";
     }
+    s << "$pareto with lines lw 5 lc rgb '#a0000000' notitle\nunset label\n";
   }
-  // the Pareto front (of the scene's own treatment), circled and joined in order of time
-  s << sep << "$pareto with linespoints lw 4 lc rgb '#90000000' pt 6 ps 2 title 'Pareto front'"
-    << sep << "NaN with points pt 7 ps 2 lc rgb 'black' title 'recommended'\n";
+  // the key panel: colours, the front, the recommendations in words
+  s << "set title ''\nunset border\nunset tics\nunset grid\nunset xlabel\nunset ylabel\n"
+       "unset arrow\nset key at graph 0.5, 0.98 center top Left reverse font ',11' spacing 1.3\n";
+  const auto points = recommended_points(wp);
+  for (size_t i = 0; i < points.size(); ++i) {
+    s << "set label " << i + 1 << " '" << points[i].first << "' at graph 0.05, graph "
+      << format_significant(0.3 - 0.07 * static_cast<double>(i), 3) << " font ',11'\n";
+  }
+  s << "plot ";
+  for (sim::Method m : methods) {
+    s << "NaN with linespoints lw 2.5 pt 7 lc rgb '" << method_colour(m) << "' title '"
+      << sim::method_name(m) << "', ";
+  }
+  s << "NaN with lines lw 5 lc rgb '#a0000000' title 'Pareto front (all treatments)', "
+       "NaN with points pt 7 ps 2 lc rgb 'black' title 'recommended (numbered)'\n"
+       "unset multiplot\n";
   return s.str();
 }
 

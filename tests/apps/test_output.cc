@@ -167,8 +167,13 @@ TEST(Plots, WorkPrecisionColourPerIntegratorDashPerTreatment) {
   EXPECT_NE(value_after(adams_exact, " dt "), value_after(adams_reg, " dt "));
   // the Pareto front in order of time, and one label per recommended point
   EXPECT_NE(s.find("$pareto << EOD\n0.004,1e-06\n0.009,1e-09\nEOD\n"), std::string::npos) << s;
-  EXPECT_NE(s.find("'for 1e-06 rad: cvode_adams at 1e-08'"), std::string::npos) << s;
-  EXPECT_NE(s.find("'for 1e-08, 1e-09 rad: arkode_erk45 at 1e-08'"), std::string::npos) << s;
+  EXPECT_NE(s.find("'1: for 1e-06 rad: cvode_adams at 1e-08 (exact_located)'"), std::string::npos)
+      << s;
+  EXPECT_NE(s.find("'2: for 1e-08, 1e-09 rad: arkode_erk45 at 1e-08 (exact_located)'"),
+            std::string::npos)
+      << s;
+  // one panel per treatment and one for the key
+  EXPECT_NE(s.find("set multiplot layout 2,2"), std::string::npos) << s;
 }
 
 TEST(Plots, SimulationFiguresUsePlainText) {

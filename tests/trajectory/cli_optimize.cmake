@@ -2,7 +2,8 @@
 # - a task whose minimum-jerk motion cannot close (issue 17) is solved from a detour, exit 0;
 # - when every task fails, exit 2 (the tasks cannot be done by the design) with one error line
 #   on stderr, each failed task's reason on stdout, and summary.csv kept (issue 8.7);
-# - trajectory.csv carries non-zero W_in and W_ext;
+# - trajectory.csv carries non-zero W_in and W_ext; animation.html is written (no ghost without
+#   a baseline) and `fivebar animate` remakes it;
 # - study.csv names the reason of every design that cannot do every task (issue 12.4).
 # Inputs: -DFIVEBAR=<executable> -DSOURCE_DIR=<project root> -DWORK_DIR=<scratch directory>
 cmake_minimum_required(VERSION 3.22)
@@ -29,6 +30,15 @@ list(GET rows 1 row)
 expect("detour: summary row ${row}" row MATCHES "^detour,ok,.*,cannot_assemble,path_search,")
 expect("detour: a baseline.csv of a baseline that cannot close"
        NOT EXISTS ${WORK_DIR}/detour/detour/baseline.csv)
+# the task's animation.html, without a ghost (no baseline); `animate` remakes it with the run's
+# scene and --set values, and says why there is no ghost
+file(READ ${WORK_DIR}/detour/detour/animation.html page)
+expect("detour: animation.html with a ghost or without frames"
+       page MATCHES "\"ghost\":null" AND page MATCHES "\"motion\":{\"t\":\\[0,")
+execute_process(COMMAND ${FIVEBAR} animate ${WORK_DIR}/detour --scene ${paper} ${short}
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("animate detour: exit ${status}\n${out}${err}"
+       status EQUAL 0 AND out MATCHES "no baseline.csv, so no minimum-jerk ghost")
 file(STRINGS ${WORK_DIR}/detour/detour/trajectory.csv lines)
 list(GET lines 0 header)
 list(GET lines -1 last)

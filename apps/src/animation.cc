@@ -1,0 +1,225 @@
+// animation.html: the run's samples as compact JSON inside one page whose script draws them
+// (animation_page.h).
+#include "fivebar/io/animation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include <yaml-cpp/yaml.h>
+
+#include "animation_page.h"
+#include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
+#include "fivebar/io/json.h"
+#include "fivebar/io/loads.h"
+#include "fivebar/model/evaluation.h"
+
+namespace fivebar::io {
+namespace {
+
+// relative rates of the joints O, B, C, D, D0 from the link rates (docs/outputs.md)
+std::array<double, 5> relative_rates(const std::array<double, 4>& omega) {
+  return {omega[0], omega[2] - omega[0], omega[3] - omega[2], omega[1] - omega[3], omega[1]};
+}
+
+void push_energies(const sim::Row& r, AnimationTrack* track) {
+  track->M1.push_back(r.M1);
+  track->M2.push_back(r.M2);
+  track->E_diss.push_back(r.E_diss);
+  track->W_in.push_back(r.W_in);
+  track->W_ext.push_back(r.W_ext);
+}
+
+// `x` in `digits` significant digits, "null" when not finite (JSON has no NaN)
+void append_number(double x, int digits, std::string* out) {
+  if (!std::isfinite(x)) {
+    *out += "null";
+    return;
+  }
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, x);
+  *out += buf;
+}
+
+// "name":[v(i0),v(i1),...] over the kept samples
+template <typename Value>
+void append_series(const char* name, const std::vector<size_t>& keep, Value value, int digits,
+                   std::string* out) {
+  *out += std::string("\"") + name + "\":[";
+  for (size_t n = 0; n < keep.size(); ++n) {
+    if (n > 0) *out += ',';
+    append_number(value(keep[n]), digits, out);
+  }
+  *out += "],";
+}
+
+// every k-th sample so that at most kAnimationMaxFrames remain, and always the last one
+std::vector<size_t> kept_samples(size_t count) {
+  std::vector<size_t> keep;
+  if (count == 0) return keep;
+  const size_t stride = (count + kAnimationMaxFrames - 2) / (kAnimationMaxFrames - 1);
+  for (size_t i = 0; i < count; i += std::max<size_t>(stride, 1)) keep.push_back(i);
+  if (keep.back() != count - 1) keep.push_back(count - 1);
+  return keep;
+}
+
+// the JSON object of one track: times, angles, and (unless `pose_only`) powers, stuck joints,
+// torques, loads M3 and F, and energies
+std::string track_json(const AnimationTrack& track, const LoadExpressions* loads,
+                       bool pose_only) {
+  const std::vector<size_t> keep = kept_samples(track.t.size());
+  std::string s = "{";
+  append_series("t", keep, [&](size_t i) { return track.t[i]; }, 7, &s);
+  for (int j = 0; j < 4; ++j) {
+    const std::string name = "th" + std::to_string(j + 1);
+    append_series(name.c_str(), keep, [&](size_t i) { return track.theta[i][j]; }, 7, &s);
+  }
+  if (!pose_only) {
+    for (int k = 0; k < 5; ++k) {
+      const std::string name = "p" + std::to_string(k + 1);
+      append_series(name.c_str(), keep, [&](size_t i) { return track.friction_power[i][k]; }, 4,
+                    &s);
+    }
+    append_series("stuck", keep, [&](size_t i) { return double(track.stuck[i]); }, 2, &s);
+    append_series("M1", keep, [&](size_t i) { return track.M1[i]; }, 4, &s);
+    append_series("M2", keep, [&](size_t i) { return track.M2[i]; }, 4, &s);
+    append_series("M3", keep, [&](size_t i) { return (*loads)(track.t[i]).M3; }, 4, &s);
+    append_series("F", keep, [&](size_t i) { return (*loads)(track.t[i]).F; }, 4, &s);
+    append_series("E_diss", keep, [&](size_t i) { return track.E_diss[i]; }, 5, &s);
+    append_series("W_in", keep, [&](size_t i) { return track.W_in[i]; }, 5, &s);
+    append_series("W_ext", keep, [&](size_t i) { return track.W_ext[i]; }, 5, &s);
+  }
+  s += "\"samples\":" + std::to_string(track.t.size()) + "}";
+  return s;
+}
+
+// throws when the first finite pose of `track` does not close with the scene's link lengths
+void check_closure(const Scene& scene, const AnimationTrack& track, const std::string& what) {
+  const Params<double>& p = scene.params;
+  double scale = p.ground_length;
+  for (const auto& link : p.links) scale += link.length;
+  for (size_t i = 0; i < track.t.size(); ++i) {
+    const auto& th = track.theta[i];
+    const double bx = p.links[0].length * std::cos(th[0]), by = p.links[0].length * std::sin(th[0]);
+    const double dx = p.ground_length + p.links[1].length * std::cos(th[1]),
+                 dy = p.links[1].length * std::sin(th[1]);
+    const double c1x = bx + p.links[2].length * std::cos(th[2]),
+                 c1y = by + p.links[2].length * std::sin(th[2]);
+    const double c2x = dx + p.links[3].length * std::cos(th[3]),
+                 c2y = dy + p.links[3].length * std::sin(th[3]);
+    const double gap = std::hypot(c1x - c2x, c1y - c2y);
+    if (!std::isfinite(gap)) continue;
+    if (gap > 1e-6 * scale) {
+      throw InputError(scene.path, "mechanism",
+                       what + " does not close with these link lengths (C from B and from D " +
+                           format_significant(gap, 3) + " m apart at t = " +
+                           format_significant(track.t[i], 6) +
+                           " s): was it made with another scene or other --set values?");
+    }
+    return;
+  }
+}
+
+}  // namespace
+
+AnimationTrack animation_track(const std::vector<sim::Row>& rows) {
+  AnimationTrack track;
+  for (const sim::Row& r : rows) {
+    track.t.push_back(r.t);
+    track.theta.push_back(r.theta);
+    std::array<double, 5> power{};
+    int stuck = 0;
+    for (int k = 0; k < 5; ++k) {
+      power[k] = std::abs(r.Mf[k] * r.omega_rel(k));
+      if (r.mode[k] == kStuck) stuck |= 1 << k;
+    }
+    track.friction_power.push_back(power);
+    track.stuck.push_back(stuck);
+    push_energies(r, &track);
+  }
+  return track;
+}
+
+AnimationTrack animation_track(const CsvTable& table) {
+  std::vector<sim::Row> rows(table.rows.size());
+  auto fill = [&](const std::string& name, auto set) {
+    const std::vector<double> v = table.column(name);
+    for (size_t i = 0; i < rows.size(); ++i) set(rows[i], v[i]);
+  };
+  fill("t", [](sim::Row& r, double v) { r.t = v; });
+  for (int j = 0; j < 4; ++j) {
+    const std::string n = std::to_string(j + 1);
+    fill("theta" + n, [j](sim::Row& r, double v) { r.theta[j] = v; });
+    fill("omega" + n, [j](sim::Row& r, double v) { r.omega[j] = v; });
+  }
+  for (int k = 0; k < 5; ++k) {
+    fill("Mf" + std::to_string(k + 1), [k](sim::Row& r, double v) { r.Mf[k] = v; });
+  }
+  fill("M1", [](sim::Row& r, double v) { r.M1 = v; });
+  fill("M2", [](sim::Row& r, double v) { r.M2 = v; });
+  fill("E_diss", [](sim::Row& r, double v) { r.E_diss = v; });
+  fill("W_in", [](sim::Row& r, double v) { r.W_in = v; });
+  fill("W_ext", [](sim::Row& r, double v) { r.W_ext = v; });
+  const bool stuck_columns = table.has("stuck1");
+  for (int k = 0; k < 5; ++k) {
+    if (stuck_columns) {
+      fill("stuck" + std::to_string(k + 1), [k](sim::Row& r, double v) {
+        r.mode[k] = v != 0 ? kStuck : JointMode::kRest;
+      });
+    } else {
+      for (sim::Row& r : rows) {
+        r.mode[k] = relative_rates(r.omega)[k] == 0 ? kStuck : JointMode::kRest;
+      }
+    }
+  }
+  return animation_track(rows);
+}
+
+std::string animation_html(const Scene& scene, const AnimationInput& input) {
+  check_closure(scene, input.motion, "the motion");
+  if (!input.ghost.t.empty()) check_closure(scene, input.ghost, input.ghost_label);
+  const Params<double>& p = scene.params;
+  const LoadExpressions loads(scene);
+  std::string data = "{\"title\":" + json_quote(input.title) +
+                     ",\"label\":" + json_quote(input.label) + ",\"geometry\":{\"l0\":";
+  append_number(p.ground_length, 9, &data);
+  data += ",\"l\":[";
+  for (int j = 0; j < 4; ++j) {
+    if (j > 0) data += ',';
+    append_number(p.links[j].length, 9, &data);
+  }
+  data += "],\"lp\":";
+  append_number(p.point_p, 9, &data);
+  data += ",\"F_angle\":";
+  append_number(scene.F_angle, 9, &data);
+  data += "},\"motion\":" + track_json(input.motion, &loads, false);
+  data += ",\"ghost\":" +
+          (input.ghost.t.empty() ? std::string("null") : track_json(input.ghost, nullptr, true));
+  data += ",\"ghost_label\":" + json_quote(input.ghost_label) + "}";
+  std::string page = kAnimationPage;
+  const std::string marker = "/*FIVEBAR_DATA*/null";
+  page.replace(page.find(marker), marker.size(), data);
+  return page;
+}
+
+bool recorded_scene(const std::string& summary_json, std::string* scene,
+                    std::vector<std::string>* sets) {
+  if (!std::filesystem::exists(summary_json)) return false;
+  YAML::Node summary;
+  try {
+    summary = YAML::LoadFile(summary_json);  // JSON is YAML
+  } catch (const YAML::Exception& e) {
+    throw InputError(summary_json, "(read)", "not valid JSON: " + e.msg);
+  }
+  if (!summary.IsMap() || !summary["scene"] || !summary["scene"].IsScalar()) return false;
+  *scene = summary["scene"].as<std::string>();
+  sets->clear();
+  if (summary["sets"] && summary["sets"].IsSequence()) {
+    for (const YAML::Node& s : summary["sets"]) sets->push_back(s.as<std::string>());
+  }
+  return true;
+}
+
+}  // namespace fivebar::io
