@@ -65,7 +65,7 @@ expect("study: exit ${status}\n${out}${err}" status EQUAL 0)
 expect("study stdout: ${out}" out MATCHES "[0-9]+ of 2 designs cannot do every task")
 file(STRINGS ${WORK_DIR}/study/study.csv study)
 list(GET study 0 header)
-expect("study.csv header: ${header}" header MATCHES ",best,reason$")
+expect("study.csv header: ${header}" header MATCHES ",best,reason,total_objective$")
 
 # trajectory.csv torques are those of `fivebar inverse` on the same motion (issue 12.1): the
 # same doubles, hence the same text

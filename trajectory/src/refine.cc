@@ -37,11 +37,11 @@ ProblemOptions stage_options(const BatchOptions& options, const RestToRest& moti
 // exact-law value of the objective the problem minimizes, Gauss-Legendre 4x denser than its rule
 double exact_objective(const TrajectoryProblem& problem, const std::vector<double>& x,
                        const BatchOptions& options) {
-  double d = NAN, in = NAN;
-  if (!problem.exact_energies(x.data(), 4 * options.problem.quadrature_points, &d, &in).ok()) {
+  Energies e;
+  if (!problem.exact_energies(x.data(), 4 * options.problem.quadrature_points, &e).ok()) {
     return NAN;
   }
-  return options.problem.objective == Objective::kInputEnergy ? in : d;
+  return e.of(options.problem.objective);
 }
 
 // a is better than b: feasible beats infeasible, then the lower exact-law objective
@@ -99,10 +99,10 @@ Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loa
   // margin, kTightenGain)
   double limit = torque_limit;
   for (int round = 0; round < kTightenRounds && c.check.status.ok() && opt.solver.usable() &&
-                      c.check.torque_excess > options.feasibility_tol * torque_limit;
+                      c.check.torque_excess > options.limit_rtol * torque_limit;
        ++round) {
     limit *= std::pow(torque_limit / c.check.peak_torque, kTightenGain) *
-             (1.0 - 0.1 * options.feasibility_tol);
+             (1.0 - 0.1 * std::max(options.limit_rtol, c.check.torque_excess / torque_limit));
     const TrajectoryProblem tightened(params, loads, motion, stage_options(options, motion, ws, limit));
     const OptimizeResult again = optimize(tightened, c.x, optimizer);
     c.evaluations += again.evaluations;
@@ -122,7 +122,8 @@ namespace {
 Candidate continuation(const Params<double>& params, const sim::LoadFunction& loads,
                        Candidate best, const BatchOptions& options,
                        const OptimizerOptions& optimizer, TaskResult* r) {
-  const RestToRest motion(best.control_points, r->duration, r->start, r->goal);
+  const RestToRest motion(best.control_points, r->duration, r->start, r->goal,
+                          options.problem.end_acceleration);
   std::vector<double> warm = best.x;
   log_stage(&r->continuation, best.smoothing_velocity, best, true);
   // a polish: its solves get the continuation's own evaluation limit
@@ -145,9 +146,9 @@ Candidate continuation(const Params<double>& params, const sim::LoadFunction& lo
 }
 
 // the free variables of a spline of n control points fitted to the motion of `c`
-std::vector<double> refit(const Candidate& c, int n, const TaskResult& r) {
-  const RestToRest from(c.control_points, r.duration, r.start, r.goal);
-  const RestToRest to(n, r.duration, r.start, r.goal);
+std::vector<double> refit(const Candidate& c, int n, const TaskResult& r, EndAcceleration ends) {
+  const RestToRest from(c.control_points, r.duration, r.start, r.goal, ends);
+  const RestToRest to(n, r.duration, r.start, r.goal, ends);
   return to.fit([&](double t) { return from.state(c.x.data(), t)[0]; });
 }
 
@@ -185,8 +186,9 @@ Candidate refinement(const Params<double>& params, const sim::LoadFunction& load
   log_stage(&r->refinement, best.control_points, best, true);
   for (int n : options.refine.control_points) {
     if (n <= best.control_points) continue;
-    const RestToRest motion(n, r->duration, r->start, r->goal);
-    Candidate c = solve_stage(params, loads, motion, ws, refit(best, n, *r), options,
+    const EndAcceleration ends = options.problem.end_acceleration;
+    const RestToRest motion(n, r->duration, r->start, r->goal, ends);
+    Candidate c = solve_stage(params, loads, motion, ws, refit(best, n, *r, ends), options,
                               r->torque_limit, optimizer);
     r->evaluations += c.evaluations;
     const bool kept = better(c, best, options);
