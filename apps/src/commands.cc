@@ -196,10 +196,16 @@ void objective_options(const OptimizeSettings& a, const MotorWindings& windings,
 
 std::string objective_note(const trajectory::BatchOptions& options) {
   if (options.problem.objective != trajectory::Objective::kDissipatedEnergy) return "";
-  return std::string("the optimum of dissipated_energy switches the motors between their torque "
-                     "limits (a chattering limit no discretization converges); add the motors' "
-                     "winding data to the scene (") +
-         kWindingKeys + ") to minimize total_dissipation instead";
+  const std::string why =
+      "the optimum of dissipated_energy switches the motors between their torque limits (a "
+      "chattering limit no discretization converges); ";
+  const std::array<double, 2>& c = options.problem.winding_heat;
+  if (c[0] > 0 && c[1] > 0) {
+    return why + "the scene gives the motors' winding data: minimize total_dissipation (the "
+                 "default) for a motion a machine can run";
+  }
+  return why + "add the motors' winding data to the scene (" + kWindingKeys +
+         ") to minimize total_dissipation instead";
 }
 
 trajectory::BatchOptions with_windings(trajectory::BatchOptions options,
@@ -214,8 +220,8 @@ std::vector<BoundHit> bounds_hit(const std::vector<std::string>& keys,
   constexpr double kOnBound = 1e-6;  // relative to the range
   std::vector<BoundHit> hits;
   for (size_t k = 0; k < keys.size(); ++k) {
-    const double tol = kOnBound * std::max(hi[k] - lo[k], 1e-12);
     if (hi[k] <= lo[k]) continue;  // a fixed value is no bound of a search
+    const double tol = kOnBound * (hi[k] - lo[k]);
     if (values[k] <= lo[k] + tol) hits.push_back({keys[k], "lower", lo[k]});
     if (values[k] >= hi[k] - tol) hits.push_back({keys[k], "upper", hi[k]});
   }

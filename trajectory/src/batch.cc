@@ -281,7 +281,7 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
     return false;
   }
   oo.global = false;  // the later stages polish from a warm start
-  const Candidate best = options.refine.enabled && feasible(first, options)
+  const Candidate best = options.refine.enabled && startable(first, options)
                              ? refine(params, loads, first, options, oo, r)
                              : first;
   // a later stage that improved on a converged first solve but stopped at a limit keeps the

@@ -211,20 +211,26 @@ TrajectoryProblem::TrajectoryProblem(const Params<double>& params, const sim::Lo
   if (options.quadrature_points < 1) {
     throw std::invalid_argument("TrajectoryProblem: quadrature_points < 1");
   }
-  // composite Gauss-Legendre: quadrature_points nodes per knot span
+  // composite Gauss-Legendre: quadrature_points nodes per knot span; with free end
+  // accelerations the torques step at the ends, which no Gauss node reaches: two nodes of weight
+  // 0 there carry the constraints only
   const ClampedBasis& basis = motion_.basis();
+  const bool ends = motion_.ends() == EndAcceleration::kFree;
+  auto add = [&](double t, double weight) {
+    Node node;
+    node.t = t;
+    node.weight = weight;
+    node.basis = basis.at(t);
+    node.loads = loads_(t);
+    nodes_.push_back(node);
+  };
+  if (ends) add(0.0, 0.0);
   for (int s = 0; s < basis.spans(); ++s) {
     const Rule rule =
         gauss_legendre(options.quadrature_points, basis.span_begin(s), basis.span_end(s));
-    for (size_t i = 0; i < rule.nodes.size(); ++i) {
-      Node node;
-      node.t = rule.nodes[i];
-      node.weight = rule.weights[i];
-      node.basis = basis.at(node.t);
-      node.loads = loads_(node.t);
-      nodes_.push_back(node);
-    }
+    for (size_t i = 0; i < rule.nodes.size(); ++i) add(rule.nodes[i], rule.weights[i]);
   }
+  if (ends) add(motion_.duration(), 0.0);
 }
 
 std::array<double, 6> TrajectoryProblem::node_state(const double* x, const Node& node) const {

@@ -11,7 +11,7 @@ namespace fivebar::trajectory {
 namespace {
 
 // re-solves with a lowered torque limit when the dense check finds a peak between the nodes
-constexpr int kTightenRounds = 2;
+constexpr int kTightenRounds = 4;
 // the limit is lowered by the overshoot raised to this power: lowered by the overshoot itself,
 // the re-solve peaked again 0.3% to 0.4% over the limit (a tenth of the first overshoot of 2% to
 // 4%), and a second re-solve followed on 3 of the 8 stages that needed one (issue 12, fifth pass)
@@ -62,7 +62,7 @@ std::string why_infeasible(const Candidate& c, const BatchOptions& options) {
   if (!c.solved()) return "not solved";
   if (!c.solver.usable()) return "solver: " + c.solver.message;
   if (!c.check.status.ok()) return "check: " + c.check.status.message;
-  if (c.check.max_violation > options.feasibility_tol) {
+  if (c.check.max_violation > options.limit_rtol) {
     return "violation " + format_significant(c.check.max_violation, 7) +
            " on the check grid (peak " + format_significant(c.check.peak_torque, 7) +
            " N m, min sine " + format_significant(c.check.min_coupler_sine, 7) + ")";
@@ -72,9 +72,14 @@ std::string why_infeasible(const Candidate& c, const BatchOptions& options) {
 
 }  // namespace
 
-bool feasible(const Candidate& c, const BatchOptions& options) {
+bool startable(const Candidate& c, const BatchOptions& options) {
   return c.solved() && c.solver.usable() && c.check.status.ok() &&
          c.check.max_violation <= options.feasibility_tol && std::isfinite(c.exact);
+}
+
+bool feasible(const Candidate& c, const BatchOptions& options) {
+  return c.solved() && c.solver.usable() && c.check.status.ok() &&
+         c.check.max_violation <= options.limit_rtol && std::isfinite(c.exact);
 }
 
 Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loads,
@@ -218,7 +223,7 @@ Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
   // the levels under the first solve's smoothed law, whose landscape has no kinks at the
   // reversals, then the continuation to the exact law on the finest spline kept (a scene whose
   // own law is smoothed is solved exactly by the first law)
-  if (!feasible(first, options)) return first;
+  if (!startable(first, options)) return first;
   Candidate best = refinement(params, loads, first, options, optimizer, r);
   const bool smooth_law = params.friction.smoothing_velocity > 0.0;
   if (!smooth_law) best = continuation(params, loads, best, options, optimizer, r);

@@ -123,7 +123,9 @@ struct ConstraintCheck {
 ///
 /// Time is discretized by composite Gauss-Legendre quadrature: quadrature_points nodes in each
 /// knot span of the spline, where the integrand (a smooth function of the spline's piecewise
-/// polynomial state) is smooth. The same nodes carry the constraints, three per node q:
+/// polynomial state) is smooth; with free end accelerations (EndAcceleration::kFree) two more
+/// nodes of weight 0 at t = 0 and t = T, where the torques step. The nodes carry the
+/// constraints, three per node q:
 ///   c[3q]   = (M1 / torque_limit)^2 - 1 <= 0
 ///   c[3q+1] = (M2 / torque_limit)^2 - 1 <= 0        (0 - 1 when there is no torque limit)
 ///   c[3q+2] = cos^2(C) - (1 - margin^2) <= 0,  cos(C) = (l3^2 + l4^2 - |BD|^2) / (2 l3 l4)
