@@ -67,6 +67,13 @@ TEST(Objective, DefaultFollowsTheWindingData) {
   EXPECT_GT(b.problem.winding_heat[0], 0.0);
   EXPECT_NE(objective_note(a).find("actuators.M1.winding_resistance"), std::string::npos);
   EXPECT_TRUE(objective_note(b).empty());
+  EXPECT_EQ(b.problem.end_acceleration, trajectory::EndAcceleration::kFree);
+  OptimizeSettings zero = s;
+  zero.end_acceleration = "zero";
+  zero.regeneration = "shared_bus";
+  const trajectory::BatchOptions z = batch_options(zero, motors.windings);
+  EXPECT_EQ(z.problem.end_acceleration, trajectory::EndAcceleration::kZero);
+  EXPECT_EQ(z.problem.regeneration, trajectory::Regeneration::kSharedBus);
   OptimizeSettings bad = s;
   bad.objective = "supply_energy";
   EXPECT_THROW(batch_options(bad, paper.windings), InputError);
