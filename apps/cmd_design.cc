@@ -341,7 +341,7 @@ void report(const Search& s, int best, const trajectory::BoxResult& box) {
   for (size_t k = 0; k < s.varies().size(); ++k) {
     std::printf(" %s=%s", s.varies()[k].key.c_str(), format_double(d.values[k]).c_str());
   }
-  std::printf("\n  total %s %.6g J over %zu tasks (start %.6g J); outer %s\n",
+  std::printf("\n  sum of %s %.6g J over %zu tasks (start %.6g J); outer %s\n",
               trajectory::objective_name(s.options().problem.objective), d.total, d.results.size(), s.history().front().total,
               trajectory::outcome_name(box.solver.outcome));
   std::printf("%s", bounds_advice(on_bound(s, best)).c_str());

@@ -21,6 +21,7 @@
 #include "fivebar/io/csv.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
+#include "fivebar/io/json.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
@@ -224,6 +225,38 @@ std::string draw_heatmap(OutputDir* out, const std::vector<trajectory::Sweep>& s
                      study_heatmap_script(h, gnuplot().terminal));
 }
 
+// the swept keys on whose range's edge the best design lies (none without a best design)
+std::vector<BoundHit> best_on_bound(const std::vector<trajectory::Sweep>& sweeps,
+                                    const std::vector<Design>& designs, const Outcome& o) {
+  if (o.best < 0) return {};
+  std::vector<std::string> keys;
+  std::vector<double> lo, hi;
+  for (const trajectory::Sweep& s : sweeps) {
+    keys.push_back(s.key);
+    lo.push_back(s.lo);
+    hi.push_back(s.hi);
+  }
+  return bounds_hit(keys, designs[o.best].values, lo, hi);
+}
+
+// study.json: the objective, the best design (index, values, total) and the bounds it lies on
+Json study_json(const std::vector<trajectory::Sweep>& sweeps, const std::vector<Design>& designs,
+                const Outcome& o, trajectory::Objective objective) {
+  Json j = Json::object();
+  j.set("objective", std::string(trajectory::objective_name(objective)));
+  j.set("best", o.best);
+  Json values = Json::object();
+  for (size_t k = 0; k < sweeps.size() && o.best >= 0; ++k) {
+    values.set(sweeps[k].key, designs[o.best].values[k]);
+  }
+  j.set("values", values);
+  j.set("total_objective", o.best >= 0 ? o.totals[o.best] : NAN);
+  j.set("on_bound", Json::array_of(best_on_bound(sweeps, designs, o), [](const BoundHit& h) {
+          return Json::object({{"key", h.key}, {"side", h.side}, {"bound", h.bound}});
+        }));
+  return j;
+}
+
 // stdout: the best design, and how many designs could not do every task, and why
 void report(const std::vector<trajectory::Sweep>& sweeps, const std::vector<Design>& designs,
             const std::vector<trajectory::TaskSpec>& tasks,
@@ -248,16 +281,9 @@ void report(const std::vector<trajectory::Sweep>& sweeps, const std::vector<Desi
       std::printf(" %s=%s", sweeps[k].key.c_str(),
                   format_double(designs[o.best].values[k]).c_str());
     }
-    std::printf("  total %s %.6g J over %d tasks\n", trajectory::objective_name(objective),
+    std::printf("  sum of %s %.6g J over %d tasks\n", trajectory::objective_name(objective),
                 o.totals[o.best], nt);
-    std::vector<std::string> keys;
-    std::vector<double> lo, hi;
-    for (const trajectory::Sweep& s : sweeps) {
-      keys.push_back(s.key);
-      lo.push_back(s.lo);
-      hi.push_back(s.hi);
-    }
-    std::printf("%s", bounds_advice(bounds_hit(keys, designs[o.best].values, lo, hi)).c_str());
+    std::printf("%s", bounds_advice(best_on_bound(sweeps, designs, o)).c_str());
   }
   std::printf("%d of %d designs cannot do every task%s\n", infeasible, count,
               infeasible ? " (reason per design in study.csv):" : "");
@@ -300,13 +326,16 @@ int run(const Args& args) {
   if (rank != 0) return 0;
 
   const Outcome outcome = summarize(designs, tasks, results, options.problem.objective);
-  OutputDir out(args.scene.out, {"study.csv", "study_tasks.csv", "heatmap.png", "heatmap.dat",
+  OutputDir out(args.scene.out, {"study.csv", "study.json", "study_tasks.csv", "heatmap.png",
+                                 "heatmap.dat",
                                  "heatmap_infeasible.dat", "heatmap.gnuplot"});
   write_text_file(out.file("study_tasks.csv"), per_task_csv(sweeps, designs, nt, results));
   if (sweeps.size() == 2 && !args.no_plots && gnuplot().available) {
     const std::string warning = draw_heatmap(&out, sweeps, designs, outcome, nt);
     if (!warning.empty()) warn(warning);
   }
+  write_json_file(out.file("study.json"),
+                  study_json(sweeps, designs, outcome, options.problem.objective));
   write_text_file(out.file("study.csv"), study_csv(sweeps, designs, tasks, results, outcome));
   return finish_run(&out, [&] {
     report(sweeps, designs, tasks, results, outcome, options.problem.objective);
