@@ -3,6 +3,7 @@
 // TaskResult codec derived from visit_fields.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -66,6 +67,35 @@ TEST(Objectives, TotalDissipationIsFrictionPlusWindingHeat) {
   }
   EXPECT_NEAR(e.winding_heat, heat, 1e-5 * heat);
   EXPECT_GT(e.winding_heat, e.dissipated);  // catalogue motors: copper loss dominates
+}
+
+// input_energy is int |M1 w1| + |M2 w2| dt; the optimizer's smoothed |p| = sqrt(p^2 + eps^2) - eps
+// is below it by at most eps per motor
+TEST(Objectives, InputEnergyIsTheExactAbsoluteWork) {
+  ProblemOptions o;
+  o.objective = Objective::kInputEnergy;
+  const TrajectoryProblem problem(paper_params(), paper_loads(),
+                                  RestToRest(10, 0.5, kStart, {0.7, 0.6}), o);
+  const std::vector<double> x = problem.motion().minimum_jerk();
+  Energies e;
+  ASSERT_TRUE(problem.energies(x.data(), 4 * o.quadrature_points, &e).ok());
+  const double dt = 1e-4;
+  double work = 0;
+  for (int i = 0; i <= 5000; ++i) {
+    double M1 = 0, M2 = 0;
+    ASSERT_TRUE(problem.smoothed_torques(x.data(), i * dt, &M1, &M2).ok());
+    const auto s = problem.motion().state(x.data(), i * dt);
+    const double p = std::abs(M1 * s[1][0]) + std::abs(M2 * s[1][1]);
+    work += (i == 0 || i == 5000 ? 0.5 : 1.0) * dt * p;
+  }
+  EXPECT_NEAR(e.input, work, 1e-4 * work);  // Gauss-Legendre across the kinks of |p|
+  EXPECT_LE(e.input_smoothed, e.input);
+  EXPECT_GE(e.input_smoothed, e.input - 2 * o.power_smoothing * 0.5);
+  Evaluated ev;
+  ASSERT_TRUE(problem.evaluate(x.data(), false, &ev).ok());
+  Energies own;
+  ASSERT_TRUE(problem.energies(x.data(), o.quadrature_points, &own).ok());
+  EXPECT_NEAR(ev.objective, own.input_smoothed, 1e-12 * ev.objective);
 }
 
 TEST(Objectives, SupplyEnergySoftplusIsWithinItsBound) {
@@ -206,6 +236,25 @@ TEST(Limits, NoOkAboveTheLimit) {
     EXPECT_NEAR(r.total_dissipation, r.dissipated_energy + r.winding_heat, 1e-12);
     EXPECT_LT(r.total_dissipation, r.baseline_total_dissipation) << task.name;
   }
+}
+
+// a task solved within its limits is ok only when the forward simulation of its torques reaches
+// the goal: a miss over miss_tol, or NaN (a simulation that failed), is validation_failed
+TEST(Limits, NoOkWithoutValidation) {
+  BatchOptions options;
+  options.problem.objective = Objective::kTotalDissipation;
+  options.problem.winding_heat = {kHeat, kHeat};
+  const TaskSpec task = paper_tasks()[1];
+  const TaskResult r = run_task(paper_params(), paper_loads(), task, paper_initial(), options);
+  ASSERT_EQ(r.status, "ok") << r.message;
+  EXPECT_LE(std::max(r.miss_distance, r.miss_distance_exact), options.miss_tol);
+  options.miss_tol = 0.1 * std::min(r.miss_distance, r.miss_distance_exact);
+  const TaskResult tight = run_task(paper_params(), paper_loads(), task, paper_initial(), options);
+  EXPECT_EQ(tight.status, "validation_failed");
+  EXPECT_NE(tight.message.find("miss the goal"), std::string::npos) << tight.message;
+  options.miss_tol = NAN;  // a NaN comparison is no pass
+  const TaskResult nan = run_task(paper_params(), paper_loads(), task, paper_initial(), options);
+  EXPECT_EQ(nan.status, "validation_failed");
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "fivebar/trajectory/batch.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -10,6 +11,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "fivebar/model/format.h"
 #include "fivebar/sim/bytes.h"
 #include "stage.h"
 
@@ -127,7 +129,7 @@ void evaluate_baseline(const TrajectoryProblem& problem, const std::vector<doubl
     return;
   }
   r->baseline_dissipated_energy_smoothed = e.dissipated;
-  r->baseline_input_energy_smoothed = e.input;
+  r->baseline_input_energy_smoothed = e.input_smoothed;
   if (problem.exact_energies(x0.data(), exact_points(options), &e).ok()) {
     r->baseline_dissipated_energy = r->baseline_dissipated_energy_exact = e.dissipated;
     r->baseline_input_energy = e.input;
@@ -143,7 +145,8 @@ void evaluate_baseline(const TrajectoryProblem& problem, const std::vector<doubl
   }
   r->baseline_peak_torque = c.peak_torque;
   r->baseline_max_constraint_violation = c.max_violation;
-  r->baseline_status = c.max_violation > options.feasibility_tol ? "violates_constraints" : "ok";
+  // a NaN violation is no pass
+  r->baseline_status = c.max_violation <= options.feasibility_tol ? "ok" : "violates_constraints";
 }
 
 // the detour: the path search, then the fewest control points whose spline keeps the margin
@@ -247,8 +250,10 @@ void record_energies(const TrajectoryProblem& problem, const BatchOptions& optio
   Energies e;
   if (problem.energies(r->x.data(), options.problem.quadrature_points, &e).ok()) {
     r->dissipated_energy_smoothed = e.dissipated;
-    r->input_energy_smoothed = e.input;
-    r->objective = o == Objective::kSupplyEnergy ? e.supply_smoothed : e.of(o);
+    r->input_energy_smoothed = e.input_smoothed;
+    r->objective = o == Objective::kSupplyEnergy  ? e.supply_smoothed
+                   : o == Objective::kInputEnergy ? e.input_smoothed
+                                                  : e.of(o);
   }
   if (problem.exact_energies(r->x.data(), exact_points(options), &e).ok()) {
     r->dissipated_energy = r->dissipated_energy_exact = e.dissipated;
@@ -316,15 +321,16 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
 void classify(const SolverStatus& solver, const ConstraintCheck& check,
               const BatchOptions& options, TaskResult* r) {
   std::string status = "ok", message = solver.message;
+  // the checks are written so that a NaN fails them (a NaN compares false)
   if (!solver.usable()) {
     status = r->solver_status;
-  } else if (check.max_violation > options.feasibility_tol) {
+  } else if (!(check.max_violation <= options.feasibility_tol)) {
     status = "infeasible";
     message = "constraints violated on the check grid (relative " +
               std::to_string(check.max_violation) + "; peak torque " +
               std::to_string(check.peak_torque) + " N m, min |sin(th4 - th3)| " +
               std::to_string(check.min_coupler_sine) + ")";
-  } else if (check.max_violation > options.limit_rtol) {
+  } else if (!(check.max_violation <= options.limit_rtol)) {
     status = "violates_constraints";
     message = "over a limit on the check grid by " + std::to_string(check.max_violation) +
               " (relative; peak torque " + std::to_string(check.peak_torque) +
@@ -332,10 +338,30 @@ void classify(const SolverStatus& solver, const ConstraintCheck& check,
   } else if (solver.limited()) {
     status = r->solver_status;
   }
+  if (status == "ok" && !(std::isfinite(r->objective) &&
+                          std::isfinite(objective_value(*r, options.problem.objective)))) {
+    status = "evaluation_failed";  // a NaN total would rank designs in study and design
+    message = "the objective of the result is not finite under the smoothed or the exact law";
+  }
   r->status = status;
   const std::string notes = r->message;
   r->message = message;
   if (!notes.empty()) add_note(r, notes);
+}
+
+// an ok task whose validation failed (a simulation that did not finish: miss NaN) or missed
+// the goal by more than BatchOptions::miss_tol is `validation_failed`
+void judge_validation(const BatchOptions& options, TaskResult* r) {
+  if (r->status != "ok") return;
+  const double miss = std::max(r->miss_distance, r->miss_distance_exact);
+  if (std::isnan(r->miss_distance) || std::isnan(r->miss_distance_exact) ||
+      !(miss <= options.miss_tol)) {
+    r->status = "validation_failed";
+    add_note(r, "the optimal torques simulated forward miss the goal by " +
+                    format_significant(r->miss_distance) + " m (smoothed law) and " +
+                    format_significant(r->miss_distance_exact) + " m (exact law), tolerance " +
+                    format_significant(options.miss_tol) + " m");
+  }
 }
 
 }  // namespace
@@ -383,6 +409,7 @@ TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads
       note.clear();
       r.miss_distance_exact = miss_distance(*problem, loads, r.x, options, true, &note);
       if (!note.empty()) add_note(&r, note);
+      judge_validation(options, &r);
     }
   } catch (const std::exception& e) {
     r.status = "failure";

@@ -57,7 +57,7 @@ T supply_power(const std::array<T, 2>& p, const ProblemOptions& o, bool exact) {
 // the powers of one node [W]: everything Energies integrates
 template <typename T>
 struct NodePowers {
-  T dissipated{}, input{}, heat{}, supply{}, supply_smooth{};
+  T dissipated{}, input{}, input_smooth{}, heat{}, supply{}, supply_smooth{};
 };
 
 // the powers of one state from its inverse dynamics
@@ -71,7 +71,8 @@ NodePowers<T> node_powers(const Evaluation<T>& ev, const std::array<T, 6>& s,
   for (int a = 0; a < kActuators; ++a) {
     const T heat = o.winding_heat[a] * M[a] * M[a];
     out.heat += heat;
-    out.input += smooth_abs(mech[a], o.power_smoothing);
+    out.input += value_of(mech[a]) < 0.0 ? T(-mech[a]) : mech[a];
+    out.input_smooth += smooth_abs(mech[a], o.power_smoothing);
     electric[a] = mech[a] + heat;
   }
   out.supply = supply_power(electric, o, true);
@@ -79,12 +80,12 @@ NodePowers<T> node_powers(const Evaluation<T>& ev, const std::array<T, 6>& s,
   return out;
 }
 
-// the integrand of objective o (the smoothed one of kSupplyEnergy)
+// the integrand of objective o (the smoothed one of kInputEnergy and kSupplyEnergy)
 template <typename T>
 T integrand(const NodePowers<T>& pw, Objective o) {
   switch (o) {
     case Objective::kDissipatedEnergy: return pw.dissipated;
-    case Objective::kInputEnergy: return pw.input;
+    case Objective::kInputEnergy: return pw.input_smooth;
     case Objective::kTotalDissipation: return pw.dissipated + pw.heat;
     case Objective::kSupplyEnergy: return pw.supply_smooth;
   }
@@ -479,6 +480,7 @@ Status TrajectoryProblem::energies_with(const Params<double>& params, const doub
       const double w = rule.weights[i];
       out->dissipated += w * pw.dissipated;
       out->input += w * pw.input;
+      out->input_smoothed += w * pw.input_smooth;
       out->winding_heat += w * pw.heat;
       out->supply += w * pw.supply;
       out->supply_smoothed += w * pw.supply_smooth;

@@ -73,6 +73,9 @@ struct BatchOptions {
   /// simulate the optimal torques forward from the start state and measure the miss of C
   bool validate = true;
   double validation_rtol = 1e-9;  ///< CVODE tolerances of that simulation
+  /// largest miss of C [m] (either law) of an `ok` task; a larger or NaN miss (a simulation
+  /// that did not finish) makes it `validation_failed`. Shipped tasks miss by 1e-10 to 1e-8 m.
+  double miss_tol = 1e-4;
   /// the search for a feasible initial guess when the minimum-jerk motion leaves the workspace
   /// or comes nearer than the singular margin to a singular pose (its margin is the problem's)
   PathSearchOptions path;
@@ -90,7 +93,9 @@ struct TaskResult {
   /// ok | max_evaluations | max_time | infeasible | violates_constraints (over a limit by more
   /// than BatchOptions::limit_rtol, within feasibility_tol) | a solver outcome (roundoff_limited ...) |
   /// a resolution status (goal_out_of_workspace, invalid_duration, ...) | unreachable (no
-  /// path of assemblable, non-singular poses joins start and goal) | evaluation_failed
+  /// path of assemblable, non-singular poses joins start and goal) | evaluation_failed |
+  /// validation_failed (solved within the limits, but the forward simulation of its torques
+  /// failed or missed the goal by more than BatchOptions::miss_tol)
   std::string status;
   std::string message;
   std::string solver_status;  ///< outcome_name() of the solve, "" when none ran

@@ -52,12 +52,13 @@ bool parse_end_acceleration(const std::string& name, EndAcceleration* out);
 /// The energies of one motion [J] (TrajectoryProblem::energies).
 struct Energies {
   double dissipated = 0;    ///< int P_diss dt: joint and actuator friction
-  double input = 0;         ///< int |M1 w1| + |M2 w2| dt (smoothed |p| as kInputEnergy)
+  double input = 0;         ///< int |M1 w1| + |M2 w2| dt
+  double input_smoothed = 0;  ///< the same with the smoothed |p| the optimizer minimizes
   double winding_heat = 0;  ///< int sum_a c_a M_a^2 dt
   double supply = 0;        ///< kSupplyEnergy's integral with the exact max(0, p)
   double supply_smoothed = 0;  ///< the same with the softplus the optimizer minimizes
   double total() const { return dissipated + winding_heat; }
-  /// the value of objective o (kSupplyEnergy: the exact `supply`)
+  /// the value of objective o (kInputEnergy, kSupplyEnergy: the exact `input`, `supply`)
   double of(Objective o) const;
 };
 
