@@ -356,11 +356,13 @@ void judge_validation(const BatchOptions& options, TaskResult* r) {
   const double miss = std::max(r->miss_distance, r->miss_distance_exact);
   if (std::isnan(r->miss_distance) || std::isnan(r->miss_distance_exact) ||
       !(miss <= options.miss_tol)) {
-    r->status = "validation_failed";
-    add_note(r, "the optimal torques simulated forward miss the goal by " +
-                    format_significant(r->miss_distance) + " m (smoothed law) and " +
-                    format_significant(r->miss_distance_exact) + " m (exact law), tolerance " +
-                    format_significant(options.miss_tol) + " m");
+    r->status = "validation_failed";  // the reason first, the solve's notes after it
+    const std::string notes = r->message;
+    r->message = "the optimal torques simulated forward miss the goal by " +
+                 format_significant(r->miss_distance) + " m (smoothed law) and " +
+                 format_significant(r->miss_distance_exact) + " m (exact law), tolerance " +
+                 format_significant(options.miss_tol) + " m";
+    add_note(r, notes);
   }
 }
 
