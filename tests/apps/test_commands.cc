@@ -67,6 +67,13 @@ TEST(Objective, DefaultFollowsTheWindingData) {
   EXPECT_GT(b.problem.winding_heat[0], 0.0);
   EXPECT_NE(objective_note(a).find("actuators.M1.winding_resistance"), std::string::npos);
   EXPECT_TRUE(objective_note(b).empty());
+  // the note goes to solved tasks only: a task the design cannot do keeps its reason alone
+  std::vector<trajectory::TaskResult> results(2);
+  results[0].x = {0.0};
+  results[1].message = "goal out of reach";
+  add_objective_note(a, &results);
+  EXPECT_EQ(results[0].message, objective_note(a));
+  EXPECT_EQ(results[1].message, "goal out of reach");
   EXPECT_EQ(b.problem.end_acceleration, trajectory::EndAcceleration::kFree);
   OptimizeSettings zero = s;
   zero.end_acceleration = "zero";

@@ -118,7 +118,8 @@ std::string bounds_advice(const std::vector<BoundHit>& hits);
 /// The note of an objective whose optimum a machine should not run (dissipated_energy: it
 /// switches the motors between their limits), naming the scene keys to add; "" for the others.
 std::string objective_note(const trajectory::BatchOptions& options);
-/// Appends objective_note() (when there is one) to the message of every result.
+/// Appends objective_note() (when there is one) to the message of every solved result (not to
+/// a task the design cannot do, whose message says why).
 void add_objective_note(const trajectory::BatchOptions& options,
                         std::vector<trajectory::TaskResult>* results);
 
