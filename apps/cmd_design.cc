@@ -149,6 +149,7 @@ class Search {
   const std::vector<Design>& history() const { return history_; }
   const std::vector<Vary>& varies() const { return varies_; }
   const std::vector<trajectory::TaskSpec>& tasks() const { return tasks_; }
+  const trajectory::BatchOptions& options() const { return options_; }
   int best() const;
   double penalty_scale = 1.0;  ///< [J], from the start design
 
@@ -191,8 +192,8 @@ Design Search::evaluate(const std::vector<double>& values, bool warm_start) {
     d.results = trajectory::run_distributed(nt, args_.threads, [&](int i) {
       const sim::LoadFunction loads = LoadExpressions(*scene).function();
       const TaskResult* warm = b >= 0 ? &history_[b].results[i] : nullptr;
-      return trajectory::run_task(scene->params, loads, tasks_[i], scene->initial, options_,
-                                  warm);
+      return trajectory::run_task(scene->params, loads, tasks_[i], scene->initial,
+                                  with_windings(options_, scene->windings), warm);
     });
     trajectory::broadcast_results(&d.results);
   } else {
@@ -206,7 +207,7 @@ Design Search::evaluate(const std::vector<double>& values, bool warm_start) {
   d.total = 0;
   for (const TaskResult& r : d.results) {
     if (r.status == "ok") {
-      d.total += r.dissipated_energy;
+      d.total += trajectory::objective_value(r, options_.problem.objective);
     } else {
       ++d.failed;
       d.reason += (d.reason.empty() ? "" : " | ") + r.task + ": " + r.status + ": " + r.message;
@@ -264,6 +265,18 @@ std::string tasks_csv(const Search& s) {
   return csv;
 }
 
+// the varied keys whose best value lies on a bound of its range
+std::vector<BoundHit> on_bound(const Search& s, int best) {
+  std::vector<std::string> keys;
+  std::vector<double> lo, hi;
+  for (const Vary& v : s.varies()) {
+    keys.push_back(v.key);
+    lo.push_back(v.lo);
+    hi.push_back(v.hi);
+  }
+  return bounds_hit(keys, s.history()[best].values, lo, hi);
+}
+
 Json design_json(const Search& s, int best, const trajectory::BoxResult& box, double seconds) {
   Json j = Json::object();
   const Design& d = s.history()[best];
@@ -288,6 +301,9 @@ Json design_json(const Search& s, int best, const trajectory::BoxResult& box, do
                                {"min_coupler_sine", r.min_coupler_sine}});
         }));
   j.set("bounds", bounds);
+  j.set("on_bound", Json::array_of(on_bound(s, best), [](const BoundHit& h) {
+          return Json::object({{"key", h.key}, {"side", h.side}, {"bound", h.bound}});
+        }));
   j.set("start_values", start_values);
   j.set("start_total_energy", start.status == "ok" ? start.total : NAN);
   j.set("evaluation", best);
@@ -325,9 +341,10 @@ void report(const Search& s, int best, const trajectory::BoxResult& box) {
   for (size_t k = 0; k < s.varies().size(); ++k) {
     std::printf(" %s=%s", s.varies()[k].key.c_str(), format_double(d.values[k]).c_str());
   }
-  std::printf("\n  total dissipated energy %.6g J over %zu tasks (start %.6g J); outer %s\n",
-              d.total, d.results.size(), s.history().front().total,
+  std::printf("\n  sum of %s %.6g J over %zu tasks (start %.6g J); outer %s\n",
+              trajectory::objective_name(s.options().problem.objective), d.total, d.results.size(), s.history().front().total,
               trajectory::outcome_name(box.solver.outcome));
+  std::printf("%s", bounds_advice(on_bound(s, best)).c_str());
   std::map<std::string, int> why;
   int failed = 0;
   for (const Design& h : s.history()) {
@@ -406,7 +423,8 @@ int run(const Args& args) {
                      "at least 2 k + 1 = " + std::to_string(2 * varies.size() + 1) + " needed");
   }
   const std::vector<double> x0 = start_values(args, varies);
-  Search search(args, varies, read_tasks(args.tasks), batch_options(args.settings));
+  Search search(args, varies, read_tasks(args.tasks),
+                batch_options(args.settings, load_scene(args.scene.scene, args.scene.sets).windings));
   std::vector<double> lo, hi;
   for (const Vary& v : varies) {
     lo.push_back(v.lo);

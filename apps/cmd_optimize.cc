@@ -1,7 +1,9 @@
 // fivebar optimize SCENE --tasks TASKS.yaml [--out DIR] [--threads N] [--set KEY=VALUE]...
-//   [--method slsqp|mma|ccsaq] [--global] [--starts N] [--objective dissipated_energy|input_energy]
+//   [--method slsqp|mma|ccsaq] [--global] [--starts N]
+//   [--objective total_dissipation|supply_energy|dissipated_energy|input_energy]
+//   [--regeneration none|shared_bus] [--end-acceleration free|zero]
 //   [--control-points N] [--quadrature-points N] [--singular-margin M] [--no-validate] [--no-plots]
-// Minimum-dissipation rest-to-rest trajectories for every task of a tasks file (issue 5):
+// Energy-optimal rest-to-rest trajectories for every task of a tasks file:
 // summary.csv (one row per task, the minimum-jerk baseline beside each result), per task
 // DIR/<task>/trajectory.csv, baseline.csv, animation.html and figures. Under mpirun the tasks are
 // split across ranks and rank 0 writes the same files as a one-process run.
@@ -164,12 +166,18 @@ std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult
 // one line per task on stdout; under it, the reason when the task did not end ok, and a note
 // when it did but its refinement ran out of levels before the energy settled; the number of
 // tasks that ended ok
-int report(const std::vector<TaskResult>& results, double refine_tol) {
+int report(const std::vector<TaskResult>& results, const trajectory::BatchOptions& options) {
+  const double refine_tol = options.refine.tol;
+  const std::string note = objective_note(options);
+  std::printf("objective: %s\n", trajectory::objective_name(options.problem.objective));
+  if (!note.empty()) std::printf("note: %s\n", note.c_str());
   int ok = 0;
   for (const TaskResult& r : results) {
-    std::printf("%-20s %-22s E %.6g J  baseline %.6g J  peak %.4g N m  miss %.3g m  %.3f s\n",
-                r.task.c_str(), r.status.c_str(), r.dissipated_energy,
-                r.baseline_dissipated_energy, r.peak_torque, r.miss_distance, r.wall_time_s);
+    std::printf("%-20s %-22s objective %.7g J  E_diss %.6g J  winding %.6g J  baseline E_diss "
+                "%.6g J  peak %.4g N m  miss %.3g m  %.3f s\n",
+                r.task.c_str(), r.status.c_str(), r.objective, r.dissipated_energy,
+                r.winding_heat, r.baseline_dissipated_energy, r.peak_torque, r.miss_distance,
+                r.wall_time_s);
     if (r.status != "ok") {
       std::printf("  %s: %s\n", r.task.c_str(), r.message.c_str());
       continue;
@@ -198,13 +206,13 @@ int run(const Args& args) {
   const std::vector<trajectory::TaskSpec> tasks = read_tasks(args.tasks);
   OptimizeSettings settings = args.settings;
   settings.validate = !args.no_validate;
-  const trajectory::BatchOptions options = batch_options(settings);
+  const trajectory::BatchOptions options = batch_options(settings, scene.windings);
   const int rank = trajectory::process_rank();
   const bool tty = rank == 0 && isatty(STDERR_FILENO);
 
   // every task on the pool of threads (and across MPI ranks); a result depends only on its task
   const int n = static_cast<int>(tasks.size());
-  const std::vector<TaskResult> results = trajectory::run_distributed(
+  const std::vector<TaskResult> solved = trajectory::run_distributed(
       n, args.threads,
       [&](int i) {
         const sim::LoadFunction loads = LoadExpressions(scene).function();  // this thread's
@@ -215,6 +223,8 @@ int run(const Args& args) {
       });
   if (tty) std::cerr << "\n";
   if (rank != 0) return 0;
+  std::vector<TaskResult> results = solved;
+  add_objective_note(options, &results);
 
   // per-task files first, summary.csv last (its presence marks a complete run)
   OutputDir out(args.scene.out, {"summary.csv"});
@@ -229,7 +239,7 @@ int run(const Args& args) {
   write_text_file(out.file("summary.csv"), csv);
   // one line per task on stdout; exit non-zero when no task ended ok (outputs kept: they say why)
   int ok = 0;
-  finish_run(&out, [&] { ok = report(results, options.refine.tol); });
+  finish_run(&out, [&] { ok = report(results, options); });
   if (ok == 0 && !results.empty()) {
     const std::string why = "every task failed (" + std::to_string(results.size()) +
                             "; reasons on stdout and in summary.csv)";
@@ -241,7 +251,7 @@ int run(const Args& args) {
 }
 
 void add_options(CLI::App* app, Args* args) {
-  args->settings.refine = true;  // the optimum of the problem, not of the basis (--no-refine)
+  args->settings = optimize_defaults();  // the refinement on (--no-refine)
   add_scene_options(app, &args->scene, "optimize");
   add_plots_flag(app, &args->no_plots, "the figures");
   app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
@@ -252,7 +262,13 @@ void add_options(CLI::App* app, Args* args) {
   app->add_option("--method", args->settings.method,
                   "NLopt algorithm: slsqp (default), mma, ccsaq");
   app->add_option("--objective", args->settings.objective,
-                  "dissipated_energy (default) or input_energy");
+                  "total_dissipation (default when the scene gives the motors' winding data), "
+                  "supply_energy, dissipated_energy (default otherwise) or input_energy");
+  app->add_option("--regeneration", args->settings.regeneration,
+                  "supply_energy: none (default: braking power is lost) or shared_bus (one "
+                  "motor's braking feeds the other)");
+  app->add_option("--end-acceleration", args->settings.end_acceleration,
+                  "free (default) or zero: the accelerations at both ends of a motion");
   app->add_flag("--global", args->settings.global,
                 "multi-start: the local method from seeded perturbed starts too, best kept");
   app->add_option("--starts", args->settings.starts, "starts of --global (default 8)");
@@ -273,10 +289,11 @@ void add_options(CLI::App* app, Args* args) {
                   "objective evaluations per local solve (default 500)");
   app->add_option("--refine-levels", args->settings.refine_levels,
                   "control points per joint of the refinement levels, increasing "
-                  "(default 45,85: from the first solve's 5 knot spans to 40, then 80)")
+                  "(default 15,25,45,85 for total_dissipation and supply_energy, else 45,85)")
       ->delimiter(',');
   app->add_option("--refine-tol", args->settings.refine_tol,
-                  "relative energy change that ends the refinement (default 1e-3)");
+                  "relative objective change that ends the refinement (default 1e-4 for "
+                  "total_dissipation and supply_energy, else 1e-3)");
   app->add_flag("--no-validate", args->no_validate,
                 "skip the forward simulation of the optimal torques (miss_distance)");
 }

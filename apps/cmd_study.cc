@@ -21,6 +21,7 @@
 #include "fivebar/io/csv.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
+#include "fivebar/io/json.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
@@ -97,14 +98,14 @@ std::vector<Design> make_designs(const Args& args, const std::vector<trajectory:
 
 // what the study found, per design
 struct Outcome {
-  std::vector<double> totals;  ///< summed dissipated energy, nan unless every task is ok
+  std::vector<double> totals;  ///< summed objective (exact law), nan unless every task is ok
   std::vector<std::string> reasons;  ///< "" for complete designs, else why not (per task)
   int best = -1;
 };
 
 Outcome summarize(const std::vector<Design>& designs,
                   const std::vector<trajectory::TaskSpec>& tasks,
-                  const std::vector<TaskResult>& results) {
+                  const std::vector<TaskResult>& results, trajectory::Objective objective) {
   const int count = static_cast<int>(designs.size()), nt = static_cast<int>(tasks.size());
   Outcome o;
   o.totals.assign(count, NAN);
@@ -113,7 +114,7 @@ Outcome summarize(const std::vector<Design>& designs,
     double total = 0;
     for (int t = 0; t < nt; ++t) {
       const TaskResult& r = results[d * nt + t];
-      total += r.dissipated_energy;
+      total += trajectory::objective_value(r, objective);
       if (r.status != "ok") {
         o.reasons[d] += (o.reasons[d].empty() ? "" : " | ") + r.task + ": " + r.status + ": " +
                         r.message;
@@ -138,27 +139,29 @@ std::string study_csv(const std::vector<trajectory::Sweep>& sweeps,
          "saving_percent";
   for (const auto& t : tasks) csv += ",E_" + t.name;
   for (const auto& t : tasks) csv += ",status_" + t.name;
-  csv += ",best,reason\n";
+  csv += ",best,reason,total_objective\n";
   for (size_t d = 0; d < designs.size(); ++d) {
     std::string values, energies, statuses;
     for (double v : designs[d].values) values += "," + format_double(v);
     int ok = 0;
-    double base_total = 0;
+    double base_total = 0, total = 0;
     for (int t = 0; t < nt; ++t) {
       const TaskResult& r = results[d * nt + t];
       ok += r.status == "ok";
+      total += r.dissipated_energy;
       base_total += r.baseline_dissipated_energy;
       energies += "," + format_double(r.dissipated_energy);
       statuses += "," + r.status;
     }
     const bool complete = o.reasons[d].empty();
-    if (!complete) base_total = NAN;
+    if (!complete) base_total = total = NAN;
     const std::string status =
         complete ? "ok" : (designs[d].scene ? "incomplete" : "design_cannot_assemble");
     csv += std::to_string(d) + values + "," + status + "," + std::to_string(ok) + "," +
-           format_double(o.totals[d]) + "," + format_double(base_total) + "," +
-           format_double(100.0 * (1.0 - o.totals[d] / base_total)) + energies + statuses + "," +
-           (static_cast<int>(d) == o.best ? "1" : "0") + "," + csv_quote(o.reasons[d]) + "\n";
+           format_double(total) + "," + format_double(base_total) + "," +
+           format_double(100.0 * (1.0 - total / base_total)) + energies + statuses + "," +
+           (static_cast<int>(d) == o.best ? "1" : "0") + "," + csv_quote(o.reasons[d]) + "," +
+           format_double(o.totals[d]) + "\n";
   }
   return csv;
 }
@@ -212,7 +215,7 @@ std::string draw_heatmap(OutputDir* out, const std::vector<trajectory::Sweep>& s
   h.y_hi = sweeps[1].hi;
   h.x_key = sweeps[0].key;
   h.y_key = sweeps[1].key;
-  h.title = "total dissipated energy over " + std::to_string(nt) + (nt == 1 ? " task" : " tasks");
+  h.title = "total of the objective over " + std::to_string(nt) + (nt == 1 ? " task" : " tasks");
   if (o.best >= 0) {
     h.has_best = true;
     h.best_x = designs[o.best].values[0];
@@ -222,10 +225,43 @@ std::string draw_heatmap(OutputDir* out, const std::vector<trajectory::Sweep>& s
                      study_heatmap_script(h, gnuplot().terminal));
 }
 
+// the swept keys on whose range's edge the best design lies (none without a best design)
+std::vector<BoundHit> best_on_bound(const std::vector<trajectory::Sweep>& sweeps,
+                                    const std::vector<Design>& designs, const Outcome& o) {
+  if (o.best < 0) return {};
+  std::vector<std::string> keys;
+  std::vector<double> lo, hi;
+  for (const trajectory::Sweep& s : sweeps) {
+    keys.push_back(s.key);
+    lo.push_back(s.lo);
+    hi.push_back(s.hi);
+  }
+  return bounds_hit(keys, designs[o.best].values, lo, hi);
+}
+
+// study.json: the objective, the best design (index, values, total) and the bounds it lies on
+Json study_json(const std::vector<trajectory::Sweep>& sweeps, const std::vector<Design>& designs,
+                const Outcome& o, trajectory::Objective objective) {
+  Json j = Json::object();
+  j.set("objective", std::string(trajectory::objective_name(objective)));
+  j.set("best", o.best);
+  Json values = Json::object();
+  for (size_t k = 0; k < sweeps.size() && o.best >= 0; ++k) {
+    values.set(sweeps[k].key, designs[o.best].values[k]);
+  }
+  j.set("values", values);
+  j.set("total_objective", o.best >= 0 ? o.totals[o.best] : NAN);
+  j.set("on_bound", Json::array_of(best_on_bound(sweeps, designs, o), [](const BoundHit& h) {
+          return Json::object({{"key", h.key}, {"side", h.side}, {"bound", h.bound}});
+        }));
+  return j;
+}
+
 // stdout: the best design, and how many designs could not do every task, and why
 void report(const std::vector<trajectory::Sweep>& sweeps, const std::vector<Design>& designs,
             const std::vector<trajectory::TaskSpec>& tasks,
-            const std::vector<TaskResult>& results, const Outcome& o) {
+            const std::vector<TaskResult>& results, const Outcome& o,
+            trajectory::Objective objective) {
   const int count = static_cast<int>(designs.size()), nt = static_cast<int>(tasks.size());
   int infeasible = 0;
   std::map<std::string, int> why;  // "task: status" -> designs
@@ -245,7 +281,9 @@ void report(const std::vector<trajectory::Sweep>& sweeps, const std::vector<Desi
       std::printf(" %s=%s", sweeps[k].key.c_str(),
                   format_double(designs[o.best].values[k]).c_str());
     }
-    std::printf("  total dissipated energy %.6g J over %d tasks\n", o.totals[o.best], nt);
+    std::printf("  sum of %s %.6g J over %d tasks\n", trajectory::objective_name(objective),
+                o.totals[o.best], nt);
+    std::printf("%s", bounds_advice(best_on_bound(sweeps, designs, o)).c_str());
   }
   std::printf("%d of %d designs cannot do every task%s\n", infeasible, count,
               infeasible ? " (reason per design in study.csv):" : "");
@@ -254,9 +292,10 @@ void report(const std::vector<trajectory::Sweep>& sweeps, const std::vector<Desi
 
 int run(const Args& args) {
   const std::vector<trajectory::Sweep> sweeps = parse_sweeps(args.sweeps);
-  load_scene(args.scene.scene, args.scene.sets);  // bad input in the base scene: exit 2 here
+  // bad input in the base scene: exit 2 here
+  const Scene base = load_scene(args.scene.scene, args.scene.sets);
   const std::vector<trajectory::TaskSpec> tasks = read_tasks(args.tasks);
-  const trajectory::BatchOptions options = batch_options(args.settings);
+  const trajectory::BatchOptions options = batch_options(args.settings, base.windings);
   const std::vector<Design> designs = make_designs(args, sweeps);
   const int count = static_cast<int>(designs.size());
 
@@ -278,7 +317,7 @@ int run(const Args& args) {
         }
         const sim::LoadFunction loads = LoadExpressions(*design.scene).function();
         return trajectory::run_task(design.scene->params, loads, task, design.scene->initial,
-                                    options);
+                                    with_windings(options, design.scene->windings));
       },
       [&](int done, int total) {
         if (tty) std::cerr << "\rstudy: " << done << "/" << total << " optimizations" << std::flush;
@@ -286,16 +325,21 @@ int run(const Args& args) {
   if (tty) std::cerr << "\n";
   if (rank != 0) return 0;
 
-  const Outcome outcome = summarize(designs, tasks, results);
-  OutputDir out(args.scene.out, {"study.csv", "study_tasks.csv", "heatmap.png", "heatmap.dat",
+  const Outcome outcome = summarize(designs, tasks, results, options.problem.objective);
+  OutputDir out(args.scene.out, {"study.csv", "study.json", "study_tasks.csv", "heatmap.png",
+                                 "heatmap.dat",
                                  "heatmap_infeasible.dat", "heatmap.gnuplot"});
   write_text_file(out.file("study_tasks.csv"), per_task_csv(sweeps, designs, nt, results));
   if (sweeps.size() == 2 && !args.no_plots && gnuplot().available) {
     const std::string warning = draw_heatmap(&out, sweeps, designs, outcome, nt);
     if (!warning.empty()) warn(warning);
   }
+  write_json_file(out.file("study.json"),
+                  study_json(sweeps, designs, outcome, options.problem.objective));
   write_text_file(out.file("study.csv"), study_csv(sweeps, designs, tasks, results, outcome));
-  return finish_run(&out, [&] { report(sweeps, designs, tasks, results, outcome); });
+  return finish_run(&out, [&] {
+    report(sweeps, designs, tasks, results, outcome, options.problem.objective);
+  });
 }
 
 void add_options(CLI::App* app, Args* args) {

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/tasks_file.h"
 #include "fivebar/io/torque_log_file.h"
@@ -135,6 +136,12 @@ Scene fitted_scene(const Scene& scene, const id::IdentifyResult& result) {
   return fitted;
 }
 
+OptimizeSettings optimize_defaults() {
+  OptimizeSettings s;
+  s.refine = true;  // the optimum of the problem, not of the basis
+  return s;
+}
+
 void add_inner_solve_options(CLI::App* app, OptimizeSettings* s) {
   s->refine = false;
   s->continuation = false;
@@ -149,14 +156,109 @@ void add_inner_solve_options(CLI::App* app, OptimizeSettings* s) {
                 "inner solves refine their control points (see optimize; slow)");
 }
 
-trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
+namespace {
+
+// the scene keys of the motors' winding data
+constexpr char kWindingKeys[] =
+    "actuators.M1.winding_resistance, actuators.M1.torque_constant, "
+    "actuators.M2.winding_resistance, actuators.M2.torque_constant (and gear_ratio, default 1)";
+
+// --objective, --regeneration, --end-acceleration and the refinement that suits the objective
+void objective_options(const OptimizeSettings& a, const MotorWindings& windings,
+                       trajectory::BatchOptions* o) {
+  const bool winding = windings.present();
+  o->problem.winding_heat = windings.heat_coefficients();
+  const std::string name =
+      a.objective.empty() ? (winding ? "total_dissipation" : "dissipated_energy") : a.objective;
+  if (!trajectory::parse_objective(name, &o->problem.objective)) {
+    throw InputError(kFlags, "--objective",
+                     "'" + name + "' is not one of " + trajectory::objective_names());
+  }
+  if (trajectory::needs_winding(o->problem.objective) && !winding) {
+    throw InputError(kFlags, "--objective",
+                     name + " needs the motors' winding data; add to the scene: " +
+                         std::string(kWindingKeys));
+  }
+  if (!trajectory::parse_regeneration(a.regeneration, &o->problem.regeneration)) {
+    throw InputError(kFlags, "--regeneration",
+                     "'" + a.regeneration + "' is not one of none, shared_bus");
+  }
+  if (!trajectory::parse_end_acceleration(a.end_acceleration, &o->problem.end_acceleration)) {
+    throw InputError(kFlags, "--end-acceleration",
+                     "'" + a.end_acceleration + "' is not one of free, zero");
+  }
+  const bool smooth = trajectory::needs_winding(o->problem.objective);
+  const double tol = std::isnan(a.refine_tol) ? (smooth ? 1e-4 : 1e-3) : a.refine_tol;
+  if (!(tol > 0 && tol < 1)) {
+    throw InputError(kFlags, "--refine-tol", "expected a number in (0, 1)");
+  }
+  o->refine.tol = tol;
+  if (a.refine) {
+    o->refine.control_points =
+        !a.refine_levels.empty()
+            ? a.refine_levels
+            : (smooth ? trajectory::kSmoothRefineLevels : trajectory::kRefineLevels);
+  }
+}
+
+}  // namespace
+
+std::string objective_note(const trajectory::BatchOptions& options) {
+  if (options.problem.objective != trajectory::Objective::kDissipatedEnergy) return "";
+  const std::string why =
+      "the optimum of dissipated_energy switches the motors between their torque limits (a "
+      "chattering limit no discretization converges); ";
+  const std::array<double, 2>& c = options.problem.winding_heat;
+  if (c[0] > 0 && c[1] > 0) {
+    return why + "the scene gives the motors' winding data: minimize total_dissipation (the "
+                 "default) for a motion a machine can run";
+  }
+  return why + "add the motors' winding data to the scene (" + kWindingKeys +
+         ") to minimize total_dissipation instead";
+}
+
+trajectory::BatchOptions with_windings(trajectory::BatchOptions options,
+                                       const MotorWindings& windings) {
+  options.problem.winding_heat = windings.heat_coefficients();
+  return options;
+}
+
+std::vector<BoundHit> bounds_hit(const std::vector<std::string>& keys,
+                                 const std::vector<double>& values, const std::vector<double>& lo,
+                                 const std::vector<double>& hi) {
+  constexpr double kOnBound = 1e-6;  // relative to the range
+  std::vector<BoundHit> hits;
+  for (size_t k = 0; k < keys.size(); ++k) {
+    if (hi[k] <= lo[k]) continue;  // a fixed value is no bound of a search
+    const double tol = kOnBound * (hi[k] - lo[k]);
+    if (values[k] <= lo[k] + tol) hits.push_back({keys[k], "lower", lo[k]});
+    if (values[k] >= hi[k] - tol) hits.push_back({keys[k], "upper", hi[k]});
+  }
+  return hits;
+}
+
+std::string bounds_advice(const std::vector<BoundHit>& hits) {
+  std::string s;
+  for (const BoundHit& h : hits) {
+    s += "the best design lies on the " + h.side + " bound of " + h.key + " (" +
+         format_double(h.bound) + "): the optimum may lie outside the range; widen it\n";
+  }
+  return s;
+}
+
+void add_objective_note(const trajectory::BatchOptions& options,
+                        std::vector<trajectory::TaskResult>* results) {
+  const std::string note = objective_note(options);
+  if (note.empty()) return;
+  for (trajectory::TaskResult& r : *results) {
+    if (r.solved()) r.message += (r.message.empty() ? "" : "; ") + note;
+  }
+}
+
+trajectory::BatchOptions batch_options(const OptimizeSettings& a, const MotorWindings& windings) {
   trajectory::BatchOptions o;
   if (!trajectory::parse_method(a.method, &o.optimizer.method)) {
     throw InputError(kFlags, "--method", "'" + a.method + "' is not slsqp, mma or ccsaq");
-  }
-  if (!trajectory::parse_objective(a.objective, &o.problem.objective)) {
-    throw InputError(kFlags, "--objective",
-                     "'" + a.objective + "' is not dissipated_energy or input_energy");
   }
   if (a.control_points < 7 || a.control_points > 60) {
     throw InputError(kFlags, "--control-points", "expected an integer in [7, 60]");
@@ -179,10 +281,6 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
   if (!(a.path_step >= 1e-3 && a.path_step <= 0.5)) {
     throw InputError(kFlags, "--path-step", "expected a number in [0.001, 0.5] rad");
   }
-  if (!(a.refine_tol > 0 && a.refine_tol < 1)) {
-    throw InputError(kFlags, "--refine-tol", "expected a number in (0, 1)");
-  }
-  o.refine.tol = a.refine_tol;
   for (size_t i = 0; i < a.refine_levels.size(); ++i) {
     if (a.refine_levels[i] < 8 || a.refine_levels[i] > 400 ||
         (i > 0 && a.refine_levels[i] <= a.refine_levels[i - 1])) {
@@ -190,10 +288,7 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a) {
                        "expected increasing integers in [8, 400], comma-separated");
     }
   }
-  if (a.refine) {
-    o.refine.control_points =
-        a.refine_levels.empty() ? trajectory::kRefineLevels : a.refine_levels;
-  }
+  objective_options(a, windings, &o);
   if (!a.continuation) o.refine.continuation.clear();
   o.refine.enabled = a.refine || a.continuation;
   o.path.step = a.path_step;

@@ -6,6 +6,7 @@
 #include "fivebar/io/command.h"
 
 #include "fivebar/model/actuator.h"
+#include "fivebar/model/motor.h"
 #include "fivebar/model/friction.h"
 #include "fivebar/model/kinematics.h"
 
@@ -73,10 +74,16 @@ const Field kBaseSchema[] = {
     {"actuators.M1.offset", Kind::kNumber},
     {"actuators.M1.coulomb", Kind::kNumber},
     {"actuators.M1.viscous", Kind::kNumber},
+    {"actuators.M1.winding_resistance", Kind::kNumber},
+    {"actuators.M1.torque_constant", Kind::kNumber},
+    {"actuators.M1.gear_ratio", Kind::kNumber},
     {"actuators.M2", Kind::kSection},
     {"actuators.M2.offset", Kind::kNumber},
     {"actuators.M2.coulomb", Kind::kNumber},
     {"actuators.M2.viscous", Kind::kNumber},
+    {"actuators.M2.winding_resistance", Kind::kNumber},
+    {"actuators.M2.torque_constant", Kind::kNumber},
+    {"actuators.M2.gear_ratio", Kind::kNumber},
     {"loads", Kind::kSection},
     {"loads.M1", Kind::kExpression},
     {"loads.M2", Kind::kExpression},
@@ -645,6 +652,29 @@ void read_friction(const SceneReader& r, FrictionParams<double>* out) {
 
 }
 
+// the motors' winding data (winding heat R (M / (k_t G))^2, docs/model.md): each value > 0; a
+// scene gives R and k_t of both motors or of none
+void read_windings(const SceneReader& r, MotorWindings* out) {
+  bool any = false;
+  for (int a = 0; a < kActuators; ++a) {
+    const std::string k = std::string("actuators.M") + std::to_string(a + 1) + ".";
+    for (const char* key : {"winding_resistance", "torque_constant"}) any |= r.has(k + key);
+  }
+  for (int a = 0; a < kActuators; ++a) {
+    const std::string k = std::string("actuators.M") + std::to_string(a + 1) + ".";
+    const std::optional<double> none = any ? std::nullopt : std::optional<double>(0.0);
+    out->resistance[a] = r.number(k + "winding_resistance", none);
+    out->torque_constant[a] = r.number(k + "torque_constant", none);
+    out->gear_ratio[a] = r.number(k + "gear_ratio", 1.0);
+    if (any) {
+      require(r, k + "winding_resistance", out->resistance[a], out->resistance[a] > 0, "> 0");
+      require(r, k + "torque_constant", out->torque_constant[a], out->torque_constant[a] > 0,
+              "> 0");
+    }
+    require(r, k + "gear_ratio", out->gear_ratio[a], out->gear_ratio[a] > 0, "> 0");
+  }
+}
+
 // actuators: per motor (M1 at O, M2 at D0) a sensor offset and a load-independent friction,
 // which needs a joint friction law with a Coulomb sign (the stick-slip logic is the joint's)
 void read_actuators(const SceneReader& r, FrictionLaw law, ActuatorParams<double>* out) {
@@ -782,6 +812,7 @@ Scene build_scene(const SceneReader& r) {
   read_mechanism(r, &s.params);
   read_friction(r, &s.params.friction);
   read_actuators(r, s.params.friction.law, &s.params.actuators);
+  read_windings(r, &s.windings);
   read_loads_and_initial(r, &s);
   read_integration(r, s.params.friction.law, &s.options);
   read_solver_limits(r, &s);
@@ -905,11 +936,20 @@ std::string scene_to_yaml(const Scene& s) {
   }
   y << "  smoothing_velocity: " << num(f.smoothing_velocity) << "\n";
   const ActuatorParams<double>& act = p.actuators;
-  if (act.offset != ActuatorParams<double>().offset || actuator_friction_active(act)) {
+  const MotorWindings& wd = s.windings;
+  const bool geared = wd.gear_ratio != MotorWindings().gear_ratio;
+  if (act.offset != ActuatorParams<double>().offset || actuator_friction_active(act) ||
+      wd.present() || geared) {
     y << "actuators:\n";
     for (int a = 0; a < kActuators; ++a) {
       y << "  M" << a + 1 << ": {offset: " << num(act.offset[a]) << ", coulomb: "
-        << num(act.coulomb[a]) << ", viscous: " << num(act.viscous[a]) << "}\n";
+        << num(act.coulomb[a]) << ", viscous: " << num(act.viscous[a]);
+      if (wd.present()) {
+        y << ", winding_resistance: " << num(wd.resistance[a])
+          << ", torque_constant: " << num(wd.torque_constant[a]);
+      }
+      if (wd.present() || geared) y << ", gear_ratio: " << num(wd.gear_ratio[a]);
+      y << "}\n";
     }
   }
   y << "loads:\n"

@@ -1,45 +1,59 @@
 #include "fivebar/io/summary_csv.h"
 
+#include <string>
+
 #include "fivebar/io/csv.h"
 #include "fivebar/io/format.h"
 
 namespace fivebar::io {
+namespace {
+
+// the column derived from two fields, placed after this one
+constexpr const char* kSavingAfter = "baseline_peak_torque";
+constexpr const char* kSaving = "saving_percent";
+
+// the columns and fields of one row from trajectory::visit_fields
+struct Row {
+  const trajectory::TaskResult* r = nullptr;  // null: the header only
+  std::vector<std::string>* out;
+  void add(const char* name, const std::string& field) const {
+    out->push_back(r ? field : std::string(name));
+    if (std::string(name) != kSavingAfter) return;
+    const double saving =
+        r ? 100.0 * (1.0 - r->dissipated_energy / r->baseline_dissipated_energy) : 0.0;
+    out->push_back(r ? format_double(saving) : std::string(kSaving));
+  }
+  void operator()(const char* name, const std::string& v) const {
+    const std::string n = name;
+    const bool text = n == "continuation" || n == "refinement" || n == "message";
+    add(name, text ? csv_quote(v) : v);
+  }
+  void operator()(const char* name, double v) const {
+    // the angles of a task that was not resolved are meaningless
+    const bool angle = std::string(name).rfind("theta", 0) == 0;
+    add(name, angle && r && r->control_points <= 0 ? std::string("nan") : format_double(v));
+  }
+  void operator()(const char* name, int v) const { add(name, std::to_string(v)); }
+  void operator()(const char* name, bool v) const { add(name, v ? "true" : "false"); }
+  void operator()(const char*, const std::vector<double>&) const {}  // x: not a column
+};
+
+}  // namespace
 
 const std::vector<std::string>& summary_columns() {
-  static const std::vector<std::string> columns = {
-      "task", "status", "dissipated_energy", "baseline_dissipated_energy", "input_energy",
-      "peak_torque", "max_constraint_violation", "wall_time_s", "baseline_input_energy",
-      "baseline_peak_torque", "saving_percent", "miss_distance", "min_coupler_sine",
-      "solver_status", "evaluations", "starts", "best_start", "duration", "torque_limit",
-      "theta1_start", "theta2_start", "theta1_goal", "theta2_goal",
-      "dissipated_energy_exact", "baseline_dissipated_energy_exact", "baseline_status",
-      "initial_guess", "initial_dissipated_energy", "initial_peak_torque",
-      "initial_min_coupler_sine", "control_points", "dissipated_energy_smoothed",
-      "baseline_dissipated_energy_smoothed", "input_energy_smoothed",
-      "baseline_input_energy_smoothed", "miss_distance_exact", "smoothing_velocity",
-      "refinement_change", "continuation", "refinement", "message"};
+  static const std::vector<std::string> columns = [] {
+    std::vector<std::string> c;
+    trajectory::TaskResult dummy;
+    trajectory::visit_fields(dummy, Row{nullptr, &c});
+    return c;
+  }();
   return columns;
 }
 
 std::vector<std::string> summary_fields(const trajectory::TaskResult& r) {
-  const auto num = format_double;
-  const double saving = 100.0 * (1.0 - r.dissipated_energy / r.baseline_dissipated_energy);
-  const bool resolved = r.control_points > 0;
-  auto angle = [&](double v) { return resolved ? num(v) : std::string("nan"); };
-  return {r.task, r.status, num(r.dissipated_energy), num(r.baseline_dissipated_energy),
-          num(r.input_energy), num(r.peak_torque), num(r.max_constraint_violation),
-          num(r.wall_time_s), num(r.baseline_input_energy), num(r.baseline_peak_torque),
-          num(saving), num(r.miss_distance), num(r.min_coupler_sine), r.solver_status,
-          std::to_string(r.evaluations), std::to_string(r.starts), std::to_string(r.best_start),
-          num(r.duration), num(r.torque_limit), angle(r.start[0]), angle(r.start[1]),
-          angle(r.goal[0]), angle(r.goal[1]), num(r.dissipated_energy_exact),
-          num(r.baseline_dissipated_energy_exact), r.baseline_status, r.initial_guess,
-          num(r.initial_dissipated_energy), num(r.initial_peak_torque),
-          num(r.initial_min_coupler_sine), std::to_string(r.control_points),
-          num(r.dissipated_energy_smoothed), num(r.baseline_dissipated_energy_smoothed),
-          num(r.input_energy_smoothed), num(r.baseline_input_energy_smoothed),
-          num(r.miss_distance_exact), num(r.smoothing_velocity), num(r.refinement_change),
-          csv_quote(r.continuation), csv_quote(r.refinement), csv_quote(r.message)};
+  std::vector<std::string> f;
+  trajectory::visit_fields(r, Row{&r, &f});
+  return f;
 }
 
 }  // namespace fivebar::io

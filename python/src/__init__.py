@@ -270,13 +270,22 @@ def identify(scene, log, **options):
 
 
 def optimize(scene, tasks, **options):
-    """Minimum-dissipation rest-to-rest trajectories for every task of a tasks file.
+    """Energy-optimal rest-to-rest trajectories for a list of tasks.
 
-    Keyword options as `fivebar optimize` (threads, method, objective, global_search, starts,
-    control_points, quadrature_points, singular_margin, validate) plus trajectories=True.
-    Returns a Record {task name: Record of summary.csv fields, 'x', 'trajectory', 'baseline'}
-    (best.reach_right.trajectory.M1; task names that are not identifiers with [...]).
+    `tasks`: a tasks file (path) or a list of task dicts as in that file (name, duration,
+    start, goal, torque_limit; docs/formats.md). Keyword options as `fivebar optimize`, with its
+    defaults (refinement on; objective total_dissipation when the scene has winding data):
+    threads, method, objective, regeneration, end_acceleration, global_search, starts,
+    control_points, quadrature_points, singular_margin, refine, validate, plus
+    trajectories=True. Returns a Record {task name: Record of summary.csv fields, 'x',
+    'trajectory', 'baseline'} (best.reach_right.trajectory.M1; task names that are not
+    identifiers with [...]).
     """
+    if isinstance(tasks, (list, tuple)):
+        import json as _json
+        # JSON is YAML: the tasks file's own reader checks the dicts (NumPy numbers as floats)
+        text = _json.dumps({"tasks": list(tasks)}, default=float)
+        return _record(_core.optimize_text(scene, text, **options))
     return _record(_core.optimize(scene, _os.fspath(tasks), **options))
 
 

@@ -1,4 +1,4 @@
-// fivebar.optimize: minimum-dissipation rest-to-rest trajectories for a tasks file.
+// fivebar.optimize: energy-optimal rest-to-rest trajectories for a tasks file or list.
 #include <pybind11/stl.h>
 
 #include <cstdlib>
@@ -7,6 +7,7 @@
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/summary_csv.h"
+#include "fivebar/io/tasks_file.h"
 #include "keywords.h"
 
 namespace fivebar::python {
@@ -49,10 +50,9 @@ py::dict task_dict(const PyScene& s, const trajectory::TaskResult& r,
   return d;
 }
 
-py::dict optimize(const PyScene& s, const std::string& tasks_path,
+py::dict optimize(const PyScene& s, const std::vector<trajectory::TaskSpec>& tasks,
                   const io::OptimizeSettings& settings, int threads, bool trajectories) {
-  const std::vector<trajectory::TaskSpec> tasks = io::read_tasks(tasks_path);
-  const trajectory::BatchOptions options = io::batch_options(settings);
+  const trajectory::BatchOptions options = io::batch_options(settings, s.scene.windings);
   std::vector<trajectory::TaskResult> results;
   {
     py::gil_scoped_release release;
@@ -61,6 +61,7 @@ py::dict optimize(const PyScene& s, const std::string& tasks_path,
       return trajectory::run_task(s.scene.params, loads, tasks[i], s.scene.initial, options);
     });
   }
+  io::add_objective_note(options, &results);
   py::dict d;
   for (const trajectory::TaskResult& r : results) {
     d[py::str(r.task)] = task_dict(s, r, options, trajectories);
@@ -72,6 +73,8 @@ py::dict optimize(const PyScene& s, const std::string& tasks_path,
 const Keywords<io::OptimizeSettings> kOptimizeKeywords = {
     {"method", &io::OptimizeSettings::method},
     {"objective", &io::OptimizeSettings::objective},
+    {"regeneration", &io::OptimizeSettings::regeneration},
+    {"end_acceleration", &io::OptimizeSettings::end_acceleration},
     {"global_search", &io::OptimizeSettings::global},
     {"starts", &io::OptimizeSettings::starts},
     {"control_points", &io::OptimizeSettings::control_points},
@@ -86,23 +89,34 @@ const Keywords<io::OptimizeSettings> kOptimizeKeywords = {
     {"validate", &io::OptimizeSettings::validate},
 };
 
+// the settings of keywords `kw` over the command line's defaults
+io::OptimizeSettings settings_of(const py::kwargs& kw) {
+  io::OptimizeSettings st = io::optimize_defaults();
+  apply_keywords("optimize", kw, kOptimizeKeywords, {"threads", "trajectories"}, &st);
+  return st;
+}
+
 }  // namespace
 
 void bind_optimize(py::module_& m) {
   m.def(
+      "optimize_text",
+      [](const PyScene& scene, const std::string& yaml, const py::kwargs& kw) {
+        return optimize(scene, io::parse_tasks(yaml, "tasks"), settings_of(kw),
+                        own_keyword(kw, "threads", 0), own_keyword(kw, "trajectories", true));
+      },
+      py::arg("scene"), py::arg("tasks_yaml"), "optimize() with the tasks file's YAML text");
+  m.def(
       "optimize",
       [](const PyScene& scene, const std::string& tasks, const py::kwargs& kw) {
-        io::OptimizeSettings st;
-        apply_keywords("optimize", kw, kOptimizeKeywords, {"threads", "trajectories"}, &st);
-        return optimize(scene, tasks, st, own_keyword(kw, "threads", 0),
-                        own_keyword(kw, "trajectories", true));
+        return optimize(scene, io::read_tasks(tasks), settings_of(kw),
+                        own_keyword(kw, "threads", 0), own_keyword(kw, "trajectories", true));
       },
       py::arg("scene"), py::arg("tasks"),
       ("Optimizes every task of a tasks file (YAML path) for `scene`. Keyword options are those "
-       "of `fivebar optimize` with _ for - (global_search is --global; refine=False: the "
-       "command line refines, Python by default does not), threads=0 (all cores) and "
-       "trajectories=True: " +
-       keyword_defaults(io::OptimizeSettings{}, kOptimizeKeywords) +
+       "of `fivebar optimize` with _ for - (global_search is --global), with its defaults, "
+       "threads=0 (all cores) and trajectories=True: " +
+       keyword_defaults(io::optimize_defaults(), kOptimizeKeywords) +
        ". Returns {task name: dict} with the columns of summary.csv, 'x' (the optimal free "
        "control points) and, for solved tasks with trajectories=True, 'trajectory' and "
        "'baseline' (the minimum-jerk motion), each a dict of arrays keyed by the trajectory.csv "

@@ -81,3 +81,23 @@ def test_identify_has_the_log_conditioning_delay_and_window_choice(root, paper_s
     delay = result["torque_delay"]
     assert set(delay) == {"value_s", "std_s", "corrected"} and delay["std_s"] > 0
     assert result["window_choice"]  # the text is that of identification.json
+
+
+def test_optimize_takes_a_list_of_tasks_with_the_command_lines_defaults(root):
+    # a list of task dicts as in a tasks file; the command line's defaults: refinement on, and
+    # total_dissipation on a scene with the motors' winding data
+    scene = fivebar.load_scene(root / "datasets/scenes/paper_motors.yaml")
+    tasks = [{"name": "swing_right", "duration": 0.5,
+              "start": {"theta1": 1.5707963267948966, "theta2": 1.5707963267948966},
+              "goal": {"theta1": 0.7, "theta2": 0.6}, "torque_limit": 30.0}]
+    task = fivebar.optimize(scene, tasks, threads=1, trajectories=False)["swing_right"]
+    assert task["status"] == "ok"
+    assert task["refinement"].startswith("10:") and ";15:" in task["refinement"]
+    assert abs(task["total_dissipation"] - task["dissipated_energy"] - task["winding_heat"]) < 1e-12
+    assert task["refinement_change"] < 1e-4
+    try:
+        fivebar.optimize(scene, [{"name": "x", "duration": 0.5}], threads=1)
+    except Exception as e:  # the tasks file's own checks
+        assert "start" in str(e) or "goal" in str(e)
+    else:
+        raise AssertionError("a task without start and goal was accepted")

@@ -33,6 +33,28 @@ run_fivebar(2 "command line: --sg-window: must be > 0 \\[s\\], got -1"
             identify ${paper} --log ${log} --sg-window -1 --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "logs: \\(file\\): is a directory, expected a CSV file"
             identify ${paper} --log ${SOURCE_DIR}/datasets/logs --out ${WORK_DIR}/out_bad)
+# optimize: winding data, objectives and their options
+set(motors ${SOURCE_DIR}/datasets/scenes/paper_motors.yaml)
+set(tasks ${SOURCE_DIR}/datasets/tasks/paper_tasks.yaml)
+run_fivebar(2 "paper_motors.yaml: actuators.M1.winding_resistance: must be > 0"
+            optimize ${motors} --tasks ${tasks} --set actuators.M1.winding_resistance=0
+            --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "paper_motors.yaml: actuators.M2.gear_ratio: must be a finite number"
+            optimize ${motors} --tasks ${tasks} --set actuators.M2.gear_ratio=.nan
+            --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "paper_motors.yaml: actuators.M1.torque_constant: expected a number"
+            optimize ${motors} --tasks ${tasks} --set actuators.M1.torque_constant=big
+            --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --objective: total_dissipation needs the motors' winding data; add to the scene: actuators.M1.winding_resistance"
+            optimize ${paper} --tasks ${tasks} --objective total_dissipation --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --objective: supply_energy needs"
+            optimize ${paper} --tasks ${tasks} --objective supply_energy --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --objective: 'heat' is not one of total_dissipation, supply_energy"
+            optimize ${motors} --tasks ${tasks} --objective heat --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --regeneration: 'bus' is not one of none, shared_bus"
+            optimize ${motors} --tasks ${tasks} --regeneration bus --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --end-acceleration: 'none' is not one of free, zero"
+            optimize ${motors} --tasks ${tasks} --end-acceleration none --out ${WORK_DIR}/out_bad)
 if(EXISTS ${WORK_DIR}/out_bad)
   message(FATAL_ERROR "a run rejected for bad input created its output directory")
 endif()

@@ -609,6 +609,57 @@ TEST(SceneYaml, RoundTripsTheActuators) {
   EXPECT_THAT(scene_to_yaml(plain), ::testing::Not(HasSubstr("actuators")));
 }
 
+// the motors' winding data: read, written back, the heat coefficient R / (k_t G)^2
+TEST(SceneYaml, RoundTripsTheWindingData) {
+  const Scene a = parse_scene(
+      kPaper + "actuators:\n  M1: {winding_resistance: 0.3, torque_constant: 0.03}\n"
+               "  M2: {winding_resistance: 0.6, torque_constant: 0.05}\n",
+      "p.yaml", {"actuators.M1.gear_ratio=66"});
+  ASSERT_TRUE(a.windings.present());
+  EXPECT_EQ(a.windings.gear_ratio[0], 66.0);
+  EXPECT_EQ(a.windings.gear_ratio[1], 1.0);
+  EXPECT_DOUBLE_EQ(a.windings.heat_coefficient(0), 0.3 / std::pow(0.03 * 66, 2));
+  EXPECT_DOUBLE_EQ(a.windings.heat_coefficient(1), 0.6 / (0.05 * 0.05));
+  const std::string yaml = scene_to_yaml(a);
+  EXPECT_THAT(yaml, HasSubstr("winding_resistance: 0.3, torque_constant: 0.03, gear_ratio: 66}"));
+  const Scene b = parse_scene(yaml, "written.yaml");
+  EXPECT_EQ(a.windings.resistance, b.windings.resistance);
+  EXPECT_EQ(a.windings.torque_constant, b.windings.torque_constant);
+  EXPECT_EQ(a.windings.gear_ratio, b.windings.gear_ratio);
+  EXPECT_EQ(scene_to_yaml(b), yaml);
+  // the shipped scene with motors
+  const Scene motors =
+      load_scene(std::string(FIVEBAR_SOURCE_DIR) + "/datasets/scenes/paper_motors.yaml");
+  const double c = motors.windings.heat_coefficient(0);
+  EXPECT_GT(c, 5e-4);
+  EXPECT_LT(c, 0.1);
+  EXPECT_FALSE(parse_scene(kPaper, "p.yaml").windings.present());
+}
+
+TEST(SceneErrors, WindingValues) {
+  const std::string both = "actuators.M2.winding_resistance=0.3";
+  const std::vector<std::string> ok = {"actuators.M1.winding_resistance=0.3",
+                                       "actuators.M1.torque_constant=0.03", both,
+                                       "actuators.M2.torque_constant=0.03"};
+  EXPECT_NO_THROW(parse_scene(kPaper, "p.yaml", ok));
+  for (const char* key : {"actuators.M1.winding_resistance", "actuators.M2.torque_constant",
+                          "actuators.M1.gear_ratio"}) {
+    for (const char* bad : {"0", "-1"}) {
+      std::vector<std::string> sets = ok;
+      sets.push_back(std::string(key) + "=" + bad);
+      expect_error(kPaper, sets, key, "> 0");
+    }
+    std::vector<std::string> sets = ok;
+    sets.push_back(std::string(key) + "=nan");
+    expect_error(kPaper, sets, key, "finite");
+    sets.back() = std::string(key) + "=ohm";
+    expect_error(kPaper, sets, key, "expected a number");
+  }
+  // one motor's data without the other's: the missing key is named
+  expect_error(kPaper, {"actuators.M1.winding_resistance=0.3", "actuators.M1.torque_constant=0.03"},
+               "actuators.M2.winding_resistance", "missing");
+}
+
 TEST(SceneErrors, ActuatorValues) {
   expect_error(kPaper, {"actuators.M1.coulomb=-0.1"}, "actuators.M1.coulomb", ">= 0");
   expect_error(kPaper, {"actuators.M2.viscous=-1"}, "actuators.M2.viscous", ">= 0");

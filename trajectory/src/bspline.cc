@@ -85,19 +85,16 @@ BasisAt ClampedBasis::at(double t) const {
 }
 
 RestToRest::RestToRest(int control_points, double duration, std::array<double, 2> start,
-                       std::array<double, 2> goal)
-    : basis_(control_points, duration), start_(start), goal_(goal) {
-  if (control_points < 7) throw std::invalid_argument("RestToRest: fewer than 7 control points");
+                       std::array<double, 2> goal, EndAcceleration ends)
+    : basis_(control_points, duration), start_(start), goal_(goal), ends_(ends) {
+  if (control_points < 2 * fixed() + 1) {
+    throw std::invalid_argument("RestToRest: too few control points for the fixed ends");
+  }
 }
 
 std::vector<double> RestToRest::control_points(const double* x, int j) const {
-  const int n = basis_.size(), nf = free_per_joint();
-  std::vector<double> c(n);
-  for (int i = 0; i < 3; ++i) {
-    c[i] = start_[j];
-    c[n - 1 - i] = goal_[j];
-  }
-  for (int v = 0; v < nf; ++v) c[control_index(v)] = x[j * nf + v];
+  std::vector<double> c(basis_.size());
+  for (int i = 0; i < basis_.size(); ++i) c[i] = control_point(x, i, j);
   return c;
 }
 
@@ -133,13 +130,13 @@ std::vector<double> RestToRest::fit(
     const std::array<double, 2> q = path(t);
     for (int j = 0; j < kDof; ++j) rhs(r, j) = q[j];
     for (int i = 0; i <= kDegree; ++i) {
-      const int c = b.first + i;
-      if (c < 3) {
+      const int c = b.first + i, v = variable_of(c, 0);
+      if (v >= 0) {
+        A(r, v) += b.d[0][i];
+      } else if (c < fixed()) {
         rhs.row(r) -= b.d[0][i] * Eigen::RowVector2d(start_[0], start_[1]);
-      } else if (c > n - 4) {
-        rhs.row(r) -= b.d[0][i] * Eigen::RowVector2d(goal_[0], goal_[1]);
       } else {
-        A(r, c - 3) += b.d[0][i];
+        rhs.row(r) -= b.d[0][i] * Eigen::RowVector2d(goal_[0], goal_[1]);
       }
     }
   }

@@ -34,23 +34,78 @@ T smooth_abs(const T& p, double eps) {
   return sqrt(p * p + T(eps * eps)) - T(eps);
 }
 
-// integrand of the objective, M1 and M2 at one state (th1, th2, w1, w2, a1, a2)
+// softplus eps log(1 + exp(p / eps)), a smooth max(0, p) above it by at most eps ln 2
+template <typename T>
+T softplus(const T& p, double eps) {
+  using std::exp;
+  using std::log;
+  const T e = value_of(p) > 0.0 ? T(exp(-p / eps)) : T(exp(p / eps));
+  const T tail = T(eps) * log(T(1.0) + e);
+  return value_of(p) > 0.0 ? T(p + tail) : tail;
+}
+
+// the supply power of both motors from their powers p (M w + heat): max(0, .) exact or smoothed
+template <typename T>
+T supply_power(const std::array<T, 2>& p, const ProblemOptions& o, bool exact) {
+  auto clip = [&](const T& v) {
+    return exact ? (value_of(v) > 0.0 ? v : T(0.0)) : softplus(v, o.power_smoothing);
+  };
+  if (o.regeneration == Regeneration::kSharedBus) return clip(T(p[0] + p[1]));
+  return clip(p[0]) + clip(p[1]);
+}
+
+// the powers of one node [W]: everything Energies integrates
+template <typename T>
+struct NodePowers {
+  T dissipated{}, input{}, input_smooth{}, heat{}, supply{}, supply_smooth{};
+};
+
+// the powers of one state from its inverse dynamics
+template <typename T>
+NodePowers<T> node_powers(const Evaluation<T>& ev, const std::array<T, 6>& s,
+                          const ProblemOptions& o) {
+  NodePowers<T> out;
+  out.dissipated = ev.P_diss;
+  const std::array<T, 2> M = {ev.M1, ev.M2}, mech = {T(ev.M1 * s[2]), T(ev.M2 * s[3])};
+  std::array<T, 2> electric;
+  for (int a = 0; a < kActuators; ++a) {
+    const T heat = o.winding_heat[a] * M[a] * M[a];
+    out.heat += heat;
+    out.input += value_of(mech[a]) < 0.0 ? T(-mech[a]) : mech[a];
+    out.input_smooth += smooth_abs(mech[a], o.power_smoothing);
+    electric[a] = mech[a] + heat;
+  }
+  out.supply = supply_power(electric, o, true);
+  out.supply_smooth = supply_power(electric, o, false);
+  return out;
+}
+
+// the integrand of objective o (the smoothed one of kInputEnergy and kSupplyEnergy)
+template <typename T>
+T integrand(const NodePowers<T>& pw, Objective o) {
+  switch (o) {
+    case Objective::kDissipatedEnergy: return pw.dissipated;
+    case Objective::kInputEnergy: return pw.input_smooth;
+    case Objective::kTotalDissipation: return pw.dissipated + pw.heat;
+    case Objective::kSupplyEnergy: return pw.supply_smooth;
+  }
+  return pw.dissipated;
+}
+
+// integrand of the objective, M1 and M2 at one state (th1, th2, w1, w2, a1, a2); all the
+// powers when asked
 template <typename T>
 Status node_values(const Params<T>& p, const Loads<T>& L, const std::array<T, 6>& s,
-                   const ProblemOptions& o, T* f, T* M1, T* M2, T* P_diss = nullptr) {
+                   const ProblemOptions& o, T* f, T* M1, T* M2, NodePowers<T>* powers = nullptr) {
   Evaluation<T> ev;
   const Status st =
       inverse_dynamics(p, L, s[0], s[1], s[2], s[3], s[4], s[5], nullptr, eval_options(o), &ev);
   if (!st.ok()) return st;
-  if (o.objective == Objective::kDissipatedEnergy) {
-    *f = ev.P_diss;
-  } else {
-    *f = smooth_abs(T(ev.M1 * s[2]), o.power_smoothing) +
-         smooth_abs(T(ev.M2 * s[3]), o.power_smoothing);
-  }
+  const NodePowers<T> pw = node_powers(ev, s, o);
+  *f = integrand(pw, o.objective);
   *M1 = ev.M1;
   *M2 = ev.M2;
-  if (P_diss) *P_diss = ev.P_diss;
+  if (powers) *powers = pw;
   return Status::Ok();
 }
 
@@ -90,16 +145,53 @@ Status add_work(const Params<double>& p, const sim::LoadFunction& loads,
 }  // namespace
 
 namespace {
-constexpr Named<Objective> kObjectiveNames[] = {{Objective::kDissipatedEnergy, "dissipated_energy"},
-                                                {Objective::kInputEnergy, "input_energy"},
-                                                {Objective::kDissipatedEnergy, "dissipated"},
-                                                {Objective::kInputEnergy, "input"}};
+constexpr Named<Objective> kObjectiveNames[] = {
+    {Objective::kTotalDissipation, "total_dissipation"},
+    {Objective::kSupplyEnergy, "supply_energy"},
+    {Objective::kDissipatedEnergy, "dissipated_energy"},
+    {Objective::kInputEnergy, "input_energy"},
+    {Objective::kDissipatedEnergy, "dissipated"},
+    {Objective::kInputEnergy, "input"}};
+constexpr Named<Regeneration> kRegenerationNames[] = {{Regeneration::kNone, "none"},
+                                                      {Regeneration::kSharedBus, "shared_bus"}};
+constexpr Named<EndAcceleration> kEndAccelerationNames[] = {{EndAcceleration::kFree, "free"},
+                                                            {EndAcceleration::kZero, "zero"}};
 }  // namespace
 
 const char* objective_name(Objective o) { return name_in(kObjectiveNames, o); }
 
 bool parse_objective(const std::string& name, Objective* out) {
   return parse_in(kObjectiveNames, name, out);
+}
+
+std::string objective_names() {
+  return "total_dissipation, supply_energy, dissipated_energy, input_energy";
+}
+
+bool needs_winding(Objective o) {
+  return o == Objective::kTotalDissipation || o == Objective::kSupplyEnergy;
+}
+
+const char* regeneration_name(Regeneration r) { return name_in(kRegenerationNames, r); }
+
+bool parse_regeneration(const std::string& name, Regeneration* out) {
+  return parse_in(kRegenerationNames, name, out);
+}
+
+const char* end_acceleration_name(EndAcceleration e) { return name_in(kEndAccelerationNames, e); }
+
+bool parse_end_acceleration(const std::string& name, EndAcceleration* out) {
+  return parse_in(kEndAccelerationNames, name, out);
+}
+
+double Energies::of(Objective o) const {
+  switch (o) {
+    case Objective::kDissipatedEnergy: return dissipated;
+    case Objective::kInputEnergy: return input;
+    case Objective::kTotalDissipation: return total();
+    case Objective::kSupplyEnergy: return supply;
+  }
+  return dissipated;
 }
 
 Params<double> smoothed_params(const Params<double>& params, const ProblemOptions& options) {
@@ -120,30 +212,33 @@ TrajectoryProblem::TrajectoryProblem(const Params<double>& params, const sim::Lo
   if (options.quadrature_points < 1) {
     throw std::invalid_argument("TrajectoryProblem: quadrature_points < 1");
   }
-  // composite Gauss-Legendre: quadrature_points nodes per knot span
+  // composite Gauss-Legendre: quadrature_points nodes per knot span; with free end
+  // accelerations the torques step at the ends, which no Gauss node reaches: two nodes of weight
+  // 0 there carry the constraints only
   const ClampedBasis& basis = motion_.basis();
+  const bool ends = motion_.ends() == EndAcceleration::kFree;
+  auto add = [&](double t, double weight) {
+    Node node;
+    node.t = t;
+    node.weight = weight;
+    node.basis = basis.at(t);
+    node.loads = loads_(t);
+    nodes_.push_back(node);
+  };
+  if (ends) add(0.0, 0.0);
   for (int s = 0; s < basis.spans(); ++s) {
     const Rule rule =
         gauss_legendre(options.quadrature_points, basis.span_begin(s), basis.span_end(s));
-    for (size_t i = 0; i < rule.nodes.size(); ++i) {
-      Node node;
-      node.t = rule.nodes[i];
-      node.weight = rule.weights[i];
-      node.basis = basis.at(node.t);
-      node.loads = loads_(node.t);
-      nodes_.push_back(node);
-    }
+    for (size_t i = 0; i < rule.nodes.size(); ++i) add(rule.nodes[i], rule.weights[i]);
   }
+  if (ends) add(motion_.duration(), 0.0);
 }
 
 std::array<double, 6> TrajectoryProblem::node_state(const double* x, const Node& node) const {
   std::array<double, 6> s{};
-  const int n = motion_.basis().size(), nf = motion_.free_per_joint();
   for (int j = 0; j < kDof; ++j) {
     for (int i = 0; i <= kDegree; ++i) {
-      const int c = node.basis.first + i;
-      const double cp = c < 3 ? motion_.start()[j]
-                              : (c > n - 4 ? motion_.goal()[j] : x[j * nf + c - 3]);
+      const double cp = motion_.control_point(x, node.basis.first + i, j);
       for (int k = 0; k < 3; ++k) s[2 * k + j] += node.basis.d[k][i] * cp;
     }
   }
@@ -286,10 +381,7 @@ Status TrajectoryProblem::evaluate_as(const double* x, Gradients how, Evaluated*
   return Status::Ok();
 }
 
-int TrajectoryProblem::variable_of(int c, int j) const {
-  const int n = motion_.basis().size();
-  return c < 3 || c > n - 4 ? -1 : j * motion_.free_per_joint() + c - 3;
-}
+int TrajectoryProblem::variable_of(int c, int j) const { return motion_.variable_of(c, j); }
 
 Status TrajectoryProblem::node_gradient(const Params<Jet6>& pj, const Node& node,
                                         const std::array<double, 6>& s, double* f,
@@ -361,23 +453,18 @@ Status TrajectoryProblem::objective(const double* x, double* value) const {
   return st;
 }
 
-Status TrajectoryProblem::energies(const double* x, int points, double* dissipated,
-                                   double* input) const {
-  return energies_with(params_, x, points, dissipated, input);
+Status TrajectoryProblem::energies(const double* x, int points, Energies* out) const {
+  return energies_with(params_, x, points, out);
 }
 
-Status TrajectoryProblem::exact_energies(const double* x, int points, double* dissipated,
-                                         double* input) const {
-  return energies_with(exact_params_, x, points, dissipated, input);
+Status TrajectoryProblem::exact_energies(const double* x, int points, Energies* out) const {
+  return energies_with(exact_params_, x, points, out);
 }
 
 Status TrajectoryProblem::energies_with(const Params<double>& params, const double* x,
-                                        int points, double* dissipated, double* input) const {
+                                        int points, Energies* out) const {
   const ClampedBasis& basis = motion_.basis();
-  ProblemOptions o = options_;
-  o.objective = Objective::kInputEnergy;
-  *dissipated = 0.0;
-  *input = 0.0;
+  *out = Energies{};
   for (int s = 0; s < basis.spans(); ++s) {
     const Rule rule = gauss_legendre(points, basis.span_begin(s), basis.span_end(s));
     for (size_t i = 0; i < rule.nodes.size(); ++i) {
@@ -386,11 +473,17 @@ Status TrajectoryProblem::energies_with(const Params<double>& params, const doub
       node.basis = basis.at(node.t);
       node.loads = loads_(node.t);
       const std::array<double, 6> st = node_state(x, node);
-      double f, M1, M2, P;
-      const Status status = node_values(params, node.loads, st, o, &f, &M1, &M2, &P);
+      double f, M1, M2;
+      NodePowers<double> pw;
+      const Status status = node_values(params, node.loads, st, options_, &f, &M1, &M2, &pw);
       if (!status.ok()) return status;
-      *dissipated += rule.weights[i] * P;
-      *input += rule.weights[i] * f;
+      const double w = rule.weights[i];
+      out->dissipated += w * pw.dissipated;
+      out->input += w * pw.input;
+      out->input_smoothed += w * pw.input_smooth;
+      out->winding_heat += w * pw.heat;
+      out->supply += w * pw.supply;
+      out->supply_smoothed += w * pw.supply_smooth;
     }
   }
   return Status::Ok();

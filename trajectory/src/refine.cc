@@ -11,7 +11,7 @@ namespace fivebar::trajectory {
 namespace {
 
 // re-solves with a lowered torque limit when the dense check finds a peak between the nodes
-constexpr int kTightenRounds = 2;
+constexpr int kTightenRounds = 4;
 // the limit is lowered by the overshoot raised to this power: lowered by the overshoot itself,
 // the re-solve peaked again 0.3% to 0.4% over the limit (a tenth of the first overshoot of 2% to
 // 4%), and a second re-solve followed on 3 of the 8 stages that needed one (issue 12, fifth pass)
@@ -37,11 +37,11 @@ ProblemOptions stage_options(const BatchOptions& options, const RestToRest& moti
 // exact-law value of the objective the problem minimizes, Gauss-Legendre 4x denser than its rule
 double exact_objective(const TrajectoryProblem& problem, const std::vector<double>& x,
                        const BatchOptions& options) {
-  double d = NAN, in = NAN;
-  if (!problem.exact_energies(x.data(), 4 * options.problem.quadrature_points, &d, &in).ok()) {
+  Energies e;
+  if (!problem.exact_energies(x.data(), 4 * options.problem.quadrature_points, &e).ok()) {
     return NAN;
   }
-  return options.problem.objective == Objective::kInputEnergy ? in : d;
+  return e.of(options.problem.objective);
 }
 
 // a is better than b: feasible beats infeasible, then the lower exact-law objective
@@ -62,7 +62,7 @@ std::string why_infeasible(const Candidate& c, const BatchOptions& options) {
   if (!c.solved()) return "not solved";
   if (!c.solver.usable()) return "solver: " + c.solver.message;
   if (!c.check.status.ok()) return "check: " + c.check.status.message;
-  if (c.check.max_violation > options.feasibility_tol) {
+  if (c.check.max_violation > options.limit_rtol) {
     return "violation " + format_significant(c.check.max_violation, 7) +
            " on the check grid (peak " + format_significant(c.check.peak_torque, 7) +
            " N m, min sine " + format_significant(c.check.min_coupler_sine, 7) + ")";
@@ -72,9 +72,14 @@ std::string why_infeasible(const Candidate& c, const BatchOptions& options) {
 
 }  // namespace
 
-bool feasible(const Candidate& c, const BatchOptions& options) {
+bool startable(const Candidate& c, const BatchOptions& options) {
   return c.solved() && c.solver.usable() && c.check.status.ok() &&
          c.check.max_violation <= options.feasibility_tol && std::isfinite(c.exact);
+}
+
+bool feasible(const Candidate& c, const BatchOptions& options) {
+  return c.solved() && c.solver.usable() && c.check.status.ok() &&
+         c.check.max_violation <= options.limit_rtol && std::isfinite(c.exact);
 }
 
 Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loads,
@@ -99,10 +104,10 @@ Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loa
   // margin, kTightenGain)
   double limit = torque_limit;
   for (int round = 0; round < kTightenRounds && c.check.status.ok() && opt.solver.usable() &&
-                      c.check.torque_excess > options.feasibility_tol * torque_limit;
+                      c.check.torque_excess > options.limit_rtol * torque_limit;
        ++round) {
     limit *= std::pow(torque_limit / c.check.peak_torque, kTightenGain) *
-             (1.0 - 0.1 * options.feasibility_tol);
+             (1.0 - 0.1 * std::max(options.limit_rtol, c.check.torque_excess / torque_limit));
     const TrajectoryProblem tightened(params, loads, motion, stage_options(options, motion, ws, limit));
     const OptimizeResult again = optimize(tightened, c.x, optimizer);
     c.evaluations += again.evaluations;
@@ -122,7 +127,8 @@ namespace {
 Candidate continuation(const Params<double>& params, const sim::LoadFunction& loads,
                        Candidate best, const BatchOptions& options,
                        const OptimizerOptions& optimizer, TaskResult* r) {
-  const RestToRest motion(best.control_points, r->duration, r->start, r->goal);
+  const RestToRest motion(best.control_points, r->duration, r->start, r->goal,
+                          options.problem.end_acceleration);
   std::vector<double> warm = best.x;
   log_stage(&r->continuation, best.smoothing_velocity, best, true);
   // a polish: its solves get the continuation's own evaluation limit
@@ -145,9 +151,9 @@ Candidate continuation(const Params<double>& params, const sim::LoadFunction& lo
 }
 
 // the free variables of a spline of n control points fitted to the motion of `c`
-std::vector<double> refit(const Candidate& c, int n, const TaskResult& r) {
-  const RestToRest from(c.control_points, r.duration, r.start, r.goal);
-  const RestToRest to(n, r.duration, r.start, r.goal);
+std::vector<double> refit(const Candidate& c, int n, const TaskResult& r, EndAcceleration ends) {
+  const RestToRest from(c.control_points, r.duration, r.start, r.goal, ends);
+  const RestToRest to(n, r.duration, r.start, r.goal, ends);
   return to.fit([&](double t) { return from.state(c.x.data(), t)[0]; });
 }
 
@@ -185,8 +191,9 @@ Candidate refinement(const Params<double>& params, const sim::LoadFunction& load
   log_stage(&r->refinement, best.control_points, best, true);
   for (int n : options.refine.control_points) {
     if (n <= best.control_points) continue;
-    const RestToRest motion(n, r->duration, r->start, r->goal);
-    Candidate c = solve_stage(params, loads, motion, ws, refit(best, n, *r), options,
+    const EndAcceleration ends = options.problem.end_acceleration;
+    const RestToRest motion(n, r->duration, r->start, r->goal, ends);
+    Candidate c = solve_stage(params, loads, motion, ws, refit(best, n, *r, ends), options,
                               r->torque_limit, optimizer);
     r->evaluations += c.evaluations;
     const bool kept = better(c, best, options);
@@ -216,7 +223,7 @@ Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
   // the levels under the first solve's smoothed law, whose landscape has no kinks at the
   // reversals, then the continuation to the exact law on the finest spline kept (a scene whose
   // own law is smoothed is solved exactly by the first law)
-  if (!feasible(first, options)) return first;
+  if (!startable(first, options)) return first;
   Candidate best = refinement(params, loads, first, options, optimizer, r);
   const bool smooth_law = params.friction.smoothing_velocity > 0.0;
   if (!smooth_law) best = continuation(params, loads, best, options, optimizer, r);

@@ -23,9 +23,11 @@ struct Candidate {
   bool solved() const { return evaluation.ok() && !x.empty(); }
 };
 
-/// True when c is usable: solved, its solver's point usable, its check ok and within the
-/// feasibility tolerance, its exact-law objective finite.
+/// True when c is usable: solved, its solver's point usable, its check ok and within every limit
+/// (BatchOptions::limit_rtol), its exact-law objective finite.
 bool feasible(const Candidate& c, const BatchOptions& options);
+/// The same within the looser feasibility_tol: a point the later stages may start from.
+bool startable(const Candidate& c, const BatchOptions& options);
 
 /// Optimizes `motion` under the smoothing velocity `ws` from x0 (the torque peak between the
 /// nodes removed by re-solving with a lowered limit, at most twice), then re-checks it.

@@ -56,7 +56,12 @@ Scene fitted_scene(const Scene& scene, const identification::IdentifyResult& res
 
 /// `fivebar optimize` options (see `fivebar optimize --help`), with the command line's defaults.
 struct OptimizeSettings {
-  std::string method = "slsqp", objective = "dissipated_energy";
+  std::string method = "slsqp";
+  /// --objective; "" (the default): total_dissipation when the scene has winding data, else
+  /// dissipated_energy
+  std::string objective;
+  std::string regeneration = "none";     ///< --regeneration (supply_energy): none | shared_bus
+  std::string end_acceleration = "free";  ///< --end-acceleration: free | zero
   bool global = false, validate = true;
   int starts = 8, control_points = 10, quadrature_points = 12;
   int max_evaluations = 500;  ///< per local solve (--max-evaluations)
@@ -68,19 +73,55 @@ struct OptimizeSettings {
   /// the continuation to the exact law and the refinement of the control points after the
   /// first solve (`optimize` turns refine on: --no-refine; --no-continuation)
   bool refine = false, continuation = true;
-  double refine_tol = 1e-3;  ///< relative energy change that stops the refinement
+  /// relative change of the objective that stops the refinement (--refine-tol); NaN: 1e-4 for
+  /// the smooth objectives (total_dissipation, supply_energy), 1e-3 for the others
+  double refine_tol = NAN;
   /// control points per joint of the refinement levels (--refine-levels; empty: the default
-  /// trajectory::kRefineLevels)
+  /// trajectory::kSmoothRefineLevels or kRefineLevels, by the objective)
   std::vector<int> refine_levels;
 };
+
+/// The defaults of `fivebar optimize` (and Python's optimize): OptimizeSettings with the
+/// refinement on.
+OptimizeSettings optimize_defaults();
 
 /// The options of the inner trajectory solves of `study` and `design` (--method, --path-step,
 /// --continuation, --refine), into `settings`, whose defaults become theirs: a first solve only,
 /// no continuation, no refinement and no validation unless asked for.
 void add_inner_solve_options(CLI::App* app, OptimizeSettings* settings);
 
-/// The batch options of `settings`; throws InputError(`command line: --method: ...`) and the like.
-trajectory::BatchOptions batch_options(const OptimizeSettings& settings);
+/// The batch options of `settings` for a scene with motor winding data `windings` (which choose
+/// the default objective and give the winding heat); throws InputError(`command line: --method:
+/// ...`) and the like, also for an objective that needs winding data the scene does not give.
+trajectory::BatchOptions batch_options(const OptimizeSettings& settings,
+                                       const MotorWindings& windings);
+
+/// `options` with the winding heat of `windings` (a design of `study` or `design` may vary the
+/// motors' keys).
+trajectory::BatchOptions with_windings(trajectory::BatchOptions options,
+                                       const MotorWindings& windings);
+
+/// A varied key whose best value lies on a bound of its range.
+struct BoundHit {
+  std::string key;
+  std::string side;  ///< "lower" or "upper"
+  double bound = 0;
+};
+/// The keys whose value lies on (within 1e-6 of the range of) the lower or upper bound.
+std::vector<BoundHit> bounds_hit(const std::vector<std::string>& keys,
+                                 const std::vector<double>& values, const std::vector<double>& lo,
+                                 const std::vector<double>& hi);
+/// One line per hit: "the best design lies on the <side> bound of <key> (<bound>): the optimum
+/// may lie outside the range; widen it".
+std::string bounds_advice(const std::vector<BoundHit>& hits);
+
+/// The note of an objective whose optimum a machine should not run (dissipated_energy: it
+/// switches the motors between their limits), naming the scene keys to add; "" for the others.
+std::string objective_note(const trajectory::BatchOptions& options);
+/// Appends objective_note() (when there is one) to the message of every solved result (not to
+/// a task the design cannot do, whose message says why).
+void add_objective_note(const trajectory::BatchOptions& options,
+                        std::vector<trajectory::TaskResult>* results);
 
 /// Reads a tasks file (io::load_tasks); a malformed one throws InputError.
 std::vector<trajectory::TaskSpec> read_tasks(const std::string& path);

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "fivebar/model/motor.h"
 #include "fivebar/model/params.h"
 #include "fivebar/sim/simulator.h"
 
@@ -12,6 +13,7 @@ namespace fivebar::io {
 /// Everything a scene file describes, validated.
 struct Scene {
   Params<double> params;
+  MotorWindings windings;  ///< actuators.M1/M2 winding data (objectives only, not the dynamics)
   /// Load expressions of t (muParser syntax, `pi` defined): M1, M2, M3 [N m], F [N].
   std::string M1 = "0", M2 = "0", M3 = "0", F = "0";
   double F_angle = 0;  ///< [rad] direction of F measured from link 3
@@ -47,6 +49,8 @@ struct Scene {
 ///     static_coulomb [= coulomb]         stribeck_velocity: R (> 0) for stribeck [0]
 ///     stribeck_exponent [2] (> 0)        sigma0: R (> 0) for lugre [0]     sigma1, sigma2 [0]
 ///   friction.smoothing_velocity [0] (>= 0)
+///   actuators.M1, .M2: offset [0], coulomb, viscous [0] (>= 0); winding_resistance,
+///     torque_constant (> 0; both motors or none) [none]; gear_ratio [1] (> 0)
 ///   loads.M1, .M2, .M3, .F ["0"]: expressions of t.   loads.F_angle [0]
 ///   initial.theta1, .theta2 R; initial.omega1, .omega2 [0]
 ///   simulation.* [sim::Options]: duration (> 0), output_step (in (0, duration]), integrator

@@ -17,7 +17,10 @@ namespace fivebar::io {
 /// baseline_dissipated_energy_exact, baseline_status, initial_guess, initial_dissipated_energy,
 /// initial_peak_torque, initial_min_coupler_sine, control_points, dissipated_energy_smoothed,
 /// baseline_dissipated_energy_smoothed, input_energy_smoothed, baseline_input_energy_smoothed,
-/// miss_distance_exact, smoothing_velocity, refinement_change, continuation, refinement, message.
+/// miss_distance_exact, smoothing_velocity, refinement_change, continuation, refinement, message,
+/// winding_heat, baseline_winding_heat, total_dissipation, baseline_total_dissipation,
+/// supply_energy, baseline_supply_energy, objective, refinement_limited: the fields of
+/// trajectory::visit_fields in its order, saving_percent after baseline_peak_torque.
 /// Energies and torques are those of the scene's exact friction law; the *_smoothed energies
 /// those of the smooth law of the winning stage.
 const std::vector<std::string>& summary_columns();

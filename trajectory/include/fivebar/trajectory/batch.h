@@ -29,6 +29,10 @@ namespace fivebar::trajectory {
 /// refit reproduces it to rounding). A level of 20 spans in between (25 control points) cost
 /// more than it saved in the 45-point solves (docs/dev/figures-optimization.md).
 inline const std::vector<int> kRefineLevels = {45, 85};
+/// The levels for the smooth objectives (total_dissipation, supply_energy), whose optimum is
+/// smooth: 10, 20, 40, 80 knot spans (each space holds the coarser ones), stopped as soon as the
+/// objective settles.
+inline const std::vector<int> kSmoothRefineLevels = {15, 25, 45, 85};
 
 struct RefineOptions {
   bool enabled = true;
@@ -62,9 +66,16 @@ struct BatchOptions {
   int check_factor = 10;
   /// relative violation (ConstraintCheck::max_violation) above which a result is "infeasible"
   double feasibility_tol = 1e-3;
+  /// relative violation above which a result is not `ok` (violates_constraints): the dense
+  /// check's peak torque within limit (1 + limit_rtol), its |sin C| within margin (1 - limit_rtol);
+  /// a stage whose peak exceeds it is re-solved with a lowered limit first
+  double limit_rtol = 1e-6;
   /// simulate the optimal torques forward from the start state and measure the miss of C
   bool validate = true;
   double validation_rtol = 1e-9;  ///< CVODE tolerances of that simulation
+  /// largest miss of C [m] (either law) of an `ok` task; a larger or NaN miss (a simulation
+  /// that did not finish) makes it `validation_failed`. Shipped tasks miss by 1e-10 to 1e-8 m.
+  double miss_tol = 1e-4;
   /// the search for a feasible initial guess when the minimum-jerk motion leaves the workspace
   /// or comes nearer than the singular margin to a singular pose (its margin is the problem's)
   PathSearchOptions path;
@@ -79,9 +90,12 @@ struct BatchOptions {
 /// The outcome of one task (one row of summary.csv). Energies are NaN when not computed.
 struct TaskResult {
   std::string task;
-  /// ok | max_evaluations | max_time | infeasible | a solver outcome (roundoff_limited ...) |
+  /// ok | max_evaluations | max_time | infeasible | violates_constraints (over a limit by more
+  /// than BatchOptions::limit_rtol, within feasibility_tol) | a solver outcome (roundoff_limited ...) |
   /// a resolution status (goal_out_of_workspace, invalid_duration, ...) | unreachable (no
-  /// path of assemblable, non-singular poses joins start and goal) | evaluation_failed
+  /// path of assemblable, non-singular poses joins start and goal) | evaluation_failed |
+  /// validation_failed (solved within the limits, but the forward simulation of its torques
+  /// failed or missed the goal by more than BatchOptions::miss_tol)
   std::string status;
   std::string message;
   std::string solver_status;  ///< outcome_name() of the solve, "" when none ran
@@ -97,7 +111,15 @@ struct TaskResult {
   /// under the smoothed law the optimizer minimizes, on its own rule [J]
   double dissipated_energy_smoothed = NAN, baseline_dissipated_energy_smoothed = NAN;
   double input_energy_smoothed = NAN, baseline_input_energy_smoothed = NAN;
-  double objective = NAN;  ///< the minimized quantity [J]
+  /// exact law, same rule as dissipated_energy [J]: the motors' winding heat int sum_a c_a M_a^2
+  /// dt, joint friction plus winding heat, and the electrical energy drawn from the supply
+  /// (exact max(0, p), ProblemOptions::regeneration); winding heat 0 without winding data
+  double winding_heat = NAN, baseline_winding_heat = NAN;
+  double total_dissipation = NAN, baseline_total_dissipation = NAN;
+  double supply_energy = NAN, baseline_supply_energy = NAN;
+  /// the minimized quantity, under the smoothed law of the winning stage and as minimized
+  /// (kSupplyEnergy: with the softplus) [J]
+  double objective = NAN;
   double peak_torque = NAN, baseline_peak_torque = NAN;  ///< dense grid [N m]
   double max_constraint_violation = NAN;  ///< dense grid, relative (ConstraintCheck)
   double baseline_max_constraint_violation = NAN;
@@ -146,6 +168,10 @@ struct TaskResult {
   }
 };
 
+/// The exact-law value of objective o of a result (dissipated_energy, input_energy,
+/// total_dissipation or supply_energy) [J].
+double objective_value(const TaskResult& r, Objective o);
+
 /// Optimizes one task for one design. Never throws for numerical trouble: everything ends up in
 /// the status. `loads` gives M3, F, F_angle (M1, M2 ignored) and must be callable from the
 /// calling thread. `warm` (optional): the same task solved for a neighbouring design, whose
@@ -169,6 +195,64 @@ std::uint64_t task_seed(const std::string& name, std::uint64_t seed);
 std::vector<TaskResult> run_parallel(int count, int threads,
                                      const std::function<TaskResult(int)>& work,
                                      const std::function<void(int, int)>& progress = {});
+
+/// Visits every field of a TaskResult once, as visit(name, member): the one list of its fields,
+/// from which the codec (encode, decode) and summary.csv (io::summary_fields) are derived.
+/// Members are std::string, double, int, bool or std::vector<double>; `name` is the field's
+/// summary.csv column (start and goal as theta1_start ... theta2_goal), and "x" is the one
+/// field summary.csv leaves out. The order is that of summary.csv (new fields at the end).
+template <typename Result, typename Visit>
+void visit_fields(Result& r, Visit&& visit) {
+  visit("task", r.task);
+  visit("status", r.status);
+  visit("dissipated_energy", r.dissipated_energy);
+  visit("baseline_dissipated_energy", r.baseline_dissipated_energy);
+  visit("input_energy", r.input_energy);
+  visit("peak_torque", r.peak_torque);
+  visit("max_constraint_violation", r.max_constraint_violation);
+  visit("wall_time_s", r.wall_time_s);
+  visit("baseline_input_energy", r.baseline_input_energy);
+  visit("baseline_peak_torque", r.baseline_peak_torque);
+  visit("miss_distance", r.miss_distance);
+  visit("min_coupler_sine", r.min_coupler_sine);
+  visit("solver_status", r.solver_status);
+  visit("evaluations", r.evaluations);
+  visit("starts", r.starts);
+  visit("best_start", r.best_start);
+  visit("duration", r.duration);
+  visit("torque_limit", r.torque_limit);
+  visit("theta1_start", r.start[0]);
+  visit("theta2_start", r.start[1]);
+  visit("theta1_goal", r.goal[0]);
+  visit("theta2_goal", r.goal[1]);
+  visit("dissipated_energy_exact", r.dissipated_energy_exact);
+  visit("baseline_dissipated_energy_exact", r.baseline_dissipated_energy_exact);
+  visit("baseline_status", r.baseline_status);
+  visit("initial_guess", r.initial_guess);
+  visit("initial_dissipated_energy", r.initial_dissipated_energy);
+  visit("initial_peak_torque", r.initial_peak_torque);
+  visit("initial_min_coupler_sine", r.initial_min_coupler_sine);
+  visit("control_points", r.control_points);
+  visit("dissipated_energy_smoothed", r.dissipated_energy_smoothed);
+  visit("baseline_dissipated_energy_smoothed", r.baseline_dissipated_energy_smoothed);
+  visit("input_energy_smoothed", r.input_energy_smoothed);
+  visit("baseline_input_energy_smoothed", r.baseline_input_energy_smoothed);
+  visit("miss_distance_exact", r.miss_distance_exact);
+  visit("smoothing_velocity", r.smoothing_velocity);
+  visit("refinement_change", r.refinement_change);
+  visit("continuation", r.continuation);
+  visit("refinement", r.refinement);
+  visit("message", r.message);
+  visit("winding_heat", r.winding_heat);
+  visit("baseline_winding_heat", r.baseline_winding_heat);
+  visit("total_dissipation", r.total_dissipation);
+  visit("baseline_total_dissipation", r.baseline_total_dissipation);
+  visit("supply_energy", r.supply_energy);
+  visit("baseline_supply_energy", r.baseline_supply_energy);
+  visit("objective", r.objective);
+  visit("refinement_limited", r.refinement_limited);
+  visit("x", r.x);
+}
 
 /// Serialization of a result (for MPI transfer): decode(encode(r)) == r, bit for bit.
 std::string encode(const TaskResult& result);

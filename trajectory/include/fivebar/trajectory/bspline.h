@@ -42,17 +42,25 @@ class ClampedBasis {
   std::vector<double> knots_;
 };
 
+/// What a rest-to-rest spline does at its ends besides resting (zero rate): kFree leaves the
+/// acceleration free (two fixed control points per end), kZero makes it zero too (three).
+enum class EndAcceleration : int { kFree = 0, kZero = 1 };
+
 /// A rest-to-rest motion of (th1, th2) from `start` to `goal` [rad] in `duration` [s]: each
-/// angle is a clamped quintic B-spline whose first three control points equal the start and
-/// last three equal the goal, which makes the rate and acceleration zero at both ends. The free
-/// variables are the n - 6 inner control points of th1 followed by those of th2.
+/// angle is a clamped quintic B-spline whose first `fixed()` control points equal the start and
+/// last `fixed()` equal the goal: two make the rate zero at both ends, three (kZero) the
+/// acceleration too. The free variables are the n - 2 fixed() inner control points of th1
+/// followed by those of th2.
 class RestToRest {
  public:
   RestToRest(int control_points, double duration, std::array<double, 2> start,
-             std::array<double, 2> goal);
+             std::array<double, 2> goal, EndAcceleration ends = EndAcceleration::kZero);
 
   const ClampedBasis& basis() const { return basis_; }
-  int free_per_joint() const { return basis_.size() - 6; }
+  EndAcceleration ends() const { return ends_; }
+  /// control points fixed at each end (2 or 3)
+  int fixed() const { return ends_ == EndAcceleration::kZero ? 3 : 2; }
+  int free_per_joint() const { return basis_.size() - 2 * fixed(); }
   int num_variables() const { return 2 * free_per_joint(); }
   const std::array<double, 2>& start() const { return start_; }
   const std::array<double, 2>& goal() const { return goal_; }
@@ -60,8 +68,18 @@ class RestToRest {
 
   /// All n control points of joint j (0: th1, 1: th2) for the free variables x.
   std::vector<double> control_points(const double* x, int j) const;
-  /// Index of the control point that variable `v` of a joint moves (3 .. n - 4).
-  static int control_index(int v) { return v + 3; }
+  /// Index of the control point that variable `v` of a joint moves (fixed() .. n - 1 - fixed()).
+  int control_index(int v) const { return v + fixed(); }
+  /// The free variable of control point c of joint j, or -1 for a fixed end point.
+  int variable_of(int c, int j) const {
+    const int f = fixed();
+    return c < f || c > basis_.size() - 1 - f ? -1 : j * free_per_joint() + c - f;
+  }
+  /// Control point c of joint j for the free variables x (start or goal at the ends).
+  double control_point(const double* x, int c, int j) const {
+    const int v = variable_of(c, j);
+    return v >= 0 ? x[v] : (c < fixed() ? start_[j] : goal_[j]);
+  }
 
   /// (th, thd, thdd) of both joints at time t: out[0] = (th1, th2), out[1] rates, out[2]
   /// accelerations.
@@ -81,6 +99,7 @@ class RestToRest {
  private:
   ClampedBasis basis_;
   std::array<double, 2> start_, goal_;
+  EndAcceleration ends_;
 };
 
 /// Minimum-jerk quintic blend s(u) = 10 u^3 - 15 u^4 + 6 u^5 and its first two derivatives in u.

@@ -24,9 +24,43 @@ enum class Objective : int {
   /// int |M1 w1| + |M2 w2| dt [J], the energy the motors put in (braking counts as spent), with
   /// |p| smoothed to sqrt(p^2 + eps^2) - eps, eps = ProblemOptions::power_smoothing.
   kInputEnergy = 1,
+  /// int P_diss + sum_a c_a M_a^2 dt [J]: joint (and actuator) friction plus the motors' winding
+  /// heat, c_a = R_a / (k_t,a G_a)^2 (ProblemOptions::winding_heat; docs/model.md)
+  kTotalDissipation = 2,
+  /// the electrical energy drawn from the supply [J]: int sum_a max(0, M_a w_a + c_a M_a^2) dt
+  /// (Regeneration::kNone) or int max(0, sum_a (M_a w_a + c_a M_a^2)) dt (kSharedBus), with
+  /// max(0, p) smoothed to the softplus eps log(1 + exp(p / eps)), eps = power_smoothing; the
+  /// softplus exceeds max(0, p) by at most eps ln 2 per motor (0.0069 W for eps = 0.01 W)
+  kSupplyEnergy = 3,
 };
 const char* objective_name(Objective o);
 bool parse_objective(const std::string& name, Objective* out);
+/// The valid objective names, comma-separated (for error messages).
+std::string objective_names();
+/// True for the objectives that need the motors' winding data (MotorWindings::present).
+bool needs_winding(Objective o);
+
+/// Where the braking power of a motor goes (kSupplyEnergy): kNone, lost (each motor's power is
+/// clipped at 0); kSharedBus, to the other motor (the sum of both powers is clipped at 0).
+enum class Regeneration : int { kNone = 0, kSharedBus = 1 };
+const char* regeneration_name(Regeneration r);
+bool parse_regeneration(const std::string& name, Regeneration* out);
+
+const char* end_acceleration_name(EndAcceleration e);
+bool parse_end_acceleration(const std::string& name, EndAcceleration* out);
+
+/// The energies of one motion [J] (TrajectoryProblem::energies).
+struct Energies {
+  double dissipated = 0;    ///< int P_diss dt: joint and actuator friction
+  double input = 0;         ///< int |M1 w1| + |M2 w2| dt
+  double input_smoothed = 0;  ///< the same with the smoothed |p| the optimizer minimizes
+  double winding_heat = 0;  ///< int sum_a c_a M_a^2 dt
+  double supply = 0;        ///< kSupplyEnergy's integral with the exact max(0, p)
+  double supply_smoothed = 0;  ///< the same with the softplus the optimizer minimizes
+  double total() const { return dissipated + winding_heat; }
+  /// the value of objective o (kInputEnergy, kSupplyEnergy: the exact `input`, `supply`)
+  double of(Objective o) const;
+};
 
 /// Discretization and constraint settings.
 struct ProblemOptions {
@@ -41,7 +75,15 @@ struct ProblemOptions {
   /// scene's friction.smoothing_velocity is 0 (the exact sign has no derivative at w = 0, and
   /// every joint starts and ends at rest). A scene value > 0 is used as it is.
   double smoothing_velocity = 5e-2;
-  double power_smoothing = 1e-2;  ///< eps [W] of the smooth |p| of kInputEnergy
+  double power_smoothing = 1e-2;  ///< eps [W] of the smooth |p| and max(0, p) (kInputEnergy,
+                                  ///< kSupplyEnergy)
+  Regeneration regeneration = Regeneration::kNone;  ///< of kSupplyEnergy
+  /// c_a = R_a / (k_t,a G_a)^2 [W/(N m)^2] of both motors (MotorWindings::heat_coefficients):
+  /// the winding heat is c_a M_a^2; zero without winding data
+  std::array<double, 2> winding_heat{};
+  /// the ends of the task motions (RestToRest): free accelerations by default (with zero ones, a
+  /// boundary layer of a few ms slows the convergence of the refinement to first order)
+  EndAcceleration end_acceleration = EndAcceleration::kFree;
   double friction_tol = 1e-13;    ///< relative stopping test of the reaction/friction loop
   /// threads of one evaluation (contiguous blocks of nodes; at least 32 nodes each). The
   /// objective and its gradient are summed in node order afterwards: the same numbers for any
@@ -82,7 +124,9 @@ struct ConstraintCheck {
 ///
 /// Time is discretized by composite Gauss-Legendre quadrature: quadrature_points nodes in each
 /// knot span of the spline, where the integrand (a smooth function of the spline's piecewise
-/// polynomial state) is smooth. The same nodes carry the constraints, three per node q:
+/// polynomial state) is smooth; with free end accelerations (EndAcceleration::kFree) two more
+/// nodes of weight 0 at t = 0 and t = T, where the torques step. The nodes carry the
+/// constraints, three per node q:
 ///   c[3q]   = (M1 / torque_limit)^2 - 1 <= 0
 ///   c[3q+1] = (M2 / torque_limit)^2 - 1 <= 0        (0 - 1 when there is no torque limit)
 ///   c[3q+2] = cos^2(C) - (1 - margin^2) <= 0,  cos(C) = (l3^2 + l4^2 - |BD|^2) / (2 l3 l4)
@@ -131,12 +175,12 @@ class TrajectoryProblem {
   /// the free control points to the node state. Costs about 7 evaluations with gradients.
   Status objective_hessian(const double* x, std::vector<double>* hessian) const;
 
-  /// Objective and input energy integrated with `points` Gauss-Legendre points per span (for
+  /// The energies of the motion integrated with `points` Gauss-Legendre points per span (for
   /// the accuracy check against a denser rule).
-  Status energies(const double* x, int points, double* dissipated, double* input) const;
+  Status energies(const double* x, int points, Energies* out) const;
   /// The same with the scene's exact friction law (exact_params()); its integrand has kinks
   /// where a joint reverses, so ask for more points than energies() needs.
-  Status exact_energies(const double* x, int points, double* dissipated, double* input) const;
+  Status exact_energies(const double* x, int points, Energies* out) const;
 
   /// Re-check of the constraints on a uniform grid of `points` instants (inverse dynamics in
   /// double with the exact law, ends included).
@@ -175,7 +219,7 @@ class TrajectoryProblem {
   Status torques_with(const Params<double>& params, const double* x, double t, double* M1,
                       double* M2) const;
   Status energies_with(const Params<double>& params, const double* x, int points,
-                       double* dissipated, double* input) const;
+                       Energies* out) const;
   // node state (th, thd, thdd of both joints) from x
   std::array<double, 6> node_state(const double* x, const Node& node) const;
   // integrand f at state s and its exact gradient in s
