@@ -651,7 +651,7 @@ RunFunction setup(CLI::App* app) {
       app->add_option("--harmonics", a->design.harmonics, "Fourier harmonics per crank"));
   app->add_option("--design-samples", a->design.design_samples, "samples of the design objective");
   fourier.push_back(app->add_option("--starts", a->starts, "multi-start: local solves"));
-  app->add_option("--seed", a->seed, "seed of the starts");
+  app->add_option("--seed", a->seed, "seed of the starts")->check(nonnegative_number());
   fourier.push_back(
       app->add_option("--spread", a->spread, "Fourier amplitudes of the random starts [rad]"));
   fourier.push_back(

@@ -322,18 +322,19 @@ constexpr double kJumpAngle = 1.0;
 
 /// Why the inverse dynamics of `motion` failed when the motion itself explains it, before the
 /// model's message is read: a jump between two rows (a gap, a wrap, a glitch: the rates from
-/// differences explode), or angles that look like degrees (beyond 2 pi, within 3600; checked
-/// first: degrees also step by more than a radian). Throws
+/// differences explode), or angles that look like degrees (a start beyond 2 pi, within 360;
+/// checked first: degrees also step by more than a radian). Throws
 /// InputError naming it; returns when neither is found.
 void diagnose_motion(const std::string& path, const Motion& motion) {
   const std::vector<sim::Row>& r = motion.rows;
-  double largest = 0;
-  for (const sim::Row& row : r) {
-    largest = std::max({largest, std::abs(row.theta[0]), std::abs(row.theta[1])});
-  }
-  if (largest > 2 * M_PI && largest <= 3600) {
+  // a start pose beyond a turn is degrees (a motion in radians may turn many times, but it
+  // starts within a turn, as scenes and tasks do)
+  const double first = r.empty() ? 0.0 : std::max(std::abs(r[0].theta[0]), std::abs(r[0].theta[1]));
+  if (first > 2 * M_PI && first <= 360) {
     throw InputError(path, "theta1, theta2",
-                     "angles look like degrees (up to " + format_significant(largest, 4) +
+                     "angles look like degrees (the motion starts at " +
+                         format_significant(r[0].theta[0], 4) + ", " +
+                         format_significant(r[0].theta[1], 4) +
                          "), expected radians: the inverse dynamics failed on them");
   }
   for (int k = 0; k < 2; ++k) {

@@ -256,7 +256,7 @@ RunFunction setup(CLI::App* app) {
       ->check(nonnegative_number());
   app->add_option("--rate-noise", args->so.rate_noise, "Gaussian std on omega1, omega2 [rad/s]")
       ->check(nonnegative_number());
-  app->add_option("--seed", args->so.seed, "std::mt19937_64 seed");
+  app->add_option("--seed", args->so.seed, "std::mt19937_64 seed")->check(nonnegative_number());
   app->add_option("--quantization", args->so.quantization, "encoder step [rad] (0: none)")
       ->check(nonnegative_number());
   app->add_option(

@@ -65,10 +65,11 @@ VALID = {
     ("synth-log", "--actuator-coulomb"): {"0": "no actuator friction"},
     ("synth-log", "--actuator-viscous"): {"0": "no actuator friction"},
     ("identify", "--loss-scale"): {"0": "0 = from the noise floor (the default)"},
-    ("identify", "--min-rate"): {"0": "no samples left out (the default)"},
     ("identify", "--smooth-sign"): {"0": "exact sign", "-1": "-1 = the scene's (the default)"},
     ("hold", "--time"): {"0": "the default", "-1": "loads at any time", "1e300": "n/a"},
-    ("hold", "--torque-limit"): {"inf": "no limit (the default)"},
+    ("hold", "--torque-limit"): {"inf": "no limit (the default)", "1e300": "no limit"},
+    ("hold", "--pose"): {"0": "a pose that assembles", "-1": "a pose that assembles"},
+    ("identify", "--min-rate"): {"0": "the default"},
     ("excite", "--max-evaluations"): {"0": "0 = the default budget"},
     ("excite", "--torque-noise"): {"0": "n/a"},
     ("excite", "--min-reversals"): {"0": "no reversal requirement"},
@@ -118,6 +119,9 @@ def main():
                         value + ("," if kind != "INT:INT" else ":") + value)
                     out = tempfile.mkdtemp(dir=tmp)
                     args = [x.replace("{out}", out) for x in base]
+                    if option in args:  # the base's own value of this option gives way
+                        k = args.index(option)
+                        del args[k:k + 2]
                     if command == "inverse":
                         args = [PAPER, "--motion", os.path.join(ROOT, "datasets", "reference",
                                                                 "paper_friction.csv")] + args[1:]
