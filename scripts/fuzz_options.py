@@ -41,7 +41,7 @@ BASE = {
     "identify": [PAPER, "--log", LOG, "--no-plots", "--no-validation", "--out", "{out}"],
     "hold": [PAPER, "--no-plots", "--out", "{out}"],
     "inverse": [PAPER, "--no-plots", "--out", "{out}"],
-    "excite": [PAPER, "--duration", "0.5", "--no-baseline", "--family", "fourier", "--starts", "1",
+    "excite": [PAPER, "--torque-limit", "20", "--duration", "2", "--no-baseline", "--family", "fourier", "--starts", "1",
                "--max-evaluations", "5", "--no-plots", "--out", "{out}"],
     "optimize": [PAPER, "--tasks", TASKS, "--starts", "1", "--max-evaluations", "5", "--no-plots",
                  "--out", "{out}"],
@@ -73,6 +73,8 @@ VALID = {
     ("excite", "--max-evaluations"): {"0": "0 = the default budget"},
     ("excite", "--torque-noise"): {"0": "n/a"},
     ("excite", "--min-reversals"): {"0": "no reversal requirement"},
+    ("excite", "--ramp"): {"0": "no ramp"},
+    ("excite", "--singular-margin"): {"0": "no margin beyond the evaluation's"},
     ("accuracy", "--repeats"): {},
 }
 
