@@ -653,9 +653,11 @@ RunFunction setup(CLI::App* app) {
   fourier.push_back(app->add_option("--starts", a->starts, "multi-start: local solves"));
   app->add_option("--seed", a->seed, "seed of the starts")->check(nonnegative_number());
   fourier.push_back(
-      app->add_option("--spread", a->spread, "Fourier amplitudes of the random starts [rad]"));
+      app->add_option("--spread", a->spread, "Fourier amplitudes of the random starts [rad]")
+          ->check(positive_number()));
   fourier.push_back(
-      app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]"));
+      app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]")
+          ->check(nonnegative_number()));
   fourier.push_back(app->add_option("--ramp", a->design.ramp, "fade-in from rest [s]"));
   fourier.push_back(app->add_option("--start", a->start,
                                     "first start: swing (both cranks swing together) | multisine "

@@ -74,6 +74,7 @@ VALID = {
     ("excite", "--torque-noise"): {"0": "n/a"},
     ("excite", "--min-reversals"): {"0": "no reversal requirement"},
     ("excite", "--ramp"): {"0": "no ramp"},
+    ("excite", "--drift-spread"): {"0": "starts without drift"},
     ("excite", "--singular-margin"): {"0": "no margin beyond the evaluation's"},
     ("accuracy", "--repeats"): {},
 }
