@@ -474,8 +474,19 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
 }
 
 // the design's own checks on the log's grid: status "ok" or what it misses
-std::string design_status(const Design& d, const id::ExcitationOptions& o, std::string* why) {
+std::string design_status(const Design& d, const id::ExcitationOptions& o,
+                          const id::DesignParameters& dp, std::string* why) {
   const id::ExcitationReport& r = d.report;
+  // a predicted std of 0, NaN or none is no prediction: the information matrix is singular or
+  // was not formed (a light mechanism once reported "worst predicted relative std 0")
+  for (int i = 0; i < dp.size(); ++i) {
+    const double sd = i < static_cast<int>(r.std_dev.size()) ? r.std_dev[i] : NAN;
+    if (!(sd > 0) || !std::isfinite(sd)) {
+      *why = "predicts no usable std for " + dp.names[i] + " (" + format_double(sd) +
+             "): the information matrix of the motion is singular or not finite";
+      return "std_not_determined";
+    }
+  }
   static const char* const kJointNames[] = {"O", "B", "C", "D", "D0"};
   for (int k = 0; k < kJoints; ++k) {
     if (r.reversals[k] < o.min_reversals) {
@@ -575,7 +586,7 @@ int run(const Args& a) {
                        ? design_torque(scene, loads, o, a)
                        : design(scene, loads, o, a, a.start == "multisine" ? ms.get() : nullptr);
   std::string why;
-  const std::string status = design_status(d, o, &why);
+  const std::string status = design_status(d, o, dp, &why);
   const id::ExcitationReport* base = a.no_baseline ? nullptr : &ms->report;
   if (base && base->peak_torque > o.torque_limit * (1 + 1e-9)) {
     warn("the multi-sine baseline peaks at " + format_double(base->peak_torque) +
@@ -640,11 +651,13 @@ RunFunction setup(CLI::App* app) {
       app->add_option("--harmonics", a->design.harmonics, "Fourier harmonics per crank"));
   app->add_option("--design-samples", a->design.design_samples, "samples of the design objective");
   fourier.push_back(app->add_option("--starts", a->starts, "multi-start: local solves"));
-  app->add_option("--seed", a->seed, "seed of the starts");
+  app->add_option("--seed", a->seed, "seed of the starts")->check(nonnegative_number());
   fourier.push_back(
-      app->add_option("--spread", a->spread, "Fourier amplitudes of the random starts [rad]"));
+      app->add_option("--spread", a->spread, "Fourier amplitudes of the random starts [rad]")
+          ->check(positive_number()));
   fourier.push_back(
-      app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]"));
+      app->add_option("--drift-spread", a->drift_spread, "drifts of the random starts [rad/s]")
+          ->check(nonnegative_number()));
   fourier.push_back(app->add_option("--ramp", a->design.ramp, "fade-in from rest [s]"));
   fourier.push_back(app->add_option("--start", a->start,
                                     "first start: swing (both cranks swing together) | multisine "

@@ -268,10 +268,13 @@ void add_options(CLI::App* app, Args* args) {
   app->add_option("--pose", args->pose, "the pose to hold (default: the scene's initial pose)")
       ->type_name("THETA1,THETA2");
   app->add_option("--grid", args->grid, "map N x N poses over theta1, theta2 in [-pi, pi)")
-      ->type_name("N");
+      ->type_name("N")
+      ->check(positive_number());
   app->add_option("--torque-limit", args->torque_limit,
                   "motor torque limit [N m]: poses that need more are marked on the map")
-      ->type_name("NM");
+      ->type_name("NM")
+      ->capture_default_str()
+      ->check(positive_number());
   app->add_option("--time", args->time, "time at which the scene's loads M3, F are evaluated")
       ->type_name("T")
       ->capture_default_str();

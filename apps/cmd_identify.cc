@@ -40,6 +40,7 @@ struct Args {
   std::string log;
   IdentifySettings settings;  // everything that reaches the identification itself
   bool no_plots = false, no_validation = false;
+  bool flip_torque_sign = false;  ///< --flip-torque-sign: the log's tau1, tau2 negated
 };
 
 const std::vector<std::string> kOutputs = {
@@ -215,7 +216,11 @@ int run(const Args& a) {
   const id::IdentifyOptions opt = identify_options(a.settings, scene);
 
   // the log, then the fit; a log that does not fit the scene is bad input (exit 2)
-  const id::TorqueLog log = read_log(a.log);
+  id::TorqueLog log = read_log(a.log);
+  if (a.flip_torque_sign) {
+    for (double& v : log.tau1) v = -v;
+    for (double& v : log.tau2) v = -v;
+  }
   const id::IdentifyResult res = identify_scene(scene, loads, log, opt);
 
   OutputDir out(a.scene.out, kOutputs);
@@ -231,8 +236,8 @@ int run(const Args& a) {
   // actuators: group actuator)
   write_text_file(out.file("scene_fitted.yaml"), scene_to_yaml(fitted_scene(scene, res)));
 
-  Json j = identification_json({scene.path, a.log, a.settings.estimate, opt.loss}, log, res,
-                               a.no_validation ? nullptr : &val);
+  const IdentifyRun run{scene.path, a.log, a.settings.estimate, opt.loss, a.flip_torque_sign};
+  Json j = identification_json(run, log, res, a.no_validation ? nullptr : &val);
   if (!a.no_plots) {
     const Gnuplot& g = gnuplot();
     const std::string warning =
@@ -246,7 +251,12 @@ int run(const Args& a) {
   j.set("wall_time_s",
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   write_json_file(out.file("identification.json"), j);
-  return finish_run(&out, [&] { print_summary(a, log, res, val); });
+  finish_run(&out, [&] { print_summary(a, log, res, val); });
+  // a fit whose own checks say it should not be used is not ok: its outputs stay for the user
+  if (!res.unusable.empty()) {
+    throw NumericalError(a.log, "identify", "the fit should not be used: " + res.unusable);
+  }
+  return 0;
 }
 
 RunFunction setup(CLI::App* app) {
@@ -285,11 +295,13 @@ RunFunction setup(CLI::App* app) {
           ->default_str("");
   app->add_option("--sg-order", args->settings.sg_order, "Savitzky-Golay polynomial order");
   app->add_option("--min-rate", args->settings.min_rate,
-                  "leave out samples where a joint's |relative rate| is below this [rad/s]");
+                  "leave out samples where a joint's |relative rate| is below this [rad/s]")
+      ->check(nonnegative_number());
   app->add_option("--window", args->settings.window,
                   "output-error and validation window [s] (restart from the logged state); "
                   "default 0.2, shortened so that the log has at least 20 windows")
-      ->default_str("");
+      ->default_str("")
+      ->check(positive_number());
   app->add_option("--threads", args->settings.threads, "Ceres threads")
       ->check(CLI::Range(1, 1024));
   app->add_flag("--start-from-scene", args->settings.start_from_scene,
@@ -307,6 +319,9 @@ RunFunction setup(CLI::App* app) {
   app->add_flag("--no-delay", args->settings.no_delay,
                 "do not estimate (and correct) a delay of the torques behind the angles");
   app->add_flag("--no-validation", args->no_validation, "skip the validation runs");
+  app->add_flag("--flip-torque-sign", args->flip_torque_sign,
+                "negate the logged tau1, tau2 (a log whose torque sign is opposite the scene's "
+                "convention)");
   return [args, sg_window] {
     args->settings.sg_window_given = sg_window->count() > 0;
     return run(*args);

@@ -86,9 +86,11 @@ std::vector<Design> make_designs(const Args& args, const std::vector<trajectory:
     try {
       designs[d].scene = load_scene(args.scene.scene, sets);
     } catch (const InputError& e) {
-      const bool geometry = e.key().rfind("initial", 0) == 0 ||
-                            e.reason().find("assembl") != std::string::npos ||
-                            e.reason().find("singular") != std::string::npos;
+      // (an unknown key's reason lists the known ones, "assembly" among them: never geometry)
+      const bool geometry = e.reason().find("unknown key") == std::string::npos &&
+                            (e.key().rfind("initial", 0) == 0 ||
+                             e.reason().find("assembl") != std::string::npos ||
+                             e.reason().find("singular") != std::string::npos);
       if (!geometry) throw InputError(e.file(), "--sweep " + e.key(), e.reason());
       designs[d].error = e.reason();
     }

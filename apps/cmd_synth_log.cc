@@ -173,6 +173,16 @@ int run(const Args& a) {
   const std::string flag_file = "command line";
   if (!(a.so.rate_hz > 0)) throw InputError(flag_file, "--rate", "must be > 0");
   if (!(a.so.duration > 0)) throw InputError(flag_file, "--duration", "must be > 0");
+  sim::Options grid;  // the log's rows, under the same limit as simulate's output rows
+  grid.duration = a.so.duration;
+  grid.output_step = 1.0 / a.so.rate_hz;
+  if (a.motion.empty() && sim::output_row_count(grid) > sim::kMaxOutputRows) {
+    throw InputError(flag_file, "--duration",
+                     "duration " + format_double(a.so.duration) + " s at --rate " +
+                         format_double(a.so.rate_hz) + " Hz needs " +
+                         std::to_string(sim::output_row_count(grid)) +
+                         " rows, more than the limit of " + std::to_string(sim::kMaxOutputRows));
+  }
   if (a.so.torque_noise < 0 || a.so.angle_noise < 0 || a.so.rate_noise < 0 || a.so.quantization < 0) {
     throw InputError(flag_file, "--*-noise/--quantization", "must be >= 0");
   }
@@ -238,13 +248,17 @@ RunFunction setup(CLI::App* app) {
       ->type_name("KEY=VALUE")
       ->allow_extra_args(false);
   app->option_defaults()->always_capture_default();  // the options below show their defaults
-  app->add_option("--rate", args->so.rate_hz, "sampling rate [Hz]");
-  app->add_option("--duration", args->so.duration, "[s]");
-  app->add_option("--torque-noise", args->so.torque_noise, "Gaussian std on tau1, tau2 [N m]");
-  app->add_option("--angle-noise", args->so.angle_noise, "Gaussian std on theta1, theta2 [rad]");
-  app->add_option("--rate-noise", args->so.rate_noise, "Gaussian std on omega1, omega2 [rad/s]");
-  app->add_option("--seed", args->so.seed, "std::mt19937_64 seed");
-  app->add_option("--quantization", args->so.quantization, "encoder step [rad] (0: none)");
+  app->add_option("--rate", args->so.rate_hz, "sampling rate [Hz]")->check(positive_number());
+  app->add_option("--duration", args->so.duration, "[s]")->check(positive_number());
+  app->add_option("--torque-noise", args->so.torque_noise, "Gaussian std on tau1, tau2 [N m]")
+      ->check(nonnegative_number());
+  app->add_option("--angle-noise", args->so.angle_noise, "Gaussian std on theta1, theta2 [rad]")
+      ->check(nonnegative_number());
+  app->add_option("--rate-noise", args->so.rate_noise, "Gaussian std on omega1, omega2 [rad/s]")
+      ->check(nonnegative_number());
+  app->add_option("--seed", args->so.seed, "std::mt19937_64 seed")->check(nonnegative_number());
+  app->add_option("--quantization", args->so.quantization, "encoder step [rad] (0: none)")
+      ->check(nonnegative_number());
   app->add_option(
       "--excitation", args->excitation,
       "scene: the scene's M1, M2; multisine: built-in excitation reversing every joint");
@@ -263,10 +277,13 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--law", args->law,
                   "friction law of the log, overriding the scene's: " +
                       identification::identifiable_law_names());
-  app->add_option("--static-coulomb", args->static_coulomb, "stribeck: mu_s of every joint");
+  app->add_option("--static-coulomb", args->static_coulomb, "stribeck: mu_s of every joint")
+      ->check(nonnegative_number());
   app->add_option("--stribeck-velocity", args->stribeck_velocity,
-                  "stribeck: w_st of every joint [rad/s]");
-  app->add_option("--stribeck-exponent", args->stribeck_exponent, "stribeck: delta");
+                  "stribeck: w_st of every joint [rad/s]")
+      ->check(positive_number());
+  app->add_option("--stribeck-exponent", args->stribeck_exponent, "stribeck: delta")
+      ->check(positive_number());
   return [args] {
     // the command that regenerates this log, every option explicit
     const Args& a = *args;

@@ -68,6 +68,12 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
     return app.exit(e);  // --help, --help-all, --version (derive from Success): print, exit 0
+  } catch (const CLI::ValidationError& e) {
+    // a value out of its option's range (positive_number() and the like): bad input
+    return fail(kInputError, std::string("command line: ") + e.what());
+  } catch (const CLI::ConversionError& e) {
+    // a value its option cannot read (nan for a count): bad input
+    return fail(kInputError, "command line: " + selected_name(app) + ": " + e.what());
   } catch (const CLI::ParseError& e) {
     return fail(kUsageError,
                 "command line: " + selected_name(app) + ": " + e.what() + " (see fivebar " +
@@ -76,6 +82,7 @@ int main(int argc, char** argv) {
 
   const CLI::App* sub = app.get_subcommands().front();
   try {
+    fivebar::io::check_numbers(*sub);
     const int status = runs.at(sub)();
     if (status != 0) {
       return fail(status,

@@ -176,6 +176,10 @@ Json identification_json(const IdentifyRun& run, const id::TorqueLog& log,
                          const id::IdentifyResult& res, const id::Validation* validation) {
   Json j = Json::object();
   j.set("command", "identify");
+  // the fit's own verdict (docs/identification.md, "Status"): not ok exits 3
+  j.set("status", res.unusable.empty() ? "ok" : "failed");
+  if (!res.unusable.empty()) j.set("status_reason", res.unusable);
+  j.set("torque_sign", run.torque_sign_flipped ? "flipped" : "as logged");
   j.set("scene", run.scene);
   j.set("log", run.log);
   j.set("method", id::method_name(res.method));
@@ -196,6 +200,10 @@ Json identification_json(const IdentifyRun& run, const id::TorqueLog& log,
   if (res.method == id::Method::kOutputError) {
     j.set("rms_angle_residual", pair(res.rms_angle_residual[0], res.rms_angle_residual[1]));
     j.set("window_s", res.window_s);
+  }
+  if (std::isfinite(res.negated_rms_torque_residual[0])) {
+    j.set("negated_rms_torque_residual",
+          pair(res.negated_rms_torque_residual[0], res.negated_rms_torque_residual[1]));
   }
   j.set("residual_sigma", res.residual_sigma);
   j.set("samples", res.samples);

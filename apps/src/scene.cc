@@ -710,6 +710,12 @@ void read_loads_and_initial(const SceneReader& r, Scene* out) {
   s.initial.theta2 = r.number("initial.theta2", std::nullopt);
   s.initial.omega1 = r.number("initial.omega1", 0.0);
   s.initial.omega2 = r.number("initial.omega2", 0.0);
+  // beyond this an angle has lost its precision (at 1e20 rad one ulp is many turns)
+  constexpr double kMaxAngle = 1e3;
+  require(r, "initial.theta1", s.initial.theta1, std::abs(s.initial.theta1) <= kMaxAngle,
+          "|theta| <= 1000 rad");
+  require(r, "initial.theta2", s.initial.theta2, std::abs(s.initial.theta2) <= kMaxAngle,
+          "|theta| <= 1000 rad");
 
 }
 

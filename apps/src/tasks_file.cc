@@ -13,6 +13,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
 
 namespace fivebar::io {
 namespace {
@@ -46,6 +47,16 @@ trajectory::Pose pose(const YAML::Node& node, const std::string& path, const std
   if (keys == std::set<std::string>{"theta1", "theta2"}) {
     p.a = number(node["theta1"], path, join(key, "theta1"));
     p.b = number(node["theta2"], path, join(key, "theta2"));
+    // crank angles beyond two turns are degrees, not a pose (goal {theta1: 150, theta2: 80}
+    // read as radians failed the optimization with a friction-loop message)
+    for (const auto& [name, v] : {std::pair{"theta1", p.a}, std::pair{"theta2", p.b}}) {
+      if (std::abs(v) > 4 * M_PI) {
+        throw InputError(path, join(key, name),
+                         format_double(v) + " rad is beyond two turns: degrees? (crank angles "
+                         "are in radians, " + format_double(v) + " degrees = " +
+                         format_significant(v * M_PI / 180, 4) + " rad)");
+      }
+    }
   } else if (keys == std::set<std::string>{"x", "y"}) {
     p.cartesian = true;
     p.a = number(node["x"], path, join(key, "x"));

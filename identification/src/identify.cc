@@ -1827,6 +1827,12 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
   if (f.layout.inertia) inertial_stage(f, an->J, out);
 }
 
+/// The larger of the two channels' rms torque residual over its noise floor
+double misfit_ratio(const IdentifyResult& r) {
+  return std::max(r.rms_torque_residual[0] / r.residual_noise_floor[0],
+                  r.rms_torque_residual[1] / r.residual_noise_floor[1]);
+}
+
 /// A friction coefficient at its bound while the residual is far above the noise floor (review:
 /// two adjacent bad samples, an acceleration spike, a step in an angle gave Coulomb 0 with exit 0
 /// and only the generic warnings): the fit is driven by samples the law cannot explain. One
@@ -1838,8 +1844,7 @@ void bound_and_misfit_warning(const Fit& f, const Analysis& an, IdentifyResult* 
     if (out->parameters[i].at_bound) at += (at.empty() ? "" : ", ") + out->parameters[i].name;
   }
   const double* fl = out->residual_noise_floor;
-  const double ratio = std::max(out->rms_torque_residual[0] / fl[0],
-                                out->rms_torque_residual[1] / fl[1]);
+  const double ratio = misfit_ratio(*out);
   if (at.empty() || !(ratio > kMisfitRatio)) return;
   const size_t m = f.index.size();
   std::vector<std::pair<double, int>> q(m);  // per sample: residual in floors, log index
@@ -1855,6 +1860,9 @@ void bound_and_misfit_warning(const Fit& f, const Analysis& an, IdentifyResult* 
   }
   // which cause cannot be told from the residual: a glitch that drags a coefficient to its bound
   // leaves the whole residual off the floor, as a wrong scene does
+  out->unusable = at + " at its bound while the torque residual is " +
+                  format_significant(ratio, 3) + " times its noise floor (more than " +
+                  format_significant(kMisfitRatio) + ")";
   out->warnings.push_back(
       at + " at its bound while the torque residual is " + format_significant(ratio) +
       " times the noise floor: the fit is driven by samples the law cannot explain (largest at " +
@@ -1936,7 +1944,7 @@ bool offset_columns(const Fit& f, const double fl[2], Eigen::MatrixXd* Jo) {
 /// (k std)": the std of the estimate, or with `own` the larger of it and the move's own std (the
 /// test of Hausman); empty if none moves so, or one is at its bound (which has its own warning).
 std::string friction_moves(const Fit& f, const IdentifyResult& out, const detail::FreedStep& fs,
-                           bool own) {
+                           bool own, double* largest = nullptr) {
   const int nf = f.layout.friction_size();
   const Eigen::MatrixXd T = to_public(f.layout).topLeftCorner(nf, nf);
   const Eigen::VectorXd move = T * fs.fitted_step.head(nf);
@@ -1947,6 +1955,7 @@ std::string friction_moves(const Fit& f, const IdentifyResult& out, const detail
     if (e.at_bound) return "";
     const double sd = own ? std::max(std::sqrt(std::max(0.0, cov(i, i))), e.std) : e.std;
     if (!(std::abs(move(i)) > kFreedMove * sd)) continue;
+    if (largest) *largest = std::max(*largest, std::abs(move(i)) / sd);
     moved += (moved.empty() ? "" : ", ") + e.name + " from " + format_significant(e.value) +
              " to " + format_significant(e.value + move(i)) + " (" +
              format_significant(std::abs(move(i)) / sd, 2) + " std)";
@@ -1960,8 +1969,8 @@ std::string friction_moves(const Fit& f, const IdentifyResult& out, const detail
 /// still due, and says so (review of 2026-11-24: a crank inertia 10 % off put coulomb at 0 and
 /// viscous 23 std off, with only the bound's warning). Empty: no warning.
 std::string friction_clause(const Fit& f, const IdentifyResult& out, const detail::FreedStep& fs,
-                            bool own, bool evidenced) {
-  const std::string moved = friction_moves(f, out, fs, own);
+                            bool own, bool evidenced, double* largest = nullptr) {
+  const std::string moved = friction_moves(f, out, fs, own, largest);
   if (!moved.empty()) return "the friction would move: " + moved;
   const int nf = f.layout.friction_size();
   bool bound = false;
@@ -2371,9 +2380,19 @@ void model_check(const Fit& f, IdentifyResult* out) {
   }
   const bool masses = cs.named(kCauseInertia);
   const int top = strongest_cause(cs);
+  double largest = 0;  // [std] the unattributed error's largest move of the friction
   if (!cs.any() && top < kCauseCount && cs.z(top) > detail::kCauseZ &&
-      !(moved = friction_clause(f, *out, cs.alone[top], false, true)).empty()) {
+      !(moved = friction_clause(f, *out, cs.alone[top], false, true, &largest)).empty()) {
     out->warnings.push_back(unresolved_warning(cs, top, moved, f.rates_biased));
+    // (largest 0: a friction coefficient is at its bound, so the move cannot be given)
+    if (out->unusable.empty() && (largest > kUnusableMove || largest == 0)) {
+      out->unusable =
+          largest > 0 ? "a model error the log cannot attribute would move the friction by " +
+                            format_significant(largest, 2) + " std (more than " +
+                            format_significant(kUnusableMove) + "; see the warnings)"
+                      : "a model error the log cannot attribute holds a friction coefficient at "
+                        "its bound (see the warnings)";
+    }
     return;
   }
   const bool old_rule = !cs.any() && !idx[1].empty() && fi.ok;
@@ -2566,6 +2585,47 @@ void follow_static_coulomb(const ParameterLayout& layout, const Params<double>& 
   }
 }
 
+/// The sign check fits the negated torques only when the residual is more than kMisfitRatio
+/// times its floor, and calls the sign wrong when that fit's residual (in floors, the worse
+/// channel) is this many times smaller (paper_angles.csv negated: 6.1 floors, negated back 0.99)
+constexpr double kSignGain = 4.0;
+
+/// IdentifyOptions::check_torque_sign: true (and out->unusable says why) when the log's torques
+/// fit far better negated (kSignGain); the negated fit's residual goes to out either way.
+bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& loads,
+                         const TorqueLog& log, const IdentifyOptions& opt, IdentifyResult* out) {
+  const double ours = misfit_ratio(*out);
+  if (!opt.check_torque_sign || opt.method != Method::kInverseDynamics ||
+      !(ours > kMisfitRatio)) {
+    return false;
+  }
+  TorqueLog negated = log;
+  for (double& v : negated.tau1) v = -v;
+  for (double& v : negated.tau2) v = -v;
+  IdentifyOptions again = opt;
+  again.check_torque_sign = false;
+  again.estimate_delay = false;
+  IdentifyResult neg;
+  try {
+    neg = identify(scene, loads, negated, again);
+  } catch (const LogError&) {
+    return false;  // the negated log cannot be fitted: no evidence either way
+  }
+  if (!neg.status.ok()) return false;
+  for (int j = 0; j < kActuators; ++j) {
+    out->negated_rms_torque_residual[j] = neg.rms_torque_residual[j];
+  }
+  const double theirs = misfit_ratio(neg);
+  if (!(theirs * kSignGain < ours)) return false;
+  out->unusable = "the logged torques fit far better negated (residual " +
+                  format_significant(theirs, 2) + " times its noise floor against " +
+                  format_significant(ours, 2) +
+                  "): the log's torque sign is opposite the scene's convention (M1, M2 "
+                  "counter-clockwise on the cranks); rerun with --flip-torque-sign";
+  out->warnings.push_back(out->unusable + "; no torque delay was estimated");
+  return true;
+}
+
 double output_error_window(double window_s, double duration) {
   return window_s > 0 ? window_s : std::min(0.2, duration / 20);
 }
@@ -2620,7 +2680,8 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   follow_static_coulomb(f.layout, scene_in, &out.fitted);
   predictions(f, &out);
   if (opt.method == Method::kOutputError) output_error_levels(f, &out);
-  if (opt.method == Method::kInverseDynamics && opt.estimate_delay) {
+  const bool sign_wrong = torques_fit_negated(scene_in, loads, log, opt, &out);
+  if (opt.method == Method::kInverseDynamics && opt.estimate_delay && !sign_wrong) {
     estimate_delay(f, an.J, an.r, an.sens, &out);
     const double dt = log.duration() / std::max(1, log.size() - 1);
     if (std::abs(out.delay_s) > kDelaySignificance * out.delay_std_s &&

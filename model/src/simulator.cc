@@ -95,6 +95,48 @@ Status at_time(const Status& st, double t, double th1, double th2) {
   return Status::Error(st.code, msg.str());
 }
 
+/// Not ok when a load is NaN or infinite at t: names the load and its value (a load expression
+/// that leaves its domain, e.g. sqrt(1.5 - t) after 1.5 s; no smaller step can help)
+Status finite_loads(const Loads<double>& L, double t) {
+  const std::pair<const char*, double> loads[] = {
+      {"M1", L.M1}, {"M2", L.M2}, {"M3", L.M3}, {"F", L.F}, {"F_angle", L.F_angle}};
+  for (const auto& [name, v] : loads) {
+    if (std::isfinite(v)) continue;
+    std::ostringstream msg;
+    msg.precision(6);
+    msg << "load " << name << " = " << (std::isnan(v) ? "nan" : v > 0 ? "inf" : "-inf") << " at t=" << t
+        << " s is not finite: check the scene's load expression (loads." << name << ")";
+    return Status::Error(StatusCode::kInvalidInput, msg.str());
+  }
+  return Status::Ok();
+}
+
+/// Below this |sin(th4 - th3)| a failed friction loop is put down to the pose: the reactions
+/// grow as 1 / sin(th4 - th3) there, so the loop's gain passes 1 with any friction (a light scene
+/// with r mu = 4e-4 was told "r_k * mu too large")
+constexpr double kSingularCause = 0.05;
+
+/// A failed evaluation's status with its cause first when the pose explains it: a friction loop
+/// that failed near the singular pose (kSingularCause) names |sin(theta4 - theta3)| and the
+/// largest r_k mu_k, so that the friction is not blamed for the geometry (same code: the callers
+/// decide on it as before). Other failures unchanged.
+Status pose_cause(const Params<double>& p, const Status& st, double th1, double th2) {
+  if (st.ok() || st.code != StatusCode::kFrictionNotConverged) return st;
+  Kinematics<double> k;
+  if (!solve_kinematics(p, th1, th2, &k).ok() || !(std::abs(k.sin43) < kSingularCause)) return st;
+  double arm = 0.0;
+  for (int j = 0; j < kJoints; ++j) {
+    arm = std::max(arm, std::abs(p.friction.pin_radius[j] * p.friction.coulomb[j]));
+  }
+  std::ostringstream msg;
+  msg.precision(3);
+  msg << "near-singular pose: |sin(theta4 - theta3)| = " << std::abs(k.sin43)
+      << " (the reactions grow as 1 / sin(theta4 - theta3)), where the friction loop cannot close "
+         "even with r_k * mu at most "
+      << arm << " (simulation.singular_margin, e.g. 0.05, stops a run at the pose); " << st.message;
+  return Status::Error(st.code, msg.str());
+}
+
 const char* joint_name(int k) {
   static const char* names[kJoints] = {"O", "B", "C", "D", "D0"};
   return names[k];
@@ -144,10 +186,15 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   std::array<double, kJoints> z{};
   if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, z.begin());
   JointModes signs;
-  const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3],
+  const Loads<double> loads = (*c.loads)(t);
+  if (const Status bad = finite_loads(loads, t); !bad.ok()) {
+    c.failure = bad;
+    return -1;  // fatal: the load is what fails, not the step
+  }
+  const Status st = forward_dynamics(*c.params, loads, y[0], y[1], y[2], y[3],
                                      rhs_modes(c, y, &signs), c.eval, &ev, &z);
   if (!st.ok()) {
-    c.failure = at_time(st, t, y[0], y[1]);
+    c.failure = at_time(pose_cause(*c.params, st, y[0], y[1]), t, y[0], y[1]);
     return 1;  // recoverable: the integrator retries with a smaller step
   }
   if (c.law_states) std::copy(ev.zdot.begin(), ev.zdot.end(), ydot + kBristle);
@@ -785,6 +832,25 @@ Status stop_at_singular_margin(Loop& L, Result* result, const Options& options, 
   return at_time(st, tb, y[0], y[1]);
 }
 
+/// Steps within one output interval after which the loads ahead are probed (loads_ahead)
+constexpr long kStallProbe = 10000;
+
+/// Loads that leave their domain stall a run long before a non-finite value is evaluated: the
+/// steps shrink toward the point (sqrt(1.5 - t) at 1.5 s, 1 / (t - 0.5) at 0.5 s) and the run
+/// used to end at simulation.max_steps. The loads over the next two output intervals, on a fine
+/// grid and at the output times themselves, name the first that is not finite.
+Status loads_ahead(const Loop& L, double step) {
+  constexpr int kProbes = 200;
+  std::vector<double> times;
+  for (int i = 0; i <= kProbes; ++i) times.push_back(L.t + 2 * step * i / kProbes);
+  for (size_t g = L.next; g < std::min(L.grid.size(), L.next + 2); ++g) times.push_back(L.grid[g]);
+  for (double ti : times) {
+    const Status bad = finite_loads((*L.c.loads)(ti), ti);
+    if (!bad.ok()) return bad;
+  }
+  return Status::Ok();
+}
+
 /// One integrator step, its switch (located and decided) if any, and the rows it covers.
 Status advance(Loop& L, Result* result, const Options& options) {
   const double tp = L.t;
@@ -794,7 +860,11 @@ Status advance(Loop& L, Result* result, const Options& options) {
     if (!L.c.failure.ok()) return L.c.failure;
     return at_time(Status::Error(StatusCode::kSolverFailed, L.integ->error()), tc, yc[0], yc[1]);
   }
-  if (++L.steps_since_row > options.max_steps) {
+  if (++L.steps_since_row == kStallProbe) {
+    const Status bad = loads_ahead(L, options.output_step);
+    if (!bad.ok()) return at_time(bad, tc, yc[0], yc[1]);
+  }
+  if (L.steps_since_row > options.max_steps) {
     // steps shrink without end next to a singular pose: say so when that is the cause
     Kinematics<double> k;
     const Status near = solve_kinematics(*L.c.params, yc[0], yc[1], &k,
@@ -993,13 +1063,14 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
   const EvalOptions eval = with_rest(EvalOptions{}, rest);
   for (const Row& m : motion) {
     const Loads<double> L = loads(m.t);
+    if (const Status bad = finite_loads(L, m.t); !bad.ok()) return bad;
     Evaluation<double> ev;
     // LuGre: the run's bristle states (a motion read from a file has none: steady state)
     const bool bristles = law_descriptor(params.friction.law).states_per_joint > 0 && m.has_bristle;
     const Status st = inverse_dynamics(params, L, m.theta[0], m.theta[1], m.omega[0], m.omega[1],
                                        m.alpha[0], m.alpha[1], nullptr, eval, &ev,
                                        bristles ? &m.bristle : nullptr);
-    if (!st.ok()) return at_time(st, m.t, m.theta[0], m.theta[1]);
+    if (!st.ok()) return at_time(pose_cause(params, st, m.theta[0], m.theta[1]), m.t, m.theta[0], m.theta[1]);
     Row r = m;
     const Row* previous = out->empty() ? nullptr : &out->back();
     set_evaluated(ev, previous, &r);

@@ -258,7 +258,8 @@ def identify(scene, log, **options):
     smooth_sign, estimate_rates, min_rate, sg_window, sg_order, threads, start_from_scene,
     window) plus validate=False. Returns a Record with every field of identification.json
     (parameters also by name: fit.parameters["coulomb"].std), the covariance, the per-sample
-    arrays and 'fitted_scene'. Its warnings also go through warnings.warn (FivebarWarning).
+    arrays and 'fitted_scene'. Its warnings also go through warnings.warn (FivebarWarning), and
+    so does a fit its own checks reject (status 'failed', status_reason).
     """
     if isinstance(log, (_Mapping, _np.ndarray)):
         log = _log_columns(log)
@@ -266,6 +267,9 @@ def identify(scene, log, **options):
         log = _os.fspath(log)
     fit = _record(_core.identify(scene, log, **options))
     _warn(fit["warnings"])
+    # a fit its own checks reject (the command line exits 3): status 'failed' and a warning
+    if fit.get("status") != "ok":
+        _warn([f"the fit should not be used: {fit.get('status_reason', '')}"])
     return fit
 
 

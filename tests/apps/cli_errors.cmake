@@ -55,6 +55,33 @@ run_fivebar(2 "command line: --regeneration: 'bus' is not one of none, shared_bu
             optimize ${motors} --tasks ${tasks} --regeneration bus --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "command line: --end-acceleration: 'none' is not one of free, zero"
             optimize ${motors} --tasks ${tasks} --end-acceleration none --out ${WORK_DIR}/out_bad)
+# numeric options: NaN and inf refused for every option (check_numbers), ranges by the shared
+# validators; each exits 2 naming the option
+run_fivebar(2 "command line: --angle-noise: must be (a finite number|>= 0), got nan"
+            synth-log ${paper} --out ${WORK_DIR}/out_bad/log.csv --angle-noise nan)
+run_fivebar(2 "command line: --time: must be a finite number, got nan"
+            hold ${paper} --time nan --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --duration: must be a finite number, got 1e400"
+            synth-log ${paper} --out ${WORK_DIR}/out_bad/log.csv --duration 1e400)
+run_fivebar(2 "command line: --stribeck-velocity: must be > 0, got 0"
+            synth-log ${paper} --out ${WORK_DIR}/out_bad/log.csv --law stribeck
+            --stribeck-velocity 0)
+run_fivebar(2 "command line: --window: must be > 0, got 0"
+            identify ${paper} --log ${log} --window 0 --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --min-rate: must be >= 0, got -1"
+            identify ${paper} --log ${log} --min-rate -1 --out ${WORK_DIR}/out_bad)
+# the row limit is bad input in synth-log as in simulate
+run_fivebar(2 "command line: --duration: .*more than the limit of 2000000"
+            synth-log ${paper} --out ${WORK_DIR}/out_bad/log.csv --duration 1e9)
+run_fivebar(2 "paper.yaml: simulation.duration: .*more than the limit of 2000000"
+            simulate ${paper} --set simulation.duration=1e9 --out ${WORK_DIR}/out_bad)
+# a swept key the scene does not have (its reason lists "assembly": not a geometry failure)
+run_fivebar(2 "--sweep mechanism.foo: unknown key"
+            study ${paper} --tasks ${SOURCE_DIR}/datasets/tasks/paper_tasks.yaml
+            --sweep mechanism.foo=1:2:3 --out ${WORK_DIR}/out_bad)
+# an absurd initial angle is refused at once (it ran 32 s to simulation.max_steps)
+run_fivebar(2 "paper.yaml: initial.theta1: must be \\|theta\\| <= 1000 rad, got 1e\\+20"
+            simulate ${paper} --set initial.theta1=1e20 --out ${WORK_DIR}/out_bad)
 if(EXISTS ${WORK_DIR}/out_bad)
   message(FATAL_ERROR "a run rejected for bad input created its output directory")
 endif()

@@ -47,6 +47,13 @@ TEST(Tasks, MalformedFilesNameFileKeyAndReason) {
   EXPECT_THAT([&] { load_tasks("/nonexistent/tasks.yaml"); },
               ThrowsMessage<InputError>(HasSubstr("/nonexistent/tasks.yaml: (file)")));
   EXPECT_EQ(parse("tasks:\n" + ok_task).size(), 1u);
+  // crank angles in degrees (they failed the optimization with a friction-loop message)
+  EXPECT_THAT(
+      [&] {
+        parse("tasks:\n  - {name: a, duration: 1, start: {theta1: 1.5, theta2: 1.5}, "
+              "goal: {theta1: 150, theta2: 80}}\n");
+      },
+      ThrowsMessage<InputError>(HasSubstr("tasks.0.goal.theta1: 150 rad is beyond two turns: degrees?")));
 }
 
 TEST(Tasks, ShippedFileReadsIntoStructs) {

@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include "fivebar/sim/simulator.h"
@@ -63,6 +64,27 @@ TEST_P(SundialsFailure, UnreachableToleranceNamesFlag) {
   EXPECT_THAT(msg, HasSubstr(is_cvode(m) ? "CV_TOO_MUCH_ACC" : "ARK_TOO_MUCH_ACC"));
   EXPECT_THAT(msg, HasSubstr("loosen simulation.rtol/atol"));
   EXPECT_THAT(msg, Not(HasSubstr("flag -")));
+}
+
+// A load that leaves its domain mid-run (sqrt(0.02 - t) after 0.02 s) stops the run there,
+// naming the load and the time, for every integrator: not after simulation.max_steps of retried
+// steps, nor blamed on the friction loop (rows: the ones before 0.02 s only)
+TEST_P(SundialsFailure, ANonFiniteLoadStopsTheRunAndIsNamed) {
+  sim::Options o;
+  o.method = GetParam();
+  o.duration = 0.05;
+  const sim::LoadFunction loads = [](double t) {
+    Loads<double> L = testing::paper_loads(t);
+    L.M3 = std::sqrt(0.02 - t);
+    return L;
+  };
+  const sim::Result r = sim::simulate(paper_params(), loads, testing::paper_initial(), o);
+  ASSERT_FALSE(r.status.ok());
+  EXPECT_THAT(r.status.message, HasSubstr("load M3 = "));
+  EXPECT_THAT(r.status.message, HasSubstr(" at t=0.02"));
+  EXPECT_THAT(r.status.message, HasSubstr("is not finite"));
+  EXPECT_THAT(r.status.message, Not(HasSubstr("friction loop")));
+  EXPECT_LE(r.rows.size(), 21u);
 }
 
 INSTANTIATE_TEST_SUITE_P(AllMethods, SundialsFailure, ::testing::ValuesIn(sim::kAllMethods),

@@ -24,6 +24,7 @@
 
 namespace CLI {
 class App;
+class Validator;
 }  // namespace CLI
 
 namespace fivebar::io {
@@ -57,6 +58,20 @@ bool register_command(Command command);
 
 /// Every registered command, sorted by name.
 std::vector<Command> registered_commands();
+
+/// The one rule for every numeric option of every command, run after parsing: a value (or a
+/// comma-separated element) that reads as NaN or infinite (1e400 included), or beyond 1e20 in
+/// magnitude, throws InputError(`command line: --opt: must be a finite number, got nan`); where
+/// the option's default is inf (no limit), inf and huge values are accepted.
+void check_numbers(const CLI::App& app);
+
+/// Range checks of numeric options, shared by the commands (`->check(positive_number())`): a
+/// value out of range fails the parse with `--opt: must be > 0, got -1`, which `fivebar` reports
+/// as bad input (exit 2). Non-numeric text is left to the option's own conversion.
+CLI::Validator positive_number();
+CLI::Validator nonnegative_number();
+/// at most `limit` (and > 0): e.g. durations, so that a typo such as 1e300 is refused at once
+CLI::Validator positive_at_most(double limit);
 
 /// The arguments shared by the commands that read a scene.
 struct SceneArgs {

@@ -16,6 +16,7 @@ struct IdentifyRun {
   std::string log;                  ///< the torque log's path ("(arrays)" for Python arrays)
   std::string estimate;             ///< --estimate
   identification::Loss loss = identification::Loss::kNone;
+  bool torque_sign_flipped = false;  ///< --flip-torque-sign: the log's tau1, tau2 negated
 };
 
 /// identification.json without the total wall time: settings, parameters (with their truth when

@@ -110,6 +110,10 @@ struct IdentifyOptions {
   bool estimate_delay = true;
   /// refits at most for the delay: each one shifts the torques by the total delay found so far
   int delay_refits = 4;
+  /// inverse dynamics: when the residual is far above its noise floor, fit the log once more
+  /// with its torques negated; torques that fit far better so are a sign-convention error, which
+  /// makes the fit unusable (IdentifyResult::unusable) and no delay is estimated
+  bool check_torque_sign = true;
 };
 
 struct ParameterEstimate {
@@ -148,9 +152,18 @@ struct InertialReport {
   bool consistent = true;             ///< every link m > 0 and inertia about the COM > 0
 };
 
+/// A model error the log cannot attribute makes the fit unusable when it would move a friction
+/// coefficient by more than this many std (model_check; below, it is a warning)
+inline constexpr double kUnusableMove = 10.0;
+
 /// Identification outcome. `status` not ok: the numerics failed (values may be partial).
 struct IdentifyResult {
   Status status;
+  /// The fit's own verdict on a converged fit (docs/identification.md, "Status"): empty when it
+  /// may be used; otherwise why not: a friction coefficient at its bound with the residual far
+  /// above its floor, a model error the log cannot attribute that moves the friction by more
+  /// than kUnusableMove std, or torques that fit far better negated
+  std::string unusable;
   ParameterLayout layout;
   Method method = Method::kInverseDynamics;
   double window_s = 0;  ///< [s] the output-error and validation window used (output_error_window)
@@ -184,6 +197,10 @@ struct IdentifyResult {
                              ///< is one: a warning names it when the friction would move
   };
   std::vector<MisfitCause> model_check;
+  /// rms torque residual of the fit with the logged torques negated, when the sign check ran
+  /// (IdentifyOptions::check_torque_sign) [N m]; NaN otherwise
+  double negated_rms_torque_residual[2] = {std::numeric_limits<double>::quiet_NaN(),
+                                           std::numeric_limits<double>::quiet_NaN()};
   int samples = 0;       ///< samples in the log
   int samples_used = 0;  ///< samples that entered the fit
   int samples_at_rest = 0;  ///< samples left out by the rest rule (some joint stuck)

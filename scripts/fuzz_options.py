@@ -1,0 +1,150 @@
+#!/usr/bin/env python3
+"""Fuzz every subcommand's numeric options with nan, inf, 0, -1 and 1e300.
+
+    python3 scripts/fuzz_options.py build/release/apps/fivebar [--timeout 20] [--only identify]
+
+The numeric options are read from each command's --help (types FLOAT, INT, UINT, N, NM, T,
+A,B, THETA1,THETA2). Each option gets each value, on top of a short, valid base command line
+(BASE below: short runs, no plots). Every run is classed by its exit status:
+
+  refused   2 (bad input) with exactly one `fivebar: error:` line naming the option
+  vague     2 or 3 without the option's name in the error line
+  numerics  3 naming the option
+  accepted  0, and the value is listed as valid for that option in VALID (with why)
+  silent    0, and the value is not listed: a bad value accepted silently
+  crash     any other status (signal, abort, 1 for a value), or several error lines
+  timeout   the run did not end within --timeout s (its values are left to the user to judge)
+
+Prints one line per run that is silent, crash, vague or timeout, then the counts. Exit status 1
+when any run is silent or a crash. Standard library only.
+"""
+import argparse
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PAPER = os.path.join(ROOT, "datasets", "scenes", "paper.yaml")
+TASKS = os.path.join(ROOT, "datasets", "tasks", "paper_tasks.yaml")
+LOG = os.path.join(ROOT, "datasets", "logs", "paper_rates.csv")
+SHORT = ["--set", "simulation.duration=0.05"]
+
+VALUES = ["nan", "inf", "0", "-1", "1e300"]
+TYPES = {"FLOAT", "INT", "UINT", "N", "NM", "T", "A,B", "THETA1,THETA2", "INT:INT"}
+
+# a short, valid command line per subcommand ({out} is a fresh directory)
+BASE = {
+    "simulate": [PAPER, *SHORT, "--no-plots", "--out", "{out}"],
+    "synth-log": [PAPER, "--duration", "0.05", "--out", "{out}/log.csv"],
+    "identify": [PAPER, "--log", LOG, "--no-plots", "--no-validation", "--out", "{out}"],
+    "hold": [PAPER, "--no-plots", "--out", "{out}"],
+    "inverse": [PAPER, "--no-plots", "--out", "{out}"],
+    "excite": [PAPER, "--torque-limit", "20", "--duration", "2", "--no-baseline", "--family", "fourier", "--starts", "1",
+               "--max-evaluations", "5", "--no-plots", "--out", "{out}"],
+    "optimize": [PAPER, "--tasks", TASKS, "--starts", "1", "--max-evaluations", "10", "--no-plots",
+                 "--out", "{out}"],
+    "study": [PAPER, "--tasks", TASKS, "--sweep", "friction.coulomb=0.1:0.12:2", "--no-plots",
+              "--out", "{out}"],
+    "design": [PAPER, "--tasks", TASKS, "--vary", "mechanism.point_p=0.18:0.22", "--max-designs",
+               "2", "--no-plots", "--out", "{out}"],
+    "accuracy": [PAPER, *SHORT, "--out", "{out}"],
+    "stress": ["--out", "{out}"],
+}
+
+# (command, option): values for which exit 0 is right, and why
+VALID = {
+    ("synth-log", "--seed"): {"0": "any seed", "1e300": "n/a"},
+    ("excite", "--seed"): {"0": "any seed"},
+    ("synth-log", "--torque-noise"): {"0": "noise-free log"},
+    ("synth-log", "--angle-noise"): {"0": "noise-free log"},
+    ("synth-log", "--rate-noise"): {"0": "noise-free log (the default)"},
+    ("synth-log", "--quantization"): {"0": "no quantization (the default)"},
+    ("synth-log", "--static-coulomb"): {"0": "applies to --law stribeck only"},
+    ("synth-log", "--torque-offset"): {"0": "an offset of 0", "-1": "offsets have either sign"},
+    ("synth-log", "--actuator-coulomb"): {"0": "no actuator friction"},
+    ("synth-log", "--actuator-viscous"): {"0": "no actuator friction"},
+    ("identify", "--loss-scale"): {"0": "0 = from the noise floor (the default)"},
+    ("identify", "--smooth-sign"): {"0": "exact sign", "-1": "-1 = the scene's (the default)"},
+    ("hold", "--time"): {"0": "the default", "-1": "loads at any time", "1e300": "n/a"},
+    ("hold", "--torque-limit"): {"inf": "no limit (the default)", "1e300": "no limit"},
+    ("hold", "--pose"): {"0": "a pose that assembles", "-1": "a pose that assembles"},
+    ("identify", "--min-rate"): {"0": "the default"},
+    ("excite", "--max-evaluations"): {"0": "0 = the default budget"},
+    ("excite", "--torque-noise"): {"0": "n/a"},
+    ("excite", "--min-reversals"): {"0": "no reversal requirement"},
+    ("excite", "--ramp"): {"0": "no ramp"},
+    ("excite", "--drift-spread"): {"0": "starts without drift"},
+    ("excite", "--singular-margin"): {"0": "no margin beyond the evaluation's"},
+    ("accuracy", "--repeats"): {},
+}
+
+
+def numeric_options(fivebar, command):
+    """(option, type) of the command's numeric options, from its --help."""
+    text = subprocess.run([fivebar, command, "--help"], capture_output=True, text=True).stdout
+    found = []
+    for line in text.splitlines():
+        m = re.match(r"\s+(--[a-z0-9-]+)\s+([A-Z0-9,:]+)", line)
+        if m and m.group(2) in TYPES:
+            found.append((m.group(1), m.group(2)))
+    return found
+
+
+def classify(command, option, value, status, err):
+    lines = [l for l in err.splitlines() if l.startswith("fivebar: error:")]
+    if status == 0:
+        return "accepted" if value in VALID.get((command, option), {}) else "silent"
+    if status in (2, 3):
+        if len(lines) != 1:
+            return "crash"
+        if option in lines[0]:
+            return "refused" if status == 2 else "numerics"
+        return "vague"
+    return "crash"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("fivebar")
+    ap.add_argument("--timeout", type=float, default=20)
+    ap.add_argument("--only", action="append", help="fuzz this subcommand only (repeatable)")
+    a = ap.parse_args()
+    counts = {}
+    bad = 0
+    with tempfile.TemporaryDirectory() as tmp:
+        for command, base in BASE.items():
+            if a.only and command not in a.only:
+                continue
+            for option, kind in numeric_options(a.fivebar, command):
+                for value in VALUES:
+                    given = value if kind not in ("A,B", "THETA1,THETA2", "INT:INT") else (
+                        value + ("," if kind != "INT:INT" else ":") + value)
+                    out = tempfile.mkdtemp(dir=tmp)
+                    args = [x.replace("{out}", out) for x in base]
+                    if option in args:  # the base's own value of this option gives way
+                        k = args.index(option)
+                        del args[k:k + 2]
+                    if command == "inverse":
+                        args = [PAPER, "--motion", os.path.join(ROOT, "datasets", "reference",
+                                                                "paper_friction.csv")] + args[1:]
+                    try:
+                        r = subprocess.run([a.fivebar, command, *args, option, given],
+                                           capture_output=True, text=True, timeout=a.timeout)
+                        cls = classify(command, option, value, r.returncode, r.stderr)
+                        status, err = r.returncode, r.stderr.strip().splitlines()
+                    except subprocess.TimeoutExpired:
+                        cls, status, err = "timeout", None, []
+                    counts[cls] = counts.get(cls, 0) + 1
+                    if cls in ("silent", "crash", "vague", "timeout"):
+                        last = err[-1] if err else ""
+                        print(f"{cls:8} {command} {option} {given}: exit {status}: {last[:160]}")
+                        sys.stdout.flush()
+                    bad += cls in ("silent", "crash")
+    print("counts: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""End-to-end check (ctest apps.cli_diagnoses): a run that fails names the real cause before the
+model's message. A motion file in degrees and one with a 3 rad jump (inverse: exit 2 naming
+them, not "r_k * mu too large"); a load expression that leaves its domain mid-run (simulate:
+exit 3 naming the load and the time, without running to simulation.max_steps); an identify log
+whose torques carry the opposite sign (exit 3, no delay reported; --flip-torque-sign fits it).
+Usage: cli_diagnoses.py FIVEBAR PAPER_YAML WORK_DIR"""
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+
+FIVEBAR, PAPER, WORK = sys.argv[1:4]
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+os.makedirs(WORK, exist_ok=True)
+failures = []
+
+
+def expect(status, pattern, args):
+    p = subprocess.run([FIVEBAR] + args, capture_output=True, text=True)
+    errors = [l for l in p.stderr.splitlines() if l.startswith("fivebar: error:")]
+    if p.returncode != status or len(errors) != 1 or not re.search(pattern, errors[0]):
+        failures.append("%s: exit %d, %s (expected %d, /%s/)" % (" ".join(args[:2]), p.returncode,
+                                                                  errors, status, pattern))
+
+
+# motions of the paper run (first second), in degrees and with a 3 rad jump at t = 0.5 s
+ref = [l.split(",") for l in open(os.path.join(ROOT, "datasets/reference/paper_friction.csv"))]
+rows = [(r[0], float(r[1]), float(r[2])) for r in ref[1:1002]]
+deg, jump = os.path.join(WORK, "deg.csv"), os.path.join(WORK, "jump.csv")
+with open(deg, "w") as f:
+    f.write("t,theta1,theta2\n" + "".join("%s,%.12g,%.12g\n" % (t, a * 180 / math.pi, b * 180 / math.pi)
+                                          for t, a, b in rows))
+with open(jump, "w") as f:
+    f.write("t,theta1,theta2\n" + "".join("%s,%.12g,%.12g\n" % (t, a + (3 if i >= 500 else 0), b)
+                                          for i, (t, a, b) in enumerate(rows)))
+out = os.path.join(WORK, "out")
+expect(2, r"deg.csv: theta1, theta2: angles look like degrees",
+       ["inverse", PAPER, "--motion", deg, "--out", out, "--no-plots"])
+expect(2, r"jump.csv: theta1: jumps by 3.0\d* rad between t = 0.499 and 0.5 s",
+       ["inverse", PAPER, "--motion", jump, "--out", out, "--no-plots"])
+# loads that leave their domain: named at the time, at once
+expect(3, r"load M3 = nan at t=1.50\d* s is not finite",
+       ["simulate", PAPER, "--set", "loads.M3=sqrt(1.5-t)", "--out", out, "--no-plots"])
+expect(3, r"load M3 = inf at t=0.5 s is not finite",
+       ["simulate", PAPER, "--set", "loads.M3=1/(t-0.5)", "--out", out, "--no-plots"])
+# the shipped angles-only log with its torques negated
+log = os.path.join(ROOT, "datasets/logs/paper_rates.csv")
+flipped = os.path.join(WORK, "flipped.csv")
+with open(log) as src, open(flipped, "w") as f:
+    for line in src:
+        cells = line.rstrip("\n").split(",")
+        if line.startswith("#") or line.startswith("t,"):
+            f.write(line)
+        else:
+            cells[3], cells[4] = repr(-float(cells[3])), repr(-float(cells[4]))
+            f.write(",".join(cells) + "\n")
+fit = os.path.join(WORK, "fit")
+expect(3, r"identify: the fit should not be used: the logged torques fit far better negated",
+       ["identify", PAPER, "--log", flipped, "--out", fit, "--no-plots", "--no-validation"])
+j = json.load(open(os.path.join(fit, "identification.json")))
+if j["status"] != "failed" or "torque_delay" in j or "negated" not in j.get("status_reason", ""):
+    failures.append("flipped log: status %s, delay %s" % (j["status"], j.get("torque_delay")))
+fit2 = os.path.join(WORK, "fit2")
+p = subprocess.run([FIVEBAR, "identify", PAPER, "--log", flipped, "--flip-torque-sign", "--out",
+                    fit2, "--no-plots", "--no-validation"], capture_output=True, text=True)
+if p.returncode != 0 or json.load(open(os.path.join(fit2, "identification.json")))["status"] != "ok":
+    failures.append("--flip-torque-sign: exit %d: %s" % (p.returncode, p.stderr[-300:]))
+if failures:
+    print("\n".join(failures))
+    sys.exit(1)
+print("7 passed, 0 failed")
