@@ -143,6 +143,9 @@ AnimationTrack animation_track(const std::vector<sim::Row>& rows) {
 }
 
 AnimationTrack animation_track(const CsvTable& table) {
+  if (table.rows.empty()) {
+    throw InputError(table.path, "(file)", "no data rows below the header: nothing to draw");
+  }
   std::vector<sim::Row> rows(table.rows.size());
   auto fill = [&](const std::string& name, auto set) {
     const std::vector<double> v = table.column(name);
@@ -204,15 +207,23 @@ std::string animation_html(const Scene& scene, const AnimationInput& input) {
   return page;
 }
 
-bool recorded_scene(const std::string& summary_json, std::string* scene,
-                    std::vector<std::string>* sets) {
-  if (!std::filesystem::exists(summary_json)) return false;
-  YAML::Node summary;
+namespace {
+
+// the run's summary.json as a node; a null node when the file is absent
+YAML::Node load_summary(const std::string& summary_json) {
+  if (!std::filesystem::exists(summary_json)) return YAML::Node();
   try {
-    summary = YAML::LoadFile(summary_json);  // JSON is YAML
+    return YAML::LoadFile(summary_json);  // JSON is YAML
   } catch (const YAML::Exception& e) {
     throw InputError(summary_json, "(read)", "not valid JSON: " + e.msg);
   }
+}
+
+}  // namespace
+
+bool recorded_scene(const std::string& summary_json, std::string* scene,
+                    std::vector<std::string>* sets) {
+  const YAML::Node summary = load_summary(summary_json);
   if (!summary.IsMap() || !summary["scene"] || !summary["scene"].IsScalar()) return false;
   *scene = summary["scene"].as<std::string>();
   sets->clear();
@@ -220,6 +231,12 @@ bool recorded_scene(const std::string& summary_json, std::string* scene,
     for (const YAML::Node& s : summary["sets"]) sets->push_back(s.as<std::string>());
   }
   return true;
+}
+
+std::string recorded_command(const std::string& summary_json) {
+  const YAML::Node summary = load_summary(summary_json);
+  if (!summary.IsMap() || !summary["command"] || !summary["command"].IsScalar()) return "";
+  return summary["command"].as<std::string>();
 }
 
 }  // namespace fivebar::io
