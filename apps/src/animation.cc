@@ -172,8 +172,13 @@ AnimationTrack animation_track(const CsvTable& table) {
         r.mode[k] = v != 0 ? kStuck : JointMode::kRest;
       });
     } else {
-      for (sim::Row& r : rows) {
-        r.mode[k] = relative_rates(r.omega)[k] == 0 ? kStuck : JointMode::kRest;
+      // held at exactly 0 over two consecutive rows: a single zero (the start from rest, a
+      // reversal) is no stick
+      auto zero = [&](size_t i) { return relative_rates(rows[i].omega)[k] == 0; };
+      for (size_t i = 0; i < rows.size(); ++i) {
+        const bool held =
+            zero(i) && ((i > 0 && zero(i - 1)) || (i + 1 < rows.size() && zero(i + 1)));
+        rows[i].mode[k] = held ? kStuck : JointMode::kRest;
       }
     }
   }

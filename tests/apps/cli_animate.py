@@ -78,6 +78,11 @@ else:
     remade = check_page(os.path.join(paper, "animation.html"), False)
     if remade["motion"]["th3"] != written["motion"]["th3"] or remade["motion"]["p2"] != written["motion"]["p2"]:
         failures.append("animate: frames differ from those simulate wrote")
+    # stuck read from the rates of trajectory.csv as the simulator's modes had it (the start
+    # from rest, where every rate is 0 for one row, is no stick on the paper scene)
+    if remade["motion"]["stuck"] != written["motion"]["stuck"]:
+        failures.append("animate: stuck joints differ from those simulate wrote (first frames %s, %s)"
+                        % (remade["motion"]["stuck"][:3], written["motion"]["stuck"][:3]))
 
 # an optimize-like folder: two task folders, one with a baseline (the frictionless twin stands in)
 tasks = os.path.join(WORK, "tasks")
