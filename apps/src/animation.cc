@@ -24,6 +24,9 @@ std::array<double, 5> relative_rates(const std::array<double, 4>& omega) {
   return {omega[0], omega[2] - omega[0], omega[3] - omega[2], omega[1] - omega[3], omega[1]};
 }
 
+// a joint's relative rate counts as 0 up to this fraction of the fastest link's rate
+constexpr double kStuckRateTolerance = 1e-6;
+
 void push_energies(const sim::Row& r, AnimationTrack* track) {
   track->M1.push_back(r.M1);
   track->M2.push_back(r.M2);
@@ -172,9 +175,15 @@ AnimationTrack animation_track(const CsvTable& table) {
         r.mode[k] = v != 0 ? kStuck : JointMode::kRest;
       });
     } else {
-      // held at exactly 0 over two consecutive rows: a single zero (the start from rest, a
-      // reversal) is no stick
-      auto zero = [&](size_t i) { return relative_rates(rows[i].omega)[k] == 0; };
+      // held at 0 over two consecutive rows: a single zero (the start from rest, a reversal) is
+      // no stick. 0 within kStuckRateTolerance of the row's fastest link: a stuck inner joint's
+      // rate, a difference of two link rates, keeps the integration's error (about 1e-9 of it)
+      auto zero = [&](size_t i) {
+        const std::array<double, 4>& w = rows[i].omega;
+        const double fastest = std::max({std::abs(w[0]), std::abs(w[1]), std::abs(w[2]),
+                                         std::abs(w[3])});
+        return std::abs(relative_rates(w)[k]) <= kStuckRateTolerance * fastest;
+      };
       for (size_t i = 0; i < rows.size(); ++i) {
         const bool held =
             zero(i) && ((i > 0 && zero(i - 1)) || (i + 1 < rows.size() && zero(i + 1)));

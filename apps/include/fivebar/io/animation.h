@@ -27,8 +27,9 @@ AnimationTrack animation_track(const std::vector<sim::Row>& rows);
 
 /// The track of a trajectory.csv (docs/outputs.md). A joint is stuck where the column
 /// stuck1..stuck5 is 1 when the file has them (optimize, inverse), else where its relative rate
-/// is exactly 0 on this row and a neighbouring one (the simulator holds a stuck joint's rate at
-/// 0; a single zero, as at a start from rest, is no stick). Throws InputError for a missing
+/// is 0 (within 1e-6 of the fastest link's rate) on this row and a neighbouring one (the
+/// simulator holds a stuck joint's rate at 0; a single zero, as at a start from rest, is no
+/// stick). Throws InputError for a missing
 /// column or a table without rows.
 AnimationTrack animation_track(const CsvTable& table);
 
