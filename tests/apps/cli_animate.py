@@ -81,15 +81,15 @@ else:
     # stuck read from the rates of trajectory.csv as the simulator's modes had it (the start
     # from rest, where every rate is 0 for one row, is no stick on the paper scene)
     if remade["motion"]["stuck"] != written["motion"]["stuck"]:
-        failures.append("animate: stuck joints differ from those simulate wrote (first frames %s, %s)"
+        failures.append("animate: stuck joints differ from simulate's (first frames %s, %s)"
                         % (remade["motion"]["stuck"][:3], written["motion"]["stuck"][:3]))
 
 # stick-slip: the stick scene with a crank torque that grows past breakaway; the stuck joints read
 # back from trajectory.csv's rates (an inner joint's within the integration's error of 0) are
 # those the simulator's modes gave
 slip = os.path.join(WORK, "stick_slip")
-code, out, err = run(["simulate", os.path.join(os.path.dirname(PAPER), "stick_below_breakaway.yaml"),
-                      "--out", slip, "--no-plots", "--set", "loads.M1=-1.3057 - 0.3*t"])
+stick_scene = os.path.join(os.path.dirname(PAPER), "stick_below_breakaway.yaml")
+code, out, err = run(["simulate", stick_scene, "--out", slip, "--no-plots", "--set", "loads.M1=-1.3057 - 0.3*t"])
 if code != 0:
     failures.append("simulate stick_slip: exit %d %s" % (code, err))
 else:
