@@ -89,7 +89,8 @@ else:
 # those the simulator's modes gave
 slip = os.path.join(WORK, "stick_slip")
 stick_scene = os.path.join(os.path.dirname(PAPER), "stick_below_breakaway.yaml")
-code, out, err = run(["simulate", stick_scene, "--out", slip, "--no-plots", "--set", "loads.M1=-1.3057 - 0.3*t"])
+code, out, err = run(["simulate", stick_scene, "--out", slip, "--no-plots",
+                      "--set", "loads.M1=-1.3057 - 0.3*t"])
 if code != 0:
     failures.append("simulate stick_slip: exit %d %s" % (code, err))
 else:
