@@ -224,14 +224,12 @@ const DATA = /*FIVEBAR_DATA*/null;
       ctx.fillText("0 at every", x0 + 24, 54); ctx.fillText("joint and t", x0 + 24, 70);
     } else {
       ctx.fillText((pPeak > pMax ? ">= " : "") + fmt(pMax, 3), x0 + 24, 54);
-      if (pPeak > pMax) {
-        ctx.fillText("(peak", x0 + 24, 70); ctx.fillText(fmt(pPeak, 3) + ")", x0 + 24, 86);
-      }
+      if (pPeak > pMax) ctx.fillText("peak " + fmt(pPeak, 3), x0 + 24, 70);  // clear of the dots
       ctx.fillText(fmt(pMax / 4, 3), x0 + 24, 124);
     }
     ctx.fillText("0", x0 + 24, 196);
     JOINTS.forEach(function (k, j) {  // the current value of each joint
-      const y = 58 + j * 30, x = x0 + 120, v = m["p" + (j + 1)][i];
+      const y = 58 + j * 30, x = x0 + 126, v = m["p" + (j + 1)][i];
       ctx.fillStyle = colour(v / pMax); ctx.strokeStyle = "#000"; ctx.lineWidth = 1;
       ctx.beginPath(); ctx.arc(x, y, 7, 0, 2 * Math.PI); ctx.fill(); ctx.stroke();
       ctx.fillStyle = "#000"; ctx.fillText(k + " " + fmt(v, 3), x + 14, y + 4);
