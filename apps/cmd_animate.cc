@@ -70,6 +70,9 @@ std::vector<fs::path> run_folders(const std::string& dir) {
 std::string folder_page(const fs::path& folder, const Scene& scene, const std::string& title) {
   AnimationInput input;
   input.title = title;
+  if (recorded_command((folder / "summary.json").string()) == "inverse") {
+    input.label = "inverse dynamics";
+  }
   input.motion = animation_track(read_csv((folder / "trajectory.csv").string()));
   const fs::path baseline = folder / "baseline.csv";
   if (fs::exists(baseline)) {

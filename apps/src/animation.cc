@@ -24,6 +24,9 @@ std::array<double, 5> relative_rates(const std::array<double, 4>& omega) {
   return {omega[0], omega[2] - omega[0], omega[3] - omega[2], omega[1] - omega[3], omega[1]};
 }
 
+// a joint's relative rate counts as 0 up to this fraction of the fastest link's rate
+constexpr double kStuckRateTolerance = 1e-6;
+
 void push_energies(const sim::Row& r, AnimationTrack* track) {
   track->M1.push_back(r.M1);
   track->M2.push_back(r.M2);
@@ -143,6 +146,9 @@ AnimationTrack animation_track(const std::vector<sim::Row>& rows) {
 }
 
 AnimationTrack animation_track(const CsvTable& table) {
+  if (table.rows.empty()) {
+    throw InputError(table.path, "(file)", "no data rows below the header: nothing to draw");
+  }
   std::vector<sim::Row> rows(table.rows.size());
   auto fill = [&](const std::string& name, auto set) {
     const std::vector<double> v = table.column(name);
@@ -169,8 +175,19 @@ AnimationTrack animation_track(const CsvTable& table) {
         r.mode[k] = v != 0 ? kStuck : JointMode::kRest;
       });
     } else {
-      for (sim::Row& r : rows) {
-        r.mode[k] = relative_rates(r.omega)[k] == 0 ? kStuck : JointMode::kRest;
+      // held at 0 over two consecutive rows: a single zero (the start from rest, a reversal) is
+      // no stick. 0 within kStuckRateTolerance of the row's fastest link: a stuck inner joint's
+      // rate, a difference of two link rates, keeps the integration's error (about 1e-9 of it)
+      auto zero = [&](size_t i) {
+        const std::array<double, 4>& w = rows[i].omega;
+        const double fastest = std::max({std::abs(w[0]), std::abs(w[1]), std::abs(w[2]),
+                                         std::abs(w[3])});
+        return std::abs(relative_rates(w)[k]) <= kStuckRateTolerance * fastest;
+      };
+      for (size_t i = 0; i < rows.size(); ++i) {
+        const bool held =
+            zero(i) && ((i > 0 && zero(i - 1)) || (i + 1 < rows.size() && zero(i + 1)));
+        rows[i].mode[k] = held ? kStuck : JointMode::kRest;
       }
     }
   }
@@ -204,15 +221,23 @@ std::string animation_html(const Scene& scene, const AnimationInput& input) {
   return page;
 }
 
-bool recorded_scene(const std::string& summary_json, std::string* scene,
-                    std::vector<std::string>* sets) {
-  if (!std::filesystem::exists(summary_json)) return false;
-  YAML::Node summary;
+namespace {
+
+// the run's summary.json as a node; a null node when the file is absent
+YAML::Node load_summary(const std::string& summary_json) {
+  if (!std::filesystem::exists(summary_json)) return YAML::Node();
   try {
-    summary = YAML::LoadFile(summary_json);  // JSON is YAML
+    return YAML::LoadFile(summary_json);  // JSON is YAML
   } catch (const YAML::Exception& e) {
     throw InputError(summary_json, "(read)", "not valid JSON: " + e.msg);
   }
+}
+
+}  // namespace
+
+bool recorded_scene(const std::string& summary_json, std::string* scene,
+                    std::vector<std::string>* sets) {
+  const YAML::Node summary = load_summary(summary_json);
   if (!summary.IsMap() || !summary["scene"] || !summary["scene"].IsScalar()) return false;
   *scene = summary["scene"].as<std::string>();
   sets->clear();
@@ -220,6 +245,12 @@ bool recorded_scene(const std::string& summary_json, std::string* scene,
     for (const YAML::Node& s : summary["sets"]) sets->push_back(s.as<std::string>());
   }
   return true;
+}
+
+std::string recorded_command(const std::string& summary_json) {
+  const YAML::Node summary = load_summary(summary_json);
+  if (!summary.IsMap() || !summary["command"] || !summary["command"].IsScalar()) return "";
+  return summary["command"].as<std::string>();
 }
 
 }  // namespace fivebar::io

@@ -20,7 +20,7 @@ h1 { font-size: 17px; margin: 0 0 6px 0; }
 canvas { border: 1px solid #ccc; width: 100%; height: auto; display: block; }
 #controls { display: flex; gap: 10px; align-items: center; margin: 6px 0; }
 #slider { flex: 1; }
-#readout { font-family: monospace; white-space: pre; font-size: 13px; }
+#readout { font-family: monospace; white-space: pre-wrap; font-size: 13px; }
 #note { color: #555; font-size: 12px; }
 </style>
 </head>
@@ -207,7 +207,7 @@ const DATA = /*FIVEBAR_DATA*/null;
         ctx.strokeStyle = "#000"; ctx.lineWidth = 3; ctx.strokeRect(p[0] - 14, p[1] - 14, 28, 28);
       }
       ctx.fillStyle = "#000"; ctx.font = "bold 13px sans-serif";
-      ctx.fillText(k, p[0] - 8, p[1] - 16);
+      ctx.fillText(k, p[0] - 8, p[1] - 19);  // above the stuck square
     });
   }
   function drawLegend(i) {
@@ -220,11 +220,16 @@ const DATA = /*FIVEBAR_DATA*/null;
       ctx.fillStyle = colour(Math.pow(1 - y / 150, 2)); ctx.fillRect(x0, 46 + y, 18, 1);
     }
     ctx.font = "12px sans-serif"; ctx.fillStyle = "#000";
-    ctx.fillText((pPeak > pMax ? ">= " : "") + fmt(pMax, 3), x0 + 24, 54);
-    if (pPeak > pMax) ctx.fillText("(peak " + fmt(pPeak, 3) + ")", x0 + 24, 70);
-    ctx.fillText(fmt(pMax / 4, 3), x0 + 24, 124); ctx.fillText("0", x0 + 24, 196);
+    if (pPeak === 0) {  // no scale to show: say so instead of inventing one
+      ctx.fillText("0 at every", x0 + 24, 54); ctx.fillText("joint and t", x0 + 24, 70);
+    } else {
+      ctx.fillText((pPeak > pMax ? ">= " : "") + fmt(pMax, 3), x0 + 24, 54);
+      if (pPeak > pMax) ctx.fillText("peak " + fmt(pPeak, 3), x0 + 24, 70);  // clear of the dots
+      ctx.fillText(fmt(pMax / 4, 3), x0 + 24, 124);
+    }
+    ctx.fillText("0", x0 + 24, 196);
     JOINTS.forEach(function (k, j) {  // the current value of each joint
-      const y = 58 + j * 30, x = x0 + 120, v = m["p" + (j + 1)][i];
+      const y = 58 + j * 30, x = x0 + 126, v = m["p" + (j + 1)][i];
       ctx.fillStyle = colour(v / pMax); ctx.strokeStyle = "#000"; ctx.lineWidth = 1;
       ctx.beginPath(); ctx.arc(x, y, 7, 0, 2 * Math.PI); ctx.fill(); ctx.stroke();
       ctx.fillStyle = "#000"; ctx.fillText(k + " " + fmt(v, 3), x + 14, y + 4);
@@ -273,9 +278,11 @@ const DATA = /*FIVEBAR_DATA*/null;
   slider.max = String(n - 1);
   document.getElementById("title").textContent = DATA.title + ": " + DATA.label;
   document.getElementById("note").textContent = "Drawn to scale, y up. " + n + " frames of " +
-    m.samples + " samples (" + (n < m.samples ? "decimated" : "all") + "); joint colours by " +
-    "the square root of the friction power, from 0 to the 98th percentile of the joints' " +
-    "friction powers over the run (" + fmt(pMax, 3) + " W; peak " + fmt(pPeak, 3) + " W). " +
+    m.samples + " samples (" + (n < m.samples ? "decimated" : "all") + "); " +
+    (pPeak === 0 ? "no joint dissipates friction power in this run (|Mf w| = 0 throughout). "
+      : "joint colours by the square root of the friction power, from 0 to the 98th percentile " +
+        "of the joints' friction powers over the run (" + fmt(pMax, 3) + " W; peak " +
+        fmt(pPeak, 3) + " W). ") +
     "Add #t=0.5 to the address to open at t = 0.5 s.";
 
   function draw() {

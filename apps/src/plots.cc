@@ -125,10 +125,10 @@ std::string preamble(const std::string& terminal, const char* what) {
     << "set style line 2 lc rgb \"#d62728\" lw 1.6 dt 2\n"
     << "set style line 3 lc rgb \"#2c8c3c\" lw 1.6\n"
     << "set style line 4 lc rgb \"#9ecae1\" lw 5\n"
-    // a tick step giving about 4 steps over a range r (gnuplot's own choice crowds a small
-    // panel with 10 or more); 1 for an empty range
-    << "nicetic(r) = (r <= 0 ? 1 : (nt_s = 10.0**floor(log10(r/4.0)), nt_f = r/4.0/nt_s, "
-       "nt_f < 1.5 ? nt_s : nt_f < 3.5 ? 2*nt_s : nt_f < 7.5 ? 5*nt_s : 10*nt_s))\n";
+    // a tick step of 1, 2 or 5 x 10^k giving 2.5 to 5 steps over a range r (gnuplot's own
+    // choice crowds a small panel with 10 or more); 1 for an empty range
+    << "nicetic(r) = (r <= 0 ? 1 : (nt_s = 10.0**floor(log10(r/5.0)), nt_f = r/5.0/nt_s, "
+       "nt_f <= 1 ? nt_s : nt_f <= 2 ? 2*nt_s : nt_f <= 5 ? 5*nt_s : 10*nt_s))\n";
   return s.str();
 }
 

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """animation.html in a real browser (Debian's chromium, headless): the page of the paper scene
 loads with no console message and no script error, and its screenshots at t = 0.2 s and 1.5 s
-both show the four links (their colours) and differ where the linkage moved.
+both show the four links (their colours) and differ where the linkage moved; an odd run (elbow
+down, no friction, gravity or loads, 2 frames) loads without error too.
 
 Usage: animation_browser.py FIVEBAR PAPER_YAML WORK_DIR
 Exits 77 (ctest: skipped) when no chromium is installed (scripts/test.sh installs it).
@@ -108,6 +109,28 @@ if len(shots) == 2:
         failures.append("the coupler B-C moved over %d pixels between t = 0.2 and 1.5 s" % moved)
     print("coupler B-C pixels at 0.2 s: %d, at 1.5 s: %d, changed: %d"
           % (len(shots["0.2"]["coupler B-C"]), len(shots["1.5"]["coupler B-C"]), moved))
+
+# an odd run: elbow down with other link lengths, no friction, no gravity, no loads (F arrow of
+# length 0, every friction power 0), 1 ms (2 frames): still drawn with no error
+odd = os.path.join(WORK, "odd")
+sets = ["mechanism.assembly=elbow_down", "mechanism.links.0.length=0.12",
+        "mechanism.links.2.length=0.3", "friction.model=none", "gravity=0", "loads.M1=0",
+        "loads.M2=0", "loads.M3=0", "loads.F=0", "simulation.duration=0.001"]
+p = subprocess.run([FIVEBAR, "simulate", PAPER, "--out", odd, "--no-plots"]
+                   + [a for s in sets for a in ("--set", s)], capture_output=True, text=True)
+if p.returncode != 0:
+    failures.append("simulate of the odd run failed: %s" % p.stderr)
+else:
+    dom, log = chromium("file://" + os.path.abspath(os.path.join(odd, "animation.html")),
+                        "--dump-dom")
+    status = re.search(r'<body data-status="([^"]*)"', dom)
+    if status is None or status.group(1) != "ok":
+        failures.append("odd run: page status %r" % (status.group(1) if status else None))
+    if "no joint dissipates friction power" not in dom:
+        failures.append("odd run: the note does not say that no friction power is dissipated")
+    console = [l for l in log.splitlines() if ":CONSOLE" in l]
+    if console:
+        failures.append("odd run: console messages: %s" % console)
 
 for f in failures:
     print("FAIL:", f)

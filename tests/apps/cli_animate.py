@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """End-to-end checks of animation.html without a browser: simulate writes it, self-contained and
 small; `fivebar animate` remakes it from a run folder, one per task of an optimize-like folder
-(the baseline as the ghost when present), and refuses bad folders with one line and exit 2.
+(the baseline as the ghost when present), labels an inverse run as such, and refuses bad folders
+(no run, a trajectory.csv without rows or cut short) with one line and exit 2.
 
 Usage: cli_animate.py FIVEBAR PAPER_YAML WORK_DIR
 """
@@ -77,6 +78,31 @@ else:
     remade = check_page(os.path.join(paper, "animation.html"), False)
     if remade["motion"]["th3"] != written["motion"]["th3"] or remade["motion"]["p2"] != written["motion"]["p2"]:
         failures.append("animate: frames differ from those simulate wrote")
+    # stuck read from the rates of trajectory.csv as the simulator's modes had it (the start
+    # from rest, where every rate is 0 for one row, is no stick on the paper scene)
+    if remade["motion"]["stuck"] != written["motion"]["stuck"]:
+        failures.append("animate: stuck joints differ from simulate's (first frames %s, %s)"
+                        % (remade["motion"]["stuck"][:3], written["motion"]["stuck"][:3]))
+
+# stick-slip: the stick scene with a crank torque that grows past breakaway; the stuck joints read
+# back from trajectory.csv's rates (an inner joint's within the integration's error of 0) are
+# those the simulator's modes gave
+slip = os.path.join(WORK, "stick_slip")
+stick_scene = os.path.join(os.path.dirname(PAPER), "stick_below_breakaway.yaml")
+code, out, err = run(["simulate", stick_scene, "--out", slip, "--no-plots",
+                      "--set", "loads.M1=-1.3057 - 0.3*t"])
+if code != 0:
+    failures.append("simulate stick_slip: exit %d %s" % (code, err))
+else:
+    written_slip = page_data(os.path.join(slip, "animation.html"))[1]["motion"]["stuck"]
+    code, out, err = run(["animate", slip])
+    remade_slip = page_data(os.path.join(slip, "animation.html"))[1]["motion"]["stuck"]
+    if len(set(written_slip)) < 3:
+        failures.append("stick_slip: expected all-stuck, partly stuck and free frames, got %s"
+                        % sorted(set(written_slip)))
+    if code != 0 or remade_slip != written_slip:
+        failures.append("stick_slip: animate's stuck joints differ from simulate's in %d frames"
+                        % sum(a != b for a, b in zip(remade_slip, written_slip)))
 
 # an optimize-like folder: two task folders, one with a baseline (the frictionless twin stands in)
 tasks = os.path.join(WORK, "tasks")
@@ -104,6 +130,33 @@ expect_error("does not close", ["animate", tasks, "--scene", PAPER,
                                 "--set", "mechanism.links.2.length=0.3"])
 if os.path.exists(os.path.join(tasks, "without_baseline", "animation.html")):
     failures.append("a refused animate wrote a page")
+
+# a run folder whose trajectory.csv lost its rows (header only) or its tail (cut mid-line):
+# refused, and the page from before is left as it was
+broken = os.path.join(WORK, "broken")
+shutil.rmtree(broken, ignore_errors=True)
+shutil.copytree(paper, broken)
+page = os.path.join(broken, "animation.html")
+before = open(page).read()
+lines = open(os.path.join(paper, "trajectory.csv")).read().split("\n")
+with open(os.path.join(broken, "trajectory.csv"), "w") as f:
+    f.write(lines[0] + "\n")
+expect_error("no data rows", ["animate", broken])
+with open(os.path.join(broken, "trajectory.csv"), "w") as f:
+    f.write("\n".join(lines[:40]) + "\n" + lines[40][:25])
+expect_error("trajectory.csv: line 41", ["animate", broken])
+if open(page).read() != before:
+    failures.append("a refused animate changed the page of %s" % broken)
+
+# an inverse run: the page names it as inverse dynamics, not as a simulation
+inverse = os.path.join(WORK, "inverse")
+code, out, err = run(["inverse", PAPER, "--motion", os.path.join(paper, "trajectory.csv"),
+                      "--out", inverse, "--no-plots"])
+code2, out2, err2 = run(["animate", inverse])
+if code != 0 or code2 != 0:
+    failures.append("inverse then animate: exit %d, %d: %s %s" % (code, code2, err, err2))
+elif page_data(os.path.join(inverse, "animation.html"))[1]["label"] != "inverse dynamics":
+    failures.append("animate of an inverse run: not labelled 'inverse dynamics'")
 
 for f in failures:
     print("FAIL:", f)

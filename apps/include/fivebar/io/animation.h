@@ -27,8 +27,10 @@ AnimationTrack animation_track(const std::vector<sim::Row>& rows);
 
 /// The track of a trajectory.csv (docs/outputs.md). A joint is stuck where the column
 /// stuck1..stuck5 is 1 when the file has them (optimize, inverse), else where its relative rate
-/// is exactly 0 (the simulator holds a stuck joint's rate at 0). Throws InputError for a missing
-/// column.
+/// is 0 (within 1e-6 of the fastest link's rate) on this row and a neighbouring one (the
+/// simulator holds a stuck joint's rate at 0; a single zero, as at a start from rest, is no
+/// stick). Throws InputError for a missing
+/// column or a table without rows.
 AnimationTrack animation_track(const CsvTable& table);
 
 /// What the page shows.
@@ -54,5 +56,9 @@ std::string animation_html(const Scene& scene, const AnimationInput& input);
 /// valid JSON.
 bool recorded_scene(const std::string& summary_json, std::string* scene,
                     std::vector<std::string>* sets);
+
+/// The `command` a run's summary.json records ("simulate", "inverse", ...); empty when the file
+/// is absent or names none. Throws InputError when it is not valid JSON.
+std::string recorded_command(const std::string& summary_json);
 
 }  // namespace fivebar::io
