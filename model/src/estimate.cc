@@ -22,7 +22,7 @@ double max_angle_difference(const std::vector<Row>& a, const std::vector<Row>& b
 }
 
 bool rounding_limited(double e, double rtol, const Result& run) {
-  if (rtol / 10 <= kRoundingCompanionRtol * 1.01) return true;
+  if (rtol / 10 < 0.99 * kRoundingCompanionRtol) return true;
   double largest = 0.0;
   for (const Row& r : run.rows) {
     for (int k = 0; k < kLinks; ++k) largest = std::max(largest, std::abs(r.theta[k]));
@@ -64,7 +64,7 @@ EstimatedRun simulate_to_target(const Params<double>& params, const LoadFunction
   const double target = o.target_error;
   // the first try: tight enough for the target, loose enough that its check is not rounding-limited
   if (o.auto_tolerance) {
-    o.rtol = o.atol = std::clamp(1e-4 * target, 100 * kRoundingCompanionRtol, 1e-6);
+    o.rtol = o.atol = std::clamp(1e-4 * target, 10 * kRoundingCompanionRtol, 1e-6);
   }
   for (int attempt = 0; attempt < 4; ++attempt) {
     out.run = simulate(params, loads, initial, o);

@@ -44,12 +44,12 @@ inline constexpr double kTightestRtol = 1e-13;
 inline constexpr double kTargetMargin = 1.0 / 3.0;
 
 /// Below this companion tolerance (rtol / 10 of the run) the companion's own rounding error is of
-/// the order of the run's: estimates at rtol 1e-12 and 1e-13 were 3 to 100 times below the
-/// difference between methods that agree at looser tolerances.
-inline constexpr double kRoundingCompanionRtol = 1e-13;
+/// the order of the run's: estimates at rtol 1e-12 and 1e-13 were up to 70 to 240 times below
+/// the difference to runs of other methods at rtol 1e-13 (docs/outputs.md).
+inline constexpr double kRoundingCompanionRtol = 1e-12;
 
 /// True when an estimate `e` of a run (its tolerance, its rows and steps) says nothing beyond the
-/// rounding of the solution: a companion tolerance at or below kRoundingCompanionRtol, or `e`
+/// rounding of the solution: a companion tolerance below kRoundingCompanionRtol, or `e`
 /// below 100 eps x the largest |theta| x the steps taken (rounding accumulated over the run).
 bool rounding_limited(double e, double rtol, const Result& run);
 
