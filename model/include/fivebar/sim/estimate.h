@@ -39,7 +39,7 @@ struct EstimatedRun {
 inline constexpr double kTightestRtol = 1e-13;
 
 /// The estimate meets the target only below this fraction of it: on 66 runs (6 scenes x 11
-/// integrators and tolerances, docs/outputs.md) the true error reached 1.4 times the estimate
+/// integrators and tolerances, docs/outputs.md) the true error reached 1.5 times the estimate
 /// wherever the estimate was above the rounding floor.
 inline constexpr double kTargetMargin = 1.0 / 3.0;
 
