@@ -57,9 +57,10 @@ bool rounding_limited(double e, double rtol, const Result& run);
 double max_angle_difference(const std::vector<Row>& a, const std::vector<Row>& b);
 
 /// Simulates with an error estimate. With options.auto_tolerance it starts from
-/// rtol = atol = 1e-4 target_error and tightens in proportion to the estimate until the target
-/// is met (at most four tries, never below kTightestRtol); where chaos makes the target
-/// unreachable it stops as soon as the proportional prediction says so, and the note says it.
+/// rtol = atol = 1e-4 target_error (not below 10 kRoundingCompanionRtol) and tightens in
+/// proportion to the estimate until the target is met with its margin (at most four tries, never
+/// below kTightestRtol); it stops at a rounding-limited estimate, and where chaos makes the target
+/// unreachable as soon as the proportional prediction says so; the note says which.
 EstimatedRun simulate_to_target(const Params<double>& params, const LoadFunction& loads,
                                 const Initial& initial, const Options& options);
 
