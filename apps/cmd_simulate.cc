@@ -127,7 +127,9 @@ void print_report(const Scene& scene, const sim::EstimatedRun& er, const sim::Ru
             << " rhs evaluations, " << run.stats.friction_events << " friction events, "
             << format_printf(run.stats.wall_time_s, "%.3f") << " s\n"
             << "  estimated error: " << format_printf(er.estimated_max_error_rad, "%.2e") << " rad"
-            << (er.target_met ? " (target met)" : "") << "\n";
+            << (er.target_met           ? " (target met)"
+                : er.rounding_limited ? " (limited by rounding: a lower bound)"
+                                      : "") << "\n";
   if (!er.note.empty()) std::cout << "  note: " << er.note << "\n";
   std::cout << "  energy: W_in " << format_printf(last.W_in, "%.6g") << " J, W_ext "
             << format_printf(last.W_ext, "%.6g") << " J, E_diss "

@@ -47,6 +47,7 @@ void estimate_json(const sim::EstimatedRun& er, Json* summary) {
   summary->set("estimated_max_error_rad", er.estimated_max_error_rad);
   summary->set("target_error", er.options.target_error);
   summary->set("target_met", er.target_met);
+  summary->set("estimate_rounding_limited", er.rounding_limited);
   summary->set("tolerance_choice", er.options.auto_tolerance ? "auto" : "scene");
   Json tried = Json::array();
   for (const sim::Attempt& a : er.attempts) {

@@ -2,7 +2,8 @@
 """End-to-end check (ctest apps.cli_diagnoses): a run that fails names the real cause before the
 model's message. A motion file in degrees and one with a 3 rad jump (inverse: exit 2 naming
 them, not "r_k * mu too large"); a load expression that leaves its domain mid-run (simulate:
-exit 3 naming the load and the time, without running to simulation.max_steps); an identify log
+exit 3 naming the load and the time, without running to simulation.max_steps); a run into a
+near-singular pose (simulate: exit 3 naming the pose and the time); an identify log
 whose torques carry the opposite sign (exit 3, no delay reported; --flip-torque-sign fits it).
 Usage: cli_diagnoses.py FIVEBAR PAPER_YAML WORK_DIR"""
 import json
@@ -46,6 +47,14 @@ expect(3, r"load M3 = nan at t=1.50\d* s is not finite",
        ["simulate", PAPER, "--set", "loads.M3=sqrt(1.5-t)", "--out", out, "--no-plots"])
 expect(3, r"load M3 = inf at t=0.5 s is not finite",
        ["simulate", PAPER, "--set", "loads.M3=1/(t-0.5)", "--out", out, "--no-plots"])
+# a light mechanism (cranks half the ground, no gravity) driven by constant torques turns until
+# its couplers lie straight: the run stops there naming the pose and the time, not the friction
+light = ["mechanism.ground_length=0.2", "mechanism.links.0.length=0.1",
+         "mechanism.links.1.length=0.1", "mechanism.links.2.length=0.2",
+         "mechanism.links.3.length=0.2", "mechanism.point_p=0.15", "gravity=0", "loads.M1=3",
+         "loads.M2=0", "loads.M3=0", "loads.F=0", "simulation.duration=3"]
+expect(3, r"at t=1.78\d* s \(theta1=6.32\d*, theta2=9.38\d*\): near-singular pose",
+       ["simulate", PAPER, "--out", out, "--no-plots"] + sum((["--set", k] for k in light), []))
 # the shipped angles-only log with its torques negated
 log = os.path.join(ROOT, "datasets/logs/paper_rates.csv")
 flipped = os.path.join(WORK, "flipped.csv")

@@ -65,16 +65,40 @@ TEST(Estimate, DefaultsMeetTheTargetAndTheEstimateIsHonest) {
   }
 }
 
-// a target the first tolerance cannot meet makes the run tighten, and report what it tried
+// a target the first tolerance cannot meet makes the run tighten, and report what it tried; the
+// tightest tolerances are limited by rounding (their check run cannot measure the error), so the
+// target is not claimed there: the estimate is flagged as a lower bound and the note says so
 TEST(Estimate, TighterTargetTightensTheTolerance) {
   Scene scene = load_scene(kRoot + "/datasets/scenes/paper.yaml",
                            {"simulation.target_error=1e-9", "simulation.duration=1"});
   const sim::EstimatedRun er = sim::simulate_to_target(
       scene.params, LoadExpressions(scene).function(), scene.initial, scene.options);
   ASSERT_TRUE(er.run.status.ok());
-  ASSERT_GE(er.attempts.size(), 1u);
-  EXPECT_LT(er.options.rtol, 1e-12);
-  EXPECT_TRUE(er.target_met) << er.note;
+  ASSERT_GE(er.attempts.size(), 2u);
+  EXPECT_LT(er.options.rtol, 1e-11);  // tighter than the first try
+  EXPECT_TRUE(er.rounding_limited);
+  EXPECT_FALSE(er.target_met);
+  EXPECT_NE(er.note.find("limited by rounding"), std::string::npos) << er.note;
+}
+
+// a target met keeps its margin: the estimate is at most a third of the target
+TEST(Estimate, TargetMetKeepsAMargin) {
+  Scene scene = load_scene(kRoot + "/datasets/scenes/paper.yaml",
+                           {"simulation.rtol=1e-6", "simulation.duration=0.6"});
+  const auto loads = LoadExpressions(scene).function();
+  const sim::EstimatedRun loose = sim::simulate_to_target(scene.params, loads, scene.initial,
+                                                          scene.options);
+  ASSERT_TRUE(loose.run.status.ok());
+  ASSERT_FALSE(loose.rounding_limited);
+  // a target just above the estimate, as the issue measured (9.9e-7 against 1e-6): not met
+  scene.options.target_error = 1.01 * loose.estimated_max_error_rad;
+  const sim::EstimatedRun near = sim::simulate_to_target(scene.params, loads, scene.initial,
+                                                         scene.options);
+  EXPECT_FALSE(near.target_met);
+  scene.options.target_error = 3.01 * loose.estimated_max_error_rad;
+  const sim::EstimatedRun met = sim::simulate_to_target(scene.params, loads, scene.initial,
+                                                        scene.options);
+  EXPECT_TRUE(met.target_met) << met.note;
 }
 
 // chaos: a target no tolerance can meet is said, with the estimate reached
