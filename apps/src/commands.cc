@@ -83,8 +83,8 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
         "must be >= 0 [rad/s] (0: the exact sign), got " + format_shortest(a.smooth_sign));
   }
   if (!(a.min_rate >= 0) || !std::isfinite(a.min_rate)) {
-    throw InputError(kFlags, "--min-rate",
-                     "must be >= 0 [rad/s], got " + format_shortest(a.min_rate));
+    // the command line's shared rule words it the same (command.cc, nonnegative_number)
+    throw InputError(kFlags, "--min-rate", "must be >= 0, got " + format_shortest(a.min_rate));
   }
   opt.loss_scale = a.loss_scale;
   opt.smoothing_velocity = a.smooth_sign;
