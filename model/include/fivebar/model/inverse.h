@@ -122,12 +122,8 @@ Status inverse_pass(const Params<T>& p, const Loads<T>& L, const T& th1, const T
         inverse_friction_arms(p, opt, wdot, slip, bristle, ev);
     std::array<T, kJoints> act;
     const bool motors = actuator_torques(p, ev->w, ev->slip, &act);
-    // the accelerations are given: a torque moves the reactions directly only (closed form)
-    const ReactionResponse<T> response = reaction_torque_response(k);
-    LoopAids<T> aids;
-    aids.response = &response;
     st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
-                       motors ? &act : nullptr, loop, aids);
+                       motors ? &act : nullptr, loop);
     if (!st.ok()) return st;
     // the implicit derivative (Jets) returns F of the final Mf already (F is affine in Mf)
     if (std::is_same_v<T, double> || !loop || !loop->set) solve(ev->Mf, &ev->F);
