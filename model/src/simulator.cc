@@ -86,6 +86,8 @@ struct Context {
   int n = kStates;                      ///< state size
   long rhs_evaluations = 0;
   Status failure;                       ///< last failure inside a callback
+  /// the right-hand side's last friction-loop solution: the next evaluation starts from it
+  FrictionWarmStart warm;
 };
 
 Status at_time(const Status& st, double t, double th1, double th2) {
@@ -142,12 +144,17 @@ const char* joint_name(int k) {
   return names[k];
 }
 
+/// Relative joint rates at a state from its first-order kinematics `k`.
+std::array<double, kJoints> joint_rates(const Kinematics<double>& k, const double* y) {
+  const Vec2<double> thd(y[2], y[3]);
+  return fivebar::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
+}
+
 /// Relative joint rates at a state (needs only the first-order kinematics).
 bool joint_rates(const Params<double>& p, const double* y, std::array<double, kJoints>* w) {
   Kinematics<double> k;
   if (!solve_kinematics(p, y[0], y[1], &k, 0.0, false).ok()) return false;
-  const Vec2<double> thd(y[2], y[3]);
-  *w = fivebar::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
+  *w = joint_rates(k, y);
   return true;
 }
 
@@ -192,7 +199,7 @@ int rhs(double t, const double* y, double* ydot, void* user) {
     return -1;  // fatal: the load is what fails, not the step
   }
   const Status st = forward_dynamics(*c.params, loads, y[0], y[1], y[2], y[3],
-                                     rhs_modes(c, y, &signs), c.eval, &ev, &z);
+                                     rhs_modes(c, y, &signs), c.eval, &ev, &z, &c.warm);
   if (!st.ok()) {
     c.failure = at_time(pose_cause(*c.params, st, y[0], y[1]), t, y[0], y[1]);
     return 1;  // recoverable: the integrator retries with a smaller step
@@ -221,8 +228,10 @@ bool any_stuck(const JointModes& slip) {
 
 /// Switch functions: s_k w_k of a slipping joint (positive while its rate keeps the slip
 /// direction) and the holding margin mu_s r_k N_k - |holding torque| of a stuck one
-/// (non-negative while friction holds it); +1 for joints without a Coulomb part.
-Status switch_values(Context& c, double t, const double* y, Switches* g) {
+/// (non-negative while friction holds it); +1 for joints without a Coulomb part. `kin` (may be
+/// null): the first-order kinematics at y, when the caller has them.
+Status switch_values(Context& c, double t, const double* y, Switches* g,
+                     const Kinematics<double>* kin = nullptr) {
   g->fill(1.0);
   if (c.locked) {
     LockAnalysis lock;
@@ -238,6 +247,8 @@ Status switch_values(Context& c, double t, const double* y, Switches* g) {
                                        c.eval, &ev);
     if (!st.ok()) return at_time(st, t, y[0], y[1]);
     w = ev.w;
+  } else if (kin) {
+    w = joint_rates(*kin, y);
   } else if (!joint_rates(*c.params, y, &w)) {
     return at_time(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t, y[0],
                    y[1]);
@@ -279,9 +290,11 @@ void advance_watch(Watch* w, const Switches& g) {
 
 /// Scans the last step (tp, tc] for the first point where a switch function fired: kSamples
 /// interior points of the cheap interpolant (confirmed on the dense output), then the step's
-/// end. Found: true with the bracket [*ta, *tb]. Not found: the watch moves to tc.
+/// end (its kinematics kin_c, may be null). Found: true with the bracket [*ta, *tb]. Not found:
+/// the watch moves to tc.
 Status scan_step(Context& c, detail::Integrator& integ, double tp, double tc, const double* yc,
-                 Watch* watch, bool* found, double* ta, double* tb) {
+                 const Kinematics<double>* kin_c, Watch* watch, bool* found, double* ta,
+                 double* tb) {
   *found = false;
   Watch w = *watch;
   double y[kMaxStates];
@@ -295,7 +308,7 @@ Status scan_step(Context& c, detail::Integrator& integ, double tp, double tc, co
       return c.failure.ok() ? Status::Error(StatusCode::kSolverFailed, integ.error()) : c.failure;
     }
     Switches g;
-    Status st = switch_values(c, ti, y, &g);
+    Status st = switch_values(c, ti, y, &g, end ? kin_c : nullptr);
     if (!st.ok()) return st;
     if (!end && any_of(fired(c, w, g))) {  // confirm on the accurate interpolant
       if (!integ.dense(ti, y)) return Status::Error(StatusCode::kSolverFailed, integ.error());
@@ -809,13 +822,21 @@ double coupler_sine_at(const Params<double>& p, const double* y) {
   return std::abs(k.sin43);
 }
 
+/// The first-order kinematics at the end of a step, shared by the singular-margin check and the
+/// switch scan: null where the pose cannot close.
+const Kinematics<double>* step_end_kinematics(const Params<double>& p, const double* y,
+                                              Kinematics<double>* k) {
+  return solve_kinematics(p, y[0], y[1], k, 0.0, false).ok() ? k : nullptr;
+}
+
 /// A run stops where |sin(th4 - th3)| reaches simulation.singular_margin: located on the dense
 /// output, the rows up to it written, then kNearSingular (the right-hand side itself only fails
 /// at half the margin, so that steps do not shrink without end next to the singular pose).
+/// `kin_c`: the kinematics at the step's end yc (null where it cannot close).
 Status stop_at_singular_margin(Loop& L, Result* result, const Options& options, double tp,
-                               double tc, const double* yc) {
+                               double tc, const double* yc, const Kinematics<double>* kin_c) {
   const double margin = options.singular_margin;
-  if (!(margin > 0.0) || coupler_sine_at(*L.c.params, yc) >= margin) return Status::Ok();
+  if (!(margin > 0.0) || (kin_c ? std::abs(kin_c->sin43) : 1.0) >= margin) return Status::Ok();
   double ta = tp, tb = tc, y[kMaxStates];
   std::copy(yc, yc + L.c.n, y);
   // (a failed dense output keeps the bracket reached: the run stops here either way)
@@ -877,12 +898,14 @@ Status advance(Loop& L, Result* result, const Options& options) {
                                      " steps between two output times"),
                    tc, yc[0], yc[1]);
   }
-  const Status singular = stop_at_singular_margin(L, result, options, tp, tc, yc);
+  Kinematics<double> kin;
+  const Kinematics<double>* kin_c = step_end_kinematics(*L.c.params, yc, &kin);
+  const Status singular = stop_at_singular_margin(L, result, options, tp, tc, yc, kin_c);
   if (!singular.ok()) return singular;
   bool found = false;
   double ta = tp, tb = tc;
   if (L.c.use_slip) {
-    const Status st = scan_step(L.c, *L.integ, tp, tc, yc, &L.watch, &found, &ta, &tb);
+    const Status st = scan_step(L.c, *L.integ, tp, tc, yc, kin_c, &L.watch, &found, &ta, &tb);
     if (!st.ok()) return st;
   }
   if (!found) {

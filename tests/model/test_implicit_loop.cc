@@ -36,7 +36,10 @@ void expect_same(const Jet6& implicit, const Jet6& full, const char* what) {
 }
 
 void expect_same(const Evaluation<Jet6>& a, const Evaluation<Jet6>& b) {
-  EXPECT_EQ(a.iterations, b.iterations);
+  // both by the fixed point, or both by the Newton fallback (the double loop reaches a
+  // contracting fixed point in fewer iterations than the loop iterated in Jets)
+  const int fixed_point_limit = EvalOptions{}.friction_max_iter;
+  EXPECT_EQ(a.iterations > fixed_point_limit, b.iterations > fixed_point_limit);
   EXPECT_EQ(a.slip, b.slip);
   expect_same(a.M1, b.M1, "M1");
   expect_same(a.M2, b.M2, "M2");

@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cmath>
+#include <type_traits>
 
 #include "fivebar/identification/parameters.h"
 #include "fivebar/model/dynamics.h"
@@ -124,26 +125,21 @@ class StructuredResidual {
       for (int i = 0; i < kInertialParams; ++i) F0[a] += st_.A(a, i) * pi[i];
     }
     std::array<T, kJoints> N, Mf;
-    for (int k = 0; k < kJoints; ++k) N[k] = sqrt(F0[2 * k] * F0[2 * k] + F0[2 * k + 1] * F0[2 * k + 1]);
-    bool converged = false;
-    for (int it = 0; it < max_iter_ && !converged; ++it) {
-      for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j] + motor[j];
-      double change = 0, scale = 1e-300;
-      for (int k = 0; k < kJoints; ++k) {
-        T fx = F0[2 * k], fy = F0[2 * k + 1];
-        for (int j = 0; j < kJoints; ++j) {
-          fx += st_.dF(2 * k, j) * Mf[j];
-          fy += st_.dF(2 * k + 1, j) * Mf[j];
-        }
-        const T n = sqrt(fx * fx + fy * fy);
-        change = std::max(change, std::abs(value_of(n) - value_of(N[k])));
-        scale = std::max(scale, std::abs(value_of(n)));
-        N[k] = n;
+    if constexpr (std::is_same_v<T, double>) {
+      if (!loop(phi, motor, F0, &N)) return false;
+    } else {
+      // the loop in double on the value parts, then its derivatives by one Newton step in Jets
+      // (implicit function theorem, as friction_loop_implicit in the model)
+      std::array<double, kJoints> phi_v, motor_v, N_v;
+      std::array<double, 10> F0_v;
+      for (int j = 0; j < kJoints; ++j) {
+        phi_v[j] = value_of(phi[j]);
+        motor_v[j] = value_of(motor[j]);
       }
-      if (!std::isfinite(change)) return false;
-      converged = change <= tol_ * scale;
+      for (int a = 0; a < 10; ++a) F0_v[a] = value_of(F0[a]);
+      if (!loop(phi_v, motor_v, F0_v, &N_v)) return false;
+      implicit_step(phi, motor, F0, N_v, &N);
     }
-    if (!converged) return false;  // Ceres rejects the step (the loop does not contract here)
     for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j] + motor[j];
     for (int a = 0; a < kActuators; ++a) {
       T m = T(st_.c(a)) + act.offset[a];
@@ -155,6 +151,68 @@ class StructuredResidual {
   }
 
  private:
+  /// F = F0 + dF Mf with Mf = phi N + motor (stacked F_1x, F_1y, ..., F_5x, F_5y).
+  template <typename T>
+  void reactions_of(const std::array<T, kJoints>& phi, const std::array<T, kJoints>& motor,
+                    const std::array<T, 10>& F0, const std::array<T, kJoints>& N,
+                    std::array<T, 10>* F) const {
+    *F = F0;
+    for (int j = 0; j < kJoints; ++j) {
+      const T Mf = phi[j] * N[j] + motor[j];
+      for (int a = 0; a < 10; ++a) (*F)[a] += st_.dF(a, j) * Mf;
+    }
+  }
+  /// The fixed point N = |F0 + dF (phi N + motor)| from N = |F0|; false when it does not
+  /// converge within max_iter_ (Ceres then rejects the step: the loop does not contract here).
+  template <typename T>
+  bool loop(const std::array<T, kJoints>& phi, const std::array<T, kJoints>& motor,
+            const std::array<T, 10>& F0, std::array<T, kJoints>* N) const {
+    using std::sqrt;
+    for (int k = 0; k < kJoints; ++k) {
+      (*N)[k] = sqrt(F0[2 * k] * F0[2 * k] + F0[2 * k + 1] * F0[2 * k + 1]);
+    }
+    std::array<T, 10> F;
+    for (int it = 0; it < max_iter_; ++it) {
+      reactions_of(phi, motor, F0, *N, &F);
+      double change = 0, scale = 1e-300;
+      for (int k = 0; k < kJoints; ++k) {
+        const T n = sqrt(F[2 * k] * F[2 * k] + F[2 * k + 1] * F[2 * k + 1]);
+        change = std::max(change, std::abs(value_of(n) - value_of((*N)[k])));
+        scale = std::max(scale, std::abs(value_of(n)));
+        (*N)[k] = n;
+      }
+      if (!std::isfinite(change)) return false;
+      if (change <= tol_ * scale) return true;
+    }
+    return false;
+  }
+  /// The Jet solution of the loop from its double solution N*: N = N* + (I - G_N)^-1 (G(N*) - N*)
+  /// with G(N) = |F(phi N)|, G_N in double; the value is N* refined, the derivatives
+  /// dN/dx = (I - G_N)^-1 G_x.
+  template <typename T>
+  void implicit_step(const std::array<T, kJoints>& phi, const std::array<T, kJoints>& motor,
+                     const std::array<T, 10>& F0, const std::array<double, kJoints>& N_star,
+                     std::array<T, kJoints>* N) const {
+    using std::sqrt;
+    std::array<T, kJoints> Ns;
+    for (int k = 0; k < kJoints; ++k) Ns[k] = T(N_star[k]);
+    std::array<T, 10> F;
+    reactions_of(phi, motor, F0, Ns, &F);
+    Eigen::Matrix<double, kJoints, kJoints> J = Eigen::Matrix<double, kJoints, kJoints>::Identity();
+    std::array<T, kJoints> r;
+    for (int k = 0; k < kJoints; ++k) {
+      const T n = sqrt(F[2 * k] * F[2 * k] + F[2 * k + 1] * F[2 * k + 1]);
+      r[k] = n - N_star[k];
+      if (!(value_of(n) > 0.0)) continue;
+      const double fx = value_of(F[2 * k]) / value_of(n), fy = value_of(F[2 * k + 1]) / value_of(n);
+      for (int j = 0; j < kJoints; ++j) {
+        J(k, j) -= (fx * st_.dF(2 * k, j) + fy * st_.dF(2 * k + 1, j)) * value_of(phi[j]);
+      }
+    }
+    const std::array<T, kJoints> dN = fivebar::detail::solve_with_double_matrix(J, r);
+    for (int k = 0; k < kJoints; ++k) (*N)[k] = dN[k] + N_star[k];
+  }
+
   FrictionParams<double> friction_;
   ActuatorParams<double> actuators_;
   std::array<double, kInertialParams> pi0_;

@@ -32,7 +32,9 @@ struct EvalOptions {
   double singular_margin = 0.0;  ///< fail with kNearSingular when |sin(th4 - th3)| is below
   double friction_tol = 1e-13;   ///< stop when max |N^i - N^(i-1)| <= tol * (max N + 1e-300)
   int friction_max_iter = 50;
-  bool want_reactions = true;    ///< compute F_k even when the scene has no friction
+  /// compute F_k even when the scene has no friction, and with friction from a last solve at the
+  /// converged friction torques (false: the friction loop's own F_k, consistent to friction_tol)
+  bool want_reactions = true;
   bool want_angles = true;       ///< compute th3, th4 (the dynamics itself needs neither)
   /// Rest rule of inverse dynamics (rest.h; forward dynamics ignores both): a joint with
   /// |w_k| <= rest_rate [rad/s] is at rest, not slipping: its Coulomb sign is that of its relative

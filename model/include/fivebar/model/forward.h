@@ -95,13 +95,28 @@ std::array<T, kJoints> forward_friction_arms(const Params<T>& p,
   return phi;
 }
 
+/// The change of the reactions per unit friction torque in forward dynamics with no joint stuck:
+/// directly (reaction_torque_response) and through the accelerations it brings,
+/// dthdd = -A^-1 J_w^T e_j (reaction_acceleration_response).
+template <typename T>
+ReactionResponse<T> forward_torque_response(const Params<T>& p, const Kinematics<T>& k,
+                                            const Mat2<T>& Ainv) {
+  ReactionResponse<T> dF = reaction_torque_response(k);
+  const std::array<Mat2<T>, kJoints> R = reaction_acceleration_response(p, k);
+  for (int j = 0; j < kJoints; ++j) {
+    const Vec2<T> dthdd = -(Ainv * joint_row(k, j).transpose());
+    for (int k2 = 0; k2 < kJoints; ++k2) dF[j][k2] += R[k2] * dthdd;
+  }
+  return dF;
+}
+
 /// forward_dynamics below; `loop` as in friction_loop (records the double solution, or
-/// differentiates it in Jets).
+/// differentiates it in Jets); `warm` as in LoopAids.
 template <typename T>
 Status forward_pass(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
                     const T& w1, const T& w2, const JointModes* slip, const EvalOptions& opt,
                     Evaluation<T>* ev, const std::array<T, kJoints>* bristle,
-                    LoopSolution* loop) {
+                    LoopSolution* loop, FrictionWarmStart* warm = nullptr) {
   Status st = solve_kinematics(p, th1, th2, &ev->kin, opt.singular_margin, opt.want_angles);
   if (!st.ok()) return st;
   const Kinematics<T>& k = ev->kin;
@@ -139,11 +154,26 @@ Status forward_pass(const Params<T>& p, const Loads<T>& L, const T& th1, const T
     const std::array<T, kJoints> phi = forward_friction_arms(p, slip, bristle, ev);
     std::array<T, kJoints> act;
     const bool motors = actuator_torques(p, ev->w, ev->slip, &act);
+    LoopAids<T> aids;
+    aids.warm = warm;
+    ReactionResponse<T> response;
+    if (stuck.count == 0 && !(loop && loop->set)) {
+      response = forward_torque_response(p, k, Ainv);
+      aids.response = &response;
+    }
     st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
-                       motors ? &act : nullptr, loop);
+                       motors ? &act : nullptr, loop, aids);
     if (!st.ok()) return st;
-    solve(ev->Mf, &ev->F);  // accelerations and reactions of the converged friction torques
-    reaction_norms(ev->F, &ev->N);
+    if (opt.want_reactions || stuck.count > 0) {
+      solve(ev->Mf, &ev->F);  // accelerations and reactions of the converged friction torques
+      reaction_norms(ev->F, &ev->N);
+    } else {
+      // the accelerations of the converged friction torques; F and N stay the loop's (consistent
+      // with Mf to friction_tol)
+      ev->thdd = Ainv * (rhs0 - friction_transpose(k, ev->Mf));
+      ev->alpha3 = k.G3.dot(ev->thdd) + ev->bias.h3;
+      ev->alpha4 = k.G4.dot(ev->thdd) + ev->bias.h4;
+    }
     for (int i = 0; i < stuck.count; ++i) {
       const int j = stuck.joint[i];
       using std::abs;
@@ -171,17 +201,21 @@ Status forward_pass(const Params<T>& p, const Loads<T>& L, const T& th1, const T
 /// Forward dynamics: thdd from the state (th, thd) and the loads, with the friction loop
 /// resolved. `slip` gives the Coulomb sign of each joint (the integrator's segment mode); pass
 /// nullptr to use sign(w_k), with sign(0) = 0. `bristle` holds the LuGre states z (kLuGre only;
-/// nullptr means z = 0).
+/// nullptr means z = 0). `warm` (may be null): the friction loop's solution of the previous
+/// evaluation, updated here; a caller evaluating nearby states in a row (the simulator) keeps it
+/// to start the next loop from (FrictionWarmStart: the same solution, in fewer iterations).
 template <typename T>
 Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, const T& th2,
                         const T& w1, const T& w2, const JointModes* slip,
                         const EvalOptions& opt, Evaluation<T>* ev,
-                        const std::array<T, kJoints>* bristle = nullptr) {
+                        const std::array<T, kJoints>* bristle = nullptr,
+                        FrictionWarmStart* warm = nullptr) {
   return detail::with_loop_shadow(
       p, L, slip, opt, ev, bristle,
       [&](const auto& pp, const auto& LL, const auto& v, const JointModes* s, auto* e,
           const auto* z, detail::LoopSolution* loop) {
-        return detail::forward_pass(pp, LL, v(th1), v(th2), v(w1), v(w2), s, opt, e, z, loop);
+        return detail::forward_pass(pp, LL, v(th1), v(th2), v(w1), v(w2), s, opt, e, z, loop,
+                                    warm);
       });
 }
 

@@ -19,6 +19,23 @@
 
 namespace fivebar {
 
+/// The previous solution of a friction loop, kept by a caller that evaluates nearby states one
+/// after the other (the simulator's right-hand side): the next loop starts from it where its
+/// fixed point is unique (the map contracts), so the start changes the cost, not the solution.
+struct FrictionWarmStart {
+  bool set = false;
+  std::array<double, kJoints> N{};  ///< the last consistent reactions [N]
+};
+
+/// Optional help for friction_loop; neither changes its solution.
+template <typename T>
+struct LoopAids {
+  /// the change of the reactions per unit friction torque (for torques before `extra`), known in
+  /// closed form: replaces the unit probes
+  const ReactionResponse<T>* response = nullptr;
+  FrictionWarmStart* warm = nullptr;  ///< double evaluations only (ignored for Jets)
+};
+
 namespace detail {
 
 /// The reactions as an affine map of the friction torques, F(Mf) = F0 + sum_j dF_j Mf_j, probed
@@ -38,9 +55,11 @@ struct AffineReactions {
   }
 };
 
-/// Probes `solve(Mf, F)` at Mf = 0 and at a unit torque per active joint.
+/// Probes `solve(Mf, F)` at Mf = 0 and, unless `response` gives the change of the reactions per
+/// unit torque (ReactionResponse, reactions.h), at a unit torque per active joint.
 template <typename T, typename Solve>
-AffineReactions<T> probe_reactions(const std::array<T, kJoints>& phi, Solve& solve) {
+AffineReactions<T> probe_reactions(const std::array<T, kJoints>& phi, Solve& solve,
+                                   const ReactionResponse<T>* response = nullptr) {
   AffineReactions<T> map;
   const std::array<T, kJoints> zero{};
   solve(zero, &map.F0);
@@ -48,6 +67,10 @@ AffineReactions<T> probe_reactions(const std::array<T, kJoints>& phi, Solve& sol
     map.active[j] = !is_exact_zero(phi[j]);
     if (!map.active[j]) {
       for (auto& v : map.dF[j]) v.setZero();
+      continue;
+    }
+    if (response) {
+      map.dF[j] = (*response)[j];
       continue;
     }
     std::array<T, kJoints> unit_torque{};
@@ -101,28 +124,81 @@ bool friction_newton(const std::array<T, kJoints>& phi, const EvalOptions& opt,
   return false;
 }
 
-/// Fixed-point iteration N <- |F(phi N)| from N = |F0|. True when it converged (N, Mf, F
-/// consistent); otherwise *contracting tells whether it was still contracting, *ratio the last
-/// ratio of successive changes.
+/// The map with its columns scaled by phi: F_k(phi N) = F0_k + sum_j B[k][j] N_j (the columns of
+/// joints without friction zero).
+template <typename T>
+struct ScaledReactions {
+  std::array<std::array<Vec2<T>, kJoints>, kJoints> B;  ///< B[k][j] = dF_j[k] phi_j
+  std::array<Vec2<T>, kJoints> F0;
+
+  ScaledReactions(const std::array<T, kJoints>& phi, const AffineReactions<T>& map) : F0(map.F0) {
+    for (int k = 0; k < kJoints; ++k) {
+      for (int j = 0; j < kJoints; ++j) {
+        B[k][j] = map.active[j] ? Vec2<T>(map.dF[j][k] * phi[j]) : Vec2<T>::Zero();
+      }
+    }
+  }
+  /// F = F(phi N) and its norms n_k = |F_k| (one evaluation of the loop's map N -> |F(phi N)|)
+  void evaluate(const std::array<T, kJoints>& N, std::array<Vec2<T>, kJoints>* F,
+                std::array<T, kJoints>* n) const {
+    using std::sqrt;
+    for (int k = 0; k < kJoints; ++k) {
+      Vec2<T> f = F0[k];
+      for (int j = 0; j < kJoints; ++j) f += B[k][j] * N[j];
+      (*F)[k] = f;
+      (*n)[k] = sqrt(f.squaredNorm());
+    }
+  }
+  /// An upper bound of the Lipschitz constant of N -> |F(phi N)| in the max norm:
+  /// max_k sum_j |B[k][j]| (|v| <= |v_x| + |v_y|). Below 1 the map contracts everywhere: its
+  /// fixed point is unique and the iteration reaches it from any start.
+  double contraction_bound() const {
+    double worst = 0.0;
+    for (int k = 0; k < kJoints; ++k) {
+      double row = 0.0;
+      for (int j = 0; j < kJoints; ++j) {
+        row += std::abs(value_of(B[k][j].x())) + std::abs(value_of(B[k][j].y()));
+      }
+      worst = std::max(worst, row);
+    }
+    return worst;
+  }
+};
+
+/// max_k |a_k - b_k| and max_k |a_k| (at least 1e-300), the loop's convergence test quantities.
+template <typename T>
+void change_and_scale(const std::array<T, kJoints>& a, const std::array<T, kJoints>& b,
+                      double* change, double* scale) {
+  *change = 0.0;
+  *scale = 1e-300;
+  for (int k = 0; k < kJoints; ++k) {
+    *change = std::max(*change, std::abs(value_of(a[k]) - value_of(b[k])));
+    *scale = std::max(*scale, std::abs(value_of(a[k])));
+  }
+}
+
+/// Fixed-point iteration N <- |F(phi N)| from `start` (nullptr: N = |F0|). True when it converged
+/// (N, Mf, F consistent); otherwise *contracting tells whether it was still contracting, *ratio
+/// the last ratio of successive changes.
 template <typename T>
 bool friction_fixed_point(const std::array<T, kJoints>& phi, const EvalOptions& opt,
-                          const AffineReactions<T>& map, std::array<T, kJoints>* N,
-                          std::array<T, kJoints>* Mf, std::array<Vec2<T>, kJoints>* F,
-                          int* iterations, bool* contracting, double* ratio) {
-  reaction_norms(map.F0, N);
+                          const ScaledReactions<T>& map, const std::array<T, kJoints>* start,
+                          std::array<T, kJoints>* N, std::array<T, kJoints>* Mf,
+                          std::array<Vec2<T>, kJoints>* F, int* iterations, bool* contracting,
+                          double* ratio) {
+  if (start) {
+    *N = *start;
+  } else {
+    reaction_norms(map.F0, N);
+  }
   double prev_err = 0.0;
   *contracting = true;
   *ratio = 0.0;
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
-    for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
     const std::array<T, kJoints> N_old = *N;
-    map(*Mf, F);
-    reaction_norms(*F, N);
-    double err = 0.0, scale = 1e-300;
-    for (int j = 0; j < kJoints; ++j) {
-      err = std::max(err, std::abs(value_of((*N)[j]) - value_of(N_old[j])));
-      scale = std::max(scale, std::abs(value_of((*N)[j])));
-    }
+    map.evaluate(N_old, F, N);
+    double err, scale;
+    change_and_scale(*N, N_old, &err, &scale);
     *iterations = it;
     if (!std::isfinite(err)) {
       *contracting = false;
@@ -140,6 +216,70 @@ bool friction_fixed_point(const std::array<T, kJoints>& phi, const EvalOptions& 
       return false;
     }
     prev_err = err;
+  }
+  return false;
+}
+
+/// r <- J^-1 r for a strictly diagonally dominant J (Gaussian elimination, no pivoting needed).
+/// (Loops unrolled: five unknowns, called at every step of the loop.)
+inline void solve_dominant(double J[kJoints][kJoints], double r[kJoints]) {
+#pragma GCC unroll 5
+  for (int c = 0; c < kJoints; ++c) {
+    const double inv = 1.0 / J[c][c];
+#pragma GCC unroll 5
+    for (int i = c + 1; i < kJoints; ++i) {
+      const double f = J[i][c] * inv;
+#pragma GCC unroll 5
+      for (int j = c + 1; j < kJoints; ++j) J[i][j] -= f * J[c][j];
+      r[i] -= f * r[c];
+    }
+  }
+#pragma GCC unroll 5
+  for (int c = kJoints - 1; c >= 0; --c) {
+#pragma GCC unroll 5
+    for (int j = c + 1; j < kJoints; ++j) r[c] -= J[c][j] * r[j];
+    r[c] /= J[c][c];
+  }
+}
+
+/// The fixed point of a contracting map (ScaledReactions::contraction_bound() < 1, so that it is
+/// unique and I - dG/dN is strictly diagonally dominant) in fewer evaluations: the fixed-point
+/// evaluation N' = G(N) = |F(phi N)| alternates with a Newton step from N, and the loop stops on
+/// the fixed point's own test (max |N' - N| <= tol max N') with N = N'. From `start` (nullptr:
+/// N = |F0|); false if it did not converge within friction_max_iter evaluations.
+inline bool friction_contracting_newton(const std::array<double, kJoints>& phi,
+                                        const EvalOptions& opt,
+                                        const ScaledReactions<double>& map,
+                                        const std::array<double, kJoints>* start,
+                                        std::array<double, kJoints>* N_out,
+                                        std::array<double, kJoints>* Mf,
+                                        std::array<Vec2<double>, kJoints>* F, int* iterations) {
+  std::array<double, kJoints> N, Nn;
+  if (start) {
+    N = *start;
+  } else {
+    reaction_norms(map.F0, &N);
+  }
+  for (int it = 1; it <= opt.friction_max_iter; ++it) {
+    map.evaluate(N, F, &Nn);
+    double err, scale;
+    change_and_scale(Nn, N, &err, &scale);
+    *iterations = it;
+    if (!std::isfinite(err)) return false;
+    if (err <= opt.friction_tol * scale) {
+      *N_out = Nn;
+      for (int k = 0; k < kJoints; ++k) (*Mf)[k] = phi[k] * Nn[k];
+      return true;
+    }
+    // Newton on R(N) = N - G(N), dG_k/dN_j = F_k . B_kj / |F_k|: N <- N - (I - dG/dN)^-1 R
+    double J[kJoints][kJoints], step[kJoints];
+    for (int k = 0; k < kJoints; ++k) {
+      const Vec2<double> u = Nn[k] > 0.0 ? Vec2<double>((*F)[k] / Nn[k]) : Vec2<double>::Zero();
+      for (int j = 0; j < kJoints; ++j) J[k][j] = (k == j) - u.dot(map.B[k][j]);
+      step[k] = N[k] - Nn[k];
+    }
+    solve_dominant(J, step);
+    for (int k = 0; k < kJoints; ++k) N[k] -= step[k];
   }
   return false;
 }
@@ -302,7 +442,7 @@ template <typename T, typename Solve>
 Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions& opt,
                            Solve&& solve, std::array<T, kJoints>* N, std::array<T, kJoints>* Mf,
                            std::array<Vec2<T>, kJoints>* F, int* iterations,
-                           LoopSolution* loop = nullptr) {
+                           LoopSolution* loop = nullptr, const LoopAids<T>& aids = {}) {
   if constexpr (!std::is_same_v<T, double>) {
     if (loop && loop->set) {
       friction_loop_implicit(phi, *loop, solve, N, Mf, F, iterations);
@@ -310,16 +450,48 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
     }
   }
   Mf->fill(T(0));
-  const AffineReactions<T> map = probe_reactions(phi, solve);
+  const AffineReactions<T> map = probe_reactions(phi, solve, aids.response);
+  const ScaledReactions<T> scaled(phi, map);
+  // a warm start only where the fixed point is unique (a contraction): the same solution, sooner
+  FrictionWarmStart* warm = std::is_same_v<T, double> ? aids.warm : nullptr;
+  const std::array<T, kJoints>* start = nullptr;
+  std::array<T, kJoints> N_warm;
+  const bool contracts = scaled.contraction_bound() < 1.0;
+  if (warm && warm->set && contracts) {
+    for (int j = 0; j < kJoints; ++j) N_warm[j] = T(warm->N[j]);
+    start = &N_warm;
+  }
   bool contracting = true;
   double ratio = 0.0;
-  if (!friction_fixed_point(phi, opt, map, N, Mf, F, iterations, &contracting, &ratio)) {
+  bool converged = false;
+  if constexpr (std::is_same_v<T, double>) {
+    // a contraction: unique fixed point, reached sooner by Newton steps
+    if (contracts) {
+      converged = friction_contracting_newton(phi, opt, scaled, start, N, Mf, F, iterations);
+    }
+  }
+  if (!converged) {
+    converged =
+        friction_fixed_point(phi, opt, scaled, start, N, Mf, F, iterations, &contracting, &ratio);
+  }
+  if (!converged && start) {  // (a contraction converges from anywhere: not expected)
+    converged = friction_fixed_point<T>(phi, opt, scaled, nullptr, N, Mf, F, iterations,
+                                        &contracting, &ratio);
+  }
+  if (!converged) {
     const Status st = friction_newton_fallback(phi, opt, map, contracting, ratio, N);
-    if (!st.ok()) return st;
+    if (!st.ok()) {
+      if (warm) warm->set = false;
+      return st;
+    }
     for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
     solve(*Mf, F);
     reaction_norms(*F, N);
     *iterations = opt.friction_max_iter + 1;  // marks a Newton solve
+  }
+  if (warm) {
+    warm->set = true;
+    for (int j = 0; j < kJoints; ++j) warm->N[j] = value_of((*N)[j]);
   }
   if constexpr (std::is_same_v<T, double>) {
     if (loop) *loop = LoopSolution{true, *N, map, *iterations};
@@ -335,19 +507,24 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
 /// torques Mf; phi_k = r_k f_k(w_k) is fixed. `extra` (may be null) adds load-independent
 /// torques (the actuators' friction, actuator.h): Mf_k = phi_k N_k + extra_k. The caller solves
 /// once more with the returned Mf. `loop`: see joint_friction_loop (the implicit derivative).
+/// `aids`: the reactions' response to the torques, known in closed form (no probes), and a warm
+/// start; neither changes the solution.
 template <typename T, typename Solve>
 Status friction_loop(const std::array<T, kJoints>& phi, const EvalOptions& opt, Solve&& solve,
                      std::array<T, kJoints>* N, std::array<T, kJoints>* Mf,
                      std::array<Vec2<T>, kJoints>* F, int* iterations,
                      const std::array<T, kJoints>* extra = nullptr,
-                     detail::LoopSolution* loop = nullptr) {
-  if (!extra) return detail::joint_friction_loop(phi, opt, solve, N, Mf, F, iterations, loop);
+                     detail::LoopSolution* loop = nullptr, const LoopAids<T>& aids = {}) {
+  if (!extra) {
+    return detail::joint_friction_loop(phi, opt, solve, N, Mf, F, iterations, loop, aids);
+  }
   auto shifted = [&](const std::array<T, kJoints>& M, std::array<Vec2<T>, kJoints>* out) {
     std::array<T, kJoints> all = M;
     for (int j = 0; j < kJoints; ++j) all[j] += (*extra)[j];
     solve(all, out);
   };
-  const Status st = detail::joint_friction_loop(phi, opt, shifted, N, Mf, F, iterations, loop);
+  const Status st =
+      detail::joint_friction_loop(phi, opt, shifted, N, Mf, F, iterations, loop, aids);
   for (int j = 0; j < kJoints; ++j) (*Mf)[j] += (*extra)[j];
   return st;
 }

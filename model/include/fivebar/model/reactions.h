@@ -14,18 +14,19 @@
 
 namespace fivebar {
 
-/// Newton-Euler reactions of the five joints for given accelerations thdd and friction torques.
+namespace detail {
+
+/// The reactions from the links' accelerations: coupler angular accelerations al3, al4,
+/// centre-of-mass accelerations a, gravity gvec, loads Fvec (at P) and M3, friction torques Mf.
 /// Links 3 and 4: moments about C give two equations in F2 (determinant l3 l4 sin(th4 - th3));
-/// then F3, F4 from the coupler force balances and F1, F5 from the cranks'.
+/// then F3, F4 from the coupler force balances and F1, F5 from the cranks'. Affine in
+/// (al3, al4, a, gvec, Fvec, M3, Mf) jointly: all of them zero gives zero reactions.
 template <typename T>
-void reactions(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& b, const Loads<T>& L,
-               const Vec2<T>& Fvec, const Vec2<T>& thdd, const std::array<T, kJoints>& Mf,
-               std::array<Vec2<T>, kJoints>* F, T* alpha3, T* alpha4) {
-  const T al3 = k.G3.dot(thdd) + b.h3;
-  const T al4 = k.G4.dot(thdd) + b.h4;
-  std::array<Vec2<T>, kLinks> a;  // centre-of-mass accelerations
-  for (int i = 0; i < kLinks; ++i) a[i] = k.Gc[i] * thdd + b.hc[i];
-  const Vec2<T> gvec(T(0), -p.gravity);
+void reactions_of_accelerations(const Params<T>& p, const Kinematics<T>& k, const T& al3,
+                                const T& al4, const std::array<Vec2<T>, kLinks>& a,
+                                const Vec2<T>& gvec, const Vec2<T>& Fvec, const T& M3,
+                                const std::array<T, kJoints>& Mf,
+                                std::array<Vec2<T>, kJoints>* F) {
   const T& m1 = p.links[0].mass;
   const T& m2 = p.links[1].mass;
   const T& m3 = p.links[2].mass;
@@ -38,7 +39,7 @@ void reactions(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& b, con
   const Vec2<T> u3 = k.B - k.C, u4 = k.D - k.C;
   const Vec2<T> q3 = k.c[2] - k.C, q4 = k.c[3] - k.C;
   const T S3 = p.links[2].inertia * al3 + m3 * cross(q3, Vec2<T>(a[2] - gvec)) -
-               cross(Vec2<T>(k.P - k.C), Fvec) - L.M3 + Mf[1] - Mf[2];
+               cross(Vec2<T>(k.P - k.C), Fvec) - M3 + Mf[1] - Mf[2];
   // link 4 about C: (D-C) x (-F4) + (c4-C) x m4 g - Mf3 + Mf4 = J4 al4 + m4 (c4-C) x a4,
   // with F4 = F2 - R3 - R4
   const T S4 = -p.links[3].inertia * al4 - m4 * cross(q4, Vec2<T>(a[3] - gvec)) - Mf[2] + Mf[3] +
@@ -53,8 +54,64 @@ void reactions(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& b, con
   // cranks: F1 - F2 + m1 g = m1 a1, F4 + F5 + m2 g = m2 a2
   (*F)[0] = m1 * (a[0] - gvec) + F2;
   (*F)[4] = m2 * (a[1] - gvec) - (*F)[3];
-  *alpha3 = al3;
-  *alpha4 = al4;
+}
+
+}  // namespace detail
+
+/// Newton-Euler reactions of the five joints for given accelerations thdd and friction torques.
+template <typename T>
+void reactions(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& b, const Loads<T>& L,
+               const Vec2<T>& Fvec, const Vec2<T>& thdd, const std::array<T, kJoints>& Mf,
+               std::array<Vec2<T>, kJoints>* F, T* alpha3, T* alpha4) {
+  *alpha3 = k.G3.dot(thdd) + b.h3;
+  *alpha4 = k.G4.dot(thdd) + b.h4;
+  std::array<Vec2<T>, kLinks> a;  // centre-of-mass accelerations
+  for (int i = 0; i < kLinks; ++i) a[i] = k.Gc[i] * thdd + b.hc[i];
+  detail::reactions_of_accelerations(p, k, *alpha3, *alpha4, a, Vec2<T>(T(0), -p.gravity), Fvec,
+                                     L.M3, Mf, F);
+}
+
+/// Linear responses of the reactions: dF[j][k] is the change of F_k per unit of the input j.
+template <typename T>
+using ReactionResponse = std::array<std::array<Vec2<T>, kJoints>, kJoints>;
+
+/// The change of the reactions per unit friction torque Mf_j at fixed accelerations (inverse
+/// dynamics). Mf enters only the moment balances of links 3 and 4 (S3 + Mf_B - Mf_C,
+/// S4 - Mf_C + Mf_D), so it moves F2, and by the force balances F1, F3, F4 with it and F5
+/// against it; the cranks' torques Mf_O, Mf_D0 leave the reactions as they are.
+template <typename T>
+ReactionResponse<T> reaction_torque_response(const Kinematics<T>& k) {
+  const Vec2<T> u3 = k.B - k.C, u4 = k.D - k.C;
+  const T det = cross(u3, u4);
+  // F2 per unit S3 and per unit S4 (solution of u3 x F2 = S3, u4 x F2 = S4)
+  const Vec2<T> f3 = u4 / det, f4 = -u3 / det;
+  const std::array<Vec2<T>, kJoints> dF2 = {Vec2<T>::Zero(), f3, Vec2<T>(-f3 - f4), f4,
+                                            Vec2<T>::Zero()};
+  ReactionResponse<T> out;
+  for (int j = 0; j < kJoints; ++j) {
+    for (int i = 0; i < 4; ++i) out[j][i] = dF2[j];
+    out[j][4] = -dF2[j];
+  }
+  return out;
+}
+
+/// The change of the reactions per unit crank acceleration: R[k] * dthdd is the change of F_k
+/// (no gravity, loads, velocity terms or friction torques in a change).
+template <typename T>
+std::array<Mat2<T>, kJoints> reaction_acceleration_response(const Params<T>& p,
+                                                            const Kinematics<T>& k) {
+  std::array<Mat2<T>, kJoints> R;
+  const Vec2<T> zero = Vec2<T>::Zero();
+  const std::array<T, kJoints> no_torque{};
+  for (int c = 0; c < kDof; ++c) {
+    std::array<Vec2<T>, kLinks> a;
+    for (int i = 0; i < kLinks; ++i) a[i] = k.Gc[i].col(c);
+    std::array<Vec2<T>, kJoints> F;
+    detail::reactions_of_accelerations(p, k, k.G3[c], k.G4[c], a, zero, zero, T(0), no_torque,
+                                       &F);
+    for (int j = 0; j < kJoints; ++j) R[j].col(c) = F[j];
+  }
+  return R;
 }
 
 /// |F_k| of the five joints.

@@ -1,0 +1,174 @@
+#!/usr/bin/env python3
+"""Measures what users wait for, side by side in one run, and writes docs/benchmarks.md.
+
+    python3 scripts/bench_table.py [--baseline OTHER_FIVEBAR] [--repeats 3] [--skip-optimize]
+
+Rows: the right-hand side with and without friction (bench_model), the paper scene simulated to
+1e-6 and 1e-8 rad, identify (per joint, friction and inertia), excite (per joint, worst std,
+10 s) and optimize per task of datasets/tasks/paper_tasks.yaml; the peers' five-bar benchmarks
+(MuJoCo, Simbody) when they are built. With --baseline, every command runs alternately with this
+build's binary and the other one, and the table gives both medians and their ratio (the machine
+may be shared: ratios of interleaved runs are what to compare, not absolute times).
+"""
+import argparse
+import csv
+import json
+import os
+import re
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BUILD = os.path.join(ROOT, "build", "release")
+FIVEBAR = os.path.join(BUILD, "apps", "fivebar")
+BENCH_MODEL = os.path.join(BUILD, "tests", "bench", "bench_model")
+PEERS = os.path.join(BUILD, "tests", "bench", "peers")
+SCENE = os.path.join(ROOT, "datasets", "scenes", "paper.yaml")
+LOG = os.path.join(ROOT, "datasets", "logs", "per_joint_multisine.csv")
+TASKS = os.path.join(ROOT, "datasets", "tasks", "paper_tasks.yaml")
+OUT = os.path.join(ROOT, "docs", "benchmarks.md")
+
+
+def run(cmd):
+    """Runs cmd; returns its wall time [s] (raises on failure)."""
+    start = time.perf_counter()
+    done = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    elapsed = time.perf_counter() - start
+    if done.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} exited {done.returncode}: {done.stderr.strip()[-400:]}")
+    return elapsed
+
+
+def commands(out):
+    """(name, arguments after the binary, function reading the time [s] from `out`)."""
+    def summary_time(key, name="summary.json"):
+        return lambda: json.load(open(os.path.join(out, name)))[key]
+
+    sims = []
+    for target in ("1e-6", "1e-8"):
+        sims.append((f"simulate paper scene to {target} rad (solver time)",
+                     ["simulate", SCENE, "--set", f"simulation.target_error={target}", "--out",
+                      out], summary_time("wall_time_s")))
+    return sims + [
+        ("identify --per-joint --estimate friction,inertia (fit)",
+         ["identify", SCENE, "--log", LOG, "--per-joint", "--estimate", "friction,inertia",
+          "--out", out], summary_time("identification_wall_time_s", "identification.json")),
+        ("excite --per-joint --criterion worst-std, 10 s (whole command)",
+         ["excite", SCENE, "--per-joint", "--criterion", "worst-std", "--duration", "10",
+          "--torque-limit", "13.4", "--out", out], None),
+    ]
+
+
+def measure(binaries, repeats, skip_optimize):
+    """rows: (name, [median time per binary]) measured alternately."""
+    rows = []
+    with tempfile.TemporaryDirectory() as out:
+        for name, args, read in commands(out):
+            times = [[] for _ in binaries]
+            for _ in range(repeats):
+                for i, binary in enumerate(binaries):
+                    wall = run([binary] + args)
+                    times[i].append(read() if read else wall)
+            rows.append((name, [statistics.median(t) for t in times]))
+        if not skip_optimize:
+            per_task = [{} for _ in binaries]
+            for i, binary in enumerate(binaries):
+                run([binary, "optimize", SCENE, "--tasks", TASKS, "--out", out])
+                with open(os.path.join(out, "summary.csv")) as f:
+                    for r in csv.DictReader(f):
+                        per_task[i][r["task"]] = float(r["wall_time_s"])
+            for task in per_task[0]:
+                rows.append((f"optimize task {task}",
+                             [p.get(task, float("nan")) for p in per_task]))
+    return rows
+
+
+def right_hand_side():
+    """Median ns of bench_model's RightHandSide benchmarks, or None when it is not built."""
+    if not os.path.exists(BENCH_MODEL):
+        return None
+    done = subprocess.run([BENCH_MODEL, "--benchmark_filter=RightHandSide",
+                           "--benchmark_repetitions=5", "--benchmark_report_aggregates_only",
+                           "--benchmark_format=json"], stdout=subprocess.PIPE, text=True,
+                          check=True)
+    out = {}
+    for b in json.loads(done.stdout)["benchmarks"]:
+        if b.get("aggregate_name") == "median":
+            out[b["run_name"].split("/")[-1]] = b["cpu_time"]
+    return out
+
+
+def peers():
+    """Lines on the peers' benchmarks: their own output, or why there is none."""
+    found = sorted(f for f in os.listdir(PEERS) if f.startswith("bench_peers_")) \
+        if os.path.isdir(PEERS) else []
+    if not found:
+        return ["MuJoCo and Simbody are not built on this machine (their benchmarks build only "
+                "when libmujoco-dev / libsimbody-dev are installed), so no peer rows."]
+    lines = []
+    for f in found:
+        done = subprocess.run([os.path.join(PEERS, f)], stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True)
+        lines += [f"`{f}`:", "```", done.stdout.strip(), "```"]
+    return lines
+
+
+def seconds(x):
+    return f"{x * 1e3:.1f} ms" if x < 1 else f"{x:.2f} s"
+
+
+def write(rows, rhs, binaries, repeats):
+    lines = ["# Benchmarks", "",
+             "Written by `python3 scripts/bench_table.py` (run it again after a change: it "
+             "rebuilds nothing, it measures `build/release`). Times are medians of "
+             f"{repeats} runs; the machine it ran on may be shared, so compare ratios measured "
+             "in the same run rather than absolute times.", "",
+             f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} on "
+             f"{os.cpu_count()} cores.", "", "## Right-hand side", ""]
+    if rhs:
+        lines += ["CPU time of one evaluation (`bench_model --benchmark_filter=RightHandSide`, median of "
+                  "5 repetitions):", "", "| evaluation | ns |", "|---|---|"]
+        for k, v in rhs.items():
+            lines.append(f"| {k} | {v:.0f} |")
+        if "friction" in rhs and "frictionless" in rhs:
+            lines += ["", f"With friction the right-hand side costs "
+                      f"{rhs['friction'] / rhs['frictionless']:.2f} times the frictionless one."]
+    else:
+        lines.append("bench_model is not built (`cmake --build --preset release --target "
+                     "bench_model`).")
+    lines += ["", "## Commands", ""]
+    if rows is None:
+        lines.append(f"Not measured: `{os.path.relpath(FIVEBAR, ROOT)}` was not built when the "
+                     "table was written (`scripts/build.sh`, then run the script again).")
+    elif len(binaries) == 2:
+        lines += [f"This build against `{binaries[1]}`, run alternately.", "",
+                  "| what | this build | other | other / this |", "|---|---|---|---|"]
+        for name, t in rows:
+            lines.append(f"| {name} | {seconds(t[0])} | {seconds(t[1])} | {t[1] / t[0]:.2f} |")
+    else:
+        lines += ["| what | time |", "|---|---|"]
+        for name, t in rows:
+            lines.append(f"| {name} | {seconds(t[0])} |")
+    lines += ["", "## Peers", ""] + peers()
+    with open(OUT, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--baseline", help="another fivebar binary to run alternately with this one")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--skip-optimize", action="store_true", help="leave out optimize (minutes)")
+    a = ap.parse_args()
+    binaries = [FIVEBAR] + ([a.baseline] if a.baseline else [])
+    rhs = right_hand_side()
+    rows = measure(binaries, a.repeats, a.skip_optimize) if os.path.exists(FIVEBAR) else None
+    write(rows, rhs, binaries, a.repeats)
+    print(f"wrote {OUT}")
+
+
+if __name__ == "__main__":
+    main()

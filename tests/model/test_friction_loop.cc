@@ -1,0 +1,146 @@
+// The friction loop's shortcuts (friction_loop.h): the reactions' response to the friction
+// torques in closed form against unit probes of the reactions, the contracting loop's Newton
+// steps against the plain fixed point, and the warm start against the cold loop, on seeded
+// random states: each shortcut reaches the same solution.
+#include <ceres/jet.h>
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "fivebar/model/dynamics.h"
+#include "paper.h"
+
+namespace fivebar {
+namespace {
+
+// the reactions are affine in the torques: probes and closed form differ by round-off of
+// reactions of ~1e3 N
+constexpr double kResponseTol = 1e-9;
+// two solutions of the loop each within friction_tol (1e-13) of the fixed point, relative
+constexpr double kSameSolution = 1e-11;
+
+JointModes random_modes(std::mt19937_64& rng) {
+  JointModes m;
+  for (auto& x : m) x = rng() % 2 ? JointMode::kSlipPositive : JointMode::kSlipNegative;
+  return m;
+}
+
+/// Change of the reactions per unit torque at joint j, by probing `solve` at 0 and e_j.
+template <typename Solve>
+std::array<Vec2<double>, kJoints> probe(Solve&& solve, int j) {
+  std::array<double, kJoints> zero{}, unit{};
+  unit[j] = 1.0;
+  std::array<Vec2<double>, kJoints> F0, F1;
+  solve(zero, &F0);
+  solve(unit, &F1);
+  for (int k = 0; k < kJoints; ++k) F1[k] -= F0[k];
+  return F1;
+}
+
+TEST(FrictionLoop, ClosedFormResponseMatchesProbes) {
+  const Params<double> p = paper_params();
+  for (const auto& s : testing::random_states(p, 50, 11)) {
+    Kinematics<double> k;
+    ASSERT_TRUE(solve_kinematics(p, s.th1, s.th2, &k).ok());
+    Bias<double> b;
+    compute_bias(p, k, s.w1, s.w2, &b);
+    const Vec2<double> Fvec = force_vector(k, s.loads);
+    Mat2<double> A;
+    Vec2<double> rhs0;
+    mass_and_forces(p, k, b, s.loads, Fvec, &A, &rhs0);
+    const Mat2<double> Ainv = inverse2(A);
+    double al3, al4;
+    const Vec2<double> thdd_fixed(3.0, -7.0);
+    auto inverse_solve = [&](const std::array<double, kJoints>& Mf,
+                             std::array<Vec2<double>, kJoints>* F) {
+      reactions(p, k, b, s.loads, Fvec, thdd_fixed, Mf, F, &al3, &al4);
+    };
+    auto forward_solve = [&](const std::array<double, kJoints>& Mf,
+                             std::array<Vec2<double>, kJoints>* F) {
+      const Vec2<double> thdd = Ainv * (rhs0 - friction_transpose(k, Mf));
+      reactions(p, k, b, s.loads, Fvec, thdd, Mf, F, &al3, &al4);
+    };
+    const ReactionResponse<double> inv = reaction_torque_response(k);
+    const ReactionResponse<double> fwd = detail::forward_torque_response(p, k, Ainv);
+    for (int j = 0; j < kJoints; ++j) {
+      const auto pi = probe(inverse_solve, j), pf = probe(forward_solve, j);
+      for (int m = 0; m < kJoints; ++m) {
+        const double scale = 1.0 + pf[m].norm() + pi[m].norm();
+        EXPECT_LT((inv[j][m] - pi[m]).norm(), kResponseTol * scale) << "inverse j=" << j;
+        EXPECT_LT((fwd[j][m] - pf[m]).norm(), kResponseTol * scale) << "forward j=" << j;
+      }
+    }
+  }
+}
+
+void expect_same_evaluation(const Evaluation<double>& a, const Evaluation<double>& b) {
+  double scale = 1.0;
+  for (int k = 0; k < kJoints; ++k) scale = std::max(scale, a.N[k]);
+  for (int k = 0; k < kJoints; ++k) {
+    EXPECT_NEAR(a.N[k], b.N[k], kSameSolution * scale);
+    EXPECT_NEAR(a.Mf[k], b.Mf[k], kSameSolution * scale);
+  }
+  const double accel = 1.0 + a.thdd.norm();
+  EXPECT_NEAR(a.thdd[0], b.thdd[0], kSameSolution * accel);
+  EXPECT_NEAR(a.thdd[1], b.thdd[1], kSameSolution * accel);
+  EXPECT_EQ(a.slip, b.slip);
+}
+
+TEST(FrictionLoop, WarmStartReachesTheColdSolution) {
+  // friction raised until some states no longer contract (the cold path takes those)
+  for (const double mu : {0.1, 0.6}) {
+    Params<double> p = paper_params();
+    p.friction.coulomb.fill(mu);
+    std::mt19937_64 rng(5);
+    EvalOptions opt;
+    opt.singular_margin = 1e-3;
+    FrictionWarmStart warm;  // carried across unrelated states: the hardest start
+    int warm_used = 0;
+    for (const auto& s : testing::random_states(p, 200, 23)) {
+      const JointModes modes = random_modes(rng);
+      Evaluation<double> cold, hot;
+      const Status a = forward_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, &modes, opt, &cold);
+      const bool had = warm.set;
+      const Status b = forward_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, &modes, opt, &hot,
+                                        static_cast<const std::array<double, kJoints>*>(nullptr),
+                                        &warm);
+      ASSERT_EQ(a.code, b.code) << a.message << " / " << b.message;
+      if (!a.ok()) continue;
+      warm_used += had;
+      expect_same_evaluation(cold, hot);
+    }
+    EXPECT_GT(warm_used, 100);
+  }
+}
+
+TEST(FrictionLoop, ContractingNewtonMatchesFixedPoint) {
+  const Params<double> p = paper_params();
+  std::mt19937_64 rng(7);
+  EvalOptions opt;
+  int compared = 0;
+  for (const auto& s : testing::random_states(p, 100, 31)) {
+    const JointModes modes = random_modes(rng);
+    // the fixed point alone: the loop iterated in Jets (the reference path) on value-only Jets
+    using J1 = ceres::Jet<double, 1>;
+    Evaluation<J1> ref;
+    EvalOptions ref_opt = opt;
+    ref_opt.implicit_loop_derivative = false;
+    const Status a =
+        forward_dynamics(p.cast<J1>(), s.loads.cast<J1>(), J1(s.th1), J1(s.th2), J1(s.w1),
+                         J1(s.w2), &modes, ref_opt, &ref);
+    Evaluation<double> fast;
+    const Status b = forward_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, &modes, opt, &fast);
+    ASSERT_EQ(a.code, b.code);
+    if (!a.ok()) continue;
+    ++compared;
+    double scale = 1.0;
+    for (int k = 0; k < kJoints; ++k) scale = std::max(scale, fast.N[k]);
+    for (int k = 0; k < kJoints; ++k) EXPECT_NEAR(ref.N[k].a, fast.N[k], kSameSolution * scale);
+    EXPECT_NEAR(ref.thdd[0].a, fast.thdd[0], kSameSolution * (1.0 + fast.thdd.norm()));
+    EXPECT_NEAR(ref.thdd[1].a, fast.thdd[1], kSameSolution * (1.0 + fast.thdd.norm()));
+  }
+  EXPECT_GT(compared, 50);
+}
+
+}  // namespace
+}  // namespace fivebar
