@@ -29,9 +29,22 @@ TaskResult solve(const TaskSpec& task, BatchOptions options,
   return run_task(params, paper_loads(), task, paper_initial(), options, warm);
 }
 
+// the exact-law objectives E of the stages "w_s:E[x];..." of TaskResult::continuation
+std::vector<double> stage_energies(const std::string& log) {
+  std::vector<double> e;
+  for (size_t at = 0; at < log.size();) {
+    const size_t end = std::min(log.find(';', at), log.size());
+    const std::string stage = log.substr(at, end - at);
+    e.push_back(std::stod(stage.substr(stage.find(':') + 1)));
+    at = end + 1;
+  }
+  return e;
+}
+
 TEST(Continuation, ReachesTheExactLawEnergy) {
   // swing_right: at w_s = 0.05 rad/s the smoothed law is 3e-4 (relative) off the exact one;
-  // the continuation must end where both agree and lower the exact-law energy
+  // the continuation lowers the exact-law energy stage by stage and ends at the first stage
+  // that lowers it by less than the refinement's tolerance
   const TaskSpec task = paper_tasks()[1];
   BatchOptions first;
   first.validate = false;
@@ -42,11 +55,15 @@ TEST(Continuation, ReachesTheExactLawEnergy) {
   ASSERT_EQ(a.status, "ok") << a.message;
   ASSERT_EQ(b.status, "ok") << b.message;
   EXPECT_GT(std::abs(a.dissipated_energy_smoothed / a.dissipated_energy - 1.0), 2e-4);
-  EXPECT_EQ(b.smoothing_velocity, cont.refine.continuation.back());
-  EXPECT_LT(std::abs(b.dissipated_energy_smoothed / b.dissipated_energy - 1.0), 2e-5);
   EXPECT_LT(b.dissipated_energy, a.dissipated_energy * (1.0 - 1e-4));
-  EXPECT_EQ(std::count(b.continuation.begin(), b.continuation.end(), ';'),
-            static_cast<long>(cont.refine.continuation.size()));
+  const std::vector<double> e = stage_energies(b.continuation);  // the start, then each stage
+  ASSERT_GE(e.size(), 2u) << b.continuation;
+  ASSERT_LE(e.size(), cont.refine.continuation.size() + 1) << b.continuation;
+  const double tol = cont.refine.tol;
+  for (size_t k = 1; k + 1 < e.size(); ++k) EXPECT_GT(e[k - 1] - e[k], tol * e[k - 1]) << k;
+  if (e.size() < cont.refine.continuation.size() + 1) {
+    EXPECT_LE(e[e.size() - 2] - e.back(), tol * e[e.size() - 2]) << b.continuation;
+  }
 }
 
 TEST(Optimizer, PreconditionedSlsqpReachesTheSameOptimumInFewerEvaluations) {

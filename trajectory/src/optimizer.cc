@@ -299,11 +299,13 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
   return out;
 }
 
-// the preconditioner of a solve from x0, when the options ask for one (inactive otherwise)
+// the preconditioner of a solve from x0, when the options ask for one (inactive otherwise); an
+// objective with the winding heat is preconditioned at any size (its Hessian costs one pass)
 Preconditioner preconditioner_of(const TrajectoryProblem& problem, const std::vector<double>& x0,
                                  const OptimizerOptions& options) {
   if (!options.precondition || options.method != Method::kSlsqp ||
-      problem.num_variables() < options.precondition_min_variables) {
+      (problem.num_variables() < options.precondition_min_variables &&
+       !problem.winding_curvature())) {
     return {};
   }
   return objective_preconditioner(problem, x0);

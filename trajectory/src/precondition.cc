@@ -6,9 +6,11 @@
 namespace fivebar::trajectory {
 namespace {
 
-// the cost of TrajectoryProblem::objective_hessian in evaluations with gradients (7 Jet passes
-// over the nodes), counted in the evaluation limit
+// the cost of TrajectoryProblem::objective_hessian in evaluations with gradients, counted in
+// the evaluation limit: 7 Jet passes over the nodes by differences, 1 for the winding heat's
+// Gauss-Newton form
 constexpr int kHessianEvaluations = 7;
+constexpr int kWindingHessianEvaluations = 1;
 constexpr double kFloor = 1e-8;      // smallest |eigenvalue| kept, relative to the largest
 
 // T = V |D|^(-1/2) of the symmetric part of H
@@ -30,7 +32,8 @@ Preconditioner objective_preconditioner(const TrajectoryProblem& problem,
                                          const std::vector<double>& x0) {
   Preconditioner p;
   const int nv = problem.num_variables();
-  p.evaluations = kHessianEvaluations;
+  p.evaluations =
+      problem.winding_curvature() ? kWindingHessianEvaluations : kHessianEvaluations;
   std::vector<double> h;
   if (nv == 0 || !problem.objective_hessian(x0.data(), &h).ok()) return p;
   const Eigen::MatrixXd H = Eigen::Map<const Eigen::MatrixXd>(h.data(), nv, nv);

@@ -168,6 +168,11 @@ std::string objective_names() {
   return "total_dissipation, supply_energy, dissipated_energy, input_energy";
 }
 
+bool TrajectoryProblem::winding_curvature() const {
+  return needs_winding(options_.objective) &&
+         (options_.winding_heat[0] > 0.0 || options_.winding_heat[1] > 0.0);
+}
+
 bool needs_winding(Objective o) {
   return o == Objective::kTotalDissipation || o == Objective::kSupplyEnergy;
 }
@@ -396,6 +401,20 @@ Status TrajectoryProblem::node_gradient(const Params<Jet6>& pj, const Node& node
 Status TrajectoryProblem::node_hessian(const Params<Jet6>& pj, const Node& node,
                                        const std::array<double, 6>& s,
                                        std::array<std::array<double, 6>, 6>* hs) const {
+  if (winding_curvature()) {
+    // the winding heat's Gauss-Newton part 2 c_a dM_a dM_a^T, from one Jet pass: the
+    // preconditioner needs the scale of the curvature, which the heat sets (the friction's
+    // share is left to the quasi-Newton updates)
+    NodeValues v;
+    const Status st = node_pass(&pj, node, s, &v);
+    const double c1 = 2.0 * options_.winding_heat[0], c2 = 2.0 * options_.winding_heat[1];
+    for (int i = 0; i < 6; ++i) {
+      for (int k = 0; k < 6; ++k) {
+        (*hs)[i][k] = c1 * v.dM1[i] * v.dM1[k] + c2 * v.dM2[i] * v.dM2[k];
+      }
+    }
+    return st;
+  }
   constexpr double kStep = 1e-7;  // relative difference step of the node state
   double f = 0;
   std::array<double, 6> g0{}, g{};

@@ -138,14 +138,21 @@ Candidate continuation(const Params<double>& params, const sim::LoadFunction& lo
   polish.stall_rtol = std::max(optimizer.stall_rtol, options.refine.continuation_stall_rtol);
   polish.stall_iterations =
       std::min(optimizer.stall_iterations, options.refine.continuation_stall_iterations);
-  for (double ws : options.refine.continuation) {
-    Candidate c = solve_stage(params, loads, motion, ws, warm, options, r->torque_limit,
-                              polish);
+  // a stage that lowers the exact-law objective by less than the refinement's tolerance ends
+  // the continuation: the smoothing no longer matters (on reach_left, whose optimum holds a
+  // joint at rest, the stages lowered it by 0.33%, 0.16% and 0.03%; on the other shipped tasks
+  // the first by less than 2e-5)
+  const std::vector<double>& stages = options.refine.continuation;
+  for (size_t k = 0; k < stages.size(); ++k) {
+    const double before = best.exact;
+    Candidate c = solve_stage(params, loads, motion, stages[k], warm, options,
+                              r->torque_limit, polish);
     r->evaluations += c.evaluations;
     if (c.solved() && c.solver.usable()) warm = c.x;
     const bool kept = better(c, best, options);
-    log_stage(&r->continuation, ws, c, kept);
+    log_stage(&r->continuation, stages[k], c, kept);
     if (kept) best = std::move(c);
+    if (!(before - best.exact > options.refine.tol * std::abs(before))) break;
   }
   return best;
 }
