@@ -261,14 +261,7 @@ void add_options(CLI::App* app, Args* args) {
                   "threads of each evaluation inside a task (default 1; same results)");
   app->add_option("--method", args->settings.method,
                   "NLopt algorithm: slsqp (default), mma, ccsaq");
-  app->add_option("--objective", args->settings.objective,
-                  "total_dissipation (default when the scene gives the motors' winding data), "
-                  "supply_energy, dissipated_energy (default otherwise) or input_energy");
-  app->add_option("--regeneration", args->settings.regeneration,
-                  "supply_energy: none (default: braking power is lost) or shared_bus (one "
-                  "motor's braking feeds the other)");
-  app->add_option("--end-acceleration", args->settings.end_acceleration,
-                  "free (default) or zero: the accelerations at both ends of a motion");
+  add_objective_options(app, &args->settings);
   app->add_flag("--global", args->settings.global,
                 "multi-start: the local method from seeded perturbed starts too, best kept");
   app->add_option("--starts", args->settings.starts, "starts of --global (default 8)");

@@ -142,10 +142,22 @@ OptimizeSettings optimize_defaults() {
   return s;
 }
 
+void add_objective_options(CLI::App* app, OptimizeSettings* s) {
+  app->add_option("--objective", s->objective,
+                  "total_dissipation (default when the scene gives the motors' winding data), "
+                  "supply_energy, dissipated_energy (default otherwise) or input_energy");
+  app->add_option("--regeneration", s->regeneration,
+                  "supply_energy: none (default: braking power is lost) or shared_bus (one "
+                  "motor's braking feeds the other)");
+  app->add_option("--end-acceleration", s->end_acceleration,
+                  "free (default) or zero: the accelerations at both ends of a motion");
+}
+
 void add_inner_solve_options(CLI::App* app, OptimizeSettings* s) {
   s->refine = false;
   s->continuation = false;
   s->validate = false;
+  add_objective_options(app, s);
   app->add_option("--method", s->method,
                   "NLopt algorithm of the inner solves: slsqp (default), mma, ccsaq");
   app->add_option("--path-step", s->path_step,

@@ -86,6 +86,22 @@ expect("study bound: exit ${status}\n${out}${err}" status EQUAL 0)
 expect("study bound: ${out}" out MATCHES "lies on the upper bound of mechanism.links.0.length \\(0.08\\)")
 file(READ ${WORK_DIR}/study_bound/study.json json)
 expect("study.json: ${json}" json MATCHES "\"side\": \"upper\"")
+# study takes optimize's --objective: study.json names it; a bad value exits 2 naming the option
+execute_process(COMMAND ${FIVEBAR} study ${SOURCE_DIR}/datasets/scenes/paper_motors.yaml
+                        --tasks ${SOURCE_DIR}/datasets/tasks/paper_tasks.yaml
+                        --sweep mechanism.links.0.length=0.07:0.08:2 --no-plots --threads 2
+                        --objective supply_energy --out ${WORK_DIR}/study_supply
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("study supply: exit ${status}\n${out}${err}" status EQUAL 0)
+file(READ ${WORK_DIR}/study_supply/study.json json)
+expect("study.json: ${json}" json MATCHES "\"objective\": \"supply_energy\"")
+execute_process(COMMAND ${FIVEBAR} study ${paper} --tasks ${SOURCE_DIR}/datasets/tasks/paper_tasks.yaml
+                        --sweep mechanism.links.0.length=0.07:0.08:2 --no-plots
+                        --objective total_dissipation --out ${WORK_DIR}/study_bad
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("study without windings: exit ${status}\n${out}${err}" status EQUAL 2)
+expect("study without windings: stderr ${err}" err MATCHES "winding_resistance")
+expect("study without windings: output written" NOT EXISTS ${WORK_DIR}/study_bad/study.csv)
 
 # trajectory.csv torques are those of `fivebar inverse` on the same motion (issue 12.1): the
 # same doubles, hence the same text

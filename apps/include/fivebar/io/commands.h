@@ -85,9 +85,14 @@ struct OptimizeSettings {
 /// refinement on.
 OptimizeSettings optimize_defaults();
 
-/// The options of the inner trajectory solves of `study` and `design` (--method, --path-step,
-/// --continuation, --refine), into `settings`, whose defaults become theirs: a first solve only,
-/// no continuation, no refinement and no validation unless asked for.
+/// --objective, --regeneration and --end-acceleration (optimize, study and design), into
+/// `settings`.
+void add_objective_options(CLI::App* app, OptimizeSettings* settings);
+
+/// The options of the inner trajectory solves of `study` and `design` (the objective options,
+/// --method, --path-step, --continuation, --refine), into `settings`, whose defaults become
+/// theirs: a first solve only, no continuation, no refinement and no validation unless asked
+/// for.
 void add_inner_solve_options(CLI::App* app, OptimizeSettings* settings);
 
 /// The batch options of `settings` for a scene with motor winding data `windings` (which choose
