@@ -104,7 +104,8 @@ std::vector<State> random_states(const FourBarParams& p, int n, uint64_t seed,
 }
 
 /// The chain's solution at a four-bar state (forward, or inverse with crank acceleration *al1).
-chain::Solution chain_solution(const FourBarParams& p, const State& s, const double* al1) {
+chain::Solution chain_solution(const FourBarParams& p, const State& s, const double* al1,
+                               const chain::Options& opt = {}) {
   FourBarKinematics k;
   EXPECT_TRUE(four_bar_kinematics(p, s.th1, &k).ok());
   const chain::Chain c = four_bar_chain(p);
@@ -114,7 +115,7 @@ chain::Solution chain_solution(const FourBarParams& p, const State& s, const dou
   chain::Solution sol;
   const std::vector<double> drive_alpha = {al1 ? *al1 : 0.0};
   EXPECT_TRUE(chain::solve(c, q, rate, four_bar_loads(p, k, s.loads), al1 ? &drive_alpha : nullptr,
-                           {}, &sol)
+                           opt, &sol)
                   .ok());
   return sol;
 }
@@ -340,6 +341,53 @@ TEST(FourBar, FrictionlessRunBalancesEnergy) {
   }
   EXPECT_LT(worst, 1e-9);
   RecordProperty("energy_balance", sci(worst));
+}
+
+// larger pins: where the loop's fixed point stops contracting and Newton solves it, the chain at
+// the same friction torques has the same motion and reactions, and they are consistent with the
+// law there: Mf_k = r_k f_k(w_k) |F_k|. (The consistent torques need not be unique at this
+// friction: the chain's own loop may find another solution, so it is not compared.)
+TEST(FourBar, NewtonSolvesOfTheFrictionLoopAreConsistentInThePlanarChain) {
+  int newton = 0, m = 0;
+  for (FourBarParams p : mechanisms(true)) {
+    p.friction.pin_radius.fill(0.1);
+    for (const State& s : random_states(p, 50, 700 + m++)) {
+      FourBarEvaluation fwd;
+      if (!four_bar_forward(p, s.loads, s.th1, s.w1, EvalOptions{}, &fwd).ok()) continue;
+      if (fwd.iterations <= EvalOptions{}.friction_max_iter) continue;  // not a Newton solve
+      ++newton;
+      const std::vector<double> Mf(fwd.Mf.begin(), fwd.Mf.end());
+      chain::Options opt;
+      opt.friction_torques = &Mf;
+      const chain::Solution cf = chain_solution(p, s, nullptr, opt);
+      EXPECT_NEAR(cf.alpha[0], fwd.qdd, 1e-9 * (1 + std::abs(fwd.qdd)));
+      EXPECT_LT(reaction_error(cf.F, fwd.F), 1e-9);
+      for (int k = 0; k < kFourBarJoints; ++k) {
+        const double f = friction_law(p.friction, k, fwd.w[k], sign_of(fwd.w[k]));
+        EXPECT_NEAR(Mf[k], p.friction.pin_radius[k] * f * cf.N[k], 1e-9 * (1 + std::abs(Mf[k])));
+      }
+    }
+  }
+  EXPECT_GT(newton, 0);
+  RecordProperty("newton_solves", newton);
+}
+
+// pins far too large for the loads: the friction loop finds no consistent reactions and says so
+TEST(FourBar, ReportsFrictionWithoutConsistentReactions) {
+  FourBarParams p = mechanisms(true)[0];
+  p.friction.pin_radius.fill(0.5);
+  p.friction.coulomb.fill(0.5);
+  int failed = 0;
+  for (const State& s : random_states(p, 20, 600)) {
+    FourBarEvaluation ev;
+    const Status st = four_bar_forward(p, s.loads, s.th1, s.w1, EvalOptions{}, &ev);
+    if (st.ok()) continue;
+    ++failed;
+    EXPECT_EQ(st.code, StatusCode::kFrictionNotConverged);
+    EXPECT_NE(st.message.find("friction loop"), std::string::npos) << st.message;
+  }
+  EXPECT_GT(failed, 0);
+  RecordProperty("failed_of_20", failed);
 }
 
 TEST(FourBar, ReportsPosesThatCannotAssembleOrAreSingular) {

@@ -177,6 +177,26 @@ TEST(PlanarChain, ReportsARedundantJointAsSingular) {
   EXPECT_EQ(st.code, StatusCode::kNearSingular);
 }
 
+// where the fixed point contracts slowly (the five-bar's loop takes Newton after 50 iterations),
+// the chain's Newton, after a fixed point cut at 20 iterations, finds the same motion and reactions
+TEST(PlanarChain, NewtonResolvesTheFiveBarsNonContractingFrictionLoop) {
+  Params<double> p = paper_params();
+  p.friction.pin_radius.fill(0.15);
+  const RandomState s{2.0, 1.0, 30.0, -20.0, testing::paper_loads(0.3)};
+  Evaluation<double> ev;
+  ASSERT_TRUE(
+      forward_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, nullptr, EvalOptions{}, &ev).ok());
+  const ChainState cs = chain_state(p, s);
+  chain::Options opt;
+  opt.max_iter = 20;
+  chain::Solution sol;
+  ASSERT_TRUE(chain::solve(cs.c, cs.q, cs.rate, cs.L, nullptr, opt, &sol).ok());
+  EXPECT_GT(sol.iterations, opt.max_iter);  // the Newton path
+  EXPECT_NEAR(sol.alpha[0], ev.thdd[0], 1e-9 * (1 + std::abs(ev.thdd[0])));
+  EXPECT_NEAR(sol.alpha[1], ev.thdd[1], 1e-9 * (1 + std::abs(ev.thdd[1])));
+  for (int k = 0; k < kJoints; ++k) EXPECT_NEAR(sol.N[k], ev.N[k], 1e-9 * (1 + ev.N[k]));
+}
+
 // where the five-bar's friction loop finds no consistent reactions, neither does the chain
 TEST(PlanarChain, ReportsFrictionWithoutConsistentReactions) {
   Params<double> p = paper_params();

@@ -97,7 +97,10 @@ struct Solution {
 /// Settings of the friction loop: stop when max |N - N_prev| <= tol (max N + 1e-300).
 struct Options {
   double tol = 1e-13;
-  int max_iter = 100;
+  int max_iter = 100;  ///< fixed-point iterations before Newton
+  /// given friction torques, one per joint (no friction loop): the motion and reactions they
+  /// give, to check another solver's friction solution where it is not unique
+  const std::vector<double>* friction_torques = nullptr;
 };
 
 /// A link's body: the centre of mass at com_offset, com_angle in the frame along the link.
@@ -375,7 +378,8 @@ inline void unpack(const Eigen::VectorXd& x, const Layout& n, bool inverse, Solu
 /// Newton-Euler of the chain at a closed pose with body rates `rate`. Forward mode
 /// (`drive_alpha` null): the drive torques are L.drive, and the accelerations are solved for.
 /// Inverse mode: the drives' relative accelerations are `drive_alpha`, and their torques are
-/// solved for. The friction loop solves Mf_k = r_k f_k(w_k) |F_k| (fixed point, then Newton).
+/// solved for. The friction loop solves Mf_k = r_k f_k(w_k) |F_k| (fixed point, then Newton),
+/// unless Options::friction_torques gives the torques.
 inline Status solve(const Chain& c, const Pose& q, const std::vector<double>& rate,
                     const ChainLoads& L, const std::vector<double>* drive_alpha, const Options& opt,
                     Solution* s) {
@@ -396,11 +400,17 @@ inline Status solve(const Chain& c, const Pose& q, const std::vector<double>& ra
     detail::unpack(x0, n, inverse, s);
     wdot = relative_rates(c, s->alpha);
   }
-  const Eigen::VectorXd phi = detail::friction_arms(c, s->w, inverse ? &wdot : nullptr);
-  Eigen::VectorXd N;
-  const Status st = detail::friction_solve(x0, X, phi, opt, n, &N, &s->iterations);
-  if (!st.ok()) return st;
-  const Eigen::VectorXd Mf = phi.cwiseProduct(N);
+  Eigen::VectorXd Mf;
+  if (opt.friction_torques) {
+    Mf = Eigen::Map<const Eigen::VectorXd>(opt.friction_torques->data(), n.joints);
+    s->iterations = 0;
+  } else {
+    const Eigen::VectorXd phi = detail::friction_arms(c, s->w, inverse ? &wdot : nullptr);
+    Eigen::VectorXd N;
+    const Status st = detail::friction_solve(x0, X, phi, opt, n, &N, &s->iterations);
+    if (!st.ok()) return st;
+    Mf = phi.cwiseProduct(N);
+  }
   detail::unpack(x0 + X * Mf, n, inverse, s);
   s->Mf.assign(Mf.data(), Mf.data() + Mf.size());
   return Status::Ok();
