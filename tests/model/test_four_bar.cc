@@ -1,0 +1,410 @@
+// The four-bar in reduced coordinates (four_bar.h): closure of positions, rates and
+// accelerations; forward and inverse dynamics and reactions against the general planar chain;
+// and on seeded random four-bars (Grashof and not) energy balance, inverse of forward, friction
+// power and the holding torque against the virtual work of gravity.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "fivebar/model/four_bar.h"
+#include "fivebar/model/planar_chain.h"
+
+namespace fivebar {
+namespace {
+
+constexpr double kAgreementTol = 1e-10;  // reduced coordinates against a 17x17 QR
+constexpr int kMechanisms = 20;
+
+/// x in scientific notation with 3 digits (RecordProperty figures).
+std::string sci(double x) {
+  std::ostringstream out;
+  out << std::scientific << std::setprecision(3) << x;
+  return out.str();
+}
+
+/// True for a Grashof four-bar: shortest + longest <= sum of the other two lengths.
+bool grashof(const FourBarParams& p) {
+  std::array<double, 4> l = {p.ground_length, p.links[0].length, p.links[1].length,
+                             p.links[2].length};
+  std::sort(l.begin(), l.end());
+  return l[0] + l[3] <= l[1] + l[2];
+}
+
+/// The fraction of 100 crank angles at which p assembles with |sin32| >= margin.
+double assembling_fraction(const FourBarParams& p, double margin) {
+  int ok = 0;
+  for (int i = 0; i < 100; ++i) {
+    FourBarKinematics k;
+    ok += four_bar_kinematics(p, -M_PI + 2 * M_PI * (i + 0.5) / 100, &k, margin).ok();
+  }
+  return ok / 100.0;
+}
+
+/// A random four-bar (Grashof or not) that assembles well on at least a quarter of the crank
+/// angles, with Coulomb-viscous friction (or none).
+FourBarParams random_four_bar(std::mt19937_64& rng, bool want_grashof, bool friction) {
+  std::uniform_real_distribution<double> len(0.05, 0.4), mass(0.2, 2.0), inertia(1e-3, 5e-2),
+      unit01(0.0, 1.0), angle(-0.5, 0.5), mu(0.05, 0.3), visc(0.0, 0.03);
+  FourBarParams p;
+  p.gravity = 9.81;
+  do {
+    p.ground_length = len(rng);
+    for (Link<double>& l : p.links) {
+      l.length = len(rng);
+      l.mass = mass(rng);
+      l.inertia = inertia(rng);
+      l.com_offset = unit01(rng) * l.length;
+      l.com_angle = angle(rng);
+    }
+    p.assembly = unit01(rng) < 0.5 ? kElbowUp : kElbowDown;
+  } while (grashof(p) != want_grashof || assembling_fraction(p, 0.3) < 0.25);
+  p.point_p = unit01(rng) * p.links[1].length;
+  p.friction.law = friction ? FrictionLaw::kCoulombViscous : FrictionLaw::kNone;
+  for (int j = 0; j < kFourBarJoints; ++j) {
+    p.friction.pin_radius[j] = 0.01;
+    p.friction.coulomb[j] = mu(rng);
+    p.friction.viscous[j] = visc(rng);
+  }
+  return p;
+}
+
+/// kMechanisms seeded four-bars, alternately Grashof and not.
+std::vector<FourBarParams> mechanisms(bool friction, uint64_t seed = 7) {
+  std::mt19937_64 rng(seed);
+  std::vector<FourBarParams> out;
+  for (int m = 0; m < kMechanisms; ++m) out.push_back(random_four_bar(rng, m % 2 == 0, friction));
+  return out;
+}
+
+struct State {
+  double th1, w1;
+  FourBarLoads loads;
+};
+
+/// n random states of p that assemble with |sin32| >= margin (rates to 10 rad/s, torques to
+/// 5 N m, F to 25 N).
+std::vector<State> random_states(const FourBarParams& p, int n, uint64_t seed,
+                                 double margin = 0.2) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI), rate(-10, 10), torque(-5, 5);
+  std::vector<State> out;
+  for (int tries = 0; static_cast<int>(out.size()) < n && tries < 1000 * n; ++tries) {
+    const State s{angle(rng), rate(rng), {torque(rng), torque(rng), 5 * torque(rng), angle(rng)}};
+    FourBarKinematics k;
+    if (four_bar_kinematics(p, s.th1, &k, margin).ok()) out.push_back(s);
+  }
+  EXPECT_EQ(static_cast<int>(out.size()), n) << "the mechanism rarely assembles";
+  return out;
+}
+
+/// The chain's solution at a four-bar state (forward, or inverse with crank acceleration *al1).
+chain::Solution chain_solution(const FourBarParams& p, const State& s, const double* al1,
+                               const chain::Options& opt = {}) {
+  FourBarKinematics k;
+  EXPECT_TRUE(four_bar_kinematics(p, s.th1, &k).ok());
+  const chain::Chain c = four_bar_chain(p);
+  const chain::Pose q = four_bar_pose(p, k);
+  std::vector<double> rate;
+  EXPECT_TRUE(chain::body_rates(c, q, {s.w1}, &rate).ok());
+  chain::Solution sol;
+  const std::vector<double> drive_alpha = {al1 ? *al1 : 0.0};
+  EXPECT_TRUE(chain::solve(c, q, rate, four_bar_loads(p, k, s.loads), al1 ? &drive_alpha : nullptr,
+                           opt, &sol)
+                  .ok());
+  return sol;
+}
+
+/// max over joints of |a_k - b_k| (components), relative to 1 + max |b_k|.
+double reaction_error(const std::vector<Vec2<double>>& a,
+                      const std::array<Vec2<double>, kFourBarJoints>& b) {
+  double err = 0.0, scale = 0.0;
+  for (int k = 0; k < kFourBarJoints; ++k) {
+    err = std::max(err, (a[k] - b[k]).cwiseAbs().maxCoeff());
+    scale = std::max(scale, b[k].norm());
+  }
+  return err / (1.0 + scale);
+}
+
+TEST(FourBar, RandomMechanismsAreGrashofAndNot) {
+  int g = 0;
+  for (const FourBarParams& p : mechanisms(false)) g += grashof(p);
+  EXPECT_EQ(g, kMechanisms / 2);
+}
+
+TEST(FourBar, ClosesPositionsRatesAndAccelerations) {
+  double worst_pos = 0.0, worst_rate = 0.0, worst_acc = 0.0;
+  for (const FourBarParams& p : mechanisms(false)) {
+    const double l1 = p.links[0].length, l2 = p.links[1].length, l3 = p.links[2].length;
+    for (const State& s : random_states(p, 50, 11)) {
+      FourBarKinematics k;
+      ASSERT_TRUE(four_bar_kinematics(p, s.th1, &k).ok());
+      const double al1 = 10 * s.loads.M1;
+      const FourBarBias b = four_bar_bias(p, k, s.w1);
+      const double al2 = k.G2 * al1 + b.h2, al3 = k.G3 * al1 + b.h3;
+      // O + l1 e1 + l2 e2 = D0 + l3 e3, and its first and second time derivatives
+      const Vec2<double> D0(p.ground_length, 0);
+      const Vec2<double> e1 = unit(k.th1), e2 = unit(k.th2), e3 = unit(k.th3);
+      const Vec2<double> pos = l1 * e1 + l2 * e2 - D0 - l3 * e3;
+      const Vec2<double> vel = l1 * s.w1 * perp(e1) + l2 * b.w2 * perp(e2) - l3 * b.w3 * perp(e3);
+      const Vec2<double> acc = l1 * (al1 * perp(e1) - s.w1 * s.w1 * e1) +
+                               l2 * (al2 * perp(e2) - b.w2 * b.w2 * e2) -
+                               l3 * (al3 * perp(e3) - b.w3 * b.w3 * e3);
+      const double vscale = l1 * std::abs(s.w1) + l2 * std::abs(b.w2) + l3 * std::abs(b.w3);
+      const double ascale = l1 * (std::abs(al1) + s.w1 * s.w1) +
+                            l2 * (std::abs(al2) + b.w2 * b.w2) + l3 * (std::abs(al3) + b.w3 * b.w3);
+      worst_pos = std::max(worst_pos, pos.norm() / (l1 + l2 + l3));
+      worst_rate = std::max(worst_rate, vel.norm() / (1e-300 + vscale));
+      worst_acc = std::max(worst_acc, acc.norm() / (1e-300 + ascale));
+      // C to the left of B->D0 for elbow up, and the sine of the coupler-rocker angle
+      EXPECT_EQ(cross(Vec2<double>(D0 - k.B), Vec2<double>(k.C - k.B)) > 0, p.assembly == kElbowUp);
+      EXPECT_NEAR(k.sin32, std::sin(k.th3 - k.th2), 1e-14);
+    }
+  }
+  EXPECT_LT(worst_pos, 1e-14);
+  EXPECT_LT(worst_rate, 1e-12);
+  EXPECT_LT(worst_acc, 1e-12);
+  RecordProperty("closure_position", sci(worst_pos));
+  RecordProperty("closure_rate", sci(worst_rate));
+  RecordProperty("closure_acceleration", sci(worst_acc));
+}
+
+// G2, G3 against central differences of the position solve (step 1e-6: error ~1e-9)
+TEST(FourBar, RateCoefficientsMatchCentralDifferences) {
+  for (const FourBarParams& p : mechanisms(false)) {
+    for (const State& s : random_states(p, 10, 12, 0.3)) {
+      FourBarKinematics k, kp, km;
+      const double h = 1e-6;
+      ASSERT_TRUE(four_bar_kinematics(p, s.th1, &k).ok());
+      ASSERT_TRUE(four_bar_kinematics(p, s.th1 + h, &kp).ok());
+      ASSERT_TRUE(four_bar_kinematics(p, s.th1 - h, &km).ok());
+      EXPECT_NEAR(k.G2, std::remainder(kp.th2 - km.th2, 2 * M_PI) / (2 * h),
+                  1e-6 * (1 + std::abs(k.G2)));
+      EXPECT_NEAR(k.G3, std::remainder(kp.th3 - km.th3, 2 * M_PI) / (2 * h),
+                  1e-6 * (1 + std::abs(k.G3)));
+    }
+  }
+}
+
+TEST(FourBar, ForwardAndInverseDynamicsAgreeWithThePlanarChain) {
+  for (bool friction : {false, true}) {
+    double worst_acc = 0.0, worst_tau = 0.0, worst_F = 0.0;
+    int m = 0;
+    for (const FourBarParams& p : mechanisms(friction)) {
+      for (const State& s : random_states(p, 1000 / kMechanisms, 100 + m++)) {
+        FourBarEvaluation fwd, inv;
+        ASSERT_TRUE(four_bar_forward(p, s.loads, s.th1, s.w1, EvalOptions{}, &fwd).ok());
+        const chain::Solution cf = chain_solution(p, s, nullptr);
+        const double acc[3] = {fwd.qdd, fwd.alpha2, fwd.alpha3};
+        double err = 0.0, scale = 0.0;
+        for (int i = 0; i < 3; ++i) {
+          err = std::max(err, std::abs(cf.alpha[i] - acc[i]));
+          scale = std::max(scale, std::abs(acc[i]));
+        }
+        worst_acc = std::max(worst_acc, err / (1 + scale));
+        worst_F = std::max(worst_F, reaction_error(cf.F, fwd.F));
+        const double al1 = 10 * s.loads.M3;  // an acceleration unrelated to the forward one
+        ASSERT_TRUE(four_bar_inverse(p, s.loads, s.th1, s.w1, al1, EvalOptions{}, &inv).ok());
+        const chain::Solution ci = chain_solution(p, s, &al1);
+        worst_tau = std::max(worst_tau, std::abs(ci.drive[0] - inv.M1) / (1 + std::abs(inv.M1)));
+        worst_F = std::max(worst_F, reaction_error(ci.F, inv.F));
+      }
+    }
+    EXPECT_LT(worst_acc, kAgreementTol);
+    EXPECT_LT(worst_tau, kAgreementTol);
+    EXPECT_LT(worst_F, kAgreementTol);
+    const std::string tag = friction ? "friction" : "frictionless";
+    RecordProperty("accel_" + tag, sci(worst_acc));
+    RecordProperty("torque_" + tag, sci(worst_tau));
+    RecordProperty("reactions_" + tag, sci(worst_F));
+  }
+}
+
+TEST(FourBar, InverseOfForwardReturnsTheTorque) {
+  double worst = 0.0;
+  int m = 0;
+  for (const FourBarParams& p : mechanisms(true)) {
+    for (const State& s : random_states(p, 50, 200 + m++)) {
+      FourBarEvaluation fwd, inv;
+      ASSERT_TRUE(four_bar_forward(p, s.loads, s.th1, s.w1, EvalOptions{}, &fwd).ok());
+      ASSERT_TRUE(four_bar_inverse(p, s.loads, s.th1, s.w1, fwd.qdd, EvalOptions{}, &inv).ok());
+      worst = std::max(worst, std::abs(inv.M1 - s.loads.M1));
+      for (int k = 0; k < kFourBarJoints; ++k) {
+        EXPECT_NEAR(inv.N[k], fwd.N[k], 1e-9 * (1 + fwd.N[k]));
+      }
+    }
+  }
+  EXPECT_LT(worst, 1e-9);  // N m
+  RecordProperty("inverse_of_forward_Nm", sci(worst));
+}
+
+TEST(FourBar, FrictionNeverSuppliesPower) {
+  double least = INFINITY;
+  int m = 0;
+  for (const FourBarParams& p : mechanisms(true)) {
+    for (const State& s : random_states(p, 50, 300 + m++)) {
+      FourBarEvaluation ev;
+      ASSERT_TRUE(four_bar_forward(p, s.loads, s.th1, s.w1, EvalOptions{}, &ev).ok());
+      // consistent to the loop's tolerance on max N: Mf_k = r_k f_k(w_k) N_k
+      const double scale = 1 + *std::max_element(ev.N.begin(), ev.N.end());
+      for (int k = 0; k < kFourBarJoints; ++k) {
+        EXPECT_GE(ev.Mf[k] * ev.w[k], 0.0);
+        const double f = friction_law(p.friction, k, ev.w[k], sign_of(ev.w[k]));
+        EXPECT_NEAR(ev.Mf[k] / (p.friction.pin_radius[k] * f), ev.N[k], 1e-10 * scale);
+      }
+      EXPECT_GT(ev.P_diss, 0.0);
+      least = std::min(least, ev.P_diss);
+    }
+  }
+  RecordProperty("least_dissipated_power", sci(least));
+}
+
+// at rest and not accelerating, the crank holds the gravity torque dU/dth1 (virtual work)
+TEST(FourBar, HoldingTorqueIsTheGravityTorqueOfVirtualWork) {
+  double worst = 0.0;
+  int m = 0;
+  for (const FourBarParams& p : mechanisms(false)) {
+    for (const State& s : random_states(p, 20, 400 + m++)) {
+      FourBarEvaluation ev;
+      ASSERT_TRUE(four_bar_inverse(p, FourBarLoads{}, s.th1, 0.0, 0.0, EvalOptions{}, &ev).ok());
+      // fourth-order central difference of U along the closure, step 1e-4
+      const double h = 1e-4;
+      double U[4];
+      const double at[4] = {-2 * h, -h, h, 2 * h};
+      for (int i = 0; i < 4; ++i) {
+        FourBarKinematics k;
+        ASSERT_TRUE(four_bar_kinematics(p, s.th1 + at[i], &k).ok());
+        U[i] = four_bar_potential(p, k);
+      }
+      const double dU = (U[0] - 8 * U[1] + 8 * U[2] - U[3]) / (12 * h);
+      const double scale = 1 + std::abs(dU);
+      worst = std::max(worst, std::abs(ev.M1 - dU) / scale);
+    }
+  }
+  EXPECT_LT(worst, 1e-9);  // truncation ~h^4, roundoff ~1e-16 U / h
+  RecordProperty("holding_vs_virtual_work", sci(worst));
+}
+
+/// One RK4 step of (th1, w1) under constant loads, frictionless.
+bool rk4_step(const FourBarParams& p, const FourBarLoads& L, double dt, double* th, double* w) {
+  auto f = [&](double t, double v, double* a) {
+    FourBarEvaluation ev;
+    if (!four_bar_forward(p, L, t, v, EvalOptions{}, &ev).ok()) return false;
+    *a = ev.qdd;
+    return true;
+  };
+  double a1, a2, a3, a4;
+  if (!f(*th, *w, &a1)) return false;
+  if (!f(*th + 0.5 * dt * *w, *w + 0.5 * dt * a1, &a2)) return false;
+  if (!f(*th + 0.5 * dt * (*w + 0.5 * dt * a1), *w + 0.5 * dt * a2, &a3)) return false;
+  if (!f(*th + dt * (*w + 0.5 * dt * a2), *w + dt * a3, &a4)) return false;
+  *th += dt / 6 * (*w + 2 * (*w + 0.5 * dt * a1) + 2 * (*w + 0.5 * dt * a2) + (*w + dt * a3));
+  *w += dt / 6 * (a1 + 2 * a2 + 2 * a3 + a4);
+  return true;
+}
+
+// KE + PE - work of the constant torques M1 (crank) and M3 (coupler) stays constant
+TEST(FourBar, FrictionlessRunBalancesEnergy) {
+  double worst = 0.0;
+  int m = 0;
+  for (const FourBarParams& p : mechanisms(false)) {
+    const std::vector<State> start = random_states(p, 1, 500 + m++, 0.4);
+    ASSERT_EQ(start.size(), 1u);
+    const State& s0 = start[0];
+    const FourBarLoads L{0.2 * s0.loads.M1, 0.2 * s0.loads.M3, 0.0, 0.0};
+    double th = s0.th1, w = 1.0, work = 0.0;
+    FourBarKinematics k;
+    ASSERT_TRUE(four_bar_kinematics(p, th, &k).ok());
+    double th2 = k.th2;
+    const double e0 = four_bar_kinetic(p, k, w) + four_bar_potential(p, k);
+    double scale = std::abs(four_bar_kinetic(p, k, w)) + std::abs(four_bar_potential(p, k));
+    int steps = 0;
+    for (; steps < 2000; ++steps) {  // 0.1 s, stopped short of a singular pose
+      double th_next = th, w_next = w;
+      if (!rk4_step(p, L, 5e-5, &th_next, &w_next)) break;
+      FourBarKinematics kn;
+      if (!four_bar_kinematics(p, th_next, &kn, 0.05).ok()) break;
+      work += L.M1 * (th_next - th) + L.M3 * std::remainder(kn.th2 - th2, 2 * M_PI);
+      th = th_next;
+      w = w_next;
+      th2 = kn.th2;
+      const double ke = four_bar_kinetic(p, kn, w), pe = four_bar_potential(p, kn);
+      scale = std::max(scale, std::abs(ke) + std::abs(pe) + std::abs(work));
+      worst = std::max(worst, std::abs(ke + pe - work - e0) / scale);
+    }
+    EXPECT_GE(steps, 200) << "mechanism " << m << " reached a singular pose at once";
+  }
+  EXPECT_LT(worst, 1e-9);
+  RecordProperty("energy_balance", sci(worst));
+}
+
+// larger pins: where the loop's fixed point stops contracting and Newton solves it, the chain at
+// the same friction torques has the same motion and reactions, and they are consistent with the
+// law there: Mf_k = r_k f_k(w_k) |F_k|. (The consistent torques need not be unique at this
+// friction: the chain's own loop may find another solution, so it is not compared.)
+TEST(FourBar, NewtonSolvesOfTheFrictionLoopAreConsistentInThePlanarChain) {
+  int newton = 0, m = 0;
+  for (FourBarParams p : mechanisms(true)) {
+    p.friction.pin_radius.fill(0.1);
+    for (const State& s : random_states(p, 50, 700 + m++)) {
+      FourBarEvaluation fwd;
+      if (!four_bar_forward(p, s.loads, s.th1, s.w1, EvalOptions{}, &fwd).ok()) continue;
+      if (fwd.iterations <= EvalOptions{}.friction_max_iter) continue;  // not a Newton solve
+      ++newton;
+      const std::vector<double> Mf(fwd.Mf.begin(), fwd.Mf.end());
+      chain::Options opt;
+      opt.friction_torques = &Mf;
+      const chain::Solution cf = chain_solution(p, s, nullptr, opt);
+      EXPECT_NEAR(cf.alpha[0], fwd.qdd, 1e-9 * (1 + std::abs(fwd.qdd)));
+      EXPECT_LT(reaction_error(cf.F, fwd.F), 1e-9);
+      for (int k = 0; k < kFourBarJoints; ++k) {
+        const double f = friction_law(p.friction, k, fwd.w[k], sign_of(fwd.w[k]));
+        EXPECT_NEAR(Mf[k], p.friction.pin_radius[k] * f * cf.N[k], 1e-9 * (1 + std::abs(Mf[k])));
+      }
+    }
+  }
+  EXPECT_GT(newton, 0);
+  RecordProperty("newton_solves", newton);
+}
+
+// pins far too large for the loads: the friction loop finds no consistent reactions and says so
+TEST(FourBar, ReportsFrictionWithoutConsistentReactions) {
+  FourBarParams p = mechanisms(true)[0];
+  p.friction.pin_radius.fill(0.5);
+  p.friction.coulomb.fill(0.5);
+  int failed = 0;
+  for (const State& s : random_states(p, 20, 600)) {
+    FourBarEvaluation ev;
+    const Status st = four_bar_forward(p, s.loads, s.th1, s.w1, EvalOptions{}, &ev);
+    if (st.ok()) continue;
+    ++failed;
+    EXPECT_EQ(st.code, StatusCode::kFrictionNotConverged);
+    EXPECT_NE(st.message.find("friction loop"), std::string::npos) << st.message;
+  }
+  EXPECT_GT(failed, 0);
+  RecordProperty("failed_of_20", failed);
+}
+
+TEST(FourBar, ReportsPosesThatCannotAssembleOrAreSingular) {
+  FourBarParams p;
+  p.ground_length = 1.0;
+  p.links[0].length = 0.2;
+  p.links[1].length = 0.3;
+  p.links[2].length = 0.3;
+  FourBarKinematics k;
+  Status st = four_bar_kinematics(p, 0.0, &k);  // |BD0| = 0.8 > 0.6
+  EXPECT_EQ(st.code, StatusCode::kCannotAssemble);
+  EXPECT_NE(st.message.find("|BD0|"), std::string::npos) << st.message;
+  p.ground_length = 0.79;  // |BD0| = 0.59 at th1 = 0: coupler and rocker nearly aligned
+  st = four_bar_kinematics(p, 0.0, &k, 0.5);
+  EXPECT_EQ(st.code, StatusCode::kNearSingular);
+  EXPECT_NE(st.message.find("sin(theta3 - theta2)"), std::string::npos) << st.message;
+}
+
+}  // namespace
+}  // namespace fivebar

@@ -1,0 +1,212 @@
+// The general planar chain (planar_chain.h) against the five-bar's Appell model: forward and
+// inverse dynamics and the joint reactions at random states, with and without friction; its
+// velocity closure against the influence coefficients; its failure statuses.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "fivebar/model/dynamics.h"
+#include "fivebar/model/five_bar_chain.h"
+#include "fivebar/model/planar_chain.h"
+#include "paper.h"
+
+namespace fivebar {
+namespace {
+
+// two formulations (Appell in 2 coordinates; Newton-Euler by a 22x22 QR) of O(100) quantities
+constexpr double kAgreementTol = 1e-10;
+
+using testing::random_states;
+
+/// x in scientific notation with 3 digits (RecordProperty figures).
+std::string sci(double x) {
+  std::ostringstream out;
+  out << std::scientific << std::setprecision(3) << x;
+  return out.str();
+}
+using testing::RandomState;
+
+/// The five-bar's chain at a state: pose, body rates (the chain's velocity closure) and loads.
+struct ChainState {
+  Kinematics<double> k;
+  chain::Chain c;
+  chain::Pose q;
+  std::vector<double> rate;
+  chain::ChainLoads L;
+};
+
+ChainState chain_state(const Params<double>& p, const RandomState& s) {
+  ChainState out;
+  EXPECT_TRUE(solve_kinematics(p, s.th1, s.th2, &out.k).ok());
+  out.c = five_bar_chain(p);
+  out.q = five_bar_pose(p, out.k);
+  EXPECT_TRUE(chain::body_rates(out.c, out.q, {s.w1, s.w2}, &out.rate).ok());
+  out.L = five_bar_loads(p, out.k, s.loads);
+  return out;
+}
+
+/// The paper's five-bar with an off-axis coupler centre of mass and joint-wise friction (or none).
+Params<double> test_params(bool friction) {
+  Params<double> p = paper_params();
+  p.links[2].com_angle = 0.2;
+  p.friction.coulomb = {0.12, 0.2, 0.05, 0.3, 0.1};
+  if (!friction) p.friction.law = FrictionLaw::kNone;
+  return p;
+}
+
+/// max |a - b| / (1 + max |b|) over the entries of two equally long ranges.
+template <typename A, typename B>
+double relative_error(const A& a, const B& b, int n) {
+  double err = 0.0, scale = 0.0;
+  for (int i = 0; i < n; ++i) {
+    err = std::max(err, std::abs(a[i] - b[i]));
+    scale = std::max(scale, std::abs(b[i]));
+  }
+  return err / (1.0 + scale);
+}
+
+/// max relative error of the reaction vectors F_k (scaled by the largest |F|).
+template <typename A, typename B>
+double reaction_error(const A& a, const B& b, int n) {
+  double err = 0.0, scale = 0.0;
+  for (int i = 0; i < n; ++i) {
+    err = std::max(err, (a[i] - b[i]).cwiseAbs().maxCoeff());
+    scale = std::max(scale, b[i].norm());
+  }
+  return err / (1.0 + scale);
+}
+
+TEST(PlanarChain, VelocityClosureMatchesTheInfluenceCoefficients) {
+  const Params<double> p = test_params(true);
+  for (const RandomState& s : random_states(p, 200, 31)) {
+    const ChainState cs = chain_state(p, s);
+    EXPECT_LT(chain::closure_residual(cs.c, cs.q), 1e-14);
+    const std::vector<double> expect = five_bar_rates(cs.k, s.w1, s.w2);
+    EXPECT_LT(relative_error(cs.rate, expect, 4), 1e-12);
+  }
+}
+
+TEST(PlanarChain, FiveBarForwardDynamicsAndReactionsAgree) {
+  for (bool friction : {false, true}) {
+    const Params<double> p = test_params(friction);
+    double worst_acc = 0.0, worst_F = 0.0, worst_Mf = 0.0;
+    for (const RandomState& s : random_states(p, 1000, friction ? 41 : 42)) {
+      Evaluation<double> ev;
+      ASSERT_TRUE(
+          forward_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, nullptr, EvalOptions{}, &ev).ok());
+      const ChainState cs = chain_state(p, s);
+      chain::Solution sol;
+      ASSERT_TRUE(chain::solve(cs.c, cs.q, cs.rate, cs.L, nullptr, {}, &sol).ok());
+      const double acc[4] = {ev.thdd[0], ev.thdd[1], ev.alpha3, ev.alpha4};
+      worst_acc = std::max(worst_acc, relative_error(sol.alpha, acc, 4));
+      worst_F = std::max(worst_F, reaction_error(sol.F, ev.F, kJoints));
+      worst_Mf = std::max(worst_Mf, relative_error(sol.Mf, ev.Mf, kJoints));
+    }
+    EXPECT_LT(worst_acc, kAgreementTol);
+    EXPECT_LT(worst_F, kAgreementTol);
+    EXPECT_LT(worst_Mf, kAgreementTol);
+    const std::string tag = friction ? "friction" : "frictionless";
+    RecordProperty("forward_accel_" + tag, sci(worst_acc));
+    RecordProperty("forward_reactions_" + tag, sci(worst_F));
+  }
+}
+
+TEST(PlanarChain, FiveBarInverseDynamicsAndReactionsAgree) {
+  for (bool friction : {false, true}) {
+    const Params<double> p = test_params(friction);
+    double worst_tau = 0.0, worst_F = 0.0;
+    for (const RandomState& s : random_states(p, 1000, friction ? 43 : 44)) {
+      const double a1 = 10.0 * s.loads.M1, a2 = 10.0 * s.loads.M2;  // up to 100 rad/s^2
+      Evaluation<double> ev;
+      ASSERT_TRUE(inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, a1, a2, nullptr,
+                                   EvalOptions{}, &ev)
+                      .ok());
+      const ChainState cs = chain_state(p, s);
+      chain::Solution sol;
+      const std::vector<double> drive_alpha = {a1, a2};
+      ASSERT_TRUE(chain::solve(cs.c, cs.q, cs.rate, cs.L, &drive_alpha, {}, &sol).ok());
+      const double tau[2] = {ev.M1, ev.M2};
+      worst_tau = std::max(worst_tau, relative_error(sol.drive, tau, 2));
+      worst_F = std::max(worst_F, reaction_error(sol.F, ev.F, kJoints));
+    }
+    EXPECT_LT(worst_tau, kAgreementTol);
+    EXPECT_LT(worst_F, kAgreementTol);
+    const std::string tag = friction ? "friction" : "frictionless";
+    RecordProperty("inverse_torque_" + tag, sci(worst_tau));
+    RecordProperty("inverse_reactions_" + tag, sci(worst_F));
+  }
+}
+
+// the inverse mode returns the drive torques that the forward mode was given
+TEST(PlanarChain, InverseModeInvertsForwardMode) {
+  const Params<double> p = test_params(true);
+  for (const RandomState& s : random_states(p, 100, 45)) {
+    const ChainState cs = chain_state(p, s);
+    chain::Solution fwd, inv;
+    ASSERT_TRUE(chain::solve(cs.c, cs.q, cs.rate, cs.L, nullptr, {}, &fwd).ok());
+    const std::vector<double> drive_alpha = {fwd.alpha[0], fwd.alpha[1]};
+    ASSERT_TRUE(chain::solve(cs.c, cs.q, cs.rate, cs.L, &drive_alpha, {}, &inv).ok());
+    EXPECT_NEAR(inv.drive[0], s.loads.M1, 1e-9);
+    EXPECT_NEAR(inv.drive[1], s.loads.M2, 1e-9);
+  }
+}
+
+TEST(PlanarChain, ReportsDrivesThatDoNotFixTheMotion) {
+  const Params<double> p = paper_params();
+  const ChainState cs = chain_state(p, random_states(p, 1, 46)[0]);
+  chain::Chain c = cs.c;
+  c.drives.pop_back();  // one drive for two degrees of freedom
+  std::vector<double> rate;
+  const Status st = chain::body_rates(c, cs.q, {1.0}, &rate);
+  EXPECT_EQ(st.code, StatusCode::kInvalidInput);
+  EXPECT_NE(st.message.find("degrees of freedom"), std::string::npos) << st.message;
+}
+
+TEST(PlanarChain, ReportsARedundantJointAsSingular) {
+  const Params<double> p = paper_params();
+  const ChainState cs = chain_state(p, random_states(p, 1, 47)[0]);
+  chain::Chain c = cs.c;
+  c.joints.push_back(c.joints[1]);  // a second pin at B: dependent constraints
+  chain::Solution sol;
+  const Status st = chain::solve(c, cs.q, cs.rate, cs.L, nullptr, {}, &sol);
+  EXPECT_EQ(st.code, StatusCode::kNearSingular);
+}
+
+// where the fixed point contracts slowly (the five-bar's loop takes Newton after 50 iterations),
+// the chain's Newton, after a fixed point cut at 20 iterations, finds the same motion and reactions
+TEST(PlanarChain, NewtonResolvesTheFiveBarsNonContractingFrictionLoop) {
+  Params<double> p = paper_params();
+  p.friction.pin_radius.fill(0.15);
+  const RandomState s{2.0, 1.0, 30.0, -20.0, testing::paper_loads(0.3)};
+  Evaluation<double> ev;
+  ASSERT_TRUE(
+      forward_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, nullptr, EvalOptions{}, &ev).ok());
+  const ChainState cs = chain_state(p, s);
+  chain::Options opt;
+  opt.max_iter = 20;
+  chain::Solution sol;
+  ASSERT_TRUE(chain::solve(cs.c, cs.q, cs.rate, cs.L, nullptr, opt, &sol).ok());
+  EXPECT_GT(sol.iterations, opt.max_iter);  // the Newton path
+  EXPECT_NEAR(sol.alpha[0], ev.thdd[0], 1e-9 * (1 + std::abs(ev.thdd[0])));
+  EXPECT_NEAR(sol.alpha[1], ev.thdd[1], 1e-9 * (1 + std::abs(ev.thdd[1])));
+  for (int k = 0; k < kJoints; ++k) EXPECT_NEAR(sol.N[k], ev.N[k], 1e-9 * (1 + ev.N[k]));
+}
+
+// where the five-bar's friction loop finds no consistent reactions, neither does the chain
+TEST(PlanarChain, ReportsFrictionWithoutConsistentReactions) {
+  Params<double> p = paper_params();
+  p.friction.pin_radius.fill(0.5);
+  const RandomState s{2.0, 1.0, 30.0, -20.0, testing::paper_loads(0.3)};
+  const ChainState cs = chain_state(p, s);
+  chain::Solution sol;
+  const Status st = chain::solve(cs.c, cs.q, cs.rate, cs.L, nullptr, {}, &sol);
+  EXPECT_EQ(st.code, StatusCode::kFrictionNotConverged);
+}
+
+}  // namespace
+}  // namespace fivebar
