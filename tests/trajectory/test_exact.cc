@@ -66,6 +66,31 @@ TEST(Continuation, ReachesTheExactLawEnergy) {
   }
 }
 
+TEST(Continuation, SaysWhenItsLastStageStillLowersTheEnergy) {
+  // swing_right with one stage (w_s = 0.01 rad/s) and no refinement level: that stage lowers
+  // the exact-law energy by far more than 1e-6, so the message says the continuation did not
+  // settle; with the stages to 4e-4 rad/s and the default tolerance it settles, and says nothing
+  const TaskSpec task = paper_tasks()[1];
+  BatchOptions one;
+  one.validate = false;
+  one.refine.control_points = {};
+  one.refine.continuation = {1e-2};
+  one.refine.tol = 1e-6;
+  const TaskResult a = solve(task, one);
+  ASSERT_EQ(a.status, "ok") << a.message;
+  const std::vector<double> e = stage_energies(a.continuation);
+  ASSERT_EQ(e.size(), 2u) << a.continuation;
+  ASSERT_GT(e[0] - e[1], one.refine.tol * e[0]) << a.continuation;
+  EXPECT_NE(a.message.find("continuation not converged: its last stage (w_s = 0.01 rad/s)"),
+            std::string::npos) << a.message;
+  BatchOptions all = one;
+  all.refine.continuation = BatchOptions().refine.continuation;
+  all.refine.tol = BatchOptions().refine.tol;
+  const TaskResult b = solve(task, all);
+  ASSERT_EQ(b.status, "ok") << b.message;
+  EXPECT_EQ(b.message.find("continuation not converged"), std::string::npos) << b.message;
+}
+
 TEST(Optimizer, PreconditionedSlsqpReachesTheSameOptimumInFewerEvaluations) {
   // a refined spline (45 control points, 78 variables) from the minimum-jerk start: SLSQP in
   // the variables that make the objective's Hessian at the start +-I ends at the optimum of the
