@@ -299,16 +299,15 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
   return out;
 }
 
-// the preconditioner of a solve from x0, when the options ask for one (inactive otherwise); an
-// objective with the winding heat is preconditioned at any size (its Hessian costs one pass)
+// the preconditioner of a solve from x0, when the options ask for one (inactive otherwise); a
+// solve whose objective is mostly winding heat is preconditioned at any size (its Gauss-Newton
+// Hessian costs one evaluation)
 Preconditioner preconditioner_of(const TrajectoryProblem& problem, const std::vector<double>& x0,
                                  const OptimizerOptions& options) {
-  if (!options.precondition || options.method != Method::kSlsqp ||
-      (problem.num_variables() < options.precondition_min_variables &&
-       !problem.winding_curvature())) {
-    return {};
-  }
-  return objective_preconditioner(problem, x0);
+  if (!options.precondition || options.method != Method::kSlsqp) return {};
+  const bool gauss_newton = gauss_newton_preconditioning(problem, x0);
+  if (problem.num_variables() < options.precondition_min_variables && !gauss_newton) return {};
+  return objective_preconditioner(problem, x0, gauss_newton);
 }
 
 // A local solve under the constraints that matter (OptimizerOptions::screen): the rows with

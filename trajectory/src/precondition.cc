@@ -28,14 +28,18 @@ bool scaling_of(const Eigen::MatrixXd& H, Eigen::MatrixXd* T) {
 
 }  // namespace
 
+bool gauss_newton_preconditioning(const TrajectoryProblem& problem,
+                                  const std::vector<double>& x0) {
+  return problem.heat_share(x0.data()) >= kGaussNewtonShare;  // false for NaN
+}
+
 Preconditioner objective_preconditioner(const TrajectoryProblem& problem,
-                                         const std::vector<double>& x0) {
+                                         const std::vector<double>& x0, bool gauss_newton) {
   Preconditioner p;
   const int nv = problem.num_variables();
-  p.evaluations =
-      problem.winding_curvature() ? kWindingHessianEvaluations : kHessianEvaluations;
+  p.evaluations = gauss_newton ? kWindingHessianEvaluations : kHessianEvaluations;
   std::vector<double> h;
-  if (nv == 0 || !problem.objective_hessian(x0.data(), &h).ok()) return p;
+  if (nv == 0 || !problem.objective_hessian(x0.data(), &h, gauss_newton).ok()) return p;
   const Eigen::MatrixXd H = Eigen::Map<const Eigen::MatrixXd>(h.data(), nv, nv);
   p.active = scaling_of(H, &p.T);
   if (p.active) p.Tt = p.T.transpose();

@@ -168,9 +168,12 @@ std::string objective_names() {
   return "total_dissipation, supply_energy, dissipated_energy, input_energy";
 }
 
-bool TrajectoryProblem::winding_curvature() const {
-  return needs_winding(options_.objective) &&
-         (options_.winding_heat[0] > 0.0 || options_.winding_heat[1] > 0.0);
+double TrajectoryProblem::heat_share(const double* x) const {
+  if (!needs_winding(options_.objective)) return 0.0;
+  Energies e;
+  if (!energies(x, options_.quadrature_points, &e).ok()) return NAN;
+  const double objective = options_.objective == Objective::kSupplyEnergy ? e.supply : e.total();
+  return objective > 0.0 ? e.winding_heat / objective : NAN;
 }
 
 bool needs_winding(Objective o) {
@@ -399,9 +402,9 @@ Status TrajectoryProblem::node_gradient(const Params<Jet6>& pj, const Node& node
 }
 
 Status TrajectoryProblem::node_hessian(const Params<Jet6>& pj, const Node& node,
-                                       const std::array<double, 6>& s,
+                                       const std::array<double, 6>& s, bool gauss_newton,
                                        std::array<std::array<double, 6>, 6>* hs) const {
-  if (winding_curvature()) {
+  if (gauss_newton) {
     // the winding heat's Gauss-Newton part 2 c_a dM_a dM_a^T, from one Jet pass: the
     // preconditioner needs the scale of the curvature, which the heat sets (the friction's
     // share is left to the quasi-Newton updates)
@@ -433,13 +436,14 @@ Status TrajectoryProblem::node_hessian(const Params<Jet6>& pj, const Node& node,
   return Status::Ok();
 }
 
-Status TrajectoryProblem::objective_hessian(const double* x, std::vector<double>* hessian) const {
+Status TrajectoryProblem::objective_hessian(const double* x, std::vector<double>* hessian,
+                                            bool gauss_newton) const {
   const int nv = num_variables();
   hessian->assign(static_cast<size_t>(nv) * nv, 0.0);
   const Params<Jet6> pj = params_.cast<Jet6>();
   for (const Node& node : nodes_) {
     std::array<std::array<double, 6>, 6> hs{};
-    const Status st = node_hessian(pj, node, node_state(x, node), &hs);
+    const Status st = node_hessian(pj, node, node_state(x, node), gauss_newton, &hs);
     if (!st.ok()) return st;
     // s[2 k + j] = sum_i d[k][i] cp(j, first + i): H[v][v'] += w sum_kk' d[k][i] hs d[k'][i']
     for (int i = 0; i <= kDegree; ++i) {

@@ -47,9 +47,9 @@ struct OptimizerOptions {
   /// x = x0 + T y, where T^T H T = +-I for the Hessian H of the objective at the start
   /// (TrajectoryProblem::objective_hessian, node by node, about 7 evaluations): SLSQP's
   /// quasi-Newton matrix starts at the identity, which in x is far from H on a refined spline.
-  /// An objective with the winding heat is preconditioned at any size, by the Gauss-Newton
-  /// form of the heat (one evaluation): on the shipped tasks its first solves took 37 instead
-  /// of 69 evaluations, each full SLSQP step having overshot before.
+  /// A solve whose objective is mostly winding heat at the start is preconditioned at any size,
+  /// by the Gauss-Newton form of the heat (one evaluation; precondition.h): without it each
+  /// full SLSQP step of the 10-point solves overshot.
   bool precondition = true;
   int precondition_min_variables = 30;
   /// Stall test of a local solve: it stops when the last stall_iterations iterations

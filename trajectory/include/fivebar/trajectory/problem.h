@@ -173,12 +173,14 @@ class TrajectoryProblem {
   /// sum over the nodes of weight B^T H_s B, H_s the 6 x 6 Hessian of the integrand in the node
   /// state by forward differences of its exact (Jet) gradient, B the spline's linear map from
   /// the free control points to the node state. Costs about 7 evaluations with gradients.
-  /// When the objective carries the winding heat (winding_curvature()), H_s is instead its
-  /// Gauss-Newton form sum_a 2 c_a grad M_a grad M_a^T, from one evaluation: positive
-  /// semi-definite, and the scale a preconditioner needs.
-  Status objective_hessian(const double* x, std::vector<double>* hessian) const;
-  /// Whether the objective carries the motors' winding heat (c_a > 0 for a motor).
-  bool winding_curvature() const;
+  /// With `gauss_newton`, H_s is instead the winding heat's Gauss-Newton form
+  /// sum_a 2 c_a grad M_a grad M_a^T, from one evaluation: positive semi-definite, and the scale
+  /// a preconditioner needs where the heat is most of the objective (heat_share()).
+  Status objective_hessian(const double* x, std::vector<double>* hessian,
+                           bool gauss_newton = false) const;
+  /// The winding heat's share of the objective at x, under the smoothed law (0 for an objective
+  /// without it, NaN when x cannot be evaluated).
+  double heat_share(const double* x) const;
 
   /// The energies of the motion integrated with `points` Gauss-Legendre points per span (for
   /// the accuracy check against a denser rule).
@@ -234,7 +236,7 @@ class TrajectoryProblem {
   // 6 x 6 Hessian of the integrand in the node state (forward differences of node_gradient,
   // or the winding heat's Gauss-Newton form)
   Status node_hessian(const Params<ceres::Jet<double, 6>>& pj, const Node& node,
-                      const std::array<double, 6>& s,
+                      const std::array<double, 6>& s, bool gauss_newton,
                       std::array<std::array<double, 6>, 6>* hs) const;
   // free variable of control point c of joint j, or -1 for the fixed end points
   int variable_of(int c, int j) const;
