@@ -209,23 +209,34 @@ void design_grid(const id::FourierMotion& m, const std::vector<double>& x, doubl
   }
 }
 
-// the built-in multi-sine of synth-log (noise-free, exact rates) on the same grid
+// the built-in multi-sine of synth-log (noise-free, exact rates) on the same grid, fitted to the
+// mechanism and the torque limit as synth-log --torque-limit does; `failure` says why there is
+// none (a failed baseline: the design is evaluated and reported without it)
 struct Multisine {
   id::TorqueLog log;
   id::ExcitationReport report;
+  double factor = 1;
+  bool holding_bias = false;
+  std::string failure;
 };
 
 Multisine multisine(const Scene& scene, const LoadExpressions& loads, const id::DesignParameters& dp,
-                    const Args& a) {
+                    const id::ExcitationOptions& o) {
   id::SynthOptions so;
-  so.rate_hz = a.design.rate_hz;
-  so.duration = a.design.duration;
+  so.rate_hz = o.rate_hz;
+  so.duration = o.duration;
   so.with_rates = true;
   so.multisine = true;
+  so.torque_limit = o.torque_limit;
   so.sim = scene.options;
   id::SynthResult res = id::synthesize_log(scene.params, loads.function(), scene.initial, so);
-  if (!res.status.ok()) throw NumericalError(scene.path, "multisine", res.status.message);
   Multisine m;
+  if (!res.status.ok()) {
+    m.failure = res.status.message;
+    return m;
+  }
+  m.factor = res.multisine_factor;
+  m.holding_bias = res.multisine_holding_bias;
   m.log = std::move(res.log);
   const id::TorqueLog& log = m.log;
   std::vector<id::MotionState> states;
@@ -234,8 +245,8 @@ Multisine multisine(const Scene& scene, const LoadExpressions& loads, const id::
                       log.alpha2[i]});
   }
   const Status st =
-      id::evaluate_motion(scene.params, dp, loads, log.t, states, a.design.torque_noise, &m.report);
-  if (!st.ok()) throw NumericalError(scene.path, "multisine", st.message);
+      id::evaluate_motion(scene.params, dp, loads, log.t, states, o.torque_noise, &m.report);
+  if (!st.ok()) m.failure = st.message;
   // the multi-sine's peak is that of its applied torques (the log's, noise-free)
   m.report.peak_torque = 0;
   for (int i = 0; i < log.size(); ++i) {
@@ -379,6 +390,19 @@ std::vector<double> scaled_start(const id::ExcitationProblem& problem, const std
   return xs;
 }
 
+// the largest motor torque per unit acceleration of both cranks together at the start pose, at
+// rest [kg m^2] (the torque at rest subtracted: loads and friction do not count)
+double swing_inertia(const Scene& scene, const LoadExpressions& loads, const id::ExcitationOptions& o) {
+  const id::DesignParameters dp = id::design_parameters(scene.params, o.groups);
+  const double th1 = scene.initial.theta1, th2 = scene.initial.theta2;
+  id::SampleTerms rest, unit;
+  if (!id::sample_terms(scene.params, dp, loads(0.0), {th1, th2, 0, 0, 0, 0}, nullptr, &rest).ok() ||
+      !id::sample_terms(scene.params, dp, loads(0.0), {th1, th2, 0, 0, 1, 1}, nullptr, &unit).ok()) {
+    return 1e-300;  // no swing: the start stays at rest
+  }
+  return std::max({std::abs(unit.M1 - rest.M1), std::abs(unit.M2 - rest.M2), 1e-300});
+}
+
 // multi-start design; while the log's grid shows a torque peak above the limit (between the
 // design samples), the margin is tightened by the excess and the best design solved again
 Design design(const Scene& scene, const LoadExpressions& loads, id::ExcitationOptions o,
@@ -389,11 +413,18 @@ Design design(const Scene& scene, const LoadExpressions& loads, id::ExcitationOp
   const id::FourierMotion motion(o.harmonics, o.duration / o.periods, o.ramp, start);
   std::vector<double> base(motion.num_variables(), 0.0);
   if (a.start == "multisine") {
+    if (!ms || !ms->failure.empty()) {
+      throw NumericalError(scene.path, "excite",
+                           "--start multisine: the multi-sine cannot run on this mechanism (" +
+                               (ms ? ms->failure : std::string("skipped")) + ")");
+    }
     base = motion.fit(ms->log.t, ms->log.theta1, ms->log.theta2);
   } else if (a.start == "swing") {
-    // both cranks swing together through a large angle once per period (peak rate 30 rad/s
-    // before the start is scaled to the limits): b_1 of each crank
-    const double amplitude = 30.0 * motion.period() / (2 * M_PI);
+    // both cranks swing together through a large angle once per period: peak rate 30 rad/s, or
+    // less where the torque the swing's acceleration needs (the mechanism's inertia) would
+    // exceed half the limit; then the start is scaled to the limits
+    const double w = 2 * M_PI / motion.period();
+    const double amplitude = std::min(30.0 / w, 0.5 * o.torque_limit / (swing_inertia(scene, loads, o) * w * w));
     for (int j = 0; j < kDof; ++j) {
       base[j * motion.per_joint() + motion.harmonics() + 1] = -amplitude;
     }
@@ -432,6 +463,29 @@ Design design(const Scene& scene, const LoadExpressions& loads, id::ExcitationOp
   return d;
 }
 
+// the starts of the torque family: the nine of tone_starts from the multi-sine as fitted to the
+// mechanism; when it was scaled down (its biases were tuned on the paper scene's loads, and a
+// bias no load balances spins the cranks one way), the nine again with the start pose's holding
+// torques as biases
+std::vector<std::vector<double>> torque_starts(const Scene& scene, const sim::LoadFunction& loads,
+                                               const id::ToneTorques& tones,
+                                               const id::FittedMultisine& fit, int k) {
+  const std::vector<double> x0 = id::resize_tones(fit.tones, 4, k);
+  std::vector<std::vector<double>> starts = id::tone_starts(tones, x0);
+  if (fit.factor >= 1 && !fit.holding_bias) return starts;
+  Holding<double> h;
+  if (!holding_torques(scene.params, loads(0.0), scene.initial.theta1, scene.initial.theta2,
+                       EvalOptions{}, &h).ok()) {
+    return starts;
+  }
+  std::vector<double> held = x0;
+  held[0] = h.M1;
+  held[tones.per_motor()] = h.M2;
+  if (held == x0) return starts;
+  for (std::vector<double>& x : id::tone_starts(tones, held)) starts.push_back(std::move(x));
+  return starts;
+}
+
 // the torque-driven design (--family torque): an evolution strategy over tone torques from the
 // multi-sine's, then the best on the log's grid
 Design design_torque(const Scene& scene, const LoadExpressions& loads, const id::ExcitationOptions& o,
@@ -444,13 +498,26 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   to.seed = a.seed;
   to.sim = scene.options;
   const std::array<double, 2> start = {scene.initial.theta1, scene.initial.theta2};
-  const std::vector<double> x0 = id::resize_tones(id::multisine_tones(), 4, a.tones);
+  const sim::LoadFunction scene_loads = loads.function();  // compiled once for every call
+  // the multi-sine fitted to the mechanism and the limit, as the baseline (its last try when it
+  // cannot run: the search's other starts may)
+  id::MultisineFitOptions mo;
+  mo.torque_limit = o.torque_limit;
+  mo.duration = o.duration;
+  mo.singular_margin = o.singular_margin;
+  mo.sim = scene.options;
+  sim::Initial rest;
+  rest.theta1 = start[0];
+  rest.theta2 = start[1];
+  const id::FittedMultisine fit = id::fit_multisine(scene.params, scene_loads, rest, mo);
   const id::ToneTorques tones(a.tones, o.torque_limit);
-  const sim::LoadFunction scene_loads = loads.function();  // compiled once for both calls
   const id::TorqueDesignResult r = id::design_torque_excitation(
-      scene.params, scene_loads, start, to, id::tone_starts(tones, x0));
+      scene.params, scene_loads, start, to, torque_starts(scene, scene_loads, tones, fit, a.tones));
   if (!r.best.status.ok()) {
-    throw NumericalError(scene.path, "excite", "the start (multi-sine tones) failed: " + r.best.status.message);
+    throw NumericalError(scene.path, "excite",
+                         "no start of the search ran (the multi-sine's tones x " +
+                             format_double(fit.factor) + ", their amplitudes x 3 and 10, frequencies "
+                             "x 0.7 and 0.5): " + r.best.status.message);
   }
   id::TorqueCandidate g =
       id::evaluate_tones(scene.params, scene_loads, start, to, r.best.x, 1.0 / o.rate_hz);
@@ -514,7 +581,8 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o,
 }
 
 Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::DesignParameters& dp,
-                  const Design& d, const std::string& status, const id::ExcitationReport* base) {
+                  const Design& d, const std::string& status, const Multisine* ms) {
+  const id::ExcitationReport* base = ms && !a.no_baseline && ms->failure.empty() ? &ms->report : nullptr;
   Json j = Json::object({{"status", status},
                           {"estimate", a.estimate},
                           {"per_joint", a.per_joint},
@@ -551,6 +619,14 @@ Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::Desig
   Json coeffs = Json::array_of(d.solve.x);
   j.set(a.family == "torque" ? "torque_tones" : "fourier_coefficients", coeffs);
   j.set("designed", report_json(dp, d.report));
+  Json baseline = Json::object(
+      {{"status", std::string(a.no_baseline ? "skipped" : base ? "ok" : "failed")}});
+  if (ms && !a.no_baseline) {
+    if (!base) baseline.set("reason", ms->failure);
+    baseline.set("tones_factor", ms->factor);
+    baseline.set("holding_bias", ms->holding_bias);
+  }
+  j.set("multisine_baseline", baseline);
   if (base) {
     j.set("multisine", report_json(dp, *base));
     const double wd = worst(d.report.relative_std, 0, dp.friction);
@@ -580,14 +656,18 @@ int run(const Args& a) {
   const id::DesignParameters dp = id::design_parameters(scene.params, o.groups);
   std::unique_ptr<Multisine> ms;
   if (!a.no_baseline || a.start == "multisine") {
-    ms = std::make_unique<Multisine>(multisine(scene, loads, dp, a));
+    ms = std::make_unique<Multisine>(multisine(scene, loads, dp, o));
+    if (!ms->failure.empty()) {
+      warn("the multi-sine baseline failed (" + ms->failure +
+           "): the design is evaluated without the comparison");
+    }
   }
   const Design d = a.family == "torque"
                        ? design_torque(scene, loads, o, a)
                        : design(scene, loads, o, a, a.start == "multisine" ? ms.get() : nullptr);
   std::string why;
   const std::string status = design_status(d, o, dp, &why);
-  const id::ExcitationReport* base = a.no_baseline ? nullptr : &ms->report;
+  const id::ExcitationReport* base = a.no_baseline || !ms->failure.empty() ? nullptr : &ms->report;
   if (base && base->peak_torque > o.torque_limit * (1 + 1e-9)) {
     warn("the multi-sine baseline peaks at " + format_double(base->peak_torque) +
          " N m, above --torque-limit " + format_double(o.torque_limit) +
@@ -595,15 +675,29 @@ int run(const Args& a) {
   }
   if (status != "ok") {
     // only the summary, which says what was missed; no excitation that could be mistaken for one
-    write_json_file(out.file("excitation.json"), summary_json(a, o, dp, d, status, base));
+    write_json_file(out.file("excitation.json"), summary_json(a, o, dp, d, status, ms.get()));
     out.commit();
     throw NumericalError(scene.path, "excite", "status " + status + ": the design " + why +
                                                    " (solver: " + d.solve.solver.message +
                                                    "; excitation.json written)");
   }
+  // a std above the value: a log along this motion will not determine the parameter (identify
+  // leaves it near its bound 0, where its std is not meaningful)
+  int loosest = -1;
+  for (int i = 0; i < dp.size(); ++i) {
+    if (d.report.relative_std[i] > 1 && (loosest < 0 || d.report.relative_std[i] > d.report.relative_std[loosest])) {
+      loosest = i;
+    }
+  }
+  if (loosest >= 0) {
+    warn("the predicted std of " + dp.names[loosest] + " is " +
+         format_significant(d.report.relative_std[loosest], 3) +
+         " times its value: a log along this motion will not determine it (a higher "
+         "--torque-limit, a longer --duration or fewer --min-reversals give more information)");
+  }
   write_excitation_csv(out.file("excitation.csv"), d.report);
   write_std_csv(out.file("predicted_std.csv"), dp, d.report, base);
-  write_json_file(out.file("excitation.json"), summary_json(a, o, dp, d, status, base));
+  write_json_file(out.file("excitation.json"), summary_json(a, o, dp, d, status, ms.get()));
   if (!a.no_plots) {
     ExcitationFigures f;
     f.torque_limit = o.torque_limit;
@@ -615,6 +709,7 @@ int run(const Args& a) {
   std::cout << "fivebar excite: " << status << " in " << format_double(std::round(d.seconds * 100) / 100)
             << " s; worst predicted relative std " << format_double(wd);
   if (base) std::cout << " (multi-sine " << format_double(worst(base->relative_std, 0, dp.size())) << ")";
+  if (ms && !a.no_baseline && !base) std::cout << " (multi-sine baseline failed)";
   std::cout << "; peak torque " << format_double(d.report.peak_torque) << " N m" << std::endl;
   print_written(out.dir(), out.commit());
   return 0;

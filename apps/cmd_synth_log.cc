@@ -167,6 +167,22 @@ void set_actuators(const Args& a, Scene* scene) {
   }
 }
 
+// the excitation of the log's header: scene, multisine (with the fit of its tones when they
+// were scaled: excite.md, "The multi-sine baseline") or the motion followed
+std::string excitation_text(const Args& a, const identification::SynthResult& res) {
+  if (!a.motion.empty()) return "motion " + a.motion;
+  std::string text = a.excitation;
+  if (a.excitation == "multisine" && (res.multisine_factor != 1 || res.multisine_holding_bias)) {
+    text += " (tones x " + format_double(res.multisine_factor) +
+            (res.multisine_holding_bias ? ", biases: the start pose's holding torques" : "") +
+            (std::isfinite(a.so.torque_limit)
+                 ? ", torque limit " + format_double(a.so.torque_limit) + " N m"
+                 : "") +
+            ")";
+  }
+  return text;
+}
+
 int run(const Args& a) {
   Scene scene = load_scene(a.scene, a.sets);
   const sim::LoadFunction loads = LoadExpressions(scene).function();
@@ -185,6 +201,12 @@ int run(const Args& a) {
   }
   if (a.so.torque_noise < 0 || a.so.angle_noise < 0 || a.so.rate_noise < 0 || a.so.quantization < 0) {
     throw InputError(flag_file, "--*-noise/--quantization", "must be >= 0");
+  }
+  if (!(a.so.torque_limit > 0)) {
+    throw InputError(flag_file, "--torque-limit", "must be > 0 N m, got " + format_double(a.so.torque_limit));
+  }
+  if (std::isfinite(a.so.torque_limit) && a.excitation != "multisine") {
+    throw InputError(flag_file, "--torque-limit", "applies to --excitation multisine only");
   }
   if (a.excitation != "scene" && a.excitation != "multisine") {
     throw InputError(flag_file, "--excitation", "expected scene or multisine, got " + a.excitation);
@@ -230,7 +252,7 @@ int run(const Args& a) {
                          format_double(a.so.angle_noise) + " rad, rate " +
                          format_double(a.so.rate_noise) + " rad/s, quantization " +
                          format_double(a.so.quantization) + " rad, seed " + std::to_string(a.so.seed));
-  log.comments.push_back(" excitation: " + (a.motion.empty() ? a.excitation : "motion " + a.motion) +
+  log.comments.push_back(" excitation: " + excitation_text(a, res) +
                          "; joint reversals (O,B,C,D,D0): " + rev.str());
   write_log(a.out, log);
   std::cout << "fivebar synth-log: " << log.size() << " samples over " << log.duration() << " s -> "
@@ -262,6 +284,10 @@ RunFunction setup(CLI::App* app) {
   app->add_option(
       "--excitation", args->excitation,
       "scene: the scene's M1, M2; multisine: built-in excitation reversing every joint");
+  app->add_option("--torque-limit", args->so.torque_limit,
+                  "multisine: |M1|, |M2| at most this [N m] (the tones scaled down to it; "
+                  "default: no limit)")
+      ->default_str("");
   app->add_flag("--with-rates", args->so.with_rates, "write omega1,omega2,alpha1,alpha2 (exact)");
   app->add_option("--motion", args->motion,
                   "follow this motion (t,theta1,theta2,omega1,omega2,alpha1,alpha2; e.g. "
@@ -297,6 +323,7 @@ RunFunction setup(CLI::App* app) {
     if (a.so.rate_noise > 0) cmd += " --rate-noise " + format_double(a.so.rate_noise);
     if (a.so.quantization > 0) cmd += " --quantization " + format_double(a.so.quantization);
     if (a.so.with_rates) cmd += " --with-rates";
+    if (std::isfinite(a.so.torque_limit)) cmd += " --torque-limit " + format_double(a.so.torque_limit);
     for (const ActuatorOption& o : kActuatorOptions) {
       const std::vector<double>& v = a.*o.values;
       if (v.size() == 2)

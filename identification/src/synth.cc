@@ -7,6 +7,7 @@
 
 #include "fivebar/identification/torque_excitation.h"
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/format.h"
 
 namespace fivebar::identification {
 
@@ -18,7 +19,24 @@ sim::LoadFunction multisine_loads(const sim::LoadFunction& scene_loads) {
 SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction& loads,
                            const sim::Initial& initial, const SynthOptions& opt) {
   SynthResult out;
-  const sim::LoadFunction f = opt.multisine ? multisine_loads(loads) : loads;
+  sim::LoadFunction f = loads;
+  if (opt.multisine) {
+    MultisineFitOptions mo;
+    mo.torque_limit = opt.torque_limit;
+    mo.duration = opt.duration;
+    mo.sim = opt.sim;
+    const FittedMultisine fit = fit_multisine(params, loads, initial, mo);
+    if (!fit.status.ok()) {
+      out.status = Status::Error(
+          fit.status.code, "the multi-sine runs into the singularity margin on this mechanism "
+                           "at every scale down to " + format_significant(fit.factor, 3) +
+                               " of its tones: " + fit.status.message);
+      return out;
+    }
+    out.multisine_factor = fit.factor;
+    out.multisine_holding_bias = fit.holding_bias;
+    f = ToneTorques(4, opt.torque_limit).loads(fit.tones, loads);
+  }
   sim::Options so = opt.sim;
   so.duration = opt.duration;
   so.output_step = 1.0 / opt.rate_hz;

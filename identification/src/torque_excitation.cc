@@ -8,6 +8,8 @@
 #include <random>
 #include <thread>
 
+#include "fivebar/model/rest.h"
+
 namespace fivebar::identification {
 namespace {
 
@@ -94,6 +96,47 @@ std::vector<double> multisine_tones() {
     for (int k = 0; k < 4; ++k) x.push_back(M_PI * k * (k + 1) / 4.0 + (j == 0 ? 0.0 : 1.0));
   }
   return x;
+}
+
+FittedMultisine fit_multisine(const Params<double>& scene, const sim::LoadFunction& loads,
+                              const sim::Initial& initial, const MultisineFitOptions& o) {
+  const std::vector<double> x0 = multisine_tones();
+  const ToneTorques raw(4, kInf);
+  // the tones' peak over the duration, sampled at 1 kHz
+  double peak = 0;
+  const long n = std::max(1L, std::lround(o.duration * 1000));
+  for (long i = 0; i <= n; ++i) {
+    const double t = o.duration * static_cast<double>(i) / static_cast<double>(n);
+    peak = std::max({peak, std::abs(raw.raw(x0, 0, t)), std::abs(raw.raw(x0, 1, t))});
+  }
+  std::array<double, 2> hold{};
+  Holding<double> h;
+  if (holding_torques(scene, loads(0.0), initial.theta1, initial.theta2, EvalOptions{}, &h).ok()) {
+    hold = {h.M1, h.M2};
+  }
+  sim::Options so = o.sim;
+  so.duration = o.duration;
+  so.output_step = o.duration / 100;  // only whether it runs matters here
+  so.singular_margin = std::max(so.singular_margin, o.singular_margin);
+  so.full_rows = false;
+  so.progress = nullptr;
+  const ToneTorques clipped(4, o.torque_limit);
+  FittedMultisine out;
+  double factor = std::min(1.0, o.torque_limit / peak);
+  for (int halving = 0; halving <= kMultisineHalvings; ++halving, factor /= 2) {
+    for (bool holding : {false, true}) {
+      std::vector<double> x = x0;
+      for (int j = 0; j < kActuators; ++j) {
+        double* v = x.data() + j * raw.per_motor();
+        v[0] = holding ? hold[j] : factor * v[0];
+        for (int k = 0; k < 4; ++k) v[1 + k] *= factor;
+      }
+      const sim::Result r = sim::simulate(scene, clipped.loads(x, loads), initial, so);
+      out = {x, factor, holding, r.status};
+      if (r.status.ok()) return out;
+    }
+  }
+  return out;
 }
 
 std::vector<double> resize_tones(const std::vector<double>& x, int from, int tones) {

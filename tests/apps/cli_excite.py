@@ -187,6 +187,56 @@ if col:
     if code != 0 or n != len(rows) or worst > 1e-9:
         failures.append("synth-log --motion along the torque design: exit %d, torques differ by %g" % (code, worst))
 
+# a light mechanism (datasets/scenes/light.yaml) at a 0.2 N m limit: the baseline multi-sine is
+# scaled to the limit (it ran into a singular pose unscaled), both families give a status (ok, or
+# exit 3 naming it), never ok with a std of 0, and no empty figure
+LIGHT = PAPER.replace("paper.yaml", "light.yaml")
+for family in ("torque", "fourier"):
+    for extra in ([], ["--no-baseline"]):
+        lout = os.path.join(WORK, "light_%s%s" % (family, "_nb" if extra else ""))
+        args = ["excite", LIGHT, "--out", lout, "--torque-limit", "0.2", "--duration", "2",
+                "--family", family, "--design-samples", "100", "--min-reversals", "2"] + extra
+        args += ["--max-evaluations", "20"] if family == "torque" else ["--max-evaluations", "15", "--starts", "1"]
+        code, out, err = run(args)
+        label = "light %s %s" % (family, extra)
+        j = json.load(open(os.path.join(lout, "excitation.json"))) if os.path.exists(os.path.join(lout, "excitation.json")) else None
+        if code not in (0, 3) or j is None:
+            failures.append("%s: exit %d without a status: %s" % (label, code, err))
+            continue
+        if (code == 0) != (j["status"] == "ok"):
+            failures.append("%s: exit %d with status %s" % (label, code, j["status"]))
+        if code == 0:
+            std = read_csv(os.path.join(lout, "predicted_std.csv"))
+            if not all(float(r["std"]) > 0 and math.isfinite(float(r["std"])) for r in std):
+                failures.append("%s: ok with predicted std %s" % (label, [r["std"] for r in std]))
+        base = j.get("multisine_baseline", {})
+        if extra and base.get("status") != "skipped":
+            failures.append("%s: baseline %s" % (label, base))
+        if not extra:
+            if base.get("status") != "ok" or not 0 < base.get("tones_factor", 0) < 0.05 \
+                    or j["multisine"]["peak_torque"] > 0.2 * (1 + 1e-9):
+                failures.append("%s: baseline %s, peak %s" % (label, base, j.get("multisine", {}).get("peak_torque")))
+        for name in os.listdir(lout):
+            if os.path.getsize(os.path.join(lout, name)) == 0:
+                failures.append("%s: %s is empty" % (label, name))
+
+# synth-log's multi-sine is the same fit: within --torque-limit on the light mechanism; the limit
+# is for the multi-sine only, and > 0
+llog = os.path.join(WORK, "light_multisine.csv")
+code, _, err = run(["synth-log", LIGHT, "--excitation", "multisine", "--torque-limit", "0.2",
+                    "--duration", "2", "--torque-noise", "0", "--out", llog])
+if code != 0:
+    failures.append("synth-log --excitation multisine on the light mechanism: exit %d: %s" % (code, err))
+else:
+    rows = read_csv(llog)
+    peak = max(max(abs(float(r["tau1"])), abs(float(r["tau2"]))) for r in rows)
+    if not 0.1 < peak <= 0.2 * (1 + 1e-12):
+        failures.append("synth-log multisine --torque-limit 0.2: peak %g" % peak)
+for bad in ("0", "-1", "nan"):
+    expect_error(2, "--torque-limit", ["synth-log", LIGHT, "--excitation", "multisine", "--torque-limit", bad,
+                                       "--out", os.path.join(WORK, "bad.csv")])
+expect_error(2, "--torque-limit", ["synth-log", LIGHT, "--torque-limit", "0.2", "--out", os.path.join(WORK, "bad.csv")])
+
 for f in failures:
     print("FAIL:", f)
 sys.exit(1 if failures else 0)

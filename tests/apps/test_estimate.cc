@@ -81,6 +81,34 @@ TEST(Estimate, TighterTargetTightensTheTolerance) {
   EXPECT_NE(er.note.find("limited by rounding"), std::string::npos) << er.note;
 }
 
+// a mechanism held at rest by friction: the check run at rtol 1e-11 agrees exactly (estimate 0),
+// and 0 is the error, not a sign of rounding (the companion's tolerance is far above the rounding
+// of the run's 101 steps); the tightest tolerances stay flagged, whatever the integrator
+TEST(Estimate, RestIsMeasuredAndTheTightestTolerancesStayRoundingLimited) {
+  Scene scene = load_scene(kRoot + "/datasets/scenes/stick_below_breakaway.yaml",
+                           {"loads.M1=-1.27570913923345", "simulation.duration=0.1"});
+  const auto loads = LoadExpressions(scene).function();
+  const sim::EstimatedRun rest =
+      sim::simulate_to_target(scene.params, loads, scene.initial, scene.options);
+  ASSERT_TRUE(rest.run.status.ok());
+  EXPECT_EQ(rest.estimated_max_error_rad, 0.0);
+  EXPECT_FALSE(rest.rounding_limited);
+  EXPECT_TRUE(rest.target_met) << rest.note;
+  for (const char* method : {"cvode_adams", "cvode_bdf"}) {
+    for (const char* rtol : {"1e-12", "1e-13"}) {
+      Scene tight = load_scene(kRoot + "/datasets/scenes/paper.yaml",
+                               {std::string("simulation.integrator=") + method,
+                                std::string("simulation.rtol=") + rtol,
+                                std::string("simulation.atol=") + rtol, "simulation.duration=0.5"});
+      const sim::EstimatedRun er = sim::simulate_to_target(
+          tight.params, LoadExpressions(tight).function(), tight.initial, tight.options);
+      ASSERT_TRUE(er.run.status.ok()) << method << " " << rtol;
+      EXPECT_TRUE(er.rounding_limited) << method << " " << rtol;
+      EXPECT_FALSE(er.target_met) << method << " " << rtol;
+    }
+  }
+}
+
 // a target met keeps its margin: the estimate is at most a third of the target
 TEST(Estimate, TargetMetKeepsAMargin) {
   Scene scene = load_scene(kRoot + "/datasets/scenes/paper.yaml",

@@ -10,6 +10,7 @@
 #include "fivebar/identification/torque_excitation.h"
 #include "fivebar/model/inertial.h"
 #include "paper.h"
+#include "light_scene.h"
 
 namespace fivebar::identification {
 namespace {
@@ -231,6 +232,70 @@ TEST(Excitation, TorqueDesignIsSeededAndNeverWorseThanItsFirstStart) {
     EXPECT_NEAR(r.M1[i], a.best.tau1[i], 1e-6) << "t = " << r.t[i];
     EXPECT_NEAR(r.M2[i], a.best.tau2[i], 1e-6) << "t = " << r.t[i];
   }
+}
+
+}  // namespace
+}  // namespace fivebar::identification
+
+namespace fivebar::identification {
+namespace {
+
+using fivebar::testing::paper_initial;
+
+Params<double> light_scene() { return testing::light_params(); }
+sim::LoadFunction light_loads() { return testing::light_loads(); }
+
+// the paper scene's multi-sine is the fit on the paper scene (within its 13.36 N m peak): same
+// tones, factor 1, so its logs and the excite baseline are unchanged
+TEST(Excitation, MultisineFitKeepsThePaperScenesTones) {
+  MultisineFitOptions o;
+  o.duration = 10;
+  for (double limit : {std::numeric_limits<double>::infinity(), 13.4}) {
+    o.torque_limit = limit;
+    const FittedMultisine fit =
+        fit_multisine(paper_params(), paper_static_load_function(), paper_initial(), o);
+    ASSERT_TRUE(fit.status.ok()) << fit.status.message;
+    EXPECT_EQ(fit.factor, 1.0);
+    EXPECT_FALSE(fit.holding_bias);
+    EXPECT_EQ(fit.tones, multisine_tones());
+  }
+}
+
+// on a light mechanism the unscaled multi-sine spins the cranks into a singular pose; fitted to a
+// 0.2 N m limit it runs the duration within the limit and away from the singularity margin, and
+// synth-log's multi-sine is that fit
+TEST(Excitation, MultisineFitRunsOnALightMechanismWithinTheLimit) {
+  const Params<double> light = light_scene();
+  const sim::Result unscaled = sim::simulate(light, multisine_loads(light_loads()), paper_initial(),
+                                             [] {
+                                               sim::Options so;
+                                               so.duration = 10;
+                                               so.output_step = 0.1;
+                                               so.singular_margin = 0.1;
+                                               return so;
+                                             }());
+  EXPECT_FALSE(unscaled.status.ok());
+  MultisineFitOptions o;
+  o.duration = 10;
+  o.torque_limit = 0.2;
+  const FittedMultisine fit = fit_multisine(light, light_loads(), paper_initial(), o);
+  ASSERT_TRUE(fit.status.ok()) << fit.status.message;
+  EXPECT_LT(fit.factor, 0.2 / 13.3);
+  EXPECT_GT(fit.factor, 0.0);
+  SynthOptions so;
+  so.duration = 10;
+  so.multisine = true;
+  so.torque_limit = 0.2;
+  so.with_rates = true;
+  const SynthResult log = synthesize_log(light, light_loads(), paper_initial(), so);
+  ASSERT_TRUE(log.status.ok()) << log.status.message;
+  EXPECT_EQ(log.multisine_factor, fit.factor);
+  double peak = 0;
+  for (int i = 0; i < log.log.size(); ++i) {
+    peak = std::max({peak, std::abs(log.log.tau1[i]), std::abs(log.log.tau2[i])});
+  }
+  EXPECT_LE(peak, 0.2);
+  EXPECT_GT(peak, 0.1);  // scaled to the limit, not far below it
 }
 
 }  // namespace

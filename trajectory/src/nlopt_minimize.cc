@@ -18,7 +18,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // one evaluation shared by the objective and constraint callbacks at the same point
 class Cache {
  public:
-  Cache(const GeneralProblem& p, double penalty) : p_(p), penalty_(penalty) {}
+  Cache(const GeneralProblem& p, double penalty, double tol) : p_(p), penalty_(penalty), tol_(tol) {}
   void at(const double* x, bool grad) {
     const bool same = valid_ && std::equal(x, x + p_.n, x_.begin());
     if (same && (has_grad_ || !grad)) return;
@@ -31,15 +31,28 @@ class Cache {
       df.assign(p_.n, 0.0);
       c.assign(p_.m, 1.0);
       dc.assign(static_cast<size_t>(p_.m) * p_.n, 0.0);
+      return;
+    }
+    // the best point evaluated: feasible (within tol) before infeasible, then the lower objective
+    // (infeasible: the smaller violation)
+    const double worst = c.empty() ? 0.0 : *std::max_element(c.begin(), c.end());
+    const bool feasible = worst <= tol_, best_feasible = best_c <= tol_;
+    if (best_x.empty() || (feasible && (!best_feasible || f < best_f)) ||
+        (!feasible && !best_feasible && worst < best_c)) {
+      best_x = x_;
+      best_f = f;
+      best_c = worst;
     }
   }
   double f = 0;
   std::vector<double> df, c, dc;
   int evaluations = 0;
+  std::vector<double> best_x;  ///< empty: no point could be evaluated
+  double best_f = kNaN, best_c = kNaN;
 
  private:
   const GeneralProblem& p_;
-  double penalty_;
+  double penalty_, tol_;
   std::vector<double> x_;
   bool valid_ = false, has_grad_ = false;
 };
@@ -69,7 +82,7 @@ struct Local {
 
 Local solve_local(const GeneralProblem& p, std::vector<double> x, const GeneralOptions& o,
                   double penalty) {
-  Cache cache(p, penalty);
+  Cache cache(p, penalty, 10.0 * o.constraint_tol);
   Local out;
   for (int i = 0; i < p.n; ++i) x[i] = std::clamp(x[i], p.lower[i], p.upper[i]);
   try {
@@ -90,10 +103,16 @@ Local solve_local(const GeneralProblem& p, std::vector<double> x, const GeneralO
   }
   out.x = x;
   out.evaluations = cache.evaluations;
-  // the returned point, evaluated afresh (NLopt may return a point it evaluated earlier)
+  // the returned point, evaluated afresh (NLopt may return a point it evaluated earlier); when
+  // the solver stopped at a point outside the model's domain, the best point it evaluated
   double f = 0;
   std::vector<double> df, c, dc;
-  if (p.evaluate(x, false, &f, &df, &c, &dc)) {
+  bool ok = p.evaluate(x, false, &f, &df, &c, &dc);
+  if (!ok && !cache.best_x.empty()) {
+    out.x = x = cache.best_x;
+    ok = p.evaluate(x, false, &f, &df, &c, &dc);
+  }
+  if (ok) {
     out.evaluated = true;
     out.objective = f;
     out.max_constraint = c.empty() ? 0.0 : *std::max_element(c.begin(), c.end());

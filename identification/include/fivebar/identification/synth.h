@@ -4,6 +4,7 @@
 #include <array>
 #include <vector>
 #include <cstdint>
+#include <limits>
 
 #include "fivebar/identification/torque_log.h"
 #include "fivebar/model/params.h"
@@ -21,7 +22,9 @@ struct SynthOptions {
   double quantization = 0;  ///< encoder step [rad]: angles rounded to multiples (0: none)
   std::uint64_t seed = 1;   ///< std::mt19937_64 seed (same seed, same log)
   bool with_rates = false;  ///< write omega1, omega2, alpha1, alpha2 (exact, + rate_noise)
-  bool multisine = false;   ///< replace the scene's M1, M2 by multisine_loads
+  bool multisine = false;   ///< replace the scene's M1, M2 by the multi-sine fitted (fit_multisine)
+  /// the multi-sine's |M1|, |M2| at most this [N m] (fit_multisine; infinity: no limit)
+  double torque_limit = std::numeric_limits<double>::infinity();
   sim::Options sim;         ///< solver settings (duration and output_step are overridden)
 };
 
@@ -30,14 +33,19 @@ struct SynthResult {
   TorqueLog log;
   sim::Stats stats;
   std::array<int, kJoints> reversals{};  ///< sign changes of each joint's relative rate (O..D0)
+  double multisine_factor = 1;        ///< the multi-sine's scale (fit_multisine)
+  bool multisine_holding_bias = false;  ///< its biases are the start pose's holding torques
 };
 
 /// Built-in excitation: the scene's M3, F, F_angle with M1, M2 replaced by sums of four sines
-/// (0.3 to 3.1 Hz, Schroeder-like phases) around a bias that balances the scene's mean load, so
-/// that both cranks swing back and forth and every joint's relative rate changes sign.
+/// (0.3 to 3.1 Hz, Schroeder-like phases) around a bias that balances the paper scene's mean
+/// load, so that both cranks swing back and forth and every joint's relative rate changes sign.
+/// These are the paper scene's tones; synthesize_log fits them to other mechanisms
+/// (fit_multisine).
 sim::LoadFunction multisine_loads(const sim::LoadFunction& scene_loads);
 
-/// Simulates `params` from `initial` under `loads` (or multisine_loads(loads)), samples at
+/// Simulates `params` from `initial` under `loads` (or the multi-sine fitted to the mechanism and
+/// torque_limit by fit_multisine: a mechanism it cannot run on at any scale fails), samples at
 /// rate_hz, adds noise (torques: the applied M1, M2 plus noise; angles: plus noise, then
 /// quantized). Comments of the log are left empty for the caller.
 SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction& loads,

@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "fivebar/identification/excitation.h"
@@ -46,6 +47,35 @@ class ToneTorques {
 /// The variables of synth-log's built-in multi-sine (4 tones per motor, no clip reached at its
 /// 13.4 N m peak): multisine_loads is ToneTorques(4, infinity) at these.
 std::vector<double> multisine_tones();
+
+/// How the multi-sine is fitted to a mechanism and a torque limit (fit_multisine).
+struct MultisineFitOptions {
+  double torque_limit = std::numeric_limits<double>::infinity();  ///< |M1|, |M2| at most [N m]
+  double duration = 10;         ///< the motion that must run [s]
+  double singular_margin = 0.1;  ///< least |sin(theta4 - theta3)| along it (the scene's if larger)
+  sim::Options sim;             ///< the scene's solver settings (duration, output step overridden)
+};
+
+/// The multi-sine's tones as fitted to one mechanism (multisine_tones' layout, 4 tones).
+struct FittedMultisine {
+  std::vector<double> tones;
+  double factor = 1;          ///< the amplitudes' scale against multisine_tones
+  bool holding_bias = false;  ///< biases replaced by the start pose's holding torques
+  Status status;              ///< not ok: no scale runs the duration (the last failure)
+};
+
+/// The one rule that fits synth-log's multi-sine (tuned on the paper scene) to another mechanism:
+/// every tone and bias times one factor, at most 1 and at most the torque limit over the tones'
+/// peak on [0, duration] (so the paper scene's multi-sine is unchanged); then the free motion from
+/// `initial` must run the duration at the singularity margin. If it does not (the mechanism's
+/// inertia and loads make the tones too strong for its geometry), the same factor is tried with
+/// the biases replaced by the torques that hold the start pose (a bias that no load balances
+/// spins the cranks), then both with the factor halved, at most kMultisineHalvings times.
+FittedMultisine fit_multisine(const Params<double>& scene, const sim::LoadFunction& loads,
+                              const sim::Initial& initial, const MultisineFitOptions& options);
+
+/// Halvings of the factor fit_multisine tries before it gives up (1/256 of the first factor).
+inline constexpr int kMultisineHalvings = 8;
 
 /// `x` with `tones` tones per motor: the extra tones at zero amplitude (frequencies spread above
 /// the given ones), or the first `tones` ones.

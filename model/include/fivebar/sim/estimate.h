@@ -49,8 +49,10 @@ inline constexpr double kTargetMargin = 1.0 / 3.0;
 inline constexpr double kRoundingCompanionRtol = 1e-12;
 
 /// True when an estimate `e` of a run (its tolerance, its rows and steps) says nothing beyond the
-/// rounding of the solution: a companion tolerance below kRoundingCompanionRtol, or `e`
-/// below 100 eps x the largest |theta| x the steps taken (rounding accumulated over the run).
+/// rounding of the solution: a companion tolerance below kRoundingCompanionRtol, or a companion
+/// tolerance below the rounding accumulated over the run (100 eps x the steps taken) with `e`
+/// below that floor times the largest |theta|. A companion tolerance above that floor measures
+/// the error even when `e` is below it (a run at rest: `e` = 0 is the error).
 bool rounding_limited(double e, double rtol, const Result& run);
 
 /// max over common output times and theta1..theta4 of |a - b| [rad] (rows on the same grid).
