@@ -1,6 +1,6 @@
 // inverse_dynamics for the ceres::Jet widths that identification differentiates through (the
 // active-parameter counts of identify's layouts, excitation's group widths, the noise model's 6
-// motion variables, the residual's 5 pin radii). Each width takes ~15 s to compile, so they are
+// motion variables, the residual's 5 pin radii). Each width takes ~12 s to compile, so they are
 // compiled once, in src/jet_dynamics_*.cc (explicit instantiations split over several units
 // that build in parallel), instead of again in every unit that calls them: this header declares
 // them `extern template`. Including it is enough; a width not listed is instantiated as usual.
