@@ -7,6 +7,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
+# the release preset generates Ninja files (both cores stay busy across the libraries); a
+# build/release configured with another generator is configured anew (a full rebuild)
+cache=build/release/CMakeCache.txt
+if [ -f "$cache" ] && ! grep -q '^CMAKE_GENERATOR:INTERNAL=Ninja$' "$cache"; then
+  echo "build: build/release was configured with another generator: configuring it anew"
+  rm -rf "$cache" build/release/CMakeFiles
+fi
 echo "build: configuring (cmake --preset release)"
 cmake --preset release >/dev/null
 targets=()
@@ -15,14 +22,14 @@ if [ $# -gt 0 ]; then
   # FIVEBAR_BUILD_PYTHON=OFF) is left out with a note
   known=$(cmake --build --preset release --target help 2>/dev/null)
   for t in "$@"; do
-    if grep -q "^\.\.\. $t\b" <<<"$known"; then
+    if grep -qE "^(\.\.\. )?$t(:| |$)" <<<"$known"; then
       targets+=(--target "$t")
     else
       echo "build: target $t is not configured here: skipped"
     fi
   done
 fi
-echo "build: compiling ${*:-everything} on 2 cores (progress in [ %] below)"
+echo "build: compiling ${*:-everything} on 2 cores (progress in [done/total] below)"
 cmake --build --preset release "${targets[@]}"
 
 # `import fivebar` from any directory: a .pth file in Debian's site directory for locally

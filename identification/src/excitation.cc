@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 
 #include "fivebar/model/inertial.h"
+#include "jet_dynamics.h"
 
 namespace fivebar::identification {
 namespace {

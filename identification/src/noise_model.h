@@ -11,6 +11,7 @@
 #include "fivebar/identification/rates.h"
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
+#include "jet_dynamics.h"  // identify.cc and noise_model.cc: the Jet inverse dynamics compiled once
 
 namespace fivebar::identification::detail {
 

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "jet_dynamics.h"
+
 namespace fivebar::identification {
 
 namespace {

@@ -1,0 +1,38 @@
+// inverse_dynamics for the ceres::Jet widths that identification differentiates through (the
+// active-parameter counts of identify's layouts, excitation's group widths, the noise model's 6
+// motion variables, the residual's 5 pin radii). Each width takes ~12 s to compile, so they are
+// compiled once, in src/jet_dynamics_*.cc (explicit instantiations split over several units
+// that build in parallel), instead of again in every unit that calls them: this header declares
+// them `extern template`. Including it is enough; a width not listed is instantiated as usual.
+#pragma once
+
+#include <array>
+
+#include <ceres/jet.h>
+
+#include "fivebar/model/dynamics.h"
+
+// KEYWORD `extern`: the declaration; empty: the explicit instantiation (src/jet_dynamics_*.cc)
+#define FIVEBAR_JET_INVERSE_DYNAMICS(KEYWORD, N)                                              \
+  KEYWORD template Status inverse_dynamics<ceres::Jet<double, N>>(                            \
+      const Params<ceres::Jet<double, N>>&, const Loads<ceres::Jet<double, N>>&,              \
+      const ceres::Jet<double, N>&, const ceres::Jet<double, N>&,                             \
+      const ceres::Jet<double, N>&, const ceres::Jet<double, N>&,                             \
+      const ceres::Jet<double, N>&, const ceres::Jet<double, N>&, const JointModes*,          \
+      const EvalOptions&, Evaluation<ceres::Jet<double, N>>*,                                 \
+      const std::array<ceres::Jet<double, N>, kJoints>*);
+
+// the widths, each in one group; a group is compiled by one unit (jet_dynamics_<group>.cc)
+#define FIVEBAR_JET_WIDTHS_A(X) X(1) X(2) X(4) X(5)
+#define FIVEBAR_JET_WIDTHS_B(X) X(6) X(8) X(10) X(16)
+#define FIVEBAR_JET_WIDTHS_C(X) X(18) X(20) X(24)
+#define FIVEBAR_JET_WIDTHS_D(X) X(26) X(32) X(36)
+
+namespace fivebar {
+#define FIVEBAR_JET_EXTERN(N) FIVEBAR_JET_INVERSE_DYNAMICS(extern, N)
+FIVEBAR_JET_WIDTHS_A(FIVEBAR_JET_EXTERN)
+FIVEBAR_JET_WIDTHS_B(FIVEBAR_JET_EXTERN)
+FIVEBAR_JET_WIDTHS_C(FIVEBAR_JET_EXTERN)
+FIVEBAR_JET_WIDTHS_D(FIVEBAR_JET_EXTERN)
+#undef FIVEBAR_JET_EXTERN
+}  // namespace fivebar
