@@ -702,6 +702,7 @@ int run(const Args& a) {
     ExcitationFigures f;
     f.torque_limit = o.torque_limit;
     f.title = scene.path;
+    f.baseline = base != nullptr;
     const std::string w = plot_excitation(out.staging(), f);
     if (!w.empty()) warn(w);
   }

@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <string>
+#include <utility>
 
 #include "fivebar/io/command.h"
 #include "fivebar/io/csv.h"
@@ -320,36 +322,32 @@ void print_rest(const RestRule& rule, const RestSummary& s) {
 /// A step of a crank angle between two rows beyond this is a jump, not motion [rad]
 constexpr double kJumpAngle = 1.0;
 
-/// Why the inverse dynamics of `motion` failed when the motion itself explains it, before the
-/// model's message is read: a jump between two rows (a gap, a wrap, a glitch: the rates from
-/// differences explode), or angles that look like degrees (a start beyond 2 pi, within 360;
-/// checked first: degrees also step by more than a radian). Throws
-/// InputError naming it; returns when neither is found.
-void diagnose_motion(const std::string& path, const Motion& motion) {
+/// What in `motion` itself makes its inverse dynamics meaningless: a jump between two rows (a
+/// gap, a wrap, a glitch: the rates from differences explode), or angles that look like degrees
+/// (a start beyond 2 pi, within 360; checked first: degrees also step by more than a radian).
+/// Returns the column(s) and the reason, or an empty key when neither is found.
+std::pair<std::string, std::string> motion_fault(const Motion& motion) {
   const std::vector<sim::Row>& r = motion.rows;
   // a start pose beyond a turn is degrees (a motion in radians may turn many times, but it
   // starts within a turn, as scenes and tasks do)
   const double first = r.empty() ? 0.0 : std::max(std::abs(r[0].theta[0]), std::abs(r[0].theta[1]));
   if (first > 2 * M_PI && first <= 360) {
-    throw InputError(path, "theta1, theta2",
-                     "angles look like degrees (the motion starts at " +
-                         format_significant(r[0].theta[0], 4) + ", " +
-                         format_significant(r[0].theta[1], 4) +
-                         "), expected radians: the inverse dynamics failed on them");
+    return {"theta1, theta2", "angles look like degrees (the motion starts at " +
+                                  format_significant(r[0].theta[0], 4) + ", " +
+                                  format_significant(r[0].theta[1], 4) + "), expected radians"};
   }
   for (int k = 0; k < 2; ++k) {
-    const std::string name = "theta" + std::to_string(k + 1);
     for (size_t i = 1; i < r.size(); ++i) {
       const double step = r[i].theta[k] - r[i - 1].theta[k];
       if (std::abs(step) > kJumpAngle) {
-        throw InputError(path, name,
-                         "jumps by " + format_significant(step, 3) + " rad between t = " +
-                             format_double(r[i - 1].t) + " and " + format_double(r[i].t) +
-                             " s: the motion must be continuous (unwrap it, or fill the gap); "
-                             "the inverse dynamics failed there");
+        return {"theta" + std::to_string(k + 1),
+                "jumps by " + format_significant(step, 3) + " rad between t = " +
+                    format_double(r[i - 1].t) + " and " + format_double(r[i].t) +
+                    " s: the motion must be continuous (unwrap it, or fill the gap)"};
       }
     }
   }
+  return {};
 }
 
 int run(const Args& args) {
@@ -363,9 +361,17 @@ int run(const Args& args) {
   std::vector<sim::Row> rows;
   const Status status =
       sim::inverse_rows(scene.params, loads, motion.rows, &rows, rest.thresholds);
+  const auto [fault_key, fault] = motion_fault(motion);
   if (!status.ok()) {
-    diagnose_motion(args.motion, motion);
+    // the motion itself explains the failure: named before the model's message
+    if (!fault_key.empty()) {
+      throw InputError(args.motion, fault_key, fault + ": the inverse dynamics failed on it");
+    }
     throw NumericalError(args.motion, "inverse dynamics", status.message);
+  }
+  if (!fault_key.empty()) {  // the model ran on it, but not on the motion that was meant
+    warn(args.motion + ": " + fault_key + ": " + fault +
+         "; the results are those of the numbers as written");
   }
 
   // the file's own torques, when it has them, beside the inverse-dynamics ones

@@ -359,6 +359,28 @@ const Gnuplot& gnuplot() {
   return g;
 }
 
+namespace {
+
+// removes the figures of `script` (its `set output 'NAME'` lines) that gnuplot left empty in
+// `dir` (it creates the file before it plots): "" or "; removed the empty NAME, ..."
+std::string remove_empty_figures(const std::string& dir, const std::string& script) {
+  static const std::string kSet = "set output '";
+  std::string removed;
+  for (size_t at = script.find(kSet); at != std::string::npos; at = script.find(kSet, at + 1)) {
+    const size_t begin = at + kSet.size(), end = script.find('\'', begin);
+    if (end == std::string::npos) break;
+    const std::filesystem::path figure = std::filesystem::path(dir) / script.substr(begin, end - begin);
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(figure, ec) && std::filesystem::file_size(figure, ec) == 0 &&
+        !ec && std::filesystem::remove(figure, ec)) {
+      removed += (removed.empty() ? "; removed the empty " : ", ") + figure.filename().string();
+    }
+  }
+  return removed;
+}
+
+}  // namespace
+
 std::string run_gnuplot(const std::string& dir, const std::string& script_name,
                         const std::string& script) {
   const Gnuplot& g = gnuplot();
@@ -371,11 +393,12 @@ std::string run_gnuplot(const std::string& dir, const std::string& script_name,
   }
   std::string output;
   const int status = run_process({g.executable, script_name}, dir, &output);
+  const std::string empty = remove_empty_figures(dir, script);
   if (status != 0) {
     const std::string why = first_error_line(output);
-    return "gnuplot failed on " + script_name + (why.empty() ? "" : ": " + why);
+    return "gnuplot failed on " + script_name + (why.empty() ? "" : ": " + why) + empty;
   }
-  return "";
+  return empty.empty() ? "" : "gnuplot drew nothing" + empty;
 }
 
 std::string simulation_plot_script(const SimulationFigures& f, const std::string& terminal) {
@@ -622,13 +645,15 @@ std::string excitation_plot_script(const ExcitationFigures& f, const std::string
   s += "unset multiplot\n";
   // predicted relative std per parameter, designed motion beside the multi-sine
   s += "\nset output 'fig_std.png'\nset title " +
-       quote("Predicted relative std (Cramer-Rao) per parameter: designed (blue) vs multi-sine (red)" +
-             (f.title.empty() ? "" : "\n" + f.title)) +
+       quote(std::string("Predicted relative std (Cramer-Rao) per parameter: designed (blue)") +
+             (f.baseline ? " vs multi-sine (red)" : "") + (f.title.empty() ? "" : "\n" + f.title)) +
        "\nset style data histograms\nset style histogram clustered gap 1\n"
        "set style fill solid 0.8 border -1\nset logscale y\nset ylabel \"std / |value|\"\n"
        "set xlabel \"\"\nset xtics rotate by -60\nset key top left\n"
        "plot " + quote(f.std_csv) + " using \"relative_std\":xtic(1) title \"designed\" lc rgb "
-       "\"#1f5fa8\", '' using \"multisine_relative_std\" title \"multi-sine\" lc rgb \"#d62728\"\n";
+       "\"#1f5fa8\"" +
+       (f.baseline ? ", '' using \"multisine_relative_std\" title \"multi-sine\" lc rgb \"#d62728\"" : "") +
+       "\n";
   return s;
 }
 

@@ -94,6 +94,16 @@ TEST(Estimate, RestIsMeasuredAndTheTightestTolerancesStayRoundingLimited) {
   EXPECT_EQ(rest.estimated_max_error_rad, 0.0);
   EXPECT_FALSE(rest.rounding_limited);
   EXPECT_TRUE(rest.target_met) << rest.note;
+  // the shipped scene as it is (2 s held: 2001 steps, a rounding floor above the check run's
+  // tolerance): still 0, measured, met
+  Scene shipped = load_scene(kRoot + "/datasets/scenes/stick_below_breakaway.yaml", {});
+  const sim::EstimatedRun held = sim::simulate_to_target(
+      shipped.params, LoadExpressions(shipped).function(), shipped.initial, shipped.options);
+  ASSERT_TRUE(held.run.status.ok());
+  EXPECT_GT(held.run.stats.steps, 2000);
+  EXPECT_EQ(held.estimated_max_error_rad, 0.0);
+  EXPECT_FALSE(held.rounding_limited) << held.note;
+  EXPECT_TRUE(held.target_met) << held.note;
   for (const char* method : {"cvode_adams", "cvode_bdf"}) {
     for (const char* rtol : {"1e-12", "1e-13"}) {
       Scene tight = load_scene(kRoot + "/datasets/scenes/paper.yaml",

@@ -1,8 +1,14 @@
-// Tests of the study figure helpers of fivebar::io (plots.h): axis labels and the heatmap script.
+// Tests of the figure helpers of fivebar::io (plots.h): axis labels, heatmap, excitation figures.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "fivebar/io/plots.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
 
 namespace fivebar::io {
 namespace {
@@ -46,6 +52,42 @@ TEST(StudyHeatmap, MarksInfeasibleDesignsAndTheBest) {
                                 "fs pattern"));
   EXPECT_THAT(marked, HasSubstr("(0.28000000000000003):(0.26000000000000001)"));
   EXPECT_THAT(marked, HasSubstr("title 'best design'"));
+}
+
+TEST(ExcitationFigures, WithoutABaselineTheStdFigureDrawsTheDesignOnly) {
+  ExcitationFigures f;
+  f.torque_limit = 0.2;
+  const std::string with = excitation_plot_script(f, "pngcairo");
+  EXPECT_THAT(with, HasSubstr("\"multisine_relative_std\""));
+  f.baseline = false;  // its columns are all nan: gnuplot fails on a histogram without points
+  const std::string without = excitation_plot_script(f, "pngcairo");
+  EXPECT_THAT(without, Not(HasSubstr("multisine_relative_std")));
+  EXPECT_THAT(without, Not(HasSubstr("vs multi-sine")));
+  EXPECT_THAT(without, HasSubstr("using \"relative_std\":xtic(1)"));
+}
+
+TEST(ExcitationFigures, AFigureGnuplotCannotDrawIsRemovedNotLeftEmpty) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("fivebar_plots_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  {  // no parameter has a relative std (all scene values 0): no valid point in the histogram
+    std::ofstream csv(dir / "predicted_std.csv");
+    csv << "name,value,std,relative_std,multisine_std,multisine_relative_std\n"
+           "offset_1,0,0.01,nan,nan,nan\noffset_2,0,0.01,nan,nan,nan\n";
+    std::ofstream motion(dir / "excitation.csv");
+    motion << "t,theta1,theta2,omega1,omega2,alpha1,alpha2,M1,M2\n0,1,1,0,0,0,0,0,0\n"
+              "0.1,1.1,1.1,1,1,0,0,0.1,0.1\n";
+  }
+  ExcitationFigures f;
+  f.torque_limit = 0.2;
+  f.baseline = false;
+  const std::string warning = plot_excitation(dir.string(), f);
+  if (warning.find("not found") == std::string::npos) {  // gnuplot present
+    EXPECT_THAT(warning, HasSubstr("removed the empty fig_std.png"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "fig_std.png"));
+    EXPECT_GT(std::filesystem::file_size(dir / "fig_motion.png"), 0u);
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -94,6 +94,7 @@ struct ExcitationFigures {
   std::string std_csv = "predicted_std.csv";
   double torque_limit = 0;
   std::string title;
+  bool baseline = true;  ///< the std csv's multisine columns hold values (false: all nan, not drawn)
 };
 std::string excitation_plot_script(const ExcitationFigures& figures, const std::string& terminal);
 /// Draws them in `dir` (script kept as dir/plots.gnuplot). Returns "" or a warning.

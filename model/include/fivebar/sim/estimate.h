@@ -52,7 +52,8 @@ inline constexpr double kRoundingCompanionRtol = 1e-12;
 /// rounding of the solution: a companion tolerance below kRoundingCompanionRtol, or a companion
 /// tolerance below the rounding accumulated over the run (100 eps x the steps taken) with `e`
 /// below that floor times the largest |theta|. A companion tolerance above that floor measures
-/// the error even when `e` is below it (a run at rest: `e` = 0 is the error).
+/// the error even when `e` is below it, and an `e` of exactly 0 (both runs equal to the last bit:
+/// a run held at rest, however many steps it took) is the error.
 bool rounding_limited(double e, double rtol, const Result& run);
 
 /// max over common output times and theta1..theta4 of |a - b| [rad] (rows on the same grid).
