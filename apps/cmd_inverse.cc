@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "fivebar/io/command.h"
+#include "fivebar/io/commands.h"
 #include "fivebar/io/csv.h"
 #include "fivebar/io/differences.h"
 #include "fivebar/io/errors.h"
@@ -322,20 +323,15 @@ void print_rest(const RestRule& rule, const RestSummary& s) {
 /// A step of a crank angle between two rows beyond this is a jump, not motion [rad]
 constexpr double kJumpAngle = 1.0;
 
-/// What in `motion` itself makes its inverse dynamics meaningless: a jump between two rows (a
-/// gap, a wrap, a glitch: the rates from differences explode), or angles that look like degrees
-/// (a start beyond 2 pi, within 360; checked first: degrees also step by more than a radian).
-/// Returns the column(s) and the reason, or an empty key when neither is found.
+/// What in `motion` itself makes its inverse dynamics meaningless: angles that look like degrees
+/// (start_looks_like_degrees; checked first: degrees also step by more than a radian), or a jump
+/// between two rows (a gap, a wrap, a glitch: the rates from differences explode). Returns the
+/// column(s) and the reason, or an empty key when neither is found.
 std::pair<std::string, std::string> motion_fault(const Motion& motion) {
   const std::vector<sim::Row>& r = motion.rows;
-  // a start pose beyond a turn is degrees (a motion in radians may turn many times, but it
-  // starts within a turn, as scenes and tasks do)
-  const double first = r.empty() ? 0.0 : std::max(std::abs(r[0].theta[0]), std::abs(r[0].theta[1]));
-  if (first > 2 * M_PI && first <= 360) {
-    return {"theta1, theta2", "angles look like degrees (the motion starts at " +
-                                  format_significant(r[0].theta[0], 4) + ", " +
-                                  format_significant(r[0].theta[1], 4) + "), expected radians"};
-  }
+  const std::string degrees =
+      r.empty() ? "" : start_looks_like_degrees(r[0].theta[0], r[0].theta[1]);
+  if (!degrees.empty()) return {"theta1, theta2", degrees};
   for (int k = 0; k < 2; ++k) {
     for (size_t i = 1; i < r.size(); ++i) {
       const double step = r[i].theta[k] - r[i - 1].theta[k];

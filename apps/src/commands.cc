@@ -116,6 +116,13 @@ id::TorqueLog read_log(const std::string& path) {
   }
 }
 
+std::string start_looks_like_degrees(double theta1, double theta2) {
+  const double first = std::max(std::abs(theta1), std::abs(theta2));
+  if (!(first > 2 * M_PI && first <= 360)) return "";
+  return "angles look like degrees (they start at " + format_significant(theta1, 4) + ", " +
+         format_significant(theta2, 4) + "), expected radians";
+}
+
 id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& loads,
                                   const id::TorqueLog& log, const id::IdentifyOptions& options) {
   id::IdentifyResult res;
@@ -124,7 +131,17 @@ id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& l
   } catch (const id::LogError& e) {
     throw InputError(e.file(), e.key(), e.reason());
   }
-  if (!res.status.ok()) throw NumericalError(log.path, "identify", res.status.message);
+  if (!res.status.ok()) {
+    const std::string degrees =
+        options.check_degrees && log.size() > 0
+            ? start_looks_like_degrees(log.theta1[0], log.theta2[0])
+            : "";
+    if (!degrees.empty()) {
+      throw InputError(log.path, "columns theta1, theta2",
+                       degrees + ": the model failed on them: " + res.status.message);
+    }
+    throw NumericalError(log.path, "identify", res.status.message);
+  }
   return res;
 }
 

@@ -44,8 +44,14 @@ identification::IdentifyOptions identify_options(const IdentifySettings& setting
 /// Reads a torque log; a log that cannot be used throws InputError (the LogError's message).
 identification::TorqueLog read_log(const std::string& path);
 
+/// "" or why angles that start at (theta1, theta2) look like degrees: a start beyond a turn,
+/// within 360 (a motion or log in radians may turn many times, but starts within a turn, as
+/// scenes and tasks do). Read where the model failed on them, to name the cause first.
+std::string start_looks_like_degrees(double theta1, double theta2);
+
 /// identification::identify for a scene: a log that does not fit the scene throws InputError,
-/// failed numerics NumericalError(`<log>: identify: ...`).
+/// failed numerics NumericalError(`<log>: identify: ...`), or InputError naming the angles when
+/// the log starts where degrees would (start_looks_like_degrees).
 identification::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& loads,
                                               const identification::TorqueLog& log,
                                               const identification::IdentifyOptions& options);
