@@ -488,8 +488,8 @@ std::string rest_list(const std::array<bool, kJoints>& rest) {
 
 Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, kJoints>& rest);
 
-/// Stats::sign_rule_inconsistent: whether the rule used before issue 15 (the joints at rest slip
-/// the way they accelerate, iterated, no stick) gives modes that are not consistent here.
+/// Stats::sign_rule_inconsistent: whether the simpler sign rule (the joints at rest slip the way
+/// they accelerate, iterated, no stick) gives modes that are not consistent here.
 bool sign_rule_inconsistent(Context& c, double t, const double* y,
                             const std::array<bool, kJoints>& rest) {
   const JointModes chosen = c.slip;

@@ -1,4 +1,4 @@
-// Rest and holding (issue 14): the rest rule of inverse dynamics, the holding torques and their
+// Rest and holding: the rest rule of inverse dynamics, the holding torques and their
 // range, and forward simulation of those torques (stick inside the range, breakaway outside).
 #include <gtest/gtest.h>
 
