@@ -1,6 +1,6 @@
-# End-to-end checks of issue 14 (run by ctest with cmake -P): `fivebar hold` at a pose and as a
-# map, its bad input (exit 2 for a pose that cannot assemble, 3 for a singular one, one line on
-# stderr, no output), and the rest columns of `fivebar inverse` on a motion held still.
+# End-to-end checks of rest and holding (run by ctest with cmake -P): `fivebar hold` at a pose
+# and as a map, its bad input (exit 2 for a pose that cannot assemble, 3 for a singular one, one
+# line on stderr, no output), and the rest columns of `fivebar inverse` on a motion held still.
 # Inputs: -DFIVEBAR=<executable> -DSOURCE_DIR=<project root> -DWORK_DIR=<scratch directory>
 cmake_minimum_required(VERSION 3.22)
 file(REMOVE_RECURSE ${WORK_DIR})

@@ -27,7 +27,7 @@ std::vector<std::array<double, 4>> reference_angles(const std::string& name) {
   return out;
 }
 
-// "never below a third of the true error" (issue 8)
+// the error estimate is never below a third of the true error
 constexpr double kHonesty = 1.0 / 3.0;
 
 TEST(Estimate, DefaultsMeetTheTargetAndTheEstimateIsHonest) {

@@ -536,7 +536,7 @@ TEST(SceneYaml, RoundTripsStribeckAndLuGre) {
 namespace fivebar::io {
 namespace {
 
-// issue 14: the rest rule's thresholds are optional (-1: derived), >= 0, and round-trip
+// the rest rule's thresholds are optional (-1: derived), >= 0, and round-trip
 TEST(Scene, RestThresholdsDefaultToDerivedAndRoundTrip) {
   const Scene d = parse_scene(kPaper, "paper.yaml");
   EXPECT_EQ(d.rest_rate_threshold, -1.0);

@@ -18,7 +18,7 @@ namespace fivebar::identification {
 namespace {
 
 constexpr double kStdBound = 4.0;      // |error| / std, as in test_recovery.cc
-constexpr double kTorqueNoise = 0.02;  // N m, issue 4
+constexpr double kTorqueNoise = 0.02;  // N m, as in datasets/logs
 constexpr int kHeld = 1000;            // samples held still (1 s at 1 kHz)
 
 using testing::paper_loads;

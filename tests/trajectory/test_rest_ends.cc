@@ -82,7 +82,8 @@ struct OscillatingSpline {
   }
 };
 
-// the estimate before issue 12's fix: fourth differences only (median |d4| / (0.6745 sqrt 70))
+// the simpler estimate series_noise improves on: fourth differences only
+// (median |d4| / (0.6745 sqrt 70))
 double fourth_difference_noise(const std::vector<double>& f) {
   std::vector<double> d;
   for (size_t i = 0; i + 4 < f.size(); ++i) {
