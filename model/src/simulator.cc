@@ -858,7 +858,7 @@ constexpr long kStallProbe = 10000;
 
 /// Loads that leave their domain stall a run long before a non-finite value is evaluated: the
 /// steps shrink toward the point (sqrt(1.5 - t) at 1.5 s, 1 / (t - 0.5) at 0.5 s) and the run
-/// used to end at simulation.max_steps. The loads over the next two output intervals, on a fine
+/// would end at simulation.max_steps. The loads over the next two output intervals, on a fine
 /// grid and at the output times themselves, name the first that is not finite.
 Status loads_ahead(const Loop& L, double step) {
   constexpr int kProbes = 200;

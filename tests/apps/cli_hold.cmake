@@ -19,7 +19,7 @@ function(require_text file regex)
   endif()
 endfunction()
 
-# one pose: the paper start pose, the frictionless equilibrium of the issue
+# one pose: the paper start pose and its frictionless equilibrium
 run_fivebar(0 "" hold ${paper} --out ${WORK_DIR}/pose)
 require_text(${WORK_DIR}/pose/hold.json "\"M1\": -0\\.69173396")
 require_text(${WORK_DIR}/pose/hold.json "\"M2\": -1\\.43789485")

@@ -118,7 +118,7 @@ TEST(Estimate, TargetMetKeepsAMargin) {
                                                           scene.options);
   ASSERT_TRUE(loose.run.status.ok());
   ASSERT_FALSE(loose.rounding_limited);
-  // a target just above the estimate, as the issue measured (9.9e-7 against 1e-6): not met
+  // a target just above the estimate, as measured (9.9e-7 against 1e-6): not met
   scene.options.target_error = 1.01 * loose.estimated_max_error_rad;
   const sim::EstimatedRun near = sim::simulate_to_target(scene.params, loads, scene.initial,
                                                          scene.options);

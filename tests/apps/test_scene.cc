@@ -553,7 +553,7 @@ TEST(Scene, RestThresholdsDefaultToDerivedAndRoundTrip) {
                "simulation.rest_acceleration_threshold", "must be >= 0");
 }
 
-// Issue 9: the friction keys come from the law descriptors (friction.h). For every law, each of
+// The friction keys come from the law descriptors (friction.h). For every law, each of
 // its coefficients (per joint, distinct values) round-trips through scene_to_yaml, and each
 // coefficient it requires is reported missing, naming the law, when absent.
 TEST(SceneLaws, EveryDescriptorCoefficientRoundTripsAndIsRequiredWhereTheLawSaysSo) {

@@ -540,7 +540,7 @@ TEST(Delay, TwentyMillisecondLagIsFoundByIteratingTheEstimate) {
   // the samples whose torques the total shift takes from beyond the log are left out (the refits
   // left out only those beyond each step's shift: the last 17 or 18 of the 20), and counted once
   // (20, or 21 with the one whose shifted time falls between the samples left out and the last
-  // one kept; 22 since the rest rule of 2026-11-24 leaves out every sample with a joint within
+  // one kept; 22 as the rest rule leaves out every sample with a joint within
   // its rate threshold: the delay found, 20.026 +- 0.011 ms, is as good)
   for (int i = log.size() - 19; i < log.size(); ++i) EXPECT_EQ(res.used[i], 0) << i;
   EXPECT_THAT(res.notes, Contains(AnyOf(HasSubstr("20 samples at an end of the log left out"),
@@ -630,7 +630,7 @@ IdentifyResult stribeck_fit(const Params<double>& truth, const SynthOptions& so)
 }
 
 TEST(Stribeck, StaticNeverBelowKineticAndNoZeroStd) {
-  // angles only at 500 Hz: the fit that used to return static 0.015 < kinetic 0.12
+  // angles only at 500 Hz, where a fit can return static 0.015 < kinetic 0.12
   const Params<double> truth = testing::stribeck_truth();
   SynthOptions so;
   so.duration = 3.0;

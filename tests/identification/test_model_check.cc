@@ -135,8 +135,8 @@ TEST(ModelCheck, AMisfitOfTheLawIsNotBlamedOnTheSensors) {
   EXPECT_FALSE(has_warning(res, kMassWarning));
 }
 
-// finding 7: on a 0.05 s log (25 samples against 22 freed columns) the check read offsets of
-// 43 N m; below 10 residuals per column it does not run
+// on a 0.05 s log (25 samples against 22 freed columns) the check would read offsets of 43 N m;
+// below 10 residuals per column it does not run
 TEST(ModelCheck, DoesNotRunOnAFewSamples) {
   const IdentifyResult res = identify(
       paper_params(), paper_loads,

@@ -133,8 +133,8 @@ IdentifyOptions stribeck_options() {
 }
 
 TEST(Recovery, StribeckStartsFromSeveralVelocities) {
-  // noise-free angles through the smallest window: from the neutral start (0.2 rad/s) the fit
-  // used to end at the velocity's bound (static_coulomb 0.191 undetermined); the least cost over
+  // noise-free angles through the smallest window: from the neutral start (0.2 rad/s) alone the
+  // fit ends at the velocity's bound (static_coulomb 0.191 undetermined); the least cost over
   // the starts finds the peak
   const TorqueLog log = stribeck_angles_log(0, 0);
   IdentifyOptions opt = stribeck_options();
@@ -156,8 +156,8 @@ TEST(Recovery, StribeckKeepsOutReversalsAndTheSecondWindow) {
   EXPECT_EQ(res.sg_order, 7);
   EXPECT_GT(res.samples_near_reversals, 0);
   EXPECT_NEAR(res.parameters[2].value, 0.2, 0.004);
-  // noisy angles: the second window (4 samples) is unbiased; the back-off used to land on the
-  // smallest and raise the order (noisier accelerations); now order 5 over 4 samples
+  // noisy angles: the second window (4 samples) is unbiased; backing off to the smallest would
+  // raise the order (noisier accelerations); order 5 over 4 samples
   res = identify(paper_params(), paper_loads, stribeck_angles_log(kTorqueNoise, kAngleNoise),
                  stribeck_options());
   ASSERT_TRUE(res.status.ok()) << res.status.message;

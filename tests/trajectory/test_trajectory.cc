@@ -83,7 +83,7 @@ TEST(Quadrature, GaussLegendreIsExactToDegree2nMinus1) {
 
 // the default rule (12 points per span) against a 6x denser one, on the baseline and optimum
 TEST(Quadrature, DissipatedEnergyAccurateTo1e6Relative) {
-  constexpr double kRelTol = 1e-6;  // the accuracy the issue asks of E
+  constexpr double kRelTol = 1e-6;  // the accuracy required of E
   const std::vector<TaskSpec> tasks = paper_tasks();
   for (const TaskSpec& task : tasks) {
     const ResolvedTask rt = resolve_task(paper_params(), task, paper_initial(), 0.1);
