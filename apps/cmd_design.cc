@@ -1,7 +1,7 @@
 // fivebar design SCENE --tasks TASKS.yaml --vary KEY=LO:HI [--vary ...] [--out DIR]
 //   [--threads N] [--set KEY=VALUE]... [--max-designs N] [--method ...] [--continuation]
 //   [--refine] [--no-plots]
-// Continuous design optimization (issue 12): the summed minimum dissipated energy over the
+// Continuous design optimization: the summed minimum dissipated energy over the
 // tasks, minimized over the varied scene keys within their bounds. Nested: every design
 // evaluation optimizes every task (warm-started from the same task's optimum of the best design
 // so far); the outer loop is derivative-free (NLopt BOBYQA, trajectory/design.h). A design that

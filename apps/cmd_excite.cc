@@ -1,7 +1,7 @@
 // fivebar excite SCENE --duration S --torque-limit NM [--estimate friction,inertia,actuator]
 //   [--per-joint] [--criterion d-optimal|condition] [--theta1-range LO:HI] [--theta2-range LO:HI]
 //   [--out DIR] [--set KEY=VALUE]...
-// Excitation design (issue 11, docs/excite.md): a periodic Fourier motion of the two cranks that
+// Excitation design (docs/excite.md): a periodic Fourier motion of the two cranks that
 // maximizes the information a torque log along it gives on the chosen parameters (D-optimal, or
 // the condition number), within the torque limit, away from the singular poses, with every
 // joint reversing; compared with the built-in multi-sine of synth-log.

@@ -1,5 +1,5 @@
 // fivebar stress [--out DIR] [--cases LIST] [--methods LIST] [--budget S] [--reduced]
-// The built-in catalogue of stiff and extreme cases (issue 3, deliverable 4), each run with every
+// The built-in catalogue of stiff and extreme cases, each run with every
 // integrator; each run ends `ok`, `rejected` (the exit code and message a user would get) or
 // `failed`. Writes DIR/stress.csv and DIR/stress.md; exits 0 with no `failed` row, 3 otherwise.
 #include <unistd.h>

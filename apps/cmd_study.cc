@@ -1,6 +1,6 @@
 // fivebar study SCENE --tasks TASKS.yaml --sweep KEY=LO:HI:N [--sweep ...] [--out DIR]
 //   [--threads N] [--set KEY=VALUE]... [--method ...] [--global] [--validate] [--no-plots]
-// Design study (issue 5): every combination of the swept scene keys is a design; every task is
+// Design study: every combination of the swept scene keys is a design; every task is
 // optimized for every design and the energies summed. Designs that cannot do a task are marked
 // in study.csv, not dropped. Writes study.csv (one row per design), study_tasks.csv (one row per
 // design and task), heatmap.png for two sweeps, and prints the best design. Under mpirun the

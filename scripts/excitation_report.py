@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Monte-Carlo check of `fivebar excite` (issue 11): predicted against empirical std.
+"""Monte-Carlo check of `fivebar excite`: predicted against empirical std.
 
 For a design directory written by `fivebar excite` (excitation.csv, predicted_std.csv), logs
 are made along the designed motion (`synth-log --motion`) and along the built-in multi-sine

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Figures of issue 14 (docs/hold.md), measured end to end with the fivebar executable.
+"""Figures of rest and holding (docs/hold.md), measured end to end with the fivebar executable.
 
 1. The paper start pose (pi/2, pi/2) held still for 1 s at 1 kHz, angles only: `fivebar inverse`
    must give the frictionless equilibrium torques (those of the frictionless scene) to 1e-9 N m

@@ -1,20 +1,20 @@
 #!/usr/bin/env python3
-"""Identification reports of issue 4, driving the `fivebar` executable.
+"""Identification reports, driving the `fivebar` executable.
 
   error-vs-time: parameter error against identification wall time as the log length and the
                  method vary (inverse-dynamics with logged rates, inverse-dynamics from angles
                  only, output-error), on the paper scene (torque noise 0.02 N m, angle 1e-5 rad).
   coverage:      per-joint fit on logs with distinct coefficients (multisine excitation) over N
                  seeds: the fraction of 95 % intervals (value +- 1.96 std) that cover the truth.
-  coverage-angles: issue 16: angles-only logs (or noisy measured rates) over N seeds, for a case:
+  coverage-angles: angles-only logs (or noisy measured rates) over N seeds, for a case:
                  shared (paper loads, 1 kHz), shared200 (200 Hz), per-joint (multisine),
                  stribeck (500 Hz, 6 s), noisy-rates (--with-rates --rate-noise 0.05),
-                 output-error (issue 10: --method output-error, rates logged; output-error-angles
+                 output-error (--method output-error, rates logged; output-error-angles
                  from angles only). Also reports the mean error in reported std (the bias) and
                  the rms of the errors in reported std (1 when the std are honest). An interval
                  covers when the reported ci95_low..ci95_high (profile likelihood or Wald with
                  the reported quantile) holds the truth; value +- 1.96 std without them.
-  fixed-motion:  issue 16: Monte Carlo on one fixed motion: a noise-free log of the case is
+  fixed-motion:  Monte Carlo on one fixed motion: a noise-free log of the case is
                  written once, then only the noise is redrawn (Python's random, seeded by --seed:
                  white Gaussian torque noise --torque-noise, angle noise --angle-noise; logged
                  rates, if the case has them, stay exact) over
@@ -23,13 +23,13 @@
                  std, the quantiles of error/std and the tail counts (|z| > 2.5, > 2.8) against
                  those of a standard normal: whether the reported std is honest, without the
                  luck of a few seeds.
-  coverage-inertia: issue 10: logs whose true links are 3-6 % off the scene (CAD_MISMATCH_SETS),
+  coverage-inertia: logs whose true links are 3-6 % off the scene (CAD_MISMATCH_SETS),
                  identified with the nominal scene and --estimate friction,inertia, over N seeds,
                  --case shared (paper loads) or per-joint (multisine, distinct coefficients):
                  coverage of the 95 % intervals of the friction coefficients (and of the
                  inertial parameters), |error| <= 3 std, reported std against the Cramer-Rao
                  bound and against the spread over the seeds, wall time.
-  fuzz:          issue 16: N seeded corruptions of a short log (1e300, wrapped, spikes, constant
+  fuzz:          N seeded corruptions of a short log (1e300, wrapped, spikes, constant
                  angles, degrees, offsets, ...) through `fivebar identify`; counts the exit
                  statuses and fails if any run ends by a signal or without its one-line message.
 
@@ -211,11 +211,11 @@ CASES = {
                   "--static-coulomb", "0.2", "--stribeck-velocity", "0.5"],
                  ["--law", "stribeck"], None),
     "noisy-rates": (["--with-rates", "--rate-noise", "0.05"], [], None),
-    # issue 16 diagnosis: the shared case's torque noise alone (exact angles; the draws of a seed
+    # for diagnosis: the shared case's torque noise alone (exact angles; the draws of a seed
     # are the same as in `shared`), and with exact logged rates (plain least squares)
     "torque-noise-only": (["--angle-noise", "0"], [], None),
     "exact-rates": (["--with-rates", "--angle-noise", "0"], [], None),
-    # issue 10: the output-error method (windows of 0.2 s restarted from the logged state)
+    # the output-error method (windows of 0.2 s restarted from the logged state)
     "output-error": (["--with-rates"], ["--method", "output-error"], None),
     "output-error-angles": ([], ["--method", "output-error"], None),
 }
@@ -365,7 +365,7 @@ def read_log(path):
 
 def corrupt(lines, rng):
     """One fuzzed log from the data lines of a log (lists of floats: t, theta1, theta2, tau1,
-    tau2): one to three corruptions of the kinds issue 16 names, and a few more."""
+    tau2): one to three corruptions of the kinds the fuzz mode's description lists, and more."""
     rows = [list(r) for r in lines]
     n = len(rows)
     kinds = []

@@ -6,7 +6,7 @@
 
 For each named column of a CSV (lines starting with '#' skipped), prints
 s_k = median |k-th difference| / (0.6745 sqrt(C(2k, k))) for k = 1..8, the fourth-difference
-estimate s_4 (series_noise before issue 12) and the estimate series_noise gives now: s_k at the
+estimate s_4 (the simpler one) and the estimate series_noise gives: s_k at the
 first order whose successor is not below 0.9 s_k. --colored prints both estimates, relative to
 the deviation, for white and coloured noise (5000 samples, seeded). A mirror of
 model/include/fivebar/model/rest_rule.h for measurement; fivebar itself uses the C++.

@@ -79,8 +79,8 @@ void check_log_time(const CsvTable& table) {
 // Savitzky-Golay, the one-sided edges left out): for accelerations, their median ratio where
 // the crank accelerates (deg/s^2 reads 0.0175); for both, a median offset over a stretch of a
 // tenth of the log (at least 100 samples) beyond 5 % of the column's median size and 8 std
-// of that median (review: alpha1 + 50 and omega1 + 1 rad/s from mid-log were fitted, exit 0,
-// with a spurious delay). Empty when they agree.
+// of that median (alpha1 + 50 or omega1 + 1 rad/s from mid-log would otherwise be fitted, with a
+// spurious delay). Empty when they agree.
 std::string derivative_mismatch(const TorqueLog& log, std::vector<double> theta,
                                 const std::vector<double>& logged, int order) {
   const int n = static_cast<int>(theta.size());
@@ -127,10 +127,10 @@ std::string derivative_mismatch(const TorqueLog& log, std::vector<double> theta,
 
 // Time stamps in milliseconds (or sample counts) read as seconds make a 1 kHz log a 1 Hz one,
 // whose motion is 1000 times slower: every estimate is then wrong, with warnings that do not
-// say why (issue 16 review). A five-bar's dynamics cannot be identified from samples 0.5 s
+// say why. A five-bar's dynamics cannot be identified from samples 0.5 s
 // apart, so a median step that long is refused, naming the likely unit; so is a step of 0.05 s
 // or more under which neither crank ever turns faster than 0.05 rad/s (millisecond stamps of a
-// 2 to 20 kHz log: review of 2026-11-24, a 5 kHz log read as 5 Hz gave viscous 21.5).
+// 2 to 20 kHz log: a 5 kHz log read as 5 Hz gives viscous 21.5).
 constexpr double kLongestTimeStep = 0.5;  // [s]
 constexpr double kSlowTimeStep = 0.05;    // [s]
 constexpr double kSlowestMotion = 0.05;   // [rad/s]

@@ -1,4 +1,4 @@
-// Work-precision study (issue 3): every integrator x friction treatment x tolerance against the
+// Work-precision study: every integrator x friction treatment x tolerance against the
 // toolkit's own tight reference, timed as the minimum of several runs.
 #include "fivebar/studies/accuracy.h"
 

@@ -1,4 +1,4 @@
-// Stress catalogue and runner (issue 3, deliverable 4). Every run is classified as
+// Stress catalogue and runner. Every run is classified as
 //   ok:       the run finished, every output value is finite, the energy balance closes to
 //             StressOptions::max_energy_balance and the trajectory agrees with the case's
 //             reference (rtol = atol = 1e-12) to StressCase::max_error;

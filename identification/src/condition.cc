@@ -193,9 +193,10 @@ bool fit_end(const std::vector<double>& t, const std::vector<double>& x, bool st
 /// Which samples near an end are bad, when a leave-one-out hit falls there: the fewest (one,
 /// else two) of the kEndCandidates samples nearest the end whose removal lets a cubic fit the
 /// other end samples within half the glitch threshold while each removed one leaves it by more
-/// than the threshold; the best fit among those. A pair of bad samples there (review: lines
-/// 1997-1998 of 2001 gave viscous -4.7 std, with five good samples "rejected" and one replaced
-/// by a value 0.2 rad off) has no single culprit. False when no such set exists.
+/// than the threshold; the best fit among those. A pair of bad samples there (e.g. lines
+/// 1997-1998 of 2001, which taken one at a time give viscous -4.7 std, five good samples
+/// "rejected" and one replaced by a value 0.2 rad off) has no single culprit. False when no such
+/// set exists.
 bool end_repair(const std::vector<double>& t, const std::vector<double>& x, bool start,
                 double threshold, EndFit* best) {
   const int n = static_cast<int>(x.size());
@@ -240,9 +241,9 @@ bool continues_one_side(const std::vector<double>& t, const std::vector<double>&
   return false;
 }
 
-/// Runs of `len` adjacent bad samples (2: review of issue 16, two adjacent +0.1 rad samples gave
-/// Coulomb 0 with exit 0; 3: review of 2026-11-24, A5, a 3-sample torque burst of 1.5 N m gave
-/// Coulomb +3 std with the noise floor doubled). Each sample of a run is in the others'
+/// Runs of `len` adjacent bad samples (2: two adjacent +0.1 rad samples must not give Coulomb at
+/// its bound 0; 3: a 3-sample torque burst of 1.5 N m must not give Coulomb +3 std with the noise
+/// floor doubled). Each sample of a run is in the others'
 /// leave-one-out stencils, which hides them all. The run (i .. i + len - 1) is predicted by the
 /// cubic through i - 2, i - 1, i + len, i + len + 1; it is a glitch when every deviation (over
 /// its noise gain) passes `threshold` with the same sign, the run is the largest among its
@@ -310,7 +311,7 @@ Glitch make_glitch(const TorqueLog& log, const char* name, const std::vector<dou
 
 /// Noise gain of an interior leave-one-out deviation (weights -1/6, 4/6, 4/6, -1/6): the floor
 /// of a column is compared with the deviation over it everywhere, so that the ends (gain ~8.4)
-/// are judged like the inside (review: a +100 spike of alpha1 on the last line was kept).
+/// are judged like the inside (a +100 spike of alpha1 on the last line is found too).
 const double kInteriorGain = std::sqrt(70.0 / 36.0);
 
 /// A burst of up to this many samples that leaves the trend and returns is a glitch run (a step
@@ -380,8 +381,8 @@ void repair_hits(const TorqueLog& log, const char* name, const std::vector<int>&
 }
 
 /// One glitch per sample: a sample flagged again in a later pass (its first repair left it off
-/// the trend) keeps the value in the file and takes its last repair (review: a glitch list
-/// repeated lines and counted them twice).
+/// the trend) keeps the value in the file and takes its last repair (so the glitch list neither
+/// repeats lines nor counts them twice).
 void merge_repeats(std::vector<Glitch>* found, double noise) {
   std::vector<Glitch> merged;
   for (const Glitch& g : *found) {
@@ -650,9 +651,9 @@ double run_fit(const std::vector<double>& t, const std::vector<double>& x, int a
   return r.allFinite() ? r.cwiseAbs().maxCoeff() : kInf;
 }
 
-/// A glitch run at the step find_steps flagged before sample k (review: a +0.1 rad burst of three
-/// samples, a +0.1/-0.1 doublet and two swapped rows were each refused as a step that "stays
-/// there"): the run [a, b] of up to kMaxRun samples, containing k - 1 or k, whose leaving out lets
+/// A glitch run at the step find_steps flagged before sample k (a +0.1 rad burst of three
+/// samples, a +0.1/-0.1 doublet or two swapped rows, none of them a step that "stays there"):
+/// the run [a, b] of up to kMaxRun samples, containing k - 1 or k, whose leaving out lets
 /// one cubic fit the kRunSide samples on each side within `tolerance`, with no step between
 /// those sides (a cubic plus a step finds one under `tolerance`), while every sample of the run
 /// leaves that cubic by more than `threshold`. The best fit among those; false when none.
@@ -812,7 +813,7 @@ std::vector<NoisyColumn> noisy_columns(ConditionedLog* out) {
     cols.push_back({"omega1", &L.omega1, &out->rate_noise[0]});
     cols.push_back({"omega2", &L.omega2, &out->rate_noise[1]});
   }
-  if (L.has_accels) {  // review: one alpha spike gave Coulomb 0 at its bound with exit 0
+  if (L.has_accels) {  // one alpha spike left in could put Coulomb at its bound 0
     cols.push_back({"alpha1", &L.alpha1, &out->accel_noise[0]});
     cols.push_back({"alpha2", &L.alpha2, &out->accel_noise[1]});
   }
@@ -923,8 +924,8 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
 
 std::string angle_units_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
                                     const TorqueLog& log, std::string* unit) {
-  // too little motion says nothing about the units (review: 25-30 samples of a radian log, 1.5
-  // Savitzky-Golay windows, read as "encoder counts"): at least four windows and 40 samples
+  // too little motion says nothing about the units (25-30 samples of a radian log, 1.5
+  // Savitzky-Golay windows, can read as "encoder counts"): at least four windows and 40 samples
   const int n = log.size();
   const int window = 2 * sg_half_window(SgOptions{}, log.duration() / std::max(1, n - 1)) + 1;
   if (n < std::max(40, 4 * window)) return "";

@@ -55,9 +55,9 @@ constexpr double kStructureRatio = 1.15;
 /// window choice: a residual/noise ratio this much above the least one is smoothing bias
 constexpr double kWindowExcess = 0.04;
 /// the least ratio over the windows beyond which the estimated rates are biased at every window,
-/// when the smallest is the best (review of 2026-11-24: a frictionless scene's 6-10 s logs read
-/// 4.67, and its smoothing bias was blamed on the masses, the encoders and the torque sensors;
-/// a misfit of the model reads about the same at every window instead)
+/// when the smallest is the best (a frictionless scene's 6-10 s logs read 4.67, a smoothing bias
+/// that must not be blamed on the masses, the encoders or the torque sensors; a misfit of the
+/// model reads about the same at every window instead)
 constexpr double kBiasedRates = 1.5;
 /// a friction coefficient at its bound with the residual this many times its noise floor is a fit
 /// driven by samples the law cannot explain (bound_and_misfit_warning)
@@ -361,7 +361,7 @@ Params<double> fit_scene(const Params<double>& scene_in, const ParameterLayout& 
 
 /// Degrees told by the motion, then unwrapping and glitch rejection, then the poses.
 void prepare_log(const TorqueLog& log, Fit* f, IdentifyResult* out) {
-  // with rates too: degrees with deg/s rates agree with each other (review)
+  // with rates too: degrees with deg/s rates agree with each other
   if (f->opt->check_degrees) {
     std::string unit;
     const std::string why = angle_units_from_motion(f->scene, f->loads, log, &unit);
@@ -520,11 +520,11 @@ bool joint_rates(const Params<double>& p, double th1, double th2, const Sample& 
 /// kinematics (with exact logged rates and 1e-5 rad on the angles, a stuck inner joint of the
 /// paper mechanism reads ~1e-5 rad/s). True (the sample is left out) when a joint's relative
 /// rate is within its threshold: whether it is stuck, slips from rest, or still turns slowly
-/// either way, the log cannot tell, and each gives its friction another direction. (Until the
-/// review of 2026-11-24 such a joint was kept when it accelerated, taken to slip the way of its
-/// acceleration: with logged rates 0.001 rad/s noisy, a joint turning slowly while it
-/// decelerated, or a stuck one whose acceleration read the rates' noise through the velocity
-/// products, got the wrong direction; a breakaway log gave coulomb -25 std, at 0.01 rad/s -42.)
+/// either way, the log cannot tell, and each gives its friction another direction. (Keeping such
+/// a joint when it accelerates, taken to slip the way of its acceleration, is wrong: with logged
+/// rates 0.001 rad/s noisy, a joint turning slowly while it decelerates, or a stuck one whose
+/// acceleration reads the rates' noise through the velocity products, gets the wrong direction;
+/// a breakaway log then gives coulomb -25 std, at 0.01 rad/s -42.)
 bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds& rest,
                  double angle_noise) {
   Kinematics<double> k, kd;
@@ -1564,7 +1564,7 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
   // samples whose shifted torque would lie beyond the samples that have torques have none: left
   // out. In a chain of refits those are the log's ends less the end blocks an earlier refit left
   // out (its shifted torques there were clamped), and only the samples not left out before are
-  // counted (review: "2238 samples left out" of 2001)
+  // counted (else a chain of refits reports more samples left out than the log has)
   const int n = conditioned.size();
   const std::vector<int>& before = opt.condition.rejected_before;
   auto left_out = [&](int i) { return std::find(before.begin(), before.end(), i) != before.end(); };
@@ -1580,8 +1580,8 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
       beyond += !left_out(i);
     }
   }
-  // the shift smooths the torques' noise, which the refit would then measure too small (review:
-  // a 0.5 ms lag gave std 22 % small and a false structure warning): it keeps the noise measured
+  // the shift smooths the torques' noise, which the refit would then measure too small (a 0.5 ms
+  // lag would give std 22 % small and a false structure warning): it keeps the noise measured
   // before (the level the coefficients' std see) and scales the per-sample level by the
   // interpolation's sum of squared weights (a product over a chain of refits, approximately)
   double factor = 1;
@@ -1593,7 +1593,7 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
   // total is their sum, with the std of the last estimate
   if (res.delay_corrected) res.warnings.erase(res.warnings.begin());
   res.samples = first.samples;
-  // (a refit whose estimate is not finite keeps the first: review, "lag by nan +- nan ms")
+  // (a refit whose estimate is not finite keeps the first, so no "lag by nan +- nan ms")
   const bool refit_estimate =
       again.estimate_delay && std::isfinite(res.delay_s) && std::isfinite(res.delay_std_s);
   res.delay_s = first.delay_s + (refit_estimate ? res.delay_s : 0.0);
@@ -1833,9 +1833,9 @@ double misfit_ratio(const IdentifyResult& r) {
                   r.rms_torque_residual[1] / r.residual_noise_floor[1]);
 }
 
-/// A friction coefficient at its bound while the residual is far above the noise floor (review:
-/// two adjacent bad samples, an acceleration spike, a step in an angle gave Coulomb 0 with exit 0
-/// and only the generic warnings): the fit is driven by samples the law cannot explain. One
+/// A friction coefficient at its bound while the residual is far above the noise floor (as from
+/// two adjacent bad samples, an acceleration spike or a step in an angle, which can put Coulomb at
+/// 0): the fit is driven by samples the law cannot explain. One
 /// warning names the coefficients, the ratio, the lines of the largest residuals (in units of
 /// the floor) and the likely causes.
 void bound_and_misfit_warning(const Fit& f, const Analysis& an, IdentifyResult* out) {
@@ -1966,8 +1966,8 @@ std::string friction_moves(const Fit& f, const IdentifyResult& out, const detail
 /// The clause of a model_check warning on the friction: "the friction would move: ..." when a
 /// freed step moves a coefficient beyond kFreedMove std (friction_moves). When a coefficient is
 /// at its bound no move is given; for a cause the log evidences (`evidenced`) the warning is
-/// still due, and says so (review of 2026-11-24: a crank inertia 10 % off put coulomb at 0 and
-/// viscous 23 std off, with only the bound's warning). Empty: no warning.
+/// still due, and says so (a crank inertia 10 % off puts coulomb at 0 and viscous 23 std off,
+/// which the bound's warning alone does not explain). Empty: no warning.
 std::string friction_clause(const Fit& f, const IdentifyResult& out, const detail::FreedStep& fs,
                             bool own, bool evidenced, double* largest = nullptr) {
   const std::string moved = friction_moves(f, out, fs, own, largest);
@@ -1988,8 +1988,8 @@ struct TorqueColumns {
 };
 
 /// A gain is left out when the model's torque of its channel varies by less than this fraction
-/// of its mean: then it is nearly an offset (review of 2026-11-24: constant drive torques of
-/// 40 N m read back an offset of -170 N m and a gain of 424 %)
+/// of its mean: then it is nearly an offset (with both free, constant drive torques of 40 N m
+/// read back an offset of -170 N m and a gain of 424 %)
 constexpr double kGainSpread = 0.1;
 
 /// The columns (r: the whitened residual at the fit, fl: the noise floors) on errors of the
@@ -2109,7 +2109,7 @@ bool accel_derivatives(const Fit& f, const IdentifyResult& out, const Eigen::Mat
 /// is evaluated at, in the inertial columns too (errors in variables), so E[J' r] = sum over
 /// samples and cranks c of sigma_c^2 m_c dJ_c' dr_c (dJ_c, dr_c: accel_derivatives; m_c: the sum
 /// of the squared acceleration taps, accel_tap_power). It grows with the log's length while the
-/// score's noise grows with its square root (review: clean 10 s logs dropped the cost by 104
+/// score's noise grows with its square root (uncorrected, clean 10 s logs drop the cost by 104
 /// against 15 +- 5.3 from white noise). Left out as measured negligible on a clean 10 s log of
 /// the paper scene: the rate noise's path (under 1 % of the acceleration's on every column) and
 /// the offset columns' bias (below 0.03 of their score's std). The torque gains' columns carry
@@ -2162,14 +2162,14 @@ detail::FreedStep freed_set(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
   return detail::freed_step(J, r, idx[0], cols, p, bias);
 }
 
-/// model_check runs only with at least this many residuals per column of its Jacobian (review of
-/// 2026-11-24: 25 samples of a 0.05 s log against 22 freed columns read offsets of 43 N m)
+/// model_check runs only with at least this many residuals per column of its Jacobian (25
+/// samples of a 0.05 s log against 22 freed columns read offsets of 43 N m)
 constexpr int kCheckRowsPerColumn = 10;
 
 /// A cause is named only when its parameters remove at least this fraction of the residual's
-/// excess over its noise floor, when there is one (review of 2026-11-24: a scene with per-joint
-/// friction fitted with the shared law left the residual 4 to 5 times its floor; every cause
-/// cleared its evidence bar by thousands of std, and the torque sensors were blamed)
+/// excess over its noise floor, when there is one (a scene with per-joint friction fitted with
+/// the shared law leaves the residual 4 to 5 times its floor; every cause clears its evidence bar
+/// by thousands of std, and without this the torque sensors would be blamed)
 constexpr double kExplainedExcess = 0.5;
 /// ... when the excess is at least this fraction of the residual's length (the residual's rms
 /// 1.12 times its floor or more): below, the floor's own error is a large part of the excess
@@ -2264,12 +2264,12 @@ std::string pair_clause(const detail::FreedStep& fs, int k, double scale) {
          format_significant(scale * fs.extra_std(k + 1), 2) + ")";
 }
 
-/// A gain is advised only from this size on (review of 2026-11-24: gains of 0.1 to 0.2 %, merely
-/// significant on logs with rates, were advised)
+/// A gain is advised only from this size on (gains of 0.1 to 0.2 % are merely significant on
+/// logs with rates, and not worth advising)
 constexpr double kSmallestGain = 0.005;
 
-/// model_check's warning on the torque readings (review of 2026-11-24, A2 and A3: a torque
-/// sensor's offset was blamed on the masses, and a 3 % gain error was silent at +13 to +18 std):
+/// model_check's warning on the torque readings (so that a torque sensor's offset is not blamed
+/// on the masses, and a 3 % gain error, read at +13 to +18 std, is not silent):
 /// the offsets o_c and gains g_c of tau_c = (1 + g_c) M_c + o_c that the refit reads beyond
 /// kFreedMove of their std (gains also from kSmallestGain on), with what to do about each.
 std::string torque_warning(const TorqueColumns& tc, const detail::FreedStep& fs,
@@ -2340,8 +2340,8 @@ std::string unresolved_warning(const CauseSteps& cs, int strongest, const std::s
 }
 
 /// Wrong masses or inertias, an encoder's zero offset, or a torque sensor's offset or gain
-/// (review: masses +-5 % gave Coulomb +5 %, 10 std, without a word; theta1 + 0.005 rad gave
-/// Coulomb -8 %, 14 std, blamed on the masses; a torque offset was blamed on the masses):
+/// (masses +-5 % give Coulomb +5 %, 10 std; theta1 + 0.005 rad gives Coulomb -8 %, 14 std, and
+/// must not be blamed on the masses, nor must a torque offset):
 /// linearized refits at the fit with the 16 inertial parameters free (under the prior of
 /// --estimate inertia), the two angle offsets free, the torque readings' offsets and gains free,
 /// and combinations (cause_steps). A cause the log evidences (detail::model_causes, misfit.h: its

@@ -189,7 +189,7 @@ class Arkode final : public Integrator {
   /// frozen at y (OdeProblem::freeze). ARKODE's own difference quotients would divide a Coulomb
   /// sign flip by an increment of ~1e-20 where a rate is near zero: the huge Jacobian then makes
   /// every Newton update tiny, and stage values that do not solve their equations pass the
-  /// convergence test (angles inconsistent with rates, issue 15 case C).
+  /// convergence test (a run then ends with angles inconsistent with its rates).
   static int jacobian(realtype t, N_Vector y, N_Vector, SUNMatrix J, void* self, N_Vector tmp1,
                       N_Vector tmp2, N_Vector) {
     auto* me = static_cast<Arkode*>(self);

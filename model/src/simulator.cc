@@ -488,8 +488,8 @@ std::string rest_list(const std::array<bool, kJoints>& rest) {
 
 Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, kJoints>& rest);
 
-/// Stats::sign_rule_inconsistent: whether the rule used before issue 15 (the joints at rest slip
-/// the way they accelerate, iterated, no stick) gives modes that are not consistent here.
+/// Stats::sign_rule_inconsistent: whether the simpler sign rule (the joints at rest slip the way
+/// they accelerate, iterated, no stick) gives modes that are not consistent here.
 bool sign_rule_inconsistent(Context& c, double t, const double* y,
                             const std::array<bool, kJoints>& rest) {
   const JointModes chosen = c.slip;
@@ -858,7 +858,7 @@ constexpr long kStallProbe = 10000;
 
 /// Loads that leave their domain stall a run long before a non-finite value is evaluated: the
 /// steps shrink toward the point (sqrt(1.5 - t) at 1.5 s, 1 / (t - 0.5) at 0.5 s) and the run
-/// used to end at simulation.max_steps. The loads over the next two output intervals, on a fine
+/// would end at simulation.max_steps. The loads over the next two output intervals, on a fine
 /// grid and at the output times themselves, name the first that is not finite.
 Status loads_ahead(const Loop& L, double step) {
   constexpr int kProbes = 200;

@@ -65,7 +65,7 @@ def test_identify_options_are_the_command_lines(root, paper_scene):
 
 
 def test_identify_has_the_log_conditioning_delay_and_window_choice(root, paper_scene):
-    # review: the dict lacked log_conditioning, torque_delay and window_choice, which
+    # the dict has log_conditioning, torque_delay and window_choice, as
     # identification.json has; a glitch put into the log is named by its line there
     text = (root / "datasets/logs/paper_angles.csv").read_text().splitlines()
     lines = [line for line in text if not line.startswith("#")][:2001]

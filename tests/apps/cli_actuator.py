@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""End-to-end checks of the actuator terms (issue 10): scene section, synth-log, identify.
+"""End-to-end checks of the actuator terms: scene section, synth-log, identify.
 
 Usage: cli_actuator.py FIVEBAR PAPER_YAML WORK_DIR
 

@@ -28,7 +28,7 @@ run_fivebar(2 "command line: --inertia-prior: must be > 0"
             --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "command line: --inertia-prior: must be > 0"
             identify ${paper} --log ${log} --inertia-prior -0.1 --out ${WORK_DIR}/out_bad)
-# review: --sg-window -1 quoted the order, a directory as --log said "empty file"
+# --sg-window -1 names the window (not the order), a directory as --log is not an "empty file"
 run_fivebar(2 "command line: --sg-window: must be > 0 \\[s\\], got -1"
             identify ${paper} --log ${log} --sg-window -1 --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "logs: \\(file\\): is a directory, expected a CSV file"

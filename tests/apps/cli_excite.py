@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""End-to-end checks of `fivebar excite` and `synth-log --motion` (issue 11).
+"""End-to-end checks of `fivebar excite` and `synth-log --motion`.
 
 Usage: cli_excite.py FIVEBAR PAPER_YAML WORK_DIR
 

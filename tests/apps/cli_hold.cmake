@@ -1,6 +1,6 @@
-# End-to-end checks of issue 14 (run by ctest with cmake -P): `fivebar hold` at a pose and as a
-# map, its bad input (exit 2 for a pose that cannot assemble, 3 for a singular one, one line on
-# stderr, no output), and the rest columns of `fivebar inverse` on a motion held still.
+# End-to-end checks of rest and holding (run by ctest with cmake -P): `fivebar hold` at a pose
+# and as a map, its bad input (exit 2 for a pose that cannot assemble, 3 for a singular one, one
+# line on stderr, no output), and the rest columns of `fivebar inverse` on a motion held still.
 # Inputs: -DFIVEBAR=<executable> -DSOURCE_DIR=<project root> -DWORK_DIR=<scratch directory>
 cmake_minimum_required(VERSION 3.22)
 file(REMOVE_RECURSE ${WORK_DIR})
@@ -19,7 +19,7 @@ function(require_text file regex)
   endif()
 endfunction()
 
-# one pose: the paper start pose, the frictionless equilibrium of the issue
+# one pose: the paper start pose and its frictionless equilibrium
 run_fivebar(0 "" hold ${paper} --out ${WORK_DIR}/pose)
 require_text(${WORK_DIR}/pose/hold.json "\"M1\": -0\\.69173396")
 require_text(${WORK_DIR}/pose/hold.json "\"M2\": -1\\.43789485")

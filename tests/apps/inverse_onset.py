@@ -2,7 +2,7 @@
 """End-to-end check (ctest apps.inverse_onset): a pose held still, then a quintic move, then held
 again, given as angles only. The 5-point rates overshoot by ~3e-6 rad/s on the row before the
 move starts; that row must still read as at rest and carry the equilibrium torque inside its
-holding range (review of issue 14). Usage: inverse_onset.py FIVEBAR SCENE WORKDIR"""
+holding range. Usage: inverse_onset.py FIVEBAR SCENE WORKDIR"""
 import csv
 import math
 import os

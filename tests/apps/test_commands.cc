@@ -17,7 +17,7 @@ namespace {
 const std::string kRoot = FIVEBAR_SOURCE_DIR;
 
 // --start-from-scene: the coefficients the scene's law uses start the fit at the scene's values
-// (issue 9 left a LuGre scene's coulomb at the neutral 0.1, as LuGre identifies nothing)
+// (a LuGre scene's coulomb too, not the neutral 0.1, though LuGre itself identifies nothing)
 TEST(StartFromScene, KeepsTheCoefficientsTheScenesLawUses) {
   IdentifySettings settings;
   settings.start_from_scene = true;

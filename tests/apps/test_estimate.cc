@@ -27,7 +27,7 @@ std::vector<std::array<double, 4>> reference_angles(const std::string& name) {
   return out;
 }
 
-// "never below a third of the true error" (issue 8)
+// the error estimate is never below a third of the true error
 constexpr double kHonesty = 1.0 / 3.0;
 
 TEST(Estimate, DefaultsMeetTheTargetAndTheEstimateIsHonest) {
@@ -128,7 +128,7 @@ TEST(Estimate, TargetMetKeepsAMargin) {
                                                           scene.options);
   ASSERT_TRUE(loose.run.status.ok());
   ASSERT_FALSE(loose.rounding_limited);
-  // a target just above the estimate, as the issue measured (9.9e-7 against 1e-6): not met
+  // a target just above the estimate, as measured (9.9e-7 against 1e-6): not met
   scene.options.target_error = 1.01 * loose.estimated_max_error_rad;
   const sim::EstimatedRun near = sim::simulate_to_target(scene.params, loads, scene.initial,
                                                          scene.options);

@@ -536,7 +536,7 @@ TEST(SceneYaml, RoundTripsStribeckAndLuGre) {
 namespace fivebar::io {
 namespace {
 
-// issue 14: the rest rule's thresholds are optional (-1: derived), >= 0, and round-trip
+// the rest rule's thresholds are optional (-1: derived), >= 0, and round-trip
 TEST(Scene, RestThresholdsDefaultToDerivedAndRoundTrip) {
   const Scene d = parse_scene(kPaper, "paper.yaml");
   EXPECT_EQ(d.rest_rate_threshold, -1.0);
@@ -553,7 +553,7 @@ TEST(Scene, RestThresholdsDefaultToDerivedAndRoundTrip) {
                "simulation.rest_acceleration_threshold", "must be >= 0");
 }
 
-// Issue 9: the friction keys come from the law descriptors (friction.h). For every law, each of
+// The friction keys come from the law descriptors (friction.h). For every law, each of
 // its coefficients (per joint, distinct values) round-trips through scene_to_yaml, and each
 // coefficient it requires is reported missing, naming the law, when absent.
 TEST(SceneLaws, EveryDescriptorCoefficientRoundTripsAndIsRequiredWhereTheLawSaysSo) {

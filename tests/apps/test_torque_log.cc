@@ -92,9 +92,8 @@ std::string accelerating_log(int n, double scale, double offset = 0, int from = 
   return s.str();
 }
 
-// review (finding 8): accelerations in deg/s^2, or offset from mid-log, were fitted (both
-// coefficients at their bounds, "lag by nan ms"); they are refused naming the column and what
-// was seen
+// accelerations in deg/s^2, or offset from mid-log, if fitted, put both coefficients at their
+// bounds ("lag by nan ms"); they are refused naming the column and what was seen
 TEST(TorqueLog, AccelerationsThatDoNotMatchTheAnglesNameTheColumn) {
   EXPECT_NO_THROW(parse_torque_log(accelerating_log(1000, 1.0), "good.csv"));
   EXPECT_THAT([&] { parse_torque_log(accelerating_log(1000, 180 / M_PI), "deg.csv"); },

@@ -1,4 +1,4 @@
-// Speed of trajectory optimization (issue 12): one evaluation of the problem (objective,
+// Speed of trajectory optimization: one evaluation of the problem (objective,
 // constraints and their gradients) for several spline sizes, and whole tasks of the paper scene
 // (the first solve with the continuation; the refined default). Nothing here is asserted.
 #include <memory>

@@ -1,4 +1,4 @@
-// Group actuator of identification (issue 10): the layout, the torque offset and the motors'
+// Group actuator of identification: the layout, the torque offset and the motors'
 // load-independent friction recovered with the joint friction, and the identifiability report
 // when they cannot be separated.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Logs as encoders and loggers write them (issue 16): wrapped and multi-turn angles, degrees told
+// Logs as encoders and loggers write them: wrapped and multi-turn angles, degrees told
 // by the motion, isolated glitches rejected by line, absurd values that end in a message (never a
 // crash), Stribeck's static >= kinetic, honest noise floors and standard deviations.
 #include <gmock/gmock.h>
@@ -101,8 +101,8 @@ TEST(Degrees, ToldByTheMotionWithWhatWasSeen) {
                                             HasSubstr("read as radians"), HasSubstr("N m"))));
 }
 
-// review: turns, encoder counts, and degrees logged with deg/s rates ended in a friction-loop
-// exit 3 or a wrong fit; they are told by the motion like degrees
+// turns, encoder counts, and degrees logged with deg/s rates, taken for radians, end in a
+// friction-loop exit 3 or a wrong fit; they are told by the motion like degrees
 TEST(Degrees, TurnsCountsAndDegreesWithDegreeRatesAreTold) {
   const TorqueLog base = paper_log(0.5);
   const auto scaled = [&](double k) {
@@ -128,8 +128,8 @@ TEST(Degrees, TurnsCountsAndDegreesWithDegreeRatesAreTold) {
   EXPECT_THAT([&] { fit(rated); }, ThrowsMessage<LogError>(HasSubstr("look like degrees")));
 }
 
-// review (finding 12): 25-30 samples of a radian log (1.5 Savitzky-Golay windows) were
-// refused as "encoder counts (4000 / 65536 per turn)"; too little motion says nothing
+// 25-30 samples of a radian log (1.5 Savitzky-Golay windows) must not be refused as "encoder
+// counts (4000 / 65536 per turn)"; too little motion says nothing
 TEST(Degrees, ShortLogsSayNothingAboutTheUnits) {
   const TorqueLog full = paper_log(2.0);
   for (int count : {25, 30, 60}) {
@@ -208,9 +208,9 @@ TEST(Sampling, NonUniformLogsAreRefusedNamingTheLine) {
   expect_truth(fit(jitter));
 }
 
-// issue 16: a spike in the first or last samples (1e300 overflowed every one-sided cubic:
-// "only 0 samples usable"; 100 rad on the last sample gave coulomb 5.6, exit 0) is rejected by
-// line and the fit holds
+// a spike in the first or last samples (1e300 can overflow every one-sided cubic: "only 0
+// samples usable"; 100 rad on the last sample, if kept, gives coulomb 5.6) is rejected by line
+// and the fit holds
 TEST(Glitch, SpikesAtTheEndsAreRejectedByLine) {
   const TorqueLog clean = paper_log(1.0);
   const int n = clean.size();
@@ -246,7 +246,7 @@ TEST(Glitch, SmallGlitchAtTheEndsNamesItsOwnLine) {
   }
 }
 
-// review: an encoder frozen for five samples (then catching up) gave coulomb 2.18 +- 0.23, exit 0
+// an encoder frozen for five samples (then catching up), if kept, gives coulomb 2.18 +- 0.23
 TEST(Glitch, FrozenEncoderIsRejectedByLineAndTheFitHolds) {
   TorqueLog log = paper_log(1.0);
   for (int i = 401; i <= 405; ++i) log.theta1[i] = log.theta1[400];
@@ -257,8 +257,8 @@ TEST(Glitch, FrozenEncoderIsRejectedByLineAndTheFitHolds) {
   for (int i = 401; i <= 405; ++i) EXPECT_EQ(res.used[i], 0);
 }
 
-// review: two adjacent +0.1 rad samples hid each other from the leave-one-out cubic and gave
-// Coulomb 0 at its bound with exit 0
+// two adjacent +0.1 rad samples hide each other from the leave-one-out cubic and, if kept, give
+// Coulomb 0 at its bound
 TEST(Glitch, TwoAdjacentBadSamplesAreRejectedByLine) {
   TorqueLog log = paper_log(1.0);
   log.theta1[400] += 0.1;
@@ -271,10 +271,10 @@ TEST(Glitch, TwoAdjacentBadSamplesAreRejectedByLine) {
   EXPECT_EQ(res.glitches[1].column, "theta1");
 }
 
-// review (issue 16, finding 1): a pair of +0.1 rad samples among the last five was not
-// rejected; good samples were "rejected" in its place (one replaced by a value 0.2 rad off) and
-// viscous went -3 to -6 std (both coefficients at their bounds for the pair before the last),
-// exit 0. The pair is rejected by its own lines, at either end, for three seeds.
+// a pair of +0.1 rad samples among the last five has no single culprit: taken one at a time,
+// good samples are "rejected" in its place (one replaced by a value 0.2 rad off) and viscous
+// goes -3 to -6 std (both coefficients at their bounds for the pair before the last). The pair
+// is rejected by its own lines, at either end, for three seeds.
 TEST(Glitch, APairOfBadSamplesAtTheEndsIsRejectedByLine) {
   for (std::uint64_t seed : {1, 2, 3}) {
     const TorqueLog clean = paper_log(2.0, 0.02, 1e-5, seed);
@@ -292,16 +292,16 @@ TEST(Glitch, APairOfBadSamplesAtTheEndsIsRejectedByLine) {
         EXPECT_EQ(c.glitches[q].column, "theta1");
         EXPECT_NEAR(c.log.theta1[first + q], clean.theta1[first + q], 1e-3);
       }
-      // the fits of the review's seed, where the pair is near the end
+      // the fits of seed 1, where the pair is near the end
       if (seed == 1 && first > n / 2) expect_truth(fit(log));
     }
   }
 }
 
-// review of 2026-11-24 (A5): a burst of three samples on a torque channel (+1.5 N m, 75 noise
-// std) was neither rejected nor named, and gave Coulomb +3.2 std with the noise floor of tau1
-// raised from 0.14 to 0.20 N m. It is a glitch run, rejected by its own lines, at two places and
-// on both channels; the noise floor is that of the clean log.
+// a burst of three samples on a torque channel (+1.5 N m, 75 noise std), if kept, gives Coulomb
+// +3.2 std with the noise floor of tau1 raised from 0.14 to 0.20 N m. It is a glitch run,
+// rejected by its own lines, at two places and on both channels; the noise floor is that of the
+// clean log.
 TEST(Glitch, ATorqueBurstOfThreeSamplesIsRejectedByLine) {
   const TorqueLog clean = paper_log(2.0);
   const IdentifyResult reference = fit(clean);
@@ -326,8 +326,8 @@ TEST(Glitch, ATorqueBurstOfThreeSamplesIsRejectedByLine) {
   }
 }
 
-// review (finding 7): a burst of three +0.1 rad samples, a +0.1/-0.1 doublet and two swapped
-// rows were each refused as a step that "stays there"; they are glitch runs, rejected by line.
+// a burst of three +0.1 rad samples, a +0.1/-0.1 doublet and two swapped rows are not a step
+// that "stays there"; they are glitch runs, rejected by line.
 // A longer burst is still refused, saying that the angle comes back.
 TEST(Glitch, BurstsDoubletsAndSwappedRowsAreRejectedByLine) {
   const TorqueLog clean = paper_log(1.0);
@@ -359,7 +359,7 @@ TEST(Glitch, BurstsDoubletsAndSwappedRowsAreRejectedByLine) {
                                             HasSubstr("and back by"), Not(HasSubstr("stays")))));
 }
 
-// review: an angle that steps by 0.1 rad and stays (an encoder slip) gave Coulomb 0, exit 0
+// an angle that steps by 0.1 rad and stays (an encoder slip), if fitted, gives Coulomb 0
 TEST(Glitch, AStepInAnAngleIsRefusedNamingTheLine) {
   TorqueLog log = paper_log(1.0);
   for (int i = 500; i < log.size(); ++i) log.theta2[i] += 0.1;
@@ -369,15 +369,15 @@ TEST(Glitch, AStepInAnAngleIsRefusedNamingTheLine) {
                   HasSubstr("steps by 0.1"), HasSubstr("encoder slip"))));
 }
 
-// review: one spike in a logged acceleration gave Coulomb 0 at its bound with exit 0
+// one spike in a logged acceleration, if kept, gives Coulomb 0 at its bound
 TEST(Glitch, AnAccelerationSpikeIsRejectedByLine) {
   SynthOptions so = testing::log_options(1.0, 0.02, 1e-5, 1);
   so.with_rates = true;
   TorqueLog log = testing::synthetic_paper_log(paper_params(), so, "log.csv");
   ASSERT_TRUE(log.has_accels);
-  // and on the first and last lines (review: the floor of a quarter of the column's
-  // interquartile range was compared there with a deviation divided by the end stencil's gain,
-  // 8.4, and a +100 spike on the last line was kept: coulomb std 10x, residual 13x the floor)
+  // and on the first and last lines (compared there with a deviation divided by the end
+  // stencil's gain, 8.4, a floor of a quarter of the column's interquartile range would keep a
+  // +100 spike on the last line: coulomb std 10x, residual 13x the floor)
   const TorqueLog clean = log;
   for (int i : {300, 0, clean.size() - 1}) {
     SCOPED_TRACE("sample " + std::to_string(i));
@@ -395,7 +395,7 @@ TEST(Glitch, AnAccelerationSpikeIsRejectedByLine) {
 // warning that names the lines, the likely cause and the robust loss
 TEST(Glitch, ACoefficientAtItsBoundWithAFarMisfitIsNeverQuiet) {
   TorqueLog log = paper_log(2.0);
-  log.theta1[999] += 0.1;  // the adjacent pair of the review's log
+  log.theta1[999] += 0.1;  // an adjacent pair of bad samples
   log.theta1[1000] += 0.1;
   IdentifyOptions opt;
   opt.condition.reject_glitches = false;
@@ -540,7 +540,7 @@ TEST(Delay, TwentyMillisecondLagIsFoundByIteratingTheEstimate) {
   // the samples whose torques the total shift takes from beyond the log are left out (the refits
   // left out only those beyond each step's shift: the last 17 or 18 of the 20), and counted once
   // (20, or 21 with the one whose shifted time falls between the samples left out and the last
-  // one kept; 22 since the rest rule of 2026-11-24 leaves out every sample with a joint within
+  // one kept; 22 as the rest rule leaves out every sample with a joint within
   // its rate threshold: the delay found, 20.026 +- 0.011 ms, is as good)
   for (int i = log.size() - 19; i < log.size(); ++i) EXPECT_EQ(res.used[i], 0) << i;
   EXPECT_THAT(res.notes, Contains(AnyOf(HasSubstr("20 samples at an end of the log left out"),
@@ -549,8 +549,8 @@ TEST(Delay, TwentyMillisecondLagIsFoundByIteratingTheEstimate) {
       << "delay " << res.delay_s;
 }
 
-// review: a 0.5 ms lag, corrected by a cubic shift of the torques, gave std 22 % small and a
-// false structure warning (the shift smooths the torque noise the refit then measured)
+// a 0.5 ms lag, corrected by a cubic shift of the torques, must not give std 22 % small and a
+// false structure warning (the shift smooths the torque noise a refit would measure)
 TEST(Delay, AFractionalLagKeepsTheStdAndTheFloorOfTheAlignedLog) {
   SynthOptions so = testing::log_options(1.0, 0.02, 1e-5, 3);
   so.rate_hz = 2000;
@@ -581,8 +581,8 @@ TEST(Delay, AFractionalLagKeepsTheStdAndTheFloorOfTheAlignedLog) {
   EXPECT_THAT(b.warnings, Not(Contains(HasSubstr("noise floor"))));
 }
 
-// review: Cauchy at the old fixed scale of 0.1 N m, below a noise floor of 0.14 N m, gave Coulomb
-// +1.7 % (3.3 std) on a clean log; the default scale now follows the floor
+// Cauchy at a fixed scale of 0.1 N m, below a noise floor of 0.14 N m, gives Coulomb +1.7 %
+// (3.3 std) on a clean log; the default scale follows the floor
 TEST(RobustLoss, TheDefaultScaleFollowsTheNoiseFloor) {
   const TorqueLog log = paper_log(2.0, 0.12, 1e-5, 2);
   const IdentifyResult plain = fit(log);
@@ -630,7 +630,7 @@ IdentifyResult stribeck_fit(const Params<double>& truth, const SynthOptions& so)
 }
 
 TEST(Stribeck, StaticNeverBelowKineticAndNoZeroStd) {
-  // angles only at 500 Hz: the fit that used to return static 0.015 < kinetic 0.12
+  // angles only at 500 Hz, where a fit can return static 0.015 < kinetic 0.12
   const Params<double> truth = testing::stribeck_truth();
   SynthOptions so;
   so.duration = 3.0;
@@ -650,8 +650,8 @@ TEST(Stribeck, StaticNeverBelowKineticAndNoZeroStd) {
   }
 }
 
-// review of issue 16: a Stribeck fit of a Coulomb-viscous log (500 Hz, 6 s, seed 3) does not
-// determine static_coulomb; the smoothing-bias prediction solved its singular curvature and took
+// a Stribeck fit of a Coulomb-viscous log (500 Hz, 6 s, seed 3) does not determine
+// static_coulomb; a smoothing-bias prediction that solved its singular curvature would take
 // -2.7e6 off it. Undetermined or singular: no correction, and a finite, physical value.
 TEST(Stribeck, AnUndeterminedStaticCoefficientGetsNoBiasCorrection) {
   SynthOptions so = testing::log_options(6.0, 0.02, 1e-5, 3);

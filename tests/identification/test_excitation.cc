@@ -1,4 +1,4 @@
-// Excitation design (issue 11): the Jet Jacobian and Fisher matrix against finite differences,
+// Excitation design: the Jet Jacobian and Fisher matrix against finite differences,
 // the design gradient against finite differences, the Fourier motion's consistency.
 #include <gtest/gtest.h>
 

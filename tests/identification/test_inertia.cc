@@ -1,4 +1,4 @@
-// Group inertia of identification (issue 10): the layout, the structured residual against the
+// Group inertia of identification: the layout, the structured residual against the
 // full model, the prior and consistency term, the base-parameter decomposition, and recovery of
 // friction from a log whose true links are 3-6 % off the scene.
 #include <ceres/jet.h>
@@ -208,7 +208,7 @@ bool has_warning(const IdentifyResult& res, const std::string& text) {
   return false;
 }
 
-// review: masses 4-5 % off the scene gave Coulomb +10 % (6 std) without a word; a linearized
+// masses 4-5 % off the scene give Coulomb +10 % (6 std); a linearized
 // refit with the inertial parameters free tells it (and stays quiet on a log of the scene)
 TEST(InertiaCheck, LinksOffTheSceneAreToldAndALogOfTheSceneIsNot) {
   IdentifyOptions opt;

@@ -1,4 +1,4 @@
-// Review of issue 16, findings 3-5: wrong answers given with confidence. A mass mismatch and an
+// Wrong answers must not be given with confidence. A mass mismatch and an
 // encoder zero offset must be told, each by its name (identify.cc, model_check); a breakaway from
 // rest, whose stuck inner joint keeps a relative rate of ~1e-10 rad/s in synth-log's exact log,
 // must fit (identify.cc, rest_rule and held_sample).
@@ -40,7 +40,7 @@ TorqueLog paper_log(const Params<double>& truth, std::uint64_t seed) {
 constexpr const char* kOffsetWarning = "an encoder's zero may be off";
 constexpr const char* kMassWarning = "masses or inertias may not match";
 
-// review finding 4: theta1 + 0.005 rad gave Coulomb -8 % (14 std) and blamed the masses
+// theta1 + 0.005 rad gives Coulomb -8 % (14 std), and must not be blamed on the masses
 TEST(ModelCheck, AnEncoderZeroOffsetIsNamed) {
   TorqueLog log = paper_log(paper_params(), 1);
   for (double& th : log.theta1) th += 0.005;
@@ -50,8 +50,8 @@ TEST(ModelCheck, AnEncoderZeroOffsetIsNamed) {
   EXPECT_FALSE(has_warning(res, kMassWarning));
 }
 
-// review of 2026-11-24 (A4): crank 1's inertia 10 % over the scene's put coulomb at its bound 0
-// and viscous 23 std off, with the bound's warning only; the evidenced cause is named anyway
+// crank 1's inertia 10 % over the scene's puts coulomb at its bound 0 and viscous 23 std off;
+// besides the bound's warning, the evidenced cause is named
 TEST(ModelCheck, AnInertiaOffTheSceneIsNamedWhenACoefficientIsAtItsBound) {
   Params<double> truth = paper_params();
   truth.links[0].inertia *= 1.1;
@@ -62,7 +62,7 @@ TEST(ModelCheck, AnInertiaOffTheSceneIsNamedWhenACoefficientIsAtItsBound) {
   EXPECT_TRUE(has_warning(res, "at its bound, so the fit cannot say"));
 }
 
-// review finding 3: link masses +-5 % gave Coulomb +5 % (10 std) without a word
+// link masses +-5 % give Coulomb +5 % (10 std), which must not pass without a word
 TEST(ModelCheck, MassesOffTheSceneAreNamed) {
   Params<double> truth = paper_params();
   for (int i = 0; i < 4; ++i) truth.links[i].mass *= i % 2 == 0 ? 1.05 : 0.95;
@@ -72,8 +72,8 @@ TEST(ModelCheck, MassesOffTheSceneAreNamed) {
   EXPECT_FALSE(has_warning(res, kOffsetWarning));
 }
 
-// review of 2026-11-24 (A3, A2): a torque sensor's offset was blamed on the masses, and a 3 %
-// gain error was silent at +13 to +18 std. With logged rates, each is named as the torque
+// a torque sensor's offset must not be blamed on the masses, nor a 3 % gain error (read at +13
+// to +18 std) pass in silence. With logged rates, each is named as the torque
 // readings' (the offset and the gain read back within their std)
 TorqueLog paper_log_with_rates(std::uint64_t seed) {
   SynthOptions so = testing::log_options(2.0, 0.02, 1e-5, seed);
@@ -118,9 +118,9 @@ TEST(ModelCheck, AMisfitWhoseCauseTheLogCannotTellIsStillTold) {
   EXPECT_EQ(res.model_check.back().name, "any");
 }
 
-// review of 2026-11-24 (helper-46, finding 2): per-joint Coulomb friction fitted with the shared
-// law leaves the residual 4 to 5 times its floor; every cause reduced it by thousands of std
-// and the torque sensors were blamed. None of them explains half the misfit beyond the others
+// per-joint Coulomb friction fitted with the shared law leaves the residual 4 to 5 times its
+// floor; every cause reduces it by thousands of std, yet the torque sensors must not be blamed.
+// None of them explains half the misfit beyond the others
 TEST(ModelCheck, AMisfitOfTheLawIsNotBlamedOnTheSensors) {
   Params<double> truth = paper_params();
   truth.friction.coulomb = {0.1, 0.2, 0.15, 0.12, 0.18};
@@ -135,8 +135,8 @@ TEST(ModelCheck, AMisfitOfTheLawIsNotBlamedOnTheSensors) {
   EXPECT_FALSE(has_warning(res, kMassWarning));
 }
 
-// finding 7: on a 0.05 s log (25 samples against 22 freed columns) the check read offsets of
-// 43 N m; below 10 residuals per column it does not run
+// on a 0.05 s log (25 samples against 22 freed columns) the check would read offsets of 43 N m;
+// below 10 residuals per column it does not run
 TEST(ModelCheck, DoesNotRunOnAFewSamples) {
   const IdentifyResult res = identify(
       paper_params(), paper_loads,
@@ -162,8 +162,8 @@ TEST(ModelCheck, LogsOfTheSceneAreQuiet) {
   }
 }
 
-// review (branch eiv17): clean angles-only logs of 6 s and more warned of the masses (synth-log
-// seed 1, 6 s: with the inertias free the cost fell by 56 against 14 +- 5.2 from noise alone):
+// clean angles-only logs of 6 s and more must not warn of the masses (synth-log seed 1, 6 s:
+// with the inertias free the cost falls by 56 against 14 +- 5.2 from noise alone):
 // the noise of the Savitzky-Golay accelerations is both in the residual and in the inertial
 // columns, so the score is not centred and its excess grows with the log's length (errors in
 // variables). Fails without score_bias.
@@ -219,10 +219,10 @@ TEST(RestSamples, ANoisyBreakawayLogFitsWithinItsStd) {
   EXPECT_LT(std::abs(res.parameters[1].value - 0.02), 3 * res.parameters[1].std);
 }
 
-// logged rates 0.001 rad/s noisy, accelerations exact (review 2026-11-24: coulomb -25 std with
-// 327 samples held): a joint within its rate threshold was kept when it accelerated, with the
-// direction of its acceleration (a stuck joint's read the rates' noise through the velocity
-// products; a slowly turning joint's opposed its motion when it decelerated)
+// logged rates 0.001 rad/s noisy, accelerations exact (327 samples held): a joint within its
+// rate threshold is left out, not kept with the direction of its acceleration (a stuck joint's
+// reads the rates' noise through the velocity products; a slowly turning joint's opposes its
+// motion when it decelerates), which would give coulomb -25 std
 TEST(RestSamples, NoisyLoggedRatesHoldTheStuckJoint) {
   const IdentifyResult exact = breakaway_fit(0.02, 1e-5);
   const IdentifyResult res = breakaway_fit(0.02, 1e-5, 1e-3);

@@ -2,7 +2,8 @@
 // noise: the estimate of a linear-in-the-coefficients least-squares fit is Gaussian around the
 // truth with the reported std (residual variance times (J^T J)^-1), so each test asks for
 // |error| < 4 std (two-sided probability 6e-5 per coefficient; the seeds are fixed, so the
-// outcome is deterministic) plus the absolute targets of issue 4 where they apply.
+// outcome is deterministic) plus absolute targets (1 % with rates, 5 % from angles only)
+// where they apply.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -18,8 +19,8 @@ namespace fivebar::identification {
 namespace {
 
 constexpr double kStdBound = 4.0;      // |error| / std, see the file comment
-constexpr double kTorqueNoise = 0.02;  // N m, issue 4
-constexpr double kAngleNoise = 1e-5;   // rad, issue 4
+constexpr double kTorqueNoise = 0.02;  // N m, as in datasets/logs
+constexpr double kAngleNoise = 1e-5;   // rad, as in datasets/logs
 
 using testing::paper_loads;
 const sim::Initial kPaperInitial = testing::paper_initial();
@@ -83,7 +84,7 @@ TEST(Recovery, PerJointDistinctCoefficients) {
 
 TEST(Recovery, AnglesOnlyWithinFivePercent) {
   // rates and accelerations by Savitzky-Golay: bias from the smoothing dominates, so only the
-  // issue's 5 % target is asserted (the reported std does not cover filter bias)
+  // 5 % target is asserted (the reported std does not cover filter bias)
   const Params<double> truth = paper_params();
   const TorqueLog log = make_log(truth, 3.0, false, false);
   const IdentifyResult res = identify(truth, paper_loads, log, IdentifyOptions{});
@@ -132,8 +133,8 @@ IdentifyOptions stribeck_options() {
 }
 
 TEST(Recovery, StribeckStartsFromSeveralVelocities) {
-  // noise-free angles through the smallest window: from the neutral start (0.2 rad/s) the fit
-  // used to end at the velocity's bound (static_coulomb 0.191 undetermined); the least cost over
+  // noise-free angles through the smallest window: from the neutral start (0.2 rad/s) alone the
+  // fit ends at the velocity's bound (static_coulomb 0.191 undetermined); the least cost over
   // the starts finds the peak
   const TorqueLog log = stribeck_angles_log(0, 0);
   IdentifyOptions opt = stribeck_options();
@@ -155,8 +156,8 @@ TEST(Recovery, StribeckKeepsOutReversalsAndTheSecondWindow) {
   EXPECT_EQ(res.sg_order, 7);
   EXPECT_GT(res.samples_near_reversals, 0);
   EXPECT_NEAR(res.parameters[2].value, 0.2, 0.004);
-  // noisy angles: the second window (4 samples) is unbiased; the back-off used to land on the
-  // smallest and raise the order (noisier accelerations); now order 5 over 4 samples
+  // noisy angles: the second window (4 samples) is unbiased; backing off to the smallest would
+  // raise the order (noisier accelerations); order 5 over 4 samples
   res = identify(paper_params(), paper_loads, stribeck_angles_log(kTorqueNoise, kAngleNoise),
                  stribeck_options());
   ASSERT_TRUE(res.status.ok()) << res.status.message;
@@ -222,7 +223,7 @@ TEST(Recovery, OutputErrorOnAShortLog) {
   expect_recovered(few, {0.12, 0.02}, 0.01);
 }
 
-// review: the fitted scene of a law without static friction held the nominal scene's static
+// the fitted scene of a law without static friction must not keep the nominal scene's static
 // coefficient (its holding bound), 0.2 against a fitted Coulomb of 0.12
 TEST(Recovery, FittedSceneStaticCoulombFollowsTheFittedCoulomb) {
   const TorqueLog log = make_log(paper_params(), 1.0, true, false);

@@ -1,6 +1,6 @@
-// Issue 14: identification and samples at rest. A log that holds the start pose still before it
+// Identification and samples at rest. A log that holds the start pose still before it
 // moves: the held samples carry a static friction torque (anywhere within +-mu_s r N), and their
-// logged rates are rounding noise of one sign (-1.5e-14 rad/s, as the issue measured). The rest
+// logged rates are rounding noise of one sign (-1.5e-14 rad/s, as measured). The rest
 // rule leaves them out; with the exact rule (only w = 0 at rest) their sign picks full kinetic
 // friction at every joint, 0.11 N m off the held torques, and biases the Coulomb coefficient.
 #include <gtest/gtest.h>
@@ -18,7 +18,7 @@ namespace fivebar::identification {
 namespace {
 
 constexpr double kStdBound = 4.0;      // |error| / std, as in test_recovery.cc
-constexpr double kTorqueNoise = 0.02;  // N m, issue 4
+constexpr double kTorqueNoise = 0.02;  // N m, as in datasets/logs
 constexpr int kHeld = 1000;            // samples held still (1 s at 1 kHz)
 
 using testing::paper_loads;

@@ -1,4 +1,4 @@
-// Slip decisions that are provably consistent and runs that prove themselves (issues 8 and 15):
+// Slip decisions that are provably consistent and runs that prove themselves:
 // friction never supplies power, inverse dynamics returns the input torques, with every
 // integrator, on long runs, hard drives, breakaways from rest and seeded random mechanisms.
 #include <gtest/gtest.h>
@@ -17,7 +17,7 @@ namespace {
 
 using sim::kAllMethods;
 
-// issue 8's figures: friction power and inverse residual on every row
+// the bounds on friction power and inverse residual on every row
 constexpr double kPowerTol = 1e-9;    // W
 constexpr double kInverseTol = 1e-8;  // N m
 
@@ -50,7 +50,7 @@ sim::LoadFunction constant_drive(double M1, double M2) {
   };
 }
 
-// issue 8: the +-40 N m drive missed a slip reversal at joint C with three integrators
+// the +-40 N m drive's slip reversal at joint C is easy to step over; every integrator finds it
 TEST(Modes, HardDriveEveryIntegrator) {
   const Params<double> p = paper_params();
   const sim::LoadFunction loads = constant_drive(40.0, -40.0);
@@ -63,7 +63,7 @@ TEST(Modes, HardDriveEveryIntegrator) {
   }
 }
 
-// issue 8: the 12 s paper run missed the reversal at t = 11.4465 s (Adams, ERK45); 60 s here
+// the 12 s paper run's reversal at t = 11.4465 s is easy to step over (Adams, ERK45); 60 s here
 TEST(Modes, LongRunEveryIntegrator) {
   const Params<double> p = paper_params();
   for (sim::Method m : kAllMethods) {
@@ -76,9 +76,9 @@ TEST(Modes, LongRunEveryIntegrator) {
   }
 }
 
-// issue 15 C: arkode_dirk with switches not located ended 5e-3 rad off, its angles inconsistent
-// with its rates (ARKODE's difference-quotient Jacobian divided a Coulomb sign flip by ~1e-20).
-// Every method now agrees with the located reference to 1e-6 rad, except Fehlberg 7(8), whose
+// arkode_dirk with switches not located can end 5e-3 rad off, its angles inconsistent with its
+// rates, if ARKODE's difference-quotient Jacobian divides a Coulomb sign flip by ~1e-20. Every
+// method agrees with the located reference to 1e-6 rad, except Fehlberg 7(8), whose
 // error control steps over unlocated kinks less well: its own error estimate must say so.
 TEST(Modes, SwitchesNotLocatedAgreeWithLocatedOnes) {
   const Params<double> p = paper_params();
@@ -120,8 +120,8 @@ Params<double> weightless() {
   return p;
 }
 
-// issue 15 A: breakaway from rest pushed the mechanism with friction (w and Mf of opposite
-// signs at all five joints)
+// breakaway from rest must not push the mechanism with friction (w and Mf of opposite signs at
+// any of the five joints)
 TEST(Modes, BreakawayFromRestIsConsistent) {
   const Params<double> p = weightless();
   for (auto [d1, d2] : {std::pair{0.04, 0.0}, {0.025, 0.0}, {0.1, 0.0}, {-0.04, 0.0},
@@ -165,8 +165,8 @@ double max_angle_gap(const sim::Result& a, const sim::Result& b) {
   return sim::max_angle_difference(a.rows, b.rows);
 }
 
-// review: a lock reached mid-run must break away when friction can no longer hold it, with
-// every integrator (CVODE stepped over the lock margin's zero: nothing moves while locked)
+// a lock reached mid-run must break away when friction can no longer hold it, with every
+// integrator (a solver stepping over the lock margin's zero leaves it locked: nothing moves)
 TEST(Modes, MidRunLockBreaksAwayWithEveryIntegrator) {
   Params<double> p = paper_params();
   p.friction.pin_radius.fill(0.05);
@@ -192,8 +192,8 @@ TEST(Modes, MidRunLockBreaksAwayWithEveryIntegrator) {
   }
 }
 
-// review: with a joint stuck, another joint's rate can cross zero at a dead point while the
-// mechanism moves; that is not a lock (the rates jumped to zero)
+// with a joint stuck, another joint's rate can cross zero at a dead point while the mechanism
+// moves; that is not a lock (taken for one, the rates would jump to zero)
 TEST(Modes, DeadPointWithAStuckJointIsNotALock) {
   const Params<double> p = testing::with_law(weightless(), FrictionLaw::kStribeck,
                                              {{Coefficient::kStaticCoulomb, 0.3},
@@ -252,7 +252,7 @@ sim::Result run_for_a_second(const RandomScene& s) {
   return sim::simulate(s.params, s.loads, s.initial, o);
 }
 
-// issue 15 property test: seeded random scenes with breakaways from rest, sticks and reversals;
+// property test: seeded random scenes with breakaways from rest, sticks and reversals;
 // a run either passes its checks, or stops with a status that names why
 TEST(Modes, RandomScenesNeverLetFrictionDriveTheMotion) {
   std::mt19937 rng(20261123);
@@ -272,7 +272,7 @@ TEST(Modes, RandomScenesNeverLetFrictionDriveTheMotion) {
   EXPECT_GT(events, 20);  // the sweep exercises switches
 }
 
-// the larger sweep of issue 15 (200 scenes, ~10 s): run with
+// the larger sweep (200 scenes, ~10 s): run with
 //   build/release/tests/model/test_model --gtest_also_run_disabled_tests
 //   --gtest_filter='*Sweep200*'
 TEST(Modes, DISABLED_RandomSweep200) {
@@ -300,7 +300,7 @@ TEST(Modes, DISABLED_RandomSweep200) {
               ok, failed, events, decisions, sticks, breakaways, naive_wrong);
 }
 
-// issue 15 D: the balance of a conservative run is relative to an energy scale it has
+// the balance of a conservative run is relative to an energy scale it has
 TEST(Modes, ConservativeRunBalanceIsRelativeToItsEnergy) {
   Params<double> p = paper_params();
   p.friction.law = FrictionLaw::kNone;
@@ -314,7 +314,7 @@ TEST(Modes, ConservativeRunBalanceIsRelativeToItsEnergy) {
   EXPECT_LE(sim::check_run(p, none, r, o.rtol).energy_balance_relative, 1e-9);  // was 1.00
 }
 
-// issue 15 E: the last row is at the duration, also off the output grid
+// the last row is at the duration, also off the output grid
 TEST(Modes, LastRowIsAtTheDuration) {
   sim::Options o;
   o.duration = 0.01;
@@ -327,7 +327,7 @@ TEST(Modes, LastRowIsAtTheDuration) {
   EXPECT_NEAR(r.rows[3].t, 0.009, 1e-15);
 }
 
-// issue 8: ARKODE's tolerance is honoured with located switches (no cap at the output step)
+// ARKODE's tolerance is honoured with located switches (no cap at the output step)
 TEST(Modes, ExplicitStepsAreNotCappedByTheOutputStep) {
   sim::Options o;
   o.method = sim::Method::kArkodeErk45;
@@ -338,7 +338,7 @@ TEST(Modes, ExplicitStepsAreNotCappedByTheOutputStep) {
   EXPECT_LT(r.stats.steps, 1000);  // was 2039 with the cap, for 2000 output rows
 }
 
-// issue 8: the estimate is honest: at least a third of the true error against the reference
+// the error estimate is honest: at least a third of the true error against the reference
 TEST(Modes, ErrorEstimateIsHonestOnThePaperScene) {
   sim::Options o;
   o.auto_tolerance = true;

@@ -1,4 +1,4 @@
-// The power_viscous law, added as the test of the friction-law descriptors (issue 9): with
+// The power_viscous law, the test of the friction-law descriptors: with
 // n = 1 it is the paper's law exactly; with n = 0.5 friction never supplies power on a run with
 // reversals and sticks; its Jet derivative in mu_v matches a difference.
 #include <ceres/jet.h>
@@ -37,7 +37,7 @@ TEST(PowerViscous, ExponentOneIsTheCoulombViscousLaw) {
 
 // A library caller who only switches the law of paper_params() (leaving n at FrictionParams'
 // default) gets the law a scene that omits viscous_exponent gets: n = 1, the linear law, not
-// mu_v sign(w) (the default was 0 before; issue 9 review).
+// mu_v sign(w) (which an exponent defaulted to 0 would give).
 TEST(PowerViscous, DefaultExponentIsTheDescriptorsAndLinear) {
   Params<double> pv = paper_params();
   pv.friction.law = FrictionLaw::kPowerViscous;

@@ -1,4 +1,4 @@
-// Rest and holding (issue 14): the rest rule of inverse dynamics, the holding torques and their
+// Rest and holding: the rest rule of inverse dynamics, the holding torques and their
 // range, and forward simulation of those torques (stick inside the range, breakaway outside).
 #include <gtest/gtest.h>
 
@@ -13,10 +13,10 @@
 namespace fivebar {
 namespace {
 
-// the issue's figures: equilibrium torques to 1e-9 N m; a held pose moves less than 1e-12 rad
+// the required figures: equilibrium torques to 1e-9 N m; a held pose moves less than 1e-12 rad
 constexpr double kTorqueTol = 1e-9;
 constexpr double kStuckDisplacement = 1e-12;
-// the issue quotes the equilibrium rounded to 4 decimals
+// the equilibrium below is quoted rounded to 4 decimals
 constexpr double kQuotedTol = 5e-5;
 // a crank that breaks away moves visibly within 0.2 s (measured: ~1e-4 rad at 1% over the bound)
 constexpr double kBreakaway = 1e-7;
@@ -199,8 +199,8 @@ TEST(Rest, PolygonContainsTheRanges) {
   EXPECT_NEAR(poly.M1_max, h.M1_max, edge_tol);
   EXPECT_NEAR(poly.M2_min, h.M2_min, edge_tol);
   EXPECT_NEAR(poly.M2_max, h.M2_max, edge_tol);
-  // the corner with every joint slipping the same way is what the exact rule reported on the
-  // issue's static motion (M1 = -0.8055, M2 = -1.5445: kinetic = static coefficient here)
+  // the corner with every joint slipping the same way is what the exact rule reports on the
+  // quoted static motion (M1 = -0.8055, M2 = -1.5445: kinetic = static coefficient here)
   EXPECT_TRUE(inside_polygon(poly.vertices, -0.8055 + kQuotedTol, -1.5445 + kQuotedTol));
 }
 

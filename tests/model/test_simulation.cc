@@ -15,9 +15,9 @@ namespace {
 using testing::paper_initial;
 using testing::paper_loads;
 
-// issue 2: max |d theta| <= 1e-6 rad at default settings
+// the accuracy at default settings: max |d theta| <= 1e-6 rad
 constexpr double kDefaultAccuracy = 1e-6;
-// issue 2: energy balance and inverse dynamics close to 1e-8 at defaults
+// energy balance and inverse dynamics close to 1e-8 at defaults
 constexpr double kBalanceTol = 1e-8;
 constexpr double kInverseTol = 1e-8;
 
@@ -75,7 +75,7 @@ INSTANTIATE_TEST_SUITE_P(WithAndWithoutFriction, PaperScene, ::testing::Bool());
 namespace fivebar {
 namespace {
 
-// issue 2: "with documented tight settings <= 1e-8 rad" (README: cvode_adams, rtol = atol = 1e-13)
+// with the documented tight settings <= 1e-8 rad (README: cvode_adams, rtol = atol = 1e-13)
 TEST(PaperSceneTight, MatchesReferenceToTenNanoradians) {
   for (bool friction : {false, true}) {
     Params<double> p = paper_params();

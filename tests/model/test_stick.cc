@@ -11,7 +11,7 @@
 namespace fivebar {
 namespace {
 
-// issue 3: zero displacement while stuck, below 1e-12 rad
+// zero displacement while stuck, below 1e-12 rad
 constexpr double kStuckDisplacement = 1e-12;
 
 /// Paper mechanism without gravity: the 50 N force at P loads the joints, so friction holds

@@ -17,7 +17,7 @@ namespace {
 using ::testing::AnyOf;
 using ::testing::HasSubstr;
 
-// issue 3: zero displacement while stuck, below 1e-12 rad
+// zero displacement while stuck, below 1e-12 rad
 constexpr double kStuckDisplacement = 1e-12;
 
 const StressCase& find_case(const std::vector<StressCase>& cases, const std::string& name) {

@@ -1,4 +1,4 @@
-# End-to-end checks of `fivebar design` (issue 12), run by ctest with cmake -P:
+# End-to-end checks of `fivebar design`, run by ctest with cmake -P:
 # - a tiny problem (one task, one key, 8 designs) improves on its start and writes its outputs;
 # - bad input exits 2 with one line: a key that is not a number of the mechanism, LO >= HI,
 #   bounds whose start design cannot assemble.

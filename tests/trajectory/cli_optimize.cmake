@@ -1,10 +1,10 @@
 # End-to-end checks of `fivebar optimize` and `fivebar study` (run by ctest with cmake -P):
-# - a task whose minimum-jerk motion cannot close (issue 17) is solved from a detour, exit 0;
+# - a task whose minimum-jerk motion cannot close is solved from a detour, exit 0;
 # - when every task fails, exit 2 (the tasks cannot be done by the design) with one error line
-#   on stderr, each failed task's reason on stdout, and summary.csv kept (issue 8.7);
+#   on stderr, each failed task's reason on stdout, and summary.csv kept;
 # - trajectory.csv carries non-zero W_in and W_ext; animation.html is written (no ghost without
 #   a baseline) and `fivebar animate` remakes it;
-# - study.csv names the reason of every design that cannot do every task (issue 12.4).
+# - study.csv names the reason of every design that cannot do every task.
 # Inputs: -DFIVEBAR=<executable> -DSOURCE_DIR=<project root> -DWORK_DIR=<scratch directory>
 cmake_minimum_required(VERSION 3.22)
 file(REMOVE_RECURSE ${WORK_DIR})
@@ -20,7 +20,7 @@ function(expect what)
   endif()
 endfunction()
 
-# issue 17's task: solved from the path search's detour
+# the detour task: solved from the path search's detour
 execute_process(COMMAND ${FIVEBAR} optimize ${paper} --tasks ${SOURCE_DIR}/datasets/tasks/detour_tasks.yaml
                         ${short} --no-plots --no-validate --no-refine --out ${WORK_DIR}/detour
                 RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -103,7 +103,7 @@ expect("study without windings: exit ${status}\n${out}${err}" status EQUAL 2)
 expect("study without windings: stderr ${err}" err MATCHES "winding_resistance")
 expect("study without windings: output written" NOT EXISTS ${WORK_DIR}/study_bad/study.csv)
 
-# trajectory.csv torques are those of `fivebar inverse` on the same motion (issue 12.1): the
+# trajectory.csv torques are those of `fivebar inverse` on the same motion: the
 # same doubles, hence the same text
 execute_process(COMMAND ${FIVEBAR} inverse ${paper} ${short} --motion ${WORK_DIR}/detour/detour/trajectory.csv
                         --no-plots --out ${WORK_DIR}/inverse

@@ -1,4 +1,4 @@
-// Issue 12: the continuation to the exact friction law, the refinement of the control points,
+// The continuation to the exact friction law, the refinement of the control points,
 // warm starts from a neighbouring design, and the outer loop of `fivebar design`.
 #include <gtest/gtest.h>
 
@@ -153,8 +153,8 @@ TEST(Refinement, StopsWhenTheEnergyChangesLessThanTheTolerance) {
   EXPECT_LT(all.dissipated_energy, r.dissipated_energy);
 }
 
-// helper deg12 (2026-11-24): a level whose solve stopped at its evaluation limit ended within
-// the tolerance of the level before and passed for converged; it shows nothing, and says so
+// a level whose solve stopped at its evaluation limit can end within the tolerance of the level
+// before and pass for converged; it shows nothing, and says so
 TEST(Refinement, ALevelStoppedAtItsLimitDoesNotShowConvergence) {
   const TaskSpec task = paper_tasks()[0];  // swing_left
   BatchOptions options;

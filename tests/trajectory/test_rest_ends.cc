@@ -1,4 +1,4 @@
-// Issue 14: a rest-to-rest trajectory starts and ends held still. Its trajectory rows there are
+// A rest-to-rest trajectory starts and ends held still. Its trajectory rows there are
 // at rest (both cranks stuck) with the holding torques of `fivebar hold`, and the optimizer's own
 // torques (its torque constraint) agree with them.
 #include <algorithm>
@@ -18,7 +18,7 @@
 namespace fivebar::trajectory {
 namespace {
 
-// the issue's tolerance on holding torques
+// the required tolerance on holding torques
 constexpr double kTorqueTol = 1e-9;
 
 TEST(RestEnds, TrajectoryEndsAreHeldWithTheHoldingTorques) {
@@ -55,7 +55,7 @@ TEST(RestEnds, TrajectoryEndsAreHeldWithTheHoldingTorques) {
   }
 }
 
-// Issue 12: an oscillating planned motion like swing_right's optimum (85 control points over
+// An oscillating planned motion like swing_right's optimum (85 control points over
 // 0.5 s, rows every 1 ms): its control points oscillate 0.05 rad about the straight line with a
 // period of 8 control points (20 Hz); the first two and last two free ones stay at the ends, so
 // the rows next to the ends move slowly (1e-4 rad/s), as swing_right's last rows do.
@@ -82,7 +82,8 @@ struct OscillatingSpline {
   }
 };
 
-// the estimate before issue 12's fix: fourth differences only (median |d4| / (0.6745 sqrt 70))
+// the simpler estimate series_noise improves on: fourth differences only
+// (median |d4| / (0.6745 sqrt 70))
 double fourth_difference_noise(const std::vector<double>& f) {
   std::vector<double> d;
   for (size_t i = 0; i + 4 < f.size(); ++i) {

@@ -1,4 +1,4 @@
-// Issue 12, the solve time: the node-wise Hessian of the preconditioner, the local form of the
+// The solve time: the node-wise Hessian of the preconditioner, the local form of the
 // constraint gradients, evaluations on several threads, and the stall test of local solves.
 // Counts and numbers only (deterministic), no timing.
 #include <cmath>

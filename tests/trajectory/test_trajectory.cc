@@ -83,7 +83,7 @@ TEST(Quadrature, GaussLegendreIsExactToDegree2nMinus1) {
 
 // the default rule (12 points per span) against a 6x denser one, on the baseline and optimum
 TEST(Quadrature, DissipatedEnergyAccurateTo1e6Relative) {
-  constexpr double kRelTol = 1e-6;  // the accuracy the issue asks of E
+  constexpr double kRelTol = 1e-6;  // the accuracy required of E
   const std::vector<TaskSpec> tasks = paper_tasks();
   for (const TaskSpec& task : tasks) {
     const ResolvedTask rt = resolve_task(paper_params(), task, paper_initial(), 0.1);
@@ -243,7 +243,7 @@ TEST(Batch, IdenticalForOneAndTwoThreads) {
   EXPECT_EQ(encode(back), encode(a[0]));
 }
 
-// the design of issue 17: shorter couplers, whose minimum-jerk motion of the detour task leaves
+// a design with shorter couplers, whose minimum-jerk motion of the detour task leaves
 // the workspace (|BD| > l3 + l4 near theta1 = 2.3)
 Params<double> short_coupler_params() {
   Params<double> p = paper_params();
@@ -412,7 +412,7 @@ TEST(Actuators, OptimizeHonoursTheMotorFriction) {
 }
 
 TEST(ExactLaw, RowsAreTheInverseDynamicsOfTheSceneLaw) {
-  // trajectory.csv torques = what `fivebar inverse` computes on the same motion (issue 12.1):
+  // trajectory.csv torques = what `fivebar inverse` computes on the same motion:
   // sim::inverse_rows with the scene's own (exact sign) friction, not the optimizer's tanh
   BatchOptions options;
   options.validate = false;
@@ -424,7 +424,7 @@ TEST(ExactLaw, RowsAreTheInverseDynamicsOfTheSceneLaw) {
   ASSERT_TRUE(problem.rows(r.x.data(), 1e-3, &rows).ok());
   ASSERT_TRUE(sim::inverse_rows(paper_params(), paper_loads(), rows, &inverse).ok());
   ASSERT_TRUE(sim::inverse_rows(problem.params(), paper_loads(), rows, &smoothed).ok());
-  constexpr double kSameCode = 1e-9;  // the contract of issue 12: same motion, same torques
+  constexpr double kSameCode = 1e-9;  // the contract: same motion, same torques
   double worst = 0, smoothing = 0;
   for (size_t i = 0; i < rows.size(); ++i) {
     worst = std::max({worst, std::abs(rows[i].M1 - inverse[i].M1),

@@ -14,7 +14,7 @@ namespace {
 constexpr int kTightenRounds = 4;
 // the limit is lowered by the overshoot raised to this power: lowered by the overshoot itself,
 // the re-solve peaked again 0.3% to 0.4% over the limit (a tenth of the first overshoot of 2% to
-// 4%), and a second re-solve followed on 3 of the 8 stages that needed one (issue 12, fifth pass)
+// 4%), and a second re-solve followed on 3 of the 8 stages that needed one
 constexpr double kTightenGain = 1.3;
 
 // the problem of a stage: finer splines get fewer quadrature points per knot span (as many

@@ -1,4 +1,4 @@
-// Stress catalogue (issue 3, deliverable 4): stiff and extreme cases, each run with every
+// Stress catalogue: stiff and extreme cases, each run with every
 // integrator, each run ending `ok` (error against a tight reference, energy balance), `rejected`
 // (the exit code and message a user would get) or `failed` (NaN, hang, crash, silent garbage).
 #pragma once

@@ -1,4 +1,4 @@
-// Excitation design (issue 11): the Fisher information that a motion of the two cranks gives on
+// Excitation design: the Fisher information that a motion of the two cranks gives on
 // the parameters identification estimates, by Jets, and the design problem around it (a periodic
 // finite Fourier motion, D-optimal or condition-number objective, torque, singularity, angle and
 // reversal constraints). The NLopt driver lives in trajectory/ (nlopt_minimize.h); the command

@@ -1,4 +1,4 @@
-// Torque-driven excitation design (issue 11, `excite --family torque`): the motor torques are
+// Torque-driven excitation design (`excite --family torque`): the motor torques are
 // sums of tones clipped at the torque limit, the motion is the mechanism's free response to them
 // (the simulator), and a seeded evolution strategy chooses the tones for information. The
 // built-in multi-sine of synth-log is one member of the family (multisine_tones) and the first

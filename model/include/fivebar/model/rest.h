@@ -1,4 +1,4 @@
-// Rest and holding (issue 14): when is a joint at rest in inverse dynamics, what torques hold a
+// Rest and holding: when is a joint at rest in inverse dynamics, what torques hold a
 // pose, and over which range of M1, M2 static friction holds it.
 //
 // The rule. A joint whose |w_k| is at most a rate threshold is at rest, not slipping: sign(w_k)

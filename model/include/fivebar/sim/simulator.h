@@ -120,8 +120,8 @@ struct Stats {
   /// slipping joints whose direction disagreed with the sign of their rate (beyond 1e-6 rad/s)
   /// at a decision (a switch missed by the detection); always 0 unless the detection is broken
   long mode_corrections = 0;
-  /// decisions (with joints at rest that may move) at which the rule used before issue 15 (slip
-  /// the way the joint accelerates, iterated; never stick) would have chosen inconsistent modes
+  /// decisions (with joints at rest that may move) at which the simpler sign rule (slip the way
+  /// the joint accelerates, iterated; never stick) would have chosen inconsistent modes
   long sign_rule_inconsistent = 0;
   double wall_time_s = 0;
 };

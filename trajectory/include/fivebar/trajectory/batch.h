@@ -50,7 +50,7 @@ struct RefineOptions {
   double continuation_stall_rtol = 1e-5;
   /// and its window (OptimizerOptions::stall_iterations, when smaller): 5 instead of 10 took
   /// the five shipped tasks from 1067 to 938 evaluations, their energies up by 0 to 0.017%
-  /// (docs/dev/figures-optimization.md, issue 12 sixth pass)
+  /// (docs/dev/figures-optimization.md)
   int continuation_stall_iterations = 5;
   /// control points per joint tried after the first solve's count (only the larger ones),
   /// until the exact-law objective changes by less than `tol` (relative) from one to the next;

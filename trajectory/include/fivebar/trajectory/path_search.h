@@ -1,4 +1,4 @@
-// A feasible joint-space path between two poses of one design (issue 17): when the straight
+// A feasible joint-space path between two poses of one design: when the straight
 // (minimum-jerk) path leaves the workspace or crosses a singular pose, a shortest path on a grid
 // of assemblable, non-singular poses in (theta1, theta2), and a rest-to-rest initial guess along
 // it. Every pose test is the model's own closure (solve_kinematics) in the scene's assembly.
