@@ -6,14 +6,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
 #include <random>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "fivebar/model/four_bar.h"
 #include "fivebar/model/planar_chain.h"
+#include "agreement.h"
 
 namespace fivebar {
 namespace {
@@ -21,12 +20,7 @@ namespace {
 constexpr double kAgreementTol = 1e-10;  // reduced coordinates against a 17x17 QR
 constexpr int kMechanisms = 20;
 
-/// x in scientific notation with 3 digits (RecordProperty figures).
-std::string sci(double x) {
-  std::ostringstream out;
-  out << std::scientific << std::setprecision(3) << x;
-  return out.str();
-}
+using testing::sci;
 
 /// True for a Grashof four-bar: shortest + longest <= sum of the other two lengths.
 bool grashof(const FourBarParams& p) {
@@ -120,15 +114,10 @@ chain::Solution chain_solution(const FourBarParams& p, const State& s, const dou
   return sol;
 }
 
-/// max over joints of |a_k - b_k| (components), relative to 1 + max |b_k|.
+/// the reaction error over the four joints (agreement.h)
 double reaction_error(const std::vector<Vec2<double>>& a,
                       const std::array<Vec2<double>, kFourBarJoints>& b) {
-  double err = 0.0, scale = 0.0;
-  for (int k = 0; k < kFourBarJoints; ++k) {
-    err = std::max(err, (a[k] - b[k]).cwiseAbs().maxCoeff());
-    scale = std::max(scale, b[k].norm());
-  }
-  return err / (1.0 + scale);
+  return testing::reaction_error(a, b, kFourBarJoints);
 }
 
 TEST(FourBar, RandomMechanismsAreGrashofAndNot) {

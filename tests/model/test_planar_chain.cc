@@ -5,14 +5,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/five_bar_chain.h"
 #include "fivebar/model/planar_chain.h"
+#include "agreement.h"
 #include "paper.h"
 
 namespace fivebar {
@@ -23,12 +22,9 @@ constexpr double kAgreementTol = 1e-10;
 
 using testing::random_states;
 
-/// x in scientific notation with 3 digits (RecordProperty figures).
-std::string sci(double x) {
-  std::ostringstream out;
-  out << std::scientific << std::setprecision(3) << x;
-  return out.str();
-}
+using testing::reaction_error;
+using testing::relative_error;
+using testing::sci;
 using testing::RandomState;
 
 /// The five-bar's chain at a state: pose, body rates (the chain's velocity closure) and loads.
@@ -57,28 +53,6 @@ Params<double> test_params(bool friction) {
   p.friction.coulomb = {0.12, 0.2, 0.05, 0.3, 0.1};
   if (!friction) p.friction.law = FrictionLaw::kNone;
   return p;
-}
-
-/// max |a - b| / (1 + max |b|) over the entries of two equally long ranges.
-template <typename A, typename B>
-double relative_error(const A& a, const B& b, int n) {
-  double err = 0.0, scale = 0.0;
-  for (int i = 0; i < n; ++i) {
-    err = std::max(err, std::abs(a[i] - b[i]));
-    scale = std::max(scale, std::abs(b[i]));
-  }
-  return err / (1.0 + scale);
-}
-
-/// max relative error of the reaction vectors F_k (scaled by the largest |F|).
-template <typename A, typename B>
-double reaction_error(const A& a, const B& b, int n) {
-  double err = 0.0, scale = 0.0;
-  for (int i = 0; i < n; ++i) {
-    err = std::max(err, (a[i] - b[i]).cwiseAbs().maxCoeff());
-    scale = std::max(scale, b[i].norm());
-  }
-  return err / (1.0 + scale);
 }
 
 TEST(PlanarChain, VelocityClosureMatchesTheInfluenceCoefficients) {

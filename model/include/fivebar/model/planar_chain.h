@@ -141,53 +141,15 @@ inline std::vector<double> relative_rates(const Chain& c, const std::vector<doub
   return w;
 }
 
-/// Velocity closure: the bodies' angular rates from the drives' relative rates, solving the pins'
-/// constraints v_c + omega perp(r) equal on both sides (ground: zero) with the centres' velocities
-/// as further unknowns. Fails unless the drives fix the motion (as many drives as degrees of
-/// freedom, away from singular poses). `velocity` (may be null) gets the centres' velocities.
-inline Status body_rates(const Chain& c, const Pose& q, const std::vector<double>& drive_rate,
-                         std::vector<double>* rate, std::vector<Vec>* velocity = nullptr) {
-  const int n = static_cast<int>(c.bodies.size()), m = static_cast<int>(c.joints.size());
-  const int d = static_cast<int>(c.drives.size());
-  if (2 * m + d != 3 * n) {
-    return Status::Error(StatusCode::kInvalidInput,
-                         "planar chain: the drives do not match the degrees of freedom");
-  }
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(3 * n, 3 * n);
-  Eigen::VectorXd b = Eigen::VectorXd::Zero(3 * n);
-  for (int k = 0; k < m; ++k) {
-    const Joint& jt = c.joints[k];
-    const Vec at = point(q, jt.i, jt.at_i);
-    for (int side = 0; side < 2; ++side) {
-      const int bd = side == 0 ? jt.j : jt.i;
-      if (bd == kGround) continue;
-      const double s = side == 0 ? 1.0 : -1.0;
-      const Vec r = at - com(c, q, bd);
-      A(2 * k, 3 * bd) += s;
-      A(2 * k + 1, 3 * bd + 1) += s;
-      A(2 * k, 3 * bd + 2) -= s * r.y();
-      A(2 * k + 1, 3 * bd + 2) += s * r.x();
-    }
-  }
-  for (int e = 0; e < d; ++e) {
-    if (c.drives[e].j != kGround) A(2 * m + e, 3 * c.drives[e].j + 2) += 1.0;
-    if (c.drives[e].i != kGround) A(2 * m + e, 3 * c.drives[e].i + 2) -= 1.0;
-    b(2 * m + e) = drive_rate[e];
-  }
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
-  if (qr.rank() < 3 * n)
-    return Status::Error(StatusCode::kNearSingular, "planar chain: singular pose");
-  const Eigen::VectorXd x = qr.solve(b);
-  rate->resize(n);
-  if (velocity) velocity->resize(n);
-  for (int i = 0; i < n; ++i) {
-    (*rate)[i] = x(3 * i + 2);
-    if (velocity) (*velocity)[i] = x.segment<2>(3 * i);
-  }
-  return Status::Ok();
+namespace detail {
+
+/// f(body, sign) for the two bodies of a joint or drive: +1 on j, -1 on i; the ground is skipped.
+template <typename F>
+void each_side(int j, int i, F f) {
+  if (j != kGround) f(j, 1.0);
+  if (i != kGround) f(i, -1.0);
 }
 
-namespace detail {
 
 /// Positions of the unknowns and equations: per body 3 (a_cx, a_cy, alpha; force and moment
 /// balances), per joint 2 (F_k; the pin's acceleration constraint), per drive 1 in inverse mode
@@ -210,10 +172,7 @@ inline Eigen::MatrixXd system_matrix(const Chain& c, const Pose& q, const Layout
   for (int k = 0; k < n.joints; ++k) {
     const Joint& jt = c.joints[k];
     const Vec at = point(q, jt.i, jt.at_i);
-    for (int side = 0; side < 2; ++side) {
-      const int b = side == 0 ? jt.j : jt.i;
-      if (b == kGround) continue;
-      const double s = side == 0 ? 1.0 : -1.0;  // +F_k on j, -F_k on i
+    each_side(jt.j, jt.i, [&](int b, double s) {  // +F_k on j, -F_k on i
       const Vec r = at - com(c, q, b);
       const int row = n.body(b), col = n.joint(k);
       A(row, col) -= s;
@@ -225,17 +184,13 @@ inline Eigen::MatrixXd system_matrix(const Chain& c, const Pose& q, const Layout
       A(col + 1, row + 1) += s;
       A(col, row + 2) += s * -r.y();
       A(col + 1, row + 2) += s * r.x();
-    }
+    });
   }
   for (int d = 0; d < n.drives; ++d) {
-    const Drive& dr = c.drives[d];
-    for (int side = 0; side < 2; ++side) {
-      const int b = side == 0 ? dr.j : dr.i;
-      if (b == kGround) continue;
-      const double s = side == 0 ? 1.0 : -1.0;
+    each_side(c.drives[d].j, c.drives[d].i, [&](int b, double s) {
       A(n.body(b) + 2, n.drive(d)) -= s;  // tau on j, -tau on i
       A(n.drive(d), n.body(b) + 2) += s;  // alpha_j - alpha_i
-    }
+    });
   }
   return A;
 }
@@ -255,33 +210,28 @@ inline Eigen::VectorXd system_rhs(const Chain& c, const Pose& q, const std::vect
     b(n.body(f.body) + 2) += cross(Vec(point(q, f.body, f.at) - com(c, q, f.body)), f.force);
   }
   for (int d = 0; d < static_cast<int>(c.drives.size()); ++d) {
-    const Drive& dr = c.drives[d];
     if (drive_alpha) {
       b(n.drive(d)) = (*drive_alpha)[d];
       continue;
     }
-    if (dr.j != kGround) b(n.body(dr.j) + 2) += L.drive[d];
-    if (dr.i != kGround) b(n.body(dr.i) + 2) -= L.drive[d];
+    each_side(c.drives[d].j, c.drives[d].i,
+              [&](int bd, double s) { b(n.body(bd) + 2) += s * L.drive[d]; });
   }
   for (int k = 0; k < n.joints; ++k) {
     const Joint& jt = c.joints[k];
     const Vec at = point(q, jt.i, jt.at_i);
-    for (int side = 0; side < 2; ++side) {
-      const int bd = side == 0 ? jt.j : jt.i;
-      if (bd == kGround) continue;
-      const double s = side == 0 ? 1.0 : -1.0;
+    each_side(jt.j, jt.i, [&](int bd, double s) {
       b.segment<2>(n.joint(k)) += s * rate[bd] * rate[bd] * (at - com(c, q, bd));
-    }
+    });
   }
   return b;
 }
 
 /// The right-hand side per unit friction torque of joint k (-1 on j's moment, +1 on i's).
 inline Eigen::VectorXd friction_column(const Chain& c, int k, const Layout& n) {
-  Eigen::VectorXd s = Eigen::VectorXd::Zero(n.size());
-  if (c.joints[k].j != kGround) s(n.body(c.joints[k].j) + 2) = -1.0;
-  if (c.joints[k].i != kGround) s(n.body(c.joints[k].i) + 2) = 1.0;
-  return s;
+  Eigen::VectorXd col = Eigen::VectorXd::Zero(n.size());
+  each_side(c.joints[k].j, c.joints[k].i, [&](int b, double s) { col(n.body(b) + 2) = -s; });
+  return col;
 }
 
 /// |F_k| of the reactions in x.
@@ -374,6 +324,37 @@ inline void unpack(const Eigen::VectorXd& x, const Layout& n, bool inverse, Solu
 }
 
 }  // namespace detail
+
+/// Velocity closure: the bodies' angular rates from the drives' relative rates, solving the pins'
+/// constraints v_c + omega perp(r) equal on both sides (ground: zero) with the centres' velocities
+/// as further unknowns (the constraint rows of detail::system_matrix). Fails unless the drives fix
+/// the motion (as many drives as degrees of freedom, away from singular poses). `velocity` (may be
+/// null) gets the centres' velocities.
+inline Status body_rates(const Chain& c, const Pose& q, const std::vector<double>& drive_rate,
+                         std::vector<double>* rate, std::vector<Vec>* velocity = nullptr) {
+  const int n = static_cast<int>(c.bodies.size()), m = static_cast<int>(c.joints.size());
+  const int d = static_cast<int>(c.drives.size());
+  if (2 * m + d != 3 * n) {
+    return Status::Error(StatusCode::kInvalidInput,
+                         "planar chain: the drives do not match the degrees of freedom");
+  }
+  const detail::Layout layout{n, m, d};
+  const Eigen::MatrixXd A = detail::system_matrix(c, q, layout).bottomLeftCorner(3 * n, 3 * n);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(3 * n);
+  for (int e = 0; e < d; ++e) b(2 * m + e) = drive_rate[e];
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  if (qr.rank() < 3 * n)
+    return Status::Error(StatusCode::kNearSingular, "planar chain: singular pose");
+  const Eigen::VectorXd x = qr.solve(b);
+  rate->resize(n);
+  if (velocity) velocity->resize(n);
+  for (int i = 0; i < n; ++i) {
+    (*rate)[i] = x(3 * i + 2);
+    if (velocity) (*velocity)[i] = x.segment<2>(3 * i);
+  }
+  return Status::Ok();
+}
+
 
 /// Newton-Euler of the chain at a closed pose with body rates `rate`. Forward mode
 /// (`drive_alpha` null): the drive torques are L.drive, and the accelerations are solved for.
