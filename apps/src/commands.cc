@@ -280,7 +280,7 @@ void add_objective_note(const trajectory::BatchOptions& options,
   const std::string note = objective_note(options);
   if (note.empty()) return;
   for (trajectory::TaskResult& r : *results) {
-    if (r.solved()) r.message += (r.message.empty() ? "" : "; ") + note;
+    if (r.solved()) r.add_note(note);
   }
 }
 

@@ -242,8 +242,8 @@ namespace {
 
 using fivebar::testing::paper_initial;
 
-Params<double> light_scene() { return testing::light_params(); }
-sim::LoadFunction light_loads() { return testing::light_loads(); }
+using fivebar::testing::light_loads;
+using fivebar::testing::light_params;
 
 // the paper scene's multi-sine is the fit on the paper scene (within its 13.36 N m peak): same
 // tones, factor 1, so its logs and the excite baseline are unchanged
@@ -265,7 +265,7 @@ TEST(Excitation, MultisineFitKeepsThePaperScenesTones) {
 // 0.2 N m limit it runs the duration within the limit and away from the singularity margin, and
 // synth-log's multi-sine is that fit
 TEST(Excitation, MultisineFitRunsOnALightMechanismWithinTheLimit) {
-  const Params<double> light = light_scene();
+  const Params<double> light = light_params();
   const sim::Result unscaled = sim::simulate(light, multisine_loads(light_loads()), paper_initial(),
                                              [] {
                                                sim::Options so;

@@ -112,10 +112,6 @@ int check_points(const TrajectoryProblem& problem, const BatchOptions& options) 
 // Gauss-Legendre points per span of the exact-law energies
 int exact_points(const BatchOptions& options) { return 4 * options.problem.quadrature_points; }
 
-void add_note(TaskResult* r, const std::string& note) {
-  r->message += (r->message.empty() ? "" : "; ") + note;
-}
-
 // the minimum-jerk baseline on `problem` (the problem's own control points): energies, checks
 // and baseline_status; a baseline that does not close is a note, not a failure of the task
 void evaluate_baseline(const TrajectoryProblem& problem, const std::vector<double>& x0,
@@ -125,7 +121,7 @@ void evaluate_baseline(const TrajectoryProblem& problem, const std::vector<doubl
   if (!s.ok()) {
     r->baseline_status =
         s.code == StatusCode::kCannotAssemble ? "cannot_assemble" : "evaluation_failed";
-    add_note(r, "minimum-jerk baseline: " + s.message);
+    r->add_note("minimum-jerk baseline: " + s.message);
     return;
   }
   r->baseline_dissipated_energy_smoothed = e.dissipated;
@@ -140,7 +136,7 @@ void evaluate_baseline(const TrajectoryProblem& problem, const std::vector<doubl
   const ConstraintCheck c = problem.check(x0.data(), check_points(problem, options));
   if (!c.status.ok()) {
     r->baseline_status = "evaluation_failed";
-    add_note(r, "minimum-jerk baseline check: " + c.status.message);
+    r->add_note("minimum-jerk baseline check: " + c.status.message);
     return;
   }
   r->baseline_peak_torque = c.peak_torque;
@@ -158,7 +154,7 @@ bool detour_start(const Params<double>& params, const sim::LoadFunction& loads,
   const JointPath path = find_joint_path(params, r->start, r->goal, po);
   if (!path.ok()) {
     r->status = path.status;
-    add_note(r, path.message);
+    r->add_note(path.message);
     return false;
   }
   std::vector<int> counts = {options.problem.control_points};
@@ -180,7 +176,7 @@ bool detour_start(const Params<double>& params, const sim::LoadFunction& loads,
   }
   problem->emplace(problem_of(params, loads, *r, options));
   r->initial_guess = "path_search";
-  add_note(r, "started from a detour of " + std::to_string(path.waypoints.size() - 2) +
+  r->add_note("started from a detour of " + std::to_string(path.waypoints.size() - 2) +
                   " via points found by the path search");
   return true;
 }
@@ -282,7 +278,7 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
   if (!first.evaluation.ok()) {
     r->solver_status = outcome_name(first.solver.outcome);
     r->status = "evaluation_failed";
-    add_note(r, first.solver.message);
+    r->add_note(first.solver.message);
     return false;
   }
   oo.global = false;  // the later stages polish from a warm start
@@ -297,7 +293,7 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
   if (later && first.solver.outcome == SolverOutcome::kConverged &&
       best.solver.outcome != SolverOutcome::kConverged) {
     *solver = first.solver;
-    add_note(r, "the last stage (" + std::to_string(best.control_points) +
+    r->add_note("the last stage (" + std::to_string(best.control_points) +
                     " control points) ended: " + best.solver.message);
   }
   *check = best.check;
@@ -308,7 +304,7 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
   record_energies(problem_of(params, loads, *r, options), options, r);
   if (!check->status.ok()) {
     r->status = "evaluation_failed";
-    add_note(r, "constraint re-check: " + check->status.message);
+    r->add_note("constraint re-check: " + check->status.message);
     return false;
   }
   r->peak_torque = check->peak_torque;
@@ -346,7 +342,7 @@ void classify(const SolverStatus& solver, const ConstraintCheck& check,
   r->status = status;
   const std::string notes = r->message;
   r->message = message;
-  if (!notes.empty()) add_note(r, notes);
+  if (!notes.empty()) r->add_note(notes);
 }
 
 // an ok task whose validation failed (a simulation that did not finish: miss NaN) or missed
@@ -362,7 +358,7 @@ void judge_validation(const BatchOptions& options, TaskResult* r) {
                  format_significant(r->miss_distance) + " m (smoothed law) and " +
                  format_significant(r->miss_distance_exact) + " m (exact law), tolerance " +
                  format_significant(options.miss_tol) + " m";
-    add_note(r, notes);
+    r->add_note(notes);
   }
 }
 
@@ -407,15 +403,15 @@ TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads
     if (options.validate) {
       std::string note;
       r.miss_distance = miss_distance(*problem, loads, r.x, options, false, &note);
-      if (!note.empty()) add_note(&r, note);
+      if (!note.empty()) r.add_note(note);
       note.clear();
       r.miss_distance_exact = miss_distance(*problem, loads, r.x, options, true, &note);
-      if (!note.empty()) add_note(&r, note);
+      if (!note.empty()) r.add_note(note);
       judge_validation(options, &r);
     }
   } catch (const std::exception& e) {
     r.status = "failure";
-    add_note(&r, e.what());
+    r.add_note(e.what());
   }
   return finish();
 }

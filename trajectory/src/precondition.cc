@@ -10,7 +10,7 @@ namespace {
 // the evaluation limit: 7 Jet passes over the nodes by differences, 1 for the winding heat's
 // Gauss-Newton form
 constexpr int kHessianEvaluations = 7;
-constexpr int kWindingHessianEvaluations = 1;
+constexpr int kGaussNewtonHessianEvaluations = 1;
 constexpr double kFloor = 1e-8;      // smallest |eigenvalue| kept, relative to the largest
 
 // T = V |D|^(-1/2) of the symmetric part of H
@@ -37,7 +37,7 @@ Preconditioner objective_preconditioner(const TrajectoryProblem& problem,
                                          const std::vector<double>& x0, bool gauss_newton) {
   Preconditioner p;
   const int nv = problem.num_variables();
-  p.evaluations = gauss_newton ? kWindingHessianEvaluations : kHessianEvaluations;
+  p.evaluations = gauss_newton ? kGaussNewtonHessianEvaluations : kHessianEvaluations;
   std::vector<double> h;
   if (nv == 0 || !problem.objective_hessian(x0.data(), &h, gauss_newton).ok()) return p;
   const Eigen::MatrixXd H = Eigen::Map<const Eigen::MatrixXd>(h.data(), nv, nv);

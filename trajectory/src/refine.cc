@@ -128,12 +128,10 @@ namespace {
 // the smoothing of the friction law still matters, and a smaller w_s may lower it further
 void note_continuation_unsettled(double ws, double lowered, const BatchOptions& options,
                                  TaskResult* r) {
-  r->message += std::string(r->message.empty() ? "" : "; ") +
-                "continuation not converged: its last stage (w_s = " +
-                format_significant(ws, 2) + " rad/s) lowered the exact-law energy by " +
-                format_significant(100.0 * lowered, 2) + "% (tolerance " +
-                format_significant(100.0 * options.refine.tol, 2) +
-                "%): a joint creeps near rest, where the friction law's smoothing still matters";
+  r->add_note("continuation not converged: its last stage (w_s = " + format_significant(ws, 2) +
+              " rad/s) lowered the exact-law energy by " + format_significant(100.0 * lowered, 2) +
+              "% (tolerance " + format_significant(100.0 * options.refine.tol, 2) +
+              "%): a joint creeps near rest, where the friction law's smoothing still matters");
 }
 
 // the continuation on w_s from `best`, each stage warm-started from the last usable point
@@ -153,8 +151,8 @@ Candidate continuation(const Params<double>& params, const sim::LoadFunction& lo
       std::min(optimizer.stall_iterations, options.refine.continuation_stall_iterations);
   // a stage that lowers the exact-law objective by less than the refinement's tolerance ends
   // the continuation: the smoothing no longer matters (on reach_left, whose optimum holds a
-  // joint at rest, the stages lowered it by 0.33%, 0.16% and 0.03%; on the other shipped tasks
-  // the first by less than 2e-5)
+  // joint at rest, the stages lowered it by 0.35%, 0.18%, 0.05% and 0.0096%; on the other
+  // shipped tasks the first by less than 2e-5)
   const std::vector<double>& stages = options.refine.continuation;
   for (size_t k = 0; k < stages.size(); ++k) {
     const double before = best.exact;
@@ -189,18 +187,17 @@ namespace {
 void note_unconverged(const BatchOptions& options, TaskResult* r) {
   if (!r->discretization_unsettled(options.refine.tol)) return;  // converged, or no level solved
   if (r->refinement_limited) {
-    r->message += std::string(r->message.empty() ? "" : "; ") +
-                  "discretization not shown converged: the finest level stopped at its "
-                  "evaluation limit (raise --max-evaluations)";
+    r->add_note(
+        "discretization not shown converged: the finest level stopped at its evaluation limit "
+        "(raise --max-evaluations)");
     return;
   }
-  r->message += std::string(r->message.empty() ? "" : "; ") +
-                "discretization not converged: the exact-law energy changed by " +
-                format_significant(100.0 * r->refinement_change, 2) +
-                "% at the last refinement (tolerance " +
-                format_significant(100.0 * options.refine.tol, 2) +
-                "%): the result is the optimum of the finest basis solved; add a finer level with "
-                "--refine-levels";
+  r->add_note("discretization not converged: the exact-law energy changed by " +
+              format_significant(100.0 * r->refinement_change, 2) +
+              "% at the last refinement (tolerance " +
+              format_significant(100.0 * options.refine.tol, 2) +
+              "%): the result is the optimum of the finest basis solved; add a finer level with "
+              "--refine-levels");
 }
 
 // the refinement of the control points of `best` (options.refine.control_points), every level
@@ -221,8 +218,8 @@ Candidate refinement(const Params<double>& params, const sim::LoadFunction& load
     const bool kept = better(c, best, options);
     log_stage(&r->refinement, n, c, kept);
     if (!feasible(c, options)) {
-      r->message += std::string(r->message.empty() ? "" : "; ") + "refinement level " +
-                    std::to_string(n) + " not kept: " + why_infeasible(c, options);
+      r->add_note("refinement level " + std::to_string(n) + " not kept: " +
+                  why_infeasible(c, options));
       continue;
     }
     r->refinement_change = std::abs(c.exact - previous) / std::abs(previous);

@@ -163,6 +163,8 @@ struct TaskResult {
   bool refinement_limited = false;
 
   bool solved() const { return !x.empty(); }
+  /// Appends a note to `message` ("; " between notes).
+  void add_note(const std::string& note) { message += (message.empty() ? "" : "; ") + note; }
   /// the refinement's levels ran out before the energy changed by less than `tol` (its
   /// RefineOptions::tol), or the last one stopped at its limit: the result is the optimum of
   /// the finest basis at best, not yet shown to be the problem's
