@@ -32,10 +32,10 @@ bool rounding_limited(double e, double rtol, const Result& run) {
     for (int k = 0; k < kLinks; ++k) largest = std::max(largest, std::abs(r.theta[k]));
   }
   // the rounding accumulated over the run, relative to the angles: 100 eps per step
-  const double relative_floor =
-      100 * std::numeric_limits<double>::epsilon() * static_cast<double>(std::max<long>(run.stats.steps, 1));
+  const double relative_floor = 100 * std::numeric_limits<double>::epsilon() *
+                                static_cast<double>(std::max<long>(run.stats.steps, 1));
   // a check run whose tolerance is well above that floor measures the error even when the
-  // difference is below the floor (a mechanism at rest: both runs agree exactly, the error is 0)
+  // difference is below the floor
   if (rtol / 10 >= relative_floor) return false;
   return e < relative_floor * largest;
 }
