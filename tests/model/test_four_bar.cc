@@ -1,18 +1,21 @@
 // The four-bar in reduced coordinates (four_bar.h): closure of positions, rates and
 // accelerations; forward and inverse dynamics and reactions against the general planar chain;
 // and on seeded random four-bars (Grashof and not) energy balance, inverse of forward, friction
-// power and the holding torque against the virtual work of gravity.
+// power and the holding torque against the virtual work of gravity; and two scenes against
+// trajectories made by an independent program (datasets/reference/four_bar/).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "agreement.h"
 #include "fivebar/model/four_bar.h"
 #include "fivebar/model/planar_chain.h"
-#include "agreement.h"
+#include "paper.h"
 
 namespace fivebar {
 namespace {
@@ -330,6 +333,109 @@ TEST(FourBar, FrictionlessRunBalancesEnergy) {
   }
   EXPECT_LT(worst, 1e-9);
   RecordProperty("energy_balance", sci(worst));
+}
+
+/// A scene of datasets/reference/four_bar/ (its values repeated: the scene reader reads five-bars
+/// only) and its loads as functions of t.
+struct ReferenceScene {
+  std::string file;
+  FourBarParams p;
+  double th0;
+  std::function<FourBarLoads(double)> loads;
+  double difference_tol;  ///< relative; the stencil's own error (measured 7.4e-6 and 1.1e-9)
+};
+
+std::vector<ReferenceScene> reference_scenes() {
+  FourBarParams cr, dr;
+  cr.ground_length = 0.30;
+  cr.links = {Link<double>{0.08, 0.5, 0.0003, 0.04, 0.0},
+              Link<double>{0.28, 1.0, 0.0065, 0.14, 0.1},
+              Link<double>{0.20, 0.8, 0.0027, 0.10, 0.0}};
+  cr.point_p = 0.18;
+  cr.assembly = kElbowUp;
+  dr.ground_length = 0.32;
+  dr.links = {Link<double>{0.20, 0.8, 0.0027, 0.10, 0.0},
+              Link<double>{0.12, 0.4, 0.0005, 0.06, 0.0},
+              Link<double>{0.22, 0.9, 0.0036, 0.11, 0.0}};
+  dr.point_p = 0.06;
+  dr.assembly = kElbowDown;
+  for (FourBarParams* p : {&cr, &dr}) {
+    p->gravity = 9.81;
+    p->friction.law = FrictionLaw::kCoulombViscous;
+    p->friction.pin_radius.fill(0.01);
+    p->friction.coulomb.fill(0.12);
+    p->friction.static_coulomb.fill(0.12);
+    p->friction.viscous.fill(0.02);
+  }
+  return {{"crank_rocker", cr, M_PI / 2,
+           [](double t) {
+             return FourBarLoads{0.9 + 0.6 * std::sin(4 * M_PI * t), 0.2, 5.0, M_PI / 2};
+           },
+           2e-5},
+          {"double_rocker", dr, -0.75,
+           [](double t) {
+             return FourBarLoads{1.0 + 0.4 * std::sin(3 * M_PI * t), 0.0, 2.0, 0.0};
+           },
+           1e-8}};
+}
+
+constexpr size_t kStencil = 3;  ///< half-width of central_difference's stencil
+
+/// 7-point central difference of column x at row i (step h): error h^6 x^(7) / 140.
+double central_difference(const std::vector<double>& x, size_t i, double h) {
+  return (x[i + 3] - 9 * x[i + 2] + 45 * x[i + 1] - 45 * x[i - 1] + 9 * x[i - 2] - x[i - 3]) /
+         (60 * h);
+}
+
+// Against trajectories of an independent program (maximal coordinates, 17x17 Newton-Euler, RK4 with
+// located switches; datasets/reference/README.md): the closure and the rates at every row, and
+// the crank's acceleration and the dissipated power against differences of the reference's
+// omega1 and E_diss, at rows whose stencil crosses no switch.
+TEST(FourBar, AgreesWithTheIndependentReferences) {
+  for (const ReferenceScene& sc : reference_scenes()) {
+    const auto ref = testing::read_csv(testing::reference_path("four_bar/" + sc.file + ".csv"));
+    const std::vector<double>& t = ref.at("t");
+    ASSERT_EQ(t.size(), 2001u) << sc.file;
+    EXPECT_EQ(ref.at("theta1")[0], sc.th0) << sc.file;
+    const double h = t[1] - t[0];
+    double pose = 0, rates = 0, accel = 0, power = 0, accel_scale = 0, power_scale = 0;
+    int compared = 0;
+    for (size_t i = 0; i < t.size(); ++i) {
+      FourBarEvaluation ev;
+      const double th1 = ref.at("theta1")[i], w1 = ref.at("omega1")[i];
+      ASSERT_TRUE(four_bar_forward(sc.p, sc.loads(t[i]), th1, w1, EvalOptions{}, &ev).ok());
+      pose = std::max({pose, std::abs(std::remainder(ev.kin.th2 - ref.at("theta2")[i], 2 * M_PI)),
+                       std::abs(std::remainder(ev.kin.th3 - ref.at("theta3")[i], 2 * M_PI))});
+      rates = std::max({rates, std::abs(ev.bias.w2 - ref.at("omega2")[i]),
+                        std::abs(ev.bias.w3 - ref.at("omega3")[i])});
+      accel_scale = std::max(accel_scale, std::abs(ev.qdd));
+      power_scale = std::max(power_scale, std::abs(ev.P_diss));
+      if (i < kStencil || i + kStencil >= t.size()) continue;
+      bool switches = false;  // a joint rate changing sign inside the stencil
+      for (size_t j = i - kStencil; j < i + kStencil; ++j) {
+        FourBarKinematics a, b;
+        ASSERT_TRUE(four_bar_kinematics(sc.p, ref.at("theta1")[j], &a).ok());
+        ASSERT_TRUE(four_bar_kinematics(sc.p, ref.at("theta1")[j + 1], &b).ok());
+        const auto ra = four_bar_joint_rows(a), rb = four_bar_joint_rows(b);
+        for (int k = 0; k < kFourBarJoints; ++k) {
+          switches |= ra[k] * ref.at("omega1")[j] * rb[k] * ref.at("omega1")[j + 1] <= 0;
+        }
+      }
+      if (switches) continue;
+      ++compared;
+      accel = std::max(accel, std::abs(ev.qdd - central_difference(ref.at("omega1"), i, h)));
+      power = std::max(power, std::abs(ev.P_diss - central_difference(ref.at("E_diss"), i, h)));
+    }
+    EXPECT_LT(pose, 1e-12) << sc.file;
+    EXPECT_LT(rates, 1e-11) << sc.file;
+    EXPECT_GT(compared, 1800) << sc.file;
+    EXPECT_LT(accel, sc.difference_tol * accel_scale) << sc.file;
+    EXPECT_LT(power, sc.difference_tol * power_scale) << sc.file;
+    RecordProperty(sc.file + "_pose", sci(pose));
+    RecordProperty(sc.file + "_rates", sci(rates));
+    RecordProperty(sc.file + "_acceleration_relative", sci(accel / accel_scale));
+    RecordProperty(sc.file + "_power_relative", sci(power / power_scale));
+  }
 }
 
 // larger pins: where the loop's fixed point stops contracting and Newton solves it, the chain at
