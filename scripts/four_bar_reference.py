@@ -43,7 +43,6 @@ class FourBar:
     def __init__(self, scene):
         m = scene["mechanism"]
         self.l0 = float(m["ground_length"])
-        self.links = m["links"]
         self.lp = float(m.get("point_p", 0.0))
         self.side = 1.0 if m.get("assembly", "elbow_up") == "elbow_up" else -1.0
         self.g = float(scene.get("gravity", 9.81))
@@ -51,22 +50,23 @@ class FourBar:
         self.friction = fr["model"] != "none"
         if fr["model"] not in ("none", "coulomb_viscous"):
             sys.exit("four_bar_reference: only friction.model none | coulomb_viscous")
-        as_list = lambda v: [float(x) for x in v] if isinstance(v, list) else [float(v)] * 4
+        def as_list(v):
+            return [float(x) for x in v] if isinstance(v, list) else [float(v)] * 4
+
         self.r = as_list(fr.get("pin_radius", 0.0))
         self.mu = as_list(fr.get("coulomb", 0.0))
         self.cv = as_list(fr.get("viscous", 0.0))
         loads = scene.get("loads", {})
         self.load = {k: self._expr(loads.get(k, "0")) for k in ("M1", "M3", "F")}
         self.F_angle = float(loads.get("F_angle", 0.0))
-        # body-fixed vectors from each centre of mass to the body's joints
         self.mass = [float(l["mass"]) for l in links_of(m)]
         self.inertia = [float(l["inertia"]) for l in links_of(m)]
         com = [float(l["com_offset"]) * np.array([math.cos(float(l.get("com_angle", 0.0))),
                                                   math.sin(float(l.get("com_angle", 0.0)))])
                for l in links_of(m)]
         L = [float(l["length"]) for l in links_of(m)]
-        self.L = L
-        self.com = com
+        self.L, self.com = L, com
+        # body-fixed vectors from each centre of mass to the body's joints and to P
         start = [-com[i] for i in range(3)]
         end = [np.array([L[i], 0.0]) - com[i] for i in range(3)]
         self.p_local = np.array([self.lp, 0.0]) - com[1]
