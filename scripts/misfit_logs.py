@@ -131,6 +131,38 @@ def identify(fivebar, scene, log, out):
     return res
 
 
+SHIPPED = [  # the shipped logs' runs (datasets/logs/README.md)
+    ("paper_rates.csv", []), ("paper_angles.csv", []),
+    ("per_joint_multisine.csv", ["--per-joint"]), ("stribeck_multisine.csv", []),
+    ("stribeck_multisine.csv", ["--law", "stribeck"]),
+]
+
+
+def shipped(fivebar, baseline, work):
+    """The shipped logs through `fivebar` and `baseline`: the largest relative difference of the
+    estimates and their std, the chosen windows and the statuses."""
+    scene = os.path.join(SCENES, "paper.yaml")
+    for k, (name, extra) in enumerate(SHIPPED):
+        res = []
+        for tag, exe in (("new", fivebar), ("old", baseline)):
+            out = os.path.join(work, "shipped_%d_%s" % (k, tag))
+            rc, _, _ = run([exe, "identify", scene, "--log",
+                            os.path.join(ROOT, "datasets", "logs", name), "--no-plots",
+                            "--no-validation", "--out", out] + extra)
+            with open(os.path.join(out, "identification.json")) as f:
+                j = json.load(f)
+            res.append((rc, j))
+        diff = 0.0
+        for a, b in zip(res[0][1]["parameters"], res[1][1]["parameters"]):
+            for key in ("value", "std"):
+                x, y = a.get(key), b.get(key)
+                if isinstance(x, float) and isinstance(y, float) and y != 0:
+                    diff = max(diff, abs(x / y - 1))
+        windows = [r[1].get("rate_source", {}).get("sg_half_window_samples", "-") for r in res]
+        print("%-26s %-16s exit %d/%d window %s/%s  largest relative difference %.2g" %
+              (name, " ".join(extra), res[0][0], res[1][0], windows[0], windows[1], diff))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fivebar", default=os.path.join(ROOT, "build", "release", "apps", "fivebar"))
@@ -139,11 +171,16 @@ def main():
     ap.add_argument("--designs", action="store_true", help="add the light mechanism's designs")
     ap.add_argument("--reuse", action="store_true", help="keep the logs already in --work")
     ap.add_argument("--logs", help="only the logs whose name contains this")
+    ap.add_argument("--shipped", metavar="BASELINE",
+                    help="only compare the shipped logs' runs with another fivebar build")
     args = ap.parse_args()
     global REUSE
     REUSE = args.reuse
     work = args.work or tempfile.mkdtemp(prefix="misfit_")
     os.makedirs(work, exist_ok=True)
+    if args.shipped:
+        shipped(args.fivebar, args.shipped, work)
+        return
     logs = clean_logs(args.fivebar, work, args.only, args.designs)
     clean_rejected, bad_accepted, bad_total = 0, 0, 0
     print("%-32s %-8s %3s %6s %9s %9s  %s" % ("log", "copy", "rc", "window", "res/floor",

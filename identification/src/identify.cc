@@ -2369,7 +2369,8 @@ std::string torque_warning(const TorqueColumns& tc, const detail::FreedStep& fs,
   return w;
 }
 
-/// The torque readings' gains and offsets of torque_warning in short: "tau1 x0.56, tau2 x0.54"
+/// The torque readings' gains and offsets of torque_warning in short: "tau1 reads 0.5 times the
+/// model"
 /// (gains beyond kFreedMove of their std, from kSmallestGain on), offsets "tau1 +0.15 N m".
 std::string torque_reading(const TorqueColumns& tc, const detail::FreedStep& fs) {
   std::string out;
@@ -2380,13 +2381,31 @@ std::string torque_reading(const TorqueColumns& tc, const detail::FreedStep& fs)
     const std::string tau = "tau" + std::to_string(c + 1);
     if (beyond(tc.gain[c]) && std::abs(fs.extra_step(tc.gain[c])) >= kSmallestGain) {
       out += (out.empty() ? "" : ", ") + tau + " reads " +
-             format_significant(1 + fs.extra_step(tc.gain[c]), 2) + " times the model";
+             format_significant(1 + fs.extra_step(tc.gain[c]), 3) + " times the model";
     } else if (beyond(tc.offset[c])) {
       out += (out.empty() ? "" : ", ") + tau + " reads " +
              format_significant(fs.extra_step(tc.offset[c]), 2) + " N m more than the model";
     }
   }
   return out.empty() ? "see the warnings" : out;
+}
+
+/// A torque reading's gain off by more than this fraction (read beyond kUnusableMove of its std)
+/// makes the fit unusable: the friction estimates are off by about as much (torques logged at
+/// half the model's: gains -0.5, coulomb 0.067 for 0.134, a move of 3 std only at the small
+/// window's noise)
+constexpr double kUnusableGain = 0.1;
+
+/// The largest |gain| of the torque readings that the refit fs reads beyond kUnusableMove std.
+double largest_gain(const TorqueColumns& tc, const detail::FreedStep& fs) {
+  double g = 0;
+  for (int c = 0; c < kDof; ++c) {
+    const int k = tc.gain[c];
+    if (k >= 0 && std::abs(fs.extra_step(k)) > kUnusableMove * fs.extra_std(k)) {
+      g = std::max(g, std::abs(fs.extra_step(k)));
+    }
+  }
+  return g;
 }
 
 /// A model error (what: its cause, or that none is named) that would move a friction
@@ -2478,8 +2497,13 @@ void model_check(const Fit& f, IdentifyResult* out) {
   if (cs.named(kCauseTorque) &&
       !(moved = friction_clause(f, *out, ft, false, true, &(largest = 0))).empty()) {
     out->warnings.push_back(torque_warning(tc, ft, moved));
-    unusable_move(largest, "the logged torques' zeros or gains are off (" +
-                               torque_reading(tc, ft) + ")", out);
+    const std::string what = "the logged torques' zeros or gains are off (" +
+                             torque_reading(tc, ft) + ")";
+    // a gain off by kUnusableGain scales the friction with it, whatever its std
+    if (out->unusable.empty() && largest_gain(tc, ft) > kUnusableGain) {
+      out->unusable = what + ": the friction estimates scale with them (see the warnings)";
+    }
+    unusable_move(largest, what, out);
   }
   const bool masses = cs.named(kCauseInertia);
   const int top = strongest_cause(cs);

@@ -9,6 +9,7 @@
 #include "fivebar/identification/identify.h"
 
 #include "light_scene.h"
+#include "window_misfit.h"
 #include "paper.h"
 #include "synthetic_log.h"
 
@@ -65,6 +66,46 @@ TEST(IdentifyStatus, ACoefficientAtItsBoundWithAModelErrorIsUnusable) {
   ASSERT_TRUE(res.parameters[0].at_bound);
   EXPECT_THAT(res.unusable, HasSubstr("at its bound"));
   EXPECT_GT(worst_ratio(res), 1.5);
+}
+
+// The window table's verdict (window_misfit.h) on tables built from the two laws: a noise level
+// falling as h^-2.5 to the torque noise 0.02 N m, plus an excess that is flat (a misfit of
+// 0.1 N m), grows as h (the reversals' jumps) or as h^8 (smooth motion's bias).
+std::vector<detail::WindowLevel> table(double (*excess)(double h), int up_to) {
+  std::vector<detail::WindowLevel> t;
+  for (int h : {3, 4, 5, 6, 7, 8, 10, 12, 15, 18, 22, 27, 33, 41}) {
+    if (h > up_to) break;
+    detail::WindowLevel l;
+    l.half = h;
+    for (int j = 0; j < 2; ++j) {
+      l.floor[j] = std::sqrt(0.02 * 0.02 + 1.4 * 1.4 * std::pow(h / 3.0, -5.0));
+      l.rms[j] = std::sqrt(l.floor[j] * l.floor[j] + excess(h));
+    }
+    t.push_back(l);
+  }
+  return t;
+}
+
+TEST(WindowMisfit, AFlatExcessIsAMisfitAndAGrowingOneIsBias) {
+  using detail::WindowMisfit;
+  const auto flat = [](double) { return 0.01; };
+  const auto linear = [](double h) { return 0.01 * h / 10; };
+  const auto smooth = [](double h) { return 0.01 * std::pow(h / 10, 8); };
+  // flat: resolved from 8 samples (excess 0.67 of the level squared; 0.35 at 7), flat to the end
+  WindowMisfit m = detail::window_misfit(table(flat, 41), false);
+  ASSERT_EQ(m.state, WindowMisfit::kMisfit);
+  EXPECT_EQ(table(flat, 41)[m.from].half, 8);
+  EXPECT_EQ(table(flat, 41)[m.to].half, 41);
+  // the table ends before the doubling, or while still flat: evaluate more
+  EXPECT_EQ(detail::window_misfit(table(flat, 12), true).state, WindowMisfit::kNeedMore);
+  EXPECT_EQ(detail::window_misfit(table(flat, 18), true).state, WindowMisfit::kNeedMore);
+  EXPECT_EQ(detail::window_misfit(table(flat, 12), false).state, WindowMisfit::kNone);
+  // bias: it doubles over a doubling of the window at least
+  EXPECT_EQ(detail::window_misfit(table(linear, 41), false).state, WindowMisfit::kNone);
+  EXPECT_EQ(detail::window_misfit(table(smooth, 41), false).state, WindowMisfit::kNone);
+  // no excess at all
+  EXPECT_EQ(detail::window_misfit(table([](double) { return 0.0; }, 41), false).state,
+            WindowMisfit::kNone);
 }
 
 // The light mechanism (datasets/scenes/light.yaml) under motor torques of a few hundredths of a
