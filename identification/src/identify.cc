@@ -2494,16 +2494,20 @@ void model_check(const Fit& f, IdentifyResult* out) {
         "from the logged angles");
     unusable_move(largest, "the logged angles' zeros are off", out);
   }
-  if (cs.named(kCauseTorque) &&
-      !(moved = friction_clause(f, *out, ft, false, true, &(largest = 0))).empty()) {
-    out->warnings.push_back(torque_warning(tc, ft, moved));
-    const std::string what = "the logged torques' zeros or gains are off (" +
-                             torque_reading(tc, ft) + ")";
-    // a gain off by kUnusableGain scales the friction with it, whatever its std
-    if (out->unusable.empty() && largest_gain(tc, ft) > kUnusableGain) {
-      out->unusable = what + ": the friction estimates scale with them (see the warnings)";
+  if (cs.named(kCauseTorque)) {
+    moved = friction_clause(f, *out, ft, false, true, &(largest = 0));
+    // a gain off by kUnusableGain scales the friction with it, whatever the move's std
+    const bool scaled = largest_gain(tc, ft) > kUnusableGain;
+    if (!moved.empty() || scaled) {
+      out->warnings.push_back(torque_warning(
+          tc, ft, moved.empty() ? "the friction estimates scale with the gains" : moved));
+      const std::string what = "the logged torques' zeros or gains are off (" +
+                               torque_reading(tc, ft) + ")";
+      if (out->unusable.empty() && scaled) {
+        out->unusable = what + ": the friction estimates scale with them (see the warnings)";
+      }
+      if (!moved.empty()) unusable_move(largest, what, out);
     }
-    unusable_move(largest, what, out);
   }
   const bool masses = cs.named(kCauseInertia);
   const int top = strongest_cause(cs);
