@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """Logs whose torques misfit the law: does `identify` refuse them (docs/identification.md, 8)?
 
-    python3 scripts/misfit_logs.py [--fivebar build/release/apps/fivebar] [--work /tmp/misfit]
-    python3 scripts/misfit_logs.py --only light --keep
+    python3 scripts/misfit_logs.py [--fivebar build/release/apps/fivebar] [--work DIR] [--designs]
+    python3 scripts/misfit_logs.py --only light --work DIR --reuse --logs angles
+    python3 scripts/misfit_logs.py --shipped OTHER_FIVEBAR
 
 Builds clean synthetic logs (seeded) and, of each, a copy with both torques negated and one with
 them halved, runs `fivebar identify SCENE --log LOG --no-plots --no-validation` on every log
@@ -14,7 +15,8 @@ The logs: `synth-log --excitation multisine --duration 4 --seed 1|2` on paper.ya
 offset_friction.yaml and hard_drive.yaml; light.yaml 10 s under two multi-sine loads
 (LIGHT_LOADS, seeds 1|2); each angles only and `--with-rates`. `--designs` adds the light
 mechanism's designed motions: `excite --family fourier --torque-limit 0.2` followed by
-synth-log along it, and the built-in multi-sine at `--torque-limit 0.2`.
+synth-log along it, and the built-in multi-sine at `--torque-limit 0.2`. `--shipped` instead
+compares the shipped logs' runs (datasets/logs/README.md) with another build.
 Standard library only.
 """
 import argparse

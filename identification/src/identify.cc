@@ -681,12 +681,6 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
   }
 }
 
-/// The data-driven Savitzky-Golay half-window. Smoothing bias shows in the torque residual as
-/// an excess over the level the sensor noise explains (that level is predicted per window by
-/// propagating the measured noise): the window chosen is the largest whose residual/noise ratio
-/// stays within kWindowExcess of the reference, 1 or the least ratio over the candidates when
-/// that is above 1 (a mismatch of the law that no window removes). Candidates from the polynomial's
-/// minimum to 50 ms, growing by 25 %, evaluated at the parameters of a preliminary fit (f.x).
 /// Candidate half-windows [samples] of choose_window: from the polynomial's minimum to 50 ms,
 /// growing by 25 %, each fitting in the log's n samples (at least the minimum).
 std::vector<int> window_candidates(int n, double dt, int order) {
@@ -768,6 +762,13 @@ void misfit_window(Fit* f, const WindowTable& tab, const detail::WindowMisfit& m
       "the largest window where it stays so";
 }
 
+/// The data-driven Savitzky-Golay half-window. Smoothing bias shows in the torque residual as
+/// an excess over the level the sensor noise explains (that level is predicted per window by
+/// propagating the measured noise): the window chosen is the largest whose residual/noise ratio
+/// stays within kWindowExcess of the reference, 1 or the least ratio over the candidates when
+/// that is above 1 (a mismatch of the law that no window removes). Candidates evaluated at the
+/// parameters of a preliminary fit (f.x). When the excess is flat in the window instead (a
+/// misfit that the small windows' noise hides, window_misfit.h), misfit_window chooses.
 void choose_window(Fit* f, IdentifyResult* out) {
   WindowTable tab(*f, *out);
   std::vector<double> ratio;
@@ -781,8 +782,8 @@ void choose_window(Fit* f, IdentifyResult* out) {
   }
   // a misfit hidden by the noise of the small windows: its excess is flat in the window
   detail::WindowMisfit m;
-  while ((m = detail::window_misfit(tab.levels(), tab.levels().size() < tab.candidates()))
-             .state == detail::WindowMisfit::kNeedMore) {
+  while ((m = detail::window_misfit(tab.levels(), tab.levels().size() < tab.candidates())).state ==
+         detail::WindowMisfit::kNeedMore) {
     tab.evaluate_next();
   }
   if (m.state == detail::WindowMisfit::kMisfit) {
@@ -2413,11 +2414,12 @@ double largest_gain(const TorqueColumns& tc, const detail::FreedStep& fs) {
 /// friction coefficient is at its bound, so the move cannot be given. The first reason stays.
 void unusable_move(double largest, const std::string& what, IdentifyResult* out) {
   if (!out->unusable.empty() || !(largest > kUnusableMove || largest == 0)) return;
-  out->unusable = largest > 0 ? what + ": it would move the friction by " +
-                                    format_significant(largest, 2) + " std (more than " +
-                                    format_significant(kUnusableMove) + "; see the warnings)"
-                              : what + ": it holds a friction coefficient at its bound (see the "
-                                       "warnings)";
+  if (largest == 0) {
+    out->unusable = what + ": it holds a friction coefficient at its bound (see the warnings)";
+    return;
+  }
+  out->unusable = what + ": it would move the friction by " + format_significant(largest, 2) +
+                  " std (more than " + format_significant(kUnusableMove) + "; see the warnings)";
 }
 
 /// The candidate cause with the strongest evidence alone (kCauseCount: none)
@@ -2501,8 +2503,8 @@ void model_check(const Fit& f, IdentifyResult* out) {
     if (!moved.empty() || scaled) {
       out->warnings.push_back(torque_warning(
           tc, ft, moved.empty() ? "the friction estimates scale with the gains" : moved));
-      const std::string what = "the logged torques' zeros or gains are off (" +
-                               torque_reading(tc, ft) + ")";
+      const std::string what =
+          "the logged torques' zeros or gains are off (" + torque_reading(tc, ft) + ")";
       if (out->unusable.empty() && scaled) {
         out->unusable = what + ": the friction estimates scale with them (see the warnings)";
       }

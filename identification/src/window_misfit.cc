@@ -9,8 +9,8 @@ WindowMisfit channel_misfit(const std::vector<WindowLevel>& levels, bool more, i
   WindowMisfit m;
   const std::size_t n = levels.size();
   std::size_t a = 0;
-  while (a < n && !(levels[a].excess(j) >= kResolvedExcess * levels[a].floor[j] *
-                                               levels[a].floor[j])) {
+  while (a < n &&
+         !(levels[a].excess(j) >= kResolvedExcess * levels[a].floor[j] * levels[a].floor[j])) {
     ++a;
   }
   if (a == n) return m;

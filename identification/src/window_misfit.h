@@ -31,7 +31,8 @@ struct WindowLevel {
 inline constexpr double kResolvedExcess = 0.5;
 /// The excess is flat (a misfit) when, over a doubling of the half-window from the smallest window
 /// where it is resolved, it has not grown beyond 1 / kFlatExcess times its value there: bias
-/// grows at least 2 times over a doubling (E ~ h at the reversals' jumps), and 2^8 on smooth motion.
+/// grows at least 2 times over a doubling (E ~ h at the reversals' jumps), and 2^8 on smooth
+/// motion.
 inline constexpr double kFlatExcess = 0.75;
 
 /// What the table says about a misfit, from `levels` (in increasing half-window, from the
@@ -43,9 +44,10 @@ struct WindowMisfit {
     kMisfit,    ///< the excess is flat over a doubling: a misfit of the law
   };
   State state = kNone;
-  int actuator = -1;  ///< kMisfit: the actuator that shows it (the larger relative excess)
-  std::size_t from = 0;    ///< kMisfit: the smallest window where it is resolved (index in levels)
-  std::size_t to = 0;      ///< kMisfit: the last window (index) up to which the excess stays flat
+  int actuator =
+      -1;  ///< kMisfit: the actuator that shows it (both: the one flat over fewer windows)
+  std::size_t from = 0;  ///< kMisfit: the smallest window where it is resolved (index in levels)
+  std::size_t to = 0;    ///< kMisfit: the last window (index) up to which the excess stays flat
 };
 
 /// The misfit test on the table (WindowMisfit). `more`: whether larger candidates remain to be

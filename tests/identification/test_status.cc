@@ -9,9 +9,9 @@
 #include "fivebar/identification/identify.h"
 
 #include "light_scene.h"
-#include "window_misfit.h"
 #include "paper.h"
 #include "synthetic_log.h"
+#include "window_misfit.h"
 
 namespace fivebar::identification {
 namespace {
