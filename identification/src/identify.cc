@@ -27,6 +27,7 @@
 #include "noise_model.h"
 #include "profile.h"
 #include "smoothing_bias.h"
+#include "window_misfit.h"
 
 namespace fivebar::identification {
 
@@ -680,12 +681,6 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
   }
 }
 
-/// The data-driven Savitzky-Golay half-window. Smoothing bias shows in the torque residual as
-/// an excess over the level the sensor noise explains (that level is predicted per window by
-/// propagating the measured noise): the window chosen is the largest whose residual/noise ratio
-/// stays within kWindowExcess of the reference, 1 or the least ratio over the candidates when
-/// that is above 1 (a mismatch of the law that no window removes). Candidates from the polynomial's
-/// minimum to 50 ms, growing by 25 %, evaluated at the parameters of a preliminary fit (f.x).
 /// Candidate half-windows [samples] of choose_window: from the polynomial's minimum to 50 ms,
 /// growing by 25 %, each fitting in the log's n samples (at least the minimum).
 std::vector<int> window_candidates(int n, double dt, int order) {
@@ -699,40 +694,111 @@ std::vector<int> window_candidates(int n, double dt, int order) {
   return cand;
 }
 
-void choose_window(Fit* f, IdentifyResult* out) {
-  const TorqueLog& log = f->cond.log;
-  const int n = log.size();
-  const double dt = n > 1 ? log.duration() / (n - 1) : 1.0;
-  std::vector<int> cand = window_candidates(n, dt, f->sg.order);
-  // probes: samples with a centred window for the largest candidate, not glitches
-  std::vector<int> probe;
-  const int edge = cand.back();
-  const int step = std::max(1, (n - 2 * edge) / 800);
-  for (int i = edge; i < n - edge; i += step) {
-    if (!f->cond.rejected[i]) probe.push_back(i);
+/// The window table of choose_window: the rms residual and noise floor of candidate k, evaluated
+/// on demand in increasing order (probes: samples with a centred window for the largest
+/// candidate, not glitches).
+class WindowTable {
+ public:
+  explicit WindowTable(const Fit& f, const IdentifyResult& out) : f_(f), out_(out) {
+    const TorqueLog& log = f.cond.log;
+    const int n = log.size();
+    dt_ = n > 1 ? log.duration() / (n - 1) : 1.0;
+    cand_ = window_candidates(n, dt_, f.sg.order);
+    const int edge = cand_.back();
+    const int step = std::max(1, (n - 2 * edge) / 800);
+    for (int i = edge; i < n - edge; i += step) {
+      if (!f.cond.rejected[i]) probe_.push_back(i);
+    }
   }
-  std::vector<double> ratio(cand.size());
-  std::vector<std::array<double, 4>> levels(cand.size());
-  for (size_t k = 0; k < cand.size(); ++k) {
-    SgOptions sg = f->sg;
-    sg.half_window_s = cand[k] * dt;
-    // every probe, those near slip reversals included (the fit leaves them out): their bias
-    // keeps the window small, which the smooth parts' bias, below what this ratio detects,
-    // needs too (measured: judged without them, the per-joint multisine fits chose 7-8 samples
-    // instead of 4-6 and the coverage of their 95 % intervals fell from 0.97 to 0.90)
-    double rms[2], floor[2];
-    window_levels(*f, probe, sg, rest_rule(log, *out, *f->opt, sg), rms, floor);
-    ratio[k] = std::max(rms[0] / floor[0], rms[1] / floor[1]);
-    levels[k] = {rms[0], rms[1], floor[0], floor[1]};
+  double dt() const { return dt_; }
+  size_t candidates() const { return cand_.size(); }
+  const std::vector<detail::WindowLevel>& levels() const { return levels_; }
+  /// the next candidate's levels: every probe, those near slip reversals included (the fit
+  /// leaves them out): their bias keeps the window small, which the smooth parts' bias, below
+  /// what the ratio detects, needs too (measured: judged without them, the per-joint multisine
+  /// fits chose 7-8 samples instead of 4-6 and the coverage of their 95 % intervals fell from
+  /// 0.97 to 0.90)
+  const detail::WindowLevel& evaluate_next() {
+    detail::WindowLevel l;
+    l.half = cand_[levels_.size()];
+    SgOptions sg = f_.sg;
+    sg.half_window_s = l.half * dt_;
+    window_levels(f_, probe_, sg, rest_rule(f_.cond.log, out_, *f_.opt, sg), l.rms, l.floor);
+    levels_.push_back(l);
+    return levels_.back();
+  }
+
+ private:
+  const Fit& f_;
+  const IdentifyResult& out_;
+  double dt_ = 1;
+  std::vector<int> cand_, probe_;
+  std::vector<detail::WindowLevel> levels_;
+};
+
+double level_ratio(const detail::WindowLevel& l) {
+  return std::max(l.rms[0] / l.floor[0], l.rms[1] / l.floor[1]);
+}
+
+/// choose_window when the window table shows a misfit of the law (window_misfit.h): the largest
+/// window up to which the excess over the noise level stays flat (the misfit, not bias), where
+/// the fit's residual shows the misfit above a floor near the torque noise.
+void misfit_window(Fit* f, const WindowTable& tab, const detail::WindowMisfit& m,
+                   IdentifyResult* out) {
+  const std::vector<detail::WindowLevel>& lv = tab.levels();
+  const detail::WindowLevel &a = lv[m.from], &b = lv[m.to];
+  const int j = m.actuator;
+  f->sg.half_window_s = b.half * tab.dt();
+  out->window_choice =
+      "data-driven, misfit: half-window " + std::to_string(b.half) + " samples (" +
+      format_significant(b.half * tab.dt() * 1e3) + " ms): the tau" + std::to_string(j + 1) +
+      " residual's excess over the level the measured noise explains is the same from " +
+      std::to_string(a.half) + " to " + std::to_string(b.half) + " samples (" +
+      format_significant(std::sqrt(std::max(0.0, a.excess(j)))) + ", " +
+      format_significant(std::sqrt(std::max(0.0, b.excess(j)))) +
+      " N m in quadrature with the noise level " + format_significant(a.floor[j]) + ", " +
+      format_significant(b.floor[j]) +
+      " N m): not smoothing bias, which grows with the window, but torques the law does not fit; "
+      "the largest window where it stays so";
+}
+
+/// The data-driven Savitzky-Golay half-window. Smoothing bias shows in the torque residual as
+/// an excess over the level the sensor noise explains (that level is predicted per window by
+/// propagating the measured noise): the window chosen is the largest whose residual/noise ratio
+/// stays within kWindowExcess of the reference, 1 or the least ratio over the candidates when
+/// that is above 1 (a mismatch of the law that no window removes). Candidates evaluated at the
+/// parameters of a preliminary fit (f.x). When the excess is flat in the window instead (a
+/// misfit that the small windows' noise hides, window_misfit.h), misfit_window chooses.
+void choose_window(Fit* f, IdentifyResult* out) {
+  WindowTable tab(*f, *out);
+  std::vector<double> ratio;
+  for (size_t k = 0; k < tab.candidates(); ++k) {
+    ratio.push_back(level_ratio(tab.evaluate_next()));
     // smoothing bias only grows with the window: stop once it clearly dominates
     if (k >= 2 &&
         ratio[k] > 1.5 * std::max(1.0, *std::min_element(ratio.begin(), ratio.begin() + k))) {
-      cand.resize(k + 1);
-      ratio.resize(k + 1);
-      levels.resize(k + 1);
       break;
     }
   }
+  // a misfit hidden by the noise of the small windows: its excess is flat in the window
+  detail::WindowMisfit m;
+  while ((m = detail::window_misfit(tab.levels(), tab.levels().size() < tab.candidates())).state ==
+         detail::WindowMisfit::kNeedMore) {
+    tab.evaluate_next();
+  }
+  if (m.state == detail::WindowMisfit::kMisfit) {
+    misfit_window(f, tab, m, out);
+    return;
+  }
+  // the rule below sees the candidates up to the stop above
+  std::vector<int> cand;
+  std::vector<std::array<double, 4>> levels;
+  for (size_t k = 0; k < ratio.size(); ++k) {
+    const detail::WindowLevel& l = tab.levels()[k];
+    cand.push_back(l.half);
+    levels.push_back({l.rms[0], l.rms[1], l.floor[0], l.floor[1]});
+  }
+  const double dt = tab.dt();
   // the reference: 1 when the noise explains the residual (a ratio below 1 is a fluctuation of
   // the estimate), the least ratio when a mismatch of the law shows at every window
   const double best = std::max(1.0, *std::min_element(ratio.begin(), ratio.end()));
@@ -2304,6 +2370,58 @@ std::string torque_warning(const TorqueColumns& tc, const detail::FreedStep& fs,
   return w;
 }
 
+/// The torque readings' gains and offsets of torque_warning in short: "tau1 reads 0.5 times the
+/// model"
+/// (gains beyond kFreedMove of their std, from kSmallestGain on), offsets "tau1 +0.15 N m".
+std::string torque_reading(const TorqueColumns& tc, const detail::FreedStep& fs) {
+  std::string out;
+  const auto beyond = [&](int k) {
+    return k >= 0 && std::abs(fs.extra_step(k)) > kFreedMove * fs.extra_std(k);
+  };
+  for (int c = 0; c < kDof; ++c) {
+    const std::string tau = "tau" + std::to_string(c + 1);
+    if (beyond(tc.gain[c]) && std::abs(fs.extra_step(tc.gain[c])) >= kSmallestGain) {
+      out += (out.empty() ? "" : ", ") + tau + " reads " +
+             format_significant(1 + fs.extra_step(tc.gain[c]), 3) + " times the model";
+    } else if (beyond(tc.offset[c])) {
+      out += (out.empty() ? "" : ", ") + tau + " reads " +
+             format_significant(fs.extra_step(tc.offset[c]), 2) + " N m more than the model";
+    }
+  }
+  return out.empty() ? "see the warnings" : out;
+}
+
+/// A torque reading's gain off by more than this fraction (read beyond kUnusableMove of its std)
+/// makes the fit unusable: the friction estimates are off by about as much (torques logged at
+/// half the model's: gains -0.5, coulomb 0.067 for 0.134, a move of 3 std only at the small
+/// window's noise)
+constexpr double kUnusableGain = 0.1;
+
+/// The largest |gain| of the torque readings that the refit fs reads beyond kUnusableMove std.
+double largest_gain(const TorqueColumns& tc, const detail::FreedStep& fs) {
+  double g = 0;
+  for (int c = 0; c < kDof; ++c) {
+    const int k = tc.gain[c];
+    if (k >= 0 && std::abs(fs.extra_step(k)) > kUnusableMove * fs.extra_std(k)) {
+      g = std::max(g, std::abs(fs.extra_step(k)));
+    }
+  }
+  return g;
+}
+
+/// A model error (what: its cause, or that none is named) that would move a friction
+/// coefficient by `largest` std makes the fit unusable beyond kUnusableMove; largest 0: a
+/// friction coefficient is at its bound, so the move cannot be given. The first reason stays.
+void unusable_move(double largest, const std::string& what, IdentifyResult* out) {
+  if (!out->unusable.empty() || !(largest > kUnusableMove || largest == 0)) return;
+  if (largest == 0) {
+    out->unusable = what + ": it holds a friction coefficient at its bound (see the warnings)";
+    return;
+  }
+  out->unusable = what + ": it would move the friction by " + format_significant(largest, 2) +
+                  " std (more than " + format_significant(kUnusableMove) + "; see the warnings)";
+}
+
 /// The candidate cause with the strongest evidence alone (kCauseCount: none)
 int strongest_cause(const CauseSteps& cs) {
   int best = kCauseCount;
@@ -2368,31 +2486,37 @@ void model_check(const Fit& f, IdentifyResult* out) {
   const detail::FreedStep &fo = cs.alone[kCauseAngles], &fi = cs.alone[kCauseInertia],
                           &ft = cs.alone[kCauseTorque];
   std::string moved;
-  if (cs.named(kCauseAngles) && !(moved = friction_clause(f, *out, fo, false, true)).empty()) {
+  double largest = 0;  // [std] the cause's largest move of the friction (0: at its bound)
+  if (cs.named(kCauseAngles) &&
+      !(moved = friction_clause(f, *out, fo, false, true, &(largest = 0))).empty()) {
     out->warnings.push_back(
         "with offsets of the logged angles free (one linearized refit) " + drop_clause(fo) +
         " and " + moved + ". theta1, theta2 read " + pair_clause(fo, 0, 1.0) +
         " rad more than the scene's angles: an encoder's zero may be off; subtract the offsets "
         "from the logged angles");
+    unusable_move(largest, "the logged angles' zeros are off", out);
   }
-  if (cs.named(kCauseTorque) && !(moved = friction_clause(f, *out, ft, false, true)).empty()) {
-    out->warnings.push_back(torque_warning(tc, ft, moved));
+  if (cs.named(kCauseTorque)) {
+    moved = friction_clause(f, *out, ft, false, true, &(largest = 0));
+    // a gain off by kUnusableGain scales the friction with it, whatever the move's std
+    const bool scaled = largest_gain(tc, ft) > kUnusableGain;
+    if (!moved.empty() || scaled) {
+      out->warnings.push_back(torque_warning(
+          tc, ft, moved.empty() ? "the friction estimates scale with the gains" : moved));
+      const std::string what =
+          "the logged torques' zeros or gains are off (" + torque_reading(tc, ft) + ")";
+      if (out->unusable.empty() && scaled) {
+        out->unusable = what + ": the friction estimates scale with them (see the warnings)";
+      }
+      if (!moved.empty()) unusable_move(largest, what, out);
+    }
   }
   const bool masses = cs.named(kCauseInertia);
   const int top = strongest_cause(cs);
-  double largest = 0;  // [std] the unattributed error's largest move of the friction
   if (!cs.any() && top < kCauseCount && cs.z(top) > detail::kCauseZ &&
-      !(moved = friction_clause(f, *out, cs.alone[top], false, true, &largest)).empty()) {
+      !(moved = friction_clause(f, *out, cs.alone[top], false, true, &(largest = 0))).empty()) {
     out->warnings.push_back(unresolved_warning(cs, top, moved, f.rates_biased));
-    // (largest 0: a friction coefficient is at its bound, so the move cannot be given)
-    if (out->unusable.empty() && (largest > kUnusableMove || largest == 0)) {
-      out->unusable =
-          largest > 0 ? "a model error the log cannot attribute would move the friction by " +
-                            format_significant(largest, 2) + " std (more than " +
-                            format_significant(kUnusableMove) + "; see the warnings)"
-                      : "a model error the log cannot attribute holds a friction coefficient at "
-                        "its bound (see the warnings)";
-    }
+    unusable_move(largest, "a model error the log cannot attribute", out);
     return;
   }
   const bool old_rule = !cs.any() && !idx[1].empty() && fi.ok;

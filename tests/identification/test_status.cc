@@ -8,8 +8,10 @@
 
 #include "fivebar/identification/identify.h"
 
+#include "light_scene.h"
 #include "paper.h"
 #include "synthetic_log.h"
+#include "window_misfit.h"
 
 namespace fivebar::identification {
 namespace {
@@ -64,6 +66,105 @@ TEST(IdentifyStatus, ACoefficientAtItsBoundWithAModelErrorIsUnusable) {
   ASSERT_TRUE(res.parameters[0].at_bound);
   EXPECT_THAT(res.unusable, HasSubstr("at its bound"));
   EXPECT_GT(worst_ratio(res), 1.5);
+}
+
+// The window table's verdict (window_misfit.h) on tables built from the two laws: a noise level
+// falling as h^-2.5 to the torque noise 0.02 N m, plus an excess that is flat (a misfit of
+// 0.1 N m), grows as h (the reversals' jumps) or as h^8 (smooth motion's bias).
+std::vector<detail::WindowLevel> table(double (*excess)(double h), int up_to) {
+  std::vector<detail::WindowLevel> t;
+  for (int h : {3, 4, 5, 6, 7, 8, 10, 12, 15, 18, 22, 27, 33, 41}) {
+    if (h > up_to) break;
+    detail::WindowLevel l;
+    l.half = h;
+    for (int j = 0; j < 2; ++j) {
+      l.floor[j] = std::sqrt(0.02 * 0.02 + 1.4 * 1.4 * std::pow(h / 3.0, -5.0));
+      l.rms[j] = std::sqrt(l.floor[j] * l.floor[j] + excess(h));
+    }
+    t.push_back(l);
+  }
+  return t;
+}
+
+TEST(WindowMisfit, AFlatExcessIsAMisfitAndAGrowingOneIsBias) {
+  using detail::WindowMisfit;
+  const auto flat = [](double) { return 0.01; };
+  const auto linear = [](double h) { return 0.01 * h / 10; };
+  const auto smooth = [](double h) { return 0.01 * std::pow(h / 10, 8); };
+  // flat: resolved from 8 samples (excess 0.67 of the level squared; 0.35 at 7), flat to the end
+  WindowMisfit m = detail::window_misfit(table(flat, 41), false);
+  ASSERT_EQ(m.state, WindowMisfit::kMisfit);
+  EXPECT_EQ(table(flat, 41)[m.from].half, 8);
+  EXPECT_EQ(table(flat, 41)[m.to].half, 41);
+  // the table ends before the doubling, or while still flat: evaluate more
+  EXPECT_EQ(detail::window_misfit(table(flat, 12), true).state, WindowMisfit::kNeedMore);
+  EXPECT_EQ(detail::window_misfit(table(flat, 18), true).state, WindowMisfit::kNeedMore);
+  EXPECT_EQ(detail::window_misfit(table(flat, 12), false).state, WindowMisfit::kNone);
+  // bias: it doubles over a doubling of the window at least
+  EXPECT_EQ(detail::window_misfit(table(linear, 41), false).state, WindowMisfit::kNone);
+  EXPECT_EQ(detail::window_misfit(table(smooth, 41), false).state, WindowMisfit::kNone);
+  // no excess at all
+  EXPECT_EQ(detail::window_misfit(table([](double) { return 0.0; }, 41), false).state,
+            WindowMisfit::kNone);
+}
+
+// The light mechanism (datasets/scenes/light.yaml) under motor torques of a few hundredths of a
+// N m: its angles-only 10 s log (torque noise 0.02 N m, angle noise 1e-5 rad, seed 1). There the
+// smallest Savitzky-Golay windows' acceleration noise reaches 60 times the torque noise, so a
+// misfit of 0.03-0.12 N m hides in it (residual / floor 1.0 at 3-4 samples); it shows, flat in
+// the window, over the larger ones.
+double light_M1(double t) {
+  return 0.06 * std::sin(2 * M_PI * 0.31 * t) + 0.045 * std::sin(2 * M_PI * 0.83 * t + 1.57) +
+         0.03 * std::sin(2 * M_PI * 1.7 * t);
+}
+double light_M2(double t) {
+  return 0.06 * std::sin(2 * M_PI * 0.43 * t + 1) + 0.045 * std::sin(2 * M_PI * 1.1 * t + 2.57) +
+         0.03 * std::sin(2 * M_PI * 2.3 * t);
+}
+
+TorqueLog light_log(double torque_factor) {
+  const sim::LoadFunction loads = testing::light_loads(light_M1, light_M2);
+  SynthResult r = synthesize_log(testing::light_params(), loads, testing::paper_initial(),
+                                 testing::log_options(10.0, 0.02, 1e-5, 1));
+  EXPECT_TRUE(r.status.ok()) << r.status.message;
+  for (double& v : r.log.tau1) v *= torque_factor;
+  for (double& v : r.log.tau2) v *= torque_factor;
+  r.log.path = "light.csv";
+  return r.log;
+}
+
+IdentifyResult fit_light(const TorqueLog& log) {
+  IdentifyOptions opt;
+  opt.estimate_delay = false;
+  return identify(testing::light_params(), testing::light_loads(), log, opt);
+}
+
+TEST(IdentifyStatus, ALightMechanismsCleanAnglesOnlyLogIsUsable) {
+  const IdentifyResult res = fit_light(light_log(1.0));
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_TRUE(res.unusable.empty()) << res.unusable;
+  EXPECT_THAT(res.window_choice, ::testing::Not(HasSubstr("misfit")));
+  EXPECT_LT(worst_ratio(res), 1.15);
+}
+
+// negated: the window where the misfit shows (residual 0.12 N m on a floor of 0.02), then the
+// sign check
+TEST(IdentifyStatus, ALightMechanismsNegatedAnglesOnlyLogIsNamed) {
+  const IdentifyResult res = fit_light(light_log(-1.0));
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_THAT(res.window_choice, HasSubstr("misfit"));
+  EXPECT_GT(worst_ratio(res), 4.0);
+  EXPECT_THAT(res.unusable, HasSubstr("fit far better negated"));
+}
+
+// halved: the misfit (0.03 N m on a floor of 0.01) is a gain of the torque readings
+TEST(IdentifyStatus, ALightMechanismsHalvedAnglesOnlyLogIsNamed) {
+  const IdentifyResult res = fit_light(light_log(0.5));
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_THAT(res.window_choice, HasSubstr("misfit"));
+  EXPECT_GT(worst_ratio(res), 2.0);
+  EXPECT_THAT(res.unusable, HasSubstr("torques' zeros or gains are off"));
+  EXPECT_THAT(res.unusable, HasSubstr("tau1 reads 0.5 times the model"));
 }
 
 }  // namespace
