@@ -1,14 +1,17 @@
 #!/usr/bin/env python3
 """Measures what users wait for, side by side in one run, and writes docs/benchmarks.md.
 
-    python3 scripts/bench_table.py [--baseline OTHER_FIVEBAR] [--repeats 3] [--skip-optimize]
+    python3 scripts/bench_table.py [--baseline OTHER_FIVEBAR] [--baseline-bench OTHER_BENCH_MODEL]
+        [--repeats 3] [--skip-optimize]
 
 Rows: the right-hand side with and without friction (bench_model), the paper scene simulated to
-1e-6 and 1e-8 rad, identify (per joint, friction and inertia), excite (per joint, worst std,
-10 s) and optimize per task of datasets/tasks/paper_tasks.yaml; the peers' five-bar benchmarks
-(MuJoCo, Simbody) when they are built. With --baseline, every command runs alternately with this
-build's binary and the other one, and the table gives both medians and their ratio (the machine
-may be shared: ratios of interleaved runs are what to compare, not absolute times).
+1e-6 and 1e-8 rad and with arkode_erk45 at rtol = atol = 1e-10, identify (per joint, friction and
+inertia), excite (per joint, worst std, 10 s) and optimize per task of
+datasets/tasks/paper_tasks.yaml; the peers' five-bar benchmarks (MuJoCo, Simbody) when they are
+built. With --baseline, every command runs alternately with this build's binary and the other
+one, and the table gives both medians and their ratio; --baseline-bench does the same for the
+right-hand side (the machine may be shared: ratios of interleaved runs are what to compare, not
+absolute times; the load average is written with the table).
 """
 import argparse
 import csv
@@ -50,8 +53,12 @@ def commands(out):
     sims = []
     for target in ("1e-6", "1e-8"):
         sims.append((f"simulate paper scene to {target} rad (solver time)",
-                     ["simulate", SCENE, "--set", f"simulation.target_error={target}", "--out",
-                      out], summary_time("wall_time_s")))
+                     ["simulate", SCENE, "--set", f"simulation.target_error={target}",
+                      "--no-plots", "--out", out], summary_time("wall_time_s")))
+    sims.append(("simulate paper scene, arkode_erk45 at rtol = atol = 1e-10 (solver time)",
+                 ["simulate", SCENE, "--set", "simulation.integrator=arkode_erk45", "--set",
+                  "simulation.rtol=1e-10", "--set", "simulation.atol=1e-10", "--no-plots",
+                  "--out", out], summary_time("wall_time_s")))
     return sims + [
         ("identify --per-joint --estimate friction,inertia (fit)",
          ["identify", SCENE, "--log", LOG, "--per-joint", "--estimate", "friction,inertia",
@@ -86,11 +93,9 @@ def measure(binaries, repeats, skip_optimize):
     return rows
 
 
-def right_hand_side():
-    """Median ns of bench_model's RightHandSide benchmarks, or None when it is not built."""
-    if not os.path.exists(BENCH_MODEL):
-        return None
-    done = subprocess.run([BENCH_MODEL, "--benchmark_filter=RightHandSide",
+def bench_once(bench):
+    """{name: median ns} of one run of a bench_model binary's RightHandSide benchmarks."""
+    done = subprocess.run([bench, "--benchmark_filter=RightHandSide",
                            "--benchmark_repetitions=5", "--benchmark_report_aggregates_only",
                            "--benchmark_format=json"], stdout=subprocess.PIPE, text=True,
                           check=True)
@@ -99,6 +104,18 @@ def right_hand_side():
         if b.get("aggregate_name") == "median":
             out[b["run_name"].split("/")[-1]] = b["cpu_time"]
     return out
+
+
+def right_hand_side(benches, repeats):
+    """[{name: ns}] per bench_model binary (medians over `repeats` alternate runs), or None when
+    this build's bench_model is not built."""
+    if not os.path.exists(benches[0]):
+        return None
+    runs = [[] for _ in benches]
+    for _ in range(repeats):
+        for i, bench in enumerate(benches):
+            runs[i].append(bench_once(bench))
+    return [{k: statistics.median(r[k] for r in rs) for k in rs[0]} for rs in runs]
 
 
 def peers():
@@ -120,22 +137,33 @@ def seconds(x):
     return f"{x * 1e3:.1f} ms" if x < 1 else f"{x:.2f} s"
 
 
-def write(rows, rhs, binaries, repeats):
+def write(rows, rhs, binaries, benches, repeats, load):
     lines = ["# Benchmarks", "",
              "Written by `python3 scripts/bench_table.py` (run it again after a change: it "
              "rebuilds nothing, it measures `build/release`). Times are medians of "
              f"{repeats} runs; the machine it ran on may be shared, so compare ratios measured "
              "in the same run rather than absolute times.", "",
              f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} on "
-             f"{os.cpu_count()} cores.", "", "## Right-hand side", ""]
+             f"{os.cpu_count()} cores, load average {load[0]:.1f} at the start and "
+             f"{load[1]:.1f} at the end.", "", "## Right-hand side", ""]
     if rhs:
         lines += ["CPU time of one evaluation (`bench_model --benchmark_filter=RightHandSide`, median of "
-                  "5 repetitions):", "", "| evaluation | ns |", "|---|---|"]
-        for k, v in rhs.items():
-            lines.append(f"| {k} | {v:.0f} |")
-        if "friction" in rhs and "frictionless" in rhs:
+                  "5 repetitions per run):", ""]
+        if len(rhs) == 2:
+            lines += [f"This build against `{benches[1]}`, run alternately.", "",
+                      "| evaluation | this build [ns] | other [ns] | other / this |",
+                      "|---|---|---|---|"]
+            for k, v in rhs[0].items():
+                other = rhs[1].get(k, float("nan"))
+                lines.append(f"| {k} | {v:.0f} | {other:.0f} | {other / v:.2f} |")
+        else:
+            lines += ["| evaluation | ns |", "|---|---|"]
+            for k, v in rhs[0].items():
+                lines.append(f"| {k} | {v:.0f} |")
+        if "friction" in rhs[0] and "frictionless" in rhs[0]:
             lines += ["", f"With friction the right-hand side costs "
-                      f"{rhs['friction'] / rhs['frictionless']:.2f} times the frictionless one."]
+                      f"{rhs[0]['friction'] / rhs[0]['frictionless']:.2f} times the frictionless "
+                      "one."]
     else:
         lines.append("bench_model is not built (`cmake --build --preset release --target "
                      "bench_model`).")
@@ -160,13 +188,17 @@ def write(rows, rhs, binaries, repeats):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--baseline", help="another fivebar binary to run alternately with this one")
+    ap.add_argument("--baseline-bench",
+                    help="another bench_model binary to run alternately with this one")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--skip-optimize", action="store_true", help="leave out optimize (minutes)")
     a = ap.parse_args()
     binaries = [FIVEBAR] + ([a.baseline] if a.baseline else [])
-    rhs = right_hand_side()
+    benches = [BENCH_MODEL] + ([a.baseline_bench] if a.baseline_bench else [])
+    load_start = os.getloadavg()[0]
+    rhs = right_hand_side(benches, a.repeats)
     rows = measure(binaries, a.repeats, a.skip_optimize) if os.path.exists(FIVEBAR) else None
-    write(rows, rhs, binaries, a.repeats)
+    write(rows, rhs, binaries, benches, a.repeats, (load_start, os.getloadavg()[0]))
     print(f"wrote {OUT}")
 
 

@@ -15,8 +15,10 @@ SundialsCommon::SundialsCommon(const OdeProblem& prob, const Options& opt) {
   atol = N_VNew_Serial(prob.n, ctx);
   if (!check_created(y, "N_VNew_Serial", &error) || !check_created(out, "N_VMake_Serial", &error) ||
       !check_created(atol, "N_VNew_Serial", &error) ||
-      // fewer vector calls per step: the state is tiny
-      !check_call(N_VEnableFusedOps_Serial(y, SUNTRUE), "N_VEnableFusedOps_Serial", &error)) {
+      // fewer vector calls per step: the state is tiny (the dense output's vector too: without
+      // them its linear combinations fall back to one scale and one axpy call per term)
+      !check_call(N_VEnableFusedOps_Serial(y, SUNTRUE), "N_VEnableFusedOps_Serial", &error) ||
+      !check_call(N_VEnableFusedOps_Serial(out, SUNTRUE), "N_VEnableFusedOps_Serial", &error)) {
     return;
   }
   N_VConst(0.0, y);

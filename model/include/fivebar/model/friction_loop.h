@@ -55,14 +55,15 @@ struct AffineReactions {
   }
 };
 
-/// Probes `solve(Mf, F)` at Mf = 0 and, unless `response` gives the change of the reactions per
-/// unit torque (ReactionResponse, reactions.h), at a unit torque per active joint.
+/// The affine map of the reactions around F0 = solve(0): the change per unit torque from
+/// `response` (ReactionResponse, reactions.h) where given, else probed at a unit torque per active
+/// joint.
 template <typename T, typename Solve>
 AffineReactions<T> probe_reactions(const std::array<T, kJoints>& phi, Solve& solve,
+                                   const std::array<Vec2<T>, kJoints>& F0,
                                    const ReactionResponse<T>* response = nullptr) {
   AffineReactions<T> map;
-  const std::array<T, kJoints> zero{};
-  solve(zero, &map.F0);
+  map.F0 = F0;
   for (int j = 0; j < kJoints; ++j) {
     map.active[j] = !is_exact_zero(phi[j]);
     if (!map.active[j]) {
@@ -130,14 +131,31 @@ template <typename T>
 struct ScaledReactions {
   std::array<std::array<Vec2<T>, kJoints>, kJoints> B;  ///< B[k][j] = dF_j[k] phi_j
   std::array<Vec2<T>, kJoints> F0;
+  /// An upper bound of the Lipschitz constant of N -> |F(phi N)| in the max norm:
+  /// max_k sum_j |B[k][j]| (|v| <= |v_x| + |v_y|). Below 1 the map contracts everywhere: its
+  /// fixed point is unique and the iteration reaches it from any start.
+  double contraction_bound = 0.0;
 
-  ScaledReactions(const std::array<T, kJoints>& phi, const AffineReactions<T>& map) : F0(map.F0) {
-    for (int k = 0; k < kJoints; ++k) {
-      for (int j = 0; j < kJoints; ++j) {
-        B[k][j] = map.active[j] ? Vec2<T>(map.dF[j][k] * phi[j]) : Vec2<T>::Zero();
+  /// From F0 and dF[j][k], the change of F_k per unit torque at joint j (built in one pass with
+  /// the bound).
+  ScaledReactions(const std::array<T, kJoints>& phi, const std::array<Vec2<T>, kJoints>& F0_,
+                  const ReactionResponse<T>& dF)
+      : F0(F0_) {
+    std::array<double, kJoints> row{};
+    for (int j = 0; j < kJoints; ++j) {
+      if (is_exact_zero(phi[j])) {
+        for (int k = 0; k < kJoints; ++k) B[k][j].setZero();
+        continue;
+      }
+      for (int k = 0; k < kJoints; ++k) {
+        B[k][j] = dF[j][k] * phi[j];
+        row[k] += std::abs(value_of(B[k][j].x())) + std::abs(value_of(B[k][j].y()));
       }
     }
+    contraction_bound = *std::max_element(row.begin(), row.end());
   }
+  ScaledReactions(const std::array<T, kJoints>& phi, const AffineReactions<T>& map)
+      : ScaledReactions(phi, map.F0, map.dF) {}
   /// F = F(phi N) and its norms n_k = |F_k| (one evaluation of the loop's map N -> |F(phi N)|)
   void evaluate(const std::array<T, kJoints>& N, std::array<Vec2<T>, kJoints>* F,
                 std::array<T, kJoints>* n) const {
@@ -148,20 +166,6 @@ struct ScaledReactions {
       (*F)[k] = f;
       (*n)[k] = sqrt(f.squaredNorm());
     }
-  }
-  /// An upper bound of the Lipschitz constant of N -> |F(phi N)| in the max norm:
-  /// max_k sum_j |B[k][j]| (|v| <= |v_x| + |v_y|). Below 1 the map contracts everywhere: its
-  /// fixed point is unique and the iteration reaches it from any start.
-  double contraction_bound() const {
-    double worst = 0.0;
-    for (int k = 0; k < kJoints; ++k) {
-      double row = 0.0;
-      for (int j = 0; j < kJoints; ++j) {
-        row += std::abs(value_of(B[k][j].x())) + std::abs(value_of(B[k][j].y()));
-      }
-      worst = std::max(worst, row);
-    }
-    return worst;
   }
 };
 
@@ -242,7 +246,7 @@ inline void solve_dominant(double J[kJoints][kJoints], double r[kJoints]) {
   }
 }
 
-/// The fixed point of a contracting map (ScaledReactions::contraction_bound() < 1, so that it is
+/// The fixed point of a contracting map (ScaledReactions::contraction_bound < 1, so that it is
 /// unique and I - dG/dN is strictly diagonally dominant) in fewer evaluations: the fixed-point
 /// evaluation N' = G(N) = |F(phi N)| alternates with a Newton step from N, and the loop stops on
 /// the fixed point's own test (max |N' - N| <= tol max N') with N = N'. From `start` (nullptr:
@@ -275,7 +279,8 @@ inline bool friction_contracting_newton(const std::array<double, kJoints>& phi,
     double J[kJoints][kJoints], step[kJoints];
     for (int k = 0; k < kJoints; ++k) {
       const Vec2<double> u = Nn[k] > 0.0 ? Vec2<double>((*F)[k] / Nn[k]) : Vec2<double>::Zero();
-      for (int j = 0; j < kJoints; ++j) J[k][j] = (k == j) - u.dot(map.B[k][j]);
+      for (int j = 0; j < kJoints; ++j) J[k][j] = -u.dot(map.B[k][j]);
+      J[k][k] += 1.0;
       step[k] = N[k] - Nn[k];
     }
     solve_dominant(J, step);
@@ -450,13 +455,25 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
     }
   }
   Mf->fill(T(0));
-  const AffineReactions<T> map = probe_reactions(phi, solve, aids.response);
-  const ScaledReactions<T> scaled(phi, map);
+  std::array<Vec2<T>, kJoints> F0;
+  solve(std::array<T, kJoints>{}, &F0);
+  // the scaled map straight from the closed-form response where there is one; the unscaled map
+  // only where it is needed (the Newton fallback, the solution recorded for the Jet pass)
+  AffineReactions<T> map;
+  bool have_map = false;
+  const auto affine = [&]() -> const AffineReactions<T>& {
+    if (!have_map) map = probe_reactions(phi, solve, F0, aids.response);
+    have_map = true;
+    return map;
+  };
+  const ScaledReactions<T> scaled = aids.response
+                                        ? ScaledReactions<T>(phi, F0, *aids.response)
+                                        : ScaledReactions<T>(phi, affine());
   // a warm start only where the fixed point is unique (a contraction): the same solution, sooner
   FrictionWarmStart* warm = std::is_same_v<T, double> ? aids.warm : nullptr;
   const std::array<T, kJoints>* start = nullptr;
   std::array<T, kJoints> N_warm;
-  const bool contracts = scaled.contraction_bound() < 1.0;
+  const bool contracts = scaled.contraction_bound < 1.0;
   if (warm && warm->set && contracts) {
     for (int j = 0; j < kJoints; ++j) N_warm[j] = T(warm->N[j]);
     start = &N_warm;
@@ -479,7 +496,7 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
                                         &contracting, &ratio);
   }
   if (!converged) {
-    const Status st = friction_newton_fallback(phi, opt, map, contracting, ratio, N);
+    const Status st = friction_newton_fallback(phi, opt, affine(), contracting, ratio, N);
     if (!st.ok()) {
       if (warm) warm->set = false;
       return st;
@@ -494,7 +511,7 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
     for (int j = 0; j < kJoints; ++j) warm->N[j] = value_of((*N)[j]);
   }
   if constexpr (std::is_same_v<T, double>) {
-    if (loop) *loop = LoopSolution{true, *N, map, *iterations};
+    if (loop) *loop = LoopSolution{true, *N, affine(), *iterations};
   }
   return Status::Ok();
 }
