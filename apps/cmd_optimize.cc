@@ -23,6 +23,7 @@
 #include "fivebar/io/csv.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
@@ -257,36 +258,50 @@ void add_options(CLI::App* app, Args* args) {
   app->add_option("--tasks", args->tasks, "tasks file (YAML, docs/formats.md)")->required();
   app->add_option("--threads", args->threads, "worker threads (default: all cores)")
       ->check(CLI::Range(0, 1024));
+  const OptimizeSettings& d = args->settings;  // the defaults, in the help texts
+  const auto dflt = [](double v) { return "(default " + format_double(v) + ")"; };
   app->add_option("--node-threads", args->settings.node_threads,
-                  "threads of each evaluation inside a task (default 1; same results)");
+                  "threads of each evaluation inside a task (default " +
+                      std::to_string(d.node_threads) + "; same results)");
   app->add_option("--method", args->settings.method,
-                  "NLopt algorithm: slsqp (default), mma, ccsaq");
+                  "NLopt algorithm: slsqp, mma, ccsaq (default " + d.method + ")");
   add_objective_options(app, &args->settings);
   app->add_flag("--global", args->settings.global,
                 "multi-start: the local method from seeded perturbed starts too, best kept");
-  app->add_option("--starts", args->settings.starts, "starts of --global (default 8)");
+  app->add_option("--starts", args->settings.starts, "starts of --global " + dflt(d.starts));
   app->add_option("--control-points", args->settings.control_points,
-                  "B-spline control points per joint (default 10, 4 free)");
+                  "B-spline control points per joint (default " +
+                      std::to_string(d.control_points) + ", " +
+                      std::to_string(d.control_points - 6) + " free)");
   app->add_option("--quadrature-points", args->settings.quadrature_points,
-                  "Gauss-Legendre points per knot span (default 12)");
+                  "Gauss-Legendre points per knot span " + dflt(d.quadrature_points));
   app->add_option("--singular-margin", args->settings.singular_margin,
-                  "minimum |sin(theta4 - theta3)| along the motion (default 0.1)");
+                  "minimum |sin(theta4 - theta3)| along the motion " + dflt(d.singular_margin));
   app->add_option("--path-step", args->settings.path_step,
                   "grid step [rad] of the path search for a feasible start when the "
-                  "minimum-jerk motion cannot close (default 0.05)");
+                  "minimum-jerk motion cannot close " + dflt(d.path_step));
   app->add_flag("--no-refine", [args](int64_t) { args->settings.refine = false; },
                 "no refinement of the control points after the first solve");
   app->add_flag("--no-continuation", [args](int64_t) { args->settings.continuation = false; },
                 "no continuation on the smoothing velocity towards the exact law");
   app->add_option("--max-evaluations", args->settings.max_evaluations,
-                  "objective evaluations per local solve (default 500)");
+                  "objective evaluations per local solve " + dflt(d.max_evaluations));
+  const auto levels = [](const std::vector<int>& v) {
+    std::string out;
+    for (int n : v) out += (out.empty() ? "" : ",") + std::to_string(n);
+    return out;
+  };
   app->add_option("--refine-levels", args->settings.refine_levels,
-                  "control points per joint of the refinement levels, increasing "
-                  "(default 15,25,45,85 for total_dissipation and supply_energy, else 45,85)")
+                  "control points per joint of the refinement levels, increasing (default " +
+                      levels(trajectory::kSmoothRefineLevels) +
+                      " for total_dissipation and supply_energy, else " +
+                      levels(trajectory::kRefineLevels) + ")")
       ->delimiter(',');
   app->add_option("--refine-tol", args->settings.refine_tol,
-                  "relative objective change that ends the refinement (default 1e-4 for "
-                  "total_dissipation and supply_energy, else 1e-3)");
+                  "relative objective change that ends the refinement (default " +
+                      format_significant(trajectory::kSmoothRefineTol) +
+                      " for total_dissipation and supply_energy, else " +
+                      format_significant(trajectory::RefineOptions().tol) + ")");
   app->add_flag("--no-validate", args->no_validate,
                 "skip the forward simulation of the optimal torques (miss_distance)");
 }

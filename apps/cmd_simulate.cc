@@ -115,7 +115,8 @@ void print_report(const Scene& scene, const sim::EstimatedRun& er, const sim::Ru
   const sim::Options& o = er.options;
   const sim::Row& last = run.rows.back();
   std::cout << "fivebar simulate: " << scene.path << " (friction "
-            << friction_law_name(scene.params.friction.law) << "), " << integrator_name(o.method)
+            << friction_law_name(scene.params.friction.law) << "), "
+            << integrator_name(sim::method_of(o, scene.params.friction.law))
             << " rtol " << format_printf(o.rtol, "%.4g") << " atol "
             << format_printf(o.atol, "%.4g")
             << (o.auto_tolerance

@@ -176,9 +176,11 @@ void add_inner_solve_options(CLI::App* app, OptimizeSettings* s) {
   s->validate = false;
   add_objective_options(app, s);
   app->add_option("--method", s->method,
-                  "NLopt algorithm of the inner solves: slsqp (default), mma, ccsaq");
+                  "NLopt algorithm of the inner solves: slsqp, mma, ccsaq (default " + s->method +
+                      ")");
   app->add_option("--path-step", s->path_step,
-                  "grid step [rad] of the path search (see optimize; default 0.05)");
+                  "grid step [rad] of the path search (see optimize; default " +
+                      format_double(s->path_step) + ")");
   app->add_flag("--continuation", s->continuation,
                 "inner solves continue towards the exact friction law (see optimize)");
   app->add_flag("--refine", s->refine,
@@ -217,7 +219,9 @@ void objective_options(const OptimizeSettings& a, const MotorWindings& windings,
                      "'" + a.end_acceleration + "' is not one of free, zero");
   }
   const bool smooth = trajectory::needs_winding(o->problem.objective);
-  const double tol = std::isnan(a.refine_tol) ? (smooth ? 1e-4 : 1e-3) : a.refine_tol;
+  const double tol = !std::isnan(a.refine_tol) ? a.refine_tol
+                     : smooth                   ? trajectory::kSmoothRefineTol
+                                                : trajectory::RefineOptions().tol;
   if (!(tol > 0 && tol < 1)) {
     throw InputError(kFlags, "--refine-tol", "expected a number in (0, 1)");
   }

@@ -732,8 +732,12 @@ void read_integration(const SceneReader& r, FrictionLaw law, sim::Options* out) 
                                          ", got " + num(o.output_step) +
                                          r.origin("simulation.output_step"));
   }
-  const std::string integrator = r.text("simulation.integrator", integrator_name(d.method));
-  if (!parse_integrator(integrator, &o.method)) {
+  // the default integrator is the friction law's (sim::default_method): stated in the scene, so
+  // that a run with another law from these options (the frictionless twin) keeps it
+  const std::string integrator =
+      r.text("simulation.integrator", integrator_name(sim::default_method(law)));
+  sim::Method method{};
+  if (!parse_integrator(integrator, &method)) {
     std::string names;
     for (sim::Method m : sim::kAllMethods) {
       names += (names.empty() ? "" : ", ") + std::string(sim::method_name(m));
@@ -741,6 +745,7 @@ void read_integration(const SceneReader& r, FrictionLaw law, sim::Options* out) 
     r.fail("simulation.integrator", "unknown integrator '" + integrator + "' (known: " + names +
                                         ")" + r.origin("simulation.integrator"));
   }
+  o.method = method;
   o.rtol = r.number("simulation.rtol", d.rtol);
   require(r, "simulation.rtol", o.rtol, o.rtol > 0 && o.rtol < 1, "in (0, 1)");
   o.atol = r.number("simulation.atol", d.atol);
@@ -750,10 +755,6 @@ void read_integration(const SceneReader& r, FrictionLaw law, sim::Options* out) 
   o.target_error = r.number("simulation.target_error", d.target_error);
   require(r, "simulation.target_error", o.target_error, o.target_error > 0 && o.target_error < 1,
           "in (0, 1)");
-  // the default integrator: Adams (the work-precision study's choice), BDF for the stiff LuGre
-  if (!r.has("simulation.integrator") && law == FrictionLaw::kLuGre) {
-    o.method = sim::Method::kCvodeBdf;
-  }
   if (sim::output_row_count(o) > sim::kMaxOutputRows) {
     r.fail("simulation.duration",
            "duration " + num(o.duration) + " s at output_step " + num(o.output_step) +
@@ -969,7 +970,7 @@ std::string scene_to_yaml(const Scene& s) {
     << "simulation:\n"
     << "  duration: " << num(o.duration) << "\n"
     << "  output_step: " << num(o.output_step) << "\n"
-    << "  integrator: " << integrator_name(o.method) << "\n"
+    << "  integrator: " << integrator_name(sim::method_of(o, p.friction.law)) << "\n"
     << "  rtol: " << num(o.rtol) << "\n"
     << "  atol: " << num(o.atol) << "\n"
     << "  target_error: " << num(o.target_error) << "\n"

@@ -66,7 +66,7 @@ void settings_json(const std::vector<std::string>& sets, const Scene& scene, con
             {"scene", scene.path},
             {"sets", Json::array_of(sets)},
             {"friction_model", friction_law_name(scene.params.friction.law)},
-            {"integrator", integrator_name(o.method)},
+            {"integrator", integrator_name(sim::method_of(o, scene.params.friction.law))},
             {"rtol", o.rtol},
             {"atol", o.atol},
             {"locate_switches", o.locate_switches},

@@ -59,12 +59,16 @@ class Integrator {
 std::unique_ptr<Integrator> make_cvode(const OdeProblem& prob, const Options& opt, double t_end);
 std::unique_ptr<Integrator> make_arkode(const OdeProblem& prob, const Options& opt, double t_end);
 
+/// The integrator of opt.method; unset: default_method(prob.stiff_states), which is the friction
+/// law's (the stiff states are its internal states).
 inline std::unique_ptr<Integrator> make_integrator(const OdeProblem& prob, const Options& opt,
                                                    double t_end) {
-  if (opt.method == Method::kCvodeAdams || opt.method == Method::kCvodeBdf) {
-    return make_cvode(prob, opt, t_end);
+  Options chosen = opt;
+  chosen.method = opt.method.value_or(default_method(prob.stiff_states));
+  if (chosen.method == Method::kCvodeAdams || chosen.method == Method::kCvodeBdf) {
+    return make_cvode(prob, chosen, t_end);
   }
-  return make_arkode(prob, opt, t_end);
+  return make_arkode(prob, chosen, t_end);
 }
 
 // The checks below are the only place that words SUNDIALS failures (sundials_status.cc). Each

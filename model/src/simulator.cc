@@ -956,7 +956,7 @@ void setup_context(Context& c, const Params<double>& params, const LoadFunction&
   c.params = &params;
   c.loads = &loads;
   // the run stops at the margin itself (stop_at_singular_margin); evaluations fail at half of it
-  c.eval.singular_margin = 0.5 * options.singular_margin;
+  c.eval.singular_margin = kEvalMarginFraction * options.singular_margin;
   c.eval.friction_tol = options.friction_tol;
   c.eval.friction_max_iter = options.friction_max_iter;
   c.eval.want_reactions = false;  // the motion needs reactions only through friction

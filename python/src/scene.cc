@@ -145,7 +145,10 @@ void bind_scene(py::module_& m) {
           [](const PyScene& s) { return io::friction_law_name(s.scene.params.friction.law); })
       .def_property_readonly(
           "integrator",
-          [](const PyScene& s) { return io::integrator_name(s.scene.options.method); })
+          [](const PyScene& s) {
+            return io::integrator_name(
+                sim::method_of(s.scene.options, s.scene.params.friction.law));
+          })
       .def_property_readonly("duration", [](const PyScene& s) { return s.scene.options.duration; })
       .def_property_readonly("output_step",
                              [](const PyScene& s) { return s.scene.options.output_step; })

@@ -103,7 +103,8 @@ TEST(Scene, PaperFileMatchesTheModelSpec) {
   EXPECT_EQ(s.options.output_step, 1e-3);
   // omitted solver settings take the sim::Options defaults
   const sim::Options d;
-  EXPECT_EQ(s.options.method, d.method);
+  EXPECT_EQ(s.options.method, sim::default_method(s.params.friction.law));
+  EXPECT_EQ(s.options.method, sim::Method::kCvodeAdams);
   EXPECT_EQ(s.options.rtol, d.rtol);
   EXPECT_EQ(s.options.atol, d.atol);
   EXPECT_EQ(s.options.max_steps, d.max_steps);
@@ -303,6 +304,7 @@ TEST(Scene, FrictionLawsAndTheirDefaults) {
   EXPECT_EQ(l.params.friction.law, FrictionLaw::kLuGre);
   EXPECT_EQ(l.params.friction.sigma0[0], 1e5);
   EXPECT_EQ(l.params.friction.viscous[0], 0.0);
+  EXPECT_EQ(l.options.method, sim::Method::kCvodeBdf);  // the law's default integrator
   EXPECT_EQ(friction_law_name(FrictionLaw::kLuGre), std::string("lugre"));
 }
 

@@ -103,15 +103,20 @@ TEST(PaperSceneErk45, EvaluatesTheStepEndOnce) {
   EXPECT_LE(max_theta_error(r, "paper_friction.csv"), 3e-8);
 }
 
+// the paper scene with LuGre friction and stiff bristles (sigma0 = 1e4 / rad)
+Params<double> stiff_lugre() {
+  return testing::with_law(paper_params(), FrictionLaw::kLuGre,
+                           {{Coefficient::kSigma0, 1e4},
+                            {Coefficient::kSigma1, 100.0},
+                            {Coefficient::kSigma2, 0.02},
+                            {Coefficient::kStaticCoulomb, 0.12}});
+}
+
 // LuGre with stiff bristles (sigma0 = 1e4 / rad) on the paper scene: BDF integrates it, the
 // mechanical energy balance closes (E_diss is then the work absorbed by the friction elements,
 // dissipated or stored in the bristles), and the motion stays near the Coulomb-viscous one
 TEST(LuGre, StiffBristlesIntegrateWithBdfAndBalanceEnergy) {
-  const Params<double> p = testing::with_law(paper_params(), FrictionLaw::kLuGre,
-                                             {{Coefficient::kSigma0, 1e4},
-                                              {Coefficient::kSigma1, 100.0},
-                                              {Coefficient::kSigma2, 0.02},
-                                              {Coefficient::kStaticCoulomb, 0.12}});
+  const Params<double> p = stiff_lugre();
   sim::Options opt;
   opt.duration = 0.5;
   opt.method = sim::Method::kCvodeBdf;
@@ -129,6 +134,31 @@ TEST(LuGre, StiffBristlesIntegrateWithBdfAndBalanceEnergy) {
   EXPECT_LT(diff, 0.05);
   std::printf("[ info ] lugre: steps=%ld rhs=%ld balance=%.2e |theta - theta_coulomb|=%.2e\n",
               r.stats.steps, r.stats.rhs_evaluations, checks.energy_balance_relative, diff);
+}
+
+// a caller that leaves the integrator unset gets the law's: BDF for LuGre (the same run, row for
+// row, as BDF asked for), Adams otherwise
+TEST(LuGre, DefaultIntegratorIsBdf) {
+  EXPECT_EQ(sim::default_method(FrictionLaw::kLuGre), sim::Method::kCvodeBdf);
+  for (FrictionLaw law : {FrictionLaw::kNone, FrictionLaw::kCoulombViscous, FrictionLaw::kStribeck})
+    EXPECT_EQ(sim::default_method(law), sim::Method::kCvodeAdams) << int(law);
+  const Params<double> p = stiff_lugre();
+  sim::Options unset;
+  unset.duration = 0.05;
+  unset.rtol = unset.atol = 1e-8;
+  EXPECT_FALSE(unset.method.has_value());
+  EXPECT_EQ(sim::method_of(unset, FrictionLaw::kLuGre), sim::Method::kCvodeBdf);
+  sim::Options bdf = unset, adams = unset;
+  bdf.method = sim::Method::kCvodeBdf;
+  adams.method = sim::Method::kCvodeAdams;
+  const sim::Result r = sim::simulate(p, testing::paper_loads, testing::paper_initial(), unset);
+  const sim::Result rb = sim::simulate(p, testing::paper_loads, testing::paper_initial(), bdf);
+  const sim::Result ra = sim::simulate(p, testing::paper_loads, testing::paper_initial(), adams);
+  ASSERT_TRUE(r.status.ok() && rb.status.ok()) << r.status.message << rb.status.message;
+  EXPECT_EQ(r.stats.steps, rb.stats.steps);
+  EXPECT_EQ(r.stats.rhs_evaluations, rb.stats.rhs_evaluations);
+  EXPECT_EQ(sim::max_angle_difference(r.rows, rb.rows), 0.0);
+  EXPECT_NE(r.stats.rhs_evaluations, ra.stats.rhs_evaluations);  // Adams is another run
 }
 
 }  // namespace

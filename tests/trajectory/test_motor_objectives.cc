@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "fivebar/trajectory/batch.h"
@@ -214,7 +216,43 @@ TEST(Objectives, NamesParseAndList) {
   EXPECT_FALSE(parse_end_acceleration("none", &a));
 }
 
-// every field of a TaskResult survives the codec, each compared with its original
+// an initializer of any member (its conversion is only declared: unevaluated contexts only)
+struct AnyMember {
+  template <typename T>
+  operator T() const;
+};
+
+// the members of an aggregate: the largest count of initializers it accepts (each member takes
+// one AnyMember, so brace elision never splits an array member)
+template <typename T, typename... A>
+constexpr auto accepts(int) -> decltype(T{std::declval<A>()...}, bool()) {
+  return true;
+}
+template <typename T, typename... A>
+constexpr bool accepts(...) {
+  return false;
+}
+template <typename T, typename... A>
+constexpr int member_count() {
+  if constexpr (accepts<T, A..., AnyMember>(0)) {
+    return member_count<T, A..., AnyMember>();
+  } else {
+    return static_cast<int>(sizeof...(A));
+  }
+}
+
+// visit_fields visits every member of TaskResult: a member added to the struct and not to the
+// list would be left out of the codec and of summary.csv
+TEST(Codec, VisitFieldsListsEveryMember) {
+  TaskResult r;
+  int visits = 0;
+  visit_fields(r, [&](const char*, auto&) { ++visits; });
+  // start and goal are visited per element (theta1_start, theta2_start, ...)
+  EXPECT_EQ(visits, member_count<TaskResult>() + 2);
+}
+
+// every field of a TaskResult survives the codec, each compared with its original (every field
+// set to its own non-default value, so that a field the codec leaves out comes back different)
 TEST(Codec, EveryFieldRoundTrips) {
   TaskResult r;
   int k = 0;

@@ -19,12 +19,16 @@ class App;
 
 namespace fivebar::io {
 
-/// `fivebar identify` options (see `fivebar identify --help`), with the command line's defaults.
+/// `fivebar identify` options (see `fivebar identify --help`), with the command line's defaults:
+/// those of identification::IdentifyOptions.
 struct IdentifySettings {
-  std::string method = "inverse-dynamics", law = "coulomb_viscous", loss = "none";
+  std::string method = identification::method_name(defaults().method);
+  std::string law = identification::law_name(defaults().layout.law);
+  std::string loss = identification::loss_name(defaults().loss);
   /// --estimate: parameter groups, comma-separated (friction, inertia)
   std::string estimate = "friction";
-  double inertia_prior = 0.2;  ///< --inertia-prior: relative std of the inertial prior
+  /// --inertia-prior: relative std of the inertial prior
+  double inertia_prior = defaults().inertia_prior;
   bool per_joint = false, estimate_rates = false, start_from_scene = false;
   /// log conditioning and error bars (docs/identification.md): --sg-window given (else the
   /// window is chosen from the log), --no-unwrap, --keep-glitches, --classical-std, --no-delay
@@ -32,8 +36,18 @@ struct IdentifySettings {
   bool keep_reversals = false;
   bool classical_std = false, no_delay = false;
   /// loss_scale 0: the robust loss's scale follows the residual's noise floor (IdentifyOptions)
-  double loss_scale = 0, smooth_sign = -1, min_rate = 0, sg_window = 0.010, window = 0;
-  int sg_order = 5, threads = 1;
+  double loss_scale = defaults().loss_scale;
+  double smooth_sign = defaults().smoothing_velocity;  ///< -1: the scene's
+  double min_rate = defaults().min_rate;
+  double sg_window = defaults().sg.half_window_s;
+  double window = defaults().window_s;  ///< 0: chosen from the log
+  int sg_order = defaults().sg.order, threads = defaults().num_threads;
+
+ private:
+  static const identification::IdentifyOptions& defaults() {
+    static const identification::IdentifyOptions d;
+    return d;
+  }
 };
 
 /// The identification options of `settings` for `scene`. Throws
@@ -60,31 +74,45 @@ identification::IdentifyResult identify_scene(const Scene& scene, const sim::Loa
 /// (group actuator). scene_fitted.yaml and fivebar.identify's 'fitted_scene'.
 Scene fitted_scene(const Scene& scene, const identification::IdentifyResult& result);
 
-/// `fivebar optimize` options (see `fivebar optimize --help`), with the command line's defaults.
+/// `fivebar optimize` options (see `fivebar optimize --help`), with the command line's defaults:
+/// those of trajectory::BatchOptions, but the refinement (optimize_defaults).
 struct OptimizeSettings {
-  std::string method = "slsqp";
+  std::string method = trajectory::method_name(defaults().optimizer.method);
   /// --objective; "" (the default): total_dissipation when the scene has winding data, else
   /// dissipated_energy
   std::string objective;
-  std::string regeneration = "none";     ///< --regeneration (supply_energy): none | shared_bus
-  std::string end_acceleration = "free";  ///< --end-acceleration: free | zero
+  /// --regeneration (supply_energy): none | shared_bus
+  std::string regeneration = trajectory::regeneration_name(defaults().problem.regeneration);
+  /// --end-acceleration: free | zero
+  std::string end_acceleration =
+      trajectory::end_acceleration_name(defaults().problem.end_acceleration);
   bool global = false, validate = true;
-  int starts = 8, control_points = 10, quadrature_points = 12;
-  int max_evaluations = 500;  ///< per local solve (--max-evaluations)
+  int starts = defaults().optimizer.starts;
+  int control_points = defaults().problem.control_points;
+  int quadrature_points = defaults().problem.quadrature_points;
+  int max_evaluations = defaults().optimizer.max_evaluations;  ///< per local solve
   /// threads of one evaluation inside a task (--node-threads; trajectory::ProblemOptions::
   /// threads): the results do not depend on it
-  int node_threads = 1;
-  double singular_margin = 0.1;
-  double path_step = 0.05;  ///< grid step of the path search for a feasible start [rad]
+  int node_threads = defaults().problem.threads;
+  double singular_margin = defaults().problem.singular_margin;
+  /// grid step of the path search for a feasible start [rad]
+  double path_step = defaults().path.step;
   /// the continuation to the exact law and the refinement of the control points after the
   /// first solve (`optimize` turns refine on: --no-refine; --no-continuation)
   bool refine = false, continuation = true;
-  /// relative change of the objective that stops the refinement (--refine-tol); NaN: 1e-4 for
-  /// the smooth objectives (total_dissipation, supply_energy), 1e-3 for the others
+  /// relative change of the objective that stops the refinement (--refine-tol); NaN:
+  /// trajectory::kSmoothRefineTol for the smooth objectives (total_dissipation, supply_energy),
+  /// RefineOptions::tol for the others
   double refine_tol = NAN;
   /// control points per joint of the refinement levels (--refine-levels; empty: the default
   /// trajectory::kSmoothRefineLevels or kRefineLevels, by the objective)
   std::vector<int> refine_levels;
+
+ private:
+  static const trajectory::BatchOptions& defaults() {
+    static const trajectory::BatchOptions d;
+    return d;
+  }
 };
 
 /// The defaults of `fivebar optimize` (and Python's optimize): OptimizeSettings with the

@@ -42,12 +42,11 @@ struct Scene {
 ///   mechanism.links: 4 x {length R (> 0), mass R (> 0), inertia R (> 0), com_offset R (>= 0),
 ///                         com_angle [0]}
 ///   gravity [9.81]
-///   friction.model [none]: none | coulomb_viscous | stribeck | lugre
-///   friction coefficients, each one number or a list of 5 (O, B, C, D, D0), all >= 0:
-///     pin_radius (> 0), coulomb: R when the model is not none
-///     viscous: R for coulomb_viscous and stribeck [0]
-///     static_coulomb [= coulomb]         stribeck_velocity: R (> 0) for stribeck [0]
-///     stribeck_exponent [2] (> 0)        sigma0: R (> 0) for lugre [0]     sigma1, sigma2 [0]
+///   friction.model [none]: a law of kLaws (friction.h: none, coulomb_viscous, stribeck, lugre,
+///     power_viscous, ...)
+///   friction.pin_radius and the coefficients (kCoefficientInfo), each one number or a list of 5
+///     (O, B, C, D, D0), all >= 0: R where the model's LawDescriptor requires them, else their
+///     CoefficientInfo default (docs/scene.md lists them)
 ///   friction.smoothing_velocity [0] (>= 0)
 ///   actuators.M1, .M2: offset [0], coulomb, viscous [0] (>= 0); winding_resistance,
 ///     torque_constant (> 0; both motors or none) [none]; gear_ratio [1] (> 0)

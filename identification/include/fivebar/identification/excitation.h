@@ -15,6 +15,7 @@
 #include "fivebar/identification/parameters.h"
 #include "fivebar/identification/synth.h"
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/kinematics.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/status.h"
 
@@ -136,7 +137,7 @@ struct ExcitationOptions {
   double torque_margin = 0.01;    ///< the design keeps |M| <= (1 - margin) torque_limit
   int constraint_blocks = 40;     ///< blocks of samples per aggregated constraint
   double aggregation_sharpness = 300;  ///< rho of the KS aggregation (overestimate <= ln(n)/rho)
-  double singular_margin = 0.1;   ///< |sin(th4 - th3)| >= this
+  double singular_margin = kMotionSingularMargin;  ///< |sin(th4 - th3)| >= this
   double torque_noise = 0.02;     ///< std of the torque noise [N m] (the Fisher's sigma)
   double rate_hz = 1000;          ///< the log's sampling rate (the Fisher is scaled to it)
   /// optional angle ranges [rad]: lo < hi, NaN when absent

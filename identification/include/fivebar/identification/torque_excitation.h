@@ -52,7 +52,8 @@ std::vector<double> multisine_tones();
 struct MultisineFitOptions {
   double torque_limit = std::numeric_limits<double>::infinity();  ///< |M1|, |M2| at most [N m]
   double duration = 10;         ///< the motion that must run [s]
-  double singular_margin = 0.1;  ///< least |sin(theta4 - theta3)| along it (the scene's if larger)
+  /// least |sin(theta4 - theta3)| along it (the scene's if larger)
+  double singular_margin = kMotionSingularMargin;
   sim::Options sim;             ///< the scene's solver settings (duration, output step overridden)
 };
 

@@ -27,11 +27,16 @@ inline JointMode slip_mode(int sign) {
   return sign > 0 ? JointMode::kSlipPositive : sign < 0 ? JointMode::kSlipNegative : JointMode::kRest;
 }
 
+/// The reaction/friction loop's stopping test (relative change of the normal forces) and its
+/// iteration limit: the defaults of every setting of it (evaluations, runs, trajectories).
+inline constexpr double kFrictionTol = 1e-13;
+inline constexpr int kFrictionMaxIter = 50;
+
 /// Settings of an evaluation: singularity margin and the reaction/friction loop.
 struct EvalOptions {
   double singular_margin = 0.0;  ///< fail with kNearSingular when |sin(th4 - th3)| is below
-  double friction_tol = 1e-13;   ///< stop when max |N^i - N^(i-1)| <= tol * (max N + 1e-300)
-  int friction_max_iter = 50;
+  double friction_tol = kFrictionTol;  ///< stop when max |N^i - N^(i-1)| <= tol * (max N + 1e-300)
+  int friction_max_iter = kFrictionMaxIter;
   /// compute F_k even when the scene has no friction, and with friction from a last solve at the
   /// converged friction torques (false: the friction loop's own F_k, consistent to friction_tol)
   bool want_reactions = true;

@@ -222,6 +222,11 @@ void first_order_coefficients(const Params<T>& p, Kinematics<T>* k) {
   k->GP.col(0) += dB1;
 }
 
+/// The least |sin(th4 - th3)| the motions the toolkit designs keep by default (optimized
+/// trajectories and their path search, excitation designs): a constraint along the motion, where
+/// a simulation only stops at sim::Options::singular_margin.
+inline constexpr double kMotionSingularMargin = 0.1;
+
 /// Closed-form position solve (eq. 4) for the assembly in params, and the G coefficients.
 /// Fails with kCannotAssemble when |BD| is outside [|l3 - l4|, l3 + l4], and with kNearSingular
 /// when |sin(th4 - th3)| < singular_margin (pass 0 to accept any pose that assembles).

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,11 +32,22 @@ const char* method_name(Method m);
 /// Parses a method name; false if unknown.
 bool parse_method(const std::string& name, Method* out);
 
+/// The integrator of a run that does not choose one: BDF when the friction law has internal
+/// states (LuGre's bristles are stiff: Adams' fixed-point iteration crawls on them), else Adams
+/// (the work-precision study's choice).
+inline Method default_method(bool stiff_states) {
+  return stiff_states ? Method::kCvodeBdf : Method::kCvodeAdams;
+}
+inline Method default_method(FrictionLaw law) {
+  return default_method(law_descriptor(law).states_per_joint > 0);
+}
+
 /// Solver settings (scene key `simulation:`), with the defaults that reach the accuracy figures.
 struct Options {
   double duration = 2.0;      ///< [s]
   double output_step = 1e-3;  ///< [s] output grid, from dense output
-  Method method = Method::kCvodeAdams;
+  /// the integrator (simulation.integrator); unset: default_method of the friction law
+  std::optional<Method> method;
   double rtol = 1e-10;
   double atol = 1e-10;
   /// [rad] the global error a run should reach (simulation.target_error); with auto_tolerance
@@ -52,16 +64,26 @@ struct Options {
   /// LuGre: absolute tolerance of the bristle states z [rad] relative to atol (deflections are
   /// ~ mu / sigma0, far below the angles)
   double bristle_atol_scale = 1e-4;
-  /// run stops (status kNearSingular) when |sin(th4 - th3)| falls below this
+  /// run stops (status kNearSingular) when |sin(th4 - th3)| falls below this; the evaluations
+  /// inside the run fail at kEvalMarginFraction of it, so that the stop itself can be located
   double singular_margin = 1e-3;
-  double friction_tol = 1e-13;  ///< relative stopping test of the reaction/friction loop
+  double friction_tol = kFrictionTol;  ///< relative stopping test of the reaction/friction loop
   /// false: output rows hold only t, theta, omega and the energy quadratures (no accelerations,
   /// reactions or friction torques): what a work-precision study needs, at a fraction of the cost
   bool full_rows = true;
-  int friction_max_iter = 50;
+  int friction_max_iter = kFrictionMaxIter;
   /// called after every accepted step with the time reached (the apps show progress; may be empty)
   std::function<void(double t)> progress;
 };
+
+/// The fraction of Options::singular_margin at which a run's evaluations fail (the run itself
+/// stops at the margin).
+inline constexpr double kEvalMarginFraction = 0.5;
+
+/// The integrator a run with these options uses for friction law `law`.
+inline Method method_of(const Options& options, FrictionLaw law) {
+  return options.method.value_or(default_method(law));
+}
 
 /// Largest number of output rows a run may produce (about 0.6 GB in memory and as much CSV):
 /// a duration / output_step beyond it is refused as bad input.

@@ -33,6 +33,9 @@ inline const std::vector<int> kRefineLevels = {45, 85};
 /// smooth: 10, 20, 40, 80 knot spans (each space holds the coarser ones), stopped as soon as the
 /// objective settles.
 inline const std::vector<int> kSmoothRefineLevels = {15, 25, 45, 85};
+/// The refinement's tolerance (RefineOptions::tol) for the smooth objectives: their refinement
+/// runs to a 0.01% change (docs/optimize.md).
+inline constexpr double kSmoothRefineTol = 1e-4;
 
 struct RefineOptions {
   bool enabled = true;
@@ -124,8 +127,8 @@ struct TaskResult {
   /// (kSupplyEnergy: with the softplus) [J]
   double objective = NAN;
   double peak_torque = NAN, baseline_peak_torque = NAN;  ///< dense grid [N m]
-  double max_constraint_violation = NAN;  ///< dense grid, relative (ConstraintCheck)
-  double baseline_max_constraint_violation = NAN;
+  /// dense grid, relative (ConstraintCheck); the baseline's decides its baseline_status
+  double max_constraint_violation = NAN;
   double min_coupler_sine = NAN;  ///< dense grid
   /// |C(T) simulated - C goal| [m], the smoothed-law torques simulated with the smoothed law
   /// (the model the optimizer solved)

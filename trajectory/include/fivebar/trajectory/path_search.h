@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fivebar/model/kinematics.h"
 #include "fivebar/model/params.h"
 #include "fivebar/trajectory/bspline.h"
 
@@ -17,7 +18,8 @@ namespace fivebar::trajectory {
 struct PathSearchOptions {
   /// grid step in both angles [rad]; larger when the box would hold more than 1e6 poses
   double step = 0.05;
-  double margin = 0.1;   ///< every pose of the path keeps |sin(th4 - th3)| >= margin
+  /// every pose of the path keeps |sin(th4 - th3)| >= margin
+  double margin = kMotionSingularMargin;
   /// the search first asks for margin + cushion, to leave the spline fit room to cut corners;
   /// the bare margin is the fallback
   double cushion = 0.1;

@@ -10,6 +10,7 @@
 #include <ceres/jet.h>
 
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/kinematics.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/status.h"
 #include "fivebar/sim/simulator.h"
@@ -70,7 +71,7 @@ struct ProblemOptions {
   /// |M1|, |M2| <= torque_limit [N m] at every quadrature point; infinity: no torque constraint
   double torque_limit = std::numeric_limits<double>::infinity();
   /// |sin(th4 - th3)| >= singular_margin at every quadrature point (also keeps the assembly)
-  double singular_margin = 0.1;
+  double singular_margin = kMotionSingularMargin;
   /// w_s [rad/s] of the smooth Coulomb sign tanh(w / w_s) used along the trajectory, when the
   /// scene's friction.smoothing_velocity is 0 (the exact sign has no derivative at w = 0, and
   /// every joint starts and ends at rest). A scene value > 0 is used as it is.
@@ -84,7 +85,7 @@ struct ProblemOptions {
   /// the ends of the task motions (RestToRest): free accelerations by default (with zero ones, a
   /// boundary layer of a few ms slows the convergence of the refinement to first order)
   EndAcceleration end_acceleration = EndAcceleration::kFree;
-  double friction_tol = 1e-13;    ///< relative stopping test of the reaction/friction loop
+  double friction_tol = kFrictionTol;  ///< relative stopping test of the reaction/friction loop
   /// threads of one evaluation (contiguous blocks of nodes; at least 32 nodes each). The
   /// objective and its gradient are summed in node order afterwards: the same numbers for any
   /// count.
