@@ -112,7 +112,7 @@ TEST(FallbackCost, PaddedWidthGivesTheJacobianOfItsOwnWidth) {
     const InverseDynamicsResidual f(scene, layout, s, EvalOptions{});
     const ceres::AutoDiffCostFunction<InverseDynamicsResidual, 2, 4> plain(
         new InverseDynamicsResidual(f));
-    double r_plain[2], r_fallback[2];
+    double r_plain[2] = {}, r_fallback[2] = {};
     const std::vector<double> a = jacobian(plain, x, r_plain);
     const std::vector<double> b = jacobian(FallbackCost<4>(f), x, r_fallback);
     EXPECT_EQ(r_plain[0], r_fallback[0]);
@@ -137,7 +137,7 @@ TEST(FallbackCost, MultiPassJacobianMatchesCentralDifferences) {
   eval.friction_tol = 1e-15;
   for (const Sample& s : random_samples(scene, 3)) {
     const InverseDynamicsResidual f(scene, layout, s, eval);
-    double r[2];
+    double r[2] = {};
     const std::vector<double> jac = jacobian(FallbackCost<32>(f), x, r);
     for (int i = 0; i < 32; ++i) {
       const double h = 1e-5 * std::max(1.0, std::abs(x[i]));
