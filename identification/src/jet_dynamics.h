@@ -25,7 +25,7 @@
 
 // the widths, each in one group; a group is compiled by one unit (jet_dynamics_<group>.cc):
 // excitation's group widths (1, 2, 10, 16, 18, 26), the residual's 5 pin radii, and nothing
-// else. Identify's fallback residual (identify.cc) pads its parameter count to one of them
+// else. Identify's fallback residual (fallback_cost.h) pads its parameter count to one of them
 // (compiled_jet_width); each further width would cost ~12 s of compilation for no gain.
 // Width 6 is left out: the trajectory problem's node Jets have it, and through the explicit
 // instantiation here its evaluations took 15% more instructions and 20% more time than through
