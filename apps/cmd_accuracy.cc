@@ -24,7 +24,8 @@
 #include "fivebar/io/scene.h"
 #include "fivebar/studies/accuracy.h"
 
-namespace fivebar::io {
+// a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
+namespace fivebar::io::accuracy_command {
 namespace {
 
 // the one line of `fivebar --help`
@@ -231,4 +232,4 @@ void add_options(CLI::App* app, Args* args) {
 const bool kRegistered = register_command(command_of("accuracy", kSummary, add_options, run));
 
 }  // namespace
-}  // namespace fivebar::io
+}  // namespace fivebar::io::accuracy_command

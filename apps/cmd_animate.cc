@@ -16,7 +16,8 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/scene.h"
 
-namespace fivebar::io {
+// a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
+namespace fivebar::io::animate_command {
 namespace {
 
 namespace fs = std::filesystem;
@@ -118,4 +119,4 @@ void add_options(CLI::App* app, Args* args) {
 const bool kRegistered = register_command(command_of("animate", kSummary, add_options, run));
 
 }  // namespace
-}  // namespace fivebar::io
+}  // namespace fivebar::io::animate_command

@@ -36,7 +36,8 @@
 #include "fivebar/trajectory/design.h"
 #include "fivebar/trajectory/distributed.h"
 
-namespace fivebar::io {
+// a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
+namespace fivebar::io::design_command {
 namespace {
 
 // the one line of `fivebar --help`
@@ -469,4 +470,4 @@ void add_options(CLI::App* app, Args* args) {
 const bool kRegistered = register_command(command_of("design", kSummary, add_options, run));
 
 }  // namespace
-}  // namespace fivebar::io
+}  // namespace fivebar::io::design_command

@@ -30,7 +30,8 @@
 #include "fivebar/model/rest.h"
 #include "fivebar/trajectory/nlopt_minimize.h"
 
-namespace fivebar::io {
+// a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
+namespace fivebar::io::excite_command {
 namespace {
 
 // the one line of `fivebar --help`
@@ -774,4 +775,4 @@ RunFunction setup(CLI::App* app) {
 const bool kRegistered = register_command({"excite", kSummary, setup});
 
 }  // namespace
-}  // namespace fivebar::io
+}  // namespace fivebar::io::excite_command

@@ -25,7 +25,8 @@
 #include "fivebar/io/scene.h"
 #include "fivebar/model/rest.h"
 
-namespace fivebar::io {
+// a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
+namespace fivebar::io::hold_command {
 namespace {
 
 // the one line of `fivebar --help`
@@ -283,4 +284,4 @@ void add_options(CLI::App* app, Args* args) {
 const bool kRegistered = register_command(command_of("hold", kSummary, add_options, run));
 
 }  // namespace
-}  // namespace fivebar::io
+}  // namespace fivebar::io::hold_command

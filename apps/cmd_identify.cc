@@ -27,7 +27,8 @@
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
 
-namespace fivebar::io {
+// a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
+namespace fivebar::io::identify_command {
 namespace {
 
 // the one line of `fivebar --help`
@@ -331,4 +332,4 @@ RunFunction setup(CLI::App* app) {
 const bool kRegistered = register_command({"identify", kSummary, setup});
 
 }  // namespace
-}  // namespace fivebar::io
+}  // namespace fivebar::io::identify_command

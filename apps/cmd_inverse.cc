@@ -26,7 +26,8 @@
 #include "fivebar/model/dynamics.h"
 #include "fivebar/sim/simulator.h"
 
-namespace fivebar::io {
+// a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
+namespace fivebar::io::inverse_command {
 namespace {
 
 // the one line of `fivebar --help`
@@ -445,4 +446,4 @@ void add_options(CLI::App* app, Args* args) {
 const bool kRegistered = register_command(command_of("inverse", kSummary, add_options, run));
 
 }  // namespace
-}  // namespace fivebar::io
+}  // namespace fivebar::io::inverse_command

@@ -33,7 +33,8 @@
 #include "fivebar/trajectory/distributed.h"
 #include "fivebar/trajectory/tasks.h"
 
-namespace fivebar::io {
+// a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
+namespace fivebar::io::optimize_command {
 namespace {
 
 // the one line of `fivebar --help`
@@ -309,4 +310,4 @@ void add_options(CLI::App* app, Args* args) {
 const bool kRegistered = register_command(command_of("optimize", kSummary, add_options, run));
 
 }  // namespace
-}  // namespace fivebar::io
+}  // namespace fivebar::io::optimize_command

@@ -24,7 +24,8 @@
 #include "fivebar/sim/estimate.h"
 #include "fivebar/sim/simulator.h"
 
-namespace fivebar::io {
+// a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
+namespace fivebar::io::simulate_command {
 namespace {
 
 // the one line of `fivebar --help`
@@ -206,4 +207,4 @@ void add_options(CLI::App* app, Args* args) {
 const bool kRegistered = register_command(command_of("simulate", kSummary, add_options, run));
 
 }  // namespace
-}  // namespace fivebar::io
+}  // namespace fivebar::io::simulate_command

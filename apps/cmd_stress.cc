@@ -20,7 +20,8 @@
 #include "fivebar/io/output.h"
 #include "fivebar/studies/stress.h"
 
-namespace fivebar::io {
+// a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
+namespace fivebar::io::stress_command {
 namespace {
 
 // the one line of `fivebar --help`
@@ -190,4 +191,4 @@ void add_options(CLI::App* app, Args* args) {
 const bool kRegistered = register_command(command_of("stress", kSummary, add_options, run));
 
 }  // namespace
-}  // namespace fivebar::io
+}  // namespace fivebar::io::stress_command

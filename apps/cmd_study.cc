@@ -32,7 +32,8 @@
 #include "fivebar/trajectory/sweep.h"
 #include "fivebar/trajectory/tasks.h"
 
-namespace fivebar::io {
+// a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
+namespace fivebar::io::study_command {
 namespace {
 
 // the one line of `fivebar --help`
@@ -361,4 +362,4 @@ void add_options(CLI::App* app, Args* args) {
 const bool kRegistered = register_command(command_of("study", kSummary, add_options, run));
 
 }  // namespace
-}  // namespace fivebar::io
+}  // namespace fivebar::io::study_command

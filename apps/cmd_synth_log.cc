@@ -32,7 +32,8 @@
 #include "fivebar/model/friction.h"
 #include "fivebar/model/inertial.h"
 
-namespace fivebar::io {
+// a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
+namespace fivebar::io::synth_log_command {
 namespace {
 
 // the one line of `fivebar --help`
@@ -343,4 +344,4 @@ RunFunction setup(CLI::App* app) {
 const bool kRegistered = register_command({"synth-log", kSummary, setup});
 
 }  // namespace
-}  // namespace fivebar::io
+}  // namespace fivebar::io::synth_log_command

@@ -34,3 +34,12 @@ function(fivebar_cli_test name script)
   endif()
   set_tests_properties(${name} PROPERTIES TIMEOUT 300)
 endfunction()
+
+# fivebar_unity_group(<target> <group> <sources>...): the sources compile as one unit (a CMake
+# unity group); the target's other sources stay units of their own. Units that instantiate the
+# same model, Eigen and Ceres templates then instantiate them once per group, not once per file
+# (docs/dev/figures-build.md: a quarter to three quarters less compile time per group).
+function(fivebar_unity_group target group)
+  set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_MODE GROUP)
+  set_source_files_properties(${ARGN} PROPERTIES UNITY_GROUP ${group})
+endfunction()

@@ -22,6 +22,7 @@
 #include "fivebar/model/names.h"
 #include "fivebar/model/rest.h"
 #include "covariance.h"
+#include "fallback_cost.h"
 #include "inertia.h"
 #include "misfit.h"
 #include "noise_model.h"
@@ -180,8 +181,7 @@ void add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayo
       cost = new ceres::AutoDiffCostFunction<StructuredResidual, 2, P>(
           new StructuredResidual(scene, layout, st, s, eval));
     } else {
-      cost = new ceres::AutoDiffCostFunction<InverseDynamicsResidual, 2, P>(
-          new InverseDynamicsResidual(scene, layout, s, eval));
+      cost = new FallbackCost<P>(InverseDynamicsResidual(scene, layout, s, eval));
     }
     problem->AddResidualBlock(cost, make_loss(loss, loss_scale), x);
   }

@@ -1,5 +1,7 @@
 // The inverse-dynamics residual: Jet derivatives through the model against central differences,
-// and a zero residual at the true parameters on exact data.
+// a zero residual at the true parameters on exact data, and identify's fallback cost function
+// (padded and multi-pass Jet widths) against plain automatic differentiation.
+#include <ceres/ceres.h>
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
@@ -9,6 +11,7 @@
 
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
+#include "fallback_cost.h"
 #include "random_samples.h"
 
 #include "paper.h"
@@ -85,6 +88,70 @@ TEST(InverseDynamicsResidual, ZeroAtTheTruthOnExactData) {
     ASSERT_TRUE(InverseDynamicsResidual(truth, layout, s, EvalOptions{})(x.data(), r));
     EXPECT_NEAR(r[0], 0.0, 1e-10);  // same evaluation, round-off of the friction loop
     EXPECT_NEAR(r[1], 0.0, 1e-10);
+  }
+}
+
+// the Jacobian of cost at x (P parameters, two residuals), row-major
+std::vector<double> jacobian(const ceres::CostFunction& cost, const std::vector<double>& x,
+                             double r[2]) {
+  std::vector<double> jac(2 * x.size());
+  const double* params[] = {x.data()};
+  double* jacs[] = {jac.data()};
+  EXPECT_TRUE(cost.Evaluate(params, r, jacs));
+  return jac;
+}
+
+// P = 4 runs on the compiled width 5: the Jacobian and residual are Jet<double, 4>'s, bit for bit
+TEST(FallbackCost, PaddedWidthGivesTheJacobianOfItsOwnWidth) {
+  static_assert(compiled_jet_width(4) == 5);
+  const Params<double> scene = paper_params();
+  const ParameterLayout layout{FrictionLaw::kStribeck, false};
+  std::vector<double> x(4);
+  for (int i = 0; i < 4; ++i) x[i] = 0.05 + 0.03 * i;
+  for (const Sample& s : random_samples(scene, 5)) {
+    const InverseDynamicsResidual f(scene, layout, s, EvalOptions{});
+    const ceres::AutoDiffCostFunction<InverseDynamicsResidual, 2, 4> plain(
+        new InverseDynamicsResidual(f));
+    double r_plain[2] = {}, r_fallback[2] = {};
+    const std::vector<double> a = jacobian(plain, x, r_plain);
+    const std::vector<double> b = jacobian(FallbackCost<4>(f), x, r_fallback);
+    EXPECT_EQ(r_plain[0], r_fallback[0]);
+    EXPECT_EQ(r_plain[1], r_fallback[1]);
+    for (size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]) << "entry " << i;
+  }
+}
+
+// P = 32 (per-joint Coulomb-viscous, inertia, actuator terms) takes two passes of width 26: every
+// column against central differences
+TEST(FallbackCost, MultiPassJacobianMatchesCentralDifferences) {
+  static_assert(compiled_jet_width(32) == 26);
+  Params<double> scene = paper_params();
+  scene.actuators.coulomb = {0.02, 0.03};
+  scene.actuators.viscous = {0.001, 0.002};
+  ParameterLayout layout{FrictionLaw::kCoulombViscous, true};
+  layout.inertia = true;
+  layout.actuator = true;
+  ASSERT_EQ(layout.size(), 32);
+  const std::vector<double> x = layout.extract(scene);
+  EvalOptions eval;
+  eval.friction_tol = 1e-15;
+  for (const Sample& s : random_samples(scene, 3)) {
+    const InverseDynamicsResidual f(scene, layout, s, eval);
+    double r[2] = {};
+    const std::vector<double> jac = jacobian(FallbackCost<32>(f), x, r);
+    for (int i = 0; i < 32; ++i) {
+      const double h = 1e-5 * std::max(1.0, std::abs(x[i]));
+      std::vector<double> xp = x, xm = x;
+      xp[i] += h;
+      xm[i] -= h;
+      double rp[2], rm[2];
+      ASSERT_TRUE(f(xp.data(), rp));
+      ASSERT_TRUE(f(xm.data(), rm));
+      for (int k = 0; k < 2; ++k) {
+        EXPECT_NEAR(jac[k * 32 + i], (rp[k] - rm[k]) / (2 * h), kDerivTol)
+            << "parameter " << layout.names()[i] << ", residual " << k;
+      }
+    }
   }
 }
 
