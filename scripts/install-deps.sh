@@ -13,7 +13,7 @@ pkgs=(build-essential cmake ninja-build pkg-config python3
       libeigen3-dev libceres-dev libnlopt-cxx-dev libsundials-dev
       libyaml-cpp-dev libcli11-dev libmuparser-dev
       gnuplot-nox openmpi-bin libopenmpi-dev
-      pybind11-dev python3-pybind11 python3-numpy)
+      pybind11-dev python3-pybind11 python3-dev python3-numpy)
 if [ "${FIVEBAR_TEST_DEPS:-0}" = "1" ]; then
   pkgs+=(libgtest-dev libgmock-dev libbenchmark-dev python3-pytest python3-matplotlib chromium)
 fi
