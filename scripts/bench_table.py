@@ -150,7 +150,7 @@ def write(rows, rhs, binaries, benches, repeats, load):
         lines += ["CPU time of one evaluation (`bench_model --benchmark_filter=RightHandSide`, median of "
                   "5 repetitions per run):", ""]
         if len(rhs) == 2:
-            lines += [f"This build against `{benches[1]}`, run alternately.", "",
+            lines += ["This build against another bench_model (`--baseline-bench`), run alternately.", "",
                       "| evaluation | this build [ns] | other [ns] | other / this |",
                       "|---|---|---|---|"]
             for k, v in rhs[0].items():
@@ -172,7 +172,7 @@ def write(rows, rhs, binaries, benches, repeats, load):
         lines.append(f"Not measured: `{os.path.relpath(FIVEBAR, ROOT)}` was not built when the "
                      "table was written (`scripts/build.sh`, then run the script again).")
     elif len(binaries) == 2:
-        lines += [f"This build against `{binaries[1]}`, run alternately.", "",
+        lines += ["This build against another fivebar binary (`--baseline`), run alternately.", "",
                   "| what | this build | other | other / this |", "|---|---|---|---|"]
         for name, t in rows:
             lines.append(f"| {name} | {seconds(t[0])} | {seconds(t[1])} | {t[1] / t[0]:.2f} |")
