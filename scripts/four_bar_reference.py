@@ -59,12 +59,13 @@ class FourBar:
         loads = scene.get("loads", {})
         self.load = {k: self._expr(loads.get(k, "0")) for k in ("M1", "M3", "F")}
         self.F_angle = float(loads.get("F_angle", 0.0))
-        self.mass = [float(l["mass"]) for l in links_of(m)]
-        self.inertia = [float(l["inertia"]) for l in links_of(m)]
+        links = links_of(m)
+        self.mass = [float(l["mass"]) for l in links]
+        self.inertia = [float(l["inertia"]) for l in links]
         com = [float(l["com_offset"]) * np.array([math.cos(float(l.get("com_angle", 0.0))),
                                                   math.sin(float(l.get("com_angle", 0.0)))])
-               for l in links_of(m)]
-        L = [float(l["length"]) for l in links_of(m)]
+               for l in links]
+        L = [float(l["length"]) for l in links]
         self.L, self.com = L, com
         # body-fixed vectors from each centre of mass to the body's joints and to P
         start = [-com[i] for i in range(3)]

@@ -9,12 +9,11 @@
 #include <random>
 #include <vector>
 
+#include "fallback_cost.h"
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
-#include "fallback_cost.h"
-#include "random_samples.h"
-
 #include "paper.h"
+#include "random_samples.h"
 
 namespace fivebar::identification {
 namespace {
@@ -24,6 +23,25 @@ constexpr double kDerivTol = 1e-6;
 
 using testing::paper_loads;
 using testing::random_samples;
+
+/// Every derivative d(i, k) of residual k by parameter i against central differences of f.
+template <typename Derivative>
+void expect_central_differences(const InverseDynamicsResidual& f, const ParameterLayout& layout,
+                                const std::vector<double>& x, Derivative&& d) {
+  for (size_t i = 0; i < x.size(); ++i) {
+    const double h = 1e-5 * std::max(1.0, std::abs(x[i]));
+    std::vector<double> xp = x, xm = x;
+    xp[i] += h;
+    xm[i] -= h;
+    double rp[2], rm[2];
+    ASSERT_TRUE(f(xp.data(), rp));
+    ASSERT_TRUE(f(xm.data(), rm));
+    for (int k = 0; k < 2; ++k) {
+      EXPECT_NEAR(d(i, k), (rp[k] - rm[k]) / (2 * h), kDerivTol)
+          << "parameter " << layout.names()[i] << ", residual " << k;
+    }
+  }
+}
 
 template <int P>
 void check_jet_against_differences(const ParameterLayout& layout, double smoothing) {
@@ -43,19 +61,7 @@ void check_jet_against_differences(const ParameterLayout& layout, double smoothi
     for (int i = 0; i < P; ++i) xj[i] = J(x[i], i);
     J rj[2];
     ASSERT_TRUE(f(xj.data(), rj));
-    for (int i = 0; i < P; ++i) {
-      const double h = 1e-5 * std::max(1.0, std::abs(x[i]));
-      std::vector<double> xp = x, xm = x;
-      xp[i] += h;
-      xm[i] -= h;
-      double rp[2], rm[2];
-      ASSERT_TRUE(f(xp.data(), rp));
-      ASSERT_TRUE(f(xm.data(), rm));
-      for (int k = 0; k < 2; ++k) {
-        EXPECT_NEAR(rj[k].v[i], (rp[k] - rm[k]) / (2 * h), kDerivTol)
-            << "parameter " << layout.names()[i] << ", residual " << k;
-      }
-    }
+    expect_central_differences(f, layout, x, [&](size_t i, int k) { return rj[k].v[i]; });
     // the value part is the double evaluation
     double r[2];
     ASSERT_TRUE(f(x.data(), r));
@@ -139,19 +145,7 @@ TEST(FallbackCost, MultiPassJacobianMatchesCentralDifferences) {
     const InverseDynamicsResidual f(scene, layout, s, eval);
     double r[2] = {};
     const std::vector<double> jac = jacobian(FallbackCost<32>(f), x, r);
-    for (int i = 0; i < 32; ++i) {
-      const double h = 1e-5 * std::max(1.0, std::abs(x[i]));
-      std::vector<double> xp = x, xm = x;
-      xp[i] += h;
-      xm[i] -= h;
-      double rp[2], rm[2];
-      ASSERT_TRUE(f(xp.data(), rp));
-      ASSERT_TRUE(f(xm.data(), rm));
-      for (int k = 0; k < 2; ++k) {
-        EXPECT_NEAR(jac[k * 32 + i], (rp[k] - rm[k]) / (2 * h), kDerivTol)
-            << "parameter " << layout.names()[i] << ", residual " << k;
-      }
-    }
+    expect_central_differences(f, layout, x, [&](size_t i, int k) { return jac[k * 32 + i]; });
   }
 }
 
