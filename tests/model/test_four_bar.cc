@@ -1,8 +1,10 @@
 // The four-bar in reduced coordinates (four_bar.h): closure of positions, rates and
 // accelerations; forward and inverse dynamics and reactions against the general planar chain;
 // and on seeded random four-bars (Grashof and not) energy balance, inverse of forward, friction
-// power and the holding torque against the virtual work of gravity; and two scenes against
+// power and the holding torque against the virtual work of gravity; stuck joints, the rest rule
+// and LuGre from the dynamics written once over the mechanism; and two scenes against
 // trajectories made by an independent program (datasets/reference/four_bar/).
+#include <ceres/jet.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,6 +16,7 @@
 
 #include "agreement.h"
 #include "fivebar/model/four_bar.h"
+#include "fivebar/model/mechanism_dynamics.h"
 #include "fivebar/model/planar_chain.h"
 #include "paper.h"
 
@@ -119,7 +122,7 @@ chain::Solution chain_solution(const FourBarParams& p, const State& s, const dou
 
 /// the reaction error over the four joints (agreement.h)
 double reaction_error(const std::vector<Vec2<double>>& a,
-                      const std::array<Vec2<double>, kFourBarJoints>& b) {
+                      const std::array<Vec2<double>, kJoints>& b) {
   return testing::reaction_error(a, b, kFourBarJoints);
 }
 
@@ -192,7 +195,7 @@ TEST(FourBar, ForwardAndInverseDynamicsAgreeWithThePlanarChain) {
         FourBarEvaluation fwd, inv;
         ASSERT_TRUE(four_bar_forward(p, s.loads, s.th1, s.w1, EvalOptions{}, &fwd).ok());
         const chain::Solution cf = chain_solution(p, s, nullptr);
-        const double acc[3] = {fwd.qdd, fwd.alpha2, fwd.alpha3};
+        const double acc[3] = {fwd.thdd[0], fwd.alpha2, fwd.alpha3};
         double err = 0.0, scale = 0.0;
         for (int i = 0; i < 3; ++i) {
           err = std::max(err, std::abs(cf.alpha[i] - acc[i]));
@@ -224,7 +227,7 @@ TEST(FourBar, InverseOfForwardReturnsTheTorque) {
     for (const State& s : random_states(p, 50, 200 + m++)) {
       FourBarEvaluation fwd, inv;
       ASSERT_TRUE(four_bar_forward(p, s.loads, s.th1, s.w1, EvalOptions{}, &fwd).ok());
-      ASSERT_TRUE(four_bar_inverse(p, s.loads, s.th1, s.w1, fwd.qdd, EvalOptions{}, &inv).ok());
+      ASSERT_TRUE(four_bar_inverse(p, s.loads, s.th1, s.w1, fwd.thdd[0], EvalOptions{}, &inv).ok());
       worst = std::max(worst, std::abs(inv.M1 - s.loads.M1));
       for (int k = 0; k < kFourBarJoints; ++k) {
         EXPECT_NEAR(inv.N[k], fwd.N[k], 1e-9 * (1 + fwd.N[k]));
@@ -287,7 +290,7 @@ bool rk4_step(const FourBarParams& p, const FourBarLoads& L, double dt, double* 
   auto f = [&](double t, double v, double* a) {
     FourBarEvaluation ev;
     if (!four_bar_forward(p, L, t, v, EvalOptions{}, &ev).ok()) return false;
-    *a = ev.qdd;
+    *a = ev.thdd[0];
     return true;
   };
   double a1, a2, a3, a4;
@@ -408,7 +411,7 @@ TEST(FourBar, AgreesWithTheIndependentReferences) {
                        std::abs(std::remainder(ev.kin.th3 - ref.at("theta3")[i], 2 * M_PI))});
       rates = std::max({rates, std::abs(ev.bias.w2 - ref.at("omega2")[i]),
                         std::abs(ev.bias.w3 - ref.at("omega3")[i])});
-      accel_scale = std::max(accel_scale, std::abs(ev.qdd));
+      accel_scale = std::max(accel_scale, std::abs(ev.thdd[0]));
       power_scale = std::max(power_scale, std::abs(ev.P_diss));
     }
     int compared = 0;
@@ -419,7 +422,7 @@ TEST(FourBar, AgreesWithTheIndependentReferences) {
       }
       if (switches) continue;
       ++compared;
-      accel = std::max(accel, std::abs(evs[i].qdd - central_difference(ref.at("omega1"), i, h)));
+      accel = std::max(accel, std::abs(evs[i].thdd[0] - central_difference(ref.at("omega1"), i, h)));
       power = std::max(power, std::abs(evs[i].P_diss - central_difference(ref.at("E_diss"), i, h)));
     }
     EXPECT_LT(pose, 1e-12) << sc.file;
@@ -451,7 +454,7 @@ TEST(FourBar, NewtonSolvesOfTheFrictionLoopAreConsistentInThePlanarChain) {
       chain::Options opt;
       opt.friction_torques = &Mf;
       const chain::Solution cf = chain_solution(p, s, nullptr, opt);
-      EXPECT_NEAR(cf.alpha[0], fwd.qdd, 1e-9 * (1 + std::abs(fwd.qdd)));
+      EXPECT_NEAR(cf.alpha[0], fwd.thdd[0], 1e-9 * (1 + std::abs(fwd.thdd[0])));
       EXPECT_LT(reaction_error(cf.F, fwd.F), 1e-9);
       for (int k = 0; k < kFourBarJoints; ++k) {
         const double f = friction_law(p.friction, k, fwd.w[k], sign_of(fwd.w[k]));
@@ -495,6 +498,172 @@ TEST(FourBar, ReportsPosesThatCannotAssembleOrAreSingular) {
   st = four_bar_kinematics(p, 0.0, &k, 0.5);
   EXPECT_EQ(st.code, StatusCode::kNearSingular);
   EXPECT_NE(st.message.find("sin(theta3 - theta2)"), std::string::npos) << st.message;
+}
+
+// The dynamics written once over the mechanism concept (mechanism_dynamics.h) give the four-bar
+// what the five-bar has: stuck joints held by constraint torques, the rest rule, LuGre.
+
+// at rest with one joint stuck the mechanism is locked: no acceleration, and the holding torque
+// lambda at joint j balances the generalized force, J_wj lambda = Q0 (every other joint at rest
+// carries no friction torque)
+TEST(FourBar, AStuckJointHoldsTheGeneralizedForce) {
+  double worst = 0.0;
+  int m = 0;
+  for (const FourBarParams& p : mechanisms(true)) {
+    for (const State& s : random_states(p, 5, 600 + m++)) {
+      for (int j = 0; j < kFourBarJoints; ++j) {
+        JointModes slip{};
+        slip[j] = kStuck;
+        FourBarEvaluation ev;
+        ASSERT_TRUE(four_bar_forward(p, s.loads, s.th1, 0.0, EvalOptions{}, &ev, &slip).ok());
+        double M, Q0;
+        four_bar_mass_and_force(p, ev.kin, ev.bias, s.loads, &M, &Q0);
+        const double row = four_bar_joint_rows(ev.kin)[j];
+        EXPECT_EQ(ev.thdd[0], 0.0);
+        worst = std::max(worst, std::abs(row * ev.Mf[j] - Q0) / (1 + std::abs(Q0)));
+        EXPECT_NEAR(ev.hold_margin[j],
+                    holding_bound(p.friction, j) * ev.N[j] - std::abs(ev.Mf[j]),
+                    1e-12 * (1 + ev.N[j]));
+        for (int k = 0; k < kJoints; ++k) {
+          if (k != j) {
+            EXPECT_EQ(ev.Mf[k], 0.0);
+          }
+        }
+        // the reactions are those of the holding torque
+        std::array<Vec2<double>, kJoints> F;
+        four_bar_reactions(p, ev.kin, ev.bias, 0.0, s.loads, ev.Mf, &F);
+        for (int k = 0; k < kJoints; ++k) {
+          EXPECT_NEAR((F[k] - ev.F[k]).norm(), 0.0, 1e-12 * (1 + ev.N[k]));
+        }
+      }
+    }
+  }
+  EXPECT_LT(worst, 1e-12);
+  RecordProperty("holding_torque_balance", sci(worst));
+}
+
+// the rest rule: a crank at rest that does not accelerate stands still, every joint is stuck and
+// carries no friction torque (the drive holds the frictionless equilibrium), and each joint's
+// hold margin is its static capacity mu_s r N
+TEST(FourBar, TheRestRuleHoldsThePoseWithTheDrive) {
+  EvalOptions rest;
+  rest.rest_rate = 1e-6;
+  rest.rest_acceleration = 1e-6;
+  int m = 0;
+  for (const FourBarParams& p : mechanisms(true)) {
+    FourBarParams frictionless = p;
+    frictionless.friction.law = FrictionLaw::kNone;
+    for (const State& s : random_states(p, 5, 700 + m++)) {
+      FourBarEvaluation held, free;
+      ASSERT_TRUE(four_bar_inverse(p, s.loads, s.th1, 1e-7, 0.0, rest, &held).ok());
+      ASSERT_TRUE(four_bar_inverse(frictionless, s.loads, s.th1, 0.0, 0.0, EvalOptions{}, &free)
+                      .ok());
+      EXPECT_NEAR(held.M1, free.M1, 1e-12 * (1 + std::abs(free.M1)));
+      EXPECT_EQ(held.thdd[0], 0.0);
+      for (int k = 0; k < kFourBarJoints; ++k) {
+        EXPECT_EQ(held.slip[k], kStuck) << "joint " << k;
+        EXPECT_EQ(held.Mf[k], 0.0);
+        EXPECT_NEAR(held.hold_margin[k], holding_bound(p.friction, k) * held.N[k],
+                    1e-12 * (1 + held.N[k]));
+      }
+      EXPECT_EQ(held.slip[kFourBarJoints], JointMode::kRest);  // the unused slot
+    }
+  }
+}
+
+// LuGre with bristle states: the inverse of the forward dynamics at the same bristle states and
+// modes returns the crank torque, and both give the same bristle rates and reactions. (At crank
+// rates to 10 rad/s some states have two consistent sets of reactions for the inverse problem,
+// and the loop's Newton fallback can return the other one: 4600 N against the forward's 420 N.)
+TEST(FourBar, LuGreInverseOfForwardReturnsTheTorque) {
+  double worst = 0.0;
+  int m = 0;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> load(0.0, 1.0);
+  for (FourBarParams p : mechanisms(true)) {
+    p.friction.law = FrictionLaw::kLuGre;
+    for (int j = 0; j < kFourBarJoints; ++j) {
+      p.friction.static_coulomb[j] = 1.3 * p.friction.coulomb[j];
+      p.friction.stribeck_velocity[j] = 0.1;
+      p.friction.sigma0[j] = 1e4;
+      p.friction.sigma1[j] = 0.01;
+      p.friction.sigma2[j] = p.friction.viscous[j];
+    }
+    for (State s : random_states(p, 10, 800 + m++)) {
+      s.w1 *= 0.3;  // crank rates to 3 rad/s (see the note above)
+      // bristles loaded part of the way to their steady state g(w) sign(w) / sigma0
+      FourBarKinematics k;
+      ASSERT_TRUE(four_bar_kinematics(p, s.th1, &k).ok());
+      std::array<double, kJoints> z{};
+      for (int j = 0; j < kFourBarJoints; ++j) {
+        const double w = four_bar_joint_rows(k)[j] * s.w1;
+        z[j] = load(rng) * sign_of(w) * stribeck_level(p.friction, j, w) / p.friction.sigma0[j];
+      }
+      const FourBar::Q<double> q(s.th1), v(s.w1);
+      FourBarEvaluation fwd, inv;
+      const Status forward =
+          mech::forward<FourBar, double>(p, s.loads, q, v, nullptr, EvalOptions{}, &fwd, &z);
+      ASSERT_TRUE(forward.ok()) << forward.message;
+      const Status inverse = mech::inverse<FourBar, double>(p, s.loads, q, v, fwd.thdd, &fwd.slip,
+                                                            EvalOptions{}, &inv, &z);
+      ASSERT_TRUE(inverse.ok()) << inverse.message;
+      worst = std::max(worst, std::abs(inv.M1 - s.loads.M1) / (1 + std::abs(s.loads.M1)));
+      for (int j = 0; j < kFourBarJoints; ++j) {
+        EXPECT_NEAR(inv.zdot[j], fwd.zdot[j], 1e-12 * (1 + std::abs(fwd.zdot[j])));
+        EXPECT_NEAR(inv.N[j], fwd.N[j], 1e-9 * (1 + fwd.N[j]));
+      }
+    }
+  }
+  EXPECT_LT(worst, 1e-9);
+  RecordProperty("lugre_inverse_of_forward", sci(worst));
+}
+
+// the four-bar in Jets: derivatives of its inverse dynamics with friction in six parameters (the
+// four joints' Coulomb coefficients, the coupler's mass, gravity) from the friction loop's
+// implicit derivative, written once over the mechanism, against the loop iterated in Jets and
+// against central differences
+TEST(FourBar, JetDerivativesOfInverseDynamicsMatchCentralDifferences) {
+  using J = ceres::Jet<double, 6>;
+  const auto parameter = [](auto& p, int i) -> auto& {
+    return i < kFourBarJoints ? p.friction.coulomb[i] : i == 4 ? p.links[1].mass : p.gravity;
+  };
+  double worst_fd = 0.0, worst_loop = 0.0;
+  int m = 0;
+  for (const FourBarParams& p : mechanisms(true)) {
+    if (m >= 6) break;
+    for (const State& s : random_states(p, 5, 900 + m++)) {
+      FourBarParamsT<J> pj = p.cast<J>();
+      for (int i = 0; i < 6; ++i) parameter(pj, i).v[i] = 1.0;
+      const FourBarLoadsT<J> Lj = s.loads.cast<J>();
+      const J th(s.th1), w(s.w1), al(3.0 * s.loads.M1);
+      FourBarEvaluationT<J> implicit, iterated;
+      EvalOptions loop;
+      loop.implicit_loop_derivative = false;
+      ASSERT_TRUE(four_bar_inverse(pj, Lj, th, w, al, EvalOptions{}, &implicit).ok());
+      ASSERT_TRUE(four_bar_inverse(pj, Lj, th, w, al, loop, &iterated).ok());
+      for (int i = 0; i < 6; ++i) {
+        // fourth-order central difference, h = 1e-3 (M1 is a difference of terms near N |B|,
+        // which rounds to ~1e-10 N m at the larger reactions: smaller steps amplify that)
+        const double x = parameter(p, i), h = 1e-3 * std::max(1.0, std::abs(x));
+        double M1[4];
+        const double at[4] = {-2 * h, -h, h, 2 * h};
+        for (int e = 0; e < 4; ++e) {
+          FourBarParams q = p;
+          parameter(q, i) = x + at[e];
+          FourBarEvaluation ev;
+          ASSERT_TRUE(four_bar_inverse(q, s.loads, s.th1, s.w1, al.a, EvalOptions{}, &ev).ok());
+          M1[e] = ev.M1;
+        }
+        const double fd = (M1[0] - 8 * M1[1] + 8 * M1[2] - M1[3]) / (12 * h), d = implicit.M1.v[i];
+        worst_fd = std::max(worst_fd, std::abs(d - fd) / (1 + std::abs(fd)));
+        worst_loop = std::max(worst_loop, std::abs(d - iterated.M1.v[i]) / (1 + std::abs(d)));
+      }
+    }
+  }
+  EXPECT_LT(worst_fd, 1e-6);     // the stencil: truncation ~h^4, roundoff ~1e-10 / h
+  EXPECT_LT(worst_loop, 1e-10);  // the same derivative, two ways
+  RecordProperty("jet_vs_central_difference", sci(worst_fd));
+  RecordProperty("implicit_vs_iterated", sci(worst_loop));
 }
 
 }  // namespace

@@ -61,7 +61,7 @@ TEST(FrictionLoop, ClosedFormResponseMatchesProbes) {
       reactions(p, k, b, s.loads, Fvec, thdd, Mf, F, &al3, &al4);
     };
     const ReactionResponse<double> inv = reaction_torque_response(k);
-    const ReactionResponse<double> fwd = detail::forward_torque_response(p, k, Ainv);
+    const ReactionResponse<double> fwd = mech::detail::forward_torque_response<FiveBar>(p, k, Ainv);
     for (int j = 0; j < kJoints; ++j) {
       const auto pi = probe(inverse_solve, j), pf = probe(forward_solve, j);
       for (int m = 0; m < kJoints; ++m) {

@@ -1,7 +1,8 @@
 // The planar four-bar (4R) with load-dependent joint friction, in reduced coordinates (one degree
 // of freedom, the crank angle th1): position, rate and acceleration closure, the mass and bias
-// terms M(q) qdd + bias = tau - friction, Newton-Euler reactions, forward and inverse dynamics
-// with the reaction/friction loop, and its joint table for the general planar chain.
+// terms M(q) qdd + bias = tau - friction, Newton-Euler reactions, the mechanism FourBar (forward
+// and inverse dynamics from mechanism_dynamics.h: the friction loop, stuck joints, the rest rule
+// and LuGre as the five-bar's), and its joint table for the general planar chain.
 //
 // Geometry: O at the origin, D0 = (l0, 0). Link 1 (crank) O->B at th1, link 2 (coupler) B->C at
 // th2, link 3 (rocker) D0->C at th3, all from +x. Joints in order O (ground-crank), B
@@ -21,6 +22,7 @@
 #include "fivebar/model/five_bar_chain.h"
 #include "fivebar/model/friction.h"
 #include "fivebar/model/friction_loop.h"
+#include "fivebar/model/mechanism_dynamics.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/planar_chain.h"
 #include "fivebar/model/scalar.h"
@@ -31,84 +33,125 @@ namespace fivebar {
 inline constexpr int kFourBarJoints = 4;  ///< O, B, C, D0
 inline constexpr int kFourBarLinks = 3;   ///< crank, coupler, rocker
 
-/// Every constant of a four-bar (links at index 0..2: crank O->B, coupler B->C, rocker D0->C).
-struct FourBarParams {
-  double ground_length = 0.0;  ///< l0 [m]: O at (0,0), D0 at (l0,0)
-  std::array<Link<double>, kFourBarLinks> links;
-  double point_p = 0.0;             ///< P on the coupler, from B [m]
-  int assembly = kElbowUp;          ///< kElbowUp: C left of the directed line B->D0
-  double gravity = 0.0;             ///< along -y [m/s^2]
-  FrictionParams<double> friction;  ///< slots 0..3: joints O, B, C, D0
+/// Every constant of a four-bar (links at index 0..2: crank O->B, coupler B->C, rocker D0->C),
+/// templated on the scalar like the five-bar's Params (FourBarParams: double).
+template <typename T>
+struct FourBarParamsT {
+  T ground_length{};  ///< l0 [m]: O at (0,0), D0 at (l0,0)
+  std::array<Link<T>, kFourBarLinks> links;
+  T point_p{};                 ///< P on the coupler, from B [m]
+  int assembly = kElbowUp;     ///< kElbowUp: C left of the directed line B->D0
+  T gravity{};                 ///< along -y [m/s^2]
+  FrictionParams<T> friction;  ///< slots 0..3: joints O, B, C, D0
+
+  template <typename U>
+  FourBarParamsT<U> cast() const {
+    FourBarParamsT<U> out;
+    out.ground_length = scalar_cast<U>(ground_length);
+    for (int i = 0; i < kFourBarLinks; ++i) out.links[i] = links[i].template cast<U>();
+    out.point_p = scalar_cast<U>(point_p);
+    out.assembly = assembly;
+    out.gravity = scalar_cast<U>(gravity);
+    out.friction = friction.template cast<U>();
+    return out;
+  }
 };
+using FourBarParams = FourBarParamsT<double>;
 
 /// Loads of one instant: M1 on the crank, M3 on the coupler, F at P at F_angle from the coupler.
-struct FourBarLoads {
-  double M1 = 0.0, M3 = 0.0, F = 0.0, F_angle = 0.0;
+template <typename T>
+struct FourBarLoadsT {
+  T M1{}, M3{}, F{}, F_angle{};
+
+  template <typename U>
+  FourBarLoadsT<U> cast() const {
+    return {scalar_cast<U>(M1), scalar_cast<U>(M3), scalar_cast<U>(F), scalar_cast<U>(F_angle)};
+  }
 };
+using FourBarLoads = FourBarLoadsT<double>;
 
 /// A closed pose and its first-order coefficients G (derivatives with respect to th1).
-struct FourBarKinematics {
-  double th1 = 0, th2 = 0, th3 = 0;
-  Vec2<double> e1, e2, e3, B, C, P;
-  std::array<Vec2<double>, kFourBarLinks> c, ec;  ///< centres of mass, directions to them
-  double sin32 = 0;  ///< sin(th3 - th2), the coupler-rocker angle's sine: zero at singular poses
-  double G2 = 0, G3 = 0;                       ///< dth2/dth1, dth3/dth1
-  std::array<Vec2<double>, kFourBarLinks> Gc;  ///< d c_i / dth1 [m/rad]
-  Vec2<double> GP;                             ///< d P / dth1 [m/rad]
+template <typename T>
+struct FourBarKinematicsT {
+  T th1{}, th2{}, th3{};
+  Vec2<T> e1, e2, e3, B, C, P;
+  std::array<Vec2<T>, kFourBarLinks> c, ec;  ///< centres of mass, directions to them
+  T sin32{};  ///< sin(th3 - th2), the coupler-rocker angle's sine: zero at singular poses
+  T G2{}, G3{};                           ///< dth2/dth1, dth3/dth1
+  std::array<Vec2<T>, kFourBarLinks> Gc;  ///< d c_i / dth1 [m/rad]
+  Vec2<T> GP;                             ///< d P / dth1 [m/rad]
 };
+using FourBarKinematics = FourBarKinematicsT<double>;
 
 /// Rates and the accelerations at alpha1 = 0 (the velocity terms).
-struct FourBarBias {
-  double w1 = 0, w2 = 0, w3 = 0;
-  double h2 = 0, h3 = 0;                       ///< alpha2, alpha3 at alpha1 = 0 [rad/s^2]
-  std::array<Vec2<double>, kFourBarLinks> hc;  ///< centre-of-mass accelerations at alpha1 = 0
-  Vec2<double> hP;
+template <typename T>
+struct FourBarBiasT {
+  T w1{}, w2{}, w3{};
+  T h2{}, h3{};                           ///< alpha2, alpha3 at alpha1 = 0 [rad/s^2]
+  std::array<Vec2<T>, kFourBarLinks> hc;  ///< centre-of-mass accelerations at alpha1 = 0
+  Vec2<T> hP;
 };
+using FourBarBias = FourBarBiasT<double>;
 
-/// Everything one evaluation computes (forward: qdd from M1; inverse: M1 from qdd).
-struct FourBarEvaluation {
-  FourBarKinematics kin;
-  FourBarBias bias;
-  double mass = 0;  ///< M(q) [kg m^2]
-  double qdd = 0;   ///< alpha1 [rad/s^2]
-  double alpha2 = 0, alpha3 = 0;
-  double M1 = 0;                               ///< crank torque [N m]
-  std::array<Vec2<double>, kFourBarJoints> F;  ///< reactions, force of i on j [N]
-  std::array<double, kFourBarJoints> N{}, Mf{}, w{};
-  double P_diss = 0;  ///< sum Mf_k w_k [W]
+/// Everything one evaluation computes (forward: the crank's acceleration from M1; inverse: M1
+/// from it). Joint arrays have the friction arrays' kJoints slots; slot 4 stays zero.
+template <typename T>
+struct FourBarEvaluationT {
+  FourBarKinematicsT<T> kin;
+  FourBarBiasT<T> bias;
+  Eigen::Matrix<T, 1, 1> A;        ///< M(q) [kg m^2]
+  Eigen::Matrix<T, 1, 1> thdd;     ///< alpha1 [rad/s^2]
+  T alpha2{}, alpha3{};            ///< coupler and rocker [rad/s^2]
+  T M1{};                          ///< crank torque [N m]
+  std::array<Vec2<T>, kJoints> F;  ///< reactions, force of i on j [N]
+  std::array<T, kJoints> N{}, Mf{}, w{};
+  JointModes slip{};                     ///< Coulomb sign used at each joint, or kStuck
+  std::array<T, kJoints> hold_margin{};  ///< stuck joints: capacity - |holding torque|
+  std::array<T, kJoints> zdot{};         ///< LuGre bristle rates [rad/s]
+  T P_diss{};  ///< sum Mf_k w_k [W]
+  T P_in{};    ///< M1 w1 [W]
+  T P_ext{};   ///< M3 w2 + F . v_P [W]
   int iterations = 0;
 };
+using FourBarEvaluation = FourBarEvaluationT<double>;
 
 /// The pose: C from the triangle B, C, D0 on the side `assembly`, th2, th3, sin32. Fails with
 /// kCannotAssemble when |BD0| is outside [|l2 - l3|, l2 + l3], with kNearSingular when
 /// |sin32| < singular_margin.
-inline Status four_bar_close(const FourBarParams& p, double th1, FourBarKinematics* k,
-                             double singular_margin) {
-  const double l2 = p.links[1].length, l3 = p.links[2].length;
+template <typename T>
+Status four_bar_close(const FourBarParamsT<T>& p, const T& th1, FourBarKinematicsT<T>* k,
+                      double singular_margin) {
+  using std::sqrt;
+  const T& l2 = p.links[1].length;
+  const T& l3 = p.links[2].length;
   k->th1 = th1;
   k->e1 = unit(th1);
   k->B = p.links[0].length * k->e1;
-  const Vec2<double> D0(p.ground_length, 0), d = D0 - k->B;
-  const double L2 = d.squaredNorm();
-  if (!(L2 > 0) || L2 > (l2 + l3) * (l2 + l3) || L2 < (l2 - l3) * (l2 - l3)) {
+  const Vec2<T> D0(p.ground_length, T(0)), d = D0 - k->B;
+  const T L2 = d.squaredNorm();
+  const double L2v = value_of(L2), l2v = value_of(l2), l3v = value_of(l3);
+  if (!(L2v > 0) || L2v > (l2v + l3v) * (l2v + l3v) || L2v < (l2v - l3v) * (l2v - l3v)) {
     std::ostringstream msg;
-    msg << "four-bar cannot assemble at theta1=" << th1 << ": |BD0|=" << std::sqrt(L2)
-        << " outside [" << std::abs(l2 - l3) << ", " << l2 + l3 << "]";
+    msg << "four-bar cannot assemble at theta1=" << value_of(th1) << ": |BD0|=" << std::sqrt(L2v)
+        << " outside [" << std::abs(l2v - l3v) << ", " << l2v + l3v << "]";
     return Status::Error(StatusCode::kCannotAssemble, msg.str());
   }
-  const double L = std::sqrt(L2), a = (l2 * l2 + L2 - l3 * l3) / (2 * L);
-  const Vec2<double> u = d / L;
-  const double h = double(p.assembly) * std::sqrt(std::max(l2 * l2 - a * a, 0.0));
+  const T L = sqrt(L2), a = (l2 * l2 + L2 - l3 * l3) / (T(2) * L);
+  const Vec2<T> u = d / L;
+  const T h2 = l2 * l2 - a * a;
+  const T h = double(p.assembly) * (value_of(h2) > 0.0 ? T(sqrt(h2)) : T(0));
   k->C = k->B + a * u + h * perp(u);
   k->e2 = (k->C - k->B) / l2;
   k->e3 = (k->C - D0) / l3;
-  k->th2 = std::atan2(k->e2.y(), k->e2.x());
-  k->th3 = std::atan2(k->e3.y(), k->e3.x());
+  using std::atan2;
+  k->th2 = atan2(k->e2.y(), k->e2.x());
+  k->th3 = atan2(k->e3.y(), k->e3.x());
   k->sin32 = cross(k->e2, k->e3);
-  if (std::abs(k->sin32) < singular_margin) {
+  if (std::abs(value_of(k->sin32)) < singular_margin) {
     std::ostringstream msg;
-    msg << "near-singular four-bar pose at theta1=" << th1
-        << ": |sin(theta3 - theta2)|=" << std::abs(k->sin32) << " < margin " << singular_margin;
+    msg << "near-singular four-bar pose at theta1=" << value_of(th1)
+        << ": |sin(theta3 - theta2)|=" << std::abs(value_of(k->sin32)) << " < margin "
+        << singular_margin;
     return Status::Error(StatusCode::kNearSingular, msg.str());
   }
   return Status::Ok();
@@ -116,21 +159,24 @@ inline Status four_bar_close(const FourBarParams& p, double th1, FourBarKinemati
 
 /// Position closure, the load point, the centres of mass and the G coefficients. From
 /// vB + l2 w2 e2' = l3 w3 e3': l2 s w2 = -vB.e3, l3 s w3 = -vB.e2 (s = sin32).
-inline Status four_bar_kinematics(const FourBarParams& p, double th1, FourBarKinematics* k,
-                                  double singular_margin = 0.0) {
+template <typename T>
+Status four_bar_kinematics(const FourBarParamsT<T>& p, const T& th1, FourBarKinematicsT<T>* k,
+                           double singular_margin = 0.0) {
   const Status st = four_bar_close(p, th1, k, singular_margin);
   if (!st.ok()) return st;
-  const std::array<const Vec2<double>*, kFourBarLinks> e = {&k->e1, &k->e2, &k->e3};
+  using std::cos;
+  using std::sin;
+  const std::array<const Vec2<T>*, kFourBarLinks> e = {&k->e1, &k->e2, &k->e3};
   for (int i = 0; i < kFourBarLinks; ++i) {
-    const double al = p.links[i].com_angle;
-    k->ec[i] = rotate(*e[i], std::cos(al), std::sin(al));
+    const T& al = p.links[i].com_angle;
+    k->ec[i] = rotate(*e[i], T(cos(al)), T(sin(al)));
   }
-  const Vec2<double> D0(p.ground_length, 0);
+  const Vec2<T> D0(p.ground_length, T(0));
   k->P = k->B + p.point_p * k->e2;
   k->c[0] = p.links[0].com_offset * k->ec[0];
   k->c[1] = k->B + p.links[1].com_offset * k->ec[1];
   k->c[2] = D0 + p.links[2].com_offset * k->ec[2];
-  const Vec2<double> dB = p.links[0].length * perp(k->e1);  // dB/dth1
+  const Vec2<T> dB = p.links[0].length * perp(k->e1);  // dB/dth1
   k->G2 = -dB.dot(k->e3) / (p.links[1].length * k->sin32);
   k->G3 = -dB.dot(k->e2) / (p.links[2].length * k->sin32);
   k->Gc[0] = p.links[0].com_offset * perp(k->ec[0]);
@@ -142,21 +188,25 @@ inline Status four_bar_kinematics(const FourBarParams& p, double th1, FourBarKin
 
 /// Rates and velocity terms at crank rate w1. Acceleration closure: l2 al2 e2' - l3 al3 e3' =
 /// -aB + l2 w2^2 e2 - l3 w3^2 e3 = delta, so l2 s al2 = delta.e3, l3 s al3 = delta.e2.
-inline FourBarBias four_bar_bias(const FourBarParams& p, const FourBarKinematics& k, double w1) {
-  const double l1 = p.links[0].length, l2 = p.links[1].length, l3 = p.links[2].length;
-  FourBarBias b;
+template <typename T>
+FourBarBiasT<T> four_bar_bias(const FourBarParamsT<T>& p, const FourBarKinematicsT<T>& k,
+                              const T& w1) {
+  const T& l1 = p.links[0].length;
+  const T& l2 = p.links[1].length;
+  const T& l3 = p.links[2].length;
+  FourBarBiasT<T> b;
   b.w1 = w1;
   b.w2 = k.G2 * w1;
   b.w3 = k.G3 * w1;
-  const Vec2<double> aB = -l1 * w1 * w1 * k.e1;  // at alpha1 = 0
-  const Vec2<double> delta = -aB + l2 * b.w2 * b.w2 * k.e2 - l3 * b.w3 * b.w3 * k.e3;
+  const Vec2<T> aB = -l1 * w1 * w1 * k.e1;  // at alpha1 = 0
+  const Vec2<T> delta = -aB + l2 * b.w2 * b.w2 * k.e2 - l3 * b.w3 * b.w3 * k.e3;
   b.h2 = delta.dot(k.e3) / (l2 * k.sin32);
   b.h3 = delta.dot(k.e2) / (l3 * k.sin32);
   // X = base + r e(th_j + alpha): bias_X = bias_base + r (h_j e'(..) - w_j^2 e(..))
-  const auto arm = [](double r, const Vec2<double>& ec, double h, double w) -> Vec2<double> {
+  const auto arm = [](const T& r, const Vec2<T>& ec, const T& h, const T& w) -> Vec2<T> {
     return r * (h * perp(ec) - w * w * ec);
   };
-  b.hc[0] = arm(p.links[0].com_offset, k.ec[0], 0.0, w1);
+  b.hc[0] = arm(p.links[0].com_offset, k.ec[0], T(0), w1);
   b.hc[1] = aB + arm(p.links[1].com_offset, k.ec[1], b.h2, b.w2);
   b.hc[2] = arm(p.links[2].com_offset, k.ec[2], b.h3, b.w3);
   b.hP = aB + arm(p.point_p, k.e2, b.h2, b.w2);
@@ -164,25 +214,29 @@ inline FourBarBias four_bar_bias(const FourBarParams& p, const FourBarKinematics
 }
 
 /// Row of J_w (w = J_w w1) of each joint: O 1, B G2 - 1, C G3 - G2, D0 G3.
-inline std::array<double, kFourBarJoints> four_bar_joint_rows(const FourBarKinematics& k) {
-  return {1.0, k.G2 - 1.0, k.G3 - k.G2, k.G3};
+template <typename T>
+std::array<T, kFourBarJoints> four_bar_joint_rows(const FourBarKinematicsT<T>& k) {
+  return {T(1), k.G2 - T(1), k.G3 - k.G2, k.G3};
 }
 
 /// The force vector at P: F e(th2 + F_angle).
-inline Vec2<double> four_bar_force(const FourBarKinematics& k, const FourBarLoads& L) {
-  return L.F * rotate(k.e2, std::cos(L.F_angle), std::sin(L.F_angle));
+template <typename T>
+Vec2<T> four_bar_force(const FourBarKinematicsT<T>& k, const FourBarLoadsT<T>& L) {
+  using std::cos;
+  using std::sin;
+  return L.F * rotate(k.e2, T(cos(L.F_angle)), T(sin(L.F_angle)));
 }
 
 /// M(q) = J1 + J2 G2^2 + J3 G3^2 + sum m_i |G_ci|^2, and the friction-free generalized force
 /// Q0 = M1 + M3 G2 + G_P . F - g sum m_i G_ci,y - bias (bias = sum J_i G_i h_i + m_i G_ci . h_ci).
-inline void four_bar_mass_and_force(const FourBarParams& p, const FourBarKinematics& k,
-                                    const FourBarBias& b, const FourBarLoads& L, double* M,
-                                    double* Q0) {
-  const std::array<double, kFourBarLinks> G = {1.0, k.G2, k.G3}, h = {0.0, b.h2, b.h3};
-  *M = 0;
+template <typename T>
+void four_bar_mass_and_force(const FourBarParamsT<T>& p, const FourBarKinematicsT<T>& k,
+                             const FourBarBiasT<T>& b, const FourBarLoadsT<T>& L, T* M, T* Q0) {
+  const std::array<T, kFourBarLinks> G = {T(1), k.G2, k.G3}, h = {T(0), b.h2, b.h3};
+  *M = T(0);
   *Q0 = L.M1 + L.M3 * k.G2 + k.GP.dot(four_bar_force(k, L));
   for (int i = 0; i < kFourBarLinks; ++i) {
-    const Link<double>& l = p.links[i];
+    const Link<T>& l = p.links[i];
     *M += l.inertia * G[i] * G[i] + l.mass * k.Gc[i].squaredNorm();
     *Q0 -=
         l.inertia * G[i] * h[i] + l.mass * k.Gc[i].dot(b.hc[i]) + p.gravity * l.mass * k.Gc[i].y();
@@ -191,156 +245,162 @@ inline void four_bar_mass_and_force(const FourBarParams& p, const FourBarKinemat
 
 /// Newton-Euler reactions at crank acceleration al1 and friction torques Mf: F_C from the moments
 /// of the rocker about D0 and of the coupler about B, then F_B, F_O, F_D0 by force balances.
-inline void four_bar_reactions(const FourBarParams& p, const FourBarEvaluation& ev, double al1,
-                               const FourBarLoads& L, const std::array<double, kFourBarJoints>& Mf,
-                               std::array<Vec2<double>, kFourBarJoints>* F) {
-  const FourBarKinematics& k = ev.kin;
-  const Vec2<double> g(0, -p.gravity), D0(p.ground_length, 0), Fv = four_bar_force(k, L);
-  std::array<Vec2<double>, kFourBarLinks> ma;  // m_i (a_ci - g)
+template <typename T>
+void four_bar_reactions(const FourBarParamsT<T>& p, const FourBarKinematicsT<T>& k,
+                        const FourBarBiasT<T>& b, const T& al1, const FourBarLoadsT<T>& L,
+                        const std::array<T, kJoints>& Mf, std::array<Vec2<T>, kJoints>* F) {
+  const Vec2<T> g(T(0), -p.gravity), D0(p.ground_length, T(0)), Fv = four_bar_force(k, L);
+  std::array<Vec2<T>, kFourBarLinks> ma;  // m_i (a_ci - g)
   for (int i = 0; i < kFourBarLinks; ++i) {
-    ma[i] = p.links[i].mass * (Vec2<double>(k.Gc[i] * al1 + ev.bias.hc[i]) - g);
+    ma[i] = p.links[i].mass * (Vec2<T>(k.Gc[i] * al1 + b.hc[i]) - g);
   }
-  const double al2 = k.G2 * al1 + ev.bias.h2, al3 = k.G3 * al1 + ev.bias.h3;
+  const T al2 = k.G2 * al1 + b.h2, al3 = k.G3 * al1 + b.h3;
   // rocker about D0: (C - D0) x F_C = J3 al3 + (c3 - D0) x m3 (a3 - g) + Mf_C + Mf_D0
-  const Vec2<double> u = k.C - D0, v = k.C - k.B;
-  const double S3 =
-      p.links[2].inertia * al3 + cross(Vec2<double>(k.c[2] - D0), ma[2]) + Mf[2] + Mf[3];
+  const Vec2<T> u = k.C - D0, v = k.C - k.B;
+  const T S3 = p.links[2].inertia * al3 + cross(Vec2<T>(k.c[2] - D0), ma[2]) + Mf[2] + Mf[3];
   // coupler about B: (C - B) x F_C = -J2 al2 - (c2 - B) x m2 (a2 - g) + (P - B) x F + M3 - Mf_B +
   // Mf_C
-  const double S2 = -p.links[1].inertia * al2 - cross(Vec2<double>(k.c[1] - k.B), ma[1]) +
-                    cross(Vec2<double>(k.P - k.B), Fv) + L.M3 - Mf[1] + Mf[2];
+  const T S2 = -p.links[1].inertia * al2 - cross(Vec2<T>(k.c[1] - k.B), ma[1]) +
+               cross(Vec2<T>(k.P - k.B), Fv) + L.M3 - Mf[1] + Mf[2];
   (*F)[2] = (S3 * v - S2 * u) / cross(u, v);
   (*F)[1] = ma[1] + (*F)[2] - Fv;  // coupler: F_B - F_C + F = m2 (a2 - g)
   (*F)[0] = ma[0] + (*F)[1];       // crank: F_O - F_B = m1 (a1 - g)
   (*F)[3] = ma[2] - (*F)[2];       // rocker: F_C + F_D0 = m3 (a3 - g)
+  (*F)[4] = Vec2<T>::Zero();
 }
 
-namespace detail {
+/// The four-bar as a mechanism (mechanism.h): q = (th1), the crank's angle; joints O, B, C, D0 in
+/// slots 0..3; one drive, M1 at O.
+struct FourBar {
+  static constexpr int kDof = 1;
+  static constexpr int kJoints = kFourBarJoints;
+  static constexpr int kLinks = kFourBarLinks;
+  static constexpr bool kClosedFormResponse = false;  ///< the loop probes the reactions
+  template <typename T>
+  using Params = FourBarParamsT<T>;
+  template <typename T>
+  using Loads = FourBarLoadsT<T>;
+  template <typename T>
+  using Kinematics = FourBarKinematicsT<T>;
+  template <typename T>
+  using Bias = FourBarBiasT<T>;
+  template <typename T>
+  using Evaluation = FourBarEvaluationT<T>;
+  template <typename T>
+  using Q = Eigen::Matrix<T, 1, 1>;
+  template <typename T>
+  using Slots = std::array<T, fivebar::kJoints>;
 
-/// The four-bar's friction arms in the friction loop's five slots (slot 4 inactive: phi = 0).
-/// The Coulomb sign is sign(w), or at w = 0 that of wdot (null: none).
-inline std::array<double, kJoints> four_bar_arms(const FourBarParams& p,
-                                                 const std::array<double, kFourBarJoints>& w,
-                                                 const std::array<double, kFourBarJoints>* wdot) {
-  std::array<double, kJoints> phi{};
-  if (!p.friction.active()) return phi;
-  for (int j = 0; j < kFourBarJoints; ++j) {
-    int slip = sign_of(w[j]);
-    if (slip == 0 && wdot) slip = sign_of((*wdot)[j]);
-    phi[j] = p.friction.pin_radius[j] * friction_law(p.friction, j, w[j], slip);
+  template <typename T>
+  static Status close(const Params<T>& p, const Q<T>& q, Kinematics<T>* k,
+                      const EvalOptions& opt) {
+    return four_bar_kinematics(p, q[0], k, opt.singular_margin);
   }
-  return phi;
-}
-
-/// Runs friction_loop (friction_loop.h) on the four joints through its five slots, with
-/// `solve(Mf, F)` the four-bar's reactions; fills ev->N, Mf, F.
-template <typename Solve>
-Status four_bar_friction_loop(const std::array<double, kJoints>& phi, const EvalOptions& opt,
-                              Solve&& solve, FourBarEvaluation* ev) {
-  auto padded = [&](const std::array<double, kJoints>& Mf, std::array<Vec2<double>, kJoints>* F) {
-    std::array<double, kFourBarJoints> m;
-    std::array<Vec2<double>, kFourBarJoints> f;
-    for (int j = 0; j < kFourBarJoints; ++j) m[j] = Mf[j];
-    solve(m, &f);
-    for (int j = 0; j < kFourBarJoints; ++j) (*F)[j] = f[j];
-    (*F)[kFourBarJoints] = Vec2<double>::Zero();
-  };
-  std::array<double, kJoints> N, Mf;
-  std::array<Vec2<double>, kJoints> F;
-  const Status st = friction_loop(phi, opt, padded, &N, &Mf, &F, &ev->iterations);
-  if (!st.ok()) return st;
-  for (int j = 0; j < kFourBarJoints; ++j) ev->Mf[j] = Mf[j];
-  return Status::Ok();
-}
-
-/// The evaluation's kinematics and velocity terms at (th1, w1).
-inline Status four_bar_state(const FourBarParams& p, double th1, double w1, const EvalOptions& opt,
-                             FourBarEvaluation* ev) {
-  const Status st = four_bar_kinematics(p, th1, &ev->kin, opt.singular_margin);
-  if (!st.ok()) return st;
-  ev->bias = four_bar_bias(p, ev->kin, w1);
-  const std::array<double, kFourBarJoints> row = four_bar_joint_rows(ev->kin);
-  for (int j = 0; j < kFourBarJoints; ++j) ev->w[j] = row[j] * w1;
-  ev->Mf.fill(0.0);
-  ev->iterations = 0;
-  return Status::Ok();
-}
-
-/// The reactions' norms, the couplers' accelerations and the dissipated power of a solved ev.
-inline void four_bar_finish(const FourBarParams& p, const FourBarLoads& L, FourBarEvaluation* ev) {
-  four_bar_reactions(p, *ev, ev->qdd, L, ev->Mf, &ev->F);
-  ev->P_diss = 0;
-  for (int j = 0; j < kFourBarJoints; ++j) {
-    ev->N[j] = ev->F[j].norm();
-    ev->P_diss += ev->Mf[j] * ev->w[j];
+  template <typename T>
+  static void bias(const Params<T>& p, const Kinematics<T>& k, const Q<T>& v, Bias<T>* b) {
+    *b = four_bar_bias(p, k, v[0]);
   }
-  ev->alpha2 = ev->kin.G2 * ev->qdd + ev->bias.h2;
-  ev->alpha3 = ev->kin.G3 * ev->qdd + ev->bias.h3;
-}
-
-}  // namespace detail
+  template <typename T>
+  static Vec2<T> applied(const Kinematics<T>& k, const Loads<T>& L) {
+    return four_bar_force(k, L);
+  }
+  template <typename T>
+  static void mass_and_force(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& b,
+                             const Loads<T>& L, const Vec2<T>&, Eigen::Matrix<T, 1, 1>* A,
+                             Q<T>* rhs0) {
+    four_bar_mass_and_force(p, k, b, L, &(*A)(0, 0), &(*rhs0)[0]);
+  }
+  template <typename T>
+  static Slots<T> joint_rates(const Kinematics<T>& k, const Bias<T>&, const Q<T>& v) {
+    const std::array<T, kFourBarJoints> row = four_bar_joint_rows(k);
+    Slots<T> w{};
+    for (int j = 0; j < kFourBarJoints; ++j) w[j] = row[j] * v[0];
+    return w;
+  }
+  template <typename T>
+  static Slots<T> joint_accelerations(const Kinematics<T>& k, const Bias<T>& b, const Q<T>& qdd) {
+    const T& al1 = qdd[0];
+    const T al2 = k.G2 * al1 + b.h2, al3 = k.G3 * al1 + b.h3;
+    return {al1, al2 - al1, al3 - al2, al3, T(0)};
+  }
+  template <typename T>
+  static Eigen::Matrix<T, 1, 1> joint_row(const Kinematics<T>& k, int j) {
+    Eigen::Matrix<T, 1, 1> r;
+    r(0, 0) = j < kFourBarJoints ? four_bar_joint_rows(k)[j] : T(0);
+    return r;
+  }
+  template <typename T>
+  static Q<T> friction_transpose(const Kinematics<T>& k, const Slots<T>& Mf) {
+    const std::array<T, kFourBarJoints> row = four_bar_joint_rows(k);
+    Q<T> q(T(0));
+    for (int j = 0; j < kFourBarJoints; ++j) q[0] += row[j] * Mf[j];
+    return q;
+  }
+  template <typename T>
+  static void link_accelerations(const Kinematics<T>& k, const Bias<T>& b, const Q<T>& qdd,
+                                 Evaluation<T>* ev) {
+    ev->alpha2 = k.G2 * qdd[0] + b.h2;
+    ev->alpha3 = k.G3 * qdd[0] + b.h3;
+  }
+  template <typename T>
+  static void reactions(const Params<T>& p, const Kinematics<T>& k, const Bias<T>& b,
+                        const Loads<T>& L, const Vec2<T>&, const Q<T>& qdd, const Slots<T>& Mf,
+                        std::array<Vec2<T>, fivebar::kJoints>* F, Evaluation<T>* ev) {
+    link_accelerations(k, b, qdd, ev);
+    four_bar_reactions(p, k, b, qdd[0], L, Mf, F);
+  }
+  template <typename T>
+  static void set_drives(const Loads<T>& L, Evaluation<T>* ev) {
+    ev->M1 = L.M1;
+  }
+  /// The crank about O: I_O al1 = M1 - Mf_O + Mf_B - B x F_B + c1 x m1 g.
+  template <typename T>
+  static void drive_torques(const Params<T>& p, const Kinematics<T>& k, const Q<T>& qdd,
+                            Evaluation<T>* ev) {
+    const Link<T>& l1 = p.links[0];
+    const T IO = l1.inertia + l1.mass * l1.com_offset * l1.com_offset;
+    const Vec2<T> mg(T(0), -l1.mass * p.gravity);
+    ev->M1 = IO * qdd[0] + ev->Mf[0] - ev->Mf[1] + cross(k.B, ev->F[1]) - cross(k.c[0], mg);
+  }
+  template <typename T>
+  static T input_power(const Evaluation<T>& ev, const Q<T>& v) {
+    return ev.M1 * v[0];
+  }
+  template <typename T>
+  static T external_power(const Kinematics<T>& k, const Bias<T>& b, const Loads<T>& L,
+                          const Vec2<T>& Fv, const Q<T>& v) {
+    return L.M3 * b.w2 + Fv.dot(k.GP * v[0]);
+  }
+  /// No actuator friction model for the four-bar's drive.
+  template <typename T>
+  static bool actuator_torques(const Params<T>&, const Slots<T>&, const JointModes&, Slots<T>*) {
+    return false;
+  }
+  template <typename T>
+  static T holding_capacity(const Params<T>& p, int j, const T& N) {
+    return holding_bound(p.friction, j) * N;
+  }
+};
 
 /// Forward dynamics: M qdd = Q0 - J_w^T Mf with Mf_k = r_k f_k(w_k) N_k consistent with the
-/// reactions (friction_loop: fixed point, Newton where it stops contracting). Coulomb sign:
-/// sign(w_k), 0 at w_k = 0.
-inline Status four_bar_forward(const FourBarParams& p, const FourBarLoads& L, double th1, double w1,
-                               const EvalOptions& opt, FourBarEvaluation* ev) {
-  Status st = detail::four_bar_state(p, th1, w1, opt, ev);
-  if (!st.ok()) return st;
-  double Q0;
-  four_bar_mass_and_force(p, ev->kin, ev->bias, L, &ev->mass, &Q0);
-  const std::array<double, kFourBarJoints> row = four_bar_joint_rows(ev->kin);
-  const auto accel = [&](const std::array<double, kFourBarJoints>& Mf) {
-    double q = Q0;
-    for (int j = 0; j < kFourBarJoints; ++j) q -= row[j] * Mf[j];
-    return q / ev->mass;
-  };
-  const std::array<double, kJoints> phi = detail::four_bar_arms(p, ev->w, nullptr);
-  if (p.friction.active()) {
-    st = detail::four_bar_friction_loop(
-        phi, opt,
-        [&](const std::array<double, kFourBarJoints>& Mf,
-            std::array<Vec2<double>, kFourBarJoints>* F) {
-          four_bar_reactions(p, *ev, accel(Mf), L, Mf, F);
-        },
-        ev);
-    if (!st.ok()) return st;
-  }
-  ev->qdd = accel(ev->Mf);
-  ev->M1 = L.M1;
-  detail::four_bar_finish(p, L, ev);
-  return Status::Ok();
+/// reactions (mechanism_dynamics.h). Coulomb sign: sign(w_k), 0 at w_k = 0, unless `slip` gives
+/// the joints' modes (kStuck: held by a constraint torque).
+template <typename T>
+Status four_bar_forward(const FourBarParamsT<T>& p, const FourBarLoadsT<T>& L, const T& th1,
+                        const T& w1, const EvalOptions& opt, FourBarEvaluationT<T>* ev,
+                        const JointModes* slip = nullptr) {
+  return mech::forward<FourBar, T>(p, L, FourBar::Q<T>(th1), FourBar::Q<T>(w1), slip, opt, ev);
 }
 
 /// Inverse dynamics: the crank torque M1 (L.M1 is ignored) and the reactions for the motion
-/// (th1, w1, al1). Coulomb sign: sign(w_k), at w_k = 0 that of the relative acceleration.
-inline Status four_bar_inverse(const FourBarParams& p, const FourBarLoads& L, double th1, double w1,
-                               double al1, const EvalOptions& opt, FourBarEvaluation* ev) {
-  Status st = detail::four_bar_state(p, th1, w1, opt, ev);
-  if (!st.ok()) return st;
-  double Q0;
-  four_bar_mass_and_force(p, ev->kin, ev->bias, L, &ev->mass, &Q0);
-  ev->qdd = al1;
-  const double al2 = ev->kin.G2 * al1 + ev->bias.h2, al3 = ev->kin.G3 * al1 + ev->bias.h3;
-  const std::array<double, kFourBarJoints> wdot = {al1, al2 - al1, al3 - al2, al3};
-  const std::array<double, kJoints> phi = detail::four_bar_arms(p, ev->w, &wdot);
-  if (p.friction.active()) {
-    st = detail::four_bar_friction_loop(
-        phi, opt,
-        [&](const std::array<double, kFourBarJoints>& Mf,
-            std::array<Vec2<double>, kFourBarJoints>* F) {
-          four_bar_reactions(p, *ev, al1, L, Mf, F);
-        },
-        ev);
-    if (!st.ok()) return st;
-  }
-  detail::four_bar_finish(p, L, ev);
-  // the crank about O: I_O al1 = M1 - Mf_O + Mf_B - B x F_B + c1 x m1 g
-  const Link<double>& l1 = p.links[0];
-  const double IO = l1.inertia + l1.mass * l1.com_offset * l1.com_offset;
-  const Vec2<double> mg(0, -l1.mass * p.gravity);
-  ev->M1 = IO * al1 + ev->Mf[0] - ev->Mf[1] + cross(ev->kin.B, ev->F[1]) - cross(ev->kin.c[0], mg);
-  return Status::Ok();
+/// (th1, w1, al1). Coulomb sign: sign(w_k), at w_k = 0 that of the relative acceleration; the
+/// rest rule of EvalOptions as in the five-bar's inverse_dynamics.
+template <typename T>
+Status four_bar_inverse(const FourBarParamsT<T>& p, const FourBarLoadsT<T>& L, const T& th1,
+                        const T& w1, const T& al1, const EvalOptions& opt,
+                        FourBarEvaluationT<T>* ev, const JointModes* slip = nullptr) {
+  return mech::inverse<FourBar, T>(p, L, FourBar::Q<T>(th1), FourBar::Q<T>(w1),
+                                   FourBar::Q<T>(al1), slip, opt, ev);
 }
 
 /// Kinetic energy M(q) w1^2 / 2 [J] and potential energy g sum m_i y_ci [J].

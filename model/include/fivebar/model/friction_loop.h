@@ -344,31 +344,6 @@ struct LoopSolution {
   int iterations = 0;
 };
 
-/// Runs a dynamics pass with the friction loop's implicit derivative: for Jets with friction on
-/// (and EvalOptions::implicit_loop_derivative), a double shadow pass first decides the joint
-/// modes and solves the loop, then the Jet pass differentiates that solution; otherwise one pass.
-/// `pass(params, loads, value, slip, ev, bristle, loop)` runs the pass on the state mapped by
-/// `value` (value_of for the shadow, the identity for the pass itself).
-template <typename T, typename Pass>
-Status with_loop_shadow(const Params<T>& p, const Loads<T>& L, const JointModes* slip,
-                        const EvalOptions& opt, Evaluation<T>* ev,
-                        const std::array<T, kJoints>* bristle, const Pass& pass) {
-  const auto same = [](const T& x) -> const T& { return x; };
-  if constexpr (!std::is_same_v<T, double>) {
-    if (p.friction.active() && opt.implicit_loop_derivative) {
-      LoopSolution loop;
-      Evaluation<double> vd;
-      std::array<double, kJoints> zd;
-      const auto values = [](const T& x) { return value_of(x); };
-      const Status st = pass(p.template cast<double>(), L.template cast<double>(), values, slip,
-                             &vd, array_values(bristle, &zd), &loop);
-      if (!st.ok()) return st;
-      return pass(p, L, same, &vd.slip, ev, bristle, &loop);
-    }
-  }
-  return pass(p, L, same, slip, ev, bristle, static_cast<LoopSolution*>(nullptr));
-}
-
 /// J^-1 r for a double matrix J and a right-hand side r of Jets: Gaussian elimination with
 /// partial pivoting, its row operations applied to r (no Jet-valued matrix, no general LU).
 template <typename T>
