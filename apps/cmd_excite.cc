@@ -575,12 +575,12 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o,
   }
   const double worst = worst_relative_std(r);
   if (worst > kAbsurdRelativeStd) {
-    *why = "predicts a relative std of " + format_significant(worst, 3) + " (more than " +
+    *why = "predicts a relative std of " + format_significant(worst, 4) + " (more than " +
            format_significant(kAbsurdRelativeStd) + "): a log along it would determine nothing";
     return "std_too_large";
   }
   if (base && worst > kWorseThanBaseline * worst_relative_std(*base)) {
-    *why = "predicts a worst relative std of " + format_significant(worst, 3) + ", more than " +
+    *why = "predicts a worst relative std of " + format_significant(worst, 4) + ", more than " +
            format_significant(kWorseThanBaseline) + " times the multi-sine baseline's " +
            format_significant(worst_relative_std(*base), 3);
     return "worse_than_baseline";

@@ -329,7 +329,8 @@ RunFunction setup(CLI::App* app) {
                   "value), for a log whose torque sign is opposite the scene's convention")
       ->expected(0, 1)
       ->default_str("both")
-      ->check(CLI::IsMember({"1", "2", "both"}));
+      ->check(CLI::IsMember({"1", "2", "both"}))
+      ->option_text("[1|2|both]");
   return [args, sg_window] {
     args->settings.sg_window_given = sg_window->count() > 0;
     return run(*args);

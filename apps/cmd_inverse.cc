@@ -325,15 +325,14 @@ void print_rest(const RestRule& rule, const RestSummary& s) {
 /// A step of a crank angle between two rows beyond this is a jump, not motion [rad]
 constexpr double kJumpAngle = 1.0;
 
-/// Whether `motion`'s angles look like degrees: told by the rates when the file gives them
-/// (identification::rates_look_like_degrees, as for logs), else by the start
-/// (start_looks_like_degrees: beyond two turns, within 360)
+/// Whether `motion`'s angles look like degrees: by the start (start_looks_like_degrees: beyond
+/// two turns, within 360; a motion in radians may start a turn out), and when the file gives
+/// rates also by them (identification::rates_look_like_degrees, as for logs)
 std::string motion_in_degrees(const Motion& motion) {
   const std::vector<sim::Row>& r = motion.rows;
   if (r.empty()) return "";
-  if (motion.omega_source != "file") {
-    return start_looks_like_degrees(r[0].theta[0], r[0].theta[1]);
-  }
+  const std::string start = start_looks_like_degrees(r[0].theta[0], r[0].theta[1]);
+  if (!start.empty() || motion.omega_source != "file") return start;
   std::vector<double> t(r.size()), theta(r.size()), omega(r.size());
   for (int k = 0; k < 2; ++k) {
     for (size_t i = 0; i < r.size(); ++i) {

@@ -2781,6 +2781,11 @@ void follow_static_coulomb(const ParameterLayout& layout, const Params<double>& 
 /// channel) is this many times smaller (paper_angles.csv negated: 6.1 floors, negated back 0.99)
 constexpr double kSignGain = 4.0;
 
+/// identify; `full` false: only the fit and its residual over the noise floor (the sign check's
+/// refits need no checks, intervals, predictions, sign check or delay)
+IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunction& loads,
+                            const TorqueLog& log, const IdentifyOptions& opt, bool full);
+
 /// The log with the torques of `channels` negated (bit 0: tau1, bit 1: tau2)
 TorqueLog negated_torques(const TorqueLog& log, unsigned channels) {
   TorqueLog negated = log;
@@ -2817,7 +2822,7 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
   for (unsigned channels : {3u, 1u, 2u}) {
     IdentifyResult neg;
     try {
-      neg = identify(scene, loads, negated_torques(log, channels), again);
+      neg = identify_fit(scene, loads, negated_torques(log, channels), again, false);
     } catch (const LogError&) {
       continue;  // the negated log cannot be fitted: no evidence either way
     }
@@ -2854,6 +2859,11 @@ double output_error_window(double window_s, double duration) {
 
 IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction& loads,
                         const TorqueLog& log, const IdentifyOptions& opt) {
+  return identify_fit(scene_in, loads, log, opt, true);
+}
+
+IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunction& loads,
+                            const TorqueLog& log, const IdentifyOptions& opt, bool full) {
   quiet_solver_logging();
   const auto start = Clock::now();
   IdentifyResult out;
@@ -2891,6 +2901,10 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   Analysis an;
   if (!solve_stage(&f, &problem, &out, &summary, &an)) return out;
   analyse(f, x0_public, summary, &an, &out);
+  if (!full) {
+    out.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
+    return out;
+  }
   if (opt.method == Method::kInverseDynamics) {
     bound_and_misfit_warning(f, an, &out);
     model_check(f, &out);
