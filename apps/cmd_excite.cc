@@ -541,9 +541,27 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   return d;
 }
 
-// the design's own checks on the log's grid: status "ok" or what it misses
+/// A design whose worst predicted relative std exceeds this is no design: a log along it
+/// determines nothing (the light mechanism's Fourier design once predicted 179 with exit 0)
+constexpr double kAbsurdRelativeStd = 10;
+/// ... nor one whose worst predicted relative std is this many times the baseline's (that
+/// design's 179 against the multi-sine's 0.093)
+constexpr double kWorseThanBaseline = 10;
+
+/// The largest relative std of a report (NaN entries, of zero nominal values, left out)
+double worst_relative_std(const id::ExcitationReport& r) {
+  double worst = 0;
+  for (double v : r.relative_std) {
+    if (std::isfinite(v)) worst = std::max(worst, v);
+  }
+  return worst;
+}
+
+// the design's own checks on the log's grid: status "ok" or what it misses; `base`: the
+// multi-sine baseline's report, when it ran
 std::string design_status(const Design& d, const id::ExcitationOptions& o,
-                          const id::DesignParameters& dp, std::string* why) {
+                          const id::DesignParameters& dp, const id::ExcitationReport* base,
+                          std::string* why) {
   const id::ExcitationReport& r = d.report;
   // a predicted std of 0, NaN or none is no prediction: the information matrix is singular or
   // was not formed (a light mechanism once reported "worst predicted relative std 0")
@@ -554,6 +572,18 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o,
              "): the information matrix of the motion is singular or not finite";
       return "std_not_determined";
     }
+  }
+  const double worst = worst_relative_std(r);
+  if (worst > kAbsurdRelativeStd) {
+    *why = "predicts a relative std of " + format_significant(worst, 4) + " (more than " +
+           format_significant(kAbsurdRelativeStd) + "): a log along it would determine nothing";
+    return "std_too_large";
+  }
+  if (base && worst > kWorseThanBaseline * worst_relative_std(*base)) {
+    *why = "predicts a worst relative std of " + format_significant(worst, 4) + ", more than " +
+           format_significant(kWorseThanBaseline) + " times the multi-sine baseline's " +
+           format_significant(worst_relative_std(*base), 3);
+    return "worse_than_baseline";
   }
   static const char* const kJointNames[] = {"O", "B", "C", "D", "D0"};
   for (int k = 0; k < kJoints; ++k) {
@@ -667,8 +697,8 @@ int run(const Args& a) {
                        ? design_torque(scene, loads, o, a)
                        : design(scene, loads, o, a, a.start == "multisine" ? ms.get() : nullptr);
   std::string why;
-  const std::string status = design_status(d, o, dp, &why);
   const id::ExcitationReport* base = a.no_baseline || !ms->failure.empty() ? nullptr : &ms->report;
+  const std::string status = design_status(d, o, dp, base, &why);
   if (base && base->peak_torque > o.torque_limit * (1 + 1e-9)) {
     warn("the multi-sine baseline peaks at " + format_double(base->peak_torque) +
          " N m, above --torque-limit " + format_double(o.torque_limit) +

@@ -41,7 +41,8 @@ struct Args {
   std::string log;
   IdentifySettings settings;  // everything that reaches the identification itself
   bool no_plots = false, no_validation = false;
-  bool flip_torque_sign = false;  ///< --flip-torque-sign: the log's tau1, tau2 negated
+  /// --flip-torque-sign: the logged torques to negate, "" (none), "1", "2" or "both"
+  std::string flip_torque_sign;
 };
 
 const std::vector<std::string> kOutputs = {
@@ -218,8 +219,10 @@ int run(const Args& a) {
 
   // the log, then the fit; a log that does not fit the scene is bad input (exit 2)
   id::TorqueLog log = read_log(a.log);
-  if (a.flip_torque_sign) {
+  if (a.flip_torque_sign == "1" || a.flip_torque_sign == "both") {
     for (double& v : log.tau1) v = -v;
+  }
+  if (a.flip_torque_sign == "2" || a.flip_torque_sign == "both") {
     for (double& v : log.tau2) v = -v;
   }
   const id::IdentifyResult res = identify_scene(scene, loads, log, opt);
@@ -287,7 +290,8 @@ RunFunction setup(CLI::App* app) {
                   "(inverse dynamics), 0.1 rad (output error)");
   app->add_option("--smooth-sign", args->settings.smooth_sign,
                   "w_s [rad/s]: tanh(w/w_s) for sign(w); 0 exact sign; default: the scene's")
-      ->default_str("");  // the defaults in words: their stored values are sentinels
+      ->default_str("")  // the defaults in words: their stored values are sentinels
+      ->check(nonnegative_number());
   app->add_flag("--estimate-rates", args->settings.estimate_rates,
                 "estimate rates from the angles even when the log has them");
   CLI::Option* sg_window =
@@ -320,9 +324,13 @@ RunFunction setup(CLI::App* app) {
   app->add_flag("--no-delay", args->settings.no_delay,
                 "do not estimate (and correct) a delay of the torques behind the angles");
   app->add_flag("--no-validation", args->no_validation, "skip the validation runs");
-  app->add_flag("--flip-torque-sign", args->flip_torque_sign,
-                "negate the logged tau1, tau2 (a log whose torque sign is opposite the scene's "
-                "convention)");
+  app->add_option("--flip-torque-sign", args->flip_torque_sign,
+                  "negate the logged torques: 1 (tau1), 2 (tau2) or both (the default without a "
+                  "value), for a log whose torque sign is opposite the scene's convention")
+      ->expected(0, 1)
+      ->default_str("both")
+      ->check(CLI::IsMember({"1", "2", "both"}))
+      ->option_text("[1|2|both]");
   return [args, sg_window] {
     args->settings.sg_window_given = sg_window->count() > 0;
     return run(*args);

@@ -12,6 +12,7 @@
 #include <string>
 #include <utility>
 
+#include "fivebar/identification/degrees.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/csv.h"
@@ -324,14 +325,36 @@ void print_rest(const RestRule& rule, const RestSummary& s) {
 /// A step of a crank angle between two rows beyond this is a jump, not motion [rad]
 constexpr double kJumpAngle = 1.0;
 
+/// Whether `motion`'s angles look like degrees: by the start (start_looks_like_degrees: beyond
+/// two turns, within 360; a motion in radians may start a turn out), and when the file gives
+/// rates also by them (identification::rates_look_like_degrees, as for logs)
+std::string motion_in_degrees(const Motion& motion) {
+  const std::vector<sim::Row>& r = motion.rows;
+  if (r.empty()) return "";
+  const std::string start = start_looks_like_degrees(r[0].theta[0], r[0].theta[1]);
+  if (!start.empty() || motion.omega_source != "file") return start;
+  std::vector<double> t(r.size()), theta(r.size()), omega(r.size());
+  for (int k = 0; k < 2; ++k) {
+    for (size_t i = 0; i < r.size(); ++i) {
+      t[i] = r[i].t;
+      theta[i] = r[i].theta[k];
+      omega[i] = r[i].omega[k];
+    }
+    const std::string why = identification::rates_look_like_degrees(t, theta, omega);
+    if (!why.empty()) {
+      return "angles look like degrees (theta" + std::to_string(k + 1) + ": " + why + ")";
+    }
+  }
+  return "";
+}
+
 /// What in `motion` itself makes its inverse dynamics meaningless: angles that look like degrees
-/// (start_looks_like_degrees; checked first: degrees also step by more than a radian), or a jump
+/// (motion_in_degrees; checked first: degrees also step by more than a radian), or a jump
 /// between two rows (a gap, a wrap, a glitch: the rates from differences explode). Returns the
 /// column(s) and the reason, or an empty key when neither is found.
 std::pair<std::string, std::string> motion_fault(const Motion& motion) {
   const std::vector<sim::Row>& r = motion.rows;
-  const std::string degrees =
-      r.empty() ? "" : start_looks_like_degrees(r[0].theta[0], r[0].theta[1]);
+  const std::string degrees = motion_in_degrees(motion);
   if (!degrees.empty()) return {"theta1, theta2", degrees};
   for (int k = 0; k < 2; ++k) {
     for (size_t i = 1; i < r.size(); ++i) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fivebar/identification/degrees.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
@@ -16,6 +17,34 @@ namespace id = fivebar::identification;
 
 namespace {
 const char* const kFlags = "command line";
+
+/// The largest Savitzky-Golay half-window --sg-window may ask for [samples]: each sample's
+/// filter is a least-squares solve whose cost grows as the window squared (1 s at 1 kHz, 1000
+/// samples, ran for minutes), and the data-driven choice never goes beyond a few tens
+constexpr double kMaxSgHalfWindow = 200;
+
+/// A half-window given with --sg-window that the log cannot hold, or one beyond
+/// kMaxSgHalfWindow samples, is bad input (a huge value overflowed to the smallest window)
+void check_sg_window(const id::IdentifyOptions& options, const id::TorqueLog& log) {
+  const double dt = id::median_time_step(log);
+  if (options.auto_window || !(dt > 0)) return;
+  const double half = options.sg.half_window_s / dt;
+  const std::string asked = format_shortest(options.sg.half_window_s) + " s is " +
+                            format_significant(half, 3) + " samples of the log's step " +
+                            format_significant(dt, 3) + " s";
+  if (!(2 * std::lround(std::min(half, 1e9)) + 1 <= log.size())) {
+    throw InputError(kFlags, "--sg-window",
+                     asked + ": the window (2 x " + format_significant(half, 3) +
+                         " + 1 samples) must fit in the log's " + std::to_string(log.size()) +
+                         " samples");
+  }
+  if (half > kMaxSgHalfWindow) {
+    throw InputError(kFlags, "--sg-window",
+                     asked + ": more than " + format_significant(kMaxSgHalfWindow) +
+                         " (the filter's cost grows as the window squared; smooth less, or "
+                         "resample the log)");
+  }
+}
 
 /// The scene's friction as the start of a fit of `law`: the coefficients the scene's law
 /// identifies or requires keep their values (a LuGre scene identifies none, and requires its
@@ -77,6 +106,7 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   if (!(a.window >= 0) || !std::isfinite(a.window)) {
     throw InputError(kFlags, "--window", "must be > 0 (0: the default)");
   }
+  // the default's -1 (the scene's) is not for users: the command line rejects negative values
   if (!std::isfinite(a.smooth_sign) || (a.smooth_sign < 0 && a.smooth_sign != -1)) {
     throw InputError(
         kFlags, "--smooth-sign",
@@ -118,13 +148,14 @@ id::TorqueLog read_log(const std::string& path) {
 
 std::string start_looks_like_degrees(double theta1, double theta2) {
   const double first = std::max(std::abs(theta1), std::abs(theta2));
-  if (!(first > 2 * M_PI && first <= 360)) return "";
+  if (!(first > id::kDegreesBeyond && first <= 360)) return "";
   return "angles look like degrees (they start at " + format_significant(theta1, 4) + ", " +
          format_significant(theta2, 4) + "), expected radians";
 }
 
 id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& loads,
                                   const id::TorqueLog& log, const id::IdentifyOptions& options) {
+  check_sg_window(options, log);
   id::IdentifyResult res;
   try {
     res = id::identify(scene.params, loads, log, options);

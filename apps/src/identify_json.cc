@@ -179,7 +179,8 @@ Json identification_json(const IdentifyRun& run, const id::TorqueLog& log,
   // the fit's own verdict (docs/identification.md, "Status"): not ok exits 3
   j.set("status", res.unusable.empty() ? "ok" : "failed");
   if (!res.unusable.empty()) j.set("status_reason", res.unusable);
-  j.set("torque_sign", run.torque_sign_flipped ? "flipped" : "as logged");
+  const std::string& flip = run.torque_sign_flipped;
+  j.set("torque_sign", flip.empty() ? "as logged" : flip == "both" ? "flipped" : "flipped tau" + flip);
   j.set("scene", run.scene);
   j.set("log", run.log);
   j.set("method", id::method_name(res.method));

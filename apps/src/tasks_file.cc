@@ -12,6 +12,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "fivebar/identification/degrees.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 
@@ -50,7 +51,7 @@ trajectory::Pose pose(const YAML::Node& node, const std::string& path, const std
     // crank angles beyond two turns are degrees, not a pose (goal {theta1: 150, theta2: 80}
     // read as radians failed the optimization with a friction-loop message)
     for (const auto& [name, v] : {std::pair{"theta1", p.a}, std::pair{"theta2", p.b}}) {
-      if (std::abs(v) > 4 * M_PI) {
+      if (std::abs(v) > identification::kDegreesBeyond) {
         throw InputError(path, join(key, name),
                          format_double(v) + " rad is beyond two turns: degrees? (crank angles "
                          "are in radians, " + format_double(v) + " degrees = " +

@@ -1626,6 +1626,8 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
   IdentifyOptions again = opt;
   again.delay_refits = opt.delay_refits - 1;
   again.estimate_delay = again.delay_refits > 0;
+  // the sign was checked on the log as logged (a shift does not change it): no refit repeats it
+  again.check_torque_sign = false;
   for (const Glitch& g : first.glitches) again.condition.rejected_before.push_back(g.index);
   // samples whose shifted torque would lie beyond the samples that have torques have none: left
   // out. In a chain of refits those are the log's ends less the end blocks an earlier refit left
@@ -2457,6 +2459,86 @@ std::string unresolved_warning(const CauseSteps& cs, int strongest, const std::s
                        : std::string());
 }
 
+/// Evidence of the torque readings beyond the other causes' parameters this many times kCauseZ
+/// makes the fit unusable even with the residual at its floor (the light mechanism's multi-sine
+/// log with tau1 x 0.9: 69 std, coulomb 0.048 for 0.12, and no warning; clean logs read -2 to 2)
+constexpr double kDecisiveCauseZ = 4 * detail::kCauseZ;
+
+/// Whether the refit fs reads both torque readings' gains (beyond kFreedMove std, from
+/// kSmallestGain on) off with the same sign: a common scale of the logged torques
+bool common_gain(const TorqueColumns& tc, const detail::FreedStep& fs) {
+  double product = 1;
+  for (int c = 0; c < kDof; ++c) {
+    const int k = tc.gain[c];
+    if (k < 0 || !(std::abs(fs.extra_step(k)) > kFreedMove * fs.extra_std(k)) ||
+        std::abs(fs.extra_step(k)) < kSmallestGain) {
+      return false;
+    }
+    product *= fs.extra_step(k);
+  }
+  return product > 0;
+}
+
+/// model_check on the encoders' zeros: the warning when the log evidences them and the friction
+/// would move, unusable beyond kUnusableMove
+void angles_check(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
+  const detail::FreedStep& fo = cs.alone[kCauseAngles];
+  double largest = 0;
+  std::string moved;
+  if (!cs.named(kCauseAngles) ||
+      (moved = friction_clause(f, *out, fo, false, true, &largest)).empty()) {
+    return;
+  }
+  out->warnings.push_back(
+      "with offsets of the logged angles free (one linearized refit) " + drop_clause(fo) +
+      " and " + moved + ". theta1, theta2 read " + pair_clause(fo, 0, 1.0) +
+      " rad more than the scene's angles: an encoder's zero may be off; subtract the offsets "
+      "from the logged angles");
+  unusable_move(largest, "the logged angles' zeros are off", out);
+}
+
+/// model_check on the torque readings, when the log evidences them: the warning when the
+/// friction would move, a gain is off by kUnusableGain, the residual is far above its floor
+/// (kMisfitRatio; evidenced, the readings explain at least half of that excess) or the evidence
+/// is decisive (kDecisiveCauseZ). Each of these but a move within kUnusableMove makes the fit
+/// unusable, naming the readings (a common scale of both when both gains are off alike).
+void torque_check(const Fit& f, const CauseSteps& cs, const TorqueColumns& tc,
+                  IdentifyResult* out) {
+  if (!cs.named(kCauseTorque)) return;
+  const detail::FreedStep& ft = cs.alone[kCauseTorque];
+  double largest = 0;
+  const std::string moved = friction_clause(f, *out, ft, false, true, &largest);
+  // a gain off by kUnusableGain scales the friction with it, whatever the move's std
+  const bool scaled = largest_gain(tc, ft) > kUnusableGain;
+  const double ratio = misfit_ratio(*out), z = cs.report[cs.slot[kCauseTorque]].z_given;
+  const bool far = ratio > kMisfitRatio, decisive = z > kDecisiveCauseZ;
+  if (moved.empty() && !scaled && !far && !decisive) return;
+  out->warnings.push_back(torque_warning(tc, ft,
+                                         !moved.empty() ? moved
+                                         : scaled ? "the friction estimates scale with the gains"
+                                                  : "the friction moves less than " +
+                                                        format_significant(kFreedMove) + " std"));
+  const std::string what =
+      (common_gain(tc, ft) ? "both logged torques' gains are off, a common scale ("
+                           : "the logged torques' zeros or gains are off (") +
+      torque_reading(tc, ft) + ")";
+  if (!out->unusable.empty()) return;
+  if (scaled) {
+    out->unusable = what + ": the friction estimates scale with them (see the warnings)";
+  } else if (!moved.empty()) {
+    unusable_move(largest, what, out);
+  }
+  if (!out->unusable.empty() || !(far || decisive)) return;
+  out->unusable =
+      what + ": " +
+      (far ? "they explain the residual, " + format_significant(ratio, 3) +
+                 " times its noise floor (more than " + format_significant(kMisfitRatio) + ")"
+           : "the log evidences them by " + format_significant(z, 2) +
+                 " std beyond the other causes (more than " +
+                 format_significant(kDecisiveCauseZ) + ")") +
+      "; see the warnings";
+}
+
 /// Wrong masses or inertias, an encoder's zero offset, or a torque sensor's offset or gain
 /// (masses +-5 % give Coulomb +5 %, 10 std; theta1 + 0.005 rad gives Coulomb -8 %, 14 std, and
 /// must not be blamed on the masses, nor must a torque offset):
@@ -2483,34 +2565,19 @@ void model_check(const Fit& f, IdentifyResult* out) {
   }
   const CauseSteps cs = cause_steps(J, r, idx, info, bias, !f.rates_biased);
   out->model_check = cs.report;
-  const detail::FreedStep &fo = cs.alone[kCauseAngles], &fi = cs.alone[kCauseInertia],
-                          &ft = cs.alone[kCauseTorque];
+  const detail::FreedStep& fi = cs.alone[kCauseInertia];
+  // both torques' gains off alike also read as the encoders' zeros (a common scale of the
+  // logged torques on the light mechanism read theta1, theta2 2.4, 1.3 rad off): the gains come
+  // first, so that the verdict names them
+  if (cs.named(kCauseTorque) && common_gain(tc, cs.alone[kCauseTorque])) {
+    torque_check(f, cs, tc, out);
+    angles_check(f, cs, out);
+  } else {
+    angles_check(f, cs, out);
+    torque_check(f, cs, tc, out);
+  }
   std::string moved;
   double largest = 0;  // [std] the cause's largest move of the friction (0: at its bound)
-  if (cs.named(kCauseAngles) &&
-      !(moved = friction_clause(f, *out, fo, false, true, &(largest = 0))).empty()) {
-    out->warnings.push_back(
-        "with offsets of the logged angles free (one linearized refit) " + drop_clause(fo) +
-        " and " + moved + ". theta1, theta2 read " + pair_clause(fo, 0, 1.0) +
-        " rad more than the scene's angles: an encoder's zero may be off; subtract the offsets "
-        "from the logged angles");
-    unusable_move(largest, "the logged angles' zeros are off", out);
-  }
-  if (cs.named(kCauseTorque)) {
-    moved = friction_clause(f, *out, ft, false, true, &(largest = 0));
-    // a gain off by kUnusableGain scales the friction with it, whatever the move's std
-    const bool scaled = largest_gain(tc, ft) > kUnusableGain;
-    if (!moved.empty() || scaled) {
-      out->warnings.push_back(torque_warning(
-          tc, ft, moved.empty() ? "the friction estimates scale with the gains" : moved));
-      const std::string what =
-          "the logged torques' zeros or gains are off (" + torque_reading(tc, ft) + ")";
-      if (out->unusable.empty() && scaled) {
-        out->unusable = what + ": the friction estimates scale with them (see the warnings)";
-      }
-      if (!moved.empty()) unusable_move(largest, what, out);
-    }
-  }
   const bool masses = cs.named(kCauseInertia);
   const int top = strongest_cause(cs);
   if (!cs.any() && top < kCauseCount && cs.z(top) > detail::kCauseZ &&
@@ -2714,8 +2781,28 @@ void follow_static_coulomb(const ParameterLayout& layout, const Params<double>& 
 /// channel) is this many times smaller (paper_angles.csv negated: 6.1 floors, negated back 0.99)
 constexpr double kSignGain = 4.0;
 
+/// identify; `full` false: only the fit and its residual over the noise floor (the sign check's
+/// refits need no checks, intervals, predictions, sign check or delay)
+IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunction& loads,
+                            const TorqueLog& log, const IdentifyOptions& opt, bool full);
+
+/// The log with the torques of `channels` negated (bit 0: tau1, bit 1: tau2)
+TorqueLog negated_torques(const TorqueLog& log, unsigned channels) {
+  TorqueLog negated = log;
+  if (channels & 1u) {
+    for (double& v : negated.tau1) v = -v;
+  }
+  if (channels & 2u) {
+    for (double& v : negated.tau2) v = -v;
+  }
+  return negated;
+}
+
 /// IdentifyOptions::check_torque_sign: true (and out->unusable says why) when the log's torques
-/// fit far better negated (kSignGain); the negated fit's residual goes to out either way.
+/// fit far better (kSignGain) with both negated, or else with one of them negated (a channel
+/// wired the other way read as "coulomb at its bound"); the fit with both negated puts its
+/// residual in out. The refits keep the fit's Savitzky-Golay window (no search of their own) and
+/// estimate no delay.
 bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& loads,
                          const TorqueLog& log, const IdentifyOptions& opt, IdentifyResult* out) {
   const double ours = misfit_ratio(*out);
@@ -2723,29 +2810,45 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
       !(ours > kMisfitRatio)) {
     return false;
   }
-  TorqueLog negated = log;
-  for (double& v : negated.tau1) v = -v;
-  for (double& v : negated.tau2) v = -v;
   IdentifyOptions again = opt;
   again.check_torque_sign = false;
   again.estimate_delay = false;
-  IdentifyResult neg;
-  try {
-    neg = identify(scene, loads, negated, again);
-  } catch (const LogError&) {
-    return false;  // the negated log cannot be fitted: no evidence either way
+  if (out->sg_half_window > 0 && log.size() > 1) {
+    again.auto_window = false;
+    again.sg.half_window_s = out->sg_half_window * log.duration() / (log.size() - 1);
   }
-  if (!neg.status.ok()) return false;
-  for (int j = 0; j < kActuators; ++j) {
-    out->negated_rms_torque_residual[j] = neg.rms_torque_residual[j];
+  double best = ours;
+  unsigned which = 0;
+  for (unsigned channels : {3u, 1u, 2u}) {
+    IdentifyResult neg;
+    try {
+      neg = identify_fit(scene, loads, negated_torques(log, channels), again, false);
+    } catch (const LogError&) {
+      continue;  // the negated log cannot be fitted: no evidence either way
+    }
+    if (!neg.status.ok()) continue;
+    for (int j = 0; j < kActuators && channels == 3u; ++j) {
+      out->negated_rms_torque_residual[j] = neg.rms_torque_residual[j];
+    }
+    if (misfit_ratio(neg) < best) {
+      best = misfit_ratio(neg);
+      which = channels;
+    }
+    if (best * kSignGain < ours) break;  // both negated fit: the single channels need no try
   }
-  const double theirs = misfit_ratio(neg);
-  if (!(theirs * kSignGain < ours)) return false;
-  out->unusable = "the logged torques fit far better negated (residual " +
-                  format_significant(theirs, 2) + " times its noise floor against " +
-                  format_significant(ours, 2) +
-                  "): the log's torque sign is opposite the scene's convention (M1, M2 "
-                  "counter-clockwise on the cranks); rerun with --flip-torque-sign";
+  if (!(best * kSignGain < ours)) return false;
+  const std::string fit = format_significant(best, 2) + " times its noise floor against " +
+                          format_significant(ours, 2);
+  out->unusable =
+      which == 3u
+          ? "the logged torques fit far better negated (residual " + fit +
+                "): the log's torque sign is opposite the scene's convention (M1, M2 "
+                "counter-clockwise on the cranks); rerun with --flip-torque-sign"
+          : "the logged tau" + std::to_string(which) +
+                " alone fits far better negated (residual " + fit + "): its sign is opposite "
+                "the scene's convention (M" + std::to_string(which) +
+                " counter-clockwise on its crank); rerun with --flip-torque-sign " +
+                std::to_string(which);
   out->warnings.push_back(out->unusable + "; no torque delay was estimated");
   return true;
 }
@@ -2756,6 +2859,11 @@ double output_error_window(double window_s, double duration) {
 
 IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction& loads,
                         const TorqueLog& log, const IdentifyOptions& opt) {
+  return identify_fit(scene_in, loads, log, opt, true);
+}
+
+IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunction& loads,
+                            const TorqueLog& log, const IdentifyOptions& opt, bool full) {
   quiet_solver_logging();
   const auto start = Clock::now();
   IdentifyResult out;
@@ -2793,6 +2901,10 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   Analysis an;
   if (!solve_stage(&f, &problem, &out, &summary, &an)) return out;
   analyse(f, x0_public, summary, &an, &out);
+  if (!full) {
+    out.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
+    return out;
+  }
   if (opt.method == Method::kInverseDynamics) {
     bound_and_misfit_warning(f, an, &out);
     model_check(f, &out);

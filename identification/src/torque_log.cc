@@ -4,34 +4,35 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fivebar/identification/degrees.h"
 #include "fivebar/model/kinematics.h"
 
 namespace fivebar::identification {
 
+std::string rates_look_like_degrees(const std::vector<double>& t, const std::vector<double>& theta,
+                                    const std::vector<double>& omega) {
+  // slope of the finite-difference rate against the logged rate
+  double sxy = 0, sxx = 0;
+  for (size_t i = 0; i + 1 < theta.size() && i + 1 < t.size() && i + 1 < omega.size(); ++i) {
+    const double d = (theta[i + 1] - theta[i]) / (t[i + 1] - t[i]);
+    const double w = 0.5 * (omega[i] + omega[i + 1]);
+    sxy += d * w;
+    sxx += w * w;
+  }
+  if (!(sxx > 0)) return "";
+  const double slope = sxy / sxx;
+  if (std::abs(slope / (180.0 / M_PI) - 1.0) < 0.2) {
+    return "d theta/dt is " + format_significant(slope, 6) + " times omega, close to 180/pi";
+  }
+  return "";
+}
+
 std::string looks_like_degrees(const TorqueLog& log, const std::vector<double>& theta,
                                const std::vector<double>* omega) {
-  const int n = static_cast<int>(theta.size());
-  if (n < 2) return "";
-  if (omega) {
-    // slope of the finite-difference rate against the logged rate
-    double sxy = 0, sxx = 0;
-    for (int i = 0; i + 1 < n; ++i) {
-      const double d = (theta[i + 1] - theta[i]) / (log.t[i + 1] - log.t[i]);
-      const double w = 0.5 * ((*omega)[i] + (*omega)[i + 1]);
-      sxy += d * w;
-      sxx += w * w;
-    }
-    if (sxx > 0) {
-      const double slope = sxy / sxx;
-      if (std::abs(slope / (180.0 / M_PI) - 1.0) < 0.2) {
-        return "d theta/dt is " + format_significant(slope, 6) + " times omega, close to 180/pi";
-      }
-    }
-    return "";
-  }
+  if (theta.size() < 2) return "";
   // without rates the magnitude says nothing (multi-turn angles are radians too): identify
   // decides from the motion and the scene (angle_units_from_motion, condition.h)
-  return "";
+  return omega ? rates_look_like_degrees(log.t, theta, *omega) : "";
 }
 
 double median_of(std::vector<double> v) {

@@ -14,12 +14,15 @@ WindowMisfit channel_misfit(const std::vector<WindowLevel>& levels, bool more, i
     ++a;
   }
   if (a == n) return m;
-  // the excess must stay within 1 / kFlatExcess of its value at a up to twice a's half-window
+  // the excess must stay within [kFallingExcess, 1 / kFlatExcess] of its value at a up to twice
+  // a's half-window
   const double cap = levels[a].excess(j) / kFlatExcess;
+  const double low = levels[a].excess(j) * kFallingExcess;
   std::size_t to = a;
-  while (to + 1 < n && levels[to + 1].excess(j) <= cap) ++to;
+  while (to + 1 < n && levels[to + 1].excess(j) <= cap && levels[to + 1].excess(j) >= low) ++to;
   if (levels[to].half < 2 * levels[a].half) {
-    // grew beyond the cap before the doubling (bias), or the table ends before it
+    // grew beyond the cap (bias) or fell below the low bound before the doubling, or the table
+    // ends before it
     if (to + 1 == n && more) m.state = WindowMisfit::kNeedMore;
     return m;
   }

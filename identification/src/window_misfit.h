@@ -32,8 +32,12 @@ inline constexpr double kResolvedExcess = 0.5;
 /// The excess is flat (a misfit) when, over a doubling of the half-window from the smallest window
 /// where it is resolved, it has not grown beyond 1 / kFlatExcess times its value there: bias
 /// grows at least 2 times over a doubling (E ~ h at the reversals' jumps), and 2^8 on smooth
-/// motion.
+/// motion. Nor has it fallen below kFallingExcess times that value: a misfit adds the same
+/// excess at every window, within the ~20 % it is known to (negated logs of the light mechanism:
+/// sqrt(E) 0.11-0.14 N m over the windows, E down to 0.62 of its value at the first), while an
+/// excess that halves is neither a misfit nor bias (the floor's model fails at that window).
 inline constexpr double kFlatExcess = 0.75;
+inline constexpr double kFallingExcess = 0.5;
 
 /// What the table says about a misfit, from `levels` (in increasing half-window, from the
 /// smallest candidate; evaluated so far).

@@ -57,6 +57,18 @@ for name, text in (("deg_small.csv", "".join("%g,%.12g,%.12g\n" % (t, a, a) for 
     if p.returncode != 0 or not re.search("fivebar: warning: .*%s.*: " % name + pattern, p.stderr):
         failures.append("inverse %s: exit %d, %s (expected 0 and a warning /%s/)" %
                         (name, p.returncode, p.stderr.strip(), pattern))
+# a motion in radians that starts a turn out (theta1 8.15 rad, swinging by 0.3 rad): no
+# degrees warning
+with open(os.path.join(WORK, "turn.csv"), "w") as f:
+    f.write("t,theta1,theta2\n" + "".join(
+        "%g,%.12g,%.12g\n" % (i * 0.002, 2.5 * math.pi + 0.3 * math.cos(2 * math.pi * i * 0.002),
+                               math.pi / 2 + 0.3 * math.sin(2 * math.pi * i * 0.002))
+        for i in range(501)))
+p = subprocess.run([FIVEBAR, "inverse", PAPER, "--motion", os.path.join(WORK, "turn.csv"), "--out",
+                    out, "--no-plots"], capture_output=True, text=True)
+if p.returncode != 0 or "degrees" in p.stderr:
+    failures.append("inverse turn.csv: exit %d, %s (expected 0, no degrees warning)" %
+                    (p.returncode, p.stderr.strip()))
 # loads that leave their domain: named at the time, at once
 expect(3, r"load M3 = nan at t=1.50\d* s is not finite",
        ["simulate", PAPER, "--set", "loads.M3=sqrt(1.5-t)", "--out", out, "--no-plots"])

@@ -31,6 +31,15 @@ run_fivebar(2 "command line: --inertia-prior: must be > 0"
 # --sg-window -1 names the window (not the order), a directory as --log is not an "empty file"
 run_fivebar(2 "command line: --sg-window: must be > 0 \\[s\\], got -1"
             identify ${paper} --log ${log} --sg-window -1 --out ${WORK_DIR}/out_bad)
+# a half-window the log cannot hold (1e9 s once became the smallest window), one beyond 200
+# samples (1 s at 1 kHz ran for minutes), and --smooth-sign -1 (the default's sentinel is no value)
+set(angles_log ${SOURCE_DIR}/datasets/logs/paper_angles.csv)
+run_fivebar(2 "command line: --sg-window: [^\n]* must fit in the log's"
+            identify ${paper} --log ${angles_log} --sg-window 1e9 --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --sg-window: 1 s is [^\n]*: more than 200"
+            identify ${paper} --log ${angles_log} --sg-window 1 --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "--smooth-sign"
+            identify ${paper} --log ${angles_log} --smooth-sign -1 --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "logs: \\(file\\): is a directory, expected a CSV file"
             identify ${paper} --log ${SOURCE_DIR}/datasets/logs --out ${WORK_DIR}/out_bad)
 # optimize: winding data, objectives and their options

@@ -209,6 +209,8 @@ for family in ("torque", "fourier"):
             std = read_csv(os.path.join(lout, "predicted_std.csv"))
             if not all(float(r["std"]) > 0 and math.isfinite(float(r["std"])) for r in std):
                 failures.append("%s: ok with predicted std %s" % (label, [r["std"] for r in std]))
+            if any(float(r["relative_std"]) > 10 for r in std):
+                failures.append("%s: ok with relative std %s" % (label, [r["relative_std"] for r in std]))
         base = j.get("multisine_baseline", {})
         if extra and base.get("status") != "skipped":
             failures.append("%s: baseline %s" % (label, base))
@@ -219,6 +221,12 @@ for family in ("torque", "fourier"):
         for name in os.listdir(lout):
             if os.path.getsize(os.path.join(lout, name)) == 0:
                 failures.append("%s: %s is empty" % (label, name))
+
+# the light mechanism's 10 s Fourier design predicts viscous at 179 times its value (the
+# multi-sine: 0.093): no design, exit 3 naming the status
+expect_error(3, "status std_too_large", ["excite", LIGHT, "--out", os.path.join(WORK, "light_absurd"),
+                                         "--torque-limit", "0.2", "--duration", "10", "--family",
+                                         "fourier", "--no-plots"], os.path.join(WORK, "light_absurd"))
 
 # synth-log's multi-sine is the same fit: within --torque-limit on the light mechanism; the limit
 # is for the multi-sine only, and > 0

@@ -58,9 +58,9 @@ identification::IdentifyOptions identify_options(const IdentifySettings& setting
 /// Reads a torque log; a log that cannot be used throws InputError (the LogError's message).
 identification::TorqueLog read_log(const std::string& path);
 
-/// "" or why angles that start at (theta1, theta2) look like degrees: a start beyond a turn,
-/// within 360 (a motion or log in radians may turn many times, but starts within a turn, as
-/// scenes and tasks do). Read where the model failed on them, to name the cause first.
+/// "" or why angles that start at (theta1, theta2) look like degrees: a start beyond
+/// identification::kDegreesBeyond (two turns), within 360. Read where the model failed on them,
+/// to name the cause first, and on motions without rates.
 std::string start_looks_like_degrees(double theta1, double theta2);
 
 /// identification::identify for a scene: a log that does not fit the scene throws InputError,

@@ -16,7 +16,8 @@ struct IdentifyRun {
   std::string log;                  ///< the torque log's path ("(arrays)" for Python arrays)
   std::string estimate;             ///< --estimate
   identification::Loss loss = identification::Loss::kNone;
-  bool torque_sign_flipped = false;  ///< --flip-torque-sign: the log's tau1, tau2 negated
+  /// --flip-torque-sign: the log's torques negated, "" (none), "1" (tau1), "2" (tau2) or "both"
+  std::string torque_sign_flipped;
 };
 
 /// identification.json without the total wall time: settings, parameters (with their truth when
