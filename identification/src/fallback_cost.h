@@ -17,7 +17,7 @@ namespace fivebar::identification {
 /// jet_dynamics.h compiles, W = compiled_jet_width(P): for W > P the derivative parts past P stay
 /// zero, for W < P the Jacobian takes ceil(P / W) passes of W columns. Each column's derivative
 /// is the one Jet<double, P> gives; the few samples that take this path need no inverse_dynamics
-/// of their own width (~12 s of compilation each).
+/// of their own width (~7 s of compilation each).
 template <int P>
 class FallbackCost final : public ceres::SizedCostFunction<2, P> {
  public:

@@ -1,6 +1,6 @@
 // inverse_dynamics for the ceres::Jet widths that identification differentiates through
 // (excitation's group widths, the residual's 5 pin radii, and identify's fallback residual padded
-// to one of them). Each width takes ~12 s to compile, so they are compiled once, in
+// to one of them). Each width takes ~7 s to compile (-O2), so they are compiled once, in
 // src/jet_dynamics_*.cc (explicit instantiations split over several units that build in
 // parallel), instead of again in every unit that calls them: this header declares them `extern
 // template`. Including it is enough; a width not listed is instantiated as usual (the noise
@@ -26,7 +26,7 @@
 // the widths, each in one group; a group is compiled by one unit (jet_dynamics_<group>.cc):
 // excitation's group widths (1, 2, 10, 16, 18, 26), the residual's 5 pin radii, and nothing
 // else. Identify's fallback residual (fallback_cost.h) pads its parameter count to one of them
-// (compiled_jet_width); each further width would cost ~12 s of compilation for no gain.
+// (compiled_jet_width); each further width would cost ~7 s of compilation for no gain.
 // Width 6 is left out: the trajectory problem's node Jets have it, and through the explicit
 // instantiation here its evaluations took 15% more instructions and 20% more time than through
 // the implicit one its own unit compiles (optimize's median task, paper_motors.yaml: 25 ms

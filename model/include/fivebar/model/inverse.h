@@ -30,4 +30,17 @@ Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
                                    slip, opt, ev, bristle);
 }
 
+#ifdef FIVEBAR_COMPILED_INVERSE_DOUBLE
+// Code that links fivebar::sim (which defines this macro for its users) takes the double pass
+// of the inverse dynamics from model/src/inverse_double.cc instead of compiling it again: ~5 s
+// of compilation in each unit that evaluates the inverse dynamics, in double or in Jets (whose
+// shadow pass is the double one). Header-only users of fivebar::model compile it as before.
+namespace mech::detail {
+extern template Status inverse_pass<FiveBar, double>(
+    const Params<double>&, const Loads<double>&, const Vec2<double>&, const Vec2<double>&,
+    const Vec2<double>&, const JointModes*, const EvalOptions&, Evaluation<double>*,
+    const std::array<double, kJoints>*, LoopSolution*);
+}  // namespace mech::detail
+#endif
+
 }  // namespace fivebar
