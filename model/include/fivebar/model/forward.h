@@ -95,19 +95,28 @@ std::array<T, kJoints> forward_friction_arms(const Params<T>& p,
   return phi;
 }
 
-/// The change of the reactions per unit friction torque in forward dynamics with no joint stuck:
-/// directly (reaction_torque_response) and through the accelerations it brings,
+/// The change of the reactions per unit friction torque in forward dynamics with no joint stuck,
+/// in rank-4 form (LowRankResponse): directly through the coupler moments
+/// (reaction_torque_response) and through the accelerations it brings,
 /// dthdd = -A^-1 J_w^T e_j (reaction_acceleration_response).
+template <typename T>
+LowRankResponse<T> forward_low_rank_response(const Params<T>& p, const Kinematics<T>& k,
+                                             const Mat2<T>& Ainv) {
+  LowRankResponse<T> r;
+  const Vec2<T> u3 = k.B - k.C, u4 = k.D - k.C;
+  const T det = cross(u3, u4);
+  r.f3 = u4 / det;  // as in reaction_torque_response
+  r.f4 = -u3 / det;
+  r.R = reaction_acceleration_response(p, k);
+  for (int j = 0; j < kJoints; ++j) r.m[j] = -(Ainv * joint_row(k, j).transpose());
+  return r;
+}
+
+/// The same as the full 5 x 5 response (ReactionResponse): dF[j][k] per unit torque at joint j.
 template <typename T>
 ReactionResponse<T> forward_torque_response(const Params<T>& p, const Kinematics<T>& k,
                                             const Mat2<T>& Ainv) {
-  ReactionResponse<T> dF = reaction_torque_response(k);
-  const std::array<Mat2<T>, kJoints> R = reaction_acceleration_response(p, k);
-  for (int j = 0; j < kJoints; ++j) {
-    const Vec2<T> dthdd = -(Ainv * joint_row(k, j).transpose());
-    for (int k2 = 0; k2 < kJoints; ++k2) dF[j][k2] += R[k2] * dthdd;
-  }
-  return dF;
+  return forward_low_rank_response(p, k, Ainv).expand();
 }
 
 /// forward_dynamics below; `loop` as in friction_loop (records the double solution, or
@@ -156,10 +165,10 @@ Status forward_pass(const Params<T>& p, const Loads<T>& L, const T& th1, const T
     const bool motors = actuator_torques(p, ev->w, ev->slip, &act);
     LoopAids<T> aids;
     aids.warm = warm;
-    ReactionResponse<T> response;
+    LowRankResponse<T> response;
     if (stuck.count == 0 && !(loop && loop->set)) {
-      response = forward_torque_response(p, k, Ainv);
-      aids.response = &response;
+      response = forward_low_rank_response(p, k, Ainv);
+      aids.low_rank = &response;
     }
     st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
                        motors ? &act : nullptr, loop, aids);
