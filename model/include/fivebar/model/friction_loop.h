@@ -323,11 +323,12 @@ inline constexpr double kChordShrink = 1e-2;
 /// The fixed point of a contracting map (ScaledReactions::contraction_bound < 1, so that it is
 /// unique and I - dG/dN is strictly diagonally dominant) in fewer evaluations: the fixed-point
 /// evaluation N' = G(N) = |F(phi N)| alternates with a Newton step from N, and the loop stops on
-/// the fixed point's own test (max |N' - N| <= tol max N') with N = N'. Once a step has shrunk the
-/// change by kChordShrink or more, the following steps reuse its factored matrix (chord steps:
-/// from there on each shrinks the change about as much, for a back substitution instead of a
-/// new matrix). From `start` (nullptr: N = |F0|); false if it did not converge within
-/// friction_max_iter evaluations.
+/// the fixed point's own test (max |N' - N| <= tol max N') with N = N'. From a warm `start`, once
+/// a step has shrunk the change by kChordShrink or more, the following steps reuse its factored
+/// matrix (chord steps: each shrinks the change about as much, for a back substitution instead of
+/// a new matrix); from N = |F0| (`start` null: the cold loops of forward and inverse dynamics)
+/// every step is a Newton step. False if it did not converge within friction_max_iter
+/// evaluations.
 inline bool friction_contracting_newton(const std::array<double, kJoints>& phi,
                                         const EvalOptions& opt,
                                         const ScaledReactions<double>& map,
@@ -370,7 +371,7 @@ inline bool friction_contracting_newton(const std::array<double, kJoints>& phi,
     for (int k = 0; k < kJoints; ++k) step[k] = N[k] - Nn[k];
     solve_factored(LU, step);
     for (int k = 0; k < kJoints; ++k) N[k] -= step[k];
-    chord = true;
+    chord = start != nullptr;
     last_err = err;
   }
   return false;
