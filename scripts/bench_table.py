@@ -2,7 +2,7 @@
 """Measures what users wait for, side by side in one run, and writes docs/benchmarks.md.
 
     python3 scripts/bench_table.py [--baseline OTHER_FIVEBAR] [--baseline-bench OTHER_BENCH_MODEL]
-        [--repeats 3] [--skip-optimize]
+        [--baseline-rhs-calls OTHER_RHS_CALLS] [--repeats 3] [--skip-optimize]
 
 Rows: the right-hand side with and without friction (bench_model), the paper scene simulated to
 1e-6 and 1e-8 rad and with arkode_erk45 at rtol = atol = 1e-10, identify (per joint, friction and
@@ -11,7 +11,9 @@ datasets/tasks/paper_tasks.yaml; the peers' five-bar benchmarks (MuJoCo, Simbody
 built. With --baseline, every command runs alternately with this build's binary and the other
 one, and the table gives both medians and their ratio; --baseline-bench does the same for the
 right-hand side (the machine may be shared: ratios of interleaved runs are what to compare, not
-absolute times; the load average is written with the table).
+absolute times; the load average is written with the table). Where valgrind is installed, the
+right-hand side is also counted in instructions (rhs_calls under callgrind: the same on a loaded
+machine as on an idle one), for this build and --baseline-rhs-calls.
 """
 import argparse
 import csv
@@ -28,6 +30,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BUILD = os.path.join(ROOT, "build", "release")
 FIVEBAR = os.path.join(BUILD, "apps", "fivebar")
 BENCH_MODEL = os.path.join(BUILD, "tests", "bench", "bench_model")
+RHS_CALLS = os.path.join(BUILD, "tests", "bench", "rhs_calls")
+RHS_MODES = ("friction", "frictionless", "actuators", "friction_warm")
 PEERS = os.path.join(BUILD, "tests", "bench", "peers")
 SCENE = os.path.join(ROOT, "datasets", "scenes", "paper.yaml")
 LOG = os.path.join(ROOT, "datasets", "logs", "per_joint_multisine.csv")
@@ -118,6 +122,46 @@ def right_hand_side(benches, repeats):
     return [{k: statistics.median(r[k] for r in rs) for k in rs[0]} for rs in runs]
 
 
+def instructions(rhs_calls, mode):
+    """Instructions of one right-hand side: callgrind's totals of 2000 and 1000 calls, apart."""
+    totals = []
+    for n in (1000, 2000):
+        done = subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
+                               rhs_calls, mode, str(n)], stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True, check=True)
+        totals.append(int(re.search(r"Collected : (\d+)", done.stderr).group(1)))
+    return (totals[1] - totals[0]) / 1000
+
+
+def right_hand_side_instructions(binaries):
+    """[{mode: instructions}] per rhs_calls binary, or None without valgrind or rhs_calls."""
+    if not os.path.exists(binaries[0]) or subprocess.run(
+            ["which", "valgrind"], stdout=subprocess.DEVNULL).returncode != 0:
+        return None
+    return [{m: instructions(b, m) for m in RHS_MODES} for b in binaries]
+
+
+def instruction_lines(counts):
+    """The table of right_hand_side_instructions."""
+    lines = ["", "Instructions of one evaluation (`valgrind --tool=callgrind`, `rhs_calls MODE N`: "
+             "the totals of N = 2000 and N = 1000 calls, apart; `friction_warm`: consecutive "
+             "states 1e-5 s apart, the loop warm-started as in the simulator):", ""]
+    if len(counts) == 2:
+        lines += ["| evaluation | this build | other | other / this |", "|---|---|---|---|"]
+        for m in RHS_MODES:
+            lines.append(f"| {m} | {counts[0][m]:.0f} | {counts[1][m]:.0f} | "
+                         f"{counts[1][m] / counts[0][m]:.2f} |")
+    else:
+        lines += ["| evaluation | instructions |", "|---|---|"]
+        for m in RHS_MODES:
+            lines.append(f"| {m} | {counts[0][m]:.0f} |")
+    c = counts[0]
+    lines += ["", f"In instructions, with friction the right-hand side costs "
+              f"{c['friction'] / c['frictionless']:.2f} times the frictionless one "
+              f"({c['friction_warm'] / c['frictionless']:.2f} warm-started)."]
+    return lines
+
+
 def peers():
     """Lines on the peers' benchmarks: their own output, or why there is none."""
     found = sorted(f for f in os.listdir(PEERS) if f.startswith("bench_peers_")) \
@@ -137,7 +181,7 @@ def seconds(x):
     return f"{x * 1e3:.1f} ms" if x < 1 else f"{x:.2f} s"
 
 
-def write(rows, rhs, binaries, benches, repeats, load):
+def write(rows, rhs, counts, binaries, benches, repeats, load):
     lines = ["# Benchmarks", "",
              "Written by `python3 scripts/bench_table.py` (run it again after a change: it "
              "rebuilds nothing, it measures `build/release`). Times are medians of "
@@ -167,6 +211,8 @@ def write(rows, rhs, binaries, benches, repeats, load):
     else:
         lines.append("bench_model is not built (`cmake --build --preset release --target "
                      "bench_model`).")
+    if counts:
+        lines += instruction_lines(counts)
     lines += ["", "## Commands", ""]
     if rows is None:
         lines.append(f"Not measured: `{os.path.relpath(FIVEBAR, ROOT)}` was not built when the "
@@ -190,6 +236,8 @@ def main():
     ap.add_argument("--baseline", help="another fivebar binary to run alternately with this one")
     ap.add_argument("--baseline-bench",
                     help="another bench_model binary to run alternately with this one")
+    ap.add_argument("--baseline-rhs-calls",
+                    help="another rhs_calls binary to count instructions of (with valgrind)")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--skip-optimize", action="store_true", help="leave out optimize (minutes)")
     a = ap.parse_args()
@@ -197,8 +245,10 @@ def main():
     benches = [BENCH_MODEL] + ([a.baseline_bench] if a.baseline_bench else [])
     load_start = os.getloadavg()[0]
     rhs = right_hand_side(benches, a.repeats)
+    counts = right_hand_side_instructions(
+        [RHS_CALLS] + ([a.baseline_rhs_calls] if a.baseline_rhs_calls else []))
     rows = measure(binaries, a.repeats, a.skip_optimize) if os.path.exists(FIVEBAR) else None
-    write(rows, rhs, binaries, benches, a.repeats, (load_start, os.getloadavg()[0]))
+    write(rows, rhs, counts, binaries, benches, a.repeats, (load_start, os.getloadavg()[0]))
     print(f"wrote {OUT}")
 
 

@@ -62,12 +62,14 @@ TEST(FrictionLoop, ClosedFormResponseMatchesProbes) {
     };
     const ReactionResponse<double> inv = reaction_torque_response(k);
     const ReactionResponse<double> fwd = mech::detail::forward_torque_response<FiveBar>(p, k, Ainv);
+    const ReactionResponse<double> low = FiveBar::forward_response(p, k, Ainv).expand();
     for (int j = 0; j < kJoints; ++j) {
       const auto pi = probe(inverse_solve, j), pf = probe(forward_solve, j);
       for (int m = 0; m < kJoints; ++m) {
         const double scale = 1.0 + pf[m].norm() + pi[m].norm();
         EXPECT_LT((inv[j][m] - pi[m]).norm(), kResponseTol * scale) << "inverse j=" << j;
         EXPECT_LT((fwd[j][m] - pf[m]).norm(), kResponseTol * scale) << "forward j=" << j;
+        EXPECT_LT((low[j][m] - pf[m]).norm(), kResponseTol * scale) << "low rank j=" << j;
       }
     }
   }

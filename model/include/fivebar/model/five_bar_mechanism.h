@@ -8,6 +8,7 @@
 #include "fivebar/model/actuator.h"
 #include "fivebar/model/appell.h"
 #include "fivebar/model/evaluation.h"
+#include "fivebar/model/friction_loop.h"
 #include "fivebar/model/kinematics.h"
 #include "fivebar/model/mechanism.h"
 #include "fivebar/model/params.h"
@@ -89,6 +90,21 @@ struct FiveBar {
   static std::array<Mat2<T>, kJoints> reaction_acceleration_response(const Params<T>& p,
                                                                      const Kinematics<T>& k) {
     return fivebar::reaction_acceleration_response(p, k);
+  }
+  /// The change of the reactions per unit friction torque in forward dynamics with no joint
+  /// stuck, in rank-4 form (LowRankResponse): through the coupler moments (as
+  /// reaction_torque_response) and through the accelerations they bring, dthdd = -A^-1 J_w^T e_j.
+  template <typename T>
+  static LowRankResponse<T> forward_response(const Params<T>& p, const Kinematics<T>& k,
+                                             const Mat2<T>& Ainv) {
+    LowRankResponse<T> r;
+    const Vec2<T> u3 = k.B - k.C, u4 = k.D - k.C;
+    const T det = cross(u3, u4);
+    r.f3 = u4 / det;
+    r.f4 = -u3 / det;
+    r.R = fivebar::reaction_acceleration_response(p, k);
+    for (int j = 0; j < kJoints; ++j) r.m[j] = -(Ainv * fivebar::joint_row(k, j).transpose());
+    return r;
   }
   template <typename T>
   static void set_drives(const Loads<T>& L, Evaluation<T>* ev) {

@@ -27,12 +27,46 @@ struct FrictionWarmStart {
   std::array<double, kJoints> N{};  ///< the last consistent reactions [N]
 };
 
+/// The change of the reactions per unit friction torque in forward dynamics with no joint stuck,
+/// in the rank-4 form it has: the torques move the reactions only through the two coupler moment
+/// sums s3 = Mf_B - Mf_C, s4 = Mf_D - Mf_C (F2 by f3 s3 + f4 s4, F1, F3, F4 with it and F5
+/// against it) and through the crank accelerations they bring, a = sum_j m_j Mf_j (F_k by R_k a):
+/// dF_j[k] = sigma_k (c3_j f3 + c4_j f4) + R_k m_j, with sigma_k = -1 for D0 and +1 otherwise,
+/// c3 = (0, 1, -1, 0, 0), c4 = (0, 0, -1, 1, 0).
+template <typename T>
+struct LowRankResponse {
+  Vec2<T> f3, f4;                  ///< F2 per unit s3 and per unit s4
+  std::array<Mat2<T>, kJoints> R;  ///< F_k per unit crank acceleration
+  std::array<Vec2<T>, kJoints> m;  ///< crank accelerations per unit Mf_j: -A^-1 J_w^T e_j
+
+  /// dF[j][k], the change of F_k per unit Mf_j (ReactionResponse)
+  ReactionResponse<T> expand() const {
+    const std::array<Vec2<T>, kJoints> dF2 = {Vec2<T>::Zero(), f3, Vec2<T>(-f3 - f4), f4,
+                                              Vec2<T>::Zero()};
+    ReactionResponse<T> out;
+    for (int j = 0; j < kJoints; ++j) {
+      for (int k = 0; k < kJoints; ++k) {
+        out[j][k] = R[k] * m[j];
+        if (k < kJoints - 1) {
+          out[j][k] += dF2[j];
+        } else {
+          out[j][k] -= dF2[j];
+        }
+      }
+    }
+    return out;
+  }
+};
+
 /// Optional help for friction_loop; neither changes its solution.
 template <typename T>
 struct LoopAids {
   /// the change of the reactions per unit friction torque (for torques before `extra`), known in
   /// closed form: replaces the unit probes
   const ReactionResponse<T>* response = nullptr;
+  /// the same change in the rank-4 form of forward dynamics with no joint stuck (cheaper to build;
+  /// used where `response` is not given)
+  const LowRankResponse<T>* low_rank = nullptr;
   FrictionWarmStart* warm = nullptr;  ///< double evaluations only (ignored for Jets)
 };
 
@@ -156,6 +190,32 @@ struct ScaledReactions {
   }
   ScaledReactions(const std::array<T, kJoints>& phi, const AffineReactions<T>& map)
       : ScaledReactions(phi, map.F0, map.dF) {}
+  /// The same from the rank-4 form, B[k][j] = R_k (m_j phi_j) + sigma_k phi_j (c3_j f3 + c4_j f4)
+  /// (without the unscaled 5 x 5 response).
+  ScaledReactions(const std::array<T, kJoints>& phi, const std::array<Vec2<T>, kJoints>& F0_,
+                  const LowRankResponse<T>& r)
+      : F0(F0_) {
+    const std::array<Vec2<T>, kJoints> dF2 = {Vec2<T>::Zero(), r.f3, Vec2<T>(-r.f3 - r.f4), r.f4,
+                                              Vec2<T>::Zero()};
+    std::array<double, kJoints> row{};
+    for (int j = 0; j < kJoints; ++j) {
+      if (is_exact_zero(phi[j])) {
+        for (int k = 0; k < kJoints; ++k) B[k][j].setZero();
+        continue;
+      }
+      const Vec2<T> a = r.m[j] * phi[j], d = dF2[j] * phi[j];
+      for (int k = 0; k < kJoints; ++k) {
+        B[k][j] = r.R[k] * a;
+        if (k < kJoints - 1) {
+          B[k][j] += d;
+        } else {
+          B[k][j] -= d;
+        }
+        row[k] += std::abs(value_of(B[k][j].x())) + std::abs(value_of(B[k][j].y()));
+      }
+    }
+    contraction_bound = *std::max_element(row.begin(), row.end());
+  }
   /// F = F(phi N) and its norms n_k = |F_k| (one evaluation of the loop's map N -> |F(phi N)|)
   void evaluate(const std::array<T, kJoints>& N, std::array<Vec2<T>, kJoints>* F,
                 std::array<T, kJoints>* n) const {
@@ -224,33 +284,51 @@ bool friction_fixed_point(const std::array<T, kJoints>& phi, const EvalOptions& 
   return false;
 }
 
-/// r <- J^-1 r for a strictly diagonally dominant J (Gaussian elimination, no pivoting needed).
-/// (Loops unrolled: five unknowns, called at every step of the loop.)
-inline void solve_dominant(double J[kJoints][kJoints], double r[kJoints]) {
+/// J <- its LU factors in place, for a strictly diagonally dominant J (Gaussian elimination, no
+/// pivoting needed): U on and above the diagonal, the multipliers of L below it.
+/// (Loops unrolled: five unknowns, called in the loop.)
+inline void factor_dominant(double J[kJoints][kJoints]) {
 #pragma GCC unroll 5
   for (int c = 0; c < kJoints; ++c) {
     const double inv = 1.0 / J[c][c];
 #pragma GCC unroll 5
     for (int i = c + 1; i < kJoints; ++i) {
       const double f = J[i][c] * inv;
+      J[i][c] = f;
 #pragma GCC unroll 5
       for (int j = c + 1; j < kJoints; ++j) J[i][j] -= f * J[c][j];
-      r[i] -= f * r[c];
     }
+  }
+}
+
+/// r <- J^-1 r from the factors of factor_dominant.
+inline void solve_factored(const double LU[kJoints][kJoints], double r[kJoints]) {
+#pragma GCC unroll 5
+  for (int c = 0; c < kJoints; ++c) {
+#pragma GCC unroll 5
+    for (int i = c + 1; i < kJoints; ++i) r[i] -= LU[i][c] * r[c];
   }
 #pragma GCC unroll 5
   for (int c = kJoints - 1; c >= 0; --c) {
 #pragma GCC unroll 5
-    for (int j = c + 1; j < kJoints; ++j) r[c] -= J[c][j] * r[j];
-    r[c] /= J[c][c];
+    for (int j = c + 1; j < kJoints; ++j) r[c] -= LU[c][j] * r[j];
+    r[c] /= LU[c][c];
   }
 }
+
+/// A chord step (the last factored Newton matrix again) is taken while the last step shrank the
+/// change by at least this factor; otherwise the matrix is formed anew at the current point.
+inline constexpr double kChordShrink = 1e-2;
 
 /// The fixed point of a contracting map (ScaledReactions::contraction_bound < 1, so that it is
 /// unique and I - dG/dN is strictly diagonally dominant) in fewer evaluations: the fixed-point
 /// evaluation N' = G(N) = |F(phi N)| alternates with a Newton step from N, and the loop stops on
-/// the fixed point's own test (max |N' - N| <= tol max N') with N = N'. From `start` (nullptr:
-/// N = |F0|); false if it did not converge within friction_max_iter evaluations.
+/// the fixed point's own test (max |N' - N| <= tol max N') with N = N'. From a warm `start`, once
+/// a step has shrunk the change by kChordShrink or more, the following steps reuse its factored
+/// matrix (chord steps: each shrinks the change about as much, for a back substitution instead of
+/// a new matrix); from N = |F0| (`start` null: the cold loops of forward and inverse dynamics)
+/// every step is a Newton step. False if it did not converge within friction_max_iter
+/// evaluations.
 inline bool friction_contracting_newton(const std::array<double, kJoints>& phi,
                                         const EvalOptions& opt,
                                         const ScaledReactions<double>& map,
@@ -264,6 +342,9 @@ inline bool friction_contracting_newton(const std::array<double, kJoints>& phi,
   } else {
     reaction_norms(map.F0, &N);
   }
+  double LU[kJoints][kJoints];
+  double last_err = 0.0;
+  bool chord = false;  // LU holds a matrix worth reusing
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
     map.evaluate(N, F, &Nn);
     double err, scale;
@@ -275,16 +356,23 @@ inline bool friction_contracting_newton(const std::array<double, kJoints>& phi,
       for (int k = 0; k < kJoints; ++k) (*Mf)[k] = phi[k] * Nn[k];
       return true;
     }
-    // Newton on R(N) = N - G(N), dG_k/dN_j = F_k . B_kj / |F_k|: N <- N - (I - dG/dN)^-1 R
-    double J[kJoints][kJoints], step[kJoints];
-    for (int k = 0; k < kJoints; ++k) {
-      const Vec2<double> u = Nn[k] > 0.0 ? Vec2<double>((*F)[k] / Nn[k]) : Vec2<double>::Zero();
-      for (int j = 0; j < kJoints; ++j) J[k][j] = -u.dot(map.B[k][j]);
-      J[k][k] += 1.0;
-      step[k] = N[k] - Nn[k];
+    chord = chord && err <= kChordShrink * last_err;
+    if (!chord) {
+      // Newton on R(N) = N - G(N), dG_k/dN_j = F_k . B_kj / |F_k|: N <- N - (I - dG/dN)^-1 R
+      for (int k = 0; k < kJoints; ++k) {
+        const Vec2<double> u =
+            Nn[k] > 0.0 ? Vec2<double>((*F)[k] / Nn[k]) : Vec2<double>::Zero();
+        for (int j = 0; j < kJoints; ++j) LU[k][j] = -u.dot(map.B[k][j]);
+        LU[k][k] += 1.0;
+      }
+      factor_dominant(LU);
     }
-    solve_dominant(J, step);
+    double step[kJoints];
+    for (int k = 0; k < kJoints; ++k) step[k] = N[k] - Nn[k];
+    solve_factored(LU, step);
     for (int k = 0; k < kJoints; ++k) N[k] -= step[k];
+    chord = start != nullptr;
+    last_err = err;
   }
   return false;
 }
@@ -415,37 +503,16 @@ void friction_loop_implicit(const std::array<T, kJoints>& phi, const LoopSolutio
   *iterations = sol.iterations;
 }
 
-/// The loop of friction_loop below for the load-dependent torques phi_k N_k alone. `loop`
-/// (may be null): a double evaluation records its solution there; a Jet evaluation given a
-/// recorded solution differentiates it (friction_loop_implicit) instead of iterating in Jets.
-template <typename T, typename Solve>
-Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions& opt,
-                           Solve&& solve, std::array<T, kJoints>* N, std::array<T, kJoints>* Mf,
-                           std::array<Vec2<T>, kJoints>* F, int* iterations,
-                           LoopSolution* loop = nullptr, const LoopAids<T>& aids = {}) {
-  if constexpr (!std::is_same_v<T, double>) {
-    if (loop && loop->set) {
-      friction_loop_implicit(phi, *loop, solve, N, Mf, F, iterations);
-      return Status::Ok();
-    }
-  }
-  Mf->fill(T(0));
-  std::array<Vec2<T>, kJoints> F0;
-  solve(std::array<T, kJoints>{}, &F0);
-  // the scaled map straight from the closed-form response where there is one; the unscaled map
-  // only where it is needed (the Newton fallback, the solution recorded for the Jet pass)
-  AffineReactions<T> map;
-  bool have_map = false;
-  const auto affine = [&]() -> const AffineReactions<T>& {
-    if (!have_map) map = probe_reactions(phi, solve, F0, aids.response);
-    have_map = true;
-    return map;
-  };
-  const ScaledReactions<T> scaled = aids.response
-                                        ? ScaledReactions<T>(phi, F0, *aids.response)
-                                        : ScaledReactions<T>(phi, affine());
+/// The loop on the scaled map: Newton steps where it contracts, else the fixed point, else Newton
+/// from two starts on `affine()`, the unscaled map (friction_newton_fallback). `warm`: as in
+/// joint_friction_loop.
+template <typename T, typename Solve, typename Affine>
+Status scaled_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions& opt,
+                            Solve& solve, const ScaledReactions<T>& scaled, const Affine& affine,
+                            const FrictionWarmStart* warm, std::array<T, kJoints>* N,
+                            std::array<T, kJoints>* Mf, std::array<Vec2<T>, kJoints>* F,
+                            int* iterations) {
   // a warm start only where the fixed point is unique (a contraction): the same solution, sooner
-  FrictionWarmStart* warm = std::is_same_v<T, double> ? aids.warm : nullptr;
   const std::array<T, kJoints>* start = nullptr;
   std::array<T, kJoints> N_warm;
   const bool contracts = scaled.contraction_bound < 1.0;
@@ -470,16 +537,62 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
     converged = friction_fixed_point<T>(phi, opt, scaled, nullptr, N, Mf, F, iterations,
                                         &contracting, &ratio);
   }
-  if (!converged) {
-    const Status st = friction_newton_fallback(phi, opt, affine(), contracting, ratio, N);
-    if (!st.ok()) {
-      if (warm) warm->set = false;
-      return st;
+  if (converged) return Status::Ok();
+  const Status st = friction_newton_fallback(phi, opt, affine(), contracting, ratio, N);
+  if (!st.ok()) return st;
+  for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
+  solve(*Mf, F);
+  reaction_norms(*F, N);
+  *iterations = opt.friction_max_iter + 1;  // marks a Newton solve
+  return Status::Ok();
+}
+
+/// The loop of friction_loop below for the load-dependent torques phi_k N_k alone. `loop`
+/// (may be null): a double evaluation records its solution there; a Jet evaluation given a
+/// recorded solution differentiates it (friction_loop_implicit) instead of iterating in Jets.
+template <typename T, typename Solve>
+Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions& opt,
+                           Solve&& solve, std::array<T, kJoints>* N, std::array<T, kJoints>* Mf,
+                           std::array<Vec2<T>, kJoints>* F, int* iterations,
+                           LoopSolution* loop = nullptr, const LoopAids<T>& aids = {}) {
+  if constexpr (!std::is_same_v<T, double>) {
+    if (loop && loop->set) {
+      friction_loop_implicit(phi, *loop, solve, N, Mf, F, iterations);
+      return Status::Ok();
     }
-    for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
-    solve(*Mf, F);
-    reaction_norms(*F, N);
-    *iterations = opt.friction_max_iter + 1;  // marks a Newton solve
+  }
+  Mf->fill(T(0));
+  std::array<Vec2<T>, kJoints> F0;
+  solve(std::array<T, kJoints>{}, &F0);
+  // the response per torque: given, or expanded from the low-rank form where a path needs it
+  ReactionResponse<T> expanded;
+  const ReactionResponse<T>* response = aids.response;
+  const auto full_response = [&]() {
+    if (!response && aids.low_rank) {
+      expanded = aids.low_rank->expand();
+      response = &expanded;
+    }
+    return response;
+  };
+  // the unscaled map only where it is needed (the Newton fallback, the solution recorded for the
+  // Jet pass)
+  AffineReactions<T> map;
+  bool have_map = false;
+  const auto affine = [&]() -> const AffineReactions<T>& {
+    if (!have_map) map = probe_reactions(phi, solve, F0, full_response());
+    have_map = true;
+    return map;
+  };
+  FrictionWarmStart* warm = std::is_same_v<T, double> ? aids.warm : nullptr;
+  const ScaledReactions<T> scaled =
+      aids.response    ? ScaledReactions<T>(phi, F0, *aids.response)
+      : aids.low_rank  ? ScaledReactions<T>(phi, F0, *aids.low_rank)
+                       : ScaledReactions<T>(phi, affine());
+  const Status st = scaled_friction_loop(phi, opt, solve, scaled, affine, warm, N, Mf, F,
+                                         iterations);
+  if (!st.ok()) {
+    if (warm) warm->set = false;
+    return st;
   }
   if (warm) {
     warm->set = true;

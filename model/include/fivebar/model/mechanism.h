@@ -23,8 +23,8 @@
 //   friction_transpose(kin, Mf)        J_w^T Mf (the friction torques' generalized force, negated)
 //   link_accelerations(kin, b, qdd, ev)  the dependent links' angular accelerations into ev
 //   reactions(p, kin, b, L, a, qdd, Mf, F, ev)   Newton-Euler reactions (and link accelerations)
-//   torque_response(p, kin, Ainv)      (kClosedFormResponse) dF_k per unit Mf_j at the forward
-//                                      dynamics' accelerations
+//   forward_response(p, kin, Ainv)     (kClosedFormResponse) dF_k per unit Mf_j at the forward
+//                                      dynamics' accelerations, in the loop's low-rank form
 //   set_drives(L, ev) / drive_torques(p, kin, qdd, ev)   forward: the drive torques given;
 //                                      inverse: the drive torques that produce qdd
 //   input_power(ev, v), external_power(kin, b, L, a, v)  [W]

@@ -162,9 +162,10 @@ Joints<T> inverse_friction_arms(const ParamsOf<M, T>& p, const EvalOptions& opt,
   return friction_arms<M>(p, z, ev);
 }
 
-/// The change of the reactions per unit friction torque in forward dynamics with no joint stuck:
-/// at fixed accelerations (M::reaction_torque_response) and through the accelerations it brings,
-/// dqdd = -A^-1 J_w^T e_j (M::reaction_acceleration_response).
+/// The change of the reactions per unit friction torque in forward dynamics with no joint stuck,
+/// as the full 5 x 5 response: at fixed accelerations (M::reaction_torque_response) and through
+/// the accelerations it brings, dqdd = -A^-1 J_w^T e_j (M::reaction_acceleration_response). The
+/// reference for M::forward_response, which the loop uses.
 template <class M, typename T>
 ReactionResponse<T> forward_torque_response(const ParamsOf<M, T>& p,
                                             const typename M::template Kinematics<T>& k,
@@ -190,11 +191,11 @@ Status forward_friction(const ParamsOf<M, T>& p, const EvalOptions& opt, const M
   const bool motors = M::actuator_torques(p, ev->w, ev->slip, &act);
   LoopAids<T> aids;
   aids.warm = warm;
-  ReactionResponse<T> response;
+  LowRankResponse<T> response;
   if constexpr (M::kClosedFormResponse) {
     if (stuck.count == 0 && !(loop && loop->set)) {
-      response = forward_torque_response<M>(p, ev->kin, Ainv);
-      aids.response = &response;
+      response = M::forward_response(p, ev->kin, Ainv);
+      aids.low_rank = &response;
     }
   }
   const Status st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
