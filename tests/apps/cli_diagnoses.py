@@ -4,7 +4,9 @@ model's message. A motion file in degrees and one with a 3 rad jump (inverse: ex
 them, not "r_k * mu too large"; a warning naming them where the model runs on them); a load expression that leaves its domain mid-run (simulate:
 exit 3 naming the load and the time, without running to simulation.max_steps); a run into a
 near-singular pose (simulate: exit 3 naming the pose and the time); an identify log
-whose torques carry the opposite sign (exit 3, no delay reported; --flip-torque-sign fits it); a
+whose torques carry the opposite sign (exit 3, no delay reported; --flip-torque-sign fits it, a
+wrong flip is told the right one); a --smooth-sign beyond the log's rates (exit 2); a motion in
+radians with rates that starts many turns out (no degrees warning); a
 light mechanism's log in degrees that the model fails on (exit 2 naming the degrees).
 Usage: cli_diagnoses.py FIVEBAR PAPER_YAML WORK_DIR"""
 import json
@@ -69,6 +71,17 @@ p = subprocess.run([FIVEBAR, "inverse", PAPER, "--motion", os.path.join(WORK, "t
 if p.returncode != 0 or "degrees" in p.stderr:
     failures.append("inverse turn.csv: exit %d, %s (expected 0, no degrees warning)" %
                     (p.returncode, p.stderr.strip()))
+# the paper run's second 1-2 s in radians with its rates, eleven turns out (theta1 from 70.7
+# rad): the rates agree with the angles in radians, so no degrees warning whatever the start
+with open(os.path.join(WORK, "late.csv"), "w") as f:
+    f.write("t,theta1,theta2,omega1,omega2\n" + "".join(
+        "%s,%.12g,%.12g,%s,%s\n" % (r[0], float(r[1]) + 22 * math.pi, float(r[2]) + 22 * math.pi,
+                                     r[5], r[6]) for r in ref[1001:2002]))
+p = subprocess.run([FIVEBAR, "inverse", PAPER, "--motion", os.path.join(WORK, "late.csv"), "--out",
+                    out, "--no-plots"], capture_output=True, text=True)
+if p.returncode != 0 or "degrees" in p.stderr:
+    failures.append("inverse late.csv: exit %d, %s (expected 0, no degrees warning)" %
+                    (p.returncode, p.stderr.strip()))
 # loads that leave their domain: named at the time, at once
 expect(3, r"load M3 = nan at t=1.50\d* s is not finite",
        ["simulate", PAPER, "--set", "loads.M3=sqrt(1.5-t)", "--out", out, "--no-plots"])
@@ -104,6 +117,13 @@ p = subprocess.run([FIVEBAR, "identify", PAPER, "--log", flipped, "--flip-torque
                     fit2, "--no-plots", "--no-validation"], capture_output=True, text=True)
 if p.returncode != 0 or json.load(open(os.path.join(fit2, "identification.json")))["status"] != "ok":
     failures.append("--flip-torque-sign: exit %d: %s" % (p.returncode, p.stderr[-300:]))
+# a flip of tau1 alone on the log negated in both: the advice is the flip of the log as logged
+expect(3, r"the flipped tau2 alone fits far better negated.*rerun with --flip-torque-sign both",
+       ["identify", PAPER, "--log", flipped, "--flip-torque-sign", "1", "--out", fit2,
+        "--no-plots", "--no-validation"])
+# a sign smoothing velocity beyond the log's largest rate: no Coulomb friction left to fit
+expect(2, r"command line: --smooth-sign: 1e\+19 rad/s is beyond the log's largest rate",
+       ["identify", PAPER, "--log", log, "--smooth-sign", "1e19", "--out", fit2, "--no-plots"])
 # a light mechanism's log in degrees, rates in deg/s: too little torque beyond the friction and
 # noise for the units check by the motion, and the model fails on it (the friction loop at 100
 # "rad"): the start pose names the degrees (exit 2), not the friction loop
@@ -129,4 +149,4 @@ expect(2, r"light_deg.csv: columns theta1, theta2: angles look like degrees",
 if failures:
     print("\n".join(failures))
     sys.exit(1)
-print("8 passed, 0 failed")
+print("11 passed, 0 failed")
