@@ -325,11 +325,13 @@ void print_rest(const RestRule& rule, const RestSummary& s) {
 /// A step of a crank angle between two rows beyond this is a jump, not motion [rad]
 constexpr double kJumpAngle = 1.0;
 
-/// Whether `motion`'s angles look like degrees. With rates in the file, the rates decide first,
-/// as for logs: angles that agree with them in degrees are degrees, in radians on both cranks
-/// radians, whatever the start (identification::rates_look_like_degrees, rates_say_radians).
-/// Else by the start (start_looks_like_degrees: beyond two turns, within 360; a motion in
-/// radians may start a turn out).
+/// Whether `motion`'s angles look like degrees. With rates in the file, as for logs: angles
+/// that agree with them in degrees (rates in rad/s) are degrees
+/// (identification::rates_look_like_degrees). Rates that agree with the angles on both cranks
+/// (rates_say_radians) cannot tell radians from degrees with deg/s rates: a start beyond two
+/// turns is then named as either (a radian motion cut late in a run, or degrees), not as
+/// degrees. Without rates, by the start (start_looks_like_degrees: beyond two turns, within 360;
+/// a motion in radians may start a turn out).
 std::string motion_in_degrees(const Motion& motion) {
   const std::vector<sim::Row>& r = motion.rows;
   if (r.empty()) return "";
@@ -348,7 +350,14 @@ std::string motion_in_degrees(const Motion& motion) {
       }
       radians = radians && identification::rates_say_radians(t, theta, omega);
     }
-    if (radians) return "";
+    const std::string start = start_looks_like_degrees(r[0].theta[0], r[0].theta[1]);
+    if (radians && !start.empty()) {
+      return "the angles start at " + format_significant(r[0].theta[0], 4) + ", " +
+             format_significant(r[0].theta[1], 4) +
+             ", beyond two turns, and the rates agree with them: radians a few turns out (rad/s "
+             "rates), or degrees (deg/s rates); check the units";
+    }
+    return radians ? "" : start;
   }
   return start_looks_like_degrees(r[0].theta[0], r[0].theta[1]);
 }
