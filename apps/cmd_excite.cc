@@ -576,13 +576,12 @@ std::string torque_excess(const Design& d, double limit) {
     return why + " (less than " + format_significant(100 * kSlightExcess) +
            " %: the applied tone torques are clipped at the limit, peak " +
            format_significant(d.peak_applied, 6) +
-           " N m; the inverse dynamics of the simulated motion reads the excess, the "
-           "integration's error: a tighter simulation.rtol or a limit lower by this much "
-           "passes)";
+           " N m; the excess is in the inverse dynamics of the simulated motion on the log's "
+           "grid, which differs from the applied torques by this much)";
   }
   return why + " (less than " + format_significant(100 * kSlightExcess) +
          " %: the design met the limit at the samples it was computed on, and the torque "
-         "peaks between them on the log's grid: a limit lower by this much passes)";
+         "peaks between them on the log's grid)";
 }
 
 // the design's own checks on the log's grid: status "ok" or what it misses; `base`: the
