@@ -215,15 +215,17 @@ int run(const Args& a) {
   const auto start = std::chrono::steady_clock::now();
   const Scene scene = load_scene(a.scene.scene, a.scene.sets);
   const sim::LoadFunction loads = LoadExpressions(scene).function();
-  const id::IdentifyOptions opt = identify_options(a.settings, scene);
+  id::IdentifyOptions opt = identify_options(a.settings, scene);
 
   // the log, then the fit; a log that does not fit the scene is bad input (exit 2)
   id::TorqueLog log = read_log(a.log);
   if (a.flip_torque_sign == "1" || a.flip_torque_sign == "both") {
     for (double& v : log.tau1) v = -v;
+    opt.torques_negated |= 1u;
   }
   if (a.flip_torque_sign == "2" || a.flip_torque_sign == "both") {
     for (double& v : log.tau2) v = -v;
+    opt.torques_negated |= 2u;
   }
   const id::IdentifyResult res = identify_scene(scene, loads, log, opt);
 
@@ -289,7 +291,8 @@ RunFunction setup(CLI::App* app) {
                   "default 0: Huber 1.345, Cauchy 2.385 times the residual's noise floor "
                   "(inverse dynamics), 0.1 rad (output error)");
   app->add_option("--smooth-sign", args->settings.smooth_sign,
-                  "w_s [rad/s]: tanh(w/w_s) for sign(w); 0 exact sign; default: the scene's")
+                  "w_s [rad/s]: tanh(w/w_s) for sign(w); 0 exact sign; default: the scene's; at "
+                  "most the log's largest rate")
       ->default_str("")  // the defaults in words: their stored values are sentinels
       ->check(nonnegative_number());
   app->add_flag("--estimate-rates", args->settings.estimate_rates,

@@ -325,27 +325,41 @@ void print_rest(const RestRule& rule, const RestSummary& s) {
 /// A step of a crank angle between two rows beyond this is a jump, not motion [rad]
 constexpr double kJumpAngle = 1.0;
 
-/// Whether `motion`'s angles look like degrees: by the start (start_looks_like_degrees: beyond
-/// two turns, within 360; a motion in radians may start a turn out), and when the file gives
-/// rates also by them (identification::rates_look_like_degrees, as for logs)
+/// Whether `motion`'s angles look like degrees. With rates in the file, as for logs: angles
+/// that agree with them in degrees (rates in rad/s) are degrees
+/// (identification::rates_look_like_degrees). Rates that agree with the angles on both cranks
+/// (rates_say_radians) cannot tell radians from degrees with deg/s rates: a start beyond two
+/// turns is then named as either (a radian motion cut late in a run, or degrees), not as
+/// degrees. Without rates, by the start (start_looks_like_degrees: beyond two turns, within 360;
+/// a motion in radians may start a turn out).
 std::string motion_in_degrees(const Motion& motion) {
   const std::vector<sim::Row>& r = motion.rows;
   if (r.empty()) return "";
-  const std::string start = start_looks_like_degrees(r[0].theta[0], r[0].theta[1]);
-  if (!start.empty() || motion.omega_source != "file") return start;
-  std::vector<double> t(r.size()), theta(r.size()), omega(r.size());
-  for (int k = 0; k < 2; ++k) {
-    for (size_t i = 0; i < r.size(); ++i) {
-      t[i] = r[i].t;
-      theta[i] = r[i].theta[k];
-      omega[i] = r[i].omega[k];
+  if (motion.omega_source == "file") {
+    bool radians = true;
+    std::vector<double> t(r.size()), theta(r.size()), omega(r.size());
+    for (int k = 0; k < 2; ++k) {
+      for (size_t i = 0; i < r.size(); ++i) {
+        t[i] = r[i].t;
+        theta[i] = r[i].theta[k];
+        omega[i] = r[i].omega[k];
+      }
+      const std::string why = identification::rates_look_like_degrees(t, theta, omega);
+      if (!why.empty()) {
+        return "angles look like degrees (theta" + std::to_string(k + 1) + ": " + why + ")";
+      }
+      radians = radians && identification::rates_say_radians(t, theta, omega);
     }
-    const std::string why = identification::rates_look_like_degrees(t, theta, omega);
-    if (!why.empty()) {
-      return "angles look like degrees (theta" + std::to_string(k + 1) + ": " + why + ")";
+    const std::string start = start_looks_like_degrees(r[0].theta[0], r[0].theta[1]);
+    if (radians && !start.empty()) {
+      return "the angles start at " + format_significant(r[0].theta[0], 4) + ", " +
+             format_significant(r[0].theta[1], 4) +
+             ", beyond two turns, and the rates agree with them: radians a few turns out (rad/s "
+             "rates), or degrees (deg/s rates); check the units";
     }
+    return radians ? "" : start;
   }
-  return "";
+  return start_looks_like_degrees(r[0].theta[0], r[0].theta[1]);
 }
 
 /// What in `motion` itself makes its inverse dynamics meaningless: angles that look like degrees

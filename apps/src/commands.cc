@@ -46,6 +46,36 @@ void check_sg_window(const id::IdentifyOptions& options, const id::TorqueLog& lo
   }
 }
 
+/// The log's largest joint rate [rad/s]: the logged rates, else the angles' differences (one
+/// turn's jumps left in: an unwrapped log reads a rate no larger than its true one)
+double largest_rate(const id::TorqueLog& log) {
+  double w = 0;
+  for (const std::vector<double>* o : {&log.omega1, &log.omega2}) {
+    for (double v : *o) w = std::max(w, std::abs(v));
+  }
+  if (log.has_rates) return w;
+  for (const std::vector<double>* th : {&log.theta1, &log.theta2}) {
+    for (size_t i = 1; i < th->size() && i < log.t.size(); ++i) {
+      const double dt = log.t[i] - log.t[i - 1], d = std::abs((*th)[i] - (*th)[i - 1]);
+      if (dt > 0 && d < M_PI) w = std::max(w, d / dt);
+    }
+  }
+  return w;
+}
+
+/// A --smooth-sign beyond the log's largest rate is bad input: tanh(w / w_s) is then nearly
+/// linear over the whole log, so Coulomb friction cannot be told from viscous friction (1e19
+/// left coulomb at its start, with no std)
+void check_smooth_sign(const id::IdentifyOptions& options, const id::TorqueLog& log) {
+  const double w = largest_rate(log);
+  if (!(options.smoothing_velocity > 0) || !(w > 0) || options.smoothing_velocity <= w) return;
+  throw InputError(kFlags, "--smooth-sign",
+                   format_shortest(options.smoothing_velocity) +
+                       " rad/s is beyond the log's largest rate, " + format_significant(w, 3) +
+                       " rad/s: the sign would be linear in the rate (no Coulomb friction to "
+                       "fit); use at most a fraction of it (0: the exact sign)");
+}
+
 /// The scene's friction as the start of a fit of `law`: the coefficients the scene's law
 /// identifies or requires keep their values (a LuGre scene identifies none, and requires its
 /// coulomb); of the others, one that defaults to another takes its value (static_coulomb:
@@ -156,6 +186,7 @@ std::string start_looks_like_degrees(double theta1, double theta2) {
 id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& loads,
                                   const id::TorqueLog& log, const id::IdentifyOptions& options) {
   check_sg_window(options, log);
+  check_smooth_sign(options, log);
   id::IdentifyResult res;
   try {
     res = id::identify(scene.params, loads, log, options);

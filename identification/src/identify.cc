@@ -1340,6 +1340,11 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& H
   const double emax = es.eigenvalues().maxCoeff(), emin = es.eigenvalues().minCoeff();
   if (!(emax > 0) || !(emin > 1e-14 * emax) || !H.allFinite()) {
     out->warnings.push_back("covariance could not be computed (Jacobian rank deficient)");
+    // a fit with no std cannot say how far to trust it
+    if (out->unusable.empty()) {
+      out->unusable = "the covariance could not be computed (the log does not determine the "
+                      "free coefficients apart): the estimates have no std";
+    }
     return;
   }
   const Eigen::MatrixXd Hinv = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
@@ -2424,6 +2429,14 @@ void unusable_move(double largest, const std::string& what, IdentifyResult* out)
                   " std (more than " + format_significant(kUnusableMove) + "; see the warnings)";
 }
 
+/// Whether a friction coefficient of the fit is at its bound
+bool friction_at_bound(const Fit& f, const IdentifyResult& out) {
+  for (int i = 0; i < f.layout.friction_size(); ++i) {
+    if (out.parameters[i].at_bound) return true;
+  }
+  return false;
+}
+
 /// The candidate cause with the strongest evidence alone (kCauseCount: none)
 int strongest_cause(const CauseSteps& cs) {
   int best = kCauseCount;
@@ -2494,7 +2507,11 @@ void angles_check(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
       " and " + moved + ". theta1, theta2 read " + pair_clause(fo, 0, 1.0) +
       " rad more than the scene's angles: an encoder's zero may be off; subtract the offsets "
       "from the logged angles");
-  unusable_move(largest, "the logged angles' zeros are off", out);
+  // evidenced zeros that hold a coefficient at its bound make the fit unusable, whatever the
+  // other coefficients' move (theta1 0.02 rad off on the light mechanism: viscous at 0, coulomb
+  // 4 std)
+  unusable_move(friction_at_bound(f, *out) ? 0 : largest, "the logged angles' zeros are off",
+                out);
 }
 
 /// model_check on the torque readings, when the log evidences them: the warning when the
@@ -2526,7 +2543,7 @@ void torque_check(const Fit& f, const CauseSteps& cs, const TorqueColumns& tc,
   if (scaled) {
     out->unusable = what + ": the friction estimates scale with them (see the warnings)";
   } else if (!moved.empty()) {
-    unusable_move(largest, what, out);
+    unusable_move(friction_at_bound(f, *out) ? 0 : largest, what, out);
   }
   if (!out->unusable.empty() || !(far || decisive)) return;
   out->unusable =
@@ -2583,6 +2600,13 @@ void model_check(const Fit& f, IdentifyResult* out) {
   if (!cs.any() && top < kCauseCount && cs.z(top) > detail::kCauseZ &&
       !(moved = friction_clause(f, *out, cs.alone[top], false, true, &(largest = 0))).empty()) {
     out->warnings.push_back(unresolved_warning(cs, top, moved, f.rates_biased));
+    const double ratio = misfit_ratio(*out);
+    if (out->unusable.empty() && ratio > kMisfitRatio) {  // an error the misfit shows, no cause
+      out->unusable = "a model error the log cannot attribute: it moves the friction while the "
+                      "torque residual is " + format_significant(ratio, 3) +
+                      " times its noise floor (more than " + format_significant(kMisfitRatio) +
+                      "; see the warnings)";
+    }
     unusable_move(largest, "a model error the log cannot attribute", out);
     return;
   }
@@ -2798,6 +2822,24 @@ TorqueLog negated_torques(const TorqueLog& log, unsigned channels) {
   return negated;
 }
 
+/// The sign check's advice: `logged_opposite` (bit 0: tau1, bit 1: tau2) are the logged torques
+/// whose sign is opposite the scene's convention, the caller's own flip already combined
+std::string torque_sign_advice(unsigned logged_opposite) {
+  switch (logged_opposite) {
+    case 0u:
+      return "the torques as logged follow the scene's convention (M1, M2 counter-clockwise on "
+             "the cranks); remove --flip-torque-sign";
+    case 3u:
+      return "the logged torques' sign is opposite the scene's convention (M1, M2 "
+             "counter-clockwise on the cranks); rerun with --flip-torque-sign both";
+    default: {
+      const std::string k = std::to_string(logged_opposite);
+      return "the logged tau" + k + "'s sign is opposite the scene's convention (M" + k +
+             " counter-clockwise on its crank); rerun with --flip-torque-sign " + k;
+    }
+  }
+}
+
 /// IdentifyOptions::check_torque_sign: true (and out->unusable says why) when the log's torques
 /// fit far better (kSignGain) with both negated, or else with one of them negated (a channel
 /// wired the other way read as "coulomb at its bound"); the fit with both negated puts its
@@ -2839,16 +2881,11 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
   if (!(best * kSignGain < ours)) return false;
   const std::string fit = format_significant(best, 2) + " times its noise floor against " +
                           format_significant(ours, 2);
-  out->unusable =
-      which == 3u
-          ? "the logged torques fit far better negated (residual " + fit +
-                "): the log's torque sign is opposite the scene's convention (M1, M2 "
-                "counter-clockwise on the cranks); rerun with --flip-torque-sign"
-          : "the logged tau" + std::to_string(which) +
-                " alone fits far better negated (residual " + fit + "): its sign is opposite "
-                "the scene's convention (M" + std::to_string(which) +
-                " counter-clockwise on its crank); rerun with --flip-torque-sign " +
-                std::to_string(which);
+  const std::string torques = opt.torques_negated == 0 ? "the logged " : "the flipped ";
+  out->unusable = (which == 3u ? torques + "torques fit far better negated (residual "
+                               : torques + "tau" + std::to_string(which) +
+                                     " alone fits far better negated (residual ") +
+                  fit + "): " + torque_sign_advice(opt.torques_negated ^ which);
   out->warnings.push_back(out->unusable + "; no torque delay was estimated");
   return true;
 }

@@ -9,9 +9,11 @@
 
 namespace fivebar::identification {
 
-std::string rates_look_like_degrees(const std::vector<double>& t, const std::vector<double>& theta,
-                                    const std::vector<double>& omega) {
-  // slope of the finite-difference rate against the logged rate
+namespace {
+/// The least-squares slope of the finite-difference rate of theta against the rate omega (NaN:
+/// no motion)
+double rate_slope(const std::vector<double>& t, const std::vector<double>& theta,
+                  const std::vector<double>& omega) {
   double sxy = 0, sxx = 0;
   for (size_t i = 0; i + 1 < theta.size() && i + 1 < t.size() && i + 1 < omega.size(); ++i) {
     const double d = (theta[i + 1] - theta[i]) / (t[i + 1] - t[i]);
@@ -19,8 +21,18 @@ std::string rates_look_like_degrees(const std::vector<double>& t, const std::vec
     sxy += d * w;
     sxx += w * w;
   }
-  if (!(sxx > 0)) return "";
-  const double slope = sxy / sxx;
+  return sxx > 0 ? sxy / sxx : NAN;
+}
+}  // namespace
+
+bool rates_say_radians(const std::vector<double>& t, const std::vector<double>& theta,
+                       const std::vector<double>& omega) {
+  return std::abs(rate_slope(t, theta, omega) - 1.0) < 0.2;
+}
+
+std::string rates_look_like_degrees(const std::vector<double>& t, const std::vector<double>& theta,
+                                    const std::vector<double>& omega) {
+  const double slope = rate_slope(t, theta, omega);
   if (std::abs(slope / (180.0 / M_PI) - 1.0) < 0.2) {
     return "d theta/dt is " + format_significant(slope, 6) + " times omega, close to 180/pi";
   }

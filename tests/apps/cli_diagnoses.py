@@ -4,7 +4,10 @@ model's message. A motion file in degrees and one with a 3 rad jump (inverse: ex
 them, not "r_k * mu too large"; a warning naming them where the model runs on them); a load expression that leaves its domain mid-run (simulate:
 exit 3 naming the load and the time, without running to simulation.max_steps); a run into a
 near-singular pose (simulate: exit 3 naming the pose and the time); an identify log
-whose torques carry the opposite sign (exit 3, no delay reported; --flip-torque-sign fits it); a
+whose torques carry the opposite sign (exit 3, no delay reported; --flip-torque-sign fits it, a
+wrong flip is told the right one); a --smooth-sign beyond the log's rates (exit 2); a motion in
+radians with rates that starts many turns out (radians or degrees, the rates agreeing); an encoder zero off that
+holds a coefficient at its bound (exit 3 naming the zeros); a
 light mechanism's log in degrees that the model fails on (exit 2 naming the degrees).
 Usage: cli_diagnoses.py FIVEBAR PAPER_YAML WORK_DIR"""
 import json
@@ -18,6 +21,30 @@ FIVEBAR, PAPER, WORK = sys.argv[1:4]
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 os.makedirs(WORK, exist_ok=True)
 failures = []
+SMALL_SCENE = """mechanism:
+  ground_length: 0.15
+  links:
+    - {length: 0.06, mass: 0.2, inertia: 0.004, com_offset: 0.03, com_angle: 0.1}
+    - {length: 0.07, mass: 0.25, inertia: 0.005, com_offset: 0.035, com_angle: 0.0}
+    - {length: 0.15, mass: 0.15, inertia: 0.003, com_offset: 0.07, com_angle: 0.0}
+    - {length: 0.16, mass: 0.15, inertia: 0.003, com_offset: 0.08, com_angle: 0.0}
+  point_p: 0.15
+  assembly: elbow_up
+gravity: 9.81
+friction:
+  model: coulomb_viscous
+  pin_radius: 0.004
+  coulomb: 0.15
+  viscous: 0.004
+loads:
+  M1: "0.03*sin(5*t) + 0.02*sin(11*t)"
+  M2: "0.025*cos(3*t) - 0.015*sin(13*t)"
+  M3: "0.002"
+  F: "0.05"
+  F_angle: 1.0
+initial: {theta1: 1.7, theta2: 1.4, omega1: 0.0, omega2: 0.0}
+simulation: {duration: 2.0, output_step: 0.001}
+"""
 
 
 def expect(status, pattern, args):
@@ -69,6 +96,18 @@ p = subprocess.run([FIVEBAR, "inverse", PAPER, "--motion", os.path.join(WORK, "t
 if p.returncode != 0 or "degrees" in p.stderr:
     failures.append("inverse turn.csv: exit %d, %s (expected 0, no degrees warning)" %
                     (p.returncode, p.stderr.strip()))
+# the paper run's second 1-2 s in radians with its rates, eleven turns out (theta1 from 70.7
+# rad): the rates agree with the angles, so the warning names radians or degrees with deg/s
+# rates, not degrees
+with open(os.path.join(WORK, "late.csv"), "w") as f:
+    f.write("t,theta1,theta2,omega1,omega2\n" + "".join(
+        "%s,%.12g,%.12g,%s,%s\n" % (r[0], float(r[1]) + 22 * math.pi, float(r[2]) + 22 * math.pi,
+                                     r[5], r[6]) for r in ref[1001:2002]))
+p = subprocess.run([FIVEBAR, "inverse", PAPER, "--motion", os.path.join(WORK, "late.csv"), "--out",
+                    out, "--no-plots"], capture_output=True, text=True)
+if p.returncode != 0 or "look like degrees" in p.stderr or "radians a few turns out" not in p.stderr:
+    failures.append("inverse late.csv: exit %d, %s (expected 0, radians or degrees)" %
+                    (p.returncode, p.stderr.strip()))
 # loads that leave their domain: named at the time, at once
 expect(3, r"load M3 = nan at t=1.50\d* s is not finite",
        ["simulate", PAPER, "--set", "loads.M3=sqrt(1.5-t)", "--out", out, "--no-plots"])
@@ -104,6 +143,39 @@ p = subprocess.run([FIVEBAR, "identify", PAPER, "--log", flipped, "--flip-torque
                     fit2, "--no-plots", "--no-validation"], capture_output=True, text=True)
 if p.returncode != 0 or json.load(open(os.path.join(fit2, "identification.json")))["status"] != "ok":
     failures.append("--flip-torque-sign: exit %d: %s" % (p.returncode, p.stderr[-300:]))
+# a flip of tau1 alone on the log negated in both: the advice is the flip of the log as logged
+expect(3, r"the flipped tau2 alone fits far better negated.*rerun with --flip-torque-sign both",
+       ["identify", PAPER, "--log", flipped, "--flip-torque-sign", "1", "--out", fit2,
+        "--no-plots", "--no-validation"])
+# a sign smoothing velocity beyond the log's largest rate: no Coulomb friction left to fit
+expect(2, r"command line: --smooth-sign: 1e\+19 rad/s is beyond the log's largest rate",
+       ["identify", PAPER, "--log", log, "--smooth-sign", "1e19", "--out", fit2, "--no-plots"])
+# a small light mechanism under gravity (torques about 0.05 N m, noise 0.02 N m), its 4 s
+# angles-only log with theta1's zero 0.02 rad off: the model check evidences the encoders' zeros
+# while viscous sits at its bound 0, so the fit is unusable, naming the zeros
+small_scene = os.path.join(WORK, "small.yaml")
+with open(small_scene, "w") as f:
+    f.write(SMALL_SCENE)
+clean, zero = os.path.join(WORK, "small.csv"), os.path.join(WORK, "small_zero1.csv")
+subprocess.run([FIVEBAR, "synth-log", small_scene, "--out", clean, "--rate", "1000", "--duration",
+                "4", "--torque-noise", "0.02", "--angle-noise", "1e-05", "--seed", "11",
+                "--excitation", "scene"], capture_output=True, check=True)
+with open(clean) as src, open(zero, "w") as f:
+    header = None
+    for line in src:
+        if line.startswith("#") or header is None:
+            header = header if line.startswith("#") else line.strip().split(",")
+            f.write(line)
+            continue
+        cells = line.rstrip("\n").split(",")
+        cells[header.index("theta1")] = repr(float(cells[header.index("theta1")]) + 0.02)
+        f.write(",".join(cells) + "\n")
+expect(3, r"the logged angles' zeros are off: it holds a friction coefficient at its bound",
+       ["identify", small_scene, "--log", zero, "--out", fit, "--no-plots", "--no-validation"])
+p = subprocess.run([FIVEBAR, "identify", small_scene, "--log", clean, "--out", fit, "--no-plots",
+                    "--no-validation"], capture_output=True, text=True)
+if p.returncode != 0:
+    failures.append("small.csv (clean): exit %d: %s" % (p.returncode, p.stderr[-300:]))
 # a light mechanism's log in degrees, rates in deg/s: too little torque beyond the friction and
 # noise for the units check by the motion, and the model fails on it (the friction loop at 100
 # "rad"): the start pose names the degrees (exit 2), not the friction loop
@@ -129,4 +201,4 @@ expect(2, r"light_deg.csv: columns theta1, theta2: angles look like degrees",
 if failures:
     print("\n".join(failures))
     sys.exit(1)
-print("8 passed, 0 failed")
+print("13 passed, 0 failed")

@@ -260,5 +260,42 @@ TEST(IdentifyStatus, OneNegatedTorqueChannelIsNamed) {
   EXPECT_TRUE(std::isnan(res.delay_s)) << res.delay_s;
 }
 
+// the advice is relative to the torques as logged: a log whose tau1 is negated, fitted with
+// tau2 flipped by the caller, fits with both negated: flip tau1 (not tau2, not both)
+TEST(IdentifyStatus, TheSignAdviceCombinesTheCallersFlip) {
+  TorqueLog log = paper_log(paper_params());
+  for (double& v : log.tau1) v = -v;  // as logged
+  for (double& v : log.tau2) v = -v;  // the caller's --flip-torque-sign 2
+  IdentifyOptions opt;
+  opt.torques_negated = 2u;
+  const IdentifyResult res = identify(paper_params(), paper_loads, log, opt);
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_THAT(res.unusable, HasSubstr("the flipped torques fit far better negated"));
+  EXPECT_THAT(res.unusable, HasSubstr("rerun with --flip-torque-sign 1"));
+}
+
+// a clean log with tau1 flipped by the caller: the advice is to remove the flip
+TEST(IdentifyStatus, AWrongFlipOfACleanLogIsToBeRemoved) {
+  TorqueLog log = paper_log(paper_params());
+  for (double& v : log.tau1) v = -v;  // the caller's --flip-torque-sign 1
+  IdentifyOptions opt;
+  opt.torques_negated = 1u;
+  const IdentifyResult res = identify(paper_params(), paper_loads, log, opt);
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_THAT(res.unusable, HasSubstr("the flipped tau1 alone fits far better negated"));
+  EXPECT_THAT(res.unusable, HasSubstr("remove --flip-torque-sign"));
+}
+
+// a sign smoothing velocity far beyond the log's rates: tanh(w / w_s) is linear in the rate,
+// Coulomb friction cannot be told from viscous, and the covariance cannot be computed; a fit
+// with no std is not usable
+TEST(IdentifyStatus, AFitWithoutCovarianceIsUnusable) {
+  IdentifyOptions opt;
+  opt.smoothing_velocity = 1e19;
+  const IdentifyResult res = identify(paper_params(), paper_loads, paper_log(paper_params()), opt);
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_THAT(res.unusable, HasSubstr("the covariance could not be computed"));
+}
+
 }  // namespace
 }  // namespace fivebar::identification

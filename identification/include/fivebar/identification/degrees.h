@@ -20,4 +20,10 @@ inline constexpr double kDegreesBeyond = 4 * M_PI;
 std::string rates_look_like_degrees(const std::vector<double>& t, const std::vector<double>& theta,
                                     const std::vector<double>& omega);
 
+/// Whether the angles `theta` at times `t` agree with their rates `omega` in radians (the same
+/// least-squares slope within 20 % of 1): then they are radians, whatever their start (a motion
+/// cut late in a run starts many turns out, at 72.5 rad)
+bool rates_say_radians(const std::vector<double>& t, const std::vector<double>& theta,
+                       const std::vector<double>& omega);
+
 }  // namespace fivebar::identification
