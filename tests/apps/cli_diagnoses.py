@@ -55,6 +55,20 @@ def expect(status, pattern, args):
                                                                   errors, status, pattern))
 
 
+def rewrite_log(src_path, dst_path, change):
+    """Copies a log, comments and header as they are, each data row through change(header, cells)."""
+    with open(src_path) as src, open(dst_path, "w") as f:
+        header = None
+        for line in src:
+            if line.startswith("#") or header is None:
+                header = header if line.startswith("#") else line.strip().split(",")
+                f.write(line)
+                continue
+            cells = line.rstrip("\n").split(",")
+            change(header, cells)
+            f.write(",".join(cells) + "\n")
+
+
 # motions of the paper run (first second), in degrees and with a 3 rad jump at t = 0.5 s
 ref = [l.split(",") for l in open(os.path.join(ROOT, "datasets/reference/paper_friction.csv"))]
 rows = [(r[0], float(r[1]), float(r[2])) for r in ref[1:1002]]
@@ -160,16 +174,13 @@ clean, zero = os.path.join(WORK, "small.csv"), os.path.join(WORK, "small_zero1.c
 subprocess.run([FIVEBAR, "synth-log", small_scene, "--out", clean, "--rate", "1000", "--duration",
                 "4", "--torque-noise", "0.02", "--angle-noise", "1e-05", "--seed", "11",
                 "--excitation", "scene"], capture_output=True, check=True)
-with open(clean) as src, open(zero, "w") as f:
-    header = None
-    for line in src:
-        if line.startswith("#") or header is None:
-            header = header if line.startswith("#") else line.strip().split(",")
-            f.write(line)
-            continue
-        cells = line.rstrip("\n").split(",")
-        cells[header.index("theta1")] = repr(float(cells[header.index("theta1")]) + 0.02)
-        f.write(",".join(cells) + "\n")
+
+
+def zero_off(header, cells):
+    cells[header.index("theta1")] = repr(float(cells[header.index("theta1")]) + 0.02)
+
+
+rewrite_log(clean, zero, zero_off)
 expect(3, r"the logged angles' zeros are off: it holds a friction coefficient at its bound",
        ["identify", small_scene, "--log", zero, "--out", fit, "--no-plots", "--no-validation"])
 p = subprocess.run([FIVEBAR, "identify", small_scene, "--log", clean, "--out", fit, "--no-plots",
@@ -184,18 +195,15 @@ rad_log, deg_log = os.path.join(WORK, "light.csv"), os.path.join(WORK, "light_de
 subprocess.run([FIVEBAR, "synth-log", LIGHT, "--excitation", "multisine", "--torque-limit", "0.2",
                 "--duration", "2", "--seed", "1", "--with-rates", "--out", rad_log],
                capture_output=True, check=True)
-with open(rad_log) as src, open(deg_log, "w") as f:
-    header = None
-    for line in src:
-        if line.startswith("#") or header is None:
-            header = header if line.startswith("#") else line.strip().split(",")
-            f.write(line)
-            continue
-        cells = line.rstrip("\n").split(",")
-        for i, name in enumerate(header):
-            if name[:-1] in ("theta", "omega", "alpha"):
-                cells[i] = repr(math.degrees(float(cells[i])))
-        f.write(",".join(cells) + "\n")
+
+
+def in_degrees(header, cells):
+    for i, name in enumerate(header):
+        if name[:-1] in ("theta", "omega", "alpha"):
+            cells[i] = repr(math.degrees(float(cells[i])))
+
+
+rewrite_log(rad_log, deg_log, in_degrees)
 expect(2, r"light_deg.csv: columns theta1, theta2: angles look like degrees",
        ["identify", LIGHT, "--log", deg_log, "--out", fit, "--no-plots", "--no-validation"])
 if failures:
