@@ -62,10 +62,8 @@ struct LowRankResponse {
 template <typename T>
 struct LoopAids {
   /// the change of the reactions per unit friction torque (for torques before `extra`), known in
-  /// closed form: replaces the unit probes
-  const ReactionResponse<T>* response = nullptr;
-  /// the same change in the rank-4 form of forward dynamics with no joint stuck (cheaper to build;
-  /// used where `response` is not given)
+  /// closed form in the rank-4 form of forward dynamics with no joint stuck: replaces the unit
+  /// probes
   const LowRankResponse<T>* low_rank = nullptr;
   FrictionWarmStart* warm = nullptr;  ///< double evaluations only (ignored for Jets)
 };
@@ -564,15 +562,12 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
   Mf->fill(T(0));
   std::array<Vec2<T>, kJoints> F0;
   solve(std::array<T, kJoints>{}, &F0);
-  // the response per torque: given, or expanded from the low-rank form where a path needs it
+  // the response per torque expanded from the low-rank form where a path needs it
   ReactionResponse<T> expanded;
-  const ReactionResponse<T>* response = aids.response;
-  const auto full_response = [&]() {
-    if (!response && aids.low_rank) {
-      expanded = aids.low_rank->expand();
-      response = &expanded;
-    }
-    return response;
+  const auto full_response = [&]() -> const ReactionResponse<T>* {
+    if (!aids.low_rank) return nullptr;
+    expanded = aids.low_rank->expand();
+    return &expanded;
   };
   // the unscaled map only where it is needed (the Newton fallback, the solution recorded for the
   // Jet pass)
@@ -584,10 +579,8 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
     return map;
   };
   FrictionWarmStart* warm = std::is_same_v<T, double> ? aids.warm : nullptr;
-  const ScaledReactions<T> scaled =
-      aids.response    ? ScaledReactions<T>(phi, F0, *aids.response)
-      : aids.low_rank  ? ScaledReactions<T>(phi, F0, *aids.low_rank)
-                       : ScaledReactions<T>(phi, affine());
+  const ScaledReactions<T> scaled = aids.low_rank ? ScaledReactions<T>(phi, F0, *aids.low_rank)
+                                                  : ScaledReactions<T>(phi, affine());
   const Status st = scaled_friction_loop(phi, opt, solve, scaled, affine, warm, N, Mf, F,
                                          iterations);
   if (!st.ok()) {
