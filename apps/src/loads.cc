@@ -147,6 +147,13 @@ sim::LoadFunction LoadExpressions::function() const {
   return [self = *this](double t) { return self(t); };
 }
 
+sim::FourBarLoadFunction LoadExpressions::four_bar_function() const {
+  return [self = *this](double t) {
+    const Loads<double> L = self(t);
+    return FourBarLoads{L.M1, L.M3, L.F, L.F_angle};
+  };
+}
+
 const std::array<std::string, 4>& LoadExpressions::expressions() const {
   return compiled_->expressions;
 }

@@ -58,20 +58,21 @@ void row_values(const sim::Row& r, double* out) {
   for (double x : {r.P_diss, r.E_diss, r.W_in, r.W_ext}) *out++ = x;
 }
 
+std::vector<std::string> trajectory_columns(const TrajectoryLayout& layout) {
+  std::vector<std::string> c = {"t"};
+  for (const char* q : {"theta", "omega", "alpha"}) {
+    for (int i = 1; i <= layout.links; ++i) c.push_back(q + std::to_string(i));
+  }
+  for (int i = 1; i <= layout.drives; ++i) c.push_back("M" + std::to_string(i));
+  for (const char* q : {"N", "Mf"}) {
+    for (int k = 1; k <= layout.joints; ++k) c.push_back(q + std::to_string(k));
+  }
+  for (const char* q : {"P_diss", "E_diss", "W_in", "W_ext"}) c.push_back(q);
+  return c;
+}
+
 const std::vector<std::string>& trajectory_columns() {
-  static const std::vector<std::string> columns = [] {
-    std::vector<std::string> c = {"t"};
-    for (const char* q : {"theta", "omega", "alpha"}) {
-      for (int i = 1; i <= kLinks; ++i) c.push_back(q + std::to_string(i));
-    }
-    c.push_back("M1");
-    c.push_back("M2");
-    for (const char* q : {"N", "Mf"}) {
-      for (int k = 1; k <= kJoints; ++k) c.push_back(q + std::to_string(k));
-    }
-    for (const char* q : {"P_diss", "E_diss", "W_in", "W_ext"}) c.push_back(q);
-    return c;
-  }();
+  static const std::vector<std::string> columns = trajectory_columns(TrajectoryLayout{});
   return columns;
 }
 
@@ -91,7 +92,7 @@ std::vector<Column> rest_columns(const std::vector<sim::Row>& rows) {
 }
 
 void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& rows,
-                          const std::vector<Column>& extra) {
+                          const std::vector<Column>& extra, const TrajectoryLayout& layout) {
   for (const Column& c : extra) {
     if (c.values.size() != rows.size()) {
       throw InputError(path, c.name,
@@ -101,7 +102,7 @@ void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& 
   }
   File f = open_for_writing(path);
   std::string line;
-  for (const std::string& name : trajectory_columns()) line += name + ",";
+  for (const std::string& name : trajectory_columns(layout)) line += name + ",";
   for (const Column& c : extra) line += c.name + ",";
   line.back() = '\n';
   std::fputs(line.c_str(), f.get());
@@ -111,13 +112,14 @@ void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& 
     line.clear();
     line.append(format_grid_value(r.t));  // 0.476, not 476 * 0.001 = 0.47600000000000003
     line.push_back(',');
-    for (double x : r.theta) append_number(&line, x, ',');
-    for (double x : r.omega) append_number(&line, x, ',');
-    for (double x : r.alpha) append_number(&line, x, ',');
+    for (const auto* a : {&r.theta, &r.omega, &r.alpha}) {
+      for (int i = 0; i < layout.links; ++i) append_number(&line, (*a)[i], ',');
+    }
     append_number(&line, r.M1, ',');
-    append_number(&line, r.M2, ',');
-    for (double x : r.N) append_number(&line, x, ',');
-    for (double x : r.Mf) append_number(&line, x, ',');
+    if (layout.drives > 1) append_number(&line, r.M2, ',');
+    for (const auto* a : {&r.N, &r.Mf}) {
+      for (int k = 0; k < layout.joints; ++k) append_number(&line, (*a)[k], ',');
+    }
     for (double x : {r.P_diss, r.E_diss, r.W_in, r.W_ext}) append_number(&line, x, ',');
     for (const Column& c : extra) append_number(&line, c.values[i], ',');
     line.back() = '\n';

@@ -6,6 +6,7 @@
 #include "fivebar/io/command.h"
 
 #include "fivebar/model/actuator.h"
+#include "fivebar/model/four_bar.h"
 #include "fivebar/model/motor.h"
 #include "fivebar/model/friction.h"
 #include "fivebar/model/kinematics.h"
@@ -54,6 +55,7 @@ struct Field {
 // which come from the friction-law descriptors (friction.h): see schema()
 const Field kBaseSchema[] = {
     {"mechanism", Kind::kSection},
+    {"mechanism.type", Kind::kName},
     {"mechanism.ground_length", Kind::kNumber},
     {"mechanism.links", Kind::kLinkList},
     {"mechanism.links.#", Kind::kSection},
@@ -259,12 +261,12 @@ class SceneReader {
                                std::string* key_io, int* element) const {
     std::vector<std::string>& parts = *parts_io;
     std::string& key = *key_io;
-    // a link index must name one of the four links
+    // a link index must name one of the mechanism's links
     if (parts.size() >= 3 && parts[0] == "mechanism" && parts[1] == "links") {
       const int i = parse_index(parts[2]);
-      if (i < 0 || i >= kLinks) {
+      if (i < 0 || i >= links()) {
         fail(join(parts, 3, '.'), "no such link" + in_set + " (links are numbered 0 to " +
-                                      std::to_string(kLinks - 1) + ")");
+                                      std::to_string(links() - 1) + ")");
       }
     }
     const Field* field = find_field(schema_key(parts));
@@ -273,9 +275,9 @@ class SceneReader {
       const Field* pf = find_field(schema_key(parent));
       if (pf != nullptr && pf->kind == Kind::kNumberOr5) {
         *element = parse_index(parts.back());
-        if (*element >= kJoints) {
+        if (*element >= joints()) {
           fail(key, "no such joint" + in_set + " (joints are numbered 0 to " +
-                        std::to_string(kJoints - 1) + ": O, B, C, D, D0)");
+                        std::to_string(joints() - 1) + ": " + joint_names() + ")");
         }
         field = pf;
         parts = parent;
@@ -302,9 +304,10 @@ class SceneReader {
       it = flat_.emplace(key, Value{fallback, fallback.size() > 1, ""}).first;
     }
     Value& v = it->second;
-    if (!v.list || v.items.size() == 1) v.items.assign(kJoints, v.items.front());
-    if (v.items.size() != static_cast<size_t>(kJoints)) {
-      fail(key, "expected 1 or 5 numbers, got " + std::to_string(v.items.size()) + v.origin);
+    if (!v.list || v.items.size() == 1) v.items.assign(joints(), v.items.front());
+    if (v.items.size() != static_cast<size_t>(joints())) {
+      fail(key, "expected 1 or " + std::to_string(joints()) + " numbers" + joint_hint() +
+                    ", got " + std::to_string(v.items.size()) + v.origin);
     }
     v.list = true;
     v.items[element] = text;
@@ -391,23 +394,27 @@ class SceneReader {
     return has(key) ? trim(scalar(key)) : fallback;
   }
 
-  // one number for all joints or a list of 5, each checked by `check` (named in `domain`)
+  // one number for all joints or a list of one per joint (5 for the five-bar, 4 for the
+  // four-bar, whose fifth slot stays 0), each checked by `check` (named in `domain`)
   std::array<double, kJoints> per_joint(const std::string& key, std::optional<double> fallback,
                                         bool (*check)(double), const char* domain) const {
-    std::array<double, kJoints> out;
+    std::array<double, kJoints> out{};
+    const int n = joints();
     if (!has(key)) {
       if (!fallback) {
         fail(key, "missing (required by friction.model " + text("friction.model", "none") +
-                      "): one number or a list of 5 (O, B, C, D, D0)");
+                      "): one number or a list of " + std::to_string(n) + " (" + joint_names() +
+                      ")");
       }
-      out.fill(*fallback);
+      std::fill(out.begin(), out.begin() + n, *fallback);
       return out;
     }
     const Value& v = flat_.at(key);
-    if (v.items.size() != 1 && v.items.size() != static_cast<size_t>(kJoints)) {
-      fail(key, "expected 1 or 5 numbers, got " + std::to_string(v.items.size()) + v.origin);
+    if (v.items.size() != 1 && v.items.size() != static_cast<size_t>(n)) {
+      fail(key, "expected 1 or " + std::to_string(n) + " numbers" + joint_hint() + ", got " +
+                    std::to_string(v.items.size()) + v.origin);
     }
-    for (int k = 0; k < kJoints; ++k) {
+    for (int k = 0; k < n; ++k) {
       const bool single = v.items.size() == 1;
       const std::string item_key = single ? key : key + "." + std::to_string(k);
       const std::string& item = v.items[single ? 0 : k];
@@ -415,6 +422,20 @@ class SceneReader {
       if (!check(out[k]))
         fail(item_key, std::string("must be ") + domain + ", got " + item + v.origin);
     }
+    return out;
+  }
+
+  /// mechanism.type four_bar (the file's or a --set's value; anything else is checked later)
+  bool four_bar() const { return has("mechanism.type") && trim(scalar("mechanism.type")) == "four_bar"; }
+  int joints() const { return four_bar() ? kFourBarJoints : kJoints; }
+  int links() const { return four_bar() ? kFourBarLinks : kLinks; }
+  std::string joint_names() const { return four_bar() ? "O, B, C, D0" : "O, B, C, D, D0"; }
+  /// the four-bar's joints named in list-length messages (the five-bar's as they always read)
+  std::string joint_hint() const { return four_bar() ? " (" + joint_names() + ")" : ""; }
+  /// every key the scene gives a value (dotted)
+  std::vector<std::string> keys() const {
+    std::vector<std::string> out;
+    for (const auto& kv : flat_) out.push_back(kv.first);
     return out;
   }
 
@@ -505,7 +526,7 @@ class SceneReader {
         return;
       case Kind::kLinkList:
         if (!node.IsSequence()) {
-          fail(key, "expected a list of " + std::to_string(kLinks) + " links, got " +
+          fail(key, "expected a list of " + std::to_string(links()) + " links, got " +
                         type_name(node) + line_of(node));
         }
         link_count_ = static_cast<int>(node.size());
@@ -551,21 +572,23 @@ std::string num(double x) { return format_double(x); }
 /// One warning line for each value that is valid but likely a unit mistake (degrees for
 /// radians, millimetres or grams for SI): |theta| > 2 pi, lengths outside 1e-4..10 m, masses
 /// outside 1e-6..1e4 kg.
-void plausibility_warnings(Scene* s) {
+template <class P>
+void plausibility_warnings(const P& p, Scene* s) {
   auto say = [&](const std::string& key, double v, const std::string& why) {
     s->warnings.push_back(s->path + ": " + key + ": " + num(v) + " " + why);
   };
+  const bool four = s->type == MechanismType::kFourBar;
   for (const char* key : {"theta1", "theta2"}) {
+    if (four && std::string(key) == "theta2") continue;
     const double v = std::string(key) == "theta1" ? s->initial.theta1 : s->initial.theta2;
     if (std::abs(v) > 2 * M_PI) say(std::string("initial.") + key, v, "rad is beyond 2 pi: degrees?");
   }
   auto length = [&](const std::string& key, double v) {
     if (v < 1e-4 || v > 10) say(key, v, "m is outside 1e-4..10 m: millimetres?");
   };
-  const Params<double>& p = s->params;
   length("mechanism.ground_length", p.ground_length);
   if (p.point_p != 0.0) length("mechanism.point_p", std::abs(p.point_p));
-  for (int i = 0; i < kLinks; ++i) {
+  for (size_t i = 0; i < p.links.size(); ++i) {
     const std::string link = "mechanism.links." + std::to_string(i);
     length(link + ".length", p.links[i].length);
     const double m = p.links[i].mass;
@@ -598,15 +621,20 @@ void require(const SceneReader& r, const std::string& key, double x, bool ok,
   if (!ok) r.fail(key, "must be " + domain + ", got " + num(x) + r.origin(key));
 }
 
-void read_mechanism(const SceneReader& r, Params<double>* out) {
-  Params<double>& p = *out;
+// the geometry of either mechanism (Params or FourBarParams: the same keys, P::links links)
+template <class P>
+void read_mechanism(const SceneReader& r, P* out) {
+  P& p = *out;
+  const int n = static_cast<int>(p.links.size());
   p.ground_length = r.number("mechanism.ground_length", std::nullopt);
   require(r, "mechanism.ground_length", p.ground_length, p.ground_length > 0, "> 0");
-  if (r.link_count() != kLinks) {
-    r.fail("mechanism.links", "expected " + std::to_string(kLinks) + " links, got " +
-                                  std::to_string(r.link_count()) + r.link_line());
+  if (r.link_count() != n) {
+    r.fail("mechanism.links",
+           "expected " + std::to_string(n) + " links, got " + std::to_string(r.link_count()) +
+               r.link_line() + "; mechanism.type " + (r.four_bar() ? "four_bar" : "five_bar") +
+               " has " + std::to_string(n) + " (five_bar 4, four_bar 3)");
   }
-  for (int i = 0; i < kLinks; ++i) {
+  for (int i = 0; i < n; ++i) {
     const std::string k = "mechanism.links." + std::to_string(i) + ".";
     Link<double>& link = p.links[i];
     link.length = r.number(k + "length", std::nullopt);
@@ -698,6 +726,7 @@ void read_actuators(const SceneReader& r, FrictionLaw law, ActuatorParams<double
 // loads (compiled once here so that a bad expression is reported at load time), initial state
 void read_loads_and_initial(const SceneReader& r, Scene* out) {
   Scene& s = *out;
+  const bool five = s.type == MechanismType::kFiveBar;
   s.M1 = r.text("loads.M1", "0");
   s.M2 = r.text("loads.M2", "0");
   s.M3 = r.text("loads.M3", "0");
@@ -705,9 +734,9 @@ void read_loads_and_initial(const SceneReader& r, Scene* out) {
   s.F_angle = r.number("loads.F_angle", 0.0);
   static_cast<void>(LoadExpressions(s));
 
-  // initial state
+  // initial state (the four-bar's crank alone)
   s.initial.theta1 = r.number("initial.theta1", std::nullopt);
-  s.initial.theta2 = r.number("initial.theta2", std::nullopt);
+  s.initial.theta2 = five ? r.number("initial.theta2", std::nullopt) : 0.0;
   s.initial.omega1 = r.number("initial.omega1", 0.0);
   s.initial.omega2 = r.number("initial.omega2", 0.0);
   // beyond this an angle has lost its precision (at 1e20 rad one ulp is many turns)
@@ -813,18 +842,68 @@ void check_initial_pose(const SceneReader& r, const Scene& s) {
   }
 }
 
-Scene build_scene(const SceneReader& r) {
+// the four-bar's initial crank angle must close, away from the toggle (coupler and rocker
+// aligned, where the reactions grow as 1 / sin(th3 - th2))
+void check_four_bar_pose(const SceneReader& r, const Scene& s) {
+  FourBarKinematics k;
+  const Status closed = four_bar_kinematics(s.four_bar, s.initial.theta1, &k);
+  if (!closed.ok()) r.fail("initial", closed.message);
+  const double sine = std::abs(k.sin32);
+  if (sine < s.options.singular_margin) {
+    r.fail("initial", "too close to a singular configuration (coupler and rocker aligned): "
+                      "|sin(th3 - th2)| = " + num(sine) + " < simulation.singular_margin = " +
+                          num(s.options.singular_margin));
+  }
+}
+
+// mechanism.type, checked against the caller's mechanisms and the keys the scene gives: a
+// five-bar key in a four-bar scene fails naming both
+MechanismType read_type(const SceneReader& r, bool four_bar_ok) {
+  const std::string type = r.text("mechanism.type", "five_bar");
+  if (type != "five_bar" && type != "four_bar") {
+    r.fail("mechanism.type", "expected five_bar or four_bar, got '" + type + "'" +
+                                 r.origin("mechanism.type"));
+  }
+  if (type == "five_bar") return MechanismType::kFiveBar;
+  if (!four_bar_ok) {
+    r.fail("mechanism.type", "four_bar: this command runs five-bars only so far (fivebar simulate "
+                             "runs four-bars)" + r.origin("mechanism.type"));
+  }
+  for (const std::string& key : r.keys()) {
+    const bool five_bar_key = key == "loads.M2" || key == "initial.theta2" ||
+                              key == "initial.omega2" || key.rfind("actuators.", 0) == 0;
+    if (five_bar_key) {
+      r.fail(key, "is a five-bar key, not one of mechanism.type four_bar (one crank: loads M1, M3, "
+                  "F, F_angle; initial theta1, omega1; no actuators)" + r.origin(key));
+    }
+  }
+  return MechanismType::kFourBar;
+}
+
+Scene build_scene(const SceneReader& r, bool four_bar_ok) {
   Scene s;
   s.path = r.path();
-  read_mechanism(r, &s.params);
-  read_friction(r, &s.params.friction);
-  read_actuators(r, s.params.friction.law, &s.params.actuators);
+  s.type = read_type(r, four_bar_ok);
+  const bool five = s.type == MechanismType::kFiveBar;
+  FrictionParams<double>& friction = five ? s.params.friction : s.four_bar.friction;
+  if (five) {
+    read_mechanism(r, &s.params);
+  } else {
+    read_mechanism(r, &s.four_bar);
+  }
+  read_friction(r, &friction);
+  if (five) read_actuators(r, friction.law, &s.params.actuators);
   read_windings(r, &s.windings);
   read_loads_and_initial(r, &s);
-  read_integration(r, s.params.friction.law, &s.options);
+  read_integration(r, friction.law, &s.options);
   read_solver_limits(r, &s);
-  check_initial_pose(r, s);
-  plausibility_warnings(&s);
+  if (five) {
+    check_initial_pose(r, s);
+    plausibility_warnings(s.params, &s);
+  } else {
+    check_four_bar_pose(r, s);
+    plausibility_warnings(s.four_bar, &s);
+  }
   return s;
 }
 
@@ -864,8 +943,12 @@ double coupler_sine(const Params<double>& p, double theta1, double theta2) {
   return std::abs(k.sin43);
 }
 
+const char* mechanism_type_name(MechanismType type) {
+  return type == MechanismType::kFourBar ? "four_bar" : "five_bar";
+}
+
 Scene parse_scene(const std::string& yaml_text, const std::string& path,
-                  const std::vector<std::string>& sets) {
+                  const std::vector<std::string>& sets, bool four_bar_ok) {
   SceneReader reader(path);
   YAML::Node root;
   try {
@@ -880,7 +963,7 @@ Scene parse_scene(const std::string& yaml_text, const std::string& path,
   }
   reader.read_root(root);
   for (const std::string& set : sets) reader.apply_set(set);
-  return build_scene(reader);
+  return build_scene(reader, four_bar_ok);
 }
 
 std::vector<std::string> scene_keys(bool sections) {
@@ -895,18 +978,18 @@ std::vector<std::string> scene_keys(bool sections) {
   return keys;
 }
 
-Scene read_scene(const std::string& path, const std::vector<std::string>& sets) {
+Scene read_scene(const std::string& path, const std::vector<std::string>& sets, bool four_bar_ok) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad())
     throw InputError(path, "(file)", std::string("cannot read: ") + std::strerror(errno));
-  return parse_scene(text.str(), path, sets);
+  return parse_scene(text.str(), path, sets, four_bar_ok);
 }
 
-Scene load_scene(const std::string& path, const std::vector<std::string>& sets) {
-  Scene scene = read_scene(path, sets);
+Scene load_scene(const std::string& path, const std::vector<std::string>& sets, bool four_bar_ok) {
+  Scene scene = read_scene(path, sets, four_bar_ok);
   for (const std::string& w : scene.warnings) warn(w);
   return scene;
 }

@@ -44,7 +44,8 @@ namespace {
 
 /// The companion of a run: same method, ten times tighter, angles only, no progress. When the
 /// companion finds the joint modes indeterminate, *indeterminate receives its status.
-double companion_estimate(const Params<double>& params, const LoadFunction& loads,
+template <class P, class LoadFn>
+double companion_estimate(const P& params, const LoadFn& loads,
                           const Initial& initial, const Options& o, const Result& run,
                           std::string* note, Status* indeterminate) {
   Options c = o;
@@ -62,10 +63,10 @@ double companion_estimate(const Params<double>& params, const LoadFunction& load
   return max_angle_difference(run.rows, companion.rows);
 }
 
-}  // namespace
-
-EstimatedRun simulate_to_target(const Params<double>& params, const LoadFunction& loads,
-                                const Initial& initial, const Options& options) {
+/// simulate_to_target's body, for the mechanism of P.
+template <class P, class LoadFn>
+EstimatedRun to_target(const P& params, const LoadFn& loads, const Initial& initial,
+                       const Options& options) {
   EstimatedRun out;
   out.options = options;
   Options& o = out.options;
@@ -122,6 +123,19 @@ EstimatedRun simulate_to_target(const Params<double>& params, const LoadFunction
                                  : " (the scene fixes rtol; remove it to let fivebar choose)");
   }
   return out;
+}
+
+}  // namespace
+
+EstimatedRun simulate_to_target(const Params<double>& params, const LoadFunction& loads,
+                                const Initial& initial, const Options& options) {
+  return to_target(params, loads, initial, options);
+}
+
+EstimatedRun simulate_to_target(const FourBarParamsT<double>& params,
+                                const FourBarLoadFunction& loads, const Initial& initial,
+                                const Options& options) {
+  return to_target(params, loads, initial, options);
 }
 
 }  // namespace fivebar::sim

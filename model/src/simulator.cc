@@ -9,6 +9,8 @@
 #include <sstream>
 
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/five_bar_mechanism.h"
+#include "fivebar/model/four_bar.h"
 #include "fivebar/model/lock.h"
 #include "fivebar/model/names.h"
 #include "fivebar/model/rest.h"
@@ -29,12 +31,13 @@ bool parse_method(const std::string& name, Method* out) { return parse_in(kMetho
 
 namespace {
 
-constexpr int kStates = 7;   // th1, th2, w1, w2, E_diss, W_in, W_ext
-/// a law with internal states (LawDescriptor::states_per_joint: LuGre's bristles z_1..z_5) adds
-/// them from here
-constexpr int kBristle = kStates;
-/// the longest state: the base states and the internal states of the law that has the most
-constexpr int kMaxStates = kStates + kJoints * kMaxStatesPerJoint;
+/// The state of a mechanism with n degrees of freedom: q (n angles), v (n rates), E_diss, W_in,
+/// W_ext; a law with internal states (LawDescriptor::states_per_joint: LuGre's bristles z_k)
+/// adds them from base_states(n) on.
+constexpr int base_states(int dof) { return 2 * dof + 3; }
+/// the longest state: the base states of the largest mechanism and the internal states of the
+/// law that has the most
+constexpr int kMaxStates = base_states(2) + kJoints * kMaxStatesPerJoint;
 static_assert(kMaxStatesPerJoint <= 1, "forward_dynamics carries one internal state per joint");
 /// interior points of every step at which the switch functions are sampled (a rate that
 /// crosses zero and comes back within one step is seen if it stays across for a quarter step)
@@ -64,10 +67,178 @@ constexpr int kLockSlot = 5;
 constexpr double kSlackAccel = 1e-9;
 constexpr double kSlackTorque = 1e-9;
 
+/// angle continued from the previous row's value (no 2 pi jumps in the output)
+double continued(double angle, const Row* previous, int k) {
+  if (!previous) return angle;
+  return previous->theta[k] + std::remainder(angle - previous->theta[k], 2 * M_PI);
+}
+
+/// What the simulator needs of a mechanism beyond the dynamics (mechanism.h): its types, where
+/// its links and drives go in a Row, its energies and its joints' names and static capacity.
+/// Row columns: the driven angles q first, then the dependent links.
+template <class M>
+struct Sim;
+
+template <>
+struct Sim<FiveBar> {
+  using P = Params<double>;
+  using Ld = Loads<double>;
+  using K = Kinematics<double>;
+  using E = Evaluation<double>;
+  static constexpr int kDof = 2;
+  /// the joint whose relative rate is driven rate i (the cranks' O and D0)
+  static int driven_joint(int i) { return i == 0 ? 0 : 4; }
+  static const char* joint(int k) {
+    static const char* names[kJoints] = {"O", "B", "C", "D", "D0"};
+    return names[k];
+  }
+  static void set_initial(const Initial& i, double* y) {
+    y[0] = i.theta1;
+    y[1] = i.theta2;
+    y[2] = i.omega1;
+    y[3] = i.omega2;
+  }
+  static std::array<std::pair<const char*, double>, 5> load_values(const Ld& L) {
+    return {{{"M1", L.M1}, {"M2", L.M2}, {"M3", L.M3}, {"F", L.F}, {"F_angle", L.F_angle}}};
+  }
+  /// the couplers' angles and rates from the first-order kinematics
+  static void dependent_links(const K& k, const double* y, const Row* previous, Row* row) {
+    const Vec2<double> thd(y[2], y[3]);
+    row->theta[2] = continued(k.th3, previous, 2);
+    row->theta[3] = continued(k.th4, previous, 3);
+    row->omega[2] = k.G3.dot(thd);
+    row->omega[3] = k.G4.dot(thd);
+  }
+  static void evaluated_links(const E& ev, const Row* previous, Row* row) {
+    row->theta[2] = continued(ev.kin.th3, previous, 2);
+    row->theta[3] = continued(ev.kin.th4, previous, 3);
+    row->omega[2] = ev.bias.w3;
+    row->omega[3] = ev.bias.w4;
+    row->alpha[2] = ev.alpha3;
+    row->alpha[3] = ev.alpha4;
+  }
+  static void drives(const Ld& L, Row* row) {
+    row->M1 = L.M1;
+    row->M2 = L.M2;
+  }
+  static double drive_error(const E& ev, const Row& r) {
+    return std::max(std::abs(ev.M1 - r.M1), std::abs(ev.M2 - r.M2));
+  }
+  static std::array<double, kJoints> joint_accelerations(const E& ev) {
+    return fivebar::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
+  }
+  static double joint_rate(const Row& r, int k) { return r.omega_rel(k); }
+  static double kinetic(const P& p, const K& k, const double* v) {
+    return kinetic_energy(p, k, v[0], v[1]);
+  }
+  static double potential(const P& p, const K& k) { return potential_energy(p, k); }
+  static bool can_hold(const P& p, int k) { return fivebar::can_hold(p, k); }
+};
+
+template <>
+struct Sim<FourBar> {
+  using P = FourBarParams;
+  using Ld = FourBarLoads;
+  using K = FourBarKinematics;
+  using E = FourBarEvaluation;
+  static constexpr int kDof = 1;
+  static int driven_joint(int) { return 0; }
+  static const char* joint(int k) {
+    static const char* names[kJoints] = {"O", "B", "C", "D0", "-"};
+    return names[k];
+  }
+  static void set_initial(const Initial& i, double* y) {
+    y[0] = i.theta1;
+    y[1] = i.omega1;
+  }
+  static std::array<std::pair<const char*, double>, 4> load_values(const Ld& L) {
+    return {{{"M1", L.M1}, {"M3", L.M3}, {"F", L.F}, {"F_angle", L.F_angle}}};
+  }
+  /// the coupler's and the rocker's angles and rates from the first-order kinematics
+  static void dependent_links(const K& k, const double* y, const Row* previous, Row* row) {
+    row->theta[1] = continued(k.th2, previous, 1);
+    row->theta[2] = continued(k.th3, previous, 2);
+    row->omega[1] = k.G2 * y[1];
+    row->omega[2] = k.G3 * y[1];
+  }
+  static void evaluated_links(const E& ev, const Row* previous, Row* row) {
+    row->theta[1] = continued(ev.kin.th2, previous, 1);
+    row->theta[2] = continued(ev.kin.th3, previous, 2);
+    row->omega[1] = ev.bias.w2;
+    row->omega[2] = ev.bias.w3;
+    row->alpha[1] = ev.alpha2;
+    row->alpha[2] = ev.alpha3;
+  }
+  static void drives(const Ld& L, Row* row) { row->M1 = L.M1; }
+  static double drive_error(const E& ev, const Row& r) { return std::abs(ev.M1 - r.M1); }
+  static std::array<double, kJoints> joint_accelerations(const E& ev) {
+    const double a1 = ev.thdd[0];
+    return {a1, ev.alpha2 - a1, ev.alpha3 - ev.alpha2, ev.alpha3, 0.0};
+  }
+  static double joint_rate(const Row& r, int k) {
+    switch (k) {
+      case 0: return r.omega[0];
+      case 1: return r.omega[1] - r.omega[0];
+      case 2: return r.omega[2] - r.omega[1];
+      case 3: return r.omega[2];
+      default: return 0.0;
+    }
+  }
+  static double kinetic(const P& p, const K& k, const double* v) {
+    return four_bar_kinetic(p, k, v[0]);
+  }
+  static double potential(const P& p, const K& k) { return four_bar_potential(p, k); }
+  static bool can_hold(const P& p, int k) { return holding_bound(p.friction, k) > 0.0; }
+};
+
+template <class M>
+using ParamsOf = typename Sim<M>::P;
+template <class M>
+using LoadsOf = typename Sim<M>::Ld;
+template <class M>
+using KinOf = typename Sim<M>::K;
+template <class M>
+using EvalOf = typename Sim<M>::E;
+template <class M>
+using VecOf = mech::Vec<M::kDof, double>;
+template <class M>
+using LoadFnOf = std::function<LoadsOf<M>(double)>;
+
+/// q and v of a state y
+template <class M>
+VecOf<M> q_of(const double* y) {
+  return Eigen::Map<const VecOf<M>>(y);
+}
+template <class M>
+VecOf<M> v_of(const double* y) {
+  return Eigen::Map<const VecOf<M>>(y + M::kDof);
+}
+
+/// The closure at a state's angles: `margin` the singular margin, `angles` whether the dependent
+/// angles themselves are needed.
+template <class M>
+Status close_at(const ParamsOf<M>& p, const double* y, KinOf<M>* k, double margin = 0.0,
+                bool angles = true) {
+  EvalOptions opt;
+  opt.singular_margin = margin;
+  opt.want_angles = angles;
+  return M::close(p, q_of<M>(y), k, opt);
+}
+
+/// Forward dynamics of M at the state y (its angles and rates).
+template <class M>
+Status forward_at(const ParamsOf<M>& p, const LoadsOf<M>& L, const double* y,
+                  const JointModes* slip, const EvalOptions& opt, EvalOf<M>* ev,
+                  const std::array<double, kJoints>* bristle = nullptr,
+                  FrictionWarmStart* warm = nullptr) {
+  return mech::forward<M, double>(p, L, q_of<M>(y), v_of<M>(y), slip, opt, ev, bristle, warm);
+}
+
 /// What the C callbacks and the event loop see.
+template <class M>
 struct Context {
-  const Params<double>* params = nullptr;
-  const LoadFunction* loads = nullptr;
+  const ParamsOf<M>* params = nullptr;
+  const LoadFnOf<M>* loads = nullptr;
   EvalOptions eval;
   bool use_slip = false;                ///< Coulomb sign from the segment's slip directions
   bool stick = false;                   ///< exact stick-slip (Options::stick, with use_slip)
@@ -83,26 +254,33 @@ struct Context {
   std::array<bool, kJoints> watched{};        ///< joints with a Coulomb part: switch functions
   bool law_states = false;  ///< the law's internal states (LuGre bristles) follow the base states
   bool full_rows = true;                ///< Options::full_rows
-  int n = kStates;                      ///< state size
+  int n = base_states(M::kDof);         ///< state size
   long rhs_evaluations = 0;
   Status failure;                       ///< last failure inside a callback
   /// the right-hand side's last friction-loop solution: the next evaluation starts from it
   FrictionWarmStart warm;
 };
 
-Status at_time(const Status& st, double t, double th1, double th2) {
+/// The status with the time and the driven angles first (theta1 .. theta_dof of `q`).
+Status at_time(const Status& st, double t, const double* q, int dof) {
   std::ostringstream msg;
   msg.precision(6);
-  msg << "at t=" << t << " s (theta1=" << th1 << ", theta2=" << th2 << "): " << st.message;
+  msg << "at t=" << t << " s (";
+  for (int i = 0; i < dof; ++i) msg << (i ? ", theta" : "theta") << i + 1 << "=" << q[i];
+  msg << "): " << st.message;
   return Status::Error(st.code, msg.str());
+}
+template <class M>
+Status at_time(const Status& st, double t, const double* y) {
+  return at_time(st, t, y, M::kDof);
 }
 
 /// Not ok when a load is NaN or infinite at t: names the load and its value (a load expression
 /// that leaves its domain, e.g. sqrt(1.5 - t) after 1.5 s; no smaller step can help)
-Status finite_loads(const Loads<double>& L, double t) {
-  const std::pair<const char*, double> loads[] = {
-      {"M1", L.M1}, {"M2", L.M2}, {"M3", L.M3}, {"F", L.F}, {"F_angle", L.F_angle}};
-  for (const auto& [name, v] : loads) {
+template <class Ld>
+Status finite_loads(const Ld& L, double t) {
+  using M = std::conditional_t<std::is_same_v<Ld, Loads<double>>, FiveBar, FourBar>;
+  for (const auto& [name, v] : Sim<M>::load_values(L)) {
     if (std::isfinite(v)) continue;
     std::ostringstream msg;
     msg.precision(6);
@@ -113,109 +291,112 @@ Status finite_loads(const Loads<double>& L, double t) {
   return Status::Ok();
 }
 
-/// Below this |sin(th4 - th3)| a failed friction loop is put down to the pose: the reactions
-/// grow as 1 / sin(th4 - th3) there, so the loop's gain passes 1 with any friction (a light scene
-/// with r mu = 4e-4 was told "r_k * mu too large")
+/// Below this singular measure (|sin(th4 - th3)| of the five-bar) a failed friction loop is put
+/// down to the pose: the reactions grow as its inverse there, so the loop's gain passes 1 with
+/// any friction (a light scene with r mu = 4e-4 was told "r_k * mu too large")
 constexpr double kSingularCause = 0.05;
 
 /// A failed evaluation's status with its cause first when the pose explains it: a friction loop
 /// that failed near the singular pose (kSingularCause) names |sin(theta4 - theta3)| and the
 /// largest r_k mu_k, so that the friction is not blamed for the geometry (same code: the callers
 /// decide on it as before). Other failures unchanged.
-Status pose_cause(const Params<double>& p, const Status& st, double th1, double th2) {
+template <class M>
+Status pose_cause(const ParamsOf<M>& p, const Status& st, const double* q) {
   if (st.ok() || st.code != StatusCode::kFrictionNotConverged) return st;
-  Kinematics<double> k;
-  if (!solve_kinematics(p, th1, th2, &k).ok() || !(std::abs(k.sin43) < kSingularCause)) return st;
+  KinOf<M> k;
+  const double sine = close_at<M>(p, q, &k).ok() ? std::abs(M::singular_measure(k)) : 1.0;
+  if (!(sine < kSingularCause)) return st;
   double arm = 0.0;
   for (int j = 0; j < kJoints; ++j) {
     arm = std::max(arm, std::abs(p.friction.pin_radius[j] * p.friction.coulomb[j]));
   }
   std::ostringstream msg;
   msg.precision(3);
-  msg << "near-singular pose: |sin(theta4 - theta3)| = " << std::abs(k.sin43)
-      << " (the reactions grow as 1 / sin(theta4 - theta3)), where the friction loop cannot close "
-         "even with r_k * mu at most "
+  msg << "near-singular pose: |" << M::kSingularName << "| = " << sine
+      << " (the reactions grow as 1 / " << M::kSingularName
+      << "), where the friction loop cannot close even with r_k * mu at most "
       << arm << " (simulation.singular_margin, e.g. 0.05, stops a run at the pose); " << st.message;
   return Status::Error(st.code, msg.str());
 }
 
-const char* joint_name(int k) {
-  static const char* names[kJoints] = {"O", "B", "C", "D", "D0"};
-  return names[k];
-}
-
 /// Relative joint rates at a state from its first-order kinematics `k`.
-std::array<double, kJoints> joint_rates(const Kinematics<double>& k, const double* y) {
-  const Vec2<double> thd(y[2], y[3]);
-  return fivebar::relative_rates(y[2], y[3], k.G3.dot(thd), k.G4.dot(thd));
+template <class M>
+std::array<double, kJoints> joint_rates(const KinOf<M>& k, const double* y) {
+  return M::joint_rates_at(k, v_of<M>(y));
 }
 
 /// Relative joint rates at a state (needs only the first-order kinematics).
-bool joint_rates(const Params<double>& p, const double* y, std::array<double, kJoints>* w) {
-  Kinematics<double> k;
-  if (!solve_kinematics(p, y[0], y[1], &k, 0.0, false).ok()) return false;
-  *w = joint_rates(k, y);
+template <class M>
+bool joint_rates(const ParamsOf<M>& p, const double* y, std::array<double, kJoints>* w) {
+  KinOf<M> k;
+  if (!close_at<M>(p, y, &k, 0.0, false).ok()) return false;
+  *w = joint_rates<M>(k, y);
   return true;
 }
 
 /// Switches not located (Context::zero_signs): the Coulomb sign of each joint from its rate at y,
 /// or the direction decided at the start where the rate is exactly zero.
-bool state_signs(const Context& c, const double* y, JointModes* signs) {
+template <class M>
+bool state_signs(const Context<M>& c, const double* y, JointModes* signs) {
   std::array<double, kJoints> w;
-  if (!joint_rates(*c.params, y, &w)) return false;
+  if (!joint_rates<M>(*c.params, y, &w)) return false;
   for (int k = 0; k < kJoints; ++k) (*signs)[k] = w[k] != 0.0 ? slip_mode(sign_of(w[k])) : c.zero_sign[k];
   return true;
 }
 
 /// OdeProblem::freeze: the signs at y hold for every evaluation until released.
+template <class M>
 void freeze_signs(const double* y, bool on, void* user) {
-  auto& c = *static_cast<Context*>(user);
+  auto& c = *static_cast<Context<M>*>(user);
   c.frozen = on && c.zero_signs && state_signs(c, y, &c.frozen_sign);
 }
 
 /// The joint modes the right-hand side uses at y: frozen for a Newton Jacobian; from the rates
 /// when switches are not located (with the start's decided direction where a rate is exactly
 /// zero); else the segment's (nullptr: sign(w) for laws without located switches).
-const JointModes* rhs_modes(const Context& c, const double* y, JointModes* buf) {
+template <class M>
+const JointModes* rhs_modes(const Context<M>& c, const double* y, JointModes* buf) {
   if (c.frozen) return &c.frozen_sign;
   if (c.zero_signs && state_signs(c, y, buf)) return buf;
   return c.use_slip ? &c.slip : nullptr;
 }
 
+template <class M>
 int rhs(double t, const double* y, double* ydot, void* user) {
-  auto& c = *static_cast<Context*>(user);
+  constexpr int n = M::kDof, kBristle = base_states(n);
+  auto& c = *static_cast<Context<M>*>(user);
   ++c.rhs_evaluations;
   if (c.locked) {  // at rest, held: nothing moves, no power flows
     std::fill(ydot, ydot + c.n, 0.0);
     return 0;
   }
-  Evaluation<double> ev;
+  EvalOf<M> ev;
   std::array<double, kJoints> z{};
   if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, z.begin());
   JointModes signs;
-  const Loads<double> loads = (*c.loads)(t);
+  const LoadsOf<M> loads = (*c.loads)(t);
   if (const Status bad = finite_loads(loads, t); !bad.ok()) {
     c.failure = bad;
     return -1;  // fatal: the load is what fails, not the step
   }
-  const Status st = forward_dynamics(*c.params, loads, y[0], y[1], y[2], y[3],
-                                     rhs_modes(c, y, &signs), c.eval, &ev, &z, &c.warm);
+  const Status st =
+      forward_at<M>(*c.params, loads, y, rhs_modes(c, y, &signs), c.eval, &ev, &z, &c.warm);
   if (!st.ok()) {
-    c.failure = at_time(pose_cause(*c.params, st, y[0], y[1]), t, y[0], y[1]);
+    c.failure = at_time<M>(pose_cause<M>(*c.params, st, y), t, y);
     return 1;  // recoverable: the integrator retries with a smaller step
   }
   if (c.law_states) std::copy(ev.zdot.begin(), ev.zdot.end(), ydot + kBristle);
-  ydot[0] = y[2];
-  ydot[1] = y[3];
-  ydot[2] = ev.thdd[0];
-  ydot[3] = ev.thdd[1];
-  ydot[4] = ev.P_diss;
-  ydot[5] = ev.P_in;
-  ydot[6] = ev.P_ext;
-  for (int i = 2; i < c.n; ++i) {
+  for (int i = 0; i < n; ++i) {
+    ydot[i] = y[n + i];
+    ydot[n + i] = ev.thdd[i];
+  }
+  ydot[2 * n] = ev.P_diss;
+  ydot[2 * n + 1] = ev.P_in;
+  ydot[2 * n + 2] = ev.P_ext;
+  for (int i = n; i < c.n; ++i) {
     if (!std::isfinite(ydot[i])) {
-      c.failure = at_time(Status::Error(StatusCode::kSolverFailed, "non-finite acceleration"), t,
-                          y[0], y[1]);
+      c.failure =
+          at_time<M>(Status::Error(StatusCode::kSolverFailed, "non-finite acceleration"), t, y);
       return 1;
     }
   }
@@ -230,28 +411,27 @@ bool any_stuck(const JointModes& slip) {
 /// direction) and the holding margin mu_s r_k N_k - |holding torque| of a stuck one
 /// (non-negative while friction holds it); +1 for joints without a Coulomb part. `kin` (may be
 /// null): the first-order kinematics at y, when the caller has them.
-Status switch_values(Context& c, double t, const double* y, Switches* g,
-                     const Kinematics<double>* kin = nullptr) {
+template <class M>
+Status switch_values(Context<M>& c, double t, const double* y, Switches* g,
+                     const KinOf<M>* kin = nullptr) {
   g->fill(1.0);
   if (c.locked) {
     LockAnalysis lock;
-    const Status st = lock_analysis(*c.params, (*c.loads)(t), y[0], y[1], c.eval, &lock);
-    if (!st.ok()) return at_time(st, t, y[0], y[1]);
+    const Status st = lock_analysis<M>(*c.params, (*c.loads)(t), q_of<M>(y), c.eval, &lock);
+    if (!st.ok()) return at_time<M>(st, t, y);
     (*g)[kLockSlot] = 1.0 - lock.ratio;
     return Status::Ok();
   }
   std::array<double, kJoints> w;
-  Evaluation<double> ev;
+  EvalOf<M> ev;
   if (any_stuck(c.slip)) {
-    const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &c.slip,
-                                       c.eval, &ev);
-    if (!st.ok()) return at_time(st, t, y[0], y[1]);
+    const Status st = forward_at<M>(*c.params, (*c.loads)(t), y, &c.slip, c.eval, &ev);
+    if (!st.ok()) return at_time<M>(st, t, y);
     w = ev.w;
   } else if (kin) {
-    w = joint_rates(*kin, y);
-  } else if (!joint_rates(*c.params, y, &w)) {
-    return at_time(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t, y[0],
-                   y[1]);
+    w = joint_rates<M>(*kin, y);
+  } else if (!joint_rates<M>(*c.params, y, &w)) {
+    return at_time<M>(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t, y);
   }
   for (int k = 0; k < kJoints; ++k) {
     if (!c.watched[k]) continue;
@@ -269,7 +449,8 @@ struct Watch {
 using Fired = std::array<bool, 6>;
 
 /// Switch functions that fired at the values g (joints 0..4, the lock in slot 5).
-Fired fired(const Context& c, const Watch& w, const Switches& g) {
+template <class M>
+Fired fired(const Context<M>& c, const Watch& w, const Switches& g) {
   Fired out{};
   for (int k = 0; k < 6; ++k) {
     const bool active = k == kLockSlot ? c.locked : c.watched[k] && !c.locked;
@@ -292,9 +473,9 @@ void advance_watch(Watch* w, const Switches& g) {
 /// interior points of the cheap interpolant (confirmed on the dense output), then the step's
 /// end (its kinematics kin_c, may be null). Found: true with the bracket [*ta, *tb]. Not found:
 /// the watch moves to tc.
-Status scan_step(Context& c, detail::Integrator& integ, double tp, double tc, const double* yc,
-                 const Kinematics<double>* kin_c, Watch* watch, bool* found, double* ta,
-                 double* tb) {
+template <class M>
+Status scan_step(Context<M>& c, detail::Integrator& integ, double tp, double tc, const double* yc,
+                 const KinOf<M>* kin_c, Watch* watch, bool* found, double* ta, double* tb) {
   *found = false;
   Watch w = *watch;
   double y[kMaxStates];
@@ -349,7 +530,8 @@ Status bisect_dense(detail::Integrator& integ, double* ta, double* tb, double* y
 /// Bisection on the dense output of [ta, tb] (nothing fired at ta, something at tb) down to
 /// the time resolution of doubles at tb; y receives the state at the located tb, `which` the
 /// switch functions that fired there.
-Status locate_switch(Context& c, detail::Integrator& integ, const Watch& watch, double ta,
+template <class M>
+Status locate_switch(Context<M>& c, detail::Integrator& integ, const Watch& watch, double ta,
                      double tb, double* y, double* te, Fired* which) {
   Switches g;
   Status st = bisect_dense(integ, &ta, &tb, y, [&](double t, const double* yt, bool* past) {
@@ -366,54 +548,67 @@ Status locate_switch(Context& c, detail::Integrator& integ, const Watch& watch, 
   return Status::Ok();
 }
 
-/// Projects the crank rates so that the joints in `mask` do not move (w_k = 0): one
-/// independent constraint leaves one degree of freedom, two (or more) bring the mechanism to
-/// rest. Returns the number of independent constraints. After a located switch |w_k| is at the
-/// location tolerance; projecting makes the decided state exact (a stuck crank exactly at rest).
-int project_rates(const Params<double>& p, const std::array<bool, kJoints>& mask, double* y) {
-  Kinematics<double> k;
-  if (!solve_kinematics(p, y[0], y[1], &k).ok()) return 0;
-  std::vector<Row2<double>> rows;
+/// Projects the driven rates v so that the joints in `mask` do not move (w_k = 0): fewer
+/// independent constraints than degrees of freedom leave the others free, as many bring the
+/// mechanism to rest. Returns the number of independent constraints. After a located switch
+/// |w_k| is at the location tolerance; projecting makes the decided state exact (a stuck crank
+/// exactly at rest). A joint whose rate is zero because its row of J_w is (a kinematic zero, as
+/// a four-bar rocker's reversal while the crank turns) is not held: the projection would move
+/// v by more than kRestProjection, and nothing is projected.
+template <class M>
+int project_rates(const ParamsOf<M>& p, const std::array<bool, kJoints>& mask, double* y) {
+  constexpr int n = M::kDof;
+  KinOf<M> k;
+  if (!close_at<M>(p, y, &k).ok()) return 0;
+  std::vector<mech::Row<n, double>> rows;
   for (int j = 0; j < kJoints; ++j) {
-    if (mask[j]) rows.push_back(fivebar::joint_row(k, j));
+    if (mask[j]) rows.push_back(M::joint_row(k, j));
   }
   if (rows.empty()) return 0;
-  Vec2<double> thd(y[2], y[3]);
-  // two independent rows hold the mechanism at rest, if it is (nearly) at rest: rows that are
+  VecOf<M> thd = v_of<M>(y);
+  // n independent rows hold the mechanism at rest, if it is (nearly) at rest: rows that are
   // close to dependent (a dead point) can both read zero while the mechanism moves
-  for (size_t a = 0; a < rows.size() && thd.norm() <= kRestProjection; ++a) {
-    for (size_t b = a + 1; b < rows.size(); ++b) {
-      const double det = rows[a][0] * rows[b][1] - rows[a][1] * rows[b][0];
-      if (std::abs(det) > 1e-9 * rows[a].norm() * rows[b].norm()) {
-        y[2] = y[3] = 0.0;
-        return 2;
+  const auto independent = [&](size_t a) {
+    if constexpr (n == 1) {
+      return rows[a](0, 0) != 0.0;
+    } else {
+      for (size_t b = a + 1; b < rows.size(); ++b) {
+        const double det = rows[a][0] * rows[b][1] - rows[a][1] * rows[b][0];
+        if (std::abs(det) > 1e-9 * rows[a].norm() * rows[b].norm()) return true;
       }
+      return false;
     }
+  };
+  for (size_t a = 0; a < rows.size() && thd.norm() <= kRestProjection; ++a) {
+    if (!independent(a)) continue;
+    std::fill(y + n, y + 2 * n, 0.0);
+    return n;
   }
   const auto& J = *std::max_element(rows.begin(), rows.end(), [](const auto& a, const auto& b) {
     return a.squaredNorm() < b.squaredNorm();
   });
-  if (J.squaredNorm() == 0.0) return 0;
+  if (J.squaredNorm() == 0.0 || std::abs(J.dot(thd)) > kRestProjection * J.norm()) return 0;
   thd -= J.transpose() * (J.dot(thd) / J.squaredNorm());
-  y[2] = mask[0] ? 0.0 : thd[0];  // a crank joint's rate is the crank's: exactly zero
-  y[3] = mask[4] ? 0.0 : thd[1];
+  for (int i = 0; i < n; ++i) {  // a crank joint's rate is the crank's: exactly zero
+    y[n + i] = mask[Sim<M>::driven_joint(i)] ? 0.0 : thd[i];
+  }
   return 1;
 }
 
 /// Whether the joint modes `slip` are consistent at (t, y) for the joints in `rest`: every
 /// slipping one accelerates in its slip direction (beyond -slack_accel), every stuck one is held
 /// (margin >= -slack_torque).
-bool consistent(Context& c, double t, const double* y, const JointModes& slip,
+template <class M>
+bool consistent(Context<M>& c, double t, const double* y, const JointModes& slip,
                 const std::array<bool, kJoints>& rest, double slack_accel, double slack_torque,
-                Vec2<double>* thdd, Status* failure) {
-  Evaluation<double> ev;
-  const Status st =
-      forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &slip, c.eval, &ev);
+                VecOf<M>* thdd, Status* failure) {
+  EvalOf<M> ev;
+  const Status st = forward_at<M>(*c.params, (*c.loads)(t), y, &slip, c.eval, &ev);
   if (!st.ok()) {
     if (failure->ok()) *failure = st;
     return false;
   }
-  const auto wdot = fivebar::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
+  const auto wdot = Sim<M>::joint_accelerations(ev);
   double accel_scale = 1.0, torque_scale = 1.0;
   for (int k = 0; k < kJoints; ++k) {
     accel_scale = std::max(accel_scale, std::abs(wdot[k]));
@@ -431,12 +626,12 @@ bool consistent(Context& c, double t, const double* y, const JointModes& slip,
 }
 
 /// The candidate modes of the joints at rest while the mechanism may move: each slips either
-/// way or is stuck, with at most one stuck joint (two would lock the mechanism: see the lock).
-std::vector<JointModes> candidate_modes(const Context& c, const std::array<bool, kJoints>& rest,
-                                                const std::array<bool, kJoints>& no_stick) {
-  auto can_hold = [&](int k) {
-    return c.stick && !no_stick[k] && fivebar::can_hold(*c.params, k);
-  };
+/// way or is stuck, with fewer stuck joints than degrees of freedom (as many would lock the
+/// mechanism: see the lock; a four-bar's joints never stick alone).
+template <class M>
+std::vector<JointModes> candidate_modes(const Context<M>& c, const std::array<bool, kJoints>& rest,
+                                        const std::array<bool, kJoints>& no_stick) {
+  auto can_hold = [&](int k) { return c.stick && !no_stick[k] && Sim<M>::can_hold(*c.params, k); };
   std::vector<int> idx;
   for (int k = 0; k < kJoints; ++k) {
     if (rest[k]) idx.push_back(k);
@@ -454,7 +649,7 @@ std::vector<JointModes> candidate_modes(const Context& c, const std::array<bool,
       m[k] = option == 0 ? JointMode::kSlipPositive
              : option == 1 ? JointMode::kSlipNegative
                            : kStuck;
-      if (option == 2 && (!can_hold(k) || ++stuck > 1)) allowed = false;
+      if (option == 2 && (!can_hold(k) || ++stuck > M::kDof - 1)) allowed = false;
     }
     if (allowed) out.push_back(m);
   }
@@ -462,13 +657,14 @@ std::vector<JointModes> candidate_modes(const Context& c, const std::array<bool,
 }
 
 /// The consistent candidates (strictly, or within the slacks) and their accelerations.
-void consistent_candidates(Context& c, double t, const double* y,
+template <class M>
+void consistent_candidates(Context<M>& c, double t, const double* y,
                            const std::vector<JointModes>& candidates,
                            const std::array<bool, kJoints>& rest, bool relaxed,
-                           std::vector<JointModes>* found,
-                           std::vector<Vec2<double>>* accel, Status* failure) {
+                           std::vector<JointModes>* found, std::vector<VecOf<M>>* accel,
+                           Status* failure) {
   for (const auto& m : candidates) {
-    Vec2<double> thdd;
+    VecOf<M> thdd;
     if (!consistent(c, t, y, m, rest, relaxed ? kSlackAccel : 0.0, relaxed ? kSlackTorque : 0.0,
                     &thdd, failure)) {
       continue;
@@ -478,24 +674,28 @@ void consistent_candidates(Context& c, double t, const double* y,
   }
 }
 
+template <class M>
 std::string rest_list(const std::array<bool, kJoints>& rest) {
   std::string out = " (joints at rest:";
   for (int k = 0; k < kJoints; ++k) {
-    if (rest[k]) out += std::string(" ") + joint_name(k);
+    if (rest[k]) out += std::string(" ") + Sim<M>::joint(k);
   }
   return out + ")";
 }
 
-Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, kJoints>& rest);
+template <class M>
+Status decide_slip_only(Context<M>& c, double t, const double* y,
+                        const std::array<bool, kJoints>& rest);
 
 /// Stats::sign_rule_inconsistent: whether the simpler sign rule (the joints at rest slip the way
 /// they accelerate, iterated, no stick) gives modes that are not consistent here.
-bool sign_rule_inconsistent(Context& c, double t, const double* y,
+template <class M>
+bool sign_rule_inconsistent(Context<M>& c, double t, const double* y,
                             const std::array<bool, kJoints>& rest) {
   const JointModes chosen = c.slip;
   bool inconsistent = true;
   if (decide_slip_only(c, t, y, rest).ok()) {
-    Vec2<double> thdd;
+    VecOf<M> thdd;
     Status failure;
     inconsistent = !consistent(c, t, y, c.slip, rest, 0.0, 0.0, &thdd, &failure);
   }
@@ -507,7 +707,8 @@ bool sign_rule_inconsistent(Context& c, double t, const double* y,
 /// consistent; the other joints slip in the direction of their rate. With every joint at rest
 /// the mechanism may stay locked (lock_analysis). No consistent combination, or several with
 /// different motions (Painleve-type), is an error.
-Status decide_modes(Context& c, double t, const double* y, const std::array<bool, kJoints>& rest,
+template <class M>
+Status decide_modes(Context<M>& c, double t, const double* y, const std::array<bool, kJoints>& rest,
                     const std::array<bool, kJoints>& no_stick, bool all_rest, bool may_lock,
                     Stats* stats) {
   ++stats->mode_decisions;
@@ -516,19 +717,20 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
   bool lock = false;
   if (all_rest && may_lock && c.stick) {
     LockAnalysis la;
-    lock = lock_analysis(*c.params, (*c.loads)(t), y[0], y[1], c.eval, &la).ok() && la.ratio <= 1.0;
+    lock = lock_analysis<M>(*c.params, (*c.loads)(t), q_of<M>(y), c.eval, &la).ok() &&
+           la.ratio <= 1.0;
   }
   const auto candidates = candidate_modes(c, rest, no_stick);
   std::vector<JointModes> found;
-  std::vector<Vec2<double>> accel;
+  std::vector<VecOf<M>> accel;
   Status failure;  // the first evaluation that failed (near-singular pose, friction loop)
   consistent_candidates(c, t, y, candidates, rest, false, &found, &accel, &failure);
   if (lock && !found.empty()) {
-    return at_time(Status::Error(StatusCode::kIndeterminateModes,
-                                 "several consistent joint modes: friction can hold the mechanism "
-                                 "at rest, yet it can also start to slip (Painleve-type)" +
-                                     rest_list(rest)),
-                   t, y[0], y[1]);
+    return at_time<M>(Status::Error(StatusCode::kIndeterminateModes,
+                                    "several consistent joint modes: friction can hold the "
+                                    "mechanism at rest, yet it can also start to slip "
+                                    "(Painleve-type)" + rest_list<M>(rest)),
+                      t, y);
   }
   if (lock) {
     c.locked = true;
@@ -537,20 +739,20 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
   }
   const bool relaxed = found.empty();
   if (relaxed) consistent_candidates(c, t, y, candidates, rest, true, &found, &accel, &failure);
-  if (found.empty() && !failure.ok()) return at_time(failure, t, y[0], y[1]);
+  if (found.empty() && !failure.ok()) return at_time<M>(failure, t, y);
   if (found.empty()) {
-    return at_time(Status::Error(StatusCode::kIndeterminateModes,
-                                 "no consistent joint modes: neither slip direction nor stick is "
-                                 "consistent with the accelerations" + rest_list(rest)),
-                   t, y[0], y[1]);
+    return at_time<M>(Status::Error(StatusCode::kIndeterminateModes,
+                                    "no consistent joint modes: neither slip direction nor stick "
+                                    "is consistent with the accelerations" + rest_list<M>(rest)),
+                      t, y);
   }
   const double same = relaxed ? 1e-6 : 1e-9;
   for (size_t i = 1; i < found.size(); ++i) {
     if ((accel[i] - accel[0]).norm() > same * (1.0 + accel[0].norm())) {
-      return at_time(Status::Error(StatusCode::kIndeterminateModes,
-                                   "several consistent joint modes with different motions "
-                                   "(Painleve-type indeterminacy)" + rest_list(rest)),
-                     t, y[0], y[1]);
+      return at_time<M>(Status::Error(StatusCode::kIndeterminateModes,
+                                      "several consistent joint modes with different motions "
+                                      "(Painleve-type indeterminacy)" + rest_list<M>(rest)),
+                        t, y);
     }
   }
   c.slip = found.front();
@@ -562,16 +764,17 @@ Status decide_modes(Context& c, double t, const double* y, const std::array<bool
 /// relative acceleration they get with those directions (a short fixed point over the signs).
 /// When no slip directions are consistent (friction could hold a joint: only stick can model
 /// that), an error with the joints, instead of chattering between the two directions.
-Status decide_slip_only(Context& c, double t, const double* y, const std::array<bool, kJoints>& rest) {
+template <class M>
+Status decide_slip_only(Context<M>& c, double t, const double* y,
+                        const std::array<bool, kJoints>& rest) {
   for (int k = 0; k < kJoints; ++k) {
     if (rest[k]) c.slip[k] = JointMode::kRest;
   }
   for (int pass = 0; pass < 6; ++pass) {
-    Evaluation<double> ev;
-    const Status st = forward_dynamics(*c.params, (*c.loads)(t), y[0], y[1], y[2], y[3], &c.slip,
-                                       c.eval, &ev);
-    if (!st.ok()) return at_time(st, t, y[0], y[1]);
-    const auto wdot = fivebar::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
+    EvalOf<M> ev;
+    const Status st = forward_at<M>(*c.params, (*c.loads)(t), y, &c.slip, c.eval, &ev);
+    if (!st.ok()) return at_time<M>(st, t, y);
+    const auto wdot = Sim<M>::joint_accelerations(ev);
     bool changed = false;
     for (int k = 0; k < kJoints; ++k) {
       if (!rest[k] || slip_mode(sign_of(wdot[k])) == c.slip[k]) continue;
@@ -580,24 +783,25 @@ Status decide_slip_only(Context& c, double t, const double* y, const std::array<
     }
     if (!changed) break;
   }
-  Vec2<double> thdd;
+  VecOf<M> thdd;
   Status failure;
   if (consistent(c, t, y, c.slip, rest, kSlackAccel, kSlackTorque, &thdd, &failure)) {
     return Status::Ok();
   }
-  if (!failure.ok()) return at_time(failure, t, y[0], y[1]);
-  return at_time(Status::Error(StatusCode::kIndeterminateModes,
-                               "no consistent slip directions with simulation.stick = false: "
-                               "friction can hold a joint here, which only stick-slip models "
-                               "(simulation.stick = true)" + rest_list(rest)),
-                 t, y[0], y[1]);
+  if (!failure.ok()) return at_time<M>(failure, t, y);
+  return at_time<M>(Status::Error(StatusCode::kIndeterminateModes,
+                                  "no consistent slip directions with simulation.stick = false: "
+                                  "friction can hold a joint here, which only stick-slip models "
+                                  "(simulation.stick = true)" + rest_list<M>(rest)),
+                    t, y);
 }
 
 /// The joints that are not at rest slip in the direction of their rate. At a decision after the
 /// first, a slipping joint found moving against its slip direction is a switch the detection
 /// missed (Stats::mode_corrections); a joint crossing zero within ~1e-12 s of the one that
 /// fired reads a few 1e-9 rad/s against its slip, and that is no missed switch.
-void slip_moving_joints(Context& c, const std::array<bool, kJoints>& rest,
+template <class M>
+void slip_moving_joints(Context<M>& c, const std::array<bool, kJoints>& rest,
                         const std::array<double, kJoints>& w, Stats* stats) {
   for (int k = 0; k < kJoints; ++k) {
     if (rest[k]) continue;
@@ -614,20 +818,20 @@ void slip_moving_joints(Context& c, const std::array<bool, kJoints>& rest,
 /// (none at the start). The fired and stuck joints are at rest: the rates are projected so that
 /// they are exactly (if that takes two independent constraints, the whole mechanism is at rest);
 /// any other watched joint whose |w| is then below kRestRate is at rest too.
-Status decide_at(Context& c, double t, double* y, const Fired& fired_now, Stats* stats) {
+template <class M>
+Status decide_at(Context<M>& c, double t, double* y, const Fired& fired_now, Stats* stats) {
   const bool was_locked = c.locked;
   std::array<bool, kJoints> fixed{};
   for (int k = 0; k < kJoints; ++k) {
     fixed[k] = was_locked || (c.watched[k] && (fired_now[k] || c.slip[k] == kStuck));
   }
-  const int rank = project_rates(*c.params, fixed, y);
+  const int rank = project_rates<M>(*c.params, fixed, y);
   std::array<double, kJoints> w{};
-  if (!joint_rates(*c.params, y, &w)) {
-    return at_time(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t, y[0],
-                   y[1]);
+  if (!joint_rates<M>(*c.params, y, &w)) {
+    return at_time<M>(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t, y);
   }
   std::array<bool, kJoints> rest{}, no_stick{};
-  bool all_rest = rank == 2;
+  bool all_rest = rank == M::kDof;
   if (!all_rest) {
     all_rest = std::all_of(w.begin(), w.end(), [](double v) { return std::abs(v) <= kRestRate; });
   }
@@ -656,32 +860,31 @@ Status decide_at(Context& c, double t, double* y, const Fired& fired_now, Stats*
   }
   std::array<bool, kJoints> stuck{};
   for (int k = 0; k < kJoints; ++k) stuck[k] = c.locked || c.slip[k] == kStuck;
-  project_rates(*c.params, stuck, y);
+  project_rates<M>(*c.params, stuck, y);
   return Status::Ok();
 }
 
-/// angle continued from the previous row's value (no 2 pi jumps in the output)
-double continued(double angle, const Row* previous, int k) {
-  if (!previous) return angle;
-  return previous->theta[k] + std::remainder(angle - previous->theta[k], 2 * M_PI);
-}
-
-/// Angles-only row: the closure, the coupler rates and the energy quadratures.
-Row make_angle_row(const Context& c, double t, const double* y, const Row* previous, Status* st) {
+/// Angles-only row: the closure, the dependent links' rates and the energy quadratures.
+template <class M>
+Row make_angle_row(const Context<M>& c, double t, const double* y, const Row* previous,
+                   Status* st) {
+  constexpr int n = M::kDof, kBristle = base_states(n);
   Row row;
   row.t = t;
-  Kinematics<double> k;
-  *st = solve_kinematics(*c.params, y[0], y[1], &k);
+  KinOf<M> k;
+  *st = close_at<M>(*c.params, y, &k);
   if (!st->ok()) {
-    *st = at_time(*st, t, y[0], y[1]);
+    *st = at_time<M>(*st, t, y);
     return row;
   }
-  const Vec2<double> thd(y[2], y[3]);
-  row.theta = {y[0], y[1], continued(k.th3, previous, 2), continued(k.th4, previous, 3)};
-  row.omega = {y[2], y[3], k.G3.dot(thd), k.G4.dot(thd)};
-  row.E_diss = y[4];
-  row.W_in = y[5];
-  row.W_ext = y[6];
+  for (int i = 0; i < n; ++i) {
+    row.theta[i] = y[i];
+    row.omega[i] = y[n + i];
+  }
+  Sim<M>::dependent_links(k, y, previous, &row);
+  row.E_diss = y[2 * n];
+  row.W_in = y[2 * n + 1];
+  row.W_ext = y[2 * n + 2];
   row.mode = c.slip;
   if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, row.bristle.begin());
   row.has_bristle = c.law_states;
@@ -689,35 +892,32 @@ Row make_angle_row(const Context& c, double t, const double* y, const Row* previ
 }
 
 /// Row of a locked mechanism: at rest, its friction torques the holding torques of lock_analysis.
-Row make_locked_row(const Context& c, double t, const double* y, const Row* previous, Status* st) {
+template <class M>
+Row make_locked_row(const Context<M>& c, double t, const double* y, const Row* previous,
+                    Status* st) {
   Row row = make_angle_row(c, t, y, previous, st);
   if (!st->ok()) return row;
-  const Loads<double> L = (*c.loads)(t);
+  const LoadsOf<M> L = (*c.loads)(t);
   LockAnalysis lock;
-  Kinematics<double> k;
-  *st = lock_analysis(*c.params, L, y[0], y[1], c.eval, &lock);
-  if (st->ok()) *st = solve_kinematics(*c.params, y[0], y[1], &k);
+  KinOf<M> k;
+  *st = lock_analysis<M>(*c.params, L, q_of<M>(y), c.eval, &lock);
+  if (st->ok()) *st = close_at<M>(*c.params, y, &k);
   if (!st->ok()) {
-    *st = at_time(*st, t, y[0], y[1]);
+    *st = at_time<M>(*st, t, y);
     return row;
   }
-  row.M1 = L.M1;
-  row.M2 = L.M2;
+  Sim<M>::drives(L, &row);
   row.N = lock.N;
   row.Mf = lock.hold;
-  row.potential = potential_energy(*c.params, k);
+  row.potential = Sim<M>::potential(*c.params, k);
   return row;
 }
 
-/// The passive links' angles (continued from the previous row), rates and accelerations, the
+/// The dependent links' angles (continued from the previous row), rates and accelerations, the
 /// reactions, friction torques and dissipated power of an evaluation, into a row.
-void set_evaluated(const Evaluation<double>& ev, const Row* previous, Row* row) {
-  row->theta[2] = continued(ev.kin.th3, previous, 2);
-  row->theta[3] = continued(ev.kin.th4, previous, 3);
-  row->omega[2] = ev.bias.w3;
-  row->omega[3] = ev.bias.w4;
-  row->alpha[2] = ev.alpha3;
-  row->alpha[3] = ev.alpha4;
+template <class M>
+void set_evaluated(const EvalOf<M>& ev, const Row* previous, Row* row) {
+  Sim<M>::evaluated_links(ev, previous, row);
   for (int k = 0; k < kJoints; ++k) {
     row->N[k] = ev.N[k];
     row->Mf[k] = ev.Mf[k];
@@ -725,7 +925,9 @@ void set_evaluated(const Evaluation<double>& ev, const Row* previous, Row* row) 
   row->P_diss = ev.P_diss;
 }
 
-Row make_row(const Context& c, double t, const double* y, const Row* previous, Status* st) {
+template <class M>
+Row make_row(const Context<M>& c, double t, const double* y, const Row* previous, Status* st) {
+  constexpr int n = M::kDof, kBristle = base_states(n);
   if (!c.full_rows) return make_angle_row(c, t, y, previous, st);
   if (c.locked) return make_locked_row(c, t, y, previous, st);
   Row row;
@@ -734,31 +936,28 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
   eval.want_reactions = true;
   eval.want_angles = true;
   eval.singular_margin = 0.0;
-  const Loads<double> L = (*c.loads)(t);
-  Evaluation<double> ev;
+  const LoadsOf<M> L = (*c.loads)(t);
+  EvalOf<M> ev;
   std::array<double, kJoints> z{};
   if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, z.begin());
   JointModes signs;  // the modes the right-hand side uses
-  *st = forward_dynamics(*c.params, L, y[0], y[1], y[2], y[3], rhs_modes(c, y, &signs), eval, &ev,
-                         &z);
+  *st = forward_at<M>(*c.params, L, y, rhs_modes(c, y, &signs), eval, &ev, &z);
   if (!st->ok()) {
-    *st = at_time(*st, t, y[0], y[1]);
+    *st = at_time<M>(*st, t, y);
     return row;
   }
-  row.theta[0] = y[0];
-  row.theta[1] = y[1];
-  row.omega[0] = y[2];
-  row.omega[1] = y[3];
-  row.alpha[0] = ev.thdd[0];
-  row.alpha[1] = ev.thdd[1];
-  set_evaluated(ev, previous, &row);
-  row.M1 = L.M1;
-  row.M2 = L.M2;
-  row.E_diss = y[4];
-  row.W_in = y[5];
-  row.W_ext = y[6];
-  row.kinetic = kinetic_energy(*c.params, ev.kin, y[2], y[3]);
-  row.potential = potential_energy(*c.params, ev.kin);
+  for (int i = 0; i < n; ++i) {
+    row.theta[i] = y[i];
+    row.omega[i] = y[n + i];
+    row.alpha[i] = ev.thdd[i];
+  }
+  set_evaluated<M>(ev, previous, &row);
+  Sim<M>::drives(L, &row);
+  row.E_diss = y[2 * n];
+  row.W_in = y[2 * n + 1];
+  row.W_ext = y[2 * n + 2];
+  row.kinetic = Sim<M>::kinetic(*c.params, ev.kin, y + n);
+  row.potential = Sim<M>::potential(*c.params, ev.kin);
   row.mode = c.use_slip ? c.slip : ev.slip;
   row.bristle = z;
   row.has_bristle = c.law_states;
@@ -766,8 +965,9 @@ Row make_row(const Context& c, double t, const double* y, const Row* previous, S
 }
 
 /// The event loop's state: integrator, switch watch, output grid and counters.
+template <class M>
 struct Loop {
-  Context c;
+  Context<M> c;
   std::unique_ptr<detail::Integrator> integ;
   Watch watch;
   std::vector<double> grid;  ///< output times
@@ -780,11 +980,12 @@ struct Loop {
 };
 
 /// (Re)starts the integration at the loop's (t, y) with fresh switch functions.
-Status restart(Loop& L, const Options& options) {
+template <class M>
+Status restart(Loop<M>& L, const Options& options) {
   // locked, nothing moves and the integrator's steps grow without bound, while the lock margin
   // still follows the loads: steps no longer than the output step keep its zero in sight
   if (!L.integ->start(L.t, L.y) || !L.integ->set_max_step(L.c.locked ? options.output_step : 0.0)) {
-    return at_time(Status::Error(StatusCode::kSolverFailed, L.integ->error()), L.t, L.y[0], L.y[1]);
+    return at_time<M>(Status::Error(StatusCode::kSolverFailed, L.integ->error()), L.t, L.y);
   }
   L.watch = Watch{};
   if (!L.c.use_slip) return Status::Ok();
@@ -797,14 +998,15 @@ Status restart(Loop& L, const Options& options) {
 
 /// Writes the rows of the output times in (.., t_end] from the dense output (the state `y_end`
 /// at t_end itself).
-Status emit_rows(Loop& L, Result* result, double t_end, const double* y_end) {
+template <class M>
+Status emit_rows(Loop<M>& L, Result* result, double t_end, const double* y_end) {
   double y[kMaxStates];
   while (L.next < L.grid.size() && L.grid[L.next] <= t_end) {
     const double tout = L.grid[L.next];
     if (tout == t_end) {
       std::copy(y_end, y_end + L.c.n, y);
     } else if (!L.integ->dense(tout, y)) {
-      return at_time(Status::Error(StatusCode::kSolverFailed, L.integ->error()), tout, y[0], y[1]);
+      return at_time<M>(Status::Error(StatusCode::kSolverFailed, L.integ->error()), tout, y);
     }
     Status st;
     result->rows.push_back(make_row(L.c, tout, y, &result->rows.back(), &st));
@@ -815,42 +1017,47 @@ Status emit_rows(Loop& L, Result* result, double t_end, const double* y_end) {
   return Status::Ok();
 }
 
-/// |sin(th4 - th3)| at a state (1 where the pose cannot close: the closure reports that itself).
-double coupler_sine_at(const Params<double>& p, const double* y) {
-  Kinematics<double> k;
-  if (!solve_kinematics(p, y[0], y[1], &k, 0.0, false).ok()) return 1.0;
-  return std::abs(k.sin43);
+/// |singular measure| at a state (1 where the pose cannot close: the closure reports that itself).
+template <class M>
+double singular_measure_at(const ParamsOf<M>& p, const double* y) {
+  KinOf<M> k;
+  if (!close_at<M>(p, y, &k, 0.0, false).ok()) return 1.0;
+  return std::abs(M::singular_measure(k));
 }
 
 /// The first-order kinematics at the end of a step, shared by the singular-margin check and the
 /// switch scan: null where the pose cannot close.
-const Kinematics<double>* step_end_kinematics(const Params<double>& p, const double* y,
-                                              Kinematics<double>* k) {
-  return solve_kinematics(p, y[0], y[1], k, 0.0, false).ok() ? k : nullptr;
+template <class M>
+const KinOf<M>* step_end_kinematics(const ParamsOf<M>& p, const double* y, KinOf<M>* k) {
+  return close_at<M>(p, y, k, 0.0, false).ok() ? k : nullptr;
 }
 
-/// A run stops where |sin(th4 - th3)| reaches simulation.singular_margin: located on the dense
-/// output, the rows up to it written, then kNearSingular (the right-hand side itself only fails
-/// at half the margin, so that steps do not shrink without end next to the singular pose).
-/// `kin_c`: the kinematics at the step's end yc (null where it cannot close).
-Status stop_at_singular_margin(Loop& L, Result* result, const Options& options, double tp,
-                               double tc, const double* yc, const Kinematics<double>* kin_c) {
+/// A run stops where the singular measure (|sin(th4 - th3)| of the five-bar) reaches
+/// simulation.singular_margin: located on the dense output, the rows up to it written, then
+/// kNearSingular (the right-hand side itself only fails at half the margin, so that steps do not
+/// shrink without end next to the singular pose). `kin_c`: the kinematics at the step's end yc
+/// (null where it cannot close).
+template <class M>
+Status stop_at_singular_margin(Loop<M>& L, Result* result, const Options& options, double tp,
+                               double tc, const double* yc, const KinOf<M>* kin_c) {
   const double margin = options.singular_margin;
-  if (!(margin > 0.0) || (kin_c ? std::abs(kin_c->sin43) : 1.0) >= margin) return Status::Ok();
+  if (!(margin > 0.0) || (kin_c ? std::abs(M::singular_measure(*kin_c)) : 1.0) >= margin) {
+    return Status::Ok();
+  }
   double ta = tp, tb = tc, y[kMaxStates];
   std::copy(yc, yc + L.c.n, y);
   // (a failed dense output keeps the bracket reached: the run stops here either way)
   static_cast<void>(bisect_dense(*L.integ, &ta, &tb, y, [&](double, const double* yt, bool* past) {
-    *past = coupler_sine_at(*L.c.params, yt) < margin;
+    *past = singular_measure_at<M>(*L.c.params, yt) < margin;
     return Status::Ok();
   }));
   if (tb != tc && !L.integ->dense(tb, y)) std::copy(yc, yc + L.c.n, y);
   const Status rows = emit_rows(L, result, ta, y);
   if (!rows.ok()) return rows;
-  Kinematics<double> k;
-  Status st = solve_kinematics(*L.c.params, y[0], y[1], &k, margin, false);
+  KinOf<M> k;
+  Status st = close_at<M>(*L.c.params, y, &k, margin, false);
   if (st.ok()) st = Status::Error(StatusCode::kNearSingular, "near-singular pose");
-  return at_time(st, tb, y[0], y[1]);
+  return at_time<M>(st, tb, y);
 }
 
 /// Steps within one output interval after which the loads ahead are probed (loads_ahead)
@@ -860,7 +1067,8 @@ constexpr long kStallProbe = 10000;
 /// steps shrink toward the point (sqrt(1.5 - t) at 1.5 s, 1 / (t - 0.5) at 0.5 s) and the run
 /// would end at simulation.max_steps. The loads over the next two output intervals, on a fine
 /// grid and at the output times themselves, name the first that is not finite.
-Status loads_ahead(const Loop& L, double step) {
+template <class M>
+Status loads_ahead(const Loop<M>& L, double step) {
   constexpr int kProbes = 200;
   std::vector<double> times;
   for (int i = 0; i <= kProbes; ++i) times.push_back(L.t + 2 * step * i / kProbes);
@@ -873,33 +1081,33 @@ Status loads_ahead(const Loop& L, double step) {
 }
 
 /// One integrator step, its switch (located and decided) if any, and the rows it covers.
-Status advance(Loop& L, Result* result, const Options& options) {
+template <class M>
+Status advance(Loop<M>& L, Result* result, const Options& options) {
   const double tp = L.t;
   double yc[kMaxStates], tc = tp;
   L.c.failure = Status::Ok();  // a recovered failure of an earlier step is not this one's
   if (!L.integ->step(yc, &tc)) {
     if (!L.c.failure.ok()) return L.c.failure;
-    return at_time(Status::Error(StatusCode::kSolverFailed, L.integ->error()), tc, yc[0], yc[1]);
+    return at_time<M>(Status::Error(StatusCode::kSolverFailed, L.integ->error()), tc, yc);
   }
   if (++L.steps_since_row == kStallProbe) {
     const Status bad = loads_ahead(L, options.output_step);
-    if (!bad.ok()) return at_time(bad, tc, yc[0], yc[1]);
+    if (!bad.ok()) return at_time<M>(bad, tc, yc);
   }
   if (L.steps_since_row > options.max_steps) {
     // steps shrink without end next to a singular pose: say so when that is the cause
-    Kinematics<double> k;
-    const Status near = solve_kinematics(*L.c.params, yc[0], yc[1], &k,
-                                         10 * options.singular_margin, false);
+    KinOf<M> k;
+    const Status near = close_at<M>(*L.c.params, yc, &k, 10 * options.singular_margin, false);
     const std::string why =
         near.ok() ? "" : near.message + " (within 10x simulation.singular_margin); ";
-    return at_time(Status::Error(near.ok() ? StatusCode::kSolverFailed : near.code,
-                                 why + "more than simulation.max_steps = " +
-                                     std::to_string(options.max_steps) +
-                                     " steps between two output times"),
-                   tc, yc[0], yc[1]);
+    return at_time<M>(Status::Error(near.ok() ? StatusCode::kSolverFailed : near.code,
+                                    why + "more than simulation.max_steps = " +
+                                        std::to_string(options.max_steps) +
+                                        " steps between two output times"),
+                      tc, yc);
   }
-  Kinematics<double> kin;
-  const Kinematics<double>* kin_c = step_end_kinematics(*L.c.params, yc, &kin);
+  KinOf<M> kin;
+  const KinOf<M>* kin_c = step_end_kinematics<M>(*L.c.params, yc, &kin);
   const Status singular = stop_at_singular_margin(L, result, options, tp, tc, yc, kin_c);
   if (!singular.ok()) return singular;
   bool found = false;
@@ -921,11 +1129,11 @@ Status advance(Loop& L, Result* result, const Options& options) {
   if (!st.ok()) return st;
   L.burst = te - L.last_switch <= kSameInstant * std::max(1.0, te) ? L.burst + 1 : 0;
   if (L.burst > kMaxSwitchesAtOnce) {
-    return at_time(Status::Error(StatusCode::kSolverFailed,
-                                 "the joint modes chatter: more than " +
-                                     std::to_string(kMaxSwitchesAtOnce) +
-                                     " switches at one instant (no consistent motion)"),
-                   te, ye[0], ye[1]);
+    return at_time<M>(Status::Error(StatusCode::kSolverFailed,
+                                    "the joint modes chatter: more than " +
+                                        std::to_string(kMaxSwitchesAtOnce) +
+                                        " switches at one instant (no consistent motion)"),
+                      te, ye);
   }
   L.last_switch = te;
   L.t = te;
@@ -951,7 +1159,8 @@ std::vector<double> output_grid(const Options& o) {
 }
 
 /// The context of a run: which joints have switch functions, state size, evaluation settings.
-void setup_context(Context& c, const Params<double>& params, const LoadFunction& loads,
+template <class M>
+void setup_context(Context<M>& c, const ParamsOf<M>& params, const LoadFnOf<M>& loads,
                    const Options& options) {
   c.params = &params;
   c.loads = &loads;
@@ -964,14 +1173,82 @@ void setup_context(Context& c, const Params<double>& params, const LoadFunction&
   // exact Coulomb sign: each joint with a Coulomb part gets a switch function on its rate
   c.use_slip = exact_sign(params.friction) && options.locate_switches;
   c.stick = c.use_slip && options.stick;
-  for (int k = 0; k < kJoints; ++k) {
+  for (int k = 0; k < M::kJoints; ++k) {  // the slots beyond the mechanism's joints stay off
     c.watched[k] = c.use_slip && params.friction.coulomb[k] != 0.0 &&
                    params.friction.pin_radius[k] != 0.0;
   }
   const int law_states = law_descriptor(params.friction.law).states_per_joint;
   c.law_states = law_states > 0;
   c.full_rows = options.full_rows;
-  c.n = kStates + kJoints * law_states;
+  c.n = base_states(M::kDof) + kJoints * law_states;
+}
+
+/// The run of mechanism M: simulate's body.
+template <class M>
+Result run(const ParamsOf<M>& params, const LoadFnOf<M>& loads, const Initial& initial,
+           const Options& options) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  Result result;
+  if (output_row_count(options) > kMaxOutputRows) {
+    result.status = Status::Error(StatusCode::kInvalidInput,
+                                  "simulation.duration / simulation.output_step needs " +
+                                      std::to_string(output_row_count(options)) +
+                                      " output rows, more than the limit of " +
+                                      std::to_string(kMaxOutputRows));
+    return result;
+  }
+  Loop<M> L;
+  setup_context(L.c, params, loads, options);
+  Sim<M>::set_initial(initial, L.y);  // energies and bristles start at zero
+  L.grid = output_grid(options);
+  if (L.c.use_slip) {
+    // at the start every watched joint at rest is undecided
+    result.status = decide_at(L.c, 0.0, L.y, {}, &result.stats);
+    if (!result.status.ok()) return result;
+  } else if (exact_sign(params.friction)) {
+    // switches not located: joints at rest at the start slip the way they accelerate
+    std::array<double, kJoints> w{};
+    std::array<bool, kJoints> rest{};
+    if (joint_rates<M>(params, L.y, &w)) {
+      for (int k = 0; k < kJoints; ++k) rest[k] = w[k] == 0.0;
+      if (decide_slip_only(L.c, 0.0, L.y, rest).ok()) {
+        L.c.zero_sign = L.c.slip;
+        L.c.zero_signs = true;
+      }
+    }
+  }
+  detail::OdeProblem prob{L.c.n, &rhs<M>, &L.c, std::vector<double>(L.c.n, 1.0),
+                          L.c.law_states};
+  if (L.c.zero_signs) prob.freeze = &freeze_signs<M>;
+  for (int i = base_states(M::kDof); i < prob.n; ++i) {
+    prob.atol_scale[i] = options.bristle_atol_scale;
+  }
+  L.integ = detail::make_integrator(prob, options, options.duration);
+  result.rows.reserve(L.grid.size());
+  Status st;
+  result.rows.push_back(make_row(L.c, 0.0, L.y, nullptr, &st));
+  if (st.ok()) st = restart(L, options);
+  while (st.ok() && L.next < L.grid.size()) {
+    st = advance(L, &result, options);
+    if (options.progress) options.progress(L.t);
+    if (st.ok() && options.max_wall_time_s > 0.0 &&
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count() >
+            options.max_wall_time_s) {
+      st = at_time<M>(Status::Error(StatusCode::kSolverFailed,
+                                    "wall-time limit of " +
+                                        std::to_string(options.max_wall_time_s) +
+                                        " s reached (simulation.max_wall_time_s)"),
+                      L.t, L.y);
+    }
+  }
+  if (!L.integ->steps(&result.stats.steps) && st.ok()) {
+    st = Status::Error(StatusCode::kSolverFailed, L.integ->error());
+  }
+  result.status = st;
+  result.stats.rhs_evaluations = L.c.rhs_evaluations;
+  result.stats.wall_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  return result;
 }
 
 }  // namespace
@@ -988,67 +1265,12 @@ long output_row_count(const Options& o) {
 
 Result simulate(const Params<double>& params, const LoadFunction& loads, const Initial& initial,
                 const Options& options) {
-  const auto wall_start = std::chrono::steady_clock::now();
-  Result result;
-  if (output_row_count(options) > kMaxOutputRows) {
-    result.status = Status::Error(StatusCode::kInvalidInput,
-                                  "simulation.duration / simulation.output_step needs " +
-                                      std::to_string(output_row_count(options)) +
-                                      " output rows, more than the limit of " +
-                                      std::to_string(kMaxOutputRows));
-    return result;
-  }
-  Loop L;
-  setup_context(L.c, params, loads, options);
-  L.y[0] = initial.theta1;
-  L.y[1] = initial.theta2;
-  L.y[2] = initial.omega1;
-  L.y[3] = initial.omega2;  // energies and bristles start at zero
-  L.grid = output_grid(options);
-  if (L.c.use_slip) {
-    // at the start every watched joint at rest is undecided
-    result.status = decide_at(L.c, 0.0, L.y, {}, &result.stats);
-    if (!result.status.ok()) return result;
-  } else if (exact_sign(params.friction)) {
-    // switches not located: joints at rest at the start slip the way they accelerate
-    std::array<double, kJoints> w{};
-    std::array<bool, kJoints> rest{};
-    if (joint_rates(params, L.y, &w)) {
-      for (int k = 0; k < kJoints; ++k) rest[k] = w[k] == 0.0;
-      if (decide_slip_only(L.c, 0.0, L.y, rest).ok()) {
-        L.c.zero_sign = L.c.slip;
-        L.c.zero_signs = true;
-      }
-    }
-  }
-  detail::OdeProblem prob{L.c.n, &rhs, &L.c, std::vector<double>(L.c.n, 1.0), L.c.law_states};
-  if (L.c.zero_signs) prob.freeze = &freeze_signs;
-  for (int i = kStates; i < prob.n; ++i) prob.atol_scale[i] = options.bristle_atol_scale;
-  L.integ = detail::make_integrator(prob, options, options.duration);
-  result.rows.reserve(L.grid.size());
-  Status st;
-  result.rows.push_back(make_row(L.c, 0.0, L.y, nullptr, &st));
-  if (st.ok()) st = restart(L, options);
-  while (st.ok() && L.next < L.grid.size()) {
-    st = advance(L, &result, options);
-    if (options.progress) options.progress(L.t);
-    if (st.ok() && options.max_wall_time_s > 0.0 &&
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count() >
-            options.max_wall_time_s) {
-      st = at_time(Status::Error(StatusCode::kSolverFailed,
-                                 "wall-time limit of " + std::to_string(options.max_wall_time_s) +
-                                     " s reached (simulation.max_wall_time_s)"),
-                   L.t, L.y[0], L.y[1]);
-    }
-  }
-  if (!L.integ->steps(&result.stats.steps) && st.ok()) {
-    st = Status::Error(StatusCode::kSolverFailed, L.integ->error());
-  }
-  result.status = st;
-  result.stats.rhs_evaluations = L.c.rhs_evaluations;
-  result.stats.wall_time_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  return result;
+  return run<FiveBar>(params, loads, initial, options);
+}
+
+Result simulate(const FourBarParams& params, const FourBarLoadFunction& loads,
+                const Initial& initial, const Options& options) {
+  return run<FourBar>(params, loads, initial, options);
 }
 
 namespace {
@@ -1093,16 +1315,18 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
     const Status st = inverse_dynamics(params, L, m.theta[0], m.theta[1], m.omega[0], m.omega[1],
                                        m.alpha[0], m.alpha[1], nullptr, eval, &ev,
                                        bristles ? &m.bristle : nullptr);
-    if (!st.ok()) return at_time(pose_cause(params, st, m.theta[0], m.theta[1]), m.t, m.theta[0], m.theta[1]);
+    if (!st.ok()) {
+      return at_time(pose_cause<FiveBar>(params, st, m.theta.data()), m.t, m.theta.data(), 2);
+    }
     Row r = m;
     const Row* previous = out->empty() ? nullptr : &out->back();
-    set_evaluated(ev, previous, &r);
+    set_evaluated<FiveBar>(ev, previous, &r);
     r.M1 = ev.M1;
     r.M2 = ev.M2;
     r.mode = ev.slip;
     r.hold_margin = ev.hold_margin;
     const Status held = holding_range(params, L, eval, &r);
-    if (!held.ok()) return at_time(held, m.t, m.theta[0], m.theta[1]);
+    if (!held.ok()) return at_time(held, m.t, m.theta.data(), 2);
     r.kinetic = kinetic_energy(params, ev.kin, m.omega[0], m.omega[1]);
     r.potential = potential_energy(params, ev.kin);
     out->push_back(r);
@@ -1127,7 +1351,8 @@ namespace {
 /// Energy balance: max |d(KE + PE) - W_in - W_ext + E_diss| over an energy scale every run has,
 /// at least 1e-9 of the mechanism's own (sum of masses x max(g, 1 m/s^2) x sum of lengths), so
 /// that a mechanism at rest does not divide round-off by round-off.
-double energy_balance(const Params<double>& p, const std::vector<Row>& rows, double* scale_out) {
+template <class P>
+double energy_balance(const P& p, const std::vector<Row>& rows, double* scale_out) {
   const Row& r0 = rows.front();
   const double e0 = r0.kinetic + r0.potential;
   double mass = 0.0, length = p.ground_length;
@@ -1146,17 +1371,18 @@ double energy_balance(const Params<double>& p, const std::vector<Row>& rows, dou
   return worst / scale;
 }
 
+template <class M>
 std::string check_failure(const char* what, double value, double tol, double t, int joint) {
   std::ostringstream msg;
   msg.precision(3);
   msg << what << " " << value << " beyond its threshold " << tol << " at t=" << t << " s";
-  if (joint >= 0) msg << ", joint " << joint_name(joint) << " (k=" << joint + 1 << ")";
+  if (joint >= 0) msg << ", joint " << Sim<M>::joint(joint) << " (k=" << joint + 1 << ")";
   return msg.str();
 }
 
-}  // namespace
-
-RunChecks check_run(const Params<double>& params, const LoadFunction& loads, const Result& result,
+/// check_run's body for mechanism M.
+template <class M>
+RunChecks checks_of(const ParamsOf<M>& params, const LoadFnOf<M>& loads, const Result& result,
                     double rtol, double atol) {
   RunChecks checks;
   if (result.rows.empty()) return checks;
@@ -1178,7 +1404,7 @@ RunChecks check_run(const Params<double>& params, const LoadFunction& loads, con
   for (const Row& r : result.rows) {
     for (int k = 0; k < kJoints && check_power; ++k) {
       if (r.mode[k] == kStuck) continue;  // a holding torque times the drift of a held rate
-      const double p = r.Mf[k] * r.omega_rel(k);
+      const double p = r.Mf[k] * Sim<M>::joint_rate(r, k);
       if (p < checks.friction_power_min) {
         checks.friction_power_min = p;
         t_pow = r.t;
@@ -1187,13 +1413,13 @@ RunChecks check_run(const Params<double>& params, const LoadFunction& loads, con
     }
     if (any_stuck(r.mode)) continue;
     // inverse dynamics with the run's slip directions (a wrong direction shows in the power)
-    Evaluation<double> ev;
+    EvalOf<M> ev;
     const bool bristles = law_descriptor(params.friction.law).states_per_joint > 0 && r.has_bristle;
-    const Status st = inverse_dynamics(params, loads(r.t), r.theta[0], r.theta[1], r.omega[0],
-                                       r.omega[1], r.alpha[0], r.alpha[1],
-                                       params.friction.active() ? &r.mode : nullptr, eval, &ev,
-                                       bristles ? &r.bristle : nullptr);
-    const double e = st.ok() ? std::max(std::abs(ev.M1 - r.M1), std::abs(ev.M2 - r.M2)) : INFINITY;
+    const Status st = mech::inverse<M, double>(
+        params, loads(r.t), Eigen::Map<const VecOf<M>>(r.theta.data()),
+        Eigen::Map<const VecOf<M>>(r.omega.data()), Eigen::Map<const VecOf<M>>(r.alpha.data()),
+        params.friction.active() ? &r.mode : nullptr, eval, &ev, bristles ? &r.bristle : nullptr);
+    const double e = st.ok() ? Sim<M>::drive_error(ev, r) : INFINITY;
     if (!(e <= checks.inverse_dynamics_max_abs_error)) {
       checks.inverse_dynamics_max_abs_error = e;
       t_inv = r.t;
@@ -1201,21 +1427,33 @@ RunChecks check_run(const Params<double>& params, const LoadFunction& loads, con
   }
   if (!(checks.energy_balance_relative <= checks.energy_tol)) {
     checks.verdict = Status::Error(StatusCode::kSolverFailed,
-                                   check_failure("energy balance residual (relative)",
+                                   check_failure<M>("energy balance residual (relative)",
                                                  checks.energy_balance_relative, checks.energy_tol,
                                                  result.rows.back().t, -1));
   } else if (!(checks.inverse_dynamics_max_abs_error <= checks.inverse_tol)) {
     checks.verdict = Status::Error(
         StatusCode::kSolverFailed,
-        check_failure("inverse-dynamics residual [N m]", checks.inverse_dynamics_max_abs_error,
+        check_failure<M>("inverse-dynamics residual [N m]", checks.inverse_dynamics_max_abs_error,
                       checks.inverse_tol, t_inv, -1));
   } else if (!(checks.friction_power_min >= -checks.power_tol)) {
     checks.verdict = Status::Error(
         StatusCode::kSolverFailed,
-        check_failure("friction supplies power: Mf w [W] =", checks.friction_power_min,
+        check_failure<M>("friction supplies power: Mf w [W] =", checks.friction_power_min,
                       -checks.power_tol, t_pow, j_pow));
   }
   return checks;
+}
+
+}  // namespace
+
+RunChecks check_run(const Params<double>& params, const LoadFunction& loads, const Result& result,
+                    double rtol, double atol) {
+  return checks_of<FiveBar>(params, loads, result, rtol, atol);
+}
+
+RunChecks check_run(const FourBarParams& params, const FourBarLoadFunction& loads,
+                    const Result& result, double rtol, double atol) {
+  return checks_of<FourBar>(params, loads, result, rtol, atol);
 }
 
 }  // namespace fivebar::sim

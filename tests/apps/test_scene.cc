@@ -149,7 +149,7 @@ TEST(SceneErrors, TopLevelMustBeAMap) {
 TEST(SceneErrors, UnknownKeysAnywhereAreNamedInFull) {
   expect_error(kPaper + "colour: red\n", "colour", "unknown key (line 24)");
   expect_error(with("  point_p: 0.20", "  point_q: 0.20"), "mechanism.point_q",
-               "unknown key (line 8); keys of mechanism: ground_length, links, point_p, assembly");
+               "unknown key (line 8); keys of mechanism: type, ground_length, links, point_p, assembly");
   expect_error(with("{length: 0.25, mass: 1.0, inertia: 0.1, com_offset: 0.15",
                     "{length: 0.25, mass: 1.0, inertia: 0.1, com_ofset: 0.15"),
                "mechanism.links.3.com_ofset", "unknown key");

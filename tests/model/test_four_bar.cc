@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "agreement.h"
+#include "four_bar_scenes.h"
 #include "fivebar/model/four_bar.h"
 #include "fivebar/model/mechanism_dynamics.h"
 #include "fivebar/model/planar_chain.h"
@@ -26,6 +27,8 @@ namespace {
 constexpr double kAgreementTol = 1e-10;  // reduced coordinates against a 17x17 QR
 constexpr int kMechanisms = 20;
 
+using testing::ReferenceScene;
+using testing::reference_scenes;
 using testing::sci;
 
 /// True for a Grashof four-bar: shortest + longest <= sum of the other two lengths.
@@ -336,50 +339,6 @@ TEST(FourBar, FrictionlessRunBalancesEnergy) {
   }
   EXPECT_LT(worst, 1e-9);
   RecordProperty("energy_balance", sci(worst));
-}
-
-/// A scene of datasets/reference/four_bar/ (its values repeated: the scene reader reads five-bars
-/// only) and its loads as functions of t.
-struct ReferenceScene {
-  std::string file;
-  FourBarParams p;
-  double th0;
-  std::function<FourBarLoads(double)> loads;
-  double difference_tol;  ///< relative; the stencil's own error (measured 7.4e-6 and 1.1e-9)
-};
-
-std::vector<ReferenceScene> reference_scenes() {
-  FourBarParams cr, dr;
-  cr.ground_length = 0.30;
-  cr.links = {Link<double>{0.08, 0.5, 0.0003, 0.04, 0.0},
-              Link<double>{0.28, 1.0, 0.0065, 0.14, 0.1},
-              Link<double>{0.20, 0.8, 0.0027, 0.10, 0.0}};
-  cr.point_p = 0.18;
-  cr.assembly = kElbowUp;
-  dr.ground_length = 0.32;
-  dr.links = {Link<double>{0.20, 0.8, 0.0027, 0.10, 0.0},
-              Link<double>{0.12, 0.4, 0.0005, 0.06, 0.0},
-              Link<double>{0.22, 0.9, 0.0036, 0.11, 0.0}};
-  dr.point_p = 0.06;
-  dr.assembly = kElbowDown;
-  for (FourBarParams* p : {&cr, &dr}) {
-    p->gravity = 9.81;
-    p->friction.law = FrictionLaw::kCoulombViscous;
-    p->friction.pin_radius.fill(0.01);
-    p->friction.coulomb.fill(0.12);
-    p->friction.static_coulomb.fill(0.12);
-    p->friction.viscous.fill(0.02);
-  }
-  return {{"crank_rocker", cr, M_PI / 2,
-           [](double t) {
-             return FourBarLoads{0.9 + 0.6 * std::sin(4 * M_PI * t), 0.2, 5.0, M_PI / 2};
-           },
-           2e-5},
-          {"double_rocker", dr, -0.75,
-           [](double t) {
-             return FourBarLoads{1.0 + 0.4 * std::sin(3 * M_PI * t), 0.0, 2.0, 0.0};
-           },
-           1e-8}};
 }
 
 constexpr size_t kStencil = 3;  ///< half-width of central_difference's stencil

@@ -45,6 +45,8 @@ class LoadExpressions {
 
   /// A copy of these loads as the simulator's load function.
   sim::LoadFunction function() const;
+  /// The same for a four-bar: M1 on the crank, M3 and F (at F_angle) on the coupler (M2 unused).
+  sim::FourBarLoadFunction four_bar_function() const;
 
   const std::array<std::string, 4>& expressions() const;
   /// True if expression `which` uses no variable (it is evaluated once, at compile time).

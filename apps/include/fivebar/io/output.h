@@ -14,6 +14,16 @@ namespace fivebar::io {
 /// (t, theta1..4, omega1..4, alpha1..4, M1, M2, N1..5, Mf1..5, P_diss, E_diss), then W_in, W_ext.
 const std::vector<std::string>& trajectory_columns();
 
+/// How many links, drives and joints a trajectory.csv has: the five-bar's (4, 2, 5) by default;
+/// the four-bar's (3, 1, 4: theta1 crank, theta2 coupler, theta3 rocker, M1, joints O, B, C,
+/// D0) from four_bar_layout().
+struct TrajectoryLayout {
+  int links = kLinks, drives = 2, joints = kJoints;
+};
+inline TrajectoryLayout four_bar_layout() { return {3, 1, 4}; }
+/// The columns of a trajectory.csv of that layout (the same names, fewer of them).
+std::vector<std::string> trajectory_columns(const TrajectoryLayout& layout);
+
 /// Writes the values of `row` in the order of trajectory_columns() to out[0 ..
 /// trajectory_columns().size() - 1].
 void row_values(const sim::Row& row, double* out);
@@ -35,7 +45,8 @@ std::vector<Column> rest_columns(const std::vector<sim::Row>& rows);
 /// by format_grid_value (0.476 for 476 * 0.001, within one ulp). Throws InputError on a
 /// write failure or an extra column whose length differs from rows.size().
 void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& rows,
-                          const std::vector<Column>& extra = {});
+                          const std::vector<Column>& extra = {},
+                          const TrajectoryLayout& layout = {});
 
 /// Writes `text` to `path`; throws InputError(`<path>: (write): <errno text>`) on failure.
 void write_text_file(const std::string& path, const std::string& text);

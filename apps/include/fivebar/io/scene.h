@@ -4,15 +4,25 @@
 #include <string>
 #include <vector>
 
+#include "fivebar/model/four_bar_params.h"
 #include "fivebar/model/motor.h"
 #include "fivebar/model/params.h"
 #include "fivebar/sim/simulator.h"
 
 namespace fivebar::io {
 
+/// The mechanism a scene describes (mechanism.type).
+enum class MechanismType { kFiveBar, kFourBar };
+/// "five_bar", "four_bar"
+const char* mechanism_type_name(MechanismType type);
+
 /// Everything a scene file describes, validated.
 struct Scene {
-  Params<double> params;
+  MechanismType type = MechanismType::kFiveBar;
+  Params<double> params;  ///< the five-bar's (type kFiveBar)
+  /// the four-bar's (type kFourBar): links crank O->B, coupler B->C, rocker D0->C; friction slots
+  /// O, B, C, D0. Its loads are M1, M3, F and F_angle; its initial state theta1 and omega1.
+  FourBarParams four_bar;
   MotorWindings windings;  ///< actuators.M1/M2 winding data (objectives only, not the dynamics)
   /// Load expressions of t (muParser syntax, `pi` defined): M1, M2, M3 [N m], F [N].
   std::string M1 = "0", M2 = "0", M3 = "0", F = "0";
@@ -28,6 +38,11 @@ struct Scene {
   /// read_scene leaves them here
   std::vector<std::string> warnings;
 };
+
+/// The friction of the scene's mechanism.
+inline const FrictionParams<double>& friction_of(const Scene& s) {
+  return s.type == MechanismType::kFourBar ? s.four_bar.friction : s.params.friction;
+}
 
 /// Reads and validates a scene file, after applying `sets` ("dotted.key=value", interfaces.md
 /// `--set`) in order. Keys absent from the file get their documented default (the schema below);
@@ -56,11 +71,18 @@ struct Scene {
 ///     (sim::method_name), rtol, atol (in (0, 1)), locate_switches, stick, max_steps (>= 1),
 ///     singular_margin (in [0, 1)), friction_tol (in (0, 1)), friction_max_iter (>= 1),
 ///     rest_rate_threshold, rest_acceleration_threshold (>= 0; [derived], see Scene)
-Scene load_scene(const std::string& path, const std::vector<std::string>& sets = {});
+///
+/// Four-bars (mechanism.type four_bar): mechanism.links has 3 links, per-joint lists 4 numbers
+/// (O, B, C, D0); loads.M2, initial.theta2, initial.omega2 and actuators are five-bar keys and
+/// fail. Only callers that pass `four_bar_ok` get four-bar scenes: for the others a four-bar scene
+/// fails on mechanism.type (the commands that run four-bars so far: simulate).
+Scene load_scene(const std::string& path, const std::vector<std::string>& sets = {},
+                 bool four_bar_ok = false);
 
 /// load_scene without printing the warnings (they stay in Scene::warnings): for callers that
 /// report them their own way, as the Python module does through warnings.warn.
-Scene read_scene(const std::string& path, const std::vector<std::string>& sets = {});
+Scene read_scene(const std::string& path, const std::vector<std::string>& sets = {},
+                 bool four_bar_ok = false);
 
 /// Every key the schema accepts (dotted, `N` for a link index: "mechanism.links.N.mass"), in
 /// schema order. `sections`: the maps and lists that hold other keys ("mechanism.links") too.
@@ -68,7 +90,7 @@ std::vector<std::string> scene_keys(bool sections = false);
 
 /// Parses a scene from YAML text; `path` only names it in error messages.
 Scene parse_scene(const std::string& yaml_text, const std::string& path,
-                  const std::vector<std::string>& sets = {});
+                  const std::vector<std::string>& sets = {}, bool four_bar_ok = false);
 
 /// Writes a scene as YAML in the layout of datasets/scenes/paper.yaml, every key explicit and
 /// every number in shortest round-trip form: parse_scene(scene_to_yaml(s)) reproduces s.

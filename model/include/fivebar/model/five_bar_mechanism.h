@@ -33,11 +33,18 @@ struct FiveBar {
   using Evaluation = fivebar::Evaluation<T>;
   template <typename T>
   using Joints = std::array<T, kJoints>;
+  /// the singular measure's name in messages (singular_measure)
+  static constexpr const char* kSingularName = "sin(theta4 - theta3)";
 
   template <typename T>
   static Status close(const Params<T>& p, const Vec2<T>& q, Kinematics<T>* k,
                       const EvalOptions& opt) {
     return solve_kinematics(p, q[0], q[1], k, opt.singular_margin, opt.want_angles);
+  }
+  /// Zero at the singular poses, where the reactions grow as its inverse.
+  template <typename T>
+  static T singular_measure(const Kinematics<T>& k) {
+    return k.sin43;
   }
   template <typename T>
   static void bias(const Params<T>& p, const Kinematics<T>& k, const Vec2<T>& v, Bias<T>* b) {
@@ -56,6 +63,11 @@ struct FiveBar {
   template <typename T>
   static Joints<T> joint_rates(const Kinematics<T>&, const Bias<T>& b, const Vec2<T>& v) {
     return relative_rates(v[0], v[1], b.w3, b.w4);
+  }
+  /// w = J_w v from the first-order kinematics alone (no velocity terms).
+  template <typename T>
+  static Joints<T> joint_rates_at(const Kinematics<T>& k, const Vec2<T>& v) {
+    return relative_rates(v[0], v[1], T(k.G3.dot(v)), T(k.G4.dot(v)));
   }
   template <typename T>
   static Joints<T> joint_accelerations(const Kinematics<T>& k, const Bias<T>& b,

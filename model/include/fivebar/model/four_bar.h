@@ -20,6 +20,7 @@
 
 #include "fivebar/model/evaluation.h"
 #include "fivebar/model/five_bar_chain.h"
+#include "fivebar/model/four_bar_params.h"
 #include "fivebar/model/friction.h"
 #include "fivebar/model/friction_loop.h"
 #include "fivebar/model/mechanism_dynamics.h"
@@ -29,46 +30,6 @@
 #include "fivebar/model/status.h"
 
 namespace fivebar {
-
-inline constexpr int kFourBarJoints = 4;  ///< O, B, C, D0
-inline constexpr int kFourBarLinks = 3;   ///< crank, coupler, rocker
-
-/// Every constant of a four-bar (links at index 0..2: crank O->B, coupler B->C, rocker D0->C),
-/// templated on the scalar like the five-bar's Params (FourBarParams: double).
-template <typename T>
-struct FourBarParamsT {
-  T ground_length{};  ///< l0 [m]: O at (0,0), D0 at (l0,0)
-  std::array<Link<T>, kFourBarLinks> links;
-  T point_p{};                 ///< P on the coupler, from B [m]
-  int assembly = kElbowUp;     ///< kElbowUp: C left of the directed line B->D0
-  T gravity{};                 ///< along -y [m/s^2]
-  FrictionParams<T> friction;  ///< slots 0..3: joints O, B, C, D0
-
-  template <typename U>
-  FourBarParamsT<U> cast() const {
-    FourBarParamsT<U> out;
-    out.ground_length = scalar_cast<U>(ground_length);
-    for (int i = 0; i < kFourBarLinks; ++i) out.links[i] = links[i].template cast<U>();
-    out.point_p = scalar_cast<U>(point_p);
-    out.assembly = assembly;
-    out.gravity = scalar_cast<U>(gravity);
-    out.friction = friction.template cast<U>();
-    return out;
-  }
-};
-using FourBarParams = FourBarParamsT<double>;
-
-/// Loads of one instant: M1 on the crank, M3 on the coupler, F at P at F_angle from the coupler.
-template <typename T>
-struct FourBarLoadsT {
-  T M1{}, M3{}, F{}, F_angle{};
-
-  template <typename U>
-  FourBarLoadsT<U> cast() const {
-    return {scalar_cast<U>(M1), scalar_cast<U>(M3), scalar_cast<U>(F), scalar_cast<U>(F_angle)};
-  }
-};
-using FourBarLoads = FourBarLoadsT<double>;
 
 /// A closed pose and its first-order coefficients G (derivatives with respect to th1).
 template <typename T>
@@ -290,11 +251,17 @@ struct FourBar {
   using Q = Eigen::Matrix<T, 1, 1>;
   template <typename T>
   using Slots = std::array<T, fivebar::kJoints>;
+  static constexpr const char* kSingularName = "sin(theta3 - theta2)";
 
   template <typename T>
   static Status close(const Params<T>& p, const Q<T>& q, Kinematics<T>* k,
                       const EvalOptions& opt) {
     return four_bar_kinematics(p, q[0], k, opt.singular_margin);
+  }
+  /// Zero at the singular (toggle) poses, where the reactions grow as its inverse.
+  template <typename T>
+  static T singular_measure(const Kinematics<T>& k) {
+    return k.sin32;
   }
   template <typename T>
   static void bias(const Params<T>& p, const Kinematics<T>& k, const Q<T>& v, Bias<T>* b) {
@@ -316,6 +283,10 @@ struct FourBar {
     Slots<T> w{};
     for (int j = 0; j < kFourBarJoints; ++j) w[j] = row[j] * v[0];
     return w;
+  }
+  template <typename T>
+  static Slots<T> joint_rates_at(const Kinematics<T>& k, const Q<T>& v) {
+    return joint_rates(k, Bias<T>{}, v);
   }
   template <typename T>
   static Slots<T> joint_accelerations(const Kinematics<T>& k, const Bias<T>& b, const Q<T>& qdd) {

@@ -1,17 +1,18 @@
-// The mechanism at rest held by joint friction (all five joints stuck: "locked").
+// A mechanism at rest held by joint friction (every joint stuck: "locked").
 //
-// At rest (thd = 0, thdd = 0) the generalized forces of the loads and gravity Q must be carried
-// by holding torques lambda_k at the five joints: J_w^T lambda = Q, two equations in five
-// unknowns. The holding torques are statically indeterminate; friction holds the mechanism when
+// At rest (qd = 0, qdd = 0) the generalized forces of the loads and gravity Q must be carried
+// by holding torques lambda_k at the joints: J_w^T lambda = Q, kDof equations in as many unknowns
+// as joints. The holding torques are statically indeterminate; friction holds the mechanism when
 // some lambda has |lambda_k| <= mu_s,k r_k N_k at every joint, N_k the reactions that lambda
 // itself produces. lock_analysis finds the lambda that minimizes the largest ratio
 // s = max_k |lambda_k| / (mu_s,k r_k N_k): the mechanism holds while s <= 1.
 //
-// With N fixed this is a linear program whose dual is two-dimensional: maximize Q . u over
-// sum_k w_k |a_k . u| <= 1 (a_k = J_w^T e_k, w_k = mu_s,k r_k N_k). Its optimum lies on a kink
-// of the constraint, where u is orthogonal to one a_k, so s = max_k |Q . perp(a_k)| /
-// sum_j w_j |a_j . perp(a_k)|, and the primal lambda follows from complementary slackness.
-// N is updated from lambda until it settles (friction changes the reactions little).
+// With N fixed this is a linear program. With two degrees of freedom (the five-bar) its dual is
+// two-dimensional: maximize Q . u over sum_k w_k |a_k . u| <= 1 (a_k = J_w^T e_k, w_k = mu_s,k
+// r_k N_k). Its optimum lies on a kink of the constraint, where u is orthogonal to one a_k, so
+// s = max_k |Q . perp(a_k)| / sum_j w_j |a_j . perp(a_k)|, and the primal lambda follows from
+// complementary slackness. With one (the four-bar) s = |Q| / sum_k w_k |a_k|. N is updated from
+// lambda until it settles (friction changes the reactions little).
 #pragma once
 
 #include <array>
@@ -19,6 +20,8 @@
 #include <limits>
 
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/five_bar_mechanism.h"
+#include "fivebar/model/mechanism.h"
 
 namespace fivebar {
 
@@ -30,13 +33,13 @@ struct LockAnalysis {
   /// max_k |lambda_k| / (mu_s,k r_k N_k) at the optimum (<= 1: friction holds the pose);
   /// infinite when no joint can resist in some direction the loads push
   double ratio = 0.0;
-  double alpha3 = 0.0, alpha4 = 0.0;
+  double alpha3 = 0.0, alpha4 = 0.0;  ///< the five-bar's couplers (zero for other mechanisms)
 };
 
 namespace detail {
 
 /// min over lambda with sum_k a_k lambda_k = q of max_k |lambda_k| / w_k (the dual vertex rule
-/// above); returns the ratio and fills lambda.
+/// above); returns the ratio and fills lambda. Two degrees of freedom.
 inline double min_max_ratio(const std::array<Vec2<double>, kJoints>& a,
                             const std::array<double, kJoints>& w, const Vec2<double>& q,
                             std::array<double, kJoints>* lambda) {
@@ -76,35 +79,69 @@ inline double min_max_ratio(const std::array<Vec2<double>, kJoints>& a,
   return best;
 }
 
+/// The same with one degree of freedom: sum_k a_k lambda_k = q is one equation, and every joint
+/// carries its full share, lambda_k = s w_k sign(a_k q), with s = |q| / sum_k w_k |a_k|.
+inline double min_max_ratio(const std::array<Eigen::Matrix<double, 1, 1>, kJoints>& a,
+                            const std::array<double, kJoints>& w,
+                            const Eigen::Matrix<double, 1, 1>& q,
+                            std::array<double, kJoints>* lambda) {
+  lambda->fill(0.0);
+  double denom = 0.0;
+  for (int j = 0; j < kJoints; ++j) denom += w[j] * std::abs(a[j](0, 0));
+  const double num = std::abs(q(0, 0));
+  if (num == 0.0) return 0.0;
+  if (!(denom > 0.0)) return std::numeric_limits<double>::infinity();
+  const double s = num / denom;
+  for (int j = 0; j < kJoints; ++j) {
+    const double d = a[j](0, 0) * q(0, 0);
+    (*lambda)[j] = d > 0.0 ? s * w[j] : d < 0.0 ? -s * w[j] : 0.0;
+  }
+  return s;
+}
+
+inline void set_coupler_accelerations(const Evaluation<double>& ev, LockAnalysis* out) {
+  out->alpha3 = ev.alpha3;
+  out->alpha4 = ev.alpha4;
+}
+template <typename E>
+void set_coupler_accelerations(const E&, LockAnalysis*) {}
+
 }  // namespace detail
 
-/// Holding torques of the locked mechanism at pose (th1, th2), at rest, under loads L.
-inline Status lock_analysis(const Params<double>& p, const Loads<double>& L, double th1,
-                            double th2, const EvalOptions& opt, LockAnalysis* out) {
-  Kinematics<double> k;
-  Status st = solve_kinematics(p, th1, th2, &k, opt.singular_margin, false);
+/// Holding torques of the locked mechanism M at pose q, at rest, under loads L.
+template <class M>
+Status lock_analysis(const typename M::template Params<double>& p,
+                     const typename M::template Loads<double>& L,
+                     const mech::Vec<M::kDof, double>& q, const EvalOptions& opt,
+                     LockAnalysis* out) {
+  using V = mech::Vec<M::kDof, double>;
+  typename M::template Kinematics<double> k;
+  EvalOptions closure = opt;
+  closure.want_angles = false;
+  Status st = M::close(p, q, &k, closure);
   if (!st.ok()) return st;
-  Bias<double> b;
-  compute_bias(p, k, 0.0, 0.0, &b);
-  const Vec2<double> Fvec = force_vector(k, L);
-  Mat2<double> A;
-  Vec2<double> q;
-  mass_and_forces(p, k, b, L, Fvec, &A, &q);
-  std::array<Vec2<double>, kJoints> a;
+  typename M::template Bias<double> b;
+  M::bias(p, k, V::Zero().eval(), &b);
+  const Vec2<double> Fvec = M::applied(k, L);
+  mech::Mat<M::kDof, double> A;
+  V rhs;
+  M::mass_and_force(p, k, b, L, Fvec, &A, &rhs);
+  std::array<V, kJoints> a;
   for (int j = 0; j < kJoints; ++j) {
     std::array<double, kJoints> unit{};
     unit[j] = 1.0;
-    a[j] = friction_transpose(k, unit);
+    a[j] = M::friction_transpose(k, unit);
   }
-  const Vec2<double> zero = Vec2<double>::Zero();
+  const V zero = V::Zero();
+  typename M::template Evaluation<double> ev;
   out->hold.fill(0.0);
   for (int it = 0; it < 30; ++it) {
-    reactions(p, k, b, L, Fvec, zero, out->hold, &out->F, &out->alpha3, &out->alpha4);
+    M::reactions(p, k, b, L, Fvec, zero, out->hold, &out->F, &ev);
     const std::array<double, kJoints> N_old = out->N;
     reaction_norms(out->F, &out->N);
     std::array<double, kJoints> w;
-    for (int j = 0; j < kJoints; ++j) w[j] = holding_capacity(p, j, out->N[j]);
-    out->ratio = detail::min_max_ratio(a, w, q, &out->hold);
+    for (int j = 0; j < kJoints; ++j) w[j] = M::holding_capacity(p, j, out->N[j]);
+    out->ratio = detail::min_max_ratio(a, w, rhs, &out->hold);
     double change = 0.0, scale = 1e-300;
     for (int j = 0; j < kJoints; ++j) {
       change = std::max(change, std::abs(out->N[j] - N_old[j]));
@@ -112,9 +149,16 @@ inline Status lock_analysis(const Params<double>& p, const Loads<double>& L, dou
     }
     if (!std::isfinite(out->ratio) || (it > 0 && change <= 1e-13 * scale)) break;
   }
-  reactions(p, k, b, L, Fvec, zero, out->hold, &out->F, &out->alpha3, &out->alpha4);
+  M::reactions(p, k, b, L, Fvec, zero, out->hold, &out->F, &ev);
   reaction_norms(out->F, &out->N);
+  detail::set_coupler_accelerations(ev, out);
   return Status::Ok();
+}
+
+/// The five-bar at pose (th1, th2).
+inline Status lock_analysis(const Params<double>& p, const Loads<double>& L, double th1,
+                            double th2, const EvalOptions& opt, LockAnalysis* out) {
+  return lock_analysis<FiveBar>(p, L, Vec2<double>(th1, th2), opt, out);
 }
 
 }  // namespace fivebar

@@ -14,10 +14,13 @@
 //   M::Applied<T>                      the external loads resolved at a pose (forces at points)
 //
 //   close(p, q, kin, opt)              position closure; kCannotAssemble / kNearSingular
+//   singular_measure(kin), kSingularName   zero at singular poses (the reactions grow as its
+//                                      inverse; opt.singular_margin bounds it), and its name
 //   bias(p, kin, v, b)                 link rates and the accelerations at qdd = 0
 //   applied(kin, L)                    the external loads at the pose
 //   mass_and_force(p, kin, b, L, a, A, rhs0)   M(q), and the generalized force without friction
 //   joint_rates(kin, b, v)             w = J_w v, one per joint slot
+//   joint_rates_at(kin, v)             the same from the first-order kinematics alone
 //   joint_accelerations(kin, b, qdd)   d w / dt
 //   joint_row(kin, j)                  row j of J_w
 //   friction_transpose(kin, Mf)        J_w^T Mf (the friction torques' generalized force, negated)

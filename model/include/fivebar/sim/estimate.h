@@ -66,5 +66,9 @@ double max_angle_difference(const std::vector<Row>& a, const std::vector<Row>& b
 /// unreachable as soon as the proportional prediction says so; the note says which.
 EstimatedRun simulate_to_target(const Params<double>& params, const LoadFunction& loads,
                                 const Initial& initial, const Options& options);
+/// The same for the four-bar.
+EstimatedRun simulate_to_target(const FourBarParamsT<double>& params,
+                                const FourBarLoadFunction& loads, const Initial& initial,
+                                const Options& options);
 
 }  // namespace fivebar::sim

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "fivebar/model/evaluation.h"
+#include "fivebar/model/four_bar_params.h"
 #include "fivebar/model/friction.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/rest_rule.h"
@@ -93,13 +94,18 @@ long output_row_count(const Options& options);
 
 /// Load function: the loads at time t.
 using LoadFunction = std::function<Loads<double>(double t)>;
+/// The four-bar's loads at time t.
+using FourBarLoadFunction = std::function<FourBarLoadsT<double>(double t)>;
 
-/// Initial state of the two cranks.
+/// Initial state of the driven links: the five-bar's two cranks; the four-bar's crank (theta1,
+/// omega1; theta2 and omega2 are not used).
 struct Initial {
   double theta1 = 0, theta2 = 0, omega1 = 0, omega2 = 0;
 };
 
-/// One output row: the columns of trajectory.csv (interfaces.md) plus the energy terms.
+/// One output row: the columns of trajectory.csv (interfaces.md) plus the energy terms. Links in
+/// the mechanism's order: the five-bar's cranks 1, 2 and couplers 3, 4; the four-bar's crank,
+/// coupler and rocker in slots 0..2 (slot 3 unused, M2 zero, joints O, B, C, D0 in slots 0..3).
 struct Row {
   double t = 0;
   std::array<double, kLinks> theta{}, omega{}, alpha{};  ///< links 1..4
@@ -118,7 +124,7 @@ struct Row {
   /// cranks stuck (the pose at rest) each actuator's range with the other at its row value
   /// (friction at all five joints, as the simulator's lock; rest.h)
   std::array<double, 4> hold_range{};
-  /// relative rate of joint k (0-based, O, B, C, D, D0) from the link rates [rad/s]
+  /// relative rate of the five-bar's joint k (0-based, O, B, C, D, D0) from the link rates [rad/s]
   double omega_rel(int k) const {
     switch (k) {
       case 0: return omega[0];
@@ -157,6 +163,10 @@ struct Result {
 /// Simulates the mechanism from `initial` over [0, options.duration].
 Result simulate(const Params<double>& params, const LoadFunction& loads, const Initial& initial,
                 const Options& options);
+/// The four-bar (four_bar.h): the same events, joint modes, lock and checks. Its joints stick
+/// only together (one degree of freedom: one stuck joint holds them all), as the lock.
+Result simulate(const FourBarParamsT<double>& params, const FourBarLoadFunction& loads,
+                const Initial& initial, const Options& options);
 
 /// Inverse dynamics along a motion: uses t, theta[0..1], omega[0..1], alpha[0..1] of each row and
 /// returns rows with the coupler kinematics, reactions, friction torques, and M1, M2 the torques
@@ -198,5 +208,7 @@ struct RunChecks {
 /// `atol` < 0: the same as rtol (the scenes' usual rtol = atol).
 RunChecks check_run(const Params<double>& params, const LoadFunction& loads, const Result& result,
                     double rtol = 1e-10, double atol = -1);
+RunChecks check_run(const FourBarParamsT<double>& params, const FourBarLoadFunction& loads,
+                    const Result& result, double rtol = 1e-10, double atol = -1);
 
 }  // namespace fivebar::sim

@@ -1,0 +1,148 @@
+// The simulator over the four-bar (simulate's events, joint modes, lock and checks, written once
+// over the mechanism): against the independent references of datasets/reference/four_bar/, the
+// energy balance without friction, and friction holding the mechanism at rest until the drive
+// breaks it away.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "agreement.h"
+#include "fivebar/model/four_bar.h"
+#include "fivebar/sim/simulator.h"
+#include "four_bar_scenes.h"
+#include "paper.h"
+
+namespace fivebar {
+namespace {
+
+using testing::sci;
+
+sim::Options options(double duration, double tol) {
+  sim::Options o;
+  o.duration = duration;
+  o.output_step = 1e-3;
+  o.rtol = o.atol = tol;
+  o.singular_margin = 0.0;
+  return o;
+}
+
+sim::Initial crank_at(double theta1, double omega1 = 0.0) {
+  sim::Initial i;
+  i.theta1 = theta1;
+  i.omega1 = omega1;
+  return i;
+}
+
+/// Sign changes of each joint's relative rate between rows (joints O, B, C, D0 from the link
+/// rates omega1..3, as trajectory.csv gives them).
+std::array<int, 4> sign_changes(const std::vector<std::array<double, 3>>& omega) {
+  std::array<int, 4> out{};
+  const auto w = [](const std::array<double, 3>& o) {
+    return std::array<double, 4>{o[0], o[1] - o[0], o[2] - o[1], o[2]};
+  };
+  for (size_t i = 1; i < omega.size(); ++i) {
+    const auto a = w(omega[i - 1]), b = w(omega[i]);
+    for (int k = 0; k < 4; ++k) out[k] += (a[k] > 0) != (b[k] > 0) && a[k] != 0 && b[k] != 0;
+  }
+  return out;
+}
+
+// Every row against the reference (RK4 at 5e-5 s with located switches, within ~2e-11 rad of the
+// exact solution): the crank, the coupler and the rocker, their rates, the dissipated energy and
+// the works; each joint's rate reverses between the same rows as in the reference.
+TEST(FourBarSimulation, AgreesWithTheIndependentReferences) {
+  for (const testing::ReferenceScene& sc : testing::reference_scenes()) {
+    const auto ref = testing::read_csv(testing::reference_path("four_bar/" + sc.file + ".csv"));
+    const sim::Result r = sim::simulate(sc.p, sc.loads, crank_at(sc.th0), options(2.0, 1e-12));
+    ASSERT_TRUE(r.status.ok()) << sc.file << ": " << r.status.message;
+    ASSERT_EQ(r.rows.size(), ref.at("t").size()) << sc.file;
+    double angle = 0, rate = 0, energy = 0;
+    std::vector<std::array<double, 3>> omega, omega_ref;
+    for (size_t i = 0; i < r.rows.size(); ++i) {
+      const sim::Row& row = r.rows[i];
+      omega.push_back({row.omega[0], row.omega[1], row.omega[2]});
+      omega_ref.push_back({ref.at("omega1")[i], ref.at("omega2")[i], ref.at("omega3")[i]});
+      for (int k = 0; k < 3; ++k) {
+        const std::string n = std::to_string(k + 1);
+        angle = std::max(angle, std::abs(row.theta[k] - ref.at("theta" + n)[i]));
+        rate = std::max(rate, std::abs(row.omega[k] - ref.at("omega" + n)[i]));
+      }
+      energy = std::max({energy, std::abs(row.E_diss - ref.at("E_diss")[i]),
+                         std::abs(row.W_in - ref.at("W_in")[i]),
+                         std::abs(row.W_ext - ref.at("W_ext")[i])});
+    }
+    EXPECT_LT(angle, 5e-9) << sc.file;
+    EXPECT_LT(rate, 5e-8) << sc.file;
+    EXPECT_LT(energy, 1e-8) << sc.file;
+    const std::array<int, 4> reversals = sign_changes(omega);
+    EXPECT_EQ(reversals, sign_changes(omega_ref)) << sc.file;
+    EXPECT_GT(reversals[0] + reversals[1] + reversals[2] + reversals[3], 10) << sc.file;
+    EXPECT_GE(r.stats.friction_events, reversals[0] + reversals[1] + reversals[2] + reversals[3]);
+    const sim::RunChecks checks = sim::check_run(sc.p, sc.loads, r, 1e-12);
+    EXPECT_TRUE(checks.verdict.ok()) << sc.file << ": " << checks.verdict.message;
+    EXPECT_LT(checks.inverse_dynamics_max_abs_error, 1e-8) << sc.file;
+    EXPECT_GE(checks.friction_power_min, 0.0) << sc.file;
+    RecordProperty(sc.file + "_angle", sci(angle));
+    RecordProperty(sc.file + "_rate", sci(rate));
+    RecordProperty(sc.file + "_energy", sci(energy));
+  }
+}
+
+// Without friction KE + PE changes by the work of the drive and the loads alone.
+TEST(FourBarSimulation, FrictionlessRunBalancesEnergy) {
+  for (testing::ReferenceScene sc : testing::reference_scenes()) {
+    sc.p.friction.pin_radius.fill(0.0);
+    const sim::Result r = sim::simulate(sc.p, sc.loads, crank_at(sc.th0, 1.0), options(1.0, 1e-10));
+    ASSERT_TRUE(r.status.ok()) << sc.file << ": " << r.status.message;
+    const sim::RunChecks checks = sim::check_run(sc.p, sc.loads, r, 1e-10);
+    EXPECT_TRUE(checks.verdict.ok()) << sc.file << ": " << checks.verdict.message;
+    EXPECT_LT(checks.energy_balance_relative, 1e-7) << sc.file;
+    EXPECT_EQ(r.rows.back().E_diss, 0.0);
+    RecordProperty(sc.file + "_energy_balance", sci(checks.energy_balance_relative));
+  }
+}
+
+// The double rocker at rest under gravity, with static friction large enough to hold it: every
+// joint is stuck (mode 2) and the crank stays put while the drive ramps up; where the ramp passes
+// what friction can hold, the mechanism breaks away and moves in the drive's direction.
+TEST(FourBarSimulation, FrictionHoldsTheMechanismUntilTheDriveBreaksItAway) {
+  testing::ReferenceScene sc = testing::reference_scenes()[1];
+  sc.p.friction.law = FrictionLaw::kCoulombViscous;
+  sc.p.friction.pin_radius.fill(0.02);
+  sc.p.friction.coulomb.fill(0.3);
+  sc.p.friction.static_coulomb.fill(0.3);
+  // the gravity torque at the start, held by friction, then a drive ramping past it
+  FourBarKinematics k;
+  ASSERT_TRUE(four_bar_kinematics(sc.p, sc.th0, &k).ok());
+  FourBarEvaluation still;
+  FourBarParams frictionless = sc.p;
+  frictionless.friction.pin_radius.fill(0.0);
+  ASSERT_TRUE(four_bar_inverse(frictionless, FourBarLoads{}, sc.th0, 0.0, 0.0, EvalOptions{}, &still)
+                  .ok());
+  const double hold = still.M1;  // the drive that holds the pose without friction
+  const auto loads = [hold](double t) { return FourBarLoads{hold + 2.0 * t, 0.0, 0.0, 0.0}; };
+  const sim::Result r = sim::simulate(sc.p, loads, crank_at(sc.th0), options(1.0, 1e-10));
+  ASSERT_TRUE(r.status.ok()) << r.status.message;
+  size_t first_move = r.rows.size();
+  for (size_t i = 0; i < r.rows.size(); ++i) {
+    if (r.rows[i].omega[0] != 0.0) {
+      first_move = i;
+      break;
+    }
+    EXPECT_EQ(r.rows[i].theta[0], sc.th0) << "t=" << r.rows[i].t;
+    for (int j = 0; j < kFourBarJoints; ++j) EXPECT_EQ(r.rows[i].mode[j], kStuck);
+  }
+  ASSERT_GT(first_move, 10u) << "friction did not hold the pose at the start";
+  ASSERT_LT(first_move, r.rows.size() - 10) << "the drive never broke the mechanism away";
+  EXPECT_GE(r.stats.breakaway_events, 1);
+  EXPECT_GT(r.rows.back().theta[0], sc.th0);  // moves the way the drive pushes
+  const sim::RunChecks checks = sim::check_run(sc.p, loads, r, 1e-10);
+  EXPECT_TRUE(checks.verdict.ok()) << checks.verdict.message;
+  RecordProperty("breakaway_t", sci(r.rows[first_move].t));
+}
+
+}  // namespace
+}  // namespace fivebar
