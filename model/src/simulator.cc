@@ -595,6 +595,33 @@ int project_rates(const ParamsOf<M>& p, const std::array<bool, kJoints>& mask, d
   return 1;
 }
 
+/// A row of J_w this small against the largest is a kinematic zero (kinematic_zero_departures).
+constexpr double kKinematicZero = 1e-9;
+
+/// At rest (v = 0) a joint whose row of J_w vanishes (a kinematic zero: a four-bar's joint C with
+/// the crank on the ground line) neither moves nor accelerates in any mode, yet its slip
+/// direction changes the reactions: w_k(t) = J_k(q(t)) v(t) ~ (t^3 / 2) qdd^T H_k qdd, so it
+/// slips the way of qdd^T H_k qdd, the velocity terms of its rate at v = qdd. That value
+/// replaces its relative acceleration in `wdot` for the consistency test.
+template <class M>
+void kinematic_zero_departures(const ParamsOf<M>& p, const EvalOf<M>& ev, const double* y,
+                               const std::array<bool, kJoints>& rest,
+                               std::array<double, kJoints>* wdot) {
+  if (!v_of<M>(y).isZero(0.0)) return;
+  double row_scale = 0.0;
+  for (int k = 0; k < M::kJoints; ++k) {
+    row_scale = std::max(row_scale, M::joint_row(ev.kin, k).norm());
+  }
+  typename M::template Bias<double> b;
+  bool have_bias = false;
+  for (int k = 0; k < M::kJoints; ++k) {
+    if (!rest[k] || M::joint_row(ev.kin, k).norm() > kKinematicZero * row_scale) continue;
+    if (!have_bias) M::bias(p, ev.kin, ev.thdd, &b);  // the velocity terms at v = qdd
+    have_bias = true;
+    (*wdot)[k] = M::joint_accelerations(ev.kin, b, VecOf<M>::Zero().eval())[k];
+  }
+}
+
 /// Whether the joint modes `slip` are consistent at (t, y) for the joints in `rest`: every
 /// slipping one accelerates in its slip direction (beyond -slack_accel), every stuck one is held
 /// (margin >= -slack_torque).
@@ -608,12 +635,13 @@ bool consistent(Context<M>& c, double t, const double* y, const JointModes& slip
     if (failure->ok()) *failure = st;
     return false;
   }
-  const auto wdot = Sim<M>::joint_accelerations(ev);
+  auto wdot = Sim<M>::joint_accelerations(ev);
   double accel_scale = 1.0, torque_scale = 1.0;
   for (int k = 0; k < kJoints; ++k) {
     accel_scale = std::max(accel_scale, std::abs(wdot[k]));
     torque_scale = std::max(torque_scale, std::abs(ev.Mf[k]));
   }
+  kinematic_zero_departures<M>(*c.params, ev, y, rest, &wdot);
   for (int k = 0; k < kJoints; ++k) {
     if (!rest[k] || slip[k] == JointMode::kRest) continue;
     const bool ok = slip[k] == kStuck ? ev.hold_margin[k] >= -slack_torque * torque_scale
@@ -1399,6 +1427,7 @@ RunChecks checks_of(const ParamsOf<M>& params, const LoadFnOf<M>& loads, const R
   // not with internal states (LuGre's bristles store and return energy)
   const bool check_power = law_descriptor(params.friction.law).states_per_joint == 0;
   double t_inv = 0, t_pow = 0;
+  Status inverse_failure;
   int j_pow = -1;
   EvalOptions eval;
   for (const Row& r : result.rows) {
@@ -1419,7 +1448,11 @@ RunChecks checks_of(const ParamsOf<M>& params, const LoadFnOf<M>& loads, const R
         params, loads(r.t), Eigen::Map<const VecOf<M>>(r.theta.data()),
         Eigen::Map<const VecOf<M>>(r.omega.data()), Eigen::Map<const VecOf<M>>(r.alpha.data()),
         params.friction.active() ? &r.mode : nullptr, eval, &ev, bristles ? &r.bristle : nullptr);
-    const double e = st.ok() ? Sim<M>::drive_error(ev, r) : INFINITY;
+    if (!st.ok()) {  // the first row where inverse dynamics fails, with its own reason
+      if (inverse_failure.ok()) inverse_failure = at_time(st, r.t, r.theta.data(), M::kDof);
+      continue;
+    }
+    const double e = Sim<M>::drive_error(ev, r);
     if (!(e <= checks.inverse_dynamics_max_abs_error)) {
       checks.inverse_dynamics_max_abs_error = e;
       t_inv = r.t;
@@ -1430,6 +1463,9 @@ RunChecks checks_of(const ParamsOf<M>& params, const LoadFnOf<M>& loads, const R
                                    check_failure<M>("energy balance residual (relative)",
                                                  checks.energy_balance_relative, checks.energy_tol,
                                                  result.rows.back().t, -1));
+  } else if (!inverse_failure.ok()) {
+    checks.verdict = Status::Error(StatusCode::kSolverFailed,
+                                   "inverse dynamics of the run failed " + inverse_failure.message);
   } else if (!(checks.inverse_dynamics_max_abs_error <= checks.inverse_tol)) {
     checks.verdict = Status::Error(
         StatusCode::kSolverFailed,

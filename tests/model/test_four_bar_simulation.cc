@@ -2,6 +2,7 @@
 // over the mechanism): against the independent references of datasets/reference/four_bar/, the
 // energy balance without friction, and friction holding the mechanism at rest until the drive
 // breaks it away.
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -142,6 +143,42 @@ TEST(FourBarSimulation, FrictionHoldsTheMechanismUntilTheDriveBreaksItAway) {
   const sim::RunChecks checks = sim::check_run(sc.p, loads, r, 1e-10);
   EXPECT_TRUE(checks.verdict.ok()) << checks.verdict.message;
   RecordProperty("breakaway_t", sci(r.rows[first_move].t));
+}
+
+// theta1 = pi puts B on the ground line: coupler and rocker turn alike there, so joint C neither
+// moves nor accelerates at rest in any mode. Its slip direction comes from the third-order term
+// of its rate (the velocity terms at v = qdd): the run from rest starts, and it agrees with the
+// run started 1e-9 rad away, where C's acceleration decides.
+TEST(FourBarSimulation, AStartAtRestWhereAJointsRateVanishesInEveryModeRuns) {
+  const testing::ReferenceScene sc = testing::reference_scenes()[0];
+  const sim::Result at = sim::simulate(sc.p, sc.loads, crank_at(M_PI), options(0.5, 1e-12));
+  ASSERT_TRUE(at.status.ok()) << at.status.message;
+  const sim::Result near =
+      sim::simulate(sc.p, sc.loads, crank_at(M_PI + 1e-9), options(0.5, 1e-12));
+  ASSERT_TRUE(near.status.ok()) << near.status.message;
+  ASSERT_EQ(at.rows.size(), near.rows.size());
+  double gap = 0;
+  for (size_t i = 0; i < at.rows.size(); ++i) {
+    for (int k = 0; k < 3; ++k) gap = std::max(gap, std::abs(at.rows[i].theta[k] - near.rows[i].theta[k]));
+  }
+  EXPECT_LT(gap, 1e-7);
+  EXPECT_TRUE(sim::check_run(sc.p, sc.loads, at, 1e-12).verdict.ok());
+  RecordProperty("gap_to_the_nearby_start", sci(gap));
+}
+
+// A row where inverse dynamics cannot be evaluated fails the run's checks with that row's time
+// and the inverse's own reason (not a residual of inf).
+TEST(FourBarSimulation, ARowWhoseInverseDynamicsFailsFailsTheChecksNamingWhy) {
+  const testing::ReferenceScene sc = testing::reference_scenes()[1];
+  sim::Result r = sim::simulate(sc.p, sc.loads, crank_at(sc.th0), options(0.2, 1e-10));
+  ASSERT_TRUE(r.status.ok()) << r.status.message;
+  r.rows[100].theta[0] = M_PI;  // |BD0| = 0.52 > l2 + l3 = 0.34: the double rocker cannot close
+  const sim::RunChecks checks = sim::check_run(sc.p, sc.loads, r, 1e-10);
+  ASSERT_FALSE(checks.verdict.ok());
+  EXPECT_THAT(checks.verdict.message,
+              ::testing::HasSubstr("inverse dynamics of the run failed at t=0.1 s (theta1=3.14159): "
+                                   "four-bar cannot assemble"));
+  EXPECT_TRUE(std::isfinite(checks.inverse_dynamics_max_abs_error));
 }
 
 }  // namespace

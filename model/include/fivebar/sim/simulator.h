@@ -192,7 +192,8 @@ struct RunChecks {
   double energy_balance_relative = 0;
   /// max |M_inverse - M_input| over the rows [N m], inverse dynamics with the run's slip
   /// directions; rows with a stuck joint are left out (their holding torque is statically
-  /// indeterminate in inverse dynamics)
+  /// indeterminate in inverse dynamics). A row where inverse dynamics fails is not counted here:
+  /// it fails the checks, and the verdict gives its time and reason
   double inverse_dynamics_max_abs_error = 0;
   /// min over rows and joints of Mf_k w_k [W]: friction never supplies power (not checked for
   /// LuGre, whose bristles store and return energy)
