@@ -127,6 +127,14 @@ double reaction_error(const std::vector<Vec2<double>>& a,
   return testing::reaction_error(a, b, kFourBarJoints);
 }
 
+/// True for the friction loop's report of several consistent solutions (friction_unique): at
+/// high joint rates the inverse problem can have two, each the reactions of a drive torque that
+/// gives the same motion.
+bool several_solutions(const Status& st) {
+  return st.code == StatusCode::kFrictionNotConverged &&
+         st.message.find("several consistent reaction forces") != std::string::npos;
+}
+
 TEST(FourBar, RandomMechanismsAreGrashofAndNot) {
   int g = 0;
   for (const FourBarParams& p : mechanisms(false)) g += grashof(p);
@@ -190,7 +198,7 @@ TEST(FourBar, RateCoefficientsMatchCentralDifferences) {
 TEST(FourBar, ForwardAndInverseDynamicsAgreeWithThePlanarChain) {
   for (bool friction : {false, true}) {
     double worst_acc = 0.0, worst_tau = 0.0, worst_F = 0.0;
-    int m = 0;
+    int m = 0, several = 0;
     for (const FourBarParams& p : mechanisms(friction)) {
       for (const State& s : random_states(p, 1000 / kMechanisms, 100 + m++)) {
         FourBarEvaluation fwd, inv;
@@ -205,7 +213,12 @@ TEST(FourBar, ForwardAndInverseDynamicsAgreeWithThePlanarChain) {
         worst_acc = std::max(worst_acc, err / (1 + scale));
         worst_F = std::max(worst_F, reaction_error(cf.F, fwd.F));
         const double al1 = 10 * s.loads.M3;  // an acceleration unrelated to the forward one
-        ASSERT_TRUE(four_bar_inverse(p, s.loads, s.th1, s.w1, al1, EvalOptions{}, &inv).ok());
+        const Status st = four_bar_inverse(p, s.loads, s.th1, s.w1, al1, EvalOptions{}, &inv);
+        if (several_solutions(st)) {
+          ++several;
+          continue;
+        }
+        ASSERT_TRUE(st.ok()) << st.message;
         const chain::Solution ci = chain_solution(p, s, &al1);
         worst_tau = std::max(worst_tau, std::abs(ci.drive[0] - inv.M1) / (1 + std::abs(inv.M1)));
         worst_F = std::max(worst_F, reaction_error(ci.F, inv.F));
@@ -214,7 +227,9 @@ TEST(FourBar, ForwardAndInverseDynamicsAgreeWithThePlanarChain) {
     EXPECT_LT(worst_acc, kAgreementTol);
     EXPECT_LT(worst_tau, kAgreementTol);
     EXPECT_LT(worst_F, kAgreementTol);
+    EXPECT_LT(several, 10);  // of 1000 inverse problems, none without friction
     const std::string tag = friction ? "friction" : "frictionless";
+    RecordProperty("inverse_several_solutions_" + tag, several);
     RecordProperty("accel_" + tag, sci(worst_acc));
     RecordProperty("torque_" + tag, sci(worst_tau));
     RecordProperty("reactions_" + tag, sci(worst_F));
@@ -259,9 +274,7 @@ TEST(FourBar, InverseOfForwardReturnsTheTorqueOrReportsSeveralSolutions) {
                                                        EvalOptions{}, &inv);
       if (!st.ok()) {
         ++reported;
-        EXPECT_EQ(st.code, StatusCode::kFrictionNotConverged);
-        EXPECT_NE(st.message.find("several consistent reaction forces"), std::string::npos)
-            << st.message;
+        EXPECT_TRUE(several_solutions(st)) << st.message;
         continue;
       }
       ++returned;
@@ -645,9 +658,7 @@ TEST(FourBar, LuGreInverseOfForwardReturnsTheTorque) {
                                                             EvalOptions{}, &inv, &z);
       if (!inverse.ok()) {
         ++reported;
-        EXPECT_EQ(inverse.code, StatusCode::kFrictionNotConverged);
-        EXPECT_NE(inverse.message.find("several consistent reaction forces"), std::string::npos)
-            << inverse.message;
+        EXPECT_TRUE(several_solutions(inverse)) << inverse.message;
         continue;
       }
       ++returned;
