@@ -564,6 +564,33 @@ void friction_loop_implicit(const std::array<T, kJoints>& phi, const LoopSolutio
   *iterations = sol.iterations;
 }
 
+/// The end of scaled_friction_loop where the fixed point did not converge (Newton on the unscaled
+/// map `affine`, friction_newton_fallback) or the map does not contract everywhere (`bound` >= 1:
+/// the solution N is checked to be the only one found, friction_unique). `converged`: the fixed
+/// point's N, Mf, F are consistent; otherwise Newton's N is completed into Mf and F here.
+template <typename T, typename Solve>
+Status friction_loop_beyond_contraction(const std::array<T, kJoints>& phi, const EvalOptions& opt,
+                                        Solve& solve, double bound,
+                                        const AffineReactions<T>& affine, bool converged,
+                                        bool contracting, double ratio, std::array<T, kJoints>* N,
+                                        std::array<T, kJoints>* Mf,
+                                        std::array<Vec2<T>, kJoints>* F, int* iterations) {
+  if (!converged) {
+    const Status st = friction_newton_fallback(phi, opt, affine, contracting, ratio, N);
+    if (!st.ok()) return st;
+  }
+  if (bound >= 1.0) {  // not a contraction: the solution found need not be the only one
+    const Status st = friction_unique(phi, opt, affine, bound, *N);
+    if (!st.ok()) return st;
+  }
+  if (converged) return Status::Ok();
+  for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
+  solve(*Mf, F);
+  reaction_norms(*F, N);
+  *iterations = opt.friction_max_iter + 1;  // marks a Newton solve
+  return Status::Ok();
+}
+
 /// The loop on the scaled map: Newton steps where it contracts, else the fixed point, else Newton
 /// on `affine()`, the unscaled map (friction_newton_fallback); where it does not contract
 /// everywhere, the solution is checked to be the only one found (friction_unique). `warm`: as in
@@ -584,36 +611,22 @@ Status scaled_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions
   }
   bool contracting = true;
   double ratio = 0.0;
-  bool converged = false;
   if constexpr (std::is_same_v<T, double>) {
     // a contraction: unique fixed point, reached sooner by Newton steps
-    if (contracts) {
-      converged = friction_contracting_newton(phi, opt, scaled, start, N, Mf, F, iterations);
+    if (contracts &&
+        friction_contracting_newton(phi, opt, scaled, start, N, Mf, F, iterations)) {
+      return Status::Ok();
     }
   }
-  if (!converged) {
-    converged =
-        friction_fixed_point(phi, opt, scaled, start, N, Mf, F, iterations, &contracting, &ratio);
-  }
+  bool converged =
+      friction_fixed_point(phi, opt, scaled, start, N, Mf, F, iterations, &contracting, &ratio);
   if (!converged && start) {  // (a contraction converges from anywhere: not expected)
     converged = friction_fixed_point<T>(phi, opt, scaled, nullptr, N, Mf, F, iterations,
                                         &contracting, &ratio);
   }
-  if (!converged) {
-    const Status st = friction_newton_fallback(phi, opt, affine(), contracting, ratio, N);
-    if (!st.ok()) return st;
-  }
-  // not a contraction: the solution found need not be the only one
-  if (!contracts) {
-    const Status st = friction_unique(phi, opt, affine(), scaled.contraction_bound, *N);
-    if (!st.ok()) return st;
-  }
-  if (converged) return Status::Ok();
-  for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
-  solve(*Mf, F);
-  reaction_norms(*F, N);
-  *iterations = opt.friction_max_iter + 1;  // marks a Newton solve
-  return Status::Ok();
+  if (converged && contracts) return Status::Ok();  // the only solution
+  return friction_loop_beyond_contraction(phi, opt, solve, scaled.contraction_bound, affine(),
+                                          converged, contracting, ratio, N, Mf, F, iterations);
 }
 
 /// The loop of friction_loop below for the load-dependent torques phi_k N_k alone. `loop`
