@@ -281,8 +281,8 @@ TEST(FourBar, InverseOfForwardReturnsTheTorqueOrReportsSeveralSolutions) {
       worst = std::max(worst, std::abs(inv.M1 - s.loads.M1));
     }
   }
-  EXPECT_LT(worst, 1e-9);              // N m
-  EXPECT_GT(reported, 0);              // the seeds reach states with two solutions
+  EXPECT_LT(worst, 1e-9);               // N m
+  EXPECT_GT(reported, 0);               // the seeds reach states with two solutions
   EXPECT_LT(reported, returned / 100);  // rare
   RecordProperty("inverse_of_forward_Nm", sci(worst));
   RecordProperty("returned", returned);

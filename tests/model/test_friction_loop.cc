@@ -150,7 +150,8 @@ TEST(FrictionLoop, ContractingNewtonMatchesFixedPoint) {
 /// where F0 . B < 0 and the discriminant is positive; one for |B| < 1.
 struct OneJointLoop {
   Vec2<double> F0, B;
-  void operator()(const std::array<double, kJoints>& Mf, std::array<Vec2<double>, kJoints>* F) const {
+  void operator()(const std::array<double, kJoints>& Mf,
+                  std::array<Vec2<double>, kJoints>* F) const {
     for (auto& f : *F) f = Vec2<double>(1.0, 2.0);
     (*F)[0] = F0 + B * Mf[0];
   }

@@ -394,7 +394,8 @@ Status friction_newton_fallback(const std::array<T, kJoints>& phi, const EvalOpt
                                 std::array<T, kJoints>* N) {
   std::array<T, kJoints> N0;
   reaction_norms(map.F0, &N0);
-  if (friction_newton(phi, opt, map, N0, N) || friction_newton(phi, opt, map, large_start(map), N)) {
+  if (friction_newton(phi, opt, map, N0, N) ||
+      friction_newton(phi, opt, map, large_start(map), N)) {
     return Status::Ok();
   }
   std::ostringstream msg;
@@ -686,10 +687,11 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
 /// Resolution of the reaction/friction loop (section 4, steps 1-4, at every call): a fixed point
 /// on N, which contracts when r_k |f_k| is small against the geometry; where it stops
 /// contracting, Newton; where the map does not contract everywhere, an error when another
-/// consistent N is found (friction_unique: the loop never chooses between solutions). `solve(Mf, F)` evaluates the reactions for friction
-/// torques Mf; phi_k = r_k f_k(w_k) is fixed. `extra` (may be null) adds load-independent
-/// torques (the actuators' friction, actuator.h): Mf_k = phi_k N_k + extra_k. The caller solves
-/// once more with the returned Mf. `loop`: see joint_friction_loop (the implicit derivative).
+/// consistent N is found (friction_unique: the loop never chooses between solutions).
+/// `solve(Mf, F)` evaluates the reactions for friction torques Mf; phi_k = r_k f_k(w_k) is fixed.
+/// `extra` (may be null) adds load-independent torques (the actuators' friction, actuator.h):
+/// Mf_k = phi_k N_k + extra_k. The caller solves once more with the returned Mf. `loop`: see
+/// joint_friction_loop (the implicit derivative).
 /// `aids`: the reactions' response to the torques, known in closed form (no probes), and a warm
 /// start; neither changes the solution.
 template <typename T, typename Solve>
