@@ -1,7 +1,8 @@
 // The friction loop's shortcuts (friction_loop.h): the reactions' response to the friction
 // torques in closed form against unit probes of the reactions, the contracting loop's Newton
 // steps against the plain fixed point, and the warm start against the cold loop, on seeded
-// random states: each shortcut reaches the same solution.
+// random states: each shortcut reaches the same solution. And a loop with two consistent
+// solutions, which it reports instead of returning one.
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
@@ -142,6 +143,62 @@ TEST(FrictionLoop, ContractingNewtonMatchesFixedPoint) {
     EXPECT_NEAR(ref.thdd[1].a, fast.thdd[1], kSameSolution * (1.0 + fast.thdd.norm()));
   }
   EXPECT_GT(compared, 50);
+}
+
+/// A loop whose only friction is at joint O, with F_O = F0 + B Mf_O (the other reactions fixed):
+/// N = |F0 + B N| is (|B|^2 - 1) N^2 + 2 (F0 . B) N + |F0|^2 = 0 for |B| > 1, two positive roots
+/// where F0 . B < 0 and the discriminant is positive; one for |B| < 1.
+struct OneJointLoop {
+  Vec2<double> F0, B;
+  void operator()(const std::array<double, kJoints>& Mf,
+                  std::array<Vec2<double>, kJoints>* F) const {
+    for (auto& f : *F) f = Vec2<double>(1.0, 2.0);
+    (*F)[0] = F0 + B * Mf[0];
+  }
+  /// the roots, smaller first (nan where none)
+  std::array<double, 2> roots() const {
+    const double a = B.squaredNorm() - 1.0, b = F0.dot(B), c = F0.squaredNorm();
+    const double d = std::sqrt(b * b - a * c);
+    if (a < 0.0) return {(-b - d) / a, NAN};  // the positive root of a N^2 + 2 b N + c = 0
+    return {(-b - d) / a, (-b + d) / a};
+  }
+};
+
+// two consistent N (the loop's gain bound 1.3): the loop reports both instead of returning one,
+// and the continuation in the friction scale from the frictionless |F0| reaches the smaller
+TEST(FrictionLoop, ReportsSeveralConsistentSolutions) {
+  const OneJointLoop loop{Vec2<double>(1.0, 0.0), Vec2<double>(-1.2, 0.1)};
+  const std::array<double, 2> root = loop.roots();
+  ASSERT_GT(root[0], 0.0);
+  ASSERT_GT(root[1], 2 * root[0]);
+  std::array<double, kJoints> phi{};
+  phi[0] = 1.0;
+  std::array<Vec2<double>, kJoints> F0;
+  loop(std::array<double, kJoints>{}, &F0);
+  const detail::AffineReactions<double> map = detail::probe_reactions(phi, loop, F0);
+  std::array<double, kJoints> N, Mf;
+  EvalOptions opt;
+  ASSERT_TRUE(detail::friction_continuation(phi, opt, map, &N));
+  EXPECT_NEAR(N[0], root[0], 1e-12);
+  std::array<Vec2<double>, kJoints> F;
+  int iterations = 0;
+  const Status st = friction_loop(phi, opt, loop, &N, &Mf, &F, &iterations);
+  EXPECT_EQ(st.code, StatusCode::kFrictionNotConverged);
+  EXPECT_NE(st.message.find("several consistent reaction forces"), std::string::npos)
+      << st.message;
+}
+
+// a gain bound of 1.2 with one consistent N: the loop returns it
+TEST(FrictionLoop, ReturnsTheOnlySolutionWhereTheMapDoesNotContractEverywhere) {
+  const OneJointLoop loop{Vec2<double>(1.0, 0.0), Vec2<double>(0.9, -0.3)};
+  std::array<double, kJoints> phi{}, N, Mf;
+  phi[0] = 1.0;
+  std::array<Vec2<double>, kJoints> F;
+  int iterations = 0;
+  const Status st = friction_loop(phi, EvalOptions{}, loop, &N, &Mf, &F, &iterations);
+  ASSERT_TRUE(st.ok()) << st.message;
+  EXPECT_NEAR(N[0], loop.roots()[0], 1e-12 * N[0]);
+  EXPECT_NEAR(Mf[0], N[0], 1e-12 * N[0]);
 }
 
 }  // namespace

@@ -1,7 +1,8 @@
 // The reaction/friction loop (model.md section 4): friction torques Mf_k = phi_k N_k that are
 // consistent with the reactions N_k they produce. The reactions are affine in the friction
 // torques, so the loop probes that map once and iterates on it; three outcomes: a contracting
-// fixed point, a Newton solution where it stops contracting, or an error naming why none exists.
+// fixed point, a Newton solution where it stops contracting, or an error naming why none exists
+// or why it is not unique (where the map does not contract everywhere, friction_unique).
 #pragma once
 
 #include <Eigen/LU>
@@ -375,39 +376,102 @@ inline bool friction_contracting_newton(const std::array<double, kJoints>& phi,
   return false;
 }
 
-/// Newton on the same affine map from two starts (|F0| and a large one): the unique consistent
-/// N, or an error saying that there is none or more than one.
+/// A start far above the consistent reactions, N = 100 |F0| + 1: where there are several
+/// consistent N, Newton from there finds a large one.
+template <typename T>
+std::array<T, kJoints> large_start(const AffineReactions<T>& map) {
+  std::array<T, kJoints> N;
+  reaction_norms(map.F0, &N);
+  for (auto& n : N) n = n * T(100) + T(1);
+  return N;
+}
+
+/// Newton on the affine map from |F0|, else from a large start (large_start): a consistent N, or
+/// an error saying that there is none. (Whether it is the only one: friction_unique.)
 template <typename T>
 Status friction_newton_fallback(const std::array<T, kJoints>& phi, const EvalOptions& opt,
                                 const AffineReactions<T>& map, bool contracting, double ratio,
                                 std::array<T, kJoints>* N) {
-  std::array<T, kJoints> N0, Na, Nb;
+  std::array<T, kJoints> N0;
   reaction_norms(map.F0, &N0);
-  const bool a = friction_newton(phi, opt, map, N0, &Na);
-  std::array<T, kJoints> N_big = N0;
-  for (auto& n : N_big) n = n * T(100) + T(1);
-  const bool b = friction_newton(phi, opt, map, N_big, &Nb);
+  if (friction_newton(phi, opt, map, N0, N) ||
+      friction_newton(phi, opt, map, large_start(map), N)) {
+    return Status::Ok();
+  }
   std::ostringstream msg;
   msg << "friction loop: fixed point " << (contracting ? "did not converge" : "does not contract")
-      << " (ratio " << ratio << "); ";
-  if (!a && !b) {
-    msg << "Newton finds no consistent reaction forces: r_k * mu too large for the loads "
-           "(friction would lock the joints)";
+      << " (ratio " << ratio << "); Newton finds no consistent reaction forces: r_k * mu too "
+      << "large for the loads (friction would lock the joints)";
+  return Status::Error(StatusCode::kFrictionNotConverged, msg.str());
+}
+
+/// The largest relative change of N in one step of friction_continuation. (Where other solutions
+/// are near, as on random four-bars at high rates, longer steps jump to them: half the largest N
+/// did there, a tenth did not.)
+inline constexpr double kContinuationStep = 0.1;
+
+/// The solution of the loop connected to the frictionless reactions: Newton along the friction
+/// scale s (friction arms s phi) from N = |F0| at s = 0 to s = 1, each step started from the last
+/// solution. A step is kept where Newton converges and no N_k moves by more than a tenth of the
+/// largest N (kContinuationStep; else it is halved, down to 1/1024 of s: there the branch folds
+/// back before s = 1 and the answer is false), and the next may be twice as long, up to 1/4.
+template <typename T>
+bool friction_continuation(const std::array<T, kJoints>& phi, const EvalOptions& opt,
+                           const AffineReactions<T>& map, std::array<T, kJoints>* N) {
+  reaction_norms(map.F0, N);
+  double s = 0.0, h = 0.25;
+  while (s < 1.0) {
+    const double next = std::min(1.0, s + h);
+    std::array<T, kJoints> phi_s, N_next;
+    for (int j = 0; j < kJoints; ++j) phi_s[j] = phi[j] * T(next);
+    double change = 0.0, scale = 0.0;
+    const bool converged = friction_newton(phi_s, opt, map, *N, &N_next);
+    if (converged) change_and_scale(N_next, *N, &change, &scale);
+    if (converged && change <= kContinuationStep * scale) {
+      *N = N_next;
+      s = next;
+      h = std::min(2.0 * h, 0.25);
+    } else if ((h *= 0.5) < 1.0 / 1024) {
+      return false;
+    }
+  }
+  return true;
+}
+
+/// Relative difference under which two solutions of the loop are taken for the same one
+/// (their own tolerance is friction_tol).
+inline constexpr double kSameSolution = 1e-6;
+
+/// Where the map does not contract everywhere (ScaledReactions::contraction_bound >= 1) the loop
+/// can have several consistent N, each the reactions of a possible motion: in forward dynamics
+/// different accelerations for the same torques, in inverse dynamics different drive torques for
+/// the same motion (on random four-bars at joint rates to 60 rad/s, forward dynamics at either
+/// drive torque gives the same accelerations, each as its unique solution). None of them is more
+/// physical than the other, so the loop does not choose: the solution N found is compared with two
+/// others, the one connected to the frictionless reactions (friction_continuation) and Newton's
+/// from a large start, and any difference is an error that gives both. (Two Newton starts alone
+/// miss the solution connected to the frictionless one where both reach the large one; the
+/// continuation alone misses the large one.) Where the bound is below 1 the solution is unique
+/// and nothing is checked.
+template <typename T>
+Status friction_unique(const std::array<T, kJoints>& phi, const EvalOptions& opt,
+                       const AffineReactions<T>& map, double bound,
+                       const std::array<T, kJoints>& N) {
+  std::array<T, kJoints> other[2];
+  const bool found[2] = {friction_continuation(phi, opt, map, &other[0]),
+                         friction_newton(phi, opt, map, large_start(map), &other[1])};
+  for (int i = 0; i < 2; ++i) {
+    double diff, scale, other_scale;
+    change_and_scale(N, other[i], &diff, &scale);
+    change_and_scale(other[i], N, &diff, &other_scale);
+    if (!found[i] || diff <= kSameSolution * std::max(scale, other_scale)) continue;
+    std::ostringstream msg;
+    msg << "friction loop: several consistent reaction forces (max |N| " << scale << " N and "
+        << other_scale << " N, differing by up to " << diff << " N; the loop's gain bound is "
+        << bound << " >= 1): the motion, or in inverse dynamics the drive torque, is not unique "
+        << "(r_k * mu too large for the reactions at this pose and speed)";
     return Status::Error(StatusCode::kFrictionNotConverged, msg.str());
   }
-  if (a && b) {
-    double diff = 0.0, scale = 1e-300;
-    for (int j = 0; j < kJoints; ++j) {
-      diff = std::max(diff, std::abs(value_of(Na[j]) - value_of(Nb[j])));
-      scale = std::max(scale, std::abs(value_of(Na[j])));
-    }
-    if (diff > 1e-6 * scale) {
-      msg << "several consistent reaction forces (max |N| " << scale << " N and differing by "
-          << diff << " N): the motion is not unique (r_k * mu too large)";
-      return Status::Error(StatusCode::kFrictionNotConverged, msg.str());
-    }
-  }
-  *N = a ? Na : Nb;
   return Status::Ok();
 }
 
@@ -501,8 +565,36 @@ void friction_loop_implicit(const std::array<T, kJoints>& phi, const LoopSolutio
   *iterations = sol.iterations;
 }
 
+/// The end of scaled_friction_loop where the fixed point did not converge (Newton on the unscaled
+/// map `affine`, friction_newton_fallback) or the map does not contract everywhere (`bound` >= 1:
+/// the solution N is checked to be the only one found, friction_unique). `converged`: the fixed
+/// point's N, Mf, F are consistent; otherwise Newton's N is completed into Mf and F here.
+template <typename T, typename Solve>
+Status friction_loop_beyond_contraction(const std::array<T, kJoints>& phi, const EvalOptions& opt,
+                                        Solve& solve, double bound,
+                                        const AffineReactions<T>& affine, bool converged,
+                                        bool contracting, double ratio, std::array<T, kJoints>* N,
+                                        std::array<T, kJoints>* Mf,
+                                        std::array<Vec2<T>, kJoints>* F, int* iterations) {
+  if (!converged) {
+    const Status st = friction_newton_fallback(phi, opt, affine, contracting, ratio, N);
+    if (!st.ok()) return st;
+  }
+  if (bound >= 1.0) {  // not a contraction: the solution found need not be the only one
+    const Status st = friction_unique(phi, opt, affine, bound, *N);
+    if (!st.ok()) return st;
+  }
+  if (converged) return Status::Ok();
+  for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
+  solve(*Mf, F);
+  reaction_norms(*F, N);
+  *iterations = opt.friction_max_iter + 1;  // marks a Newton solve
+  return Status::Ok();
+}
+
 /// The loop on the scaled map: Newton steps where it contracts, else the fixed point, else Newton
-/// from two starts on `affine()`, the unscaled map (friction_newton_fallback). `warm`: as in
+/// on `affine()`, the unscaled map (friction_newton_fallback); where it does not contract
+/// everywhere, the solution is checked to be the only one found (friction_unique). `warm`: as in
 /// joint_friction_loop.
 template <typename T, typename Solve, typename Affine>
 Status scaled_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions& opt,
@@ -520,29 +612,22 @@ Status scaled_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions
   }
   bool contracting = true;
   double ratio = 0.0;
-  bool converged = false;
   if constexpr (std::is_same_v<T, double>) {
     // a contraction: unique fixed point, reached sooner by Newton steps
-    if (contracts) {
-      converged = friction_contracting_newton(phi, opt, scaled, start, N, Mf, F, iterations);
+    if (contracts &&
+        friction_contracting_newton(phi, opt, scaled, start, N, Mf, F, iterations)) {
+      return Status::Ok();
     }
   }
-  if (!converged) {
-    converged =
-        friction_fixed_point(phi, opt, scaled, start, N, Mf, F, iterations, &contracting, &ratio);
-  }
+  bool converged =
+      friction_fixed_point(phi, opt, scaled, start, N, Mf, F, iterations, &contracting, &ratio);
   if (!converged && start) {  // (a contraction converges from anywhere: not expected)
     converged = friction_fixed_point<T>(phi, opt, scaled, nullptr, N, Mf, F, iterations,
                                         &contracting, &ratio);
   }
-  if (converged) return Status::Ok();
-  const Status st = friction_newton_fallback(phi, opt, affine(), contracting, ratio, N);
-  if (!st.ok()) return st;
-  for (int j = 0; j < kJoints; ++j) (*Mf)[j] = phi[j] * (*N)[j];
-  solve(*Mf, F);
-  reaction_norms(*F, N);
-  *iterations = opt.friction_max_iter + 1;  // marks a Newton solve
-  return Status::Ok();
+  if (converged && contracts) return Status::Ok();  // the only solution
+  return friction_loop_beyond_contraction(phi, opt, solve, scaled.contraction_bound, affine(),
+                                          converged, contracting, ratio, N, Mf, F, iterations);
 }
 
 /// The loop of friction_loop below for the load-dependent torques phi_k N_k alone. `loop`
@@ -601,10 +686,12 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
 
 /// Resolution of the reaction/friction loop (section 4, steps 1-4, at every call): a fixed point
 /// on N, which contracts when r_k |f_k| is small against the geometry; where it stops
-/// contracting, Newton from two starts. `solve(Mf, F)` evaluates the reactions for friction
-/// torques Mf; phi_k = r_k f_k(w_k) is fixed. `extra` (may be null) adds load-independent
-/// torques (the actuators' friction, actuator.h): Mf_k = phi_k N_k + extra_k. The caller solves
-/// once more with the returned Mf. `loop`: see joint_friction_loop (the implicit derivative).
+/// contracting, Newton; where the map does not contract everywhere, an error when another
+/// consistent N is found (friction_unique: the loop never chooses between solutions).
+/// `solve(Mf, F)` evaluates the reactions for friction torques Mf; phi_k = r_k f_k(w_k) is fixed.
+/// `extra` (may be null) adds load-independent torques (the actuators' friction, actuator.h):
+/// Mf_k = phi_k N_k + extra_k. The caller solves once more with the returned Mf. `loop`: see
+/// joint_friction_loop (the implicit derivative).
 /// `aids`: the reactions' response to the torques, known in closed form (no probes), and a warm
 /// start; neither changes the solution.
 template <typename T, typename Solve>

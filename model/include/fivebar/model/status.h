@@ -11,7 +11,9 @@ enum class StatusCode : int {
   kOk = 0,
   kCannotAssemble,        ///< |BD| outside [|l3 - l4|, l3 + l4]: no closure exists
   kNearSingular,          ///< |sin(th4 - th3)| below the singularity margin
-  kFrictionNotConverged,  ///< the reaction/friction loop did not converge
+  /// the reaction/friction loop has no consistent solution, or several (the message says which:
+  /// "no consistent reaction forces" or "several consistent reaction forces")
+  kFrictionNotConverged,
   kInvalidInput,          ///< a value out of its domain (NaN, non-positive length, ...)
   kSolverFailed,          ///< the integrator or optimizer gave up
   /// no consistent joint modes, or several with different motions (Painleve-type): the motion
