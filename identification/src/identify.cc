@@ -22,8 +22,8 @@
 #include "fivebar/model/names.h"
 #include "fivebar/model/rest.h"
 #include "covariance.h"
+#include "fallback_cost.h"
 #include "inertia.h"
-#include "inverse_dynamics_terms.h"
 #include "misfit.h"
 #include "noise_model.h"
 #include "profile.h"
@@ -47,9 +47,6 @@ const char* loss_name(Loss l) { return name_in(kLossNames, l); }
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using detail::add_inverse_dynamics_terms;
-using detail::make_loss;
-using detail::with_size;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// noise-free logs: residual levels below this fraction of the rms logged torque are what a good
 /// torque sensor resolves (0.1 %), not structure
@@ -86,6 +83,18 @@ double interp(const std::vector<double>& ts, const std::vector<double>& y, doubl
   const size_t i = std::upper_bound(ts.begin(), ts.end(), t) - ts.begin();
   const double s = (t - ts[i - 1]) / (ts[i] - ts[i - 1]);
   return y[i - 1] + s * (y[i] - y[i - 1]);
+}
+
+ceres::LossFunction* make_loss(Loss loss, double scale) {
+  switch (loss) {
+    case Loss::kNone:
+      return nullptr;
+    case Loss::kHuber:
+      return new ceres::HuberLoss(scale);
+    case Loss::kCauchy:
+      return new ceres::CauchyLoss(scale);
+  }
+  return nullptr;
 }
 
 /// Neutral start values, independent of the scene: each coefficient's CoefficientInfo::start
@@ -156,6 +165,26 @@ RestThresholds rest_rule(const TorqueLog& log, const IdentifyResult& out,
   if (opt.rest_rate_threshold >= 0) r.rate = opt.rest_rate_threshold;
   if (opt.rest_acceleration_threshold >= 0) r.acceleration = opt.rest_acceleration_threshold;
   return r;
+}
+
+/// The inverse-dynamics residual blocks, one per sample: from the sample's structure
+/// (residual.h: the Jets carry only the P active parameters through a five-number loop), or the
+/// full model where the structure cannot be read off.
+template <int P>
+void add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayout& layout,
+                                const std::vector<Sample>& samples, const EvalOptions& eval,
+                                Loss loss, double loss_scale, double* x, ceres::Problem* problem) {
+  for (const Sample& s : samples) {
+    SampleStructure st;
+    ceres::CostFunction* cost = nullptr;
+    if (sample_structure(scene, s, eval, &st)) {
+      cost = new ceres::AutoDiffCostFunction<StructuredResidual, 2, P>(
+          new StructuredResidual(scene, layout, st, s, eval));
+    } else {
+      cost = new FallbackCost<P>(InverseDynamicsResidual(scene, layout, s, eval));
+    }
+    problem->AddResidualBlock(cost, make_loss(loss, loss_scale), x);
+  }
 }
 
 /// Output error over one window [i0, i1]: simulated minus logged angles at samples i0+1..i1.
@@ -262,6 +291,28 @@ struct Fit {
   /// names no cause, the misfit being the rates' as much as the model's
   bool rates_biased = false;
 };
+
+/// Calls f(std::integral_constant<int, P>) for the parameter counts the layouts give (friction
+/// 2, 4, 10, 20, each with or without the 16 inertial parameters, and with the 6 actuator terms
+/// except after per-joint Stribeck with inertia); false for another count.
+template <typename F>
+bool with_size(int P, F&& f) {
+  switch (P) {
+    case 2: f(std::integral_constant<int, 2>()); return true;
+    case 4: f(std::integral_constant<int, 4>()); return true;
+    case 10: f(std::integral_constant<int, 10>()); return true;
+    case 20: f(std::integral_constant<int, 20>()); return true;
+    case 18: f(std::integral_constant<int, 18>()); return true;
+    case 26: f(std::integral_constant<int, 26>()); return true;
+    case 36: f(std::integral_constant<int, 36>()); return true;
+    // with the 6 actuator terms
+    case 8: f(std::integral_constant<int, 8>()); return true;
+    case 16: f(std::integral_constant<int, 16>()); return true;
+    case 24: f(std::integral_constant<int, 24>()); return true;
+    case 32: f(std::integral_constant<int, 32>()); return true;
+    default: return false;
+  }
+}
 
 /// Group inertia: the prior and consistency residuals (inertia.h) on the parameter block x.
 void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem) {
