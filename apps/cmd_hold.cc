@@ -15,6 +15,7 @@
 #include <memory>
 #include <sstream>
 
+#include "cli_options.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "fivebar/identification/degrees.h"
+#include "cli_options.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/csv.h"

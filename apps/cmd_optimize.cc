@@ -19,6 +19,7 @@
 #include <memory>
 
 #include "fivebar/io/animation.h"
+#include "cli_options.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/csv.h"
 #include "fivebar/io/commands.h"

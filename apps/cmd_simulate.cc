@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "fivebar/io/animation.h"
+#include "cli_options.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/decimate.h"
 #include "fivebar/io/errors.h"

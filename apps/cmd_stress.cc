@@ -13,6 +13,7 @@
 #include <memory>
 #include <sstream>
 
+#include "cli_options.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/csv.h"
 #include "fivebar/io/errors.h"

@@ -16,6 +16,7 @@
 #include <memory>
 #include <optional>
 
+#include "cli_options.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/csv.h"

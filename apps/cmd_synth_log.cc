@@ -19,6 +19,7 @@
 #include "fivebar/identification/excitation.h"
 #include "fivebar/identification/parameters.h"
 #include "fivebar/identification/synth.h"
+#include "cli_options.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/csv.h"
 #include "fivebar/io/errors.h"

@@ -9,8 +9,10 @@
 #include <map>
 #include <string>
 
+#include "cli_options.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/errors.h"
+#include "version.h"
 
 namespace {
 
@@ -39,7 +41,7 @@ std::string selected_name(const CLI::App& app) {
 
 int main(int argc, char** argv) {
   CLI::App app{"Dynamics of a planar five-bar mechanism with joint friction.", "fivebar"};
-  app.set_version_flag("--version", std::string("fivebar ") + FIVEBAR_VERSION,
+  app.set_version_flag("--version", std::string("fivebar ") + fivebar::io::version(),
                        "print the version and exit");
   app.require_subcommand(1);
 

@@ -1,6 +1,5 @@
 #include "fivebar/io/commands.h"
 
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
 
@@ -219,34 +218,6 @@ OptimizeSettings optimize_defaults() {
   OptimizeSettings s;
   s.refine = true;  // the optimum of the problem, not of the basis
   return s;
-}
-
-void add_objective_options(CLI::App* app, OptimizeSettings* s) {
-  app->add_option("--objective", s->objective,
-                  "total_dissipation (default when the scene gives the motors' winding data), "
-                  "supply_energy, dissipated_energy (default otherwise) or input_energy");
-  app->add_option("--regeneration", s->regeneration,
-                  "supply_energy: none (default: braking power is lost) or shared_bus (one "
-                  "motor's braking feeds the other)");
-  app->add_option("--end-acceleration", s->end_acceleration,
-                  "free (default) or zero: the accelerations at both ends of a motion");
-}
-
-void add_inner_solve_options(CLI::App* app, OptimizeSettings* s) {
-  s->refine = false;
-  s->continuation = false;
-  s->validate = false;
-  add_objective_options(app, s);
-  app->add_option("--method", s->method,
-                  "NLopt algorithm of the inner solves: slsqp, mma, ccsaq (default " + s->method +
-                      ")");
-  app->add_option("--path-step", s->path_step,
-                  "grid step [rad] of the path search (see optimize; default " +
-                      format_double(s->path_step) + ")");
-  app->add_flag("--continuation", s->continuation,
-                "inner solves continue towards the exact friction law (see optimize)");
-  app->add_flag("--refine", s->refine,
-                "inner solves refine their control points (see optimize; slow)");
 }
 
 namespace {

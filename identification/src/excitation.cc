@@ -130,12 +130,13 @@ DesignParameters design_parameters(const Params<double>& scene, const DesignGrou
 Status sample_terms(const Params<double>& scene, const DesignParameters& dp, const Loads<double>& L,
                     const MotionState& s, const JointModes* slip, SampleTerms* out) {
   out->J = Eigen::MatrixXd::Zero(2, dp.size());
-  // the Jet widths instantiated: the active parameters of each group combination
+  // the Jet widths instantiated: the active parameters of each group combination (the actuator
+  // terms alone, 0 Jet parameters, take the narrowest: their columns are in closed form)
   using Columns = Status (*)(const Params<double>&, const DesignParameters&, const Loads<double>&,
                              const MotionState&, const JointModes*, SampleTerms*);
   static const std::pair<int, Columns> kWidths[] = {
-      {1, &jet_columns<1>},   {2, &jet_columns<2>},   {10, &jet_columns<10>},
-      {16, &jet_columns<16>}, {18, &jet_columns<18>}, {26, &jet_columns<26>}};
+      {2, &jet_columns<2>},   {10, &jet_columns<10>}, {16, &jet_columns<16>},
+      {18, &jet_columns<18>}, {26, &jet_columns<26>}};
   Columns columns = &jet_columns<26>;  // the widest: every group
   for (const auto& [width, fn] : kWidths) {
     if (dp.jet_size() <= width) {

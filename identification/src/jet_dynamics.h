@@ -24,14 +24,15 @@
       const std::array<ceres::Jet<double, N>, kJoints>*);
 
 // the widths, each in one group; a group is compiled by one unit (jet_dynamics_<group>.cc):
-// excitation's group widths (1, 2, 10, 16, 18, 26), the residual's 5 pin radii, and nothing
+// excitation's group widths (2, 10, 16, 18, 26; a design of the actuator terms alone, which
+// need no derivative of the model, runs at width 2), the residual's 5 pin radii, and nothing
 // else. Identify's fallback residual (fallback_cost.h) pads its parameter count to one of them
 // (compiled_jet_width); each further width would cost ~7 s of compilation for no gain.
 // Width 6 is left out: the trajectory problem's node Jets have it, and through the explicit
 // instantiation here its evaluations took 15% more instructions and 20% more time than through
 // the implicit one its own unit compiles (optimize's median task, paper_motors.yaml: 25 ms
 // against 20.5 ms)
-#define FIVEBAR_JET_WIDTHS_A(X) X(1) X(2) X(5)
+#define FIVEBAR_JET_WIDTHS_A(X) X(2) X(5)
 #define FIVEBAR_JET_WIDTHS_B(X) X(10) X(16)
 #define FIVEBAR_JET_WIDTHS_C(X) X(18) X(26)
 

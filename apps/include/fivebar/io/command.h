@@ -24,7 +24,6 @@
 
 namespace CLI {
 class App;
-class Validator;
 }  // namespace CLI
 
 namespace fivebar::io {
@@ -59,35 +58,12 @@ bool register_command(Command command);
 /// Every registered command, sorted by name.
 std::vector<Command> registered_commands();
 
-/// The one rule for every numeric option of every command, run after parsing: a value (or a
-/// comma-separated element) that reads as NaN or infinite (1e400 included), or beyond 1e20 in
-/// magnitude, throws InputError(`command line: --opt: must be a finite number, got nan`); where
-/// the option's default is inf (no limit), inf and huge values are accepted.
-void check_numbers(const CLI::App& app);
-
-/// Range checks of numeric options, shared by the commands (`->check(positive_number())`): a
-/// value out of range fails the parse with `--opt: must be > 0, got -1`, which `fivebar` reports
-/// as bad input (exit 2). Non-numeric text is left to the option's own conversion.
-CLI::Validator positive_number();
-CLI::Validator nonnegative_number();
-/// at most `limit` (and > 0): e.g. durations, so that a typo such as 1e300 is refused at once
-CLI::Validator positive_at_most(double limit);
-
 /// The arguments shared by the commands that read a scene.
 struct SceneArgs {
   std::string scene;              ///< SCENE (positional)
   std::string out;                ///< --out DIR, default results/<command>
   std::vector<std::string> sets;  ///< --set KEY=VALUE, repeatable, applied in order
 };
-
-/// Declares SCENE, --out and --set on `app` (a subcommand named `command`).
-void add_scene_options(CLI::App* app, SceneArgs* args, const std::string& command);
-
-/// Declares --no-plots, which skips drawing `figures` (the PNG files gnuplot draws).
-void add_plots_flag(CLI::App* app, bool* no_plots, const std::string& figures);
-
-/// Declares --out DIR (default results/<command>) alone.
-void add_out_option(CLI::App* app, std::string* out, const std::string& command);
 
 /// Prints the closing line of every command on stdout: `  wrote DIR/: name name ...`.
 void print_written(const std::string& dir, const std::vector<std::string>& names);

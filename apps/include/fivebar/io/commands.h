@@ -13,10 +13,6 @@
 #include "fivebar/trajectory/batch.h"
 #include "fivebar/trajectory/tasks.h"
 
-namespace CLI {
-class App;
-}  // namespace CLI
-
 namespace fivebar::io {
 
 /// `fivebar identify` options (see `fivebar identify --help`), with the command line's defaults:
@@ -118,16 +114,6 @@ struct OptimizeSettings {
 /// The defaults of `fivebar optimize` (and Python's optimize): OptimizeSettings with the
 /// refinement on.
 OptimizeSettings optimize_defaults();
-
-/// --objective, --regeneration and --end-acceleration (optimize, study and design), into
-/// `settings`.
-void add_objective_options(CLI::App* app, OptimizeSettings* settings);
-
-/// The options of the inner trajectory solves of `study` and `design` (the objective options,
-/// --method, --path-step, --continuation, --refine), into `settings`, whose defaults become
-/// theirs: a first solve only, no continuation, no refinement and no validation unless asked
-/// for.
-void add_inner_solve_options(CLI::App* app, OptimizeSettings* settings);
 
 /// The batch options of `settings` for a scene with motor winding data `windings` (which choose
 /// the default objective and give the winding heat); throws InputError(`command line: --method:

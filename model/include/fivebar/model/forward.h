@@ -30,4 +30,17 @@ Status forward_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
                                    bristle, warm);
 }
 
+#ifdef FIVEBAR_COMPILED_DOUBLE_DYNAMICS
+// Code that links fivebar::sim (which defines this macro for its users) takes the double pass
+// of the forward dynamics from model/src/forward_double.cc instead of compiling it again (~6 s
+// of compilation in each unit that evaluates it). Header-only users of fivebar::model compile
+// it as before.
+namespace mech::detail {
+extern template Status forward_pass<FiveBar, double>(
+    const Params<double>&, const Loads<double>&, const Vec2<double>&, const Vec2<double>&,
+    const JointModes*, const EvalOptions&, Evaluation<double>*,
+    const std::array<double, kJoints>*, LoopSolution*, FrictionWarmStart*);
+}  // namespace mech::detail
+#endif
+
 }  // namespace fivebar

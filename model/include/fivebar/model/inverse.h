@@ -30,7 +30,7 @@ Status inverse_dynamics(const Params<T>& p, const Loads<T>& L, const T& th1, con
                                    slip, opt, ev, bristle);
 }
 
-#ifdef FIVEBAR_COMPILED_INVERSE_DOUBLE
+#ifdef FIVEBAR_COMPILED_DOUBLE_DYNAMICS
 // Code that links fivebar::sim (which defines this macro for its users) takes the double pass
 // of the inverse dynamics from model/src/inverse_double.cc instead of compiling it again: ~5 s
 // of compilation in each unit that evaluates the inverse dynamics, in double or in Jets (whose

@@ -1,0 +1,120 @@
+// The command line's shared options and checks (cli_options.h).
+#include "cli_options.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <sstream>
+
+#include "fivebar/io/errors.h"
+#include "fivebar/io/format.h"
+
+namespace fivebar::io {
+
+namespace {
+/// the value of a numeric option's text (strtod on the whole text); false when not a number
+bool read_number(const std::string& text, double* v) {
+  char* end = nullptr;
+  *v = std::strtod(text.c_str(), &end);
+  return !text.empty() && end == text.c_str() + text.size();
+}
+
+CLI::Validator range_check(std::function<bool(double)> ok, std::string rule) {
+  return CLI::Validator(
+      [ok, rule](std::string& text) -> std::string {
+        double v = 0;
+        if (!read_number(text, &v) || ok(v)) return "";
+        return "must be " + rule + ", got " + text;
+      },
+      "");
+}
+}  // namespace
+
+void check_numbers(const CLI::App& app) {
+  // no quantity of the toolkit's options comes near this (a 64-bit seed is below 2e19)
+  constexpr double kLargest = 1e20;
+  for (const CLI::Option* o : app.get_options()) {
+    const bool no_limit = o->get_default_str() == "inf";  // inf and huge values: no limit
+    for (const std::string& result : o->results()) {
+      std::stringstream parts(result);
+      std::string part;
+      while (std::getline(parts, part, ',')) {
+        double v = 0;
+        if (!read_number(part, &v) || (!std::isnan(v) && no_limit)) continue;
+        if (std::isnan(v) || std::isinf(v)) {
+          throw InputError("command line", o->get_name(), "must be a finite number, got " + part);
+        }
+        if (std::abs(v) > kLargest) {
+          throw InputError("command line", o->get_name(),
+                           "must be at most 1e20 in magnitude, got " + part);
+        }
+      }
+    }
+  }
+}
+
+CLI::Validator positive_number() {
+  return range_check([](double v) { return v > 0; }, "> 0");
+}
+
+CLI::Validator nonnegative_number() {
+  return range_check([](double v) { return v >= 0; }, ">= 0");
+}
+
+CLI::Validator positive_at_most(double limit) {
+  return range_check([limit](double v) { return v > 0 && v <= limit; },
+                     "> 0 and at most " + format_shortest(limit));
+}
+
+void add_out_option(CLI::App* app, std::string* out, const std::string& command) {
+  *out = "results/" + command;
+  app->add_option("--out", *out, "directory that receives every output file")
+      ->type_name("DIR")
+      ->capture_default_str();
+}
+
+void add_scene_options(CLI::App* app, SceneArgs* args, const std::string& command) {
+  app->add_option("SCENE", args->scene, "scene file (YAML, see datasets/scenes/)")
+      ->type_name("FILE")
+      ->required();
+  add_out_option(app, &args->out, command);
+  app->add_option("--set", args->sets,
+                  "override one scene value: dotted key, list elements by 0-based index, e.g. "
+                  "--set friction.coulomb=0.2 --set mechanism.links.2.mass=1.5")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);  // one KEY=VALUE per --set
+}
+
+void add_plots_flag(CLI::App* app, bool* no_plots, const std::string& figures) {
+  app->add_flag("--no-plots", *no_plots, "do not draw " + figures + " (PNG, with gnuplot)");
+}
+
+void add_objective_options(CLI::App* app, OptimizeSettings* s) {
+  app->add_option("--objective", s->objective,
+                  "total_dissipation (default when the scene gives the motors' winding data), "
+                  "supply_energy, dissipated_energy (default otherwise) or input_energy");
+  app->add_option("--regeneration", s->regeneration,
+                  "supply_energy: none (default: braking power is lost) or shared_bus (one "
+                  "motor's braking feeds the other)");
+  app->add_option("--end-acceleration", s->end_acceleration,
+                  "free (default) or zero: the accelerations at both ends of a motion");
+}
+
+void add_inner_solve_options(CLI::App* app, OptimizeSettings* s) {
+  s->refine = false;
+  s->continuation = false;
+  s->validate = false;
+  add_objective_options(app, s);
+  app->add_option("--method", s->method,
+                  "NLopt algorithm of the inner solves: slsqp, mma, ccsaq (default " + s->method +
+                      ")");
+  app->add_option("--path-step", s->path_step,
+                  "grid step [rad] of the path search (see optimize; default " +
+                      format_double(s->path_step) + ")");
+  app->add_flag("--continuation", s->continuation,
+                "inner solves continue towards the exact friction law (see optimize)");
+  app->add_flag("--refine", s->refine,
+                "inner solves refine their control points (see optimize; slow)");
+}
+
+}  // namespace fivebar::io

@@ -1,0 +1,49 @@
+// The command line's shared options and checks (CLI11), used by main.cc and the subcommands.
+// They are compiled into the executable alone (cli_options.cc, with the subcommands), so that
+// the libraries behind it (fivebar::io, fivebar::commands) and the Python module never parse
+// CLI11.
+#pragma once
+
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "fivebar/io/command.h"
+#include "fivebar/io/commands.h"
+
+namespace fivebar::io {
+
+/// The one rule for every numeric option of every command, run after parsing: a value (or a
+/// comma-separated element) that reads as NaN or infinite (1e400 included), or beyond 1e20 in
+/// magnitude, throws InputError(`command line: --opt: must be a finite number, got nan`); where
+/// the option's default is inf (no limit), inf and huge values are accepted.
+void check_numbers(const CLI::App& app);
+
+/// Range checks of numeric options, shared by the commands (`->check(positive_number())`): a
+/// value out of range fails the parse with `--opt: must be > 0, got -1`, which `fivebar` reports
+/// as bad input (exit 2). Non-numeric text is left to the option's own conversion.
+CLI::Validator positive_number();
+CLI::Validator nonnegative_number();
+/// at most `limit` (and > 0): e.g. durations, so that a typo such as 1e300 is refused at once
+CLI::Validator positive_at_most(double limit);
+
+/// Declares SCENE, --out and --set on `app` (a subcommand named `command`).
+void add_scene_options(CLI::App* app, SceneArgs* args, const std::string& command);
+
+/// Declares --no-plots, which skips drawing `figures` (the PNG files gnuplot draws).
+void add_plots_flag(CLI::App* app, bool* no_plots, const std::string& figures);
+
+/// Declares --out DIR (default results/<command>) alone.
+void add_out_option(CLI::App* app, std::string* out, const std::string& command);
+
+/// --objective, --regeneration and --end-acceleration (optimize, study and design), into
+/// `settings`.
+void add_objective_options(CLI::App* app, OptimizeSettings* settings);
+
+/// The options of the inner trajectory solves of `study` and `design` (the objective options,
+/// --method, --path-step, --continuation, --refine), into `settings`, whose defaults become
+/// theirs: a first solve only, no continuation, no refinement and no validation unless asked
+/// for.
+void add_inner_solve_options(CLI::App* app, OptimizeSettings* settings);
+
+}  // namespace fivebar::io
