@@ -2478,18 +2478,41 @@ std::string unresolved_warning(const CauseSteps& cs, int strongest, const std::s
 constexpr double kDecisiveCauseZ = 4 * detail::kCauseZ;
 
 /// Whether the refit fs reads both torque readings' gains (beyond kFreedMove std, from
-/// kSmallestGain on) off with the same sign: a common scale of the logged torques
+/// kSmallestGain on) off alike: the same sign, both readings positive (1 + g_c > 0: a negative
+/// one is a sign, torque_signs) and within a factor 2 of each other (or within kFreedMove of
+/// their difference's std): a common scale of the logged torques (gains read 0.828 and -0.976 are
+/// no common scale)
 bool common_gain(const TorqueColumns& tc, const detail::FreedStep& fs) {
-  double product = 1;
+  std::array<double, kDof> g{}, sd{};
   for (int c = 0; c < kDof; ++c) {
     const int k = tc.gain[c];
     if (k < 0 || !(std::abs(fs.extra_step(k)) > kFreedMove * fs.extra_std(k)) ||
-        std::abs(fs.extra_step(k)) < kSmallestGain) {
+        std::abs(fs.extra_step(k)) < kSmallestGain || !(1 + fs.extra_step(k) > 0)) {
       return false;
     }
-    product *= fs.extra_step(k);
+    g[c] = fs.extra_step(k);
+    sd[c] = fs.extra_std(k);
   }
-  return product > 0;
+  const double small = std::min(std::abs(g[0]), std::abs(g[1]));
+  const double large = std::max(std::abs(g[0]), std::abs(g[1]));
+  return g[0] * g[1] > 0 && (2 * small >= large || std::abs(g[0] - g[1]) <=
+                                                       kFreedMove * std::hypot(sd[0], sd[1]));
+}
+
+/// The torque channels (bit 0: tau1, bit 1: tau2) whose reading the refit fs reads negative,
+/// 1 + g_c < 0 with g_c beyond kFreedMove of its std: logged with the sign opposite the model's
+/// (a light mechanism's tau1 negated read -1.02 times the model, its residual 2.6 times its floor,
+/// below the sign check's kMisfitRatio)
+unsigned torque_signs(const TorqueColumns& tc, const detail::FreedStep& fs) {
+  unsigned out = 0;
+  for (int c = 0; c < kDof && fs.ok; ++c) {
+    const int k = tc.gain[c];
+    if (k >= 0 && std::abs(fs.extra_step(k)) > kFreedMove * fs.extra_std(k) &&
+        1 + fs.extra_step(k) < 0) {
+      out |= 1u << c;
+    }
+  }
+  return out;
 }
 
 /// model_check on the encoders' zeros: the warning when the log evidences them and the friction
@@ -2556,6 +2579,16 @@ void torque_check(const Fit& f, const CauseSteps& cs, const TorqueColumns& tc,
       "; see the warnings";
 }
 
+/// What model_check leaves for the refits after it (the sign and per-joint checks)
+struct ModelVerdict {
+  /// torque channels read negative (torque_signs; bit 0: tau1, bit 1: tau2): the sign check
+  /// fits them negated whatever the residual
+  unsigned negative_readings = 0;
+  /// the torque readings' positive gains or offsets made the fit unusable: the sign and
+  /// per-joint refits have nothing left to decide
+  bool readings_decided = false;
+};
+
 /// Wrong masses or inertias, an encoder's zero offset, or a torque sensor's offset or gain
 /// (masses +-5 % give Coulomb +5 %, 10 std; theta1 + 0.005 rad gives Coulomb -8 %, 14 std, and
 /// must not be blamed on the masses, nor must a torque offset):
@@ -2570,29 +2603,35 @@ void torque_check(const Fit& f, const CauseSteps& cs, const TorqueColumns& tc,
 /// angles-only logs of 6 s and more warned). Costs one Jacobian with 16 more columns, four
 /// evaluations of the residual and a few small solves, and two more such Jacobians when the
 /// accelerations are estimated.
-void model_check(const Fit& f, IdentifyResult* out) {
-  if (!out->converged) return;
+ModelVerdict model_check(const Fit& f, IdentifyResult* out) {
+  ModelVerdict verdict;
+  if (!out->converged) return verdict;
   Eigen::MatrixXd J;
   Eigen::VectorXd r, info, bias;
   std::vector<int> idx[4];  // fitted, inertial, angle offsets, torque offsets and gains
   TorqueColumns tc;
   if (!check_jacobian(f, *out, &J, &r, idx, &info, &tc) ||
       J.rows() < kCheckRowsPerColumn * J.cols() || !score_bias(f, *out, J, r, tc, &bias)) {
-    return;
+    return verdict;
   }
   const CauseSteps cs = cause_steps(J, r, idx, info, bias, !f.rates_biased);
   out->model_check = cs.report;
   const detail::FreedStep& fi = cs.alone[kCauseInertia];
+  verdict.negative_readings = torque_signs(tc, cs.alone[kCauseTorque]);
   // both torques' gains off alike also read as the encoders' zeros (a common scale of the
   // logged torques on the light mechanism read theta1, theta2 2.4, 1.3 rad off): the gains come
   // first, so that the verdict names them
   if (cs.named(kCauseTorque) && common_gain(tc, cs.alone[kCauseTorque])) {
     torque_check(f, cs, tc, out);
+    verdict.readings_decided = !out->unusable.empty();
     angles_check(f, cs, out);
   } else {
     angles_check(f, cs, out);
+    const bool before = out->unusable.empty();
     torque_check(f, cs, tc, out);
+    verdict.readings_decided = before && !out->unusable.empty();
   }
+  verdict.readings_decided = verdict.readings_decided && verdict.negative_readings == 0;
   std::string moved;
   double largest = 0;  // [std] the cause's largest move of the friction (0: at its bound)
   const bool masses = cs.named(kCauseInertia);
@@ -2608,7 +2647,7 @@ void model_check(const Fit& f, IdentifyResult* out) {
                       "; see the warnings)";
     }
     unusable_move(largest, "a model error the log cannot attribute", out);
-    return;
+    return verdict;
   }
   const bool old_rule = !cs.any() && !idx[1].empty() && fi.ok;
   if ((masses || old_rule) && !(moved = friction_clause(f, *out, fi, old_rule, masses)).empty()) {
@@ -2619,6 +2658,7 @@ void model_check(const Fit& f, IdentifyResult* out) {
         ". The scene's masses or inertias may not match the mechanism; try --estimate "
         "friction,inertia");
   }
+  return verdict;
 }
 
 // ---- 95 % intervals ----
@@ -2801,9 +2841,19 @@ void follow_static_coulomb(const ParameterLayout& layout, const Params<double>& 
 }
 
 /// The sign check fits the negated torques only when the residual is more than kMisfitRatio
-/// times its floor, and calls the sign wrong when that fit's residual (in floors, the worse
-/// channel) is this many times smaller (paper_angles.csv negated: 6.1 floors, negated back 0.99)
+/// times its floor (or model_check reads a channel negative), and calls the sign wrong when that
+/// fit's residual (in floors, the worse channel) is this many times smaller (paper_angles.csv
+/// negated: 6.1 floors, negated back 0.99), or its excess over the floor (ratio^2 - 1) this many
+/// squared times smaller (a light mechanism's multi-sine log with rates, both negated: 3.95
+/// floors, negated back 1.00)
 constexpr double kSignGain = 4.0;
+
+/// Whether a refit whose residual is `theirs` floors (the worse channel) fits far better than
+/// the fit at `ours` (kSignGain, on the ratio or on its excess over the floor)
+bool fits_far_better(double theirs, double ours) {
+  return theirs * kSignGain < ours ||
+         (theirs * theirs - 1) * kSignGain * kSignGain < ours * ours - 1;
+}
 
 /// identify; `full` false: only the fit and its residual over the noise floor (the sign check's
 /// refits need no checks, intervals, predictions, sign check or delay)
@@ -2841,16 +2891,25 @@ std::string torque_sign_advice(unsigned logged_opposite) {
 }
 
 /// IdentifyOptions::check_torque_sign: true (and out->unusable says why) when the log's torques
-/// fit far better (kSignGain) with both negated, or else with one of them negated (a channel
-/// wired the other way read as "coulomb at its bound"); the fit with both negated puts its
-/// residual in out. The refits keep the fit's Savitzky-Golay window (no search of their own) and
-/// estimate no delay.
+/// fit far better (fits_far_better) with both negated, or else with one of them negated (a
+/// channel wired the other way read as "coulomb at its bound"); the fit with both negated puts
+/// its residual in out. Runs when the residual is above kMisfitRatio floors, or when model_check
+/// read channels negative (`suspect`, tried first); not when it found the torque readings'
+/// gains or offsets to be the cause (`decided`). The refits keep the fit's Savitzky-Golay window
+/// (no search of their own) and estimate no delay.
 bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& loads,
-                         const TorqueLog& log, const IdentifyOptions& opt, IdentifyResult* out) {
+                         const TorqueLog& log, const IdentifyOptions& opt,
+                         const ModelVerdict& verdict, IdentifyResult* out) {
   const double ours = misfit_ratio(*out);
+  const unsigned suspect = verdict.negative_readings;
   if (!opt.check_torque_sign || opt.method != Method::kInverseDynamics ||
-      !(ours > kMisfitRatio)) {
+      verdict.readings_decided || !(ours > kMisfitRatio || suspect != 0)) {
     return false;
+  }
+  std::vector<unsigned> order = {3u, 1u, 2u};
+  if (suspect != 0) {  // the channels read negative first
+    order.erase(std::find(order.begin(), order.end(), suspect));
+    order.insert(order.begin(), suspect);
   }
   IdentifyOptions again = opt;
   again.check_torque_sign = false;
@@ -2861,7 +2920,7 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
   }
   double best = ours;
   unsigned which = 0;
-  for (unsigned channels : {3u, 1u, 2u}) {
+  for (unsigned channels : order) {
     IdentifyResult neg;
     try {
       neg = identify_fit(scene, loads, negated_torques(log, channels), again, false);
@@ -2876,9 +2935,9 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
       best = misfit_ratio(neg);
       which = channels;
     }
-    if (best * kSignGain < ours) break;  // both negated fit: the single channels need no try
+    if (fits_far_better(best, ours)) break;  // the first that fits: the others need no try
   }
-  if (!(best * kSignGain < ours)) return false;
+  if (!fits_far_better(best, ours)) return false;
   const std::string fit = format_significant(best, 2) + " times its noise floor against " +
                           format_significant(ours, 2);
   const std::string torques = opt.torques_negated == 0 ? "the logged " : "the flipped ";
@@ -2886,6 +2945,47 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
                                : torques + "tau" + std::to_string(which) +
                                      " alone fits far better negated (residual ") +
                   fit + "): " + torque_sign_advice(opt.torques_negated ^ which);
+  out->warnings.push_back(out->unusable + "; no torque delay was estimated");
+  return true;
+}
+
+/// The per-joint check runs when a shared fit's residual is more than kMisfitRatio times its
+/// floor (and model_check did not find the torque readings to be the cause), and names the joints' differing friction when the fit with one coefficient per joint
+/// leaves a residual (in floors, the worse channel) this many times smaller (offset_friction.yaml,
+/// whose five joints' coefficients differ by up to 2.5 times, multi-sine log with rates: 18.3
+/// floors shared, 1.00 per joint): fits_far_better, as the sign check's refits
+/// IdentifyOptions::check_per_joint: true (and out->unusable says why, replacing the reason
+/// model_check gave) when a shared-law fit's misfit goes away with one coefficient per joint.
+/// The refit keeps the fit's Savitzky-Golay window and estimates no delay.
+bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunction& loads,
+                               const TorqueLog& log, const IdentifyOptions& opt,
+                               const ModelVerdict& verdict, IdentifyResult* out) {
+  const double ours = misfit_ratio(*out);
+  if (!opt.check_per_joint || opt.layout.per_joint || opt.method != Method::kInverseDynamics ||
+      verdict.readings_decided || !(ours > kMisfitRatio)) {
+    return false;
+  }
+  IdentifyOptions again = opt;
+  again.layout.per_joint = true;
+  again.initial.clear();  // the shared start values do not fit the per-joint layout
+  again.check_torque_sign = again.check_per_joint = false;
+  again.estimate_delay = false;
+  if (out->sg_half_window > 0 && log.size() > 1) {
+    again.auto_window = false;
+    again.sg.half_window_s = out->sg_half_window * log.duration() / (log.size() - 1);
+  }
+  IdentifyResult pj;
+  try {
+    pj = identify_fit(scene, loads, log, again, false);
+  } catch (const LogError&) {
+    return false;  // too few samples for ten coefficients: no evidence either way
+  }
+  const double theirs = misfit_ratio(pj);
+  if (!pj.status.ok() || !fits_far_better(theirs, ours)) return false;
+  out->unusable = "the joints' friction differs: one coefficient per joint (--per-joint) leaves "
+                  "the torque residual at " + format_significant(theirs, 2) +
+                  " times its noise floor against " + format_significant(ours, 3) +
+                  " with the shared law; rerun with --per-joint";
   out->warnings.push_back(out->unusable + "; no torque delay was estimated");
   return true;
 }
@@ -2942,9 +3042,10 @@ IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunct
     out.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
     return out;
   }
+  ModelVerdict verdict;
   if (opt.method == Method::kInverseDynamics) {
     bound_and_misfit_warning(f, an, &out);
-    model_check(f, &out);
+    verdict = model_check(f, &out);
   }
   intervals(f, &problem, an, &out);
   correct_smoothing_bias(&f, &out);
@@ -2953,8 +3054,10 @@ IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunct
   follow_static_coulomb(f.layout, scene_in, &out.fitted);
   predictions(f, &out);
   if (opt.method == Method::kOutputError) output_error_levels(f, &out);
-  const bool sign_wrong = torques_fit_negated(scene_in, loads, log, opt, &out);
-  if (opt.method == Method::kInverseDynamics && opt.estimate_delay && !sign_wrong) {
+  const bool sign_wrong = torques_fit_negated(scene_in, loads, log, opt, verdict, &out);
+  const bool law_wrong =
+      !sign_wrong && friction_differs_by_joint(scene_in, loads, log, opt, verdict, &out);
+  if (opt.method == Method::kInverseDynamics && opt.estimate_delay && !sign_wrong && !law_wrong) {
     estimate_delay(f, an.J, an.r, an.sens, &out);
     const double dt = log.duration() / std::max(1, log.size() - 1);
     if (std::abs(out.delay_s) > kDelaySignificance * out.delay_std_s &&

@@ -286,6 +286,36 @@ TEST(IdentifyStatus, AWrongFlipOfACleanLogIsToBeRemoved) {
   EXPECT_THAT(res.unusable, HasSubstr("remove --flip-torque-sign"));
 }
 
+// The paper scene with five joints of different friction (offset_friction.yaml's coefficients),
+// its 2 s log with rates: the shared law leaves a misfit far above its floor, which one
+// coefficient per joint removes. The shared fit names that (and reports no delay, which the
+// misfit would fake); the per-joint fit is usable and within its error bars.
+TEST(IdentifyStatus, FrictionThatDiffersByJointIsNamedAndItsFitIsUsable) {
+  Params<double> truth = paper_params();
+  truth.friction.coulomb = {0.10, 0.15, 0.08, 0.12, 0.20};
+  truth.friction.viscous = {0.02, 0.01, 0.03, 0.02, 0.01};
+  SynthOptions so = testing::log_options(2.0, 0.02, 1e-5, 3);
+  so.with_rates = true;
+  const TorqueLog log = testing::synthetic_paper_log(truth, so, "per_joint.csv");
+  const IdentifyResult shared = identify(truth, paper_loads, log, {});
+  ASSERT_TRUE(shared.status.ok()) << shared.status.message;
+  EXPECT_GT(worst_ratio(shared), 4.0);
+  EXPECT_THAT(shared.unusable, HasSubstr("the joints' friction differs"));
+  EXPECT_THAT(shared.unusable, HasSubstr("rerun with --per-joint"));
+  EXPECT_TRUE(std::isnan(shared.delay_s)) << shared.delay_s;
+  IdentifyOptions opt;
+  opt.layout.per_joint = true;
+  const IdentifyResult pj = identify(truth, paper_loads, log, opt);
+  ASSERT_TRUE(pj.status.ok()) << pj.status.message;
+  EXPECT_TRUE(pj.unusable.empty()) << pj.unusable;
+  EXPECT_LT(worst_ratio(pj), 1.1);
+  for (int k = 0; k < kJoints; ++k) {
+    EXPECT_NEAR(pj.parameters[k].value, truth.friction.coulomb[k], 4 * pj.parameters[k].std);
+    EXPECT_NEAR(pj.parameters[kJoints + k].value, truth.friction.viscous[k],
+                4 * pj.parameters[kJoints + k].std);
+  }
+}
+
 // a sign smoothing velocity far beyond the log's rates: tanh(w / w_s) is linear in the rate,
 // Coulomb friction cannot be told from viscous, and the covariance cannot be computed; a fit
 // with no std is not usable
