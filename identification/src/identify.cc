@@ -2537,15 +2537,22 @@ void angles_check(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
                 out);
 }
 
+/// The torque readings' step of model_check and the indices of its offsets and gains
+struct ReadingStep {
+  detail::FreedStep fs;
+  TorqueColumns tc;  ///< offset and gain indices into fs's extras (-1: left out)
+};
+
 /// model_check on the torque readings, when the log evidences them: the warning when the
 /// friction would move, a gain is off by kUnusableGain, the residual is far above its floor
 /// (kMisfitRatio; evidenced, the readings explain at least half of that excess) or the evidence
 /// is decisive (kDecisiveCauseZ). Each of these but a move within kUnusableMove makes the fit
 /// unusable, naming the readings (a common scale of both when both gains are off alike).
-void torque_check(const Fit& f, const CauseSteps& cs, const TorqueColumns& tc,
+void torque_check(const Fit& f, const CauseSteps& cs, const ReadingStep& rs,
                   IdentifyResult* out) {
   if (!cs.named(kCauseTorque)) return;
-  const detail::FreedStep& ft = cs.alone[kCauseTorque];
+  const detail::FreedStep& ft = rs.fs;
+  const TorqueColumns& tc = rs.tc;
   double largest = 0;
   const std::string moved = friction_clause(f, *out, ft, false, true, &largest);
   // a gain off by kUnusableGain scales the friction with it, whatever the move's std
@@ -2577,6 +2584,30 @@ void torque_check(const Fit& f, const CauseSteps& cs, const TorqueColumns& tc,
                  " std beyond the other causes (more than " +
                  format_significant(kDecisiveCauseZ) + ")") +
       "; see the warnings";
+}
+
+/// No cause named, but the torque readings alone are evidenced decisively (kDecisiveCauseZ) and
+/// read a common gain beyond kUnusableGain: both torques scaled alike read as the links' masses
+/// and inertias scaled alike (the friction's normal forces scale with them), which the log
+/// cannot tell apart when the external loads are small. Either way the friction estimates are
+/// off by that scale: the fit is unusable (a light mechanism's multi-sine log with rates, both
+/// torques x 0.75: coulomb -4.8 std, viscous +5.0 std, residual 1.2 times its floor, evidence
+/// alone 1520 std for the readings, 871 for the inertias). True when it says so.
+bool scale_ambiguity(const CauseSteps& cs, const ReadingStep& rs, IdentifyResult* out) {
+  if (!out->unusable.empty() || cs.slot[kCauseTorque] < 0 || !rs.fs.ok ||
+      !(cs.z(kCauseTorque) > kDecisiveCauseZ) || !common_gain(rs.tc, rs.fs) ||
+      !(largest_gain(rs.tc, rs.fs) > kUnusableGain)) {
+    return false;
+  }
+  out->unusable = "both logged torques' gains are off alike (" + torque_reading(rs.tc, rs.fs) +
+                  "), or the links' masses and inertias are by that scale: the log cannot tell "
+                  "them apart (evidence alone, in std: torque_readings " +
+                  format_significant(cs.z(kCauseTorque), 2) + ", inertia " +
+                  format_significant(cs.z(kCauseInertia), 2) +
+                  "); either way the friction estimates scale with them. Check the torque "
+                  "sensors' gains and the scene's masses";
+  out->warnings.push_back(out->unusable);
+  return true;
 }
 
 /// What model_check leaves for the refits after it (the sign and per-joint checks)
@@ -2618,19 +2649,21 @@ ModelVerdict model_check(const Fit& f, IdentifyResult* out) {
   out->model_check = cs.report;
   const detail::FreedStep& fi = cs.alone[kCauseInertia];
   verdict.negative_readings = torque_signs(tc, cs.alone[kCauseTorque]);
+  const ReadingStep rs{cs.alone[kCauseTorque], tc};
   // both torques' gains off alike also read as the encoders' zeros (a common scale of the
   // logged torques on the light mechanism read theta1, theta2 2.4, 1.3 rad off): the gains come
   // first, so that the verdict names them
-  if (cs.named(kCauseTorque) && common_gain(tc, cs.alone[kCauseTorque])) {
-    torque_check(f, cs, tc, out);
+  if (cs.named(kCauseTorque) && common_gain(rs.tc, rs.fs)) {
+    torque_check(f, cs, rs, out);
     verdict.readings_decided = !out->unusable.empty();
     angles_check(f, cs, out);
   } else {
     angles_check(f, cs, out);
     const bool before = out->unusable.empty();
-    torque_check(f, cs, tc, out);
+    torque_check(f, cs, rs, out);
     verdict.readings_decided = before && !out->unusable.empty();
   }
+  if (!cs.any() && scale_ambiguity(cs, rs, out)) verdict.readings_decided = true;
   verdict.readings_decided = verdict.readings_decided && verdict.negative_readings == 0;
   std::string moved;
   double largest = 0;  // [std] the cause's largest move of the friction (0: at its bound)

@@ -316,6 +316,59 @@ TEST(IdentifyStatus, FrictionThatDiffersByJointIsNamedAndItsFitIsUsable) {
   }
 }
 
+// The featherweight mechanism (0.15-0.25 kg links under gravity, torques of a few hundredths of
+// a N m), its 3 s log with rates (seed 5) under the scene's loads: clean, usable; tau1 negated
+// (residual 2.5 times its floor, under the sign check's threshold, but the model check reads tau1
+// at -1 times the model): the sign is named; both torques at 0.75 of the model's (residual 1.06
+// times its floor, which masses scaled alike would explain as well): unusable, naming both.
+TorqueLog feather_log(double k1, double k2) {
+  SynthOptions so = testing::log_options(3.0, 0.02, 1e-5, 5);
+  so.with_rates = true;
+  SynthResult r = synthesize_log(testing::feather_params(), testing::feather_loads(),
+                                 testing::feather_initial(), so);
+  EXPECT_TRUE(r.status.ok()) << r.status.message;
+  for (double& v : r.log.tau1) v *= k1;
+  for (double& v : r.log.tau2) v *= k2;
+  r.log.path = "feather.csv";
+  return r.log;
+}
+
+IdentifyResult fit_feather(const TorqueLog& log) {
+  IdentifyOptions opt;
+  opt.estimate_delay = false;
+  return identify(testing::feather_params(), testing::feather_loads(), log, opt);
+}
+
+TEST(IdentifyStatus, AFeatherweightsCleanLogIsUsable) {
+  const IdentifyResult res = fit_feather(feather_log(1, 1));
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_TRUE(res.unusable.empty()) << res.unusable;
+}
+
+TEST(IdentifyStatus, AFeatherweightsNegatedTorqueIsNamedBelowTheMisfitThreshold) {
+  const IdentifyResult res = fit_feather(feather_log(-1, 1));
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_LT(worst_ratio(res), 3.0);
+  EXPECT_THAT(res.unusable, HasSubstr("the logged tau1 alone fits far better negated"));
+  EXPECT_THAT(res.unusable, HasSubstr("--flip-torque-sign 1"));
+}
+
+TEST(IdentifyStatus, AFeatherweightsCommonTorqueScaleIsUnusable) {
+  const IdentifyResult res = fit_feather(feather_log(0.75, 0.75));
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_LT(worst_ratio(res), 1.5);
+  EXPECT_THAT(res.unusable, HasSubstr("both logged torques' gains are off alike"));
+  EXPECT_THAT(res.unusable, HasSubstr("masses and inertias"));
+}
+
+// gains read 0.83 and -0.98 (tau2 negated on a light log) are no common scale
+TEST(IdentifyStatus, GainsOfOppositeSignsAreNoCommonScale) {
+  const IdentifyResult res = fit_feather(feather_log(0.83, -1));
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_THAT(res.unusable, ::testing::Not(HasSubstr("common scale")));
+  EXPECT_THAT(res.unusable, HasSubstr("tau2"));
+}
+
 // a sign smoothing velocity far beyond the log's rates: tanh(w / w_s) is linear in the rate,
 // Coulomb friction cannot be told from viscous, and the covariance cannot be computed; a fit
 // with no std is not usable
