@@ -1555,17 +1555,49 @@ void output_error_levels(const Fit& f, IdentifyResult* out) {
 /// Torque-to-angle delay d: one Gauss-Newton step of the fit with d as an extra parameter
 /// (d r_i / d d = tau'(t_i), tau' by Savitzky-Golay on the logged torques), its std from the
 /// errors-in-variables covariance of that augmented step.
+/// The delay's regressor, the logged torques' rates, carries their noise: it attenuates the
+/// estimate by the share of the rates' variance that is noise (errors in variables). The window
+/// of the rates doubles from the fit's (at least 3 samples) until that share is at most this on
+/// both channels, or the window reaches kDelayWindowMax (a light mechanism's torques of 0.08 N m
+/// with 0.02 N m of noise: at 3 samples the rates' noise was 14 times their signal, and a lag of
+/// 20 ms read 1.4 ms)
+constexpr double kDelayRateNoise = 0.05;
+/// ... [s], and at most a twentieth of the log
+constexpr double kDelayWindowMax = 0.1;
+
+/// The logged torques' rates (order-3 Savitzky-Golay) for the delay estimate (kDelayRateNoise)
+void delay_regressor(const Fit& f, std::vector<double>* g1, std::vector<double>* g2) {
+  const TorqueLog& log = f.cond.log;
+  const double dt = log.duration() / std::max(1, log.size() - 1);
+  const double widest = std::min(kDelayWindowMax, log.duration() / 20);
+  SgOptions sg;
+  sg.order = 3;
+  sg.half_window_s = std::max(f.sg.half_window_s, 3 * dt);
+  std::vector<double> unused;
+  for (;;) {
+    savitzky_golay(log.t, log.tau1, sg, g1, &unused);
+    savitzky_golay(log.t, log.tau2, sg, g2, &unused);
+    double gain = 0, acc_gain = 0;
+    sg_noise_gains(log.t, sg, &gain, &acc_gain);
+    bool quiet = true;
+    for (int c = 0; c < kActuators; ++c) {
+      const std::vector<double>& g = c == 0 ? *g1 : *g2;
+      double power = 0;
+      for (int i : f.index) power += g[i] * g[i];
+      power /= std::max<size_t>(1, f.index.size());
+      quiet = quiet && std::pow(f.noise.torque[c] * gain, 2) <= kDelayRateNoise * power;
+    }
+    if (quiet || 2 * sg.half_window_s > widest) return;
+    sg.half_window_s *= 2;
+  }
+}
+
 void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<double>& r,
                     const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
   const TorqueLog& log = f.cond.log;
   const int P = static_cast<int>(J.cols()), m = static_cast<int>(J.rows());
-  const double dt = log.duration() / std::max(1, log.size() - 1);
-  SgOptions sg;
-  sg.order = 3;
-  sg.half_window_s = std::max(f.sg.half_window_s, 3 * dt);
-  std::vector<double> g1, g2, unused;
-  savitzky_golay(log.t, log.tau1, sg, &g1, &unused);
-  savitzky_golay(log.t, log.tau2, sg, &g2, &unused);
+  std::vector<double> g1, g2;
+  delay_regressor(f, &g1, &g2);
   Eigen::MatrixXd Ja(m, P + 1);
   Ja.leftCols(P) = J;
   for (size_t u = 0; u < f.index.size(); ++u) {
@@ -1631,8 +1663,10 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
   IdentifyOptions again = opt;
   again.delay_refits = opt.delay_refits - 1;
   again.estimate_delay = again.delay_refits > 0;
-  // the sign was checked on the log as logged (a shift does not change it): no refit repeats it
+  // the sign was checked on the log as logged (a shift does not change it), and so was the
+  // friction per joint: no refit repeats them
   again.check_torque_sign = false;
+  again.check_per_joint = false;
   for (const Glitch& g : first.glitches) again.condition.rejected_before.push_back(g.index);
   // samples whose shifted torque would lie beyond the samples that have torques have none: left
   // out. In a chain of refits those are the log's ends less the end blocks an earlier refit left
@@ -2615,9 +2649,10 @@ struct ModelVerdict {
   /// torque channels read negative (torque_signs; bit 0: tau1, bit 1: tau2): the sign check
   /// fits them negated whatever the residual
   unsigned negative_readings = 0;
-  /// the torque readings' positive gains or offsets made the fit unusable: the sign and
-  /// per-joint refits have nothing left to decide
-  bool readings_decided = false;
+  /// a named cause (the encoders' zeros, the torque readings' offsets or positive gains, a
+  /// common scale) made the fit unusable: the sign and per-joint refits have nothing left to
+  /// decide (they tripled the time of such rejected runs)
+  bool cause_decided = false;
 };
 
 /// Wrong masses or inertias, an encoder's zero offset, or a torque sensor's offset or gain
@@ -2653,18 +2688,17 @@ ModelVerdict model_check(const Fit& f, IdentifyResult* out) {
   // both torques' gains off alike also read as the encoders' zeros (a common scale of the
   // logged torques on the light mechanism read theta1, theta2 2.4, 1.3 rad off): the gains come
   // first, so that the verdict names them
+  const bool open = out->unusable.empty();  // (a bound's rule may have decided before)
   if (cs.named(kCauseTorque) && common_gain(rs.tc, rs.fs)) {
     torque_check(f, cs, rs, out);
-    verdict.readings_decided = !out->unusable.empty();
     angles_check(f, cs, out);
   } else {
     angles_check(f, cs, out);
-    const bool before = out->unusable.empty();
     torque_check(f, cs, rs, out);
-    verdict.readings_decided = before && !out->unusable.empty();
   }
-  if (!cs.any() && scale_ambiguity(cs, rs, out)) verdict.readings_decided = true;
-  verdict.readings_decided = verdict.readings_decided && verdict.negative_readings == 0;
+  verdict.cause_decided = open && !out->unusable.empty();
+  if (!cs.any() && scale_ambiguity(cs, rs, out)) verdict.cause_decided = true;
+  verdict.cause_decided = verdict.cause_decided && verdict.negative_readings == 0;
   std::string moved;
   double largest = 0;  // [std] the cause's largest move of the friction (0: at its bound)
   const bool masses = cs.named(kCauseInertia);
@@ -2927,8 +2961,8 @@ std::string torque_sign_advice(unsigned logged_opposite) {
 /// fit far better (fits_far_better) with both negated, or else with one of them negated (a
 /// channel wired the other way read as "coulomb at its bound"); the fit with both negated puts
 /// its residual in out. Runs when the residual is above kMisfitRatio floors, or when model_check
-/// read channels negative (`suspect`, tried first); not when it found the torque readings'
-/// gains or offsets to be the cause (`decided`). The refits keep the fit's Savitzky-Golay window
+/// read channels negative (`suspect`, tried first); not when a cause it named decided
+/// (ModelVerdict::cause_decided). The refits keep the fit's Savitzky-Golay window
 /// (no search of their own) and estimate no delay.
 bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& loads,
                          const TorqueLog& log, const IdentifyOptions& opt,
@@ -2936,7 +2970,7 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
   const double ours = misfit_ratio(*out);
   const unsigned suspect = verdict.negative_readings;
   if (!opt.check_torque_sign || opt.method != Method::kInverseDynamics ||
-      verdict.readings_decided || !(ours > kMisfitRatio || suspect != 0)) {
+      verdict.cause_decided || !(ours > kMisfitRatio || suspect != 0)) {
     return false;
   }
   std::vector<unsigned> order = {3u, 1u, 2u};
@@ -2982,20 +3016,20 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
   return true;
 }
 
-/// The per-joint check runs when a shared fit's residual is more than kMisfitRatio times its
-/// floor (and model_check did not find the torque readings to be the cause), and names the joints' differing friction when the fit with one coefficient per joint
-/// leaves a residual (in floors, the worse channel) this many times smaller (offset_friction.yaml,
-/// whose five joints' coefficients differ by up to 2.5 times, multi-sine log with rates: 18.3
-/// floors shared, 1.00 per joint): fits_far_better, as the sign check's refits
 /// IdentifyOptions::check_per_joint: true (and out->unusable says why, replacing the reason
 /// model_check gave) when a shared-law fit's misfit goes away with one coefficient per joint.
+/// It runs when the residual is more than kMisfitRatio times its floor and no cause named by
+/// model_check decided, and names the joints' differing friction when the fit with one
+/// coefficient per joint fits far better (fits_far_better, as the sign check's refits;
+/// offset_friction.yaml, whose five joints' coefficients differ by up to 2.5 times, multi-sine
+/// log with rates: 18.3 floors shared, 1.00 per joint).
 /// The refit keeps the fit's Savitzky-Golay window and estimates no delay.
 bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunction& loads,
                                const TorqueLog& log, const IdentifyOptions& opt,
                                const ModelVerdict& verdict, IdentifyResult* out) {
   const double ours = misfit_ratio(*out);
   if (!opt.check_per_joint || opt.layout.per_joint || opt.method != Method::kInverseDynamics ||
-      verdict.readings_decided || !(ours > kMisfitRatio)) {
+      verdict.cause_decided || !(ours > kMisfitRatio)) {
     return false;
   }
   IdentifyOptions again = opt;
