@@ -2927,6 +2927,16 @@ bool fits_far_better(double theirs, double ours) {
 IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunction& loads,
                             const TorqueLog& log, const IdentifyOptions& opt, bool full);
 
+/// The options of a check's refit (IdentifyOptions::check_torque_sign, check_per_joint): the
+/// fit's Savitzky-Golay window (no search of its own), no delay estimate
+void keep_window(const TorqueLog& log, const IdentifyResult& fit, IdentifyOptions* again) {
+  again->estimate_delay = false;
+  if (fit.sg_half_window > 0 && log.size() > 1) {
+    again->auto_window = false;
+    again->sg.half_window_s = fit.sg_half_window * log.duration() / (log.size() - 1);
+  }
+}
+
 /// The log with the torques of `channels` negated (bit 0: tau1, bit 1: tau2)
 TorqueLog negated_torques(const TorqueLog& log, unsigned channels) {
   TorqueLog negated = log;
@@ -2980,11 +2990,7 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
   }
   IdentifyOptions again = opt;
   again.check_torque_sign = false;
-  again.estimate_delay = false;
-  if (out->sg_half_window > 0 && log.size() > 1) {
-    again.auto_window = false;
-    again.sg.half_window_s = out->sg_half_window * log.duration() / (log.size() - 1);
-  }
+  keep_window(log, *out, &again);
   double best = ours;
   unsigned which = 0;
   for (unsigned channels : order) {
@@ -3036,11 +3042,7 @@ bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunct
   again.layout.per_joint = true;
   again.initial.clear();  // the shared start values do not fit the per-joint layout
   again.check_torque_sign = again.check_per_joint = false;
-  again.estimate_delay = false;
-  if (out->sg_half_window > 0 && log.size() > 1) {
-    again.auto_window = false;
-    again.sg.half_window_s = out->sg_half_window * log.duration() / (log.size() - 1);
-  }
+  keep_window(log, *out, &again);
   IdentifyResult pj;
   try {
     pj = identify_fit(scene, loads, log, again, false);
