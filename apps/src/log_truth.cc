@@ -1,6 +1,8 @@
 #include "fivebar/io/log_truth.h"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <sstream>
 
 #include "fivebar/io/format.h"
@@ -86,12 +88,15 @@ bool true_value(const LogTruth& truth, const id::ParameterLayout& layout, int i,
   const bool indexed = layout.per_joint && us != std::string::npos;
   auto it = truth.find(indexed ? name.substr(0, us) : name);
   if (it == truth.end() || it->second.size() != size_t(kJoints)) return false;
-  *value = 0;
   if (indexed) {
     *value = it->second[std::stoi(name.substr(us + 1)) - 1];
-  } else {
-    for (double v : it->second) *value += v / kJoints;
+    return true;
   }
+  // a shared coefficient has a truth only when the joints share it (the mean of differing
+  // values is no value the fit should reach: a shared fit of a per-joint log read 50 std off it)
+  const auto [lo, hi] = std::minmax_element(it->second.begin(), it->second.end());
+  if (*hi - *lo > 1e-12 * std::max(std::abs(*hi), std::abs(*lo))) return false;
+  *value = *lo;
   return true;
 }
 

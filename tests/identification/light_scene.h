@@ -1,5 +1,5 @@
 // datasets/scenes/light.yaml as the tests build it: the paper's links on a shorter geometry, no
-// gravity, small pins, loads near zero.
+// gravity, small pins, loads near zero; and a featherweight mechanism under gravity.
 #pragma once
 
 #include <cmath>
@@ -28,5 +28,35 @@ inline sim::LoadFunction light_loads(double (*M1)(double) = nullptr, double (*M2
     return Loads<double>{M1 ? M1(t) : 0.0, M2 ? M2(t) : 0.0, 0.001, 0.01, M_PI / 2};
   };
 }
+
+/// A featherweight five-bar under gravity: links of 0.15-0.25 kg on a 0.15 m ground, pins of
+/// 0.004 m, coulomb 0.15, viscous 0.004; motor torques of a few hundredths of a N m
+/// (feather_loads). Its friction torques are a few thousandths of a N m, under the torque noise.
+inline Params<double> feather_params() {
+  Params<double> p = paper_params();
+  p.ground_length = 0.15;
+  p.links[0] = {0.06, 0.2, 0.004, 0.03, 0.1};
+  p.links[1] = {0.07, 0.25, 0.005, 0.035, 0.0};
+  p.links[2] = {0.15, 0.15, 0.003, 0.07, 0.0};
+  p.links[3] = {0.16, 0.15, 0.003, 0.08, 0.0};
+  p.point_p = 0.15;
+  p.gravity = 9.81;
+  p.friction.pin_radius.fill(0.004);
+  p.friction.coulomb.fill(0.15);
+  p.friction.static_coulomb.fill(0.15);
+  p.friction.viscous.fill(0.004);
+  return p;
+}
+
+/// The featherweight scene's loads: M1, M2 two tones each, M3 0.002 N m, F 0.05 N at 1 rad.
+inline sim::LoadFunction feather_loads() {
+  return [](double t) {
+    return Loads<double>{0.03 * std::sin(5 * t) + 0.02 * std::sin(11 * t),
+                         0.025 * std::cos(3 * t) - 0.015 * std::sin(13 * t), 0.002, 0.05, 1.0};
+  };
+}
+
+/// The featherweight scene's start: theta1 1.7, theta2 1.4 rad, at rest.
+inline sim::Initial feather_initial() { return {1.7, 1.4, 0.0, 0.0}; }
 
 }  // namespace fivebar::testing

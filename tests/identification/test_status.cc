@@ -286,6 +286,107 @@ TEST(IdentifyStatus, AWrongFlipOfACleanLogIsToBeRemoved) {
   EXPECT_THAT(res.unusable, HasSubstr("remove --flip-torque-sign"));
 }
 
+// The paper scene with five joints of different friction (offset_friction.yaml's coefficients),
+// its 2 s log with rates: the shared law leaves a misfit far above its floor, which one
+// coefficient per joint removes. The shared fit names that (and reports no delay, which the
+// misfit would fake); the per-joint fit is usable and within its error bars.
+TEST(IdentifyStatus, FrictionThatDiffersByJointIsNamedAndItsFitIsUsable) {
+  Params<double> truth = paper_params();
+  truth.friction.coulomb = {0.10, 0.15, 0.08, 0.12, 0.20};
+  truth.friction.viscous = {0.02, 0.01, 0.03, 0.02, 0.01};
+  SynthOptions so = testing::log_options(2.0, 0.02, 1e-5, 3);
+  so.with_rates = true;
+  const TorqueLog log = testing::synthetic_paper_log(truth, so, "per_joint.csv");
+  const IdentifyResult shared = identify(truth, paper_loads, log, {});
+  ASSERT_TRUE(shared.status.ok()) << shared.status.message;
+  EXPECT_GT(worst_ratio(shared), 4.0);
+  EXPECT_THAT(shared.unusable, HasSubstr("the joints' friction differs"));
+  EXPECT_THAT(shared.unusable, HasSubstr("rerun with --per-joint"));
+  EXPECT_TRUE(std::isnan(shared.delay_s)) << shared.delay_s;
+  IdentifyOptions opt;
+  opt.layout.per_joint = true;
+  const IdentifyResult pj = identify(truth, paper_loads, log, opt);
+  ASSERT_TRUE(pj.status.ok()) << pj.status.message;
+  EXPECT_TRUE(pj.unusable.empty()) << pj.unusable;
+  EXPECT_LT(worst_ratio(pj), 1.1);
+  for (int k = 0; k < kJoints; ++k) {
+    EXPECT_NEAR(pj.parameters[k].value, truth.friction.coulomb[k], 4 * pj.parameters[k].std);
+    EXPECT_NEAR(pj.parameters[kJoints + k].value, truth.friction.viscous[k],
+                4 * pj.parameters[kJoints + k].std);
+  }
+}
+
+// The featherweight mechanism (0.15-0.25 kg links under gravity, torques of a few hundredths of
+// a N m), its 3 s log with rates (seed 5) under the scene's loads: clean, usable; tau1 negated
+// (residual 2.5 times its floor, under the sign check's threshold, but the model check reads tau1
+// at -1 times the model): the sign is named; both torques at 0.75 of the model's (residual 1.06
+// times its floor, which masses scaled alike would explain as well): unusable, naming both.
+TorqueLog feather_log(double k1, double k2) {
+  SynthOptions so = testing::log_options(3.0, 0.02, 1e-5, 5);
+  so.with_rates = true;
+  SynthResult r = synthesize_log(testing::feather_params(), testing::feather_loads(),
+                                 testing::feather_initial(), so);
+  EXPECT_TRUE(r.status.ok()) << r.status.message;
+  for (double& v : r.log.tau1) v *= k1;
+  for (double& v : r.log.tau2) v *= k2;
+  r.log.path = "feather.csv";
+  return r.log;
+}
+
+IdentifyResult fit_feather(const TorqueLog& log) {
+  IdentifyOptions opt;
+  opt.estimate_delay = false;
+  return identify(testing::feather_params(), testing::feather_loads(), log, opt);
+}
+
+TEST(IdentifyStatus, AFeatherweightsCleanLogIsUsable) {
+  const IdentifyResult res = fit_feather(feather_log(1, 1));
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_TRUE(res.unusable.empty()) << res.unusable;
+}
+
+TEST(IdentifyStatus, AFeatherweightsNegatedTorqueIsNamedBelowTheMisfitThreshold) {
+  const IdentifyResult res = fit_feather(feather_log(-1, 1));
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_LT(worst_ratio(res), 3.0);
+  EXPECT_THAT(res.unusable, HasSubstr("the logged tau1 alone fits far better negated"));
+  EXPECT_THAT(res.unusable, HasSubstr("--flip-torque-sign 1"));
+}
+
+TEST(IdentifyStatus, AFeatherweightsCommonTorqueScaleIsUnusable) {
+  const IdentifyResult res = fit_feather(feather_log(0.75, 0.75));
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_LT(worst_ratio(res), 1.5);
+  EXPECT_THAT(res.unusable, HasSubstr("both logged torques' gains are off alike"));
+  EXPECT_THAT(res.unusable, HasSubstr("masses and inertias"));
+}
+
+// the featherweight log with its torques 10 ms late: the delay estimate's regressor, the logged
+// torques' rates, is smoothed until their noise is a small share of them (at 3 samples it was
+// 14 times their signal on such a log, and a 20 ms lag read 1.4 ms)
+TEST(IdentifyStatus, AFeatherweightsTorqueLagIsReadInFull) {
+  TorqueLog log = feather_log(1, 1);
+  constexpr int kLag = 10;  // samples of 1 ms
+  for (int i = log.size() - 1; i >= 0; --i) {
+    log.tau1[i] = log.tau1[std::max(i - kLag, 0)];
+    log.tau2[i] = log.tau2[std::max(i - kLag, 0)];
+  }
+  const IdentifyResult res =
+      identify(testing::feather_params(), testing::feather_loads(), log, IdentifyOptions{});
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_TRUE(res.delay_corrected);
+  EXPECT_NEAR(res.delay_s, 0.010, std::max(3 * res.delay_std_s, 0.001)) << res.delay_std_s;
+  EXPECT_LT(res.delay_std_s, 0.003);
+}
+
+// gains read 0.83 and -0.98 (tau2 negated on a light log) are no common scale
+TEST(IdentifyStatus, GainsOfOppositeSignsAreNoCommonScale) {
+  const IdentifyResult res = fit_feather(feather_log(0.83, -1));
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_THAT(res.unusable, ::testing::Not(HasSubstr("common scale")));
+  EXPECT_THAT(res.unusable, HasSubstr("tau2"));
+}
+
 // a sign smoothing velocity far beyond the log's rates: tanh(w / w_s) is linear in the rate,
 // Coulomb friction cannot be told from viscous, and the covariance cannot be computed; a fit
 // with no std is not usable

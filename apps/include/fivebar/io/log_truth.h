@@ -24,8 +24,8 @@ std::vector<std::string> truth_lines(const Params<double>& params);
 /// The `true.*` values of a log's comment lines; lines that do not parse are skipped.
 LogTruth read_truth(const std::vector<std::string>& comments);
 
-/// The true value of parameter i (named `name`) of `layout`, when `truth` states it (shared
-/// friction: the mean over the joints); false otherwise.
+/// The true value of parameter i (named `name`) of `layout`, when `truth` states it (a shared
+/// friction coefficient: only when the five joints' true values are equal); false otherwise.
 bool true_value(const LogTruth& truth, const identification::ParameterLayout& layout, int i,
                 const std::string& name, double* value);
 

@@ -114,6 +114,11 @@ struct IdentifyOptions {
   /// with its torques negated; torques that fit far better so are a sign-convention error, which
   /// makes the fit unusable (IdentifyResult::unusable) and no delay is estimated
   bool check_torque_sign = true;
+  /// inverse dynamics, shared law: when the residual is still far above its noise floor (the
+  /// sign check found nothing), fit the log once more with one coefficient per joint; a misfit
+  /// that goes away so names the joints' differing friction, makes the fit unusable and no
+  /// delay is estimated
+  bool check_per_joint = true;
   /// the torques the caller already negated before the fit (--flip-torque-sign; bit 0: tau1,
   /// bit 1: tau2): the sign check's advice names the flip relative to the torques as logged
   unsigned torques_negated = 0;
