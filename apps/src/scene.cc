@@ -432,9 +432,9 @@ class SceneReader {
   std::string joint_names() const { return four_bar() ? "O, B, C, D0" : "O, B, C, D, D0"; }
   /// the four-bar's joints named in list-length messages (the five-bar's as they always read)
   std::string joint_hint() const { return four_bar() ? " (" + joint_names() + ")" : ""; }
-  /// every key the scene gives a value (dotted)
+  /// every key the scene gives a value (dotted), and every section it names, even empty
   std::vector<std::string> keys() const {
-    std::vector<std::string> out;
+    std::vector<std::string> out(sections_.begin(), sections_.end());
     for (const auto& kv : flat_) out.push_back(kv.first);
     return out;
   }
@@ -497,6 +497,7 @@ class SceneReader {
 
   // a YAML map under `key` (dotted) whose schema key is `skey`
   void read_section(const YAML::Node& node, const std::string& key, const std::string& skey) {
+    if (!key.empty()) sections_.insert(key);
     if (node.IsNull()) return;  // `friction:` with nothing below
     if (!node.IsMap()) {
       fail(key, "expected a map of keys (" + children_of(skey) + "), got " + type_name(node) +
@@ -558,6 +559,7 @@ class SceneReader {
 
   std::string path_;
   std::map<std::string, Value> flat_;
+  std::set<std::string> sections_;  // the sections the file names (dotted)
   int link_count_ = 0;
   std::string link_line_;
 };
@@ -871,7 +873,8 @@ MechanismType read_type(const SceneReader& r, bool four_bar_ok) {
   }
   for (const std::string& key : r.keys()) {
     const bool five_bar_key = key == "loads.M2" || key == "initial.theta2" ||
-                              key == "initial.omega2" || key.rfind("actuators.", 0) == 0;
+                              key == "initial.omega2" || key == "actuators" ||
+                              key.rfind("actuators.", 0) == 0;
     if (five_bar_key) {
       r.fail(key, "is a five-bar key, not one of mechanism.type four_bar (one crank: loads M1, M3, "
                   "F, F_angle; initial theta1, omega1; no actuators)" + r.origin(key));

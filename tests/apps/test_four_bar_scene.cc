@@ -79,6 +79,7 @@ TEST(FourBarScene, FiveBarKeysFailNamingTheKeyAndTheType) {
                "initial.theta2", "mechanism.type four_bar");
   expect_error(kFourBar, {"actuators.M1.coulomb=0.1"}, "actuators.M1.coulomb",
                "mechanism.type four_bar");
+  expect_error(kFourBar + "actuators: {}\n", {}, "actuators", "mechanism.type four_bar");
   expect_error(kFourBar, {"mechanism.links.3.mass=1"}, "mechanism.links.3",
                "no such link in --set mechanism.links.3.mass=1 (links are numbered 0 to 2)");
   expect_error(with("  type: four_bar\n", ""), {}, "mechanism.links",
