@@ -172,8 +172,7 @@ struct Sim<FourBar> {
   static void drives(const Ld& L, Row* row) { row->M1 = L.M1; }
   static double drive_error(const E& ev, const Row& r) { return std::abs(ev.M1 - r.M1); }
   static std::array<double, kJoints> joint_accelerations(const E& ev) {
-    const double a1 = ev.thdd[0];
-    return {a1, ev.alpha2 - a1, ev.alpha3 - ev.alpha2, ev.alpha3, 0.0};
+    return FourBar::joint_accelerations(ev.kin, ev.bias, ev.thdd);
   }
   static double joint_rate(const Row& r, int k) {
     switch (k) {
@@ -608,17 +607,20 @@ void kinematic_zero_departures(const ParamsOf<M>& p, const EvalOf<M>& ev, const 
                                const std::array<bool, kJoints>& rest,
                                std::array<double, kJoints>* wdot) {
   if (!v_of<M>(y).isZero(0.0)) return;
-  double row_scale = 0.0;
+  std::array<double, kJoints> row{};
+  for (int k = 0; k < M::kJoints; ++k) row[k] = M::joint_row(ev.kin, k).norm();
+  const double zero = kKinematicZero * *std::max_element(row.begin(), row.end());
+  std::array<double, kJoints> third{};  // qdd^T H_k qdd, once a joint needs it
+  bool have = false;
   for (int k = 0; k < M::kJoints; ++k) {
-    row_scale = std::max(row_scale, M::joint_row(ev.kin, k).norm());
-  }
-  typename M::template Bias<double> b;
-  bool have_bias = false;
-  for (int k = 0; k < M::kJoints; ++k) {
-    if (!rest[k] || M::joint_row(ev.kin, k).norm() > kKinematicZero * row_scale) continue;
-    if (!have_bias) M::bias(p, ev.kin, ev.thdd, &b);  // the velocity terms at v = qdd
-    have_bias = true;
-    (*wdot)[k] = M::joint_accelerations(ev.kin, b, VecOf<M>::Zero().eval())[k];
+    if (!rest[k] || row[k] > zero) continue;
+    if (!have) {
+      typename M::template Bias<double> b;
+      M::bias(p, ev.kin, ev.thdd, &b);  // the velocity terms at v = qdd
+      third = M::joint_accelerations(ev.kin, b, VecOf<M>::Zero().eval());
+      have = true;
+    }
+    (*wdot)[k] = third[k];
   }
 }
 

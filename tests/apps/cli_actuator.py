@@ -9,33 +9,16 @@ with the truth in its header; identify --estimate friction,actuator recovers the
 the simulated motion returns the applied torques with the actuator friction on; bad input
 exits 2 with one line.
 """
-import csv
 import json
 import os
 import shutil
-import subprocess
 import sys
 
+from cli_common import Cli, read_csv
+
 FIVEBAR, PAPER, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
-failures = []
-
-
-def run(args):
-    p = subprocess.run([FIVEBAR] + args, capture_output=True, text=True)
-    return p.returncode, p.stdout, p.stderr
-
-
-def expect_error(status, pattern, args):
-    code, _, err = run(args)
-    lines = err.strip("\n").split("\n")
-    if code != status or len(lines) != 1 or not lines[0].startswith("fivebar: error: ") \
-            or pattern not in lines[0]:
-        failures.append("%s: exit %d, stderr %r (expected %d and '%s')" % (args, code, err, status, pattern))
-
-
-def read_csv(path):
-    with open(path) as f:
-        return list(csv.DictReader(l for l in f if not l.startswith("#")))
+cli = Cli(FIVEBAR)
+failures, run, expect_error = cli.failures, cli.run, cli.expect_error
 
 
 shutil.rmtree(WORK, ignore_errors=True)

@@ -10,24 +10,17 @@ import json
 import os
 import re
 import shutil
-import subprocess
 import sys
 
+from cli_common import Cli
+
 FIVEBAR, PAPER, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
-failures = []
-
-
-def run(args):
-    p = subprocess.run([FIVEBAR] + args, capture_output=True, text=True)
-    return p.returncode, p.stdout, p.stderr
+cli = Cli(FIVEBAR)
+failures, run = cli.failures, cli.run
 
 
 def expect_error(pattern, args):
-    code, _, err = run(args)
-    lines = err.strip("\n").split("\n")
-    if code != 2 or len(lines) != 1 or not lines[0].startswith("fivebar: error: ") \
-            or pattern not in lines[0]:
-        failures.append("%s: exit %d, stderr %r (expected 2 and '%s')" % (args, code, err, pattern))
+    cli.expect_error(2, pattern, args)
 
 
 def page_data(path):

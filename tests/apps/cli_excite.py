@@ -8,37 +8,23 @@ with a status; a small design honours its constraints (torque limit, singularity
 range, reversals) on the 1 kHz grid, its rates and accelerations are those of its angles, and
 synth-log --motion along it reproduces its torques.
 """
-import csv
 import json
 import math
 import os
 import shutil
-import subprocess
 import sys
 
+from cli_common import Cli, read_csv
+
 FIVEBAR, PAPER, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
-failures = []
-
-
-def run(args):
-    p = subprocess.run([FIVEBAR] + args, capture_output=True, text=True)
-    return p.returncode, p.stdout, p.stderr
+cli = Cli(FIVEBAR)
+failures, run = cli.failures, cli.run
 
 
 def expect_error(status, pattern, args, out_dir=None):
-    code, _, err = run(args)
-    lines = err.strip("\n").split("\n")
-    if code != status or len(lines) != 1 or not lines[0].startswith("fivebar: error: ") \
-            or pattern not in lines[0]:
-        failures.append("%s: exit %d, stderr %r (expected %d and '%s')" % (args, code, err, status, pattern))
+    cli.expect_error(status, pattern, args)
     if out_dir and os.path.exists(os.path.join(out_dir, "excitation.csv")):
         failures.append("%s: wrote excitation.csv after failing" % args)
-
-
-def read_csv(path):
-    with open(path) as f:
-        rows = [l for l in f if not l.startswith("#")]
-    return list(csv.DictReader(rows))
 
 
 def design_columns(label, out, args):

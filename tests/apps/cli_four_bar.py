@@ -8,34 +8,17 @@ four-bar's columns and agrees with the independent reference trajectories (withi
 the run's own error estimate); summary.json says ok. Bad input exits 2 with one line naming the
 key and the mechanism type; a command that runs five-bars only refuses a four-bar scene.
 """
-import csv
 import json
 import os
 import shutil
-import subprocess
 import sys
+
+from cli_common import Cli, read_csv
 
 FIVEBAR, PAPER, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 REFERENCE = os.path.join(os.path.dirname(os.path.abspath(PAPER)), "..", "reference", "four_bar")
-failures = []
-
-
-def run(args):
-    p = subprocess.run([FIVEBAR] + args, capture_output=True, text=True)
-    return p.returncode, p.stdout, p.stderr
-
-
-def expect_error(status, pattern, args):
-    code, _, err = run(args)
-    lines = err.strip("\n").split("\n")
-    if code != status or len(lines) != 1 or not lines[0].startswith("fivebar: error: ") \
-            or pattern not in lines[0]:
-        failures.append("%s: exit %d, stderr %r (expected %d and '%s')" % (args, code, err, status, pattern))
-
-
-def read_csv(path):
-    with open(path) as f:
-        return list(csv.DictReader(f))
+cli = Cli(FIVEBAR)
+failures, run, expect_error = cli.failures, cli.run, cli.expect_error
 
 
 COLUMNS = (["t"] + ["%s%d" % (q, i) for q in ("theta", "omega", "alpha") for i in (1, 2, 3)] + ["M1"]

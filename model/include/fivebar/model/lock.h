@@ -33,7 +33,6 @@ struct LockAnalysis {
   /// max_k |lambda_k| / (mu_s,k r_k N_k) at the optimum (<= 1: friction holds the pose);
   /// infinite when no joint can resist in some direction the loads push
   double ratio = 0.0;
-  double alpha3 = 0.0, alpha4 = 0.0;  ///< the five-bar's couplers (zero for other mechanisms)
 };
 
 namespace detail {
@@ -99,13 +98,6 @@ inline double min_max_ratio(const std::array<Eigen::Matrix<double, 1, 1>, kJoint
   return s;
 }
 
-inline void set_coupler_accelerations(const Evaluation<double>& ev, LockAnalysis* out) {
-  out->alpha3 = ev.alpha3;
-  out->alpha4 = ev.alpha4;
-}
-template <typename E>
-void set_coupler_accelerations(const E&, LockAnalysis*) {}
-
 }  // namespace detail
 
 /// Holding torques of the locked mechanism M at pose q, at rest, under loads L.
@@ -151,7 +143,6 @@ Status lock_analysis(const typename M::template Params<double>& p,
   }
   M::reactions(p, k, b, L, Fvec, zero, out->hold, &out->F, &ev);
   reaction_norms(out->F, &out->N);
-  detail::set_coupler_accelerations(ev, out);
   return Status::Ok();
 }
 
