@@ -6,7 +6,8 @@
 // simulated, sampled, with seeded Gaussian sensor noise and optional encoder quantization. The
 // `#` header of the log holds the true friction values and the command that made it. With
 // --motion (e.g. the excitation.csv of `fivebar excite`), the log is that of a position-controlled
-// mechanism following the given motion: the torques by inverse dynamics, plus the noise.
+// mechanism following the given motion: the torques by inverse dynamics, plus the noise. A
+// four-bar scene's log has one crank (t,theta1,tau1; docs/formats.md).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <array>
@@ -30,6 +31,7 @@
 #include "fivebar/io/torque_log_file.h"
 #include "fivebar/model/actuator.h"
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/four_bar.h"
 #include "fivebar/model/friction.h"
 #include "fivebar/model/inertial.h"
 
@@ -72,36 +74,52 @@ void write_log(const std::string& path, const identification::TorqueLog& log) {
   }
 }
 
-// The log of a position-controlled mechanism following MOTION.csv (columns t, theta1, theta2,
-// omega1, omega2, alpha1, alpha2, as excitation.csv of `fivebar excite`): inverse dynamics of
-// the scene at every row, then the same noise as a simulated log.
-identification::SynthResult motion_log(const Scene& scene, const sim::LoadFunction& loads,
-                                       const std::string& path,
-                                       const identification::SynthOptions& so) {
-  const CsvTable table = read_csv(path);
-  const std::vector<double> t = table.column("t"), th1 = table.column("theta1"),
-                            th2 = table.column("theta2"), w1 = table.column("omega1"),
-                            w2 = table.column("omega2"), a1 = table.column("alpha1"),
-                            a2 = table.column("alpha2");
+// The rows of MOTION.csv (columns t, theta<j>, omega<j>, alpha<j> of the mechanism's `dof`
+// cranks, as excitation.csv of `fivebar excite`), t strictly increasing.
+std::vector<sim::Row> motion_rows(const CsvTable& table, int dof) {
+  const std::string& path = table.path;
+  const std::vector<double> t = table.column("t");
   if (t.empty()) throw InputError(path, "(file)", "no data rows after the header");
   std::vector<sim::Row> rows(t.size());
+  for (int j = 0; j < dof; ++j) {
+    const std::string n = std::to_string(j + 1);
+    const std::vector<double> th = table.column("theta" + n), w = table.column("omega" + n),
+                              al = table.column("alpha" + n);
+    for (size_t i = 0; i < t.size(); ++i) {
+      rows[i].theta[j] = th[i];
+      rows[i].omega[j] = w[i];
+      rows[i].alpha[j] = al[i];
+    }
+  }
   for (size_t i = 0; i < t.size(); ++i) {
     if (i > 0 && !(t[i] > t[i - 1])) {
       throw InputError(path, "line " + std::to_string(table.lines[i]) + ", column t",
                        "t must increase strictly");
     }
+    rows[i].t = t[i];
+  }
+  return rows;
+}
+
+// The log of a position-controlled five-bar following MOTION.csv: inverse dynamics of the
+// scene at every row, then the same noise as a simulated log.
+identification::SynthResult motion_log(const Scene& scene, const sim::LoadFunction& loads,
+                                       const std::string& path,
+                                       const identification::SynthOptions& so) {
+  const CsvTable table = read_csv(path);
+  std::vector<sim::Row> rows = motion_rows(table, kDof);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    sim::Row& r = rows[i];
     Evaluation<double> ev;
-    const Status st = inverse_dynamics(scene.params, loads(t[i]), th1[i], th2[i], w1[i], w2[i],
-                                       a1[i], a2[i], nullptr, EvalOptions{}, &ev);
+    const Status st = inverse_dynamics(scene.params, loads(r.t), r.theta[0], r.theta[1],
+                                       r.omega[0], r.omega[1], r.alpha[0], r.alpha[1], nullptr,
+                                       EvalOptions{}, &ev);
     if (!st.ok()) {
       throw NumericalError(path, "line " + std::to_string(table.lines[i]),
                            "inverse dynamics: " + st.message);
     }
-    sim::Row& r = rows[i];
-    r.t = t[i];
-    r.theta = {th1[i], th2[i], 0, 0};
-    r.omega = {w1[i], w2[i], ev.bias.w3, ev.bias.w4};
-    r.alpha = {a1[i], a2[i], 0, 0};
+    r.omega[2] = ev.bias.w3;
+    r.omega[3] = ev.bias.w4;
     r.M1 = ev.M1;
     r.M2 = ev.M2;
   }
@@ -110,11 +128,39 @@ identification::SynthResult motion_log(const Scene& scene, const sim::LoadFuncti
   return out;
 }
 
+// The same for a four-bar (columns t, theta1, omega1, alpha1).
+identification::SynthResult four_bar_motion_log(const Scene& scene,
+                                                const sim::FourBarLoadFunction& loads,
+                                                const std::string& path,
+                                                const identification::SynthOptions& so) {
+  const CsvTable table = read_csv(path);
+  std::vector<sim::Row> rows = motion_rows(table, 1);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    sim::Row& r = rows[i];
+    FourBarEvaluation ev;
+    const Status st = four_bar_inverse(scene.four_bar, loads(r.t), r.theta[0], r.omega[0],
+                                       r.alpha[0], EvalOptions{}, &ev);
+    if (!st.ok()) {
+      throw NumericalError(path, "line " + std::to_string(table.lines[i]),
+                           "inverse dynamics: " + st.message);
+    }
+    r.omega[1] = ev.bias.w2;
+    r.omega[2] = ev.bias.w3;
+    r.M1 = ev.M1;
+  }
+  identification::SynthResult out;
+  identification::sample_log(scene.four_bar, rows, so, &out);
+  return out;
+}
+
 // header: provenance and the truth (fivebar/io/log_truth.h, which identify reads back)
 std::vector<std::string> truth_header(const Args& a, const Scene& scene) {
   std::vector<std::string> out = {" fivebar synth-log: synthetic torque log (format: docs/formats.md)",
                                   " command: " + a.command_line, " scene: " + scene.path};
-  for (const std::string& line : truth_lines(scene.params)) out.push_back(line);
+  const std::vector<std::string> truth = scene.type == MechanismType::kFourBar
+                                             ? truth_lines(scene.four_bar)
+                                             : truth_lines(scene.params);
+  out.insert(out.end(), truth.begin(), truth.end());
   return out;
 }
 
@@ -185,9 +231,8 @@ std::string excitation_text(const Args& a, const identification::SynthResult& re
   return text;
 }
 
-int run(const Args& a) {
-  Scene scene = load_scene(a.scene, a.sets);
-  const sim::LoadFunction loads = LoadExpressions(scene).function();
+// the options that do not depend on the scene
+void check_options(const Args& a) {
   const std::string flag_file = "command line";
   if (!(a.so.rate_hz > 0)) throw InputError(flag_file, "--rate", "must be > 0");
   if (!(a.so.duration > 0)) throw InputError(flag_file, "--duration", "must be > 0");
@@ -213,52 +258,87 @@ int run(const Args& a) {
   if (a.excitation != "scene" && a.excitation != "multisine") {
     throw InputError(flag_file, "--excitation", "expected scene or multisine, got " + a.excitation);
   }
-  // the friction law of the log (the scene's, or Stribeck with the coefficients given here)
-  FrictionParams<double>& fp = scene.params.friction;
-  if (!a.law.empty()) {
-    FrictionLaw law;
-    if (!identification::parse_law(a.law, &law)) {
-      throw InputError(flag_file, "--law", "expected " + identification::identifiable_law_names() + ", got " + a.law);
-    }
-    fp.law = law;
-    if (law == FrictionLaw::kStribeck) {
-      const double kinetic = *std::max_element(fp.coulomb.begin(), fp.coulomb.end());
-      if (a.static_coulomb < kinetic) {
-        throw InputError(flag_file, "--static-coulomb",
-                         format_double(a.static_coulomb) + " is below the scene's Coulomb "
-                         "(kinetic) coefficient " + format_double(kinetic) +
-                         ": static friction is at least the kinetic (identify fits it so)");
-      }
-      fp.static_coulomb.fill(a.static_coulomb);
-      fp.stribeck_velocity.fill(a.stribeck_velocity);
-      fp.stribeck_exponent.fill(a.stribeck_exponent);
-    }
-  }
-  set_actuators(a, &scene);
-  identification::SynthOptions so = a.so;
-  so.multisine = a.excitation == "multisine";
-  so.sim = scene.options;
   if (!a.motion.empty() && a.excitation != "scene") {
     throw InputError(flag_file, "--motion", "cannot be combined with --excitation " + a.excitation);
   }
-  identification::SynthResult res =
-      a.motion.empty() ? identification::synthesize_log(scene.params, loads, scene.initial, so)
-                       : motion_log(scene, loads, a.motion, so);
+}
+
+// the friction law of the log: the scene's, or Stribeck with the coefficients given here
+void set_law(const Args& a, FrictionParams<double>* fp) {
+  if (a.law.empty()) return;
+  FrictionLaw law;
+  if (!identification::parse_law(a.law, &law)) {
+    throw InputError("command line", "--law",
+                     "expected " + identification::identifiable_law_names() + ", got " + a.law);
+  }
+  fp->law = law;
+  if (law != FrictionLaw::kStribeck) return;
+  const double kinetic = *std::max_element(fp->coulomb.begin(), fp->coulomb.end());
+  if (a.static_coulomb < kinetic) {
+    throw InputError("command line", "--static-coulomb",
+                     format_double(a.static_coulomb) + " is below the scene's Coulomb "
+                     "(kinetic) coefficient " + format_double(kinetic) +
+                     ": static friction is at least the kinetic (identify fits it so)");
+  }
+  fp->static_coulomb.fill(a.static_coulomb);
+  fp->stribeck_velocity.fill(a.stribeck_velocity);
+  fp->stribeck_exponent.fill(a.stribeck_exponent);
+}
+
+// the four-bar's log: its scene's loads or a motion; the options only a five-bar has refused
+identification::SynthResult four_bar_log(const Args& a, const Scene& scene,
+                                         const identification::SynthOptions& so) {
+  if (a.excitation == "multisine") {
+    throw InputError("command line", "--excitation",
+                     "multisine drives the five-bar's two cranks; a four_bar scene's log follows "
+                     "its loads.M1 (--excitation scene) or --motion");
+  }
+  for (const ActuatorOption& o : kActuatorOptions) {
+    if (!(a.*o.values).empty()) {
+      throw InputError("command line", o.flag,
+                       "actuator terms are the five-bar's; not available for a four_bar scene");
+    }
+  }
+  const sim::FourBarLoadFunction loads = LoadExpressions(scene).four_bar_function();
+  return a.motion.empty()
+             ? identification::synthesize_log(scene.four_bar, loads, scene.initial, so)
+             : four_bar_motion_log(scene, loads, a.motion, so);
+}
+
+int run(const Args& a) {
+  check_options(a);
+  Scene scene = load_scene(a.scene, a.sets, /*four_bar_ok=*/true);
+  const bool four_bar = scene.type == MechanismType::kFourBar;
+  set_law(a, four_bar ? &scene.four_bar.friction : &scene.params.friction);
+  identification::SynthOptions so = a.so;
+  so.multisine = a.excitation == "multisine";
+  so.sim = scene.options;
+  identification::SynthResult res;
+  if (four_bar) {
+    res = four_bar_log(a, scene, so);
+  } else {
+    set_actuators(a, &scene);
+    const sim::LoadFunction loads = LoadExpressions(scene).function();
+    res = a.motion.empty() ? identification::synthesize_log(scene.params, loads, scene.initial, so)
+                           : motion_log(scene, loads, a.motion, so);
+  }
   if (!res.status.ok()) throw NumericalError(scene.path, "simulation", res.status.message);
 
   identification::TorqueLog& log = res.log;
   log.comments = truth_header(a, scene);
+  const int joints = four_bar ? kFourBarJoints : kJoints;
+  const std::string names = four_bar ? "O,B,C,D0" : "O,B,C,D,D0";
   std::ostringstream rev;
-  for (int k = 0; k < kJoints; ++k) rev << (k ? "," : "") << res.reversals[k];
+  for (int k = 0; k < joints; ++k) rev << (k ? "," : "") << res.reversals[k];
   log.comments.push_back(" noise: torque " + format_double(a.so.torque_noise) + " N m, angle " +
                          format_double(a.so.angle_noise) + " rad, rate " +
                          format_double(a.so.rate_noise) + " rad/s, quantization " +
                          format_double(a.so.quantization) + " rad, seed " + std::to_string(a.so.seed));
-  log.comments.push_back(" excitation: " + excitation_text(a, res) +
-                         "; joint reversals (O,B,C,D,D0): " + rev.str());
+  log.comments.push_back(" excitation: " + excitation_text(a, res) + "; joint reversals (" +
+                         names + "): " + rev.str());
   write_log(a.out, log);
   std::cout << "fivebar synth-log: " << log.size() << " samples over " << log.duration() << " s -> "
-            << a.out << "\n  joint reversals (O,B,C,D,D0): " << rev.str() << "; simulation "
+            << a.out << "\n  joint reversals (" << names << "): " << rev.str() << "; simulation "
             << res.stats.wall_time_s << " s, " << res.stats.friction_events << " friction events"
             << std::endl;
   return 0;
@@ -292,9 +372,9 @@ RunFunction setup(CLI::App* app) {
       ->default_str("");
   app->add_flag("--with-rates", args->so.with_rates, "write omega1,omega2,alpha1,alpha2 (exact)");
   app->add_option("--motion", args->motion,
-                  "follow this motion (t,theta1,theta2,omega1,omega2,alpha1,alpha2; e.g. "
-                  "excitation.csv of excite): torques by inverse dynamics; its grid replaces "
-                  "--rate and --duration")
+                  "follow this motion (t,theta1,theta2,omega1,omega2,alpha1,alpha2; a "
+                  "four-bar's t,theta1,omega1,alpha1; e.g. excitation.csv of excite): torques "
+                  "by inverse dynamics; its grid replaces --rate and --duration")
       ->type_name("MOTION.csv");
   for (const ActuatorOption& o : kActuatorOptions) {
     app->add_option(o.flag, (*args).*o.values, o.help)

@@ -13,35 +13,51 @@ namespace fivebar::io {
 namespace id = fivebar::identification;
 namespace {
 
+// the first n values of v, comma-separated
 template <size_t N>
-std::string joined(const std::array<double, N>& v) {
+std::string joined(const std::array<double, N>& v, size_t n = N) {
   std::string s;
-  for (size_t k = 0; k < N; ++k) s += (k ? "," : "") + format_double(v[k]);
+  for (size_t k = 0; k < n; ++k) s += (k ? "," : "") + format_double(v[k]);
   return s;
+}
+
+// the law, pin radii, coulomb and viscous of `joints` joints
+std::vector<std::string> friction_truth(const FrictionParams<double>& fp, size_t joints) {
+  return {" true.law = " + std::string(id::law_name(fp.law)),
+          " true.pin_radius = " + joined(fp.pin_radius, joints),
+          " true.coulomb = " + joined(fp.coulomb, joints),
+          " true.viscous = " + joined(fp.viscous, joints)};
+}
+
+// the law's other coefficients of `joints` joints, appended to out
+void law_truth(const FrictionParams<double>& fp, size_t joints, std::vector<std::string>* out) {
+  const LawDescriptor& law = law_descriptor(fp.law);
+  for (int i = 0; i < law.count; ++i) {
+    const Coefficient c = law.coefficients[i].id;
+    if (c == Coefficient::kCoulomb || c == Coefficient::kViscous) continue;
+    out->push_back(" true." + std::string(coefficient_info(c).key) + " = " +
+                   joined(coefficient(fp, c), joints));
+  }
 }
 
 }  // namespace
 
+std::vector<std::string> truth_lines(const FourBarParams& params) {
+  std::vector<std::string> out = friction_truth(params.friction, kFourBarJoints);
+  law_truth(params.friction, kFourBarJoints, &out);
+  return out;
+}
+
 std::vector<std::string> truth_lines(const Params<double>& params) {
-  const FrictionParams<double>& fp = params.friction;
-  std::vector<std::string> out = {" true.law = " + std::string(id::law_name(fp.law)),
-                                  " true.pin_radius = " + joined(fp.pin_radius),
-                                  " true.coulomb = " + joined(fp.coulomb),
-                                  " true.viscous = " + joined(fp.viscous),
-                                  " true.inertial = " + joined(standard_inertial(params))};
+  std::vector<std::string> out = friction_truth(params.friction, kJoints);
+  out.push_back(" true.inertial = " + joined(standard_inertial(params)));
   const ActuatorParams<double>& act = params.actuators;
   const std::array<double, kActuators>* terms[] = {&act.offset, &act.coulomb, &act.viscous};
   for (int g = 0; g < 3; ++g) {  // true.offset, true.actuator_coulomb, true.actuator_viscous
     const std::string name = id::actuator_term_name(g * kActuators);
     out.push_back(" true." + name.substr(0, name.size() - 2) + " = " + joined(*terms[g]));
   }
-  const LawDescriptor& law = law_descriptor(fp.law);
-  for (int i = 0; i < law.count; ++i) {
-    const Coefficient c = law.coefficients[i].id;
-    if (c == Coefficient::kCoulomb || c == Coefficient::kViscous) continue;
-    out.push_back(" true." + std::string(coefficient_info(c).key) + " = " +
-                  joined(coefficient(fp, c)));
-  }
+  law_truth(params.friction, kJoints, &out);
   return out;
 }
 
@@ -64,7 +80,10 @@ LogTruth read_truth(const std::vector<std::string>& comments) {
         break;
       }
     }
-    if (v.size() == kJoints || v.size() == kInertialParams || v.size() == kActuators) truth[key] = v;
+    if (v.size() == kJoints || v.size() == kFourBarJoints || v.size() == kInertialParams ||
+        v.size() == kActuators) {
+      truth[key] = v;
+    }
   }
   return truth;
 }

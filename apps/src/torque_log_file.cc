@@ -19,47 +19,63 @@
 namespace fivebar::io {
 namespace {
 
-using identification::kLogOptional;
 using identification::median_of;
-using identification::kLogRequired;
 using identification::LogError;
 using identification::TorqueLog;
 
 std::string line_key(int line) { return "line " + std::to_string(line); }
 
-// the torque-log header: required columns, optional pairs, nothing else
+// "t,theta1,theta2,tau1,tau2", the required columns as a header
+std::string joined_names(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ",") + n;
+  return out;
+}
+
+// what a log of `dof` cranks holds, for messages
+std::string log_kind(int dof) {
+  return std::string(dof == 1 ? "a four-bar's torque log (one crank)" : "a five-bar's torque log") +
+         " has " + joined_names(identification::required_log_columns(dof)) + " and optionally " +
+         joined_names(identification::optional_log_columns(dof));
+}
+
+// the torque-log header: required columns, optional groups, nothing else
 void check_log_header(const std::string& path, const std::vector<std::string>& names,
-                      int line_no) {
+                      int line_no, int dof) {
+  const std::vector<std::string> required = identification::required_log_columns(dof),
+                                 optional = identification::optional_log_columns(dof);
+  auto listed = [](const std::vector<std::string>& v, const std::string& n) {
+    return std::find(v.begin(), v.end(), n) != v.end();
+  };
   std::map<std::string, int> index;
   for (size_t j = 0; j < names.size(); ++j) {
     const std::string& n = names[j];
-    const bool known = std::find(std::begin(kLogRequired), std::end(kLogRequired), n) !=
-                           std::end(kLogRequired) ||
-                       std::find(std::begin(kLogOptional), std::end(kLogOptional), n) !=
-                           std::end(kLogOptional);
     const std::string col = line_key(line_no) + ", column " + std::to_string(j + 1);
     if (n.empty()) throw LogError(path, col, "empty column name in the header");
-    if (!known) {
+    if (!listed(required, n) && !listed(optional, n)) {
+      const bool other_dof = listed(identification::optional_log_columns(2), n) ||
+                             listed(identification::required_log_columns(2), n);
       throw LogError(path, col,
-                     "unknown column '" + n +
-                         "' (expected t,theta1,theta2,tau1,tau2 and optionally "
-                         "omega1,omega2,alpha1,alpha2)");
+                     (other_dof ? "column '" + n + "' does not belong to this mechanism: "
+                                : "unknown column '" + n + "': ") + log_kind(dof));
     }
     if (index.count(n)) throw LogError(path, col, "duplicate column '" + n + "'");
     index[n] = static_cast<int>(j);
   }
-  for (const char* r : kLogRequired) {
+  for (const std::string& r : required) {
     if (!index.count(r)) {
-      throw LogError(path, "header",
-                     std::string("missing column '") + r +
-                         "' (a torque log needs t,theta1,theta2,tau1,tau2)");
+      throw LogError(path, "header", "missing column '" + r + "' (" + log_kind(dof) + ")");
     }
   }
-  for (auto [a, b] : {std::pair{"omega1", "omega2"}, std::pair{"alpha1", "alpha2"}}) {
-    if (index.count(a) != index.count(b)) {
-      throw LogError(path, "header",
-                     std::string("column '") + (index.count(a) ? a : b) + "' without '" +
-                         (index.count(a) ? b : a) + "' (they come in pairs)");
+  for (const char* group : {"omega", "alpha"}) {
+    std::string present, missing;
+    for (int j = 1; j <= dof; ++j) {
+      const std::string n = group + std::to_string(j);
+      (index.count(n) ? present : missing) = n;
+    }
+    if (!present.empty() && !missing.empty()) {
+      throw LogError(path, "header", "column '" + present + "' without '" + missing + "' (the " +
+                                         group + " columns come for every crank)");
     }
   }
 }
@@ -138,9 +154,10 @@ constexpr double kSlowestMotion = 0.05;   // [rad/s]
 // the largest crank rate of the log by first differences, unwrapped [rad/s]
 double fastest_crank(const TorqueLog& log) {
   double fastest = 0;
-  for (const std::vector<double>* th : {&log.theta1, &log.theta2}) {
-    for (size_t i = 0; i + 1 < th->size(); ++i) {
-      const double d = std::remainder((*th)[i + 1] - (*th)[i], 2 * M_PI);
+  for (int j = 0; j < log.dof; ++j) {
+    const std::vector<double>& th = log.theta(j);
+    for (size_t i = 0; i + 1 < th.size(); ++i) {
+      const double d = std::remainder(th[i + 1] - th[i], 2 * M_PI);
       fastest = std::max(fastest, std::abs(d) / (log.t[i + 1] - log.t[i]));
     }
   }
@@ -164,9 +181,9 @@ void check_log_time_unit(const TorqueLog& log) {
 // angles in degrees and rates in other units are common mistakes; say so instead of failing
 // later
 void check_log_units(const TorqueLog& log) {
-  for (int j = 0; j < fivebar::kDof; ++j) {
-    const std::vector<double>& th = j == 0 ? log.theta1 : log.theta2;
-    const std::vector<double>* om = log.has_rates ? (j == 0 ? &log.omega1 : &log.omega2) : nullptr;
+  for (int j = 0; j < log.dof; ++j) {
+    const std::vector<double>& th = log.theta(j);
+    const std::vector<double>* om = log.has_rates ? &log.omega(j) : nullptr;
     const std::string why = identification::looks_like_degrees(log, th, om);
     if (!why.empty()) {
       throw LogError(log.path, std::string("column theta") + char('1' + j),
@@ -183,7 +200,7 @@ void check_log_units(const TorqueLog& log) {
       throw LogError(log.path, std::string("column omega") + char('1' + j),
                      "rates do not match the angles: " + w_off);
     }
-    const std::vector<double>* al = log.has_accels ? (j == 0 ? &log.alpha1 : &log.alpha2) : nullptr;
+    const std::vector<double>* al = log.has_accels ? &log.alpha(j) : nullptr;
     const std::string a_off = al ? derivative_mismatch(log, th, *al, 2) : "";
     if (!a_off.empty()) {
       throw LogError(log.path, std::string("column alpha") + char('1' + j),
@@ -195,7 +212,7 @@ void check_log_units(const TorqueLog& log) {
 
 }  // namespace
 
-TorqueLog read_torque_log(const std::string& path) {
+TorqueLog read_torque_log(const std::string& path, int dof) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) {
     throw LogError(path, "(file)", "is a directory, expected a CSV file");
@@ -204,13 +221,13 @@ TorqueLog read_torque_log(const std::string& path) {
   if (!in) throw LogError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));
   std::stringstream ss;
   ss << in.rdbuf();
-  return parse_torque_log(ss.str(), path);
+  return parse_torque_log(ss.str(), path, dof);
 }
 
-TorqueLog parse_torque_log(const std::string& text, const std::string& path) {
+TorqueLog parse_torque_log(const std::string& text, const std::string& path, int dof) {
   CsvRules rules;
-  rules.header = [&path](const std::vector<std::string>& names, int line) {
-    check_log_header(path, names, line);
+  rules.header = [&path, dof](const std::vector<std::string>& names, int line) {
+    check_log_header(path, names, line, dof);
   };
   rules.row = check_log_time;
   const CsvTable table = parse_csv(text, path, rules);
@@ -218,6 +235,7 @@ TorqueLog parse_torque_log(const std::string& text, const std::string& path) {
   if (table.rows.empty()) throw LogError(path, "samples", "no data rows under the header");
   TorqueLog log;
   log.path = path;
+  log.dof = dof;
   log.comments = table.comments;
   log.lines = table.lines;
   log.has_rates = table.has("omega1");
@@ -239,19 +257,27 @@ TorqueLog parse_torque_log(const std::string& text, const std::string& path) {
 void write_torque_log(const std::string& path, const TorqueLog& log) {
   std::ostringstream out;
   for (const std::string& c : log.comments) out << "#" << c << "\n";
-  out << "t,theta1,theta2,tau1,tau2";
-  if (log.has_rates) out << ",omega1,omega2";
-  if (log.has_accels) out << ",alpha1,alpha2";
-  out << "\n";
-  for (int i = 0; i < log.size(); ++i) {
-    out << format_shortest(log.t[i]) << ',' << format_shortest(log.theta1[i]) << ','
-        << format_shortest(log.theta2[i]) << ',' << format_shortest(log.tau1[i]) << ','
-        << format_shortest(log.tau2[i]);
+  std::vector<const std::vector<double>*> columns = {&log.t};
+  for (int j = 0; j < log.dof; ++j) columns.push_back(&log.theta(j));
+  for (int j = 0; j < log.dof; ++j) columns.push_back(&log.tau(j));
+  std::vector<std::string> names = identification::required_log_columns(log.dof);
+  const std::vector<std::string> optional = identification::optional_log_columns(log.dof);
+  for (int j = 0; j < log.dof; ++j) {
     if (log.has_rates) {
-      out << ',' << format_shortest(log.omega1[i]) << ',' << format_shortest(log.omega2[i]);
+      columns.push_back(&log.omega(j));
+      names.push_back(optional[j]);
     }
+  }
+  for (int j = 0; j < log.dof; ++j) {
     if (log.has_accels) {
-      out << ',' << format_shortest(log.alpha1[i]) << ',' << format_shortest(log.alpha2[i]);
+      columns.push_back(&log.alpha(j));
+      names.push_back(optional[log.dof + j]);
+    }
+  }
+  out << joined_names(names) << "\n";
+  for (int i = 0; i < log.size(); ++i) {
+    for (size_t c = 0; c < columns.size(); ++c) {
+      out << (c ? "," : "") << format_shortest((*columns[c])[i]);
     }
     out << "\n";
   }

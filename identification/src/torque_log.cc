@@ -25,6 +25,22 @@ double rate_slope(const std::vector<double>& t, const std::vector<double>& theta
 }
 }  // namespace
 
+std::vector<std::string> required_log_columns(int dof) {
+  std::vector<std::string> out = {"t"};
+  for (const char* name : {"theta", "tau"}) {
+    for (int j = 1; j <= dof; ++j) out.push_back(name + std::to_string(j));
+  }
+  return out;
+}
+
+std::vector<std::string> optional_log_columns(int dof) {
+  std::vector<std::string> out;
+  for (const char* name : {"omega", "alpha"}) {
+    for (int j = 1; j <= dof; ++j) out.push_back(name + std::to_string(j));
+  }
+  return out;
+}
+
 bool rates_say_radians(const std::vector<double>& t, const std::vector<double>& theta,
                        const std::vector<double>& omega) {
   return std::abs(rate_slope(t, theta, omega) - 1.0) < 0.2;

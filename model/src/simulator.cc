@@ -174,15 +174,7 @@ struct Sim<FourBar> {
   static std::array<double, kJoints> joint_accelerations(const E& ev) {
     return FourBar::joint_accelerations(ev.kin, ev.bias, ev.thdd);
   }
-  static double joint_rate(const Row& r, int k) {
-    switch (k) {
-      case 0: return r.omega[0];
-      case 1: return r.omega[1] - r.omega[0];
-      case 2: return r.omega[2] - r.omega[1];
-      case 3: return r.omega[2];
-      default: return 0.0;
-    }
-  }
+  static double joint_rate(const Row& r, int k) { return four_bar_omega_rel(r, k); }
   static double kinetic(const P& p, const K& k, const double* v) {
     return four_bar_kinetic(p, k, v[0]);
   }

@@ -149,6 +149,34 @@ const BadLog kBadLogs[] = {
     {"no rows", kHeader, {"bad.csv: samples: no data rows"}},
 };
 
+TEST(TorqueLog, AFourBarLogHasOneCrank) {
+  // dof 1: t, theta1, tau1 and optional omega1, alpha1; written back with the same columns
+  const std::string text = "t,theta1,tau1,omega1\n0,1,0.5,0\n0.001,1.0001,0.5,0.1\n";
+  TorqueLog log = parse_torque_log(text, "four.csv", 1);
+  EXPECT_EQ(log.dof, 1);
+  EXPECT_EQ(log.size(), 2);
+  EXPECT_TRUE(log.has_rates);
+  EXPECT_TRUE(log.theta2.empty());
+  const std::string path = ::testing::TempDir() + "/four_bar_log.csv";
+  write_torque_log(path, log);
+  const CsvTable table = io::read_csv(path);
+  EXPECT_EQ(table.columns, (std::vector<std::string>{"t", "theta1", "tau1", "omega1"}));
+  EXPECT_EQ(read_torque_log(path, 1).omega1, log.omega1);
+  std::remove(path.c_str());
+}
+
+TEST(TorqueLog, ALogOfTheOtherMechanismNamesTheColumnAndTheMechanism) {
+  EXPECT_THAT([] { parse_torque_log(good_log(5), "five.csv", 1); },
+              ThrowsMessage<LogError>(AllOf(
+                  HasSubstr("five.csv: line 2, column 3"),
+                  HasSubstr("column 'theta2' does not belong to this mechanism"),
+                  HasSubstr("a four-bar's torque log (one crank) has t,theta1,tau1"))));
+  EXPECT_THAT([] { parse_torque_log("t,theta1,tau1\n0,1,1\n", "four.csv"); },
+              ThrowsMessage<LogError>(AllOf(
+                  HasSubstr("four.csv: header: missing column 'theta2'"),
+                  HasSubstr("a five-bar's torque log has t,theta1,theta2,tau1,tau2"))));
+}
+
 TEST(TorqueLog, EveryMalformedLogNamesFileLineColumnAndReason) {
   for (const BadLog& bad : kBadLogs) {
     SCOPED_TRACE(bad.what);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "fivebar/identification/parameters.h"
+#include "fivebar/model/four_bar_params.h"
 #include "fivebar/model/params.h"
 
 namespace fivebar::io {
@@ -20,6 +21,8 @@ using LogTruth = std::map<std::string, std::vector<double>>;
 /// radii, every coefficient of its law (from its descriptor, friction.h), the links' standard
 /// inertial parameters (model/inertial.h) and the actuator terms.
 std::vector<std::string> truth_lines(const Params<double>& params);
+/// The four-bar's: the law, pin radii and coefficients of its four joints (O, B, C, D0).
+std::vector<std::string> truth_lines(const FourBarParams& params);
 
 /// The `true.*` values of a log's comment lines; lines that do not parse are skipped.
 LogTruth read_truth(const std::vector<std::string>& comments);

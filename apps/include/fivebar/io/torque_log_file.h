@@ -13,13 +13,17 @@ namespace fivebar::io {
 /// or empty file, a missing, unknown or duplicate column, an unpaired omega/alpha column, a row
 /// with the wrong number of fields, a field that is not a finite number (NaN, inf, text), time
 /// not strictly increasing, and angles that look like degrees (see identification::looks_like_degrees).
-identification::TorqueLog read_torque_log(const std::string& path);
+/// `dof` is the mechanism's number of driven cranks (2: the five-bar's columns; 1: the
+/// four-bar's t,theta1,tau1 and optional omega1, alpha1); a column of the other mechanism is
+/// refused naming it.
+identification::TorqueLog read_torque_log(const std::string& path, int dof = 2);
 
 /// Parses a log from text (`path` only names it in messages). Same checks as read_torque_log.
-identification::TorqueLog parse_torque_log(const std::string& text, const std::string& path);
+identification::TorqueLog parse_torque_log(const std::string& text, const std::string& path,
+                                           int dof = 2);
 
-/// Writes a log: `#` + each comment line, the header (rates and accelerations when has_rates /
-/// has_accels), then one row per sample in shortest round-trip form. Throws LogError on failure.
+/// Writes a log of log.dof cranks: `#` + each comment line, the header (rates and accelerations
+/// when has_rates / has_accels), then one row per sample in shortest round-trip form. Throws LogError on failure.
 void write_torque_log(const std::string& path, const identification::TorqueLog& log);
 
 }  // namespace fivebar::io

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "fivebar/identification/torque_log.h"
+#include "fivebar/model/four_bar_params.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/status.h"
 #include "fivebar/sim/simulator.h"
@@ -32,7 +33,9 @@ struct SynthResult {
   Status status;  ///< not ok: the simulation failed (log empty)
   TorqueLog log;
   sim::Stats stats;
-  std::array<int, kJoints> reversals{};  ///< sign changes of each joint's relative rate (O..D0)
+  /// sign changes of each joint's relative rate: the five-bar's O, B, C, D, D0; the four-bar's
+  /// O, B, C, D0 (slot 4 unused)
+  std::array<int, kJoints> reversals{};
   double multisine_factor = 1;        ///< the multi-sine's scale (fit_multisine)
   bool multisine_holding_bias = false;  ///< its biases are the start pose's holding torques
 };
@@ -51,11 +54,20 @@ sim::LoadFunction multisine_loads(const sim::LoadFunction& scene_loads);
 SynthResult synthesize_log(const Params<double>& params, const sim::LoadFunction& loads,
                            const sim::Initial& initial, const SynthOptions& options);
 
+/// The four-bar's log (dof 1: t, theta1, tau1, and omega1, alpha1 with rates) of a run under the
+/// scene's loads. The built-in multi-sine drives the five-bar's two cranks: options.multisine
+/// fails here.
+SynthResult synthesize_log(const FourBarParams& params, const sim::FourBarLoadFunction& loads,
+                           const sim::Initial& initial, const SynthOptions& options);
+
 /// The log a sensor records along `rows` (t, theta1..2, omega1..4, alpha1..2, M1, M2), into
 /// out->log and out->reversals: noise in one fixed order of draws per row (tau1, tau2, theta1,
 /// theta2, omega1, omega2, from opt.seed), torques plus the actuators' offsets, angles
 /// quantized. Used by synthesize_log and for a given motion (`synth-log --motion`).
 void sample_log(const Params<double>& params, const std::vector<sim::Row>& rows,
+                const SynthOptions& opt, SynthResult* out);
+/// The same for the four-bar's rows (crank in slot 0, M1): draws tau1, theta1, omega1 per row.
+void sample_log(const FourBarParams& params, const std::vector<sim::Row>& rows,
                 const SynthOptions& opt, SynthResult* out);
 
 /// Sign changes of each joint's relative rate over a sequence of rate samples (zeros keep the

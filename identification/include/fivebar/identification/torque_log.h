@@ -19,10 +19,12 @@ class LogError : public FieldError {
   using FieldError::FieldError;
 };
 
-/// Measured motion and actuator torques of the two cranks, one entry per sample.
+/// Measured motion and actuator torques of the driven cranks, one entry per sample: the
+/// five-bar's two (dof 2), the four-bar's one (dof 1: theta2, tau2, omega2, alpha2 stay empty).
 /// Units: t [s], theta [rad], tau [N m], omega [rad/s], alpha [rad/s^2].
 struct TorqueLog {
   std::string path;  ///< as given, for messages
+  int dof = 2;       ///< driven cranks: the columns theta1..theta<dof>, tau1..tau<dof>
   std::vector<double> t, theta1, theta2, tau1, tau2;
   std::vector<double> omega1, omega2, alpha1, alpha2;  ///< empty unless has_rates / has_accels
   bool has_rates = false;                              ///< omega1, omega2 came from the file
@@ -32,11 +34,21 @@ struct TorqueLog {
 
   int size() const { return static_cast<int>(t.size()); }
   double duration() const { return t.empty() ? 0.0 : t.back() - t.front(); }
+  /// crank j's column (0-based) of the angles, torques, rates and accelerations
+  const std::vector<double>& theta(int j) const { return j == 0 ? theta1 : theta2; }
+  const std::vector<double>& tau(int j) const { return j == 0 ? tau1 : tau2; }
+  const std::vector<double>& omega(int j) const { return j == 0 ? omega1 : omega2; }
+  const std::vector<double>& alpha(int j) const { return j == 0 ? alpha1 : alpha2; }
+  std::vector<double>& theta(int j) { return j == 0 ? theta1 : theta2; }
+  std::vector<double>& tau(int j) { return j == 0 ? tau1 : tau2; }
+  std::vector<double>& omega(int j) { return j == 0 ? omega1 : omega2; }
+  std::vector<double>& alpha(int j) { return j == 0 ? alpha1 : alpha2; }
 };
 
-/// Required columns, then the optional ones (omega1,omega2 and alpha1,alpha2 come in pairs).
-inline const char* const kLogRequired[] = {"t", "theta1", "theta2", "tau1", "tau2"};
-inline const char* const kLogOptional[] = {"omega1", "omega2", "alpha1", "alpha2"};
+/// The columns a log of `dof` cranks must have: t, theta1..theta<dof>, tau1..tau<dof>.
+std::vector<std::string> required_log_columns(int dof);
+/// Its optional columns: omega1..omega<dof> (all or none), alpha1..alpha<dof> (all or none).
+std::vector<std::string> optional_log_columns(int dof);
 
 /// Empty if the angles of `log` look like radians, else the reason they look like degrees. Only
 /// with rates in the log: the finite-difference rate of theta is ~180/pi times omega

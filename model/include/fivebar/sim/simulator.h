@@ -136,6 +136,18 @@ struct Row {
   }
 };
 
+/// relative rate of the four-bar's joint k (0-based, O, B, C, D0) from a row's link rates
+/// (crank, coupler, rocker in slots 0..2) [rad/s]; 0 for k >= 4
+inline double four_bar_omega_rel(const Row& r, int k) {
+  switch (k) {
+    case 0: return r.omega[0];
+    case 1: return r.omega[1] - r.omega[0];
+    case 2: return r.omega[2] - r.omega[1];
+    case 3: return r.omega[2];
+    default: return 0.0;
+  }
+}
+
 struct Stats {
   long rhs_evaluations = 0;
   long steps = 0;
