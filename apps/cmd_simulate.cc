@@ -63,10 +63,36 @@ constexpr size_t kPlotBuckets = 100;
 /// runs with more rows than this are drawn from the decimated copy (gnuplot stays fast)
 constexpr size_t kPlotMaxRows = 10000;
 
+// What simulate needs of the scene's mechanism: its parameters, loads and trajectory columns,
+// and the inverse dynamics of a run (figure 5, columns M<i>_inverse).
+struct FiveBarRun {
+  using Loads = sim::LoadFunction;
+  static const Params<double>& params(const Scene& s) { return s.params; }
+  static Loads loads(const Scene& s) { return LoadExpressions(s).function(); }
+  static TrajectoryLayout layout() { return {}; }
+  static constexpr bool kInverse = true;
+  static Status inverse(const Scene& s, const Loads& loads, const std::vector<sim::Row>& rows,
+                        std::vector<sim::Row>* out) {
+    return sim::inverse_rows(s.params, loads, rows, out);
+  }
+};
+struct FourBarRun {
+  using Loads = sim::FourBarLoadFunction;
+  static const FourBarParams& params(const Scene& s) { return s.four_bar; }
+  static Loads loads(const Scene& s) { return LoadExpressions(s).four_bar_function(); }
+  static TrajectoryLayout layout() { return four_bar_layout(); }
+  static constexpr bool kInverse = false;  // no inverse_rows over the four-bar yet
+  static Status inverse(const Scene&, const Loads&, const std::vector<sim::Row>&,
+                        std::vector<sim::Row>*) {
+    return Status::Error(StatusCode::kInvalidInput, "not available for four-bars");
+  }
+};
+
 // the frictionless twin for figures 2-4; its failure is reported but does not fail the run
-std::optional<TwinRun> run_twin(const Scene& scene, const sim::LoadFunction& loads,
+template <class Mech>
+std::optional<TwinRun> run_twin(const Scene& scene, const typename Mech::Loads& loads,
                                 const sim::Options& options, bool forced) {
-  if (!scene.params.friction.active()) return std::nullopt;
+  if (!friction_of(scene).active()) return std::nullopt;
   if (options.duration > kTwinMaxDuration && !forced) {
     std::cout << "  frictionless twin skipped: runs over "
               << format_printf(kTwinMaxDuration, "%.4g") << " s draw it only with --twin\n";
@@ -81,33 +107,38 @@ std::optional<TwinRun> run_twin(const Scene& scene, const sim::LoadFunction& loa
 }
 
 // inverse dynamics of the computed motion (figure 5): the torques that reproduce it
-std::vector<Column> inverse_columns(const Scene& scene, const sim::LoadFunction& loads,
+template <class Mech>
+std::vector<Column> inverse_columns(const Scene& scene, const typename Mech::Loads& loads,
                                     const std::vector<sim::Row>& rows) {
+  if (!Mech::kInverse) return {};
   std::vector<sim::Row> inverse;
-  const Status status = sim::inverse_rows(scene.params, loads, rows, &inverse);
+  const Status status = Mech::inverse(scene, loads, rows, &inverse);
+  const int drives = Mech::layout().drives;
   if (!status.ok() || inverse.size() != rows.size()) {
     warn(scene.path + ": inverse dynamics of the run failed: " + status.message +
-         " (no M1_inverse, M2_inverse columns, no figure 5)");
+         (drives == 1 ? " (no M1_inverse column, no figure 5)"
+                      : " (no M1_inverse, M2_inverse columns, no figure 5)"));
     return {};
   }
-  Column m1{"M1_inverse", {}}, m2{"M2_inverse", {}};
-  for (const sim::Row& r : inverse) {
-    m1.values.push_back(r.M1);
-    m2.values.push_back(r.M2);
+  std::vector<Column> out;
+  for (int i = 0; i < drives; ++i) {
+    out.push_back({"M" + std::to_string(i + 1) + "_inverse", {}});
+    for (const sim::Row& r : inverse) out.back().values.push_back(i == 0 ? r.M1 : r.M2);
   }
-  return {std::move(m1), std::move(m2)};
+  return out;
 }
 
 // trajectory CSV, and its decimated copy for the figures when it is long; returns the name to plot
 std::string write_with_plot_copy(const OutputDir& out, const std::string& name,
                                  const std::vector<sim::Row>& rows,
-                                 const std::vector<Column>& extra) {
-  write_trajectory_csv(out.file(name + ".csv"), rows, extra);
+                                 const std::vector<Column>& extra,
+                                 const TrajectoryLayout& layout) {
+  write_trajectory_csv(out.file(name + ".csv"), rows, extra, layout);
   if (rows.size() <= kPlotMaxRows) return name + ".csv";
   std::vector<sim::Row> few;
   std::vector<Column> few_extra;
   select_rows(rows, extra, decimation_indices(rows, extra, kPlotBuckets), &few, &few_extra);
-  write_trajectory_csv(out.file(name + "_plot.csv"), few, few_extra);
+  write_trajectory_csv(out.file(name + "_plot.csv"), few, few_extra, layout);
   return name + "_plot.csv";
 }
 
@@ -150,65 +181,38 @@ void print_report(const Scene& scene, const sim::EstimatedRun& er, const sim::Ru
   }
 }
 
-// A four-bar scene: the run with its estimate and checks, trajectory.csv (four-bar columns) and
-// summary.json. The frictionless twin, the figures and the animation draw five-bars only so far.
-int run_four_bar(const Args& args, const Scene& scene,
-                 std::chrono::steady_clock::time_point start) {
-  const sim::FourBarLoadFunction loads = LoadExpressions(scene).four_bar_function();
+// The run of a scene of mechanism Mech: the run and its error estimate (a failure leaves no
+// output behind), its checks, the frictionless twin, trajectory CSVs, figures, animation.html
+// and summary.json.
+template <class Mech>
+int run_mechanism(const Args& args, const Scene& scene,
+                  std::chrono::steady_clock::time_point start) {
+  const typename Mech::Loads loads = Mech::loads(scene);
   OutputDir out(args.scene.out, kOutputs);
   sim::Options options = scene.options;
   Progress progress("simulate", options.duration, "s");
   options.progress = [&progress](double t) { progress.update(t); };
   const sim::EstimatedRun er =
-      sim::simulate_to_target(scene.four_bar, loads, scene.initial, options);
+      sim::simulate_to_target(Mech::params(scene), loads, scene.initial, options);
   const sim::Result& run = er.run;
   if (!run.status.ok()) throw NumericalError(scene.path, "simulation", run.status.message);
   if (run.rows.empty()) throw NumericalError(scene.path, "simulation", "no output rows");
   const sim::RunChecks checks =
-      sim::check_run(scene.four_bar, loads, run, er.options.rtol, er.options.atol);
-  write_trajectory_csv(out.file("trajectory.csv"), run.rows, {}, four_bar_layout());
-  Json summary = simulation_summary_json(scene, args.scene.sets, er, checks, nullptr);
-  summary.set("total_wall_time_s",
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  write_json_file(out.file("summary.json"), summary);
-  finish_run(&out, [&] {
-    print_report(scene, er, checks, std::nullopt);
-    std::cout << "  (four-bar: no frictionless twin, figures or animation yet)\n";
-  });
-  if (!checks.verdict.ok()) {
-    throw NumericalError(scene.path, "simulation", "run check failed: " + checks.verdict.message);
-  }
-  return 0;
-}
-
-int run(const Args& args) {
-  const auto start = std::chrono::steady_clock::now();
-  const Scene scene = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
-  if (scene.type == MechanismType::kFourBar) return run_four_bar(args, scene, start);
-  const sim::LoadFunction loads = LoadExpressions(scene).function();
-  OutputDir out(args.scene.out, kOutputs);
-
-  // the run and its error estimate: a failure leaves no output behind
-  sim::Options options = scene.options;
-  Progress progress("simulate", options.duration, "s");
-  options.progress = [&progress](double t) { progress.update(t); };
-  const sim::EstimatedRun er = sim::simulate_to_target(scene.params, loads, scene.initial, options);
-  const sim::Result& run = er.run;
-  if (!run.status.ok()) throw NumericalError(scene.path, "simulation", run.status.message);
-  if (run.rows.empty()) throw NumericalError(scene.path, "simulation", "no output rows");
-  const sim::RunChecks checks = sim::check_run(scene.params, loads, run, er.options.rtol, er.options.atol);
-  const std::optional<TwinRun> twin = run_twin(scene, loads, er.options, args.twin);
+      sim::check_run(Mech::params(scene), loads, run, er.options.rtol, er.options.atol);
+  const std::optional<TwinRun> twin = run_twin<Mech>(scene, loads, er.options, args.twin);
   const bool twin_ok = twin && twin->run.status.ok();
 
-  const std::vector<Column> extra = inverse_columns(scene, loads, run.rows);
+  const std::vector<Column> extra = inverse_columns<Mech>(scene, loads, run.rows);
   SimulationFigures figures;
-  figures.trajectory = write_with_plot_copy(out, "trajectory", run.rows, extra);
+  figures.layout = Mech::layout();
+  figures.trajectory = write_with_plot_copy(out, "trajectory", run.rows, extra, figures.layout);
   if (twin_ok) {
-    figures.frictionless = write_with_plot_copy(out, "trajectory_frictionless", twin->run.rows, {});
+    figures.frictionless = write_with_plot_copy(out, "trajectory_frictionless", twin->run.rows,
+                                                {}, figures.layout);
   }
   AnimationInput animation;
   animation.title = std::filesystem::path(scene.path).filename().string();
-  animation.motion = animation_track(run.rows);
+  animation.motion = animation_track(run.rows, figures.layout);
   write_text_file(out.file("animation.html"), animation_html(scene, animation));
 
   // summary.json: the run's checks and statistics, its estimate, its settings, then the twin
@@ -229,6 +233,13 @@ int run(const Args& args) {
     throw NumericalError(scene.path, "simulation", "run check failed: " + checks.verdict.message);
   }
   return 0;
+}
+
+int run(const Args& args) {
+  const auto start = std::chrono::steady_clock::now();
+  const Scene scene = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
+  return scene.type == MechanismType::kFourBar ? run_mechanism<FourBarRun>(args, scene, start)
+                                               : run_mechanism<FiveBarRun>(args, scene, start);
 }
 
 void add_options(CLI::App* app, Args* args) {

@@ -19,9 +19,10 @@
 namespace fivebar::io {
 namespace {
 
-// relative rates of the joints O, B, C, D, D0 from the link rates (docs/outputs.md)
-std::array<double, 5> relative_rates(const std::array<double, 4>& omega) {
-  return {omega[0], omega[2] - omega[0], omega[3] - omega[2], omega[1] - omega[3], omega[1]};
+// relative rate of joint k from a row's link rates (docs/outputs.md): the five-bar's O, B, C,
+// D, D0 or the four-bar's O, B, C, D0
+double joint_rate(const sim::Row& r, int k, const TrajectoryLayout& layout) {
+  return layout.joints == kJoints ? r.omega_rel(k) : sim::four_bar_omega_rel(r, k);
 }
 
 // a joint's relative rate counts as 0 up to this fraction of the fastest link's rate
@@ -75,19 +76,21 @@ std::string track_json(const AnimationTrack& track, const LoadExpressions* loads
   const std::vector<size_t> keep = kept_samples(track.t.size());
   std::string s = "{";
   append_series("t", keep, [&](size_t i) { return track.t[i]; }, 7, &s);
-  for (int j = 0; j < 4; ++j) {
+  for (int j = 0; j < track.layout.links; ++j) {
     const std::string name = "th" + std::to_string(j + 1);
     append_series(name.c_str(), keep, [&](size_t i) { return track.theta[i][j]; }, 7, &s);
   }
   if (!pose_only) {
-    for (int k = 0; k < 5; ++k) {
+    for (int k = 0; k < track.layout.joints; ++k) {
       const std::string name = "p" + std::to_string(k + 1);
       append_series(name.c_str(), keep, [&](size_t i) { return track.friction_power[i][k]; }, 4,
                     &s);
     }
     append_series("stuck", keep, [&](size_t i) { return double(track.stuck[i]); }, 2, &s);
     append_series("M1", keep, [&](size_t i) { return track.M1[i]; }, 4, &s);
-    append_series("M2", keep, [&](size_t i) { return track.M2[i]; }, 4, &s);
+    if (track.layout.drives > 1) {
+      append_series("M2", keep, [&](size_t i) { return track.M2[i]; }, 4, &s);
+    }
     append_series("M3", keep, [&](size_t i) { return (*loads)(track.t[i]).M3; }, 4, &s);
     append_series("F", keep, [&](size_t i) { return (*loads)(track.t[i]).F; }, 4, &s);
     append_series("E_diss", keep, [&](size_t i) { return track.E_diss[i]; }, 5, &s);
@@ -98,27 +101,45 @@ std::string track_json(const AnimationTrack& track, const LoadExpressions* loads
   return s;
 }
 
+// the joint C of a pose from both sides: from B along the coupler and from D (the five-bar's
+// second crank and coupler) or D0 (the four-bar's rocker); a gap when the angles do not fit
+double closure_gap(const Scene& scene, const std::array<double, 4>& th) {
+  const bool four_bar = scene.type == MechanismType::kFourBar;
+  auto length = [&](int j) {
+    return four_bar ? scene.four_bar.links[j].length : scene.params.links[j].length;
+  };
+  const double l0 = four_bar ? scene.four_bar.ground_length : scene.params.ground_length;
+  const double bx = length(0) * std::cos(th[0]), by = length(0) * std::sin(th[0]);
+  if (four_bar) {  // C from B (coupler, th[1]) and from D0 (rocker, th[2])
+    return std::hypot(bx + length(1) * std::cos(th[1]) - (l0 + length(2) * std::cos(th[2])),
+                      by + length(1) * std::sin(th[1]) - length(2) * std::sin(th[2]));
+  }
+  const double dx = l0 + length(1) * std::cos(th[1]), dy = length(1) * std::sin(th[1]);
+  return std::hypot(bx + length(2) * std::cos(th[2]) - (dx + length(3) * std::cos(th[3])),
+                    by + length(2) * std::sin(th[2]) - (dy + length(3) * std::sin(th[3])));
+}
+
 // throws when the first finite pose of `track` does not close with the scene's link lengths
 void check_closure(const Scene& scene, const AnimationTrack& track, const std::string& what) {
-  const Params<double>& p = scene.params;
-  double scale = p.ground_length;
-  for (const auto& link : p.links) scale += link.length;
+  const bool four_bar = scene.type == MechanismType::kFourBar;
+  if (track.layout.links != (four_bar ? kFourBarLinks : kLinks)) {
+    throw InputError(scene.path, "mechanism.type",
+                     what + " has " + std::to_string(track.layout.links) +
+                         " links, the scene's mechanism " +
+                         std::to_string(four_bar ? kFourBarLinks : kLinks));
+  }
+  double scale = four_bar ? scene.four_bar.ground_length : scene.params.ground_length;
+  for (int j = 0; j < track.layout.links; ++j) {
+    scale += four_bar ? scene.four_bar.links[j].length : scene.params.links[j].length;
+  }
   for (size_t i = 0; i < track.t.size(); ++i) {
-    const auto& th = track.theta[i];
-    const double bx = p.links[0].length * std::cos(th[0]), by = p.links[0].length * std::sin(th[0]);
-    const double dx = p.ground_length + p.links[1].length * std::cos(th[1]),
-                 dy = p.links[1].length * std::sin(th[1]);
-    const double c1x = bx + p.links[2].length * std::cos(th[2]),
-                 c1y = by + p.links[2].length * std::sin(th[2]);
-    const double c2x = dx + p.links[3].length * std::cos(th[3]),
-                 c2y = dy + p.links[3].length * std::sin(th[3]);
-    const double gap = std::hypot(c1x - c2x, c1y - c2y);
+    const double gap = closure_gap(scene, track.theta[i]);
     if (!std::isfinite(gap)) continue;
     if (gap > 1e-6 * scale) {
       throw InputError(scene.path, "mechanism",
-                       what + " does not close with these link lengths (C from B and from D " +
-                           format_significant(gap, 3) + " m apart at t = " +
-                           format_significant(track.t[i], 6) +
+                       what + " does not close with these link lengths (C from B and from " +
+                           (four_bar ? "D0 " : "D ") + format_significant(gap, 3) +
+                           " m apart at t = " + format_significant(track.t[i], 6) +
                            " s): was it made with another scene or other --set values?");
     }
     return;
@@ -127,15 +148,16 @@ void check_closure(const Scene& scene, const AnimationTrack& track, const std::s
 
 }  // namespace
 
-AnimationTrack animation_track(const std::vector<sim::Row>& rows) {
+AnimationTrack animation_track(const std::vector<sim::Row>& rows, const TrajectoryLayout& layout) {
   AnimationTrack track;
+  track.layout = layout;
   for (const sim::Row& r : rows) {
     track.t.push_back(r.t);
     track.theta.push_back(r.theta);
     std::array<double, 5> power{};
     int stuck = 0;
-    for (int k = 0; k < 5; ++k) {
-      power[k] = std::abs(r.Mf[k] * r.omega_rel(k));
+    for (int k = 0; k < layout.joints; ++k) {
+      power[k] = std::abs(r.Mf[k] * joint_rate(r, k, layout));
       if (r.mode[k] == kStuck) stuck |= 1 << k;
     }
     track.friction_power.push_back(power);
@@ -145,7 +167,7 @@ AnimationTrack animation_track(const std::vector<sim::Row>& rows) {
   return track;
 }
 
-AnimationTrack animation_track(const CsvTable& table) {
+AnimationTrack animation_track(const CsvTable& table, const TrajectoryLayout& layout) {
   if (table.rows.empty()) {
     throw InputError(table.path, "(file)", "no data rows below the header: nothing to draw");
   }
@@ -155,21 +177,21 @@ AnimationTrack animation_track(const CsvTable& table) {
     for (size_t i = 0; i < rows.size(); ++i) set(rows[i], v[i]);
   };
   fill("t", [](sim::Row& r, double v) { r.t = v; });
-  for (int j = 0; j < 4; ++j) {
+  for (int j = 0; j < layout.links; ++j) {
     const std::string n = std::to_string(j + 1);
     fill("theta" + n, [j](sim::Row& r, double v) { r.theta[j] = v; });
     fill("omega" + n, [j](sim::Row& r, double v) { r.omega[j] = v; });
   }
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < layout.joints; ++k) {
     fill("Mf" + std::to_string(k + 1), [k](sim::Row& r, double v) { r.Mf[k] = v; });
   }
   fill("M1", [](sim::Row& r, double v) { r.M1 = v; });
-  fill("M2", [](sim::Row& r, double v) { r.M2 = v; });
+  if (layout.drives > 1) fill("M2", [](sim::Row& r, double v) { r.M2 = v; });
   fill("E_diss", [](sim::Row& r, double v) { r.E_diss = v; });
   fill("W_in", [](sim::Row& r, double v) { r.W_in = v; });
   fill("W_ext", [](sim::Row& r, double v) { r.W_ext = v; });
   const bool stuck_columns = table.has("stuck1");
-  for (int k = 0; k < 5; ++k) {
+  for (int k = 0; k < layout.joints; ++k) {
     if (stuck_columns) {
       fill("stuck" + std::to_string(k + 1), [k](sim::Row& r, double v) {
         r.mode[k] = v != 0 ? kStuck : JointMode::kRest;
@@ -179,10 +201,9 @@ AnimationTrack animation_track(const CsvTable& table) {
       // no stick. 0 within kStuckRateTolerance of the row's fastest link: a stuck inner joint's
       // rate, a difference of two link rates, keeps the integration's error (about 1e-9 of it)
       auto zero = [&](size_t i) {
-        const std::array<double, 4>& w = rows[i].omega;
-        const double fastest = std::max({std::abs(w[0]), std::abs(w[1]), std::abs(w[2]),
-                                         std::abs(w[3])});
-        return std::abs(relative_rates(w)[k]) <= kStuckRateTolerance * fastest;
+        double fastest = 0;
+        for (int j = 0; j < layout.links; ++j) fastest = std::max(fastest, std::abs(rows[i].omega[j]));
+        return std::abs(joint_rate(rows[i], k, layout)) <= kStuckRateTolerance * fastest;
       };
       for (size_t i = 0; i < rows.size(); ++i) {
         const bool held =
@@ -191,24 +212,26 @@ AnimationTrack animation_track(const CsvTable& table) {
       }
     }
   }
-  return animation_track(rows);
+  return animation_track(rows, layout);
 }
 
 std::string animation_html(const Scene& scene, const AnimationInput& input) {
   check_closure(scene, input.motion, "the motion");
   if (!input.ghost.t.empty()) check_closure(scene, input.ghost, input.ghost_label);
-  const Params<double>& p = scene.params;
+  const bool four_bar = scene.type == MechanismType::kFourBar;
   const LoadExpressions loads(scene);
   std::string data = "{\"title\":" + json_quote(input.title) +
-                     ",\"label\":" + json_quote(input.label) + ",\"geometry\":{\"l0\":";
-  append_number(p.ground_length, 9, &data);
+                     ",\"label\":" + json_quote(input.label) + ",\"geometry\":{\"type\":" +
+                     json_quote(mechanism_type_name(scene.type)) + ",\"l0\":";
+  append_number(four_bar ? scene.four_bar.ground_length : scene.params.ground_length, 9, &data);
   data += ",\"l\":[";
-  for (int j = 0; j < 4; ++j) {
+  for (int j = 0; j < input.motion.layout.links; ++j) {
     if (j > 0) data += ',';
-    append_number(p.links[j].length, 9, &data);
+    append_number(four_bar ? scene.four_bar.links[j].length : scene.params.links[j].length, 9,
+                  &data);
   }
   data += "],\"lp\":";
-  append_number(p.point_p, 9, &data);
+  append_number(four_bar ? scene.four_bar.point_p : scene.params.point_p, 9, &data);
   data += ",\"F_angle\":";
   append_number(scene.F_angle, 9, &data);
   data += "},\"motion\":" + track_json(input.motion, &loads, false);

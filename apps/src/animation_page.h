@@ -50,16 +50,26 @@ const DATA = /*FIVEBAR_DATA*/null;
   const n = m.t.length;
   const canvas = document.getElementById("view"), ctx = canvas.getContext("2d");
   const W = canvas.width, H = canvas.height, PANEL = 230;  // drawing | legend panel
-  const LINKS = [["crank O-B", "#1f77b4", "O", "B"], ["crank D0-D", "#ff7f0e", "D0", "D"],
-                 ["coupler B-C", "#2ca02c", "B", "C"], ["coupler D-C", "#9467bd", "D", "C"]];
-  const JOINTS = ["O", "B", "C", "D", "D0"];
+  const FOUR = g.type === "four_bar";  // crank O-B, coupler B-C, rocker D0-C; one drive
+  const LINKS = FOUR
+    ? [["crank O-B", "#1f77b4", "O", "B"], ["coupler B-C", "#2ca02c", "B", "C"],
+       ["rocker D0-C", "#ff7f0e", "D0", "C"]]
+    : [["crank O-B", "#1f77b4", "O", "B"], ["crank D0-D", "#ff7f0e", "D0", "D"],
+       ["coupler B-C", "#2ca02c", "B", "C"], ["coupler D-C", "#9467bd", "D", "C"]];
+  const JOINTS = FOUR ? ["O", "B", "C", "D0"] : ["O", "B", "C", "D", "D0"];
+  const POWERS = JOINTS.map(function (k, j) { return m["p" + (j + 1)]; });
   const VIRIDIS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
 
   function pose(tr, i) {
-    const th = [tr.th1[i], tr.th2[i], tr.th3[i], tr.th4[i]];
+    const th = LINKS.map(function (L, j) { return tr["th" + (j + 1)][i]; });
     if (th.some(function (v) { return v === null; })) return null;
     const e = th.map(function (a) { return [Math.cos(a), Math.sin(a)]; });
     const B = [g.l[0] * e[0][0], g.l[0] * e[0][1]];
+    if (FOUR) {  // th: crank, coupler B->C, rocker D0->C
+      return { O: [0, 0], D0: [g.l0, 0], B: B,
+               C: [B[0] + g.l[1] * e[1][0], B[1] + g.l[1] * e[1][1]],
+               P: [B[0] + g.lp * e[1][0], B[1] + g.lp * e[1][1]], th3: th[1] };
+    }
     const D = [g.l0 + g.l[1] * e[1][0], g.l[1] * e[1][1]];
     return { O: [0, 0], D0: [g.l0, 0], B: B, D: D,
              C: [B[0] + g.l[2] * e[2][0], B[1] + g.l[2] * e[2][1]],
@@ -73,13 +83,13 @@ const DATA = /*FIVEBAR_DATA*/null;
   // the colour scale: square root of the power (it spans orders of magnitude), ending at the
   // 98th percentile of the joints' powers (a brief spike would leave every other frame dark);
   // larger values get the top colour
-  const pPeak = Math.max(maxAbs(m.p1), maxAbs(m.p2), maxAbs(m.p3), maxAbs(m.p4), maxAbs(m.p5));
-  const pAll = [].concat(m.p1, m.p2, m.p3, m.p4, m.p5).filter(function (v) { return v !== null; })
+  const pPeak = Math.max.apply(null, POWERS.map(maxAbs));
+  const pAll = [].concat.apply([], POWERS).filter(function (v) { return v !== null; })
     .sort(function (a, b) { return a - b; });
   const pMax = pAll[Math.floor(0.98 * (pAll.length - 1))] || pPeak || 1;
-  const mMax = Math.max(maxAbs(m.M1), maxAbs(m.M2)) || 1, m3Max = maxAbs(m.M3) || 1;
+  const mMax = Math.max(maxAbs(m.M1), m.M2 ? maxAbs(m.M2) : 0) || 1, m3Max = maxAbs(m.M3) || 1;
   const fMax = maxAbs(m.F);
-  const lMax = Math.max(g.l0, g.l[0], g.l[1], g.l[2], g.l[3]), arrowLen = 0.3 * lMax;
+  const lMax = Math.max.apply(null, [g.l0].concat(g.l)), arrowLen = 0.3 * lMax;
 
   // the box around every pose of both tracks (and the force arrow), in true proportions
   let box = [Infinity, Infinity, -Infinity, -Infinity];
@@ -92,7 +102,7 @@ const DATA = /*FIVEBAR_DATA*/null;
     for (let i = 0; i < tr.t.length; ++i) {
       const q = pose(tr, i);
       if (!q) continue;
-      ["O", "B", "C", "D", "D0"].forEach(function (k) { grow(q[k], 0); });
+      JOINTS.forEach(function (k) { grow(q[k], 0); });
       grow(q.P, tr === m && fMax > 0 ? arrowLen : 0);
     }
   });
@@ -188,7 +198,7 @@ const DATA = /*FIVEBAR_DATA*/null;
       ctx.fillText("F " + fmt(m.F[i], 3) + " N", tip[0] + 6, tip[1] - 6);
     }
     torqueArc(X(q.O), m.M1[i], mMax, "#1f77b4", "M1");
-    torqueArc(X(q.D0), m.M2[i], mMax, "#ff7f0e", "M2");
+    if (m.M2) torqueArc(X(q.D0), m.M2[i], mMax, "#ff7f0e", "M2");
     const mid = X([(q.B[0] + q.C[0]) / 2, (q.B[1] + q.C[1]) / 2]);
     if (maxAbs(m.M3) > 0) torqueArc(mid, m.M3[i], m3Max, "#2ca02c", "M3");
   }
@@ -263,12 +273,13 @@ const DATA = /*FIVEBAR_DATA*/null;
   }
   function energies(i) {
     const dE = m.W_in[i] + m.W_ext[i] - m.E_diss[i];
-    const p = [1, 2, 3, 4, 5].reduce(function (s, k) { return s + (m["p" + k][i] || 0); }, 0);
+    const p = POWERS.reduce(function (s, pk) { return s + (pk[i] || 0); }, 0);
     return "t = " + m.t[i].toFixed(4) + " s   (frame " + (i + 1) + " of " + n + ")\n" +
       "W_in " + fmt(m.W_in[i], 5) + " J   W_ext " + fmt(m.W_ext[i], 5) + " J   E_diss " +
       fmt(m.E_diss[i], 5) + " J   change of KE + PE " + fmt(dE, 5) + " J   P_diss " +
       fmt(p, 4) + " W\n" +
-      "M1 " + fmt(m.M1[i], 4) + " N m   M2 " + fmt(m.M2[i], 4) + " N m   M3 " + fmt(m.M3[i], 4) +
+      "M1 " + fmt(m.M1[i], 4) + " N m   " + (m.M2 ? "M2 " + fmt(m.M2[i], 4) + " N m   " : "") +
+      "M3 " + fmt(m.M3[i], 4) +
       " N m   F " + fmt(m.F[i], 4) + " N";
   }
 

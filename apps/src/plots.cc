@@ -179,45 +179,56 @@ std::string difference(const std::string& file, const std::string& a, const std:
 }
 
 // figure 6: friction torque of each joint, one panel per joint (paper Fig. 6), and the total
-// dissipated power
-std::string friction_figure(const std::string& trajectory, const std::string& title) {
+// dissipated power; the joints of the five-bar or (layout.joints 4) of the four-bar
+std::string friction_figure(const std::string& trajectory, const std::string& title,
+                            const TrajectoryLayout& layout = {}) {
   std::string s = begin_figure(
       "fig6_friction_torques.png", "3,2", "Fig. 6  Friction torque of each joint",
       "Mf_k has the sign of the joint's relative rate w_k (friction opposes it; it acts on the "
       "distal body as -Mf_k), so Mf_k w_k >= 0",
       title);
-  const char* joints[] = {"(a) joint O: ground / crank O-B, w1 = omega1",
-                          "(b) joint B: crank O-B / coupler B-C, w2 = omega3 - omega1",
-                          "(c) joint C: coupler B-C / coupler D-C, w3 = omega4 - omega3",
-                          "(d) joint D: coupler D-C / crank D0-D, w4 = omega2 - omega4",
-                          "(e) joint D0: ground / crank D0-D, w5 = omega2"};
+  const char* five_bar[] = {"(a) joint O: ground / crank O-B, w1 = omega1",
+                            "(b) joint B: crank O-B / coupler B-C, w2 = omega3 - omega1",
+                            "(c) joint C: coupler B-C / coupler D-C, w3 = omega4 - omega3",
+                            "(d) joint D: coupler D-C / crank D0-D, w4 = omega2 - omega4",
+                            "(e) joint D0: ground / crank D0-D, w5 = omega2"};
+  const char* four_bar[] = {"(a) joint O: ground / crank O-B, w1 = omega1",
+                            "(b) joint B: crank O-B / coupler B-C, w2 = omega2 - omega1",
+                            "(c) joint C: coupler B-C / rocker D0-C, w3 = omega3 - omega2",
+                            "(d) joint D0: ground / rocker D0-C, w4 = omega3"};
+  const char* const* joints = layout.joints == kJoints ? five_bar : four_bar;
+  const char panel_letter = static_cast<char>('a' + layout.joints);
   s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
-  for (int k = 1; k <= kJoints; ++k) {
+  for (int k = 1; k <= layout.joints; ++k) {
     const std::string column = "Mf" + std::to_string(k);
     s += y_range_stats({trajectory}, column) + panel(joints[k - 1], column + " [N m]") + "plot " +
          curve(trajectory, column, 1) + "\n";
   }
   s += y_range_stats({trajectory}, "P_diss") +
-       panel("(f) total dissipated power P_diss = sum_k Mf_k w_k", "P_diss [W]") + "plot " +
-       curve(trajectory, "P_diss", 3) + "\n";
+       panel(std::string("(") + panel_letter + ") total dissipated power P_diss = sum_k Mf_k w_k",
+             "P_diss [W]") +
+       "plot " + curve(trajectory, "P_diss", 3) + "\n";
   return s + "set ytics autofreq\nset offsets 0, 0, 0, 0\nunset multiplot\n";
 }
 
-// figure 5: torques M1, M2 of `reference` (thick, light) under those of `computed` (dashed, on
-// top), large, and their difference computed - reference in two small panels below; `%` in a
-// column pattern stands for 1 or 2
+// figure 5: torques M1, M2 (the first `drives` of them) of `reference` (thick, light) under those
+// of `computed` (dashed, on top), large, and their difference computed - reference in small
+// panels below; `%` in a column pattern stands for 1 or 2
 std::string torque_check_figure(const std::string& trajectory, const std::string& reference,
                                 const std::string& computed, const std::string& reference_name,
-                                const std::string& figure, const std::string& title) {
+                                const std::string& figure, const std::string& title,
+                                int drives = 2) {
   auto column = [](std::string pattern, int i) {
     return pattern.replace(pattern.find('%'), 1, std::to_string(i));
   };
   std::string s = begin_figure("fig5_inverse_torques.png", "", figure,
                                "(c), (d): inverse dynamics - " + reference_name, title);
   s += "set key top left horizontal opaque box samplen 4 font \",10\"\n" + std::string(kKeyRoom);
-  for (int i = 1; i <= 2; ++i) {
+  const std::string width = drives == 1 ? "1" : "0.5";
+  auto origin = [&](int i) { return std::string(i == 1 ? "0" : "0.5"); };
+  for (int i = 1; i <= drives; ++i) {
     const std::string ref = column(reference, i), comp = column(computed, i);
-    s += "set size 0.5, 0.6\nset origin " + std::string(i == 1 ? "0" : "0.5") + ", 0.32\n" +
+    s += "set size " + width + ", 0.6\nset origin " + origin(i) + ", 0.32\n" +
          y_range_stats({trajectory}, ref) +
          panel(std::string(i == 1 ? "(a)" : "(b)") + " driving torque M" + std::to_string(i),
                "M" + std::to_string(i) + " [N m]") +
@@ -226,12 +237,12 @@ std::string torque_check_figure(const std::string& trajectory, const std::string
          " title \"inverse dynamics\"\n";
   }
   s += "unset key\nset offsets 0, 0, graph 0.1, graph 0.1\nset format y \"%.0e\"\n";
-  for (int i = 1; i <= 2; ++i) {
+  for (int i = 1; i <= drives; ++i) {
     const std::string n = std::to_string(i);
     s += "set autoscale y\nstats " + quote(trajectory) + " using (column(" +
          quote(column(computed, i)) + ") - column(" + quote(column(reference, i)) +
          ")) nooutput\nset ytics nicetic(STATS_max - STATS_min)\n";
-    s += "set size 0.5, 0.3\nset origin " + std::string(i == 1 ? "0" : "0.5") + ", 0\n" +
+    s += "set size " + width + ", 0.3\nset origin " + origin(i) + ", 0\n" +
          panel(std::string(i == 1 ? "(c)" : "(d)") + " difference, M" + n, "dM" + n + " [N m]") +
          "plot " + difference(trajectory, column(computed, i), column(reference, i), 3) + "\n";
   }
@@ -404,8 +415,11 @@ std::string run_gnuplot(const std::string& dir, const std::string& script_name,
 std::string simulation_plot_script(const SimulationFigures& f, const std::string& terminal) {
   std::string s = preamble(terminal, "figures of `fivebar simulate`");
   const bool twin = !f.frictionless.empty();
-  const char* links[] = {"(a) link 1: crank O-B", "(b) link 2: crank D0-D",
-                         "(c) link 3: coupler B-C", "(d) link 4: coupler D-C"};
+  const char* five_bar[] = {"(a) link 1: crank O-B", "(b) link 2: crank D0-D",
+                            "(c) link 3: coupler B-C", "(d) link 4: coupler D-C"};
+  const char* four_bar[] = {"(a) link 1: crank O-B", "(b) link 2: coupler B-C",
+                            "(c) link 3: rocker D0-C"};
+  const char* const* links = f.layout.links == kLinks ? five_bar : four_bar;
 
   // figures 2-4: one panel per link, friction solid, frictionless twin dashed (paper Figs. 2-4)
   struct Quantity {
@@ -431,7 +445,7 @@ std::string simulation_plot_script(const SimulationFigures& f, const std::string
                                 : ""),
                       f.title);
     s += kKeyRoom;
-    for (int i = 1; i <= 4; ++i) {
+    for (int i = 1; i <= f.layout.links; ++i) {
       const std::string column = q.column + std::to_string(i);
       s += y_range_stats(clip ? std::vector<std::string>{f.trajectory}
                               : twin ? std::vector<std::string>{f.trajectory, f.frictionless}
@@ -449,11 +463,12 @@ std::string simulation_plot_script(const SimulationFigures& f, const std::string
   // figure 5: input torques against the inverse dynamics of the computed motion (paper Fig. 5)
   if (f.inverse) {
     const char* figure = "Fig. 5  Inverse dynamics: the input torques recomputed from the motion";
-    s += torque_check_figure(f.trajectory, "M%", "M%_inverse", "input", figure, f.title);
+    s += torque_check_figure(f.trajectory, "M%", "M%_inverse", "input", figure, f.title,
+                             f.layout.drives);
   }
   s += "unset key\nset ytics autofreq\nset offsets 0, 0, 0, 0\n";
 
-  return s + friction_figure(f.trajectory, f.title);
+  return s + friction_figure(f.trajectory, f.title, f.layout);
 }
 
 std::string plot_simulation(const std::string& dir, const SimulationFigures& figures) {

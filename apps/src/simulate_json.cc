@@ -78,16 +78,30 @@ void settings_json(const std::vector<std::string>& sets, const Scene& scene, con
 
 }  // namespace
 
-TwinRun frictionless_twin(const Scene& scene, const sim::LoadFunction& loads,
-                          const sim::Options& options) {
-  Params<double> frictionless = scene.params;
-  frictionless.friction.law = FrictionLaw::kNone;
+namespace {
+
+// the run of `params` with friction off, and its checks
+template <class P, class L>
+TwinRun twin_of(P params, const L& loads, const sim::Initial& initial,
+                const sim::Options& options) {
+  params.friction.law = FrictionLaw::kNone;
   sim::Options o = options;
   o.progress = nullptr;
-  TwinRun twin{sim::simulate(frictionless, loads, scene.initial, o), std::nullopt};
-  if (twin.run.status.ok())
-    twin.checks = sim::check_run(frictionless, loads, twin.run, o.rtol, o.atol);
+  TwinRun twin{sim::simulate(params, loads, initial, o), std::nullopt};
+  if (twin.run.status.ok()) twin.checks = sim::check_run(params, loads, twin.run, o.rtol, o.atol);
   return twin;
+}
+
+}  // namespace
+
+TwinRun frictionless_twin(const Scene& scene, const sim::LoadFunction& loads,
+                          const sim::Options& options) {
+  return twin_of(scene.params, loads, scene.initial, options);
+}
+
+TwinRun frictionless_twin(const Scene& scene, const sim::FourBarLoadFunction& loads,
+                          const sim::Options& options) {
+  return twin_of(scene.four_bar, loads, scene.initial, options);
 }
 
 Json simulation_summary_json(const Scene& scene, const std::vector<std::string>& sets,

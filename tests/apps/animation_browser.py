@@ -2,7 +2,8 @@
 """animation.html in a real browser (Debian's chromium, headless): the page of the paper scene
 loads with no console message and no script error, and its screenshots at t = 0.2 s and 1.5 s
 both show the four links (their colours) and differ where the linkage moved; an odd run (elbow
-down, no friction, gravity or loads, 2 frames) loads without error too.
+down, no friction, gravity or loads, 2 frames) loads without error too; so does a four-bar's
+page, showing its crank, coupler and rocker.
 
 Usage: animation_browser.py FIVEBAR PAPER_YAML WORK_DIR
 Exits 77 (ctest: skipped) when no chromium is installed (scripts/test.sh installs it).
@@ -131,6 +132,39 @@ else:
     console = [l for l in log.splitlines() if ":CONSOLE" in l]
     if console:
         failures.append("odd run: console messages: %s" % console)
+
+# a four-bar (datasets/reference/four_bar/crank_rocker.yaml): its three links in their colours
+four_bar = os.path.join(os.path.dirname(os.path.abspath(PAPER)), "..", "reference", "four_bar",
+                        "crank_rocker.yaml")
+run = os.path.join(WORK, "crank_rocker")
+p = subprocess.run([FIVEBAR, "simulate", four_bar, "--out", run, "--no-plots"],
+                   capture_output=True, text=True)
+if p.returncode != 0:
+    failures.append("simulate of the four-bar failed: %s" % p.stderr)
+else:
+    url = "file://" + os.path.abspath(os.path.join(run, "animation.html"))
+    dom, log = chromium(url + "#t=0.5", "--dump-dom")
+    status = re.search(r'<body data-status="([^"]*)"', dom)
+    if status is None or status.group(1) != "ok":
+        failures.append("four-bar: page status %r" % (status.group(1) if status else None))
+    console = [l for l in log.splitlines() if ":CONSOLE" in l]
+    if console:
+        failures.append("four-bar: console messages: %s" % console)
+    png = os.path.join(WORK, "four_bar.png")
+    if os.path.exists(png):
+        os.remove(png)
+    chromium(url + "#t=0.5", "--screenshot=" + png)
+    if not os.path.exists(png):
+        failures.append("four-bar: no screenshot")
+    else:
+        _, _, rows = png_pixels(png)
+        for name, colour in (("crank O-B", LINK_COLOURS["crank O-B"]),
+                             ("coupler B-C", LINK_COLOURS["coupler B-C"]),
+                             ("rocker D0-C", LINK_COLOURS["crank D0-D"])):
+            count = len(colour_pixels(rows, colour))
+            print("four-bar: %s: %d pixels" % (name, count))
+            if count < 300:
+                failures.append("four-bar: %s: %d pixels of its colour" % (name, count))
 
 for f in failures:
     print("FAIL:", f)

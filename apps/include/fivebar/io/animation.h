@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "fivebar/io/csv.h"
+#include "fivebar/io/output.h"
 #include "fivebar/io/scene.h"
 #include "fivebar/sim/simulator.h"
 
@@ -20,10 +21,14 @@ struct AnimationTrack {
   std::vector<std::array<double, 5>> friction_power;  ///< |Mf_k w_k| of joints O, B, C, D, D0 [W]
   std::vector<int> stuck;  ///< bit k set when joint k is stuck (held at w_k = 0)
   std::vector<double> M1, M2, E_diss, W_in, W_ext;    ///< [N m], [J]
+  /// the mechanism's links, drives and joints (the four-bar: angles of crank, coupler, rocker
+  /// in theta[0..2], joints O, B, C, D0 in friction_power[0..3], M2 zero)
+  TrajectoryLayout layout;
 };
 
 /// The track of simulated or inverse-dynamics rows; a joint is stuck where its mode says so.
-AnimationTrack animation_track(const std::vector<sim::Row>& rows);
+AnimationTrack animation_track(const std::vector<sim::Row>& rows,
+                               const TrajectoryLayout& layout = {});
 
 /// The track of a trajectory.csv (docs/outputs.md). A joint is stuck where the column
 /// stuck1..stuck5 is 1 when the file has them (optimize, inverse), else where its relative rate
@@ -31,7 +36,7 @@ AnimationTrack animation_track(const std::vector<sim::Row>& rows);
 /// simulator holds a stuck joint's rate at 0; a single zero, as at a start from rest, is no
 /// stick). Throws InputError for a missing
 /// column or a table without rows.
-AnimationTrack animation_track(const CsvTable& table);
+AnimationTrack animation_track(const CsvTable& table, const TrajectoryLayout& layout = {});
 
 /// What the page shows.
 struct AnimationInput {

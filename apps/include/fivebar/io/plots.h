@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "fivebar/io/output.h"
 #include "fivebar/studies/accuracy.h"
 
 namespace fivebar::io {
@@ -30,6 +31,9 @@ struct SimulationFigures {
   std::string frictionless;  ///< the frictionless twin's trajectory, or "" when there is none
   bool inverse = true;       ///< trajectory has M1_inverse, M2_inverse: draw fig5
   std::string title;         ///< shown in every figure title (e.g. the scene file name)
+  /// the mechanism's columns: the five-bar's (default) or four_bar_layout() (links crank,
+  /// coupler, rocker; drive M1; joints O, B, C, D0)
+  TrajectoryLayout layout;
 };
 
 /// gnuplot script drawing fig2_angles.png, fig3_rates.png, fig4_accelerations.png (theta,

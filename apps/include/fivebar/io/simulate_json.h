@@ -23,6 +23,9 @@ struct TwinRun {
 /// Runs the frictionless twin of `scene` with `options` (progress reports off).
 TwinRun frictionless_twin(const Scene& scene, const sim::LoadFunction& loads,
                           const sim::Options& options);
+/// The same for a four-bar scene.
+TwinRun frictionless_twin(const Scene& scene, const sim::FourBarLoadFunction& loads,
+                          const sim::Options& options);
 
 /// summary.json without total_wall_time_s: the run's status, checks and statistics, its error
 /// estimate and how the tolerance was chosen, the settings (`sets`: the --set arguments), and
