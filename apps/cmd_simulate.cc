@@ -21,6 +21,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/scene_mechanism.h"
 #include "fivebar/io/simulate_json.h"
 #include "fivebar/sim/estimate.h"
 #include "fivebar/sim/simulator.h"
@@ -62,31 +63,6 @@ constexpr double kTwinMaxDuration = 20.0;
 constexpr size_t kPlotBuckets = 100;
 /// runs with more rows than this are drawn from the decimated copy (gnuplot stays fast)
 constexpr size_t kPlotMaxRows = 10000;
-
-// What simulate needs of the scene's mechanism: its parameters, loads and trajectory columns,
-// and the inverse dynamics of a run (figure 5, columns M<i>_inverse).
-struct FiveBarRun {
-  using Loads = sim::LoadFunction;
-  static const Params<double>& params(const Scene& s) { return s.params; }
-  static Loads loads(const Scene& s) { return LoadExpressions(s).function(); }
-  static TrajectoryLayout layout() { return {}; }
-  static constexpr bool kInverse = true;
-  static Status inverse(const Scene& s, const Loads& loads, const std::vector<sim::Row>& rows,
-                        std::vector<sim::Row>* out) {
-    return sim::inverse_rows(s.params, loads, rows, out);
-  }
-};
-struct FourBarRun {
-  using Loads = sim::FourBarLoadFunction;
-  static const FourBarParams& params(const Scene& s) { return s.four_bar; }
-  static Loads loads(const Scene& s) { return LoadExpressions(s).four_bar_function(); }
-  static TrajectoryLayout layout() { return four_bar_layout(); }
-  static constexpr bool kInverse = false;  // no inverse_rows over the four-bar yet
-  static Status inverse(const Scene&, const Loads&, const std::vector<sim::Row>&,
-                        std::vector<sim::Row>*) {
-    return Status::Error(StatusCode::kInvalidInput, "not available for four-bars");
-  }
-};
 
 // the frictionless twin for figures 2-4; its failure is reported but does not fail the run
 template <class Mech>
@@ -187,7 +163,7 @@ void print_report(const Scene& scene, const sim::EstimatedRun& er, const sim::Ru
 template <class Mech>
 int run_mechanism(const Args& args, const Scene& scene,
                   std::chrono::steady_clock::time_point start) {
-  const typename Mech::Loads loads = Mech::loads(scene);
+  const typename Mech::Loads loads = Mech::loads(LoadExpressions(scene));
   OutputDir out(args.scene.out, kOutputs);
   sim::Options options = scene.options;
   Progress progress("simulate", options.duration, "s");
@@ -238,8 +214,9 @@ int run_mechanism(const Args& args, const Scene& scene,
 int run(const Args& args) {
   const auto start = std::chrono::steady_clock::now();
   const Scene scene = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
-  return scene.type == MechanismType::kFourBar ? run_mechanism<FourBarRun>(args, scene, start)
-                                               : run_mechanism<FiveBarRun>(args, scene, start);
+  return with_mechanism(scene, [&](auto mech) {
+    return run_mechanism<decltype(mech)>(args, scene, start);
+  });
 }
 
 void add_options(CLI::App* app, Args* args) {

@@ -49,13 +49,14 @@ inline void append_number(std::string* line, double x, char sep) {
 
 }  // namespace
 
-void row_values(const sim::Row& r, double* out) {
+double* row_values(const sim::Row& r, double* out, const TrajectoryLayout& layout) {
   *out++ = r.t;
-  for (const auto* a : {&r.theta, &r.omega, &r.alpha}) out = std::copy(a->begin(), a->end(), out);
+  for (const auto* a : {&r.theta, &r.omega, &r.alpha}) out = std::copy_n(a->begin(), layout.links, out);
   *out++ = r.M1;
-  *out++ = r.M2;
-  for (const auto* a : {&r.N, &r.Mf}) out = std::copy(a->begin(), a->end(), out);
+  if (layout.drives > 1) *out++ = r.M2;
+  for (const auto* a : {&r.N, &r.Mf}) out = std::copy_n(a->begin(), layout.joints, out);
   for (double x : {r.P_diss, r.E_diss, r.W_in, r.W_ext}) *out++ = x;
+  return out;
 }
 
 std::vector<std::string> trajectory_columns(const TrajectoryLayout& layout) {
@@ -107,20 +108,13 @@ void write_trajectory_csv(const std::string& path, const std::vector<sim::Row>& 
   line.back() = '\n';
   std::fputs(line.c_str(), f.get());
 
+  std::vector<double> values(trajectory_columns(layout).size());
   for (size_t i = 0; i < rows.size(); ++i) {
-    const sim::Row& r = rows[i];
+    row_values(rows[i], values.data(), layout);
     line.clear();
-    line.append(format_grid_value(r.t));  // 0.476, not 476 * 0.001 = 0.47600000000000003
+    line.append(format_grid_value(values[0]));  // 0.476, not 476 * 0.001 = 0.47600000000000003
     line.push_back(',');
-    for (const auto* a : {&r.theta, &r.omega, &r.alpha}) {
-      for (int i = 0; i < layout.links; ++i) append_number(&line, (*a)[i], ',');
-    }
-    append_number(&line, r.M1, ',');
-    if (layout.drives > 1) append_number(&line, r.M2, ',');
-    for (const auto* a : {&r.N, &r.Mf}) {
-      for (int k = 0; k < layout.joints; ++k) append_number(&line, (*a)[k], ',');
-    }
-    for (double x : {r.P_diss, r.E_diss, r.W_in, r.W_ext}) append_number(&line, x, ',');
+    for (size_t j = 1; j < values.size(); ++j) append_number(&line, values[j], ',');
     for (const Column& c : extra) append_number(&line, c.values[i], ',');
     line.back() = '\n';
     std::fwrite(line.data(), 1, line.size(), f.get());

@@ -923,10 +923,13 @@ std::string quoted(const std::string& s) {
   return out + "\"";
 }
 
-std::string per_joint_yaml(const std::array<double, kJoints>& v) {
-  if (std::all_of(v.begin(), v.end(), [&](double x) { return x == v[0]; })) return num(v[0]);
+// the first `joints` values of v: one number when they are equal, else a list
+std::string per_joint_yaml(const std::array<double, kJoints>& v, int joints) {
+  if (std::all_of(v.begin(), v.begin() + joints, [&](double x) { return x == v[0]; })) {
+    return num(v[0]);
+  }
   std::string out = "[";
-  for (int k = 0; k < kJoints; ++k) out += (k ? ", " : "") + num(v[k]);
+  for (int k = 0; k < joints; ++k) out += (k ? ", " : "") + num(v[k]);
   return out + "]";
 }
 
@@ -997,13 +1000,14 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& sets, 
   return scene;
 }
 
-std::string scene_to_yaml(const Scene& s) {
-  const Params<double>& p = s.params;
-  const FrictionParams<double>& f = p.friction;
-  const sim::Options& o = s.options;
-  std::ostringstream y;
-  y << "mechanism:\n"
-    << "  ground_length: " << num(p.ground_length) << "\n"
+namespace {
+
+// mechanism: the type (four-bars only: five_bar is the default) and the links of either
+template <class P>
+void mechanism_yaml(const Scene& s, const P& p, std::ostringstream& y) {
+  y << "mechanism:\n";
+  if (s.type == MechanismType::kFourBar) y << "  type: four_bar\n";
+  y << "  ground_length: " << num(p.ground_length) << "\n"
     << "  links:\n";
   for (const Link<double>& l : p.links) {
     y << "    - {length: " << num(l.length) << ", mass: " << num(l.mass)
@@ -1012,12 +1016,16 @@ std::string scene_to_yaml(const Scene& s) {
   }
   y << "  point_p: " << num(p.point_p) << "\n"
     << "  assembly: " << (p.assembly == kElbowDown ? "elbow_down" : "elbow_up") << "\n"
-    << "gravity: " << num(p.gravity) << "\n"
-    << "friction:\n"
+    << "gravity: " << num(p.gravity) << "\n";
+}
+
+// friction: the law and every coefficient of the mechanism's joints
+void friction_yaml(const FrictionParams<double>& f, int joints, std::ostringstream& y) {
+  y << "friction:\n"
     << "  model: " << friction_law_name(f.law) << "\n"
-    << "  pin_radius: " << per_joint_yaml(f.pin_radius) << "\n"
-    << "  coulomb: " << per_joint_yaml(f.coulomb) << "\n"
-    << "  viscous: " << per_joint_yaml(f.viscous) << "\n";
+    << "  pin_radius: " << per_joint_yaml(f.pin_radius, joints) << "\n"
+    << "  coulomb: " << per_joint_yaml(f.coulomb, joints) << "\n"
+    << "  viscous: " << per_joint_yaml(f.viscous, joints) << "\n";
   // the other coefficients, where they differ from their defaults
   for (const CoefficientInfo& c : kCoefficientInfo) {
     if (c.id == Coefficient::kCoulomb || c.id == Coefficient::kViscous) continue;
@@ -1025,38 +1033,66 @@ std::string scene_to_yaml(const Scene& s) {
     fallback.fill(c.default_value);
     if (c.same_as != c.id) fallback = coefficient(f, c.same_as);
     const std::array<double, kJoints>& v = coefficient(f, c.id);
-    if (v != fallback) y << "  " << c.key << ": " << per_joint_yaml(v) << "\n";
-  }
-  y << "  smoothing_velocity: " << num(f.smoothing_velocity) << "\n";
-  const ActuatorParams<double>& act = p.actuators;
-  const MotorWindings& wd = s.windings;
-  const bool geared = wd.gear_ratio != MotorWindings().gear_ratio;
-  if (act.offset != ActuatorParams<double>().offset || actuator_friction_active(act) ||
-      wd.present() || geared) {
-    y << "actuators:\n";
-    for (int a = 0; a < kActuators; ++a) {
-      y << "  M" << a + 1 << ": {offset: " << num(act.offset[a]) << ", coulomb: "
-        << num(act.coulomb[a]) << ", viscous: " << num(act.viscous[a]);
-      if (wd.present()) {
-        y << ", winding_resistance: " << num(wd.resistance[a])
-          << ", torque_constant: " << num(wd.torque_constant[a]);
-      }
-      if (wd.present() || geared) y << ", gear_ratio: " << num(wd.gear_ratio[a]);
-      y << "}\n";
+    if (!std::equal(v.begin(), v.begin() + joints, fallback.begin())) {
+      y << "  " << c.key << ": " << per_joint_yaml(v, joints) << "\n";
     }
   }
+  y << "  smoothing_velocity: " << num(f.smoothing_velocity) << "\n";
+}
+
+// actuators: the five-bar's motor terms, when any differs from the defaults
+void actuators_yaml(const Scene& s, std::ostringstream& y) {
+  const ActuatorParams<double>& act = s.params.actuators;
+  const MotorWindings& wd = s.windings;
+  const bool geared = wd.gear_ratio != MotorWindings().gear_ratio;
+  if (act.offset == ActuatorParams<double>().offset && !actuator_friction_active(act) &&
+      !wd.present() && !geared) {
+    return;
+  }
+  y << "actuators:\n";
+  for (int a = 0; a < kActuators; ++a) {
+    y << "  M" << a + 1 << ": {offset: " << num(act.offset[a]) << ", coulomb: "
+      << num(act.coulomb[a]) << ", viscous: " << num(act.viscous[a]);
+    if (wd.present()) {
+      y << ", winding_resistance: " << num(wd.resistance[a])
+        << ", torque_constant: " << num(wd.torque_constant[a]);
+    }
+    if (wd.present() || geared) y << ", gear_ratio: " << num(wd.gear_ratio[a]);
+    y << "}\n";
+  }
+}
+
+}  // namespace
+
+std::string scene_to_yaml(const Scene& s) {
+  const bool four_bar = s.type == MechanismType::kFourBar;
+  const sim::Options& o = s.options;
+  std::ostringstream y;
+  if (four_bar) {
+    mechanism_yaml(s, s.four_bar, y);
+    friction_yaml(s.four_bar.friction, kFourBarJoints, y);
+  } else {
+    mechanism_yaml(s, s.params, y);
+    friction_yaml(s.params.friction, kJoints, y);
+    actuators_yaml(s, y);
+  }
   y << "loads:\n"
-    << "  M1: " << quoted(s.M1) << "\n"
-    << "  M2: " << quoted(s.M2) << "\n"
-    << "  M3: " << quoted(s.M3) << "\n"
+    << "  M1: " << quoted(s.M1) << "\n";
+  if (!four_bar) y << "  M2: " << quoted(s.M2) << "\n";
+  y << "  M3: " << quoted(s.M3) << "\n"
     << "  F: " << quoted(s.F) << "\n"
-    << "  F_angle: " << num(s.F_angle) << "\n"
-    << "initial: {theta1: " << num(s.initial.theta1) << ", theta2: " << num(s.initial.theta2)
-    << ", omega1: " << num(s.initial.omega1) << ", omega2: " << num(s.initial.omega2) << "}\n"
-    << "simulation:\n"
+    << "  F_angle: " << num(s.F_angle) << "\n";
+  if (four_bar) {
+    y << "initial: {theta1: " << num(s.initial.theta1) << ", omega1: " << num(s.initial.omega1)
+      << "}\n";
+  } else {
+    y << "initial: {theta1: " << num(s.initial.theta1) << ", theta2: " << num(s.initial.theta2)
+      << ", omega1: " << num(s.initial.omega1) << ", omega2: " << num(s.initial.omega2) << "}\n";
+  }
+  y << "simulation:\n"
     << "  duration: " << num(o.duration) << "\n"
     << "  output_step: " << num(o.output_step) << "\n"
-    << "  integrator: " << integrator_name(sim::method_of(o, p.friction.law)) << "\n"
+    << "  integrator: " << integrator_name(sim::method_of(o, friction_of(s).law)) << "\n"
     << "  rtol: " << num(o.rtol) << "\n"
     << "  atol: " << num(o.atol) << "\n"
     << "  target_error: " << num(o.target_error) << "\n"

@@ -220,7 +220,8 @@ def simulate(scene, overrides=None, *, twin=False, **simulation):
     duration=1.0, rtol=1e-9); `overrides` ({"dotted.key": value}) changes any key.
     twin=True also runs the frictionless twin ('frictionless', summary.frictionless).
     Returns a Record: one float64 array per trajectory.csv column (t, theta1..theta4, ...,
-    E_diss, W_in, W_ext), 'mode' (N, 5) int joint modes (+1/-1 slip, 0 at rest, 2 stuck) and
+    E_diss, W_in, W_ext; a four-bar scene's: theta1..theta3, M1, N1..N4, ...), 'mode'
+    (N, joints) int joint modes (+1/-1 slip, 0 at rest, 2 stuck) and
     'summary' (every field of summary.json). A run whose own checks fail has
     summary.status 'failed' and warns (FivebarWarning); a run that fails raises
     fivebar.NumericalError.

@@ -9,7 +9,9 @@
 #include <vector>
 
 #include "fivebar/io/json.h"
+#include "fivebar/io/errors.h"
 #include "fivebar/io/loads.h"
+#include "fivebar/io/output.h"
 #include "fivebar/io/scene.h"
 #include "fivebar/sim/simulator.h"
 
@@ -36,6 +38,14 @@ struct PyScene {
     loads_constant = loads->constant(L::kM3) && loads->constant(L::kF);
     if (loads_constant) constant_loads = (*loads)(0.0);
   }
+  /// Raises ValueError (`<scene>: mechanism.type: ...`) for a four-bar scene: `function` takes
+  /// five-bars only so far.
+  void require_five_bar(const char* function) const {
+    if (scene.type == io::MechanismType::kFiveBar) return;
+    throw InputError(scene.path, "mechanism.type",
+                     std::string(io::mechanism_type_name(scene.type)) + ": fivebar." + function +
+                         " takes five-bars only so far");
+  }
 };
 
 /// A float64 NumPy array of the given shape, filled from `data` (copied).
@@ -48,7 +58,7 @@ py::array_t<double> to_array(const std::vector<double>& data);
 py::object to_python(const io::Json& json);
 
 /// The columns of trajectory.csv (io::trajectory_columns) of `rows`, one array each.
-py::dict rows_dict(const std::vector<sim::Row>& rows);
+py::dict rows_dict(const std::vector<sim::Row>& rows, const io::TrajectoryLayout& layout = {});
 
 void bind_scene(py::module_& m);     // Scene, load_scene, parse_scene, simulate
 void bind_inverse(py::module_& m);   // inverse, _time_inverse_cpp

@@ -112,6 +112,7 @@ py::dict result_dict(const PyScene& s, const io::IdentifyRun& run, const id::Tor
 
 py::dict identify(const PyScene& s, const py::object& log, const io::IdentifySettings& settings,
                   bool validate) {
+  s.require_five_bar("identify");
   const id::IdentifyOptions options = io::identify_options(settings, s.scene);
   const id::TorqueLog torque_log = py::isinstance<py::dict>(log)
                                        ? log_from_dict(log.cast<py::dict>())

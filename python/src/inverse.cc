@@ -164,6 +164,7 @@ Failure inverse_all(const PyScene& s, const States& in, const Outputs& out, int 
 
 py::dict inverse(const PyScene& s, const py::object& theta, const py::object& omega,
                  const py::object& alpha, const py::object& t, int threads) {
+  s.require_five_bar("inverse");
   const auto th = checked_array(theta, "theta", -1, 2);
   const py::ssize_t n = th.shape(0);
   const auto om = checked_array(omega, "omega", n, 2);
@@ -200,6 +201,7 @@ py::dict inverse(const PyScene& s, const py::object& theta, const py::object& om
 double time_inverse_cpp(const PyScene& s, std::array<double, 6> state, int calls, int repeats,
                         bool cpu_time) {
   py::gil_scoped_release release;
+  s.require_five_bar("_time_inverse_cpp");
   if (!s.loads_constant) throw InputError("scene", "loads", "must not depend on t");
   const Loads<double>& constant = s.constant_loads;
   EvalOptions eval;

@@ -52,6 +52,7 @@ py::dict task_dict(const PyScene& s, const trajectory::TaskResult& r,
 
 py::dict optimize(const PyScene& s, const std::vector<trajectory::TaskSpec>& tasks,
                   const io::OptimizeSettings& settings, int threads, bool trajectories) {
+  s.require_five_bar("optimize");
   const trajectory::BatchOptions options = io::batch_options(settings, s.scene.windings);
   std::vector<trajectory::TaskResult> results;
   {

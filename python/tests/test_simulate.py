@@ -52,3 +52,40 @@ def test_numpy_values_as_overrides(root):
                                                                         0.2]),
                                           "simulation.max_steps": np.int64(5000)})
     assert numpy.to_yaml() == plain.to_yaml()
+
+
+def test_a_four_bar_scene_runs_with_its_own_columns(root):
+    # the Grashof crank-rocker of datasets/reference/four_bar/ against its independent reference
+    folder = root / "datasets" / "reference" / "four_bar"
+    scene = fivebar.load_scene(folder / "crank_rocker.yaml")
+    assert scene.mechanism == "four_bar"
+    assert scene.initial == {"theta1": 1.5707963267948966, "omega1": 0.0}
+    run = fivebar.simulate(scene, twin=True)
+    assert "theta4" not in run and "M2" not in run and "Mf5" not in run
+    assert run["mode"].shape == (2001, 4)
+    assert run["summary"]["mechanism"] == "four_bar" and run["summary"]["status"] == "ok"
+    assert run["frictionless"]["theta3"].shape == (2001,)
+    ref = np.genfromtxt(folder / "crank_rocker.csv", delimiter=",", names=True)
+    error = max(np.max(np.abs(run[f"theta{i}"] - ref[f"theta{i}"])) for i in range(1, 4))
+    assert error <= 1e-7, f"max |d theta| = {error:.3g} rad"
+    # friction never supplies power (joints O, B, C, D0 from the link rates)
+    w = [run["omega1"], run["omega2"] - run["omega1"], run["omega3"] - run["omega2"],
+         run["omega3"]]
+    assert min(np.min(run[f"Mf{k + 1}"] * w[k]) for k in range(4)) >= -1e-9
+
+
+def test_a_four_bar_scene_keeps_its_type_through_yaml_and_pickle(root):
+    import pickle
+    scene = fivebar.load_scene(root / "datasets/reference/four_bar/double_rocker.yaml")
+    again = fivebar.parse_scene(scene.to_yaml())
+    assert again.mechanism == "four_bar" and again.to_yaml() == scene.to_yaml()
+    assert pickle.loads(pickle.dumps(scene)).to_yaml() == scene.to_yaml()
+    assert scene.replace({"gravity": 0}).mechanism == "four_bar"
+
+
+def test_five_bar_only_functions_refuse_a_four_bar(root):
+    import pytest
+    scene = fivebar.load_scene(root / "datasets/reference/four_bar/crank_rocker.yaml")
+    z = np.zeros((3, 2))
+    with pytest.raises(ValueError, match="mechanism.type: four_bar: fivebar.inverse takes five-bars"):
+        fivebar.inverse(scene, z, z, z)

@@ -24,9 +24,9 @@ inline TrajectoryLayout four_bar_layout() { return {3, 1, 4}; }
 /// The columns of a trajectory.csv of that layout (the same names, fewer of them).
 std::vector<std::string> trajectory_columns(const TrajectoryLayout& layout);
 
-/// Writes the values of `row` in the order of trajectory_columns() to out[0 ..
-/// trajectory_columns().size() - 1].
-void row_values(const sim::Row& row, double* out);
+/// Writes the values of `row` in the order of trajectory_columns(layout) to out[0 ..
+/// trajectory_columns(layout).size() - 1]; returns the end of what it wrote.
+double* row_values(const sim::Row& row, double* out, const TrajectoryLayout& layout = {});
 
 /// An extra column appended after the standard ones (one value per row).
 struct Column {

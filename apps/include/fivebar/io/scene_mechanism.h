@@ -1,0 +1,48 @@
+// The parts of a scene that belong to its mechanism (mechanism.type), as one small traits type
+// per mechanism, so that a command or binding writes its run once over both:
+//   scene.type == kFourBar ? f(FourBarScene{}) : f(FiveBarScene{})   (with_mechanism below)
+#pragma once
+
+#include <vector>
+
+#include "fivebar/io/loads.h"
+#include "fivebar/io/output.h"
+#include "fivebar/io/scene.h"
+#include "fivebar/model/status.h"
+#include "fivebar/sim/simulator.h"
+
+namespace fivebar::io {
+
+/// The five-bar's: Params, its loads, the trajectory.csv columns, inverse dynamics along rows.
+struct FiveBarScene {
+  using Loads = sim::LoadFunction;
+  static const Params<double>& params(const Scene& s) { return s.params; }
+  static Loads loads(const LoadExpressions& e) { return e.function(); }
+  static TrajectoryLayout layout() { return {}; }
+  static constexpr bool kInverse = true;  ///< inverse() is available
+  static Status inverse(const Scene& s, const Loads& loads, const std::vector<sim::Row>& rows,
+                        std::vector<sim::Row>* out) {
+    return sim::inverse_rows(s.params, loads, rows, out);
+  }
+};
+
+/// The four-bar's (inverse dynamics along rows not yet available).
+struct FourBarScene {
+  using Loads = sim::FourBarLoadFunction;
+  static const FourBarParams& params(const Scene& s) { return s.four_bar; }
+  static Loads loads(const LoadExpressions& e) { return e.four_bar_function(); }
+  static TrajectoryLayout layout() { return four_bar_layout(); }
+  static constexpr bool kInverse = false;
+  static Status inverse(const Scene&, const Loads&, const std::vector<sim::Row>&,
+                        std::vector<sim::Row>*) {
+    return Status::Error(StatusCode::kInvalidInput, "not available for four-bars");
+  }
+};
+
+/// f(FiveBarScene{}) or f(FourBarScene{}), by the scene's mechanism.type.
+template <class F>
+auto with_mechanism(const Scene& scene, F&& f) {
+  return scene.type == MechanismType::kFourBar ? f(FourBarScene{}) : f(FiveBarScene{});
+}
+
+}  // namespace fivebar::io
