@@ -15,6 +15,7 @@
 #include "fivebar/io/errors.h"
 #include "fivebar/io/output.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/scene_mechanism.h"
 
 // a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
 namespace fivebar::io::animate_command {
@@ -33,7 +34,7 @@ struct Args {
 
 // --scene (with --set) when given, else the scene and --set values the run's summary.json records
 Scene run_scene(const Args& args) {
-  if (!args.scene.empty()) return load_scene(args.scene, args.sets);
+  if (!args.scene.empty()) return load_scene(args.scene, args.sets, /*four_bar_ok=*/true);
   const std::string summary = (fs::path(args.dir) / "summary.json").string();
   std::string path;
   std::vector<std::string> sets;
@@ -47,7 +48,7 @@ Scene run_scene(const Args& args) {
                      "'" + path + "' not found from this directory: give it with --scene");
   }
   sets.insert(sets.end(), args.sets.begin(), args.sets.end());
-  return load_scene(path, sets);
+  return load_scene(path, sets, /*four_bar_ok=*/true);
 }
 
 // the folders to animate: RUN_DIR itself, or its subfolders that hold a trajectory.csv
@@ -74,11 +75,12 @@ std::string folder_page(const fs::path& folder, const Scene& scene, const std::s
   if (recorded_command((folder / "summary.json").string()) == "inverse") {
     input.label = "inverse dynamics";
   }
-  input.motion = animation_track(read_csv((folder / "trajectory.csv").string()));
+  const TrajectoryLayout layout = layout_of(scene);
+  input.motion = animation_track(read_csv((folder / "trajectory.csv").string()), layout);
   const fs::path baseline = folder / "baseline.csv";
   if (fs::exists(baseline)) {
     input.label = "optimal motion";
-    input.ghost = animation_track(read_csv(baseline.string()));
+    input.ghost = animation_track(read_csv(baseline.string()), layout);
     input.ghost_label = "minimum jerk (baseline)";
   }
   return animation_html(scene, input);

@@ -87,6 +87,16 @@ else:
     print("synth-log --motion: max |tau1 - M1| %.3g N m" % worst)
     if not worst <= 1e-9:
         failures.append("synth-log --motion: max |tau1 - M1| = %.3g N m" % worst)
+# the run's figures and page, and `animate` on its folder (the scene from summary.json)
+cr = os.path.join(WORK, "crank_rocker")
+for name in ("fig2_angles.png", "fig6_friction_torques.png", "animation.html"):
+    if not os.path.exists(os.path.join(cr, name)):
+        failures.append("simulate of the four-bar wrote no %s" % name)
+os.remove(os.path.join(cr, "animation.html"))
+code, _, err = run(["animate", cr])
+if code != 0 or not os.path.exists(os.path.join(cr, "animation.html")):
+    failures.append("animate of the four-bar's folder: exit %d: %s" % (code, err))
+expect_error(2, "missing column 'theta4'", ["animate", cr, "--scene", PAPER])
 bad = os.path.join(WORK, "bad")
 expect_error(2, "--excitation: multisine drives the five-bar's two cranks",
              ["synth-log", scene, "--out", bad, "--excitation", "multisine"])

@@ -39,6 +39,11 @@ struct FourBarScene {
   }
 };
 
+/// The trajectory.csv columns of the scene's mechanism.
+inline TrajectoryLayout layout_of(const Scene& scene) {
+  return scene.type == MechanismType::kFourBar ? FourBarScene::layout() : FiveBarScene::layout();
+}
+
 /// f(FiveBarScene{}) or f(FourBarScene{}), by the scene's mechanism.type.
 template <class F>
 auto with_mechanism(const Scene& scene, F&& f) {
