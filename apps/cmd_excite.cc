@@ -601,23 +601,13 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o,
       return "std_not_determined";
     }
   }
-  const double worst = worst_relative_std(r);
-  if (worst > kAbsurdRelativeStd) {
-    *why = "predicts a relative std of " + format_significant(worst, 4) + " (more than " +
-           format_significant(kAbsurdRelativeStd) + "): a log along it would determine nothing";
-    return "std_too_large";
-  }
-  if (base && worst > kWorseThanBaseline * worst_relative_std(*base)) {
-    *why = "predicts a worst relative std of " + format_significant(worst, 4) + ", more than " +
-           format_significant(kWorseThanBaseline) + " times the multi-sine baseline's " +
-           format_significant(worst_relative_std(*base), 3);
-    return "worse_than_baseline";
-  }
   static const char* const kJointNames[] = {"O", "B", "C", "D", "D0"};
   for (int k = 0; k < kJoints; ++k) {
     if (r.reversals[k] < o.min_reversals) {
       *why = "joint " + std::string(kJointNames[k]) + " reverses " + std::to_string(r.reversals[k]) +
-             " times, fewer than --min-reversals " + std::to_string(o.min_reversals);
+             " times, fewer than --min-reversals " + std::to_string(o.min_reversals) +
+             " (the search found no motion within --torque-limit that does; a lower "
+             "--min-reversals accepts fewer)";
       return "reversals_not_met";
     }
   }
@@ -635,6 +625,20 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o,
       *why = "theta" + std::to_string(j + 1) + " leaves its range";
       return "angle_range_violated";
     }
+  }
+  // the information of a design that meets its constraints (one that misses one is named for it
+  // above: its large std is the cost of the search's compromise)
+  const double worst = worst_relative_std(r);
+  if (worst > kAbsurdRelativeStd) {
+    *why = "predicts a relative std of " + format_significant(worst, 4) + " (more than " +
+           format_significant(kAbsurdRelativeStd) + "): a log along it would determine nothing";
+    return "std_too_large";
+  }
+  if (base && worst > kWorseThanBaseline * worst_relative_std(*base)) {
+    *why = "predicts a worst relative std of " + format_significant(worst, 4) + ", more than " +
+           format_significant(kWorseThanBaseline) + " times the multi-sine baseline's " +
+           format_significant(worst_relative_std(*base), 3);
+    return "worse_than_baseline";
   }
   return "ok";
 }
