@@ -12,6 +12,7 @@
 
 #include "agreement.h"
 #include "fivebar/model/four_bar.h"
+#include "fivebar/model/four_bar_rest.h"
 #include "fivebar/sim/simulator.h"
 #include "four_bar_scenes.h"
 #include "paper.h"
@@ -143,6 +144,49 @@ TEST(FourBarSimulation, FrictionHoldsTheMechanismUntilTheDriveBreaksItAway) {
   const sim::RunChecks checks = sim::check_run(sc.p, loads, r, 1e-10);
   EXPECT_TRUE(checks.verdict.ok()) << checks.verdict.message;
   RecordProperty("breakaway_t", sci(r.rows[first_move].t));
+}
+
+// The holding range of four_bar_holding is where the simulator's lock holds: from rest under a
+// constant M1 0.1 % of the range inside either end, every joint stays stuck; 0.1 % outside, the
+// mechanism breaks away the way M1 pushes. Both scenes at three poses each, gravity and a coupler
+// load. The range holds at least what joint O holds alone.
+TEST(FourBarSimulation, TheHoldingRangeIsWhereTheLockHolds) {
+  int poses = 0;
+  for (testing::ReferenceScene sc : testing::reference_scenes()) {
+    sc.p.friction.law = FrictionLaw::kCoulombViscous;
+    sc.p.friction.pin_radius.fill(0.02);
+    sc.p.friction.coulomb.fill(0.3);
+    sc.p.friction.static_coulomb.fill(0.3);
+    for (double dth : {0.0, 0.15, -0.2}) {
+      const double th = sc.th0 + dth;
+      const FourBarLoads L{0.0, 0.05, 2.0, 0.3};
+      FourBarHolding h;
+      ASSERT_TRUE(four_bar_holding(sc.p, L, th, EvalOptions{}, &h).ok()) << sc.file << " " << th;
+      ASSERT_LT(h.M1_min, h.M1);
+      ASSERT_GT(h.M1_max, h.M1);
+      EXPECT_GE(h.M1_max - h.M1, h.bound[0] * (1 - 1e-9));
+      EXPECT_GE(h.M1 - h.M1_min, h.bound[0] * (1 - 1e-9));
+      const double width = h.M1_max - h.M1_min;
+      for (const auto& [drive, held] : {std::pair{h.M1_max - 1e-3 * width, true},
+                                        std::pair{h.M1_min + 1e-3 * width, true},
+                                        std::pair{h.M1_max + 1e-3 * width, false},
+                                        std::pair{h.M1_min - 1e-3 * width, false}}) {
+        FourBarLoads at = L;
+        at.M1 = drive;
+        const sim::Result r =
+            sim::simulate(sc.p, [at](double) { return at; }, crank_at(th), options(0.05, 1e-10));
+        ASSERT_TRUE(r.status.ok()) << r.status.message;
+        const double moved = r.rows.back().theta[0] - th;
+        if (held) {
+          EXPECT_EQ(moved, 0.0) << sc.file << " th " << th << " M1 " << drive;
+        } else {
+          EXPECT_GT(moved * (drive - h.M1), 0.0) << sc.file << " th " << th << " M1 " << drive;
+        }
+      }
+      ++poses;
+    }
+  }
+  EXPECT_EQ(poses, 6);
 }
 
 // theta1 = pi puts B on the ground line: coupler and rocker turn alike there, so joint C neither

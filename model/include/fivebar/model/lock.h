@@ -146,6 +146,35 @@ Status lock_analysis(const typename M::template Params<double>& p,
   return Status::Ok();
 }
 
+/// How far a drive torque of mechanism M can move from its value in `L` in direction `sign`
+/// (set(&L, value) sets it) before the locked mechanism breaks away: lock_analysis's ratio
+/// reaches 1. The ratio is homogeneous of degree one in the torque excess for fixed reactions, so
+/// d <- d / ratio(d) converges in a few steps (the reactions change with the holding torques by
+/// O(mu r / l)); `start` is the first d (> 0). d = 0 where no friction resists that direction.
+template <class M, class SetDrive>
+Status lock_extent(const typename M::template Params<double>& p,
+                   const typename M::template Loads<double>& L, const mech::Vec<M::kDof, double>& q,
+                   const EvalOptions& opt, double at, double sign, double start, SetDrive set,
+                   double* d) {
+  *d = start;
+  for (int it = 0; it < 50; ++it) {
+    typename M::template Loads<double> moved = L;
+    set(&moved, at + sign * *d);
+    LockAnalysis lock;
+    const Status st = lock_analysis<M>(p, moved, q, opt, &lock);
+    if (!st.ok()) return st;
+    if (!(lock.ratio > 0.0) || !std::isfinite(lock.ratio)) {
+      *d = 0.0;
+      return Status::Ok();
+    }
+    const double next = *d / lock.ratio;
+    const bool done = std::abs(next - *d) <= 1e-14 * next;
+    *d = next;
+    if (done) return Status::Ok();
+  }
+  return Status::Ok();
+}
+
 /// The five-bar at pose (th1, th2).
 inline Status lock_analysis(const Params<double>& p, const Loads<double>& L, double th1,
                             double th2, const EvalOptions& opt, LockAnalysis* out) {

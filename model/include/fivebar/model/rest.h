@@ -79,29 +79,17 @@ struct Holding {
 namespace detail {
 
 /// How far actuator `i` (0: M1, 1: M2) can move from the equilibrium h in direction `sign`
-/// before the locked mechanism breaks away: lock_analysis's ratio reaches 1. The ratio is
-/// homogeneous of degree one in the torque excess for fixed reactions, so d <- d / ratio(d)
-/// converges in a few steps (the reactions change with the holding torques by O(mu r / l)).
+/// before the locked mechanism breaks away (lock_extent of lock.h), the other at its equilibrium.
 inline Status lock_extent(const Params<double>& p, Loads<double> L, double th1, double th2,
                           const EvalOptions& opt, const Holding<double>& h, int i, double sign,
                           double* d) {
-  *d = std::max(h.bound[i == 0 ? 0 : 4], 1e-12 * (1.0 + std::abs(i == 0 ? h.M1 : h.M2)));
-  for (int it = 0; it < 50; ++it) {
-    L.M1 = h.M1 + (i == 0 ? sign * *d : 0.0);
-    L.M2 = h.M2 + (i == 1 ? sign * *d : 0.0);
-    LockAnalysis lock;
-    const Status st = lock_analysis(p, L, th1, th2, opt, &lock);
-    if (!st.ok()) return st;
-    if (!(lock.ratio > 0.0) || !std::isfinite(lock.ratio)) {
-      *d = 0.0;  // no friction resists this direction
-      return Status::Ok();
-    }
-    const double next = *d / lock.ratio;
-    const bool done = std::abs(next - *d) <= 1e-14 * next;
-    *d = next;
-    if (done) return Status::Ok();
-  }
-  return Status::Ok();
+  L.M1 = h.M1;
+  L.M2 = h.M2;
+  const double start =
+      std::max(h.bound[i == 0 ? 0 : 4], 1e-12 * (1.0 + std::abs(i == 0 ? h.M1 : h.M2)));
+  return fivebar::lock_extent<FiveBar>(
+      p, L, Vec2<double>(th1, th2), opt, i == 0 ? h.M1 : h.M2, sign, start,
+      [i](Loads<double>* l, double v) { (i == 0 ? l->M1 : l->M2) = v; }, d);
 }
 
 }  // namespace detail
