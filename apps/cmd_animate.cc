@@ -70,11 +70,16 @@ std::vector<fs::path> run_folders(const std::string& dir) {
 
 // the page of one folder: its trajectory.csv, and baseline.csv as the ghost when present
 std::string folder_page(const fs::path& folder, const Scene& scene, const std::string& title) {
+  const std::string summary = (folder / "summary.json").string();
+  const std::string run_type = recorded_mechanism(summary);
+  if (!run_type.empty() && run_type != mechanism_type_name(scene.type)) {
+    throw InputError(summary, "mechanism",
+                     "a " + run_type + " run, and the scene " + scene.path + " is a " +
+                         mechanism_type_name(scene.type) + ": give the run's scene with --scene");
+  }
   AnimationInput input;
   input.title = title;
-  if (recorded_command((folder / "summary.json").string()) == "inverse") {
-    input.label = "inverse dynamics";
-  }
+  if (recorded_command(summary) == "inverse") input.label = "inverse dynamics";
   const TrajectoryLayout layout = layout_of(scene);
   input.motion = animation_track(read_csv((folder / "trajectory.csv").string()), layout);
   const fs::path baseline = folder / "baseline.csv";

@@ -4,6 +4,7 @@
 // animation.html.
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -78,6 +79,9 @@ std::optional<TwinRun> run_twin(const Scene& scene, const typename Mech::Loads& 
   if (!twin.run.status.ok()) {
     warn(scene.path + ": frictionless twin: " + twin.run.status.message +
          " (trajectory_frictionless.csv not written)");
+  } else if (twin.checks && !twin.checks->verdict.ok()) {
+    warn(scene.path + ": frictionless twin: run check failed: " + twin.checks->verdict.message +
+         " (summary.json: frictionless.status failed; its rows are written and drawn)");
   }
   return twin;
 }
@@ -146,10 +150,17 @@ void print_report(const Scene& scene, const sim::EstimatedRun& er, const sim::Ru
             << format_printf(last.W_ext, "%.6g") << " J, E_diss "
             << format_printf(last.E_diss, "%.6g") << " J; balance residual "
             << format_printf(checks.energy_balance_relative, "%.2e") << " (relative)\n"
-            << "  inverse dynamics: max |M - M_input| = "
-            << format_printf(checks.inverse_dynamics_max_abs_error, "%.2e")
-            << " N m; min friction power " << format_printf(checks.friction_power_min, "%.2e")
-            << " W\n";
+            << "  inverse dynamics: "
+            << (std::isnan(checks.inverse_failed_at)
+                    ? std::string()
+                    : "FAILED at t = " + format_printf(checks.inverse_failed_at, "%.6g") +
+                          " s (the error below says why); over the other rows ")
+            << "max |M - M_input| = " << format_printf(checks.inverse_dynamics_max_abs_error, "%.2e")
+            << " N m; min friction power "
+            << (law_descriptor(law).states_per_joint > 0
+                    ? std::string("not checked (the bristles store and return energy)")
+                    : format_printf(checks.friction_power_min, "%.2e") + " W")
+            << "\n";
   if (twin && twin->run.status.ok()) {
     std::cout << "  frictionless twin: " << twin->run.stats.steps << " steps, "
               << format_printf(twin->run.stats.wall_time_s, "%.3f") << " s, balance residual "

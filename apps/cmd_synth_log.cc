@@ -78,6 +78,19 @@ void write_log(const std::string& path, const identification::TorqueLog& log) {
 // cranks, as excitation.csv of `fivebar excite`), t strictly increasing.
 std::vector<sim::Row> motion_rows(const CsvTable& table, int dof) {
   const std::string& path = table.path;
+  // a motion of the other mechanism: a four-bar's has theta3 and no theta4, a five-bar's theta2
+  // without theta3 (excitation.csv) or theta4
+  const bool four_bar_file = table.has("theta3") && !table.has("theta4");
+  const bool five_bar_file = table.has("theta4") || (table.has("theta2") && !table.has("theta3"));
+  if (dof == 2 && four_bar_file) {
+    throw InputError(path, "column theta3",
+                     "a four-bar's motion (theta3 without theta4); the scene is a five_bar");
+  }
+  if (dof == 1 && five_bar_file) {
+    throw InputError(path, table.has("theta4") ? "column theta4" : "column theta2",
+                     "a five-bar's motion; the scene is a four_bar (its motion: t,theta1,omega1,"
+                     "alpha1)");
+  }
   const std::vector<double> t = table.column("t");
   if (t.empty()) throw InputError(path, "(file)", "no data rows after the header");
   std::vector<sim::Row> rows(t.size());

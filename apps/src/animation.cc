@@ -270,6 +270,12 @@ bool recorded_scene(const std::string& summary_json, std::string* scene,
   return true;
 }
 
+std::string recorded_mechanism(const std::string& summary_json) {
+  const YAML::Node summary = load_summary(summary_json);
+  if (!summary.IsMap() || !summary["mechanism"] || !summary["mechanism"].IsScalar()) return "";
+  return summary["mechanism"].as<std::string>();
+}
+
 std::string recorded_command(const std::string& summary_json) {
   const YAML::Node summary = load_summary(summary_json);
   if (!summary.IsMap() || !summary["command"] || !summary["command"].IsScalar()) return "";

@@ -282,34 +282,6 @@ Status finite_loads(const Ld& L, double t) {
   return Status::Ok();
 }
 
-/// Below this singular measure (|sin(th4 - th3)| of the five-bar) a failed friction loop is put
-/// down to the pose: the reactions grow as its inverse there, so the loop's gain passes 1 with
-/// any friction (a light scene with r mu = 4e-4 was told "r_k * mu too large")
-constexpr double kSingularCause = 0.05;
-
-/// A failed evaluation's status with its cause first when the pose explains it: a friction loop
-/// that failed near the singular pose (kSingularCause) names |sin(theta4 - theta3)| and the
-/// largest r_k mu_k, so that the friction is not blamed for the geometry (same code: the callers
-/// decide on it as before). Other failures unchanged.
-template <class M>
-Status pose_cause(const ParamsOf<M>& p, const Status& st, const double* q) {
-  if (st.ok() || st.code != StatusCode::kFrictionNotConverged) return st;
-  KinOf<M> k;
-  const double sine = close_at<M>(p, q, &k).ok() ? std::abs(M::singular_measure(k)) : 1.0;
-  if (!(sine < kSingularCause)) return st;
-  double arm = 0.0;
-  for (int j = 0; j < kJoints; ++j) {
-    arm = std::max(arm, std::abs(p.friction.pin_radius[j] * p.friction.coulomb[j]));
-  }
-  std::ostringstream msg;
-  msg.precision(3);
-  msg << "near-singular pose: |" << M::kSingularName << "| = " << sine
-      << " (the reactions grow as 1 / " << M::kSingularName
-      << "), where the friction loop cannot close even with r_k * mu at most "
-      << arm << " (simulation.singular_margin, e.g. 0.05, stops a run at the pose); " << st.message;
-  return Status::Error(st.code, msg.str());
-}
-
 /// Relative joint rates at a state from its first-order kinematics `k`.
 template <class M>
 std::array<double, kJoints> joint_rates(const KinOf<M>& k, const double* y) {
@@ -373,7 +345,7 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   const Status st =
       forward_at<M>(*c.params, loads, y, rhs_modes(c, y, &signs), c.eval, &ev, &z, &c.warm);
   if (!st.ok()) {
-    c.failure = at_time<M>(pose_cause<M>(*c.params, st, y), t, y);
+    c.failure = at_time<M>(st, t, y);
     return 1;  // recoverable: the integrator retries with a smaller step
   }
   if (c.law_states) std::copy(ev.zdot.begin(), ev.zdot.end(), ydot + kBristle);
@@ -1338,7 +1310,7 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
                                        m.alpha[0], m.alpha[1], nullptr, eval, &ev,
                                        bristles ? &m.bristle : nullptr);
     if (!st.ok()) {
-      return at_time(pose_cause<FiveBar>(params, st, m.theta.data()), m.t, m.theta.data(), 2);
+      return at_time(st, m.t, m.theta.data(), 2);
     }
     Row r = m;
     const Row* previous = out->empty() ? nullptr : &out->back();
@@ -1443,7 +1415,10 @@ RunChecks checks_of(const ParamsOf<M>& params, const LoadFnOf<M>& loads, const R
         Eigen::Map<const VecOf<M>>(r.omega.data()), Eigen::Map<const VecOf<M>>(r.alpha.data()),
         params.friction.active() ? &r.mode : nullptr, eval, &ev, bristles ? &r.bristle : nullptr);
     if (!st.ok()) {  // the first row where inverse dynamics fails, with its own reason
-      if (inverse_failure.ok()) inverse_failure = at_time(st, r.t, r.theta.data(), M::kDof);
+      if (inverse_failure.ok()) {
+        inverse_failure = at_time(st, r.t, r.theta.data(), M::kDof);
+        checks.inverse_failed_at = r.t;
+      }
       continue;
     }
     const double e = Sim<M>::drive_error(ev, r);

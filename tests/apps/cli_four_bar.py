@@ -96,7 +96,10 @@ os.remove(os.path.join(cr, "animation.html"))
 code, _, err = run(["animate", cr])
 if code != 0 or not os.path.exists(os.path.join(cr, "animation.html")):
     failures.append("animate of the four-bar's folder: exit %d: %s" % (code, err))
-expect_error(2, "missing column 'theta4'", ["animate", cr, "--scene", PAPER])
+expect_error(2, "mechanism: a four_bar run, and the scene", ["animate", cr, "--scene", PAPER])
+expect_error(2, "column theta3: a four-bar's motion",
+             ["synth-log", PAPER, "--out", os.path.join(WORK, "bad.csv"), "--motion",
+              os.path.join(cr, "trajectory.csv")])
 bad = os.path.join(WORK, "bad")
 expect_error(2, "--excitation: multisine drives the five-bar's two cranks",
              ["synth-log", scene, "--out", bad, "--excitation", "multisine"])

@@ -62,6 +62,10 @@ std::string animation_html(const Scene& scene, const AnimationInput& input);
 bool recorded_scene(const std::string& summary_json, std::string* scene,
                     std::vector<std::string>* sets);
 
+/// The `mechanism` a run's summary.json records ("five_bar", "four_bar"); empty when the file is
+/// absent or names none. Throws InputError when it is not valid JSON.
+std::string recorded_mechanism(const std::string& summary_json);
+
 /// The `command` a run's summary.json records ("simulate", "inverse", ...); empty when the file
 /// is absent or names none. Throws InputError when it is not valid JSON.
 std::string recorded_command(const std::string& summary_json);

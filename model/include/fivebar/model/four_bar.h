@@ -110,6 +110,7 @@ Status four_bar_close(const FourBarParamsT<T>& p, const T& th1, FourBarKinematic
   k->sin32 = cross(k->e2, k->e3);
   if (std::abs(value_of(k->sin32)) < singular_margin) {
     std::ostringstream msg;
+    msg.precision(10);  // a value just under the margin prints below it
     msg << "near-singular four-bar pose at theta1=" << value_of(th1)
         << ": |sin(theta3 - theta2)|=" << std::abs(value_of(k->sin32)) << " < margin "
         << singular_margin;

@@ -56,6 +56,7 @@ inline Status cannot_assemble_status(double th1, double th2, double L2, double l
 /// Message of a pose within the singular margin (cold path).
 inline Status near_singular_status(double th1, double th2, double sine, double margin) {
   std::ostringstream msg;
+  msg.precision(10);  // a value just under the margin prints below it
   msg << "near-singular pose at theta1=" << th1 << ", theta2=" << th2
       << ": |sin(theta4 - theta3)|=" << sine << " < margin " << margin;
   return Status::Error(StatusCode::kNearSingular, msg.str());

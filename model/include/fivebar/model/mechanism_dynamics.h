@@ -7,6 +7,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
 #include <type_traits>
 
 #include "fivebar/model/evaluation.h"
@@ -27,9 +30,55 @@ using EvaluationOf = typename M::template Evaluation<T>;
 template <class M, typename T>
 using State = Vec<M::kDof, T>;
 
+/// Below this singular measure (|sin(th4 - th3)| of the five-bar, |sin(th3 - th2)| of the
+/// four-bar) a failed friction loop is put down to the pose: the reactions grow as its inverse
+/// there (with the rates, the coupler accelerations as its cube), so the loop's gain passes 1
+/// with any friction (a light scene with r mu = 4e-4 was told "r_k * mu too large").
+inline constexpr double kSingularCause = 0.05;
+/// ... and below this one too where every friction arm r_k mu_k is under kSmallArm of the shortest
+/// link: arms that small do not bring the loop's gain to 1 at a regular pose (a double rocker
+/// driven at 1 rad/s failed its loop at |sin| = 0.095 with r mu = 0.6 % of its shortest link)
+inline constexpr double kNearSingularCause = 0.25;
+inline constexpr double kSmallArm = 0.05;
+
 namespace detail {
 
 using fivebar::detail::LoopSolution;
+
+/// A failed friction loop's status with its cause first when the pose explains it (near the
+/// singular pose, kSingularCause): names the singular measure and the largest r_k mu_k, so that
+/// the friction is not blamed for the geometry (same code: callers decide on it as before).
+template <class M, typename T>
+Status singular_cause(const ParamsOf<M, T>& p, const typename M::template Kinematics<T>& k,
+                      const Status& st) {
+  using std::abs;
+  if (st.ok() || st.code != StatusCode::kFrictionNotConverged) return st;
+  const double sine = abs(value_of(M::singular_measure(k)));
+  double arm = 0.0, shortest = std::numeric_limits<double>::infinity();
+  for (int j = 0; j < M::kJoints; ++j) {
+    arm = std::max(arm, abs(value_of(p.friction.pin_radius[j] * p.friction.coulomb[j])));
+  }
+  for (const auto& link : p.links) shortest = std::min(shortest, abs(value_of(link.length)));
+  const bool small_arms = arm < kSmallArm * shortest;
+  if (!(sine < kSingularCause) && !(sine < kNearSingularCause && small_arms)) return st;
+  // the loop's own guess at the cause is the friction's: not here
+  std::string loop = st.message;
+  for (const char* guess : {" (r_k * mu too large for the reactions at this pose and speed)",
+                            ": r_k * mu too large for the loads (friction would lock the joints)"}) {
+    const size_t at = loop.find(guess);
+    if (at != std::string::npos) loop.erase(at, std::string(guess).size());
+  }
+  std::ostringstream msg;
+  msg.precision(3);
+  msg << "near-singular pose: |" << M::kSingularName << "| = " << sine
+      << " (the reactions grow as 1 / " << M::kSingularName
+      << ", and with the rates as its cube), where the friction loop cannot close even with r_k * "
+         "mu at most "
+      << arm << " m (" << 100 * arm / shortest
+      << " % of the shortest link; simulation.singular_margin stops a run before such a pose); "
+      << loop;
+  return Status::Error(st.code, msg.str());
+}
 
 /// The stuck joints of a forward evaluation (mode kStuck): J_k qdd + wb_k = 0, with wb the
 /// relative accelerations at qdd = 0. At most kDof (that many independent ones lock the
@@ -200,7 +249,7 @@ Status forward_friction(const ParamsOf<M, T>& p, const EvalOptions& opt, const M
   }
   const Status st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
                                   motors ? &act : nullptr, loop, aids);
-  if (!st.ok()) return st;
+  if (!st.ok()) return singular_cause<M, T>(p, ev->kin, st);
   if (opt.want_reactions || stuck.count > 0) {
     solve(ev->Mf, &ev->F);  // accelerations and reactions of the converged friction torques
     reaction_norms(ev->F, &ev->N);
@@ -289,7 +338,7 @@ Status inverse_friction(const ParamsOf<M, T>& p, const EvalOptions& opt, const J
   const bool motors = M::actuator_torques(p, ev->w, ev->slip, &act);
   const Status st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
                                   motors ? &act : nullptr, loop);
-  if (!st.ok()) return st;
+  if (!st.ok()) return singular_cause<M, T>(p, ev->kin, st);
   // the implicit derivative (Jets) returns F of the final Mf already (F is affine in Mf)
   if (std::is_same_v<T, double> || !loop || !loop->set) solve(ev->Mf, &ev->F);
   reaction_norms(ev->F, &ev->N);

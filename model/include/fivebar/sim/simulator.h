@@ -3,6 +3,7 @@
 
 #include <array>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -207,6 +208,8 @@ struct RunChecks {
   /// indeterminate in inverse dynamics). A row where inverse dynamics fails is not counted here:
   /// it fails the checks, and the verdict gives its time and reason
   double inverse_dynamics_max_abs_error = 0;
+  /// the time of the first row where inverse dynamics fails [s]; NaN where none does
+  double inverse_failed_at = std::numeric_limits<double>::quiet_NaN();
   /// min over rows and joints of Mf_k w_k [W]: friction never supplies power (not checked for
   /// LuGre, whose bristles store and return energy)
   double friction_power_min = 0;
