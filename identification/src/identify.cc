@@ -1,3 +1,5 @@
+// identify(): the pipeline of the stages (identify_stages.h), the method's strategy
+// (method.h) chosen once; the enum names and the logged loads.
 #include "fivebar/identification/identify.h"
 #include <ceres/ceres.h>
 #include <Eigen/Dense>
@@ -30,11 +32,12 @@ namespace fivebar::identification {
 
 using namespace stages;
 
+namespace {
 constexpr Named<Method> kMethodNames[] = {{Method::kInverseDynamics, "inverse-dynamics"},
                                           {Method::kOutputError, "output-error"}};
-
 constexpr Named<Loss> kLossNames[] = {
     {Loss::kNone, "none"}, {Loss::kHuber, "huber"}, {Loss::kCauchy, "cauchy"}};
+}  // namespace
 
 bool parse_method(const std::string& name, Method* out) { return parse_in(kMethodNames, name, out); }
 
@@ -43,9 +46,6 @@ const char* method_name(Method m) { return name_in(kMethodNames, m); }
 bool parse_loss(const std::string& name, Loss* out) { return parse_in(kLossNames, name, out); }
 
 const char* loss_name(Loss l) { return name_in(kLossNames, l); }
-
-/// a torque-to-angle delay beyond this many std is corrected
-constexpr double kDelaySignificance = 3.0;
 
 sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& scene_loads,
                                double t0, std::array<double, kActuators> offset) {
@@ -60,6 +60,11 @@ sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& sc
     return L;
   };
 }
+
+namespace {
+
+/// a torque-to-angle delay beyond this many std is corrected
+constexpr double kDelaySignificance = 3.0;
 
 /// Ceres reports through glog on stderr ("Terminating: ..."); library code never prints: the
 /// outcome is in the summary we return. Once per process, glog is told to keep quiet.
@@ -87,6 +92,46 @@ void follow_static_coulomb(const ParameterLayout& layout, const Params<double>& 
   }
 }
 
+/// Conditioning, rates and window, start values: the fit's state up to its samples; false (and
+/// out->status) when a stage stops the fit.
+bool prepare_fit(const Params<double>& scene_in, const sim::LoadFunction& loads,
+                 const TorqueLog& log, const IdentifyOptions& opt, Fit* f,
+                 std::vector<double>* x0_public, IdentifyResult* out) {
+  init_fit(scene_in, loads, log, opt, f, out);
+  if ((f->layout.inertia || f->layout.actuator) && !f->method->fits_groups()) {
+    out->status = Status::Error(StatusCode::kInvalidInput,
+                                std::string("the ") + (f->layout.inertia ? "inertia" : "actuator") +
+                                    " group needs the inverse-dynamics method");
+    return false;
+  }
+  const int P = f->layout.size();
+  require_samples(log, P + 1, std::to_string(P) + " parameters + 1");
+  require_uniform_sampling(log);
+  // the log as encoders write it: degrees, wraps, glitches; then rates
+  prepare_log(log, f, out);
+  f->source = rate_source(*f, log, out);
+  if (!start_values(f, opt.initial, x0_public, out)) return false;
+  f->prior_scale = initial_prior_scale(*f);
+  return rates_window_and_samples(log, f, out);
+}
+
+/// The torque-to-angle delay when the readings' checks leave the fit usable: the fit redone
+/// with the torques shifted when it is significant (true, *refit), else out's delay fields.
+bool delay_stage(const Params<double>& scene_in, const sim::LoadFunction& loads,
+                 const TorqueLog& log, const Fit& f, const Analysis& an, IdentifyResult* out,
+                 IdentifyResult* refit) {
+  estimate_delay(f, an.J, an.r, an.sens, out);
+  const double dt = log.duration() / std::max(1, log.size() - 1);
+  if (std::abs(out->delay_s) > kDelaySignificance * out->delay_std_s &&
+      std::abs(out->delay_s) > 0.1 * dt) {
+    *refit = refit_with_delay(scene_in, loads, f.cond.log, *f.opt, *out);
+    return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 double output_error_window(double window_s, double duration) {
   return window_s > 0 ? window_s : std::min(0.2, duration / 20);
 }
@@ -100,31 +145,14 @@ IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunct
                             const TorqueLog& log, const IdentifyOptions& opt, bool full) {
   quiet_solver_logging();
   const auto start = Clock::now();
+  const auto finish = [&](IdentifyResult r) {
+    r.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
+    return r;
+  };
   IdentifyResult out;
   Fit f;
-  init_fit(scene_in, loads, log, opt, &f, &out);
-  if ((f.layout.inertia || f.layout.actuator) && opt.method != Method::kInverseDynamics) {
-    out.status = Status::Error(StatusCode::kInvalidInput,
-                               std::string("the ") + (f.layout.inertia ? "inertia" : "actuator") +
-                                   " group needs the inverse-dynamics method");
-    return out;
-  }
-  const int P = f.layout.size();
-  require_samples(log, P + 1, std::to_string(P) + " parameters + 1");
-  require_uniform_sampling(log);
-
-  // the log as encoders write it: degrees, wraps, glitches; then rates
-  prepare_log(log, &f, &out);
-  f.source = !log.has_rates || opt.estimate_rates ? detail::RateSource::kFromAngles
-             : !log.has_accels                    ? detail::RateSource::kAccelsFromRates
-                                                  : detail::RateSource::kLogged;
-  if (f.source != detail::RateSource::kFromAngles && angles_give_better_rates(f, &out)) {
-    f.source = detail::RateSource::kFromAngles;
-  }
   std::vector<double> x0_public;
-  if (!start_values(&f, opt.initial, &x0_public, &out)) return out;
-  f.prior_scale = initial_prior_scale(f);
-  if (!rates_window_and_samples(log, &f, &out)) return out;
+  if (!prepare_fit(scene_in, loads, log, opt, &f, &x0_public, &out)) return out;
   choose_loss_scale(&f, &out);
   ceres::Problem problem;
   if (!build_problem(&f, &out, &problem)) {
@@ -134,38 +162,25 @@ IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunct
   ceres::Solver::Summary summary;
   Analysis an;
   if (!solve_stage(&f, &problem, &out, &summary, &an)) return out;
-  analyse(f, x0_public, summary, &an, &out);
-  if (!full) {
-    out.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
-    return out;
-  }
-  ModelVerdict verdict;
-  if (opt.method == Method::kInverseDynamics) {
-    bound_and_misfit_warning(f, an, &out);
-    verdict = model_check(f, &out);
-  }
+  analyse(f, x0_public, summary, &an, &out);  // levels, covariance, identifiability, estimates
+  if (!full) return finish(out);
+  const ModelVerdict verdict = f.method->check_model(f, an, &out);
   intervals(f, &problem, an, &out);
   correct_smoothing_bias(&f, &out);
   out.fitted = scene_in;
   f.layout.apply(f.x.data(), &out.fitted);
   follow_static_coulomb(f.layout, scene_in, &out.fitted);
   predictions(f, &out);
-  if (opt.method == Method::kOutputError) output_error_levels(f, &out);
+  f.method->prediction_levels(f, &out);
   const bool sign_wrong = torques_fit_negated(scene_in, loads, log, opt, verdict, &out);
   const bool law_wrong =
       !sign_wrong && friction_differs_by_joint(scene_in, loads, log, opt, verdict, &out);
-  if (opt.method == Method::kInverseDynamics && opt.estimate_delay && !sign_wrong && !law_wrong) {
-    estimate_delay(f, an.J, an.r, an.sens, &out);
-    const double dt = log.duration() / std::max(1, log.size() - 1);
-    if (std::abs(out.delay_s) > kDelaySignificance * out.delay_std_s &&
-        std::abs(out.delay_s) > 0.1 * dt) {
-      IdentifyResult res = refit_with_delay(scene_in, loads, f.cond.log, opt, out);
-      res.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
-      return res;
-    }
+  IdentifyResult refit;
+  if (f.method->checks_readings() && opt.estimate_delay && !sign_wrong && !law_wrong &&
+      delay_stage(scene_in, loads, log, f, an, &out, &refit)) {
+    return finish(refit);
   }
-  out.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();
-  return out;
+  return finish(out);
 }
 
 }  // namespace fivebar::identification

@@ -26,6 +26,7 @@
 #include "profile.h"
 #include "smoothing_bias.h"
 #include "window_misfit.h"
+#include "method.h"
 
 namespace fivebar::identification {
 
@@ -52,6 +53,7 @@ constexpr double kMisfitRatio = 3.0;
 /// The state the stages of identify() share.
 struct Fit {
   const IdentifyOptions* opt = nullptr;
+  const MethodStrategy* method = nullptr;  ///< the method's strategy (method_strategy)
   sim::LoadFunction loads;
   Params<double> scene;    ///< the law to fit and the Coulomb sign form
   ParameterLayout layout;  ///< internal (Stribeck: static_coulomb as excess over coulomb)
@@ -129,10 +131,7 @@ sim::Options window_sim_options(double rtol);
 /// Group inertia: the prior and consistency residuals (inertia.h) on the parameter block x.
 void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem);
 
-/// Adds the residual blocks of the method to `problem`; false for an unsupported size.
-bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem);
 
-ceres::Solver::Options solver_options(const IdentifyOptions& opt);
 
 // ---- stage_setup.cc ----
 
@@ -167,6 +166,10 @@ double initial_prior_scale(const Fit& f);
 /// sign and viscous terms and the reactions (errors in variables), so the rates and
 /// accelerations are estimated from the angles instead, with a note saying so.
 bool angles_give_better_rates(const Fit& f, IdentifyResult* out);
+/// Where the rates and accelerations come from: the log's own when it has them (and the
+/// options do not ask to estimate them), unless the angles give better ones
+/// (angles_give_better_rates, which notes it).
+detail::RateSource rate_source(const Fit& f, const TorqueLog& log, IdentifyResult* out);
 
 // ---- stage_samples.cc ----
 
@@ -207,7 +210,7 @@ bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds&
 
 /// The first sample of the fit whose inverse dynamics fails at the parameters x, as a status
 /// naming it and the reason (ok if none fails).
-Status first_failure(const Fit& f, const std::vector<double>& x, const std::string& at);
+Status first_failing_sample(const Fit& f, const std::vector<double>& x, const std::string& at);
 
 /// Rates (logged or Savitzky-Golay), the data-driven window when it applies, the samples of the
 /// fit, and a check that the model evaluates at every one at the start values (false: status).
@@ -398,6 +401,41 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
 bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunction& loads,
                                const TorqueLog& log, const IdentifyOptions& opt,
                                const ModelVerdict& verdict, IdentifyResult* out);
+
+// ---- residual_blocks.cc (more) ----
+
+/// Output error: the window [i0, i1] (WindowResidual) on f->x, rates w1, w2 at its start;
+/// returns its residual count.
+int add_window_residual(Fit* f, const std::vector<double>& w1, const std::vector<double>& w2,
+                        int i0, int i1, const sim::Options& so, ceres::Problem* problem);
+
+// ---- stage_solve.cc (more) ----
+
+/// The fit's problem: the method's residual blocks on f->x, the parameters' lower bounds; false
+/// for a parameter count with no compiled cost.
+bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem);
+/// The solver's options: dense QR, the options' iteration limit and threads, the method's
+/// tolerances.
+ceres::Solver::Options solver_options(const Fit& f);
+/// Sensor-noise sensitivities of every sample of the fit at the parameters f.x.
+std::vector<detail::Sensitivity> noise_sensitivities(const Fit& f);
+
+// ---- stage_analysis.cc (more) ----
+
+/// Inverse dynamics: the torque residual's rms and noise floor (noise_floor) per actuator, and
+/// the structure warning.
+void torque_residual_levels(const Fit& f, const std::vector<double>& r,
+                            const std::vector<detail::Sensitivity>& sens, IdentifyResult* out);
+/// Covariance of the internal parameters (out->covariance) and an->Hinv.
+void covariance(const Fit& f, const Eigen::MatrixXd& Hp, Analysis* an, IdentifyResult* out);
+/// Inverse dynamics: the errors-in-variables sandwich over the free parameters.
+Eigen::MatrixXd score_sandwich(const Fit& f, const FreeSet& fs, const Analysis& an,
+                               IdentifyResult* out);
+/// Output error: the block sandwich over the windows (covariance.h), whose residuals are
+/// correlated within a window (they integrate the torque noise from the logged start) and
+/// independent between windows. Empty when too few windows carry residuals (a warning).
+Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
+                                  const std::vector<double>& r, IdentifyResult* out);
 
 }  // namespace stages
 }  // namespace fivebar::identification

@@ -1,236 +1,180 @@
-#include "fivebar/identification/identify.h"
-#include <ceres/ceres.h>
-#include <Eigen/Dense>
-#include <array>
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <functional>
-#include <iterator>
-#include <limits>
-#include <mutex>
-#include <memory>
-#include <sstream>
-#include <glog/logging.h>
-#include "fivebar/identification/residual.h"
-#include "fivebar/model/dynamics.h"
-#include "fivebar/model/names.h"
-#include "fivebar/model/rest.h"
+// The two identification methods as strategies (method.h): inverse dynamics (a torque residual
+// per sample) and output error (simulated minus logged angles over short windows).
+#include "method.h"
+
 #include "identify_stages.h"
-#include "covariance.h"
-#include "fallback_cost.h"
-#include "inertia.h"
-#include "misfit.h"
-#include "noise_model.h"
-#include "profile.h"
-#include "smoothing_bias.h"
-#include "window_misfit.h"
 
 namespace fivebar::identification::stages {
 
-double interp(const std::vector<double>& ts, const std::vector<double>& y, double t) {
-  if (t <= ts.front()) return y.front();
-  if (t >= ts.back()) return y.back();
-  const size_t i = std::upper_bound(ts.begin(), ts.end(), t) - ts.begin();
-  const double s = (t - ts[i - 1]) / (ts[i] - ts[i - 1]);
-  return y[i - 1] + s * (y[i] - y[i - 1]);
-}
-
 namespace {
 
-ceres::LossFunction* make_loss(Loss loss, double scale) {
-  switch (loss) {
-    case Loss::kNone:
-      return nullptr;
-    case Loss::kHuber:
-      return new ceres::HuberLoss(scale);
-    case Loss::kCauchy:
-      return new ceres::CauchyLoss(scale);
-  }
-  return nullptr;
-}
-
-}  // namespace
-
-template <int P>
-void add_sized_terms(const Params<double>& scene, const ParameterLayout& layout,
-                                const std::vector<Sample>& samples, const EvalOptions& eval,
-                                Loss loss, double loss_scale, double* x, ceres::Problem* problem) {
-  for (const Sample& s : samples) {
-    SampleStructure st;
-    ceres::CostFunction* cost = nullptr;
-    if (sample_structure(scene, s, eval, &st)) {
-      cost = new ceres::AutoDiffCostFunction<StructuredResidual, 2, P>(
-          new StructuredResidual(scene, layout, st, s, eval));
-    } else {
-      cost = new FallbackCost<P>(InverseDynamicsResidual(scene, layout, s, eval));
-    }
-    problem->AddResidualBlock(cost, make_loss(loss, loss_scale), x);
-  }
-}
-
-namespace {
-
-/// Output error over one window [i0, i1]: simulated minus logged angles at samples i0+1..i1.
-class WindowResidual {
+/// Torque residuals, one pair per sample of the fit.
+class InverseDynamicsMethod final : public MethodStrategy {
  public:
-  WindowResidual(const Params<double>& scene, const ParameterLayout& layout, const TorqueLog& log,
-                 const sim::LoadFunction& loads, const std::vector<double>& w1,
-                 const std::vector<double>& w2, int i0, int i1, const sim::Options& sim)
-      : scene_(scene), layout_(layout), log_(log), i0_(i0), i1_(i1), sim_(sim) {
-    loads_ = logged_loads(log, loads, log.t[i0], scene.actuators.offset);
-    initial_ = {log.theta1[i0], log.theta2[i0], w1[i0], w2[i0]};
-    sim_.duration = log.t[i1] - log.t[i0];
-    sim_.output_step = sim_.duration / (i1 - i0);
-  }
-  int residuals() const { return 2 * (i1_ - i0_); }
-
-  bool operator()(double const* const* x, double* r) const {
-    Params<double> p = scene_;
-    layout_.apply(x[0], &p);
-    const sim::Result res = sim::simulate(p, loads_, initial_, sim_);
-    if (!res.status.ok() || res.rows.size() < 2) return false;
-    std::vector<double> ts, a, b;
-    for (const sim::Row& row : res.rows) {
-      ts.push_back(row.t);
-      a.push_back(row.theta[0]);
-      b.push_back(row.theta[1]);
+  bool add_residuals(Fit* f, IdentifyResult* out, ceres::Problem* problem) const override {
+    if (!add_inverse_dynamics_terms(f->scene, f->layout, f->samples, f->eval, f->opt->loss,
+                                    f->loss_scale, f->x.data(), problem)) {
+      return false;
     }
-    for (int i = i0_ + 1, k = 0; i <= i1_; ++i, ++k) {
-      const double tt = log_.t[i] - log_.t[i0_];
-      if (tt > ts.back() + 1e-9) return false;
-      r[2 * k] = interp(ts, a, tt) - log_.theta1[i];
-      r[2 * k + 1] = interp(ts, b, tt) - log_.theta2[i];
+    add_inertial_prior(f, f->x.data(), problem);
+    out->residuals = 2 * out->samples_used;
+    return true;
+  }
+
+  void set_tolerances(ceres::Solver::Options* so) const override {
+    so->function_tolerance = 1e-12;
+    so->gradient_tolerance = 1e-14;
+    so->parameter_tolerance = 1e-10;
+  }
+
+  Status first_failure(const Fit& f, const std::vector<double>& x,
+                       const std::string& at) const override {
+    return first_failing_sample(f, x, at);
+  }
+
+  /// kLossScaleHuber or kLossScaleCauchy times a sample's expected residual level at the start
+  /// values (the two actuators' noise floors in quadrature: the loss sees the block's norm).
+  double default_loss_scale(const Fit& f, IdentifyResult* out) const override {
+    const IdentifyOptions& opt = *f.opt;
+    double scale = 0.1;
+    double floor[2];
+    noise_floor(f, noise_sensitivities(f), floor);
+    const double level = std::hypot(floor[0], floor[1]);
+    const double k = opt.loss == Loss::kHuber ? kLossScaleHuber : kLossScaleCauchy;
+    if (level > 0 && std::isfinite(level)) scale = k * level;
+    out->notes.push_back(std::string(loss_name(opt.loss)) + " loss at scale " +
+                         format_significant(scale) + " N m: " + format_significant(k, 4) +
+                         " times the residual's noise level per sample " +
+                         format_significant(level) + " N m (--loss-scale sets it)");
+    return scale;
+  }
+
+  /// The residual level at the start (the Jacobian is needed only after the solve).
+  void initial_levels(ceres::Problem* problem, IdentifyResult* out) const override {
+    std::vector<double> r0;
+    raw_residuals(problem, &r0);
+    r0.resize(out->residuals);
+    rms_pair(r0, out->rms_torque_residual_initial);
+  }
+
+  /// Group inertia: the prior's weight is set to the residual's noise level (the torque noise
+  /// plus the angle noise through the rates) and, if that differs, the fit is solved again.
+  bool refine(Fit* f, ceres::Problem* problem, IdentifyResult* out,
+              ceres::Solver::Summary* summary, Analysis* an) const override {
+    an->sens = noise_sensitivities(*f);
+    if (!f->layout.inertia) return true;
+    double floor[2];
+    noise_floor(*f, an->sens, floor);
+    const double s = std::max(floor[0], floor[1]);
+    if (s > 1.2 * f->prior_scale || s < f->prior_scale / 1.2) {
+      f->prior_scale = s;
+      solve(f, problem, out, summary);
+      if (!out->status.ok()) return false;
+      an->sens = noise_sensitivities(*f);
     }
     return true;
   }
 
- private:
-  const Params<double>& scene_;
-  ParameterLayout layout_;
-  const TorqueLog& log_;
-  int i0_, i1_;
-  sim::Options sim_;
-  sim::LoadFunction loads_;
-  sim::Initial initial_;
+  void residual_levels(const Fit& f, const Analysis& an, IdentifyResult* out) const override {
+    torque_residual_levels(f, an.r, an.sens, out);
+  }
+
+  Eigen::MatrixXd errors_in_variables(const Fit& f, const FreeSet& fs, const Analysis& an,
+                                      IdentifyResult* out) const override {
+    return score_sandwich(f, fs, an, out);
+  }
+
+  ModelVerdict check_model(const Fit& f, const Analysis& an, IdentifyResult* out) const override {
+    bound_and_misfit_warning(f, an, out);
+    return model_check(f, out);
+  }
+
+  void prediction_levels(const Fit&, IdentifyResult*) const override {}
+
+  bool fits_groups() const override { return true; }
+  bool chooses_window() const override { return true; }
+  bool excludes_reversals() const override { return true; }
+  bool restarts_stribeck() const override { return true; }
+  bool profiles_intervals() const override { return true; }
+  bool checks_readings() const override { return true; }
+};
+
+/// Angle residuals of the fitted scene simulated over windows from the logged states.
+class OutputErrorMethod final : public MethodStrategy {
+ public:
+  /// Windows over the used range (the rate threshold does not apply), differentiated by
+  /// central differences of relative step IdentifyOptions::relative_step.
+  bool add_residuals(Fit* f, IdentifyResult* out, ceres::Problem* problem) const override {
+    const IdentifyOptions& opt = *f->opt;
+    const sim::Options so = window_sim_options(opt.sim_rtol);
+    for (auto [i0, i1] : make_windows(f->cond.log, f->first, f->last, out->window_s)) {
+      const int m = add_window_residual(f, out->omega1, out->omega2, i0, i1, so, problem);
+      out->residuals += m;
+      f->window_sizes.push_back(m);
+    }
+    return true;
+  }
+
+  /// The simulated residual carries integrator noise (~rtol, a relative cost noise ~1e-4), so
+  /// less is asked of it.
+  void set_tolerances(ceres::Solver::Options* so) const override {
+    so->function_tolerance = 1e-3;
+    so->gradient_tolerance = 1e-10;
+    so->parameter_tolerance = 1e-7;
+  }
+
+  Status first_failure(const Fit&, const std::vector<double>&, const std::string&) const override {
+    return Status::Ok();
+  }
+
+  /// 0.1 rad.
+  double default_loss_scale(const Fit&, IdentifyResult*) const override { return 0.1; }
+
+  void initial_levels(ceres::Problem*, IdentifyResult*) const override {}
+
+  bool refine(Fit*, ceres::Problem*, IdentifyResult*, ceres::Solver::Summary*,
+              Analysis*) const override {
+    return true;
+  }
+
+  void residual_levels(const Fit& f, const Analysis& an, IdentifyResult* out) const override {
+    if (!f.opt->errors_in_variables) {
+      out->warnings.push_back(
+          "output-error standard deviations treat the angle residuals as independent; within a "
+          "window they are correlated (they integrate the torque noise), so the reported std "
+          "understate the uncertainty");
+    }
+    rms_pair(an.r, out->rms_angle_residual);
+  }
+
+  Eigen::MatrixXd errors_in_variables(const Fit& f, const FreeSet& fs, const Analysis& an,
+                                      IdentifyResult* out) const override {
+    return window_covariance(f, fs.J, an.r, out);
+  }
+
+  ModelVerdict check_model(const Fit&, const Analysis&, IdentifyResult*) const override {
+    return {};
+  }
+
+  void prediction_levels(const Fit& f, IdentifyResult* out) const override {
+    output_error_levels(f, out);
+  }
+
+  bool fits_groups() const override { return false; }
+  bool chooses_window() const override { return false; }
+  bool excludes_reversals() const override { return false; }
+  bool restarts_stribeck() const override { return false; }
+  bool profiles_intervals() const override { return false; }
+  bool checks_readings() const override { return false; }
 };
 
 }  // namespace
 
-std::vector<std::pair<int, int>> make_windows(const TorqueLog& log, int first, int last,
-                                              double window_s) {
-  std::vector<std::pair<int, int>> out;
-  int i0 = first;
-  while (i0 < last) {
-    int i1 = i0;
-    while (i1 < last && log.t[i1 + 1] - log.t[i0] <= window_s * (1 + 1e-9)) ++i1;
-    if (i1 == i0) ++i1;
-    // fold a short tail into the previous window
-    if (!out.empty() && log.t[last] - log.t[i0] < 0.5 * window_s) {
-      out.back().second = last;
-      break;
-    }
-    out.push_back({i0, i1});
-    i0 = i1;
-  }
-  return out;
-}
-
-sim::Options window_sim_options(double rtol) {
-  sim::Options o;
-  o.rtol = rtol;
-  o.atol = rtol;
-  o.method = sim::Method::kCvodeAdams;
-  return o;
-}
-
-namespace {
-
-/// Calls f(std::integral_constant<int, P>) for the parameter counts the layouts give (friction
-/// 2, 4, 10, 20, each with or without the 16 inertial parameters, and with the 6 actuator terms
-/// except after per-joint Stribeck with inertia); false for another count.
-template <typename F>
-bool with_size(int P, F&& f) {
-  switch (P) {
-    case 2: f(std::integral_constant<int, 2>()); return true;
-    case 4: f(std::integral_constant<int, 4>()); return true;
-    case 10: f(std::integral_constant<int, 10>()); return true;
-    case 20: f(std::integral_constant<int, 20>()); return true;
-    case 18: f(std::integral_constant<int, 18>()); return true;
-    case 26: f(std::integral_constant<int, 26>()); return true;
-    case 36: f(std::integral_constant<int, 36>()); return true;
-    // with the 6 actuator terms
-    case 8: f(std::integral_constant<int, 8>()); return true;
-    case 16: f(std::integral_constant<int, 16>()); return true;
-    case 24: f(std::integral_constant<int, 24>()); return true;
-    case 32: f(std::integral_constant<int, 32>()); return true;
-    default: return false;
-  }
-}
-
-}  // namespace
-
-/// The inverse-dynamics residual blocks of `samples` on the parameter block x (P =
-/// layout.size()); false for a parameter count with no compiled cost.
-bool add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayout& layout,
-                                const std::vector<Sample>& samples, const EvalOptions& eval,
-                                Loss loss, double loss_scale, double* x, ceres::Problem* problem) {
-  return with_size(layout.size(), [&](auto n) {
-    add_sized_terms<decltype(n)::value>(scene, layout, samples, eval, loss, loss_scale, x, problem);
-  });
-}
-
-
-void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem) {
-  if (!f->layout.inertia) return;
-  problem->AddResidualBlock(detail::inertial_prior_cost(f->prior, f->layout.size(),
-                                                        f->layout.inertia_offset(),
-                                                        &f->prior_scale),
-                            nullptr, x);
-}
-
-bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem) {
-  const IdentifyOptions& opt = *f->opt;
-  const int P = f->layout.size();
-  if (opt.method == Method::kInverseDynamics) {
-    const bool sized = add_inverse_dynamics_terms(f->scene, f->layout, f->samples, f->eval, opt.loss, f->loss_scale, f->x.data(), problem);
-    if (!sized) return false;
-    add_inertial_prior(f, f->x.data(), problem);
-    out->residuals = 2 * out->samples_used;
-  } else {
-    const sim::Options so = window_sim_options(opt.sim_rtol);
-    // output error: windows over the used range (the rate threshold does not apply)
-    for (auto [i0, i1] : make_windows(f->cond.log, f->first, f->last, out->window_s)) {
-      auto* w = new WindowResidual(f->scene, f->layout, f->cond.log, f->loads, out->omega1,
-                                   out->omega2, i0, i1, so);
-      ceres::NumericDiffOptions nd;
-      nd.relative_step_size = opt.relative_step;
-      auto* cost = new ceres::DynamicNumericDiffCostFunction<WindowResidual, ceres::CENTRAL>(
-          w, ceres::TAKE_OWNERSHIP, nd);
-      cost->AddParameterBlock(P);
-      cost->SetNumResiduals(w->residuals());
-      out->residuals += w->residuals();
-      f->window_sizes.push_back(w->residuals());
-      problem->AddResidualBlock(cost, make_loss(opt.loss, f->loss_scale), f->x.data());
-    }
-  }
-  for (int i = 0; i < P; ++i)
-    problem->SetParameterLowerBound(f->x.data(), i, f->layout.lower_bound(i));
-  return true;
-}
-
-ceres::Solver::Options solver_options(const IdentifyOptions& opt) {
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = opt.max_iterations;
-  so.num_threads = opt.num_threads;
-  // output error: the simulated residual carries integrator noise (~rtol), so ask less of it
-  const bool oe = opt.method == Method::kOutputError;
-  so.function_tolerance = oe ? 1e-3 : 1e-12;  // OE cost noise ~1e-4 relative
-  so.gradient_tolerance = oe ? 1e-10 : 1e-14;
-  so.parameter_tolerance = oe ? 1e-7 : 1e-10;
-  so.logging_type = ceres::SILENT;
-  return so;
+const MethodStrategy& method_strategy(Method method) {
+  static const InverseDynamicsMethod inverse_dynamics;
+  static const OutputErrorMethod output_error;
+  return method == Method::kOutputError ? static_cast<const MethodStrategy&>(output_error)
+                                        : inverse_dynamics;
 }
 
 }  // namespace fivebar::identification::stages

@@ -38,27 +38,6 @@ constexpr double kStructureRatio = 1.15;
 /// (their relative error is about 1 / sqrt(2 (windows - 1)), 24 % for 10 windows)
 constexpr int kFewWindows = 10;
 
-void residual_levels(const Fit& f, const std::vector<double>& r,
-                     const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
-  rms_pair(r, out->rms_torque_residual);
-  double noises[2], floors[2];
-  noise_floor(f, sens, out->residual_noise_floor, noises, floors);
-  for (int j = 0; j < kActuators; ++j) {
-    const double noise = noises[j], floor = floors[j];
-    const double ratio = out->rms_torque_residual[j] / out->residual_noise_floor[j];
-    if (ratio > kStructureRatio) {
-      out->warnings.push_back(
-          "tau" + std::to_string(j + 1) + " residual rms " +
-          format_significant(out->rms_torque_residual[j]) + " N m is " + format_significant(ratio) +
-          " times the noise floor " + format_significant(out->residual_noise_floor[j]) + " N m (" +
-          (noise >= floor ? "torque noise " + format_significant(f.noise.torque[j]) +
-                                " N m with the sensor noise propagated through the rates"
-                          : "0.1 % of the rms logged torque, the log being nearly noise-free") +
-          "): the residual has structure the fitted law (or the estimated rates) cannot "
-          "explain; see fig_residual_vs_rate.png");
-    }
-  }
-}
 
 }  // namespace
 
@@ -100,49 +79,43 @@ void inertial_stage(const Fit& f, const Eigen::MatrixXd& J, IdentifyResult* out)
   }
 }
 
-/// Output error: the block sandwich over the windows (covariance.h), whose residuals are
-/// correlated within a window (they integrate the torque noise from the logged start) and
-/// independent between windows. Empty when too few windows carry residuals (a warning).
-Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
-                                  const std::vector<double>& r, IdentifyResult* out) {
-  const std::vector<int>& sizes = f.window_sizes;
-  const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
-  const detail::BlockCovariance bc = detail::block_sandwich(Jf, rv, sizes);
-  if (bc.covariance.size() == 0) {
-    out->warnings.push_back("output error: " + std::to_string(sizes.size()) +
-                            " windows are too few to estimate the correlated residuals' "
-                            "covariance: standard deviations not given (use a longer log or a "
-                            "shorter --window)");
-    return {};
+
+/// The free parameters (covariance): off their bounds, with an effect on the residuals; empty
+/// index when none is.
+FreeSet free_set(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& Hp) {
+  FreeSet fs;
+  for (int i = 0; i < f.layout.size(); ++i) {
+    if (f.x[i] > f.layout.lower_bound(i) + 1e-12 && J.col(i).squaredNorm() > 0) {
+      fs.index.push_back(i);
+    }
   }
-  const auto [lo, hi] = std::minmax_element(bc.inflation.begin(), bc.inflation.end());
-  out->std_method = "window-sandwich";
-  // the variance is estimated from G independent windows: Student's t with G - 1 degrees of
-  // freedom for the 95 % intervals (the cluster-robust standard; 2.09 for 20 windows)
-  out->ci_dof = bc.blocks - 1;
-  out->ci_quantile = detail::t_quantile_975(out->ci_dof);
-  out->std_detail = "block sandwich over the residuals of " + std::to_string(bc.blocks) +
-                    " windows (correlated within a window, independent between windows): " +
-                    format_significant(*lo) + "-" + format_significant(*hi) +
-                    " times the std that treats the angle residuals as independent";
-  if (bc.blocks < kFewWindows) {
-    out->warnings.push_back("output error: the std come from the residuals of only " +
-                            std::to_string(bc.blocks) +
-                            " windows and are themselves uncertain (a longer log, or a shorter "
-                            "--window, gives more)");
+  const int n = static_cast<int>(fs.index.size());
+  fs.J.resize(J.rows(), n);
+  fs.Hp.resize(n, n);
+  for (int a = 0; a < n; ++a) {
+    fs.J.col(a) = J.col(fs.index[a]);
+    for (int b = 0; b < n; ++b) fs.Hp(a, b) = Hp(fs.index[a], fs.index[b]);
   }
-  return bc.covariance;
+  fs.s2 = f.prior_scale * f.prior_scale;
+  return fs;
 }
 
+/// `Cf` (over the free parameters) into the rows and columns fs.index of *C.
+void scatter_into(const FreeSet& fs, const Eigen::MatrixXd& Cf, Eigen::MatrixXd* C) {
+  for (size_t a = 0; a < fs.index.size(); ++a) {
+    for (size_t b = 0; b < fs.index.size(); ++b) (*C)(fs.index[a], fs.index[b]) = Cf(a, b);
+  }
+}
+
+}  // namespace
+
 /// Covariance of the internal parameters, only on a converged solution with a full-rank
-/// Jacobian (of the parameters off their bounds): errors in variables (sandwich) for inverse
-/// dynamics, the window sandwich for output error, else s^2 (J^T J)^-1.
-void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& Hp,
-                const std::vector<detail::Sensitivity>& sens, const std::vector<double>& r,
-                IdentifyResult* out, Eigen::MatrixXd* hinv) {
+/// Jacobian (of the parameters off their bounds): errors in variables (the method's, sandwich
+/// or window sandwich), else s^2 (J^T J)^-1. an->Hinv: (J^T J + Hp)^-1 of the free parameters.
+void covariance(const Fit& f, const Eigen::MatrixXd& Hp, Analysis* an, IdentifyResult* out) {
   const int P = f.layout.size();
   out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
-  *hinv = out->covariance;  // (J^T J + Hp)^-1 of the free parameters
+  an->Hinv = out->covariance;
   if (!out->converged) {
     out->warnings.push_back("the solver did not converge (" + out->solver_message +
                             "): no covariance, standard deviations not given");
@@ -150,21 +123,12 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& H
   }
   // parameters at a bound are held there (active constraints), and parameters without effect
   // on the residuals are left out: the covariance is that of the others
-  std::vector<int> free;
-  for (int i = 0; i < P; ++i) {
-    if (f.x[i] > f.layout.lower_bound(i) + 1e-12 && J.col(i).squaredNorm() > 0) free.push_back(i);
-  }
-  if (free.empty()) return;
-  Eigen::MatrixXd Jf(J.rows(), free.size()), Hpf(free.size(), free.size());
-  for (size_t a = 0; a < free.size(); ++a) {
-    Jf.col(a) = J.col(free[a]);
-    for (size_t b = 0; b < free.size(); ++b) Hpf(a, b) = Hp(free[a], free[b]);
-  }
+  FreeSet fs = free_set(f, an->J, Hp);
+  if (fs.index.empty()) return;
   // the prior (group inertia) as a pseudo-observation of noise level s: information Hp = s^2 /
   // sigma^2, score covariance s^2 Hp; the covariance is then the posterior one (a direction the
   // log cannot determine gets its prior std, the CAD error it may carry)
-  const double s2 = f.prior_scale * f.prior_scale;
-  const Eigen::MatrixXd H = Jf.transpose() * Jf + Hpf;
+  const Eigen::MatrixXd H = fs.J.transpose() * fs.J + fs.Hp;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
   const double emax = es.eigenvalues().maxCoeff(), emin = es.eigenvalues().minCoeff();
   if (!(emax > 0) || !(emin > 1e-14 * emax) || !H.allFinite()) {
@@ -176,29 +140,30 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& H
     }
     return;
   }
-  const Eigen::MatrixXd Hinv = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
-                               es.eigenvectors().transpose();
-  const auto scatter_into = [&](const Eigen::MatrixXd& Cf, Eigen::MatrixXd* C) {
-    for (size_t a = 0; a < free.size(); ++a) {
-      for (size_t b = 0; b < free.size(); ++b) (*C)(free[a], free[b]) = Cf(a, b);
-    }
-  };
-  const auto scatter = [&](const Eigen::MatrixXd& Cf) { scatter_into(Cf, &out->covariance); };
-  scatter_into(Hinv, hinv);  // the profile intervals' noise scale (intervals)
-  if (f.opt->errors_in_variables && f.opt->method == Method::kOutputError) {
-    const Eigen::MatrixXd Cw = window_covariance(f, Jf, r, out);
-    if (Cw.size() > 0) scatter(Cw);
+  fs.Hinv = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
+            es.eigenvectors().transpose();
+  scatter_into(fs, fs.Hinv, &an->Hinv);  // the profile intervals' noise scale (intervals)
+  if (f.opt->errors_in_variables) {
+    const Eigen::MatrixXd C = f.method->errors_in_variables(f, fs, *an, out);
+    if (C.size() > 0) scatter_into(fs, C, &out->covariance);
     return;
   }
-  if (!f.opt->errors_in_variables) {
-    const double sig2 = out->residual_sigma * out->residual_sigma;
-    // the prior at the residual's level: H = J^T J + sig2 / sigma^2
-    const Eigen::MatrixXd H2 = Jf.transpose() * Jf + Hpf * (sig2 / s2);
-    scatter(H2.ldlt().solve(Eigen::MatrixXd::Identity(H2.rows(), H2.cols())) * sig2);
-    out->std_method = "residual-variance";
-    return;
-  }
-  Eigen::MatrixXd S = detail::score_covariance(Jf, sens, f.noise, f.cond.log.size()) + s2 * Hpf;
+  const double sig2 = out->residual_sigma * out->residual_sigma;
+  // the prior at the residual's level: H = J^T J + sig2 / sigma^2
+  const Eigen::MatrixXd H2 = fs.J.transpose() * fs.J + fs.Hp * (sig2 / fs.s2);
+  scatter_into(fs, H2.ldlt().solve(Eigen::MatrixXd::Identity(H2.rows(), H2.cols())) * sig2,
+               &out->covariance);
+  out->std_method = "residual-variance";
+}
+
+/// Inverse dynamics, errors in variables: the sandwich Hinv S Hinv, S the score covariance of
+/// the sensor noise through the residual plus the residual beyond the modelled noise counted as
+/// white; with the Cramer-Rao bound of the torque noise alone (out->cramer_rao_std).
+Eigen::MatrixXd score_sandwich(const Fit& f, const FreeSet& fs, const Analysis& an,
+                               IdentifyResult* out) {
+  const Eigen::MatrixXd& Jf = fs.J;
+  Eigen::MatrixXd S =
+      detail::score_covariance(Jf, an.sens, f.noise, f.cond.log.size()) + fs.s2 * fs.Hp;
   // residual beyond the modelled noise (model mismatch, unmodelled noise) counted as white
   for (int j = 0; j < kActuators; ++j) {
     const double excess = std::max(
@@ -207,18 +172,22 @@ void covariance(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& H
       S += excess * Jf.row(row).transpose() * Jf.row(row);
     }
   }
-  scatter(Hinv * S * Hinv);
   out->std_method = "errors-in-variables";
   // Cramer-Rao bound for white torque noise alone (the logged level; angle noise ignored): a
   // lower bound the reported std should approach when the rates are logged
   const double st2 = std::max(f.noise.torque[0], f.noise.torque[1]);
   if (st2 > 0) {
-    const Eigen::MatrixXd Hc = Jf.transpose() * Jf / (st2 * st2) + Hpf / s2;
+    const Eigen::MatrixXd Hc = Jf.transpose() * Jf / (st2 * st2) + fs.Hp / fs.s2;
     const Eigen::MatrixXd Cc = Hc.ldlt().solve(Eigen::MatrixXd::Identity(Hc.rows(), Hc.cols()));
-    out->cramer_rao_std.assign(P, kNaN);
-    for (size_t a = 0; a < free.size(); ++a) out->cramer_rao_std[free[a]] = std::sqrt(Cc(a, a));
+    out->cramer_rao_std.assign(f.layout.size(), kNaN);
+    for (size_t a = 0; a < fs.index.size(); ++a) {
+      out->cramer_rao_std[fs.index[a]] = std::sqrt(Cc(a, a));
+    }
   }
+  return fs.Hinv * S * fs.Hinv;
 }
+
+namespace {
 
 /// Singular values of the (public) Jacobian with unit-norm columns, and the warnings they imply.
 void identifiability(const Eigen::MatrixXd& JtJ, const ParameterLayout& layout,
@@ -339,26 +308,71 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
 void analyse(const Fit& f, const std::vector<double>& x0_public,
              const ceres::Solver::Summary& summary, Analysis* an, IdentifyResult* out) {
   const int P = f.layout.size();
-  const bool id = f.opt->method == Method::kInverseDynamics;
   out->residual_sigma =
       std::sqrt(2.0 * summary.final_cost / std::max(1, summary.num_residuals - P));
-  if (!id && !f.opt->errors_in_variables) {
-    out->warnings.push_back(
-        "output-error standard deviations treat the angle residuals as independent; within a "
-        "window they are correlated (they integrate the torque noise), so the reported std "
-        "understate the uncertainty");
-  }
-  if (id) {
-    residual_levels(f, an->r, an->sens, out);
-  } else {
-    rms_pair(an->r, out->rms_angle_residual);
-  }
+  f.method->residual_levels(f, *an, out);
   const Eigen::MatrixXd Hp = prior_information(f);
-  covariance(f, an->J, Hp, an->sens, an->r, out, &an->Hinv);
+  covariance(f, Hp, an, out);
   const Eigen::MatrixXd Tinv = to_public(f.layout).inverse();
   identifiability(Tinv.transpose() * (an->J.transpose() * an->J + Hp) * Tinv, f.layout, out);
   estimates(f, x0_public, out);
   if (f.layout.inertia) inertial_stage(f, an->J, out);
+}
+
+/// Output error: the block sandwich over the windows (covariance.h), whose residuals are
+/// correlated within a window (they integrate the torque noise from the logged start) and
+/// independent between windows. Empty when too few windows carry residuals (a warning).
+Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
+                                  const std::vector<double>& r, IdentifyResult* out) {
+  const std::vector<int>& sizes = f.window_sizes;
+  const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
+  const detail::BlockCovariance bc = detail::block_sandwich(Jf, rv, sizes);
+  if (bc.covariance.size() == 0) {
+    out->warnings.push_back("output error: " + std::to_string(sizes.size()) +
+                            " windows are too few to estimate the correlated residuals' "
+                            "covariance: standard deviations not given (use a longer log or a "
+                            "shorter --window)");
+    return {};
+  }
+  const auto [lo, hi] = std::minmax_element(bc.inflation.begin(), bc.inflation.end());
+  out->std_method = "window-sandwich";
+  // the variance is estimated from G independent windows: Student's t with G - 1 degrees of
+  // freedom for the 95 % intervals (the cluster-robust standard; 2.09 for 20 windows)
+  out->ci_dof = bc.blocks - 1;
+  out->ci_quantile = detail::t_quantile_975(out->ci_dof);
+  out->std_detail = "block sandwich over the residuals of " + std::to_string(bc.blocks) +
+                    " windows (correlated within a window, independent between windows): " +
+                    format_significant(*lo) + "-" + format_significant(*hi) +
+                    " times the std that treats the angle residuals as independent";
+  if (bc.blocks < kFewWindows) {
+    out->warnings.push_back("output error: the std come from the residuals of only " +
+                            std::to_string(bc.blocks) +
+                            " windows and are themselves uncertain (a longer log, or a shorter "
+                            "--window, gives more)");
+  }
+  return bc.covariance;
+}
+
+void torque_residual_levels(const Fit& f, const std::vector<double>& r,
+                            const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
+  rms_pair(r, out->rms_torque_residual);
+  double noises[2], floors[2];
+  noise_floor(f, sens, out->residual_noise_floor, noises, floors);
+  for (int j = 0; j < kActuators; ++j) {
+    const double noise = noises[j], floor = floors[j];
+    const double ratio = out->rms_torque_residual[j] / out->residual_noise_floor[j];
+    if (ratio > kStructureRatio) {
+      out->warnings.push_back(
+          "tau" + std::to_string(j + 1) + " residual rms " +
+          format_significant(out->rms_torque_residual[j]) + " N m is " + format_significant(ratio) +
+          " times the noise floor " + format_significant(out->residual_noise_floor[j]) + " N m (" +
+          (noise >= floor ? "torque noise " + format_significant(f.noise.torque[j]) +
+                                " N m with the sensor noise propagated through the rates"
+                          : "0.1 % of the rms logged torque, the log being nearly noise-free") +
+          "): the residual has structure the fitted law (or the estimated rates) cannot "
+          "explain; see fig_residual_vs_rate.png");
+    }
+  }
 }
 
 }  // namespace fivebar::identification::stages

@@ -95,7 +95,7 @@ class ProfileFits {
       z_[coulomb_] = std::min(z_[coulomb_], theta);
       reduced_.SetParameterUpperBound(z_.data(), coulomb_, theta);
     }
-    ceres::Solver::Options so = solver_options(*f_.opt);
+    ceres::Solver::Options so = solver_options(f_);
     so.max_num_iterations = 50;
     ceres::Solver::Summary summary;
     ceres::Solve(so, &reduced_, &summary);
@@ -157,7 +157,7 @@ void intervals(const Fit& f, ceres::Problem* problem, const Analysis& an, Identi
     e.ci_high = e.value + out->ci_quantile * e.std;
     e.ci_method = "wald";
   }
-  if (f.opt->method != Method::kInverseDynamics || f.opt->loss != Loss::kNone || !out->converged) {
+  if (!f.method->profiles_intervals() || f.opt->loss != Loss::kNone || !out->converged) {
     return;
   }
   for (int i = 0; i < static_cast<int>(out->parameters.size()); ++i) {

@@ -92,7 +92,7 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
                          const ModelVerdict& verdict, IdentifyResult* out) {
   const double ours = misfit_ratio(*out);
   const unsigned suspect = verdict.negative_readings;
-  if (!opt.check_torque_sign || opt.method != Method::kInverseDynamics ||
+  if (!opt.check_torque_sign || !method_strategy(opt.method).checks_readings() ||
       verdict.cause_decided || !(ours > kMisfitRatio || suspect != 0)) {
     return false;
   }
@@ -139,7 +139,7 @@ bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunct
                                const TorqueLog& log, const IdentifyOptions& opt,
                                const ModelVerdict& verdict, IdentifyResult* out) {
   const double ours = misfit_ratio(*out);
-  if (!opt.check_per_joint || opt.layout.per_joint || opt.method != Method::kInverseDynamics ||
+  if (!opt.check_per_joint || opt.layout.per_joint || !method_strategy(opt.method).checks_readings() ||
       verdict.cause_decided || !(ours > kMisfitRatio)) {
     return false;
   }

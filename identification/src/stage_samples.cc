@@ -172,7 +172,7 @@ int reversal_half_window(Fit* f, IdentifyResult* out) {
   const bool raised = f->sg.order > f->opt->sg.order &&
                       f->layout.group_of(Coefficient::kStaticCoulomb) < 0;  // no fitted peak
   if (!out->accels_estimated || !f->opt->exclude_reversals ||
-      f->opt->method != Method::kInverseDynamics || raised) {
+      !f->method->excludes_reversals() || raised) {
     return 0;
   }
   f->reversals = reversal_counts(*f, *out);
@@ -281,7 +281,7 @@ void select_samples(Fit* f, IdentifyResult* out) {
 
 }  // namespace
 
-Status first_failure(const Fit& f, const std::vector<double>& x, const std::string& at) {
+Status first_failing_sample(const Fit& f, const std::vector<double>& x, const std::string& at) {
   Params<double> p = f.scene;
   f.layout.apply(x.data(), &p);
   for (size_t u = 0; u < f.samples.size(); ++u) {
@@ -321,7 +321,6 @@ void reversal_note(const Fit& f, IdentifyResult* out) {
 bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out) {
   const IdentifyOptions& opt = *f->opt;
   const int P = f->layout.size();
-  const bool id = opt.method == Method::kInverseDynamics;
   const auto rates_and_samples = [&]() {
     estimate_rates(f, out);
     require_samples(log, P + 1 + (out->accels_estimated ? 2 * out->sg_half_window : 0),
@@ -329,11 +328,11 @@ bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out)
                         (out->accels_estimated ? " + the Savitzky-Golay window" : std::string()));
     select_samples(f, out);
     // a sample the model cannot evaluate at the start values is a numerical failure, named
-    if (id) out->status = first_failure(*f, f->x, "at the start values");
+    out->status = f->method->first_failure(*f, f->x, "at the start values");
     return out->status.ok();
   };
   if (!rates_and_samples()) return false;
-  if (out->accels_estimated && opt.auto_window && id) {
+  if (out->accels_estimated && opt.auto_window && f->method->chooses_window()) {
     const std::vector<double> x_start = f->x;
     preliminary_fit(f);
     choose_window(f, out);

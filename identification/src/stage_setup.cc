@@ -158,6 +158,7 @@ void init_fit(const Params<double>& scene_in, const sim::LoadFunction& loads, co
   out->samples = log.size();
   out->window_s = output_error_window(opt.window_s, log.duration());
   f->opt = &opt;
+  f->method = &method_strategy(opt.method);
   f->loads = loads;
   f->layout = opt.layout;
   f->layout.static_as_excess = f->layout.group_of(Coefficient::kStaticCoulomb) >= 0;
@@ -194,6 +195,17 @@ bool angles_give_better_rates(const Fit& f, IdentifyResult* out) {
                        " rad/s): rates and accelerations estimated from the angles, the logged "
                        "rates not used");
   return true;
+}
+
+detail::RateSource rate_source(const Fit& f, const TorqueLog& log, IdentifyResult* out) {
+  const detail::RateSource given = !log.has_rates || f.opt->estimate_rates
+                                       ? detail::RateSource::kFromAngles
+                                   : !log.has_accels ? detail::RateSource::kAccelsFromRates
+                                                     : detail::RateSource::kLogged;
+  if (given != detail::RateSource::kFromAngles && angles_give_better_rates(f, out)) {
+    return detail::RateSource::kFromAngles;
+  }
+  return given;
 }
 
 }  // namespace fivebar::identification::stages

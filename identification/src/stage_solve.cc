@@ -60,8 +60,8 @@ namespace {
 /// with the least cost is the start of the final solve. f->x is left at that start.
 void best_stribeck_start(Fit* f, ceres::Problem* problem) {
   const int g = f->layout.group_of(Coefficient::kStribeckVelocity);
-  if (g < 0 || f->opt->method != Method::kInverseDynamics) return;
-  const ceres::Solver::Options so = solver_options(*f->opt);
+  if (g < 0 || !f->method->restarts_stribeck()) return;
+  const ceres::Solver::Options so = solver_options(*f);
   const std::vector<double> x0 = f->x;
   std::vector<double> best = x0;
   double best_cost = std::numeric_limits<double>::infinity();
@@ -85,7 +85,7 @@ void best_stribeck_start(Fit* f, ceres::Problem* problem) {
 }  // namespace
 
 void solve(Fit* f, ceres::Problem* problem, IdentifyResult* out, ceres::Solver::Summary* summary) {
-  ceres::Solve(solver_options(*f->opt), problem, summary);
+  ceres::Solve(solver_options(*f), problem, summary);
   out->iterations += static_cast<int>(summary->iterations.size());
   out->converged = summary->termination_type == ceres::CONVERGENCE;
   out->solver_message = summary->BriefReport();
@@ -96,9 +96,7 @@ void solve(Fit* f, ceres::Problem* problem, IdentifyResult* out, ceres::Solver::
   bool finite = evaluates;
   for (double v : r) finite = finite && std::isfinite(v);
   if (summary->IsSolutionUsable() && finite) return;
-  Status st = f->opt->method == Method::kInverseDynamics
-                  ? first_failure(*f, f->x, "at the solver's last iterate")
-                  : Status::Ok();
+  Status st = f->method->first_failure(*f, f->x, "at the solver's last iterate");
   if (st.ok()) {
     st = Status::Error(StatusCode::kSolverFailed,
                        std::string("Ceres: ") +
@@ -106,24 +104,6 @@ void solve(Fit* f, ceres::Problem* problem, IdentifyResult* out, ceres::Solver::
   }
   out->status = st;
 }
-
-namespace {
-
-/// Sensor-noise sensitivities of every sample of the fit at the parameters f->x.
-std::vector<detail::Sensitivity> noise_sensitivities(const Fit& f) {
-  std::vector<detail::Sensitivity> sens;
-  sens.reserve(f.samples.size());
-  for (size_t u = 0; u < f.samples.size(); ++u) {
-    Eigen::Matrix<double, 2, 6> D;
-    if (!detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), f.samples[u], f.eval, &D)) {
-      D.setZero();
-    }
-    sens.push_back(detail::sensitivity(f.cond.log.t, f.index[u], f.source, f.sg, f.noise, D));
-  }
-  return sens;
-}
-
-}  // namespace
 
 void noise_floor(const Fit& f, const std::vector<detail::Sensitivity>& sens, double floor[2],
                  double noise[2], double absolute[2]) {
@@ -149,18 +129,7 @@ void choose_loss_scale(Fit* f, IdentifyResult* out) {
   const IdentifyOptions& opt = *f->opt;
   f->loss_scale = opt.loss_scale;
   if (opt.loss != Loss::kNone && !(opt.loss_scale > 0)) {
-    f->loss_scale = 0.1;
-    if (opt.method == Method::kInverseDynamics) {
-      double floor[2];
-      noise_floor(*f, noise_sensitivities(*f), floor);
-      const double level = std::hypot(floor[0], floor[1]);
-      const double k = opt.loss == Loss::kHuber ? kLossScaleHuber : kLossScaleCauchy;
-      if (level > 0 && std::isfinite(level)) f->loss_scale = k * level;
-      out->notes.push_back(std::string(loss_name(opt.loss)) + " loss at scale " +
-                           format_significant(f->loss_scale) + " N m: " + format_significant(k, 4) +
-                           " times the residual's noise level per sample " +
-                           format_significant(level) + " N m (--loss-scale sets it)");
-    }
+    f->loss_scale = f->method->default_loss_scale(*f, out);
   }
   out->loss_scale = opt.loss == Loss::kNone ? 0.0 : f->loss_scale;
 }
@@ -187,31 +156,46 @@ void data_residuals(ceres::Problem* problem, int P, int m, Analysis* an) {
 
 bool solve_stage(Fit* f, ceres::Problem* problem, IdentifyResult* out,
                  ceres::Solver::Summary* summary, Analysis* an) {
-  const bool id = f->opt->method == Method::kInverseDynamics;
-  const int P = f->layout.size();
-  if (id) {  // the residual level at the start (the Jacobian is needed only after the solve)
-    std::vector<double> r0;
-    raw_residuals(problem, &r0);
-    r0.resize(out->residuals);
-    rms_pair(r0, out->rms_torque_residual_initial);
-  }
+  f->method->initial_levels(problem, out);
   best_stribeck_start(f, problem);
   solve(f, problem, out, summary);
-  if (!out->status.ok()) return false;
-  if (id) an->sens = noise_sensitivities(*f);
-  if (id && f->layout.inertia) {
-    double floor[2];
-    noise_floor(*f, an->sens, floor);
-    const double s = std::max(floor[0], floor[1]);
-    if (s > 1.2 * f->prior_scale || s < f->prior_scale / 1.2) {
-      f->prior_scale = s;
-      solve(f, problem, out, summary);
-      if (!out->status.ok()) return false;
-      an->sens = noise_sensitivities(*f);
-    }
-  }
-  data_residuals(problem, P, out->residuals, an);
+  if (!out->status.ok() || !f->method->refine(f, problem, out, summary, an)) return false;
+  data_residuals(problem, f->layout.size(), out->residuals, an);
   return true;
+}
+
+/// Sensor-noise sensitivities of every sample of the fit at the parameters f->x.
+std::vector<detail::Sensitivity> noise_sensitivities(const Fit& f) {
+  std::vector<detail::Sensitivity> sens;
+  sens.reserve(f.samples.size());
+  for (size_t u = 0; u < f.samples.size(); ++u) {
+    Eigen::Matrix<double, 2, 6> D;
+    if (!detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), f.samples[u], f.eval, &D)) {
+      D.setZero();
+    }
+    sens.push_back(detail::sensitivity(f.cond.log.t, f.index[u], f.source, f.sg, f.noise, D));
+  }
+  return sens;
+}
+
+/// The fit's problem: the method's residual blocks on f->x, the parameters' lower bounds.
+bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem) {
+  if (!f->method->add_residuals(f, out, problem)) return false;
+  for (int i = 0; i < f->layout.size(); ++i)
+    problem->SetParameterLowerBound(f->x.data(), i, f->layout.lower_bound(i));
+  return true;
+}
+
+/// The solver's options: dense QR, the iteration limit and threads of the options, the method's
+/// tolerances.
+ceres::Solver::Options solver_options(const Fit& f) {
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = f.opt->max_iterations;
+  so.num_threads = f.opt->num_threads;
+  f.method->set_tolerances(&so);
+  so.logging_type = ceres::SILENT;
+  return so;
 }
 
 }  // namespace fivebar::identification::stages
