@@ -140,8 +140,11 @@ void covariance(const Fit& f, const Eigen::MatrixXd& Hp, Analysis* an, IdentifyR
     }
     return;
   }
-  fs.Hinv = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
-            es.eigenvectors().transpose();
+  // evaluated into a matrix of its own, then copied: assigned into fs.Hinv directly, Eigen
+  // takes another product path, whose last bits differ
+  const Eigen::MatrixXd Hinv = es.eigenvectors() * es.eigenvalues().cwiseInverse().asDiagonal() *
+                               es.eigenvectors().transpose();
+  fs.Hinv = Hinv;
   scatter_into(fs, fs.Hinv, &an->Hinv);  // the profile intervals' noise scale (intervals)
   if (f.opt->errors_in_variables) {
     const Eigen::MatrixXd C = f.method->errors_in_variables(f, fs, *an, out);
