@@ -1,7 +1,9 @@
+// The stages of identify() (identify.cc), one file each (docs/architecture.md): the state they
+// share (Fit, Analysis, ModelVerdict) and the functions one stage takes from another.
 #pragma once
 
-#include "fivebar/identification/identify.h"
 #include <ceres/ceres.h>
+
 #include <Eigen/Dense>
 #include <array>
 #include <algorithm>
@@ -10,16 +12,15 @@
 #include <functional>
 #include <iterator>
 #include <limits>
-#include <mutex>
 #include <memory>
 #include <sstream>
-#include <glog/logging.h>
+
+#include "fivebar/identification/identify.h"
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/names.h"
 #include "fivebar/model/rest.h"
 #include "covariance.h"
-#include "fallback_cost.h"
 #include "inertia.h"
 #include "misfit.h"
 #include "noise_model.h"
@@ -50,36 +51,44 @@ constexpr double kMisfitRatio = 3.0;
 
 // ---- stages of identify() ----
 
-/// The state the stages of identify() share.
+/// The state the stages of identify() share, grouped by the stage that writes it; each stage
+/// reads what the stages before it wrote.
 struct Fit {
+  // setup (init_fit, start_values): what the options and the scene decide
   const IdentifyOptions* opt = nullptr;
   const MethodStrategy* method = nullptr;  ///< the method's strategy (method_strategy)
   sim::LoadFunction loads;
   Params<double> scene;    ///< the law to fit and the Coulomb sign form
   ParameterLayout layout;  ///< internal (Stribeck: static_coulomb as excess over coulomb)
-  ConditionedLog cond;     ///< the log as fitted
-  std::vector<int> window_sizes;  ///< output error: residuals of each window, in problem order
+  EvalOptions eval;             ///< the model's evaluation (rest_rate set by select_samples)
+  detail::InertialPrior prior;  ///< group inertia
+  std::vector<double> x;        ///< internal parameter vector: the start, then the fit's
+
+  // conditioning (prepare_log, rate_source)
+  ConditionedLog cond;  ///< the log as fitted
+  detail::SensorNoise noise;
   detail::RateSource source = detail::RateSource::kLogged;
+
+  // rates, window and samples (rates_window_and_samples)
   SgOptions sg;              ///< as used
   int first = 0, last = -1;  ///< samples with a centred Savitzky-Golay window
-  EvalOptions eval;
   std::vector<Sample> samples;
   std::vector<int> index;  ///< log index of each sample in the fit
   /// slip reversals of the rates of the fit: reversals[i] = how many lie between samples k and
   /// k + 1 for k < i (reversal_counts)
   std::vector<int> reversals;
-  std::vector<double> x;   ///< internal parameter vector
-  detail::SensorNoise noise;
-  detail::InertialPrior prior;  ///< group inertia
-  /// the torque residual's noise level that weighs the prior against the data [N m]
-  double prior_scale = 1;
-  /// predicted smoothing bias of the public friction coefficients at the chosen window
-  /// (limit_smoothing_bias; empty when not predicted), taken off the estimates
-  Eigen::VectorXd smoothing_bias;
-  double loss_scale = 0;  ///< the robust loss's scale as applied (choose_loss_scale)
   /// the estimated accelerations' smoothing shows at every window (choose_window): model_check
   /// names no cause, the misfit being the rates' as much as the model's
   bool rates_biased = false;
+  /// predicted smoothing bias of the public friction coefficients at the chosen window
+  /// (limit_smoothing_bias; empty when not predicted), taken off the estimates
+  Eigen::VectorXd smoothing_bias;
+
+  // the fit (choose_loss_scale, build_problem, solve_stage)
+  double loss_scale = 0;  ///< the robust loss's scale as applied (choose_loss_scale)
+  std::vector<int> window_sizes;  ///< output error: residuals of each window, in problem order
+  /// the torque residual's noise level that weighs the prior against the data [N m]
+  double prior_scale = 1;
 };
 
 /// What the stages after the solve share: the data residuals and their Jacobian at the fit, and

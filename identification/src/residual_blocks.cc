@@ -1,32 +1,7 @@
 // The residual blocks of the two methods: the inverse-dynamics blocks of the samples (one
 // place chooses the compiled cost for the parameter count) and the output-error windows.
-#include "fivebar/identification/identify.h"
-#include <ceres/ceres.h>
-#include <Eigen/Dense>
-#include <array>
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <functional>
-#include <iterator>
-#include <limits>
-#include <mutex>
-#include <memory>
-#include <sstream>
-#include <glog/logging.h>
-#include "fivebar/identification/residual.h"
-#include "fivebar/model/dynamics.h"
-#include "fivebar/model/names.h"
-#include "fivebar/model/rest.h"
-#include "identify_stages.h"
-#include "covariance.h"
 #include "fallback_cost.h"
-#include "inertia.h"
-#include "misfit.h"
-#include "noise_model.h"
-#include "profile.h"
-#include "smoothing_bias.h"
-#include "window_misfit.h"
+#include "identify_stages.h"
 
 namespace fivebar::identification::stages {
 
@@ -52,11 +27,9 @@ ceres::LossFunction* make_loss(Loss loss, double scale) {
   return nullptr;
 }
 
-}  // namespace
-
-
-namespace {
-
+/// The inverse-dynamics residual blocks, one per sample, on P parameters: from the sample's
+/// structure (residual.h: the Jets carry only the P active parameters through a five-number
+/// loop), or the full model where the structure cannot be read off (fallback_cost.h).
 template <int P>
 void add_sized_terms(const Params<double>& scene, const ParameterLayout& layout,
                      const std::vector<Sample>& samples, const EvalOptions& eval, Loss loss,
@@ -76,7 +49,10 @@ void add_sized_terms(const Params<double>& scene, const ParameterLayout& layout,
 
 /// Calls f(std::integral_constant<int, P>) for the parameter counts the layouts give (friction
 /// 2, 4, 10, 20, each with or without the 16 inertial parameters, and with the 6 actuator terms
-/// except after per-joint Stribeck with inertia); false for another count.
+/// except after per-joint Stribeck with inertia); false for another count. The one place that
+/// maps the run-time count to a compiled Jet width: one Jet<double, P> pass per evaluation
+/// (ceres::DynamicAutoDiffCostFunction's passes of a fixed stride measured slower,
+/// docs/dev/figures-build.md).
 template <typename F>
 bool with_size(int P, F&& f) {
   switch (P) {
@@ -95,51 +71,6 @@ bool with_size(int P, F&& f) {
     default: return false;
   }
 }
-
-#ifdef FIVEBAR_ID_DYNAMIC_COST
-/// StructuredResidual in the form DynamicAutoDiffCostFunction calls (one parameter block).
-class DynamicStructured {
- public:
-  explicit DynamicStructured(const StructuredResidual& r) : r_(r) {}
-  template <typename T>
-  bool operator()(T const* const* x, T* out) const {
-    return r_(x[0], out);
-  }
-
- private:
-  StructuredResidual r_;
-};
-
-/// InverseDynamicsResidual's cost on a run-time parameter count: ceil(P / W) passes of W
-/// columns with a compiled Jet width (jet_dynamics.h).
-class DynamicFallbackCost final : public ceres::DynamicCostFunction {
- public:
-  DynamicFallbackCost(const InverseDynamicsResidual& r, int P) : r_(r) {
-    AddParameterBlock(P);
-    SetNumResiduals(2);
-  }
-  bool Evaluate(double const* const* x, double* residuals, double** jacobians) const override {
-    if (jacobians == nullptr || jacobians[0] == nullptr) return r_(x[0], residuals);
-    constexpr int W = 10;
-    using J = ceres::Jet<double, W>;
-    const int P = parameter_block_sizes()[0];
-    std::vector<J> xj(P);
-    for (int c0 = 0; c0 < P; c0 += W) {
-      for (int i = 0; i < P; ++i) xj[i] = i >= c0 && i < c0 + W ? J(x[0][i], i - c0) : J(x[0][i]);
-      std::array<J, 2> rj;
-      if (!r_(xj.data(), rj.data())) return false;
-      for (int k = 0; k < 2; ++k) {
-        residuals[k] = rj[k].a;
-        for (int i = c0; i < std::min(P, c0 + W); ++i) jacobians[0][k * P + i] = rj[k].v[i - c0];
-      }
-    }
-    return true;
-  }
-
- private:
-  InverseDynamicsResidual r_;
-};
-#endif
 
 /// Output error over one window [i0, i1]: simulated minus logged angles at samples i0+1..i1.
 class WindowResidual {
@@ -228,33 +159,14 @@ sim::Options window_sim_options(double rtol) {
 }
 
 /// The inverse-dynamics residual blocks of `samples` on the parameter block x (P =
-/// layout.size()); false for a parameter count with no compiled cost.
+/// layout.size(), through with_size); false for a parameter count with no compiled cost.
 bool add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayout& layout,
                                 const std::vector<Sample>& samples, const EvalOptions& eval,
                                 Loss loss, double loss_scale, double* x, ceres::Problem* problem) {
-#ifdef FIVEBAR_ID_DYNAMIC_COST
-  const int P = layout.size();
-  for (const Sample& s : samples) {
-    SampleStructure st;
-    ceres::CostFunction* cost = nullptr;
-    if (sample_structure(scene, s, eval, &st)) {
-      auto* c = new ceres::DynamicAutoDiffCostFunction<DynamicStructured, FIVEBAR_ID_DYNAMIC_COST>(
-          new DynamicStructured(StructuredResidual(scene, layout, st, s, eval)));
-      c->AddParameterBlock(P);
-      c->SetNumResiduals(2);
-      cost = c;
-    } else {
-      cost = new DynamicFallbackCost(InverseDynamicsResidual(scene, layout, s, eval), P);
-    }
-    problem->AddResidualBlock(cost, make_loss(loss, loss_scale), x);
-  }
-  return true;
-#endif
   return with_size(layout.size(), [&](auto n) {
     add_sized_terms<decltype(n)::value>(scene, layout, samples, eval, loss, loss_scale, x, problem);
   });
 }
-
 
 void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem) {
   if (!f->layout.inertia) return;

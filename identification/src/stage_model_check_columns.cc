@@ -1,30 +1,6 @@
-#include "fivebar/identification/identify.h"
-#include <ceres/ceres.h>
-#include <Eigen/Dense>
-#include <array>
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <functional>
-#include <iterator>
-#include <limits>
-#include <mutex>
-#include <memory>
-#include <sstream>
-#include <glog/logging.h>
-#include "fivebar/identification/residual.h"
-#include "fivebar/model/dynamics.h"
-#include "fivebar/model/names.h"
-#include "fivebar/model/rest.h"
+// Model check of identify(), its Jacobian: the columns of the causes it frees (inertia, angle
+// offsets, torque readings) and the acceleration-bias scores.
 #include "identify_stages.h"
-#include "covariance.h"
-#include "fallback_cost.h"
-#include "inertia.h"
-#include "misfit.h"
-#include "noise_model.h"
-#include "profile.h"
-#include "smoothing_bias.h"
-#include "window_misfit.h"
 
 namespace fivebar::identification::stages {
 
@@ -36,7 +12,8 @@ namespace {
 /// caller, who may change it between evaluations); false for an unsupported size.
 bool check_problem(const Fit& f, const ParameterLayout& layout2, std::vector<double>* x2,
                    ceres::Problem* problem) {
-  return add_inverse_dynamics_terms(f.scene, layout2, f.samples, f.eval, Loss::kNone, 1, x2->data(), problem);
+  return add_inverse_dynamics_terms(f.scene, layout2, f.samples, f.eval, Loss::kNone, 1, x2->data(),
+                                    problem);
 }
 
 /// The Jacobian of `problem`'s residuals (P parameters) at its current values, rows whitened by
@@ -84,7 +61,8 @@ bool offset_columns(const Fit& f, const double fl[2], Eigen::MatrixXd* Jo) {
       for (Sample& s : shifted) (c == 0 ? s.th1 : s.th2) -= sgn * h;
       std::vector<double> x = f.x, r;
       ceres::Problem problem;
-      const bool sized = add_inverse_dynamics_terms(f.scene, f.layout, shifted, f.eval, Loss::kNone, 1, x.data(), &problem);
+      const bool sized = add_inverse_dynamics_terms(f.scene, f.layout, shifted, f.eval, Loss::kNone,
+                                                    1, x.data(), &problem);
       if (!sized || !raw_residuals(&problem, &r) || static_cast<int>(r.size()) != m) return false;
       for (int row = 0; row < m; ++row) (*Jo)(row, c) += sgn * r[row] / (2 * h * fl[row % 2]);
     }

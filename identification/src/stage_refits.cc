@@ -1,30 +1,6 @@
-#include "fivebar/identification/identify.h"
-#include <ceres/ceres.h>
-#include <Eigen/Dense>
-#include <array>
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <functional>
-#include <iterator>
-#include <limits>
-#include <mutex>
-#include <memory>
-#include <sstream>
-#include <glog/logging.h>
-#include "fivebar/identification/residual.h"
-#include "fivebar/model/dynamics.h"
-#include "fivebar/model/names.h"
-#include "fivebar/model/rest.h"
+// Sign and per-joint checks of identify(): refits of the negated torques and of one coefficient
+// per joint.
 #include "identify_stages.h"
-#include "covariance.h"
-#include "fallback_cost.h"
-#include "inertia.h"
-#include "misfit.h"
-#include "noise_model.h"
-#include "profile.h"
-#include "smoothing_bias.h"
-#include "window_misfit.h"
 
 namespace fivebar::identification::stages {
 
@@ -139,8 +115,9 @@ bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunct
                                const TorqueLog& log, const IdentifyOptions& opt,
                                const ModelVerdict& verdict, IdentifyResult* out) {
   const double ours = misfit_ratio(*out);
-  if (!opt.check_per_joint || opt.layout.per_joint || !method_strategy(opt.method).checks_readings() ||
-      verdict.cause_decided || !(ours > kMisfitRatio)) {
+  if (!opt.check_per_joint || opt.layout.per_joint ||
+      !method_strategy(opt.method).checks_readings() || verdict.cause_decided ||
+      !(ours > kMisfitRatio)) {
     return false;
   }
   IdentifyOptions again = opt;

@@ -1,30 +1,6 @@
-#include "fivebar/identification/identify.h"
-#include <ceres/ceres.h>
-#include <Eigen/Dense>
-#include <array>
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <functional>
-#include <iterator>
-#include <limits>
-#include <mutex>
-#include <memory>
-#include <sstream>
-#include <glog/logging.h>
-#include "fivebar/identification/residual.h"
-#include "fivebar/model/dynamics.h"
-#include "fivebar/model/names.h"
-#include "fivebar/model/rest.h"
+// Smoothing bias of the data-driven window: the window limited by its predicted bias, and the
+// bias taken off the estimates.
 #include "identify_stages.h"
-#include "covariance.h"
-#include "fallback_cost.h"
-#include "inertia.h"
-#include "misfit.h"
-#include "noise_model.h"
-#include "profile.h"
-#include "smoothing_bias.h"
-#include "window_misfit.h"
 
 namespace fivebar::identification::stages {
 
@@ -54,7 +30,8 @@ detail::BiasInputs bias_inputs(const Fit& f, int reach, int min_half) {
   in.index = f.index;
   ceres::Problem problem;
   std::vector<double> x = f.x;
-  add_inverse_dynamics_terms(f.scene, f.layout, f.samples, f.eval, Loss::kNone, 1, x.data(), &problem);
+  add_inverse_dynamics_terms(f.scene, f.layout, f.samples, f.eval, Loss::kNone, 1, x.data(),
+                             &problem);
   ceres::CRSMatrix crs;
   std::vector<double> r;
   if (problem.NumResidualBlocks() > 0 && raw_residuals(&problem, &r, &crs)) in.J = dense(crs, P);

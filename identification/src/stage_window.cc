@@ -1,30 +1,6 @@
-#include "fivebar/identification/identify.h"
-#include <ceres/ceres.h>
-#include <Eigen/Dense>
-#include <array>
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <functional>
-#include <iterator>
-#include <limits>
-#include <mutex>
-#include <memory>
-#include <sstream>
-#include <glog/logging.h>
-#include "fivebar/identification/residual.h"
-#include "fivebar/model/dynamics.h"
-#include "fivebar/model/names.h"
-#include "fivebar/model/rest.h"
+// Window stage of identify(): the data-driven Savitzky-Golay window, read off the torque
+// residual at a preliminary fit.
 #include "identify_stages.h"
-#include "covariance.h"
-#include "fallback_cost.h"
-#include "inertia.h"
-#include "misfit.h"
-#include "noise_model.h"
-#include "profile.h"
-#include "smoothing_bias.h"
-#include "window_misfit.h"
 
 namespace fivebar::identification::stages {
 
@@ -261,7 +237,8 @@ void preliminary_fit(Fit* f) {
   for (size_t u = 0; u < f->samples.size(); u += step) g.samples.push_back(f->samples[u]);
   ceres::Problem problem;
   std::vector<double> x = f->x;
-  const bool sized = add_inverse_dynamics_terms(g.scene, g.layout, g.samples, g.eval, Loss::kNone, 1, x.data(), &problem);
+  const bool sized = add_inverse_dynamics_terms(g.scene, g.layout, g.samples, g.eval, Loss::kNone,
+                                                1, x.data(), &problem);
   if (!sized) return;
   add_inertial_prior(f, x.data(), &problem);
   for (int i = 0; i < P; ++i) problem.SetParameterLowerBound(x.data(), i, f->layout.lower_bound(i));
