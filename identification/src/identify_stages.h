@@ -119,7 +119,7 @@ struct ModelVerdict {
   bool cause_decided = false;
 };
 
-// ---- method.cc ----
+// ---- residual_blocks.cc ----
 
 /// Linear interpolation of y(t) on the sorted grid ts (clamped at the ends).
 double interp(const std::vector<double>& ts, const std::vector<double>& y, double t);
@@ -135,12 +135,16 @@ bool add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayo
 std::vector<std::pair<int, int>> make_windows(const TorqueLog& log, int first, int last,
                                               double window_s);
 
+/// The simulator options of an output-error window and of validate(): CVODE Adams at rtol.
 sim::Options window_sim_options(double rtol);
 
 /// Group inertia: the prior and consistency residuals (inertia.h) on the parameter block x.
 void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem);
 
-
+/// Output error: the window [i0, i1] (WindowResidual) on f->x, rates w1, w2 at its start;
+/// returns its residual count.
+int add_window_residual(Fit* f, const std::vector<double>& w1, const std::vector<double>& w2,
+                        int i0, int i1, const sim::Options& so, ceres::Problem* problem);
 
 // ---- stage_setup.cc ----
 
@@ -153,6 +157,7 @@ void sg_noise_gains(const std::vector<double>& t, const SgOptions& sg, double* g
 /// excess for Stribeck; identity otherwise).
 Eigen::MatrixXd to_public(const ParameterLayout& layout);
 
+/// "line L (t = T s)" of log sample i, for messages.
 std::string sample_name(const TorqueLog& log, int i);
 
 /// Degrees told by the motion, then unwrapping and glitch rejection, then the poses.
@@ -175,6 +180,7 @@ double initial_prior_scale(const Fit& f);
 /// sign and viscous terms and the reactions (errors in variables), so the rates and
 /// accelerations are estimated from the angles instead, with a note saying so.
 bool angles_give_better_rates(const Fit& f, IdentifyResult* out);
+
 /// Where the rates and accelerations come from: the log's own when it has them (and the
 /// options do not ask to estimate them), unless the angles give better ones
 /// (angles_give_better_rates, which notes it).
@@ -277,6 +283,15 @@ Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P);
 bool solve_stage(Fit* f, ceres::Problem* problem, IdentifyResult* out,
                  ceres::Solver::Summary* summary, Analysis* an);
 
+/// The fit's problem: the method's residual blocks on f->x, the parameters' lower bounds; false
+/// for a parameter count with no compiled cost.
+bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem);
+/// The solver's options: dense QR, the options' iteration limit and threads, the method's
+/// tolerances.
+ceres::Solver::Options solver_options(const Fit& f);
+/// Sensor-noise sensitivities of every sample of the fit at the parameters f.x.
+std::vector<detail::Sensitivity> noise_sensitivities(const Fit& f);
+
 // ---- stage_analysis.cc ----
 
 /// The prior's information in J^T J units (group inertia: s^2 / sigma_i^2 on the diagonal of the
@@ -291,6 +306,21 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
 /// inertial report.
 void analyse(const Fit& f, const std::vector<double>& x0_public,
              const ceres::Solver::Summary& summary, Analysis* an, IdentifyResult* out);
+
+/// Inverse dynamics: the torque residual's rms and noise floor (noise_floor) per actuator, and
+/// the structure warning.
+void torque_residual_levels(const Fit& f, const std::vector<double>& r,
+                            const std::vector<detail::Sensitivity>& sens, IdentifyResult* out);
+/// Covariance of the internal parameters (out->covariance) and an->Hinv.
+void covariance(const Fit& f, const Eigen::MatrixXd& Hp, Analysis* an, IdentifyResult* out);
+/// Inverse dynamics: the errors-in-variables sandwich over the free parameters.
+Eigen::MatrixXd score_sandwich(const Fit& f, const FreeSet& fs, const Analysis& an,
+                               IdentifyResult* out);
+/// Output error: the block sandwich over the windows (covariance.h), whose residuals are
+/// correlated within a window (they integrate the torque noise from the logged start) and
+/// independent between windows. Empty when too few windows carry residuals (a warning).
+Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
+                                  const std::vector<double>& r, IdentifyResult* out);
 
 // ---- stage_smoothing_bias.cc ----
 
@@ -410,41 +440,6 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
 bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunction& loads,
                                const TorqueLog& log, const IdentifyOptions& opt,
                                const ModelVerdict& verdict, IdentifyResult* out);
-
-// ---- residual_blocks.cc (more) ----
-
-/// Output error: the window [i0, i1] (WindowResidual) on f->x, rates w1, w2 at its start;
-/// returns its residual count.
-int add_window_residual(Fit* f, const std::vector<double>& w1, const std::vector<double>& w2,
-                        int i0, int i1, const sim::Options& so, ceres::Problem* problem);
-
-// ---- stage_solve.cc (more) ----
-
-/// The fit's problem: the method's residual blocks on f->x, the parameters' lower bounds; false
-/// for a parameter count with no compiled cost.
-bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem);
-/// The solver's options: dense QR, the options' iteration limit and threads, the method's
-/// tolerances.
-ceres::Solver::Options solver_options(const Fit& f);
-/// Sensor-noise sensitivities of every sample of the fit at the parameters f.x.
-std::vector<detail::Sensitivity> noise_sensitivities(const Fit& f);
-
-// ---- stage_analysis.cc (more) ----
-
-/// Inverse dynamics: the torque residual's rms and noise floor (noise_floor) per actuator, and
-/// the structure warning.
-void torque_residual_levels(const Fit& f, const std::vector<double>& r,
-                            const std::vector<detail::Sensitivity>& sens, IdentifyResult* out);
-/// Covariance of the internal parameters (out->covariance) and an->Hinv.
-void covariance(const Fit& f, const Eigen::MatrixXd& Hp, Analysis* an, IdentifyResult* out);
-/// Inverse dynamics: the errors-in-variables sandwich over the free parameters.
-Eigen::MatrixXd score_sandwich(const Fit& f, const FreeSet& fs, const Analysis& an,
-                               IdentifyResult* out);
-/// Output error: the block sandwich over the windows (covariance.h), whose residuals are
-/// correlated within a window (they integrate the torque noise from the logged start) and
-/// independent between windows. Empty when too few windows carry residuals (a warning).
-Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
-                                  const std::vector<double>& r, IdentifyResult* out);
 
 }  // namespace stages
 }  // namespace fivebar::identification
