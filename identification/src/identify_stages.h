@@ -1,0 +1,445 @@
+// The stages of identify() (identify.cc), one file each (docs/architecture.md): the state they
+// share (Fit, Analysis, ModelVerdict) and the functions one stage takes from another.
+#pragma once
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <array>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <iterator>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#include "fivebar/identification/identify.h"
+#include "fivebar/identification/residual.h"
+#include "fivebar/model/dynamics.h"
+#include "fivebar/model/names.h"
+#include "fivebar/model/rest.h"
+#include "covariance.h"
+#include "inertia.h"
+#include "misfit.h"
+#include "noise_model.h"
+#include "profile.h"
+#include "smoothing_bias.h"
+#include "window_misfit.h"
+#include "method.h"
+
+namespace fivebar::identification {
+
+/// identify; `full` false: only the fit and its residual over the noise floor
+IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunction& loads,
+                            const TorqueLog& log, const IdentifyOptions& opt, bool full);
+
+namespace stages {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// noise-free logs: residual levels below this fraction of the rms logged torque are what a good
+/// torque sensor resolves (0.1 %), not structure
+constexpr double kAbsoluteFloor = 1e-3;
+
+/// a friction coefficient at its bound with the residual this many times its noise floor is a fit
+/// driven by samples the law cannot explain (bound_and_misfit_warning)
+constexpr double kMisfitRatio = 3.0;
+
+// ---- stages of identify() ----
+
+/// The state the stages of identify() share, grouped by the stage that writes it; each stage
+/// reads what the stages before it wrote.
+struct Fit {
+  // setup (init_fit, start_values): what the options and the scene decide
+  const IdentifyOptions* opt = nullptr;
+  const MethodStrategy* method = nullptr;  ///< the method's strategy (method_strategy)
+  sim::LoadFunction loads;
+  Params<double> scene;    ///< the law to fit and the Coulomb sign form
+  ParameterLayout layout;  ///< internal (Stribeck: static_coulomb as excess over coulomb)
+  EvalOptions eval;             ///< the model's evaluation (rest_rate set by select_samples)
+  detail::InertialPrior prior;  ///< group inertia
+  std::vector<double> x;        ///< internal parameter vector: the start, then the fit's
+
+  // conditioning (prepare_log, rate_source)
+  ConditionedLog cond;  ///< the log as fitted
+  detail::SensorNoise noise;
+  detail::RateSource source = detail::RateSource::kLogged;
+
+  // rates, window and samples (rates_window_and_samples)
+  SgOptions sg;              ///< as used
+  int first = 0, last = -1;  ///< samples with a centred Savitzky-Golay window
+  std::vector<Sample> samples;
+  std::vector<int> index;  ///< log index of each sample in the fit
+  /// slip reversals of the rates of the fit: reversals[i] = how many lie between samples k and
+  /// k + 1 for k < i (reversal_counts)
+  std::vector<int> reversals;
+  /// the estimated accelerations' smoothing shows at every window (choose_window): model_check
+  /// names no cause, the misfit being the rates' as much as the model's
+  bool rates_biased = false;
+  /// predicted smoothing bias of the public friction coefficients at the chosen window
+  /// (limit_smoothing_bias; empty when not predicted), taken off the estimates
+  Eigen::VectorXd smoothing_bias;
+
+  // the fit (choose_loss_scale, build_problem, solve_stage)
+  double loss_scale = 0;  ///< the robust loss's scale as applied (choose_loss_scale)
+  std::vector<int> window_sizes;  ///< output error: residuals of each window, in problem order
+  /// the torque residual's noise level that weighs the prior against the data [N m]
+  double prior_scale = 1;
+};
+
+/// What the stages after the solve share: the data residuals and their Jacobian at the fit, and
+/// the sensor-noise sensitivities (inverse dynamics).
+struct Analysis {
+  std::vector<double> r;
+  Eigen::MatrixXd J;
+  std::vector<detail::Sensitivity> sens;
+  /// (J^T J + Hp)^-1 over the parameters off their bounds (internal layout; NaN elsewhere)
+  Eigen::MatrixXd Hinv;
+};
+
+/// Columns of the whitened residual's Jacobian on errors of the torque readings (TorqueColumns)
+struct TorqueColumns {
+  Eigen::MatrixXd J;
+  /// column of channel c's offset and gain in J (-1: left out)
+  std::array<int, 2> offset{-1, -1}, gain{-1, -1};
+};
+
+/// What model_check leaves for the refits after it (the sign and per-joint checks)
+struct ModelVerdict {
+  /// torque channels read negative (torque_signs; bit 0: tau1, bit 1: tau2): the sign check
+  /// fits them negated whatever the residual
+  unsigned negative_readings = 0;
+  /// a named cause (the encoders' zeros, the torque readings' offsets or positive gains, a
+  /// common scale) made the fit unusable: the sign and per-joint refits have nothing left to
+  /// decide (they tripled the time of such rejected runs)
+  bool cause_decided = false;
+};
+
+// ---- residual_blocks.cc ----
+
+/// Linear interpolation of y(t) on the sorted grid ts (clamped at the ends).
+double interp(const std::vector<double>& ts, const std::vector<double>& y, double t);
+
+/// The inverse-dynamics residual blocks, one per sample: from the sample's structure
+/// (residual.h: the Jets carry only the P active parameters through a five-number loop), or the
+/// full model where the structure cannot be read off.
+bool add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayout& layout,
+                                const std::vector<Sample>& samples, const EvalOptions& eval,
+                                Loss loss, double loss_scale, double* x, ceres::Problem* problem);
+
+/// Consecutive windows [i0, i1] of about window_s over the samples [first, last].
+std::vector<std::pair<int, int>> make_windows(const TorqueLog& log, int first, int last,
+                                              double window_s);
+
+/// The simulator options of an output-error window and of validate(): CVODE Adams at rtol.
+sim::Options window_sim_options(double rtol);
+
+/// Group inertia: the prior and consistency residuals (inertia.h) on the parameter block x.
+void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem);
+
+/// Output error: the window [i0, i1] (WindowResidual) on f->x, rates w1, w2 at its start;
+/// returns its residual count.
+int add_window_residual(Fit* f, const std::vector<double>& w1, const std::vector<double>& w2,
+                        int i0, int i1, const sim::Options& so, ceres::Problem* problem);
+
+// ---- stage_setup.cc ----
+
+/// Noise gains of the Savitzky-Golay rate and acceleration at an interior sample (white noise
+/// of deviation s on the angles gives s * gain): the root sum of squares of the filter
+/// coefficients, read off its response to a unit impulse in the middle of the log.
+void sg_noise_gains(const std::vector<double>& t, const SgOptions& sg, double* g1, double* g2);
+
+/// Linear map from the internal parameter vector to the public one (static_coulomb = coulomb +
+/// excess for Stribeck; identity otherwise).
+Eigen::MatrixXd to_public(const ParameterLayout& layout);
+
+/// "line L (t = T s)" of log sample i, for messages.
+std::string sample_name(const TorqueLog& log, int i);
+
+/// Degrees told by the motion, then unwrapping and glitch rejection, then the poses.
+void prepare_log(const TorqueLog& log, Fit* f, IdentifyResult* out);
+
+/// Start values in the internal layout, from the public `initial` (or the neutral defaults).
+bool start_values(Fit* fp, const std::vector<double>& initial, std::vector<double>* x0_public,
+                  IdentifyResult* out);
+
+/// The fit's shared state from the options: the internal layout, the scene with the law to fit,
+/// the inertial prior.
+void init_fit(const Params<double>& scene_in, const sim::LoadFunction& loads, const TorqueLog& log,
+              const IdentifyOptions& opt, Fit* f, IdentifyResult* out);
+
+/// The prior's weight before the fit: the logged torque noise (refined after a first solve).
+double initial_prior_scale(const Fit& f);
+
+/// Logged rates noisier than those the angles give, even through the noisiest Savitzky-Golay
+/// window of the choice (order 5 over 3 samples each side): their noise enters the friction's
+/// sign and viscous terms and the reactions (errors in variables), so the rates and
+/// accelerations are estimated from the angles instead, with a note saying so.
+bool angles_give_better_rates(const Fit& f, IdentifyResult* out);
+
+/// Where the rates and accelerations come from: the log's own when it has them (and the
+/// options do not ask to estimate them), unless the angles give better ones
+/// (angles_give_better_rates, which notes it).
+detail::RateSource rate_source(const Fit& f, const TorqueLog& log, IdentifyResult* out);
+
+// ---- stage_samples.cc ----
+
+/// Thresholds of the rest rule for this log (IdentifyOptions::rest_rate_threshold).
+/// The Savitzky-Golay noise gains are those of the window in use, `sg` (the data-driven one once
+/// chosen: at 3 samples each side the rate noise is 6 times that at the default 10, and stuck
+/// joints escaped the rule). Logged rates: never below the model's thresholds for computed rates
+/// (RestThresholds{}): noise-free rates from a simulation keep a stuck joint's relative rate only
+/// to its integration tolerance (synth-log: ~1e-10 rad/s, where the rounding reads 5e-13).
+RestThresholds rest_rule(const TorqueLog& log, const IdentifyResult& out,
+                         const IdentifyOptions& opt, const SgOptions& sg);
+
+/// Rates and accelerations: logged, else Savitzky-Golay with f->sg (the edges, where the window
+/// is one-sided, are left out of the fit).
+void estimate_rates(Fit* f, IdentifyResult* out);
+
+/// Sample i of the conditioned log: time, angles, torques and loads (rates left at 0).
+Sample logged_sample(const Fit& f, int i);
+
+/// Whether the Savitzky-Golay window of half-width hw centred on sample i spans a slip reversal
+/// (f.reversals): its accelerations then smear the jump, a bias that correlates with the Coulomb
+/// sign (it reads as less Coulomb friction) and that no window is small enough to remove.
+bool spans_reversal(const Fit& f, int i, int hw);
+
+/// The rest rule at sample s with each joint's rate threshold set for its own noise: the rates'
+/// noise through its row of J_w (the thresholds are set for one crank's rate; an inner joint's
+/// relative rate combines both), in quadrature with the angle noise `angle_noise` through the
+/// kinematics (with exact logged rates and 1e-5 rad on the angles, a stuck inner joint of the
+/// paper mechanism reads ~1e-5 rad/s). True (the sample is left out) when a joint's relative
+/// rate is within its threshold: whether it is stuck, slips from rest, or still turns slowly
+/// either way, the log cannot tell, and each gives its friction another direction. (Keeping such
+/// a joint when it accelerates, taken to slip the way of its acceleration, is wrong: with logged
+/// rates 0.001 rad/s noisy, a joint turning slowly while it decelerates, or a stuck one whose
+/// acceleration reads the rates' noise through the velocity products, gets the wrong direction;
+/// a breakaway log then gives coulomb -25 std, at 0.01 rad/s -42.)
+bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds& rest,
+                 double angle_noise);
+
+/// The first sample of the fit whose inverse dynamics fails at the parameters x, as a status
+/// naming it and the reason (ok if none fails).
+Status first_failing_sample(const Fit& f, const std::vector<double>& x, const std::string& at);
+
+/// Rates (logged or Savitzky-Golay), the data-driven window when it applies, the samples of the
+/// fit, and a check that the model evaluates at every one at the start values (false: status).
+bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out);
+
+// ---- stage_window.cc ----
+
+/// Candidate half-windows [samples] of choose_window: from the polynomial's minimum to 50 ms,
+/// growing by 25 %, each fitting in the log's n samples (at least the minimum).
+std::vector<int> window_candidates(int n, double dt, int order);
+
+/// The data-driven Savitzky-Golay half-window. Smoothing bias shows in the torque residual as
+/// an excess over the level the sensor noise explains (that level is predicted per window by
+/// propagating the measured noise): the window chosen is the largest whose residual/noise ratio
+/// stays within kWindowExcess of the reference, 1 or the least ratio over the candidates when
+/// that is above 1 (a mismatch of the law that no window removes). Candidates evaluated at the
+/// parameters of a preliminary fit (f.x). When the excess is flat in the window instead (a
+/// misfit that the small windows' noise hides, window_misfit.h), misfit_window chooses.
+void choose_window(Fit* f, IdentifyResult* out);
+
+/// A quick fit on at most ~1500 of the selected samples (plain least squares) that sets f->x for
+/// the window choice; keeps the start values if it fails.
+void preliminary_fit(Fit* f);
+
+// ---- stage_solve.cc ----
+
+/// Raw (unweighted) residuals; false where an evaluation fails.
+bool raw_residuals(ceres::Problem* problem, std::vector<double>* r,
+                   ceres::CRSMatrix* jac = nullptr);
+
+void rms_pair(const std::vector<double>& r, double* out2);
+
+/// Solves; a solver that gives up or an evaluation that fails is a status naming the sample.
+void solve(Fit* f, ceres::Problem* problem, IdentifyResult* out, ceres::Solver::Summary* summary);
+
+/// Residual levels and the structure warning: the rms against the level the sensor noise alone
+/// gives (torque noise plus angle/rate noise through the rate estimation), floored for noise-free
+/// logs at kAbsoluteFloor of the rms logged torque.
+/// The residual's expected level from the sensor noise (noise[j]) and the floor for noise-free
+/// logs (absolute[j], kAbsoluteFloor of the rms logged torque); floor[j] the larger.
+void noise_floor(const Fit& f, const std::vector<detail::Sensitivity>& sens, double floor[2],
+                 double noise[2] = nullptr, double absolute[2] = nullptr);
+
+/// The robust loss's scale: as given, else (0) from the noise: inverse dynamics kLossScaleHuber or
+/// kLossScaleCauchy times a sample's expected residual level at the start values (the two
+/// actuators' noise floors in quadrature: the loss sees the block's norm), output error 0.1 rad.
+/// Costs one pass of noise_sensitivities over the samples.
+void choose_loss_scale(Fit* f, IdentifyResult* out);
+
+/// J^T J of the CRS Jacobian and the dense Jacobian itself (2 rows per sample).
+Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P);
+
+/// Solves. Group inertia: the prior's weight is then set to the residual's noise level (the torque
+/// noise plus the angle noise through the rates) and, if that differs, the fit is refined.
+bool solve_stage(Fit* f, ceres::Problem* problem, IdentifyResult* out,
+                 ceres::Solver::Summary* summary, Analysis* an);
+
+/// The fit's problem: the method's residual blocks on f->x, the parameters' lower bounds; false
+/// for a parameter count with no compiled cost.
+bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem);
+/// The solver's options: dense QR, the options' iteration limit and threads, the method's
+/// tolerances.
+ceres::Solver::Options solver_options(const Fit& f);
+/// Sensor-noise sensitivities of every sample of the fit at the parameters f.x.
+std::vector<detail::Sensitivity> noise_sensitivities(const Fit& f);
+
+// ---- stage_analysis.cc ----
+
+/// The prior's information in J^T J units (group inertia: s^2 / sigma_i^2 on the diagonal of the
+/// inertial parameters, s the prior's noise level; zero elsewhere).
+Eigen::MatrixXd prior_information(const Fit& f);
+
+/// Public estimates, correlation, bounds: a parameter at a bound has no meaningful std (NaN),
+/// and a std that is not > 0 is never reported as a number.
+void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResult* out);
+
+/// Residual levels, covariance (converged solutions only), identifiability, estimates, and the
+/// inertial report.
+void analyse(const Fit& f, const std::vector<double>& x0_public,
+             const ceres::Solver::Summary& summary, Analysis* an, IdentifyResult* out);
+
+/// Inverse dynamics: the torque residual's rms and noise floor (noise_floor) per actuator, and
+/// the structure warning.
+void torque_residual_levels(const Fit& f, const std::vector<double>& r,
+                            const std::vector<detail::Sensitivity>& sens, IdentifyResult* out);
+/// Covariance of the internal parameters (out->covariance) and an->Hinv.
+void covariance(const Fit& f, const Eigen::MatrixXd& Hp, Analysis* an, IdentifyResult* out);
+/// Inverse dynamics: the errors-in-variables sandwich over the free parameters.
+Eigen::MatrixXd score_sandwich(const Fit& f, const FreeSet& fs, const Analysis& an,
+                               IdentifyResult* out);
+/// Output error: the block sandwich over the windows (covariance.h), whose residuals are
+/// correlated within a window (they integrate the torque noise from the logged start) and
+/// independent between windows. Empty when too few windows carry residuals (a warning).
+Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
+                                  const std::vector<double>& r, IdentifyResult* out);
+
+// ---- stage_smoothing_bias.cc ----
+
+/// After the residual rule (choose_window): the largest window up to its choice whose predicted
+/// smoothing bias (smoothing_bias.h) is within kBiasFraction of the std for every friction
+/// coefficient, from the rule's choice down to the second smallest window; the rule's choice
+/// when none is. Angles only, the filter's order as given (not raised).
+void limit_smoothing_bias(Fit* f, IdentifyResult* out);
+
+/// The predicted smoothing bias at the chosen window (f->smoothing_bias) taken off the friction
+/// estimates, their intervals and the fitted parameters. Coefficients at a bound, or whose std
+/// the log does not determine, are left as fitted, and no correction takes a coefficient past
+/// its bound (a Stribeck static_coulomb stays >= coulomb): the correction is limited there, and
+/// says so. Its own error, from the angle noise through the reconstruction, is a small part of
+/// the bias (over two noisy paper logs at half-window 8: 0.078 and 0.136 std predicted for 0.088
+/// measured), so a few hundredths of the std, and is not added to the std.
+void correct_smoothing_bias(Fit* f, IdentifyResult* out);
+
+// ---- stage_predictions.cc ----
+
+/// Predicted torques at every sample of the (conditioned) log, at the fit.
+void predictions(const Fit& f, IdentifyResult* out);
+
+/// Output error: the torque residual of the fitted scene and its white-noise level.
+void output_error_levels(const Fit& f, IdentifyResult* out);
+
+/// The larger of the two channels' rms torque residual over its noise floor
+double misfit_ratio(const IdentifyResult& r);
+
+/// A friction coefficient at its bound while the residual is far above the noise floor (as from
+/// two adjacent bad samples, an acceleration spike or a step in an angle, which can put Coulomb at
+/// 0): the fit is driven by samples the law cannot explain. One
+/// warning names the coefficients, the ratio, the lines of the largest residuals (in units of
+/// the floor) and the likely causes.
+void bound_and_misfit_warning(const Fit& f, const Analysis& an, IdentifyResult* out);
+
+// ---- stage_delay.cc ----
+
+void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<double>& r,
+                    const std::vector<detail::Sensitivity>& sens, IdentifyResult* out);
+
+/// The fit redone on the conditioned log with the torques shifted by the delay `first` found,
+/// carrying over what the first pass reported about the log.
+IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadFunction& loads,
+                                const TorqueLog& conditioned, const IdentifyOptions& opt,
+                                const IdentifyResult& first);
+
+// ---- stage_model_check_columns.cc ----
+
+/// The residual's Jacobian at the fit, whitened by the noise floors, with the links' 16 inertial
+/// parameters (columns idx[1], prior information in `info`), the two angle offsets (idx[2])
+/// and the torque readings' offsets and gains (idx[3], `tc`) added to the fitted ones (idx[0]);
+/// false if an evaluation fails.
+bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J, Eigen::VectorXd* r,
+                    std::vector<int> idx[4], Eigen::VectorXd* info, TorqueColumns* tc);
+
+/// The expectation of the check's score J' r (J: check_jacobian's columns, b: one entry each)
+/// that the noise of estimated accelerations gives when the model holds. That noise is in the
+/// residual (-M(q) times the acceleration's) and, through the accelerations the inverse dynamics
+/// is evaluated at, in the inertial columns too (errors in variables), so E[J' r] = sum over
+/// samples and cranks c of sigma_c^2 m_c dJ_c' dr_c (dJ_c, dr_c: accel_derivatives; m_c: the sum
+/// of the squared acceleration taps, accel_tap_power). It grows with the log's length while the
+/// score's noise grows with its square root (uncorrected, clean 10 s logs drop the cost by 104
+/// against 15 +- 5.3 from white noise). Left out as measured negligible on a clean 10 s log of
+/// the paper scene: the rate noise's path (under 1 % of the acceleration's on every column) and
+/// the offset columns' bias (below 0.03 of their score's std). The torque gains' columns carry
+/// the model's torque, so the same noise biases them too. Zero when the accelerations are
+/// logged. Costs two Jacobians on the fitted and inertial parameters.
+bool score_bias(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
+                const Eigen::VectorXd& r, const TorqueColumns& tc, Eigen::VectorXd* b);
+
+// ---- stage_model_check.cc ----
+
+/// Wrong masses or inertias, an encoder's zero offset, or a torque sensor's offset or gain
+/// (masses +-5 % give Coulomb +5 %, 10 std; theta1 + 0.005 rad gives Coulomb -8 %, 14 std, and
+/// must not be blamed on the masses, nor must a torque offset):
+/// linearized refits at the fit with the 16 inertial parameters free (under the prior of
+/// --estimate inertia), the two angle offsets free, the torque readings' offsets and gains free,
+/// and combinations (cause_steps). A cause the log evidences (detail::model_causes, misfit.h: its
+/// parameters lower the whitened cost by more than kCauseZ std above what noise gives them, also
+/// with the other causes free) that would move a friction coefficient beyond kFreedMove of its
+/// std is a warning naming it. Without such evidence, the earlier rule: the inertias' move
+/// beyond kFreedMove times the larger of the estimate's std and the move's own. The score is
+/// taken net of what the noise of estimated accelerations puts in it (score_bias: without, clean
+/// angles-only logs of 6 s and more warned). Costs one Jacobian with 16 more columns, four
+/// evaluations of the residual and a few small solves, and two more such Jacobians when the
+/// accelerations are estimated.
+ModelVerdict model_check(const Fit& f, IdentifyResult* out);
+
+// ---- stage_intervals.cc ----
+
+/// 95 % intervals of the public parameters: Wald, value +- ci_quantile std; profile likelihood
+/// where wants_profile (inverse dynamics without a robust loss, converged).
+void intervals(const Fit& f, ceres::Problem* problem, const Analysis& an, IdentifyResult* out);
+
+// ---- stage_refits.cc ----
+
+/// IdentifyOptions::check_torque_sign: true (and out->unusable says why) when the log's torques
+/// fit far better (fits_far_better) with both negated, or else with one of them negated (a
+/// channel wired the other way read as "coulomb at its bound"); the fit with both negated puts
+/// its residual in out. Runs when the residual is above kMisfitRatio floors, or when model_check
+/// read channels negative (`suspect`, tried first); not when a cause it named decided
+/// (ModelVerdict::cause_decided). The refits keep the fit's Savitzky-Golay window
+/// (no search of their own) and estimate no delay.
+bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& loads,
+                         const TorqueLog& log, const IdentifyOptions& opt,
+                         const ModelVerdict& verdict, IdentifyResult* out);
+
+/// IdentifyOptions::check_per_joint: true (and out->unusable says why, replacing the reason
+/// model_check gave) when a shared-law fit's misfit goes away with one coefficient per joint.
+/// It runs when the residual is more than kMisfitRatio times its floor and no cause named by
+/// model_check decided, and names the joints' differing friction when the fit with one
+/// coefficient per joint fits far better (fits_far_better, as the sign check's refits;
+/// offset_friction.yaml, whose five joints' coefficients differ by up to 2.5 times, multi-sine
+/// log with rates: 18.3 floors shared, 1.00 per joint).
+/// The refit keeps the fit's Savitzky-Golay window and estimates no delay.
+bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunction& loads,
+                               const TorqueLog& log, const IdentifyOptions& opt,
+                               const ModelVerdict& verdict, IdentifyResult* out);
+
+}  // namespace stages
+}  // namespace fivebar::identification

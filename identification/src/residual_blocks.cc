@@ -1,0 +1,179 @@
+// The residual blocks of the two methods: the inverse-dynamics blocks of the samples (one
+// place chooses the compiled cost for the parameter count) and the output-error windows.
+#include "fallback_cost.h"
+#include "identify_stages.h"
+
+namespace fivebar::identification::stages {
+
+double interp(const std::vector<double>& ts, const std::vector<double>& y, double t) {
+  if (t <= ts.front()) return y.front();
+  if (t >= ts.back()) return y.back();
+  const size_t i = std::upper_bound(ts.begin(), ts.end(), t) - ts.begin();
+  const double s = (t - ts[i - 1]) / (ts[i] - ts[i - 1]);
+  return y[i - 1] + s * (y[i] - y[i - 1]);
+}
+
+namespace {
+
+ceres::LossFunction* make_loss(Loss loss, double scale) {
+  switch (loss) {
+    case Loss::kNone:
+      return nullptr;
+    case Loss::kHuber:
+      return new ceres::HuberLoss(scale);
+    case Loss::kCauchy:
+      return new ceres::CauchyLoss(scale);
+  }
+  return nullptr;
+}
+
+/// The inverse-dynamics residual blocks, one per sample, on P parameters: from the sample's
+/// structure (residual.h: the Jets carry only the P active parameters through a five-number
+/// loop), or the full model where the structure cannot be read off (fallback_cost.h).
+template <int P>
+void add_sized_terms(const Params<double>& scene, const ParameterLayout& layout,
+                     const std::vector<Sample>& samples, const EvalOptions& eval, Loss loss,
+                     double loss_scale, double* x, ceres::Problem* problem) {
+  for (const Sample& s : samples) {
+    SampleStructure st;
+    ceres::CostFunction* cost = nullptr;
+    if (sample_structure(scene, s, eval, &st)) {
+      cost = new ceres::AutoDiffCostFunction<StructuredResidual, 2, P>(
+          new StructuredResidual(scene, layout, st, s, eval));
+    } else {
+      cost = new FallbackCost<P>(InverseDynamicsResidual(scene, layout, s, eval));
+    }
+    problem->AddResidualBlock(cost, make_loss(loss, loss_scale), x);
+  }
+}
+
+/// Calls f(std::integral_constant<int, P>) for the parameter counts the layouts give (friction
+/// 2, 4, 10, 20, each with or without the 16 inertial parameters, and with the 6 actuator terms
+/// except after per-joint Stribeck with inertia); false for another count. The one place that
+/// maps the run-time count to a compiled Jet width: one Jet<double, P> pass per evaluation
+/// (ceres::DynamicAutoDiffCostFunction's passes of a fixed stride measured slower,
+/// docs/dev/figures-build.md).
+template <typename F>
+bool with_size(int P, F&& f) {
+  switch (P) {
+    case 2: f(std::integral_constant<int, 2>()); return true;
+    case 4: f(std::integral_constant<int, 4>()); return true;
+    case 10: f(std::integral_constant<int, 10>()); return true;
+    case 20: f(std::integral_constant<int, 20>()); return true;
+    case 18: f(std::integral_constant<int, 18>()); return true;
+    case 26: f(std::integral_constant<int, 26>()); return true;
+    case 36: f(std::integral_constant<int, 36>()); return true;
+    // with the 6 actuator terms
+    case 8: f(std::integral_constant<int, 8>()); return true;
+    case 16: f(std::integral_constant<int, 16>()); return true;
+    case 24: f(std::integral_constant<int, 24>()); return true;
+    case 32: f(std::integral_constant<int, 32>()); return true;
+    default: return false;
+  }
+}
+
+/// Output error over one window [i0, i1]: simulated minus logged angles at samples i0+1..i1.
+class WindowResidual {
+ public:
+  WindowResidual(const Params<double>& scene, const ParameterLayout& layout, const TorqueLog& log,
+                 const sim::LoadFunction& loads, const std::vector<double>& w1,
+                 const std::vector<double>& w2, int i0, int i1, const sim::Options& sim)
+      : scene_(scene), layout_(layout), log_(log), i0_(i0), i1_(i1), sim_(sim) {
+    loads_ = logged_loads(log, loads, log.t[i0], scene.actuators.offset);
+    initial_ = {log.theta1[i0], log.theta2[i0], w1[i0], w2[i0]};
+    sim_.duration = log.t[i1] - log.t[i0];
+    sim_.output_step = sim_.duration / (i1 - i0);
+  }
+  int residuals() const { return 2 * (i1_ - i0_); }
+
+  bool operator()(double const* const* x, double* r) const {
+    Params<double> p = scene_;
+    layout_.apply(x[0], &p);
+    const sim::Result res = sim::simulate(p, loads_, initial_, sim_);
+    if (!res.status.ok() || res.rows.size() < 2) return false;
+    std::vector<double> ts, a, b;
+    for (const sim::Row& row : res.rows) {
+      ts.push_back(row.t);
+      a.push_back(row.theta[0]);
+      b.push_back(row.theta[1]);
+    }
+    for (int i = i0_ + 1, k = 0; i <= i1_; ++i, ++k) {
+      const double tt = log_.t[i] - log_.t[i0_];
+      if (tt > ts.back() + 1e-9) return false;
+      r[2 * k] = interp(ts, a, tt) - log_.theta1[i];
+      r[2 * k + 1] = interp(ts, b, tt) - log_.theta2[i];
+    }
+    return true;
+  }
+
+ private:
+  const Params<double>& scene_;
+  ParameterLayout layout_;
+  const TorqueLog& log_;
+  int i0_, i1_;
+  sim::Options sim_;
+  sim::LoadFunction loads_;
+  sim::Initial initial_;
+};
+
+}  // namespace
+
+std::vector<std::pair<int, int>> make_windows(const TorqueLog& log, int first, int last,
+                                              double window_s) {
+  std::vector<std::pair<int, int>> out;
+  int i0 = first;
+  while (i0 < last) {
+    int i1 = i0;
+    while (i1 < last && log.t[i1 + 1] - log.t[i0] <= window_s * (1 + 1e-9)) ++i1;
+    if (i1 == i0) ++i1;
+    // fold a short tail into the previous window
+    if (!out.empty() && log.t[last] - log.t[i0] < 0.5 * window_s) {
+      out.back().second = last;
+      break;
+    }
+    out.push_back({i0, i1});
+    i0 = i1;
+  }
+  return out;
+}
+
+int add_window_residual(Fit* f, const std::vector<double>& w1, const std::vector<double>& w2,
+                        int i0, int i1, const sim::Options& so, ceres::Problem* problem) {
+  auto* w = new WindowResidual(f->scene, f->layout, f->cond.log, f->loads, w1, w2, i0, i1, so);
+  ceres::NumericDiffOptions nd;
+  nd.relative_step_size = f->opt->relative_step;
+  auto* cost = new ceres::DynamicNumericDiffCostFunction<WindowResidual, ceres::CENTRAL>(
+      w, ceres::TAKE_OWNERSHIP, nd);
+  cost->AddParameterBlock(f->layout.size());
+  cost->SetNumResiduals(w->residuals());
+  problem->AddResidualBlock(cost, make_loss(f->opt->loss, f->loss_scale), f->x.data());
+  return w->residuals();
+}
+
+sim::Options window_sim_options(double rtol) {
+  sim::Options o;
+  o.rtol = rtol;
+  o.atol = rtol;
+  o.method = sim::Method::kCvodeAdams;
+  return o;
+}
+
+/// The inverse-dynamics residual blocks of `samples` on the parameter block x (P =
+/// layout.size(), through with_size); false for a parameter count with no compiled cost.
+bool add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayout& layout,
+                                const std::vector<Sample>& samples, const EvalOptions& eval,
+                                Loss loss, double loss_scale, double* x, ceres::Problem* problem) {
+  return with_size(layout.size(), [&](auto n) {
+    add_sized_terms<decltype(n)::value>(scene, layout, samples, eval, loss, loss_scale, x, problem);
+  });
+}
+
+void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem) {
+  if (!f->layout.inertia) return;
+  problem->AddResidualBlock(detail::inertial_prior_cost(f->prior, f->layout.size(),
+                                                        f->layout.inertia_offset(),
+                                                        &f->prior_scale),
+                            nullptr, x);
+}
+
+}  // namespace fivebar::identification::stages

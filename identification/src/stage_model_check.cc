@@ -1,0 +1,512 @@
+// Model check of identify(): the freed causes' steps, their warnings, and the verdict for the
+// refits.
+#include "identify_stages.h"
+
+namespace fivebar::identification::stages {
+
+namespace {
+
+/// model_check: a friction move beyond this many std (its own, or the move's) is a warning
+constexpr double kFreedMove = 3.0;
+
+/// The friction coefficients a freed step moves beyond kFreedMove std, as "name from a to b
+/// (k std)": the std of the estimate, or with `own` the larger of it and the move's own std (the
+/// test of Hausman); empty if none moves so, or one is at its bound (which has its own warning).
+std::string friction_moves(const Fit& f, const IdentifyResult& out, const detail::FreedStep& fs,
+                           bool own, double* largest = nullptr) {
+  const int nf = f.layout.friction_size();
+  const Eigen::MatrixXd T = to_public(f.layout).topLeftCorner(nf, nf);
+  const Eigen::VectorXd move = T * fs.fitted_step.head(nf);
+  const Eigen::MatrixXd cov = T * fs.fitted_cov.topLeftCorner(nf, nf) * T.transpose();
+  std::string moved;
+  for (int i = 0; i < nf; ++i) {
+    const ParameterEstimate& e = out.parameters[i];
+    if (e.at_bound) return "";
+    const double sd = own ? std::max(std::sqrt(std::max(0.0, cov(i, i))), e.std) : e.std;
+    if (!(std::abs(move(i)) > kFreedMove * sd)) continue;
+    if (largest) *largest = std::max(*largest, std::abs(move(i)) / sd);
+    moved += (moved.empty() ? "" : ", ") + e.name + " from " + format_significant(e.value) +
+             " to " + format_significant(e.value + move(i)) + " (" +
+             format_significant(std::abs(move(i)) / sd, 2) + " std)";
+  }
+  return moved;
+}
+
+/// The clause of a model_check warning on the friction: "the friction would move: ..." when a
+/// freed step moves a coefficient beyond kFreedMove std (friction_moves). When a coefficient is
+/// at its bound no move is given; for a cause the log evidences (`evidenced`) the warning is
+/// still due, and says so (a crank inertia 10 % off puts coulomb at 0 and viscous 23 std off,
+/// which the bound's warning alone does not explain). Empty: no warning.
+std::string friction_clause(const Fit& f, const IdentifyResult& out, const detail::FreedStep& fs,
+                            bool own, bool evidenced, double* largest = nullptr) {
+  const std::string moved = friction_moves(f, out, fs, own, largest);
+  if (!moved.empty()) return "the friction would move: " + moved;
+  const int nf = f.layout.friction_size();
+  bool bound = false;
+  for (int i = 0; i < nf; ++i) bound = bound || out.parameters[i].at_bound;
+  if (!evidenced || !bound) return "";
+  return "a friction coefficient is at its bound, so the fit cannot say how far the friction "
+         "would move";
+}
+
+/// The candidate causes of model_check, in the order of check_jacobian's idx[1..3].
+enum CauseId { kCauseInertia, kCauseAngles, kCauseTorque, kCauseCount };
+
+/// The freed step with the columns of every cause in `mask` (bit id: CauseId) freed together.
+detail::FreedStep freed_set(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                            const std::vector<int> idx[4], const Eigen::VectorXd& info,
+                            const Eigen::VectorXd& bias, unsigned mask) {
+  std::vector<int> cols;
+  std::vector<double> prior;
+  for (int id = 0; id < kCauseCount; ++id) {
+    if (!(mask & (1u << id))) continue;
+    const std::vector<int>& c = idx[id + 1];
+    cols.insert(cols.end(), c.begin(), c.end());
+    for (size_t e = 0; e < c.size(); ++e) {
+      prior.push_back(id == kCauseInertia ? info(static_cast<Eigen::Index>(e)) : 0.0);
+    }
+  }
+  const Eigen::Map<const Eigen::VectorXd> p(prior.data(), static_cast<Eigen::Index>(prior.size()));
+  return detail::freed_step(J, r, idx[0], cols, p, bias);
+}
+
+/// model_check runs only with at least this many residuals per column of its Jacobian (25
+/// samples of a 0.05 s log against 22 freed columns read offsets of 43 N m)
+constexpr int kCheckRowsPerColumn = 10;
+
+/// A cause is named only when its parameters remove at least this fraction of the residual's
+/// excess over its noise floor, when there is one (a scene with per-joint friction fitted with
+/// the shared law leaves the residual 4 to 5 times its floor; every cause clears its evidence bar
+/// by thousands of std, and without this the torque sensors would be blamed)
+constexpr double kExplainedExcess = 0.5;
+
+/// ... when the excess is at least this fraction of the residual's length (the residual's rms
+/// 1.12 times its floor or more): below, the floor's own error is a large part of the excess
+/// (measured: a 1 % torque gain on a 4 s angles-only log, ratio 1.02, explained 0.43 of it)
+constexpr double kExcessShows = 0.25;
+
+/// ... and, when the rates are biased at every window (Fit::rates_biased), a cause is named only
+/// when it removes this fraction of the excess (a 5 N m torque offset, which also spoils the
+/// window rule, explained 0.99 of it)
+constexpr double kExplainsAll = 0.9;
+
+/// model_check's freed steps: each candidate cause whose columns the check has (the inertias
+/// only when they are not fitted) freed alone, all of them together, and the causes the log
+/// evidences (detail::model_causes: each beyond what the others' parameters explain, and
+/// explaining kExplainedExcess of the whitened residual's excess over its length).
+struct CauseSteps {
+  std::array<detail::FreedStep, kCauseCount> alone;  ///< not ok: no candidate
+  detail::FreedStep all;
+  std::vector<IdentifyResult::MisfitCause> report;  ///< IdentifyResult::model_check ("any" last)
+  std::array<int, kCauseCount> slot{-1, -1, -1};    ///< each cause's entry in `report`
+  bool named(int id) const { return slot[id] >= 0 && report[slot[id]].evidenced; }
+  /// evidence alone [std of noise's]
+  double z(int id) const { return slot[id] >= 0 ? report[slot[id]].z : 0.0; }
+  bool any() const { return named(0) || named(1) || named(2); }
+};
+
+/// model_check's candidate causes by CauseId: the name in identification.json, and the words
+struct CauseText {
+  const char* name;
+  const char* what;
+};
+
+constexpr CauseText kCauseText[kCauseCount] = {
+    {"inertia", "the links' inertial parameters"},
+    {"angle_offsets", "the encoders' zeros"},
+    {"torque_readings", "the torque sensors' offsets and gains"}};
+
+IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedStep& fs,
+                                         double z, double z_given, double excess) {
+  IdentifyResult::MisfitCause m;
+  m.name = name;
+  m.checked = fs.ok;
+  m.drop = fs.drop - fs.drop_mean;
+  m.z = z;
+  m.z_given = z_given;
+  m.explained = excess > 0 ? fs.drop / excess : NAN;
+  return m;
+}
+
+CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                       const std::vector<int> idx[4], const Eigen::VectorXd& info,
+                       const Eigen::VectorXd& bias, bool attributable) {
+  const double excess = r.squaredNorm() - static_cast<double>(r.size());
+  unsigned present = 0;
+  std::vector<int> ids;
+  std::vector<detail::FreedStep> alone, all_but;
+  for (int id = 0; id < kCauseCount; ++id) {
+    if (idx[id + 1].empty()) continue;
+    present |= 1u << id;
+    ids.push_back(id);
+    alone.push_back(freed_set(J, r, idx, info, bias, 1u << id));
+  }
+  CauseSteps cs;
+  cs.all = freed_set(J, r, idx, info, bias, present);
+  for (int id : ids) all_but.push_back(freed_set(J, r, idx, info, bias, present & ~(1u << id)));
+  const detail::Causes c = detail::model_causes(alone, cs.all, all_but);
+  for (size_t k = 0; k < ids.size(); ++k) {
+    IdentifyResult::MisfitCause m =
+        misfit_cause(kCauseText[ids[k]].name, alone[k], c.z[k], c.z_given[k], excess);
+    m.evidenced = c.named[k] &&
+                  !(excess > kExcessShows * r.size() && m.explained < kExplainedExcess) &&
+                  (attributable || m.explained >= kExplainsAll);
+    cs.alone[ids[k]] = alone[k];
+    cs.slot[ids[k]] = static_cast<int>(cs.report.size());
+    cs.report.push_back(m);
+  }
+  const double z_all = detail::evidence(cs.all, cs.all.drop);
+  cs.report.push_back(misfit_cause("any", cs.all, z_all, z_all, excess));
+  return cs;
+}
+
+/// "falls by D (noise alone: m +- s)" of a freed step
+std::string drop_clause(const detail::FreedStep& fs) {
+  return "the residual falls by " + format_significant(fs.drop - fs.drop_mean, 3) +
+         " (noise alone: " + format_significant(fs.drop_mean, 2) + " +- " +
+         format_significant(fs.drop_sd, 2) + ")";
+}
+
+/// "a, b (+- sa, sb)" of extras k and k + 1 of a freed step, each times `scale`
+std::string pair_clause(const detail::FreedStep& fs, int k, double scale) {
+  return format_significant(scale * fs.extra_step(k)) + ", " +
+         format_significant(scale * fs.extra_step(k + 1)) + " (+- " +
+         format_significant(scale * fs.extra_std(k), 2) + ", " +
+         format_significant(scale * fs.extra_std(k + 1), 2) + ")";
+}
+
+/// A gain is advised only from this size on (gains of 0.1 to 0.2 % are merely significant on
+/// logs with rates, and not worth advising)
+constexpr double kSmallestGain = 0.005;
+
+/// model_check's warning on the torque readings (so that a torque sensor's offset is not blamed
+/// on the masses, and a 3 % gain error, read at +13 to +18 std, is not silent):
+/// the offsets o_c and gains g_c of tau_c = (1 + g_c) M_c + o_c that the refit reads beyond
+/// kFreedMove of their std (gains also from kSmallestGain on), with what to do about each.
+std::string torque_warning(const TorqueColumns& tc, const detail::FreedStep& fs,
+                           const std::string& moved) {
+  const auto beyond = [&](int k) {
+    return k >= 0 && std::abs(fs.extra_step(k)) > kFreedMove * fs.extra_std(k);
+  };
+  std::vector<std::string> advice;
+  for (int c = 0; c < kDof; ++c) {
+    const std::string tau = "tau" + std::to_string(c + 1);
+    if (beyond(tc.offset[c])) {
+      const double o = fs.extra_step(tc.offset[c]);
+      advice.push_back("a torque sensor's zero may be off: " + tau + " reads " +
+                       format_significant(o, 3) + " +- " +
+                       format_significant(fs.extra_std(tc.offset[c]), 2) +
+                       " N m more than the model (subtract it, or fit the offsets with "
+                       "--estimate friction,actuator)");
+    }
+    if (beyond(tc.gain[c]) && std::abs(fs.extra_step(tc.gain[c])) >= kSmallestGain) {
+      const double g = fs.extra_step(tc.gain[c]);
+      advice.push_back("a torque sensor's gain may be off: " + tau + " reads " +
+                       format_significant(100 * g, 3) + " +- " +
+                       format_significant(100 * fs.extra_std(tc.gain[c]), 2) +
+                       " % more than the model (divide " + tau + " by " +
+                       format_significant(1 + g, 5) + ", or check its torque constant)");
+    }
+  }
+  if (advice.empty()) advice.push_back("the torque readings may be off");
+  std::string w = "with offsets and gains of the logged torques free (one linearized refit) " +
+                  drop_clause(fs) + " and " + moved;
+  for (const std::string& a : advice) w += "; " + a;
+  return w;
+}
+
+/// The torque readings' gains and offsets of torque_warning in short: "tau1 reads 0.5 times the
+/// model"
+/// (gains beyond kFreedMove of their std, from kSmallestGain on), offsets "tau1 +0.15 N m".
+std::string torque_reading(const TorqueColumns& tc, const detail::FreedStep& fs) {
+  std::string out;
+  const auto beyond = [&](int k) {
+    return k >= 0 && std::abs(fs.extra_step(k)) > kFreedMove * fs.extra_std(k);
+  };
+  for (int c = 0; c < kDof; ++c) {
+    const std::string tau = "tau" + std::to_string(c + 1);
+    if (beyond(tc.gain[c]) && std::abs(fs.extra_step(tc.gain[c])) >= kSmallestGain) {
+      out += (out.empty() ? "" : ", ") + tau + " reads " +
+             format_significant(1 + fs.extra_step(tc.gain[c]), 3) + " times the model";
+    } else if (beyond(tc.offset[c])) {
+      out += (out.empty() ? "" : ", ") + tau + " reads " +
+             format_significant(fs.extra_step(tc.offset[c]), 2) + " N m more than the model";
+    }
+  }
+  return out.empty() ? "see the warnings" : out;
+}
+
+/// A torque reading's gain off by more than this fraction (read beyond kUnusableMove of its std)
+/// makes the fit unusable: the friction estimates are off by about as much (torques logged at
+/// half the model's: gains -0.5, coulomb 0.067 for 0.134, a move of 3 std only at the small
+/// window's noise)
+constexpr double kUnusableGain = 0.1;
+
+/// The largest |gain| of the torque readings that the refit fs reads beyond kUnusableMove std.
+double largest_gain(const TorqueColumns& tc, const detail::FreedStep& fs) {
+  double g = 0;
+  for (int c = 0; c < kDof; ++c) {
+    const int k = tc.gain[c];
+    if (k >= 0 && std::abs(fs.extra_step(k)) > kUnusableMove * fs.extra_std(k)) {
+      g = std::max(g, std::abs(fs.extra_step(k)));
+    }
+  }
+  return g;
+}
+
+/// A model error (what: its cause, or that none is named) that would move a friction
+/// coefficient by `largest` std makes the fit unusable beyond kUnusableMove; largest 0: a
+/// friction coefficient is at its bound, so the move cannot be given. The first reason stays.
+void unusable_move(double largest, const std::string& what, IdentifyResult* out) {
+  if (!out->unusable.empty() || !(largest > kUnusableMove || largest == 0)) return;
+  if (largest == 0) {
+    out->unusable = what + ": it holds a friction coefficient at its bound (see the warnings)";
+    return;
+  }
+  out->unusable = what + ": it would move the friction by " + format_significant(largest, 2) +
+                  " std (more than " + format_significant(kUnusableMove) + "; see the warnings)";
+}
+
+/// Whether a friction coefficient of the fit is at its bound
+bool friction_at_bound(const Fit& f, const IdentifyResult& out) {
+  for (int i = 0; i < f.layout.friction_size(); ++i) {
+    if (out.parameters[i].at_bound) return true;
+  }
+  return false;
+}
+
+/// The candidate cause with the strongest evidence alone (kCauseCount: none)
+int strongest_cause(const CauseSteps& cs) {
+  int best = kCauseCount;
+  for (int id = 0; id < kCauseCount; ++id) {
+    if (cs.alone[id].ok && (best == kCauseCount || cs.z(id) > cs.z(best))) best = id;
+  }
+  return best;
+}
+
+/// model_check's warning when a candidate cause alone is evidenced and would move the friction,
+/// but no cause stands out beyond the others' parameters or explains the misfit (with per-joint
+/// friction fitted by the shared law, every cause reduces a misfit none explains; on a 2 s
+/// angles-only log of the paper
+/// scene, a torque offset of 0.1 N m on tau1 gave coulomb +24 std without a word: the offsets'
+/// evidence, 14 std alone, was 4.7 std beyond the inertias' and the encoders' zeros')
+std::string unresolved_warning(const CauseSteps& cs, int strongest, const std::string& moved,
+                               bool rates_biased) {
+  std::vector<IdentifyResult::MisfitCause> causes(cs.report.begin(), cs.report.end() - 1);
+  std::sort(causes.begin(), causes.end(), [](const auto& a, const auto& b) { return a.z > b.z; });
+  std::string each;
+  for (const IdentifyResult::MisfitCause& c : causes) {
+    each += (each.empty() ? "" : ", ") + c.name + " " + format_significant(c.z, 2);
+  }
+  return "the friction estimates absorbed a model error the log cannot attribute: with " +
+         std::string(kCauseText[strongest].what) + " free (one linearized refit) " +
+         drop_clause(cs.alone[strongest]) + " and " + moved +
+         ", but no cause stands out from the others or explains the misfit (evidence of each "
+         "alone, in std: " + each + "). Check the friction law (--per-joint, --law), the "
+         "scene's masses (--estimate friction,inertia), the encoders' zeros and the torque "
+         "sensors (--estimate friction,actuator), or log a longer motion" +
+         (rates_biased ? std::string("; the estimated accelerations show smoothing bias at "
+                                     "every window: log the rates, or sample faster")
+                       : std::string());
+}
+
+/// Evidence of the torque readings beyond the other causes' parameters this many times kCauseZ
+/// makes the fit unusable even with the residual at its floor (the light mechanism's multi-sine
+/// log with tau1 x 0.9: 69 std, coulomb 0.048 for 0.12, and no warning; clean logs read -2 to 2)
+constexpr double kDecisiveCauseZ = 4 * detail::kCauseZ;
+
+/// Whether the refit fs reads both torque readings' gains (beyond kFreedMove std, from
+/// kSmallestGain on) off alike: the same sign, both readings positive (1 + g_c > 0: a negative
+/// one is a sign, torque_signs) and within a factor 2 of each other (or within kFreedMove of
+/// their difference's std): a common scale of the logged torques (gains read 0.828 and -0.976 are
+/// no common scale)
+bool common_gain(const TorqueColumns& tc, const detail::FreedStep& fs) {
+  std::array<double, kDof> g{}, sd{};
+  for (int c = 0; c < kDof; ++c) {
+    const int k = tc.gain[c];
+    if (k < 0 || !(std::abs(fs.extra_step(k)) > kFreedMove * fs.extra_std(k)) ||
+        std::abs(fs.extra_step(k)) < kSmallestGain || !(1 + fs.extra_step(k) > 0)) {
+      return false;
+    }
+    g[c] = fs.extra_step(k);
+    sd[c] = fs.extra_std(k);
+  }
+  const double small = std::min(std::abs(g[0]), std::abs(g[1]));
+  const double large = std::max(std::abs(g[0]), std::abs(g[1]));
+  return g[0] * g[1] > 0 && (2 * small >= large || std::abs(g[0] - g[1]) <=
+                                                       kFreedMove * std::hypot(sd[0], sd[1]));
+}
+
+/// The torque channels (bit 0: tau1, bit 1: tau2) whose reading the refit fs reads negative,
+/// 1 + g_c < 0 with g_c beyond kFreedMove of its std: logged with the sign opposite the model's
+/// (a light mechanism's tau1 negated read -1.02 times the model, its residual 2.6 times its floor,
+/// below the sign check's kMisfitRatio)
+unsigned torque_signs(const TorqueColumns& tc, const detail::FreedStep& fs) {
+  unsigned out = 0;
+  for (int c = 0; c < kDof && fs.ok; ++c) {
+    const int k = tc.gain[c];
+    if (k >= 0 && std::abs(fs.extra_step(k)) > kFreedMove * fs.extra_std(k) &&
+        1 + fs.extra_step(k) < 0) {
+      out |= 1u << c;
+    }
+  }
+  return out;
+}
+
+/// model_check on the encoders' zeros: the warning when the log evidences them and the friction
+/// would move, unusable beyond kUnusableMove
+void angles_check(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
+  const detail::FreedStep& fo = cs.alone[kCauseAngles];
+  double largest = 0;
+  std::string moved;
+  if (!cs.named(kCauseAngles) ||
+      (moved = friction_clause(f, *out, fo, false, true, &largest)).empty()) {
+    return;
+  }
+  out->warnings.push_back(
+      "with offsets of the logged angles free (one linearized refit) " + drop_clause(fo) +
+      " and " + moved + ". theta1, theta2 read " + pair_clause(fo, 0, 1.0) +
+      " rad more than the scene's angles: an encoder's zero may be off; subtract the offsets "
+      "from the logged angles");
+  // evidenced zeros that hold a coefficient at its bound make the fit unusable, whatever the
+  // other coefficients' move (theta1 0.02 rad off on the light mechanism: viscous at 0, coulomb
+  // 4 std)
+  unusable_move(friction_at_bound(f, *out) ? 0 : largest, "the logged angles' zeros are off",
+                out);
+}
+
+/// The torque readings' step of model_check and the indices of its offsets and gains
+struct ReadingStep {
+  detail::FreedStep fs;
+  TorqueColumns tc;  ///< offset and gain indices into fs's extras (-1: left out)
+};
+
+/// model_check on the torque readings, when the log evidences them: the warning when the
+/// friction would move, a gain is off by kUnusableGain, the residual is far above its floor
+/// (kMisfitRatio; evidenced, the readings explain at least half of that excess) or the evidence
+/// is decisive (kDecisiveCauseZ). Each of these but a move within kUnusableMove makes the fit
+/// unusable, naming the readings (a common scale of both when both gains are off alike).
+void torque_check(const Fit& f, const CauseSteps& cs, const ReadingStep& rs,
+                  IdentifyResult* out) {
+  if (!cs.named(kCauseTorque)) return;
+  const detail::FreedStep& ft = rs.fs;
+  const TorqueColumns& tc = rs.tc;
+  double largest = 0;
+  const std::string moved = friction_clause(f, *out, ft, false, true, &largest);
+  // a gain off by kUnusableGain scales the friction with it, whatever the move's std
+  const bool scaled = largest_gain(tc, ft) > kUnusableGain;
+  const double ratio = misfit_ratio(*out), z = cs.report[cs.slot[kCauseTorque]].z_given;
+  const bool far = ratio > kMisfitRatio, decisive = z > kDecisiveCauseZ;
+  if (moved.empty() && !scaled && !far && !decisive) return;
+  out->warnings.push_back(torque_warning(tc, ft,
+                                         !moved.empty() ? moved
+                                         : scaled ? "the friction estimates scale with the gains"
+                                                  : "the friction moves less than " +
+                                                        format_significant(kFreedMove) + " std"));
+  const std::string what =
+      (common_gain(tc, ft) ? "both logged torques' gains are off, a common scale ("
+                           : "the logged torques' zeros or gains are off (") +
+      torque_reading(tc, ft) + ")";
+  if (!out->unusable.empty()) return;
+  if (scaled) {
+    out->unusable = what + ": the friction estimates scale with them (see the warnings)";
+  } else if (!moved.empty()) {
+    unusable_move(friction_at_bound(f, *out) ? 0 : largest, what, out);
+  }
+  if (!out->unusable.empty() || !(far || decisive)) return;
+  out->unusable =
+      what + ": " +
+      (far ? "they explain the residual, " + format_significant(ratio, 3) +
+                 " times its noise floor (more than " + format_significant(kMisfitRatio) + ")"
+           : "the log evidences them by " + format_significant(z, 2) +
+                 " std beyond the other causes (more than " +
+                 format_significant(kDecisiveCauseZ) + ")") +
+      "; see the warnings";
+}
+
+/// No cause named, but the torque readings alone are evidenced decisively (kDecisiveCauseZ) and
+/// read a common gain beyond kUnusableGain: both torques scaled alike read as the links' masses
+/// and inertias scaled alike (the friction's normal forces scale with them), which the log
+/// cannot tell apart when the external loads are small. Either way the friction estimates are
+/// off by that scale: the fit is unusable (a light mechanism's multi-sine log with rates, both
+/// torques x 0.75: coulomb -4.8 std, viscous +5.0 std, residual 1.2 times its floor, evidence
+/// alone 1520 std for the readings, 871 for the inertias). True when it says so.
+bool scale_ambiguity(const CauseSteps& cs, const ReadingStep& rs, IdentifyResult* out) {
+  if (!out->unusable.empty() || cs.slot[kCauseTorque] < 0 || !rs.fs.ok ||
+      !(cs.z(kCauseTorque) > kDecisiveCauseZ) || !common_gain(rs.tc, rs.fs) ||
+      !(largest_gain(rs.tc, rs.fs) > kUnusableGain)) {
+    return false;
+  }
+  out->unusable = "both logged torques' gains are off alike (" + torque_reading(rs.tc, rs.fs) +
+                  "), or the links' masses and inertias are by that scale: the log cannot tell "
+                  "them apart (evidence alone, in std: torque_readings " +
+                  format_significant(cs.z(kCauseTorque), 2) + ", inertia " +
+                  format_significant(cs.z(kCauseInertia), 2) +
+                  "); either way the friction estimates scale with them. Check the torque "
+                  "sensors' gains and the scene's masses";
+  out->warnings.push_back(out->unusable);
+  return true;
+}
+
+}  // namespace
+
+ModelVerdict model_check(const Fit& f, IdentifyResult* out) {
+  ModelVerdict verdict;
+  if (!out->converged) return verdict;
+  Eigen::MatrixXd J;
+  Eigen::VectorXd r, info, bias;
+  std::vector<int> idx[4];  // fitted, inertial, angle offsets, torque offsets and gains
+  TorqueColumns tc;
+  if (!check_jacobian(f, *out, &J, &r, idx, &info, &tc) ||
+      J.rows() < kCheckRowsPerColumn * J.cols() || !score_bias(f, *out, J, r, tc, &bias)) {
+    return verdict;
+  }
+  const CauseSteps cs = cause_steps(J, r, idx, info, bias, !f.rates_biased);
+  out->model_check = cs.report;
+  const detail::FreedStep& fi = cs.alone[kCauseInertia];
+  verdict.negative_readings = torque_signs(tc, cs.alone[kCauseTorque]);
+  const ReadingStep rs{cs.alone[kCauseTorque], tc};
+  // both torques' gains off alike also read as the encoders' zeros (a common scale of the
+  // logged torques on the light mechanism read theta1, theta2 2.4, 1.3 rad off): the gains come
+  // first, so that the verdict names them
+  const bool open = out->unusable.empty();  // (a bound's rule may have decided before)
+  if (cs.named(kCauseTorque) && common_gain(rs.tc, rs.fs)) {
+    torque_check(f, cs, rs, out);
+    angles_check(f, cs, out);
+  } else {
+    angles_check(f, cs, out);
+    torque_check(f, cs, rs, out);
+  }
+  verdict.cause_decided = open && !out->unusable.empty();
+  if (!cs.any() && scale_ambiguity(cs, rs, out)) verdict.cause_decided = true;
+  verdict.cause_decided = verdict.cause_decided && verdict.negative_readings == 0;
+  std::string moved;
+  double largest = 0;  // [std] the cause's largest move of the friction (0: at its bound)
+  const bool masses = cs.named(kCauseInertia);
+  const int top = strongest_cause(cs);
+  if (!cs.any() && top < kCauseCount && cs.z(top) > detail::kCauseZ &&
+      !(moved = friction_clause(f, *out, cs.alone[top], false, true, &(largest = 0))).empty()) {
+    out->warnings.push_back(unresolved_warning(cs, top, moved, f.rates_biased));
+    const double ratio = misfit_ratio(*out);
+    if (out->unusable.empty() && ratio > kMisfitRatio) {  // an error the misfit shows, no cause
+      out->unusable = "a model error the log cannot attribute: it moves the friction while the "
+                      "torque residual is " + format_significant(ratio, 3) +
+                      " times its noise floor (more than " + format_significant(kMisfitRatio) +
+                      "; see the warnings)";
+    }
+    unusable_move(largest, "a model error the log cannot attribute", out);
+    return verdict;
+  }
+  const bool old_rule = !cs.any() && !idx[1].empty() && fi.ok;
+  if ((masses || old_rule) && !(moved = friction_clause(f, *out, fi, old_rule, masses)).empty()) {
+    out->warnings.push_back(
+        "with the links' inertial parameters free (one linearized refit, prior std " +
+        format_significant(f.opt->inertia_prior) + " of the scene's values) " +
+        (masses ? drop_clause(fi) + " and " : std::string()) + moved +
+        ". The scene's masses or inertias may not match the mechanism; try --estimate "
+        "friction,inertia");
+  }
+  return verdict;
+}
+
+}  // namespace fivebar::identification::stages

@@ -1,0 +1,217 @@
+// Model check of identify(), its Jacobian: the columns of the causes it frees (inertia, angle
+// offsets, torque readings) and the acceleration-bias scores.
+#include "identify_stages.h"
+
+namespace fivebar::identification::stages {
+
+namespace {
+
+// ---- model checks (misfit.h) ----
+
+/// The fit's residual blocks under `layout2` on the parameter vector *x2 (kept alive by the
+/// caller, who may change it between evaluations); false for an unsupported size.
+bool check_problem(const Fit& f, const ParameterLayout& layout2, std::vector<double>* x2,
+                   ceres::Problem* problem) {
+  return add_inverse_dynamics_terms(f.scene, layout2, f.samples, f.eval, Loss::kNone, 1, x2->data(),
+                                    problem);
+}
+
+/// The Jacobian of `problem`'s residuals (P parameters) at its current values, rows whitened by
+/// the noise floors `fl`, and the whitened residual; false if an evaluation fails.
+bool whitened_jacobian(ceres::Problem* problem, int P, const double fl[2], Eigen::MatrixXd* J,
+                       Eigen::VectorXd* r) {
+  std::vector<double> rv;
+  ceres::CRSMatrix crs;
+  if (!raw_residuals(problem, &rv, &crs)) return false;
+  *J = dense(crs, P);
+  *r = Eigen::Map<const Eigen::VectorXd>(rv.data(), rv.size());
+  for (Eigen::Index row = 0; row < J->rows(); ++row) {
+    J->row(row) /= fl[row % 2];
+    (*r)(row) /= fl[row % 2];
+  }
+  return J->allFinite() && r->allFinite();
+}
+
+/// The fit's vector under `layout2`, which differs from f.layout in its friction part or by the
+/// inertial group: `friction` then the scene's inertial parameters (or the fitted ones), then
+/// the fitted actuator terms.
+std::vector<double> with_layout(const Fit& f, const ParameterLayout& layout2,
+                                std::vector<double> friction) {
+  const auto mid = f.x.begin() + f.layout.friction_size();
+  if (f.layout.inertia) {
+    friction.insert(friction.end(), mid, mid + kInertialParams);
+  } else if (layout2.inertia) {
+    const detail::InertialPrior prior = detail::inertial_prior(f.scene, f.opt->inertia_prior);
+    friction.insert(friction.end(), prior.centre.begin(), prior.centre.end());
+  }
+  if (f.layout.actuator) friction.insert(friction.end(), f.x.end() - kActuatorTerms, f.x.end());
+  return friction;
+}
+
+/// Columns of the residual's Jacobian on offsets d of the logged angles (theta1, theta2 read d
+/// more than the scene's angles: the model is evaluated at theta - d), by central differences at
+/// the fit, rows whitened by the floors `fl`; false if an evaluation fails.
+bool offset_columns(const Fit& f, const double fl[2], Eigen::MatrixXd* Jo) {
+  constexpr double h = 1e-6;  // [rad]
+  const int m = 2 * static_cast<int>(f.samples.size());
+  Jo->setZero(m, 2);
+  for (int c = 0; c < 2; ++c) {
+    for (double sgn : {1.0, -1.0}) {
+      std::vector<Sample> shifted = f.samples;
+      for (Sample& s : shifted) (c == 0 ? s.th1 : s.th2) -= sgn * h;
+      std::vector<double> x = f.x, r;
+      ceres::Problem problem;
+      const bool sized = add_inverse_dynamics_terms(f.scene, f.layout, shifted, f.eval, Loss::kNone,
+                                                    1, x.data(), &problem);
+      if (!sized || !raw_residuals(&problem, &r) || static_cast<int>(r.size()) != m) return false;
+      for (int row = 0; row < m; ++row) (*Jo)(row, c) += sgn * r[row] / (2 * h * fl[row % 2]);
+    }
+  }
+  return Jo->allFinite();
+}
+
+/// A gain is left out when the model's torque of its channel varies by less than this fraction
+/// of its mean: then it is nearly an offset (with both free, constant drive torques of 40 N m
+/// read back an offset of -170 N m and a gain of 424 %)
+constexpr double kGainSpread = 0.1;
+
+/// The columns (r: the whitened residual at the fit, fl: the noise floors) on errors of the
+/// torque readings, tau_c = (1 + g_c) M_c + o_c: the offsets o1, o2 (left out when the fit has
+/// them, --estimate actuator) then the gains g1, g2 (kGainSpread), with M_c the fitted model's
+/// torque (tau_c - o_c - r_c).
+TorqueColumns torque_columns(const Fit& f, const Eigen::VectorXd& r, const double fl[2]) {
+  const double* o = f.layout.actuator ? &f.x[f.layout.actuator_offset()] : nullptr;
+  const Eigen::Index n = static_cast<Eigen::Index>(f.samples.size());
+  Eigen::MatrixXd model(n, kDof);
+  for (Eigen::Index u = 0; u < n; ++u) {
+    for (int c = 0; c < kDof; ++c) {
+      const double tau = c == 0 ? f.samples[u].tau1 : f.samples[u].tau2;
+      model(u, c) = tau - (o ? o[c] : 0.0) - r(2 * u + c) * fl[c];
+    }
+  }
+  TorqueColumns tc;
+  int k = 0;
+  for (int c = 0; c < kDof && !o; ++c) tc.offset[c] = k++;
+  for (int c = 0; c < kDof; ++c) {
+    const double mean = model.col(c).mean();
+    const double spread = std::sqrt((model.col(c).array() - mean).square().mean());
+    if (spread >= kGainSpread * std::abs(mean)) tc.gain[c] = k++;
+  }
+  tc.J = Eigen::MatrixXd::Zero(r.size(), k);
+  for (Eigen::Index u = 0; u < n; ++u) {
+    for (int c = 0; c < kDof; ++c) {
+      if (tc.offset[c] >= 0) tc.J(2 * u + c, tc.offset[c]) = -1.0 / fl[c];
+      if (tc.gain[c] >= 0) tc.J(2 * u + c, tc.gain[c]) = -model(u, c) / fl[c];
+    }
+  }
+  return tc;
+}
+
+}  // namespace
+
+bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J, Eigen::VectorXd* r,
+                    std::vector<int> idx[4], Eigen::VectorXd* info, TorqueColumns* tc) {
+  const int nf = f.layout.friction_size();
+  ParameterLayout l2 = f.layout;
+  l2.inertia = true;
+  std::vector<double> x2 = with_layout(f, l2, std::vector<double>(f.x.begin(), f.x.begin() + nf));
+  ceres::Problem problem;
+  Eigen::MatrixXd Ji, Jo;
+  if (!check_problem(f, l2, &x2, &problem) ||
+      !whitened_jacobian(&problem, l2.size(), out.residual_noise_floor, &Ji, r) ||
+      !offset_columns(f, out.residual_noise_floor, &Jo) || Jo.rows() != Ji.rows()) {
+    return false;
+  }
+  *tc = torque_columns(f, *r, out.residual_noise_floor);
+  const Eigen::MatrixXd& Jt = tc->J;
+  J->resize(Ji.rows(), Ji.cols() + 2 + Jt.cols());
+  *J << Ji, Jo, Jt;
+  for (int i = 0; i < l2.size(); ++i) {
+    idx[l2.is_inertial(i) && !f.layout.inertia ? 1 : 0].push_back(i);
+  }
+  idx[2] = {l2.size(), l2.size() + 1};
+  for (Eigen::Index k = 0; k < Jt.cols(); ++k) idx[3].push_back(l2.size() + 2 + k);
+  const detail::InertialPrior prior = detail::inertial_prior(f.scene, f.opt->inertia_prior);
+  info->resize(kInertialParams);
+  for (int k = 0; k < kInertialParams; ++k) (*info)(k) = 1.0 / std::pow(prior.sigma[k], 2);
+  return true;
+}
+
+namespace {
+
+/// The sum of the squared taps through which a noise channel (an angle, or a logged rate) reaches
+/// the estimated acceleration at log sample i (noise of std s on the channel: s^2 times it on the
+/// acceleration): the Savitzky-Golay d2 of the angles, or d1 of logged rates; 0 when the
+/// accelerations are logged (their own noise is not modelled).
+double accel_tap_power(const Fit& f, int i) {
+  if (f.source == detail::RateSource::kLogged) return 0.0;
+  int lo = i;
+  std::vector<double> d1, d2;
+  savitzky_golay_taps(f.cond.log.t, i, f.sg, &lo, &d1, &d2);
+  const std::vector<double>& d = f.source == detail::RateSource::kFromAngles ? d2 : d1;
+  double power = 0;
+  for (double w : d) power += w * w;
+  return power;
+}
+
+/// d J / d alpha_c and d r / d alpha_c (c: crank 1, 2; each moved at every sample at once) of
+/// the whitened Jacobian on the fitted and inertial parameters (check_jacobian's columns but the
+/// offsets') and of the whitened residual, by forward differences from J, r at the fit (the
+/// residual is nearly linear in the accelerations: only the load-dependent friction is not);
+/// false if an evaluation fails.
+bool accel_derivatives(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
+                       const Eigen::VectorXd& r, Eigen::MatrixXd dJ[2], Eigen::VectorXd dr[2]) {
+  constexpr double h = 1e-2;  // [rad/s^2]
+  ParameterLayout l2 = f.layout;
+  l2.inertia = true;
+  Fit g = f;
+  for (int c = 0; c < kDof; ++c) {
+    for (size_t u = 0; u < f.samples.size(); ++u) {
+      g.samples[u].a1 = f.samples[u].a1 + (c == 0 ? h : 0.0);
+      g.samples[u].a2 = f.samples[u].a2 + (c == 1 ? h : 0.0);
+    }
+    const auto friction_end = f.x.begin() + f.layout.friction_size();
+    std::vector<double> x2 = with_layout(g, l2, std::vector<double>(f.x.begin(), friction_end));
+    ceres::Problem problem;
+    Eigen::MatrixXd Jh;
+    Eigen::VectorXd rh;
+    if (!check_problem(g, l2, &x2, &problem) ||
+        !whitened_jacobian(&problem, l2.size(), out.residual_noise_floor, &Jh, &rh) ||
+        Jh.rows() != J.rows() || Jh.cols() > J.cols()) {
+      return false;
+    }
+    dJ[c] = (Jh - J.leftCols(Jh.cols())) / h;
+    dr[c] = (rh - r) / h;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool score_bias(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
+                const Eigen::VectorXd& r, const TorqueColumns& tc, Eigen::VectorXd* b) {
+  b->setZero(J.cols());
+  // the std of each crank's noise channel
+  const double* sigma = f.source == detail::RateSource::kFromAngles ? f.noise.angle : f.noise.rate;
+  if (f.source == detail::RateSource::kLogged || !(sigma[0] > 0 || sigma[1] > 0)) return true;
+  Eigen::MatrixXd dJ[2];
+  Eigen::VectorXd dr[2];
+  if (!accel_derivatives(f, out, J, r, dJ, dr)) return false;
+  // the torque gains' columns (the last of J, torque_columns) hold minus the model's torque,
+  // whose derivative in the accelerations is the residual's: dr_c on their crank's rows
+  const Eigen::Index first = J.cols() - tc.J.cols();
+  for (size_t u = 0; u < f.samples.size(); ++u) {
+    const Eigen::Index row = 2 * static_cast<Eigen::Index>(u);
+    const double m = accel_tap_power(f, f.index[u]);
+    for (int c = 0; c < kDof; ++c) {
+      const double v = sigma[c] * sigma[c] * m;
+      b->head(dJ[c].cols()) += v * dJ[c].middleRows(row, 2).transpose() * dr[c].segment(row, 2);
+      for (int k = 0; k < kDof; ++k) {
+        if (tc.gain[k] >= 0) (*b)(first + tc.gain[k]) += v * std::pow(dr[c](row + k), 2);
+      }
+    }
+  }
+  return b->allFinite();
+}
+
+}  // namespace fivebar::identification::stages

@@ -1,0 +1,89 @@
+// Predictions of identify(): the fitted model's torques, the output-error residual levels, and
+// the warning on a coefficient at its bound under a misfit.
+#include "identify_stages.h"
+
+namespace fivebar::identification::stages {
+
+void predictions(const Fit& f, IdentifyResult* out) {
+  const TorqueLog& log = f.cond.log;
+  const int n = log.size();
+  out->predicted_tau1.assign(n, kNaN);
+  out->predicted_tau2.assign(n, kNaN);
+  Params<double> p = f.scene;
+  f.layout.apply(f.x.data(), &p);
+  for (int i = 0; i < n; ++i) {
+    Evaluation<double> ev;
+    const Status st =
+        inverse_dynamics(p, f.loads(log.t[i]), log.theta1[i], log.theta2[i], out->omega1[i],
+                         out->omega2[i], out->alpha1[i], out->alpha2[i], nullptr, f.eval, &ev);
+    if (st.ok()) {
+      out->predicted_tau1[i] = ev.M1 + p.actuators.offset[0];  // as the sensor reads it
+      out->predicted_tau2[i] = ev.M2 + p.actuators.offset[1];
+    }
+  }
+}
+
+void output_error_levels(const Fit& f, IdentifyResult* out) {
+  const TorqueLog& log = f.cond.log;
+  double s[2] = {0, 0};
+  int c = 0;
+  for (int i = f.first; i <= f.last; ++i) {
+    if (std::isnan(out->predicted_tau1[i])) continue;
+    s[0] += std::pow(log.tau1[i] - out->predicted_tau1[i], 2);
+    s[1] += std::pow(log.tau2[i] - out->predicted_tau2[i], 2);
+    ++c;
+  }
+  for (int j = 0; j < kActuators; ++j)
+    out->rms_torque_residual[j] = std::sqrt(s[j] / std::max(1, c));
+  for (int j = 0; j < kActuators; ++j) {
+    const std::vector<double>& tau = j == 0 ? log.tau1 : log.tau2;
+    const std::vector<double>& pred = j == 0 ? out->predicted_tau1 : out->predicted_tau2;
+    std::vector<double> d;
+    for (int i = f.first + 1; i <= f.last; ++i) {
+      const double e = (tau[i] - pred[i]) - (tau[i - 1] - pred[i - 1]);
+      if (std::isfinite(e)) d.push_back(e);
+    }
+    out->residual_noise_floor[j] = robust_std(d) / std::sqrt(2.0);
+  }
+}
+
+double misfit_ratio(const IdentifyResult& r) {
+  return std::max(r.rms_torque_residual[0] / r.residual_noise_floor[0],
+                  r.rms_torque_residual[1] / r.residual_noise_floor[1]);
+}
+
+void bound_and_misfit_warning(const Fit& f, const Analysis& an, IdentifyResult* out) {
+  std::string at;
+  for (int i = 0; i < f.layout.friction_size(); ++i) {
+    if (out->parameters[i].at_bound) at += (at.empty() ? "" : ", ") + out->parameters[i].name;
+  }
+  const double* fl = out->residual_noise_floor;
+  const double ratio = misfit_ratio(*out);
+  if (at.empty() || !(ratio > kMisfitRatio)) return;
+  const size_t m = f.index.size();
+  std::vector<std::pair<double, int>> q(m);  // per sample: residual in floors, log index
+  for (size_t u = 0; u < m; ++u) {
+    q[u] = {std::hypot(an.r[2 * u] / fl[0], an.r[2 * u + 1] / fl[1]) / std::sqrt(2.0), f.index[u]};
+  }
+  const size_t top = std::min<size_t>(3, m);
+  std::partial_sort(q.begin(), q.begin() + top, q.end(), std::greater<>());
+  std::string lines;
+  for (size_t k = 0; k < top; ++k) {
+    lines += (k ? ", " : "") + sample_name(f.cond.log, q[k].second) + " (" +
+             format_significant(q[k].first, 2) + " times)";
+  }
+  // which cause cannot be told from the residual: a glitch that drags a coefficient to its bound
+  // leaves the whole residual off the floor, as a wrong scene does
+  out->unusable = at + " at its bound while the torque residual is " +
+                  format_significant(ratio, 3) + " times its noise floor (more than " +
+                  format_significant(kMisfitRatio) + ")";
+  out->warnings.push_back(
+      at + " at its bound while the torque residual is " + format_significant(ratio) +
+      " times the noise floor: the fit is driven by samples the law cannot explain (largest at " +
+      lines + "). Likely causes: glitches the rejection missed (check those lines; --loss cauchy "
+      "fits past them), or a scene (masses, geometry, loads) or law that does not match the log "
+      "(--estimate friction,inertia, another --law). A coefficient at its bound has no "
+      "meaningful std; do not use this fit as it is");
+}
+
+}  // namespace fivebar::identification::stages
