@@ -288,12 +288,14 @@ bool friction_fixed_point(const std::array<T, kJoints>& phi, const EvalOptions& 
 }
 
 /// J <- its LU factors in place, for a strictly diagonally dominant J (Gaussian elimination, no
-/// pivoting needed): U on and above the diagonal, the multipliers of L below it.
-/// (Loops unrolled: five unknowns, called in the loop.)
+/// pivoting needed): U above the diagonal, the reciprocals of U's diagonal on it, the multipliers
+/// of L below it. (Loops unrolled: five unknowns, called in the loop. The reciprocals take the
+/// divisions off the back substitution, whose steps depend on each other.)
 inline void factor_dominant(double J[kJoints][kJoints]) {
 #pragma GCC unroll 5
   for (int c = 0; c < kJoints; ++c) {
     const double inv = 1.0 / J[c][c];
+    J[c][c] = inv;
 #pragma GCC unroll 5
     for (int i = c + 1; i < kJoints; ++i) {
       const double f = J[i][c] * inv;
@@ -315,7 +317,7 @@ inline void solve_factored(const double LU[kJoints][kJoints], double r[kJoints])
   for (int c = kJoints - 1; c >= 0; --c) {
 #pragma GCC unroll 5
     for (int j = c + 1; j < kJoints; ++j) r[c] -= LU[c][j] * r[j];
-    r[c] /= LU[c][c];
+    r[c] *= LU[c][c];
   }
 }
 
