@@ -250,6 +250,8 @@ struct Context {
   Status failure;                       ///< last failure inside a callback
   /// the right-hand side's last friction-loop solution: the next evaluation starts from it
   FrictionWarmStart warm;
+  /// the same for the output rows (make_row), one output step apart
+  FrictionWarmStart row_warm;
 };
 
 /// The status with the time and the driven angles first (theta1 .. theta_dof of `q`).
@@ -920,7 +922,7 @@ void set_evaluated(const EvalOf<M>& ev, const Row* previous, Row* row) {
 }
 
 template <class M>
-Row make_row(const Context<M>& c, double t, const double* y, const Row* previous, Status* st) {
+Row make_row(Context<M>& c, double t, const double* y, const Row* previous, Status* st) {
   constexpr int n = M::kDof, kBristle = base_states(n);
   if (!c.full_rows) return make_angle_row(c, t, y, previous, st);
   if (c.locked) return make_locked_row(c, t, y, previous, st);
@@ -935,7 +937,7 @@ Row make_row(const Context<M>& c, double t, const double* y, const Row* previous
   std::array<double, kJoints> z{};
   if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, z.begin());
   JointModes signs;  // the modes the right-hand side uses
-  *st = forward_at<M>(*c.params, L, y, rhs_modes(c, y, &signs), eval, &ev, &z);
+  *st = forward_at<M>(*c.params, L, y, rhs_modes(c, y, &signs), eval, &ev, &z, &c.row_warm);
   if (!st->ok()) {
     *st = at_time<M>(*st, t, y);
     return row;

@@ -116,6 +116,38 @@ TEST(FrictionLoop, WarmStartReachesTheColdSolution) {
   }
 }
 
+TEST(FrictionLoop, WarmStartOnNearbyStatesSavesEvaluations) {
+  // states 1e-5 s apart along the paper scene's motion, as an integrator's right-hand sides see
+  // them: the warm start carries friction's share of N onto the new frictionless reactions and
+  // needs fewer evaluations of the loop's map than the cold start, for the same solution
+  const Params<double> p = paper_params();
+  EvalOptions opt;
+  opt.singular_margin = 1e-3;
+  const JointModes slip = {JointMode::kSlipPositive, JointMode::kSlipNegative,
+                           JointMode::kSlipPositive, JointMode::kSlipPositive,
+                           JointMode::kSlipNegative};
+  FrictionWarmStart warm;
+  int cold_evaluations = 0, warm_evaluations = 0;
+  for (int i = 0; i < 50; ++i) {
+    const double dt = 1e-5 * i;
+    const Loads<double> L = testing::paper_loads(0.31 + dt);
+    Evaluation<double> cold, hot;
+    ASSERT_TRUE(forward_dynamics(p, L, 1.3 + 23.0 * dt, 2.0 - 31.0 * dt, 23.0, -31.0, &slip, opt,
+                                 &cold)
+                    .ok());
+    ASSERT_TRUE(forward_dynamics(p, L, 1.3 + 23.0 * dt, 2.0 - 31.0 * dt, 23.0, -31.0, &slip, opt,
+                                 &hot, static_cast<const std::array<double, kJoints>*>(nullptr),
+                                 &warm)
+                    .ok());
+    expect_same_evaluation(cold, hot);
+    if (i == 0) continue;  // (the first starts cold either way)
+    cold_evaluations += cold.iterations;
+    warm_evaluations += hot.iterations;
+  }
+  EXPECT_LT(warm_evaluations, cold_evaluations);
+  EXPECT_LE(warm_evaluations, 2 * 49);  // one Newton step reaches the tolerance
+}
+
 TEST(FrictionLoop, ContractingNewtonMatchesFixedPoint) {
   const Params<double> p = paper_params();
   std::mt19937_64 rng(7);

@@ -23,9 +23,13 @@ namespace fivebar {
 /// The previous solution of a friction loop, kept by a caller that evaluates nearby states one
 /// after the other (the simulator's right-hand side): the next loop starts from it where its
 /// fixed point is unique (the map contracts), so the start changes the cost, not the solution.
+/// The start carries over what friction adds to the reactions, N - |F0| (F0: the frictionless
+/// reactions), onto the new frictionless ones: N_k = |F0_k| + (N - |F0|)_k of the last loop. That
+/// part changes from one state to the next far less than N itself.
 struct FrictionWarmStart {
   bool set = false;
   std::array<double, kJoints> N{};  ///< the last consistent reactions [N]
+  std::array<double, kJoints> N0{};  ///< the last frictionless reactions |F0_k| [N]
 };
 
 /// The change of the reactions per unit friction torque in forward dynamics with no joint stuck,
@@ -284,12 +288,14 @@ bool friction_fixed_point(const std::array<T, kJoints>& phi, const EvalOptions& 
 }
 
 /// J <- its LU factors in place, for a strictly diagonally dominant J (Gaussian elimination, no
-/// pivoting needed): U on and above the diagonal, the multipliers of L below it.
-/// (Loops unrolled: five unknowns, called in the loop.)
+/// pivoting needed): U above the diagonal, the reciprocals of U's diagonal on it, the multipliers
+/// of L below it. (Loops unrolled: five unknowns, called in the loop. The reciprocals take the
+/// divisions off the back substitution, whose steps depend on each other.)
 inline void factor_dominant(double J[kJoints][kJoints]) {
 #pragma GCC unroll 5
   for (int c = 0; c < kJoints; ++c) {
     const double inv = 1.0 / J[c][c];
+    J[c][c] = inv;
 #pragma GCC unroll 5
     for (int i = c + 1; i < kJoints; ++i) {
       const double f = J[i][c] * inv;
@@ -311,7 +317,7 @@ inline void solve_factored(const double LU[kJoints][kJoints], double r[kJoints])
   for (int c = kJoints - 1; c >= 0; --c) {
 #pragma GCC unroll 5
     for (int j = c + 1; j < kJoints; ++j) r[c] -= LU[c][j] * r[j];
-    r[c] /= LU[c][c];
+    r[c] *= LU[c][c];
   }
 }
 
@@ -607,7 +613,8 @@ Status scaled_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions
   std::array<T, kJoints> N_warm;
   const bool contracts = scaled.contraction_bound < 1.0;
   if (warm && warm->set && contracts) {
-    for (int j = 0; j < kJoints; ++j) N_warm[j] = T(warm->N[j]);
+    reaction_norms(scaled.F0, &N_warm);
+    for (int j = 0; j < kJoints; ++j) N_warm[j] += T(warm->N[j] - warm->N0[j]);
     start = &N_warm;
   }
   bool contracting = true;
@@ -674,7 +681,11 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
   }
   if (warm) {
     warm->set = true;
-    for (int j = 0; j < kJoints; ++j) warm->N[j] = value_of((*N)[j]);
+    using std::sqrt;
+    for (int j = 0; j < kJoints; ++j) {
+      warm->N[j] = value_of((*N)[j]);
+      warm->N0[j] = value_of(sqrt(F0[j].squaredNorm()));
+    }
   }
   if constexpr (std::is_same_v<T, double>) {
     if (loop) *loop = LoopSolution{true, *N, affine(), *iterations};
