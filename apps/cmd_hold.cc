@@ -5,6 +5,8 @@
 // (the other at its equilibrium) over which static friction holds the pose, and the region of
 // (M1, M2) as a polygon. One pose (default the scene's initial one) -> hold.json; a
 // grid of N x N poses over the whole circle of both cranks -> hold_map.csv and hold_map.png.
+// A four-bar scene: its one crank (--pose THETA1, --grid N poses of theta1), the equilibrium M1
+// and the range of M1 static friction holds (four_bar_rest.h).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <array>
@@ -24,6 +26,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/model/four_bar_rest.h"
 #include "fivebar/model/rest.h"
 
 // a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
@@ -36,7 +39,7 @@ constexpr char kSummary[] =
 
 struct Args {
   SceneArgs scene;
-  std::string pose;  // "theta1,theta2"; empty: the scene's initial pose
+  std::string pose;  // "theta1,theta2" (a four-bar: "theta1"); empty: the scene's initial pose
   int grid = -1;     // > 0: map over N x N poses; -1: not given
   double torque_limit = std::numeric_limits<double>::infinity();
   double time = 0;  // when the loads M3, F are evaluated
@@ -241,8 +244,127 @@ int run_grid(const Args& args, const Scene& scene, const Loads<double>& L) {
   return 0;
 }
 
+// ---- the four-bar: one crank, one drive torque ----
+
+// "a" -> one finite number, else InputError on --pose
+double parse_crank(const std::string& text, const std::string& scene) {
+  std::stringstream in(text);
+  double th = NAN;
+  std::string rest;
+  if (!(in >> th) || (in >> rest) || !std::isfinite(th) || std::abs(th) > 1e3) {
+    throw InputError(scene, "--pose", "expected THETA1 (a four-bar has one crank angle, in rad, "
+                                      "|theta1| <= 1000), got '" + text + "'");
+  }
+  return th;
+}
+
+// the four-bar's holding at th1: the pose assembles (else exit 2 when `strict`) and is away from
+// the singular pose (else exit 3 when `strict`); a map cell's status otherwise (as map_cell)
+int four_bar_cell(const Scene& scene, const FourBarLoads& L, double th1, bool strict,
+                  FourBarHolding* h) {
+  FourBarKinematics k;
+  const Status closes = four_bar_kinematics(scene.four_bar, th1, &k,
+                                            std::max(scene.options.singular_margin, 1e-12));
+  if (!closes.ok() && strict) {
+    const std::string why = "at theta1 = " + format_double(th1) + ": " + closes.message;
+    if (closes.code == StatusCode::kCannotAssemble) throw InputError(scene.path, "--pose", why);
+    throw NumericalError(scene.path, "--pose", why + ": no finite holding torque");
+  }
+  if (!closes.ok()) return closes.code == StatusCode::kCannotAssemble ? 1 : 2;
+  const Status st = four_bar_holding(scene.four_bar, L, th1, eval_options(scene), h);
+  if (!st.ok() && strict) {
+    throw NumericalError(scene.path, "--pose", "theta1 = " + format_double(th1) + ": " + st.message);
+  }
+  return st.ok() ? 0 : 3;
+}
+
+int run_four_bar_pose(const Args& args, const Scene& scene, const FourBarLoads& L, double th1) {
+  FourBarHolding h;
+  four_bar_cell(scene, L, th1, true, &h);
+  OutputDir dir(args.scene.out, kOutputs);
+  const double required = least_magnitude(h.M1_min, h.M1_max);
+  Json j = Json::object();
+  j.set("mechanism", "four_bar");
+  j.set("M1", h.M1);
+  j.set("range_M1", pair(h.M1_min, h.M1_max));
+  Json N = Json::array(), bound = Json::array();
+  for (int k = 0; k < kFourBarJoints; ++k) {
+    N.push(h.N[k]);
+    bound.push(h.bound[k]);
+  }
+  j.set("N", std::move(N));
+  j.set("static_friction_bound", std::move(bound));
+  j.set("crank_joint_range_M1", pair(h.M1 - h.bound[0], h.M1 + h.bound[0]));
+  j.set("stuck_joints", "O, B, C, D0 (all at rest)");
+  j.set("required_torque", required);
+  j.set("holdable_within_limit", required <= args.torque_limit);
+  j.set("theta1", th1);
+  j.set("scene", scene.path);
+  j.set("loads_time", args.time);
+  j.set("torque_limit", args.torque_limit);
+  write_json_file(dir.file("hold.json"), j);
+  const std::vector<std::string> written = dir.commit();
+  char line[512];
+  std::snprintf(line, sizeof line,
+                " (four-bar) at theta1 = %.10g rad (loads at t = %g s)\n"
+                "  frictionless equilibrium: M1 = %.10f N m\n"
+                "  static friction holds M1 in [%.6f, %.6f] N m (joint O alone: +- %.6f)\n"
+                "  torque needed to hold: %.6g N m\n",
+                th1, args.time, h.M1, h.M1_min, h.M1_max, h.bound[0], required);
+  std::cout << "fivebar hold: " << scene.path << line << "  wrote " << dir.dir() << "/:";
+  for (const std::string& name : written) std::cout << " " << name;
+  std::cout << std::endl;
+  return 0;
+}
+
+int run_four_bar_grid(const Args& args, const Scene& scene, const FourBarLoads& L) {
+  OutputDir dir(args.scene.out, kOutputs);
+  std::string csv = "theta1,status,M1,M1_hold_min,M1_hold_max,required,within_limit";
+  long held = 0, over = 0, blank = 0;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int i = 0; i < args.grid; ++i) {
+    const double th1 = -M_PI + 2 * M_PI * (i + 0.5) / args.grid;
+    FourBarHolding h;
+    const int status = four_bar_cell(scene, L, th1, false, &h);
+    const bool ok = status == 0;
+    const double req = ok ? least_magnitude(h.M1_min, h.M1_max) : nan;
+    const bool within = ok && req <= args.torque_limit;
+    held += within;
+    over += ok && !within;
+    blank += !ok;
+    csv += "\n";
+    const double values[] = {th1, double(status), ok ? h.M1 : nan, ok ? h.M1_min : nan,
+                             ok ? h.M1_max : nan, req, ok ? double(within) : nan};
+    for (size_t c = 0; c < std::size(values); ++c) csv += (c ? "," : "") + format_double(values[c]);
+  }
+  write_text_file(dir.file("hold_map.csv"), csv + "\n");
+  if (!args.no_plots) {
+    const std::string warning =
+        plot_hold_curve(dir.staging(), "hold_map.csv", args.torque_limit, scene.path);
+    if (!warning.empty()) warn(warning);
+  }
+  Json j = Json::object();
+  j.set("command", "hold");
+  j.set("mechanism", "four_bar");
+  j.set("scene", scene.path);
+  j.set("grid", args.grid);
+  j.set("loads_time", args.time);
+  j.set("torque_limit", args.torque_limit);
+  j.set("poses_held_within_limit", held);
+  j.set("poses_over_limit", over);
+  j.set("poses_not_assembled_or_singular", blank);
+  write_json_file(dir.file("summary.json"), j);
+  const std::vector<std::string> written = dir.commit();
+  std::cout << "fivebar hold: " << scene.path << " (four-bar), " << args.grid << " poses: " << held
+            << " held within the limit, " << over << " over it, " << blank
+            << " cannot assemble or singular\n  wrote " << dir.dir() << "/:";
+  for (const std::string& name : written) std::cout << " " << name;
+  std::cout << std::endl;
+  return 0;
+}
+
 int run(const Args& args) {
-  const Scene scene = load_scene(args.scene.scene, args.scene.sets);
+  const Scene scene = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
   if (args.grid != -1 && (args.grid < 1 || args.grid > 2000)) {
     throw InputError(scene.path, "--grid", "expected 1 to 2000 poses per crank, got " +
                                                std::to_string(args.grid));
@@ -253,6 +375,13 @@ int run(const Args& args) {
   if (!(args.torque_limit > 0)) {
     throw InputError(scene.path, "--torque-limit", "must be > 0, got " +
                                                        format_double(args.torque_limit));
+  }
+  if (scene.type == MechanismType::kFourBar) {
+    FourBarLoads L = LoadExpressions(scene).four_bar_function()(args.time);
+    L.M1 = 0;  // the unknown
+    if (args.grid > 0) return run_four_bar_grid(args, scene, L);
+    const double th1 = args.pose.empty() ? scene.initial.theta1 : parse_crank(args.pose, scene.path);
+    return run_four_bar_pose(args, scene, L, th1);
   }
   Loads<double> L = LoadExpressions(scene).function()(args.time);
   L.M1 = L.M2 = 0;  // the unknowns
@@ -267,9 +396,11 @@ int run(const Args& args) {
 void add_options(CLI::App* app, Args* args) {
   add_scene_options(app, &args->scene, "hold");
   add_plots_flag(app, &args->no_plots, "the map");
-  app->add_option("--pose", args->pose, "the pose to hold (default: the scene's initial pose)")
+  app->add_option("--pose", args->pose,
+                  "the pose to hold (default: the scene's initial pose; a four-bar: THETA1)")
       ->type_name("THETA1,THETA2");
-  app->add_option("--grid", args->grid, "map N x N poses over theta1, theta2 in [-pi, pi)")
+  app->add_option("--grid", args->grid,
+                  "map N x N poses over theta1, theta2 in [-pi, pi) (a four-bar: N poses of theta1)")
       ->type_name("N")
       ->check(positive_number());
   app->add_option("--torque-limit", args->torque_limit,

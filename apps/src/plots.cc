@@ -526,6 +526,38 @@ std::string hold_map_plot_script(const std::string& map_csv, double torque_limit
   return s;
 }
 
+std::string hold_curve_plot_script(const std::string& map_csv, double torque_limit,
+                                   const std::string& title, const std::string& terminal) {
+  std::string s = preamble(terminal, "figure of `fivebar hold --grid` (four-bar)");
+  char value[32];
+  std::snprintf(value, sizeof value, "%g", torque_limit);
+  const bool limited = std::isfinite(torque_limit);
+  s += "set xlabel \"{/Symbol q}_1 [rad]\"\nset ylabel \"M1 [N m]\"\nset xrange [-pi:pi]\n"
+       "set key top left opaque box font \",10\"\n";
+  s += begin_figure("hold_map.png", "1,1",
+                    "Holding torque of the crank: the frictionless equilibrium and the range static "
+                    "friction holds",
+                    std::string(limited ? "dashed: the torque limit +-" + std::string(value) + " N m"
+                                        : "no torque limit") +
+                        "; gaps: cannot assemble or singular",
+                    title);
+  s += "plot " + quote(map_csv) +
+       " using \"theta1\":\"M1_hold_min\":\"M1_hold_max\" with filledcurves lc rgb "
+       "\"#a6cee3\" title \"held by static friction\", \\\n     " +
+       quote(map_csv) + " using \"theta1\":\"M1\" with lines ls 1 title \"frictionless equilibrium\"";
+  if (limited) {
+    s += ", \\\n     " + std::string(value) + " with lines ls 2 dt 2 notitle, -" + value +
+         " with lines ls 2 dt 2 notitle";
+  }
+  return s + "\nunset multiplot\n";
+}
+
+std::string plot_hold_curve(const std::string& dir, const std::string& map_csv,
+                            double torque_limit, const std::string& title) {
+  return run_gnuplot(dir, "plots.gnuplot",
+                     hold_curve_plot_script(map_csv, torque_limit, title, gnuplot().terminal));
+}
+
 std::string plot_hold_map(const std::string& dir, const std::string& map_csv, double torque_limit,
                           const std::string& title) {
   // run_gnuplot says so when gnuplot is missing (the terminal is "" then)

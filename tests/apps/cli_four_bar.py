@@ -100,6 +100,39 @@ expect_error(2, "mechanism: a four_bar run, and the scene", ["animate", cr, "--s
 expect_error(2, "column theta3: a four-bar's motion",
              ["synth-log", PAPER, "--out", os.path.join(WORK, "bad.csv"), "--motion",
               os.path.join(cr, "trajectory.csv")])
+# hold: the range of M1 static friction holds at the start pose, checked by simulate from rest
+# just inside (every row at the start angle) and just outside it (the crank moves)
+held = os.path.join(WORK, "hold")
+code, _, err = run(["hold", scene, "--out", held, "--set", "friction.pin_radius=0.02",
+                    "--set", "friction.coulomb=0.3"])
+if code != 0:
+    failures.append("hold: exit %d: %s" % (code, err))
+else:
+    h = json.load(open(os.path.join(held, "hold.json")))
+    lo, hi = h["range_M1"]
+    if not (h["mechanism"] == "four_bar" and lo < h["M1"] < hi):
+        failures.append("hold.json: %r" % h)
+    for frac, stays in ((0.99, True), (1.01, False)):
+        m1 = h["M1"] + frac * (hi - h["M1"])
+        out = os.path.join(WORK, "hold_sim_%g" % frac)
+        code, _, err = run(["simulate", scene, "--out", out, "--no-plots", "--set",
+                            "friction.pin_radius=0.02", "--set", "friction.coulomb=0.3", "--set",
+                            "loads.M1=%r" % m1, "--set", "simulation.duration=0.1"])
+        rows = read_csv(os.path.join(out, "trajectory.csv")) if code == 0 else []
+        moved = max((abs(float(r["theta1"]) - float(rows[0]["theta1"])) for r in rows), default=-1)
+        if code != 0 or (moved != 0) == stays:
+            failures.append("hold range vs simulate at %g of the way to M1_max: exit %d, moved %g rad"
+                            % (frac, code, moved))
+code, _, err = run(["hold", os.path.join(REFERENCE, "double_rocker.yaml"), "--grid", "36",
+                    "--out", os.path.join(WORK, "hold_map")])
+if code != 0 or not os.path.exists(os.path.join(WORK, "hold_map", "hold_map.csv")):
+    failures.append("hold --grid on the double rocker: exit %d: %s" % (code, err))
+else:
+    status = [float(r["status"]) for r in read_csv(os.path.join(WORK, "hold_map", "hold_map.csv"))]
+    if not (status.count(0.0) > 0 and status.count(1.0) > 0):
+        failures.append("hold --grid on the double rocker: statuses %s" % sorted(set(status)))
+expect_error(2, "--pose: expected THETA1 (a four-bar has one crank angle",
+             ["hold", scene, "--pose", "1,2", "--out", os.path.join(WORK, "bad")])
 bad = os.path.join(WORK, "bad")
 expect_error(2, "--excitation: multisine drives the five-bar's two cranks",
              ["synth-log", scene, "--out", bad, "--excitation", "multisine"])
@@ -112,7 +145,7 @@ expect_error(2, "friction.coulomb: expected 1 or 4 numbers (O, B, C, D0), got 5"
 expect_error(2, "initial: four-bar cannot assemble",
              ["simulate", scene, "--set", "mechanism.links.2.length=0.01", "--out", bad])
 expect_error(2, "mechanism.type: four_bar: this command runs five-bars only so far",
-             ["inverse", scene, "--motion", os.path.join(REFERENCE, "crank_rocker.csv"), "--out", bad])
+             ["identify", scene, "--log", log, "--out", bad])
 if os.path.exists(bad):
     failures.append("a failed run left %s behind" % bad)
 

@@ -62,6 +62,12 @@ std::string hold_map_plot_script(const std::string& map_csv, double torque_limit
                                  const std::string& title, const std::string& terminal);
 std::string plot_hold_map(const std::string& dir, const std::string& map_csv, double torque_limit,
                           const std::string& title);
+/// The four-bar's hold_map.png from its hold_map.csv (theta1, M1, M1_hold_min, M1_hold_max): the
+/// held range as a band around the equilibrium over theta1, the torque limit dashed.
+std::string hold_curve_plot_script(const std::string& map_csv, double torque_limit,
+                                   const std::string& title, const std::string& terminal);
+std::string plot_hold_curve(const std::string& dir, const std::string& map_csv,
+                            double torque_limit, const std::string& title);
 /// A readable name of a scene key for axis labels, links 1-based as in the README and the
 /// figures, with units: `mechanism.links.2.length` -> "l3: length of link 3 (coupler B-C) [m]".
 /// Keys it does not know come back as they are.
