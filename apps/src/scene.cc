@@ -869,7 +869,7 @@ MechanismType read_type(const SceneReader& r, bool four_bar_ok) {
   if (type == "five_bar") return MechanismType::kFiveBar;
   if (!four_bar_ok) {
     r.fail("mechanism.type", "four_bar: this command runs five-bars only so far (fivebar simulate "
-                             "runs four-bars)" + r.origin("mechanism.type"));
+                             "and inverse run four-bars)" + r.origin("mechanism.type"));
   }
   for (const std::string& key : r.keys()) {
     const bool five_bar_key = key == "loads.M2" || key == "initial.theta2" ||
