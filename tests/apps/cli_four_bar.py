@@ -124,6 +124,11 @@ with open(five, "w") as f:
     f.write("t,theta1,theta2\n" + "".join("%g,1.2,0.3\n" % (0.01 * i) for i in range(6)))
 expect_error(2, "theta2: is a five-bar motion column (the second crank), not one of mechanism.type "
              "four_bar", ["inverse", scene, "--motion", five, "--out", bad])
+far = os.path.join(WORK, "far.csv")
+with open(far, "w") as f:
+    f.write("t,theta1\n" + "".join("%g,%g\n" % (0.01 * i, 3.0 - 0.01 * i) for i in range(6)))
+expect_error(2, "line 2: the mechanism cannot assemble at theta1 = 3",
+             ["inverse", os.path.join(REFERENCE, "double_rocker.yaml"), "--motion", far, "--out", bad])
 expect_error(2, "loads.M2: is a five-bar key, not one of mechanism.type four_bar",
              ["simulate", scene, "--set", "loads.M2=1", "--out", bad])
 expect_error(2, "friction.coulomb: expected 1 or 4 numbers (O, B, C, D0), got 5",
