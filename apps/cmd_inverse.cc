@@ -1,6 +1,7 @@
 // fivebar inverse SCENE --motion MOTION.csv [--out DIR] [--set KEY=VALUE]... [--no-plots]
-// Inverse dynamics along a given motion of the two cranks: the torques M1, M2 that produce it
-// under the scene's other loads, with every joint reaction and friction torque.
+// Inverse dynamics along a given motion of the driven cranks (the five-bar's two, the four-bar's
+// one): the torques that produce it under the scene's other loads, with every joint reaction
+// and friction torque.
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -26,6 +27,7 @@
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/four_bar.h"
 #include "fivebar/sim/simulator.h"
 
 // a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
@@ -49,11 +51,12 @@ const std::vector<std::string> kOutputs = {"trajectory.csv", "summary.json",
 // minimum number of samples for the 5-point differences
 constexpr size_t kMinSamplesForDifferences = 5;
 
-// The motion of the two cranks read from a CSV, with where each rate came from.
+// The motion of the driven cranks read from a CSV, with where each rate came from.
 struct Motion {
-  std::vector<sim::Row> rows;  // t, theta[0..1], omega[0..1], alpha[0..1] filled
+  int cranks = 2;              // the five-bar's two, the four-bar's one
+  std::vector<sim::Row> rows;  // t, theta, omega, alpha of the cranks filled
   std::string omega_source, alpha_source;
-  bool has_torques = false;  // the file has M1, M2 (e.g. a trajectory.csv of simulate)
+  bool has_torques = false;  // the file has the drive torques (e.g. a trajectory.csv of simulate)
   std::vector<double> M1, M2;
   // noise standard deviations of the rates and accelerations used (rest rule, docs/hold.md)
   double rate_noise = 0, acceleration_noise = 0;
@@ -70,9 +73,15 @@ double max_difference(std::vector<double> f, int n) {
   return worst;
 }
 
-// larger of the two cranks' series_noise
-double crank_noise(const std::vector<double>& a, const std::vector<double>& b) {
-  return std::max(series_noise(a), series_noise(b));
+// the largest of the cranks' `noise` (series_noise, rounding_noise) or max_difference
+template <typename F>
+double largest(const std::vector<std::vector<double>>& series, const F& f) {
+  double worst = 0.0;
+  for (const std::vector<double>& s : series) worst = std::max(worst, f(s));
+  return worst;
+}
+double crank_noise(const std::vector<std::vector<double>>& series) {
+  return largest(series, [](const std::vector<double>& s) { return series_noise(s); });
 }
 
 // time must increase strictly from row to row
@@ -87,33 +96,78 @@ void check_times(const std::string& path, const CsvTable& table, const std::vect
   }
 }
 
-// each pose must close away from the coupler singularity
+// why a pose of the scene's mechanism at the crank angles `theta` is refused ("" when it closes
+// away from the singular poses)
+std::string pose_problem(const Scene& scene, const std::vector<double>& theta) {
+  double sine;
+  if (scene.type == MechanismType::kFourBar) {
+    FourBarKinematics k;
+    sine = four_bar_kinematics(scene.four_bar, theta[0], &k).ok() ? std::abs(k.sin32) : -1.0;
+  } else {
+    sine = coupler_sine(scene.params, theta[0], theta[1]);
+  }
+  if (sine >= scene.options.singular_margin) return "";
+  return sine < 0 ? "the mechanism cannot assemble" : "too close to a singular configuration";
+}
+
+// each pose must close away from the singular poses
 void check_motion_poses(const std::string& path, const CsvTable& table, const Scene& scene,
-                        const std::vector<double>& theta1, const std::vector<double>& theta2) {
-  for (size_t i = 0; i < theta1.size(); ++i) {
-    const double sine = coupler_sine(scene.params, theta1[i], theta2[i]);
-    if (sine < scene.options.singular_margin) {
-      throw InputError(path, "line " + std::to_string(table.lines[i]),
-                       std::string(sine < 0 ? "the mechanism cannot assemble"
-                                            : "too close to a singular configuration") +
-                           " at theta1 = " + format_double(theta1[i]) +
-                           ", theta2 = " + format_double(theta2[i]));
+                        const std::vector<std::vector<double>>& theta) {
+  std::vector<double> pose(theta.size());
+  for (size_t i = 0; i < theta[0].size(); ++i) {
+    for (size_t j = 0; j < theta.size(); ++j) pose[j] = theta[j][i];
+    const std::string problem = pose_problem(scene, pose);
+    if (problem.empty()) continue;
+    std::string at;
+    for (size_t j = 0; j < theta.size(); ++j) {
+      at += (j ? ", theta" : " at theta") + std::to_string(j + 1) + " = " + format_double(pose[j]);
     }
+    throw InputError(path, "line " + std::to_string(table.lines[i]), problem + at);
   }
 }
 
-// the crank series of a motion file: angles, and rates and accelerations from the file or by
-// differences on the uniform step h (0 when every series comes from the file)
+// A four-bar has one crank: a motion file with a second crank's columns (theta2 without the
+// four-bar trajectory's theta3, or any of theta4, omega2, alpha2, M2 with theta2 and no theta3)
+// is a five-bar's. A trajectory.csv of a four-bar (theta2, theta3: coupler and rocker) is read
+// by its crank's columns.
+void check_four_bar_columns(const std::string& path, const CsvTable& table) {
+  const bool trajectory = table.has("theta3") && !table.has("theta4");
+  for (const char* column : {"theta2", "theta4", "omega2", "alpha2", "M2"}) {
+    if (!table.has(column) || (trajectory && std::string(column) != "theta4" &&
+                               std::string(column) != "M2")) {
+      continue;
+    }
+    throw InputError(path, column,
+                     "is a five-bar motion column (the second crank), not one of mechanism.type "
+                     "four_bar: its motion files have t, theta1 and optionally omega1, alpha1");
+  }
+}
+
+// the crank series of a motion file (one entry per crank): angles, and rates and accelerations
+// from the file or by differences on the uniform step h (0 when every series comes from the file)
 struct CrankSeries {
-  std::vector<double> t, theta1, theta2, omega1, omega2, alpha1, alpha2;
+  std::vector<double> t;
+  std::vector<std::vector<double>> theta, omega, alpha;
   bool has_omega = false, has_alpha = false;
   double h = 0;
 };
 
-// rates from the file when it has both columns, else by differences on a uniform grid
+// column `name` of crank j (0-based): theta1, omega2, ...
+std::string crank_column(const char* name, size_t j) { return name + std::to_string(j + 1); }
+
+// whether the table has column `name` of every crank
+bool has_all(const CsvTable& table, const char* name, size_t cranks) {
+  for (size_t j = 0; j < cranks; ++j) {
+    if (!table.has(crank_column(name, j))) return false;
+  }
+  return true;
+}
+
+// rates from the file when it has every crank's column, else by differences on a uniform grid
 void derive_rates(const std::string& path, const CsvTable& table, CrankSeries* c, Motion* m) {
-  c->has_omega = table.has("omega1") && table.has("omega2");
-  c->has_alpha = table.has("alpha1") && table.has("alpha2");
+  const size_t n = c->theta.size();
+  c->has_omega = has_all(table, "omega", n);
+  c->has_alpha = has_all(table, "alpha", n);
   if (!c->has_omega || !c->has_alpha) {
     if (c->t.size() < kMinSamplesForDifferences) {
       throw InputError(path, "(file)",
@@ -123,52 +177,46 @@ void derive_rates(const std::string& path, const CsvTable& table, CrankSeries* c
     }
     c->h = uniform_step(c->t, table.lines, path);
   }
-  if (c->has_omega) {
-    c->omega1 = table.column("omega1");
-    c->omega2 = table.column("omega2");
-    m->omega_source = "file";
-  } else {
-    c->omega1 = first_derivative(c->theta1, c->h);
-    c->omega2 = first_derivative(c->theta2, c->h);
-    m->omega_source = "5-point central differences of theta";
-  }
-  if (c->has_alpha) {
-    c->alpha1 = table.column("alpha1");
-    c->alpha2 = table.column("alpha2");
-    m->alpha_source = "file";
-  } else if (c->has_omega) {
-    c->alpha1 = first_derivative(c->omega1, c->h);
-    c->alpha2 = first_derivative(c->omega2, c->h);
-    m->alpha_source = "5-point central differences of omega";
-  } else {
-    c->alpha1 = second_derivative(c->theta1, c->h);
-    c->alpha2 = second_derivative(c->theta2, c->h);
-    m->alpha_source = "5-point central second differences of theta";
+  c->omega.resize(n);
+  c->alpha.resize(n);
+  m->omega_source = c->has_omega ? "file" : "5-point central differences of theta";
+  m->alpha_source = c->has_alpha   ? "file"
+                    : c->has_omega ? "5-point central differences of omega"
+                                   : "5-point central second differences of theta";
+  for (size_t j = 0; j < n; ++j) {
+    c->omega[j] = c->has_omega ? table.column(crank_column("omega", j))
+                               : first_derivative(c->theta[j], c->h);
+    c->alpha[j] = c->has_alpha   ? table.column(crank_column("alpha", j))
+                  : c->has_omega ? first_derivative(c->omega[j], c->h)
+                                 : second_derivative(c->theta[j], c->h);
   }
 }
 
 // noise of what the rest rule compares with its thresholds: measured from the series given,
 // or propagated from the angles' (or rates') noise through the difference stencils
 void estimate_noise(const CrankSeries& c, Motion* m) {
-  const double theta_noise = crank_noise(c.theta1, c.theta2);
+  const double theta_noise = crank_noise(c.theta);
   // given series: never below the rounding of the angles over one step
   double h = c.h;
   const size_t n = c.t.size();
   if (h == 0) h = n > 1 ? (c.t.back() - c.t.front()) / double(n - 1) : 1.0;
-  const double rounding = std::max(rounding_noise(c.theta1), rounding_noise(c.theta2));
+  const double rounding =
+      largest(c.theta, [](const std::vector<double>& s) { return rounding_noise(s); });
   // differentiated angles: also never below the stencils' own truncation error where the
   // motion has a kink (h^4/30 |f^(5)| for the rate, h^4/90 |f^(6)| for the acceleration, from
   // the largest 5th and 6th differences): the row before a held pose starts to move would
   // otherwise read as slipping
   const double trunc_rate =
-      std::max(max_difference(c.theta1, 5), max_difference(c.theta2, 5)) / (30 * h);
+      largest(c.theta, [](const std::vector<double>& s) { return max_difference(s, 5); }) /
+      (30 * h);
   const double trunc_accel =
-      std::max(max_difference(c.theta1, 6), max_difference(c.theta2, 6)) / (90 * h * h);
+      largest(c.theta, [](const std::vector<double>& s) { return max_difference(s, 6); }) /
+      (90 * h * h);
   m->rate_noise = c.has_omega
-                      ? std::max(crank_noise(c.omega1, c.omega2), rounding / h)
+                      ? std::max(crank_noise(c.omega), rounding / h)
                       : std::max(kFirstDerivativeNoiseGain * theta_noise / h, trunc_rate);
   if (c.has_alpha) {
-    m->acceleration_noise = std::max(crank_noise(c.alpha1, c.alpha2), rounding / (h * h));
+    m->acceleration_noise = std::max(crank_noise(c.alpha), rounding / (h * h));
   } else if (c.has_omega) {
     m->acceleration_noise = kFirstDerivativeNoiseGain * m->rate_noise / h;
   } else {
@@ -179,30 +227,32 @@ void estimate_noise(const CrankSeries& c, Motion* m) {
 
 Motion read_motion(const std::string& path, const Scene& scene) {
   const CsvTable table = read_csv(path);
+  const bool four_bar = scene.type == MechanismType::kFourBar;
+  if (four_bar) check_four_bar_columns(path, table);
   CrankSeries c;
   c.t = table.column("t");
   check_times(path, table, c.t);
-  c.theta1 = table.column("theta1");
-  c.theta2 = table.column("theta2");
-  check_motion_poses(path, table, scene, c.theta1, c.theta2);
+  const size_t cranks = four_bar ? 1 : 2;
+  for (size_t j = 0; j < cranks; ++j) c.theta.push_back(table.column(crank_column("theta", j)));
+  check_motion_poses(path, table, scene, c.theta);
   Motion m;
+  m.cranks = static_cast<int>(cranks);
   derive_rates(path, table, &c, &m);
   estimate_noise(c, &m);
   m.rows.resize(c.t.size());
   for (size_t i = 0; i < c.t.size(); ++i) {
     sim::Row& r = m.rows[i];
     r.t = c.t[i];
-    r.theta[0] = c.theta1[i];
-    r.theta[1] = c.theta2[i];
-    r.omega[0] = c.omega1[i];
-    r.omega[1] = c.omega2[i];
-    r.alpha[0] = c.alpha1[i];
-    r.alpha[1] = c.alpha2[i];
+    for (size_t j = 0; j < cranks; ++j) {
+      r.theta[j] = c.theta[j][i];
+      r.omega[j] = c.omega[j][i];
+      r.alpha[j] = c.alpha[j][i];
+    }
   }
-  m.has_torques = table.has("M1") && table.has("M2");
+  m.has_torques = table.has("M1") && (four_bar || table.has("M2"));
   if (m.has_torques) {
     m.M1 = table.column("M1");
-    m.M2 = table.column("M2");
+    m.M2 = four_bar ? std::vector<double>(c.t.size(), 0.0) : table.column("M2");
   }
   return m;
 }
@@ -239,26 +289,29 @@ RestRule rest_rule(const Scene& scene, const Motion& motion) {
   return r;
 }
 
-// the rows at rest (both cranks stuck) and what holds them
+// the rows at rest (every crank stuck) and what holds them
 struct RestSummary {
+  int cranks = 2;
   long rows_at_rest = 0, rows_with_stuck_joint = 0;
-  std::array<long, kJoints> stuck_rows{};
+  std::vector<long> stuck_rows;  // per joint of the mechanism
   // reported holding torques over the rows at rest, and the intersection of their ranges
   double M1_lo = INFINITY, M1_hi = -INFINITY, M2_lo = INFINITY, M2_hi = -INFINITY;
   double range1_lo = -INFINITY, range1_hi = INFINITY, range2_lo = -INFINITY, range2_hi = INFINITY;
 };
 
-RestSummary summarize_rest(const std::vector<sim::Row>& rows) {
+RestSummary summarize_rest(const std::vector<sim::Row>& rows, const TrajectoryLayout& layout) {
   RestSummary s;
+  s.cranks = layout.drives;
+  s.stuck_rows.assign(layout.joints, 0);
   for (const sim::Row& r : rows) {
     bool any = false;
-    for (int k = 0; k < kJoints; ++k) {
+    for (int k = 0; k < layout.joints; ++k) {
       const bool stuck = r.mode[k] == kStuck;
       s.stuck_rows[k] += stuck;
       any = any || stuck;
     }
     s.rows_with_stuck_joint += any;
-    if (r.mode[0] != kStuck || r.mode[4] != kStuck) continue;
+    if (!r.at_rest(layout.drives)) continue;
     ++s.rows_at_rest;
     s.M1_lo = std::min(s.M1_lo, r.M1);
     s.M1_hi = std::max(s.M1_hi, r.M1);
@@ -292,10 +345,10 @@ Json rest_json(const RestRule& rule, const Motion& motion, const RestSummary& s)
   j.set("stuck_rows_per_joint", std::move(per_joint));
   if (s.rows_at_rest > 0) {
     j.set("holding_M1", pair(s.M1_lo, s.M1_hi));
-    j.set("holding_M2", pair(s.M2_lo, s.M2_hi));
+    if (s.cranks > 1) j.set("holding_M2", pair(s.M2_lo, s.M2_hi));
     // a constant torque inside these holds every row at rest (empty when lo > hi)
     j.set("holding_range_M1", pair(s.range1_lo, s.range1_hi));
-    j.set("holding_range_M2", pair(s.range2_lo, s.range2_hi));
+    if (s.cranks > 1) j.set("holding_range_M2", pair(s.range2_lo, s.range2_hi));
   }
   return j;
 }
@@ -307,6 +360,14 @@ void print_rest(const RestRule& rule, const RestSummary& s) {
                 rule.thresholds.rate, rule.thresholds.acceleration, rule.source.c_str());
   std::cout << line;
   if (s.rows_at_rest == 0) return;
+  if (s.cranks == 1) {
+    std::snprintf(line, sizeof line,
+                  "  %ld rows held still: M1 in [%.10g, %.10g] N m (a constant M1 in [%.6g, %.6g] "
+                  "holds them all)\n",
+                  s.rows_at_rest, s.M1_lo, s.M1_hi, s.range1_lo, s.range1_hi);
+    std::cout << line;
+    return;
+  }
   if (s.M1_hi - s.M1_lo > 1e-9 || s.M2_hi - s.M2_lo > 1e-9) {  // held at several poses
     std::snprintf(line, sizeof line,
                   "  %ld rows held still at several poses: M1 in [%.6g, %.6g], M2 in [%.6g, "
@@ -336,10 +397,11 @@ constexpr double kJumpAngle = 1.0;
 std::string motion_in_degrees(const Motion& motion) {
   const std::vector<sim::Row>& r = motion.rows;
   if (r.empty()) return "";
+  const std::vector<double> starts(r[0].theta.begin(), r[0].theta.begin() + motion.cranks);
   if (motion.omega_source == "file") {
     bool radians = true;
     std::vector<double> t(r.size()), theta(r.size()), omega(r.size());
-    for (int k = 0; k < 2; ++k) {
+    for (int k = 0; k < motion.cranks; ++k) {
       for (size_t i = 0; i < r.size(); ++i) {
         t[i] = r[i].t;
         theta[i] = r[i].theta[k];
@@ -351,16 +413,17 @@ std::string motion_in_degrees(const Motion& motion) {
       }
       radians = radians && identification::rates_say_radians(t, theta, omega);
     }
-    const std::string start = start_looks_like_degrees(r[0].theta[0], r[0].theta[1]);
+    const std::string start = start_looks_like_degrees(starts);
     if (radians && !start.empty()) {
-      return "the angles start at " + format_significant(r[0].theta[0], 4) + ", " +
-             format_significant(r[0].theta[1], 4) +
+      std::string at;
+      for (double a : starts) at += (at.empty() ? "" : ", ") + format_significant(a, 4);
+      return "the angles start at " + at +
              ", beyond two turns, and the rates agree with them: radians a few turns out (rad/s "
              "rates), or degrees (deg/s rates); check the units";
     }
     return radians ? "" : start;
   }
-  return start_looks_like_degrees(r[0].theta[0], r[0].theta[1]);
+  return start_looks_like_degrees(starts);
 }
 
 /// What in `motion` itself makes its inverse dynamics meaningless: angles that look like degrees
@@ -370,8 +433,8 @@ std::string motion_in_degrees(const Motion& motion) {
 std::pair<std::string, std::string> motion_fault(const Motion& motion) {
   const std::vector<sim::Row>& r = motion.rows;
   const std::string degrees = motion_in_degrees(motion);
-  if (!degrees.empty()) return {"theta1, theta2", degrees};
-  for (int k = 0; k < 2; ++k) {
+  if (!degrees.empty()) return {motion.cranks > 1 ? "theta1, theta2" : "theta1", degrees};
+  for (int k = 0; k < motion.cranks; ++k) {
     for (size_t i = 1; i < r.size(); ++i) {
       const double step = r[i].theta[k] - r[i - 1].theta[k];
       if (std::abs(step) > kJumpAngle) {
@@ -387,15 +450,20 @@ std::pair<std::string, std::string> motion_fault(const Motion& motion) {
 
 int run(const Args& args) {
   const auto start = std::chrono::steady_clock::now();
-  const Scene scene = load_scene(args.scene.scene, args.scene.sets);
-  const sim::LoadFunction loads = LoadExpressions(scene).function();
+  const Scene scene = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
+  const bool four_bar = scene.type == MechanismType::kFourBar;
+  const TrajectoryLayout layout = four_bar ? four_bar_layout() : TrajectoryLayout{};
   const Motion motion = read_motion(args.motion, scene);
   OutputDir out(args.scene.out, kOutputs);
 
   const RestRule rest = rest_rule(scene, motion);
   std::vector<sim::Row> rows;
+  const LoadExpressions expressions(scene);
   const Status status =
-      sim::inverse_rows(scene.params, loads, motion.rows, &rows, rest.thresholds);
+      four_bar ? sim::inverse_rows(scene.four_bar, expressions.four_bar_function(), motion.rows,
+                                   &rows, rest.thresholds)
+               : sim::inverse_rows(scene.params, expressions.function(), motion.rows, &rows,
+                                   rest.thresholds);
   const auto [fault_key, fault] = motion_fault(motion);
   if (!status.ok()) {
     // the motion itself explains the failure: named before the model's message
@@ -417,13 +485,15 @@ int run(const Args& args) {
     max_m2 = std::max(max_m2, std::fabs(r.M2));
   }
   const double max_error = torque_error(rows, motion);
-  if (motion.has_torques) extra = {{"M1_input", motion.M1}, {"M2_input", motion.M2}};
-  for (Column& c : rest_columns(rows)) extra.push_back(std::move(c));
-  write_trajectory_csv(out.file("trajectory.csv"), rows, extra);
+  if (motion.has_torques) extra = {{"M1_input", motion.M1}};
+  if (motion.has_torques && !four_bar) extra.push_back({"M2_input", motion.M2});
+  for (Column& c : rest_columns(rows, layout)) extra.push_back(std::move(c));
+  write_trajectory_csv(out.file("trajectory.csv"), rows, extra, layout);
 
   Json summary = Json::object();
   summary.set("command", "inverse");
   summary.set("scene", scene.path);
+  summary.set("mechanism", mechanism_type_name(scene.type));
   summary.set("motion", args.motion);
   Json sets = Json::array_of(args.scene.sets);
   summary.set("sets", std::move(sets));
@@ -433,15 +503,15 @@ int run(const Args& args) {
   summary.set("omega_source", motion.omega_source);
   summary.set("alpha_source", motion.alpha_source);
   summary.set("rates_estimated", motion.omega_source != "file" || motion.alpha_source != "file");
-  summary.set("friction_model", friction_law_name(scene.params.friction.law));
+  summary.set("friction_model", friction_law_name(friction_of(scene).law));
   summary.set("max_abs_M1", max_m1);
-  summary.set("max_abs_M2", max_m2);
+  if (!four_bar) summary.set("max_abs_M2", max_m2);
   summary.set("E_diss", rows.back().E_diss);
   if (motion.has_torques) summary.set("inverse_dynamics_max_abs_error", max_error);
-  const RestSummary at_rest = summarize_rest(rows);
+  const RestSummary at_rest = summarize_rest(rows, layout);
   summary.set("rest", rest_json(rest, motion, at_rest));
 
-  if (!args.no_plots) {
+  if (!args.no_plots && !four_bar) {  // the figures draw the five-bar's columns
     const std::string warning =
         plot_inverse(out.staging(), "trajectory.csv", motion.has_torques,
                      std::filesystem::path(args.motion).filename().string());
@@ -452,11 +522,11 @@ int run(const Args& args) {
   write_json_file(out.file("summary.json"), summary);
   return finish_run(&out, [&] {
     char line[256];
-    std::snprintf(line, sizeof line,
-                  "  %zu samples, t = %g .. %g s; max |M1| = %.4g N m, "
-                  "max |M2| = %.4g N m, E_diss = %.6g J\n",
-                  rows.size(), rows.front().t, rows.back().t, max_m1, max_m2, rows.back().E_diss);
-    std::cout << "fivebar inverse: " << args.motion << " under " << scene.path << "\n" << line;
+    const std::string m2 = four_bar ? "" : ", max |M2| = " + format_printf(max_m2, "%.4g") + " N m";
+    std::snprintf(line, sizeof line, "  %zu samples, t = %g .. %g s; max |M1| = %.4g N m%s, E_diss = %.6g J\n",
+                  rows.size(), rows.front().t, rows.back().t, max_m1, m2.c_str(), rows.back().E_diss);
+    std::cout << "fivebar inverse: " << args.motion << " under " << scene.path
+              << (four_bar ? " (four-bar)" : "") << "\n" << line;
     if (motion.omega_source != "file" || motion.alpha_source != "file") {
       std::cout << "  rates estimated: omega from " << motion.omega_source << ", alpha from "
                 << motion.alpha_source << "\n";
@@ -468,6 +538,7 @@ int run(const Args& args) {
       std::cout << line;
     }
     print_rest(rest, at_rest);
+    if (four_bar && !args.no_plots) std::cout << "  (four-bar: no figures yet)\n";
   });
 }
 
@@ -475,8 +546,9 @@ void add_options(CLI::App* app, Args* args) {
   add_scene_options(app, &args->scene, "inverse");
   add_plots_flag(app, &args->no_plots, "the figures");
   app->add_option("--motion", args->motion,
-                  "CSV with t, theta1, theta2 and optionally omega1, omega2, alpha1, alpha2 "
-                  "(a trajectory.csv of simulate works)")
+                  "CSV with t, theta1, theta2 and optionally omega1, omega2, alpha1, alpha2; "
+                  "a four-bar's: t, theta1 and optionally omega1, alpha1 (a trajectory.csv of "
+                  "simulate works)")
       ->type_name("MOTION.csv")
       ->required();
 }

@@ -90,7 +90,6 @@ std::optional<TwinRun> run_twin(const Scene& scene, const typename Mech::Loads& 
 template <class Mech>
 std::vector<Column> inverse_columns(const Scene& scene, const typename Mech::Loads& loads,
                                     const std::vector<sim::Row>& rows) {
-  if (!Mech::kInverse) return {};
   std::vector<sim::Row> inverse;
   const Status status = Mech::inverse(scene, loads, rows, &inverse);
   const int drives = Mech::layout().drives;

@@ -175,11 +175,20 @@ id::TorqueLog read_log(const std::string& path) {
   }
 }
 
-std::string start_looks_like_degrees(double theta1, double theta2) {
-  const double first = std::max(std::abs(theta1), std::abs(theta2));
+std::string start_looks_like_degrees(const std::vector<double>& starts) {
+  double first = 0.0;
+  std::string at;
+  for (double s : starts) {
+    first = std::max(first, std::abs(s));
+    at += (at.empty() ? "" : ", ") + format_significant(s, 4);
+  }
   if (!(first > id::kDegreesBeyond && first <= 360)) return "";
-  return "angles look like degrees (they start at " + format_significant(theta1, 4) + ", " +
-         format_significant(theta2, 4) + "), expected radians";
+  return "angles look like degrees (" + std::string(starts.size() > 1 ? "they start" : "it starts") +
+         " at " + at + "), expected radians";
+}
+
+std::string start_looks_like_degrees(double theta1, double theta2) {
+  return start_looks_like_degrees(std::vector<double>{theta1, theta2});
 }
 
 id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& loads,

@@ -77,17 +77,20 @@ const std::vector<std::string>& trajectory_columns() {
   return columns;
 }
 
-std::vector<Column> rest_columns(const std::vector<sim::Row>& rows) {
+std::vector<Column> rest_columns(const std::vector<sim::Row>& rows,
+                                 const TrajectoryLayout& layout) {
   std::vector<Column> c = {{"at_rest", {}}};
-  for (int k = 1; k <= kJoints; ++k) c.push_back({"stuck" + std::to_string(k), {}});
-  for (const char* name : {"M1_hold_min", "M1_hold_max", "M2_hold_min", "M2_hold_max"}) {
-    c.push_back({name, {}});
+  for (int k = 1; k <= layout.joints; ++k) c.push_back({"stuck" + std::to_string(k), {}});
+  const int ranges = 2 * layout.drives;  // min and max of each drive
+  for (int i = 0; i < ranges; ++i) {
+    c.push_back({"M" + std::to_string(i / 2 + 1) + (i % 2 ? "_hold_max" : "_hold_min"), {}});
   }
   for (const sim::Row& r : rows) {
-    const bool o = r.mode[0] == kStuck, d0 = r.mode[4] == kStuck;
-    c[0].values.push_back(o && d0 ? 1.0 : 0.0);
-    for (int k = 0; k < kJoints; ++k) c[1 + k].values.push_back(r.mode[k] == kStuck ? 1.0 : 0.0);
-    for (int i = 0; i < 4; ++i) c[6 + i].values.push_back(r.hold_range[i]);
+    c[0].values.push_back(r.at_rest(layout.drives) ? 1.0 : 0.0);
+    for (int k = 0; k < layout.joints; ++k) {
+      c[1 + k].values.push_back(r.mode[k] == kStuck ? 1.0 : 0.0);
+    }
+    for (int i = 0; i < ranges; ++i) c[1 + layout.joints + i].values.push_back(r.hold_range[i]);
   }
   return c;
 }

@@ -869,7 +869,8 @@ MechanismType read_type(const SceneReader& r, bool four_bar_ok) {
   if (type == "five_bar") return MechanismType::kFiveBar;
   if (!four_bar_ok) {
     r.fail("mechanism.type", "four_bar: this command runs five-bars only so far (simulate, "
-                             "synth-log and animate run four-bars)" + r.origin("mechanism.type"));
+                             "inverse, synth-log, hold and animate run four-bars)" +
+                                 r.origin("mechanism.type"));
   }
   for (const std::string& key : r.keys()) {
     const bool five_bar_key = key == "loads.M2" || key == "initial.theta2" ||

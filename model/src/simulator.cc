@@ -124,6 +124,12 @@ struct Sim<FiveBar> {
   static double drive_error(const E& ev, const Row& r) {
     return std::max(std::abs(ev.M1 - r.M1), std::abs(ev.M2 - r.M2));
   }
+  /// inverse dynamics: the drive torques that produce the row's motion
+  static void computed_drives(const E& ev, Row* row) {
+    row->M1 = ev.M1;
+    row->M2 = ev.M2;
+  }
+  static Status hold_range(const P& p, const Ld& L, const EvalOptions& eval, Row* r);
   static std::array<double, kJoints> joint_accelerations(const E& ev) {
     return fivebar::relative_accelerations(ev.thdd, ev.alpha3, ev.alpha4);
   }
@@ -171,6 +177,8 @@ struct Sim<FourBar> {
   }
   static void drives(const Ld& L, Row* row) { row->M1 = L.M1; }
   static double drive_error(const E& ev, const Row& r) { return std::abs(ev.M1 - r.M1); }
+  static void computed_drives(const E& ev, Row* row) { row->M1 = ev.M1; }
+  static Status hold_range(const P& p, const Ld& L, const EvalOptions& eval, Row* r);
   static std::array<double, kJoints> joint_accelerations(const E& ev) {
     return FourBar::joint_accelerations(ev.kin, ev.bias, ev.thdd);
   }
@@ -1274,8 +1282,7 @@ namespace {
 /// Row::hold_range of an inverse-dynamics row: the torque itself where the crank moves, M +-
 /// mu_s r N where it is stuck alone, and where both are stuck (the pose at rest) the range of
 /// each over which the mechanism stays locked, the other at its row value (rest.h).
-Status holding_range(const Params<double>& p, const Loads<double>& L, const EvalOptions& eval,
-                     Row* r) {
+Status Sim<FiveBar>::hold_range(const P& p, const Ld& L, const EvalOptions& eval, Row* r) {
   const bool o = r->mode[0] == kStuck, d0 = r->mode[4] == kStuck;
   const double m1 = o ? r->hold_margin[0] : 0.0, m2 = d0 ? r->hold_margin[4] : 0.0;
   r->hold_range = {r->M1 - m1, r->M1 + m1, r->M2 - m2, r->M2 + m2};
@@ -1288,43 +1295,61 @@ Status holding_range(const Params<double>& p, const Loads<double>& L, const Eval
   return Status::Ok();
 }
 
-}  // namespace
-
-Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
-                    const std::vector<Row>& motion, std::vector<Row>* out) {
-  return inverse_rows(params, loads, motion, out, RestThresholds{});
+/// The four-bar's Row::hold_range: M1 itself where the crank moves. With the crank stuck every
+/// joint is (one degree of freedom), and the row's M1 is the frictionless equilibrium M1_eq;
+/// the range is that over which the locked mechanism holds, as the simulator's lock decides it.
+/// lock_analysis at M1 = M1_eq + d has the ratio |d| / sum_k w_k(N) |a_k|, so each end is the
+/// fixed point d = d / ratio (the reactions change little with the holding torques: a few
+/// iterations). M2's slots are zero.
+Status Sim<FourBar>::hold_range(const P& p, const Ld& L, const EvalOptions& eval, Row* r) {
+  r->hold_range = {r->M1, r->M1, 0.0, 0.0};
+  if (r->mode[0] != kStuck || !p.friction.active()) return Status::Ok();
+  const double start = r->hold_margin[0] > 0.0 ? r->hold_margin[0] : 1.0;
+  for (int end = 0; end < 2; ++end) {
+    const double sign = end == 0 ? -1.0 : 1.0;
+    double d = 0.0;
+    const Status st = lock_extent<FourBar>(
+        p, L, VecOf<FourBar>(r->theta[0]), eval, r->M1, sign, start,
+        [](Ld* l, double v) { l->M1 = v; }, &d);
+    if (!st.ok()) return st;
+    r->hold_range[end] = r->M1 + sign * d;
+  }
+  return Status::Ok();
 }
 
-Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
-                    const std::vector<Row>& motion, std::vector<Row>* out,
-                    const RestThresholds& rest) {
+/// inverse_rows for mechanism M.
+template <class M>
+Status inverse_rows_of(const ParamsOf<M>& params, const LoadFnOf<M>& loads,
+                       const std::vector<Row>& motion, std::vector<Row>* out,
+                       const RestThresholds& rest) {
   out->clear();
   out->reserve(motion.size());
-  std::vector<double> power_in, power_ext;  // M1 w1 + M2 w2 and M3 w3 + F . v_P [W]
+  std::vector<double> power_in, power_ext;  // the drives' power and that of the other loads [W]
   const EvalOptions eval = with_rest(EvalOptions{}, rest);
   for (const Row& m : motion) {
-    const Loads<double> L = loads(m.t);
+    const LoadsOf<M> L = loads(m.t);
     if (const Status bad = finite_loads(L, m.t); !bad.ok()) return bad;
-    Evaluation<double> ev;
+    EvalOf<M> ev;
     // LuGre: the run's bristle states (a motion read from a file has none: steady state)
     const bool bristles = law_descriptor(params.friction.law).states_per_joint > 0 && m.has_bristle;
-    const Status st = inverse_dynamics(params, L, m.theta[0], m.theta[1], m.omega[0], m.omega[1],
-                                       m.alpha[0], m.alpha[1], nullptr, eval, &ev,
-                                       bristles ? &m.bristle : nullptr);
+    const VecOf<M> v = Eigen::Map<const VecOf<M>>(m.omega.data());
+    const Status st = mech::inverse<M, double>(
+        params, L, Eigen::Map<const VecOf<M>>(m.theta.data()), v,
+        Eigen::Map<const VecOf<M>>(m.alpha.data()), nullptr, eval, &ev,
+        bristles ? &m.bristle : nullptr);
     if (!st.ok()) {
-      return at_time(st, m.t, m.theta.data(), 2);
+      return at_time(st, m.t, m.theta.data(), M::kDof);
     }
     Row r = m;
     const Row* previous = out->empty() ? nullptr : &out->back();
-    set_evaluated<FiveBar>(ev, previous, &r);
-    r.M1 = ev.M1;
-    r.M2 = ev.M2;
+    set_evaluated<M>(ev, previous, &r);
+    Sim<M>::computed_drives(ev, &r);
     r.mode = ev.slip;
     r.hold_margin = ev.hold_margin;
-    const Status held = holding_range(params, L, eval, &r);
-    if (!held.ok()) return at_time(held, m.t, m.theta.data(), 2);
-    r.kinetic = kinetic_energy(params, ev.kin, m.omega[0], m.omega[1]);
-    r.potential = potential_energy(params, ev.kin);
+    const Status held = Sim<M>::hold_range(params, L, eval, &r);
+    if (!held.ok()) return at_time(held, m.t, m.theta.data(), M::kDof);
+    r.kinetic = Sim<M>::kinetic(params, ev.kin, v.data());
+    r.potential = Sim<M>::potential(params, ev.kin);
     out->push_back(r);
     power_in.push_back(ev.P_in);
     power_ext.push_back(ev.P_ext);
@@ -1340,6 +1365,25 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
   }
   if (!out->empty()) out->front().E_diss = out->front().W_in = out->front().W_ext = 0.0;
   return Status::Ok();
+}
+
+}  // namespace
+
+Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
+                    const std::vector<Row>& motion, std::vector<Row>* out) {
+  return inverse_rows(params, loads, motion, out, RestThresholds{});
+}
+
+Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
+                    const std::vector<Row>& motion, std::vector<Row>* out,
+                    const RestThresholds& rest) {
+  return inverse_rows_of<FiveBar>(params, loads, motion, out, rest);
+}
+
+Status inverse_rows(const FourBarParams& params, const FourBarLoadFunction& loads,
+                    const std::vector<Row>& motion, std::vector<Row>* out,
+                    const RestThresholds& rest) {
+  return inverse_rows_of<FourBar>(params, loads, motion, out, rest);
 }
 
 namespace {

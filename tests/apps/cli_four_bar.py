@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""End-to-end checks of `fivebar simulate` on four-bar scenes.
+"""End-to-end checks of `fivebar simulate` and `fivebar inverse` on four-bar scenes.
 
 Usage: cli_four_bar.py FIVEBAR PAPER_YAML WORK_DIR
 
@@ -39,7 +39,7 @@ for name in ("crank_rocker", "double_rocker"):
         failures.append("%s: the report does not name the four-bar: %r" % (name, stdout))
     with open(os.path.join(out, "trajectory.csv")) as f:
         header = f.readline().strip().split(",")
-    if header != COLUMNS:
+    if header != COLUMNS + ["M1_inverse"]:
         failures.append("%s: columns %s" % (name, header))
     rows = read_csv(os.path.join(out, "trajectory.csv"))
     ref = read_csv(os.path.join(REFERENCE, name + ".csv"))
@@ -64,6 +64,7 @@ for name in ("crank_rocker", "double_rocker"):
         failures.append("%s: friction supplies power: %.3g W" % (name, power))
     print("%s: max |theta - reference| %.3g rad, estimate %.3g rad" % (name, worst, estimate or float("nan")))
 
+# inverse of the simulated crank-rocker: the file carries the exact rates, so M1 comes back
 scene = os.path.join(REFERENCE, "crank_rocker.yaml")
 # synth-log: a four-bar's log has one crank; following the simulated motion without noise gives
 # back the run's M1 (inverse of forward)
@@ -89,7 +90,8 @@ else:
         failures.append("synth-log --motion: max |tau1 - M1| = %.3g N m" % worst)
 # the run's figures and page, and `animate` on its folder (the scene from summary.json)
 cr = os.path.join(WORK, "crank_rocker")
-for name in ("fig2_angles.png", "fig6_friction_torques.png", "animation.html"):
+for name in ("fig2_angles.png", "fig5_inverse_torques.png", "fig6_friction_torques.png",
+             "animation.html"):
     if not os.path.exists(os.path.join(cr, name)):
         failures.append("simulate of the four-bar wrote no %s" % name)
 os.remove(os.path.join(cr, "animation.html"))
@@ -138,6 +140,70 @@ expect_error(2, "--excitation: multisine drives the five-bar's two cranks",
              ["synth-log", scene, "--out", bad, "--excitation", "multisine"])
 expect_error(2, "--torque-offset: actuator terms are the five-bar's",
              ["synth-log", scene, "--out", bad, "--torque-offset", "0.1,0.1"])
+simulated = os.path.join(WORK, "crank_rocker", "trajectory.csv")
+inv = os.path.join(WORK, "inverse")
+code, stdout, err = run(["inverse", scene, "--motion", simulated, "--out", inv])
+if code != 0:
+    failures.append("inverse: exit %d: %s" % (code, err))
+else:
+    with open(os.path.join(inv, "trajectory.csv")) as f:
+        header = f.readline().strip().split(",")
+    rest = ["at_rest", "stuck1", "stuck2", "stuck3", "stuck4", "M1_hold_min", "M1_hold_max"]
+    if header != COLUMNS + ["M1_input"] + rest:
+        failures.append("inverse: columns %s" % header)
+    with open(os.path.join(inv, "summary.json")) as f:
+        summary = json.load(f)
+    error = summary.get("inverse_dynamics_max_abs_error")
+    if summary.get("mechanism") != "four_bar" or "max_abs_M2" in summary:
+        failures.append("inverse: summary %s" % summary)
+    if error is None or not error <= 1e-9:
+        failures.append("inverse: max |M1 - M1_input| = %r N m" % error)
+    rows, sim_rows = read_csv(os.path.join(inv, "trajectory.csv")), read_csv(simulated)
+    worst = max(abs(float(a[c]) - float(b[c])) for a, b in zip(rows, sim_rows)
+                for c in ("theta2", "theta3", "N2", "Mf3"))
+    if not worst < 1e-6:
+        failures.append("inverse: coupler, rocker and reactions differ from the run by %.3g" % worst)
+    print("inverse of the crank-rocker: max |M1 - M1_input| %.3g N m" % error)
+
+# a crank held still: every row at rest, and its M1 range is what the simulator's lock holds
+still = os.path.join(WORK, "still.csv")
+with open(still, "w") as f:
+    f.write("t,theta1\n" + "".join("%g,1.2\n" % (0.01 * i) for i in range(11)))
+code, _, err = run(["inverse", scene, "--motion", still, "--out", inv])
+if code != 0:
+    failures.append("inverse of a still crank: exit %d: %s" % (code, err))
+else:
+    rows = read_csv(os.path.join(inv, "trajectory.csv"))
+    lo, hi, m1 = (float(rows[0][c]) for c in ("M1_hold_min", "M1_hold_max", "M1"))
+    if not all(r["at_rest"] == "1" and r["stuck4"] == "1" for r in rows) or not lo < m1 < hi:
+        failures.append("inverse of a still crank: at rest %s, M1 %g in [%g, %g]"
+                        % ([r["at_rest"] for r in rows], m1, lo, hi))
+    for torque, moves in ((lo + 0.02 * (hi - lo), False), (hi - 0.02 * (hi - lo), False),
+                          (hi + 0.02 * (hi - lo), True), (lo - 0.02 * (hi - lo), True)):
+        out = os.path.join(WORK, "held")
+        code, _, err = run(["simulate", scene, "--set", "loads.M1=%.17g" % torque,
+                            "--set", "loads.F=5", "--set", "initial.theta1=1.2",
+                            "--set", "simulation.duration=0.05", "--out", out])
+        if code != 0:
+            failures.append("held crank at M1 = %g: exit %d: %s" % (torque, code, err))
+            continue
+        drift = max(abs(float(r["theta1"]) - 1.2) for r in read_csv(os.path.join(out, "trajectory.csv")))
+        if (drift > 1e-6) != moves:
+            failures.append("M1 = %g (range [%g, %g]): the crank %s (drift %.3g rad)"
+                            % (torque, lo, hi, "stays" if not moves else "moves", drift))
+    print("still crank: M1 %.6g N m holds in [%.6g, %.6g]" % (m1, lo, hi))
+
+bad = os.path.join(WORK, "bad")
+five = os.path.join(WORK, "five_bar_motion.csv")
+with open(five, "w") as f:
+    f.write("t,theta1,theta2\n" + "".join("%g,1.2,0.3\n" % (0.01 * i) for i in range(6)))
+expect_error(2, "theta2: is a five-bar motion column (the second crank), not one of mechanism.type "
+             "four_bar", ["inverse", scene, "--motion", five, "--out", bad])
+far = os.path.join(WORK, "far.csv")
+with open(far, "w") as f:
+    f.write("t,theta1\n" + "".join("%g,%g\n" % (0.01 * i, 3.0 - 0.01 * i) for i in range(6)))
+expect_error(2, "line 2: the mechanism cannot assemble at theta1 = 3",
+             ["inverse", os.path.join(REFERENCE, "double_rocker.yaml"), "--motion", far, "--out", bad])
 expect_error(2, "loads.M2: is a five-bar key, not one of mechanism.type four_bar",
              ["simulate", scene, "--set", "loads.M2=1", "--out", bad])
 expect_error(2, "friction.coulomb: expected 1 or 4 numbers (O, B, C, D0), got 5",

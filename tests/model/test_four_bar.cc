@@ -138,6 +138,40 @@ bool several_solutions(const Status& st) {
          st.message.find("several consistent reaction forces") != std::string::npos;
 }
 
+// The smooth form of the singular measure (FourBar::singular_cosine): 1 - cos^2 is
+// sin^2(theta3 - theta2) and cos is e2 . e3 where the four-bar closes, |cos| > 1 where it cannot;
+// its derivative agrees with central differences and with Jets.
+TEST(FourBar, SingularCosineIsTheSmoothFormOfTheSingularMeasure) {
+  using J = ceres::Jet<double, 1>;
+  int closed = 0, open = 0;
+  double worst = 0.0, worst_derivative = 0.0;
+  for (const FourBarParams& p : mechanisms(false)) {
+    const FourBarParamsT<J> pj = p.cast<J>();
+    for (int i = 0; i < 200; ++i) {
+      const double th1 = -M_PI + 2 * M_PI * (i + 0.5) / 200, h = 1e-6;
+      Eigen::Matrix<double, 1, 1> g;
+      const double c = FourBar::singular_cosine(p, FourBar::Q<double>(th1), &g);
+      FourBarKinematics k;
+      if (four_bar_kinematics(p, th1, &k).ok()) {
+        ++closed;
+        worst = std::max({worst, std::abs(1 - c * c - k.sin32 * k.sin32),
+                          std::abs(c - k.e2.dot(k.e3))});
+      } else {
+        ++open;
+        EXPECT_GT(std::abs(c), 1.0) << "theta1 = " << th1;
+      }
+      const double central =
+          (four_bar_coupler_cosine(p, th1 + h) - four_bar_coupler_cosine(p, th1 - h)) / (2 * h);
+      worst_derivative = std::max({worst_derivative, std::abs(g(0, 0) - central),
+                                   std::abs(four_bar_coupler_cosine(pj, J(th1, 0)).v[0] - g(0, 0))});
+    }
+  }
+  EXPECT_LT(worst, 1e-12);
+  EXPECT_LT(worst_derivative, 1e-8);
+  EXPECT_GT(closed, 0);
+  EXPECT_GT(open, 0) << "some non-Grashof four-bar should fail to close somewhere";
+}
+
 TEST(FourBar, RandomMechanismsAreGrashofAndNot) {
   int g = 0;
   for (const FourBarParams& p : mechanisms(false)) g += grashof(p);

@@ -58,6 +58,8 @@ identification::TorqueLog read_log(const std::string& path);
 /// identification::kDegreesBeyond (two turns), within 360. Read where the model failed on them,
 /// to name the cause first, and on motions without rates.
 std::string start_looks_like_degrees(double theta1, double theta2);
+/// The same for the starts of any number of cranks.
+std::string start_looks_like_degrees(const std::vector<double>& starts);
 
 /// identification::identify for a scene: a log that does not fit the scene throws InputError,
 /// failed numerics NumericalError(`<log>: identify: ...`), or InputError naming the angles when

@@ -35,10 +35,12 @@ struct Column {
 };
 
 /// The rest columns of inverse dynamics (rest.h), appended to trajectory.csv: at_rest (1 where
-/// both cranks are stuck: the pose held still), stuck1..stuck5 (1 where joint O, B, C, D, D0 is
+/// every crank is stuck: the pose held still), stuck1..stuck5 (1 where joint O, B, C, D, D0 is
 /// stuck), M1_hold_min, M1_hold_max, M2_hold_min, M2_hold_max (sim::Row::hold_range: the torques
-/// over which static friction holds the row; M itself where the crank moves).
-std::vector<Column> rest_columns(const std::vector<sim::Row>& rows);
+/// over which static friction holds the row; M itself where the crank moves). A four-bar layout
+/// has stuck1..stuck4 (O, B, C, D0) and M1_hold_min, M1_hold_max.
+std::vector<Column> rest_columns(const std::vector<sim::Row>& rows,
+                                 const TrajectoryLayout& layout = {});
 
 /// Writes rows as trajectory.csv: header trajectory_columns() then `extra` names, one line per
 /// row, every number in shortest round-trip form (as exact as %.17g) except t, which is written

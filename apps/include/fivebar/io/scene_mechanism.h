@@ -19,23 +19,21 @@ struct FiveBarScene {
   static const Params<double>& params(const Scene& s) { return s.params; }
   static Loads loads(const LoadExpressions& e) { return e.function(); }
   static TrajectoryLayout layout() { return {}; }
-  static constexpr bool kInverse = true;  ///< inverse() is available
   static Status inverse(const Scene& s, const Loads& loads, const std::vector<sim::Row>& rows,
                         std::vector<sim::Row>* out) {
     return sim::inverse_rows(s.params, loads, rows, out);
   }
 };
 
-/// The four-bar's (inverse dynamics along rows not yet available).
+/// The four-bar's.
 struct FourBarScene {
   using Loads = sim::FourBarLoadFunction;
   static const FourBarParams& params(const Scene& s) { return s.four_bar; }
   static Loads loads(const LoadExpressions& e) { return e.four_bar_function(); }
   static TrajectoryLayout layout() { return four_bar_layout(); }
-  static constexpr bool kInverse = false;
-  static Status inverse(const Scene&, const Loads&, const std::vector<sim::Row>&,
-                        std::vector<sim::Row>*) {
-    return Status::Error(StatusCode::kInvalidInput, "not available for four-bars");
+  static Status inverse(const Scene& s, const Loads& loads, const std::vector<sim::Row>& rows,
+                        std::vector<sim::Row>* out) {
+    return sim::inverse_rows(s.four_bar, loads, rows, out);
   }
 };
 

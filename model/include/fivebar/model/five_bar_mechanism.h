@@ -46,6 +46,12 @@ struct FiveBar {
   static T singular_measure(const Kinematics<T>& k) {
     return k.sin43;
   }
+  /// cos(th4 - th3) at any q, smooth (coupler_cosine): 1 - cos^2 = singular_measure^2 where the
+  /// five-bar closes, |cos| > 1 where it cannot; its gradient in q when asked.
+  template <typename T>
+  static T singular_cosine(const Params<T>& p, const Vec2<T>& q, Row2<T>* gradient = nullptr) {
+    return coupler_cosine(p, q[0], q[1], gradient);
+  }
   template <typename T>
   static void bias(const Params<T>& p, const Kinematics<T>& k, const Vec2<T>& v, Bias<T>* b) {
     compute_bias(p, k, v[0], v[1], b);

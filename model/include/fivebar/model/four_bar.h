@@ -119,6 +119,25 @@ Status four_bar_close(const FourBarParamsT<T>& p, const T& th1, FourBarKinematic
   return Status::Ok();
 }
 
+/// cos(th3 - th2), the cosine of the coupler-rocker angle at C, from |BD0| by the law of cosines
+/// on the triangle B, C, D0 (|BD0|^2 = l0^2 + l1^2 - 2 l0 l1 cos th1), and when asked its
+/// derivative in th1 [1/rad]. Defined at every crank angle (|cos| > 1 where the four-bar cannot
+/// close) and smooth through the singular poses, where G2 and G3 are not: 1 - cos^2 =
+/// sin^2(th3 - th2), the smooth form of the singular measure (for constraints that must also
+/// hold the assembly, as the trajectory optimizer's singular margin).
+template <typename T>
+T four_bar_coupler_cosine(const FourBarParamsT<T>& p, const T& th1, T* derivative = nullptr) {
+  using std::cos;
+  using std::sin;
+  const T& l0 = p.ground_length;
+  const T& l1 = p.links[0].length;
+  const T& l2 = p.links[1].length;
+  const T& l3 = p.links[2].length;
+  const T bd2 = l0 * l0 + l1 * l1 - T(2) * l0 * l1 * cos(th1);
+  if (derivative) *derivative = -(l0 * l1 * sin(th1)) / (l2 * l3);
+  return (l2 * l2 + l3 * l3 - bd2) / (T(2) * l2 * l3);
+}
+
 /// Position closure, the load point, the centres of mass and the G coefficients. From
 /// vB + l2 w2 e2' = l3 w3 e3': l2 s w2 = -vB.e3, l3 s w3 = -vB.e2 (s = sin32).
 template <typename T>
@@ -263,6 +282,12 @@ struct FourBar {
   template <typename T>
   static T singular_measure(const Kinematics<T>& k) {
     return k.sin32;
+  }
+  /// cos(th3 - th2) at any q, smooth (four_bar_coupler_cosine); its gradient in q when asked.
+  template <typename T>
+  static T singular_cosine(const Params<T>& p, const Q<T>& q,
+                           Eigen::Matrix<T, 1, 1>* gradient = nullptr) {
+    return four_bar_coupler_cosine(p, q[0], gradient ? &(*gradient)(0, 0) : nullptr);
   }
   template <typename T>
   static void bias(const Params<T>& p, const Kinematics<T>& k, const Q<T>& v, Bias<T>* b) {

@@ -16,6 +16,9 @@
 //   close(p, q, kin, opt)              position closure; kCannotAssemble / kNearSingular
 //   singular_measure(kin), kSingularName   zero at singular poses (the reactions grow as its
 //                                      inverse; opt.singular_margin bounds it), and its name
+//   singular_cosine(p, q, grad)        its smooth form at any q: a cosine c with 1 - c^2 =
+//                                      singular_measure^2 where the chain closes, |c| > 1 where
+//                                      it cannot; and its gradient in q (Row<kDof>) when asked
 //   bias(p, kin, v, b)                 link rates and the accelerations at qdd = 0
 //   applied(kin, L)                    the external loads at the pose
 //   mass_and_force(p, kin, b, L, a, A, rhs0)   M(q), and the generalized force without friction

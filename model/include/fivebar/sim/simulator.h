@@ -125,6 +125,11 @@ struct Row {
   /// cranks stuck (the pose at rest) each actuator's range with the other at its row value
   /// (friction at all five joints, as the simulator's lock; rest.h)
   std::array<double, 4> hold_range{};
+  /// every driven joint stuck (inverse_rows' rest rule): the pose held still. `cranks` 2: the
+  /// five-bar's O and D0 (slots 0, 4); 1: the four-bar's O (with one degree of freedom, all)
+  bool at_rest(int cranks) const {
+    return mode[0] == kStuck && (cranks == 1 || mode[4] == kStuck);
+  }
   /// relative rate of the five-bar's joint k (0-based, O, B, C, D, D0) from the link rates [rad/s]
   double omega_rel(int k) const {
     switch (k) {
@@ -196,6 +201,14 @@ Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
 Status inverse_rows(const Params<double>& params, const LoadFunction& loads,
                     const std::vector<Row>& motion, std::vector<Row>* out,
                     const RestThresholds& rest);
+/// The four-bar: uses t, theta[0], omega[0], alpha[0] (the crank) and returns the coupler's and
+/// the rocker's kinematics in slots 1, 2, the reactions and friction torques of joints O, B, C,
+/// D0, and M1. With one degree of freedom the crank at rest stands the whole mechanism still:
+/// every joint stuck, hold_range[0..1] the range of M1 over which the locked mechanism holds (as
+/// the simulator's lock decides it), hold_range[2..3] zero.
+Status inverse_rows(const FourBarParamsT<double>& params, const FourBarLoadFunction& loads,
+                    const std::vector<Row>& motion, std::vector<Row>* out,
+                    const RestThresholds& rest = {});
 
 /// Checks of a finished run (summary.json). A run whose checks fail is not ok: `verdict` names
 /// the check, the time and the joint.
