@@ -3,6 +3,7 @@
 // one): the torques that produce it under the scene's other loads, with every joint reaction
 // and friction torque.
 #include <CLI/CLI.hpp>
+#include <array>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -448,6 +449,42 @@ std::pair<std::string, std::string> motion_fault(const Motion& motion) {
   return {};
 }
 
+// max |M1|, max |M2| over the rows
+std::array<double, 2> peak_torques(const std::vector<sim::Row>& rows) {
+  std::array<double, 2> peak{};
+  for (const sim::Row& r : rows) {
+    peak[0] = std::max(peak[0], std::fabs(r.M1));
+    peak[1] = std::max(peak[1], std::fabs(r.M2));
+  }
+  return peak;
+}
+
+// summary.json of a run, without its rest record and wall time
+Json inverse_summary(const Args& args, const Scene& scene, const Motion& motion,
+                     const std::vector<sim::Row>& rows, double max_error) {
+  const bool four_bar = scene.type == MechanismType::kFourBar;
+  const auto [max_m1, max_m2] = peak_torques(rows);
+  Json summary = Json::object();
+  summary.set("command", "inverse");
+  summary.set("scene", scene.path);
+  summary.set("mechanism", mechanism_type_name(scene.type));
+  summary.set("motion", args.motion);
+  Json sets = Json::array_of(args.scene.sets);
+  summary.set("sets", std::move(sets));
+  summary.set("samples", static_cast<long>(rows.size()));
+  summary.set("t_start", rows.front().t);
+  summary.set("t_end", rows.back().t);
+  summary.set("omega_source", motion.omega_source);
+  summary.set("alpha_source", motion.alpha_source);
+  summary.set("rates_estimated", motion.omega_source != "file" || motion.alpha_source != "file");
+  summary.set("friction_model", friction_law_name(friction_of(scene).law));
+  summary.set("max_abs_M1", max_m1);
+  if (!four_bar) summary.set("max_abs_M2", max_m2);
+  summary.set("E_diss", rows.back().E_diss);
+  if (motion.has_torques) summary.set("inverse_dynamics_max_abs_error", max_error);
+  return summary;
+}
+
 int run(const Args& args) {
   const auto start = std::chrono::steady_clock::now();
   const Scene scene = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
@@ -479,36 +516,16 @@ int run(const Args& args) {
 
   // the file's own torques, when it has them, beside the inverse-dynamics ones
   std::vector<Column> extra;
-  double max_m1 = 0, max_m2 = 0;
-  for (const sim::Row& r : rows) {
-    max_m1 = std::max(max_m1, std::fabs(r.M1));
-    max_m2 = std::max(max_m2, std::fabs(r.M2));
-  }
+  const std::array<double, 2> peak = peak_torques(rows);
+  const double max_m1 = peak[0], max_m2 = peak[1];
   const double max_error = torque_error(rows, motion);
   if (motion.has_torques) extra = {{"M1_input", motion.M1}};
   if (motion.has_torques && !four_bar) extra.push_back({"M2_input", motion.M2});
   for (Column& c : rest_columns(rows, layout)) extra.push_back(std::move(c));
   write_trajectory_csv(out.file("trajectory.csv"), rows, extra, layout);
 
-  Json summary = Json::object();
-  summary.set("command", "inverse");
-  summary.set("scene", scene.path);
-  summary.set("mechanism", mechanism_type_name(scene.type));
-  summary.set("motion", args.motion);
-  Json sets = Json::array_of(args.scene.sets);
-  summary.set("sets", std::move(sets));
-  summary.set("samples", static_cast<long>(rows.size()));
-  summary.set("t_start", rows.front().t);
-  summary.set("t_end", rows.back().t);
-  summary.set("omega_source", motion.omega_source);
-  summary.set("alpha_source", motion.alpha_source);
-  summary.set("rates_estimated", motion.omega_source != "file" || motion.alpha_source != "file");
-  summary.set("friction_model", friction_law_name(friction_of(scene).law));
-  summary.set("max_abs_M1", max_m1);
-  if (!four_bar) summary.set("max_abs_M2", max_m2);
-  summary.set("E_diss", rows.back().E_diss);
-  if (motion.has_torques) summary.set("inverse_dynamics_max_abs_error", max_error);
   const RestSummary at_rest = summarize_rest(rows, layout);
+  Json summary = inverse_summary(args, scene, motion, rows, max_error);
   summary.set("rest", rest_json(rest, motion, at_rest));
 
   if (!args.no_plots && !four_bar) {  // the figures draw the five-bar's columns
