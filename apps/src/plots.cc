@@ -222,7 +222,9 @@ std::string torque_check_figure(const std::string& trajectory, const std::string
     return pattern.replace(pattern.find('%'), 1, std::to_string(i));
   };
   std::string s = begin_figure("fig5_inverse_torques.png", "", figure,
-                               "(c), (d): inverse dynamics - " + reference_name, title);
+                               std::string(drives == 1 ? "(c)" : "(c), (d)") +
+                                   ": inverse dynamics - " + reference_name,
+                               title);
   s += "set key top left horizontal opaque box samplen 4 font \",10\"\n" + std::string(kKeyRoom);
   const std::string width = drives == 1 ? "1" : "0.5";
   auto origin = [&](int i) { return std::string(i == 1 ? "0" : "0.5"); };
@@ -512,7 +514,7 @@ std::string hold_map_plot_script(const std::string& map_csv, double torque_limit
   const std::string limit = std::isfinite(torque_limit)
                                 ? "crosses: more than the torque limit " + std::string(value) + " N m"
                                 : "no torque limit";
-  s += "set xlabel \"{/Symbol q}_1 [rad]\"\nset ylabel \"{/Symbol q}_2 [rad]\"\n"
+  s += "set xlabel \"theta1 [rad]\"\nset ylabel \"theta2 [rad]\"\n"
        "set cblabel \"torque needed to hold [N m]\"\nset palette rgb 33,13,10\n"
        "set size ratio -1\nunset grid\nset xrange [-pi:pi]\nset yrange [-pi:pi]\n";
   s += begin_figure("hold_map.png", "1,1",
@@ -532,7 +534,7 @@ std::string hold_curve_plot_script(const std::string& map_csv, double torque_lim
   char value[32];
   std::snprintf(value, sizeof value, "%g", torque_limit);
   const bool limited = std::isfinite(torque_limit);
-  s += "set xlabel \"{/Symbol q}_1 [rad]\"\nset ylabel \"M1 [N m]\"\nset xrange [-pi:pi]\n"
+  s += "set xlabel \"theta1 [rad]\"\nset ylabel \"M1 [N m]\"\nset xrange [-pi:pi]\n"
        "set key top left opaque box font \",10\"\n";
   s += begin_figure("hold_map.png", "1,1",
                     "Holding torque of the crank: the frictionless equilibrium and the range static "
