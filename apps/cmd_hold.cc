@@ -307,8 +307,8 @@ int run_four_bar_pose(const Args& args, const Scene& scene, const FourBarLoads& 
   char line[512];
   std::snprintf(line, sizeof line,
                 " (four-bar) at theta1 = %.10g rad (loads at t = %g s)\n"
-                "  frictionless equilibrium: M1 = %.10f N m\n"
-                "  static friction holds M1 in [%.6f, %.6f] N m (joint O alone: +- %.6f)\n"
+                "  frictionless equilibrium: M1 = %.10g N m\n"
+                "  static friction holds M1 in [%.6g, %.6g] N m (joint O alone: +- %.6g)\n"
                 "  torque needed to hold: %.6g N m\n",
                 th1, args.time, h.M1, h.M1_min, h.M1_max, h.bound[0], required);
   std::cout << "fivebar hold: " << scene.path << line << "  wrote " << dir.dir() << "/:";

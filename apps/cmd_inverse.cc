@@ -362,11 +362,16 @@ void print_rest(const RestRule& rule, const RestSummary& s) {
   std::cout << line;
   if (s.rows_at_rest == 0) return;
   if (s.cranks == 1) {
-    std::snprintf(line, sizeof line,
-                  "  %ld rows held still: M1 in [%.10g, %.10g] N m (a constant M1 in [%.6g, %.6g] "
-                  "holds them all)\n",
-                  s.rows_at_rest, s.M1_lo, s.M1_hi, s.range1_lo, s.range1_hi);
+    std::snprintf(line, sizeof line, "  %ld rows held still: M1 in [%.10g, %.10g] N m (",
+                  s.rows_at_rest, s.M1_lo, s.M1_hi);
     std::cout << line;
+    if (s.range1_lo <= s.range1_hi) {
+      std::snprintf(line, sizeof line, "a constant M1 in [%.6g, %.6g] holds them all)\n",
+                    s.range1_lo, s.range1_hi);
+      std::cout << line;
+    } else {
+      std::cout << "no constant M1 holds them all: their ranges do not overlap)\n";
+    }
     return;
   }
   if (s.M1_hi - s.M1_lo > 1e-9 || s.M2_hi - s.M2_lo > 1e-9) {  // held at several poses

@@ -18,6 +18,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/five_bar_mechanism.h"
@@ -146,11 +147,27 @@ Status lock_analysis(const typename M::template Params<double>& p,
   return Status::Ok();
 }
 
+/// lock_extent's bound on the extent, in units of its start plus the torque it starts from
+inline constexpr double kSelfLocking = 1e6;
+
+/// lock_extent's failure where the extent grows without bound from the drive torque `at`
+inline Status self_locking(double at) {
+  std::ostringstream msg;
+  msg.precision(3);
+  msg << "static friction would hold any drive torque here (the lock's extent grows without "
+         "bound from M = "
+      << at << " N m: self-locking, as near a toggle pose); the motion from rest is not unique";
+  return Status::Error(StatusCode::kIndeterminateModes, msg.str());
+}
+
 /// How far a drive torque of mechanism M can move from its value in `L` in direction `sign`
 /// (set(&L, value) sets it) before the locked mechanism breaks away: lock_analysis's ratio
 /// reaches 1. The ratio is homogeneous of degree one in the torque excess for fixed reactions, so
 /// d <- d / ratio(d) converges in a few steps (the reactions change with the holding torques by
 /// O(mu r / l)); `start` is the first d (> 0). d = 0 where no friction resists that direction.
+/// Fails (kIndeterminateModes) where the extent grows without settling: near a toggle friction
+/// can lock the mechanism against any torque (the reactions it brings grow with the torque), and
+/// the motion from rest is not unique there (the friction loop finds several solutions).
 template <class M, class SetDrive>
 Status lock_extent(const typename M::template Params<double>& p,
                    const typename M::template Loads<double>& L, const mech::Vec<M::kDof, double>& q,
@@ -171,6 +188,7 @@ Status lock_extent(const typename M::template Params<double>& p,
     const bool done = std::abs(next - *d) <= 1e-14 * next;
     *d = next;
     if (done) return Status::Ok();
+    if (!(next < kSelfLocking * (start + std::abs(at)))) return self_locking(at);
   }
   return Status::Ok();
 }

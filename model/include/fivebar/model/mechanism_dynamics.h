@@ -37,7 +37,8 @@ using State = Vec<M::kDof, T>;
 inline constexpr double kSingularCause = 0.05;
 /// ... and below this one too where every friction arm r_k mu_k is under kSmallArm of the shortest
 /// link: arms that small do not bring the loop's gain to 1 at a regular pose (a double rocker
-/// driven at 1 rad/s failed its loop at |sin| = 0.095 with r mu = 0.6 % of its shortest link)
+/// driven at 1 rad/s failed its loop at |sin| = 0.095 with r mu = 0.6 % of its shortest link);
+/// with larger arms the pose is named beside the friction
 inline constexpr double kNearSingularCause = 0.25;
 inline constexpr double kSmallArm = 0.05;
 
@@ -60,23 +61,26 @@ Status singular_cause(const ParamsOf<M, T>& p, const typename M::template Kinema
   }
   for (const auto& link : p.links) shortest = std::min(shortest, abs(value_of(link.length)));
   const bool small_arms = arm < kSmallArm * shortest;
-  if (!(sine < kSingularCause) && !(sine < kNearSingularCause && small_arms)) return st;
-  // the loop's own guess at the cause is the friction's: not here
+  if (!(sine < kNearSingularCause)) return st;
+  // with small friction arms the pose alone explains it: the loop's own guess (the friction's)
+  // is dropped; with larger arms both are named
   std::string loop = st.message;
-  for (const char* guess : {" (r_k * mu too large for the reactions at this pose and speed)",
-                            ": r_k * mu too large for the loads (friction would lock the joints)"}) {
-    const size_t at = loop.find(guess);
-    if (at != std::string::npos) loop.erase(at, std::string(guess).size());
+  if (sine < kSingularCause || small_arms) {
+    for (const char* guess :
+         {" (r_k * mu too large for the reactions at this pose and speed)",
+          ": r_k * mu too large for the loads (friction would lock the joints)"}) {
+      const size_t at = loop.find(guess);
+      if (at != std::string::npos) loop.erase(at, std::string(guess).size());
+    }
   }
   std::ostringstream msg;
   msg.precision(3);
-  msg << "near-singular pose: |" << M::kSingularName << "| = " << sine
-      << " (the reactions grow as 1 / " << M::kSingularName
-      << ", and with the rates as its cube), where the friction loop cannot close even with r_k * "
-         "mu at most "
-      << arm << " m (" << 100 * arm / shortest
-      << " % of the shortest link; simulation.singular_margin stops a run before such a pose); "
-      << loop;
+  msg << (sine < kSingularCause || small_arms ? "near-singular pose" : "friction near a singular pose")
+      << ": |" << M::kSingularName << "| = " << sine << " (the reactions grow as 1 / "
+      << M::kSingularName << ", and with the rates as its cube), where the friction loop cannot "
+      << "close with r_k * mu up to " << arm << " m (" << 100 * arm / shortest
+      << " % of the shortest link; simulation.singular_margin above " << sine
+      << " stops a run before this pose); " << loop;
   return Status::Error(st.code, msg.str());
 }
 
