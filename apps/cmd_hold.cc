@@ -259,23 +259,24 @@ double parse_crank(const std::string& text, const std::string& scene) {
 }
 
 // the four-bar's holding at th1: the pose assembles (else exit 2 when `strict`) and is away from
-// the singular pose (else exit 3 when `strict`); a map cell's status otherwise (as map_cell)
+// the singular pose (else exit 3 when `strict`), and the range settles (else exit 3); a map
+// cell's status otherwise (as map_cell)
 int four_bar_cell(const Scene& scene, const FourBarLoads& L, double th1, bool strict,
                   FourBarHolding* h) {
-  FourBarKinematics k;
-  const Status closes = four_bar_kinematics(scene.four_bar, th1, &k,
-                                            std::max(scene.options.singular_margin, 1e-12));
-  if (!closes.ok() && strict) {
-    const std::string why = "at theta1 = " + format_double(th1) + ": " + closes.message;
-    if (closes.code == StatusCode::kCannotAssemble) throw InputError(scene.path, "--pose", why);
-    throw NumericalError(scene.path, "--pose", why + ": no finite holding torque");
+  EvalOptions eval = eval_options(scene);
+  eval.singular_margin = std::max(eval.singular_margin, 1e-12);
+  const Status st = four_bar_holding(scene.four_bar, L, th1, eval, h);
+  const int status = st.ok() ? 0
+                     : st.code == StatusCode::kCannotAssemble ? 1
+                     : st.code == StatusCode::kNearSingular   ? 2
+                                                              : 3;
+  if (status != 0 && strict) {
+    const std::string why = "at theta1 = " + format_double(th1) + ": " + st.message;
+    if (status == 1) throw InputError(scene.path, "--pose", why);
+    throw NumericalError(scene.path, "--pose",
+                         status == 2 ? why + ": no finite holding torque" : why);
   }
-  if (!closes.ok()) return closes.code == StatusCode::kCannotAssemble ? 1 : 2;
-  const Status st = four_bar_holding(scene.four_bar, L, th1, eval_options(scene), h);
-  if (!st.ok() && strict) {
-    throw NumericalError(scene.path, "--pose", "theta1 = " + format_double(th1) + ": " + st.message);
-  }
-  return st.ok() ? 0 : 3;
+  return status;
 }
 
 int run_four_bar_pose(const Args& args, const Scene& scene, const FourBarLoads& L, double th1) {

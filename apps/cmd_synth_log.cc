@@ -31,7 +31,6 @@
 #include "fivebar/io/torque_log_file.h"
 #include "fivebar/model/actuator.h"
 #include "fivebar/model/dynamics.h"
-#include "fivebar/model/four_bar.h"
 #include "fivebar/model/friction.h"
 #include "fivebar/model/inertial.h"
 
@@ -141,26 +140,15 @@ identification::SynthResult motion_log(const Scene& scene, const sim::LoadFuncti
   return out;
 }
 
-// The same for a four-bar (columns t, theta1, omega1, alpha1).
+// The same for a four-bar (columns t, theta1, omega1, alpha1): sim::inverse_rows of the crank.
 identification::SynthResult four_bar_motion_log(const Scene& scene,
                                                 const sim::FourBarLoadFunction& loads,
                                                 const std::string& path,
                                                 const identification::SynthOptions& so) {
   const CsvTable table = read_csv(path);
-  std::vector<sim::Row> rows = motion_rows(table, 1);
-  for (size_t i = 0; i < rows.size(); ++i) {
-    sim::Row& r = rows[i];
-    FourBarEvaluation ev;
-    const Status st = four_bar_inverse(scene.four_bar, loads(r.t), r.theta[0], r.omega[0],
-                                       r.alpha[0], EvalOptions{}, &ev);
-    if (!st.ok()) {
-      throw NumericalError(path, "line " + std::to_string(table.lines[i]),
-                           "inverse dynamics: " + st.message);
-    }
-    r.omega[1] = ev.bias.w2;
-    r.omega[2] = ev.bias.w3;
-    r.M1 = ev.M1;
-  }
+  std::vector<sim::Row> rows;
+  const Status st = sim::inverse_rows(scene.four_bar, loads, motion_rows(table, 1), &rows);
+  if (!st.ok()) throw NumericalError(path, "inverse dynamics", st.message);
   identification::SynthResult out;
   identification::sample_log(scene.four_bar, rows, so, &out);
   return out;

@@ -11,6 +11,7 @@
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/five_bar_mechanism.h"
 #include "fivebar/model/four_bar.h"
+#include "fivebar/model/four_bar_rest.h"
 #include "fivebar/model/lock.h"
 #include "fivebar/model/names.h"
 #include "fivebar/model/rest.h"
@@ -1508,3 +1509,37 @@ RunChecks check_run(const FourBarParams& params, const FourBarLoadFunction& load
 }
 
 }  // namespace fivebar::sim
+
+// Holding a four-bar at rest (four_bar_rest.h): here, where the four-bar's inverse dynamics and
+// lock are compiled for the simulator already.
+namespace fivebar {
+
+Status four_bar_holding(const FourBarParams& p, FourBarLoads L, double th1, const EvalOptions& opt,
+                        FourBarHolding* h) {
+  FourBarParams frictionless = p;
+  frictionless.friction.law = FrictionLaw::kNone;
+  FourBarEvaluation ev;
+  const Status st = four_bar_inverse(frictionless, L, th1, 0.0, 0.0, opt, &ev);
+  if (!st.ok()) return st;
+  h->M1 = ev.M1;
+  for (int k = 0; k < kFourBarJoints; ++k) {
+    h->N[k] = ev.N[k];
+    h->bound[k] = p.friction.active() ? FourBar::holding_capacity(p, k, ev.N[k]) : 0.0;
+  }
+  double ext[2] = {0.0, 0.0};  // below, above the equilibrium
+  if (p.friction.active()) {
+    L.M1 = h->M1;
+    const double start = std::max(h->bound[0], 1e-12 * (1.0 + std::abs(h->M1)));
+    for (int e = 0; e < 2; ++e) {
+      const Status s = lock_extent<FourBar>(
+          p, L, FourBar::Q<double>(th1), opt, h->M1, e == 0 ? -1.0 : 1.0, start,
+          [](FourBarLoads* l, double v) { l->M1 = v; }, &ext[e]);
+      if (!s.ok()) return s;
+    }
+  }
+  h->M1_min = h->M1 - ext[0];
+  h->M1_max = h->M1 + ext[1];
+  return Status::Ok();
+}
+
+}  // namespace fivebar

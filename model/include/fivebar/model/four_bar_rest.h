@@ -4,12 +4,11 @@
 // lock.h). The five-bar's counterpart is Holding in rest.h.
 #pragma once
 
-#include <algorithm>
 #include <array>
-#include <cmath>
 
-#include "fivebar/model/four_bar.h"
-#include "fivebar/model/lock.h"
+#include "fivebar/model/evaluation.h"
+#include "fivebar/model/four_bar_params.h"
+#include "fivebar/model/status.h"
 
 namespace fivebar {
 
@@ -23,33 +22,10 @@ struct FourBarHolding {
 };
 
 /// Frictionless equilibrium and holding range at crank angle th1 under loads L (L.M1 ignored).
-/// Fails like the kinematics: kCannotAssemble, kNearSingular (opt.singular_margin).
-inline Status four_bar_holding(const FourBarParams& p, FourBarLoads L, double th1,
-                               const EvalOptions& opt, FourBarHolding* h) {
-  FourBarParams frictionless = p;
-  frictionless.friction.law = FrictionLaw::kNone;
-  FourBarEvaluation ev;
-  const Status st = four_bar_inverse(frictionless, L, th1, 0.0, 0.0, opt, &ev);
-  if (!st.ok()) return st;
-  h->M1 = ev.M1;
-  for (int k = 0; k < kFourBarJoints; ++k) {
-    h->N[k] = ev.N[k];
-    h->bound[k] = p.friction.active() ? FourBar::holding_capacity(p, k, ev.N[k]) : 0.0;
-  }
-  double ext[2] = {0.0, 0.0};  // below, above the equilibrium
-  if (p.friction.active()) {
-    L.M1 = h->M1;
-    const double start = std::max(h->bound[0], 1e-12 * (1.0 + std::abs(h->M1)));
-    for (int e = 0; e < 2; ++e) {
-      const Status s = lock_extent<FourBar>(
-          p, L, FourBar::Q<double>(th1), opt, h->M1, e == 0 ? -1.0 : 1.0, start,
-          [](FourBarLoads* l, double v) { l->M1 = v; }, &ext[e]);
-      if (!s.ok()) return s;
-    }
-  }
-  h->M1_min = h->M1 - ext[0];
-  h->M1_max = h->M1 + ext[1];
-  return Status::Ok();
-}
+/// Fails like the kinematics: kCannotAssemble, kNearSingular (opt.singular_margin); and
+/// kIndeterminateModes where the range does not settle (lock_extent: self-locking). Compiled in
+/// the simulation library (src/simulator.cc, beside the four-bar's other instantiations).
+Status four_bar_holding(const FourBarParams& p, FourBarLoads L, double th1, const EvalOptions& opt,
+                        FourBarHolding* h);
 
 }  // namespace fivebar
