@@ -28,7 +28,6 @@
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
 #include "fivebar/model/dynamics.h"
-#include "fivebar/model/four_bar.h"
 #include "fivebar/sim/simulator.h"
 
 // a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
@@ -100,13 +99,9 @@ void check_times(const std::string& path, const CsvTable& table, const std::vect
 // why a pose of the scene's mechanism at the crank angles `theta` is refused ("" when it closes
 // away from the singular poses)
 std::string pose_problem(const Scene& scene, const std::vector<double>& theta) {
-  double sine;
-  if (scene.type == MechanismType::kFourBar) {
-    FourBarKinematics k;
-    sine = four_bar_kinematics(scene.four_bar, theta[0], &k).ok() ? std::abs(k.sin32) : -1.0;
-  } else {
-    sine = coupler_sine(scene.params, theta[0], theta[1]);
-  }
+  const double sine = scene.type == MechanismType::kFourBar
+                          ? four_bar_sine(scene.four_bar, theta[0])
+                          : coupler_sine(scene.params, theta[0], theta[1]);
   if (sine >= scene.options.singular_margin) return "";
   return sine < 0 ? "the mechanism cannot assemble" : "too close to a singular configuration";
 }

@@ -950,6 +950,11 @@ double coupler_sine(const Params<double>& p, double theta1, double theta2) {
   return std::abs(k.sin43);
 }
 
+double four_bar_sine(const FourBarParams& p, double theta1) {
+  FourBarKinematics k;
+  return four_bar_kinematics(p, theta1, &k).ok() ? std::abs(k.sin32) : -1.0;
+}
+
 const char* mechanism_type_name(MechanismType type) {
   return type == MechanismType::kFourBar ? "four_bar" : "five_bar";
 }

@@ -108,5 +108,8 @@ const char* friction_law_name(FrictionLaw law);
 /// |sin(th4 - th3)| at (theta1, theta2) from closed-form triangle geometry, or -1 when the
 /// mechanism cannot close there (|BD| outside [|l3 - l4|, l3 + l4]). Independent of the assembly.
 double coupler_sine(const Params<double>& params, double theta1, double theta2);
+/// The four-bar's |sin(theta3 - theta2)| at crank angle theta1, or -1 when it cannot close there
+/// (|BD0| outside [|l2 - l3|, l2 + l3]).
+double four_bar_sine(const FourBarParams& params, double theta1);
 
 }  // namespace fivebar::io
