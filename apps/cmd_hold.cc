@@ -119,13 +119,8 @@ Json pose_json(const Holding<double>& h, const HoldingPolygon& poly, double limi
   j.set("M2", h.M2);
   j.set("range_M1", pair(h.M1_min, h.M1_max));
   j.set("range_M2", pair(h.M2_min, h.M2_max));
-  Json N = Json::array(), bound = Json::array();
-  for (int k = 0; k < kJoints; ++k) {
-    N.push(h.N[k]);
-    bound.push(h.bound[k]);
-  }
-  j.set("N", std::move(N));
-  j.set("static_friction_bound", std::move(bound));
+  j.set("N", Json::array_of(h.N));
+  j.set("static_friction_bound", Json::array_of(h.bound));
   j.set("crank_joint_range_M1", pair(h.M1 - h.bound[0], h.M1 + h.bound[0]));
   j.set("crank_joint_range_M2", pair(h.M2 - h.bound[4], h.M2 + h.bound[4]));
   j.set("stuck_joints", "O, B, C, D, D0 (all at rest)");
@@ -288,13 +283,8 @@ int run_four_bar_pose(const Args& args, const Scene& scene, const FourBarLoads& 
   j.set("mechanism", "four_bar");
   j.set("M1", h.M1);
   j.set("range_M1", pair(h.M1_min, h.M1_max));
-  Json N = Json::array(), bound = Json::array();
-  for (int k = 0; k < kFourBarJoints; ++k) {
-    N.push(h.N[k]);
-    bound.push(h.bound[k]);
-  }
-  j.set("N", std::move(N));
-  j.set("static_friction_bound", std::move(bound));
+  j.set("N", Json::array_of(h.N));
+  j.set("static_friction_bound", Json::array_of(h.bound));
   j.set("crank_joint_range_M1", pair(h.M1 - h.bound[0], h.M1 + h.bound[0]));
   j.set("stuck_joints", "O, B, C, D0 (all at rest)");
   j.set("required_torque", required);

@@ -27,6 +27,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/scene_mechanism.h"
 #include "fivebar/model/dynamics.h"
 #include "fivebar/sim/simulator.h"
 
@@ -489,7 +490,7 @@ int run(const Args& args) {
   const auto start = std::chrono::steady_clock::now();
   const Scene scene = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
   const bool four_bar = scene.type == MechanismType::kFourBar;
-  const TrajectoryLayout layout = four_bar ? four_bar_layout() : TrajectoryLayout{};
+  const TrajectoryLayout layout = layout_of(scene);
   const Motion motion = read_motion(args.motion, scene);
   OutputDir out(args.scene.out, kOutputs);
 
