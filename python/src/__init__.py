@@ -244,7 +244,10 @@ def inverse(scene, theta, omega, alpha, t=None, threads=0):
     float64: lists, int or float32 arrays); t: (N,) times, needed when loads.M3 or loads.F
     depend on t. Returns a Record {'M': (N, 2) driving torques [N m], 'N': (N, 5) joint
     reaction magnitudes [N], 'Mf': (N, 5) friction torques [N m]} (joints O, B, C, D, D0).
-    Runs with the GIL released, on `threads` threads (0: all cores) when N is large.
+    A four-bar scene takes the crank's theta, omega, alpha as (N,) or (N, 1) arrays and returns
+    'M' (N, 1), 'N' and 'Mf' (N, 4) (joints O, B, C, D0); a crank at rest is held as
+    `fivebar inverse` holds it (docs/hold.md). Runs with the GIL released, on `threads` threads
+    (0: all cores) when N is large.
     """
     return Record(_core.inverse(scene, _floats(theta), _floats(omega), _floats(alpha),
                                 _floats(t), threads))

@@ -12,7 +12,6 @@
 #include "bindings.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
-#include "fivebar/model/rest.h"
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/rest.h"
 
@@ -122,16 +121,18 @@ py::array_t<double, py::array::c_style> checked_array(const py::object& obj, con
   throw NumericalError(s.scene.path, "inverse dynamics", row + ": " + f.status.message);
 }
 
+// the rest rule of `fivebar inverse` (docs/hold.md): thresholds for computed rates, or the
+// scene's simulation.rest_rate_threshold / rest_acceleration_threshold when it sets them
+RestThresholds rest_thresholds(const io::Scene& scene) {
+  RestThresholds rest;
+  if (scene.rest_rate_threshold >= 0) rest.rate = scene.rest_rate_threshold;
+  if (scene.rest_acceleration_threshold >= 0) rest.acceleration = scene.rest_acceleration_threshold;
+  return rest;
+}
+
 // all states on `threads` threads (0: the machine's cores); the first failure by index
 Failure inverse_all(const PyScene& s, const States& in, const Outputs& out, int threads) {
-  // the rest rule of `fivebar inverse` (docs/hold.md): thresholds for computed rates, or the
-  // scene's simulation.rest_rate_threshold / rest_acceleration_threshold when it sets them
-  RestThresholds rest;
-  if (s.scene.rest_rate_threshold >= 0) rest.rate = s.scene.rest_rate_threshold;
-  if (s.scene.rest_acceleration_threshold >= 0) {
-    rest.acceleration = s.scene.rest_acceleration_threshold;
-  }
-  EvalOptions eval = with_rest(EvalOptions{}, rest);
+  EvalOptions eval = with_rest(EvalOptions{}, rest_thresholds(s.scene));
   eval.singular_margin = s.scene.options.singular_margin;
   const bool fixed = s.loads_constant;
   const Loads<double>& constant = s.constant_loads;
@@ -162,9 +163,70 @@ Failure inverse_all(const PyScene& s, const States& in, const Outputs& out, int 
   return {};
 }
 
+// raises ValueError when the scene's loads depend on t and `t` is None
+void require_times(const PyScene& s, const py::object& t) {
+  if (!t.is_none() || s.loads_constant) return;
+  throw InputError("t", "(argument)",
+                   "the loads of " + s.scene.path +
+                       " depend on t (loads.M3 or loads.F): pass t, a float64 array of shape (N,)");
+}
+
+// `name` of a one-crank mechanism: shape (N,) or (N, 1), as a contiguous (N,) array
+py::array_t<double, py::array::c_style> crank_array(const py::object& obj, const char* name,
+                                                    py::ssize_t n) {
+  const bool column = py::isinstance<py::array>(obj) && py::array(obj).ndim() == 2;
+  if (!column) return checked_array(obj, name, n, 0);
+  const auto a = checked_array(obj, name, n, 1);
+  return py::array_t<double, py::array::c_style>::ensure(a.attr("reshape")(a.shape(0)));
+}
+
+// The four-bar (one crank): sim::inverse_rows over the states, its rest rule included. Returns
+// M (N, 1), N and Mf (N, 4) of joints O, B, C, D0.
+py::dict inverse_four_bar(const PyScene& s, const py::object& theta, const py::object& omega,
+                          const py::object& alpha, const py::object& t) {
+  const auto th = crank_array(theta, "theta", -1);
+  const py::ssize_t n = th.shape(0);
+  const auto om = crank_array(omega, "omega", n), al = crank_array(alpha, "alpha", n);
+  require_times(s, t);
+  const auto times = t.is_none() ? py::array_t<double, py::array::c_style>()
+                                 : checked_array(t, "t", n, 0);
+  std::vector<sim::Row> motion(static_cast<size_t>(n)), rows;
+  for (py::ssize_t i = 0; i < n; ++i) {
+    sim::Row& r = motion[size_t(i)];
+    r.t = t.is_none() ? 0.0 : times.at(i);
+    r.theta[0] = th.at(i), r.omega[0] = om.at(i), r.alpha[0] = al.at(i);
+    for (const auto& [name, v] : {std::pair{"theta", r.theta[0]}, {"omega", r.omega[0]},
+                                  {"alpha", r.alpha[0]}, {"t", r.t}}) {
+      if (!std::isfinite(v)) {
+        throw InputError(name, "row " + std::to_string(i), "expected a finite number");
+      }
+    }
+  }
+  Status st;
+  {
+    py::gil_scoped_release release;
+    st = sim::inverse_rows(s.scene.four_bar, s.loads->four_bar_function(), motion, &rows,
+                           rest_thresholds(s.scene));
+  }
+  if (!st.ok()) throw NumericalError(s.scene.path, "inverse dynamics", st.message);
+  py::array_t<double> M({n, py::ssize_t(1)}), N({n, py::ssize_t(4)}), Mf({n, py::ssize_t(4)});
+  for (py::ssize_t i = 0; i < n; ++i) {
+    const sim::Row& r = rows[size_t(i)];
+    M.mutable_at(i, 0) = r.M1;
+    for (int k = 0; k < 4; ++k) N.mutable_at(i, k) = r.N[k], Mf.mutable_at(i, k) = r.Mf[k];
+  }
+  py::dict d;
+  d["M"] = std::move(M);
+  d["N"] = std::move(N);
+  d["Mf"] = std::move(Mf);
+  return d;
+}
+
 py::dict inverse(const PyScene& s, const py::object& theta, const py::object& omega,
                  const py::object& alpha, const py::object& t, int threads) {
-  s.require_five_bar("inverse");
+  if (s.scene.type == io::MechanismType::kFourBar) {
+    return inverse_four_bar(s, theta, omega, alpha, t);
+  }
   const auto th = checked_array(theta, "theta", -1, 2);
   const py::ssize_t n = th.shape(0);
   const auto om = checked_array(omega, "omega", n, 2);
@@ -172,11 +234,8 @@ py::dict inverse(const PyScene& s, const py::object& theta, const py::object& om
   py::array_t<double, py::array::c_style> times;
   if (!t.is_none()) {
     times = checked_array(t, "t", n, 0);
-  } else if (!s.loads_constant) {
-    throw InputError("t", "(argument)",
-                     "the loads of " + s.scene.path +
-                         " depend on t (loads.M3 or loads.F): pass t, a float64 array of "
-                         "shape (N,)");
+  } else {
+    require_times(s, t);
   }
   const States in{th.data(), om.data(), al.data(), t.is_none() ? nullptr : times.data(),
                   static_cast<size_t>(n)};
@@ -237,8 +296,10 @@ void bind_inverse(py::module_& m) {
         "Inverse dynamics with friction of N states: theta, omega, alpha are float64 arrays of "
         "shape (N, 2) (cranks 1 and 2). Returns {'M': (N, 2) driving torques [N m], 'N': (N, 5) "
         "joint reaction magnitudes [N], 'Mf': (N, 5) friction torques [N m]} (joints O, B, C, D, "
-        "D0). t, shape (N,), gives the time of each state for loads that depend on t. Runs with "
-        "the GIL released, on `threads` threads (0: all cores) when N is large.");
+        "D0). A four-bar scene takes the crank's theta, omega, alpha of shape (N,) or (N, 1) and "
+        "returns M (N, 1), N and Mf (N, 4) (joints O, B, C, D0). t, shape (N,), gives the time "
+        "of each state for loads that depend on t. Runs with the GIL released, on `threads` "
+        "threads (0: all cores) when N is large (five-bars).");
   m.def("_time_inverse_cpp", &time_inverse_cpp, py::arg("scene"), py::arg("state"),
         py::arg("calls") = 20000, py::arg("repeats") = 7, py::arg("cpu_time") = false,
         "Benchmark helper: seconds per call of the C++ work of a one-state inverse (state = "

@@ -83,9 +83,30 @@ def test_a_four_bar_scene_keeps_its_type_through_yaml_and_pickle(root):
     assert scene.replace({"gravity": 0}).mechanism == "four_bar"
 
 
-def test_five_bar_only_functions_refuse_a_four_bar(root):
+def test_four_bar_inverse_gives_back_the_simulated_torque(root):
+    # the crank's motion of a simulated run: inverse dynamics returns its M1, reactions and
+    # friction torques (the run's rates and accelerations are exact, slip directions the same
+    # wherever the joints move)
+    scene = fivebar.load_scene(root / "datasets/reference/four_bar/crank_rocker.yaml")
+    run = fivebar.simulate(scene, duration=0.5)
+    inv = fivebar.inverse(scene, run["theta1"], run["omega1"][:, None], run["alpha1"], t=run["t"])
+    assert inv["M"].shape == (len(run["t"]), 1) and inv["N"].shape == (len(run["t"]), 4)
+    moving = np.all(run["mode"] != 0, axis=1)
+    assert np.count_nonzero(moving) > 0.9 * len(run["t"])
+    assert np.max(np.abs(inv["M"][moving, 0] - run["M1"][moving])) <= 1e-9
+    for k in range(4):
+        assert np.max(np.abs(inv["N"][moving, k] - run[f"N{k + 1}"][moving])) <= 1e-7
+        assert np.max(np.abs(inv["Mf"][moving, k] - run[f"Mf{k + 1}"][moving])) <= 1e-9
+
+
+def test_four_bar_inverse_refuses_bad_arrays(root):
     import pytest
     scene = fivebar.load_scene(root / "datasets/reference/four_bar/crank_rocker.yaml")
     z = np.zeros((3, 2))
-    with pytest.raises(ValueError, match="mechanism.type: four_bar: fivebar.inverse takes five-bars"):
-        fivebar.inverse(scene, z, z, z)
+    with pytest.raises(ValueError, match=r"theta: \(argument\): expected a float64 array of shape \(N, 1\)"):
+        fivebar.inverse(scene, z, z, z, t=np.zeros(3))
+    bad = np.array([0.1, np.nan, 0.3])
+    with pytest.raises(ValueError, match="omega: row 1: expected a finite number"):
+        fivebar.inverse(scene, np.zeros(3), bad, np.zeros(3), t=np.zeros(3))
+    with pytest.raises(ValueError, match="depend on t"):
+        fivebar.inverse(scene.replace({"loads.M3": "0.2*t"}), np.zeros(3), np.zeros(3), np.zeros(3))
