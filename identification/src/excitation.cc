@@ -748,6 +748,39 @@ void set_std(const DesignParameters& dp, const Eigen::MatrixXd& C, ExcitationRep
   }
 }
 
+/// The Jacobians J and D and the joint rates at every sample of the motion of `r` (exact); the
+/// first sample that fails, named by its time.
+Status eiv_samples(const Params<double>& scene, const DesignParameters& dp,
+                   const std::function<Loads<double>(double)>& loads, const ExcitationReport& r,
+                   std::vector<EivSample>* samples) {
+  const int n = static_cast<int>(r.t.size());
+  samples->assign(n, EivSample{});
+  std::vector<Status> status(n);
+  const std::vector<double> x = dp.layout.extract(scene.friction);
+  parallel_for(n, [&](int i) {
+    const MotionState& q = r.states[i];
+    SampleTerms terms;
+    status[i] = sample_terms(scene, dp, loads(r.t[i]), q, nullptr, &terms);
+    if (!status[i].ok()) return;
+    Sample s;
+    s.t = r.t[i], s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
+    s.loads = loads(r.t[i]);
+    if (!detail::kinematic_jacobian(scene, dp.layout, x.data(), s, EvalOptions{}, &(*samples)[i].D)) {
+      status[i] = Status::Error(StatusCode::kSolverFailed,
+                                "the torques' derivative along the motion failed");
+      return;
+    }
+    (*samples)[i].J = terms.J;
+    (*samples)[i].w = terms.w;
+  });
+  for (int i = 0; i < n; ++i) {
+    if (!status[i].ok()) {
+      return Status::Error(status[i].code, "at t = " + digits3(r.t[i]) + " s: " + status[i].message);
+    }
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status predict_identified_std(const Params<double>& scene, const DesignParameters& dp,
@@ -759,30 +792,9 @@ Status predict_identified_std(const Params<double>& scene, const DesignParameter
   for (double v : r->std_dev) {
     if (!std::isfinite(v)) return Status::Ok();  // an unidentifiable direction stays so
   }
-  // the Jacobians at the exact motion
-  std::vector<EivSample> samples(n);
-  std::vector<Status> status(n);
-  const std::vector<double> x = dp.layout.extract(scene.friction);
-  parallel_for(n, [&](int i) {
-    const MotionState& q = r->states[i];
-    SampleTerms terms;
-    status[i] = sample_terms(scene, dp, loads(r->t[i]), q, nullptr, &terms);
-    if (!status[i].ok()) return;
-    Sample s;
-    s.t = r->t[i], s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
-    s.loads = loads(r->t[i]);
-    if (!detail::kinematic_jacobian(scene, dp.layout, x.data(), s, EvalOptions{}, &samples[i].D)) {
-      status[i] = Status::Error(StatusCode::kSolverFailed, "the torques' derivative along the motion failed");
-      return;
-    }
-    samples[i].J = terms.J;
-    samples[i].w = terms.w;
-  });
-  for (int i = 0; i < n; ++i) {
-    if (!status[i].ok()) {
-      return Status::Error(status[i].code, "at t = " + digits3(r->t[i]) + " s: " + status[i].message);
-    }
-  }
+  std::vector<EivSample> samples;
+  const Status st = eiv_samples(scene, dp, loads, *r, &samples);
+  if (!st.ok()) return st;
   const EivPredictor eiv(*r, std::move(samples), torque_noise, angle_noise);
   const std::vector<int> cand = stages::window_candidates(n, eiv.dt(), SgOptions{}.order);
   // the residual rule: the largest candidate within the excess (scanned until the bias clearly
