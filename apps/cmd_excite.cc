@@ -343,6 +343,7 @@ struct Design {
   /// it beats the design (NaN otherwise): what the constraints cost
   double unconstrained_std = NAN;
   std::array<int, kJoints> unconstrained_reversals{};
+  bool torque_family = false;
 };
 
 trajectory::GeneralResult solve_design(const id::ExcitationProblem& problem, const Args& a,
@@ -547,6 +548,7 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   Design d;
   d.report = std::move(g.report);
   d.peak_applied = g.peak_applied;
+  d.torque_family = true;
   const id::TorqueCandidate& u = r.best_unconstrained;
   if (o.min_reversals > 0 && u.status.ok() && u.objective < r.best.objective) {
     // its report is on the design grid: each sample stands for rate * duration / samples
@@ -611,14 +613,18 @@ std::string torque_excess(const Design& d, double limit) {
          "peaks between them on the log's grid)";
 }
 
-// what --min-reversals costs a design whose std is too large (the torque family: the best
-// motion found that reverses fewer times, when it carries more information); empty without it
+// what to change for a design whose std is too large: what --min-reversals costs it (the torque
+// family: the best motion found that reverses fewer times, when it carries more information),
+// else the settings that may give more
 std::string reversal_cost(const Design& d, const id::ExcitationOptions& o,
                           const id::DesignParameters& dp) {
-  if (o.min_reversals == 0) return "";
   const std::string n = std::to_string(o.min_reversals);
   if (!std::isfinite(d.unconstrained_std)) {
-    return "; a lower --min-reversals (" + n + ") or a higher --torque-limit may give more";
+    // the Fourier family: its local solves give no comparison
+    return std::string("; ") + (o.min_reversals > 0 ? "a lower --min-reversals (" + n + "), " : "") +
+           "a higher --torque-limit" +
+           (d.torque_family ? "" : " or --family torque (free motions, faster within the same limit)") +
+           " may give more";
   }
   double own = 0;  // the design's, torque noise alone (comparable with the search's)
   for (size_t i = 0; i < d.report.torque_only_std.size(); ++i) {
