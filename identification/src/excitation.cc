@@ -12,7 +12,6 @@
 
 #include "fivebar/identification/rates.h"
 #include "fivebar/model/inertial.h"
-#include "identify_stages.h"  // window_candidates: identify's half-windows
 #include "jet_dynamics.h"
 #include "noise_model.h"
 
@@ -705,9 +704,12 @@ class EivPredictor {
       g += s_[used[u]].J.transpose() * dM;  // one Gauss-Newton step: the residual moves by -dM
     }
     const Eigen::MatrixXd H = J.transpose() * J;
-    const Eigen::LDLT<Eigen::MatrixXd> ldlt(H);
-    if (ldlt.info() != Eigen::Success || !H.allFinite()) return out;
-    const Eigen::MatrixXd Hinv = ldlt.solve(Eigen::MatrixXd::Identity(P, P));
+    if (!H.allFinite()) return out;
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+    const Eigen::VectorXd ev = es.eigenvalues();
+    if (!(ev(0) > 1e-14 * ev(P - 1))) return out;  // the samples do not determine them all
+    const Eigen::MatrixXd Hinv =
+        es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
     out.covariance = Hinv * detail::score_covariance(J, sens, noise_, n) * Hinv;
     out.bias = -Hinv * g;
     out.ok = out.covariance.allFinite();
@@ -754,7 +756,8 @@ Status eiv_samples(const Params<double>& scene, const DesignParameters& dp,
                    const std::function<Loads<double>(double)>& loads, const ExcitationReport& r,
                    std::vector<EivSample>* samples) {
   const int n = static_cast<int>(r.t.size());
-  samples->assign(n, EivSample{});
+  samples->clear();
+  samples->resize(n);
   std::vector<Status> status(n);
   const std::vector<double> x = dp.layout.extract(scene.friction);
   parallel_for(n, [&](int i) {

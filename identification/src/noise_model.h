@@ -57,3 +57,12 @@ Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sen
                                  const SensorNoise& noise, int n);
 
 }  // namespace fivebar::identification::detail
+
+namespace fivebar::identification::stages {
+
+/// The Savitzky-Golay half-windows [samples] identify's window choice tries on a log of n
+/// samples of step dt (stage_window.cc; declared here too for the excitation design's prediction
+/// of that choice, which needs no Ceres).
+std::vector<int> window_candidates(int n, double dt, int order);
+
+}  // namespace fivebar::identification::stages
