@@ -246,8 +246,10 @@ Multisine multisine(const Scene& scene, const LoadExpressions& loads, const id::
     states.push_back({log.theta1[i], log.theta2[i], log.omega1[i], log.omega2[i], log.alpha1[i],
                       log.alpha2[i]});
   }
-  const Status st =
-      id::evaluate_motion(scene.params, dp, loads, log.t, states, o.torque_noise, &m.report);
+  Status st = id::evaluate_motion(scene.params, dp, loads, log.t, states, o.torque_noise, &m.report);
+  if (st.ok()) {
+    st = id::predict_identified_std(scene.params, dp, loads, o.torque_noise, o.angle_noise, &m.report);
+  }
   if (!st.ok()) m.failure = st.message;
   // the multi-sine's peak is that of its applied torques (the log's, noise-free)
   m.report.peak_torque = 0;
@@ -282,12 +284,16 @@ void write_excitation_csv(const std::string& path, const id::ExcitationReport& r
 void write_std_csv(const std::string& path, const id::DesignParameters& dp,
                    const id::ExcitationReport& r, const id::ExcitationReport* base) {
   std::ostringstream s;
-  s << "name,value,std,relative_std,multisine_std,multisine_relative_std\n";
+  s << "name,value,std,relative_std,multisine_std,multisine_relative_std,torque_noise_std,"
+       "multisine_torque_noise_std\n";
+  auto at = [](const std::vector<double>& v, int i) { return i < static_cast<int>(v.size()) ? v[i] : NAN; };
   for (int i = 0; i < dp.size(); ++i) {
     s << dp.names[i] << ',' << format_double(dp.nominal[i]) << ',' << format_double(r.std_dev[i])
       << ',' << format_double(r.relative_std[i]) << ','
       << format_double(base ? base->std_dev[i] : NAN) << ','
-      << format_double(base ? base->relative_std[i] : NAN) << '\n';
+      << format_double(base ? base->relative_std[i] : NAN) << ','
+      << format_double(at(r.torque_only_std, i)) << ','
+      << format_double(base ? at(base->torque_only_std, i) : NAN) << '\n';
   }
   write_text_file(path, s.str());
 }
@@ -305,13 +311,20 @@ Json report_json(const id::DesignParameters& dp, const id::ExcitationReport& r) 
   j.set("condition_number_scaled", r.condition_number);
   j.set("worst_relative_std_friction", worst(r.relative_std, 0, dp.friction));
   j.set("worst_relative_std", worst(r.relative_std, 0, dp.size()));
+  j.set("std_method", r.sg_half_window > 0 ? "errors-in-variables" : "torque-noise");
+  if (r.sg_half_window > 0) {
+    j.set("sg_half_window_samples", r.sg_half_window);
+    j.set("window_choice", r.window_choice);
+  }
   Json params = Json::array();
   for (int i = 0; i < dp.size(); ++i) {
     params.push(Json::object()
                     .set("name", dp.names[i])
                     .set("value", dp.nominal[i])
                     .set("std", r.std_dev[i])
-                    .set("relative_std", r.relative_std[i]));
+                    .set("relative_std", r.relative_std[i])
+                    .set("torque_noise_std",
+                         i < static_cast<int>(r.torque_only_std.size()) ? r.torque_only_std[i] : NAN));
   }
   j.set("parameters", params);
   return j;
@@ -325,6 +338,12 @@ struct Design {
   double torque_margin = 0;  // the margin of the last round
   /// the torque family: the peak of the applied (clipped) tone torques [N m]; NaN otherwise
   double peak_applied = NAN;
+  /// the torque family with --min-reversals > 0: the worst relative std (torque noise alone,
+  /// design grid) and the reversals of the best motion found that misses the constraints, when
+  /// it beats the design (NaN otherwise): what the constraints cost
+  double unconstrained_std = NAN;
+  std::array<int, kJoints> unconstrained_reversals{};
+  bool torque_family = false;
 };
 
 trajectory::GeneralResult solve_design(const id::ExcitationProblem& problem, const Args& a,
@@ -529,6 +548,15 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   Design d;
   d.report = std::move(g.report);
   d.peak_applied = g.peak_applied;
+  d.torque_family = true;
+  const id::TorqueCandidate& u = r.best_unconstrained;
+  if (o.min_reversals > 0 && u.status.ok() && u.objective < r.best.objective) {
+    // its report is on the design grid: each sample stands for rate * duration / samples
+    const double samples = static_cast<double>(u.report.t.size());
+    d.unconstrained_std = worst(u.report.relative_std, 0, static_cast<int>(u.report.relative_std.size())) *
+                          std::sqrt(samples / (o.rate_hz * o.duration));
+    d.unconstrained_reversals = u.report.reversals;
+  }
   trajectory::GeneralResult& s = d.solve;
   s.solver.outcome = trajectory::SolverOutcome::kMaxEvaluations;
   s.solver.message = "evolution strategy: " + std::to_string(r.evaluations) + " simulations, " +
@@ -585,6 +613,33 @@ std::string torque_excess(const Design& d, double limit) {
          "peaks between them on the log's grid)";
 }
 
+// what to change for a design whose std is too large: what --min-reversals costs it (the torque
+// family: the best motion found that reverses fewer times, when it carries more information),
+// else the settings that may give more
+std::string reversal_cost(const Design& d, const id::ExcitationOptions& o,
+                          const id::DesignParameters& dp) {
+  const std::string n = std::to_string(o.min_reversals);
+  if (!std::isfinite(d.unconstrained_std)) {
+    // the Fourier family: its local solves give no comparison
+    return std::string("; ") + (o.min_reversals > 0 ? "a lower --min-reversals (" + n + "), " : "") +
+           "a higher --torque-limit" +
+           (d.torque_family ? "" : " or --family torque (free motions, faster within the same limit)") +
+           " may give more";
+  }
+  double own = 0;  // the design's, torque noise alone (comparable with the search's)
+  for (size_t i = 0; i < d.report.torque_only_std.size(); ++i) {
+    if (dp.nominal[i] != 0) own = std::max(own, d.report.torque_only_std[i] / std::abs(dp.nominal[i]));
+  }
+  std::string rev;
+  for (int k : d.unconstrained_reversals) rev += (rev.empty() ? "" : ", ") + std::to_string(k);
+  return ". --min-reversals " + n + " costs it: within --torque-limit " +
+         format_significant(o.torque_limit, 6) + " N m the motions found that reverse every joint " +
+         n + " times are small, while the best motion found that reverses fewer (O, B, C, D, D0: " +
+         rev + ") predicts a worst relative std of " + format_significant(d.unconstrained_std, 3) +
+         " for the torque noise alone, where this design predicts " + format_significant(own, 3) +
+         ": a lower --min-reversals (0 accepts any) or a higher --torque-limit gives a usable design";
+}
+
 // the design's own checks on the log's grid: status "ok" or what it misses; `base`: the
 // multi-sine baseline's report, when it ran
 std::string design_status(const Design& d, const id::ExcitationOptions& o,
@@ -631,13 +686,14 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o,
   const double worst = worst_relative_std(r);
   if (worst > kAbsurdRelativeStd) {
     *why = "predicts a relative std of " + format_significant(worst, 4) + " (more than " +
-           format_significant(kAbsurdRelativeStd) + "): a log along it would determine nothing";
+           format_significant(kAbsurdRelativeStd) + "): a log along it would determine nothing" +
+           reversal_cost(d, o, dp);
     return "std_too_large";
   }
   if (base && worst > kWorseThanBaseline * worst_relative_std(*base)) {
     *why = "predicts a worst relative std of " + format_significant(worst, 4) + ", more than " +
            format_significant(kWorseThanBaseline) + " times the multi-sine baseline's " +
-           format_significant(worst_relative_std(*base), 3);
+           format_significant(worst_relative_std(*base), 3) + reversal_cost(d, o, dp);
     return "worse_than_baseline";
   }
   return "ok";
@@ -725,9 +781,13 @@ int run(const Args& a) {
            "): the design is evaluated without the comparison");
     }
   }
-  const Design d = a.family == "torque"
-                       ? design_torque(scene, loads, o, a)
-                       : design(scene, loads, o, a, a.start == "multisine" ? ms.get() : nullptr);
+  Design d = a.family == "torque"
+                 ? design_torque(scene, loads, o, a)
+                 : design(scene, loads, o, a, a.start == "multisine" ? ms.get() : nullptr);
+  // the std identify will report for a log along it: the angle noise through the rates too
+  const Status eiv = id::predict_identified_std(scene.params, dp, loads, o.torque_noise,
+                                                o.angle_noise, &d.report);
+  if (!eiv.ok()) throw NumericalError(scene.path, "excite", "designed motion: " + eiv.message);
   std::string why;
   const id::ExcitationReport* base = a.no_baseline || !ms->failure.empty() ? nullptr : &ms->report;
   const std::string status = design_status(d, o, dp, base, &why);
@@ -808,6 +868,9 @@ RunFunction setup(CLI::App* app) {
   fourier.push_back(app->add_option("--reversal-rate", a->design.reversal_rate,
                                     "fourier: every joint reaches +- this [rad/s]"));
   app->add_option("--torque-noise", a->design.torque_noise, "std of the logged torques [N m]");
+  app->add_option("--angle-noise", a->design.angle_noise,
+                  "std of the logged angles [rad] (the rates identify estimates from them)")
+      ->check(nonnegative_number());
   app->add_option("--rate", a->design.rate_hz, "sampling rate of the log [Hz]");
   fourier.push_back(app->add_option("--periods", a->design.periods, "periods of the motion"));
   fourier.push_back(

@@ -14,6 +14,7 @@
 #include <string>
 #include <utility>
 
+#include "fivebar/identification/condition.h"
 #include "fivebar/identification/degrees.h"
 #include "cli_options.h"
 #include "fivebar/io/command.h"
@@ -446,6 +447,20 @@ std::pair<std::string, std::string> motion_fault(const Motion& motion) {
                     " s: the motion must be continuous (unwrap it, or fill the gap)"};
       }
     }
+  }
+  // a smaller step off the motion's trend: identify's step check of a logged angle
+  std::vector<double> t(r.size()), theta(r.size());
+  for (size_t i = 0; i < r.size(); ++i) t[i] = r[i].t;
+  for (int k = 0; k < motion.cranks; ++k) {
+    for (size_t i = 0; i < r.size(); ++i) theta[i] = r[i].theta[k];
+    double size = 0;
+    const int i = identification::first_angle_step(t, theta, &size);
+    if (i < 0) continue;
+    return {"theta" + std::to_string(k + 1),
+            "steps by " + format_significant(size, 3) + " rad off the motion's trend between t = " +
+                format_double(r[i - 1].t) + " and " + format_double(r[i].t) +
+                " s (a gap, a glitch or an encoder slip): the motion must be continuous; its rates "
+                "and the rest thresholds read from them are meaningless"};
   }
   return {};
 }

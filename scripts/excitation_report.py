@@ -4,8 +4,10 @@
 For a design directory written by `fivebar excite` (excitation.csv, predicted_std.csv), logs
 are made along the designed motion (`synth-log --motion`) and along the built-in multi-sine
 (`synth-log --excitation multisine`) with seeds 1..N, each identified by `fivebar identify`;
-the std of the estimates over the seeds is compared with the predicted (Cramer-Rao) std of
-predicted_std.csv (columns std and multisine_std).
+the std of the estimates over the seeds is compared with the predicted std of
+predicted_std.csv (columns std and multisine_std: identify's errors-in-variables std of a log
+whose rates it estimates from the angles). With --with-rates the logs carry exact rates
+(synth-log --with-rates): design with `excite --angle-noise 0` for a prediction of such logs.
 
   python3 scripts/excitation_report.py --design results/excite --seeds 50 --per-joint \\
       --out results/excite_mc
@@ -48,8 +50,10 @@ def estimates(args, motion, work):
     out = []
     for seed in range(1, args.seeds + 1):
         log = os.path.join(work, "%s_%d.csv" % (motion, seed))
-        cmd = [args.fivebar, "synth-log", args.scene, "--out", log, "--with-rates",
+        cmd = [args.fivebar, "synth-log", args.scene, "--out", log,
                "--seed", str(seed), "--torque-noise", str(args.torque_noise)]
+        if args.with_rates:
+            cmd.append("--with-rates")
         if motion == "designed":
             cmd += ["--motion", os.path.join(args.design, "excitation.csv")]
         else:
@@ -76,6 +80,8 @@ def main():
     ap.add_argument("--estimate", default="")
     ap.add_argument("--duration", type=float, default=10.0)
     ap.add_argument("--torque-noise", type=float, default=0.02)
+    ap.add_argument("--with-rates", action="store_true",
+                    help="logs with exact rates (a design made with excite --angle-noise 0)")
     ap.add_argument("--out", default="results/excite_mc")
     ap.add_argument("--motions", default="designed,multisine",
                     help="which motions to run (designed, multisine or both)")

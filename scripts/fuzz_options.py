@@ -48,7 +48,7 @@ BASE = {
     "study": [PAPER, "--tasks", TASKS, "--sweep", "friction.coulomb=0.1:0.12:2", "--no-plots",
               "--out", "{out}"],
     "design": [PAPER, "--tasks", TASKS, "--vary", "mechanism.point_p=0.18:0.22", "--max-designs",
-               "2", "--no-plots", "--out", "{out}"],
+               "3", "--no-plots", "--out", "{out}"],
     "accuracy": [PAPER, *SHORT, "--out", "{out}"],
     "stress": ["--out", "{out}"],
 }
@@ -73,6 +73,7 @@ VALID = {
     ("identify", "--min-rate"): {"0": "the default"},
     ("excite", "--max-evaluations"): {"0": "0 = the default budget"},
     ("excite", "--torque-noise"): {"0": "n/a"},
+    ("excite", "--angle-noise"): {"0": "rates logged exactly: the torque noise's std alone"},
     ("excite", "--min-reversals"): {"0": "no reversal requirement"},
     ("excite", "--ramp"): {"0": "no ramp"},
     ("excite", "--drift-spread"): {"0": "starts without drift"},

@@ -10,8 +10,10 @@
 #include <ceres/jet.h>
 #include <Eigen/Dense>
 
+#include "fivebar/identification/rates.h"
 #include "fivebar/model/inertial.h"
 #include "jet_dynamics.h"
+#include "noise_model.h"
 
 namespace fivebar::identification {
 namespace {
@@ -572,6 +574,272 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
                            : std::sqrt(std::max(0.0, out->covariance(i, i)));
     if (dp.nominal[i] != 0) out->relative_std[i] = out->std_dev[i] / std::abs(dp.nominal[i]);
   }
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// The std identify reports: errors in variables at the window it chooses
+
+namespace {
+
+/// identify's window rules (stage_window.cc, stage_smoothing_bias.cc): a torque residual this
+/// much above the noise level is smoothing bias, and a coefficient's bias may be this fraction
+/// of its std
+constexpr double kWindowExcess = 0.04;
+constexpr double kBiasFraction = 0.2;
+
+/// What one sample of the motion gives the prediction: J (2 x P), the kinematic Jacobian D of
+/// the torques (noise_model.h) and the joints' relative rates.
+struct EivSample {
+  Eigen::MatrixXd J;
+  Eigen::Matrix<double, 2, 6> D;
+  std::array<double, kJoints> w{};
+};
+
+/// The prediction at one half-window m: the samples it keeps, the std and the bias of the
+/// coefficients, the expected torque residual over its noise level.
+struct WindowPrediction {
+  Eigen::MatrixXd covariance;
+  Eigen::VectorXd bias;
+  double residual_ratio = 1;
+  bool ok = false;
+};
+
+/// Savitzky-Golay taps of a centred window of half-width m (savitzky_golay_taps)
+struct Taps {
+  int m = 0;
+  std::vector<double> d1, d2;
+};
+
+class EivPredictor {
+ public:
+  EivPredictor(const ExcitationReport& r, std::vector<EivSample> samples, double torque_noise,
+               double angle_noise)
+      : r_(r), s_(std::move(samples)) {
+    const int n = static_cast<int>(r.t.size());
+    dt_ = (r.t.back() - r.t.front()) / std::max(1, n - 1);
+    for (int c = 0; c < kDof; ++c) {
+      noise_.angle[c] = angle_noise;
+      noise_.torque[c] = torque_noise;
+    }
+    // prefix counts of the sample steps over which some joint's rate changes sign
+    reversals_.assign(n + 1, 0);
+    for (int i = 0; i < n; ++i) {
+      bool flip = false;
+      for (int k = 0; i > 0 && k < kJoints; ++k) flip = flip || (s_[i].w[k] > 0) != (s_[i - 1].w[k] > 0);
+      reversals_[i + 1] = reversals_[i] + (flip ? 1 : 0);
+    }
+  }
+  double dt() const { return dt_; }
+  int size() const { return static_cast<int>(r_.t.size()); }
+
+  /// the bias of the filter's rates and accelerations on the exact motion at sample i, and the
+  /// residual's sensitivities to the angle noise
+  void at(int i, const Taps& taps, Eigen::Vector2d* dM, detail::Sensitivity* sens) const {
+    const int lo = i - taps.m;
+    const std::vector<double>&d1 = taps.d1, &d2 = taps.d2;
+    double e[4] = {0, 0, 0, 0};
+    for (size_t k = 0; k < d1.size(); ++k) {
+      const MotionState& q = r_.states[lo + k];
+      e[0] += d1[k] * q.th1, e[1] += d1[k] * q.th2, e[2] += d2[k] * q.th1, e[3] += d2[k] * q.th2;
+    }
+    const MotionState& q = r_.states[i];
+    const Eigen::Vector4d delta(e[0] - q.w1, e[1] - q.w2, e[2] - q.a1, e[3] - q.a2);
+    *dM = s_[i].D.rightCols<4>() * delta;
+    *sens = detail::sensitivity(i, lo, d1, d2, detail::RateSource::kFromAngles, noise_, s_[i].D);
+  }
+
+  /// the filter of half-window m at a centred sample: the same at every one (uniform grid)
+  Taps taps(int m) const {
+    Taps out;
+    out.m = m;
+    SgOptions sg;
+    sg.half_window_s = m * dt_;
+    int lo = 0;
+    savitzky_golay_taps(r_.t, m, sg, &lo, &out.d1, &out.d2);
+    return out;
+  }
+
+  /// the expected torque residual over identify's noise level at half-window m (its residual
+  /// rule: noise and bias add in quadrature), over about 2000 samples with a centred window
+  double residual_ratio(int m) const {
+    const Taps sg = taps(m);
+    const int n = size(), step = std::max(1, (n - 2 * m) / 2000);
+    Eigen::Vector2d b2 = Eigen::Vector2d::Zero(), v = b2;
+    int count = 0;
+    for (int i = m; i < n - m; i += step, ++count) {
+      Eigen::Vector2d dM;
+      detail::Sensitivity sens;
+      at(i, sg, &dM, &sens);
+      b2 += dM.cwiseAbs2();
+      v += detail::propagated_variance(sens);
+    }
+    double ratio = 1;
+    for (int j = 0; j < kActuators && count > 0; ++j) {
+      const double floor2 = noise_.torque[j] * noise_.torque[j] + v(j) / count;
+      ratio = std::max(ratio, std::sqrt(1 + b2(j) / count / floor2));
+    }
+    return ratio;
+  }
+
+  /// covariance and bias of the coefficients over the samples whose window of half-width
+  /// `exclude` spans no slip reversal, with rates from half-window m
+  WindowPrediction predict(int m, int exclude) const {
+    const Taps sg = taps(m);
+    WindowPrediction out;
+    const int n = size(), P = static_cast<int>(s_.front().J.cols());
+    std::vector<int> used;
+    for (int i = m; i < n - m; ++i) {
+      const int a = std::max(0, i - exclude), b = std::min(n - 1, i + exclude);
+      if (reversals_[b] - reversals_[a] == 0) used.push_back(i);
+    }
+    if (static_cast<int>(used.size()) <= P) return out;
+    Eigen::MatrixXd J(2 * used.size(), P);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(P);
+    std::vector<detail::Sensitivity> sens(used.size());
+    for (size_t u = 0; u < used.size(); ++u) {
+      Eigen::Vector2d dM;
+      at(used[u], sg, &dM, &sens[u]);
+      J.middleRows(2 * u, 2) = s_[used[u]].J;
+      g += s_[used[u]].J.transpose() * dM;  // one Gauss-Newton step: the residual moves by -dM
+    }
+    const Eigen::MatrixXd H = J.transpose() * J;
+    if (!H.allFinite()) return out;
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+    const Eigen::VectorXd ev = es.eigenvalues();
+    if (!(ev(0) > 1e-14 * ev(P - 1))) return out;  // the samples do not determine them all
+    const Eigen::MatrixXd Hinv =
+        es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+    out.covariance = Hinv * detail::score_covariance(J, sens, noise_, n) * Hinv;
+    out.bias = -Hinv * g;
+    out.ok = out.covariance.allFinite();
+    return out;
+  }
+
+ private:
+  const ExcitationReport& r_;
+  std::vector<EivSample> s_;
+  detail::SensorNoise noise_;
+  std::vector<int> reversals_;
+  double dt_ = 1;
+};
+
+/// The largest |bias| / std over the friction coefficients of a prediction.
+double bias_in_std(const WindowPrediction& p, int friction) {
+  double worst = 0;
+  for (int i = 0; i < friction; ++i) {
+    const double sd = std::sqrt(std::max(0.0, p.covariance(i, i)));
+    if (sd > 0) worst = std::max(worst, std::abs(p.bias(i)) / sd);
+  }
+  return worst;
+}
+
+/// v to 3 significant digits
+std::string digits3(double v) {
+  std::ostringstream o;
+  o.precision(3);
+  o << v;
+  return o.str();
+}
+
+/// std and relative std of a covariance (NaN relative std for a zero nominal value).
+void set_std(const DesignParameters& dp, const Eigen::MatrixXd& C, ExcitationReport* r) {
+  for (int i = 0; i < dp.size(); ++i) {
+    r->std_dev[i] = std::sqrt(std::max(0.0, C(i, i)));
+    r->relative_std[i] = dp.nominal[i] != 0 ? r->std_dev[i] / std::abs(dp.nominal[i]) : kNaN;
+  }
+}
+
+/// The Jacobians J and D and the joint rates at every sample of the motion of `r` (exact); the
+/// first sample that fails, named by its time.
+Status eiv_samples(const Params<double>& scene, const DesignParameters& dp,
+                   const std::function<Loads<double>(double)>& loads, const ExcitationReport& r,
+                   std::vector<EivSample>* samples) {
+  const int n = static_cast<int>(r.t.size());
+  samples->clear();
+  samples->resize(n);
+  std::vector<Status> status(n);
+  const std::vector<double> x = dp.layout.extract(scene.friction);
+  parallel_for(n, [&](int i) {
+    const MotionState& q = r.states[i];
+    SampleTerms terms;
+    status[i] = sample_terms(scene, dp, loads(r.t[i]), q, nullptr, &terms);
+    if (!status[i].ok()) return;
+    Sample s;
+    s.t = r.t[i], s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
+    s.loads = loads(r.t[i]);
+    if (!detail::kinematic_jacobian(scene, dp.layout, x.data(), s, EvalOptions{}, &(*samples)[i].D)) {
+      status[i] = Status::Error(StatusCode::kSolverFailed,
+                                "the torques' derivative along the motion failed");
+      return;
+    }
+    (*samples)[i].J = terms.J;
+    (*samples)[i].w = terms.w;
+  });
+  for (int i = 0; i < n; ++i) {
+    if (!status[i].ok()) {
+      return Status::Error(status[i].code, "at t = " + digits3(r.t[i]) + " s: " + status[i].message);
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status predict_identified_std(const Params<double>& scene, const DesignParameters& dp,
+                              const std::function<Loads<double>(double)>& loads,
+                              double torque_noise, double angle_noise, ExcitationReport* r) {
+  const int n = static_cast<int>(r->t.size());
+  r->torque_only_std = r->std_dev;
+  if (!(angle_noise > 0) || n < 8 || dp.size() == 0) return Status::Ok();
+  for (double v : r->std_dev) {
+    if (!std::isfinite(v)) return Status::Ok();  // an unidentifiable direction stays so
+  }
+  std::vector<EivSample> samples;
+  const Status st = eiv_samples(scene, dp, loads, *r, &samples);
+  if (!st.ok()) return st;
+  const EivPredictor eiv(*r, std::move(samples), torque_noise, angle_noise);
+  const std::vector<int> cand = stages::window_candidates(n, eiv.dt(), SgOptions{}.order);
+  // the residual rule: the largest candidate within the excess (scanned until the bias clearly
+  // dominates), one below it past the second
+  std::vector<double> ratio;
+  for (size_t k = 0; k < cand.size(); ++k) {
+    ratio.push_back(eiv.residual_ratio(cand[k]));
+    if (k >= 2 && ratio[k] > 1.5 * *std::min_element(ratio.begin(), ratio.begin() + k)) break;
+  }
+  const double best = std::max(1.0, *std::min_element(ratio.begin(), ratio.end()));
+  int rule = 0;
+  for (size_t k = 0; k < ratio.size(); ++k) {
+    if (ratio[k] <= best * (1 + kWindowExcess)) rule = static_cast<int>(k);
+  }
+  if (rule > 1) --rule;
+  // the bias rule: from the residual rule's window down, the first within kBiasFraction std
+  // (none: the residual rule's)
+  int pick = rule;
+  WindowPrediction chosen = eiv.predict(cand[rule], cand[rule]);
+  std::string table;
+  for (int k = rule; k >= 1 && chosen.ok; --k) {
+    WindowPrediction p = k == rule ? chosen : eiv.predict(cand[k], cand[k]);
+    if (!p.ok) break;
+    const double b = bias_in_std(p, dp.friction);
+    table += (table.empty() ? "" : ", ") + std::to_string(cand[k]) + ": " + digits3(b);
+    if (b <= kBiasFraction) {
+      pick = k;
+      chosen = std::move(p);
+      break;
+    }
+  }
+  if (!chosen.ok) {
+    return Status::Error(StatusCode::kSolverFailed,
+                         "the errors-in-variables covariance could not be formed (the samples "
+                         "away from the slip reversals do not determine the parameters)");
+  }
+  r->covariance = chosen.covariance;
+  set_std(dp, chosen.covariance, r);
+  r->sg_half_window = cand[pick];
+  r->window_choice = "half-window " + std::to_string(cand[rule]) +
+                     " samples by the residual rule (expected ratio " + digits3(ratio[rule]) +
+                     "), " + std::to_string(cand[pick]) + " by the bias rule (|bias| / std: " + table + ")";
   return Status::Ok();
 }
 

@@ -289,3 +289,16 @@ std::vector<Glitch> runs_or_steps(const TorqueLog& log, const char* name, std::v
 }
 
 }  // namespace fivebar::identification::glitches
+
+namespace fivebar::identification {
+
+int first_angle_step(const std::vector<double>& t, const std::vector<double>& x, double* size,
+                     double sigmas) {
+  std::vector<double> sizes;
+  const std::vector<int> steps = glitches::find_steps(t, x, sigmas, &sizes);
+  if (steps.empty()) return -1;
+  *size = sizes.front();
+  return steps.front();
+}
+
+}  // namespace fivebar::identification

@@ -28,12 +28,18 @@ bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layo
 
 Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source, const SgOptions& sg,
                         const SensorNoise& noise, const Eigen::Matrix<double, 2, 6>& D) {
-  Sensitivity out;
-  // r = tau - M: d r / d v = -D[:, v]; v = 0,1 theta, 2,3 omega, 4,5 alpha
-  auto col = [&](int v) { return Eigen::Vector2d(-D(0, v), -D(1, v)); };
   int lo = i;
   std::vector<double> d1, d2;
   if (source != RateSource::kLogged) savitzky_golay_taps(t, i, sg, &lo, &d1, &d2);
+  return sensitivity(i, lo, d1, d2, source, noise, D);
+}
+
+Sensitivity sensitivity(int i, int lo, const std::vector<double>& d1, const std::vector<double>& d2,
+                        RateSource source, const SensorNoise& noise,
+                        const Eigen::Matrix<double, 2, 6>& D) {
+  Sensitivity out;
+  // r = tau - M: d r / d v = -D[:, v]; v = 0,1 theta, 2,3 omega, 4,5 alpha
+  auto col = [&](int v) { return Eigen::Vector2d(-D(0, v), -D(1, v)); };
   for (int c = 0; c < kDof; ++c) {
     if (source == RateSource::kFromAngles) {
       // the angle noise of the window: through omega (d1), alpha (d2) and, at i, theta itself

@@ -41,6 +41,12 @@ struct Sensitivity {
 Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source, const SgOptions& sg,
                         const SensorNoise& noise, const Eigen::Matrix<double, 2, 6>& D);
 
+/// The same with the filter's taps at i given (savitzky_golay_taps: the window starts at log
+/// index lo; unused for logged rates): on a uniform grid every centred window has the same taps.
+Sensitivity sensitivity(int i, int lo, const std::vector<double>& d1, const std::vector<double>& d2,
+                        RateSource source, const SensorNoise& noise,
+                        const Eigen::Matrix<double, 2, 6>& D);
+
 /// Variance of the residual of each actuator that the noise in `s` produces.
 Eigen::Vector2d propagated_variance(const Sensitivity& s);
 
@@ -51,3 +57,12 @@ Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sen
                                  const SensorNoise& noise, int n);
 
 }  // namespace fivebar::identification::detail
+
+namespace fivebar::identification::stages {
+
+/// The Savitzky-Golay half-windows [samples] identify's window choice tries on a log of n
+/// samples of step dt (stage_window.cc; declared here too for the excitation design's prediction
+/// of that choice, which needs no Ceres).
+std::vector<int> window_candidates(int n, double dt, int order);
+
+}  // namespace fivebar::identification::stages

@@ -249,7 +249,12 @@ TorqueDesignResult design_torque_excitation(const Params<double>& scene,
   std::vector<TorqueCandidate> first = evaluate_all(starts, eval);
   out.evaluations = static_cast<int>(first.size());
   double vbest = kInf;
+  out.best_unconstrained.objective = kInf;
+  auto track = [&](const TorqueCandidate& c) {
+    if (c.status.ok() && c.objective < out.best_unconstrained.objective) out.best_unconstrained = c;
+  };
   for (size_t i = 0; i < first.size(); ++i) {
+    track(first[i]);
     const double v = violation(first[i], o);
     out.start_objectives.push_back(first[i].objective);
     out.start_feasible.push_back(v == 0);
@@ -274,6 +279,7 @@ TorqueDesignResult design_torque_excitation(const Params<double>& scene,
     out.evaluations += lambda;
     bool improved = false;
     for (TorqueCandidate& c : cs) {
+      track(c);
       const double vc = violation(c, o);
       if (better(c, vc, out.best, vbest)) {
         out.best = std::move(c);

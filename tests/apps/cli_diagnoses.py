@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """End-to-end check (ctest apps.cli_diagnoses): a run that fails names the real cause before the
 model's message. A motion file in degrees and one with a 3 rad jump (inverse: exit 2 naming
-them, not "r_k * mu too large"; a warning naming them where the model runs on them); a load expression that leaves its domain mid-run (simulate:
+them, not "r_k * mu too large"; a warning naming them where the model runs on them, and a 0.5 rad
+step found by identify's step check); a load expression that leaves its domain mid-run (simulate:
 exit 3 naming the load and the time, without running to simulation.max_steps); a run into a
 near-singular pose (simulate: exit 3 naming the pose and the time); an identify log
 whose torques carry the opposite sign (exit 3, no delay reported; --flip-torque-sign fits it, a
@@ -89,12 +90,17 @@ expect(2, r"jump.csv: theta1: jumps by 3.0\d* rad between t = 0.499 and 0.5 s",
 small = [(i * 0.002, 90 + 10 * math.sin(2 * math.pi * i * 0.002)) for i in range(501)]
 for name, text in (("deg_small.csv", "".join("%g,%.12g,%.12g\n" % (t, a, a) for t, a in small)),
                    ("jump_small.csv", "".join("%g,%.12g,%.12g\n" % (t, math.radians(a) + (3 if t >= 0.5 else 0),
+                                                                   math.radians(a)) for t, a in small)),
+                   # a step below the 1 rad jump check: identify's step check of a logged angle
+                   # names it (its differences read a rate noise of 100 rad/s, and every row held)
+                   ("step_small.csv", "".join("%g,%.12g,%.12g\n" % (t, math.radians(a) + (0.5 if t >= 0.5 else 0),
                                                                    math.radians(a)) for t, a in small))):
     with open(os.path.join(WORK, name), "w") as f:
         f.write("t,theta1,theta2\n" + text)
     p = subprocess.run([FIVEBAR, "inverse", PAPER, "--motion", os.path.join(WORK, name), "--out", out,
                         "--no-plots"], capture_output=True, text=True)
-    pattern = "angles look like degrees" if name.startswith("deg") else r"theta1: jumps by 3 rad"
+    pattern = {"deg": "angles look like degrees", "jum": r"theta1: jumps by 3 rad",
+               "ste": r"theta1: steps by 0.5 rad off the motion's trend between t = 0.498 and 0.5 s"}[name[:3]]
     if p.returncode != 0 or not re.search("fivebar: warning: .*%s.*: " % name + pattern, p.stderr):
         failures.append("inverse %s: exit %d, %s (expected 0 and a warning /%s/)" %
                         (name, p.returncode, p.stderr.strip(), pattern))

@@ -6,7 +6,9 @@ Usage: cli_excite.py FIVEBAR PAPER_YAML WORK_DIR
 Bad input exits 2 with one error line and writes nothing; an unreachable reversal count exits 3
 with a status; a small design honours its constraints (torque limit, singularity margin, angle
 range, reversals) on the 1 kHz grid, its rates and accelerations are those of its angles, and
-synth-log --motion along it reproduces its torques.
+synth-log --motion along it reproduces its torques. On the light mechanism: the predicted std is
+identify's on a log along the design (within 1.5x), and the default --min-reversals is named as
+what makes the design unusable.
 """
 import json
 import math
@@ -213,6 +215,44 @@ for family in ("torque", "fourier"):
 expect_error(3, "status std_too_large", ["excite", LIGHT, "--out", os.path.join(WORK, "light_absurd"),
                                          "--torque-limit", "0.2", "--duration", "10", "--family",
                                          "fourier", "--no-plots"], os.path.join(WORK, "light_absurd"))
+
+# the predicted std is what identify reports for a log along the design: its errors-in-variables
+# std (the angle noise through the rates it estimates), not the torque noise's alone (which on
+# the light mechanism's 10 s design was 7 times smaller than identify's)
+eiv = os.path.join(WORK, "light_eiv")
+code, _, err = run(["excite", LIGHT, "--out", eiv, "--torque-limit", "0.2", "--duration", "5",
+                    "--min-reversals", "0", "--no-plots", "--no-baseline", "--max-evaluations", "40"])
+if code != 0:
+    failures.append("light design for the std check: exit %d: %s" % (code, err))
+else:
+    predicted = {r["name"]: r for r in read_csv(os.path.join(eiv, "predicted_std.csv"))}
+    if any(not float(r["torque_noise_std"]) <= float(r["std"]) for r in predicted.values()):
+        failures.append("predicted std below the torque noise's alone: %s" % predicted)
+    log, fit = os.path.join(WORK, "light_eiv.csv"), os.path.join(WORK, "light_eiv_fit")
+    code, _, err = run(["synth-log", LIGHT, "--motion", os.path.join(eiv, "excitation.csv"), "--seed", "1",
+                        "--out", log])
+    code2, _, err2 = run(["identify", LIGHT, "--log", log, "--no-plots", "--no-validation", "--out", fit])
+    if code != 0 or code2 != 0:
+        failures.append("log and fit along the light design: exit %d, %d: %s %s" % (code, code2, err, err2))
+    else:
+        for p in json.load(open(os.path.join(fit, "identification.json")))["parameters"]:
+            ratio = float(predicted[p["name"]]["std"]) / p["std"]
+            if not 1 / 1.5 < ratio < 1.5:
+                failures.append("%s: predicted std %s, identify's %g" % (p["name"], predicted[p["name"]]["std"], p["std"]))
+
+# the default --min-reversals 6 on the light mechanism at 0.2 N m: only small motions reverse
+# every joint that often; the status names what the constraint costs and what to change
+rev6 = os.path.join(WORK, "light_rev6")
+code, _, err = run(["excite", LIGHT, "--out", rev6, "--torque-limit", "0.2", "--duration", "10",
+                    "--no-plots", "--no-baseline"])
+for part in ("status std_too_large", "--min-reversals 6 costs it: within --torque-limit 0.2 N m the "
+             "motions found that reverse every joint 6 times are small, while the best motion found that "
+             "reverses fewer", "a lower --min-reversals (0 accepts any) or a higher --torque-limit"):
+    if code != 3 or part not in err:
+        failures.append("light design at the default --min-reversals: exit %d, %r (expected 3 and '%s')"
+                        % (code, err, part))
+if os.path.exists(os.path.join(rev6, "excitation.csv")):
+    failures.append("light design at the default --min-reversals wrote excitation.csv")
 
 # synth-log's multi-sine is the same fit: within --torque-limit on the light mechanism; the limit
 # is for the multi-sine only, and > 0

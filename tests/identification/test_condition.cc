@@ -369,6 +369,21 @@ TEST(Glitch, AStepInAnAngleIsRefusedNamingTheLine) {
                   HasSubstr("steps by 0.1"), HasSubstr("encoder slip"))));
 }
 
+// the same check of one angle series (first_angle_step, which inverse applies to a motion
+// file): the step's first sample and its size; none on the noisy log or its noise-free motion
+TEST(Glitch, TheStepCheckOfOneSeriesFindsTheStepOnly) {
+  const TorqueLog noisy = paper_log(1.0), exact = paper_log(1.0, 0.0, 0.0);
+  double size = 0;
+  for (const TorqueLog* l : {&noisy, &exact}) {
+    EXPECT_EQ(first_angle_step(l->t, l->theta1, &size), -1);
+    EXPECT_EQ(first_angle_step(l->t, l->theta2, &size), -1);
+    std::vector<double> stepped = l->theta2;
+    for (int i = 500; i < l->size(); ++i) stepped[i] += 0.05;
+    EXPECT_EQ(first_angle_step(l->t, stepped, &size), 500);
+    EXPECT_NEAR(size, 0.05, 1e-3);
+  }
+}
+
 // one spike in a logged acceleration, if kept, gives Coulomb 0 at its bound
 TEST(Glitch, AnAccelerationSpikeIsRejectedByLine) {
   SynthOptions so = testing::log_options(1.0, 0.02, 1e-5, 1);

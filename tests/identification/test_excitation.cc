@@ -298,5 +298,50 @@ TEST(Excitation, MultisineFitRunsOnALightMechanismWithinTheLimit) {
   EXPECT_GT(peak, 0.1);  // scaled to the limit, not far below it
 }
 
+
+// The std identify reports for a log along a motion (predict_identified_std): the torque noise's
+// alone without angle noise; with it, never less, growing with the angle noise, and back near
+// the torque noise's where that noise dominates. Motion: the light mechanism's multi-sine.
+TEST(Excitation, PredictedStdAddsTheAngleNoiseThroughTheRates) {
+  const Params<double> light = light_params();
+  SynthOptions so;
+  so.duration = 4;
+  so.multisine = true;
+  so.torque_limit = 0.2;
+  so.with_rates = true;
+  const SynthResult log = synthesize_log(light, light_loads(), paper_initial(), so);
+  ASSERT_TRUE(log.status.ok()) << log.status.message;
+  std::vector<MotionState> states;
+  for (int i = 0; i < log.log.size(); ++i) {
+    const TorqueLog& l = log.log;
+    states.push_back({l.theta1[i], l.theta2[i], l.omega1[i], l.omega2[i], l.alpha1[i], l.alpha2[i]});
+  }
+  const DesignParameters dp = design_parameters(light, DesignGroups{});
+  auto predicted = [&](double torque_noise, double angle_noise) {
+    ExcitationReport r;
+    EXPECT_TRUE(evaluate_motion(light, dp, light_loads(), log.log.t, states, torque_noise, &r).ok());
+    const Status st = predict_identified_std(light, dp, light_loads(), torque_noise, angle_noise, &r);
+    EXPECT_TRUE(st.ok()) << st.message;
+    return r;
+  };
+  const ExcitationReport exact = predicted(0.02, 0);
+  EXPECT_EQ(exact.sg_half_window, 0);
+  const ExcitationReport noisy = predicted(0.02, 1e-5), noisier = predicted(0.02, 4e-5);
+  const ExcitationReport loud = predicted(1.0, 1e-5);
+  EXPECT_GT(noisy.sg_half_window, 0);
+  EXPECT_FALSE(noisy.window_choice.empty());
+  for (int i = 0; i < dp.size(); ++i) {
+    EXPECT_EQ(exact.std_dev[i], exact.torque_only_std[i]);
+    EXPECT_EQ(noisy.torque_only_std[i], exact.std_dev[i]);
+    EXPECT_TRUE(std::isfinite(noisy.std_dev[i]));
+    EXPECT_GE(noisy.std_dev[i], noisy.torque_only_std[i]) << dp.names[i];
+    EXPECT_GT(noisier.std_dev[i], noisy.std_dev[i]) << dp.names[i];
+    // torque noise of 1 N m: the angle noise's share is small (the samples the fit leaves out
+    // near the slip reversals and at the ends cost a little)
+    EXPECT_NEAR(loud.std_dev[i] / loud.torque_only_std[i], 1.0, 0.15) << dp.names[i];
+    EXPECT_NEAR(noisy.relative_std[i], noisy.std_dev[i] / std::abs(dp.nominal[i]), 1e-15);
+  }
+}
+
 }  // namespace
 }  // namespace fivebar::identification

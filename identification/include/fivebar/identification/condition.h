@@ -43,6 +43,14 @@ struct Glitch {
   double sigmas = 0;    ///< |value - expected| in robust standard deviations
 };
 
+/// The first step of an angle series between two samples that is no motion (an encoder slip or
+/// reset, a gap, a glitch): the check identify applies to each logged angle (an isolated spike of
+/// the first differences beyond `sigmas` robust std of their leave-one-out deviation and beyond
+/// the floor of the motion's own third differences). Returns the index of the first sample
+/// after the step, with its size beyond the trend in *size [the series' unit]; -1 when none.
+int first_angle_step(const std::vector<double>& t, const std::vector<double>& x, double* size,
+                     double sigmas = ConditionOptions{}.glitch_sigmas);
+
 /// The log after conditioning, and what was done to it.
 struct ConditionedLog {
   TorqueLog log;               ///< unwrapped angles, glitches replaced by their interpolation

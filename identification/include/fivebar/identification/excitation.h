@@ -139,6 +139,9 @@ struct ExcitationOptions {
   double aggregation_sharpness = 300;  ///< rho of the KS aggregation (overestimate <= ln(n)/rho)
   double singular_margin = kMotionSingularMargin;  ///< |sin(th4 - th3)| >= this
   double torque_noise = 0.02;     ///< std of the torque noise [N m] (the Fisher's sigma)
+  /// std of the angle noise of the log [rad] (synth-log's default): identify estimates the rates
+  /// from the angles, and this noise through them enters its std (predict_identified_std)
+  double angle_noise = 1e-5;
   double rate_hz = 1000;          ///< the log's sampling rate (the Fisher is scaled to it)
   /// optional angle ranges [rad]: lo < hi, NaN when absent
   std::array<double, 2> theta_lo{NAN, NAN}, theta_hi{NAN, NAN};
@@ -215,8 +218,15 @@ struct ExcitationReport {
   std::vector<MotionState> states;
   std::vector<double> M1, M2;
   Eigen::MatrixXd fisher;      ///< unscaled, 1 / sigma^2 sum J^T J
-  Eigen::MatrixXd covariance;  ///< its (pseudo-)inverse
+  /// its (pseudo-)inverse; after predict_identified_std, the errors-in-variables covariance
+  Eigen::MatrixXd covariance;
   std::vector<double> std_dev, relative_std;  ///< relative: std / |nominal| (NaN for 0)
+  /// the std of the torque noise alone (the Fisher's), kept by predict_identified_std
+  std::vector<double> torque_only_std;
+  /// predict_identified_std: the Savitzky-Golay half-window [samples] identify's rules choose
+  /// on this motion (0: not predicted), and how it was chosen
+  int sg_half_window = 0;
+  std::string window_choice;
   std::array<int, kJoints> reversals{};
   double peak_torque = 0, peak_time = 0, min_sine = 1, condition_number = 0, log_det_scaled = 0;
   std::array<double, 2> theta_min{}, theta_max{};
@@ -228,6 +238,22 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
                        const std::function<Loads<double>(double)>& loads,
                        const std::vector<double>& t, const std::vector<MotionState>& states,
                        double torque_noise, ExcitationReport* out);
+
+/// What identify reports for a log along the motion of `r` (evaluate_motion's, on a uniform
+/// grid) whose rates and accelerations it estimates from angles of noise `angle_noise` [rad]
+/// (torque noise `torque_noise` [N m]): the errors-in-variables covariance H^-1 S H^-1 of
+/// noise_model.h (H = sum J^T J over the samples the fit uses, S the score covariance of the
+/// torque noise and of the angle noise through the Savitzky-Golay rates), at the half-window
+/// identify's rules choose in expectation: the largest whose smoothing bias on the torques stays
+/// within its residual rule's 4 % of the noise level (one candidate below, as identify backs
+/// off), then the largest up to it whose bias on the coefficients is within 0.2 of their std.
+/// The bias is exact here (the filter applied to the noise-free motion). Samples within the
+/// window of a slip reversal are left out as identify leaves them out. Replaces covariance,
+/// std_dev and relative_std; the Fisher's std goes to torque_only_std. With angle_noise 0 the
+/// std are the Fisher's.
+Status predict_identified_std(const Params<double>& scene, const DesignParameters& dp,
+                              const std::function<Loads<double>(double)>& loads,
+                              double torque_noise, double angle_noise, ExcitationReport* r);
 
 
 }  // namespace fivebar::identification

@@ -114,6 +114,9 @@ TorqueCandidate evaluate_tones(const Params<double>& scene, const sim::LoadFunct
 
 struct TorqueDesignResult {
   TorqueCandidate best;
+  /// the candidate of the lowest objective whatever its constraints (a run that failed aside):
+  /// when it is not `best`, what the constraints cost the design
+  TorqueCandidate best_unconstrained;
   int best_start = 0;  ///< the start the search went on from
   std::vector<double> start_objectives;
   std::vector<bool> start_feasible;
