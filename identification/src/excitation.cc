@@ -582,11 +582,8 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
 
 namespace {
 
-/// identify's window rules (stage_window.cc, stage_smoothing_bias.cc): a torque residual this
-/// much above the noise level is smoothing bias, and a coefficient's bias may be this fraction
-/// of its std
-constexpr double kWindowExcess = 0.04;
-constexpr double kBiasFraction = 0.2;
+using stages::kBiasFraction;  // identify's window rules (noise_model.h)
+using stages::kWindowExcess;
 
 /// What one sample of the motion gives the prediction: J (2 x P), the kinematic Jacobian D of
 /// the torques (noise_model.h) and the joints' relative rates.

@@ -231,11 +231,7 @@ Status first_failing_sample(const Fit& f, const std::vector<double>& x, const st
 /// fit, and a check that the model evaluates at every one at the start values (false: status).
 bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out);
 
-// ---- stage_window.cc ----
-
-/// Candidate half-windows [samples] of choose_window: from the polynomial's minimum to 50 ms,
-/// growing by 25 %, each fitting in the log's n samples (at least the minimum).
-std::vector<int> window_candidates(int n, double dt, int order);
+// ---- stage_window.cc (window_candidates: noise_model.h) ----
 
 /// The data-driven Savitzky-Golay half-window. Smoothing bias shows in the torque residual as
 /// an excess over the level the sensor noise explains (that level is predicted per window by

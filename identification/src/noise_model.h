@@ -61,8 +61,18 @@ Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sen
 namespace fivebar::identification::stages {
 
 /// The Savitzky-Golay half-windows [samples] identify's window choice tries on a log of n
-/// samples of step dt (stage_window.cc; declared here too for the excitation design's prediction
-/// of that choice, which needs no Ceres).
+/// samples of step dt: from the polynomial's minimum to 50 ms, growing by 25 %, each fitting in
+/// the n samples (at least the minimum). Defined in stage_window.cc; declared here, beside the
+/// noise model, for the excitation design's prediction of that choice too (no Ceres needed).
 std::vector<int> window_candidates(int n, double dt, int order);
+
+/// Window choice: a residual/noise ratio this much above the least one is smoothing bias
+/// (stage_window.cc; the excitation design predicts the same choice).
+constexpr double kWindowExcess = 0.04;
+
+/// The largest predicted smoothing bias of a friction coefficient, in its std, that a window may
+/// carry: a bias b moves the coverage of a 95 % interval from 0.95 to 0.945 at b = 0.2, 0.943 at
+/// 0.25 and 0.92 at 0.5 (stage_smoothing_bias.cc; the excitation design predicts the same choice)
+constexpr double kBiasFraction = 0.2;
 
 }  // namespace fivebar::identification::stages

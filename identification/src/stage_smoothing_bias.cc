@@ -14,11 +14,6 @@ namespace {
 /// span)
 constexpr double kReconSpan = 2.0;
 
-/// The largest predicted smoothing bias of a friction coefficient, in its std, that a window may
-/// carry: a bias b moves the coverage of a 95 % interval from 0.95 to 0.945 at b = 0.2, 0.943 at
-/// 0.25 and 0.92 at 0.5
-constexpr double kBiasFraction = 0.2;
-
 /// The inputs of the bias prediction at the preliminary fit (f.x, f.samples): the Jacobians, and
 /// the motion's high-order terms from local polynomials over +-reach samples, cut short (not
 /// below +-min_half) where they would span a slip reversal (the motion is not smooth across it).

@@ -6,9 +6,6 @@ namespace fivebar::identification::stages {
 
 namespace {
 
-/// window choice: a residual/noise ratio this much above the least one is smoothing bias
-constexpr double kWindowExcess = 0.04;
-
 /// the least ratio over the windows beyond which the estimated rates are biased at every window,
 /// when the smallest is the best (a frictionless scene's 6-10 s logs read 4.67, a smoothing bias
 /// that must not be blamed on the masses, the encoders or the torque sensors; a misfit of the
