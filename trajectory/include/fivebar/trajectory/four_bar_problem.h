@@ -1,0 +1,31 @@
+// The four-bar's trajectory problem (TrajectoryProblemT<FourBar>: one spline for the crank angle
+// th1, one torque row per node for M1 and the singular margin on |sin(th3 - th2)|). Its tasks
+// and their run: four_bar_tasks.h.
+#pragma once
+
+#include <array>
+
+#include "fivebar/model/four_bar.h"
+#include "fivebar/trajectory/problem.h"
+
+namespace fivebar::trajectory {
+
+template <>
+struct TrajectoryMechanism<FourBar> {
+  template <typename T>
+  static Status inverse(const FourBarParamsT<T>& p, const FourBarLoadsT<T>& L,
+                        const std::array<T, 3>& s, const EvalOptions& opt,
+                        FourBarEvaluationT<T>* ev) {
+    return four_bar_inverse(p, L, s[0], s[1], s[2], opt, ev);
+  }
+  template <typename T>
+  static std::array<T, 1> drives(const FourBarEvaluationT<T>& ev) {
+    return {ev.M1};
+  }
+};
+
+/// The four-bar's problem (instantiated once, in problem_four_bar.cc).
+extern template class TrajectoryProblemT<FourBar>;
+using FourBarTrajectoryProblem = TrajectoryProblemT<FourBar>;
+
+}  // namespace fivebar::trajectory
