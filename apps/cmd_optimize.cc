@@ -242,15 +242,7 @@ int run(const Args& args) {
   const int n = static_cast<int>(tasks.size());
   const std::vector<TaskResult> solved = trajectory::run_distributed(
       n, args.threads,
-      [&](int i) {
-        if (four_bar) {
-          const sim::FourBarLoadFunction loads = LoadExpressions(scene).four_bar_function();
-          return trajectory::run_four_bar_task(scene.four_bar, loads, tasks[i],
-                                               scene.initial.theta1, options);
-        }
-        const sim::LoadFunction loads = LoadExpressions(scene).function();  // this thread's
-        return trajectory::run_task(scene.params, loads, tasks[i], scene.initial, options);
-      },
+      [&](int i) { return run_scene_task(scene, tasks[i], options); },
       [&](int done, int count) {
         if (tty) std::cerr << "\roptimize: " << done << "/" << count << " tasks" << std::flush;
       });

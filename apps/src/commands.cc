@@ -387,26 +387,46 @@ std::vector<trajectory::TaskSpec> read_tasks(const std::string& path, bool four_
   return load_tasks(path, four_bar);
 }
 
+trajectory::TaskResult run_scene_task(const Scene& scene, const trajectory::TaskSpec& task,
+                                      const trajectory::BatchOptions& options,
+                                      const trajectory::TaskResult* warm) {
+  if (scene.type == MechanismType::kFourBar) {
+    const sim::FourBarLoadFunction loads = LoadExpressions(scene).four_bar_function();
+    return trajectory::run_four_bar_task(scene.four_bar, loads, task, scene.initial.theta1,
+                                         options);
+  }
+  const sim::LoadFunction loads = LoadExpressions(scene).function();
+  return trajectory::run_task(scene.params, loads, task, scene.initial, options, warm);
+}
+
 Status task_rows(const Scene& scene, const trajectory::TaskResult& r,
                  const trajectory::BatchOptions& options, std::vector<sim::Row>* optimal,
                  std::vector<sim::Row>* baseline) {
   const double step = std::min(scene.options.output_step, r.duration / 10);
-  auto rows_of = [&](const auto& problem) {
-    const Status s1 = problem.rows(r.x.data(), step, optimal);
+  // rows(base, out): the rows of the result's motion, or of its minimum-jerk baseline
+  auto rows_of = [&](const auto& rows) {
+    const Status s1 = rows(false, optimal);
     if (!s1.ok()) return s1;
     baseline->clear();
     if (r.baseline_status != "ok" && r.baseline_status != "violates_constraints") {
       return Status::Ok();  // the baseline does not close: no rows
     }
-    const std::vector<double> x0 = problem.motion().minimum_jerk();
-    return problem.rows(x0.data(), step, baseline);
+    return rows(true, baseline);
   };
   if (scene.type == MechanismType::kFourBar) {
     const sim::FourBarLoadFunction loads = LoadExpressions(scene).four_bar_function();
-    return rows_of(trajectory::four_bar_problem_of(scene.four_bar, loads, r, options));
+    return rows_of([&](bool base, std::vector<sim::Row>* out) {
+      return trajectory::four_bar_rows(scene.four_bar, loads, r, options, base, step, out);
+    });
   }
   const sim::LoadFunction loads = LoadExpressions(scene).function();
-  return rows_of(trajectory::problem_of(scene.params, loads, r, options));
+  const trajectory::TrajectoryProblem problem =
+      trajectory::problem_of(scene.params, loads, r, options);
+  return rows_of([&](bool base, std::vector<sim::Row>* out) {
+    if (!base) return problem.rows(r.x.data(), step, out);
+    const std::vector<double> x0 = problem.motion().minimum_jerk();
+    return problem.rows(x0.data(), step, out);
+  });
 }
 
 }  // namespace fivebar::io

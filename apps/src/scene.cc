@@ -869,7 +869,7 @@ MechanismType read_type(const SceneReader& r, bool four_bar_ok) {
   if (type == "five_bar") return MechanismType::kFiveBar;
   if (!four_bar_ok) {
     r.fail("mechanism.type", "four_bar: this command runs five-bars only so far (simulate, "
-                             "inverse, synth-log, hold, animate and optimize run four-bars)" +
+                             "inverse, synth-log, hold, animate, optimize, study and design run four-bars)" +
                                  r.origin("mechanism.type"));
   }
   for (const std::string& key : r.keys()) {
@@ -1074,6 +1074,18 @@ void actuators_yaml(const Scene& s, std::ostringstream& y) {
   }
 }
 
+// actuators: the four-bar's one motor's winding data, when given
+void four_bar_windings_yaml(const MotorWindings& wd, std::ostringstream& y) {
+  const bool geared = wd.gear_ratio[0] != MotorWindings().gear_ratio[0];
+  if (!wd.present(1) && !geared) return;
+  y << "actuators:\n  M1: {";
+  if (wd.present(1)) {
+    y << "winding_resistance: " << num(wd.resistance[0])
+      << ", torque_constant: " << num(wd.torque_constant[0]) << ", ";
+  }
+  y << "gear_ratio: " << num(wd.gear_ratio[0]) << "}\n";
+}
+
 }  // namespace
 
 std::string scene_to_yaml(const Scene& s) {
@@ -1083,6 +1095,7 @@ std::string scene_to_yaml(const Scene& s) {
   if (four_bar) {
     mechanism_yaml(s, s.four_bar, y);
     friction_yaml(s.four_bar.friction, kFourBarJoints, y);
+    four_bar_windings_yaml(s.windings, y);
   } else {
     mechanism_yaml(s, s.params, y);
     friction_yaml(s.params.friction, kJoints, y);

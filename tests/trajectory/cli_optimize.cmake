@@ -4,7 +4,9 @@
 #   on stderr, each failed task's reason on stdout, and summary.csv kept;
 # - trajectory.csv carries non-zero W_in and W_ext; animation.html is written (no ghost without
 #   a baseline) and `fivebar animate` remakes it;
-# - study.csv names the reason of every design that cannot do every task.
+# - study.csv names the reason of every design that cannot do every task;
+# - a four-bar: a task solved with the four-bar's columns, a five-bar pose refused (exit 2), and
+#   a study over its crank length.
 # Inputs: -DFIVEBAR=<executable> -DSOURCE_DIR=<project root> -DWORK_DIR=<scratch directory>
 cmake_minimum_required(VERSION 3.22)
 file(REMOVE_RECURSE ${WORK_DIR})
@@ -167,3 +169,17 @@ expect("four-bar theta2: exit ${status}\n${out}${err}" status EQUAL 2)
 expect("four-bar theta2: stderr ${err}"
        err MATCHES "tasks.0.start.theta2: a five_bar key: a mechanism.type four_bar scene")
 expect("four-bar theta2: output written" NOT EXISTS ${WORK_DIR}/four_bar_bad/summary.csv)
+
+# study on the four-bar: two crank lengths, each design's task solved (the four-bar's tasks file)
+execute_process(COMMAND ${FIVEBAR} study ${crank_rocker} --tasks ${WORK_DIR}/four_bar.yaml
+                        --sweep mechanism.links.0.length=0.07:0.08:2 --no-plots
+                        --out ${WORK_DIR}/four_bar_study
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("four-bar study: exit ${status}\n${out}${err}" status EQUAL 0)
+file(STRINGS ${WORK_DIR}/four_bar_study/study.csv study)
+list(LENGTH study rows)
+expect("four-bar study.csv: ${rows} lines" rows EQUAL 3)
+list(GET study 1 first)
+list(GET study 2 second)
+expect("four-bar study.csv rows: ${first} / ${second}"
+       first MATCHES "^0,0.07,ok," AND second MATCHES "^1,0.08,ok,")

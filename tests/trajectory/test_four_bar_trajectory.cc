@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
+#include "fivebar/trajectory/four_bar_problem.h"
 #include "fivebar/trajectory/four_bar_tasks.h"
 
 namespace fivebar::trajectory {
@@ -82,6 +84,9 @@ TEST(FourBarTrajectory, SolvesATaskWithItsPhysicsOnTheRows) {
     scale = std::max({scale, std::abs(row.W_in), row.E_diss, std::abs(d_energy)});
   }
   EXPECT_LT(worst, 1e-4 * scale);  // the trapezoidal rule on a 1 ms grid
+  RecordProperty("energy_balance_relative", std::to_string(worst / scale));
+  RecordProperty("dissipated_energy", std::to_string(r.dissipated_energy));
+  RecordProperty("baseline_dissipated_energy", std::to_string(r.baseline_dissipated_energy));
   EXPECT_NEAR(rows.back().E_diss, r.dissipated_energy, 1e-3 * r.dissipated_energy);
   EXPECT_NEAR(rows.back().theta[0], 3 * M_PI / 2, 1e-12);
 }

@@ -89,7 +89,7 @@ Candidate refine(const StageFactory& factory, const Candidate& first, const Batc
                  const OptimizerOptions& optimizer, TaskResult* r);
 
 // The steps of a task's run that do not depend on the mechanism (batch.cc): run_task (the
-// five-bar) and run_four_bar_task (four_bar_batch.cc) chain them.
+// five-bar) and run_four_bar_task (problem_four_bar.cc) chain them.
 
 /// control points per joint of a result's spline (the options' when it has none)
 int result_control_points(const TaskResult& result, const BatchOptions& options);
@@ -118,7 +118,7 @@ void classify(const SolverStatus& solver, const ConstraintCheck& check,
 void judge_validation(const BatchOptions& options, TaskResult* r);
 
 /// The point of the mechanism whose miss the validation measures at pose q: the five-bar's C,
-/// the four-bar's P (four_bar_batch.cc); false where the mechanism cannot close.
+/// the four-bar's P (problem_four_bar.cc); false where the mechanism cannot close.
 bool validation_point(const Params<double>& params, const std::array<double, 2>& q,
                       std::array<double, 2>* c);
 bool validation_point(const FourBarParams& params, const std::array<double, 1>& q,

@@ -155,6 +155,14 @@ void add_objective_note(const trajectory::BatchOptions& options,
 /// poses); a malformed one throws InputError.
 std::vector<trajectory::TaskSpec> read_tasks(const std::string& path, bool four_bar = false);
 
+/// One task solved on the scene's mechanism (trajectory::run_task, or run_four_bar_task for a
+/// four-bar), under the scene's loads (built here: call it from the thread that runs the task).
+/// `warm`: the same task solved for a neighbouring design (run_task's warm start; a four-bar
+/// starts from its minimum-jerk motion).
+trajectory::TaskResult run_scene_task(const Scene& scene, const trajectory::TaskSpec& task,
+                                      const trajectory::BatchOptions& options,
+                                      const trajectory::TaskResult* warm = nullptr);
+
 /// The trajectory rows of a solved task and of its minimum-jerk baseline, on the scene's output
 /// step (at most a tenth of the task's duration). `baseline` is left empty when the baseline
 /// cannot close (TaskResult::baseline_status neither ok nor violates_constraints).

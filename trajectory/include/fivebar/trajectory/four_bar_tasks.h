@@ -1,13 +1,15 @@
 // The four-bar's tasks (a pose is the crank angle th1 or one coordinate of the coupler point P)
-// and one task's run, as run_task does it for the five-bar.
+// and one task's run, as run_task does it for the five-bar. Light: it does not include the
+// four-bar's model (four_bar.h); its problem is in four_bar_problem.h.
 #pragma once
 
 #include <array>
 #include <string>
+#include <vector>
 
+#include "fivebar/model/four_bar_params.h"
 #include "fivebar/sim/simulator.h"
 #include "fivebar/trajectory/batch.h"
-#include "fivebar/trajectory/four_bar_problem.h"
 #include "fivebar/trajectory/tasks.h"
 
 namespace fivebar::trajectory {
@@ -42,10 +44,10 @@ TaskResult run_four_bar_task(const FourBarParams& params, const sim::FourBarLoad
                              const TaskSpec& task, double initial_theta1,
                              const BatchOptions& options);
 
-/// The problem a four-bar result was solved on (to recompute its rows or torques).
-FourBarTrajectoryProblem four_bar_problem_of(const FourBarParams& params,
-                                             const sim::FourBarLoadFunction& loads,
-                                             const TaskResult& result,
-                                             const BatchOptions& options);
+/// The rows of trajectory.csv (TrajectoryProblemT::rows) of a solved four-bar result's motion,
+/// or with `baseline` of its minimum-jerk motion, on a grid of step `step` [s].
+Status four_bar_rows(const FourBarParams& params, const sim::FourBarLoadFunction& loads,
+                     const TaskResult& result, const BatchOptions& options, bool baseline,
+                     double step, std::vector<sim::Row>* out);
 
 }  // namespace fivebar::trajectory
