@@ -6,7 +6,8 @@
 // Energy-optimal rest-to-rest trajectories for every task of a tasks file:
 // summary.csv (one row per task, the minimum-jerk baseline beside each result), per task
 // DIR/<task>/trajectory.csv, baseline.csv, animation.html and figures. Under mpirun the tasks are
-// split across ranks and rank 0 writes the same files as a one-process run.
+// split across ranks and rank 0 writes the same files as a one-process run. A four-bar scene
+// (mechanism.type four_bar) is optimized on its crank angle (docs/optimize.md, "The four-bar").
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -301,7 +302,8 @@ void add_options(CLI::App* app, Args* args) {
   app->add_option("--quadrature-points", args->settings.quadrature_points,
                   "Gauss-Legendre points per knot span " + dflt(d.quadrature_points));
   app->add_option("--singular-margin", args->settings.singular_margin,
-                  "minimum |sin(theta4 - theta3)| along the motion " + dflt(d.singular_margin));
+                  "minimum |sin(theta4 - theta3)| (a four-bar's |sin(theta3 - theta2)|) along "
+                  "the motion " + dflt(d.singular_margin));
   app->add_option("--path-step", args->settings.path_step,
                   "grid step [rad] of the path search for a feasible start when the "
                   "minimum-jerk motion cannot close " + dflt(d.path_step));
