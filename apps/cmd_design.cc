@@ -32,6 +32,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/scene_mechanism.h"
 #include "fivebar/io/summary_csv.h"
 #include "fivebar/trajectory/batch.h"
 #include "fivebar/trajectory/design.h"
@@ -95,12 +96,14 @@ Vary parse_vary(const std::string& arg) {
 }
 
 // the scene's own value of a design key (the start of the search, clamped into the bounds)
-double scene_value(const Params<double>& p, const std::string& key, const std::string& arg) {
+template <class P>
+double mechanism_value(const P& p, const std::string& key, const std::string& arg) {
   if (key == "mechanism.ground_length") return p.ground_length;
   if (key == "mechanism.point_p") return p.point_p;
   const std::string prefix = "mechanism.links.";
+  const char last = static_cast<char>('0' + p.links.size() - 1);
   if (key.rfind(prefix, 0) == 0 && key.size() > prefix.size() + 2 &&
-      key[prefix.size() + 1] == '.' && key[prefix.size()] >= '0' && key[prefix.size()] <= '3') {
+      key[prefix.size() + 1] == '.' && key[prefix.size()] >= '0' && key[prefix.size()] <= last) {
     const Link<double>& l = p.links[key[prefix.size()] - '0'];
     const std::string f = key.substr(prefix.size() + 2);
     if (f == "length") return l.length;
@@ -110,6 +113,12 @@ double scene_value(const Params<double>& p, const std::string& key, const std::s
     if (f == "com_angle") return l.com_angle;
   }
   throw InputError(kFlags, "--vary " + arg, "'" + key + "' is not a number of the mechanism");
+}
+
+// the scene's value of a varied key (its mechanism's: the five-bar's or the four-bar's)
+double scene_value(const Scene& s, const std::string& key, const std::string& arg) {
+  return s.type == MechanismType::kFourBar ? mechanism_value(s.four_bar, key, arg)
+                                           : mechanism_value(s.params, key, arg);
 }
 
 // one evaluated design
@@ -167,7 +176,7 @@ class Search {
 std::optional<Scene> Search::scene_of(const std::vector<double>& values,
                                       std::string* error) const {
   try {
-    return load_scene(args_.scene.scene, sets(values));
+    return load_scene(args_.scene.scene, sets(values), /*four_bar_ok=*/true);
   } catch (const InputError& e) {
     *error = e.key() + ": " + e.reason();
     return std::nullopt;
@@ -192,10 +201,8 @@ Design Search::evaluate(const std::vector<double>& values, bool warm_start) {
   const int nt = static_cast<int>(tasks_.size()), b = warm_start ? best() : -1;
   if (scene) {
     d.results = trajectory::run_distributed(nt, args_.threads, [&](int i) {
-      const sim::LoadFunction loads = LoadExpressions(*scene).function();
       const TaskResult* warm = b >= 0 ? &history_[b].results[i] : nullptr;
-      return trajectory::run_task(scene->params, loads, tasks_[i], scene->initial,
-                                  with_windings(options_, scene->windings), warm);
+      return run_scene_task(*scene, tasks_[i], with_windings(options_, scene->windings), warm);
     });
     trajectory::broadcast_results(&d.results);
   } else {
@@ -364,16 +371,16 @@ void report(const Search& s, int best, const trajectory::BoxResult& box) {
 // the varied keys, their start values (the scene's, clamped into the bounds) and the checks of
 // the start design: it must assemble
 std::vector<double> start_values(const Args& args, const std::vector<Vary>& varies) {
-  const Scene base = load_scene(args.scene.scene, args.scene.sets);
+  const Scene base = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
   std::vector<double> x0;
   std::vector<std::string> sets = args.scene.sets;
   for (size_t k = 0; k < varies.size(); ++k) {
-    const double v = scene_value(base.params, varies[k].key, args.varies[k]);
+    const double v = scene_value(base, varies[k].key, args.varies[k]);
     x0.push_back(std::min(std::max(v, varies[k].lo), varies[k].hi));
     sets.push_back(varies[k].key + "=" + format_double(x0.back()));
   }
   try {
-    load_scene(args.scene.scene, sets);
+    load_scene(args.scene.scene, sets, /*four_bar_ok=*/true);
   } catch (const InputError& e) {
     throw InputError(kFlags, "--vary",
                      "the start design (the scene's values clamped into the bounds) is unusable: " +
@@ -401,7 +408,8 @@ int write_outputs(const Args& args, const Search& search, const trajectory::BoxR
                              std::to_string(search.history().size()) +
                              " designs; reasons in design_history.csv)");
   }
-  Scene scene = load_scene(args.scene.scene, search.sets(search.history()[best].values));
+  Scene scene = load_scene(args.scene.scene, search.sets(search.history()[best].values),
+                           /*four_bar_ok=*/true);
   write_text_file(out.file("scene.yaml"), scene_to_yaml(scene));
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -425,8 +433,9 @@ int run(const Args& args) {
                      "at least 2 k + 1 = " + std::to_string(2 * varies.size() + 1) + " needed");
   }
   const std::vector<double> x0 = start_values(args, varies);
-  Search search(args, varies, read_tasks(args.tasks),
-                batch_options(args.settings, load_scene(args.scene.scene, args.scene.sets).windings));
+  const Scene base = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
+  Search search(args, varies, read_tasks(args.tasks, base.type == MechanismType::kFourBar),
+                batch_options(args.settings, base.windings, layout_of(base).drives));
   std::vector<double> lo, hi;
   for (const Vary& v : varies) {
     lo.push_back(v.lo);

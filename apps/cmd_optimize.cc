@@ -6,7 +6,8 @@
 // Energy-optimal rest-to-rest trajectories for every task of a tasks file:
 // summary.csv (one row per task, the minimum-jerk baseline beside each result), per task
 // DIR/<task>/trajectory.csv, baseline.csv, animation.html and figures. Under mpirun the tasks are
-// split across ranks and rank 0 writes the same files as a one-process run.
+// split across ranks and rank 0 writes the same files as a one-process run. A four-bar scene
+// (mechanism.type four_bar) is optimized on its crank angle (docs/optimize.md, "The four-bar").
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -29,9 +30,11 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/scene_mechanism.h"
 #include "fivebar/io/summary_csv.h"
 #include "fivebar/trajectory/batch.h"
 #include "fivebar/trajectory/distributed.h"
+#include "fivebar/trajectory/four_bar_tasks.h"
 #include "fivebar/trajectory/tasks.h"
 
 // a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
@@ -52,23 +55,34 @@ struct Args {
   bool no_validate = false, no_plots = false;
 };
 
-// x and y of point C for each row (extra trajectory.csv columns, for the path figure), from the
-// model's loop closure; nan where a row's pose cannot close
-std::vector<Column> point_c_columns(const Params<double>& p, const std::vector<sim::Row>& rows) {
-  Column x{"x_C", {}}, y{"y_C", {}};
+// the point whose path the figures draw: the five-bar's C, the four-bar's coupler point P
+const char* point_name(const Scene& scene) {
+  return scene.type == MechanismType::kFourBar ? "P" : "C";
+}
+
+// x and y of that point for each row (extra trajectory.csv columns x_C, y_C or x_P, y_P, for the
+// path figure), from the model's loop closure; nan where a row's pose cannot close
+std::vector<Column> point_columns(const Scene& scene, const std::vector<sim::Row>& rows) {
+  const std::string name = point_name(scene);
+  Column x{"x_" + name, {}}, y{"y_" + name, {}};
   for (const sim::Row& r : rows) {
     std::array<double, 2> c{NAN, NAN};  // left so when the pose cannot close
-    trajectory::point_c(p, r.theta[0], r.theta[1], &c);
+    if (scene.type == MechanismType::kFourBar) {
+      trajectory::four_bar_point_p(scene.four_bar, r.theta[0], &c);
+    } else {
+      trajectory::point_c(scene.params, r.theta[0], r.theta[1], &c);
+    }
     x.values.push_back(c[0]);
     y.values.push_back(c[1]);
   }
   return {x, y};
 }
 
-// `columns` and then the rest rule's (the ends of a rest-to-rest motion are held: docs/hold.md)
-std::vector<Column> with_rest_columns(std::vector<Column> columns,
-                                      const std::vector<sim::Row>& rows) {
-  for (Column& c : rest_columns(rows)) columns.push_back(std::move(c));
+// the point's columns and then the rest rule's (the ends of a rest-to-rest motion are held:
+// docs/hold.md)
+std::vector<Column> extra_columns(const Scene& scene, const std::vector<sim::Row>& rows) {
+  std::vector<Column> columns = point_columns(scene, rows);
+  for (Column& c : rest_columns(rows, layout_of(scene))) columns.push_back(std::move(c));
   return columns;
 }
 
@@ -80,8 +94,10 @@ void write_atomic(const fs::path& path, Write&& write) {
   fs::rename(tmp, path);
 }
 
+// `point`: C or P (point_name); `drives`: the motors whose torques are drawn (M1, M2 or M1)
 std::string plot_script(const std::string& task, double limit, const std::string& terminal,
-                        bool baseline) {
+                        bool baseline, const std::string& point, int drives) {
+  const std::string xp = "'x_" + point + "'", yp = "'y_" + point + "'";
   // the minimum-jerk curve beside each optimal one, when the baseline closes
   auto with_baseline = [&](const std::string& column, const std::string& title,
                            const std::string& colour) {
@@ -93,31 +109,36 @@ std::string plot_script(const std::string& task, double limit, const std::string
                   " size 900,600 noenhanced\nset key autotitle columnhead\nset grid\n";
   // the path in true proportions, in a square box around it (a short path along one axis would
   // otherwise be squeezed into a strip)
-  s += "stats 'trajectory.csv' using 'x_C':'y_C' nooutput\n"
+  s += "stats 'trajectory.csv' using " + xp + ":" + yp + " nooutput\n"
        "span = 0.6 * (STATS_max_x - STATS_min_x > STATS_max_y - STATS_min_y ? "
        "STATS_max_x - STATS_min_x : STATS_max_y - STATS_min_y) + 1e-3\n"
        "cx = (STATS_max_x + STATS_min_x) / 2\ncy = (STATS_max_y + STATS_min_y) / 2\n"
        "last = STATS_records - 1\n"
        "set xrange [cx - span:cx + span]\nset yrange [cy - span:cy + span]\n";
-  s += "set output 'path_C.png'\nset title '" + task + ": path of C'\nset size ratio -1\n"
+  s += "set output 'path_" + point + ".png'\nset title '" + task + ": path of " + point +
+       "'\nset size ratio -1\n"
        "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
        "set key outside right top\n"
-       "plot 'trajectory.csv' using 'x_C':'y_C' with lines lw 2 lc rgb '#1f5fa8' title 'optimal'" +
-       with_baseline("'x_C':'y_C'", "minimum jerk", "#777777") +
+       "plot 'trajectory.csv' using " + xp + ":" + yp +
+       " with lines lw 2 lc rgb '#1f5fa8' title 'optimal'" +
+       with_baseline(xp + ":" + yp, "minimum jerk", "#777777") +
        // the ends: the first and the last row
-       ", 'trajectory.csv' using ($0 == 0 ? column('x_C') : NaN):'y_C' with points pt 7 ps 2.5 "
-       "lc 'dark-green' title 'start', 'trajectory.csv' using ($0 == last ? column('x_C') : "
-       "NaN):'y_C' with points pt 5 ps 2.5 lc 'black' title 'goal'"
+       ", 'trajectory.csv' using ($0 == 0 ? column(" + xp + ") : NaN):" + yp +
+       " with points pt 7 ps 2.5 lc 'dark-green' title 'start', 'trajectory.csv' using ($0 == "
+       "last ? column(" + xp + ") : NaN):" + yp + " with points pt 5 ps 2.5 lc 'black' title "
+       "'goal'"
        "\nset size noratio\nset autoscale xy\n";
   // room above and below, so that the torque limit lines are not drawn on the border
   s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
   // the key beside the plot: the torques fill the band between the limits
   s += "set output 'torques.png'\nset title '" + task + ": motor torques'\n"
        "set xlabel 't [s]'\nset ylabel 'torque [N m]'\n"
-       "plot 'trajectory.csv' using 't':'M1' with lines lw 2 lc rgb '#1f5fa8' title 'M1', "
-       "'trajectory.csv' using 't':'M2' with lines lw 2 lc rgb '#d62728' title 'M2'" +
+       "plot 'trajectory.csv' using 't':'M1' with lines lw 2 lc rgb '#1f5fa8' title 'M1'" +
+       (drives > 1 ? std::string(", 'trajectory.csv' using 't':'M2' with lines lw 2 lc rgb "
+                                 "'#d62728' title 'M2'")
+                   : std::string()) +
        with_baseline("'t':'M1'", "M1 minimum jerk", "#1f5fa8") +
-       with_baseline("'t':'M2'", "M2 minimum jerk", "#d62728");
+       (drives > 1 ? with_baseline("'t':'M2'", "M2 minimum jerk", "#d62728") : std::string());
   if (std::isfinite(limit)) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.6g", limit);
@@ -140,12 +161,13 @@ std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult
   if (!status.ok()) return r.task + ": trajectory rows: " + status.message;
   const bool baseline = !base.empty();  // empty when the baseline cannot close
   fs::create_directories(dir);
+  const TrajectoryLayout layout = layout_of(scene);
   write_atomic(dir / "trajectory.csv", [&](const std::string& p) {
-    write_trajectory_csv(p, rows, with_rest_columns(point_c_columns(scene.params, rows), rows));
+    write_trajectory_csv(p, rows, extra_columns(scene, rows), layout);
   });
   if (baseline) {
     write_atomic(dir / "baseline.csv", [&](const std::string& p) {
-      write_trajectory_csv(p, base, with_rest_columns(point_c_columns(scene.params, base), base));
+      write_trajectory_csv(p, base, extra_columns(scene, base), layout);
     });
   } else {
     fs::remove(dir / "baseline.csv");  // a stale one from an earlier run would mislead
@@ -153,9 +175,9 @@ std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult
   AnimationInput animation;
   animation.title = r.task + ", " + fs::path(scene.path).filename().string();
   animation.label = "optimal motion";
-  animation.motion = animation_track(rows);
+  animation.motion = animation_track(rows, layout);
   if (baseline) {
-    animation.ghost = animation_track(base);
+    animation.ghost = animation_track(base, layout);
     animation.ghost_label = "minimum jerk (baseline)";
   }
   write_atomic(dir / "animation.html", [&](const std::string& p) {
@@ -163,15 +185,17 @@ std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult
   });
   if (!plots) return "";
   return run_gnuplot(dir.string(), "plots.gnuplot",
-                     plot_script(r.task, r.torque_limit, gnuplot().terminal, baseline));
+                     plot_script(r.task, r.torque_limit, gnuplot().terminal, baseline,
+                                 point_name(scene), layout.drives));
 }
 
 // one line per task on stdout; under it, the reason when the task did not end ok, and a note
 // when it did but its refinement ran out of levels before the energy settled; the number of
 // tasks that ended ok
-int report(const std::vector<TaskResult>& results, const trajectory::BatchOptions& options) {
+int report(const std::vector<TaskResult>& results, const trajectory::BatchOptions& options,
+           int motors) {
   const double refine_tol = options.refine.tol;
-  const std::string note = objective_note(options);
+  const std::string note = objective_note(options, motors);
   std::printf("objective: %s\n", trajectory::objective_name(options.problem.objective));
   if (!note.empty()) std::printf("note: %s\n", note.c_str());
   int ok = 0;
@@ -205,11 +229,13 @@ bool input_failure(const TaskResult& r) {
 }
 
 int run(const Args& args) {
-  const Scene scene = load_scene(args.scene.scene, args.scene.sets);
-  const std::vector<trajectory::TaskSpec> tasks = read_tasks(args.tasks);
+  const Scene scene = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
+  const bool four_bar = scene.type == MechanismType::kFourBar;
+  const std::vector<trajectory::TaskSpec> tasks = read_tasks(args.tasks, four_bar);
   OptimizeSettings settings = args.settings;
   settings.validate = !args.no_validate;
-  const trajectory::BatchOptions options = batch_options(settings, scene.windings);
+  const trajectory::BatchOptions options =
+      batch_options(settings, scene.windings, layout_of(scene).drives);
   const int rank = trajectory::process_rank();
   const bool tty = rank == 0 && isatty(STDERR_FILENO);
 
@@ -217,17 +243,15 @@ int run(const Args& args) {
   const int n = static_cast<int>(tasks.size());
   const std::vector<TaskResult> solved = trajectory::run_distributed(
       n, args.threads,
-      [&](int i) {
-        const sim::LoadFunction loads = LoadExpressions(scene).function();  // this thread's
-        return trajectory::run_task(scene.params, loads, tasks[i], scene.initial, options);
-      },
+      [&](int i) { return run_scene_task(scene, tasks[i], options); },
       [&](int done, int count) {
         if (tty) std::cerr << "\roptimize: " << done << "/" << count << " tasks" << std::flush;
       });
   if (tty) std::cerr << "\n";
   if (rank != 0) return 0;
   std::vector<TaskResult> results = solved;
-  add_objective_note(options, &results);
+  const int motors = layout_of(scene).drives;
+  add_objective_note(options, &results, motors);
 
   // per-task files first, summary.csv last (its presence marks a complete run)
   OutputDir out(args.scene.out, {"summary.csv"});
@@ -242,7 +266,7 @@ int run(const Args& args) {
   write_text_file(out.file("summary.csv"), csv);
   // one line per task on stdout; exit non-zero when no task ended ok (outputs kept: they say why)
   int ok = 0;
-  finish_run(&out, [&] { ok = report(results, options); });
+  finish_run(&out, [&] { ok = report(results, options, motors); });
   if (ok == 0 && !results.empty()) {
     const std::string why = "every task failed (" + std::to_string(results.size()) +
                             "; reasons on stdout and in summary.csv)";
@@ -278,7 +302,8 @@ void add_options(CLI::App* app, Args* args) {
   app->add_option("--quadrature-points", args->settings.quadrature_points,
                   "Gauss-Legendre points per knot span " + dflt(d.quadrature_points));
   app->add_option("--singular-margin", args->settings.singular_margin,
-                  "minimum |sin(theta4 - theta3)| along the motion " + dflt(d.singular_margin));
+                  "minimum |sin(theta4 - theta3)| (a four-bar's |sin(theta3 - theta2)|) along "
+                  "the motion " + dflt(d.singular_margin));
   app->add_option("--path-step", args->settings.path_step,
                   "grid step [rad] of the path search for a feasible start when the "
                   "minimum-jerk motion cannot close " + dflt(d.path_step));

@@ -27,6 +27,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/scene_mechanism.h"
 #include "fivebar/io/summary_csv.h"
 #include "fivebar/trajectory/batch.h"
 #include "fivebar/trajectory/distributed.h"
@@ -86,7 +87,7 @@ std::vector<Design> make_designs(const Args& args, const std::vector<trajectory:
       sets.push_back(sweeps[k].key + "=" + format_double(designs[d].values[k]));
     }
     try {
-      designs[d].scene = load_scene(args.scene.scene, sets);
+      designs[d].scene = load_scene(args.scene.scene, sets, /*four_bar_ok=*/true);
     } catch (const InputError& e) {
       // (an unknown key's reason lists the known ones, "assembly" among them: never geometry)
       const bool geometry = e.reason().find("unknown key") == std::string::npos &&
@@ -297,9 +298,11 @@ void report(const std::vector<trajectory::Sweep>& sweeps, const std::vector<Desi
 int run(const Args& args) {
   const std::vector<trajectory::Sweep> sweeps = parse_sweeps(args.sweeps);
   // bad input in the base scene: exit 2 here
-  const Scene base = load_scene(args.scene.scene, args.scene.sets);
-  const std::vector<trajectory::TaskSpec> tasks = read_tasks(args.tasks);
-  const trajectory::BatchOptions options = batch_options(args.settings, base.windings);
+  const Scene base = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
+  const std::vector<trajectory::TaskSpec> tasks =
+      read_tasks(args.tasks, base.type == MechanismType::kFourBar);
+  const trajectory::BatchOptions options =
+      batch_options(args.settings, base.windings, layout_of(base).drives);
   const std::vector<Design> designs = make_designs(args, sweeps);
   const int count = static_cast<int>(designs.size());
 
@@ -319,9 +322,7 @@ int run(const Args& args) {
           r.message = design.error;
           return r;
         }
-        const sim::LoadFunction loads = LoadExpressions(*design.scene).function();
-        return trajectory::run_task(design.scene->params, loads, task, design.scene->initial,
-                                    with_windings(options, design.scene->windings));
+        return run_scene_task(*design.scene, task, with_windings(options, design.scene->windings));
       },
       [&](int done, int total) {
         if (tty) std::cerr << "\rstudy: " << done << "/" << total << " optimizations" << std::flush;

@@ -9,6 +9,7 @@
 #include "fivebar/io/loads.h"
 #include "fivebar/io/tasks_file.h"
 #include "fivebar/io/torque_log_file.h"
+#include "fivebar/trajectory/four_bar_tasks.h"
 
 namespace fivebar::io {
 
@@ -235,11 +236,15 @@ namespace {
 constexpr char kWindingKeys[] =
     "actuators.M1.winding_resistance, actuators.M1.torque_constant, "
     "actuators.M2.winding_resistance, actuators.M2.torque_constant (and gear_ratio, default 1)";
+// the four-bar's (one motor)
+constexpr char kFourBarWindingKeys[] =
+    "actuators.M1.winding_resistance, actuators.M1.torque_constant (and gear_ratio, default 1)";
 
 // --objective, --regeneration, --end-acceleration and the refinement that suits the objective
-void objective_options(const OptimizeSettings& a, const MotorWindings& windings,
+void objective_options(const OptimizeSettings& a, const MotorWindings& windings, int motors,
                        trajectory::BatchOptions* o) {
-  const bool winding = windings.present();
+  const bool winding = windings.present(motors);
+  const std::string keys = motors == 1 ? kFourBarWindingKeys : kWindingKeys;
   o->problem.winding_heat = windings.heat_coefficients();
   const std::string name =
       a.objective.empty() ? (winding ? "total_dissipation" : "dissipated_energy") : a.objective;
@@ -250,7 +255,7 @@ void objective_options(const OptimizeSettings& a, const MotorWindings& windings,
   if (trajectory::needs_winding(o->problem.objective) && !winding) {
     throw InputError(kFlags, "--objective",
                      name + " needs the motors' winding data; add to the scene: " +
-                         std::string(kWindingKeys));
+                         keys);
   }
   if (!trajectory::parse_regeneration(a.regeneration, &o->problem.regeneration)) {
     throw InputError(kFlags, "--regeneration",
@@ -278,17 +283,18 @@ void objective_options(const OptimizeSettings& a, const MotorWindings& windings,
 
 }  // namespace
 
-std::string objective_note(const trajectory::BatchOptions& options) {
+std::string objective_note(const trajectory::BatchOptions& options, int motors) {
   if (options.problem.objective != trajectory::Objective::kDissipatedEnergy) return "";
   const std::string why =
       "the optimum of dissipated_energy switches the motors between their torque limits (a "
       "chattering limit no discretization converges); ";
   const std::array<double, 2>& c = options.problem.winding_heat;
-  if (c[0] > 0 && c[1] > 0) {
+  if (c[0] > 0 && (motors < 2 || c[1] > 0)) {
     return why + "the scene gives the motors' winding data: minimize total_dissipation (the "
                  "default) for a motion a machine can run";
   }
-  return why + "add the motors' winding data to the scene (" + kWindingKeys +
+  return why + "add the motors' winding data to the scene (" +
+         (motors == 1 ? kFourBarWindingKeys : kWindingKeys) +
          ") to minimize total_dissipation instead";
 }
 
@@ -322,15 +328,16 @@ std::string bounds_advice(const std::vector<BoundHit>& hits) {
 }
 
 void add_objective_note(const trajectory::BatchOptions& options,
-                        std::vector<trajectory::TaskResult>* results) {
-  const std::string note = objective_note(options);
+                        std::vector<trajectory::TaskResult>* results, int motors) {
+  const std::string note = objective_note(options, motors);
   if (note.empty()) return;
   for (trajectory::TaskResult& r : *results) {
     if (r.solved()) r.add_note(note);
   }
 }
 
-trajectory::BatchOptions batch_options(const OptimizeSettings& a, const MotorWindings& windings) {
+trajectory::BatchOptions batch_options(const OptimizeSettings& a, const MotorWindings& windings,
+                                       int motors) {
   trajectory::BatchOptions o;
   if (!trajectory::parse_method(a.method, &o.optimizer.method)) {
     throw InputError(kFlags, "--method", "'" + a.method + "' is not slsqp, mma or ccsaq");
@@ -363,7 +370,7 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a, const MotorWin
                        "expected increasing integers in [8, 400], comma-separated");
     }
   }
-  objective_options(a, windings, &o);
+  objective_options(a, windings, motors, &o);
   if (!a.continuation) o.refine.continuation.clear();
   o.refine.enabled = a.refine || a.continuation;
   o.path.step = a.path_step;
@@ -376,23 +383,50 @@ trajectory::BatchOptions batch_options(const OptimizeSettings& a, const MotorWin
   return o;
 }
 
-std::vector<trajectory::TaskSpec> read_tasks(const std::string& path) { return load_tasks(path); }
+std::vector<trajectory::TaskSpec> read_tasks(const std::string& path, bool four_bar) {
+  return load_tasks(path, four_bar);
+}
+
+trajectory::TaskResult run_scene_task(const Scene& scene, const trajectory::TaskSpec& task,
+                                      const trajectory::BatchOptions& options,
+                                      const trajectory::TaskResult* warm) {
+  if (scene.type == MechanismType::kFourBar) {
+    const sim::FourBarLoadFunction loads = LoadExpressions(scene).four_bar_function();
+    return trajectory::run_four_bar_task(scene.four_bar, loads, task, scene.initial.theta1,
+                                         options);
+  }
+  const sim::LoadFunction loads = LoadExpressions(scene).function();
+  return trajectory::run_task(scene.params, loads, task, scene.initial, options, warm);
+}
 
 Status task_rows(const Scene& scene, const trajectory::TaskResult& r,
                  const trajectory::BatchOptions& options, std::vector<sim::Row>* optimal,
                  std::vector<sim::Row>* baseline) {
+  const double step = std::min(scene.options.output_step, r.duration / 10);
+  // rows(base, out): the rows of the result's motion, or of its minimum-jerk baseline
+  auto rows_of = [&](const auto& rows) {
+    const Status s1 = rows(false, optimal);
+    if (!s1.ok()) return s1;
+    baseline->clear();
+    if (r.baseline_status != "ok" && r.baseline_status != "violates_constraints") {
+      return Status::Ok();  // the baseline does not close: no rows
+    }
+    return rows(true, baseline);
+  };
+  if (scene.type == MechanismType::kFourBar) {
+    const sim::FourBarLoadFunction loads = LoadExpressions(scene).four_bar_function();
+    return rows_of([&](bool base, std::vector<sim::Row>* out) {
+      return trajectory::four_bar_rows(scene.four_bar, loads, r, options, base, step, out);
+    });
+  }
   const sim::LoadFunction loads = LoadExpressions(scene).function();
   const trajectory::TrajectoryProblem problem =
       trajectory::problem_of(scene.params, loads, r, options);
-  const double step = std::min(scene.options.output_step, r.duration / 10);
-  const Status s1 = problem.rows(r.x.data(), step, optimal);
-  if (!s1.ok()) return s1;
-  baseline->clear();
-  if (r.baseline_status != "ok" && r.baseline_status != "violates_constraints") {
-    return Status::Ok();  // the baseline does not close: no rows
-  }
-  const std::vector<double> x0 = problem.motion().minimum_jerk();
-  return problem.rows(x0.data(), step, baseline);
+  return rows_of([&](bool base, std::vector<sim::Row>* out) {
+    if (!base) return problem.rows(r.x.data(), step, out);
+    const std::vector<double> x0 = problem.motion().minimum_jerk();
+    return problem.rows(x0.data(), step, out);
+  });
 }
 
 }  // namespace fivebar::io

@@ -683,14 +683,14 @@ void read_friction(const SceneReader& r, FrictionParams<double>* out) {
 }
 
 // the motors' winding data (winding heat R (M / (k_t G))^2, docs/model.md): each value > 0; a
-// scene gives R and k_t of both motors or of none
-void read_windings(const SceneReader& r, MotorWindings* out) {
+// scene gives R and k_t of all its `motors` motors or of none
+void read_windings(const SceneReader& r, int motors, MotorWindings* out) {
   bool any = false;
-  for (int a = 0; a < kActuators; ++a) {
+  for (int a = 0; a < motors; ++a) {
     const std::string k = std::string("actuators.M") + std::to_string(a + 1) + ".";
     for (const char* key : {"winding_resistance", "torque_constant"}) any |= r.has(k + key);
   }
-  for (int a = 0; a < kActuators; ++a) {
+  for (int a = 0; a < motors; ++a) {
     const std::string k = std::string("actuators.M") + std::to_string(a + 1) + ".";
     const std::optional<double> none = any ? std::nullopt : std::optional<double>(0.0);
     out->resistance[a] = r.number(k + "winding_resistance", none);
@@ -869,16 +869,22 @@ MechanismType read_type(const SceneReader& r, bool four_bar_ok) {
   if (type == "five_bar") return MechanismType::kFiveBar;
   if (!four_bar_ok) {
     r.fail("mechanism.type", "four_bar: this command runs five-bars only so far (simulate, "
-                             "inverse, synth-log, hold and animate run four-bars)" +
+                             "inverse, synth-log, hold, animate, optimize, study and design run four-bars)" +
                                  r.origin("mechanism.type"));
   }
   for (const std::string& key : r.keys()) {
+    // the four-bar's motor has winding data only (no actuator friction)
+    const bool winding = key == "actuators" || key == "actuators.M1" ||
+                         key == "actuators.M1.winding_resistance" ||
+                         key == "actuators.M1.torque_constant" ||
+                         key == "actuators.M1.gear_ratio";
     const bool five_bar_key = key == "loads.M2" || key == "initial.theta2" ||
-                              key == "initial.omega2" || key == "actuators" ||
-                              key.rfind("actuators.", 0) == 0;
+                              key == "initial.omega2" ||
+                              (key.rfind("actuators", 0) == 0 && !winding);
     if (five_bar_key) {
       r.fail(key, "is a five-bar key, not one of mechanism.type four_bar (one crank: loads M1, M3, "
-                  "F, F_angle; initial theta1, omega1; no actuators)" + r.origin(key));
+                  "F, F_angle; initial theta1, omega1; actuators.M1 winding_resistance, "
+                  "torque_constant, gear_ratio only)" + r.origin(key));
     }
   }
   return MechanismType::kFourBar;
@@ -897,7 +903,7 @@ Scene build_scene(const SceneReader& r, bool four_bar_ok) {
   }
   read_friction(r, &friction);
   if (five) read_actuators(r, friction.law, &s.params.actuators);
-  read_windings(r, &s.windings);
+  read_windings(r, five ? kActuators : 1, &s.windings);
   read_loads_and_initial(r, &s);
   read_integration(r, friction.law, &s.options);
   read_solver_limits(r, &s);
@@ -1068,6 +1074,18 @@ void actuators_yaml(const Scene& s, std::ostringstream& y) {
   }
 }
 
+// actuators: the four-bar's one motor's winding data, when given
+void four_bar_windings_yaml(const MotorWindings& wd, std::ostringstream& y) {
+  const bool geared = wd.gear_ratio[0] != MotorWindings().gear_ratio[0];
+  if (!wd.present(1) && !geared) return;
+  y << "actuators:\n  M1: {";
+  if (wd.present(1)) {
+    y << "winding_resistance: " << num(wd.resistance[0])
+      << ", torque_constant: " << num(wd.torque_constant[0]) << ", ";
+  }
+  y << "gear_ratio: " << num(wd.gear_ratio[0]) << "}\n";
+}
+
 }  // namespace
 
 std::string scene_to_yaml(const Scene& s) {
@@ -1077,6 +1095,7 @@ std::string scene_to_yaml(const Scene& s) {
   if (four_bar) {
     mechanism_yaml(s, s.four_bar, y);
     friction_yaml(s.four_bar.friction, kFourBarJoints, y);
+    four_bar_windings_yaml(s.windings, y);
   } else {
     mechanism_yaml(s, s.params, y);
     friction_yaml(s.params.friction, kJoints, y);

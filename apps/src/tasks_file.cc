@@ -33,7 +33,46 @@ double number(const YAML::Node& node, const std::string& path, const std::string
   return v;
 }
 
-trajectory::Pose pose(const YAML::Node& node, const std::string& path, const std::string& key) {
+// a four-bar's pose: exactly one of theta1, x, y (P's coordinate); theta2 is named as the
+// five-bar's key it is
+trajectory::Pose four_bar_pose(const YAML::Node& node, const std::string& path,
+                               const std::string& key) {
+  const std::string expected =
+      "expected one of {theta1: ...}, {x: ...}, {y: ...} (x, y: the coupler point P) for a "
+      "mechanism.type four_bar scene";
+  if (!node.IsMap()) throw InputError(path, key, expected);
+  trajectory::Pose p{false, NAN, NAN};
+  std::string single;
+  for (const auto& kv : node) {
+    const std::string k = kv.first.as<std::string>();
+    if (k == "theta2") {
+      throw InputError(path, join(key, k),
+                       "a five_bar key: a mechanism.type four_bar scene has one degree of "
+                       "freedom (" + expected + ")");
+    }
+    if (k != "theta1" && k != "x" && k != "y") {
+      throw InputError(path, join(key, k), "unknown key (" + expected + ")");
+    }
+    if (!single.empty()) {
+      throw InputError(path, key, "two coordinates (" + single + ", " + k + "): " + expected);
+    }
+    single = k;
+    p.cartesian = k != "theta1";
+    (k == "y" ? p.b : p.a) = number(kv.second, path, join(key, k));
+  }
+  if (single.empty()) throw InputError(path, key, expected);
+  if (single == "theta1" && std::abs(p.a) > identification::kDegreesBeyond) {
+    throw InputError(path, join(key, "theta1"),
+                     format_double(p.a) + " rad is beyond two turns: degrees? (crank angles "
+                     "are in radians, " + format_double(p.a) + " degrees = " +
+                     format_significant(p.a * M_PI / 180, 4) + " rad)");
+  }
+  return p;
+}
+
+trajectory::Pose pose(const YAML::Node& node, const std::string& path, const std::string& key,
+                      bool four_bar) {
+  if (four_bar) return four_bar_pose(node, path, key);
   const std::string expected = "expected {theta1: ..., theta2: ...} or {x: ..., y: ...}";
   if (!node.IsMap()) throw InputError(path, key, expected);
   std::set<std::string> keys;
@@ -62,6 +101,10 @@ trajectory::Pose pose(const YAML::Node& node, const std::string& path, const std
     p.cartesian = true;
     p.a = number(node["x"], path, join(key, "x"));
     p.b = number(node["y"], path, join(key, "y"));
+  } else if (keys.size() == 1) {
+    throw InputError(path, join(key, *keys.begin()),
+                     "one coordinate is a four_bar pose: a mechanism.type five_bar scene "
+                     "needs two (" + expected + ")");
   } else {
     throw InputError(path, key, expected);
   }
@@ -80,7 +123,8 @@ bool valid_name(const std::string& s) {
 
 }  // namespace
 
-std::vector<trajectory::TaskSpec> parse_tasks(const std::string& text, const std::string& path) {
+std::vector<trajectory::TaskSpec> parse_tasks(const std::string& text, const std::string& path,
+                                              bool four_bar) {
   YAML::Node root;
   try {
     root = YAML::Load(text);
@@ -126,8 +170,8 @@ std::vector<trajectory::TaskSpec> parse_tasks(const std::string& text, const std
       throw InputError(path, join(key, "name"), "duplicate task name '" + spec.name + "'");
     }
     spec.duration = number(t["duration"], path, join(key, "duration"));
-    spec.start = pose(t["start"], path, join(key, "start"));
-    spec.goal = pose(t["goal"], path, join(key, "goal"));
+    spec.start = pose(t["start"], path, join(key, "start"), four_bar);
+    spec.goal = pose(t["goal"], path, join(key, "goal"), four_bar);
     if (t["torque_limit"]) {
       spec.torque_limit = number(t["torque_limit"], path, join(key, "torque_limit"));
     }
@@ -136,12 +180,12 @@ std::vector<trajectory::TaskSpec> parse_tasks(const std::string& text, const std
   return tasks;
 }
 
-std::vector<trajectory::TaskSpec> load_tasks(const std::string& path) {
+std::vector<trajectory::TaskSpec> load_tasks(const std::string& path, bool four_bar) {
   std::ifstream in(path);
   if (!in) throw InputError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));
   std::stringstream text;
   text << in.rdbuf();
-  return parse_tasks(text.str(), path);
+  return parse_tasks(text.str(), path, four_bar);
 }
 
 }  // namespace fivebar::io

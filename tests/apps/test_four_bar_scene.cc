@@ -79,7 +79,17 @@ TEST(FourBarScene, FiveBarKeysFailNamingTheKeyAndTheType) {
                "initial.theta2", "mechanism.type four_bar");
   expect_error(kFourBar, {"actuators.M1.coulomb=0.1"}, "actuators.M1.coulomb",
                "mechanism.type four_bar");
-  expect_error(kFourBar + "actuators: {}\n", {}, "actuators", "mechanism.type four_bar");
+  expect_error(kFourBar + "actuators: {M2: {winding_resistance: 1}}\n", {},
+               "actuators.M2", "mechanism.type four_bar");
+  // the one motor's winding data is the four-bar's (the optimizer's winding heat)
+  const Scene s = parse_scene(kFourBar, "ok.yaml",
+                              {"actuators.M1.winding_resistance=2",
+                               "actuators.M1.torque_constant=0.5"},
+                              /*four_bar_ok=*/true);
+  EXPECT_TRUE(s.windings.present(1));
+  EXPECT_DOUBLE_EQ(s.windings.heat_coefficient(0), 8.0);
+  expect_error(kFourBar, {"actuators.M1.winding_resistance=2"}, "actuators.M1.torque_constant",
+               "");
   expect_error(kFourBar, {"mechanism.links.3.mass=1"}, "mechanism.links.3",
                "no such link in --set mechanism.links.3.mass=1 (links are numbered 0 to 2)");
   expect_error(with("  type: four_bar\n", ""), {}, "mechanism.links",

@@ -56,6 +56,39 @@ TEST(Tasks, MalformedFilesNameFileKeyAndReason) {
       ThrowsMessage<InputError>(HasSubstr("tasks.0.goal.theta1: 150 rad is beyond two turns: degrees?")));
 }
 
+TEST(Tasks, FourBarPosesHaveOneCoordinate) {
+  auto four = [](const std::string& start, const std::string& goal) {
+    return parse_tasks("tasks:\n  - {name: a, duration: 0.5, start: " + start + ", goal: " + goal +
+                           "}\n",
+                       "t.yaml", /*four_bar=*/true);
+  };
+  const auto tasks = four("{theta1: 1.5}", "{y: 0.25}");
+  ASSERT_EQ(tasks.size(), 1u);
+  EXPECT_STREQ(tasks[0].start.single(), "theta1");
+  EXPECT_EQ(tasks[0].start.value(), 1.5);
+  EXPECT_STREQ(tasks[0].goal.single(), "y");
+  EXPECT_EQ(tasks[0].goal.value(), 0.25);
+  EXPECT_THAT([&] { four("{theta1: 1.5, theta2: 1.5}", "{x: 0.1}"); },
+              ThrowsMessage<InputError>(HasSubstr(
+                  "t.yaml: tasks.0.start.theta2: a five_bar key: a mechanism.type four_bar")));
+  EXPECT_THAT([&] { four("{theta1: 1.5}", "{x: 0.1, y: 0.2}"); },
+              ThrowsMessage<InputError>(HasSubstr("tasks.0.goal: two coordinates (x, y)")));
+  EXPECT_THAT([&] { four("{theta1: 150}", "{x: 0.1}"); },
+              ThrowsMessage<InputError>(HasSubstr("tasks.0.start.theta1: 150 rad is beyond")));
+  // the reverse: a one-coordinate pose on a five-bar
+  EXPECT_THAT(
+      [&] {
+        parse_tasks("tasks:\n  - {name: a, duration: 0.5, start: {theta1: 1.5}, goal: {x: 0.1, "
+                    "y: 0.2}}\n",
+                    "t.yaml");
+      },
+      ThrowsMessage<InputError>(HasSubstr(
+          "tasks.0.start.theta1: one coordinate is a four_bar pose: a mechanism.type five_bar")));
+  const auto shipped = load_tasks(
+      std::string(FIVEBAR_SOURCE_DIR) + "/datasets/tasks/four_bar_tasks.yaml", /*four_bar=*/true);
+  EXPECT_EQ(shipped.size(), 3u);
+}
+
 TEST(Tasks, ShippedFileReadsIntoStructs) {
   const auto tasks = load_tasks(std::string(FIVEBAR_SOURCE_DIR) + "/datasets/tasks/paper_tasks.yaml");
   ASSERT_EQ(tasks.size(), 5u);

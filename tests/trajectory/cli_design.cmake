@@ -1,7 +1,9 @@
 # End-to-end checks of `fivebar design`, run by ctest with cmake -P:
 # - a tiny problem (one task, one key, 8 designs) improves on its start and writes its outputs;
 # - bad input exits 2 with one line: a key that is not a number of the mechanism, LO >= HI,
-#   bounds whose start design cannot assemble.
+#   bounds whose start design cannot assemble;
+# - a four-bar design: the crank length for one task, its scene.yaml usable, a link index beyond
+#   the four-bar's refused.
 # Inputs: -DFIVEBAR=<executable> -DSOURCE_DIR=<project root> -DWORK_DIR=<scratch directory>
 cmake_minimum_required(VERSION 3.22)
 file(REMOVE_RECURSE ${WORK_DIR})
@@ -55,3 +57,26 @@ foreach(bad "friction.coulomb=0.1:0.2" "mechanism.links.0.length=0.1:0.05"
   expect("--vary ${bad}: stderr ${err}" err MATCHES "^fivebar: error: command line: --vary[^\n]*\n$")
   expect("--vary ${bad}: output written" NOT EXISTS ${WORK_DIR}/bad/design.json)
 endforeach()
+
+# a four-bar: the crank length of the crank-rocker designed for one task; the winning scene is a
+# four-bar scene that loads again; a link index beyond the four-bar's three is refused
+set(crank_rocker ${SOURCE_DIR}/datasets/reference/four_bar/crank_rocker.yaml)
+file(WRITE ${WORK_DIR}/four_bar.yaml "tasks:\n"
+     "  - {name: half_turn, duration: 0.5, start: {theta1: 1.5707963267948966}, goal: {theta1: 4.71238898038469}, torque_limit: 0.8}\n")
+execute_process(COMMAND ${FIVEBAR} design ${crank_rocker} --tasks ${WORK_DIR}/four_bar.yaml
+                        --vary mechanism.links.0.length=0.07:0.09 --max-designs 5 --threads 1
+                        --no-plots --out ${WORK_DIR}/four_bar
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("four-bar design: exit ${status}\n${out}${err}" status EQUAL 0)
+file(READ ${WORK_DIR}/four_bar/design.json json)
+string(JSON total GET ${json} total_energy)
+string(JSON start GET ${json} start_total_energy)
+expect("four-bar design: total ${total} above the start ${start}" total LESS_EQUAL start)
+execute_process(COMMAND ${FIVEBAR} simulate ${WORK_DIR}/four_bar/scene.yaml --no-plots
+                        --set simulation.duration=0.01 --out ${WORK_DIR}/four_bar_scene
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("four-bar design scene.yaml: exit ${status}\n${out}${err}" status EQUAL 0)
+execute_process(COMMAND ${FIVEBAR} design ${crank_rocker} --tasks ${WORK_DIR}/four_bar.yaml
+                        --vary mechanism.links.3.length=0.1:0.2 --out ${WORK_DIR}/four_bar_bad
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("four-bar design links.3: exit ${status}\n${err}" status EQUAL 2 AND err MATCHES "links.3.length")

@@ -4,7 +4,9 @@
 #   on stderr, each failed task's reason on stdout, and summary.csv kept;
 # - trajectory.csv carries non-zero W_in and W_ext; animation.html is written (no ghost without
 #   a baseline) and `fivebar animate` remakes it;
-# - study.csv names the reason of every design that cannot do every task.
+# - study.csv names the reason of every design that cannot do every task;
+# - a four-bar: a task solved with the four-bar's columns, a five-bar pose refused (exit 2), and
+#   a study over its crank length.
 # Inputs: -DFIVEBAR=<executable> -DSOURCE_DIR=<project root> -DWORK_DIR=<scratch directory>
 cmake_minimum_required(VERSION 3.22)
 file(REMOVE_RECURSE ${WORK_DIR})
@@ -140,3 +142,44 @@ foreach(bad "--refine-levels;45,25" "--refine-levels;4" "--max-evaluations;3")
   expect("${bad}: stderr ${err}" err MATCHES "${option}")
   expect("${bad}: output written" NOT EXISTS ${WORK_DIR}/bad_levels/summary.csv)
 endforeach()
+
+# a four-bar: the shipped crank-rocker's first task solved (exit 0) with the four-bar's columns;
+# a five-bar pose on a four-bar scene is a file error naming the key and the mechanism type
+set(crank_rocker ${SOURCE_DIR}/datasets/reference/four_bar/crank_rocker.yaml)
+file(WRITE ${WORK_DIR}/four_bar.yaml "tasks:\n"
+     "  - {name: half_turn, duration: 0.5, start: {theta1: 1.5707963267948966}, goal: {theta1: 4.71238898038469}, torque_limit: 0.8}\n")
+execute_process(COMMAND ${FIVEBAR} optimize ${crank_rocker} --tasks ${WORK_DIR}/four_bar.yaml
+                        --no-plots --refine-levels 25 --out ${WORK_DIR}/four_bar
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("four-bar: exit ${status}\n${out}${err}" status EQUAL 0)
+file(STRINGS ${WORK_DIR}/four_bar/summary.csv rows)
+list(GET rows 1 row)
+expect("four-bar: summary row ${row}" row MATCHES "^half_turn,ok,")
+file(STRINGS ${WORK_DIR}/four_bar/half_turn/trajectory.csv lines)
+list(GET lines 0 header)
+expect("four-bar: trajectory.csv header ${header}"
+       header MATCHES "^t,theta1,theta2,theta3,omega1," AND header MATCHES ",x_P,y_P," AND
+       NOT header MATCHES "theta4|,M2,")
+file(WRITE ${WORK_DIR}/four_bar_bad.yaml "tasks:\n"
+     "  - {name: a, duration: 0.5, start: {theta1: 1.5, theta2: 1.5}, goal: {theta1: 2.0}}\n")
+execute_process(COMMAND ${FIVEBAR} optimize ${crank_rocker} --tasks ${WORK_DIR}/four_bar_bad.yaml
+                        --no-plots --out ${WORK_DIR}/four_bar_bad
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("four-bar theta2: exit ${status}\n${out}${err}" status EQUAL 2)
+expect("four-bar theta2: stderr ${err}"
+       err MATCHES "tasks.0.start.theta2: a five_bar key: a mechanism.type four_bar scene")
+expect("four-bar theta2: output written" NOT EXISTS ${WORK_DIR}/four_bar_bad/summary.csv)
+
+# study on the four-bar: two crank lengths, each design's task solved (the four-bar's tasks file)
+execute_process(COMMAND ${FIVEBAR} study ${crank_rocker} --tasks ${WORK_DIR}/four_bar.yaml
+                        --sweep mechanism.links.0.length=0.07:0.08:2 --no-plots
+                        --out ${WORK_DIR}/four_bar_study
+                RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+expect("four-bar study: exit ${status}\n${out}${err}" status EQUAL 0)
+file(STRINGS ${WORK_DIR}/four_bar_study/study.csv study)
+list(LENGTH study rows)
+expect("four-bar study.csv: ${rows} lines" rows EQUAL 3)
+list(GET study 1 first)
+list(GET study 2 second)
+expect("four-bar study.csv rows: ${first} / ${second}"
+       first MATCHES "^0,0.07,ok," AND second MATCHES "^1,0.08,ok,")

@@ -18,55 +18,10 @@
 namespace fivebar::trajectory {
 namespace {
 
-// the exact-law validation ends this fraction of the duration before the end
-constexpr double kValidationEndGap = 1e-4;
-
 ProblemOptions task_problem_options(const BatchOptions& options, double torque_limit) {
   ProblemOptions o = options.problem;
   o.torque_limit = torque_limit;
   return o;
-}
-
-// |C(T) - C goal| of the optimal torques simulated forward from rest at the start: with the
-// smoothed law the optimizer works on (its torques; consistent with the optimization), or with
-// the scene's exact law and stick-slip (the exact-law torques of trajectory.csv)
-double miss_distance(const TrajectoryProblem& problem, const sim::LoadFunction& loads,
-                     const std::vector<double>& x, const BatchOptions& options, bool exact,
-                     std::string* note) {
-  const RestToRest& m = problem.motion();
-  const sim::LoadFunction drive = [&](double t) {
-    Loads<double> L = loads(t);
-    // the optimal torques, from the inverse dynamics of the spline at t (no sampling error)
-    const Status s = exact ? problem.torques(x.data(), t, &L.M1, &L.M2)
-                           : problem.smoothed_torques(x.data(), t, &L.M1, &L.M2);
-    if (!s.ok()) L.M1 = L.M2 = NAN;
-    return L;
-  };
-  sim::Options so;
-  // the exact law stops a fraction short of the end: there every joint comes to rest at once
-  // and the simulator's joint modes are degenerate (docs/optimize.md, "Validation")
-  so.duration = exact ? m.duration() * (1.0 - kValidationEndGap) : m.duration();
-  so.output_step = so.duration / 50;
-  so.rtol = options.validation_rtol;
-  so.atol = options.validation_rtol;
-  const sim::Initial init{m.start()[0], m.start()[1], 0.0, 0.0};
-  const sim::Result run =
-      sim::simulate(exact ? problem.exact_params() : problem.params(), drive, init, so);
-  if (!run.status.ok() || run.rows.empty()) {
-    *note = std::string(exact ? "exact-law " : "") + "validation simulation failed: " +
-            run.status.message;
-    return NAN;
-  }
-  const sim::Row& last = run.rows.back();
-  // the planned pose at the end of the run (the goal itself when it runs to the end)
-  const std::array<double, 2> planned = m.state(x.data(), last.t)[0];
-  std::array<double, 2> c{}, goal{};
-  if (!point_c(problem.params(), last.theta[0], last.theta[1], &c) ||
-      !point_c(problem.params(), planned[0], planned[1], &goal)) {
-    *note = "validation simulation ended where the mechanism cannot close";
-    return NAN;
-  }
-  return std::hypot(c[0] - goal[0], c[1] - goal[1]);
 }
 
 constexpr const char* kTruncated = "decode: truncated TaskResult";
@@ -92,28 +47,35 @@ std::uint64_t task_seed(const std::string& name, std::uint64_t seed) {
   return h ^ (seed * 0x9e3779b97f4a7c15ULL);
 }
 
-TrajectoryProblem problem_of(const Params<double>& params, const sim::LoadFunction& loads,
-                             const TaskResult& result, const BatchOptions& options) {
-  const int n = result.control_points > 0 ? result.control_points : options.problem.control_points;
-  const RestToRest motion(n, result.duration, result.start, result.goal,
-                          options.problem.end_acceleration);
-  ProblemOptions o = task_problem_options(options, result.torque_limit);
-  if (result.smoothing_velocity > 0) o.smoothing_velocity = result.smoothing_velocity;
-  return TrajectoryProblem(params, loads, motion, o);
+int result_control_points(const TaskResult& result, const BatchOptions& options) {
+  return result.control_points > 0 ? result.control_points : options.problem.control_points;
 }
 
-namespace {
+ProblemOptions result_options(const TaskResult& result, const BatchOptions& options) {
+  ProblemOptions o = task_problem_options(options, result.torque_limit);
+  if (result.smoothing_velocity > 0) o.smoothing_velocity = result.smoothing_velocity;
+  return o;
+}
 
-int check_points(const TrajectoryProblem& problem, const BatchOptions& options) {
+TrajectoryProblem problem_of(const Params<double>& params, const sim::LoadFunction& loads,
+                             const TaskResult& result, const BatchOptions& options) {
+  const RestToRest motion(result_control_points(result, options), result.duration, result.start,
+                          result.goal, options.problem.end_acceleration);
+  return TrajectoryProblem(params, loads, motion, result_options(result, options));
+}
+
+bool validation_point(const Params<double>& params, const std::array<double, 2>& q,
+                      std::array<double, 2>* c) {
+  return point_c(params, q[0], q[1], c);
+}
+
+int check_points(const TrajectoryProblemBase& problem, const BatchOptions& options) {
   return options.check_factor * problem.num_nodes() + 1;
 }
 
-// Gauss-Legendre points per span of the exact-law energies
 int exact_points(const BatchOptions& options) { return 4 * options.problem.quadrature_points; }
 
-// the minimum-jerk baseline on `problem` (the problem's own control points): energies, checks
-// and baseline_status; a baseline that does not close is a note, not a failure of the task
-void evaluate_baseline(const TrajectoryProblem& problem, const std::vector<double>& x0,
+void evaluate_baseline(const TrajectoryProblemBase& problem, const std::vector<double>& x0,
                        const BatchOptions& options, TaskResult* r) {
   Energies e;
   const Status s = problem.energies(x0.data(), options.problem.quadrature_points, &e);
@@ -142,6 +104,8 @@ void evaluate_baseline(const TrajectoryProblem& problem, const std::vector<doubl
   // a NaN violation is no pass
   r->baseline_status = c.max_violation <= options.feasibility_tol ? "ok" : "violates_constraints";
 }
+
+namespace {
 
 // the detour: the path search, then the fewest control points whose spline keeps the margin
 bool detour_start(const Params<double>& params, const sim::LoadFunction& loads,
@@ -238,7 +202,7 @@ bool choose_start(const Params<double>& params, const sim::LoadFunction& loads,
 }
 
 // the energies of r->x: smoothed (the law of its stage) and exact
-void record_energies(const TrajectoryProblem& problem, const BatchOptions& options,
+void record_energies(const TrajectoryProblemBase& problem, const BatchOptions& options,
                      TaskResult* r) {
   const Objective o = options.problem.objective;
   Energies e;
@@ -258,16 +222,14 @@ void record_energies(const TrajectoryProblem& problem, const BatchOptions& optio
   }
 }
 
-// the first solve from x0 (multi-start when asked), then the continuation to the exact law and
-// the refinement; the best stage's point goes into r. False (status set) when nothing usable
-// came out.
-bool solve(const Params<double>& params, const sim::LoadFunction& loads,
-           const TrajectoryProblem& problem, const std::vector<double>& x0,
-           const BatchOptions& options, TaskResult* r, SolverStatus* solver,
-           ConstraintCheck* check) {
+}  // namespace
+
+bool solve_task(const StageFactory& factory, const TrajectoryProblemBase& problem,
+                const std::vector<double>& x0, const BatchOptions& options, TaskResult* r,
+                SolverStatus* solver, ConstraintCheck* check) {
   OptimizerOptions oo = options.optimizer;
   oo.seed = task_seed(r->task, options.optimizer.seed);
-  const Candidate first = solve_stage(params, loads, problem.motion(),
+  const Candidate first = solve_stage(factory, problem.control_points(),
                                       problem.options().smoothing_velocity, x0, options,
                                       r->torque_limit, oo);
   r->evaluations = first.evaluations;
@@ -281,7 +243,7 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
   }
   oo.global = false;  // the later stages polish from a warm start
   const Candidate best = options.refine.enabled && startable(first, options)
-                             ? refine(params, loads, first, options, oo, r)
+                             ? refine(factory, first, options, oo, r)
                              : first;
   // a later stage that improved on a converged first solve but stopped at a limit keeps the
   // task ok (it is feasible and better); its outcome is noted
@@ -299,7 +261,8 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
   r->x = best.x;
   r->control_points = best.control_points;
   r->smoothing_velocity = best.smoothing_velocity;
-  record_energies(problem_of(params, loads, *r, options), options, r);
+  record_energies(*factory.problem(result_control_points(*r, options), result_options(*r, options)),
+                  options, r);
   if (!check->status.ok()) {
     r->status = "evaluation_failed";
     r->add_note("constraint re-check: " + check->status.message);
@@ -311,9 +274,8 @@ bool solve(const Params<double>& params, const sim::LoadFunction& loads,
   return true;
 }
 
-// the status of a solved task
 void classify(const SolverStatus& solver, const ConstraintCheck& check,
-              const BatchOptions& options, TaskResult* r) {
+              const BatchOptions& options, TaskResult* r, const char* singular_name) {
   std::string status = "ok", message = solver.message;
   // the checks are written so that a NaN fails them (a NaN compares false)
   if (!solver.usable()) {
@@ -328,7 +290,7 @@ void classify(const SolverStatus& solver, const ConstraintCheck& check,
     status = "violates_constraints";
     message = "over a limit on the check grid by " + std::to_string(check.max_violation) +
               " (relative; peak torque " + std::to_string(check.peak_torque) +
-              " N m, min |sin(th4 - th3)| " + std::to_string(check.min_coupler_sine) + ")";
+              " N m, min |" + singular_name + "| " + std::to_string(check.min_coupler_sine) + ")";
   } else if (solver.limited()) {
     status = r->solver_status;
   }
@@ -343,8 +305,6 @@ void classify(const SolverStatus& solver, const ConstraintCheck& check,
   if (!notes.empty()) r->add_note(notes);
 }
 
-// an ok task whose validation failed (a simulation that did not finish: miss NaN) or missed
-// the goal by more than BatchOptions::miss_tol is `validation_failed`
 void judge_validation(const BatchOptions& options, TaskResult* r) {
   if (r->status != "ok") return;
   const double miss = std::max(r->miss_distance, r->miss_distance_exact);
@@ -359,8 +319,6 @@ void judge_validation(const BatchOptions& options, TaskResult* r) {
     r->add_note(notes);
   }
 }
-
-}  // namespace
 
 TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads,
                     const TaskSpec& task, const sim::Initial& initial,
@@ -394,19 +352,13 @@ TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads
     if (!choose_start(params, loads, options, warm, &r, &problem, &x0)) return finish();
     SolverStatus solver;
     ConstraintCheck check;
-    if (!solve(params, loads, *problem, x0, options, &r, &solver, &check)) return finish();
-    classify(solver, check, options, &r);
+    const StageFactoryT<FiveBar> factory(params, loads, r.duration, r.start, r.goal,
+                                         options.problem.end_acceleration);
+    if (!solve_task(factory, *problem, x0, options, &r, &solver, &check)) return finish();
+    classify(solver, check, options, &r, "sin(th4 - th3)");
 
     // validation: the optimal torques simulated forward must bring C to the goal
-    if (options.validate) {
-      std::string note;
-      r.miss_distance = miss_distance(*problem, loads, r.x, options, false, &note);
-      if (!note.empty()) r.add_note(note);
-      note.clear();
-      r.miss_distance_exact = miss_distance(*problem, loads, r.x, options, true, &note);
-      if (!note.empty()) r.add_note(note);
-      judge_validation(options, &r);
-    }
+    if (options.validate) validate(*problem, loads, options, &r);
   } catch (const std::exception& e) {
     r.status = "failure";
     r.add_note(e.what());

@@ -84,24 +84,27 @@ BasisAt ClampedBasis::at(double t) const {
   return out;
 }
 
-RestToRest::RestToRest(int control_points, double duration, std::array<double, 2> start,
-                       std::array<double, 2> goal, EndAcceleration ends)
+template <int n>
+RestToRestT<n>::RestToRestT(int control_points, double duration, Angles start, Angles goal,
+                            EndAcceleration ends)
     : basis_(control_points, duration), start_(start), goal_(goal), ends_(ends) {
   if (control_points < 2 * fixed() + 1) {
     throw std::invalid_argument("RestToRest: too few control points for the fixed ends");
   }
 }
 
-std::vector<double> RestToRest::control_points(const double* x, int j) const {
+template <int n>
+std::vector<double> RestToRestT<n>::control_points(const double* x, int j) const {
   std::vector<double> c(basis_.size());
   for (int i = 0; i < basis_.size(); ++i) c[i] = control_point(x, i, j);
   return c;
 }
 
-std::array<std::array<double, 2>, 3> RestToRest::state(const double* x, double t) const {
+template <int n>
+std::array<std::array<double, n>, 3> RestToRestT<n>::state(const double* x, double t) const {
   const BasisAt b = basis_.at(t);
-  std::array<std::array<double, 2>, 3> out{};
-  for (int j = 0; j < kDof; ++j) {
+  std::array<Angles, 3> out{};
+  for (int j = 0; j < n; ++j) {
     const std::vector<double> c = control_points(x, j);
     for (int k = 0; k < 3; ++k) {
       double s = 0.0;
@@ -118,41 +121,49 @@ std::array<double, 3> minimum_jerk_blend(double u) {
           60.0 * u * (1.0 - 3.0 * u + 2.0 * u2)};
 }
 
-std::vector<double> RestToRest::fit(
-    const std::function<std::array<double, 2>(double)>& path) const {
+template <int n>
+std::vector<double> RestToRestT<n>::fit(const std::function<Angles(double)>& path) const {
   // least squares for the inner control points on 8 n samples of each joint's path
-  const int n = basis_.size(), nf = free_per_joint(), m = 8 * n;
+  using RowN = Eigen::Matrix<double, 1, n>;
+  const int nc = basis_.size(), nf = free_per_joint(), m = 8 * nc;
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, nf);
-  Eigen::MatrixXd rhs(m, 2);
+  Eigen::MatrixXd rhs(m, n);
+  const RowN start = Eigen::Map<const RowN>(start_.data());
+  const RowN goal = Eigen::Map<const RowN>(goal_.data());
   for (int r = 0; r < m; ++r) {
     const double t = duration() * (r + 0.5) / m;
     const BasisAt b = basis_.at(t);
-    const std::array<double, 2> q = path(t);
-    for (int j = 0; j < kDof; ++j) rhs(r, j) = q[j];
+    const Angles q = path(t);
+    for (int j = 0; j < n; ++j) rhs(r, j) = q[j];
     for (int i = 0; i <= kDegree; ++i) {
       const int c = b.first + i, v = variable_of(c, 0);
       if (v >= 0) {
         A(r, v) += b.d[0][i];
       } else if (c < fixed()) {
-        rhs.row(r) -= b.d[0][i] * Eigen::RowVector2d(start_[0], start_[1]);
+        rhs.row(r) -= b.d[0][i] * start;
       } else {
-        rhs.row(r) -= b.d[0][i] * Eigen::RowVector2d(goal_[0], goal_[1]);
+        rhs.row(r) -= b.d[0][i] * goal;
       }
     }
   }
   const Eigen::MatrixXd sol = A.colPivHouseholderQr().solve(rhs);
-  std::vector<double> x(2 * nf);
-  for (int j = 0; j < kDof; ++j)
+  std::vector<double> x(n * nf);
+  for (int j = 0; j < n; ++j)
     for (int v = 0; v < nf; ++v) x[j * nf + v] = sol(v, j);
   return x;
 }
 
-std::vector<double> RestToRest::minimum_jerk() const {
+template <int n>
+std::vector<double> RestToRestT<n>::minimum_jerk() const {
   return fit([this](double t) {
     const double s = minimum_jerk_blend(t / duration())[0];
-    return std::array<double, 2>{start_[0] + (goal_[0] - start_[0]) * s,
-                                 start_[1] + (goal_[1] - start_[1]) * s};
+    Angles q;
+    for (int j = 0; j < n; ++j) q[j] = start_[j] + (goal_[j] - start_[j]) * s;
+    return q;
   });
 }
+
+template class RestToRestT<1>;
+template class RestToRestT<2>;
 
 }  // namespace fivebar::trajectory

@@ -18,7 +18,7 @@ namespace {
 // evaluations shared by the objective and constraint callbacks of one local solve
 class Cache {
  public:
-  Cache(const TrajectoryProblem& problem, double penalty) : problem_(problem), penalty_(penalty) {}
+  Cache(const TrajectoryProblemBase& problem, double penalty) : problem_(problem), penalty_(penalty) {}
 
   const Evaluated& at(const double* x, bool grad) {
     const int n = problem_.num_variables();
@@ -37,14 +37,14 @@ class Cache {
       value_.constraints.assign(problem_.num_constraints(), 1.0);
       value_.objective_grad.assign(n, 0.0);
       value_.constraints_grad_local.assign(
-          static_cast<size_t>(problem_.num_constraints()) * kLocalVariables, 0.0);
+          static_cast<size_t>(problem_.num_constraints()) * problem_.local_variables(), 0.0);
     }
     return value_;
   }
   int evaluations() const { return evaluations_; }
 
  private:
-  const TrajectoryProblem& problem_;
+  const TrajectoryProblemBase& problem_;
   double penalty_;
   std::vector<double> x_;
   bool valid_ = false, has_grad_ = false;
@@ -121,7 +121,10 @@ struct View {
   const Preconditioner* pre;  // null: x itself
   Eigen::VectorXd origin, x;
   Stall* stall;
-  const std::vector<std::array<int, kLocalVariables>>* node_vars;
+  // the free variables of each node's local gradients, `local` per node
+  // (TrajectoryProblemBase::node_variables_into), and the rows per node
+  const std::vector<int>* node_vars;
+  int local = 0, rows_per_node = 1;
 
   const Evaluated& at(const double* y, unsigned n, bool grad) {
     const double* px = y;
@@ -137,11 +140,11 @@ struct View {
   // the local gradient of constraint row `row` (Evaluated::constraints_grad_local) as a dense
   // one with respect to the variables NLopt sees
   void chain_row(const Evaluated& e, int row, unsigned n, double* out) const {
-    const std::array<int, kLocalVariables>& vars = (*node_vars)[row / 3];
-    const double* g = &e.constraints_grad_local[static_cast<size_t>(row) * kLocalVariables];
+    const int* vars = &(*node_vars)[static_cast<size_t>(row / rows_per_node) * local];
+    const double* g = &e.constraints_grad_local[static_cast<size_t>(row) * local];
     std::fill(out, out + n, 0.0);
     Eigen::Map<Eigen::VectorXd> o(out, n);
-    for (int l = 0; l < kLocalVariables; ++l) {
+    for (int l = 0; l < local; ++l) {
       if (vars[l] < 0 || g[l] == 0.0) continue;
       if (pre) {
         o += g[l] * pre->Tt.col(vars[l]);
@@ -197,13 +200,13 @@ struct Local {
 
 // the box of the variables: one turn beyond the span of the motion (MMA and CCSAQ want a
 // bounded box); x is clamped into it
-void box_of(const TrajectoryProblem& problem, std::vector<double>* lo, std::vector<double>* hi,
+void box_of(const TrajectoryProblemBase& problem, std::vector<double>* lo, std::vector<double>* hi,
             std::vector<double>* x) {
-  const int n = problem.num_variables(), nf = problem.motion().free_per_joint();
+  const int n = problem.num_variables(), nf = problem.free_per_joint();
   lo->resize(n);
   hi->resize(n);
-  for (int j = 0; j < kDof; ++j) {
-    const double a = problem.motion().start()[j], b = problem.motion().goal()[j];
+  for (int j = 0; j < problem.dofs(); ++j) {
+    const double a = problem.start_angle(j), b = problem.goal_angle(j);
     for (int v = 0; v < nf; ++v) {
       (*lo)[j * nf + v] = std::min(a, b) - M_PI;
       (*hi)[j * nf + v] = std::max(a, b) + M_PI;
@@ -241,7 +244,7 @@ void finish_run(const View& view, const Stall& stall, int code, std::exception_p
 }
 
 // one local solve under the constraint rows `rows` (indices into the problem's constraints)
-Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x0,
+Local solve_local(const TrajectoryProblemBase& problem, const std::vector<double>& x0,
                   const OptimizerOptions& options, double penalty, const std::vector<int>& rows,
                   const Preconditioner* pre, const std::vector<char>* screened = nullptr) {
   const int n = problem.num_variables(), m = static_cast<int>(rows.size());
@@ -251,9 +254,13 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
   stall.window = options.stall_iterations;
   stall.feasible_tol = options.stall_feasibility_tol;
   if (static_cast<int>(rows.size()) < problem.num_constraints()) stall.screened = screened;
-  std::vector<std::array<int, kLocalVariables>> node_vars(problem.num_nodes());
-  for (int q = 0; q < problem.num_nodes(); ++q) node_vars[q] = problem.node_variables(q);
-  View view{&cache, &rows, pre && pre->active ? pre : nullptr, {}, {}, &stall, &node_vars};
+  const int local = problem.local_variables();
+  std::vector<int> node_vars(static_cast<size_t>(problem.num_nodes()) * local);
+  for (int q = 0; q < problem.num_nodes(); ++q) {
+    problem.node_variables_into(q, &node_vars[static_cast<size_t>(q) * local]);
+  }
+  View view{&cache, &rows, pre && pre->active ? pre : nullptr, {}, {}, &stall, &node_vars,
+            local, problem.rows_per_node()};
   Local out;
   out.x = x0;
   int code = 0;
@@ -302,7 +309,7 @@ Local solve_local(const TrajectoryProblem& problem, const std::vector<double>& x
 // the preconditioner of a solve from x0, when the options ask for one (inactive otherwise); a
 // solve whose objective is mostly winding heat is preconditioned at any size (its Gauss-Newton
 // Hessian costs one evaluation)
-Preconditioner preconditioner_of(const TrajectoryProblem& problem, const std::vector<double>& x0,
+Preconditioner preconditioner_of(const TrajectoryProblemBase& problem, const std::vector<double>& x0,
                                  const OptimizerOptions& options) {
   if (!options.precondition || options.method != Method::kSlsqp) return {};
   const bool gauss_newton = gauss_newton_preconditioning(problem, x0);
@@ -317,7 +324,7 @@ Preconditioner preconditioner_of(const TrajectoryProblem& problem, const std::ve
 // (it would otherwise converge to a point the next round rejects: swing_left's, reach_right's
 // and lower_fast's refined levels spent 25 to 40 evaluations there). screen <= 0: every row
 // from the start.
-Local solve_screened(const TrajectoryProblem& problem, const std::vector<double>& x0,
+Local solve_screened(const TrajectoryProblemBase& problem, const std::vector<double>& x0,
                      const OptimizerOptions& options, double penalty) {
   const int m = problem.num_constraints();
   std::vector<int> all(m);
@@ -390,7 +397,7 @@ const char* method_name(Method m) { return name_in(kMethodNames, m, "slsqp"); }
 
 bool parse_method(const std::string& name, Method* out) { return parse_in(kMethodNames, name, out); }
 
-OptimizeResult optimize(const TrajectoryProblem& problem, const std::vector<double>& x0,
+OptimizeResult optimize(const TrajectoryProblemBase& problem, const std::vector<double>& x0,
                         const OptimizerOptions& options) {
   OptimizeResult result;
   result.x = x0;
@@ -411,12 +418,12 @@ OptimizeResult optimize(const TrajectoryProblem& problem, const std::vector<doub
   // multi-start: seeded perturbations of the start, each polished by the local method
   if (options.global) {
     Normal normal(options.seed);
-    const int nf = problem.motion().free_per_joint();
+    const int nf = problem.free_per_joint();
     for (int s = 1; s < options.starts; ++s) {
       std::vector<double> xs = x0;
-      for (int j = 0; j < kDof; ++j) {
-        const double scale = options.spread * (std::abs(problem.motion().goal()[j] -
-                                                        problem.motion().start()[j]) + 0.1);
+      for (int j = 0; j < problem.dofs(); ++j) {
+        const double scale =
+            options.spread * (std::abs(problem.goal_angle(j) - problem.start_angle(j)) + 0.1);
         for (int v = 0; v < nf; ++v) xs[j * nf + v] += scale * normal();
       }
       Local local = solve_screened(problem, xs, options, penalty);

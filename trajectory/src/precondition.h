@@ -31,7 +31,7 @@ struct Preconditioner {
 /// the near-active rows) the refined solves took more iterations, not fewer. Inactive when x0
 /// cannot be evaluated. With `gauss_newton`, the winding heat's Gauss-Newton Hessian instead
 /// (one evaluation; TrajectoryProblem::objective_hessian).
-Preconditioner objective_preconditioner(const TrajectoryProblem& problem,
+Preconditioner objective_preconditioner(const TrajectoryProblemBase& problem,
                                          const std::vector<double>& x0, bool gauss_newton);
 
 /// Whether a solve from x0 is preconditioned by the winding heat's Gauss-Newton Hessian: when
@@ -41,7 +41,7 @@ Preconditioner objective_preconditioner(const TrajectoryProblem& problem,
 /// form, blind to the friction's curvature, made the five tasks 1.6 times slower, with c = 5e-5
 /// 2.3 times; with c = 1e-2 (heat ~20%) neither gained.
 constexpr double kGaussNewtonShare = 0.3;
-bool gauss_newton_preconditioning(const TrajectoryProblem& problem,
+bool gauss_newton_preconditioning(const TrajectoryProblemBase& problem,
                                   const std::vector<double>& x0);
 
 }  // namespace fivebar::trajectory

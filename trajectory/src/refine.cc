@@ -19,13 +19,13 @@ constexpr double kTightenGain = 1.3;
 
 // the problem of a stage: finer splines get fewer quadrature points per knot span (as many
 // nodes in all as the first solve's, at least options.refine.min_quadrature_points per span)
-ProblemOptions stage_options(const BatchOptions& options, const RestToRest& motion, double ws,
+ProblemOptions stage_options(const BatchOptions& options, int control_points, double ws,
                              double torque_limit) {
   ProblemOptions o = options.problem;
   o.smoothing_velocity = ws;
   o.torque_limit = torque_limit;
   const int base_spans = std::max(1, options.problem.control_points - kDegree);
-  const int spans = motion.basis().spans();
+  const int spans = control_points - kDegree;
   if (spans > base_spans) {
     const int q = (o.quadrature_points * base_spans + spans - 1) / spans;
     o.quadrature_points = std::max(std::min(options.refine.min_quadrature_points,
@@ -35,7 +35,7 @@ ProblemOptions stage_options(const BatchOptions& options, const RestToRest& moti
 }
 
 // exact-law value of the objective the problem minimizes, Gauss-Legendre 4x denser than its rule
-double exact_objective(const TrajectoryProblem& problem, const std::vector<double>& x,
+double exact_objective(const TrajectoryProblemBase& problem, const std::vector<double>& x,
                        const BatchOptions& options) {
   Energies e;
   if (!problem.exact_energies(x.data(), 4 * options.problem.quadrature_points, &e).ok()) {
@@ -82,14 +82,15 @@ bool feasible(const Candidate& c, const BatchOptions& options) {
          c.check.max_violation <= options.limit_rtol && std::isfinite(c.exact);
 }
 
-Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loads,
-                      const RestToRest& motion, double ws, const std::vector<double>& x0,
-                      const BatchOptions& options, double torque_limit,
-                      const OptimizerOptions& optimizer) {
+Candidate solve_stage(const StageFactory& factory, int n, double ws,
+                      const std::vector<double>& x0, const BatchOptions& options,
+                      double torque_limit, const OptimizerOptions& optimizer) {
   Candidate c;
-  c.control_points = motion.basis().size();
+  c.control_points = n;
   c.smoothing_velocity = ws;
-  const TrajectoryProblem problem(params, loads, motion, stage_options(options, motion, ws, torque_limit));
+  const std::unique_ptr<TrajectoryProblemBase> owned =
+      factory.problem(n, stage_options(options, n, ws, torque_limit));
+  const TrajectoryProblemBase& problem = *owned;
   const OptimizeResult opt = optimize(problem, x0, optimizer);
   c.solver = opt.solver;
   c.evaluation = opt.evaluation;
@@ -108,8 +109,9 @@ Candidate solve_stage(const Params<double>& params, const sim::LoadFunction& loa
        ++round) {
     limit *= std::pow(torque_limit / c.check.peak_torque, kTightenGain) *
              (1.0 - 0.1 * std::max(options.limit_rtol, c.check.torque_excess / torque_limit));
-    const TrajectoryProblem tightened(params, loads, motion, stage_options(options, motion, ws, limit));
-    const OptimizeResult again = optimize(tightened, c.x, optimizer);
+    const std::unique_ptr<TrajectoryProblemBase> tightened =
+        factory.problem(n, stage_options(options, n, ws, limit));
+    const OptimizeResult again = optimize(*tightened, c.x, optimizer);
     c.evaluations += again.evaluations;
     if (!again.solver.usable()) break;
     const ConstraintCheck c2 = problem.check(again.x.data(), grid);
@@ -135,11 +137,9 @@ void note_continuation_unsettled(double ws, double lowered, const BatchOptions& 
 }
 
 // the continuation on w_s from `best`, each stage warm-started from the last usable point
-Candidate continuation(const Params<double>& params, const sim::LoadFunction& loads,
-                       Candidate best, const BatchOptions& options,
+Candidate continuation(const StageFactory& factory, Candidate best, const BatchOptions& options,
                        const OptimizerOptions& optimizer, TaskResult* r) {
-  const RestToRest motion(best.control_points, r->duration, r->start, r->goal,
-                          options.problem.end_acceleration);
+  const int n = best.control_points;
   std::vector<double> warm = best.x;
   log_stage(&r->continuation, best.smoothing_velocity, best, true);
   // a polish: its solves get the continuation's own evaluation limit
@@ -156,8 +156,7 @@ Candidate continuation(const Params<double>& params, const sim::LoadFunction& lo
   const std::vector<double>& stages = options.refine.continuation;
   for (size_t k = 0; k < stages.size(); ++k) {
     const double before = best.exact;
-    Candidate c = solve_stage(params, loads, motion, stages[k], warm, options,
-                              r->torque_limit, polish);
+    Candidate c = solve_stage(factory, n, stages[k], warm, options, r->torque_limit, polish);
     r->evaluations += c.evaluations;
     if (c.solved() && c.solver.usable()) warm = c.x;
     const bool kept = better(c, best, options);
@@ -168,13 +167,6 @@ Candidate continuation(const Params<double>& params, const sim::LoadFunction& lo
     if (k + 1 == stages.size()) note_continuation_unsettled(stages[k], lowered, options, r);
   }
   return best;
-}
-
-// the free variables of a spline of n control points fitted to the motion of `c`
-std::vector<double> refit(const Candidate& c, int n, const TaskResult& r, EndAcceleration ends) {
-  const RestToRest from(c.control_points, r.duration, r.start, r.goal, ends);
-  const RestToRest to(n, r.duration, r.start, r.goal, ends);
-  return to.fit([&](double t) { return from.state(c.x.data(), t)[0]; });
 }
 
 }  // namespace
@@ -202,18 +194,15 @@ void note_unconverged(const BatchOptions& options, TaskResult* r) {
 
 // the refinement of the control points of `best` (options.refine.control_points), every level
 // solved under the smoothed law of `best`
-Candidate refinement(const Params<double>& params, const sim::LoadFunction& loads,
-                     Candidate best, const BatchOptions& options,
+Candidate refinement(const StageFactory& factory, Candidate best, const BatchOptions& options,
                      const OptimizerOptions& optimizer, TaskResult* r) {
   const double ws = best.smoothing_velocity;
   double previous = best.exact;
   log_stage(&r->refinement, best.control_points, best, true);
   for (int n : options.refine.control_points) {
     if (n <= best.control_points) continue;
-    const EndAcceleration ends = options.problem.end_acceleration;
-    const RestToRest motion(n, r->duration, r->start, r->goal, ends);
-    Candidate c = solve_stage(params, loads, motion, ws, refit(best, n, *r, ends), options,
-                              r->torque_limit, optimizer);
+    Candidate c = solve_stage(factory, n, ws, factory.refit(best, n), options, r->torque_limit,
+                              optimizer);
     r->evaluations += c.evaluations;
     const bool kept = better(c, best, options);
     log_stage(&r->refinement, n, c, kept);
@@ -236,16 +225,14 @@ Candidate refinement(const Params<double>& params, const sim::LoadFunction& load
 
 }  // namespace
 
-Candidate refine(const Params<double>& params, const sim::LoadFunction& loads,
-                 const Candidate& first, const BatchOptions& options,
-                 const OptimizerOptions& optimizer, TaskResult* r) {
+Candidate refine(const StageFactory& factory, const Candidate& first,
+                 const BatchOptions& options, const OptimizerOptions& optimizer, TaskResult* r) {
   // the levels under the first solve's smoothed law, whose landscape has no kinks at the
   // reversals, then the continuation to the exact law on the finest spline kept (a scene whose
   // own law is smoothed is solved exactly by the first law)
   if (!startable(first, options)) return first;
-  Candidate best = refinement(params, loads, first, options, optimizer, r);
-  const bool smooth_law = params.friction.smoothing_velocity > 0.0;
-  if (!smooth_law) best = continuation(params, loads, best, options, optimizer, r);
+  Candidate best = refinement(factory, first, options, optimizer, r);
+  if (!factory.smooth_law()) best = continuation(factory, best, options, optimizer, r);
   return best;
 }
 

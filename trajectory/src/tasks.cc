@@ -23,13 +23,11 @@ bool point_c(const Params<double>& params, double theta1, double theta2,
   return true;
 }
 
-ResolvedTask resolve_task(const Params<double>& params, const TaskSpec& task,
-                          const sim::Initial& initial, double singular_margin) {
-  ResolvedTask r;
-  auto fail = [&](const std::string& status, const std::string& message) {
-    r.status = status;
-    r.message = message;
-    return r;
+bool task_values_ok(const TaskSpec& task, std::string* status, std::string* message) {
+  auto fail = [&](const std::string& st, const std::string& msg) {
+    *status = st;
+    *message = msg;
+    return false;
   };
   if (!(task.duration > 0)) {
     return fail("invalid_duration",
@@ -46,6 +44,18 @@ ResolvedTask resolve_task(const Params<double>& params, const TaskSpec& task,
     return fail("invalid_torque_limit", "torque_limit " + format_significant(task.torque_limit, 6) +
                                             " N m is not positive");
   }
+  return true;
+}
+
+ResolvedTask resolve_task(const Params<double>& params, const TaskSpec& task,
+                          const sim::Initial& initial, double singular_margin) {
+  ResolvedTask r;
+  auto fail = [&](const std::string& status, const std::string& message) {
+    r.status = status;
+    r.message = message;
+    return r;
+  };
+  if (!task_values_ok(task, &r.status, &r.message)) return r;
   // joint angles of a pose, Cartesian ones in the working mode of the reference angles
   auto solve = [&](const Pose& pose, std::array<double, 2> ref, const char* which,
                    std::array<double, 2>* out) -> bool {

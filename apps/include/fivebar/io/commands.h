@@ -117,11 +117,12 @@ struct OptimizeSettings {
 /// refinement on.
 OptimizeSettings optimize_defaults();
 
-/// The batch options of `settings` for a scene with motor winding data `windings` (which choose
-/// the default objective and give the winding heat); throws InputError(`command line: --method:
-/// ...`) and the like, also for an objective that needs winding data the scene does not give.
+/// The batch options of `settings` for a scene with motor winding data `windings` of its
+/// `motors` motors (which choose the default objective and give the winding heat); throws
+/// InputError(`command line: --method: ...`) and the like, also for an objective that needs
+/// winding data the scene does not give.
 trajectory::BatchOptions batch_options(const OptimizeSettings& settings,
-                                       const MotorWindings& windings);
+                                       const MotorWindings& windings, int motors = kActuators);
 
 /// `options` with the winding heat of `windings` (a design of `study` or `design` may vary the
 /// motors' keys).
@@ -144,14 +145,23 @@ std::string bounds_advice(const std::vector<BoundHit>& hits);
 
 /// The note of an objective whose optimum a machine should not run (dissipated_energy: it
 /// switches the motors between their limits), naming the scene keys to add; "" for the others.
-std::string objective_note(const trajectory::BatchOptions& options);
+std::string objective_note(const trajectory::BatchOptions& options, int motors = kActuators);
 /// Appends objective_note() (when there is one) to the message of every solved result (not to
 /// a task the design cannot do, whose message says why).
 void add_objective_note(const trajectory::BatchOptions& options,
-                        std::vector<trajectory::TaskResult>* results);
+                        std::vector<trajectory::TaskResult>* results, int motors = kActuators);
 
-/// Reads a tasks file (io::load_tasks); a malformed one throws InputError.
-std::vector<trajectory::TaskSpec> read_tasks(const std::string& path);
+/// Reads a tasks file (io::load_tasks) for a scene of that mechanism (`four_bar`: one-coordinate
+/// poses); a malformed one throws InputError.
+std::vector<trajectory::TaskSpec> read_tasks(const std::string& path, bool four_bar = false);
+
+/// One task solved on the scene's mechanism (trajectory::run_task, or run_four_bar_task for a
+/// four-bar), under the scene's loads (built here: call it from the thread that runs the task).
+/// `warm`: the same task solved for a neighbouring design (run_task's warm start; a four-bar
+/// starts from its minimum-jerk motion).
+trajectory::TaskResult run_scene_task(const Scene& scene, const trajectory::TaskSpec& task,
+                                      const trajectory::BatchOptions& options,
+                                      const trajectory::TaskResult* warm = nullptr);
 
 /// The trajectory rows of a solved task and of its minimum-jerk baseline, on the scene's output
 /// step (at most a tenth of the task's duration). `baseline` is left empty when the baseline

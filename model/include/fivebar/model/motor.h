@@ -9,15 +9,17 @@
 
 namespace fivebar {
 
-/// Winding data of the two motors (index 0: M1 at O, 1: M2 at D0).
+/// Winding data of the motors (index 0: M1 at O, 1: M2 at D0; the four-bar's one motor, M1,
+/// in index 0).
 struct MotorWindings {
   std::array<double, kActuators> resistance{};       ///< R [ohm]; 0: no winding data
   std::array<double, kActuators> torque_constant{};  ///< k_t [N m/A] on the motor shaft; 0: none
   std::array<double, kActuators> gear_ratio{1.0, 1.0};  ///< G [motor turns per crank turn]
 
-  /// True when both motors have winding data (R > 0 and k_t > 0).
-  bool present() const {
-    for (int a = 0; a < kActuators; ++a) {
+  /// True when the first `motors` motors (both by default) have winding data (R > 0 and
+  /// k_t > 0).
+  bool present(int motors = kActuators) const {
+    for (int a = 0; a < motors; ++a) {
       if (!(resistance[a] > 0.0) || !(torque_constant[a] > 0.0)) return false;
     }
     return true;

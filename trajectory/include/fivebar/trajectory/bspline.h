@@ -46,27 +46,30 @@ class ClampedBasis {
 /// acceleration free (two fixed control points per end), kZero makes it zero too (three).
 enum class EndAcceleration : int { kFree = 0, kZero = 1 };
 
-/// A rest-to-rest motion of (th1, th2) from `start` to `goal` [rad] in `duration` [s]: each
-/// angle is a clamped quintic B-spline whose first `fixed()` control points equal the start and
-/// last `fixed()` equal the goal: two make the rate zero at both ends, three (kZero) the
-/// acceleration too. The free variables are the n - 2 fixed() inner control points of th1
-/// followed by those of th2.
-class RestToRest {
+/// A rest-to-rest motion of n joints (the five-bar's th1, th2; the four-bar's th1) from `start`
+/// to `goal` [rad] in `duration` [s]: each angle is a clamped quintic B-spline whose first
+/// `fixed()` control points equal the start and last `fixed()` equal the goal: two make the rate
+/// zero at both ends, three (kZero) the acceleration too. The free variables are the
+/// n - 2 fixed() inner control points of joint 0, followed by those of joint 1, ...
+/// Instantiated for n = 1 and 2 (bspline.cc).
+template <int n>
+class RestToRestT {
  public:
-  RestToRest(int control_points, double duration, std::array<double, 2> start,
-             std::array<double, 2> goal, EndAcceleration ends = EndAcceleration::kZero);
+  using Angles = std::array<double, n>;
+  RestToRestT(int control_points, double duration, Angles start, Angles goal,
+              EndAcceleration ends = EndAcceleration::kZero);
 
   const ClampedBasis& basis() const { return basis_; }
   EndAcceleration ends() const { return ends_; }
   /// control points fixed at each end (2 or 3)
   int fixed() const { return ends_ == EndAcceleration::kZero ? 3 : 2; }
   int free_per_joint() const { return basis_.size() - 2 * fixed(); }
-  int num_variables() const { return 2 * free_per_joint(); }
-  const std::array<double, 2>& start() const { return start_; }
-  const std::array<double, 2>& goal() const { return goal_; }
+  int num_variables() const { return n * free_per_joint(); }
+  const Angles& start() const { return start_; }
+  const Angles& goal() const { return goal_; }
   double duration() const { return basis_.duration(); }
 
-  /// All n control points of joint j (0: th1, 1: th2) for the free variables x.
+  /// All control points of joint j (0-based) for the free variables x.
   std::vector<double> control_points(const double* x, int j) const;
   /// Index of the control point that variable `v` of a joint moves (fixed() .. n - 1 - fixed()).
   int control_index(int v) const { return v + fixed(); }
@@ -81,9 +84,9 @@ class RestToRest {
     return v >= 0 ? x[v] : (c < fixed() ? start_[j] : goal_[j]);
   }
 
-  /// (th, thd, thdd) of both joints at time t: out[0] = (th1, th2), out[1] rates, out[2]
+  /// (th, thd, thdd) of every joint at time t: out[0] angles, out[1] rates, out[2]
   /// accelerations.
-  std::array<std::array<double, 2>, 3> state(const double* x, double t) const;
+  std::array<Angles, 3> state(const double* x, double t) const;
 
   /// The free variables that reproduce the minimum-jerk quintic
   /// th(t) = start + (goal - start) (10 s^3 - 15 s^4 + 6 s^5), s = t / duration. The spline space
@@ -94,13 +97,18 @@ class RestToRest {
   /// The free variables whose spline is the least-squares fit (8 n samples in time) of the
   /// joint path `path(t)`, t in [0, duration]. The ends stay at rest at start and goal whatever
   /// the path does there.
-  std::vector<double> fit(const std::function<std::array<double, 2>(double)>& path) const;
+  std::vector<double> fit(const std::function<Angles(double)>& path) const;
 
  private:
   ClampedBasis basis_;
-  std::array<double, 2> start_, goal_;
+  Angles start_, goal_;
   EndAcceleration ends_;
 };
+
+extern template class RestToRestT<1>;
+extern template class RestToRestT<2>;
+/// The five-bar's motion of (th1, th2).
+using RestToRest = RestToRestT<2>;
 
 /// Minimum-jerk quintic blend s(u) = 10 u^3 - 15 u^4 + 6 u^5 and its first two derivatives in u.
 std::array<double, 3> minimum_jerk_blend(double u);

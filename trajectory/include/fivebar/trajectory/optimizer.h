@@ -75,7 +75,7 @@ struct OptimizeResult {
 };
 
 /// Minimizes problem.objective subject to its constraints, from x0.
-OptimizeResult optimize(const TrajectoryProblem& problem, const std::vector<double>& x0,
+OptimizeResult optimize(const TrajectoryProblemBase& problem, const std::vector<double>& x0,
                         const OptimizerOptions& options);
 
 }  // namespace fivebar::trajectory

@@ -1,5 +1,7 @@
 // The trajectory optimization problem: cost and constraints of a rest-to-rest B-spline motion of
-// the five-bar, evaluated by the friction-aware inverse dynamics, with exact gradients.
+// a mechanism (mechanism.h: the five-bar, the four-bar), evaluated by the friction-aware inverse
+// dynamics, with exact gradients. TrajectoryProblem is the five-bar's; the four-bar's is declared
+// in four_bar_problem.h.
 #pragma once
 
 #include <array>
@@ -8,8 +10,10 @@
 #include <vector>
 
 #include <ceres/jet.h>
+#include <functional>
 
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/five_bar_mechanism.h"
 #include "fivebar/model/kinematics.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/status.h"
@@ -68,9 +72,11 @@ struct ProblemOptions {
   int control_points = 10;      ///< per joint (n >= 7); n - 6 of them are free
   int quadrature_points = 12;   ///< Gauss-Legendre points per knot span (also constraint points)
   Objective objective = Objective::kDissipatedEnergy;
-  /// |M1|, |M2| <= torque_limit [N m] at every quadrature point; infinity: no torque constraint
+  /// |M_a| <= torque_limit [N m] for every motor a at every quadrature point; infinity: no
+  /// torque constraint
   double torque_limit = std::numeric_limits<double>::infinity();
-  /// |sin(th4 - th3)| >= singular_margin at every quadrature point (also keeps the assembly)
+  /// |singular measure| >= singular_margin at every quadrature point (also keeps the assembly):
+  /// the five-bar's |sin(th4 - th3)|, the four-bar's |sin(th3 - th2)|
   double singular_margin = kMotionSingularMargin;
   /// w_s [rad/s] of the smooth Coulomb sign tanh(w / w_s) used along the trajectory, when the
   /// scene's friction.smoothing_velocity is 0 (the exact sign has no derivative at w = 0, and
@@ -79,8 +85,9 @@ struct ProblemOptions {
   double power_smoothing = 1e-2;  ///< eps [W] of the smooth |p| and max(0, p) (kInputEnergy,
                                   ///< kSupplyEnergy)
   Regeneration regeneration = Regeneration::kNone;  ///< of kSupplyEnergy
-  /// c_a = R_a / (k_t,a G_a)^2 [W/(N m)^2] of both motors (MotorWindings::heat_coefficients):
-  /// the winding heat is c_a M_a^2; zero without winding data
+  /// c_a = R_a / (k_t,a G_a)^2 [W/(N m)^2] of the motors (MotorWindings::heat_coefficients;
+  /// a mechanism with one motor uses the first): the winding heat is c_a M_a^2; zero without
+  /// winding data
   std::array<double, 2> winding_heat{};
   /// the ends of the task motions (RestToRest): free accelerations by default (with zero ones, a
   /// boundary layer of a few ms slows the convergence of the refinement to first order)
@@ -94,7 +101,14 @@ struct ProblemOptions {
 
 /// The friction parameters actually used along trajectories: `params` with smoothing_velocity
 /// set to options.smoothing_velocity when it is 0 (see ProblemOptions::smoothing_velocity).
-Params<double> smoothed_params(const Params<double>& params, const ProblemOptions& options);
+template <class P>
+P smoothed_params(const P& params, const ProblemOptions& options) {
+  P p = params;
+  if (!(p.friction.smoothing_velocity > 0.0)) {
+    p.friction.smoothing_velocity = options.smoothing_velocity;
+  }
+  return p;
+}
 
 /// Values at the constraint points of one evaluation.
 struct Evaluated {
@@ -102,106 +116,181 @@ struct Evaluated {
   std::vector<double> objective_grad;    ///< d objective / dx, when asked
   std::vector<double> constraints;       ///< c(x) <= 0, see TrajectoryProblem
   std::vector<double> constraints_grad;  ///< row-major (constraints x variables), when asked
-  /// the same in local form (TrajectoryProblem::evaluate_local): row r depends on the 12 free
-  /// variables node_variables(r / 3) only; d c_r / d those at [12 r, 12 r + 12)
+  /// the same in local form (evaluate_local): row r depends on the L = local_variables() free
+  /// variables of node r / rows_per_node() only; d c_r / d those at [L r, L r + L)
   std::vector<double> constraints_grad_local;
 };
 
-/// control points (6) times joints (2) that one node's state depends on
+/// control points (6) times joints (2) that one node's state depends on (the five-bar's)
 constexpr int kLocalVariables = 2 * (kDegree + 1);
 
 /// Constraint check on a uniform grid (t = duration i / (points - 1)).
 struct ConstraintCheck {
   Status status;                ///< not ok: the inverse dynamics failed somewhere on the grid
   int points = 0;
-  double peak_torque = 0;       ///< max over the grid of max(|M1|, |M2|) [N m]
+  double peak_torque = 0;       ///< max over the grid and the motors of |M_a| [N m]
   double torque_excess = 0;     ///< max(0, peak_torque - torque_limit) [N m]
-  double min_coupler_sine = 1;  ///< min |sin(th4 - th3)| over the grid
+  double min_coupler_sine = 1;  ///< min |singular measure| over the grid (the five-bar's
+                                ///< |sin(th4 - th3)|, the four-bar's |sin(th3 - th2)|)
   /// max(0, torque_excess / torque_limit, (margin - min_coupler_sine) / margin): relative
   double max_violation = 0;
 };
 
-/// Cost and constraints of one rest-to-rest task for one design.
+/// What the optimizer (optimizer.h) and the batch's checks need of a trajectory problem,
+/// whatever the mechanism: TrajectoryProblemT<M> implements it. Constraint rows come in groups
+/// of rows_per_node() per node (see TrajectoryProblemT).
+class TrajectoryProblemBase {
+ public:
+  virtual ~TrajectoryProblemBase() = default;
+  /// degrees of freedom: one spline per driven joint, one torque row per motor
+  virtual int dofs() const = 0;
+  virtual int num_variables() const = 0;
+  virtual int num_nodes() const = 0;
+  int rows_per_node() const { return dofs() + 1; }
+  int num_constraints() const { return rows_per_node() * num_nodes(); }
+  /// control points (kDegree + 1) times joints that one node's state depends on
+  int local_variables() const { return dofs() * (kDegree + 1); }
+  virtual const ProblemOptions& options() const = 0;
+  /// control points per joint of the spline
+  virtual int control_points() const = 0;
+  /// free variables per joint (joint j's are [j free_per_joint(), (j + 1) free_per_joint()))
+  virtual int free_per_joint() const = 0;
+  /// the motion's start and goal angle of joint j [rad]
+  virtual double start_angle(int j) const = 0;
+  virtual double goal_angle(int j) const = 0;
+
+  /// Objective, constraints and (when the flags ask) their gradients at x. Not ok when the
+  /// inverse dynamics fails at a node (cannot assemble, friction loop): out is then unusable.
+  virtual Status evaluate(const double* x, bool want_gradients, Evaluated* out) const = 0;
+  /// The same with gradients, those of the constraints in local form (constraints_grad_local;
+  /// constraints_grad is left as it was): a row of the dense form has local_variables()
+  /// non-zeros of up to 300 (160 variables at 85 control points), and the dense form is 2.4 MB
+  /// to clear.
+  virtual Status evaluate_local(const double* x, Evaluated* out) const = 0;
+  /// The free variables of the local gradients of node `node`'s rows into out[0 ..
+  /// local_variables()): entry dofs() i + j is control point i of the node's six of joint j,
+  /// -1 where it is a fixed end point.
+  virtual void node_variables_into(int node, int* out) const = 0;
+  /// Objective only, in double (no Jets).
+  Status objective(const double* x, double* value) const;
+  /// Hessian of the objective at x (num_variables()^2 values, row-major, symmetric):
+  /// sum over the nodes of weight B^T H_s B, H_s the Hessian of the integrand in the node
+  /// state (3 dofs() values) by forward differences of its exact (Jet) gradient, B the spline's
+  /// linear map from the free control points to the node state. Costs about 3 dofs() + 1
+  /// evaluations with gradients. With `gauss_newton`, H_s is instead the winding heat's
+  /// Gauss-Newton form sum_a 2 c_a grad M_a grad M_a^T, from one evaluation: positive
+  /// semi-definite, and the scale a preconditioner needs where the heat is most of the
+  /// objective (heat_share()).
+  virtual Status objective_hessian(const double* x, std::vector<double>* hessian,
+                                   bool gauss_newton = false) const = 0;
+  /// The winding heat's share of the objective at x, under the smoothed law (0 for an objective
+  /// without it, NaN when x cannot be evaluated).
+  double heat_share(const double* x) const;
+  /// The energies of the motion integrated with `points` Gauss-Legendre points per span (for
+  /// the accuracy check against a denser rule).
+  virtual Status energies(const double* x, int points, Energies* out) const = 0;
+  /// The same with the scene's exact friction law; its integrand has kinks where a joint
+  /// reverses, so ask for more points than energies() needs.
+  virtual Status exact_energies(const double* x, int points, Energies* out) const = 0;
+  /// Re-check of the constraints on a uniform grid of `points` instants (inverse dynamics in
+  /// double with the exact law, ends included).
+  virtual ConstraintCheck check(const double* x, int points) const = 0;
+};
+
+/// What the trajectory problem needs of a mechanism M beyond the concept (mechanism.h): its
+/// inverse dynamics on the node state s = (q, v, qdd) and the drive torques it returns.
+/// Specialized for FiveBar below and for FourBar in four_bar_problem.h.
+template <class M>
+struct TrajectoryMechanism;
+
+template <>
+struct TrajectoryMechanism<FiveBar> {
+  template <typename T>
+  static Status inverse(const Params<T>& p, const Loads<T>& L, const std::array<T, 6>& s,
+                        const EvalOptions& opt, Evaluation<T>* ev) {
+    return inverse_dynamics(p, L, s[0], s[1], s[2], s[3], s[4], s[5], nullptr, opt, ev);
+  }
+  template <typename T>
+  static std::array<T, 2> drives(const Evaluation<T>& ev) {
+    return {ev.M1, ev.M2};
+  }
+};
+
+/// Cost and constraints of one rest-to-rest task of mechanism M (kDof = M::kDof joints) for one
+/// design.
 ///
 /// Time is discretized by composite Gauss-Legendre quadrature: quadrature_points nodes in each
 /// knot span of the spline, where the integrand (a smooth function of the spline's piecewise
 /// polynomial state) is smooth; with free end accelerations (EndAcceleration::kFree) two more
 /// nodes of weight 0 at t = 0 and t = T, where the torques step. The nodes carry the
-/// constraints, three per node q:
-///   c[3q]   = (M1 / torque_limit)^2 - 1 <= 0
-///   c[3q+1] = (M2 / torque_limit)^2 - 1 <= 0        (0 - 1 when there is no torque limit)
-///   c[3q+2] = cos^2(C) - (1 - margin^2) <= 0,  cos(C) = (l3^2 + l4^2 - |BD|^2) / (2 l3 l4)
-/// where C is the coupler angle at joint C (|sin C| = |sin(th4 - th3)|). The third constraint is
-/// defined for any (th1, th2), also where the mechanism cannot close, and implies both the margin
-/// and the assembly; the elbow branch cannot change along a motion that keeps |sin C| > 0.
+/// constraints, kDof + 1 per node q (the five-bar's three: M1, M2, the coupler):
+///   c[(kDof + 1) q + a]    = (M_a / torque_limit)^2 - 1 <= 0  for each motor a < kDof
+///                            (0 - 1 when there is no torque limit)
+///   c[(kDof + 1) q + kDof] = c^2 - (1 - margin^2) <= 0,  c = M::singular_cosine(q)
+/// where c is the smooth form of the singular measure (the five-bar's cos C = (l3^2 + l4^2 -
+/// |BD|^2) / (2 l3 l4), C the coupler angle at joint C; the four-bar's cos(th3 - th2)). The last
+/// constraint is defined for any q, also where the mechanism cannot close, and implies both the
+/// margin and the assembly; the branch cannot change along a motion that keeps the measure > 0.
 ///
-/// Gradients are exact: the inverse dynamics at each node runs on ceres::Jet<double, 6> seeded
-/// on the node state (th1, th2, w1, w2, a1, a2), and the chain rule through the spline basis
-/// (linear in x) gives the derivatives with respect to the free control points.
+/// Gradients are exact: the inverse dynamics at each node runs on ceres::Jet<double, 3 kDof>
+/// seeded on the node state (q, v, qdd), and the chain rule through the spline basis (linear in
+/// x) gives the derivatives with respect to the free control points.
 ///
 /// Thread-safety: const member functions may be called from several threads at once.
-class TrajectoryProblem {
+template <class M>
+class TrajectoryProblemT : public TrajectoryProblemBase {
  public:
-  /// `loads` gives M3, F, F_angle of the scene at t (its M1, M2 are ignored): the constructor
-  /// samples it at the nodes; check(), rows() and torques() call it at their instants.
-  TrajectoryProblem(const Params<double>& params, const sim::LoadFunction& loads,
-                    const RestToRest& motion, const ProblemOptions& options);
+  static constexpr int kDof = M::kDof;
+  static constexpr int kState = 3 * kDof;  ///< node state (q, v, qdd)
+  static constexpr int kLocal = kDof * (kDegree + 1);
+  using ParamsD = typename M::template Params<double>;
+  using LoadsD = typename M::template Loads<double>;
+  using LoadFunction = std::function<LoadsD(double)>;
+  using Motion = RestToRestT<kDof>;
+  using State = std::array<double, kState>;
+  using Jet = ceres::Jet<double, kState>;
 
-  int num_variables() const { return motion_.num_variables(); }
-  int num_constraints() const { return 3 * static_cast<int>(nodes_.size()); }
-  int num_nodes() const { return static_cast<int>(nodes_.size()); }
-  const RestToRest& motion() const { return motion_; }
-  const ProblemOptions& options() const { return options_; }
+  /// `loads` gives the scene's other loads at t (its drive torques are ignored): the
+  /// constructor samples it at the nodes; check(), rows() and torques() call it at their
+  /// instants.
+  TrajectoryProblemT(const ParamsD& params, const LoadFunction& loads, const Motion& motion,
+                     const ProblemOptions& options);
+
+  int dofs() const override { return kDof; }
+  int num_variables() const override { return motion_.num_variables(); }
+  int num_nodes() const override { return static_cast<int>(nodes_.size()); }
+  const Motion& motion() const { return motion_; }
+  const ProblemOptions& options() const override { return options_; }
+  int control_points() const override { return motion_.basis().size(); }
+  int free_per_joint() const override { return motion_.free_per_joint(); }
+  double start_angle(int j) const override { return motion_.start()[j]; }
+  double goal_angle(int j) const override { return motion_.goal()[j]; }
   /// the parameters of the cost and constraints (friction smoothed, smoothed_params)
-  const Params<double>& params() const { return params_; }
+  const ParamsD& params() const { return params_; }
   /// the parameters as given (the scene's own friction law): those of check(), rows(),
   /// torques(), which are what the mechanism needs and what `fivebar inverse` computes
-  const Params<double>& exact_params() const { return exact_params_; }
+  const ParamsD& exact_params() const { return exact_params_; }
 
-  /// Objective, constraints and (when the flags ask) their gradients at x. Not ok when the
-  /// inverse dynamics fails at a node (cannot assemble, friction loop): out is then unusable.
-  Status evaluate(const double* x, bool want_gradients, Evaluated* out) const;
-  /// The same with gradients, those of the constraints in local form (constraints_grad_local;
-  /// constraints_grad is left as it was): a row of the dense form has 12 non-zeros of up to
-  /// 300 (160 variables at 85 control points), and the dense form is 2.4 MB to clear.
-  Status evaluate_local(const double* x, Evaluated* out) const;
-  /// The free variables of the local gradients of node `node`'s rows: entry 2 i + j is control
-  /// point i of the node's six of joint j, -1 where it is a fixed end point.
-  std::array<int, kLocalVariables> node_variables(int node) const;
-  /// Objective only, in double (no Jets).
-  Status objective(const double* x, double* value) const;
-  /// Hessian of the objective at x (num_variables()^2 values, row-major, symmetric):
-  /// sum over the nodes of weight B^T H_s B, H_s the 6 x 6 Hessian of the integrand in the node
-  /// state by forward differences of its exact (Jet) gradient, B the spline's linear map from
-  /// the free control points to the node state. Costs about 7 evaluations with gradients.
-  /// With `gauss_newton`, H_s is instead the winding heat's Gauss-Newton form
-  /// sum_a 2 c_a grad M_a grad M_a^T, from one evaluation: positive semi-definite, and the scale
-  /// a preconditioner needs where the heat is most of the objective (heat_share()).
+  Status evaluate(const double* x, bool want_gradients, Evaluated* out) const override;
+  Status evaluate_local(const double* x, Evaluated* out) const override;
+  /// node_variables_into as an array (entry kDof i + j: control point i of joint j)
+  std::array<int, kLocal> node_variables(int node) const;
+  void node_variables_into(int node, int* out) const override;
   Status objective_hessian(const double* x, std::vector<double>* hessian,
-                           bool gauss_newton = false) const;
-  /// The winding heat's share of the objective at x, under the smoothed law (0 for an objective
-  /// without it, NaN when x cannot be evaluated).
-  double heat_share(const double* x) const;
-
-  /// The energies of the motion integrated with `points` Gauss-Legendre points per span (for
-  /// the accuracy check against a denser rule).
-  Status energies(const double* x, int points, Energies* out) const;
-  /// The same with the scene's exact friction law (exact_params()); its integrand has kinks
-  /// where a joint reverses, so ask for more points than energies() needs.
-  Status exact_energies(const double* x, int points, Energies* out) const;
-
-  /// Re-check of the constraints on a uniform grid of `points` instants (inverse dynamics in
-  /// double with the exact law, ends included).
-  ConstraintCheck check(const double* x, int points) const;
+                           bool gauss_newton = false) const override;
+  Status energies(const double* x, int points, Energies* out) const override;
+  Status exact_energies(const double* x, int points, Energies* out) const override;
+  ConstraintCheck check(const double* x, int points) const override;
 
   /// Rows of trajectory.csv (interfaces.md) on a uniform grid of step `step` [s] (ends
   /// included), from sim::inverse_rows with the scene's exact friction law (the torques of
-  /// `fivebar inverse` on the same motion). E_diss,
-  /// W_in (M1 w1 + M2 w2) and W_ext (M3 w3 + F . v_P) are integrated by the trapezoidal rule
-  /// on the rows, so that d(KE + PE) = W_in + W_ext - E_diss to that rule's accuracy.
+  /// `fivebar inverse` on the same motion). E_diss, W_in (sum_a M_a w_a) and W_ext (the
+  /// external loads' power) are integrated by the trapezoidal rule on the rows, so that
+  /// d(KE + PE) = W_in + W_ext - E_diss to that rule's accuracy.
   Status rows(const double* x, double step, std::vector<sim::Row>* out) const;
 
-  /// M1, M2 [N m] of the motion at time t (inverse dynamics in double, exact law).
+  /// The drive torques [N m] of the motion at time t (inverse dynamics in double, exact law):
+  /// M1 and M2 (left as it is when null; the four-bar, with one motor, sets it to 0).
   Status torques(const double* x, double t, double* M1, double* M2) const;
   /// The same with the smoothed law of the cost (params()).
   Status smoothed_torques(const double* x, double t, double* M1, double* M2) const;
@@ -210,43 +299,49 @@ class TrajectoryProblem {
   struct Node {
     double t, weight;
     BasisAt basis;
-    Loads<double> loads;
+    LoadsD loads;
   };
   enum class Gradients { kNone, kDense, kLocal };
   struct NodeValues {
-    double f = 0, M1 = 0, M2 = 0;
-    std::array<double, 6> df{}, dM1{}, dM2{};  ///< in the node state (with Jets)
+    double f = 0;
+    std::array<double, kDof> drives{};
+    std::array<double, kState> df{};  ///< in the node state (with Jets)
+    std::array<std::array<double, kState>, kDof> dM{};
   };
+  using Hessian = std::array<std::array<double, kState>, kState>;
   Status evaluate_as(const double* x, Gradients how, Evaluated* out) const;
-  Status node_pass(const Params<ceres::Jet<double, 6>>* pj, const Node& node,
-                   const std::array<double, 6>& s, NodeValues* v) const;
-  void node_gradients(int q, const NodeValues& v, double ds1, double ds2, Gradients how,
-                      double* objective_grad, Evaluated* out) const;
+  Status node_pass(const typename M::template Params<Jet>* pj, const Node& node, const State& s,
+                   NodeValues* v) const;
+  void node_gradients(int q, const NodeValues& v, const std::array<double, kDof>& ds,
+                      Gradients how, double* objective_grad, Evaluated* out) const;
   Status evaluate_nodes(const double* x, Gradients how, int begin, int end,
                         std::vector<double>* shares, Evaluated* out) const;
-  Status torques_with(const Params<double>& params, const double* x, double t, double* M1,
-                      double* M2) const;
-  Status energies_with(const Params<double>& params, const double* x, int points,
-                       Energies* out) const;
-  // node state (th, thd, thdd of both joints) from x
-  std::array<double, 6> node_state(const double* x, const Node& node) const;
+  Status torques_with(const ParamsD& params, const double* x, double t,
+                      std::array<double, kDof>* drives) const;
+  Status torques_out(const ParamsD& params, const double* x, double t, double* M1,
+                     double* M2) const;
+  Status energies_with(const ParamsD& params, const double* x, int points, Energies* out) const;
+  // node state (q, v, qdd: s[kDof k + j]) from x
+  State node_state(const double* x, const Node& node) const;
   // integrand f at state s and its exact gradient in s
-  Status node_gradient(const Params<ceres::Jet<double, 6>>& pj, const Node& node,
-                       const std::array<double, 6>& s, double* f,
-                       std::array<double, 6>* df) const;
-  // 6 x 6 Hessian of the integrand in the node state (forward differences of node_gradient,
-  // or the winding heat's Gauss-Newton form)
-  Status node_hessian(const Params<ceres::Jet<double, 6>>& pj, const Node& node,
-                      const std::array<double, 6>& s, bool gauss_newton,
-                      std::array<std::array<double, 6>, 6>* hs) const;
+  Status node_gradient(const typename M::template Params<Jet>& pj, const Node& node,
+                       const State& s, double* f, State* df) const;
+  // Hessian of the integrand in the node state (forward differences of node_gradient, or the
+  // winding heat's Gauss-Newton form)
+  Status node_hessian(const typename M::template Params<Jet>& pj, const Node& node,
+                      const State& s, bool gauss_newton, Hessian* hs) const;
   // free variable of control point c of joint j, or -1 for the fixed end points
-  int variable_of(int c, int j) const;
+  int variable_of(int c, int j) const { return motion_.variable_of(c, j); }
 
-  Params<double> params_, exact_params_;
-  sim::LoadFunction loads_;
-  RestToRest motion_;
+  ParamsD params_, exact_params_;
+  LoadFunction loads_;
+  Motion motion_;
   ProblemOptions options_;
   std::vector<Node> nodes_;
 };
+
+/// The five-bar's problem (instantiated once, in problem.cc).
+extern template class TrajectoryProblemT<FiveBar>;
+using TrajectoryProblem = TrajectoryProblemT<FiveBar>;
 
 }  // namespace fivebar::trajectory

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
@@ -13,10 +14,22 @@
 
 namespace fivebar::trajectory {
 
-/// A start or goal: joint angles {theta1, theta2} [rad] or point C {x, y} [m].
+/// A start or goal: the five-bar's joint angles {theta1, theta2} [rad] or point C {x, y} [m];
+/// the four-bar's one coordinate, {theta1} [rad] or {x} or {y} of its point P [m], with the
+/// coordinate it does not give NaN ({theta1}: b NaN; {x}: cartesian, b NaN; {y}: cartesian,
+/// a NaN).
 struct Pose {
   bool cartesian = false;
   double a = 0, b = 0;  ///< theta1, theta2 or x, y
+
+  /// "theta1", "x" or "y" for a one-coordinate pose, nullptr for a two-coordinate one
+  const char* single() const {
+    if (std::isnan(b) && !std::isnan(a)) return cartesian ? "x" : "theta1";
+    if (std::isnan(a) && !std::isnan(b) && cartesian) return "y";
+    return nullptr;
+  }
+  /// the coordinate of a one-coordinate pose
+  double value() const { return std::isnan(a) ? b : a; }
 };
 
 /// One task as written in the file. Values are not range-checked here: a non-positive duration
@@ -30,9 +43,14 @@ struct TaskSpec {
   std::string name;
   double duration = 0;  ///< [s], rest to rest
   Pose start, goal;
-  /// [N m] on |M1| and |M2|; infinity when the file gives none
+  /// [N m] on every motor's |M_a| (the five-bar's M1, M2; the four-bar's M1); infinity when the
+  /// file gives none
   double torque_limit = std::numeric_limits<double>::infinity();
 };
+
+/// The checks of a task's own values (duration, torque limit) that come before its poses: false
+/// with the task's status (invalid_duration, invalid_torque_limit) and message when one fails.
+bool task_values_ok(const TaskSpec& task, std::string* status, std::string* message);
 
 /// A task resolved for one design: joint angles at both ends, or why it cannot be done.
 struct ResolvedTask {
