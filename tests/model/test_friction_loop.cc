@@ -1,12 +1,14 @@
-// The friction loop's shortcuts (friction_loop.h): the reactions' response to the friction
-// torques in closed form against unit probes of the reactions, the contracting loop's Newton
-// steps against the plain fixed point, and the warm start against the cold loop, on seeded
-// random states: each shortcut reaches the same solution. And a loop with two consistent
-// solutions, which it reports instead of returning one.
+// The friction loop's shortcuts (friction_loop.h, reduced_loop.h): the reactions' response to the
+// friction torques in closed form against unit probes of the reactions, the loop on the four
+// numbers of the reduced map against the scaled map, the contracting loop's Newton steps against
+// the plain fixed point, and the warm start against the cold loop, on seeded random states: each
+// shortcut reaches the same solution. And a loop with two consistent solutions, which it reports
+// instead of returning one.
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
 #include <random>
+#include <vector>
 
 #include "fivebar/model/dynamics.h"
 #include "paper.h"
@@ -175,6 +177,117 @@ TEST(FrictionLoop, ContractingNewtonMatchesFixedPoint) {
     EXPECT_NEAR(ref.thdd[1].a, fast.thdd[1], kSameSolution * (1.0 + fast.thdd.norm()));
   }
   EXPECT_GT(compared, 50);
+}
+
+/// The reduced map's pieces at a random state with friction raised to mu: the low-rank response,
+/// the frictionless reactions and the friction arms of random slip directions.
+struct ReducedCase {
+  LowRankResponse<double> response;
+  std::array<Vec2<double>, kJoints> F0;
+  std::array<double, kJoints> phi;
+};
+
+std::vector<ReducedCase> reduced_cases(double mu, int n, uint64_t seed) {
+  Params<double> p = paper_params();
+  p.friction.coulomb.fill(mu);
+  std::mt19937_64 rng(seed);
+  std::vector<ReducedCase> out;
+  for (const auto& s : testing::random_states(p, n, seed)) {
+    Kinematics<double> k;
+    if (!solve_kinematics(p, s.th1, s.th2, &k).ok()) continue;
+    Bias<double> b;
+    compute_bias(p, k, s.w1, s.w2, &b);
+    const Vec2<double> Fvec = force_vector(k, s.loads);
+    Mat2<double> A;
+    Vec2<double> rhs0;
+    mass_and_forces(p, k, b, s.loads, Fvec, &A, &rhs0);
+    const Mat2<double> Ainv = inverse2(A);
+    ReducedCase c;
+    c.response = FiveBar::forward_response(p, k, Ainv);
+    double al3, al4;
+    reactions(p, k, b, s.loads, Fvec, Vec2<double>(Ainv * rhs0), std::array<double, kJoints>{},
+              &c.F0, &al3, &al4);
+    const JointModes modes = random_modes(rng);
+    for (int j = 0; j < kJoints; ++j) {
+      c.phi[j] = p.friction.pin_radius[j] * mu * (modes[j] == JointMode::kSlipPositive ? 1 : -1);
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
+// the reduced map is the scaled map B[k][j] = dF_j[k] phi_j in four numbers, and its gain bound
+// is never below the exact one (so the loop's decision between the contracting path and the
+// uniqueness check is kept: below 1 the exact bound is below 1 too)
+TEST(FrictionLoop, ReducedMapMatchesTheScaledMap) {
+  int contracting = 0, beyond = 0;
+  for (const double mu : {0.1, 1.0, 5.0}) {
+    for (const ReducedCase& c : reduced_cases(mu, 60, 41)) {
+      const detail::ReducedReactions reduced(c.phi, c.F0, c.response);
+      const detail::ScaledReactions<double> scaled(c.phi, c.F0, c.response);
+      EXPECT_GE(reduced.gain_bound, scaled.contraction_bound * (1.0 - 1e-12));
+      (reduced.gain_bound < 1.0 ? contracting : beyond) += 1;
+      for (int j = 0; j < kJoints; ++j) {
+        double unit[kJoints] = {};
+        unit[j] = 1.0;
+        double x[kJoints], y[kJoints];
+        reduced.apply(reduced.moments(unit), x, y);
+        for (int k = 0; k < kJoints; ++k) {
+          const double tol = kResponseTol * (1.0 + scaled.B[k][j].norm());
+          EXPECT_NEAR(x[k], scaled.B[k][j].x(), tol) << "k=" << k << " j=" << j;
+          EXPECT_NEAR(y[k], scaled.B[k][j].y(), tol) << "k=" << k << " j=" << j;
+        }
+      }
+    }
+  }
+  EXPECT_GT(contracting, 20);
+  EXPECT_GT(beyond, 20);
+}
+
+// Newton and chord steps on the reduced map reach the fixed point of the scaled map's loop (and
+// its own convergence test holds there), from |F0| and from a start far off
+TEST(FrictionLoop, ReducedNewtonReachesTheFixedPoint) {
+  EvalOptions opt;
+  int compared = 0;
+  for (const double mu : {0.1, 0.6}) {
+    for (const ReducedCase& c : reduced_cases(mu, 60, 43)) {
+      const detail::ReducedReactions reduced(c.phi, c.F0, c.response);
+      if (!(reduced.gain_bound < 1.0)) continue;
+      const detail::ScaledReactions<double> scaled(c.phi, c.F0, c.response);
+      std::array<double, kJoints> N_ref, Mf_ref, start;
+      std::array<Vec2<double>, kJoints> F_ref;
+      int it_ref = 0;
+      bool contracting = true;
+      double ratio = 0.0;
+      ASSERT_TRUE(detail::friction_fixed_point<double>(c.phi, opt, scaled, nullptr, &N_ref,
+                                                       &Mf_ref, &F_ref, &it_ref, &contracting,
+                                                       &ratio));
+      reaction_norms(c.F0, &start);
+      for (const double factor : {1.0, 3.0}) {
+        std::array<double, kJoints> s = start, N, Mf;
+        for (double& v : s) v *= factor;
+        std::array<Vec2<double>, kJoints> F;
+        int it = 0;
+        ASSERT_TRUE(detail::friction_reduced_newton(reduced, opt, s, &N, &Mf, &F, &it));
+        double scale = 1.0;
+        for (int k = 0; k < kJoints; ++k) scale = std::max(scale, N_ref[k]);
+        for (int k = 0; k < kJoints; ++k) {
+          EXPECT_NEAR(N[k], N_ref[k], kSameSolution * scale);
+          EXPECT_NEAR(N[k], F[k].norm(), 1e-14 * scale);  // N = |F|
+          EXPECT_DOUBLE_EQ(Mf[k], c.phi[k] * N[k]);
+        }
+        // one more fixed-point evaluation moves N by at most the loop's tolerance
+        std::array<Vec2<double>, kJoints> F_next;
+        std::array<double, kJoints> N_next;
+        scaled.evaluate(N, &F_next, &N_next);
+        for (int k = 0; k < kJoints; ++k) {
+          EXPECT_LE(std::abs(N_next[k] - N[k]), 2 * opt.friction_tol * scale);
+        }
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GT(compared, 100);
 }
 
 /// A loop whose only friction is at joint O, with F_O = F0 + B Mf_O (the other reactions fixed):

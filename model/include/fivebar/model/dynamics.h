@@ -4,6 +4,7 @@
 //   appell.h        Appell's equations: mass matrix, generalized forces, relative joint rates
 //   reactions.h     Newton-Euler joint reactions
 //   friction_loop.h the reaction/friction loop (fixed point, Newton fallback, failure reasons)
+//   reduced_loop.h  the loop of forward dynamics in the four numbers the torques act through
 //   forward.h       forward dynamics, with stuck joints held by constraint torques
 //   inverse.h       inverse dynamics, with the rest rule
 //   energy.h        kinetic and potential energy

@@ -15,6 +15,7 @@
 
 #include "fivebar/model/evaluation.h"
 #include "fivebar/model/reactions.h"
+#include "fivebar/model/reduced_loop.h"
 #include "fivebar/model/scalar.h"
 #include "fivebar/model/status.h"
 
@@ -30,37 +31,6 @@ struct FrictionWarmStart {
   bool set = false;
   std::array<double, kJoints> N{};  ///< the last consistent reactions [N]
   std::array<double, kJoints> N0{};  ///< the last frictionless reactions |F0_k| [N]
-};
-
-/// The change of the reactions per unit friction torque in forward dynamics with no joint stuck,
-/// in the rank-4 form it has: the torques move the reactions only through the two coupler moment
-/// sums s3 = Mf_B - Mf_C, s4 = Mf_D - Mf_C (F2 by f3 s3 + f4 s4, F1, F3, F4 with it and F5
-/// against it) and through the crank accelerations they bring, a = sum_j m_j Mf_j (F_k by R_k a):
-/// dF_j[k] = sigma_k (c3_j f3 + c4_j f4) + R_k m_j, with sigma_k = -1 for D0 and +1 otherwise,
-/// c3 = (0, 1, -1, 0, 0), c4 = (0, 0, -1, 1, 0).
-template <typename T>
-struct LowRankResponse {
-  Vec2<T> f3, f4;                  ///< F2 per unit s3 and per unit s4
-  std::array<Mat2<T>, kJoints> R;  ///< F_k per unit crank acceleration
-  std::array<Vec2<T>, kJoints> m;  ///< crank accelerations per unit Mf_j: -A^-1 J_w^T e_j
-
-  /// dF[j][k], the change of F_k per unit Mf_j (ReactionResponse)
-  ReactionResponse<T> expand() const {
-    const std::array<Vec2<T>, kJoints> dF2 = {Vec2<T>::Zero(), f3, Vec2<T>(-f3 - f4), f4,
-                                              Vec2<T>::Zero()};
-    ReactionResponse<T> out;
-    for (int j = 0; j < kJoints; ++j) {
-      for (int k = 0; k < kJoints; ++k) {
-        out[j][k] = R[k] * m[j];
-        if (k < kJoints - 1) {
-          out[j][k] += dF2[j];
-        } else {
-          out[j][k] -= dF2[j];
-        }
-      }
-    }
-    return out;
-  }
 };
 
 /// Optional help for friction_loop; neither changes its solution.
@@ -637,6 +607,28 @@ Status scaled_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions
                                           converged, contracting, ratio, N, Mf, F, iterations);
 }
 
+/// The contracting loop of forward dynamics with no joint stuck on the reduced map
+/// (ReducedReactions, friction_reduced_newton), started from |F0| (`N0`) or, with `warm` set, from
+/// friction's share of the last reactions carried onto it (FrictionWarmStart). True with N, Mf, F
+/// set; false where the map's gain bound is 1 or more (the exact bound and the uniqueness check
+/// of scaled_friction_loop decide there) or Newton did not converge (scaled_friction_loop takes
+/// the loop from the start, with the same outcome as without this path).
+inline bool reduced_friction_loop(const std::array<double, kJoints>& phi, const EvalOptions& opt,
+                                  const std::array<Vec2<double>, kJoints>& F0,
+                                  const std::array<double, kJoints>& N0,
+                                  const LowRankResponse<double>& response,
+                                  const FrictionWarmStart* warm, std::array<double, kJoints>* N,
+                                  std::array<double, kJoints>* Mf,
+                                  std::array<Vec2<double>, kJoints>* F, int* iterations) {
+  const ReducedReactions map(phi, F0, response);
+  if (!(map.gain_bound < 1.0)) return false;
+  std::array<double, kJoints> start = N0;
+  if (warm && warm->set) {
+    for (int j = 0; j < kJoints; ++j) start[j] += warm->N[j] - warm->N0[j];
+  }
+  return friction_reduced_newton(map, opt, start, N, Mf, F, iterations);
+}
+
 /// The loop of friction_loop below for the load-dependent torques phi_k N_k alone. `loop`
 /// (may be null): a double evaluation records its solution there; a Jet evaluation given a
 /// recorded solution differentiates it (friction_loop_implicit) instead of iterating in Jets.
@@ -671,20 +663,31 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
     return map;
   };
   FrictionWarmStart* warm = std::is_same_v<T, double> ? aids.warm : nullptr;
-  const ScaledReactions<T> scaled = aids.low_rank ? ScaledReactions<T>(phi, F0, *aids.low_rank)
-                                                  : ScaledReactions<T>(phi, affine());
-  const Status st = scaled_friction_loop(phi, opt, solve, scaled, affine, warm, N, Mf, F,
-                                         iterations);
-  if (!st.ok()) {
-    if (warm) warm->set = false;
-    return st;
+  std::array<T, kJoints> N0;  // |F0|
+  reaction_norms(F0, &N0);
+  bool reduced = false;  // solved on the reduced map (forward dynamics, no joint stuck)
+  if constexpr (std::is_same_v<T, double>) {
+    if (aids.low_rank) {
+      reduced = reduced_friction_loop(phi, opt, F0, N0, *aids.low_rank, warm, N, Mf, F,
+                                      iterations);
+    }
+  }
+  if (!reduced) {
+    const ScaledReactions<T> scaled = aids.low_rank
+                                          ? ScaledReactions<T>(phi, F0, *aids.low_rank)
+                                          : ScaledReactions<T>(phi, affine());
+    const Status st =
+        scaled_friction_loop(phi, opt, solve, scaled, affine, warm, N, Mf, F, iterations);
+    if (!st.ok()) {
+      if (warm) warm->set = false;
+      return st;
+    }
   }
   if (warm) {
     warm->set = true;
-    using std::sqrt;
     for (int j = 0; j < kJoints; ++j) {
       warm->N[j] = value_of((*N)[j]);
-      warm->N0[j] = value_of(sqrt(F0[j].squaredNorm()));
+      warm->N0[j] = value_of(N0[j]);
     }
   }
   if constexpr (std::is_same_v<T, double>) {
