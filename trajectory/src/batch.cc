@@ -357,8 +357,9 @@ TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads
     if (!solve_task(factory, *problem, x0, options, &r, &solver, &check)) return finish();
     classify(solver, check, options, &r, "sin(th4 - th3)");
 
-    // validation: the optimal torques simulated forward must bring C to the goal
-    if (options.validate) validate(*problem, loads, options, &r);
+    // validation: the optimal torques simulated forward must bring C to the goal (the problem
+    // of the result: refinement may have changed its control points)
+    if (options.validate) validate(problem_of(params, loads, r, options), loads, options, &r);
   } catch (const std::exception& e) {
     r.status = "failure";
     r.add_note(e.what());
