@@ -257,6 +257,10 @@ struct Context {
   int n = base_states(M::kDof);         ///< state size
   long rhs_evaluations = 0;
   Status failure;                       ///< last failure inside a callback
+  /// the last right-hand side that failed and the integrator recovered from (a smaller step),
+  /// and how many did since the last output row: what a run that stalls is stalled by
+  Status recovered;
+  long recovered_since_row = 0;
   /// the right-hand side's last friction-loop solution: the next evaluation starts from it
   FrictionWarmStart warm;
   /// the same for the output rows (make_row), one output step apart
@@ -357,6 +361,8 @@ int rhs(double t, const double* y, double* ydot, void* user) {
       forward_at<M>(*c.params, loads, y, rhs_modes(c, y, &signs), c.eval, &ev, &z, &c.warm);
   if (!st.ok()) {
     c.failure = at_time<M>(st, t, y);
+    c.recovered = c.failure;
+    ++c.recovered_since_row;
     return 1;  // recoverable: the integrator retries with a smaller step
   }
   if (c.law_states) std::copy(ev.zdot.begin(), ev.zdot.end(), ydot + kBristle);
@@ -1018,6 +1024,7 @@ Status emit_rows(Loop<M>& L, Result* result, double t_end, const double* y_end) 
     if (!st.ok()) return st;
     ++L.next;
     L.steps_since_row = 0;
+    L.c.recovered_since_row = 0;
   }
   return Status::Ok();
 }
@@ -1065,8 +1072,22 @@ Status stop_at_singular_margin(Loop<M>& L, Result* result, const Options& option
   return at_time<M>(st, tb, y);
 }
 
-/// Steps within one output interval after which the loads ahead are probed (loads_ahead)
+/// Steps within one output interval after which a run is taken to stall: the loads ahead are
+/// probed (loads_ahead), and right-hand sides that failed meanwhile are named (stalled_by)
 constexpr long kStallProbe = 10000;
+
+/// A run whose steps shrink while its right-hand sides keep failing (say, a friction loop with
+/// several consistent solutions in the states the integrator tries) creeps on to
+/// simulation.max_steps: at the stall probe, the last of those failures names the cause.
+template <class M>
+Status stalled_by(const Loop<M>& L) {
+  if (L.c.recovered_since_row == 0) return Status::Ok();
+  return Status::Error(L.c.recovered.code,
+                       "the run stalls (" + std::to_string(kStallProbe) + " steps within one " +
+                           "output interval, " + std::to_string(L.c.recovered_since_row) +
+                           " failed evaluations retried with smaller steps); the last: " +
+                           L.c.recovered.message);
+}
 
 /// Loads that leave their domain stall a run long before a non-finite value is evaluated: the
 /// steps shrink toward the point (sqrt(1.5 - t) at 1.5 s, 1 / (t - 0.5) at 0.5 s) and the run
@@ -1098,6 +1119,8 @@ Status advance(Loop<M>& L, Result* result, const Options& options) {
   if (++L.steps_since_row == kStallProbe) {
     const Status bad = loads_ahead(L, options.output_step);
     if (!bad.ok()) return at_time<M>(bad, tc, yc);
+    const Status stalled = stalled_by(L);
+    if (!stalled.ok()) return stalled;
   }
   if (L.steps_since_row > options.max_steps) {
     // steps shrink without end next to a singular pose: say so when that is the cause
