@@ -573,9 +573,11 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   return d;
 }
 
-/// A design whose worst predicted relative std exceeds this is no design: a log along it
-/// determines nothing (the light mechanism's Fourier design once predicted 179 with exit 0)
-constexpr double kAbsurdRelativeStd = 10;
+/// A design that predicts a parameter's std above its value is no design: a log along it does
+/// not determine that parameter (identify leaves it near its bound 0, or at the bound, where its
+/// std is no longer meaningful: a light mechanism's design at a relative std of 2.2 gave logs
+/// with one coefficient at its bound 0 and the other 4.4 std off)
+constexpr double kUndeterminedRelativeStd = 1;
 /// ... nor one whose worst predicted relative std is this many times the baseline's (that
 /// design's 179 against the multi-sine's 0.093)
 constexpr double kWorseThanBaseline = 10;
@@ -619,10 +621,10 @@ std::string torque_excess(const Design& d, double limit) {
 std::string reversal_cost(const Design& d, const id::ExcitationOptions& o,
                           const id::DesignParameters& dp) {
   const std::string n = std::to_string(o.min_reversals);
-  if (!std::isfinite(d.unconstrained_std)) {
-    // the Fourier family: its local solves give no comparison
+  if (!std::isfinite(d.unconstrained_std) || o.min_reversals == 0) {
+    // the Fourier family (its local solves give no comparison), or no reversal constraint
     return std::string("; ") + (o.min_reversals > 0 ? "a lower --min-reversals (" + n + "), " : "") +
-           "a higher --torque-limit" +
+           "a higher --torque-limit, a longer --duration" +
            (d.torque_family ? "" : " or --family torque (free motions, faster within the same limit)") +
            " may give more";
   }
@@ -684,9 +686,11 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o,
   // the information of a design that meets its constraints (one that misses one is named for it
   // above: its large std is the cost of the search's compromise)
   const double worst = worst_relative_std(r);
-  if (worst > kAbsurdRelativeStd) {
-    *why = "predicts a relative std of " + format_significant(worst, 4) + " (more than " +
-           format_significant(kAbsurdRelativeStd) + "): a log along it would determine nothing" +
+  if (worst > kUndeterminedRelativeStd) {
+    int i = 0;
+    while (i + 1 < dp.size() && !(r.relative_std[i] == worst)) ++i;
+    *why = "predicts a std of " + dp.names[i] + " " + format_significant(worst, 4) +
+           " times its value: a log along it would not determine " + dp.names[i] +
            reversal_cost(d, o, dp);
     return "std_too_large";
   }
@@ -803,20 +807,6 @@ int run(const Args& a) {
     throw NumericalError(scene.path, "excite", "status " + status + ": the design " + why +
                                                    " (solver: " + d.solve.solver.message +
                                                    "; excitation.json written)");
-  }
-  // a std above the value: a log along this motion will not determine the parameter (identify
-  // leaves it near its bound 0, where its std is not meaningful)
-  int loosest = -1;
-  for (int i = 0; i < dp.size(); ++i) {
-    if (d.report.relative_std[i] > 1 && (loosest < 0 || d.report.relative_std[i] > d.report.relative_std[loosest])) {
-      loosest = i;
-    }
-  }
-  if (loosest >= 0) {
-    warn("the predicted std of " + dp.names[loosest] + " is " +
-         format_significant(d.report.relative_std[loosest], 3) +
-         " times its value: a log along this motion will not determine it (a higher "
-         "--torque-limit, a longer --duration or fewer --min-reversals give more information)");
   }
   write_excitation_csv(out.file("excitation.csv"), d.report);
   write_std_csv(out.file("predicted_std.csv"), dp, d.report, base);
