@@ -17,6 +17,7 @@
 #include "fivebar/identification/identify.h"
 #include "fivebar/model/format.h"
 #include "fivebar/model/four_bar.h"
+#include "fivebar/sim/simulator.h"
 #include "mechanism_residual.h"
 #include "setup_shared.h"
 
@@ -418,20 +419,28 @@ void model_check(IdentifyResult* out) {
   out->warnings.push_back(out->unusable);
 }
 
-/// The fitted scene, and its inverse dynamics at every sample of the log (NaN where it fails).
+/// The fitted scene, and its inverse dynamics at every sample of the log (sim::inverse_rows, the
+/// four-bar's inverse dynamics compiled once in the simulator; NaN at every sample when a row
+/// fails, which it names in a warning).
 void predictions(const FourBarFit& f, IdentifyResult* out) {
   out->fitted_four_bar = f.scene;
   f.layout.apply(f.x.data(), &out->fitted_four_bar.friction);
   const TorqueLog& L = f.cond.log;
-  out->predicted_tau1.assign(L.size(), kNaN);
+  std::vector<sim::Row> motion(L.size()), rows;
   for (int i = 0; i < L.size(); ++i) {
-    FourBarEvaluation ev;
-    if (four_bar_inverse(out->fitted_four_bar, f.loads(L.t[i]), L.theta1[i], f.w[i], f.a[i], f.eval,
-                         &ev)
-            .ok()) {
-      out->predicted_tau1[i] = ev.M1;
-    }
+    motion[i].t = L.t[i];
+    motion[i].theta[0] = L.theta1[i];
+    motion[i].omega[0] = f.w[i];
+    motion[i].alpha[0] = f.a[i];
   }
+  out->predicted_tau1.assign(L.size(), kNaN);
+  const Status st = sim::inverse_rows(out->fitted_four_bar, f.loads, motion, &rows);
+  if (!st.ok()) {
+    out->warnings.push_back("no predicted torques: the fitted scene's inverse dynamics fails: " +
+                            st.message);
+    return;
+  }
+  for (int i = 0; i < L.size(); ++i) out->predicted_tau1[i] = rows[i].M1;
 }
 
 }  // namespace
