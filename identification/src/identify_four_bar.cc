@@ -270,12 +270,17 @@ double rms(const std::vector<double>& r) {
 bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
   const ParameterLayout& lay = f->layout;
   const int P = lay.size();
-  f->x = f->opt->initial.empty() ? stages::default_start(lay) : f->opt->initial;
-  if (static_cast<int>(f->x.size()) != P) {
+  const std::vector<double> x0 =
+      f->opt->initial.empty() ? stages::default_start(lay) : f->opt->initial;
+  if (static_cast<int>(x0.size()) != P) {
     out->status = Status::Error(StatusCode::kInvalidInput,
                                 "initial values: expected " + std::to_string(P) + " numbers");
     return false;
   }
+  // the internal layout (Stribeck: static_coulomb as its excess over coulomb)
+  const Eigen::VectorXd xi =
+      stages::to_public(lay).inverse() * Eigen::Map<const Eigen::VectorXd>(x0.data(), P);
+  f->x.assign(xi.data(), xi.data() + P);
   for (int i = 0; i < P; ++i) f->x[i] = std::max(f->x[i], lay.lower_bound(i));
   stages::add_mechanism_terms<FourBar>(f->scene, lay, f->samples, f->eval, f->x.data(), problem);
   for (int i = 0; i < P; ++i) problem->SetParameterLowerBound(f->x.data(), i, lay.lower_bound(i));
@@ -374,20 +379,33 @@ void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* ou
   }
 }
 
-/// Estimates, correlation and Wald intervals (value +- ci_quantile std); a parameter at its
-/// bound has no std.
+/// Estimates, correlation and Wald intervals (value +- ci_quantile std) of the public parameters
+/// (to_public: Stribeck's static_coulomb = coulomb + the fitted excess); a parameter at its
+/// bound, or made of one (static_coulomb = coulomb), has no std.
 void estimates(const FourBarFit& f, const std::vector<double>& x0, IdentifyResult* out) {
   const int P = f.layout.size();
   const std::vector<std::string> names = f.layout.names();
+  const Eigen::MatrixXd T = stages::to_public(f.layout);
+  const Eigen::VectorXd x = T * Eigen::Map<const Eigen::VectorXd>(f.x.data(), P);
+  std::vector<char> bound(P, 0);  // public i depends on an internal parameter at its bound
+  for (int i = 0; i < P; ++i) {
+    for (int j = 0; j < P; ++j) {
+      const bool off =
+          f.x[j] > f.layout.lower_bound(j) + 1e-12 && std::isfinite(out->covariance(j, j));
+      if (T(i, j) != 0 && !off) bound[i] = 1;
+    }
+  }
+  const Eigen::MatrixXd C = T * out->covariance.unaryExpr([](double v) {
+    return std::isfinite(v) ? v : 0.0;
+  }) * T.transpose();
   out->correlation = Eigen::MatrixXd::Constant(P, P, kNaN);
   for (int i = 0; i < P; ++i) {
     ParameterEstimate e;
     e.name = names[i];
-    e.value = f.x[i];
+    e.value = x[i];
     e.initial = x0[i];
-    e.at_bound = !(f.x[i] > f.layout.lower_bound(i) + 1e-12);
-    const double v = out->covariance(i, i);
-    e.std = v > 0 ? std::sqrt(v) : kNaN;
+    e.at_bound = bound[i] && !(f.x[i] > f.layout.lower_bound(i) + 1e-12);
+    e.std = !bound[i] && C(i, i) > 0 ? std::sqrt(C(i, i)) : kNaN;
     if (std::isfinite(e.std)) {
       e.ci_low = e.value - out->ci_quantile * e.std;
       e.ci_high = e.value + out->ci_quantile * e.std;
@@ -395,8 +413,8 @@ void estimates(const FourBarFit& f, const std::vector<double>& x0, IdentifyResul
     }
     out->parameters.push_back(e);
     for (int j = 0; j < P; ++j) {
-      const double d = std::sqrt(out->covariance(i, i) * out->covariance(j, j));
-      if (d > 0) out->correlation(i, j) = out->covariance(i, j) / d;
+      const double d = std::sqrt(C(i, i) * C(j, j));
+      if (!bound[i] && !bound[j] && d > 0) out->correlation(i, j) = C(i, j) / d;
     }
   }
 }
@@ -473,6 +491,7 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   FourBarFit f;
   f.opt = &opt;
   f.layout = out.layout;
+  f.layout.static_as_excess = f.layout.group_of(Coefficient::kStaticCoulomb) >= 0;
   f.scene = scene;
   f.scene.friction = stages::fit_friction(scene.friction, f.layout, opt);
   f.loads = loads;
@@ -490,7 +509,8 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   out.residual_noise_floor[0] = noise_floor(f);
   ceres::Problem problem;
   if (!solve(&f, &problem, &out)) return out;
-  std::vector<double> x0 = opt.initial.empty() ? stages::default_start(f.layout) : opt.initial;
+  const std::vector<double> x0 =
+      opt.initial.empty() ? stages::default_start(f.layout) : opt.initial;
   covariance(f, &problem, &out);
   estimates(f, x0, &out);
   model_check(&out);

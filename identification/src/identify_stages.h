@@ -141,10 +141,6 @@ int add_window_residual(Fit* f, const std::vector<double>& w1, const std::vector
 
 // ---- stage_setup.cc ----
 
-/// Linear map from the internal parameter vector to the public one (static_coulomb = coulomb +
-/// excess for Stribeck; identity otherwise).
-Eigen::MatrixXd to_public(const ParameterLayout& layout);
-
 /// "line L (t = T s)" of log sample i, for messages.
 std::string sample_name(const TorqueLog& log, int i);
 

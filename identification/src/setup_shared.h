@@ -1,8 +1,9 @@
 // What identify's setup (stage_setup.cc) shares with the four-bar's stages (identify_four_bar.cc):
-// the law to fit in a scene's friction, the neutral start values, the Savitzky-Golay noise gains,
-// the residual's levels against its noise floor.
+// the law to fit in a scene's friction, the neutral start values, the internal-to-public map of
+// the parameters, the Savitzky-Golay noise gains, the residual's levels against its noise floor.
 #pragma once
 
+#include <Eigen/Core>
 #include <vector>
 
 #include "fivebar/identification/identify.h"
@@ -49,6 +50,10 @@ inline FrictionParams<double> fit_friction(const FrictionParams<double>& in,
   }
   return fp;
 }
+
+/// Linear map from the internal parameter vector to the public one (static_coulomb = coulomb +
+/// excess for Stribeck; identity otherwise).
+Eigen::MatrixXd to_public(const ParameterLayout& layout);
 
 /// Noise gains of the Savitzky-Golay rate and acceleration at an interior sample (white noise
 /// of deviation s on the angles gives s * gain): the root sum of squares of the filter

@@ -74,6 +74,21 @@ TEST(FourBarIdentify, PerJointHasFourCoefficientsPerGroup) {
   }
 }
 
+// Stribeck: static friction is fitted as its excess over the kinetic (never below it), as the
+// five-bar's; on the crank-rocker, whose joints cross zero rate quickly, it sits at that bound.
+TEST(FourBarIdentify, StribeckStaticFrictionIsNeverBelowKinetic) {
+  const TorqueLog log = crank_rocker_log(crank_rocker().p, 2.0, 0.02, 1e-5, 3, false);
+  IdentifyOptions opt = four_bar_options();
+  opt.layout.law = FrictionLaw::kStribeck;
+  const IdentifyResult res = identify(crank_rocker().p, crank_rocker().loads, log, opt);
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  ASSERT_EQ(res.parameters.size(), 4u);
+  EXPECT_EQ(res.parameters[2].name, "static_coulomb");
+  EXPECT_GE(res.parameters[2].value, res.parameters[0].value - 1e-12);
+  EXPECT_GE(res.fitted_four_bar.friction.static_coulomb[0],
+            res.fitted_four_bar.friction.coulomb[0] - 1e-12);
+}
+
 // The coverage figure: 30 seeded logs of the crank-rocker with friction drawn at random
 // (coulomb 0.05..0.2, viscous 0.005..0.04), synth-log's default noise (torque 0.02 N m, angle
 // 1e-5 rad), 3 s each at 1 kHz with rates estimated from the angles; the share of the 60 true
