@@ -162,15 +162,16 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   opt.estimate_delay = !a.no_delay;
   opt.num_threads = std::max(1, a.threads);
   opt.window_s = a.window;
+  if (scene.type == MechanismType::kFourBar) opt.layout.joints = kFourBarJoints;
   if (a.start_from_scene) {
-    opt.initial = opt.layout.extract(start_from(scene.params.friction, opt.layout.law));
+    opt.initial = opt.layout.extract(start_from(friction_of(scene), opt.layout.law));
   }
   return opt;
 }
 
-id::TorqueLog read_log(const std::string& path) {
+id::TorqueLog read_log(const std::string& path, int dof) {
   try {
-    return io::read_torque_log(path);
+    return io::read_torque_log(path, dof);
   } catch (const id::LogError& e) {
     throw InputError(e.file(), e.key(), e.reason());
   }
@@ -216,8 +217,25 @@ id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& l
   return res;
 }
 
+id::IdentifyResult identify_four_bar_scene(const Scene& scene, const id::TorqueLog& log,
+                                           const id::IdentifyOptions& options) {
+  check_sg_window(options, log);
+  id::IdentifyResult res;
+  try {
+    res = id::identify(scene.four_bar, LoadExpressions(scene).four_bar_function(), log, options);
+  } catch (const id::LogError& e) {
+    throw InputError(e.file(), e.key(), e.reason());
+  }
+  if (!res.status.ok()) throw NumericalError(log.path, "identify", res.status.message);
+  return res;
+}
+
 Scene fitted_scene(const Scene& scene, const id::IdentifyResult& result) {
   Scene fitted = scene;
+  if (scene.type == MechanismType::kFourBar) {
+    fitted.four_bar = result.fitted_four_bar;
+    return fitted;
+  }
   fitted.params.friction = result.fitted.friction;
   fitted.params.links = result.fitted.links;
   fitted.params.actuators = result.fitted.actuators;

@@ -21,6 +21,14 @@ Json pair(double a, double b) {
   return j;
 }
 
+/// One value per driven crank: the five-bar's two (a, b), the four-bar's one (a).
+Json cranks(int dof, double a, double b) {
+  Json j = Json::array();
+  j.push(a);
+  if (dof == 2) j.push(b);
+  return j;
+}
+
 /// "parameters": value, std, truth and errors when the log states the truth.
 Json parameters_json(const id::IdentifyResult& res, const id::TorqueLog& log, bool* have_truth) {
   const LogTruth truth = read_truth(log.comments);
@@ -79,10 +87,10 @@ Json inertial_json(const id::InertialReport& r) {
 /// Log conditioning: unwrapping, noise levels, glitches, notes.
 Json conditioning_json(const id::IdentifyResult& res, const id::TorqueLog& log) {
   Json cond = Json::object();
-  cond.set("unwrapped_turns", pair(res.unwrapped[0], res.unwrapped[1]));
-  cond.set("angle_noise", pair(res.angle_noise[0], res.angle_noise[1]));
-  cond.set("torque_noise", pair(res.torque_noise[0], res.torque_noise[1]));
-  if (log.has_rates) cond.set("rate_noise", pair(res.rate_noise[0], res.rate_noise[1]));
+  cond.set("unwrapped_turns", cranks(log.dof, res.unwrapped[0], res.unwrapped[1]));
+  cond.set("angle_noise", cranks(log.dof, res.angle_noise[0], res.angle_noise[1]));
+  cond.set("torque_noise", cranks(log.dof, res.torque_noise[0], res.torque_noise[1]));
+  if (log.has_rates) cond.set("rate_noise", cranks(log.dof, res.rate_noise[0], res.rate_noise[1]));
   cond.set("rejected_glitches", Json::array_of(res.glitches, [](const id::Glitch& g) {
              return Json::object({{"line", g.line},
                                   {"column", g.column},
@@ -176,6 +184,7 @@ Json identification_json(const IdentifyRun& run, const id::TorqueLog& log,
                          const id::IdentifyResult& res, const id::Validation* validation) {
   Json j = Json::object();
   j.set("command", "identify");
+  if (log.dof == 1) j.set("mechanism", "four_bar");
   // the fit's own verdict (docs/identification.md, "Status"): not ok exits 3
   j.set("status", res.unusable.empty() ? "ok" : "failed");
   if (!res.unusable.empty()) j.set("status_reason", res.unusable);
@@ -192,19 +201,23 @@ Json identification_json(const IdentifyRun& run, const id::TorqueLog& log,
   bool have_truth = false;
   j.set("parameters", parameters_json(res, log, &have_truth));
   if (res.inertial.estimated) j.set("inertial", inertial_json(res.inertial));
-  j.set("rms_torque_residual", pair(res.rms_torque_residual[0], res.rms_torque_residual[1]));
-  j.set("residual_noise_floor", pair(res.residual_noise_floor[0], res.residual_noise_floor[1]));
-  j.set("residual_to_noise_ratio", pair(res.rms_torque_residual[0] / res.residual_noise_floor[0],
-                                        res.rms_torque_residual[1] / res.residual_noise_floor[1]));
+  j.set("rms_torque_residual",
+        cranks(log.dof, res.rms_torque_residual[0], res.rms_torque_residual[1]));
+  j.set("residual_noise_floor",
+        cranks(log.dof, res.residual_noise_floor[0], res.residual_noise_floor[1]));
+  j.set("residual_to_noise_ratio",
+        cranks(log.dof, res.rms_torque_residual[0] / res.residual_noise_floor[0],
+               res.rms_torque_residual[1] / res.residual_noise_floor[1]));
   j.set("rms_torque_residual_initial",
-        pair(res.rms_torque_residual_initial[0], res.rms_torque_residual_initial[1]));
+        cranks(log.dof, res.rms_torque_residual_initial[0], res.rms_torque_residual_initial[1]));
   if (res.method == id::Method::kOutputError) {
-    j.set("rms_angle_residual", pair(res.rms_angle_residual[0], res.rms_angle_residual[1]));
+    j.set("rms_angle_residual",
+          cranks(log.dof, res.rms_angle_residual[0], res.rms_angle_residual[1]));
     j.set("window_s", res.window_s);
   }
   if (std::isfinite(res.negated_rms_torque_residual[0])) {
     j.set("negated_rms_torque_residual",
-          pair(res.negated_rms_torque_residual[0], res.negated_rms_torque_residual[1]));
+          cranks(log.dof, res.negated_rms_torque_residual[0], res.negated_rms_torque_residual[1]));
   }
   j.set("residual_sigma", res.residual_sigma);
   j.set("samples", res.samples);

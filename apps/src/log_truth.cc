@@ -106,7 +106,7 @@ bool true_value(const LogTruth& truth, const id::ParameterLayout& layout, int i,
   const size_t us = name.rfind('_');
   const bool indexed = layout.per_joint && us != std::string::npos;
   auto it = truth.find(indexed ? name.substr(0, us) : name);
-  if (it == truth.end() || it->second.size() != size_t(kJoints)) return false;
+  if (it == truth.end() || it->second.size() != size_t(layout.joints)) return false;
   if (indexed) {
     *value = it->second[std::stoi(name.substr(us + 1)) - 1];
     return true;

@@ -110,6 +110,13 @@ struct NoisyColumn {
 /// accelerations when the log has them.
 std::vector<NoisyColumn> noisy_columns(ConditionedLog* out) {
   TorqueLog& L = out->log;
+  if (L.dof == 1) {  // the four-bar's one crank
+    std::vector<NoisyColumn> cols = {{"theta1", &L.theta1, &out->angle_noise[0]},
+                                     {"tau1", &L.tau1, &out->torque_noise[0]}};
+    if (L.has_rates) cols.push_back({"omega1", &L.omega1, &out->rate_noise[0]});
+    if (L.has_accels) cols.push_back({"alpha1", &L.alpha1, &out->accel_noise[0]});
+    return cols;
+  }
   std::vector<NoisyColumn> cols = {{"theta1", &L.theta1, &out->angle_noise[0]},
                                    {"theta2", &L.theta2, &out->angle_noise[1]},
                                    {"tau1", &L.tau1, &out->torque_noise[0]},
@@ -180,8 +187,13 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
   }
   if (opt.unwrap) {
     out.unwrapped[0] = unwrap_angles(&L.theta1);
-    out.unwrapped[1] = unwrap_angles(&L.theta2);
-    if (out.unwrapped[0] + out.unwrapped[1] > 0) {
+    if (L.dof == 1 && out.unwrapped[0] > 0) {
+      out.notes.push_back("unwrapped " + std::to_string(out.unwrapped[0]) +
+                          " one-turn (2 pi) jumps of theta1 (angles wrapped by the encoder or "
+                          "logger)");
+    }
+    if (L.dof == 2) out.unwrapped[1] = unwrap_angles(&L.theta2);
+    if (L.dof == 2 && out.unwrapped[0] + out.unwrapped[1] > 0) {
       out.notes.push_back("unwrapped " + std::to_string(out.unwrapped[0]) + " + " +
                           std::to_string(out.unwrapped[1]) +
                           " one-turn (2 pi) jumps of theta1, theta2 (angles wrapped by the "
@@ -215,7 +227,7 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
     }
     out.glitches.insert(out.glitches.end(), g.begin(), g.end());
   }
-  for (int j = 0; j < kActuators; ++j) {
+  for (int j = 0; j < L.dof; ++j) {
     if (opt.torque_noise[j] > 0) out.torque_noise[j] = opt.torque_noise[j];
   }
   out.torque_variance_factor = opt.torque_variance_factor;

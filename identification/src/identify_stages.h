@@ -28,6 +28,7 @@
 #include "smoothing_bias.h"
 #include "window_misfit.h"
 #include "method.h"
+#include "setup_shared.h"
 
 namespace fivebar::identification {
 
@@ -40,14 +41,6 @@ namespace stages {
 using Clock = std::chrono::steady_clock;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-/// noise-free logs: residual levels below this fraction of the rms logged torque are what a good
-/// torque sensor resolves (0.1 %), not structure
-constexpr double kAbsoluteFloor = 1e-3;
-
-/// a friction coefficient at its bound with the residual this many times its noise floor is a fit
-/// driven by samples the law cannot explain (bound_and_misfit_warning)
-constexpr double kMisfitRatio = 3.0;
 
 // ---- stages of identify() ----
 
@@ -147,15 +140,6 @@ int add_window_residual(Fit* f, const std::vector<double>& w1, const std::vector
                         int i0, int i1, const sim::Options& so, ceres::Problem* problem);
 
 // ---- stage_setup.cc ----
-
-/// Noise gains of the Savitzky-Golay rate and acceleration at an interior sample (white noise
-/// of deviation s on the angles gives s * gain): the root sum of squares of the filter
-/// coefficients, read off its response to a unit impulse in the middle of the log.
-void sg_noise_gains(const std::vector<double>& t, const SgOptions& sg, double* g1, double* g2);
-
-/// Linear map from the internal parameter vector to the public one (static_coulomb = coulomb +
-/// excess for Stribeck; identity otherwise).
-Eigen::MatrixXd to_public(const ParameterLayout& layout);
 
 /// "line L (t = T s)" of log sample i, for messages.
 std::string sample_name(const TorqueLog& log, int i);

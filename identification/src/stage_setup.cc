@@ -1,6 +1,7 @@
 // Setup and conditioning stages of identify(): the layout and scene to fit, the start values,
 // the conditioned log and where the rates come from.
 #include "identify_stages.h"
+#include "setup_shared.h"
 
 namespace fivebar::identification::stages {
 
@@ -8,16 +9,6 @@ namespace {
 
 /// logged rates this much noisier than the angles' (through the noisiest window) are not used
 constexpr double kNoisierRates = 2.0;
-
-/// Neutral start values, independent of the scene: each coefficient's CoefficientInfo::start
-/// (coulomb 0.1, viscous 0.01, static 0.15, Stribeck velocity 0.2 rad/s).
-std::vector<double> default_start(const ParameterLayout& layout) {
-  std::vector<double> x(layout.friction_size());
-  for (int i = 0; i < layout.friction_size(); ++i) {
-    x[i] = coefficient_info(layout.group(i / layout.per_group())).start;
-  }
-  return x;
-}
 
 }  // namespace
 
@@ -56,22 +47,11 @@ std::string sample_name(const TorqueLog& log, int i) {
 
 namespace {
 
-/// The scene with the law to fit and the chosen Coulomb sign form.
+/// The scene with the law to fit and the chosen Coulomb sign form (fit_friction).
 Params<double> fit_scene(const Params<double>& scene_in, const ParameterLayout& layout,
                          const IdentifyOptions& opt) {
   Params<double> scene = scene_in;
-  scene.friction.law = layout.law;
-  if (opt.smoothing_velocity >= 0) scene.friction.smoothing_velocity = opt.smoothing_velocity;
-  // a fixed coefficient the law needs > 0 (the Stribeck exponent) that the scene leaves unset
-  // takes its default
-  const LawDescriptor& d = law_descriptor(layout.law);
-  for (int i = 0; i < d.count; ++i) {
-    const LawCoefficient& c = d.coefficients[i];
-    if (!c.positive || c.identifiable) continue;
-    for (double& v : coefficient(scene.friction, c.id)) {
-      if (!(v > 0)) v = coefficient_info(c.id).default_value;
-    }
-  }
+  scene.friction = fit_friction(scene_in.friction, layout, opt);
   return scene;
 }
 

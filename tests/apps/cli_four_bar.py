@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""End-to-end checks of `fivebar simulate` and `fivebar inverse` on four-bar scenes.
+"""End-to-end checks of `fivebar simulate`, `inverse` and `identify` on four-bar scenes.
 
 Usage: cli_four_bar.py FIVEBAR PAPER_YAML WORK_DIR
 
@@ -8,6 +8,8 @@ four-bar's columns and agrees with the independent reference trajectories (withi
 the run's own error estimate); summary.json says ok. Bad input exits 2 with one line naming the
 key and the mechanism type; a command that runs five-bars only refuses a four-bar scene.
 synth-log writes a four-bar log of one crank; following the simulated motion it gives back M1.
+identify fits a four-bar's log end to end (the true coefficients inside its intervals) and
+refuses the five-bar's options and logs naming them.
 """
 import json
 import os
@@ -211,7 +213,51 @@ expect_error(2, "friction.coulomb: expected 1 or 4 numbers (O, B, C, D0), got 5"
 expect_error(2, "initial: four-bar cannot assemble",
              ["simulate", scene, "--set", "mechanism.links.2.length=0.01", "--out", bad])
 expect_error(2, "mechanism.type: four_bar: this command runs five-bars only so far",
-             ["identify", scene, "--log", log, "--out", bad])
+             ["excite", scene, "--torque-limit", "1", "--out", bad])
+# identify: a four-bar's log fitted end to end (2 s, angles only, synth-log's default noise); the
+# five-bar's options and a five-bar's log refused naming them
+id_log = os.path.join(WORK, "crank_rocker_id.csv")
+code, _, err = run(["synth-log", scene, "--out", id_log, "--duration", "2", "--seed", "5"])
+fit = os.path.join(WORK, "identify")
+code, stdout, err = run(["identify", scene, "--log", id_log, "--out", fit])
+if code != 0:
+    failures.append("identify of the four-bar: exit %d: %s" % (code, err))
+else:
+    with open(os.path.join(fit, "identification.json")) as f:
+        result = json.load(f)
+    if result.get("status") != "ok" or result.get("mechanism") != "four_bar":
+        failures.append("identify of the four-bar: status %r, mechanism %r"
+                        % (result.get("status"), result.get("mechanism")))
+    for p in result.get("parameters", []):
+        if not p["ci95_low"] - 1e-12 <= p["true"] <= p["ci95_high"] + 1e-12 or \
+                abs(p["error_in_std"]) > 4:
+            failures.append("identify of the four-bar: %s = %.4g, true %.4g outside [%.4g, %.4g]"
+                            % (p["name"], p["value"], p["true"], p["ci95_low"], p["ci95_high"]))
+    if [p["name"] for p in result.get("parameters", [])] != ["coulomb", "viscous"]:
+        failures.append("identify of the four-bar: parameters %r" % result.get("parameters"))
+    if len(result.get("rms_torque_residual", [])) != 1:
+        failures.append("identify of the four-bar: rms_torque_residual %r"
+                        % result.get("rms_torque_residual"))
+    with open(os.path.join(fit, "residuals.csv")) as f:
+        header = f.readline().strip()
+    if header != "t,theta1,tau1,omega1,alpha1,predicted_tau1,residual_tau1,used":
+        failures.append("identify of the four-bar: residuals.csv header %r" % header)
+    with open(os.path.join(fit, "scene_fitted.yaml")) as f:
+        fitted = f.read()
+    if "four_bar" not in fitted:
+        failures.append("identify of the four-bar: scene_fitted.yaml is not a four-bar's")
+    # the fitted scene simulates
+    code, _, err = run(["simulate", os.path.join(fit, "scene_fitted.yaml"), "--out",
+                        os.path.join(WORK, "fitted_run"), "--set", "simulation.duration=0.2"])
+    if code != 0:
+        failures.append("simulate of the fitted four-bar: exit %d: %s" % (code, err))
+expect_error(2, "mechanism.type: four_bar: --method output-error runs five-bars only",
+             ["identify", scene, "--log", id_log, "--method", "output-error", "--out", bad])
+expect_error(2, "mechanism.type: four_bar: --estimate inertia runs five-bars only",
+             ["identify", scene, "--log", id_log, "--estimate", "friction,inertia", "--out", bad])
+expect_error(2, "column 3: column 'theta2' does not belong to this mechanism",
+             ["identify", scene, "--log", os.path.join(os.path.dirname(os.path.abspath(PAPER)), "..",
+                                                       "logs", "paper_angles.csv"), "--out", bad])
 if os.path.exists(bad):
     failures.append("a failed run left %s behind" % bad)
 

@@ -51,8 +51,9 @@ struct IdentifySettings {
 identification::IdentifyOptions identify_options(const IdentifySettings& settings,
                                                  const Scene& scene);
 
-/// Reads a torque log; a log that cannot be used throws InputError (the LogError's message).
-identification::TorqueLog read_log(const std::string& path);
+/// Reads a torque log of `dof` cranks (torque_log_file.h); a log that cannot be used throws
+/// InputError (the LogError's message).
+identification::TorqueLog read_log(const std::string& path, int dof = 2);
 
 /// "" or why angles that start at (theta1, theta2) look like degrees: a start beyond
 /// identification::kDegreesBeyond (two turns), within 360. Read where the model failed on them,
@@ -67,6 +68,13 @@ std::string start_looks_like_degrees(const std::vector<double>& starts);
 identification::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& loads,
                                               const identification::TorqueLog& log,
                                               const identification::IdentifyOptions& options);
+
+/// identification::identify of a four_bar scene (its loads M3, F, F_angle from the scene), with
+/// identify_scene's errors. Options the four-bar's fit does not support are refused before
+/// (identification::four_bar_unsupported).
+identification::IdentifyResult identify_four_bar_scene(
+    const Scene& scene, const identification::TorqueLog& log,
+    const identification::IdentifyOptions& options);
 
 /// The scene with what identify fitted: the friction, the links (group inertia) and the motors
 /// (group actuator). scene_fitted.yaml and fivebar.identify's 'fitted_scene'.

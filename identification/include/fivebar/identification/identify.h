@@ -20,6 +20,7 @@
 #include "fivebar/identification/parameters.h"
 #include "fivebar/identification/rates.h"
 #include "fivebar/identification/torque_log.h"
+#include "fivebar/model/four_bar_params.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/status.h"
 #include "fivebar/sim/simulator.h"
@@ -263,6 +264,9 @@ struct IdentifyResult {
   std::vector<double> omega1, omega2, alpha1, alpha2, predicted_tau1, predicted_tau2;
   std::vector<char> used;
   Params<double> fitted;  ///< the scene's parameters with the identified friction (and links)
+  /// a four-bar's fit (identify's four-bar overload): the scene's four-bar with the identified
+  /// friction; `fitted` is then left at its defaults
+  FourBarParams fitted_four_bar;
   InertialReport inertial;  ///< group inertia
 };
 
@@ -275,6 +279,20 @@ struct IdentifyResult {
 /// the covariance is computed only on a converged solution.
 IdentifyResult identify(const Params<double>& scene, const sim::LoadFunction& loads,
                         const TorqueLog& log, const IdentifyOptions& options);
+
+/// Identifies the joint friction of a four-bar (one crank: a log of dof 1, t, theta1, tau1 and
+/// optionally omega1, alpha1) by inverse dynamics over the mechanism (four_bar.h): the same
+/// conditioning, rate estimation, fit, covariance, model check and Wald intervals as the
+/// five-bar's, with the checks that need the five-bar's two cranks or its inertial and
+/// actuator models left out (docs/identification.md, "Four-bar"). `loads` gives M3, F and
+/// F_angle (its M1 is ignored). A layout or method the four-bar does not support is a status
+/// kInvalidInput naming it (four_bar_unsupported). Throws LogError as identify.
+IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
+                        const TorqueLog& log, const IdentifyOptions& options);
+
+/// Empty if identify's four-bar overload supports `options`, else the option it does not
+/// support, in one line ("--method output-error runs five-bars only (...)").
+std::string four_bar_unsupported(const IdentifyOptions& options);
 
 /// Angles of a simulation of `params` driven by the logged torques (linear between samples)
 /// against the logged angles.

@@ -46,6 +46,9 @@ struct ParameterLayout {
   /// (>= 0 by its bound), so that a fit cannot return static friction below kinetic friction.
   /// identify() solves in this form and reports static_coulomb itself.
   bool static_as_excess = false;
+  /// joints with friction (the five-bar's 5, the four-bar's 4: slots 0..joints-1 of the friction
+  /// arrays; per joint, one coefficient each; shared, one value written to every slot)
+  int joints = kJoints;
 
   /// The coefficient of friction group g (0 <= g < groups()).
   Coefficient group(int g) const {
@@ -68,7 +71,7 @@ struct ParameterLayout {
     }
     return -1;
   }
-  int per_group() const { return per_joint ? kJoints : 1; }
+  int per_group() const { return per_joint ? joints : 1; }
   int friction_size() const { return groups() * per_group(); }
   int inertia_offset() const { return friction_size(); }
   int actuator_offset() const { return inertia_offset() + (inertia ? kInertialParams : 0); }
@@ -163,7 +166,7 @@ struct ParameterLayout {
     const int g_static = group_of(Coefficient::kStaticCoulomb);
     const int g_coulomb = group_of(Coefficient::kCoulomb);
     for (int i = 0; i < n; ++i) {
-      // parameter i sets group i / per_group() at one joint (per joint) or at all five
+      // parameter i sets group i / per_group() at one joint (per joint) or at all of them
       const int g = i / per_group();
       std::array<T, kJoints>& d = coefficient(*fp, group(g));
       // static_as_excess: static_coulomb = coulomb (same joint) + excess
@@ -171,7 +174,7 @@ struct ParameterLayout {
                       ? x[i] + x[i - (g_static - g_coulomb) * per_group()]
                       : x[i];
       if (per_joint) {
-        d[i % kJoints] = v;
+        d[i % joints] = v;
       } else {
         d.fill(v);
       }
@@ -183,8 +186,8 @@ struct ParameterLayout {
     std::vector<double> x(friction_size(), 0.0);
     for (int g = 0; g < groups(); ++g) {
       const std::array<double, kJoints>& src = coefficient(fp, group(g));
-      for (int k = 0; k < kJoints; ++k) {
-        x[g * per_group() + (per_joint ? k : 0)] += src[k] / (per_joint ? 1.0 : kJoints);
+      for (int k = 0; k < joints; ++k) {
+        x[g * per_group() + (per_joint ? k : 0)] += src[k] / (per_joint ? 1.0 : joints);
       }
     }
     const int g_static = group_of(Coefficient::kStaticCoulomb);

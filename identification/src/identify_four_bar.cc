@@ -1,0 +1,522 @@
+// identify() of the four-bar (identify.h): the default method, inverse dynamics, over the
+// mechanism FourBar, through the stages of the five-bar's fit in their one-crank form
+// (docs/identification.md, "Four-bar"): conditioning (condition_log), rates and samples (logged,
+// or Savitzky-Golay with the rest rule and the slip reversals left out), the fit (the mechanism
+// residual, mechanism_residual.h), the covariance (the block sandwich over the filter's windows),
+// the model check (the residual against its noise floor) and Wald intervals.
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "covariance.h"
+#include "fivebar/identification/identify.h"
+#include "fivebar/model/format.h"
+#include "fivebar/model/four_bar.h"
+#include "fivebar/sim/simulator.h"
+#include "mechanism_residual.h"
+#include "setup_shared.h"
+
+namespace fivebar::identification {
+
+namespace {
+
+using Sample = stages::MechanismSample<FourBar>;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// a joint whose relative rate is within this many of its noise std of zero is left out (its
+/// Coulomb sign is not known)
+constexpr double kRestSigmas = 4.0;
+
+/// the Savitzky-Golay order when the window is not given: the crank-rocker's crank turns at
+/// ~23 rad/s, and order 5 smooths its accelerations (noise-free log, 5 ms: coulomb -4 %; seeded
+/// logs at 10 ms: -2 std); order 7 at 10 ms left |error| <= 1.3 std on the seeds tried. A
+/// smaller window does not help: the acceleration noise then biases the friction (the reactions'
+/// norms grow with it) by up to -5 std at 4 ms.
+constexpr int kWindowOrder = 7;
+
+/// The state the four-bar's stages share, in the order they write it.
+struct FourBarFit {
+  const IdentifyOptions* opt = nullptr;
+  FourBarParams scene;  ///< with the law to fit (fit_friction)
+  sim::FourBarLoadFunction loads;
+  ParameterLayout layout;
+  EvalOptions eval;
+  ConditionedLog cond;  ///< conditioning
+  // rates and samples
+  int hw = 0;                ///< Savitzky-Golay half-window [samples] (0: accelerations logged)
+  int first = 0, last = -1;  ///< samples whose rates and accelerations are centred estimates
+  std::vector<double> w, a;  ///< crank rate and acceleration at every log sample
+  double rate_noise = 0, accel_noise = 0;  ///< their noise std
+  std::vector<Sample> samples;
+  std::vector<int> index;  ///< log index of each sample
+  // the fit
+  std::vector<double> x;
+};
+
+std::string line_of(const TorqueLog& log, int i) {
+  return "line " + std::to_string(log.lines.empty() ? i + 1 : log.lines[i]);
+}
+
+/// Conditioning: the log's shape, unwrapping and glitches (condition_log), then every pose
+/// assembles with the scene's four-bar (a LogError naming the line when one does not).
+void condition(const TorqueLog& log, FourBarFit* f, IdentifyResult* out) {
+  if (log.dof != 1) {
+    throw LogError(log.path, "header",
+                   "has the columns of " + std::to_string(log.dof) +
+                       " cranks; a four_bar's log has one: t, theta1, tau1 (and optionally "
+                       "omega1, alpha1)");
+  }
+  const int P = f->layout.size();
+  require_samples(log, P + 1, std::to_string(P) + " parameters + 1");
+  require_uniform_sampling(log);
+  f->cond = condition_log(log, f->opt->condition);
+  const TorqueLog& L = f->cond.log;
+  for (int i = 0; i < L.size(); ++i) {
+    FourBarKinematics k;
+    const Status st = four_bar_close(f->scene, L.theta1[i], &k, 0.0);
+    if (!st.ok()) throw LogError(log.path, line_of(log, i) + ", column theta1", st.message);
+  }
+  out->notes = f->cond.notes;
+  out->conditioned_log = L;
+  out->glitches = f->cond.glitches;
+  out->unwrapped[0] = f->cond.unwrapped[0];
+  out->angle_noise[0] = f->cond.angle_noise[0];
+  out->torque_noise[0] = f->cond.torque_noise[0];
+  out->rate_noise[0] = f->cond.rate_noise[0];
+}
+
+/// Noise gains of the Savitzky-Golay rate and acceleration at the middle sample of the log (white
+/// noise of std s on the angles gives s * gain): the root sum of squares of its taps.
+void interior_gains(const std::vector<double>& t, const SgOptions& sg, double* g1, double* g2) {
+  int lo = 0;
+  std::vector<double> d1, d2;
+  savitzky_golay_taps(t, static_cast<int>(t.size()) / 2, sg, &lo, &d1, &d2);
+  *g1 = *g2 = 0;
+  for (size_t r = 0; r < d1.size(); ++r) {
+    *g1 += d1[r] * d1[r];
+    *g2 += d2[r] * d2[r];
+  }
+  *g1 = std::sqrt(*g1);
+  *g2 = std::sqrt(*g2);
+}
+
+/// The Savitzky-Golay filter: as given (--sg-window), else the options' half-window with the
+/// polynomial's order at least kWindowOrder.
+SgOptions filter_options(const IdentifyOptions& opt, std::string* why) {
+  SgOptions sg = opt.sg;
+  if (!opt.auto_window) {
+    *why = "given: --sg-window";
+    return sg;
+  }
+  sg.order = std::max(sg.order, kWindowOrder);
+  *why = "default: the four-bar's order " + std::to_string(sg.order) +
+         " over the default half-window (no data-driven choice)";
+  return sg;
+}
+
+/// Rates and accelerations: the log's own when it has them (and the options do not ask to
+/// estimate them), else Savitzky-Golay (filter_options; the edges, where the window is
+/// one-sided, are left out of the fit); their noise from the angles' through the filter.
+void rates(FourBarFit* f, IdentifyResult* out) {
+  const TorqueLog& L = f->cond.log;
+  const IdentifyOptions& opt = *f->opt;
+  const int n = L.size();
+  const double dt = L.duration() / std::max(1, n - 1);
+  const bool logged = L.has_rates && !opt.estimate_rates;
+  const bool accels_logged = logged && L.has_accels;
+  std::string why;
+  const SgOptions sg = accels_logged ? opt.sg : filter_options(opt, &why);
+  std::vector<double> w_sg, a_sg;
+  savitzky_golay(L.t, L.theta1, sg, &w_sg, &a_sg);
+  f->w = logged ? L.omega1 : w_sg;
+  f->a = accels_logged ? L.alpha1 : a_sg;
+  double g1 = 0, g2 = 0;
+  interior_gains(L.t, sg, &g1, &g2);
+  f->rate_noise = logged ? f->cond.rate_noise[0] : f->cond.angle_noise[0] * g1;
+  f->accel_noise = accels_logged ? f->cond.accel_noise[0] : f->cond.angle_noise[0] * g2;
+  f->hw = accels_logged ? 0 : sg_half_window(sg, dt);
+  f->first = f->hw;
+  f->last = n - 1 - f->hw;
+  out->rates_estimated = !logged;
+  out->accels_estimated = !accels_logged;
+  if (out->accels_estimated) {
+    out->sg_half_window = f->hw;
+    out->sg_order = sg.order;
+    out->window_choice = why;
+  }
+  out->omega1 = f->w;
+  out->alpha1 = f->a;
+}
+
+/// Per sample, 1 when some joint's relative rate changed sign since the sample before (zeros
+/// keep the previous sign); *count: the sign changes of all joints.
+std::vector<int> reversal_marks(const std::vector<std::array<double, 4>>& rel, int* count) {
+  std::vector<int> mark(rel.size(), 0);
+  for (int k = 0; k < kFourBarJoints; ++k) {
+    double last_sign = 0;
+    for (size_t i = 0; i < rel.size(); ++i) {
+      const double s = rel[i][k] > 0 ? 1.0 : (rel[i][k] < 0 ? -1.0 : 0.0);
+      if (s != 0 && last_sign != 0 && s != last_sign) {
+        mark[i] = 1;
+        ++*count;
+      }
+      if (s != 0) last_sign = s;
+    }
+  }
+  return mark;
+}
+
+/// The samples of the fit: glitches, joints at rest (the rest rule: a relative rate within
+/// kRestSigmas of its noise, or below --min-rate) and, with estimated accelerations, samples
+/// whose filter window spans a slip reversal are left out.
+void select_samples(FourBarFit* f, IdentifyResult* out) {
+  const TorqueLog& L = f->cond.log;
+  const IdentifyOptions& opt = *f->opt;
+  const int n = L.size();
+  std::vector<std::array<double, 4>> rel(n, {0, 0, 0, 0}), row(n, {0, 0, 0, 0});
+  for (int i = f->first; i <= f->last; ++i) {
+    FourBarKinematics k;
+    if (!four_bar_kinematics(f->scene, L.theta1[i], &k).ok()) continue;
+    row[i] = four_bar_joint_rows(k);
+    for (int j = 0; j < kFourBarJoints; ++j) rel[i][j] = row[i][j] * f->w[i];
+  }
+  int reversals = 0;
+  const std::vector<int> mark = reversal_marks(rel, &reversals);
+  std::vector<int> before(n + 1, 0);  // marks at samples < i
+  for (int i = 0; i < n; ++i) before[i + 1] = before[i] + mark[i];
+  out->used.assign(n, 0);
+  const bool skip_reversals = f->hw > 0 && opt.exclude_reversals;
+  for (int i = f->first; i <= f->last; ++i) {
+    if (f->cond.rejected[i]) continue;
+    bool held = false;
+    for (int j = 0; j < kFourBarJoints; ++j) {
+      const double rest = opt.rest_rate_threshold >= 0
+                              ? opt.rest_rate_threshold
+                              : kRestSigmas * f->rate_noise * std::abs(row[i][j]);
+      held = held || std::abs(rel[i][j]) <= std::max({opt.min_rate, rest, 1e-12});
+    }
+    if (held) {
+      ++out->samples_at_rest;
+      continue;
+    }
+    const int lo = std::max(0, i - f->hw + 1), hi = std::min(n - 1, i + f->hw);
+    if (skip_reversals && before[hi + 1] - before[lo] > 0) {
+      ++out->samples_near_reversals;
+      continue;
+    }
+    Sample s;
+    s.t = L.t[i];
+    s.q[0] = L.theta1[i];
+    s.v[0] = f->w[i];
+    s.a[0] = f->a[i];
+    s.tau[0] = L.tau1[i];
+    s.loads = f->loads(L.t[i]);
+    f->samples.push_back(s);
+    f->index.push_back(i);
+    out->used[i] = 1;
+  }
+  out->slip_reversals = reversals;
+  out->rest_rate_threshold = kRestSigmas * f->rate_noise;
+  out->samples_used = static_cast<int>(f->samples.size());
+}
+
+/// The torque residual's expected rms from the sensor noise: the torque noise and the
+/// acceleration noise through M(q), floored at kAbsoluteFloor of the rms logged torque.
+double noise_floor(const FourBarFit& f) {
+  const double tn = f.cond.torque_noise[0];
+  double s2 = 0, tau2 = 0;
+  for (const Sample& s : f.samples) {
+    FourBarKinematics k;
+    double M = 0, Q0 = 0;
+    if (four_bar_kinematics(f.scene, s.q[0], &k).ok()) {
+      four_bar_mass_and_force(f.scene, k, four_bar_bias(f.scene, k, s.v[0]), s.loads, &M, &Q0);
+    }
+    s2 += tn * tn + M * M * f.accel_noise * f.accel_noise;
+    tau2 += s.tau[0] * s.tau[0];
+  }
+  const double m = std::max<double>(1, f.samples.size());
+  return std::max(std::sqrt(s2 / m), stages::kAbsoluteFloor * std::sqrt(tau2 / m));
+}
+
+/// Raw residuals (and the Jacobian) of the problem at its parameters; false where one fails.
+bool evaluate(ceres::Problem* problem, std::vector<double>* r, Eigen::MatrixXd* J = nullptr) {
+  ceres::Problem::EvaluateOptions eo;
+  eo.apply_loss_function = false;
+  ceres::CRSMatrix crs;
+  if (!problem->Evaluate(eo, nullptr, r, nullptr, J ? &crs : nullptr)) return false;
+  if (J) {
+    J->setZero(crs.num_rows, crs.num_cols);
+    for (int i = 0; i < crs.num_rows; ++i) {
+      for (int k = crs.rows[i]; k < crs.rows[i + 1]; ++k) (*J)(i, crs.cols[k]) = crs.values[k];
+    }
+  }
+  return true;
+}
+
+double rms(const std::vector<double>& r) {
+  double s = 0;
+  for (double v : r) s += v * v;
+  return r.empty() ? 0.0 : std::sqrt(s / r.size());
+}
+
+/// The fit: start values (the options' or the neutral ones, inside the bounds), the residual
+/// blocks, the bounds, the solve. False (out->status) when the start values are malformed, the
+/// model fails at them, or the solver fails.
+bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
+  const ParameterLayout& lay = f->layout;
+  const int P = lay.size();
+  const std::vector<double> x0 =
+      f->opt->initial.empty() ? stages::default_start(lay) : f->opt->initial;
+  if (static_cast<int>(x0.size()) != P) {
+    out->status = Status::Error(StatusCode::kInvalidInput,
+                                "initial values: expected " + std::to_string(P) + " numbers");
+    return false;
+  }
+  // the internal layout (Stribeck: static_coulomb as its excess over coulomb)
+  const Eigen::VectorXd xi =
+      stages::to_public(lay).inverse() * Eigen::Map<const Eigen::VectorXd>(x0.data(), P);
+  f->x.assign(xi.data(), xi.data() + P);
+  for (int i = 0; i < P; ++i) f->x[i] = std::max(f->x[i], lay.lower_bound(i));
+  stages::add_mechanism_terms<FourBar>(f->scene, lay, f->samples, f->eval, f->x.data(), problem);
+  for (int i = 0; i < P; ++i) problem->SetParameterLowerBound(f->x.data(), i, lay.lower_bound(i));
+  out->residuals = static_cast<int>(f->samples.size());
+  std::vector<double> r;
+  if (!evaluate(problem, &r)) {
+    out->status = Status::Error(StatusCode::kFrictionNotConverged,
+                                "the four-bar's inverse dynamics fails at the start values");
+    return false;
+  }
+  out->rms_torque_residual_initial[0] = rms(r);
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = f->opt->max_iterations;
+  so.num_threads = f->opt->num_threads;
+  so.function_tolerance = 1e-12;  // the five-bar's inverse-dynamics tolerances
+  so.gradient_tolerance = 1e-14;
+  so.parameter_tolerance = 1e-10;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, problem, &summary);
+  out->iterations = static_cast<int>(summary.iterations.size()) - 1;
+  out->solver_message = summary.message;
+  for (const ceres::IterationSummary& it : summary.iterations) {
+    out->iteration_costs.push_back(it.cost);
+  }
+  out->converged = summary.termination_type == ceres::CONVERGENCE;
+  if (summary.termination_type == ceres::FAILURE ||
+      summary.termination_type == ceres::USER_FAILURE) {
+    out->status = Status::Error(StatusCode::kSolverFailed, "the solver failed: " + summary.message);
+    return false;
+  }
+  if (!out->converged)
+    out->warnings.push_back("the solver stopped before converging: " + summary.message);
+  return true;
+}
+
+/// The block sizes of the sandwich: samples whose filter windows overlap share their rate
+/// errors, so consecutive runs of 2 hw + 1 log samples form a block (one sample each when the
+/// accelerations are logged).
+std::vector<int> block_sizes(const FourBarFit& f) {
+  std::vector<int> sizes;
+  const int span = 2 * f.hw + 1;
+  int start = -1;
+  for (int i : f.index) {
+    if (start < 0 || i - start >= span) {
+      sizes.push_back(0);
+      start = i;
+    }
+    ++sizes.back();
+  }
+  return sizes;
+}
+
+/// The covariance of the free parameters (those off their bounds): the block sandwich
+/// (errors in variables: the rates' noise enters the reactions and the friction's sign terms), or
+/// s^2 (J^T J)^-1 with --classical-std; the singular values of the scaled Jacobian.
+void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* out) {
+  const int P = f.layout.size();
+  std::vector<double> r;
+  Eigen::MatrixXd J;
+  out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
+  if (!evaluate(problem, &r, &J)) return;
+  const int m = static_cast<int>(r.size());
+  out->rms_torque_residual[0] = rms(r);
+  out->residual_sigma = std::sqrt(rms(r) * rms(r) * m / std::max(1, m - P));
+  Eigen::MatrixXd Js = J;
+  for (int i = 0; i < P; ++i) Js.col(i) /= std::max(1e-300, J.col(i).norm());
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js);
+  for (int i = 0; i < svd.singularValues().size(); ++i) {
+    out->singular_values.push_back(svd.singularValues()(i));
+  }
+  std::vector<int> free;
+  for (int i = 0; i < P; ++i) {
+    if (f.x[i] > f.layout.lower_bound(i) + 1e-12) free.push_back(i);
+  }
+  if (free.empty() || !out->converged) return;
+  Eigen::MatrixXd Jf(m, free.size());
+  for (size_t c = 0; c < free.size(); ++c) Jf.col(c) = J.col(free[c]);
+  const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), m);
+  Eigen::MatrixXd C;
+  if (f.opt->errors_in_variables) {
+    C = detail::block_sandwich(Jf, rv, block_sizes(f)).covariance;
+    out->std_method = "block-sandwich";
+    out->std_detail = "sandwich over blocks of " + std::to_string(2 * f.hw + 1) +
+                      " samples (the rate filter's window), small-sample corrected";
+  }
+  if (C.size() == 0) {
+    const Eigen::MatrixXd H = Jf.transpose() * Jf;
+    C = out->residual_sigma * out->residual_sigma *
+        H.ldlt().solve(Eigen::MatrixXd::Identity(H.rows(), H.cols()));
+    out->std_method = "residual-variance";
+  }
+  for (size_t a = 0; a < free.size(); ++a) {
+    for (size_t b = 0; b < free.size(); ++b) out->covariance(free[a], free[b]) = C(a, b);
+  }
+}
+
+/// Estimates, correlation and Wald intervals (value +- ci_quantile std) of the public parameters
+/// (to_public: Stribeck's static_coulomb = coulomb + the fitted excess); a parameter at its
+/// bound, or made of one (static_coulomb = coulomb), has no std.
+void estimates(const FourBarFit& f, const std::vector<double>& x0, IdentifyResult* out) {
+  const int P = f.layout.size();
+  const std::vector<std::string> names = f.layout.names();
+  const Eigen::MatrixXd T = stages::to_public(f.layout);
+  const Eigen::VectorXd x = T * Eigen::Map<const Eigen::VectorXd>(f.x.data(), P);
+  std::vector<char> bound(P, 0);  // public i depends on an internal parameter at its bound
+  for (int i = 0; i < P; ++i) {
+    for (int j = 0; j < P; ++j) {
+      const bool off =
+          f.x[j] > f.layout.lower_bound(j) + 1e-12 && std::isfinite(out->covariance(j, j));
+      if (T(i, j) != 0 && !off) bound[i] = 1;
+    }
+  }
+  const Eigen::MatrixXd C = T * out->covariance.unaryExpr([](double v) {
+    return std::isfinite(v) ? v : 0.0;
+  }) * T.transpose();
+  out->correlation = Eigen::MatrixXd::Constant(P, P, kNaN);
+  for (int i = 0; i < P; ++i) {
+    ParameterEstimate e;
+    e.name = names[i];
+    e.value = x[i];
+    e.initial = x0[i];
+    e.at_bound = bound[i] && !(f.x[i] > f.layout.lower_bound(i) + 1e-12);
+    e.std = !bound[i] && C(i, i) > 0 ? std::sqrt(C(i, i)) : kNaN;
+    if (std::isfinite(e.std)) {
+      e.ci_low = e.value - out->ci_quantile * e.std;
+      e.ci_high = e.value + out->ci_quantile * e.std;
+      e.ci_method = "wald";
+    }
+    out->parameters.push_back(e);
+    for (int j = 0; j < P; ++j) {
+      const double d = std::sqrt(C(i, i) * C(j, j));
+      if (!bound[i] && !bound[j] && d > 0) out->correlation(i, j) = C(i, j) / d;
+    }
+  }
+}
+
+/// The model check: a residual more than kMisfitRatio times its noise floor is structure the
+/// law or the scene misses; the fit is then not to be used (out->unusable).
+void model_check(IdentifyResult* out) {
+  const double floor = out->residual_noise_floor[0];
+  const double ratio = out->rms_torque_residual[0] / floor;
+  if (!(ratio > stages::kMisfitRatio)) return;
+  std::string bound;
+  for (const ParameterEstimate& p : out->parameters) {
+    if (p.at_bound) bound += (bound.empty() ? "" : ", ") + p.name;
+  }
+  out->unusable =
+      "the torque residual (rms " + format_significant(out->rms_torque_residual[0], 3) +
+      " N m) is " + format_significant(ratio, 3) +
+      " times its noise floor: the friction law or the scene misses what the log shows" +
+      (bound.empty() ? "" : " (at its bound: " + bound + ")");
+  out->warnings.push_back(out->unusable);
+}
+
+/// The fitted scene, and its inverse dynamics at every sample of the log (sim::inverse_rows, the
+/// four-bar's inverse dynamics compiled once in the simulator; NaN at every sample when a row
+/// fails, which it names in a warning).
+void predictions(const FourBarFit& f, IdentifyResult* out) {
+  out->fitted_four_bar = f.scene;
+  f.layout.apply(f.x.data(), &out->fitted_four_bar.friction);
+  const TorqueLog& L = f.cond.log;
+  std::vector<sim::Row> motion(L.size()), rows;
+  for (int i = 0; i < L.size(); ++i) {
+    motion[i].t = L.t[i];
+    motion[i].theta[0] = L.theta1[i];
+    motion[i].omega[0] = f.w[i];
+    motion[i].alpha[0] = f.a[i];
+  }
+  out->predicted_tau1.assign(L.size(), kNaN);
+  const Status st = sim::inverse_rows(out->fitted_four_bar, f.loads, motion, &rows);
+  if (!st.ok()) {
+    out->warnings.push_back("no predicted torques: the fitted scene's inverse dynamics fails: " +
+                            st.message);
+    return;
+  }
+  for (int i = 0; i < L.size(); ++i) out->predicted_tau1[i] = rows[i].M1;
+}
+
+}  // namespace
+
+std::string four_bar_unsupported(const IdentifyOptions& opt) {
+  const std::string tail = " runs five-bars only (mechanism.type five_bar)";
+  if (opt.method != Method::kInverseDynamics) {
+    return "--method " + std::string(method_name(opt.method)) + tail;
+  }
+  if (opt.layout.inertia) return "--estimate inertia" + tail;
+  if (opt.layout.actuator) return "--estimate actuator" + tail;
+  if (opt.loss != Loss::kNone) return "--loss " + std::string(loss_name(opt.loss)) + tail;
+  return "";
+}
+
+IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
+                        const TorqueLog& log, const IdentifyOptions& opt) {
+  const auto start = std::chrono::steady_clock::now();
+  IdentifyResult out;
+  out.layout = opt.layout;
+  out.layout.joints = kFourBarJoints;
+  out.layout.static_as_excess = false;
+  out.method = opt.method;
+  out.samples = log.size();
+  const std::string unsupported = four_bar_unsupported(opt);
+  if (!unsupported.empty()) {
+    out.status = Status::Error(StatusCode::kInvalidInput, unsupported);
+    return out;
+  }
+  FourBarFit f;
+  f.opt = &opt;
+  f.layout = out.layout;
+  f.layout.static_as_excess = f.layout.group_of(Coefficient::kStaticCoulomb) >= 0;
+  f.scene = scene;
+  f.scene.friction = stages::fit_friction(scene.friction, f.layout, opt);
+  f.loads = loads;
+  f.eval.friction_tol = 1e-12;
+  f.eval.friction_max_iter = 100;
+  condition(log, &f, &out);
+  rates(&f, &out);
+  select_samples(&f, &out);
+  if (out.samples_used < f.layout.size() + 1) {
+    out.status = Status::Error(StatusCode::kInvalidInput,
+                               std::to_string(out.samples_used) + " samples left for " +
+                                   std::to_string(f.layout.size()) + " parameters");
+    return out;
+  }
+  out.residual_noise_floor[0] = noise_floor(f);
+  ceres::Problem problem;
+  if (!solve(&f, &problem, &out)) return out;
+  const std::vector<double> x0 =
+      opt.initial.empty() ? stages::default_start(f.layout) : opt.initial;
+  covariance(f, &problem, &out);
+  estimates(f, x0, &out);
+  model_check(&out);
+  predictions(f, &out);
+  out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace fivebar::identification

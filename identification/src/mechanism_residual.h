@@ -1,0 +1,40 @@
+// The inverse-dynamics residual over a mechanism M (model/mechanism.h): one sample's measured
+// drive torques minus those of mech::inverse<M> with the friction coefficients x laid out by a
+// ParameterLayout. add_mechanism_terms<M> is declared here and instantiated per mechanism in a
+// unit of its own (residual_blocks_four_bar.cc), with one Jet width: the cost is a
+// ceres::DynamicAutoDiffCostFunction of stride kMechanismStride, so every parameter count runs
+// through the same compiled evaluation. The five-bar's residual blocks (residual_blocks.cc)
+// read each sample's structure instead (residual.h), which is faster for its five joints.
+#pragma once
+
+#include <ceres/ceres.h>
+
+#include <vector>
+
+#include "fivebar/identification/parameters.h"
+#include "fivebar/model/evaluation.h"
+#include "fivebar/model/mechanism.h"
+
+namespace fivebar::identification::stages {
+
+/// Jet width of the mechanism residual's passes (parameter counts above it take several passes)
+inline constexpr int kMechanismStride = 8;
+
+/// One sample of a mechanism of M::kDof driven joints: pose, rates, accelerations (measured or
+/// estimated), the measured drive torques and the scene's other loads at that time.
+template <class M>
+struct MechanismSample {
+  double t = 0;
+  mech::Vec<M::kDof, double> q, v, a, tau;
+  typename M::template Loads<double> loads;
+};
+
+/// The inverse-dynamics residual blocks of `samples` on the parameter block x (the friction
+/// coefficients of `layout`, every other constant from `scene`): r = tau - drive torques.
+template <class M>
+void add_mechanism_terms(const typename M::template Params<double>& scene,
+                         const ParameterLayout& layout,
+                         const std::vector<MechanismSample<M>>& samples, const EvalOptions& eval,
+                         double* x, ceres::Problem* problem);
+
+}  // namespace fivebar::identification::stages

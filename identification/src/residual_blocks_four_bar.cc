@@ -1,0 +1,68 @@
+// The four-bar's inverse-dynamics residual blocks (mechanism_residual.h): add_mechanism_terms
+// instantiated for FourBar, in a unit of its own so that its Jet instantiation of the four-bar's
+// dynamics (one width, kMechanismStride) is compiled once.
+#include "fivebar/model/four_bar.h"
+#include "mechanism_residual.h"
+
+namespace fivebar::identification::stages {
+
+namespace {
+
+/// The drive torques of an evaluation of M.
+template <typename T>
+mech::Vec<1, T> drive_torques(const FourBarEvaluationT<T>& ev) {
+  return mech::Vec<1, T>(ev.M1);
+}
+
+/// r = tau - the drive torques of mech::inverse<M> at the sample's motion, the friction
+/// coefficients x[0] laid out by `layout` into the scene's friction. Coulomb signs are those of
+/// the sample's relative rates: data, so r is smooth in x.
+template <class M>
+class MechanismResidual {
+ public:
+  MechanismResidual(const typename M::template Params<double>& scene, const ParameterLayout& layout,
+                    const MechanismSample<M>& s, const EvalOptions& eval)
+      : scene_(scene), layout_(layout), s_(s), eval_(eval) {}
+
+  template <typename T>
+  bool operator()(T const* const* x, T* r) const {
+    typename M::template Params<T> p = scene_.template cast<T>();
+    layout_.apply(x[0], &p.friction);
+    typename M::template Evaluation<T> ev;
+    const Status st =
+        mech::inverse<M, T>(p, s_.loads.template cast<T>(), s_.q.template cast<T>(),
+                            s_.v.template cast<T>(), s_.a.template cast<T>(), nullptr, eval_, &ev);
+    if (!st.ok()) return false;  // Ceres rejects the step
+    const mech::Vec<M::kDof, T> d = drive_torques(ev);
+    for (int j = 0; j < M::kDof; ++j) r[j] = T(s_.tau[j]) - d[j];
+    return true;
+  }
+
+ private:
+  const typename M::template Params<double>& scene_;
+  ParameterLayout layout_;
+  MechanismSample<M> s_;
+  EvalOptions eval_;
+};
+
+}  // namespace
+
+template <class M>
+void add_mechanism_terms(const typename M::template Params<double>& scene,
+                         const ParameterLayout& layout,
+                         const std::vector<MechanismSample<M>>& samples, const EvalOptions& eval,
+                         double* x, ceres::Problem* problem) {
+  for (const MechanismSample<M>& s : samples) {
+    auto* cost = new ceres::DynamicAutoDiffCostFunction<MechanismResidual<M>, kMechanismStride>(
+        new MechanismResidual<M>(scene, layout, s, eval));
+    cost->AddParameterBlock(layout.size());
+    cost->SetNumResiduals(M::kDof);
+    problem->AddResidualBlock(cost, nullptr, x);
+  }
+}
+
+template void add_mechanism_terms<FourBar>(const FourBarParams&, const ParameterLayout&,
+                                           const std::vector<MechanismSample<FourBar>>&,
+                                           const EvalOptions&, double*, ceres::Problem*);
+
+}  // namespace fivebar::identification::stages
