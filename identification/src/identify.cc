@@ -97,16 +97,30 @@ bool prepare_fit(const Params<double>& scene_in, const sim::LoadFunction& loads,
 
 /// The torque-to-angle delay when the readings' checks leave the fit usable: the fit redone
 /// with the torques shifted when it is significant (true, *refit), else out's delay fields.
+/// A shift is kept only where it explains the misfit: its fit within kMisfitRatio floors, or
+/// half the first fit's ratio. A model error the shift leaves (masses that do not match read
+/// as a lag of a fraction of a millisecond) is named instead, uncorrected.
 bool delay_stage(const Params<double>& scene_in, const sim::LoadFunction& loads,
                  const TorqueLog& log, const Fit& f, const Analysis& an, IdentifyResult* out,
                  IdentifyResult* refit) {
   estimate_delay(f, an.J, an.r, an.sens, out);
   const double dt = log.duration() / std::max(1, log.size() - 1);
-  if (std::abs(out->delay_s) > kDelaySignificance * out->delay_std_s &&
-      std::abs(out->delay_s) > 0.1 * dt) {
-    *refit = refit_with_delay(scene_in, loads, f.cond.log, *f.opt, *out);
+  if (!(std::abs(out->delay_s) > kDelaySignificance * out->delay_std_s &&
+        std::abs(out->delay_s) > 0.1 * dt)) {
+    return false;
+  }
+  IdentifyResult shifted = refit_with_delay(scene_in, loads, f.cond.log, *f.opt, *out);
+  const double before = misfit_ratio(*out), after = misfit_ratio(shifted);
+  if (!(after > kMisfitRatio && after > 0.5 * before)) {
+    *refit = std::move(shifted);
     return true;
   }
+  out->warnings.push_back(
+      std::string("the torques seem to ") + (out->delay_s < 0 ? "lead" : "lag") + " the angles by " +
+      format_significant(std::abs(out->delay_s) * 1e3) + " +- " +
+      format_significant(out->delay_std_s * 1e3) + " ms, but the fit with them shifted keeps its "
+      "residual at " + format_significant(after, 3) + " times its noise floor (" +
+      format_significant(before, 3) + " without): a model error, not a delay; not corrected");
   return false;
 }
 

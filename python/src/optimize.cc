@@ -6,6 +6,7 @@
 #include "bindings.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
+#include "fivebar/io/scene_mechanism.h"
 #include "fivebar/io/summary_csv.h"
 #include "fivebar/io/tasks_file.h"
 #include "keywords.h"
@@ -44,22 +45,21 @@ py::dict task_dict(const PyScene& s, const trajectory::TaskResult& r,
     std::vector<sim::Row> optimal, baseline;
     const Status st = io::task_rows(s.scene, r, options, &optimal, &baseline);
     if (!st.ok()) throw NumericalError(s.scene.path, r.task, "trajectory rows: " + st.message);
-    d["trajectory"] = rows_dict(optimal);
-    d["baseline"] = rows_dict(baseline);
+    d["trajectory"] = rows_dict(optimal, io::layout_of(s.scene));
+    d["baseline"] = rows_dict(baseline, io::layout_of(s.scene));
   }
   return d;
 }
 
 py::dict optimize(const PyScene& s, const std::vector<trajectory::TaskSpec>& tasks,
                   const io::OptimizeSettings& settings, int threads, bool trajectories) {
-  s.require_five_bar("optimize");
-  const trajectory::BatchOptions options = io::batch_options(settings, s.scene.windings);
+  const trajectory::BatchOptions options =
+      io::batch_options(settings, s.scene.windings, io::layout_of(s.scene).drives);
   std::vector<trajectory::TaskResult> results;
   {
     py::gil_scoped_release release;
     results = trajectory::run_parallel(static_cast<int>(tasks.size()), threads, [&](int i) {
-      const sim::LoadFunction loads = io::LoadExpressions(s.scene).function();  // this thread's
-      return trajectory::run_task(s.scene.params, loads, tasks[i], s.scene.initial, options);
+      return io::run_scene_task(s.scene, tasks[i], options);  // (its own load expressions)
     });
   }
   io::add_objective_note(options, &results);
@@ -69,6 +69,8 @@ py::dict optimize(const PyScene& s, const std::vector<trajectory::TaskSpec>& tas
   }
   return d;
 }
+
+bool four_bar(const PyScene& s) { return s.scene.type == io::MechanismType::kFourBar; }
 
 // the keywords of fivebar.optimize: the options of `fivebar optimize`, with _ for -
 const Keywords<io::OptimizeSettings> kOptimizeKeywords = {
@@ -103,14 +105,14 @@ void bind_optimize(py::module_& m) {
   m.def(
       "optimize_text",
       [](const PyScene& scene, const std::string& yaml, const py::kwargs& kw) {
-        return optimize(scene, io::parse_tasks(yaml, "tasks"), settings_of(kw),
+        return optimize(scene, io::parse_tasks(yaml, "tasks", four_bar(scene)), settings_of(kw),
                         own_keyword(kw, "threads", 0), own_keyword(kw, "trajectories", true));
       },
       py::arg("scene"), py::arg("tasks_yaml"), "optimize() with the tasks file's YAML text");
   m.def(
       "optimize",
       [](const PyScene& scene, const std::string& tasks, const py::kwargs& kw) {
-        return optimize(scene, io::read_tasks(tasks), settings_of(kw),
+        return optimize(scene, io::read_tasks(tasks, four_bar(scene)), settings_of(kw),
                         own_keyword(kw, "threads", 0), own_keyword(kw, "trajectories", true));
       },
       py::arg("scene"), py::arg("tasks"),

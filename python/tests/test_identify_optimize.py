@@ -101,3 +101,21 @@ def test_optimize_takes_a_list_of_tasks_with_the_command_lines_defaults(root):
         assert "start" in str(e) or "goal" in str(e)
     else:
         raise AssertionError("a task without start and goal was accepted")
+
+
+def test_optimize_a_four_bar_task_from_a_list(root):
+    # the crank-rocker's P lowered to y = 0.10 m: the crank's columns, the limit held, energy
+    # below the minimum-jerk start's, and a five-bar key refused naming the mechanism
+    import pytest
+    scene = fivebar.load_scene(root / "datasets/reference/four_bar/crank_rocker.yaml")
+    task = {"name": "lower_p", "duration": 0.4, "start": {"theta1": 1.5707963267948966},
+            "goal": {"y": 0.10}, "torque_limit": 1.5}
+    result = fivebar.optimize(scene, [task], threads=1, refine=False)["lower_p"]
+    assert result["status"] == "ok"
+    assert result["dissipated_energy"] < result["baseline_dissipated_energy"]
+    rows = result["trajectory"]
+    assert "theta3" in rows and "theta4" not in rows and "M2" not in rows
+    assert np.max(np.abs(rows["M1"])) <= 1.5 * (1 + 1e-6)
+    bad = dict(task, goal={"theta1": 2.0, "theta2": 1.0})
+    with pytest.raises(ValueError, match="theta2: a five_bar key"):
+        fivebar.optimize(scene, [bad], threads=1)
