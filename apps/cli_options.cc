@@ -66,6 +66,11 @@ CLI::Validator positive_at_most(double limit) {
                      "> 0 and at most " + format_shortest(limit));
 }
 
+CLI::Validator within_a_turn() {
+  return range_check([](double v) { return v >= 0 && v <= 2 * M_PI; },
+                     ">= 0 and at most one turn (2 pi = 6.283185 rad)");
+}
+
 void add_out_option(CLI::App* app, std::string* out, const std::string& command) {
   *out = "results/" + command;
   app->add_option("--out", *out, "directory that receives every output file")

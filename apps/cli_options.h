@@ -26,6 +26,9 @@ CLI::Validator positive_number();
 CLI::Validator nonnegative_number();
 /// at most `limit` (and > 0): e.g. durations, so that a typo such as 1e300 is refused at once
 CLI::Validator positive_at_most(double limit);
+/// >= 0 and at most one turn (2 pi rad): the angle noise and encoder step of a log, which beyond
+/// a turn say nothing of the angle
+CLI::Validator within_a_turn();
 
 /// Declares SCENE, --out and --set on `app` (a subcommand named `command`).
 void add_scene_options(CLI::App* app, SceneArgs* args, const std::string& command);

@@ -90,8 +90,12 @@ void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads
   if (!(a.design.rate_hz > 0) || !std::isfinite(a.design.rate_hz)) {
     throw InputError(kFlags, "--rate", "must be > 0, got " + format_double(a.design.rate_hz));
   }
-  if (a.design.rate_hz * a.design.duration > 1e7) {
-    throw InputError(kFlags, "--rate", "--rate x --duration gives more than 1e7 samples");
+  // the designed motion's log is sampled at --rate: simulate's and synth-log's row limit
+  const std::string rows = rows_beyond_limit(a.design.duration, 1.0 / a.design.rate_hz);
+  if (!rows.empty()) {
+    throw InputError(kFlags, "--duration, --rate",
+                     "duration " + format_double(a.design.duration) + " s at --rate " +
+                         format_double(a.design.rate_hz) + " Hz " + rows);
   }
   if (!(a.design.singular_margin >= 0 && a.design.singular_margin < 1)) {
     throw InputError(kFlags, "--singular-margin",
@@ -860,7 +864,7 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--torque-noise", a->design.torque_noise, "std of the logged torques [N m]");
   app->add_option("--angle-noise", a->design.angle_noise,
                   "std of the logged angles [rad] (the rates identify estimates from them)")
-      ->check(nonnegative_number());
+      ->check(within_a_turn());
   app->add_option("--rate", a->design.rate_hz, "sampling rate of the log [Hz]");
   fourier.push_back(app->add_option("--periods", a->design.periods, "periods of the motion"));
   fourier.push_back(

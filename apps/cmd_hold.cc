@@ -399,9 +399,11 @@ void add_options(CLI::App* app, Args* args) {
       ->type_name("NM")
       ->capture_default_str()
       ->check(positive_number());
-  app->add_option("--time", args->time, "time at which the scene's loads M3, F are evaluated")
+  app->add_option("--time", args->time,
+                  "time at which the scene's loads M3, F are evaluated [s] (>= 0)")
       ->type_name("T")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(nonnegative_number());
 }
 
 const bool kRegistered = register_command(command_of("hold", kSummary, add_options, run));

@@ -387,68 +387,85 @@ void print_rest(const RestRule& rule, const RestSummary& s) {
   std::cout << line;
 }
 
-/// A step of a crank angle between two rows beyond this is a jump, not motion [rad]
+/// A step of a crank angle between two rows that differs from its neighbouring steps by more
+/// than this is a jump, not motion [rad] (a coarsely sampled smooth motion steps far, but evenly)
 constexpr double kJumpAngle = 1.0;
 
-/// Whether `motion`'s angles look like degrees. With rates in the file, as for logs: angles
-/// that agree with them in degrees (rates in rad/s) are degrees
-/// (identification::rates_look_like_degrees). Rates that agree with the angles on both cranks
+/// What in a motion file makes its inverse dynamics meaningless, found before it is run
+struct MotionFault {
+  std::string key;     ///< the column(s); empty when nothing was found
+  std::string reason;  ///< what was found and what to do
+  bool refused = true;  ///< bad input (exit 2); false: a warning (the unit cannot be told)
+};
+
+/// Whether `motion`'s angles look like degrees, by the rules identify applies to logs. With
+/// rates in the file: angles that agree with them in degrees (rates in rad/s) are degrees
+/// (identification::rates_look_like_degrees). Rates that agree with the angles on every crank
 /// (rates_say_radians) cannot tell radians from degrees with deg/s rates: a start beyond two
-/// turns is then named as either (a radian motion cut late in a run, or degrees), not as
-/// degrees. Without rates, by the start (start_looks_like_degrees: beyond two turns, within 360;
-/// a motion in radians may start a turn out).
-std::string motion_in_degrees(const Motion& motion) {
+/// turns is then named as either (a radian motion cut late in a run, or degrees), a warning.
+/// Without rates, by the start (start_looks_like_degrees: beyond two turns, within 360; a
+/// motion in radians may start a turn out).
+MotionFault motion_in_degrees(const Motion& motion) {
   const std::vector<sim::Row>& r = motion.rows;
-  if (r.empty()) return "";
+  const std::string columns = motion.cranks > 1 ? "theta1, theta2" : "theta1";
+  if (r.empty()) return {};
   const std::vector<double> starts(r[0].theta.begin(), r[0].theta.begin() + motion.cranks);
-  if (motion.omega_source == "file") {
-    bool radians = true;
-    std::vector<double> t(r.size()), theta(r.size()), omega(r.size());
-    for (int k = 0; k < motion.cranks; ++k) {
-      for (size_t i = 0; i < r.size(); ++i) {
-        t[i] = r[i].t;
-        theta[i] = r[i].theta[k];
-        omega[i] = r[i].omega[k];
-      }
-      const std::string why = identification::rates_look_like_degrees(t, theta, omega);
-      if (!why.empty()) {
-        return "angles look like degrees (theta" + std::to_string(k + 1) + ": " + why + ")";
-      }
-      radians = radians && identification::rates_say_radians(t, theta, omega);
+  const std::string start = start_looks_like_degrees(starts);
+  if (motion.omega_source != "file") return {start.empty() ? "" : columns, start};
+  bool radians = true;
+  std::vector<double> t(r.size()), theta(r.size()), omega(r.size());
+  for (int k = 0; k < motion.cranks; ++k) {
+    for (size_t i = 0; i < r.size(); ++i) {
+      t[i] = r[i].t;
+      theta[i] = r[i].theta[k];
+      omega[i] = r[i].omega[k];
     }
-    const std::string start = start_looks_like_degrees(starts);
-    if (radians && !start.empty()) {
-      std::string at;
-      for (double a : starts) at += (at.empty() ? "" : ", ") + format_significant(a, 4);
-      return "the angles start at " + at +
-             ", beyond two turns, and the rates agree with them: radians a few turns out (rad/s "
-             "rates), or degrees (deg/s rates); check the units";
+    const std::string why = identification::rates_look_like_degrees(t, theta, omega);
+    if (!why.empty()) {
+      return {columns, "angles look like degrees, expected radians (theta" +
+                           std::to_string(k + 1) + ": " + why + ")"};
     }
-    return radians ? "" : start;
+    radians = radians && identification::rates_say_radians(t, theta, omega);
   }
-  return start_looks_like_degrees(starts);
+  if (!radians || start.empty()) return {start.empty() ? "" : columns, start};
+  std::string at;
+  for (double a : starts) at += (at.empty() ? "" : ", ") + format_significant(a, 4);
+  return {columns,
+          "the angles start at " + at +
+              ", beyond two turns, and the rates agree with them: radians a few turns out (rad/s "
+              "rates), or degrees (deg/s rates); check the units",
+          false};
+}
+
+/// The first jump of crank k: a step off its neighbouring steps by more than kJumpAngle (a gap,
+/// a wrap, a glitch: the rates from differences explode)
+MotionFault motion_jump(const std::vector<sim::Row>& r, int k) {
+  const auto step = [&](size_t i) { return r[i].theta[k] - r[i - 1].theta[k]; };
+  for (size_t i = 1; i < r.size(); ++i) {
+    const double s = step(i);
+    const bool off_before = i < 2 || std::abs(s - step(i - 1)) > kJumpAngle;
+    const bool off_after = i + 1 >= r.size() || std::abs(s - step(i + 1)) > kJumpAngle;
+    if (!(off_before && off_after && (i >= 2 || i + 1 < r.size()))) continue;
+    return {"theta" + std::to_string(k + 1),
+            "jumps by " + format_significant(s, 3) + " rad between t = " +
+                format_double(r[i - 1].t) + " and " + format_double(r[i].t) +
+                " s: the motion must be continuous (unwrap it, or fill the gap)"};
+  }
+  return {};
 }
 
 /// What in `motion` itself makes its inverse dynamics meaningless: angles that look like degrees
-/// (motion_in_degrees; checked first: degrees also step by more than a radian), or a jump
-/// between two rows (a gap, a wrap, a glitch: the rates from differences explode). Returns the
-/// column(s) and the reason, or an empty key when neither is found.
-std::pair<std::string, std::string> motion_fault(const Motion& motion) {
+/// (motion_in_degrees; checked first: degrees also step by more than a radian), a jump between
+/// two rows (motion_jump), or a smaller step off the motion's trend (identify's step check of a
+/// logged angle, identification::first_angle_step). An empty key when none is found.
+MotionFault motion_fault(const Motion& motion) {
   const std::vector<sim::Row>& r = motion.rows;
-  const std::string degrees = motion_in_degrees(motion);
-  if (!degrees.empty()) return {motion.cranks > 1 ? "theta1, theta2" : "theta1", degrees};
+  MotionFault degrees = motion_in_degrees(motion);
+  if (!degrees.key.empty()) return degrees;
   for (int k = 0; k < motion.cranks; ++k) {
-    for (size_t i = 1; i < r.size(); ++i) {
-      const double step = r[i].theta[k] - r[i - 1].theta[k];
-      if (std::abs(step) > kJumpAngle) {
-        return {"theta" + std::to_string(k + 1),
-                "jumps by " + format_significant(step, 3) + " rad between t = " +
-                    format_double(r[i - 1].t) + " and " + format_double(r[i].t) +
-                    " s: the motion must be continuous (unwrap it, or fill the gap)"};
-      }
-    }
+    MotionFault jump = motion_jump(r, k);
+    if (!jump.key.empty()) return jump;
   }
-  // a smaller step off the motion's trend: identify's step check of a logged angle
   std::vector<double> t(r.size()), theta(r.size());
   for (size_t i = 0; i < r.size(); ++i) t[i] = r[i].t;
   for (int k = 0; k < motion.cranks; ++k) {
@@ -507,6 +524,11 @@ int run(const Args& args) {
   const bool four_bar = scene.type == MechanismType::kFourBar;
   const TrajectoryLayout layout = layout_of(scene);
   const Motion motion = read_motion(args.motion, scene);
+  // the motion itself: refused before anything is run or written, whether the model would run
+  // on it or not (its torques would be those of the numbers as written)
+  const MotionFault fault = motion_fault(motion);
+  if (fault.refused && !fault.key.empty()) throw InputError(args.motion, fault.key, fault.reason);
+  if (!fault.key.empty()) warn(args.motion + ": " + fault.key + ": " + fault.reason);
   OutputDir out(args.scene.out, kOutputs);
 
   const RestRule rest = rest_rule(scene, motion);
@@ -517,18 +539,7 @@ int run(const Args& args) {
                                    &rows, rest.thresholds)
                : sim::inverse_rows(scene.params, expressions.function(), motion.rows, &rows,
                                    rest.thresholds);
-  const auto [fault_key, fault] = motion_fault(motion);
-  if (!status.ok()) {
-    // the motion itself explains the failure: named before the model's message
-    if (!fault_key.empty()) {
-      throw InputError(args.motion, fault_key, fault + ": the inverse dynamics failed on it");
-    }
-    throw NumericalError(args.motion, "inverse dynamics", status.message);
-  }
-  if (!fault_key.empty()) {  // the model ran on it, but not on the motion that was meant
-    warn(args.motion + ": " + fault_key + ": " + fault +
-         "; the results are those of the numbers as written");
-  }
+  if (!status.ok()) throw NumericalError(args.motion, "inverse dynamics", status.message);
 
   // the file's own torques, when it has them, beside the inverse-dynamics ones
   std::vector<Column> extra;

@@ -237,15 +237,11 @@ void check_options(const Args& a) {
   const std::string flag_file = "command line";
   if (!(a.so.rate_hz > 0)) throw InputError(flag_file, "--rate", "must be > 0");
   if (!(a.so.duration > 0)) throw InputError(flag_file, "--duration", "must be > 0");
-  sim::Options grid;  // the log's rows, under the same limit as simulate's output rows
-  grid.duration = a.so.duration;
-  grid.output_step = 1.0 / a.so.rate_hz;
-  if (a.motion.empty() && sim::output_row_count(grid) > sim::kMaxOutputRows) {
-    throw InputError(flag_file, "--duration",
+  const std::string rows = rows_beyond_limit(a.so.duration, 1.0 / a.so.rate_hz);
+  if (a.motion.empty() && !rows.empty()) {  // the same row limit as simulate's output rows
+    throw InputError(flag_file, "--duration, --rate",
                      "duration " + format_double(a.so.duration) + " s at --rate " +
-                         format_double(a.so.rate_hz) + " Hz needs " +
-                         std::to_string(sim::output_row_count(grid)) +
-                         " rows, more than the limit of " + std::to_string(sim::kMaxOutputRows));
+                         format_double(a.so.rate_hz) + " Hz " + rows);
   }
   if (a.so.torque_noise < 0 || a.so.angle_noise < 0 || a.so.rate_noise < 0 || a.so.quantization < 0) {
     throw InputError(flag_file, "--*-noise/--quantization", "must be >= 0");
@@ -358,12 +354,12 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--torque-noise", args->so.torque_noise, "Gaussian std on tau1, tau2 [N m]")
       ->check(nonnegative_number());
   app->add_option("--angle-noise", args->so.angle_noise, "Gaussian std on theta1, theta2 [rad]")
-      ->check(nonnegative_number());
+      ->check(within_a_turn());
   app->add_option("--rate-noise", args->so.rate_noise, "Gaussian std on omega1, omega2 [rad/s]")
       ->check(nonnegative_number());
   app->add_option("--seed", args->so.seed, "std::mt19937_64 seed")->check(nonnegative_number());
   app->add_option("--quantization", args->so.quantization, "encoder step [rad] (0: none)")
-      ->check(nonnegative_number());
+      ->check(within_a_turn());
   app->add_option(
       "--excitation", args->excitation,
       "scene: the scene's M1, M2; multisine: built-in excitation reversing every joint");

@@ -67,7 +67,7 @@ VALID = {
     ("synth-log", "--actuator-viscous"): {"0": "no actuator friction"},
     ("identify", "--loss-scale"): {"0": "0 = from the noise floor (the default)"},
     ("identify", "--smooth-sign"): {"0": "exact sign", "-1": "-1 = the scene's (the default)"},
-    ("hold", "--time"): {"0": "the default", "-1": "loads at any time", "1e300": "n/a"},
+    ("hold", "--time"): {"0": "the default"},
     ("hold", "--torque-limit"): {"inf": "no limit (the default)", "1e300": "no limit"},
     ("hold", "--pose"): {"0": "a pose that assembles", "-1": "a pose that assembles"},
     ("identify", "--min-rate"): {"0": "the default"},

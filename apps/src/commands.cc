@@ -46,6 +46,17 @@ void check_sg_window(const id::IdentifyOptions& options, const id::TorqueLog& lo
   }
 }
 
+/// A --window longer than the log holds no window: bad input naming the log's duration
+void check_window(const id::IdentifyOptions& options, const id::TorqueLog& log) {
+  if (!(options.window_s > 0) || log.size() < 2) return;
+  const double span = log.t.back() - log.t.front();
+  if (options.window_s <= span) return;
+  throw InputError(kFlags, "--window",
+                   format_shortest(options.window_s) + " s is longer than the log (" +
+                       format_significant(span, 4) + " s from t = " +
+                       format_significant(log.t.front(), 6) + "): at most its duration");
+}
+
 /// The log's largest joint rate [rad/s]: the logged rates, else the angles' differences (one
 /// turn's jumps left in: an unwrapped log reads a rate no larger than its true one)
 double largest_rate(const id::TorqueLog& log) {
@@ -196,6 +207,7 @@ std::string start_looks_like_degrees(double theta1, double theta2) {
 id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& loads,
                                   const id::TorqueLog& log, const id::IdentifyOptions& options) {
   check_sg_window(options, log);
+  check_window(options, log);
   check_smooth_sign(options, log);
   id::IdentifyResult res;
   try {

@@ -786,12 +786,11 @@ void read_integration(const SceneReader& r, FrictionLaw law, sim::Options* out) 
   o.target_error = r.number("simulation.target_error", d.target_error);
   require(r, "simulation.target_error", o.target_error, o.target_error > 0 && o.target_error < 1,
           "in (0, 1)");
-  if (sim::output_row_count(o) > sim::kMaxOutputRows) {
-    r.fail("simulation.duration",
-           "duration " + num(o.duration) + " s at output_step " + num(o.output_step) +
-               " s needs " + std::to_string(sim::output_row_count(o)) +
-               " output rows, more than the limit of " + std::to_string(sim::kMaxOutputRows) +
-               " (raise simulation.output_step)");
+  const std::string rows = rows_beyond_limit(o.duration, o.output_step);
+  if (!rows.empty()) {
+    r.fail("simulation.duration, simulation.output_step",
+           "duration " + num(o.duration) + " s at output_step " + num(o.output_step) + " s " +
+               rows + " (shorten simulation.duration or raise simulation.output_step)");
   }
 }
 
@@ -955,6 +954,18 @@ double coupler_sine(const Params<double>& p, double theta1, double theta2) {
   Kinematics<double> k;
   if (!solve_kinematics(p, theta1, theta2, &k, 0.0, false).ok()) return -1;
   return std::abs(k.sin43);
+}
+
+std::string rows_beyond_limit(double duration, double step) {
+  sim::Options grid;
+  grid.duration = duration;
+  grid.output_step = step;
+  const long rows = sim::output_row_count(grid);
+  if (rows <= sim::kMaxOutputRows) return "";
+  // exact where the count is (the grid's tolerance of 1e-12 steps is below a row)
+  const std::string count =
+      rows < 1e9 ? std::to_string(rows) : format_significant(duration / step, 3);
+  return "needs " + count + " rows, more than the limit of " + std::to_string(sim::kMaxOutputRows);
 }
 
 double four_bar_sine(const FourBarParams& p, double theta1) {

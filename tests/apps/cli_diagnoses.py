@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """End-to-end check (ctest apps.cli_diagnoses): a run that fails names the real cause before the
-model's message. A motion file in degrees and one with a 3 rad jump (inverse: exit 2 naming
-them, not "r_k * mu too large"; a warning naming them where the model runs on them, and a 0.5 rad
-step found by identify's step check); a load expression that leaves its domain mid-run (simulate:
+model's message. A motion file in degrees, one with a 3 rad jump and one with a 0.5 rad step
+found by identify's step check (inverse: exit 2 naming them before anything is run, not "r_k * mu
+too large", also where the model would run on them; five-bar and four-bar alike, while a
+multi-turn motion in radians and a coarsely sampled one run); a load expression that leaves its domain mid-run (simulate:
 exit 3 naming the load and the time, without running to simulation.max_steps); a run into a
 near-singular pose (simulate: exit 3 naming the pose and the time); an identify log
 whose torques carry the opposite sign (exit 3, no delay reported; --flip-torque-sign fits it, a
@@ -85,25 +86,55 @@ expect(2, r"deg.csv: theta1, theta2: angles look like degrees",
        ["inverse", PAPER, "--motion", deg, "--out", out, "--no-plots"])
 expect(2, r"jump.csv: theta1: jumps by 3.0\d* rad between t = 0.499 and 0.5 s",
        ["inverse", PAPER, "--motion", jump, "--out", out, "--no-plots"])
-# a degrees motion and a jump the model runs on (small swings, 90 +- 10 degrees): exit 0, but a
-# warning names them (the torques are those of the numbers as written)
+# a degrees motion and a jump the model runs on (small swings, 90 +- 10 degrees): refused all the
+# same, before anything is written (the torques would be those of the numbers as written)
 small = [(i * 0.002, 90 + 10 * math.sin(2 * math.pi * i * 0.002)) for i in range(501)]
-for name, text in (("deg_small.csv", "".join("%g,%.12g,%.12g\n" % (t, a, a) for t, a in small)),
-                   ("jump_small.csv", "".join("%g,%.12g,%.12g\n" % (t, math.radians(a) + (3 if t >= 0.5 else 0),
-                                                                   math.radians(a)) for t, a in small)),
-                   # a step below the 1 rad jump check: identify's step check of a logged angle
-                   # names it (its differences read a rate noise of 100 rad/s, and every row held)
-                   ("step_small.csv", "".join("%g,%.12g,%.12g\n" % (t, math.radians(a) + (0.5 if t >= 0.5 else 0),
-                                                                   math.radians(a)) for t, a in small))):
+for name, text, pattern in (
+        ("deg_small.csv", "".join("%g,%.12g,%.12g\n" % (t, a, a) for t, a in small),
+         r"theta1, theta2: angles look like degrees \(they start at 90, 90\), expected radians"),
+        ("jump_small.csv", "".join("%g,%.12g,%.12g\n" % (t, math.radians(a) + (3 if t >= 0.5 else 0),
+                                                        math.radians(a)) for t, a in small),
+         r"theta1: jumps by 3 rad between t = 0.498 and 0.5 s: the motion must be continuous"),
+        # a step below the 1 rad jump check: identify's step check of a logged angle names it
+        # (its differences read a rate noise of 100 rad/s, and every row held)
+        ("step_small.csv", "".join("%g,%.12g,%.12g\n" % (t, math.radians(a) + (0.5 if t >= 0.5 else 0),
+                                                        math.radians(a)) for t, a in small),
+         r"theta1: steps by 0.5 rad off the motion's trend between t = 0.498 and 0.5 s")):
     with open(os.path.join(WORK, name), "w") as f:
         f.write("t,theta1,theta2\n" + text)
-    p = subprocess.run([FIVEBAR, "inverse", PAPER, "--motion", os.path.join(WORK, name), "--out", out,
-                        "--no-plots"], capture_output=True, text=True)
-    pattern = {"deg": "angles look like degrees", "jum": r"theta1: jumps by 3 rad",
-               "ste": r"theta1: steps by 0.5 rad off the motion's trend between t = 0.498 and 0.5 s"}[name[:3]]
-    if p.returncode != 0 or not re.search("fivebar: warning: .*%s.*: " % name + pattern, p.stderr):
-        failures.append("inverse %s: exit %d, %s (expected 0 and a warning /%s/)" %
-                        (name, p.returncode, p.stderr.strip(), pattern))
+    small_out = os.path.join(WORK, "out_" + name)
+    expect(2, name + ": " + pattern,
+           ["inverse", PAPER, "--motion", os.path.join(WORK, name), "--out", small_out, "--no-plots"])
+    if os.path.exists(small_out):
+        failures.append("inverse %s: refused, but wrote %s" % (name, small_out))
+# the four-bar's motions alike: 5 turns of the crank at 2 rad/s (radians, multi-turn: run), the
+# same in degrees, with a 3 rad jump and a 0.5 rad step (refused); and a coarse grid (1.25 rad a
+# row, rates given) of the same motion: run
+CRANK_ROCKER = os.path.join(ROOT, "datasets/reference/four_bar/crank_rocker.yaml")
+turns = [(i * 0.002, 1.0 + 2.0 * i * 0.002) for i in range(int(5 * math.pi / 0.002) + 1)]
+coarse = [(i * 0.625, 1.0 + 1.25 * i, 2.0, 0.0) for i in range(26)]
+for name, text, status, pattern in (
+        ("fb_turns.csv", "".join("%g,%.12g\n" % (t, a) for t, a in turns), 0, ""),
+        ("fb_deg.csv", "".join("%g,%.12g\n" % (t, 80 + 20 * t / turns[-1][0]) for t, _ in turns), 2,
+         r"theta1: angles look like degrees \(it starts at 80\)"),
+        ("fb_jump.csv", "".join("%g,%.12g\n" % (t, a + (3 if t >= 5 else 0)) for t, a in turns), 2,
+         r"theta1: jumps by 3 rad between t = 4.998 and 5 s"),
+        ("fb_step.csv", "".join("%g,%.12g\n" % (t, a + (0.5 if t >= 5 else 0)) for t, a in turns), 2,
+         r"theta1: steps by 0.5 rad off the motion's trend between t = 4.998 and 5 s"),
+        ("fb_coarse.csv", "".join("%g,%.12g,%g,%g\n" % r for r in coarse), 0, "")):
+    header = "t,theta1,omega1,alpha1\n" if name == "fb_coarse.csv" else "t,theta1\n"
+    with open(os.path.join(WORK, name), "w") as f:
+        f.write(header + text)
+    fb_out = os.path.join(WORK, "out_" + name)
+    if status:
+        expect(status, name + ": " + pattern,
+               ["inverse", CRANK_ROCKER, "--motion", os.path.join(WORK, name), "--out", fb_out])
+        continue
+    p = subprocess.run([FIVEBAR, "inverse", CRANK_ROCKER, "--motion", os.path.join(WORK, name),
+                        "--out", fb_out], capture_output=True, text=True)
+    if p.returncode != 0 or "warning" in p.stderr:
+        failures.append("inverse %s: exit %d, %s (expected 0, no warning)" %
+                        (name, p.returncode, p.stderr.strip()))
 # a motion in radians that starts a turn out (theta1 8.15 rad, swinging by 0.3 rad): no
 # degrees warning
 with open(os.path.join(WORK, "turn.csv"), "w") as f:

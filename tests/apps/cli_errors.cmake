@@ -66,9 +66,9 @@ run_fivebar(2 "command line: --end-acceleration: 'none' is not one of free, zero
             optimize ${motors} --tasks ${tasks} --end-acceleration none --out ${WORK_DIR}/out_bad)
 # numeric options: NaN and inf refused for every option (check_numbers), ranges by the shared
 # validators; each exits 2 naming the option
-run_fivebar(2 "command line: --angle-noise: must be (a finite number|>= 0), got nan"
+run_fivebar(2 "command line: --angle-noise: must be (a finite number|>= 0[^,]*), got nan"
             synth-log ${paper} --out ${WORK_DIR}/out_bad/log.csv --angle-noise nan)
-run_fivebar(2 "command line: --time: must be a finite number, got nan"
+run_fivebar(2 "command line: --time: must be (a finite number|>= 0), got nan"
             hold ${paper} --time nan --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "command line: --duration: must be a finite number, got 1e400"
             synth-log ${paper} --out ${WORK_DIR}/out_bad/log.csv --duration 1e400)
@@ -79,11 +79,30 @@ run_fivebar(2 "command line: --window: must be > 0, got 0"
             identify ${paper} --log ${log} --window 0 --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "command line: --min-rate: must be >= 0, got -1"
             identify ${paper} --log ${log} --min-rate -1 --out ${WORK_DIR}/out_bad)
-# the row limit is bad input in synth-log as in simulate
-run_fivebar(2 "command line: --duration: .*more than the limit of 2000000"
+# a load time before the start, a --window longer than the 10 s log (it was run with exit 0),
+# and an angle noise or encoder step beyond a turn
+run_fivebar(2 "command line: --time: must be >= 0, got -1"
+            hold ${paper} --time -1 --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --window: [^\n]* s is longer than the log \\(10 s from t = 0\\)"
+            identify ${paper} --log ${log} --window 1e6 --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --angle-noise: must be >= 0 and at most one turn"
+            synth-log ${paper} --out ${WORK_DIR}/out_bad/log.csv --angle-noise 1e6)
+run_fivebar(2 "command line: --quantization: must be >= 0 and at most one turn"
+            synth-log ${paper} --out ${WORK_DIR}/out_bad/log.csv --quantization 1e6)
+run_fivebar(2 "command line: --angle-noise: must be >= 0 and at most one turn"
+            excite ${paper} --torque-limit 20 --angle-noise 1e6 --out ${WORK_DIR}/out_bad)
+# the row limit is the same bad input in synth-log, excite (before designing) and simulate,
+# naming both options that make the count, and the true count beyond a long
+run_fivebar(2 "command line: --duration, --rate: duration 1e\\+09 s at --rate 1000 Hz needs 1e\\+12 rows, more than the limit of 2000000"
             synth-log ${paper} --out ${WORK_DIR}/out_bad/log.csv --duration 1e9)
-run_fivebar(2 "paper.yaml: simulation.duration: .*more than the limit of 2000000"
+run_fivebar(2 "command line: --duration, --rate: duration 10 s at --rate 1e\\+09 Hz needs 1e\\+10 rows"
+            synth-log ${paper} --out ${WORK_DIR}/out_bad/log.csv --rate 1e9)
+run_fivebar(2 "command line: --duration, --rate: duration 3000 s at --rate 1000 Hz needs 3000001 rows"
+            excite ${paper} --torque-limit 20 --duration 3000 --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "paper.yaml: simulation.duration, simulation.output_step: .*more than the limit of 2000000"
             simulate ${paper} --set simulation.duration=1e9 --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "simulation.output_step: duration 1e\\+300 s at output_step 0.001 s needs 1e\\+303 rows"
+            simulate ${paper} --set simulation.duration=1e300 --out ${WORK_DIR}/out_bad)
 # a swept key the scene does not have (its reason lists "assembly": not a geometry failure)
 run_fivebar(2 "--sweep mechanism.foo: unknown key"
             study ${paper} --tasks ${SOURCE_DIR}/datasets/tasks/paper_tasks.yaml

@@ -112,4 +112,10 @@ double coupler_sine(const Params<double>& params, double theta1, double theta2);
 /// (|BD0| outside [|l2 - l3|, l2 + l3]).
 double four_bar_sine(const FourBarParams& params, double theta1);
 
+/// The one row limit of every command that writes rows on a grid (simulate's output rows,
+/// synth-log's and excite's log): "" when `duration` s with a row every `step` s stays within
+/// sim::kMaxOutputRows, else "needs <rows> rows, more than the limit of 2000000", the count to
+/// three digits from 1e9 rows on (1e+303). The caller names its options.
+std::string rows_beyond_limit(double duration, double step);
+
 }  // namespace fivebar::io
