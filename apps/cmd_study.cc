@@ -89,8 +89,10 @@ std::vector<Design> make_designs(const Args& args, const std::vector<trajectory:
     try {
       designs[d].scene = load_scene(args.scene.scene, sets, /*four_bar_ok=*/true);
     } catch (const InputError& e) {
-      // (an unknown key's reason lists the known ones, "assembly" among them: never geometry)
+      // (an unknown key's reason lists the known ones, "assembly" among them: never geometry;
+      // nor is a key of the other mechanism, as initial.theta2 on a four-bar)
       const bool geometry = e.reason().find("unknown key") == std::string::npos &&
+                            e.reason().find("-bar key") == std::string::npos &&
                             (e.key().rfind("initial", 0) == 0 ||
                              e.reason().find("assembl") != std::string::npos ||
                              e.reason().find("singular") != std::string::npos);

@@ -232,13 +232,31 @@ id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& l
 id::IdentifyResult identify_four_bar_scene(const Scene& scene, const id::TorqueLog& log,
                                            const id::IdentifyOptions& options) {
   check_sg_window(options, log);
+  if (options.check_degrees && log.has_rates) {
+    const std::string why = id::rates_look_like_degrees(log.t, log.theta1, log.omega1);
+    if (!why.empty()) {
+      throw InputError(log.path, "column theta1",
+                       "angles look like degrees, expected radians (" + why + ")");
+    }
+  }
+  // without rates, a start in degrees is named where the model fails on the angles
+  const std::string degrees = options.check_degrees && log.size() > 0
+                                  ? start_looks_like_degrees(std::vector<double>{log.theta1[0]})
+                                  : "";
   id::IdentifyResult res;
   try {
     res = id::identify(scene.four_bar, LoadExpressions(scene).four_bar_function(), log, options);
   } catch (const id::LogError& e) {
+    if (!degrees.empty()) throw InputError(log.path, "column theta1", degrees + ": " + e.reason());
     throw InputError(e.file(), e.key(), e.reason());
   }
-  if (!res.status.ok()) throw NumericalError(log.path, "identify", res.status.message);
+  if (!res.status.ok()) {
+    if (!degrees.empty()) {
+      throw InputError(log.path, "column theta1",
+                       degrees + ": the model failed on them: " + res.status.message);
+    }
+    throw NumericalError(log.path, "identify", res.status.message);
+  }
   return res;
 }
 

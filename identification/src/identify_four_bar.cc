@@ -471,6 +471,8 @@ std::string four_bar_unsupported(const IdentifyOptions& opt) {
   if (opt.layout.inertia) return "--estimate inertia" + tail;
   if (opt.layout.actuator) return "--estimate actuator" + tail;
   if (opt.loss != Loss::kNone) return "--loss " + std::string(loss_name(opt.loss)) + tail;
+  if (opt.smoothing_velocity > 0) return "--smooth-sign" + tail;
+  if (opt.window_s > 0) return "--window" + tail;
   return "";
 }
 

@@ -12,6 +12,7 @@ identify fits a four-bar's log end to end (the true coefficients inside its inte
 refuses the five-bar's options and logs naming them.
 """
 import json
+import math
 import os
 import shutil
 import sys
@@ -20,6 +21,7 @@ from cli_common import Cli, read_csv
 
 FIVEBAR, PAPER, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 REFERENCE = os.path.join(os.path.dirname(os.path.abspath(PAPER)), "..", "reference", "four_bar")
+TASKS = os.path.join(os.path.dirname(os.path.abspath(PAPER)), "..", "tasks", "four_bar_tasks.yaml")
 cli = Cli(FIVEBAR)
 failures, run, expect_error = cli.failures, cli.run, cli.expect_error
 
@@ -255,6 +257,24 @@ expect_error(2, "mechanism.type: four_bar: --method output-error runs five-bars 
              ["identify", scene, "--log", id_log, "--method", "output-error", "--out", bad])
 expect_error(2, "mechanism.type: four_bar: --estimate inertia runs five-bars only",
              ["identify", scene, "--log", id_log, "--estimate", "friction,inertia", "--out", bad])
+expect_error(2, "mechanism.type: four_bar: --smooth-sign runs five-bars only",
+             ["identify", scene, "--log", id_log, "--smooth-sign", "0.05", "--out", bad])
+# the same log with its angles in degrees: named as such (the crank-rocker assembles at any angle,
+# so the model alone would only say that no sample is left)
+deg_log = os.path.join(WORK, "crank_rocker_deg.csv")
+with open(id_log) as f, open(deg_log, "w") as g:
+    for line in f:
+        if line[0].isdigit() or line[0] == "-":
+            cells = line.rstrip("\n").split(",")
+            cells[1] = repr(float(cells[1]) * 180 / math.pi)
+            line = ",".join(cells) + "\n"
+        g.write(line)
+expect_error(2, "column theta1: angles look like degrees (it starts at 90)",
+             ["identify", scene, "--log", deg_log, "--out", bad])
+# study: a five-bar key swept on a four-bar is refused up front, not a study of designs that
+# "cannot assemble"
+expect_error(2, "--sweep initial.theta2: is a five-bar key",
+             ["study", scene, "--tasks", TASKS, "--sweep", "initial.theta2=0:1:2", "--out", bad])
 expect_error(2, "column 3: column 'theta2' does not belong to this mechanism",
              ["identify", scene, "--log", os.path.join(os.path.dirname(os.path.abspath(PAPER)), "..",
                                                        "logs", "paper_angles.csv"), "--out", bad])

@@ -284,7 +284,7 @@ void classify(const SolverStatus& solver, const ConstraintCheck& check,
     status = "infeasible";
     message = "constraints violated on the check grid (relative " +
               std::to_string(check.max_violation) + "; peak torque " +
-              std::to_string(check.peak_torque) + " N m, min |sin(th4 - th3)| " +
+              std::to_string(check.peak_torque) + " N m, min |" + singular_name + "| " +
               std::to_string(check.min_coupler_sine) + ")";
   } else if (!(check.max_violation <= options.limit_rtol)) {
     status = "violates_constraints";

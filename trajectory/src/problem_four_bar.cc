@@ -137,6 +137,22 @@ Status four_bar_rows(const FourBarParams& params, const sim::FourBarLoadFunction
 
 namespace {
 
+// Why the crank's sweep from a to b fails: the first angle where the four-bar cannot close
+// (kinematics alone, on a grid of 1e-3 rad at most), else the dynamics' own reason
+std::string sweep_failure(const FourBarParams& params, double a, double b, const Status& st) {
+  const int n = std::max(2, static_cast<int>(std::ceil(std::abs(b - a) / 1e-3)));
+  for (int i = 0; i <= n; ++i) {
+    const double th = a + (b - a) * i / n;
+    FourBarKinematics k;
+    const Status closed = four_bar_close(params, th, &k, 0.0);
+    if (!closed.ok()) {
+      return "leaves the workspace at theta1 = " + format_significant(th, 6) + " rad (" +
+             closed.message + ")";
+    }
+  }
+  return "fails in the dynamics: " + st.message;
+}
+
 // the minimum-jerk start: its baseline and, when it keeps the margin on the dense grid, the
 // initial_* fields; false (status unreachable) when it does not: with one degree of freedom
 // every motion between the ends sweeps the same crank angles
@@ -152,7 +168,8 @@ bool minimum_jerk_start(const FourBarTrajectoryProblem& problem, const std::vect
                 (c.status.ok() ? "comes to |" + std::string(FourBar::kSingularName) + "| = " +
                                      format_significant(c.min_coupler_sine, 4) +
                                      " < the singular margin " + format_significant(margin, 4)
-                               : "leaves the workspace: " + c.status.message) +
+                               : sweep_failure(problem.params(), r->start[0], r->goal[0],
+                                               c.status)) +
                 "; with one degree of freedom every motion between these ends sweeps it");
     return false;
   }
