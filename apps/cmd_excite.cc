@@ -625,16 +625,18 @@ std::string torque_excess(const Design& d, double limit) {
 std::string reversal_cost(const Design& d, const id::ExcitationOptions& o,
                           const id::DesignParameters& dp) {
   const std::string n = std::to_string(o.min_reversals);
-  if (!std::isfinite(d.unconstrained_std) || o.min_reversals == 0) {
-    // the Fourier family (its local solves give no comparison), or no reversal constraint
+  double own = 0;  // the design's, torque noise alone (comparable with the search's)
+  for (size_t i = 0; i < d.report.torque_only_std.size(); ++i) {
+    if (dp.nominal[i] != 0) own = std::max(own, d.report.torque_only_std[i] / std::abs(dp.nominal[i]));
+  }
+  // no comparison (the Fourier family's local solves give none), no reversal constraint, or one
+  // that costs little (the motions that reverse fewer times predict about as much)
+  if (!std::isfinite(d.unconstrained_std) || o.min_reversals == 0 ||
+      d.unconstrained_std > 0.5 * own) {
     return std::string("; ") + (o.min_reversals > 0 ? "a lower --min-reversals (" + n + "), " : "") +
            "a higher --torque-limit, a longer --duration" +
            (d.torque_family ? "" : " or --family torque (free motions, faster within the same limit)") +
            " may give more";
-  }
-  double own = 0;  // the design's, torque noise alone (comparable with the search's)
-  for (size_t i = 0; i < d.report.torque_only_std.size(); ++i) {
-    if (dp.nominal[i] != 0) own = std::max(own, d.report.torque_only_std[i] / std::abs(dp.nominal[i]));
   }
   std::string rev;
   for (int k : d.unconstrained_reversals) rev += (rev.empty() ? "" : ", ") + std::to_string(k);
@@ -694,8 +696,19 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o,
     int i = 0;
     while (i + 1 < dp.size() && !(r.relative_std[i] == worst)) ++i;
     *why = "predicts a std of " + dp.names[i] + " " + format_significant(worst, 4) +
-           " times its value: a log along it would not determine " + dp.names[i] +
-           reversal_cost(d, o, dp);
+           " times its value: a log along it would not determine " + dp.names[i];
+    // the angle noise through the estimated rates, when it is what makes the std large
+    const double torque_only = i < static_cast<int>(r.torque_only_std.size()) && dp.nominal[i] != 0
+                                   ? r.torque_only_std[i] / std::abs(dp.nominal[i])
+                                   : NAN;
+    if (torque_only < 0.5 * worst) {
+      *why += " (the angle noise through the rates estimated from the angles dominates: the "
+              "torque noise alone predicts " + format_significant(torque_only, 3) +
+              "); a smaller --angle-noise (finer encoders), logged rates, a longer --duration or "
+              "a higher --torque-limit give more";
+    } else {
+      *why += reversal_cost(d, o, dp);
+    }
     return "std_too_large";
   }
   if (base && worst > kWorseThanBaseline * worst_relative_std(*base)) {

@@ -454,10 +454,37 @@ MotionFault motion_jump(const std::vector<sim::Row>& r, int k) {
   return {};
 }
 
+/// A sample of crank k off the cubic through its neighbours (identification::loo_deviation) by
+/// more than kGlitchAngle and kGlitchSpread times the motion's own spread of such deviations: one
+/// or two rows off the motion (a glitch), which a step check misses (it steps there and back).
+/// A coarsely sampled smooth motion deviates everywhere alike, and is not one.
+constexpr double kGlitchAngle = 0.1;    // [rad]
+constexpr double kGlitchSpread = 50.0;  // robust std of the deviations
+MotionFault motion_glitch(const std::vector<double>& t, const std::vector<double>& theta, int k) {
+  if (t.size() < 8) return {};
+  std::vector<double> expected;
+  const std::vector<double> dev = identification::loo_deviation(t, theta, &expected);
+  const double spread = identification::robust_std(dev);
+  for (size_t i = 0; i < dev.size(); ++i) {
+    if (!(std::abs(dev[i]) > std::max(kGlitchAngle, kGlitchSpread * spread))) continue;
+    // the glitch moves its neighbours' deviations too: the row is the largest nearby
+    for (size_t j = i + 1; j < std::min(dev.size(), i + 4); ++j) {
+      if (std::abs(dev[j]) > std::abs(dev[i])) i = j;
+    }
+    return {"theta" + std::to_string(k + 1),
+            "the row at t = " + format_double(t[i]) + " s is " +
+                format_significant(theta[i] - expected[i], 3) +
+                " rad off the motion through its neighbours (a glitch): the motion must be "
+                "smooth; fix or remove the row"};
+  }
+  return {};
+}
+
 /// What in `motion` itself makes its inverse dynamics meaningless: angles that look like degrees
 /// (motion_in_degrees; checked first: degrees also step by more than a radian), a jump between
-/// two rows (motion_jump), or a smaller step off the motion's trend (identify's step check of a
-/// logged angle, identification::first_angle_step). An empty key when none is found.
+/// two rows (motion_jump), a smaller step off the motion's trend (identify's step check of a
+/// logged angle, identification::first_angle_step), or a glitch (motion_glitch). An empty key
+/// when none is found.
 MotionFault motion_fault(const Motion& motion) {
   const std::vector<sim::Row>& r = motion.rows;
   MotionFault degrees = motion_in_degrees(motion);
@@ -478,6 +505,11 @@ MotionFault motion_fault(const Motion& motion) {
                 format_double(r[i - 1].t) + " and " + format_double(r[i].t) +
                 " s (a gap, a glitch or an encoder slip): the motion must be continuous; its rates "
                 "and the rest thresholds read from them are meaningless"};
+  }
+  for (int k = 0; k < motion.cranks; ++k) {
+    for (size_t i = 0; i < r.size(); ++i) theta[i] = r[i].theta[k];
+    MotionFault glitch = motion_glitch(t, theta, k);
+    if (!glitch.key.empty()) return glitch;
   }
   return {};
 }
@@ -539,7 +571,15 @@ int run(const Args& args) {
                                    &rows, rest.thresholds)
                : sim::inverse_rows(scene.params, expressions.function(), motion.rows, &rows,
                                    rest.thresholds);
-  if (!status.ok()) throw NumericalError(args.motion, "inverse dynamics", status.message);
+  if (!status.ok()) {
+    // a motion whose units could not be told (the warning above) that the model fails on is
+    // bad input: the units, not the friction loop, are the first cause to check
+    if (!fault.key.empty()) {
+      throw InputError(args.motion, fault.key,
+                       fault.reason + "; the model failed on it: " + status.message);
+    }
+    throw NumericalError(args.motion, "inverse dynamics", status.message);
+  }
 
   // the file's own torques, when it has them, beside the inverse-dynamics ones
   std::vector<Column> extra;

@@ -1287,7 +1287,9 @@ long output_row_count(const Options& o) {
   if (!(steps < 1e15)) return std::numeric_limits<long>::max();
   // the last grid point is the duration: one more row when it is not on the grid
   const long full = static_cast<long>(std::floor(steps * (1 + 1e-12)));
-  const bool on_grid = std::abs(full * o.output_step - o.duration) <= 1e-9 * o.output_step;
+  // (within the product's rounding too: 1e7 steps of 1e-5 s make 100.00000000000001 s)
+  const bool on_grid =
+      std::abs(full * o.output_step - o.duration) <= 1e-9 * o.output_step + 1e-12 * o.duration;
   return full + (on_grid ? 1 : 2);
 }
 

@@ -99,7 +99,12 @@ for name, text, pattern in (
         # (its differences read a rate noise of 100 rad/s, and every row held)
         ("step_small.csv", "".join("%g,%.12g,%.12g\n" % (t, math.radians(a) + (0.5 if t >= 0.5 else 0),
                                                         math.radians(a)) for t, a in small),
-         r"theta1: steps by 0.5 rad off the motion's trend between t = 0.498 and 0.5 s")):
+         r"theta1: steps by 0.5 rad off the motion's trend between t = 0.498 and 0.5 s"),
+        # one row 0.5 rad off the motion (it steps there and back: no step of the motion's trend)
+        ("glitch_small.csv", "".join("%g,%.12g,%.12g\n" % (t, math.radians(a),
+                                                          math.radians(a) + (0.5 if t == 0.5 else 0))
+                                     for t, a in small),
+         r"theta2: the row at t = 0.5 s is 0.5\d* rad off the motion through its neighbours")):
     with open(os.path.join(WORK, name), "w") as f:
         f.write("t,theta1,theta2\n" + text)
     small_out = os.path.join(WORK, "out_" + name)
