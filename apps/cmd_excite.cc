@@ -91,7 +91,7 @@ void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads
     throw InputError(kFlags, "--rate", "must be > 0, got " + format_double(a.design.rate_hz));
   }
   // the designed motion's log is sampled at --rate: simulate's and synth-log's row limit
-  const std::string rows = rows_beyond_limit(a.design.duration, 1.0 / a.design.rate_hz);
+  const std::string rows = log_rows_problem(a.design.duration, a.design.rate_hz);
   if (!rows.empty()) {
     throw InputError(kFlags, "--duration, --rate",
                      "duration " + format_double(a.design.duration) + " s at --rate " +

@@ -237,7 +237,7 @@ void check_options(const Args& a) {
   const std::string flag_file = "command line";
   if (!(a.so.rate_hz > 0)) throw InputError(flag_file, "--rate", "must be > 0");
   if (!(a.so.duration > 0)) throw InputError(flag_file, "--duration", "must be > 0");
-  const std::string rows = rows_beyond_limit(a.so.duration, 1.0 / a.so.rate_hz);
+  const std::string rows = log_rows_problem(a.so.duration, a.so.rate_hz);
   if (a.motion.empty() && !rows.empty()) {  // the same row limit as simulate's output rows
     throw InputError(flag_file, "--duration, --rate",
                      "duration " + format_double(a.so.duration) + " s at --rate " +

@@ -968,6 +968,15 @@ std::string rows_beyond_limit(double duration, double step) {
   return "needs " + count + " rows, more than the limit of " + std::to_string(sim::kMaxOutputRows);
 }
 
+std::string log_rows_problem(double duration, double rate_hz) {
+  const std::string rows = rows_beyond_limit(duration, 1.0 / rate_hz);
+  if (!rows.empty()) return rows;
+  const double samples = std::floor(duration * rate_hz * (1 + 1e-12)) + 1;
+  if (samples >= kMinLogSamples) return "";
+  return "gives " + format_significant(samples, 3) + " sample" + (samples == 1 ? "" : "s") +
+         ", fewer than the " + std::to_string(kMinLogSamples) + " of a torque log";
+}
+
 double four_bar_sine(const FourBarParams& p, double theta1) {
   FourBarKinematics k;
   return four_bar_kinematics(p, theta1, &k).ok() ? std::abs(k.sin32) : -1.0;

@@ -99,6 +99,11 @@ run_fivebar(2 "command line: --duration, --rate: duration 10 s at --rate 1e\\+09
             synth-log ${paper} --out ${WORK_DIR}/out_bad/log.csv --rate 1e9)
 run_fivebar(2 "command line: --duration, --rate: duration 3000 s at --rate 1000 Hz needs 3000001 rows"
             excite ${paper} --torque-limit 20 --duration 3000 --out ${WORK_DIR}/out_bad)
+# and too few samples for a log at either end
+run_fivebar(2 "command line: --duration, --rate: duration 10 s at --rate 1e-300 Hz gives 1 sample, fewer than the 10 of a torque log"
+            synth-log ${paper} --out ${WORK_DIR}/out_bad/log.csv --rate 1e-300)
+run_fivebar(2 "command line: --duration, --rate: duration 10 s at --rate 0.5 Hz gives 6 samples"
+            excite ${paper} --torque-limit 20 --rate 0.5 --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "paper.yaml: simulation.duration, simulation.output_step: .*more than the limit of 2000000"
             simulate ${paper} --set simulation.duration=1e9 --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "simulation.output_step: duration 1e\\+300 s at output_step 0.001 s needs 1e\\+303 rows"

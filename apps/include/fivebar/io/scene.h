@@ -118,4 +118,11 @@ double four_bar_sine(const FourBarParams& params, double theta1);
 /// three digits from 1e9 rows on (1e+303). The caller names its options.
 std::string rows_beyond_limit(double duration, double step);
 
+/// The fewest samples a torque log (synth-log's, excite's design) may have
+inline constexpr int kMinLogSamples = 10;
+/// The same check for a log of `duration` s at `rate_hz`, and at least kMinLogSamples samples:
+/// "" or what is wrong ("gives 1 sample, fewer than the 10 of a torque log"). The caller names
+/// its options.
+std::string log_rows_problem(double duration, double rate_hz);
+
 }  // namespace fivebar::io
