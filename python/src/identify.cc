@@ -40,7 +40,7 @@ std::string array_key(const std::string& key) {
 
 // a log given as a dict of arrays: written as CSV text and parsed, so it gets every check of a
 // log file (columns, finite numbers, increasing t, degrees)
-id::TorqueLog log_from_dict(const py::dict& columns) {
+id::TorqueLog log_from_dict(const py::dict& columns, int dof) {
   std::vector<std::string> names;
   std::vector<std::vector<double>> values;
   for (const auto& [key, value] : columns) {
@@ -63,7 +63,7 @@ id::TorqueLog log_from_dict(const py::dict& columns) {
     text += "\n";
   }
   try {
-    return io::parse_torque_log(text, "log");
+    return io::parse_torque_log(text, "log", dof);
   } catch (const id::LogError& e) {
     throw InputError(e.file(), array_key(e.key()), e.reason());
   }
@@ -110,13 +110,37 @@ py::dict result_dict(const PyScene& s, const io::IdentifyRun& run, const id::Tor
   return d;
 }
 
+// a four-bar's fit (`fivebar identify` on a four-bar scene): the options it does not run and
+// the validation run (the five-bar's) refused naming them
+id::IdentifyResult identify_four_bar(const PyScene& s, const id::TorqueLog& log,
+                                     const id::IdentifyOptions& options, bool validate) {
+  const std::string unsupported = id::four_bar_unsupported(options);
+  if (!unsupported.empty()) {
+    throw InputError(s.scene.path, "mechanism.type", "four_bar: " + unsupported);
+  }
+  if (validate) {
+    throw InputError("validate", "(argument)",
+                     "the validation run simulates five-bars only (mechanism.type four_bar)");
+  }
+  py::gil_scoped_release release;
+  return io::identify_four_bar_scene(s.scene, log, options);
+}
+
 py::dict identify(const PyScene& s, const py::object& log, const io::IdentifySettings& settings,
                   bool validate) {
-  s.require_five_bar("identify");
   const id::IdentifyOptions options = io::identify_options(settings, s.scene);
+  const bool four_bar = s.scene.type == io::MechanismType::kFourBar;
+  const int dof = four_bar ? 1 : 2;
   const id::TorqueLog torque_log = py::isinstance<py::dict>(log)
-                                       ? log_from_dict(log.cast<py::dict>())
-                                       : io::read_log(py::str(log));
+                                       ? log_from_dict(log.cast<py::dict>(), dof)
+                                       : io::read_log(py::str(log), dof);
+  const io::IdentifyRun run{s.scene.path,
+                            py::isinstance<py::dict>(log) ? "(arrays)" : std::string(py::str(log)),
+                            settings.estimate, options.loss};
+  if (four_bar) {
+    const id::IdentifyResult result = identify_four_bar(s, torque_log, options, validate);
+    return result_dict(s, run, torque_log, result, nullptr);
+  }
   id::IdentifyResult result;
   id::Validation validation;
   {
@@ -129,9 +153,6 @@ py::dict identify(const PyScene& s, const py::object& log, const io::IdentifySet
                                 result.omega2, result.window_s);
     }
   }
-  const io::IdentifyRun run{s.scene.path,
-                            py::isinstance<py::dict>(log) ? "(arrays)" : std::string(py::str(log)),
-                            settings.estimate, options.loss};
   return result_dict(s, run, torque_log, result, validate ? &validation : nullptr);
 }
 
