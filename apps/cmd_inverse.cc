@@ -276,11 +276,10 @@ struct RestRule {
 
 RestRule rest_rule(const Scene& scene, const Motion& motion) {
   RestRule r;
-  r.thresholds = rest_thresholds(motion.rate_noise, motion.acceleration_noise);
+  r.thresholds =
+      scene.rest_thresholds(rest_thresholds(motion.rate_noise, motion.acceleration_noise));
   const bool rate_set = scene.rest_rate_threshold >= 0;
   const bool accel_set = scene.rest_acceleration_threshold >= 0;
-  if (rate_set) r.thresholds.rate = scene.rest_rate_threshold;
-  if (accel_set) r.thresholds.acceleration = scene.rest_acceleration_threshold;
   const std::string derived = format_double(kRestSigmas) + " x the estimated noise";
   r.source = std::string("rate: ") + (rate_set ? "scene" : derived) +
              "; acceleration: " + (accel_set ? "scene" : derived);

@@ -121,18 +121,12 @@ py::array_t<double, py::array::c_style> checked_array(const py::object& obj, con
   throw NumericalError(s.scene.path, "inverse dynamics", row + ": " + f.status.message);
 }
 
-// the rest rule of `fivebar inverse` (docs/hold.md): thresholds for computed rates, or the
-// scene's simulation.rest_rate_threshold / rest_acceleration_threshold when it sets them
-RestThresholds rest_thresholds(const io::Scene& scene) {
-  RestThresholds rest;
-  if (scene.rest_rate_threshold >= 0) rest.rate = scene.rest_rate_threshold;
-  if (scene.rest_acceleration_threshold >= 0) rest.acceleration = scene.rest_acceleration_threshold;
-  return rest;
-}
 
 // all states on `threads` threads (0: the machine's cores); the first failure by index
 Failure inverse_all(const PyScene& s, const States& in, const Outputs& out, int threads) {
-  EvalOptions eval = with_rest(EvalOptions{}, rest_thresholds(s.scene));
+  // the rest rule of `fivebar inverse` (docs/hold.md): the thresholds for computed rates, or
+  // the scene's where it sets them
+  EvalOptions eval = with_rest(EvalOptions{}, s.scene.rest_thresholds({}));
   eval.singular_margin = s.scene.options.singular_margin;
   const bool fixed = s.loads_constant;
   const Loads<double>& constant = s.constant_loads;
@@ -206,7 +200,7 @@ py::dict inverse_four_bar(const PyScene& s, const py::object& theta, const py::o
   {
     py::gil_scoped_release release;
     st = sim::inverse_rows(s.scene.four_bar, s.loads->four_bar_function(), motion, &rows,
-                           rest_thresholds(s.scene));
+                           s.scene.rest_thresholds({}));
   }
   if (!st.ok()) throw NumericalError(s.scene.path, "inverse dynamics", st.message);
   py::array_t<double> M({n, py::ssize_t(1)}), N({n, py::ssize_t(4)}), Mf({n, py::ssize_t(4)});

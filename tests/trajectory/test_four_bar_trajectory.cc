@@ -10,29 +10,13 @@
 
 #include "fivebar/trajectory/four_bar_problem.h"
 #include "fivebar/trajectory/four_bar_tasks.h"
+#include "../model/four_bar_scenes.h"
 
 namespace fivebar::trajectory {
 namespace {
 
-// datasets/reference/four_bar/crank_rocker.yaml
-FourBarParams crank_rocker() {
-  FourBarParams p;
-  p.ground_length = 0.30;
-  p.links[0] = {0.08, 0.5, 0.0003, 0.04, 0.0};
-  p.links[1] = {0.28, 1.0, 0.0065, 0.14, 0.1};
-  p.links[2] = {0.20, 0.8, 0.0027, 0.10, 0.0};
-  p.point_p = 0.18;
-  p.assembly = kElbowUp;
-  p.gravity = 9.81;
-  p.friction.law = FrictionLaw::kCoulombViscous;
-  for (int k = 0; k < kFourBarJoints; ++k) {
-    p.friction.pin_radius[k] = 0.01;
-    p.friction.coulomb[k] = 0.12;
-    p.friction.static_coulomb[k] = 0.12;  // as the scene reader sets it
-    p.friction.viscous[k] = 0.02;
-  }
-  return p;
-}
+// datasets/reference/four_bar/crank_rocker.yaml (the model tests' copy of its values)
+FourBarParams crank_rocker() { return testing::reference_scenes()[0].p; }
 
 sim::FourBarLoadFunction loads() {
   return [](double) { return FourBarLoads{0.0, 0.2, 5.0, M_PI / 2}; };

@@ -324,11 +324,7 @@ TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads
                     const TaskSpec& task, const sim::Initial& initial,
                     const BatchOptions& options, const TaskResult* warm) {
   const auto t0 = std::chrono::steady_clock::now();
-  TaskResult r;
-  r.task = task.name;
-  r.duration = task.duration;
-  r.torque_limit = task.torque_limit;
-  r.control_points = options.problem.control_points;
+  TaskResult r = begin_task(task, options);
   auto finish = [&]() {
     r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return r;
@@ -337,12 +333,7 @@ TaskResult run_task(const Params<double>& params, const sim::LoadFunction& loads
   // joint angles of both ends, or why the task cannot be done by this design
   const ResolvedTask resolved =
       resolve_task(params, task, initial, options.problem.singular_margin);
-  if (!resolved.ok()) {
-    r.status = resolved.status;
-    r.message = resolved.message;
-    r.control_points = 0;
-    return finish();
-  }
+  if (!ends_resolved(resolved, &r)) return finish();
   r.start = resolved.start;
   r.goal = resolved.goal;
 

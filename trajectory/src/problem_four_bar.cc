@@ -189,23 +189,14 @@ TaskResult run_four_bar_task(const FourBarParams& params, const sim::FourBarLoad
                              const TaskSpec& task, double initial_theta1,
                              const BatchOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
-  TaskResult r;
-  r.task = task.name;
-  r.duration = task.duration;
-  r.torque_limit = task.torque_limit;
-  r.control_points = options.problem.control_points;
+  TaskResult r = begin_task(task, options);
   auto finish = [&]() {
     r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return r;
   };
   const ResolvedFourBarTask resolved =
       resolve_four_bar_task(params, task, initial_theta1, options.problem.singular_margin);
-  if (!resolved.ok()) {
-    r.status = resolved.status;
-    r.message = resolved.message;
-    r.control_points = 0;
-    return finish();
-  }
+  if (!ends_resolved(resolved, &r)) return finish();
   r.start = {resolved.start, NAN};
   r.goal = {resolved.goal, NAN};
   try {

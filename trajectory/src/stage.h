@@ -92,6 +92,28 @@ Candidate refine(const StageFactory& factory, const Candidate& first, const Batc
 // five-bar) and run_four_bar_task (problem_four_bar.cc) chain them.
 
 /// control points per joint of a result's spline (the options' when it has none)
+/// A task's result before it is set up: the task's name, duration, torque limit and the
+/// options' control points
+inline TaskResult begin_task(const TaskSpec& task, const BatchOptions& options) {
+  TaskResult r;
+  r.task = task.name;
+  r.duration = task.duration;
+  r.torque_limit = task.torque_limit;
+  r.control_points = options.problem.control_points;
+  return r;
+}
+
+/// False, with r's status and message, when the task's ends could not be resolved (any
+/// mechanism's resolved task: ok(), status, message)
+template <class Resolved>
+bool ends_resolved(const Resolved& resolved, TaskResult* r) {
+  if (resolved.ok()) return true;
+  r->status = resolved.status;
+  r->message = resolved.message;
+  r->control_points = 0;
+  return false;
+}
+
 int result_control_points(const TaskResult& result, const BatchOptions& options);
 /// the problem options of a result: its torque limit, the smoothing velocity of its stage
 ProblemOptions result_options(const TaskResult& result, const BatchOptions& options);

@@ -33,6 +33,12 @@ struct Scene {
   /// rule of inverse dynamics (rest.h, docs/hold.md); -1 (absent): derived from the noise of the
   /// rates and accelerations the command uses
   double rest_rate_threshold = -1, rest_acceleration_threshold = -1;
+  /// `base` with the thresholds this scene sets in their place
+  RestThresholds rest_thresholds(RestThresholds base) const {
+    if (rest_rate_threshold >= 0) base.rate = rest_rate_threshold;
+    if (rest_acceleration_threshold >= 0) base.acceleration = rest_acceleration_threshold;
+    return base;
+  }
   std::string path;  ///< the file it came from, as given (used in every error message)
   /// likely unit mistakes (`<path>: <key>: <value> <why>`): load_scene prints them as warnings,
   /// read_scene leaves them here
