@@ -1,6 +1,11 @@
-// The double instances double_instances.h declares, compiled once here, and the holding
-// polygon (rest.h), whose friction loops are the simulator's.
-#include "fivebar/model/double_instances.h"
+// The double kinematics, mass matrix, reactions and holding that the headers declare `extern
+// template` under FIVEBAR_DOUBLE_KINEMATICS_FROM_SIM (the command-line layer, apps/), compiled
+// once here, and the holding polygon (rest.h), whose friction loops are the simulator's.
+#include "fivebar/model/appell.h"
+#include "fivebar/model/four_bar.h"
+#include "fivebar/model/kinematics.h"
+#include "fivebar/model/reactions.h"
+#include "fivebar/model/rest.h"
 
 namespace fivebar {
 template Status close_loop<double>(const Params<double>&, const double&, const double&,

@@ -444,7 +444,7 @@ inline chain::ChainLoads four_bar_loads(const FourBarParams& p, const FourBarKin
 
 #ifdef FIVEBAR_COMPILED_DOUBLE_DYNAMICS
 // As the five-bar's (inverse.h, forward.h): code that links fivebar::sim takes the four-bar's
-// double passes from model/src/inverse_double.cc and forward_double.cc.
+// double passes from model/src/simulator.cc.
 namespace mech::detail {
 extern template Status inverse_pass<FourBar, double>(
     const FourBar::Params<double>&, const FourBar::Loads<double>&, const FourBar::Q<double>&,
@@ -456,6 +456,16 @@ extern template Status forward_pass<FourBar, double>(
     FourBar::Evaluation<double>*, const std::array<double, kJoints>*, LoopSolution*,
     FrictionWarmStart*);
 }  // namespace mech::detail
+#endif
+
+#ifdef FIVEBAR_DOUBLE_KINEMATICS_FROM_SIM
+// The command-line layer (apps/, at -O1) takes these double instances from fivebar::sim
+// (model/src/double_instances.cc) rather than compiling -O1 copies the linker could keep in
+// place of the libraries' optimized ones.
+extern template Status four_bar_close<double>(const FourBarParamsT<double>&, const double&,
+                                              FourBarKinematicsT<double>*, double);
+extern template Status four_bar_kinematics<double>(const FourBarParamsT<double>&, const double&,
+                                                   FourBarKinematicsT<double>*, double);
 #endif
 
 }  // namespace fivebar

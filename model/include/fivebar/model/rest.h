@@ -194,4 +194,13 @@ inline void polygon_slice(const std::vector<std::array<double, 2>>& poly, int ax
 Status holding_polygon(const Params<double>& p, const Loads<double>& L, double th1, double th2,
                        const EvalOptions& opt, const Holding<double>& h, HoldingPolygon* out);
 
+#ifdef FIVEBAR_DOUBLE_KINEMATICS_FROM_SIM
+// The command-line layer (apps/, at -O1) takes these double instances from fivebar::sim
+// (model/src/double_instances.cc) rather than compiling -O1 copies the linker could keep in
+// place of the libraries' optimized ones.
+extern template Status holding_torques<double>(const Params<double>&, const Loads<double>&,
+                                               const double&, const double&, const EvalOptions&,
+                                               Holding<double>*);
+#endif
+
 }  // namespace fivebar
