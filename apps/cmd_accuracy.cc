@@ -23,6 +23,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/scene_mechanism.h"
 #include "fivebar/studies/accuracy.h"
 
 // a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
@@ -46,11 +47,14 @@ const std::vector<std::string> kOutputs = {"work_precision.csv", "work_precision
                                            "work_precision.gnuplot", "summary.json"};
 
 /// max |d theta| between our reference rows and an external CSV, on the times both have.
-double against_external(const std::string& path, const std::vector<sim::Row>& rows, double step) {
+double against_external(const std::string& path, const Scene& scene,
+                        const std::vector<sim::Row>& rows) {
+  const double step = scene.options.output_step;
+  const int links = layout_of(scene).links;
   const CsvTable table = read_csv(path);
   const int t_col = table.require("t");
   int cols[kLinks];
-  for (int k = 0; k < kLinks; ++k) cols[k] = table.require("theta" + std::to_string(k + 1));
+  for (int k = 0; k < links; ++k) cols[k] = table.require("theta" + std::to_string(k + 1));
   double worst = 0.0;
   long matched = 0;
   for (const auto& r : table.rows) {
@@ -59,7 +63,7 @@ double against_external(const std::string& path, const std::vector<sim::Row>& ro
       continue;
     }
     ++matched;
-    for (int k = 0; k < kLinks; ++k) {
+    for (int k = 0; k < links; ++k) {
       worst = std::max(worst, std::abs(rows[i].theta[k] - r[cols[k]]));
     }
   }
@@ -91,8 +95,8 @@ studies::WorkPrecisionOptions study_options(const Args& args, const Scene& scene
       opt.methods.push_back(m);
     }
   }
-  if (scene.params.friction.smoothing_velocity > 0.0) {
-    opt.regularization_velocity = scene.params.friction.smoothing_velocity;
+  if (friction_of(scene).smoothing_velocity > 0.0) {
+    opt.regularization_velocity = friction_of(scene).smoothing_velocity;
   }
   return opt;
 }
@@ -146,7 +150,7 @@ Json summary_json(const Args& args, const Scene& scene, const studies::WorkPreci
   ref.set("self_difference", wp.exact.self_difference);
   ref.set("friction_events", wp.exact.stats.friction_events);
   if (!args.reference.empty()) {
-    const double d = against_external(args.reference, wp.exact.rows, scene.options.output_step);
+    const double d = against_external(args.reference, scene, wp.exact.rows);
     ref.set("external", args.reference);
     ref.set("max_abs_difference_external", d);
   }
@@ -169,7 +173,7 @@ void print_report(const Args& args, const Scene& scene, const studies::WorkPreci
             << " differ by " << g3(wp.exact.self_difference) << " rad";
   if (!args.reference.empty()) {
     std::cout << "; vs " << args.reference << ": "
-              << g3(against_external(args.reference, wp.exact.rows, scene.options.output_step))
+              << g3(against_external(args.reference, scene, wp.exact.rows))
               << " rad";
   }
   std::cout << "\n  Pareto front (" << studies::treatment_name(wp.points.front().treatment)
@@ -192,16 +196,18 @@ void print_report(const Args& args, const Scene& scene, const studies::WorkPreci
 }
 
 int run(const Args& args) {
-  const Scene scene = load_scene(args.scene.scene, args.scene.sets);
-  const sim::LoadFunction loads = LoadExpressions(scene).function();
+  const Scene scene = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
   studies::WorkPrecisionOptions opt = study_options(args, scene);
   OutputDir out(args.scene.out, kOutputs);
 
   studies::WorkPrecision wp;
   Progress progress("accuracy", 1.0);
   opt.progress = [&progress](int done, int total) { progress.update(double(done) / total); };
-  const Status st =
-      studies::work_precision(scene.params, loads, scene.initial, scene.options, opt, &wp);
+  const Status st = with_mechanism(scene, [&](auto mech) {
+    using S = decltype(mech);
+    return studies::work_precision(S::params(scene), S::loads(LoadExpressions(scene)),
+                                   scene.initial, scene.options, opt, &wp);
+  });
   if (!st.ok()) throw NumericalError(scene.path, "reference", st.message);
 
   write_text_file(out.file("work_precision.csv"), work_precision_csv(wp));
@@ -227,7 +233,8 @@ void add_options(CLI::App* app, Args* args) {
       ->delimiter(',');
   app->add_option("--methods", args->methods, "integrators (default: all)")->delimiter(',');
   app->add_option("--reference", args->reference,
-                  "external reference CSV (t, theta1..theta4) to check the toolkit's own against");
+                  "external reference CSV (t and the link angles theta1..: 4 of a five-bar, 3 of a "
+                  "four-bar) to check the toolkit's own against");
 }
 
 const bool kRegistered = register_command(command_of("accuracy", kSummary, add_options, run));

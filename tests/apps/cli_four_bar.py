@@ -6,7 +6,8 @@ Usage: cli_four_bar.py FIVEBAR PAPER_YAML WORK_DIR
 The two scenes of datasets/reference/four_bar/ run with exit 0; their trajectory.csv has the
 four-bar's columns and agrees with the independent reference trajectories (within 1e-7 rad and
 the run's own error estimate); summary.json says ok. Bad input exits 2 with one line naming the
-key and the mechanism type; a command that runs five-bars only refuses a four-bar scene.
+key and the mechanism type; a command that runs five-bars only refuses a four-bar scene. accuracy's
+work-precision study runs on a four-bar, its own reference within 1e-9 rad of the independent one.
 synth-log writes a four-bar log of one crank; following the simulated motion it gives back M1.
 identify fits a four-bar's log end to end (the true coefficients inside its intervals) and
 refuses the five-bar's options and logs naming them.
@@ -216,6 +217,31 @@ expect_error(2, "initial: four-bar cannot assemble",
              ["simulate", scene, "--set", "mechanism.links.2.length=0.01", "--out", bad])
 expect_error(2, "mechanism.type: four_bar: this command runs five-bars only so far",
              ["excite", scene, "--torque-limit", "1", "--out", bad])
+# accuracy: the work-precision study of a four-bar, checked against its independent reference
+out = os.path.join(WORK, "accuracy")
+code, stdout, err = run(["accuracy", os.path.join(REFERENCE, "crank_rocker.yaml"), "--out", out,
+                         "--repeats", "1", "--tolerances", "1e-6,1e-9",
+                         "--methods", "cvode_adams,arkode_erk45", "--no-plots",
+                         "--reference", os.path.join(REFERENCE, "crank_rocker.csv")])
+if code != 0:
+    failures.append("accuracy on a four-bar: exit %d: %s" % (code, err))
+else:
+    with open(os.path.join(out, "summary.json")) as f:
+        reference = json.load(f)["reference"]
+    points = read_csv(os.path.join(out, "work_precision.csv"))
+    if not reference["max_abs_difference_external"] < 1e-9:
+        failures.append("accuracy: the own reference differs from the independent one by %r"
+                        % reference["max_abs_difference_external"])
+    ok = [p for p in points if p["status"] == "ok"]
+    if len(points) != 12 or len(ok) != 12:  # 3 treatments x 2 methods x 2 tolerances
+        failures.append("accuracy: %d points, %d ok (expected 12)" % (len(points), len(ok)))
+    errors = {(p["method"], p["tolerance"]): float(p["error"])
+              for p in ok if p["treatment"] == "exact_located"}
+    for method in ("cvode_adams", "arkode_erk45"):  # a tighter tolerance, a smaller error
+        tight, loose = errors.get((method, "1e-09")), errors.get((method, "1e-06"))
+        if tight is None or loose is None or not tight < loose:
+            failures.append("accuracy: %s: error %r at 1e-9 against %r at 1e-6"
+                            % (method, tight, loose))
 # identify: a four-bar's log fitted end to end (2 s, angles only, synth-log's default noise); the
 # five-bar's options and a five-bar's log refused naming them
 id_log = os.path.join(WORK, "crank_rocker_id.csv")

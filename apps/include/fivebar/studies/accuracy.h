@@ -68,11 +68,15 @@ struct WorkPrecision {
   std::vector<Recommendation> recommendations;
 };
 
-/// Max |d theta_1..4| between two runs on the same grid (infinity if the grids differ).
+/// Max |d theta_k| (every link angle) between two runs on the same grid (infinity if the grids differ).
 double max_theta_difference(const std::vector<Row>& a, const std::vector<Row>& b);
 
 /// Runs the study. `base` supplies duration, output step and loop settings.
 Status work_precision(const Params<double>& params, const LoadFunction& loads,
+                      const Initial& initial, const Options& base,
+                      const WorkPrecisionOptions& options, WorkPrecision* out);
+/// The same on a four-bar (its crank, coupler and rocker angles).
+Status work_precision(const FourBarParamsT<double>& params, const FourBarLoadFunction& loads,
                       const Initial& initial, const Options& base,
                       const WorkPrecisionOptions& options, WorkPrecision* out);
 

@@ -140,4 +140,17 @@ void reaction_norms(const std::array<Vec2<T>, kJoints>& F, std::array<T, kJoints
   for (int j = 0; j < kJoints; ++j) (*N)[j] = sqrt(F[j].squaredNorm());
 }
 
+#ifdef FIVEBAR_DOUBLE_KINEMATICS_FROM_SIM
+// The command-line layer (apps/, at -O1) takes these double instances from fivebar::sim
+// (model/src/double_instances.cc) rather than compiling -O1 copies the linker could keep in
+// place of the libraries' optimized ones.
+extern template void reactions<double>(const Params<double>&, const Kinematics<double>&,
+                                       const Bias<double>&, const Loads<double>&,
+                                       const Vec2<double>&, const Vec2<double>&,
+                                       const std::array<double, kJoints>&,
+                                       std::array<Vec2<double>, kJoints>*, double*, double*);
+extern template void reaction_norms<double>(const std::array<Vec2<double>, kJoints>&,
+                                            std::array<double, kJoints>*);
+#endif
+
 }  // namespace fivebar
