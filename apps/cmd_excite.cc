@@ -182,9 +182,11 @@ void refuse_four_bar_options(const Args& a, const id::ExcitationOptions& o) {
   }
   const std::string group = id::four_bar_design_unsupported(o.groups);
   if (!group.empty()) {
-    throw InputError(kFlags, group.substr(0, group.find(' ')),
-                     group + ": the four-bar's design estimates its friction coefficients shared by "
-                     "its joints, as identify does on four-bars" + type);
+    const size_t space = group.find(' ');  // "--estimate inertia": the option and its value
+    throw InputError(kFlags, group.substr(0, space),
+                     (space == std::string::npos ? "" : group.substr(space + 1) + ": ") +
+                         "the four-bar's design estimates its friction coefficients (coulomb, "
+                         "viscous) shared by its joints, as identify does on four-bars" + type);
   }
   if (!a.theta2_range.empty()) {
     throw InputError(kFlags, "--theta2-range", "a four-bar has one crank, theta1" + type);
@@ -675,8 +677,9 @@ std::string torque_excess(const Design& d, double limit) {
 // what to change for a design whose std is too large: what --min-reversals costs it (the torque
 // family: the best motion found that reverses fewer times, when it carries more information),
 // else the settings that may give more
+// (`torque_family`: whether the mechanism has the torque family, the five-bar)
 std::string reversal_cost(const Design& d, const id::ExcitationOptions& o,
-                          const id::DesignParameters& dp) {
+                          const id::DesignParameters& dp, bool torque_family) {
   const std::string n = std::to_string(o.min_reversals);
   double own = 0;  // the design's, torque noise alone (comparable with the search's)
   for (size_t i = 0; i < d.report.torque_only_std.size(); ++i) {
@@ -688,7 +691,9 @@ std::string reversal_cost(const Design& d, const id::ExcitationOptions& o,
       d.unconstrained_std > 0.5 * own) {
     return std::string("; ") + (o.min_reversals > 0 ? "a lower --min-reversals (" + n + "), " : "") +
            "a higher --torque-limit, a longer --duration" +
-           (d.torque_family ? "" : " or --family torque (free motions, faster within the same limit)") +
+           (d.torque_family || !torque_family
+                ? ""
+                : " or --family torque (free motions, faster within the same limit)") +
            " may give more";
   }
   std::string rev;
@@ -760,14 +765,14 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o,
               "); a smaller --angle-noise (finer encoders), logged rates, a longer --duration or "
               "a higher --torque-limit give more";
     } else {
-      *why += reversal_cost(d, o, dp);
+      *why += reversal_cost(d, o, dp, mech.dof() > 1);
     }
     return "std_too_large";
   }
   if (base && worst > kWorseThanBaseline * worst_relative_std(*base)) {
     *why = "predicts a worst relative std of " + format_significant(worst, 4) + ", more than " +
            format_significant(kWorseThanBaseline) + " times the multi-sine baseline's " +
-           format_significant(worst_relative_std(*base), 3) + reversal_cost(d, o, dp);
+           format_significant(worst_relative_std(*base), 3) + reversal_cost(d, o, dp, true);
     return "worse_than_baseline";
   }
   return "ok";
@@ -883,10 +888,9 @@ int run(const Args& given) {
                  : design(scene, mech, o, a, a.start == "multisine" ? ms.get() : nullptr);
   // the std identify will report for a log along it: the angle noise through the rates too
   const Status eiv = id::predict_identified_std(*mech, o.torque_noise, o.angle_noise, &d.report);
-  if (!eiv.ok()) throw NumericalError(scene.path, "excite", "designed motion: " + eiv.message);
-  std::string why;
+  std::string why = "predicts no std identify could report: " + eiv.message;
   const id::ExcitationReport* base = !ms || a.no_baseline || !ms->failure.empty() ? nullptr : &ms->report;
-  const std::string status = design_status(d, o, *mech, base, &why);
+  const std::string status = eiv.ok() ? design_status(d, o, *mech, base, &why) : "std_not_determined";
   if (base && base->peak_torque > o.torque_limit * (1 + 1e-9)) {
     warn("the multi-sine baseline peaks at " + format_double(base->peak_torque) +
          " N m, above --torque-limit " + format_double(o.torque_limit) +

@@ -12,10 +12,19 @@
 
 #include "fivebar/identification/rates.h"
 #include "fivebar/model/inertial.h"
+#include "fivebar/model/rest_rule.h"
 #include "jet_dynamics.h"
 #include "noise_model.h"
 
 namespace fivebar::identification {
+
+namespace stages {
+/// identify's rest rule on the five-bar (stage_samples.cc; declared in identify_stages.h, whose
+/// Ceres stages this unit does not need)
+bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds& rest,
+                 double angle_noise);
+}  // namespace stages
+
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -195,7 +204,18 @@ class FiveBarExcitation : public ExcitationMechanism {
     return Status::Ok();
   }
   bool fixed_filter(SgOptions*) const override { return false; }
-  bool at_rest(double, const MotionState&, double, double, double) const override { return false; }
+  bool block_sandwich() const override { return false; }
+  /// identify's rule (stage_samples.cc: rest_rule, held_sample): thresholds kRestSigmas std of
+  /// the filtered rates and accelerations, the angle noise through the joint rates' dependence
+  /// on the pose
+  bool at_rest(double t, const MotionState& q, double g1, double g2,
+               double angle_noise) const override {
+    if (!(angle_noise > 0)) return false;
+    Sample s;
+    s.t = t, s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
+    return stages::held_sample(scene_, s, rest_thresholds(g1 * angle_noise, g2 * angle_noise),
+                               angle_noise);
+  }
 
  private:
   Params<double> scene_;
@@ -788,13 +808,39 @@ class EivPredictor {
     if (!(ev(0) > 1e-14 * ev(P - 1))) return out;  // the samples do not determine them all
     const Eigen::MatrixXd Hinv =
         es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
-    out.covariance = Hinv * detail::score_covariance(J, sens, noise_, n) * Hinv;
+    const Eigen::MatrixXd S = mech_.block_sandwich() ? block_score_covariance(J, used, sens, m)
+                                                     : detail::score_covariance(J, sens, noise_, n);
+    out.covariance = Hinv * S * Hinv;
     out.bias = -Hinv * g;
     out.ok = out.covariance.allFinite();
     return out;
   }
 
  private:
+  /// The expected meat of identify's block sandwich: blocks of used samples within 2 m + 1 log
+  /// samples of the block's first (identify_four_bar.cc's block_sizes), each block's score
+  /// covariance alone (the correlations between blocks, through the filter's overlapping
+  /// windows, are not in the sandwich)
+  Eigen::MatrixXd block_score_covariance(const Eigen::MatrixXd& J, const std::vector<int>& used,
+                                         const std::vector<detail::Sensitivity>& sens, int m) const {
+    const int P = static_cast<int>(J.cols()), span = 2 * m + 1;
+    Eigen::MatrixXd S = Eigen::MatrixXd::Zero(P, P);
+    for (size_t u0 = 0; u0 < used.size();) {
+      size_t u1 = u0 + 1;
+      while (u1 < used.size() && used[u1] - used[u0] < span) ++u1;
+      // the block's noise samples lie within [used[u0] - m, used[u1 - 1] + m]: shift them to 0
+      const int lo = std::max(0, used[u0] - m);
+      std::vector<detail::Sensitivity> block(sens.begin() + u0, sens.begin() + u1);
+      for (detail::Sensitivity& b : block) {
+        for (int c = 0; c < 4; ++c) b.lo[c] -= lo;
+      }
+      const int width = std::min(size(), used[u1 - 1] + m + 1) - lo;
+      S += detail::score_covariance(J.middleRows(2 * u0, 2 * (u1 - u0)), block, noise_, width);
+      u0 = u1;
+    }
+    return S;
+  }
+
   const ExcitationMechanism& mech_;
   const ExcitationReport& r_;
   std::vector<EivSample> s_;
@@ -931,14 +977,21 @@ Status predict_identified_std(const ExcitationMechanism& mech, double torque_noi
     r->sg_half_window = m;
     r->window_choice = "half-window " + std::to_string(m) + " samples, order " +
                        std::to_string(fixed.order) + ": identify's filter for a " + mech.type();
+    if (chosen.ok) {
+      r->window_choice += " (its smoothing bias of the coefficients, |bias| / std: " +
+                          digits3(bias_in_std(chosen, dp.friction)) + ")";
+    }
   } else {
     choose_window(eiv, dp, r, &chosen);
   }
-  if (!chosen.ok) {
+  if (!chosen.ok) {  // no std identify could report: none predicted
     r->sg_half_window = 0;
+    r->std_dev.assign(dp.size(), kNaN);
+    r->relative_std.assign(dp.size(), kNaN);
     return Status::Error(StatusCode::kSolverFailed,
                          "the errors-in-variables covariance could not be formed (the samples "
-                         "away from the slip reversals do not determine the parameters)");
+                         "identify keeps, away from the slip reversals and not at rest, do not "
+                         "determine the parameters)");
   }
   r->covariance = chosen.covariance;
   set_std(dp, chosen.covariance, r);

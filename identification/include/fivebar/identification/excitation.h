@@ -106,6 +106,10 @@ class ExcitationMechanism {
   /// identify's rate filter when it does not choose it from the log (true, *sg set); false when
   /// identify chooses the half-window by its window rules (the five-bar)
   virtual bool fixed_filter(SgOptions* sg) const = 0;
+  /// identify's covariance: true for the sandwich over blocks of the filter's window (2 m + 1
+  /// log samples: the four-bar), whose meat holds only the score's correlations within a block;
+  /// false for the errors-in-variables covariance over all of them (the five-bar)
+  virtual bool block_sandwich() const = 0;
   /// identify's rest rule at a sample of the exact motion: true where identify would leave the
   /// sample out as at rest, its rates estimated by a filter whose rate and acceleration noise
   /// gains are g1, g2 from angles of noise std `angle_noise` [rad]
@@ -314,7 +318,9 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
 /// within its residual rule's 4 % of the noise level (one candidate below, as identify backs
 /// off), then the largest up to it whose bias on the coefficients is within 0.2 of their std.
 /// The bias is exact here (the filter applied to the noise-free motion). Samples within the
-/// window of a slip reversal are left out as identify leaves them out. Replaces covariance,
+/// window of a slip reversal, and those identify's rest rule takes as at rest at this noise
+/// (ExcitationMechanism::at_rest), are left out as identify leaves them out. Where the samples
+/// left do not determine the parameters, fails with NaN std. Replaces covariance,
 /// std_dev and relative_std; the Fisher's std goes to torque_only_std. With angle_noise 0 the
 /// std are the Fisher's. A mechanism whose identify has a fixed rate filter
 /// (ExcitationMechanism::fixed_filter) is predicted at that filter.
