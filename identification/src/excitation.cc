@@ -15,6 +15,7 @@
 #include "fivebar/model/rest_rule.h"
 #include "jet_dynamics.h"
 #include "noise_model.h"
+#include "setup_shared.h"
 
 namespace fivebar::identification {
 
@@ -215,6 +216,10 @@ class FiveBarExcitation : public ExcitationMechanism {
     s.t = t, s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
     return stages::held_sample(scene_, s, rest_thresholds(g1 * angle_noise, g2 * angle_noise),
                                angle_noise);
+  }
+  void rest_gains(const std::vector<double>& t, const SgOptions& sg, double* g1,
+                  double* g2) const override {
+    stages::sg_noise_gains(t, sg, g1, g2);
   }
 
  private:
@@ -705,12 +710,14 @@ struct Taps {
 class EivPredictor {
  public:
   EivPredictor(const ExcitationMechanism& mech, const ExcitationReport& r,
-               std::vector<EivSample> samples, double torque_noise, double angle_noise, int order)
-      : mech_(mech), r_(r), s_(std::move(samples)), order_(order), angle_noise_(angle_noise) {
+               std::vector<EivSample> samples, double torque_noise,
+               const std::array<double, 2>& angle_noise, int order)
+      : mech_(mech), r_(r), s_(std::move(samples)), order_(order),
+        angle_noise_(std::max(angle_noise[0], angle_noise[1])) {
     const int n = static_cast<int>(r.t.size());
     dt_ = (r.t.back() - r.t.front()) / std::max(1, n - 1);
     for (int c = 0; c < mech.dof(); ++c) {
-      noise_.angle[c] = angle_noise;
+      noise_.angle[c] = angle_noise[c];
       noise_.torque[c] = torque_noise;
     }
     // prefix counts of the sample steps over which some joint's rate changes sign
@@ -781,9 +788,11 @@ class EivPredictor {
     const Taps sg = taps(m);
     WindowPrediction out;
     const int n = size(), P = static_cast<int>(s_.front().J.cols());
-    double g1 = 0, g2 = 0;  // the filter's noise gains
-    for (size_t k = 0; k < sg.d1.size(); ++k) g1 += sg.d1[k] * sg.d1[k], g2 += sg.d2[k] * sg.d2[k];
-    g1 = std::sqrt(g1), g2 = std::sqrt(g2);
+    double g1 = 0, g2 = 0;  // the filter's noise gains, as identify's rest rule takes them
+    SgOptions filter;
+    filter.half_window_s = m * dt_;
+    filter.order = order_;
+    mech_.rest_gains(r_.t, filter, &g1, &g2);
     std::vector<int> used;
     for (int i = m; i < n - m; ++i) {
       const int a = std::max(0, i - exclude), b = std::min(n - 1, i + exclude);
@@ -968,7 +977,7 @@ Status predict_identified_std(const ExcitationMechanism& mech, double torque_noi
   if (!st.ok()) return st;
   SgOptions fixed;
   const bool is_fixed = mech.fixed_filter(&fixed);
-  const EivPredictor eiv(mech, *r, std::move(samples), torque_noise, angle_noise,
+  const EivPredictor eiv(mech, *r, std::move(samples), torque_noise, {angle_noise, angle_noise},
                          is_fixed ? fixed.order : SgOptions{}.order);
   WindowPrediction chosen;
   if (is_fixed) {
