@@ -747,6 +747,25 @@ class EivPredictor {
     *sens = detail::sensitivity(i, lo, d1, d2, detail::RateSource::kFromAngles, noise_, s_[i].D);
   }
 
+  /// The samples the rest rule may hold at any half-window from m up (its thresholds grow with
+  /// the filter's noise gains, which fall as the window grows): the others need no rest test
+  void bound_rest(int m) {
+    double g1 = 0, g2 = 0;
+    gains(m, &g1, &g2);
+    maybe_rest_.assign(size(), 0);
+    parallel_for(size(), [&](int i) {
+      maybe_rest_[i] = mech_.at_rest(r_.t[i], r_.states[i], g1, g2, angle_noise_) ? 1 : 0;
+    });
+  }
+
+  /// the noise gains of the filter of half-window m, as identify's rest rule takes them
+  void gains(int m, double* g1, double* g2) const {
+    SgOptions filter;
+    filter.half_window_s = m * dt_;
+    filter.order = order_;
+    mech_.rest_gains(r_.t, filter, g1, g2);
+  }
+
   /// the filter of half-window m at a centred sample: the same at every one (uniform grid)
   Taps taps(int m) const {
     Taps out;
@@ -788,16 +807,14 @@ class EivPredictor {
     const Taps sg = taps(m);
     WindowPrediction out;
     const int n = size(), P = static_cast<int>(s_.front().J.cols());
-    double g1 = 0, g2 = 0;  // the filter's noise gains, as identify's rest rule takes them
-    SgOptions filter;
-    filter.half_window_s = m * dt_;
-    filter.order = order_;
-    mech_.rest_gains(r_.t, filter, &g1, &g2);
+    double g1 = 0, g2 = 0;
+    gains(m, &g1, &g2);
     std::vector<int> used;
     for (int i = m; i < n - m; ++i) {
       const int a = std::max(0, i - exclude), b = std::min(n - 1, i + exclude);
       if (reversals_[b] - reversals_[a] != 0) continue;
-      if (mech_.at_rest(r_.t[i], r_.states[i], g1, g2, angle_noise_)) continue;
+      const bool maybe = maybe_rest_.empty() || maybe_rest_[i];
+      if (maybe && mech_.at_rest(r_.t[i], r_.states[i], g1, g2, angle_noise_)) continue;
       used.push_back(i);
     }
     if (static_cast<int>(used.size()) <= P) return out;
@@ -857,6 +874,7 @@ class EivPredictor {
   double angle_noise_;
   detail::SensorNoise noise_;
   std::vector<int> reversals_;
+  std::vector<char> maybe_rest_;  ///< bound_rest's (empty: test every sample)
   double dt_ = 1;
 };
 
@@ -916,10 +934,12 @@ namespace {
 
 /// The window identify's rules choose on the five-bar (predict_identified_std): the prediction
 /// there into *chosen, the half-window into r->sg_half_window and r->window_choice.
-void choose_window(const EivPredictor& eiv, const DesignParameters& dp, ExcitationReport* r,
+void choose_window(EivPredictor* predictor, const DesignParameters& dp, ExcitationReport* r,
                    WindowPrediction* chosen) {
   const int n = static_cast<int>(r->t.size());
-  const std::vector<int> cand = stages::window_candidates(n, eiv.dt(), SgOptions{}.order);
+  const std::vector<int> cand = stages::window_candidates(n, predictor->dt(), SgOptions{}.order);
+  predictor->bound_rest(cand.front());  // the candidates grow: the first's thresholds are the largest
+  const EivPredictor& eiv = *predictor;
   // the residual rule: the largest candidate within the excess (scanned until the bias clearly
   // dominates), one below it past the second
   std::vector<double> ratio;
@@ -977,7 +997,7 @@ Status predict_identified_std(const ExcitationMechanism& mech, double torque_noi
   if (!st.ok()) return st;
   SgOptions fixed;
   const bool is_fixed = mech.fixed_filter(&fixed);
-  const EivPredictor eiv(mech, *r, std::move(samples), torque_noise, {angle_noise, angle_noise},
+  EivPredictor eiv(mech, *r, std::move(samples), torque_noise, {angle_noise, angle_noise},
                          is_fixed ? fixed.order : SgOptions{}.order);
   WindowPrediction chosen;
   if (is_fixed) {
@@ -991,7 +1011,7 @@ Status predict_identified_std(const ExcitationMechanism& mech, double torque_noi
                           digits3(bias_in_std(chosen, dp.friction)) + ")";
     }
   } else {
-    choose_window(eiv, dp, r, &chosen);
+    choose_window(&eiv, dp, r, &chosen);
   }
   if (!chosen.ok) {  // no std identify could report: none predicted
     r->sg_half_window = 0;
