@@ -604,7 +604,9 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
                        const std::function<Loads<double>(double)>& loads,
                        const std::vector<double>& t, const std::vector<MotionState>& states,
                        double torque_noise, ExcitationReport* out) {
-  return evaluate_motion(*five_bar_excitation(scene, dp, loads), t, states, torque_noise, out);
+  // the loads by reference for this call (a copy of a scene's loads recompiles its expressions)
+  const auto mech = five_bar_excitation(scene, dp, [&loads](double at) { return loads(at); });
+  return evaluate_motion(*mech, t, states, torque_noise, out);
 }
 
 Status evaluate_motion(const ExcitationMechanism& mech, const std::vector<double>& t,
@@ -980,7 +982,9 @@ void choose_window(EivPredictor* predictor, const DesignParameters& dp, Excitati
 Status predict_identified_std(const Params<double>& scene, const DesignParameters& dp,
                               const std::function<Loads<double>(double)>& loads,
                               double torque_noise, double angle_noise, ExcitationReport* r) {
-  return predict_identified_std(*five_bar_excitation(scene, dp, loads), torque_noise, angle_noise, r);
+  // the loads by reference for this call (a copy of a scene's loads recompiles its expressions)
+  const auto mech = five_bar_excitation(scene, dp, [&loads](double at) { return loads(at); });
+  return predict_identified_std(*mech, torque_noise, angle_noise, r);
 }
 
 Status predict_identified_std(const ExcitationMechanism& mech, double torque_noise,
