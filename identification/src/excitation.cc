@@ -12,10 +12,20 @@
 
 #include "fivebar/identification/rates.h"
 #include "fivebar/model/inertial.h"
+#include "fivebar/model/rest_rule.h"
 #include "jet_dynamics.h"
 #include "noise_model.h"
+#include "setup_shared.h"
 
 namespace fivebar::identification {
+
+namespace stages {
+/// identify's rest rule on the five-bar (stage_samples.cc; declared in identify_stages.h, whose
+/// Ceres stages this unit does not need)
+bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds& rest,
+                 double angle_noise);
+}  // namespace stages
+
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -161,10 +171,77 @@ Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians
 }
 
 // ---------------------------------------------------------------------------------------------
+// The five-bar as an ExcitationMechanism
+
+namespace {
+
+class FiveBarExcitation : public ExcitationMechanism {
+ public:
+  FiveBarExcitation(const Params<double>& scene, DesignParameters dp,
+                    std::function<Loads<double>(double)> loads)
+      : scene_(scene), dp_(std::move(dp)), loads_(std::move(loads)) {}
+  int dof() const override { return kDof; }
+  int joints() const override { return kJoints; }
+  std::string joint_name(int k) const override {
+    static const char* const kNames[] = {"O", "B", "C", "D", "D0"};
+    return kNames[k];
+  }
+  std::string type() const override { return "five_bar"; }
+  const DesignParameters& parameters() const override { return dp_; }
+  Status terms(double t, const MotionState& s, const JointModes* slip,
+               SampleTerms* out) const override {
+    return sample_terms(scene_, dp_, loads_(t), s, slip, out);
+  }
+  Status kinematic_jacobian(double t, const MotionState& q,
+                            Eigen::Matrix<double, 2, 6>* D) const override {
+    Sample s;
+    s.t = t, s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
+    s.loads = loads_(t);
+    const std::vector<double> x = dp_.layout.extract(scene_.friction);
+    if (!detail::kinematic_jacobian(scene_, dp_.layout, x.data(), s, EvalOptions{}, D)) {
+      return Status::Error(StatusCode::kSolverFailed,
+                           "the torques' derivative along the motion failed");
+    }
+    return Status::Ok();
+  }
+  bool fixed_filter(SgOptions*) const override { return false; }
+  bool block_sandwich() const override { return false; }
+  /// identify's rule (stage_samples.cc: rest_rule, held_sample): thresholds kRestSigmas std of
+  /// the filtered rates and accelerations, the angle noise through the joint rates' dependence
+  /// on the pose
+  bool at_rest(double t, const MotionState& q, double g1, double g2,
+               double angle_noise) const override {
+    if (!(angle_noise > 0)) return false;
+    Sample s;
+    s.t = t, s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
+    return stages::held_sample(scene_, s, rest_thresholds(g1 * angle_noise, g2 * angle_noise),
+                               angle_noise);
+  }
+  void rest_gains(const std::vector<double>& t, const SgOptions& sg, double* g1,
+                  double* g2) const override {
+    stages::sg_noise_gains(t, sg, g1, g2);
+  }
+
+ private:
+  Params<double> scene_;
+  DesignParameters dp_;
+  std::function<Loads<double>(double)> loads_;
+};
+
+}  // namespace
+
+std::shared_ptr<const ExcitationMechanism> five_bar_excitation(
+    const Params<double>& scene, const DesignParameters& dp,
+    std::function<Loads<double>(double)> loads) {
+  return std::make_shared<FiveBarExcitation>(scene, dp, std::move(loads));
+}
+
+// ---------------------------------------------------------------------------------------------
 // Fourier motion
 
-FourierMotion::FourierMotion(int harmonics, double period, double ramp, std::array<double, 2> start)
-    : h_(std::max(1, harmonics)), period_(period), ramp_(ramp), start_(start) {}
+FourierMotion::FourierMotion(int harmonics, double period, double ramp, std::array<double, 2> start,
+                             int dof)
+    : h_(std::max(1, harmonics)), period_(period), ramp_(ramp), start_(start), dof_(dof) {}
 
 void FourierMotion::basis(double t, std::vector<std::array<double, 3>>* d) const {
   const double w = 2 * M_PI / period_;
@@ -191,8 +268,8 @@ MotionState FourierMotion::state(const std::vector<double>& x, double t) const {
   std::vector<std::array<double, 3>> d;
   basis(t, &d);
   std::array<std::array<double, 3>, 2> q{};
-  for (int j = 0; j < kDof; ++j) {
-    q[j][0] = start_[j];
+  for (int j = 0; j < kDof; ++j) q[j][0] = start_[j];
+  for (int j = 0; j < dof_; ++j) {
     for (int v = 0; v < per_joint(); ++v) {
       for (int k = 0; k < 3; ++k) q[j][k] += x[j * per_joint() + v] * d[v][k];
     }
@@ -214,7 +291,7 @@ std::vector<double> FourierMotion::fit(const std::vector<double>& t, const std::
   }
   const Eigen::MatrixXd c = A.colPivHouseholderQr().solve(b);
   std::vector<double> x(num_variables());
-  for (int j = 0; j < kDof; ++j) {
+  for (int j = 0; j < dof_; ++j) {
     for (int v = 0; v < pj; ++v) x[j * pj + v] = c(v, j);
   }
   return x;
@@ -232,11 +309,16 @@ struct ExcitationProblem::Derivs {
 ExcitationProblem::ExcitationProblem(const Params<double>& scene,
                                      std::function<Loads<double>(double)> loads,
                                      std::array<double, 2> start, const ExcitationOptions& options)
-    : scene_(scene),
-      loads_(std::move(loads)),
+    : ExcitationProblem(five_bar_excitation(scene, design_parameters(scene, options.groups),
+                                            std::move(loads)),
+                        start, options) {}
+
+ExcitationProblem::ExcitationProblem(std::shared_ptr<const ExcitationMechanism> mechanism,
+                                     std::array<double, 2> start, const ExcitationOptions& options)
+    : mech_(std::move(mechanism)),
       opt_(options),
-      motion_(options.harmonics, options.duration / std::max(1, options.periods), options.ramp, start),
-      dp_(design_parameters(scene, options.groups)) {
+      motion_(options.harmonics, options.duration / std::max(1, options.periods), options.ramp, start,
+              mech_->dof()) {
   // a count that is not a multiple of the periods samples every period at other phases
   int n = std::max(8, options.design_samples);
   if (n % std::max(1, options.periods) == 0) ++n;
@@ -246,14 +328,14 @@ ExcitationProblem::ExcitationProblem(const Params<double>& scene,
 }
 
 int ExcitationProblem::per_sample_constraints() const {
-  int c = 5;  // +-M1, +-M2, sine
-  for (int j = 0; j < kDof; ++j) c += std::isfinite(opt_.theta_lo[j]) ? 2 : 0;
+  int c = 2 * mech_->dof() + 1;  // +-M_j, sine
+  for (int j = 0; j < mech_->dof(); ++j) c += std::isfinite(opt_.theta_lo[j]) ? 2 : 0;
   return c;
 }
 
 int ExcitationProblem::constraint_kinds() const {
   int k = 2;  // torque, sine
-  for (int j = 0; j < kDof; ++j) k += std::isfinite(opt_.theta_lo[j]) ? 1 : 0;
+  for (int j = 0; j < mech_->dof(); ++j) k += std::isfinite(opt_.theta_lo[j]) ? 1 : 0;
   return k;
 }
 
@@ -261,17 +343,20 @@ int ExcitationProblem::blocks() const {
   return std::max(1, std::min(static_cast<int>(times_.size()), opt_.constraint_blocks));
 }
 
-int ExcitationProblem::num_constraints() const { return blocks() * constraint_kinds() + 2 * kJoints; }
+int ExcitationProblem::num_constraints() const {
+  return blocks() * constraint_kinds() + reversal_constraints();
+}
 
 void ExcitationProblem::aggregate(const std::vector<double>& raw, const std::vector<double>& raw_grad,
                                   bool grad, DesignValue* out) const {
   const int N = static_cast<int>(times_.size()), n = num_variables(), ps = per_sample_constraints();
   const int nb = blocks(), kinds = constraint_kinds();
-  // kind of each per-sample row: +-M1, +-M2 -> torque; sine; theta1 range; theta2 range
+  // kind of each per-sample row: +-M_j -> torque; sine; theta1 range; theta2 range
+  const int nt = 2 * mech_->dof();  // torque rows
   std::vector<int> kind(ps);
-  for (int r = 0; r < ps; ++r) kind[r] = r < 4 ? 0 : r == 4 ? 1 : 2 + (r - 5) / 2;
-  if (ps > 5 && !std::isfinite(opt_.theta_lo[0])) {
-    for (int r = 5; r < ps; ++r) kind[r] = 2;
+  for (int r = 0; r < ps; ++r) kind[r] = r < nt ? 0 : r == nt ? 1 : 2 + (r - nt - 1) / 2;
+  if (ps > nt + 1 && !std::isfinite(opt_.theta_lo[0])) {
+    for (int r = nt + 1; r < ps; ++r) kind[r] = 2;
   }
   const double rho = opt_.aggregation_sharpness;
   for (int b = 0; b < nb; ++b) {
@@ -303,17 +388,18 @@ void ExcitationProblem::aggregate(const std::vector<double>& raw, const std::vec
 
 Status ExcitationProblem::sample(const std::vector<double>& x, int i, bool grad, Derivs* d) const {
   d->s = motion_.state(x, times_[i]);
-  const Loads<double> L = loads_(times_[i]);
-  Status st = sample_terms(scene_, dp_, L, d->s, nullptr, &d->v);
+  const double t = times_[i];
+  Status st = mech_->terms(t, d->s, nullptr, &d->v);
   if (!st.ok() || !grad) return st;
   const std::array<double, 6> base = {d->s.th1, d->s.th2, d->s.w1, d->s.w2, d->s.a1, d->s.a2};
   for (int c = 0; c < 6; ++c) {
+    if (c % 2 >= mech_->dof()) continue;  // a crank the mechanism does not have
     // forward differences (one Jet evaluation per motion variable) at the sample's slip signs
     const double h = 1e-7 * std::max(1.0, std::abs(base[c]));
     std::array<double, 6> b = base;
     b[c] += h;
     SampleTerms plus;
-    st = sample_terms(scene_, dp_, L, {b[0], b[1], b[2], b[3], b[4], b[5]}, &d->v.slip, &plus);
+    st = mech_->terms(t, {b[0], b[1], b[2], b[3], b[4], b[5]}, &d->v.slip, &plus);
     if (!st.ok()) return st;
     SampleTerms& o = d->d[c];
     o.J = (plus.J - d->v.J) / h;
@@ -326,7 +412,8 @@ Status ExcitationProblem::sample(const std::vector<double>& x, int i, bool grad,
 }
 
 double ExcitationProblem::criterion_value(const Eigen::MatrixXd& F, Eigen::MatrixXd* dF) const {
-  return design_criterion(F, dp_.scale, dp_.nominal, opt_.regularization, opt_.criterion, dF);
+  const DesignParameters& dp = mech_->parameters();
+  return design_criterion(F, dp.scale, dp.nominal, opt_.regularization, opt_.criterion, dF);
 }
 
 namespace {
@@ -403,13 +490,16 @@ void ExcitationProblem::add_sample_constraints(int i, const Derivs& d, bool grad
   auto m1 = [](const SampleTerms& t) { return t.M1; };
   auto m2 = [](const SampleTerms& t) { return t.M2; };
   auto sine = [](const SampleTerms& t) { return t.sine; };
+  const int dof = mech_->dof();
   cs.push_back({d.v.M1 / lim - keep, of(m1, 1, lim)});
   cs.push_back({-d.v.M1 / lim - keep, of(m1, -1, lim)});
-  cs.push_back({d.v.M2 / lim - keep, of(m2, 1, lim)});
-  cs.push_back({-d.v.M2 / lim - keep, of(m2, -1, lim)});
+  if (dof > 1) {
+    cs.push_back({d.v.M2 / lim - keep, of(m2, 1, lim)});
+    cs.push_back({-d.v.M2 / lim - keep, of(m2, -1, lim)});
+  }
   cs.push_back({1.0 - d.v.sine / opt_.singular_margin, of(sine, -1, opt_.singular_margin)});
   const double th[2] = {d.s.th1, d.s.th2};
-  for (int j = 0; j < kDof; ++j) {
+  for (int j = 0; j < dof; ++j) {
     if (!std::isfinite(opt_.theta_lo[j])) continue;
     const double span = opt_.theta_hi[j] - opt_.theta_lo[j];
     std::array<double, 6> g{};
@@ -423,7 +513,7 @@ void ExcitationProblem::add_sample_constraints(int i, const Derivs& d, bool grad
     (*raw)[row0 + r] = cs[r].first;
     if (!grad) continue;
     double* g = &(*raw_grad)[(row0 + r) * n];
-    for (int j = 0; j < kDof; ++j) {
+    for (int j = 0; j < dof; ++j) {
       for (int v = 0; v < pj; ++v) {
         // s = (th1, th2, w1, w2, a1, a2): crank j's angle, rate, acceleration at 0+j, 2+j, 4+j
         g[j * pj + v] = cs[r].second[j] * basis[v][0] + cs[r].second[2 + j] * basis[v][1] +
@@ -439,7 +529,7 @@ void ExcitationProblem::add_reversal_constraints(
   const int n = num_variables(), pj = motion_.per_joint();
   const int row0 = blocks() * constraint_kinds();
   const double vr = opt_.reversal_rate, rho = 10.0 / vr;
-  for (int k = 0; k < kJoints; ++k) {
+  for (int k = 0; k < mech_->joints(); ++k) {
     for (int sgn : {+1, -1}) {
       std::vector<double> v(all.size()), wts;
       for (size_t i = 0; i < all.size(); ++i) v[i] = sgn * all[i].v.w[k];
@@ -449,7 +539,7 @@ void ExcitationProblem::add_reversal_constraints(
       if (!grad) continue;
       double* g = &out->constraints_grad[static_cast<size_t>(row) * n];
       for (size_t i = 0; i < all.size(); ++i) {
-        for (int j = 0; j < kDof; ++j) {
+        for (int j = 0; j < mech_->dof(); ++j) {
           for (int q = 0; q < pj; ++q) {
             double dw = 0;
             for (int o = 0; o < 3; ++o) dw += all[i].d[2 * o + j].w[k] * basis[i][q][o];
@@ -492,8 +582,10 @@ Status ExcitationProblem::evaluate(const std::vector<double>& x, bool grad, Desi
     // d Phi / d s_c = 2 w / sigma^2 sum (J G) .* dJ/ds_c
     const Eigen::MatrixXd JG = all[i].v.J * G;
     std::array<double, 6> ds{};
-    for (int cc = 0; cc < 6; ++cc) ds[cc] = c * JG.cwiseProduct(all[i].d[cc].J).sum();
-    for (int j = 0; j < kDof; ++j) {
+    for (int cc = 0; cc < 6; ++cc) {
+      if (cc % 2 < mech_->dof()) ds[cc] = c * JG.cwiseProduct(all[i].d[cc].J).sum();
+    }
+    for (int j = 0; j < mech_->dof(); ++j) {
       for (int v = 0; v < pj; ++v) {
         out->objective_grad[j * pj + v] += ds[j] * basis[i][v][0] + ds[2 + j] * basis[i][v][1] +
                                            ds[4 + j] * basis[i][v][2];
@@ -512,12 +604,19 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
                        const std::function<Loads<double>(double)>& loads,
                        const std::vector<double>& t, const std::vector<MotionState>& states,
                        double torque_noise, ExcitationReport* out) {
+  // the loads by reference for this call (a copy of a scene's loads recompiles its expressions)
+  const auto mech = five_bar_excitation(scene, dp, [&loads](double at) { return loads(at); });
+  return evaluate_motion(*mech, t, states, torque_noise, out);
+}
+
+Status evaluate_motion(const ExcitationMechanism& mech, const std::vector<double>& t,
+                       const std::vector<MotionState>& states, double torque_noise,
+                       ExcitationReport* out) {
+  const DesignParameters& dp = mech.parameters();
   const int N = static_cast<int>(t.size());
   std::vector<SampleTerms> terms(N);
   std::vector<Status> status(N);
-  parallel_for(N, [&](int i) {
-    status[i] = sample_terms(scene, dp, loads(t[i]), states[i], nullptr, &terms[i]);
-  });
+  parallel_for(N, [&](int i) { status[i] = mech.terms(t[i], states[i], nullptr, &terms[i]); });
   for (int i = 0; i < N; ++i) {
     if (!status[i].ok()) {
       std::ostringstream msg;
@@ -527,6 +626,8 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
   }
   out->t = t;
   out->states = states;
+  out->dof = mech.dof();
+  out->joints = mech.joints();
   out->M1.resize(N);
   out->M2.resize(N);
   std::vector<Eigen::MatrixXd> Js(N);
@@ -545,7 +646,7 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
     Js[i] = terms[i].J;
     rates[i] = terms[i].w;
     const double th[2] = {states[i].th1, states[i].th2};
-    for (int j = 0; j < kDof; ++j) {
+    for (int j = 0; j < mech.dof(); ++j) {
       out->theta_min[j] = std::min(out->theta_min[j], th[j]);
       out->theta_max[j] = std::max(out->theta_max[j], th[j]);
     }
@@ -610,13 +711,15 @@ struct Taps {
 
 class EivPredictor {
  public:
-  EivPredictor(const ExcitationReport& r, std::vector<EivSample> samples, double torque_noise,
-               double angle_noise)
-      : r_(r), s_(std::move(samples)) {
+  EivPredictor(const ExcitationMechanism& mech, const ExcitationReport& r,
+               std::vector<EivSample> samples, double torque_noise,
+               const std::array<double, 2>& angle_noise, int order)
+      : mech_(mech), r_(r), s_(std::move(samples)), order_(order),
+        angle_noise_(std::max(angle_noise[0], angle_noise[1])) {
     const int n = static_cast<int>(r.t.size());
     dt_ = (r.t.back() - r.t.front()) / std::max(1, n - 1);
-    for (int c = 0; c < kDof; ++c) {
-      noise_.angle[c] = angle_noise;
+    for (int c = 0; c < mech.dof(); ++c) {
+      noise_.angle[c] = angle_noise[c];
       noise_.torque[c] = torque_noise;
     }
     // prefix counts of the sample steps over which some joint's rate changes sign
@@ -646,12 +749,32 @@ class EivPredictor {
     *sens = detail::sensitivity(i, lo, d1, d2, detail::RateSource::kFromAngles, noise_, s_[i].D);
   }
 
+  /// The samples the rest rule may hold at any half-window from m up (its thresholds grow with
+  /// the filter's noise gains, which fall as the window grows): the others need no rest test
+  void bound_rest(int m) {
+    double g1 = 0, g2 = 0;
+    gains(m, &g1, &g2);
+    maybe_rest_.assign(size(), 0);
+    parallel_for(size(), [&](int i) {
+      maybe_rest_[i] = mech_.at_rest(r_.t[i], r_.states[i], g1, g2, angle_noise_) ? 1 : 0;
+    });
+  }
+
+  /// the noise gains of the filter of half-window m, as identify's rest rule takes them
+  void gains(int m, double* g1, double* g2) const {
+    SgOptions filter;
+    filter.half_window_s = m * dt_;
+    filter.order = order_;
+    mech_.rest_gains(r_.t, filter, g1, g2);
+  }
+
   /// the filter of half-window m at a centred sample: the same at every one (uniform grid)
   Taps taps(int m) const {
     Taps out;
     out.m = m;
     SgOptions sg;
     sg.half_window_s = m * dt_;
+    sg.order = order_;
     int lo = 0;
     savitzky_golay_taps(r_.t, m, sg, &lo, &out.d1, &out.d2);
     return out;
@@ -672,7 +795,7 @@ class EivPredictor {
       v += detail::propagated_variance(sens);
     }
     double ratio = 1;
-    for (int j = 0; j < kActuators && count > 0; ++j) {
+    for (int j = 0; j < mech_.dof() && count > 0; ++j) {
       const double floor2 = noise_.torque[j] * noise_.torque[j] + v(j) / count;
       ratio = std::max(ratio, std::sqrt(1 + b2(j) / count / floor2));
     }
@@ -680,15 +803,21 @@ class EivPredictor {
   }
 
   /// covariance and bias of the coefficients over the samples whose window of half-width
-  /// `exclude` spans no slip reversal, with rates from half-window m
+  /// `exclude` spans no slip reversal and that identify's rest rule keeps, with rates from
+  /// half-window m
   WindowPrediction predict(int m, int exclude) const {
     const Taps sg = taps(m);
     WindowPrediction out;
     const int n = size(), P = static_cast<int>(s_.front().J.cols());
+    double g1 = 0, g2 = 0;
+    gains(m, &g1, &g2);
     std::vector<int> used;
     for (int i = m; i < n - m; ++i) {
       const int a = std::max(0, i - exclude), b = std::min(n - 1, i + exclude);
-      if (reversals_[b] - reversals_[a] == 0) used.push_back(i);
+      if (reversals_[b] - reversals_[a] != 0) continue;
+      const bool maybe = maybe_rest_.empty() || maybe_rest_[i];
+      if (maybe && mech_.at_rest(r_.t[i], r_.states[i], g1, g2, angle_noise_)) continue;
+      used.push_back(i);
     }
     if (static_cast<int>(used.size()) <= P) return out;
     Eigen::MatrixXd J(2 * used.size(), P);
@@ -707,17 +836,47 @@ class EivPredictor {
     if (!(ev(0) > 1e-14 * ev(P - 1))) return out;  // the samples do not determine them all
     const Eigen::MatrixXd Hinv =
         es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
-    out.covariance = Hinv * detail::score_covariance(J, sens, noise_, n) * Hinv;
+    const Eigen::MatrixXd S = mech_.block_sandwich() ? block_score_covariance(J, used, sens, m)
+                                                     : detail::score_covariance(J, sens, noise_, n);
+    out.covariance = Hinv * S * Hinv;
     out.bias = -Hinv * g;
     out.ok = out.covariance.allFinite();
     return out;
   }
 
  private:
+  /// The expected meat of identify's block sandwich: blocks of used samples within 2 m + 1 log
+  /// samples of the block's first (identify_four_bar.cc's block_sizes), each block's score
+  /// covariance alone (the correlations between blocks, through the filter's overlapping
+  /// windows, are not in the sandwich)
+  Eigen::MatrixXd block_score_covariance(const Eigen::MatrixXd& J, const std::vector<int>& used,
+                                         const std::vector<detail::Sensitivity>& sens, int m) const {
+    const int P = static_cast<int>(J.cols()), span = 2 * m + 1;
+    Eigen::MatrixXd S = Eigen::MatrixXd::Zero(P, P);
+    for (size_t u0 = 0; u0 < used.size();) {
+      size_t u1 = u0 + 1;
+      while (u1 < used.size() && used[u1] - used[u0] < span) ++u1;
+      // the block's noise samples lie within [used[u0] - m, used[u1 - 1] + m]: shift them to 0
+      const int lo = std::max(0, used[u0] - m);
+      std::vector<detail::Sensitivity> block(sens.begin() + u0, sens.begin() + u1);
+      for (detail::Sensitivity& b : block) {
+        for (int c = 0; c < 4; ++c) b.lo[c] -= lo;
+      }
+      const int width = std::min(size(), used[u1 - 1] + m + 1) - lo;
+      S += detail::score_covariance(J.middleRows(2 * u0, 2 * (u1 - u0)), block, noise_, width);
+      u0 = u1;
+    }
+    return S;
+  }
+
+  const ExcitationMechanism& mech_;
   const ExcitationReport& r_;
   std::vector<EivSample> s_;
+  int order_;
+  double angle_noise_;
   detail::SensorNoise noise_;
   std::vector<int> reversals_;
+  std::vector<char> maybe_rest_;  ///< bound_rest's (empty: test every sample)
   double dt_ = 1;
 };
 
@@ -749,27 +908,17 @@ void set_std(const DesignParameters& dp, const Eigen::MatrixXd& C, ExcitationRep
 
 /// The Jacobians J and D and the joint rates at every sample of the motion of `r` (exact); the
 /// first sample that fails, named by its time.
-Status eiv_samples(const Params<double>& scene, const DesignParameters& dp,
-                   const std::function<Loads<double>(double)>& loads, const ExcitationReport& r,
+Status eiv_samples(const ExcitationMechanism& mech, const ExcitationReport& r,
                    std::vector<EivSample>* samples) {
   const int n = static_cast<int>(r.t.size());
   samples->clear();
   samples->resize(n);
   std::vector<Status> status(n);
-  const std::vector<double> x = dp.layout.extract(scene.friction);
   parallel_for(n, [&](int i) {
-    const MotionState& q = r.states[i];
     SampleTerms terms;
-    status[i] = sample_terms(scene, dp, loads(r.t[i]), q, nullptr, &terms);
+    status[i] = mech.terms(r.t[i], r.states[i], nullptr, &terms);
+    if (status[i].ok()) status[i] = mech.kinematic_jacobian(r.t[i], r.states[i], &(*samples)[i].D);
     if (!status[i].ok()) return;
-    Sample s;
-    s.t = r.t[i], s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
-    s.loads = loads(r.t[i]);
-    if (!detail::kinematic_jacobian(scene, dp.layout, x.data(), s, EvalOptions{}, &(*samples)[i].D)) {
-      status[i] = Status::Error(StatusCode::kSolverFailed,
-                                "the torques' derivative along the motion failed");
-      return;
-    }
     (*samples)[i].J = terms.J;
     (*samples)[i].w = terms.w;
   });
@@ -783,20 +932,16 @@ Status eiv_samples(const Params<double>& scene, const DesignParameters& dp,
 
 }  // namespace
 
-Status predict_identified_std(const Params<double>& scene, const DesignParameters& dp,
-                              const std::function<Loads<double>(double)>& loads,
-                              double torque_noise, double angle_noise, ExcitationReport* r) {
+namespace {
+
+/// The window identify's rules choose on the five-bar (predict_identified_std): the prediction
+/// there into *chosen, the half-window into r->sg_half_window and r->window_choice.
+void choose_window(EivPredictor* predictor, const DesignParameters& dp, ExcitationReport* r,
+                   WindowPrediction* chosen) {
   const int n = static_cast<int>(r->t.size());
-  r->torque_only_std = r->std_dev;
-  if (!(angle_noise > 0) || n < 8 || dp.size() == 0) return Status::Ok();
-  for (double v : r->std_dev) {
-    if (!std::isfinite(v)) return Status::Ok();  // an unidentifiable direction stays so
-  }
-  std::vector<EivSample> samples;
-  const Status st = eiv_samples(scene, dp, loads, *r, &samples);
-  if (!st.ok()) return st;
-  const EivPredictor eiv(*r, std::move(samples), torque_noise, angle_noise);
-  const std::vector<int> cand = stages::window_candidates(n, eiv.dt(), SgOptions{}.order);
+  const std::vector<int> cand = stages::window_candidates(n, predictor->dt(), SgOptions{}.order);
+  predictor->bound_rest(cand.front());  // the candidates grow: the first's thresholds are the largest
+  const EivPredictor& eiv = *predictor;
   // the residual rule: the largest candidate within the excess (scanned until the bias clearly
   // dominates), one below it past the second
   std::vector<double> ratio;
@@ -813,30 +958,76 @@ Status predict_identified_std(const Params<double>& scene, const DesignParameter
   // the bias rule: from the residual rule's window down, the first within kBiasFraction std
   // (none: the residual rule's)
   int pick = rule;
-  WindowPrediction chosen = eiv.predict(cand[rule], cand[rule]);
+  *chosen = eiv.predict(cand[rule], cand[rule]);
   std::string table;
-  for (int k = rule; k >= 1 && chosen.ok; --k) {
-    WindowPrediction p = k == rule ? chosen : eiv.predict(cand[k], cand[k]);
+  for (int k = rule; k >= 1 && chosen->ok; --k) {
+    WindowPrediction p = k == rule ? *chosen : eiv.predict(cand[k], cand[k]);
     if (!p.ok) break;
     const double b = bias_in_std(p, dp.friction);
     table += (table.empty() ? "" : ", ") + std::to_string(cand[k]) + ": " + digits3(b);
     if (b <= kBiasFraction) {
       pick = k;
-      chosen = std::move(p);
+      *chosen = std::move(p);
       break;
     }
   }
-  if (!chosen.ok) {
-    return Status::Error(StatusCode::kSolverFailed,
-                         "the errors-in-variables covariance could not be formed (the samples "
-                         "away from the slip reversals do not determine the parameters)");
-  }
-  r->covariance = chosen.covariance;
-  set_std(dp, chosen.covariance, r);
   r->sg_half_window = cand[pick];
   r->window_choice = "half-window " + std::to_string(cand[rule]) +
                      " samples by the residual rule (expected ratio " + digits3(ratio[rule]) +
                      "), " + std::to_string(cand[pick]) + " by the bias rule (|bias| / std: " + table + ")";
+}
+
+}  // namespace
+
+Status predict_identified_std(const Params<double>& scene, const DesignParameters& dp,
+                              const std::function<Loads<double>(double)>& loads,
+                              double torque_noise, double angle_noise, ExcitationReport* r) {
+  // the loads by reference for this call (a copy of a scene's loads recompiles its expressions)
+  const auto mech = five_bar_excitation(scene, dp, [&loads](double at) { return loads(at); });
+  return predict_identified_std(*mech, torque_noise, angle_noise, r);
+}
+
+Status predict_identified_std(const ExcitationMechanism& mech, double torque_noise,
+                              double angle_noise, ExcitationReport* r) {
+  const DesignParameters& dp = mech.parameters();
+  const int n = static_cast<int>(r->t.size());
+  r->torque_only_std = r->std_dev;
+  if (!(angle_noise > 0) || n < 8 || dp.size() == 0) return Status::Ok();
+  for (double v : r->std_dev) {
+    if (!std::isfinite(v)) return Status::Ok();  // an unidentifiable direction stays so
+  }
+  std::vector<EivSample> samples;
+  const Status st = eiv_samples(mech, *r, &samples);
+  if (!st.ok()) return st;
+  SgOptions fixed;
+  const bool is_fixed = mech.fixed_filter(&fixed);
+  EivPredictor eiv(mech, *r, std::move(samples), torque_noise, {angle_noise, angle_noise},
+                         is_fixed ? fixed.order : SgOptions{}.order);
+  WindowPrediction chosen;
+  if (is_fixed) {
+    const int m = sg_half_window(fixed, eiv.dt());
+    chosen = eiv.predict(m, m);
+    r->sg_half_window = m;
+    r->window_choice = "half-window " + std::to_string(m) + " samples, order " +
+                       std::to_string(fixed.order) + ": identify's filter for a " + mech.type();
+    if (chosen.ok) {
+      r->window_choice += " (its smoothing bias of the coefficients, |bias| / std: " +
+                          digits3(bias_in_std(chosen, dp.friction)) + ")";
+    }
+  } else {
+    choose_window(&eiv, dp, r, &chosen);
+  }
+  if (!chosen.ok) {  // no std identify could report: none predicted
+    r->sg_half_window = 0;
+    r->std_dev.assign(dp.size(), kNaN);
+    r->relative_std.assign(dp.size(), kNaN);
+    return Status::Error(StatusCode::kSolverFailed,
+                         "the errors-in-variables covariance could not be formed (the samples "
+                         "identify keeps, away from the slip reversals and not at rest, do not "
+                         "determine the parameters)");
+  }
+  r->covariance = chosen.covariance;
+  set_std(dp, chosen.covariance, r);
   return Status::Ok();
 }
 

@@ -1,5 +1,6 @@
 // Excitation design: the Jet Jacobian and Fisher matrix against finite differences,
-// the design gradient against finite differences, the Fourier motion's consistency.
+// the design gradient against finite differences, the Fourier motion's consistency, the
+// predicted std (the four-bar's: test_four_bar_identify.cc).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -341,6 +342,45 @@ TEST(Excitation, PredictedStdAddsTheAngleNoiseThroughTheRates) {
     EXPECT_NEAR(loud.std_dev[i] / loud.torque_only_std[i], 1.0, 0.15) << dp.names[i];
     EXPECT_NEAR(noisy.relative_std[i], noisy.std_dev[i] / std::abs(dp.nominal[i]), 1e-15);
   }
+}
+
+// identify's rest rule in the prediction: a sample whose joint rates are within the noise of the
+// filtered rates is at rest (identify leaves it out), one that turns well above it is not, and
+// without angle noise none is (the five-bar's held_sample).
+TEST(Excitation, RestRuleOfThePredictionIsIdentifys) {
+  const auto five = five_bar_excitation(light_params(), design_parameters(light_params(), {}),
+                                        light_loads());
+  const MotionState still{1.4, 1.9, 1e-4, -1e-4, 0, 0}, turning{1.4, 1.9, 2.0, -1.5, 0, 0};
+  const double g1 = 30, g2 = 3000;  // a filter's noise gains [1/s], [1/s^2]
+  EXPECT_TRUE(five->at_rest(0, still, g1, g2, 1e-5));
+  EXPECT_FALSE(five->at_rest(0, turning, g1, g2, 1e-5));
+  EXPECT_FALSE(five->at_rest(0, still, g1, g2, 0));
+  EXPECT_TRUE(five->at_rest(0, turning, g1, g2, 1e-1));
+}
+
+// Where the angle noise puts every sample of a motion at rest for identify (it then refuses the
+// log: too few samples usable), the prediction has no std either, not an optimistic one.
+TEST(Excitation, NoPredictionWhereIdentifyKeepsNoSample) {
+  const Params<double> light = light_params();
+  SynthOptions so;
+  so.duration = 2;
+  so.multisine = true;
+  so.torque_limit = 0.2;
+  so.with_rates = true;
+  const SynthResult log = synthesize_log(light, light_loads(), paper_initial(), so);
+  ASSERT_TRUE(log.status.ok()) << log.status.message;
+  std::vector<MotionState> states;
+  const TorqueLog& l = log.log;
+  for (int i = 0; i < l.size(); ++i) {
+    states.push_back({l.theta1[i], l.theta2[i], l.omega1[i], l.omega2[i], l.alpha1[i], l.alpha2[i]});
+  }
+  const DesignParameters dp = design_parameters(light, DesignGroups{});
+  ExcitationReport r;
+  ASSERT_TRUE(evaluate_motion(light, dp, light_loads(), l.t, states, 0.02, &r).ok());
+  const Status st = predict_identified_std(light, dp, light_loads(), 0.02, 0.1, &r);
+  EXPECT_FALSE(st.ok());
+  EXPECT_NE(st.message.find("not at rest"), std::string::npos) << st.message;
+  for (int i = 0; i < dp.size(); ++i) EXPECT_TRUE(std::isnan(r.std_dev[i])) << dp.names[i];
 }
 
 }  // namespace
