@@ -23,7 +23,7 @@ namespace fivebar::identification {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using detail::kNaN;
 
 /// The Jet part of sample_terms: friction and inertial columns of dM/dparameter.
 template <int N>

@@ -18,7 +18,7 @@
 namespace fivebar::identification {
 
 namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using detail::kNaN;
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <limits>
 #include <thread>
 
 #include "fivebar/identification/residual.h"
@@ -18,6 +19,8 @@ bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds&
 }  // namespace stages
 
 namespace detail {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 /// Runs f(i) for i in [0, n) on up to two threads (the machine's budget), in contiguous chunks.
 template <typename F>
