@@ -847,6 +847,18 @@ std::shared_ptr<const id::ExcitationMechanism> mechanism_of(const Scene& scene,
   return id::five_bar_excitation(scene.params, id::design_parameters(scene.params, o.groups), loads);
 }
 
+// A design makes each parameter's std small against its value (`ok`: every relative std at most
+// 1): a scene whose parameters are all 0 (no friction) leaves nothing to design for.
+void check_values(const Scene& scene, const id::DesignParameters& dp) {
+  for (double v : dp.nominal) {
+    if (v != 0) return;
+  }
+  throw InputError(scene.path, "friction",
+                   "every parameter to design for is 0 (" + std::to_string(dp.size()) +
+                       " of them): excite makes their std small against their values; give the "
+                       "scene the friction you expect");
+}
+
 // the family of the design (a four-bar's default: fourier) and the options given that it does
 // not use
 Args resolved(const Args& given, const Scene& scene) {
@@ -863,6 +875,7 @@ int run(const Args& given) {
   const LoadExpressions loads(scene);
   const id::ExcitationOptions o = options_of(a, scene);
   const std::shared_ptr<const id::ExcitationMechanism> mech = mechanism_of(scene, loads, o);
+  check_values(scene, mech->parameters());
   check_holding(a, scene, loads, *mech, o);
   // a trigonometric polynomial of degree H changes sign at most 2 H times per period
   const int most = 2 * o.harmonics * o.periods;

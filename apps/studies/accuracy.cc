@@ -89,6 +89,7 @@ PrecisionPoint measure_point(const P& params, const LF& loads, const Initial& in
   pt.rhs_evaluations = r.stats.rhs_evaluations;
   pt.steps = r.stats.steps;
   pt.friction_events = r.stats.friction_events;
+  pt.error = pt.error_vs_exact = std::numeric_limits<double>::quiet_NaN();  // a failed run's
   if (pt.ok) {
     const Reference& own = t == Treatment::kRegularized ? refs.regularized : refs.exact;
     pt.error = max_theta_difference(r.rows, own.rows);

@@ -25,7 +25,7 @@ struct PrecisionPoint {
   double tolerance = 0;      ///< rtol = atol
   bool ok = false;
   std::string message;       ///< the failure, when !ok
-  double error = 0;          ///< max |d theta_1..4| over the output grid vs its own reference [rad]
+  double error = 0;          ///< max |d theta_k| over the output grid vs its own reference [rad]; NaN when !ok
   double error_vs_exact = 0; ///< vs the exact-sign reference (model error of regularization)
   double wall_time_s = 0;    ///< minimum over the repeats
   long rhs_evaluations = 0;
