@@ -279,6 +279,24 @@ else:
         if tight is None or loose is None or not tight < loose:
             failures.append("accuracy: %s: error %r at 1e-9 against %r at 1e-6"
                             % (method, tight, loose))
+    if reference.get("external_times_compared") != len(read_csv(os.path.join(REFERENCE, "crank_rocker.csv"))) \
+            or reference.get("external_agrees") is not True:
+        failures.append("accuracy: the independent reference: %r" % reference)
+# another mechanism's trajectory as the reference: a warning, and the summary says so
+out = os.path.join(WORK, "accuracy_other")
+code, _, err = run(["accuracy", os.path.join(REFERENCE, "crank_rocker.yaml"), "--out", out,
+                    "--repeats", "1", "--tolerances", "1e-6", "--methods", "cvode_adams",
+                    "--no-plots", "--reference", os.path.join(REFERENCE, "double_rocker.csv")])
+if code != 0 or "it is not a run of this scene" not in err:
+    failures.append("accuracy with the double rocker's reference: exit %d: %s" % (code, err))
+else:
+    with open(os.path.join(out, "summary.json")) as f:
+        if json.load(f)["reference"].get("external_agrees") is not False:
+            failures.append("accuracy: the double rocker's reference read as agreeing")
+# excite on a frictionless four-bar: nothing to design for, refused naming friction
+expect_error(2, "friction: every parameter to design for is 0",
+             ["excite", scene, "--set", "friction.coulomb=0", "--set", "friction.viscous=0",
+              "--duration", "2", "--torque-limit", "2", "--out", bad])
 # identify: a four-bar's log fitted end to end (2 s, angles only, synth-log's default noise); the
 # five-bar's options and a five-bar's log refused naming them
 id_log = os.path.join(WORK, "crank_rocker_id.csv")
