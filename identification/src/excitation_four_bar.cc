@@ -9,6 +9,7 @@
 
 #include "fivebar/identification/excitation.h"
 #include "fivebar/model/four_bar.h"
+#include "four_bar_rules.h"
 
 namespace fivebar::identification {
 namespace {
@@ -18,11 +19,9 @@ namespace {
 constexpr int kWidth = 3;
 using Jet = ceres::Jet<double, kWidth>;
 
-/// identify_four_bar.cc's rules, repeated: the Savitzky-Golay order of its rate filter when the
-/// window is not given (kWindowOrder there), and its rest rule, a joint whose relative rate is
-/// within this many of its noise std of zero (kRestSigmas there)
-constexpr int kFourBarFilterOrder = 7;
-constexpr double kFourBarRestSigmas = 4.0;
+/// identify_four_bar.cc's rate filter order and rest rule (four_bar_rules.h)
+using four_bar_rules::kRestSigmas;
+using four_bar_rules::kWindowOrder;
 
 class FourBarExcitation : public ExcitationMechanism {
  public:
@@ -72,7 +71,7 @@ class FourBarExcitation : public ExcitationMechanism {
 
   bool fixed_filter(SgOptions* sg) const override {
     *sg = SgOptions{};
-    sg->order = std::max(sg->order, kFourBarFilterOrder);
+    sg->order = std::max(sg->order, kWindowOrder);
     return true;
   }
 
@@ -96,7 +95,7 @@ class FourBarExcitation : public ExcitationMechanism {
     const std::array<double, kFourBarJoints> row = four_bar_joint_rows(k);
     const double rate_noise = angle_noise * g1;
     for (int j = 0; j < kFourBarJoints; ++j) {
-      const double rest = kFourBarRestSigmas * rate_noise * std::abs(row[j]);
+      const double rest = kRestSigmas * rate_noise * std::abs(row[j]);
       if (std::abs(row[j] * s.w1) <= std::max(rest, 1e-12)) return true;
     }
     return false;

@@ -18,6 +18,7 @@
 #include "fivebar/model/format.h"
 #include "fivebar/model/four_bar.h"
 #include "fivebar/sim/simulator.h"
+#include "four_bar_rules.h"
 #include "mechanism_residual.h"
 #include "setup_shared.h"
 
@@ -28,16 +29,8 @@ namespace {
 using Sample = stages::MechanismSample<FourBar>;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-/// a joint whose relative rate is within this many of its noise std of zero is left out (its
-/// Coulomb sign is not known)
-constexpr double kRestSigmas = 4.0;
-
-/// the Savitzky-Golay order when the window is not given: the crank-rocker's crank turns at
-/// ~23 rad/s, and order 5 smooths its accelerations (noise-free log, 5 ms: coulomb -4 %; seeded
-/// logs at 10 ms: -2 std); order 7 at 10 ms left |error| <= 1.3 std on the seeds tried. A
-/// smaller window does not help: the acceleration noise then biases the friction (the reactions'
-/// norms grow with it) by up to -5 std at 4 ms.
-constexpr int kWindowOrder = 7;
+using four_bar_rules::kRestSigmas;
+using four_bar_rules::kWindowOrder;
 
 /// The state the four-bar's stages share, in the order they write it.
 struct FourBarFit {
