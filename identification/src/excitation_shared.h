@@ -1,22 +1,12 @@
 // What the excitation design (excitation.cc) and its prediction of identify's std
-// (excitation_prediction.cc) share.
+// (excitation_prediction.cc) share (identify's rest rule of a sample: setup_shared.h).
 #pragma once
 
 #include <algorithm>
 #include <limits>
 #include <thread>
 
-#include "fivebar/identification/residual.h"
-#include "fivebar/model/rest_rule.h"
-
 namespace fivebar::identification {
-
-namespace stages {
-/// identify's rest rule on the five-bar (stage_samples.cc; declared in identify_stages.h, whose
-/// Ceres stages this unit does not need)
-bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds& rest,
-                 double angle_noise);
-}  // namespace stages
 
 namespace detail {
 
