@@ -41,7 +41,8 @@ struct WorkPrecisionOptions {
   int repeats = 3;                    ///< wall time is the minimum over this many runs
   double regularization_velocity = 1e-3;  ///< w_s of the regularized treatment [rad/s]
   double reference_tolerance = 1e-13;
-  /// skip the remaining tolerances of a method once a run takes longer than this [s]
+  /// skip the remaining tolerances of a method once a run takes longer than this [s]; a run
+  /// taking twice this long is stopped and counts as failed
   double max_run_time_s = 5.0;
   /// called after every point with (points done, points planned); may be empty
   std::function<void(int done, int total)> progress;
