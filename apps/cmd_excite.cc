@@ -221,6 +221,9 @@ id::ExcitationOptions options_of(const Args& a, const Scene& scene) {
   if (a.family != "fourier" && a.family != "torque") {
     throw InputError(kFlags, "--family", "expected fourier or torque, got " + a.family);
   }
+  // a four-bar's refusals first: `--family torque --starts 1` names the family the four-bar
+  // lacks, not --starts
+  if (scene.type == MechanismType::kFourBar) refuse_four_bar_options(a, o);
   if (!a.family_only.empty()) {
     throw InputError(kFlags, a.family_only.front(),
                      "applies to --family " + std::string(a.family == "torque" ? "fourier" : "torque") +
@@ -229,7 +232,6 @@ id::ExcitationOptions options_of(const Args& a, const Scene& scene) {
   if (a.tones < 1 || a.max_evaluations < 0) {
     throw InputError(kFlags, "--tones/--max-evaluations", "need tones >= 1, max evaluations >= 0");
   }
-  if (scene.type == MechanismType::kFourBar) refuse_four_bar_options(a, o);
   o.singular_margin = std::max(a.design.singular_margin, scene.options.singular_margin);
   check_input(a, scene, &o);
   return o;
