@@ -14,6 +14,8 @@ import random
 import subprocess
 import sys
 
+from cli_common import write_hold_move
+
 fivebar, paper, work = sys.argv[1:4]
 root = os.path.dirname(os.path.dirname(os.path.abspath(paper)))
 crank_rocker = os.path.join(root, "reference", "four_bar", "crank_rocker.yaml")
@@ -101,14 +103,7 @@ check("noisy hold", s, err, None, 0, False, most_rest=1001)
 # derived threshold (0.28 rad/s, 0.15 of the peak) is capped at 0.19 rad/s, still 20 interior
 # deviations of the rates' noise: the held rows stay at rest
 move = os.path.join(work, "holdmove.csv")
-with open(move, "w") as f:
-    f.write("t,theta1,theta2\n")
-    for i in range(1501):
-        t = i * 1e-3
-        u = min(max((t - 0.5) / 0.5, 0.0), 1.0)
-        th = math.pi / 2 + 0.5 * (10 * u**3 - 15 * u**4 + 6 * u**5)
-        f.write("%.17g,%.17g,%.17g\n" % (t, th + rng.gauss(0, 1e-5),
-                                          math.pi / 2 + rng.gauss(0, 1e-5)))
+write_hold_move(move, (rng, 1e-5))
 s, err = inverse(paper, move, "inv_holdmove")
 check("noisy hold-move-hold", s, err, None, 0, True, most_rest=900)
 if failures:

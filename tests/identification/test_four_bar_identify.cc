@@ -10,6 +10,7 @@
 #include <random>
 
 #include "../model/four_bar_scenes.h"
+#include "design_gradients.h"
 #include "fivebar/identification/excitation.h"
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/synth.h"
@@ -190,25 +191,7 @@ TEST(FourBarExcitation, DesignGradientMatchesFiniteDifferences) {
   const std::vector<double> x = {4.0, 0.3, -0.2, 0.1, 0.2, -0.1, 0.05};
   ASSERT_EQ(problem.num_variables(), static_cast<int>(x.size()));
   EXPECT_EQ(problem.reversal_constraints(), 2 * kFourBarJoints);
-  DesignValue v;
-  ASSERT_TRUE(problem.evaluate(x, true, &v).ok());
-  const int n = problem.num_variables(), m = problem.num_constraints();
-  for (int i = 0; i < n; ++i) {
-    std::vector<double> xp = x, xm = x;
-    const double h = 1e-6;
-    xp[i] += h;
-    xm[i] -= h;
-    DesignValue vp, vm;
-    ASSERT_TRUE(problem.evaluate(xp, false, &vp).ok());
-    ASSERT_TRUE(problem.evaluate(xm, false, &vm).ok());
-    const double fd = (vp.objective - vm.objective) / (2 * h);
-    EXPECT_NEAR(v.objective_grad[i], fd, 1e-4 * (1 + std::abs(fd))) << "variable " << i;
-    for (int r = 0; r < m; ++r) {
-      const double cfd = (vp.constraints[r] - vm.constraints[r]) / (2 * h);
-      EXPECT_NEAR(v.constraints_grad[static_cast<size_t>(r) * n + i], cfd, 1e-4 * (1 + std::abs(cfd)))
-          << "constraint " << r << " variable " << i;
-    }
-  }
+  testing::expect_design_gradients(problem, x);
 }
 
 // The four-bar's predicted std (predict_identified_std at identify's fixed filter and rest rule)
