@@ -62,8 +62,8 @@ struct Motion {
   std::vector<double> M1, M2;
   // noise standard deviations of the rates and accelerations used (rest rule, docs/hold.md)
   double rate_noise = 0, acceleration_noise = 0;
-  // the largest rest rate threshold the noise may give (rest_rate_cap), and the sample step
-  double rest_rate_cap = INFINITY, step = 0;
+  // the largest rest rate threshold the noise may give (rest_rate_cap)
+  double rest_rate_cap = INFINITY;
 };
 
 // largest |n-th forward difference| of a series (0 when it is too short)
@@ -268,7 +268,6 @@ Motion read_motion(const std::string& path, const Scene& scene) {
   derive_rates(path, table, &c, &m);
   estimate_noise(c, &m);
   m.rest_rate_cap = rest_rate_cap(c);
-  m.step = (c.t.back() - c.t.front()) / double(std::max<size_t>(c.t.size() - 1, 1));
   m.rows.resize(c.t.size());
   for (size_t i = 0; i < c.t.size(); ++i) {
     sim::Row& r = m.rows[i];
@@ -314,10 +313,12 @@ RestRule rest_rule(const Scene& scene, const Motion& motion) {
   const bool accel_set = scene.rest_acceleration_threshold >= 0;
   if (!rate_set && derived.rate > motion.rest_rate_cap) {
     const double peak = motion.rest_rate_cap / kRestResolution;
+    const std::vector<sim::Row>& rows = motion.rows;  // the mean sample step, for the message
+    const double step = (rows.back().t - rows.front().t) / double(rows.size() - 1);
     r.capped = "the rest threshold its noise gives, |w| <= " + format_significant(derived.rate, 3) +
                " rad/s, is " + format_significant(derived.rate / peak, 3) +
                " times its largest rate, " + format_significant(peak, 3) + " rad/s: sampled every " +
-               format_significant(motion.step, 3) +
+               format_significant(step, 3) +
                " s, its noise (or its own motion, too fast for the sampling, read as noise) "
                "cannot tell rest from motion; capped at " +
                format_significant(kRestResolution) + " of the largest rate, " +
