@@ -234,6 +234,14 @@ id::ExcitationOptions options_of(const Args& a, const Scene& scene) {
   }
   o.singular_margin = std::max(a.design.singular_margin, scene.options.singular_margin);
   check_input(a, scene, &o);
+  // at rest the motion carries no information (the criterion is not finite there), so a local
+  // solve started there alone cannot leave it; the other starts perturb rest
+  if (a.start == "rest" && a.starts == 1) {
+    throw InputError(kFlags, "--start",
+                     "rest with --starts 1: a motion at rest carries no information, so the design "
+                     "cannot leave it; give --starts 2 or more (the others perturb rest) or "
+                     "--start swing");
+  }
   return o;
 }
 

@@ -689,13 +689,16 @@ std::string excitation_plot_script(const ExcitationFigures& f, const std::string
   s += begin_figure("fig_torques.png", f.cranks > 1 ? "2,1" : "1,1",
                     "Designed excitation: motor torques (inverse dynamics)",
                     std::string("green: the torque limit +-") + limit + " N m", f.title);
+  // a margin above and below, so that the limit lines never lie on the axes' border (a design
+  // that reaches its limit exactly would put them there)
+  s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
   for (int i = 1; i <= f.cranks; ++i) {
     const std::string n = std::to_string(i);
     s += panel("(" + std::string(i == 1 ? "a" : "b") + ") M" + n, "M" + n + " [N m]") + "plot " +
          curve(f.excitation, "M" + n, 1) + ", " + limit + " with lines ls 3, -" + limit +
          " with lines ls 3\n";
   }
-  s += "unset multiplot\n";
+  s += "unset multiplot\nunset offsets\n";
   // predicted relative std per parameter, designed motion beside the multi-sine
   s += "\nset output 'fig_std.png'\nset title " +
        quote(std::string("Predicted relative std (Cramer-Rao) per parameter: designed (blue)") +

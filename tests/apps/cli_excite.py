@@ -77,6 +77,8 @@ expect_error(2, "--tones: applies to --family torque only",
 expect_error(2, "--family: expected fourier or torque", base + ["--family", "spline"], bad)
 expect_error(2, "expected d-optimal, condition or worst-std", base + ["--criterion", "a-optimal"], bad)
 expect_error(2, "--duration: must be > 0", base + ["--duration", "0", "--family", "torque"], bad)
+# a design started at rest alone cannot leave it (no information there): refused, not run
+expect_error(2, "--start: rest with --starts 1", base + ["--family", "fourier", "--start", "rest", "--starts", "1"], bad)
 if os.path.exists(bad):
     failures.append("a run rejected for bad input created its output directory")
 
