@@ -558,6 +558,33 @@ bool scale_ambiguity(const CauseSteps& cs, const ReadingStep& rs, IdentifyResult
   return true;
 }
 
+/// model_check on the inertias: the warning when the log evidences them (or, no cause
+/// evidenced, by the earlier rule: `candidate`, the inertias are among the columns) and the
+/// friction would move; named, unusable by the rule of the other causes (unusable_move): else
+/// masses 6 % off a heavy mechanism, named, passed with a warning where 5 %, not named, failed
+void inertia_check(const Fit& f, const CauseSteps& cs, bool candidate, IdentifyResult* out) {
+  const detail::FreedStep& fi = cs.alone[kCauseInertia];
+  const bool masses = cs.named(kCauseInertia);
+  const bool old_rule = !cs.any() && candidate && fi.ok;
+  double largest = 0;
+  std::string moved;
+  if (!(masses || old_rule) ||
+      (moved = friction_clause(f, *out, fi, old_rule, masses, &largest)).empty()) {
+    return;
+  }
+  out->warnings.push_back(
+      "with the links' inertial parameters free (one linearized refit, prior std " +
+      format_significant(f.opt->inertia_prior) + " of the scene's values) " +
+      (masses ? drop_clause(fi) + " and " : std::string()) + moved +
+      ". The scene's masses or inertias may not match the mechanism; try --estimate "
+      "friction,inertia");
+  if (!masses) return;
+  unusable_move(friction_at_bound(f, *out) ? 0 : largest,
+                cause_explaining_most(cs, kCauseInertia, kAllCauses & ~(1u << kCauseInertia),
+                                      "the scene's masses or inertias do not match the log"),
+                out);
+}
+
 /// The delay's column (the logged torques' rates at the fit's samples, rows whitened by the
 /// floors) appended to J, its score bias 0 (the rates' noise at a sample is independent of the
 /// torque's there: a centred derivative's middle tap is 0; the angles' noise does not enter it)
@@ -630,7 +657,6 @@ ModelVerdict model_check(const Fit& f, IdentifyResult* out) {
     out->model_check[cs.slot[kCauseDelay]].evidenced =
         verdict.delay == ModelVerdict::Delay::kExplainsMost;
   }
-  const detail::FreedStep& fi = cs.alone[kCauseInertia];
   verdict.negative_readings = torque_signs(tc, cs.alone[kCauseTorque]);
   const ReadingStep rs{cs.alone[kCauseTorque], tc};
   // both torques' gains off alike also read as the encoders' zeros (a common scale of the
@@ -649,7 +675,6 @@ ModelVerdict model_check(const Fit& f, IdentifyResult* out) {
   verdict.cause_decided = verdict.cause_decided && verdict.negative_readings == 0;
   std::string moved;
   double largest = 0;  // [std] the cause's largest move of the friction (0: at its bound)
-  const bool masses = cs.named(kCauseInertia);
   const int top = most_explaining_cause(cs);
   if (!cs.any() && top < kCauseCount &&
       !(moved = friction_clause(f, *out, cs.alone[top], false, true, &(largest = 0))).empty()) {
@@ -666,24 +691,7 @@ ModelVerdict model_check(const Fit& f, IdentifyResult* out) {
     unusable_move(largest, what, out);
     return verdict;
   }
-  const bool old_rule = !cs.any() && !idx[1].empty() && fi.ok;
-  if ((masses || old_rule) &&
-      !(moved = friction_clause(f, *out, fi, old_rule, masses, &(largest = 0))).empty()) {
-    out->warnings.push_back(
-        "with the links' inertial parameters free (one linearized refit, prior std " +
-        format_significant(f.opt->inertia_prior) + " of the scene's values) " +
-        (masses ? drop_clause(fi) + " and " : std::string()) + moved +
-        ". The scene's masses or inertias may not match the mechanism; try --estimate "
-        "friction,inertia");
-  }
-  // named, the inertias make the fit unusable by the rule of the other causes (unusable_move):
-  // else masses 6 % off, named, passed with a warning where 5 %, not named, failed
-  if (masses && !moved.empty()) {
-    unusable_move(friction_at_bound(f, *out) ? 0 : largest,
-                  cause_explaining_most(cs, kCauseInertia, kAllCauses & ~(1u << kCauseInertia),
-                                        "the scene's masses or inertias do not match the log"),
-                  out);
-  }
+  inertia_check(f, cs, !idx[1].empty(), out);
   return verdict;
 }
 
