@@ -110,6 +110,11 @@ struct ModelVerdict {
   /// common scale) made the fit unusable: the sign and per-joint refits have nothing left to
   /// decide (they tripled the time of such rejected runs)
   bool cause_decided = false;
+  /// the torque-to-angle delay as one more candidate cause (model_check; docs 9): kUnchecked
+  /// when the check did not run, else whether its fall is evidenced (kCauseZ) and clearly
+  /// beyond every other cause's; delay_falls: the falls of each cause, for the delay's warning
+  enum class Delay { kUnchecked, kNotEvidenced, kNotMost, kExplainsMost } delay = Delay::kUnchecked;
+  std::string delay_falls;
 };
 
 // ---- residual_blocks.cc ----
@@ -324,6 +329,10 @@ double misfit_ratio(const IdentifyResult& r);
 void bound_and_misfit_warning(const Fit& f, const Analysis& an, IdentifyResult* out);
 
 // ---- stage_delay.cc ----
+
+/// The logged torques' rates (order-3 Savitzky-Golay, its window widened until their noise is
+/// a small share of them): the delay's column, d r / d d, per log sample.
+void delay_regressor(const Fit& f, std::vector<double>* g1, std::vector<double>* g2);
 
 void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<double>& r,
                     const std::vector<detail::Sensitivity>& sens, IdentifyResult* out);

@@ -20,6 +20,8 @@ constexpr double kDelayRateNoise = 0.05;
 /// ... [s], and at most a twentieth of the log
 constexpr double kDelayWindowMax = 0.1;
 
+}  // namespace
+
 /// The logged torques' rates (order-3 Savitzky-Golay) for the delay estimate (kDelayRateNoise)
 void delay_regressor(const Fit& f, std::vector<double>* g1, std::vector<double>* g2) {
   const TorqueLog& log = f.cond.log;
@@ -46,8 +48,6 @@ void delay_regressor(const Fit& f, std::vector<double>* g1, std::vector<double>*
     sg.half_window_s *= 2;
   }
 }
-
-}  // namespace
 
 void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<double>& r,
                     const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {

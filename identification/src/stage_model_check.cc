@@ -49,12 +49,19 @@ std::string friction_clause(const Fit& f, const IdentifyResult& out, const detai
          "would move";
 }
 
-/// The candidate causes of model_check, in the order of check_jacobian's idx[1..3].
-enum CauseId { kCauseInertia, kCauseAngles, kCauseTorque, kCauseCount };
+/// The candidate causes of model_check, in the order of check_jacobian's idx[1..3], then the
+/// torque-to-angle delay (idx[4]: one column, the logged torques' rates). The delay competes in
+/// the falls of one cost (most_explaining_cause, cause_explaining_most, delay_verdict) but not in
+/// the model causes' evidence beyond each other (detail::model_causes), which a delay does not
+/// explain: a cause of the model stays named as it was without the delay's column.
+enum CauseId { kCauseInertia, kCauseAngles, kCauseTorque, kCauseDelay, kCauseCount };
+
+/// Every cause's bit
+constexpr unsigned kAllCauses = (1u << kCauseCount) - 1;
 
 /// The freed step with the columns of every cause in `mask` (bit id: CauseId) freed together.
 detail::FreedStep freed_set(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
-                            const std::vector<int> idx[4], const Eigen::VectorXd& info,
+                            const std::vector<int> idx[5], const Eigen::VectorXd& info,
                             const Eigen::VectorXd& bias, unsigned mask) {
   std::vector<int> cols;
   std::vector<double> prior;
@@ -98,7 +105,7 @@ struct CauseSteps {
   std::array<detail::FreedStep, kCauseCount> alone;  ///< not ok: no candidate
   detail::FreedStep all;
   std::vector<IdentifyResult::MisfitCause> report;  ///< IdentifyResult::model_check ("any" last)
-  std::array<int, kCauseCount> slot{-1, -1, -1};    ///< each cause's entry in `report`
+  std::array<int, kCauseCount> slot{-1, -1, -1, -1};  ///< each cause's entry in `report`
   bool named(int id) const { return slot[id] >= 0 && report[slot[id]].evidenced; }
   /// evidence alone [std of noise's]
   double z(int id) const { return slot[id] >= 0 ? report[slot[id]].z : 0.0; }
@@ -114,7 +121,8 @@ struct CauseText {
 constexpr CauseText kCauseText[kCauseCount] = {
     {"inertia", "the links' inertial parameters"},
     {"angle_offsets", "the encoders' zeros"},
-    {"torque_readings", "the torque sensors' offsets and gains"}};
+    {"torque_readings", "the torque sensors' offsets and gains"},
+    {"delay", "the torque readings' times (a delay)"}};
 
 IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedStep& fs,
                                          double z, double z_given, double excess) {
@@ -129,13 +137,13 @@ IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedSt
 }
 
 CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
-                       const std::vector<int> idx[4], const Eigen::VectorXd& info,
+                       const std::vector<int> idx[5], const Eigen::VectorXd& info,
                        const Eigen::VectorXd& bias, bool attributable) {
   const double excess = r.squaredNorm() - static_cast<double>(r.size());
   unsigned present = 0;
   std::vector<int> ids;
   std::vector<detail::FreedStep> alone, all_but;
-  for (int id = 0; id < kCauseCount; ++id) {
+  for (int id = 0; id < kCauseDelay; ++id) {
     if (idx[id + 1].empty()) continue;
     present |= 1u << id;
     ids.push_back(id);
@@ -154,6 +162,16 @@ CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
     cs.alone[ids[k]] = alone[k];
     cs.slot[ids[k]] = static_cast<int>(cs.report.size());
     cs.report.push_back(m);
+  }
+  if (!idx[kCauseDelay + 1].empty()) {  // the delay: alone, and beyond the model causes
+    const detail::FreedStep fd = freed_set(J, r, idx, info, bias, 1u << kCauseDelay);
+    const detail::FreedStep with = freed_set(J, r, idx, info, bias, present | 1u << kCauseDelay);
+    const double z_given = cs.all.ok && with.ok ? detail::evidence(fd, with.drop - cs.all.drop)
+                                                : 0.0;
+    cs.alone[kCauseDelay] = fd;
+    cs.slot[kCauseDelay] = static_cast<int>(cs.report.size());
+    cs.report.push_back(misfit_cause(kCauseText[kCauseDelay].name, fd,
+                                     detail::evidence(fd, fd.drop), z_given, excess));
   }
   const double z_all = detail::evidence(cs.all, cs.all.drop);
   cs.report.push_back(misfit_cause("any", cs.all, z_all, z_all, excess));
@@ -321,6 +339,14 @@ std::string falls_clause(const CauseSteps& cs, int best) {
 /// inertias: a tie, the readings stay). A candidate that explains at least as much but not
 /// clearly more is named beside it, with the falls: the log cannot tell them apart (a light
 /// mechanism's masses 3 % off: 83.3 with the inertias, 79.3 with the encoders' zeros).
+/// Whether candidate k, evidenced alone (z above kCauseZ), lowers the cost clearly more than
+/// candidate id (cause_explaining_most's "clearly")
+bool clearly_more(const CauseSteps& cs, int k, int id) {
+  if (cs.slot[k] < 0 || !cs.alone[k].ok || !(cs.z(k) > detail::kCauseZ)) return false;
+  const double margin = detail::kCauseZ * std::max(cs.alone[k].drop_sd, cs.alone[id].drop_sd);
+  return cs.report[cs.slot[k]].drop - cs.report[cs.slot[id]].drop > margin;
+}
+
 std::string cause_explaining_most(const CauseSteps& cs, int id, unsigned others,
                                   const std::string& what) {
   if (cs.slot[id] < 0 || !cs.alone[id].ok) return what;
@@ -420,27 +446,35 @@ unsigned torque_signs(const TorqueColumns& tc, const detail::FreedStep& fs) {
   return out;
 }
 
-/// model_check on the encoders' zeros: the warning when the log evidences them and the friction
-/// would move, unusable beyond kUnusableMove
+/// model_check on the encoders' zeros: the warning when the log evidences them, unusable when
+/// the friction would move beyond kUnusableMove (or one is at its bound)
 void angles_check(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
   const detail::FreedStep& fo = cs.alone[kCauseAngles];
   double largest = 0;
-  std::string moved;
-  if (!cs.named(kCauseAngles) ||
-      (moved = friction_clause(f, *out, fo, false, true, &largest)).empty()) {
-    return;
+  if (!cs.named(kCauseAngles)) return;
+  std::string moved = friction_clause(f, *out, fo, false, true, &largest);
+  // named, the zeros are said even where the linearized refit moves the friction little, unless
+  // another cause explains clearly more (an encoder 0.005 rad off on a heavy mechanism: read
+  // 0.0052 +- 0.00075 rad at 31 std, a move of coulomb by 1 std, while the fit's coulomb was
+  // 10 std off; masses 5 % off on another evidenced zeros too, at a fall of 27 against 414)
+  if (moved.empty()) {
+    for (int k = 0; k < kCauseCount; ++k) {
+      if (k != kCauseAngles && clearly_more(cs, k, kCauseAngles)) return;  // not the zeros
+    }
+    moved = "the friction moves less than " + format_significant(kFreedMove) + " std";
+    largest = -1;  // no move to judge
   }
   out->warnings.push_back(
       "with offsets of the logged angles free (one linearized refit) " + drop_clause(fo) +
       " and " + moved + ". theta1, theta2 read " + pair_clause(fo, 0, 1.0) +
       " rad more than the scene's angles: an encoder's zero may be off; subtract the offsets "
       "from the logged angles");
+  if (largest < 0) return;
   // evidenced zeros that hold a coefficient at its bound make the fit unusable, whatever the
   // other coefficients' move (theta1 0.02 rad off on the light mechanism: viscous at 0, coulomb
   // 4 std)
   unusable_move(friction_at_bound(f, *out) ? 0 : largest,
-                cause_explaining_most(cs, kCauseAngles,
-                                      (1u << kCauseInertia) | (1u << kCauseTorque),
+                cause_explaining_most(cs, kCauseAngles, kAllCauses & ~(1u << kCauseAngles),
                                       "the logged angles' zeros are off"),
                 out);
 }
@@ -476,7 +510,8 @@ void torque_check(const Fit& f, const CauseSteps& cs, const ReadingStep& rs,
   // a common gain also reads as the encoders' zeros (model_check): only the inertias, which
   // scale the torques alike too, may explain more then
   const bool common = common_gain(tc, ft);
-  const unsigned others = (1u << kCauseInertia) | (common ? 0u : 1u << kCauseAngles);
+  const unsigned others =
+      (1u << kCauseInertia) | (1u << kCauseDelay) | (common ? 0u : 1u << kCauseAngles);
   const std::string what = cause_explaining_most(
       cs, kCauseTorque, others,
       (common ? "both logged torques' gains are off, a common scale ("
@@ -523,6 +558,77 @@ bool scale_ambiguity(const CauseSteps& cs, const ReadingStep& rs, IdentifyResult
   return true;
 }
 
+/// model_check on the inertias: the warning when the log evidences them (or, no cause
+/// evidenced, by the earlier rule: `candidate`, the inertias are among the columns) and the
+/// friction would move; named, unusable by the rule of the other causes (unusable_move): else
+/// masses 6 % off a heavy mechanism, named, passed with a warning where 5 %, not named, failed
+void inertia_check(const Fit& f, const CauseSteps& cs, bool candidate, IdentifyResult* out) {
+  const detail::FreedStep& fi = cs.alone[kCauseInertia];
+  const bool masses = cs.named(kCauseInertia);
+  const bool old_rule = !cs.any() && candidate && fi.ok;
+  double largest = 0;
+  std::string moved;
+  if (!(masses || old_rule) ||
+      (moved = friction_clause(f, *out, fi, old_rule, masses, &largest)).empty()) {
+    return;
+  }
+  out->warnings.push_back(
+      "with the links' inertial parameters free (one linearized refit, prior std " +
+      format_significant(f.opt->inertia_prior) + " of the scene's values) " +
+      (masses ? drop_clause(fi) + " and " : std::string()) + moved +
+      ". The scene's masses or inertias may not match the mechanism; try --estimate "
+      "friction,inertia");
+  if (!masses) return;
+  unusable_move(friction_at_bound(f, *out) ? 0 : largest,
+                cause_explaining_most(cs, kCauseInertia, kAllCauses & ~(1u << kCauseInertia),
+                                      "the scene's masses or inertias do not match the log"),
+                out);
+}
+
+/// The delay's column (the logged torques' rates at the fit's samples, rows whitened by the
+/// floors) appended to J, its score bias 0 (the rates' noise at a sample is independent of the
+/// torque's there: a centred derivative's middle tap is 0; the angles' noise does not enter it)
+void add_delay_column(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
+                      Eigen::VectorXd* bias, std::vector<int>* cols) {
+  std::vector<double> g1, g2;
+  delay_regressor(f, &g1, &g2);
+  const Eigen::Index c = J->cols();
+  J->conservativeResize(Eigen::NoChange, c + 1);
+  for (size_t u = 0; u < f.index.size(); ++u) {
+    (*J)(2 * u, c) = g1[f.index[u]] / out.residual_noise_floor[0];
+    (*J)(2 * u + 1, c) = g2[f.index[u]] / out.residual_noise_floor[1];
+  }
+  bias->conservativeResize(c + 1);
+  (*bias)(c) = 0;
+  cols->push_back(static_cast<int>(c));
+}
+
+/// The delay judged as the causes are: evidenced alone and beyond the model causes (kCauseZ),
+/// and its fall beyond every other evidenced cause's by more than kCauseZ times the larger of
+/// their noise-alone std (cause_explaining_most's "clearly more"). *rival: the cause with the
+/// largest fall that the delay does not clearly exceed (kNotMost).
+ModelVerdict::Delay delay_verdict(const CauseSteps& cs, int* rival) {
+  using D = ModelVerdict::Delay;
+  const int d = cs.slot[kCauseDelay];
+  if (d < 0) return D::kUnchecked;
+  const IdentifyResult::MisfitCause& m = cs.report[d];
+  if (!cs.alone[kCauseDelay].ok || !(m.z > detail::kCauseZ && m.z_given > detail::kCauseZ)) {
+    return D::kNotEvidenced;
+  }
+  *rival = kCauseCount;
+  for (int k = 0; k < kCauseDelay; ++k) {
+    if (cs.slot[k] < 0 || !cs.alone[k].ok || !(cs.z(k) > detail::kCauseZ)) continue;
+    const double margin =
+        detail::kCauseZ * std::max(cs.alone[k].drop_sd, cs.alone[kCauseDelay].drop_sd);
+    const double fall = cs.report[cs.slot[k]].drop;
+    if (!(m.drop - fall > margin) &&
+        (*rival == kCauseCount || fall > cs.report[cs.slot[*rival]].drop)) {
+      *rival = k;
+    }
+  }
+  return *rival == kCauseCount ? D::kExplainsMost : D::kNotMost;
+}
+
 }  // namespace
 
 ModelVerdict model_check(const Fit& f, IdentifyResult* out) {
@@ -530,15 +636,27 @@ ModelVerdict model_check(const Fit& f, IdentifyResult* out) {
   if (!out->converged) return verdict;
   Eigen::MatrixXd J;
   Eigen::VectorXd r, info, bias;
-  std::vector<int> idx[4];  // fitted, inertial, angle offsets, torque offsets and gains
+  std::vector<int> idx[5];  // fitted, inertial, angle offsets, torque offsets and gains, delay
   TorqueColumns tc;
   if (!check_jacobian(f, *out, &J, &r, idx, &info, &tc) ||
       J.rows() < kCheckRowsPerColumn * J.cols() || !score_bias(f, *out, J, r, tc, &bias)) {
     return verdict;
   }
+  if (f.opt->estimate_delay && f.method->checks_readings()) {
+    add_delay_column(f, *out, &J, &bias, &idx[kCauseDelay + 1]);
+  }
   const CauseSteps cs = cause_steps(J, r, idx, info, bias, !f.rates_biased);
+  int rival = kCauseCount;
+  verdict.delay = delay_verdict(cs, &rival);
+  if (verdict.delay == ModelVerdict::Delay::kNotMost) {
+    verdict.delay_falls = std::string("it does not explain clearly more of the misfit than ") +
+                          kCauseText[rival].what + " (" + falls_clause(cs, rival) + ")";
+  }
   out->model_check = cs.report;
-  const detail::FreedStep& fi = cs.alone[kCauseInertia];
+  if (cs.slot[kCauseDelay] >= 0) {
+    out->model_check[cs.slot[kCauseDelay]].evidenced =
+        verdict.delay == ModelVerdict::Delay::kExplainsMost;
+  }
   verdict.negative_readings = torque_signs(tc, cs.alone[kCauseTorque]);
   const ReadingStep rs{cs.alone[kCauseTorque], tc};
   // both torques' gains off alike also read as the encoders' zeros (a common scale of the
@@ -557,7 +675,6 @@ ModelVerdict model_check(const Fit& f, IdentifyResult* out) {
   verdict.cause_decided = verdict.cause_decided && verdict.negative_readings == 0;
   std::string moved;
   double largest = 0;  // [std] the cause's largest move of the friction (0: at its bound)
-  const bool masses = cs.named(kCauseInertia);
   const int top = most_explaining_cause(cs);
   if (!cs.any() && top < kCauseCount &&
       !(moved = friction_clause(f, *out, cs.alone[top], false, true, &(largest = 0))).empty()) {
@@ -574,15 +691,7 @@ ModelVerdict model_check(const Fit& f, IdentifyResult* out) {
     unusable_move(largest, what, out);
     return verdict;
   }
-  const bool old_rule = !cs.any() && !idx[1].empty() && fi.ok;
-  if ((masses || old_rule) && !(moved = friction_clause(f, *out, fi, old_rule, masses)).empty()) {
-    out->warnings.push_back(
-        "with the links' inertial parameters free (one linearized refit, prior std " +
-        format_significant(f.opt->inertia_prior) + " of the scene's values) " +
-        (masses ? drop_clause(fi) + " and " : std::string()) + moved +
-        ". The scene's masses or inertias may not match the mechanism; try --estimate "
-        "friction,inertia");
-  }
+  inertia_check(f, cs, !idx[1].empty(), out);
   return verdict;
 }
 
