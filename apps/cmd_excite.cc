@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -63,6 +64,8 @@ struct Args {
   std::string theta1_range, theta2_range;
   bool per_joint = false, no_plots = false, no_baseline = false;
   int starts = 2, max_evaluations = 0, tones = 6;
+  double search_tolerance = id::kSearchTolerance;
+  int finalists = id::kFinalists;
   unsigned long long seed = 1;
 };
 
@@ -407,6 +410,8 @@ struct Design {
   double unconstrained_std = NAN;
   std::array<int, kJoints> unconstrained_reversals{};
   bool torque_family = false;
+  /// the torque family: the status of the std identify would report, already in `report`
+  std::optional<Status> predicted;
 };
 
 trajectory::GeneralResult solve_design(const id::ExcitationProblem& problem, const Args& a,
@@ -581,6 +586,8 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   to.max_evaluations = a.max_evaluations > 0 ? a.max_evaluations : 160;
   to.seed = a.seed;
   to.sim = scene.options;
+  to.search_tolerance = a.search_tolerance;
+  to.finalists = a.finalists;
   const std::array<double, 2> start = {scene.initial.theta1, scene.initial.theta2};
   const sim::LoadFunction scene_loads = loads.function();  // compiled once for every call
   // the multi-sine fitted to the mechanism and the limit, as the baseline (its last try when it
@@ -603,11 +610,13 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
                              format_double(fit.factor) + ", their amplitudes x 3 and 10, frequencies "
                              "x 0.7 and 0.5): " + r.best.status.message);
   }
-  id::TorqueCandidate g =
-      id::evaluate_tones(scene.params, scene_loads, start, to, r.best.x, 1.0 / o.rate_hz);
+  // the search's best few again at the scene's settings, on the log's grid, with their std
+  id::FinishedTorqueDesign f = id::finish_torque_design(scene.params, scene_loads, start, to, r.finalists);
+  id::TorqueCandidate& g = f.design;
   if (!g.status.ok()) throw NumericalError(scene.path, "excite", "designed motion: " + g.status.message);
   Design d;
   d.report = std::move(g.report);
+  d.predicted = f.predicted;
   d.peak_applied = g.peak_applied;
   d.torque_family = true;
   const id::TorqueCandidate& u = r.best_unconstrained;
@@ -621,15 +630,17 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   trajectory::GeneralResult& s = d.solve;
   s.solver.outcome = trajectory::SolverOutcome::kMaxEvaluations;
   s.solver.message = "evolution strategy: " + std::to_string(r.evaluations) + " simulations, " +
-                     std::to_string(r.improvements) + " improving generations";
-  s.x = r.best.x;
-  s.objective = r.best.objective;
+                     std::to_string(r.improvements) + " improving generations, its best " +
+                     std::to_string(r.finalists.size()) + " again at the scene's settings (number " +
+                     std::to_string(f.finalist + 1) + " chosen)";
+  s.x = r.finalists[static_cast<size_t>(f.finalist)];
+  s.objective = r.finalist_objectives[static_cast<size_t>(f.finalist)];
   s.evaluated = true;
   s.evaluations = r.evaluations;
   s.best_start = r.best_start;
   s.start_objectives = r.start_objectives;
   for (bool f : r.start_feasible) s.start_max_constraint.push_back(f ? 0.0 : 1.0);
-  s.max_constraint = r.best.feasible ? 0.0 : 1.0;
+  s.max_constraint = g.feasible ? 0.0 : 1.0;
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return d;
 }
@@ -642,15 +653,6 @@ constexpr double kUndeterminedRelativeStd = 1;
 /// ... nor one whose worst predicted relative std is this many times the baseline's (that
 /// design's 179 against the multi-sine's 0.093)
 constexpr double kWorseThanBaseline = 10;
-
-/// The largest relative std of a report (NaN entries, of zero nominal values, left out)
-double worst_relative_std(const id::ExcitationReport& r) {
-  double worst = 0;
-  for (double v : r.relative_std) {
-    if (std::isfinite(v)) worst = std::max(worst, v);
-  }
-  return worst;
-}
 
 /// A peak torque this far above the limit at most (relative) is an excess of the final check
 /// alone: the design met the limit where it was computed
@@ -902,7 +904,8 @@ int run(const Args& given) {
                  ? design_torque(scene, loads, o, a)
                  : design(scene, mech, o, a, a.start == "multisine" ? ms.get() : nullptr);
   // the std identify will report for a log along it: the angle noise through the rates too
-  const Status eiv = id::predict_identified_std(*mech, o.torque_noise, o.angle_noise, &d.report);
+  const Status eiv = d.predicted ? *d.predicted
+                                 : id::predict_identified_std(*mech, o.torque_noise, o.angle_noise, &d.report);
   std::string why = "predicts no std identify could report: " + eiv.message;
   const id::ExcitationReport* base = !ms || a.no_baseline || !ms->failure.empty() ? nullptr : &ms->report;
   const std::string status = eiv.ok() ? design_status(d, o, *mech, base, &why) : "std_not_determined";
@@ -963,6 +966,16 @@ RunFunction setup(CLI::App* app) {
                   "multi-sine; five-bars only). Default: torque, on a four-bar fourier");
   std::vector<CLI::Option*> fourier, torque;  // the options of one family only
   torque.push_back(app->add_option("--tones", a->tones, "torque family: tones per motor"));
+  torque.push_back(app->add_option("--search-tolerance", a->search_tolerance,
+                                   "torque family: rtol = atol of the search's simulations where "
+                                   "the scene's are tighter (0: the scene's; the design found is "
+                                   "evaluated at the scene's)")
+                       ->check(nonnegative_number()));
+  torque.push_back(app->add_option("--finalists", a->finalists,
+                                   "torque family: the search's best motions simulated again at "
+                                   "the scene's settings, the one of the lowest predicted std "
+                                   "chosen")
+                       ->check(CLI::PositiveNumber));
   app->add_option("--theta1-range", a->theta1_range, "allowed theta1 [rad], LO:HI");
   app->add_option("--theta2-range", a->theta2_range, "allowed theta2 [rad], LO:HI");
   app->add_option("--singular-margin", a->design.singular_margin,
