@@ -289,7 +289,7 @@ TorqueDesignResult design_torque_excitation(const Params<double>& scene,
     return evaluate_tones(scene, scene_loads, start, search, x, step);
   };
   TorqueDesignResult out;
-  Finalists finalists(options.finalists);
+  Finalists finalists(kFinalistSpares * std::max(1, options.finalists));
   std::vector<TorqueCandidate> first = evaluate_all(starts, eval);
   out.evaluations = static_cast<int>(first.size());
   double vbest = kInf;
@@ -376,12 +376,22 @@ FinishedTorqueDesign finish_torque_design(const Params<double>& scene,
     f.predicted = predict_identified_std(scene, dp, scene_loads, o.torque_noise, o.angle_noise, &f.c.report);
     return f;
   };
-  std::vector<Final> fs = evaluate_all(finalists, eval);
+  const size_t group = static_cast<size_t>(std::max(1, options.finalists));
+  std::vector<Final> fs;
   FinishedTorqueDesign out;
-  for (size_t i = 1; i < fs.size(); ++i) {
-    if (better_final(fs[i], fs[static_cast<size_t>(out.finalist)], o.criterion == Criterion::kWorstStd)) {
-      out.finalist = static_cast<int>(i);
+  for (size_t begin = 0; begin < finalists.size(); begin += group) {
+    const size_t end = std::min(finalists.size(), begin + group);
+    for (Final& f : evaluate_all(std::vector<std::vector<double>>(finalists.begin() + begin,
+                                                                  finalists.begin() + end),
+                                 eval)) {
+      fs.push_back(std::move(f));
+      if (fs.size() > 1 && better_final(fs.back(), fs[static_cast<size_t>(out.finalist)],
+                                        o.criterion == Criterion::kWorstStd)) {
+        out.finalist = static_cast<int>(fs.size() - 1);
+      }
     }
+    const Final& best = fs[static_cast<size_t>(out.finalist)];
+    if (best.c.status.ok() && best.miss == 0 && best.predicted.ok()) break;
   }
   if (fs.empty()) {
     out.design.status = Status::Error(StatusCode::kSolverFailed, "no finalist: no candidate of the search ran");

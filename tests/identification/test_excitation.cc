@@ -257,11 +257,13 @@ TEST(Excitation, TorqueDesignIsFinishedAtTheScenesSettings) {
   const TorqueDesignResult a =
       design_torque_excitation(p, scene, start, o, tone_starts(ToneTorques(4, 13.4), multisine_tones()));
   ASSERT_TRUE(a.best.status.ok()) << a.best.status.message;
-  ASSERT_EQ(a.finalists.size(), 3u);
+  // 13 candidates ran: kFinalistSpares * 3 = 9 kept, ranked
+  ASSERT_EQ(a.finalists.size(), 9u);
   EXPECT_EQ(a.finalists[0], a.best.x);
   EXPECT_EQ(a.finalist_objectives[0], a.best.objective);
-  EXPECT_LE(a.finalist_objectives[0], a.finalist_objectives[1]);
-  EXPECT_LE(a.finalist_objectives[1], a.finalist_objectives[2]);
+  for (size_t i = 1; i < a.finalists.size(); ++i) {
+    EXPECT_LE(a.finalist_objectives[i - 1], a.finalist_objectives[i]);
+  }
   // the search's objective is that of its own settings, not the scene's
   const double step = o.excitation.duration / o.excitation.design_samples;
   TorqueDesignOptions search = o;
@@ -274,8 +276,10 @@ TEST(Excitation, TorqueDesignIsFinishedAtTheScenesSettings) {
   ASSERT_TRUE(f.predicted.ok()) << f.predicted.message;
   EXPECT_EQ(f.design.x, a.finalists[static_cast<size_t>(f.finalist)]);
   EXPECT_EQ(f.design.report.t.size(), 1501u);  // the log's grid, 1 kHz
+  EXPECT_LT(f.finalist, 3);  // the first three ran and met the constraints: no spare evaluated
   const DesignParameters dp = design_parameters(p, o.excitation.groups);
-  for (const std::vector<double>& x : a.finalists) {
+  for (size_t i = 0; i < 3; ++i) {
+    const std::vector<double>& x = a.finalists[i];
     TorqueCandidate c = evaluate_tones(p, scene, start, o, x, 1e-3);
     ASSERT_TRUE(c.status.ok());
     ASSERT_TRUE(predict_identified_std(p, dp, scene, o.excitation.torque_noise,
@@ -287,6 +291,19 @@ TEST(Excitation, TorqueDesignIsFinishedAtTheScenesSettings) {
       EXPECT_GE(worst_relative_std(c.report), worst_relative_std(f.design.report));
     }
   }
+  // a finalist that misses the constraints at the scene's settings (full torque one way: crank
+  // O turns past the range allowed) is passed over for the next one
+  std::vector<double> spin(a.best.x.size(), 0.0);
+  spin[0] = 13.4;
+  spin[spin.size() / 2] = -13.4;
+  o.excitation.theta_lo = {-10, NAN};
+  o.excitation.theta_hi = {55, NAN};
+  ASSERT_FALSE(evaluate_tones(p, scene, start, o, spin, 1e-3).feasible);
+  o.finalists = 1;
+  const FinishedTorqueDesign g = finish_torque_design(p, scene, start, o, {spin, a.finalists[0]});
+  ASSERT_TRUE(g.design.status.ok()) << g.design.status.message;
+  EXPECT_EQ(g.finalist, 1);
+  EXPECT_EQ(g.design.x, a.finalists[0]);
 }
 
 }  // namespace

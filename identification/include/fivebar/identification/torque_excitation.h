@@ -87,6 +87,9 @@ inline constexpr double kSearchTolerance = 1e-6;
 /// The search's best candidates evaluated again at the scene's settings by default
 /// (TorqueDesignOptions::finalists)
 inline constexpr int kFinalists = 2;
+/// The search keeps this many times `finalists` of its best candidates: the spares are evaluated
+/// when none of the first runs and meets the constraints at the scene's settings
+inline constexpr int kFinalistSpares = 3;
 
 /// The settings of the search's simulations (`tolerance` 0: `scene` unchanged): `scene` with rtol
 /// and atol loosened to at least `tolerance`, and for a friction law without internal states
@@ -107,7 +110,8 @@ struct TorqueDesignOptions {
   /// (search_settings; 0: the scene's settings): the search only ranks candidates, its
   /// finalists are evaluated again at the scene's settings (finish_torque_design)
   double search_tolerance = kSearchTolerance;
-  /// the search's best candidates kept for finish_torque_design (at least 1)
+  /// the search's best candidates finish_torque_design evaluates (at least 1; kFinalistSpares
+  /// times as many are kept)
   int finalists = kFinalists;
 };
 
@@ -140,8 +144,8 @@ struct TorqueDesignResult {
   std::vector<double> start_objectives;
   std::vector<bool> start_feasible;
   int evaluations = 0, improvements = 0;
-  /// the tones of the search's best candidates, best first (`best`'s the first): at most
-  /// options.finalists of them, ranked as `best` is
+  /// the tones of the search's best candidates that ran, best first (`best`'s the first): at
+  /// most kFinalistSpares * options.finalists of them, ranked as `best` is
   std::vector<std::vector<double>> finalists;
   std::vector<double> finalist_objectives;  ///< their objectives in the search
 };
@@ -155,9 +159,12 @@ struct FinishedTorqueDesign {
   int finalist = 0;  ///< its rank in the search (0: the search's best)
 };
 
-/// Simulates each finalist again at options.sim (the scene's settings: the search's tolerance
-/// only ranked them) on the log's grid, two at a time, and predicts the std identify would
-/// report for a log along it (torque and angle noise). The chosen one: a run that failed last,
+/// Simulates the first options.finalists finalists again at options.sim (the scene's settings:
+/// the search's tolerance only ranked them) on the log's grid, two at a time, and predicts the
+/// std identify would report for a log along each (torque and angle noise); while none of those
+/// evaluated runs, meets the constraints and has a prediction (a motion near a constraint may
+/// cross it at the scene's tolerance), the next options.finalists, until none is left. The
+/// chosen one: a run that failed last,
 /// then the constraints as in the search (feasible first, among infeasible the smaller miss),
 /// then a prediction that failed last, then the lowest worst relative std with the criterion
 /// kWorstStd (the std the design is judged by), else the lowest objective; the search's rank
