@@ -602,16 +602,24 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   rest.theta2 = start[1];
   const id::FittedMultisine fit = id::fit_multisine(scene.params, scene_loads, rest, mo);
   const id::ToneTorques tones(a.tones, o.torque_limit);
-  const id::TorqueDesignResult r = id::design_torque_excitation(
-      scene.params, scene_loads, start, to, torque_starts(scene, scene_loads, tones, fit, a.tones));
+  const std::vector<std::vector<double>> starts = torque_starts(scene, scene_loads, tones, fit, a.tones);
+  id::TorqueDesignResult r = id::design_torque_excitation(scene.params, scene_loads, start, to, starts);
+  // the search's best few again at the scene's settings, on the log's grid, with their std
+  id::FinishedTorqueDesign f = id::finish_torque_design(scene.params, scene_loads, start, to, r.finalists);
+  const bool searched_again = to.search_tolerance > 0 && !(f.design.status.ok() && f.design.feasible);
+  if (searched_again) {
+    // none of the finalists runs within the constraints at the scene's settings: the search's
+    // tolerance has misled it near a constraint, so the search is repeated at the scene's
+    to.search_tolerance = 0;
+    r = id::design_torque_excitation(scene.params, scene_loads, start, to, starts);
+    f = id::finish_torque_design(scene.params, scene_loads, start, to, r.finalists);
+  }
   if (!r.best.status.ok()) {
     throw NumericalError(scene.path, "excite",
                          "no start of the search ran (the multi-sine's tones x " +
                              format_double(fit.factor) + ", their amplitudes x 3 and 10, frequencies "
                              "x 0.7 and 0.5): " + r.best.status.message);
   }
-  // the search's best few again at the scene's settings, on the log's grid, with their std
-  id::FinishedTorqueDesign f = id::finish_torque_design(scene.params, scene_loads, start, to, r.finalists);
   id::TorqueCandidate& g = f.design;
   if (!g.status.ok()) throw NumericalError(scene.path, "excite", "designed motion: " + g.status.message);
   Design d;
@@ -629,10 +637,13 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   }
   trajectory::GeneralResult& s = d.solve;
   s.solver.outcome = trajectory::SolverOutcome::kMaxEvaluations;
-  s.solver.message = "evolution strategy: " + std::to_string(r.evaluations) + " simulations, " +
-                     std::to_string(r.improvements) + " improving generations, its best " +
-                     std::to_string(r.finalists.size()) + " again at the scene's settings (number " +
-                     std::to_string(f.finalist + 1) + " chosen)";
+  s.solver.message = "evolution strategy: " + std::to_string(r.evaluations) + " simulations" +
+                     (searched_again ? " at the scene's settings (none of the finalists of the "
+                                       "search at --search-tolerance met the constraints there)"
+                                     : "") +
+                     ", " + std::to_string(r.improvements) + " improving generations; its best " +
+                     std::to_string(f.evaluated) + " at the scene's settings, number " +
+                     std::to_string(f.finalist + 1) + " chosen";
   s.x = r.finalists[static_cast<size_t>(f.finalist)];
   s.objective = r.finalist_objectives[static_cast<size_t>(f.finalist)];
   s.evaluated = true;

@@ -393,6 +393,7 @@ FinishedTorqueDesign finish_torque_design(const Params<double>& scene,
     const Final& best = fs[static_cast<size_t>(out.finalist)];
     if (best.c.status.ok() && best.miss == 0 && best.predicted.ok()) break;
   }
+  out.evaluated = static_cast<int>(fs.size());
   if (fs.empty()) {
     out.design.status = Status::Error(StatusCode::kSolverFailed, "no finalist: no candidate of the search ran");
     return out;

@@ -156,7 +156,8 @@ struct FinishedTorqueDesign {
   /// would report (predict_identified_std) in its report when `predicted` is ok
   TorqueCandidate design;
   Status predicted;
-  int finalist = 0;  ///< its rank in the search (0: the search's best)
+  int finalist = 0;   ///< its rank in the search (0: the search's best)
+  int evaluated = 0;  ///< finalists evaluated at the scene's settings
 };
 
 /// Simulates the first options.finalists finalists again at options.sim (the scene's settings:
