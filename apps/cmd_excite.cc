@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <future>
 #include <iostream>
 #include <memory>
 #include <random>
@@ -589,7 +590,13 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   to.search_tolerance = a.search_tolerance;
   to.finalists = a.finalists;
   const std::array<double, 2> start = {scene.initial.theta1, scene.initial.theta2};
-  const sim::LoadFunction scene_loads = loads.function();  // compiled once for every call
+  // M3 and F compiled once for every call; the tones replace M1 and M2 (the scene's
+  // expressions for them are not evaluated)
+  const std::array<std::string, 4>& e = loads.expressions();
+  const sim::LoadFunction scene_loads =
+      LoadExpressions({"0", "0", e[LoadExpressions::kM3], e[LoadExpressions::kF]}, loads(0.0).F_angle,
+                      scene.path)
+          .function();
   // the multi-sine fitted to the mechanism and the limit, as the baseline (its last try when it
   // cannot run: the search's other starts may)
   id::MultisineFitOptions mo;
@@ -904,16 +911,25 @@ int run(const Args& given) {
   OutputDir out(a.scene.out, kOutputs);
   const id::DesignParameters& dp = mech->parameters();
   std::unique_ptr<Multisine> ms;  // the five-bar's
+  // the torque family does not start from the baseline: it is evaluated beside the design's
+  // search (a thread of its own; the load expressions are safe to share)
+  std::future<Multisine> baseline;
   if (mech->dof() > 1 && (!a.no_baseline || a.start == "multisine")) {
-    ms = std::make_unique<Multisine>(multisine(scene, loads, dp, o));
+    baseline = std::async(std::launch::async, [&] { return multisine(scene, loads, dp, o); });
+  }
+  const auto take_baseline = [&] {
+    if (!baseline.valid()) return;
+    ms = std::make_unique<Multisine>(baseline.get());
     if (!ms->failure.empty()) {
       warn("the multi-sine baseline failed (" + ms->failure +
            "): the design is evaluated without the comparison");
     }
-  }
+  };
+  if (a.family != "torque") take_baseline();
   Design d = a.family == "torque"
                  ? design_torque(scene, loads, o, a)
                  : design(scene, mech, o, a, a.start == "multisine" ? ms.get() : nullptr);
+  take_baseline();
   // the std identify will report for a log along it: the angle noise through the rates too
   const Status eiv = d.predicted ? *d.predicted
                                  : id::predict_identified_std(*mech, o.torque_noise, o.angle_noise, &d.report);
