@@ -995,13 +995,14 @@ RunFunction setup(CLI::App* app) {
   torque.push_back(app->add_option("--tones", a->tones, "torque family: tones per motor"));
   torque.push_back(app->add_option("--search-tolerance", a->search_tolerance,
                                    "torque family: rtol = atol of the search's simulations where "
-                                   "the scene's are tighter (0: the scene's; the design found is "
-                                   "evaluated at the scene's)")
+                                   "the scene's are tighter, with arkode_erk45 unless the friction "
+                                   "law is lugre (0: the scene's settings); its finalists are "
+                                   "evaluated at the scene's")
                        ->check(nonnegative_number()));
   torque.push_back(app->add_option("--finalists", a->finalists,
                                    "torque family: the search's best motions simulated again at "
-                                   "the scene's settings, the one of the lowest predicted std "
-                                   "chosen")
+                                   "the scene's settings; the design is the one of the lowest "
+                                   "worst predicted std (other criteria: objective)")
                        ->check(CLI::PositiveNumber));
   app->add_option("--theta1-range", a->theta1_range, "allowed theta1 [rad], LO:HI");
   app->add_option("--theta2-range", a->theta2_range, "allowed theta2 [rad], LO:HI");
