@@ -576,8 +576,32 @@ std::vector<std::vector<double>> torque_starts(const Scene& scene, const sim::Lo
   return starts;
 }
 
+// the torque family's search as the solver summary of excitation.json: the chosen finalist's
+// tones and search objective, its constraints at the scene's settings
+trajectory::GeneralResult torque_solve_summary(const id::TorqueDesignResult& r,
+                                               const id::FinishedTorqueDesign& f, bool searched_again) {
+  trajectory::GeneralResult s;
+  s.solver.outcome = trajectory::SolverOutcome::kMaxEvaluations;
+  s.solver.message = "evolution strategy: " + std::to_string(r.evaluations) + " simulations" +
+                     (searched_again ? " at the scene's settings (none of the finalists of the "
+                                       "search at --search-tolerance met the constraints there)"
+                                     : "") +
+                     ", " + std::to_string(r.improvements) + " improving generations; its best " +
+                     std::to_string(f.evaluated) + " at the scene's settings, number " +
+                     std::to_string(f.finalist + 1) + " chosen";
+  s.x = r.finalists[static_cast<size_t>(f.finalist)];
+  s.objective = r.finalist_objectives[static_cast<size_t>(f.finalist)];
+  s.evaluated = true;
+  s.evaluations = r.evaluations;
+  s.best_start = r.best_start;
+  s.start_objectives = r.start_objectives;
+  for (bool ok : r.start_feasible) s.start_max_constraint.push_back(ok ? 0.0 : 1.0);
+  s.max_constraint = f.design.feasible ? 0.0 : 1.0;
+  return s;
+}
+
 // the torque-driven design (--family torque): an evolution strategy over tone torques from the
-// multi-sine's, then the best on the log's grid
+// multi-sine's, then its finalists at the scene's settings on the log's grid
 Design design_torque(const Scene& scene, const LoadExpressions& loads, const id::ExcitationOptions& o,
                      const Args& a) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -642,23 +666,7 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
                           std::sqrt(samples / (o.rate_hz * o.duration));
     d.unconstrained_reversals = u.report.reversals;
   }
-  trajectory::GeneralResult& s = d.solve;
-  s.solver.outcome = trajectory::SolverOutcome::kMaxEvaluations;
-  s.solver.message = "evolution strategy: " + std::to_string(r.evaluations) + " simulations" +
-                     (searched_again ? " at the scene's settings (none of the finalists of the "
-                                       "search at --search-tolerance met the constraints there)"
-                                     : "") +
-                     ", " + std::to_string(r.improvements) + " improving generations; its best " +
-                     std::to_string(f.evaluated) + " at the scene's settings, number " +
-                     std::to_string(f.finalist + 1) + " chosen";
-  s.x = r.finalists[static_cast<size_t>(f.finalist)];
-  s.objective = r.finalist_objectives[static_cast<size_t>(f.finalist)];
-  s.evaluated = true;
-  s.evaluations = r.evaluations;
-  s.best_start = r.best_start;
-  s.start_objectives = r.start_objectives;
-  for (bool f : r.start_feasible) s.start_max_constraint.push_back(f ? 0.0 : 1.0);
-  s.max_constraint = g.feasible ? 0.0 : 1.0;
+  d.solve = torque_solve_summary(r, f, searched_again);
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return d;
 }
