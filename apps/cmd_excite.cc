@@ -9,13 +9,13 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
-#include <optional>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <future>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <random>
 #include <sstream>
 
@@ -413,6 +413,10 @@ struct Design {
   bool torque_family = false;
   /// the torque family: the status of the std identify would report, already in `report`
   std::optional<Status> predicted;
+  /// the torque family: the search objectives of the finalists evaluated at the scene's
+  /// settings (the search's best first) and the chosen one's index
+  std::vector<double> finalist_objectives;
+  int finalist = 0;
 };
 
 trajectory::GeneralResult solve_design(const id::ExcitationProblem& problem, const Args& a,
@@ -579,7 +583,8 @@ std::vector<std::vector<double>> torque_starts(const Scene& scene, const sim::Lo
 // the torque family's search as the solver summary of excitation.json: the chosen finalist's
 // tones and search objective, its constraints at the scene's settings
 trajectory::GeneralResult torque_solve_summary(const id::TorqueDesignResult& r,
-                                               const id::FinishedTorqueDesign& f, bool searched_again) {
+                                               const id::FinishedTorqueDesign& f,
+                                               bool searched_again) {
   trajectory::GeneralResult s;
   s.solver.outcome = trajectory::SolverOutcome::kMaxEvaluations;
   s.solver.message = "evolution strategy: " + std::to_string(r.evaluations) + " simulations" +
@@ -618,8 +623,8 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   // expressions for them are not evaluated)
   const std::array<std::string, 4>& e = loads.expressions();
   const sim::LoadFunction scene_loads =
-      LoadExpressions({"0", "0", e[LoadExpressions::kM3], e[LoadExpressions::kF]}, loads(0.0).F_angle,
-                      scene.path)
+      LoadExpressions({"0", "0", e[LoadExpressions::kM3], e[LoadExpressions::kF]},
+                      loads(0.0).F_angle, scene.path)
           .function();
   // the multi-sine fitted to the mechanism and the limit, as the baseline (its last try when it
   // cannot run: the search's other starts may)
@@ -633,11 +638,15 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   rest.theta2 = start[1];
   const id::FittedMultisine fit = id::fit_multisine(scene.params, scene_loads, rest, mo);
   const id::ToneTorques tones(a.tones, o.torque_limit);
-  const std::vector<std::vector<double>> starts = torque_starts(scene, scene_loads, tones, fit, a.tones);
-  id::TorqueDesignResult r = id::design_torque_excitation(scene.params, scene_loads, start, to, starts);
+  const std::vector<std::vector<double>> starts =
+      torque_starts(scene, scene_loads, tones, fit, a.tones);
+  id::TorqueDesignResult r =
+      id::design_torque_excitation(scene.params, scene_loads, start, to, starts);
   // the search's best few again at the scene's settings, on the log's grid, with their std
-  id::FinishedTorqueDesign f = id::finish_torque_design(scene.params, scene_loads, start, to, r.finalists);
-  const bool searched_again = to.search_tolerance > 0 && !(f.design.status.ok() && f.design.feasible);
+  id::FinishedTorqueDesign f =
+      id::finish_torque_design(scene.params, scene_loads, start, to, r.finalists);
+  const bool searched_again =
+      to.search_tolerance > 0 && !(f.design.status.ok() && f.design.feasible);
   if (searched_again) {
     // none of the finalists runs within the constraints at the scene's settings: the search's
     // tolerance has misled it near a constraint, so the search is repeated at the scene's
@@ -667,6 +676,9 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
     d.unconstrained_reversals = u.report.reversals;
   }
   d.solve = torque_solve_summary(r, f, searched_again);
+  d.finalist_objectives.assign(r.finalist_objectives.begin(),
+                               r.finalist_objectives.begin() + f.evaluated);
+  d.finalist = f.finalist;
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return d;
 }
@@ -830,20 +842,25 @@ Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::Desig
                        " harmonics, " + std::to_string(o.periods) + " periods, faded in from rest over " +
                        format_double(o.ramp) + " s");
   }
-  j.set("solver",
-        Json::object({{"method", a.family == "torque" ? "evolution_strategy" : a.method},
-                      {"outcome", trajectory::outcome_name(d.solve.solver.outcome)},
-                      {"message", d.solve.solver.message},
-                      {"objective", d.solve.objective},
-                      {"max_design_constraint", d.solve.max_constraint},
-                      {"evaluations", d.solve.evaluations},
-                      {"starts", a.starts},
-                      {"best_start", d.solve.best_start},
-                      {"start_objectives", Json::array_of(d.solve.start_objectives)},
-                      {"start_max_constraint", Json::array_of(d.solve.start_max_constraint)},
-                      {"design_time_s", d.seconds},
-                      {"margin_rounds", d.rounds},
-                      {"final_torque_margin", d.torque_margin}}));
+  Json solver =
+      Json::object({{"method", a.family == "torque" ? "evolution_strategy" : a.method},
+                    {"outcome", trajectory::outcome_name(d.solve.solver.outcome)},
+                    {"message", d.solve.solver.message},
+                    {"objective", d.solve.objective},
+                    {"max_design_constraint", d.solve.max_constraint},
+                    {"evaluations", d.solve.evaluations},
+                    {"starts", a.starts},
+                    {"best_start", d.solve.best_start},
+                    {"start_objectives", Json::array_of(d.solve.start_objectives)},
+                    {"start_max_constraint", Json::array_of(d.solve.start_max_constraint)},
+                    {"design_time_s", d.seconds},
+                    {"margin_rounds", d.rounds},
+                    {"final_torque_margin", d.torque_margin}});
+  if (d.torque_family) {
+    solver.set("finalist_objectives", Json::array_of(d.finalist_objectives));
+    solver.set("finalist", d.finalist);
+  }
+  j.set("solver", solver);
   Json coeffs = Json::array_of(d.solve.x);
   j.set(a.family == "torque" ? "torque_tones" : "fourier_coefficients", coeffs);
   j.set("designed", report_json(dp, d.report));
@@ -939,8 +956,9 @@ int run(const Args& given) {
                  : design(scene, mech, o, a, a.start == "multisine" ? ms.get() : nullptr);
   take_baseline();
   // the std identify will report for a log along it: the angle noise through the rates too
-  const Status eiv = d.predicted ? *d.predicted
-                                 : id::predict_identified_std(*mech, o.torque_noise, o.angle_noise, &d.report);
+  const Status eiv =
+      d.predicted ? *d.predicted
+                  : id::predict_identified_std(*mech, o.torque_noise, o.angle_noise, &d.report);
   std::string why = "predicts no std identify could report: " + eiv.message;
   const id::ExcitationReport* base = !ms || a.no_baseline || !ms->failure.empty() ? nullptr : &ms->report;
   const std::string status = eiv.ok() ? design_status(d, o, *mech, base, &why) : "std_not_determined";

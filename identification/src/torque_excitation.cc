@@ -285,9 +285,10 @@ TorqueDesignResult design_torque_excitation(const Params<double>& scene,
   const double step = o.duration / std::max(16, o.design_samples);
   TorqueDesignOptions search = options;
   search.sim = search_settings(options.sim, options.search_tolerance, scene.friction.law);
-  const std::function<TorqueCandidate(const std::vector<double>&)> eval = [&](const std::vector<double>& x) {
-    return evaluate_tones(scene, scene_loads, start, search, x, step);
-  };
+  const std::function<TorqueCandidate(const std::vector<double>&)> eval =
+      [&](const std::vector<double>& x) {
+        return evaluate_tones(scene, scene_loads, start, search, x, step);
+      };
   TorqueDesignResult out;
   Finalists finalists(kFinalistSpares * std::max(1, options.finalists));
   std::vector<TorqueCandidate> first = evaluate_all(starts, eval);
@@ -355,7 +356,9 @@ bool better_final(const Final& a, const Final& b, bool worst_std) {
   if ((a.miss == 0) != (b.miss == 0)) return a.miss == 0;
   if (a.miss > 0 && a.miss != b.miss) return a.miss < b.miss;
   if (a.predicted.ok() != b.predicted.ok()) return a.predicted.ok();
-  if (worst_std && a.predicted.ok()) return worst_relative_std(a.c.report) < worst_relative_std(b.c.report);
+  if (worst_std && a.predicted.ok()) {
+    return worst_relative_std(a.c.report) < worst_relative_std(b.c.report);
+  }
   return a.c.objective < b.c.objective;
 }
 
@@ -373,7 +376,8 @@ FinishedTorqueDesign finish_torque_design(const Params<double>& scene,
     f.c = evaluate_tones(scene, scene_loads, start, options, x, 1.0 / o.rate_hz);
     if (!f.c.status.ok()) return f;
     f.miss = violation(f.c, o);
-    f.predicted = predict_identified_std(scene, dp, scene_loads, o.torque_noise, o.angle_noise, &f.c.report);
+    f.predicted =
+        predict_identified_std(scene, dp, scene_loads, o.torque_noise, o.angle_noise, &f.c.report);
     return f;
   };
   const size_t group = static_cast<size_t>(std::max(1, options.finalists));
@@ -381,9 +385,9 @@ FinishedTorqueDesign finish_torque_design(const Params<double>& scene,
   FinishedTorqueDesign out;
   for (size_t begin = 0; begin < finalists.size(); begin += group) {
     const size_t end = std::min(finalists.size(), begin + group);
-    for (Final& f : evaluate_all(std::vector<std::vector<double>>(finalists.begin() + begin,
-                                                                  finalists.begin() + end),
-                                 eval)) {
+    for (Final& f : evaluate_all(
+             std::vector<std::vector<double>>(finalists.begin() + begin, finalists.begin() + end),
+             eval)) {
       fs.push_back(std::move(f));
       if (fs.size() > 1 && better_final(fs.back(), fs[static_cast<size_t>(out.finalist)],
                                         o.criterion == Criterion::kWorstStd)) {
@@ -395,7 +399,8 @@ FinishedTorqueDesign finish_torque_design(const Params<double>& scene,
   }
   out.evaluated = static_cast<int>(fs.size());
   if (fs.empty()) {
-    out.design.status = Status::Error(StatusCode::kSolverFailed, "no finalist: no candidate of the search ran");
+    out.design.status =
+        Status::Error(StatusCode::kSolverFailed, "no finalist: no candidate of the search ran");
     return out;
   }
   Final& best = fs[static_cast<size_t>(out.finalist)];

@@ -12,8 +12,8 @@
 #include "fivebar/identification/synth.h"
 #include "fivebar/identification/torque_excitation.h"
 #include "fivebar/model/inertial.h"
-#include "paper.h"
 #include "light_scene.h"
+#include "paper.h"
 
 namespace fivebar::identification {
 namespace {
@@ -254,8 +254,8 @@ TEST(Excitation, TorqueDesignIsFinishedAtTheScenesSettings) {
   const Params<double> p = per_joint_scene();
   const sim::LoadFunction scene = paper_static_load_function();
   const std::array<double, 2> start = {M_PI / 2, M_PI / 2};
-  const TorqueDesignResult a =
-      design_torque_excitation(p, scene, start, o, tone_starts(ToneTorques(4, 13.4), multisine_tones()));
+  const TorqueDesignResult a = design_torque_excitation(
+      p, scene, start, o, tone_starts(ToneTorques(4, 13.4), multisine_tones()));
   ASSERT_TRUE(a.best.status.ok()) << a.best.status.message;
   // 13 candidates ran: kFinalistSpares * 3 = 9 kept, ranked
   ASSERT_EQ(a.finalists.size(), 9u);
