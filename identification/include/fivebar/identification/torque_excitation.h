@@ -2,7 +2,9 @@
 // sums of tones clipped at the torque limit, the motion is the mechanism's free response to them
 // (the simulator), and a seeded evolution strategy chooses the tones for information. The
 // built-in multi-sine of synth-log is one member of the family (multisine_tones) and the first
-// start, so the design is never worse than it on the design's objective.
+// start, so the search's best is never worse than it on the design's objective. The search
+// simulates at loosened settings (search_settings); its finalists are evaluated again at the
+// scene's (finish_torque_design).
 #pragma once
 
 #include <array>
