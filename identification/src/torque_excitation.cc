@@ -2,6 +2,7 @@
 #include "fivebar/identification/torque_excitation.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -251,15 +252,18 @@ std::vector<std::vector<double>> tone_starts(const ToneTorques& tones, const std
 
 namespace {
 
-// evaluates every point, two at a time (results in order, whatever the threads)
+// evaluates every point, two at a time: each thread takes the next point not yet taken, so a
+// long simulation does not hold the other thread up (results in order, whatever the threads)
 template <class Result>
 std::vector<Result> evaluate_all(const std::vector<std::vector<double>>& xs,
                                  const std::function<Result(const std::vector<double>&)>& eval) {
   std::vector<Result> cs(xs.size());
-  std::thread other([&] {
-    for (size_t i = 1; i < xs.size(); i += 2) cs[i] = eval(xs[i]);
-  });
-  for (size_t i = 0; i < xs.size(); i += 2) cs[i] = eval(xs[i]);
+  std::atomic<size_t> next{0};
+  const auto work = [&] {
+    for (size_t i = next++; i < xs.size(); i = next++) cs[i] = eval(xs[i]);
+  };
+  std::thread other(work);
+  work();
   other.join();
   return cs;
 }
