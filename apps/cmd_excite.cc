@@ -12,8 +12,10 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <future>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <random>
 #include <sstream>
 
@@ -63,6 +65,8 @@ struct Args {
   std::string theta1_range, theta2_range;
   bool per_joint = false, no_plots = false, no_baseline = false;
   int starts = 2, max_evaluations = 0, tones = 6;
+  double search_tolerance = id::kSearchTolerance;
+  int finalists = id::kFinalists;
   unsigned long long seed = 1;
 };
 
@@ -415,6 +419,12 @@ struct Design {
   double unconstrained_std = NAN;
   std::array<int, kJoints> unconstrained_reversals{};
   bool torque_family = false;
+  /// the torque family: the status of the std identify would report, already in `report`
+  std::optional<Status> predicted;
+  /// the torque family: the search objectives of the finalists evaluated at the scene's
+  /// settings (the search's best first) and the chosen one's index
+  std::vector<double> finalist_objectives;
+  int finalist = 0;
 };
 
 trajectory::GeneralResult solve_design(const id::ExcitationProblem& problem, const Args& a,
@@ -578,8 +588,33 @@ std::vector<std::vector<double>> torque_starts(const Scene& scene, const sim::Lo
   return starts;
 }
 
+// the torque family's search as the solver summary of excitation.json: the chosen finalist's
+// tones and search objective, its constraints at the scene's settings
+trajectory::GeneralResult torque_solve_summary(const id::TorqueDesignResult& r,
+                                               const id::FinishedTorqueDesign& f,
+                                               bool searched_again) {
+  trajectory::GeneralResult s;
+  s.solver.outcome = trajectory::SolverOutcome::kMaxEvaluations;
+  s.solver.message = "evolution strategy: " + std::to_string(r.evaluations) + " simulations" +
+                     (searched_again ? " at the scene's settings (none of the finalists of the "
+                                       "search at --search-tolerance met the constraints there)"
+                                     : "") +
+                     ", " + std::to_string(r.improvements) + " improving generations; its best " +
+                     std::to_string(f.evaluated) + " at the scene's settings, number " +
+                     std::to_string(f.finalist + 1) + " chosen";
+  s.x = r.finalists[static_cast<size_t>(f.finalist)];
+  s.objective = r.finalist_objectives[static_cast<size_t>(f.finalist)];
+  s.evaluated = true;
+  s.evaluations = r.evaluations;
+  s.best_start = r.best_start;
+  s.start_objectives = r.start_objectives;
+  for (bool ok : r.start_feasible) s.start_max_constraint.push_back(ok ? 0.0 : 1.0);
+  s.max_constraint = f.design.feasible ? 0.0 : 1.0;
+  return s;
+}
+
 // the torque-driven design (--family torque): an evolution strategy over tone torques from the
-// multi-sine's, then the best on the log's grid
+// multi-sine's, then its finalists at the scene's settings on the log's grid
 Design design_torque(const Scene& scene, const LoadExpressions& loads, const id::ExcitationOptions& o,
                      const Args& a) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -589,8 +624,16 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   to.max_evaluations = a.max_evaluations > 0 ? a.max_evaluations : 160;
   to.seed = a.seed;
   to.sim = scene.options;
+  to.search_tolerance = a.search_tolerance;
+  to.finalists = a.finalists;
   const std::array<double, 2> start = {scene.initial.theta1, scene.initial.theta2};
-  const sim::LoadFunction scene_loads = loads.function();  // compiled once for every call
+  // M3 and F compiled once for every call; the tones replace M1 and M2 (the scene's
+  // expressions for them are not evaluated)
+  const std::array<std::string, 4>& e = loads.expressions();
+  const sim::LoadFunction scene_loads =
+      LoadExpressions({"0", "0", e[LoadExpressions::kM3], e[LoadExpressions::kF]},
+                      loads(0.0).F_angle, scene.path)
+          .function();
   // the multi-sine fitted to the mechanism and the limit, as the baseline (its last try when it
   // cannot run: the search's other starts may)
   id::MultisineFitOptions mo;
@@ -603,19 +646,33 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
   rest.theta2 = start[1];
   const id::FittedMultisine fit = id::fit_multisine(scene.params, scene_loads, rest, mo);
   const id::ToneTorques tones(a.tones, o.torque_limit);
-  const id::TorqueDesignResult r = id::design_torque_excitation(
-      scene.params, scene_loads, start, to, torque_starts(scene, scene_loads, tones, fit, a.tones));
+  const std::vector<std::vector<double>> starts =
+      torque_starts(scene, scene_loads, tones, fit, a.tones);
+  id::TorqueDesignResult r =
+      id::design_torque_excitation(scene.params, scene_loads, start, to, starts);
+  // the search's best few again at the scene's settings, on the log's grid, with their std
+  id::FinishedTorqueDesign f =
+      id::finish_torque_design(scene.params, scene_loads, start, to, r.finalists);
+  const bool searched_again =
+      to.search_tolerance > 0 && !(f.design.status.ok() && f.design.feasible);
+  if (searched_again) {
+    // none of the finalists runs within the constraints at the scene's settings: the search's
+    // tolerance has misled it near a constraint, so the search is repeated at the scene's
+    to.search_tolerance = 0;
+    r = id::design_torque_excitation(scene.params, scene_loads, start, to, starts);
+    f = id::finish_torque_design(scene.params, scene_loads, start, to, r.finalists);
+  }
   if (!r.best.status.ok()) {
     throw NumericalError(scene.path, "excite",
                          "no start of the search ran (the multi-sine's tones x " +
                              format_double(fit.factor) + ", their amplitudes x 3 and 10, frequencies "
                              "x 0.7 and 0.5): " + r.best.status.message);
   }
-  id::TorqueCandidate g =
-      id::evaluate_tones(scene.params, scene_loads, start, to, r.best.x, 1.0 / o.rate_hz);
+  id::TorqueCandidate& g = f.design;
   if (!g.status.ok()) throw NumericalError(scene.path, "excite", "designed motion: " + g.status.message);
   Design d;
   d.report = std::move(g.report);
+  d.predicted = f.predicted;
   d.peak_applied = g.peak_applied;
   d.torque_family = true;
   const id::TorqueCandidate& u = r.best_unconstrained;
@@ -626,18 +683,10 @@ Design design_torque(const Scene& scene, const LoadExpressions& loads, const id:
                           std::sqrt(samples / (o.rate_hz * o.duration));
     d.unconstrained_reversals = u.report.reversals;
   }
-  trajectory::GeneralResult& s = d.solve;
-  s.solver.outcome = trajectory::SolverOutcome::kMaxEvaluations;
-  s.solver.message = "evolution strategy: " + std::to_string(r.evaluations) + " simulations, " +
-                     std::to_string(r.improvements) + " improving generations";
-  s.x = r.best.x;
-  s.objective = r.best.objective;
-  s.evaluated = true;
-  s.evaluations = r.evaluations;
-  s.best_start = r.best_start;
-  s.start_objectives = r.start_objectives;
-  for (bool f : r.start_feasible) s.start_max_constraint.push_back(f ? 0.0 : 1.0);
-  s.max_constraint = r.best.feasible ? 0.0 : 1.0;
+  d.solve = torque_solve_summary(r, f, searched_again);
+  d.finalist_objectives.assign(r.finalist_objectives.begin(),
+                               r.finalist_objectives.begin() + f.evaluated);
+  d.finalist = f.finalist;
   d.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return d;
 }
@@ -650,15 +699,6 @@ constexpr double kUndeterminedRelativeStd = 1;
 /// ... nor one whose worst predicted relative std is this many times the baseline's (that
 /// design's 179 against the multi-sine's 0.093)
 constexpr double kWorseThanBaseline = 10;
-
-/// The largest relative std of a report (NaN entries, of zero nominal values, left out)
-double worst_relative_std(const id::ExcitationReport& r) {
-  double worst = 0;
-  for (double v : r.relative_std) {
-    if (std::isfinite(v)) worst = std::max(worst, v);
-  }
-  return worst;
-}
 
 /// A peak torque this far above the limit at most (relative) is an excess of the final check
 /// alone: the design met the limit where it was computed
@@ -810,20 +850,25 @@ Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::Desig
                        " harmonics, " + std::to_string(o.periods) + " periods, faded in from rest over " +
                        format_double(o.ramp) + " s");
   }
-  j.set("solver",
-        Json::object({{"method", a.family == "torque" ? "evolution_strategy" : a.method},
-                      {"outcome", trajectory::outcome_name(d.solve.solver.outcome)},
-                      {"message", d.solve.solver.message},
-                      {"objective", d.solve.objective},
-                      {"max_design_constraint", d.solve.max_constraint},
-                      {"evaluations", d.solve.evaluations},
-                      {"starts", a.starts},
-                      {"best_start", d.solve.best_start},
-                      {"start_objectives", Json::array_of(d.solve.start_objectives)},
-                      {"start_max_constraint", Json::array_of(d.solve.start_max_constraint)},
-                      {"design_time_s", d.seconds},
-                      {"margin_rounds", d.rounds},
-                      {"final_torque_margin", d.torque_margin}}));
+  Json solver =
+      Json::object({{"method", a.family == "torque" ? "evolution_strategy" : a.method},
+                    {"outcome", trajectory::outcome_name(d.solve.solver.outcome)},
+                    {"message", d.solve.solver.message},
+                    {"objective", d.solve.objective},
+                    {"max_design_constraint", d.solve.max_constraint},
+                    {"evaluations", d.solve.evaluations},
+                    {"starts", a.starts},
+                    {"best_start", d.solve.best_start},
+                    {"start_objectives", Json::array_of(d.solve.start_objectives)},
+                    {"start_max_constraint", Json::array_of(d.solve.start_max_constraint)},
+                    {"design_time_s", d.seconds},
+                    {"margin_rounds", d.rounds},
+                    {"final_torque_margin", d.torque_margin}});
+  if (d.torque_family) {
+    solver.set("finalist_objectives", Json::array_of(d.finalist_objectives));
+    solver.set("finalist", d.finalist);
+  }
+  j.set("solver", solver);
   Json coeffs = Json::array_of(d.solve.x);
   j.set(a.family == "torque" ? "torque_tones" : "fourier_coefficients", coeffs);
   j.set("designed", report_json(dp, d.report));
@@ -899,18 +944,29 @@ int run(const Args& given) {
   OutputDir out(a.scene.out, kOutputs);
   const id::DesignParameters& dp = mech->parameters();
   std::unique_ptr<Multisine> ms;  // the five-bar's
+  // the torque family does not start from the baseline: it is evaluated beside the design's
+  // search (a thread of its own; the load expressions are safe to share)
+  std::future<Multisine> baseline;
   if (mech->dof() > 1 && (!a.no_baseline || a.start == "multisine")) {
-    ms = std::make_unique<Multisine>(multisine(scene, loads, dp, o));
+    baseline = std::async(std::launch::async, [&] { return multisine(scene, loads, dp, o); });
+  }
+  const auto take_baseline = [&] {
+    if (!baseline.valid()) return;
+    ms = std::make_unique<Multisine>(baseline.get());
     if (!ms->failure.empty()) {
       warn("the multi-sine baseline failed (" + ms->failure +
            "): the design is evaluated without the comparison");
     }
-  }
+  };
+  if (a.family != "torque") take_baseline();
   Design d = a.family == "torque"
                  ? design_torque(scene, loads, o, a)
                  : design(scene, mech, o, a, a.start == "multisine" ? ms.get() : nullptr);
+  take_baseline();
   // the std identify will report for a log along it: the angle noise through the rates too
-  const Status eiv = id::predict_identified_std(*mech, o.torque_noise, o.angle_noise, &d.report);
+  const Status eiv =
+      d.predicted ? *d.predicted
+                  : id::predict_identified_std(*mech, o.torque_noise, o.angle_noise, &d.report);
   std::string why = "predicts no std identify could report: " + eiv.message;
   const id::ExcitationReport* base = !ms || a.no_baseline || !ms->failure.empty() ? nullptr : &ms->report;
   const std::string status = eiv.ok() ? design_status(d, o, *mech, base, &why) : "std_not_determined";
@@ -971,6 +1027,17 @@ RunFunction setup(CLI::App* app) {
                   "multi-sine; five-bars only). Default: torque, on a four-bar fourier");
   std::vector<CLI::Option*> fourier, torque;  // the options of one family only
   torque.push_back(app->add_option("--tones", a->tones, "torque family: tones per motor"));
+  torque.push_back(app->add_option("--search-tolerance", a->search_tolerance,
+                                   "torque family: rtol = atol of the search's simulations where "
+                                   "the scene's are tighter, with arkode_erk45 unless the friction "
+                                   "law is lugre (0: the scene's settings); its finalists are "
+                                   "evaluated at the scene's")
+                       ->check(nonnegative_number()));
+  torque.push_back(app->add_option("--finalists", a->finalists,
+                                   "torque family: the search's best motions simulated again at "
+                                   "the scene's settings; the design is the one of the lowest "
+                                   "worst predicted std (other criteria: objective)")
+                       ->check(CLI::PositiveNumber));
   app->add_option("--theta1-range", a->theta1_range, "allowed theta1 [rad], LO:HI");
   app->add_option("--theta2-range", a->theta2_range, "allowed theta2 [rad], LO:HI");
   app->add_option("--singular-margin", a->design.singular_margin,

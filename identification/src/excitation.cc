@@ -576,4 +576,12 @@ Status ExcitationProblem::evaluate(const std::vector<double>& x, bool grad, Desi
   return Status::Ok();
 }
 
+double worst_relative_std(const ExcitationReport& r) {
+  double worst = 0;
+  for (double v : r.relative_std) {
+    if (std::isfinite(v)) worst = std::max(worst, v);
+  }
+  return worst;
+}
+
 }  // namespace fivebar::identification

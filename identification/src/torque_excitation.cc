@@ -2,6 +2,7 @@
 #include "fivebar/identification/torque_excitation.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -35,12 +36,44 @@ double violation(const TorqueCandidate& c, const ExcitationOptions& o) {
   return v;
 }
 
-// a beats b: feasible first, then the lower objective; among infeasible ones the smaller miss
-bool better(const TorqueCandidate& a, double va, const TorqueCandidate& b, double vb) {
+// (objective a, miss va) beats (b, vb): feasible first, then the lower objective; among
+// infeasible ones the smaller miss
+bool better(double a, double va, double b, double vb) {
   if ((va == 0) != (vb == 0)) return va == 0;
   if (va > 0) return va < vb;
-  return a.objective < b.objective;
+  return a < b;
 }
+bool better(const TorqueCandidate& a, double va, const TorqueCandidate& b, double vb) {
+  return better(a.objective, va, b.objective, vb);
+}
+
+// the best `size` candidates of a search, ranked as `better` (the earlier first among equals)
+class Finalists {
+ public:
+  explicit Finalists(int size) : size_(static_cast<size_t>(std::max(1, size))) {}
+  void offer(const TorqueCandidate& c, double v) {
+    if (!c.status.ok()) return;
+    size_t i = 0;
+    while (i < kept_.size() && !better(c.objective, v, kept_[i].objective, kept_[i].miss)) ++i;
+    if (i >= size_) return;
+    kept_.insert(kept_.begin() + static_cast<std::ptrdiff_t>(i), {c.x, c.objective, v});
+    if (kept_.size() > size_) kept_.pop_back();
+  }
+  void write(TorqueDesignResult* out) const {
+    for (const Kept& k : kept_) {
+      out->finalists.push_back(k.x);
+      out->finalist_objectives.push_back(k.objective);
+    }
+  }
+
+ private:
+  struct Kept {
+    std::vector<double> x;
+    double objective, miss;
+  };
+  size_t size_;
+  std::vector<Kept> kept_;
+};
 
 }  // namespace
 
@@ -219,20 +252,32 @@ std::vector<std::vector<double>> tone_starts(const ToneTorques& tones, const std
 
 namespace {
 
-// evaluates every point, two at a time (results in order, whatever the threads)
-std::vector<TorqueCandidate> evaluate_all(
-    const std::vector<std::vector<double>>& xs,
-    const std::function<TorqueCandidate(const std::vector<double>&)>& eval) {
-  std::vector<TorqueCandidate> cs(xs.size());
-  std::thread other([&] {
-    for (size_t i = 1; i < xs.size(); i += 2) cs[i] = eval(xs[i]);
-  });
-  for (size_t i = 0; i < xs.size(); i += 2) cs[i] = eval(xs[i]);
+// evaluates every point, two at a time: each thread takes the next point not yet taken, so a
+// long simulation does not hold the other thread up (results in order, whatever the threads)
+template <class Result>
+std::vector<Result> evaluate_all(const std::vector<std::vector<double>>& xs,
+                                 const std::function<Result(const std::vector<double>&)>& eval) {
+  std::vector<Result> cs(xs.size());
+  std::atomic<size_t> next{0};
+  const auto work = [&] {
+    for (size_t i = next++; i < xs.size(); i = next++) cs[i] = eval(xs[i]);
+  };
+  std::thread other(work);
+  work();
   other.join();
   return cs;
 }
 
 }  // namespace
+
+sim::Options search_settings(const sim::Options& scene, double tolerance, FrictionLaw law) {
+  sim::Options s = scene;
+  if (tolerance <= 0) return s;
+  s.rtol = std::max(s.rtol, tolerance);
+  s.atol = std::max(s.atol, tolerance);
+  if (law_descriptor(law).states_per_joint == 0) s.method = sim::Method::kArkodeErk45;
+  return s;
+}
 
 TorqueDesignResult design_torque_excitation(const Params<double>& scene,
                                             const sim::LoadFunction& scene_loads,
@@ -242,10 +287,14 @@ TorqueDesignResult design_torque_excitation(const Params<double>& scene,
   const ExcitationOptions& o = options.excitation;
   const ToneTorques tones(options.tones, o.torque_limit);
   const double step = o.duration / std::max(16, o.design_samples);
-  const std::function<TorqueCandidate(const std::vector<double>&)> eval = [&](const std::vector<double>& x) {
-    return evaluate_tones(scene, scene_loads, start, options, x, step);
-  };
+  TorqueDesignOptions search = options;
+  search.sim = search_settings(options.sim, options.search_tolerance, scene.friction.law);
+  const std::function<TorqueCandidate(const std::vector<double>&)> eval =
+      [&](const std::vector<double>& x) {
+        return evaluate_tones(scene, scene_loads, start, search, x, step);
+      };
   TorqueDesignResult out;
+  Finalists finalists(kFinalistSpares * std::max(1, options.finalists));
   std::vector<TorqueCandidate> first = evaluate_all(starts, eval);
   out.evaluations = static_cast<int>(first.size());
   double vbest = kInf;
@@ -256,6 +305,7 @@ TorqueDesignResult design_torque_excitation(const Params<double>& scene,
   for (size_t i = 0; i < first.size(); ++i) {
     track(first[i]);
     const double v = violation(first[i], o);
+    finalists.offer(first[i], v);
     out.start_objectives.push_back(first[i].objective);
     out.start_feasible.push_back(v == 0);
     if (i == 0 || better(first[i], v, out.best, vbest)) {
@@ -281,6 +331,7 @@ TorqueDesignResult design_torque_excitation(const Params<double>& scene,
     for (TorqueCandidate& c : cs) {
       track(c);
       const double vc = violation(c, o);
+      finalists.offer(c, vc);
       if (better(c, vc, out.best, vbest)) {
         out.best = std::move(c);
         vbest = vc;
@@ -290,6 +341,75 @@ TorqueDesignResult design_torque_excitation(const Params<double>& scene,
     out.improvements += improved ? 1 : 0;
     sigma = std::clamp(sigma * (improved ? 1.5 : 0.8), 0.01, 2.0);
   }
+  finalists.write(&out);
+  return out;
+}
+
+namespace {
+
+// a finalist at the scene's settings and its prediction
+struct Final {
+  TorqueCandidate c;
+  Status predicted = Status::Error(StatusCode::kSolverFailed, "not evaluated");
+  double miss = kInf;
+};
+
+// a beats b as finish_torque_design says
+bool better_final(const Final& a, const Final& b, bool worst_std) {
+  if (a.c.status.ok() != b.c.status.ok()) return a.c.status.ok();
+  if ((a.miss == 0) != (b.miss == 0)) return a.miss == 0;
+  if (a.miss > 0 && a.miss != b.miss) return a.miss < b.miss;
+  if (a.predicted.ok() != b.predicted.ok()) return a.predicted.ok();
+  if (worst_std && a.predicted.ok()) {
+    return worst_relative_std(a.c.report) < worst_relative_std(b.c.report);
+  }
+  return a.c.objective < b.c.objective;
+}
+
+}  // namespace
+
+FinishedTorqueDesign finish_torque_design(const Params<double>& scene,
+                                          const sim::LoadFunction& scene_loads,
+                                          std::array<double, 2> start,
+                                          const TorqueDesignOptions& options,
+                                          const std::vector<std::vector<double>>& finalists) {
+  const ExcitationOptions& o = options.excitation;
+  const DesignParameters dp = design_parameters(scene, o.groups);
+  const std::function<Final(const std::vector<double>&)> eval = [&](const std::vector<double>& x) {
+    Final f;
+    f.c = evaluate_tones(scene, scene_loads, start, options, x, 1.0 / o.rate_hz);
+    if (!f.c.status.ok()) return f;
+    f.miss = violation(f.c, o);
+    f.predicted =
+        predict_identified_std(scene, dp, scene_loads, o.torque_noise, o.angle_noise, &f.c.report);
+    return f;
+  };
+  const size_t group = static_cast<size_t>(std::max(1, options.finalists));
+  std::vector<Final> fs;
+  FinishedTorqueDesign out;
+  for (size_t begin = 0; begin < finalists.size(); begin += group) {
+    const size_t end = std::min(finalists.size(), begin + group);
+    for (Final& f : evaluate_all(
+             std::vector<std::vector<double>>(finalists.begin() + begin, finalists.begin() + end),
+             eval)) {
+      fs.push_back(std::move(f));
+      if (fs.size() > 1 && better_final(fs.back(), fs[static_cast<size_t>(out.finalist)],
+                                        o.criterion == Criterion::kWorstStd)) {
+        out.finalist = static_cast<int>(fs.size() - 1);
+      }
+    }
+    const Final& best = fs[static_cast<size_t>(out.finalist)];
+    if (best.c.status.ok() && best.miss == 0 && best.predicted.ok()) break;
+  }
+  out.evaluated = static_cast<int>(fs.size());
+  if (fs.empty()) {
+    out.design.status =
+        Status::Error(StatusCode::kSolverFailed, "no finalist: no candidate of the search ran");
+    return out;
+  }
+  Final& best = fs[static_cast<size_t>(out.finalist)];
+  out.design = std::move(best.c);
+  out.predicted = best.predicted;
   return out;
 }
 

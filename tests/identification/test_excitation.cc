@@ -5,14 +5,15 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "design_gradients.h"
 #include "fivebar/identification/excitation.h"
 #include "fivebar/identification/synth.h"
 #include "fivebar/identification/torque_excitation.h"
 #include "fivebar/model/inertial.h"
-#include "paper.h"
 #include "light_scene.h"
+#include "paper.h"
 
 namespace fivebar::identification {
 namespace {
@@ -216,6 +217,94 @@ TEST(Excitation, TorqueDesignIsSeededAndNeverWorseThanItsFirstStart) {
     EXPECT_NEAR(r.M1[i], a.best.tau1[i], 1e-6) << "t = " << r.t[i];
     EXPECT_NEAR(r.M2[i], a.best.tau2[i], 1e-6) << "t = " << r.t[i];
   }
+}
+
+// the search's simulations: looser and explicit where the scene's are tighter, the scene's
+// settings otherwise; LuGre's stiff bristles keep the scene's method
+TEST(Excitation, TorqueSearchSettingsLoosenTheScenesOnly) {
+  const sim::Options scene;  // rtol = atol = 1e-10, the law's default method
+  const sim::Options s = search_settings(scene, 1e-6, FrictionLaw::kCoulombViscous);
+  EXPECT_EQ(s.rtol, 1e-6);
+  EXPECT_EQ(s.atol, 1e-6);
+  EXPECT_EQ(s.method, sim::Method::kArkodeErk45);
+  EXPECT_EQ(s.duration, scene.duration);
+  EXPECT_EQ(search_settings(scene, 1e-6, FrictionLaw::kLuGre).method, std::nullopt);
+  const sim::Options unchanged = search_settings(scene, 0, FrictionLaw::kCoulombViscous);
+  EXPECT_EQ(unchanged.rtol, 1e-10);
+  EXPECT_EQ(unchanged.method, std::nullopt);
+  sim::Options loose = scene;
+  loose.rtol = loose.atol = 1e-4;
+  EXPECT_EQ(search_settings(loose, 1e-6, FrictionLaw::kCoulombViscous).rtol, 1e-4);
+}
+
+// the search ranks its candidates at search_settings; its finalists are its best, best first;
+// finish_torque_design simulates them again at the scene's settings on the log's grid and keeps
+// the one of the lowest worst relative std identify would report
+TEST(Excitation, TorqueDesignIsFinishedAtTheScenesSettings) {
+  TorqueDesignOptions o;
+  o.excitation.duration = 1.5;
+  o.excitation.design_samples = 150;
+  o.excitation.torque_limit = 13.4;
+  o.excitation.min_reversals = 0;
+  o.excitation.groups.per_joint = true;
+  o.excitation.criterion = Criterion::kWorstStd;
+  o.max_evaluations = 13;
+  o.seed = 3;
+  o.finalists = 3;
+  const Params<double> p = per_joint_scene();
+  const sim::LoadFunction scene = paper_static_load_function();
+  const std::array<double, 2> start = {M_PI / 2, M_PI / 2};
+  const TorqueDesignResult a = design_torque_excitation(
+      p, scene, start, o, tone_starts(ToneTorques(4, 13.4), multisine_tones()));
+  ASSERT_TRUE(a.best.status.ok()) << a.best.status.message;
+  // 13 candidates ran: kFinalistSpares * 3 = 9 kept, ranked
+  ASSERT_EQ(a.finalists.size(), 9u);
+  EXPECT_EQ(a.finalists[0], a.best.x);
+  EXPECT_EQ(a.finalist_objectives[0], a.best.objective);
+  for (size_t i = 1; i < a.finalists.size(); ++i) {
+    EXPECT_LE(a.finalist_objectives[i - 1], a.finalist_objectives[i]);
+  }
+  // the search's objective is that of its own settings, not the scene's
+  const double step = o.excitation.duration / o.excitation.design_samples;
+  TorqueDesignOptions search = o;
+  search.sim = search_settings(o.sim, o.search_tolerance, p.friction.law);
+  EXPECT_EQ(evaluate_tones(p, scene, start, search, a.best.x, step).objective, a.best.objective);
+  EXPECT_NE(evaluate_tones(p, scene, start, o, a.best.x, step).objective, a.best.objective);
+
+  const FinishedTorqueDesign f = finish_torque_design(p, scene, start, o, a.finalists);
+  ASSERT_TRUE(f.design.status.ok()) << f.design.status.message;
+  ASSERT_TRUE(f.predicted.ok()) << f.predicted.message;
+  EXPECT_EQ(f.design.x, a.finalists[static_cast<size_t>(f.finalist)]);
+  EXPECT_EQ(f.design.report.t.size(), 1501u);  // the log's grid, 1 kHz
+  EXPECT_EQ(f.evaluated, 3);  // the first three ran and met the constraints: no spare evaluated
+  const DesignParameters dp = design_parameters(p, o.excitation.groups);
+  for (size_t i = 0; i < 3; ++i) {
+    const std::vector<double>& x = a.finalists[i];
+    TorqueCandidate c = evaluate_tones(p, scene, start, o, x, 1e-3);
+    ASSERT_TRUE(c.status.ok());
+    ASSERT_TRUE(predict_identified_std(p, dp, scene, o.excitation.torque_noise,
+                                       o.excitation.angle_noise, &c.report)
+                    .ok());
+    if (x == f.design.x) {
+      EXPECT_EQ(worst_relative_std(c.report), worst_relative_std(f.design.report));
+    } else if (c.feasible) {
+      EXPECT_GE(worst_relative_std(c.report), worst_relative_std(f.design.report));
+    }
+  }
+  // a finalist that misses the constraints at the scene's settings (full torque one way: crank
+  // O turns past the range allowed) is passed over for the next one
+  std::vector<double> spin(a.best.x.size(), 0.0);
+  spin[0] = 13.4;
+  spin[spin.size() / 2] = -13.4;
+  o.excitation.theta_lo = {-10, NAN};
+  o.excitation.theta_hi = {55, NAN};
+  ASSERT_FALSE(evaluate_tones(p, scene, start, o, spin, 1e-3).feasible);
+  o.finalists = 1;
+  const FinishedTorqueDesign g = finish_torque_design(p, scene, start, o, {spin, a.finalists[0]});
+  ASSERT_TRUE(g.design.status.ok()) << g.design.status.message;
+  EXPECT_EQ(g.finalist, 1);
+  EXPECT_EQ(g.evaluated, 2);
+  EXPECT_EQ(g.design.x, a.finalists[0]);
 }
 
 }  // namespace

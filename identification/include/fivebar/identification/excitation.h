@@ -301,6 +301,9 @@ struct ExcitationReport {
   std::array<double, 2> theta_min{}, theta_max{};
 };
 
+/// The largest relative std of a report (NaN entries, of zero nominal values, left out).
+double worst_relative_std(const ExcitationReport& r);
+
 /// Evaluates a motion given as states on a grid (the design's, or any logged motion). Loads at
 /// each time from `loads`. Fails on the first sample that cannot be evaluated.
 Status evaluate_motion(const ExcitationMechanism& mechanism, const std::vector<double>& t,

@@ -2,7 +2,9 @@
 // sums of tones clipped at the torque limit, the motion is the mechanism's free response to them
 // (the simulator), and a seeded evolution strategy chooses the tones for information. The
 // built-in multi-sine of synth-log is one member of the family (multisine_tones) and the first
-// start, so the design is never worse than it on the design's objective.
+// start, so the search's best is never worse than it on the design's objective. The search
+// simulates at loosened settings (search_settings); its finalists are evaluated again at the
+// scene's (finish_torque_design).
 #pragma once
 
 #include <array>
@@ -82,6 +84,22 @@ inline constexpr int kMultisineHalvings = 8;
 /// the given ones), or the first `tones` ones.
 std::vector<double> resize_tones(const std::vector<double>& x, int from, int tones);
 
+/// The search's default tolerance (TorqueDesignOptions::search_tolerance)
+inline constexpr double kSearchTolerance = 1e-6;
+/// The search's best candidates evaluated again at the scene's settings by default
+/// (TorqueDesignOptions::finalists)
+inline constexpr int kFinalists = 2;
+/// The search keeps this many times `finalists` of its best candidates: the spares are evaluated
+/// when none of the first runs and meets the constraints at the scene's settings
+inline constexpr int kFinalistSpares = 3;
+
+/// The settings of the search's simulations (`tolerance` 0: `scene` unchanged): `scene` with rtol
+/// and atol loosened to at least `tolerance`, and for a friction law without internal states
+/// the explicit arkode_erk45 (a tone-driven motion switches a joint's slip direction some 20
+/// times a second: the explicit steps go on at full size after each switch, where Adams
+/// restarts at order 1; LuGre's stiff bristles keep the scene's method).
+sim::Options search_settings(const sim::Options& scene, double tolerance, FrictionLaw law);
+
 struct TorqueDesignOptions {
   ExcitationOptions excitation;  ///< limits, noise, criterion, groups, duration, design_samples
   int tones = 4;
@@ -90,6 +108,13 @@ struct TorqueDesignOptions {
   double step = 0.3;           ///< initial mutation, in units of ToneTorques::steps()
   std::uint64_t seed = 1;
   sim::Options sim;            ///< the scene's solver settings (duration, output step overridden)
+  /// rtol and atol of the search's simulations where the scene's are tighter, and their method
+  /// (search_settings; 0: the scene's settings): the search only ranks candidates, its
+  /// finalists are evaluated again at the scene's settings (finish_torque_design)
+  double search_tolerance = kSearchTolerance;
+  /// the search's best candidates finish_torque_design evaluates (at least 1; kFinalistSpares
+  /// times as many are kept)
+  int finalists = kFinalists;
 };
 
 /// One motion of the family on a grid: the simulated motion with its Fisher information,
@@ -121,7 +146,37 @@ struct TorqueDesignResult {
   std::vector<double> start_objectives;
   std::vector<bool> start_feasible;
   int evaluations = 0, improvements = 0;
+  /// the tones of the search's best candidates that ran, best first (`best`'s the first): at
+  /// most kFinalistSpares * options.finalists of them, ranked as `best` is
+  std::vector<std::vector<double>> finalists;
+  std::vector<double> finalist_objectives;  ///< their objectives in the search
 };
+
+/// The design the search's finalists give, at the scene's settings.
+struct FinishedTorqueDesign {
+  /// the chosen finalist on the log's grid (1 / rate_hz) at options.sim, with the std identify
+  /// would report (predict_identified_std) in its report when `predicted` is ok
+  TorqueCandidate design;
+  Status predicted;
+  int finalist = 0;   ///< its rank in the search (0: the search's best)
+  int evaluated = 0;  ///< finalists evaluated at the scene's settings
+};
+
+/// Simulates the first options.finalists finalists again at options.sim (the scene's settings:
+/// the search's tolerance only ranked them) on the log's grid, two at a time, and predicts the
+/// std identify would report for a log along each (torque and angle noise); while none of those
+/// evaluated runs, meets the constraints and has a prediction (a motion near a constraint may
+/// cross it at the scene's tolerance), the next options.finalists, until none is left. The
+/// chosen one: a run that failed last,
+/// then the constraints as in the search (feasible first, among infeasible the smaller miss),
+/// then a prediction that failed last, then the lowest worst relative std with the criterion
+/// kWorstStd (the std the design is judged by), else the lowest objective; the search's rank
+/// breaks ties. Deterministic whatever the threads.
+FinishedTorqueDesign finish_torque_design(const Params<double>& scene,
+                                          const sim::LoadFunction& scene_loads,
+                                          std::array<double, 2> start,
+                                          const TorqueDesignOptions& options,
+                                          const std::vector<std::vector<double>>& finalists);
 
 /// The starts of the search from x0 (the multi-sine's tones): x0 itself first, then x0 with its
 /// amplitudes times 1, 3, 10 (clipped at the limit: towards bang-bang torques) and its
@@ -133,6 +188,7 @@ std::vector<std::vector<double>> tone_starts(const ToneTorques& tones, const std
 /// improving generation and shrunk by 0.8 otherwise), seeded, on the design grid
 /// (design_samples over the duration). Deterministic for a seed whatever the threads. The best
 /// feasible candidate wins (feasible before infeasible; among infeasible, the smaller miss).
+/// Its simulations use search_settings(options.sim, options.search_tolerance).
 TorqueDesignResult design_torque_excitation(const Params<double>& scene,
                                             const sim::LoadFunction& scene_loads,
                                             std::array<double, 2> start,
