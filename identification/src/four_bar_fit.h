@@ -72,9 +72,6 @@ void select_samples(FourBarFit* f, IdentifyResult* out);
 /// kRestSigmas of the rate's noise through that row, or below --min-rate.
 bool held(const FourBarFit& f, const std::array<double, 4>& row, double w, double rate_noise);
 
-/// Raw residuals (and the Jacobian) of the problem at its parameters; false where one fails.
-bool evaluate(ceres::Problem* problem, std::vector<double>* r, Eigen::MatrixXd* J = nullptr);
-
 /// The data-driven window (mechanism_stages.h) after a preliminary fit on at most ~1500 of the
 /// samples, then the rates and samples again at the window chosen; f->x back at its start
 /// (four_bar_window.cc).

@@ -105,8 +105,9 @@ class FourBarWindowFit : public stages::WindowFit {
     std::vector<double> x = f_.x, r;
     stages::add_mechanism_terms<FourBar>(f_.scene, f_.layout, f_.samples, f_.eval, x.data(),
                                          &problem);
-    Eigen::MatrixXd J1;
-    if (!evaluate(&problem, &r, &J1)) return in;
+    ceres::CRSMatrix crs;
+    if (!stages::raw_residuals(&problem, &r, &crs)) return in;
+    const Eigen::MatrixXd J1 = stages::dense(crs, P);
     in.J = Eigen::MatrixXd::Zero(2 * m, P);
     for (int u = 0; u < m; ++u) in.J.row(2 * u) = J1.row(u);
     const std::vector<int>& rev = f_.reversals;

@@ -204,20 +204,6 @@ double noise_floor(const FourBarFit& f) {
   return std::max(std::sqrt(s2 / m), stages::kAbsoluteFloor * std::sqrt(tau2 / m));
 }
 
-bool evaluate(ceres::Problem* problem, std::vector<double>* r, Eigen::MatrixXd* J) {
-  ceres::Problem::EvaluateOptions eo;
-  eo.apply_loss_function = false;
-  ceres::CRSMatrix crs;
-  if (!problem->Evaluate(eo, nullptr, r, nullptr, J ? &crs : nullptr)) return false;
-  if (J) {
-    J->setZero(crs.num_rows, crs.num_cols);
-    for (int i = 0; i < crs.num_rows; ++i) {
-      for (int k = crs.rows[i]; k < crs.rows[i + 1]; ++k) (*J)(i, crs.cols[k]) = crs.values[k];
-    }
-  }
-  return true;
-}
-
 double rms(const std::vector<double>& r) {
   double s = 0;
   for (double v : r) s += v * v;
@@ -252,7 +238,7 @@ bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
   for (int i = 0; i < P; ++i) problem->SetParameterLowerBound(f->x.data(), i, lay.lower_bound(i));
   out->residuals = static_cast<int>(f->samples.size());
   std::vector<double> r;
-  if (!evaluate(problem, &r)) {
+  if (!stages::raw_residuals(problem, &r)) {
     out->status = Status::Error(StatusCode::kFrictionNotConverged,
                                 "the four-bar's inverse dynamics fails at the start values");
     return false;
@@ -309,7 +295,9 @@ void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* ou
   std::vector<double> r;
   Eigen::MatrixXd J;
   out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
-  if (!evaluate(problem, &r, &J)) return;
+  ceres::CRSMatrix crs;
+  if (!stages::raw_residuals(problem, &r, &crs)) return;
+  J = stages::dense(crs, P);
   const int m = static_cast<int>(r.size());
   out->rms_torque_residual[0] = rms(r);
   out->residual_sigma = std::sqrt(rms(r) * rms(r) * m / std::max(1, m - P));

@@ -246,9 +246,6 @@ void preliminary_fit(Fit* f);
 
 // ---- stage_solve.cc ----
 
-/// Raw (unweighted) residuals; false where an evaluation fails.
-bool raw_residuals(ceres::Problem* problem, std::vector<double>* r,
-                   ceres::CRSMatrix* jac = nullptr);
 
 void rms_pair(const std::vector<double>& r, double* out2);
 
@@ -269,8 +266,6 @@ void noise_floor(const Fit& f, const std::vector<detail::Sensitivity>& sens, dou
 /// Costs one pass of noise_sensitivities over the samples.
 void choose_loss_scale(Fit* f, IdentifyResult* out);
 
-/// J^T J of the CRS Jacobian and the dense Jacobian itself (2 rows per sample).
-Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P);
 
 /// Solves. Group inertia: the prior's weight is then set to the residual's noise level (the torque
 /// noise plus the angle noise through the rates) and, if that differs, the fit is refined.

@@ -19,6 +19,7 @@
 
 namespace ceres {
 class Problem;
+struct CRSMatrix;
 }
 
 namespace fivebar::identification::stages {
@@ -113,6 +114,14 @@ using Refit =
 /// run no sign check; the one with every channel negated puts its residual in out.
 bool torques_fit_negated(const TorqueLog& log, const IdentifyOptions& opt, int drives,
                          unsigned suspect, const Refit& refit, IdentifyResult* out);
+
+/// Raw (unweighted) residuals of the problem at its parameters, and its Jacobian with `jac`;
+/// false where an evaluation fails (stage_solve.cc).
+bool raw_residuals(ceres::Problem* problem, std::vector<double>* r,
+                   ceres::CRSMatrix* jac = nullptr);
+
+/// The CRS Jacobian as a dense matrix of P columns.
+Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P);
 
 /// The preliminary fit before the window choice: plain least squares of the residual blocks
 /// already in `problem` on the parameter block x (its lower bounds set here), at most 20
