@@ -23,6 +23,7 @@
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
+#include "fivebar/io/scene_mechanism.h"
 #include "fivebar/studies/accuracy.h"
 
 // a namespace of its own: the subcommands compile as one unit (apps/CMakeLists.txt)
@@ -45,26 +46,55 @@ struct Args {
 const std::vector<std::string> kOutputs = {"work_precision.csv", "work_precision.png",
                                            "work_precision.gnuplot", "summary.json"};
 
-/// max |d theta| between our reference rows and an external CSV, on the times both have.
-double against_external(const std::string& path, const std::vector<sim::Row>& rows, double step) {
+/// The toolkit's reference against an external CSV: max |d theta| on the times both have.
+struct External {
+  double difference = 0;
+  long times = 0;  ///< times compared
+};
+
+External against_external(const std::string& path, const Scene& scene,
+                          const std::vector<sim::Row>& rows) {
+  const double step = scene.options.output_step;
+  const int links = layout_of(scene).links;
   const CsvTable table = read_csv(path);
   const int t_col = table.require("t");
   int cols[kLinks];
-  for (int k = 0; k < kLinks; ++k) cols[k] = table.require("theta" + std::to_string(k + 1));
-  double worst = 0.0;
-  long matched = 0;
+  for (int k = 0; k < links; ++k) cols[k] = table.require("theta" + std::to_string(k + 1));
+  External e;
   for (const auto& r : table.rows) {
     const long i = std::lround(r[t_col] / step);
     if (i < 0 || i >= static_cast<long>(rows.size()) || std::abs(rows[i].t - r[t_col]) > 1e-9) {
       continue;
     }
-    ++matched;
-    for (int k = 0; k < kLinks; ++k) {
-      worst = std::max(worst, std::abs(rows[i].theta[k] - r[cols[k]]));
+    ++e.times;
+    for (int k = 0; k < links; ++k) {
+      e.difference = std::max(e.difference, std::abs(rows[i].theta[k] - r[cols[k]]));
     }
   }
-  if (matched == 0) throw InputError(path, "t", "no time in common with the scene's output grid");
-  return worst;
+  if (e.times == 0) throw InputError(path, "t", "no time in common with the scene's output grid");
+  return e;
+}
+
+/// An external reference this many times farther from the toolkit's own than its two
+/// integrators are from each other (and above 1e-6 rad) is not a run of the scene
+constexpr double kExternalExcess = 1e3;
+
+/// What the comparison with an external reference warns of: a difference the reference's own
+/// agreement cannot explain, or fewer than half the output times compared (empty: none).
+std::string external_warning(const std::string& path, const External& e,
+                             const studies::WorkPrecision& wp) {
+  const auto g3 = [](double x) { return format_significant(x, 3); };
+  const long rows = static_cast<long>(wp.exact.rows.size());
+  if (e.difference > 1e-6 && e.difference > kExternalExcess * wp.exact.self_difference) {
+    return path + ": differs from the toolkit's reference by " + g3(e.difference) +
+           " rad, whose two integrators agree to " + g3(wp.exact.self_difference) +
+           " rad: it is not a run of this scene (or of its mechanism's angles)";
+  }
+  if (2 * e.times < rows) {
+    return path + ": only " + std::to_string(e.times) + " of the scene's " +
+           std::to_string(rows) + " output times compared";
+  }
+  return "";
 }
 
 /// The study's options from the command line; throws InputError naming the flag.
@@ -91,8 +121,8 @@ studies::WorkPrecisionOptions study_options(const Args& args, const Scene& scene
       opt.methods.push_back(m);
     }
   }
-  if (scene.params.friction.smoothing_velocity > 0.0) {
-    opt.regularization_velocity = scene.params.friction.smoothing_velocity;
+  if (friction_of(scene).smoothing_velocity > 0.0) {
+    opt.regularization_velocity = friction_of(scene).smoothing_velocity;
   }
   return opt;
 }
@@ -135,7 +165,7 @@ Json recommendations_json(const studies::WorkPrecision& wp) {
 /// summary.json: the reference (and its distance to --reference), the regularization's own
 /// model error, the recommendations.
 Json summary_json(const Args& args, const Scene& scene, const studies::WorkPrecisionOptions& opt,
-                  const studies::WorkPrecision& wp) {
+                  const studies::WorkPrecision& wp, const External& external) {
   Json summary = Json::object();
   summary.set("command", "accuracy");
   summary.set("scene", scene.path);
@@ -146,9 +176,10 @@ Json summary_json(const Args& args, const Scene& scene, const studies::WorkPreci
   ref.set("self_difference", wp.exact.self_difference);
   ref.set("friction_events", wp.exact.stats.friction_events);
   if (!args.reference.empty()) {
-    const double d = against_external(args.reference, wp.exact.rows, scene.options.output_step);
     ref.set("external", args.reference);
-    ref.set("max_abs_difference_external", d);
+    ref.set("max_abs_difference_external", external.difference);
+    ref.set("external_times_compared", external.times);
+    ref.set("external_agrees", external_warning(args.reference, external, wp).empty());
   }
   summary.set("reference", std::move(ref));
   if (!wp.regularized.rows.empty()) {
@@ -162,15 +193,14 @@ Json summary_json(const Args& args, const Scene& scene, const studies::WorkPreci
 
 /// The console report: the reference's self-difference, the Pareto front, the recommendations.
 void print_report(const Args& args, const Scene& scene, const studies::WorkPrecisionOptions& opt,
-                  const studies::WorkPrecision& wp) {
+                  const studies::WorkPrecision& wp, const External& external) {
   const auto g3 = [](double x) { return format_significant(x, 3); };
   std::cout << "fivebar accuracy: " << scene.path << ": " << wp.points.size() << " runs\n"
             << "  reference: Adams vs Dormand-Prince at " << g3(opt.reference_tolerance)
             << " differ by " << g3(wp.exact.self_difference) << " rad";
   if (!args.reference.empty()) {
-    std::cout << "; vs " << args.reference << ": "
-              << g3(against_external(args.reference, wp.exact.rows, scene.options.output_step))
-              << " rad";
+    std::cout << "; vs " << args.reference << ": " << g3(external.difference) << " rad at "
+              << external.times << " times";
   }
   std::cout << "\n  Pareto front (" << studies::treatment_name(wp.points.front().treatment)
             << "):\n";
@@ -192,20 +222,28 @@ void print_report(const Args& args, const Scene& scene, const studies::WorkPreci
 }
 
 int run(const Args& args) {
-  const Scene scene = load_scene(args.scene.scene, args.scene.sets);
-  const sim::LoadFunction loads = LoadExpressions(scene).function();
+  const Scene scene = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
   studies::WorkPrecisionOptions opt = study_options(args, scene);
   OutputDir out(args.scene.out, kOutputs);
 
   studies::WorkPrecision wp;
   Progress progress("accuracy", 1.0);
   opt.progress = [&progress](int done, int total) { progress.update(double(done) / total); };
-  const Status st =
-      studies::work_precision(scene.params, loads, scene.initial, scene.options, opt, &wp);
+  const Status st = with_mechanism(scene, [&](auto mech) {
+    using S = decltype(mech);
+    return studies::work_precision(S::params(scene), S::loads(LoadExpressions(scene)),
+                                   scene.initial, scene.options, opt, &wp);
+  });
   if (!st.ok()) throw NumericalError(scene.path, "reference", st.message);
 
+  External external;
+  if (!args.reference.empty()) {
+    external = against_external(args.reference, scene, wp.exact.rows);
+    const std::string w = external_warning(args.reference, external, wp);
+    if (!w.empty()) warn(w);
+  }
   write_text_file(out.file("work_precision.csv"), work_precision_csv(wp));
-  const Json summary = summary_json(args, scene, opt, wp);
+  const Json summary = summary_json(args, scene, opt, wp, external);
   if (!args.no_plots) {
     const std::string warning =
         run_gnuplot(out.staging(), "work_precision.gnuplot",
@@ -215,7 +253,7 @@ int run(const Args& args) {
     if (!warning.empty()) warn(warning);
   }
   write_json_file(out.file("summary.json"), summary);
-  return finish_run(&out, [&] { print_report(args, scene, opt, wp); });
+  return finish_run(&out, [&] { print_report(args, scene, opt, wp, external); });
 }
 
 void add_options(CLI::App* app, Args* args) {
@@ -227,7 +265,8 @@ void add_options(CLI::App* app, Args* args) {
       ->delimiter(',');
   app->add_option("--methods", args->methods, "integrators (default: all)")->delimiter(',');
   app->add_option("--reference", args->reference,
-                  "external reference CSV (t, theta1..theta4) to check the toolkit's own against");
+                  "external reference CSV (t and the link angles theta1..: 4 of a five-bar, 3 of a "
+                  "four-bar) to check the toolkit's own against");
 }
 
 const bool kRegistered = register_command(command_of("accuracy", kSummary, add_options, run));

@@ -1,10 +1,11 @@
 // fivebar excite SCENE --duration S --torque-limit NM [--estimate friction,inertia,actuator]
 //   [--per-joint] [--criterion d-optimal|condition] [--theta1-range LO:HI] [--theta2-range LO:HI]
 //   [--out DIR] [--set KEY=VALUE]...
-// Excitation design (docs/excite.md): a periodic Fourier motion of the two cranks that
-// maximizes the information a torque log along it gives on the chosen parameters (D-optimal, or
-// the condition number), within the torque limit, away from the singular poses, with every
-// joint reversing; compared with the built-in multi-sine of synth-log.
+// Excitation design (docs/excite.md): a periodic Fourier motion of the cranks (the five-bar's
+// two, the four-bar's one) that maximizes the information a torque log along it gives on the
+// chosen parameters (D-optimal, or the condition number), within the torque limit, away from
+// the singular poses, with every joint reversing; on the five-bar compared with the built-in
+// multi-sine of synth-log, or designed as tone torques (--family torque).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
@@ -55,6 +56,10 @@ struct Args {
   std::string estimate = "friction", criterion = "d-optimal", method = "mma", start = "swing";
   std::string family = "torque";
   std::vector<std::string> family_only;  ///< options given that apply to the other family
+  /// the options given of each family only, and whether --family was given (a four-bar's
+  /// default family is fourier: the torque family is the five-bar's)
+  std::vector<std::string> fourier_given, torque_given;
+  bool family_given = false;
   std::string theta1_range, theta2_range;
   bool per_joint = false, no_plots = false, no_baseline = false;
   int starts = 2, max_evaluations = 0, tones = 6;
@@ -78,8 +83,7 @@ std::array<double, 2> parse_range(const std::string& text, const std::string& fl
 }
 
 // the checks of bad input (exit 2) that need the scene
-void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads,
-                 id::ExcitationOptions* o) {
+void check_input(const Args& a, const Scene& scene, id::ExcitationOptions* o) {
   if (!(a.design.duration > 0) || !std::isfinite(a.design.duration)) {
     throw InputError(kFlags, "--duration", "must be > 0, got " + format_double(a.design.duration));
   }
@@ -128,9 +132,29 @@ void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads
     o->theta_lo[j] = r[0];
     o->theta_hi[j] = r[1];
   }
-  // the motion starts at rest at the start pose: the motors must at least hold it there
+}
+
+// the start pose: the five-bar's cranks, the four-bar's crank (theta2 unused)
+std::array<double, 2> start_pose(const Scene& scene) {
+  return {scene.initial.theta1,
+          scene.type == MechanismType::kFourBar ? 0.0 : scene.initial.theta2};
+}
+
+// the motion starts at rest at the start pose: the motors must at least hold it there (bad
+// input otherwise)
+void check_holding(const Args& a, const Scene& scene, const LoadExpressions& loads,
+                   const id::ExcitationMechanism& mech, const id::ExcitationOptions& o) {
+  const std::array<double, 2> start = start_pose(scene);
   Holding<double> h;
-  const Status st = holding_torques(scene.params, loads(0.0), start[0], start[1], EvalOptions{}, &h);
+  Status st;
+  if (scene.type == MechanismType::kFourBar) {
+    id::SampleTerms rest;  // inverse dynamics at rest: no joint slips
+    st = mech.terms(0.0, {start[0], start[1], 0, 0, 0, 0}, nullptr, &rest);
+    h.M1 = rest.M1;
+    h.M2 = 0;
+  } else {
+    st = holding_torques(scene.params, loads(0.0), start[0], start[1], EvalOptions{}, &h);
+  }
   if (!st.ok()) throw InputError(scene.path, "initial", st.message);
   const double need = std::max(std::abs(h.M1), std::abs(h.M2));
   if (!std::isfinite(need)) {
@@ -138,16 +162,42 @@ void check_input(const Args& a, const Scene& scene, const LoadExpressions& loads
                      "holding the start pose needs torques that are not finite (M1 = " +
                          format_double(h.M1) + ", M2 = " + format_double(h.M2) + " N m)");
   }
-  if (need >= a.design.torque_limit * (1.0 - o->torque_margin)) {
+  if (need >= a.design.torque_limit * (1.0 - o.torque_margin)) {
+    const std::string torques = "M1 = " + format_double(h.M1) +
+                                (mech.dof() > 1 ? ", M2 = " + format_double(h.M2) : std::string());
     throw InputError(kFlags, "--torque-limit",
                      format_double(a.design.torque_limit) + " N m is below what holding the start pose needs (" +
-                         "M1 = " + format_double(h.M1) + ", M2 = " + format_double(h.M2) +
-                         " N m at rest, plus the design's " +
-                         format_double(100 * o->torque_margin) + " % margin)");
+                         torques + " N m at rest, plus the design's " +
+                         format_double(100 * o.torque_margin) + " % margin)");
   }
 }
 
-id::ExcitationOptions options_of(const Args& a, const Scene& scene, const LoadExpressions& loads) {
+// the options a four-bar's design does not have: bad input naming the option and the type
+void refuse_four_bar_options(const Args& a, const id::ExcitationOptions& o) {
+  const std::string type = " (mechanism.type four_bar)";
+  if (a.family == "torque") {
+    throw InputError(kFlags, "--family",
+                     "torque drives the five-bar's two motors by tone torques; a four-bar's design "
+                     "is --family fourier" + type);
+  }
+  const std::string group = id::four_bar_design_unsupported(o.groups);
+  if (!group.empty()) {
+    const size_t space = group.find(' ');  // "--estimate inertia": the option and its value
+    throw InputError(kFlags, group.substr(0, space),
+                     (space == std::string::npos ? "" : group.substr(space + 1) + ": ") +
+                         "the four-bar's design estimates its friction coefficients (coulomb, "
+                         "viscous) shared by its joints, as identify does on four-bars" + type);
+  }
+  if (!a.theta2_range.empty()) {
+    throw InputError(kFlags, "--theta2-range", "a four-bar has one crank, theta1" + type);
+  }
+  if (a.start == "multisine") {
+    throw InputError(kFlags, "--start",
+                     "multisine: the multi-sine drives the five-bar's two cranks" + type);
+  }
+}
+
+id::ExcitationOptions options_of(const Args& a, const Scene& scene) {
   id::ExcitationOptions o = a.design;
   std::string bad;
   if (!id::parse_groups(a.estimate, &o.groups, &bad)) {
@@ -171,6 +221,9 @@ id::ExcitationOptions options_of(const Args& a, const Scene& scene, const LoadEx
   if (a.family != "fourier" && a.family != "torque") {
     throw InputError(kFlags, "--family", "expected fourier or torque, got " + a.family);
   }
+  // a four-bar's refusals first: `--family torque --starts 1` names the family the four-bar
+  // lacks, not --starts
+  if (scene.type == MechanismType::kFourBar) refuse_four_bar_options(a, o);
   if (!a.family_only.empty()) {
     throw InputError(kFlags, a.family_only.front(),
                      "applies to --family " + std::string(a.family == "torque" ? "fourier" : "torque") +
@@ -180,7 +233,7 @@ id::ExcitationOptions options_of(const Args& a, const Scene& scene, const LoadEx
     throw InputError(kFlags, "--tones/--max-evaluations", "need tones >= 1, max evaluations >= 0");
   }
   o.singular_margin = std::max(a.design.singular_margin, scene.options.singular_margin);
-  check_input(a, scene, loads, &o);
+  check_input(a, scene, &o);
   return o;
 }
 
@@ -194,7 +247,7 @@ std::vector<std::vector<double>> make_starts(const id::FourierMotion& m, const A
   const int pj = m.per_joint();
   for (int s = 1; s < a.starts; ++s) {
     std::vector<double> x = base;
-    for (int j = 0; j < kDof; ++j) {
+    for (int j = 0; j < m.dof(); ++j) {
       for (int v = 0; v < pj; ++v) {
         const int l = m.harmonic_of(v);
         x[j * pj + v] += l == 0 ? a.drift_spread * gauss(rng) : a.spread * gauss(rng) / l;
@@ -271,14 +324,20 @@ double worst(const std::vector<double>& v, int begin, int end) {
   return w;
 }
 
+// the motion and its torques: the five-bar's two cranks, or the four-bar's one (the columns of
+// its motion files, t,theta1,omega1,alpha1, then M1)
 void write_excitation_csv(const std::string& path, const id::ExcitationReport& r) {
   std::ostringstream s;
-  s << "t,theta1,theta2,omega1,omega2,alpha1,alpha2,M1,M2\n";
+  s << (r.dof > 1 ? "t,theta1,theta2,omega1,omega2,alpha1,alpha2,M1,M2\n" : "t,theta1,omega1,alpha1,M1\n");
   for (size_t i = 0; i < r.t.size(); ++i) {
     const id::MotionState& m = r.states[i];
     s << format_grid_value(r.t[i]);
-    for (double v : {m.th1, m.th2, m.w1, m.w2, m.a1, m.a2, r.M1[i], r.M2[i]}) {
-      s << ',' << format_double(v);
+    if (r.dof > 1) {
+      for (double v : {m.th1, m.th2, m.w1, m.w2, m.a1, m.a2, r.M1[i], r.M2[i]}) {
+        s << ',' << format_double(v);
+      }
+    } else {
+      for (double v : {m.th1, m.w1, m.a1, r.M1[i]}) s << ',' << format_double(v);
     }
     s << '\n';
   }
@@ -307,10 +366,10 @@ Json report_json(const id::DesignParameters& dp, const id::ExcitationReport& r) 
   j.set("peak_torque", r.peak_torque);
   j.set("peak_torque_time", r.peak_time);
   j.set("min_coupler_sine", r.min_sine);
-  Json rev = Json::array_of(r.reversals);
+  Json rev = Json::array_of(std::vector<int>(r.reversals.begin(), r.reversals.begin() + r.joints));
   j.set("reversals", rev);
   j.set("theta1_range", Json::array().push(r.theta_min[0]).push(r.theta_max[0]));
-  j.set("theta2_range", Json::array().push(r.theta_min[1]).push(r.theta_max[1]));
+  if (r.dof > 1) j.set("theta2_range", Json::array().push(r.theta_min[1]).push(r.theta_max[1]));
   j.set("log_det_scaled_fisher", r.log_det_scaled);
   j.set("condition_number_scaled", r.condition_number);
   j.set("worst_relative_std_friction", worst(r.relative_std, 0, dp.friction));
@@ -385,15 +444,14 @@ trajectory::GeneralResult solve_design(const id::ExcitationProblem& problem, con
 }
 
 // the designed motion on the log's grid, with its Fisher information
-id::ExcitationReport on_grid(const Scene& scene, const LoadExpressions& loads,
-                             const id::ExcitationProblem& problem, const std::vector<double>& x) {
+id::ExcitationReport on_grid(const Scene& scene, const id::ExcitationProblem& problem,
+                             const std::vector<double>& x) {
   const id::ExcitationOptions& o = problem.options();
   std::vector<double> t;
   std::vector<id::MotionState> states;
   design_grid(problem.motion(), x, o.duration, o.rate_hz, &t, &states);
   id::ExcitationReport r;
-  const Status st = id::evaluate_motion(scene.params, problem.parameters(), loads, t, states,
-                                        o.torque_noise, &r);
+  const Status st = id::evaluate_motion(problem.mechanism(), t, states, o.torque_noise, &r);
   if (!st.ok()) throw NumericalError(scene.path, "excite", "designed motion: " + st.message);
   return r;
 }
@@ -401,7 +459,7 @@ id::ExcitationReport on_grid(const Scene& scene, const LoadExpressions& loads,
 // a start scaled towards the torque and singularity limits: the largest factor in (0, 1] (by
 // bisection) at which the per-sample constraints hold, so that no local solve starts far outside
 std::vector<double> scaled_start(const id::ExcitationProblem& problem, const std::vector<double>& x) {
-  const int per_samples = problem.num_constraints() - 2 * kJoints;  // reversal rows come last
+  const int per_samples = problem.num_constraints() - problem.reversal_constraints();
   auto fits = [&](double s) {
     std::vector<double> xs = x;
     for (double& v : xs) v *= s;
@@ -419,12 +477,11 @@ std::vector<double> scaled_start(const id::ExcitationProblem& problem, const std
 
 // the largest motor torque per unit acceleration of both cranks together at the start pose, at
 // rest [kg m^2] (the torque at rest subtracted: loads and friction do not count)
-double swing_inertia(const Scene& scene, const LoadExpressions& loads, const id::ExcitationOptions& o) {
-  const id::DesignParameters dp = id::design_parameters(scene.params, o.groups);
-  const double th1 = scene.initial.theta1, th2 = scene.initial.theta2;
+double swing_inertia(const id::ExcitationMechanism& mech, const std::array<double, 2>& start) {
+  const double th1 = start[0], th2 = start[1];
   id::SampleTerms rest, unit;
-  if (!id::sample_terms(scene.params, dp, loads(0.0), {th1, th2, 0, 0, 0, 0}, nullptr, &rest).ok() ||
-      !id::sample_terms(scene.params, dp, loads(0.0), {th1, th2, 0, 0, 1, 1}, nullptr, &unit).ok()) {
+  if (!mech.terms(0.0, {th1, th2, 0, 0, 0, 0}, nullptr, &rest).ok() ||
+      !mech.terms(0.0, {th1, th2, 0, 0, 1, 1}, nullptr, &unit).ok()) {
     return 1e-300;  // no swing: the start stays at rest
   }
   return std::max({std::abs(unit.M1 - rest.M1), std::abs(unit.M2 - rest.M2), 1e-300});
@@ -432,12 +489,12 @@ double swing_inertia(const Scene& scene, const LoadExpressions& loads, const id:
 
 // multi-start design; while the log's grid shows a torque peak above the limit (between the
 // design samples), the margin is tightened by the excess and the best design solved again
-Design design(const Scene& scene, const LoadExpressions& loads, id::ExcitationOptions o,
-              const Args& a, const Multisine* ms) {
+Design design(const Scene& scene, const std::shared_ptr<const id::ExcitationMechanism>& mech,
+              id::ExcitationOptions o, const Args& a, const Multisine* ms) {
   const auto t0 = std::chrono::steady_clock::now();
-  const std::array<double, 2> start = {scene.initial.theta1, scene.initial.theta2};
+  const std::array<double, 2> start = start_pose(scene);
   Design d;
-  const id::FourierMotion motion(o.harmonics, o.duration / o.periods, o.ramp, start);
+  const id::FourierMotion motion(o.harmonics, o.duration / o.periods, o.ramp, start, mech->dof());
   std::vector<double> base(motion.num_variables(), 0.0);
   if (a.start == "multisine") {
     if (!ms || !ms->failure.empty()) {
@@ -451,14 +508,14 @@ Design design(const Scene& scene, const LoadExpressions& loads, id::ExcitationOp
     // less where the torque the swing's acceleration needs (the mechanism's inertia) would
     // exceed half the limit; then the start is scaled to the limits
     const double w = 2 * M_PI / motion.period();
-    const double amplitude = std::min(30.0 / w, 0.5 * o.torque_limit / (swing_inertia(scene, loads, o) * w * w));
-    for (int j = 0; j < kDof; ++j) {
+    const double amplitude = std::min(30.0 / w, 0.5 * o.torque_limit / (swing_inertia(*mech, start) * w * w));
+    for (int j = 0; j < mech->dof(); ++j) {
       base[j * motion.per_joint() + motion.harmonics() + 1] = -amplitude;
     }
   }
   std::vector<std::vector<double>> starts = make_starts(motion, a, base);
   for (int round = 0; round < 4; ++round) {
-    const id::ExcitationProblem problem(scene.params, loads, start, o);
+    const id::ExcitationProblem problem(mech, start, o);
     if (round == 0) {
       for (std::vector<double>& x : starts) x = scaled_start(problem, x);
     }
@@ -469,7 +526,7 @@ Design design(const Scene& scene, const LoadExpressions& loads, id::ExcitationOp
     }
     if (round > 0) r.evaluations += d.solve.evaluations;
     d.solve = r;
-    d.report = on_grid(scene, loads, problem, r.x);
+    d.report = on_grid(scene, problem, r.x);
     d.rounds = round;
     d.torque_margin = o.torque_margin;
     if (d.report.peak_torque <= o.torque_limit) break;
@@ -622,8 +679,9 @@ std::string torque_excess(const Design& d, double limit) {
 // what to change for a design whose std is too large: what --min-reversals costs it (the torque
 // family: the best motion found that reverses fewer times, when it carries more information),
 // else the settings that may give more
+// (`torque_family`: whether the mechanism has the torque family, the five-bar)
 std::string reversal_cost(const Design& d, const id::ExcitationOptions& o,
-                          const id::DesignParameters& dp) {
+                          const id::DesignParameters& dp, bool torque_family) {
   const std::string n = std::to_string(o.min_reversals);
   double own = 0;  // the design's, torque noise alone (comparable with the search's)
   for (size_t i = 0; i < d.report.torque_only_std.size(); ++i) {
@@ -635,7 +693,9 @@ std::string reversal_cost(const Design& d, const id::ExcitationOptions& o,
       d.unconstrained_std > 0.5 * own) {
     return std::string("; ") + (o.min_reversals > 0 ? "a lower --min-reversals (" + n + "), " : "") +
            "a higher --torque-limit, a longer --duration" +
-           (d.torque_family ? "" : " or --family torque (free motions, faster within the same limit)") +
+           (d.torque_family || !torque_family
+                ? ""
+                : " or --family torque (free motions, faster within the same limit)") +
            " may give more";
   }
   std::string rev;
@@ -651,8 +711,9 @@ std::string reversal_cost(const Design& d, const id::ExcitationOptions& o,
 // the design's own checks on the log's grid: status "ok" or what it misses; `base`: the
 // multi-sine baseline's report, when it ran
 std::string design_status(const Design& d, const id::ExcitationOptions& o,
-                          const id::DesignParameters& dp, const id::ExcitationReport* base,
+                          const id::ExcitationMechanism& mech, const id::ExcitationReport* base,
                           std::string* why) {
+  const id::DesignParameters& dp = mech.parameters();
   const id::ExcitationReport& r = d.report;
   // a predicted std of 0, NaN or none is no prediction: the information matrix is singular or
   // was not formed (a light mechanism once reported "worst predicted relative std 0")
@@ -664,10 +725,9 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o,
       return "std_not_determined";
     }
   }
-  static const char* const kJointNames[] = {"O", "B", "C", "D", "D0"};
-  for (int k = 0; k < kJoints; ++k) {
+  for (int k = 0; k < mech.joints(); ++k) {
     if (r.reversals[k] < o.min_reversals) {
-      *why = "joint " + std::string(kJointNames[k]) + " reverses " + std::to_string(r.reversals[k]) +
+      *why = "joint " + mech.joint_name(k) + " reverses " + std::to_string(r.reversals[k]) +
              " times, fewer than --min-reversals " + std::to_string(o.min_reversals) +
              " (the search found no motion within --torque-limit that does; a lower "
              "--min-reversals accepts fewer)";
@@ -682,7 +742,7 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o,
     *why = "min coupler sine " + format_double(r.min_sine) + " below the singularity margin";
     return "singular_margin_violated";
   }
-  for (int j = 0; j < kDof; ++j) {
+  for (int j = 0; j < mech.dof(); ++j) {
     if (std::isfinite(o.theta_lo[j]) &&
         (r.theta_min[j] < o.theta_lo[j] - 1e-9 || r.theta_max[j] > o.theta_hi[j] + 1e-9)) {
       *why = "theta" + std::to_string(j + 1) + " leaves its range";
@@ -707,14 +767,14 @@ std::string design_status(const Design& d, const id::ExcitationOptions& o,
               "); a smaller --angle-noise (finer encoders), logged rates, a longer --duration or "
               "a higher --torque-limit give more";
     } else {
-      *why += reversal_cost(d, o, dp);
+      *why += reversal_cost(d, o, dp, mech.dof() > 1);
     }
     return "std_too_large";
   }
   if (base && worst > kWorseThanBaseline * worst_relative_std(*base)) {
     *why = "predicts a worst relative std of " + format_significant(worst, 4) + ", more than " +
            format_significant(kWorseThanBaseline) + " times the multi-sine baseline's " +
-           format_significant(worst_relative_std(*base), 3) + reversal_cost(d, o, dp);
+           format_significant(worst_relative_std(*base), 3) + reversal_cost(d, o, dp, true);
     return "worse_than_baseline";
   }
   return "ok";
@@ -760,7 +820,8 @@ Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::Desig
   j.set(a.family == "torque" ? "torque_tones" : "fourier_coefficients", coeffs);
   j.set("designed", report_json(dp, d.report));
   Json baseline = Json::object(
-      {{"status", std::string(a.no_baseline ? "skipped" : base ? "ok" : "failed")}});
+      {{"status", std::string(a.no_baseline || !ms ? "skipped" : base ? "ok" : "failed")}});
+  if (!ms && !a.no_baseline) baseline.set("reason", "the multi-sine drives the five-bar's two cranks");
   if (ms && !a.no_baseline) {
     if (!base) baseline.set("reason", ms->failure);
     baseline.set("tones_factor", ms->factor);
@@ -778,11 +839,46 @@ Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::Desig
   return j;
 }
 
-int run(const Args& a) {
-  Scene scene = load_scene(a.scene.scene, a.scene.sets);
+// the mechanism of the scene as the design sees it
+std::shared_ptr<const id::ExcitationMechanism> mechanism_of(const Scene& scene,
+                                                             const LoadExpressions& loads,
+                                                             const id::ExcitationOptions& o) {
+  if (scene.type == MechanismType::kFourBar) {
+    return id::four_bar_excitation(scene.four_bar, loads.four_bar_function());
+  }
+  return id::five_bar_excitation(scene.params, id::design_parameters(scene.params, o.groups), loads);
+}
+
+// A design makes each parameter's std small against its value (`ok`: every relative std at most
+// 1): a scene whose parameters are all 0 (no friction) leaves nothing to design for.
+void check_values(const Scene& scene, const id::DesignParameters& dp) {
+  for (double v : dp.nominal) {
+    if (v != 0) return;
+  }
+  throw InputError(scene.path, "friction",
+                   "every parameter to design for is 0 (" + std::to_string(dp.size()) +
+                       " of them): excite makes their std small against their values; give the "
+                       "scene the friction you expect");
+}
+
+// the family of the design (a four-bar's default: fourier) and the options given that it does
+// not use
+Args resolved(const Args& given, const Scene& scene) {
+  Args a = given;
+  if (scene.type == MechanismType::kFourBar && !a.family_given) a.family = "fourier";
+  a.family_only = a.family == "torque" ? a.fourier_given : a.torque_given;
+  return a;
+}
+
+int run(const Args& given) {
+  Scene scene = load_scene(given.scene.scene, given.scene.sets, /*four_bar_ok=*/true);
   for (const std::string& w : scene.warnings) warn(w);
+  const Args a = resolved(given, scene);
   const LoadExpressions loads(scene);
-  const id::ExcitationOptions o = options_of(a, scene, loads);
+  const id::ExcitationOptions o = options_of(a, scene);
+  const std::shared_ptr<const id::ExcitationMechanism> mech = mechanism_of(scene, loads, o);
+  check_values(scene, mech->parameters());
+  check_holding(a, scene, loads, *mech, o);
   // a trigonometric polynomial of degree H changes sign at most 2 H times per period
   const int most = 2 * o.harmonics * o.periods;
   if (a.family == "fourier" && o.min_reversals > most) {
@@ -793,9 +889,9 @@ int run(const Args& a) {
                              " periods (at most " + std::to_string(most) + ")");
   }
   OutputDir out(a.scene.out, kOutputs);
-  const id::DesignParameters dp = id::design_parameters(scene.params, o.groups);
-  std::unique_ptr<Multisine> ms;
-  if (!a.no_baseline || a.start == "multisine") {
+  const id::DesignParameters& dp = mech->parameters();
+  std::unique_ptr<Multisine> ms;  // the five-bar's
+  if (mech->dof() > 1 && (!a.no_baseline || a.start == "multisine")) {
     ms = std::make_unique<Multisine>(multisine(scene, loads, dp, o));
     if (!ms->failure.empty()) {
       warn("the multi-sine baseline failed (" + ms->failure +
@@ -804,14 +900,12 @@ int run(const Args& a) {
   }
   Design d = a.family == "torque"
                  ? design_torque(scene, loads, o, a)
-                 : design(scene, loads, o, a, a.start == "multisine" ? ms.get() : nullptr);
+                 : design(scene, mech, o, a, a.start == "multisine" ? ms.get() : nullptr);
   // the std identify will report for a log along it: the angle noise through the rates too
-  const Status eiv = id::predict_identified_std(scene.params, dp, loads, o.torque_noise,
-                                                o.angle_noise, &d.report);
-  if (!eiv.ok()) throw NumericalError(scene.path, "excite", "designed motion: " + eiv.message);
-  std::string why;
-  const id::ExcitationReport* base = a.no_baseline || !ms->failure.empty() ? nullptr : &ms->report;
-  const std::string status = design_status(d, o, dp, base, &why);
+  const Status eiv = id::predict_identified_std(*mech, o.torque_noise, o.angle_noise, &d.report);
+  std::string why = "predicts no std identify could report: " + eiv.message;
+  const id::ExcitationReport* base = !ms || a.no_baseline || !ms->failure.empty() ? nullptr : &ms->report;
+  const std::string status = eiv.ok() ? design_status(d, o, *mech, base, &why) : "std_not_determined";
   if (base && base->peak_torque > o.torque_limit * (1 + 1e-9)) {
     warn("the multi-sine baseline peaks at " + format_double(base->peak_torque) +
          " N m, above --torque-limit " + format_double(o.torque_limit) +
@@ -833,6 +927,7 @@ int run(const Args& a) {
     f.torque_limit = o.torque_limit;
     f.title = scene.path;
     f.baseline = base != nullptr;
+    f.cranks = mech->dof();
     const std::string w = plot_excitation(out.staging(), f);
     if (!w.empty()) warn(w);
   }
@@ -862,15 +957,16 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--estimate", a->estimate, "parameter groups: friction,inertia,actuator");
   app->add_flag("--per-joint", a->per_joint, "five friction coefficients of each kind");
   app->add_option("--criterion", a->criterion, "d-optimal | condition | worst-std");
-  app->add_option("--family", a->family,
+  CLI::Option* family = app->add_option("--family", a->family,
                   "fourier: position-controlled Fourier motion (gradient, NLopt) | torque: free "
                   "motion under tone torques clipped at the limit (evolution strategy from the "
-                  "multi-sine)");
+                  "multi-sine; five-bars only). Default: torque, on a four-bar fourier");
   std::vector<CLI::Option*> fourier, torque;  // the options of one family only
   torque.push_back(app->add_option("--tones", a->tones, "torque family: tones per motor"));
   app->add_option("--theta1-range", a->theta1_range, "allowed theta1 [rad], LO:HI");
   app->add_option("--theta2-range", a->theta2_range, "allowed theta2 [rad], LO:HI");
-  app->add_option("--singular-margin", a->design.singular_margin, "least |sin(theta4 - theta3)|");
+  app->add_option("--singular-margin", a->design.singular_margin,
+                  "least |sin(theta4 - theta3)| (four-bar: |sin(theta3 - theta2)|)");
   app->add_option("--min-reversals", a->design.min_reversals, "sign changes of every joint's rate");
   fourier.push_back(app->add_option("--reversal-rate", a->design.reversal_rate,
                                     "fourier: every joint reaches +- this [rad/s]"));
@@ -900,10 +996,14 @@ RunFunction setup(CLI::App* app) {
                   "fourier: per local solve (0: 80); torque: simulations in the search (0: 160)");
   app->add_flag("--no-baseline", a->no_baseline, "skip the multi-sine comparison");
   // the options a user gave that the chosen family does not use: bad input, not ignored
-  return [a, fourier, torque] {
-    for (const CLI::Option* o : a->family == "torque" ? fourier : torque) {
-      if (o->count() > 0) a->family_only.push_back(o->get_name());
+  return [a, fourier, torque, family] {
+    for (const CLI::Option* o : fourier) {
+      if (o->count() > 0) a->fourier_given.push_back(o->get_name());
     }
+    for (const CLI::Option* o : torque) {
+      if (o->count() > 0) a->torque_given.push_back(o->get_name());
+    }
+    a->family_given = family->count() > 0;
     return run(*a);
   };
 }

@@ -208,7 +208,9 @@ void print_summary(const Args& a, const id::TorqueLog& log, const id::IdentifyRe
   for (const std::string& n : res.notes) std::printf("  log: %s\n", n.c_str());
   if (std::isfinite(res.delay_s)) {
     std::printf("  torque delay: %.4g +- %.2g ms%s\n", res.delay_s * 1e3, res.delay_std_s * 1e3,
-                res.delay_corrected ? " (corrected: torques shifted by it)" : " (not significant)");
+                res.delay_corrected     ? " (corrected: torques shifted by it)"
+                : res.delay_unexplained ? " (not corrected: a model error, not a delay)"
+                                        : " (not significant)");
   }
   if (res.accels_estimated) {  // how the window was chosen: identification.json, rate_source
     std::printf("  rates: Savitzky-Golay, half-window %d samples (%.3g ms), order %d, %s\n",

@@ -62,6 +62,8 @@ struct Motion {
   std::vector<double> M1, M2;
   // noise standard deviations of the rates and accelerations used (rest rule, docs/hold.md)
   double rate_noise = 0, acceleration_noise = 0;
+  // the largest rest rate threshold the noise may give (rest_rate_cap)
+  double rest_rate_cap = INFINITY;
 };
 
 // largest |n-th forward difference| of a series (0 when it is too short)
@@ -223,6 +225,34 @@ void estimate_noise(const CrankSeries& c, Motion* m) {
   }
 }
 
+/// A rest rate threshold derived from the noise is capped at this share of the motion's largest
+/// rate: a rule that holds rows moving faster than a tenth of the peak cannot tell rest from
+/// motion. On the crank-rocker sampled at 20-33 Hz (rates 7-35 rad/s) the derived threshold was
+/// 0.26-3 times the peak rate and held every row; at 50 Hz from angles, 0.22; from 100 Hz on,
+/// and the five-bar at 25 Hz and finer, below 0.07 (not capped).
+constexpr double kRestResolution = 0.1;
+
+/// A crank's angles move when they span more than this many deviations of their noise: angles at
+/// rest span about 9 over 1e5 samples of Gaussian noise (a noisy hold, whose largest rates are
+/// its noise, is not capped)
+constexpr double kMoveSigmas = 4 * kRestSigmas;
+
+/// The cap on the rest rate threshold (kRestResolution of the largest rate of the cranks; infinite
+/// when no crank's angles move beyond their noise). A motion sampled too coarsely for its
+/// content (a turning crank at 20 Hz) has differences that do not fall with the order: its own
+/// motion reads as noise, and the threshold derived from it grows past the rates it should tell
+/// from rest.
+double rest_rate_cap(const CrankSeries& c) {
+  bool moves = false;
+  double peak = 0;
+  for (size_t j = 0; j < c.theta.size(); ++j) {
+    const auto [lo, hi] = std::minmax_element(c.theta[j].begin(), c.theta[j].end());
+    moves = moves || *hi - *lo > kMoveSigmas * series_noise(c.theta[j]);
+    for (double w : c.omega[j]) peak = std::max(peak, std::abs(w));
+  }
+  return moves ? kRestResolution * peak : INFINITY;
+}
+
 Motion read_motion(const std::string& path, const Scene& scene) {
   const CsvTable table = read_csv(path);
   const bool four_bar = scene.type == MechanismType::kFourBar;
@@ -237,6 +267,7 @@ Motion read_motion(const std::string& path, const Scene& scene) {
   m.cranks = static_cast<int>(cranks);
   derive_rates(path, table, &c, &m);
   estimate_noise(c, &m);
+  m.rest_rate_cap = rest_rate_cap(c);
   m.rows.resize(c.t.size());
   for (size_t i = 0; i < c.t.size(); ++i) {
     sim::Row& r = m.rows[i];
@@ -268,21 +299,39 @@ double torque_error(const std::vector<sim::Row>& rows, const Motion& motion) {
   return worst;
 }
 
-// the thresholds of the rest rule: the scene's, else kRestSigmas deviations of the noise
+// the thresholds of the rest rule: the scene's, else kRestSigmas deviations of the noise (the
+// rate's capped at rest_rate_cap; `capped`: the cap applied, and why)
 struct RestRule {
   RestThresholds thresholds;
-  std::string source;
+  std::string source, capped;
 };
 
 RestRule rest_rule(const Scene& scene, const Motion& motion) {
   RestRule r;
-  r.thresholds =
-      scene.rest_thresholds(rest_thresholds(motion.rate_noise, motion.acceleration_noise));
+  RestThresholds derived = rest_thresholds(motion.rate_noise, motion.acceleration_noise);
   const bool rate_set = scene.rest_rate_threshold >= 0;
   const bool accel_set = scene.rest_acceleration_threshold >= 0;
-  const std::string derived = format_double(kRestSigmas) + " x the estimated noise";
-  r.source = std::string("rate: ") + (rate_set ? "scene" : derived) +
-             "; acceleration: " + (accel_set ? "scene" : derived);
+  if (!rate_set && derived.rate > motion.rest_rate_cap) {
+    const double peak = motion.rest_rate_cap / kRestResolution;
+    const std::vector<sim::Row>& rows = motion.rows;  // the mean sample step, for the message
+    const double step = (rows.back().t - rows.front().t) / double(rows.size() - 1);
+    r.capped = "the rest threshold its noise gives, |w| <= " + format_significant(derived.rate, 3) +
+               " rad/s, is " + format_significant(derived.rate / peak, 3) +
+               " times its largest rate, " + format_significant(peak, 3) + " rad/s: sampled every " +
+               format_significant(step, 3) +
+               " s, its noise (or its own motion, too fast for the sampling, read as noise) "
+               "cannot tell rest from motion; capped at " +
+               format_significant(kRestResolution) + " of the largest rate, " +
+               format_significant(motion.rest_rate_cap, 3) +
+               " rad/s (sample finer, or set simulation.rest_rate_threshold)";
+    derived.rate = motion.rest_rate_cap;
+  }
+  r.thresholds = scene.rest_thresholds(derived);
+  const std::string noise = format_double(kRestSigmas) + " x the estimated noise";
+  const std::string rate_derived =
+      r.capped.empty() ? noise : "capped at " + format_double(kRestResolution) + " x the largest rate";
+  r.source = std::string("rate: ") + (rate_set ? "scene" : rate_derived) +
+             "; acceleration: " + (accel_set ? "scene" : noise);
   return r;
 }
 
@@ -336,6 +385,7 @@ Json rest_json(const RestRule& rule, const Motion& motion, const RestSummary& s)
   j.set("threshold_source", rule.source);
   j.set("rate_noise", motion.rate_noise);
   j.set("acceleration_noise", motion.acceleration_noise);
+  if (!rule.capped.empty()) j.set("rate_threshold_capped", rule.capped);
   j.set("rows_at_rest", s.rows_at_rest);
   j.set("rows_with_stuck_joint", s.rows_with_stuck_joint);
   Json per_joint = Json::array_of(s.stuck_rows);
@@ -563,6 +613,7 @@ int run(const Args& args) {
   OutputDir out(args.scene.out, kOutputs);
 
   const RestRule rest = rest_rule(scene, motion);
+  if (!rest.capped.empty()) warn(args.motion + ": " + rest.capped);
   std::vector<sim::Row> rows;
   const LoadExpressions expressions(scene);
   const Status status =

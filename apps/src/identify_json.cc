@@ -126,6 +126,7 @@ void rates_json(const id::IdentifyResult& res, const id::TorqueLog& log, Json* j
     d.set("value_s", res.delay_s);  // the logged torques at t + d match the angles at t
     d.set("std_s", res.delay_std_s);
     d.set("corrected", res.delay_corrected);
+    if (res.delay_unexplained) d.set("unexplained", true);  // significant, but a model error
     j->set("torque_delay", std::move(d));
   }
 }

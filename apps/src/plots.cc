@@ -674,18 +674,22 @@ std::string excitation_plot_script(const ExcitationFigures& f, const std::string
   char limit[32];
   std::snprintf(limit, sizeof limit, "%g", f.torque_limit);
   s += begin_figure("fig_motion.png", "3,1", "Designed excitation: crank angles, rates, accelerations",
-                    "blue: theta1/omega1/alpha1, red dashed: crank 2", f.title);
+                    f.cranks > 1 ? "blue: theta1/omega1/alpha1, red dashed: crank 2"
+                                 : "theta1/omega1/alpha1 of the crank",
+                    f.title);
   const char* rows[3][3] = {{"(a) crank angles", "theta [rad]", "theta"},
                             {"(b) crank rates", "omega [rad/s]", "omega"},
                             {"(c) crank accelerations", "alpha [rad/s^2]", "alpha"}};
   for (const auto& r : rows) {
-    s += panel(r[0], r[1]) + "plot " + curve(f.excitation, std::string(r[2]) + "1", 1) + ", \\\n     " +
-         curve(f.excitation, std::string(r[2]) + "2", 2) + "\n";
+    s += panel(r[0], r[1]) + "plot " + curve(f.excitation, std::string(r[2]) + "1", 1);
+    if (f.cranks > 1) s += ", \\\n     " + curve(f.excitation, std::string(r[2]) + "2", 2);
+    s += "\n";
   }
   s += "unset multiplot\n";
-  s += begin_figure("fig_torques.png", "2,1", "Designed excitation: motor torques (inverse dynamics)",
+  s += begin_figure("fig_torques.png", f.cranks > 1 ? "2,1" : "1,1",
+                    "Designed excitation: motor torques (inverse dynamics)",
                     std::string("green: the torque limit +-") + limit + " N m", f.title);
-  for (int i = 1; i <= 2; ++i) {
+  for (int i = 1; i <= f.cranks; ++i) {
     const std::string n = std::to_string(i);
     s += panel("(" + std::string(i == 1 ? "a" : "b") + ") M" + n, "M" + n + " [N m]") + "plot " +
          curve(f.excitation, "M" + n, 1) + ", " + limit + " with lines ls 3, -" + limit +

@@ -26,8 +26,12 @@ double max_theta_difference(const std::vector<Row>& a, const std::vector<Row>& b
 
 namespace {
 
-/// The scene's parameters and options for one treatment.
-void apply(Treatment t, double w_s, Params<double>* p, Options* o) {
+/// a run's wall-time limit in units of WorkPrecisionOptions::max_run_time_s
+constexpr double kRunBudget = 2.0;
+
+/// The scene's parameters and options for one treatment (P: the mechanism's parameters).
+template <class P>
+void apply(Treatment t, double w_s, P* p, Options* o) {
   switch (t) {
     case Treatment::kExactLocated:
       o->locate_switches = true;
@@ -43,8 +47,9 @@ void apply(Treatment t, double w_s, Params<double>* p, Options* o) {
   }
 }
 
-Status reference(const Params<double>& p, const LoadFunction& loads, const Initial& initial,
-                 Options o, double tol, Reference* ref) {
+template <class P, class LF>
+Status reference(const P& p, const LF& loads, const Initial& initial, Options o, double tol,
+                 Reference* ref) {
   o.rtol = o.atol = tol;
   o.method = Method::kCvodeAdams;
   const Result a = simulate(p, loads, initial, o);
@@ -61,16 +66,21 @@ Status reference(const Params<double>& p, const LoadFunction& loads, const Initi
 /// One point of the study: the run of method `m` at tolerance `tol` under treatment `t`, timed
 /// as the minimum of options.repeats runs (fewer when a run fails or exceeds max_run_time_s),
 /// with its error against the treatment's own reference and against the exact one.
-PrecisionPoint measure_point(const Params<double>& params, const LoadFunction& loads,
-                             const Initial& initial, const Options& base,
-                             const WorkPrecisionOptions& options, Treatment t, Method m,
-                             double tol, const WorkPrecision& refs) {
-  Params<double> p = params;
+template <class P, class LF>
+PrecisionPoint measure_point(const P& params, const LF& loads, const Initial& initial,
+                             const Options& base, const WorkPrecisionOptions& options,
+                             Treatment t, Method m, double tol, const WorkPrecision& refs) {
+  P p = params;
   Options o = base;
   apply(t, options.regularization_velocity, &p, &o);
   o.method = m;
   o.rtol = o.atol = tol;
   o.full_rows = false;  // the study times the integration, not the reaction post-processing
+  // a run is stopped (failed, its message says so) past twice the time after which the study
+  // skips a method's tighter tolerances: integrating a sticking four-bar with the switches left
+  // unlocated took 22 s for one run (14.8 M right-hand sides), the default study hours
+  const double budget = kRunBudget * options.max_run_time_s;
+  if (!(o.max_wall_time_s > 0) || o.max_wall_time_s > budget) o.max_wall_time_s = budget;
   PrecisionPoint pt;
   pt.method = m;
   pt.treatment = t;
@@ -87,6 +97,7 @@ PrecisionPoint measure_point(const Params<double>& params, const LoadFunction& l
   pt.rhs_evaluations = r.stats.rhs_evaluations;
   pt.steps = r.stats.steps;
   pt.friction_events = r.stats.friction_events;
+  pt.error = pt.error_vs_exact = std::numeric_limits<double>::quiet_NaN();  // a failed run's
   if (pt.ok) {
     const Reference& own = t == Treatment::kRegularized ? refs.regularized : refs.exact;
     pt.error = max_theta_difference(r.rows, own.rows);
@@ -128,11 +139,10 @@ std::vector<WorkPrecision::Recommendation> recommend(const std::vector<Precision
   return out;
 }
 
-}  // namespace
-
-Status work_precision(const Params<double>& params, const LoadFunction& loads,
-                      const Initial& initial, const Options& base,
-                      const WorkPrecisionOptions& options, WorkPrecision* out) {
+/// work_precision over the mechanism's parameters P and load function LF.
+template <class P, class LF>
+Status study(const P& params, const LF& loads, const Initial& initial, const Options& base,
+             const WorkPrecisionOptions& options, WorkPrecision* out) {
   *out = WorkPrecision{};
   // treatments: the three of an exact-sign law, else the scene's own
   const bool exact_sign = fivebar::exact_sign(params.friction);
@@ -145,7 +155,7 @@ Status work_precision(const Params<double>& params, const LoadFunction& loads,
   Status st = reference(params, loads, initial, base, options.reference_tolerance, &out->exact);
   if (!st.ok()) return st;
   if (exact_sign) {
-    Params<double> reg = params;
+    P reg = params;
     reg.friction.smoothing_velocity = options.regularization_velocity;
     st = reference(reg, loads, initial, base, options.reference_tolerance, &out->regularized);
     if (!st.ok()) return st;
@@ -167,6 +177,20 @@ Status work_precision(const Params<double>& params, const LoadFunction& loads,
   mark_pareto(treatments.front(), options.reference_tolerance, &out->points);
   out->recommendations = recommend(out->points);
   return Status::Ok();
+}
+
+}  // namespace
+
+Status work_precision(const Params<double>& params, const LoadFunction& loads,
+                      const Initial& initial, const Options& base,
+                      const WorkPrecisionOptions& options, WorkPrecision* out) {
+  return study(params, loads, initial, base, options, out);
+}
+
+Status work_precision(const FourBarParamsT<double>& params, const FourBarLoadFunction& loads,
+                      const Initial& initial, const Options& base,
+                      const WorkPrecisionOptions& options, WorkPrecision* out) {
+  return study(params, loads, initial, base, options, out);
 }
 
 }  // namespace fivebar::studies

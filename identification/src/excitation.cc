@@ -1,4 +1,5 @@
-// Excitation design: Fisher information by Jets, the Fourier motion, the design problem.
+// Excitation design: Fisher information by Jets, the Fourier motion, the design problem (a
+// motion's evaluation and the std identify would report: excitation_prediction.cc).
 #include "fivebar/identification/excitation.h"
 
 #include <algorithm>
@@ -12,29 +13,17 @@
 
 #include "fivebar/identification/rates.h"
 #include "fivebar/model/inertial.h"
+#include "fivebar/model/rest_rule.h"
 #include "jet_dynamics.h"
 #include "noise_model.h"
+#include "excitation_shared.h"
+#include "setup_shared.h"
 
 namespace fivebar::identification {
+
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-/// Runs f(i) for i in [0, n) on up to two threads (the machine's budget), in contiguous chunks.
-template <typename F>
-void parallel_for(int n, F&& f) {
-  const int workers = std::min(2, std::max(1, static_cast<int>(std::thread::hardware_concurrency())));
-  if (workers == 1 || n < 64) {
-    for (int i = 0; i < n; ++i) f(i);
-    return;
-  }
-  const int half = n / 2;
-  std::thread other([&] {
-    for (int i = half; i < n; ++i) f(i);
-  });
-  for (int i = 0; i < half; ++i) f(i);
-  other.join();
-}
+using detail::kNaN;
 
 /// The Jet part of sample_terms: friction and inertial columns of dM/dparameter.
 template <int N>
@@ -161,10 +150,77 @@ Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians
 }
 
 // ---------------------------------------------------------------------------------------------
+// The five-bar as an ExcitationMechanism
+
+namespace {
+
+class FiveBarExcitation : public ExcitationMechanism {
+ public:
+  FiveBarExcitation(const Params<double>& scene, DesignParameters dp,
+                    std::function<Loads<double>(double)> loads)
+      : scene_(scene), dp_(std::move(dp)), loads_(std::move(loads)) {}
+  int dof() const override { return kDof; }
+  int joints() const override { return kJoints; }
+  std::string joint_name(int k) const override {
+    static const char* const kNames[] = {"O", "B", "C", "D", "D0"};
+    return kNames[k];
+  }
+  std::string type() const override { return "five_bar"; }
+  const DesignParameters& parameters() const override { return dp_; }
+  Status terms(double t, const MotionState& s, const JointModes* slip,
+               SampleTerms* out) const override {
+    return sample_terms(scene_, dp_, loads_(t), s, slip, out);
+  }
+  Status kinematic_jacobian(double t, const MotionState& q,
+                            Eigen::Matrix<double, 2, 6>* D) const override {
+    Sample s;
+    s.t = t, s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
+    s.loads = loads_(t);
+    const std::vector<double> x = dp_.layout.extract(scene_.friction);
+    if (!detail::kinematic_jacobian(scene_, dp_.layout, x.data(), s, EvalOptions{}, D)) {
+      return Status::Error(StatusCode::kSolverFailed,
+                           "the torques' derivative along the motion failed");
+    }
+    return Status::Ok();
+  }
+  bool fixed_filter(SgOptions*) const override { return false; }
+  bool block_sandwich() const override { return false; }
+  /// identify's rule (stage_samples.cc: rest_rule, held_sample): thresholds kRestSigmas std of
+  /// the filtered rates and accelerations, the angle noise through the joint rates' dependence
+  /// on the pose
+  bool at_rest(double t, const MotionState& q, double g1, double g2,
+               double angle_noise) const override {
+    if (!(angle_noise > 0)) return false;
+    Sample s;
+    s.t = t, s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
+    return stages::held_sample(scene_, s, rest_thresholds(g1 * angle_noise, g2 * angle_noise),
+                               angle_noise);
+  }
+  void rest_gains(const std::vector<double>& t, const SgOptions& sg, double* g1,
+                  double* g2) const override {
+    stages::sg_noise_gains(t, sg, g1, g2);
+  }
+
+ private:
+  Params<double> scene_;
+  DesignParameters dp_;
+  std::function<Loads<double>(double)> loads_;
+};
+
+}  // namespace
+
+std::shared_ptr<const ExcitationMechanism> five_bar_excitation(
+    const Params<double>& scene, const DesignParameters& dp,
+    std::function<Loads<double>(double)> loads) {
+  return std::make_shared<FiveBarExcitation>(scene, dp, std::move(loads));
+}
+
+// ---------------------------------------------------------------------------------------------
 // Fourier motion
 
-FourierMotion::FourierMotion(int harmonics, double period, double ramp, std::array<double, 2> start)
-    : h_(std::max(1, harmonics)), period_(period), ramp_(ramp), start_(start) {}
+FourierMotion::FourierMotion(int harmonics, double period, double ramp, std::array<double, 2> start,
+                             int dof)
+    : h_(std::max(1, harmonics)), period_(period), ramp_(ramp), start_(start), dof_(dof) {}
 
 void FourierMotion::basis(double t, std::vector<std::array<double, 3>>* d) const {
   const double w = 2 * M_PI / period_;
@@ -191,8 +247,8 @@ MotionState FourierMotion::state(const std::vector<double>& x, double t) const {
   std::vector<std::array<double, 3>> d;
   basis(t, &d);
   std::array<std::array<double, 3>, 2> q{};
-  for (int j = 0; j < kDof; ++j) {
-    q[j][0] = start_[j];
+  for (int j = 0; j < kDof; ++j) q[j][0] = start_[j];
+  for (int j = 0; j < dof_; ++j) {
     for (int v = 0; v < per_joint(); ++v) {
       for (int k = 0; k < 3; ++k) q[j][k] += x[j * per_joint() + v] * d[v][k];
     }
@@ -214,7 +270,7 @@ std::vector<double> FourierMotion::fit(const std::vector<double>& t, const std::
   }
   const Eigen::MatrixXd c = A.colPivHouseholderQr().solve(b);
   std::vector<double> x(num_variables());
-  for (int j = 0; j < kDof; ++j) {
+  for (int j = 0; j < dof_; ++j) {
     for (int v = 0; v < pj; ++v) x[j * pj + v] = c(v, j);
   }
   return x;
@@ -232,11 +288,16 @@ struct ExcitationProblem::Derivs {
 ExcitationProblem::ExcitationProblem(const Params<double>& scene,
                                      std::function<Loads<double>(double)> loads,
                                      std::array<double, 2> start, const ExcitationOptions& options)
-    : scene_(scene),
-      loads_(std::move(loads)),
+    : ExcitationProblem(five_bar_excitation(scene, design_parameters(scene, options.groups),
+                                            std::move(loads)),
+                        start, options) {}
+
+ExcitationProblem::ExcitationProblem(std::shared_ptr<const ExcitationMechanism> mechanism,
+                                     std::array<double, 2> start, const ExcitationOptions& options)
+    : mech_(std::move(mechanism)),
       opt_(options),
-      motion_(options.harmonics, options.duration / std::max(1, options.periods), options.ramp, start),
-      dp_(design_parameters(scene, options.groups)) {
+      motion_(options.harmonics, options.duration / std::max(1, options.periods), options.ramp, start,
+              mech_->dof()) {
   // a count that is not a multiple of the periods samples every period at other phases
   int n = std::max(8, options.design_samples);
   if (n % std::max(1, options.periods) == 0) ++n;
@@ -246,14 +307,14 @@ ExcitationProblem::ExcitationProblem(const Params<double>& scene,
 }
 
 int ExcitationProblem::per_sample_constraints() const {
-  int c = 5;  // +-M1, +-M2, sine
-  for (int j = 0; j < kDof; ++j) c += std::isfinite(opt_.theta_lo[j]) ? 2 : 0;
+  int c = 2 * mech_->dof() + 1;  // +-M_j, sine
+  for (int j = 0; j < mech_->dof(); ++j) c += std::isfinite(opt_.theta_lo[j]) ? 2 : 0;
   return c;
 }
 
 int ExcitationProblem::constraint_kinds() const {
   int k = 2;  // torque, sine
-  for (int j = 0; j < kDof; ++j) k += std::isfinite(opt_.theta_lo[j]) ? 1 : 0;
+  for (int j = 0; j < mech_->dof(); ++j) k += std::isfinite(opt_.theta_lo[j]) ? 1 : 0;
   return k;
 }
 
@@ -261,17 +322,20 @@ int ExcitationProblem::blocks() const {
   return std::max(1, std::min(static_cast<int>(times_.size()), opt_.constraint_blocks));
 }
 
-int ExcitationProblem::num_constraints() const { return blocks() * constraint_kinds() + 2 * kJoints; }
+int ExcitationProblem::num_constraints() const {
+  return blocks() * constraint_kinds() + reversal_constraints();
+}
 
 void ExcitationProblem::aggregate(const std::vector<double>& raw, const std::vector<double>& raw_grad,
                                   bool grad, DesignValue* out) const {
   const int N = static_cast<int>(times_.size()), n = num_variables(), ps = per_sample_constraints();
   const int nb = blocks(), kinds = constraint_kinds();
-  // kind of each per-sample row: +-M1, +-M2 -> torque; sine; theta1 range; theta2 range
+  // kind of each per-sample row: +-M_j -> torque; sine; theta1 range; theta2 range
+  const int nt = 2 * mech_->dof();  // torque rows
   std::vector<int> kind(ps);
-  for (int r = 0; r < ps; ++r) kind[r] = r < 4 ? 0 : r == 4 ? 1 : 2 + (r - 5) / 2;
-  if (ps > 5 && !std::isfinite(opt_.theta_lo[0])) {
-    for (int r = 5; r < ps; ++r) kind[r] = 2;
+  for (int r = 0; r < ps; ++r) kind[r] = r < nt ? 0 : r == nt ? 1 : 2 + (r - nt - 1) / 2;
+  if (ps > nt + 1 && !std::isfinite(opt_.theta_lo[0])) {
+    for (int r = nt + 1; r < ps; ++r) kind[r] = 2;
   }
   const double rho = opt_.aggregation_sharpness;
   for (int b = 0; b < nb; ++b) {
@@ -303,17 +367,18 @@ void ExcitationProblem::aggregate(const std::vector<double>& raw, const std::vec
 
 Status ExcitationProblem::sample(const std::vector<double>& x, int i, bool grad, Derivs* d) const {
   d->s = motion_.state(x, times_[i]);
-  const Loads<double> L = loads_(times_[i]);
-  Status st = sample_terms(scene_, dp_, L, d->s, nullptr, &d->v);
+  const double t = times_[i];
+  Status st = mech_->terms(t, d->s, nullptr, &d->v);
   if (!st.ok() || !grad) return st;
   const std::array<double, 6> base = {d->s.th1, d->s.th2, d->s.w1, d->s.w2, d->s.a1, d->s.a2};
   for (int c = 0; c < 6; ++c) {
+    if (c % 2 >= mech_->dof()) continue;  // a crank the mechanism does not have
     // forward differences (one Jet evaluation per motion variable) at the sample's slip signs
     const double h = 1e-7 * std::max(1.0, std::abs(base[c]));
     std::array<double, 6> b = base;
     b[c] += h;
     SampleTerms plus;
-    st = sample_terms(scene_, dp_, L, {b[0], b[1], b[2], b[3], b[4], b[5]}, &d->v.slip, &plus);
+    st = mech_->terms(t, {b[0], b[1], b[2], b[3], b[4], b[5]}, &d->v.slip, &plus);
     if (!st.ok()) return st;
     SampleTerms& o = d->d[c];
     o.J = (plus.J - d->v.J) / h;
@@ -326,7 +391,8 @@ Status ExcitationProblem::sample(const std::vector<double>& x, int i, bool grad,
 }
 
 double ExcitationProblem::criterion_value(const Eigen::MatrixXd& F, Eigen::MatrixXd* dF) const {
-  return design_criterion(F, dp_.scale, dp_.nominal, opt_.regularization, opt_.criterion, dF);
+  const DesignParameters& dp = mech_->parameters();
+  return design_criterion(F, dp.scale, dp.nominal, opt_.regularization, opt_.criterion, dF);
 }
 
 namespace {
@@ -403,13 +469,16 @@ void ExcitationProblem::add_sample_constraints(int i, const Derivs& d, bool grad
   auto m1 = [](const SampleTerms& t) { return t.M1; };
   auto m2 = [](const SampleTerms& t) { return t.M2; };
   auto sine = [](const SampleTerms& t) { return t.sine; };
+  const int dof = mech_->dof();
   cs.push_back({d.v.M1 / lim - keep, of(m1, 1, lim)});
   cs.push_back({-d.v.M1 / lim - keep, of(m1, -1, lim)});
-  cs.push_back({d.v.M2 / lim - keep, of(m2, 1, lim)});
-  cs.push_back({-d.v.M2 / lim - keep, of(m2, -1, lim)});
+  if (dof > 1) {
+    cs.push_back({d.v.M2 / lim - keep, of(m2, 1, lim)});
+    cs.push_back({-d.v.M2 / lim - keep, of(m2, -1, lim)});
+  }
   cs.push_back({1.0 - d.v.sine / opt_.singular_margin, of(sine, -1, opt_.singular_margin)});
   const double th[2] = {d.s.th1, d.s.th2};
-  for (int j = 0; j < kDof; ++j) {
+  for (int j = 0; j < dof; ++j) {
     if (!std::isfinite(opt_.theta_lo[j])) continue;
     const double span = opt_.theta_hi[j] - opt_.theta_lo[j];
     std::array<double, 6> g{};
@@ -423,7 +492,7 @@ void ExcitationProblem::add_sample_constraints(int i, const Derivs& d, bool grad
     (*raw)[row0 + r] = cs[r].first;
     if (!grad) continue;
     double* g = &(*raw_grad)[(row0 + r) * n];
-    for (int j = 0; j < kDof; ++j) {
+    for (int j = 0; j < dof; ++j) {
       for (int v = 0; v < pj; ++v) {
         // s = (th1, th2, w1, w2, a1, a2): crank j's angle, rate, acceleration at 0+j, 2+j, 4+j
         g[j * pj + v] = cs[r].second[j] * basis[v][0] + cs[r].second[2 + j] * basis[v][1] +
@@ -439,7 +508,7 @@ void ExcitationProblem::add_reversal_constraints(
   const int n = num_variables(), pj = motion_.per_joint();
   const int row0 = blocks() * constraint_kinds();
   const double vr = opt_.reversal_rate, rho = 10.0 / vr;
-  for (int k = 0; k < kJoints; ++k) {
+  for (int k = 0; k < mech_->joints(); ++k) {
     for (int sgn : {+1, -1}) {
       std::vector<double> v(all.size()), wts;
       for (size_t i = 0; i < all.size(); ++i) v[i] = sgn * all[i].v.w[k];
@@ -449,7 +518,7 @@ void ExcitationProblem::add_reversal_constraints(
       if (!grad) continue;
       double* g = &out->constraints_grad[static_cast<size_t>(row) * n];
       for (size_t i = 0; i < all.size(); ++i) {
-        for (int j = 0; j < kDof; ++j) {
+        for (int j = 0; j < mech_->dof(); ++j) {
           for (int q = 0; q < pj; ++q) {
             double dw = 0;
             for (int o = 0; o < 3; ++o) dw += all[i].d[2 * o + j].w[k] * basis[i][q][o];
@@ -465,7 +534,7 @@ Status ExcitationProblem::evaluate(const std::vector<double>& x, bool grad, Desi
   const int N = static_cast<int>(times_.size()), n = num_variables(), m = num_constraints();
   std::vector<Derivs> all(N);
   std::vector<Status> status(N);
-  parallel_for(N, [&](int i) { status[i] = sample(x, i, grad, &all[i]); });
+  detail::parallel_for(N, [&](int i) { status[i] = sample(x, i, grad, &all[i]); });
   for (int i = 0; i < N; ++i) {
     if (!status[i].ok()) return status[i];
   }
@@ -492,8 +561,10 @@ Status ExcitationProblem::evaluate(const std::vector<double>& x, bool grad, Desi
     // d Phi / d s_c = 2 w / sigma^2 sum (J G) .* dJ/ds_c
     const Eigen::MatrixXd JG = all[i].v.J * G;
     std::array<double, 6> ds{};
-    for (int cc = 0; cc < 6; ++cc) ds[cc] = c * JG.cwiseProduct(all[i].d[cc].J).sum();
-    for (int j = 0; j < kDof; ++j) {
+    for (int cc = 0; cc < 6; ++cc) {
+      if (cc % 2 < mech_->dof()) ds[cc] = c * JG.cwiseProduct(all[i].d[cc].J).sum();
+    }
+    for (int j = 0; j < mech_->dof(); ++j) {
       for (int v = 0; v < pj; ++v) {
         out->objective_grad[j * pj + v] += ds[j] * basis[i][v][0] + ds[2 + j] * basis[i][v][1] +
                                            ds[4 + j] * basis[i][v][2];
@@ -502,341 +573,6 @@ Status ExcitationProblem::evaluate(const std::vector<double>& x, bool grad, Desi
   }
   aggregate(raw, raw_grad, grad, out);
   add_reversal_constraints(all, grad, basis, out);
-  return Status::Ok();
-}
-
-// ---------------------------------------------------------------------------------------------
-// Evaluation of a motion on a grid
-
-Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
-                       const std::function<Loads<double>(double)>& loads,
-                       const std::vector<double>& t, const std::vector<MotionState>& states,
-                       double torque_noise, ExcitationReport* out) {
-  const int N = static_cast<int>(t.size());
-  std::vector<SampleTerms> terms(N);
-  std::vector<Status> status(N);
-  parallel_for(N, [&](int i) {
-    status[i] = sample_terms(scene, dp, loads(t[i]), states[i], nullptr, &terms[i]);
-  });
-  for (int i = 0; i < N; ++i) {
-    if (!status[i].ok()) {
-      std::ostringstream msg;
-      msg << "at t = " << t[i] << " s: " << status[i].message;
-      return Status::Error(status[i].code, msg.str());
-    }
-  }
-  out->t = t;
-  out->states = states;
-  out->M1.resize(N);
-  out->M2.resize(N);
-  std::vector<Eigen::MatrixXd> Js(N);
-  std::vector<std::array<double, kJoints>> rates(N);
-  out->theta_min = {states[0].th1, states[0].th2};
-  out->theta_max = out->theta_min;
-  for (int i = 0; i < N; ++i) {
-    out->M1[i] = terms[i].M1;
-    out->M2[i] = terms[i].M2;
-    const double peak = std::max(std::abs(terms[i].M1), std::abs(terms[i].M2));
-    if (peak > out->peak_torque) {
-      out->peak_torque = peak;
-      out->peak_time = t[i];
-    }
-    out->min_sine = std::min(out->min_sine, terms[i].sine);
-    Js[i] = terms[i].J;
-    rates[i] = terms[i].w;
-    const double th[2] = {states[i].th1, states[i].th2};
-    for (int j = 0; j < kDof; ++j) {
-      out->theta_min[j] = std::min(out->theta_min[j], th[j]);
-      out->theta_max[j] = std::max(out->theta_max[j], th[j]);
-    }
-  }
-  out->reversals = count_reversals(rates);
-  out->fisher = fisher_information(Js, torque_noise);
-  const int P = dp.size();
-  const Eigen::VectorXd scale = Eigen::Map<const Eigen::VectorXd>(dp.scale.data(), P);
-  const Eigen::MatrixXd Fs = scale.asDiagonal() * out->fisher * scale.asDiagonal();
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Fs);
-  const Eigen::VectorXd ev = es.eigenvalues();
-  out->condition_number = ev(0) > 0 ? ev(P - 1) / ev(0) : kNaN;
-  out->log_det_scaled = ev(0) > 0 ? ev.array().log().sum() : -std::numeric_limits<double>::infinity();
-  // covariance: pseudo-inverse of the scaled Fisher (directions below 1e-14 of the largest are
-  // unidentifiable: their parameters get an infinite std)
-  Eigen::VectorXd inv(P);
-  for (int i = 0; i < P; ++i) inv(i) = ev(i) > 1e-14 * ev(P - 1) ? 1.0 / ev(i) : 0.0;
-  const Eigen::MatrixXd Cs = es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
-  out->covariance = scale.asDiagonal() * Cs * scale.asDiagonal();
-  out->std_dev.assign(P, kNaN);
-  out->relative_std.assign(P, kNaN);
-  for (int i = 0; i < P; ++i) {
-    bool lost = false;
-    for (int e = 0; e < P; ++e) lost = lost || (inv(e) == 0 && std::abs(es.eigenvectors()(i, e)) > 1e-6);
-    out->std_dev[i] = lost ? std::numeric_limits<double>::infinity()
-                           : std::sqrt(std::max(0.0, out->covariance(i, i)));
-    if (dp.nominal[i] != 0) out->relative_std[i] = out->std_dev[i] / std::abs(dp.nominal[i]);
-  }
-  return Status::Ok();
-}
-
-// ---------------------------------------------------------------------------------------------
-// The std identify reports: errors in variables at the window it chooses
-
-namespace {
-
-using stages::kBiasFraction;  // identify's window rules (noise_model.h)
-using stages::kWindowExcess;
-
-/// What one sample of the motion gives the prediction: J (2 x P), the kinematic Jacobian D of
-/// the torques (noise_model.h) and the joints' relative rates.
-struct EivSample {
-  Eigen::MatrixXd J;
-  Eigen::Matrix<double, 2, 6> D;
-  std::array<double, kJoints> w{};
-};
-
-/// The prediction at one half-window m: the samples it keeps, the std and the bias of the
-/// coefficients, the expected torque residual over its noise level.
-struct WindowPrediction {
-  Eigen::MatrixXd covariance;
-  Eigen::VectorXd bias;
-  double residual_ratio = 1;
-  bool ok = false;
-};
-
-/// Savitzky-Golay taps of a centred window of half-width m (savitzky_golay_taps)
-struct Taps {
-  int m = 0;
-  std::vector<double> d1, d2;
-};
-
-class EivPredictor {
- public:
-  EivPredictor(const ExcitationReport& r, std::vector<EivSample> samples, double torque_noise,
-               double angle_noise)
-      : r_(r), s_(std::move(samples)) {
-    const int n = static_cast<int>(r.t.size());
-    dt_ = (r.t.back() - r.t.front()) / std::max(1, n - 1);
-    for (int c = 0; c < kDof; ++c) {
-      noise_.angle[c] = angle_noise;
-      noise_.torque[c] = torque_noise;
-    }
-    // prefix counts of the sample steps over which some joint's rate changes sign
-    reversals_.assign(n + 1, 0);
-    for (int i = 0; i < n; ++i) {
-      bool flip = false;
-      for (int k = 0; i > 0 && k < kJoints; ++k) flip = flip || (s_[i].w[k] > 0) != (s_[i - 1].w[k] > 0);
-      reversals_[i + 1] = reversals_[i] + (flip ? 1 : 0);
-    }
-  }
-  double dt() const { return dt_; }
-  int size() const { return static_cast<int>(r_.t.size()); }
-
-  /// the bias of the filter's rates and accelerations on the exact motion at sample i, and the
-  /// residual's sensitivities to the angle noise
-  void at(int i, const Taps& taps, Eigen::Vector2d* dM, detail::Sensitivity* sens) const {
-    const int lo = i - taps.m;
-    const std::vector<double>&d1 = taps.d1, &d2 = taps.d2;
-    double e[4] = {0, 0, 0, 0};
-    for (size_t k = 0; k < d1.size(); ++k) {
-      const MotionState& q = r_.states[lo + k];
-      e[0] += d1[k] * q.th1, e[1] += d1[k] * q.th2, e[2] += d2[k] * q.th1, e[3] += d2[k] * q.th2;
-    }
-    const MotionState& q = r_.states[i];
-    const Eigen::Vector4d delta(e[0] - q.w1, e[1] - q.w2, e[2] - q.a1, e[3] - q.a2);
-    *dM = s_[i].D.rightCols<4>() * delta;
-    *sens = detail::sensitivity(i, lo, d1, d2, detail::RateSource::kFromAngles, noise_, s_[i].D);
-  }
-
-  /// the filter of half-window m at a centred sample: the same at every one (uniform grid)
-  Taps taps(int m) const {
-    Taps out;
-    out.m = m;
-    SgOptions sg;
-    sg.half_window_s = m * dt_;
-    int lo = 0;
-    savitzky_golay_taps(r_.t, m, sg, &lo, &out.d1, &out.d2);
-    return out;
-  }
-
-  /// the expected torque residual over identify's noise level at half-window m (its residual
-  /// rule: noise and bias add in quadrature), over about 2000 samples with a centred window
-  double residual_ratio(int m) const {
-    const Taps sg = taps(m);
-    const int n = size(), step = std::max(1, (n - 2 * m) / 2000);
-    Eigen::Vector2d b2 = Eigen::Vector2d::Zero(), v = b2;
-    int count = 0;
-    for (int i = m; i < n - m; i += step, ++count) {
-      Eigen::Vector2d dM;
-      detail::Sensitivity sens;
-      at(i, sg, &dM, &sens);
-      b2 += dM.cwiseAbs2();
-      v += detail::propagated_variance(sens);
-    }
-    double ratio = 1;
-    for (int j = 0; j < kActuators && count > 0; ++j) {
-      const double floor2 = noise_.torque[j] * noise_.torque[j] + v(j) / count;
-      ratio = std::max(ratio, std::sqrt(1 + b2(j) / count / floor2));
-    }
-    return ratio;
-  }
-
-  /// covariance and bias of the coefficients over the samples whose window of half-width
-  /// `exclude` spans no slip reversal, with rates from half-window m
-  WindowPrediction predict(int m, int exclude) const {
-    const Taps sg = taps(m);
-    WindowPrediction out;
-    const int n = size(), P = static_cast<int>(s_.front().J.cols());
-    std::vector<int> used;
-    for (int i = m; i < n - m; ++i) {
-      const int a = std::max(0, i - exclude), b = std::min(n - 1, i + exclude);
-      if (reversals_[b] - reversals_[a] == 0) used.push_back(i);
-    }
-    if (static_cast<int>(used.size()) <= P) return out;
-    Eigen::MatrixXd J(2 * used.size(), P);
-    Eigen::VectorXd g = Eigen::VectorXd::Zero(P);
-    std::vector<detail::Sensitivity> sens(used.size());
-    for (size_t u = 0; u < used.size(); ++u) {
-      Eigen::Vector2d dM;
-      at(used[u], sg, &dM, &sens[u]);
-      J.middleRows(2 * u, 2) = s_[used[u]].J;
-      g += s_[used[u]].J.transpose() * dM;  // one Gauss-Newton step: the residual moves by -dM
-    }
-    const Eigen::MatrixXd H = J.transpose() * J;
-    if (!H.allFinite()) return out;
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
-    const Eigen::VectorXd ev = es.eigenvalues();
-    if (!(ev(0) > 1e-14 * ev(P - 1))) return out;  // the samples do not determine them all
-    const Eigen::MatrixXd Hinv =
-        es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
-    out.covariance = Hinv * detail::score_covariance(J, sens, noise_, n) * Hinv;
-    out.bias = -Hinv * g;
-    out.ok = out.covariance.allFinite();
-    return out;
-  }
-
- private:
-  const ExcitationReport& r_;
-  std::vector<EivSample> s_;
-  detail::SensorNoise noise_;
-  std::vector<int> reversals_;
-  double dt_ = 1;
-};
-
-/// The largest |bias| / std over the friction coefficients of a prediction.
-double bias_in_std(const WindowPrediction& p, int friction) {
-  double worst = 0;
-  for (int i = 0; i < friction; ++i) {
-    const double sd = std::sqrt(std::max(0.0, p.covariance(i, i)));
-    if (sd > 0) worst = std::max(worst, std::abs(p.bias(i)) / sd);
-  }
-  return worst;
-}
-
-/// v to 3 significant digits
-std::string digits3(double v) {
-  std::ostringstream o;
-  o.precision(3);
-  o << v;
-  return o.str();
-}
-
-/// std and relative std of a covariance (NaN relative std for a zero nominal value).
-void set_std(const DesignParameters& dp, const Eigen::MatrixXd& C, ExcitationReport* r) {
-  for (int i = 0; i < dp.size(); ++i) {
-    r->std_dev[i] = std::sqrt(std::max(0.0, C(i, i)));
-    r->relative_std[i] = dp.nominal[i] != 0 ? r->std_dev[i] / std::abs(dp.nominal[i]) : kNaN;
-  }
-}
-
-/// The Jacobians J and D and the joint rates at every sample of the motion of `r` (exact); the
-/// first sample that fails, named by its time.
-Status eiv_samples(const Params<double>& scene, const DesignParameters& dp,
-                   const std::function<Loads<double>(double)>& loads, const ExcitationReport& r,
-                   std::vector<EivSample>* samples) {
-  const int n = static_cast<int>(r.t.size());
-  samples->clear();
-  samples->resize(n);
-  std::vector<Status> status(n);
-  const std::vector<double> x = dp.layout.extract(scene.friction);
-  parallel_for(n, [&](int i) {
-    const MotionState& q = r.states[i];
-    SampleTerms terms;
-    status[i] = sample_terms(scene, dp, loads(r.t[i]), q, nullptr, &terms);
-    if (!status[i].ok()) return;
-    Sample s;
-    s.t = r.t[i], s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
-    s.loads = loads(r.t[i]);
-    if (!detail::kinematic_jacobian(scene, dp.layout, x.data(), s, EvalOptions{}, &(*samples)[i].D)) {
-      status[i] = Status::Error(StatusCode::kSolverFailed,
-                                "the torques' derivative along the motion failed");
-      return;
-    }
-    (*samples)[i].J = terms.J;
-    (*samples)[i].w = terms.w;
-  });
-  for (int i = 0; i < n; ++i) {
-    if (!status[i].ok()) {
-      return Status::Error(status[i].code, "at t = " + digits3(r.t[i]) + " s: " + status[i].message);
-    }
-  }
-  return Status::Ok();
-}
-
-}  // namespace
-
-Status predict_identified_std(const Params<double>& scene, const DesignParameters& dp,
-                              const std::function<Loads<double>(double)>& loads,
-                              double torque_noise, double angle_noise, ExcitationReport* r) {
-  const int n = static_cast<int>(r->t.size());
-  r->torque_only_std = r->std_dev;
-  if (!(angle_noise > 0) || n < 8 || dp.size() == 0) return Status::Ok();
-  for (double v : r->std_dev) {
-    if (!std::isfinite(v)) return Status::Ok();  // an unidentifiable direction stays so
-  }
-  std::vector<EivSample> samples;
-  const Status st = eiv_samples(scene, dp, loads, *r, &samples);
-  if (!st.ok()) return st;
-  const EivPredictor eiv(*r, std::move(samples), torque_noise, angle_noise);
-  const std::vector<int> cand = stages::window_candidates(n, eiv.dt(), SgOptions{}.order);
-  // the residual rule: the largest candidate within the excess (scanned until the bias clearly
-  // dominates), one below it past the second
-  std::vector<double> ratio;
-  for (size_t k = 0; k < cand.size(); ++k) {
-    ratio.push_back(eiv.residual_ratio(cand[k]));
-    if (k >= 2 && ratio[k] > 1.5 * *std::min_element(ratio.begin(), ratio.begin() + k)) break;
-  }
-  const double best = std::max(1.0, *std::min_element(ratio.begin(), ratio.end()));
-  int rule = 0;
-  for (size_t k = 0; k < ratio.size(); ++k) {
-    if (ratio[k] <= best * (1 + kWindowExcess)) rule = static_cast<int>(k);
-  }
-  if (rule > 1) --rule;
-  // the bias rule: from the residual rule's window down, the first within kBiasFraction std
-  // (none: the residual rule's)
-  int pick = rule;
-  WindowPrediction chosen = eiv.predict(cand[rule], cand[rule]);
-  std::string table;
-  for (int k = rule; k >= 1 && chosen.ok; --k) {
-    WindowPrediction p = k == rule ? chosen : eiv.predict(cand[k], cand[k]);
-    if (!p.ok) break;
-    const double b = bias_in_std(p, dp.friction);
-    table += (table.empty() ? "" : ", ") + std::to_string(cand[k]) + ": " + digits3(b);
-    if (b <= kBiasFraction) {
-      pick = k;
-      chosen = std::move(p);
-      break;
-    }
-  }
-  if (!chosen.ok) {
-    return Status::Error(StatusCode::kSolverFailed,
-                         "the errors-in-variables covariance could not be formed (the samples "
-                         "away from the slip reversals do not determine the parameters)");
-  }
-  r->covariance = chosen.covariance;
-  set_std(dp, chosen.covariance, r);
-  r->sg_half_window = cand[pick];
-  r->window_choice = "half-window " + std::to_string(cand[rule]) +
-                     " samples by the residual rule (expected ratio " + digits3(ratio[rule]) +
-                     "), " + std::to_string(cand[pick]) + " by the bias rule (|bias| / std: " + table + ")";
   return Status::Ok();
 }
 

@@ -194,20 +194,6 @@ Sample logged_sample(const Fit& f, int i);
 /// sign (it reads as less Coulomb friction) and that no window is small enough to remove.
 bool spans_reversal(const Fit& f, int i, int hw);
 
-/// The rest rule at sample s with each joint's rate threshold set for its own noise: the rates'
-/// noise through its row of J_w (the thresholds are set for one crank's rate; an inner joint's
-/// relative rate combines both), in quadrature with the angle noise `angle_noise` through the
-/// kinematics (with exact logged rates and 1e-5 rad on the angles, a stuck inner joint of the
-/// paper mechanism reads ~1e-5 rad/s). True (the sample is left out) when a joint's relative
-/// rate is within its threshold: whether it is stuck, slips from rest, or still turns slowly
-/// either way, the log cannot tell, and each gives its friction another direction. (Keeping such
-/// a joint when it accelerates, taken to slip the way of its acceleration, is wrong: with logged
-/// rates 0.001 rad/s noisy, a joint turning slowly while it decelerates, or a stuck one whose
-/// acceleration reads the rates' noise through the velocity products, gets the wrong direction;
-/// a breakaway log then gives coulomb -25 std, at 0.01 rad/s -42.)
-bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds& rest,
-                 double angle_noise);
-
 /// The first sample of the fit whose inverse dynamics fails at the parameters x, as a status
 /// naming it and the reason (ok if none fails).
 Status first_failing_sample(const Fit& f, const std::vector<double>& x, const std::string& at);

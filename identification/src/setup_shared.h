@@ -1,6 +1,6 @@
-// What identify's setup (stage_setup.cc) shares with the four-bar's stages (identify_four_bar.cc):
-// the law to fit in a scene's friction, the neutral start values, the internal-to-public map of
-// the parameters, the Savitzky-Golay noise gains, the residual's levels against its noise floor.
+// What identify's setup (stage_setup.cc) shares with the four-bar's stages (identify_four_bar.cc)
+// and the excitation design's prediction: the law to fit in a scene's friction, the neutral start values, the internal-to-public map of
+// the parameters, the Savitzky-Golay noise gains, the residual's levels against its noise floor, the rest rule of a sample.
 #pragma once
 
 #include <Eigen/Core>
@@ -9,7 +9,9 @@
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/parameters.h"
 #include "fivebar/identification/rates.h"
+#include "fivebar/identification/residual.h"
 #include "fivebar/model/friction.h"
+#include "fivebar/model/rest_rule.h"
 
 namespace fivebar::identification::stages {
 
@@ -59,5 +61,19 @@ Eigen::MatrixXd to_public(const ParameterLayout& layout);
 /// of deviation s on the angles gives s * gain): the root sum of squares of the filter
 /// coefficients, read off its response to a unit impulse in the middle of the log.
 void sg_noise_gains(const std::vector<double>& t, const SgOptions& sg, double* g1, double* g2);
+
+/// The rest rule at sample s with each joint's rate threshold set for its own noise: the rates'
+/// noise through its row of J_w (the thresholds are set for one crank's rate; an inner joint's
+/// relative rate combines both), in quadrature with the angle noise `angle_noise` through the
+/// kinematics (with exact logged rates and 1e-5 rad on the angles, a stuck inner joint of the
+/// paper mechanism reads ~1e-5 rad/s). True (the sample is left out) when a joint's relative
+/// rate is within its threshold: whether it is stuck, slips from rest, or still turns slowly
+/// either way, the log cannot tell, and each gives its friction another direction. (Keeping such
+/// a joint when it accelerates, taken to slip the way of its acceleration, is wrong: with logged
+/// rates 0.001 rad/s noisy, a joint turning slowly while it decelerates, or a stuck one whose
+/// acceleration reads the rates' noise through the velocity products, gets the wrong direction;
+/// a breakaway log then gives coulomb -25 std, at 0.01 rad/s -42.)
+bool held_sample(const Params<double>& p, const Sample& s, const RestThresholds& rest,
+                 double angle_noise);
 
 }  // namespace fivebar::identification::stages

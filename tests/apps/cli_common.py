@@ -28,3 +28,18 @@ class Cli:
 def read_csv(path):
     with open(path) as f:
         return list(csv.DictReader(l for l in f if not l.startswith("#")))
+
+
+def write_hold_move(path, noise=None):
+    """A five-bar motion file t,theta1,theta2 at 1 kHz: both cranks at pi/2 for 0.5 s, theta1 a
+    quintic move of 0.5 rad in 0.5 s (peak 1.9 rad/s), held 0.5 s; `noise`: a random.Random and
+    a std [rad] added to every angle, or None."""
+    import math
+    with open(path, "w") as f:
+        f.write("t,theta1,theta2\n")
+        for i in range(1501):
+            t = i * 1e-3
+            u = min(max((t - 0.5) / 0.5, 0.0), 1.0)
+            th = math.pi / 2 + 0.5 * (10 * u**3 - 15 * u**4 + 6 * u**5)
+            e1, e2 = (noise[0].gauss(0, noise[1]), noise[0].gauss(0, noise[1])) if noise else (0, 0)
+            f.write("%.17g,%.17g,%.17g\n" % (t, th + e1, math.pi / 2 + e2))

@@ -1,17 +1,19 @@
 #!/usr/bin/env python3
-"""End-to-end checks of `fivebar simulate`, `inverse` and `identify` on four-bar scenes.
+"""End-to-end checks of `fivebar simulate`, `inverse`, `identify` and `excite` on four-bar scenes.
 
 Usage: cli_four_bar.py FIVEBAR PAPER_YAML WORK_DIR
 
 The two scenes of datasets/reference/four_bar/ run with exit 0; their trajectory.csv has the
 four-bar's columns and agrees with the independent reference trajectories (within 1e-7 rad and
 the run's own error estimate); summary.json says ok. Bad input exits 2 with one line naming the
-key and the mechanism type; a command that runs five-bars only refuses a four-bar scene.
+key and the mechanism type. accuracy's work-precision study runs on a four-bar, its own reference
+within 1e-9 rad of the independent one.
 synth-log writes a four-bar log of one crank; following the simulated motion it gives back M1.
 identify fits a four-bar's log end to end (the true coefficients inside its intervals) and
 refuses the five-bar's options and logs naming them. A log whose torque has the opposite sign
 gets the five-bar's sign check: exit 3 advising --flip-torque-sign 1, which then fits it; the
-flip on a log that did not need it is advised away.
+flip on a log that did not need it is advised away. excite designs a crank motion within its
+limit that synth-log --motion follows, and refuses the five-bar's options naming them.
 """
 import json
 import math
@@ -218,8 +220,87 @@ expect_error(2, "friction.coulomb: expected 1 or 4 numbers (O, B, C, D0), got 5"
              ["simulate", scene, "--set", "friction.coulomb=[0.1,0.1,0.1,0.1,0.1]", "--out", bad])
 expect_error(2, "initial: four-bar cannot assemble",
              ["simulate", scene, "--set", "mechanism.links.2.length=0.01", "--out", bad])
-expect_error(2, "mechanism.type: four_bar: this command runs five-bars only so far",
-             ["excite", scene, "--torque-limit", "1", "--out", bad])
+# excite: a small Fourier design of the crank (exit 0, the four-bar's columns, within its limit,
+# every joint reversing); synth-log --motion along it gives back its M1; the five-bar's options
+# refused naming the option and the mechanism type
+design = os.path.join(WORK, "excite")
+code, _, err = run(["excite", scene, "--duration", "4", "--torque-limit", "2", "--design-samples",
+                    "100", "--harmonics", "3", "--periods", "2", "--max-evaluations", "30",
+                    "--starts", "1", "--min-reversals", "2", "--no-plots", "--out", design])
+if code != 0:
+    failures.append("excite: exit %d: %s" % (code, err))
+else:
+    rows = read_csv(os.path.join(design, "excitation.csv"))
+    if list(rows[0].keys()) != ["t", "theta1", "omega1", "alpha1", "M1"]:
+        failures.append("excite: excitation.csv columns %s" % list(rows[0].keys()))
+    if max(abs(float(r["M1"])) for r in rows) > 2:
+        failures.append("excite: |M1| above the limit")
+    summary = json.load(open(os.path.join(design, "excitation.json")))
+    designed = summary["designed"]
+    if summary["status"] != "ok" or len(designed["reversals"]) != 4 or min(designed["reversals"]) < 2:
+        failures.append("excite: status %s, reversals %s" % (summary["status"], designed["reversals"]))
+    names = [r["name"] for r in read_csv(os.path.join(design, "predicted_std.csv"))]
+    if names != ["coulomb", "viscous"] or not 0 < designed["worst_relative_std"] <= 1:
+        failures.append("excite: parameters %s, worst relative std %s"
+                        % (names, designed["worst_relative_std"]))
+    follow = os.path.join(WORK, "excite_log.csv")
+    code, _, err = run(["synth-log", scene, "--motion", os.path.join(design, "excitation.csv"),
+                        "--torque-noise", "0", "--angle-noise", "0", "--out", follow])
+    worst = max([abs(float(a["tau1"]) - float(b["M1"])) for a, b in zip(read_csv(follow), rows)]
+                if code == 0 else [float("inf")])
+    if worst > 1e-9:
+        failures.append("excite: synth-log --motion along the design differs by %g N m (exit %d %s)"
+                        % (worst, code, err))
+for option, args in (("--family: torque drives the five-bar's two motors", ["--family", "torque"]),
+                     ("--per-joint: the four-bar's design", ["--per-joint"]),
+                     ("--estimate: inertia: the four-bar's design", ["--estimate", "friction,inertia"]),
+                     ("--theta2-range: a four-bar has one crank", ["--theta2-range", "0:1"]),
+                     ("--start: multisine", ["--start", "multisine"])):
+    for pattern in (option, "(mechanism.type four_bar)"):
+        expect_error(2, pattern, ["excite", scene, "--torque-limit", "2", "--out", bad] + args)
+# accuracy: the work-precision study of a four-bar, checked against its independent reference
+out = os.path.join(WORK, "accuracy")
+code, stdout, err = run(["accuracy", os.path.join(REFERENCE, "crank_rocker.yaml"), "--out", out,
+                         "--repeats", "1", "--tolerances", "1e-6,1e-9",
+                         "--methods", "cvode_adams,arkode_erk45", "--no-plots",
+                         "--reference", os.path.join(REFERENCE, "crank_rocker.csv")])
+if code != 0:
+    failures.append("accuracy on a four-bar: exit %d: %s" % (code, err))
+else:
+    with open(os.path.join(out, "summary.json")) as f:
+        reference = json.load(f)["reference"]
+    points = read_csv(os.path.join(out, "work_precision.csv"))
+    if not reference["max_abs_difference_external"] < 1e-9:
+        failures.append("accuracy: the own reference differs from the independent one by %r"
+                        % reference["max_abs_difference_external"])
+    ok = [p for p in points if p["status"] == "ok"]
+    if len(points) != 12 or len(ok) != 12:  # 3 treatments x 2 methods x 2 tolerances
+        failures.append("accuracy: %d points, %d ok (expected 12)" % (len(points), len(ok)))
+    errors = {(p["method"], p["tolerance"]): float(p["error"])
+              for p in ok if p["treatment"] == "exact_located"}
+    for method in ("cvode_adams", "arkode_erk45"):  # a tighter tolerance, a smaller error
+        tight, loose = errors.get((method, "1e-09")), errors.get((method, "1e-06"))
+        if tight is None or loose is None or not tight < loose:
+            failures.append("accuracy: %s: error %r at 1e-9 against %r at 1e-6"
+                            % (method, tight, loose))
+    if reference.get("external_times_compared") != len(read_csv(os.path.join(REFERENCE, "crank_rocker.csv"))) \
+            or reference.get("external_agrees") is not True:
+        failures.append("accuracy: the independent reference: %r" % reference)
+# another mechanism's trajectory as the reference: a warning, and the summary says so
+out = os.path.join(WORK, "accuracy_other")
+code, _, err = run(["accuracy", os.path.join(REFERENCE, "crank_rocker.yaml"), "--out", out,
+                    "--repeats", "1", "--tolerances", "1e-6", "--methods", "cvode_adams",
+                    "--no-plots", "--reference", os.path.join(REFERENCE, "double_rocker.csv")])
+if code != 0 or "it is not a run of this scene" not in err:
+    failures.append("accuracy with the double rocker's reference: exit %d: %s" % (code, err))
+else:
+    with open(os.path.join(out, "summary.json")) as f:
+        if json.load(f)["reference"].get("external_agrees") is not False:
+            failures.append("accuracy: the double rocker's reference read as agreeing")
+# excite on a frictionless four-bar: nothing to design for, refused naming friction
+expect_error(2, "friction: every parameter to design for is 0",
+             ["excite", scene, "--set", "friction.coulomb=0", "--set", "friction.viscous=0",
+              "--duration", "2", "--torque-limit", "2", "--out", bad])
 # identify: a four-bar's log fitted end to end (2 s, angles only, synth-log's default noise); the
 # five-bar's options and a five-bar's log refused naming them
 id_log = os.path.join(WORK, "crank_rocker_id.csv")

@@ -4,21 +4,16 @@ again, given as angles only. The 5-point rates overshoot by ~3e-6 rad/s on the r
 move starts; that row must still read as at rest and carry the equilibrium torque inside its
 holding range. Usage: inverse_onset.py FIVEBAR SCENE WORKDIR"""
 import csv
-import math
 import os
 import subprocess
 import sys
 
+from cli_common import write_hold_move
+
 fivebar, scene, work = sys.argv[1:4]
 os.makedirs(work, exist_ok=True)
 motion = os.path.join(work, "holdmove.csv")
-with open(motion, "w") as f:
-    f.write("t,theta1,theta2\n")
-    for i in range(1501):
-        t = i * 1e-3
-        s = min(max((t - 0.5) / 0.5, 0.0), 1.0)
-        th = math.pi / 2 + 0.5 * (10 * s**3 - 15 * s**4 + 6 * s**5)
-        f.write("%.17g,%.17g,%.17g\n" % (t, th, math.pi / 2))
+write_hold_move(motion)
 out = os.path.join(work, "out")
 subprocess.run([fivebar, "inverse", scene, "--motion", motion, "--out", out, "--no-plots"],
                check=True, stdout=subprocess.DEVNULL)

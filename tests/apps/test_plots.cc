@@ -66,6 +66,17 @@ TEST(ExcitationFigures, WithoutABaselineTheStdFigureDrawsTheDesignOnly) {
   EXPECT_THAT(without, HasSubstr("using \"relative_std\":xtic(1)"));
 }
 
+// A four-bar's excitation has one crank: its figures draw theta1, omega1, alpha1 and M1 only (the
+// columns its excitation.csv has).
+TEST(ExcitationFigures, OneCrankDrawsItsColumnsOnly) {
+  ExcitationFigures f;
+  EXPECT_THAT(excitation_plot_script(f, "pngcairo"), HasSubstr("\"M2\""));
+  f.cranks = 1;
+  const std::string one = excitation_plot_script(f, "pngcairo");
+  for (const char* c : {"\"theta1\"", "\"omega1\"", "\"alpha1\"", "\"M1\""}) EXPECT_THAT(one, HasSubstr(c));
+  for (const char* c : {"theta2", "omega2", "alpha2", "M2", "crank 2"}) EXPECT_THAT(one, Not(HasSubstr(c)));
+}
+
 TEST(ExcitationFigures, AFigureGnuplotCannotDrawIsRemovedNotLeftEmpty) {
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("fivebar_plots_" + std::to_string(::getpid()));

@@ -1,10 +1,12 @@
 // Excitation design: the Jet Jacobian and Fisher matrix against finite differences,
-// the design gradient against finite differences, the Fourier motion's consistency.
+// the design gradient against finite differences, the Fourier motion's consistency, the
+// predicted std (the four-bar's: test_four_bar_identify.cc).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 
+#include "design_gradients.h"
 #include "fivebar/identification/excitation.h"
 #include "fivebar/identification/synth.h"
 #include "fivebar/identification/torque_excitation.h"
@@ -115,25 +117,7 @@ TEST(Excitation, DesignGradientMatchesFiniteDifferences) {
     std::vector<double> x = {0.5, 0.10, -0.05, 0.04, 0.02, -0.08, 0.06,
                              -0.7, 0.03, -0.02, 0.05, 0.01, 0.02, -0.04};
     ASSERT_EQ(problem.num_variables(), static_cast<int>(x.size()));
-    DesignValue v;
-    ASSERT_TRUE(problem.evaluate(x, true, &v).ok());
-    const int n = problem.num_variables(), m = problem.num_constraints();
-    for (int i = 0; i < n; ++i) {
-      std::vector<double> xp = x, xm = x;
-      const double h = 1e-6;
-      xp[i] += h;
-      xm[i] -= h;
-      DesignValue vp, vm;
-      ASSERT_TRUE(problem.evaluate(xp, false, &vp).ok());
-      ASSERT_TRUE(problem.evaluate(xm, false, &vm).ok());
-      const double fd = (vp.objective - vm.objective) / (2 * h);
-      EXPECT_NEAR(v.objective_grad[i], fd, 1e-4 * (1 + std::abs(fd))) << "variable " << i;
-      for (int r = 0; r < m; ++r) {
-        const double cfd = (vp.constraints[r] - vm.constraints[r]) / (2 * h);
-        EXPECT_NEAR(v.constraints_grad[static_cast<size_t>(r) * n + i], cfd, 1e-4 * (1 + std::abs(cfd)))
-            << "constraint " << r << " variable " << i;
-      }
-    }
+    testing::expect_design_gradients(problem, x);
   }
 }
 
@@ -298,24 +282,37 @@ TEST(Excitation, MultisineFitRunsOnALightMechanismWithinTheLimit) {
   EXPECT_GT(peak, 0.1);  // scaled to the limit, not far below it
 }
 
+/// The light mechanism's multi-sine log (limit 0.2 N m, rates logged) of `duration` seconds and
+/// its samples' states.
+struct LightMotion {
+  SynthResult log;
+  std::vector<MotionState> states;
+};
+
+LightMotion light_multisine(double duration) {
+  SynthOptions so;
+  so.duration = duration;
+  so.multisine = true;
+  so.torque_limit = 0.2;
+  so.with_rates = true;
+  LightMotion m{synthesize_log(light_params(), light_loads(), paper_initial(), so), {}};
+  const TorqueLog& l = m.log.log;
+  for (int i = 0; i < l.size(); ++i) {
+    m.states.push_back(
+        {l.theta1[i], l.theta2[i], l.omega1[i], l.omega2[i], l.alpha1[i], l.alpha2[i]});
+  }
+  return m;
+}
 
 // The std identify reports for a log along a motion (predict_identified_std): the torque noise's
 // alone without angle noise; with it, never less, growing with the angle noise, and back near
 // the torque noise's where that noise dominates. Motion: the light mechanism's multi-sine.
 TEST(Excitation, PredictedStdAddsTheAngleNoiseThroughTheRates) {
   const Params<double> light = light_params();
-  SynthOptions so;
-  so.duration = 4;
-  so.multisine = true;
-  so.torque_limit = 0.2;
-  so.with_rates = true;
-  const SynthResult log = synthesize_log(light, light_loads(), paper_initial(), so);
-  ASSERT_TRUE(log.status.ok()) << log.status.message;
-  std::vector<MotionState> states;
-  for (int i = 0; i < log.log.size(); ++i) {
-    const TorqueLog& l = log.log;
-    states.push_back({l.theta1[i], l.theta2[i], l.omega1[i], l.omega2[i], l.alpha1[i], l.alpha2[i]});
-  }
+  const LightMotion motion = light_multisine(4);
+  ASSERT_TRUE(motion.log.status.ok()) << motion.log.status.message;
+  const SynthResult& log = motion.log;
+  const std::vector<MotionState>& states = motion.states;
   const DesignParameters dp = design_parameters(light, DesignGroups{});
   auto predicted = [&](double torque_noise, double angle_noise) {
     ExcitationReport r;
@@ -341,6 +338,37 @@ TEST(Excitation, PredictedStdAddsTheAngleNoiseThroughTheRates) {
     EXPECT_NEAR(loud.std_dev[i] / loud.torque_only_std[i], 1.0, 0.15) << dp.names[i];
     EXPECT_NEAR(noisy.relative_std[i], noisy.std_dev[i] / std::abs(dp.nominal[i]), 1e-15);
   }
+}
+
+// identify's rest rule in the prediction: a sample whose joint rates are within the noise of the
+// filtered rates is at rest (identify leaves it out), one that turns well above it is not, and
+// without angle noise none is (the five-bar's held_sample).
+TEST(Excitation, RestRuleOfThePredictionIsIdentifys) {
+  const auto five = five_bar_excitation(light_params(), design_parameters(light_params(), {}),
+                                        light_loads());
+  const MotionState still{1.4, 1.9, 1e-4, -1e-4, 0, 0}, turning{1.4, 1.9, 2.0, -1.5, 0, 0};
+  const double g1 = 30, g2 = 3000;  // a filter's noise gains [1/s], [1/s^2]
+  EXPECT_TRUE(five->at_rest(0, still, g1, g2, 1e-5));
+  EXPECT_FALSE(five->at_rest(0, turning, g1, g2, 1e-5));
+  EXPECT_FALSE(five->at_rest(0, still, g1, g2, 0));
+  EXPECT_TRUE(five->at_rest(0, turning, g1, g2, 1e-1));
+}
+
+// Where the angle noise puts every sample of a motion at rest for identify (it then refuses the
+// log: too few samples usable), the prediction has no std either, not an optimistic one.
+TEST(Excitation, NoPredictionWhereIdentifyKeepsNoSample) {
+  const Params<double> light = light_params();
+  const LightMotion motion = light_multisine(2);
+  ASSERT_TRUE(motion.log.status.ok()) << motion.log.status.message;
+  const std::vector<MotionState>& states = motion.states;
+  const TorqueLog& l = motion.log.log;
+  const DesignParameters dp = design_parameters(light, DesignGroups{});
+  ExcitationReport r;
+  ASSERT_TRUE(evaluate_motion(light, dp, light_loads(), l.t, states, 0.02, &r).ok());
+  const Status st = predict_identified_std(light, dp, light_loads(), 0.02, 0.1, &r);
+  EXPECT_FALSE(st.ok());
+  EXPECT_NE(st.message.find("not at rest"), std::string::npos) << st.message;
+  for (int i = 0; i < dp.size(); ++i) EXPECT_TRUE(std::isnan(r.std_dev[i])) << dp.names[i];
 }
 
 }  // namespace

@@ -66,6 +66,7 @@ TEST(FrictionLoop, ClosedFormResponseMatchesProbes) {
     const ReactionResponse<double> inv = reaction_torque_response(k);
     const ReactionResponse<double> fwd = mech::detail::forward_torque_response<FiveBar>(p, k, Ainv);
     const ReactionResponse<double> low = FiveBar::forward_response(p, k, Ainv).expand();
+    const ReactionResponse<double> cpl = FiveBar::inverse_response(k).expand();
     for (int j = 0; j < kJoints; ++j) {
       const auto pi = probe(inverse_solve, j), pf = probe(forward_solve, j);
       for (int m = 0; m < kJoints; ++m) {
@@ -73,6 +74,7 @@ TEST(FrictionLoop, ClosedFormResponseMatchesProbes) {
         EXPECT_LT((inv[j][m] - pi[m]).norm(), kResponseTol * scale) << "inverse j=" << j;
         EXPECT_LT((fwd[j][m] - pf[m]).norm(), kResponseTol * scale) << "forward j=" << j;
         EXPECT_LT((low[j][m] - pf[m]).norm(), kResponseTol * scale) << "low rank j=" << j;
+        EXPECT_LT((cpl[j][m] - pi[m]).norm(), kResponseTol * scale) << "rank 2 j=" << j;
       }
     }
   }
@@ -216,15 +218,29 @@ std::vector<ReducedCase> reduced_cases(double mu, int n, uint64_t seed) {
   return out;
 }
 
-// the reduced map is the scaled map B[k][j] = dF_j[k] phi_j in four numbers, and its gain bound
-// is never below the exact one (so the loop's decision between the contracting path and the
-// uniqueness check is kept: below 1 the exact bound is below 1 too)
-TEST(FrictionLoop, ReducedMapMatchesTheScaledMap) {
+/// The reduced map of a case: forward dynamics' (n = 4) or, from the coupler part of the same
+/// response, that at given accelerations (n = 2); and the scaled map of the same response.
+template <int n>
+detail::ReducedMap<n> reduced_map(const ReducedCase& c) {
+  return detail::ReducedMap<n>(c.phi, c.F0, c.response);
+}
+template <int n>
+detail::ScaledReactions<double> scaled_map(const ReducedCase& c) {
+  if constexpr (n == 4) return detail::ScaledReactions<double>(c.phi, c.F0, c.response);
+  const CouplerResponse<double>& coupler = c.response;
+  return detail::ScaledReactions<double>(c.phi, c.F0, coupler.expand());
+}
+
+// the reduced map is the scaled map B[k][j] = dF_j[k] phi_j in four (two) numbers, and its gain
+// bound is never below the exact one (so the loop's decision between the contracting path and
+// the uniqueness check is kept: below 1 the exact bound is below 1 too)
+template <int n>
+void expect_reduced_map_matches_the_scaled_map() {
   int contracting = 0, beyond = 0;
-  for (const double mu : {0.1, 1.0, 5.0}) {
+  for (const double mu : {0.1, 1.0, 5.0, 20.0}) {
     for (const ReducedCase& c : reduced_cases(mu, 60, 41)) {
-      const detail::ReducedReactions reduced(c.phi, c.F0, c.response);
-      const detail::ScaledReactions<double> scaled(c.phi, c.F0, c.response);
+      const detail::ReducedMap<n> reduced = reduced_map<n>(c);
+      const detail::ScaledReactions<double> scaled = scaled_map<n>(c);
       EXPECT_GE(reduced.gain_bound, scaled.contraction_bound * (1.0 - 1e-12));
       (reduced.gain_bound < 1.0 ? contracting : beyond) += 1;
       for (int j = 0; j < kJoints; ++j) {
@@ -244,16 +260,20 @@ TEST(FrictionLoop, ReducedMapMatchesTheScaledMap) {
   EXPECT_GT(beyond, 20);
 }
 
+TEST(FrictionLoop, ReducedMapMatchesTheScaledMap) { expect_reduced_map_matches_the_scaled_map<4>(); }
+TEST(FrictionLoop, CouplerMapMatchesTheScaledMap) { expect_reduced_map_matches_the_scaled_map<2>(); }
+
 // Newton and chord steps on the reduced map reach the fixed point of the scaled map's loop (and
 // its own convergence test holds there), from |F0| and from a start far off
-TEST(FrictionLoop, ReducedNewtonReachesTheFixedPoint) {
+template <int n>
+void expect_reduced_newton_reaches_the_fixed_point() {
   EvalOptions opt;
   int compared = 0;
-  for (const double mu : {0.1, 0.6}) {
+  for (const double mu : {0.1, 0.6, 3.0}) {
     for (const ReducedCase& c : reduced_cases(mu, 60, 43)) {
-      const detail::ReducedReactions reduced(c.phi, c.F0, c.response);
+      const detail::ReducedMap<n> reduced = reduced_map<n>(c);
       if (!(reduced.gain_bound < 1.0)) continue;
-      const detail::ScaledReactions<double> scaled(c.phi, c.F0, c.response);
+      const detail::ScaledReactions<double> scaled = scaled_map<n>(c);
       std::array<double, kJoints> N_ref, Mf_ref, start;
       std::array<Vec2<double>, kJoints> F_ref;
       int it_ref = 0;
@@ -285,6 +305,48 @@ TEST(FrictionLoop, ReducedNewtonReachesTheFixedPoint) {
         }
         ++compared;
       }
+    }
+  }
+  EXPECT_GT(compared, 100);
+}
+
+TEST(FrictionLoop, ReducedNewtonReachesTheFixedPoint) {
+  expect_reduced_newton_reaches_the_fixed_point<4>();
+}
+TEST(FrictionLoop, CouplerNewtonReachesTheFixedPoint) {
+  expect_reduced_newton_reaches_the_fixed_point<2>();
+}
+
+// inverse dynamics on the rank-2 map (double) against the loop iterated in Jets on the unscaled
+// map (value-only Jets, the reference path), friction raised until some states no longer
+// contract: the same outcome, and the same solution
+TEST(FrictionLoop, InverseCouplerLoopMatchesTheReferenceLoop) {
+  using J1 = ceres::Jet<double, 1>;
+  int compared = 0;
+  for (const double mu : {0.12, 2.0, 8.0}) {
+    Params<double> p = paper_params();
+    p.friction.coulomb.fill(mu);
+    std::mt19937_64 rng(9);
+    EvalOptions opt, ref_opt;
+    ref_opt.implicit_loop_derivative = false;
+    for (const auto& s : testing::random_states(p, 60, 47)) {
+      const double a1 = std::uniform_real_distribution<double>(-50.0, 50.0)(rng);
+      const double a2 = std::uniform_real_distribution<double>(-50.0, 50.0)(rng);
+      Evaluation<double> fast;
+      Evaluation<J1> ref;
+      const Status a = inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, a1, a2, nullptr,
+                                        opt, &fast);
+      const Status b = inverse_dynamics(p.cast<J1>(), s.loads.cast<J1>(), J1(s.th1), J1(s.th2),
+                                        J1(s.w1), J1(s.w2), J1(a1), J1(a2), nullptr, ref_opt,
+                                        &ref);
+      ASSERT_EQ(a.code, b.code) << a.message << " / " << b.message;
+      if (!a.ok()) continue;
+      ++compared;
+      double scale = 1.0;
+      for (int k = 0; k < kJoints; ++k) scale = std::max(scale, fast.N[k]);
+      for (int k = 0; k < kJoints; ++k) EXPECT_NEAR(ref.N[k].a, fast.N[k], kSameSolution * scale);
+      EXPECT_NEAR(ref.M1.a, fast.M1, kSameSolution * scale);
+      EXPECT_NEAR(ref.M2.a, fast.M2, kSameSolution * scale);
     }
   }
   EXPECT_GT(compared, 100);

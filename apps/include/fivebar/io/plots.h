@@ -105,6 +105,7 @@ struct ExcitationFigures {
   double torque_limit = 0;
   std::string title;
   bool baseline = true;  ///< the std csv's multisine columns hold values (false: all nan, not drawn)
+  int cranks = 2;        ///< the excitation's cranks: 2 (theta1, theta2, M1, M2) or 1 (theta1, M1)
 };
 std::string excitation_plot_script(const ExcitationFigures& figures, const std::string& terminal);
 /// Draws them in `dir` (script kept as dir/plots.gnuplot). Returns "" or a warning.

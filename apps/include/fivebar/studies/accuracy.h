@@ -25,7 +25,7 @@ struct PrecisionPoint {
   double tolerance = 0;      ///< rtol = atol
   bool ok = false;
   std::string message;       ///< the failure, when !ok
-  double error = 0;          ///< max |d theta_1..4| over the output grid vs its own reference [rad]
+  double error = 0;          ///< max |d theta_k| over the output grid vs its own reference [rad]; NaN when !ok
   double error_vs_exact = 0; ///< vs the exact-sign reference (model error of regularization)
   double wall_time_s = 0;    ///< minimum over the repeats
   long rhs_evaluations = 0;
@@ -41,7 +41,8 @@ struct WorkPrecisionOptions {
   int repeats = 3;                    ///< wall time is the minimum over this many runs
   double regularization_velocity = 1e-3;  ///< w_s of the regularized treatment [rad/s]
   double reference_tolerance = 1e-13;
-  /// skip the remaining tolerances of a method once a run takes longer than this [s]
+  /// skip the remaining tolerances of a method once a run takes longer than this [s]; a run
+  /// taking twice this long is stopped and counts as failed
   double max_run_time_s = 5.0;
   /// called after every point with (points done, points planned); may be empty
   std::function<void(int done, int total)> progress;
@@ -68,11 +69,15 @@ struct WorkPrecision {
   std::vector<Recommendation> recommendations;
 };
 
-/// Max |d theta_1..4| between two runs on the same grid (infinity if the grids differ).
+/// Max |d theta_k| (every link angle) between two runs on the same grid (infinity if the grids differ).
 double max_theta_difference(const std::vector<Row>& a, const std::vector<Row>& b);
 
 /// Runs the study. `base` supplies duration, output step and loop settings.
 Status work_precision(const Params<double>& params, const LoadFunction& loads,
+                      const Initial& initial, const Options& base,
+                      const WorkPrecisionOptions& options, WorkPrecision* out);
+/// The same on a four-bar (its crank, coupler and rocker angles).
+Status work_precision(const FourBarParamsT<double>& params, const FourBarLoadFunction& loads,
                       const Initial& initial, const Options& base,
                       const WorkPrecisionOptions& options, WorkPrecision* out);
 

@@ -12,6 +12,7 @@ using sim::Stats;
 using sim::Options;
 using sim::Result;
 using sim::LoadFunction;
+using sim::FourBarLoadFunction;
 using sim::Initial;
 using sim::kAllMethods;
 

@@ -7,14 +7,17 @@
 
 #include <array>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "fivebar/identification/parameters.h"
+#include "fivebar/identification/rates.h"
 #include "fivebar/identification/synth.h"
 #include "fivebar/model/dynamics.h"
+#include "fivebar/model/four_bar_params.h"
 #include "fivebar/model/kinematics.h"
 #include "fivebar/model/params.h"
 #include "fivebar/model/status.h"
@@ -51,15 +54,18 @@ struct DesignParameters {
 };
 DesignParameters design_parameters(const Params<double>& scene, const DesignGroups& groups);
 
-/// One sample of a motion: pose, rates and accelerations of the two cranks.
+/// One sample of a motion: pose, rates and accelerations of the two cranks (a mechanism with
+/// one crank, the four-bar, uses th1, w1, a1 only).
 struct MotionState {
   double th1 = 0, th2 = 0, w1 = 0, w2 = 0, a1 = 0, a2 = 0;
 };
 
 /// What one sample gives: the Jacobian of the measured torques (M1, M2) with respect to the
-/// design parameters (2 x P, by Jets; the actuator columns in closed form), the torques
-/// themselves (actuator terms at their nominal 0), the coupler sine |sin(th4 - th3)| and the
-/// relative rates of the five joints.
+/// design parameters (2 x P, by Jets; the actuator columns in closed form; a mechanism with one
+/// crank leaves row 2 and M2 at 0), the torques themselves (actuator terms at their nominal 0),
+/// the singular measure (the five-bar's coupler sine |sin(th4 - th3)|, the four-bar's
+/// |sin(th3 - th2)|) and the relative rates of the joints (slots from the mechanism's joints on:
+/// 0).
 struct SampleTerms {
   Eigen::MatrixXd J;
   double M1 = 0, M2 = 0, sine = 0;
@@ -76,6 +82,59 @@ Status sample_terms(const Params<double>& scene, const DesignParameters& dp, con
 /// The Fisher information sum_i J_i^T J_i / sigma^2 of a motion, with its sample terms.
 Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians, double sigma);
 
+/// What the design and its prediction need of a mechanism, at the scene's constants and loads:
+/// per sample the terms above and the torques' kinematic Jacobian, and identify's rules for the
+/// mechanism (its rate filter, its rest rule). The five-bar (five_bar_excitation) and the
+/// four-bar (four_bar_excitation) are its instances.
+class ExcitationMechanism {
+ public:
+  virtual ~ExcitationMechanism() = default;
+  /// driven cranks (1 or 2) and joints (<= kJoints)
+  virtual int dof() const = 0;
+  virtual int joints() const = 0;
+  virtual std::string joint_name(int k) const = 0;
+  /// "five_bar", "four_bar"
+  virtual std::string type() const = 0;
+  virtual const DesignParameters& parameters() const = 0;
+  /// sample_terms at time t (the loads of that time)
+  virtual Status terms(double t, const MotionState& s, const JointModes* slip,
+                       SampleTerms* out) const = 0;
+  /// d (M1, M2) / d (th1, th2, w1, w2, a1, a2) at the scene's parameters (the rows and columns
+  /// of a crank the mechanism does not have: 0)
+  virtual Status kinematic_jacobian(double t, const MotionState& s,
+                                    Eigen::Matrix<double, 2, 6>* D) const = 0;
+  /// identify's rate filter when it does not choose it from the log (true, *sg set); false when
+  /// identify chooses the half-window by its window rules (the five-bar)
+  virtual bool fixed_filter(SgOptions* sg) const = 0;
+  /// identify's covariance: true for the sandwich over blocks of the filter's window (2 m + 1
+  /// log samples: the four-bar), whose meat holds only the score's correlations within a block;
+  /// false for the errors-in-variables covariance over all of them (the five-bar)
+  virtual bool block_sandwich() const = 0;
+  /// identify's rest rule at a sample of the exact motion: true where identify would leave the
+  /// sample out as at rest, its rates estimated by a filter whose rate and acceleration noise
+  /// gains are g1, g2 from angles of noise std `angle_noise` [rad]
+  virtual bool at_rest(double t, const MotionState& s, double g1, double g2,
+                       double angle_noise) const = 0;
+  /// the noise gains g1, g2 identify's rest rule takes for the filter `sg` on the grid t
+  virtual void rest_gains(const std::vector<double>& t, const SgOptions& sg, double* g1,
+                          double* g2) const = 0;
+};
+
+/// The five-bar of `scene` with the loads at each time, for the parameters `dp`.
+std::shared_ptr<const ExcitationMechanism> five_bar_excitation(
+    const Params<double>& scene, const DesignParameters& dp,
+    std::function<Loads<double>(double)> loads);
+
+/// The four-bar's design parameters: its friction, coulomb and viscous shared by its four joints
+/// (identify's default on four-bars); the groups it does not have, "" when it has them all, else
+/// the option that asks for one (--estimate inertia, --estimate actuator, --per-joint).
+DesignParameters four_bar_design_parameters(const FourBarParams& scene);
+std::string four_bar_design_unsupported(const DesignGroups& groups);
+
+/// The four-bar of `scene` (identify_four_bar.cc's rate filter and rest rule).
+std::shared_ptr<const ExcitationMechanism> four_bar_excitation(
+    const FourBarParams& scene, std::function<FourBarLoads(double)> loads);
+
 /// The designed motion of each crank: a drift (a steady rotation) plus a finite Fourier series,
 /// faded in from rest at the start pose by a ramp r(t) (quintic smoothstep over `ramp` seconds,
 /// then 1):
@@ -83,14 +142,17 @@ Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians
 /// w = 2 pi / period. After the ramp the rates and accelerations are periodic; r(0) = r'(0) =
 /// r''(0) = 0 makes the motion start at rest at th0 with zero acceleration whatever the
 /// coefficients. Free variables per crank: c [rad/s], a_1..a_H, b_1..b_H [rad]; th1's first.
+/// With one crank (dof 1) th2 stays at its start.
 class FourierMotion {
  public:
-  FourierMotion(int harmonics, double period, double ramp, std::array<double, 2> start);
+  FourierMotion(int harmonics, double period, double ramp, std::array<double, 2> start,
+                int dof = kDof);
+  int dof() const { return dof_; }
   int harmonics() const { return h_; }
   double period() const { return period_; }
   double ramp() const { return ramp_; }
   int per_joint() const { return 2 * h_ + 1; }
-  int num_variables() const { return 2 * per_joint(); }
+  int num_variables() const { return dof_ * per_joint(); }
   /// Harmonic of variable v of a crank (0 for the drift).
   int harmonic_of(int v) const { return v == 0 ? 0 : (v - 1) % h_ + 1; }
   const std::array<double, 2>& start() const { return start_; }
@@ -98,7 +160,7 @@ class FourierMotion {
   void basis(double t, std::vector<std::array<double, 3>>* d) const;
   MotionState state(const std::vector<double>& x, double t) const;
   /// The variables whose motion is the least-squares fit of the angles th1(t), th2(t) sampled at
-  /// `t` (e.g. another excitation, as a start for the design).
+  /// `t` (e.g. another excitation, as a start for the design; th2 unused with one crank).
   std::vector<double> fit(const std::vector<double>& t, const std::vector<double>& th1,
                           const std::vector<double>& th2) const;
 
@@ -106,6 +168,7 @@ class FourierMotion {
   int h_;
   double period_, ramp_;
   std::array<double, 2> start_;
+  int dof_;
 };
 
 /// The design's objective.
@@ -160,22 +223,29 @@ struct DesignValue {
   std::vector<double> constraints_grad;  ///< row-major m x n
 };
 
-/// The design problem. Variables: FourierMotion's. Constraints, scaled to be dimensionless: at
-/// every design sample |M_j| / limit - (1 - margin) <= 0 (two per crank), 1 - sine / margin <= 0,
+/// The design problem over a mechanism. Variables: FourierMotion's (one series per crank).
+/// Constraints, scaled to be dimensionless: at every design sample |M_j| / limit - (1 - margin)
+/// <= 0 (two per crank), 1 - sine / margin <= 0 (the mechanism's singular measure),
 /// the angle ranges when given, each kind aggregated over constraint_blocks blocks of
 /// consecutive samples by a Kreisselmeier-Steinhauser upper bound of the block's maximum (few
 /// constraints keep the NLopt subproblems cheap); for every joint, a smooth lower bound of the
 /// maximum of +-w_k at least reversal_rate.
 class ExcitationProblem {
  public:
+  ExcitationProblem(std::shared_ptr<const ExcitationMechanism> mechanism,
+                    std::array<double, 2> start, const ExcitationOptions& options);
+  /// the five-bar of `scene` (options.groups' parameters)
   ExcitationProblem(const Params<double>& scene, std::function<Loads<double>(double)> loads,
                     std::array<double, 2> start, const ExcitationOptions& options);
 
   const FourierMotion& motion() const { return motion_; }
-  const DesignParameters& parameters() const { return dp_; }
+  const ExcitationMechanism& mechanism() const { return *mech_; }
+  const DesignParameters& parameters() const { return mech_->parameters(); }
   const ExcitationOptions& options() const { return opt_; }
   int num_variables() const { return motion_.num_variables(); }
   int num_constraints() const;
+  /// the reversal constraints, two per joint, come last
+  int reversal_constraints() const { return 2 * mech_->joints(); }
   /// Design sample times (over the duration, midpoints of equal cells), then the extra times.
   const std::vector<double>& times() const { return times_; }
 
@@ -202,11 +272,9 @@ class ExcitationProblem {
                                 DesignValue* out) const;
   int per_sample_constraints() const;
 
-  Params<double> scene_;
-  std::function<Loads<double>(double)> loads_;
+  std::shared_ptr<const ExcitationMechanism> mech_;
   ExcitationOptions opt_;
   FourierMotion motion_;
-  DesignParameters dp_;
   std::vector<double> times_;
   int objective_samples_ = 0;  ///< the first ones of times_ (the extra times only constrain)
 };
@@ -228,12 +296,17 @@ struct ExcitationReport {
   int sg_half_window = 0;
   std::string window_choice;
   std::array<int, kJoints> reversals{};
+  int dof = kDof, joints = kJoints;  ///< the mechanism's cranks and joints (evaluate_motion)
   double peak_torque = 0, peak_time = 0, min_sine = 1, condition_number = 0, log_det_scaled = 0;
   std::array<double, 2> theta_min{}, theta_max{};
 };
 
 /// Evaluates a motion given as states on a grid (the design's, or any logged motion). Loads at
 /// each time from `loads`. Fails on the first sample that cannot be evaluated.
+Status evaluate_motion(const ExcitationMechanism& mechanism, const std::vector<double>& t,
+                       const std::vector<MotionState>& states, double torque_noise,
+                       ExcitationReport* out);
+/// the same for the five-bar of `scene`
 Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
                        const std::function<Loads<double>(double)>& loads,
                        const std::vector<double>& t, const std::vector<MotionState>& states,
@@ -248,9 +321,15 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
 /// within its residual rule's 4 % of the noise level (one candidate below, as identify backs
 /// off), then the largest up to it whose bias on the coefficients is within 0.2 of their std.
 /// The bias is exact here (the filter applied to the noise-free motion). Samples within the
-/// window of a slip reversal are left out as identify leaves them out. Replaces covariance,
+/// window of a slip reversal, and those identify's rest rule takes as at rest at this noise
+/// (ExcitationMechanism::at_rest), are left out as identify leaves them out. Where the samples
+/// left do not determine the parameters, fails with NaN std. Replaces covariance,
 /// std_dev and relative_std; the Fisher's std goes to torque_only_std. With angle_noise 0 the
-/// std are the Fisher's.
+/// std are the Fisher's. A mechanism whose identify has a fixed rate filter
+/// (ExcitationMechanism::fixed_filter) is predicted at that filter.
+Status predict_identified_std(const ExcitationMechanism& mechanism, double torque_noise,
+                              double angle_noise, ExcitationReport* r);
+/// the same for the five-bar of `scene`
 Status predict_identified_std(const Params<double>& scene, const DesignParameters& dp,
                               const std::function<Loads<double>(double)>& loads,
                               double torque_noise, double angle_noise, ExcitationReport* r);

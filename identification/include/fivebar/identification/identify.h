@@ -259,6 +259,9 @@ struct IdentifyResult {
   /// the torques lag); NaN when not estimated. delay_corrected: the fit used torques shifted by d
   double delay_s = std::numeric_limits<double>::quiet_NaN(), delay_std_s = delay_s;
   bool delay_corrected = false;
+  /// a significant delay that the fit with the torques shifted by it did not explain (a model
+  /// error, not a delay: not corrected, named in the warnings)
+  bool delay_unexplained = false;
   /// per sample (log order): rates and accelerations used, predicted torques at the fit (inverse
   /// dynamics of the fitted scene at every sample; NaN where it failed), and whether used
   std::vector<double> omega1, omega2, alpha1, alpha2, predicted_tau1, predicted_tau2;

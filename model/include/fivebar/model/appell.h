@@ -85,4 +85,13 @@ std::array<T, kJoints> relative_accelerations(const Vec2<T>& thdd, const T& al3,
   return relative_rates(thdd[0], thdd[1], al3, al4);
 }
 
+#ifdef FIVEBAR_DOUBLE_KINEMATICS_FROM_SIM
+// The command-line layer (apps/, at -O1) takes these double instances from fivebar::sim
+// (model/src/double_instances.cc) rather than compiling -O1 copies the linker could keep in
+// place of the libraries' optimized ones.
+extern template void mass_and_forces<double>(const Params<double>&, const Kinematics<double>&,
+                                             const Bias<double>&, const Loads<double>&,
+                                             const Vec2<double>&, Mat2<double>*, Vec2<double>*);
+#endif
+
 }  // namespace fivebar

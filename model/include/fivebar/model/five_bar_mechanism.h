@@ -109,6 +109,17 @@ struct FiveBar {
                                                                      const Kinematics<T>& k) {
     return fivebar::reaction_acceleration_response(p, k);
   }
+  /// The change of the reactions per unit friction torque at given accelerations (inverse
+  /// dynamics), in rank-2 form (CouplerResponse; reaction_torque_response expanded).
+  template <typename T>
+  static CouplerResponse<T> inverse_response(const Kinematics<T>& k) {
+    const Vec2<T> u3 = k.B - k.C, u4 = k.D - k.C;
+    const T inv = T(1) / cross(u3, u4);
+    CouplerResponse<T> r;
+    r.f3 = u4 * inv;
+    r.f4 = -u3 * inv;
+    return r;
+  }
   /// The change of the reactions per unit friction torque in forward dynamics with no joint
   /// stuck, in rank-4 form (LowRankResponse): through the coupler moments (as
   /// reaction_torque_response) and through the accelerations they bring, dthdd = -A^-1 J_w^T e_j.
@@ -116,12 +127,15 @@ struct FiveBar {
   static LowRankResponse<T> forward_response(const Params<T>& p, const Kinematics<T>& k,
                                              const Mat2<T>& Ainv) {
     LowRankResponse<T> r;
-    const Vec2<T> u3 = k.B - k.C, u4 = k.D - k.C;
-    const T det = cross(u3, u4);
-    r.f3 = u4 / det;
-    r.f4 = -u3 / det;
-    r.R = fivebar::reaction_acceleration_response(p, k);
-    for (int j = 0; j < kJoints; ++j) r.m[j] = -(Ainv * fivebar::joint_row(k, j).transpose());
+    static_cast<CouplerResponse<T>&>(r) = inverse_response(k);
+    r.R = fivebar::reaction_acceleration_response(p, k, r.f3, r.f4);
+    // -A^-1 J_w^T e_j from the rows of J_w (joint_row): e1, G3 - e1, G4 - G3, e2 - G4, e2
+    const Vec2<T> g3 = Ainv * k.G3.transpose(), g4 = Ainv * k.G4.transpose();
+    r.m[0] = -Ainv.col(0);
+    r.m[1] = Ainv.col(0) - g3;
+    r.m[2] = g3 - g4;
+    r.m[3] = g4 - Ainv.col(1);
+    r.m[4] = -Ainv.col(1);
     return r;
   }
   template <typename T>

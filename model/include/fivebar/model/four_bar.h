@@ -442,4 +442,30 @@ inline chain::ChainLoads four_bar_loads(const FourBarParams& p, const FourBarKin
   return {{L.M1}, {0.0, L.M3, 0.0}, {{1, chain::Vec(p.point_p, 0), four_bar_force(k, L)}}};
 }
 
+#ifdef FIVEBAR_COMPILED_DOUBLE_DYNAMICS
+// As the five-bar's (inverse.h, forward.h): code that links fivebar::sim takes the four-bar's
+// double passes from model/src/simulator.cc.
+namespace mech::detail {
+extern template Status inverse_pass<FourBar, double>(
+    const FourBar::Params<double>&, const FourBar::Loads<double>&, const FourBar::Q<double>&,
+    const FourBar::Q<double>&, const FourBar::Q<double>&, const JointModes*, const EvalOptions&,
+    FourBar::Evaluation<double>*, const std::array<double, kJoints>*, LoopSolution*);
+extern template Status forward_pass<FourBar, double>(
+    const FourBar::Params<double>&, const FourBar::Loads<double>&, const FourBar::Q<double>&,
+    const FourBar::Q<double>&, const JointModes*, const EvalOptions&,
+    FourBar::Evaluation<double>*, const std::array<double, kJoints>*, LoopSolution*,
+    FrictionWarmStart*);
+}  // namespace mech::detail
+#endif
+
+#ifdef FIVEBAR_DOUBLE_KINEMATICS_FROM_SIM
+// The command-line layer (apps/, at -O1) takes these double instances from fivebar::sim
+// (model/src/double_instances.cc) rather than compiling -O1 copies the linker could keep in
+// place of the libraries' optimized ones.
+extern template Status four_bar_close<double>(const FourBarParamsT<double>&, const double&,
+                                              FourBarKinematicsT<double>*, double);
+extern template Status four_bar_kinematics<double>(const FourBarParamsT<double>&, const double&,
+                                                   FourBarKinematicsT<double>*, double);
+#endif
+
 }  // namespace fivebar

@@ -40,6 +40,9 @@ struct LoopAids {
   /// closed form in the rank-4 form of forward dynamics with no joint stuck: replaces the unit
   /// probes
   const LowRankResponse<T>* low_rank = nullptr;
+  /// the same at given accelerations (inverse dynamics), in its rank-2 form (unused where
+  /// low_rank is given)
+  const CouplerResponse<T>* coupler = nullptr;
   FrictionWarmStart* warm = nullptr;  ///< double evaluations only (ignored for Jets)
 };
 
@@ -607,20 +610,17 @@ Status scaled_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions
                                           converged, contracting, ratio, N, Mf, F, iterations);
 }
 
-/// The contracting loop of forward dynamics with no joint stuck on the reduced map
-/// (ReducedReactions, friction_reduced_newton), started from |F0| (`N0`) or, with `warm` set, from
-/// friction's share of the last reactions carried onto it (FrictionWarmStart). True with N, Mf, F
-/// set; false where the map's gain bound is 1 or more (the exact bound and the uniqueness check
-/// of scaled_friction_loop decide there) or Newton did not converge (scaled_friction_loop takes
-/// the loop from the start, with the same outcome as without this path).
-inline bool reduced_friction_loop(const std::array<double, kJoints>& phi, const EvalOptions& opt,
-                                  const std::array<Vec2<double>, kJoints>& F0,
-                                  const std::array<double, kJoints>& N0,
-                                  const LowRankResponse<double>& response,
-                                  const FrictionWarmStart* warm, std::array<double, kJoints>* N,
-                                  std::array<double, kJoints>* Mf,
-                                  std::array<Vec2<double>, kJoints>* F, int* iterations) {
-  const ReducedReactions map(phi, F0, response);
+/// The contracting loop on a reduced map (ReducedMap: forward dynamics with no joint stuck, or
+/// given accelerations; friction_reduced_newton), started from |F0| (`N0`) or, with `warm` set,
+/// from friction's share of the last reactions carried onto it (FrictionWarmStart). True with N,
+/// Mf, F set; false where the map's gain bound is 1 or more (the exact bound and the uniqueness
+/// check of scaled_friction_loop decide there) or Newton did not converge (scaled_friction_loop
+/// takes the loop from the start, with the same outcome as without this path).
+template <int n>
+bool reduced_friction_loop(const ReducedMap<n>& map, const EvalOptions& opt,
+                           const std::array<double, kJoints>& N0, const FrictionWarmStart* warm,
+                           std::array<double, kJoints>* N, std::array<double, kJoints>* Mf,
+                           std::array<Vec2<double>, kJoints>* F, int* iterations) {
   if (!(map.gain_bound < 1.0)) return false;
   std::array<double, kJoints> start = N0;
   if (warm && warm->set) {
@@ -649,8 +649,13 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
   // the response per torque expanded from the low-rank form where a path needs it
   ReactionResponse<T> expanded;
   const auto full_response = [&]() -> const ReactionResponse<T>* {
-    if (!aids.low_rank) return nullptr;
-    expanded = aids.low_rank->expand();
+    if (aids.low_rank) {
+      expanded = aids.low_rank->expand();
+    } else if (aids.coupler) {
+      expanded = aids.coupler->expand();
+    } else {
+      return nullptr;
+    }
     return &expanded;
   };
   // the unscaled map only where it is needed (the Newton fallback, the solution recorded for the
@@ -665,11 +670,14 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
   FrictionWarmStart* warm = std::is_same_v<T, double> ? aids.warm : nullptr;
   std::array<T, kJoints> N0;  // |F0|
   reaction_norms(F0, &N0);
-  bool reduced = false;  // solved on the reduced map (forward dynamics, no joint stuck)
+  bool reduced = false;  // solved on a reduced map (ReducedMap)
   if constexpr (std::is_same_v<T, double>) {
     if (aids.low_rank) {
-      reduced = reduced_friction_loop(phi, opt, F0, N0, *aids.low_rank, warm, N, Mf, F,
-                                      iterations);
+      reduced = reduced_friction_loop(ReducedReactions(phi, F0, *aids.low_rank), opt, N0, warm,
+                                      N, Mf, F, iterations);
+    } else if (aids.coupler) {
+      reduced = reduced_friction_loop(CouplerReactions(phi, F0, *aids.coupler), opt, N0, warm,
+                                      N, Mf, F, iterations);
     }
   }
   if (!reduced) {

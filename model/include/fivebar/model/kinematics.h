@@ -309,4 +309,18 @@ Hessians<T> compute_hessians(const Params<T>& p, const Kinematics<T>& k) {
   return H;
 }
 
+#ifdef FIVEBAR_DOUBLE_KINEMATICS_FROM_SIM
+// The command-line layer (apps/, at -O1) takes these double instances from fivebar::sim
+// (model/src/double_instances.cc) rather than compiling -O1 copies the linker could keep in
+// place of the libraries' optimized ones.
+extern template Status close_loop<double>(const Params<double>&, const double&, const double&,
+                                          Kinematics<double>*, double, bool);
+extern template void place_points<double>(const Params<double>&, Kinematics<double>*);
+extern template void first_order_coefficients<double>(const Params<double>&, Kinematics<double>*);
+extern template Status solve_kinematics<double>(const Params<double>&, const double&,
+                                                const double&, Kinematics<double>*, double, bool);
+extern template void compute_bias<double>(const Params<double>&, const Kinematics<double>&,
+                                          const double&, const double&, Bias<double>*);
+#endif
+
 }  // namespace fivebar

@@ -31,6 +31,7 @@
 //   reactions(p, kin, b, L, a, qdd, Mf, F, ev)   Newton-Euler reactions (and link accelerations)
 //   forward_response(p, kin, Ainv)     (kClosedFormResponse) dF_k per unit Mf_j at the forward
 //                                      dynamics' accelerations, in the loop's low-rank form
+//   inverse_response(kin)              (kClosedFormResponse) the same at given accelerations
 //   set_drives(L, ev) / drive_torques(p, kin, qdd, ev)   forward: the drive torques given;
 //                                      inverse: the drive torques that produce qdd
 //   input_power(ev, v), external_power(kin, b, L, a, v)  [W]

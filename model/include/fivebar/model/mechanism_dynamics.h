@@ -340,8 +340,16 @@ Status inverse_friction(const ParamsOf<M, T>& p, const EvalOptions& opt, const J
   const Joints<T> phi = inverse_friction_arms<M>(p, opt, wdot, slip, bristle, ev);
   Joints<T> act;
   const bool motors = M::actuator_torques(p, ev->w, ev->slip, &act);
+  LoopAids<T> aids;
+  CouplerResponse<T> response;
+  if constexpr (M::kClosedFormResponse) {
+    if (!(loop && loop->set)) {
+      response = M::inverse_response(ev->kin);
+      aids.coupler = &response;
+    }
+  }
   const Status st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
-                                  motors ? &act : nullptr, loop);
+                                  motors ? &act : nullptr, loop, aids);
   if (!st.ok()) return singular_cause<M, T>(p, ev->kin, st);
   // the implicit derivative (Jets) returns F of the final Mf already (F is affine in Mf)
   if (std::is_same_v<T, double> || !loop || !loop->set) solve(ev->Mf, &ev->F);

@@ -99,28 +99,38 @@ ReactionResponse<T> reaction_torque_response(const Kinematics<T>& k) {
 /// (no gravity, loads, velocity terms or friction torques in a change). The steps of
 /// detail::reactions_of_accelerations for both unit accelerations at once, without the terms
 /// that are zero in a change: each quantity is a matrix (or row) whose column c is its change per
-/// unit thdd_c.
+/// unit thdd_c. f3, f4: F2 per unit coupler moment sum (u3 x F2 = S3, u4 x F2 = S4:
+/// F2 = f3 S3 + f4 S4, f3 = u4 / det, f4 = -u3 / det, det = u3 x u4).
 template <typename T>
 std::array<Mat2<T>, kJoints> reaction_acceleration_response(const Params<T>& p,
-                                                            const Kinematics<T>& k) {
+                                                            const Kinematics<T>& k,
+                                                            const Vec2<T>& f3, const Vec2<T>& f4) {
   // q x A.col(c) for both columns
   const auto cross_columns = [](const Vec2<T>& q, const Mat2<T>& A) -> Row2<T> {
     return q.x() * A.row(1) - q.y() * A.row(0);
   };
   const Mat2<T> R3 = p.links[2].mass * k.Gc[2];  // force balances: F2 - F3 = R3, F3 - F4 = R4
   const Mat2<T> R4 = p.links[3].mass * k.Gc[3];
-  const Vec2<T> u3 = k.B - k.C, u4 = k.D - k.C;
+  const Vec2<T> u4 = k.D - k.C;
   const Row2<T> S3 = p.links[2].inertia * k.G3 + cross_columns(Vec2<T>(k.c[2] - k.C), R3);
   const Row2<T> S4 = -p.links[3].inertia * k.G4 - cross_columns(Vec2<T>(k.c[3] - k.C), R4) +
                      cross_columns(u4, Mat2<T>(R3 + R4));
-  const T det = cross(u3, u4);
   std::array<Mat2<T>, kJoints> R;
-  R[1] = (u4 * S3 - u3 * S4) / det;  // u3 x F2 = S3, u4 x F2 = S4
+  R[1] = f3 * S3 + f4 * S4;
   R[2] = R[1] - R3;
   R[3] = R[2] - R4;
   R[0] = p.links[0].mass * k.Gc[0] + R[1];
   R[4] = p.links[1].mass * k.Gc[1] - R[3];
   return R;
+}
+
+/// The same with F2's response to the coupler moment sums formed here.
+template <typename T>
+std::array<Mat2<T>, kJoints> reaction_acceleration_response(const Params<T>& p,
+                                                            const Kinematics<T>& k) {
+  const Vec2<T> u3 = k.B - k.C, u4 = k.D - k.C;
+  const T inv = T(1) / cross(u3, u4);
+  return reaction_acceleration_response(p, k, Vec2<T>(u4 * inv), Vec2<T>(-u3 * inv));
 }
 
 /// |F_k| of the five joints.
@@ -129,5 +139,18 @@ void reaction_norms(const std::array<Vec2<T>, kJoints>& F, std::array<T, kJoints
   using std::sqrt;
   for (int j = 0; j < kJoints; ++j) (*N)[j] = sqrt(F[j].squaredNorm());
 }
+
+#ifdef FIVEBAR_DOUBLE_KINEMATICS_FROM_SIM
+// The command-line layer (apps/, at -O1) takes these double instances from fivebar::sim
+// (model/src/double_instances.cc) rather than compiling -O1 copies the linker could keep in
+// place of the libraries' optimized ones.
+extern template void reactions<double>(const Params<double>&, const Kinematics<double>&,
+                                       const Bias<double>&, const Loads<double>&,
+                                       const Vec2<double>&, const Vec2<double>&,
+                                       const std::array<double, kJoints>&,
+                                       std::array<Vec2<double>, kJoints>*, double*, double*);
+extern template void reaction_norms<double>(const std::array<Vec2<double>, kJoints>&,
+                                            std::array<double, kJoints>*);
+#endif
 
 }  // namespace fivebar

@@ -1,13 +1,15 @@
-// The friction loop in the four numbers through which the friction torques move the reactions
-// in forward dynamics with no joint stuck (LowRankResponse): the coupler moment sums and the crank
-// accelerations z = (s3, s4, a1, a2). The reactions are affine in z, F_k(z) = F0_k + G_k z, and
-// z = H Mf with Mf_j = phi_j |F_j(z)|: Newton on z solves 4 x 4 systems and never forms the 5 x 5
-// response of the reactions to the friction torques.
+// The friction loop in the few numbers through which the friction torques move the reactions
+// (ReducedMap): in forward dynamics with no joint stuck the coupler moment sums and the crank
+// accelerations z = (s3, s4, a1, a2); in inverse dynamics (accelerations given) the coupler moment
+// sums z = (s3, s4) alone. The reactions are affine in z, F_k(z) = F0_k + G_k z, and
+// z = H Mf with Mf_j = phi_j |F_j(z)|: Newton on z solves 4 x 4 (2 x 2) systems and never forms
+// the 5 x 5 response of the reactions to the friction torques.
 #pragma once
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <type_traits>
 
 #include <Eigen/LU>
 
@@ -18,17 +20,14 @@
 
 namespace fivebar {
 
-/// The change of the reactions per unit friction torque in forward dynamics with no joint stuck,
-/// in the rank-4 form it has: the torques move the reactions only through the two coupler moment
-/// sums s3 = Mf_B - Mf_C, s4 = Mf_D - Mf_C (F2 by f3 s3 + f4 s4, F1, F3, F4 with it and F5
-/// against it) and through the crank accelerations they bring, a = sum_j m_j Mf_j (F_k by R_k a):
-/// dF_j[k] = sigma_k (c3_j f3 + c4_j f4) + R_k m_j, with sigma_k = -1 for D0 and +1 otherwise,
-/// c3 = (0, 1, -1, 0, 0), c4 = (0, 0, -1, 1, 0).
+/// The change of the reactions per unit friction torque at given accelerations (inverse
+/// dynamics), in the rank-2 form it has: the torques move the reactions only through the two
+/// coupler moment sums s3 = Mf_B - Mf_C, s4 = Mf_D - Mf_C (F2 by f3 s3 + f4 s4, F1, F3, F4 with
+/// it and F5 against it): dF_j[k] = sigma_k (c3_j f3 + c4_j f4), with sigma_k = -1 for D0 and +1
+/// otherwise, c3 = (0, 1, -1, 0, 0), c4 = (0, 0, -1, 1, 0).
 template <typename T>
-struct LowRankResponse {
-  Vec2<T> f3, f4;                  ///< F2 per unit s3 and per unit s4
-  std::array<Mat2<T>, kJoints> R;  ///< F_k per unit crank acceleration
-  std::array<Vec2<T>, kJoints> m;  ///< crank accelerations per unit Mf_j: -A^-1 J_w^T e_j
+struct CouplerResponse {
+  Vec2<T> f3, f4;  ///< F2 per unit s3 and per unit s4
 
   /// dF[j][k], the change of F_k per unit Mf_j (ReactionResponse)
   ReactionResponse<T> expand() const {
@@ -36,14 +35,27 @@ struct LowRankResponse {
                                               Vec2<T>::Zero()};
     ReactionResponse<T> out;
     for (int j = 0; j < kJoints; ++j) {
-      for (int k = 0; k < kJoints; ++k) {
-        out[j][k] = R[k] * m[j];
-        if (k < kJoints - 1) {
-          out[j][k] += dF2[j];
-        } else {
-          out[j][k] -= dF2[j];
-        }
-      }
+      for (int k = 0; k < kJoints - 1; ++k) out[j][k] = dF2[j];
+      out[j][kJoints - 1] = -dF2[j];
+    }
+    return out;
+  }
+};
+
+/// The change of the reactions per unit friction torque in forward dynamics with no joint stuck,
+/// in the rank-4 form it has: through the coupler moment sums as at given accelerations
+/// (CouplerResponse), and through the crank accelerations they bring, a = sum_j m_j Mf_j (F_k by
+/// R_k a): dF_j[k] = sigma_k (c3_j f3 + c4_j f4) + R_k m_j.
+template <typename T>
+struct LowRankResponse : CouplerResponse<T> {
+  std::array<Mat2<T>, kJoints> R;  ///< F_k per unit crank acceleration
+  std::array<Vec2<T>, kJoints> m;  ///< crank accelerations per unit Mf_j: -A^-1 J_w^T e_j
+
+  /// dF[j][k], the change of F_k per unit Mf_j (ReactionResponse)
+  ReactionResponse<T> expand() const {
+    ReactionResponse<T> out = CouplerResponse<T>::expand();
+    for (int j = 0; j < kJoints; ++j) {
+      for (int k = 0; k < kJoints; ++k) out[j][k] += R[k] * m[j];
     }
     return out;
   }
@@ -55,98 +67,124 @@ namespace detail {
 /// least this factor; otherwise the matrix is formed anew.
 inline constexpr double kReducedChordShrink = 1e-2;
 
-/// The loop's map in z (forward dynamics, no joint stuck, double): the reactions F_k(z) = F0_k +
-/// G_k z with G_k = [sigma_k f3, sigma_k f4, R_k] (2 x 4), and the moments of the friction torques
-/// z = H (phi N): s3 = phi_B N_B - phi_C N_C, s4 = phi_D N_D - phi_C N_C, a = sum_j m_j phi_j N_j.
+/// The loop's map in z (double): the reactions F_k(z) = F0_k + G_k z and the moments of the
+/// friction torques z = H (phi N). n = 4, forward dynamics with no joint stuck: z = (s3, s4, a),
+/// G_k = [sigma_k f3, sigma_k f4, R_k] (2 x 4), s3 = phi_B N_B - phi_C N_C, s4 = phi_D N_D -
+/// phi_C N_C, a = sum_j m_j phi_j N_j (LowRankResponse). n = 2, given accelerations (inverse
+/// dynamics): z = (s3, s4), G_k = [sigma_k f3, sigma_k f4] (CouplerResponse).
 /// (In scalars: Eigen's small blocks cost more in broadcasts and alignment checks than the
 /// arithmetic here.)
-struct ReducedReactions {
-  using Vec4 = Eigen::Matrix<double, 4, 1>;
+template <int n>
+struct ReducedMap {
+  static_assert(n == 2 || n == 4, "z: the coupler sums, and with n = 4 the crank accelerations");
+  using Vec = Eigen::Matrix<double, n, 1>;
+  using Mat = Eigen::Matrix<double, n, n>;
+  using Response = std::conditional_t<n == 4, LowRankResponse<double>, CouplerResponse<double>>;
   const std::array<Vec2<double>, kJoints>& F0;
-  const LowRankResponse<double>& r;
+  const Response& r;
   const std::array<double, kJoints>& phi;
-  double mx[kJoints], my[kJoints];  ///< m_j phi_j: crank accelerations per unit N_j
+  double mx[kJoints] = {}, my[kJoints] = {};  ///< m_j phi_j: crank accelerations per unit N_j
   /// An upper bound of ScaledReactions::contraction_bound, max_k sum_j |B[k][j]|_1 with B[k][j] =
   /// G_k H_j phi_j: |G_k H_j phi_j| <= |G_k| |H_j phi_j| element by element, so the bound is
   /// max_k 1^T |G_k| h with h = sum_j |H_j phi_j| (no 5 x 5 B). Below 1 the map contracts.
   double gain_bound = 0.0;
 
-  ReducedReactions(const std::array<double, kJoints>& phi_,
-                   const std::array<Vec2<double>, kJoints>& F0_,
-                   const LowRankResponse<double>& response)
+  ReducedMap(const std::array<double, kJoints>& phi_,
+             const std::array<Vec2<double>, kJoints>& F0_, const Response& response)
       : F0(F0_), r(response), phi(phi_) {
     using std::abs;
-    double h2 = 0.0, h3 = 0.0;  // h's crank rows
-    for (int j = 0; j < kJoints; ++j) {
-      mx[j] = r.m[j].x() * phi[j];
-      my[j] = r.m[j].y() * phi[j];
-      h2 += abs(mx[j]);
-      h3 += abs(my[j]);
-    }
     const double h0 = abs(phi[1]) + abs(phi[2]), h1 = abs(phi[2]) + abs(phi[3]);
     const double coupler = (abs(r.f3.x()) + abs(r.f3.y())) * h0 +
                            (abs(r.f4.x()) + abs(r.f4.y())) * h1;
-    for (int k = 0; k < kJoints; ++k) {
-      const Mat2<double>& R = r.R[k];
-      gain_bound = std::max(gain_bound, coupler + (abs(R(0, 0)) + abs(R(1, 0))) * h2 +
-                                            (abs(R(0, 1)) + abs(R(1, 1))) * h3);
+    gain_bound = coupler;
+    if constexpr (n == 4) {
+      double h2 = 0.0, h3 = 0.0;  // h's crank rows
+      for (int j = 0; j < kJoints; ++j) {
+        mx[j] = r.m[j].x() * phi[j];
+        my[j] = r.m[j].y() * phi[j];
+        h2 += abs(mx[j]);
+        h3 += abs(my[j]);
+      }
+      for (int k = 0; k < kJoints; ++k) {
+        const Mat2<double>& R = r.R[k];
+        gain_bound = std::max(gain_bound, coupler + (abs(R(0, 0)) + abs(R(1, 0))) * h2 +
+                                              (abs(R(0, 1)) + abs(R(1, 1))) * h3);
+      }
     }
   }
 
   /// z = H (phi N), the moments of the friction torques phi_j N_j
-  Vec4 moments(const double N[kJoints]) const {
+  Vec moments(const double N[kJoints]) const {
     const double mc = phi[2] * N[2];
-    return Vec4(phi[1] * N[1] - mc, phi[3] * N[3] - mc,
-                mx[0] * N[0] + mx[1] * N[1] + mx[2] * N[2] + mx[3] * N[3] + mx[4] * N[4],
-                my[0] * N[0] + my[1] * N[1] + my[2] * N[2] + my[3] * N[3] + my[4] * N[4]);
+    Vec z;
+    z[0] = phi[1] * N[1] - mc;
+    z[1] = phi[3] * N[3] - mc;
+    if constexpr (n == 4) {
+      z[2] = mx[0] * N[0] + mx[1] * N[1] + mx[2] * N[2] + mx[3] * N[3] + mx[4] * N[4];
+      z[3] = my[0] * N[0] + my[1] * N[1] + my[2] * N[2] + my[3] * N[3] + my[4] * N[4];
+    }
+    return z;
   }
   /// (x, y)_k = G_k z for all k
-  void apply(const Vec4& z, double x[kJoints], double y[kJoints]) const {
+  void apply(const Vec& z, double x[kJoints], double y[kJoints]) const {
     const double cx = r.f3.x() * z[0] + r.f4.x() * z[1];
     const double cy = r.f3.y() * z[0] + r.f4.y() * z[1];
     for (int k = 0; k < kJoints; ++k) {
-      const Mat2<double>& R = r.R[k];
-      x[k] = R(0, 0) * z[2] + R(0, 1) * z[3] + (k < kJoints - 1 ? cx : -cx);
-      y[k] = R(1, 0) * z[2] + R(1, 1) * z[3] + (k < kJoints - 1 ? cy : -cy);
+      if constexpr (n == 4) {
+        const Mat2<double>& R = r.R[k];
+        x[k] = R(0, 0) * z[2] + R(0, 1) * z[3] + (k < kJoints - 1 ? cx : -cx);
+        y[k] = R(1, 0) * z[2] + R(1, 1) * z[3] + (k < kJoints - 1 ? cy : -cy);
+      } else {
+        x[k] = k < kJoints - 1 ? cx : -cx;
+        y[k] = k < kJoints - 1 ? cy : -cy;
+      }
     }
   }
   /// The Newton matrix at F = (x, y), N = |F|: I - H diag(phi) dN/dz, where dN_k/dz = g_k^T =
   /// u_k^T G_k with u_k = F_k / N_k (0 where N_k = 0), returned in (ux, uy).
-  Eigen::Matrix4d newton_matrix(const double x[kJoints], const double y[kJoints],
-                                const double N[kJoints], double ux_out[kJoints],
-                                double uy_out[kJoints]) const {
-    double g[kJoints][4];  // g_k
+  Mat newton_matrix(const double x[kJoints], const double y[kJoints], const double N[kJoints],
+                    double ux_out[kJoints], double uy_out[kJoints]) const {
+    double g[kJoints][n];  // g_k
     for (int k = 0; k < kJoints; ++k) {
       const double inv = N[k] > 0.0 ? 1.0 / N[k] : 0.0;
       const double ux = x[k] * inv, uy = y[k] * inv;
       ux_out[k] = ux;
       uy_out[k] = uy;
       const double sigma = k < kJoints - 1 ? 1.0 : -1.0;
-      const Mat2<double>& R = r.R[k];
       g[k][0] = sigma * (ux * r.f3.x() + uy * r.f3.y());
       g[k][1] = sigma * (ux * r.f4.x() + uy * r.f4.y());
-      g[k][2] = ux * R(0, 0) + uy * R(1, 0);
-      g[k][3] = ux * R(0, 1) + uy * R(1, 1);
+      if constexpr (n == 4) {
+        const Mat2<double>& R = r.R[k];
+        g[k][2] = ux * R(0, 0) + uy * R(1, 0);
+        g[k][3] = ux * R(0, 1) + uy * R(1, 1);
+      }
     }
     // H diag(phi): columns (c3_j phi_j, c4_j phi_j, m_j phi_j) with c3 = (0, 1, -1, 0, 0),
     // c4 = (0, 0, -1, 1, 0): two nonzeros in each coupler row, five in each crank row
-    Eigen::Matrix4d J;
-    for (int c = 0; c < 4; ++c) {
+    Mat J;
+    for (int c = 0; c < n; ++c) {
       const double mc = phi[2] * g[2][c];
       J(0, c) = mc - phi[1] * g[1][c];
       J(1, c) = mc - phi[3] * g[3][c];
-      J(2, c) = -(mx[0] * g[0][c] + mx[1] * g[1][c] + mx[2] * g[2][c] + mx[3] * g[3][c] +
-                  mx[4] * g[4][c]);
-      J(3, c) = -(my[0] * g[0][c] + my[1] * g[1][c] + my[2] * g[2][c] + my[3] * g[3][c] +
-                  my[4] * g[4][c]);
+      if constexpr (n == 4) {
+        J(2, c) = -(mx[0] * g[0][c] + mx[1] * g[1][c] + mx[2] * g[2][c] + mx[3] * g[3][c] +
+                    mx[4] * g[4][c]);
+        J(3, c) = -(my[0] * g[0][c] + my[1] * g[1][c] + my[2] * g[2][c] + my[3] * g[3][c] +
+                    my[4] * g[4][c]);
+      }
     }
     J.diagonal().array() += 1.0;
     return J;
   }
 };
 
+/// The map of forward dynamics with no joint stuck (z = (s3, s4, a1, a2)).
+using ReducedReactions = ReducedMap<4>;
+/// The map at given accelerations, inverse dynamics (z = (s3, s4)).
+using CouplerReactions = ReducedMap<2>;
+
 /// Newton on r(z) = z - H (phi |F(z)|) from z = H (phi N_start), for a contracting map
-/// (ReducedReactions::gain_bound < 1: its solution is unique). F is affine in z, so a step d
+/// (ReducedMap::gain_bound < 1: its solution is unique). F is affine in z, so a step d
 /// gives the new reactions exactly, F+ = F - dF with dF_k = G_k d, and no evaluation of the map
 /// follows the last step. A step solves J d = r(z) with J = I - H diag(phi) D, D's rows u_k^T G_k
 /// taken at this z (a Newton step) or at an earlier one (a chord step, the factored matrix
@@ -155,18 +193,18 @@ struct ReducedReactions {
 /// used), the part of the change of |F_k| that the matrix did not predict. One more fixed-point
 /// evaluation at z+ would move N by at most max_k |G_k r+|_1 <= gain_bound max_k |rho_k|; the
 /// loop stops where that is at most friction_tol max N+ (the fixed point's own test) and
-/// returns N+ = |F+|, F+ and Mf = phi N+. On the paper scene, from |F0|: one Newton step
-/// (leaving rho about 2e-8 of N) and one chord step; from the warm start of nearby states, one
-/// Newton step. `iterations`: the evaluations of the map, the start and one per step. False if
+/// returns N+ = |F+|, F+ and Mf = phi N+. On the paper scene's forward dynamics, from |F0|: one
+/// Newton step (leaving rho about 2e-8 of N) and one chord step; from the warm start of nearby
+/// states, one Newton step. `iterations`: the evaluations of the map, the start and one per step. False if
 /// it did not converge within friction_max_iter steps.
-inline bool friction_reduced_newton(const ReducedReactions& map, const EvalOptions& opt,
-                                    const std::array<double, kJoints>& N_start,
-                                    std::array<double, kJoints>* N_out,
-                                    std::array<double, kJoints>* Mf,
-                                    std::array<Vec2<double>, kJoints>* F, int* iterations) {
-  using Vec4 = ReducedReactions::Vec4;
+template <int nz>
+bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
+                             const std::array<double, kJoints>& N_start,
+                             std::array<double, kJoints>* N_out, std::array<double, kJoints>* Mf,
+                             std::array<Vec2<double>, kJoints>* F, int* iterations) {
+  using Vec = typename ReducedMap<nz>::Vec;
   double x[kJoints], y[kJoints], N[kJoints], ux[kJoints], uy[kJoints];
-  Vec4 z = map.moments(N_start.data());
+  Vec z = map.moments(N_start.data());
   map.apply(z, x, y);
   double last = 0.0;  // the last step's max |rho_k|, or at the start max |N_k - N_start_k|
   for (int k = 0; k < kJoints; ++k) {
@@ -176,11 +214,11 @@ inline bool friction_reduced_newton(const ReducedReactions& map, const EvalOptio
     last = std::max(last, std::abs(N[k] - N_start[k]));
   }
   const double gain = std::max(map.gain_bound, 1e-300);
-  Eigen::Matrix4d J_inv;
+  typename ReducedMap<nz>::Mat J_inv;
   bool chord = false;  // J_inv worth another step
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
     if (!chord) J_inv = map.newton_matrix(x, y, N, ux, uy).inverse();
-    const Vec4 d = J_inv * (z - map.moments(N));
+    const Vec d = J_inv * (z - map.moments(N));
     z -= d;
     // the reactions at the new z, F - dF, and the unpredicted change of their norms
     double dx[kJoints], dy[kJoints], scale = 1e-300, rho = 0.0, sum = 0.0;

@@ -190,44 +190,17 @@ inline void polygon_slice(const std::vector<std::array<double, 2>>& poly, int ax
 }  // namespace detail
 
 /// The polygon of HoldingPolygon at (th1, th2) under loads L, from its equilibrium `h`.
-inline Status holding_polygon(const Params<double>& p, const Loads<double>& L, double th1,
-                              double th2, const EvalOptions& opt, const Holding<double>& h,
-                              HoldingPolygon* out) {
-  Kinematics<double> k;
-  Status st = solve_kinematics(p, th1, th2, &k, opt.singular_margin);
-  if (!st.ok()) return st;
-  Bias<double> b;
-  compute_bias(p, k, 0.0, 0.0, &b);
-  const Vec2<double> Fvec = force_vector(k, L);
-  const Vec2<double> thdd = Vec2<double>::Zero();
-  double al3 = 0, al4 = 0;
-  auto solve = [&](const std::array<double, kJoints>& Mf, std::array<Vec2<double>, kJoints>* F) {
-    reactions(p, k, b, L, Fvec, thdd, Mf, F, &al3, &al4);
-  };
-  std::vector<std::array<double, 2>> corners;
-  for (int pattern = 0; pattern < 32; ++pattern) {
-    std::array<double, kJoints> phi{}, N{}, Mf{}, motor{};  // motor: actuator Coulomb c_a
-    for (int j = 0; j < kJoints; ++j) {
-      const double sign = (pattern >> j) & 1 ? 1.0 : -1.0;
-      phi[j] = p.friction.active() ? sign * holding_bound(p.friction, j) : 0.0;
-      motor[j] = p.friction.active() ? sign * holding_capacity(p, j, 0.0) : 0.0;
-    }
-    std::array<Vec2<double>, kJoints> F;
-    int iterations = 0;
-    st = friction_loop(phi, opt, solve, &N, &Mf, &F, &iterations, &motor);
-    if (!st.ok()) return st;
-    const Vec2<double> M = Vec2<double>(h.M1, h.M2) + friction_transpose(k, Mf);
-    corners.push_back({M[0], M[1]});
-  }
-  out->vertices = detail::convex_hull(corners);
-  if (out->vertices.size() < 3) {  // no friction: the equilibrium alone
-    out->M1_min = out->M1_max = h.M1;
-    out->M2_min = out->M2_max = h.M2;
-    return Status::Ok();
-  }
-  detail::polygon_slice(out->vertices, 0, h.M2, &out->M1_min, &out->M1_max);
-  detail::polygon_slice(out->vertices, 1, h.M1, &out->M2_min, &out->M2_max);
-  return Status::Ok();
-}
+/// Compiled in fivebar::sim (model/src/double_instances.cc).
+Status holding_polygon(const Params<double>& p, const Loads<double>& L, double th1, double th2,
+                       const EvalOptions& opt, const Holding<double>& h, HoldingPolygon* out);
+
+#ifdef FIVEBAR_DOUBLE_KINEMATICS_FROM_SIM
+// The command-line layer (apps/, at -O1) takes these double instances from fivebar::sim
+// (model/src/double_instances.cc) rather than compiling -O1 copies the linker could keep in
+// place of the libraries' optimized ones.
+extern template Status holding_torques<double>(const Params<double>&, const Loads<double>&,
+                                               const double&, const double&, const EvalOptions&,
+                                               Holding<double>*);
+#endif
 
 }  // namespace fivebar

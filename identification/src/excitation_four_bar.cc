@@ -1,0 +1,136 @@
+// The four-bar as an ExcitationMechanism (excitation.h): the crank's torque M1 and its
+// derivatives by Jets of the four-bar's inverse dynamics (mech::inverse<FourBar>, one Jet width
+// for both the parameter and the motion derivatives), and identify's rules on four-bars
+// (identify_four_bar.cc): its fixed rate filter and its rest rule.
+#include <ceres/jet.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "fivebar/identification/excitation.h"
+#include "fivebar/model/four_bar.h"
+#include "four_bar_rules.h"
+
+namespace fivebar::identification {
+namespace {
+
+/// One Jet width for every derivative here: the two friction coefficients, or the crank's angle,
+/// rate and acceleration (one instantiation of the four-bar's inverse dynamics)
+constexpr int kWidth = 3;
+using Jet = ceres::Jet<double, kWidth>;
+
+/// identify_four_bar.cc's rate filter order and rest rule (four_bar_rules.h)
+using four_bar_rules::kRestSigmas;
+using four_bar_rules::kWindowOrder;
+
+class FourBarExcitation : public ExcitationMechanism {
+ public:
+  FourBarExcitation(const FourBarParams& scene, std::function<FourBarLoads(double)> loads)
+      : scene_(scene), dp_(four_bar_design_parameters(scene)), loads_(std::move(loads)) {}
+  int dof() const override { return FourBar::kDof; }
+  int joints() const override { return kFourBarJoints; }
+  std::string joint_name(int k) const override {
+    static const char* const kNames[] = {"O", "B", "C", "D0"};
+    return kNames[k];
+  }
+  std::string type() const override { return "four_bar"; }
+  const DesignParameters& parameters() const override { return dp_; }
+
+  Status terms(double t, const MotionState& s, const JointModes* slip,
+               SampleTerms* out) const override {
+    FourBarParamsT<Jet> p = scene_.cast<Jet>();
+    std::vector<Jet> x(dp_.size());
+    for (int i = 0; i < dp_.size(); ++i) x[i] = Jet(dp_.nominal[i], i);
+    dp_.layout.apply(x.data(), &p.friction);
+    FourBarEvaluationT<Jet> ev;
+    const Status st = four_bar_inverse(p, loads_(t).cast<Jet>(), Jet(s.th1), Jet(s.w1),
+                                       Jet(s.a1), EvalOptions{}, &ev, slip);
+    if (!st.ok()) return st;
+    out->J = Eigen::MatrixXd::Zero(2, dp_.size());
+    for (int c = 0; c < dp_.size(); ++c) out->J(0, c) = ev.M1.v[c];
+    out->M1 = ev.M1.a;
+    out->M2 = 0;
+    out->sine = std::abs(ev.kin.sin32.a);
+    out->w = {};
+    for (int k = 0; k < kFourBarJoints; ++k) out->w[k] = ev.w[k].a;
+    out->slip = ev.slip;
+    return Status::Ok();
+  }
+
+  Status kinematic_jacobian(double t, const MotionState& s,
+                            Eigen::Matrix<double, 2, 6>* D) const override {
+    FourBarEvaluationT<Jet> ev;
+    const Status st = four_bar_inverse(scene_.cast<Jet>(), loads_(t).cast<Jet>(), Jet(s.th1, 0),
+                                       Jet(s.w1, 1), Jet(s.a1, 2), EvalOptions{}, &ev);
+    if (!st.ok()) return st;
+    D->setZero();
+    // columns th1, w1, a1 of (th1, th2, w1, w2, a1, a2)
+    for (int c = 0; c < 3; ++c) (*D)(0, 2 * c) = ev.M1.v[c];
+    return Status::Ok();
+  }
+
+  bool fixed_filter(SgOptions* sg) const override {
+    *sg = SgOptions{};
+    sg->order = std::max(sg->order, kWindowOrder);
+    return true;
+  }
+
+  bool block_sandwich() const override { return true; }
+
+  /// the centred filter's (identify_four_bar.cc's interior_gains)
+  void rest_gains(const std::vector<double>& t, const SgOptions& sg, double* g1,
+                  double* g2) const override {
+    int lo = 0;
+    std::vector<double> d1, d2;
+    savitzky_golay_taps(t, static_cast<int>(t.size()) / 2, sg, &lo, &d1, &d2);
+    *g1 = *g2 = 0;
+    for (size_t r = 0; r < d1.size(); ++r) *g1 += d1[r] * d1[r], *g2 += d2[r] * d2[r];
+    *g1 = std::sqrt(*g1);
+    *g2 = std::sqrt(*g2);
+  }
+
+  bool at_rest(double, const MotionState& s, double g1, double, double angle_noise) const override {
+    FourBarKinematics k;
+    if (!four_bar_kinematics(scene_, s.th1, &k).ok()) return false;
+    const std::array<double, kFourBarJoints> row = four_bar_joint_rows(k);
+    const double rate_noise = angle_noise * g1;
+    for (int j = 0; j < kFourBarJoints; ++j) {
+      const double rest = kRestSigmas * rate_noise * std::abs(row[j]);
+      if (std::abs(row[j] * s.w1) <= std::max(rest, 1e-12)) return true;
+    }
+    return false;
+  }
+
+ private:
+  FourBarParams scene_;
+  DesignParameters dp_;
+  std::function<FourBarLoads(double)> loads_;
+};
+
+}  // namespace
+
+DesignParameters four_bar_design_parameters(const FourBarParams& scene) {
+  DesignParameters dp;
+  dp.layout.law = FrictionLaw::kCoulombViscous;
+  dp.layout.per_joint = false;
+  dp.layout.joints = kFourBarJoints;
+  dp.names = dp.layout.names();
+  dp.nominal = dp.layout.extract(scene.friction);
+  for (double v : dp.nominal) dp.scale.push_back(std::abs(v) > 0 ? std::abs(v) : 1e-3);
+  dp.friction = static_cast<int>(dp.names.size());
+  return dp;
+}
+
+std::string four_bar_design_unsupported(const DesignGroups& groups) {
+  if (groups.inertia) return "--estimate inertia";
+  if (groups.actuator) return "--estimate actuator";
+  if (groups.per_joint) return "--per-joint";
+  return "";
+}
+
+std::shared_ptr<const ExcitationMechanism> four_bar_excitation(
+    const FourBarParams& scene, std::function<FourBarLoads(double)> loads) {
+  return std::make_shared<FourBarExcitation>(scene, std::move(loads));
+}
+
+}  // namespace fivebar::identification

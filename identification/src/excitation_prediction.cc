@@ -1,0 +1,458 @@
+// A motion's evaluation on a grid (evaluate_motion) and the std identify would report on it
+// (predict_identified_std): errors in variables at the window identify's rules choose, its rest
+// and reversal samples left out.
+#include "fivebar/identification/excitation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include <Eigen/Dense>
+
+#include "fivebar/identification/rates.h"
+#include "excitation_shared.h"
+#include "noise_model.h"
+#include "setup_shared.h"
+
+namespace fivebar::identification {
+
+namespace {
+using detail::kNaN;
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Evaluation of a motion on a grid
+
+Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
+                       const std::function<Loads<double>(double)>& loads,
+                       const std::vector<double>& t, const std::vector<MotionState>& states,
+                       double torque_noise, ExcitationReport* out) {
+  // the loads by reference for this call (a copy of a scene's loads recompiles its expressions)
+  const auto mech = five_bar_excitation(scene, dp, [&loads](double at) { return loads(at); });
+  return evaluate_motion(*mech, t, states, torque_noise, out);
+}
+
+Status evaluate_motion(const ExcitationMechanism& mech, const std::vector<double>& t,
+                       const std::vector<MotionState>& states, double torque_noise,
+                       ExcitationReport* out) {
+  const DesignParameters& dp = mech.parameters();
+  const int N = static_cast<int>(t.size());
+  std::vector<SampleTerms> terms(N);
+  std::vector<Status> status(N);
+  detail::parallel_for(N, [&](int i) { status[i] = mech.terms(t[i], states[i], nullptr, &terms[i]); });
+  for (int i = 0; i < N; ++i) {
+    if (!status[i].ok()) {
+      std::ostringstream msg;
+      msg << "at t = " << t[i] << " s: " << status[i].message;
+      return Status::Error(status[i].code, msg.str());
+    }
+  }
+  out->t = t;
+  out->states = states;
+  out->dof = mech.dof();
+  out->joints = mech.joints();
+  out->M1.resize(N);
+  out->M2.resize(N);
+  std::vector<Eigen::MatrixXd> Js(N);
+  std::vector<std::array<double, kJoints>> rates(N);
+  out->theta_min = {states[0].th1, states[0].th2};
+  out->theta_max = out->theta_min;
+  for (int i = 0; i < N; ++i) {
+    out->M1[i] = terms[i].M1;
+    out->M2[i] = terms[i].M2;
+    const double peak = std::max(std::abs(terms[i].M1), std::abs(terms[i].M2));
+    if (peak > out->peak_torque) {
+      out->peak_torque = peak;
+      out->peak_time = t[i];
+    }
+    out->min_sine = std::min(out->min_sine, terms[i].sine);
+    Js[i] = terms[i].J;
+    rates[i] = terms[i].w;
+    const double th[2] = {states[i].th1, states[i].th2};
+    for (int j = 0; j < mech.dof(); ++j) {
+      out->theta_min[j] = std::min(out->theta_min[j], th[j]);
+      out->theta_max[j] = std::max(out->theta_max[j], th[j]);
+    }
+  }
+  out->reversals = count_reversals(rates);
+  out->fisher = fisher_information(Js, torque_noise);
+  const int P = dp.size();
+  const Eigen::VectorXd scale = Eigen::Map<const Eigen::VectorXd>(dp.scale.data(), P);
+  const Eigen::MatrixXd Fs = scale.asDiagonal() * out->fisher * scale.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Fs);
+  const Eigen::VectorXd ev = es.eigenvalues();
+  out->condition_number = ev(0) > 0 ? ev(P - 1) / ev(0) : kNaN;
+  out->log_det_scaled = ev(0) > 0 ? ev.array().log().sum() : -std::numeric_limits<double>::infinity();
+  // covariance: pseudo-inverse of the scaled Fisher (directions below 1e-14 of the largest are
+  // unidentifiable: their parameters get an infinite std)
+  Eigen::VectorXd inv(P);
+  for (int i = 0; i < P; ++i) inv(i) = ev(i) > 1e-14 * ev(P - 1) ? 1.0 / ev(i) : 0.0;
+  const Eigen::MatrixXd Cs = es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
+  out->covariance = scale.asDiagonal() * Cs * scale.asDiagonal();
+  out->std_dev.assign(P, kNaN);
+  out->relative_std.assign(P, kNaN);
+  for (int i = 0; i < P; ++i) {
+    bool lost = false;
+    for (int e = 0; e < P; ++e) lost = lost || (inv(e) == 0 && std::abs(es.eigenvectors()(i, e)) > 1e-6);
+    out->std_dev[i] = lost ? std::numeric_limits<double>::infinity()
+                           : std::sqrt(std::max(0.0, out->covariance(i, i)));
+    if (dp.nominal[i] != 0) out->relative_std[i] = out->std_dev[i] / std::abs(dp.nominal[i]);
+  }
+  return Status::Ok();
+}
+
+// ---------------------------------------------------------------------------------------------
+// The std identify reports: errors in variables at the window it chooses
+
+namespace {
+
+using stages::kBiasFraction;  // identify's window rules (noise_model.h)
+using stages::kWindowExcess;
+
+/// What one sample of the motion gives the prediction: J (2 x P), the kinematic Jacobian D of
+/// the torques (noise_model.h) and the joints' relative rates.
+struct EivSample {
+  Eigen::MatrixXd J;
+  Eigen::Matrix<double, 2, 6> D;
+  std::array<double, kJoints> w{};
+};
+
+/// The prediction at one half-window m: the samples it keeps, the std and the bias of the
+/// coefficients, the expected torque residual over its noise level.
+struct WindowPrediction {
+  Eigen::MatrixXd covariance;
+  Eigen::VectorXd bias;
+  double residual_ratio = 1;
+  bool ok = false;
+};
+
+/// Savitzky-Golay taps of a centred window of half-width m (savitzky_golay_taps)
+struct Taps {
+  int m = 0;
+  std::vector<double> d1, d2;
+};
+
+class EivPredictor {
+ public:
+  EivPredictor(const ExcitationMechanism& mech, const ExcitationReport& r,
+               std::vector<EivSample> samples, double torque_noise,
+               const std::array<double, 2>& angle_noise, int order)
+      : mech_(mech), r_(r), s_(std::move(samples)), order_(order),
+        angle_noise_(std::max(angle_noise[0], angle_noise[1])) {
+    const int n = static_cast<int>(r.t.size());
+    dt_ = (r.t.back() - r.t.front()) / std::max(1, n - 1);
+    for (int c = 0; c < mech.dof(); ++c) {
+      noise_.angle[c] = angle_noise[c];
+      noise_.torque[c] = torque_noise;
+    }
+    // prefix counts of the sample steps over which some joint's rate changes sign
+    reversals_.assign(n + 1, 0);
+    for (int i = 0; i < n; ++i) {
+      bool flip = false;
+      for (int k = 0; i > 0 && k < kJoints; ++k) flip = flip || (s_[i].w[k] > 0) != (s_[i - 1].w[k] > 0);
+      reversals_[i + 1] = reversals_[i] + (flip ? 1 : 0);
+    }
+  }
+  double dt() const { return dt_; }
+  int size() const { return static_cast<int>(r_.t.size()); }
+
+  /// the bias of the filter's rates and accelerations on the exact motion at sample i, and the
+  /// residual's sensitivities to the angle noise
+  void at(int i, const Taps& taps, Eigen::Vector2d* dM, detail::Sensitivity* sens) const {
+    const int lo = i - taps.m;
+    const std::vector<double>&d1 = taps.d1, &d2 = taps.d2;
+    double e[4] = {0, 0, 0, 0};
+    for (size_t k = 0; k < d1.size(); ++k) {
+      const MotionState& q = r_.states[lo + k];
+      e[0] += d1[k] * q.th1, e[1] += d1[k] * q.th2, e[2] += d2[k] * q.th1, e[3] += d2[k] * q.th2;
+    }
+    const MotionState& q = r_.states[i];
+    const Eigen::Vector4d delta(e[0] - q.w1, e[1] - q.w2, e[2] - q.a1, e[3] - q.a2);
+    *dM = s_[i].D.rightCols<4>() * delta;
+    *sens = detail::sensitivity(i, lo, d1, d2, detail::RateSource::kFromAngles, noise_, s_[i].D);
+  }
+
+  /// The samples the rest rule may hold at any half-window from m up (its thresholds grow with
+  /// the filter's noise gains, which fall as the window grows): the others need no rest test
+  void bound_rest(int m) {
+    double g1 = 0, g2 = 0;
+    gains(m, &g1, &g2);
+    maybe_rest_.assign(size(), 0);
+    detail::parallel_for(size(), [&](int i) {
+      maybe_rest_[i] = mech_.at_rest(r_.t[i], r_.states[i], g1, g2, angle_noise_) ? 1 : 0;
+    });
+  }
+
+  /// the noise gains of the filter of half-window m, as identify's rest rule takes them
+  void gains(int m, double* g1, double* g2) const {
+    SgOptions filter;
+    filter.half_window_s = m * dt_;
+    filter.order = order_;
+    mech_.rest_gains(r_.t, filter, g1, g2);
+  }
+
+  /// the filter of half-window m at a centred sample: the same at every one (uniform grid)
+  Taps taps(int m) const {
+    Taps out;
+    out.m = m;
+    SgOptions sg;
+    sg.half_window_s = m * dt_;
+    sg.order = order_;
+    int lo = 0;
+    savitzky_golay_taps(r_.t, m, sg, &lo, &out.d1, &out.d2);
+    return out;
+  }
+
+  /// the expected torque residual over identify's noise level at half-window m (its residual
+  /// rule: noise and bias add in quadrature), over about 2000 samples with a centred window
+  double residual_ratio(int m) const {
+    const Taps sg = taps(m);
+    const int n = size(), step = std::max(1, (n - 2 * m) / 2000);
+    Eigen::Vector2d b2 = Eigen::Vector2d::Zero(), v = b2;
+    int count = 0;
+    for (int i = m; i < n - m; i += step, ++count) {
+      Eigen::Vector2d dM;
+      detail::Sensitivity sens;
+      at(i, sg, &dM, &sens);
+      b2 += dM.cwiseAbs2();
+      v += detail::propagated_variance(sens);
+    }
+    double ratio = 1;
+    for (int j = 0; j < mech_.dof() && count > 0; ++j) {
+      const double floor2 = noise_.torque[j] * noise_.torque[j] + v(j) / count;
+      ratio = std::max(ratio, std::sqrt(1 + b2(j) / count / floor2));
+    }
+    return ratio;
+  }
+
+  /// covariance and bias of the coefficients over the samples whose window of half-width
+  /// `exclude` spans no slip reversal and that identify's rest rule keeps, with rates from
+  /// half-window m
+  WindowPrediction predict(int m, int exclude) const {
+    const Taps sg = taps(m);
+    WindowPrediction out;
+    const int n = size(), P = static_cast<int>(s_.front().J.cols());
+    double g1 = 0, g2 = 0;
+    gains(m, &g1, &g2);
+    std::vector<int> used;
+    for (int i = m; i < n - m; ++i) {
+      const int a = std::max(0, i - exclude), b = std::min(n - 1, i + exclude);
+      if (reversals_[b] - reversals_[a] != 0) continue;
+      const bool maybe = maybe_rest_.empty() || maybe_rest_[i];
+      if (maybe && mech_.at_rest(r_.t[i], r_.states[i], g1, g2, angle_noise_)) continue;
+      used.push_back(i);
+    }
+    if (static_cast<int>(used.size()) <= P) return out;
+    Eigen::MatrixXd J(2 * used.size(), P);
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(P);
+    std::vector<detail::Sensitivity> sens(used.size());
+    for (size_t u = 0; u < used.size(); ++u) {
+      Eigen::Vector2d dM;
+      at(used[u], sg, &dM, &sens[u]);
+      J.middleRows(2 * u, 2) = s_[used[u]].J;
+      g += s_[used[u]].J.transpose() * dM;  // one Gauss-Newton step: the residual moves by -dM
+    }
+    const Eigen::MatrixXd H = J.transpose() * J;
+    if (!H.allFinite()) return out;
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+    const Eigen::VectorXd ev = es.eigenvalues();
+    if (!(ev(0) > 1e-14 * ev(P - 1))) return out;  // the samples do not determine them all
+    const Eigen::MatrixXd Hinv =
+        es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+    const Eigen::MatrixXd S = mech_.block_sandwich() ? block_score_covariance(J, used, sens, m)
+                                                     : detail::score_covariance(J, sens, noise_, n);
+    out.covariance = Hinv * S * Hinv;
+    out.bias = -Hinv * g;
+    out.ok = out.covariance.allFinite();
+    return out;
+  }
+
+ private:
+  /// The expected meat of identify's block sandwich: blocks of used samples within 2 m + 1 log
+  /// samples of the block's first (identify_four_bar.cc's block_sizes), each block's score
+  /// covariance alone (the correlations between blocks, through the filter's overlapping
+  /// windows, are not in the sandwich)
+  Eigen::MatrixXd block_score_covariance(const Eigen::MatrixXd& J, const std::vector<int>& used,
+                                         const std::vector<detail::Sensitivity>& sens, int m) const {
+    const int P = static_cast<int>(J.cols()), span = 2 * m + 1;
+    Eigen::MatrixXd S = Eigen::MatrixXd::Zero(P, P);
+    for (size_t u0 = 0; u0 < used.size();) {
+      size_t u1 = u0 + 1;
+      while (u1 < used.size() && used[u1] - used[u0] < span) ++u1;
+      // the block's noise samples lie within [used[u0] - m, used[u1 - 1] + m]: shift them to 0
+      const int lo = std::max(0, used[u0] - m);
+      std::vector<detail::Sensitivity> block(sens.begin() + u0, sens.begin() + u1);
+      for (detail::Sensitivity& b : block) {
+        for (int c = 0; c < 4; ++c) b.lo[c] -= lo;
+      }
+      const int width = std::min(size(), used[u1 - 1] + m + 1) - lo;
+      S += detail::score_covariance(J.middleRows(2 * u0, 2 * (u1 - u0)), block, noise_, width);
+      u0 = u1;
+    }
+    return S;
+  }
+
+  const ExcitationMechanism& mech_;
+  const ExcitationReport& r_;
+  std::vector<EivSample> s_;
+  int order_;
+  double angle_noise_;
+  detail::SensorNoise noise_;
+  std::vector<int> reversals_;
+  std::vector<char> maybe_rest_;  ///< bound_rest's (empty: test every sample)
+  double dt_ = 1;
+};
+
+/// The largest |bias| / std over the friction coefficients of a prediction.
+double bias_in_std(const WindowPrediction& p, int friction) {
+  double worst = 0;
+  for (int i = 0; i < friction; ++i) {
+    const double sd = std::sqrt(std::max(0.0, p.covariance(i, i)));
+    if (sd > 0) worst = std::max(worst, std::abs(p.bias(i)) / sd);
+  }
+  return worst;
+}
+
+/// v to 3 significant digits
+std::string digits3(double v) {
+  std::ostringstream o;
+  o.precision(3);
+  o << v;
+  return o.str();
+}
+
+/// std and relative std of a covariance (NaN relative std for a zero nominal value).
+void set_std(const DesignParameters& dp, const Eigen::MatrixXd& C, ExcitationReport* r) {
+  for (int i = 0; i < dp.size(); ++i) {
+    r->std_dev[i] = std::sqrt(std::max(0.0, C(i, i)));
+    r->relative_std[i] = dp.nominal[i] != 0 ? r->std_dev[i] / std::abs(dp.nominal[i]) : kNaN;
+  }
+}
+
+/// The Jacobians J and D and the joint rates at every sample of the motion of `r` (exact); the
+/// first sample that fails, named by its time.
+Status eiv_samples(const ExcitationMechanism& mech, const ExcitationReport& r,
+                   std::vector<EivSample>* samples) {
+  const int n = static_cast<int>(r.t.size());
+  samples->clear();
+  samples->resize(n);
+  std::vector<Status> status(n);
+  detail::parallel_for(n, [&](int i) {
+    SampleTerms terms;
+    status[i] = mech.terms(r.t[i], r.states[i], nullptr, &terms);
+    if (status[i].ok()) status[i] = mech.kinematic_jacobian(r.t[i], r.states[i], &(*samples)[i].D);
+    if (!status[i].ok()) return;
+    (*samples)[i].J = terms.J;
+    (*samples)[i].w = terms.w;
+  });
+  for (int i = 0; i < n; ++i) {
+    if (!status[i].ok()) {
+      return Status::Error(status[i].code, "at t = " + digits3(r.t[i]) + " s: " + status[i].message);
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+namespace {
+
+/// The window identify's rules choose on the five-bar (predict_identified_std): the prediction
+/// there into *chosen, the half-window into r->sg_half_window and r->window_choice.
+void choose_window(EivPredictor* predictor, const DesignParameters& dp, ExcitationReport* r,
+                   WindowPrediction* chosen) {
+  const int n = static_cast<int>(r->t.size());
+  const std::vector<int> cand = stages::window_candidates(n, predictor->dt(), SgOptions{}.order);
+  predictor->bound_rest(cand.front());  // the candidates grow: the first's thresholds are the largest
+  const EivPredictor& eiv = *predictor;
+  // the residual rule: the largest candidate within the excess (scanned until the bias clearly
+  // dominates), one below it past the second
+  std::vector<double> ratio;
+  for (size_t k = 0; k < cand.size(); ++k) {
+    ratio.push_back(eiv.residual_ratio(cand[k]));
+    if (k >= 2 && ratio[k] > 1.5 * *std::min_element(ratio.begin(), ratio.begin() + k)) break;
+  }
+  const double best = std::max(1.0, *std::min_element(ratio.begin(), ratio.end()));
+  int rule = 0;
+  for (size_t k = 0; k < ratio.size(); ++k) {
+    if (ratio[k] <= best * (1 + kWindowExcess)) rule = static_cast<int>(k);
+  }
+  if (rule > 1) --rule;
+  // the bias rule: from the residual rule's window down, the first within kBiasFraction std
+  // (none: the residual rule's)
+  int pick = rule;
+  *chosen = eiv.predict(cand[rule], cand[rule]);
+  std::string table;
+  for (int k = rule; k >= 1 && chosen->ok; --k) {
+    WindowPrediction p = k == rule ? *chosen : eiv.predict(cand[k], cand[k]);
+    if (!p.ok) break;
+    const double b = bias_in_std(p, dp.friction);
+    table += (table.empty() ? "" : ", ") + std::to_string(cand[k]) + ": " + digits3(b);
+    if (b <= kBiasFraction) {
+      pick = k;
+      *chosen = std::move(p);
+      break;
+    }
+  }
+  r->sg_half_window = cand[pick];
+  r->window_choice = "half-window " + std::to_string(cand[rule]) +
+                     " samples by the residual rule (expected ratio " + digits3(ratio[rule]) +
+                     "), " + std::to_string(cand[pick]) + " by the bias rule (|bias| / std: " + table + ")";
+}
+
+}  // namespace
+
+Status predict_identified_std(const Params<double>& scene, const DesignParameters& dp,
+                              const std::function<Loads<double>(double)>& loads,
+                              double torque_noise, double angle_noise, ExcitationReport* r) {
+  // the loads by reference for this call (a copy of a scene's loads recompiles its expressions)
+  const auto mech = five_bar_excitation(scene, dp, [&loads](double at) { return loads(at); });
+  return predict_identified_std(*mech, torque_noise, angle_noise, r);
+}
+
+Status predict_identified_std(const ExcitationMechanism& mech, double torque_noise,
+                              double angle_noise, ExcitationReport* r) {
+  const DesignParameters& dp = mech.parameters();
+  const int n = static_cast<int>(r->t.size());
+  r->torque_only_std = r->std_dev;
+  if (!(angle_noise > 0) || n < 8 || dp.size() == 0) return Status::Ok();
+  for (double v : r->std_dev) {
+    if (!std::isfinite(v)) return Status::Ok();  // an unidentifiable direction stays so
+  }
+  std::vector<EivSample> samples;
+  const Status st = eiv_samples(mech, *r, &samples);
+  if (!st.ok()) return st;
+  SgOptions fixed;
+  const bool is_fixed = mech.fixed_filter(&fixed);
+  EivPredictor eiv(mech, *r, std::move(samples), torque_noise, {angle_noise, angle_noise},
+                         is_fixed ? fixed.order : SgOptions{}.order);
+  WindowPrediction chosen;
+  if (is_fixed) {
+    const int m = sg_half_window(fixed, eiv.dt());
+    chosen = eiv.predict(m, m);
+    r->sg_half_window = m;
+    r->window_choice = "half-window " + std::to_string(m) + " samples, order " +
+                       std::to_string(fixed.order) + ": identify's filter for a " + mech.type();
+    if (chosen.ok) {
+      r->window_choice += " (its smoothing bias of the coefficients, |bias| / std: " +
+                          digits3(bias_in_std(chosen, dp.friction)) + ")";
+    }
+  } else {
+    choose_window(&eiv, dp, r, &chosen);
+  }
+  if (!chosen.ok) {  // no std identify could report: none predicted
+    r->sg_half_window = 0;
+    r->std_dev.assign(dp.size(), kNaN);
+    r->relative_std.assign(dp.size(), kNaN);
+    return Status::Error(StatusCode::kSolverFailed,
+                         "the errors-in-variables covariance could not be formed (the samples "
+                         "identify keeps, away from the slip reversals and not at rest, do not "
+                         "determine the parameters)");
+  }
+  r->covariance = chosen.covariance;
+  set_std(dp, chosen.covariance, r);
+  return Status::Ok();
+}
+
+}  // namespace fivebar::identification
