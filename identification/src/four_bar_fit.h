@@ -14,6 +14,7 @@
 #include "fivebar/identification/identify.h"
 #include "fivebar/model/four_bar.h"
 #include "fivebar/sim/simulator.h"
+#include "four_bar_rules.h"
 #include "mechanism_residual.h"
 #include "noise_model.h"
 
@@ -22,15 +23,8 @@ namespace fivebar::identification::four_bar {
 using Sample = stages::MechanismSample<FourBar>;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-/// a joint whose relative rate is within this many of its noise std of zero is left out (its
-/// Coulomb sign is not known)
-constexpr double kRestSigmas = 4.0;
-
-/// the least Savitzky-Golay order of the four-bar's estimated accelerations: the crank-rocker's
-/// crank turns at ~23 rad/s, and order 5 smooths its accelerations (fixed 10 ms window, seeded
-/// logs: -2 std); with the data-driven window, over 30 seeded 3 s logs, order 7 covered 88 % at
-/// angle noise 1e-5 rad and 97 % at 1e-4 rad, order 5 87 % and 95 %
-constexpr int kWindowOrder = 7;
+using four_bar_rules::kRestSigmas;
+using four_bar_rules::kWindowOrder;
 
 /// The state the four-bar's stages share, in the order they write it.
 struct FourBarFit {

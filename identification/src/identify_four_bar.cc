@@ -19,47 +19,14 @@
 #include "fivebar/model/format.h"
 #include "fivebar/model/four_bar.h"
 #include "fivebar/sim/simulator.h"
-<<<<<<< HEAD
 #include "four_bar_fit.h"
-=======
-#include "four_bar_rules.h"
->>>>>>> main
 #include "mechanism_residual.h"
 #include "setup_shared.h"
 #include "mechanism_stages.h"
 
 namespace fivebar::identification {
 
-<<<<<<< HEAD
 namespace four_bar {
-=======
-namespace {
-
-using Sample = stages::MechanismSample<FourBar>;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-using four_bar_rules::kRestSigmas;
-using four_bar_rules::kWindowOrder;
-
-/// The state the four-bar's stages share, in the order they write it.
-struct FourBarFit {
-  const IdentifyOptions* opt = nullptr;
-  FourBarParams scene;  ///< with the law to fit (fit_friction)
-  sim::FourBarLoadFunction loads;
-  ParameterLayout layout;
-  EvalOptions eval;
-  ConditionedLog cond;  ///< conditioning
-  // rates and samples
-  int hw = 0;                ///< Savitzky-Golay half-window [samples] (0: accelerations logged)
-  int first = 0, last = -1;  ///< samples whose rates and accelerations are centred estimates
-  std::vector<double> w, a;  ///< crank rate and acceleration at every log sample
-  double rate_noise = 0, accel_noise = 0;  ///< their noise std
-  std::vector<Sample> samples;
-  std::vector<int> index;  ///< log index of each sample
-  // the fit
-  std::vector<double> x;
-};
->>>>>>> main
 
 std::string line_of(const TorqueLog& log, int i) {
   return "line " + std::to_string(log.lines.empty() ? i + 1 : log.lines[i]);
