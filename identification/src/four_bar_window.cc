@@ -94,40 +94,22 @@ class FourBarWindowFit : public stages::WindowFit {
     rms[1] = floor[1] = 0;
   }
   /// the residual's Jacobian (its rows of the second channel zero), the kinematic Jacobians, and
-  /// the crank angle's higher terms cut short where they would span a slip reversal
+  /// the crank angle's higher terms cut short where they would span a slip reversal; the
+  /// Jacobians, which do not depend on the reach, computed once for every window searched
   detail::BiasInputs bias_inputs(int reach, int min_half, int order) const override {
     const TorqueLog& L = f_.cond.log;
-    const int n = L.size(), P = f_.layout.size(), m = static_cast<int>(f_.samples.size());
+    const int n = L.size();
     const double dt = L.duration() / std::max(1, n - 1);
-    detail::BiasInputs in;
-    in.index = f_.index;
-    ceres::Problem problem;
-    std::vector<double> x = f_.x, r;
-    stages::add_mechanism_terms<FourBar>(f_.scene, f_.layout, f_.samples, f_.eval, x.data(),
-                                         &problem);
-    ceres::CRSMatrix crs;
-    if (!stages::raw_residuals(&problem, &r, &crs)) return in;
-    const Eigen::MatrixXd J1 = stages::dense(crs, P);
-    in.J = Eigen::MatrixXd::Zero(2 * m, P);
-    for (int u = 0; u < m; ++u) in.J.row(2 * u) = J1.row(u);
+    if (jacobians_.index.empty() && !jacobians()) return {};
+    detail::BiasInputs in = jacobians_;
     const std::vector<int>& rev = f_.reversals;
-    for (int u = 0; u < m; ++u) {
-      Eigen::Matrix<double, 2, 6> D;
-      double M1 = 0;
-      if (!kinematic_jacobian(f_, f_.x.data(), f_.samples[u], &D, &M1)) D.setZero();
-      in.D.push_back(D);
-      const int i = f_.index[u];
+    for (const int i : f_.index) {
       int a = std::max(0, i - reach), b = std::min(n - 1, i + reach);
       while (a < i - min_half && rev[i] - rev[a] > 0) ++a;
       while (b > i + min_half && rev[b] - rev[i] > 0) --b;
       in.terms[0].push_back(detail::high_order_terms(L.t, L.theta1, i, a, b, dt, order));
       in.terms[1].push_back(Eigen::VectorXd::Zero(detail::kReconExtra));
     }
-    in.Hp = Eigen::MatrixXd::Zero(P, P);
-    in.T = stages::to_public(f_.layout);
-    in.friction_size = f_.layout.friction_size();
-    in.source = source();
-    in.noise = f_.noise;
     return in;
   }
   bool predicts_noise_bias() const override { return true; }
@@ -194,7 +176,35 @@ class FourBarWindowFit : public stages::WindowFit {
     s.loads = f_.loads(L.t[i]);
     return s;
   }
+  /// bias_inputs without the terms into jacobians_; false where the residual fails
+  bool jacobians() const {
+    const int P = f_.layout.size(), m = static_cast<int>(f_.samples.size());
+    detail::BiasInputs& in = jacobians_;
+    ceres::Problem problem;
+    std::vector<double> x = f_.x, r;
+    stages::add_mechanism_terms<FourBar>(f_.scene, f_.layout, f_.samples, f_.eval, x.data(),
+                                         &problem);
+    ceres::CRSMatrix crs;
+    if (!stages::raw_residuals(&problem, &r, &crs)) return false;
+    const Eigen::MatrixXd J1 = stages::dense(crs, P);
+    in.J = Eigen::MatrixXd::Zero(2 * m, P);
+    for (int u = 0; u < m; ++u) in.J.row(2 * u) = J1.row(u);
+    for (int u = 0; u < m; ++u) {
+      Eigen::Matrix<double, 2, 6> D;
+      double M1 = 0;
+      if (!kinematic_jacobian(f_, f_.x.data(), f_.samples[u], &D, &M1)) D.setZero();
+      in.D.push_back(D);
+    }
+    in.Hp = Eigen::MatrixXd::Zero(P, P);
+    in.T = stages::to_public(f_.layout);
+    in.friction_size = f_.layout.friction_size();
+    in.source = source();
+    in.noise = f_.noise;
+    in.index = f_.index;
+    return true;
+  }
   const FourBarFit& f_;
+  mutable detail::BiasInputs jacobians_;  ///< bias_inputs' Jacobians, once
 };
 
 }  // namespace

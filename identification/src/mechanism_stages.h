@@ -81,9 +81,12 @@ void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::s
 /// After choose_window: the largest window up to its choice whose predicted smoothing bias
 /// (smoothing_bias.h) is within kBiasFraction of the std for every friction coefficient, from
 /// the rule's choice down to the second smallest window; the rule's choice when none is. Where
-/// the mechanism predicts the noise's bias too (WindowFit::noise_shift), which grows as the
-/// window shrinks, the search runs over every candidate but the smallest with the bias of both:
-/// the largest window within kBiasFraction, else the one of least predicted bias. Angles only,
+/// the mechanism predicts the noise's bias too (WindowFit::noise_bias), which grows as the
+/// window shrinks, the search runs up from the second smallest candidate with the bias of both:
+/// the smallest window within kBiasFraction (the bias left is then mostly the noise's, which the
+/// correction takes off, while a larger window adds smoothing bias the residual does not show
+/// and leaves out more samples near slip reversals), else the one of least predicted bias; the
+/// residual rule's choice is not read. Angles only,
 /// the filter's order as given (`given_order`, not raised). *bias: the prediction at the window
 /// kept (left empty when not predicted); *choice gets its text appended.
 void limit_smoothing_bias(const WindowFit& w, int given_order, SgOptions* sg, Eigen::VectorXd* bias,

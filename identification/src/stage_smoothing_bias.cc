@@ -81,8 +81,11 @@ std::vector<char> centred_samples(const WindowFit& w, int m) {
 }
 
 /// limit_smoothing_bias where the mechanism predicts the noise's bias (WindowFit::noise_bias):
-/// the candidates from the second smallest until the bias has grown to twice its least, the
-/// motion's higher terms over +-kReconSpan times each window.
+/// the candidates from the second smallest up to the first within kBiasFraction, or until the
+/// bias has grown to twice its least, the motion's higher terms over +-kReconSpan times each
+/// window. (Over 30 seeded crank-rocker logs at angle noise 1e-5 rad, keeping the largest window
+/// within kBiasFraction instead chose 12-41 samples and covered 86.7 %, the smallest 8-15
+/// samples and 98.3 %.)
 void limit_total_bias(const WindowFit& w, const std::vector<int>& cand, double dt,
                       SgOptions* sg_fit, Eigen::VectorXd* bias_kept, std::string* choice) {
   std::string table;
@@ -104,8 +107,11 @@ void limit_total_bias(const WindowFit& w, const std::vector<int>& cand, double d
     }
     const double worst = worst_ratio(biases[k], std);
     table += (table.empty() ? "" : ", ") + std::to_string(m) + ": " + format_significant(worst);
-    if (worst <= kBiasFraction) chosen = static_cast<int>(k);
     if (least < 0 || worst < least_worst) least = static_cast<int>(k), least_worst = worst;
+    if (worst <= kBiasFraction) {
+      chosen = static_cast<int>(k);
+      break;
+    }
     // the noise's bias falls and the smoothing's grows with the window: past the least, once
     // it is twice the least, the larger windows only add
     if (worst > 2 * std::max(least_worst, kBiasFraction)) break;
@@ -117,7 +123,7 @@ void limit_total_bias(const WindowFit& w, const std::vector<int>& cand, double d
   *choice += "; then half-window " + std::to_string(cand[pick]) + " samples, " +
              (chosen < 0 ? "the one of least predicted bias (none keeps it within " +
                                format_significant(kBiasFraction) + " std)"
-                         : "the largest whose predicted bias is within " +
+                         : "the smallest whose predicted bias is within " +
                                format_significant(kBiasFraction) +
                                " std of every friction coefficient") +
              " (the smoothing bias and the noise's through the reactions, errors in variables; "
