@@ -33,7 +33,7 @@ struct FourBarFit {
   sim::FourBarLoadFunction loads;
   ParameterLayout layout;
   EvalOptions eval;
-  ConditionedLog cond;  ///< conditioning
+  ConditionedLog cond;        ///< conditioning
   detail::SensorNoise noise;  ///< channel 0: the crank's angle, rate and torque noise
   // rates, window and samples
   SgOptions sg;              ///< the Savitzky-Golay filter as used
@@ -52,7 +52,6 @@ struct FourBarFit {
   std::vector<double> x;  ///< internal parameter vector: the start, then the fit's
 };
 
-
 /// Rates and accelerations: the log's own when it has them (and the options do not ask to
 /// estimate them), else Savitzky-Golay with f->sg (the edges, where the window is one-sided, are
 /// left out of the fit); their noise from the angles' through the filter.
@@ -66,9 +65,9 @@ void select_samples(FourBarFit* f, IdentifyResult* out);
 /// kRestSigmas of the rate's noise through that row, or below --min-rate.
 bool held(const FourBarFit& f, const std::array<double, 4>& row, double w, double rate_noise);
 
-/// The data-driven window (mechanism_stages.h) after a preliminary fit on at most ~1500 of the
-/// samples, then the rates and samples again at the window chosen; f->x back at its start
-/// (four_bar_window.cc).
+/// The window chosen by its predicted bias (choose_window_by_bias, mechanism_stages.h) after a
+/// preliminary fit on at most ~1500 of the samples, then the rates and samples again at the
+/// window chosen; f->x back at its start (four_bar_window.cc).
 void window_stage(FourBarFit* f, IdentifyResult* out);
 
 }  // namespace fivebar::identification::four_bar

@@ -1,6 +1,7 @@
-// The four-bar's window stage (four_bar_fit.h): the five-bar's data-driven window and its bias
-// stages (mechanism_stages.h) over FourBarWindowFit, the four-bar's residual levels, its inputs of
-// the bias prediction and the noise's bias through its reactions.
+// The four-bar's window stage (four_bar_fit.h): the window chosen by its predicted bias
+// (mechanism_stages.h, choose_window_by_bias, with the five-bar's bias prediction) over
+// FourBarWindowFit, the four-bar's inputs of the bias prediction and the noise's bias through its
+// reactions.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -44,8 +45,9 @@ bool kinematic_jacobian(const FourBarFit& f, const double* x, const Sample& s,
   return true;
 }
 
-/// The four-bar's fit as the window stages read it (mechanism_stages.h), at the parameters f.x of the
-/// preliminary fit: one torque channel, rates from the angles.
+/// The four-bar's fit as choose_window_by_bias reads it (mechanism_stages.h), at the parameters
+/// f.x of the preliminary fit: one torque channel, rates from the angles (no residual levels:
+/// choose_window is the five-bar's).
 class FourBarWindowFit : public stages::WindowFit {
  public:
   explicit FourBarWindowFit(const FourBarFit& f) : f_(f) {}
@@ -56,42 +58,6 @@ class FourBarWindowFit : public stages::WindowFit {
   const std::vector<int>& index() const override { return f_.index; }
   bool spans_reversal(int i, int hw) const override {
     return stages::window_spans_reversal(f_.reversals, i, hw);
-  }
-  /// over the probes, the rest rule (held) at the rate noise of the window `sg`
-  void levels(const std::vector<int>& probe, const SgOptions& sg, double rms[2],
-              double floor[2]) const override {
-    const TorqueLog& L = f_.cond.log;
-    double g1 = 0, g2 = 0;
-    stages::sg_noise_gains(L.t, sg, &g1, &g2);
-    double r2 = 0, t2 = 0, v = 0;
-    int count = 0;
-    for (int i : probe) {
-      int lo = 0;
-      std::vector<double> d1, d2;
-      savitzky_golay_taps(L.t, i, sg, &lo, &d1, &d2);
-      Sample s = logged(i);
-      for (size_t k = 0; k < d1.size(); ++k) {
-        s.v[0] += d1[k] * L.theta1[lo + k];
-        s.a[0] += d2[k] * L.theta1[lo + k];
-      }
-      FourBarKinematics kin;
-      if (!four_bar_kinematics(f_.scene, s.q[0], &kin).ok() ||
-          held(f_, four_bar_joint_rows(kin), s.v[0], f_.noise.angle[0] * g1)) {
-        continue;
-      }
-      Eigen::Matrix<double, 2, 6> D;
-      double M1 = 0;
-      if (!kinematic_jacobian(f_, f_.x.data(), s, &D, &M1)) continue;
-      r2 += (s.tau[0] - M1) * (s.tau[0] - M1);
-      t2 += s.tau[0] * s.tau[0];
-      v += detail::propagated_variance(
-               detail::sensitivity(i, lo, d1, d2, source(), f_.noise, D))(0);
-      ++count;
-    }
-    const double c = std::max(1, count), tn = f_.noise.torque[0];
-    rms[0] = std::sqrt(r2 / c);
-    floor[0] = std::max(std::sqrt(tn * tn + v / c), stages::kAbsoluteFloor * std::sqrt(t2 / c));
-    rms[1] = floor[1] = 0;
   }
   /// the residual's Jacobian (its rows of the second channel zero), the kinematic Jacobians, and
   /// the crank angle's higher terms cut short where they would span a slip reversal; the
@@ -112,7 +78,6 @@ class FourBarWindowFit : public stages::WindowFit {
     }
     return in;
   }
-  bool predicts_noise_bias() const override { return true; }
   /// At each sample's motion u = (theta1, omega1, alpha1), n the noise of the angle and of its
   /// filtered derivatives (covariance from the filter's taps): a 3-point Gauss-Hermite rule
   /// along each principal axis of its covariance, exact for quadratic torques, and bounded where
@@ -145,13 +110,13 @@ class FourBarWindowFit : public stages::WindowFit {
       Eigen::VectorXd score = Eigen::VectorXd::Zero(P);
       bool ok = true;
       for (int k = 0; k < 3 && ok; ++k) {
-        const Eigen::Vector3d e = std::sqrt(3.0 * std::max(0.0, eig.eigenvalues()(k))) *
-                                  eig.eigenvectors().col(k);
+        const Eigen::Vector3d e =
+            std::sqrt(3.0 * std::max(0.0, eig.eigenvalues()(k))) * eig.eigenvectors().col(k);
         for (double side : {1.0, -1.0}) {
           Sample p = s;
           p.q[0] += side * e(0), p.v[0] += side * e(1), p.a[0] += side * e(2);
-          ok = ok && stages::mechanism_drive_torques<FourBar>(f_.scene, f_.layout, f_.x.data(),
-                                                              p, f_.eval, &m1, &A1);
+          ok = ok && stages::mechanism_drive_torques<FourBar>(f_.scene, f_.layout, f_.x.data(), p,
+                                                              f_.eval, &m1, &A1);
           if (!ok) break;
           shift += (m1[0] - m0[0]) / 6;
           score += (A1.row(0) - A0.row(0)).transpose() * (m1[0] - m0[0]) / 6;
@@ -165,17 +130,6 @@ class FourBarWindowFit : public stages::WindowFit {
   }
 
  private:
-  /// log sample i with its rates and accelerations at 0
-  Sample logged(int i) const {
-    const TorqueLog& L = f_.cond.log;
-    Sample s;
-    s.t = L.t[i];
-    s.q[0] = L.theta1[i];
-    s.v[0] = s.a[0] = 0;
-    s.tau[0] = L.tau1[i];
-    s.loads = f_.loads(L.t[i]);
-    return s;
-  }
   /// bias_inputs without the terms into jacobians_; false where the residual fails
   bool jacobians() const {
     const int P = f_.layout.size(), m = static_cast<int>(f_.samples.size());
@@ -218,12 +172,8 @@ void window_stage(FourBarFit* f, IdentifyResult* out) {
   std::vector<double> x = f->x;
   stages::add_mechanism_terms<FourBar>(f->scene, f->layout, some, f->eval, x.data(), &problem);
   if (stages::solve_preliminary(f->layout, x.data(), &problem)) f->x = x;
-  const FourBarWindowFit w(*f);
-  bool rates_biased = false;
-  const int order = f->sg.order;
-  stages::choose_window(w, &f->sg, &rates_biased, &out->window_choice);
-  stages::limit_smoothing_bias(w, order, &f->sg, &f->smoothing_bias,
-                               &out->window_choice);
+  stages::choose_window_by_bias(FourBarWindowFit(*f), &f->sg, &f->smoothing_bias,
+                                &out->window_choice);
   f->x = x_start;
   rates(f, out);
   select_samples(f, out);

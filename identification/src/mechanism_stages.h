@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,7 @@
 namespace ceres {
 class Problem;
 struct CRSMatrix;
-}
+}  // namespace ceres
 
 namespace fivebar::identification::stages {
 
@@ -51,18 +52,19 @@ class WindowFit {
   /// whether the filter's window of half-width hw centred on log sample i spans a slip reversal
   virtual bool spans_reversal(int i, int hw) const = 0;
   /// per channel: the rms torque residual and the level the sensor noise explains over the log
-  /// samples `probe` (joints at rest left out), with the rates of the filter `sg`
+  /// samples `probe` (joints at rest left out), with the rates of the filter `sg` (read by
+  /// choose_window; a mechanism whose window choose_window_by_bias chooses leaves them NaN)
   virtual void levels(const std::vector<int>& probe, const SgOptions& sg, double rms[2],
-                      double floor[2]) const = 0;
+                      double floor[2]) const {
+    (void)probe, (void)sg;
+    rms[0] = rms[1] = floor[0] = floor[1] = std::numeric_limits<double>::quiet_NaN();
+  }
   /// the inputs of the bias prediction (smoothing_bias.h) over the samples of the fit: the
   /// motion's higher terms above `order` from local polynomials over +-reach samples, cut short
   /// (not below +-min_half) at slip reversals
   virtual detail::BiasInputs bias_inputs(int reach, int min_half, int order) const = 0;
-  /// whether the mechanism predicts the noise's bias (noise_bias); if not, only the smoothing
-  /// bias limits the window
-  virtual bool predicts_noise_bias() const { return false; }
   /// what the noise of the rates and accelerations estimated with `sg` does to the fit at each
-  /// of its samples (smoothing_bias.h); empty when not predicted
+  /// of its samples (smoothing_bias.h); empty when not predicted (choose_window_by_bias reads it)
   virtual detail::NoiseBias noise_bias(const SgOptions& sg) const {
     (void)sg;
     return {};
@@ -80,17 +82,24 @@ void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::s
 
 /// After choose_window: the largest window up to its choice whose predicted smoothing bias
 /// (smoothing_bias.h) is within kBiasFraction of the std for every friction coefficient, from
-/// the rule's choice down to the second smallest window; the rule's choice when none is. Where
-/// the mechanism predicts the noise's bias too (WindowFit::noise_bias), which grows as the
-/// window shrinks, the search runs up from the second smallest candidate with the bias of both:
-/// the smallest window within kBiasFraction (the bias left is then mostly the noise's, which the
-/// correction takes off, while a larger window adds smoothing bias the residual does not show
-/// and leaves out more samples near slip reversals), else the one of least predicted bias; the
-/// residual rule's choice is not read. Angles only,
+/// the rule's choice down to the second smallest window; the rule's choice when none is. Angles
+/// only,
 /// the filter's order as given (`given_order`, not raised). *bias: the prediction at the window
 /// kept (left empty when not predicted); *choice gets its text appended.
 void limit_smoothing_bias(const WindowFit& w, int given_order, SgOptions* sg, Eigen::VectorXd* bias,
                           std::string* choice);
+
+/// The window of a mechanism that predicts the noise's bias (WindowFit::noise_bias), in place of
+/// choose_window and limit_smoothing_bias: the noise's bias through the reactions falls as the
+/// window grows while the smoothing bias grows, and the search runs up from the second smallest
+/// candidate with the bias of both: the smallest window within kBiasFraction of the std of every
+/// friction coefficient (the bias left is then mostly the noise's, which correct_smoothing_bias
+/// takes off, while a larger window adds smoothing bias and leaves out more samples near slip
+/// reversals), else the one of least predicted bias. Angles only, at sg's order; sg as given
+/// when no bias can be predicted. *bias: the prediction at the window kept (left empty when not
+/// predicted); *choice: its text, with the predictions by half-window.
+void choose_window_by_bias(const WindowFit& w, SgOptions* sg, Eigen::VectorXd* bias,
+                           std::string* choice);
 
 /// The predicted smoothing bias at the chosen window (`bias`, public friction coefficients)
 /// taken off the estimates, their intervals and the fitted parameters x (internal layout).

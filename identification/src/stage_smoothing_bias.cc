@@ -80,59 +80,6 @@ std::vector<char> centred_samples(const WindowFit& w, int m) {
   return keep;
 }
 
-/// limit_smoothing_bias where the mechanism predicts the noise's bias (WindowFit::noise_bias):
-/// the candidates from the second smallest up to the first within kBiasFraction, or until the
-/// bias has grown to twice its least, the motion's higher terms over +-kReconSpan times each
-/// window. (Over 30 seeded crank-rocker logs at angle noise 1e-5 rad, keeping the largest window
-/// within kBiasFraction instead chose 12-41 samples and covered 86.7 %, the smallest 8-15
-/// samples and 98.3 %.)
-void limit_total_bias(const WindowFit& w, const std::vector<int>& cand, double dt,
-                      SgOptions* sg_fit, Eigen::VectorXd* bias_kept, std::string* choice) {
-  std::string table;
-  int chosen = -1, least = -1;
-  double least_worst = 0;
-  std::vector<Eigen::VectorXd> biases(cand.size());
-  for (size_t k = 1; k < cand.size(); ++k) {
-    const int m = cand[k];
-    const detail::BiasInputs in = w.bias_inputs(std::lround(kReconSpan * m), cand[1], sg_fit->order);
-    if (in.J.rows() != 2 * static_cast<int>(w.index().size())) return;
-    SgOptions sg = *sg_fit;
-    sg.half_window_s = m * dt;
-    const detail::NoiseBias noise = w.noise_bias(sg);
-    Eigen::VectorXd std;
-    if (noise.shift.size() != w.index().size() || noise.score.size() != w.index().size() ||
-        !detail::smoothing_bias(w.log().t, in, centred_samples(w, m), sg, &biases[k], &std,
-                                &noise)) {
-      continue;
-    }
-    const double worst = worst_ratio(biases[k], std);
-    table += (table.empty() ? "" : ", ") + std::to_string(m) + ": " + format_significant(worst);
-    if (least < 0 || worst < least_worst) least = static_cast<int>(k), least_worst = worst;
-    if (worst <= kBiasFraction) {
-      chosen = static_cast<int>(k);
-      break;
-    }
-    // the noise's bias falls and the smoothing's grows with the window: past the least, once
-    // it is twice the least, the larger windows only add
-    if (worst > 2 * std::max(least_worst, kBiasFraction)) break;
-  }
-  if (least < 0) return;
-  const int pick = chosen < 0 ? least : chosen;
-  sg_fit->half_window_s = cand[pick] * dt;
-  *bias_kept = biases[pick];
-  *choice += "; then half-window " + std::to_string(cand[pick]) + " samples, " +
-             (chosen < 0 ? "the one of least predicted bias (none keeps it within " +
-                               format_significant(kBiasFraction) + " std)"
-                         : "the smallest whose predicted bias is within " +
-                               format_significant(kBiasFraction) +
-                               " std of every friction coefficient") +
-             " (the smoothing bias and the noise's through the reactions, errors in variables; "
-             "predicted |bias| / std by half-window, the motion's higher terms from local "
-             "polynomials of degree " +
-             std::to_string(sg_fit->order + detail::kReconExtra) + " over +-" +
-             format_significant(kReconSpan) + " half-windows: " + table + ")";
-}
-
 }  // namespace
 
 void limit_smoothing_bias(const WindowFit& w, int given_order, SgOptions* sg_fit,
@@ -145,10 +92,6 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, SgOptions* sg_fit
   }
   const double dt = log.duration() / (n - 1);
   const std::vector<int> cand = window_candidates(n, dt, sg_fit->order);
-  if (cand.size() > 1 && w.predicts_noise_bias()) {
-    limit_total_bias(w, cand, dt, sg_fit, bias_kept, choice);
-    return;
-  }
   const int rule = static_cast<int>(
       std::find(cand.begin(), cand.end(), sg_half_window(*sg_fit, dt)) - cand.begin());
   if (rule < 1 || rule >= static_cast<int>(cand.size())) return;
@@ -183,6 +126,89 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, SgOptions* sg_fit
       "of degree " +
       std::to_string(sg_fit->order + detail::kReconExtra) + " over +-" +
       std::to_string(std::lround(kReconSpan * cand[rule])) + " samples: " + table + ")";
+}
+
+// The smallest candidate within kBiasFraction, found by a walk from the filter's window as given
+// (the predicted bias falls with the window as far as the noise's dominates): down while within,
+// else up until within, or until the bias has grown to twice its least (then the least). The
+// motion's higher terms over +-kReconSpan times each window. (Over 30 seeded crank-rocker logs at
+// angle noise 1e-5 rad, keeping the largest window within kBiasFraction instead chose 12-41
+// samples and covered 86.7 %, the smallest 8-15 samples and 98.3 %.)
+void choose_window_by_bias(const WindowFit& w, SgOptions* sg_fit, Eigen::VectorXd* bias_kept,
+                           std::string* choice) {
+  const int n = w.log().size();
+  const double dt = w.log().duration() / std::max(1, n - 1);
+  const std::vector<int> cand = window_candidates(n, dt, sg_fit->order);
+  const int K = static_cast<int>(cand.size());
+  *choice = "default: half-window " + std::to_string(sg_half_window(*sg_fit, dt)) +
+            " samples (no window's bias could be predicted)";
+  if (w.source() != detail::RateSource::kFromAngles || n < 2 || K < 2) return;
+  std::vector<Eigen::VectorXd> biases(K);
+  std::vector<double> worst(K, -1);  // -1: not evaluated; NaN: not predicted
+  // candidate k's predicted |bias| / std; false when the inputs cannot be formed
+  const auto evaluate = [&](int k) {
+    const detail::BiasInputs in =
+        w.bias_inputs(std::lround(kReconSpan * cand[k]), cand[1], sg_fit->order);
+    if (in.J.rows() != 2 * static_cast<int>(w.index().size())) return false;
+    SgOptions sg = *sg_fit;
+    sg.half_window_s = cand[k] * dt;
+    const detail::NoiseBias noise = w.noise_bias(sg);
+    Eigen::VectorXd std;
+    const bool ok = noise.shift.size() == w.index().size() &&
+                    noise.score.size() == w.index().size() &&
+                    detail::smoothing_bias(w.log().t, in, centred_samples(w, cand[k]), sg,
+                                           &biases[k], &std, &noise);
+    worst[k] = ok ? worst_ratio(biases[k], std) : std::numeric_limits<double>::quiet_NaN();
+    return true;
+  };
+  const auto within = [&](int k) { return worst[k] <= kBiasFraction; };
+  const int start = std::clamp(
+      static_cast<int>(std::lower_bound(cand.begin(), cand.end(), sg_half_window(*sg_fit, dt)) -
+                       cand.begin()),
+      1, K - 1);
+  if (!evaluate(start)) return;
+  int chosen = -1;
+  if (within(start)) {
+    chosen = start;
+    for (int k = start - 1; k >= 1; --k) {
+      if (!evaluate(k)) return;
+      if (!within(k)) break;
+      chosen = k;
+    }
+  } else {
+    double least = std::isnan(worst[start]) ? INFINITY : worst[start];
+    for (int k = start + 1; k < K && chosen < 0; ++k) {
+      if (!evaluate(k)) return;
+      if (within(k)) chosen = k;
+      if (worst[k] < least) least = worst[k];
+      // the noise's bias falls and the smoothing's grows with the window: past the least, once
+      // it is twice the least, the larger windows only add
+      if (worst[k] > 2 * std::max(least, kBiasFraction)) break;
+    }
+  }
+  int pick = chosen;
+  std::string table;
+  for (int k = 1; k < K; ++k) {
+    if (worst[k] < 0 || std::isnan(worst[k])) continue;
+    if (pick < 0 || (chosen < 0 && worst[k] < worst[pick])) pick = k;
+    table += (table.empty() ? "" : ", ") + std::to_string(cand[k]) + ": " +
+             format_significant(worst[k]);
+  }
+  if (pick < 0) return;
+  sg_fit->half_window_s = cand[pick] * dt;
+  *bias_kept = biases[pick];
+  *choice =
+      "data-driven: half-window " + std::to_string(cand[pick]) + " samples (" +
+      format_significant(cand[pick] * dt * 1e3) + " ms), " +
+      (chosen < 0 ? "the one of least predicted bias (none keeps it within " +
+                        format_significant(kBiasFraction) + " std)"
+                  : "the smallest whose predicted bias is within " +
+                        format_significant(kBiasFraction) + " std of every friction coefficient") +
+      " (the smoothing bias and the noise's through the reactions, errors in variables; "
+      "predicted |bias| / std by half-window, the motion's higher terms from local polynomials of "
+      "degree " +
+      std::to_string(sg_fit->order + detail::kReconExtra) + " over +-" +
+      format_significant(kReconSpan) + " half-windows: " + table + ")";
 }
 
 void correct_smoothing_bias(const ParameterLayout& layout, const Eigen::VectorXd& b,
