@@ -269,7 +269,7 @@ int finish(const Args& a, const Scene& scene, const id::TorqueLog& log,
 /// refused naming them; no validation run (the simulation of the fitted scene against the log
 /// is the five-bar's).
 int run_four_bar(Args a, const Scene& scene, std::chrono::steady_clock::time_point start) {
-  const id::IdentifyOptions opt = identify_options(a.settings, scene);
+  id::IdentifyOptions opt = identify_options(a.settings, scene);
   const std::string unsupported = id::four_bar_unsupported(opt);
   if (!unsupported.empty())
     throw InputError(scene.path, "mechanism.type", "four_bar: " + unsupported);
@@ -280,6 +280,7 @@ int run_four_bar(Args a, const Scene& scene, std::chrono::steady_clock::time_poi
   id::TorqueLog log = read_log(a.log, 1);
   if (!a.flip_torque_sign.empty()) {
     for (double& v : log.tau1) v = -v;
+    opt.torques_negated = 1u;
   }
   const id::IdentifyResult res = identify_four_bar_scene(scene, log, opt);
   a.no_validation = true;

@@ -1,9 +1,10 @@
 // identify() of the four-bar (identify.h): the default method, inverse dynamics, over the
 // mechanism FourBar, through the stages of the five-bar's fit in their one-crank form
 // (docs/identification.md, "Four-bar"): conditioning (condition_log), rates and samples (logged,
-// or Savitzky-Golay with the rest rule and the slip reversals left out), the fit (the mechanism
-// residual, mechanism_residual.h), the covariance (the block sandwich over the filter's windows),
-// the model check (the residual against its noise floor) and Wald intervals.
+// or Savitzky-Golay with the rest rule and the slip reversals left out), the data-driven window
+// and its smoothing bias (the five-bar's stages, mechanism_stages.h, over FourBarWindowFit), the fit
+// (the mechanism residual, mechanism_residual.h), the covariance (the block sandwich over the
+// filter's windows), the model check (the residual against its noise floor) and Wald intervals.
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
@@ -18,38 +19,14 @@
 #include "fivebar/model/format.h"
 #include "fivebar/model/four_bar.h"
 #include "fivebar/sim/simulator.h"
-#include "four_bar_rules.h"
+#include "four_bar_fit.h"
 #include "mechanism_residual.h"
 #include "setup_shared.h"
+#include "mechanism_stages.h"
 
 namespace fivebar::identification {
 
-namespace {
-
-using Sample = stages::MechanismSample<FourBar>;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-using four_bar_rules::kRestSigmas;
-using four_bar_rules::kWindowOrder;
-
-/// The state the four-bar's stages share, in the order they write it.
-struct FourBarFit {
-  const IdentifyOptions* opt = nullptr;
-  FourBarParams scene;  ///< with the law to fit (fit_friction)
-  sim::FourBarLoadFunction loads;
-  ParameterLayout layout;
-  EvalOptions eval;
-  ConditionedLog cond;  ///< conditioning
-  // rates and samples
-  int hw = 0;                ///< Savitzky-Golay half-window [samples] (0: accelerations logged)
-  int first = 0, last = -1;  ///< samples whose rates and accelerations are centred estimates
-  std::vector<double> w, a;  ///< crank rate and acceleration at every log sample
-  double rate_noise = 0, accel_noise = 0;  ///< their noise std
-  std::vector<Sample> samples;
-  std::vector<int> index;  ///< log index of each sample
-  // the fit
-  std::vector<double> x;
-};
+namespace four_bar {
 
 std::string line_of(const TorqueLog& log, int i) {
   return "line " + std::to_string(log.lines.empty() ? i + 1 : log.lines[i]);
@@ -81,40 +58,34 @@ void condition(const TorqueLog& log, FourBarFit* f, IdentifyResult* out) {
   out->angle_noise[0] = f->cond.angle_noise[0];
   out->torque_noise[0] = f->cond.torque_noise[0];
   out->rate_noise[0] = f->cond.rate_noise[0];
+  f->noise.angle[0] = f->cond.angle_noise[0];
+  f->noise.rate[0] = f->cond.rate_noise[0];
+  f->noise.torque[0] = f->cond.torque_noise[0];
 }
 
-/// Noise gains of the Savitzky-Golay rate and acceleration at the middle sample of the log (white
-/// noise of std s on the angles gives s * gain): the root sum of squares of its taps.
-void interior_gains(const std::vector<double>& t, const SgOptions& sg, double* g1, double* g2) {
-  int lo = 0;
-  std::vector<double> d1, d2;
-  savitzky_golay_taps(t, static_cast<int>(t.size()) / 2, sg, &lo, &d1, &d2);
-  *g1 = *g2 = 0;
-  for (size_t r = 0; r < d1.size(); ++r) {
-    *g1 += d1[r] * d1[r];
-    *g2 += d2[r] * d2[r];
-  }
-  *g1 = std::sqrt(*g1);
-  *g2 = std::sqrt(*g2);
+/// Whether the rates and accelerations come from the angles through the data-driven window: the
+/// angles alone (no logged rates, or --estimate-rates) and no window given.
+bool data_driven_window(const TorqueLog& L, const IdentifyOptions& opt) {
+  return (!L.has_rates || opt.estimate_rates) && opt.auto_window;
 }
 
-/// The Savitzky-Golay filter: as given (--sg-window), else the options' half-window with the
-/// polynomial's order at least kWindowOrder.
-SgOptions filter_options(const IdentifyOptions& opt, std::string* why) {
+/// The Savitzky-Golay filter before the window choice, and its text: as given (--sg-window),
+/// else the options' with the polynomial's order at least kWindowOrder (logged rates: over the
+/// options' half-window, no data-driven choice).
+SgOptions filter_options(const TorqueLog& L, const IdentifyOptions& opt, std::string* why) {
   SgOptions sg = opt.sg;
   if (!opt.auto_window) {
     *why = "given: --sg-window";
     return sg;
   }
   sg.order = std::max(sg.order, kWindowOrder);
-  *why = "default: the four-bar's order " + std::to_string(sg.order) +
-         " over the default half-window (no data-driven choice)";
+  if (!data_driven_window(L, opt)) {
+    *why = "default: the four-bar's order " + std::to_string(sg.order) +
+           " over the default half-window (logged rates: no data-driven choice)";
+  }
   return sg;
 }
 
-/// Rates and accelerations: the log's own when it has them (and the options do not ask to
-/// estimate them), else Savitzky-Golay (filter_options; the edges, where the window is
-/// one-sided, are left out of the fit); their noise from the angles' through the filter.
 void rates(FourBarFit* f, IdentifyResult* out) {
   const TorqueLog& L = f->cond.log;
   const IdentifyOptions& opt = *f->opt;
@@ -122,14 +93,13 @@ void rates(FourBarFit* f, IdentifyResult* out) {
   const double dt = L.duration() / std::max(1, n - 1);
   const bool logged = L.has_rates && !opt.estimate_rates;
   const bool accels_logged = logged && L.has_accels;
-  std::string why;
-  const SgOptions sg = accels_logged ? opt.sg : filter_options(opt, &why);
+  const SgOptions& sg = f->sg;
   std::vector<double> w_sg, a_sg;
   savitzky_golay(L.t, L.theta1, sg, &w_sg, &a_sg);
   f->w = logged ? L.omega1 : w_sg;
   f->a = accels_logged ? L.alpha1 : a_sg;
   double g1 = 0, g2 = 0;
-  interior_gains(L.t, sg, &g1, &g2);
+  stages::sg_noise_gains(L.t, sg, &g1, &g2);
   f->rate_noise = logged ? f->cond.rate_noise[0] : f->cond.angle_noise[0] * g1;
   f->accel_noise = accels_logged ? f->cond.accel_noise[0] : f->cond.angle_noise[0] * g2;
   f->hw = accels_logged ? 0 : sg_half_window(sg, dt);
@@ -140,33 +110,39 @@ void rates(FourBarFit* f, IdentifyResult* out) {
   if (out->accels_estimated) {
     out->sg_half_window = f->hw;
     out->sg_order = sg.order;
-    out->window_choice = why;
   }
   out->omega1 = f->w;
   out->alpha1 = f->a;
 }
 
-/// Per sample, 1 when some joint's relative rate changed sign since the sample before (zeros
-/// keep the previous sign); *count: the sign changes of all joints.
-std::vector<int> reversal_marks(const std::vector<std::array<double, 4>>& rel, int* count) {
-  std::vector<int> mark(rel.size(), 0);
-  for (int k = 0; k < kFourBarJoints; ++k) {
-    double last_sign = 0;
-    for (size_t i = 0; i < rel.size(); ++i) {
+/// Slip reversals: prefix counts of the sample steps (i, i + 1) over which some joint's relative
+/// rate changes sign (FourBarFit::reversals, the five-bar's form); zeros keep the previous sign.
+std::vector<int> reversal_counts(const std::vector<std::array<double, 4>>& rel) {
+  std::vector<int> pre(rel.size() + 1, 0);
+  std::array<double, kFourBarJoints> last{};
+  for (size_t i = 0; i < rel.size(); ++i) {
+    bool flip = false;
+    for (int k = 0; k < kFourBarJoints; ++k) {
       const double s = rel[i][k] > 0 ? 1.0 : (rel[i][k] < 0 ? -1.0 : 0.0);
-      if (s != 0 && last_sign != 0 && s != last_sign) {
-        mark[i] = 1;
-        ++*count;
-      }
-      if (s != 0) last_sign = s;
+      flip = flip || (s != 0 && last[k] != 0 && s != last[k]);
+      if (s != 0) last[k] = s;
     }
+    pre[i + 1] = pre[i] + (i > 0 && flip ? 1 : 0);
   }
-  return mark;
+  return pre;
 }
 
-/// The samples of the fit: glitches, joints at rest (the rest rule: a relative rate within
-/// kRestSigmas of its noise, or below --min-rate) and, with estimated accelerations, samples
-/// whose filter window spans a slip reversal are left out.
+bool held(const FourBarFit& f, const std::array<double, 4>& row, double w, double rate_noise) {
+  const IdentifyOptions& opt = *f.opt;
+  bool held = false;
+  for (int j = 0; j < kFourBarJoints; ++j) {
+    const double rest = opt.rest_rate_threshold >= 0 ? opt.rest_rate_threshold
+                                                     : kRestSigmas * rate_noise * std::abs(row[j]);
+    held = held || std::abs(row[j] * w) <= std::max({opt.min_rate, rest, 1e-12});
+  }
+  return held;
+}
+
 void select_samples(FourBarFit* f, IdentifyResult* out) {
   const TorqueLog& L = f->cond.log;
   const IdentifyOptions& opt = *f->opt;
@@ -178,27 +154,19 @@ void select_samples(FourBarFit* f, IdentifyResult* out) {
     row[i] = four_bar_joint_rows(k);
     for (int j = 0; j < kFourBarJoints; ++j) rel[i][j] = row[i][j] * f->w[i];
   }
-  int reversals = 0;
-  const std::vector<int> mark = reversal_marks(rel, &reversals);
-  std::vector<int> before(n + 1, 0);  // marks at samples < i
-  for (int i = 0; i < n; ++i) before[i + 1] = before[i] + mark[i];
+  f->reversals = reversal_counts(rel);
   out->used.assign(n, 0);
-  const bool skip_reversals = f->hw > 0 && opt.exclude_reversals;
+  out->samples_at_rest = out->samples_near_reversals = 0;
+  f->samples.clear();
+  f->index.clear();
+  const int hw = f->hw > 0 && opt.exclude_reversals ? f->hw : 0;
   for (int i = f->first; i <= f->last; ++i) {
     if (f->cond.rejected[i]) continue;
-    bool held = false;
-    for (int j = 0; j < kFourBarJoints; ++j) {
-      const double rest = opt.rest_rate_threshold >= 0
-                              ? opt.rest_rate_threshold
-                              : kRestSigmas * f->rate_noise * std::abs(row[i][j]);
-      held = held || std::abs(rel[i][j]) <= std::max({opt.min_rate, rest, 1e-12});
-    }
-    if (held) {
+    if (held(*f, row[i], f->w[i], f->rate_noise)) {
       ++out->samples_at_rest;
       continue;
     }
-    const int lo = std::max(0, i - f->hw + 1), hi = std::min(n - 1, i + f->hw);
-    if (skip_reversals && before[hi + 1] - before[lo] > 0) {
+    if (stages::window_spans_reversal(f->reversals, i, hw)) {
       ++out->samples_near_reversals;
       continue;
     }
@@ -213,7 +181,7 @@ void select_samples(FourBarFit* f, IdentifyResult* out) {
     f->index.push_back(i);
     out->used[i] = 1;
   }
-  out->slip_reversals = reversals;
+  out->slip_reversals = f->reversals.back();
   out->rest_rate_threshold = kRestSigmas * f->rate_noise;
   out->samples_used = static_cast<int>(f->samples.size());
 }
@@ -236,31 +204,15 @@ double noise_floor(const FourBarFit& f) {
   return std::max(std::sqrt(s2 / m), stages::kAbsoluteFloor * std::sqrt(tau2 / m));
 }
 
-/// Raw residuals (and the Jacobian) of the problem at its parameters; false where one fails.
-bool evaluate(ceres::Problem* problem, std::vector<double>* r, Eigen::MatrixXd* J = nullptr) {
-  ceres::Problem::EvaluateOptions eo;
-  eo.apply_loss_function = false;
-  ceres::CRSMatrix crs;
-  if (!problem->Evaluate(eo, nullptr, r, nullptr, J ? &crs : nullptr)) return false;
-  if (J) {
-    J->setZero(crs.num_rows, crs.num_cols);
-    for (int i = 0; i < crs.num_rows; ++i) {
-      for (int k = crs.rows[i]; k < crs.rows[i + 1]; ++k) (*J)(i, crs.cols[k]) = crs.values[k];
-    }
-  }
-  return true;
-}
-
 double rms(const std::vector<double>& r) {
   double s = 0;
   for (double v : r) s += v * v;
   return r.empty() ? 0.0 : std::sqrt(s / r.size());
 }
 
-/// The fit: start values (the options' or the neutral ones, inside the bounds), the residual
-/// blocks, the bounds, the solve. False (out->status) when the start values are malformed, the
-/// model fails at them, or the solver fails.
-bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
+/// Start values in the internal layout (Stribeck: static_coulomb as its excess over coulomb),
+/// from the options' or the neutral ones, inside the bounds; false (out->status) when malformed.
+bool start_values(FourBarFit* f, IdentifyResult* out) {
   const ParameterLayout& lay = f->layout;
   const int P = lay.size();
   const std::vector<double> x0 =
@@ -270,16 +222,23 @@ bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
                                 "initial values: expected " + std::to_string(P) + " numbers");
     return false;
   }
-  // the internal layout (Stribeck: static_coulomb as its excess over coulomb)
   const Eigen::VectorXd xi =
       stages::to_public(lay).inverse() * Eigen::Map<const Eigen::VectorXd>(x0.data(), P);
   f->x.assign(xi.data(), xi.data() + P);
   for (int i = 0; i < P; ++i) f->x[i] = std::max(f->x[i], lay.lower_bound(i));
+  return true;
+}
+
+/// The fit: the residual blocks on f->x (its start values), the bounds, the solve. False
+/// (out->status) when the model fails at the start values, or the solver fails.
+bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
+  const ParameterLayout& lay = f->layout;
+  const int P = lay.size();
   stages::add_mechanism_terms<FourBar>(f->scene, lay, f->samples, f->eval, f->x.data(), problem);
   for (int i = 0; i < P; ++i) problem->SetParameterLowerBound(f->x.data(), i, lay.lower_bound(i));
   out->residuals = static_cast<int>(f->samples.size());
   std::vector<double> r;
-  if (!evaluate(problem, &r)) {
+  if (!stages::raw_residuals(problem, &r)) {
     out->status = Status::Error(StatusCode::kFrictionNotConverged,
                                 "the four-bar's inverse dynamics fails at the start values");
     return false;
@@ -336,7 +295,9 @@ void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* ou
   std::vector<double> r;
   Eigen::MatrixXd J;
   out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
-  if (!evaluate(problem, &r, &J)) return;
+  ceres::CRSMatrix crs;
+  if (!stages::raw_residuals(problem, &r, &crs)) return;
+  J = stages::dense(crs, P);
   const int m = static_cast<int>(r.size());
   out->rms_torque_residual[0] = rms(r);
   out->residual_sigma = std::sqrt(rms(r) * rms(r) * m / std::max(1, m - P));
@@ -454,7 +415,25 @@ void predictions(const FourBarFit& f, IdentifyResult* out) {
   for (int i = 0; i < L.size(); ++i) out->predicted_tau1[i] = rows[i].M1;
 }
 
-}  // namespace
+/// The sign check (stages::torques_fit_negated, the five-bar's) when the residual is more than
+/// kMisfitRatio times its floor: refits of the negated torque by this identify.
+void sign_check(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
+                const TorqueLog& log, const IdentifyOptions& opt, IdentifyResult* out) {
+  if (!opt.check_torque_sign ||
+      !(out->rms_torque_residual[0] > stages::kMisfitRatio * out->residual_noise_floor[0])) {
+    return;
+  }
+  const stages::Refit refit = [&](const TorqueLog& negated, const IdentifyOptions& again,
+                                  IdentifyResult* fit) {
+    *fit = identify(scene, loads, negated, again);
+    return true;
+  };
+  stages::torques_fit_negated(log, opt, 1, 0u, refit, out);
+}
+
+}  // namespace four_bar
+
+using namespace four_bar;
 
 std::string four_bar_unsupported(const IdentifyOptions& opt) {
   const std::string tail = " runs five-bars only (mechanism.type five_bar)";
@@ -493,8 +472,13 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   f.eval.friction_tol = 1e-12;
   f.eval.friction_max_iter = 100;
   condition(log, &f, &out);
+  if (!start_values(&f, &out)) return out;
+  f.sg = filter_options(f.cond.log, opt, &out.window_choice);
   rates(&f, &out);
   select_samples(&f, &out);
+  if (data_driven_window(f.cond.log, opt) && out.samples_used >= f.layout.size() + 1) {
+    window_stage(&f, &out);
+  }
   if (out.samples_used < f.layout.size() + 1) {
     out.status = Status::Error(StatusCode::kInvalidInput,
                                std::to_string(out.samples_used) + " samples left for " +
@@ -509,7 +493,9 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   covariance(f, &problem, &out);
   estimates(f, x0, &out);
   model_check(&out);
+  stages::correct_smoothing_bias(f.layout, f.smoothing_bias, &f.x, &out);
   predictions(f, &out);
+  sign_check(scene, loads, log, opt, &out);
   out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

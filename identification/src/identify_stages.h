@@ -26,6 +26,7 @@
 #include "noise_model.h"
 #include "profile.h"
 #include "smoothing_bias.h"
+#include "mechanism_stages.h"
 #include "window_misfit.h"
 #include "method.h"
 #include "setup_shared.h"
@@ -206,16 +207,29 @@ Status first_failing_sample(const Fit& f, const std::vector<double>& x, const st
 /// fit, and a check that the model evaluates at every one at the start values (false: status).
 bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out);
 
-// ---- stage_window.cc (window_candidates: noise_model.h) ----
+// ---- stage_window.cc, stage_smoothing_bias.cc (mechanism_stages.h; window_candidates: noise_model.h) ----
 
-/// The data-driven Savitzky-Golay half-window. Smoothing bias shows in the torque residual as
-/// an excess over the level the sensor noise explains (that level is predicted per window by
-/// propagating the measured noise): the window chosen is the largest whose residual/noise ratio
-/// stays within kWindowExcess of the reference, 1 or the least ratio over the candidates when
-/// that is above 1 (a mismatch of the law that no window removes). Candidates evaluated at the
-/// parameters of a preliminary fit (f.x). When the excess is flat in the window instead (a
-/// misfit that the small windows' noise hides, window_misfit.h), misfit_window chooses.
-void choose_window(Fit* f, IdentifyResult* out);
+/// The five-bar's fit as the window stages read it (mechanism_stages.h): its residual levels at a
+/// window (stage_window.cc) and the inputs of the bias prediction (stage_smoothing_bias.cc), at
+/// the parameters of the preliminary fit.
+class FiveBarWindowFit : public WindowFit {
+ public:
+  FiveBarWindowFit(const Fit& f, const IdentifyResult& out) : f_(f), out_(out) {}
+  const TorqueLog& log() const override { return f_.cond.log; }
+  const std::vector<char>& rejected() const override { return f_.cond.rejected; }
+  int drives() const override { return kActuators; }
+  detail::RateSource source() const override { return f_.source; }
+  const std::vector<int>& index() const override { return f_.index; }
+  bool spans_reversal(int i, int hw) const override { return stages::spans_reversal(f_, i, hw); }
+  /// over the probes, the rest rule (held_sample) at the thresholds of the window `sg`
+  void levels(const std::vector<int>& probe, const SgOptions& sg, double rms[2],
+              double floor[2]) const override;
+  detail::BiasInputs bias_inputs(int reach, int min_half, int order) const override;
+
+ private:
+  const Fit& f_;
+  const IdentifyResult& out_;
+};
 
 /// A quick fit on at most ~1500 of the selected samples (plain least squares) that sets f->x for
 /// the window choice; keeps the start values if it fails.
@@ -223,9 +237,6 @@ void preliminary_fit(Fit* f);
 
 // ---- stage_solve.cc ----
 
-/// Raw (unweighted) residuals; false where an evaluation fails.
-bool raw_residuals(ceres::Problem* problem, std::vector<double>* r,
-                   ceres::CRSMatrix* jac = nullptr);
 
 void rms_pair(const std::vector<double>& r, double* out2);
 
@@ -246,8 +257,6 @@ void noise_floor(const Fit& f, const std::vector<detail::Sensitivity>& sens, dou
 /// Costs one pass of noise_sensitivities over the samples.
 void choose_loss_scale(Fit* f, IdentifyResult* out);
 
-/// J^T J of the CRS Jacobian and the dense Jacobian itself (2 rows per sample).
-Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P);
 
 /// Solves. Group inertia: the prior's weight is then set to the residual's noise level (the torque
 /// noise plus the angle noise through the rates) and, if that differs, the fit is refined.
@@ -292,23 +301,6 @@ Eigen::MatrixXd score_sandwich(const Fit& f, const FreeSet& fs, const Analysis& 
 /// independent between windows. Empty when too few windows carry residuals (a warning).
 Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
                                   const std::vector<double>& r, IdentifyResult* out);
-
-// ---- stage_smoothing_bias.cc ----
-
-/// After the residual rule (choose_window): the largest window up to its choice whose predicted
-/// smoothing bias (smoothing_bias.h) is within kBiasFraction of the std for every friction
-/// coefficient, from the rule's choice down to the second smallest window; the rule's choice
-/// when none is. Angles only, the filter's order as given (not raised).
-void limit_smoothing_bias(Fit* f, IdentifyResult* out);
-
-/// The predicted smoothing bias at the chosen window (f->smoothing_bias) taken off the friction
-/// estimates, their intervals and the fitted parameters. Coefficients at a bound, or whose std
-/// the log does not determine, are left as fitted, and no correction takes a coefficient past
-/// its bound (a Stribeck static_coulomb stays >= coulomb): the correction is limited there, and
-/// says so. Its own error, from the angle noise through the reconstruction, is a small part of
-/// the bias (over two noisy paper logs at half-window 8: 0.078 and 0.136 std predicted for 0.088
-/// measured), so a few hundredths of the std, and is not added to the std.
-void correct_smoothing_bias(Fit* f, IdentifyResult* out);
 
 // ---- stage_predictions.cc ----
 

@@ -9,6 +9,7 @@
 
 #include <ceres/ceres.h>
 
+#include <Eigen/Core>
 #include <vector>
 
 #include "fivebar/identification/parameters.h"
@@ -36,5 +37,14 @@ void add_mechanism_terms(const typename M::template Params<double>& scene,
                          const ParameterLayout& layout,
                          const std::vector<MechanismSample<M>>& samples, const EvalOptions& eval,
                          double* x, ceres::Problem* problem);
+
+/// The drive torques of mech::inverse<M> at the sample's motion, the friction coefficients x laid
+/// out by `layout` (the residual's own evaluation), and with `dx` their derivatives in x (M::kDof
+/// rows, the residual's Jets); false where the model fails.
+template <class M>
+bool mechanism_drive_torques(const typename M::template Params<double>& scene,
+                             const ParameterLayout& layout, const double* x,
+                             const MechanismSample<M>& s, const EvalOptions& eval,
+                             mech::Vec<M::kDof, double>* torques, Eigen::MatrixXd* dx = nullptr);
 
 }  // namespace fivebar::identification::stages

@@ -1,6 +1,7 @@
 // The four-bar's inverse-dynamics residual blocks (mechanism_residual.h): add_mechanism_terms
-// instantiated for FourBar, in a unit of its own so that its Jet instantiation of the four-bar's
-// dynamics (one width, kMechanismStride) is compiled once.
+// and mechanism_drive_torques instantiated for FourBar, in a unit of its own so that its Jet
+// instantiation of the four-bar's dynamics (one width, kMechanismStride) and its double one are
+// compiled once.
 #include "fivebar/model/four_bar.h"
 #include "mechanism_residual.h"
 
@@ -61,8 +62,35 @@ void add_mechanism_terms(const typename M::template Params<double>& scene,
   }
 }
 
+template <class M>
+bool mechanism_drive_torques(const typename M::template Params<double>& scene,
+                             const ParameterLayout& layout, const double* x,
+                             const MechanismSample<M>& s, const EvalOptions& eval,
+                             mech::Vec<M::kDof, double>* torques, Eigen::MatrixXd* dx) {
+  double r[M::kDof];
+  if (dx == nullptr) {
+    const MechanismResidual<M> residual(scene, layout, s, eval);
+    if (!residual(&x, r)) return false;
+  } else {
+    ceres::DynamicAutoDiffCostFunction<MechanismResidual<M>, kMechanismStride> cost(
+        new MechanismResidual<M>(scene, layout, s, eval));
+    cost.AddParameterBlock(layout.size());
+    cost.SetNumResiduals(M::kDof);
+    Eigen::Matrix<double, M::kDof, Eigen::Dynamic, Eigen::RowMajor> jac(M::kDof, layout.size());
+    double* jacobians[] = {jac.data()};
+    if (!cost.Evaluate(&x, r, jacobians)) return false;
+    *dx = -jac;  // r = tau - torques
+  }
+  for (int j = 0; j < M::kDof; ++j) (*torques)[j] = s.tau[j] - r[j];
+  return true;
+}
+
 template void add_mechanism_terms<FourBar>(const FourBarParams&, const ParameterLayout&,
                                            const std::vector<MechanismSample<FourBar>>&,
                                            const EvalOptions&, double*, ceres::Problem*);
+template bool mechanism_drive_torques<FourBar>(const FourBarParams&, const ParameterLayout&,
+                                               const double*, const MechanismSample<FourBar>&,
+                                               const EvalOptions&, mech::Vec<1, double>*,
+                                               Eigen::MatrixXd*);
 
 }  // namespace fivebar::identification::stages

@@ -50,7 +50,7 @@ void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen:
 
 bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
                     const std::vector<char>& keep, const SgOptions& sg, Eigen::VectorXd* bias,
-                    Eigen::VectorXd* std) {
+                    Eigen::VectorXd* std, const NoiseBias* noise) {
   if (in.source != RateSource::kFromAngles || t.size() < 2) return false;
   const int P = static_cast<int>(in.J.cols());
   const int kept = static_cast<int>(std::count(keep.begin(), keep.end(), 1));
@@ -68,6 +68,7 @@ bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
     for (int c = 0; c < kDof; ++c) {
       m += in.D[u].col(2 + c) * in.terms[c][u].dot(r1) + in.D[u].col(4 + c) * in.terms[c][u].dot(r2);
     }
+    if (noise) m += noise->shift[u];
     dM.segment<2>(2 * k) = m;
     J.middleRows(2 * k, 2) = in.J.middleRows(2 * u, 2);
     sens.push_back(sensitivity(t, in.index[u], in.source, sg, in.noise, in.D[u]));
@@ -83,7 +84,11 @@ bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
   const Eigen::MatrixXd Hinv = ldlt.solve(Eigen::MatrixXd::Identity(P, P));
   // the model's torque M is off by dM where the residual r = tau - M is evaluated with biased
   // rates; the Gauss-Newton step from the truth moves x by (J^T J)^-1 J^T dM (J = d r / d x)
-  const Eigen::VectorXd b = in.T * (Hinv * (J.transpose() * dM));
+  Eigen::VectorXd score = J.transpose() * dM;
+  for (size_t u = 0; noise && u < keep.size(); ++u) {
+    if (keep[u]) score -= noise->score[u];
+  }
+  const Eigen::VectorXd b = in.T * (Hinv * score);
   const Eigen::MatrixXd S = score_covariance(J, sens, in.noise, static_cast<int>(t.size())) +
                             in.s2 * in.Hp;
   const Eigen::MatrixXd C = in.T * Hinv * S * Hinv * in.T.transpose();

@@ -51,10 +51,22 @@ struct BiasInputs {
   SensorNoise noise;
 };
 
+/// What the noise of estimated rates and accelerations does to the fit at each of its samples u
+/// (errors in variables), for one filter: with A = d torques / d x and n that noise,
+/// shift[u] = E[torques(u + n)] - torques(u) (the reactions' norms, and with them the friction,
+/// are convex in the accelerations) and score[u] = E[(A(u + n) - A(u))^T (torques(u + n) -
+/// torques(u))] (the friction's columns move with the same noise as the residual: the larger
+/// part).
+struct NoiseBias {
+  std::vector<Eigen::Vector2d> shift;
+  std::vector<Eigen::VectorXd> score;
+};
+
 /// Predicted smoothing bias and errors-in-variables std of the public friction coefficients for
-/// the filter `sg`, over the samples u with keep[u] (false when too few or singular).
+/// the filter `sg`, over the samples u with keep[u] (false when too few or singular). With
+/// `noise` (NoiseBias at sg), the bias is that of the smoothing and of the noise.
 bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
                     const std::vector<char>& keep, const SgOptions& sg, Eigen::VectorXd* bias,
-                    Eigen::VectorXd* std);
+                    Eigen::VectorXd* std, const NoiseBias* noise = nullptr);
 
 }  // namespace fivebar::identification::detail

@@ -44,8 +44,13 @@ TorqueLog negated_torques(const TorqueLog& log, unsigned channels) {
 }
 
 /// The sign check's advice: `logged_opposite` (bit 0: tau1, bit 1: tau2) are the logged torques
-/// whose sign is opposite the scene's convention, the caller's own flip already combined
-std::string torque_sign_advice(unsigned logged_opposite) {
+/// whose sign is opposite the scene's convention, the caller's own flip already combined; a
+/// mechanism of one channel (`drives` 1) has tau1 alone
+std::string torque_sign_advice(unsigned logged_opposite, int drives) {
+  if (drives == 1 && logged_opposite == 0u) {
+    return "the torque as logged follows the scene's convention (M1 counter-clockwise on the "
+           "crank); remove --flip-torque-sign";
+  }
   switch (logged_opposite) {
     case 0u:
       return "the torques as logged follow the scene's convention (M1, M2 counter-clockwise on "
@@ -63,16 +68,12 @@ std::string torque_sign_advice(unsigned logged_opposite) {
 
 }  // namespace
 
-bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& loads,
-                         const TorqueLog& log, const IdentifyOptions& opt,
-                         const ModelVerdict& verdict, IdentifyResult* out) {
+bool torques_fit_negated(const TorqueLog& log, const IdentifyOptions& opt, int drives,
+                         unsigned suspect, const Refit& refit, IdentifyResult* out) {
   const double ours = misfit_ratio(*out);
-  const unsigned suspect = verdict.negative_readings;
-  if (!opt.check_torque_sign || !method_strategy(opt.method).checks_readings() ||
-      verdict.cause_decided || !(ours > kMisfitRatio || suspect != 0)) {
-    return false;
-  }
-  std::vector<unsigned> order = {3u, 1u, 2u};
+  const unsigned all = drives == 1 ? 1u : 3u;
+  std::vector<unsigned> order = {all};
+  if (drives == 2) order = {3u, 1u, 2u};
   if (suspect != 0) {  // the channels read negative first
     order.erase(std::find(order.begin(), order.end(), suspect));
     order.insert(order.begin(), suspect);
@@ -85,12 +86,12 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
   for (unsigned channels : order) {
     IdentifyResult neg;
     try {
-      neg = identify_fit(scene, loads, negated_torques(log, channels), again, false);
+      if (!refit(negated_torques(log, channels), again, &neg)) continue;
     } catch (const LogError&) {
       continue;  // the negated log cannot be fitted: no evidence either way
     }
     if (!neg.status.ok()) continue;
-    for (int j = 0; j < kActuators && channels == 3u; ++j) {
+    for (int j = 0; j < drives && channels == all; ++j) {
       out->negated_rms_torque_residual[j] = neg.rms_torque_residual[j];
     }
     if (misfit_ratio(neg) < best) {
@@ -103,12 +104,30 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
   const std::string fit = format_significant(best, 2) + " times its noise floor against " +
                           format_significant(ours, 2);
   const std::string torques = opt.torques_negated == 0 ? "the logged " : "the flipped ";
-  out->unusable = (which == 3u ? torques + "torques fit far better negated (residual "
-                               : torques + "tau" + std::to_string(which) +
-                                     " alone fits far better negated (residual ") +
-                  fit + "): " + torque_sign_advice(opt.torques_negated ^ which);
+  out->unusable = (which == 3u   ? torques + "torques fit far better negated (residual "
+                   : drives == 1 ? torques + "torque fits far better negated (residual "
+                                 : torques + "tau" + std::to_string(which) +
+                                       " alone fits far better negated (residual ") +
+                  fit + "): " + torque_sign_advice(opt.torques_negated ^ which, drives);
   out->warnings.push_back(out->unusable + "; no torque delay was estimated");
   return true;
+}
+
+bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& loads,
+                         const TorqueLog& log, const IdentifyOptions& opt,
+                         const ModelVerdict& verdict, IdentifyResult* out) {
+  const double ours = misfit_ratio(*out);
+  const unsigned suspect = verdict.negative_readings;
+  if (!opt.check_torque_sign || !method_strategy(opt.method).checks_readings() ||
+      verdict.cause_decided || !(ours > kMisfitRatio || suspect != 0)) {
+    return false;
+  }
+  const Refit refit = [&](const TorqueLog& negated, const IdentifyOptions& again,
+                          IdentifyResult* fit) {
+    *fit = identify_fit(scene, loads, negated, again, false);
+    return true;
+  };
+  return torques_fit_negated(log, opt, kActuators, suspect, refit, out);
 }
 
 bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunction& loads,

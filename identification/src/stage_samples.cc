@@ -124,10 +124,7 @@ std::vector<int> reversal_counts(const Fit& f, const IdentifyResult& out) {
 }  // namespace
 
 bool spans_reversal(const Fit& f, int i, int hw) {
-  const int n = static_cast<int>(f.reversals.size()) - 1;
-  if (hw <= 0 || n <= 0) return false;
-  const int a = std::clamp(i - hw, 0, n - 1), b = std::clamp(i + hw, 0, n - 1);
-  return f.reversals[b] - f.reversals[a] > 0;  // steps (k, k + 1) with a <= k < b
+  return window_spans_reversal(f.reversals, i, hw);
 }
 
 namespace {
@@ -311,8 +308,9 @@ bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out)
   if (out->accels_estimated && opt.auto_window && f->method->chooses_window()) {
     const std::vector<double> x_start = f->x;
     preliminary_fit(f);
-    choose_window(f, out);
-    limit_smoothing_bias(f, out);
+    const FiveBarWindowFit w(*f, *out);
+    choose_window(w, &f->sg, &f->rates_biased, &out->window_choice);
+    limit_smoothing_bias(w, opt.sg.order, &f->sg, &f->smoothing_bias, &out->window_choice);
     f->x = x_start;
     if (!rates_and_samples()) return false;
   } else if (out->accels_estimated) {

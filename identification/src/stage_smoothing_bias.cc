@@ -1,5 +1,6 @@
-// Smoothing bias of the data-driven window: the window limited by its predicted bias, and the
-// bias taken off the estimates.
+// Smoothing bias of the data-driven window, for any mechanism (mechanism_stages.h): the window
+// limited by its predicted bias, and the bias taken off the estimates; the five-bar's inputs of
+// the prediction.
 #include "identify_stages.h"
 
 namespace fivebar::identification::stages {
@@ -14,10 +15,13 @@ namespace {
 /// span)
 constexpr double kReconSpan = 2.0;
 
-/// The inputs of the bias prediction at the preliminary fit (f.x, f.samples): the Jacobians, and
-/// the motion's high-order terms from local polynomials over +-reach samples, cut short (not
-/// below +-min_half) where they would span a slip reversal (the motion is not smooth across it).
-detail::BiasInputs bias_inputs(const Fit& f, int reach, int min_half) {
+}  // namespace
+
+/// At the preliminary fit (f.x, f.samples): the residual's and the kinematic Jacobians, the
+/// motion's higher terms cut short where they would span a slip reversal (the motion is not
+/// smooth across it).
+detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int order) const {
+  const Fit& f = f_;
   const TorqueLog& log = f.cond.log;
   const int n = log.size(), P = f.layout.size();
   const double dt = log.duration() / std::max(1, n - 1);
@@ -40,8 +44,8 @@ detail::BiasInputs bias_inputs(const Fit& f, int reach, int min_half) {
     int a = std::max(0, i - reach), b = std::min(n - 1, i + reach);
     while (!f.reversals.empty() && a < i - min_half && f.reversals[i] - f.reversals[a] > 0) ++a;
     while (!f.reversals.empty() && b > i + min_half && f.reversals[b] - f.reversals[i] > 0) --b;
-    in.terms[0].push_back(detail::high_order_terms(log.t, log.theta1, i, a, b, dt, f.sg.order));
-    in.terms[1].push_back(detail::high_order_terms(log.t, log.theta2, i, a, b, dt, f.sg.order));
+    in.terms[0].push_back(detail::high_order_terms(log.t, log.theta1, i, a, b, dt, order));
+    in.terms[1].push_back(detail::high_order_terms(log.t, log.theta2, i, a, b, dt, order));
   }
   in.Hp = prior_information(f);
   in.s2 = f.prior_scale * f.prior_scale;
@@ -52,48 +56,67 @@ detail::BiasInputs bias_inputs(const Fit& f, int reach, int min_half) {
   return in;
 }
 
+namespace {
+
+/// The largest predicted |bias| / std over the coefficients (0 where the std is not > 0).
+double worst_ratio(const Eigen::VectorXd& bias, const Eigen::VectorXd& std) {
+  double worst = 0;
+  for (int p = 0; p < bias.size(); ++p) {
+    if (std(p) > 0) worst = std::max(worst, std::abs(bias(p)) / std(p));
+  }
+  return worst;
+}
+
+/// The samples of the fit whose window of half-width m is centred in the log and spans no slip
+/// reversal.
+std::vector<char> centred_samples(const WindowFit& w, int m) {
+  const std::vector<int>& index = w.index();
+  const int n = w.log().size();
+  std::vector<char> keep(index.size(), 0);
+  for (size_t u = 0; u < keep.size(); ++u) {
+    const int i = index[u];
+    keep[u] = i - m >= 0 && i + m < n && !w.spans_reversal(i, m);
+  }
+  return keep;
+}
+
 }  // namespace
 
-void limit_smoothing_bias(Fit* f, IdentifyResult* out) {
-  const TorqueLog& log = f->cond.log;
+void limit_smoothing_bias(const WindowFit& w, int given_order, SgOptions* sg_fit,
+                          Eigen::VectorXd* bias_kept, std::string* choice) {
+  const TorqueLog& log = w.log();
+  const std::vector<int>& index = w.index();
   const int n = log.size();
-  if (f->source != detail::RateSource::kFromAngles || f->sg.order != f->opt->sg.order || n < 2) {
+  if (w.source() != detail::RateSource::kFromAngles || sg_fit->order != given_order || n < 2) {
     return;
   }
   const double dt = log.duration() / (n - 1);
-  const std::vector<int> cand = window_candidates(n, dt, f->sg.order);
+  const std::vector<int> cand = window_candidates(n, dt, sg_fit->order);
   const int rule = static_cast<int>(
-      std::find(cand.begin(), cand.end(), sg_half_window(f->sg, dt)) - cand.begin());
+      std::find(cand.begin(), cand.end(), sg_half_window(*sg_fit, dt)) - cand.begin());
   if (rule < 1 || rule >= static_cast<int>(cand.size())) return;
-  const detail::BiasInputs in = bias_inputs(*f, std::lround(kReconSpan * cand[rule]), cand[1]);
-  if (in.J.rows() != 2 * static_cast<int>(f->samples.size())) return;
+  const detail::BiasInputs in =
+      w.bias_inputs(std::lround(kReconSpan * cand[rule]), cand[1], sg_fit->order);
+  if (in.J.rows() != 2 * static_cast<int>(index.size())) return;
   std::string table;
   int chosen = -1;
   Eigen::VectorXd at_rule, at_chosen;
   for (int k = rule; k >= 1 && chosen < 0; --k) {
     const int m = cand[k];
-    std::vector<char> keep(f->index.size(), 0);
-    for (size_t u = 0; u < keep.size(); ++u) {
-      const int i = f->index[u];
-      keep[u] = i - m >= 0 && i + m < n && !spans_reversal(*f, i, m);
-    }
-    SgOptions sg = f->sg;
+    SgOptions sg = *sg_fit;
     sg.half_window_s = m * dt;
     Eigen::VectorXd bias, std;
-    if (!detail::smoothing_bias(log.t, in, keep, sg, &bias, &std)) break;
-    double worst = 0;
-    for (int p = 0; p < bias.size(); ++p) {
-      if (std(p) > 0) worst = std::max(worst, std::abs(bias(p)) / std(p));
-    }
+    if (!detail::smoothing_bias(log.t, in, centred_samples(w, m), sg, &bias, &std)) break;
+    const double worst = worst_ratio(bias, std);
     table += (table.empty() ? "" : ", ") + std::to_string(m) + ": " + format_significant(worst);
     if (k == rule) at_rule = bias;
     if (worst <= kBiasFraction) chosen = k, at_chosen = bias;
   }
   if (table.empty()) return;
   const int pick = chosen < 0 ? rule : chosen;
-  f->sg.half_window_s = cand[pick] * dt;
-  f->smoothing_bias = chosen < 0 ? at_rule : at_chosen;
-  out->window_choice +=
+  sg_fit->half_window_s = cand[pick] * dt;
+  *bias_kept = chosen < 0 ? at_rule : at_chosen;
+  *choice +=
       "; then half-window " + std::to_string(cand[pick]) + " samples, " +
       (chosen < 0 ? "the rule's (no window down to " + std::to_string(cand[1]) +
                         " samples keeps it within " + format_significant(kBiasFraction) + " std)"
@@ -101,13 +124,96 @@ void limit_smoothing_bias(Fit* f, IdentifyResult* out) {
                         format_significant(kBiasFraction) + " std of every friction coefficient") +
       " (predicted |bias| / std by half-window, the motion's higher terms from local polynomials "
       "of degree " +
-      std::to_string(f->sg.order + detail::kReconExtra) + " over +-" +
+      std::to_string(sg_fit->order + detail::kReconExtra) + " over +-" +
       std::to_string(std::lround(kReconSpan * cand[rule])) + " samples: " + table + ")";
 }
 
-void correct_smoothing_bias(Fit* f, IdentifyResult* out) {
-  const Eigen::VectorXd& b = f->smoothing_bias;
-  const int P = f->layout.size();
+// The smallest candidate within kBiasFraction, found by a walk from the filter's window as given
+// (the predicted bias falls with the window as far as the noise's dominates): down while within,
+// else up until within, or until the bias has grown to twice its least (then the least). The
+// motion's higher terms over +-kReconSpan times each window. (Over 30 seeded crank-rocker logs at
+// angle noise 1e-5 rad, keeping the largest window within kBiasFraction instead chose 12-41
+// samples and covered 86.7 %, the smallest 8-15 samples and 98.3 %.)
+void choose_window_by_bias(const WindowFit& w, SgOptions* sg_fit, Eigen::VectorXd* bias_kept,
+                           std::string* choice) {
+  const int n = w.log().size();
+  const double dt = w.log().duration() / std::max(1, n - 1);
+  const std::vector<int> cand = window_candidates(n, dt, sg_fit->order);
+  const int K = static_cast<int>(cand.size());
+  *choice = "default: half-window " + std::to_string(sg_half_window(*sg_fit, dt)) +
+            " samples (no window's bias could be predicted)";
+  if (w.source() != detail::RateSource::kFromAngles || n < 2 || K < 2) return;
+  std::vector<Eigen::VectorXd> biases(K);
+  std::vector<double> worst(K, -1);  // -1: not evaluated; NaN: not predicted
+  // candidate k's predicted |bias| / std; false when the inputs cannot be formed
+  const auto evaluate = [&](int k) {
+    const detail::BiasInputs in =
+        w.bias_inputs(std::lround(kReconSpan * cand[k]), cand[1], sg_fit->order);
+    if (in.J.rows() != 2 * static_cast<int>(w.index().size())) return false;
+    SgOptions sg = *sg_fit;
+    sg.half_window_s = cand[k] * dt;
+    const detail::NoiseBias noise = w.noise_bias(sg);
+    Eigen::VectorXd std;
+    const bool ok = noise.shift.size() == w.index().size() &&
+                    noise.score.size() == w.index().size() &&
+                    detail::smoothing_bias(w.log().t, in, centred_samples(w, cand[k]), sg,
+                                           &biases[k], &std, &noise);
+    worst[k] = ok ? worst_ratio(biases[k], std) : std::numeric_limits<double>::quiet_NaN();
+    return true;
+  };
+  const auto within = [&](int k) { return worst[k] <= kBiasFraction; };
+  const int start = std::clamp(
+      static_cast<int>(std::lower_bound(cand.begin(), cand.end(), sg_half_window(*sg_fit, dt)) -
+                       cand.begin()),
+      1, K - 1);
+  if (!evaluate(start)) return;
+  int chosen = -1;
+  if (within(start)) {
+    chosen = start;
+    for (int k = start - 1; k >= 1; --k) {
+      if (!evaluate(k)) return;
+      if (!within(k)) break;
+      chosen = k;
+    }
+  } else {
+    double least = std::isnan(worst[start]) ? INFINITY : worst[start];
+    for (int k = start + 1; k < K && chosen < 0; ++k) {
+      if (!evaluate(k)) return;
+      if (within(k)) chosen = k;
+      if (worst[k] < least) least = worst[k];
+      // the noise's bias falls and the smoothing's grows with the window: past the least, once
+      // it is twice the least, the larger windows only add
+      if (worst[k] > 2 * std::max(least, kBiasFraction)) break;
+    }
+  }
+  int pick = chosen;
+  std::string table;
+  for (int k = 1; k < K; ++k) {
+    if (worst[k] < 0 || std::isnan(worst[k])) continue;
+    if (pick < 0 || (chosen < 0 && worst[k] < worst[pick])) pick = k;
+    table += (table.empty() ? "" : ", ") + std::to_string(cand[k]) + ": " +
+             format_significant(worst[k]);
+  }
+  if (pick < 0) return;
+  sg_fit->half_window_s = cand[pick] * dt;
+  *bias_kept = biases[pick];
+  *choice =
+      "data-driven: half-window " + std::to_string(cand[pick]) + " samples (" +
+      format_significant(cand[pick] * dt * 1e3) + " ms), " +
+      (chosen < 0 ? "the one of least predicted bias (none keeps it within " +
+                        format_significant(kBiasFraction) + " std)"
+                  : "the smallest whose predicted bias is within " +
+                        format_significant(kBiasFraction) + " std of every friction coefficient") +
+      " (the smoothing bias and the noise's through the reactions, errors in variables; "
+      "predicted |bias| / std by half-window, the motion's higher terms from local polynomials of "
+      "degree " +
+      std::to_string(sg_fit->order + detail::kReconExtra) + " over +-" +
+      format_significant(kReconSpan) + " half-windows: " + table + ")";
+}
+
+void correct_smoothing_bias(const ParameterLayout& layout, const Eigen::VectorXd& b,
+                            std::vector<double>* x, IdentifyResult* out) {
+  const int P = layout.size();
   if (b.size() == 0 || static_cast<int>(out->parameters.size()) < b.size()) return;
   Eigen::VectorXd shift = Eigen::VectorXd::Zero(P);
   for (int p = 0; p < b.size(); ++p) {
@@ -115,13 +221,13 @@ void correct_smoothing_bias(Fit* f, IdentifyResult* out) {
     if (!e.at_bound && std::isfinite(e.std) && std::isfinite(b(p))) shift(p) = b(p);
   }
   if (shift.isZero(0.0)) return;
-  const Eigen::MatrixXd T = to_public(f->layout);
+  const Eigen::MatrixXd T = to_public(layout);
   const Eigen::VectorXd dx = T.inverse() * shift;
   Eigen::VectorXd x_old(P), x_new(P);
   for (int i = 0; i < P; ++i) {
-    x_old(i) = f->x[i];
-    f->x[i] = std::max(f->layout.lower_bound(i), f->x[i] - dx(i));
-    x_new(i) = f->x[i];
+    x_old(i) = (*x)[i];
+    (*x)[i] = std::max(layout.lower_bound(i), (*x)[i] - dx(i));
+    x_new(i) = (*x)[i];
   }
   const Eigen::VectorXd applied = T * (x_old - x_new);  // the shift each public value took
   std::string list;

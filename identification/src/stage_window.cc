@@ -1,5 +1,5 @@
 // Window stage of identify(): the data-driven Savitzky-Golay window, read off the torque
-// residual at a preliminary fit.
+// residual at a preliminary fit, for any mechanism (mechanism_stages.h); the five-bar's residual levels.
 #include "identify_stages.h"
 
 namespace fivebar::identification::stages {
@@ -12,10 +12,12 @@ namespace {
 /// model reads about the same at every window instead)
 constexpr double kBiasedRates = 1.5;
 
-/// rms residual and expected noise level of each actuator over up to ~200 samples of the fit
-/// (log indices `probe`), with the rates of half-window `sg`, at the parameters f.x.
-void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions& sg,
-                   const RestThresholds& rest, double rms[2], double floor[2]) {
+}  // namespace
+
+void FiveBarWindowFit::levels(const std::vector<int>& probe, const SgOptions& sg, double rms[2],
+                              double floor[2]) const {
+  const Fit& f = f_;
+  const RestThresholds rest = rest_rule(f.cond.log, out_, *f.opt, sg);
   const TorqueLog& log = f.cond.log;
   Params<double> p = f.scene;
   f.layout.apply(f.x.data(), &p);
@@ -65,8 +67,6 @@ void window_levels(const Fit& f, const std::vector<int>& probe, const SgOptions&
   }
 }
 
-}  // namespace
-
 std::vector<int> window_candidates(int n, double dt, int order) {
   const int min_half = order / 2 + 1;
   const int max_half = std::max(min_half, static_cast<int>(std::lround(0.05 / dt)));
@@ -85,15 +85,15 @@ namespace {
 /// candidate, not glitches).
 class WindowTable {
  public:
-  explicit WindowTable(const Fit& f, const IdentifyResult& out) : f_(f), out_(out) {
-    const TorqueLog& log = f.cond.log;
+  WindowTable(const WindowFit& w, const SgOptions& sg) : w_(w), sg_(sg) {
+    const TorqueLog& log = w.log();
     const int n = log.size();
     dt_ = n > 1 ? log.duration() / (n - 1) : 1.0;
-    cand_ = window_candidates(n, dt_, f.sg.order);
+    cand_ = window_candidates(n, dt_, sg.order);
     const int edge = cand_.back();
     const int step = std::max(1, (n - 2 * edge) / 800);
     for (int i = edge; i < n - edge; i += step) {
-      if (!f.cond.rejected[i]) probe_.push_back(i);
+      if (!w.rejected()[i]) probe_.push_back(i);
     }
   }
   double dt() const { return dt_; }
@@ -107,35 +107,45 @@ class WindowTable {
   const detail::WindowLevel& evaluate_next() {
     detail::WindowLevel l;
     l.half = cand_[levels_.size()];
-    SgOptions sg = f_.sg;
+    SgOptions sg = sg_;
     sg.half_window_s = l.half * dt_;
-    window_levels(f_, probe_, sg, rest_rule(f_.cond.log, out_, *f_.opt, sg), l.rms, l.floor);
+    w_.levels(probe_, sg, l.rms, l.floor);
     levels_.push_back(l);
     return levels_.back();
   }
 
  private:
-  const Fit& f_;
-  const IdentifyResult& out_;
+  const WindowFit& w_;
+  const SgOptions sg_;  ///< the filter before the choice (its order)
   double dt_ = 1;
   std::vector<int> cand_, probe_;
   std::vector<detail::WindowLevel> levels_;
 };
 
-double level_ratio(const detail::WindowLevel& l) {
-  return std::max(l.rms[0] / l.floor[0], l.rms[1] / l.floor[1]);
+/// the larger of the channels' rms residual over its noise level
+double level_ratio(const detail::WindowLevel& l, int drives) {
+  double r = l.rms[0] / l.floor[0];
+  for (int j = 1; j < drives; ++j) r = std::max(r, l.rms[j] / l.floor[j]);
+  return r;
+}
+
+/// the channels' values of a level, for the choice's text: "a, b" or "a"
+std::string channels_text(const double v[2], int drives) {
+  std::string s = format_significant(v[0]);
+  for (int j = 1; j < drives; ++j) s += ", " + format_significant(v[j]);
+  return s;
 }
 
 /// choose_window when the window table shows a misfit of the law (window_misfit.h): the largest
 /// window up to which the excess over the noise level stays flat (the misfit, not bias), where
 /// the fit's residual shows the misfit above a floor near the torque noise.
-void misfit_window(Fit* f, const WindowTable& tab, const detail::WindowMisfit& m,
-                   IdentifyResult* out) {
+void misfit_window(const WindowTable& tab, const detail::WindowMisfit& m, SgOptions* sg,
+                   std::string* choice) {
   const std::vector<detail::WindowLevel>& lv = tab.levels();
   const detail::WindowLevel &a = lv[m.from], &b = lv[m.to];
   const int j = m.actuator;
-  f->sg.half_window_s = b.half * tab.dt();
-  out->window_choice =
+  sg->half_window_s = b.half * tab.dt();
+  *choice =
       "data-driven, misfit: half-window " + std::to_string(b.half) + " samples (" +
       format_significant(b.half * tab.dt() * 1e3) + " ms): the tau" + std::to_string(j + 1) +
       " residual's excess over the level the measured noise explains is the same from " +
@@ -150,11 +160,12 @@ void misfit_window(Fit* f, const WindowTable& tab, const detail::WindowMisfit& m
 
 }  // namespace
 
-void choose_window(Fit* f, IdentifyResult* out) {
-  WindowTable tab(*f, *out);
+void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::string* choice) {
+  WindowTable tab(w, *sg);
+  const int drives = w.drives();
   std::vector<double> ratio;
   for (size_t k = 0; k < tab.candidates(); ++k) {
-    ratio.push_back(level_ratio(tab.evaluate_next()));
+    ratio.push_back(level_ratio(tab.evaluate_next(), drives));
     // smoothing bias only grows with the window: stop once it clearly dominates
     if (k >= 2 &&
         ratio[k] > 1.5 * std::max(1.0, *std::min_element(ratio.begin(), ratio.begin() + k))) {
@@ -163,22 +174,17 @@ void choose_window(Fit* f, IdentifyResult* out) {
   }
   // a misfit hidden by the noise of the small windows: its excess is flat in the window
   detail::WindowMisfit m;
-  while ((m = detail::window_misfit(tab.levels(), tab.levels().size() < tab.candidates())).state ==
-         detail::WindowMisfit::kNeedMore) {
+  while ((m = detail::window_misfit(tab.levels(), tab.levels().size() < tab.candidates(), drives))
+             .state == detail::WindowMisfit::kNeedMore) {
     tab.evaluate_next();
   }
   if (m.state == detail::WindowMisfit::kMisfit) {
-    misfit_window(f, tab, m, out);
+    misfit_window(tab, m, sg, choice);
     return;
   }
   // the rule below sees the candidates up to the stop above
   std::vector<int> cand;
-  std::vector<std::array<double, 4>> levels;
-  for (size_t k = 0; k < ratio.size(); ++k) {
-    const detail::WindowLevel& l = tab.levels()[k];
-    cand.push_back(l.half);
-    levels.push_back({l.rms[0], l.rms[1], l.floor[0], l.floor[1]});
-  }
+  for (size_t k = 0; k < ratio.size(); ++k) cand.push_back(tab.levels()[k].half);
   const double dt = tab.dt();
   // the reference: 1 when the noise explains the residual (a ratio below 1 is a fluctuation of
   // the estimate), the least ratio when a mismatch of the law shows at every window
@@ -196,38 +202,46 @@ void choose_window(Fit* f, IdentifyResult* out) {
   // Measured on Stribeck logs at 500 Hz (30 seeds), whose second window was still unbiased:
   // backed off to the smallest, coverage of static_coulomb 0.77; at the second, 0.90.
   const bool undersampled = chosen == 0 && ratio.size() > 1;
-  f->rates_biased = undersampled && best > kBiasedRates;
+  *rates_biased = undersampled && best > kBiasedRates;
   const bool backed_off = chosen > 1;
   if (backed_off) --chosen;
   std::string table;
   for (size_t k = 0; k < cand.size(); ++k) {
     table += (k ? ", " : "") + std::to_string(cand[k]) + ": " + format_significant(ratio[k]);
   }
-  f->sg.half_window_s = cand[chosen] * dt;
+  sg->half_window_s = cand[chosen] * dt;
   // every window but the smallest of this order shows bias: the log is sampled too slowly for
   // it, and a higher order over the next smallest span bends better at the kinks
   std::string raised;
   if (undersampled) {
-    f->sg.order += 2;
-    f->sg.half_window_s = (f->sg.order / 2 + 1) * dt;
+    sg->order += 2;
+    sg->half_window_s = (sg->order / 2 + 1) * dt;
     raised = "; the smallest window being the choice, order raised to " +
-             std::to_string(f->sg.order) + " over " + std::to_string(f->sg.order / 2 + 1) +
+             std::to_string(sg->order) + " over " + std::to_string(sg->order / 2 + 1) +
              " samples each side";
   }
-  const std::array<double, 4>& l = levels[chosen];
-  out->window_choice = "data-driven: half-window " + std::to_string(cand[chosen]) + " samples (" +
+  const detail::WindowLevel& l = tab.levels()[chosen];
+  *choice = "data-driven: half-window " + std::to_string(cand[chosen]) + " samples (" +
                        format_significant(cand[chosen] * dt * 1e3) + " ms), " +
                        (backed_off ? "one below " : "") + "the largest whose torque residual (" +
-                       format_significant(l[0]) + ", " + format_significant(l[1]) +
-                       " N m) shows no smoothing bias over the level the measured noise " +
-                       "explains (" + format_significant(l[2]) + ", " + format_significant(l[3]) +
-                       " N m), ratio " + format_significant(ratio[chosen]) +
+                       channels_text(l.rms, drives) + " N m) shows no smoothing bias over the level the measured noise " +
+                       "explains (" + channels_text(l.floor, drives) + " N m), ratio " + format_significant(ratio[chosen]) +
                        " against the reference " + format_significant(best) +
                        " (ratio by half-window: " + table + ")" + raised;
 }
 
+bool solve_preliminary(const ParameterLayout& layout, double* x, ceres::Problem* problem) {
+  for (int i = 0; i < layout.size(); ++i) problem->SetParameterLowerBound(x, i, layout.lower_bound(i));
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = 20;
+  so.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, problem, &summary);
+  return summary.IsSolutionUsable();
+}
+
 void preliminary_fit(Fit* f) {
-  const int P = f->layout.size();
   Fit g = *f;
   g.samples.clear();
   const size_t step = std::max<size_t>(1, f->samples.size() / 1500);
@@ -238,14 +252,7 @@ void preliminary_fit(Fit* f) {
                                                 1, x.data(), &problem);
   if (!sized) return;
   add_inertial_prior(f, x.data(), &problem);
-  for (int i = 0; i < P; ++i) problem.SetParameterLowerBound(x.data(), i, f->layout.lower_bound(i));
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = 20;
-  so.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
-  if (summary.IsSolutionUsable()) f->x = x;
+  if (solve_preliminary(f->layout, x.data(), &problem)) f->x = x;
 }
 
 }  // namespace fivebar::identification::stages

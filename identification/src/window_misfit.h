@@ -16,7 +16,7 @@
 
 namespace fivebar::identification::detail {
 
-/// One evaluated candidate: its half-window [samples] and, per actuator, the rms torque residual
+/// One evaluated candidate: its half-window [samples] and, per actuator (one or two), the rms torque residual
 /// and its noise floor over the probes [N m].
 struct WindowLevel {
   int half = 0;
@@ -54,8 +54,8 @@ struct WindowMisfit {
   std::size_t to = 0;    ///< kMisfit: the last window (index) up to which the excess stays flat
 };
 
-/// The misfit test on the table (WindowMisfit). `more`: whether larger candidates remain to be
-/// evaluated (else kNeedMore is kNone).
-WindowMisfit window_misfit(const std::vector<WindowLevel>& levels, bool more);
+/// The misfit test on the table (WindowMisfit) over the first `channels` actuators. `more`:
+/// whether larger candidates remain to be evaluated (else kNeedMore is kNone).
+WindowMisfit window_misfit(const std::vector<WindowLevel>& levels, bool more, int channels = 2);
 
 }  // namespace fivebar::identification::detail

@@ -10,13 +10,17 @@ key and the mechanism type. accuracy's work-precision study runs on a four-bar, 
 within 1e-9 rad of the independent one.
 synth-log writes a four-bar log of one crank; following the simulated motion it gives back M1.
 identify fits a four-bar's log end to end (the true coefficients inside its intervals) and
-refuses the five-bar's options and logs naming them. excite designs a crank motion within its
+refuses the five-bar's options and logs naming them. A log whose torque has the opposite sign
+gets the five-bar's sign check: exit 3 advising --flip-torque-sign 1, which then fits it; the
+flip on a log that did not need it is advised away. excite designs a crank motion within its
 limit that synth-log --motion follows, and refuses the five-bar's options naming them.
 """
 import json
 import math
 import os
+import re
 import shutil
+import subprocess
 import sys
 
 from cli_common import Cli, read_csv
@@ -340,6 +344,44 @@ expect_error(2, "mechanism.type: four_bar: --estimate inertia runs five-bars onl
              ["identify", scene, "--log", id_log, "--estimate", "friction,inertia", "--out", bad])
 expect_error(2, "mechanism.type: four_bar: --smooth-sign runs five-bars only",
              ["identify", scene, "--log", id_log, "--smooth-sign", "0.05", "--out", bad])
+# the sign check: the log with tau1 negated
+neg_log = os.path.join(WORK, "crank_rocker_negated.csv")
+with open(id_log) as f, open(neg_log, "w") as g:
+    for line in f:
+        if line[0].isdigit() or line[0] == "-":
+            cells = line.rstrip("\n").split(",")
+            cells[2] = repr(-float(cells[2]))
+            line = ",".join(cells) + "\n"
+        g.write(line)
+
+
+def expect_unusable(pattern, args):
+    """exit 3, one error line matching `pattern`, identification.json written and failed"""
+    p = subprocess.run([FIVEBAR] + args, capture_output=True, text=True)
+    errors = [l for l in p.stderr.splitlines() if l.startswith("fivebar: error:")]
+    if p.returncode != 3 or len(errors) != 1 or not re.search(pattern, errors[0]):
+        failures.append("%s: exit %d, %s (expected 3, /%s/)" % (args, p.returncode, errors,
+                                                               pattern))
+        return
+    with open(os.path.join(args[args.index("--out") + 1], "identification.json")) as f:
+        status = json.load(f).get("status")
+    if status != "failed":
+        failures.append("%s: identification.json status %r" % (args, status))
+
+
+expect_unusable(r"the logged torque fits far better negated .*rerun with --flip-torque-sign 1$",
+                ["identify", scene, "--log", neg_log, "--out", os.path.join(WORK, "negated"),
+                 "--no-plots"])
+code, _, err = run(["identify", scene, "--log", neg_log, "--flip-torque-sign", "1", "--out",
+                    os.path.join(WORK, "flipped"), "--no-plots"])
+if code != 0:
+    failures.append("identify --flip-torque-sign 1 of the negated four-bar log: exit %d: %s"
+                    % (code, err))
+expect_unusable(r"the flipped torque fits far better negated .*remove --flip-torque-sign$",
+                ["identify", scene, "--log", id_log, "--flip-torque-sign", "1", "--out",
+                 os.path.join(WORK, "flipped_wrongly"), "--no-plots"])
+expect_error(2, "--flip-torque-sign: 2: a four_bar's log has one torque",
+             ["identify", scene, "--log", id_log, "--flip-torque-sign", "2", "--out", bad])
 # the same log with its angles in degrees: named as such (the crank-rocker assembles at any angle,
 # so the model alone would only say that no sample is left)
 deg_log = os.path.join(WORK, "crank_rocker_deg.csv")

@@ -93,11 +93,11 @@ TEST(FourBarIdentify, StribeckStaticFrictionIsNeverBelowKinetic) {
             res.fitted_four_bar.friction.coulomb[0] - 1e-12);
 }
 
-// The coverage figure: 30 seeded logs of the crank-rocker with friction drawn at random
-// (coulomb 0.05..0.2, viscous 0.005..0.04), synth-log's default noise (torque 0.02 N m, angle
-// 1e-5 rad), 3 s each at 1 kHz with rates estimated from the angles; the share of the 60 true
-// coefficients inside identify's 95 % Wald intervals (measured: 56 of 60, 93.3 %).
-TEST(FourBarIdentify, CoverageOver30SeededLogs) {
+/// The coverage figure: 30 seeded logs of the crank-rocker with friction drawn at random
+/// (coulomb 0.05..0.2, viscous 0.005..0.04), torque noise 0.02 N m and the given angle noise,
+/// 3 s each at 1 kHz with rates estimated from the angles; the share of the 60 true
+/// coefficients inside identify's 95 % Wald intervals.
+double coverage_over_30_logs(double angle_noise) {
   std::mt19937_64 rng(2024);
   std::uniform_real_distribution<double> coulomb(0.05, 0.2), viscous(0.005, 0.04);
   int inside = 0, total = 0;
@@ -107,24 +107,40 @@ TEST(FourBarIdentify, CoverageOver30SeededLogs) {
     truth.friction.coulomb.fill(coulomb(rng));
     truth.friction.static_coulomb = truth.friction.coulomb;
     truth.friction.viscous.fill(viscous(rng));
-    const TorqueLog log = crank_rocker_log(truth, 3.0, 0.02, 1e-5, 100 + k, false);
+    const TorqueLog log = crank_rocker_log(truth, 3.0, 0.02, angle_noise, 100 + k, false);
     const IdentifyResult res = identify(truth, crank_rocker().loads, log, four_bar_options());
-    ASSERT_TRUE(res.status.ok()) << k << ": " << res.status.message;
+    EXPECT_TRUE(res.status.ok()) << k << ": " << res.status.message;
     EXPECT_TRUE(res.unusable.empty()) << k << ": " << res.unusable;
+    if (!res.status.ok()) continue;
     const double tv[2] = {truth.friction.coulomb[0], truth.friction.viscous[0]};
     for (int i = 0; i < 2; ++i) {
       const ParameterEstimate& p = res.parameters[i];
-      ASSERT_TRUE(std::isfinite(p.std)) << k << " " << p.name;
+      EXPECT_TRUE(std::isfinite(p.std)) << k << " " << p.name;
       inside += tv[i] >= p.ci_low && tv[i] <= p.ci_high;
       ++total;
       worst_z = std::max(worst_z, std::abs(p.value - tv[i]) / p.std);
     }
   }
-  const double coverage = double(inside) / total;
+  const double coverage = double(inside) / std::max(1, total);
   std::printf(
-      "four-bar coverage: %d of %d true coefficients inside the 95 %% Wald intervals "
-      "(%.1f %%), largest |error| %.2f std\n",
-      inside, total, 100 * coverage, worst_z);
+      "four-bar coverage at angle noise %g rad: %d of %d true coefficients inside the 95 %% Wald "
+      "intervals (%.1f %%), largest |error| %.2f std\n",
+      angle_noise, inside, total, 100 * coverage, worst_z);
+  return coverage;
+}
+
+// synth-log's default noise (torque 0.02 N m, angle 1e-5 rad)
+TEST(FourBarIdentify, CoverageOver30SeededLogs) {
+  const double coverage = coverage_over_30_logs(1e-5);
+  RecordProperty("coverage_percent", std::to_string(100 * coverage));
+  EXPECT_GE(coverage, 0.9);
+}
+
+// angle noise 1e-4 rad: the accelerations' noise biases the friction low through the reactions'
+// norms (errors in variables) unless the window and its bias correction weigh it (a fixed 10 ms
+// window of order 7: coulomb -4 to -5 std on every seed tried)
+TEST(FourBarIdentify, CoverageOver30SeededLogsAtAngleNoise1e4) {
+  const double coverage = coverage_over_30_logs(1e-4);
   RecordProperty("coverage_percent", std::to_string(100 * coverage));
   EXPECT_GE(coverage, 0.9);
 }

@@ -1,0 +1,73 @@
+// Internal to identification: the state the four-bar's stages share (identify_four_bar.cc) and
+// what its window stage (four_bar_window.cc) takes from them.
+#pragma once
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "fivebar/identification/condition.h"
+#include "fivebar/identification/identify.h"
+#include "fivebar/model/four_bar.h"
+#include "fivebar/sim/simulator.h"
+#include "four_bar_rules.h"
+#include "mechanism_residual.h"
+#include "noise_model.h"
+
+namespace fivebar::identification::four_bar {
+
+using Sample = stages::MechanismSample<FourBar>;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+using four_bar_rules::kRestSigmas;
+using four_bar_rules::kWindowOrder;
+
+/// The state the four-bar's stages share, in the order they write it.
+struct FourBarFit {
+  const IdentifyOptions* opt = nullptr;
+  FourBarParams scene;  ///< with the law to fit (fit_friction)
+  sim::FourBarLoadFunction loads;
+  ParameterLayout layout;
+  EvalOptions eval;
+  ConditionedLog cond;        ///< conditioning
+  detail::SensorNoise noise;  ///< channel 0: the crank's angle, rate and torque noise
+  // rates, window and samples
+  SgOptions sg;              ///< the Savitzky-Golay filter as used
+  int hw = 0;                ///< Savitzky-Golay half-window [samples] (0: accelerations logged)
+  int first = 0, last = -1;  ///< samples whose rates and accelerations are centred estimates
+  std::vector<double> w, a;  ///< crank rate and acceleration at every log sample
+  double rate_noise = 0, accel_noise = 0;  ///< their noise std
+  /// slip reversals: reversals[i] = how many lie between samples k and k + 1 for k < i
+  std::vector<int> reversals;
+  std::vector<Sample> samples;
+  std::vector<int> index;  ///< log index of each sample
+  /// predicted smoothing bias of the public friction coefficients at the chosen window
+  /// (limit_smoothing_bias; empty when not predicted)
+  Eigen::VectorXd smoothing_bias;
+  // the fit
+  std::vector<double> x;  ///< internal parameter vector: the start, then the fit's
+};
+
+/// Rates and accelerations: the log's own when it has them (and the options do not ask to
+/// estimate them), else Savitzky-Golay with f->sg (the edges, where the window is one-sided, are
+/// left out of the fit); their noise from the angles' through the filter.
+void rates(FourBarFit* f, IdentifyResult* out);
+
+/// The samples of the fit: glitches, joints at rest (held) and, with estimated accelerations,
+/// samples whose filter window spans a slip reversal are left out.
+void select_samples(FourBarFit* f, IdentifyResult* out);
+
+/// The rest rule: some joint's relative rate (its row of J_w times the crank rate w) within
+/// kRestSigmas of the rate's noise through that row, or below --min-rate.
+bool held(const FourBarFit& f, const std::array<double, 4>& row, double w, double rate_noise);
+
+/// The window chosen by its predicted bias (choose_window_by_bias, mechanism_stages.h) after a
+/// preliminary fit on at most ~1500 of the samples, then the rates and samples again at the
+/// window chosen; f->x back at its start (four_bar_window.cc).
+void window_stage(FourBarFit* f, IdentifyResult* out);
+
+}  // namespace fivebar::identification::four_bar

@@ -1,0 +1,182 @@
+// The four-bar's window stage (four_bar_fit.h): the window chosen by its predicted bias
+// (mechanism_stages.h, choose_window_by_bias, with the five-bar's bias prediction) over
+// FourBarWindowFit, the four-bar's inputs of the bias prediction and the noise's bias through its
+// reactions.
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "fivebar/identification/rates.h"
+#include "four_bar_fit.h"
+#include "mechanism_stages.h"
+#include "setup_shared.h"
+#include "smoothing_bias.h"
+
+namespace fivebar::identification::four_bar {
+
+namespace {
+
+/// d M1 / d (theta1, omega1, alpha1) at sample s, by central differences on the drive torque,
+/// in the two-channel form of the noise model (noise_model.h: row 0, the first crank's columns);
+/// false where an evaluation fails.
+bool kinematic_jacobian(const FourBarFit& f, const double* x, const Sample& s,
+                        Eigen::Matrix<double, 2, 6>* D, double* M1) {
+  mech::Vec<1, double> tau;
+  if (!stages::mechanism_drive_torques<FourBar>(f.scene, f.layout, x, s, f.eval, &tau)) {
+    return false;
+  }
+  *M1 = tau[0];
+  D->setZero();
+  const double step[3] = {1e-6, 1e-6 * std::max(1.0, std::abs(s.v[0])),
+                          1e-6 * std::max(1.0, std::abs(s.a[0]))};
+  for (int v = 0; v < 3; ++v) {
+    double m[2];
+    for (int side = 0; side < 2; ++side) {
+      Sample d = s;
+      double* value = v == 0 ? &d.q[0] : (v == 1 ? &d.v[0] : &d.a[0]);
+      *value += side ? step[v] : -step[v];
+      if (!stages::mechanism_drive_torques<FourBar>(f.scene, f.layout, x, d, f.eval, &tau)) {
+        return false;
+      }
+      m[side] = tau[0];
+    }
+    (*D)(0, 2 * v) = (m[1] - m[0]) / (2 * step[v]);
+  }
+  return true;
+}
+
+/// The four-bar's fit as choose_window_by_bias reads it (mechanism_stages.h), at the parameters
+/// f.x of the preliminary fit: one torque channel, rates from the angles (no residual levels:
+/// choose_window is the five-bar's).
+class FourBarWindowFit : public stages::WindowFit {
+ public:
+  explicit FourBarWindowFit(const FourBarFit& f) : f_(f) {}
+  const TorqueLog& log() const override { return f_.cond.log; }
+  const std::vector<char>& rejected() const override { return f_.cond.rejected; }
+  int drives() const override { return 1; }
+  detail::RateSource source() const override { return detail::RateSource::kFromAngles; }
+  const std::vector<int>& index() const override { return f_.index; }
+  bool spans_reversal(int i, int hw) const override {
+    return stages::window_spans_reversal(f_.reversals, i, hw);
+  }
+  /// the residual's Jacobian (its rows of the second channel zero), the kinematic Jacobians, and
+  /// the crank angle's higher terms cut short where they would span a slip reversal; the
+  /// Jacobians, which do not depend on the reach, computed once for every window searched
+  detail::BiasInputs bias_inputs(int reach, int min_half, int order) const override {
+    const TorqueLog& L = f_.cond.log;
+    const int n = L.size();
+    const double dt = L.duration() / std::max(1, n - 1);
+    if (jacobians_.index.empty() && !jacobians()) return {};
+    detail::BiasInputs in = jacobians_;
+    const std::vector<int>& rev = f_.reversals;
+    for (const int i : f_.index) {
+      int a = std::max(0, i - reach), b = std::min(n - 1, i + reach);
+      while (a < i - min_half && rev[i] - rev[a] > 0) ++a;
+      while (b > i + min_half && rev[b] - rev[i] > 0) --b;
+      in.terms[0].push_back(detail::high_order_terms(L.t, L.theta1, i, a, b, dt, order));
+      in.terms[1].push_back(Eigen::VectorXd::Zero(detail::kReconExtra));
+    }
+    return in;
+  }
+  /// At each sample's motion u = (theta1, omega1, alpha1), n the noise of the angle and of its
+  /// filtered derivatives (covariance from the filter's taps): a 3-point Gauss-Hermite rule
+  /// along each principal axis of its covariance, exact for quadratic torques, and bounded where
+  /// a reaction passes through zero (its norm's kink) as a Taylor term is not.
+  detail::NoiseBias noise_bias(const SgOptions& sg) const override {
+    const TorqueLog& L = f_.cond.log;
+    const int mid = L.size() / 2, P = f_.layout.size();
+    int lo = 0;
+    std::vector<double> d1, d2;
+    savitzky_golay_taps(L.t, mid, sg, &lo, &d1, &d2);
+    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();  // of (theta1, omega1, alpha1)
+    for (size_t r = 0; r < d1.size(); ++r) {
+      const Eigen::Vector3d g(lo + static_cast<int>(r) == mid ? 1.0 : 0.0, d1[r], d2[r]);
+      C += g * g.transpose();
+    }
+    C *= f_.noise.angle[0] * f_.noise.angle[0];
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+    detail::NoiseBias nb;
+    nb.shift.assign(f_.samples.size(), Eigen::Vector2d::Zero());
+    nb.score.assign(f_.samples.size(), Eigen::VectorXd::Zero(P));
+    for (size_t u = 0; u < f_.samples.size(); ++u) {
+      const Sample& s = f_.samples[u];
+      mech::Vec<1, double> m0, m1;
+      Eigen::MatrixXd A0, A1;
+      if (!stages::mechanism_drive_torques<FourBar>(f_.scene, f_.layout, f_.x.data(), s, f_.eval,
+                                                    &m0, &A0)) {
+        continue;
+      }
+      double shift = 0;
+      Eigen::VectorXd score = Eigen::VectorXd::Zero(P);
+      bool ok = true;
+      for (int k = 0; k < 3 && ok; ++k) {
+        const Eigen::Vector3d e =
+            std::sqrt(3.0 * std::max(0.0, eig.eigenvalues()(k))) * eig.eigenvectors().col(k);
+        for (double side : {1.0, -1.0}) {
+          Sample p = s;
+          p.q[0] += side * e(0), p.v[0] += side * e(1), p.a[0] += side * e(2);
+          ok = ok && stages::mechanism_drive_torques<FourBar>(f_.scene, f_.layout, f_.x.data(), p,
+                                                              f_.eval, &m1, &A1);
+          if (!ok) break;
+          shift += (m1[0] - m0[0]) / 6;
+          score += (A1.row(0) - A0.row(0)).transpose() * (m1[0] - m0[0]) / 6;
+        }
+      }
+      if (!ok) continue;
+      nb.shift[u](0) = shift;
+      nb.score[u] = score;
+    }
+    return nb;
+  }
+
+ private:
+  /// bias_inputs without the terms into jacobians_; false where the residual fails
+  bool jacobians() const {
+    const int P = f_.layout.size(), m = static_cast<int>(f_.samples.size());
+    detail::BiasInputs& in = jacobians_;
+    ceres::Problem problem;
+    std::vector<double> x = f_.x, r;
+    stages::add_mechanism_terms<FourBar>(f_.scene, f_.layout, f_.samples, f_.eval, x.data(),
+                                         &problem);
+    ceres::CRSMatrix crs;
+    if (!stages::raw_residuals(&problem, &r, &crs)) return false;
+    const Eigen::MatrixXd J1 = stages::dense(crs, P);
+    in.J = Eigen::MatrixXd::Zero(2 * m, P);
+    for (int u = 0; u < m; ++u) in.J.row(2 * u) = J1.row(u);
+    for (int u = 0; u < m; ++u) {
+      Eigen::Matrix<double, 2, 6> D;
+      double M1 = 0;
+      if (!kinematic_jacobian(f_, f_.x.data(), f_.samples[u], &D, &M1)) D.setZero();
+      in.D.push_back(D);
+    }
+    in.Hp = Eigen::MatrixXd::Zero(P, P);
+    in.T = stages::to_public(f_.layout);
+    in.friction_size = f_.layout.friction_size();
+    in.source = source();
+    in.noise = f_.noise;
+    in.index = f_.index;
+    return true;
+  }
+  const FourBarFit& f_;
+  mutable detail::BiasInputs jacobians_;  ///< bias_inputs' Jacobians, once
+};
+
+}  // namespace
+
+void window_stage(FourBarFit* f, IdentifyResult* out) {
+  const std::vector<double> x_start = f->x;
+  std::vector<Sample> some;
+  const size_t step = std::max<size_t>(1, f->samples.size() / 1500);
+  for (size_t u = 0; u < f->samples.size(); u += step) some.push_back(f->samples[u]);
+  ceres::Problem problem;
+  std::vector<double> x = f->x;
+  stages::add_mechanism_terms<FourBar>(f->scene, f->layout, some, f->eval, x.data(), &problem);
+  if (stages::solve_preliminary(f->layout, x.data(), &problem)) f->x = x;
+  stages::choose_window_by_bias(FourBarWindowFit(*f), &f->sg, &f->smoothing_bias,
+                                &out->window_choice);
+  f->x = x_start;
+  rates(f, out);
+  select_samples(f, out);
+}
+
+}  // namespace fivebar::identification::four_bar

@@ -1,0 +1,143 @@
+// The data-driven Savitzky-Golay window and its smoothing bias, written once for every
+// mechanism: the window choice (stage_window.cc) and the smoothing-bias stages
+// (stage_smoothing_bias.cc) read a fit through WindowFit, which each mechanism's identify
+// implements over its own residual (the five-bar: identify_stages.h, FiveBarWindowFit; the
+// four-bar: identify_four_bar.cc). A mechanism of one driven joint fills channel 0 of the
+// two-channel noise model (noise_model.h) and leaves channel 1 at zero.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "fivebar/identification/identify.h"
+#include "fivebar/identification/rates.h"
+#include "smoothing_bias.h"
+#include "window_misfit.h"
+
+namespace ceres {
+class Problem;
+struct CRSMatrix;
+}  // namespace ceres
+
+namespace fivebar::identification::stages {
+
+/// Whether the Savitzky-Golay window of half-width hw centred on log sample i spans a slip
+/// reversal, from the reversals' prefix counts over the sample steps (reversals[i + 1] -
+/// reversals[i]: whether the step into sample i reverses; empty: none known).
+inline bool window_spans_reversal(const std::vector<int>& reversals, int i, int hw) {
+  const int n = static_cast<int>(reversals.size()) - 1;
+  if (hw <= 0 || n <= 0) return false;
+  const int a = std::clamp(i - hw, 0, n - 1), b = std::clamp(i + hw, 0, n - 1);
+  return reversals[b] - reversals[a] > 0;
+}
+
+/// What the window stages read of a mechanism's fit, at the parameters of its preliminary fit.
+class WindowFit {
+ public:
+  virtual ~WindowFit() = default;
+  /// the conditioned log
+  virtual const TorqueLog& log() const = 0;
+  /// per log sample: 1 for a glitch (never probed)
+  virtual const std::vector<char>& rejected() const = 0;
+  /// the torque channels (1 or 2)
+  virtual int drives() const = 0;
+  /// where the rates and accelerations come from
+  virtual detail::RateSource source() const = 0;
+  /// log index of each sample of the fit
+  virtual const std::vector<int>& index() const = 0;
+  /// whether the filter's window of half-width hw centred on log sample i spans a slip reversal
+  virtual bool spans_reversal(int i, int hw) const = 0;
+  /// per channel: the rms torque residual and the level the sensor noise explains over the log
+  /// samples `probe` (joints at rest left out), with the rates of the filter `sg` (read by
+  /// choose_window; a mechanism whose window choose_window_by_bias chooses leaves them NaN)
+  virtual void levels(const std::vector<int>& probe, const SgOptions& sg, double rms[2],
+                      double floor[2]) const {
+    (void)probe, (void)sg;
+    rms[0] = rms[1] = floor[0] = floor[1] = std::numeric_limits<double>::quiet_NaN();
+  }
+  /// the inputs of the bias prediction (smoothing_bias.h) over the samples of the fit: the
+  /// motion's higher terms above `order` from local polynomials over +-reach samples, cut short
+  /// (not below +-min_half) at slip reversals
+  virtual detail::BiasInputs bias_inputs(int reach, int min_half, int order) const = 0;
+  /// what the noise of the rates and accelerations estimated with `sg` does to the fit at each
+  /// of its samples (smoothing_bias.h); empty when not predicted (choose_window_by_bias reads it)
+  virtual detail::NoiseBias noise_bias(const SgOptions& sg) const {
+    (void)sg;
+    return {};
+  }
+};
+
+/// The data-driven Savitzky-Golay half-window (stage_window.cc). Smoothing bias shows in the
+/// torque residual as an excess over the level the sensor noise explains: the window chosen is
+/// the largest whose residual/noise ratio stays within kWindowExcess of the reference (1, or the
+/// least ratio over the candidates when that is above 1: a mismatch of the law that no window
+/// removes), then one candidate smaller; a flat excess (a misfit the small windows' noise hides,
+/// window_misfit.h) is chosen by its own rule. Sets sg's half-window (and its order when the
+/// smallest window is the choice), *rates_biased, and *choice (the text of the choice).
+void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::string* choice);
+
+/// After choose_window: the largest window up to its choice whose predicted smoothing bias
+/// (smoothing_bias.h) is within kBiasFraction of the std for every friction coefficient, from
+/// the rule's choice down to the second smallest window; the rule's choice when none is. Angles
+/// only,
+/// the filter's order as given (`given_order`, not raised). *bias: the prediction at the window
+/// kept (left empty when not predicted); *choice gets its text appended.
+void limit_smoothing_bias(const WindowFit& w, int given_order, SgOptions* sg, Eigen::VectorXd* bias,
+                          std::string* choice);
+
+/// The window of a mechanism that predicts the noise's bias (WindowFit::noise_bias), in place of
+/// choose_window and limit_smoothing_bias: the noise's bias through the reactions falls as the
+/// window grows while the smoothing bias grows, and the search runs up from the second smallest
+/// candidate with the bias of both: the smallest window within kBiasFraction of the std of every
+/// friction coefficient (the bias left is then mostly the noise's, which correct_smoothing_bias
+/// takes off, while a larger window adds smoothing bias and leaves out more samples near slip
+/// reversals), else the one of least predicted bias. Angles only, at sg's order; sg as given
+/// when no bias can be predicted. *bias: the prediction at the window kept (left empty when not
+/// predicted); *choice: its text, with the predictions by half-window.
+void choose_window_by_bias(const WindowFit& w, SgOptions* sg, Eigen::VectorXd* bias,
+                           std::string* choice);
+
+/// The predicted smoothing bias at the chosen window (`bias`, public friction coefficients)
+/// taken off the estimates, their intervals and the fitted parameters x (internal layout).
+/// Coefficients at a bound, or whose std the log does not determine, are left as fitted, and no
+/// correction takes a coefficient past its bound (a Stribeck static_coulomb stays >= coulomb):
+/// the correction is limited there, and says so. Its own error, from the angle noise through
+/// the reconstruction, is a small part of the bias (over two noisy paper logs at half-window 8:
+/// 0.078 and 0.136 std predicted for 0.088 measured), so a few hundredths of the std, and is not
+/// added to the std.
+void correct_smoothing_bias(const ParameterLayout& layout, const Eigen::VectorXd& bias,
+                            std::vector<double>* x, IdentifyResult* out);
+
+/// A refit of the sign check: the fit of `log` with `opt` into *fit (its residual levels at
+/// least); false or a LogError when the log cannot be fitted (no evidence either way).
+using Refit =
+    std::function<bool(const TorqueLog& log, const IdentifyOptions& opt, IdentifyResult* fit)>;
+
+/// The sign check (IdentifyOptions::check_torque_sign) of a mechanism of `drives` torque
+/// channels, once the caller has decided it runs (stage_refits.cc): true (and out->unusable says
+/// why, with the --flip-torque-sign advice) when the log's torques fit far better negated: all
+/// channels, or else one of them (a channel wired the other way read as "coulomb at its bound");
+/// `suspect` (bit c - 1: tau c, read negative by the model check) is tried first. The refits
+/// (`refit`) keep the fit's Savitzky-Golay window (no search of their own), estimate no delay and
+/// run no sign check; the one with every channel negated puts its residual in out.
+bool torques_fit_negated(const TorqueLog& log, const IdentifyOptions& opt, int drives,
+                         unsigned suspect, const Refit& refit, IdentifyResult* out);
+
+/// Raw (unweighted) residuals of the problem at its parameters, and its Jacobian with `jac`;
+/// false where an evaluation fails (stage_solve.cc).
+bool raw_residuals(ceres::Problem* problem, std::vector<double>* r,
+                   ceres::CRSMatrix* jac = nullptr);
+
+/// The CRS Jacobian as a dense matrix of P columns.
+Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P);
+
+/// The preliminary fit before the window choice: plain least squares of the residual blocks
+/// already in `problem` on the parameter block x (its lower bounds set here), at most 20
+/// iterations; whether the solution is usable.
+bool solve_preliminary(const ParameterLayout& layout, double* x, ceres::Problem* problem);
+
+}  // namespace fivebar::identification::stages
