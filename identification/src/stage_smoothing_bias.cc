@@ -235,7 +235,11 @@ void correct_smoothing_bias(const ParameterLayout& layout, const Eigen::VectorXd
     if (shift(p) == 0 && applied(p) == 0) continue;
     ParameterEstimate& e = out->parameters[p];
     e.value -= applied(p);
-    e.ci_low -= applied(p);  // an open side (+-inf) stays open
+    // an open side (+-inf) stays open; a lower end that respected the bound (a profile interval
+    // ends there) still does after the shift
+    const bool within_bound = e.ci_low >= layout.lower_bound(p);
+    e.ci_low -= applied(p);
+    if (within_bound) e.ci_low = std::max(e.ci_low, layout.lower_bound(p));
     e.ci_high -= applied(p);
     list += (list.empty() ? "" : ", ") + e.name + " " + format_significant(-applied(p));
     if (std::abs(applied(p) - shift(p)) > 1e-12 * std::abs(shift(p))) {

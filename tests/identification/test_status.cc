@@ -12,6 +12,7 @@
 #include "light_scene.h"
 #include "paper.h"
 #include "synthetic_log.h"
+#include "mechanism_stages.h"
 #include "window_misfit.h"
 
 namespace fivebar::identification {
@@ -495,6 +496,32 @@ TEST(IdentifyStatus, TheReasonNamesTheCauseThatExplainsMost) {
                                       " with the links' inertial parameters free, against"));
   EXPECT_THAT(res.unusable, HasSubstr(format_significant(readings, 3) +
                                       " with the torque sensors' offsets and gains"));
+}
+
+
+// The smoothing bias taken off an estimate moves its interval with it, but a lower end that
+// stopped at the coefficient's bound (a profile interval ending at 0) stays there: coulomb is
+// never reported as possibly negative
+TEST(SmoothingBias, CorrectionKeepsALowerEndAtItsBound) {
+  const ParameterLayout layout{FrictionLaw::kCoulombViscous, false};
+  IdentifyResult out;
+  out.parameters.resize(2);
+  for (ParameterEstimate& e : out.parameters) e.std = 0.05;
+  out.parameters[0].value = 0.1;
+  out.parameters[0].ci_low = 0;  // the profile ended at the bound
+  out.parameters[0].ci_high = 0.2;
+  out.parameters[1].value = 0.02;
+  out.parameters[1].ci_low = 0.01;
+  out.parameters[1].ci_high = 0.03;
+  std::vector<double> x = {0.1, 0.02};
+  Eigen::VectorXd bias(2);
+  bias << 0.004, 0.001;  // the estimates read this much high
+  stages::correct_smoothing_bias(layout, bias, &x, &out);
+  EXPECT_NEAR(out.parameters[0].value, 0.096, 1e-15);
+  EXPECT_EQ(out.parameters[0].ci_low, 0.0);
+  EXPECT_NEAR(out.parameters[0].ci_high, 0.196, 1e-15);
+  EXPECT_NEAR(out.parameters[1].ci_low, 0.009, 1e-15);  // away from the bound: moved
+  EXPECT_NEAR(x[0], 0.096, 1e-15);
 }
 
 }  // namespace
