@@ -112,17 +112,23 @@ struct CauseSteps {
   bool any() const { return named(0) || named(1) || named(2); }
 };
 
-/// model_check's candidate causes by CauseId: the name in identification.json, and the words
+/// model_check's candidate causes by CauseId: the name in identification.json, the words, and
+/// the words of a reason that names the cause (the torque readings' reasons say which reading)
 struct CauseText {
   const char* name;
   const char* what;
+  const char* off;
 };
 
 constexpr CauseText kCauseText[kCauseCount] = {
-    {"inertia", "the links' inertial parameters"},
-    {"angle_offsets", "the encoders' zeros"},
-    {"torque_readings", "the torque sensors' offsets and gains"},
-    {"delay", "the torque readings' times (a delay)"}};
+    {"inertia", "the links' inertial parameters",
+     "the scene's masses or inertias do not match the log"},
+    {"angle_offsets", "the encoders' zeros",
+     "the logged angles' zeros are off (subtract the offsets the warning reads from the logged "
+     "angles)"},
+    {"torque_readings", "the torque sensors' offsets and gains",
+     "the logged torques' zeros or gains are off"},
+    {"delay", "the torque readings' times (a delay)", "the logged torques are delayed"}};
 
 IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedStep& fs,
                                          double z, double z_given, double excess) {
@@ -456,7 +462,8 @@ void angles_check(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
   // named, the zeros are said even where the linearized refit moves the friction little, unless
   // another cause explains clearly more (an encoder 0.005 rad off on a heavy mechanism: read
   // 0.0052 +- 0.00075 rad at 31 std, a move of coulomb by 1 std, while the fit's coulomb was
-  // 10 std off; masses 5 % off on another evidenced zeros too, at a fall of 27 against 414)
+  // 10 std off, from the smallest window the zeros' error had chosen: unbounded_error; masses
+  // 5 % off on another evidenced zeros too, at a fall of 27 against 414)
   if (moved.empty()) {
     for (int k = 0; k < kCauseCount; ++k) {
       if (k != kCauseAngles && clearly_more(cs, k, kCauseAngles)) return;  // not the zeros
@@ -475,7 +482,7 @@ void angles_check(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
   // 4 std)
   unusable_move(friction_at_bound(f, *out) ? 0 : largest,
                 cause_explaining_most(cs, kCauseAngles, kAllCauses & ~(1u << kCauseAngles),
-                                      "the logged angles' zeros are off"),
+                                      kCauseText[kCauseAngles].off),
                 out);
 }
 
@@ -581,7 +588,7 @@ void inertia_check(const Fit& f, const CauseSteps& cs, bool candidate, IdentifyR
   if (!masses) return;
   unusable_move(friction_at_bound(f, *out) ? 0 : largest,
                 cause_explaining_most(cs, kCauseInertia, kAllCauses & ~(1u << kCauseInertia),
-                                      "the scene's masses or inertias do not match the log"),
+                                      kCauseText[kCauseInertia].off),
                 out);
 }
 
@@ -645,13 +652,8 @@ int named_cause(const CauseSteps& cs) {
 
 /// The words of a reason for the named cause `id` (cause_explaining_most)
 std::string attributed_what(const CauseSteps& cs, int id) {
-  static const char* const kWhat[kCauseDelay] = {
-      "the scene's masses or inertias do not match the log",
-      "the logged angles' zeros are off (subtract the offsets the warning reads from the logged "
-      "angles)",
-      "the logged torques' zeros or gains are off"};
   return cause_explaining_most(cs, id, kAllCauses & ~(1u << id) & ~(1u << kCauseDelay),
-                               kWhat[id]);
+                               kCauseText[id].off);
 }
 
 /// A model error the check names (`what`) makes the fit unusable, whatever the linearized move
