@@ -112,17 +112,23 @@ struct CauseSteps {
   bool any() const { return named(0) || named(1) || named(2); }
 };
 
-/// model_check's candidate causes by CauseId: the name in identification.json, and the words
+/// model_check's candidate causes by CauseId: the name in identification.json, the words, and
+/// the words of a reason that names the cause (the torque readings' reasons say which reading)
 struct CauseText {
   const char* name;
   const char* what;
+  const char* off;
 };
 
 constexpr CauseText kCauseText[kCauseCount] = {
-    {"inertia", "the links' inertial parameters"},
-    {"angle_offsets", "the encoders' zeros"},
-    {"torque_readings", "the torque sensors' offsets and gains"},
-    {"delay", "the torque readings' times (a delay)"}};
+    {"inertia", "the links' inertial parameters",
+     "the scene's masses or inertias do not match the log"},
+    {"angle_offsets", "the encoders' zeros",
+     "the logged angles' zeros are off (subtract the offsets the warning reads from the logged "
+     "angles)"},
+    {"torque_readings", "the torque sensors' offsets and gains",
+     "the logged torques' zeros or gains are off"},
+    {"delay", "the torque readings' times (a delay)", "the logged torques are delayed"}};
 
 IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedStep& fs,
                                          double z, double z_given, double excess) {
@@ -456,7 +462,8 @@ void angles_check(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
   // named, the zeros are said even where the linearized refit moves the friction little, unless
   // another cause explains clearly more (an encoder 0.005 rad off on a heavy mechanism: read
   // 0.0052 +- 0.00075 rad at 31 std, a move of coulomb by 1 std, while the fit's coulomb was
-  // 10 std off; masses 5 % off on another evidenced zeros too, at a fall of 27 against 414)
+  // 10 std off, from the smallest window the zeros' error had chosen: unbounded_error; masses
+  // 5 % off on another evidenced zeros too, at a fall of 27 against 414)
   if (moved.empty()) {
     for (int k = 0; k < kCauseCount; ++k) {
       if (k != kCauseAngles && clearly_more(cs, k, kCauseAngles)) return;  // not the zeros
@@ -475,7 +482,7 @@ void angles_check(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
   // 4 std)
   unusable_move(friction_at_bound(f, *out) ? 0 : largest,
                 cause_explaining_most(cs, kCauseAngles, kAllCauses & ~(1u << kCauseAngles),
-                                      "the logged angles' zeros are off"),
+                                      kCauseText[kCauseAngles].off),
                 out);
 }
 
@@ -581,7 +588,7 @@ void inertia_check(const Fit& f, const CauseSteps& cs, bool candidate, IdentifyR
   if (!masses) return;
   unusable_move(friction_at_bound(f, *out) ? 0 : largest,
                 cause_explaining_most(cs, kCauseInertia, kAllCauses & ~(1u << kCauseInertia),
-                                      "the scene's masses or inertias do not match the log"),
+                                      kCauseText[kCauseInertia].off),
                 out);
 }
 
@@ -627,6 +634,56 @@ ModelVerdict::Delay delay_verdict(const CauseSteps& cs, int* rival) {
     }
   }
   return *rival == kCauseCount ? D::kExplainsMost : D::kNotMost;
+}
+
+/// The cause a reason names for the model error: of the causes the check names (inertia,
+/// encoders' zeros, torque readings), the one with the largest fall (attributed_what names
+/// another that explains clearly more instead); kCauseCount: none.
+int named_cause(const CauseSteps& cs) {
+  int best = kCauseCount;
+  for (int id = 0; id < kCauseDelay; ++id) {
+    if (cs.named(id) && (best == kCauseCount ||
+                         cs.report[cs.slot[id]].drop > cs.report[cs.slot[best]].drop)) {
+      best = id;
+    }
+  }
+  return best;
+}
+
+/// The words of a reason for the named cause `id` (cause_explaining_most)
+std::string attributed_what(const CauseSteps& cs, int id) {
+  return cause_explaining_most(cs, id, kAllCauses & ~(1u << id) & ~(1u << kCauseDelay),
+                               kCauseText[id].off);
+}
+
+/// A model error the check names (`what`) makes the fit unusable, whatever the linearized move
+/// of the friction, when that move cannot bound the friction's error:
+/// - a friction coefficient's std exceeds its value: a move "within k std" then says nothing
+///   (light links 6 % heavier than the scene: inertias named at 88 std, coulomb 0.019 +- 0.19);
+/// - the data-driven window was the smallest (the order raised): the window rule read the model
+///   error as smoothing bias at every larger window, so the rates, the noise floor and the std
+///   are those of the noisiest window, whose acceleration noise biases the friction (an encoder
+///   zero 0.005 rad off a heavy mechanism: floor 9.7 N m against 2.0 at the clean log's window,
+///   the zeros' move of coulomb 1 std, coulomb 10 std off; the clean log at that window: 11 std).
+/// The first reason stays.
+void unbounded_error(const Fit& f, const std::string& what, IdentifyResult* out) {
+  if (!out->unusable.empty()) return;
+  for (int i = 0; i < f.layout.friction_size(); ++i) {
+    const ParameterEstimate& e = out->parameters[i];
+    if (e.at_bound || !(e.std > std::abs(e.value))) continue;
+    out->unusable = what + ": " + e.name + " is not determined (std " +
+                    format_significant(e.std, 2) + " against a value of " +
+                    format_significant(e.value, 2) +
+                    "), so the fit cannot bound how far the error moves it (see the warnings)";
+    return;
+  }
+  if (f.source != detail::RateSource::kLogged && f.opt->auto_window &&
+      f.sg.order > f.opt->sg.order) {
+    out->unusable = what + ": the rates' window was chosen with this error in the residual "
+                    "(every window but the smallest read it as smoothing bias), so the noise "
+                    "floor, the std and the friction are those of the noisiest window; correct "
+                    "it and rerun (see the warnings)";
+  }
 }
 
 }  // namespace
@@ -689,9 +746,12 @@ ModelVerdict model_check(const Fit& f, IdentifyResult* out) {
                       format_significant(kMisfitRatio) + "; see the warnings)";
     }
     unusable_move(largest, what, out);
+    unbounded_error(f, what, out);
     return verdict;
   }
   inertia_check(f, cs, !idx[1].empty(), out);
+  const int cause = named_cause(cs);
+  if (cause < kCauseCount) unbounded_error(f, attributed_what(cs, cause), out);
   return verdict;
 }
 

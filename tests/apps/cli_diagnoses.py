@@ -223,7 +223,8 @@ def zero_off(header, cells):
 
 
 rewrite_log(clean, zero, zero_off)
-expect(3, r"the logged angles' zeros are off: it holds a friction coefficient at its bound",
+expect(3, r"the logged angles' zeros are off \(subtract the offsets the warning reads from the "
+          r"logged angles\): it holds a friction coefficient at its bound",
        ["identify", small_scene, "--log", zero, "--out", fit, "--no-plots", "--no-validation"])
 p = subprocess.run([FIVEBAR, "identify", small_scene, "--log", clean, "--out", fit, "--no-plots",
                     "--no-validation"], capture_output=True, text=True)
