@@ -209,8 +209,11 @@ void print_summary(const Args& a, const id::TorqueLog& log, const id::IdentifyRe
   if (std::isfinite(res.delay_s)) {
     std::printf("  torque delay: %.4g +- %.2g ms%s\n", res.delay_s * 1e3, res.delay_std_s * 1e3,
                 res.delay_corrected     ? " (corrected: torques shifted by it)"
-                : res.delay_unexplained ? " (not corrected: a model error, not a delay)"
-                                        : " (not significant)");
+                : res.delay_unexplained ? " (not corrected: see the warnings)"
+                : std::abs(res.delay_s) > 3 * res.delay_std_s
+                    ? " (not corrected: the model check does not evidence it beyond the noise and "
+                      "the model's other causes)"
+                    : " (not significant)");
   }
   if (res.accels_estimated) {  // how the window was chosen: identification.json, rate_source
     std::printf("  rates: Savitzky-Golay, half-window %d samples (%.3g ms), order %d, %s\n",

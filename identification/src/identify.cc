@@ -129,6 +129,13 @@ double both_channels_misfit(const IdentifyResult& r) {
   return std::sqrt(sum / kActuators);
 }
 
+/// "the torques seem to lag the angles by D +- s ms" of out's delay estimate
+std::string delay_seen(const IdentifyResult& out) {
+  return std::string("the torques seem to ") + (out.delay_s < 0 ? "lead" : "lag") +
+         " the angles by " + format_significant(std::abs(out.delay_s) * 1e3) + " +- " +
+         format_significant(out.delay_std_s * 1e3) + " ms";
+}
+
 /// Where the model check did not run (a log too short for its columns): why the fit with the
 /// torques shifted does not explain the misfit ("" when it does): it is not usable itself, or
 /// it does not lower the residual of both channels over their floors, or it leaves the residual above kMisfitRatio floors and above half the unshifted fit's ratio.
@@ -174,6 +181,13 @@ bool delay_stage(const Params<double>& scene_in, const sim::LoadFunction& loads,
       (!checked && !(std::abs(out->delay_s) > kDelaySignificance * out->delay_std_s))) {
     return false;
   }
+  if (!checked && !verdict.short_log) {  // the check could not run: its warning says why
+    out->warnings.push_back(delay_seen(*out) + ", but the model check did not run (" +
+                            verdict.unchecked + "), so nothing tells it from a model error; "
+                            "not corrected");
+    out->delay_unexplained = true;
+    return false;
+  }
   std::string why = verdict.delay_falls;
   if (verdict.delay != Delay::kNotMost) {
     IdentifyResult shifted = refit_with_delay(scene_in, loads, f.cond.log, *f.opt, *out);
@@ -186,10 +200,7 @@ bool delay_stage(const Params<double>& scene_in, const sim::LoadFunction& loads,
       return true;
     }
   }
-  out->warnings.push_back(std::string("the torques seem to ") +
-                          (out->delay_s < 0 ? "lead" : "lag") + " the angles by " +
-                          format_significant(std::abs(out->delay_s) * 1e3) + " +- " +
-                          format_significant(out->delay_std_s * 1e3) + " ms, but " + why +
+  out->warnings.push_back(delay_seen(*out) + ", but " + why +
                           (verdict.delay == Delay::kExplainsMost
                                ? std::string("; not corrected")
                                : std::string(": a model error, not a delay; not corrected")));

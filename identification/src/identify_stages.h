@@ -116,6 +116,11 @@ struct ModelVerdict {
   /// beyond every other cause's; delay_falls: the falls of each cause, for the delay's warning
   enum class Delay { kUnchecked, kNotEvidenced, kNotMost, kExplainsMost } delay = Delay::kUnchecked;
   std::string delay_falls;
+  /// why the check did not run ("" when it ran); `short_log`: only because the log has too few
+  /// samples for its columns (kCheckRowsPerColumn), the one case a delay may still be judged
+  /// without it (delay_stage)
+  std::string unchecked;
+  bool short_log = false;
 };
 
 // ---- residual_blocks.cc ----
@@ -358,6 +363,12 @@ bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
 /// logged. Costs two Jacobians on the fitted and inertial parameters.
 bool score_bias(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
                 const Eigen::VectorXd& r, const TorqueColumns& tc, Eigen::VectorXd* b);
+
+/// The samples (indices into f.samples) whose residual does not evaluate under one of the
+/// check's changes (check_jacobian's inertial layout, offset_columns' angle steps,
+/// accel_derivatives' acceleration steps): where the friction loop does not converge, as on
+/// a pose a hair from a singular one.
+std::vector<int> check_failures(const Fit& f);
 
 // ---- stage_model_check.cc ----
 

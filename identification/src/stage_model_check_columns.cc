@@ -48,11 +48,16 @@ std::vector<double> with_layout(const Fit& f, const ParameterLayout& layout2,
   return friction;
 }
 
+/// The check's step on the logged angles [rad] (offset_columns) and on the accelerations
+/// [rad/s^2] (accel_derivatives)
+constexpr double kOffsetStep = 1e-6;
+constexpr double kAccelStep = 1e-2;
+
 /// Columns of the residual's Jacobian on offsets d of the logged angles (theta1, theta2 read d
 /// more than the scene's angles: the model is evaluated at theta - d), by central differences at
 /// the fit, rows whitened by the floors `fl`; false if an evaluation fails.
 bool offset_columns(const Fit& f, const double fl[2], Eigen::MatrixXd* Jo) {
-  constexpr double h = 1e-6;  // [rad]
+  constexpr double h = kOffsetStep;
   const int m = 2 * static_cast<int>(f.samples.size());
   Jo->setZero(m, 2);
   for (int c = 0; c < 2; ++c) {
@@ -161,7 +166,7 @@ double accel_tap_power(const Fit& f, int i) {
 /// false if an evaluation fails.
 bool accel_derivatives(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
                        const Eigen::VectorXd& r, Eigen::MatrixXd dJ[2], Eigen::VectorXd dr[2]) {
-  constexpr double h = 1e-2;  // [rad/s^2]
+  constexpr double h = kAccelStep;
   ParameterLayout l2 = f.layout;
   l2.inertia = true;
   Fit g = f;
@@ -212,6 +217,53 @@ bool score_bias(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& 
     }
   }
   return b->allFinite();
+}
+
+namespace {
+
+/// Marks in `fails` the samples whose residual block, under `layout` at x, does not evaluate
+/// (the friction loop does not converge there), with each sample changed by `change` first.
+template <typename Change>
+void mark_failures(const Fit& f, const ParameterLayout& layout, std::vector<double> x,
+                   Change change, std::vector<bool>* fails) {
+  std::vector<Sample> s = f.samples;
+  for (Sample& e : s) change(&e);
+  ceres::Problem problem;
+  if (!add_inverse_dynamics_terms(f.scene, layout, s, f.eval, Loss::kNone, 1, x.data(),
+                                  &problem)) {
+    return;
+  }
+  std::vector<ceres::ResidualBlockId> blocks;
+  problem.GetResidualBlocks(&blocks);
+  for (size_t u = 0; u < blocks.size() && u < fails->size(); ++u) {
+    double cost = 0, r[2];
+    if (!problem.EvaluateResidualBlock(blocks[u], false, &cost, r, nullptr) ||
+        !std::isfinite(r[0]) || !std::isfinite(r[1])) {
+      (*fails)[u] = true;
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<int> check_failures(const Fit& f) {
+  ParameterLayout l2 = f.layout;
+  l2.inertia = true;
+  const std::vector<double> x2 = with_layout(
+      f, l2, std::vector<double>(f.x.begin(), f.x.begin() + f.layout.friction_size()));
+  std::vector<bool> fails(f.samples.size(), false);
+  mark_failures(f, l2, x2, [](Sample*) {}, &fails);
+  for (double h : {kOffsetStep, -kOffsetStep}) {
+    mark_failures(f, f.layout, f.x, [h](Sample* e) { e->th1 -= h; }, &fails);
+    mark_failures(f, f.layout, f.x, [h](Sample* e) { e->th2 -= h; }, &fails);
+  }
+  mark_failures(f, l2, x2, [](Sample* e) { e->a1 += kAccelStep; }, &fails);
+  mark_failures(f, l2, x2, [](Sample* e) { e->a2 += kAccelStep; }, &fails);
+  std::vector<int> out;
+  for (size_t u = 0; u < fails.size(); ++u) {
+    if (fails[u]) out.push_back(static_cast<int>(u));
+  }
+  return out;
 }
 
 }  // namespace fivebar::identification::stages
