@@ -4,7 +4,8 @@
 // or Savitzky-Golay with the rest rule and the slip reversals left out), the data-driven window
 // and its smoothing bias (the five-bar's stages, mechanism_stages.h, over FourBarWindowFit), the fit
 // (the mechanism residual, mechanism_residual.h), the covariance (the block sandwich over the
-// filter's windows), the model check (the residual against its noise floor) and Wald intervals.
+// filter's windows), the residual checks (against its noise floor, setup_shared.h), the model
+// check's candidate causes (four_bar_model_check.cc) and Wald intervals.
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
