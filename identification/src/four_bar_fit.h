@@ -70,4 +70,10 @@ bool held(const FourBarFit& f, const std::array<double, 4>& row, double w, doubl
 /// window chosen; f->x back at its start (four_bar_window.cc).
 void window_stage(FourBarFit* f, IdentifyResult* out);
 
+/// The model check's candidate causes at the fit: the five-bar's that exist for one crank (the
+/// links' inertial parameters, the crank encoder's zero, tau1's offset and gain, the delay)
+/// freed on the four-bar's Jacobian; a warning when a cause would move the friction beyond
+/// kFreedMove std, out->unusable beyond kUnusableMove or at a bound (four_bar_model_check.cc).
+void cause_check(const FourBarFit& f, IdentifyResult* out);
+
 }  // namespace fivebar::identification::four_bar

@@ -95,29 +95,6 @@ bool prepare_fit(const Params<double>& scene_in, const sim::LoadFunction& loads,
   return rates_window_and_samples(log, f, out);
 }
 
-/// A fit whose every friction coefficient is at its bound explains none of the torques by
-/// friction: a residual this many times its floor is then unexplained (a light mechanism whose
-/// masses did not match the log gave 2.6-2.8 with both coefficients at 0, true 0.08 and 0.01)
-constexpr double kAllAtBoundMisfitRatio = 2.0;
-
-/// The last check, where no stage named a cause: every friction coefficient at its bound with
-/// the residual above kAllAtBoundMisfitRatio floors (one at its bound above kMisfitRatio is
-/// bound_and_misfit_warning's)
-void unexplained_misfit(const ParameterLayout& layout, IdentifyResult* out) {
-  const int n = layout.friction_size();
-  if (!out->unusable.empty() || n == 0) return;
-  for (int i = 0; i < n; ++i) {
-    if (!out->parameters[i].at_bound) return;
-  }
-  const double ratio = misfit_ratio(*out);
-  if (!(ratio > kAllAtBoundMisfitRatio)) return;
-  out->unusable = "every friction coefficient at its bound while the torque residual is " +
-                  format_significant(ratio, 3) + " times its noise floor (more than " +
-                  format_significant(kAllAtBoundMisfitRatio) +
-                  "): friction explains none of the torques, and something else does not match "
-                  "(the scene's masses or geometry, the law, the log's units)";
-}
-
 /// The residual of both torque channels over their noise floors, sqrt((q1^2 + q2^2) / 2) with q_c
 /// the channel's rms residual over its floor: the measure a shift of the torques must lower (each
 /// fit against its own floor: the shifted torques' noise is smoothed, and so is their floor)

@@ -4,7 +4,8 @@
 // or Savitzky-Golay with the rest rule and the slip reversals left out), the data-driven window
 // and its smoothing bias (the five-bar's stages, mechanism_stages.h, over FourBarWindowFit), the fit
 // (the mechanism residual, mechanism_residual.h), the covariance (the block sandwich over the
-// filter's windows), the model check (the residual against its noise floor) and Wald intervals.
+// filter's windows), the residual checks (against its noise floor, setup_shared.h), the model
+// check's candidate causes (four_bar_model_check.cc) and Wald intervals.
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
@@ -187,8 +188,9 @@ void select_samples(FourBarFit* f, IdentifyResult* out) {
 }
 
 /// The torque residual's expected rms from the sensor noise: the torque noise and the
-/// acceleration noise through M(q), floored at kAbsoluteFloor of the rms logged torque.
-double noise_floor(const FourBarFit& f) {
+/// acceleration noise through M(q), floored at kAbsoluteFloor of the rms logged torque;
+/// *from_noise: the floor is the noise's (not the 0.1 % of a nearly noise-free log).
+double noise_floor(const FourBarFit& f, bool* from_noise) {
   const double tn = f.cond.torque_noise[0];
   double s2 = 0, tau2 = 0;
   for (const Sample& s : f.samples) {
@@ -201,7 +203,9 @@ double noise_floor(const FourBarFit& f) {
     tau2 += s.tau[0] * s.tau[0];
   }
   const double m = std::max<double>(1, f.samples.size());
-  return std::max(std::sqrt(s2 / m), stages::kAbsoluteFloor * std::sqrt(tau2 / m));
+  const double noise = std::sqrt(s2 / m), floor = stages::kAbsoluteFloor * std::sqrt(tau2 / m);
+  *from_noise = noise >= floor;
+  return std::max(noise, floor);
 }
 
 double rms(const std::vector<double>& r) {
@@ -485,17 +489,23 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
                                    std::to_string(f.layout.size()) + " parameters");
     return out;
   }
-  out.residual_noise_floor[0] = noise_floor(f);
+  bool from_noise = true;
+  out.residual_noise_floor[0] = noise_floor(f, &from_noise);
   ceres::Problem problem;
   if (!solve(&f, &problem, &out)) return out;
   const std::vector<double> x0 =
       opt.initial.empty() ? stages::default_start(f.layout) : opt.initial;
   covariance(f, &problem, &out);
+  const std::string structure = stages::structure_warning(
+      0, out.rms_torque_residual[0], out.residual_noise_floor[0], f.noise.torque[0], from_noise);
+  if (!structure.empty()) out.warnings.push_back(structure);
   estimates(f, x0, &out);
   model_check(&out);
+  cause_check(f, &out);
   stages::correct_smoothing_bias(f.layout, f.smoothing_bias, &f.x, &out);
   predictions(f, &out);
   sign_check(scene, loads, log, opt, &out);
+  stages::unexplained_misfit(f.layout, &out);
   out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

@@ -315,9 +315,6 @@ void predictions(const Fit& f, IdentifyResult* out);
 /// Output error: the torque residual of the fitted scene and its white-noise level.
 void output_error_levels(const Fit& f, IdentifyResult* out);
 
-/// The larger of the two channels' rms torque residual over its noise floor
-double misfit_ratio(const IdentifyResult& r);
-
 /// A friction coefficient at its bound while the residual is far above the noise floor (as from
 /// two adjacent bad samples, an acceleration spike or a step in an angle, which can put Coulomb at
 /// 0): the fit is driven by samples the law cannot explain. One

@@ -23,6 +23,21 @@ constexpr double kAbsoluteFloor = 1e-3;
 /// driven by samples the law cannot explain (bound_and_misfit_warning)
 constexpr double kMisfitRatio = 3.0;
 
+/// The residual over its noise floor: the larger of the torque channels' rms residual over
+/// their floors (the channels with a floor: one for the four-bar)
+double misfit_ratio(const IdentifyResult& r);
+
+/// The warning when channel j's rms residual is more than kStructureRatio times its noise floor
+/// ("" below): structure the fitted law or the estimated rates cannot explain. `from_noise`: the
+/// floor is the sensors' noise propagated (torque noise `torque_noise`), not the 0.1 % of the
+/// rms logged torque of a nearly noise-free log.
+std::string structure_warning(int j, double rms, double floor, double torque_noise,
+                              bool from_noise);
+
+/// The last check, where no stage named a cause: every friction coefficient at its bound with
+/// the residual above kAllAtBoundMisfitRatio floors makes the fit unusable (out->unusable)
+void unexplained_misfit(const ParameterLayout& layout, IdentifyResult* out);
+
 /// Neutral start values, independent of the scene: each coefficient's CoefficientInfo::start
 /// (coulomb 0.1, viscous 0.01, static 0.15, Stribeck velocity 0.2 rad/s).
 inline std::vector<double> default_start(const ParameterLayout& layout) {

@@ -332,25 +332,30 @@ Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
   return bc.covariance;
 }
 
+std::string structure_warning(int j, double rms, double floor, double torque_noise,
+                              bool from_noise) {
+  const double ratio = rms / floor;
+  if (!(ratio > kStructureRatio)) return "";
+  return "tau" + std::to_string(j + 1) + " residual rms " + format_significant(rms) +
+         " N m is " + format_significant(ratio) + " times the noise floor " +
+         format_significant(floor) + " N m (" +
+         (from_noise ? "torque noise " + format_significant(torque_noise) +
+                           " N m with the sensor noise propagated through the rates"
+                     : "0.1 % of the rms logged torque, the log being nearly noise-free") +
+         "): the residual has structure the fitted law (or the estimated rates) cannot "
+         "explain; see fig_residual_vs_rate.png";
+}
+
 void torque_residual_levels(const Fit& f, const std::vector<double>& r,
                             const std::vector<detail::Sensitivity>& sens, IdentifyResult* out) {
   rms_pair(r, out->rms_torque_residual);
   double noises[2], floors[2];
   noise_floor(f, sens, out->residual_noise_floor, noises, floors);
   for (int j = 0; j < kActuators; ++j) {
-    const double noise = noises[j], floor = floors[j];
-    const double ratio = out->rms_torque_residual[j] / out->residual_noise_floor[j];
-    if (ratio > kStructureRatio) {
-      out->warnings.push_back(
-          "tau" + std::to_string(j + 1) + " residual rms " +
-          format_significant(out->rms_torque_residual[j]) + " N m is " + format_significant(ratio) +
-          " times the noise floor " + format_significant(out->residual_noise_floor[j]) + " N m (" +
-          (noise >= floor ? "torque noise " + format_significant(f.noise.torque[j]) +
-                                " N m with the sensor noise propagated through the rates"
-                          : "0.1 % of the rms logged torque, the log being nearly noise-free") +
-          "): the residual has structure the fitted law (or the estimated rates) cannot "
-          "explain; see fig_residual_vs_rate.png");
-    }
+    const std::string w =
+        structure_warning(j, out->rms_torque_residual[j], out->residual_noise_floor[j],
+                          f.noise.torque[j], noises[j] >= floors[j]);
+    if (!w.empty()) out->warnings.push_back(w);
   }
 }
 

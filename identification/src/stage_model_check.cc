@@ -1,21 +1,17 @@
 // Model check of identify(): the freed causes' steps, their warnings, and the verdict for the
 // refits.
 #include "identify_stages.h"
+#include "model_check_causes.h"
 
 namespace fivebar::identification::stages {
-
-namespace {
-
-/// model_check: a friction move beyond this many std (its own, or the move's) is a warning
-constexpr double kFreedMove = 3.0;
 
 /// The friction coefficients a freed step moves beyond kFreedMove std, as "name from a to b
 /// (k std)": the std of the estimate, or with `own` the larger of it and the move's own std (the
 /// test of Hausman); empty if none moves so, or one is at its bound (which has its own warning).
-std::string friction_moves(const Fit& f, const IdentifyResult& out, const detail::FreedStep& fs,
-                           bool own, double* largest = nullptr) {
-  const int nf = f.layout.friction_size();
-  const Eigen::MatrixXd T = to_public(f.layout).topLeftCorner(nf, nf);
+std::string friction_moves(const ParameterLayout& layout, const IdentifyResult& out,
+                           const detail::FreedStep& fs, bool own, double* largest) {
+  const int nf = layout.friction_size();
+  const Eigen::MatrixXd T = to_public(layout).topLeftCorner(nf, nf);
   const Eigen::VectorXd move = T * fs.fitted_step.head(nf);
   const Eigen::MatrixXd cov = T * fs.fitted_cov.topLeftCorner(nf, nf) * T.transpose();
   std::string moved;
@@ -39,7 +35,7 @@ std::string friction_moves(const Fit& f, const IdentifyResult& out, const detail
 /// which the bound's warning alone does not explain). Empty: no warning.
 std::string friction_clause(const Fit& f, const IdentifyResult& out, const detail::FreedStep& fs,
                             bool own, bool evidenced, double* largest = nullptr) {
-  const std::string moved = friction_moves(f, out, fs, own, largest);
+  const std::string moved = friction_moves(f.layout, out, fs, own, largest);
   if (!moved.empty()) return "the friction would move: " + moved;
   const int nf = f.layout.friction_size();
   bool bound = false;
@@ -48,16 +44,6 @@ std::string friction_clause(const Fit& f, const IdentifyResult& out, const detai
   return "a friction coefficient is at its bound, so the fit cannot say how far the friction "
          "would move";
 }
-
-/// The candidate causes of model_check, in the order of check_jacobian's idx[1..3], then the
-/// torque-to-angle delay (idx[4]: one column, the logged torques' rates). The delay competes in
-/// the falls of one cost (most_explaining_cause, cause_explaining_most, delay_verdict) but not in
-/// the model causes' evidence beyond each other (detail::model_causes), which a delay does not
-/// explain: a cause of the model stays named as it was without the delay's column.
-enum CauseId { kCauseInertia, kCauseAngles, kCauseTorque, kCauseDelay, kCauseCount };
-
-/// Every cause's bit
-constexpr unsigned kAllCauses = (1u << kCauseCount) - 1;
 
 /// The freed step with the columns of every cause in `mask` (bit id: CauseId) freed together.
 detail::FreedStep freed_set(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
@@ -77,10 +63,6 @@ detail::FreedStep freed_set(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
   return detail::freed_step(J, r, idx[0], cols, p, bias);
 }
 
-/// model_check runs only with at least this many residuals per column of its Jacobian (25
-/// samples of a 0.05 s log against 22 freed columns read offsets of 43 N m)
-constexpr int kCheckRowsPerColumn = 10;
-
 /// A cause is named only when its parameters remove at least this fraction of the residual's
 /// excess over its noise floor, when there is one (a scene with per-joint friction fitted with
 /// the shared law leaves the residual 4 to 5 times its floor; every cause clears its evidence bar
@@ -96,39 +78,6 @@ constexpr double kExcessShows = 0.25;
 /// when it removes this fraction of the excess (a 5 N m torque offset, which also spoils the
 /// window rule, explained 0.99 of it)
 constexpr double kExplainsAll = 0.9;
-
-/// model_check's freed steps: each candidate cause whose columns the check has (the inertias
-/// only when they are not fitted) freed alone, all of them together, and the causes the log
-/// evidences (detail::model_causes: each beyond what the others' parameters explain, and
-/// explaining kExplainedExcess of the whitened residual's excess over its length).
-struct CauseSteps {
-  std::array<detail::FreedStep, kCauseCount> alone;  ///< not ok: no candidate
-  detail::FreedStep all;
-  std::vector<IdentifyResult::MisfitCause> report;  ///< IdentifyResult::model_check ("any" last)
-  std::array<int, kCauseCount> slot{-1, -1, -1, -1};  ///< each cause's entry in `report`
-  bool named(int id) const { return slot[id] >= 0 && report[slot[id]].evidenced; }
-  /// evidence alone [std of noise's]
-  double z(int id) const { return slot[id] >= 0 ? report[slot[id]].z : 0.0; }
-  bool any() const { return named(0) || named(1) || named(2); }
-};
-
-/// model_check's candidate causes by CauseId: the name in identification.json, the words, and
-/// the words of a reason that names the cause (the torque readings' reasons say which reading)
-struct CauseText {
-  const char* name;
-  const char* what;
-  const char* off;
-};
-
-constexpr CauseText kCauseText[kCauseCount] = {
-    {"inertia", "the links' inertial parameters",
-     "the scene's masses or inertias do not match the log"},
-    {"angle_offsets", "the encoders' zeros",
-     "the logged angles' zeros are off (subtract the offsets the warning reads from the logged "
-     "angles)"},
-    {"torque_readings", "the torque sensors' offsets and gains",
-     "the logged torques' zeros or gains are off"},
-    {"delay", "the torque readings' times (a delay)", "the logged torques are delayed"}};
 
 IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedStep& fs,
                                          double z, double z_given, double excess) {
@@ -646,6 +595,8 @@ ModelVerdict::Delay delay_verdict(const CauseSteps& cs, int* rival) {
   }
   return *rival == kCauseCount ? D::kExplainsMost : D::kNotMost;
 }
+
+namespace {
 
 /// The cause a reason names for the model error: of the causes the check names (inertia,
 /// encoders' zeros, torque readings), the one with the largest fall (attributed_what names

@@ -48,8 +48,36 @@ void output_error_levels(const Fit& f, IdentifyResult* out) {
 }
 
 double misfit_ratio(const IdentifyResult& r) {
-  return std::max(r.rms_torque_residual[0] / r.residual_noise_floor[0],
-                  r.rms_torque_residual[1] / r.residual_noise_floor[1]);
+  double ratio = 0;
+  for (int c = 0; c < kActuators; ++c) {
+    if (r.residual_noise_floor[c] > 0) {
+      ratio = std::max(ratio, r.rms_torque_residual[c] / r.residual_noise_floor[c]);
+    }
+  }
+  return ratio;
+}
+
+/// A fit whose every friction coefficient is at its bound explains none of the torques by
+/// friction: a residual this many times its floor is then unexplained (a light mechanism whose
+/// masses did not match the log gave 2.6-2.8 with both coefficients at 0, true 0.08 and 0.01)
+constexpr double kAllAtBoundMisfitRatio = 2.0;
+
+/// The last check, where no stage named a cause: every friction coefficient at its bound with
+/// the residual above kAllAtBoundMisfitRatio floors (one at its bound above kMisfitRatio is
+/// bound_and_misfit_warning's)
+void unexplained_misfit(const ParameterLayout& layout, IdentifyResult* out) {
+  const int n = layout.friction_size();
+  if (!out->unusable.empty() || n == 0) return;
+  for (int i = 0; i < n; ++i) {
+    if (!out->parameters[i].at_bound) return;
+  }
+  const double ratio = misfit_ratio(*out);
+  if (!(ratio > kAllAtBoundMisfitRatio)) return;
+  out->unusable = "every friction coefficient at its bound while the torque residual is " +
+                  format_significant(ratio, 3) + " times its noise floor (more than " +
+                  format_significant(kAllAtBoundMisfitRatio) +
+                  "): friction explains none of the torques, and something else does not match "
+                  "(the scene's masses or geometry, the law, the log's units)";
 }
 
 void bound_and_misfit_warning(const Fit& f, const Analysis& an, IdentifyResult* out) {

@@ -100,7 +100,7 @@ TEST(FourBarIdentify, StribeckStaticFrictionIsNeverBelowKinetic) {
 double coverage_over_30_logs(double angle_noise) {
   std::mt19937_64 rng(2024);
   std::uniform_real_distribution<double> coulomb(0.05, 0.2), viscous(0.005, 0.04);
-  int inside = 0, total = 0;
+  int inside = 0, total = 0, warned = 0;
   double worst_z = 0;
   for (int k = 0; k < 30; ++k) {
     FourBarParams truth = crank_rocker().p;
@@ -111,6 +111,9 @@ double coverage_over_30_logs(double angle_noise) {
     const IdentifyResult res = identify(truth, crank_rocker().loads, log, four_bar_options());
     EXPECT_TRUE(res.status.ok()) << k << ": " << res.status.message;
     EXPECT_TRUE(res.unusable.empty()) << k << ": " << res.unusable;
+    // a clean log gets no warning from the residual's or the model's checks either
+    for (const std::string& w : res.warnings) ADD_FAILURE() << k << ": " << w;
+    warned += !res.warnings.empty();
     if (!res.status.ok()) continue;
     const double tv[2] = {truth.friction.coulomb[0], truth.friction.viscous[0]};
     for (int i = 0; i < 2; ++i) {
@@ -124,8 +127,8 @@ double coverage_over_30_logs(double angle_noise) {
   const double coverage = double(inside) / std::max(1, total);
   std::printf(
       "four-bar coverage at angle noise %g rad: %d of %d true coefficients inside the 95 %% Wald "
-      "intervals (%.1f %%), largest |error| %.2f std\n",
-      angle_noise, inside, total, 100 * coverage, worst_z);
+      "intervals (%.1f %%), largest |error| %.2f std; %d of 30 logs with a warning\n",
+      angle_noise, inside, total, 100 * coverage, worst_z, warned);
   return coverage;
 }
 

@@ -1,0 +1,196 @@
+// The four-bar's model check (identify_four_bar.cc): the five-bar's candidate causes that exist
+// for one crank, freed on the four-bar's Jacobian, judged by the five-bar's comparison
+// (model_check_causes.h). Columns, rows whitened by the noise floor: the fitted friction
+// coefficients (the residual's Jets), the links' masses, inertias and centres of mass (relative,
+// with the prior --inertia-prior), the crank encoder's zero, tau1's offset and gain, and the
+// delay (the logged torque's rate), each by central differences where not linear.
+#include <Eigen/Dense>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "fivebar/model/format.h"
+#include "four_bar_fit.h"
+#include "mechanism_residual.h"
+#include "model_check_causes.h"
+
+namespace fivebar::identification::four_bar {
+
+namespace {
+
+using stages::CauseSteps;
+
+/// The inertial parameters freed per link: mass, inertia, centre-of-mass offset (relative to the
+/// scene's value; the offset relative to the link's length)
+constexpr int kPerLink = 3;
+
+/// The model's drive torque at every sample for the scene `p` (the samples' angles moved by
+/// -offset), and with `dx` the rows of d r / d x; false where the model fails.
+bool model_torques(const FourBarFit& f, const FourBarParams& p, double offset,
+                   Eigen::VectorXd* M, Eigen::MatrixXd* dx = nullptr) {
+  const int n = static_cast<int>(f.samples.size());
+  M->resize(n);
+  if (dx) dx->resize(n, f.layout.size());
+  for (int u = 0; u < n; ++u) {
+    Sample s = f.samples[u];
+    s.q[0] -= offset;
+    mech::Vec<1, double> tq;
+    Eigen::MatrixXd d;
+    if (!stages::mechanism_drive_torques<FourBar>(p, f.layout, f.x.data(), s, f.eval, &tq,
+                                                  dx ? &d : nullptr)) {
+      return false;
+    }
+    (*M)(u) = tq(0);
+    if (dx) dx->row(u) = d.row(0);
+  }
+  return M->allFinite();
+}
+
+/// The scene with link k's inertial parameter j moved by h (relative units)
+FourBarParams moved(const FourBarParams& p, int k, int j, double h) {
+  FourBarParams q = p;
+  Link<double>& l = q.links[k];
+  if (j == 0) l.mass *= 1 + h;
+  if (j == 1) l.inertia *= 1 + h;
+  if (j == 2) l.com_offset += h * l.length;
+  return q;
+}
+
+/// The check's whitened Jacobian J and residual r, and its index sets (fitted, inertial, angle
+/// offset, torque readings, delay: model_check_causes.h); false where an evaluation fails.
+bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
+                    Eigen::VectorXd* r, std::vector<int> idx[5]) {
+  constexpr double h = 1e-6;
+  const double fl = out.residual_noise_floor[0];
+  const int n = static_cast<int>(f.samples.size()), P = f.layout.size();
+  Eigen::VectorXd M, Mp, Mm, tau(n);
+  Eigen::MatrixXd dx;
+  if (!model_torques(f, f.scene, 0, &M, &dx)) return false;
+  for (int u = 0; u < n; ++u) tau(u) = f.samples[u].tau[0];
+  const int ni = kFourBarLinks * kPerLink;
+  const bool delay = f.opt->estimate_delay;
+  J->setZero(n, P + ni + 3 + (delay ? 1 : 0));
+  J->leftCols(P) = -dx;  // dx: the torques' derivatives
+  for (int i = 0; i < P; ++i) idx[0].push_back(i);
+  int c = P;
+  for (int k = 0; k < kFourBarLinks; ++k) {
+    for (int j = 0; j < kPerLink; ++j, ++c) {
+      if (!model_torques(f, moved(f.scene, k, j, h), 0, &Mp) ||
+          !model_torques(f, moved(f.scene, k, j, -h), 0, &Mm)) {
+        return false;
+      }
+      J->col(c) = -(Mp - Mm) / (2 * h);
+      idx[1].push_back(c);
+    }
+  }
+  // theta1 reads d more than the scene's angle: the model at theta1 - d
+  if (!model_torques(f, f.scene, h, &Mp) || !model_torques(f, f.scene, -h, &Mm)) return false;
+  J->col(c) = -(Mp - Mm) / (2 * h);
+  idx[2].push_back(c++);
+  // tau1 = (1 + g) M + o
+  J->col(c).setConstant(-1.0);
+  idx[3].push_back(c++);
+  J->col(c) = -M;
+  idx[3].push_back(c++);
+  if (delay) {  // tau1 lagging by d reads the torque of t + d: its rate (the filter's of the log)
+    std::vector<double> rate, accel;
+    savitzky_golay(f.cond.log.t, f.cond.log.tau1, f.sg, &rate, &accel);
+    for (int u = 0; u < n; ++u) (*J)(u, c) = rate[f.index[u]];
+    idx[4].push_back(c++);
+  }
+  *J /= fl;
+  *r = (tau - M) / fl;
+  return J->allFinite() && r->allFinite();
+}
+
+/// What a named cause reads, in the log's terms: "theta1 reads 0.01 +- 0.001 rad more than the
+/// scene's angle", the gain and offset of tau1, the delay in ms.
+std::string reading(int id, const detail::FreedStep& fs) {
+  const auto pm = [&](int k, double scale, const char* unit) {
+    return format_significant(scale * fs.extra_step(k), 3) + " +- " +
+           format_significant(scale * fs.extra_std(k), 2) + unit;
+  };
+  switch (id) {
+    case stages::kCauseAngles:
+      return "theta1 reads " + pm(0, 1.0, " rad") +
+             " more than the scene's angle: the encoder's zero may be off; subtract the offset "
+             "from the logged angles";
+    case stages::kCauseTorque:
+      return "tau1 reads " + pm(1, 100.0, " %") + " more than the model and " + pm(0, 1.0, " N m") +
+             " above it: the torque sensor's gain or zero may be off (check its torque constant)";
+    case stages::kCauseDelay:
+      return "the torques seem to lag the angles by " + pm(0, 1e3, " ms") +
+             " (negative: lead): a delay of the torque readings";
+    default:
+      return "the scene's masses or inertias may not match the mechanism";
+  }
+}
+
+/// The warning and the fit's status for the cause `id` (top: none is named, the one that
+/// explains most): the friction's move beyond kFreedMove std is a warning; beyond kUnusableMove,
+/// or a coefficient at its bound (the move cannot be given), the fit is unusable.
+void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, IdentifyResult* out) {
+  const detail::FreedStep& fs = cs.alone[id];
+  double largest = 0;
+  const std::string moves = stages::friction_moves(f.layout, *out, fs, false, &largest);
+  bool bound = false;
+  for (int i = 0; i < f.layout.friction_size(); ++i) bound = bound || out->parameters[i].at_bound;
+  if (moves.empty() && !bound) return;
+  const std::string what = stages::kCauseText[id].what;
+  const std::string moved = !moves.empty() ? "the friction would move: " + moves
+                                           : "a friction coefficient is at its bound, so the fit "
+                                             "cannot say how far the friction would move";
+  const std::string head = named ? "with " + what + " free (one linearized refit) "
+                                 : "the friction estimates absorbed a model error the log cannot "
+                                   "attribute: with " + what + " free, the most of the causes, ";
+  out->warnings.push_back(head + stages::drop_clause(fs) + " and " + moved + "; " +
+                          (named ? reading(id, fs) : "no cause stands out from the others"));
+  if (!out->unusable.empty()) return;
+  const std::string cause =
+      named ? stages::cause_explaining_most(cs, id, stages::kAllCauses & ~(1u << id),
+                                            what + " do not match the log")
+            : "a model error the log cannot attribute (" + what +
+                  " explain most of it: " + stages::falls_clause(cs, id) + ")";
+  if (bound && moves.empty()) {
+    out->unusable = cause + ": it holds a friction coefficient at its bound (see the warnings)";
+  } else if (largest > kUnusableMove) {
+    out->unusable = cause + ": it would move the friction by " + format_significant(largest, 2) +
+                    " std (more than " + format_significant(kUnusableMove) +
+                    "; see the warnings)";
+  }
+}
+
+}  // namespace
+
+void cause_check(const FourBarFit& f, IdentifyResult* out) {
+  if (!out->converged || f.layout.inertia || f.layout.actuator) return;
+  Eigen::MatrixXd J;
+  Eigen::VectorXd r;
+  std::vector<int> idx[5];
+  if (!check_jacobian(f, *out, &J, &r, idx) ||
+      J.rows() < stages::kCheckRowsPerColumn * J.cols()) {
+    return;
+  }
+  const Eigen::VectorXd info = Eigen::VectorXd::Constant(
+      static_cast<Eigen::Index>(idx[1].size()), 1.0 / std::pow(f.opt->inertia_prior, 2));
+  CauseSteps cs = stages::cause_steps(J, r, idx, info, Eigen::VectorXd(), true);
+  const int top = stages::most_explaining_cause(cs);
+  // the delay: named when it is evidenced beyond the model causes and explains the most
+  const int d = cs.slot[stages::kCauseDelay];
+  if (d >= 0) {
+    const IdentifyResult::MisfitCause& m = cs.report[d];
+    cs.report[d].evidenced =
+        top == stages::kCauseDelay && m.z > detail::kCauseZ && m.z_given > detail::kCauseZ;
+  }
+  out->model_check = cs.report;
+  bool any = false;
+  for (int id : {stages::kCauseTorque, stages::kCauseAngles, stages::kCauseInertia,
+                 stages::kCauseDelay}) {
+    if (!cs.named(id)) continue;
+    any = true;
+    judge(f, cs, id, true, out);
+  }
+  if (!any && top < stages::kCauseCount) judge(f, cs, top, false, out);
+}
+
+}  // namespace fivebar::identification::four_bar

@@ -1,0 +1,98 @@
+// Internal to identification: the model check's candidate causes and their comparison, over a
+// whitened Jacobian J of the residual r and the index sets of its columns (fitted, inertial,
+// angle offsets, torque readings, delay). The five-bar's model_check (stage_model_check.cc) and
+// the four-bar's (four_bar_model_check.cc) build their J and decide with these.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "fivebar/identification/identify.h"
+#include "fivebar/identification/parameters.h"
+#include "misfit.h"
+
+namespace fivebar::identification::stages {
+
+/// model_check: a friction move beyond this many std (its own, or the move's) is a warning
+constexpr double kFreedMove = 3.0;
+
+/// The candidate causes of model_check, in the order of check_jacobian's idx[1..3], then the
+/// torque-to-angle delay (idx[4]: one column, the logged torques' rates). The delay competes in
+/// the falls of one cost (most_explaining_cause, cause_explaining_most, delay_verdict) but not in
+/// the model causes' evidence beyond each other (detail::model_causes), which a delay does not
+/// explain: a cause of the model stays named as it was without the delay's column.
+enum CauseId { kCauseInertia, kCauseAngles, kCauseTorque, kCauseDelay, kCauseCount };
+
+/// Every cause's bit
+constexpr unsigned kAllCauses = (1u << kCauseCount) - 1;
+
+/// model_check runs only with at least this many residuals per column of its Jacobian (25
+/// samples of a 0.05 s log against 22 freed columns read offsets of 43 N m)
+constexpr int kCheckRowsPerColumn = 10;
+
+/// model_check's freed steps: each candidate cause whose columns the check has (the inertias
+/// only when they are not fitted) freed alone, all of them together, and the causes the log
+/// evidences (detail::model_causes: each beyond what the others' parameters explain, and
+/// explaining kExplainedExcess of the whitened residual's excess over its length).
+struct CauseSteps {
+  std::array<detail::FreedStep, kCauseCount> alone;  ///< not ok: no candidate
+  detail::FreedStep all;
+  std::vector<IdentifyResult::MisfitCause> report;  ///< IdentifyResult::model_check ("any" last)
+  std::array<int, kCauseCount> slot{-1, -1, -1, -1};  ///< each cause's entry in `report`
+  bool named(int id) const { return slot[id] >= 0 && report[slot[id]].evidenced; }
+  /// evidence alone [std of noise's]
+  double z(int id) const { return slot[id] >= 0 ? report[slot[id]].z : 0.0; }
+  bool any() const { return named(0) || named(1) || named(2); }
+};
+
+/// model_check's candidate causes by CauseId: the name in identification.json, the words, and
+/// the words of a reason that names the cause (the torque readings' reasons say which reading)
+struct CauseText {
+  const char* name;
+  const char* what;
+  const char* off;
+};
+
+constexpr CauseText kCauseText[kCauseCount] = {
+    {"inertia", "the links' inertial parameters",
+     "the scene's masses or inertias do not match the log"},
+    {"angle_offsets", "the encoders' zeros",
+     "the logged angles' zeros are off (subtract the offsets the warning reads from the logged "
+     "angles)"},
+    {"torque_readings", "the torque sensors' offsets and gains",
+     "the logged torques' zeros or gains are off"},
+    {"delay", "the torque readings' times (a delay)", "the logged torques are delayed"}};
+
+/// The friction coefficients a freed step moves beyond kFreedMove std, as "name from a to b
+/// (k std)": the std of the estimate, or with `own` the larger of it and the move's own std (the
+/// test of Hausman); empty if none moves so, or one is at its bound (which has its own warning).
+/// *largest: the largest such move [std].
+std::string friction_moves(const ParameterLayout& layout, const IdentifyResult& out,
+                           const detail::FreedStep& fs, bool own, double* largest = nullptr);
+
+/// The freed steps of the causes whose columns idx[1..4] holds (idx[0]: the fitted parameters;
+/// info: the inertial columns' prior information; bias: the score's expectation, empty: none),
+/// alone, together and beyond each other; `attributable`: a cause may be named below
+/// kExplainsAll of the excess.
+CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
+                       const std::vector<int> idx[5], const Eigen::VectorXd& info,
+                       const Eigen::VectorXd& bias, bool attributable);
+
+/// "the residual falls by D (noise alone: m +- s)" of a freed step
+std::string drop_clause(const detail::FreedStep& fs);
+
+/// The cause whose refit alone explains most of the misfit among those evidenced alone
+/// (kCauseCount: none)
+int most_explaining_cause(const CauseSteps& cs);
+
+/// "the residual falls by A with <best> free, against B with <other>, ..."
+std::string falls_clause(const CauseSteps& cs, int best);
+
+/// The cause a reason names: `what`, or another candidate among `others` that explains clearly
+/// more (or as much: both named)
+std::string cause_explaining_most(const CauseSteps& cs, int id, unsigned others,
+                                  const std::string& what);
+
+}  // namespace fivebar::identification::stages
