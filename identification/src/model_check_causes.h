@@ -83,6 +83,13 @@ CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
 /// "the residual falls by D (noise alone: m +- s)" of a freed step
 std::string drop_clause(const detail::FreedStep& fs);
 
+/// "B with <other>, C with <other>": the falls of the other candidates checked than `best`
+std::string other_falls(const CauseSteps& cs, int best);
+
+/// Whether candidate k, evidenced alone (z above kCauseZ), lowers the cost clearly more than
+/// candidate id (cause_explaining_most's "clearly")
+bool clearly_more(const CauseSteps& cs, int k, int id);
+
 /// The cause whose refit alone explains most of the misfit among those evidenced alone
 /// (kCauseCount: none)
 int most_explaining_cause(const CauseSteps& cs);
