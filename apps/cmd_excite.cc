@@ -923,6 +923,37 @@ Args resolved(const Args& given, const Scene& scene) {
   return a;
 }
 
+// an ok design's outputs (excitation.csv, predicted_std.csv, excitation.json, the figures) and
+// its line on the console
+void write_design(const Args& a, const Scene& scene, const id::ExcitationOptions& o,
+                  const id::ExcitationMechanism& mech, const Design& d, const Multisine* ms,
+                  const id::ExcitationReport* base, OutputDir* out) {
+  const id::DesignParameters& dp = mech.parameters();
+  write_excitation_csv(out->file("excitation.csv"), d.report);
+  write_std_csv(out->file("predicted_std.csv"), dp, d.report, base);
+  write_json_file(out->file("excitation.json"), summary_json(a, o, dp, d, "ok", ms));
+  if (!a.no_plots) {
+    ExcitationFigures f;
+    f.torque_limit = o.torque_limit;
+    f.title = scene.path;
+    f.baseline = base != nullptr;
+    f.cranks = mech.dof();
+    const std::string w = plot_excitation(out->staging(), f);
+    if (!w.empty()) warn(w);
+  }
+  const double wd = worst(d.report.relative_std, 0, dp.size());
+  std::cout << "fivebar excite: ok in " << format_double(std::round(d.seconds * 100) / 100)
+            << " s; worst predicted relative std " << format_significant(wd, 4);
+  if (base) {
+    std::cout << " (multi-sine " << format_significant(worst(base->relative_std, 0, dp.size()), 4)
+              << ")";
+  }
+  if (ms && !a.no_baseline && !base) std::cout << " (multi-sine baseline failed)";
+  std::cout << "; peak torque " << format_significant(d.report.peak_torque, 6) << " N m"
+            << std::endl;
+  print_written(out->dir(), out->commit());
+}
+
 int run(const Args& given) {
   Scene scene = load_scene(given.scene.scene, given.scene.sets, /*four_bar_ok=*/true);
   for (const std::string& w : scene.warnings) warn(w);
@@ -983,29 +1014,7 @@ int run(const Args& given) {
                                                    " (solver: " + d.solve.solver.message +
                                                    "; excitation.json written)");
   }
-  write_excitation_csv(out.file("excitation.csv"), d.report);
-  write_std_csv(out.file("predicted_std.csv"), dp, d.report, base);
-  write_json_file(out.file("excitation.json"), summary_json(a, o, dp, d, status, ms.get()));
-  if (!a.no_plots) {
-    ExcitationFigures f;
-    f.torque_limit = o.torque_limit;
-    f.title = scene.path;
-    f.baseline = base != nullptr;
-    f.cranks = mech->dof();
-    const std::string w = plot_excitation(out.staging(), f);
-    if (!w.empty()) warn(w);
-  }
-  const double wd = worst(d.report.relative_std, 0, dp.size());
-  std::cout << "fivebar excite: " << status << " in " << format_double(std::round(d.seconds * 100) / 100)
-            << " s; worst predicted relative std " << format_significant(wd, 4);
-  if (base) {
-    std::cout << " (multi-sine " << format_significant(worst(base->relative_std, 0, dp.size()), 4)
-              << ")";
-  }
-  if (ms && !a.no_baseline && !base) std::cout << " (multi-sine baseline failed)";
-  std::cout << "; peak torque " << format_significant(d.report.peak_torque, 6) << " N m"
-            << std::endl;
-  print_written(out.dir(), out.commit());
+  write_design(a, scene, o, *mech, d, ms.get(), base, &out);
   return 0;
 }
 
