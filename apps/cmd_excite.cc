@@ -19,10 +19,10 @@
 #include <random>
 #include <sstream>
 
+#include "cli_options.h"
 #include "fivebar/identification/excitation.h"
 #include "fivebar/identification/synth.h"
 #include "fivebar/identification/torque_excitation.h"
-#include "cli_options.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"

@@ -26,8 +26,8 @@ constexpr int kPerLink = 3;
 
 /// The model's drive torque at every sample for the scene `p` (the samples' angles moved by
 /// -offset), and with `dx` the rows of d r / d x; false where the model fails.
-bool model_torques(const FourBarFit& f, const FourBarParams& p, double offset,
-                   Eigen::VectorXd* M, Eigen::MatrixXd* dx = nullptr) {
+bool model_torques(const FourBarFit& f, const FourBarParams& p, double offset, Eigen::VectorXd* M,
+                   Eigen::MatrixXd* dx = nullptr) {
   const int n = static_cast<int>(f.samples.size());
   M->resize(n);
   if (dx) dx->resize(n, f.layout.size());
@@ -142,7 +142,8 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, Identi
                                              "cannot say how far the friction would move";
   const std::string head = named ? "with " + what + " free (one linearized refit) "
                                  : "the friction estimates absorbed a model error the log cannot "
-                                   "attribute: with " + what + " free, the most of the causes, ";
+                                   "attribute: with " +
+                                       what + " free, the most of the causes, ";
   out->warnings.push_back(head + stages::drop_clause(fs) + " and " + moved + "; " +
                           (named ? reading(id, fs) : "no cause stands out from the others"));
   if (!out->unusable.empty()) return;
@@ -155,8 +156,7 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, Identi
     out->unusable = cause + ": it holds a friction coefficient at its bound (see the warnings)";
   } else if (largest > kUnusableMove) {
     out->unusable = cause + ": it would move the friction by " + format_significant(largest, 2) +
-                    " std (more than " + format_significant(kUnusableMove) +
-                    "; see the warnings)";
+                    " std (more than " + format_significant(kUnusableMove) + "; see the warnings)";
   }
 }
 
@@ -167,12 +167,11 @@ void cause_check(const FourBarFit& f, IdentifyResult* out) {
   Eigen::MatrixXd J;
   Eigen::VectorXd r;
   std::vector<int> idx[5];
-  if (!check_jacobian(f, *out, &J, &r, idx) ||
-      J.rows() < stages::kCheckRowsPerColumn * J.cols()) {
+  if (!check_jacobian(f, *out, &J, &r, idx) || J.rows() < stages::kCheckRowsPerColumn * J.cols()) {
     return;
   }
-  const Eigen::VectorXd info = Eigen::VectorXd::Constant(
-      static_cast<Eigen::Index>(idx[1].size()), 1.0 / std::pow(f.opt->inertia_prior, 2));
+  const Eigen::VectorXd info = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(idx[1].size()),
+                                                         1.0 / std::pow(f.opt->inertia_prior, 2));
   CauseSteps cs = stages::cause_steps(J, r, idx, info, Eigen::VectorXd(), true);
   const int top = stages::most_explaining_cause(cs);
   // the delay: named when it is evidenced beyond the model causes and explains the most
@@ -184,8 +183,8 @@ void cause_check(const FourBarFit& f, IdentifyResult* out) {
   }
   out->model_check = cs.report;
   bool any = false;
-  for (int id : {stages::kCauseTorque, stages::kCauseAngles, stages::kCauseInertia,
-                 stages::kCauseDelay}) {
+  for (int id :
+       {stages::kCauseTorque, stages::kCauseAngles, stages::kCauseInertia, stages::kCauseDelay}) {
     if (!cs.named(id)) continue;
     any = true;
     judge(f, cs, id, true, out);

@@ -115,7 +115,8 @@ std::string delay_seen(const IdentifyResult& out) {
 
 /// Where the model check did not run (a log too short for its columns): why the fit with the
 /// torques shifted does not explain the misfit ("" when it does): it is not usable itself, or
-/// it does not lower the residual of both channels over their floors, or it leaves the residual above kMisfitRatio floors and above half the unshifted fit's ratio.
+/// it does not lower the residual of both channels over their floors, or it leaves the residual
+/// above kMisfitRatio floors and above half the unshifted fit's ratio.
 /// (A light mechanism whose masses were 5 % off, no delay, read a lag of 0.67 ms at 6.8 std;
 /// shifted, its residual rose from 1.36 to 1.48 floors on tau2: the mismatch, not a delay.)
 std::string shift_unexplained(const IdentifyResult& unshifted, const IdentifyResult& shifted) {
@@ -160,7 +161,8 @@ bool delay_stage(const Params<double>& scene_in, const sim::LoadFunction& loads,
   }
   if (!checked && !verdict.short_log) {  // the check could not run: its warning says why
     out->warnings.push_back(delay_seen(*out) + ", but the model check did not run (" +
-                            verdict.unchecked + "), so nothing tells it from a model error; "
+                            verdict.unchecked +
+                            "), so nothing tells it from a model error; "
                             "not corrected");
     out->delay_unexplained = true;
     return false;

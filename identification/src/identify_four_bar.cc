@@ -2,8 +2,8 @@
 // mechanism FourBar, through the stages of the five-bar's fit in their one-crank form
 // (docs/identification.md, "Four-bar"): conditioning (condition_log), rates and samples (logged,
 // or Savitzky-Golay with the rest rule and the slip reversals left out), the data-driven window
-// and its smoothing bias (the five-bar's stages, mechanism_stages.h, over FourBarWindowFit), the fit
-// (the mechanism residual, mechanism_residual.h), the covariance (the block sandwich over the
+// and its smoothing bias (the five-bar's stages, mechanism_stages.h, over FourBarWindowFit), the
+// fit (the mechanism residual, mechanism_residual.h), the covariance (the block sandwich over the
 // filter's windows), the residual checks (against its noise floor, setup_shared.h), the model
 // check's candidate causes (four_bar_model_check.cc) and Wald intervals.
 #include <ceres/ceres.h>
@@ -22,8 +22,8 @@
 #include "fivebar/sim/simulator.h"
 #include "four_bar_fit.h"
 #include "mechanism_residual.h"
-#include "setup_shared.h"
 #include "mechanism_stages.h"
+#include "setup_shared.h"
 
 namespace fivebar::identification {
 

@@ -5,8 +5,8 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
-#include <array>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -15,21 +15,21 @@
 #include <memory>
 #include <sstream>
 
+#include "covariance.h"
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/residual.h"
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/names.h"
 #include "fivebar/model/rest.h"
-#include "covariance.h"
 #include "inertia.h"
+#include "mechanism_stages.h"
+#include "method.h"
 #include "misfit.h"
 #include "noise_model.h"
 #include "profile.h"
-#include "smoothing_bias.h"
-#include "mechanism_stages.h"
-#include "window_misfit.h"
-#include "method.h"
 #include "setup_shared.h"
+#include "smoothing_bias.h"
+#include "window_misfit.h"
 
 namespace fivebar::identification {
 
@@ -212,7 +212,8 @@ Status first_failing_sample(const Fit& f, const std::vector<double>& x, const st
 /// fit, and a check that the model evaluates at every one at the start values (false: status).
 bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out);
 
-// ---- stage_window.cc, stage_smoothing_bias.cc (mechanism_stages.h; window_candidates: noise_model.h) ----
+// ---- stage_window.cc, stage_smoothing_bias.cc (mechanism_stages.h; window_candidates:
+// noise_model.h) ----
 
 /// The five-bar's fit as the window stages read it (mechanism_stages.h): its residual levels at a
 /// window (stage_window.cc) and the inputs of the bias prediction (stage_smoothing_bias.cc), at
@@ -242,7 +243,6 @@ void preliminary_fit(Fit* f);
 
 // ---- stage_solve.cc ----
 
-
 void rms_pair(const std::vector<double>& r, double* out2);
 
 /// Solves; a solver that gives up or an evaluation that fails is a status naming the sample.
@@ -261,7 +261,6 @@ void noise_floor(const Fit& f, const std::vector<detail::Sensitivity>& sens, dou
 /// actuators' noise floors in quadrature: the loss sees the block's norm), output error 0.1 rad.
 /// Costs one pass of noise_sensitivities over the samples.
 void choose_loss_scale(Fit* f, IdentifyResult* out);
-
 
 /// Solves. Group inertia: the prior's weight is then set to the residual's noise level (the torque
 /// noise plus the angle noise through the rates) and, if that differs, the fit is refined.

@@ -1,8 +1,9 @@
 // The model check's candidate causes compared, for every mechanism: the freed steps of the
 // causes' columns (alone, together, beyond each other), the cause that explains most of a
 // misfit, and the words that name it (model_check_causes.h).
-#include "identify_stages.h"
 #include "model_check_causes.h"
+
+#include "identify_stages.h"
 
 namespace fivebar::identification::stages {
 
@@ -65,8 +66,8 @@ constexpr double kExcessShows = 0.25;
 /// window rule, explained 0.99 of it)
 constexpr double kExplainsAll = 0.9;
 
-IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedStep& fs,
-                                         double z, double z_given, double excess) {
+IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedStep& fs, double z,
+                                         double z_given, double excess) {
   IdentifyResult::MisfitCause m;
   m.name = name;
   m.checked = fs.ok;
@@ -109,8 +110,8 @@ CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
   if (!idx[kCauseDelay + 1].empty()) {  // the delay: alone, and beyond the model causes
     const detail::FreedStep fd = freed_set(J, r, idx, info, bias, 1u << kCauseDelay);
     const detail::FreedStep with = freed_set(J, r, idx, info, bias, present | 1u << kCauseDelay);
-    const double z_given = cs.all.ok && with.ok ? detail::evidence(fd, with.drop - cs.all.drop)
-                                                : 0.0;
+    const double z_given =
+        cs.all.ok && with.ok ? detail::evidence(fd, with.drop - cs.all.drop) : 0.0;
     cs.alone[kCauseDelay] = fd;
     cs.slot[kCauseDelay] = static_cast<int>(cs.report.size());
     cs.report.push_back(misfit_cause(kCauseText[kCauseDelay].name, fd,
@@ -192,8 +193,7 @@ std::string cause_explaining_most(const CauseSteps& cs, int id, unsigned others,
         !(cs.z(k) > detail::kCauseZ)) {
       continue;
     }
-    const double margin =
-        detail::kCauseZ * std::max(cs.alone[k].drop_sd, cs.alone[most].drop_sd);
+    const double margin = detail::kCauseZ * std::max(cs.alone[k].drop_sd, cs.alone[most].drop_sd);
     if (drop(k) - drop(most) > margin) {
       most = k;
     } else if (drop(k) >= drop(id) && (tie == kCauseCount || drop(k) > drop(tie))) {

@@ -39,7 +39,7 @@ constexpr int kCheckRowsPerColumn = 10;
 struct CauseSteps {
   std::array<detail::FreedStep, kCauseCount> alone;  ///< not ok: no candidate
   detail::FreedStep all;
-  std::vector<IdentifyResult::MisfitCause> report;  ///< IdentifyResult::model_check ("any" last)
+  std::vector<IdentifyResult::MisfitCause> report;    ///< IdentifyResult::model_check ("any" last)
   std::array<int, kCauseCount> slot{-1, -1, -1, -1};  ///< each cause's entry in `report`
   bool named(int id) const { return slot[id] >= 0 && report[slot[id]].evidenced; }
   /// evidence alone [std of noise's]

@@ -336,9 +336,9 @@ std::string structure_warning(int j, double rms, double floor, double torque_noi
                               bool from_noise) {
   const double ratio = rms / floor;
   if (!(ratio > kStructureRatio)) return "";
-  return "tau" + std::to_string(j + 1) + " residual rms " + format_significant(rms) +
-         " N m is " + format_significant(ratio) + " times the noise floor " +
-         format_significant(floor) + " N m (" +
+  return "tau" + std::to_string(j + 1) + " residual rms " + format_significant(rms) + " N m is " +
+         format_significant(ratio) + " times the noise floor " + format_significant(floor) +
+         " N m (" +
          (from_noise ? "torque noise " + format_significant(torque_noise) +
                            " N m with the sensor noise propagated through the rates"
                      : "0.1 % of the rms logged torque, the log being nearly noise-free") +

@@ -131,10 +131,10 @@ bool friction_at_bound(const Fit& f, const IdentifyResult& out) {
 }
 
 /// model_check's warning when a candidate cause alone is evidenced and would move the friction
-/// (`top`: the one that explains most, most_explaining_cause), but no cause stands out beyond the others' parameters or explains the misfit (with per-joint
-/// friction fitted by the shared law, every cause reduces a misfit none explains; on a 2 s
-/// angles-only log of the paper
-/// scene, a torque offset of 0.1 N m on tau1 gave coulomb +24 std without a word: the offsets'
+/// (`top`: the one that explains most, most_explaining_cause), but no cause stands out beyond
+/// the others' parameters or explains the misfit (with per-joint friction fitted by the shared
+/// law, every cause reduces a misfit none explains; on a 2 s angles-only log of the paper scene,
+/// a torque offset of 0.1 N m on tau1 gave coulomb +24 std without a word: the offsets'
 /// evidence, 14 std alone, was 4.7 std beyond the inertias' and the encoders' zeros')
 std::string unresolved_warning(const CauseSteps& cs, int top, const std::string& moved,
                                bool rates_biased) {
@@ -405,8 +405,8 @@ namespace {
 int named_cause(const CauseSteps& cs) {
   int best = kCauseCount;
   for (int id = 0; id < kCauseDelay; ++id) {
-    if (cs.named(id) && (best == kCauseCount ||
-                         cs.report[cs.slot[id]].drop > cs.report[cs.slot[best]].drop)) {
+    if (cs.named(id) &&
+        (best == kCauseCount || cs.report[cs.slot[id]].drop > cs.report[cs.slot[best]].drop)) {
       best = id;
     }
   }
@@ -442,7 +442,8 @@ void unbounded_error(const Fit& f, const std::string& what, IdentifyResult* out)
   }
   if (f.source != detail::RateSource::kLogged && f.opt->auto_window &&
       f.sg.order > f.opt->sg.order) {
-    out->unusable = what + ": the rates' window was chosen with this error in the residual "
+    out->unusable = what +
+                    ": the rates' window was chosen with this error in the residual "
                     "(every window but the smallest read it as smoothing bias), so the noise "
                     "floor, the std and the friction are those of the noisiest window; correct "
                     "it and rerun (see the warnings)";
@@ -487,11 +488,14 @@ const Fit* check_inputs(const Fit& fit, Fit* spare, IdentifyResult* out, Eigen::
                               sample_name(fit.cond.log, fit.index[bad[0]]) + ")";
     for (int k = 0; k < 5; ++k) idx[k].clear();
     if (!run(*spare)) {
-      verdict->unchecked = "the model cannot be evaluated under the check's small changes, even "
-                           "without the " + where + " where the friction loop does not converge";
+      verdict->unchecked =
+          "the model cannot be evaluated under the check's small changes, even "
+          "without the " +
+          where + " where the friction loop does not converge";
       return nullptr;
     }
-    out->notes.push_back("model check: " + where + " left out, where the friction loop does not "
+    out->notes.push_back("model check: " + where +
+                         " left out, where the friction loop does not "
                          "converge under the check's small changes (a pose near a singular one?)");
     f = spare;
   }

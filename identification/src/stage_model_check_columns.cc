@@ -229,8 +229,7 @@ void mark_failures(const Fit& f, const ParameterLayout& layout, std::vector<doub
   std::vector<Sample> s = f.samples;
   for (Sample& e : s) change(&e);
   ceres::Problem problem;
-  if (!add_inverse_dynamics_terms(f.scene, layout, s, f.eval, Loss::kNone, 1, x.data(),
-                                  &problem)) {
+  if (!add_inverse_dynamics_terms(f.scene, layout, s, f.eval, Loss::kNone, 1, x.data(), &problem)) {
     return;
   }
   std::vector<ceres::ResidualBlockId> blocks;
@@ -249,16 +248,21 @@ void mark_failures(const Fit& f, const ParameterLayout& layout, std::vector<doub
 std::vector<int> check_failures(const Fit& f) {
   ParameterLayout l2 = f.layout;
   l2.inertia = true;
-  const std::vector<double> x2 = with_layout(
-      f, l2, std::vector<double>(f.x.begin(), f.x.begin() + f.layout.friction_size()));
+  const std::vector<double> x2 =
+      with_layout(f, l2, std::vector<double>(f.x.begin(), f.x.begin() + f.layout.friction_size()));
   std::vector<bool> fails(f.samples.size(), false);
-  mark_failures(f, l2, x2, [](Sample*) {}, &fails);
+  mark_failures(
+      f, l2, x2, [](Sample*) {}, &fails);
   for (double h : {kOffsetStep, -kOffsetStep}) {
-    mark_failures(f, f.layout, f.x, [h](Sample* e) { e->th1 -= h; }, &fails);
-    mark_failures(f, f.layout, f.x, [h](Sample* e) { e->th2 -= h; }, &fails);
+    mark_failures(
+        f, f.layout, f.x, [h](Sample* e) { e->th1 -= h; }, &fails);
+    mark_failures(
+        f, f.layout, f.x, [h](Sample* e) { e->th2 -= h; }, &fails);
   }
-  mark_failures(f, l2, x2, [](Sample* e) { e->a1 += kAccelStep; }, &fails);
-  mark_failures(f, l2, x2, [](Sample* e) { e->a2 += kAccelStep; }, &fails);
+  mark_failures(
+      f, l2, x2, [](Sample* e) { e->a1 += kAccelStep; }, &fails);
+  mark_failures(
+      f, l2, x2, [](Sample* e) { e->a2 += kAccelStep; }, &fails);
   std::vector<int> out;
   for (size_t u = 0; u < fails.size(); ++u) {
     if (fails[u]) out.push_back(static_cast<int>(u));

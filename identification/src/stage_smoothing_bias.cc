@@ -191,8 +191,8 @@ void choose_window_by_bias(const WindowFit& w, SgOptions* sg_fit, Eigen::VectorX
   for (int k = 1; k < K; ++k) {
     if (worst[k] < 0 || std::isnan(worst[k])) continue;
     if (pick < 0 || (chosen < 0 && worst[k] < worst[pick])) pick = k;
-    table += (table.empty() ? "" : ", ") + std::to_string(cand[k]) + ": " +
-             format_significant(worst[k]);
+    table +=
+        (table.empty() ? "" : ", ") + std::to_string(cand[k]) + ": " + format_significant(worst[k]);
   }
   if (pick < 0) return;
   sg_fit->half_window_s = cand[pick] * dt;

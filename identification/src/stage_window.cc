@@ -1,5 +1,6 @@
 // Window stage of identify(): the data-driven Savitzky-Golay window, read off the torque
-// residual at a preliminary fit, for any mechanism (mechanism_stages.h); the five-bar's residual levels.
+// residual at a preliminary fit, for any mechanism (mechanism_stages.h); the five-bar's residual
+// levels.
 #include "identify_stages.h"
 
 namespace fivebar::identification::stages {
@@ -222,16 +223,18 @@ void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::s
   }
   const detail::WindowLevel& l = tab.levels()[chosen];
   *choice = "data-driven: half-window " + std::to_string(cand[chosen]) + " samples (" +
-                       format_significant(cand[chosen] * dt * 1e3) + " ms), " +
-                       (backed_off ? "one below " : "") + "the largest whose torque residual (" +
-                       channels_text(l.rms, drives) + " N m) shows no smoothing bias over the level the measured noise " +
-                       "explains (" + channels_text(l.floor, drives) + " N m), ratio " + format_significant(ratio[chosen]) +
-                       " against the reference " + format_significant(best) +
-                       " (ratio by half-window: " + table + ")" + raised;
+            format_significant(cand[chosen] * dt * 1e3) + " ms), " +
+            (backed_off ? "one below " : "") + "the largest whose torque residual (" +
+            channels_text(l.rms, drives) +
+            " N m) shows no smoothing bias over the level the measured noise " + "explains (" +
+            channels_text(l.floor, drives) + " N m), ratio " + format_significant(ratio[chosen]) +
+            " against the reference " + format_significant(best) +
+            " (ratio by half-window: " + table + ")" + raised;
 }
 
 bool solve_preliminary(const ParameterLayout& layout, double* x, ceres::Problem* problem) {
-  for (int i = 0; i < layout.size(); ++i) problem->SetParameterLowerBound(x, i, layout.lower_bound(i));
+  for (int i = 0; i < layout.size(); ++i)
+    problem->SetParameterLowerBound(x, i, layout.lower_bound(i));
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
   so.max_num_iterations = 20;

@@ -16,8 +16,8 @@
 
 namespace fivebar::identification::detail {
 
-/// One evaluated candidate: its half-window [samples] and, per actuator (one or two), the rms torque residual
-/// and its noise floor over the probes [N m].
+/// One evaluated candidate: its half-window [samples] and, per actuator (one or two), the rms
+/// torque residual and its noise floor over the probes [N m].
 struct WindowLevel {
   int half = 0;
   double rms[2] = {0, 0}, floor[2] = {0, 0};

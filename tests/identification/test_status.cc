@@ -8,11 +8,10 @@
 
 #include "fivebar/identification/identify.h"
 #include "fivebar/model/format.h"
-
 #include "light_scene.h"
+#include "mechanism_stages.h"
 #include "paper.h"
 #include "synthetic_log.h"
-#include "mechanism_stages.h"
 #include "window_misfit.h"
 
 namespace fivebar::identification {
@@ -497,7 +496,6 @@ TEST(IdentifyStatus, TheReasonNamesTheCauseThatExplainsMost) {
   EXPECT_THAT(res.unusable, HasSubstr(format_significant(readings, 3) +
                                       " with the torque sensors' offsets and gains"));
 }
-
 
 // The smoothing bias taken off an estimate moves its interval with it, but a lower end that
 // stopped at the coefficient's bound (a profile interval ending at 0) stays there: coulomb is
