@@ -277,8 +277,9 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
       if (out->converged) out->warnings.push_back("std of " + names[i] + " not determined");
       e.std = kNaN;
     } else if (e.std > std::abs(e.value) && !f.layout.is_inertial(i)) {
+      // the value is not repeated: a later stage (the smoothing-bias correction) may move it
       out->warnings.push_back(names[i] + " is poorly determined (std " + format_significant(e.std) +
-                              " > value " + format_significant(e.value) + ")");
+                              ", more than its value)");
     }
     out->parameters.push_back(e);
   }

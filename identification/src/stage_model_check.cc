@@ -434,10 +434,11 @@ void unbounded_error(const Fit& f, const std::string& what, IdentifyResult* out)
   for (int i = 0; i < f.layout.friction_size(); ++i) {
     const ParameterEstimate& e = out->parameters[i];
     if (e.at_bound || !(e.std > std::abs(e.value))) continue;
+    // (the value is not repeated: the smoothing-bias correction may still move it)
     out->unusable = what + ": " + e.name + " is not determined (std " +
-                    format_significant(e.std, 2) + " against a value of " +
-                    format_significant(e.value, 2) +
-                    "), so the fit cannot bound how far the error moves it (see the warnings)";
+                    format_significant(e.std, 2) +
+                    ", more than its value), so the fit cannot bound how far the error moves it "
+                    "(see the warnings)";
     return;
   }
   if (f.source != detail::RateSource::kLogged && f.opt->auto_window &&
