@@ -146,18 +146,14 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, Identi
                                        what + " free, the most of the causes, ";
   out->warnings.push_back(head + stages::drop_clause(fs) + " and " + moved + "; " +
                           (named ? reading(id, fs) : "no cause stands out from the others"));
-  if (!out->unusable.empty()) return;
+  if (!out->unusable.empty()) return;  // the first reason stays
   const std::string cause =
       named ? stages::cause_explaining_most(cs, id, stages::kAllCauses & ~(1u << id),
                                             what + " do not match the log")
             : "a model error the log cannot attribute (" + what +
                   " explain most of it: " + stages::falls_clause(cs, id) + ")";
-  if (bound && moves.empty()) {
-    out->unusable = cause + ": it holds a friction coefficient at its bound (see the warnings)";
-  } else if (largest > kUnusableMove) {
-    out->unusable = cause + ": it would move the friction by " + format_significant(largest, 2) +
-                    " std (more than " + format_significant(kUnusableMove) + "; see the warnings)";
-  }
+  // a coefficient at its bound gives no move (friction_moves), so largest is 0 there
+  stages::unusable_move(largest, cause, out);
 }
 
 }  // namespace

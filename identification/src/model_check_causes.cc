@@ -209,4 +209,14 @@ std::string cause_explaining_most(const CauseSteps& cs, int id, unsigned others,
          kCauseText[id].what + " (" + falls_clause(cs, most) + ")";
 }
 
+void unusable_move(double largest, const std::string& what, IdentifyResult* out) {
+  if (!out->unusable.empty() || !(largest > kUnusableMove || largest == 0)) return;
+  if (largest == 0) {
+    out->unusable = what + ": it holds a friction coefficient at its bound (see the warnings)";
+    return;
+  }
+  out->unusable = what + ": it would move the friction by " + format_significant(largest, 2) +
+                  " std (more than " + format_significant(kUnusableMove) + "; see the warnings)";
+}
+
 }  // namespace fivebar::identification::stages

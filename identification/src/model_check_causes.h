@@ -102,4 +102,9 @@ std::string falls_clause(const CauseSteps& cs, int best);
 std::string cause_explaining_most(const CauseSteps& cs, int id, unsigned others,
                                   const std::string& what);
 
+/// A model error (what: its cause, or that none is named) that would move a friction
+/// coefficient by `largest` std makes the fit unusable beyond kUnusableMove; largest 0: a
+/// friction coefficient is at its bound, so the move cannot be given. The first reason stays.
+void unusable_move(double largest, const std::string& what, IdentifyResult* out);
+
 }  // namespace fivebar::identification::stages

@@ -109,19 +109,6 @@ double largest_gain(const TorqueColumns& tc, const detail::FreedStep& fs) {
   return g;
 }
 
-/// A model error (what: its cause, or that none is named) that would move a friction
-/// coefficient by `largest` std makes the fit unusable beyond kUnusableMove; largest 0: a
-/// friction coefficient is at its bound, so the move cannot be given. The first reason stays.
-void unusable_move(double largest, const std::string& what, IdentifyResult* out) {
-  if (!out->unusable.empty() || !(largest > kUnusableMove || largest == 0)) return;
-  if (largest == 0) {
-    out->unusable = what + ": it holds a friction coefficient at its bound (see the warnings)";
-    return;
-  }
-  out->unusable = what + ": it would move the friction by " + format_significant(largest, 2) +
-                  " std (more than " + format_significant(kUnusableMove) + "; see the warnings)";
-}
-
 /// Whether a friction coefficient of the fit is at its bound
 bool friction_at_bound(const Fit& f, const IdentifyResult& out) {
   for (int i = 0; i < f.layout.friction_size(); ++i) {

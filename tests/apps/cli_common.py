@@ -1,5 +1,6 @@
 """What the end-to-end scripts of tests/apps share: running `fivebar`, checking that bad input
-gets one error line and the expected exit status, and reading a CSV (comment lines skipped)."""
+gets one error line and the expected exit status, reading a CSV (comment lines skipped) and
+rewriting a log."""
 import csv
 import subprocess
 
@@ -23,6 +24,19 @@ class Cli:
                 or pattern not in lines[0]:
             self.failures.append("%s: exit %d, stderr %r (expected %d and '%s')"
                                  % (args, code, err, status, pattern))
+
+
+def rewrite_log(src, dst, change):
+    """The log src with change(header, rows) applied (rows: lists of cells; it returns the rows
+    to write), written to dst with src's comment lines; returns dst."""
+    with open(src) as f:
+        lines = f.read().splitlines()
+    head = [l for l in lines if l.startswith("#")]
+    body = [l for l in lines if not l.startswith("#")]
+    rows = change(body[0].split(","), [r.split(",") for r in body[1:]])
+    with open(dst, "w") as f:
+        f.write("\n".join(head + [body[0]] + [",".join(r) for r in rows]) + "\n")
+    return dst
 
 
 def read_csv(path):

@@ -25,7 +25,7 @@ import sys
 
 FIVEBAR, PAPER, WORK, CASE = sys.argv[1:5]
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from cli_common import Cli  # noqa: E402
+from cli_common import Cli, rewrite_log  # noqa: E402
 
 os.makedirs(WORK, exist_ok=True)
 cli = Cli(FIVEBAR)
@@ -76,42 +76,16 @@ def synth(truth, name, torque_noise, excitation=("--excitation", "scene")):
     return out
 
 
-def rewrite(src, dst, change):
-    """The log src with change(header, rows) applied, written to dst"""
-    with open(src) as f:
-        lines = f.read().splitlines()
-    head = [l for l in lines if l.startswith("#")]
-    body = [l for l in lines if not l.startswith("#")]
-    rows = [r.split(",") for r in body[1:]]
-    rows = change(body[0].split(","), rows)
-    with open(dst, "w") as f:
-        f.write("\n".join(head + [body[0]] + [",".join(r) for r in rows]) + "\n")
-    return dst
-
-
-def lag(ms):
-    """torques that lag the angles by ms (1 kHz): row i's torques are the true ones of row i - k"""
+def shift(k):
+    """torques that lag the angles by k samples (1 ms at 1 kHz; k < 0: lead): row i's torques
+    are the true ones of row i - k"""
     def change(cols, rows):
         ti = [j for j, c in enumerate(cols) if c.startswith("tau")]
         out = []
-        for i in range(ms, len(rows)):
+        for i in range(max(0, k), len(rows) + min(0, k)):
             r = list(rows[i])
             for j in ti:
-                r[j] = rows[i - ms][j]
-            out.append(r)
-        return out
-    return change
-
-
-def lead(ms):
-    """torques that lead the angles by ms (1 kHz): row i's torques are the true ones of row i + k"""
-    def change(cols, rows):
-        ti = [j for j, c in enumerate(cols) if c.startswith("tau")]
-        out = []
-        for i in range(len(rows) - ms):
-            r = list(rows[i])
-            for j in ti:
-                r[j] = rows[i + ms][j]
+                r[j] = rows[i - k][j]
             out.append(r)
         return out
     return change
@@ -165,13 +139,13 @@ if CASE == "mass":
     check(not j.get("torque_delay", {}).get("corrected", True), "masses 6 %% off: shifted")
 elif CASE == "delay":
     odd = scene("odd", ODD)
-    log = rewrite(synth(odd, "odd", 0.001), os.path.join(WORK, "odd_d5.csv"), lag(5))
+    log = rewrite_log(synth(odd, "odd", 0.001), os.path.join(WORK, "odd_d5.csv"), shift(5))
     code, err, j = identify("odd_d5", odd, log)
     d = j.get("torque_delay", {})
     check(code == 0 and d.get("corrected") and abs(d["value_s"] - 5e-3) < 3 * d["std_s"] + 2e-4,
           "odd, 5 ms late: exit %d, %s, %s" % (code, d, err))
     base = scene("heavy", heavy())
-    log = rewrite(synth(base, "heavy", 0.02), os.path.join(WORK, "heavy_zero.csv"), zero(0.005))
+    log = rewrite_log(synth(base, "heavy", 0.02), os.path.join(WORK, "heavy_zero.csv"), zero(0.005))
     code, err, j = identify("zero", base, log)
     check("an encoder's zero may be off" in err, "theta1 0.005 rad off: zeros not named: %s" % err)
     check(not j.get("torque_delay", {}).get("corrected", True), "theta1 0.005 rad off: shifted")
@@ -208,13 +182,13 @@ elif CASE == "unchecked":
           "masses 3 %% below: the model check did not run: %s" % err)
 elif CASE == "small_heavy":
     base = scene("heavy", heavy())
-    log = rewrite(synth(base, "heavy", 0.02), os.path.join(WORK, "heavy_d1.csv"), lag(1))
+    log = rewrite_log(synth(base, "heavy", 0.02), os.path.join(WORK, "heavy_d1.csv"), shift(1))
     small_delay("heavy_d1", base, log, 1e-3)
 elif CASE == "small_light":
     light = os.path.join(os.path.dirname(sys.argv[2]), "light.yaml")
     log = synth(light, "light", 0.002, ("--excitation", "multisine", "--torque-limit", "0.2"))
-    small_delay("light_lead8", light, rewrite(log, os.path.join(WORK, "light_lead8.csv"),
-                                              lead(8)), -8e-3)
+    lead8 = rewrite_log(log, os.path.join(WORK, "light_lead8.csv"), shift(-8))
+    small_delay("light_lead8", light, lead8, -8e-3)
 else:
     cli.failures.append("unknown case " + CASE)
 

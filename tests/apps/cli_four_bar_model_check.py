@@ -16,7 +16,7 @@ import re
 import shutil
 import sys
 
-from cli_common import Cli
+from cli_common import Cli, rewrite_log
 
 FIVEBAR, PAPER, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 SCENE = os.path.join(os.path.dirname(os.path.abspath(PAPER)), "..", "reference", "four_bar",
@@ -42,22 +42,12 @@ def synth(name, extra=()):
 
 def edited(src, name, column, change):
     """A copy of the log src with `column` changed by change(value)."""
-    path = os.path.join(WORK, name + ".csv")
-    with open(src) as f, open(path, "w") as g:
-        header = None
-        for line in f:
-            if line.startswith("#"):
-                g.write(line)
-                continue
-            if header is None:
-                header = line.strip().split(",")
-                g.write(line)
-                continue
-            cells = line.strip().split(",")
-            k = header.index(column)
-            cells[k] = repr(change(float(cells[k])))
-            g.write(",".join(cells) + "\n")
-    return path
+    def apply(header, rows):
+        k = header.index(column)
+        for r in rows:
+            r[k] = repr(change(float(r[k])))
+        return rows
+    return rewrite_log(src, os.path.join(WORK, name + ".csv"), apply)
 
 
 def identify(name, log):

@@ -11,6 +11,19 @@
 
 namespace fivebar::testing {
 
+/// The small Fourier design of the gradient tests: 2 s, one period of 3 harmonics, a 0.5 s ramp,
+/// 40 design samples, within `torque_limit`
+inline identification::ExcitationOptions small_design(double torque_limit) {
+  identification::ExcitationOptions o;
+  o.duration = 2;
+  o.periods = 1;
+  o.harmonics = 3;
+  o.ramp = 0.5;
+  o.design_samples = 40;
+  o.torque_limit = torque_limit;
+  return o;
+}
+
 inline void expect_design_gradients(const identification::ExcitationProblem& problem,
                                     const std::vector<double>& x) {
   identification::DesignValue v;

@@ -103,13 +103,7 @@ TEST(Excitation, FourierMotionIsConsistentAndStartsAtRest) {
 }
 
 TEST(Excitation, DesignGradientMatchesFiniteDifferences) {
-  ExcitationOptions o;
-  o.duration = 2;
-  o.periods = 1;
-  o.harmonics = 3;
-  o.ramp = 0.5;
-  o.design_samples = 40;
-  o.torque_limit = 20;
+  ExcitationOptions o = testing::small_design(20);
   o.groups.per_joint = true;
   for (Criterion c : {Criterion::kDOptimal, Criterion::kCondition, Criterion::kWorstStd}) {
     o.criterion = c;

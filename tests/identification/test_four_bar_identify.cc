@@ -198,13 +198,7 @@ TEST(FourBarExcitation, DesignGradientMatchesFiniteDifferences) {
   EXPECT_EQ(mech->dof(), 1);
   EXPECT_EQ(mech->joints(), kFourBarJoints);
   ASSERT_EQ(mech->parameters().names, (std::vector<std::string>{"coulomb", "viscous"}));
-  ExcitationOptions o;
-  o.duration = 2;
-  o.periods = 1;
-  o.harmonics = 3;
-  o.ramp = 0.5;
-  o.design_samples = 40;
-  o.torque_limit = 3;
+  ExcitationOptions o = testing::small_design(3);
   o.singular_margin = 0.2;
   const ExcitationProblem problem(mech, {cr.th0, 0.0}, o);
   const std::vector<double> x = {4.0, 0.3, -0.2, 0.1, 0.2, -0.1, 0.05};

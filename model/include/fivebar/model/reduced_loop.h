@@ -195,8 +195,8 @@ using CouplerReactions = ReducedMap<2>;
 /// loop stops where that is at most friction_tol max N+ (the fixed point's own test) and
 /// returns N+ = |F+|, F+ and Mf = phi N+. On the paper scene's forward dynamics, from |F0|: one
 /// Newton step (leaving rho about 2e-8 of N) and one chord step; from the warm start of nearby
-/// states, one Newton step. `iterations`: the evaluations of the map, the start and one per step. False if
-/// it did not converge within friction_max_iter steps.
+/// states, one Newton step. `iterations`: the evaluations of the map, the start and one per
+/// step. False if it did not converge within friction_max_iter steps.
 template <int nz>
 bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
                              const std::array<double, kJoints>& N_start,
