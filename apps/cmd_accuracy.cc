@@ -91,8 +91,8 @@ std::string external_warning(const std::string& path, const External& e,
            " rad: it is not a run of this scene (or of its mechanism's angles)";
   }
   if (2 * e.times < rows) {
-    return path + ": only " + std::to_string(e.times) + " of the scene's " +
-           std::to_string(rows) + " output times compared";
+    return path + ": only " + std::to_string(e.times) + " of the scene's " + std::to_string(rows) +
+           " output times compared";
   }
   return "";
 }

@@ -140,8 +140,7 @@ void check_input(const Args& a, const Scene& scene, id::ExcitationOptions* o) {
 
 // the start pose: the five-bar's cranks, the four-bar's crank (theta2 unused)
 std::array<double, 2> start_pose(const Scene& scene) {
-  return {scene.initial.theta1,
-          scene.type == MechanismType::kFourBar ? 0.0 : scene.initial.theta2};
+  return {scene.initial.theta1, scene.type == MechanismType::kFourBar ? 0.0 : scene.initial.theta2};
 }
 
 // the motion starts at rest at the start pose: the motors must at least hold it there (bad
@@ -170,9 +169,10 @@ void check_holding(const Args& a, const Scene& scene, const LoadExpressions& loa
     const std::string torques = "M1 = " + format_double(h.M1) +
                                 (mech.dof() > 1 ? ", M2 = " + format_double(h.M2) : std::string());
     throw InputError(kFlags, "--torque-limit",
-                     format_double(a.design.torque_limit) + " N m is below what holding the start pose needs (" +
-                         torques + " N m at rest, plus the design's " +
-                         format_double(100 * o.torque_margin) + " % margin)");
+                     format_double(a.design.torque_limit) +
+                         " N m is below what holding the start pose needs (" + torques +
+                         " N m at rest, plus the design's " + format_double(100 * o.torque_margin) +
+                         " % margin)");
   }
 }
 
@@ -182,7 +182,8 @@ void refuse_four_bar_options(const Args& a, const id::ExcitationOptions& o) {
   if (a.family == "torque") {
     throw InputError(kFlags, "--family",
                      "torque drives the five-bar's two motors by tone torques; a four-bar's design "
-                     "is --family fourier" + type);
+                     "is --family fourier" +
+                         type);
   }
   const std::string group = id::four_bar_design_unsupported(o.groups);
   if (!group.empty()) {
@@ -190,7 +191,8 @@ void refuse_four_bar_options(const Args& a, const id::ExcitationOptions& o) {
     throw InputError(kFlags, group.substr(0, space),
                      (space == std::string::npos ? "" : group.substr(space + 1) + ": ") +
                          "the four-bar's design estimates its friction coefficients (coulomb, "
-                         "viscous) shared by its joints, as identify does on four-bars" + type);
+                         "viscous) shared by its joints, as identify does on four-bars" +
+                         type);
   }
   if (!a.theta2_range.empty()) {
     throw InputError(kFlags, "--theta2-range", "a four-bar has one crank, theta1" + type);
@@ -340,7 +342,8 @@ double worst(const std::vector<double>& v, int begin, int end) {
 // its motion files, t,theta1,omega1,alpha1, then M1)
 void write_excitation_csv(const std::string& path, const id::ExcitationReport& r) {
   std::ostringstream s;
-  s << (r.dof > 1 ? "t,theta1,theta2,omega1,omega2,alpha1,alpha2,M1,M2\n" : "t,theta1,omega1,alpha1,M1\n");
+  s << (r.dof > 1 ? "t,theta1,theta2,omega1,omega2,alpha1,alpha2,M1,M2\n"
+                  : "t,theta1,omega1,alpha1,M1\n");
   for (size_t i = 0; i < r.t.size(); ++i) {
     const id::MotionState& m = r.states[i];
     s << format_grid_value(r.t[i]);
@@ -526,7 +529,8 @@ Design design(const Scene& scene, const std::shared_ptr<const id::ExcitationMech
     // less where the torque the swing's acceleration needs (the mechanism's inertia) would
     // exceed half the limit; then the start is scaled to the limits
     const double w = 2 * M_PI / motion.period();
-    const double amplitude = std::min(30.0 / w, 0.5 * o.torque_limit / (swing_inertia(*mech, start) * w * w));
+    const double amplitude =
+        std::min(30.0 / w, 0.5 * o.torque_limit / (swing_inertia(*mech, start) * w * w));
     for (int j = 0; j < mech->dof(); ++j) {
       base[j * motion.per_joint() + motion.harmonics() + 1] = -amplitude;
     }
@@ -739,7 +743,8 @@ std::string reversal_cost(const Design& d, const id::ExcitationOptions& o,
   // that costs little (the motions that reverse fewer times predict about as much)
   if (!std::isfinite(d.unconstrained_std) || o.min_reversals == 0 ||
       d.unconstrained_std > 0.5 * own) {
-    return std::string("; ") + (o.min_reversals > 0 ? "a lower --min-reversals (" + n + "), " : "") +
+    return std::string("; ") +
+           (o.min_reversals > 0 ? "a lower --min-reversals (" + n + "), " : "") +
            "a higher --torque-limit, a longer --duration" +
            (d.torque_family || !torque_family
                 ? ""
@@ -872,9 +877,11 @@ Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::Desig
   Json coeffs = Json::array_of(d.solve.x);
   j.set(a.family == "torque" ? "torque_tones" : "fourier_coefficients", coeffs);
   j.set("designed", report_json(dp, d.report));
-  Json baseline = Json::object(
-      {{"status", std::string(a.no_baseline || !ms ? "skipped" : base ? "ok" : "failed")}});
-  if (!ms && !a.no_baseline) baseline.set("reason", "the multi-sine drives the five-bar's two cranks");
+  Json baseline = Json::object({{"status", std::string(a.no_baseline || !ms ? "skipped"
+                                                       : base               ? "ok"
+                                                                            : "failed")}});
+  if (!ms && !a.no_baseline)
+    baseline.set("reason", "the multi-sine drives the five-bar's two cranks");
   if (ms && !a.no_baseline) {
     if (!base) baseline.set("reason", ms->failure);
     baseline.set("tones_factor", ms->factor);
@@ -894,12 +901,13 @@ Json summary_json(const Args& a, const id::ExcitationOptions& o, const id::Desig
 
 // the mechanism of the scene as the design sees it
 std::shared_ptr<const id::ExcitationMechanism> mechanism_of(const Scene& scene,
-                                                             const LoadExpressions& loads,
-                                                             const id::ExcitationOptions& o) {
+                                                            const LoadExpressions& loads,
+                                                            const id::ExcitationOptions& o) {
   if (scene.type == MechanismType::kFourBar) {
     return id::four_bar_excitation(scene.four_bar, loads.four_bar_function());
   }
-  return id::five_bar_excitation(scene.params, id::design_parameters(scene.params, o.groups), loads);
+  return id::five_bar_excitation(scene.params, id::design_parameters(scene.params, o.groups),
+                                 loads);
 }
 
 // A design makes each parameter's std small against its value (`ok`: every relative std at most
@@ -999,8 +1007,10 @@ int run(const Args& given) {
       d.predicted ? *d.predicted
                   : id::predict_identified_std(*mech, o.torque_noise, o.angle_noise, &d.report);
   std::string why = "predicts no std identify could report: " + eiv.message;
-  const id::ExcitationReport* base = !ms || a.no_baseline || !ms->failure.empty() ? nullptr : &ms->report;
-  const std::string status = eiv.ok() ? design_status(d, o, *mech, base, &why) : "std_not_determined";
+  const id::ExcitationReport* base =
+      !ms || a.no_baseline || !ms->failure.empty() ? nullptr : &ms->report;
+  const std::string status =
+      eiv.ok() ? design_status(d, o, *mech, base, &why) : "std_not_determined";
   if (base && base->peak_torque > o.torque_limit * (1 + 1e-9)) {
     warn("the multi-sine baseline peaks at " + format_double(base->peak_torque) +
          " N m, above --torque-limit " + format_double(o.torque_limit) +
@@ -1030,10 +1040,11 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--estimate", a->estimate, "parameter groups: friction,inertia,actuator");
   app->add_flag("--per-joint", a->per_joint, "five friction coefficients of each kind");
   app->add_option("--criterion", a->criterion, "d-optimal | condition | worst-std");
-  CLI::Option* family = app->add_option("--family", a->family,
-                  "fourier: position-controlled Fourier motion (gradient, NLopt) | torque: free "
-                  "motion under tone torques clipped at the limit (evolution strategy from the "
-                  "multi-sine; five-bars only). Default: torque, on a four-bar fourier");
+  CLI::Option* family = app->add_option(
+      "--family", a->family,
+      "fourier: position-controlled Fourier motion (gradient, NLopt) | torque: free "
+      "motion under tone torques clipped at the limit (evolution strategy from the "
+      "multi-sine; five-bars only). Default: torque, on a four-bar fourier");
   std::vector<CLI::Option*> fourier, torque;  // the options of one family only
   torque.push_back(app->add_option("--tones", a->tones, "torque family: tones per motor"));
   torque.push_back(app->add_option("--search-tolerance", a->search_tolerance,

@@ -317,8 +317,8 @@ RestRule rest_rule(const Scene& scene, const Motion& motion) {
     const double step = (rows.back().t - rows.front().t) / double(rows.size() - 1);
     r.capped = "the rest threshold its noise gives, |w| <= " + format_significant(derived.rate, 3) +
                " rad/s, is " + format_significant(derived.rate / peak, 3) +
-               " times its largest rate, " + format_significant(peak, 3) + " rad/s: sampled every " +
-               format_significant(step, 3) +
+               " times its largest rate, " + format_significant(peak, 3) +
+               " rad/s: sampled every " + format_significant(step, 3) +
                " s, its noise (or its own motion, too fast for the sampling, read as noise) "
                "cannot tell rest from motion; capped at " +
                format_significant(kRestResolution) + " of the largest rate, " +
@@ -329,7 +329,8 @@ RestRule rest_rule(const Scene& scene, const Motion& motion) {
   r.thresholds = scene.rest_thresholds(derived);
   const std::string noise = format_double(kRestSigmas) + " x the estimated noise";
   const std::string rate_derived =
-      r.capped.empty() ? noise : "capped at " + format_double(kRestResolution) + " x the largest rate";
+      r.capped.empty() ? noise
+                       : "capped at " + format_double(kRestResolution) + " x the largest rate";
   r.source = std::string("rate: ") + (rate_set ? "scene" : rate_derived) +
              "; acceleration: " + (accel_set ? "scene" : noise);
   return r;

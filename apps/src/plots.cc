@@ -673,7 +673,8 @@ std::string excitation_plot_script(const ExcitationFigures& f, const std::string
   std::string s = preamble(terminal, "figures of `fivebar excite`");
   char limit[32];
   std::snprintf(limit, sizeof limit, "%g", f.torque_limit);
-  s += begin_figure("fig_motion.png", "3,1", "Designed excitation: crank angles, rates, accelerations",
+  s += begin_figure("fig_motion.png", "3,1",
+                    "Designed excitation: crank angles, rates, accelerations",
                     f.cranks > 1 ? "blue: theta1/omega1/alpha1, red dashed: crank 2"
                                  : "theta1/omega1/alpha1 of the crank",
                     f.title);

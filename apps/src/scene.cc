@@ -867,10 +867,11 @@ MechanismType read_type(const SceneReader& r, bool four_bar_ok) {
   }
   if (type == "five_bar") return MechanismType::kFiveBar;
   if (!four_bar_ok) {
-    r.fail("mechanism.type", "four_bar: this command runs five-bars only so far (simulate, "
-                             "inverse, synth-log, hold, animate, identify, excite, optimize, study, "
-                             "design and accuracy run four-bars)" +
-                                 r.origin("mechanism.type"));
+    r.fail("mechanism.type",
+           "four_bar: this command runs five-bars only so far (simulate, "
+           "inverse, synth-log, hold, animate, identify, excite, optimize, study, "
+           "design and accuracy run four-bars)" +
+               r.origin("mechanism.type"));
   }
   for (const std::string& key : r.keys()) {
     // the four-bar's motor has winding data only (no actuator friction)

@@ -68,8 +68,8 @@ Status reference(const P& p, const LF& loads, const Initial& initial, Options o,
 /// with its error against the treatment's own reference and against the exact one.
 template <class P, class LF>
 PrecisionPoint measure_point(const P& params, const LF& loads, const Initial& initial,
-                             const Options& base, const WorkPrecisionOptions& options,
-                             Treatment t, Method m, double tol, const WorkPrecision& refs) {
+                             const Options& base, const WorkPrecisionOptions& options, Treatment t,
+                             Method m, double tol, const WorkPrecision& refs) {
   P p = params;
   Options o = base;
   apply(t, options.regularization_velocity, &p, &o);

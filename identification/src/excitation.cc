@@ -288,16 +288,16 @@ struct ExcitationProblem::Derivs {
 ExcitationProblem::ExcitationProblem(const Params<double>& scene,
                                      std::function<Loads<double>(double)> loads,
                                      std::array<double, 2> start, const ExcitationOptions& options)
-    : ExcitationProblem(five_bar_excitation(scene, design_parameters(scene, options.groups),
-                                            std::move(loads)),
-                        start, options) {}
+    : ExcitationProblem(
+          five_bar_excitation(scene, design_parameters(scene, options.groups), std::move(loads)),
+          start, options) {}
 
 ExcitationProblem::ExcitationProblem(std::shared_ptr<const ExcitationMechanism> mechanism,
                                      std::array<double, 2> start, const ExcitationOptions& options)
     : mech_(std::move(mechanism)),
       opt_(options),
-      motion_(options.harmonics, options.duration / std::max(1, options.periods), options.ramp, start,
-              mech_->dof()) {
+      motion_(options.harmonics, options.duration / std::max(1, options.periods), options.ramp,
+              start, mech_->dof()) {
   // a count that is not a multiple of the periods samples every period at other phases
   int n = std::max(8, options.design_samples);
   if (n % std::max(1, options.periods) == 0) ++n;

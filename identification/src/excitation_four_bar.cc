@@ -43,8 +43,8 @@ class FourBarExcitation : public ExcitationMechanism {
     for (int i = 0; i < dp_.size(); ++i) x[i] = Jet(dp_.nominal[i], i);
     dp_.layout.apply(x.data(), &p.friction);
     FourBarEvaluationT<Jet> ev;
-    const Status st = four_bar_inverse(p, loads_(t).cast<Jet>(), Jet(s.th1), Jet(s.w1),
-                                       Jet(s.a1), EvalOptions{}, &ev, slip);
+    const Status st = four_bar_inverse(p, loads_(t).cast<Jet>(), Jet(s.th1), Jet(s.w1), Jet(s.a1),
+                                       EvalOptions{}, &ev, slip);
     if (!st.ok()) return st;
     out->J = Eigen::MatrixXd::Zero(2, dp_.size());
     for (int c = 0; c < dp_.size(); ++c) out->J(0, c) = ev.M1.v[c];

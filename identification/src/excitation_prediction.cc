@@ -40,7 +40,8 @@ Status evaluate_motion(const ExcitationMechanism& mech, const std::vector<double
   const int N = static_cast<int>(t.size());
   std::vector<SampleTerms> terms(N);
   std::vector<Status> status(N);
-  detail::parallel_for(N, [&](int i) { status[i] = mech.terms(t[i], states[i], nullptr, &terms[i]); });
+  detail::parallel_for(N,
+                       [&](int i) { status[i] = mech.terms(t[i], states[i], nullptr, &terms[i]); });
   for (int i = 0; i < N; ++i) {
     if (!status[i].ok()) {
       std::ostringstream msg;
@@ -83,7 +84,8 @@ Status evaluate_motion(const ExcitationMechanism& mech, const std::vector<double
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Fs);
   const Eigen::VectorXd ev = es.eigenvalues();
   out->condition_number = ev(0) > 0 ? ev(P - 1) / ev(0) : kNaN;
-  out->log_det_scaled = ev(0) > 0 ? ev.array().log().sum() : -std::numeric_limits<double>::infinity();
+  out->log_det_scaled =
+      ev(0) > 0 ? ev.array().log().sum() : -std::numeric_limits<double>::infinity();
   // covariance: pseudo-inverse of the scaled Fisher (directions below 1e-14 of the largest are
   // unidentifiable: their parameters get an infinite std)
   Eigen::VectorXd inv(P);
@@ -94,7 +96,8 @@ Status evaluate_motion(const ExcitationMechanism& mech, const std::vector<double
   out->relative_std.assign(P, kNaN);
   for (int i = 0; i < P; ++i) {
     bool lost = false;
-    for (int e = 0; e < P; ++e) lost = lost || (inv(e) == 0 && std::abs(es.eigenvectors()(i, e)) > 1e-6);
+    for (int e = 0; e < P; ++e)
+      lost = lost || (inv(e) == 0 && std::abs(es.eigenvectors()(i, e)) > 1e-6);
     out->std_dev[i] = lost ? std::numeric_limits<double>::infinity()
                            : std::sqrt(std::max(0.0, out->covariance(i, i)));
     if (dp.nominal[i] != 0) out->relative_std[i] = out->std_dev[i] / std::abs(dp.nominal[i]);
@@ -138,7 +141,10 @@ class EivPredictor {
   EivPredictor(const ExcitationMechanism& mech, const ExcitationReport& r,
                std::vector<EivSample> samples, double torque_noise,
                const std::array<double, 2>& angle_noise, int order)
-      : mech_(mech), r_(r), s_(std::move(samples)), order_(order),
+      : mech_(mech),
+        r_(r),
+        s_(std::move(samples)),
+        order_(order),
         angle_noise_(std::max(angle_noise[0], angle_noise[1])) {
     const int n = static_cast<int>(r.t.size());
     dt_ = (r.t.back() - r.t.front()) / std::max(1, n - 1);
@@ -150,7 +156,8 @@ class EivPredictor {
     reversals_.assign(n + 1, 0);
     for (int i = 0; i < n; ++i) {
       bool flip = false;
-      for (int k = 0; i > 0 && k < kJoints; ++k) flip = flip || (s_[i].w[k] > 0) != (s_[i - 1].w[k] > 0);
+      for (int k = 0; i > 0 && k < kJoints; ++k)
+        flip = flip || (s_[i].w[k] > 0) != (s_[i - 1].w[k] > 0);
       reversals_[i + 1] = reversals_[i] + (flip ? 1 : 0);
     }
   }
@@ -274,7 +281,8 @@ class EivPredictor {
   /// covariance alone (the correlations between blocks, through the filter's overlapping
   /// windows, are not in the sandwich)
   Eigen::MatrixXd block_score_covariance(const Eigen::MatrixXd& J, const std::vector<int>& used,
-                                         const std::vector<detail::Sensitivity>& sens, int m) const {
+                                         const std::vector<detail::Sensitivity>& sens,
+                                         int m) const {
     const int P = static_cast<int>(J.cols()), span = 2 * m + 1;
     Eigen::MatrixXd S = Eigen::MatrixXd::Zero(P, P);
     for (size_t u0 = 0; u0 < used.size();) {
@@ -348,7 +356,8 @@ Status eiv_samples(const ExcitationMechanism& mech, const ExcitationReport& r,
   });
   for (int i = 0; i < n; ++i) {
     if (!status[i].ok()) {
-      return Status::Error(status[i].code, "at t = " + digits3(r.t[i]) + " s: " + status[i].message);
+      return Status::Error(status[i].code,
+                           "at t = " + digits3(r.t[i]) + " s: " + status[i].message);
     }
   }
   return Status::Ok();
@@ -364,7 +373,8 @@ void choose_window(EivPredictor* predictor, const DesignParameters& dp, Excitati
                    WindowPrediction* chosen) {
   const int n = static_cast<int>(r->t.size());
   const std::vector<int> cand = stages::window_candidates(n, predictor->dt(), SgOptions{}.order);
-  predictor->bound_rest(cand.front());  // the candidates grow: the first's thresholds are the largest
+  predictor->bound_rest(
+      cand.front());  // the candidates grow: the first's thresholds are the largest
   const EivPredictor& eiv = *predictor;
   // the residual rule: the largest candidate within the excess (scanned until the bias clearly
   // dominates), one below it past the second
@@ -398,7 +408,8 @@ void choose_window(EivPredictor* predictor, const DesignParameters& dp, Excitati
   r->sg_half_window = cand[pick];
   r->window_choice = "half-window " + std::to_string(cand[rule]) +
                      " samples by the residual rule (expected ratio " + digits3(ratio[rule]) +
-                     "), " + std::to_string(cand[pick]) + " by the bias rule (|bias| / std: " + table + ")";
+                     "), " + std::to_string(cand[pick]) +
+                     " by the bias rule (|bias| / std: " + table + ")";
 }
 
 }  // namespace
@@ -426,7 +437,7 @@ Status predict_identified_std(const ExcitationMechanism& mech, double torque_noi
   SgOptions fixed;
   const bool is_fixed = mech.fixed_filter(&fixed);
   EivPredictor eiv(mech, *r, std::move(samples), torque_noise, {angle_noise, angle_noise},
-                         is_fixed ? fixed.order : SgOptions{}.order);
+                   is_fixed ? fixed.order : SgOptions{}.order);
   WindowPrediction chosen;
   if (is_fixed) {
     const int m = sg_half_window(fixed, eiv.dt());

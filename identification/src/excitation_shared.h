@@ -15,7 +15,8 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 /// Runs f(i) for i in [0, n) on up to two threads (the machine's budget), in contiguous chunks.
 template <typename F>
 void parallel_for(int n, F&& f) {
-  const int workers = std::min(2, std::max(1, static_cast<int>(std::thread::hardware_concurrency())));
+  const int workers =
+      std::min(2, std::max(1, static_cast<int>(std::thread::hardware_concurrency())));
   if (workers == 1 || n < 64) {
     for (int i = 0; i < n; ++i) f(i);
     return;

@@ -121,8 +121,8 @@ std::string delay_seen(const IdentifyResult& out) {
 /// shifted, its residual rose from 1.36 to 1.48 floors on tau2: the mismatch, not a delay.)
 std::string shift_unexplained(const IdentifyResult& unshifted, const IdentifyResult& shifted) {
   const double before = misfit_ratio(unshifted), after = misfit_ratio(shifted);
-  const std::string floors = " times its noise floor (" + format_significant(before, 3) +
-                             " without)";
+  const std::string floors =
+      " times its noise floor (" + format_significant(before, 3) + " without)";
   if (!shifted.unusable.empty()) {
     return "the fit with them shifted is not to be used (" + shifted.unusable + ")";
   }

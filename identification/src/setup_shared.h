@@ -1,6 +1,7 @@
 // What identify's setup (stage_setup.cc) shares with the four-bar's stages (identify_four_bar.cc)
-// and the excitation design's prediction: the law to fit in a scene's friction, the neutral start values, the internal-to-public map of
-// the parameters, the Savitzky-Golay noise gains, the residual's levels against its noise floor, the rest rule of a sample.
+// and the excitation design's prediction: the law to fit in a scene's friction, the neutral start
+// values, the internal-to-public map of the parameters, the Savitzky-Golay noise gains, the
+// residual's levels against its noise floor, the rest rule of a sample.
 #pragma once
 
 #include <Eigen/Core>

@@ -138,7 +138,9 @@ std::string unresolved_warning(const CauseSteps& cs, int top, const std::string&
          (others.empty() ? std::string() : ", the most of the causes (against " + others + ")") +
          " and " + moved +
          ", but no cause stands out from the others or explains the misfit (evidence of each "
-         "alone, in std: " + each + "). Check the friction law (--per-joint, --law), the "
+         "alone, in std: " +
+         each +
+         "). Check the friction law (--per-joint, --law), the "
          "scene's masses (--estimate friction,inertia), the encoders' zeros and the torque "
          "sensors (--estimate friction,actuator), or log a longer motion" +
          (rates_biased ? std::string("; the estimated accelerations show smoothing bias at "
@@ -256,11 +258,11 @@ void torque_check(const Fit& f, const CauseSteps& cs, const ReadingStep& rs,
   const bool common = common_gain(tc, ft);
   const unsigned others =
       (1u << kCauseInertia) | (1u << kCauseDelay) | (common ? 0u : 1u << kCauseAngles);
-  const std::string what = cause_explaining_most(
-      cs, kCauseTorque, others,
-      (common ? "both logged torques' gains are off, a common scale ("
-              : "the logged torques' zeros or gains are off (") +
-          torque_reading(tc, ft) + ")");
+  const std::string what =
+      cause_explaining_most(cs, kCauseTorque, others,
+                            (common ? "both logged torques' gains are off, a common scale ("
+                                    : "the logged torques' zeros or gains are off (") +
+                                torque_reading(tc, ft) + ")");
   if (!out->unusable.empty()) return;
   if (scaled) {
     out->unusable = what + ": the friction estimates scale with them (see the warnings)";
@@ -557,8 +559,8 @@ ModelVerdict model_check(const Fit& fit, IdentifyResult* out) {
       !(moved = friction_clause(f, *out, cs.alone[top], false, true, &(largest = 0))).empty()) {
     out->warnings.push_back(unresolved_warning(cs, top, moved, f.rates_biased));
     const std::string what = "a model error the log cannot attribute (" +
-                             std::string(kCauseText[top].what) + " explain most of it: " +
-                             falls_clause(cs, top) + ")";
+                             std::string(kCauseText[top].what) +
+                             " explain most of it: " + falls_clause(cs, top) + ")";
     const double ratio = misfit_ratio(*out);
     if (out->unusable.empty() && ratio > kMisfitRatio) {  // an error the misfit shows, no cause
       out->unusable = what + ": it moves the friction while the torque residual is " +

@@ -1572,13 +1572,14 @@ Status four_bar_holding(const FourBarParams& p, FourBarLoads L, double th1, cons
 // The four-bar's double passes (four_bar.h declares them `extern template` for the code that
 // links fivebar::sim), compiled here with the simulator that runs them.
 namespace fivebar::mech::detail {
-template Status inverse_pass<FourBar, double>(
-    const FourBar::Params<double>&, const FourBar::Loads<double>&, const FourBar::Q<double>&,
-    const FourBar::Q<double>&, const FourBar::Q<double>&, const JointModes*, const EvalOptions&,
-    FourBar::Evaluation<double>*, const std::array<double, kJoints>*, LoopSolution*);
+template Status inverse_pass<FourBar, double>(const FourBar::Params<double>&,
+                                              const FourBar::Loads<double>&,
+                                              const FourBar::Q<double>&, const FourBar::Q<double>&,
+                                              const FourBar::Q<double>&, const JointModes*,
+                                              const EvalOptions&, FourBar::Evaluation<double>*,
+                                              const std::array<double, kJoints>*, LoopSolution*);
 template Status forward_pass<FourBar, double>(
     const FourBar::Params<double>&, const FourBar::Loads<double>&, const FourBar::Q<double>&,
-    const FourBar::Q<double>&, const JointModes*, const EvalOptions&,
-    FourBar::Evaluation<double>*, const std::array<double, kJoints>*, LoopSolution*,
-    FrictionWarmStart*);
+    const FourBar::Q<double>&, const JointModes*, const EvalOptions&, FourBar::Evaluation<double>*,
+    const std::array<double, kJoints>*, LoopSolution*, FrictionWarmStart*);
 }  // namespace fivebar::mech::detail

@@ -73,8 +73,10 @@ TEST(ExcitationFigures, OneCrankDrawsItsColumnsOnly) {
   EXPECT_THAT(excitation_plot_script(f, "pngcairo"), HasSubstr("\"M2\""));
   f.cranks = 1;
   const std::string one = excitation_plot_script(f, "pngcairo");
-  for (const char* c : {"\"theta1\"", "\"omega1\"", "\"alpha1\"", "\"M1\""}) EXPECT_THAT(one, HasSubstr(c));
-  for (const char* c : {"theta2", "omega2", "alpha2", "M2", "crank 2"}) EXPECT_THAT(one, Not(HasSubstr(c)));
+  for (const char* c : {"\"theta1\"", "\"omega1\"", "\"alpha1\"", "\"M1\""})
+    EXPECT_THAT(one, HasSubstr(c));
+  for (const char* c : {"theta2", "omega2", "alpha2", "M2", "crank 2"})
+    EXPECT_THAT(one, Not(HasSubstr(c)));
 }
 
 TEST(ExcitationFigures, AFigureGnuplotCannotDrawIsRemovedNotLeftEmpty) {

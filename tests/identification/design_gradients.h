@@ -41,7 +41,8 @@ inline void expect_design_gradients(const identification::ExcitationProblem& pro
     EXPECT_NEAR(v.objective_grad[i], fd, 1e-4 * (1 + std::abs(fd))) << "variable " << i;
     for (int r = 0; r < m; ++r) {
       const double cfd = (vp.constraints[r] - vm.constraints[r]) / (2 * h);
-      EXPECT_NEAR(v.constraints_grad[static_cast<size_t>(r) * n + i], cfd, 1e-4 * (1 + std::abs(cfd)))
+      EXPECT_NEAR(v.constraints_grad[static_cast<size_t>(r) * n + i], cfd,
+                  1e-4 * (1 + std::abs(cfd)))
           << "constraint " << r << " variable " << i;
     }
   }

@@ -427,8 +427,8 @@ TEST(Excitation, PredictedStdAddsTheAngleNoiseThroughTheRates) {
 // filtered rates is at rest (identify leaves it out), one that turns well above it is not, and
 // without angle noise none is (the five-bar's held_sample).
 TEST(Excitation, RestRuleOfThePredictionIsIdentifys) {
-  const auto five = five_bar_excitation(light_params(), design_parameters(light_params(), {}),
-                                        light_loads());
+  const auto five =
+      five_bar_excitation(light_params(), design_parameters(light_params(), {}), light_loads());
   const MotionState still{1.4, 1.9, 1e-4, -1e-4, 0, 0}, turning{1.4, 1.9, 2.0, -1.5, 0, 0};
   const double g1 = 30, g2 = 3000;  // a filter's noise gains [1/s], [1/s^2]
   EXPECT_TRUE(five->at_rest(0, still, g1, g2, 1e-5));

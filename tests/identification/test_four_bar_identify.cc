@@ -224,7 +224,8 @@ TEST(FourBarExcitation, PredictedStdIsIdentifysOnSeededLogs) {
   ASSERT_TRUE(exact.status.ok()) << exact.status.message;
   const TorqueLog& e = exact.log;
   std::vector<MotionState> states;
-  for (int i = 0; i < e.size(); ++i) states.push_back({e.theta1[i], 0, e.omega1[i], 0, e.alpha1[i], 0});
+  for (int i = 0; i < e.size(); ++i)
+    states.push_back({e.theta1[i], 0, e.omega1[i], 0, e.alpha1[i], 0});
   const auto mech = four_bar_excitation(cr.p, cr.loads);
   IdentifyOptions opt;
   opt.layout.joints = kFourBarJoints;

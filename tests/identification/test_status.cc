@@ -426,8 +426,7 @@ TorqueLog light_mismatch_log(void (*mismatch)(Params<double>*), double torque_li
   so.multisine = true;
   so.torque_limit = torque_limit;
   so.with_rates = with_rates;
-  SynthResult r =
-      synthesize_log(truth, testing::light_loads(), testing::paper_initial(), so);
+  SynthResult r = synthesize_log(truth, testing::light_loads(), testing::paper_initial(), so);
   EXPECT_TRUE(r.status.ok()) << r.status.message;
   r.log.path = "light_mismatch.csv";
   return r.log;
@@ -491,7 +490,8 @@ TEST(IdentifyStatus, TheReasonNamesTheCauseThatExplainsMost) {
   }
   ASSERT_GT(inertia, readings);
   EXPECT_THAT(res.unusable, HasSubstr("the links' inertial parameters explain most of it: the "
-                                      "residual falls by " + format_significant(inertia, 3) +
+                                      "residual falls by " +
+                                      format_significant(inertia, 3) +
                                       " with the links' inertial parameters free, against"));
   EXPECT_THAT(res.unusable, HasSubstr(format_significant(readings, 3) +
                                       " with the torque sensors' offsets and gains"));

@@ -260,8 +260,12 @@ void expect_reduced_map_matches_the_scaled_map() {
   EXPECT_GT(beyond, 20);
 }
 
-TEST(FrictionLoop, ReducedMapMatchesTheScaledMap) { expect_reduced_map_matches_the_scaled_map<4>(); }
-TEST(FrictionLoop, CouplerMapMatchesTheScaledMap) { expect_reduced_map_matches_the_scaled_map<2>(); }
+TEST(FrictionLoop, ReducedMapMatchesTheScaledMap) {
+  expect_reduced_map_matches_the_scaled_map<4>();
+}
+TEST(FrictionLoop, CouplerMapMatchesTheScaledMap) {
+  expect_reduced_map_matches_the_scaled_map<2>();
+}
 
 // Newton and chord steps on the reduced map reach the fixed point of the scaled map's loop (and
 // its own convergence test holds there), from |F0| and from a start far off
@@ -334,11 +338,10 @@ TEST(FrictionLoop, InverseCouplerLoopMatchesTheReferenceLoop) {
       const double a2 = std::uniform_real_distribution<double>(-50.0, 50.0)(rng);
       Evaluation<double> fast;
       Evaluation<J1> ref;
-      const Status a = inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, a1, a2, nullptr,
-                                        opt, &fast);
+      const Status a =
+          inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, a1, a2, nullptr, opt, &fast);
       const Status b = inverse_dynamics(p.cast<J1>(), s.loads.cast<J1>(), J1(s.th1), J1(s.th2),
-                                        J1(s.w1), J1(s.w2), J1(a1), J1(a2), nullptr, ref_opt,
-                                        &ref);
+                                        J1(s.w1), J1(s.w2), J1(a1), J1(a2), nullptr, ref_opt, &ref);
       ASSERT_EQ(a.code, b.code) << a.message << " / " << b.message;
       if (!a.ok()) continue;
       ++compared;

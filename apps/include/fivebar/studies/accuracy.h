@@ -25,7 +25,8 @@ struct PrecisionPoint {
   double tolerance = 0;      ///< rtol = atol
   bool ok = false;
   std::string message;       ///< the failure, when !ok
-  double error = 0;          ///< max |d theta_k| over the output grid vs its own reference [rad]; NaN when !ok
+  double error =
+      0;  ///< max |d theta_k| over the output grid vs its own reference [rad]; NaN when !ok
   double error_vs_exact = 0; ///< vs the exact-sign reference (model error of regularization)
   double wall_time_s = 0;    ///< minimum over the repeats
   long rhs_evaluations = 0;
@@ -69,7 +70,8 @@ struct WorkPrecision {
   std::vector<Recommendation> recommendations;
 };
 
-/// Max |d theta_k| (every link angle) between two runs on the same grid (infinity if the grids differ).
+/// Max |d theta_k| (every link angle) between two runs on the same grid (infinity if the grids
+/// differ).
 double max_theta_difference(const std::vector<Row>& a, const std::vector<Row>& b);
 
 /// Runs the study. `base` supplies duration, output step and loop settings.

@@ -6,14 +6,14 @@
 namespace fivebar::studies {
 
 // the simulation types the studies are made of
-using sim::Method;
-using sim::Row;
-using sim::Stats;
-using sim::Options;
-using sim::Result;
-using sim::LoadFunction;
 using sim::FourBarLoadFunction;
 using sim::Initial;
 using sim::kAllMethods;
+using sim::LoadFunction;
+using sim::Method;
+using sim::Options;
+using sim::Result;
+using sim::Row;
+using sim::Stats;
 
 }  // namespace fivebar::studies

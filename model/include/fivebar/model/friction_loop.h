@@ -673,11 +673,11 @@ Status joint_friction_loop(const std::array<T, kJoints>& phi, const EvalOptions&
   bool reduced = false;  // solved on a reduced map (ReducedMap)
   if constexpr (std::is_same_v<T, double>) {
     if (aids.low_rank) {
-      reduced = reduced_friction_loop(ReducedReactions(phi, F0, *aids.low_rank), opt, N0, warm,
-                                      N, Mf, F, iterations);
+      reduced = reduced_friction_loop(ReducedReactions(phi, F0, *aids.low_rank), opt, N0, warm, N,
+                                      Mf, F, iterations);
     } else if (aids.coupler) {
-      reduced = reduced_friction_loop(CouplerReactions(phi, F0, *aids.coupler), opt, N0, warm,
-                                      N, Mf, F, iterations);
+      reduced = reduced_friction_loop(CouplerReactions(phi, F0, *aids.coupler), opt, N0, warm, N,
+                                      Mf, F, iterations);
     }
   }
   if (!reduced) {

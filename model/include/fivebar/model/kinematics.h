@@ -317,8 +317,8 @@ extern template Status close_loop<double>(const Params<double>&, const double&, 
                                           Kinematics<double>*, double, bool);
 extern template void place_points<double>(const Params<double>&, Kinematics<double>*);
 extern template void first_order_coefficients<double>(const Params<double>&, Kinematics<double>*);
-extern template Status solve_kinematics<double>(const Params<double>&, const double&,
-                                                const double&, Kinematics<double>*, double, bool);
+extern template Status solve_kinematics<double>(const Params<double>&, const double&, const double&,
+                                                Kinematics<double>*, double, bool);
 extern template void compute_bias<double>(const Params<double>&, const Kinematics<double>&,
                                           const double&, const double&, Bias<double>*);
 #endif

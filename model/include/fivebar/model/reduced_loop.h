@@ -89,8 +89,8 @@ struct ReducedMap {
   /// max_k 1^T |G_k| h with h = sum_j |H_j phi_j| (no 5 x 5 B). Below 1 the map contracts.
   double gain_bound = 0.0;
 
-  ReducedMap(const std::array<double, kJoints>& phi_,
-             const std::array<Vec2<double>, kJoints>& F0_, const Response& response)
+  ReducedMap(const std::array<double, kJoints>& phi_, const std::array<Vec2<double>, kJoints>& F0_,
+             const Response& response)
       : F0(F0_), r(response), phi(phi_) {
     using std::abs;
     const double h0 = abs(phi[1]) + abs(phi[2]), h1 = abs(phi[2]) + abs(phi[3]);
