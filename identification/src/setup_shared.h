@@ -74,8 +74,8 @@ inline FrictionParams<double> fit_friction(const FrictionParams<double>& in,
 Eigen::MatrixXd to_public(const ParameterLayout& layout);
 
 /// Noise gains of the Savitzky-Golay rate and acceleration at an interior sample (white noise
-/// of deviation s on the angles gives s * gain): the root sum of squares of the filter
-/// coefficients, read off its response to a unit impulse in the middle of the log.
+/// of deviation s on the angles gives s * gain): the root sum of squares of the taps of the
+/// filter centred in the middle of the log.
 void sg_noise_gains(const std::vector<double>& t, const SgOptions& sg, double* g1, double* g2);
 
 /// The rest rule at sample s with each joint's rate threshold set for its own noise: the rates'

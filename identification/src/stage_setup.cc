@@ -3,6 +3,8 @@
 #include "identify_stages.h"
 #include "setup_shared.h"
 
+#include <numeric>
+
 namespace fivebar::identification::stages {
 
 namespace {
@@ -13,20 +15,11 @@ constexpr double kNoisierRates = 2.0;
 }  // namespace
 
 void sg_noise_gains(const std::vector<double>& t, const SgOptions& sg, double* g1, double* g2) {
-  const int n = static_cast<int>(t.size());
-  const int hw = sg_half_window(sg, (t.back() - t.front()) / std::max(1, n - 1));
-  const int lo = std::max(0, n / 2 - 2 * hw), hi = std::min(n - 1, n / 2 + 2 * hw);
-  const std::vector<double> ts(t.begin() + lo, t.begin() + hi + 1);
-  std::vector<double> x(ts.size(), 0.0), d1, d2;
-  x[n / 2 - lo] = 1.0;
-  savitzky_golay(ts, x, sg, &d1, &d2);
-  *g1 = *g2 = 0.0;
-  for (size_t i = 0; i < ts.size(); ++i) {
-    *g1 += d1[i] * d1[i];
-    *g2 += d2[i] * d2[i];
-  }
-  *g1 = std::sqrt(*g1);
-  *g2 = std::sqrt(*g2);
+  int lo = 0;
+  std::vector<double> d1, d2;
+  savitzky_golay_taps(t, static_cast<int>(t.size()) / 2, sg, &lo, &d1, &d2);
+  *g1 = std::sqrt(std::inner_product(d1.begin(), d1.end(), d1.begin(), 0.0));
+  *g2 = std::sqrt(std::inner_product(d2.begin(), d2.end(), d2.begin(), 0.0));
 }
 
 Eigen::MatrixXd to_public(const ParameterLayout& layout) {
