@@ -29,6 +29,11 @@ double violation(const TorqueCandidate& c, const ExcitationOptions& o) {
   const ExcitationReport& r = c.report;
   for (int k : r.reversals) v += std::max(0, o.min_reversals - k);
   if (r.min_sine < o.singular_margin) v += 1 + o.singular_margin - r.min_sine;
+  // the tones are clipped at the limit, but the torques that hold a stuck joint (the motion's
+  // inverse dynamics, which a log along the design reads) may exceed it
+  if (o.torque_limit > 0 && r.peak_torque > o.torque_limit * (1 + 1e-9)) {
+    v += r.peak_torque / o.torque_limit - 1;
+  }
   for (int j = 0; j < kDof; ++j) {
     if (!std::isfinite(o.theta_lo[j])) continue;
     v += std::max(0.0, o.theta_lo[j] - r.theta_min[j]) + std::max(0.0, r.theta_max[j] - o.theta_hi[j]);
