@@ -150,26 +150,33 @@ std::string reading(int id, const detail::FreedStep& fs) {
 }
 
 /// The warning and the fit's status for the cause `id` (top: none is named, the one that
-/// explains most): the friction's move beyond kFreedMove std is a warning; beyond kUnusableMove,
-/// or a coefficient at its bound (the move cannot be given), the fit is unusable.
+/// explains most): the friction's move beyond kFreedMove std is a warning (a named delay is one
+/// at any move: the fit is not redone with the torques shifted); beyond kUnusableMove, or a
+/// coefficient at its bound (the move cannot be given), the fit is unusable.
 void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, IdentifyResult* out) {
   const detail::FreedStep& fs = cs.alone[id];
   double largest = 0;
   const std::string moves = stages::friction_moves(f.layout, *out, fs, false, &largest);
   bool bound = false;
   for (int i = 0; i < f.layout.friction_size(); ++i) bound = bound || out->parameters[i].at_bound;
-  if (moves.empty() && !bound) return;
+  // the four-bar's fit does not shift the torques: a delay it names is always said
+  const bool delay = named && id == stages::kCauseDelay;
+  if (moves.empty() && !bound && !delay) return;
   const std::string what = stages::kCauseText[id].what;
-  const std::string moved = !moves.empty() ? "the friction would move: " + moves
-                                           : "a friction coefficient is at its bound, so the fit "
-                                             "cannot say how far the friction would move";
+  const std::string moved =
+      !moves.empty() ? "the friction would move: " + moves
+      : bound        ? "a friction coefficient is at its bound, so the fit cannot say how far "
+                       "the friction would move"
+                     : "the friction would move less than " + format_significant(stages::kFreedMove) +
+                       " std (a linearized move: refit a log whose torques are shifted by it)";
   const std::string head = named ? "with " + what + " free (one linearized refit) "
                                  : "the friction estimates absorbed a model error the log cannot "
                                    "attribute: with " +
                                        what + " free, the most of the causes, ";
   out->warnings.push_back(head + stages::drop_clause(fs) + " and " + moved + "; " +
                           (named ? reading(id, fs) : "no cause stands out from the others"));
-  if (!out->unusable.empty()) return;  // the first reason stays
+  // the first reason stays; a delay's move within kFreedMove makes nothing unusable
+  if (!out->unusable.empty() || (moves.empty() && !bound)) return;
   const std::string cause =
       named ? stages::cause_explaining_most(cs, id, stages::kAllCauses & ~(1u << id),
                                             what + " do not match the log")

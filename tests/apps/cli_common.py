@@ -39,6 +39,21 @@ def rewrite_log(src, dst, change):
     return dst
 
 
+def shift_torques(k):
+    """A rewrite_log change: torques that lag the angles by k samples (k < 0: lead); row i's
+    torques are the true ones of row i - k, the rows without one dropped."""
+    def change(cols, rows):
+        ti = [j for j, c in enumerate(cols) if c.startswith("tau")]
+        out = []
+        for i in range(max(0, k), len(rows) + min(0, k)):
+            r = list(rows[i])
+            for j in ti:
+                r[j] = rows[i - k][j]
+            out.append(r)
+        return out
+    return change
+
+
 def read_csv(path):
     with open(path) as f:
         return list(csv.DictReader(l for l in f if not l.startswith("#")))
