@@ -490,8 +490,7 @@ void walk_window(EivPredictor* predictor, const DesignParameters& dp, const SgOp
     *ratio = p.ok ? bias_in_std(p, dp.friction) : kNaN;
     return true;
   };
-  const int first =
-      static_cast<int>(std::lower_bound(cand.begin(), cand.end(), m0) - cand.begin());
+  const int first = static_cast<int>(std::lower_bound(cand.begin(), cand.end(), m0) - cand.begin());
   const stages::BiasWalk walk = stages::walk_window_by_bias(K, first, worst);
   const int m = walk.pick < 0 ? m0 : cand[walk.pick];
   *chosen = eiv.predict(m, m);

@@ -84,9 +84,9 @@ constexpr double kBiasFraction = 0.2;
 /// twice kBiasFraction), then the least. Shared by identify and the excitation design's
 /// prediction of identify's window.
 struct BiasWalk {
-  int pick = -1;                ///< the candidate chosen (-1: none)
-  bool within = false;          ///< whether it is within kBiasFraction
-  std::vector<double> ratio;    ///< per candidate: -1 not evaluated, NaN not predicted
+  int pick = -1;              ///< the candidate chosen (-1: none)
+  bool within = false;        ///< whether it is within kBiasFraction
+  std::vector<double> ratio;  ///< per candidate: -1 not evaluated, NaN not predicted
 };
 BiasWalk walk_window_by_bias(int K, int start, const std::function<bool(int, double*)>& worst);
 

@@ -213,10 +213,11 @@ void choose_window_by_bias(const WindowFit& w, SgOptions* sg_fit, Eigen::VectorX
   *choice =
       "data-driven: half-window " + std::to_string(cand[pick]) + " samples (" +
       format_significant(cand[pick] * dt * 1e3) + " ms), " +
-      (!walk.within ? "the one of least predicted bias (none keeps it within " +
-                          format_significant(kBiasFraction) + " std)"
-                    : "the smallest whose predicted bias is within " +
-                          format_significant(kBiasFraction) + " std of every friction coefficient") +
+      (!walk.within
+           ? "the one of least predicted bias (none keeps it within " +
+                 format_significant(kBiasFraction) + " std)"
+           : "the smallest whose predicted bias is within " + format_significant(kBiasFraction) +
+                 " std of every friction coefficient") +
       " (the smoothing bias and the noise's through the reactions, errors in variables; "
       "predicted |bias| / std by half-window, the motion's higher terms from local polynomials of "
       "degree " +

@@ -261,7 +261,7 @@ TEST(FourBarExcitation, PredictedStdIsIdentifysOnSeededLogs) {
 TEST(FourBarExcitation, PredictedWindowAndStdAreIdentifysOnADesign) {
   const testing::ReferenceScene dr = testing::reference_scenes()[1];
   const FourierMotion motion(5, 2.5, 1.0, {dr.th0, 0.0}, 1);
-  const std::vector<double> x = {6.02658e-05, -0.319070, -0.172660, 0.0258247,
+  const std::vector<double> x = {6.02658e-05, -0.319070,  -0.172660, 0.0258247,
                                  -0.0323684,  -0.0252491, -0.118141, -0.0209053,
                                  0.222728,    -0.204352,  0.157110};
   std::vector<double> t;
