@@ -1,7 +1,7 @@
 // The four-bar as an ExcitationMechanism (excitation.h): the crank's torque M1 and its
 // derivatives by Jets of the four-bar's inverse dynamics (mech::inverse<FourBar>, one Jet width
 // for both the parameter and the motion derivatives), and identify's rules on four-bars
-// (identify_four_bar.cc): its fixed rate filter and its rest rule.
+// (identify_four_bar.cc): its window walked by predicted bias from its filter, and its rest rule.
 #include <ceres/jet.h>
 
 #include <algorithm>
@@ -69,7 +69,8 @@ class FourBarExcitation : public ExcitationMechanism {
     return Status::Ok();
   }
 
-  bool fixed_filter(SgOptions* sg) const override {
+  /// identify_four_bar.cc's filter before its window choice (filter_options) and its walk
+  bool window_by_bias(SgOptions* sg) const override {
     *sg = SgOptions{};
     sg->order = std::max(sg->order, kWindowOrder);
     return true;

@@ -14,6 +14,7 @@
 #include "excitation_shared.h"
 #include "noise_model.h"
 #include "setup_shared.h"
+#include "smoothing_bias.h"
 
 namespace fivebar::identification {
 
@@ -125,6 +126,9 @@ struct EivSample {
 /// coefficients, the expected torque residual over its noise level.
 struct WindowPrediction {
   Eigen::MatrixXd covariance;
+  /// the errors-in-variables covariance over all the samples (the covariance itself but for a
+  /// block sandwich): the std a window's predicted bias is measured in
+  Eigen::MatrixXd eiv;
   Eigen::VectorXd bias;
   double residual_ratio = 1;
   bool ok = false;
@@ -140,11 +144,12 @@ class EivPredictor {
  public:
   EivPredictor(const ExcitationMechanism& mech, const ExcitationReport& r,
                std::vector<EivSample> samples, double torque_noise,
-               const std::array<double, 2>& angle_noise, int order)
+               const std::array<double, 2>& angle_noise, int order, bool noise_bias = false)
       : mech_(mech),
         r_(r),
         s_(std::move(samples)),
         order_(order),
+        noise_bias_(noise_bias),
         angle_noise_(std::max(angle_noise[0], angle_noise[1])) {
     const int n = static_cast<int>(r.t.size());
     dt_ = (r.t.back() - r.t.front()) / std::max(1, n - 1);
@@ -234,16 +239,17 @@ class EivPredictor {
   }
 
   /// covariance and bias of the coefficients over the samples whose window of half-width
-  /// `exclude` spans no slip reversal and that identify's rest rule keeps, with rates from
-  /// half-window m
-  WindowPrediction predict(int m, int exclude) const {
+  /// `exclude` spans no slip reversal and that identify's rest rule at half-window rest_m keeps
+  /// (-1: m), with rates from half-window m
+  WindowPrediction predict(int m, int exclude, int rest_m = -1) const {
     const Taps sg = taps(m);
     WindowPrediction out;
     const int n = size(), P = static_cast<int>(s_.front().J.cols());
     double g1 = 0, g2 = 0;
-    gains(m, &g1, &g2);
+    gains(rest_m < 0 ? m : rest_m, &g1, &g2);
     std::vector<int> used;
-    for (int i = m; i < n - m; ++i) {
+    const int edge = std::max(m, exclude);
+    for (int i = edge; i < n - edge; ++i) {
       const int a = std::max(0, i - exclude), b = std::min(n - 1, i + exclude);
       if (reversals_[b] - reversals_[a] != 0) continue;
       const bool maybe = maybe_rest_.empty() || maybe_rest_[i];
@@ -254,11 +260,19 @@ class EivPredictor {
     Eigen::MatrixXd J(2 * used.size(), P);
     Eigen::VectorXd g = Eigen::VectorXd::Zero(P);
     std::vector<detail::Sensitivity> sens(used.size());
+    // per used sample, with the noise's bias: J^T (dM + shift) + score (smoothing_bias.h)
+    std::vector<Eigen::VectorXd> mean_score;
+    if (noise_bias_) mean_score = noise_scores(used, sg);
     for (size_t u = 0; u < used.size(); ++u) {
       Eigen::Vector2d dM;
       at(used[u], sg, &dM, &sens[u]);
       J.middleRows(2 * u, 2) = s_[used[u]].J;
-      g += s_[used[u]].J.transpose() * dM;  // one Gauss-Newton step: the residual moves by -dM
+      if (noise_bias_) {
+        mean_score[u] += s_[used[u]].J.transpose() * dM;
+        g += mean_score[u];
+      } else {
+        g += s_[used[u]].J.transpose() * dM;  // one Gauss-Newton step: the residual moves by -dM
+      }
     }
     const Eigen::MatrixXd H = J.transpose() * J;
     if (!H.allFinite()) return out;
@@ -267,11 +281,16 @@ class EivPredictor {
     if (!(ev(0) > 1e-14 * ev(P - 1))) return out;  // the samples do not determine them all
     const Eigen::MatrixXd Hinv =
         es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
-    const Eigen::MatrixXd S = mech_.block_sandwich() ? block_score_covariance(J, used, sens, m)
-                                                     : detail::score_covariance(J, sens, noise_, n);
-    out.covariance = Hinv * S * Hinv;
     out.bias = -Hinv * g;
-    out.ok = out.covariance.allFinite();
+    if (mech_.block_sandwich()) {
+      const Eigen::MatrixXd S = block_score_covariance(J, used, sens, m, mean_score, out.bias);
+      out.covariance = Hinv * S * Hinv;
+      out.eiv = Hinv * detail::score_covariance(J, sens, noise_, n) * Hinv;
+    } else {
+      out.covariance = Hinv * detail::score_covariance(J, sens, noise_, n) * Hinv;
+      out.eiv = out.covariance;
+    }
+    out.ok = out.covariance.allFinite() && out.eiv.allFinite();
     return out;
   }
 
@@ -279,10 +298,13 @@ class EivPredictor {
   /// The expected meat of identify's block sandwich: blocks of used samples within 2 m + 1 log
   /// samples of the block's first (identify_four_bar.cc's block_sizes), each block's score
   /// covariance alone (the correlations between blocks, through the filter's overlapping
-  /// windows, are not in the sandwich)
+  /// windows, are not in the sandwich), plus, with the samples' mean scores `mean` (J^T (dM +
+  /// shift) + score, empty: none), the square of each block's mean score at the biased fit
+  /// (its residuals hold the bias the fit leaves: sum over the block of mean + J^T J bias)
   Eigen::MatrixXd block_score_covariance(const Eigen::MatrixXd& J, const std::vector<int>& used,
-                                         const std::vector<detail::Sensitivity>& sens,
-                                         int m) const {
+                                         const std::vector<detail::Sensitivity>& sens, int m,
+                                         const std::vector<Eigen::VectorXd>& mean,
+                                         const Eigen::VectorXd& bias) const {
     const int P = static_cast<int>(J.cols()), span = 2 * m + 1;
     Eigen::MatrixXd S = Eigen::MatrixXd::Zero(P, P);
     for (size_t u0 = 0; u0 < used.size();) {
@@ -296,15 +318,51 @@ class EivPredictor {
       }
       const int width = std::min(size(), used[u1 - 1] + m + 1) - lo;
       S += detail::score_covariance(J.middleRows(2 * u0, 2 * (u1 - u0)), block, noise_, width);
+      if (!mean.empty()) {
+        const Eigen::MatrixXd Jb = J.middleRows(2 * u0, 2 * (u1 - u0));
+        Eigen::VectorXd b = Jb.transpose() * (Jb * bias);
+        for (size_t u = u0; u < u1; ++u) b += mean[u];
+        S += b * b.transpose();
+      }
       u0 = u1;
     }
     return S;
+  }
+
+  /// Per used sample: J^T shift + score of the noise's bias (smoothing_bias.h, NoiseBias), the
+  /// first crank's angle noise through the filter `sg` (detail::noise_bias_at: identify's
+  /// prediction on four-bars); zero where an evaluation fails.
+  std::vector<Eigen::VectorXd> noise_scores(const std::vector<int>& used, const Taps& sg) const {
+    const int P = static_cast<int>(s_.front().J.cols());
+    const Eigen::Matrix3d C =
+        detail::filtered_noise_covariance(sg.m, 0, sg.d1, sg.d2, noise_.angle[0]);
+    std::vector<Eigen::VectorXd> out(used.size(), Eigen::VectorXd::Zero(P));
+    detail::parallel_for(static_cast<int>(used.size()), [&](int u) {
+      const int i = used[u];
+      const detail::PerturbedTorques torques = [&](const Eigen::Vector3d& dn, Eigen::Vector2d* M,
+                                                   Eigen::MatrixXd* A) {
+        MotionState q = r_.states[i];
+        q.th1 += dn(0), q.w1 += dn(1), q.a1 += dn(2);
+        SampleTerms terms;
+        if (!mech_.terms(r_.t[i], q, nullptr, &terms).ok()) return false;
+        *M = Eigen::Vector2d(terms.M1, terms.M2);
+        *A = terms.J;
+        return true;
+      };
+      Eigen::Vector2d shift;
+      Eigen::VectorXd score;
+      if (detail::noise_bias_at(C, torques, &shift, &score)) {
+        out[u] = s_[i].J.transpose() * shift + score;
+      }
+    });
+    return out;
   }
 
   const ExcitationMechanism& mech_;
   const ExcitationReport& r_;
   std::vector<EivSample> s_;
   int order_;
+  bool noise_bias_;  ///< the noise's bias in the prediction (the mechanisms of window_by_bias)
   double angle_noise_;
   detail::SensorNoise noise_;
   std::vector<int> reversals_;
@@ -312,11 +370,12 @@ class EivPredictor {
   double dt_ = 1;
 };
 
-/// The largest |bias| / std over the friction coefficients of a prediction.
+/// The largest |bias| / std over the friction coefficients of a prediction (its errors-in-variables
+/// std, as identify's bias rules take it).
 double bias_in_std(const WindowPrediction& p, int friction) {
   double worst = 0;
   for (int i = 0; i < friction; ++i) {
-    const double sd = std::sqrt(std::max(0.0, p.covariance(i, i)));
+    const double sd = std::sqrt(std::max(0.0, p.eiv(i, i)));
     if (sd > 0) worst = std::max(worst, std::abs(p.bias(i)) / sd);
   }
   return worst;
@@ -412,6 +471,45 @@ void choose_window(EivPredictor* predictor, const DesignParameters& dp, Excitati
                      " by the bias rule (|bias| / std: " + table + ")";
 }
 
+/// The window identify's walk by predicted bias chooses (a mechanism of window_by_bias; its
+/// identify: choose_window_by_bias), by the same walk (stages::walk_window_by_bias) from its
+/// filter `start`: each candidate's bias, the smoothing's and the noise's, over the samples its
+/// rules keep before the choice (the rest rule at the start's filter, the slip reversals within
+/// the larger of the two windows left out); then the prediction at the window chosen, with the
+/// samples identify's fit keeps there, into *chosen; the half-window into r->sg_half_window and
+/// r->window_choice. No window predicted: identify's, the start.
+void walk_window(EivPredictor* predictor, const DesignParameters& dp, const SgOptions& start,
+                 ExcitationReport* r, WindowPrediction* chosen) {
+  const int n = static_cast<int>(r->t.size());
+  const std::vector<int> cand = stages::window_candidates(n, predictor->dt(), start.order);
+  const int K = static_cast<int>(cand.size()), m0 = sg_half_window(start, predictor->dt());
+  predictor->bound_rest(std::min(cand.front(), m0));  // the largest thresholds
+  const EivPredictor& eiv = *predictor;
+  const auto worst = [&](int k, double* ratio) {
+    const WindowPrediction p = eiv.predict(cand[k], std::max(cand[k], m0), m0);
+    *ratio = p.ok ? bias_in_std(p, dp.friction) : kNaN;
+    return true;
+  };
+  const int first = static_cast<int>(std::lower_bound(cand.begin(), cand.end(), m0) - cand.begin());
+  const stages::BiasWalk walk = stages::walk_window_by_bias(K, first, worst);
+  const int m = walk.pick < 0 ? m0 : cand[walk.pick];
+  *chosen = eiv.predict(m, m);
+  r->sg_half_window = m;
+  std::string table;
+  for (int k = 1; k < K; ++k) {
+    if (walk.ratio[k] < 0 || std::isnan(walk.ratio[k])) continue;
+    table += (table.empty() ? "" : ", ") + std::to_string(cand[k]) + ": " + digits3(walk.ratio[k]);
+  }
+  r->window_choice =
+      "half-window " + std::to_string(m) + " samples, order " + std::to_string(start.order) +
+      ": identify's walk by predicted bias from " + std::to_string(m0) + " samples, " +
+      (walk.pick < 0 ? "no window's bias predicted: the start"
+       : walk.within ? "the smallest within " + digits3(stages::kBiasFraction) + " std"
+                     : "none within " + digits3(stages::kBiasFraction) + " std: the least") +
+      " (the smoothing bias and the noise's through the reactions, |bias| / std by half-window: " +
+      table + ")";
+}
+
 }  // namespace
 
 Status predict_identified_std(const Params<double>& scene, const DesignParameters& dp,
@@ -434,21 +532,13 @@ Status predict_identified_std(const ExcitationMechanism& mech, double torque_noi
   std::vector<EivSample> samples;
   const Status st = eiv_samples(mech, *r, &samples);
   if (!st.ok()) return st;
-  SgOptions fixed;
-  const bool is_fixed = mech.fixed_filter(&fixed);
+  SgOptions start;
+  const bool by_bias = mech.window_by_bias(&start);
   EivPredictor eiv(mech, *r, std::move(samples), torque_noise, {angle_noise, angle_noise},
-                   is_fixed ? fixed.order : SgOptions{}.order);
+                   by_bias ? start.order : SgOptions{}.order, by_bias);
   WindowPrediction chosen;
-  if (is_fixed) {
-    const int m = sg_half_window(fixed, eiv.dt());
-    chosen = eiv.predict(m, m);
-    r->sg_half_window = m;
-    r->window_choice = "half-window " + std::to_string(m) + " samples, order " +
-                       std::to_string(fixed.order) + ": identify's filter for a " + mech.type();
-    if (chosen.ok) {
-      r->window_choice += " (its smoothing bias of the coefficients, |bias| / std: " +
-                          digits3(bias_in_std(chosen, dp.friction)) + ")";
-    }
+  if (by_bias) {
+    walk_window(&eiv, dp, start, r, &chosen);
   } else {
     choose_window(&eiv, dp, r, &chosen);
   }

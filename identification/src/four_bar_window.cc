@@ -79,51 +79,38 @@ class FourBarWindowFit : public stages::WindowFit {
     return in;
   }
   /// At each sample's motion u = (theta1, omega1, alpha1), n the noise of the angle and of its
-  /// filtered derivatives (covariance from the filter's taps): a 3-point Gauss-Hermite rule
-  /// along each principal axis of its covariance, exact for quadratic torques, and bounded where
-  /// a reaction passes through zero (its norm's kink) as a Taylor term is not.
+  /// filtered derivatives (covariance from the filter's taps): detail::noise_bias_at.
   detail::NoiseBias noise_bias(const SgOptions& sg) const override {
     const TorqueLog& L = f_.cond.log;
     const int mid = L.size() / 2, P = f_.layout.size();
     int lo = 0;
     std::vector<double> d1, d2;
     savitzky_golay_taps(L.t, mid, sg, &lo, &d1, &d2);
-    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();  // of (theta1, omega1, alpha1)
-    for (size_t r = 0; r < d1.size(); ++r) {
-      const Eigen::Vector3d g(lo + static_cast<int>(r) == mid ? 1.0 : 0.0, d1[r], d2[r]);
-      C += g * g.transpose();
-    }
-    C *= f_.noise.angle[0] * f_.noise.angle[0];
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+    const Eigen::Matrix3d C = detail::filtered_noise_covariance(mid, lo, d1, d2, f_.noise.angle[0]);
     detail::NoiseBias nb;
     nb.shift.assign(f_.samples.size(), Eigen::Vector2d::Zero());
     nb.score.assign(f_.samples.size(), Eigen::VectorXd::Zero(P));
     for (size_t u = 0; u < f_.samples.size(); ++u) {
       const Sample& s = f_.samples[u];
-      mech::Vec<1, double> m0, m1;
-      Eigen::MatrixXd A0, A1;
-      if (!stages::mechanism_drive_torques<FourBar>(f_.scene, f_.layout, f_.x.data(), s, f_.eval,
-                                                    &m0, &A0)) {
-        continue;
-      }
-      double shift = 0;
-      Eigen::VectorXd score = Eigen::VectorXd::Zero(P);
-      bool ok = true;
-      for (int k = 0; k < 3 && ok; ++k) {
-        const Eigen::Vector3d e =
-            std::sqrt(3.0 * std::max(0.0, eig.eigenvalues()(k))) * eig.eigenvectors().col(k);
-        for (double side : {1.0, -1.0}) {
-          Sample p = s;
-          p.q[0] += side * e(0), p.v[0] += side * e(1), p.a[0] += side * e(2);
-          ok = ok && stages::mechanism_drive_torques<FourBar>(f_.scene, f_.layout, f_.x.data(), p,
-                                                              f_.eval, &m1, &A1);
-          if (!ok) break;
-          shift += (m1[0] - m0[0]) / 6;
-          score += (A1.row(0) - A0.row(0)).transpose() * (m1[0] - m0[0]) / 6;
+      const detail::PerturbedTorques torques = [&](const Eigen::Vector3d& dn, Eigen::Vector2d* m,
+                                                   Eigen::MatrixXd* A) {
+        Sample p = s;
+        p.q[0] += dn(0), p.v[0] += dn(1), p.a[0] += dn(2);
+        mech::Vec<1, double> tau;
+        Eigen::MatrixXd A1;
+        if (!stages::mechanism_drive_torques<FourBar>(f_.scene, f_.layout, f_.x.data(), p, f_.eval,
+                                                      &tau, &A1)) {
+          return false;
         }
-      }
-      if (!ok) continue;
-      nb.shift[u](0) = shift;
+        *m = Eigen::Vector2d(tau[0], 0.0);
+        *A = Eigen::MatrixXd::Zero(2, P);
+        A->row(0) = A1.row(0);
+        return true;
+      };
+      Eigen::Vector2d shift;
+      Eigen::VectorXd score;
+      if (!detail::noise_bias_at(C, torques, &shift, &score)) continue;
+      nb.shift[u] = shift;
       nb.score[u] = score;
     }
     return nb;

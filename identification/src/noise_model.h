@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <vector>
 
 #include "fivebar/identification/parameters.h"
@@ -74,5 +75,19 @@ constexpr double kWindowExcess = 0.04;
 /// carry: a bias b moves the coverage of a 95 % interval from 0.95 to 0.945 at b = 0.2, 0.943 at
 /// 0.25 and 0.92 at 0.5 (stage_smoothing_bias.cc; the excitation design predicts the same choice)
 constexpr double kBiasFraction = 0.2;
+
+/// The walk of the window choice by predicted bias (choose_window_by_bias, mechanism_stages.h),
+/// over candidates 1 .. K - 1 from `start` (clamped into them): worst(k) gives candidate k's
+/// predicted largest |bias| / std of a friction coefficient (NaN: not predicted there), false when
+/// its inputs cannot be formed (then no choice). Within kBiasFraction at the start: down while
+/// within, the smallest so; else up until within, or until the ratio exceeds twice the least (or
+/// twice kBiasFraction), then the least. Shared by identify and the excitation design's
+/// prediction of identify's window.
+struct BiasWalk {
+  int pick = -1;              ///< the candidate chosen (-1: none)
+  bool within = false;        ///< whether it is within kBiasFraction
+  std::vector<double> ratio;  ///< per candidate: -1 not evaluated, NaN not predicted
+};
+BiasWalk walk_window_by_bias(int K, int start, const std::function<bool(int, double*)>& worst);
 
 }  // namespace fivebar::identification::stages

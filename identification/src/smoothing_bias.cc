@@ -48,6 +48,38 @@ void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen:
   }
 }
 
+Eigen::Matrix3d filtered_noise_covariance(int at, int lo, const std::vector<double>& d1,
+                                          const std::vector<double>& d2, double sigma) {
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (size_t r = 0; r < d1.size(); ++r) {
+    const Eigen::Vector3d g(lo + static_cast<int>(r) == at ? 1.0 : 0.0, d1[r], d2[r]);
+    C += g * g.transpose();
+  }
+  return C * (sigma * sigma);
+}
+
+bool noise_bias_at(const Eigen::Matrix3d& C, const PerturbedTorques& torques,
+                   Eigen::Vector2d* shift, Eigen::VectorXd* score) {
+  Eigen::Vector2d m0, m1;
+  Eigen::MatrixXd A0, A1;
+  if (!torques(Eigen::Vector3d::Zero(), &m0, &A0)) return false;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+  shift->setZero();
+  *score = Eigen::VectorXd::Zero(A0.cols());
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d e =
+        std::sqrt(3.0 * std::max(0.0, eig.eigenvalues()(k))) * eig.eigenvectors().col(k);
+    for (double side : {1.0, -1.0}) {
+      if (!torques(side * e, &m1, &A1)) return false;
+      for (int j = 0; j < 2; ++j) {
+        (*shift)(j) += (m1(j) - m0(j)) / 6;
+        *score += (A1.row(j) - A0.row(j)).transpose() * (m1(j) - m0(j)) / 6;
+      }
+    }
+  }
+  return true;
+}
+
 bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
                     const std::vector<char>& keep, const SgOptions& sg, Eigen::VectorXd* bias,
                     Eigen::VectorXd* std, const NoiseBias* noise) {

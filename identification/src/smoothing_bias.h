@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <vector>
 
 #include "fivebar/identification/rates.h"
@@ -61,6 +62,25 @@ struct NoiseBias {
   std::vector<Eigen::Vector2d> shift;
   std::vector<Eigen::VectorXd> score;
 };
+
+/// The covariance of the noise of (theta, omega, alpha) of one crank at log sample `at`, its
+/// rate and acceleration from the filter's taps d1, d2 over the window from log sample lo, the
+/// angles of noise std `sigma`.
+Eigen::Matrix3d filtered_noise_covariance(int at, int lo, const std::vector<double>& d1,
+                                          const std::vector<double>& d2, double sigma);
+
+/// The drive torques (2; a mechanism of one crank leaves the second 0) and their derivatives in
+/// the parameters (2 x P) at a sample's motion with (theta, omega, alpha) of its first crank moved
+/// by dn; false where the model fails.
+using PerturbedTorques =
+    std::function<bool(const Eigen::Vector3d& dn, Eigen::Vector2d* torques, Eigen::MatrixXd* A)>;
+
+/// One sample's NoiseBias (shift and score) for the noise of covariance C of the first crank's
+/// (theta, omega, alpha): a 3-point Gauss-Hermite rule along each principal axis of C, exact for
+/// quadratic torques, and bounded where a reaction passes through zero (its norm's kink) as a
+/// Taylor term is not; false where an evaluation fails.
+bool noise_bias_at(const Eigen::Matrix3d& C, const PerturbedTorques& torques,
+                   Eigen::Vector2d* shift, Eigen::VectorXd* score);
 
 /// Predicted smoothing bias and errors-in-variables std of the public friction coefficients for
 /// the filter `sg`, over the samples u with keep[u] (false when too few or singular). With

@@ -128,12 +128,49 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, SgOptions* sg_fit
       std::to_string(std::lround(kReconSpan * cand[rule])) + " samples: " + table + ")";
 }
 
+BiasWalk walk_window_by_bias(int K, int start, const std::function<bool(int, double*)>& worst) {
+  BiasWalk w;
+  w.ratio.assign(std::max(0, K), -1.0);
+  if (K < 2) return w;
+  // candidate k's ratio into w.ratio; false when the inputs cannot be formed
+  const auto evaluate = [&](int k) { return worst(k, &w.ratio[k]); };
+  const auto within = [&](int k) { return w.ratio[k] <= kBiasFraction; };
+  start = std::clamp(start, 1, K - 1);
+  if (!evaluate(start)) return w;
+  int chosen = -1;
+  if (within(start)) {
+    chosen = start;
+    for (int k = start - 1; k >= 1; --k) {
+      if (!evaluate(k)) return w;
+      if (!within(k)) break;
+      chosen = k;
+    }
+  } else {
+    double least = std::isnan(w.ratio[start]) ? INFINITY : w.ratio[start];
+    for (int k = start + 1; k < K && chosen < 0; ++k) {
+      if (!evaluate(k)) return w;
+      if (within(k)) chosen = k;
+      if (w.ratio[k] < least) least = w.ratio[k];
+      // the noise's bias falls and the smoothing's grows with the window: past the least, once
+      // it is twice the least, the larger windows only add
+      if (w.ratio[k] > 2 * std::max(least, kBiasFraction)) break;
+    }
+  }
+  int pick = chosen;
+  for (int k = 1; k < K; ++k) {
+    if (w.ratio[k] < 0 || std::isnan(w.ratio[k])) continue;
+    if (pick < 0 || (chosen < 0 && w.ratio[k] < w.ratio[pick])) pick = k;
+  }
+  w.pick = pick;
+  w.within = chosen >= 0;
+  return w;
+}
+
 // The smallest candidate within kBiasFraction, found by a walk from the filter's window as given
-// (the predicted bias falls with the window as far as the noise's dominates): down while within,
-// else up until within, or until the bias has grown to twice its least (then the least). The
-// motion's higher terms over +-kReconSpan times each window. (Over 30 seeded crank-rocker logs at
-// angle noise 1e-5 rad, keeping the largest window within kBiasFraction instead chose 12-41
-// samples and covered 86.7 %, the smallest 8-15 samples and 98.3 %.)
+// (walk_window_by_bias: the predicted bias falls with the window as far as the noise's
+// dominates). The motion's higher terms over +-kReconSpan times each window. (Over 30 seeded
+// crank-rocker logs at angle noise 1e-5 rad, keeping the largest window within kBiasFraction
+// instead chose 12-41 samples and covered 86.7 %, the smallest 8-15 samples and 98.3 %.)
 void choose_window_by_bias(const WindowFit& w, SgOptions* sg_fit, Eigen::VectorXd* bias_kept,
                            std::string* choice) {
   const int n = w.log().size();
@@ -144,9 +181,8 @@ void choose_window_by_bias(const WindowFit& w, SgOptions* sg_fit, Eigen::VectorX
             " samples (no window's bias could be predicted)";
   if (w.source() != detail::RateSource::kFromAngles || n < 2 || K < 2) return;
   std::vector<Eigen::VectorXd> biases(K);
-  std::vector<double> worst(K, -1);  // -1: not evaluated; NaN: not predicted
   // candidate k's predicted |bias| / std; false when the inputs cannot be formed
-  const auto evaluate = [&](int k) {
+  const auto evaluate = [&](int k, double* worst) {
     const detail::BiasInputs in =
         w.bias_inputs(std::lround(kReconSpan * cand[k]), cand[1], sg_fit->order);
     if (in.J.rows() != 2 * static_cast<int>(w.index().size())) return false;
@@ -158,52 +194,30 @@ void choose_window_by_bias(const WindowFit& w, SgOptions* sg_fit, Eigen::VectorX
                     noise.score.size() == w.index().size() &&
                     detail::smoothing_bias(w.log().t, in, centred_samples(w, cand[k]), sg,
                                            &biases[k], &std, &noise);
-    worst[k] = ok ? worst_ratio(biases[k], std) : std::numeric_limits<double>::quiet_NaN();
+    *worst = ok ? worst_ratio(biases[k], std) : std::numeric_limits<double>::quiet_NaN();
     return true;
   };
-  const auto within = [&](int k) { return worst[k] <= kBiasFraction; };
-  const int start = std::clamp(
-      static_cast<int>(std::lower_bound(cand.begin(), cand.end(), sg_half_window(*sg_fit, dt)) -
-                       cand.begin()),
-      1, K - 1);
-  if (!evaluate(start)) return;
-  int chosen = -1;
-  if (within(start)) {
-    chosen = start;
-    for (int k = start - 1; k >= 1; --k) {
-      if (!evaluate(k)) return;
-      if (!within(k)) break;
-      chosen = k;
-    }
-  } else {
-    double least = std::isnan(worst[start]) ? INFINITY : worst[start];
-    for (int k = start + 1; k < K && chosen < 0; ++k) {
-      if (!evaluate(k)) return;
-      if (within(k)) chosen = k;
-      if (worst[k] < least) least = worst[k];
-      // the noise's bias falls and the smoothing's grows with the window: past the least, once
-      // it is twice the least, the larger windows only add
-      if (worst[k] > 2 * std::max(least, kBiasFraction)) break;
-    }
-  }
-  int pick = chosen;
+  const int start = static_cast<int>(
+      std::lower_bound(cand.begin(), cand.end(), sg_half_window(*sg_fit, dt)) - cand.begin());
+  const BiasWalk walk = walk_window_by_bias(K, start, evaluate);
+  if (walk.pick < 0) return;
   std::string table;
   for (int k = 1; k < K; ++k) {
-    if (worst[k] < 0 || std::isnan(worst[k])) continue;
-    if (pick < 0 || (chosen < 0 && worst[k] < worst[pick])) pick = k;
-    table +=
-        (table.empty() ? "" : ", ") + std::to_string(cand[k]) + ": " + format_significant(worst[k]);
+    const double r = walk.ratio[k];
+    if (r < 0 || std::isnan(r)) continue;
+    table += (table.empty() ? "" : ", ") + std::to_string(cand[k]) + ": " + format_significant(r);
   }
-  if (pick < 0) return;
+  const int pick = walk.pick;
   sg_fit->half_window_s = cand[pick] * dt;
   *bias_kept = biases[pick];
   *choice =
       "data-driven: half-window " + std::to_string(cand[pick]) + " samples (" +
       format_significant(cand[pick] * dt * 1e3) + " ms), " +
-      (chosen < 0 ? "the one of least predicted bias (none keeps it within " +
-                        format_significant(kBiasFraction) + " std)"
-                  : "the smallest whose predicted bias is within " +
-                        format_significant(kBiasFraction) + " std of every friction coefficient") +
+      (!walk.within
+           ? "the one of least predicted bias (none keeps it within " +
+                 format_significant(kBiasFraction) + " std)"
+           : "the smallest whose predicted bias is within " + format_significant(kBiasFraction) +
+                 " std of every friction coefficient") +
       " (the smoothing bias and the noise's through the reactions, errors in variables; "
       "predicted |bias| / std by half-window, the motion's higher terms from local polynomials of "
       "degree " +

@@ -103,9 +103,10 @@ class ExcitationMechanism {
   /// of a crank the mechanism does not have: 0)
   virtual Status kinematic_jacobian(double t, const MotionState& s,
                                     Eigen::Matrix<double, 2, 6>* D) const = 0;
-  /// identify's rate filter when it does not choose it from the log (true, *sg set); false when
-  /// identify chooses the half-window by its window rules (the five-bar)
-  virtual bool fixed_filter(SgOptions* sg) const = 0;
+  /// identify's window rule: true where it walks the windows by their predicted bias from the
+  /// filter *sg (the four-bar: choose_window_by_bias, the noise's bias through the reactions
+  /// included); false where it takes its residual rule, then the bias limit (the five-bar)
+  virtual bool window_by_bias(SgOptions* sg) const = 0;
   /// identify's covariance: true for the sandwich over blocks of the filter's window (2 m + 1
   /// log samples: the four-bar), whose meat holds only the score's correlations within a block;
   /// false for the errors-in-variables covariance over all of them (the five-bar)
@@ -328,8 +329,12 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
 /// (ExcitationMechanism::at_rest), are left out as identify leaves them out. Where the samples
 /// left do not determine the parameters, fails with NaN std. Replaces covariance,
 /// std_dev and relative_std; the Fisher's std goes to torque_only_std. With angle_noise 0 the
-/// std are the Fisher's. A mechanism whose identify has a fixed rate filter
-/// (ExcitationMechanism::fixed_filter) is predicted at that filter.
+/// std are the Fisher's. A mechanism whose identify walks the windows by their predicted bias
+/// (ExcitationMechanism::window_by_bias) is predicted at the window of that walk (the same
+/// function as identify's, stages::walk_window_by_bias), its bias the smoothing's and the
+/// noise's through the reactions, and its std identify's block sandwich in expectation (the
+/// score's noise within each block, and the spread of the blocks' mean scores that the
+/// smoothing and the noise's bias leave).
 Status predict_identified_std(const ExcitationMechanism& mechanism, double torque_noise,
                               double angle_noise, ExcitationReport* r);
 /// the same for the five-bar of `scene`
