@@ -120,8 +120,8 @@ int linear_combination(int nvec, realtype* c, N_Vector* X, N_Vector z) {
   }
   double* zd = data(z);
   const sunindextype n = length(z);
-  constexpr int kMaxTerms = 16;  // more than any Butcher table's stages + 1
-  if (nvec > kMaxTerms) {        // vector by vector (z is not one of X_1 ..)
+  constexpr sunindextype kShort = 16;  // longer than any fivebar state
+  if (n > kShort) {                    // vector by vector (z is not one of X_1 ..)
     scale(c[0], X[0], z);
     for (int k = 1; k < nvec; ++k) {
       const double* xd = data(X[k]);
@@ -129,13 +129,14 @@ int linear_combination(int nvec, realtype* c, N_Vector* X, N_Vector z) {
     }
     return 0;
   }
-  const double* xd[kMaxTerms];
-  for (int k = 0; k < nvec; ++k) xd[k] = data(X[k]);
-  for (sunindextype i = 0; i < n; ++i) {
-    double s = c[0] * xd[0][i];
-    for (int k = 1; k < nvec; ++k) s += c[k] * xd[k][i];
-    zd[i] = s;
+  double s[kShort];  // the sums, apart from z (which may be X_0)
+  const double* x0 = data(X[0]);
+  for (sunindextype i = 0; i < n; ++i) s[i] = c[0] * x0[i];
+  for (int k = 1; k < nvec; ++k) {
+    const double* xd = data(X[k]);
+    for (sunindextype i = 0; i < n; ++i) s[i] += c[k] * xd[i];
   }
+  for (sunindextype i = 0; i < n; ++i) zd[i] = s[i];
   return 0;
 }
 
