@@ -111,9 +111,11 @@ class Arkode final : public Integrator {
                "ERKStepSetErrHandlerFn")) {
       return false;
     }
-    // ARKODE names tables NAME_stages_embedding_order. Dense output: ARKODE's default degree-5
-    // Hermite interpolant (two extra right-hand sides per call; cubic Hermite or Lagrange lose
-    // one to two digits at the 1 ms grid, measured with `fivebar accuracy`)
+    // ARKODE names tables NAME_stages_embedding_order. Dense output: ARKODE's default Hermite
+    // interpolant, of degree order - 1 up to 5 (Dormand-Prince: degree 4, one extra right-hand
+    // side per call, at t_n+1 - h/3, which rhs() serves again to the step's later calls; cubic
+    // Hermite or Lagrange lose one to two digits at the 1 ms grid, measured with `fivebar
+    // accuracy`)
     const auto table = opt.method == Method::kArkodeErk45   ? ARKODE_DORMAND_PRINCE_7_4_5
                        : opt.method == Method::kArkodeErk65 ? ARKODE_VERNER_8_5_6
                                                             : ARKODE_FEHLBERG_13_7_8;
@@ -178,7 +180,7 @@ class Arkode final : public Integrator {
   /// (first-same-as-last, which ERKStep does not exploit itself).
   static int rhs(realtype t, N_Vector y, N_Vector ydot, void* self) {
     auto* me = static_cast<Arkode*>(self);
-    // the serial vector's data (the library's accessors are two calls each, built without optimization)
+    // the serial vector's data (the library's accessors: two unoptimized calls each)
     const double* yp = NV_DATA_S(y);
     double* fp = NV_DATA_S(ydot);
     StepEnd& c = me->cache_;  // the last evaluation, for slope() and the repeat

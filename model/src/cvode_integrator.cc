@@ -83,7 +83,7 @@ class Cvode final : public Integrator {
   }
   static int rhs(realtype t, N_Vector y, N_Vector ydot, void* self) {
     auto* me = static_cast<Cvode*>(self);
-    // the serial vector's data (the library's accessors are two calls each, built without optimization)
+    // the serial vector's data (the library's accessors: two unoptimized calls each)
     return me->prob_.rhs(t, NV_DATA_S(y), NV_DATA_S(ydot), me->prob_.user);
   }
   OdeProblem prob_;
