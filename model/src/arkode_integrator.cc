@@ -51,8 +51,8 @@ struct QuarticHermite {
   /// The cubic interpolant's state at tau = -1/3 (tau = (t - t_new) / h) into ya, and its time.
   double cubic_third(double* ya) const {
     const double tau = -1.0 / 3.0, tau2 = tau * tau, tau3 = tau * tau2;
-    const double c[4] = {3.0 * tau2 + 2.0 * tau3, 1.0 - 3.0 * tau2 - 2.0 * tau3,
-                         h * (tau2 + tau3), h * (tau + 2.0 * tau2 + tau3)};
+    const double c[4] = {3.0 * tau2 + 2.0 * tau3, 1.0 - 3.0 * tau2 - 2.0 * tau3, h * (tau2 + tau3),
+                         h * (tau + 2.0 * tau2 + tau3)};
     const double* const x[4] = {y_old.data(), y_new.data(), f_old.data(), f_new.data()};
     combine(c, x, static_cast<int>(y_old.size()), ya);
     return t_new - h / 3.0;
@@ -60,18 +60,20 @@ struct QuarticHermite {
   /// The quartic interpolant at t, with f_a the slope at cubic_third's point.
   void quartic(double t, const double* fa, double* y) const {
     const double tau = (t - t_new) / h, tau2 = tau * tau, tau3 = tau * tau2, tau4 = tau * tau3;
-    const double c[5] = {-6.0 * tau2 - 16.0 * tau3 - 9.0 * tau4,
-                         1.0 + 6.0 * tau2 + 16.0 * tau3 + 9.0 * tau4,
-                         h * 0.25 * (-5.0 * tau2 - 14.0 * tau3 - 9.0 * tau4),
-                         h * (tau + 2.0 * tau2 + tau3),
-                         h * 27.0 * 0.25 * (-tau4 - 2.0 * tau3 - tau2)};
+    const double c[5] = {
+        -6.0 * tau2 - 16.0 * tau3 - 9.0 * tau4,
+        1.0 + 6.0 * tau2 + 16.0 * tau3 + 9.0 * tau4,
+        h * 0.25 * (-5.0 * tau2 - 14.0 * tau3 - 9.0 * tau4),
+        h * (tau + 2.0 * tau2 + tau3),
+        h * 27.0 * 0.25 * (-tau4 - 2.0 * tau3 - tau2),
+    };
     const double* const x[5] = {y_old.data(), y_new.data(), f_old.data(), f_new.data(), fa};
     combine(c, x, static_cast<int>(y_old.size()), y);
   }
   /// Whether t is within the step as ERKStepGetDky accepts it (its rounding slack).
   bool covers(double t) const {
-    const double fuzz = 100 * std::numeric_limits<double>::epsilon() *
-                        (std::abs(t_new) + std::abs(h));
+    const double fuzz =
+        100 * std::numeric_limits<double>::epsilon() * (std::abs(t_new) + std::abs(h));
     return (t - (t_new - h - fuzz)) * (t - (t_new + fuzz)) <= 0.0;
   }
 };
