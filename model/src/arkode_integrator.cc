@@ -28,6 +28,56 @@ struct StepEnd {
   bool has_f = false;
 };
 
+/// z = sum_k c_k x_k, summed in k order for each element (as the serial vector's linear
+/// combination: the same bits)
+template <int K>
+void combine(const double (&c)[K], const double* const (&x)[K], int n, double* z) {
+  for (int i = 0; i < n; ++i) {
+    double s = c[0] * x[0][i];
+    for (int k = 1; k < K; ++k) s += c[k] * x[k][i];
+    z[i] = s;
+  }
+}
+
+/// ERKStep's dense output for Dormand-Prince: ARKODE's Hermite interpolant of degree 4 on the
+/// last step [t_new - h, t_new], in the library's arithmetic (SUNDIALS 6.4 arkode_interp.c: the
+/// same coefficient expressions in the same order, the same linear combinations), so its values
+/// are the library's bit for bit. The slopes are those ERKStep holds: f_old and f_new as the
+/// right-hand side returned them, f_a at t_new - h/3 on the cubic interpolant.
+struct QuarticHermite {
+  double t_new = 0.0, h = 0.0;
+  std::vector<double> y_old, y_new, f_old, f_new;
+
+  /// The cubic interpolant's state at tau = -1/3 (tau = (t - t_new) / h) into ya, and its time.
+  double cubic_third(double* ya) const {
+    const double tau = -1.0 / 3.0, tau2 = tau * tau, tau3 = tau * tau2;
+    const double c[4] = {3.0 * tau2 + 2.0 * tau3, 1.0 - 3.0 * tau2 - 2.0 * tau3, h * (tau2 + tau3),
+                         h * (tau + 2.0 * tau2 + tau3)};
+    const double* const x[4] = {y_old.data(), y_new.data(), f_old.data(), f_new.data()};
+    combine(c, x, static_cast<int>(y_old.size()), ya);
+    return t_new - h / 3.0;
+  }
+  /// The quartic interpolant at t, with f_a the slope at cubic_third's point.
+  void quartic(double t, const double* fa, double* y) const {
+    const double tau = (t - t_new) / h, tau2 = tau * tau, tau3 = tau * tau2, tau4 = tau * tau3;
+    const double c[5] = {
+        -6.0 * tau2 - 16.0 * tau3 - 9.0 * tau4,
+        1.0 + 6.0 * tau2 + 16.0 * tau3 + 9.0 * tau4,
+        h * 0.25 * (-5.0 * tau2 - 14.0 * tau3 - 9.0 * tau4),
+        h * (tau + 2.0 * tau2 + tau3),
+        h * 27.0 * 0.25 * (-tau4 - 2.0 * tau3 - tau2),
+    };
+    const double* const x[5] = {y_old.data(), y_new.data(), f_old.data(), f_new.data(), fa};
+    combine(c, x, static_cast<int>(y_old.size()), y);
+  }
+  /// Whether t is within the step as ERKStepGetDky accepts it (its rounding slack).
+  bool covers(double t) const {
+    const double fuzz =
+        100 * std::numeric_limits<double>::epsilon() * (std::abs(t_new) + std::abs(h));
+    return (t - (t_new - h - fuzz)) * (t - (t_new + fuzz)) <= 0.0;
+  }
+};
+
 class Arkode final : public Integrator {
  public:
   Arkode(const OdeProblem& prob, const Options& opt, double t_end)
@@ -35,6 +85,11 @@ class Arkode final : public Integrator {
     for (StepEnd* e : {&prev_, &cur_, &cache_}) {
       e->y.assign(prob.n, 0.0);
       e->f.assign(prob.n, 0.0);
+    }
+    own_dense_ = opt.method == Method::kArkodeErk45;
+    for (auto* v : {&hermite_.y_old, &hermite_.y_new, &hermite_.f_old, &hermite_.f_new, &last_f_,
+                    &start_f_, &ya_, &fa_}) {
+      v->assign(prob.n, 0.0);
     }
     ok_ = sc_.ready && (explicit_ ? setup_erk(opt) : setup_dirk(opt));
   }
@@ -57,6 +112,8 @@ class Arkode final : public Integrator {
     std::copy(y0, y0 + prob_.n, cur_.y.begin());
     cur_.has_f = false;
     cache_.has_f = false;  // the modes may have changed at a restart: no earlier evaluation holds
+    hermite_valid_ = false;
+    start_f_pending_ = true;  // ERKStep evaluates f(t0, y0) first, its interpolant's f_old
     if (explicit_) {
       return check(ERKStepReInit(mem_, &Arkode::rhs, t0, sc_.y), "ERKStepReInit") &&
              check(ERKStepSetStopTime(mem_, t_end_), "ERKStepSetStopTime");
@@ -70,16 +127,30 @@ class Arkode final : public Integrator {
   }
   bool step(double* y, double* t) override {
     std::swap(prev_, cur_);
+    recording_ = own_dense_;
+    has_last_ = false;
     const int flag = explicit_ ? ERKStepEvolve(mem_, t_end_, sc_.y, t, ARK_ONE_STEP)
                                : ARKStepEvolve(mem_, t_end_, sc_.y, t, ARK_ONE_STEP);
+    recording_ = false;
     sc_.store(y, prob_.n);
     cur_.t = *t;
     std::copy(y, y + prob_.n, cur_.y.begin());
     cur_.has_f = false;
+    if (own_dense_) update_hermite(flag);
     return check(flag, explicit_ ? "ERKStepEvolve" : "ARKStepEvolve");
   }
   bool dense(double t, double* y) override {
-    N_VSetArrayPointer(y, sc_.out);  // a view of the caller's array: no allocation per call
+    if (hermite_valid_ && hermite_.covers(t)) {
+      // the interior slope as ERKStep's interpolant takes it: through rhs(), as ARKODE calls it
+      const double ta = hermite_.cubic_third(ya_.data());
+      if (evaluate(ta, ya_.data(), fa_.data()) != 0) {
+        sc_.error = "right-hand side failed in the dense output";
+        return false;
+      }
+      hermite_.quartic(t, fa_.data(), y);
+      return true;
+    }
+    NV_DATA_S(sc_.out) = y;  // a view of the caller's array: no allocation per call
     const int flag = explicit_ ? ERKStepGetDky(mem_, t, 0, sc_.out)
                                : ARKStepGetDky(mem_, t, 0, sc_.out);
     return check(flag, explicit_ ? "ERKStepGetDky" : "ARKStepGetDky");
@@ -111,9 +182,11 @@ class Arkode final : public Integrator {
                "ERKStepSetErrHandlerFn")) {
       return false;
     }
-    // ARKODE names tables NAME_stages_embedding_order. Dense output: ARKODE's default degree-5
-    // Hermite interpolant (two extra right-hand sides per call; cubic Hermite or Lagrange lose
-    // one to two digits at the 1 ms grid, measured with `fivebar accuracy`)
+    // ARKODE names tables NAME_stages_embedding_order. Dense output: ARKODE's default Hermite
+    // interpolant, of degree order - 1 up to 5 (Dormand-Prince: degree 4, one extra right-hand
+    // side per call, at t_n+1 - h/3, which rhs() serves again to the step's later calls; cubic
+    // Hermite or Lagrange lose one to two digits at the 1 ms grid, measured with `fivebar
+    // accuracy`)
     const auto table = opt.method == Method::kArkodeErk45   ? ARKODE_DORMAND_PRINCE_7_4_5
                        : opt.method == Method::kArkodeErk65 ? ARKODE_VERNER_8_5_6
                                                             : ARKODE_FEHLBERG_13_7_8;
@@ -177,22 +250,59 @@ class Arkode final : public Integrator {
   /// same coefficients), where ARKODE evaluates f again for the next step and the interpolant
   /// (first-same-as-last, which ERKStep does not exploit itself).
   static int rhs(realtype t, N_Vector y, N_Vector ydot, void* self) {
-    auto* me = static_cast<Arkode*>(self);
-    const double* yp = N_VGetArrayPointer(y);
-    double* fp = N_VGetArrayPointer(ydot);
-    StepEnd& c = me->cache_;  // the last evaluation, for slope() and the repeat
-    if (c.has_f && c.t == t && std::memcmp(yp, c.y.data(), sizeof(double) * me->prob_.n) == 0) {
+    // the serial vector's data (the library's accessors: two unoptimized calls each)
+    return static_cast<Arkode*>(self)->evaluate(t, NV_DATA_S(y), NV_DATA_S(ydot));
+  }
+  int evaluate(double t, const double* yp, double* fp) {
+    StepEnd& c = cache_;  // the last evaluation, for slope() and the repeat
+    int flag = 0;
+    if (c.has_f && c.t == t && std::memcmp(yp, c.y.data(), sizeof(double) * prob_.n) == 0) {
       std::copy(c.f.begin(), c.f.end(), fp);
-      return 0;
+    } else {
+      flag = prob_.rhs(t, yp, fp, prob_.user);
+      c.has_f = flag == 0;
+      if (c.has_f) {
+        c.t = t;
+        std::copy(yp, yp + prob_.n, c.y.begin());
+        std::copy(fp, fp + prob_.n, c.f.begin());
+      }
     }
-    const int flag = me->prob_.rhs(t, yp, fp, me->prob_.user);
-    c.has_f = flag == 0;
-    if (c.has_f) {
-      c.t = t;
-      std::copy(yp, yp + me->prob_.n, c.y.begin());
-      std::copy(fp, fp + me->prob_.n, c.f.begin());
-    }
+    if (recording_ && flag == 0) record(t, fp);
     return flag;
+  }
+  /// Within a step: the slopes ERKStep keeps for its interpolant, as returned to it (the first
+  /// evaluation after a restart is f(t0, y0); the last of a step its last stage, at t_new).
+  void record(double t, const double* fp) {
+    if (start_f_pending_) {
+      std::copy(fp, fp + prob_.n, start_f_.begin());
+      start_f_pending_ = false;
+      has_start_f_ = true;
+    }
+    last_t_ = t;
+    std::copy(fp, fp + prob_.n, last_f_.begin());
+    has_last_ = true;
+  }
+  /// After a step: the interpolant ERKStep now holds, when everything it needs is known. The
+  /// step that reaches the end time returns its state from the dense output at the end time (its
+  /// last evaluation is that output's interior slope): its interpolant stays the library's.
+  void update_hermite(int flag) {
+    const bool restarted = has_start_f_;
+    const bool f_old_known = restarted || f_new_known_;
+    has_start_f_ = false;
+    hermite_valid_ = false;
+    f_new_known_ = false;
+    if (flag != ARK_SUCCESS || !f_old_known) return;
+    hermite_.f_old.swap(restarted ? start_f_ : hermite_.f_new);
+    if (!has_last_ || last_t_ != cur_.t) return;
+    hermite_.f_new.swap(last_f_);
+    f_new_known_ = true;
+    double h = 0.0;
+    if (ERKStepGetLastStep(mem_, &h) != ARK_SUCCESS) return;
+    hermite_.h = h;
+    hermite_.t_new = cur_.t;
+    hermite_.y_old = prev_.y;
+    hermite_.y_new = cur_.y;
+    hermite_valid_ = true;
   }
   /// Newton Jacobian by forward differences with the switched parts of the right-hand side
   /// frozen at y (OdeProblem::freeze). ARKODE's own difference quotients would divide a Coulomb
@@ -228,6 +338,14 @@ class Arkode final : public Integrator {
   bool ok_ = false;
   void* mem_ = nullptr;
   StepEnd prev_, cur_, cache_;
+  // ERKStep's interpolant evaluated here (Dormand-Prince): QuarticHermite and what it needs
+  bool own_dense_ = false;
+  QuarticHermite hermite_;
+  bool hermite_valid_ = false;
+  bool recording_ = false;  ///< within ERKStepEvolve: record() keeps the slopes returned
+  bool start_f_pending_ = false, has_start_f_ = false, has_last_ = false, f_new_known_ = false;
+  double last_t_ = 0.0;
+  std::vector<double> last_f_, start_f_, ya_, fa_;
 };
 
 }  // namespace

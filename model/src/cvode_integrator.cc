@@ -41,7 +41,7 @@ class Cvode final : public Integrator {
     return check(flag, "CVode");
   }
   bool dense(double t, double* y) override {
-    N_VSetArrayPointer(y, sc_.out);  // a view of the caller's array: no allocation per call
+    NV_DATA_S(sc_.out) = y;  // a view of the caller's array: no allocation per call
     const int flag = CVodeGetDky(mem_, t, 0, sc_.out);
     return check(flag, "CVodeGetDky");
   }
@@ -83,7 +83,8 @@ class Cvode final : public Integrator {
   }
   static int rhs(realtype t, N_Vector y, N_Vector ydot, void* self) {
     auto* me = static_cast<Cvode*>(self);
-    return me->prob_.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot), me->prob_.user);
+    // the serial vector's data (the library's accessors: two unoptimized calls each)
+    return me->prob_.rhs(t, NV_DATA_S(y), NV_DATA_S(ydot), me->prob_.user);
   }
   OdeProblem prob_;
   double t_end_;

@@ -265,7 +265,21 @@ struct Context {
   FrictionWarmStart warm;
   /// the same for the output rows (make_row), one output step apart
   FrictionWarmStart row_warm;
+  /// the loads at the time of the last right-hand side or row (loads_at)
+  double loads_time = std::numeric_limits<double>::quiet_NaN();
+  LoadsOf<M> loads_then{};
 };
+
+/// The loads at t, from the last evaluation when it was at the same time (a load function is a
+/// function of t: Dormand-Prince's last two stages share their time).
+template <class M>
+const LoadsOf<M>& loads_at(Context<M>& c, double t) {
+  if (!(t == c.loads_time)) {
+    c.loads_then = (*c.loads)(t);
+    c.loads_time = t;
+  }
+  return c.loads_then;
+}
 
 /// The status with the time and the driven angles first (theta1 .. theta_dof of `q`).
 Status at_time(const Status& st, double t, const double* q, int dof) {
@@ -352,7 +366,7 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   std::array<double, kJoints> z{};
   if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, z.begin());
   JointModes signs;
-  const LoadsOf<M> loads = (*c.loads)(t);
+  const LoadsOf<M>& loads = loads_at(c, t);
   if (const Status bad = finite_loads(loads, t); !bad.ok()) {
     c.failure = bad;
     return -1;  // fatal: the load is what fails, not the step
@@ -947,7 +961,7 @@ Row make_row(Context<M>& c, double t, const double* y, const Row* previous, Stat
   eval.want_reactions = true;
   eval.want_angles = true;
   eval.singular_margin = 0.0;
-  const LoadsOf<M> L = (*c.loads)(t);
+  const LoadsOf<M> L = loads_at(c, t);
   EvalOf<M> ev;
   std::array<double, kJoints> z{};
   if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, z.begin());

@@ -3,6 +3,8 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#include "serial_vector_ops.h"
+
 namespace fivebar::sim::detail {
 
 SundialsCommon::SundialsCommon(const OdeProblem& prob, const Options& opt) {
@@ -21,6 +23,8 @@ SundialsCommon::SundialsCommon(const OdeProblem& prob, const Options& opt) {
       !check_call(N_VEnableFusedOps_Serial(out, SUNTRUE), "N_VEnableFusedOps_Serial", &error)) {
     return;
   }
+  // after the fused operations are enabled (which sets the library's), before any solver clones y
+  for (N_Vector v : {y, out, atol}) use_compiled_serial_ops(v);
   N_VConst(0.0, y);
   for (int i = 0; i < prob.n; ++i) NV_Ith_S(atol, i) = opt.atol * prob.atol_scale[i];
   ready = true;
