@@ -196,10 +196,6 @@ class FiveBarExcitation : public ExcitationMechanism {
     return stages::held_sample(scene_, s, rest_thresholds(g1 * angle_noise, g2 * angle_noise),
                                angle_noise);
   }
-  void rest_gains(const std::vector<double>& t, const SgOptions& sg, double* g1,
-                  double* g2) const override {
-    stages::sg_noise_gains(t, sg, g1, g2);
-  }
 
  private:
   Params<double> scene_;

@@ -78,18 +78,6 @@ class FourBarExcitation : public ExcitationMechanism {
 
   bool block_sandwich() const override { return true; }
 
-  /// the centred filter's (identify_four_bar.cc's interior_gains)
-  void rest_gains(const std::vector<double>& t, const SgOptions& sg, double* g1,
-                  double* g2) const override {
-    int lo = 0;
-    std::vector<double> d1, d2;
-    savitzky_golay_taps(t, static_cast<int>(t.size()) / 2, sg, &lo, &d1, &d2);
-    *g1 = *g2 = 0;
-    for (size_t r = 0; r < d1.size(); ++r) *g1 += d1[r] * d1[r], *g2 += d2[r] * d2[r];
-    *g1 = std::sqrt(*g1);
-    *g2 = std::sqrt(*g2);
-  }
-
   bool at_rest(double, const MotionState& s, double g1, double, double angle_noise) const override {
     FourBarKinematics k;
     if (!four_bar_kinematics(scene_, s.th1, &k).ok()) return false;

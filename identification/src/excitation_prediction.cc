@@ -201,7 +201,7 @@ class EivPredictor {
     SgOptions filter;
     filter.half_window_s = m * dt_;
     filter.order = order_;
-    mech_.rest_gains(r_.t, filter, g1, g2);
+    stages::sg_noise_gains(r_.t, filter, g1, g2);
   }
 
   /// the filter of half-window m at a centred sample: the same at every one (uniform grid)

@@ -116,9 +116,6 @@ class ExcitationMechanism {
   /// gains are g1, g2 from angles of noise std `angle_noise` [rad]
   virtual bool at_rest(double t, const MotionState& s, double g1, double g2,
                        double angle_noise) const = 0;
-  /// the noise gains g1, g2 identify's rest rule takes for the filter `sg` on the grid t
-  virtual void rest_gains(const std::vector<double>& t, const SgOptions& sg, double* g1,
-                          double* g2) const = 0;
 };
 
 /// The five-bar of `scene` with the loads at each time, for the parameters `dp`.
