@@ -13,6 +13,7 @@
 #include "four_bar_fit.h"
 #include "mechanism_residual.h"
 #include "model_check_causes.h"
+#include "setup_shared.h"
 
 namespace fivebar::identification::four_bar {
 
@@ -92,10 +93,12 @@ bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::Matri
   idx[3].push_back(c++);
   J->col(c) = -M;
   idx[3].push_back(c++);
-  if (delay) {  // tau1 lagging by d reads the torque of t + d: its rate (the filter's of the log)
-    std::vector<double> rate, accel;
-    savitzky_golay(f.cond.log.t, f.cond.log.tau1, f.sg, &rate, &accel);
-    for (int u = 0; u < n; ++u) (*J)(u, c) = rate[f.index[u]];
+  if (delay) {  // tau1 lagging by d reads the torque of t + d: its rate (the delay's regressor)
+    const TorqueLog& log = f.cond.log;
+    std::vector<std::vector<double>> rate;
+    stages::delay_regressor(log.t, {&log.tau1}, f.noise.torque, f.index, f.sg.half_window_s,
+                            &rate);
+    for (int u = 0; u < n; ++u) (*J)(u, c) = rate[0][f.index[u]];
     idx[4].push_back(c++);
   }
   *J /= fl;

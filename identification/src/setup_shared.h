@@ -78,6 +78,15 @@ Eigen::MatrixXd to_public(const ParameterLayout& layout);
 /// filter centred in the middle of the log.
 void sg_noise_gains(const std::vector<double>& t, const SgOptions& sg, double* g1, double* g2);
 
+/// The regressor of a torque-to-angle delay: the logged torques' rates (order-3 Savitzky-Golay
+/// on the grid t) of each channel tau[c] of noise std torque_noise[c], into (*rates)[c]. The
+/// rates carry the torques' noise, which attenuates a delay's estimate by the share of their
+/// variance that is noise (errors in variables): the window grows from half_window_s (at least
+/// 3 samples) until that share, over the samples `index`, is small on every channel.
+void delay_regressor(const std::vector<double>& t, const std::vector<const std::vector<double>*>& tau,
+                     const double* torque_noise, const std::vector<int>& index,
+                     double half_window_s, std::vector<std::vector<double>>* rates);
+
 /// The rest rule at sample s with each joint's rate threshold set for its own noise: the rates'
 /// noise through its row of J_w (the thresholds are set for one crank's rate; an inner joint's
 /// relative rate combines both), in quadrature with the angle noise `angle_noise` through the

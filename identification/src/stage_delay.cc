@@ -22,31 +22,41 @@ constexpr double kDelayWindowMax = 0.1;
 
 }  // namespace
 
-/// The logged torques' rates (order-3 Savitzky-Golay) for the delay estimate (kDelayRateNoise)
-void delay_regressor(const Fit& f, std::vector<double>* g1, std::vector<double>* g2) {
-  const TorqueLog& log = f.cond.log;
-  const double dt = log.duration() / std::max(1, log.size() - 1);
-  const double widest = std::min(kDelayWindowMax, log.duration() / 20);
+void delay_regressor(const std::vector<double>& t, const std::vector<const std::vector<double>*>& tau,
+                     const double* torque_noise, const std::vector<int>& index,
+                     double half_window_s, std::vector<std::vector<double>>* rates) {
+  const double duration = t.back() - t.front(), dt = duration / std::max<size_t>(1, t.size() - 1);
+  const double widest = std::min(kDelayWindowMax, duration / 20);
   SgOptions sg;
   sg.order = 3;
-  sg.half_window_s = std::max(f.sg.half_window_s, 3 * dt);
+  sg.half_window_s = std::max(half_window_s, 3 * dt);
+  rates->assign(tau.size(), {});
   std::vector<double> unused;
   for (;;) {
-    savitzky_golay(log.t, log.tau1, sg, g1, &unused);
-    savitzky_golay(log.t, log.tau2, sg, g2, &unused);
     double gain = 0, acc_gain = 0;
-    sg_noise_gains(log.t, sg, &gain, &acc_gain);
+    sg_noise_gains(t, sg, &gain, &acc_gain);
     bool quiet = true;
-    for (int c = 0; c < kActuators; ++c) {
-      const std::vector<double>& g = c == 0 ? *g1 : *g2;
+    for (size_t c = 0; c < tau.size(); ++c) {
+      std::vector<double>& g = (*rates)[c];
+      savitzky_golay(t, *tau[c], sg, &g, &unused);
       double power = 0;
-      for (int i : f.index) power += g[i] * g[i];
-      power /= std::max<size_t>(1, f.index.size());
-      quiet = quiet && std::pow(f.noise.torque[c] * gain, 2) <= kDelayRateNoise * power;
+      for (int i : index) power += g[i] * g[i];
+      power /= std::max<size_t>(1, index.size());
+      quiet = quiet && std::pow(torque_noise[c] * gain, 2) <= kDelayRateNoise * power;
     }
     if (quiet || 2 * sg.half_window_s > widest) return;
     sg.half_window_s *= 2;
   }
+}
+
+/// The five-bar's: both channels, from the fit's window
+void delay_regressor(const Fit& f, std::vector<double>* g1, std::vector<double>* g2) {
+  const TorqueLog& log = f.cond.log;
+  std::vector<std::vector<double>> g;
+  delay_regressor(log.t, {&log.tau1, &log.tau2}, f.noise.torque, f.index, f.sg.half_window_s,
+                  &g);
+  *g1 = std::move(g[0]);
+  *g2 = std::move(g[1]);
 }
 
 void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<double>& r,

@@ -11,7 +11,7 @@ is a third of its residual: without the score's expectation under that noise its
 as off and it exited 3). A torque gain off 5 % moves
 the friction by more than 10 std: exit 3, status failed, the reason naming the torque readings.
 The encoder's zero off 0.01 rad is named in a warning that reads the offset back; torques 5 ms
-ahead of the angles are named as a delay in a warning (the four-bar's fit is not redone with the
+ahead of the angles are named as a delay in a warning that reads it back (the four-bar's fit is not redone with the
 torques shifted, so a named delay is said whatever its move of the friction). The masses off
 4 % hold coulomb at its bound: exit 3, the reason naming the links' inertial parameters.
 """
@@ -101,8 +101,11 @@ for name, words in (("gain", "torque sensors"), ("mass", "inertial parameters"))
                         % (name, code, j.get("status"), reason, words))
 
 code, j = results["lead"]
-if code != 0 or not any("a delay of the torque readings" in w for w in j.get("warnings", [])):
-    failures.append("lead: exit %d, warnings %s (expected exit 0 naming the delay)"
+read = [re.search(r"lag the angles by ([-0-9.e]+) \+- ([0-9.e]+) ms", w)
+        for w in j.get("warnings", []) if "a delay of the torque readings" in w]
+if code != 0 or not read or not read[0] or \
+        abs(float(read[0].group(1)) + 5) > 3 * float(read[0].group(2)) + 0.5:
+    failures.append("lead: exit %d, warnings %s (expected exit 0 naming the delay, -5 ms)"
                     % (code, j.get("warnings")))
 
 code, j = results["zero"]
