@@ -79,22 +79,10 @@ class FourBarWindowFit : public stages::WindowFit {
     return in;
   }
   /// At each sample's motion u = (theta1, omega1, alpha1), n the noise of the angle and of its
-  /// filtered derivatives (covariance from the filter's taps): a 3-point Gauss-Hermite rule
-  /// along each principal axis of its covariance, exact for quadratic torques, and bounded where
-  /// a reaction passes through zero (its norm's kink) as a Taylor term is not.
+  /// filtered derivatives: the Gauss-Hermite points of detail::noise_axes.
   detail::NoiseBias noise_bias(const SgOptions& sg) const override {
-    const TorqueLog& L = f_.cond.log;
-    const int mid = L.size() / 2, P = f_.layout.size();
-    int lo = 0;
-    std::vector<double> d1, d2;
-    savitzky_golay_taps(L.t, mid, sg, &lo, &d1, &d2);
-    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();  // of (theta1, omega1, alpha1)
-    for (size_t r = 0; r < d1.size(); ++r) {
-      const Eigen::Vector3d g(lo + static_cast<int>(r) == mid ? 1.0 : 0.0, d1[r], d2[r]);
-      C += g * g.transpose();
-    }
-    C *= f_.noise.angle[0] * f_.noise.angle[0];
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+    const int P = f_.layout.size();
+    const std::array<Eigen::Vector3d, 3> axes = detail::noise_axes(f_.cond.log.t, sg);
     detail::NoiseBias nb;
     nb.shift.assign(f_.samples.size(), Eigen::Vector2d::Zero());
     nb.score.assign(f_.samples.size(), Eigen::VectorXd::Zero(P));
@@ -110,8 +98,7 @@ class FourBarWindowFit : public stages::WindowFit {
       Eigen::VectorXd score = Eigen::VectorXd::Zero(P);
       bool ok = true;
       for (int k = 0; k < 3 && ok; ++k) {
-        const Eigen::Vector3d e =
-            std::sqrt(3.0 * std::max(0.0, eig.eigenvalues()(k))) * eig.eigenvectors().col(k);
+        const Eigen::Vector3d e = f_.noise.angle[0] * axes[k];
         for (double side : {1.0, -1.0}) {
           Sample p = s;
           p.q[0] += side * e(0), p.v[0] += side * e(1), p.a[0] += side * e(2);

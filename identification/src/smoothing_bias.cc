@@ -48,6 +48,24 @@ void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen:
   }
 }
 
+std::array<Eigen::Vector3d, 3> noise_axes(const std::vector<double>& t, const SgOptions& sg) {
+  const int mid = static_cast<int>(t.size()) / 2;
+  int lo = 0;
+  std::vector<double> d1, d2;
+  savitzky_golay_taps(t, mid, sg, &lo, &d1, &d2);
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (size_t r = 0; r < d1.size(); ++r) {
+    const Eigen::Vector3d g(lo + static_cast<int>(r) == mid ? 1.0 : 0.0, d1[r], d2[r]);
+    C += g * g.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+  std::array<Eigen::Vector3d, 3> axes;
+  for (int k = 0; k < 3; ++k) {
+    axes[k] = std::sqrt(3.0 * std::max(0.0, eig.eigenvalues()(k))) * eig.eigenvectors().col(k);
+  }
+  return axes;
+}
+
 bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
                     const std::vector<char>& keep, const SgOptions& sg, Eigen::VectorXd* bias,
                     Eigen::VectorXd* std, const NoiseBias* noise) {

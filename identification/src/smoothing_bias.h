@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <vector>
 
 #include "fivebar/identification/rates.h"
@@ -61,6 +62,13 @@ struct NoiseBias {
   std::vector<Eigen::Vector2d> shift;
   std::vector<Eigen::VectorXd> score;
 };
+
+/// The Gauss-Hermite points of one crank's noise for the filter `sg` at a centred sample of the
+/// uniform grid t: sqrt(3 lambda_k) v_k for each eigenpair of the covariance of (angle, filtered
+/// rate, filtered acceleration) per unit angle noise. A 3-point rule along each axis (weights
+/// 1/6 at +-, 2/3 at 0) is exact for quadratic torques, and bounded where a reaction passes
+/// through zero (its norm's kink) as a Taylor term is not.
+std::array<Eigen::Vector3d, 3> noise_axes(const std::vector<double>& t, const SgOptions& sg);
 
 /// Predicted smoothing bias and errors-in-variables std of the public friction coefficients for
 /// the filter `sg`, over the samples u with keep[u] (false when too few or singular). With

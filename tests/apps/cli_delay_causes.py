@@ -21,6 +21,7 @@ candidate cause of the model check, against the others in one comparison of fall
 Usage: cli_delay_causes.py FIVEBAR PAPER_YAML WORK_DIR CASE"""
 import json
 import os
+import re
 import sys
 
 FIVEBAR, PAPER, WORK, CASE = sys.argv[1:5]
@@ -58,6 +59,13 @@ ODD = ("mechanism:\n  ground_length: 0.12\n  links:\n"
        INITIAL)
 
 
+def scaled_odd(scale):
+    """ODD with every link's mass and inertia times scale"""
+    return re.sub(r"mass: ([0-9.]+), inertia: ([0-9.]+)",
+                  lambda m: "mass: %.17g, inertia: %.17g" % (float(m.group(1)) * scale,
+                                                             float(m.group(2)) * scale), ODD)
+
+
 def scene(name, text):
     path = os.path.join(WORK, name + ".yaml")
     with open(path, "w") as f:
@@ -65,12 +73,12 @@ def scene(name, text):
     return path
 
 
-def synth(truth, name, torque_noise, excitation=("--excitation", "scene")):
-    """A 10 s log at 1 kHz of the scene file `truth` (seed 1)"""
+def synth(truth, name, torque_noise, excitation=("--excitation", "scene"), seed=1):
+    """A 10 s log at 1 kHz of the scene file `truth`"""
     out = os.path.join(WORK, name + ".csv")
     code, _, err = cli.run(["synth-log", truth, "--out", out, "--rate", "1000", "--duration",
                             "10", "--torque-noise", str(torque_noise), "--angle-noise", "1e-5",
-                            "--seed", "1"] + list(excitation))
+                            "--seed", str(seed)] + list(excitation))
     if code != 0:
         cli.failures.append("synth-log %s: exit %d %s" % (name, code, err))
     return out
@@ -189,6 +197,30 @@ elif CASE == "small_light":
     log = synth(light, "light", 0.002, ("--excitation", "multisine", "--torque-limit", "0.2"))
     lead8 = rewrite_log(log, os.path.join(WORK, "light_lead8.csv"), shift(-8))
     small_delay("light_lead8", light, lead8, -8e-3)
+elif CASE == "cover":
+    base = scene("heavy", heavy())
+    for seed in (1, 2, 3):
+        code, err, j = identify("cover%d" % seed, base, synth(base, "heavy%d" % seed, 0.02,
+                                                               seed=seed))
+        p = {e["name"]: e for e in j.get("parameters", [])}
+        for name, truth in (("coulomb", 0.1), ("viscous", 0.05)):
+            e = p.get(name, {})
+            check(code == 0 and e.get("std") and e["ci95_low"] <= truth <= e["ci95_high"],
+                  "clean heavy log, seed %d: exit %d, %s %s +- %s, interval %s..%s (truth %g)"
+                  % (seed, code, name, e.get("value"), e.get("std"), e.get("ci95_low"),
+                     e.get("ci95_high"), truth))
+elif CASE == "scaled":
+    base = scene("heavy", heavy())
+    code, err, j = identify("m096", base, synth(scene("heavy_m096", heavy(0.96)), "m096", 0.02))
+    reason = j.get("status_reason", "")
+    check(code == 3 and reason.startswith("the scene's masses or inertias"),
+          "heavy masses 4 %% below: exit %d, %s" % (code, reason))
+    odd = scene("odd", ODD)
+    code, err, j = identify("odd105", odd, synth(scene("odd105", scaled_odd(1.05)), "odd105",
+                                                 0.001))
+    reason = j.get("status_reason", "")
+    check(code == 3 and reason.startswith("the scene's masses or inertias"),
+          "odd masses 5 %% above: exit %d, %s" % (code, reason))
 else:
     cli.failures.append("unknown case " + CASE)
 
