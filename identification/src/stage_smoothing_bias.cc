@@ -135,27 +135,23 @@ class WindowBias {
   /// the motion's higher terms over +-kReconSpan times the half-window `reach_half`
   WindowBias(const WindowFit& w, const SgOptions& sg, const std::vector<int>& cand,
              int reach_half)
-      : w_(w), sg_(sg), cand_(cand), worst_(cand.size(), -1), bias_(cand.size()) {
+      : w_(w), sg_(sg), cand_(cand), worst_(cand.size(), -1), smooth_(cand.size(), -1),
+        bias_(cand.size()), done_(cand.size(), 0) {
     const int n = w.log().size();
     dt_ = w.log().duration() / std::max(1, n - 1);
     in_ = w.bias_inputs(std::lround(kReconSpan * reach_half), cand.size() > 1 ? cand[1] : 1,
                         sg.order);
     ok_ = in_.J.rows() == 2 * static_cast<int>(w.index().size());
   }
-  /// candidate k's largest predicted |bias| / std, -1 where not predicted
+  /// candidate k's largest predicted |bias| / std, the noise's included; -1: not predicted
   double worst(int k) {
-    if (!ok_ || worst_[k] != -1 || done_[k]) return worst_[k];
-    done_[k] = true;
-    const SgOptions sg = filter(k);
-    const detail::NoiseBias noise = w_.noise_bias(sg);
-    const size_t m = w_.index().size();
-    const bool with_noise = noise.shift.size() == m && noise.score.size() == m;
-    Eigen::VectorXd std;
-    if (detail::smoothing_bias(w_.log().t, in_, centred_samples(w_, cand_[k]), sg, &bias_[k],
-                               &std, with_noise ? &noise : nullptr)) {
-      worst_[k] = worst_ratio(bias_[k], std);
-    }
+    evaluate(k);
     return worst_[k];
+  }
+  /// the same of the smoothing's bias alone
+  double smoothing(int k) {
+    evaluate(k);
+    return smooth_[k];
   }
   bool within(int k) { return worst(k) >= 0 && worst(k) <= kBiasFraction; }
   const Eigen::VectorXd& bias(int k) const { return bias_[k]; }
@@ -164,37 +160,49 @@ class WindowBias {
     sg.half_window_s = cand_[k] * dt_;
     return sg;
   }
-  /// "h: ratio, ..." over the candidates evaluated
+  /// "h: ratio (smoothing's ratio), ..." over the candidates evaluated
   std::string table() const {
     std::string t;
     for (size_t k = 0; k < cand_.size(); ++k) {
       if (worst_[k] < 0) continue;
       t += (t.empty() ? "" : ", ") + std::to_string(cand_[k]) + ": " +
-           format_significant(worst_[k]);
+           format_significant(worst_[k]) + " (" + format_significant(smooth_[k]) + ")";
     }
     return t;
   }
 
  private:
+  void evaluate(int k) {
+    if (!ok_ || done_[k]) return;
+    done_[k] = true;
+    const SgOptions sg = filter(k);
+    const std::vector<char> keep = centred_samples(w_, cand_[k]);
+    Eigen::VectorXd b, std;
+    if (!detail::smoothing_bias(w_.log().t, in_, keep, sg, &b, &std)) return;
+    smooth_[k] = worst_ratio(b, std);
+    const detail::NoiseBias noise = w_.noise_bias(sg);
+    const size_t m = w_.index().size();
+    if (noise.shift.size() != m || noise.score.size() != m) {
+      bias_[k] = b, worst_[k] = smooth_[k];
+    } else if (detail::smoothing_bias(w_.log().t, in_, keep, sg, &bias_[k], &std, &noise)) {
+      worst_[k] = worst_ratio(bias_[k], std);
+    }
+  }
   const WindowFit& w_;
   SgOptions sg_;
   std::vector<int> cand_;
-  std::vector<double> worst_;
+  std::vector<double> worst_, smooth_;
   std::vector<Eigen::VectorXd> bias_;
-  std::vector<char> done_ = std::vector<char>(cand_.size(), 0);
+  std::vector<char> done_;
   detail::BiasInputs in_;
   double dt_ = 1;
   bool ok_ = false;
 };
 
-/// The index of the candidate of least predicted bias among 1..top evaluated, then up from top
-/// while the bias falls (-1: none predicted)
-int least_bias(WindowBias* wb, int top, int K) {
-  int pick = -1;
-  for (int k = 1; k <= top; ++k) {
-    if (wb->worst(k) >= 0 && (pick < 0 || wb->worst(k) < wb->worst(pick))) pick = k;
-  }
-  for (int k = top + 1; pick == k - 1 && k < K; ++k) {
+/// The candidate of least predicted bias from `from` up, while the bias falls (-1: none)
+int least_bias_up(WindowBias* wb, int from, int K) {
+  int pick = wb->worst(from) >= 0 ? from : -1;
+  for (int k = from + 1; pick == k - 1 && k < K; ++k) {
     if (wb->worst(k) >= 0 && wb->worst(k) < wb->worst(pick)) pick = k;
   }
   return pick;
@@ -231,38 +239,41 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
             std::to_string(given_order) + " ";
   }
   WindowBias wb(w, given, cand, cand[rule]);
-  // the largest window up to the rule's within kBiasFraction: the noise's bias grows as the
-  // window shrinks, the smoothing's as it grows
-  int chosen = -1;
-  for (int k = rule; k >= 1 && chosen < 0 && !raised; --k) {
-    if (wb.worst(k) < 0) break;
-    if (wb.within(k)) chosen = k;
+  // the largest window up to the rule's whose smoothing bias is within kBiasFraction (else the
+  // rule's); with the raised order, the second smallest
+  int base = raised ? 1 : -1;
+  for (int k = rule; k >= 1 && base < 0; --k) {
+    if (wb.smoothing(k) < 0) break;
+    if (wb.smoothing(k) <= kBiasFraction) base = k;
   }
-  // none: the noise's bias dominates up to the rule's window (a heavy mechanism's reactions, or
-  // a raised order chosen by the noise of the residual's ratio); then up from it while the
-  // predicted bias falls, the one of least predicted bias
-  const int pick = chosen >= 0 ? chosen : least_bias(&wb, rule, K);
+  if (base < 0) base = rule;
+  // where the noise's bias, with the smoothing's, exceeds kBiasFraction there (a heavy
+  // mechanism's reactions), up from it while the predicted bias falls: the noise's bias falls as
+  // the window grows, the smoothing's grows. Never down: the prediction of the noise's bias is
+  // least reliable where it is largest, at the smallest windows (a light mechanism's at half-window
+  // 4: +0.003 std predicted, -2.3 measured).
+  const int pick = wb.within(base) ? base : least_bias_up(&wb, base, K);
   if (pick < 0) return;
   if (raised_bias && raised_bias->worst(1) <= wb.worst(pick)) {
     *bias_kept = raised_bias->bias(1);
-    *choice += "; the raised order's predicted bias the least (predicted |bias| / std: " + table +
-               wb.table() + ")";
+    *choice += "; the raised order's predicted bias the least (predicted |bias| / std, the "
+               "smoothing's and the noise's through the reactions: " +
+               table + wb.table() + ")";
     return;
   }
   *sg_fit = wb.filter(pick);
   *bias_kept = wb.bias(pick);
   *choice += "; then half-window " + std::to_string(cand[pick]) + " samples" +
              (raised ? " of order " + std::to_string(given_order) : std::string()) + ", " +
-             (chosen < 0 ? "the one of least predicted bias (none up to the rule's keeps it within " +
-                               format_significant(kBiasFraction) + " std)"
-                         : "the largest up to the rule's whose predicted bias is within " +
-                               format_significant(kBiasFraction) +
-                               " std of every friction coefficient") +
-             " (predicted |bias| / std by half-window, the smoothing's, the motion's higher terms "
-             "from local polynomials of degree " +
+             (pick == base ? "the largest up to the rule's whose predicted smoothing bias is within " +
+                               format_significant(kBiasFraction) + " std of every friction coefficient"
+                         : "the one of least predicted bias up from the largest whose smoothing bias is within " +
+                               format_significant(kBiasFraction) + " std") +
+             " (predicted |bias| / std by half-window, the smoothing's and the noise's through "
+             "the reactions (the smoothing's alone), the motion's higher terms from local "
+             "polynomials of degree " +
              std::to_string(given_order + detail::kReconExtra) + " over +-" +
-             format_significant(kReconSpan) +
-             " times the rule's half-window, and the noise's through the reactions: " + table +
+             format_significant(kReconSpan) + " times the rule's half-window: " + table +
              wb.table() + ")";
 }
 
