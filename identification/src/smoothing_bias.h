@@ -48,6 +48,8 @@ struct BiasInputs {
   double s2 = 0;
   Eigen::MatrixXd T;  ///< internal to public parameters
   int friction_size = 0;
+  /// the public friction coefficients at the fit (empty: not given)
+  Eigen::VectorXd friction;
   RateSource source = RateSource::kFromAngles;
   SensorNoise noise;
 };

@@ -440,18 +440,35 @@ void unbounded_error(const Fit& f, const std::string& what, IdentifyResult* out)
   }
 }
 
-/// A model error the log evidences decisively (a cause alone beyond kDecisiveCauseZ) that the
-/// checks above leave usable, because no cause stands out beyond the others (masses and inertias
-/// scaled alike read as both torque gains off alike) or because the one they name explains
-/// clearly less than another, makes the fit unusable whatever the linearized move of the
-/// friction: the small windows' noise, which such an error makes the window rule choose,
-/// understates that move (a heavy mechanism's links 3 % lighter than the scene: viscous 36 std
-/// off, the inertias' refit moving it less than 3 std; evidence alone 52 std for the inertias,
-/// 95 for the torque readings, where clean logs of three mechanisms read at most 16). The reason
-/// names the cause that explains most, the inertias where they explain as much (a common scale
-/// of the torques is the masses' scale).
-void decisive_error(const CauseSteps& cs, IdentifyResult* out) {
+/// A model error the log evidences decisively that the checks above leave usable makes the fit
+/// unusable (the first reason stays):
+/// - the cause named, evidenced beyond the other causes by more than kDecisiveCauseZ, would move
+///   a friction coefficient beyond kFreedMove std (the warning's bar): an encoder 0.005 rad off a
+///   heavy mechanism, read at 1877 std beyond the others, coulomb 3.6 std, viscous 5.2 std;
+/// - a cause alone beyond kDecisiveCauseZ while no cause stands out beyond the others (the
+///   masses and inertias scaled alike read as both torque gains off alike), or while the cause
+///   named explains clearly less than another: whatever the linearized move of the friction,
+///   which the small windows' noise, chosen by such an error, understates (a heavy mechanism's
+///   links 3 % lighter than the scene: viscous 36 std off, the inertias' refit moving it less
+///   than 3 std; evidence alone 52 std for the inertias, 95 for the torque readings, where clean
+///   logs of three mechanisms read at most 16). The reason names the cause that explains most,
+///   the inertias where they explain as much (a common scale of the torques is the masses').
+void decisive_error(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
   if (!out->unusable.empty()) return;
+  const int named = named_cause(cs);
+  double largest = 0;
+  if (named < kCauseCount && cs.report[cs.slot[named]].z_given > kDecisiveCauseZ &&
+      !friction_clause(f, *out, cs.alone[named], false, true, &largest).empty() &&
+      (largest == 0 || largest > kFreedMove)) {
+    out->unusable = attributed_what(cs, named) + ": the log evidences it by " +
+                    format_significant(cs.report[cs.slot[named]].z_given, 2) +
+                    " std beyond the other causes (more than " +
+                    format_significant(kDecisiveCauseZ) + "), and it would move the friction " +
+                    (largest == 0 ? std::string("from a bound")
+                                  : "by " + format_significant(largest, 2) + " std") +
+                    " (see the warnings)";
+    return;
+  }
   bool decisive = false;
   for (int id = 0; id < kCauseDelay; ++id) {
     decisive = decisive || (cs.slot[id] >= 0 && cs.alone[id].ok && cs.z(id) > kDecisiveCauseZ);
@@ -600,13 +617,13 @@ ModelVerdict model_check(const Fit& fit, IdentifyResult* out) {
     }
     unusable_move(largest, what, out);
     unbounded_error(f, what, out);
-    decisive_error(cs, out);
+    decisive_error(f, cs, out);
     return verdict;
   }
   inertia_check(f, cs, !idx[1].empty(), out);
   const int cause = named_cause(cs);
   if (cause < kCauseCount) unbounded_error(f, attributed_what(cs, cause), out);
-  decisive_error(cs, out);
+  decisive_error(f, cs, out);
   return verdict;
 }
 
