@@ -137,7 +137,7 @@ class WindowBias {
   WindowBias(const WindowFit& w, const SgOptions& sg, const std::vector<int>& cand,
              int reach_half)
       : w_(w), sg_(sg), cand_(cand), worst_(cand.size(), -1), smooth_(cand.size(), -1),
-        bias_(cand.size()), done_(cand.size(), 0) {
+        bias_(cand.size()), smooth_bias_(cand.size()), done_(cand.size(), 0) {
     const int n = w.log().size();
     dt_ = w.log().duration() / std::max(1, n - 1);
     in_ = w.bias_inputs(std::lround(kReconSpan * reach_half), cand.size() > 1 ? cand[1] : 1,
@@ -156,6 +156,7 @@ class WindowBias {
   }
   bool within(int k) { return worst(k) >= 0 && worst(k) <= kBiasFraction; }
   const Eigen::VectorXd& bias(int k) const { return bias_[k]; }
+  const Eigen::VectorXd& smoothing_bias(int k) const { return smooth_bias_[k]; }
   SgOptions filter(int k) const {
     SgOptions sg = sg_;
     sg.half_window_s = cand_[k] * dt_;
@@ -178,7 +179,8 @@ class WindowBias {
     done_[k] = true;
     const SgOptions sg = filter(k);
     const std::vector<char> keep = centred_samples(w_, cand_[k]);
-    Eigen::VectorXd b, std;
+    Eigen::VectorXd& b = smooth_bias_[k];
+    Eigen::VectorXd std;
     if (!detail::smoothing_bias(w_.log().t, in_, keep, sg, &b, &std)) return;
     smooth_[k] = worst_ratio(b, std);
     // the noise's bias is one Gauss-Newton step from the fit: where a friction coefficient's std
@@ -200,7 +202,7 @@ class WindowBias {
   SgOptions sg_;
   std::vector<int> cand_;
   std::vector<double> worst_, smooth_;
-  std::vector<Eigen::VectorXd> bias_;
+  std::vector<Eigen::VectorXd> bias_, smooth_bias_;
   std::vector<char> done_;
   detail::BiasInputs in_;
   double dt_ = 1;
@@ -270,7 +272,9 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
     return;
   }
   *sg_fit = wb.filter(pick);
-  *bias_kept = wb.bias(pick);
+  // within kBiasFraction at the window the smoothing's bias chose, the smoothing's alone is taken
+  // off, as without the noise's prediction (the shipped paper log's estimates stay as they were)
+  *bias_kept = pick == base ? wb.smoothing_bias(pick) : wb.bias(pick);
   *choice += "; then half-window " + std::to_string(cand[pick]) + " samples" +
              (raised ? " of order " + std::to_string(given_order) : std::string()) + ", " +
              (pick == base ? "the largest up to the rule's whose predicted smoothing bias is within " +
