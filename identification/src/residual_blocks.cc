@@ -172,9 +172,9 @@ bool add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayo
   });
 }
 
-bool sample_residual(const Params<double>& scene, const ParameterLayout& layout,
-                     const Sample& s, const EvalOptions& eval, const double* x,
-                     Eigen::Vector2d* r, Eigen::MatrixXd* J) {
+bool sample_residual(const Params<double>& scene, const ParameterLayout& layout, const Sample& s,
+                     const EvalOptions& eval, const double* x, Eigen::Vector2d* r,
+                     Eigen::MatrixXd* J) {
   const int P = layout.size();
   bool ok = false;
   const bool sized = with_size(P, [&](auto n) {

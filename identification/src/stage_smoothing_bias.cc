@@ -134,10 +134,15 @@ namespace {
 class WindowBias {
  public:
   /// the motion's higher terms over +-kReconSpan times the half-window `reach_half`
-  WindowBias(const WindowFit& w, const SgOptions& sg, const std::vector<int>& cand,
-             int reach_half)
-      : w_(w), sg_(sg), cand_(cand), worst_(cand.size(), -1), smooth_(cand.size(), -1),
-        bias_(cand.size()), smooth_bias_(cand.size()), done_(cand.size(), 0) {
+  WindowBias(const WindowFit& w, const SgOptions& sg, const std::vector<int>& cand, int reach_half)
+      : w_(w),
+        sg_(sg),
+        cand_(cand),
+        worst_(cand.size(), -1),
+        smooth_(cand.size(), -1),
+        bias_(cand.size()),
+        smooth_bias_(cand.size()),
+        done_(cand.size(), 0) {
     const int n = w.log().size();
     dt_ = w.log().duration() / std::max(1, n - 1);
     in_ = w.bias_inputs(std::lround(kReconSpan * reach_half), cand.size() > 1 ? cand[1] : 1,
@@ -234,10 +239,10 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
   // the order raised by the window rule: its one window, kept when within kBiasFraction (a log
   // sampled too slowly for order 5) or when every window showed bias in the residual
   if (raised && (rates_biased || K < 2)) return;
-  const int rule = raised ? 1
-                          : static_cast<int>(std::find(cand.begin(), cand.end(),
-                                                       sg_half_window(*sg_fit, dt)) -
-                                             cand.begin());
+  const int rule =
+      raised ? 1
+             : static_cast<int>(std::find(cand.begin(), cand.end(), sg_half_window(*sg_fit, dt)) -
+                                cand.begin());
   if (rule < 1 || rule >= K) return;
   std::string table;
   std::unique_ptr<WindowBias> raised_bias;
@@ -266,27 +271,29 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
   if (pick < 0) return;
   if (raised_bias && raised_bias->worst(1) <= wb.worst(pick)) {
     *bias_kept = raised_bias->bias(1);
-    *choice += "; the raised order's predicted bias the least (predicted |bias| / std, the "
-               "smoothing's and the noise's through the reactions: " +
-               table + wb.table() + ")";
+    *choice +=
+        "; the raised order's predicted bias the least (predicted |bias| / std, the "
+        "smoothing's and the noise's through the reactions: " +
+        table + wb.table() + ")";
     return;
   }
   *sg_fit = wb.filter(pick);
   // within kBiasFraction at the window the smoothing's bias chose, the smoothing's alone is taken
   // off, as without the noise's prediction (the shipped paper log's estimates stay as they were)
   *bias_kept = pick == base ? wb.smoothing_bias(pick) : wb.bias(pick);
-  *choice += "; then half-window " + std::to_string(cand[pick]) + " samples" +
-             (raised ? " of order " + std::to_string(given_order) : std::string()) + ", " +
-             (pick == base ? "the largest up to the rule's whose predicted smoothing bias is within " +
-                               format_significant(kBiasFraction) + " std of every friction coefficient"
-                         : "the one of least predicted bias up from the largest whose smoothing bias is within " +
-                               format_significant(kBiasFraction) + " std") +
-             " (predicted |bias| / std by half-window, the smoothing's and the noise's through "
-             "the reactions (the smoothing's alone), the motion's higher terms from local "
-             "polynomials of degree " +
-             std::to_string(given_order + detail::kReconExtra) + " over +-" +
-             format_significant(kReconSpan) + " times the rule's half-window: " + table +
-             wb.table() + ")";
+  *choice +=
+      "; then half-window " + std::to_string(cand[pick]) + " samples" +
+      (raised ? " of order " + std::to_string(given_order) : std::string()) + ", " +
+      (pick == base
+           ? "the largest up to the rule's whose predicted smoothing bias is within " +
+                 format_significant(kBiasFraction) + " std of every friction coefficient"
+           : "the one of least predicted bias up from the largest whose smoothing bias is within " +
+                 format_significant(kBiasFraction) + " std") +
+      " (predicted |bias| / std by half-window, the smoothing's and the noise's through "
+      "the reactions (the smoothing's alone), the motion's higher terms from local "
+      "polynomials of degree " +
+      std::to_string(given_order + detail::kReconExtra) + " over +-" +
+      format_significant(kReconSpan) + " times the rule's half-window: " + table + wb.table() + ")";
 }
 
 // The smallest candidate within kBiasFraction, found by a walk from the filter's window as given
