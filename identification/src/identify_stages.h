@@ -135,6 +135,12 @@ bool add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayo
                                 const std::vector<Sample>& samples, const EvalOptions& eval,
                                 Loss loss, double loss_scale, double* x, ceres::Problem* problem);
 
+/// One sample's inverse-dynamics residual r and its Jacobian J = d r / d x (2 x P) at the
+/// parameters x, with the cost add_inverse_dynamics_terms gives it; false where it fails.
+bool sample_residual(const Params<double>& scene, const ParameterLayout& layout, const Sample& s,
+                     const EvalOptions& eval, const double* x, Eigen::Vector2d* r,
+                     Eigen::MatrixXd* J);
+
 /// Consecutive windows [i0, i1] of about window_s over the samples [first, last].
 std::vector<std::pair<int, int>> make_windows(const TorqueLog& log, int first, int last,
                                               double window_s);
@@ -231,6 +237,9 @@ class FiveBarWindowFit : public WindowFit {
   void levels(const std::vector<int>& probe, const SgOptions& sg, double rms[2],
               double floor[2]) const override;
   detail::BiasInputs bias_inputs(int reach, int min_half, int order) const override;
+  /// each crank's angle noise and its filtered rate and acceleration, by a 3-point Gauss-Hermite
+  /// rule along the principal axes of their covariance (the two cranks' noises independent)
+  detail::NoiseBias noise_bias(const SgOptions& sg) const override;
 
  private:
   const Fit& f_;

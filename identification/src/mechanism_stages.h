@@ -80,14 +80,18 @@ class WindowFit {
 /// smallest window is the choice), *rates_biased, and *choice (the text of the choice).
 void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::string* choice);
 
-/// After choose_window: the largest window up to its choice whose predicted smoothing bias
-/// (smoothing_bias.h) is within kBiasFraction of the std for every friction coefficient, from
-/// the rule's choice down to the second smallest window; the rule's choice when none is. Angles
-/// only,
-/// the filter's order as given (`given_order`, not raised). *bias: the prediction at the window
-/// kept (left empty when not predicted); *choice gets its text appended.
-void limit_smoothing_bias(const WindowFit& w, int given_order, SgOptions* sg, Eigen::VectorXd* bias,
-                          std::string* choice);
+/// After choose_window: the largest window up to its choice whose predicted bias (smoothing_bias.h:
+/// the smoothing's, and the noise's through the reactions where the mechanism predicts it,
+/// WindowFit::noise_bias) is within kBiasFraction of the std for every friction coefficient, from
+/// the rule's choice down to the second smallest window; when none is (the noise's bias grows as
+/// the window shrinks: a heavy mechanism's reactions), the one of least predicted bias up to the
+/// rule's choice and up from it while the bias falls. A filter whose order choose_window raised
+/// (`given_order`: the order before) is kept when its own predicted bias is within
+/// kBiasFraction, or when `rates_biased`; else the windows of the given order are searched as
+/// above, from the second smallest up. Angles only. *bias: the prediction at the window kept
+/// (left empty when not predicted); *choice gets its text appended.
+void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased, SgOptions* sg,
+                          Eigen::VectorXd* bias, std::string* choice);
 
 /// The window of a mechanism that predicts the noise's bias (WindowFit::noise_bias), in place of
 /// choose_window and limit_smoothing_bias: the noise's bias through the reactions falls as the

@@ -31,19 +31,23 @@ ceres::LossFunction* make_loss(Loss loss, double scale) {
 /// structure (residual.h: the Jets carry only the P active parameters through a five-number
 /// loop), or the full model where the structure cannot be read off (fallback_cost.h).
 template <int P>
+ceres::CostFunction* sample_cost(const Params<double>& scene, const ParameterLayout& layout,
+                                 const Sample& s, const EvalOptions& eval) {
+  SampleStructure st;
+  if (sample_structure(scene, s, eval, &st)) {
+    return new ceres::AutoDiffCostFunction<StructuredResidual, 2, P>(
+        new StructuredResidual(scene, layout, st, s, eval));
+  }
+  return new FallbackCost<P>(InverseDynamicsResidual(scene, layout, s, eval));
+}
+
+template <int P>
 void add_sized_terms(const Params<double>& scene, const ParameterLayout& layout,
                      const std::vector<Sample>& samples, const EvalOptions& eval, Loss loss,
                      double loss_scale, double* x, ceres::Problem* problem) {
   for (const Sample& s : samples) {
-    SampleStructure st;
-    ceres::CostFunction* cost = nullptr;
-    if (sample_structure(scene, s, eval, &st)) {
-      cost = new ceres::AutoDiffCostFunction<StructuredResidual, 2, P>(
-          new StructuredResidual(scene, layout, st, s, eval));
-    } else {
-      cost = new FallbackCost<P>(InverseDynamicsResidual(scene, layout, s, eval));
-    }
-    problem->AddResidualBlock(cost, make_loss(loss, loss_scale), x);
+    problem->AddResidualBlock(sample_cost<P>(scene, layout, s, eval), make_loss(loss, loss_scale),
+                              x);
   }
 }
 
@@ -166,6 +170,22 @@ bool add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayo
   return with_size(layout.size(), [&](auto n) {
     add_sized_terms<decltype(n)::value>(scene, layout, samples, eval, loss, loss_scale, x, problem);
   });
+}
+
+bool sample_residual(const Params<double>& scene, const ParameterLayout& layout, const Sample& s,
+                     const EvalOptions& eval, const double* x, Eigen::Vector2d* r,
+                     Eigen::MatrixXd* J) {
+  const int P = layout.size();
+  bool ok = false;
+  const bool sized = with_size(P, [&](auto n) {
+    const std::unique_ptr<ceres::CostFunction> cost(
+        sample_cost<decltype(n)::value>(scene, layout, s, eval));
+    Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor> jac(2, P);
+    double* jacobians[] = {jac.data()};
+    ok = cost->Evaluate(&x, r->data(), jacobians);
+    *J = jac;
+  });
+  return sized && ok && r->allFinite() && J->allFinite();
 }
 
 void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem) {

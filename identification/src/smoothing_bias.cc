@@ -48,6 +48,21 @@ void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen:
   }
 }
 
+namespace {
+
+/// The 3-point Gauss-Hermite points along the principal axes of the covariance C:
+/// sqrt(3 lambda_k) v_k for each eigenpair (weights 1/6 at +-, 2/3 at 0)
+std::array<Eigen::Vector3d, 3> gauss_hermite_axes(const Eigen::Matrix3d& C) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
+  std::array<Eigen::Vector3d, 3> axes;
+  for (int k = 0; k < 3; ++k) {
+    axes[k] = std::sqrt(3.0 * std::max(0.0, eig.eigenvalues()(k))) * eig.eigenvectors().col(k);
+  }
+  return axes;
+}
+
+}  // namespace
+
 Eigen::Matrix3d filtered_noise_covariance(int at, int lo, const std::vector<double>& d1,
                                           const std::vector<double>& d2, double sigma) {
   Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
@@ -63,12 +78,9 @@ bool noise_bias_at(const Eigen::Matrix3d& C, const PerturbedTorques& torques,
   Eigen::Vector2d m0, m1;
   Eigen::MatrixXd A0, A1;
   if (!torques(Eigen::Vector3d::Zero(), &m0, &A0)) return false;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(C);
   shift->setZero();
   *score = Eigen::VectorXd::Zero(A0.cols());
-  for (int k = 0; k < 3; ++k) {
-    const Eigen::Vector3d e =
-        std::sqrt(3.0 * std::max(0.0, eig.eigenvalues()(k))) * eig.eigenvectors().col(k);
+  for (const Eigen::Vector3d& e : gauss_hermite_axes(C)) {
     for (double side : {1.0, -1.0}) {
       if (!torques(side * e, &m1, &A1)) return false;
       for (int j = 0; j < 2; ++j) {
@@ -78,6 +90,14 @@ bool noise_bias_at(const Eigen::Matrix3d& C, const PerturbedTorques& torques,
     }
   }
   return true;
+}
+
+std::array<Eigen::Vector3d, 3> noise_axes(const std::vector<double>& t, const SgOptions& sg) {
+  const int mid = static_cast<int>(t.size()) / 2;
+  int lo = 0;
+  std::vector<double> d1, d2;
+  savitzky_golay_taps(t, mid, sg, &lo, &d1, &d2);
+  return gauss_hermite_axes(filtered_noise_covariance(mid, lo, d1, d2, 1.0));
 }
 
 bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <functional>
 #include <vector>
 
@@ -48,6 +49,8 @@ struct BiasInputs {
   double s2 = 0;
   Eigen::MatrixXd T;  ///< internal to public parameters
   int friction_size = 0;
+  /// the public friction coefficients at the fit (empty: not given)
+  Eigen::VectorXd friction;
   RateSource source = RateSource::kFromAngles;
   SensorNoise noise;
 };
@@ -81,6 +84,13 @@ using PerturbedTorques =
 /// Taylor term is not; false where an evaluation fails.
 bool noise_bias_at(const Eigen::Matrix3d& C, const PerturbedTorques& torques,
                    Eigen::Vector2d* shift, Eigen::VectorXd* score);
+
+/// The Gauss-Hermite points of one crank's noise for the filter `sg` at a centred sample of the
+/// uniform grid t: sqrt(3 lambda_k) v_k for each eigenpair of the covariance of (angle, filtered
+/// rate, filtered acceleration) per unit angle noise. A 3-point rule along each axis (weights
+/// 1/6 at +-, 2/3 at 0) is exact for quadratic torques, and bounded where a reaction passes
+/// through zero (its norm's kink) as a Taylor term is not.
+std::array<Eigen::Vector3d, 3> noise_axes(const std::vector<double>& t, const SgOptions& sg);
 
 /// Predicted smoothing bias and errors-in-variables std of the public friction coefficients for
 /// the filter `sg`, over the samples u with keep[u] (false when too few or singular). With

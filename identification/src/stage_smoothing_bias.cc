@@ -15,6 +15,9 @@ namespace {
 /// span)
 constexpr double kReconSpan = 2.0;
 
+/// The noise's bias is evaluated at about this many samples of the fit (noise_bias)
+constexpr int kNoiseBiasSamples = 800;
+
 }  // namespace
 
 /// At the preliminary fit (f.x, f.samples): the residual's and the kinematic Jacobians, the
@@ -51,9 +54,51 @@ detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int or
   in.s2 = f.prior_scale * f.prior_scale;
   in.T = to_public(f.layout);
   in.friction_size = f.layout.friction_size();
+  in.friction = (in.T * Eigen::Map<const Eigen::VectorXd>(f.x.data(), P)).head(in.friction_size);
   in.source = f.source;
   in.noise = f.noise;
   return in;
+}
+
+detail::NoiseBias FiveBarWindowFit::noise_bias(const SgOptions& sg) const {
+  const Fit& f = f_;
+  const int P = f.layout.size(), m = static_cast<int>(f.samples.size());
+  detail::NoiseBias nb;
+  if (f.source != detail::RateSource::kFromAngles) return nb;
+  const std::array<Eigen::Vector3d, 3> axes = detail::noise_axes(f.cond.log.t, sg);
+  nb.shift.assign(m, Eigen::Vector2d::Zero());
+  nb.score.assign(m, Eigen::VectorXd::Zero(P));
+  // the bias is a sum over the samples of a smooth function of the motion: evaluated at every
+  // few samples of a long log (kNoiseBiasSamples in all), each stands for its neighbours
+  const int stride = std::max(1, m / kNoiseBiasSamples);
+  for (int u0 = 0; u0 < m; u0 += stride) {
+    const Sample& s = f.samples[u0];
+    Eigen::Vector2d r0, r1;
+    Eigen::MatrixXd J0, J1;
+    if (!sample_residual(f.scene, f.layout, s, f.eval, f.x.data(), &r0, &J0)) continue;
+    Eigen::Vector2d shift = Eigen::Vector2d::Zero();
+    Eigen::VectorXd score = Eigen::VectorXd::Zero(P);
+    bool ok = true;
+    for (int c = 0; c < kDof && ok; ++c) {
+      for (int k = 0; k < 3 && ok; ++k) {
+        const Eigen::Vector3d e = f.noise.angle[c] * axes[k];
+        for (double side : {1.0, -1.0}) {
+          Sample p = s;
+          (c == 0 ? p.th1 : p.th2) += side * e(0);
+          (c == 0 ? p.w1 : p.w2) += side * e(1);
+          (c == 0 ? p.a1 : p.a2) += side * e(2);
+          ok = sample_residual(f.scene, f.layout, p, f.eval, f.x.data(), &r1, &J1);
+          if (!ok) break;
+          // r = tau - M: the torques' change is -(r1 - r0), their Jacobian's -(J1 - J0)
+          shift -= (r1 - r0) / 6;
+          score += (J1 - J0).transpose() * (r1 - r0) / 6;
+        }
+      }
+    }
+    if (!ok) continue;
+    for (int u = u0; u < std::min(m, u0 + stride); ++u) nb.shift[u] = shift, nb.score[u] = score;
+  }
+  return nb;
 }
 
 namespace {
@@ -82,50 +127,173 @@ std::vector<char> centred_samples(const WindowFit& w, int m) {
 
 }  // namespace
 
-void limit_smoothing_bias(const WindowFit& w, int given_order, SgOptions* sg_fit,
+namespace {
+
+/// The predicted bias (the smoothing's, and the noise's where the mechanism predicts it) of the
+/// filters of one order over the window candidates, each evaluated once, on demand.
+class WindowBias {
+ public:
+  /// the motion's higher terms over +-kReconSpan times the half-window `reach_half`
+  WindowBias(const WindowFit& w, const SgOptions& sg, const std::vector<int>& cand, int reach_half)
+      : w_(w),
+        sg_(sg),
+        cand_(cand),
+        worst_(cand.size(), -1),
+        smooth_(cand.size(), -1),
+        bias_(cand.size()),
+        smooth_bias_(cand.size()),
+        done_(cand.size(), 0) {
+    const int n = w.log().size();
+    dt_ = w.log().duration() / std::max(1, n - 1);
+    in_ = w.bias_inputs(std::lround(kReconSpan * reach_half), cand.size() > 1 ? cand[1] : 1,
+                        sg.order);
+    ok_ = in_.J.rows() == 2 * static_cast<int>(w.index().size());
+  }
+  /// candidate k's largest predicted |bias| / std, the noise's included; -1: not predicted
+  double worst(int k) {
+    evaluate(k);
+    return worst_[k];
+  }
+  /// the same of the smoothing's bias alone
+  double smoothing(int k) {
+    evaluate(k);
+    return smooth_[k];
+  }
+  bool within(int k) { return worst(k) >= 0 && worst(k) <= kBiasFraction; }
+  const Eigen::VectorXd& bias(int k) const { return bias_[k]; }
+  const Eigen::VectorXd& smoothing_bias(int k) const { return smooth_bias_[k]; }
+  SgOptions filter(int k) const {
+    SgOptions sg = sg_;
+    sg.half_window_s = cand_[k] * dt_;
+    return sg;
+  }
+  /// "h: ratio (smoothing's ratio), ..." over the candidates evaluated
+  std::string table() const {
+    std::string t;
+    for (size_t k = 0; k < cand_.size(); ++k) {
+      if (worst_[k] < 0) continue;
+      t += (t.empty() ? "" : ", ") + std::to_string(cand_[k]) + ": " +
+           format_significant(worst_[k]) + " (" + format_significant(smooth_[k]) + ")";
+    }
+    return t;
+  }
+
+ private:
+  void evaluate(int k) {
+    if (!ok_ || done_[k]) return;
+    done_[k] = true;
+    const SgOptions sg = filter(k);
+    const std::vector<char> keep = centred_samples(w_, cand_[k]);
+    Eigen::VectorXd& b = smooth_bias_[k];
+    Eigen::VectorXd std;
+    if (!detail::smoothing_bias(w_.log().t, in_, keep, sg, &b, &std)) return;
+    smooth_[k] = worst_ratio(b, std);
+    // the noise's bias is one Gauss-Newton step from the fit: where a friction coefficient's std
+    // exceeds its value (a light mechanism's log at 0.02 N m of torque noise), it predicts
+    // nothing (4.5 std at half-window 10 there, on a coulomb std of 0.097)
+    bool determined = true;
+    for (int p = 0; p < in_.friction.size() && p < std.size(); ++p) {
+      determined = determined && std(p) < std::abs(in_.friction(p));
+    }
+    const detail::NoiseBias noise = determined ? w_.noise_bias(sg) : detail::NoiseBias{};
+    const size_t m = w_.index().size();
+    if (noise.shift.size() != m || noise.score.size() != m) {
+      bias_[k] = b, worst_[k] = smooth_[k];
+    } else if (detail::smoothing_bias(w_.log().t, in_, keep, sg, &bias_[k], &std, &noise)) {
+      worst_[k] = worst_ratio(bias_[k], std);
+    }
+  }
+  const WindowFit& w_;
+  SgOptions sg_;
+  std::vector<int> cand_;
+  std::vector<double> worst_, smooth_;
+  std::vector<Eigen::VectorXd> bias_, smooth_bias_;
+  std::vector<char> done_;
+  detail::BiasInputs in_;
+  double dt_ = 1;
+  bool ok_ = false;
+};
+
+/// The candidate of least predicted bias from `from` up, while the bias falls (-1: none)
+int least_bias_up(WindowBias* wb, int from, int K) {
+  int pick = wb->worst(from) >= 0 ? from : -1;
+  for (int k = from + 1; pick == k - 1 && k < K; ++k) {
+    if (wb->worst(k) >= 0 && wb->worst(k) < wb->worst(pick)) pick = k;
+  }
+  return pick;
+}
+
+}  // namespace
+
+void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased, SgOptions* sg_fit,
                           Eigen::VectorXd* bias_kept, std::string* choice) {
   const TorqueLog& log = w.log();
-  const std::vector<int>& index = w.index();
   const int n = log.size();
-  if (w.source() != detail::RateSource::kFromAngles || sg_fit->order != given_order || n < 2) {
+  if (w.source() != detail::RateSource::kFromAngles || n < 2) return;
+  const double dt = log.duration() / (n - 1);
+  SgOptions given = *sg_fit;
+  given.order = given_order;
+  const std::vector<int> cand = window_candidates(n, dt, given_order);
+  const int K = static_cast<int>(cand.size());
+  const bool raised = sg_fit->order != given_order;
+  // the order raised by the window rule: its one window, kept when within kBiasFraction (a log
+  // sampled too slowly for order 5) or when every window showed bias in the residual
+  if (raised && (rates_biased || K < 2)) return;
+  const int rule =
+      raised ? 1
+             : static_cast<int>(std::find(cand.begin(), cand.end(), sg_half_window(*sg_fit, dt)) -
+                                cand.begin());
+  if (rule < 1 || rule >= K) return;
+  std::string table;
+  std::unique_ptr<WindowBias> raised_bias;
+  if (raised) {
+    const std::vector<int> one{cand[0], sg_half_window(*sg_fit, dt)};
+    raised_bias = std::make_unique<WindowBias>(w, *sg_fit, one, one[1]);
+    if (raised_bias->worst(1) < 0 || raised_bias->within(1)) return;
+    table = "order " + std::to_string(sg_fit->order) + " " + raised_bias->table() + "; order " +
+            std::to_string(given_order) + " ";
+  }
+  WindowBias wb(w, given, cand, cand[rule]);
+  // the largest window up to the rule's whose smoothing bias is within kBiasFraction (else the
+  // rule's); with the raised order, the second smallest
+  int base = raised ? 1 : -1;
+  for (int k = rule; k >= 1 && base < 0; --k) {
+    if (wb.smoothing(k) < 0) break;
+    if (wb.smoothing(k) <= kBiasFraction) base = k;
+  }
+  if (base < 0) base = rule;
+  // where the noise's bias, with the smoothing's, exceeds kBiasFraction there (a heavy
+  // mechanism's reactions), up from it while the predicted bias falls: the noise's bias falls as
+  // the window grows, the smoothing's grows. Never down: the prediction of the noise's bias is
+  // least reliable where it is largest, at the smallest windows (a light mechanism's at half-window
+  // 4: +0.003 std predicted, -2.3 measured).
+  const int pick = wb.within(base) ? base : least_bias_up(&wb, base, K);
+  if (pick < 0) return;
+  if (raised_bias && raised_bias->worst(1) <= wb.worst(pick)) {
+    *bias_kept = raised_bias->bias(1);
+    *choice +=
+        "; the raised order's predicted bias the least (predicted |bias| / std, the "
+        "smoothing's and the noise's through the reactions: " +
+        table + wb.table() + ")";
     return;
   }
-  const double dt = log.duration() / (n - 1);
-  const std::vector<int> cand = window_candidates(n, dt, sg_fit->order);
-  const int rule = static_cast<int>(
-      std::find(cand.begin(), cand.end(), sg_half_window(*sg_fit, dt)) - cand.begin());
-  if (rule < 1 || rule >= static_cast<int>(cand.size())) return;
-  const detail::BiasInputs in =
-      w.bias_inputs(std::lround(kReconSpan * cand[rule]), cand[1], sg_fit->order);
-  if (in.J.rows() != 2 * static_cast<int>(index.size())) return;
-  std::string table;
-  int chosen = -1;
-  Eigen::VectorXd at_rule, at_chosen;
-  for (int k = rule; k >= 1 && chosen < 0; --k) {
-    const int m = cand[k];
-    SgOptions sg = *sg_fit;
-    sg.half_window_s = m * dt;
-    Eigen::VectorXd bias, std;
-    if (!detail::smoothing_bias(log.t, in, centred_samples(w, m), sg, &bias, &std)) break;
-    const double worst = worst_ratio(bias, std);
-    table += (table.empty() ? "" : ", ") + std::to_string(m) + ": " + format_significant(worst);
-    if (k == rule) at_rule = bias;
-    if (worst <= kBiasFraction) chosen = k, at_chosen = bias;
-  }
-  if (table.empty()) return;
-  const int pick = chosen < 0 ? rule : chosen;
-  sg_fit->half_window_s = cand[pick] * dt;
-  *bias_kept = chosen < 0 ? at_rule : at_chosen;
+  *sg_fit = wb.filter(pick);
+  // within kBiasFraction at the window the smoothing's bias chose, the smoothing's alone is taken
+  // off, as without the noise's prediction (the shipped paper log's estimates stay as they were)
+  *bias_kept = pick == base ? wb.smoothing_bias(pick) : wb.bias(pick);
   *choice +=
-      "; then half-window " + std::to_string(cand[pick]) + " samples, " +
-      (chosen < 0 ? "the rule's (no window down to " + std::to_string(cand[1]) +
-                        " samples keeps it within " + format_significant(kBiasFraction) + " std)"
-                  : "the largest up to the rule's whose predicted smoothing bias is within " +
-                        format_significant(kBiasFraction) + " std of every friction coefficient") +
-      " (predicted |bias| / std by half-window, the motion's higher terms from local polynomials "
-      "of degree " +
-      std::to_string(sg_fit->order + detail::kReconExtra) + " over +-" +
-      std::to_string(std::lround(kReconSpan * cand[rule])) + " samples: " + table + ")";
+      "; then half-window " + std::to_string(cand[pick]) + " samples" +
+      (raised ? " of order " + std::to_string(given_order) : std::string()) + ", " +
+      (pick == base
+           ? "the largest up to the rule's whose predicted smoothing bias is within " +
+                 format_significant(kBiasFraction) + " std of every friction coefficient"
+           : "the one of least predicted bias up from the largest whose smoothing bias is within " +
+                 format_significant(kBiasFraction) + " std") +
+      " (predicted |bias| / std by half-window, the smoothing's and the noise's through "
+      "the reactions (the smoothing's alone), the motion's higher terms from local "
+      "polynomials of degree " +
+      std::to_string(given_order + detail::kReconExtra) + " over +-" +
+      format_significant(kReconSpan) + " times the rule's half-window: " + table + wb.table() + ")";
 }
 
 BiasWalk walk_window_by_bias(int K, int start, const std::function<bool(int, double*)>& worst) {
