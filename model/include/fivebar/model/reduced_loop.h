@@ -98,16 +98,14 @@ struct ReducedMap {
                            (abs(r.f4.x()) + abs(r.f4.y())) * h1;
     gain_bound = coupler;
     if constexpr (n == 4) {
-      double h2 = 0.0, h3 = 0.0;  // h's crank rows
+      Vec2<double> h(0.0, 0.0);  // h's crank rows
       for (int j = 0; j < kJoints; ++j) {
         m_phi[j] = r.m[j] * phi[j];
-        h2 += abs(m_phi[j].x());
-        h3 += abs(m_phi[j].y());
+        h += m_phi[j].cwiseAbs();
       }
       for (int k = 0; k < kJoints; ++k) {
-        const Mat2<double>& R = r.R[k];
-        gain_bound = std::max(gain_bound, coupler + (abs(R(0, 0)) + abs(R(1, 0))) * h2 +
-                                              (abs(R(0, 1)) + abs(R(1, 1))) * h3);
+        const Row2<double> R = r.R[k].cwiseAbs().colwise().sum();  // |R_k|'s column sums
+        gain_bound = std::max(gain_bound, coupler + R.x() * h.x() + R.y() * h.y());
       }
     }
   }
