@@ -206,10 +206,10 @@ bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
     last = std::max(last, std::abs(N[k] - N_start[k]));
   }
   const double gain = std::max(map.gain_bound, 1e-300);
-  typename ReducedMap<nz>::Mat J_inv;
+  Eigen::Matrix<double, nz, nz> J_inv;  // (column-major: the inverse of the SSE path)
   bool chord = false;  // J_inv worth another step
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
-    if (!chord) J_inv = map.newton_matrix(F, N, &u).inverse();
+    if (!chord) J_inv = Eigen::Matrix<double, nz, nz>(map.newton_matrix(F, N, &u)).inverse();
     const Vec d = J_inv * (z - map.moments(N));
     z -= d;
     // the reactions at the new z, F - dF, and the unpredicted change of their norms
