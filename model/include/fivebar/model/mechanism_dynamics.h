@@ -240,18 +240,6 @@ ReactionResponse<T> forward_torque_response(const ParamsOf<M, T>& p,
   return dF;
 }
 
-/// M::forward_response where `use` (M::kClosedFormResponse), built in place; else left unset.
-template <class M, typename T>
-LowRankResponse<T> closed_form_response(bool use, const ParamsOf<M, T>& p,
-                                        const typename M::template Kinematics<T>& k,
-                                        const Mat<M::kDof, T>& Ainv) {
-  if constexpr (M::kClosedFormResponse) {
-    if (use) return M::forward_response(p, k, Ainv);
-  }
-  LowRankResponse<T> unset;
-  return unset;
-}
-
 /// The friction loop of a forward pass, its converged reactions and the holding torques of the
 /// stuck joints (ev->Mf, hold_margin), with `solve(Mf, F)` the accelerations and reactions.
 template <class M, typename T, typename Solve>
@@ -264,11 +252,13 @@ Status forward_friction(const ParamsOf<M, T>& p, const EvalOptions& opt, const M
   const bool motors = M::actuator_torques(p, ev->w, ev->slip, &act);
   LoopAids<T> aids;
   aids.warm = warm;
-  // the response in closed form where M has it, no joint is stuck and no Jet pass differentiates
-  // a recorded loop
-  const bool closed_form = M::kClosedFormResponse && stuck.count == 0 && !(loop && loop->set);
-  const LowRankResponse<T> response = closed_form_response<M>(closed_form, p, ev->kin, Ainv);
-  if (closed_form) aids.low_rank = &response;
+  LowRankResponse<T> response;
+  if constexpr (M::kClosedFormResponse) {
+    if (stuck.count == 0 && !(loop && loop->set)) {
+      response = M::forward_response(p, ev->kin, Ainv);
+      aids.low_rank = &response;
+    }
+  }
   const Status st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
                                   motors ? &act : nullptr, loop, aids);
   if (!st.ok()) return singular_cause<M, T>(p, ev->kin, st);
