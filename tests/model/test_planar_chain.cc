@@ -139,15 +139,18 @@ Params<double> random_mechanism(std::mt19937_64& rng) {
 }
 
 /// Joint modes as an integrator's segment has them: slip directions (mostly sign(w)), some
-/// joints at rest (no Coulomb term: a transition), and up to two stuck.
+/// joints at rest (no Coulomb term: a transition), and up to two stuck (as many as the degrees
+/// of freedom).
 JointModes random_segment_modes(std::mt19937_64& rng, const std::array<double, kJoints>& w) {
   JointModes m;
+  int stuck = 0;
   for (int j = 0; j < kJoints; ++j) {
     const unsigned draw = rng() % 8;
     m[j] = draw < 5 ? slip_mode(sign_of(w[j]))
            : draw < 6 ? slip_mode(-sign_of(w[j]))
-           : draw < 7 ? JointMode::kRest
-                      : kStuck;
+           : draw < 7 || stuck == kDof ? JointMode::kRest
+                                       : kStuck;
+    stuck += m[j] == kStuck;
   }
   return m;
 }
