@@ -72,13 +72,14 @@ inline constexpr double kReducedChordShrink = 1e-2;
 /// G_k = [sigma_k f3, sigma_k f4, R_k] (2 x 4), s3 = phi_B N_B - phi_C N_C, s4 = phi_D N_D -
 /// phi_C N_C, a = sum_j m_j phi_j N_j (LowRankResponse). n = 2, given accelerations (inverse
 /// dynamics): z = (s3, s4), G_k = [sigma_k f3, sigma_k f4] (CouplerResponse).
-/// (In whole vectors F_k, u_k, m_j phi_j, each one SSE register: the compiler keeps them there,
-/// where the same sums written out in components made it spill the map's coefficients.)
+/// (The reactions and moments in whole 2-vectors F_k, m_j phi_j: fewer instructions than the
+/// same sums in components. The Newton matrix in scalars: formed in rows of vectors it took
+/// fewer instructions but longer to run.)
 template <int n>
 struct ReducedMap {
   static_assert(n == 2 || n == 4, "z: the coupler sums, and with n = 4 the crank accelerations");
   using Vec = Eigen::Matrix<double, n, 1>;
-  using Mat = Eigen::Matrix<double, n, n, Eigen::RowMajor>;
+  using Mat = Eigen::Matrix<double, n, n>;
   using Forces = std::array<Vec2<double>, kJoints>;
   using Response = std::conditional_t<n == 4, LowRankResponse<double>, CouplerResponse<double>>;
   const Forces& F0;
@@ -141,29 +142,33 @@ struct ReducedMap {
   /// The Newton matrix at F, N = |F|: I - H diag(phi) dN/dz, where dN_k/dz = g_k^T = u_k^T G_k
   /// with u_k = F_k / N_k (0 where N_k = 0), returned in u.
   Mat newton_matrix(const Forces& F, const double N[kJoints], Forces* u) const {
-    using Row = Eigen::Matrix<double, 1, n>;
-    Mat2<double> coupler;  // columns f3, f4
-    coupler << r.f3, r.f4;
-    std::array<Row, kJoints> g;  // g_k^T
+    double g[kJoints][n];  // g_k
     for (int k = 0; k < kJoints; ++k) {
       const double inv = N[k] > 0.0 ? 1.0 / N[k] : 0.0;
-      const Vec2<double> uk = F[k] * inv;
-      (*u)[k] = uk;
-      const Row2<double> c = uk.transpose() * coupler;  // sigma_k = -1 for D0, else 1
-      g[k].template head<2>() = k < kJoints - 1 ? c : Row2<double>(-c);
-      if constexpr (n == 4) g[k].template tail<2>() = uk.transpose() * r.R[k];
+      const double ux = F[k].x() * inv, uy = F[k].y() * inv;
+      (*u)[k] = Vec2<double>(ux, uy);
+      const double sigma = k < kJoints - 1 ? 1.0 : -1.0;
+      g[k][0] = sigma * (ux * r.f3.x() + uy * r.f3.y());
+      g[k][1] = sigma * (ux * r.f4.x() + uy * r.f4.y());
+      if constexpr (n == 4) {
+        const Mat2<double>& R = r.R[k];
+        g[k][2] = ux * R(0, 0) + uy * R(1, 0);
+        g[k][3] = ux * R(0, 1) + uy * R(1, 1);
+      }
     }
     // H diag(phi): columns (c3_j phi_j, c4_j phi_j, m_j phi_j) with c3 = (0, 1, -1, 0, 0),
     // c4 = (0, 0, -1, 1, 0): two nonzeros in each coupler row, five in each crank row
     Mat J;
-    const Row mc = phi[2] * g[2];
-    J.row(0) = mc - phi[1] * g[1];
-    J.row(1) = mc - phi[3] * g[3];
-    if constexpr (n == 4) {
-      J.row(2) = -(m_phi[0].x() * g[0] + m_phi[1].x() * g[1] + m_phi[2].x() * g[2] +
-                   m_phi[3].x() * g[3] + m_phi[4].x() * g[4]);
-      J.row(3) = -(m_phi[0].y() * g[0] + m_phi[1].y() * g[1] + m_phi[2].y() * g[2] +
-                   m_phi[3].y() * g[3] + m_phi[4].y() * g[4]);
+    for (int c = 0; c < n; ++c) {
+      const double mc = phi[2] * g[2][c];
+      J(0, c) = mc - phi[1] * g[1][c];
+      J(1, c) = mc - phi[3] * g[3][c];
+      if constexpr (n == 4) {
+        J(2, c) = -(m_phi[0].x() * g[0][c] + m_phi[1].x() * g[1][c] + m_phi[2].x() * g[2][c] +
+                    m_phi[3].x() * g[3][c] + m_phi[4].x() * g[4][c]);
+        J(3, c) = -(m_phi[0].y() * g[0][c] + m_phi[1].y() * g[1][c] + m_phi[2].y() * g[2][c] +
+                    m_phi[3].y() * g[3][c] + m_phi[4].y() * g[4][c]);
+      }
     }
     J.diagonal().array() += 1.0;
     return J;
@@ -206,10 +211,10 @@ bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
     last = std::max(last, std::abs(N[k] - N_start[k]));
   }
   const double gain = std::max(map.gain_bound, 1e-300);
-  Eigen::Matrix<double, nz, nz> J_inv;  // (column-major: the inverse of the SSE path)
+  typename ReducedMap<nz>::Mat J_inv;
   bool chord = false;  // J_inv worth another step
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
-    if (!chord) J_inv = Eigen::Matrix<double, nz, nz>(map.newton_matrix(F, N, &u)).inverse();
+    if (!chord) J_inv = map.newton_matrix(F, N, &u).inverse();
     const Vec d = J_inv * (z - map.moments(N));
     z -= d;
     // the reactions at the new z, F - dF, and the unpredicted change of their norms
