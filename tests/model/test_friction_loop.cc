@@ -246,12 +246,12 @@ void expect_reduced_map_matches_the_scaled_map() {
       for (int j = 0; j < kJoints; ++j) {
         double unit[kJoints] = {};
         unit[j] = 1.0;
-        double x[kJoints], y[kJoints];
-        reduced.apply(reduced.moments(unit), x, y);
+        typename detail::ReducedMap<n>::Forces f;
+        reduced.apply(reduced.moments(unit), &f);
         for (int k = 0; k < kJoints; ++k) {
           const double tol = kResponseTol * (1.0 + scaled.B[k][j].norm());
-          EXPECT_NEAR(x[k], scaled.B[k][j].x(), tol) << "k=" << k << " j=" << j;
-          EXPECT_NEAR(y[k], scaled.B[k][j].y(), tol) << "k=" << k << " j=" << j;
+          EXPECT_NEAR(f[k].x(), scaled.B[k][j].x(), tol) << "k=" << k << " j=" << j;
+          EXPECT_NEAR(f[k].y(), scaled.B[k][j].y(), tol) << "k=" << k << " j=" << j;
         }
       }
     }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -114,6 +115,111 @@ TEST(PlanarChain, FiveBarInverseDynamicsAndReactionsAgree) {
     RecordProperty("inverse_torque_" + tag, sci(worst_tau));
     RecordProperty("inverse_reactions_" + tag, sci(worst_F));
   }
+}
+
+/// The paper's five-bar with its lengths, masses, inertias, centres of mass and joint friction
+/// drawn at random around the paper's values.
+Params<double> random_mechanism(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> near(0.9, 1.1), wide(0.5, 2.0), angle(-0.5, 0.5),
+      mu(0.02, 0.4), radius(0.004, 0.02);
+  Params<double> p = paper_params();
+  for (Link<double>& l : p.links) {
+    l.length *= near(rng);
+    l.mass *= wide(rng);
+    l.inertia *= wide(rng);
+    l.com_offset *= near(rng);
+    l.com_angle = angle(rng);
+  }
+  for (int j = 0; j < kJoints; ++j) {
+    p.friction.coulomb[j] = mu(rng);
+    p.friction.viscous[j] = 0.1 * mu(rng);
+    p.friction.pin_radius[j] = radius(rng);
+  }
+  return p;
+}
+
+/// Joint modes as an integrator's segment has them: slip directions (mostly sign(w)), some
+/// joints at rest (no Coulomb term: a transition), and up to two stuck (as many as the degrees
+/// of freedom).
+JointModes random_segment_modes(std::mt19937_64& rng, const std::array<double, kJoints>& w) {
+  JointModes m;
+  int stuck = 0;
+  for (int j = 0; j < kJoints; ++j) {
+    const unsigned draw = rng() % 8;
+    m[j] = draw < 5 ? slip_mode(sign_of(w[j]))
+           : draw < 6 ? slip_mode(-sign_of(w[j]))
+           : draw < 7 || stuck == kDof ? JointMode::kRest
+                                       : kStuck;
+    stuck += m[j] == kStuck;
+  }
+  return m;
+}
+
+// The simulator's right-hand side (forward dynamics without the final reaction solve) against
+// the general chain: with every joint slipping along sign(w), the chain solves the friction loop
+// itself; in any mode (slip against sign(w), rest, stuck), the chain given the evaluation's
+// friction and holding torques has the same accelerations, holds the stuck joints (relative
+// acceleration 0) and has reactions with Mf_k = r_k f_k N_k at the others. Random mechanisms and
+// states, seeded.
+TEST(PlanarChain, FiveBarFrictionRightHandSideAgreesInEveryJointMode) {
+  std::mt19937_64 rng(57);
+  EvalOptions opt;
+  opt.want_reactions = false;
+  opt.want_angles = false;
+  opt.singular_margin = 1e-3;
+  double worst_acc = 0.0, worst_N = 0.0, worst_Mf = 0.0, worst_hold = 0.0;
+  int loops = 0, stuck = 0, rest = 0;
+  for (int mechanism = 0; mechanism < 40; ++mechanism) {
+    const Params<double> p = random_mechanism(rng);
+    for (const RandomState& s : random_states(p, 25, 100 + mechanism)) {
+      const ChainState cs = chain_state(p, s);
+      const std::array<double, kJoints> w =
+          relative_rates(s.w1, s.w2, cs.k.G3.dot(Vec2<double>(s.w1, s.w2)),
+                         cs.k.G4.dot(Vec2<double>(s.w1, s.w2)));
+      const bool own_loop = rng() % 2;  // every joint along sign(w): the chain's own loop
+      JointModes modes;
+      for (int j = 0; j < kJoints; ++j) modes[j] = slip_mode(sign_of(w[j]));
+      if (!own_loop) modes = random_segment_modes(rng, w);
+      Evaluation<double> ev;
+      const Status st =
+          forward_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, &modes, opt, &ev);
+      if (!st.ok()) continue;  // (dependent stuck joints, or a loop without a unique solution)
+      chain::Solution sol;
+      chain::Options copt;
+      const std::vector<double> torques(ev.Mf.begin(), ev.Mf.end());
+      if (!own_loop) copt.friction_torques = &torques;
+      ASSERT_TRUE(chain::solve(cs.c, cs.q, cs.rate, cs.L, nullptr, copt, &sol).ok());
+      const double acc[4] = {ev.thdd[0], ev.thdd[1], ev.alpha3, ev.alpha4};
+      worst_acc = std::max(worst_acc, relative_error(sol.alpha, acc, 4));
+      worst_N = std::max(worst_N, relative_error(sol.N, ev.N, kJoints));
+      // relative accelerations of the chain's motion (the stuck joints' are held at zero)
+      const std::array<double, kJoints> wdot =
+          relative_rates(sol.alpha[0], sol.alpha[1], sol.alpha[2], sol.alpha[3]);
+      double scale = 1.0;
+      for (double a : sol.alpha) scale = std::max(scale, std::abs(a));
+      for (int j = 0; j < kJoints; ++j) {
+        if (modes[j] == kStuck) {
+          worst_hold = std::max(worst_hold, std::abs(wdot[j]) / scale);
+          ++stuck;
+          continue;
+        }
+        rest += modes[j] == JointMode::kRest;
+        const double phi = p.friction.pin_radius[j] *
+                           friction_law(p.friction, j, ev.w[j], coulomb_sign(modes[j]));
+        worst_Mf = std::max(worst_Mf, std::abs(ev.Mf[j] - phi * sol.N[j]) / (1.0 + sol.N[j]));
+      }
+      loops += own_loop;
+    }
+  }
+  EXPECT_GT(loops, 300);
+  EXPECT_GT(stuck, 300);
+  EXPECT_GT(rest, 100);
+  EXPECT_LT(worst_acc, kAgreementTol);
+  EXPECT_LT(worst_N, kAgreementTol);
+  EXPECT_LT(worst_Mf, kAgreementTol);
+  EXPECT_LT(worst_hold, kAgreementTol);
+  RecordProperty("rhs_accel", sci(worst_acc));
+  RecordProperty("rhs_reactions", sci(worst_N));
 }
 
 // the inverse mode returns the drive torques that the forward mode was given

@@ -40,6 +40,19 @@ T coulomb_direction(const FrictionParams<T>& fp, const T& w, int slip) {
                                                : T(double(slip));
 }
 
+/// The Coulomb-viscous law with the Coulomb part's direction s given: mu_c s + mu_v w (the
+/// kCoulombViscous case of friction_law, for callers that decide the law once for all joints).
+template <typename T>
+T coulomb_viscous_law(const FrictionParams<T>& fp, int k, const T& w, const T& s) {
+  return fp.coulomb[k] * s + fp.viscous[k] * w;
+}
+
+/// friction_law below reduces to coulomb_viscous_law with s = `slip` for every joint.
+template <typename T>
+bool plain_coulomb_viscous(const FrictionParams<T>& fp) {
+  return fp.law == FrictionLaw::kCoulombViscous && !(value_of(fp.smoothing_velocity) > 0.0);
+}
+
 /// f_k(w) of joint k (0-based, order O, B, C, D, D0). `slip` is the sign that the Coulomb part
 /// takes: the caller passes sign(w) or, inside an integration segment, the segment's slip
 /// direction (so that sign(w) never jumps inside a step). With smoothing_velocity w_s > 0 the

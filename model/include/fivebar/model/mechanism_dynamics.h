@@ -145,6 +145,14 @@ Vec<n, T> constrained_accelerations(const Mat<n, T>& A, const Mat<n, T>& Ainv,
 template <class M, typename T>
 Joints<T> friction_arms(const ParamsOf<M, T>& p, const Joints<T>& z, EvaluationOf<M, T>* ev) {
   Joints<T> phi{};
+  if (plain_coulomb_viscous(p.friction)) {  // the common law, decided once for all joints
+    for (int j = 0; j < M::kJoints; ++j) {
+      if (ev->slip[j] == kStuck) continue;
+      phi[j] = p.friction.pin_radius[j] *
+               coulomb_viscous_law(p.friction, j, ev->w[j], T(double(coulomb_sign(ev->slip[j]))));
+    }
+    return phi;
+  }
   for (int j = 0; j < M::kJoints; ++j) {
     if (ev->slip[j] == kStuck) {
       phi[j] = T(0);

@@ -72,25 +72,26 @@ inline constexpr double kReducedChordShrink = 1e-2;
 /// G_k = [sigma_k f3, sigma_k f4, R_k] (2 x 4), s3 = phi_B N_B - phi_C N_C, s4 = phi_D N_D -
 /// phi_C N_C, a = sum_j m_j phi_j N_j (LowRankResponse). n = 2, given accelerations (inverse
 /// dynamics): z = (s3, s4), G_k = [sigma_k f3, sigma_k f4] (CouplerResponse).
-/// (In scalars: Eigen's small blocks cost more in broadcasts and alignment checks than the
-/// arithmetic here.)
+/// (The reactions and moments in whole 2-vectors F_k, m_j phi_j: fewer instructions than the
+/// same sums in components. The Newton matrix in scalars: formed in rows of vectors it took
+/// fewer instructions but longer to run.)
 template <int n>
 struct ReducedMap {
   static_assert(n == 2 || n == 4, "z: the coupler sums, and with n = 4 the crank accelerations");
   using Vec = Eigen::Matrix<double, n, 1>;
   using Mat = Eigen::Matrix<double, n, n>;
+  using Forces = std::array<Vec2<double>, kJoints>;
   using Response = std::conditional_t<n == 4, LowRankResponse<double>, CouplerResponse<double>>;
-  const std::array<Vec2<double>, kJoints>& F0;
+  const Forces& F0;
   const Response& r;
   const std::array<double, kJoints>& phi;
-  double mx[kJoints] = {}, my[kJoints] = {};  ///< m_j phi_j: crank accelerations per unit N_j
+  Forces m_phi{};  ///< m_j phi_j: crank accelerations per unit N_j (n = 4)
   /// An upper bound of ScaledReactions::contraction_bound, max_k sum_j |B[k][j]|_1 with B[k][j] =
   /// G_k H_j phi_j: |G_k H_j phi_j| <= |G_k| |H_j phi_j| element by element, so the bound is
   /// max_k 1^T |G_k| h with h = sum_j |H_j phi_j| (no 5 x 5 B). Below 1 the map contracts.
   double gain_bound = 0.0;
 
-  ReducedMap(const std::array<double, kJoints>& phi_, const std::array<Vec2<double>, kJoints>& F0_,
-             const Response& response)
+  ReducedMap(const std::array<double, kJoints>& phi_, const Forces& F0_, const Response& response)
       : F0(F0_), r(response), phi(phi_) {
     using std::abs;
     const double h0 = abs(phi[1]) + abs(phi[2]), h1 = abs(phi[2]) + abs(phi[3]);
@@ -98,17 +99,14 @@ struct ReducedMap {
                            (abs(r.f4.x()) + abs(r.f4.y())) * h1;
     gain_bound = coupler;
     if constexpr (n == 4) {
-      double h2 = 0.0, h3 = 0.0;  // h's crank rows
+      Vec2<double> h(0.0, 0.0);  // h's crank rows
       for (int j = 0; j < kJoints; ++j) {
-        mx[j] = r.m[j].x() * phi[j];
-        my[j] = r.m[j].y() * phi[j];
-        h2 += abs(mx[j]);
-        h3 += abs(my[j]);
+        m_phi[j] = r.m[j] * phi[j];
+        h += m_phi[j].cwiseAbs();
       }
       for (int k = 0; k < kJoints; ++k) {
-        const Mat2<double>& R = r.R[k];
-        gain_bound = std::max(gain_bound, coupler + (abs(R(0, 0)) + abs(R(1, 0))) * h2 +
-                                              (abs(R(0, 1)) + abs(R(1, 1))) * h3);
+        const Row2<double> R = r.R[k].cwiseAbs().colwise().sum();  // |R_k|'s column sums
+        gain_bound = std::max(gain_bound, coupler + R.x() * h.x() + R.y() * h.y());
       }
     }
   }
@@ -120,36 +118,35 @@ struct ReducedMap {
     z[0] = phi[1] * N[1] - mc;
     z[1] = phi[3] * N[3] - mc;
     if constexpr (n == 4) {
-      z[2] = mx[0] * N[0] + mx[1] * N[1] + mx[2] * N[2] + mx[3] * N[3] + mx[4] * N[4];
-      z[3] = my[0] * N[0] + my[1] * N[1] + my[2] * N[2] + my[3] * N[3] + my[4] * N[4];
+      const Vec2<double> a = m_phi[0] * N[0] + m_phi[1] * N[1] + m_phi[2] * N[2] +
+                             m_phi[3] * N[3] + m_phi[4] * N[4];
+      z[2] = a.x();
+      z[3] = a.y();
     }
     return z;
   }
-  /// (x, y)_k = G_k z for all k
-  void apply(const Vec& z, double x[kJoints], double y[kJoints]) const {
-    const double cx = r.f3.x() * z[0] + r.f4.x() * z[1];
-    const double cy = r.f3.y() * z[0] + r.f4.y() * z[1];
+  /// out_k = G_k z for all k
+  void apply(const Vec& z, Forces* out) const {
+    const Vec2<double> c = r.f3 * z[0] + r.f4 * z[1];
     for (int k = 0; k < kJoints; ++k) {
+      Vec2<double> f;
       if constexpr (n == 4) {
-        const Mat2<double>& R = r.R[k];
-        x[k] = R(0, 0) * z[2] + R(0, 1) * z[3] + (k < kJoints - 1 ? cx : -cx);
-        y[k] = R(1, 0) * z[2] + R(1, 1) * z[3] + (k < kJoints - 1 ? cy : -cy);
+        f = r.R[k].col(0) * z[2] + r.R[k].col(1) * z[3];
+        f = k < kJoints - 1 ? Vec2<double>(f + c) : Vec2<double>(f - c);
       } else {
-        x[k] = k < kJoints - 1 ? cx : -cx;
-        y[k] = k < kJoints - 1 ? cy : -cy;
+        f = k < kJoints - 1 ? c : Vec2<double>(-c);
       }
+      (*out)[k] = f;
     }
   }
-  /// The Newton matrix at F = (x, y), N = |F|: I - H diag(phi) dN/dz, where dN_k/dz = g_k^T =
-  /// u_k^T G_k with u_k = F_k / N_k (0 where N_k = 0), returned in (ux, uy).
-  Mat newton_matrix(const double x[kJoints], const double y[kJoints], const double N[kJoints],
-                    double ux_out[kJoints], double uy_out[kJoints]) const {
+  /// The Newton matrix at F, N = |F|: I - H diag(phi) dN/dz, where dN_k/dz = g_k^T = u_k^T G_k
+  /// with u_k = F_k / N_k (0 where N_k = 0), returned in u.
+  Mat newton_matrix(const Forces& F, const double N[kJoints], Forces* u) const {
     double g[kJoints][n];  // g_k
     for (int k = 0; k < kJoints; ++k) {
       const double inv = N[k] > 0.0 ? 1.0 / N[k] : 0.0;
-      const double ux = x[k] * inv, uy = y[k] * inv;
-      ux_out[k] = ux;
-      uy_out[k] = uy;
+      const double ux = F[k].x() * inv, uy = F[k].y() * inv;
+      (*u)[k] = Vec2<double>(ux, uy);
       const double sigma = k < kJoints - 1 ? 1.0 : -1.0;
       g[k][0] = sigma * (ux * r.f3.x() + uy * r.f3.y());
       g[k][1] = sigma * (ux * r.f4.x() + uy * r.f4.y());
@@ -167,10 +164,10 @@ struct ReducedMap {
       J(0, c) = mc - phi[1] * g[1][c];
       J(1, c) = mc - phi[3] * g[3][c];
       if constexpr (n == 4) {
-        J(2, c) = -(mx[0] * g[0][c] + mx[1] * g[1][c] + mx[2] * g[2][c] + mx[3] * g[3][c] +
-                    mx[4] * g[4][c]);
-        J(3, c) = -(my[0] * g[0][c] + my[1] * g[1][c] + my[2] * g[2][c] + my[3] * g[3][c] +
-                    my[4] * g[4][c]);
+        J(2, c) = -(m_phi[0].x() * g[0][c] + m_phi[1].x() * g[1][c] + m_phi[2].x() * g[2][c] +
+                    m_phi[3].x() * g[3][c] + m_phi[4].x() * g[4][c]);
+        J(3, c) = -(m_phi[0].y() * g[0][c] + m_phi[1].y() * g[1][c] + m_phi[2].y() * g[2][c] +
+                    m_phi[3].y() * g[3][c] + m_phi[4].y() * g[4][c]);
       }
     }
     J.diagonal().array() += 1.0;
@@ -201,34 +198,34 @@ template <int nz>
 bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
                              const std::array<double, kJoints>& N_start,
                              std::array<double, kJoints>* N_out, std::array<double, kJoints>* Mf,
-                             std::array<Vec2<double>, kJoints>* F, int* iterations) {
+                             std::array<Vec2<double>, kJoints>* F_out, int* iterations) {
   using Vec = typename ReducedMap<nz>::Vec;
-  double x[kJoints], y[kJoints], N[kJoints], ux[kJoints], uy[kJoints];
+  typename ReducedMap<nz>::Forces F, u, dF;
+  double N[kJoints];
   Vec z = map.moments(N_start.data());
-  map.apply(z, x, y);
+  map.apply(z, &F);
   double last = 0.0;  // the last step's max |rho_k|, or at the start max |N_k - N_start_k|
   for (int k = 0; k < kJoints; ++k) {
-    x[k] += map.F0[k].x();
-    y[k] += map.F0[k].y();
-    N[k] = std::sqrt(x[k] * x[k] + y[k] * y[k]);
+    F[k] += map.F0[k];
+    N[k] = std::sqrt(F[k].squaredNorm());
     last = std::max(last, std::abs(N[k] - N_start[k]));
   }
   const double gain = std::max(map.gain_bound, 1e-300);
   typename ReducedMap<nz>::Mat J_inv;
   bool chord = false;  // J_inv worth another step
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
-    if (!chord) J_inv = map.newton_matrix(x, y, N, ux, uy).inverse();
+    if (!chord) J_inv = map.newton_matrix(F, N, &u).inverse();
     const Vec d = J_inv * (z - map.moments(N));
     z -= d;
     // the reactions at the new z, F - dF, and the unpredicted change of their norms
-    double dx[kJoints], dy[kJoints], scale = 1e-300, rho = 0.0, sum = 0.0;
-    map.apply(d, dx, dy);
+    map.apply(d, &dF);
+    double scale = 1e-300, rho = 0.0, sum = 0.0;
     for (int k = 0; k < kJoints; ++k) {
       const double n = N[k];
-      x[k] -= dx[k];
-      y[k] -= dy[k];
-      N[k] = std::sqrt(x[k] * x[k] + y[k] * y[k]);
-      const double rho_k = std::abs(N[k] - n + ux[k] * dx[k] + uy[k] * dy[k]);
+      F[k] -= dF[k];
+      N[k] = std::sqrt(F[k].squaredNorm());
+      const double rho_k =
+          std::abs(N[k] - n + u[k].x() * dF[k].x() + u[k].y() * dF[k].y());
       scale = std::max(scale, N[k]);
       rho = std::max(rho, rho_k);
       sum += N[k] + rho_k;  // (a NaN does not pass std::max)
@@ -239,8 +236,8 @@ bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
       for (int k = 0; k < kJoints; ++k) {
         (*N_out)[k] = N[k];
         (*Mf)[k] = map.phi[k] * N[k];
-        (*F)[k] = Vec2<double>(x[k], y[k]);
       }
+      *F_out = F;
       return true;
     }
     chord = rho <= kReducedChordShrink * last;
