@@ -40,7 +40,10 @@ std::string selected_name(const CLI::App& app) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Dynamics of planar closed-chain mechanisms (the five-bar, and the four-bar in every command that reads a scene) with load-dependent joint friction.", "fivebar"};
+  CLI::App app{
+      "Dynamics of planar closed-chain mechanisms (the five-bar, and the four-bar in every command "
+      "that reads a scene) with load-dependent joint friction.",
+      "fivebar"};
   app.set_version_flag("--version", std::string("fivebar ") + fivebar::io::version(),
                        "print the version and exit");
   app.require_subcommand(1);

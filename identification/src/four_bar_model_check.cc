@@ -96,8 +96,7 @@ bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::Matri
   if (delay) {  // tau1 lagging by d reads the torque of t + d: its rate (the delay's regressor)
     const TorqueLog& log = f.cond.log;
     std::vector<std::vector<double>> rate;
-    stages::delay_regressor(log.t, {&log.tau1}, f.noise.torque, f.index, f.sg.half_window_s,
-                            &rate);
+    stages::delay_regressor(log.t, {&log.tau1}, f.noise.torque, f.index, f.sg.half_window_s, &rate);
     for (int u = 0; u < n; ++u) (*J)(u, c) = rate[0][f.index[u]];
     idx[4].push_back(c++);
   }
@@ -170,8 +169,8 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, Identi
       !moves.empty() ? "the friction would move: " + moves
       : bound        ? "a friction coefficient is at its bound, so the fit cannot say how far "
                        "the friction would move"
-                     : "the friction would move less than " + format_significant(stages::kFreedMove) +
-                       " std (a linearized move: refit a log whose torques are shifted by it)";
+              : "the friction would move less than " + format_significant(stages::kFreedMove) +
+                    " std (a linearized move: refit a log whose torques are shifted by it)";
   const std::string head = named ? "with " + what + " free (one linearized refit) "
                                  : "the friction estimates absorbed a model error the log cannot "
                                    "attribute: with " +

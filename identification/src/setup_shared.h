@@ -83,9 +83,10 @@ void sg_noise_gains(const std::vector<double>& t, const SgOptions& sg, double* g
 /// rates carry the torques' noise, which attenuates a delay's estimate by the share of their
 /// variance that is noise (errors in variables): the window grows from half_window_s (at least
 /// 3 samples) until that share, over the samples `index`, is small on every channel.
-void delay_regressor(const std::vector<double>& t, const std::vector<const std::vector<double>*>& tau,
-                     const double* torque_noise, const std::vector<int>& index,
-                     double half_window_s, std::vector<std::vector<double>>* rates);
+void delay_regressor(const std::vector<double>& t,
+                     const std::vector<const std::vector<double>*>& tau, const double* torque_noise,
+                     const std::vector<int>& index, double half_window_s,
+                     std::vector<std::vector<double>>* rates);
 
 /// The rest rule at sample s with each joint's rate threshold set for its own noise: the rates'
 /// noise through its row of J_w (the thresholds are set for one crank's rate; an inner joint's

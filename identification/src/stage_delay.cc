@@ -22,9 +22,10 @@ constexpr double kDelayWindowMax = 0.1;
 
 }  // namespace
 
-void delay_regressor(const std::vector<double>& t, const std::vector<const std::vector<double>*>& tau,
-                     const double* torque_noise, const std::vector<int>& index,
-                     double half_window_s, std::vector<std::vector<double>>* rates) {
+void delay_regressor(const std::vector<double>& t,
+                     const std::vector<const std::vector<double>*>& tau, const double* torque_noise,
+                     const std::vector<int>& index, double half_window_s,
+                     std::vector<std::vector<double>>* rates) {
   const double duration = t.back() - t.front(), dt = duration / std::max<size_t>(1, t.size() - 1);
   const double widest = std::min(kDelayWindowMax, duration / 20);
   SgOptions sg;
@@ -53,8 +54,7 @@ void delay_regressor(const std::vector<double>& t, const std::vector<const std::
 void delay_regressor(const Fit& f, std::vector<double>* g1, std::vector<double>* g2) {
   const TorqueLog& log = f.cond.log;
   std::vector<std::vector<double>> g;
-  delay_regressor(log.t, {&log.tau1, &log.tau2}, f.noise.torque, f.index, f.sg.half_window_s,
-                  &g);
+  delay_regressor(log.t, {&log.tau1, &log.tau2}, f.noise.torque, f.index, f.sg.half_window_s, &g);
   *g1 = std::move(g[0]);
   *g2 = std::move(g[1]);
 }

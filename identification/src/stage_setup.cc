@@ -1,9 +1,9 @@
 // Setup and conditioning stages of identify(): the layout and scene to fit, the start values,
 // the conditioned log and where the rates come from.
+#include <numeric>
+
 #include "identify_stages.h"
 #include "setup_shared.h"
-
-#include <numeric>
 
 namespace fivebar::identification::stages {
 

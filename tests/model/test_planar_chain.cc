@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "agreement.h"
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/five_bar_chain.h"
 #include "fivebar/model/planar_chain.h"
-#include "agreement.h"
 #include "paper.h"
 
 namespace fivebar {
@@ -146,8 +146,8 @@ JointModes random_segment_modes(std::mt19937_64& rng, const std::array<double, k
   int stuck = 0;
   for (int j = 0; j < kJoints; ++j) {
     const unsigned draw = rng() % 8;
-    m[j] = draw < 5 ? slip_mode(sign_of(w[j]))
-           : draw < 6 ? slip_mode(-sign_of(w[j]))
+    m[j] = draw < 5                    ? slip_mode(sign_of(w[j]))
+           : draw < 6                  ? slip_mode(-sign_of(w[j]))
            : draw < 7 || stuck == kDof ? JointMode::kRest
                                        : kStuck;
     stuck += m[j] == kStuck;
@@ -173,16 +173,14 @@ TEST(PlanarChain, FiveBarFrictionRightHandSideAgreesInEveryJointMode) {
     const Params<double> p = random_mechanism(rng);
     for (const RandomState& s : random_states(p, 25, 100 + mechanism)) {
       const ChainState cs = chain_state(p, s);
-      const std::array<double, kJoints> w =
-          relative_rates(s.w1, s.w2, cs.k.G3.dot(Vec2<double>(s.w1, s.w2)),
-                         cs.k.G4.dot(Vec2<double>(s.w1, s.w2)));
+      const std::array<double, kJoints> w = relative_rates(
+          s.w1, s.w2, cs.k.G3.dot(Vec2<double>(s.w1, s.w2)), cs.k.G4.dot(Vec2<double>(s.w1, s.w2)));
       const bool own_loop = rng() % 2;  // every joint along sign(w): the chain's own loop
       JointModes modes;
       for (int j = 0; j < kJoints; ++j) modes[j] = slip_mode(sign_of(w[j]));
       if (!own_loop) modes = random_segment_modes(rng, w);
       Evaluation<double> ev;
-      const Status st =
-          forward_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, &modes, opt, &ev);
+      const Status st = forward_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, &modes, opt, &ev);
       if (!st.ok()) continue;  // (dependent stuck joints, or a loop without a unique solution)
       chain::Solution sol;
       chain::Options copt;
@@ -204,8 +202,8 @@ TEST(PlanarChain, FiveBarFrictionRightHandSideAgreesInEveryJointMode) {
           continue;
         }
         rest += modes[j] == JointMode::kRest;
-        const double phi = p.friction.pin_radius[j] *
-                           friction_law(p.friction, j, ev.w[j], coulomb_sign(modes[j]));
+        const double phi =
+            p.friction.pin_radius[j] * friction_law(p.friction, j, ev.w[j], coulomb_sign(modes[j]));
         worst_Mf = std::max(worst_Mf, std::abs(ev.Mf[j] - phi * sol.N[j]) / (1.0 + sol.N[j]));
       }
       loops += own_loop;

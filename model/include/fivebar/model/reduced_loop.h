@@ -118,8 +118,8 @@ struct ReducedMap {
     z[0] = phi[1] * N[1] - mc;
     z[1] = phi[3] * N[3] - mc;
     if constexpr (n == 4) {
-      const Vec2<double> a = m_phi[0] * N[0] + m_phi[1] * N[1] + m_phi[2] * N[2] +
-                             m_phi[3] * N[3] + m_phi[4] * N[4];
+      const Vec2<double> a =
+          m_phi[0] * N[0] + m_phi[1] * N[1] + m_phi[2] * N[2] + m_phi[3] * N[3] + m_phi[4] * N[4];
       z[2] = a.x();
       z[3] = a.y();
     }
@@ -224,8 +224,7 @@ bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
       const double n = N[k];
       F[k] -= dF[k];
       N[k] = std::sqrt(F[k].squaredNorm());
-      const double rho_k =
-          std::abs(N[k] - n + u[k].x() * dF[k].x() + u[k].y() * dF[k].y());
+      const double rho_k = std::abs(N[k] - n + u[k].x() * dF[k].x() + u[k].y() * dF[k].y());
       scale = std::max(scale, N[k]);
       rho = std::max(rho, rho_k);
       sum += N[k] + rho_k;  // (a NaN does not pass std::max)
