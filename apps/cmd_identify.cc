@@ -106,12 +106,13 @@ std::string residual_plot_script(const std::string& terminal, const std::string&
     // the windowed runs (restarted from the logged state) are the meaningful check on chaotic
     // motion: their error sets the y range; the full run, which leaves the log once errors have
     // grown, is drawn thin and may leave the panel
-    s << "set xlabel \"t [s]\"\nset output \"fig_validation.png\"\nset multiplot layout 2,1 "
+    s << "set xlabel \"t [s]\"\nset output \"fig_validation.png\"\nset multiplot layout " << dof
+      << ",1 "
          "title \"validation: angle error of the fitted scene driven by the logged torques, "
          "restarted from the log every window (red), and of one run over the whole log (grey, "
          "may leave the panel)   "
       << title << "\" noenhanced\n";
-    for (int i = 1; i <= 2; ++i) {
+    for (int i = 1; i <= dof; ++i) {
       const std::string n = std::to_string(i);
       const std::string windowed =
           "(column(\"windowed_theta" + n + "\") - column(\"theta" + n + "\"))";
@@ -156,16 +157,20 @@ void write_residuals(const Args& a, const id::IdentifyResult& res, const id::Val
 }
 
 /// residuals.csv of a four-bar's fit: its one crank's columns.
-void write_four_bar_residuals(const id::IdentifyResult& res, OutputDir* out) {
+void write_four_bar_residuals(const Args& a, const id::IdentifyResult& res,
+                              const id::Validation& val, OutputDir* out) {
   const id::TorqueLog& log = res.conditioned_log;
   std::ostringstream csv;
-  csv << "t,theta1,tau1,omega1,alpha1,predicted_tau1,residual_tau1,used\n";
+  csv << "t,theta1,tau1,omega1,alpha1,predicted_tau1,residual_tau1,used,simulated_theta1,"
+         "windowed_theta1\n";
   for (int i = 0; i < log.size(); ++i) {
     const double p = res.predicted_tau1[i];
     const double row[] = {log.t[i], log.theta1[i],  log.tau1[i], res.omega1[i], res.alpha1[i],
                           p,        log.tau1[i] - p};
     for (size_t k = 0; k < std::size(row); ++k) csv << (k ? "," : "") << format_double(row[k]);
-    csv << ',' << int(res.used[i]) << '\n';
+    csv << ',' << int(res.used[i]) << ','
+        << format_double(a.no_validation ? NAN : val.full_theta1[i]) << ','
+        << format_double(a.no_validation ? NAN : val.window_theta1[i]) << '\n';
   }
   write_text_file(out->file("residuals.csv"), csv.str());
 }
@@ -230,7 +235,12 @@ void print_summary(const Args& a, const id::TorqueLog& log, const id::IdentifyRe
                 res.rms_torque_residual[0], res.rms_torque_residual[1], res.residual_noise_floor[0],
                 res.residual_noise_floor[1]);
   }
-  if (!a.no_validation) {
+  if (!a.no_validation && log.dof == 1) {
+    std::printf("  validation: windowed (%.3g s) rms angle error %.3g rad\n", val.window_s,
+                val.window_rms[0]);
+    std::printf("  full run: rms angle error %.3g rad; %s\n", val.full_rms[0],
+                full_run_note(val).c_str());
+  } else if (!a.no_validation) {
     std::printf("  validation: windowed (%.3g s) rms angle error %.3g, %.3g rad\n", val.window_s,
                 val.window_rms[0], val.window_rms[1]);
     std::printf("  full run: rms angle error %.3g, %.3g rad; %s\n", val.full_rms[0],
@@ -269,8 +279,7 @@ int finish(const Args& a, const Scene& scene, const id::TorqueLog& log,
 }
 
 /// A four-bar's identification (identify's four-bar overload): the options it does not run are
-/// refused naming them; no validation run (the simulation of the fitted scene against the log
-/// is the five-bar's).
+/// refused naming them.
 int run_four_bar(Args a, const Scene& scene, std::chrono::steady_clock::time_point start) {
   id::IdentifyOptions opt = identify_options(a.settings, scene);
   const std::string unsupported = id::four_bar_unsupported(opt);
@@ -286,11 +295,16 @@ int run_four_bar(Args a, const Scene& scene, std::chrono::steady_clock::time_poi
     opt.torques_negated = 1u;
   }
   const id::IdentifyResult res = identify_four_bar_scene(scene, log, opt);
-  a.no_validation = true;
   OutputDir out(a.scene.out, kOutputs);
-  write_four_bar_residuals(res, &out);
+  // validation and residuals on the log as fitted (unwrapped, glitches interpolated)
+  id::Validation val;
+  if (!a.no_validation) {
+    val = id::validate(res.fitted_four_bar, LoadExpressions(scene).four_bar_function(),
+                       res.conditioned_log, res.omega1, res.window_s);
+  }
+  write_four_bar_residuals(a, res, val, &out);
   write_text_file(out.file("scene_fitted.yaml"), scene_to_yaml(fitted_scene(scene, res)));
-  return finish(a, scene, log, opt, res, id::Validation{}, start, &out);
+  return finish(a, scene, log, opt, res, val, start, &out);
 }
 
 int run(const Args& a) {

@@ -41,6 +41,17 @@ sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& sc
   };
 }
 
+sim::FourBarLoadFunction logged_loads(const TorqueLog& log,
+                                      const sim::FourBarLoadFunction& scene_loads, double t0) {
+  const std::vector<double>* t = &log.t;
+  const std::vector<double>* tau1 = &log.tau1;
+  return [t, tau1, scene_loads, t0](double s) {
+    FourBarLoads L = scene_loads(t0 + s);
+    L.M1 = interp(*t, *tau1, t0 + s);
+    return L;
+  };
+}
+
 namespace {
 
 /// a torque-to-angle delay beyond this many std is corrected

@@ -448,7 +448,6 @@ std::string four_bar_unsupported(const IdentifyOptions& opt) {
   if (opt.layout.actuator) return "--estimate actuator" + tail;
   if (opt.loss != Loss::kNone) return "--loss " + std::string(loss_name(opt.loss)) + tail;
   if (opt.smoothing_velocity > 0) return "--smooth-sign" + tail;
-  if (opt.window_s > 0) return "--window" + tail;
   return "";
 }
 
@@ -461,6 +460,7 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   out.layout.static_as_excess = false;
   out.method = opt.method;
   out.samples = log.size();
+  out.window_s = output_error_window(opt.window_s, log.duration());
   const std::string unsupported = four_bar_unsupported(opt);
   if (!unsupported.empty()) {
     out.status = Status::Error(StatusCode::kInvalidInput, unsupported);

@@ -1,42 +1,47 @@
 // validate(): the fitted scene simulated against the log, over the whole log and restarted
-// every validation window.
+// every validation window; one procedure for every mechanism (its driven angles compared).
 #include "identify_stages.h"
 
 namespace fivebar::identification {
 
 using namespace stages;
 
-Validation validate(const Params<double>& params, const sim::LoadFunction& loads,
-                    const TorqueLog& log, const std::vector<double>& omega1,
-                    const std::vector<double>& omega2, double window_s, double rtol,
-                    double budget_s) {
+namespace {
+
+/// A run of the mechanism from sample i0 under the logged torques, with the given options.
+using WindowRun = std::function<sim::Result(int i0, const sim::Options& options)>;
+
+/// Compares the runs' driven angles (the first `dof` of each row) with the log's.
+Validation validate_runs(const TorqueLog& log, int dof, const WindowRun& simulate_from,
+                         double window_s, double rtol, double budget_s) {
   const auto start = Clock::now();
   const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
   Validation v;
+  v.dof = dof;
   v.window_s = window_s;
   const int n = log.size();
-  v.full_theta1.assign(n, kNaN);
-  v.full_theta2.assign(n, kNaN);
-  v.window_theta1.assign(n, kNaN);
-  v.window_theta2.assign(n, kNaN);
+  std::vector<double>* full[2] = {&v.full_theta1, &v.full_theta2};
+  std::vector<double>* windowed[2] = {&v.window_theta1, &v.window_theta2};
+  for (int j = 0; j < kActuators; ++j) {
+    full[j]->assign(n, kNaN);
+    windowed[j]->assign(n, kNaN);
+  }
   if (n < 2) return v;
-  auto run = [&](int i0, int i1, bool full, double* s2, int* count) {
+  const std::vector<double>* logged[2] = {&log.theta1, &log.theta2};
+  auto run = [&](int i0, int i1, bool is_full, double* s2, int* count) {
     sim::Options o = window_sim_options(rtol);
     // a fitted scene far from the log (absurd logs) can make the simulation crawl: bounded
-    o.max_wall_time_s = std::max(1e-3, (full ? 0.5 : 1.0) * budget_s - elapsed());
+    o.max_wall_time_s = std::max(1e-3, (is_full ? 0.5 : 1.0) * budget_s - elapsed());
     o.max_steps = 50000;  // per output interval (a sample step): normal runs take a few
     o.duration = log.t[i1] - log.t[i0];
     o.output_step = o.duration / (i1 - i0);
-    const sim::Result res =
-        sim::simulate(params, logged_loads(log, loads, log.t[i0], params.actuators.offset),
-                      {log.theta1[i0], log.theta2[i0], omega1[i0], omega2[i0]}, o);
-    std::vector<double> ts, a, b;
+    const sim::Result res = simulate_from(i0, o);
+    std::vector<double> ts, angle[2];
     for (const sim::Row& row : res.rows) {
       ts.push_back(row.t);
-      a.push_back(row.theta[0]);
-      b.push_back(row.theta[1]);
+      for (int j = 0; j < dof; ++j) angle[j].push_back(row.theta[j]);
     }
-    if (full) {
+    if (is_full) {
       v.status = res.status;
       v.full_duration_s = ts.empty() ? 0.0 : ts.back();
     }
@@ -44,27 +49,25 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
     for (int i = i0; i <= i1; ++i) {
       const double tt = log.t[i] - log.t[i0];
       if (tt > ts.back() + 1e-9) break;
-      const double e1 = interp(ts, a, tt) - log.theta1[i];
-      const double e2 = interp(ts, b, tt) - log.theta2[i];
-      s2[0] += e1 * e1;
-      s2[1] += e2 * e2;
+      double worst = 0;
+      for (int j = 0; j < dof; ++j) {
+        const double sim_angle = interp(ts, angle[j], tt);
+        const double e = sim_angle - (*logged[j])[i];
+        s2[j] += e * e;
+        (*(is_full ? full : windowed)[j])[i] = sim_angle;
+        if (is_full) v.full_max[j] = std::max(v.full_max[j], std::abs(e));
+        worst = std::max(worst, std::abs(e));
+      }
       ++*count;
-      (full ? v.full_theta1 : v.window_theta1)[i] = interp(ts, a, tt);
-      (full ? v.full_theta2 : v.window_theta2)[i] = interp(ts, b, tt);
-      if (full) {
-        if (std::isnan(v.divergence_time_s) &&
-            std::max(std::abs(e1), std::abs(e2)) > Validation::kDivergedAngle) {
-          v.divergence_time_s = tt;
-        }
-        v.full_max[0] = std::max(v.full_max[0], std::abs(e1));
-        v.full_max[1] = std::max(v.full_max[1], std::abs(e2));
+      if (is_full && std::isnan(v.divergence_time_s) && worst > Validation::kDivergedAngle) {
+        v.divergence_time_s = tt;
       }
     }
   };
   double s2[2] = {0, 0};
   int count = 0;
   run(0, n - 1, true, s2, &count);
-  for (int j = 0; j < kActuators; ++j) v.full_rms[j] = std::sqrt(s2[j] / std::max(1, count));
+  for (int j = 0; j < dof; ++j) v.full_rms[j] = std::sqrt(s2[j] / std::max(1, count));
   double w2[2] = {0, 0};
   int wc = 0;
   for (auto [i0, i1] : make_windows(log, 0, n - 1, window_s)) {
@@ -74,8 +77,33 @@ Validation validate(const Params<double>& params, const sim::LoadFunction& loads
     }
     run(i0, i1, false, w2, &wc);
   }
-  for (int j = 0; j < kActuators; ++j) v.window_rms[j] = std::sqrt(w2[j] / std::max(1, wc));
+  for (int j = 0; j < dof; ++j) v.window_rms[j] = std::sqrt(w2[j] / std::max(1, wc));
   return v;
+}
+
+}  // namespace
+
+Validation validate(const Params<double>& params, const sim::LoadFunction& loads,
+                    const TorqueLog& log, const std::vector<double>& omega1,
+                    const std::vector<double>& omega2, double window_s, double rtol,
+                    double budget_s) {
+  const WindowRun from = [&](int i0, const sim::Options& o) {
+    return sim::simulate(params, logged_loads(log, loads, log.t[i0], params.actuators.offset),
+                         {log.theta1[i0], log.theta2[i0], omega1[i0], omega2[i0]}, o);
+  };
+  return validate_runs(log, 2, from, window_s, rtol, budget_s);
+}
+
+Validation validate(const FourBarParams& params, const sim::FourBarLoadFunction& loads,
+                    const TorqueLog& log, const std::vector<double>& omega1, double window_s,
+                    double rtol, double budget_s) {
+  const WindowRun from = [&](int i0, const sim::Options& o) {
+    sim::Initial initial;
+    initial.theta1 = log.theta1[i0];
+    initial.omega1 = omega1[i0];
+    return sim::simulate(params, logged_loads(log, loads, log.t[i0]), initial, o);
+  };
+  return validate_runs(log, 1, from, window_s, rtol, budget_s);
 }
 
 }  // namespace fivebar::identification

@@ -72,8 +72,9 @@ id::TorqueLog log_from_dict(const py::dict& columns, int dof) {
 // the simulated angles of the validation runs (residuals.csv's columns), beside its record
 void add_validation_arrays(const id::Validation& v, py::dict* validation) {
   (*validation)["simulated_theta1"] = to_array(v.full_theta1);
-  (*validation)["simulated_theta2"] = to_array(v.full_theta2);
   (*validation)["windowed_theta1"] = to_array(v.window_theta1);
+  if (v.dof == 1) return;
+  (*validation)["simulated_theta2"] = to_array(v.full_theta2);
   (*validation)["windowed_theta2"] = to_array(v.window_theta2);
 }
 
@@ -110,20 +111,22 @@ py::dict result_dict(const PyScene& s, const io::IdentifyRun& run, const id::Tor
   return d;
 }
 
-// a four-bar's fit (`fivebar identify` on a four-bar scene): the options it does not run and
-// the validation run (the five-bar's) refused naming them
+// a four-bar's fit (`fivebar identify` on a four-bar scene): the options it does not run
+// refused naming them
 id::IdentifyResult identify_four_bar(const PyScene& s, const id::TorqueLog& log,
-                                     const id::IdentifyOptions& options, bool validate) {
+                                     const id::IdentifyOptions& options, bool validate,
+                                     id::Validation* validation) {
   const std::string unsupported = id::four_bar_unsupported(options);
   if (!unsupported.empty()) {
     throw InputError(s.scene.path, "mechanism.type", "four_bar: " + unsupported);
   }
-  if (validate) {
-    throw InputError("validate", "(argument)",
-                     "the validation run simulates five-bars only (mechanism.type four_bar)");
-  }
   py::gil_scoped_release release;
-  return io::identify_four_bar_scene(s.scene, log, options);
+  id::IdentifyResult result = io::identify_four_bar_scene(s.scene, log, options);
+  if (validate) {
+    *validation = id::validate(result.fitted_four_bar, s.loads->four_bar_function(),
+                               result.conditioned_log, result.omega1, result.window_s);
+  }
+  return result;
 }
 
 py::dict identify(const PyScene& s, const py::object& log, const io::IdentifySettings& settings,
@@ -136,10 +139,12 @@ py::dict identify(const PyScene& s, const py::object& log, const io::IdentifySet
                                        : io::read_log(py::str(log), dof);
   const io::IdentifyRun run{s.scene.path,
                             py::isinstance<py::dict>(log) ? "(arrays)" : std::string(py::str(log)),
-                            settings.estimate, options.loss};
+                            settings.estimate, options.loss, /*torque_sign_flipped=*/""};
   if (four_bar) {
-    const id::IdentifyResult result = identify_four_bar(s, torque_log, options, validate);
-    return result_dict(s, run, torque_log, result, nullptr);
+    id::Validation validation;
+    const id::IdentifyResult result =
+        identify_four_bar(s, torque_log, options, validate, &validation);
+    return result_dict(s, run, torque_log, result, validate ? &validation : nullptr);
   }
   id::IdentifyResult result;
   id::Validation validation;
@@ -194,7 +199,8 @@ void bind_identify(py::module_& m) {
       py::arg("scene"), py::arg("log"),
       ("Identifies the friction coefficients of `scene` from a torque log: a CSV path, or a dict "
        "of equal-length arrays with the log's columns (t, theta1, theta2, tau1, tau2 and "
-       "optionally omega1, omega2, alpha1, alpha2). Keyword options are those of `fivebar "
+       "optionally omega1, omega2, alpha1, alpha2; a four-bar's: t, theta1, tau1 and optionally "
+       "omega1, alpha1). Keyword options are those of `fivebar "
        "identify` with _ for - (sg_window: the Savitzky-Golay half-window [s], chosen from the "
        "log when not given), and validate=False: " +
        keyword_defaults(io::IdentifySettings{}, kIdentifyKeywords,

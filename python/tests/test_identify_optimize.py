@@ -123,7 +123,7 @@ def test_optimize_a_four_bar_task_from_a_list(root):
 
 def test_identify_a_four_bar_log(root, cli, tmp_path):
     # a synthetic crank-rocker log (the CLI's synth-log): the truths inside the 95 % intervals,
-    # one torque channel; the five-bar's validation run refused naming the mechanism
+    # one torque channel; the validation run of its crank angle
     import subprocess
     import pytest
     if not cli:
@@ -139,7 +139,10 @@ def test_identify_a_four_bar_log(root, cli, tmp_path):
         assert p["ci95_low"] <= p["true"] <= p["ci95_high"], p["name"]
     assert result["fitted_scene"].mechanism == "four_bar"
     assert result["predicted_tau1"].shape == result["omega1"].shape
-    with pytest.raises(ValueError, match="validation run simulates five-bars only"):
-        fivebar.identify(scene, log, validate=True)
+    validated = fivebar.identify(scene, log, validate=True)
+    validation = validated["validation"]
+    assert len(validation["windowed_rms_angle_error"]) == 1
+    assert validation["windowed_theta1"].shape == result["omega1"].shape
+    assert "windowed_theta2" not in validation
     with pytest.raises(ValueError, match="four_bar: --method output-error runs five-bars only"):
         fivebar.identify(scene, log, method="output-error")

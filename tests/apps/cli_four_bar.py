@@ -297,6 +297,24 @@ else:
     with open(os.path.join(out, "summary.json")) as f:
         if json.load(f)["reference"].get("external_agrees") is not False:
             failures.append("accuracy: the double rocker's reference read as agreeing")
+# identify's validation of a four-bar: on a noise-free log (exact rates) the fitted scene driven
+# by the logged torque follows the logged crank angle to the interpolation of the torque between
+# samples, restarted every 0.1 s (--window) and over the whole log
+exact_log = os.path.join(WORK, "crank_rocker_exact.csv")
+run(["synth-log", scene, "--out", exact_log, "--duration", "2", "--seed", "5", "--torque-noise",
+     "0", "--angle-noise", "0", "--with-rates"])
+code, _, err = run(["identify", scene, "--log", exact_log, "--window", "0.1", "--no-plots",
+                    "--out", os.path.join(WORK, "identify_exact")])
+if code != 0:
+    failures.append("identify of the exact four-bar log: exit %d: %s" % (code, err))
+else:
+    with open(os.path.join(WORK, "identify_exact", "identification.json")) as f:
+        validation = json.load(f).get("validation", {})
+    windowed = validation.get("windowed_rms_angle_error", [1.0])
+    full = validation.get("full_run_rms_angle_error", [1.0])
+    if validation.get("window_s") != 0.1 or len(windowed) != 1 or not windowed[0] < 1e-5 \
+            or not full[0] < 1e-4:
+        failures.append("identify of the exact four-bar log: validation %r" % validation)
 # excite on a frictionless four-bar: nothing to design for, refused naming friction
 expect_error(2, "friction: every parameter to design for is 0",
              ["excite", scene, "--set", "friction.coulomb=0", "--set", "friction.viscous=0",
@@ -327,12 +345,17 @@ else:
                         % result.get("rms_torque_residual"))
     with open(os.path.join(fit, "residuals.csv")) as f:
         header = f.readline().strip()
-    if header != "t,theta1,tau1,omega1,alpha1,predicted_tau1,residual_tau1,used":
+    if header != ("t,theta1,tau1,omega1,alpha1,predicted_tau1,residual_tau1,used,"
+                  "simulated_theta1,windowed_theta1"):
         failures.append("identify of the four-bar: residuals.csv header %r" % header)
     with open(os.path.join(fit, "scene_fitted.yaml")) as f:
         fitted = f.read()
     if "four_bar" not in fitted:
         failures.append("identify of the four-bar: scene_fitted.yaml is not a four-bar's")
+    validation = result.get("validation", {})
+    if len(validation.get("windowed_rms_angle_error", [])) != 1 or \
+            not os.path.exists(os.path.join(fit, "fig_validation.png")):
+        failures.append("identify of the four-bar: validation %r" % validation)
     # the fitted scene simulates
     code, _, err = run(["simulate", os.path.join(fit, "scene_fitted.yaml"), "--out",
                         os.path.join(WORK, "fitted_run"), "--set", "simulation.duration=0.2"])

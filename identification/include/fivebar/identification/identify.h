@@ -300,6 +300,7 @@ std::string four_bar_unsupported(const IdentifyOptions& options);
 /// Angles of a simulation of `params` driven by the logged torques (linear between samples)
 /// against the logged angles.
 struct Validation {
+  int dof = 2;                    ///< driven angles compared (channels 0..dof-1 below)
   Status status;                  ///< of the full run (not ok: the run stopped early)
   double full_rms[2] = {0, 0};    ///< [rad] one run from the first sample over the whole log
   double full_max[2] = {0, 0};    ///< [rad]
@@ -318,21 +319,29 @@ struct Validation {
   int windows_skipped = 0;  ///< windows not run: the time budget was spent
 };
 
-/// Simulates `params` with the log's torques from the log's state (rates: `omega1/2`), once over
 /// The output-error and validation window for a log of `duration` seconds: window_s when > 0,
 /// else 0.2 s or duration / 20 if shorter.
 double output_error_window(double window_s, double duration);
 
+/// Simulates `params` with the log's torques from the log's state (rates: `omega1/2`), once over
 /// the whole log and in windows of `window_s` restarted from the logged state, within a wall-time
 /// budget (the full run gets half; windows past the budget are skipped and counted).
 Validation validate(const Params<double>& params, const sim::LoadFunction& loads,
                     const TorqueLog& log, const std::vector<double>& omega1,
                     const std::vector<double>& omega2, double window_s, double rtol = 1e-9,
                     double budget_s = 10.0);
+/// The four-bar's: its crank driven by the logged tau1 from the logged theta1, omega1; its
+/// crank angle compared (channel 0 of the Validation; channel 1 stays empty).
+Validation validate(const FourBarParams& params, const sim::FourBarLoadFunction& loads,
+                    const TorqueLog& log, const std::vector<double>& omega1, double window_s,
+                    double rtol = 1e-9, double budget_s = 10.0);
 
 /// Loads for the simulator: logged tau1, tau2 (linear in t) less the sensors' `offset` as M1, M2
 /// and the scene's M3, F, F_angle, shifted by t0 (the simulator starts at t = 0).
 sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& scene_loads,
                                double t0, std::array<double, kActuators> offset = {0.0, 0.0});
+/// The four-bar's: logged tau1 as M1, the scene's M3, F, F_angle.
+sim::FourBarLoadFunction logged_loads(const TorqueLog& log,
+                                      const sim::FourBarLoadFunction& scene_loads, double t0);
 
 }  // namespace fivebar::identification
