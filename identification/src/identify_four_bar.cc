@@ -235,6 +235,19 @@ bool start_values(FourBarFit* f, IdentifyResult* out) {
 
 /// The fit: the residual blocks on f->x (its start values), the bounds, the solve. False
 /// (out->status) when the model fails at the start values, or the solver fails.
+/// The five-bar's inverse-dynamics solver settings: the fit's and its profiles' re-fits.
+ceres::Solver::Options solver_options(const FourBarFit& f) {
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = f.opt->max_iterations;
+  so.num_threads = f.opt->num_threads;
+  so.function_tolerance = 1e-12;
+  so.gradient_tolerance = 1e-14;
+  so.parameter_tolerance = 1e-10;
+  so.logging_type = ceres::SILENT;
+  return so;
+}
+
 bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
   const ParameterLayout& lay = f->layout;
   const int P = lay.size();
@@ -248,16 +261,8 @@ bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
     return false;
   }
   out->rms_torque_residual_initial[0] = rms(r);
-  ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = f->opt->max_iterations;
-  so.num_threads = f->opt->num_threads;
-  so.function_tolerance = 1e-12;  // the five-bar's inverse-dynamics tolerances
-  so.gradient_tolerance = 1e-14;
-  so.parameter_tolerance = 1e-10;
-  so.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
-  ceres::Solve(so, problem, &summary);
+  ceres::Solve(solver_options(*f), problem, &summary);
   out->iterations = static_cast<int>(summary.iterations.size()) - 1;
   out->solver_message = summary.message;
   for (const ceres::IterationSummary& it : summary.iterations) {
@@ -293,12 +298,15 @@ std::vector<int> block_sizes(const FourBarFit& f) {
 
 /// The covariance of the free parameters (those off their bounds): the block sandwich
 /// (errors in variables: the rates' noise enters the reactions and the friction's sign terms), or
-/// s^2 (J^T J)^-1 with --classical-std; the singular values of the scaled Jacobian.
-void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* out) {
+/// s^2 (J^T J)^-1 with --classical-std; the singular values of the scaled Jacobian. *Hinv:
+/// (J^T J)^-1 of the free parameters (NaN elsewhere), the profile intervals' noise scale.
+void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
+                Eigen::MatrixXd* Hinv) {
   const int P = f.layout.size();
   std::vector<double> r;
   Eigen::MatrixXd J;
   out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
+  *Hinv = out->covariance;
   ceres::CRSMatrix crs;
   if (!stages::raw_residuals(problem, &r, &crs)) return;
   J = stages::dense(crs, P);
@@ -326,14 +334,17 @@ void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* ou
     out->std_detail = "sandwich over blocks of " + std::to_string(2 * f.hw + 1) +
                       " samples (the rate filter's window), small-sample corrected";
   }
+  const Eigen::MatrixXd H = Jf.transpose() * Jf;
+  const Eigen::MatrixXd Hf = H.ldlt().solve(Eigen::MatrixXd::Identity(H.rows(), H.cols()));
   if (C.size() == 0) {
-    const Eigen::MatrixXd H = Jf.transpose() * Jf;
-    C = out->residual_sigma * out->residual_sigma *
-        H.ldlt().solve(Eigen::MatrixXd::Identity(H.rows(), H.cols()));
+    C = out->residual_sigma * out->residual_sigma * Hf;
     out->std_method = "residual-variance";
   }
   for (size_t a = 0; a < free.size(); ++a) {
-    for (size_t b = 0; b < free.size(); ++b) out->covariance(free[a], free[b]) = C(a, b);
+    for (size_t b = 0; b < free.size(); ++b) {
+      out->covariance(free[a], free[b]) = C(a, b);
+      (*Hinv)(free[a], free[b]) = Hf(a, b);
+    }
   }
 }
 
@@ -495,11 +506,13 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   if (!solve(&f, &problem, &out)) return out;
   const std::vector<double> x0 =
       opt.initial.empty() ? stages::default_start(f.layout) : opt.initial;
-  covariance(f, &problem, &out);
+  Eigen::MatrixXd Hinv;
+  covariance(f, &problem, &out, &Hinv);
   const std::string structure = stages::structure_warning(
       0, out.rms_torque_residual[0], out.residual_noise_floor[0], f.noise.torque[0], from_noise);
   if (!structure.empty()) out.warnings.push_back(structure);
   estimates(f, x0, &out);
+  stages::profile_intervals({f.layout, f.x, &problem, Hinv, solver_options(f)}, &out);
   model_check(&out);
   cause_check(f, &out);
   stages::correct_smoothing_bias(f.layout, f.smoothing_bias, &f.x, &out);

@@ -399,6 +399,7 @@ ModelVerdict model_check(const Fit& f, IdentifyResult* out);
 /// where wants_profile (inverse dynamics without a robust loss, converged).
 void intervals(const Fit& f, ceres::Problem* problem, const Analysis& an, IdentifyResult* out);
 
+
 // ---- stage_refits.cc ----
 
 /// IdentifyOptions::check_torque_sign: true (and out->unusable says why) when the log's torques

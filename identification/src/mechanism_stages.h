@@ -3,8 +3,11 @@
 // (stage_smoothing_bias.cc) read a fit through WindowFit, which each mechanism's identify
 // implements over its own residual (the five-bar: identify_stages.h, FiveBarWindowFit; the
 // four-bar: identify_four_bar.cc). A mechanism of one driven joint fills channel 0 of the
-// two-channel noise model (noise_model.h) and leaves channel 1 at zero.
+// two-channel noise model (noise_model.h) and leaves channel 1 at zero. The profile-likelihood
+// intervals (stage_intervals.cc) read a fit through ProfileProblem.
 #pragma once
+
+#include <ceres/ceres.h>
 
 #include <Eigen/Core>
 #include <algorithm>
@@ -17,11 +20,6 @@
 #include "fivebar/identification/rates.h"
 #include "smoothing_bias.h"
 #include "window_misfit.h"
-
-namespace ceres {
-class Problem;
-struct CRSMatrix;
-}  // namespace ceres
 
 namespace fivebar::identification::stages {
 
@@ -143,5 +141,22 @@ Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P);
 /// already in `problem` on the parameter block x (its lower bounds set here), at most 20
 /// iterations; whether the solution is usable.
 bool solve_preliminary(const ParameterLayout& layout, double* x, ceres::Problem* problem);
+
+// ---- stage_intervals.cc ----
+
+/// What a profile-likelihood interval re-fits: the fit's problem (its residual blocks on the
+/// internal parameters x, without a robust loss), (J^T J + Hp)^-1 of its free parameters (NaN
+/// or 0 elsewhere) and the fit's solver options. Any mechanism's fit provides one.
+struct ProfileProblem {
+  const ParameterLayout& layout;
+  const std::vector<double>& x;
+  ceres::Problem* problem;
+  const Eigen::MatrixXd& Hinv;
+  ceres::Solver::Options solver;
+};
+
+/// The profile-likelihood intervals where wants_profile, on a converged fit whose Wald
+/// intervals are in out->parameters.
+void profile_intervals(const ProfileProblem& pp, IdentifyResult* out);
 
 }  // namespace fivebar::identification::stages

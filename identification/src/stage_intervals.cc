@@ -29,13 +29,14 @@ bool wants_profile(const ParameterLayout& layout, int i, const ParameterEstimate
 /// the static value (static >= kinetic); otherwise y are the internal parameters.
 class ProfileFits {
  public:
-  ProfileFits(const Fit& f, ceres::Problem* problem, int i) : f_(f) {
-    const int P = f.layout.size();
-    const Eigen::MatrixXd T = to_public(f.layout);
-    const bool stat = f.layout.static_as_excess && i < f.layout.friction_size() &&
-                      f.layout.group(i / f.layout.per_group()) == Coefficient::kStaticCoulomb;
+  ProfileFits(const ProfileProblem& pp, int i) : so_(pp.solver) {
+    const ParameterLayout& layout = pp.layout;
+    const int P = layout.size();
+    const Eigen::MatrixXd T = to_public(layout);
+    const bool stat = layout.static_as_excess && i < layout.friction_size() &&
+                      layout.group(i / layout.per_group()) == Coefficient::kStaticCoulomb;
     const Eigen::MatrixXd M = stat ? Eigen::MatrixXd(T.inverse()) : Eigen::MatrixXd::Identity(P, P);
-    const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(f.x.data(), P);
+    const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(pp.x.data(), P);
     const Eigen::VectorXd y = stat ? Eigen::VectorXd(T * x) : x;
     theta_ = y(i);
     Eigen::MatrixXd B(P, P - 1);
@@ -43,18 +44,18 @@ class ProfileFits {
       if (k != i) B.col(c) = M.col(k), z_hat_.push_back(y(k)), ++c;
     }
     std::vector<ceres::ResidualBlockId> blocks;
-    problem->GetResidualBlocks(&blocks);
+    pp.problem->GetResidualBlocks(&blocks);
     z_ = z_hat_;
     for (ceres::ResidualBlockId id : blocks) {
-      reduced_.AddResidualBlock(new detail::AffineCost(problem->GetCostFunctionForResidualBlock(id),
+      reduced_.AddResidualBlock(new detail::AffineCost(pp.problem->GetCostFunctionForResidualBlock(id),
                                                        M.col(i), B, &theta_),
                                 nullptr, z_.data());
     }
     for (int k = 0; k < P; ++k) {
-      if (k != i) reduced_.SetParameterLowerBound(z_.data(), k < i ? k : k - 1, f.layout.lower_bound(k));
+      if (k != i) reduced_.SetParameterLowerBound(z_.data(), k < i ? k : k - 1, layout.lower_bound(k));
     }
-    if (stat) coulomb_ = f.layout.group_of(Coefficient::kCoulomb) * f.layout.per_group() +
-                         i % f.layout.per_group();
+    if (stat) coulomb_ = layout.group_of(Coefficient::kCoulomb) * layout.per_group() +
+                         i % layout.per_group();
     double cost = 0;
     reduced_.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
     cost_hat_ = cost;
@@ -71,7 +72,7 @@ class ProfileFits {
       z_[coulomb_] = std::min(z_[coulomb_], theta);
       reduced_.SetParameterUpperBound(z_.data(), coulomb_, theta);
     }
-    ceres::Solver::Options so = solver_options(f_);
+    ceres::Solver::Options so = so_;
     so.max_num_iterations = 50;
     ceres::Solver::Summary summary;
     ceres::Solve(so, &reduced_, &summary);
@@ -81,7 +82,7 @@ class ProfileFits {
   }
 
  private:
-  const Fit& f_;
+  ceres::Solver::Options so_;
   int coulomb_ = -1;  ///< static profile: index (in z) of the same joint's coulomb
   double theta_ = 0, cost_hat_ = 0;
   std::vector<double> z_hat_, z_;
@@ -93,18 +94,17 @@ class ProfileFits {
 /// cost by at most q^2 / 2 times its noise scale V_ii / Hinv_ii (V the reported covariance, Hinv
 /// that of J^T J: for a quadratic cost this is exactly value +- q std, so the interval agrees
 /// with the covariance model wherever the Wald interval is right). Warnings for an open side.
-void profile_parameter(const Fit& f, ceres::Problem* problem, const Analysis& an, int i,
-                       IdentifyResult* out) {
+void profile_parameter(const ProfileProblem& pp, int i, IdentifyResult* out) {
   ParameterEstimate& e = out->parameters[i];
-  const Eigen::VectorXd t = to_public(f.layout).row(i).transpose();
-  const Eigen::MatrixXd Hinv = an.Hinv.unaryExpr([](double v) { return std::isfinite(v) ? v : 0.0; });
+  const Eigen::VectorXd t = to_public(pp.layout).row(i).transpose();
+  const Eigen::MatrixXd Hinv = pp.Hinv.unaryExpr([](double v) { return std::isfinite(v) ? v : 0.0; });
   const double h = t.dot(Hinv * t), q = out->ci_quantile;
   if (!(h > 0)) return;
   const double threshold = 0.5 * q * q * e.std * e.std / h;
-  ProfileFits fits(f, problem, i);
+  ProfileFits fits(pp, i);
   const auto rise = [&](double theta, int side) { return fits.rise(theta, side); };
   const detail::ProfileInterval pi =
-      detail::profile_interval(rise, e.value, q * e.std, threshold, f.layout.lower_bound(i),
+      detail::profile_interval(rise, e.value, q * e.std, threshold, pp.layout.lower_bound(i),
                                std::numeric_limits<double>::infinity(), 0.02 * e.std);
   out->profile_refits += pi.refits;
   if (pi.low.failed || pi.high.failed) {
@@ -133,11 +133,14 @@ void intervals(const Fit& f, ceres::Problem* problem, const Analysis& an, Identi
     e.ci_high = e.value + out->ci_quantile * e.std;
     e.ci_method = "wald";
   }
-  if (!f.method->profiles_intervals() || f.opt->loss != Loss::kNone || !out->converged) {
-    return;
-  }
+  if (!f.method->profiles_intervals() || f.opt->loss != Loss::kNone) return;
+  profile_intervals({f.layout, f.x, problem, an.Hinv, solver_options(f)}, out);
+}
+
+void profile_intervals(const ProfileProblem& pp, IdentifyResult* out) {
+  if (!out->converged) return;
   for (int i = 0; i < static_cast<int>(out->parameters.size()); ++i) {
-    if (wants_profile(f.layout, i, out->parameters[i])) profile_parameter(f, problem, an, i, out);
+    if (wants_profile(pp.layout, i, out->parameters[i])) profile_parameter(pp, i, out);
   }
 }
 
