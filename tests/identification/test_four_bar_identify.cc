@@ -6,6 +6,7 @@
 // predicted std against identify's.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <random>
 
@@ -61,6 +62,26 @@ TEST(FourBarIdentify, RecoversTheFrictionOfANoiseFreeLog) {
   EXPECT_TRUE(res.unusable.empty()) << res.unusable;
   EXPECT_GT(res.slip_reversals, 20);  // C and D0 reverse about twice a turn
   EXPECT_NEAR(res.fitted_four_bar.friction.coulomb[3], 0.12, 1e-6);
+}
+
+// A small coulomb (0.005 against viscous 0.02) whose Wald interval reaches below its bound 0:
+// its interval is the profile likelihood's (re-fits of the four-bar's problem with coulomb
+// held), ending above the bound and holding the truth; viscous keeps its Wald interval.
+TEST(FourBarIdentify, ProfileIntervalWhereWaldReachesBelowTheBound) {
+  FourBarParams truth = crank_rocker().p;
+  for (int k = 0; k < kFourBarJoints; ++k) truth.friction.coulomb[k] = 0.005;
+  const TorqueLog log = crank_rocker_log(truth, 3.0, 0.02, 1e-5, 1, /*with_rates=*/false);
+  const IdentifyResult res = identify(truth, crank_rocker().loads, log, four_bar_options());
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  const ParameterEstimate& c = res.parameters[0];
+  ASSERT_TRUE(std::isfinite(c.std));
+  EXPECT_LT(c.value - res.ci_quantile * c.std, 0.0);  // the Wald interval crosses the bound
+  EXPECT_EQ(c.ci_method, "profile-likelihood");
+  EXPECT_GT(res.profile_refits, 0);
+  EXPECT_GT(c.ci_low, c.value - res.ci_quantile * c.std);
+  EXPECT_LE(c.ci_low, 0.005);
+  EXPECT_GE(c.ci_high, 0.005);
+  EXPECT_EQ(res.parameters[1].ci_method, "wald");
 }
 
 TEST(FourBarIdentify, PerJointHasFourCoefficientsPerGroup) {
