@@ -419,20 +419,46 @@ void predictions(const FourBarFit& f, IdentifyResult* out) {
   for (int i = 0; i < L.size(); ++i) out->predicted_tau1[i] = rows[i].M1;
 }
 
+/// A refit by this identify (the sign check's and the delay's)
+stages::Refit refit_by(const FourBarParams& scene, const sim::FourBarLoadFunction& loads) {
+  return [&scene, &loads](const TorqueLog& log, const IdentifyOptions& opt, IdentifyResult* fit) {
+    *fit = identify(scene, loads, log, opt);
+    return true;
+  };
+}
+
 /// The sign check (stages::torques_fit_negated, the five-bar's) when the residual is more than
-/// kMisfitRatio times its floor: refits of the negated torque by this identify.
-void sign_check(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
+/// kMisfitRatio times its floor: refits of the negated torque by this identify; true when the
+/// torques fit far better negated (out->unusable says so).
+bool sign_check(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
                 const TorqueLog& log, const IdentifyOptions& opt, IdentifyResult* out) {
   if (!opt.check_torque_sign ||
       !(out->rms_torque_residual[0] > stages::kMisfitRatio * out->residual_noise_floor[0])) {
-    return;
+    return false;
   }
-  const stages::Refit refit = [&](const TorqueLog& negated, const IdentifyOptions& again,
-                                  IdentifyResult* fit) {
-    *fit = identify(scene, loads, negated, again);
+  return stages::torques_fit_negated(log, opt, 1, 0u, refit_by(scene, loads), out);
+}
+
+/// The delay the model check named (cause_check), corrected: the fit redone with the torques
+/// shifted by it (stages::refit_with_delay, the five-bar's), true and *refit when that fit is
+/// usable; else a warning that the delay is not corrected (out->delay_unexplained). Not for a
+/// delay within a tenth of a sample, nor without refits left (IdentifyOptions::delay_refits).
+bool delay_refit(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
+                 const FourBarFit& f, IdentifyResult* out, IdentifyResult* refit) {
+  const TorqueLog& L = f.cond.log;
+  const double dt = L.duration() / std::max(1, L.size() - 1);
+  if (f.opt->delay_refits <= 0 || !(std::abs(out->delay_s) > 0.1 * dt)) return false;
+  IdentifyResult shifted = stages::refit_with_delay(L, *f.opt, *out, refit_by(scene, loads));
+  if (shifted.unusable.empty()) {
+    *refit = std::move(shifted);
     return true;
-  };
-  stages::torques_fit_negated(log, opt, 1, 0u, refit, out);
+  }
+  out->warnings.push_back("the torques seem to " + std::string(out->delay_s < 0 ? "lead" : "lag") +
+                          " the angles by " + format_significant(std::abs(out->delay_s) * 1e3) +
+                          " ms, but the fit with them shifted is not to be used (" +
+                          shifted.unusable + "); not corrected");
+  out->delay_unexplained = true;
+  return false;
 }
 
 }  // namespace four_bar
@@ -501,11 +527,14 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   if (!structure.empty()) out.warnings.push_back(structure);
   estimates(f, x0, &out);
   model_check(&out);
-  cause_check(f, &out);
+  const bool delay_named = cause_check(f, &out);
   stages::correct_smoothing_bias(f.layout, f.smoothing_bias, &f.x, &out);
   predictions(f, &out);
-  sign_check(scene, loads, log, opt, &out);
-  stages::unexplained_misfit(f.layout, &out);
+  const bool sign_wrong = sign_check(scene, loads, log, opt, &out);
+  IdentifyResult refit;
+  const bool shifted = delay_named && !sign_wrong && delay_refit(scene, loads, f, &out, &refit);
+  if (shifted) out = std::move(refit);
+  if (!shifted) stages::unexplained_misfit(f.layout, &out);
   out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

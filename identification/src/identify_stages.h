@@ -339,8 +339,7 @@ void delay_regressor(const Fit& f, std::vector<double>* g1, std::vector<double>*
 void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<double>& r,
                     const std::vector<detail::Sensitivity>& sens, IdentifyResult* out);
 
-/// The fit redone on the conditioned log with the torques shifted by the delay `first` found,
-/// carrying over what the first pass reported about the log.
+/// The five-bar's refit_with_delay (mechanism_stages.h): the fit redone by this identify.
 IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadFunction& loads,
                                 const TorqueLog& conditioned, const IdentifyOptions& opt,
                                 const IdentifyResult& first);

@@ -131,6 +131,16 @@ using Refit =
 bool torques_fit_negated(const TorqueLog& log, const IdentifyOptions& opt, int drives,
                          unsigned suspect, const Refit& refit, IdentifyResult* out);
 
+/// The fit redone by `refit` (stage_delay.cc) on the conditioned log with its torques (every
+/// channel the log has) shifted by the delay `first` found (first.delay_s: the torques at
+/// t + d match the angles at t), carrying over what the first pass reported about the log: its
+/// glitches left out again, its torque noise, the samples whose shifted torques fall beyond the
+/// log left out and noted. The refit estimates the delay left after the shift (and refits again,
+/// at most opt.delay_refits - 1 times); the result's delay is the total, delay_corrected, and its
+/// first warning says it. A refit that fails gives a result with `unusable` set.
+IdentifyResult refit_with_delay(const TorqueLog& conditioned, const IdentifyOptions& opt,
+                                const IdentifyResult& first, const Refit& refit);
+
 /// Raw (unweighted) residuals of the problem at its parameters, and its Jacobian with `jac`;
 /// false where an evaluation fails (stage_solve.cc).
 bool raw_residuals(ceres::Problem* problem, std::vector<double>* r,
