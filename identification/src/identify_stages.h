@@ -229,7 +229,6 @@ class FiveBarWindowFit : public WindowFit {
   FiveBarWindowFit(const Fit& f, const IdentifyResult& out) : f_(f), out_(out) {}
   const TorqueLog& log() const override { return f_.cond.log; }
   const std::vector<char>& rejected() const override { return f_.cond.rejected; }
-  int drives() const override { return kActuators; }
   detail::RateSource source() const override { return f_.source; }
   const std::vector<int>& index() const override { return f_.index; }
   bool spans_reversal(int i, int hw) const override { return stages::spans_reversal(f_, i, hw); }

@@ -43,17 +43,16 @@ class WindowFit {
   virtual const TorqueLog& log() const = 0;
   /// per log sample: 1 for a glitch (never probed)
   virtual const std::vector<char>& rejected() const = 0;
-  /// the torque channels (1 or 2)
-  virtual int drives() const = 0;
   /// where the rates and accelerations come from
   virtual detail::RateSource source() const = 0;
   /// log index of each sample of the fit
   virtual const std::vector<int>& index() const = 0;
   /// whether the filter's window of half-width hw centred on log sample i spans a slip reversal
   virtual bool spans_reversal(int i, int hw) const = 0;
-  /// per channel: the rms torque residual and the level the sensor noise explains over the log
-  /// samples `probe` (joints at rest left out), with the rates of the filter `sg` (read by
-  /// choose_window; a mechanism whose window choose_window_by_bias chooses leaves them NaN)
+  /// per channel (two: choose_window is the five-bar's): the rms torque residual and the level
+  /// the sensor noise explains over the log samples `probe` (joints at rest left out), with the
+  /// rates of the filter `sg` (read by choose_window; a mechanism whose window
+  /// choose_window_by_bias chooses leaves them NaN)
   virtual void levels(const std::vector<int>& probe, const SgOptions& sg, double rms[2],
                       double floor[2]) const {
     (void)probe, (void)sg;
@@ -77,7 +76,12 @@ class WindowFit {
 /// least ratio over the candidates when that is above 1: a mismatch of the law that no window
 /// removes), then one candidate smaller; a flat excess (a misfit the small windows' noise hides,
 /// window_misfit.h) is chosen by its own rule. Sets sg's half-window (and its order when the
-/// smallest window is the choice), *rates_biased, and *choice (the text of the choice).
+/// smallest window is the choice), *rates_biased, and *choice (the text of the choice). It reads
+/// both torque channels' levels (WindowFit::levels): the five-bar's rule. A mechanism of one
+/// driven joint (the four-bar) chooses by choose_window_by_bias, which reads no levels: the
+/// misfit of a law shows in its residual at the window chosen, whose noise floor is mostly the
+/// torque noise (the crank rocker's 3 s logs: floor 0.024 N m for torque noise 0.02 N m), and
+/// its model check names it.
 void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::string* choice);
 
 /// After choose_window: the largest window up to its choice whose predicted bias (smoothing_bias.h:
