@@ -154,7 +154,8 @@ bool held(const FourBarFit& f, const std::array<double, 4>& row, double w, doubl
 std::vector<char> near_reversals(const FourBarFit& f, int hw) {
   const int n = f.cond.log.size();
   std::vector<char> near(n, 0);
-  for (int i = f.first; i <= f.last; ++i) near[i] = stages::window_spans_reversal(f.reversals, i, hw);
+  for (int i = f.first; i <= f.last; ++i)
+    near[i] = stages::window_spans_reversal(f.reversals, i, hw);
   if (hw <= 0) return near;
   for (int i = f.first; i <= f.last;) {
     if (near[i]) {
@@ -186,8 +187,7 @@ void select_samples(FourBarFit* f, IdentifyResult* out) {
   out->samples_at_rest = out->samples_near_reversals = 0;
   f->samples.clear();
   f->index.clear();
-  const std::vector<char> near =
-      near_reversals(*f, f->hw > 0 && opt.exclude_reversals ? f->hw : 0);
+  const std::vector<char> near = near_reversals(*f, f->hw > 0 && opt.exclude_reversals ? f->hw : 0);
   for (int i = f->first; i <= f->last; ++i) {
     if (f->cond.rejected[i]) continue;
     if (held(*f, row[i], f->w[i], f->rate_noise)) {

@@ -170,8 +170,8 @@ void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::s
   }
   // a misfit hidden by the noise of the small windows: its excess is flat in the window
   detail::WindowMisfit m;
-  while ((m = detail::window_misfit(tab.levels(), tab.levels().size() < tab.candidates()))
-             .state == detail::WindowMisfit::kNeedMore) {
+  while ((m = detail::window_misfit(tab.levels(), tab.levels().size() < tab.candidates())).state ==
+         detail::WindowMisfit::kNeedMore) {
     tab.evaluate_next();
   }
   if (m.state == detail::WindowMisfit::kMisfit) {
