@@ -74,6 +74,9 @@ void window_stage(FourBarFit* f, IdentifyResult* out);
 /// links' inertial parameters, the crank encoder's zero, tau1's offset and gain, the delay)
 /// freed on the four-bar's Jacobian; a warning when a cause would move the friction beyond
 /// kFreedMove std, out->unusable beyond kUnusableMove or at a bound (four_bar_model_check.cc).
-void cause_check(const FourBarFit& f, IdentifyResult* out);
+/// out->delay_s and delay_std_s: the delay's estimate (its column freed alone with the friction)
+/// where the check has the column; true when it names the delay (evidenced beyond the model
+/// causes and explaining the most: identify then refits with the torques shifted by it).
+bool cause_check(const FourBarFit& f, IdentifyResult* out);
 
 }  // namespace fivebar::identification::four_bar

@@ -153,15 +153,16 @@ std::string reading(int id, const detail::FreedStep& fs) {
 
 /// The warning and the fit's status for the cause `id` (top: none is named, the one that
 /// explains most): the friction's move beyond kFreedMove std is a warning (a named delay is one
-/// at any move: the fit is not redone with the torques shifted); beyond kUnusableMove, or a
-/// coefficient at its bound (the move cannot be given), the fit is unusable.
+/// at any move: identify redoes the fit with the torques shifted by it, and this fit's warnings
+/// are then replaced by the refit's); beyond kUnusableMove, or a coefficient at its bound (the
+/// move cannot be given), the fit is unusable.
 void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, IdentifyResult* out) {
   const detail::FreedStep& fs = cs.alone[id];
   double largest = 0;
   const std::string moves = stages::friction_moves(f.layout, *out, fs, false, &largest);
   bool bound = false;
   for (int i = 0; i < f.layout.friction_size(); ++i) bound = bound || out->parameters[i].at_bound;
-  // the four-bar's fit does not shift the torques: a delay it names is always said
+  // a delay it names is always said (the refit's warning replaces it when the refit is used)
   const bool delay = named && id == stages::kCauseDelay;
   if (moves.empty() && !bound && !delay) return;
   const std::string what = stages::kCauseText[id].what;
@@ -190,19 +191,25 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, Identi
 
 }  // namespace
 
-void cause_check(const FourBarFit& f, IdentifyResult* out) {
-  if (!out->converged || f.layout.inertia || f.layout.actuator) return;
+bool cause_check(const FourBarFit& f, IdentifyResult* out) {
+  if (!out->converged || f.layout.inertia || f.layout.actuator) return false;
   Eigen::MatrixXd J;
   Eigen::VectorXd r;
   std::vector<int> idx[5];
   if (!check_jacobian(f, *out, &J, &r, idx) || J.rows() < stages::kCheckRowsPerColumn * J.cols()) {
-    return;
+    return false;
   }
   const Eigen::VectorXd info = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(idx[1].size()),
                                                          1.0 / std::pow(f.opt->inertia_prior, 2));
   Eigen::VectorXd bias;
-  if (!score_bias(f, *out, &bias)) return;
+  if (!score_bias(f, *out, &bias)) return false;
   CauseSteps cs = stages::cause_steps(J, r, idx, info, bias, true);
+  // the delay's estimate: its step freed alone with the friction (the five-bar's estimate_delay)
+  const detail::FreedStep& ds = cs.alone[stages::kCauseDelay];
+  if (!idx[4].empty() && ds.ok && ds.extra_step.size() == 1) {
+    out->delay_s = ds.extra_step(0);
+    out->delay_std_s = ds.extra_std(0);
+  }
   const int top = stages::most_explaining_cause(cs);
   // the delay: named when it is evidenced beyond the model causes and explains the most
   const int d = cs.slot[stages::kCauseDelay];
@@ -220,6 +227,7 @@ void cause_check(const FourBarFit& f, IdentifyResult* out) {
     judge(f, cs, id, true, out);
   }
   if (!any && top < stages::kCauseCount) judge(f, cs, top, false, out);
+  return cs.named(stages::kCauseDelay);
 }
 
 }  // namespace fivebar::identification::four_bar

@@ -53,7 +53,6 @@ class FourBarWindowFit : public stages::WindowFit {
   explicit FourBarWindowFit(const FourBarFit& f) : f_(f) {}
   const TorqueLog& log() const override { return f_.cond.log; }
   const std::vector<char>& rejected() const override { return f_.cond.rejected; }
-  int drives() const override { return 1; }
   detail::RateSource source() const override { return detail::RateSource::kFromAngles; }
   const std::vector<int>& index() const override { return f_.index; }
   bool spans_reversal(int i, int hw) const override {

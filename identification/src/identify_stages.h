@@ -229,7 +229,6 @@ class FiveBarWindowFit : public WindowFit {
   FiveBarWindowFit(const Fit& f, const IdentifyResult& out) : f_(f), out_(out) {}
   const TorqueLog& log() const override { return f_.cond.log; }
   const std::vector<char>& rejected() const override { return f_.cond.rejected; }
-  int drives() const override { return kActuators; }
   detail::RateSource source() const override { return f_.source; }
   const std::vector<int>& index() const override { return f_.index; }
   bool spans_reversal(int i, int hw) const override { return stages::spans_reversal(f_, i, hw); }
@@ -339,8 +338,7 @@ void delay_regressor(const Fit& f, std::vector<double>* g1, std::vector<double>*
 void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<double>& r,
                     const std::vector<detail::Sensitivity>& sens, IdentifyResult* out);
 
-/// The fit redone on the conditioned log with the torques shifted by the delay `first` found,
-/// carrying over what the first pass reported about the log.
+/// The five-bar's refit_with_delay (mechanism_stages.h): the fit redone by this identify.
 IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadFunction& loads,
                                 const TorqueLog& conditioned, const IdentifyOptions& opt,
                                 const IdentifyResult& first);

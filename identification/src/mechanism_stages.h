@@ -41,17 +41,16 @@ class WindowFit {
   virtual const TorqueLog& log() const = 0;
   /// per log sample: 1 for a glitch (never probed)
   virtual const std::vector<char>& rejected() const = 0;
-  /// the torque channels (1 or 2)
-  virtual int drives() const = 0;
   /// where the rates and accelerations come from
   virtual detail::RateSource source() const = 0;
   /// log index of each sample of the fit
   virtual const std::vector<int>& index() const = 0;
   /// whether the filter's window of half-width hw centred on log sample i spans a slip reversal
   virtual bool spans_reversal(int i, int hw) const = 0;
-  /// per channel: the rms torque residual and the level the sensor noise explains over the log
-  /// samples `probe` (joints at rest left out), with the rates of the filter `sg` (read by
-  /// choose_window; a mechanism whose window choose_window_by_bias chooses leaves them NaN)
+  /// per channel (two: choose_window is the five-bar's): the rms torque residual and the level
+  /// the sensor noise explains over the log samples `probe` (joints at rest left out), with the
+  /// rates of the filter `sg` (read by choose_window; a mechanism whose window
+  /// choose_window_by_bias chooses leaves them NaN)
   virtual void levels(const std::vector<int>& probe, const SgOptions& sg, double rms[2],
                       double floor[2]) const {
     (void)probe, (void)sg;
@@ -75,7 +74,12 @@ class WindowFit {
 /// least ratio over the candidates when that is above 1: a mismatch of the law that no window
 /// removes), then one candidate smaller; a flat excess (a misfit the small windows' noise hides,
 /// window_misfit.h) is chosen by its own rule. Sets sg's half-window (and its order when the
-/// smallest window is the choice), *rates_biased, and *choice (the text of the choice).
+/// smallest window is the choice), *rates_biased, and *choice (the text of the choice). It reads
+/// both torque channels' levels (WindowFit::levels): the five-bar's rule. A mechanism of one
+/// driven joint (the four-bar) chooses by choose_window_by_bias, which reads no levels: the
+/// misfit of a law shows in its residual at the window chosen, whose noise floor is mostly the
+/// torque noise (the crank rocker's 3 s logs: floor 0.024 N m for torque noise 0.02 N m), and
+/// its model check names it.
 void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::string* choice);
 
 /// After choose_window: the largest window up to its choice whose predicted bias (smoothing_bias.h:
@@ -128,6 +132,16 @@ using Refit =
 /// run no sign check; the one with every channel negated puts its residual in out.
 bool torques_fit_negated(const TorqueLog& log, const IdentifyOptions& opt, int drives,
                          unsigned suspect, const Refit& refit, IdentifyResult* out);
+
+/// The fit redone by `refit` (stage_delay.cc) on the conditioned log with its torques (every
+/// channel the log has) shifted by the delay `first` found (first.delay_s: the torques at
+/// t + d match the angles at t), carrying over what the first pass reported about the log: its
+/// glitches left out again, its torque noise, the samples whose shifted torques fall beyond the
+/// log left out and noted. The refit estimates the delay left after the shift (and refits again,
+/// at most opt.delay_refits - 1 times); the result's delay is the total, delay_corrected, and its
+/// first warning says it. A refit that fails gives a result with `unusable` set.
+IdentifyResult refit_with_delay(const TorqueLog& conditioned, const IdentifyOptions& opt,
+                                const IdentifyResult& first, const Refit& refit);
 
 /// Raw (unweighted) residuals of the problem at its parameters, and its Jacobian with `jac`;
 /// false where an evaluation fails (stage_solve.cc).

@@ -92,14 +92,16 @@ void estimate_delay(const Fit& f, const Eigen::MatrixXd& J, const std::vector<do
 
 namespace {
 
-/// `log` with its torques read at t + d (cubic through the four nearest samples, clamped at the
-/// ends): torques that lag the angles by d brought in line. The interpolation smooths their
-/// noise: *variance_factor is the sum of the squared weights at the middle sample (0.64 for half
-/// a sample), the per-sample variance left of white noise; its low-frequency level, which the
-/// std of the coefficients see, is unchanged (the weights sum to 1).
+/// `log` with its torques (tau1, and tau2 where the log has it) read at t + d (cubic through the
+/// four nearest samples, clamped at the ends): torques that lag the angles by d brought in line.
+/// The interpolation smooths their noise: *variance_factor is the sum of the squared weights at
+/// the middle sample (0.64 for half a sample), the per-sample variance left of white noise; its
+/// low-frequency level, which the std of the coefficients see, is unchanged (the weights sum to
+/// 1).
 TorqueLog shift_torques(const TorqueLog& log, double d, double* variance_factor) {
   TorqueLog out = log;
   const int n = log.size();
+  const bool second = log.tau2.size() == log.tau1.size();
   *variance_factor = 1;
   for (int i = 0; i < n; ++i) {
     const double t = log.t[i] + d;
@@ -114,21 +116,20 @@ TorqueLog shift_torques(const TorqueLog& log, double d, double* variance_factor)
         if (b != a) w *= (tc - log.t[b]) / (log.t[a] - log.t[b]);
       }
       v1 += w * log.tau1[a];
-      v2 += w * log.tau2[a];
+      if (second) v2 += w * log.tau2[a];
       g += w * w;
     }
     if (i == n / 2) *variance_factor = g;
     out.tau1[i] = v1;
-    out.tau2[i] = v2;
+    if (second) out.tau2[i] = v2;
   }
   return out;
 }
 
 }  // namespace
 
-IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadFunction& loads,
-                                const TorqueLog& conditioned, const IdentifyOptions& opt,
-                                const IdentifyResult& first) {
+IdentifyResult refit_with_delay(const TorqueLog& conditioned, const IdentifyOptions& opt,
+                                const IdentifyResult& first, const Refit& refit) {
   IdentifyOptions again = opt;
   again.delay_refits = opt.delay_refits - 1;
   again.estimate_delay = again.delay_refits > 0;
@@ -164,7 +165,12 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
   const TorqueLog shifted = shift_torques(conditioned, first.delay_s, &factor);
   for (int j = 0; j < kActuators; ++j) again.condition.torque_noise[j] = first.torque_noise[j];
   again.condition.torque_variance_factor = opt.condition.torque_variance_factor * factor;
-  IdentifyResult res = identify(scene_in, loads, shifted, again);
+  IdentifyResult res;
+  if (!refit(shifted, again, &res)) {
+    res = IdentifyResult();
+    res.unusable = "the fit of the shifted log failed";
+    return res;
+  }
   // the refit estimated the delay left after the shift (and corrected it when significant): the
   // total is their sum, with the std of the last estimate
   if (res.delay_corrected) res.warnings.erase(res.warnings.begin());
@@ -199,9 +205,25 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
                                 format_significant(res.delay_std_s * 1e3) + " ms (first estimate " +
                                 format_significant(std::abs(first.delay_s) / first.delay_std_s) +
                                 " std): refitted with the torques shifted by it"};
-  if (!first.glitches.empty()) w.push_back(first.warnings.front());
+  // the glitches' warning, where the mechanism's fit gives one (the first, one of its notes)
+  if (!first.glitches.empty() && !first.warnings.empty() &&
+      std::find(first.notes.begin(), first.notes.end(), first.warnings.front()) !=
+          first.notes.end()) {
+    w.push_back(first.warnings.front());
+  }
   res.warnings.insert(res.warnings.begin(), w.begin(), w.end());
   return res;
+}
+
+IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadFunction& loads,
+                                const TorqueLog& conditioned, const IdentifyOptions& opt,
+                                const IdentifyResult& first) {
+  const Refit refit = [&](const TorqueLog& shifted, const IdentifyOptions& again,
+                          IdentifyResult* fit) {
+    *fit = identify(scene_in, loads, shifted, again);
+    return true;
+  };
+  return refit_with_delay(conditioned, opt, first, refit);
 }
 
 }  // namespace fivebar::identification::stages

@@ -123,18 +123,14 @@ class WindowTable {
   std::vector<detail::WindowLevel> levels_;
 };
 
-/// the larger of the channels' rms residual over its noise level
-double level_ratio(const detail::WindowLevel& l, int drives) {
-  double r = l.rms[0] / l.floor[0];
-  for (int j = 1; j < drives; ++j) r = std::max(r, l.rms[j] / l.floor[j]);
-  return r;
+/// the larger of the two channels' rms residual over its noise level
+double level_ratio(const detail::WindowLevel& l) {
+  return std::max(l.rms[0] / l.floor[0], l.rms[1] / l.floor[1]);
 }
 
-/// the channels' values of a level, for the choice's text: "a, b" or "a"
-std::string channels_text(const double v[2], int drives) {
-  std::string s = format_significant(v[0]);
-  for (int j = 1; j < drives; ++j) s += ", " + format_significant(v[j]);
-  return s;
+/// the two channels' values of a level, for the choice's text: "a, b"
+std::string channels_text(const double v[2]) {
+  return format_significant(v[0]) + ", " + format_significant(v[1]);
 }
 
 /// choose_window when the window table shows a misfit of the law (window_misfit.h): the largest
@@ -163,10 +159,9 @@ void misfit_window(const WindowTable& tab, const detail::WindowMisfit& m, SgOpti
 
 void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::string* choice) {
   WindowTable tab(w, *sg);
-  const int drives = w.drives();
   std::vector<double> ratio;
   for (size_t k = 0; k < tab.candidates(); ++k) {
-    ratio.push_back(level_ratio(tab.evaluate_next(), drives));
+    ratio.push_back(level_ratio(tab.evaluate_next()));
     // smoothing bias only grows with the window: stop once it clearly dominates
     if (k >= 2 &&
         ratio[k] > 1.5 * std::max(1.0, *std::min_element(ratio.begin(), ratio.begin() + k))) {
@@ -175,8 +170,8 @@ void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::s
   }
   // a misfit hidden by the noise of the small windows: its excess is flat in the window
   detail::WindowMisfit m;
-  while ((m = detail::window_misfit(tab.levels(), tab.levels().size() < tab.candidates(), drives))
-             .state == detail::WindowMisfit::kNeedMore) {
+  while ((m = detail::window_misfit(tab.levels(), tab.levels().size() < tab.candidates())).state ==
+         detail::WindowMisfit::kNeedMore) {
     tab.evaluate_next();
   }
   if (m.state == detail::WindowMisfit::kMisfit) {
@@ -225,9 +220,9 @@ void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::s
   *choice = "data-driven: half-window " + std::to_string(cand[chosen]) + " samples (" +
             format_significant(cand[chosen] * dt * 1e3) + " ms), " +
             (backed_off ? "one below " : "") + "the largest whose torque residual (" +
-            channels_text(l.rms, drives) +
+            channels_text(l.rms) +
             " N m) shows no smoothing bias over the level the measured noise " + "explains (" +
-            channels_text(l.floor, drives) + " N m), ratio " + format_significant(ratio[chosen]) +
+            channels_text(l.floor) + " N m), ratio " + format_significant(ratio[chosen]) +
             " against the reference " + format_significant(best) +
             " (ratio by half-window: " + table + ")" + raised;
 }

@@ -36,9 +36,9 @@ WindowMisfit channel_misfit(const std::vector<WindowLevel>& levels, bool more, i
 
 }  // namespace
 
-WindowMisfit window_misfit(const std::vector<WindowLevel>& levels, bool more, int channels) {
+WindowMisfit window_misfit(const std::vector<WindowLevel>& levels, bool more) {
   WindowMisfit out;
-  for (int j = 0; j < channels; ++j) {
+  for (int j = 0; j < 2; ++j) {
     const WindowMisfit m = channel_misfit(levels, more, j);
     if (m.state == WindowMisfit::kNeedMore) return m;
     // both show it: the one whose excess stays flat over the fewer windows (the first bias)

@@ -54,8 +54,9 @@ struct WindowMisfit {
   std::size_t to = 0;    ///< kMisfit: the last window (index) up to which the excess stays flat
 };
 
-/// The misfit test on the table (WindowMisfit) over the first `channels` actuators. `more`:
-/// whether larger candidates remain to be evaluated (else kNeedMore is kNone).
-WindowMisfit window_misfit(const std::vector<WindowLevel>& levels, bool more, int channels = 2);
+/// The misfit test on the table (WindowMisfit) over both actuators (the five-bar's
+/// choose_window). `more`: whether larger candidates remain to be evaluated (else kNeedMore is
+/// kNone).
+WindowMisfit window_misfit(const std::vector<WindowLevel>& levels, bool more);
 
 }  // namespace fivebar::identification::detail

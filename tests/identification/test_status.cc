@@ -109,23 +109,6 @@ TEST(WindowMisfit, AFlatExcessIsAMisfitAndAGrowingOneIsBias) {
             WindowMisfit::kNone);
 }
 
-// A mechanism of one torque channel (the four-bar) leaves channel 1 at zero: a zero rms over a
-// zero floor is no excess, and the one channel decides
-TEST(WindowMisfit, OneChannelReadsChannelZeroAlone) {
-  using detail::WindowMisfit;
-  const auto one_channel = [](std::vector<detail::WindowLevel> t) {
-    for (detail::WindowLevel& l : t) l.rms[1] = l.floor[1] = 0;
-    return t;
-  };
-  const auto smooth = [](double h) { return 0.01 * std::pow(h / 10, 8); };
-  EXPECT_EQ(detail::window_misfit(one_channel(table(smooth, 41)), false, 1).state,
-            WindowMisfit::kNone);
-  const WindowMisfit m =
-      detail::window_misfit(one_channel(table([](double) { return 0.01; }, 41)), false, 1);
-  EXPECT_EQ(m.state, WindowMisfit::kMisfit);
-  EXPECT_EQ(m.actuator, 0);
-}
-
 // An excess that falls with the window is not the same at every window: below half its value at
 // the first resolved window it is no misfit; a fall to 0.6 (the scatter of negated logs'
 // excess over the windows) still is one
