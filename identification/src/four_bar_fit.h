@@ -74,6 +74,7 @@ void window_stage(FourBarFit* f, IdentifyResult* out);
 /// links' inertial parameters, the crank encoder's zero, tau1's offset and gain, the delay)
 /// freed on the four-bar's Jacobian; a warning when a cause would move the friction beyond
 /// kFreedMove std, out->unusable beyond kUnusableMove or at a bound (four_bar_model_check.cc).
-void cause_check(const FourBarFit& f, IdentifyResult* out);
+/// Whether a cause it named made the fit unusable (the refits after it have nothing to decide).
+bool cause_check(const FourBarFit& f, IdentifyResult* out);
 
 }  // namespace fivebar::identification::four_bar

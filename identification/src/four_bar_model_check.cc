@@ -190,18 +190,18 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, Identi
 
 }  // namespace
 
-void cause_check(const FourBarFit& f, IdentifyResult* out) {
-  if (!out->converged || f.layout.inertia || f.layout.actuator) return;
+bool cause_check(const FourBarFit& f, IdentifyResult* out) {
+  if (!out->converged || f.layout.inertia || f.layout.actuator) return false;
   Eigen::MatrixXd J;
   Eigen::VectorXd r;
   std::vector<int> idx[5];
   if (!check_jacobian(f, *out, &J, &r, idx) || J.rows() < stages::kCheckRowsPerColumn * J.cols()) {
-    return;
+    return false;
   }
   const Eigen::VectorXd info = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(idx[1].size()),
                                                          1.0 / std::pow(f.opt->inertia_prior, 2));
   Eigen::VectorXd bias;
-  if (!score_bias(f, *out, &bias)) return;
+  if (!score_bias(f, *out, &bias)) return false;
   CauseSteps cs = stages::cause_steps(J, r, idx, info, bias, true);
   const int top = stages::most_explaining_cause(cs);
   // the delay: named when it is evidenced beyond the model causes and explains the most
@@ -212,6 +212,7 @@ void cause_check(const FourBarFit& f, IdentifyResult* out) {
         top == stages::kCauseDelay && m.z > detail::kCauseZ && m.z_given > detail::kCauseZ;
   }
   out->model_check = cs.report;
+  const bool open = out->unusable.empty();  // a reason given before (the misfit) stays first
   bool any = false;
   for (int id :
        {stages::kCauseTorque, stages::kCauseAngles, stages::kCauseInertia, stages::kCauseDelay}) {
@@ -219,7 +220,9 @@ void cause_check(const FourBarFit& f, IdentifyResult* out) {
     any = true;
     judge(f, cs, id, true, out);
   }
-  if (!any && top < stages::kCauseCount) judge(f, cs, top, false, out);
+  if (any) return open && !out->unusable.empty();
+  if (top < stages::kCauseCount) judge(f, cs, top, false, out);
+  return false;
 }
 
 }  // namespace fivebar::identification::four_bar

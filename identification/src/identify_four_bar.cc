@@ -430,20 +430,27 @@ void predictions(const FourBarFit& f, IdentifyResult* out) {
   for (int i = 0; i < L.size(); ++i) out->predicted_tau1[i] = rows[i].M1;
 }
 
-/// The sign check (stages::torques_fit_negated, the five-bar's) when the residual is more than
-/// kMisfitRatio times its floor: refits of the negated torque by this identify.
-void sign_check(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
-                const TorqueLog& log, const IdentifyOptions& opt, IdentifyResult* out) {
-  if (!opt.check_torque_sign ||
-      !(out->rms_torque_residual[0] > stages::kMisfitRatio * out->residual_noise_floor[0])) {
+/// The sign check, then the per-joint check (stages::torques_fit_negated,
+/// friction_differs_by_joint: the five-bar's) when the residual is more than kMisfitRatio times
+/// its floor; the per-joint check of a shared law, unless a cause the model check named
+/// (`cause_decided`) made the fit unusable. Their refits are this identify's.
+void refit_checks(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
+                  const TorqueLog& log, const IdentifyOptions& opt, bool cause_decided,
+                  IdentifyResult* out) {
+  if (!(out->rms_torque_residual[0] > stages::kMisfitRatio * out->residual_noise_floor[0])) {
     return;
   }
-  const stages::Refit refit = [&](const TorqueLog& negated, const IdentifyOptions& again,
+  const stages::Refit refit = [&](const TorqueLog& same, const IdentifyOptions& again,
                                   IdentifyResult* fit) {
-    *fit = identify(scene, loads, negated, again);
+    IdentifyOptions plain = again;  // a refit runs no refits of its own
+    plain.check_torque_sign = plain.check_per_joint = false;
+    *fit = identify(scene, loads, same, plain);
     return true;
   };
-  stages::torques_fit_negated(log, opt, 1, 0u, refit, out);
+  if (opt.check_torque_sign && stages::torques_fit_negated(log, opt, 1, 0u, refit, out)) return;
+  if (opt.check_per_joint && !opt.layout.per_joint && !cause_decided) {
+    stages::friction_differs_by_joint(log, opt, refit, out);
+  }
 }
 
 }  // namespace four_bar
@@ -519,10 +526,10 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
     stages::profile_intervals({f.layout, f.x, &problem, Hinv, solver_options(f)}, &out);
   }
   model_check(&out);
-  cause_check(f, &out);
+  const bool cause_decided = cause_check(f, &out);
   stages::correct_smoothing_bias(f.layout, f.smoothing_bias, &f.x, &out);
   predictions(f, &out);
-  sign_check(scene, loads, log, opt, &out);
+  refit_checks(scene, loads, log, opt, cause_decided, &out);
   stages::unexplained_misfit(f.layout, &out);
   out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;

@@ -84,6 +84,26 @@ TEST(FourBarIdentify, ProfileIntervalWhereWaldReachesBelowTheBound) {
   EXPECT_EQ(res.parameters[1].ci_method, "wald");
 }
 
+// Joints whose friction differs (coulomb 0.02-0.3, viscous 0.005-0.04): the shared law leaves
+// the residual at 3.4 times its floor, one coefficient per joint at its floor, and the fit is
+// rejected naming --per-joint (the five-bar's per-joint check over the four-bar's refits).
+TEST(FourBarIdentify, FrictionThatDiffersByJointIsNamed) {
+  FourBarParams truth = crank_rocker().p;
+  truth.friction.coulomb = {0.02, 0.3, 0.12, 0.05, 0.0};
+  truth.friction.viscous = {0.01, 0.04, 0.02, 0.005, 0.0};
+  const TorqueLog log = crank_rocker_log(truth, 3.0, 0.02, 1e-5, 1, /*with_rates=*/false);
+  const IdentifyResult res = identify(crank_rocker().p, crank_rocker().loads, log,
+                                      four_bar_options());
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_NE(res.unusable.find("the joints' friction differs"), std::string::npos) << res.unusable;
+  EXPECT_NE(res.unusable.find("rerun with --per-joint"), std::string::npos) << res.unusable;
+  // a clean log of the shared law is not sent to --per-joint
+  const TorqueLog clean = crank_rocker_log(crank_rocker().p, 3.0, 0.02, 1e-5, 1, false);
+  const IdentifyResult ok = identify(crank_rocker().p, crank_rocker().loads, clean,
+                                     four_bar_options());
+  EXPECT_TRUE(ok.unusable.empty()) << ok.unusable;
+}
+
 TEST(FourBarIdentify, PerJointHasFourCoefficientsPerGroup) {
   FourBarParams truth = crank_rocker().p;
   truth.friction.coulomb = {0.10, 0.14, 0.12, 0.09, 0.0};
