@@ -70,13 +70,21 @@ bool held(const FourBarFit& f, const std::array<double, 4>& row, double w, doubl
 /// window chosen; f->x back at its start (four_bar_window.cc).
 void window_stage(FourBarFit* f, IdentifyResult* out);
 
+/// What the model check (cause_check) leaves for the refits after it.
+struct CauseVerdict {
+  /// the delay named (evidenced beyond the model causes and explaining the most): identify then
+  /// refits with the torques shifted by it
+  bool delay_named = false;
+  /// a cause it named made the fit unusable: the sign and per-joint refits have nothing to decide
+  bool cause_decided = false;
+};
+
 /// The model check's candidate causes at the fit: the five-bar's that exist for one crank (the
 /// links' inertial parameters, the crank encoder's zero, tau1's offset and gain, the delay)
 /// freed on the four-bar's Jacobian; a warning when a cause would move the friction beyond
 /// kFreedMove std, out->unusable beyond kUnusableMove or at a bound (four_bar_model_check.cc).
-/// out->delay_s and delay_std_s: the delay's estimate (its column freed alone with the friction)
-/// where the check has the column; true when it names the delay (evidenced beyond the model
-/// causes and explaining the most: identify then refits with the torques shifted by it).
-bool cause_check(const FourBarFit& f, IdentifyResult* out);
+/// The delay's estimate in out->delay_s and delay_std_s (its column freed alone with the
+/// friction) where the check has the column.
+CauseVerdict cause_check(const FourBarFit& f, IdentifyResult* out);
 
 }  // namespace fivebar::identification::four_bar

@@ -191,18 +191,18 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, Identi
 
 }  // namespace
 
-bool cause_check(const FourBarFit& f, IdentifyResult* out) {
-  if (!out->converged || f.layout.inertia || f.layout.actuator) return false;
+CauseVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
+  if (!out->converged || f.layout.inertia || f.layout.actuator) return {};
   Eigen::MatrixXd J;
   Eigen::VectorXd r;
   std::vector<int> idx[5];
   if (!check_jacobian(f, *out, &J, &r, idx) || J.rows() < stages::kCheckRowsPerColumn * J.cols()) {
-    return false;
+    return {};
   }
   const Eigen::VectorXd info = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(idx[1].size()),
                                                          1.0 / std::pow(f.opt->inertia_prior, 2));
   Eigen::VectorXd bias;
-  if (!score_bias(f, *out, &bias)) return false;
+  if (!score_bias(f, *out, &bias)) return {};
   CauseSteps cs = stages::cause_steps(J, r, idx, info, bias, true);
   // the delay's estimate: its step freed alone with the friction (the five-bar's estimate_delay)
   const detail::FreedStep& ds = cs.alone[stages::kCauseDelay];
@@ -219,6 +219,7 @@ bool cause_check(const FourBarFit& f, IdentifyResult* out) {
         top == stages::kCauseDelay && m.z > detail::kCauseZ && m.z_given > detail::kCauseZ;
   }
   out->model_check = cs.report;
+  const bool open = out->unusable.empty();  // a reason given before (the misfit) stays first
   bool any = false;
   for (int id :
        {stages::kCauseTorque, stages::kCauseAngles, stages::kCauseInertia, stages::kCauseDelay}) {
@@ -227,7 +228,7 @@ bool cause_check(const FourBarFit& f, IdentifyResult* out) {
     judge(f, cs, id, true, out);
   }
   if (!any && top < stages::kCauseCount) judge(f, cs, top, false, out);
-  return cs.named(stages::kCauseDelay);
+  return {cs.named(stages::kCauseDelay), any && open && !out->unusable.empty()};
 }
 
 }  // namespace fivebar::identification::four_bar

@@ -397,7 +397,6 @@ ModelVerdict model_check(const Fit& f, IdentifyResult* out);
 /// where wants_profile (inverse dynamics without a robust loss, converged).
 void intervals(const Fit& f, ceres::Problem* problem, const Analysis& an, IdentifyResult* out);
 
-
 // ---- stage_refits.cc ----
 
 /// IdentifyOptions::check_torque_sign: true (and out->unusable says why) when the log's torques
@@ -411,14 +410,8 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
                          const TorqueLog& log, const IdentifyOptions& opt,
                          const ModelVerdict& verdict, IdentifyResult* out);
 
-/// IdentifyOptions::check_per_joint: true (and out->unusable says why, replacing the reason
-/// model_check gave) when a shared-law fit's misfit goes away with one coefficient per joint.
-/// It runs when the residual is more than kMisfitRatio times its floor and no cause named by
-/// model_check decided, and names the joints' differing friction when the fit with one
-/// coefficient per joint fits far better (fits_far_better, as the sign check's refits;
-/// offset_friction.yaml, whose five joints' coefficients differ by up to 2.5 times, multi-sine
-/// log with rates: 18.3 floors shared, 1.00 per joint).
-/// The refit keeps the fit's Savitzky-Golay window and estimates no delay.
+/// The five-bar's per-joint check (mechanism_stages.h): when the residual is more than
+/// kMisfitRatio times its floor and no cause named by model_check decided.
 bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunction& loads,
                                const TorqueLog& log, const IdentifyOptions& opt,
                                const ModelVerdict& verdict, IdentifyResult* out);

@@ -130,15 +130,9 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
   return torques_fit_negated(log, opt, kActuators, suspect, refit, out);
 }
 
-bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunction& loads,
-                               const TorqueLog& log, const IdentifyOptions& opt,
-                               const ModelVerdict& verdict, IdentifyResult* out) {
+bool friction_differs_by_joint(const TorqueLog& log, const IdentifyOptions& opt,
+                               const Refit& refit, IdentifyResult* out) {
   const double ours = misfit_ratio(*out);
-  if (!opt.check_per_joint || opt.layout.per_joint ||
-      !method_strategy(opt.method).checks_readings() || verdict.cause_decided ||
-      !(ours > kMisfitRatio)) {
-    return false;
-  }
   IdentifyOptions again = opt;
   again.layout.per_joint = true;
   again.initial.clear();  // the shared start values do not fit the per-joint layout
@@ -146,9 +140,9 @@ bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunct
   keep_window(log, *out, &again);
   IdentifyResult pj;
   try {
-    pj = identify_fit(scene, loads, log, again, false);
+    if (!refit(log, again, &pj)) return false;
   } catch (const LogError&) {
-    return false;  // too few samples for ten coefficients: no evidence either way
+    return false;  // too few samples for a coefficient per joint: no evidence either way
   }
   const double theirs = misfit_ratio(pj);
   if (!pj.status.ok() || !fits_far_better(theirs, ours)) return false;
@@ -158,6 +152,22 @@ bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunct
                   " with the shared law; rerun with --per-joint";
   out->warnings.push_back(out->unusable + "; no torque delay was estimated");
   return true;
+}
+
+bool friction_differs_by_joint(const Params<double>& scene, const sim::LoadFunction& loads,
+                               const TorqueLog& log, const IdentifyOptions& opt,
+                               const ModelVerdict& verdict, IdentifyResult* out) {
+  if (!opt.check_per_joint || opt.layout.per_joint ||
+      !method_strategy(opt.method).checks_readings() || verdict.cause_decided ||
+      !(misfit_ratio(*out) > kMisfitRatio)) {
+    return false;
+  }
+  const Refit refit = [&](const TorqueLog& same, const IdentifyOptions& again,
+                          IdentifyResult* fit) {
+    *fit = identify_fit(scene, loads, same, again, false);
+    return true;
+  };
+  return friction_differs_by_joint(log, opt, refit, out);
 }
 
 }  // namespace fivebar::identification::stages

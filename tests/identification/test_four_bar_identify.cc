@@ -70,7 +70,7 @@ TEST(FourBarIdentify, RecoversTheFrictionOfANoiseFreeLog) {
 TEST(FourBarIdentify, ProfileIntervalWhereWaldReachesBelowTheBound) {
   FourBarParams truth = crank_rocker().p;
   for (int k = 0; k < kFourBarJoints; ++k) truth.friction.coulomb[k] = 0.005;
-  const TorqueLog log = crank_rocker_log(truth, 3.0, 0.02, 1e-5, 1, /*with_rates=*/false);
+  const TorqueLog log = crank_rocker_log(truth, 3.0, 0.02, 1e-5, 2, /*with_rates=*/false);
   const IdentifyResult res = identify(truth, crank_rocker().loads, log, four_bar_options());
   ASSERT_TRUE(res.status.ok()) << res.status.message;
   const ParameterEstimate& c = res.parameters[0];
@@ -82,6 +82,26 @@ TEST(FourBarIdentify, ProfileIntervalWhereWaldReachesBelowTheBound) {
   EXPECT_LE(c.ci_low, 0.005);
   EXPECT_GE(c.ci_high, 0.005);
   EXPECT_EQ(res.parameters[1].ci_method, "wald");
+}
+
+// The friction at the rocker's pin D0 alone (coulomb 0.6 there, 0.01 elsewhere): the shared law
+// leaves the residual at 6.6 times its floor, one coefficient per joint at 1.3, and the fit is
+// rejected naming --per-joint (the five-bar's per-joint check over the four-bar's refits).
+TEST(FourBarIdentify, FrictionThatDiffersByJointIsNamed) {
+  FourBarParams truth = crank_rocker().p;
+  truth.friction.coulomb = {0.01, 0.01, 0.01, 0.6, 0.0};
+  truth.friction.viscous = {0.002, 0.002, 0.002, 0.08, 0.0};
+  const TorqueLog log = crank_rocker_log(truth, 3.0, 0.02, 1e-5, 1, /*with_rates=*/false);
+  const IdentifyResult res = identify(crank_rocker().p, crank_rocker().loads, log,
+                                      four_bar_options());
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_NE(res.unusable.find("the joints' friction differs"), std::string::npos) << res.unusable;
+  EXPECT_NE(res.unusable.find("rerun with --per-joint"), std::string::npos) << res.unusable;
+  // a clean log of the shared law is not sent to --per-joint
+  const TorqueLog clean = crank_rocker_log(crank_rocker().p, 3.0, 0.02, 1e-5, 1, false);
+  const IdentifyResult ok = identify(crank_rocker().p, crank_rocker().loads, clean,
+                                     four_bar_options());
+  EXPECT_TRUE(ok.unusable.empty()) << ok.unusable;
 }
 
 TEST(FourBarIdentify, PerJointHasFourCoefficientsPerGroup) {
