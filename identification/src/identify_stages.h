@@ -355,15 +355,18 @@ bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
 /// The expectation of the check's score J' r (J: check_jacobian's columns, b: one entry each)
 /// that the noise of estimated accelerations gives when the model holds. That noise is in the
 /// residual (-M(q) times the acceleration's) and, through the accelerations the inverse dynamics
-/// is evaluated at, in the inertial columns too (errors in variables), so E[J' r] = sum over
-/// samples and cranks c of sigma_c^2 m_c dJ_c' dr_c (dJ_c, dr_c: accel_derivatives; m_c: the sum
-/// of the squared acceleration taps, accel_tap_power). It grows with the log's length while the
-/// score's noise grows with its square root (uncorrected, clean 10 s logs drop the cost by 104
-/// against 15 +- 5.3 from white noise). Left out as measured negligible on a clean 10 s log of
-/// the paper scene: the rate noise's path (under 1 % of the acceleration's on every column) and
-/// the offset columns' bias (below 0.03 of their score's std). The torque gains' columns carry
-/// the model's torque, so the same noise biases them too. Zero when the accelerations are
-/// logged. Costs two Jacobians on the fitted and inertial parameters.
+/// is evaluated at, in the inertial and angle offsets' columns too (errors in variables), so
+/// E[J' r] = sum over samples and cranks c of sigma_c^2 m_c dJ_c' dr_c (dJ_c, dr_c:
+/// accel_derivatives; m_c: the sum of the squared acceleration taps, accel_tap_power). It grows
+/// with the log's length while the score's noise grows with its square root (uncorrected, clean
+/// 10 s logs drop the cost by 104 against 15 +- 5.3 from white noise). The offsets' share is
+/// small on the paper scene (below 0.03 of their score's std on a clean 10 s log) but not at a
+/// light mechanism's small window (a clean 3 s log at 4 samples: the offsets' fall 92 against 2
+/// +- 2 without it, 6.1 with it). Left out as measured negligible on a clean 10 s log of the
+/// paper scene: the rate noise's path (under 1 % of the acceleration's on every column). The
+/// torque gains' columns carry the model's torque, so the same noise biases them too. Zero when
+/// the accelerations are logged. Costs two Jacobians on the fitted and inertial parameters and
+/// two sets of offset columns.
 bool score_bias(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
                 const Eigen::VectorXd& r, const TorqueColumns& tc, Eigen::VectorXd* b);
 

@@ -160,10 +160,10 @@ double accel_tap_power(const Fit& f, int i) {
 }
 
 /// d J / d alpha_c and d r / d alpha_c (c: crank 1, 2; each moved at every sample at once) of
-/// the whitened Jacobian on the fitted and inertial parameters (check_jacobian's columns but the
-/// offsets') and of the whitened residual, by forward differences from J, r at the fit (the
-/// residual is nearly linear in the accelerations: only the load-dependent friction is not);
-/// false if an evaluation fails.
+/// the whitened Jacobian on the fitted and inertial parameters and the angle offsets
+/// (check_jacobian's columns but the torque readings') and of the whitened residual, by forward
+/// differences from J, r at the fit (the residual is nearly linear in the accelerations: only the
+/// load-dependent friction is not); false if an evaluation fails.
 bool accel_derivatives(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
                        const Eigen::VectorXd& r, Eigen::MatrixXd dJ[2], Eigen::VectorXd dr[2]) {
   constexpr double h = kAccelStep;
@@ -178,14 +178,17 @@ bool accel_derivatives(const Fit& f, const IdentifyResult& out, const Eigen::Mat
     const auto friction_end = f.x.begin() + f.layout.friction_size();
     std::vector<double> x2 = with_layout(g, l2, std::vector<double>(f.x.begin(), friction_end));
     ceres::Problem problem;
-    Eigen::MatrixXd Jh;
+    Eigen::MatrixXd Jh, Jo;
     Eigen::VectorXd rh;
     if (!check_problem(g, l2, &x2, &problem) ||
         !whitened_jacobian(&problem, l2.size(), out.residual_noise_floor, &Jh, &rh) ||
-        Jh.rows() != J.rows() || Jh.cols() > J.cols()) {
+        !offset_columns(g, out.residual_noise_floor, &Jo) || Jh.rows() != J.rows() ||
+        Jo.rows() != J.rows() || Jh.cols() + Jo.cols() > J.cols()) {
       return false;
     }
-    dJ[c] = (Jh - J.leftCols(Jh.cols())) / h;
+    dJ[c].resize(J.rows(), Jh.cols() + Jo.cols());
+    dJ[c] << Jh, Jo;
+    dJ[c] = (dJ[c] - J.leftCols(dJ[c].cols())) / h;
     dr[c] = (rh - r) / h;
   }
   return true;

@@ -11,8 +11,9 @@ candidate cause of the model check, against the others in one comparison of fall
   there moves the window up, where the zeros are evidenced 1877 std beyond the other causes and
   would move viscous 5.2 std: the fit exits 3 naming the zeros;
 - light: the light mechanism's links 6 % heavier than the scene: the inertias named (beside the
-  torque readings, too close to tell apart) while coulomb's std is 10 times its value: exits 3
-  (the move in std bounds nothing);
+  torque readings, too close to tell apart) while coulomb's std is 3 times its value: exits 3
+  (the move in std bounds nothing; or, neither cause standing out beyond the other, by the
+  decisive evidence, 94 std);
 - clean: the heavy mechanism's clean log: no delay warning, exit 0;
 - unchecked: the heavy mechanism's masses 3 % below the scene's, driven a hair from its stretched
   singular pose (t = 8.711 s), read a lag of 2.7 ms at 3.4 std: the model check leaves out the
@@ -174,8 +175,12 @@ elif CASE == "light":
     code, err, j = identify("light_m106", base, out)
     reason = j.get("status_reason", "")
     # the inertias named, alone or tied with the torque readings (a light mechanism's inertial
-    # torques scale with its masses as a torque gain scales the reading)
-    check(code == 3 and "inertia" in reason and "is not determined" in reason,
+    # torques scale with its masses as a torque gain scales the reading), evidenced far beyond
+    # clean logs' 16 std with coulomb undetermined (its std 0.18 above its value): neither
+    # cause stands out beyond the other (the refit with every cause free falls by 291, as the
+    # inertias' alone), so the decisive evidence names them
+    check(code == 3 and "inertia" in reason and
+          ("is not determined" in reason or "evidences a model error" in reason),
           "light links 6 %% heavy: exit %d, %s" % (code, reason))
 elif CASE == "clean":
     base = scene("heavy", heavy())
