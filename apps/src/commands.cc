@@ -32,6 +32,11 @@ void check_sg_window(const id::IdentifyOptions& options, const id::TorqueLog& lo
   const std::string asked = format_shortest(options.sg.half_window_s) + " s is " +
                             format_significant(half, 3) + " samples of the log's step " +
                             format_significant(dt, 3) + " s";
+  if (std::lround(half) < 1) {
+    throw InputError(kFlags, "--sg-window",
+                     asked + ": less than one sample (the filter's half-window holds whole "
+                             "samples)");
+  }
   if (!(2 * std::lround(std::min(half, 1e9)) + 1 <= log.size())) {
     throw InputError(kFlags, "--sg-window",
                      asked + ": the window (2 x " + format_significant(half, 3) +

@@ -20,6 +20,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
@@ -55,6 +56,7 @@ struct Field {
 // Plausibility limits: a nonzero magnitude outside [low, high] describes no machine (a 100 m crane
 // link, a 1e-4 m MEMS link and 1e5 kg are all well inside). Zero and the sign are left to each
 // key's own domain check. docs/scene.md states the same table.
+constexpr double kNoUpperLimit = std::numeric_limits<double>::max();
 constexpr SceneLimit kLength{1e-7, 1e3, "m"};
 constexpr SceneLimit kOffset{0, 1e3, "m"};
 constexpr SceneLimit kAngle{0, 1e3, "rad"};
@@ -108,7 +110,8 @@ const Field kBaseSchema[] = {
     {"initial.omega1", Kind::kNumber, kRate},
     {"initial.omega2", Kind::kNumber, kRate},
     {"simulation", Kind::kSection},
-    {"simulation.duration", Kind::kNumber, {1e-6, 1e6, "s"}},
+    // the longest duration is the output rows' limit (rows_beyond_limit) at output_step's
+    {"simulation.duration", Kind::kNumber, {1e-6, kNoUpperLimit, "s"}},
     {"simulation.output_step", Kind::kNumber, {1e-9, 1e6, "s"}},
     {"simulation.integrator", Kind::kName},
     {"simulation.rtol", Kind::kNumber, {1e-16, 1, "-"}},
@@ -1061,9 +1064,10 @@ std::string limit_problem(const std::string& key, double value) {
   const double a = std::abs(value);
   if (l == nullptr || value == 0 || (a >= l->low && a <= l->high)) return "";
   const std::string unit = std::string(l->unit) == "-" ? "" : std::string(" ") + l->unit;
-  const std::string range = l->low > 0 ? "within [" + format_double(l->low) + ", " +
-                                             format_double(l->high) + "]" + unit
-                                       : "at most " + format_double(l->high) + unit;
+  std::string range = l->low > 0 ? "within [" + format_double(l->low) + ", " +
+                                       format_double(l->high) + "]" + unit
+                                 : "at most " + format_double(l->high) + unit;
+  if (l->high == std::numeric_limits<double>::max()) range = "at least " + format_double(l->low) + unit;
   return "must be " + range + " in magnitude (the plausible range of a machine, " +
          "docs/scene.md), got " + format_double(value);
 }

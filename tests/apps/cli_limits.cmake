@@ -37,8 +37,11 @@ run_fivebar(2 "paper.yaml: loads.F: '1e300\\*t' at t = 1: must be at most 1e\\+1
             simulate ${paper} --set loads.F=1e300*t --out ${bad})
 run_fivebar(2 "crank_rocker.yaml: loads.M1: '-1e12' at t = 0: must be at most 1e\\+09 N m"
             hold ${rocker} --set loads.M1=-1e12 --out ${bad})
-run_fivebar(2 "paper.yaml: simulation.duration: must be within \\[1e-06, 1e\\+06\\] s"
+run_fivebar(2 "paper.yaml: simulation.output_step: must be within \\[1e-09, 1e\\+06\\] s"
             simulate ${paper} --set simulation.duration=1e300 --set simulation.output_step=1e299
+            --out ${bad})
+run_fivebar(2 "paper.yaml: simulation.duration: must be at least 1e-06 s"
+            simulate ${paper} --set simulation.duration=1e-300 --set simulation.output_step=1e-300
             --out ${bad})
 run_fivebar(2 "paper.yaml: simulation.rtol: must be within \\[1e-16, 1\\]"
             accuracy ${paper} --set simulation.rtol=1e-300 --out ${bad})

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <limits>
 #include <map>
 #include <regex>
 #include <set>
@@ -57,15 +58,19 @@ TEST(SceneDoc, EveryDocumentedKeyIsInTheSchema) {
 std::map<std::string, std::pair<double, double>> documented_limits() {
   std::ifstream in(std::string(FIVEBAR_SOURCE_DIR) + "/docs/scene.md");
   std::map<std::string, std::pair<double, double>> out;
-  const std::regex row(R"(^\| `([a-zA-Z0-9_.]+)` \| [^|]+ \| (\[([^,]+), ([^\]]+)\]|at most (\S+)) \|$)");
+  const std::regex row(R"(^\| `([a-zA-Z0-9_.]+)` \| [^|]+ \| (\[([^,]+), ([^\]]+)\]|at most (\S+)|at least (\S+)[^|]*) \|$)");
   std::string line;
   bool in_table = false;
   while (std::getline(in, line)) {
     if (line.rfind("## ", 0) == 0) in_table = line == "## Plausibility limits";
     std::smatch m;
     if (!in_table || !std::regex_match(line, m, row)) continue;
-    out[m[1]] = m[5].matched ? std::make_pair(0.0, std::stod(m[5]))
-                             : std::make_pair(std::stod(m[3]), std::stod(m[4]));
+    if (m[6].matched) {
+      out[m[1]] = {std::stod(m[6]), std::numeric_limits<double>::max()};
+    } else {
+      out[m[1]] = m[5].matched ? std::make_pair(0.0, std::stod(m[5]))
+                               : std::make_pair(std::stod(m[3]), std::stod(m[4]));
+    }
   }
   return out;
 }
