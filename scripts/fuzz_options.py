@@ -18,7 +18,8 @@ A,B, THETA1,THETA2). Each option gets each value, on top of a short, valid base 
   accepted  0, and the value is listed as valid for that option in VALID (with why)
   silent    0, and the value is not listed: a bad value accepted silently
   crash     any other status (signal, abort, 1 for a value), or several error lines
-  timeout   the run did not end within --timeout s (its values are left to the user to judge)
+  timeout   the run did not end within --timeout s on a value not listed as valid
+  slow-valid  the same on a valid value (the base command's cost on a changed scene)
 
 Prints one line per run that is silent, crash, vague or timeout, then the counts. Exit status 1
 when any run is silent or a crash. Standard library only.
@@ -158,15 +159,18 @@ def base_args(command, base, out, scene, log):
 
 
 def run_one(a, command, args, tally, label, classify_fn):
+    """Runs one case; a timeout on a value that exit 0 would accept is `slow-valid` (the base
+    command's own cost on a changed scene, not a bad value's)."""
     try:
         r = subprocess.run([a.fivebar, command, *args], capture_output=True, text=True,
                            timeout=a.timeout)
         cls = classify_fn(r.returncode, r.stderr)
         status, err = r.returncode, r.stderr.strip().splitlines()
     except subprocess.TimeoutExpired:
-        cls, status, err = "timeout", None, []
+        status, err = None, []
+        cls = "slow-valid" if classify_fn(0, "") == "accepted" else "timeout"
     tally[cls] = tally.get(cls, 0) + 1
-    if cls in ("silent", "crash", "vague", "timeout"):
+    if cls in ("silent", "crash", "vague", "timeout", "slow-valid"):
         last = err[-1] if err else ""
         print(f"{cls:8} {command} {label}: exit {status}: {last[:160]}")
         sys.stdout.flush()

@@ -55,6 +55,12 @@ void check_sg_window(const id::IdentifyOptions& options, const id::TorqueLog& lo
 void check_window(const id::IdentifyOptions& options, const id::TorqueLog& log) {
   if (!(options.window_s > 0) || log.size() < 2) return;
   const double span = log.t.back() - log.t.front();
+  const double dt = id::median_time_step(log);
+  if (dt > 0 && options.window_s < 2 * dt) {
+    throw InputError(kFlags, "--window",
+                     format_shortest(options.window_s) + " s holds fewer than 2 samples of the "
+                     "log's step " + format_significant(dt, 3) + " s");
+  }
   if (options.window_s <= span) return;
   throw InputError(kFlags, "--window",
                    format_shortest(options.window_s) + " s is longer than the log (" +

@@ -52,6 +52,19 @@ run_fivebar(2 "paper.yaml: mechanism.links.0.length: must be within"
             study ${paper} --tasks ${SOURCE_DIR}/datasets/tasks/paper_tasks.yaml
             --sweep friction.coulomb=0.1:0.12:2 --set mechanism.links.0.length=1e-300 --out ${bad})
 
+# options that stand for a scene key's quantity take its limit, with the same exit status
+run_fivebar(2 "command line: --stribeck-velocity: must be within \\[1e-06, 10000\\] rad/s"
+            synth-log ${paper} --law stribeck --stribeck-velocity 1e-300 --out ${bad}/log.csv)
+run_fivebar(2 "command line: --static-coulomb: must be at most 10"
+            synth-log ${paper} --law stribeck --static-coulomb 50 --out ${bad}/log.csv)
+run_fivebar(2 "paper.yaml: --tolerances: must be within \\[1e-16, 1\\]"
+            accuracy ${paper} --tolerances 1e-300 --out ${bad})
+# identify: windows shorter than the log's step
+run_fivebar(2 "command line: --sg-window: 1e-300 s is [^\n]*: less than one sample"
+            identify ${paper} --log ${log} --sg-window 1e-300 --out ${bad})
+run_fivebar(2 "command line: --window: 1e-300 s holds fewer than 2 samples"
+            identify ${paper} --log ${log} --window 1e-300 --out ${bad})
+
 # excite: nothing to design for, or a coefficient with no relative std
 run_fivebar(2 "crank_rocker.yaml: friction.model: none: there is no friction to identify"
             excite ${rocker} --torque-limit 2 --set friction.model=none --out ${bad})
