@@ -34,8 +34,7 @@ void check_sg_window(const id::IdentifyOptions& options, const id::TorqueLog& lo
                             format_significant(dt, 3) + " s";
   if (std::lround(half) < 1) {
     throw InputError(kFlags, "--sg-window",
-                     asked + ": less than one sample (the filter's half-window holds whole "
-                             "samples)");
+                     asked + ": less than one sample (its half-window holds whole samples)");
   }
   if (!(2 * std::lround(std::min(half, 1e9)) + 1 <= log.size())) {
     throw InputError(kFlags, "--sg-window",
@@ -58,8 +57,8 @@ void check_window(const id::IdentifyOptions& options, const id::TorqueLog& log) 
   const double dt = id::median_time_step(log);
   if (dt > 0 && options.window_s < 2 * dt) {
     throw InputError(kFlags, "--window",
-                     format_shortest(options.window_s) + " s holds fewer than 2 samples of the "
-                     "log's step " + format_significant(dt, 3) + " s");
+                     format_shortest(options.window_s) + " s holds fewer than 2 samples of the " +
+                         "log's step " + format_significant(dt, 3) + " s");
   }
   if (options.window_s <= span) return;
   throw InputError(kFlags, "--window",

@@ -101,9 +101,9 @@ LoadExpressions::LoadExpressions(const std::array<std::string, 4>& expressions, 
         }
         const std::string implausible = limit_problem(key, v);
         if (!implausible.empty()) {
-          throw InputError(file, key,
-                           "'" + expressions[i] + "' at t = " + format_double(probe) + ": " +
-                               implausible);
+          throw InputError(
+              file, key,
+              "'" + expressions[i] + "' at t = " + format_double(probe) + ": " + implausible);
         }
         if (c->constant[i]) c->value[i] = v;
       }

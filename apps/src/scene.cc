@@ -3,14 +3,6 @@
 // the Scene is then built and validated key by key.
 #include "fivebar/io/scene.h"
 
-#include "fivebar/io/command.h"
-
-#include "fivebar/model/actuator.h"
-#include "fivebar/model/four_bar.h"
-#include "fivebar/model/motor.h"
-#include "fivebar/model/friction.h"
-#include "fivebar/model/kinematics.h"
-
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -26,9 +18,15 @@
 #include <set>
 #include <sstream>
 
+#include "fivebar/io/command.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
+#include "fivebar/model/actuator.h"
+#include "fivebar/model/four_bar.h"
+#include "fivebar/model/friction.h"
+#include "fivebar/model/kinematics.h"
+#include "fivebar/model/motor.h"
 
 namespace fivebar::io {
 namespace {
@@ -130,9 +128,9 @@ const Field kBaseSchema[] = {
 // the friction coefficients' limits (kCoefficientInfo order: coulomb, viscous, static_coulomb,
 // stribeck_velocity, stribeck_exponent, sigma0, sigma1, sigma2, viscous_exponent)
 constexpr SceneLimit kCoefficientLimits[kCoefficients] = {
-    {0, 10, "-"},      {0, 1e4, "s/rad"},   {0, 10, "-"},
-    {1e-6, 1e4, "rad/s"}, {1e-2, 100, "-"}, {1e-6, 1e12, "1/rad"},
-    {0, 1e6, "s/rad"}, {0, 1e4, "s/rad"}, {1e-2, 10, "-"},
+    {0, 10, "-"},         {0, 1e4, "s/rad"}, {0, 10, "-"},
+    {1e-6, 1e4, "rad/s"}, {1e-2, 100, "-"},  {1e-6, 1e12, "1/rad"},
+    {0, 1e6, "s/rad"},    {0, 1e4, "s/rad"}, {1e-2, 10, "-"},
 };
 
 // the whole schema: the base keys with the laws' coefficients after friction.pin_radius
@@ -1064,10 +1062,11 @@ std::string limit_problem(const std::string& key, double value) {
   const double a = std::abs(value);
   if (l == nullptr || value == 0 || (a >= l->low && a <= l->high)) return "";
   const std::string unit = std::string(l->unit) == "-" ? "" : std::string(" ") + l->unit;
-  std::string range = l->low > 0 ? "within [" + format_double(l->low) + ", " +
-                                       format_double(l->high) + "]" + unit
-                                 : "at most " + format_double(l->high) + unit;
-  if (l->high == std::numeric_limits<double>::max()) range = "at least " + format_double(l->low) + unit;
+  std::string range =
+      l->low > 0 ? "within [" + format_double(l->low) + ", " + format_double(l->high) + "]" + unit
+                 : "at most " + format_double(l->high) + unit;
+  if (l->high == std::numeric_limits<double>::max())
+    range = "at least " + format_double(l->low) + unit;
   return "must be " + range + " in magnitude (the plausible range of a machine, " +
          "docs/scene.md), got " + format_double(value);
 }

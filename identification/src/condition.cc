@@ -19,7 +19,6 @@ using namespace glitches;
 
 namespace {
 
-
 /// Readings of logged angles other than radians that the motion can reveal, with their factor
 /// to radians: degrees, turns, gradians, the counts of common encoder resolutions, and radians
 /// with the two angle columns swapped.

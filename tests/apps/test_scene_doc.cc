@@ -58,7 +58,8 @@ TEST(SceneDoc, EveryDocumentedKeyIsInTheSchema) {
 std::map<std::string, std::pair<double, double>> documented_limits() {
   std::ifstream in(std::string(FIVEBAR_SOURCE_DIR) + "/docs/scene.md");
   std::map<std::string, std::pair<double, double>> out;
-  const std::regex row(R"(^\| `([a-zA-Z0-9_.]+)` \| [^|]+ \| (\[([^,]+), ([^\]]+)\]|at most (\S+)|at least (\S+)[^|]*) \|$)");
+  const std::regex row(
+      R"(^\| `([a-zA-Z0-9_.]+)` \| [^|]+ \| (\[([^,]+), ([^\]]+)\]|at most (\S+)|at least (\S+)[^|]*) \|$)");
   std::string line;
   bool in_table = false;
   while (std::getline(in, line)) {

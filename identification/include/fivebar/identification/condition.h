@@ -90,10 +90,11 @@ inline constexpr const char* kSwappedAngles = "radians with theta1 and theta2 sw
 
 /// Empty if the log's angles read as radians explain its torques, else the evidence that they
 /// are in another unit, which is set in `unit` (degrees, turns, gradians, the counts of a
-/// common encoder resolution, or kSwappedAngles: radians in each other's column): with rates estimated from the angles, the scene's frictionless
-/// inverse dynamics is compared with the logged torques for each reading (median |tau - M| over
-/// the log, and the median crank rate); another unit is reported only when its reading explains
-/// the torques four times better than radians and to within half their median size.
+/// common encoder resolution, or kSwappedAngles: radians in each other's column): with rates
+/// estimated from the angles, the scene's frictionless inverse dynamics is compared with the logged
+/// torques for each reading (median |tau - M| over the log, and the median crank rate); another
+/// unit is reported only when its reading explains the torques four times better than radians and
+/// to within half their median size.
 std::string angle_units_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
                                     const TorqueLog& log, std::string* unit);
 
