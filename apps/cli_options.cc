@@ -8,6 +8,7 @@
 
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
+#include "fivebar/io/scene.h"
 
 namespace fivebar::io {
 
@@ -64,6 +65,15 @@ CLI::Validator nonnegative_number() {
 CLI::Validator positive_at_most(double limit) {
   return range_check([limit](double v) { return v > 0 && v <= limit; },
                      "> 0 and at most " + format_shortest(limit));
+}
+
+CLI::Validator within_scene_limit(const std::string& key) {
+  return CLI::Validator(
+      [key](std::string& text) -> std::string {
+        double v = 0;
+        return read_number(text, &v) && std::isfinite(v) ? limit_problem(key, v) : "";
+      },
+      "");
 }
 
 CLI::Validator within_a_turn() {

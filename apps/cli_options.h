@@ -19,6 +19,10 @@ namespace fivebar::io {
 /// the option's default is inf (no limit), inf and huge values are accepted.
 void check_numbers(const CLI::App& app);
 
+/// The plausibility limit of scene key `key` (scene_limit, docs/scene.md) for an option that
+/// stands for that key's quantity: the same bound and message as the scene's.
+CLI::Validator within_scene_limit(const std::string& key);
+
 /// Range checks of numeric options, shared by the commands (`->check(positive_number())`): a
 /// value out of range fails the parse with `--opt: must be > 0, got -1`, which `fivebar` reports
 /// as bad input (exit 2). Non-numeric text is left to the option's own conversion.

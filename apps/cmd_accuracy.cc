@@ -108,6 +108,9 @@ studies::WorkPrecisionOptions study_options(const Args& args, const Scene& scene
         throw InputError(scene.path, "--tolerances",
                          format_significant(t, 3) + ": a tolerance must be in (0, 1)");
       }
+      // the scene's rtol limit: tighter than rounding, no integrator can be asked for it
+      const std::string implausible = limit_problem("simulation.rtol", t);
+      if (!implausible.empty()) throw InputError(scene.path, "--tolerances", implausible);
     }
     opt.tolerances = args.tolerances;
   }

@@ -8,6 +8,7 @@
 // multi-sine of synth-log, or designed as tone torques (--family torque).
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -910,16 +911,42 @@ std::shared_ptr<const id::ExcitationMechanism> mechanism_of(const Scene& scene,
                                  loads);
 }
 
+// the scene key of a friction parameter of the design ("coulomb" -> friction.coulomb, a
+// per-joint "coulomb_3" -> friction.coulomb.2)
+std::string friction_key(const std::string& name) {
+  const size_t u = name.rfind('_');
+  const bool joint = u != std::string::npos && u + 1 < name.size() &&
+                     std::isdigit(static_cast<unsigned char>(name[u + 1]));
+  if (!joint) return "friction." + name;
+  return "friction." + name.substr(0, u) + "." + std::to_string(std::stoi(name.substr(u + 1)) - 1);
+}
+
 // A design makes each parameter's std small against its value (`ok`: every relative std at most
-// 1): a scene whose parameters are all 0 (no friction) leaves nothing to design for.
+// 1): a scene without a friction law, or whose parameters are all 0, leaves nothing to design
+// for, and a friction coefficient of 0 has no relative std to judge the design by.
 void check_values(const Scene& scene, const id::DesignParameters& dp) {
-  for (double v : dp.nominal) {
-    if (v != 0) return;
+  const FrictionParams<double>& f =
+      scene.type == MechanismType::kFourBar ? scene.four_bar.friction : scene.params.friction;
+  if (!f.active()) {
+    throw InputError(scene.path, "friction.model",
+                     "none: there is no friction to identify; excite designs a motion for the "
+                     "coefficients of a friction law (give friction.model and the values you "
+                     "expect)");
   }
-  throw InputError(scene.path, "friction",
-                   "every parameter to design for is 0 (" + std::to_string(dp.size()) +
-                       " of them): excite makes their std small against their values; give the "
-                       "scene the friction you expect");
+  bool any = false;
+  for (double v : dp.nominal) any = any || v != 0;
+  if (!any) {
+    throw InputError(scene.path, "friction",
+                     "every parameter to design for is 0 (" + std::to_string(dp.size()) +
+                         " of them): excite makes their std small against their values; give "
+                         "the scene the friction you expect");
+  }
+  for (int i = 0; i < dp.friction; ++i) {
+    if (dp.nominal[i] != 0) continue;
+    throw InputError(scene.path, friction_key(dp.names[i]),
+                     "0: excite judges a design by each coefficient's std against its value, "
+                     "which a 0 does not have; give the value you expect (> 0)");
+  }
 }
 
 // the family of the design (a four-bar's default: fourier) and the options given that it does

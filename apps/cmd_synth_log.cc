@@ -383,12 +383,15 @@ RunFunction setup(CLI::App* app) {
                   "friction law of the log, overriding the scene's: " +
                       identification::identifiable_law_names());
   app->add_option("--static-coulomb", args->static_coulomb, "stribeck: mu_s of every joint")
-      ->check(nonnegative_number());
+      ->check(nonnegative_number())
+      ->check(within_scene_limit("friction.static_coulomb"));
   app->add_option("--stribeck-velocity", args->stribeck_velocity,
                   "stribeck: w_st of every joint [rad/s]")
-      ->check(positive_number());
+      ->check(positive_number())
+      ->check(within_scene_limit("friction.stribeck_velocity"));
   app->add_option("--stribeck-exponent", args->stribeck_exponent, "stribeck: delta")
-      ->check(positive_number());
+      ->check(positive_number())
+      ->check(within_scene_limit("friction.stribeck_exponent"));
   return [args] {
     // the command that regenerates this log, every option explicit
     const Args& a = *args;

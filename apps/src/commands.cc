@@ -32,6 +32,10 @@ void check_sg_window(const id::IdentifyOptions& options, const id::TorqueLog& lo
   const std::string asked = format_shortest(options.sg.half_window_s) + " s is " +
                             format_significant(half, 3) + " samples of the log's step " +
                             format_significant(dt, 3) + " s";
+  if (std::lround(half) < 1) {
+    throw InputError(kFlags, "--sg-window",
+                     asked + ": less than one sample (its half-window holds whole samples)");
+  }
   if (!(2 * std::lround(std::min(half, 1e9)) + 1 <= log.size())) {
     throw InputError(kFlags, "--sg-window",
                      asked + ": the window (2 x " + format_significant(half, 3) +
@@ -50,6 +54,12 @@ void check_sg_window(const id::IdentifyOptions& options, const id::TorqueLog& lo
 void check_window(const id::IdentifyOptions& options, const id::TorqueLog& log) {
   if (!(options.window_s > 0) || log.size() < 2) return;
   const double span = log.t.back() - log.t.front();
+  const double dt = id::median_time_step(log);
+  if (dt > 0 && options.window_s < 2 * dt) {
+    throw InputError(kFlags, "--window",
+                     format_shortest(options.window_s) + " s holds fewer than 2 samples of the " +
+                         "log's step " + format_significant(dt, 3) + " s");
+  }
   if (options.window_s <= span) return;
   throw InputError(kFlags, "--window",
                    format_shortest(options.window_s) + " s is longer than the log (" +

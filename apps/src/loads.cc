@@ -8,6 +8,7 @@
 
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
+#include "fivebar/io/scene.h"
 
 namespace fivebar::io {
 
@@ -97,6 +98,12 @@ LoadExpressions::LoadExpressions(const std::array<std::string, 4>& expressions, 
           throw InputError(file, key,
                            "'" + expressions[i] + "' is not finite at t = " + format_double(probe) +
                                " (" + format_double(v) + ")");
+        }
+        const std::string implausible = limit_problem(key, v);
+        if (!implausible.empty()) {
+          throw InputError(
+              file, key,
+              "'" + expressions[i] + "' at t = " + format_double(probe) + ": " + implausible);
         }
         if (c->constant[i]) c->value[i] = v;
       }

@@ -3,14 +3,6 @@
 // the Scene is then built and validated key by key.
 #include "fivebar/io/scene.h"
 
-#include "fivebar/io/command.h"
-
-#include "fivebar/model/actuator.h"
-#include "fivebar/model/four_bar.h"
-#include "fivebar/model/motor.h"
-#include "fivebar/model/friction.h"
-#include "fivebar/model/kinematics.h"
-
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -20,14 +12,21 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
 #include <sstream>
 
+#include "fivebar/io/command.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
+#include "fivebar/model/actuator.h"
+#include "fivebar/model/four_bar.h"
+#include "fivebar/model/friction.h"
+#include "fivebar/model/kinematics.h"
+#include "fivebar/model/motor.h"
 
 namespace fivebar::io {
 namespace {
@@ -49,69 +48,89 @@ enum class Kind {
 struct Field {
   std::string key;  // dotted; "#" stands for a link index
   Kind kind;
+  SceneLimit limit{};  // the plausible magnitudes of a number (none when high is 0)
 };
+
+// Plausibility limits: a nonzero magnitude outside [low, high] describes no machine (a 100 m crane
+// link, a 1e-4 m MEMS link and 1e5 kg are all well inside). Zero and the sign are left to each
+// key's own domain check. docs/scene.md states the same table.
+constexpr double kNoUpperLimit = std::numeric_limits<double>::max();
+constexpr SceneLimit kLength{1e-7, 1e3, "m"};
+constexpr SceneLimit kOffset{0, 1e3, "m"};
+constexpr SceneLimit kAngle{0, 1e3, "rad"};
+constexpr SceneLimit kRate{0, 1e5, "rad/s"};
+constexpr SceneLimit kTorque{0, 1e9, "N m"};
 
 // every key a scene may contain (interfaces.md, scene.h), except the friction coefficients,
 // which come from the friction-law descriptors (friction.h): see schema()
 const Field kBaseSchema[] = {
     {"mechanism", Kind::kSection},
     {"mechanism.type", Kind::kName},
-    {"mechanism.ground_length", Kind::kNumber},
+    {"mechanism.ground_length", Kind::kNumber, kLength},
     {"mechanism.links", Kind::kLinkList},
     {"mechanism.links.#", Kind::kSection},
-    {"mechanism.links.#.length", Kind::kNumber},
-    {"mechanism.links.#.mass", Kind::kNumber},
-    {"mechanism.links.#.inertia", Kind::kNumber},
-    {"mechanism.links.#.com_offset", Kind::kNumber},
-    {"mechanism.links.#.com_angle", Kind::kNumber},
-    {"mechanism.point_p", Kind::kNumber},
+    {"mechanism.links.#.length", Kind::kNumber, kLength},
+    {"mechanism.links.#.mass", Kind::kNumber, {1e-15, 1e7, "kg"}},
+    {"mechanism.links.#.inertia", Kind::kNumber, {1e-30, 1e13, "kg m^2"}},
+    {"mechanism.links.#.com_offset", Kind::kNumber, kOffset},
+    {"mechanism.links.#.com_angle", Kind::kNumber, kAngle},
+    {"mechanism.point_p", Kind::kNumber, kOffset},
     {"mechanism.assembly", Kind::kName},
-    {"gravity", Kind::kNumber},
+    {"gravity", Kind::kNumber, {0, 1e4, "m/s^2"}},
     {"friction", Kind::kSection},
     {"friction.model", Kind::kName},
-    {"friction.pin_radius", Kind::kNumberOr5},
-    {"friction.smoothing_velocity", Kind::kNumber},
+    {"friction.pin_radius", Kind::kNumberOr5, {1e-8, 10, "m"}},
+    {"friction.smoothing_velocity", Kind::kNumber, {1e-9, 1e4, "rad/s"}},
     {"actuators", Kind::kSection},
     {"actuators.M1", Kind::kSection},
-    {"actuators.M1.offset", Kind::kNumber},
-    {"actuators.M1.coulomb", Kind::kNumber},
-    {"actuators.M1.viscous", Kind::kNumber},
-    {"actuators.M1.winding_resistance", Kind::kNumber},
-    {"actuators.M1.torque_constant", Kind::kNumber},
-    {"actuators.M1.gear_ratio", Kind::kNumber},
+    {"actuators.M1.offset", Kind::kNumber, kTorque},
+    {"actuators.M1.coulomb", Kind::kNumber, kTorque},
+    {"actuators.M1.viscous", Kind::kNumber, {0, 1e9, "N m s/rad"}},
+    {"actuators.M1.winding_resistance", Kind::kNumber, {1e-6, 1e6, "ohm"}},
+    {"actuators.M1.torque_constant", Kind::kNumber, {1e-6, 1e4, "N m/A"}},
+    {"actuators.M1.gear_ratio", Kind::kNumber, {1e-3, 1e6, "-"}},
     {"actuators.M2", Kind::kSection},
-    {"actuators.M2.offset", Kind::kNumber},
-    {"actuators.M2.coulomb", Kind::kNumber},
-    {"actuators.M2.viscous", Kind::kNumber},
-    {"actuators.M2.winding_resistance", Kind::kNumber},
-    {"actuators.M2.torque_constant", Kind::kNumber},
-    {"actuators.M2.gear_ratio", Kind::kNumber},
+    {"actuators.M2.offset", Kind::kNumber, kTorque},
+    {"actuators.M2.coulomb", Kind::kNumber, kTorque},
+    {"actuators.M2.viscous", Kind::kNumber, {0, 1e9, "N m s/rad"}},
+    {"actuators.M2.winding_resistance", Kind::kNumber, {1e-6, 1e6, "ohm"}},
+    {"actuators.M2.torque_constant", Kind::kNumber, {1e-6, 1e4, "N m/A"}},
+    {"actuators.M2.gear_ratio", Kind::kNumber, {1e-3, 1e6, "-"}},
     {"loads", Kind::kSection},
-    {"loads.M1", Kind::kExpression},
-    {"loads.M2", Kind::kExpression},
-    {"loads.M3", Kind::kExpression},
-    {"loads.F", Kind::kExpression},
-    {"loads.F_angle", Kind::kNumber},
+    {"loads.M1", Kind::kExpression, kTorque},
+    {"loads.M2", Kind::kExpression, kTorque},
+    {"loads.M3", Kind::kExpression, kTorque},
+    {"loads.F", Kind::kExpression, {0, 1e10, "N"}},
+    {"loads.F_angle", Kind::kNumber, kAngle},
     {"initial", Kind::kSection},
     {"initial.theta1", Kind::kNumber},
     {"initial.theta2", Kind::kNumber},
-    {"initial.omega1", Kind::kNumber},
-    {"initial.omega2", Kind::kNumber},
+    {"initial.omega1", Kind::kNumber, kRate},
+    {"initial.omega2", Kind::kNumber, kRate},
     {"simulation", Kind::kSection},
-    {"simulation.duration", Kind::kNumber},
-    {"simulation.output_step", Kind::kNumber},
+    // the longest duration is the output rows' limit (rows_beyond_limit) at output_step's
+    {"simulation.duration", Kind::kNumber, {1e-6, kNoUpperLimit, "s"}},
+    {"simulation.output_step", Kind::kNumber, {1e-9, 1e6, "s"}},
     {"simulation.integrator", Kind::kName},
-    {"simulation.rtol", Kind::kNumber},
-    {"simulation.atol", Kind::kNumber},
-    {"simulation.target_error", Kind::kNumber},
+    {"simulation.rtol", Kind::kNumber, {1e-16, 1, "-"}},
+    {"simulation.atol", Kind::kNumber, {1e-20, 1, "rad, rad/s"}},
+    {"simulation.target_error", Kind::kNumber, {1e-15, 1, "rad"}},
     {"simulation.locate_switches", Kind::kBool},
     {"simulation.stick", Kind::kBool},
     {"simulation.max_steps", Kind::kInteger},
     {"simulation.singular_margin", Kind::kNumber},
-    {"simulation.friction_tol", Kind::kNumber},
+    {"simulation.friction_tol", Kind::kNumber, {1e-16, 1, "-"}},
     {"simulation.friction_max_iter", Kind::kInteger},
-    {"simulation.rest_rate_threshold", Kind::kNumber},
-    {"simulation.rest_acceleration_threshold", Kind::kNumber},
+    {"simulation.rest_rate_threshold", Kind::kNumber, kRate},
+    {"simulation.rest_acceleration_threshold", Kind::kNumber, {0, 1e9, "rad/s^2"}},
+};
+
+// the friction coefficients' limits (kCoefficientInfo order: coulomb, viscous, static_coulomb,
+// stribeck_velocity, stribeck_exponent, sigma0, sigma1, sigma2, viscous_exponent)
+constexpr SceneLimit kCoefficientLimits[kCoefficients] = {
+    {0, 10, "-"},         {0, 1e4, "s/rad"}, {0, 10, "-"},
+    {1e-6, 1e4, "rad/s"}, {1e-2, 100, "-"},  {1e-6, 1e12, "1/rad"},
+    {0, 1e6, "s/rad"},    {0, 1e4, "s/rad"}, {1e-2, 10, "-"},
 };
 
 // the whole schema: the base keys with the laws' coefficients after friction.pin_radius
@@ -122,7 +141,8 @@ const std::vector<Field>& schema() {
       out.push_back(f);
       if (f.key != "friction.pin_radius") continue;
       for (const CoefficientInfo& c : kCoefficientInfo) {
-        out.push_back({std::string("friction.") + c.key, Kind::kNumberOr5});
+        out.push_back({std::string("friction.") + c.key, Kind::kNumberOr5,
+                       kCoefficientLimits[static_cast<int>(c.id)]});
       }
     }
     return out;
@@ -368,6 +388,8 @@ class SceneReader {
     double x = 0;
     if (!parse_double(text, &x)) fail(key, "expected a number, got '" + text + "'" + where);
     if (!std::isfinite(x)) fail(key, "must be a finite number, got " + text + where);
+    const std::string implausible = limit_problem(limit_key(key), x);
+    if (!implausible.empty()) fail(key, implausible + where);
     return x;
   }
 
@@ -454,6 +476,15 @@ class SceneReader {
   static std::string line_of(const YAML::Node& n) {
     const int line = n.Mark().line;
     return line >= 0 ? " (line " + std::to_string(line + 1) + ")" : "";
+  }
+
+  // the scene_keys() name of a value's key: link indices become "N", a per-joint item's index
+  // is dropped (friction.coulomb.2 -> friction.coulomb)
+  static std::string limit_key(const std::string& key) {
+    std::vector<std::string> p = split(key, '.');
+    if (p.size() >= 3 && p[0] == "mechanism" && p[1] == "links") p[2] = "N";
+    if (p.size() == 3 && p[0] == "friction") p.pop_back();
+    return join(p, p.size(), '.');
   }
 
   // the schema key of a dotted key: link indices become "#"
@@ -1016,6 +1047,28 @@ std::vector<std::string> scene_keys(bool sections) {
     keys.push_back(key);
   }
   return keys;
+}
+
+const SceneLimit* scene_limit(const std::string& key) {
+  std::string skey = key;
+  const size_t n = skey.find(".N.");
+  if (n != std::string::npos) skey[n + 1] = '#';
+  const Field* f = find_field(skey);
+  return f != nullptr && f->limit.high > 0 ? &f->limit : nullptr;
+}
+
+std::string limit_problem(const std::string& key, double value) {
+  const SceneLimit* l = scene_limit(key);
+  const double a = std::abs(value);
+  if (l == nullptr || value == 0 || (a >= l->low && a <= l->high)) return "";
+  const std::string unit = std::string(l->unit) == "-" ? "" : std::string(" ") + l->unit;
+  std::string range =
+      l->low > 0 ? "within [" + format_double(l->low) + ", " + format_double(l->high) + "]" + unit
+                 : "at most " + format_double(l->high) + unit;
+  if (l->high == std::numeric_limits<double>::max())
+    range = "at least " + format_double(l->low) + unit;
+  return "must be " + range + " in magnitude (the plausible range of a machine, " +
+         "docs/scene.md), got " + format_double(value);
 }
 
 Scene read_scene(const std::string& path, const std::vector<std::string>& sets, bool four_bar_ok) {

@@ -19,15 +19,17 @@ using namespace glitches;
 
 namespace {
 
-
-/// Units of logged angles other than radians that the motion can reveal, with their factor to
-/// radians: degrees, turns, gradians, and the counts of common encoder resolutions.
+/// Readings of logged angles other than radians that the motion can reveal, with their factor
+/// to radians: degrees, turns, gradians, the counts of common encoder resolutions, and radians
+/// with the two angle columns swapped.
 struct AngleUnit {
   const char* name;
   double to_rad;
+  bool swapped = false;
 };
 
 constexpr AngleUnit kAngleUnits[] = {
+    {kSwappedAngles, 1.0, true},
     {"degrees", M_PI / 180},
     {"turns", 2 * M_PI},
     {"gradians", M_PI / 200},
@@ -254,7 +256,8 @@ std::string angle_units_from_motion(const Params<double>& scene, const sim::Load
   double best = kInf, best_rate = 0;
   std::string best_unit;
   for (const AngleUnit& u : kAngleUnits) {
-    std::vector<double> a1 = log.theta1, a2 = log.theta2;
+    std::vector<double> a1 = u.swapped ? log.theta2 : log.theta1;
+    std::vector<double> a2 = u.swapped ? log.theta1 : log.theta2;
     for (std::vector<double>* v : {&a1, &a2}) {
       for (double& x : *v) x *= u.to_rad;
     }

@@ -558,6 +558,7 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   f.sg = filter_options(f.cond.log, opt, &out.window_choice);
   rates(&f, &out);
   select_samples(&f, &out);
+  require_usable_samples(f.cond.log, out.samples_used, f.layout.size(), opt.min_rate);
   if (data_driven_window(f.cond.log, opt) && out.samples_used >= f.layout.size() + 1) {
     window_stage(&f, &out);
   }

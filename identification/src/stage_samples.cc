@@ -243,13 +243,7 @@ void select_samples(Fit* f, IdentifyResult* out) {
     f->index.push_back(i);
   }
   out->samples_used = static_cast<int>(f->samples.size());
-  if (out->samples_used < P + 1) {
-    throw LogError(log.path, "samples",
-                   "only " + std::to_string(out->samples_used) +
-                       " samples usable (rate threshold, glitches and filter edges), fewer than "
-                       "the " +
-                       std::to_string(P + 1) + " needed for " + std::to_string(P) + " parameters");
-  }
+  require_usable_samples(log, out->samples_used, P, f->opt->min_rate);
 }
 
 }  // namespace

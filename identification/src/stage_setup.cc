@@ -56,8 +56,11 @@ void prepare_log(const TorqueLog& log, Fit* f, IdentifyResult* out) {
     std::string unit;
     const std::string why = angle_units_from_motion(f->scene, f->loads, log, &unit);
     if (!why.empty()) {
-      throw LogError(log.path, "columns theta1, theta2",
-                     "angles look like " + unit + ", expected radians (" + why + ")");
+      const std::string what = unit == kSwappedAngles
+                                   ? "the two angles look swapped: the scene's motion fits theta1 "
+                                     "in the theta2 column and theta2 in the theta1 column"
+                                   : "angles look like " + unit + ", expected radians";
+      throw LogError(log.path, "columns theta1, theta2", what + " (" + why + ")");
     }
   }
   f->cond = condition_log(log, f->opt->condition);

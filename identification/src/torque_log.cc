@@ -104,6 +104,18 @@ void require_samples(const TorqueLog& log, int needed, const std::string& what) 
   }
 }
 
+void require_usable_samples(const TorqueLog& log, int used, int params, double min_rate) {
+  if (used >= params + 1) return;
+  const std::string count = "only " + std::to_string(used) +
+                            " samples usable (rate threshold, glitches and filter edges), fewer " +
+                            "than the " + std::to_string(params + 1) + " needed for " +
+                            std::to_string(params) + " parameters";
+  if (!(min_rate > 0)) throw LogError(log.path, "samples", count);
+  throw LogError("command line", "--min-rate",
+                 format_significant(min_rate, 6) + " rad/s leaves too few samples of " + log.path +
+                     ": " + count + "; a lower --min-rate keeps more (0 keeps all)");
+}
+
 void require_uniform_sampling(const TorqueLog& log) {
   const int n = log.size();
   if (n < 3) return;

@@ -70,7 +70,7 @@ expect_error(2, "--singular-margin: expected a number in", base + ["--singular-m
 expect_error(2, "--min-reversals: must be >= 0", base + ["--min-reversals", "-1"], bad)
 expect_error(2, "--reversal-rate: must be > 0", base + ["--family", "fourier", "--reversal-rate", "0"], bad)
 expect_error(2, "--reversal-rate: applies to --family fourier only", base + ["--reversal-rate", "1"], bad)
-expect_error(2, "loads: holding the start pose needs torques that are not finite",
+expect_error(2, "loads.M3: '1e300' at t = 0: must be at most 1e+09 N m",
              base + ["--set", "loads.M3=1e300"], bad)
 expect_error(2, "--tones: applies to --family torque only",
              base + ["--family", "fourier", "--tones", "3"], bad)

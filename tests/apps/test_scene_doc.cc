@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <limits>
+#include <map>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -50,6 +52,45 @@ TEST(SceneDoc, EveryDocumentedKeyIsInTheSchema) {
     if (!schema.count(k)) unknown.push_back(k);
   }
   EXPECT_THAT(unknown, ::testing::IsEmpty()) << "keys in docs/scene.md the schema refuses";
+}
+
+// the rows of docs/scene.md's plausibility table: key -> (low, high)
+std::map<std::string, std::pair<double, double>> documented_limits() {
+  std::ifstream in(std::string(FIVEBAR_SOURCE_DIR) + "/docs/scene.md");
+  std::map<std::string, std::pair<double, double>> out;
+  const std::regex row(
+      R"(^\| `([a-zA-Z0-9_.]+)` \| [^|]+ \| (\[([^,]+), ([^\]]+)\]|at most (\S+)|at least (\S+)[^|]*) \|$)");
+  std::string line;
+  bool in_table = false;
+  while (std::getline(in, line)) {
+    if (line.rfind("## ", 0) == 0) in_table = line == "## Plausibility limits";
+    std::smatch m;
+    if (!in_table || !std::regex_match(line, m, row)) continue;
+    if (m[6].matched) {
+      out[m[1]] = {std::stod(m[6]), std::numeric_limits<double>::max()};
+    } else {
+      out[m[1]] = m[5].matched ? std::make_pair(0.0, std::stod(m[5]))
+                               : std::make_pair(std::stod(m[3]), std::stod(m[4]));
+    }
+  }
+  return out;
+}
+
+TEST(SceneDoc, PlausibilityLimitsAreTheSchemas) {
+  const auto documented = documented_limits();
+  ASSERT_FALSE(documented.empty()) << "no plausibility table in docs/scene.md";
+  for (const std::string& k : scene_keys()) {
+    const SceneLimit* l = scene_limit(k);
+    const std::string m1 = k.rfind("actuators.M2.", 0) == 0 ? "actuators.M1." + k.substr(13) : k;
+    auto it = documented.find(m1);
+    if (l == nullptr) {
+      EXPECT_EQ(it, documented.end()) << k << " is documented with a limit it does not have";
+      continue;
+    }
+    ASSERT_NE(it, documented.end()) << k << "'s limit is not in docs/scene.md";
+    EXPECT_EQ(it->second.first, l->low) << k;
+    EXPECT_EQ(it->second.second, l->high) << k;
+  }
 }
 
 }  // namespace

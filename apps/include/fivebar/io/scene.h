@@ -95,6 +95,21 @@ Scene read_scene(const std::string& path, const std::vector<std::string>& sets =
 /// schema order. `sections`: the maps and lists that hold other keys ("mechanism.links") too.
 std::vector<std::string> scene_keys(bool sections = false);
 
+/// The plausible magnitudes of a scene number: a nonzero |value| outside [low, high] (in `unit`)
+/// describes no machine and is refused (exit 2) naming the key. low 0: no lower limit. Zero and
+/// the sign are each key's own domain check. docs/scene.md states the same table.
+struct SceneLimit {
+  double low = 0;
+  double high = 0;  ///< 0: the key has no limit
+  const char* unit = "";
+};
+
+/// The limit of a key in scene_keys() form ("mechanism.links.N.mass"); nullptr when it has none.
+const SceneLimit* scene_limit(const std::string& key);
+
+/// Why `value` of `key` describes no machine ("must be ..., got ..."), or "" when it may.
+std::string limit_problem(const std::string& key, double value);
+
 /// Parses a scene from YAML text; `path` only names it in error messages.
 Scene parse_scene(const std::string& yaml_text, const std::string& path,
                   const std::vector<std::string>& sets = {}, bool four_bar_ok = false);

@@ -85,12 +85,16 @@ std::vector<double> loo_deviation(const std::vector<double>& t, const std::vecto
 /// 1.4826 times the median of |v| (robust std of zero-mean values); 0 for an empty vector.
 double robust_std(std::vector<double> v);
 
+/// The reading of angle_units_from_motion whose columns theta1 and theta2 are each other's.
+inline constexpr const char* kSwappedAngles = "radians with theta1 and theta2 swapped";
+
 /// Empty if the log's angles read as radians explain its torques, else the evidence that they
-/// are in another unit, which is set in `unit` (degrees, turns, gradians, or the counts of a
-/// common encoder resolution): with rates estimated from the angles, the scene's frictionless
-/// inverse dynamics is compared with the logged torques for each reading (median |tau - M| over
-/// the log, and the median crank rate); another unit is reported only when its reading explains
-/// the torques four times better than radians and to within half their median size.
+/// are in another unit, which is set in `unit` (degrees, turns, gradians, the counts of a
+/// common encoder resolution, or kSwappedAngles: radians in each other's column): with rates
+/// estimated from the angles, the scene's frictionless inverse dynamics is compared with the logged
+/// torques for each reading (median |tau - M| over the log, and the median crank rate); another
+/// unit is reported only when its reading explains the torques four times better than radians and
+/// to within half their median size.
 std::string angle_units_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
                                     const TorqueLog& log, std::string* unit);
 

@@ -84,6 +84,11 @@ void require_uniform_sampling(const TorqueLog& log);
 /// (e.g. the number of parameters, or of residuals needed to estimate them).
 void require_samples(const TorqueLog& log, int needed, const std::string& what);
 
+/// Throws LogError when the samples a fit may use (after the rate threshold, the glitches and
+/// the filter's edges) are fewer than `params` + 1: keyed `samples`, or `--min-rate` (file
+/// "command line") when `min_rate` > 0 takes part, since a lower one keeps more.
+void require_usable_samples(const TorqueLog& log, int used, int params, double min_rate);
+
 /// Throws LogError(`<file>: line N: pose theta1=..., theta2=... cannot assemble ...`) at the first
 /// sample whose pose cannot close with the mechanism of `params`.
 void check_poses(const TorqueLog& log, const Params<double>& params);
