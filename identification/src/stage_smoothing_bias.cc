@@ -407,9 +407,9 @@ void unbiased_window_check(const Fit& f, IdentifyResult* out) {
       std::to_string(sg_half_window(f.sg, dt)) + " samples of order " + std::to_string(f.sg.order) +
       ", predicts a friction coefficient off by " + format_significant(f.window_bias_left, 2) +
       " std (the smoothing's bias grows with the window, the angle noise's through the reactions "
-      "as it shrinks): the log's rate (" +
-      std::to_string(std::lround(1 / dt)) + " Hz) is too low for this motion's speed; log faster, log the rates, or drive the motion "
-      "slower";
+      "as it shrinks): this motion is too fast for accelerations estimated from its angles at " +
+      std::to_string(std::lround(1 / dt)) +
+      " Hz; log the rates (or at a much higher rate), or drive the motion slower";
 }
 
 void correct_smoothing_bias(const ParameterLayout& layout, const Eigen::VectorXd& b,
