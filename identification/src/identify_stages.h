@@ -254,8 +254,9 @@ class FiveBarWindowFit : public WindowFit {
 void preliminary_fit(Fit* f);
 
 /// The fit is unusable (out->unusable, unless a reason is already there) when no window keeps
-/// the predicted bias of the friction coefficients within kUnusableBias std (Fit::window_bias_left):
-/// the log is sampled too slowly for its motion's speed.
+/// the predicted bias of the friction coefficients within kUnusableBias std
+/// (Fit::window_bias_left): the motion is too fast for accelerations estimated from its angles
+/// at the log's rate.
 void unbiased_window_check(const Fit& f, IdentifyResult* out);
 
 // ---- stage_solve.cc ----
