@@ -189,9 +189,12 @@ class WindowBias {
     Eigen::VectorXd std;
     if (!detail::smoothing_bias(w_.log().t, in_, keep, sg, &b, &std)) return;
     smooth_[k] = worst_ratio(b, std);
-    // the noise's bias is one Gauss-Newton step from the fit: where a friction coefficient's std
-    // exceeds its value (a light mechanism's log at 0.02 N m of torque noise), it predicts
-    // nothing (4.5 std at half-window 10 there, on a coulomb std of 0.097)
+    // the noise's bias is one Gauss-Newton step from the fit: where a shared friction
+    // coefficient's std exceeds its value (a light mechanism's log at 0.02 N m of torque noise),
+    // it predicts nothing (4.5 std at half-window 10 there, on a coulomb std of 0.097). Per joint
+    // it is always predicted: some coefficient is at its bound or undetermined on most logs (a
+    // fast design's order-7 window carried 13 std of it, unseen; light per-joint logs keep
+    // exit 0)
     bool determined = true;
     for (int p = 0; !in_.per_joint && p < in_.friction.size() && p < std.size(); ++p) {
       determined = determined && std(p) < std::abs(in_.friction(p));
