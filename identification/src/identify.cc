@@ -249,6 +249,8 @@ IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunct
     return finish(refit);
   }
   unexplained_misfit(f.layout, &out);
+  // last: a model error the checks above name inflates the predicted bias too
+  unbiased_window_check(f, &out);
   return finish(out);
 }
 

@@ -77,6 +77,9 @@ struct Fit {
   /// predicted smoothing bias of the public friction coefficients at the chosen window
   /// (limit_smoothing_bias; empty when not predicted), taken off the estimates
   Eigen::VectorXd smoothing_bias;
+  /// the largest predicted |bias| / std of a friction coefficient at the chosen window where no
+  /// window keeps it within kBiasFraction (limit_smoothing_bias; 0 otherwise)
+  double window_bias_left = 0;
 
   // the fit (choose_loss_scale, build_problem, solve_stage)
   double loss_scale = 0;  ///< the robust loss's scale as applied (choose_loss_scale)
@@ -248,6 +251,12 @@ class FiveBarWindowFit : public WindowFit {
 /// A quick fit on at most ~1500 of the selected samples (plain least squares) that sets f->x for
 /// the window choice; keeps the start values if it fails.
 void preliminary_fit(Fit* f);
+
+/// The fit is unusable (out->unusable, unless a reason is already there) when no window keeps
+/// the predicted bias of the friction coefficients within kUnusableBias std
+/// (Fit::window_bias_left): the motion is too fast for accelerations estimated from its angles
+/// at the log's rate.
+void unbiased_window_check(const Fit& f, IdentifyResult* out);
 
 // ---- stage_solve.cc ----
 

@@ -91,9 +91,10 @@ void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::s
 /// (`given_order`: the order before) is kept when its own predicted bias is within
 /// kBiasFraction, or when `rates_biased`; else the windows of the given order are searched as
 /// above, from the second smallest up. Angles only. *bias: the prediction at the window kept
-/// (left empty when not predicted); *choice gets its text appended.
+/// (left empty when not predicted); *choice gets its text appended; *left: the largest predicted
+/// |bias| / std at the window kept when no window searched is within kBiasFraction (0 otherwise).
 void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased, SgOptions* sg,
-                          Eigen::VectorXd* bias, std::string* choice);
+                          Eigen::VectorXd* bias, std::string* choice, double* left);
 
 /// The window of a mechanism that predicts the noise's bias (WindowFit::noise_bias), in place of
 /// choose_window and limit_smoothing_bias: the noise's bias through the reactions falls as the

@@ -76,6 +76,13 @@ constexpr double kWindowExcess = 0.04;
 /// 0.25 and 0.92 at 0.5 (stage_smoothing_bias.cc; the excitation design predicts the same choice)
 constexpr double kBiasFraction = 0.2;
 
+/// Where no window keeps the predicted bias within kBiasFraction, the largest predicted |bias| /
+/// std of a friction coefficient at the window kept beyond which the fit is not to be used
+/// (unbiased_window_check, stage_smoothing_bias.cc): the prediction is taken off the estimates,
+/// but its own error grows with it (a fast per-joint design at 1 kHz, predicted 2.4 std at its
+/// least: errors of 3-6 std left after the correction, 67 of 100 intervals covering)
+constexpr double kUnusableBias = 1.0;
+
 /// The walk of the window choice by predicted bias (choose_window_by_bias, mechanism_stages.h),
 /// over candidates 1 .. K - 1 from `start` (clamped into them): worst(k) gives candidate k's
 /// predicted largest |bias| / std of a friction coefficient (NaN: not predicted there), false when

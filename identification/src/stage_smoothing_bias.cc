@@ -54,6 +54,7 @@ detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int or
   in.s2 = f.prior_scale * f.prior_scale;
   in.T = to_public(f.layout);
   in.friction_size = f.layout.friction_size();
+  in.per_joint = f.layout.per_joint;
   in.friction = (in.T * Eigen::Map<const Eigen::VectorXd>(f.x.data(), P)).head(in.friction_size);
   in.source = f.source;
   in.noise = f.noise;
@@ -188,11 +189,14 @@ class WindowBias {
     Eigen::VectorXd std;
     if (!detail::smoothing_bias(w_.log().t, in_, keep, sg, &b, &std)) return;
     smooth_[k] = worst_ratio(b, std);
-    // the noise's bias is one Gauss-Newton step from the fit: where a friction coefficient's std
-    // exceeds its value (a light mechanism's log at 0.02 N m of torque noise), it predicts
-    // nothing (4.5 std at half-window 10 there, on a coulomb std of 0.097)
+    // the noise's bias is one Gauss-Newton step from the fit: where a shared friction
+    // coefficient's std exceeds its value (a light mechanism's log at 0.02 N m of torque noise),
+    // it predicts nothing (4.5 std at half-window 10 there, on a coulomb std of 0.097). Per joint
+    // it is always predicted: some coefficient is at its bound or undetermined on most logs (a
+    // fast design's order-7 window carried 13 std of it, unseen; light per-joint logs keep
+    // exit 0)
     bool determined = true;
-    for (int p = 0; p < in_.friction.size() && p < std.size(); ++p) {
+    for (int p = 0; !in_.per_joint && p < in_.friction.size() && p < std.size(); ++p) {
       determined = determined && std(p) < std::abs(in_.friction(p));
     }
     const detail::NoiseBias noise = determined ? w_.noise_bias(sg) : detail::NoiseBias{};
@@ -226,7 +230,8 @@ int least_bias_up(WindowBias* wb, int from, int K) {
 }  // namespace
 
 void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased, SgOptions* sg_fit,
-                          Eigen::VectorXd* bias_kept, std::string* choice) {
+                          Eigen::VectorXd* bias_kept, std::string* choice, double* left) {
+  *left = 0;
   const TorqueLog& log = w.log();
   const int n = log.size();
   if (w.source() != detail::RateSource::kFromAngles || n < 2) return;
@@ -270,6 +275,7 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
   const int pick = wb.within(base) ? base : least_bias_up(&wb, base, K);
   if (pick < 0) return;
   if (raised_bias && raised_bias->worst(1) <= wb.worst(pick)) {
+    *left = raised_bias->worst(1);
     *bias_kept = raised_bias->bias(1);
     *choice +=
         "; the raised order's predicted bias the least (predicted |bias| / std, the "
@@ -278,6 +284,7 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
     return;
   }
   *sg_fit = wb.filter(pick);
+  if (!wb.within(pick)) *left = wb.worst(pick);
   // within kBiasFraction at the window the smoothing's bias chose, the smoothing's alone is taken
   // off, as without the noise's prediction (the shipped paper log's estimates stay as they were)
   *bias_kept = pick == base ? wb.smoothing_bias(pick) : wb.bias(pick);
@@ -391,6 +398,21 @@ void choose_window_by_bias(const WindowFit& w, SgOptions* sg_fit, Eigen::VectorX
       "degree " +
       std::to_string(sg_fit->order + detail::kReconExtra) + " over +-" +
       format_significant(kReconSpan) + " half-windows: " + table + ")";
+}
+
+void unbiased_window_check(const Fit& f, IdentifyResult* out) {
+  if (!(f.window_bias_left > kUnusableBias) || !out->unusable.empty()) return;
+  const TorqueLog& log = f.cond.log;
+  const double dt = log.duration() / std::max(1, log.size() - 1);
+  out->unusable =
+      "no Savitzky-Golay window estimates this log's accelerations without a bias the error bars "
+      "miss: the least biased, half-window " +
+      std::to_string(sg_half_window(f.sg, dt)) + " samples of order " + std::to_string(f.sg.order) +
+      ", predicts a friction coefficient off by " + format_significant(f.window_bias_left, 2) +
+      " std (the smoothing's bias grows with the window, the angle noise's through the reactions "
+      "as it shrinks): this motion is too fast for accelerations estimated from its angles at " +
+      std::to_string(std::lround(1 / dt)) +
+      " Hz; log the rates (or at a much higher rate), or drive the motion slower";
 }
 
 void correct_smoothing_bias(const ParameterLayout& layout, const Eigen::VectorXd& b,
