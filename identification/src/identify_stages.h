@@ -385,6 +385,15 @@ bool score_bias(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& 
 /// a pose a hair from a singular one.
 std::vector<int> check_failures(const Fit& f);
 
+/// The check's Jacobian, residual and score bias (check_jacobian, score_bias) on fit, or on
+/// *spare: fit without the samples where the check's changes do not evaluate (check_failures;
+/// a heavy mechanism driven a hair from its stretched singular pose: one sample's friction loop
+/// did not converge with an encoder's zero moved by 1e-6 rad), noted. The fit the check runs on,
+/// or nullptr with verdict->unchecked (and short_log) saying why it cannot run.
+const Fit* check_inputs(const Fit& fit, Fit* spare, IdentifyResult* out, Eigen::MatrixXd* J,
+                        Eigen::VectorXd* r, std::vector<int> idx[5], Eigen::VectorXd* info,
+                        TorqueColumns* tc, Eigen::VectorXd* bias, ModelVerdict* verdict);
+
 // ---- stage_model_check.cc ----
 
 /// Wrong masses or inertias, an encoder's zero offset, or a torque sensor's offset or gain

@@ -490,63 +490,6 @@ void decisive_error(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
 
 }  // namespace
 
-/// The check's Jacobian, residual and score bias (check_jacobian, score_bias) on fit, or on
-/// *spare: fit without the samples where the check's changes do not evaluate (check_failures;
-/// a heavy mechanism driven a hair from its stretched singular pose: one sample's friction loop
-/// did not converge with an encoder's zero moved by 1e-6 rad), noted. The fit the check runs on,
-/// or nullptr with verdict->unchecked (and short_log) saying why it cannot run.
-const Fit* check_inputs(const Fit& fit, Fit* spare, IdentifyResult* out, Eigen::MatrixXd* J,
-                        Eigen::VectorXd* r, std::vector<int> idx[5], Eigen::VectorXd* info,
-                        TorqueColumns* tc, Eigen::VectorXd* bias, ModelVerdict* verdict) {
-  const auto run = [&](const Fit& f) {
-    return check_jacobian(f, *out, J, r, idx, info, tc) &&
-           (J->rows() < kCheckRowsPerColumn * J->cols() || score_bias(f, *out, *J, *r, *tc, bias));
-  };
-  const Fit* f = &fit;
-  if (!run(fit)) {
-    const std::vector<int> bad = check_failures(fit);
-    const size_t n = fit.samples.size();
-    if (bad.empty() || 2 * bad.size() > n) {
-      verdict->unchecked = "the model cannot be evaluated under the check's small changes";
-      return nullptr;
-    }
-    *spare = fit;
-    spare->samples.clear();
-    spare->index.clear();
-    for (size_t u = 0, b = 0; u < n; ++u) {
-      if (b < bad.size() && bad[b] == static_cast<int>(u)) {
-        ++b;
-        continue;
-      }
-      spare->samples.push_back(fit.samples[u]);
-      spare->index.push_back(fit.index[u]);
-    }
-    const std::string where = std::to_string(bad.size()) + " sample" +
-                              (bad.size() == 1 ? "" : "s") + " (first " +
-                              sample_name(fit.cond.log, fit.index[bad[0]]) + ")";
-    for (int k = 0; k < 5; ++k) idx[k].clear();
-    if (!run(*spare)) {
-      verdict->unchecked =
-          "the model cannot be evaluated under the check's small changes, even "
-          "without the " +
-          where + " where the friction loop does not converge";
-      return nullptr;
-    }
-    out->notes.push_back("model check: " + where +
-                         " left out, where the friction loop does not "
-                         "converge under the check's small changes (a pose near a singular one?)");
-    f = spare;
-  }
-  if (J->rows() < kCheckRowsPerColumn * J->cols()) {
-    verdict->unchecked = "the log has " + std::to_string(J->rows()) + " residuals for its " +
-                         std::to_string(J->cols()) + " columns (fewer than " +
-                         std::to_string(kCheckRowsPerColumn) + " per column)";
-    verdict->short_log = true;
-    return nullptr;
-  }
-  return f;
-}
-
 ModelVerdict model_check(const Fit& fit, IdentifyResult* out) {
   ModelVerdict verdict;
   if (!out->converged) {
