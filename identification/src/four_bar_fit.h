@@ -87,4 +87,21 @@ struct CauseVerdict {
 /// friction) where the check has the column.
 CauseVerdict cause_check(const FourBarFit& f, IdentifyResult* out);
 
+// ---- four_bar_refits.cc ----
+
+/// The sign check, then the per-joint check of a shared law (stages::torques_fit_negated,
+/// friction_differs_by_joint: the five-bar's) when the residual is more than kMisfitRatio times
+/// its floor and no cause the model check named made the fit unusable; true when one of them
+/// says the fit is not to be used (out->unusable says why).
+bool refit_checks(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
+                  const TorqueLog& log, const IdentifyOptions& opt, const CauseVerdict& verdict,
+                  IdentifyResult* out);
+
+/// The delay the model check named (cause_check), corrected: the fit redone with the torques
+/// shifted by it (stages::refit_with_delay, the five-bar's), true and *refit when that fit is
+/// usable; else a warning that the delay is not corrected (out->delay_unexplained). Not for a
+/// delay within a tenth of a sample, nor without refits left (IdentifyOptions::delay_refits).
+bool delay_refit(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
+                 const FourBarFit& f, IdentifyResult* out, IdentifyResult* refit);
+
 }  // namespace fivebar::identification::four_bar
