@@ -126,6 +126,48 @@ TorqueLog shift_torques(const TorqueLog& log, double d, double* variance_factor)
   return out;
 }
 
+/// Samples whose shifted torque (by `delay`) would lie beyond the samples that have torques have
+/// none: left out (again->condition.rejected_before). In a chain of refits those are the log's
+/// ends less the end blocks an earlier refit left out (its shifted torques there were clamped),
+/// and only the samples not left out before are counted (else a chain of refits reports more
+/// samples left out than the log has: `before`, the samples left out before this refit). Returns
+/// that count.
+int leave_out_beyond(const TorqueLog& conditioned, double delay, const std::vector<int>& before,
+                     IdentifyOptions* again) {
+  const int n = conditioned.size();
+  auto left_out = [&](int i) { return std::find(before.begin(), before.end(), i) != before.end(); };
+  int lo = 0, hi = n - 1;
+  while (lo < hi && left_out(lo)) ++lo;
+  while (hi > lo && left_out(hi)) --hi;
+  const double tol = 1e-9 * std::max(1.0, conditioned.duration());
+  int beyond = 0;
+  for (int i = 0; i < n; ++i) {
+    const double t = conditioned.t[i] + delay;
+    if (t > conditioned.t[hi] + tol || t < conditioned.t[lo] - tol) {
+      again->condition.rejected_before.push_back(i);
+      beyond += !left_out(i);
+    }
+  }
+  return beyond;
+}
+
+/// One note for the whole chain of refits: `beyond` samples left out by this refit plus those a
+/// deeper refit's note counted (its note replaced)
+void note_beyond(int beyond, std::vector<std::string>* notes) {
+  const char* const kBeyond = " samples at an end of the log left out: their torques, shifted by "
+                              "the delay, fall beyond the log";
+  int total = beyond;
+  for (auto it = notes->begin(); it != notes->end();) {
+    if (it->find(kBeyond) == std::string::npos) {
+      ++it;
+      continue;
+    }
+    total += std::stoi(*it);
+    it = notes->erase(it);
+  }
+  if (total > 0) notes->push_back(std::to_string(total) + kBeyond);
+}
+
 }  // namespace
 
 IdentifyResult refit_with_delay(const TorqueLog& conditioned, const IdentifyOptions& opt,
@@ -138,25 +180,8 @@ IdentifyResult refit_with_delay(const TorqueLog& conditioned, const IdentifyOpti
   again.check_torque_sign = false;
   again.check_per_joint = false;
   for (const Glitch& g : first.glitches) again.condition.rejected_before.push_back(g.index);
-  // samples whose shifted torque would lie beyond the samples that have torques have none: left
-  // out. In a chain of refits those are the log's ends less the end blocks an earlier refit left
-  // out (its shifted torques there were clamped), and only the samples not left out before are
-  // counted (else a chain of refits reports more samples left out than the log has)
-  const int n = conditioned.size();
-  const std::vector<int>& before = opt.condition.rejected_before;
-  auto left_out = [&](int i) { return std::find(before.begin(), before.end(), i) != before.end(); };
-  int lo = 0, hi = n - 1;
-  while (lo < hi && left_out(lo)) ++lo;
-  while (hi > lo && left_out(hi)) --hi;
-  const double tol = 1e-9 * std::max(1.0, conditioned.duration());
-  int beyond = 0;
-  for (int i = 0; i < n; ++i) {
-    const double t = conditioned.t[i] + first.delay_s;
-    if (t > conditioned.t[hi] + tol || t < conditioned.t[lo] - tol) {
-      again.condition.rejected_before.push_back(i);
-      beyond += !left_out(i);
-    }
-  }
+  const int beyond =
+      leave_out_beyond(conditioned, first.delay_s, opt.condition.rejected_before, &again);
   // the shift smooths the torques' noise, which the refit would then measure too small (a 0.5 ms
   // lag would give std 22 % small and a false structure warning): it keeps the noise measured
   // before (the level the coefficients' std see) and scales the per-sample level by the
@@ -182,19 +207,7 @@ IdentifyResult refit_with_delay(const TorqueLog& conditioned, const IdentifyOpti
   res.delay_std_s = refit_estimate ? res.delay_std_s : first.delay_std_s;
   res.delay_corrected = true;
   res.notes.insert(res.notes.begin(), first.notes.begin(), first.notes.end());
-  // one note for the whole chain of refits (a deeper refit's count is included in this one)
-  const char* const kBeyond = " samples at an end of the log left out: their torques, shifted by "
-                              "the delay, fall beyond the log";
-  int total_beyond = beyond;
-  for (auto it = res.notes.begin(); it != res.notes.end();) {
-    if (it->find(kBeyond) == std::string::npos) {
-      ++it;
-      continue;
-    }
-    total_beyond += std::stoi(*it);
-    it = res.notes.erase(it);
-  }
-  if (total_beyond > 0) res.notes.push_back(std::to_string(total_beyond) + kBeyond);
+  note_beyond(beyond, &res.notes);
   res.glitches.insert(res.glitches.begin(), first.glitches.begin(), first.glitches.end());
   for (int j = 0; j < kDof; ++j) res.unwrapped[j] += first.unwrapped[j];
   // the significance that decided the correction is the first estimate's (the refit's std is
