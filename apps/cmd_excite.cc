@@ -113,9 +113,10 @@ void check_input(const Args& a, const Scene& scene, id::ExcitationOptions* o) {
   if (a.design.min_reversals < 0) {
     throw InputError(kFlags, "--min-reversals", "must be >= 0, got " + std::to_string(a.design.min_reversals));
   }
-  if (!(a.design.reversal_rate > 0) || !std::isfinite(a.design.reversal_rate)) {
+  // (below 1e-6 rad/s no log tells a rate from rest; above 1e5 rad/s no machine turns)
+  if (!(a.design.reversal_rate >= 1e-6 && a.design.reversal_rate <= 1e5)) {
     throw InputError(kFlags, "--reversal-rate",
-                     "must be > 0 rad/s, got " + format_double(a.design.reversal_rate));
+                     "must be in [1e-6, 1e5] rad/s, got " + format_double(a.design.reversal_rate));
   }
   if (a.design.periods < 1 || a.design.harmonics < 1 || a.design.design_samples < 16 || a.starts < 1 ||
       !(a.family == "torque" || (a.design.ramp >= 0 && a.design.ramp < a.design.duration))) {

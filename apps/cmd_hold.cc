@@ -134,6 +134,14 @@ Json pose_json(const Holding<double>& h, const HoldingPolygon& poly, double limi
   return j;
 }
 
+/// The console's line on a pose's torque limit (--torque-limit given): whether the torque needed
+/// to hold it is within the limit; "" without a limit.
+std::string limit_line(double required, double limit) {
+  if (!std::isfinite(limit)) return "";
+  return "  within the torque limit " + format_double(limit) + " N m: " +
+         (required <= limit ? "yes" : "no, the pose needs more") + "\n";
+}
+
 int run_pose(const Args& args, const Scene& scene, const Loads<double>& L,
              const std::array<double, 2>& pose) {
   const EvalOptions eval = eval_options(scene);
@@ -164,7 +172,9 @@ int run_pose(const Args& args, const Scene& scene, const Loads<double>& L,
                 "  torque needed to hold: %.6g N m\n",
                 pose[0], pose[1], args.time, h.M1, h.M2, h.M1_min, h.M1_max, h.M2_min, h.M2_max,
                 h.bound[0], h.bound[4], poly.vertices.size(), required_torque(h));
-  std::cout << "fivebar hold: " << scene.path << line << "  wrote " << out->dir() << "/:";
+  std::cout << "fivebar hold: " << scene.path << line
+            << limit_line(required_torque(h), args.torque_limit) << "  wrote " << out->dir()
+            << "/:";
   for (const std::string& name : written) std::cout << " " << name;
   std::cout << std::endl;
   return 0;
@@ -302,7 +312,8 @@ int run_four_bar_pose(const Args& args, const Scene& scene, const FourBarLoads& 
                 "  static friction holds M1 in [%.6g, %.6g] N m (joint O alone: +- %.6g)\n"
                 "  torque needed to hold: %.6g N m\n",
                 th1, args.time, h.M1, h.M1_min, h.M1_max, h.bound[0], required);
-  std::cout << "fivebar hold: " << scene.path << line << "  wrote " << dir.dir() << "/:";
+  std::cout << "fivebar hold: " << scene.path << line << limit_line(required, args.torque_limit)
+            << "  wrote " << dir.dir() << "/:";
   for (const std::string& name : written) std::cout << " " << name;
   std::cout << std::endl;
   return 0;

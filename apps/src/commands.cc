@@ -129,8 +129,12 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
                      "'" + bad + "' is not a group or is given twice (expected friction, inertia, " +
                          "actuator, each at most once, comma-separated)");
   }
-  if (!(a.inertia_prior > 0) || !std::isfinite(a.inertia_prior)) {
-    throw InputError(kFlags, "--inertia-prior", "must be > 0 (a relative std, e.g. 0.2)");
+  // a relative std below 1e-6 holds the inertias at the scene's values (--estimate friction
+  // does that); above 1e3 it is no prior
+  if (!(a.inertia_prior >= 1e-6 && a.inertia_prior <= 1e3)) {
+    throw InputError(kFlags, "--inertia-prior",
+                     "must be in [1e-6, 1e3] (a relative std, e.g. 0.2), got " +
+                         format_double(a.inertia_prior));
   }
   opt.inertia_prior = a.inertia_prior;
   if (!id::parse_method(a.method, &opt.method)) {
@@ -327,8 +331,10 @@ void objective_options(const OptimizeSettings& a, const MotorWindings& windings,
   const double tol = !std::isnan(a.refine_tol) ? a.refine_tol
                      : smooth                   ? trajectory::kSmoothRefineTol
                                                 : trajectory::RefineOptions().tol;
-  if (!(tol > 0 && tol < 1)) {
-    throw InputError(kFlags, "--refine-tol", "expected a number in (0, 1)");
+  // a relative change of the energy below 1e-12 cannot be told from rounding
+  if (!(tol >= 1e-12 && tol < 1)) {
+    throw InputError(kFlags, "--refine-tol",
+                     "expected a number in [1e-12, 1), got " + format_double(tol));
   }
   o->refine.tol = tol;
   if (a.refine) {

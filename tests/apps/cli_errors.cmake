@@ -23,10 +23,10 @@ run_fivebar(2 "paper.yaml: simulation.rtoll: unknown key"
 set(log ${SOURCE_DIR}/datasets/logs/paper_rates.csv)
 run_fivebar(2 "command line: --estimate: 'inertias' is not a group"
             identify ${paper} --log ${log} --estimate friction,inertias --out ${WORK_DIR}/out_bad)
-run_fivebar(2 "command line: --inertia-prior: must be > 0"
+run_fivebar(2 "command line: --inertia-prior: must be in \\[1e-6, 1e3\\]"
             identify ${paper} --log ${log} --estimate friction,inertia --inertia-prior 0
             --out ${WORK_DIR}/out_bad)
-run_fivebar(2 "command line: --inertia-prior: must be > 0"
+run_fivebar(2 "command line: --inertia-prior: must be in \\[1e-6, 1e3\\]"
             identify ${paper} --log ${log} --inertia-prior -0.1 --out ${WORK_DIR}/out_bad)
 # --sg-window -1 names the window (not the order), a directory as --log is not an "empty file"
 run_fivebar(2 "command line: --sg-window: must be > 0 \\[s\\], got -1"

@@ -68,7 +68,8 @@ expect_error(2, "--harmonics: applies to --family fourier only", base + ["--harm
 expect_error(2, "--singular-margin: must be a finite number", base + ["--singular-margin", "nan"], bad)
 expect_error(2, "--singular-margin: expected a number in", base + ["--singular-margin", "1"], bad)
 expect_error(2, "--min-reversals: must be >= 0", base + ["--min-reversals", "-1"], bad)
-expect_error(2, "--reversal-rate: must be > 0", base + ["--family", "fourier", "--reversal-rate", "0"], bad)
+expect_error(2, "--reversal-rate: must be in [1e-6, 1e5] rad/s", base + ["--family", "fourier", "--reversal-rate", "0"], bad)
+expect_error(2, "--reversal-rate: must be in [1e-6, 1e5] rad/s", base + ["--family", "fourier", "--reversal-rate", "1e-300"], bad)
 expect_error(2, "--reversal-rate: applies to --family fourier only", base + ["--reversal-rate", "1"], bad)
 expect_error(2, "loads.M3: '1e300' at t = 0: must be at most 1e+09 N m",
              base + ["--set", "loads.M3=1e300"], bad)

@@ -23,6 +23,15 @@ endfunction()
 run_fivebar(0 "" hold ${paper} --out ${WORK_DIR}/pose)
 require_text(${WORK_DIR}/pose/hold.json "\"M1\": -0\\.69173396")
 require_text(${WORK_DIR}/pose/hold.json "\"M2\": -1\\.43789485")
+# with a torque limit, the console says whether the pose holds within it (1.382 N m needed)
+run_fivebar(0 "" hold ${paper} --torque-limit 1 --out ${WORK_DIR}/pose_limit)
+if(NOT FIVEBAR_OUT MATCHES "within the torque limit 1 N m: no, the pose needs more")
+  message(FATAL_ERROR "hold --torque-limit 1 does not say the pose needs more:\n${FIVEBAR_OUT}")
+endif()
+run_fivebar(0 "" hold ${paper} --torque-limit 2 --out ${WORK_DIR}/pose_limit2)
+if(NOT FIVEBAR_OUT MATCHES "within the torque limit 2 N m: yes")
+  message(FATAL_ERROR "hold --torque-limit 2 does not say the pose holds:\n${FIVEBAR_OUT}")
+endif()
 
 # bad input: nothing written
 run_fivebar(2 "paper.yaml: --pose: the mechanism cannot assemble at theta1 = 3.14159, theta2 = 0"
