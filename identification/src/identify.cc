@@ -250,7 +250,7 @@ IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunct
   }
   unexplained_misfit(f.layout, &out);
   // last: a model error the checks above name inflates the predicted bias too
-  unbiased_window_check(f, &out);
+  unbiased_window_check(f, verdict, &out);
   return finish(out);
 }
 

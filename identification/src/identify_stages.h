@@ -114,6 +114,10 @@ struct ModelVerdict {
   /// common scale) made the fit unusable: the sign and per-joint refits have nothing left to
   /// decide (they tripled the time of such rejected runs)
   bool cause_decided = false;
+  /// the reason the check gave for a model error no cause explains (out->unusable then; ""
+  /// otherwise): a window whose accelerations cannot be unbiased names the real cause instead
+  /// (unbiased_window_check)
+  std::string unattributed;
   /// the torque-to-angle delay as one more candidate cause (model_check; docs 9): kUnchecked
   /// when the check did not run, else whether its fall is evidenced (kCauseZ) and clearly
   /// beyond every other cause's; delay_falls: the falls of each cause, for the delay's warning
@@ -252,11 +256,12 @@ class FiveBarWindowFit : public WindowFit {
 /// the window choice; keeps the start values if it fails.
 void preliminary_fit(Fit* f);
 
-/// The fit is unusable (out->unusable, unless a reason is already there) when no window keeps
-/// the predicted bias of the friction coefficients within kUnusableBias std
+/// The fit is unusable (out->unusable, unless a reason is already there; the model check's
+/// reason for an error no cause explains, ModelVerdict::unattributed, it replaces) when no window
+/// keeps the predicted bias of the friction coefficients within kUnusableBias std
 /// (Fit::window_bias_left): the motion is too fast for accelerations estimated from its angles
 /// at the log's rate.
-void unbiased_window_check(const Fit& f, IdentifyResult* out);
+void unbiased_window_check(const Fit& f, const ModelVerdict& verdict, IdentifyResult* out);
 
 // ---- stage_solve.cc ----
 

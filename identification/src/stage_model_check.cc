@@ -561,6 +561,7 @@ ModelVerdict model_check(const Fit& fit, IdentifyResult* out) {
     unusable_move(largest, what, out);
     unbounded_error(f, what, out);
     decisive_error(f, cs, out);
+    if (open) verdict.unattributed = out->unusable;
     return verdict;
   }
   inertia_check(f, cs, !idx[1].empty(), out);
