@@ -403,6 +403,7 @@ void estimates(const FourBarFit& f, const std::vector<double>& x0, IdentifyResul
     e.initial = x0[i];
     e.at_bound = bound[i] && !(f.x[i] > f.layout.lower_bound(i) + 1e-12);
     e.std = !bound[i] && C(i, i) > 0 ? std::sqrt(C(i, i)) : kNaN;
+    stages::judge_estimate(f.layout, i, out->converged, &e, &out->warnings);
     if (std::isfinite(e.std)) {
       e.ci_low = e.value - out->ci_quantile * e.std;
       e.ci_high = e.value + out->ci_quantile * e.std;
@@ -414,6 +415,7 @@ void estimates(const FourBarFit& f, const std::vector<double>& x0, IdentifyResul
       if (!bound[i] && !bound[j] && d > 0) out->correlation(i, j) = C(i, j) / d;
     }
   }
+  stages::correlation_warnings(f.layout, out->correlation, &out->warnings);
 }
 
 /// The model check: a residual more than kMisfitRatio times its noise floor is structure the

@@ -256,9 +256,9 @@ class FiveBarWindowFit : public WindowFit {
 /// the window choice; keeps the start values if it fails.
 void preliminary_fit(Fit* f);
 
-/// The fit is unusable (out->unusable, unless a reason is already there; the model check's
-/// reason for an error no cause explains, ModelVerdict::unattributed, it replaces) when no window
-/// keeps the predicted bias of the friction coefficients within kUnusableBias std
+/// A per-joint fit is unusable (out->unusable, unless a reason is already there; the model
+/// check's reason for an error no cause explains, ModelVerdict::unattributed, it replaces) when
+/// no window keeps the predicted bias of the friction coefficients within kUnusableBias std
 /// (Fit::window_bias_left): the motion is too fast for accelerations estimated from its angles
 /// at the log's rate.
 void unbiased_window_check(const Fit& f, const ModelVerdict& verdict, IdentifyResult* out);

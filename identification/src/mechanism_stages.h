@@ -167,6 +167,19 @@ Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P);
 /// iterations; whether the solution is usable.
 bool solve_preliminary(const ParameterLayout& layout, double* x, ceres::Problem* problem);
 
+// ---- stage_analysis.cc ----
+
+/// Warnings of a strong correlation (|r| > 0.98) between two public parameters (not two
+/// inertial ones: the base combinations say which the log separates).
+void correlation_warnings(const ParameterLayout& layout, const Eigen::MatrixXd& correlation,
+                          std::vector<std::string>* warnings);
+
+/// The warning of public parameter i's estimate *e (at_bound, value and std set): at its bound
+/// or its std not determined (e->std then NaN: not reported), or poorly determined (std above
+/// its value; not for inertial parameters).
+void judge_estimate(const ParameterLayout& layout, int i, bool converged, ParameterEstimate* e,
+                    std::vector<std::string>* warnings);
+
 // ---- stage_intervals.cc ----
 
 /// What a profile-likelihood interval re-fits: the fit's problem (its residual blocks on the

@@ -244,17 +244,7 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
           out->covariance(i, j) / std::sqrt(out->covariance(i, i) * out->covariance(j, j));
     }
   }
-  for (int i = 0; i < P; ++i) {
-    for (int j = i + 1; j < P; ++j) {
-      // inertial pairs: the base combinations say which the log separates
-      if (f.layout.is_inertial(i) && f.layout.is_inertial(j)) continue;
-      if (std::abs(out->correlation(i, j)) > 0.98) {
-        out->warnings.push_back("strong correlation " + format_significant(out->correlation(i, j)) +
-                                " between " + names[i] + " and " + names[j]);
-      }
-    }
-  }
-  const bool excess = f.layout.static_as_excess;
+  correlation_warnings(f.layout, out->correlation, &out->warnings);
   for (int i = 0; i < P; ++i) {
     ParameterEstimate e;
     e.name = names[i];
@@ -262,26 +252,46 @@ void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResul
     e.std = std::sqrt(out->covariance(i, i));
     e.initial = x0_public[i];
     e.at_bound = f.x[i] <= f.layout.lower_bound(i) + 1e-12;
-    const bool static_group =
-        excess && i < f.layout.friction_size() &&
-        f.layout.group(i / f.layout.per_group()) == Coefficient::kStaticCoulomb;
-    if (e.at_bound) {
-      out->warnings.push_back(
-          names[i] + " is at its bound" +
-          (static_group ? " static_coulomb = coulomb (static friction cannot be below kinetic)"
-                        : " " + format_significant(f.layout.lower_bound(i))) +
-          ": its std is not meaningful (not reported); the log may not support this law or "
-          "coefficient");
-      e.std = kNaN;
-    } else if (!(e.std > 0) || !std::isfinite(e.std)) {
-      if (out->converged) out->warnings.push_back("std of " + names[i] + " not determined");
-      e.std = kNaN;
-    } else if (e.std > std::abs(e.value) && !f.layout.is_inertial(i)) {
-      // the value is not repeated: a later stage (the smoothing-bias correction) may move it
-      out->warnings.push_back(names[i] + " is poorly determined (std " + format_significant(e.std) +
-                              ", more than its value)");
-    }
+    judge_estimate(f.layout, i, out->converged, &e, &out->warnings);
     out->parameters.push_back(e);
+  }
+}
+
+void correlation_warnings(const ParameterLayout& layout, const Eigen::MatrixXd& correlation,
+                          std::vector<std::string>* warnings) {
+  const std::vector<std::string> names = layout.names();
+  const int P = layout.size();
+  for (int i = 0; i < P; ++i) {
+    for (int j = i + 1; j < P; ++j) {
+      // inertial pairs: the base combinations say which the log separates
+      if (layout.is_inertial(i) && layout.is_inertial(j)) continue;
+      if (std::abs(correlation(i, j)) > 0.98) {
+        warnings->push_back("strong correlation " + format_significant(correlation(i, j)) +
+                            " between " + names[i] + " and " + names[j]);
+      }
+    }
+  }
+}
+
+void judge_estimate(const ParameterLayout& layout, int i, bool converged, ParameterEstimate* e,
+                    std::vector<std::string>* warnings) {
+  const bool static_group = layout.static_as_excess && i < layout.friction_size() &&
+                            layout.group(i / layout.per_group()) == Coefficient::kStaticCoulomb;
+  if (e->at_bound) {
+    warnings->push_back(
+        e->name + " is at its bound" +
+        (static_group ? " static_coulomb = coulomb (static friction cannot be below kinetic)"
+                      : " " + format_significant(layout.lower_bound(i))) +
+        ": its std is not meaningful (not reported); the log may not support this law or "
+        "coefficient");
+    e->std = kNaN;
+  } else if (!(e->std > 0) || !std::isfinite(e->std)) {
+    if (converged) warnings->push_back("std of " + e->name + " not determined");
+    e->std = kNaN;
+  } else if (e->std > std::abs(e->value) && !layout.is_inertial(i)) {
+    // the value is not repeated: a later stage (the smoothing-bias correction) may move it
+    warnings->push_back(e->name + " is poorly determined (std " + format_significant(e->std) +
+                        ", more than its value)");
   }
 }
 
