@@ -246,6 +246,7 @@ id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& l
 id::IdentifyResult identify_four_bar_scene(const Scene& scene, const id::TorqueLog& log,
                                            const id::IdentifyOptions& options) {
   check_sg_window(options, log);
+  check_window(options, log);
   if (options.check_degrees && log.has_rates) {
     const std::string why = id::rates_look_like_degrees(log.t, log.theta1, log.omega1);
     if (!why.empty()) {

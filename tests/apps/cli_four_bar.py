@@ -367,6 +367,11 @@ expect_error(2, "mechanism.type: four_bar: --estimate inertia runs five-bars onl
              ["identify", scene, "--log", id_log, "--estimate", "friction,inertia", "--out", bad])
 expect_error(2, "mechanism.type: four_bar: --smooth-sign runs five-bars only",
              ["identify", scene, "--log", id_log, "--smooth-sign", "0.05", "--out", bad])
+# the validation window as the five-bar's: within the log, at least 2 samples
+expect_error(2, "--window: 100 s is longer than the log",
+             ["identify", scene, "--log", id_log, "--window", "100", "--out", bad])
+expect_error(2, "--window: 1e-09 s holds fewer than 2 samples",
+             ["identify", scene, "--log", id_log, "--window", "1e-9", "--out", bad])
 # the sign check: the log with tau1 negated
 neg_log = os.path.join(WORK, "crank_rocker_negated.csv")
 with open(id_log) as f, open(neg_log, "w") as g:
