@@ -272,6 +272,7 @@ ceres::Solver::Options solver_options(const FourBarFit& f) {
   so.function_tolerance = 1e-12;
   so.gradient_tolerance = 1e-14;
   so.parameter_tolerance = 1e-10;
+  stages::scale_gradient_tolerance(f.cond.log, &so);
   so.logging_type = ceres::SILENT;
   return so;
 }

@@ -167,6 +167,18 @@ Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P);
 /// iterations; whether the solution is usable.
 bool solve_preliminary(const ParameterLayout& layout, double* x, ceres::Problem* problem);
 
+// ---- stage_solve.cc ----
+
+/// Logged torques whose mean square is below this [N^2 m^2] scale the solver's gradient tolerance
+/// (scale_gradient_tolerance)
+inline constexpr double kSmallTorqueSquare = 1e-6;
+
+/// The solver's gradient tolerance is absolute: the cost's gradient in a friction coefficient
+/// scales as the torques squared, so for logged torques whose mean square is below
+/// kSmallTorqueSquare it is scaled by that mean square (a MEMS five-bar's 1e-12 N m torques
+/// stopped the solver at its start values after one iteration). Larger torques keep it.
+void scale_gradient_tolerance(const TorqueLog& log, ceres::Solver::Options* so);
+
 // ---- stage_analysis.cc ----
 
 /// Warnings of a strong correlation (|r| > 0.98) between two public parameters (not two

@@ -170,8 +170,18 @@ ceres::Solver::Options solver_options(const Fit& f) {
   so.max_num_iterations = f.opt->max_iterations;
   so.num_threads = f.opt->num_threads;
   f.method->set_tolerances(&so);
+  scale_gradient_tolerance(f.cond.log, &so);
   so.logging_type = ceres::SILENT;
   return so;
+}
+
+void scale_gradient_tolerance(const TorqueLog& log, ceres::Solver::Options* so) {
+  double ms = 0;
+  for (int i = 0; i < log.size(); ++i) {
+    ms += log.tau1[i] * log.tau1[i] + (log.dof == 2 ? log.tau2[i] * log.tau2[i] : 0.0);
+  }
+  ms /= std::max(1, log.size() * log.dof);
+  if (ms > 0 && ms < kSmallTorqueSquare) so->gradient_tolerance *= ms;
 }
 
 }  // namespace fivebar::identification::stages
