@@ -118,11 +118,13 @@ void check_input(const Args& a, const Scene& scene, id::ExcitationOptions* o) {
     throw InputError(kFlags, "--reversal-rate",
                      "must be in [1e-6, 1e5] rad/s, got " + format_double(a.design.reversal_rate));
   }
-  if (a.design.periods < 1 || a.design.harmonics < 1 || a.design.design_samples < 16 || a.starts < 1 ||
-      !(a.family == "torque" || (a.design.ramp >= 0 && a.design.ramp < a.design.duration))) {
-    throw InputError(kFlags, "--periods/--harmonics/--design-samples/--starts/--ramp",
-                     "need periods >= 1, harmonics >= 1, design samples >= 16, starts >= 1, "
-                     "0 <= ramp < duration");
+  if (a.design.periods < 1) throw InputError(kFlags, "--periods", "must be >= 1");
+  if (a.design.harmonics < 1) throw InputError(kFlags, "--harmonics", "must be >= 1");
+  if (a.design.design_samples < 16) throw InputError(kFlags, "--design-samples", "must be >= 16");
+  if (a.starts < 1) throw InputError(kFlags, "--starts", "must be >= 1");
+  if (!(a.family == "torque" || (a.design.ramp >= 0 && a.design.ramp < a.design.duration))) {
+    throw InputError(kFlags, "--ramp",
+                     "must be in [0, duration), got " + format_double(a.design.ramp));
   }
   const std::array<double, 2> start = {scene.initial.theta1, scene.initial.theta2};
   const std::string* ranges[2] = {&a.theta1_range, &a.theta2_range};

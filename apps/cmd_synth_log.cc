@@ -243,8 +243,19 @@ void check_options(const Args& a) {
                      "duration " + format_double(a.so.duration) + " s at --rate " +
                          format_double(a.so.rate_hz) + " Hz " + rows);
   }
-  if (a.so.torque_noise < 0 || a.so.angle_noise < 0 || a.so.rate_noise < 0 || a.so.quantization < 0) {
-    throw InputError(flag_file, "--*-noise/--quantization", "must be >= 0");
+  // each noise level within the plausible magnitudes of its quantity (a scene key's, scene.h)
+  const struct {
+    const char* flag;
+    double value;
+    const char* key;
+  } levels[] = {{"--torque-noise", a.so.torque_noise, "loads.M1"},
+                {"--angle-noise", a.so.angle_noise, "loads.F_angle"},
+                {"--rate-noise", a.so.rate_noise, "initial.omega1"},
+                {"--quantization", a.so.quantization, "loads.F_angle"}};
+  for (const auto& l : levels) {
+    if (!(l.value >= 0)) throw InputError(flag_file, l.flag, "must be >= 0, got " + format_double(l.value));
+    const std::string implausible = limit_problem(l.key, l.value);
+    if (!implausible.empty()) throw InputError(flag_file, l.flag, implausible);
   }
   if (!(a.so.torque_limit > 0)) {
     throw InputError(flag_file, "--torque-limit", "must be > 0 N m, got " + format_double(a.so.torque_limit));

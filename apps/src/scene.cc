@@ -617,7 +617,8 @@ void plausibility_warnings(const P& p, Scene* s) {
     if (std::abs(v) > 2 * M_PI) say(std::string("initial.") + key, v, "rad is beyond 2 pi: degrees?");
   }
   auto length = [&](const std::string& key, double v) {
-    if (v < 1e-4 || v > 10) say(key, v, "m is outside 1e-4..10 m: millimetres?");
+    if (v > 10) say(key, v, "m is outside 1e-4..10 m: millimetres?");
+    if (v < 1e-4) say(key, v, "m is outside 1e-4..10 m: a microscale mechanism, or another unit?");
   };
   length("mechanism.ground_length", p.ground_length);
   if (p.point_p != 0.0) length("mechanism.point_p", std::abs(p.point_p));
@@ -625,7 +626,10 @@ void plausibility_warnings(const P& p, Scene* s) {
     const std::string link = "mechanism.links." + std::to_string(i);
     length(link + ".length", p.links[i].length);
     const double m = p.links[i].mass;
-    if (m < 1e-6 || m > 1e4) say(link + ".mass", m, "kg is outside 1e-6..1e4 kg: grams?");
+    if (m > 1e4) say(link + ".mass", m, "kg is outside 1e-6..1e4 kg: grams?");
+    if (m < 1e-6) {
+      say(link + ".mass", m, "kg is outside 1e-6..1e4 kg: a microscale mechanism, or another unit?");
+    }
   }
 }
 
