@@ -170,6 +170,7 @@ void track_staging(const std::string& dir, bool add) {
 
 OutputDir::OutputDir(const std::string& dir, const std::vector<std::string>& outputs) : dir_(dir) {
   std::error_code ec;
+  created_ = !fs::exists(dir_, ec);
   fs::create_directories(dir_, ec);
   if (ec || !fs::is_directory(dir_)) {
     throw InputError(dir_, "--out",
@@ -197,6 +198,7 @@ OutputDir::~OutputDir() {
   track_staging(staging_, false);
   std::error_code ec;
   fs::remove_all(staging_, ec);  // best effort: never throw from a destructor
+  if (created_) fs::remove(dir_, ec);  // the directory this run created, when left empty
 }
 
 std::string OutputDir::file(const std::string& name) const {

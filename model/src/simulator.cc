@@ -311,6 +311,22 @@ Status finite_loads(const Ld& L, double t) {
   return Status::Ok();
 }
 
+/// Why the acceleration at t overflowed when a load is absurdly large (beyond 1e100: no machine's,
+/// a load expression that grows without bound), naming it; else the plain reason.
+template <class Ld>
+std::string overflow_reason(const Ld& L) {
+  using M = std::conditional_t<std::is_same_v<Ld, Loads<double>>, FiveBar, FourBar>;
+  for (const auto& [name, v] : Sim<M>::load_values(L)) {
+    if (!(std::abs(v) > 1e100)) continue;
+    std::ostringstream msg;
+    msg.precision(6);
+    msg << "non-finite acceleration: load " << name << " = " << v
+        << " overflows the dynamics: check the scene's load expression (loads." << name << ")";
+    return msg.str();
+  }
+  return "non-finite acceleration";
+}
+
 /// Relative joint rates at a state from its first-order kinematics `k`.
 template <class M>
 std::array<double, kJoints> joint_rates(const KinOf<M>& k, const double* y) {
@@ -390,7 +406,7 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   for (int i = n; i < c.n; ++i) {
     if (!std::isfinite(ydot[i])) {
       c.failure =
-          at_time<M>(Status::Error(StatusCode::kSolverFailed, "non-finite acceleration"), t, y);
+          at_time<M>(Status::Error(StatusCode::kSolverFailed, overflow_reason(loads)), t, y);
       return 1;
     }
   }

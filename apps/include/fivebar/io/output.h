@@ -68,7 +68,8 @@ class OutputDir {
  public:
   /// Creates DIR (and parents) and the staging directory. Throws InputError(`<dir>: --out: ...`).
   OutputDir(const std::string& dir, const std::vector<std::string>& outputs);
-  /// Without commit(): removes the staging directory and everything in it.
+  /// Without commit(): removes the staging directory and everything in it, and DIR itself when
+  /// this run created it and it is empty.
   ~OutputDir();
   OutputDir(const OutputDir&) = delete;
   OutputDir& operator=(const OutputDir&) = delete;
@@ -85,6 +86,7 @@ class OutputDir {
  private:
   std::string dir_, staging_;
   bool committed_ = false;
+  bool created_ = false;  ///< DIR did not exist: removed again by a run that fails, when empty
 };
 
 }  // namespace fivebar::io
