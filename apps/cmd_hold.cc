@@ -138,8 +138,8 @@ Json pose_json(const Holding<double>& h, const HoldingPolygon& poly, double limi
 /// to hold it is within the limit; "" without a limit.
 std::string limit_line(double required, double limit) {
   if (!std::isfinite(limit)) return "";
-  return "  within the torque limit " + format_double(limit) + " N m: " +
-         (required <= limit ? "yes" : "no, the pose needs more") + "\n";
+  return "  within the torque limit " + format_double(limit) +
+         " N m: " + (required <= limit ? "yes" : "no, the pose needs more") + "\n";
 }
 
 int run_pose(const Args& args, const Scene& scene, const Loads<double>& L,

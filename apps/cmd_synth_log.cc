@@ -253,7 +253,8 @@ void check_options(const Args& a) {
                 {"--rate-noise", a.so.rate_noise, "initial.omega1"},
                 {"--quantization", a.so.quantization, "loads.F_angle"}};
   for (const auto& l : levels) {
-    if (!(l.value >= 0)) throw InputError(flag_file, l.flag, "must be >= 0, got " + format_double(l.value));
+    if (!(l.value >= 0))
+      throw InputError(flag_file, l.flag, "must be >= 0, got " + format_double(l.value));
     const std::string implausible = limit_problem(l.key, l.value);
     if (!implausible.empty()) throw InputError(flag_file, l.flag, implausible);
   }

@@ -132,9 +132,9 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   // a relative std below 1e-6 holds the inertias at the scene's values (--estimate friction
   // does that); above 1e3 it is no prior
   if (!(a.inertia_prior >= 1e-6 && a.inertia_prior <= 1e3)) {
-    throw InputError(kFlags, "--inertia-prior",
-                     "must be in [1e-6, 1e3] (a relative std, e.g. 0.2), got " +
-                         format_double(a.inertia_prior));
+    throw InputError(
+        kFlags, "--inertia-prior",
+        "must be in [1e-6, 1e3] (a relative std, e.g. 0.2), got " + format_double(a.inertia_prior));
   }
   opt.inertia_prior = a.inertia_prior;
   if (!id::parse_method(a.method, &opt.method)) {

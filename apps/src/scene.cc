@@ -628,7 +628,8 @@ void plausibility_warnings(const P& p, Scene* s) {
     const double m = p.links[i].mass;
     if (m > 1e4) say(link + ".mass", m, "kg is outside 1e-6..1e4 kg: grams?");
     if (m < 1e-6) {
-      say(link + ".mass", m, "kg is outside 1e-6..1e4 kg: a microscale mechanism, or another unit?");
+      say(link + ".mass", m,
+          "kg is outside 1e-6..1e4 kg: a microscale mechanism, or another unit?");
     }
   }
 }

@@ -151,8 +151,8 @@ IdentifyResult refit_with_delay(const TorqueLog& conditioned, const IdentifyOpti
 /// five joints' coefficients differ by up to 2.5 times, multi-sine log with rates: 18.3 floors
 /// shared, 1.00 per joint). The refit keeps the fit's Savitzky-Golay window and estimates no
 /// delay.
-bool friction_differs_by_joint(const TorqueLog& log, const IdentifyOptions& opt,
-                               const Refit& refit, IdentifyResult* out);
+bool friction_differs_by_joint(const TorqueLog& log, const IdentifyOptions& opt, const Refit& refit,
+                               IdentifyResult* out);
 
 /// Raw (unweighted) residuals of the problem at its parameters, and its Jacobian with `jac`;
 /// false where an evaluation fails (stage_solve.cc).

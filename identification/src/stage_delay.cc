@@ -154,8 +154,9 @@ int leave_out_beyond(const TorqueLog& conditioned, double delay, const std::vect
 /// One note for the whole chain of refits: `beyond` samples left out by this refit plus those a
 /// deeper refit's note counted (its note replaced)
 void note_beyond(int beyond, std::vector<std::string>* notes) {
-  const char* const kBeyond = " samples at an end of the log left out: their torques, shifted by "
-                              "the delay, fall beyond the log";
+  const char* const kBeyond =
+      " samples at an end of the log left out: their torques, shifted by "
+      "the delay, fall beyond the log";
   int total = beyond;
   for (auto it = notes->begin(); it != notes->end();) {
     if (it->find(kBeyond) == std::string::npos) {

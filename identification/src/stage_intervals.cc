@@ -47,15 +47,18 @@ class ProfileFits {
     pp.problem->GetResidualBlocks(&blocks);
     z_ = z_hat_;
     for (ceres::ResidualBlockId id : blocks) {
-      reduced_.AddResidualBlock(new detail::AffineCost(pp.problem->GetCostFunctionForResidualBlock(id),
-                                                       M.col(i), B, &theta_),
-                                nullptr, z_.data());
+      reduced_.AddResidualBlock(
+          new detail::AffineCost(pp.problem->GetCostFunctionForResidualBlock(id), M.col(i), B,
+                                 &theta_),
+          nullptr, z_.data());
     }
     for (int k = 0; k < P; ++k) {
-      if (k != i) reduced_.SetParameterLowerBound(z_.data(), k < i ? k : k - 1, layout.lower_bound(k));
+      if (k != i)
+        reduced_.SetParameterLowerBound(z_.data(), k < i ? k : k - 1, layout.lower_bound(k));
     }
-    if (stat) coulomb_ = layout.group_of(Coefficient::kCoulomb) * layout.per_group() +
-                         i % layout.per_group();
+    if (stat)
+      coulomb_ =
+          layout.group_of(Coefficient::kCoulomb) * layout.per_group() + i % layout.per_group();
     double cost = 0;
     reduced_.Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
     cost_hat_ = cost;
@@ -97,7 +100,8 @@ class ProfileFits {
 void profile_parameter(const ProfileProblem& pp, int i, IdentifyResult* out) {
   ParameterEstimate& e = out->parameters[i];
   const Eigen::VectorXd t = to_public(pp.layout).row(i).transpose();
-  const Eigen::MatrixXd Hinv = pp.Hinv.unaryExpr([](double v) { return std::isfinite(v) ? v : 0.0; });
+  const Eigen::MatrixXd Hinv =
+      pp.Hinv.unaryExpr([](double v) { return std::isfinite(v) ? v : 0.0; });
   const double h = t.dot(Hinv * t), q = out->ci_quantile;
   if (!(h > 0)) return;
   const double threshold = 0.5 * q * q * e.std * e.std / h;

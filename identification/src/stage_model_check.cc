@@ -325,7 +325,8 @@ void inertia_check(const Fit& f, const CauseSteps& cs, bool candidate, IdentifyR
           ": the log evidences them off the scene's by " +
           format_significant(cs.report[cs.slot[kCauseInertia]].z_given, 2) +
           " std beyond the other causes; their linearized move of the friction is below " +
-          format_significant(kFreedMove) + " std, which may understate it. The scene's masses "
+          format_significant(kFreedMove) +
+          " std, which may understate it. The scene's masses "
           "or inertias may not match the mechanism; try --estimate friction,inertia");
     }
     return;

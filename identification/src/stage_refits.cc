@@ -130,8 +130,8 @@ bool torques_fit_negated(const Params<double>& scene, const sim::LoadFunction& l
   return torques_fit_negated(log, opt, kActuators, suspect, refit, out);
 }
 
-bool friction_differs_by_joint(const TorqueLog& log, const IdentifyOptions& opt,
-                               const Refit& refit, IdentifyResult* out) {
+bool friction_differs_by_joint(const TorqueLog& log, const IdentifyOptions& opt, const Refit& refit,
+                               IdentifyResult* out) {
   const double ours = misfit_ratio(*out);
   IdentifyOptions again = opt;
   again.layout.per_joint = true;

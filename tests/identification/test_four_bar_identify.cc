@@ -92,15 +92,15 @@ TEST(FourBarIdentify, FrictionThatDiffersByJointIsNamed) {
   truth.friction.coulomb = {0.01, 0.01, 0.01, 0.6, 0.0};
   truth.friction.viscous = {0.002, 0.002, 0.002, 0.08, 0.0};
   const TorqueLog log = crank_rocker_log(truth, 3.0, 0.02, 1e-5, 1, /*with_rates=*/false);
-  const IdentifyResult res = identify(crank_rocker().p, crank_rocker().loads, log,
-                                      four_bar_options());
+  const IdentifyResult res =
+      identify(crank_rocker().p, crank_rocker().loads, log, four_bar_options());
   ASSERT_TRUE(res.status.ok()) << res.status.message;
   EXPECT_NE(res.unusable.find("the joints' friction differs"), std::string::npos) << res.unusable;
   EXPECT_NE(res.unusable.find("rerun with --per-joint"), std::string::npos) << res.unusable;
   // a clean log of the shared law is not sent to --per-joint
   const TorqueLog clean = crank_rocker_log(crank_rocker().p, 3.0, 0.02, 1e-5, 1, false);
-  const IdentifyResult ok = identify(crank_rocker().p, crank_rocker().loads, clean,
-                                     four_bar_options());
+  const IdentifyResult ok =
+      identify(crank_rocker().p, crank_rocker().loads, clean, four_bar_options());
   EXPECT_TRUE(ok.unusable.empty()) << ok.unusable;
 }
 
