@@ -316,19 +316,6 @@ void inertia_check(const Fit& f, const CauseSteps& cs, bool candidate, IdentifyR
   std::string moved;
   if (!(masses || old_rule) ||
       (moved = friction_clause(f, *out, fi, old_rule, masses, &largest)).empty()) {
-    if (masses && cs.report[cs.slot[kCauseInertia]].z_given > kDecisiveCauseZ) {
-      // evidenced decisively, the friction's linearized move below the warning's bar: said all
-      // the same (a light five-bar's links 4 % light, read at 184 std beyond the other causes,
-      // moved the friction less than 3 std and left coulomb 3.3 std off)
-      out->warnings.push_back(
-          "with the links' inertial parameters free (one linearized refit) " + drop_clause(fi) +
-          ": the log evidences them off the scene's by " +
-          format_significant(cs.report[cs.slot[kCauseInertia]].z_given, 2) +
-          " std beyond the other causes; their linearized move of the friction is below " +
-          format_significant(kFreedMove) +
-          " std, which may understate it. The scene's masses "
-          "or inertias may not match the mechanism; try --estimate friction,inertia");
-    }
     return;
   }
   out->warnings.push_back(
