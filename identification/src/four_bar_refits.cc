@@ -1,7 +1,9 @@
 // The four-bar's refits after its model check (four_bar_fit.h): the sign and per-joint checks
 // and the delay's correction, each a fit of this identify on a changed log or layout.
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "fivebar/model/format.h"
 #include "four_bar_fit.h"
