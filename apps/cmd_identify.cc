@@ -108,9 +108,8 @@ std::string residual_plot_script(const std::string& terminal, const std::string&
     // grown, is drawn thin and may leave the panel
     s << "set xlabel \"t [s]\"\nset output \"fig_validation.png\"\nset multiplot layout " << dof
       << ",1 "
-         "title \"validation: angle error of the fitted scene driven by the logged torques, "
-         "restarted from the log every window (red), and of one run over the whole log (grey, "
-         "may leave the panel)   "
+         "title \"validation: angle error of the fitted scene under the logged torques, red: "
+         "restarted from the log every window, grey: one run over the log   "
       << title << "\" noenhanced\n";
     for (int i = 1; i <= dof; ++i) {
       const std::string n = std::to_string(i);
