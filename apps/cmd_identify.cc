@@ -174,6 +174,21 @@ void write_four_bar_residuals(const Args& a, const id::IdentifyResult& res,
   write_text_file(out->file("residuals.csv"), csv.str());
 }
 
+/// The console's validation lines: one angle error per driven crank.
+void print_validation(const id::Validation& val) {
+  const auto angles = [&](const double* e) {
+    return format_significant(e[0], 3) + (val.dof == 2 ? ", " + format_significant(e[1], 3) : "");
+  };
+  std::printf("  validation: windowed (%.3g s) rms angle error %s rad\n", val.window_s,
+              angles(val.window_rms).c_str());
+  if (val.windows_stopped > 0) {
+    std::printf("  %d validation window(s) stopped before their end (the first: %s)\n",
+                val.windows_stopped, val.window_stop.c_str());
+  }
+  std::printf("  full run: rms angle error %s rad; %s\n", angles(val.full_rms).c_str(),
+              full_run_note(val).c_str());
+}
+
 /// The console summary.
 void print_summary(const Args& a, const id::TorqueLog& log, const id::IdentifyResult& res,
                    const id::Validation& val) {
@@ -234,17 +249,7 @@ void print_summary(const Args& a, const id::TorqueLog& log, const id::IdentifyRe
                 res.rms_torque_residual[0], res.rms_torque_residual[1], res.residual_noise_floor[0],
                 res.residual_noise_floor[1]);
   }
-  if (!a.no_validation && log.dof == 1) {
-    std::printf("  validation: windowed (%.3g s) rms angle error %.3g rad\n", val.window_s,
-                val.window_rms[0]);
-    std::printf("  full run: rms angle error %.3g rad; %s\n", val.full_rms[0],
-                full_run_note(val).c_str());
-  } else if (!a.no_validation) {
-    std::printf("  validation: windowed (%.3g s) rms angle error %.3g, %.3g rad\n", val.window_s,
-                val.window_rms[0], val.window_rms[1]);
-    std::printf("  full run: rms angle error %.3g, %.3g rad; %s\n", val.full_rms[0],
-                val.full_rms[1], full_run_note(val).c_str());
-  }
+  if (!a.no_validation) print_validation(val);
   for (const std::string& w : res.warnings) warn(w);
   std::fflush(stdout);
 }

@@ -158,6 +158,8 @@ Json validation_json(const id::Validation& val) {
   v.set("window_s", val.window_s);
   v.set("windowed_rms_angle_error", cranks(val.dof, val.window_rms[0], val.window_rms[1]));
   v.set("windows_skipped_over_time_budget", val.windows_skipped);
+  v.set("windows_stopped_early", val.windows_stopped);
+  if (val.windows_stopped > 0) v.set("first_window_stop", val.window_stop);
   return v;
 }
 

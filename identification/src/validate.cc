@@ -44,6 +44,11 @@ Validation validate_runs(const TorqueLog& log, int dof, const WindowRun& simulat
     if (is_full) {
       v.status = res.status;
       v.full_duration_s = ts.empty() ? 0.0 : ts.back();
+    } else if (!res.status.ok()) {
+      if (v.windows_stopped++ == 0) {
+        v.window_stop = "the window from t = " + format_significant(log.t[i0], 6) + " s, " +
+                        res.status.message + " (t from the window's start)";
+      }
     }
     if (ts.size() < 2) return;
     for (int i = i0; i <= i1; ++i) {

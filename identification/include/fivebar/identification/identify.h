@@ -317,6 +317,10 @@ struct Validation {
   double divergence_time_s = std::numeric_limits<double>::quiet_NaN();
   static constexpr double kDivergedAngle = 0.1;  ///< [rad]
   int windows_skipped = 0;  ///< windows not run: the time budget was spent
+  /// windows whose run stopped before their end (their samples from there NaN), and the first's
+  /// start and reason
+  int windows_stopped = 0;
+  std::string window_stop;
 };
 
 /// The output-error and validation window for a log of `duration` seconds: window_s when > 0,
