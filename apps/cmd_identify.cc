@@ -174,11 +174,14 @@ void write_four_bar_residuals(const Args& a, const id::IdentifyResult& res,
   write_text_file(out->file("residuals.csv"), csv.str());
 }
 
+/// One value per driven crank for the console: "a" (a four-bar's) or "a, b" (a five-bar's).
+std::string per_crank(const double* v, int dof, int digits) {
+  return format_significant(v[0], digits) + (dof == 2 ? ", " + format_significant(v[1], digits) : "");
+}
+
 /// The console's validation lines: one angle error per driven crank.
 void print_validation(const id::Validation& val) {
-  const auto angles = [&](const double* e) {
-    return format_significant(e[0], 3) + (val.dof == 2 ? ", " + format_significant(e[1], 3) : "");
-  };
+  const auto angles = [&](const double* e) { return per_crank(e, val.dof, 3); };
   std::printf("  validation: windowed (%.3g s) rms angle error %s rad\n", val.window_s,
               angles(val.window_rms).c_str());
   if (val.windows_stopped > 0) {
@@ -241,14 +244,9 @@ void print_summary(const Args& a, const id::TorqueLog& log, const id::IdentifyRe
                 res.sg_order, res.window_choice.substr(0, res.window_choice.find(':')).c_str());
   }
   if (!res.std_detail.empty()) std::printf("  std: %s\n", res.std_detail.c_str());
-  if (log.dof == 1) {
-    std::printf("  rms torque residual: %.4g N m (noise floor %.4g N m)\n",
-                res.rms_torque_residual[0], res.residual_noise_floor[0]);
-  } else {
-    std::printf("  rms torque residual: %.4g, %.4g N m (noise floor %.4g, %.4g N m)\n",
-                res.rms_torque_residual[0], res.rms_torque_residual[1], res.residual_noise_floor[0],
-                res.residual_noise_floor[1]);
-  }
+  std::printf("  rms torque residual: %s N m (noise floor %s N m)\n",
+              per_crank(res.rms_torque_residual, log.dof, 4).c_str(),
+              per_crank(res.residual_noise_floor, log.dof, 4).c_str());
   if (!a.no_validation) print_validation(val);
   for (const std::string& w : res.warnings) warn(w);
   std::fflush(stdout);

@@ -60,6 +60,11 @@ constexpr SceneLimit kOffset{0, 1e3, "m"};
 constexpr SceneLimit kAngle{0, 1e3, "rad"};
 constexpr SceneLimit kRate{0, 1e5, "rad/s"};
 constexpr SceneLimit kTorque{0, 1e9, "N m"};
+// a motor's (actuators.M1, actuators.M2)
+constexpr SceneLimit kMotorViscous{0, 1e9, "N m s/rad"};
+constexpr SceneLimit kWinding{1e-6, 1e6, "ohm"};
+constexpr SceneLimit kTorqueConstant{1e-6, 1e4, "N m/A"};
+constexpr SceneLimit kGearRatio{1e-3, 1e6, "-"};
 
 // every key a scene may contain (interfaces.md, scene.h), except the friction coefficients,
 // which come from the friction-law descriptors (friction.h): see schema()
@@ -85,17 +90,17 @@ const Field kBaseSchema[] = {
     {"actuators.M1", Kind::kSection},
     {"actuators.M1.offset", Kind::kNumber, kTorque},
     {"actuators.M1.coulomb", Kind::kNumber, kTorque},
-    {"actuators.M1.viscous", Kind::kNumber, {0, 1e9, "N m s/rad"}},
-    {"actuators.M1.winding_resistance", Kind::kNumber, {1e-6, 1e6, "ohm"}},
-    {"actuators.M1.torque_constant", Kind::kNumber, {1e-6, 1e4, "N m/A"}},
-    {"actuators.M1.gear_ratio", Kind::kNumber, {1e-3, 1e6, "-"}},
+    {"actuators.M1.viscous", Kind::kNumber, kMotorViscous},
+    {"actuators.M1.winding_resistance", Kind::kNumber, kWinding},
+    {"actuators.M1.torque_constant", Kind::kNumber, kTorqueConstant},
+    {"actuators.M1.gear_ratio", Kind::kNumber, kGearRatio},
     {"actuators.M2", Kind::kSection},
     {"actuators.M2.offset", Kind::kNumber, kTorque},
     {"actuators.M2.coulomb", Kind::kNumber, kTorque},
-    {"actuators.M2.viscous", Kind::kNumber, {0, 1e9, "N m s/rad"}},
-    {"actuators.M2.winding_resistance", Kind::kNumber, {1e-6, 1e6, "ohm"}},
-    {"actuators.M2.torque_constant", Kind::kNumber, {1e-6, 1e4, "N m/A"}},
-    {"actuators.M2.gear_ratio", Kind::kNumber, {1e-3, 1e6, "-"}},
+    {"actuators.M2.viscous", Kind::kNumber, kMotorViscous},
+    {"actuators.M2.winding_resistance", Kind::kNumber, kWinding},
+    {"actuators.M2.torque_constant", Kind::kNumber, kTorqueConstant},
+    {"actuators.M2.gear_ratio", Kind::kNumber, kGearRatio},
     {"loads", Kind::kSection},
     {"loads.M1", Kind::kExpression, kTorque},
     {"loads.M2", Kind::kExpression, kTorque},

@@ -15,6 +15,7 @@
 #include "fivebar/model/four_bar.h"
 #include "fivebar/sim/simulator.h"
 #include "four_bar_rules.h"
+#include "mechanism_stages.h"
 #include "mechanism_residual.h"
 #include "noise_model.h"
 
@@ -70,22 +71,14 @@ bool held(const FourBarFit& f, const std::array<double, 4>& row, double w, doubl
 /// window chosen; f->x back at its start (four_bar_window.cc).
 void window_stage(FourBarFit* f, IdentifyResult* out);
 
-/// What the model check (cause_check) leaves for the refits after it.
-struct CauseVerdict {
-  /// the delay named (evidenced beyond the model causes and explaining the most): identify then
-  /// refits with the torques shifted by it
-  bool delay_named = false;
-  /// a cause it named made the fit unusable: the sign and per-joint refits have nothing to decide
-  bool cause_decided = false;
-};
-
 /// The model check's candidate causes at the fit: the five-bar's that exist for one crank (the
 /// links' inertial parameters, the crank encoder's zero, tau1's offset and gain, the delay)
 /// freed on the four-bar's Jacobian; a warning when a cause would move the friction beyond
 /// kFreedMove std, out->unusable beyond kUnusableMove or at a bound (four_bar_model_check.cc).
 /// The delay's estimate in out->delay_s and delay_std_s (its column freed alone with the
-/// friction) where the check has the column.
-CauseVerdict cause_check(const FourBarFit& f, IdentifyResult* out);
+/// friction) where the check has the column. Its verdict: cause_decided, and the delay
+/// kExplainsMost when it names the delay (identify then refits with the torques shifted by it).
+stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out);
 
 // ---- four_bar_refits.cc ----
 
@@ -94,7 +87,7 @@ CauseVerdict cause_check(const FourBarFit& f, IdentifyResult* out);
 /// its floor and no cause the model check named made the fit unusable; true when one of them
 /// says the fit is not to be used (out->unusable says why).
 bool refit_checks(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
-                  const TorqueLog& log, const IdentifyOptions& opt, const CauseVerdict& verdict,
+                  const TorqueLog& log, const IdentifyOptions& opt, const stages::ModelVerdict& verdict,
                   IdentifyResult* out);
 
 /// The delay the model check named (cause_check), corrected: the fit redone with the torques

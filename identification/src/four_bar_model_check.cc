@@ -191,7 +191,7 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, Identi
 
 }  // namespace
 
-CauseVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
+stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
   if (!out->converged || f.layout.inertia || f.layout.actuator) return {};
   Eigen::MatrixXd J;
   Eigen::VectorXd r;
@@ -228,7 +228,13 @@ CauseVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
     judge(f, cs, id, true, out);
   }
   if (!any && top < stages::kCauseCount) judge(f, cs, top, false, out);
-  return {cs.named(stages::kCauseDelay), any && open && !out->unusable.empty()};
+  stages::ModelVerdict verdict;
+  using D = stages::ModelVerdict::Delay;
+  verdict.delay = cs.named(stages::kCauseDelay)           ? D::kExplainsMost
+                  : d >= 0 && cs.report[d].z > detail::kCauseZ ? D::kNotMost
+                                                          : D::kNotEvidenced;
+  verdict.cause_decided = any && open && !out->unusable.empty();
+  return verdict;
 }
 
 }  // namespace fivebar::identification::four_bar

@@ -33,7 +33,7 @@ stages::Refit refit_by(const FourBarParams& scene, const sim::FourBarLoadFunctio
 /// its floor and no cause the model check named made the fit unusable; true when one of them
 /// says the fit is not to be used (out->unusable says why).
 bool refit_checks(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
-                  const TorqueLog& log, const IdentifyOptions& opt, const CauseVerdict& verdict,
+                  const TorqueLog& log, const IdentifyOptions& opt, const stages::ModelVerdict& verdict,
                   IdentifyResult* out) {
   if (verdict.cause_decided ||
       !(out->rms_torque_residual[0] > stages::kMisfitRatio * out->residual_noise_floor[0])) {

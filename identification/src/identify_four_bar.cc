@@ -536,13 +536,14 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
     stages::profile_intervals({f.layout, f.x, &problem, Hinv, solver_options(f)}, &out);
   }
   model_check(&out);
-  const CauseVerdict verdict = cause_check(f, &out);
+  const stages::ModelVerdict verdict = cause_check(f, &out);
   stages::correct_smoothing_bias(f.layout, f.smoothing_bias, &f.x, &out);
   predictions(f, &out);
   const bool rejected = refit_checks(scene, loads, log, opt, verdict, &out);
   IdentifyResult refit;
   const bool shifted =
-      verdict.delay_named && !rejected && delay_refit(scene, loads, f, &out, &refit);
+      verdict.delay == stages::ModelVerdict::Delay::kExplainsMost && !rejected &&
+      delay_refit(scene, loads, f, &out, &refit);
   if (shifted) out = std::move(refit);
   if (!shifted) stages::unexplained_misfit(f.layout, &out);
   out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -33,6 +33,32 @@ inline bool window_spans_reversal(const std::vector<int>& reversals, int i, int 
   return reversals[b] - reversals[a] > 0;
 }
 
+/// What a mechanism's model check leaves for the refits after it (the sign and per-joint checks,
+/// the delay)
+struct ModelVerdict {
+  /// torque channels read negative (torque_signs; bit 0: tau1, bit 1: tau2): the sign check
+  /// fits them negated whatever the residual
+  unsigned negative_readings = 0;
+  /// a named cause (the encoders' zeros, the torque readings' offsets or positive gains, a
+  /// common scale) made the fit unusable: the sign and per-joint refits have nothing left to
+  /// decide (they tripled the time of such rejected runs)
+  bool cause_decided = false;
+  /// the reason the check gave for a model error no cause explains (out->unusable then; ""
+  /// otherwise): a window whose accelerations cannot be unbiased names the real cause instead
+  /// (unbiased_window_check)
+  std::string unattributed;
+  /// the torque-to-angle delay as one more candidate cause (model_check; docs 9): kUnchecked
+  /// when the check did not run, else whether its fall is evidenced (kCauseZ) and clearly
+  /// beyond every other cause's; delay_falls: the falls of each cause, for the delay's warning
+  enum class Delay { kUnchecked, kNotEvidenced, kNotMost, kExplainsMost } delay = Delay::kUnchecked;
+  std::string delay_falls;
+  /// why the check did not run ("" when it ran); `short_log`: only because the log has too few
+  /// samples for its columns (kCheckRowsPerColumn), the one case a delay may still be judged
+  /// without it (delay_stage)
+  std::string unchecked;
+  bool short_log = false;
+};
+
 /// What the window stages read of a mechanism's fit, at the parameters of its preliminary fit.
 class WindowFit {
  public:

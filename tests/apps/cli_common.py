@@ -2,6 +2,8 @@
 gets one error line and the expected exit status, reading a CSV (comment lines skipped) and
 rewriting a log."""
 import csv
+import json
+import os
 import subprocess
 
 
@@ -24,6 +26,18 @@ class Cli:
                 or pattern not in lines[0]:
             self.failures.append("%s: exit %d, stderr %r (expected %d and '%s')"
                                  % (args, code, err, status, pattern))
+
+
+    def identify(self, name, scene, log, out, extra=()):
+        """`fivebar identify scene --log log --out out` (plus extra): its exit status and
+        identification.json ({} with a failure noted when none was written)."""
+        code, _, err = self.run(["identify", scene, "--log", log, "--out", out] + list(extra))
+        path = os.path.join(out, "identification.json")
+        if not os.path.exists(path):
+            self.failures.append("%s: no identification.json (exit %d: %s)" % (name, code, err))
+            return code, {}
+        with open(path) as f:
+            return code, json.load(f)
 
 
 def rewrite_log(src, dst, change):

@@ -64,14 +64,7 @@ def edited(src, name, column, change):
 
 
 def identify(name, log, scene=SCENE):
-    out = os.path.join(WORK, "id_" + name)
-    code, _, err = run(["identify", scene, "--log", log, "--out", out])
-    path = os.path.join(out, "identification.json")
-    if not os.path.exists(path):
-        failures.append("%s: no identification.json (exit %d: %s)" % (name, code, err))
-        return code, {}
-    with open(path) as f:
-        return code, json.load(f)
+    return cli.identify(name, scene, log, os.path.join(WORK, "id_" + name))
 
 
 clean = synth("clean")

@@ -11,7 +11,6 @@ encoders' zeros 0.079, -0.040 rad off (a fall of 92 against 2 +- 2 from noise al
 The clean log: exit 0, no warning naming the encoders' zeros. Its theta1 +0.05 rad: exit 3, the
 reason naming the logged angles' zeros.
 """
-import json
 import os
 import shutil
 import sys
@@ -57,15 +56,8 @@ def zero(offset):
 
 
 def identify(name, log):
-    out = os.path.join(WORK, "id_" + name)
-    code, _, err = cli.run(["identify", SCENE, "--log", log, "--out", out, "--no-validation",
-                            "--no-plots"])
-    path = os.path.join(out, "identification.json")
-    if not os.path.exists(path):
-        failures.append("%s: no identification.json (exit %d: %s)" % (name, code, err))
-        return code, {}
-    with open(path) as f:
-        return code, json.load(f)
+    return cli.identify(name, SCENE, log, os.path.join(WORK, "id_" + name),
+                        ["--no-validation", "--no-plots"])
 
 
 code, j = identify("clean", clean)
