@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/five_bar_mechanism.h"
@@ -268,18 +269,8 @@ struct Context {
   /// the loads at the time of the last right-hand side or row (loads_at)
   double loads_time = std::numeric_limits<double>::quiet_NaN();
   LoadsOf<M> loads_then{};
+  Status loads_status;
 };
-
-/// The loads at t, from the last evaluation when it was at the same time (a load function is a
-/// function of t: Dormand-Prince's last two stages share their time).
-template <class M>
-const LoadsOf<M>& loads_at(Context<M>& c, double t) {
-  if (!(t == c.loads_time)) {
-    c.loads_then = (*c.loads)(t);
-    c.loads_time = t;
-  }
-  return c.loads_then;
-}
 
 /// The status with the time and the driven angles first (theta1 .. theta_dof of `q`).
 Status at_time(const Status& st, double t, const double* q, int dof) {
@@ -295,13 +286,22 @@ Status at_time(const Status& st, double t, const double* y) {
   return at_time(st, t, y, M::kDof);
 }
 
+/// The first load of L whose value `bad` holds for (its name and value), or a null name
+template <class Ld, class Bad>
+std::pair<const char*, double> first_load(const Ld& L, Bad bad) {
+  using M = std::conditional_t<std::is_same_v<Ld, Loads<double>>, FiveBar, FourBar>;
+  for (const auto& [name, v] : Sim<M>::load_values(L)) {
+    if (bad(v)) return {name, v};
+  }
+  return {nullptr, 0.0};
+}
+
 /// Not ok when a load is NaN or infinite at t: names the load and its value (a load expression
 /// that leaves its domain, e.g. sqrt(1.5 - t) after 1.5 s; no smaller step can help)
 template <class Ld>
 Status finite_loads(const Ld& L, double t) {
-  using M = std::conditional_t<std::is_same_v<Ld, Loads<double>>, FiveBar, FourBar>;
-  for (const auto& [name, v] : Sim<M>::load_values(L)) {
-    if (std::isfinite(v)) continue;
+  const auto [name, v] = first_load(L, [](double x) { return !std::isfinite(x); });
+  if (name != nullptr) {
     std::ostringstream msg;
     msg.precision(6);
     msg << "load " << name << " = " << (std::isnan(v) ? "nan" : v > 0 ? "inf" : "-inf") << " at t=" << t
@@ -311,20 +311,30 @@ Status finite_loads(const Ld& L, double t) {
   return Status::Ok();
 }
 
+/// The loads at t, from the last evaluation when it was at the same time (a load function is a
+/// function of t: Dormand-Prince's last two stages share their time); c.loads_status whether
+/// they are finite (finite_loads), checked once per evaluation.
+template <class M>
+const LoadsOf<M>& loads_at(Context<M>& c, double t) {
+  if (!(t == c.loads_time)) {
+    c.loads_then = (*c.loads)(t);
+    c.loads_time = t;
+    c.loads_status = finite_loads(c.loads_then, t);
+  }
+  return c.loads_then;
+}
+
 /// Why the acceleration at t overflowed when a load is absurdly large (beyond 1e100: no machine's,
 /// a load expression that grows without bound), naming it; else the plain reason.
 template <class Ld>
 std::string overflow_reason(const Ld& L) {
-  using M = std::conditional_t<std::is_same_v<Ld, Loads<double>>, FiveBar, FourBar>;
-  for (const auto& [name, v] : Sim<M>::load_values(L)) {
-    if (!(std::abs(v) > 1e100)) continue;
-    std::ostringstream msg;
-    msg.precision(6);
-    msg << "non-finite acceleration: load " << name << " = " << v
-        << " overflows the dynamics: check the scene's load expression (loads." << name << ")";
-    return msg.str();
-  }
-  return "non-finite acceleration";
+  const auto [name, v] = first_load(L, [](double x) { return std::abs(x) > 1e100; });
+  if (name == nullptr) return "non-finite acceleration";
+  std::ostringstream msg;
+  msg.precision(6);
+  msg << "non-finite acceleration: load " << name << " = " << v
+      << " overflows the dynamics: check the scene's load expression (loads." << name << ")";
+  return msg.str();
 }
 
 /// Relative joint rates at a state from its first-order kinematics `k`.
@@ -383,8 +393,8 @@ int rhs(double t, const double* y, double* ydot, void* user) {
   if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, z.begin());
   JointModes signs;
   const LoadsOf<M>& loads = loads_at(c, t);
-  if (const Status bad = finite_loads(loads, t); !bad.ok()) {
-    c.failure = bad;
+  if (!c.loads_status.ok()) {
+    c.failure = c.loads_status;
     return -1;  // fatal: the load is what fails, not the step
   }
   const Status st =
@@ -977,7 +987,7 @@ Row make_row(Context<M>& c, double t, const double* y, const Row* previous, Stat
   eval.want_reactions = true;
   eval.want_angles = true;
   eval.singular_margin = 0.0;
-  const LoadsOf<M> L = loads_at(c, t);
+  const LoadsOf<M>& L = loads_at(c, t);
   EvalOf<M> ev;
   std::array<double, kJoints> z{};
   if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, z.begin());
