@@ -50,6 +50,7 @@ struct FourBarFit {
   /// (limit_smoothing_bias; empty when not predicted)
   Eigen::VectorXd smoothing_bias;
   // the fit
+  double loss_scale = 1;  ///< the robust loss's scale as applied (--loss; unused without one)
   std::vector<double> x;  ///< internal parameter vector: the start, then the fit's
 };
 

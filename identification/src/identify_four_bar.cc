@@ -277,10 +277,22 @@ ceres::Solver::Options solver_options(const FourBarFit& f) {
   return so;
 }
 
+/// The robust loss's scale (--loss): as given, else loss_scale_from_level at the residual's
+/// noise floor per sample.
+void choose_loss_scale(FourBarFit* f, IdentifyResult* out) {
+  const IdentifyOptions& opt = *f->opt;
+  if (opt.loss == Loss::kNone) return;
+  f->loss_scale = opt.loss_scale > 0
+                      ? opt.loss_scale
+                      : stages::loss_scale_from_level(opt.loss, out->residual_noise_floor[0], out);
+  out->loss_scale = f->loss_scale;
+}
+
 bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
   const ParameterLayout& lay = f->layout;
   const int P = lay.size();
-  stages::add_mechanism_terms<FourBar>(f->scene, lay, f->samples, f->eval, f->x.data(), problem);
+  stages::add_mechanism_terms<FourBar>(f->scene, lay, f->samples, f->eval, f->x.data(), problem,
+                                       f->opt->loss, f->loss_scale);
   for (int i = 0; i < P; ++i) problem->SetParameterLowerBound(f->x.data(), i, lay.lower_bound(i));
   out->residuals = static_cast<int>(f->samples.size());
   std::vector<double> r;
@@ -473,7 +485,6 @@ std::string four_bar_unsupported(const IdentifyOptions& opt) {
   }
   if (opt.layout.inertia) return "--estimate inertia" + tail;
   if (opt.layout.actuator) return "--estimate actuator" + tail;
-  if (opt.loss != Loss::kNone) return "--loss " + std::string(loss_name(opt.loss)) + tail;
   if (opt.smoothing_velocity > 0) return "--smooth-sign" + tail;
   return "";
 }
@@ -519,6 +530,7 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   }
   bool from_noise = true;
   out.residual_noise_floor[0] = noise_floor(f, &from_noise);
+  choose_loss_scale(&f, &out);
   ceres::Problem problem;
   if (!solve(&f, &problem, &out)) return out;
   const std::vector<double> x0 =
@@ -531,8 +543,9 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   estimates(f, x0, &out);
   // per joint, a log rarely determines every joint's coefficients, and each undetermined one
   // costs its re-fits (five of eight on a 3 s crank-rocker log: 26 re-fits, 20 s of CPU against
-  // the fit's 0.5 s): a per-joint fit keeps its Wald intervals
-  if (!f.layout.per_joint) {
+  // the fit's 0.5 s): a per-joint fit keeps its Wald intervals; so does a robust fit, whose
+  // cost is not the likelihood the profile reads
+  if (!f.layout.per_joint && opt.loss == Loss::kNone) {
     stages::profile_intervals({f.layout, f.x, &problem, Hinv, solver_options(f)}, &out);
   }
   model_check(&out);

@@ -193,7 +193,17 @@ Eigen::MatrixXd dense(const ceres::CRSMatrix& crs, int P);
 /// iterations; whether the solution is usable.
 bool solve_preliminary(const ParameterLayout& layout, double* x, ceres::Problem* problem);
 
+// ---- residual_blocks.cc ----
+
+/// The robust loss of a residual block at `scale` (nullptr for Loss::kNone); the problem owns it.
+ceres::LossFunction* make_loss(Loss loss, double scale);
+
 // ---- stage_solve.cc ----
+
+/// The robust loss's default scale: kLossScaleHuber or kLossScaleCauchy times `level`, a
+/// sample's expected residual level [N m] (0.1 where it is not positive and finite); the note
+/// saying so is added to out.
+double loss_scale_from_level(Loss loss, double level, IdentifyResult* out);
 
 /// Logged torques whose mean square is below this [N^2 m^2] scale the solver's gradient tolerance
 /// (scale_gradient_tolerance)

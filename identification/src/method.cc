@@ -35,18 +35,9 @@ class InverseDynamicsMethod final : public MethodStrategy {
   /// kLossScaleHuber or kLossScaleCauchy times a sample's expected residual level at the start
   /// values (the two actuators' noise floors in quadrature: the loss sees the block's norm).
   double default_loss_scale(const Fit& f, IdentifyResult* out) const override {
-    const IdentifyOptions& opt = *f.opt;
-    double scale = 0.1;
     double floor[2];
     noise_floor(f, noise_sensitivities(f), floor);
-    const double level = std::hypot(floor[0], floor[1]);
-    const double k = opt.loss == Loss::kHuber ? kLossScaleHuber : kLossScaleCauchy;
-    if (level > 0 && std::isfinite(level)) scale = k * level;
-    out->notes.push_back(std::string(loss_name(opt.loss)) + " loss at scale " +
-                         format_significant(scale) + " N m: " + format_significant(k, 4) +
-                         " times the residual's noise level per sample " +
-                         format_significant(level) + " N m (--loss-scale sets it)");
-    return scale;
+    return loss_scale_from_level(f.opt->loss, std::hypot(floor[0], floor[1]), out);
   }
 
   /// The residual level at the start (the Jacobian is needed only after the solve).

@@ -13,8 +13,6 @@ double interp(const std::vector<double>& ts, const std::vector<double>& y, doubl
   return y[i - 1] + s * (y[i] - y[i - 1]);
 }
 
-namespace {
-
 ceres::LossFunction* make_loss(Loss loss, double scale) {
   switch (loss) {
     case Loss::kNone:
@@ -26,6 +24,8 @@ ceres::LossFunction* make_loss(Loss loss, double scale) {
   }
   return nullptr;
 }
+
+namespace {
 
 /// The inverse-dynamics residual blocks, one per sample, on P parameters: from the sample's
 /// structure (residual.h: the Jets carry only the P active parameters through a five-number

@@ -4,6 +4,7 @@
 // compiled once.
 #include "fivebar/model/four_bar.h"
 #include "mechanism_residual.h"
+#include "mechanism_stages.h"
 
 namespace fivebar::identification::stages {
 
@@ -52,13 +53,13 @@ template <class M>
 void add_mechanism_terms(const typename M::template Params<double>& scene,
                          const ParameterLayout& layout,
                          const std::vector<MechanismSample<M>>& samples, const EvalOptions& eval,
-                         double* x, ceres::Problem* problem) {
+                         double* x, ceres::Problem* problem, Loss loss, double loss_scale) {
   for (const MechanismSample<M>& s : samples) {
     auto* cost = new ceres::DynamicAutoDiffCostFunction<MechanismResidual<M>, kMechanismStride>(
         new MechanismResidual<M>(scene, layout, s, eval));
     cost->AddParameterBlock(layout.size());
     cost->SetNumResiduals(M::kDof);
-    problem->AddResidualBlock(cost, nullptr, x);
+    problem->AddResidualBlock(cost, make_loss(loss, loss_scale), x);
   }
 }
 
@@ -87,7 +88,8 @@ bool mechanism_drive_torques(const typename M::template Params<double>& scene,
 
 template void add_mechanism_terms<FourBar>(const FourBarParams&, const ParameterLayout&,
                                            const std::vector<MechanismSample<FourBar>>&,
-                                           const EvalOptions&, double*, ceres::Problem*);
+                                           const EvalOptions&, double*, ceres::Problem*, Loss,
+                                           double);
 template bool mechanism_drive_torques<FourBar>(const FourBarParams&, const ParameterLayout&,
                                                const double*, const MechanismSample<FourBar>&,
                                                const EvalOptions&, mech::Vec<1, double>*,

@@ -101,6 +101,16 @@ void noise_floor(const Fit& f, const std::vector<detail::Sensitivity>& sens, dou
   }
 }
 
+double loss_scale_from_level(Loss loss, double level, IdentifyResult* out) {
+  const double k = loss == Loss::kHuber ? kLossScaleHuber : kLossScaleCauchy;
+  const double scale = level > 0 && std::isfinite(level) ? k * level : 0.1;
+  out->notes.push_back(std::string(loss_name(loss)) + " loss at scale " +
+                       format_significant(scale) + " N m: " + format_significant(k, 4) +
+                       " times the residual's noise level per sample " +
+                       format_significant(level) + " N m (--loss-scale sets it)");
+  return scale;
+}
+
 void choose_loss_scale(Fit* f, IdentifyResult* out) {
   const IdentifyOptions& opt = *f->opt;
   f->loss_scale = opt.loss_scale;
