@@ -262,7 +262,11 @@ id::IdentifyResult identify_four_bar_scene(const Scene& scene, const id::TorqueL
   try {
     res = id::identify(scene.four_bar, LoadExpressions(scene).four_bar_function(), log, options);
   } catch (const id::LogError& e) {
-    if (!degrees.empty()) throw InputError(log.path, "column theta1", degrees + ": " + e.reason());
+    // identify names the unit itself where the motion tells it (angle_units_from_motion)
+    const bool named = e.reason().rfind("angles look like", 0) == 0;
+    if (!degrees.empty() && !named) {
+      throw InputError(log.path, "column theta1", degrees + ": " + e.reason());
+    }
     throw InputError(e.file(), e.key(), e.reason());
   }
   if (!res.status.ok()) {

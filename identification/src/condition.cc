@@ -242,6 +242,16 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
 
 std::string angle_units_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
                                     const TorqueLog& log, std::string* unit) {
+  return angle_units_from_motion(
+      log,
+      [&](const std::vector<double>& a1, const std::vector<double>& a2, double* rate) {
+        return torque_mismatch(scene, loads, log, a1, a2, rate);
+      },
+      unit);
+}
+
+std::string angle_units_from_motion(const TorqueLog& log, const TorqueMismatch& mismatch,
+                                    std::string* unit) {
   // too little motion says nothing about the units (25-30 samples of a radian log, 1.5
   // Savitzky-Golay windows, can read as "encoder counts"): at least four windows and 40 samples
   const int n = log.size();
@@ -251,11 +261,15 @@ std::string angle_units_from_motion(const Params<double>& scene, const sim::Load
   unwrap_angles(&r1);
   unwrap_angles(&r2);
   double rate_rad = 0;
-  const double as_rad = torque_mismatch(scene, loads, log, r1, r2, &rate_rad);
+  const double as_rad = mismatch(r1, r2, &rate_rad);
+  // motion that the scene cannot assemble as radians at most samples is not judged here: its
+  // poses are named where they fail (a coupler too short reads "better" in degrees, a small swing)
+  if (!std::isfinite(as_rad)) return "";
   // the reading that explains the torques best
   double best = kInf, best_rate = 0;
   std::string best_unit;
   for (const AngleUnit& u : kAngleUnits) {
+    if (u.swapped && log.dof == 1) continue;
     std::vector<double> a1 = u.swapped ? log.theta2 : log.theta1;
     std::vector<double> a2 = u.swapped ? log.theta1 : log.theta2;
     for (std::vector<double>* v : {&a1, &a2}) {
@@ -264,7 +278,7 @@ std::string angle_units_from_motion(const Params<double>& scene, const sim::Load
     unwrap_angles(&a1);
     unwrap_angles(&a2);
     double rate = 0;
-    const double m = torque_mismatch(scene, loads, log, a1, a2, &rate);
+    const double m = mismatch(a1, a2, &rate);
     if (m < best) {
       best = m;
       best_rate = rate;
@@ -275,7 +289,9 @@ std::string angle_units_from_motion(const Params<double>& scene, const sim::Load
   // radians, and well in absolute terms (within half the logged torques' median size): a log
   // that no reading explains (wrong scene, absurd values) is not called another unit
   std::vector<double> tau;
-  for (int i = 0; i < n; ++i) tau.push_back(std::max(std::abs(log.tau1[i]), std::abs(log.tau2[i])));
+  for (int i = 0; i < n; ++i) {
+    tau.push_back(std::max(std::abs(log.tau1[i]), log.dof == 2 ? std::abs(log.tau2[i]) : 0.0));
+  }
   if (!(best < 0.25 * as_rad) || !(best < 0.5 * median_abs(tau))) return "";
   *unit = best_unit;
   return "read as radians, the motion (median crank rate " + format_significant(rate_rad, 3) +

@@ -22,6 +22,7 @@
 #include "fivebar/model/four_bar.h"
 #include "fivebar/sim/simulator.h"
 #include "four_bar_fit.h"
+#include "glitches.h"
 #include "mechanism_residual.h"
 #include "mechanism_stages.h"
 #include "setup_shared.h"
@@ -34,7 +35,29 @@ std::string line_of(const TorqueLog& log, int i) {
   return "line " + std::to_string(log.lines.empty() ? i + 1 : log.lines[i]);
 }
 
-/// Conditioning: the log's shape, unwrapping and glitches (condition_log), then every pose
+/// The four-bar's reading of crank angles `th` against the logged torques (TorqueMismatch,
+/// condition.h): its frictionless inverse dynamics at Savitzky-Golay rates, on at most ~400
+/// samples.
+double torque_mismatch(const FourBarFit& f, const TorqueLog& log, const std::vector<double>& th,
+                       double* median_rate) {
+  std::vector<double> w, a;
+  savitzky_golay(log.t, th, SgOptions{}, &w, &a);
+  FourBarParams p = f.scene;
+  p.friction.law = FrictionLaw::kNone;
+  const int n = log.size();
+  std::vector<double> mismatch, rate;
+  for (int i = 0; i < n; i += std::max(1, n / 400)) {
+    FourBarEvaluation ev;
+    const Status st = four_bar_inverse(p, f.loads(log.t[i]), th[i], w[i], a[i], EvalOptions{}, &ev);
+    mismatch.push_back(st.ok() ? log.tau1[i] - ev.M1 : glitches::kInf);
+    rate.push_back(w[i]);
+  }
+  *median_rate = glitches::median_abs(rate);
+  return glitches::median_abs(mismatch);
+}
+
+/// Conditioning: angles in another unit than radians (angle_units_from_motion, with
+/// check_degrees), the log's shape, unwrapping and glitches (condition_log), then every pose
 /// assembles with the scene's four-bar (a LogError naming the line when one does not).
 void condition(const TorqueLog& log, FourBarFit* f, IdentifyResult* out) {
   if (log.dof != 1) {
@@ -46,6 +69,20 @@ void condition(const TorqueLog& log, FourBarFit* f, IdentifyResult* out) {
   const int P = f->layout.size();
   require_samples(log, P + 1, std::to_string(P) + " parameters + 1");
   require_uniform_sampling(log);
+  std::string unit;
+  const std::string why =
+      !f->opt->check_degrees
+          ? ""
+          : angle_units_from_motion(
+                log,
+                [&](const std::vector<double>& th, const std::vector<double>&, double* rate) {
+                  return torque_mismatch(*f, log, th, rate);
+                },
+                &unit);
+  if (!why.empty()) {
+    throw LogError(log.path, "column theta1",
+                   "angles look like " + unit + ", expected radians (" + why + ")");
+  }
   f->cond = condition_log(log, f->opt->condition);
   const TorqueLog& L = f->cond.log;
   for (int i = 0; i < L.size(); ++i) {

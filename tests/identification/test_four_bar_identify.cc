@@ -204,6 +204,24 @@ TEST(FourBarIdentify, RefusesAFiveBarLog) {
   }
 }
 
+// Angles in degrees without logged rates: the motion read as radians needs torques far from the
+// logged ones, read as degrees it explains them (angle_units_from_motion over the four-bar's
+// inverse dynamics); the log in radians passes the same check.
+TEST(FourBarIdentify, NamesAnglesInDegreesFromTheMotion) {
+  const TorqueLog log = crank_rocker_log(crank_rocker().p, 2.0, 0.02, 1e-5, 3, false);
+  TorqueLog deg = log;
+  for (double& th : deg.theta1) th *= 180 / M_PI;
+  try {
+    identify(crank_rocker().p, crank_rocker().loads, deg, four_bar_options());
+    FAIL() << "no LogError";
+  } catch (const LogError& e) {
+    EXPECT_EQ(e.key(), "column theta1");
+    EXPECT_EQ(e.reason().rfind("angles look like degrees, expected radians (read as radians", 0), 0u)
+        << e.what();
+  }
+  EXPECT_TRUE(identify(crank_rocker().p, crank_rocker().loads, log, four_bar_options()).status.ok());
+}
+
 TEST(FourBarIdentify, RefusesAPoseThatCannotAssemble) {
   FourBarParams short_coupler = crank_rocker().p;
   short_coupler.links[1].length = 0.05;  // |BD0| > l2 + l3 somewhere on the logged motion

@@ -4,6 +4,7 @@
 // describes the rules for users.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -97,5 +98,17 @@ inline constexpr const char* kSwappedAngles = "radians with theta1 and theta2 sw
 /// to within half their median size.
 std::string angle_units_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
                                     const TorqueLog& log, std::string* unit);
+
+/// A reading of a log's crank angles (theta1, and theta2 for two cranks; radians) against its
+/// torques: the median over the log of the largest |logged - frictionless inverse torque| of its
+/// cranks [N m], and the median crank rate [rad/s] in *median_rate.
+using TorqueMismatch = std::function<double(const std::vector<double>& theta1,
+                                            const std::vector<double>& theta2,
+                                            double* median_rate)>;
+
+/// angle_units_from_motion over any mechanism, its readings judged by `mismatch`; a log of one
+/// crank has no swapped reading.
+std::string angle_units_from_motion(const TorqueLog& log, const TorqueMismatch& mismatch,
+                                    std::string* unit);
 
 }  // namespace fivebar::identification
