@@ -195,7 +195,8 @@ void refuse_four_bar_options(const Args& a, const id::ExcitationOptions& o) {
     throw InputError(kFlags, group.substr(0, space),
                      (space == std::string::npos ? "" : group.substr(space + 1) + ": ") +
                          "the four-bar's design estimates its friction coefficients (coulomb, "
-                         "viscous) shared by its joints, as identify does on four-bars" +
+                         "viscous), shared by its joints or --per-joint, as identify does on "
+                         "four-bars" +
                          type);
   }
   if (!a.theta2_range.empty()) {
@@ -908,7 +909,7 @@ std::shared_ptr<const id::ExcitationMechanism> mechanism_of(const Scene& scene,
                                                             const LoadExpressions& loads,
                                                             const id::ExcitationOptions& o) {
   if (scene.type == MechanismType::kFourBar) {
-    return id::four_bar_excitation(scene.four_bar, loads.four_bar_function());
+    return id::four_bar_excitation(scene.four_bar, loads.four_bar_function(), o.groups.per_joint);
   }
   return id::five_bar_excitation(scene.params, id::design_parameters(scene.params, o.groups),
                                  loads);
@@ -1068,7 +1069,8 @@ RunFunction setup(CLI::App* app) {
       ->default_str("")
       ->required();
   app->add_option("--estimate", a->estimate, "parameter groups: friction,inertia,actuator");
-  app->add_flag("--per-joint", a->per_joint, "five friction coefficients of each kind");
+  app->add_flag("--per-joint", a->per_joint,
+                "one friction coefficient of each kind per joint (five-bar 5, four-bar 4)");
   app->add_option("--criterion", a->criterion, "d-optimal | condition | worst-std");
   CLI::Option* family = app->add_option(
       "--family", a->family,

@@ -14,19 +14,23 @@
 namespace fivebar::identification {
 namespace {
 
-/// One Jet width for every derivative here: the two friction coefficients, or the crank's angle,
-/// rate and acceleration (one instantiation of the four-bar's inverse dynamics)
-constexpr int kWidth = 3;
-using Jet = ceres::Jet<double, kWidth>;
+/// One Jet width W for every derivative of a design: its friction coefficients (2 shared, 8 per
+/// joint), or the crank's angle, rate and acceleration (3): one instantiation of the four-bar's
+/// inverse dynamics per layout
+constexpr int kSharedWidth = 3, kPerJointWidth = 2 * kFourBarJoints;
 
 /// identify_four_bar.cc's rate filter order and rest rule (four_bar_rules.h)
 using four_bar_rules::kRestSigmas;
 using four_bar_rules::kWindowOrder;
 
+template <int W>
 class FourBarExcitation : public ExcitationMechanism {
+  using Jet = ceres::Jet<double, W>;
+
  public:
-  FourBarExcitation(const FourBarParams& scene, std::function<FourBarLoads(double)> loads)
-      : scene_(scene), dp_(four_bar_design_parameters(scene)), loads_(std::move(loads)) {}
+  FourBarExcitation(const FourBarParams& scene, bool per_joint,
+                    std::function<FourBarLoads(double)> loads)
+      : scene_(scene), dp_(four_bar_design_parameters(scene, per_joint)), loads_(std::move(loads)) {}
   int dof() const override { return FourBar::kDof; }
   int joints() const override { return kFourBarJoints; }
   std::string joint_name(int k) const override {
@@ -98,10 +102,10 @@ class FourBarExcitation : public ExcitationMechanism {
 
 }  // namespace
 
-DesignParameters four_bar_design_parameters(const FourBarParams& scene) {
+DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per_joint) {
   DesignParameters dp;
   dp.layout.law = FrictionLaw::kCoulombViscous;
-  dp.layout.per_joint = false;
+  dp.layout.per_joint = per_joint;
   dp.layout.joints = kFourBarJoints;
   dp.names = dp.layout.names();
   dp.nominal = dp.layout.extract(scene.friction);
@@ -113,13 +117,15 @@ DesignParameters four_bar_design_parameters(const FourBarParams& scene) {
 std::string four_bar_design_unsupported(const DesignGroups& groups) {
   if (groups.inertia) return "--estimate inertia";
   if (groups.actuator) return "--estimate actuator";
-  if (groups.per_joint) return "--per-joint";
   return "";
 }
 
 std::shared_ptr<const ExcitationMechanism> four_bar_excitation(
-    const FourBarParams& scene, std::function<FourBarLoads(double)> loads) {
-  return std::make_shared<FourBarExcitation>(scene, std::move(loads));
+    const FourBarParams& scene, std::function<FourBarLoads(double)> loads, bool per_joint) {
+  if (per_joint) {
+    return std::make_shared<FourBarExcitation<kPerJointWidth>>(scene, true, std::move(loads));
+  }
+  return std::make_shared<FourBarExcitation<kSharedWidth>>(scene, false, std::move(loads));
 }
 
 }  // namespace fivebar::identification

@@ -252,7 +252,6 @@ else:
         failures.append("excite: synth-log --motion along the design differs by %g N m (exit %d %s)"
                         % (worst, code, err))
 for option, args in (("--family: torque drives the five-bar's two motors", ["--family", "torque"]),
-                     ("--per-joint: the four-bar's design", ["--per-joint"]),
                      ("--estimate: inertia: the four-bar's design", ["--estimate", "friction,inertia"]),
                      ("--theta2-range: a four-bar has one crank", ["--theta2-range", "0:1"]),
                      ("--start: multisine", ["--start", "multisine"])):
@@ -410,8 +409,8 @@ expect_unusable(r"the flipped torque fits far better negated .*remove --flip-tor
                  os.path.join(WORK, "flipped_wrongly"), "--no-plots"])
 expect_error(2, "--flip-torque-sign: 2: a four_bar's log has one torque",
              ["identify", scene, "--log", id_log, "--flip-torque-sign", "2", "--out", bad])
-# the same log with its angles in degrees: named as such (the crank-rocker assembles at any angle,
-# so the model alone would only say that no sample is left)
+# the same log with its angles in degrees: named as such from the motion (the crank-rocker
+# assembles at any angle, so the model alone would only say that no sample is left)
 deg_log = os.path.join(WORK, "crank_rocker_deg.csv")
 with open(id_log) as f, open(deg_log, "w") as g:
     for line in f:
@@ -420,7 +419,8 @@ with open(id_log) as f, open(deg_log, "w") as g:
             cells[1] = repr(float(cells[1]) * 180 / math.pi)
             line = ",".join(cells) + "\n"
         g.write(line)
-expect_error(2, "column theta1: angles look like degrees (it starts at 90)",
+expect_error(2, "column theta1: angles look like degrees, expected radians (read as radians, the "
+             "motion (median crank rate",
              ["identify", scene, "--log", deg_log, "--out", bad])
 # study: a five-bar key swept on a four-bar is refused up front, not a study of designs that
 # "cannot assemble"

@@ -124,14 +124,16 @@ std::shared_ptr<const ExcitationMechanism> five_bar_excitation(
     std::function<Loads<double>(double)> loads);
 
 /// The four-bar's design parameters: its friction, coulomb and viscous shared by its four joints
-/// (identify's default on four-bars); the groups it does not have, "" when it has them all, else
-/// the option that asks for one (--estimate inertia, --estimate actuator, --per-joint).
-DesignParameters four_bar_design_parameters(const FourBarParams& scene);
+/// (identify's default on four-bars) or, per_joint, one of each per joint (coulomb_1..4,
+/// viscous_1..4); the groups it does not have, "" when it has them all, else the option that
+/// asks for one (--estimate inertia, --estimate actuator).
+DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per_joint = false);
 std::string four_bar_design_unsupported(const DesignGroups& groups);
 
-/// The four-bar of `scene` (identify_four_bar.cc's rate filter and rest rule).
+/// The four-bar of `scene` for the friction of four_bar_design_parameters (identify_four_bar.cc's
+/// rate filter and rest rule).
 std::shared_ptr<const ExcitationMechanism> four_bar_excitation(
-    const FourBarParams& scene, std::function<FourBarLoads(double)> loads);
+    const FourBarParams& scene, std::function<FourBarLoads(double)> loads, bool per_joint = false);
 
 /// The designed motion of each crank: a drift (a steady rotation) plus a finite Fourier series,
 /// faded in from rest at the start pose by a ramp r(t) (quintic smoothstep over `ramp` seconds,
