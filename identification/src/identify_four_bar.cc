@@ -374,10 +374,13 @@ std::vector<int> block_sizes(const FourBarFit& f) {
   return sizes;
 }
 
-/// The covariance of the free parameters (those off their bounds): the block sandwich
-/// (errors in variables: the rates' noise enters the reactions and the friction's sign terms), or
-/// s^2 (J^T J)^-1 with --classical-std; the singular values of the scaled Jacobian. *Hinv:
-/// (J^T J)^-1 of the free parameters (NaN elsewhere), the profile intervals' noise scale.
+/// The covariance of the parameters, those at a bound included (the direction a bound holds keeps
+/// its uncertainty in the others' std; a parameter at its bound reports none, estimates): the
+/// block sandwich (errors in variables: the rates' noise enters the reactions and the friction's
+/// sign terms), or s^2 (J^T J)^-1 with --classical-std; the singular values of the scaled
+/// Jacobian. *Hinv: (J^T J)^-1, the profile intervals' noise scale. A per-joint crank-rocker log
+/// (10 s, angles only) whose viscous_4 sat at 0 read coulomb_4 2.7 std high with the parameters at
+/// a bound left out of it; over seeds 1-10 its intervals held 65 of 80 truths that way, 73 now.
 void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
                 Eigen::MatrixXd* Hinv) {
   const int P = f.layout.size();
@@ -397,13 +400,8 @@ void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* ou
   for (int i = 0; i < svd.singularValues().size(); ++i) {
     out->singular_values.push_back(svd.singularValues()(i));
   }
-  std::vector<int> free;
-  for (int i = 0; i < P; ++i) {
-    if (f.x[i] > f.layout.lower_bound(i) + 1e-12) free.push_back(i);
-  }
-  if (free.empty() || !out->converged) return;
-  Eigen::MatrixXd Jf(m, free.size());
-  for (size_t c = 0; c < free.size(); ++c) Jf.col(c) = J.col(free[c]);
+  if (!out->converged) return;
+  const Eigen::MatrixXd& Jf = J;
   const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), m);
   Eigen::MatrixXd C;
   if (f.opt->errors_in_variables) {
@@ -418,12 +416,8 @@ void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* ou
     C = out->residual_sigma * out->residual_sigma * Hf;
     out->std_method = "residual-variance";
   }
-  for (size_t a = 0; a < free.size(); ++a) {
-    for (size_t b = 0; b < free.size(); ++b) {
-      out->covariance(free[a], free[b]) = C(a, b);
-      (*Hinv)(free[a], free[b]) = Hf(a, b);
-    }
-  }
+  out->covariance = C;
+  *Hinv = Hf;
 }
 
 /// Estimates, correlation and Wald intervals (value +- ci_quantile std) of the public parameters
