@@ -378,9 +378,9 @@ std::vector<int> block_sizes(const FourBarFit& f) {
 /// its uncertainty in the others' std; a parameter at its bound reports none, estimates): the
 /// block sandwich (errors in variables: the rates' noise enters the reactions and the friction's
 /// sign terms), or s^2 (J^T J)^-1 with --classical-std; the singular values of the scaled
-/// Jacobian. *Hinv: (J^T J)^-1, the profile intervals' noise scale. A per-joint crank-rocker log
-/// (10 s, angles only) whose viscous_4 sat at 0 read coulomb_4 2.7 std high with the parameters at
-/// a bound left out of it; over seeds 1-10 its intervals held 65 of 80 truths that way, 73 now.
+/// Jacobian. *Hinv: (J^T J)^-1, the profile intervals' noise scale. Per-joint crank-rocker logs
+/// (10 s, angles only, seeds 1-10): the intervals hold 73 of 80 truths; with the parameters at a
+/// bound left out of the covariance, 65 (viscous_4 at 0 read coulomb_4 2.7 std high).
 void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
                 Eigen::MatrixXd* Hinv) {
   const int P = f.layout.size();
@@ -401,16 +401,15 @@ void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* ou
     out->singular_values.push_back(svd.singularValues()(i));
   }
   if (!out->converged) return;
-  const Eigen::MatrixXd& Jf = J;
   const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), m);
   Eigen::MatrixXd C;
   if (f.opt->errors_in_variables) {
-    C = detail::block_sandwich(Jf, rv, block_sizes(f)).covariance;
+    C = detail::block_sandwich(J, rv, block_sizes(f)).covariance;
     out->std_method = "block-sandwich";
     out->std_detail = "sandwich over blocks of " + std::to_string(2 * f.hw + 1) +
                       " samples (the rate filter's window), small-sample corrected";
   }
-  const Eigen::MatrixXd H = Jf.transpose() * Jf;
+  const Eigen::MatrixXd H = J.transpose() * J;
   const Eigen::MatrixXd Hf = H.ldlt().solve(Eigen::MatrixXd::Identity(H.rows(), H.cols()));
   if (C.size() == 0) {
     C = out->residual_sigma * out->residual_sigma * Hf;
