@@ -92,6 +92,9 @@ class Arkode final : public Integrator {
     cur_.t = *t;
     std::copy(y, y + prob_.n, cur_.y.begin());
     cur_.has_f = false;
+    // the step's end slope while the last evaluation is there (the first-same-as-last stage),
+    // before later evaluations replace it, whether or not the switch scan samples this step
+    slope_from_cache(&cur_);
     return check(flag, explicit_ ? "ERKStepEvolve" : "ARKStepEvolve");
   }
   bool dense(double t, double* y) override {
@@ -186,14 +189,21 @@ class Arkode final : public Integrator {
   /// f(t, y) at one end of the step: from the last right-hand side ARKODE evaluated there (the
   /// first-same-as-last stage of Dormand-Prince), else evaluated here.
   bool slope(StepEnd* e) {
-    if (e->has_f) return true;
-    const size_t bytes = sizeof(double) * prob_.n;
-    if (cache_.has_f && cache_.t == e->t && std::memcmp(cache_.y.data(), e->y.data(), bytes) == 0) {
-      e->f = cache_.f;
-    } else if (prob_.rhs(e->t, e->y.data(), e->f.data(), prob_.user) != 0) {
+    if (e->has_f || slope_from_cache(e)) return true;
+    if (prob_.rhs(e->t, e->y.data(), e->f.data(), prob_.user) != 0) {
       sc_.error = "right-hand side failed at a sampled point";
       return false;
     }
+    e->has_f = true;
+    return true;
+  }
+  /// f(t, y) at one end of the step from the last evaluation, when that was there.
+  bool slope_from_cache(StepEnd* e) {
+    const size_t bytes = sizeof(double) * prob_.n;
+    if (!cache_.has_f || cache_.t != e->t || std::memcmp(cache_.y.data(), e->y.data(), bytes) != 0) {
+      return false;
+    }
+    e->f = cache_.f;
     e->has_f = true;
     return true;
   }

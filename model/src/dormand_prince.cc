@@ -31,13 +31,28 @@ constexpr int kEmbeddingOrder = 4;  // the controller's k (pq off: the embedding
 double sun_max(double a, double b) { return a > b ? a : b; }
 double sun_min(double a, double b) { return a < b ? a : b; }
 
-/// z = sum_k c_k x_k, accumulated in k order for each element (N_VLinearCombination of three or
-/// more vectors; with two, where the second coefficient is 1, the same bits as N_VLinearSum)
-void combine(int nvec, const double* c, const double* const* x, int n, double* z) {
+/// z = sum_k c_k x_k of K vectors, accumulated in k order for each element
+template <int K>
+void combine_fixed(const double* c, const double* const* x, int n, double* z) {
   for (int i = 0; i < n; ++i) {
     double s = c[0] * x[0][i];
-    for (int k = 1; k < nvec; ++k) s += c[k] * x[k][i];
+    for (int k = 1; k < K; ++k) s += c[k] * x[k][i];
     z[i] = s;
+  }
+}
+
+/// z = sum_k c_k x_k (nvec from 2 to 8), accumulated in k order for each element: the
+/// arithmetic of N_VLinearCombination of three or more vectors, and with two, where the second
+/// coefficient is 1, of N_VLinearSum. z may be one of the x.
+void combine(int nvec, const double* c, const double* const* x, int n, double* z) {
+  switch (nvec) {
+    case 2: return combine_fixed<2>(c, x, n, z);
+    case 3: return combine_fixed<3>(c, x, n, z);
+    case 4: return combine_fixed<4>(c, x, n, z);
+    case 5: return combine_fixed<5>(c, x, n, z);
+    case 6: return combine_fixed<6>(c, x, n, z);
+    case 7: return combine_fixed<7>(c, x, n, z);
+    default: return combine_fixed<8>(c, x, n, z);
   }
 }
 
@@ -321,6 +336,7 @@ void DormandPrince::complete_step(double dsm) {
   etamax_ = kGrowth;
   initsetup_ = false;
   has_step_ = true;
+  has_interior_ = false;
 }
 
 /// arkEvolve's and arkStopTests' limit: the next step ends before the stop time
@@ -395,8 +411,11 @@ int DormandPrince::dense(double t, double* y) {
                                                    "last step, which ends at %g.",
                                                    t, hermite_.t_new));
   }
-  const double ta = hermite_.cubic_third(ya_.data());
-  if (rhs_(ta, ya_.data(), fa_.data(), user_) != 0) {
+  if (!has_interior_) {  // the interior point, once per step
+    ta_ = hermite_.cubic_third(ya_.data());
+    has_interior_ = true;
+  }
+  if (rhs_(ta_, ya_.data(), fa_.data(), user_) != 0) {
     return fail(ARK_RHSFUNC_FAIL, "arkGetDky: the right-hand side failed in the dense output.");
   }
   hermite_.quartic(t, fa_.data(), y);

@@ -96,7 +96,9 @@ class DormandPrince {
   long nst_ = 0;
   std::vector<double> yn_, ycur_, ewt_, tmp_, F_[kStages];
   QuarticHermite hermite_;
-  std::vector<double> ya_, fa_;
+  std::vector<double> ya_, fa_;  ///< the dense output's interior point and its slope
+  double ta_ = 0.0;
+  bool has_interior_ = false;    ///< ya_ and ta_ are the last step's
   std::string message_;
 };
 
