@@ -1,7 +1,9 @@
 // ARKODE behind the Integrator interface: ERKStep for the explicit Runge-Kutta pairs
 // (Dormand-Prince 5(4), Verner 6(5), Fehlberg 7(8)) and ARKStep for the implicit DIRK
-// (ARK5(4)8L[2]SA, Newton with a dense Jacobian). The only file that includes ARKODE. Every
-// call's flag is checked; flag names come from ERKStepGetReturnFlagName / ARKStepGetReturnFlagName.
+// (ARK5(4)8L[2]SA, Newton with a dense Jacobian). Dormand-Prince is stepped by dormand_prince.cc,
+// ERKStep's algorithm compiled with the project, the library's ERKStep checking its settings.
+// Every call's flag is checked; flag names come from ERKStepGetReturnFlagName /
+// ARKStepGetReturnFlagName.
 #include <arkode/arkode_arkstep.h>
 #include <arkode/arkode_erkstep.h>
 #include <nvector/nvector_serial.h>
@@ -100,10 +102,6 @@ class Arkode final : public Integrator {
   bool dense(double t, double* y) override {
     if (own_) {
       const int flag = own_->dense(t, y);
-      if (flag == ARK_RHSFUNC_FAIL) {
-        sc_.error = "right-hand side failed in the dense output";
-        return false;
-      }
       if (flag < 0) sc_.solver_message = own_->message();
       return check(flag, "ERKStepGetDky");
     }
@@ -140,10 +138,9 @@ class Arkode final : public Integrator {
       return false;
     }
     // ARKODE names tables NAME_stages_embedding_order. Dense output: ARKODE's default Hermite
-    // interpolant, of degree order - 1 up to 5 (Dormand-Prince: degree 4, one extra right-hand
-    // side per call, at t_n+1 - h/3, which rhs() serves again to the step's later calls; cubic
-    // Hermite or Lagrange lose one to two digits at the 1 ms grid, measured with `fivebar
-    // accuracy`)
+    // interpolant, of degree order - 1 up to 5 (cubic Hermite or Lagrange lose one to two digits
+    // at the 1 ms grid, measured with `fivebar accuracy`); Dormand-Prince steps in
+    // dormand_prince.cc with its own continuous extension, no extra right-hand side
     const auto table = opt.method == Method::kArkodeErk45   ? ARKODE_DORMAND_PRINCE_7_4_5
                        : opt.method == Method::kArkodeErk65 ? ARKODE_VERNER_8_5_6
                                                             : ARKODE_FEHLBERG_13_7_8;

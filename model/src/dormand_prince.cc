@@ -91,29 +91,33 @@ std::string printed(const char* format, double a, double b = 0.0) {
 
 }  // namespace
 
-double QuarticHermite::cubic_third(double* ya) const {
-  const double tau = -1.0 / 3.0, tau2 = tau * tau, tau3 = tau * tau2;
-  const double c[4] = {3.0 * tau2 + 2.0 * tau3, 1.0 - 3.0 * tau2 - 2.0 * tau3, h * (tau2 + tau3),
-                       h * (tau + 2.0 * tau2 + tau3)};
-  const double* const x[4] = {y_old.data(), y_new.data(), f_old.data(), f_new.data()};
-  combine(4, c, x, static_cast<int>(y_old.size()), ya);
-  return t_new - h / 3.0;
+void DopriDense::set(double t_end, double step, const std::vector<double>& y0,
+                     const std::vector<double>& y1, const std::vector<double> (&k)[7]) {
+  // DOPRI5's coefficients of its continuous extension
+  constexpr double d1 = -12715105075.0 / 11282082432.0, d3 = 87487479700.0 / 32700410799.0;
+  constexpr double d4 = -10690763975.0 / 1880347072.0, d5 = 701980252875.0 / 199316789632.0;
+  constexpr double d6 = -1453857185.0 / 822651844.0, d7 = 69997945.0 / 29380423.0;
+  t_new = t_end;
+  h = step;
+  const size_t n = y0.size();
+  y_old = y0;
+  for (size_t i = 0; i < n; ++i) {
+    ydiff[i] = y1[i] - y0[i];
+    bspl[i] = h * k[0][i] - ydiff[i];
+    r4[i] = ydiff[i] - h * k[6][i] - bspl[i];
+    r5[i] = h * (d1 * k[0][i] + d3 * k[2][i] + d4 * k[3][i] + d5 * k[4][i] + d6 * k[5][i] +
+                 d7 * k[6][i]);
+  }
 }
 
-void QuarticHermite::quartic(double t, const double* fa, double* y) const {
-  const double tau = (t - t_new) / h, tau2 = tau * tau, tau3 = tau * tau2, tau4 = tau * tau3;
-  const double c[5] = {
-      -6.0 * tau2 - 16.0 * tau3 - 9.0 * tau4,
-      1.0 + 6.0 * tau2 + 16.0 * tau3 + 9.0 * tau4,
-      h * 0.25 * (-5.0 * tau2 - 14.0 * tau3 - 9.0 * tau4),
-      h * (tau + 2.0 * tau2 + tau3),
-      h * 27.0 * 0.25 * (-tau4 - 2.0 * tau3 - tau2),
-  };
-  const double* const x[5] = {y_old.data(), y_new.data(), f_old.data(), f_new.data(), fa};
-  combine(5, c, x, static_cast<int>(y_old.size()), y);
+void DopriDense::at(double t, double* y) const {
+  const double theta = (t - (t_new - h)) / h, theta1 = 1.0 - theta;
+  for (size_t i = 0; i < y_old.size(); ++i) {
+    y[i] = y_old[i] + theta * (ydiff[i] + theta1 * (bspl[i] + theta * (r4[i] + theta1 * r5[i])));
+  }
 }
 
-bool QuarticHermite::covers(double t) const {
+bool DopriDense::covers(double t) const {
   const double fuzz = kFuzz * kUround * (std::abs(t_new) + std::abs(h));
   return (t - (t_new - h - fuzz)) * (t - (t_new + fuzz)) <= 0.0;
 }
@@ -123,8 +127,8 @@ DormandPrince::DormandPrince(int n, RhsFn rhs, void* user, double rtol,
     : n_(n), rhs_(rhs), user_(user), rtol_(rtol), atol_(atol), max_nef_(max_nef),
       tab_(load_table()) {
   atol_has_zero_ = *std::min_element(atol_.begin(), atol_.end()) == 0.0;
-  for (auto* v : {&yn_, &ycur_, &ewt_, &tmp_, &ya_, &fa_, &hermite_.y_old, &hermite_.y_new,
-                  &hermite_.f_old, &hermite_.f_new}) {
+  for (auto* v : {&yn_, &ycur_, &ewt_, &tmp_, &dense_.y_old, &dense_.ydiff, &dense_.bspl,
+                  &dense_.r4, &dense_.r5}) {
     v->assign(n, 0.0);
   }
   for (auto& f : F_) f.assign(n, 0.0);
@@ -320,13 +324,8 @@ void DormandPrince::complete_step(double dsm) {
       std::abs(tcur_ - tstop_) <= kFuzz * kUround * (std::abs(tcur_) + std::abs(h_))) {
     tcur_ = tstop_;
   }
-  hermite_.y_old = yn_;
-  hermite_.f_old = F_[0];
-  hermite_.t_new = tcur_;
-  hermite_.h = h_;
-  hermite_.y_new = ycur_;
+  dense_.set(tcur_, h_, yn_, ycur_, F_);
   F_[0] = F_[kStages - 1];  // c = 1 at the last stage: f(t_new, y_new) is its slope
-  hermite_.f_new = F_[0];
   yn_ = ycur_;
   ehist_[1] = ehist_[0];
   ehist_[0] = dsm * kBias;
@@ -336,7 +335,6 @@ void DormandPrince::complete_step(double dsm) {
   etamax_ = kGrowth;
   initsetup_ = false;
   has_step_ = true;
-  has_interior_ = false;
 }
 
 /// arkEvolve's and arkStopTests' limit: the next step ends before the stop time
@@ -391,9 +389,8 @@ int DormandPrince::step(double* y, double* t) {
   }
   complete_step(dsm);
   if (tstopset_) {
-    if (std::abs(tcur_ - tstop_) <= kFuzz * kUround * (std::abs(tcur_) + std::abs(h_))) {
-      const int flag = dense(tstop_, y);
-      if (flag != ARK_SUCCESS) return flag;
+    if (tcur_ == tstop_) {  // (complete_step puts the step's end on the stop time within rounding)
+      std::copy(yn_.begin(), yn_.end(), y);
       tretlast_ = *t = tstop_;
       tstopset_ = false;
       return ARK_TSTOP_RETURN;
@@ -406,19 +403,12 @@ int DormandPrince::step(double* y, double* t) {
 }
 
 int DormandPrince::dense(double t, double* y) {
-  if (!has_step_ || !hermite_.covers(t)) {
+  if (!has_step_ || !dense_.covers(t)) {
     return fail(ARK_BAD_T, "arkGetDky: " + printed("Illegal value for t. t = %g is not within the "
                                                    "last step, which ends at %g.",
-                                                   t, hermite_.t_new));
+                                                   t, dense_.t_new));
   }
-  if (!has_interior_) {  // the interior point, once per step
-    ta_ = hermite_.cubic_third(ya_.data());
-    has_interior_ = true;
-  }
-  if (rhs_(ta_, ya_.data(), fa_.data(), user_) != 0) {
-    return fail(ARK_RHSFUNC_FAIL, "arkGetDky: the right-hand side failed in the dense output.");
-  }
-  hermite_.quartic(t, fa_.data(), y);
+  dense_.at(t, y);
   return ARK_SUCCESS;
 }
 

@@ -4,8 +4,9 @@
 // products and sums in the same order, the same special cases where those round differently, so
 // its steps, states and error estimates are the library's bit for bit (ErkStepper.* checks it
 // against ERKStep). The distribution's library is built without optimization; its step loop,
-// controller and generic vector calls cost the simulator more than this. Also ERKStep's dense
-// output: ARKODE's Hermite interpolant of degree 4 (arkode_interp.c).
+// controller and generic vector calls cost the simulator more than this. Its dense output is
+// Dormand-Prince's own (DopriDense), from the step's stages: ERKStep's Hermite interpolant needs
+// one more right-hand side per step.
 #pragma once
 
 #include <string>
@@ -15,20 +16,19 @@
 
 namespace fivebar::sim::detail {
 
-/// ERKStep's dense output for Dormand-Prince: ARKODE's Hermite interpolant of degree 4 on the
-/// last step [t_new - h, t_new], in the library's arithmetic (SUNDIALS 6.4 arkode_interp.c: the
-/// same coefficient expressions in the same order, the same linear combinations). The slopes are
-/// those ERKStep holds: f_old and f_new of the step's ends, f_a at t_new - h/3 on the cubic
-/// interpolant.
-struct QuarticHermite {
+/// Dormand-Prince's own continuous extension on the last step [t_new - h, t_new] (Hairer,
+/// Norsett and Wanner, DOPRI5's dense output: order 4 from the step's seven stages, no further
+/// right-hand side): y(t_new - h + theta h) = y_old + theta (ydiff + (1 - theta) (bspl + theta
+/// (r4 + (1 - theta) r5))).
+struct DopriDense {
   double t_new = 0.0, h = 0.0;
-  std::vector<double> y_old, y_new, f_old, f_new;
+  std::vector<double> y_old, ydiff, bspl, r4, r5;
 
-  /// The cubic interpolant's state at tau = -1/3 (tau = (t - t_new) / h) into ya, and its time.
-  double cubic_third(double* ya) const;
-  /// The quartic interpolant at t, with f_a the slope at cubic_third's point.
-  void quartic(double t, const double* fa, double* y) const;
-  /// Whether t is within the step as ERKStepGetDky accepts it (its rounding slack).
+  /// From the step's start y_old, end y_new and stage slopes k[0..6] (k[6] = f(t_new, y_new)).
+  void set(double t_end, double step, const std::vector<double>& y0, const std::vector<double>& y1,
+           const std::vector<double> (&k)[7]);
+  void at(double t, double* y) const;
+  /// Whether t is within the step, with ERKStepGetDky's rounding slack.
   bool covers(double t) const;
 };
 
@@ -49,13 +49,10 @@ class DormandPrince {
   void start(double t0, const double* y0, double t_stop);
   /// Largest step from now on (<= 0: none), as ERKStepSetMaxStep.
   void set_max_step(double h) { hmax_inv_ = h > 0.0 ? 1.0 / h : 0.0; }
-  /// One step (ERKStepEvolve in ARK_ONE_STEP mode): *t and y the step's end (at the stop time, the
-  /// dense output there). Returns ARKODE's flag; on failure, message() has its words.
+  /// One step (ERKStepEvolve in ARK_ONE_STEP mode): *t and y the step's end. Returns ARKODE's
+  /// flag (ARK_TSTOP_RETURN at the stop time); on failure, message() has its words.
   int step(double* y, double* t);
-  /// The interpolant of the last step (valid once a step succeeded since the last start).
-  const QuarticHermite& interpolant() const { return hermite_; }
-  bool has_interpolant() const { return has_step_; }
-  /// The dense output at t within the last step (one right-hand side, at the interior point).
+  /// The dense output at t within the last step (ARK_BAD_T elsewhere).
   int dense(double t, double* y);
   /// Steps since the last start.
   long steps() const { return nst_; }
@@ -95,10 +92,7 @@ class DormandPrince {
   double ehist_[2] = {1.0, 1.0};
   long nst_ = 0;
   std::vector<double> yn_, ycur_, ewt_, tmp_, F_[kStages];
-  QuarticHermite hermite_;
-  std::vector<double> ya_, fa_;  ///< the dense output's interior point and its slope
-  double ta_ = 0.0;
-  bool has_interior_ = false;    ///< ya_ and ta_ are the last step's
+  DopriDense dense_;
   std::string message_;
 };
 
