@@ -44,8 +44,8 @@ class Arkode final : public Integrator {
     if (ok_ && opt.method == Method::kArkodeErk45) {
       // the library's ERKStep keeps checking the settings (tolerances, step limit) as it
       // receives them; the steps are taken by the compiled copy of its algorithm
-      own_ = std::make_unique<DormandPrince>(prob.n, &Arkode::evaluate_for, this, opt.rtol,
-                                             atol(), kMaxErrTestFails);
+      own_ = std::make_unique<DormandPrince>(prob.n, &Arkode::evaluate_for, this, opt.rtol, atol(),
+                                             kMaxErrTestFails);
     }
   }
   ~Arkode() override {
@@ -197,7 +197,8 @@ class Arkode final : public Integrator {
   /// f(t, y) at one end of the step from the last evaluation, when that was there.
   bool slope_from_cache(StepEnd* e) {
     const size_t bytes = sizeof(double) * prob_.n;
-    if (!cache_.has_f || cache_.t != e->t || std::memcmp(cache_.y.data(), e->y.data(), bytes) != 0) {
+    if (!cache_.has_f || cache_.t != e->t ||
+        std::memcmp(cache_.y.data(), e->y.data(), bytes) != 0) {
       return false;
     }
     e->f = cache_.f;

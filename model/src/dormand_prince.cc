@@ -16,10 +16,10 @@ namespace fivebar::sim::detail {
 namespace {
 
 constexpr double kUround = std::numeric_limits<double>::epsilon();
-constexpr double kFuzz = 100.0;        // FUZZ_FACTOR
-constexpr double kTiny = 1.0e-10;      // TINY
-constexpr double kOnePsm = 1.000001;   // ONEPSM
-constexpr double kOneMsm = 0.999999;   // ONEMSM
+constexpr double kFuzz = 100.0;       // FUZZ_FACTOR
+constexpr double kTiny = 1.0e-10;     // TINY
+constexpr double kOnePsm = 1.000001;  // ONEPSM
+constexpr double kOneMsm = 0.999999;  // ONEMSM
 // ERKStep's defaults (ERKStepSetDefaults over arkSetDefaults)
 constexpr double kSafety = 0.99, kBias = 1.2, kGrowth = 25.0, kK1 = 0.8, kK2 = 0.31;
 constexpr double kEtaMx1 = 10000.0, kEtaMxf = 0.3, kEtaMin = 0.1, kCfl = 0.5;
@@ -46,13 +46,20 @@ void combine_fixed(const double* c, const double* const* x, int n, double* z) {
 /// coefficient is 1, of N_VLinearSum. z may be one of the x.
 void combine(int nvec, const double* c, const double* const* x, int n, double* z) {
   switch (nvec) {
-    case 2: return combine_fixed<2>(c, x, n, z);
-    case 3: return combine_fixed<3>(c, x, n, z);
-    case 4: return combine_fixed<4>(c, x, n, z);
-    case 5: return combine_fixed<5>(c, x, n, z);
-    case 6: return combine_fixed<6>(c, x, n, z);
-    case 7: return combine_fixed<7>(c, x, n, z);
-    default: return combine_fixed<8>(c, x, n, z);
+    case 2:
+      return combine_fixed<2>(c, x, n, z);
+    case 3:
+      return combine_fixed<3>(c, x, n, z);
+    case 4:
+      return combine_fixed<4>(c, x, n, z);
+    case 5:
+      return combine_fixed<5>(c, x, n, z);
+    case 6:
+      return combine_fixed<6>(c, x, n, z);
+    case 7:
+      return combine_fixed<7>(c, x, n, z);
+    default:
+      return combine_fixed<8>(c, x, n, z);
   }
 }
 
@@ -124,7 +131,12 @@ bool DopriDense::covers(double t) const {
 
 DormandPrince::DormandPrince(int n, RhsFn rhs, void* user, double rtol,
                              const std::vector<double>& atol, int max_nef)
-    : n_(n), rhs_(rhs), user_(user), rtol_(rtol), atol_(atol), max_nef_(max_nef),
+    : n_(n),
+      rhs_(rhs),
+      user_(user),
+      rtol_(rtol),
+      atol_(atol),
+      max_nef_(max_nef),
       tab_(load_table()) {
   atol_has_zero_ = *std::min_element(atol_.begin(), atol_.end()) == 0.0;
   for (auto* v : {&yn_, &ycur_, &ewt_, &tmp_, &dense_.y_old, &dense_.ydiff, &dense_.bspl,
@@ -320,8 +332,7 @@ int DormandPrince::check_error(double dsm, int* nef) {
 /// ends, the first-same-as-last slope, the error history
 void DormandPrince::complete_step(double dsm) {
   tcur_ = tn_ + h_;
-  if (tstopset_ &&
-      std::abs(tcur_ - tstop_) <= kFuzz * kUround * (std::abs(tcur_) + std::abs(h_))) {
+  if (tstopset_ && std::abs(tcur_ - tstop_) <= kFuzz * kUround * (std::abs(tcur_) + std::abs(h_))) {
     tcur_ = tstop_;
   }
   dense_.set(tcur_, h_, yn_, ycur_, F_);

@@ -332,7 +332,9 @@ const LoadsOf<M>& loads_at(Context<M>& c, double t) {
     c.loads_time = t;
     // (the status worded only for a load that is not finite: the common case costs no message)
     bool finite = true;
-    for (const auto& named : Sim<M>::load_values(c.loads_then)) finite &= std::isfinite(named.second);
+    for (const auto& named : Sim<M>::load_values(c.loads_then)) {
+      finite &= std::isfinite(named.second);
+    }
     if (!finite) {
       c.loads_status = finite_loads(c.loads_then, t);
     } else if (!c.loads_status.ok()) {
@@ -551,8 +553,8 @@ bool switch_slopes(const Context<M>& c, const StepEnd& end, Switches* gdot) {
 /// change stays within twice the larger of its ends' cannot fall from g0 and come back to g1
 /// through zero in h; the interior samples are then skipped.
 template <class M>
-bool interior_clear(const Context<M>& c, const Watch& w, const Switches& g1,
-                    const Switches& gdot1, double h) {
+bool interior_clear(const Context<M>& c, const Watch& w, const Switches& g1, const Switches& gdot1,
+                    double h) {
   if (!w.has_gdot) return false;
   for (int k = 0; k < kJoints; ++k) {
     if (!c.watched[k]) continue;

@@ -58,7 +58,8 @@ double max_difference(const double* a, const double* b) {
 }
 
 /// Steps the simulator's Dormand-Prince and the library's ERKStep side by side; the reference's
-/// error-test failures into *rejected, the largest difference of the dense outputs into *dense_diff.
+/// error-test failures into *rejected, the largest difference of the dense outputs into
+/// *dense_diff.
 template <bool kink>
 void compare_with_library(long* rejected, double* dense_diff) {
   Options opt;
@@ -134,7 +135,7 @@ TEST(ErkStepper, StepsAsTheLibraryThroughRejectedSteps) {
   long rejected = 0;
   double dense_diff = 0.0;
   compare_with_library<true>(&rejected, &dense_diff);
-  EXPECT_GT(rejected, 0);  // the kink's rejected steps were compared too
+  EXPECT_GT(rejected, 0);             // the kink's rejected steps were compared too
   EXPECT_LT(dense_diff, 100 * kTol);  // 6.5e-9: a kink inside a step
 }
 
