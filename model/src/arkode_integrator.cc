@@ -1,7 +1,9 @@
 // ARKODE behind the Integrator interface: ERKStep for the explicit Runge-Kutta pairs
 // (Dormand-Prince 5(4), Verner 6(5), Fehlberg 7(8)) and ARKStep for the implicit DIRK
-// (ARK5(4)8L[2]SA, Newton with a dense Jacobian). The only file that includes ARKODE. Every
-// call's flag is checked; flag names come from ERKStepGetReturnFlagName / ARKStepGetReturnFlagName.
+// (ARK5(4)8L[2]SA, Newton with a dense Jacobian). Dormand-Prince is stepped by dormand_prince.cc,
+// ERKStep's algorithm compiled with the project, the library's ERKStep checking its settings.
+// Every call's flag is checked; flag names come from ERKStepGetReturnFlagName /
+// ARKStepGetReturnFlagName.
 #include <arkode/arkode_arkstep.h>
 #include <arkode/arkode_erkstep.h>
 #include <nvector/nvector_serial.h>
@@ -9,11 +11,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <cstring>
+#include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "dormand_prince.h"
 #include "sundials_common.h"
 
 namespace fivebar::sim::detail {
@@ -28,56 +32,6 @@ struct StepEnd {
   bool has_f = false;
 };
 
-/// z = sum_k c_k x_k, summed in k order for each element (as the serial vector's linear
-/// combination: the same bits)
-template <int K>
-void combine(const double (&c)[K], const double* const (&x)[K], int n, double* z) {
-  for (int i = 0; i < n; ++i) {
-    double s = c[0] * x[0][i];
-    for (int k = 1; k < K; ++k) s += c[k] * x[k][i];
-    z[i] = s;
-  }
-}
-
-/// ERKStep's dense output for Dormand-Prince: ARKODE's Hermite interpolant of degree 4 on the
-/// last step [t_new - h, t_new], in the library's arithmetic (SUNDIALS 6.4 arkode_interp.c: the
-/// same coefficient expressions in the same order, the same linear combinations), so its values
-/// are the library's bit for bit. The slopes are those ERKStep holds: f_old and f_new as the
-/// right-hand side returned them, f_a at t_new - h/3 on the cubic interpolant.
-struct QuarticHermite {
-  double t_new = 0.0, h = 0.0;
-  std::vector<double> y_old, y_new, f_old, f_new;
-
-  /// The cubic interpolant's state at tau = -1/3 (tau = (t - t_new) / h) into ya, and its time.
-  double cubic_third(double* ya) const {
-    const double tau = -1.0 / 3.0, tau2 = tau * tau, tau3 = tau * tau2;
-    const double c[4] = {3.0 * tau2 + 2.0 * tau3, 1.0 - 3.0 * tau2 - 2.0 * tau3, h * (tau2 + tau3),
-                         h * (tau + 2.0 * tau2 + tau3)};
-    const double* const x[4] = {y_old.data(), y_new.data(), f_old.data(), f_new.data()};
-    combine(c, x, static_cast<int>(y_old.size()), ya);
-    return t_new - h / 3.0;
-  }
-  /// The quartic interpolant at t, with f_a the slope at cubic_third's point.
-  void quartic(double t, const double* fa, double* y) const {
-    const double tau = (t - t_new) / h, tau2 = tau * tau, tau3 = tau * tau2, tau4 = tau * tau3;
-    const double c[5] = {
-        -6.0 * tau2 - 16.0 * tau3 - 9.0 * tau4,
-        1.0 + 6.0 * tau2 + 16.0 * tau3 + 9.0 * tau4,
-        h * 0.25 * (-5.0 * tau2 - 14.0 * tau3 - 9.0 * tau4),
-        h * (tau + 2.0 * tau2 + tau3),
-        h * 27.0 * 0.25 * (-tau4 - 2.0 * tau3 - tau2),
-    };
-    const double* const x[5] = {y_old.data(), y_new.data(), f_old.data(), f_new.data(), fa};
-    combine(c, x, static_cast<int>(y_old.size()), y);
-  }
-  /// Whether t is within the step as ERKStepGetDky accepts it (its rounding slack).
-  bool covers(double t) const {
-    const double fuzz =
-        100 * std::numeric_limits<double>::epsilon() * (std::abs(t_new) + std::abs(h));
-    return (t - (t_new - h - fuzz)) * (t - (t_new + fuzz)) <= 0.0;
-  }
-};
-
 class Arkode final : public Integrator {
  public:
   Arkode(const OdeProblem& prob, const Options& opt, double t_end)
@@ -86,12 +40,13 @@ class Arkode final : public Integrator {
       e->y.assign(prob.n, 0.0);
       e->f.assign(prob.n, 0.0);
     }
-    own_dense_ = opt.method == Method::kArkodeErk45;
-    for (auto* v : {&hermite_.y_old, &hermite_.y_new, &hermite_.f_old, &hermite_.f_new, &last_f_,
-                    &start_f_, &ya_, &fa_}) {
-      v->assign(prob.n, 0.0);
-    }
     ok_ = sc_.ready && (explicit_ ? setup_erk(opt) : setup_dirk(opt));
+    if (ok_ && opt.method == Method::kArkodeErk45) {
+      // the library's ERKStep keeps checking the settings (tolerances, step limit) as it
+      // receives them; the steps are taken by the compiled copy of its algorithm
+      own_ = std::make_unique<DormandPrince>(prob.n, &Arkode::evaluate_for, this, opt.rtol, atol(),
+                                             kMaxErrTestFails);
+    }
   }
   ~Arkode() override {
     if (mem_) {
@@ -112,8 +67,7 @@ class Arkode final : public Integrator {
     std::copy(y0, y0 + prob_.n, cur_.y.begin());
     cur_.has_f = false;
     cache_.has_f = false;  // the modes may have changed at a restart: no earlier evaluation holds
-    hermite_valid_ = false;
-    start_f_pending_ = true;  // ERKStep evaluates f(t0, y0) first, its interpolant's f_old
+    if (own_) own_->start(t0, y0, t_end_);
     if (explicit_) {
       return check(ERKStepReInit(mem_, &Arkode::rhs, t0, sc_.y), "ERKStepReInit") &&
              check(ERKStepSetStopTime(mem_, t_end_), "ERKStepSetStopTime");
@@ -122,33 +76,34 @@ class Arkode final : public Integrator {
            check(ARKStepSetStopTime(mem_, t_end_), "ARKStepSetStopTime");
   }
   bool set_max_step(double h) override {
+    if (own_) own_->set_max_step(h);
     return explicit_ ? check(ERKStepSetMaxStep(mem_, h), "ERKStepSetMaxStep")
                      : check(ARKStepSetMaxStep(mem_, h), "ARKStepSetMaxStep");
   }
   bool step(double* y, double* t) override {
     std::swap(prev_, cur_);
-    recording_ = own_dense_;
-    has_last_ = false;
-    const int flag = explicit_ ? ERKStepEvolve(mem_, t_end_, sc_.y, t, ARK_ONE_STEP)
-                               : ARKStepEvolve(mem_, t_end_, sc_.y, t, ARK_ONE_STEP);
-    recording_ = false;
-    sc_.store(y, prob_.n);
+    int flag = 0;
+    if (own_) {
+      flag = own_->step(y, t);
+      if (flag < 0) sc_.solver_message = own_->message();
+    } else {
+      flag = explicit_ ? ERKStepEvolve(mem_, t_end_, sc_.y, t, ARK_ONE_STEP)
+                       : ARKStepEvolve(mem_, t_end_, sc_.y, t, ARK_ONE_STEP);
+      sc_.store(y, prob_.n);
+    }
     cur_.t = *t;
     std::copy(y, y + prob_.n, cur_.y.begin());
     cur_.has_f = false;
-    if (own_dense_) update_hermite(flag);
+    // the step's end slope while the last evaluation is there (the first-same-as-last stage),
+    // before later evaluations replace it, whether or not the switch scan samples this step
+    slope_from_cache(&cur_);
     return check(flag, explicit_ ? "ERKStepEvolve" : "ARKStepEvolve");
   }
   bool dense(double t, double* y) override {
-    if (hermite_valid_ && hermite_.covers(t)) {
-      // the interior slope as ERKStep's interpolant takes it: through rhs(), as ARKODE calls it
-      const double ta = hermite_.cubic_third(ya_.data());
-      if (evaluate(ta, ya_.data(), fa_.data()) != 0) {
-        sc_.error = "right-hand side failed in the dense output";
-        return false;
-      }
-      hermite_.quartic(t, fa_.data(), y);
-      return true;
+    if (own_) {
+      const int flag = own_->dense(t, y);
+      if (flag < 0) sc_.solver_message = own_->message();
+      return check(flag, "ERKStepGetDky");
     }
     NV_DATA_S(sc_.out) = y;  // a view of the caller's array: no allocation per call
     const int flag = explicit_ ? ERKStepGetDky(mem_, t, 0, sc_.out)
@@ -183,10 +138,9 @@ class Arkode final : public Integrator {
       return false;
     }
     // ARKODE names tables NAME_stages_embedding_order. Dense output: ARKODE's default Hermite
-    // interpolant, of degree order - 1 up to 5 (Dormand-Prince: degree 4, one extra right-hand
-    // side per call, at t_n+1 - h/3, which rhs() serves again to the step's later calls; cubic
-    // Hermite or Lagrange lose one to two digits at the 1 ms grid, measured with `fivebar
-    // accuracy`)
+    // interpolant, of degree order - 1 up to 5 (cubic Hermite or Lagrange lose one to two digits
+    // at the 1 ms grid, measured with `fivebar accuracy`); Dormand-Prince steps in
+    // dormand_prince.cc with its own continuous extension, no extra right-hand side
     const auto table = opt.method == Method::kArkodeErk45   ? ARKODE_DORMAND_PRINCE_7_4_5
                        : opt.method == Method::kArkodeErk65 ? ARKODE_VERNER_8_5_6
                                                             : ARKODE_FEHLBERG_13_7_8;
@@ -220,6 +174,11 @@ class Arkode final : public Integrator {
            check(ARKStepSetLinearSolver(mem_, sc_.ls, sc_.A), "ARKStepSetLinearSolver") &&
            (!prob_.freeze || check(ARKStepSetJacFn(mem_, &Arkode::jacobian), "ARKStepSetJacFn"));
   }
+  /// the absolute tolerances the library was given
+  std::vector<double> atol() const {
+    const double* a = NV_DATA_S(sc_.atol);
+    return std::vector<double>(a, a + prob_.n);
+  }
   bool check(int flag, const char* call) {
     return check_flag(flag, call, explicit_ ? &ERKStepGetReturnFlagName : &ARKStepGetReturnFlagName,
                       &sc_.solver_message, &sc_.error);
@@ -227,20 +186,32 @@ class Arkode final : public Integrator {
   /// f(t, y) at one end of the step: from the last right-hand side ARKODE evaluated there (the
   /// first-same-as-last stage of Dormand-Prince), else evaluated here.
   bool slope(StepEnd* e) {
-    if (e->has_f) return true;
-    const size_t bytes = sizeof(double) * prob_.n;
-    if (cache_.has_f && cache_.t == e->t && std::memcmp(cache_.y.data(), e->y.data(), bytes) == 0) {
-      e->f = cache_.f;
-    } else if (prob_.rhs(e->t, e->y.data(), e->f.data(), prob_.user) != 0) {
+    if (e->has_f || slope_from_cache(e)) return true;
+    if (prob_.rhs(e->t, e->y.data(), e->f.data(), prob_.user) != 0) {
       sc_.error = "right-hand side failed at a sampled point";
       return false;
     }
     e->has_f = true;
     return true;
   }
+  /// f(t, y) at one end of the step from the last evaluation, when that was there.
+  bool slope_from_cache(StepEnd* e) {
+    const size_t bytes = sizeof(double) * prob_.n;
+    if (!cache_.has_f || cache_.t != e->t ||
+        std::memcmp(cache_.y.data(), e->y.data(), bytes) != 0) {
+      return false;
+    }
+    e->f = cache_.f;
+    e->has_f = true;
+    return true;
+  }
   /// Steps since the last (re)start; 0 before the solver exists.
   bool current_steps(long* n) {
     *n = 0;
+    if (own_) {
+      *n = own_->steps();
+      return true;
+    }
     if (!mem_) return true;
     return explicit_ ? check(ERKStepGetNumSteps(mem_, n), "ERKStepGetNumSteps")
                      : check(ARKStepGetNumSteps(mem_, n), "ARKStepGetNumSteps");
@@ -267,42 +238,11 @@ class Arkode final : public Integrator {
         std::copy(fp, fp + prob_.n, c.f.begin());
       }
     }
-    if (recording_ && flag == 0) record(t, fp);
     return flag;
   }
-  /// Within a step: the slopes ERKStep keeps for its interpolant, as returned to it (the first
-  /// evaluation after a restart is f(t0, y0); the last of a step its last stage, at t_new).
-  void record(double t, const double* fp) {
-    if (start_f_pending_) {
-      std::copy(fp, fp + prob_.n, start_f_.begin());
-      start_f_pending_ = false;
-      has_start_f_ = true;
-    }
-    last_t_ = t;
-    std::copy(fp, fp + prob_.n, last_f_.begin());
-    has_last_ = true;
-  }
-  /// After a step: the interpolant ERKStep now holds, when everything it needs is known. The
-  /// step that reaches the end time returns its state from the dense output at the end time (its
-  /// last evaluation is that output's interior slope): its interpolant stays the library's.
-  void update_hermite(int flag) {
-    const bool restarted = has_start_f_;
-    const bool f_old_known = restarted || f_new_known_;
-    has_start_f_ = false;
-    hermite_valid_ = false;
-    f_new_known_ = false;
-    if (flag != ARK_SUCCESS || !f_old_known) return;
-    hermite_.f_old.swap(restarted ? start_f_ : hermite_.f_new);
-    if (!has_last_ || last_t_ != cur_.t) return;
-    hermite_.f_new.swap(last_f_);
-    f_new_known_ = true;
-    double h = 0.0;
-    if (ERKStepGetLastStep(mem_, &h) != ARK_SUCCESS) return;
-    hermite_.h = h;
-    hermite_.t_new = cur_.t;
-    hermite_.y_old = prev_.y;
-    hermite_.y_new = cur_.y;
-    hermite_valid_ = true;
+  /// The right-hand side for the compiled Dormand-Prince (DormandPrince): as for ARKODE's.
+  static int evaluate_for(double t, const double* y, double* f, void* self) {
+    return static_cast<Arkode*>(self)->evaluate(t, y, f);
   }
   /// Newton Jacobian by forward differences with the switched parts of the right-hand side
   /// frozen at y (OdeProblem::freeze). ARKODE's own difference quotients would divide a Coulomb
@@ -338,14 +278,8 @@ class Arkode final : public Integrator {
   bool ok_ = false;
   void* mem_ = nullptr;
   StepEnd prev_, cur_, cache_;
-  // ERKStep's interpolant evaluated here (Dormand-Prince): QuarticHermite and what it needs
-  bool own_dense_ = false;
-  QuarticHermite hermite_;
-  bool hermite_valid_ = false;
-  bool recording_ = false;  ///< within ERKStepEvolve: record() keeps the slopes returned
-  bool start_f_pending_ = false, has_start_f_ = false, has_last_ = false, f_new_known_ = false;
-  double last_t_ = 0.0;
-  std::vector<double> last_f_, start_f_, ya_, fa_;
+  /// Dormand-Prince stepped by the compiled copy of ERKStep's algorithm (null: the library steps)
+  std::unique_ptr<DormandPrince> own_;
 };
 
 }  // namespace

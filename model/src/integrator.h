@@ -47,7 +47,7 @@ class Integrator {
   virtual bool dense(double t, double* y) = 0;
   /// A cheaper interpolant at t within the last step, for scanning switch functions: CVODE's
   /// dense output (free), or a cubic Hermite from the step's end values and slopes for ARKODE
-  /// (whose Hermite dense output evaluates the right-hand side at interior points of the step).
+  /// (whose Hermite dense output evaluates the right-hand side at an interior point of the step).
   virtual bool sample(double t, double* y) = 0;
   /// Steps taken since construction, over all starts. False with error() set if SUNDIALS
   /// refuses the count.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <sstream>
 #include <utility>
@@ -266,6 +267,16 @@ struct Context {
   FrictionWarmStart warm;
   /// the same for the output rows (make_row), one output step apart
   FrictionWarmStart row_warm;
+  /// the last right-hand side's point and, from its evaluation, what the switch scan and the
+  /// singular-margin check need at a step's end (StepEnd): Dormand-Prince's last stage is the
+  /// step's end itself
+  struct LastEvaluation {
+    bool ok = false;
+    double t = 0.0;
+    double y[kMaxStates] = {};
+    double singular = 0.0;
+    std::array<double, kJoints> w{}, wdot{};
+  } last;
   /// the loads at the time of the last right-hand side or row (loads_at)
   double loads_time = std::numeric_limits<double>::quiet_NaN();
   LoadsOf<M> loads_then{};
@@ -319,7 +330,16 @@ const LoadsOf<M>& loads_at(Context<M>& c, double t) {
   if (!(t == c.loads_time)) {
     c.loads_then = (*c.loads)(t);
     c.loads_time = t;
-    c.loads_status = finite_loads(c.loads_then, t);
+    // (the status worded only for a load that is not finite: the common case costs no message)
+    bool finite = true;
+    for (const auto& named : Sim<M>::load_values(c.loads_then)) {
+      finite &= std::isfinite(named.second);
+    }
+    if (!finite) {
+      c.loads_status = finite_loads(c.loads_then, t);
+    } else if (!c.loads_status.ok()) {
+      c.loads_status = Status::Ok();
+    }
   }
   return c.loads_then;
 }
@@ -379,11 +399,25 @@ const JointModes* rhs_modes(const Context<M>& c, const double* y, JointModes* bu
   return c.use_slip ? &c.slip : nullptr;
 }
 
+/// Keeps the point of a right-hand side and, from its evaluation, the joint rates (as
+/// joint_rates computes them from the kinematics), their rates of change and the singular
+/// measure.
+template <class M>
+void remember_evaluation(Context<M>& c, double t, const double* y, const EvalOf<M>& ev) {
+  c.last.ok = true;
+  c.last.t = t;
+  std::copy(y, y + c.n, c.last.y);
+  c.last.w = joint_rates<M>(ev.kin, y);
+  c.last.wdot = Sim<M>::joint_accelerations(ev);
+  c.last.singular = std::abs(M::singular_measure(ev.kin));
+}
+
 template <class M>
 int rhs(double t, const double* y, double* ydot, void* user) {
   constexpr int n = M::kDof, kBristle = base_states(n);
   auto& c = *static_cast<Context<M>*>(user);
   ++c.rhs_evaluations;
+  c.last.ok = false;
   if (c.locked) {  // at rest, held: nothing moves, no power flows
     std::fill(ydot, ydot + c.n, 0.0);
     return 0;
@@ -420,6 +454,7 @@ int rhs(double t, const double* y, double* ydot, void* user) {
       return 1;
     }
   }
+  remember_evaluation(c, t, y, ev);
   return 0;
 }
 
@@ -429,11 +464,11 @@ bool any_stuck(const JointModes& slip) {
 
 /// Switch functions: s_k w_k of a slipping joint (positive while its rate keeps the slip
 /// direction) and the holding margin mu_s r_k N_k - |holding torque| of a stuck one
-/// (non-negative while friction holds it); +1 for joints without a Coulomb part. `kin` (may be
-/// null): the first-order kinematics at y, when the caller has them.
+/// (non-negative while friction holds it); +1 for joints without a Coulomb part. `rates` (may be
+/// null): the joint rates at y, when the caller has them.
 template <class M>
 Status switch_values(Context<M>& c, double t, const double* y, Switches* g,
-                     const KinOf<M>* kin = nullptr) {
+                     const std::array<double, kJoints>* rates = nullptr) {
   g->fill(1.0);
   if (c.locked) {
     LockAnalysis lock;
@@ -448,8 +483,8 @@ Status switch_values(Context<M>& c, double t, const double* y, Switches* g,
     const Status st = forward_at<M>(*c.params, (*c.loads)(t), y, &c.slip, c.eval, &ev);
     if (!st.ok()) return at_time<M>(st, t, y);
     w = ev.w;
-  } else if (kin) {
-    w = joint_rates<M>(*kin, y);
+  } else if (rates) {
+    w = *rates;
   } else if (!joint_rates<M>(*c.params, y, &w)) {
     return at_time<M>(Status::Error(StatusCode::kCannotAssemble, "pose cannot assemble"), t, y);
   }
@@ -465,6 +500,18 @@ Status switch_values(Context<M>& c, double t, const double* y, Switches* g,
 struct Watch {
   Switches g{};
   std::array<bool, 6> armed{};
+  /// the switch functions' rates of change at the last step's end, when known (joints slipping)
+  Switches gdot{};
+  bool has_gdot = false;
+};
+
+/// What the switch scan and the singular-margin check need at a step's end: whether the pose
+/// closes, its singular measure, the joint rates and, when known, their rates of change.
+struct StepEnd {
+  bool closes = false;
+  double singular = 1.0;
+  std::array<double, kJoints> w{}, wdot{};
+  bool has_wdot = false;
 };
 using Fired = std::array<bool, 6>;
 
@@ -489,18 +536,56 @@ void advance_watch(Watch* w, const Switches& g) {
   w->g = g;
 }
 
+/// The rates of change of the slipping joints' switch functions at a step's end (s_k dw_k/dt);
+/// false when they are not known there or a joint is stuck or locked.
+template <class M>
+bool switch_slopes(const Context<M>& c, const StepEnd& end, Switches* gdot) {
+  gdot->fill(0.0);
+  if (!end.has_wdot || c.locked || any_stuck(c.slip)) return false;
+  for (int k = 0; k < kJoints; ++k) {
+    if (c.watched[k]) (*gdot)[k] = coulomb_sign(c.slip[k]) * end.wdot[k];
+  }
+  return true;
+}
+
+/// Whether no switch function can reach zero inside the step of length h: each watched one
+/// positive at both ends (g0, g1) and g0 + g1 > 2 max(|g0'|, |g1'|) h. A function whose rate of
+/// change stays within twice the larger of its ends' cannot fall from g0 and come back to g1
+/// through zero in h; the interior samples are then skipped.
+template <class M>
+bool interior_clear(const Context<M>& c, const Watch& w, const Switches& g1, const Switches& gdot1,
+                    double h) {
+  if (!w.has_gdot) return false;
+  for (int k = 0; k < kJoints; ++k) {
+    if (!c.watched[k]) continue;
+    const double slope = 2.0 * std::max(std::abs(w.gdot[k]), std::abs(gdot1[k]));
+    if (!(w.g[k] > 0.0 && g1[k] > 0.0 && w.g[k] + g1[k] > slope * h)) return false;
+  }
+  return true;
+}
+
 /// Scans the last step (tp, tc] for the first point where a switch function fired: kSamples
-/// interior points of the cheap interpolant (confirmed on the dense output), then the step's
-/// end (its kinematics kin_c, may be null). Found: true with the bracket [*ta, *tb]. Not found:
-/// the watch moves to tc.
+/// interior points of the cheap interpolant (confirmed on the dense output; skipped where
+/// interior_clear), then the step's end `end`. Found: true with the bracket [*ta, *tb]. Not
+/// found: the watch moves to tc.
 template <class M>
 Status scan_step(Context<M>& c, detail::Integrator& integ, double tp, double tc, const double* yc,
-                 const KinOf<M>* kin_c, Watch* watch, bool* found, double* ta, double* tb) {
+                 const StepEnd& end_values, Watch* watch, bool* found, double* ta, double* tb) {
   *found = false;
   Watch w = *watch;
   double y[kMaxStates];
   double t_prev = tp;
-  for (int i = 1; i <= kSamples + 1; ++i) {
+  const std::array<double, kJoints>* end_rates = end_values.closes ? &end_values.w : nullptr;
+  Switches gdot_end;
+  const bool slopes = switch_slopes(c, end_values, &gdot_end);
+  int first = 1;
+  if (slopes) {
+    Switches g_end;
+    const Status st = switch_values(c, tc, yc, &g_end, end_rates);
+    if (!st.ok()) return st;
+    if (interior_clear(c, w, g_end, gdot_end, tc - tp)) first = kSamples + 1;
+  }
+  for (int i = first; i <= kSamples + 1; ++i) {
     const bool end = i == kSamples + 1;
     const double ti = end ? tc : tp + (tc - tp) * i / (kSamples + 1);
     if (end) {
@@ -509,7 +594,7 @@ Status scan_step(Context<M>& c, detail::Integrator& integ, double tp, double tc,
       return c.failure.ok() ? Status::Error(StatusCode::kSolverFailed, integ.error()) : c.failure;
     }
     Switches g;
-    Status st = switch_values(c, ti, y, &g, end ? kin_c : nullptr);
+    Status st = switch_values(c, ti, y, &g, end ? end_rates : nullptr);
     if (!st.ok()) return st;
     if (!end && any_of(fired(c, w, g))) {  // confirm on the accurate interpolant
       if (!integ.dense(ti, y)) return Status::Error(StatusCode::kSolverFailed, integ.error());
@@ -525,6 +610,8 @@ Status scan_step(Context<M>& c, detail::Integrator& integ, double tp, double tc,
     advance_watch(&w, g);
     t_prev = ti;
   }
+  w.gdot = gdot_end;
+  w.has_gdot = slopes;
   *watch = w;
   return Status::Ok();
 }
@@ -1077,23 +1164,38 @@ double singular_measure_at(const ParamsOf<M>& p, const double* y) {
   return std::abs(M::singular_measure(k));
 }
 
-/// The first-order kinematics at the end of a step, shared by the singular-margin check and the
-/// switch scan: null where the pose cannot close.
+/// The values at the end (tc, yc) of a step that the singular-margin check and the switch scan
+/// share: from the last right-hand side when it was evaluated there (Dormand-Prince's last
+/// stage), else from the first-order kinematics.
 template <class M>
-const KinOf<M>* step_end_kinematics(const ParamsOf<M>& p, const double* y, KinOf<M>* k) {
-  return close_at<M>(p, y, k, 0.0, false).ok() ? k : nullptr;
+StepEnd step_end(const Context<M>& c, double tc, const double* yc) {
+  StepEnd end;
+  if (c.last.ok && c.last.t == tc && std::memcmp(c.last.y, yc, sizeof(double) * c.n) == 0) {
+    end.closes = true;
+    end.singular = c.last.singular;
+    end.w = c.last.w;
+    end.wdot = c.last.wdot;
+    end.has_wdot = true;
+    return end;
+  }
+  KinOf<M> k;
+  end.closes = close_at<M>(*c.params, yc, &k, 0.0, false).ok();
+  if (end.closes) {
+    end.singular = std::abs(M::singular_measure(k));
+    end.w = joint_rates<M>(k, yc);
+  }
+  return end;
 }
 
 /// A run stops where the singular measure (|sin(th4 - th3)| of the five-bar) reaches
 /// simulation.singular_margin: located on the dense output, the rows up to it written, then
 /// kNearSingular (the right-hand side itself only fails at half the margin, so that steps do not
-/// shrink without end next to the singular pose). `kin_c`: the kinematics at the step's end yc
-/// (null where it cannot close).
+/// shrink without end next to the singular pose). `end`: the values at the step's end yc.
 template <class M>
 Status stop_at_singular_margin(Loop<M>& L, Result* result, const Options& options, double tp,
-                               double tc, const double* yc, const KinOf<M>* kin_c) {
+                               double tc, const double* yc, const StepEnd& end) {
   const double margin = options.singular_margin;
-  if (!(margin > 0.0) || (kin_c ? std::abs(M::singular_measure(*kin_c)) : 1.0) >= margin) {
+  if (!(margin > 0.0) || (end.closes ? end.singular : 1.0) >= margin) {
     return Status::Ok();
   }
   double ta = tp, tb = tc, y[kMaxStates];
@@ -1174,14 +1276,13 @@ Status advance(Loop<M>& L, Result* result, const Options& options) {
                                         " steps between two output times"),
                       tc, yc);
   }
-  KinOf<M> kin;
-  const KinOf<M>* kin_c = step_end_kinematics<M>(*L.c.params, yc, &kin);
-  const Status singular = stop_at_singular_margin(L, result, options, tp, tc, yc, kin_c);
+  const StepEnd end = step_end(L.c, tc, yc);
+  const Status singular = stop_at_singular_margin(L, result, options, tp, tc, yc, end);
   if (!singular.ok()) return singular;
   bool found = false;
   double ta = tp, tb = tc;
   if (L.c.use_slip) {
-    const Status st = scan_step(L.c, *L.integ, tp, tc, yc, kin_c, &L.watch, &found, &ta, &tb);
+    const Status st = scan_step(L.c, *L.integ, tp, tc, yc, end, &L.watch, &found, &ta, &tb);
     if (!st.ok()) return st;
   }
   if (!found) {
