@@ -251,14 +251,19 @@ struct CheckWindow {
 /// where it is least), with the noise floors of that window. Angles-only logs only.
 CheckWindow check_window(const Fit& f, const IdentifyResult& out);
 
+/// model_check's note when the check at cw evidences a model error too (its report `again`).
+std::string confirmed_note(const Fit& f, const CheckWindow& cw,
+                           const std::vector<IdentifyResult::MisfitCause>& again);
+
 /// model_check's warning when the check at the fit's window evidenced a model error (the causes'
 /// report `first`) and the check at cw evidences none: the smoothing error of the fit's window
 /// explains it.
 std::string smoothing_warning(const Fit& f, const CheckWindow& cw,
                               const std::vector<IdentifyResult::MisfitCause>& first);
 
-/// f with its samples' rates and accelerations estimated with the filter sg.
-Fit refiltered(const Fit& f, const SgOptions& sg);
+/// f with its samples' rates and accelerations estimated with the filter sg, those the rest rule
+/// holds at sg's thresholds left out.
+Fit refiltered(const Fit& f, const IdentifyResult& out, const SgOptions& sg);
 
 /// A quick fit on at most ~1500 of the selected samples (plain least squares) that sets f->x for
 /// the window choice; keeps the start values if it fails.

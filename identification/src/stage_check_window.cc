@@ -10,12 +10,13 @@ namespace {
 /// (even: the centred filter's acceleration error) and the second (odd: its rate error)
 constexpr int kCheckTerms = 2;
 
-/// The check's window keeps the predicted smoothing error's whitened cost at most this: the
-/// freed causes absorbed about a quarter of it on a fast five-bar (1 kHz, cranks up to 55
-/// rad/s, a clean 3 s log: 418 of 1695 at its fit's half-window of 7 samples, 66 of 256 at 6),
-/// so that at this cost they absorb about the encoders' zeros' evidence bar (kCauseZ std of
-/// their fall under noise alone, 2 +- 2), and the inertias' fall at 5 samples (cost 26) was -9.
-constexpr double kCheckSmoothingCost = 64;
+/// The check's window keeps the predicted smoothing error's whitened cost at most this: a
+/// deterministic error of cost E lowers the cost of any refit by at most E, and the smallest
+/// evidence bar of a cause is kCauseZ std of the encoders' two zeros' fall under noise alone
+/// (2 +- 2), 16. (The freed causes absorbed from a quarter of it, the inertias and the zeros
+/// together on a fast five-bar, 418 of 1695 at its fit's half-window of 7 samples, to all of it,
+/// a heavy one's zeros, 43 of 40 at 6 samples.)
+constexpr double kCheckSmoothingCost = 16;
 
 /// What the smoothing error of any window needs about the fit's samples: each one's kinematic
 /// Jacobian D and its cranks' higher terms (motion_terms over the fit's window's reach).
@@ -102,20 +103,42 @@ CheckWindow check_window(const Fit& f, const IdentifyResult& out) {
   return cw;
 }
 
-std::string smoothing_warning(const Fit& f, const CheckWindow& cw,
-                              const std::vector<IdentifyResult::MisfitCause>& first) {
+namespace {
+
+/// "N samples": the half-window of sg on f's log
+std::string half_window_text(const Fit& f, const SgOptions& sg) {
   const TorqueLog& log = f.cond.log;
   const double dt = log.duration() / std::max(1, log.size() - 1);
-  const auto samples = [&](const SgOptions& sg) {
-    return std::to_string(sg_half_window(sg, dt)) + " samples";
-  };
+  return std::to_string(sg_half_window(sg, dt)) + " samples";
+}
+
+/// "inertia 41, angle_offsets 75": the model causes of a check's report evidenced alone
+std::string evidence_text(const std::vector<IdentifyResult::MisfitCause>& causes) {
   std::string read;
-  for (const IdentifyResult::MisfitCause& c : first) {
+  for (const IdentifyResult::MisfitCause& c : causes) {
     if (c.name == "delay" || c.name == "any" || !c.checked || !(c.z > detail::kCauseZ)) continue;
     read += (read.empty() ? "" : ", ") + c.name + " " + format_significant(c.z, 2);
   }
+  return read.empty() ? "all of them together" : read;
+}
+
+}  // namespace
+
+std::string confirmed_note(const Fit& f, const CheckWindow& cw,
+                           const std::vector<IdentifyResult::MisfitCause>& again) {
+  return "model check: the fit's half-window of " + half_window_text(f, f.sg) +
+         " smooths this motion's accelerations (a predicted error of whitened cost " +
+         format_significant(cw.fit_cost, 3) + " in the residual), but the check at " +
+         half_window_text(f, cw.sg) + " (cost " + format_significant(cw.cost, 2) +
+         ") evidences a model error too (evidence alone, in std: " + evidence_text(again) +
+         "): the verdict is the fit's window's";
+}
+
+std::string smoothing_warning(const Fit& f, const CheckWindow& cw,
+                              const std::vector<IdentifyResult::MisfitCause>& first) {
+  const auto samples = [&](const SgOptions& sg) { return half_window_text(f, sg); };
   return "the model check at the fit's Savitzky-Golay half-window of " + samples(f.sg) +
-         " evidenced a model error (evidence alone, in std: " + read +
+         " evidenced a model error (evidence alone, in std: " + evidence_text(first) +
          ") that the estimated accelerations' smoothing error explains: that window smooths "
          "this motion's accelerations (a predicted error of whitened cost " +
          format_significant(cw.fit_cost, 3) + " in the residual, more than " +
@@ -127,19 +150,29 @@ std::string smoothing_warning(const Fit& f, const CheckWindow& cw,
          "model check at the fit's window)";
 }
 
-Fit refiltered(const Fit& f, const SgOptions& sg) {
+Fit refiltered(const Fit& f, const IdentifyResult& out, const SgOptions& sg) {
   Fit g = f;
   g.sg = sg;
+  g.samples.clear();
+  g.index.clear();
   const TorqueLog& log = f.cond.log;
   std::vector<double> w1, a1, w2, a2;
   savitzky_golay(log.t, log.theta1, sg, &w1, &a1);
   savitzky_golay(log.t, log.theta2, sg, &w2, &a2);
-  for (size_t u = 0; u < g.samples.size(); ++u) {
+  // the rest rule at sg's thresholds (select_samples): its noisier rates hold more samples
+  const RestThresholds rest = rest_rule(log, out, *f.opt, sg);
+  g.eval.rest_rate = rest.rate;
+  const double noise = std::max(f.noise.angle[0], f.noise.angle[1]);
+  for (size_t u = 0; u < f.samples.size(); ++u) {
     const int i = f.index[u];
-    g.samples[u].w1 = w1[i];
-    g.samples[u].w2 = w2[i];
-    g.samples[u].a1 = a1[i];
-    g.samples[u].a2 = a2[i];
+    Sample s = f.samples[u];
+    s.w1 = w1[i];
+    s.w2 = w2[i];
+    s.a1 = a1[i];
+    s.a2 = a2[i];
+    if (held_sample(f.scene, s, rest, noise)) continue;
+    g.samples.push_back(s);
+    g.index.push_back(i);
   }
   return g;
 }

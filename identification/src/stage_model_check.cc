@@ -631,10 +631,11 @@ ModelVerdict model_check(const Fit& fit, IdentifyResult* out) {
   const CheckWindow cw = check_window(fit, *out);
   if (!cw.changed()) return verdict;
   CheckOutputs first = take_check(out, warnings, notes, unusable);
-  const ModelVerdict second = check_at(refiltered(fit, cw.sg), cw.floor, out, &evidenced);
+  const ModelVerdict second = check_at(refiltered(fit, *out, cw.sg), cw.floor, out, &evidenced);
   if (evidenced || !second.unchecked.empty()) {
-    take_check(out, warnings, notes, unusable);
+    const CheckOutputs again = take_check(out, warnings, notes, unusable);
     put_check(std::move(first), out);
+    out->notes.push_back(confirmed_note(fit, cw, again.causes));
     return verdict;
   }
   out->warnings.push_back(smoothing_warning(fit, cw, first.causes));
