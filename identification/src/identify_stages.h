@@ -428,7 +428,10 @@ const Fit* check_inputs(const Fit& fit, const double fl[2], Fit* spare, Identify
 /// taken net of what the noise of estimated accelerations puts in it (score_bias: without, clean
 /// angles-only logs of 6 s and more warned). Costs one Jacobian with 16 more columns, four
 /// evaluations of the residual and a few small solves, and two more such Jacobians when the
-/// accelerations are estimated.
+/// accelerations are estimated. A model error evidenced on an angles-only log whose window
+/// smooths the motion's accelerations beyond kCheckSmoothingCost (check_window) is checked again
+/// at the smaller window: evidenced there too, the first check stands (confirmed_note); else the
+/// second's verdict, and smoothing_warning names the estimated accelerations.
 ModelVerdict model_check(const Fit& f, IdentifyResult* out);
 
 // ---- stage_intervals.cc ----

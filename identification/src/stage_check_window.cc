@@ -142,8 +142,8 @@ std::string smoothing_warning(const Fit& f, const CheckWindow& cw,
          ") that the estimated accelerations' smoothing error explains: that window smooths "
          "this motion's accelerations (a predicted error of whitened cost " +
          format_significant(cw.fit_cost, 3) + " in the residual, more than " +
-         format_significant(kCheckSmoothingCost) + "), and at a half-window of " +
-         samples(cw.sg) + " (cost " + format_significant(cw.cost, 2) + ", noise floor " +
+         format_significant(kCheckSmoothingCost) + "), and at a half-window of " + samples(cw.sg) +
+         " (cost " + format_significant(cw.cost, 2) + ", noise floor " +
          format_significant(cw.floor[0], 3) + ", " + format_significant(cw.floor[1], 3) +
          " N m) the check evidences no cause. The residual's structure is the rates': the log's "
          "rate is low for this motion's accelerations (log the rates, or sample faster, for a "

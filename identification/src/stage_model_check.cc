@@ -509,8 +509,7 @@ ModelVerdict check_at(const Fit& fit, const double fl[2], IdentifyResult* out, b
   std::vector<int> idx[5];  // fitted, inertial, angle offsets, torque offsets and gains, delay
   TorqueColumns tc;
   Fit spare;
-  const Fit* checked =
-      check_inputs(fit, fl, &spare, out, &J, &r, idx, &info, &tc, &bias, &verdict);
+  const Fit* checked = check_inputs(fit, fl, &spare, out, &J, &r, idx, &info, &tc, &bias, &verdict);
   if (!checked) {
     if (verdict.short_log) {
       out->notes.push_back("model check: not run, " + verdict.unchecked);

@@ -123,9 +123,8 @@ bool check_jacobian(const Fit& f, const double fl[2], Eigen::MatrixXd* J, Eigen:
   std::vector<double> x2 = with_layout(f, l2, std::vector<double>(f.x.begin(), f.x.begin() + nf));
   ceres::Problem problem;
   Eigen::MatrixXd Ji, Jo;
-  if (!check_problem(f, l2, &x2, &problem) ||
-      !whitened_jacobian(&problem, l2.size(), fl, &Ji, r) || !offset_columns(f, fl, &Jo) ||
-      Jo.rows() != Ji.rows()) {
+  if (!check_problem(f, l2, &x2, &problem) || !whitened_jacobian(&problem, l2.size(), fl, &Ji, r) ||
+      !offset_columns(f, fl, &Jo) || Jo.rows() != Ji.rows()) {
     return false;
   }
   *tc = torque_columns(f, *r, fl);
@@ -183,8 +182,7 @@ bool accel_derivatives(const Fit& f, const double fl[2], const Eigen::MatrixXd& 
     Eigen::VectorXd rh;
     if (!check_problem(g, l2, &x2, &problem) ||
         !whitened_jacobian(&problem, l2.size(), fl, &Jh, &rh) || !offset_columns(g, fl, &Jo) ||
-        Jh.rows() != J.rows() ||
-        Jo.rows() != J.rows() || Jh.cols() + Jo.cols() > J.cols()) {
+        Jh.rows() != J.rows() || Jo.rows() != J.rows() || Jh.cols() + Jo.cols() > J.cols()) {
       return false;
     }
     dJ[c].resize(J.rows(), Jh.cols() + Jo.cols());

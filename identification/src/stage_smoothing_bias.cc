@@ -301,7 +301,8 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
       "the reactions (the smoothing's alone), the motion's higher terms from local "
       "polynomials of degree " +
       std::to_string(given_order + detail::kReconExtra) + " over +-" +
-      format_significant(detail::kReconSpan) + " times the rule's half-window: " + table + wb.table() + ")";
+      format_significant(detail::kReconSpan) + " times the rule's half-window: " + table +
+      wb.table() + ")";
 }
 
 BiasWalk walk_window_by_bias(int K, int start, const std::function<bool(int, double*)>& worst) {
