@@ -251,9 +251,18 @@ struct CheckWindow {
 /// where it is least), with the noise floors of that window. Angles-only logs only.
 CheckWindow check_window(const Fit& f, const IdentifyResult& out);
 
-/// model_check's note when the check at cw evidences a model error too (its report `again`).
+/// The largest evidence alone [std] of a check's report (the delay's left out).
+double largest_evidence(const std::vector<IdentifyResult::MisfitCause>& causes);
+
+/// The mean over the torque channels of (the fit's floor / cw's floor)^2: what a model error's
+/// fall, and so its evidence, is multiplied by at cw's window.
+double floor_ratio(const IdentifyResult& out, const CheckWindow& cw);
+
+/// model_check's note when the first check's verdict stands: the check at cw evidences a model
+/// error too (its report `again`), or would not see the first one's (`seen`: its evidence there,
+/// largest_evidence times floor_ratio, not above kCauseZ).
 std::string confirmed_note(const Fit& f, const CheckWindow& cw,
-                           const std::vector<IdentifyResult::MisfitCause>& again);
+                           const std::vector<IdentifyResult::MisfitCause>& again, double seen);
 
 /// model_check's warning when the check at the fit's window evidenced a model error (the causes'
 /// report `first`) and the check at cw evidences none: the smoothing error of the fit's window

@@ -8,7 +8,8 @@ rule picks a half-window of 7 samples, which smooths the motion's accelerations 
 the residual (1.9 times its floor); at that window the freed inertias absorb the smoothing error
 (a fall of 221 against 15 +- 5 from noise alone, 41 std), and the clean log exited 3 blaming the
 masses. The check runs again at the largest smaller window where the predicted smoothing error
-does not show (4 samples), and evidences nothing there. Expected:
+is within 64 (5 samples), and evidences nothing there, where a real error's evidence would
+read about a fifth of the first check's (inertias 41, zeros 75 std). Expected:
 - clean: exit 0, no cause named, a warning naming the estimated accelerations' smoothing error;
 - the same motion made with masses and inertias x0.96, theta1 +0.01 rad, tau1 x1.05: exit 3, the
   reason naming the masses, the angles' zeros, the torque sensors.
