@@ -634,7 +634,7 @@ ModelVerdict model_check(const Fit& fit, IdentifyResult* out) {
   // quiet there, the error is the smoothing's only if that check would have seen it: a model
   // error's fall scales with the whitening, so its evidence there is the first's times the
   // floors' ratio squared (the paper scene's masses +-5 % at 2 s: inertias 15 std at 7 samples,
-  // quiet at 6, where they would read about 3)
+  // quiet at 6, where they would read about 7)
   const double seen = largest_evidence(first.causes) * floor_ratio(*out, cw);
   if (evidenced || !second.unchecked.empty() || !(seen > detail::kCauseZ)) {
     const CheckOutputs again = take_check(out, warnings, notes, unusable);
