@@ -227,6 +227,53 @@ class FiveBarWindowFit : public WindowFit {
   const IdentifyResult& out_;
 };
 
+/// The motion's terms above the filter's order (high_order_terms, `extra` of them) of both
+/// cranks' angles at log sample i over +-reach samples, cut short where they would span one of
+/// f's slip reversals (the motion is not smooth across it), though never to fewer than min_half
+/// samples each side.
+void motion_terms(const Fit& f, int i, int reach, int min_half, int order, int extra,
+                  std::array<Eigen::VectorXd, kDof>* terms);
+
+// ---- stage_check_window.cc ----
+
+/// The Savitzky-Golay window of model_check and the noise floors there (CheckWindow).
+struct CheckWindow {
+  SgOptions sg;
+  double floor[2] = {0, 0};
+  /// the whitened cost of the smoothing error predicted at the fit's window and at sg
+  double fit_cost = 0, cost = 0;
+  bool changed() const { return cost != fit_cost; }
+};
+
+/// The model check's window: the fit's, unless the smoothing error it puts in the estimated
+/// accelerations shows in the residual (its predicted whitened cost above kCheckSmoothingCost):
+/// then the largest smaller half-window of the same order where it does not (or, none, the one
+/// where it is least), with the noise floors of that window. Angles-only logs only.
+CheckWindow check_window(const Fit& f, const IdentifyResult& out);
+
+/// The largest evidence alone [std] of a check's report (the delay's left out).
+double largest_evidence(const std::vector<IdentifyResult::MisfitCause>& causes);
+
+/// The mean over the torque channels of (the fit's floor / cw's floor)^2: what a model error's
+/// fall, and so its evidence, is multiplied by at cw's window.
+double floor_ratio(const IdentifyResult& out, const CheckWindow& cw);
+
+/// model_check's note when the first check's verdict stands: the check at cw evidences a model
+/// error too (its report `again`), or would not see the first one's (`seen`: its evidence there,
+/// largest_evidence times floor_ratio, not above kCauseZ).
+std::string confirmed_note(const Fit& f, const CheckWindow& cw,
+                           const std::vector<IdentifyResult::MisfitCause>& again, double seen);
+
+/// model_check's warning when the check at the fit's window evidenced a model error (the causes'
+/// report `first`) and the check at cw evidences none: the smoothing error of the fit's window
+/// explains it.
+std::string smoothing_warning(const Fit& f, const CheckWindow& cw,
+                              const std::vector<IdentifyResult::MisfitCause>& first);
+
+/// f with its samples' rates and accelerations estimated with the filter sg, those the rest rule
+/// holds at sg's thresholds left out.
+Fit refiltered(const Fit& f, const IdentifyResult& out, const SgOptions& sg);
+
 /// A quick fit on at most ~1500 of the selected samples (plain least squares) that sets f->x for
 /// the window choice; keeps the start values if it fails.
 void preliminary_fit(Fit* f);
@@ -338,7 +385,7 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
 /// parameters (columns idx[1], prior information in `info`), the two angle offsets (idx[2])
 /// and the torque readings' offsets and gains (idx[3], `tc`) added to the fitted ones (idx[0]);
 /// false if an evaluation fails.
-bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J, Eigen::VectorXd* r,
+bool check_jacobian(const Fit& f, const double fl[2], Eigen::MatrixXd* J, Eigen::VectorXd* r,
                     std::vector<int> idx[4], Eigen::VectorXd* info, TorqueColumns* tc);
 
 /// The expectation of the check's score J' r (J: check_jacobian's columns, b: one entry each)
@@ -356,7 +403,7 @@ bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
 /// torque gains' columns carry the model's torque, so the same noise biases them too. Zero when
 /// the accelerations are logged. Costs two Jacobians on the fitted and inertial parameters and
 /// two sets of offset columns.
-bool score_bias(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
+bool score_bias(const Fit& f, const double fl[2], const Eigen::MatrixXd& J,
                 const Eigen::VectorXd& r, const TorqueColumns& tc, Eigen::VectorXd* b);
 
 /// The samples (indices into f.samples) whose residual does not evaluate under one of the
@@ -370,9 +417,10 @@ std::vector<int> check_failures(const Fit& f);
 /// a heavy mechanism driven a hair from its stretched singular pose: one sample's friction loop
 /// did not converge with an encoder's zero moved by 1e-6 rad), noted. The fit the check runs on,
 /// or nullptr with verdict->unchecked (and short_log) saying why it cannot run.
-const Fit* check_inputs(const Fit& fit, Fit* spare, IdentifyResult* out, Eigen::MatrixXd* J,
-                        Eigen::VectorXd* r, std::vector<int> idx[5], Eigen::VectorXd* info,
-                        TorqueColumns* tc, Eigen::VectorXd* bias, ModelVerdict* verdict);
+const Fit* check_inputs(const Fit& fit, const double fl[2], Fit* spare, IdentifyResult* out,
+                        Eigen::MatrixXd* J, Eigen::VectorXd* r, std::vector<int> idx[5],
+                        Eigen::VectorXd* info, TorqueColumns* tc, Eigen::VectorXd* bias,
+                        ModelVerdict* verdict);
 
 // ---- stage_model_check.cc ----
 
@@ -389,7 +437,10 @@ const Fit* check_inputs(const Fit& fit, Fit* spare, IdentifyResult* out, Eigen::
 /// taken net of what the noise of estimated accelerations puts in it (score_bias: without, clean
 /// angles-only logs of 6 s and more warned). Costs one Jacobian with 16 more columns, four
 /// evaluations of the residual and a few small solves, and two more such Jacobians when the
-/// accelerations are estimated.
+/// accelerations are estimated. A model error evidenced on an angles-only log whose window
+/// smooths the motion's accelerations beyond kCheckSmoothingCost (check_window) is checked again
+/// at the smaller window: evidenced there too, the first check stands (confirmed_note); else the
+/// second's verdict, and smoothing_warning names the estimated accelerations.
 ModelVerdict model_check(const Fit& f, IdentifyResult* out);
 
 // ---- stage_intervals.cc ----

@@ -8,9 +8,9 @@
 namespace fivebar::identification::detail {
 
 Eigen::VectorXd high_order_terms(const std::vector<double>& t, const std::vector<double>& x, int i,
-                                 int a, int b, double dt, int order) {
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(kReconExtra);
-  const int deg = std::min(order + kReconExtra, b - a);
+                                 int a, int b, double dt, int order, int extra) {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(extra);
+  const int deg = std::min(order + extra, b - a);
   if (deg <= order) return out;
   // the offsets scaled by the window's reach keep the powers near 1 (conditioning)
   const double reach = std::max({i - a, b - i, 1}) * dt;
@@ -29,16 +29,17 @@ Eigen::VectorXd high_order_terms(const std::vector<double>& t, const std::vector
   return out;
 }
 
-void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen::VectorXd* r2) {
+void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen::VectorXd* r2,
+                     int extra) {
   const int m = sg_half_window(sg, dt);
   std::vector<double> tu(2 * m + 1);
   for (int r = 0; r <= 2 * m; ++r) tu[r] = (r - m) * dt;
   int lo = 0;
   std::vector<double> d1, d2;
   savitzky_golay_taps(tu, m, sg, &lo, &d1, &d2);
-  r1->setZero(kReconExtra);
-  r2->setZero(kReconExtra);
-  for (int e = 0; e < kReconExtra; ++e) {
+  r1->setZero(extra);
+  r2->setZero(extra);
+  for (int e = 0; e < extra; ++e) {
     const int k = sg.order + 1 + e;
     for (size_t r = 0; r < d1.size(); ++r) {
       const double p = std::pow(static_cast<double>(lo + static_cast<int>(r) - m), k);

@@ -29,15 +29,22 @@ namespace fivebar::identification::detail {
 /// docs/dev/figures-logs.md, round bias16).
 constexpr int kReconExtra = 1;
 
-/// The terms of degree order + 1 .. order + kReconExtra of the least-squares polynomial of degree
-/// order + kReconExtra through x over the samples [a, b] (fewer where b - a is too short), as
+/// The reconstruction of the motion for the bias prediction reaches this many times the residual
+/// rule's half-window each side (the polynomial of degree order + kReconExtra then averages the
+/// angle noise far below the filter's own noise, while following the motion over the filter's
+/// span)
+constexpr double kReconSpan = 2.0;
+
+/// The terms of degree order + 1 .. order + extra of the least-squares polynomial of degree
+/// order + extra through x over the samples [a, b] (fewer where b - a is too short), as
 /// coefficients of ((t - t_i) / dt)^k.
 Eigen::VectorXd high_order_terms(const std::vector<double>& t, const std::vector<double>& x, int i,
-                                 int a, int b, double dt, int order);
+                                 int a, int b, double dt, int order, int extra = kReconExtra);
 
 /// The filter's rate (r1) and acceleration (r2) response to ((t - t_i) / dt)^k for k = order + 1
-/// .. order + kReconExtra, on a uniform grid of step dt (it reproduces lower degrees exactly).
-void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen::VectorXd* r2);
+/// .. order + extra, on a uniform grid of step dt (it reproduces lower degrees exactly).
+void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen::VectorXd* r2,
+                     int extra = kReconExtra);
 
 /// What the prediction needs about the samples of a fit, at its parameters.
 struct BiasInputs {

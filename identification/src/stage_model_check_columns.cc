@@ -115,7 +115,7 @@ TorqueColumns torque_columns(const Fit& f, const Eigen::VectorXd& r, const doubl
 
 }  // namespace
 
-bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J, Eigen::VectorXd* r,
+bool check_jacobian(const Fit& f, const double fl[2], Eigen::MatrixXd* J, Eigen::VectorXd* r,
                     std::vector<int> idx[4], Eigen::VectorXd* info, TorqueColumns* tc) {
   const int nf = f.layout.friction_size();
   ParameterLayout l2 = f.layout;
@@ -123,12 +123,11 @@ bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
   std::vector<double> x2 = with_layout(f, l2, std::vector<double>(f.x.begin(), f.x.begin() + nf));
   ceres::Problem problem;
   Eigen::MatrixXd Ji, Jo;
-  if (!check_problem(f, l2, &x2, &problem) ||
-      !whitened_jacobian(&problem, l2.size(), out.residual_noise_floor, &Ji, r) ||
-      !offset_columns(f, out.residual_noise_floor, &Jo) || Jo.rows() != Ji.rows()) {
+  if (!check_problem(f, l2, &x2, &problem) || !whitened_jacobian(&problem, l2.size(), fl, &Ji, r) ||
+      !offset_columns(f, fl, &Jo) || Jo.rows() != Ji.rows()) {
     return false;
   }
-  *tc = torque_columns(f, *r, out.residual_noise_floor);
+  *tc = torque_columns(f, *r, fl);
   const Eigen::MatrixXd& Jt = tc->J;
   J->resize(Ji.rows(), Ji.cols() + 2 + Jt.cols());
   *J << Ji, Jo, Jt;
@@ -165,7 +164,7 @@ double accel_tap_power(const Fit& f, int i) {
 /// (check_jacobian's columns but the torque readings') and of the whitened residual, by forward
 /// differences from J, r at the fit (the residual is nearly linear in the accelerations: only the
 /// load-dependent friction is not); false if an evaluation fails.
-bool accel_derivatives(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
+bool accel_derivatives(const Fit& f, const double fl[2], const Eigen::MatrixXd& J,
                        const Eigen::VectorXd& r, Eigen::MatrixXd dJ[2], Eigen::VectorXd dr[2]) {
   constexpr double h = kAccelStep;
   ParameterLayout l2 = f.layout;
@@ -182,9 +181,8 @@ bool accel_derivatives(const Fit& f, const IdentifyResult& out, const Eigen::Mat
     Eigen::MatrixXd Jh, Jo;
     Eigen::VectorXd rh;
     if (!check_problem(g, l2, &x2, &problem) ||
-        !whitened_jacobian(&problem, l2.size(), out.residual_noise_floor, &Jh, &rh) ||
-        !offset_columns(g, out.residual_noise_floor, &Jo) || Jh.rows() != J.rows() ||
-        Jo.rows() != J.rows() || Jh.cols() + Jo.cols() > J.cols()) {
+        !whitened_jacobian(&problem, l2.size(), fl, &Jh, &rh) || !offset_columns(g, fl, &Jo) ||
+        Jh.rows() != J.rows() || Jo.rows() != J.rows() || Jh.cols() + Jo.cols() > J.cols()) {
       return false;
     }
     dJ[c].resize(J.rows(), Jh.cols() + Jo.cols());
@@ -197,7 +195,7 @@ bool accel_derivatives(const Fit& f, const IdentifyResult& out, const Eigen::Mat
 
 }  // namespace
 
-bool score_bias(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& J,
+bool score_bias(const Fit& f, const double fl[2], const Eigen::MatrixXd& J,
                 const Eigen::VectorXd& r, const TorqueColumns& tc, Eigen::VectorXd* b) {
   b->setZero(J.cols());
   // the std of each crank's noise channel
@@ -205,7 +203,7 @@ bool score_bias(const Fit& f, const IdentifyResult& out, const Eigen::MatrixXd& 
   if (f.source == detail::RateSource::kLogged || !(sigma[0] > 0 || sigma[1] > 0)) return true;
   Eigen::MatrixXd dJ[2];
   Eigen::VectorXd dr[2];
-  if (!accel_derivatives(f, out, J, r, dJ, dr)) return false;
+  if (!accel_derivatives(f, fl, J, r, dJ, dr)) return false;
   // the torque gains' columns (the last of J, torque_columns) hold minus the model's torque,
   // whose derivative in the accelerations is the residual's: dr_c on their crank's rows
   const Eigen::Index first = J.cols() - tc.J.cols();
@@ -279,12 +277,13 @@ std::vector<int> check_failures(const Fit& f) {
 /// a heavy mechanism driven a hair from its stretched singular pose: one sample's friction loop
 /// did not converge with an encoder's zero moved by 1e-6 rad), noted. The fit the check runs on,
 /// or nullptr with verdict->unchecked (and short_log) saying why it cannot run.
-const Fit* check_inputs(const Fit& fit, Fit* spare, IdentifyResult* out, Eigen::MatrixXd* J,
-                        Eigen::VectorXd* r, std::vector<int> idx[5], Eigen::VectorXd* info,
-                        TorqueColumns* tc, Eigen::VectorXd* bias, ModelVerdict* verdict) {
+const Fit* check_inputs(const Fit& fit, const double fl[2], Fit* spare, IdentifyResult* out,
+                        Eigen::MatrixXd* J, Eigen::VectorXd* r, std::vector<int> idx[5],
+                        Eigen::VectorXd* info, TorqueColumns* tc, Eigen::VectorXd* bias,
+                        ModelVerdict* verdict) {
   const auto run = [&](const Fit& f) {
-    return check_jacobian(f, *out, J, r, idx, info, tc) &&
-           (J->rows() < kCheckRowsPerColumn * J->cols() || score_bias(f, *out, *J, *r, *tc, bias));
+    return check_jacobian(f, fl, J, r, idx, info, tc) &&
+           (J->rows() < kCheckRowsPerColumn * J->cols() || score_bias(f, fl, *J, *r, *tc, bias));
   };
   const Fit* f = &fit;
   if (!run(fit)) {

@@ -9,25 +9,28 @@ namespace {
 
 // ---- the smoothing bias of the data-driven window ----
 
-/// The reconstruction of the motion for the bias prediction reaches this many times the residual
-/// rule's half-window each side (the polynomial of degree order + kReconExtra then averages the
-/// angle noise far below the filter's own noise, while following the motion over the filter's
-/// span)
-constexpr double kReconSpan = 2.0;
-
 /// The noise's bias is evaluated at about this many samples of the fit (noise_bias)
 constexpr int kNoiseBiasSamples = 800;
 
 }  // namespace
 
+void motion_terms(const Fit& f, int i, int reach, int min_half, int order, int extra,
+                  std::array<Eigen::VectorXd, kDof>* terms) {
+  const TorqueLog& log = f.cond.log;
+  const int n = log.size();
+  const double dt = log.duration() / std::max(1, n - 1);
+  int a = std::max(0, i - reach), b = std::min(n - 1, i + reach);
+  while (!f.reversals.empty() && a < i - min_half && f.reversals[i] - f.reversals[a] > 0) ++a;
+  while (!f.reversals.empty() && b > i + min_half && f.reversals[b] - f.reversals[i] > 0) --b;
+  (*terms)[0] = detail::high_order_terms(log.t, log.theta1, i, a, b, dt, order, extra);
+  (*terms)[1] = detail::high_order_terms(log.t, log.theta2, i, a, b, dt, order, extra);
+}
+
 /// At the preliminary fit (f.x, f.samples): the residual's and the kinematic Jacobians, the
-/// motion's higher terms cut short where they would span a slip reversal (the motion is not
-/// smooth across it).
+/// motion's higher terms (motion_terms).
 detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int order) const {
   const Fit& f = f_;
-  const TorqueLog& log = f.cond.log;
-  const int n = log.size(), P = f.layout.size();
-  const double dt = log.duration() / std::max(1, n - 1);
+  const int P = f.layout.size();
   detail::BiasInputs in;
   in.index = f.index;
   ceres::Problem problem;
@@ -43,12 +46,10 @@ detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int or
       D.setZero();
     }
     in.D.push_back(D);
-    const int i = f.index[u];
-    int a = std::max(0, i - reach), b = std::min(n - 1, i + reach);
-    while (!f.reversals.empty() && a < i - min_half && f.reversals[i] - f.reversals[a] > 0) ++a;
-    while (!f.reversals.empty() && b > i + min_half && f.reversals[b] - f.reversals[i] > 0) --b;
-    in.terms[0].push_back(detail::high_order_terms(log.t, log.theta1, i, a, b, dt, order));
-    in.terms[1].push_back(detail::high_order_terms(log.t, log.theta2, i, a, b, dt, order));
+    std::array<Eigen::VectorXd, kDof> terms;
+    motion_terms(f, f.index[u], reach, min_half, order, detail::kReconExtra, &terms);
+    in.terms[0].push_back(terms[0]);
+    in.terms[1].push_back(terms[1]);
   }
   in.Hp = prior_information(f);
   in.s2 = f.prior_scale * f.prior_scale;
@@ -146,7 +147,7 @@ class WindowBias {
         done_(cand.size(), 0) {
     const int n = w.log().size();
     dt_ = w.log().duration() / std::max(1, n - 1);
-    in_ = w.bias_inputs(std::lround(kReconSpan * reach_half), cand.size() > 1 ? cand[1] : 1,
+    in_ = w.bias_inputs(std::lround(detail::kReconSpan * reach_half), cand.size() > 1 ? cand[1] : 1,
                         sg.order);
     ok_ = in_.J.rows() == 2 * static_cast<int>(w.index().size());
   }
@@ -300,7 +301,8 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
       "the reactions (the smoothing's alone), the motion's higher terms from local "
       "polynomials of degree " +
       std::to_string(given_order + detail::kReconExtra) + " over +-" +
-      format_significant(kReconSpan) + " times the rule's half-window: " + table + wb.table() + ")";
+      format_significant(detail::kReconSpan) + " times the rule's half-window: " + table +
+      wb.table() + ")";
 }
 
 BiasWalk walk_window_by_bias(int K, int start, const std::function<bool(int, double*)>& worst) {
@@ -359,7 +361,7 @@ void choose_window_by_bias(const WindowFit& w, SgOptions* sg_fit, Eigen::VectorX
   // candidate k's predicted |bias| / std; false when the inputs cannot be formed
   const auto evaluate = [&](int k, double* worst) {
     const detail::BiasInputs in =
-        w.bias_inputs(std::lround(kReconSpan * cand[k]), cand[1], sg_fit->order);
+        w.bias_inputs(std::lround(detail::kReconSpan * cand[k]), cand[1], sg_fit->order);
     if (in.J.rows() != 2 * static_cast<int>(w.index().size())) return false;
     SgOptions sg = *sg_fit;
     sg.half_window_s = cand[k] * dt;
@@ -397,7 +399,7 @@ void choose_window_by_bias(const WindowFit& w, SgOptions* sg_fit, Eigen::VectorX
       "predicted |bias| / std by half-window, the motion's higher terms from local polynomials of "
       "degree " +
       std::to_string(sg_fit->order + detail::kReconExtra) + " over +-" +
-      format_significant(kReconSpan) + " half-windows: " + table + ")";
+      format_significant(detail::kReconSpan) + " half-windows: " + table + ")";
 }
 
 void unbiased_window_check(const Fit& f, const ModelVerdict& verdict, IdentifyResult* out) {
