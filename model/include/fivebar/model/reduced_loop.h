@@ -175,6 +175,44 @@ struct ReducedMap {
   }
 };
 
+/// Newton's matrix J of a ReducedMap, factored for the steps that reuse it. n = 2: J^-1. n = 4:
+/// by its 2 x 2 blocks J = [P Q; U V] (the coupler sums first, the crank accelerations last):
+/// P^-1, W = P^-1 Q and the inverse of the Schur complement V - U W, each in closed form. P is I
+/// less the coupler sums' response to themselves, whose eigenvalues are within the coupler term
+/// of gain_bound of 0, and J's are within gain_bound of 1: where the map contracts, neither block
+/// is near singular, and no pivoting is needed.
+template <int n>
+struct NewtonFactors {
+  using Vec = Eigen::Matrix<double, n, 1>;
+  using Mat = Eigen::Matrix<double, n, n>;
+  Mat2<double> P_inv, W, U, C_inv;  ///< n = 4: P^-1, W, U, (V - U W)^-1; n = 2: P_inv = J^-1
+
+  NewtonFactors() = default;
+  explicit NewtonFactors(const Mat& J) {
+    if constexpr (n == 2) {
+      P_inv = J.inverse();
+    } else {
+      P_inv = inverse2(Mat2<double>(J.template topLeftCorner<2, 2>()));
+      W = P_inv * J.template topRightCorner<2, 2>();
+      U = J.template bottomLeftCorner<2, 2>();
+      C_inv = inverse2(Mat2<double>(J.template bottomRightCorner<2, 2>() - U * W));
+    }
+  }
+  /// J^-1 r
+  Vec solve(const Vec& r) const {
+    if constexpr (n == 2) {
+      return P_inv * r;
+    } else {
+      const Vec2<double> t = P_inv * r.template head<2>();
+      const Vec2<double> da = C_inv * (r.template tail<2>() - U * t);
+      Vec d;
+      d.template head<2>() = t - W * da;
+      d.template tail<2>() = da;
+      return d;
+    }
+  }
+};
+
 /// The map of forward dynamics with no joint stuck (z = (s3, s4, a1, a2)).
 using ReducedReactions = ReducedMap<4>;
 /// The map at given accelerations, inverse dynamics (z = (s3, s4)).
@@ -211,11 +249,11 @@ bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
     last = std::max(last, std::abs(N[k] - N_start[k]));
   }
   const double gain = std::max(map.gain_bound, 1e-300);
-  typename ReducedMap<nz>::Mat J_inv;
-  bool chord = false;  // J_inv worth another step
+  NewtonFactors<nz> J;
+  bool chord = false;  // J worth another step
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
-    if (!chord) J_inv = map.newton_matrix(F, N, &u).inverse();
-    const Vec d = J_inv * (z - map.moments(N));
+    if (!chord) J = NewtonFactors<nz>(map.newton_matrix(F, N, &u));
+    const Vec d = J.solve(z - map.moments(N));
     z -= d;
     // the reactions at the new z, F - dF, and the unpredicted change of their norms
     map.apply(d, &dF);
