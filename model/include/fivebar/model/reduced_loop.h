@@ -104,10 +104,12 @@ struct ReducedMap {
         m_phi[j] = r.m[j] * phi[j];
         h += m_phi[j].cwiseAbs();
       }
+      double crank = 0.0;  // max_k 1^T |R_k| h
       for (int k = 0; k < kJoints; ++k) {
-        const Row2<double> R = r.R[k].cwiseAbs().colwise().sum();  // |R_k|'s column sums
-        gain_bound = std::max(gain_bound, coupler + R.x() * h.x() + R.y() * h.y());
+        const Vec2<double> Rh = r.R[k].col(0).cwiseAbs() * h.x() + r.R[k].col(1).cwiseAbs() * h.y();
+        crank = std::max(crank, Rh.x() + Rh.y());
       }
+      gain_bound = coupler + crank;
     }
   }
 
@@ -187,8 +189,8 @@ struct NewtonFactors {
   using Mat = Eigen::Matrix<double, n, n>;
   Mat2<double> P_inv, W, U, C_inv;  ///< n = 4: P^-1, W, U, (V - U W)^-1; n = 2: P_inv = J^-1
 
-  NewtonFactors() = default;
-  explicit NewtonFactors(const Mat& J) {
+  /// from J (in place: no copies of the factors)
+  void factor(const Mat& J) {
     if constexpr (n == 2) {
       P_inv = J.inverse();
     } else {
@@ -252,7 +254,7 @@ bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
   NewtonFactors<nz> J;
   bool chord = false;  // J worth another step
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
-    if (!chord) J = NewtonFactors<nz>(map.newton_matrix(F, N, &u));
+    if (!chord) J.factor(map.newton_matrix(F, N, &u));
     const Vec d = J.solve(z - map.moments(N));
     z -= d;
     // the reactions at the new z, F - dF, and the unpredicted change of their norms
