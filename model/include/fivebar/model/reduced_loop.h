@@ -233,15 +233,17 @@ using CouplerReactions = ReducedMap<2>;
 /// returns N+ = |F+|, F+ and Mf = phi N+. On the paper scene's forward dynamics, from |F0|: one
 /// Newton step (leaving rho about 2e-8 of N) and one chord step; from the warm start of nearby
 /// states, one Newton step. `iterations`: the evaluations of the map, the start and one per
-/// step. False if it did not converge within friction_max_iter steps.
+/// step. False if it did not converge within friction_max_iter steps (*N_out and *F_out, the
+/// loop's working copies, are then unspecified; N_start is not one of them).
 template <int nz>
 bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
                              const std::array<double, kJoints>& N_start,
                              std::array<double, kJoints>* N_out, std::array<double, kJoints>* Mf,
                              std::array<Vec2<double>, kJoints>* F_out, int* iterations) {
   using Vec = typename ReducedMap<nz>::Vec;
-  typename ReducedMap<nz>::Forces F, u, dF;
-  double N[kJoints];
+  typename ReducedMap<nz>::Forces& F = *F_out;  // (the outputs as the working copies)
+  typename ReducedMap<nz>::Forces u, dF;
+  std::array<double, kJoints>& N = *N_out;
   Vec z = map.moments(N_start.data());
   map.apply(z, &F);
   double last = 0.0;  // the last step's max |rho_k|, or at the start max |N_k - N_start_k|
@@ -254,12 +256,12 @@ bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
   NewtonFactors<nz> J;
   bool chord = false;  // J worth another step
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
-    if (!chord) J.factor(map.newton_matrix(F, N, &u));
-    const Vec d = J.solve(z - map.moments(N));
+    if (!chord) J.factor(map.newton_matrix(F, N.data(), &u));
+    const Vec d = J.solve(z - map.moments(N.data()));
     z -= d;
     // the reactions at the new z, F - dF, and the unpredicted change of their norms
     map.apply(d, &dF);
-    double scale = 1e-300, rho = 0.0, sum = 0.0;
+    double scale = 1e-300, rho = 0.0;
     for (int k = 0; k < kJoints; ++k) {
       const double n = N[k];
       F[k] -= dF[k];
@@ -267,16 +269,14 @@ bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
       const double rho_k = std::abs(N[k] - n + u[k].x() * dF[k].x() + u[k].y() * dF[k].y());
       scale = std::max(scale, N[k]);
       rho = std::max(rho, rho_k);
-      sum += N[k] + rho_k;  // (a NaN does not pass std::max)
     }
     *iterations = it + 1;
-    if (!std::isfinite(sum)) return false;
     if (gain * rho <= opt.friction_tol * scale) {
-      for (int k = 0; k < kJoints; ++k) {
-        (*N_out)[k] = N[k];
-        (*Mf)[k] = map.phi[k] * N[k];
-      }
-      *F_out = F;
+      // (a NaN passes neither std::max nor a failed test: the step that passes is checked)
+      double sum = 0.0;
+      for (int k = 0; k < kJoints; ++k) sum += N[k];
+      if (!std::isfinite(sum)) return false;
+      for (int k = 0; k < kJoints; ++k) (*Mf)[k] = map.phi[k] * N[k];
       return true;
     }
     chord = rho <= kReducedChordShrink * last;
