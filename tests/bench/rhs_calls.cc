@@ -21,7 +21,8 @@ int main(int argc, char** argv) {
   for (int m = 0; m < 5 && argc == 3; ++m) mode = std::strcmp(argv[1], modes[m]) == 0 ? m : mode;
   const long n = argc == 3 ? std::atol(argv[2]) : 0;
   if (mode < 0 || n < 1) {
-    std::fprintf(stderr, "usage: rhs_calls friction|frictionless|actuators|friction_warm|friction_path N\n");
+    std::fprintf(stderr,
+                 "usage: rhs_calls friction|frictionless|actuators|friction_warm|friction_path N\n");
     return 2;
   }
   Params<double> p = paper_params();

@@ -250,9 +250,9 @@ TEST(PlanarChain, FiveBarWarmStartedRightHandSideAgreesAlongAMotion) {
         for (int j = 0; j < kJoints; ++j) modes[j] = slip_mode(sign_of(w[j]));
         const bool warm_start = start.set;
         Evaluation<double> ev;
-        const Status st = forward_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, &modes, opt, &ev,
-                                           static_cast<const std::array<double, kJoints>*>(nullptr),
-                                           &start);
+        const Status st =
+            forward_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, &modes, opt, &ev,
+                             static_cast<const std::array<double, kJoints>*>(nullptr), &start);
         if (!st.ok()) break;  // (a loop without a unique solution)
         chain::Solution sol;
         ASSERT_TRUE(chain::solve(cs.c, cs.q, cs.rate, cs.L, nullptr, {}, &sol).ok());
