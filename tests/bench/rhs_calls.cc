@@ -4,7 +4,9 @@
 //   valgrind --tool=callgrind --callgrind-out-file=/dev/null build/release/tests/bench/rhs_calls friction 1000
 // Modes: friction, frictionless, actuators (the benchmark's state, the loop started cold), and
 // friction_warm (states 1e-5 s apart along the benchmark's velocities, 200 in a cycle, the loop
-// warm-started from the previous evaluation as in the simulator).
+// warm-started from the previous evaluation as in the simulator), and friction_path (the same
+// states and loads, the loop started cold: what friction_warm saves is the difference; the other
+// modes' loads are at one time, which the compiler evaluates once).
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -14,12 +16,13 @@
 
 int main(int argc, char** argv) {
   using namespace fivebar;
-  const char* modes[] = {"friction", "frictionless", "actuators", "friction_warm"};
+  const char* modes[] = {"friction", "frictionless", "actuators", "friction_warm", "friction_path"};
   int mode = -1;
-  for (int m = 0; m < 4 && argc == 3; ++m) mode = std::strcmp(argv[1], modes[m]) == 0 ? m : mode;
+  for (int m = 0; m < 5 && argc == 3; ++m) mode = std::strcmp(argv[1], modes[m]) == 0 ? m : mode;
   const long n = argc == 3 ? std::atol(argv[2]) : 0;
   if (mode < 0 || n < 1) {
-    std::fprintf(stderr, "usage: rhs_calls friction|frictionless|actuators|friction_warm N\n");
+    std::fprintf(stderr,
+                 "usage: rhs_calls friction|frictionless|actuators|friction_warm|friction_path N\n");
     return 2;
   }
   Params<double> p = paper_params();
@@ -35,7 +38,7 @@ int main(int argc, char** argv) {
   FrictionWarmStart warm;
   double sum = 0.0;
   for (long i = 0; i < n; ++i) {
-    const double dt = mode == 3 ? 1e-5 * static_cast<double>(i % 200) : 0.0;
+    const double dt = mode >= 3 ? 1e-5 * static_cast<double>(i % 200) : 0.0;
     Evaluation<double> ev;
     const Loads<double> L = testing::paper_loads(0.31 + dt);
     const Status st = forward_dynamics(p, L, 1.3 + 23.0 * dt, 2.0 - 31.0 * dt, 23.0, -31.0,

@@ -220,6 +220,56 @@ TEST(PlanarChain, FiveBarFrictionRightHandSideAgreesInEveryJointMode) {
   RecordProperty("rhs_reactions", sci(worst_N));
 }
 
+// The simulator's right-hand side as it evaluates it, warm-started (FrictionWarmStart carried from
+// one evaluation to the next) along short stretches of motion, states 2e-5 s apart, every joint
+// slipping along sign(w), against the general chain solving the friction loop itself: random
+// mechanisms and states, seeded. The warm start must reach the cold start's solution, not its own.
+TEST(PlanarChain, FiveBarWarmStartedRightHandSideAgreesAlongAMotion) {
+  std::mt19937_64 rng(61);
+  EvalOptions opt;
+  opt.want_reactions = false;
+  opt.want_angles = false;
+  opt.singular_margin = 1e-3;
+  double worst_acc = 0.0, worst_N = 0.0;
+  int warm = 0;
+  for (int mechanism = 0; mechanism < 20; ++mechanism) {
+    const Params<double> p = random_mechanism(rng);
+    for (const RandomState& s0 : random_states(p, 5, 300 + mechanism)) {
+      FrictionWarmStart start;
+      for (int i = 0; i < 12; ++i) {
+        RandomState s = s0;
+        s.th1 += 2e-5 * i * s0.w1;
+        s.th2 += 2e-5 * i * s0.w2;
+        Kinematics<double> k;
+        if (!solve_kinematics(p, s.th1, s.th2, &k, 0.05).ok()) break;
+        const ChainState cs = chain_state(p, s);
+        const std::array<double, kJoints> w =
+            relative_rates(s.w1, s.w2, cs.k.G3.dot(Vec2<double>(s.w1, s.w2)),
+                           cs.k.G4.dot(Vec2<double>(s.w1, s.w2)));
+        JointModes modes;
+        for (int j = 0; j < kJoints; ++j) modes[j] = slip_mode(sign_of(w[j]));
+        const bool warm_start = start.set;
+        Evaluation<double> ev;
+        const Status st =
+            forward_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, &modes, opt, &ev,
+                             static_cast<const std::array<double, kJoints>*>(nullptr), &start);
+        if (!st.ok()) break;  // (a loop without a unique solution)
+        chain::Solution sol;
+        ASSERT_TRUE(chain::solve(cs.c, cs.q, cs.rate, cs.L, nullptr, {}, &sol).ok());
+        const double acc[4] = {ev.thdd[0], ev.thdd[1], ev.alpha3, ev.alpha4};
+        worst_acc = std::max(worst_acc, relative_error(sol.alpha, acc, 4));
+        worst_N = std::max(worst_N, relative_error(sol.N, ev.N, kJoints));
+        warm += warm_start;
+      }
+    }
+  }
+  EXPECT_GT(warm, 800);
+  EXPECT_LT(worst_acc, kAgreementTol);
+  EXPECT_LT(worst_N, kAgreementTol);
+  RecordProperty("warm_rhs_accel", sci(worst_acc));
+  RecordProperty("warm_rhs_reactions", sci(worst_N));
+}
+
 // the inverse mode returns the drive torques that the forward mode was given
 TEST(PlanarChain, InverseModeInvertsForwardMode) {
   const Params<double> p = test_params(true);

@@ -128,7 +128,7 @@ struct FiveBar {
                                              const Mat2<T>& Ainv) {
     LowRankResponse<T> r;
     static_cast<CouplerResponse<T>&>(r) = inverse_response(k);
-    r.R = fivebar::reaction_acceleration_response(p, k, r.f3, r.f4);
+    fivebar::reaction_acceleration_response(p, k, r.f3, r.f4, &r.R);
     // -A^-1 J_w^T e_j from the rows of J_w (joint_row): e1, G3 - e1, G4 - G3, e2 - G4, e2
     const Vec2<T> g3 = Ainv * k.G3.transpose(), g4 = Ainv * k.G4.transpose();
     r.m[0] = -Ainv.col(0);

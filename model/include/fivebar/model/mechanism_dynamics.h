@@ -252,13 +252,14 @@ Status forward_friction(const ParamsOf<M, T>& p, const EvalOptions& opt, const M
   const bool motors = M::actuator_torques(p, ev->w, ev->slip, &act);
   LoopAids<T> aids;
   aids.warm = warm;
-  LowRankResponse<T> response;
-  if constexpr (M::kClosedFormResponse) {
-    if (stuck.count == 0 && !(loop && loop->set)) {
-      response = M::forward_response(p, ev->kin, Ainv);
-      aids.low_rank = &response;
+  const bool closed_form = M::kClosedFormResponse && stuck.count == 0 && !(loop && loop->set);
+  const LowRankResponse<T> response = [&] {  // (built in place)
+    if constexpr (M::kClosedFormResponse) {
+      if (closed_form) return M::forward_response(p, ev->kin, Ainv);
     }
-  }
+    return LowRankResponse<T>();
+  }();
+  if (closed_form) aids.low_rank = &response;
   const Status st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
                                   motors ? &act : nullptr, loop, aids);
   if (!st.ok()) return singular_cause<M, T>(p, ev->kin, st);

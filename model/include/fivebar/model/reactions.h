@@ -102,9 +102,8 @@ ReactionResponse<T> reaction_torque_response(const Kinematics<T>& k) {
 /// unit thdd_c. f3, f4: F2 per unit coupler moment sum (u3 x F2 = S3, u4 x F2 = S4:
 /// F2 = f3 S3 + f4 S4, f3 = u4 / det, f4 = -u3 / det, det = u3 x u4).
 template <typename T>
-std::array<Mat2<T>, kJoints> reaction_acceleration_response(const Params<T>& p,
-                                                            const Kinematics<T>& k,
-                                                            const Vec2<T>& f3, const Vec2<T>& f4) {
+void reaction_acceleration_response(const Params<T>& p, const Kinematics<T>& k, const Vec2<T>& f3,
+                                    const Vec2<T>& f4, std::array<Mat2<T>, kJoints>* out) {
   // q x A.col(c) for both columns
   const auto cross_columns = [](const Vec2<T>& q, const Mat2<T>& A) -> Row2<T> {
     return q.x() * A.row(1) - q.y() * A.row(0);
@@ -115,13 +114,12 @@ std::array<Mat2<T>, kJoints> reaction_acceleration_response(const Params<T>& p,
   const Row2<T> S3 = p.links[2].inertia * k.G3 + cross_columns(Vec2<T>(k.c[2] - k.C), R3);
   const Row2<T> S4 = -p.links[3].inertia * k.G4 - cross_columns(Vec2<T>(k.c[3] - k.C), R4) +
                      cross_columns(u4, Mat2<T>(R3 + R4));
-  std::array<Mat2<T>, kJoints> R;
+  std::array<Mat2<T>, kJoints>& R = *out;
   R[1] = f3 * S3 + f4 * S4;
   R[2] = R[1] - R3;
   R[3] = R[2] - R4;
   R[0] = p.links[0].mass * k.Gc[0] + R[1];
   R[4] = p.links[1].mass * k.Gc[1] - R[3];
-  return R;
 }
 
 /// The same with F2's response to the coupler moment sums formed here.
@@ -130,7 +128,9 @@ std::array<Mat2<T>, kJoints> reaction_acceleration_response(const Params<T>& p,
                                                             const Kinematics<T>& k) {
   const Vec2<T> u3 = k.B - k.C, u4 = k.D - k.C;
   const T inv = T(1) / cross(u3, u4);
-  return reaction_acceleration_response(p, k, Vec2<T>(u4 * inv), Vec2<T>(-u3 * inv));
+  std::array<Mat2<T>, kJoints> R;
+  reaction_acceleration_response(p, k, Vec2<T>(u4 * inv), Vec2<T>(-u3 * inv), &R);
+  return R;
 }
 
 /// |F_k| of the five joints.

@@ -104,10 +104,12 @@ struct ReducedMap {
         m_phi[j] = r.m[j] * phi[j];
         h += m_phi[j].cwiseAbs();
       }
+      double crank = 0.0;  // max_k 1^T |R_k| h
       for (int k = 0; k < kJoints; ++k) {
-        const Row2<double> R = r.R[k].cwiseAbs().colwise().sum();  // |R_k|'s column sums
-        gain_bound = std::max(gain_bound, coupler + R.x() * h.x() + R.y() * h.y());
+        const Vec2<double> Rh = r.R[k].col(0).cwiseAbs() * h.x() + r.R[k].col(1).cwiseAbs() * h.y();
+        crank = std::max(crank, Rh.x() + Rh.y());
       }
+      gain_bound = coupler + crank;
     }
   }
 
@@ -175,6 +177,44 @@ struct ReducedMap {
   }
 };
 
+/// Newton's matrix J of a ReducedMap, factored for the steps that reuse it. n = 2: J^-1. n = 4:
+/// by its 2 x 2 blocks J = [P Q; U V] (the coupler sums first, the crank accelerations last):
+/// P^-1, W = P^-1 Q and the inverse of the Schur complement V - U W, each in closed form. P is I
+/// less the coupler sums' response to themselves, whose eigenvalues are within the coupler term
+/// of gain_bound of 0, and J's are within gain_bound of 1: where the map contracts, neither block
+/// is near singular, and no pivoting is needed.
+template <int n>
+struct NewtonFactors {
+  using Vec = Eigen::Matrix<double, n, 1>;
+  using Mat = Eigen::Matrix<double, n, n>;
+  Mat2<double> P_inv, W, U, C_inv;  ///< n = 4: P^-1, W, U, (V - U W)^-1; n = 2: P_inv = J^-1
+
+  /// from J (in place: no copies of the factors)
+  void factor(const Mat& J) {
+    if constexpr (n == 2) {
+      P_inv = J.inverse();
+    } else {
+      P_inv = inverse2(Mat2<double>(J.template topLeftCorner<2, 2>()));
+      W = P_inv * J.template topRightCorner<2, 2>();
+      U = J.template bottomLeftCorner<2, 2>();
+      C_inv = inverse2(Mat2<double>(J.template bottomRightCorner<2, 2>() - U * W));
+    }
+  }
+  /// J^-1 r
+  Vec solve(const Vec& r) const {
+    if constexpr (n == 2) {
+      return P_inv * r;
+    } else {
+      const Vec2<double> t = P_inv * r.template head<2>();
+      const Vec2<double> da = C_inv * (r.template tail<2>() - U * t);
+      Vec d;
+      d.template head<2>() = t - W * da;
+      d.template tail<2>() = da;
+      return d;
+    }
+  }
+};
+
 /// The map of forward dynamics with no joint stuck (z = (s3, s4, a1, a2)).
 using ReducedReactions = ReducedMap<4>;
 /// The map at given accelerations, inverse dynamics (z = (s3, s4)).
@@ -193,15 +233,17 @@ using CouplerReactions = ReducedMap<2>;
 /// returns N+ = |F+|, F+ and Mf = phi N+. On the paper scene's forward dynamics, from |F0|: one
 /// Newton step (leaving rho about 2e-8 of N) and one chord step; from the warm start of nearby
 /// states, one Newton step. `iterations`: the evaluations of the map, the start and one per
-/// step. False if it did not converge within friction_max_iter steps.
+/// step. False if it did not converge within friction_max_iter steps (*N_out and *F_out, the
+/// loop's working copies, are then unspecified; N_start is not one of them).
 template <int nz>
 bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
                              const std::array<double, kJoints>& N_start,
                              std::array<double, kJoints>* N_out, std::array<double, kJoints>* Mf,
                              std::array<Vec2<double>, kJoints>* F_out, int* iterations) {
   using Vec = typename ReducedMap<nz>::Vec;
-  typename ReducedMap<nz>::Forces F, u, dF;
-  double N[kJoints];
+  typename ReducedMap<nz>::Forces& F = *F_out;  // (the outputs as the working copies)
+  typename ReducedMap<nz>::Forces u, dF;
+  std::array<double, kJoints>& N = *N_out;
   Vec z = map.moments(N_start.data());
   map.apply(z, &F);
   double last = 0.0;  // the last step's max |rho_k|, or at the start max |N_k - N_start_k|
@@ -211,15 +253,15 @@ bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
     last = std::max(last, std::abs(N[k] - N_start[k]));
   }
   const double gain = std::max(map.gain_bound, 1e-300);
-  typename ReducedMap<nz>::Mat J_inv;
-  bool chord = false;  // J_inv worth another step
+  NewtonFactors<nz> J;
+  bool chord = false;  // J worth another step
   for (int it = 1; it <= opt.friction_max_iter; ++it) {
-    if (!chord) J_inv = map.newton_matrix(F, N, &u).inverse();
-    const Vec d = J_inv * (z - map.moments(N));
+    if (!chord) J.factor(map.newton_matrix(F, N.data(), &u));
+    const Vec d = J.solve(z - map.moments(N.data()));
     z -= d;
     // the reactions at the new z, F - dF, and the unpredicted change of their norms
     map.apply(d, &dF);
-    double scale = 1e-300, rho = 0.0, sum = 0.0;
+    double scale = 1e-300, rho = 0.0;
     for (int k = 0; k < kJoints; ++k) {
       const double n = N[k];
       F[k] -= dF[k];
@@ -227,16 +269,14 @@ bool friction_reduced_newton(const ReducedMap<nz>& map, const EvalOptions& opt,
       const double rho_k = std::abs(N[k] - n + u[k].x() * dF[k].x() + u[k].y() * dF[k].y());
       scale = std::max(scale, N[k]);
       rho = std::max(rho, rho_k);
-      sum += N[k] + rho_k;  // (a NaN does not pass std::max)
     }
     *iterations = it + 1;
-    if (!std::isfinite(sum)) return false;
     if (gain * rho <= opt.friction_tol * scale) {
-      for (int k = 0; k < kJoints; ++k) {
-        (*N_out)[k] = N[k];
-        (*Mf)[k] = map.phi[k] * N[k];
-      }
-      *F_out = F;
+      // (a NaN passes neither std::max nor a failed test: the step that passes is checked)
+      double sum = 0.0;
+      for (int k = 0; k < kJoints; ++k) sum += N[k];
+      if (!std::isfinite(sum)) return false;
+      for (int k = 0; k < kJoints; ++k) (*Mf)[k] = map.phi[k] * N[k];
       return true;
     }
     chord = rho <= kReducedChordShrink * last;
