@@ -235,6 +235,30 @@ TEST(FourBarIdentify, RefusesAPoseThatCannotAssemble) {
   }
 }
 
+// A log sampled too slowly for the crank-rocker's slip reversals (100 Hz, angles only: 44 in 3 s,
+// one every 68 ms against a rate-filter window of 110 ms) leaves a handful of samples between
+// them: the fit is not to be used, naming the log's rate; at 1 kHz the same motion is fitted.
+TEST(FourBarIdentify, ReversalsTooDenseForTheLogsRateAreNamed) {
+  SynthOptions so;
+  so.rate_hz = 100;
+  so.duration = 3;
+  so.torque_noise = 0.02;
+  so.angle_noise = 1e-5;
+  sim::Initial init;
+  init.theta1 = crank_rocker().th0;
+  const SynthResult slow = synthesize_log(crank_rocker().p, crank_rocker().loads, init, so);
+  ASSERT_TRUE(slow.status.ok()) << slow.status.message;
+  const IdentifyResult res =
+      identify(crank_rocker().p, crank_rocker().loads, slow.log, four_bar_options());
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_LT(res.samples_used, 20);
+  EXPECT_NE(res.unusable.find("slip reversals (one every"), std::string::npos) << res.unusable;
+  EXPECT_NE(res.unusable.find("log the rates or sample faster"), std::string::npos);
+  const TorqueLog fast = crank_rocker_log(crank_rocker().p, 3.0, 0.02, 1e-5, 1, false);
+  EXPECT_TRUE(identify(crank_rocker().p, crank_rocker().loads, fast, four_bar_options())
+                  .unusable.empty());
+}
+
 // A robust loss (--loss cauchy) takes out torque spikes kept in the fit (every 50th sample, 0.5-1.5
 // N m against 0.02 N m of noise): the plain fit's coulomb moves off the truth, the robust one's
 // stays within half a std of it; its scale follows the residual's noise floor, and its
