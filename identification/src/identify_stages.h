@@ -337,9 +337,11 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
 /// The residual's Jacobian at the fit, whitened by the noise floors, with the links' 16 inertial
 /// parameters (columns idx[1], prior information in `info`), the two angle offsets (idx[2])
 /// and the torque readings' offsets and gains (idx[3], `tc`) added to the fitted ones (idx[0]);
-/// false if an evaluation fails.
+/// false if an evaluation fails. `at_fit`: the data residuals and Jacobian of f's own problem at
+/// f.x (solve_stage), taken as they are when f fits the inertial parameters itself.
 bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J, Eigen::VectorXd* r,
-                    std::vector<int> idx[4], Eigen::VectorXd* info, TorqueColumns* tc);
+                    std::vector<int> idx[4], Eigen::VectorXd* info, TorqueColumns* tc,
+                    const Analysis* at_fit = nullptr);
 
 /// The expectation of the check's score J' r (J: check_jacobian's columns, b: one entry each)
 /// that the noise of estimated accelerations gives when the model holds. That noise is in the
@@ -370,9 +372,11 @@ std::vector<int> check_failures(const Fit& f);
 /// a heavy mechanism driven a hair from its stretched singular pose: one sample's friction loop
 /// did not converge with an encoder's zero moved by 1e-6 rad), noted. The fit the check runs on,
 /// or nullptr with verdict->unchecked (and short_log) saying why it cannot run.
-const Fit* check_inputs(const Fit& fit, Fit* spare, IdentifyResult* out, Eigen::MatrixXd* J,
-                        Eigen::VectorXd* r, std::vector<int> idx[5], Eigen::VectorXd* info,
-                        TorqueColumns* tc, Eigen::VectorXd* bias, ModelVerdict* verdict);
+/// `an`: fit's data residuals and Jacobian at its parameters (check_jacobian's at_fit).
+const Fit* check_inputs(const Fit& fit, const Analysis& an, Fit* spare, IdentifyResult* out,
+                        Eigen::MatrixXd* J, Eigen::VectorXd* r, std::vector<int> idx[5],
+                        Eigen::VectorXd* info, TorqueColumns* tc, Eigen::VectorXd* bias,
+                        ModelVerdict* verdict);
 
 // ---- stage_model_check.cc ----
 
@@ -390,7 +394,7 @@ const Fit* check_inputs(const Fit& fit, Fit* spare, IdentifyResult* out, Eigen::
 /// angles-only logs of 6 s and more warned). Costs one Jacobian with 16 more columns, four
 /// evaluations of the residual and a few small solves, and two more such Jacobians when the
 /// accelerations are estimated.
-ModelVerdict model_check(const Fit& f, IdentifyResult* out);
+ModelVerdict model_check(const Fit& f, const Analysis& an, IdentifyResult* out);
 
 // ---- stage_intervals.cc ----
 

@@ -490,7 +490,7 @@ void decisive_error(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
 
 }  // namespace
 
-ModelVerdict model_check(const Fit& fit, IdentifyResult* out) {
+ModelVerdict model_check(const Fit& fit, const Analysis& an, IdentifyResult* out) {
   ModelVerdict verdict;
   if (!out->converged) {
     verdict.unchecked = "the fit did not converge";
@@ -501,7 +501,7 @@ ModelVerdict model_check(const Fit& fit, IdentifyResult* out) {
   std::vector<int> idx[5];  // fitted, inertial, angle offsets, torque offsets and gains, delay
   TorqueColumns tc;
   Fit spare;
-  const Fit* checked = check_inputs(fit, &spare, out, &J, &r, idx, &info, &tc, &bias, &verdict);
+  const Fit* checked = check_inputs(fit, an, &spare, out, &J, &r, idx, &info, &tc, &bias, &verdict);
   if (!checked) {
     if (verdict.short_log) {
       out->notes.push_back("model check: not run, " + verdict.unchecked);
