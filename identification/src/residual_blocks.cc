@@ -27,21 +27,6 @@ ceres::LossFunction* make_loss(Loss loss, double scale) {
   return nullptr;
 }
 
-/// A sample's residual from its structure (StructuredResidual), its Jacobian by
-/// evaluate_with_jacobian.
-template <int P>
-class StructuredCost : public ceres::SizedCostFunction<2, P> {
- public:
-  explicit StructuredCost(const StructuredResidual& residual) : residual_(residual) {}
-  bool Evaluate(double const* const* x, double* r, double** jacobians) const override {
-    if (jacobians == nullptr || jacobians[0] == nullptr) return residual_(x[0], r);
-    return residual_.evaluate_with_jacobian<P>(x[0], r, jacobians[0]);
-  }
-
- private:
-  StructuredResidual residual_;
-};
-
 /// The inverse-dynamics residual blocks, one per sample, on P parameters: from the sample's
 /// structure (residual.h: the Jets carry only the P active parameters through a five-number
 /// loop), or the full model where the structure cannot be read off (fallback_cost.h).
@@ -50,7 +35,8 @@ ceres::CostFunction* sample_cost(const Params<double>& scene, const ParameterLay
                                  const Sample& s, const EvalOptions& eval) {
   SampleStructure st;
   if (sample_structure(scene, s, eval, &st)) {
-    return new StructuredCost<P>(StructuredResidual(scene, layout, st, s, eval));
+    return new ceres::AutoDiffCostFunction<StructuredResidual, 2, P>(
+        new StructuredResidual(scene, layout, st, s, eval));
   }
   return new FallbackCost<P>(InverseDynamicsResidual(scene, layout, s, eval));
 }

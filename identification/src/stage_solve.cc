@@ -167,10 +167,6 @@ bool build_problem(Fit* f, IdentifyResult* out, ceres::Problem* problem) {
 ceres::Solver::Options solver_options(const Fit& f) {
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
-  // with bounds, each step is checked by a projected line search from step 1; its cubic
-  // interpolation evaluates the Jacobian at every candidate, the quadratic one the cost alone
-  // (the step is the same wherever step 1 is accepted, as it is near the fit)
-  so.line_search_interpolation_type = ceres::QUADRATIC;
   so.max_num_iterations = f.opt->max_iterations;
   so.num_threads = f.opt->num_threads;
   f.method->set_tolerances(&so);

@@ -1,8 +1,6 @@
 // Inverse-dynamics residual of one log sample, templated on the scalar for ceres::Jet.
 #pragma once
 
-#include <ceres/jet.h>
-
 #include <Eigen/Core>
 #include <array>
 #include <cmath>
@@ -101,12 +99,25 @@ class StructuredResidual {
   template <typename T>
   bool operator()(const T* x, T* r) const {
     using std::sqrt;
-    ActuatorParams<T> act;
-    std::array<T, kJoints> phi, motor;
-    law_terms(x, &act, &phi, &motor);
+    FrictionParams<T> fp = friction_.template cast<T>();
+    layout_.apply(x, &fp);
+    ActuatorParams<T> act = actuators_.template cast<T>();
+    if (layout_.actuator) ParameterLayout::apply_actuators(x + layout_.actuator_offset(), &act);
+    std::array<T, kJoints> motor{};  // actuator friction: a load-independent Mf term
+    for (int a = 0; a < kActuators; ++a) {  // as actuator_torques (actuator.h)
+      const int k = actuator_joint(a);
+      if (st_.slip[k] == kStuck) continue;
+      motor[k] = actuator_friction(fp, act, k, T(st_.w[k]), coulomb_sign(st_.slip[k]));
+    }
     std::array<T, kInertialParams> pi;
     for (int i = 0; i < kInertialParams; ++i) {
       pi[i] = layout_.inertia ? x[layout_.inertia_offset() + i] : T(pi0_[i]);
+    }
+    std::array<T, kJoints> phi;
+    for (int j = 0; j < kJoints; ++j) {
+      phi[j] = st_.slip[j] == kStuck
+                   ? T(0)
+                   : fp.pin_radius[j] * friction_law(fp, j, T(st_.w[j]), coulomb_sign(st_.slip[j]));
     }
     std::array<T, 10> F0;
     for (int a = 0; a < 10; ++a) {
@@ -139,105 +150,7 @@ class StructuredResidual {
     return true;
   }
 
-  /// The residual r and its Jacobian jac = d r / d x (2 x P, row-major) with the values and
-  /// derivatives of operator()'s Jet evaluation (the loop's value refined by its Newton step),
-  /// but Jets of width P only through the friction law and the actuator terms: the reactions
-  /// are affine in the inertial parameters and in the friction torques, so their derivatives
-  /// are carried in doubles (a fraction of the cost of P-wide Jets through the 10 x 16
-  /// structure). False where operator() fails or the Jacobian would not be finite.
-  template <int P>
-  bool evaluate_with_jacobian(const double* x, double* r, double* jac) const {
-    using Jet = ceres::Jet<double, P>;
-    using Rows = Eigen::Matrix<double, kJoints, P>;
-    std::array<Jet, P> xj;
-    for (int i = 0; i < P; ++i) xj[i] = Jet(x[i], i);
-    ActuatorParams<Jet> act;
-    std::array<Jet, kJoints> phi_j, motor_j;
-    law_terms(xj.data(), &act, &phi_j, &motor_j);
-    std::array<double, kJoints> phi, motor, N_star;
-    Rows Dphi, Dmotor;
-    for (int j = 0; j < kJoints; ++j) {
-      phi[j] = phi_j[j].a;
-      motor[j] = motor_j[j].a;
-      Dphi.row(j) = phi_j[j].v.transpose();
-      Dmotor.row(j) = motor_j[j].v.transpose();
-    }
-    std::array<double, kInertialParams> pi;
-    for (int i = 0; i < kInertialParams; ++i) {
-      pi[i] = layout_.inertia ? x[layout_.inertia_offset() + i] : pi0_[i];
-    }
-    std::array<double, 10> F0;
-    for (int a = 0; a < 10; ++a) {
-      F0[a] = st_.b(a);
-      for (int i = 0; i < kInertialParams; ++i) F0[a] += st_.A(a, i) * pi[i];
-    }
-    if (!loop(phi, motor, F0, &N_star)) return false;
-    // one Newton step from N*, as implicit_step: G(N*) - N* and d G / d x in its columns
-    std::array<double, 10> F;
-    reactions_of(phi, motor, F0, N_star, &F);
-    Rows Dsrc;  // d (phi N* + motor) / d x
-    for (int j = 0; j < kJoints; ++j) Dsrc.row(j) = N_star[j] * Dphi.row(j) + Dmotor.row(j);
-    Eigen::Matrix<double, kJoints, kJoints> M = Eigen::Matrix<double, kJoints, kJoints>::Identity();
-    std::array<Eigen::Matrix<double, 1, P + 1>, kJoints> rhs;
-    for (int k = 0; k < kJoints; ++k) {
-      const double n = std::sqrt(F[2 * k] * F[2 * k] + F[2 * k + 1] * F[2 * k + 1]);
-      if (!(n > 0.0)) return false;  // the norm's derivative is not finite there
-      const double fx = F[2 * k] / n, fy = F[2 * k + 1] / n;
-      rhs[k].setZero();
-      rhs[k](0) = n - N_star[k];
-      for (int j = 0; j < kJoints; ++j) {
-        const double u = fx * st_.dF(2 * k, j) + fy * st_.dF(2 * k + 1, j);
-        M(k, j) -= u * phi[j];
-        rhs[k].template tail<P>() += u * Dsrc.row(j);
-      }
-      if (layout_.inertia) {
-        rhs[k].template segment<kInertialParams>(1 + layout_.inertia_offset()) +=
-            fx * st_.A.row(2 * k) + fy * st_.A.row(2 * k + 1);
-      }
-    }
-    const std::array<Eigen::Matrix<double, 1, P + 1>, kJoints> dN =
-        fivebar::detail::solve_with_double_matrix(M, rhs);
-    Eigen::Map<Eigen::Matrix<double, 2, P, Eigen::RowMajor>> J(jac);
-    for (int a = 0; a < kActuators; ++a) {
-      double m = st_.c(a) + act.offset[a].a;
-      Eigen::Matrix<double, 1, P> dm = act.offset[a].v.transpose();
-      for (int i = 0; i < kInertialParams; ++i) m += st_.Y(a, i) * pi[i];
-      if (layout_.inertia) dm.template segment<kInertialParams>(layout_.inertia_offset()) += st_.Y.row(a);
-      for (int j = 0; j < kJoints; ++j) {
-        const double N = dN[j](0) + N_star[j];
-        m += st_.G(a, j) * (phi[j] * N + motor[j]);
-        dm += st_.G(a, j) * (phi[j] * dN[j].template tail<P>() + N * Dphi.row(j) + Dmotor.row(j));
-      }
-      r[a] = tau_[a] - m;
-      J.row(a) = -dm;
-    }
-    return std::isfinite(r[0]) && std::isfinite(r[1]) && J.allFinite();
-  }
-
  private:
-  /// The actuator terms of x (act), the joints' friction factors phi_j = r_j f_j(w_j) at the
-  /// sample's rates and Coulomb signs and the actuators' friction torques (motor, a
-  /// load-independent Mf term; 0 at a stuck joint).
-  template <typename T>
-  void law_terms(const T* x, ActuatorParams<T>* act, std::array<T, kJoints>* phi,
-                 std::array<T, kJoints>* motor) const {
-    FrictionParams<T> fp = friction_.template cast<T>();
-    layout_.apply(x, &fp);
-    *act = actuators_.template cast<T>();
-    if (layout_.actuator) ParameterLayout::apply_actuators(x + layout_.actuator_offset(), act);
-    motor->fill(T(0));
-    for (int a = 0; a < kActuators; ++a) {  // as actuator_torques (actuator.h)
-      const int k = actuator_joint(a);
-      if (st_.slip[k] == kStuck) continue;
-      (*motor)[k] = actuator_friction(fp, *act, k, T(st_.w[k]), coulomb_sign(st_.slip[k]));
-    }
-    for (int j = 0; j < kJoints; ++j) {
-      (*phi)[j] = st_.slip[j] == kStuck ? T(0)
-                                         : fp.pin_radius[j] * friction_law(fp, j, T(st_.w[j]),
-                                                                           coulomb_sign(st_.slip[j]));
-    }
-  }
-
   /// F = F0 + dF Mf with Mf = phi N + motor (stacked F_1x, F_1y, ..., F_5x, F_5y).
   template <typename T>
   void reactions_of(const std::array<T, kJoints>& phi, const std::array<T, kJoints>& motor,
