@@ -135,8 +135,7 @@ bool check_jacobian(const Fit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
     // the fit's own columns already hold the inertial ones, at the same parameters
     if (!whitened(at_fit->J, at_fit->r, fl, &Ji, r)) return false;
   } else {
-    std::vector<double> x2 =
-        with_layout(f, l2, std::vector<double>(f.x.begin(), f.x.begin() + nf));
+    std::vector<double> x2 = with_layout(f, l2, std::vector<double>(f.x.begin(), f.x.begin() + nf));
     ceres::Problem problem;
     if (!check_problem(f, l2, &x2, &problem) ||
         !whitened_jacobian(&problem, l2.size(), fl, &Ji, r)) {

@@ -339,8 +339,7 @@ inline constexpr double kValidationRtol = 1e-7;
 Validation validate(const Params<double>& params, const sim::LoadFunction& loads,
                     const TorqueLog& log, const std::vector<double>& omega1,
                     const std::vector<double>& omega2, double window_s,
-                    double rtol = kValidationRtol,
-                    double budget_s = 10.0);
+                    double rtol = kValidationRtol, double budget_s = 10.0);
 /// The four-bar's: its crank driven by the logged tau1 from the logged theta1, omega1; its
 /// crank angle compared (channel 0 of the Validation; channel 1 stays empty).
 Validation validate(const FourBarParams& params, const sim::FourBarLoadFunction& loads,
