@@ -145,13 +145,13 @@ std::string line_list(const std::vector<Glitch>& g, size_t max_shown) {
 double torque_mismatch(const Params<double>& scene, const sim::LoadFunction& loads,
                        const TorqueLog& log, const std::vector<double>& th1,
                        const std::vector<double>& th2, double* median_rate) {
-  std::vector<double> w1, w2, a1, a2;
-  savitzky_golay(log.t, th1, SgOptions{}, &w1, &a1);
-  savitzky_golay(log.t, th2, SgOptions{}, &w2, &a2);
-  Params<double> p = scene;
-  p.friction.law = FrictionLaw::kNone;
   const int n = log.size();
   const int step = std::max(1, n / 400);
+  std::vector<double> w1, w2, a1, a2;  // at the samples read below only
+  savitzky_golay(log.t, th1, SgOptions{}, &w1, &a1, step);
+  savitzky_golay(log.t, th2, SgOptions{}, &w2, &a2, step);
+  Params<double> p = scene;
+  p.friction.law = FrictionLaw::kNone;
   std::vector<double> mismatch, rate;
   EvalOptions eval;
   for (int i = 0; i < n; i += step) {

@@ -384,9 +384,11 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
 /// The residual's Jacobian at the fit, whitened by the noise floors, with the links' 16 inertial
 /// parameters (columns idx[1], prior information in `info`), the two angle offsets (idx[2])
 /// and the torque readings' offsets and gains (idx[3], `tc`) added to the fitted ones (idx[0]);
-/// false if an evaluation fails.
+/// false if an evaluation fails. `at_fit`: the data residuals and Jacobian of f's own problem at
+/// f.x (solve_stage), taken as they are when f fits the inertial parameters itself.
 bool check_jacobian(const Fit& f, const double fl[2], Eigen::MatrixXd* J, Eigen::VectorXd* r,
-                    std::vector<int> idx[4], Eigen::VectorXd* info, TorqueColumns* tc);
+                    std::vector<int> idx[4], Eigen::VectorXd* info, TorqueColumns* tc,
+                    const Analysis* at_fit = nullptr);
 
 /// The expectation of the check's score J' r (J: check_jacobian's columns, b: one entry each)
 /// that the noise of estimated accelerations gives when the model holds. That noise is in the
@@ -417,7 +419,10 @@ std::vector<int> check_failures(const Fit& f);
 /// a heavy mechanism driven a hair from its stretched singular pose: one sample's friction loop
 /// did not converge with an encoder's zero moved by 1e-6 rad), noted. The fit the check runs on,
 /// or nullptr with verdict->unchecked (and short_log) saying why it cannot run.
-const Fit* check_inputs(const Fit& fit, const double fl[2], Fit* spare, IdentifyResult* out,
+/// `an`: fit's data residuals and Jacobian at its parameters (check_jacobian's at_fit; nullptr
+/// for a fit other than the solved one).
+const Fit* check_inputs(const Fit& fit, const double fl[2], const Analysis* an, Fit* spare,
+                        IdentifyResult* out,
                         Eigen::MatrixXd* J, Eigen::VectorXd* r, std::vector<int> idx[5],
                         Eigen::VectorXd* info, TorqueColumns* tc, Eigen::VectorXd* bias,
                         ModelVerdict* verdict);
@@ -440,8 +445,9 @@ const Fit* check_inputs(const Fit& fit, const double fl[2], Fit* spare, Identify
 /// accelerations are estimated. A model error evidenced on an angles-only log whose window
 /// smooths the motion's accelerations beyond kCheckSmoothingCost (check_window) is checked again
 /// at the smaller window: evidenced there too, the first check stands (confirmed_note); else the
-/// second's verdict, and smoothing_warning names the estimated accelerations.
-ModelVerdict model_check(const Fit& f, IdentifyResult* out);
+/// second's verdict, and smoothing_warning names the estimated accelerations. `an`: the fit's
+/// data residuals and Jacobian (check_inputs).
+ModelVerdict model_check(const Fit& f, const Analysis& an, IdentifyResult* out);
 
 // ---- stage_intervals.cc ----
 

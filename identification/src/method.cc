@@ -77,7 +77,7 @@ class InverseDynamicsMethod final : public MethodStrategy {
 
   ModelVerdict check_model(const Fit& f, const Analysis& an, IdentifyResult* out) const override {
     bound_and_misfit_warning(f, an, out);
-    return model_check(f, out);
+    return model_check(f, an, out);
   }
 
   void prediction_levels(const Fit&, IdentifyResult*) const override {}

@@ -43,7 +43,8 @@ void savitzky_golay_taps(const std::vector<double>& t, int i, const SgOptions& o
 }
 
 void savitzky_golay(const std::vector<double>& t, const std::vector<double>& x,
-                    const SgOptions& options, std::vector<double>* dx, std::vector<double>* ddx) {
+                    const SgOptions& options, std::vector<double>* dx, std::vector<double>* ddx,
+                    int step) {
   const int n = static_cast<int>(t.size());
   dx->assign(n, 0.0);
   ddx->assign(n, 0.0);
@@ -55,7 +56,7 @@ void savitzky_golay(const std::vector<double>& t, const std::vector<double>& x,
   const int deg = std::min(order, width - 1);
   Eigen::MatrixXd V(width, deg + 1);
   Eigen::VectorXd y(width);
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < n; i += std::max(1, step)) {
     // window [lo, lo + width) centred on i, shifted inside the log at the ends
     const int lo = std::clamp(i - width / 2, 0, n - width);
     // powers of the scaled time offset (t - t_i) / dt keep the normal equations well conditioned

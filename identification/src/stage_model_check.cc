@@ -499,9 +499,11 @@ bool model_error_evidenced(const CauseSteps& cs) {
   return any;
 }
 
-/// model_check on the fit f, its residual whitened by the noise floors fl; *evidenced:
-/// model_error_evidenced.
-ModelVerdict check_at(const Fit& fit, const double fl[2], IdentifyResult* out, bool* evidenced) {
+/// model_check on the fit f, its residual whitened by the noise floors fl (an: its own data
+/// residuals and Jacobian, check_inputs; nullptr for a fit other than the solved one);
+/// *evidenced: model_error_evidenced.
+ModelVerdict check_at(const Fit& fit, const double fl[2], const Analysis* an, IdentifyResult* out,
+                      bool* evidenced) {
   ModelVerdict verdict;
   *evidenced = false;
   Eigen::MatrixXd J;
@@ -509,7 +511,8 @@ ModelVerdict check_at(const Fit& fit, const double fl[2], IdentifyResult* out, b
   std::vector<int> idx[5];  // fitted, inertial, angle offsets, torque offsets and gains, delay
   TorqueColumns tc;
   Fit spare;
-  const Fit* checked = check_inputs(fit, fl, &spare, out, &J, &r, idx, &info, &tc, &bias, &verdict);
+  const Fit* checked =
+      check_inputs(fit, fl, an, &spare, out, &J, &r, idx, &info, &tc, &bias, &verdict);
   if (!checked) {
     if (verdict.short_log) {
       out->notes.push_back("model check: not run, " + verdict.unchecked);
@@ -613,7 +616,7 @@ void put_check(CheckOutputs c, IdentifyResult* out) {
 
 }  // namespace
 
-ModelVerdict model_check(const Fit& fit, IdentifyResult* out) {
+ModelVerdict model_check(const Fit& fit, const Analysis& an, IdentifyResult* out) {
   if (!out->converged) {
     ModelVerdict verdict;
     verdict.unchecked = "the fit did not converge";
@@ -622,7 +625,7 @@ ModelVerdict model_check(const Fit& fit, IdentifyResult* out) {
   const size_t warnings = out->warnings.size(), notes = out->notes.size();
   const std::string unusable = out->unusable;
   bool evidenced = false;
-  const ModelVerdict verdict = check_at(fit, out->residual_noise_floor, out, &evidenced);
+  const ModelVerdict verdict = check_at(fit, out->residual_noise_floor, &an, out, &evidenced);
   if (!evidenced) return verdict;
   // a model error evidenced where the fit's window smooths the motion's accelerations beyond
   // the noise: checked again at the window where it does not (check_window); evidenced there
@@ -630,7 +633,8 @@ ModelVerdict model_check(const Fit& fit, IdentifyResult* out) {
   const CheckWindow cw = check_window(fit, *out);
   if (!cw.changed()) return verdict;
   CheckOutputs first = take_check(out, warnings, notes, unusable);
-  const ModelVerdict second = check_at(refiltered(fit, *out, cw.sg), cw.floor, out, &evidenced);
+  const ModelVerdict second =
+      check_at(refiltered(fit, *out, cw.sg), cw.floor, nullptr, out, &evidenced);
   // quiet there, the error is the smoothing's only if that check would have seen it: a model
   // error's fall scales with the whitening, so its evidence there is the first's times the
   // floors' ratio squared (the paper scene's masses +-5 % at 2 s: inertias 15 std at 7 samples,

@@ -17,6 +17,18 @@ bool check_problem(const Fit& f, const ParameterLayout& layout2, std::vector<dou
                                     problem);
 }
 
+/// The Jacobian J0 and residual r0, rows whitened by the noise floors `fl`; false if not finite.
+bool whitened(const Eigen::MatrixXd& J0, const std::vector<double>& r0, const double fl[2],
+              Eigen::MatrixXd* J, Eigen::VectorXd* r) {
+  *J = J0;
+  *r = Eigen::Map<const Eigen::VectorXd>(r0.data(), r0.size());
+  for (Eigen::Index row = 0; row < J->rows(); ++row) {
+    J->row(row) /= fl[row % 2];
+    (*r)(row) /= fl[row % 2];
+  }
+  return J->allFinite() && r->allFinite();
+}
+
 /// The Jacobian of `problem`'s residuals (P parameters) at its current values, rows whitened by
 /// the noise floors `fl`, and the whitened residual; false if an evaluation fails.
 bool whitened_jacobian(ceres::Problem* problem, int P, const double fl[2], Eigen::MatrixXd* J,
@@ -24,13 +36,7 @@ bool whitened_jacobian(ceres::Problem* problem, int P, const double fl[2], Eigen
   std::vector<double> rv;
   ceres::CRSMatrix crs;
   if (!raw_residuals(problem, &rv, &crs)) return false;
-  *J = dense(crs, P);
-  *r = Eigen::Map<const Eigen::VectorXd>(rv.data(), rv.size());
-  for (Eigen::Index row = 0; row < J->rows(); ++row) {
-    J->row(row) /= fl[row % 2];
-    (*r)(row) /= fl[row % 2];
-  }
-  return J->allFinite() && r->allFinite();
+  return whitened(dense(crs, P), rv, fl, J, r);
 }
 
 /// The fit's vector under `layout2`, which differs from f.layout in its friction part or by the
@@ -56,21 +62,23 @@ constexpr double kAccelStep = 1e-2;
 
 /// Columns of the residual's Jacobian on offsets d of the logged angles (theta1, theta2 read d
 /// more than the scene's angles: the model is evaluated at theta - d), by central differences at
-/// the fit, rows whitened by the floors `fl`; false if an evaluation fails.
+/// the fit, rows whitened by the floors `fl`; false if an evaluation fails. The residual of each
+/// shifted sample is the full model's (InverseDynamicsResidual, equal to the fit's residual to
+/// the friction loop's tolerance): a sample's structure costs 17 more evaluations and is not
+/// needed for a residual alone.
 bool offset_columns(const Fit& f, const double fl[2], Eigen::MatrixXd* Jo) {
   constexpr double h = kOffsetStep;
   const int m = 2 * static_cast<int>(f.samples.size());
   Jo->setZero(m, 2);
   for (int c = 0; c < 2; ++c) {
     for (double sgn : {1.0, -1.0}) {
-      std::vector<Sample> shifted = f.samples;
-      for (Sample& s : shifted) (c == 0 ? s.th1 : s.th2) -= sgn * h;
-      std::vector<double> x = f.x, r;
-      ceres::Problem problem;
-      const bool sized = add_inverse_dynamics_terms(f.scene, f.layout, shifted, f.eval, Loss::kNone,
-                                                    1, x.data(), &problem);
-      if (!sized || !raw_residuals(&problem, &r) || static_cast<int>(r.size()) != m) return false;
-      for (int row = 0; row < m; ++row) (*Jo)(row, c) += sgn * r[row] / (2 * h * fl[row % 2]);
+      for (size_t u = 0; u < f.samples.size(); ++u) {
+        Sample s = f.samples[u];
+        (c == 0 ? s.th1 : s.th2) -= sgn * h;
+        double r[2];
+        if (!InverseDynamicsResidual(f.scene, f.layout, s, f.eval)(f.x.data(), r)) return false;
+        for (int k = 0; k < 2; ++k) (*Jo)(2 * u + k, c) += sgn * r[k] / (2 * h * fl[k]);
+      }
     }
   }
   return Jo->allFinite();
@@ -116,17 +124,24 @@ TorqueColumns torque_columns(const Fit& f, const Eigen::VectorXd& r, const doubl
 }  // namespace
 
 bool check_jacobian(const Fit& f, const double fl[2], Eigen::MatrixXd* J, Eigen::VectorXd* r,
-                    std::vector<int> idx[4], Eigen::VectorXd* info, TorqueColumns* tc) {
+                    std::vector<int> idx[4], Eigen::VectorXd* info, TorqueColumns* tc,
+                    const Analysis* at_fit) {
   const int nf = f.layout.friction_size();
   ParameterLayout l2 = f.layout;
   l2.inertia = true;
-  std::vector<double> x2 = with_layout(f, l2, std::vector<double>(f.x.begin(), f.x.begin() + nf));
-  ceres::Problem problem;
   Eigen::MatrixXd Ji, Jo;
-  if (!check_problem(f, l2, &x2, &problem) || !whitened_jacobian(&problem, l2.size(), fl, &Ji, r) ||
-      !offset_columns(f, fl, &Jo) || Jo.rows() != Ji.rows()) {
-    return false;
+  if (f.layout.inertia && at_fit != nullptr && at_fit->J.cols() == l2.size()) {
+    // the fit's own columns already hold the inertial ones, at the same parameters
+    if (!whitened(at_fit->J, at_fit->r, fl, &Ji, r)) return false;
+  } else {
+    std::vector<double> x2 = with_layout(f, l2, std::vector<double>(f.x.begin(), f.x.begin() + nf));
+    ceres::Problem problem;
+    if (!check_problem(f, l2, &x2, &problem) ||
+        !whitened_jacobian(&problem, l2.size(), fl, &Ji, r)) {
+      return false;
+    }
   }
+  if (!offset_columns(f, fl, &Jo) || Jo.rows() != Ji.rows()) return false;
   *tc = torque_columns(f, *r, fl);
   const Eigen::MatrixXd& Jt = tc->J;
   J->resize(Ji.rows(), Ji.cols() + 2 + Jt.cols());
@@ -277,12 +292,13 @@ std::vector<int> check_failures(const Fit& f) {
 /// a heavy mechanism driven a hair from its stretched singular pose: one sample's friction loop
 /// did not converge with an encoder's zero moved by 1e-6 rad), noted. The fit the check runs on,
 /// or nullptr with verdict->unchecked (and short_log) saying why it cannot run.
-const Fit* check_inputs(const Fit& fit, const double fl[2], Fit* spare, IdentifyResult* out,
+const Fit* check_inputs(const Fit& fit, const double fl[2], const Analysis* an, Fit* spare,
+                        IdentifyResult* out,
                         Eigen::MatrixXd* J, Eigen::VectorXd* r, std::vector<int> idx[5],
                         Eigen::VectorXd* info, TorqueColumns* tc, Eigen::VectorXd* bias,
                         ModelVerdict* verdict) {
   const auto run = [&](const Fit& f) {
-    return check_jacobian(f, fl, J, r, idx, info, tc) &&
+    return check_jacobian(f, fl, J, r, idx, info, tc, &f == &fit ? an : nullptr) &&
            (J->rows() < kCheckRowsPerColumn * J->cols() || score_bias(f, fl, *J, *r, *tc, bias));
   };
   const Fit* f = &fit;

@@ -26,9 +26,12 @@ struct SgOptions {
 /// Half-width in samples for a log of mean sample step dt.
 int sg_half_window(const SgOptions& options, double dt);
 
-/// First and second derivatives of x(t) by Savitzky-Golay (see SgOptions).
+/// First and second derivatives of x(t) by Savitzky-Golay (see SgOptions); with `step` > 1
+/// only at the samples 0, step, 2 step, ... (the others left 0), for a caller that reads no
+/// others.
 void savitzky_golay(const std::vector<double>& t, const std::vector<double>& x,
-                    const SgOptions& options, std::vector<double>* dx, std::vector<double>* ddx);
+                    const SgOptions& options, std::vector<double>* dx, std::vector<double>* ddx,
+                    int step = 1);
 
 /// The weights that savitzky_golay applies at sample i: dx[i] = sum_r d1[r] x[lo + r] and
 /// ddx[i] = sum_r d2[r] x[lo + r] (the filter is linear in x; used to propagate sensor noise).
