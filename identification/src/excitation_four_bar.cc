@@ -30,7 +30,9 @@ class FourBarExcitation : public ExcitationMechanism {
  public:
   FourBarExcitation(const FourBarParams& scene, bool per_joint,
                     std::function<FourBarLoads(double)> loads)
-      : scene_(scene), dp_(four_bar_design_parameters(scene, per_joint)), loads_(std::move(loads)) {}
+      : scene_(scene),
+        dp_(four_bar_design_parameters(scene, per_joint)),
+        loads_(std::move(loads)) {}
   int dof() const override { return FourBar::kDof; }
   int joints() const override { return kFourBarJoints; }
   std::string joint_name(int k) const override {

@@ -81,6 +81,11 @@ void window_stage(FourBarFit* f, IdentifyResult* out);
 /// kExplainsMost when it names the delay (identify then refits with the torques shifted by it).
 stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out);
 
+/// The residual rule: a residual more than kMisfitRatio times its noise floor is structure the
+/// fit misses, and a log whose slip reversals leave too few samples between them is sampled too
+/// slowly; either makes the fit not to be used (out->unusable, naming the cause).
+void model_check(const FourBarFit& f, IdentifyResult* out);
+
 // ---- four_bar_refits.cc ----
 
 /// The sign check, then the per-joint check of a shared law (stages::torques_fit_negated,

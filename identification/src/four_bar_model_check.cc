@@ -1,9 +1,10 @@
-// The four-bar's model check (identify_four_bar.cc): the five-bar's candidate causes that exist
-// for one crank, freed on the four-bar's Jacobian, judged by the five-bar's comparison
-// (model_check_causes.h). Columns, rows whitened by the noise floor: the fitted friction
-// coefficients (the residual's Jets), the links' masses, inertias and centres of mass (relative,
-// with the prior --inertia-prior), the crank encoder's zero, tau1's offset and gain, and the
-// delay (the logged torque's rate), each by central differences where not linear.
+// The four-bar's model checks (identify_four_bar.cc): its residual against the noise floor, and
+// the five-bar's candidate causes that exist for one crank, freed on the four-bar's Jacobian,
+// judged by the five-bar's comparison (model_check_causes.h). Columns, rows whitened by the noise
+// floor: the fitted friction coefficients (the residual's Jets), the links' masses, inertias and
+// centres of mass (relative, with the prior --inertia-prior), the crank encoder's zero, tau1's
+// offset and gain, and the delay (the logged torque's rate), each by central differences where not
+// linear.
 #include <Eigen/Dense>
 #include <cmath>
 #include <string>
@@ -235,6 +236,59 @@ stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
                                                           : D::kNotEvidenced;
   verdict.cause_decided = any && open && !out->unusable.empty();
   return verdict;
+}
+
+namespace {
+
+/// Samples left between slip reversals too dense for the rate filter: fewer than
+/// kMinWindowsLeft of its windows, and fewer than those left out near the reversals (the
+/// crank-rocker logged at 100 Hz: 5 of 301 left, its 44 reversals in 3 s one every 68 ms against
+/// a window of 110 ms; at 200 Hz 189 of 601, coulomb within 1.8 std over seeds 1-3).
+constexpr int kMinWindowsLeft = 10;
+
+/// Whether the fit is not to be used because the slip reversals leave too few samples (above);
+/// out->unusable names the log's rate.
+bool too_few_between_reversals(const FourBarFit& f, IdentifyResult* out) {
+  const int window = 2 * f.hw + 1;
+  if (f.hw <= 0 || out->samples_used >= kMinWindowsLeft * window ||
+      out->samples_used >= out->samples_near_reversals) {
+    return false;
+  }
+  const double dt = f.cond.log.duration() / std::max(1, f.cond.log.size() - 1);
+  out->unusable =
+      "only " + std::to_string(out->samples_used) + " samples lie away from the " +
+      std::to_string(out->slip_reversals) + " slip reversals (one every " +
+      format_significant(1e3 * f.cond.log.duration() / std::max(1, out->slip_reversals), 3) +
+      " ms against the rate filter's window of " + format_significant(1e3 * window * dt, 3) +
+      " ms): the log is sampled too slowly to estimate the accelerations between "
+      "them; log the rates or sample faster";
+  out->warnings.push_back(out->unusable);
+  return true;
+}
+
+}  // namespace
+
+/// The model check: a residual more than kMisfitRatio times its noise floor is structure the
+/// fit misses; the fit is then not to be used (out->unusable). Its cause: outliers where a
+/// robust loss discounted them (the residual counts them), else the friction law or the scene.
+void model_check(const FourBarFit& f, IdentifyResult* out) {
+  if (too_few_between_reversals(f, out)) return;
+  const double floor = out->residual_noise_floor[0];
+  const double ratio = out->rms_torque_residual[0] / floor;
+  if (!(ratio > stages::kMisfitRatio)) return;
+  std::string bound;
+  for (const ParameterEstimate& p : out->parameters) {
+    if (p.at_bound) bound += (bound.empty() ? "" : ", ") + p.name;
+  }
+  const std::string cause =
+      f.opt->loss != Loss::kNone
+          ? "outliers that the robust loss discounted (the residual counts them), or the "
+            "friction law or the scene misses what the log shows"
+          : "the friction law or the scene misses what the log shows";
+  out->unusable = "the torque residual (rms " + format_significant(out->rms_torque_residual[0], 3) +
+                  " N m) is " + format_significant(ratio, 3) + " times its noise floor: " + cause +
+                  (bound.empty() ? "" : " (at its bound: " + bound + ")");
+  out->warnings.push_back(out->unusable);
 }
 
 }  // namespace fivebar::identification::four_bar

@@ -71,14 +71,12 @@ void condition(const TorqueLog& log, FourBarFit* f, IdentifyResult* out) {
   require_uniform_sampling(log);
   std::string unit;
   const std::string why =
-      !f->opt->check_degrees
-          ? ""
-          : angle_units_from_motion(
-                log,
-                [&](const std::vector<double>& th, const std::vector<double>&, double* rate) {
-                  return torque_mismatch(*f, log, th, rate);
-                },
-                &unit);
+      !f->opt->check_degrees ? ""
+                             : angle_units_from_motion(
+                                   log,
+                                   [&](const std::vector<double>& th, const std::vector<double>&,
+                                       double* rate) { return torque_mismatch(*f, log, th, rate); },
+                                   &unit);
   if (!why.empty()) {
     throw LogError(log.path, "column theta1",
                    "angles look like " + unit + ", expected radians (" + why + ")");
@@ -460,58 +458,6 @@ void estimates(const FourBarFit& f, const std::vector<double>& x0, IdentifyResul
       if (!bound[i] && !bound[j] && d > 0) out->correlation(i, j) = C(i, j) / d;
     }
   }
-}
-
-/// Samples left between slip reversals too dense for the rate filter: fewer than
-/// kMinWindowsLeft of its windows, and fewer than those left out near the reversals (the
-/// crank-rocker logged at 100 Hz: 5 of 301 left, its 44 reversals in 3 s one every 68 ms against
-/// a window of 110 ms; at 200 Hz 189 of 601, coulomb within 1.8 std over seeds 1-3).
-constexpr int kMinWindowsLeft = 10;
-
-/// Whether the fit is not to be used because the slip reversals leave too few samples (above);
-/// out->unusable names the log's rate.
-bool too_few_between_reversals(const FourBarFit& f, IdentifyResult* out) {
-  const int window = 2 * f.hw + 1;
-  if (f.hw <= 0 || out->samples_used >= kMinWindowsLeft * window ||
-      out->samples_used >= out->samples_near_reversals) {
-    return false;
-  }
-  const double dt = f.cond.log.duration() / std::max(1, f.cond.log.size() - 1);
-  out->unusable = "only " + std::to_string(out->samples_used) +
-                  " samples lie away from the " + std::to_string(out->slip_reversals) +
-                  " slip reversals (one every " +
-                  format_significant(1e3 * f.cond.log.duration() /
-                                         std::max(1, out->slip_reversals), 3) +
-                  " ms against the rate filter's window of " +
-                  format_significant(1e3 * window * dt, 3) +
-                  " ms): the log is sampled too slowly to estimate the accelerations between "
-                  "them; log the rates or sample faster";
-  out->warnings.push_back(out->unusable);
-  return true;
-}
-
-/// The model check: a residual more than kMisfitRatio times its noise floor is structure the
-/// fit misses; the fit is then not to be used (out->unusable). Its cause: outliers where a
-/// robust loss discounted them (the residual counts them), else the friction law or the scene.
-void model_check(const FourBarFit& f, IdentifyResult* out) {
-  if (too_few_between_reversals(f, out)) return;
-  const double floor = out->residual_noise_floor[0];
-  const double ratio = out->rms_torque_residual[0] / floor;
-  if (!(ratio > stages::kMisfitRatio)) return;
-  std::string bound;
-  for (const ParameterEstimate& p : out->parameters) {
-    if (p.at_bound) bound += (bound.empty() ? "" : ", ") + p.name;
-  }
-  const std::string cause =
-      f.opt->loss != Loss::kNone
-          ? "outliers that the robust loss discounted (the residual counts them), or the "
-            "friction law or the scene misses what the log shows"
-          : "the friction law or the scene misses what the log shows";
-  out->unusable = "the torque residual (rms " +
-                  format_significant(out->rms_torque_residual[0], 3) + " N m) is " +
-                  format_significant(ratio, 3) + " times its noise floor: " + cause +
-                  (bound.empty() ? "" : " (at its bound: " + bound + ")");
-  out->warnings.push_back(out->unusable);
 }
 
 /// The fitted scene, and its inverse dynamics at every sample of the log (sim::inverse_rows, the

@@ -422,10 +422,9 @@ std::vector<int> check_failures(const Fit& f);
 /// `an`: fit's data residuals and Jacobian at its parameters (check_jacobian's at_fit; nullptr
 /// for a fit other than the solved one).
 const Fit* check_inputs(const Fit& fit, const double fl[2], const Analysis* an, Fit* spare,
-                        IdentifyResult* out,
-                        Eigen::MatrixXd* J, Eigen::VectorXd* r, std::vector<int> idx[5],
-                        Eigen::VectorXd* info, TorqueColumns* tc, Eigen::VectorXd* bias,
-                        ModelVerdict* verdict);
+                        IdentifyResult* out, Eigen::MatrixXd* J, Eigen::VectorXd* r,
+                        std::vector<int> idx[5], Eigen::VectorXd* info, TorqueColumns* tc,
+                        Eigen::VectorXd* bias, ModelVerdict* verdict);
 
 // ---- stage_model_check.cc ----
 
@@ -448,6 +447,13 @@ const Fit* check_inputs(const Fit& fit, const double fl[2], const Analysis* an, 
 /// second's verdict, and smoothing_warning names the estimated accelerations. `an`: the fit's
 /// data residuals and Jacobian (check_inputs).
 ModelVerdict model_check(const Fit& f, const Analysis& an, IdentifyResult* out);
+
+/// One model check on the fit f, its residual whitened by the noise floors fl (an: its own data
+/// residuals and Jacobian, check_inputs; nullptr for a fit other than the solved one);
+/// *evidenced: a model cause evidenced alone, what the smoothing error of the fit's window could
+/// have made (stage_model_check.cc; model_check runs it once or twice).
+ModelVerdict check_at(const Fit& fit, const double fl[2], const Analysis* an, IdentifyResult* out,
+                      bool* evidenced);
 
 // ---- stage_intervals.cc ----
 

@@ -499,6 +499,8 @@ bool model_error_evidenced(const CauseSteps& cs) {
   return any;
 }
 
+}  // namespace
+
 /// model_check on the fit f, its residual whitened by the noise floors fl (an: its own data
 /// residuals and Jacobian, check_inputs; nullptr for a fit other than the solved one);
 /// *evidenced: model_error_evidenced.
@@ -581,73 +583,6 @@ ModelVerdict check_at(const Fit& fit, const double fl[2], const Analysis* an, Id
   if (cause < kCauseCount) unbounded_error(f, attributed_what(cs, cause), out);
   decisive_error(f, cs, out);
   return verdict;
-}
-
-/// What a model check adds to the result (warnings, notes, the reason not to use the fit, the
-/// causes' report), set aside by take_check so that another check's may replace it.
-struct CheckOutputs {
-  std::vector<std::string> warnings, notes;
-  std::string unusable;
-  std::vector<IdentifyResult::MisfitCause> causes;
-};
-
-/// Moves out of *out what a check added after it held `warnings` warnings and `notes` notes and
-/// the reason `unusable`, which is restored.
-CheckOutputs take_check(IdentifyResult* out, size_t warnings, size_t notes,
-                        const std::string& unusable) {
-  CheckOutputs c;
-  c.warnings.assign(out->warnings.begin() + warnings, out->warnings.end());
-  c.notes.assign(out->notes.begin() + notes, out->notes.end());
-  out->warnings.resize(warnings);
-  out->notes.resize(notes);
-  c.unusable = out->unusable;
-  out->unusable = unusable;
-  c.causes = std::move(out->model_check);
-  out->model_check.clear();
-  return c;
-}
-
-void put_check(CheckOutputs c, IdentifyResult* out) {
-  out->warnings.insert(out->warnings.end(), c.warnings.begin(), c.warnings.end());
-  out->notes.insert(out->notes.end(), c.notes.begin(), c.notes.end());
-  out->unusable = c.unusable;
-  out->model_check = std::move(c.causes);
-}
-
-}  // namespace
-
-ModelVerdict model_check(const Fit& fit, const Analysis& an, IdentifyResult* out) {
-  if (!out->converged) {
-    ModelVerdict verdict;
-    verdict.unchecked = "the fit did not converge";
-    return verdict;
-  }
-  const size_t warnings = out->warnings.size(), notes = out->notes.size();
-  const std::string unusable = out->unusable;
-  bool evidenced = false;
-  const ModelVerdict verdict = check_at(fit, out->residual_noise_floor, &an, out, &evidenced);
-  if (!evidenced) return verdict;
-  // a model error evidenced where the fit's window smooths the motion's accelerations beyond
-  // the noise: checked again at the window where it does not (check_window); evidenced there
-  // too (or not checked), the first check stands
-  const CheckWindow cw = check_window(fit, *out);
-  if (!cw.changed()) return verdict;
-  CheckOutputs first = take_check(out, warnings, notes, unusable);
-  const ModelVerdict second =
-      check_at(refiltered(fit, *out, cw.sg), cw.floor, nullptr, out, &evidenced);
-  // quiet there, the error is the smoothing's only if that check would have seen it: a model
-  // error's fall scales with the whitening, so its evidence there is the first's times the
-  // floors' ratio squared (the paper scene's masses +-5 % at 2 s: inertias 15 std at 7 samples,
-  // quiet at 6, where they would read about 7)
-  const double seen = largest_evidence(first.causes) * floor_ratio(*out, cw);
-  if (evidenced || !second.unchecked.empty() || !(seen > detail::kCauseZ)) {
-    const CheckOutputs again = take_check(out, warnings, notes, unusable);
-    put_check(std::move(first), out);
-    out->notes.push_back(confirmed_note(fit, cw, again.causes, seen));
-    return verdict;
-  }
-  out->warnings.push_back(smoothing_warning(fit, cw, first.causes));
-  return second;
 }
 
 }  // namespace fivebar::identification::stages

@@ -293,10 +293,9 @@ std::vector<int> check_failures(const Fit& f) {
 /// did not converge with an encoder's zero moved by 1e-6 rad), noted. The fit the check runs on,
 /// or nullptr with verdict->unchecked (and short_log) saying why it cannot run.
 const Fit* check_inputs(const Fit& fit, const double fl[2], const Analysis* an, Fit* spare,
-                        IdentifyResult* out,
-                        Eigen::MatrixXd* J, Eigen::VectorXd* r, std::vector<int> idx[5],
-                        Eigen::VectorXd* info, TorqueColumns* tc, Eigen::VectorXd* bias,
-                        ModelVerdict* verdict) {
+                        IdentifyResult* out, Eigen::MatrixXd* J, Eigen::VectorXd* r,
+                        std::vector<int> idx[5], Eigen::VectorXd* info, TorqueColumns* tc,
+                        Eigen::VectorXd* bias, ModelVerdict* verdict) {
   const auto run = [&](const Fit& f) {
     return check_jacobian(f, fl, J, r, idx, info, tc, &f == &fit ? an : nullptr) &&
            (J->rows() < kCheckRowsPerColumn * J->cols() || score_bias(f, fl, *J, *r, *tc, bias));

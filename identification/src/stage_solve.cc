@@ -106,8 +106,8 @@ double loss_scale_from_level(Loss loss, double level, IdentifyResult* out) {
   const double scale = level > 0 && std::isfinite(level) ? k * level : 0.1;
   out->notes.push_back(std::string(loss_name(loss)) + " loss at scale " +
                        format_significant(scale) + " N m: " + format_significant(k, 4) +
-                       " times the residual's noise level per sample " +
-                       format_significant(level) + " N m (--loss-scale sets it)");
+                       " times the residual's noise level per sample " + format_significant(level) +
+                       " N m (--loss-scale sets it)");
   return scale;
 }
 

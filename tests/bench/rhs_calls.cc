@@ -1,7 +1,8 @@
 // n right-hand sides as bench_model's RightHandSide benchmarks evaluate them, for instruction
 // counts (valgrind --tool=callgrind; the difference of two counts n1, n2 over n2 - n1 is the cost
 // of one evaluation, without the program's start):
-//   valgrind --tool=callgrind --callgrind-out-file=/dev/null build/release/tests/bench/rhs_calls friction 1000
+//   valgrind --tool=callgrind --callgrind-out-file=/dev/null build/release/tests/bench/rhs_calls
+//   friction 1000
 // Modes: friction, frictionless, actuators (the benchmark's state, the loop started cold), and
 // friction_warm (states 1e-5 s apart along the benchmark's velocities, 200 in a cycle, the loop
 // warm-started from the previous evaluation as in the simulator), and friction_path (the same
@@ -21,8 +22,8 @@ int main(int argc, char** argv) {
   for (int m = 0; m < 5 && argc == 3; ++m) mode = std::strcmp(argv[1], modes[m]) == 0 ? m : mode;
   const long n = argc == 3 ? std::atol(argv[2]) : 0;
   if (mode < 0 || n < 1) {
-    std::fprintf(stderr,
-                 "usage: rhs_calls friction|frictionless|actuators|friction_warm|friction_path N\n");
+    std::fprintf(
+        stderr, "usage: rhs_calls friction|frictionless|actuators|friction_warm|friction_path N\n");
     return 2;
   }
   Params<double> p = paper_params();

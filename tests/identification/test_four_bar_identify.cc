@@ -216,10 +216,12 @@ TEST(FourBarIdentify, NamesAnglesInDegreesFromTheMotion) {
     FAIL() << "no LogError";
   } catch (const LogError& e) {
     EXPECT_EQ(e.key(), "column theta1");
-    EXPECT_EQ(e.reason().rfind("angles look like degrees, expected radians (read as radians", 0), 0u)
+    EXPECT_EQ(e.reason().rfind("angles look like degrees, expected radians (read as radians", 0),
+              0u)
         << e.what();
   }
-  EXPECT_TRUE(identify(crank_rocker().p, crank_rocker().loads, log, four_bar_options()).status.ok());
+  EXPECT_TRUE(
+      identify(crank_rocker().p, crank_rocker().loads, log, four_bar_options()).status.ok());
 }
 
 TEST(FourBarIdentify, RefusesAPoseThatCannotAssemble) {
@@ -255,8 +257,8 @@ TEST(FourBarIdentify, ReversalsTooDenseForTheLogsRateAreNamed) {
   EXPECT_NE(res.unusable.find("slip reversals (one every"), std::string::npos) << res.unusable;
   EXPECT_NE(res.unusable.find("log the rates or sample faster"), std::string::npos);
   const TorqueLog fast = crank_rocker_log(crank_rocker().p, 3.0, 0.02, 1e-5, 1, false);
-  EXPECT_TRUE(identify(crank_rocker().p, crank_rocker().loads, fast, four_bar_options())
-                  .unusable.empty());
+  EXPECT_TRUE(
+      identify(crank_rocker().p, crank_rocker().loads, fast, four_bar_options()).unusable.empty());
 }
 
 // A robust loss (--loss cauchy) takes out torque spikes kept in the fit (every 50th sample, 0.5-1.5
@@ -396,8 +398,8 @@ TEST(FourBarExcitation, PerJointGradientAndPredictedStdAreIdentifys) {
   o.singular_margin = 0.2;
   const ExcitationProblem problem(mech, {cr.th0, 0.0}, o);
   testing::expect_design_gradients(problem, {4.0, 0.3, -0.2, 0.1, 0.2, -0.1, 0.05});
-  const std::vector<double> x = {-0.711127, 0.101214, 0.482080, -0.0761166, -0.233120, -0.163505,
-                                 -4.58909,  2.31141,  -0.223370, -0.243613, -0.276516};
+  const std::vector<double> x = {-0.711127, 0.101214, 0.482080,  -0.0761166, -0.233120, -0.163505,
+                                 -4.58909,  2.31141,  -0.223370, -0.243613,  -0.276516};
   std::vector<double> t;
   std::vector<MotionState> states;
   std::vector<sim::Row> rows;

@@ -102,9 +102,8 @@ std::string angle_units_from_motion(const Params<double>& scene, const sim::Load
 /// A reading of a log's crank angles (theta1, and theta2 for two cranks; radians) against its
 /// torques: the median over the log of the largest |logged - frictionless inverse torque| of its
 /// cranks [N m], and the median crank rate [rad/s] in *median_rate.
-using TorqueMismatch = std::function<double(const std::vector<double>& theta1,
-                                            const std::vector<double>& theta2,
-                                            double* median_rate)>;
+using TorqueMismatch = std::function<double(
+    const std::vector<double>& theta1, const std::vector<double>& theta2, double* median_rate)>;
 
 /// angle_units_from_motion over any mechanism, its readings judged by `mismatch`; a log of one
 /// crank has no swapped reading.
