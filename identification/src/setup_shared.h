@@ -35,8 +35,9 @@ double misfit_ratio(const IdentifyResult& r);
 std::string structure_warning(int j, double rms, double floor, double torque_noise,
                               bool from_noise);
 
-/// The last check, where no stage named a cause: every friction coefficient at its bound with
-/// the residual above kAllAtBoundMisfitRatio floors makes the fit unusable (out->unusable)
+/// The last check, where no stage named a cause: a solver stopped before converging with no
+/// friction coefficient determined, or every friction coefficient at its bound with the residual
+/// above kAllAtBoundMisfitRatio floors, makes the fit unusable (out->unusable)
 void unexplained_misfit(const ParameterLayout& layout, IdentifyResult* out);
 
 /// Neutral start values, independent of the scene: each coefficient's CoefficientInfo::start

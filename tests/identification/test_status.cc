@@ -11,6 +11,7 @@
 #include "light_scene.h"
 #include "mechanism_stages.h"
 #include "paper.h"
+#include "setup_shared.h"
 #include "synthetic_log.h"
 #include "window_misfit.h"
 
@@ -29,6 +30,29 @@ TorqueLog paper_log(const Params<double>& truth) {
 double worst_ratio(const IdentifyResult& r) {
   return std::max(r.rms_torque_residual[0] / r.residual_noise_floor[0],
                   r.rms_torque_residual[1] / r.residual_noise_floor[1]);
+}
+
+// A solver stopped before converging with no friction coefficient determined is unusable (a
+// per-joint Stribeck four-bar fit of a 3 s log: 100 iterations, every coefficient at its bound or
+// without a std); one determined coefficient, or a converged solver, leaves the verdict to the
+// other checks.
+TEST(IdentifyStatus, AnUnconvergedFitWithNothingDeterminedIsUnusable) {
+  ParameterLayout layout;
+  IdentifyResult res;
+  res.converged = false;
+  res.iterations = 100;
+  res.parameters.resize(layout.size());
+  for (ParameterEstimate& p : res.parameters) p.std = std::nan("");
+  stages::unexplained_misfit(layout, &res);
+  EXPECT_THAT(res.unusable, HasSubstr("no friction coefficient is determined"));
+  res.unusable.clear();
+  res.parameters[1].std = 0.001;
+  stages::unexplained_misfit(layout, &res);
+  EXPECT_EQ(res.unusable, "");
+  res.parameters[1].std = std::nan("");
+  res.converged = true;
+  stages::unexplained_misfit(layout, &res);
+  EXPECT_EQ(res.unusable, "");
 }
 
 TEST(IdentifyStatus, ACleanLogIsUsable) {
