@@ -363,6 +363,18 @@ TEST(FourBarExcitation, PredictedStdIsIdentifysOnSeededLogs) {
   }
 }
 
+/// A log of synth-log's sensors (torque 0.02 N m, angles 1e-5 rad) along `rows` of scene s.
+TorqueLog sensor_log(const testing::ReferenceScene& s, const std::vector<sim::Row>& rows,
+                     std::uint64_t seed) {
+  SynthOptions so;
+  so.torque_noise = 0.02;
+  so.angle_noise = 1e-5;
+  so.seed = seed;
+  SynthResult log;
+  sample_log(s.p, rows, so, &log);
+  return log.log;
+}
+
 /// The first `seconds` of a four-bar's designed motion (5 harmonics, 4 periods of 2.5 s, a 1 s
 /// ramp: `excite --duration 10`'s basis) of coefficients x at 1 kHz: times, states and the rows
 /// of its inverse dynamics (for sample_log).
@@ -410,13 +422,7 @@ TEST(FourBarExcitation, PerJointGradientAndPredictedStdAreIdentifys) {
   IdentifyOptions opt = four_bar_options();
   opt.layout.per_joint = true;
   for (const std::uint64_t seed : {1, 2}) {
-    SynthOptions so;  // synth-log's sensors
-    so.torque_noise = 0.02;
-    so.angle_noise = 1e-5;
-    so.seed = seed;
-    SynthResult log;
-    sample_log(cr.p, rows, so, &log);
-    const IdentifyResult id = identify(cr.p, cr.loads, log.log, opt);
+    const IdentifyResult id = identify(cr.p, cr.loads, sensor_log(cr, rows, seed), opt);
     ASSERT_TRUE(id.status.ok()) << id.status.message;
     for (int i = 0; i < 2 * kFourBarJoints; ++i) {
       const double ratio = id.parameters[i].std / r.std_dev[i];
@@ -448,13 +454,8 @@ TEST(FourBarExcitation, PredictedWindowAndStdAreIdentifysOnADesign) {
   ASSERT_TRUE(st.ok()) << st.message;
   int same = 0;
   for (const std::uint64_t seed : {1, 2, 3}) {
-    SynthOptions so;  // synth-log's sensors
-    so.torque_noise = 0.02;
-    so.angle_noise = 1e-5;
-    so.seed = seed;
-    SynthResult log;
-    sample_log(dr.p, rows, so, &log);
-    const IdentifyResult id = identify(dr.p, dr.loads, log.log, four_bar_options());
+    const IdentifyResult id =
+        identify(dr.p, dr.loads, sensor_log(dr, rows, seed), four_bar_options());
     ASSERT_TRUE(id.status.ok()) << id.status.message;
     same += id.sg_half_window == r.sg_half_window ? 1 : 0;
     for (int i = 0; i < 2; ++i) {
