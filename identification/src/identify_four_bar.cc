@@ -40,13 +40,14 @@ std::string line_of(const TorqueLog& log, int i) {
 /// samples.
 double torque_mismatch(const FourBarFit& f, const TorqueLog& log, const std::vector<double>& th,
                        double* median_rate) {
-  std::vector<double> w, a;
-  savitzky_golay(log.t, th, SgOptions{}, &w, &a);
+  const int n = log.size();
+  const int step = std::max(1, n / 400);
+  std::vector<double> w, a;  // at the samples read below only
+  savitzky_golay(log.t, th, SgOptions{}, &w, &a, step);
   FourBarParams p = f.scene;
   p.friction.law = FrictionLaw::kNone;
-  const int n = log.size();
   std::vector<double> mismatch, rate;
-  for (int i = 0; i < n; i += std::max(1, n / 400)) {
+  for (int i = 0; i < n; i += step) {
     FourBarEvaluation ev;
     const Status st = four_bar_inverse(p, f.loads(log.t[i]), th[i], w[i], a[i], EvalOptions{}, &ev);
     mismatch.push_back(st.ok() ? log.tau1[i] - ev.M1 : glitches::kInf);

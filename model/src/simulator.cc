@@ -331,11 +331,7 @@ const LoadsOf<M>& loads_at(Context<M>& c, double t) {
     c.loads_then = (*c.loads)(t);
     c.loads_time = t;
     // (the status worded only for a load that is not finite: the common case costs no message)
-    bool finite = true;
-    for (const auto& named : Sim<M>::load_values(c.loads_then)) {
-      finite &= std::isfinite(named.second);
-    }
-    if (!finite) {
+    if (first_load(c.loads_then, [](double x) { return !std::isfinite(x); }).first != nullptr) {
       c.loads_status = finite_loads(c.loads_then, t);
     } else if (!c.loads_status.ok()) {
       c.loads_status = Status::Ok();
@@ -579,8 +575,8 @@ Status scan_step(Context<M>& c, detail::Integrator& integ, double tp, double tc,
   Switches gdot_end;
   const bool slopes = switch_slopes(c, end_values, &gdot_end);
   int first = 1;
+  Switches g_end;  // the step end's switch values, when computed here (slopes)
   if (slopes) {
-    Switches g_end;
     const Status st = switch_values(c, tc, yc, &g_end, end_rates);
     if (!st.ok()) return st;
     if (interior_clear(c, w, g_end, gdot_end, tc - tp)) first = kSamples + 1;
@@ -593,8 +589,8 @@ Status scan_step(Context<M>& c, detail::Integrator& integ, double tp, double tc,
     } else if (!integ.sample(ti, y)) {  // the right-hand side failed: say why
       return c.failure.ok() ? Status::Error(StatusCode::kSolverFailed, integ.error()) : c.failure;
     }
-    Switches g;
-    Status st = switch_values(c, ti, y, &g, end ? end_rates : nullptr);
+    Switches g = g_end;
+    Status st = end && slopes ? Status::Ok() : switch_values(c, ti, y, &g, end ? end_rates : nullptr);
     if (!st.ok()) return st;
     if (!end && any_of(fired(c, w, g))) {  // confirm on the accurate interpolant
       if (!integ.dense(ti, y)) return Status::Error(StatusCode::kSolverFailed, integ.error());

@@ -53,6 +53,22 @@ def rewrite_log(src, dst, change):
     return dst
 
 
+def column(name, change):
+    """A rewrite_log change: every value v of the column `name` replaced by change(v)."""
+    def rewrite(cols, rows):
+        k = cols.index(name)
+        for r in rows:
+            r[k] = repr(change(float(r[k])))
+        return rows
+    return rewrite
+
+
+def zero(offset):
+    """A rewrite_log change: theta1 read `offset` rad more than the true angle (an encoder's
+    zero off)."""
+    return column("theta1", lambda v: v + offset)
+
+
 def shift_torques(k):
     """A rewrite_log change: torques that lag the angles by k samples (k < 0: lead); row i's
     torques are the true ones of row i - k, the rows without one dropped."""

@@ -36,7 +36,7 @@ import sys
 
 FIVEBAR, PAPER, WORK, CASE = sys.argv[1:5]
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from cli_common import Cli, rewrite_log, shift_torques  # noqa: E402
+from cli_common import Cli, rewrite_log, shift_torques, zero  # noqa: E402
 
 os.makedirs(WORK, exist_ok=True)
 cli = Cli(FIVEBAR)
@@ -92,15 +92,6 @@ def synth(truth, name, torque_noise, excitation=("--excitation", "scene"), seed=
     if code != 0:
         cli.failures.append("synth-log %s: exit %d %s" % (name, code, err))
     return out
-
-
-def zero(offset):
-    def change(cols, rows):
-        j = cols.index("theta1")
-        for r in rows:
-            r[j] = repr(float(r[j]) + offset)
-        return rows
-    return change
 
 
 def identify(name, scene_path, log):

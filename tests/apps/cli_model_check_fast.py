@@ -19,7 +19,7 @@ import re
 import shutil
 import sys
 
-from cli_common import Cli, rewrite_log
+from cli_common import Cli, column, rewrite_log, zero
 
 FIVEBAR, WORK = sys.argv[1], sys.argv[3]
 cli = Cli(FIVEBAR)
@@ -68,15 +68,6 @@ def synth(scene_path, out):
     return out
 
 
-def column(name, change):
-    def rewrite(cols, rows):
-        k = cols.index(name)
-        for r in rows:
-            r[k] = repr(change(float(r[k])))
-        return rows
-    return rewrite
-
-
 SCENE_PATH = scene(os.path.join(WORK, "fast.yaml"), 1.0)
 clean = synth(SCENE_PATH, os.path.join(WORK, "clean.csv"))
 logs = {
@@ -84,7 +75,7 @@ logs = {
     "masses": synth(scene(os.path.join(WORK, "heavier.yaml"), 0.96),
                     os.path.join(WORK, "masses.csv")),
     "zero": rewrite_log(clean, os.path.join(WORK, "zero.csv"),
-                        column("theta1", lambda v: v + 0.01)),
+                        zero(0.01)),
     "gain": rewrite_log(clean, os.path.join(WORK, "gain.csv"), column("tau1", lambda v: v * 1.05)),
 }
 expected = {"masses": "masses or inertias", "zero": "angles' zeros", "gain": "torque sensors"}

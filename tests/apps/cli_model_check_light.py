@@ -15,7 +15,7 @@ import os
 import shutil
 import sys
 
-from cli_common import Cli, rewrite_log
+from cli_common import Cli, rewrite_log, zero
 
 FIVEBAR, WORK = sys.argv[1], sys.argv[3]
 cli = Cli(FIVEBAR)
@@ -44,15 +44,6 @@ code, _, err = cli.run(["synth-log", SCENE, "--out", clean, "--rate", "1000", "-
                         "--excitation", "scene"])
 if code != 0:
     failures.append("synth-log: exit %d: %s" % (code, err))
-
-
-def zero(offset):
-    def change(cols, rows):
-        k = cols.index("theta1")
-        for r in rows:
-            r[k] = repr(float(r[k]) + offset)
-        return rows
-    return change
 
 
 def identify(name, log):

@@ -155,6 +155,15 @@ JointModes random_segment_modes(std::mt19937_64& rng, const std::array<double, k
   return m;
 }
 
+/// The simulator's right-hand-side evaluation options (no reactions or angles asked for).
+EvalOptions rhs_options() {
+  EvalOptions opt;
+  opt.want_reactions = false;
+  opt.want_angles = false;
+  opt.singular_margin = 1e-3;
+  return opt;
+}
+
 // The simulator's right-hand side (forward dynamics without the final reaction solve) against
 // the general chain: with every joint slipping along sign(w), the chain solves the friction loop
 // itself; in any mode (slip against sign(w), rest, stuck), the chain given the evaluation's
@@ -163,10 +172,7 @@ JointModes random_segment_modes(std::mt19937_64& rng, const std::array<double, k
 // states, seeded.
 TEST(PlanarChain, FiveBarFrictionRightHandSideAgreesInEveryJointMode) {
   std::mt19937_64 rng(57);
-  EvalOptions opt;
-  opt.want_reactions = false;
-  opt.want_angles = false;
-  opt.singular_margin = 1e-3;
+  const EvalOptions opt = rhs_options();
   double worst_acc = 0.0, worst_N = 0.0, worst_Mf = 0.0, worst_hold = 0.0;
   int loops = 0, stuck = 0, rest = 0;
   for (int mechanism = 0; mechanism < 40; ++mechanism) {
@@ -226,10 +232,7 @@ TEST(PlanarChain, FiveBarFrictionRightHandSideAgreesInEveryJointMode) {
 // mechanisms and states, seeded. The warm start must reach the cold start's solution, not its own.
 TEST(PlanarChain, FiveBarWarmStartedRightHandSideAgreesAlongAMotion) {
   std::mt19937_64 rng(61);
-  EvalOptions opt;
-  opt.want_reactions = false;
-  opt.want_angles = false;
-  opt.singular_margin = 1e-3;
+  const EvalOptions opt = rhs_options();
   double worst_acc = 0.0, worst_N = 0.0;
   int warm = 0;
   for (int mechanism = 0; mechanism < 20; ++mechanism) {
