@@ -590,7 +590,8 @@ Status scan_step(Context<M>& c, detail::Integrator& integ, double tp, double tc,
       return c.failure.ok() ? Status::Error(StatusCode::kSolverFailed, integ.error()) : c.failure;
     }
     Switches g = g_end;
-    Status st = end && slopes ? Status::Ok() : switch_values(c, ti, y, &g, end ? end_rates : nullptr);
+    Status st =
+        end && slopes ? Status::Ok() : switch_values(c, ti, y, &g, end ? end_rates : nullptr);
     if (!st.ok()) return st;
     if (!end && any_of(fired(c, w, g))) {  // confirm on the accurate interpolant
       if (!integ.dense(ti, y)) return Status::Error(StatusCode::kSolverFailed, integ.error());
