@@ -14,6 +14,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -56,6 +57,14 @@ struct Args {
   /// actuator terms (tau1, tau2), overriding the scene's `actuators:` when given
   std::vector<double> torque_offset, actuator_coulomb, actuator_viscous;
   std::string command_line;
+  /// --rate and --duration as given on the command line (a motion's grid replaces their defaults)
+  const CLI::Option* rate_option = nullptr;
+  const CLI::Option* duration_option = nullptr;
+  /// the motion's first seconds to follow: --duration when given, else all of it
+  double motion_duration() const {
+    return duration_option && duration_option->count() ? so.duration
+                                                       : std::numeric_limits<double>::infinity();
+  }
 };
 
 // Writes the log to `path`, creating its directory.
@@ -73,9 +82,28 @@ void write_log(const std::string& path, const identification::TorqueLog& log) {
   }
 }
 
+// The rows of a motion up to `duration` seconds after its first (all of them for infinity); a
+// motion shorter than that by more than half a step is refused, naming its length.
+std::vector<sim::Row> first_seconds(const std::string& path, std::vector<sim::Row> rows,
+                                    double duration) {
+  if (!std::isfinite(duration)) return rows;
+  const double t0 = rows.front().t, length = rows.back().t - t0;
+  const double half_step = rows.size() > 1 ? 0.5 * length / double(rows.size() - 1) : 0.0;
+  if (duration > length + half_step) {
+    throw InputError(path, "--duration",
+                     format_double(duration) + " s is longer than the motion (" +
+                         format_double(length) + " s)");
+  }
+  size_t n = 0;
+  while (n < rows.size() && rows[n].t - t0 <= duration + half_step) ++n;
+  rows.resize(n);
+  return rows;
+}
+
 // The rows of MOTION.csv (columns t, theta<j>, omega<j>, alpha<j> of the mechanism's `dof`
-// cranks, as excitation.csv of `fivebar excite`), t strictly increasing.
-std::vector<sim::Row> motion_rows(const CsvTable& table, int dof) {
+// cranks, as excitation.csv of `fivebar excite`), t strictly increasing, up to `duration`
+// seconds after its first row.
+std::vector<sim::Row> motion_rows(const CsvTable& table, int dof, double duration) {
   const std::string& path = table.path;
   // a motion of the other mechanism: a four-bar's has theta3 and no theta4, a five-bar's theta2
   // without theta3 (excitation.csv) or theta4
@@ -110,16 +138,16 @@ std::vector<sim::Row> motion_rows(const CsvTable& table, int dof) {
     }
     rows[i].t = t[i];
   }
-  return rows;
+  return first_seconds(path, std::move(rows), duration);
 }
 
 // The log of a position-controlled five-bar following MOTION.csv: inverse dynamics of the
 // scene at every row, then the same noise as a simulated log.
 identification::SynthResult motion_log(const Scene& scene, const sim::LoadFunction& loads,
-                                       const std::string& path,
+                                       const std::string& path, double duration,
                                        const identification::SynthOptions& so) {
   const CsvTable table = read_csv(path);
-  std::vector<sim::Row> rows = motion_rows(table, kDof);
+  std::vector<sim::Row> rows = motion_rows(table, kDof, duration);
   for (size_t i = 0; i < rows.size(); ++i) {
     sim::Row& r = rows[i];
     Evaluation<double> ev;
@@ -143,11 +171,12 @@ identification::SynthResult motion_log(const Scene& scene, const sim::LoadFuncti
 // The same for a four-bar (columns t, theta1, omega1, alpha1): sim::inverse_rows of the crank.
 identification::SynthResult four_bar_motion_log(const Scene& scene,
                                                 const sim::FourBarLoadFunction& loads,
-                                                const std::string& path,
+                                                const std::string& path, double duration,
                                                 const identification::SynthOptions& so) {
   const CsvTable table = read_csv(path);
   std::vector<sim::Row> rows;
-  const Status st = sim::inverse_rows(scene.four_bar, loads, motion_rows(table, 1), &rows);
+  const Status st =
+      sim::inverse_rows(scene.four_bar, loads, motion_rows(table, 1, duration), &rows);
   if (!st.ok()) throw NumericalError(path, "inverse dynamics", st.message);
   identification::SynthResult out;
   identification::sample_log(scene.four_bar, rows, so, &out);
@@ -270,6 +299,11 @@ void check_options(const Args& a) {
   if (!a.motion.empty() && a.excitation != "scene") {
     throw InputError(flag_file, "--motion", "cannot be combined with --excitation " + a.excitation);
   }
+  if (!a.motion.empty() && a.rate_option && a.rate_option->count()) {
+    throw InputError(flag_file, "--rate",
+                     "the motion's own grid sets the sampling rate; resample " + a.motion +
+                         " to change it");
+  }
 }
 
 // the friction law of the log: the scene's, or Stribeck with the coefficients given here
@@ -311,7 +345,7 @@ identification::SynthResult four_bar_log(const Args& a, const Scene& scene,
   const sim::FourBarLoadFunction loads = LoadExpressions(scene).four_bar_function();
   return a.motion.empty()
              ? identification::synthesize_log(scene.four_bar, loads, scene.initial, so)
-             : four_bar_motion_log(scene, loads, a.motion, so);
+             : four_bar_motion_log(scene, loads, a.motion, a.motion_duration(), so);
 }
 
 int run(const Args& a) {
@@ -329,7 +363,7 @@ int run(const Args& a) {
     set_actuators(a, &scene);
     const sim::LoadFunction loads = LoadExpressions(scene).function();
     res = a.motion.empty() ? identification::synthesize_log(scene.params, loads, scene.initial, so)
-                           : motion_log(scene, loads, a.motion, so);
+                           : motion_log(scene, loads, a.motion, a.motion_duration(), so);
   }
   if (!res.status.ok()) throw NumericalError(scene.path, "simulation", res.status.message);
 
@@ -361,8 +395,11 @@ RunFunction setup(CLI::App* app) {
       ->type_name("KEY=VALUE")
       ->allow_extra_args(false);
   app->option_defaults()->always_capture_default();  // the options below show their defaults
-  app->add_option("--rate", args->so.rate_hz, "sampling rate [Hz]")->check(positive_number());
-  app->add_option("--duration", args->so.duration, "[s]")->check(positive_number());
+  args->rate_option =
+      app->add_option("--rate", args->so.rate_hz, "sampling rate [Hz]")->check(positive_number());
+  args->duration_option = app->add_option("--duration", args->so.duration,
+                                          "[s]; with --motion, its first seconds")
+                              ->check(positive_number());
   app->add_option("--torque-noise", args->so.torque_noise, "Gaussian std on tau1, tau2 [N m]")
       ->check(nonnegative_number());
   app->add_option("--angle-noise", args->so.angle_noise, "Gaussian std on theta1, theta2 [rad]")
@@ -383,7 +420,7 @@ RunFunction setup(CLI::App* app) {
   app->add_option("--motion", args->motion,
                   "follow this motion (t,theta1,theta2,omega1,omega2,alpha1,alpha2; a "
                   "four-bar's t,theta1,omega1,alpha1; e.g. excitation.csv of excite): torques "
-                  "by inverse dynamics; its grid replaces --rate and --duration")
+                  "by inverse dynamics; its grid sets the rate, --duration cuts it")
       ->type_name("MOTION.csv");
   for (const ActuatorOption& o : kActuatorOptions) {
     app->add_option(o.flag, (*args).*o.values, o.help)
@@ -409,8 +446,12 @@ RunFunction setup(CLI::App* app) {
     const Args& a = *args;
     std::string cmd = "fivebar synth-log " + shell_word(a.scene) + " --out " + shell_word(a.out);
     for (const std::string& s : a.sets) cmd += " --set " + shell_word(s);
-    cmd += " --rate " + format_double(a.so.rate_hz) + " --duration " +
-           format_double(a.so.duration) + " --torque-noise " + format_double(a.so.torque_noise) +
+    if (a.motion.empty()) {
+      cmd += " --rate " + format_double(a.so.rate_hz) + " --duration " + format_double(a.so.duration);
+    } else if (std::isfinite(a.motion_duration())) {
+      cmd += " --duration " + format_double(a.so.duration);
+    }
+    cmd += " --torque-noise " + format_double(a.so.torque_noise) +
            " --angle-noise " + format_double(a.so.angle_noise) + " --seed " +
            std::to_string(a.so.seed) + " --excitation " + a.excitation;
     if (!a.motion.empty()) cmd += " --motion " + shell_word(a.motion);

@@ -136,6 +136,20 @@ if col:
         failures.append("synth-log --motion: exit %d, %d rows, torques differ by %g" % (code, n, worst))
     expect_error(2, "missing column", ["synth-log", PAPER, "--motion", PAPER.replace("paper.yaml", "../logs/paper_angles.csv"),
                                        "--out", os.path.join(WORK, "log2.csv")])
+    # --duration takes the motion's first seconds; a longer one, or a --rate, is refused
+    motion = os.path.join(out, "excitation.csv")
+    half = 0.5 * (t[-1] - t[0])
+    code, _, err = run(["synth-log", PAPER, "--motion", motion, "--duration", repr(half), "--out",
+                        os.path.join(WORK, "log3.csv"), "--torque-noise", "0", "--angle-noise", "0"])
+    cut = read_csv(os.path.join(WORK, "log3.csv")) if code == 0 else []
+    if code != 0 or abs(float(cut[-1]["t"]) - t[0] - half) > 1e-9 or len(cut) >= len(t):
+        failures.append("synth-log --motion --duration %g: exit %d, %d rows: %s" % (half, code, len(cut), err))
+    expect_error(2, "longer than the motion",
+                 ["synth-log", PAPER, "--motion", motion, "--duration", repr(3 * half), "--out", os.path.join(WORK, "log4.csv")])
+    expect_error(2, "--rate: the motion's own grid",
+                 ["synth-log", PAPER, "--motion", motion, "--rate", "100", "--out", os.path.join(WORK, "log4.csv")])
+    if os.path.exists(os.path.join(WORK, "log4.csv")):
+        failures.append("synth-log wrote log4.csv after failing")
 
 # the torque family cannot meet 1000 reversals in 1 s: exit 3 with the status, no excitation.csv
 tmiss = os.path.join(WORK, "torque_missed")
