@@ -240,6 +240,17 @@ ConditionedLog condition_log(const TorqueLog& log, const ConditionOptions& opt) 
   return out;
 }
 
+namespace {
+
+/// Whether two readings scale the angles nearly alike (within 25 %: degrees and gradians, the
+/// counts of neighbouring resolutions), so that one motion can hardly tell them apart.
+bool same_scale(const AngleUnit& a, const AngleUnit& b) {
+  const double ratio = a.to_rad / b.to_rad;
+  return a.swapped == b.swapped && ratio > 0.8 && ratio < 1.25;
+}
+
+}  // namespace
+
 std::string angle_units_from_motion(const Params<double>& scene, const sim::LoadFunction& loads,
                                     const TorqueLog& log, std::string* unit) {
   return angle_units_from_motion(
@@ -262,12 +273,12 @@ std::string angle_units_from_motion(const TorqueLog& log, const TorqueMismatch& 
   unwrap_angles(&r2);
   double rate_rad = 0;
   const double as_rad = mismatch(r1, r2, &rate_rad);
-  // motion that the scene cannot assemble as radians at most samples is not judged here: its
-  // poses are named where they fail (a coupler too short reads "better" in degrees, a small swing)
-  if (!std::isfinite(as_rad)) return "";
-  // the reading that explains the torques best
-  double best = kInf, best_rate = 0;
-  std::string best_unit;
+  // every reading's mismatch, the best first
+  struct Reading {
+    const AngleUnit* unit;
+    double mismatch, rate;
+  };
+  std::vector<Reading> readings;
   for (const AngleUnit& u : kAngleUnits) {
     if (u.swapped && log.dof == 1) continue;
     std::vector<double> a1 = u.swapped ? log.theta2 : log.theta1;
@@ -277,14 +288,14 @@ std::string angle_units_from_motion(const TorqueLog& log, const TorqueMismatch& 
     }
     unwrap_angles(&a1);
     unwrap_angles(&a2);
-    double rate = 0;
-    const double m = mismatch(a1, a2, &rate);
-    if (m < best) {
-      best = m;
-      best_rate = rate;
-      best_unit = u.name;
-    }
+    Reading r{&u, kInf, 0.0};
+    const double m = mismatch(a1, a2, &r.rate);
+    if (m < kInf) r.mismatch = m;  // NaN (a pose that does not assemble) sorts last
+    readings.push_back(r);
   }
+  std::stable_sort(readings.begin(), readings.end(),
+                   [](const Reading& a, const Reading& b) { return a.mismatch < b.mismatch; });
+  const Reading& best = readings.front();
   // another unit only when that reading explains the torques several times better than
   // radians, and well in absolute terms (within half the logged torques' median size): a log
   // that no reading explains (wrong scene, absurd values) is not called another unit
@@ -292,12 +303,36 @@ std::string angle_units_from_motion(const TorqueLog& log, const TorqueMismatch& 
   for (int i = 0; i < n; ++i) {
     tau.push_back(std::max(std::abs(log.tau1[i]), log.dof == 2 ? std::abs(log.tau2[i]) : 0.0));
   }
-  if (!(best < 0.25 * as_rad) || !(best < 0.5 * median_abs(tau))) return "";
+  if (!(best.mismatch < 0.5 * median_abs(tau))) return "";
+  double rival = as_rad;
+  if (!std::isfinite(as_rad)) {
+    // motion the scene cannot assemble as radians (a four-bar's swing, counts far out): the
+    // rival is the best reading of a clearly different scale, since a wrong scene (a coupler too
+    // short) can leave every small swing (degrees, counts) assembled and near-static alike
+    rival = kInf;
+    for (const Reading& r : readings) {
+      if (!same_scale(*r.unit, *best.unit)) rival = std::min(rival, r.mismatch);
+    }
+  }
+  if (!(best.mismatch < 0.25 * rival)) return "";
+  // readings of a nearly equal scale that explain the torques about as well are named too (the
+  // motion can hardly tell 4000 from 4096 counts per turn)
+  std::string best_unit = best.unit->name;
+  for (size_t k = 1; k < readings.size(); ++k) {
+    if (same_scale(*readings[k].unit, *best.unit) && readings[k].mismatch <= 1.25 * best.mismatch) {
+      best_unit += std::string(" or ") + readings[k].unit->name;
+    }
+  }
   *unit = best_unit;
-  return "read as radians, the motion (median crank rate " + format_significant(rate_rad, 3) +
-         " rad/s) needs torques a median " + format_significant(as_rad, 3) +
-         " N m away from the logged ones; read as " + best_unit + " (median rate " +
-         format_significant(best_rate, 3) + " rad/s), " + format_significant(best, 3) + " N m";
+  const std::string as_radians =
+      std::isfinite(as_rad)
+          ? "read as radians, the motion (median crank rate " + format_significant(rate_rad, 3) +
+                " rad/s) needs torques a median " + format_significant(as_rad, 3) +
+                " N m away from the logged ones"
+          : std::string("read as radians, the scene cannot assemble the motion");
+  return as_radians + "; read as " + best_unit + " (median rate " +
+         format_significant(best.rate, 3) + " rad/s), " + format_significant(best.mismatch, 3) +
+         " N m";
 }
 
 }  // namespace fivebar::identification

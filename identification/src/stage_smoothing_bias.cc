@@ -457,7 +457,8 @@ void correct_smoothing_bias(const ParameterLayout& layout, const Eigen::VectorXd
     if (within_bound) e.ci_low = std::max(e.ci_low, layout.lower_bound(p));
     e.ci_high -= applied(p);
     list += (list.empty() ? "" : ", ") + e.name + " " + format_significant(-applied(p));
-    if (std::abs(applied(p) - shift(p)) > 1e-12 * std::abs(shift(p))) {
+    // the shift's rounding in x - dx is eps |x|, far above eps |shift| for a small shift
+    if (std::abs(applied(p) - shift(p)) > 1e-6 * std::abs(shift(p))) {
       list += " (limited by its bound: predicted " + format_significant(-shift(p)) + ")";
     }
   }

@@ -224,6 +224,33 @@ TEST(FourBarIdentify, NamesAnglesInDegreesFromTheMotion) {
       identify(crank_rocker().p, crank_rocker().loads, log, four_bar_options()).status.ok());
 }
 
+// A double rocker's swing in encoder counts cannot be assembled as radians: the readings that
+// can be are compared among themselves, and the counts named (with the neighbouring resolution
+// the motion cannot tell from them).
+TEST(FourBarIdentify, NamesADoubleRockersCountsThatRadiansCannotAssemble) {
+  const testing::ReferenceScene dr = testing::reference_scenes()[1];
+  SynthOptions so;
+  so.duration = 2;
+  so.torque_noise = 0.02;
+  so.angle_noise = 1e-5;
+  sim::Initial init;
+  init.theta1 = dr.th0;
+  const SynthResult r = synthesize_log(dr.p, dr.loads, init, so);
+  ASSERT_TRUE(r.status.ok()) << r.status.message;
+  TorqueLog counts = r.log;
+  for (double& th : counts.theta1) th *= 4096 / (2 * M_PI);
+  try {
+    identify(dr.p, dr.loads, counts, four_bar_options());
+    FAIL() << "no LogError";
+  } catch (const LogError& e) {
+    EXPECT_EQ(e.key(), "column theta1");
+    EXPECT_NE(e.reason().find("encoder counts (4096 per turn)"), std::string::npos) << e.what();
+    EXPECT_NE(e.reason().find("the scene cannot assemble the motion"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(identify(dr.p, dr.loads, r.log, four_bar_options()).status.ok());
+}
+
 TEST(FourBarIdentify, RefusesAPoseThatCannotAssemble) {
   FourBarParams short_coupler = crank_rocker().p;
   short_coupler.links[1].length = 0.05;  // |BD0| > l2 + l3 somewhere on the logged motion
