@@ -56,14 +56,14 @@ void inertial_stage(const Fit& f, const Eigen::MatrixXd& J, IdentifyResult* out)
 }
 
 
-/// The free parameters (covariance): off their bounds, with an effect on the residuals; empty
-/// index when none is.
-FreeSet free_set(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& Hp) {
+/// The parameters of the covariance: those with an effect on the residuals, and of them those
+/// at their bound only when `with_bound`; empty index when none is.
+FreeSet free_set(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& Hp,
+                 bool with_bound) {
   FreeSet fs;
   for (int i = 0; i < f.layout.size(); ++i) {
-    if (f.x[i] > f.layout.lower_bound(i) + 1e-12 && J.col(i).squaredNorm() > 0) {
-      fs.index.push_back(i);
-    }
+    const bool off_bound = f.x[i] > f.layout.lower_bound(i) + 1e-12;
+    if ((with_bound || off_bound) && J.col(i).squaredNorm() > 0) fs.index.push_back(i);
   }
   const int n = static_cast<int>(fs.index.size());
   fs.J.resize(J.rows(), n);
@@ -74,6 +74,13 @@ FreeSet free_set(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& 
   }
   fs.s2 = f.prior_scale * f.prior_scale;
   return fs;
+}
+
+/// Whether the information H (eigen-decomposed in es) can be inverted to a covariance.
+bool well_conditioned(const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>& es,
+                      const Eigen::MatrixXd& H) {
+  const double emax = es.eigenvalues().maxCoeff(), emin = es.eigenvalues().minCoeff();
+  return emax > 0 && emin > 1e-14 * emax && H.allFinite();
 }
 
 /// `Cf` (over the free parameters) into the rows and columns fs.index of *C.
@@ -97,17 +104,24 @@ void covariance(const Fit& f, const Eigen::MatrixXd& Hp, Analysis* an, IdentifyR
                             "): no covariance, standard deviations not given");
     return;
   }
-  // parameters at a bound are held there (active constraints), and parameters without effect
-  // on the residuals are left out: the covariance is that of the others
-  FreeSet fs = free_set(f, an->J, Hp);
+  // parameters without effect on the residuals are left out. Those at a bound are kept, so that
+  // the direction a bound holds keeps its uncertainty in the others' std (a light five-bar's
+  // viscous at 0 had coulomb's std at half its spread, 3 of 4 such intervals missing the
+  // truth), unless the log does not determine them: then the covariance is the others'
+  FreeSet fs = free_set(f, an->J, Hp, /*with_bound=*/true);
   if (fs.index.empty()) return;
   // the prior (group inertia) as a pseudo-observation of noise level s: information Hp = s^2 /
   // sigma^2, score covariance s^2 Hp; the covariance is then the posterior one (a direction the
   // log cannot determine gets its prior std, the CAD error it may carry)
-  const Eigen::MatrixXd H = fs.J.transpose() * fs.J + fs.Hp;
+  Eigen::MatrixXd H = fs.J.transpose() * fs.J + fs.Hp;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
-  const double emax = es.eigenvalues().maxCoeff(), emin = es.eigenvalues().minCoeff();
-  if (!(emax > 0) || !(emin > 1e-14 * emax) || !H.allFinite()) {
+  if (!well_conditioned(es, H)) {
+    fs = free_set(f, an->J, Hp, /*with_bound=*/false);
+    if (fs.index.empty()) return;
+    H = fs.J.transpose() * fs.J + fs.Hp;
+    es.compute(H);
+  }
+  if (!well_conditioned(es, H)) {
     out->warnings.push_back("covariance could not be computed (Jacobian rank deficient)");
     // a fit with no std cannot say how far to trust it
     if (out->unusable.empty()) {
