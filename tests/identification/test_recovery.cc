@@ -295,5 +295,25 @@ TEST(Synth, QuantizationRoundsAngles) {
   for (double th : r.log.theta1) EXPECT_NEAR(th / 1e-3, std::round(th / 1e-3), 1e-6);
 }
 
+// A coefficient at its bound keeps the direction it holds uncertain in the others' std: with
+// viscous nearly 0 in truth (1e-5), the 2 s log of seed 2 ends at viscous = 0, and its coulomb
+// std is that of the seeds where viscous stays free (it was a quarter of it, the bound taken as
+// known).
+TEST(Recovery, AStdKeepsTheUncertaintyOfACoefficientAtItsBound) {
+  Params<double> truth = paper_params();
+  truth.friction.viscous.fill(1e-5);
+  const IdentifyResult at_bound = identify(
+      truth, paper_loads, make_log(truth, 2.0, false, false, kTorqueNoise, kAngleNoise, 2),
+      IdentifyOptions{});
+  const IdentifyResult free = identify(
+      truth, paper_loads, make_log(truth, 2.0, false, false, kTorqueNoise, kAngleNoise, 3),
+      IdentifyOptions{});
+  ASSERT_TRUE(at_bound.status.ok() && free.status.ok());
+  ASSERT_TRUE(at_bound.parameters[1].at_bound) << at_bound.parameters[1].value;
+  ASSERT_FALSE(free.parameters[1].at_bound);
+  EXPECT_GT(at_bound.parameters[0].std, 0.7 * free.parameters[0].std);
+  EXPECT_LT(std::abs(at_bound.parameters[0].value - 0.12), 3 * at_bound.parameters[0].std);
+}
+
 }  // namespace
 }  // namespace fivebar::identification
