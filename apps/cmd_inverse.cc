@@ -64,6 +64,9 @@ struct Motion {
   double rate_noise = 0, acceleration_noise = 0;
   // the largest rest rate threshold the noise may give (rest_rate_cap)
   double rest_rate_cap = INFINITY;
+  // the first pose that cannot close away from the singular poses (pose_fault): its line and
+  // what is wrong with it, both empty when every pose closes
+  std::string pose_key, pose_reason;
 };
 
 // largest |n-th forward difference| of a series (0 when it is too short)
@@ -110,9 +113,11 @@ std::string pose_problem(const Scene& scene, const std::vector<double>& theta) {
   return sine < 0 ? "the mechanism cannot assemble" : "too close to a singular configuration";
 }
 
-// each pose must close away from the singular poses
-void check_motion_poses(const std::string& path, const CsvTable& table, const Scene& scene,
-                        const std::vector<std::vector<double>>& theta) {
+// the first pose that does not close away from the singular poses: its line and the problem
+// into *key and *reason (left empty when every pose closes)
+void pose_fault(const CsvTable& table, const Scene& scene,
+                const std::vector<std::vector<double>>& theta, std::string* key,
+                std::string* reason) {
   std::vector<double> pose(theta.size());
   for (size_t i = 0; i < theta[0].size(); ++i) {
     for (size_t j = 0; j < theta.size(); ++j) pose[j] = theta[j][i];
@@ -122,7 +127,9 @@ void check_motion_poses(const std::string& path, const CsvTable& table, const Sc
     for (size_t j = 0; j < theta.size(); ++j) {
       at += (j ? ", theta" : " at theta") + std::to_string(j + 1) + " = " + format_double(pose[j]);
     }
-    throw InputError(path, "line " + std::to_string(table.lines[i]), problem + at);
+    *key = "line " + std::to_string(table.lines[i]);
+    *reason = problem + at;
+    return;
   }
 }
 
@@ -262,8 +269,8 @@ Motion read_motion(const std::string& path, const Scene& scene) {
   check_times(path, table, c.t);
   const size_t cranks = four_bar ? 1 : 2;
   for (size_t j = 0; j < cranks; ++j) c.theta.push_back(table.column(crank_column("theta", j)));
-  check_motion_poses(path, table, scene, c.theta);
   Motion m;
+  pose_fault(table, scene, c.theta, &m.pose_key, &m.pose_reason);
   m.cranks = static_cast<int>(cranks);
   derive_rates(path, table, &c, &m);
   estimate_noise(c, &m);
@@ -608,8 +615,14 @@ int run(const Args& args) {
   const Motion motion = read_motion(args.motion, scene);
   // the motion itself: refused before anything is run or written, whether the model would run
   // on it or not (its torques would be those of the numbers as written)
+  // (a jump or degrees first: they also make poses that cannot close, far from the jump)
   const MotionFault fault = motion_fault(motion);
   if (fault.refused && !fault.key.empty()) throw InputError(args.motion, fault.key, fault.reason);
+  if (!motion.pose_key.empty()) {
+    throw InputError(args.motion, motion.pose_key,
+                     motion.pose_reason + (fault.key.empty() ? "" : "; " + fault.key + ": " +
+                                                                        fault.reason));
+  }
   if (!fault.key.empty()) warn(args.motion + ": " + fault.key + ": " + fault.reason);
   OutputDir out(args.scene.out, kOutputs);
 

@@ -86,6 +86,36 @@ expect(2, r"deg.csv: theta1, theta2: angles look like degrees",
        ["inverse", PAPER, "--motion", deg, "--out", out, "--no-plots"])
 expect(2, r"jump.csv: theta1: jumps by 3.0\d* rad between t = 0.499 and 0.5 s",
        ["inverse", PAPER, "--motion", jump, "--out", out, "--no-plots"])
+# a lasting 3 rad step of a light five-bar's simulated motion, after which a pose comes near its
+# singular one (line 1085): the step is named, not that later pose
+LIGHT = """mechanism:
+  ground_length: 0.2
+  links:
+    - {length: 0.1, mass: 0.4, inertia: 0.004, com_offset: 0.05}
+    - {length: 0.1, mass: 0.4, inertia: 0.004, com_offset: 0.04}
+    - {length: 0.2, mass: 0.6, inertia: 0.008, com_offset: 0.1}
+    - {length: 0.2, mass: 0.6, inertia: 0.008, com_offset: 0.12}
+  point_p: 0.2
+  assembly: elbow_up
+gravity: 0
+friction: {model: coulomb_viscous, pin_radius: 0.004, coulomb: 0.1, viscous: 0.01}
+loads: {M1: "0.05*sin(3*t)", M2: "0.05*cos(2*t)", M3: "0.0005", F: "0.005", F_angle: 1.57}
+initial: {theta1: 1.8, theta2: 1.3, omega1: 0.0, omega2: 0.0}
+simulation: {duration: 2.0, output_step: 0.001}
+"""
+light = os.path.join(WORK, "light.yaml")
+with open(light, "w") as f:
+    f.write(LIGHT)
+light_run = os.path.join(WORK, "light_run")
+subprocess.run([FIVEBAR, "simulate", light, "--out", light_run, "--no-plots"], capture_output=True)
+traj = [l.split(",") for l in open(os.path.join(light_run, "trajectory.csv")) if not l.startswith("#")]
+cols = traj[0]
+i1, i2 = cols.index("theta1"), cols.index("theta2")
+with open(os.path.join(WORK, "light_step.csv"), "w") as f:
+    f.write("t,theta1,theta2\n" + "".join("%s,%.12g,%s\n" % (r[0], float(r[i1]) + (3 if i >= 1000 else 0), r[i2])
+                                          for i, r in enumerate(traj[1:])))
+expect(2, r"light_step.csv: theta1: jumps by 3(\.\d+)? rad between t = 0.999 and 1 s",
+       ["inverse", light, "--motion", os.path.join(WORK, "light_step.csv"), "--out", out, "--no-plots"])
 # a degrees motion and a jump the model runs on (small swings, 90 +- 10 degrees): refused all the
 # same, before anything is written (the torques would be those of the numbers as written)
 small = [(i * 0.002, 90 + 10 * math.sin(2 * math.pi * i * 0.002)) for i in range(501)]
