@@ -998,6 +998,7 @@ int run(const Args& given) {
   for (const std::string& w : scene.warnings) warn(w);
   const Args a = resolved(given, scene);
   const LoadExpressions loads(scene);
+  loads.require_finite(a.design.duration, 1 / a.design.rate_hz);
   const id::ExcitationOptions o = options_of(a, scene);
   const std::shared_ptr<const id::ExcitationMechanism> mech = mechanism_of(scene, loads, o);
   check_values(scene, mech->parameters());

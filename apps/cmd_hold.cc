@@ -378,14 +378,16 @@ int run(const Args& args) {
     throw InputError(scene.path, "--torque-limit", "must be > 0, got " +
                                                        format_double(args.torque_limit));
   }
+  const LoadExpressions expressions(scene);
+  expressions.require_finite({args.time});
   if (scene.type == MechanismType::kFourBar) {
-    FourBarLoads L = LoadExpressions(scene).four_bar_function()(args.time);
+    FourBarLoads L = expressions.four_bar_function()(args.time);
     L.M1 = 0;  // the unknown
     if (args.grid > 0) return run_four_bar_grid(args, scene, L);
     const double th1 = args.pose.empty() ? scene.initial.theta1 : parse_crank(args.pose, scene.path);
     return run_four_bar_pose(args, scene, L, th1);
   }
-  Loads<double> L = LoadExpressions(scene).function()(args.time);
+  Loads<double> L = expressions(args.time);
   L.M1 = L.M2 = 0;  // the unknowns
   if (args.grid > 0) return run_grid(args, scene, L);
   // the pose is checked before any output exists

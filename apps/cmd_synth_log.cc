@@ -141,13 +141,22 @@ std::vector<sim::Row> motion_rows(const CsvTable& table, int dof, double duratio
   return first_seconds(path, std::move(rows), duration);
 }
 
+// the times of a motion's rows
+std::vector<double> row_times(const std::vector<sim::Row>& rows) {
+  std::vector<double> t;
+  for (const sim::Row& r : rows) t.push_back(r.t);
+  return t;
+}
+
 // The log of a position-controlled five-bar following MOTION.csv: inverse dynamics of the
 // scene at every row, then the same noise as a simulated log.
-identification::SynthResult motion_log(const Scene& scene, const sim::LoadFunction& loads,
+identification::SynthResult motion_log(const Scene& scene, const LoadExpressions& expressions,
                                        const std::string& path, double duration,
                                        const identification::SynthOptions& so) {
   const CsvTable table = read_csv(path);
   std::vector<sim::Row> rows = motion_rows(table, kDof, duration);
+  expressions.require_finite(row_times(rows));
+  const sim::LoadFunction loads = expressions.function();
   for (size_t i = 0; i < rows.size(); ++i) {
     sim::Row& r = rows[i];
     Evaluation<double> ev;
@@ -170,13 +179,15 @@ identification::SynthResult motion_log(const Scene& scene, const sim::LoadFuncti
 
 // The same for a four-bar (columns t, theta1, omega1, alpha1): sim::inverse_rows of the crank.
 identification::SynthResult four_bar_motion_log(const Scene& scene,
-                                                const sim::FourBarLoadFunction& loads,
+                                                const LoadExpressions& expressions,
                                                 const std::string& path, double duration,
                                                 const identification::SynthOptions& so) {
   const CsvTable table = read_csv(path);
+  const std::vector<sim::Row> motion = motion_rows(table, 1, duration);
+  expressions.require_finite(row_times(motion));
   std::vector<sim::Row> rows;
   const Status st =
-      sim::inverse_rows(scene.four_bar, loads, motion_rows(table, 1, duration), &rows);
+      sim::inverse_rows(scene.four_bar, expressions.four_bar_function(), motion, &rows);
   if (!st.ok()) throw NumericalError(path, "inverse dynamics", st.message);
   identification::SynthResult out;
   identification::sample_log(scene.four_bar, rows, so, &out);
@@ -342,10 +353,13 @@ identification::SynthResult four_bar_log(const Args& a, const Scene& scene,
                        "actuator terms are the five-bar's; not available for a four_bar scene");
     }
   }
-  const sim::FourBarLoadFunction loads = LoadExpressions(scene).four_bar_function();
-  return a.motion.empty()
-             ? identification::synthesize_log(scene.four_bar, loads, scene.initial, so)
-             : four_bar_motion_log(scene, loads, a.motion, a.motion_duration(), so);
+  const LoadExpressions expressions(scene);
+  if (a.motion.empty()) {
+    expressions.require_finite(so.duration, 1 / so.rate_hz);
+    return identification::synthesize_log(scene.four_bar, expressions.four_bar_function(),
+                                          scene.initial, so);
+  }
+  return four_bar_motion_log(scene, expressions, a.motion, a.motion_duration(), so);
 }
 
 int run(const Args& a) {
@@ -361,9 +375,13 @@ int run(const Args& a) {
     res = four_bar_log(a, scene, so);
   } else {
     set_actuators(a, &scene);
-    const sim::LoadFunction loads = LoadExpressions(scene).function();
-    res = a.motion.empty() ? identification::synthesize_log(scene.params, loads, scene.initial, so)
-                           : motion_log(scene, loads, a.motion, a.motion_duration(), so);
+    const LoadExpressions expressions(scene);
+    if (a.motion.empty()) {
+      expressions.require_finite(so.duration, 1 / so.rate_hz);
+      res = identification::synthesize_log(scene.params, expressions.function(), scene.initial, so);
+    } else {
+      res = motion_log(scene, expressions, a.motion, a.motion_duration(), so);
+    }
   }
   if (!res.status.ok()) throw NumericalError(scene.path, "simulation", res.status.message);
 

@@ -223,6 +223,7 @@ id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& l
   check_sg_window(options, log);
   check_window(options, log);
   check_smooth_sign(options, log);
+  LoadExpressions(scene).require_finite(log.t);
   id::IdentifyResult res;
   try {
     res = id::identify(scene.params, loads, log, options);
@@ -258,9 +259,11 @@ id::IdentifyResult identify_four_bar_scene(const Scene& scene, const id::TorqueL
   const std::string degrees = options.check_degrees && log.size() > 0
                                   ? start_looks_like_degrees(std::vector<double>{log.theta1[0]})
                                   : "";
+  const LoadExpressions expressions(scene);
+  expressions.require_finite(log.t);
   id::IdentifyResult res;
   try {
-    res = id::identify(scene.four_bar, LoadExpressions(scene).four_bar_function(), log, options);
+    res = id::identify(scene.four_bar, expressions.four_bar_function(), log, options);
   } catch (const id::LogError& e) {
     // identify names the unit itself where the motion tells it (angle_units_from_motion)
     const bool named = e.reason().rfind("angles look like", 0) == 0;

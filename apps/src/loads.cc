@@ -18,6 +18,7 @@ struct LoadExpressions::Compiled {
   std::array<bool, 4> constant{};
   std::array<double, 4> value{};  // the value of each constant expression
   double F_angle = 0;
+  std::string file;  // the scene the expressions come from
 };
 
 // one parser per non-constant expression, all bound to the variable t_ of this object (which
@@ -83,6 +84,7 @@ LoadExpressions::LoadExpressions(const std::array<std::string, 4>& expressions, 
   auto c = std::make_shared<Compiled>();
   c->expressions = expressions;
   c->F_angle = F_angle;
+  c->file = file;
   for (int i = 0; i < 4; ++i) {
     const std::string key = std::string("loads.") + kNames[i];
     double t = 0;
@@ -159,6 +161,29 @@ sim::FourBarLoadFunction LoadExpressions::four_bar_function() const {
     const Loads<double> L = self(t);
     return FourBarLoads{L.M1, L.M3, L.F, L.F_angle};
   };
+}
+
+void LoadExpressions::require_finite(const std::vector<double>& times) const {
+  for (double t : times) {
+    const Loads<double> L = (*this)(t);
+    const double v[4] = {L.M1, L.M2, L.M3, L.F};
+    for (int i = 0; i < 4; ++i) {
+      if (std::isfinite(v[i])) continue;
+      const std::string name = kNames[i];
+      throw NumericalError(compiled_->file, "loads." + name,
+                           "load " + name + " = " + format_double(v[i]) + " at t=" +
+                               format_significant(t, 6) + " s is not finite: check the scene's load "
+                               "expression (loads." + name + ")");
+    }
+  }
+}
+
+void LoadExpressions::require_finite(double duration, double step) const {
+  std::vector<double> times;
+  const long n = static_cast<long>(std::ceil(duration / step - 1e-9));
+  for (long i = 0; i < n && n < 100000000; ++i) times.push_back(static_cast<double>(i) * step);
+  times.push_back(duration);
+  require_finite(times);
 }
 
 const std::array<std::string, 4>& LoadExpressions::expressions() const {

@@ -199,6 +199,22 @@ expect(3, r"load M3 = nan at t=1.50\d* s is not finite",
        ["simulate", PAPER, "--set", "loads.M3=sqrt(1.5-t)", "--out", out, "--no-plots"])
 expect(3, r"load M3 = inf at t=0.5 s is not finite",
        ["simulate", PAPER, "--set", "loads.M3=1/(t-0.5)", "--out", out, "--no-plots"])
+# the same before the work of the commands that evaluate the loads outside a simulation (a log's
+# or a motion's times, a design's grid, a holding time), and nothing written
+nan_m3 = ["--set", "loads.M3=0.001*sqrt(1.5-t)"]
+paper_log = os.path.join(ROOT, "datasets/logs/paper_angles.csv")
+for args in (["synth-log", PAPER, "--out", os.path.join(WORK, "nan_log.csv")],
+             ["synth-log", light, "--motion", os.path.join(light_run, "trajectory.csv"), "--out",
+              os.path.join(WORK, "nan_log.csv")],
+             ["identify", PAPER, "--log", paper_log, "--out", os.path.join(WORK, "nan_id"), "--no-plots"],
+             ["excite", PAPER, "--duration", "2", "--torque-limit", "13.4", "--out",
+              os.path.join(WORK, "nan_ex"), "--no-plots"],
+             ["hold", PAPER, "--time", "2", "--out", os.path.join(WORK, "nan_hold")]):
+    expect(3, r"loads.M3: load M3 = nan at t=1.50\d* s is not finite|loads.M3: load M3 = nan at t=2 s",
+           args + nan_m3)
+for written in ("nan_log.csv", "nan_id", "nan_ex", "nan_hold"):
+    if os.path.exists(os.path.join(WORK, written)):
+        failures.append("a run refused for a NaN load wrote " + written)
 # a light mechanism (cranks half the ground, no gravity) driven by constant torques turns until
 # its couplers lie straight: the run stops there naming the pose and the time, not the friction
 light = ["mechanism.ground_length=0.2", "mechanism.links.0.length=0.1",

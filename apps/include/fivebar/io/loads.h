@@ -5,6 +5,7 @@
 #include <atomic>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "fivebar/io/scene.h"
 #include "fivebar/model/params.h"
@@ -47,6 +48,14 @@ class LoadExpressions {
   sim::LoadFunction function() const;
   /// The same for a four-bar: M1 on the crank, M3 and F (at F_angle) on the coupler (M2 unused).
   sim::FourBarLoadFunction four_bar_function() const;
+
+  /// Throws NumericalError(`<file>: loads.<name>: ...`, exit 3, the words of the simulator's
+  /// own check) at the first of `times` where a load is NaN or infinite (an expression that
+  /// leaves its domain, e.g. sqrt(1.5 - t) after 1.5 s), for the commands that evaluate the loads
+  /// outside a simulation: before their work, not as a model failure later.
+  void require_finite(const std::vector<double>& times) const;
+  /// The same on the grid 0, step, 2 step, ... up to `duration` (and at `duration` itself).
+  void require_finite(double duration, double step) const;
 
   const std::array<std::string, 4>& expressions() const;
   /// True if expression `which` uses no variable (it is evaluated once, at compile time).
