@@ -203,10 +203,10 @@ bool sample_residual(const Params<double>& scene, const ParameterLayout& layout,
 
 void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem) {
   if (!f->layout.inertia) return;
-  problem->AddResidualBlock(detail::inertial_prior_cost(f->prior, f->layout.size(),
-                                                        f->layout.inertia_offset(),
-                                                        &f->prior_scale),
-                            make_loss(Loss::kNone, 0, f->cost_weight), x);
+  problem->AddResidualBlock(
+      detail::inertial_prior_cost(f->prior, f->layout.size(), f->layout.inertia_offset(),
+                                  &f->prior_scale),
+      make_loss(Loss::kNone, 0, f->cost_weight), x);
 }
 
 }  // namespace fivebar::identification::stages

@@ -87,7 +87,7 @@ class ProfileFits {
 
  private:
   ceres::Solver::Options so_;
-  double weight_;  ///< of every block's cost
+  double weight_;     ///< of every block's cost
   int coulomb_ = -1;  ///< static profile: index (in z) of the same joint's coulomb
   double theta_ = 0, cost_hat_ = 0;
   std::vector<double> z_hat_, z_;

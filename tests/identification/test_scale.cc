@@ -50,7 +50,8 @@ void expect_same_fit(const IdentifyResult& ref, const IdentifyResult& res,
     const ParameterEstimate &e = res.parameters[i], &r = ref.parameters[i];
     ASSERT_TRUE(std::isfinite(e.std)) << e.name;
     EXPECT_LT(std::abs(e.value - truth[i]), 3 * e.std) << e.name << " " << e.value;
-    EXPECT_LT(std::abs(e.value - r.value), 0.1 * r.std) << e.name << " " << e.value << " " << r.value;
+    EXPECT_LT(std::abs(e.value - r.value), 0.1 * r.std)
+        << e.name << " " << e.value << " " << r.value;
     EXPECT_NEAR(e.std / r.std, 1.0, 0.05) << e.name;
   }
 }
