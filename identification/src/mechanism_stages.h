@@ -208,13 +208,13 @@ ceres::LossFunction* make_loss(Loss loss, double scale, double weight = 1);
 double loss_scale_from_level(Loss loss, double level, IdentifyResult* out);
 
 /// The weight of every residual block of a torque residual's cost (make_loss): the power of 4
-/// nearest 1 / (the logged torques' mean square), 1 where that mean square is not positive and
-/// finite. The solver works on a cost of order one per sample at any scale of the mechanism:
-/// its tolerances are absolute, its Jacobi scaling 1 / (1 + column norm) and its projected
-/// gradient x - P(x - g) rounds to 0 beside a coefficient of 0.1 where |g| < eps |x| (a MEMS
-/// four-bar's 1e-16 N m torques, a cost of 1e-31, stopped the fit at its start values). A power
-/// of 4 scales the residuals by a power of 2, so the weight and its undoing (unweighted: the
-/// costs reported and compared) are exact.
+/// nearest 1 / (the finite logged torques' mean square), 1 where that mean square is not
+/// positive and finite. The solver works on a cost of order one per sample at any scale of the
+/// mechanism: its tolerances are absolute, its Jacobi scaling 1 / (1 + column norm) and its
+/// projected gradient x - P(x - g) rounds to 0 beside a coefficient of 0.1 where |g| < eps |x|
+/// (a MEMS four-bar's 1e-16 N m torques, a cost of 1e-31, stopped the fit at its start values).
+/// A power of 4 scales the residuals by a power of 2, so the weight and its undoing (the costs
+/// reported and compared) are exact.
 double torque_cost_weight(const TorqueLog& log);
 
 /// The solver's brief report with its costs divided by the problem's cost `weight`.

@@ -185,11 +185,15 @@ ceres::Solver::Options solver_options(const Fit& f) {
 }
 
 double torque_cost_weight(const TorqueLog& log) {
-  double ms = 0;
+  double s = 0;
+  int n = 0;
   for (int i = 0; i < log.size(); ++i) {
-    ms += log.tau1[i] * log.tau1[i] + (log.dof == 2 ? log.tau2[i] * log.tau2[i] : 0.0);
+    for (int j = 0; j < log.dof; ++j) {
+      const double t = j == 0 ? log.tau1[i] : log.tau2[i];
+      if (std::isfinite(t)) s += t * t, ++n;
+    }
   }
-  ms /= std::max(1, log.size() * log.dof);
+  const double ms = s / std::max(1, n);
   if (!(ms > 0) || !std::isfinite(ms)) return 1;
   return std::ldexp(1.0, -2 * static_cast<int>(std::lround(0.5 * std::log2(ms))));
 }
