@@ -35,6 +35,9 @@ struct FourBarFit {
   ParameterLayout layout;
   EvalOptions eval;
   ConditionedLog cond;        ///< conditioning
+  /// the weight of every residual block's cost in the problems solved (torque_cost_weight of
+  /// the conditioned log)
+  double cost_weight = 1;
   detail::SensorNoise noise;  ///< channel 0: the crank's angle, rate and torque noise
   // rates, window and samples
   SgOptions sg;              ///< the Savitzky-Golay filter as used

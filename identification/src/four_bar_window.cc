@@ -156,7 +156,8 @@ void window_stage(FourBarFit* f, IdentifyResult* out) {
   for (size_t u = 0; u < f->samples.size(); u += step) some.push_back(f->samples[u]);
   ceres::Problem problem;
   std::vector<double> x = f->x;
-  stages::add_mechanism_terms<FourBar>(f->scene, f->layout, some, f->eval, x.data(), &problem);
+  stages::add_mechanism_terms<FourBar>(f->scene, f->layout, some, f->eval, x.data(), &problem,
+                                       Loss::kNone, 1, f->cost_weight);
   if (stages::solve_preliminary(f->layout, x.data(), &problem)) f->x = x;
   stages::choose_window_by_bias(FourBarWindowFit(*f), &f->sg, &f->smoothing_bias,
                                 &out->window_choice);

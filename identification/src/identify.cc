@@ -100,6 +100,7 @@ bool prepare_fit(const Params<double>& scene_in, const sim::LoadFunction& loads,
   require_uniform_sampling(log);
   // the log as encoders write it: degrees, wraps, glitches; then rates
   prepare_log(log, f, out);
+  f->cost_weight = f->method->cost_weight(f->cond.log);
   f->source = rate_source(*f, log, out);
   if (!start_values(f, opt.initial, x0_public, out)) return false;
   f->prior_scale = initial_prior_scale(*f);

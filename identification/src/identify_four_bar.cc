@@ -84,6 +84,7 @@ void condition(const TorqueLog& log, FourBarFit* f, IdentifyResult* out) {
   }
   f->cond = condition_log(log, f->opt->condition);
   const TorqueLog& L = f->cond.log;
+  f->cost_weight = stages::torque_cost_weight(L);
   for (int i = 0; i < L.size(); ++i) {
     FourBarKinematics k;
     const Status st = four_bar_close(f->scene, L.theta1[i], &k, 0.0);
@@ -308,7 +309,6 @@ ceres::Solver::Options solver_options(const FourBarFit& f) {
   so.function_tolerance = 1e-12;
   so.gradient_tolerance = 1e-14;
   so.parameter_tolerance = 1e-10;
-  stages::scale_gradient_tolerance(f.cond.log, &so);
   so.logging_type = ceres::SILENT;
   return so;
 }
@@ -328,7 +328,7 @@ bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
   const ParameterLayout& lay = f->layout;
   const int P = lay.size();
   stages::add_mechanism_terms<FourBar>(f->scene, lay, f->samples, f->eval, f->x.data(), problem,
-                                       f->opt->loss, f->loss_scale);
+                                       f->opt->loss, f->loss_scale, f->cost_weight);
   for (int i = 0; i < P; ++i) problem->SetParameterLowerBound(f->x.data(), i, lay.lower_bound(i));
   out->residuals = static_cast<int>(f->samples.size());
   std::vector<double> r;
@@ -343,7 +343,7 @@ bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
   out->iterations = static_cast<int>(summary.iterations.size()) - 1;
   out->solver_message = summary.message;
   for (const ceres::IterationSummary& it : summary.iterations) {
-    out->iteration_costs.push_back(it.cost);
+    out->iteration_costs.push_back(it.cost / f->cost_weight);
   }
   out->converged = summary.termination_type == ceres::CONVERGENCE;
   if (summary.termination_type == ceres::FAILURE ||
@@ -557,7 +557,8 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   // the fit's 0.5 s): a per-joint fit keeps its Wald intervals; so does a robust fit, whose
   // cost is not the likelihood the profile reads
   if (!f.layout.per_joint && opt.loss == Loss::kNone) {
-    stages::profile_intervals({f.layout, f.x, &problem, Hinv, solver_options(f)}, &out);
+    stages::profile_intervals({f.layout, f.x, &problem, Hinv, solver_options(f), f.cost_weight},
+                              &out);
   }
   model_check(f, &out);
   const stages::ModelVerdict verdict = cause_check(f, &out);

@@ -62,6 +62,9 @@ struct Fit {
   ConditionedLog cond;  ///< the log as fitted
   detail::SensorNoise noise;
   detail::RateSource source = detail::RateSource::kLogged;
+  /// the weight of every residual block's cost in the problems solved (make_loss): the method's
+  /// cost_weight of the conditioned log
+  double cost_weight = 1;
 
   // rates, window and samples (rates_window_and_samples)
   SgOptions sg;              ///< as used
@@ -112,10 +115,12 @@ double interp(const std::vector<double>& ts, const std::vector<double>& y, doubl
 
 /// The inverse-dynamics residual blocks, one per sample: from the sample's structure
 /// (residual.h: the Jets carry only the P active parameters through a five-number loop), or the
-/// full model where the structure cannot be read off.
+/// full model where the structure cannot be read off; each block's loss make_loss(loss,
+/// loss_scale, weight).
 bool add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayout& layout,
                                 const std::vector<Sample>& samples, const EvalOptions& eval,
-                                Loss loss, double loss_scale, double* x, ceres::Problem* problem);
+                                Loss loss, double loss_scale, double* x, ceres::Problem* problem,
+                                double weight = 1);
 
 /// One sample's inverse-dynamics residual r and its Jacobian J = d r / d x (2 x P) at the
 /// parameters x, with the cost add_inverse_dynamics_terms gives it; false where it fails.
@@ -130,7 +135,8 @@ std::vector<std::pair<int, int>> make_windows(const TorqueLog& log, int first, i
 /// The simulator options of an output-error window and of validate(): CVODE Adams at rtol.
 sim::Options window_sim_options(double rtol);
 
-/// Group inertia: the prior and consistency residuals (inertia.h) on the parameter block x.
+/// Group inertia: the prior and consistency residuals (inertia.h) on the parameter block x, at
+/// the fit's cost weight.
 void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem);
 
 /// Output error: the window [i0, i1] (WindowResidual) on f->x, rates w1, w2 at its start;

@@ -33,13 +33,13 @@ struct MechanismSample {
 
 /// The inverse-dynamics residual blocks of `samples` on the parameter block x (the friction
 /// coefficients of `layout`, every other constant from `scene`): r = tau - drive torques, each
-/// block under the robust `loss` at `loss_scale` (make_loss).
+/// block under the robust `loss` at `loss_scale`, its cost times `weight` (make_loss).
 template <class M>
 void add_mechanism_terms(const typename M::template Params<double>& scene,
                          const ParameterLayout& layout,
                          const std::vector<MechanismSample<M>>& samples, const EvalOptions& eval,
                          double* x, ceres::Problem* problem, Loss loss = Loss::kNone,
-                         double loss_scale = 1.0);
+                         double loss_scale = 1.0, double weight = 1.0);
 
 /// The drive torques of mech::inverse<M> at the sample's motion, the friction coefficients x laid
 /// out by `layout` (the residual's own evaluation), and with `dx` their derivatives in x (M::kDof

@@ -195,8 +195,10 @@ bool solve_preliminary(const ParameterLayout& layout, double* x, ceres::Problem*
 
 // ---- residual_blocks.cc ----
 
-/// The robust loss of a residual block at `scale` (nullptr for Loss::kNone); the problem owns it.
-ceres::LossFunction* make_loss(Loss loss, double scale);
+/// The loss of a residual block: the robust `loss` at `scale` (in the residual's units), its
+/// cost times `weight` (torque_cost_weight); nullptr for Loss::kNone at weight 1. The problem
+/// owns it.
+ceres::LossFunction* make_loss(Loss loss, double scale, double weight = 1);
 
 // ---- stage_solve.cc ----
 
@@ -205,15 +207,18 @@ ceres::LossFunction* make_loss(Loss loss, double scale);
 /// saying so is added to out.
 double loss_scale_from_level(Loss loss, double level, IdentifyResult* out);
 
-/// Logged torques whose mean square is below this [N^2 m^2] scale the solver's gradient tolerance
-/// (scale_gradient_tolerance)
-inline constexpr double kSmallTorqueSquare = 1e-6;
+/// The weight of every residual block of a torque residual's cost (make_loss): the power of 4
+/// nearest 1 / (the finite logged torques' mean square), 1 where that mean square is not
+/// positive and finite. The solver works on a cost of order one per sample at any scale of the
+/// mechanism: its tolerances are absolute, its Jacobi scaling 1 / (1 + column norm) and its
+/// projected gradient x - P(x - g) rounds to 0 beside a coefficient of 0.1 where |g| < eps |x|
+/// (a MEMS four-bar's 1e-16 N m torques, a cost of 1e-31, stopped the fit at its start values).
+/// A power of 4 scales the residuals by a power of 2, so the weight and its undoing (the costs
+/// reported and compared) are exact.
+double torque_cost_weight(const TorqueLog& log);
 
-/// The solver's gradient tolerance is absolute: the cost's gradient in a friction coefficient
-/// scales as the torques squared, so for logged torques whose mean square is below
-/// kSmallTorqueSquare it is scaled by that mean square (a MEMS five-bar's 1e-12 N m torques
-/// stopped the solver at its start values after one iteration). Larger torques keep it.
-void scale_gradient_tolerance(const TorqueLog& log, ceres::Solver::Options* so);
+/// The solver's brief report with its costs divided by the problem's cost `weight`.
+std::string unweighted_report(const ceres::Solver::Summary& summary, double weight);
 
 // ---- stage_analysis.cc ----
 
@@ -232,13 +237,15 @@ void judge_estimate(const ParameterLayout& layout, int i, bool converged, Parame
 
 /// What a profile-likelihood interval re-fits: the fit's problem (its residual blocks on the
 /// internal parameters x, without a robust loss), (J^T J + Hp)^-1 of its free parameters (NaN
-/// or 0 elsewhere) and the fit's solver options. Any mechanism's fit provides one.
+/// or 0 elsewhere), the fit's solver options and the weight of its blocks' costs (make_loss).
+/// Any mechanism's fit provides one.
 struct ProfileProblem {
   const ParameterLayout& layout;
   const std::vector<double>& x;
   ceres::Problem* problem;
   const Eigen::MatrixXd& Hinv;
   ceres::Solver::Options solver;
+  double cost_weight;
 };
 
 /// The profile-likelihood intervals where wants_profile, on a converged fit whose Wald

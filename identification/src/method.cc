@@ -13,7 +13,7 @@ class InverseDynamicsMethod final : public MethodStrategy {
  public:
   bool add_residuals(Fit* f, IdentifyResult* out, ceres::Problem* problem) const override {
     if (!add_inverse_dynamics_terms(f->scene, f->layout, f->samples, f->eval, f->opt->loss,
-                                    f->loss_scale, f->x.data(), problem)) {
+                                    f->loss_scale, f->x.data(), problem, f->cost_weight)) {
       return false;
     }
     add_inertial_prior(f, f->x.data(), problem);
@@ -26,6 +26,9 @@ class InverseDynamicsMethod final : public MethodStrategy {
     so->gradient_tolerance = 1e-14;
     so->parameter_tolerance = 1e-10;
   }
+
+  /// torque_cost_weight: the cost of order one per sample at any scale of the mechanism.
+  double cost_weight(const TorqueLog& log) const override { return torque_cost_weight(log); }
 
   Status first_failure(const Fit& f, const std::vector<double>& x,
                        const std::string& at) const override {
@@ -113,6 +116,9 @@ class OutputErrorMethod final : public MethodStrategy {
     so->gradient_tolerance = 1e-10;
     so->parameter_tolerance = 1e-7;
   }
+
+  /// 1: the residuals are angles [rad], of the same order at any scale of the mechanism.
+  double cost_weight(const TorqueLog&) const override { return 1; }
 
   Status first_failure(const Fit&, const std::vector<double>&, const std::string&) const override {
     return Status::Ok();

@@ -37,6 +37,8 @@ class MethodStrategy {
   virtual bool add_residuals(Fit* f, IdentifyResult* out, ceres::Problem* problem) const = 0;
   /// The solver's convergence tolerances.
   virtual void set_tolerances(ceres::Solver::Options* so) const = 0;
+  /// The weight of every residual block's cost (make_loss) on the conditioned log.
+  virtual double cost_weight(const TorqueLog& log) const = 0;
   /// The first sample at which the model cannot be evaluated at x, as a status naming it (ok
   /// when none fails, or when the method evaluates no per-sample model).
   virtual Status first_failure(const Fit& f, const std::vector<double>& x,

@@ -13,7 +13,9 @@ double interp(const std::vector<double>& ts, const std::vector<double>& y, doubl
   return y[i - 1] + s * (y[i] - y[i - 1]);
 }
 
-ceres::LossFunction* make_loss(Loss loss, double scale) {
+namespace {
+
+ceres::LossFunction* robust_loss(Loss loss, double scale) {
   switch (loss) {
     case Loss::kNone:
       return nullptr;
@@ -23,6 +25,14 @@ ceres::LossFunction* make_loss(Loss loss, double scale) {
       return new ceres::CauchyLoss(scale);
   }
   return nullptr;
+}
+
+}  // namespace
+
+ceres::LossFunction* make_loss(Loss loss, double scale, double weight) {
+  ceres::LossFunction* robust = robust_loss(loss, scale);
+  if (weight == 1) return robust;
+  return new ceres::ScaledLoss(robust, weight, ceres::TAKE_OWNERSHIP);
 }
 
 namespace {
@@ -44,10 +54,10 @@ ceres::CostFunction* sample_cost(const Params<double>& scene, const ParameterLay
 template <int P>
 void add_sized_terms(const Params<double>& scene, const ParameterLayout& layout,
                      const std::vector<Sample>& samples, const EvalOptions& eval, Loss loss,
-                     double loss_scale, double* x, ceres::Problem* problem) {
+                     double loss_scale, double weight, double* x, ceres::Problem* problem) {
   for (const Sample& s : samples) {
-    problem->AddResidualBlock(sample_cost<P>(scene, layout, s, eval), make_loss(loss, loss_scale),
-                              x);
+    problem->AddResidualBlock(sample_cost<P>(scene, layout, s, eval),
+                              make_loss(loss, loss_scale, weight), x);
   }
 }
 
@@ -150,7 +160,8 @@ int add_window_residual(Fit* f, const std::vector<double>& w1, const std::vector
       w, ceres::TAKE_OWNERSHIP, nd);
   cost->AddParameterBlock(f->layout.size());
   cost->SetNumResiduals(w->residuals());
-  problem->AddResidualBlock(cost, make_loss(f->opt->loss, f->loss_scale), f->x.data());
+  problem->AddResidualBlock(cost, make_loss(f->opt->loss, f->loss_scale, f->cost_weight),
+                            f->x.data());
   return w->residuals();
 }
 
@@ -166,9 +177,11 @@ sim::Options window_sim_options(double rtol) {
 /// layout.size(), through with_size); false for a parameter count with no compiled cost.
 bool add_inverse_dynamics_terms(const Params<double>& scene, const ParameterLayout& layout,
                                 const std::vector<Sample>& samples, const EvalOptions& eval,
-                                Loss loss, double loss_scale, double* x, ceres::Problem* problem) {
+                                Loss loss, double loss_scale, double* x, ceres::Problem* problem,
+                                double weight) {
   return with_size(layout.size(), [&](auto n) {
-    add_sized_terms<decltype(n)::value>(scene, layout, samples, eval, loss, loss_scale, x, problem);
+    add_sized_terms<decltype(n)::value>(scene, layout, samples, eval, loss, loss_scale, weight, x,
+                                        problem);
   });
 }
 
@@ -190,10 +203,10 @@ bool sample_residual(const Params<double>& scene, const ParameterLayout& layout,
 
 void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem) {
   if (!f->layout.inertia) return;
-  problem->AddResidualBlock(detail::inertial_prior_cost(f->prior, f->layout.size(),
-                                                        f->layout.inertia_offset(),
-                                                        &f->prior_scale),
-                            nullptr, x);
+  problem->AddResidualBlock(
+      detail::inertial_prior_cost(f->prior, f->layout.size(), f->layout.inertia_offset(),
+                                  &f->prior_scale),
+      make_loss(Loss::kNone, 0, f->cost_weight), x);
 }
 
 }  // namespace fivebar::identification::stages

@@ -53,13 +53,14 @@ template <class M>
 void add_mechanism_terms(const typename M::template Params<double>& scene,
                          const ParameterLayout& layout,
                          const std::vector<MechanismSample<M>>& samples, const EvalOptions& eval,
-                         double* x, ceres::Problem* problem, Loss loss, double loss_scale) {
+                         double* x, ceres::Problem* problem, Loss loss, double loss_scale,
+                         double weight) {
   for (const MechanismSample<M>& s : samples) {
     auto* cost = new ceres::DynamicAutoDiffCostFunction<MechanismResidual<M>, kMechanismStride>(
         new MechanismResidual<M>(scene, layout, s, eval));
     cost->AddParameterBlock(layout.size());
     cost->SetNumResiduals(M::kDof);
-    problem->AddResidualBlock(cost, make_loss(loss, loss_scale), x);
+    problem->AddResidualBlock(cost, make_loss(loss, loss_scale, weight), x);
   }
 }
 
@@ -89,7 +90,7 @@ bool mechanism_drive_torques(const typename M::template Params<double>& scene,
 template void add_mechanism_terms<FourBar>(const FourBarParams&, const ParameterLayout&,
                                            const std::vector<MechanismSample<FourBar>>&,
                                            const EvalOptions&, double*, ceres::Problem*, Loss,
-                                           double);
+                                           double, double);
 template bool mechanism_drive_torques<FourBar>(const FourBarParams&, const ParameterLayout&,
                                                const double*, const MechanismSample<FourBar>&,
                                                const EvalOptions&, mech::Vec<1, double>*,

@@ -313,7 +313,7 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
              const ceres::Solver::Summary& summary, Analysis* an, IdentifyResult* out) {
   const int P = f.layout.size();
   out->residual_sigma =
-      std::sqrt(2.0 * summary.final_cost / std::max(1, summary.num_residuals - P));
+      std::sqrt(2.0 * summary.final_cost / f.cost_weight / std::max(1, summary.num_residuals - P));
   f.method->residual_levels(f, *an, out);
   const Eigen::MatrixXd Hp = prior_information(f);
   covariance(f, Hp, an, out);

@@ -23,13 +23,14 @@ bool wants_profile(const ParameterLayout& layout, int i, const ParameterEstimate
   return e.ci_low < layout.lower_bound(i);
 }
 
-/// The re-fits of a profile: every residual block of the fit's problem (no robust loss), on the
-/// coordinates y other than y_i, y_i held at theta. x = M y: for static_coulomb (internally
-/// coulomb + excess) y are the public parameters and each joint's coulomb is bounded above by
-/// the static value (static >= kinetic); otherwise y are the internal parameters.
+/// The re-fits of a profile: every residual block of the fit's problem (no robust loss, the
+/// fit's cost weight, taken off the rises), on the coordinates y other than y_i, y_i held at
+/// theta. x = M y: for static_coulomb (internally coulomb + excess) y are the public parameters
+/// and each joint's coulomb is bounded above by the static value (static >= kinetic); otherwise
+/// y are the internal parameters.
 class ProfileFits {
  public:
-  ProfileFits(const ProfileProblem& pp, int i) : so_(pp.solver) {
+  ProfileFits(const ProfileProblem& pp, int i) : so_(pp.solver), weight_(pp.cost_weight) {
     const ParameterLayout& layout = pp.layout;
     const int P = layout.size();
     const Eigen::MatrixXd T = to_public(layout);
@@ -50,7 +51,7 @@ class ProfileFits {
       reduced_.AddResidualBlock(
           new detail::AffineCost(pp.problem->GetCostFunctionForResidualBlock(id), M.col(i), B,
                                  &theta_),
-          nullptr, z_.data());
+          make_loss(Loss::kNone, 0, weight_), z_.data());
     }
     for (int k = 0; k < P; ++k) {
       if (k != i)
@@ -81,11 +82,12 @@ class ProfileFits {
     ceres::Solve(so, &reduced_, &summary);
     if (!summary.IsSolutionUsable() || !std::isfinite(summary.final_cost)) return kNaN;
     start = z_;
-    return summary.final_cost - cost_hat_;
+    return (summary.final_cost - cost_hat_) / weight_;
   }
 
  private:
   ceres::Solver::Options so_;
+  double weight_;     ///< of every block's cost
   int coulomb_ = -1;  ///< static profile: index (in z) of the same joint's coulomb
   double theta_ = 0, cost_hat_ = 0;
   std::vector<double> z_hat_, z_;
@@ -138,7 +140,7 @@ void intervals(const Fit& f, ceres::Problem* problem, const Analysis& an, Identi
     e.ci_method = "wald";
   }
   if (!f.method->profiles_intervals() || f.opt->loss != Loss::kNone) return;
-  profile_intervals({f.layout, f.x, problem, an.Hinv, solver_options(f)}, out);
+  profile_intervals({f.layout, f.x, problem, an.Hinv, solver_options(f), f.cost_weight}, out);
 }
 
 void profile_intervals(const ProfileProblem& pp, IdentifyResult* out) {

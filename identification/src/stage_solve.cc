@@ -64,9 +64,9 @@ void solve(Fit* f, ceres::Problem* problem, IdentifyResult* out, ceres::Solver::
   ceres::Solve(solver_options(*f), problem, summary);
   out->iterations += static_cast<int>(summary->iterations.size());
   out->converged = summary->termination_type == ceres::CONVERGENCE;
-  out->solver_message = summary->BriefReport();
+  out->solver_message = unweighted_report(*summary, f->cost_weight);
   for (const ceres::IterationSummary& it : summary->iterations)
-    out->iteration_costs.push_back(it.cost);
+    out->iteration_costs.push_back(it.cost / f->cost_weight);
   std::vector<double> r;
   const bool evaluates = raw_residuals(problem, &r);
   bool finite = evaluates;
@@ -180,18 +180,29 @@ ceres::Solver::Options solver_options(const Fit& f) {
   so.max_num_iterations = f.opt->max_iterations;
   so.num_threads = f.opt->num_threads;
   f.method->set_tolerances(&so);
-  scale_gradient_tolerance(f.cond.log, &so);
   so.logging_type = ceres::SILENT;
   return so;
 }
 
-void scale_gradient_tolerance(const TorqueLog& log, ceres::Solver::Options* so) {
-  double ms = 0;
+double torque_cost_weight(const TorqueLog& log) {
+  double s = 0;
+  int n = 0;
   for (int i = 0; i < log.size(); ++i) {
-    ms += log.tau1[i] * log.tau1[i] + (log.dof == 2 ? log.tau2[i] * log.tau2[i] : 0.0);
+    for (int j = 0; j < log.dof; ++j) {
+      const double t = j == 0 ? log.tau1[i] : log.tau2[i];
+      if (std::isfinite(t)) s += t * t, ++n;
+    }
   }
-  ms /= std::max(1, log.size() * log.dof);
-  if (ms > 0 && ms < kSmallTorqueSquare) so->gradient_tolerance *= ms;
+  const double ms = s / std::max(1, n);
+  if (!(ms > 0) || !std::isfinite(ms)) return 1;
+  return std::ldexp(1.0, -2 * static_cast<int>(std::lround(0.5 * std::log2(ms))));
+}
+
+std::string unweighted_report(const ceres::Solver::Summary& summary, double weight) {
+  ceres::Solver::Summary s = summary;
+  s.initial_cost /= weight;
+  s.final_cost /= weight;
+  return s.BriefReport();
 }
 
 }  // namespace fivebar::identification::stages

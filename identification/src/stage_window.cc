@@ -247,7 +247,7 @@ void preliminary_fit(Fit* f) {
   ceres::Problem problem;
   std::vector<double> x = f->x;
   const bool sized = add_inverse_dynamics_terms(g.scene, g.layout, g.samples, g.eval, Loss::kNone,
-                                                1, x.data(), &problem);
+                                                1, x.data(), &problem, f->cost_weight);
   if (!sized) return;
   add_inertial_prior(f, x.data(), &problem);
   if (solve_preliminary(f->layout, x.data(), &problem)) f->x = x;
