@@ -43,6 +43,14 @@ TorqueLog negated_torques(const TorqueLog& log, unsigned channels) {
   return negated;
 }
 
+/// A fit a refit check rejected: the warning of out->unusable, and no delay (the model check
+/// may have estimated one on the rejected fit; it is not reported).
+void no_delay(IdentifyResult* out) {
+  out->warnings.push_back(out->unusable + "; no torque delay was estimated");
+  out->delay_s = out->delay_std_s = std::numeric_limits<double>::quiet_NaN();
+  out->delay_corrected = false;
+}
+
 /// The sign check's advice: `logged_opposite` (bit 0: tau1, bit 1: tau2) are the logged torques
 /// whose sign is opposite the scene's convention, the caller's own flip already combined; a
 /// mechanism of one channel (`drives` 1) has tau1 alone
@@ -109,7 +117,7 @@ bool torques_fit_negated(const TorqueLog& log, const IdentifyOptions& opt, int d
                                  : torques + "tau" + std::to_string(which) +
                                        " alone fits far better negated (residual ") +
                   fit + "): " + torque_sign_advice(opt.torques_negated ^ which, drives);
-  out->warnings.push_back(out->unusable + "; no torque delay was estimated");
+  no_delay(out);
   return true;
 }
 
@@ -150,7 +158,7 @@ bool friction_differs_by_joint(const TorqueLog& log, const IdentifyOptions& opt,
                   "the torque residual at " + format_significant(theirs, 2) +
                   " times its noise floor against " + format_significant(ours, 3) +
                   " with the shared law; rerun with --per-joint";
-  out->warnings.push_back(out->unusable + "; no torque delay was estimated");
+  no_delay(out);
   return true;
 }
 

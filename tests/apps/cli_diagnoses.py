@@ -245,6 +245,24 @@ p = subprocess.run([FIVEBAR, "identify", PAPER, "--log", flipped, "--flip-torque
                     fit2, "--no-plots", "--no-validation"], capture_output=True, text=True)
 if p.returncode != 0 or json.load(open(os.path.join(fit2, "identification.json")))["status"] != "ok":
     failures.append("--flip-torque-sign: exit %d: %s" % (p.returncode, p.stderr[-300:]))
+# a crank-rocker's 3 s log with its torque negated: the sign named, no delay reported (its model
+# check had estimated one on the rejected fit)
+fb_log, fb_flipped = os.path.join(WORK, "fb_log.csv"), os.path.join(WORK, "fb_flipped.csv")
+subprocess.run([FIVEBAR, "synth-log", CRANK_ROCKER, "--out", fb_log, "--duration", "3", "--seed", "3"],
+               capture_output=True)
+with open(fb_log) as src, open(fb_flipped, "w") as f:
+    for line in src:
+        cells = line.rstrip("\n").split(",")
+        if not (line.startswith("#") or line.startswith("t,")):
+            cells[2] = repr(-float(cells[2]))
+        f.write(",".join(cells) + "\n")
+fb_fit = os.path.join(WORK, "fb_fit")
+expect(3, r"identify: the fit should not be used: the logged torque fits far better negated",
+       ["identify", CRANK_ROCKER, "--log", fb_flipped, "--out", fb_fit, "--no-plots",
+        "--no-validation"])
+j = json.load(open(os.path.join(fb_fit, "identification.json")))
+if "torque_delay" in j:
+    failures.append("flipped four-bar log: torque_delay %s" % j["torque_delay"])
 # a flip of tau1 alone on the log negated in both: the advice is the flip of the log as logged
 expect(3, r"the flipped tau2 alone fits far better negated.*rerun with --flip-torque-sign both",
        ["identify", PAPER, "--log", flipped, "--flip-torque-sign", "1", "--out", fit2,
