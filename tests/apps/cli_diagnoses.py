@@ -267,6 +267,13 @@ if "torque_delay" in j:
 expect(3, r"the flipped tau2 alone fits far better negated.*rerun with --flip-torque-sign both",
        ["identify", PAPER, "--log", flipped, "--flip-torque-sign", "1", "--out", fit2,
         "--no-plots", "--no-validation"])
+# a scene whose pin radii are 100 times too small: the fit reads coulomb 100 times too large,
+# beyond the plausible range of a machine, and is not to be used (its scene_fitted.yaml would be
+# refused by simulate)
+expect(3, r"the fit should not be used: the fitted scene is refused by the scene reader "
+          r"\(friction.coulomb: must be at most 10",
+       ["identify", PAPER, "--log", log, "--set", "friction.pin_radius=0.0001", "--out", fit2,
+        "--no-plots", "--no-validation"])
 # a sign smoothing velocity beyond the log's largest rate: no Coulomb friction left to fit
 expect(2, r"command line: --smooth-sign: 1e\+19 rad/s is beyond the log's largest rate",
        ["identify", PAPER, "--log", log, "--smooth-sign", "1e19", "--out", fit2, "--no-plots"])
