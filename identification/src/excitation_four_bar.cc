@@ -82,7 +82,7 @@ class FourBarExcitation : public ExcitationMechanism {
     return true;
   }
 
-  bool block_sandwich() const override { return true; }
+  bool block_sandwich() const override { return false; }
 
   bool at_rest(double, const MotionState& s, double g1, double, double angle_noise) const override {
     FourBarKinematics k;
