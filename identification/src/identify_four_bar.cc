@@ -3,8 +3,8 @@
 // (docs/identification.md, "Four-bar"): conditioning (condition_log), rates and samples (logged,
 // or Savitzky-Golay with the rest rule and the slip reversals left out), the data-driven window
 // and its smoothing bias (the five-bar's stages, mechanism_stages.h, over FourBarWindowFit), the
-// fit (the mechanism residual, mechanism_residual.h), the covariance (the block sandwich over the
-// filter's windows), the residual checks (against its noise floor, setup_shared.h), the model
+// fit (the mechanism residual, mechanism_residual.h), the covariance (the five-bar's errors in
+// variables, noise_model.h), the residual checks (against its noise floor, setup_shared.h), the model
 // check's candidate causes (four_bar_model_check.cc), the intervals (Wald, profile likelihood),
 // and the refits of the checks after it (four_bar_refits.cc).
 #include <ceres/ceres.h>
@@ -419,11 +419,13 @@ Eigen::MatrixXd score_covariance(const FourBarFit& f, const Eigen::MatrixXd& J,
 
 /// The covariance of the parameters, those at a bound included (the direction a bound holds keeps
 /// its uncertainty in the others' std; a parameter at its bound reports none, estimates): the
-/// block sandwich (errors in variables: the rates' noise enters the reactions and the friction's
-/// sign terms), or s^2 (J^T J)^-1 with --classical-std; the singular values of the scaled
-/// Jacobian. *Hinv: (J^T J)^-1, the profile intervals' noise scale. Per-joint crank-rocker logs
-/// (10 s, angles only, seeds 1-10): the intervals hold 73 of 80 truths; with the parameters at a
-/// bound left out of the covariance, 65 (viscous_4 at 0 read coulomb_4 2.7 std high).
+/// errors-in-variables sandwich (score_covariance: the rates' noise enters the reactions and the
+/// friction's sign terms), or s^2 (J^T J)^-1 with --classical-std; the singular values of the
+/// scaled Jacobian. *Hinv: (J^T J)^-1, the profile intervals' noise scale. Per-joint
+/// crank-rocker logs (10 s, angles only, seeds 1-10): the intervals hold 74 of 80 truths. The
+/// sandwich's meat is the noise model's, not the residuals' (a sandwich over blocks of one filter
+/// window: the same std on average at 300 Hz, but varying 15 % from log to log where the slip
+/// reversals leave a few windows between them, which widened the errors' spread in its std).
 void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
                 Eigen::MatrixXd* Hinv) {
   const int P = f.layout.size();
