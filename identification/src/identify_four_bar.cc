@@ -4,9 +4,9 @@
 // or Savitzky-Golay with the rest rule and the slip reversals left out), the data-driven window
 // and its smoothing bias (the five-bar's stages, mechanism_stages.h, over FourBarWindowFit), the
 // fit (the mechanism residual, mechanism_residual.h), the covariance (the five-bar's errors in
-// variables, noise_model.h), the residual checks (against its noise floor, setup_shared.h), the model
-// check's candidate causes (four_bar_model_check.cc), the intervals (Wald, profile likelihood),
-// and the refits of the checks after it (four_bar_refits.cc).
+// variables, noise_model.h), the residual checks (against its noise floor, setup_shared.h), the
+// model check's candidate causes (four_bar_model_check.cc), the intervals (Wald, profile
+// likelihood), and the refits of the checks after it (four_bar_refits.cc).
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
@@ -359,9 +359,8 @@ bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
 /// model's form (noise_model.h): channel 0 the crank angle's noise over the filter's window
 /// through the estimated rate (taps d1, window from log index lo) and acceleration (taps d2) and,
 /// at i, the angle itself; channel 2 a logged rate's noise at i. D: kinematic_jacobian's.
-detail::Sensitivity noise_sensitivity(const FourBarFit& f, const IdentifyResult& out, int i,
-                                      int lo, const std::vector<double>& d1,
-                                      const std::vector<double>& d2,
+detail::Sensitivity noise_sensitivity(const FourBarFit& f, const IdentifyResult& out, int i, int lo,
+                                      const std::vector<double>& d1, const std::vector<double>& d2,
                                       const Eigen::Matrix<double, 2, 6>& D) {
   detail::Sensitivity s;
   // r = tau1 - M1: d r / d theta1, omega1, alpha1
@@ -412,8 +411,8 @@ Eigen::MatrixXd score_covariance(const FourBarFit& f, const Eigen::MatrixXd& J,
   detail::SensorNoise noise;
   noise.torque[0] = f.noise.torque[0];
   Eigen::MatrixXd S = detail::score_covariance(J2, sens, noise, L.size());
-  const double excess = std::max(0.0, std::pow(out.rms_torque_residual[0], 2) -
-                                          std::pow(out.residual_noise_floor[0], 2));
+  const double excess = std::max(
+      0.0, std::pow(out.rms_torque_residual[0], 2) - std::pow(out.residual_noise_floor[0], 2));
   return S + excess * J.transpose() * J;
 }
 

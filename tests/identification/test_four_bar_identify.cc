@@ -115,7 +115,8 @@ TEST(FourBarIdentify, StdOfShortRunsAtThreeHundredHertzIsTheEstimatesSpread) {
   std::vector<double> value, sd;
   for (int seed = 101; seed <= 110; ++seed) {
     const TorqueLog log = crank_rocker_log(crank_rocker().p, 3.0, 0.02, 1e-5, seed, false, 300);
-    const IdentifyResult res = identify(crank_rocker().p, crank_rocker().loads, log, four_bar_options());
+    const IdentifyResult res =
+        identify(crank_rocker().p, crank_rocker().loads, log, four_bar_options());
     ASSERT_TRUE(res.status.ok()) << res.status.message;
     EXPECT_EQ(res.std_method, "errors-in-variables");
     value.push_back(res.parameters[0].value);
