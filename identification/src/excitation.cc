@@ -184,7 +184,6 @@ class FiveBarExcitation : public ExcitationMechanism {
     return Status::Ok();
   }
   bool window_by_bias(SgOptions*) const override { return false; }
-  bool block_sandwich() const override { return false; }
   /// identify's rule (stage_samples.cc: rest_rule, held_sample): thresholds kRestSigmas std of
   /// the filtered rates and accelerations, the angle noise through the joint rates' dependence
   /// on the pose

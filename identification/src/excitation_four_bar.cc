@@ -82,8 +82,6 @@ class FourBarExcitation : public ExcitationMechanism {
     return true;
   }
 
-  bool block_sandwich() const override { return true; }
-
   bool at_rest(double, const MotionState& s, double g1, double, double angle_noise) const override {
     FourBarKinematics k;
     if (!four_bar_kinematics(scene_, s.th1, &k).ok()) return false;

@@ -125,10 +125,7 @@ struct EivSample {
 /// The prediction at one half-window m: the samples it keeps, the std and the bias of the
 /// coefficients, the expected torque residual over its noise level.
 struct WindowPrediction {
-  Eigen::MatrixXd covariance;
-  /// the errors-in-variables covariance over all the samples (the covariance itself but for a
-  /// block sandwich): the std a window's predicted bias is measured in
-  Eigen::MatrixXd eiv;
+  Eigen::MatrixXd covariance;  ///< errors in variables, identify's
   Eigen::VectorXd bias;
   double residual_ratio = 1;
   bool ok = false;
@@ -282,53 +279,12 @@ class EivPredictor {
     const Eigen::MatrixXd Hinv =
         es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
     out.bias = -Hinv * g;
-    if (mech_.block_sandwich()) {
-      const Eigen::MatrixXd S = block_score_covariance(J, used, sens, m, mean_score, out.bias);
-      out.covariance = Hinv * S * Hinv;
-      out.eiv = Hinv * detail::score_covariance(J, sens, noise_, n) * Hinv;
-    } else {
-      out.covariance = Hinv * detail::score_covariance(J, sens, noise_, n) * Hinv;
-      out.eiv = out.covariance;
-    }
-    out.ok = out.covariance.allFinite() && out.eiv.allFinite();
+    out.covariance = Hinv * detail::score_covariance(J, sens, noise_, n) * Hinv;
+    out.ok = out.covariance.allFinite();
     return out;
   }
 
  private:
-  /// The expected meat of identify's block sandwich: blocks of used samples within 2 m + 1 log
-  /// samples of the block's first (identify_four_bar.cc's block_sizes), each block's score
-  /// covariance alone (the correlations between blocks, through the filter's overlapping
-  /// windows, are not in the sandwich), plus, with the samples' mean scores `mean` (J^T (dM +
-  /// shift) + score, empty: none), the square of each block's mean score at the biased fit
-  /// (its residuals hold the bias the fit leaves: sum over the block of mean + J^T J bias)
-  Eigen::MatrixXd block_score_covariance(const Eigen::MatrixXd& J, const std::vector<int>& used,
-                                         const std::vector<detail::Sensitivity>& sens, int m,
-                                         const std::vector<Eigen::VectorXd>& mean,
-                                         const Eigen::VectorXd& bias) const {
-    const int P = static_cast<int>(J.cols()), span = 2 * m + 1;
-    Eigen::MatrixXd S = Eigen::MatrixXd::Zero(P, P);
-    for (size_t u0 = 0; u0 < used.size();) {
-      size_t u1 = u0 + 1;
-      while (u1 < used.size() && used[u1] - used[u0] < span) ++u1;
-      // the block's noise samples lie within [used[u0] - m, used[u1 - 1] + m]: shift them to 0
-      const int lo = std::max(0, used[u0] - m);
-      std::vector<detail::Sensitivity> block(sens.begin() + u0, sens.begin() + u1);
-      for (detail::Sensitivity& b : block) {
-        for (int c = 0; c < 4; ++c) b.lo[c] -= lo;
-      }
-      const int width = std::min(size(), used[u1 - 1] + m + 1) - lo;
-      S += detail::score_covariance(J.middleRows(2 * u0, 2 * (u1 - u0)), block, noise_, width);
-      if (!mean.empty()) {
-        const Eigen::MatrixXd Jb = J.middleRows(2 * u0, 2 * (u1 - u0));
-        Eigen::VectorXd b = Jb.transpose() * (Jb * bias);
-        for (size_t u = u0; u < u1; ++u) b += mean[u];
-        S += b * b.transpose();
-      }
-      u0 = u1;
-    }
-    return S;
-  }
-
   /// Per used sample: J^T shift + score of the noise's bias (smoothing_bias.h, NoiseBias), the
   /// first crank's angle noise through the filter `sg` (detail::noise_bias_at: identify's
   /// prediction on four-bars); zero where an evaluation fails.
@@ -375,7 +331,7 @@ class EivPredictor {
 double bias_in_std(const WindowPrediction& p, int friction) {
   double worst = 0;
   for (int i = 0; i < friction; ++i) {
-    const double sd = std::sqrt(std::max(0.0, p.eiv(i, i)));
+    const double sd = std::sqrt(std::max(0.0, p.covariance(i, i)));
     if (sd > 0) worst = std::max(worst, std::abs(p.bias(i)) / sd);
   }
   return worst;

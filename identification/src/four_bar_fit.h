@@ -70,6 +70,13 @@ void select_samples(FourBarFit* f, IdentifyResult* out);
 /// kRestSigmas of the rate's noise through that row, or below --min-rate.
 bool held(const FourBarFit& f, const std::array<double, 4>& row, double w, double rate_noise);
 
+/// d M1 / d (theta1, omega1, alpha1) at sample s, by central differences on the drive torque,
+/// in the two-channel form of the noise model (noise_model.h: row 0, the first crank's columns)
+/// at the internal parameters x, *M1 the drive torque; false where an evaluation fails
+/// (four_bar_window.cc).
+bool kinematic_jacobian(const FourBarFit& f, const double* x, const Sample& s,
+                        Eigen::Matrix<double, 2, 6>* D, double* M1);
+
 /// The window chosen by its predicted bias (choose_window_by_bias, mechanism_stages.h) after a
 /// preliminary fit on at most ~1500 of the samples, then the rates and samples again at the
 /// window chosen; f->x back at its start (four_bar_window.cc).

@@ -14,11 +14,6 @@
 
 namespace fivebar::identification::four_bar {
 
-namespace {
-
-/// d M1 / d (theta1, omega1, alpha1) at sample s, by central differences on the drive torque,
-/// in the two-channel form of the noise model (noise_model.h: row 0, the first crank's columns);
-/// false where an evaluation fails.
 bool kinematic_jacobian(const FourBarFit& f, const double* x, const Sample& s,
                         Eigen::Matrix<double, 2, 6>* D, double* M1) {
   mech::Vec<1, double> tau;
@@ -44,6 +39,8 @@ bool kinematic_jacobian(const FourBarFit& f, const double* x, const Sample& s,
   }
   return true;
 }
+
+namespace {
 
 /// The four-bar's fit as choose_window_by_bias reads it (mechanism_stages.h), at the parameters
 /// f.x of the preliminary fit: one torque channel, rates from the angles (no residual levels:

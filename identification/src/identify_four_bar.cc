@@ -3,10 +3,10 @@
 // (docs/identification.md, "Four-bar"): conditioning (condition_log), rates and samples (logged,
 // or Savitzky-Golay with the rest rule and the slip reversals left out), the data-driven window
 // and its smoothing bias (the five-bar's stages, mechanism_stages.h, over FourBarWindowFit), the
-// fit (the mechanism residual, mechanism_residual.h), the covariance (the block sandwich over the
-// filter's windows), the residual checks (against its noise floor, setup_shared.h), the model
-// check's candidate causes (four_bar_model_check.cc), the intervals (Wald, profile likelihood),
-// and the refits of the checks after it (four_bar_refits.cc).
+// fit (the mechanism residual, mechanism_residual.h), the covariance (the five-bar's errors in
+// variables, noise_model.h), the residual checks (against its noise floor, setup_shared.h), the
+// model check's candidate causes (four_bar_model_check.cc), the intervals (Wald, profile
+// likelihood), and the refits of the checks after it (four_bar_refits.cc).
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
@@ -16,7 +16,6 @@
 #include <limits>
 #include <sstream>
 
-#include "covariance.h"
 #include "fivebar/identification/identify.h"
 #include "fivebar/model/format.h"
 #include "fivebar/model/four_bar.h"
@@ -356,30 +355,76 @@ bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
   return true;
 }
 
-/// The block sizes of the sandwich: samples whose filter windows overlap share their rate
-/// errors, so consecutive runs of 2 hw + 1 log samples form a block (one sample each when the
-/// accelerations are logged).
-std::vector<int> block_sizes(const FourBarFit& f) {
-  std::vector<int> sizes;
-  const int span = 2 * f.hw + 1;
-  int start = -1;
-  for (int i : f.index) {
-    if (start < 0 || i - start >= span) {
-      sizes.push_back(0);
-      start = i;
+/// The residual's sensitivities to the sensor noise at used sample u (log index i), in the noise
+/// model's form (noise_model.h): channel 0 the crank angle's noise over the filter's window
+/// through the estimated rate (taps d1, window from log index lo) and acceleration (taps d2) and,
+/// at i, the angle itself; channel 2 a logged rate's noise at i. D: kinematic_jacobian's.
+detail::Sensitivity noise_sensitivity(const FourBarFit& f, const IdentifyResult& out, int i, int lo,
+                                      const std::vector<double>& d1, const std::vector<double>& d2,
+                                      const Eigen::Matrix<double, 2, 6>& D) {
+  detail::Sensitivity s;
+  // r = tau1 - M1: d r / d theta1, omega1, alpha1
+  const double dth = -D(0, 0), dw = -D(0, 2), da = -D(0, 4);
+  s.sigma[0] = f.noise.angle[0];
+  if (out.accels_estimated) {
+    s.lo[0] = lo;
+    for (size_t r = 0; r < d2.size(); ++r) {
+      const double c = (out.rates_estimated ? dw * d1[r] : 0.0) + da * d2[r] +
+                       (lo + static_cast<int>(r) == i ? dth : 0.0);
+      s.coef[0].push_back(Eigen::Vector2d(c, 0.0));
     }
-    ++sizes.back();
+  } else {
+    s.lo[0] = i;
+    s.coef[0].push_back(Eigen::Vector2d(dth, 0.0));
   }
-  return sizes;
+  if (!out.rates_estimated) {
+    s.lo[2] = i;
+    s.sigma[2] = f.noise.rate[0];
+    s.coef[2].push_back(Eigen::Vector2d(dw, 0.0));
+  }
+  return s;
+}
+
+/// The errors-in-variables score covariance J^T Sigma J of the five-bar's inverse dynamics
+/// (detail::score_covariance): the torque noise at every sample, each angle noise sample
+/// through every residual whose filter window holds it (the rates and accelerations estimated
+/// from the angles), a logged rate's noise at its sample, and the residual beyond that modelled
+/// noise counted as white. Empty when a kinematic Jacobian cannot be formed.
+Eigen::MatrixXd score_covariance(const FourBarFit& f, const Eigen::MatrixXd& J,
+                                 const IdentifyResult& out) {
+  const int m = static_cast<int>(J.rows()), P = static_cast<int>(J.cols());
+  const TorqueLog& L = f.cond.log;
+  int lo_mid = 0;
+  std::vector<double> d1, d2;
+  const int mid = L.size() / 2;  // a centred window: on the uniform grid all have its taps
+  if (out.accels_estimated) savitzky_golay_taps(L.t, mid, f.sg, &lo_mid, &d1, &d2);
+  Eigen::MatrixXd J2 = Eigen::MatrixXd::Zero(2 * m, P);
+  std::vector<detail::Sensitivity> sens(m);
+  for (int u = 0; u < m; ++u) {
+    Eigen::Matrix<double, 2, 6> D;
+    double M1 = 0;
+    if (!kinematic_jacobian(f, f.x.data(), f.samples[u], &D, &M1)) return {};
+    const int i = f.index[u];
+    sens[u] = noise_sensitivity(f, out, i, i + lo_mid - mid, d1, d2, D);
+    J2.row(2 * u) = J.row(u);
+  }
+  detail::SensorNoise noise;
+  noise.torque[0] = f.noise.torque[0];
+  Eigen::MatrixXd S = detail::score_covariance(J2, sens, noise, L.size());
+  const double excess = std::max(
+      0.0, std::pow(out.rms_torque_residual[0], 2) - std::pow(out.residual_noise_floor[0], 2));
+  return S + excess * J.transpose() * J;
 }
 
 /// The covariance of the parameters, those at a bound included (the direction a bound holds keeps
 /// its uncertainty in the others' std; a parameter at its bound reports none, estimates): the
-/// block sandwich (errors in variables: the rates' noise enters the reactions and the friction's
-/// sign terms), or s^2 (J^T J)^-1 with --classical-std; the singular values of the scaled
-/// Jacobian. *Hinv: (J^T J)^-1, the profile intervals' noise scale. Per-joint crank-rocker logs
-/// (10 s, angles only, seeds 1-10): the intervals hold 73 of 80 truths; with the parameters at a
-/// bound left out of the covariance, 65 (viscous_4 at 0 read coulomb_4 2.7 std high).
+/// errors-in-variables sandwich (score_covariance: the rates' noise enters the reactions and the
+/// friction's sign terms), or s^2 (J^T J)^-1 with --classical-std; the singular values of the
+/// scaled Jacobian. *Hinv: (J^T J)^-1, the profile intervals' noise scale. Per-joint
+/// crank-rocker logs (10 s, angles only, seeds 1-10): the intervals hold 74 of 80 truths. The
+/// sandwich's meat is the noise model's, not the residuals' (a sandwich over blocks of one filter
+/// window: the same std on average at 300 Hz, but varying 15 % from log to log where the slip
+/// reversals leave a few windows between them, which widened the errors' spread in its std).
 void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
                 Eigen::MatrixXd* Hinv) {
   const int P = f.layout.size();
@@ -400,16 +445,16 @@ void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* ou
     out->singular_values.push_back(svd.singularValues()(i));
   }
   if (!out->converged) return;
-  const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), m);
   Eigen::MatrixXd C;
-  if (f.opt->errors_in_variables) {
-    C = detail::block_sandwich(J, rv, block_sizes(f)).covariance;
-    out->std_method = "block-sandwich";
-    out->std_detail = "sandwich over blocks of " + std::to_string(2 * f.hw + 1) +
-                      " samples (the rate filter's window), small-sample corrected";
-  }
   const Eigen::MatrixXd H = J.transpose() * J;
   const Eigen::MatrixXd Hf = H.ldlt().solve(Eigen::MatrixXd::Identity(H.rows(), H.cols()));
+  if (f.opt->errors_in_variables) {
+    const Eigen::MatrixXd S = score_covariance(f, J, *out);
+    if (S.size() > 0) {
+      C = Hf * S * Hf;
+      out->std_method = "errors-in-variables";
+    }
+  }
   if (C.size() == 0) {
     C = out->residual_sigma * out->residual_sigma * Hf;
     out->std_method = "residual-variance";

@@ -450,11 +450,14 @@ void correct_smoothing_bias(const ParameterLayout& layout, const Eigen::VectorXd
     if (shift(p) == 0 && applied(p) == 0) continue;
     ParameterEstimate& e = out->parameters[p];
     e.value -= applied(p);
-    // an open side (+-inf) stays open; a lower end that respected the bound (a profile interval
-    // ends there) still does after the shift
-    const bool within_bound = e.ci_low >= layout.lower_bound(p);
+    // an open side (+-inf) stays open; a lower end that respected the bound still does after
+    // the shift, and one at the bound (a profile interval that reached it: the cost there is
+    // within the threshold) stays there, whichever way the estimate moves
+    const double lb = layout.lower_bound(p);
+    const bool within_bound = e.ci_low >= lb, at_bound = e.ci_low == lb;
     e.ci_low -= applied(p);
-    if (within_bound) e.ci_low = std::max(e.ci_low, layout.lower_bound(p));
+    if (within_bound) e.ci_low = std::max(e.ci_low, lb);
+    if (at_bound) e.ci_low = lb;
     e.ci_high -= applied(p);
     list += (list.empty() ? "" : ", ") + e.name + " " + format_significant(-applied(p));
     // the shift's rounding in x - dx is eps |x|, far above eps |shift| for a small shift

@@ -107,10 +107,6 @@ class ExcitationMechanism {
   /// filter *sg (the four-bar: choose_window_by_bias, the noise's bias through the reactions
   /// included); false where it takes its residual rule, then the bias limit (the five-bar)
   virtual bool window_by_bias(SgOptions* sg) const = 0;
-  /// identify's covariance: true for the sandwich over blocks of the filter's window (2 m + 1
-  /// log samples: the four-bar), whose meat holds only the score's correlations within a block;
-  /// false for the errors-in-variables covariance over all of them (the five-bar)
-  virtual bool block_sandwich() const = 0;
   /// identify's rest rule at a sample of the exact motion: true where identify would leave the
   /// sample out as at rest, its rates estimated by a filter whose rate and acceleration noise
   /// gains are g1, g2 from angles of noise std `angle_noise` [rad]
@@ -331,9 +327,7 @@ Status evaluate_motion(const Params<double>& scene, const DesignParameters& dp,
 /// std are the Fisher's. A mechanism whose identify walks the windows by their predicted bias
 /// (ExcitationMechanism::window_by_bias) is predicted at the window of that walk (the same
 /// function as identify's, stages::walk_window_by_bias), its bias the smoothing's and the
-/// noise's through the reactions, and its std identify's block sandwich in expectation (the
-/// score's noise within each block, and the spread of the blocks' mean scores that the
-/// smoothing and the noise's bias leave).
+/// noise's through the reactions, and its std identify's errors-in-variables std.
 Status predict_identified_std(const ExcitationMechanism& mechanism, double torque_noise,
                               double angle_noise, ExcitationReport* r);
 /// the same for the five-bar of `scene`
