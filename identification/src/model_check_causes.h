@@ -57,7 +57,8 @@ struct CauseText {
 
 constexpr CauseText kCauseText[kCauseCount] = {
     {"inertia", "the links' inertial parameters",
-     "the scene's masses or inertias do not match the log"},
+     "the scene's masses or inertias do not match the log (or its lengths, gravity or loads: "
+     "the links' inertial parameters absorb those too)"},
     {"angle_offsets", "the encoders' zeros",
      "the logged angles' zeros are off (subtract the offsets the warning reads from the logged "
      "angles)"},
