@@ -199,6 +199,10 @@ expect(3, r"load M3 = nan at t=1.50\d* s is not finite",
        ["simulate", PAPER, "--set", "loads.M3=sqrt(1.5-t)", "--out", out, "--no-plots"])
 expect(3, r"load M3 = inf at t=0.5 s is not finite",
        ["simulate", PAPER, "--set", "loads.M3=1/(t-0.5)", "--out", out, "--no-plots"])
+# a crank-rocker started at 1000 rad/s: its viscous friction arm is 172 times the one at rest,
+# the rate is named, not the friction coefficients
+expect(3, r"at t=0 s \(theta1=[0-9.]+\): joint rates too fast for the friction law: at \|w\| = ",
+       ["simulate", CRANK_ROCKER, "--set", "initial.omega1=1000", "--out", out, "--no-plots"])
 # the same before the work of the commands that evaluate the loads outside a simulation (a log's
 # or a motion's times, a design's grid, a holding time), and nothing written
 nan_m3 = ["--set", "loads.M3=0.001*sqrt(1.5-t)"]

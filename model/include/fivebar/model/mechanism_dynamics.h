@@ -84,6 +84,34 @@ Status singular_cause(const ParamsOf<M, T>& p, const typename M::template Kinema
   return Status::Error(st.code, msg.str());
 }
 
+/// A failed friction loop's status with the joint rates first when they explain it: a friction
+/// arm r_k f(w_k) of the law at the evaluation's rates kFastArm times the largest at rest
+/// (r_k mu_k), as viscous friction at a rate of hundreds of rad/s, names the rate and both arms,
+/// so that the coefficients are not blamed for a speed (same code).
+inline constexpr double kFastArm = 3.0;
+template <class M, typename T>
+Status rate_cause(const ParamsOf<M, T>& p, const Joints<T>& phi, const Joints<T>& w,
+                  const Status& st) {
+  using std::abs;
+  if (st.ok() || st.code != StatusCode::kFrictionNotConverged) return st;
+  double arm = 0.0, still = 0.0, rate = 0.0;
+  for (int j = 0; j < M::kJoints; ++j) {
+    still = std::max(still, abs(value_of(p.friction.pin_radius[j] * p.friction.coulomb[j])));
+    if (abs(value_of(phi[j])) > arm) {
+      arm = abs(value_of(phi[j]));
+      rate = abs(value_of(w[j]));
+    }
+  }
+  if (!(arm > kFastArm * still)) return st;
+  std::ostringstream msg;
+  msg.precision(3);
+  msg << "joint rates too fast for the friction law: at |w| = " << rate
+      << " rad/s a joint's friction arm r_k f(w_k) is " << arm << " m, " << arm / still
+      << " times r_k mu_k at rest (the rate-dependent friction grows with the rate: check the "
+      << "initial rates and the loads); " << st.message;
+  return Status::Error(st.code, msg.str());
+}
+
 /// The stuck joints of a forward evaluation (mode kStuck): J_k qdd + wb_k = 0, with wb the
 /// relative accelerations at qdd = 0. At most kDof (that many independent ones lock the
 /// mechanism).
@@ -262,7 +290,10 @@ Status forward_friction(const ParamsOf<M, T>& p, const EvalOptions& opt, const M
   if (closed_form) aids.low_rank = &response;
   const Status st = friction_loop(phi, opt, solve, &ev->N, &ev->Mf, &ev->F, &ev->iterations,
                                   motors ? &act : nullptr, loop, aids);
-  if (!st.ok()) return singular_cause<M, T>(p, ev->kin, st);
+  if (!st.ok()) {
+    const Status pose = singular_cause<M, T>(p, ev->kin, st);
+    return pose.message != st.message ? pose : rate_cause<M, T>(p, phi, ev->w, st);
+  }
   if (opt.want_reactions || stuck.count > 0) {
     solve(ev->Mf, &ev->F);  // accelerations and reactions of the converged friction torques
     reaction_norms(ev->F, &ev->N);
