@@ -994,6 +994,7 @@ void write_design(const Args& a, const Scene& scene, const id::ExcitationOptions
 }
 
 int run(const Args& given) {
+  OutputDir::remove_previous(given.scene.out, kOutputs);  // a refused run leaves none of them
   Scene scene = load_scene(given.scene.scene, given.scene.sets, /*four_bar_ok=*/true);
   for (const std::string& w : scene.warnings) warn(w);
   const Args a = resolved(given, scene);

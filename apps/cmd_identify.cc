@@ -299,7 +299,8 @@ std::string fitted_yaml(const Scene& scene, id::IdentifyResult* res) {
 
 /// A four-bar's identification (identify's four-bar overload): the options it does not run are
 /// refused naming them.
-int run_four_bar(Args a, const Scene& scene, std::chrono::steady_clock::time_point start) {
+int run_four_bar(Args a, const Scene& scene, std::chrono::steady_clock::time_point start,
+                 OutputDir* out) {
   id::IdentifyOptions opt = identify_options(a.settings, scene);
   const std::string unsupported = id::four_bar_unsupported(opt);
   if (!unsupported.empty())
@@ -315,22 +316,24 @@ int run_four_bar(Args a, const Scene& scene, std::chrono::steady_clock::time_poi
   }
   id::IdentifyResult res = identify_four_bar_scene(scene, log, opt);
   const std::string fitted = fitted_yaml(scene, &res);
-  OutputDir out(a.scene.out, kOutputs);
   // validation and residuals on the log as fitted (unwrapped, glitches interpolated)
   id::Validation val;
   if (!a.no_validation) {
     val = id::validate(res.fitted_four_bar, LoadExpressions(scene).four_bar_function(),
                        res.conditioned_log, res.omega1, res.window_s);
   }
-  write_four_bar_residuals(a, res, val, &out);
-  write_text_file(out.file("scene_fitted.yaml"), fitted);
-  return finish(a, scene, log, opt, res, val, start, &out);
+  write_four_bar_residuals(a, res, val, out);
+  write_text_file(out->file("scene_fitted.yaml"), fitted);
+  return finish(a, scene, log, opt, res, val, start, out);
 }
 
 int run(const Args& a) {
   const auto start = std::chrono::steady_clock::now();
+  // the output directory first: a bad --out is told before the fit, and a refused run leaves
+  // none of the previous run's results
+  OutputDir out(a.scene.out, kOutputs);
   const Scene scene = load_scene(a.scene.scene, a.scene.sets, /*four_bar_ok=*/true);
-  if (scene.type == MechanismType::kFourBar) return run_four_bar(a, scene, start);
+  if (scene.type == MechanismType::kFourBar) return run_four_bar(a, scene, start, &out);
   const sim::LoadFunction loads = LoadExpressions(scene).function();
   id::IdentifyOptions opt = identify_options(a.settings, scene);
 
@@ -347,7 +350,6 @@ int run(const Args& a) {
   id::IdentifyResult res = identify_scene(scene, loads, log, opt);
   const std::string fitted = fitted_yaml(scene, &res);
 
-  OutputDir out(a.scene.out, kOutputs);
   // validation and residuals on the log as fitted (unwrapped, glitches interpolated)
   id::Validation val;
   if (!a.no_validation) {

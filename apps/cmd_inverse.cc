@@ -609,6 +609,7 @@ Json inverse_summary(const Args& args, const Scene& scene, const Motion& motion,
 
 int run(const Args& args) {
   const auto start = std::chrono::steady_clock::now();
+  OutputDir::remove_previous(args.scene.out, kOutputs);  // a refused run leaves none of them
   const Scene scene = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
   const bool four_bar = scene.type == MechanismType::kFourBar;
   const TrajectoryLayout layout = layout_of(scene);

@@ -223,6 +223,7 @@ int run_mechanism(const Args& args, const Scene& scene,
 
 int run(const Args& args) {
   const auto start = std::chrono::steady_clock::now();
+  OutputDir::remove_previous(args.scene.out, kOutputs);  // a refused run leaves none of them
   const Scene scene = load_scene(args.scene.scene, args.scene.sets, /*four_bar_ok=*/true);
   return with_mechanism(scene, [&](auto mech) {
     return run_mechanism<decltype(mech)>(args, scene, start);

@@ -27,6 +27,7 @@
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
+#include "fivebar/io/output.h"
 #include "fivebar/io/log_truth.h"
 #include "fivebar/io/scene.h"
 #include "fivebar/io/torque_log_file.h"
@@ -363,6 +364,9 @@ identification::SynthResult four_bar_log(const Args& a, const Scene& scene,
 }
 
 int run(const Args& a) {
+  // a refused or failed run leaves no previous log under that name
+  const std::filesystem::path target(a.out);
+  OutputDir::remove_previous(target.parent_path().string(), {target.filename().string()});
   check_options(a);
   Scene scene = load_scene(a.scene, a.sets, /*four_bar_ok=*/true);
   const bool four_bar = scene.type == MechanismType::kFourBar;

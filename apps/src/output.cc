@@ -168,6 +168,16 @@ void track_staging(const std::string& dir, bool add) {
 
 }  // namespace
 
+void OutputDir::remove_previous(const std::string& dir, const std::vector<std::string>& outputs) {
+  std::error_code ec;
+  for (const std::string& name : outputs) {
+    const fs::path old = fs::path(dir) / name;
+    if (fs::is_regular_file(old, ec) && !fs::remove(old, ec)) {
+      throw InputError(old.string(), "--out", "cannot remove the previous result: " + ec.message());
+    }
+  }
+}
+
 OutputDir::OutputDir(const std::string& dir, const std::vector<std::string>& outputs) : dir_(dir) {
   std::error_code ec;
   created_ = !fs::exists(dir_, ec);
@@ -177,13 +187,7 @@ OutputDir::OutputDir(const std::string& dir, const std::vector<std::string>& out
                      "cannot create the output directory: " +
                          (ec ? ec.message() : "a file of that name exists"));
   }
-  // the previous run's results under the names this run writes
-  for (const std::string& name : outputs) {
-    const fs::path old = fs::path(dir_) / name;
-    if (fs::is_regular_file(old, ec) && !fs::remove(old, ec)) {
-      throw InputError(old.string(), "--out", "cannot remove the previous result: " + ec.message());
-    }
-  }
+  remove_previous(dir_, outputs);
   std::string pattern = (fs::path(dir_) / ".partial-XXXXXX").string();
   if (::mkdtemp(pattern.data()) == nullptr) {
     throw InputError(dir_, "--out",

@@ -153,3 +153,30 @@ file(GLOB left RELATIVE ${out} ${out}/* ${out}/.partial-*)
 if(left)
   message(FATAL_ERROR "a failed run left files in its output directory: ${left}")
 endif()
+
+# 2: a run refused for its input after a successful one leaves none of the previous results:
+# simulate (a NaN coefficient), inverse (a motion file that cannot be read), identify (a window
+# the log cannot hold, checked in run)
+set(again ${WORK_DIR}/again)
+run_fivebar(0 "" simulate ${paper} --set simulation.duration=0.05 --no-plots --out ${again}/sim)
+file(COPY_FILE ${again}/sim/trajectory.csv ${WORK_DIR}/motion.csv)
+run_fivebar(0 "" inverse ${paper} --motion ${WORK_DIR}/motion.csv --no-plots --out ${again}/inv)
+run_fivebar(0 "" identify ${paper} --log ${log} --no-plots --no-validation --out ${again}/id)
+foreach(refused
+    "simulate;${paper};--set;friction.coulomb=nan;--out;${again}/sim;trajectory.csv"
+    "inverse;${paper};--motion;${WORK_DIR}/nope.csv;--out;${again}/inv;summary.json"
+    "identify;${paper};--log;${angles_log};--sg-window;1e9;--out;${again}/id;identification.json")
+  list(POP_BACK refused file)
+  list(GET refused -1 dir)
+  execute_process(COMMAND ${FIVEBAR} ${refused} RESULT_VARIABLE status OUTPUT_QUIET ERROR_QUIET)
+  if(NOT status EQUAL 2 OR EXISTS ${dir}/${file})
+    message(FATAL_ERROR "${refused}: exit ${status}, ${dir}/${file} left")
+  endif()
+endforeach()
+# synth-log: a refused run leaves no previous log of that name
+run_fivebar(0 "" synth-log ${paper} --duration 0.1 --out ${WORK_DIR}/old.csv)
+execute_process(COMMAND ${FIVEBAR} synth-log ${paper} --set friction.coulomb=nan
+                --out ${WORK_DIR}/old.csv RESULT_VARIABLE status OUTPUT_QUIET ERROR_QUIET)
+if(NOT status EQUAL 2 OR EXISTS ${WORK_DIR}/old.csv)
+  message(FATAL_ERROR "synth-log refused (exit ${status}) kept the previous log")
+endif()

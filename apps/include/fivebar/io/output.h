@@ -68,6 +68,10 @@ class OutputDir {
  public:
   /// Creates DIR (and parents) and the staging directory. Throws InputError(`<dir>: --out: ...`).
   OutputDir(const std::string& dir, const std::vector<std::string>& outputs);
+  /// Deletes from `dir` (when it exists) the files named in `outputs`: what the constructor does
+  /// first, for a command to call before any check that may refuse the run, so that a run
+  /// refused before its output directory is made leaves no previous result either.
+  static void remove_previous(const std::string& dir, const std::vector<std::string>& outputs);
   /// Without commit(): removes the staging directory and everything in it, and DIR itself when
   /// this run created it and it is empty.
   ~OutputDir();
