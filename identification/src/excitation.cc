@@ -108,10 +108,13 @@ DesignParameters design_parameters(const Params<double>& scene, const DesignGrou
     dp.inertial = kInertialParams;
   }
   if (g.actuator) {
-    for (int j = 1; j <= 2; ++j) {
-      add("offset_" + std::to_string(j), 0.0, 0.1);
-      add("actuator_coulomb_" + std::to_string(j), 0.0, 0.1);
-      add("actuator_viscous_" + std::to_string(j), 0.0, 0.01);
+    // the scene's values (`actuators:`), a typical scale where it has none
+    const ActuatorParams<double>& a = scene.actuators;
+    for (int j = 0; j < kActuators; ++j) {
+      const std::string n = std::to_string(j + 1);
+      add("offset_" + n, a.offset[j], 0.1);
+      add("actuator_coulomb_" + n, a.coulomb[j], 0.1);
+      add("actuator_viscous_" + n, a.viscous[j], 0.01);
     }
     dp.actuator = 2 * kActuatorPerMotor;
   }

@@ -42,6 +42,24 @@ std::array<double, 2> torques(const Params<double>& scene, const DesignParameter
   return {ev.M1, ev.M2};
 }
 
+// The actuator group's values are the scene's (`actuators:`), so that their relative std is
+// defined and enters the design's worst; a scale of their kind where the scene has none.
+TEST(Excitation, ActuatorParametersTakeTheScenesValues) {
+  Params<double> scene = per_joint_scene();
+  scene.actuators.offset = {0.05, -0.02};
+  scene.actuators.coulomb = {0.04, 0.0};
+  scene.actuators.viscous = {0.01, 0.003};
+  DesignGroups g;
+  g.actuator = true;
+  const DesignParameters dp = design_parameters(scene, g);
+  const int a = dp.friction;
+  ASSERT_EQ(dp.size(), a + 6);
+  const std::vector<double> want = {0.05, 0.04, 0.01, -0.02, 0.0, 0.003};
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(dp.nominal[a + i], want[i]) << dp.names[a + i];
+  EXPECT_EQ(dp.scale[a + 4], 0.1);  // no value: the typical Coulomb scale
+  EXPECT_EQ(dp.scale[a + 3], 0.02);
+}
+
 TEST(Excitation, JetJacobianMatchesFiniteDifferences) {
   const Params<double> scene = per_joint_scene();
   DesignGroups g;
