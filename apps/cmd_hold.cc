@@ -22,6 +22,7 @@
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/json.h"
+#include "fivebar/io/commands.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
@@ -49,6 +50,16 @@ struct Args {
 const std::vector<std::string> kOutputs = {"hold.json", "hold_map.csv", "hold_map.png",
                                            "plots.gnuplot", "summary.json"};
 
+// a pose beyond two turns and within 360 (start_looks_like_degrees): refused on --pose, as the
+// goals of optimize are
+void refuse_degrees(const std::string& scene, const std::vector<double>& pose) {
+  const std::string degrees = start_looks_like_degrees(pose);
+  if (degrees.empty()) return;
+  std::string given;
+  for (double a : pose) given += (given.empty() ? "" : ",") + format_double(a);
+  throw InputError(scene, "--pose", given + ": angles look like degrees, expected radians");
+}
+
 // "a,b" -> two finite numbers, else InputError on --pose
 std::array<double, 2> parse_pose(const std::string& text, const std::string& scene) {
   std::stringstream in(text);
@@ -61,6 +72,7 @@ std::array<double, 2> parse_pose(const std::string& text, const std::string& sce
     throw InputError(scene, "--pose", "expected THETA1,THETA2 (two numbers in rad, |theta| <= 1000), got '" +
                                           text + "'");
   }
+  refuse_degrees(scene, {pose[0], pose[1]});
   return pose;
 }
 
@@ -260,6 +272,7 @@ double parse_crank(const std::string& text, const std::string& scene) {
     throw InputError(scene, "--pose", "expected THETA1 (a four-bar has one crank angle, in rad, "
                                       "|theta1| <= 1000), got '" + text + "'");
   }
+  refuse_degrees(scene, {th});
   return th;
 }
 

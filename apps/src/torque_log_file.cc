@@ -174,7 +174,7 @@ void check_log_time_unit(const TorqueLog& log) {
                      (shorter ? " under which no crank turns faster than " +
                                  format_significant(kSlowestMotion) + " rad/s"
                            : std::string()) +
-                     ": t must be in seconds, and a five-bar's log samples at tens of Hz or "
+                     ": t must be in seconds, and a mechanism's log samples at tens of Hz or "
                      "more; these stamps look like milliseconds, microseconds or sample counts");
 }
 
