@@ -152,9 +152,23 @@ std::array<double, 2> start_pose(const Scene& scene) {
 void check_holding(const Args& a, const Scene& scene, const LoadExpressions& loads,
                    const id::ExcitationMechanism& mech, const id::ExcitationOptions& o) {
   const std::array<double, 2> start = start_pose(scene);
+  // a start within the singular margin: no design can keep the margin from its first sample
+  const bool four_bar = scene.type == MechanismType::kFourBar;
+  const double sine = four_bar ? four_bar_sine(scene.four_bar, start[0])
+                               : coupler_sine(scene.params, start[0], start[1]);
+  if (sine < o.singular_margin) {
+    throw InputError(scene.path, "initial",
+                     "the start pose (theta1 = " + format_double(start[0]) +
+                         (four_bar ? "" : ", theta2 = " + format_double(start[1])) + ") is " +
+                         (sine < 0 ? "one the mechanism cannot assemble"
+                                   : "within the design's singular margin (its singular measure " +
+                                         format_significant(sine, 3) + " < " +
+                                         format_significant(o.singular_margin, 3) + ")") +
+                         ": start the design away from the singular pose");
+  }
   Holding<double> h;
   Status st;
-  if (scene.type == MechanismType::kFourBar) {
+  if (four_bar) {
     id::SampleTerms rest;  // inverse dynamics at rest: no joint slips
     st = mech.terms(0.0, {start[0], start[1], 0, 0, 0, 0}, nullptr, &rest);
     h.M1 = rest.M1;

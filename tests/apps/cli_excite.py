@@ -56,6 +56,11 @@ bad = os.path.join(WORK, "bad")
 base = ["excite", PAPER, "--out", bad, "--torque-limit", "13.4"]
 expect_error(2, "--duration: must be > 0", base + ["--duration", "0"], bad)
 expect_error(2, "--duration: must be > 0", base + ["--duration", "-3"], bad)
+expect_error(2, "initial: the start pose (theta1 = 3.1, theta2 = 0.05) is within the design's singular margin",
+             base + ["--set", "initial.theta1=3.1", "--set", "initial.theta2=0.05", "--set",
+                     "mechanism.ground_length=0.2", "--set", "mechanism.links.0.length=0.1",
+                     "--set", "mechanism.links.1.length=0.1", "--set", "mechanism.links.2.length=0.2",
+                     "--set", "mechanism.links.3.length=0.2", "--set", "mechanism.point_p=0.2"], bad)
 expect_error(2, "below what holding the start pose needs",
              ["excite", PAPER, "--out", bad, "--torque-limit", "0.5"], bad)
 expect_error(2, "excludes the start pose theta1", base + ["--theta1-range", "2:3"], bad)
