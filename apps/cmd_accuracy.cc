@@ -56,7 +56,7 @@ External against_external(const std::string& path, const Scene& scene,
                           const std::vector<sim::Row>& rows) {
   const double step = scene.options.output_step;
   const int links = layout_of(scene).links;
-  const CsvTable table = read_csv(path);
+  const CsvTable table = read_csv(path, "--reference");
   const int t_col = table.require("t");
   int cols[kLinks];
   for (int k = 0; k < links; ++k) cols[k] = table.require("theta" + std::to_string(k + 1));

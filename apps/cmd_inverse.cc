@@ -261,7 +261,7 @@ double rest_rate_cap(const CrankSeries& c) {
 }
 
 Motion read_motion(const std::string& path, const Scene& scene) {
-  const CsvTable table = read_csv(path);
+  const CsvTable table = read_csv(path, "--motion");
   const bool four_bar = scene.type == MechanismType::kFourBar;
   if (four_bar) check_four_bar_columns(path, table);
   CrankSeries c;

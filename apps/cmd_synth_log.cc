@@ -154,7 +154,7 @@ std::vector<double> row_times(const std::vector<sim::Row>& rows) {
 identification::SynthResult motion_log(const Scene& scene, const LoadExpressions& expressions,
                                        const std::string& path, double duration,
                                        const identification::SynthOptions& so) {
-  const CsvTable table = read_csv(path);
+  const CsvTable table = read_csv(path, "--motion");
   std::vector<sim::Row> rows = motion_rows(table, kDof, duration);
   expressions.require_finite(row_times(rows));
   const sim::LoadFunction loads = expressions.function();
@@ -183,7 +183,7 @@ identification::SynthResult four_bar_motion_log(const Scene& scene,
                                                 const LoadExpressions& expressions,
                                                 const std::string& path, double duration,
                                                 const identification::SynthOptions& so) {
-  const CsvTable table = read_csv(path);
+  const CsvTable table = read_csv(path, "--motion");
   const std::vector<sim::Row> motion = motion_rows(table, 1, duration);
   expressions.require_finite(row_times(motion));
   std::vector<sim::Row> rows;

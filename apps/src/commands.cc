@@ -198,7 +198,8 @@ id::TorqueLog read_log(const std::string& path, int dof) {
   try {
     return io::read_torque_log(path, dof);
   } catch (const id::LogError& e) {
-    throw InputError(e.file(), e.key(), e.reason());
+    // the file itself (cannot open, a directory): the option that named it
+    throw InputError(e.file(), e.key() == "(file)" ? "--log" : e.key(), e.reason());
   }
 }
 

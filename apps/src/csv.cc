@@ -113,13 +113,13 @@ std::vector<double> CsvTable::column(const std::string& name) const {
   return out;
 }
 
-CsvTable read_csv(const std::string& path) {
+CsvTable read_csv(const std::string& path, const std::string& option) {
   std::ifstream in(path);
-  if (!in) throw InputError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));
+  if (!in) throw InputError(path, option, std::string("cannot open: ") + std::strerror(errno));
   std::stringstream text;
   text << in.rdbuf();
   if (in.bad()) {
-    throw InputError(path, "(file)", std::string("cannot read: ") + std::strerror(errno));
+    throw InputError(path, option, std::string("cannot read: ") + std::strerror(errno));
   }
   CsvRules rules;
   rules.header = [&path](const std::vector<std::string>& names, int line) {
@@ -140,7 +140,7 @@ CsvTable read_csv(const std::string& path) {
   } catch (const identification::LogError& e) {
     throw InputError(e.file(), e.key(), e.reason());
   }
-  if (table.header_line == 0) throw InputError(path, "(file)", "empty: no header row");
+  if (table.header_line == 0) throw InputError(path, option, "empty: no header row");
   return table;
 }
 

@@ -182,7 +182,7 @@ std::vector<trajectory::TaskSpec> parse_tasks(const std::string& text, const std
 
 std::vector<trajectory::TaskSpec> load_tasks(const std::string& path, bool four_bar) {
   std::ifstream in(path);
-  if (!in) throw InputError(path, "(file)", std::string("cannot open: ") + std::strerror(errno));
+  if (!in) throw InputError(path, "--tasks", std::string("cannot open: ") + std::strerror(errno));
   std::stringstream text;
   text << in.rdbuf();
   return parse_tasks(text.str(), path, four_bar);

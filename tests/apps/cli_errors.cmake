@@ -15,6 +15,11 @@ file(WRITE ${WORK_DIR}/bad.yaml "${text}colour: red\n")
 run_fivebar(2 "^fivebar: error: [^\n]*bad.yaml: colour: unknown key"
             simulate ${WORK_DIR}/bad.yaml --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "nope.yaml: \\(file\\): cannot open" simulate ${WORK_DIR}/nope.yaml)
+# a file named by an option that cannot be opened: the option is named
+run_fivebar(2 "nope.csv: --log: cannot open" identify ${paper} --log ${WORK_DIR}/nope.csv
+            --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "nope.csv: --motion: cannot open" inverse ${paper} --motion ${WORK_DIR}/nope.csv
+            --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "paper.yaml: friction.coulomb: expected 1 or 5 numbers, got 4"
             simulate ${paper} --set "friction.coulomb=[1,2,3,4]" --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "paper.yaml: simulation.rtoll: unknown key"
@@ -40,7 +45,7 @@ run_fivebar(2 "command line: --sg-window: 1 s is [^\n]*: more than 200"
             identify ${paper} --log ${angles_log} --sg-window 1 --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "--smooth-sign"
             identify ${paper} --log ${angles_log} --smooth-sign -1 --out ${WORK_DIR}/out_bad)
-run_fivebar(2 "logs: \\(file\\): is a directory, expected a CSV file"
+run_fivebar(2 "logs: --log: is a directory, expected a CSV file"
             identify ${paper} --log ${SOURCE_DIR}/datasets/logs --out ${WORK_DIR}/out_bad)
 # optimize: winding data, objectives and their options
 set(motors ${SOURCE_DIR}/datasets/scenes/paper_motors.yaml)

@@ -51,7 +51,9 @@ CsvTable parse_csv(const std::string& text, const std::string& path, const CsvRu
 /// are skipped. Throws InputError naming the file, the line and column and the reason for a
 /// missing file, an empty file, duplicate header names, a row with the wrong number of fields,
 /// or a field that is not a finite number.
-CsvTable read_csv(const std::string& path);
+/// `option`: the key of the errors of the file itself (cannot open or read, empty): the option
+/// that named the file (`--motion`), or "(file)".
+CsvTable read_csv(const std::string& path, const std::string& option = "(file)");
 
 /// One CSV line: the fields joined by commas, and a newline (fields are written as given: quote
 /// text that may hold commas with csv_quote).
