@@ -188,21 +188,30 @@ std::string reading(int id, const detail::FreedStep& fs) {
   }
 }
 
+/// Whether a friction coefficient is at its bound
+bool friction_at_bound(const FourBarFit& f, const IdentifyResult& out) {
+  for (int i = 0; i < f.layout.friction_size(); ++i) {
+    if (out.parameters[i].at_bound) return true;
+  }
+  return false;
+}
+
 /// A cause whose move (beyond kFreedMove std: judge) takes a friction coefficient out of its
 /// reported interval makes the fit unusable: the interval does not hold what the log reads with
 /// the cause corrected. Where the misfit widened the std the move can stay within kUnusableMove
 /// of the corrected std and still leave the interval (a drag link's masses 3 % off: viscous
 /// 0.0123 +- 0.00084, the truth 0.015 3.2 std off, the inertias' move to 0.0147 7 std of the fit
 /// with them corrected).
-void leaves_interval(const FourBarFit& f, const detail::FreedStep& fs, const std::string& cause,
-                     IdentifyResult* out) {
+void leaves_interval(const FourBarFit& f, const detail::FreedStep& fs, const Eigen::VectorXd& sd,
+                     const std::string& cause, IdentifyResult* out) {
   if (!out->unusable.empty()) return;
   const int nf = f.layout.friction_size();
   const Eigen::VectorXd move =
       stages::to_public(f.layout).topLeftCorner(nf, nf) * fs.fitted_step.head(nf);
   for (int i = 0; i < nf; ++i) {
     const ParameterEstimate& e = out->parameters[i];
-    if (e.at_bound || !(std::abs(move(i)) > out->ci_quantile * e.std)) continue;
+    const double bar = std::max(out->ci_quantile * e.std, stages::kFreedMove * sd(i));
+    if (e.at_bound || !(std::abs(move(i)) > bar)) continue;
     out->unusable = cause + ": it would move " + e.name + " to " +
                     format_significant(e.value + move(i)) + ", out of its interval [" +
                     format_significant(e.ci_low) + ", " + format_significant(e.ci_high) +
@@ -221,8 +230,7 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named,
   const detail::FreedStep& fs = cs.alone[id];
   double largest = 0;
   const std::string moves = stages::friction_moves(f.layout, *out, fs, false, &largest, &sd);
-  bool bound = false;
-  for (int i = 0; i < f.layout.friction_size(); ++i) bound = bound || out->parameters[i].at_bound;
+  const bool bound = friction_at_bound(f, *out);
   // a delay it names is always said (the refit's warning replaces it when the refit is used)
   const bool delay = named && id == stages::kCauseDelay;
   if (moves.empty() && !bound && !delay) return;
@@ -248,7 +256,7 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named,
                   " explain most of it: " + stages::falls_clause(cs, id) + ")";
   // a coefficient at its bound gives no move (friction_moves), so largest is 0 there
   stages::unusable_move(largest, cause, out);
-  if (!delay) leaves_interval(f, fs, cause, out);
+  if (!delay) leaves_interval(f, fs, sd, cause, out);
 }
 
 }  // namespace
@@ -294,12 +302,12 @@ stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
   // the five-bar's decisive evidence, its named cause's move judged as judge's
   const int nc = stages::named_cause(cs);
   double largest = 0;
-  bool bound = false;
-  for (int i = 0; i < f.layout.friction_size(); ++i) bound = bound || out->parameters[i].at_bound;
+  const bool bound = friction_at_bound(f, *out);
   const Eigen::VectorXd nsd = nc < stages::kCauseCount ? sd(nc) : Eigen::VectorXd();
   const bool moves =
       nc < stages::kCauseCount &&
-      (bound || !stages::friction_moves(f.layout, *out, cs.alone[nc], false, &largest, &nsd).empty());
+      (bound ||
+       !stages::friction_moves(f.layout, *out, cs.alone[nc], false, &largest, &nsd).empty());
   stages::decisive_model_error(cs, moves, bound ? 0.0 : largest, out);
   stages::ModelVerdict verdict;
   using D = stages::ModelVerdict::Delay;
