@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "covariance.h"
 #include "fivebar/model/format.h"
 #include "four_bar_fit.h"
 #include "mechanism_residual.h"
-#include "covariance.h"
 #include "model_check_causes.h"
 #include "setup_shared.h"
 
@@ -137,9 +137,9 @@ bool score_bias(const FourBarFit& f, const IdentifyResult& out, Eigen::VectorXd*
 /// the fit), and the sandwich counts it as noise: a drag link's tau1 x 1.03 read viscous
 /// 0.0170 +- 0.00085 (the truth 0.015, 2.3 std off), its std 0.00030 with the gain freed; judged
 /// against the first, the gain's move of 0.002 was within kFreedMove std.
-Eigen::VectorXd corrected_std(const FourBarFit& f, const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
-                              const std::vector<int> idx[5], int id, const detail::FreedStep& fs,
-                              const IdentifyResult& out) {
+Eigen::VectorXd corrected_std(const FourBarFit& f, const Eigen::MatrixXd& J,
+                              const Eigen::VectorXd& r, const std::vector<int> idx[5], int id,
+                              const detail::FreedStep& fs, const IdentifyResult& out) {
   const int nf = f.layout.friction_size(), P = f.layout.size();
   Eigen::VectorXd sd(nf);
   for (int i = 0; i < nf; ++i) sd(i) = out.parameters[i].std;
@@ -225,8 +225,8 @@ void leaves_interval(const FourBarFit& f, const detail::FreedStep& fs, const Eig
 /// at any move: identify redoes the fit with the torques shifted by it, and this fit's warnings
 /// are then replaced by the refit's); beyond kUnusableMove, or a coefficient at its bound (the
 /// move cannot be given), the fit is unusable.
-void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named,
-           const Eigen::VectorXd& sd, IdentifyResult* out) {
+void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, const Eigen::VectorXd& sd,
+           IdentifyResult* out) {
   const detail::FreedStep& fs = cs.alone[id];
   double largest = 0;
   const std::string moves = stages::friction_moves(f.layout, *out, fs, false, &largest, &sd);

@@ -47,7 +47,8 @@ FourBarParams with_friction(const FourBarParams& scene, double c, double v) {
 
 /// y less its least-squares fit by the columns X with non-negative coefficients (two columns:
 /// both, else the better one alone, else none).
-std::vector<double> less_fit(const std::vector<double>& y, const std::vector<std::array<double, 2>>& X) {
+std::vector<double> less_fit(const std::vector<double>& y,
+                             const std::vector<std::array<double, 2>>& X) {
   Eigen::Matrix2d A = Eigen::Matrix2d::Zero();
   Eigen::Vector2d b = Eigen::Vector2d::Zero();
   for (size_t i = 0; i < y.size(); ++i) {
@@ -97,9 +98,9 @@ double torque_mismatch(const FourBarFit& f, const TorqueLog& log, const std::vec
                     four_bar_inverse(pc, loads, th[i], w[i], a[i], EvalOptions{}, &ec).ok() &&
                     four_bar_inverse(pv, loads, th[i], w[i], a[i], EvalOptions{}, &ev).ok();
     y.push_back(ok ? log.tau1[i] - e0.M1 : glitches::kInf);
-    X.push_back(ok ? std::array<double, 2>{(ec.M1 - e0.M1) / kUnitCoulomb,
-                                           (ev.M1 - e0.M1) / kUnitViscous}
-                   : std::array<double, 2>{0, 0});
+    X.push_back(
+        ok ? std::array<double, 2>{(ec.M1 - e0.M1) / kUnitCoulomb, (ev.M1 - e0.M1) / kUnitViscous}
+           : std::array<double, 2>{0, 0});
     rate.push_back(w[i]);
   }
   *median_rate = glitches::median_abs(rate);
