@@ -66,9 +66,6 @@ void rates(FourBarFit* f, IdentifyResult* out);
 /// samples whose filter window spans a slip reversal are left out.
 void select_samples(FourBarFit* f, IdentifyResult* out);
 
-/// The block sizes of the covariance's sandwich over the samples of the fit (identify_four_bar.cc)
-std::vector<int> block_sizes(const FourBarFit& f);
-
 /// The rest rule: some joint's relative rate (its row of J_w times the crank rate w) within
 /// kRestSigmas of the rate's noise through that row, or below --min-rate.
 bool held(const FourBarFit& f, const std::array<double, 4>& row, double w, double rate_noise);

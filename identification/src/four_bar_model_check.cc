@@ -10,7 +10,6 @@
 #include <string>
 #include <vector>
 
-#include "covariance.h"
 #include "fivebar/model/format.h"
 #include "four_bar_fit.h"
 #include "mechanism_residual.h"
@@ -130,33 +129,36 @@ bool score_bias(const FourBarFit& f, const IdentifyResult& out, Eigen::VectorXd*
   return b->allFinite();
 }
 
-/// The std of the public friction coefficients that the fit's covariance (identify_four_bar.cc:
-/// the block sandwich, or s^2 (J^T J)^-1) gives over the residual the freed step `fs` of cause
-/// `id` leaves (its parameters at the step's values), each at most the estimate's own std. A model
-/// error that the friction absorbs stays in every block's score (their sum, not each, is zero at
-/// the fit), and the sandwich counts it as noise: a drag link's tau1 x 1.03 read viscous
-/// 0.0170 +- 0.00085 (the truth 0.015, 2.3 std off), its std 0.00030 with the gain freed; judged
-/// against the first, the gain's move of 0.002 was within kFreedMove std.
+/// The std of the public friction coefficients that the fit's covariance (identify_four_bar.cc)
+/// gives with the residual the freed step `fs` of cause `id` leaves (its parameters at the
+/// step's values), each at most the estimate's own std: the errors-in-variables sandwich counts
+/// the residual beyond its noise floor as white noise, (ratio^2 - 1) (J^T J)^-1 in the floor's
+/// units, and s^2 (J^T J)^-1 (--classical-std) is the residual's variance. A model error that
+/// the friction absorbs is counted as noise there: the double rocker's tau1 x 1.03 (3 s, seed 1)
+/// read coulomb 0.126 +- 0.0049 (the clean log's std 0.0022), the gain's move 0.0054 read as
+/// within kFreedMove std. J, r: the check's (whitened by the floor).
 Eigen::VectorXd corrected_std(const FourBarFit& f, const Eigen::MatrixXd& J,
                               const Eigen::VectorXd& r, const std::vector<int> idx[5], int id,
                               const detail::FreedStep& fs, const IdentifyResult& out) {
   const int nf = f.layout.friction_size(), P = f.layout.size();
+  const int n = static_cast<int>(r.size());
   Eigen::VectorXd sd(nf);
   for (int i = 0; i < nf; ++i) sd(i) = out.parameters[i].std;
-  if (!fs.ok) return sd;
+  if (!fs.ok || out.covariance.rows() != P || !out.covariance.allFinite()) return sd;
   Eigen::VectorXd rc = r + J.leftCols(P) * fs.fitted_step;
   const std::vector<int>& extra = idx[id + 1];
   for (size_t k = 0; k < extra.size(); ++k) rc += J.col(extra[k]) * fs.extra_step(k);
-  const Eigen::MatrixXd Jf = J.leftCols(P);
+  const Eigen::MatrixXd H = J.leftCols(P).transpose() * J.leftCols(P);
+  const Eigen::MatrixXd Hinv = H.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
   Eigen::MatrixXd C;
-  if (out.std_method == "block-sandwich") {
-    C = detail::block_sandwich(Jf, rc, block_sizes(f)).covariance;
+  if (out.std_method == "errors-in-variables") {
+    const auto excess = [&](const Eigen::VectorXd& v) {
+      return std::max(0.0, v.squaredNorm() / n - 1.0);
+    };
+    C = out.covariance - (excess(r) - excess(rc)) * Hinv;
   } else {
-    const Eigen::MatrixXd H = Jf.transpose() * Jf;
-    C = rc.squaredNorm() / std::max(1, static_cast<int>(rc.size()) - P) *
-        H.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
+    C = rc.squaredNorm() / std::max(1, n - P) * Hinv;
   }
-  if (C.rows() != P || !C.allFinite()) return sd;
   const Eigen::MatrixXd T = stages::to_public(f.layout).topLeftCorner(nf, P);
   const Eigen::MatrixXd Cp = T * C * T.transpose();
   for (int i = 0; i < nf; ++i) {

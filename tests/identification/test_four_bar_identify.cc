@@ -400,15 +400,15 @@ TorqueLog four_bar_log(const FourBarParams& p, const std::function<FourBarLoads(
   return log;
 }
 
-// A 3 % model error that the friction absorbs widens the block sandwich's std, whose blocks
-// each carry it: judged against those std the error's move of the friction read as within
-// 3 std, and the fit exited 0 with the truth outside its interval. The check judges the move
-// against the std of the fit with the cause corrected. A drag link (4 s, seed 1) with tau1 x 1.03:
-// viscous 0.0170 +- 0.00085 for 0.015, the gain's move 6.4 std of the corrected fit and out of
-// the interval: not to be used, naming the torque sensors. The double rocker's tau1 x 1.03 (3 s):
-// every cause explains it as much, each alone evidenced by hundreds of std (the five-bar's
-// decisive evidence): not to be used, naming the inertias or the readings. The clean logs are
-// used, their check naming nothing.
+// A 3 % model error that the friction absorbs: its move of the friction is judged against the
+// std of the fit with it corrected (the sandwich counts the residual beyond its floor as noise),
+// a move out of the coefficient's interval makes the fit unusable, and so does the five-bar's
+// decisive evidence. A drag link (4 s, seed 1) with tau1 x 1.03: viscous 0.0170 +- 0.00025 for
+// 0.015, the gain named and its move 9 std, which was only a warning: now out of the interval,
+// not to be used, naming the torque sensors. The double rocker's tau1 x 1.03 (3 s): every cause
+// explains it as much, each alone evidenced by hundreds of std; it exited 0 with coulomb 2.8 std
+// off: not to be used, naming the readings (and the inertias, as much). The clean logs are used,
+// their check naming nothing.
 TEST(FourBarIdentify, ModelErrorsTheSandwichAbsorbsAreNamed) {
   FourBarParams drag;
   drag.ground_length = 0.10;
@@ -434,7 +434,7 @@ TEST(FourBarIdentify, ModelErrorsTheSandwichAbsorbsAreNamed) {
     const char* named;
   };
   for (const Case& c : {Case{drag, drag_loads, 0.3, 4.0, "torque sensors"},
-                        Case{dr.p, dr.loads, dr.th0, 3.0, "masses or inertias"}}) {
+                        Case{dr.p, dr.loads, dr.th0, 3.0, "torque sensors"}}) {
     TorqueLog log = four_bar_log(c.p, c.loads, c.th0, c.duration, 0.02, 1);
     const IdentifyResult clean = identify(c.p, c.loads, log, four_bar_options());
     ASSERT_TRUE(clean.status.ok()) << clean.status.message;
