@@ -85,7 +85,9 @@ void window_stage(FourBarFit* f, IdentifyResult* out);
 /// The model check's candidate causes at the fit: the five-bar's that exist for one crank (the
 /// links' inertial parameters, the crank encoder's zero, tau1's offset and gain, the delay)
 /// freed on the four-bar's Jacobian; a warning when a cause would move the friction beyond
-/// kFreedMove std, out->unusable beyond kUnusableMove or at a bound (four_bar_model_check.cc).
+/// kFreedMove std of the fit with the cause corrected, out->unusable beyond kUnusableMove of them,
+/// out of the coefficient's interval or at a bound, and on the five-bar's decisive evidence
+/// (stages::decisive_model_error; four_bar_model_check.cc).
 /// The delay's estimate in out->delay_s and delay_std_s (its column freed alone with the
 /// friction) where the check has the column. Its verdict: cause_decided, and the delay
 /// kExplainsMost when it names the delay (identify then refits with the torques shifted by it).

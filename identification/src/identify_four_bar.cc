@@ -34,26 +34,96 @@ std::string line_of(const TorqueLog& log, int i) {
   return "line " + std::to_string(log.lines.empty() ? i + 1 : log.lines[i]);
 }
 
-/// The four-bar's reading of crank angles `th` against the logged torques (TorqueMismatch,
-/// condition.h): its frictionless inverse dynamics at Savitzky-Golay rates, on at most ~400
-/// samples.
+/// The scene with the shared law coulomb_viscous at the coefficients (c, v) on its pins.
+FourBarParams with_friction(const FourBarParams& scene, double c, double v) {
+  FourBarParams p = scene;
+  p.friction.law = FrictionLaw::kCoulombViscous;
+  p.friction.coulomb.fill(c);
+  p.friction.static_coulomb.fill(c);
+  p.friction.viscous.fill(v);
+  p.friction.smoothing_velocity = 0;
+  return p;
+}
+
+/// y less its least-squares fit by the columns X with non-negative coefficients (two columns:
+/// both, else the better one alone, else none).
+std::vector<double> less_fit(const std::vector<double>& y,
+                             const std::vector<std::array<double, 2>>& X) {
+  Eigen::Matrix2d A = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < y.size(); ++i) {
+    if (!std::isfinite(y[i])) continue;
+    const Eigen::Vector2d x(X[i][0], X[i][1]);
+    A += x * x.transpose();
+    b += y[i] * x;
+  }
+  Eigen::Vector2d c = Eigen::Vector2d::Zero();
+  if (A.determinant() > 1e-12 * A(0, 0) * A(1, 1) && A.ldlt().solve(b).minCoeff() >= 0) {
+    c = A.ldlt().solve(b);
+  } else {  // one column alone: the one that lowers the squares most
+    double best = 0;
+    for (int k = 0; k < 2; ++k) {
+      if (!(A(k, k) > 0) || !(b(k) > 0) || !(b(k) * b(k) / A(k, k) > best)) continue;
+      best = b(k) * b(k) / A(k, k);
+      c.setZero();
+      c(k) = b(k) / A(k, k);
+    }
+  }
+  std::vector<double> r(y.size());
+  for (size_t i = 0; i < y.size(); ++i) r[i] = y[i] - c(0) * X[i][0] - c(1) * X[i][1];
+  return r;
+}
+
+/// The four-bar's reading of crank angles `th` at Savitzky-Golay rates over the half-window
+/// `sg` against the logged torques: the median |logged torque less the frictionless inverse
+/// dynamics and less the friction that fits it best| (the shared law coulomb_viscous on the
+/// scene's pins, its two coefficients non-negative, by least squares), on at most ~400 samples.
 double torque_mismatch(const FourBarFit& f, const TorqueLog& log, const std::vector<double>& th,
-                       double* median_rate) {
+                       const SgOptions& sg, double* median_rate) {
+  // unit coefficients small enough for the drive torque to be linear in them
+  constexpr double kUnitCoulomb = 1e-3, kUnitViscous = 1e-4;
   const int n = log.size();
   const int step = std::max(1, n / 400);
   std::vector<double> w, a;  // at the samples read below only
-  savitzky_golay(log.t, th, SgOptions{}, &w, &a, step);
-  FourBarParams p = f.scene;
-  p.friction.law = FrictionLaw::kNone;
-  std::vector<double> mismatch, rate;
+  savitzky_golay(log.t, th, sg, &w, &a, step);
+  const FourBarParams p0 = with_friction(f.scene, 0, 0);
+  const FourBarParams pc = with_friction(f.scene, kUnitCoulomb, 0);
+  const FourBarParams pv = with_friction(f.scene, 0, kUnitViscous);
+  std::vector<double> y, rate;
+  std::vector<std::array<double, 2>> X;
   for (int i = 0; i < n; i += step) {
-    FourBarEvaluation ev;
-    const Status st = four_bar_inverse(p, f.loads(log.t[i]), th[i], w[i], a[i], EvalOptions{}, &ev);
-    mismatch.push_back(st.ok() ? log.tau1[i] - ev.M1 : glitches::kInf);
+    const FourBarLoadsT<double> loads = f.loads(log.t[i]);
+    FourBarEvaluation e0, ec, ev;
+    const bool ok = four_bar_inverse(p0, loads, th[i], w[i], a[i], EvalOptions{}, &e0).ok() &&
+                    four_bar_inverse(pc, loads, th[i], w[i], a[i], EvalOptions{}, &ec).ok() &&
+                    four_bar_inverse(pv, loads, th[i], w[i], a[i], EvalOptions{}, &ev).ok();
+    y.push_back(ok ? log.tau1[i] - e0.M1 : glitches::kInf);
+    X.push_back(
+        ok ? std::array<double, 2>{(ec.M1 - e0.M1) / kUnitCoulomb, (ev.M1 - e0.M1) / kUnitViscous}
+           : std::array<double, 2>{0, 0});
     rate.push_back(w[i]);
   }
   *median_rate = glitches::median_abs(rate);
-  return glitches::median_abs(mismatch);
+  return glitches::median_abs(less_fit(y, X));
+}
+
+/// The four-bar's reading of crank angles `th` against the logged torques (TorqueMismatch,
+/// condition.h): the smaller mismatch of the default 10 ms half-window and of kWideReading
+/// times it. The friction fitted: a log in turns of a light crank-rocker whose friction is a
+/// large share of its torque read the turns 0.35 of the radians' mismatch without it, not the
+/// quarter the unit rule asks (the fit then exited 3 naming the law or the scene). The wide
+/// window: a crane-sized four-bar's acceleration noise through its inertias was most of both
+/// readings' mismatch at 10 ms (turns 1.3e5 N m against radians 3.9e5).
+double torque_mismatch(const FourBarFit& f, const TorqueLog& log, const std::vector<double>& th,
+                       double* median_rate) {
+  constexpr double kWideReading = 4;
+  SgOptions wide;
+  wide.half_window_s *= kWideReading;
+  double rate_wide = 0;
+  const double m = torque_mismatch(f, log, th, SgOptions{}, median_rate);
+  const double mw = torque_mismatch(f, log, th, wide, &rate_wide);
+  if (mw < m) *median_rate = rate_wide;
+  return std::min(m, mw);
 }
 
 /// Conditioning: angles in another unit than radians (angle_units_from_motion, with

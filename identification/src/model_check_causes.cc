@@ -11,7 +11,8 @@ namespace fivebar::identification::stages {
 /// (k std)": the std of the estimate, or with `own` the larger of it and the move's own std (the
 /// test of Hausman); empty if none moves so, or one is at its bound (which has its own warning).
 std::string friction_moves(const ParameterLayout& layout, const IdentifyResult& out,
-                           const detail::FreedStep& fs, bool own, double* largest) {
+                           const detail::FreedStep& fs, bool own, double* largest,
+                           const Eigen::VectorXd* judged) {
   const int nf = layout.friction_size();
   const Eigen::MatrixXd T = to_public(layout).topLeftCorner(nf, nf);
   const Eigen::VectorXd move = T * fs.fitted_step.head(nf);
@@ -20,7 +21,8 @@ std::string friction_moves(const ParameterLayout& layout, const IdentifyResult& 
   for (int i = 0; i < nf; ++i) {
     const ParameterEstimate& e = out.parameters[i];
     if (e.at_bound) return "";
-    const double sd = own ? std::max(std::sqrt(std::max(0.0, cov(i, i))), e.std) : e.std;
+    const double std = judged ? (*judged)(i) : e.std;
+    const double sd = own ? std::max(std::sqrt(std::max(0.0, cov(i, i))), std) : std;
     if (!(std::abs(move(i)) > kFreedMove * sd)) continue;
     if (largest) *largest = std::max(*largest, std::abs(move(i)) / sd);
     moved += (moved.empty() ? "" : ", ") + e.name + " from " + format_significant(e.value) +
@@ -208,6 +210,54 @@ std::string cause_explaining_most(const CauseSteps& cs, int id, unsigned others,
   if (most == id) return what;
   return std::string(kCauseText[most].what) + " explain more of the misfit than " +
          kCauseText[id].what + " (" + falls_clause(cs, most) + ")";
+}
+
+int named_cause(const CauseSteps& cs) {
+  int best = kCauseCount;
+  for (int id = 0; id < kCauseDelay; ++id) {
+    if (cs.named(id) &&
+        (best == kCauseCount || cs.report[cs.slot[id]].drop > cs.report[cs.slot[best]].drop)) {
+      best = id;
+    }
+  }
+  return best;
+}
+
+std::string attributed_what(const CauseSteps& cs, int id) {
+  return cause_explaining_most(cs, id, kAllCauses & ~(1u << id) & ~(1u << kCauseDelay),
+                               kCauseText[id].off);
+}
+
+void decisive_model_error(const CauseSteps& cs, bool moves, double largest, IdentifyResult* out) {
+  if (!out->unusable.empty()) return;
+  const int named = named_cause(cs);
+  if (named < kCauseCount && cs.report[cs.slot[named]].z_given > kDecisiveCauseZ && moves) {
+    out->unusable = attributed_what(cs, named) + ": the log evidences it by " +
+                    format_significant(cs.report[cs.slot[named]].z_given, 2) +
+                    " std beyond the other causes (more than " +
+                    format_significant(kDecisiveCauseZ) + "), and it would move the friction " +
+                    (largest == 0 ? std::string("from a bound")
+                                  : "by " + format_significant(largest, 2) + " std") +
+                    " (see the warnings)";
+    return;
+  }
+  bool decisive = false;
+  for (int id = 0; id < kCauseDelay; ++id) {
+    decisive = decisive || (cs.slot[id] >= 0 && cs.alone[id].ok && cs.z(id) > kDecisiveCauseZ);
+  }
+  int top = most_explaining_cause(cs);
+  // (a delay that explains most is the delay stage's to correct)
+  if (!decisive || top == kCauseCount || top == kCauseDelay || cs.named(top)) return;
+  if (top != kCauseInertia && cs.slot[kCauseInertia] >= 0 && cs.alone[kCauseInertia].ok &&
+      cs.z(kCauseInertia) > detail::kCauseZ && !clearly_more(cs, top, kCauseInertia)) {
+    top = kCauseInertia;
+  }
+  const std::string what =
+      cause_explaining_most(cs, top, kAllCauses & ~(1u << top), kCauseText[top].off);
+  out->unusable = what + ": the log evidences a model error by " +
+                  format_significant(cs.z(top), 2) + " std (more than " +
+                  format_significant(kDecisiveCauseZ) +
+                  "), which the friction estimates absorb (see the warnings)";
 }
 
 void unusable_move(double largest, const std::string& what, IdentifyResult* out) {

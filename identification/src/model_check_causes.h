@@ -67,11 +67,12 @@ constexpr CauseText kCauseText[kCauseCount] = {
     {"delay", "the torque readings' times (a delay)", "the logged torques are delayed"}};
 
 /// The friction coefficients a freed step moves beyond kFreedMove std, as "name from a to b
-/// (k std)": the std of the estimate, or with `own` the larger of it and the move's own std (the
-/// test of Hausman); empty if none moves so, or one is at its bound (which has its own warning).
-/// *largest: the largest such move [std].
+/// (k std)": the std of the estimate (or `judged`, one per friction coefficient, when given), or
+/// with `own` the larger of it and the move's own std (the test of Hausman); empty if none moves
+/// so, or one is at its bound (which has its own warning). *largest: the largest such move [std].
 std::string friction_moves(const ParameterLayout& layout, const IdentifyResult& out,
-                           const detail::FreedStep& fs, bool own, double* largest = nullptr);
+                           const detail::FreedStep& fs, bool own, double* largest = nullptr,
+                           const Eigen::VectorXd* judged = nullptr);
 
 /// The freed steps of the causes whose columns idx[1..4] holds (idx[0]: the fitted parameters;
 /// info: the inertial columns' prior information; bias: the score's expectation, empty: none),
@@ -102,6 +103,36 @@ std::string falls_clause(const CauseSteps& cs, int best);
 /// more (or as much: both named)
 std::string cause_explaining_most(const CauseSteps& cs, int id, unsigned others,
                                   const std::string& what);
+
+/// Evidence of a cause beyond the other causes' parameters (or alone, with none named) this many
+/// times kCauseZ makes the fit unusable even with the residual at its floor (the light
+/// mechanism's multi-sine log with tau1 x 0.9: 69 std, coulomb 0.048 for 0.12, and no warning;
+/// clean logs read -2 to 2)
+constexpr double kDecisiveCauseZ = 4 * detail::kCauseZ;
+
+/// The cause a reason names for the model error: of the causes the check names (inertia,
+/// encoders' zeros, torque readings), the one with the largest fall (attributed_what names
+/// another that explains clearly more instead); kCauseCount: none.
+int named_cause(const CauseSteps& cs);
+
+/// The words of a reason for the named cause `id` (cause_explaining_most)
+std::string attributed_what(const CauseSteps& cs, int id);
+
+/// A model error the log evidences decisively that the checks before leave usable makes the fit
+/// unusable (the first reason stays):
+/// - the cause named (named_cause), evidenced beyond the other causes by more than
+///   kDecisiveCauseZ, would move a friction coefficient beyond kFreedMove std (`moves`, its
+///   largest move `largest` [std], 0: from a bound): an encoder 0.005 rad off a heavy five-bar,
+///   read at 1877 std beyond the others, coulomb 3.6 std, viscous 5.2 std;
+/// - a cause alone beyond kDecisiveCauseZ while no cause stands out beyond the others (the
+///   masses and inertias scaled alike read as both torque gains off alike), or while the cause
+///   named explains clearly less than another: whatever the linearized move of the friction,
+///   which the small windows' noise, chosen by such an error, understates (a heavy five-bar's
+///   links 3 % lighter than the scene: viscous 36 std off, the inertias' refit moving it less
+///   than 3 std; evidence alone 52 std for the inertias, 95 for the torque readings, where clean
+///   logs of three mechanisms read at most 16). The reason names the cause that explains most,
+///   the inertias where they explain as much (a common scale of the torques is the masses').
+void decisive_model_error(const CauseSteps& cs, bool moves, double largest, IdentifyResult* out);
 
 /// A model error (what: its cause, or that none is named) that would move a friction
 /// coefficient by `largest` std makes the fit unusable beyond kUnusableMove; largest 0: a

@@ -148,11 +148,6 @@ std::string unresolved_warning(const CauseSteps& cs, int top, const std::string&
                        : std::string());
 }
 
-/// Evidence of the torque readings beyond the other causes' parameters this many times kCauseZ
-/// makes the fit unusable even with the residual at its floor (the light mechanism's multi-sine
-/// log with tau1 x 0.9: 69 std, coulomb 0.048 for 0.12, and no warning; clean logs read -2 to 2)
-constexpr double kDecisiveCauseZ = 4 * detail::kCauseZ;
-
 /// Whether the refit fs reads both torque readings' gains (beyond kFreedMove std, from
 /// kSmallestGain on) off alike: the same sign, both readings positive (1 + g_c > 0: a negative
 /// one is a sign, torque_signs) and within a factor 2 of each other (or within kFreedMove of
@@ -388,26 +383,6 @@ ModelVerdict::Delay delay_verdict(const CauseSteps& cs, int* rival) {
 
 namespace {
 
-/// The cause a reason names for the model error: of the causes the check names (inertia,
-/// encoders' zeros, torque readings), the one with the largest fall (attributed_what names
-/// another that explains clearly more instead); kCauseCount: none.
-int named_cause(const CauseSteps& cs) {
-  int best = kCauseCount;
-  for (int id = 0; id < kCauseDelay; ++id) {
-    if (cs.named(id) &&
-        (best == kCauseCount || cs.report[cs.slot[id]].drop > cs.report[cs.slot[best]].drop)) {
-      best = id;
-    }
-  }
-  return best;
-}
-
-/// The words of a reason for the named cause `id` (cause_explaining_most)
-std::string attributed_what(const CauseSteps& cs, int id) {
-  return cause_explaining_most(cs, id, kAllCauses & ~(1u << id) & ~(1u << kCauseDelay),
-                               kCauseText[id].off);
-}
-
 /// A model error the check names (`what`) makes the fit unusable, whatever the linearized move
 /// of the friction, when that move cannot bound the friction's error:
 /// - a friction coefficient's std exceeds its value: a move "within k std" then says nothing
@@ -440,52 +415,16 @@ void unbounded_error(const Fit& f, const std::string& what, IdentifyResult* out)
   }
 }
 
-/// A model error the log evidences decisively that the checks above leave usable makes the fit
-/// unusable (the first reason stays):
-/// - the cause named, evidenced beyond the other causes by more than kDecisiveCauseZ, would move
-///   a friction coefficient beyond kFreedMove std (the warning's bar): an encoder 0.005 rad off a
-///   heavy mechanism, read at 1877 std beyond the others, coulomb 3.6 std, viscous 5.2 std;
-/// - a cause alone beyond kDecisiveCauseZ while no cause stands out beyond the others (the
-///   masses and inertias scaled alike read as both torque gains off alike), or while the cause
-///   named explains clearly less than another: whatever the linearized move of the friction,
-///   which the small windows' noise, chosen by such an error, understates (a heavy mechanism's
-///   links 3 % lighter than the scene: viscous 36 std off, the inertias' refit moving it less
-///   than 3 std; evidence alone 52 std for the inertias, 95 for the torque readings, where clean
-///   logs of three mechanisms read at most 16). The reason names the cause that explains most,
-///   the inertias where they explain as much (a common scale of the torques is the masses').
+/// The five-bar's decisive model error (decisive_model_error): its named cause's move judged on
+/// the fit's std.
 void decisive_error(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
   if (!out->unusable.empty()) return;
   const int named = named_cause(cs);
   double largest = 0;
-  if (named < kCauseCount && cs.report[cs.slot[named]].z_given > kDecisiveCauseZ &&
-      !friction_clause(f, *out, cs.alone[named], false, true, &largest).empty() &&
-      (largest == 0 || largest > kFreedMove)) {
-    out->unusable = attributed_what(cs, named) + ": the log evidences it by " +
-                    format_significant(cs.report[cs.slot[named]].z_given, 2) +
-                    " std beyond the other causes (more than " +
-                    format_significant(kDecisiveCauseZ) + "), and it would move the friction " +
-                    (largest == 0 ? std::string("from a bound")
-                                  : "by " + format_significant(largest, 2) + " std") +
-                    " (see the warnings)";
-    return;
-  }
-  bool decisive = false;
-  for (int id = 0; id < kCauseDelay; ++id) {
-    decisive = decisive || (cs.slot[id] >= 0 && cs.alone[id].ok && cs.z(id) > kDecisiveCauseZ);
-  }
-  int top = most_explaining_cause(cs);
-  // (a delay that explains most is the delay stage's to correct)
-  if (!decisive || top == kCauseCount || top == kCauseDelay || cs.named(top)) return;
-  if (top != kCauseInertia && cs.slot[kCauseInertia] >= 0 && cs.alone[kCauseInertia].ok &&
-      cs.z(kCauseInertia) > detail::kCauseZ && !clearly_more(cs, top, kCauseInertia)) {
-    top = kCauseInertia;
-  }
-  const std::string what =
-      cause_explaining_most(cs, top, kAllCauses & ~(1u << top), kCauseText[top].off);
-  out->unusable = what + ": the log evidences a model error by " +
-                  format_significant(cs.z(top), 2) + " std (more than " +
-                  format_significant(kDecisiveCauseZ) +
-                  "), which the friction estimates absorb (see the warnings)";
+  const bool moves = named < kCauseCount &&
+                     !friction_clause(f, *out, cs.alone[named], false, true, &largest).empty() &&
+                     (largest == 0 || largest > kFreedMove);
+  decisive_model_error(cs, moves, largest, out);
 }
 
 /// Whether the check's steps evidence a model cause alone (inertias, encoders' zeros, torque
