@@ -19,10 +19,10 @@
 
 #include "cli_options.h"
 #include "fivebar/io/command.h"
+#include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/json.h"
-#include "fivebar/io/commands.h"
 #include "fivebar/io/loads.h"
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"

@@ -289,7 +289,8 @@ std::string fitted_yaml(const Scene& scene, id::IdentifyResult* res) {
     parse_scene(yaml, "scene_fitted.yaml", {}, /*four_bar_ok=*/true);
   } catch (const InputError& e) {
     const std::string why = "the fitted scene is refused by the scene reader (" + e.key() + ": " +
-                            e.reason() + "): check the scene's pin radii, masses and lengths, "
+                            e.reason() +
+                            "): check the scene's pin radii, masses and lengths, "
                             "and the log's units";
     res->warnings.push_back(why);
     if (res->unusable.empty()) res->unusable = why;

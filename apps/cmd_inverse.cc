@@ -607,6 +607,22 @@ Json inverse_summary(const Args& args, const Scene& scene, const Motion& motion,
   return summary;
 }
 
+/// The motion itself, refused before anything is run or written, whether the model would run on
+/// it or not (its torques would be those of the numbers as written): its fault (a jump or degrees
+/// first: they also make poses that cannot close, far from the jump), then a pose that cannot
+/// close. A fault that is only suspected is warned of and returned.
+MotionFault checked_motion(const std::string& path, const Motion& motion) {
+  const MotionFault fault = motion_fault(motion);
+  if (fault.refused && !fault.key.empty()) throw InputError(path, fault.key, fault.reason);
+  if (!motion.pose_key.empty()) {
+    throw InputError(
+        path, motion.pose_key,
+        motion.pose_reason + (fault.key.empty() ? "" : "; " + fault.key + ": " + fault.reason));
+  }
+  if (!fault.key.empty()) warn(path + ": " + fault.key + ": " + fault.reason);
+  return fault;
+}
+
 int run(const Args& args) {
   const auto start = std::chrono::steady_clock::now();
   OutputDir::remove_previous(args.scene.out, kOutputs);  // a refused run leaves none of them
@@ -614,17 +630,7 @@ int run(const Args& args) {
   const bool four_bar = scene.type == MechanismType::kFourBar;
   const TrajectoryLayout layout = layout_of(scene);
   const Motion motion = read_motion(args.motion, scene);
-  // the motion itself: refused before anything is run or written, whether the model would run
-  // on it or not (its torques would be those of the numbers as written)
-  // (a jump or degrees first: they also make poses that cannot close, far from the jump)
-  const MotionFault fault = motion_fault(motion);
-  if (fault.refused && !fault.key.empty()) throw InputError(args.motion, fault.key, fault.reason);
-  if (!motion.pose_key.empty()) {
-    throw InputError(args.motion, motion.pose_key,
-                     motion.pose_reason + (fault.key.empty() ? "" : "; " + fault.key + ": " +
-                                                                        fault.reason));
-  }
-  if (!fault.key.empty()) warn(args.motion + ": " + fault.key + ": " + fault.reason);
+  const MotionFault fault = checked_motion(args.motion, motion);
   OutputDir out(args.scene.out, kOutputs);
 
   const RestRule rest = rest_rule(scene, motion);

@@ -18,17 +18,17 @@
 #include <memory>
 #include <sstream>
 
+#include "cli_options.h"
 #include "fivebar/identification/excitation.h"
 #include "fivebar/identification/parameters.h"
 #include "fivebar/identification/synth.h"
-#include "cli_options.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/csv.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/loads.h"
-#include "fivebar/io/output.h"
 #include "fivebar/io/log_truth.h"
+#include "fivebar/io/output.h"
 #include "fivebar/io/scene.h"
 #include "fivebar/io/torque_log_file.h"
 #include "fivebar/model/actuator.h"
@@ -91,9 +91,9 @@ std::vector<sim::Row> first_seconds(const std::string& path, std::vector<sim::Ro
   const double t0 = rows.front().t, length = rows.back().t - t0;
   const double half_step = rows.size() > 1 ? 0.5 * length / double(rows.size() - 1) : 0.0;
   if (duration > length + half_step) {
-    throw InputError(path, "--duration",
-                     format_double(duration) + " s is longer than the motion (" +
-                         format_double(length) + " s)");
+    throw InputError(
+        path, "--duration",
+        format_double(duration) + " s is longer than the motion (" + format_double(length) + " s)");
   }
   size_t n = 0;
   while (n < rows.size() && rows[n].t - t0 <= duration + half_step) ++n;
@@ -312,9 +312,9 @@ void check_options(const Args& a) {
     throw InputError(flag_file, "--motion", "cannot be combined with --excitation " + a.excitation);
   }
   if (!a.motion.empty() && a.rate_option && a.rate_option->count()) {
-    throw InputError(flag_file, "--rate",
-                     "the motion's own grid sets the sampling rate; resample " + a.motion +
-                         " to change it");
+    throw InputError(
+        flag_file, "--rate",
+        "the motion's own grid sets the sampling rate; resample " + a.motion + " to change it");
   }
 }
 
@@ -409,6 +409,38 @@ int run(const Args& a) {
   return 0;
 }
 
+// the command that regenerates the log, every option applied explicit
+std::string command_line(const Args& a) {
+  std::string cmd = "fivebar synth-log " + shell_word(a.scene) + " --out " + shell_word(a.out);
+  for (const std::string& s : a.sets) cmd += " --set " + shell_word(s);
+  if (a.motion.empty()) {
+    cmd +=
+        " --rate " + format_double(a.so.rate_hz) + " --duration " + format_double(a.so.duration);
+  } else if (std::isfinite(a.motion_duration())) {
+    cmd += " --duration " + format_double(a.so.duration);
+  }
+  cmd += " --torque-noise " + format_double(a.so.torque_noise) + " --angle-noise " +
+         format_double(a.so.angle_noise) + " --seed " + std::to_string(a.so.seed) +
+         " --excitation " + a.excitation;
+  if (!a.motion.empty()) cmd += " --motion " + shell_word(a.motion);
+  if (a.so.rate_noise > 0) cmd += " --rate-noise " + format_double(a.so.rate_noise);
+  if (a.so.quantization > 0) cmd += " --quantization " + format_double(a.so.quantization);
+  if (a.so.with_rates) cmd += " --with-rates";
+  if (std::isfinite(a.so.torque_limit)) cmd += " --torque-limit " + format_double(a.so.torque_limit);
+  for (const ActuatorOption& o : kActuatorOptions) {
+    const std::vector<double>& v = a.*o.values;
+    if (v.size() == 2)
+      cmd += " " + std::string(o.flag) + " " + format_double(v[0]) + "," + format_double(v[1]);
+  }
+  if (!a.law.empty()) cmd += " --law " + a.law;
+  if (a.law == "stribeck") {
+    cmd += " --static-coulomb " + format_double(a.static_coulomb) + " --stribeck-velocity " +
+           format_double(a.stribeck_velocity) + " --stribeck-exponent " +
+           format_double(a.stribeck_exponent);
+  }
+  return cmd;
+}
+
 RunFunction setup(CLI::App* app) {
   auto args = std::make_shared<Args>();
   app->add_option("scene", args->scene, "scene file (YAML)")->type_name("SCENE")->required();
@@ -419,9 +451,9 @@ RunFunction setup(CLI::App* app) {
   app->option_defaults()->always_capture_default();  // the options below show their defaults
   args->rate_option =
       app->add_option("--rate", args->so.rate_hz, "sampling rate [Hz]")->check(positive_number());
-  args->duration_option = app->add_option("--duration", args->so.duration,
-                                          "[s]; with --motion, its first seconds")
-                              ->check(positive_number());
+  args->duration_option =
+      app->add_option("--duration", args->so.duration, "[s]; with --motion, its first seconds")
+          ->check(positive_number());
   app->add_option("--torque-noise", args->so.torque_noise, "Gaussian std on tau1, tau2 [N m]")
       ->check(nonnegative_number());
   app->add_option("--angle-noise", args->so.angle_noise, "Gaussian std on theta1, theta2 [rad]")
@@ -464,35 +496,7 @@ RunFunction setup(CLI::App* app) {
       ->check(positive_number())
       ->check(within_scene_limit("friction.stribeck_exponent"));
   return [args] {
-    // the command that regenerates this log, every option explicit
-    const Args& a = *args;
-    std::string cmd = "fivebar synth-log " + shell_word(a.scene) + " --out " + shell_word(a.out);
-    for (const std::string& s : a.sets) cmd += " --set " + shell_word(s);
-    if (a.motion.empty()) {
-      cmd += " --rate " + format_double(a.so.rate_hz) + " --duration " + format_double(a.so.duration);
-    } else if (std::isfinite(a.motion_duration())) {
-      cmd += " --duration " + format_double(a.so.duration);
-    }
-    cmd += " --torque-noise " + format_double(a.so.torque_noise) +
-           " --angle-noise " + format_double(a.so.angle_noise) + " --seed " +
-           std::to_string(a.so.seed) + " --excitation " + a.excitation;
-    if (!a.motion.empty()) cmd += " --motion " + shell_word(a.motion);
-    if (a.so.rate_noise > 0) cmd += " --rate-noise " + format_double(a.so.rate_noise);
-    if (a.so.quantization > 0) cmd += " --quantization " + format_double(a.so.quantization);
-    if (a.so.with_rates) cmd += " --with-rates";
-    if (std::isfinite(a.so.torque_limit)) cmd += " --torque-limit " + format_double(a.so.torque_limit);
-    for (const ActuatorOption& o : kActuatorOptions) {
-      const std::vector<double>& v = a.*o.values;
-      if (v.size() == 2)
-        cmd += " " + std::string(o.flag) + " " + format_double(v[0]) + "," + format_double(v[1]);
-    }
-    if (!a.law.empty()) cmd += " --law " + a.law;
-    if (a.law == "stribeck") {
-      cmd += " --static-coulomb " + format_double(a.static_coulomb) + " --stribeck-velocity " +
-             format_double(a.stribeck_velocity) + " --stribeck-exponent " +
-             format_double(a.stribeck_exponent);
-    }
-    args->command_line = cmd;
+    args->command_line = command_line(*args);
     return run(*args);
   };
 }

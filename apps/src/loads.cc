@@ -171,9 +171,11 @@ void LoadExpressions::require_finite(const std::vector<double>& times) const {
       if (std::isfinite(v[i])) continue;
       const std::string name = kNames[i];
       throw NumericalError(compiled_->file, "loads." + name,
-                           "load " + name + " = " + format_double(v[i]) + " at t=" +
-                               format_significant(t, 6) + " s is not finite: check the scene's load "
-                               "expression (loads." + name + ")");
+                           "load " + name + " = " + format_double(v[i]) +
+                               " at t=" + format_significant(t, 6) +
+                               " s is not finite: check the scene's load "
+                               "expression (loads." +
+                               name + ")");
     }
   }
 }

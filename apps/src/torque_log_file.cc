@@ -172,8 +172,8 @@ void check_log_time_unit(const TorqueLog& log) {
   throw LogError(log.path, "column t",
                  "median time step " + format_significant(step, 3) +
                      (shorter ? " under which no crank turns faster than " +
-                                 format_significant(kSlowestMotion) + " rad/s"
-                           : std::string()) +
+                                    format_significant(kSlowestMotion) + " rad/s"
+                              : std::string()) +
                      ": t must be in seconds, and a mechanism's log samples at tens of Hz or "
                      "more; these stamps look like milliseconds, microseconds or sample counts");
 }

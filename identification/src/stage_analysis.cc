@@ -55,7 +55,6 @@ void inertial_stage(const Fit& f, const Eigen::MatrixXd& J, IdentifyResult* out)
   }
 }
 
-
 /// The parameters of the covariance: those with an effect on the residuals, and of them those
 /// at their bound only when `with_bound`; empty index when none is.
 FreeSet free_set(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& Hp,

@@ -44,8 +44,9 @@ TEST(Tasks, MalformedFilesNameFileKeyAndReason) {
         parse("tasks:\n  - {name: a/b, duration: 1, start: {x: 0, y: 0}, goal: {x: 0, y: 0}}\n");
       },
       ThrowsMessage<InputError>(HasSubstr("tasks.0.name: 'a/b' is not usable")));
-  EXPECT_THAT([&] { load_tasks("/nonexistent/tasks.yaml"); },
-              ThrowsMessage<InputError>(HasSubstr("/nonexistent/tasks.yaml: --tasks: cannot open")));
+  EXPECT_THAT(
+      [&] { load_tasks("/nonexistent/tasks.yaml"); },
+      ThrowsMessage<InputError>(HasSubstr("/nonexistent/tasks.yaml: --tasks: cannot open")));
   EXPECT_EQ(parse("tasks:\n" + ok_task).size(), 1u);
   // crank angles in degrees (they failed the optimization with a friction-loop message)
   EXPECT_THAT(

@@ -302,12 +302,12 @@ TEST(Synth, QuantizationRoundsAngles) {
 TEST(Recovery, AStdKeepsTheUncertaintyOfACoefficientAtItsBound) {
   Params<double> truth = paper_params();
   truth.friction.viscous.fill(1e-5);
-  const IdentifyResult at_bound = identify(
-      truth, paper_loads, make_log(truth, 2.0, false, false, kTorqueNoise, kAngleNoise, 2),
-      IdentifyOptions{});
-  const IdentifyResult free = identify(
-      truth, paper_loads, make_log(truth, 2.0, false, false, kTorqueNoise, kAngleNoise, 3),
-      IdentifyOptions{});
+  const IdentifyResult at_bound =
+      identify(truth, paper_loads, make_log(truth, 2.0, false, false, kTorqueNoise, kAngleNoise, 2),
+               IdentifyOptions{});
+  const IdentifyResult free =
+      identify(truth, paper_loads, make_log(truth, 2.0, false, false, kTorqueNoise, kAngleNoise, 3),
+               IdentifyOptions{});
   ASSERT_TRUE(at_bound.status.ok() && free.status.ok());
   ASSERT_TRUE(at_bound.parameters[1].at_bound) << at_bound.parameters[1].value;
   ASSERT_FALSE(free.parameters[1].at_bound);
