@@ -280,24 +280,6 @@ int finish(const Args& a, const Scene& scene, const id::TorqueLog& log,
   return 0;
 }
 
-/// scene_fitted.yaml's text, and the fit made unusable when the scene reader refuses it (a value
-/// beyond the plausible range of a machine: coulomb 30 from a scene whose pin radius is 150
-/// times too small), naming the key: a scene `simulate` would refuse is not a result.
-std::string fitted_yaml(const Scene& scene, id::IdentifyResult* res) {
-  const std::string yaml = scene_to_yaml(fitted_scene(scene, *res));
-  try {
-    parse_scene(yaml, "scene_fitted.yaml", {}, /*four_bar_ok=*/true);
-  } catch (const InputError& e) {
-    const std::string why = "the fitted scene is refused by the scene reader (" + e.key() + ": " +
-                            e.reason() +
-                            "): check the scene's pin radii, masses and lengths, "
-                            "and the log's units";
-    res->warnings.push_back(why);
-    if (res->unusable.empty()) res->unusable = why;
-  }
-  return yaml;
-}
-
 /// A four-bar's identification (identify's four-bar overload): the options it does not run are
 /// refused naming them.
 int run_four_bar(Args a, const Scene& scene, std::chrono::steady_clock::time_point start,
@@ -315,8 +297,7 @@ int run_four_bar(Args a, const Scene& scene, std::chrono::steady_clock::time_poi
     for (double& v : log.tau1) v = -v;
     opt.torques_negated = 1u;
   }
-  id::IdentifyResult res = identify_four_bar_scene(scene, log, opt);
-  const std::string fitted = fitted_yaml(scene, &res);
+  const id::IdentifyResult res = identify_four_bar_scene(scene, log, opt);
   // validation and residuals on the log as fitted (unwrapped, glitches interpolated)
   id::Validation val;
   if (!a.no_validation) {
@@ -324,7 +305,7 @@ int run_four_bar(Args a, const Scene& scene, std::chrono::steady_clock::time_poi
                        res.conditioned_log, res.omega1, res.window_s);
   }
   write_four_bar_residuals(a, res, val, out);
-  write_text_file(out->file("scene_fitted.yaml"), fitted);
+  write_text_file(out->file("scene_fitted.yaml"), scene_to_yaml(fitted_scene(scene, res)));
   return finish(a, scene, log, opt, res, val, start, out);
 }
 
@@ -348,8 +329,7 @@ int run(const Args& a) {
     for (double& v : log.tau2) v = -v;
     opt.torques_negated |= 2u;
   }
-  id::IdentifyResult res = identify_scene(scene, loads, log, opt);
-  const std::string fitted = fitted_yaml(scene, &res);
+  const id::IdentifyResult res = identify_scene(scene, loads, log, opt);
 
   // validation and residuals on the log as fitted (unwrapped, glitches interpolated)
   id::Validation val;
@@ -361,7 +341,7 @@ int run(const Args& a) {
 
   // scene_fitted.yaml: the input scene with the identified friction (and links: group inertia;
   // actuators: group actuator)
-  write_text_file(out.file("scene_fitted.yaml"), fitted);
+  write_text_file(out.file("scene_fitted.yaml"), scene_to_yaml(fitted_scene(scene, res)));
 
   return finish(a, scene, log, opt, res, val, start, &out);
 }

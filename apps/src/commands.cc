@@ -219,6 +219,27 @@ std::string start_looks_like_degrees(double theta1, double theta2) {
   return start_looks_like_degrees(std::vector<double>{theta1, theta2});
 }
 
+namespace {
+
+/// A fit whose fitted scene the scene reader refuses (a value beyond the plausible range of a
+/// machine: coulomb 30 from a scene whose pin radius is 150 times too small) is not to be used,
+/// naming the key: a scene `simulate` would refuse is not a result.
+void reject_implausible_fit(const Scene& scene, id::IdentifyResult* res) {
+  try {
+    parse_scene(scene_to_yaml(fitted_scene(scene, *res)), "scene_fitted.yaml", {},
+                /*four_bar_ok=*/true);
+  } catch (const InputError& e) {
+    const std::string why = "the fitted scene is refused by the scene reader (" + e.key() + ": " +
+                            e.reason() +
+                            "): check the scene's pin radii, masses and lengths, and the log's "
+                            "units";
+    res->warnings.push_back(why);
+    if (res->unusable.empty()) res->unusable = why;
+  }
+}
+
+}  // namespace
+
 id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& loads,
                                   const id::TorqueLog& log, const id::IdentifyOptions& options) {
   check_sg_window(options, log);
@@ -242,6 +263,7 @@ id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& l
     }
     throw NumericalError(log.path, "identify", res.status.message);
   }
+  reject_implausible_fit(scene, &res);
   return res;
 }
 
@@ -280,6 +302,7 @@ id::IdentifyResult identify_four_bar_scene(const Scene& scene, const id::TorqueL
     }
     throw NumericalError(log.path, "identify", res.status.message);
   }
+  reject_implausible_fit(scene, &res);
   return res;
 }
 
