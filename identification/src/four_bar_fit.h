@@ -52,6 +52,10 @@ struct FourBarFit {
   /// predicted smoothing bias of the public friction coefficients at the chosen window
   /// (limit_smoothing_bias; empty when not predicted)
   Eigen::VectorXd smoothing_bias;
+  /// the covariance of the sensors' noise alone (errors in variables, before the block sandwich
+  /// raises the reported std: at_least_block_sandwich); the model check judges a cause's move
+  /// against it, not against std a model error has widened (empty: the reported one)
+  Eigen::MatrixXd noise_covariance;
   // the fit
   double loss_scale = 1;  ///< the robust loss's scale as applied (--loss; unused without one)
   std::vector<double> x;  ///< internal parameter vector: the start, then the fit's

@@ -129,6 +129,21 @@ bool score_bias(const FourBarFit& f, const IdentifyResult& out, Eigen::VectorXd*
   return b->allFinite();
 }
 
+/// The std of the public friction coefficients from the sensors' noise alone (the fit's
+/// noise_covariance; the reported std where there is none)
+Eigen::VectorXd noise_std(const FourBarFit& f, const IdentifyResult& out) {
+  const int nf = f.layout.friction_size();
+  Eigen::VectorXd sd(nf);
+  for (int i = 0; i < nf; ++i) sd(i) = out.parameters[i].std;
+  if (f.noise_covariance.rows() != f.layout.size() || !f.noise_covariance.allFinite()) return sd;
+  const Eigen::MatrixXd T = stages::to_public(f.layout).topLeftCorner(nf, f.layout.size());
+  const Eigen::MatrixXd Cp = T * f.noise_covariance * T.transpose();
+  for (int i = 0; i < nf; ++i) {
+    if (Cp(i, i) > 0) sd(i) = std::min(sd(i), std::sqrt(Cp(i, i)));
+  }
+  return sd;
+}
+
 /// The std of the public friction coefficients that the fit's covariance (identify_four_bar.cc)
 /// gives with the residual the freed step `fs` of cause `id` leaves (its parameters at the
 /// step's values), each at most the estimate's own std: the errors-in-variables sandwich counts
@@ -142,9 +157,9 @@ Eigen::VectorXd corrected_std(const FourBarFit& f, const Eigen::MatrixXd& J,
                               const detail::FreedStep& fs, const IdentifyResult& out) {
   const int nf = f.layout.friction_size(), P = f.layout.size();
   const int n = static_cast<int>(r.size());
-  Eigen::VectorXd sd(nf);
-  for (int i = 0; i < nf; ++i) sd(i) = out.parameters[i].std;
-  if (!fs.ok || out.covariance.rows() != P || !out.covariance.allFinite()) return sd;
+  const Eigen::MatrixXd& cov = f.noise_covariance.size() > 0 ? f.noise_covariance : out.covariance;
+  Eigen::VectorXd sd = noise_std(f, out);
+  if (!fs.ok || cov.rows() != P || !cov.allFinite()) return sd;
   Eigen::VectorXd rc = r + J.leftCols(P) * fs.fitted_step;
   const std::vector<int>& extra = idx[id + 1];
   for (size_t k = 0; k < extra.size(); ++k) rc += J.col(extra[k]) * fs.extra_step(k);
@@ -155,7 +170,7 @@ Eigen::VectorXd corrected_std(const FourBarFit& f, const Eigen::MatrixXd& J,
     const auto excess = [&](const Eigen::VectorXd& v) {
       return std::max(0.0, v.squaredNorm() / n - 1.0);
     };
-    C = out.covariance - (excess(r) - excess(rc)) * Hinv;
+    C = cov - (excess(r) - excess(rc)) * Hinv;
   } else {
     C = rc.squaredNorm() / std::max(1, n - P) * Hinv;
   }
@@ -210,14 +225,16 @@ void leaves_interval(const FourBarFit& f, const detail::FreedStep& fs, const Eig
   const int nf = f.layout.friction_size();
   const Eigen::VectorXd move =
       stages::to_public(f.layout).topLeftCorner(nf, nf) * fs.fitted_step.head(nf);
+  const Eigen::VectorXd noise = noise_std(f, *out);
   for (int i = 0; i < nf; ++i) {
     const ParameterEstimate& e = out->parameters[i];
-    const double bar = std::max(out->ci_quantile * e.std, stages::kFreedMove * sd(i));
+    // the interval of the sensors' noise alone (a model error widens the reported one)
+    const double bar = std::max(out->ci_quantile * noise(i), stages::kFreedMove * sd(i));
     if (e.at_bound || !(std::abs(move(i)) > bar)) continue;
     out->unusable = cause + ": it would move " + e.name + " to " +
-                    format_significant(e.value + move(i)) + ", out of its interval [" +
-                    format_significant(e.ci_low) + ", " + format_significant(e.ci_high) +
-                    "] (see the warnings)";
+                    format_significant(e.value + move(i)) + ", out of its interval of the "
+                    "sensors' noise [" + format_significant(e.value - bar) + ", " +
+                    format_significant(e.value + bar) + "] (see the warnings)";
     return;
   }
 }

@@ -16,6 +16,7 @@
 #include <limits>
 #include <sstream>
 
+#include "covariance.h"
 #include "fivebar/identification/identify.h"
 #include "fivebar/model/format.h"
 #include "fivebar/model/four_bar.h"
@@ -486,6 +487,42 @@ Eigen::MatrixXd score_covariance(const FourBarFit& f, const Eigen::MatrixXd& J,
   return S + excess * J.transpose() * J;
 }
 
+/// The block sizes of a sandwich: samples whose filter windows overlap share their rate errors,
+/// so consecutive runs of 2 hw + 1 log samples form a block (one sample each when the
+/// accelerations are logged).
+std::vector<int> block_sizes(const FourBarFit& f) {
+  std::vector<int> sizes;
+  const int span = 2 * f.hw + 1;
+  int start = -1;
+  for (int i : f.index) {
+    if (start < 0 || i - start >= span) {
+      sizes.push_back(0);
+      start = i;
+    }
+    ++sizes.back();
+  }
+  return sizes;
+}
+
+/// The errors-in-variables covariance `C` with each variance raised to at least the block
+/// sandwich's (its correlations kept). The noise model counts the residual beyond the sensors'
+/// noise as white; where that excess is correlated over the filter's window (the smoothing
+/// error of a double rocker's estimated accelerations, half-window 22 samples) the std were half
+/// the estimates' spread (6 s logs of a non-Grashof four-bar, 15 seeds: 5 and 3 of 15 truths
+/// inside), and the block sandwich sees it (14 and 14). Where the excess is white the block
+/// sandwich is the noisier of the two, and the larger std is kept.
+Eigen::MatrixXd at_least_block_sandwich(const FourBarFit& f, const Eigen::MatrixXd& J,
+                                        const std::vector<double>& r, Eigen::MatrixXd C) {
+  const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
+  const Eigen::MatrixXd Cb = detail::block_sandwich(J, rv, block_sizes(f)).covariance;
+  if (Cb.rows() != C.rows() || !Cb.allFinite()) return C;
+  Eigen::VectorXd d(C.rows());
+  for (int i = 0; i < C.rows(); ++i) {
+    d(i) = C(i, i) > 0 ? std::max(1.0, std::sqrt(Cb(i, i) / C(i, i))) : 1.0;
+  }
+  return d.asDiagonal() * C * d.asDiagonal();
+}
+
 /// The covariance of the parameters, those at a bound included (the direction a bound holds keeps
 /// its uncertainty in the others' std; a parameter at its bound reports none, estimates): the
 /// errors-in-variables sandwich (score_covariance: the rates' noise enters the reactions and the
@@ -495,7 +532,7 @@ Eigen::MatrixXd score_covariance(const FourBarFit& f, const Eigen::MatrixXd& J,
 /// sandwich's meat is the noise model's, not the residuals' (a sandwich over blocks of one filter
 /// window: the same std on average at 300 Hz, but varying 15 % from log to log where the slip
 /// reversals leave a few windows between them, which widened the errors' spread in its std).
-void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
+void covariance(FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
                 Eigen::MatrixXd* Hinv) {
   const int P = f.layout.size();
   std::vector<double> r;
@@ -521,8 +558,12 @@ void covariance(const FourBarFit& f, ceres::Problem* problem, IdentifyResult* ou
   if (f.opt->errors_in_variables) {
     const Eigen::MatrixXd S = score_covariance(f, J, *out);
     if (S.size() > 0) {
-      C = Hf * S * Hf;
+      f.noise_covariance = Hf * S * Hf;
+      C = at_least_block_sandwich(f, J, r, f.noise_covariance);
       out->std_method = "errors-in-variables";
+      out->std_detail = "the sensors' noise through the model, each std at least the sandwich's "
+                        "over blocks of " + std::to_string(2 * f.hw + 1) +
+                        " samples (the rate filter's window)";
     }
   }
   if (C.size() == 0) {

@@ -106,11 +106,13 @@ TEST(FourBarIdentify, ProfileIntervalThatReachesTheBoundKeepsIt) {
   EXPECT_GT(c.ci_high, c.value);
 }
 
-// The std of the errors-in-variables covariance (the torque noise at every sample, the angle
-// noise through the rate filter into every residual its window holds) on 300 Hz logs, where the
-// slip reversals leave short runs of samples: the same from log to log (a sandwich over blocks
-// of the filter's window, estimated from the residuals, varied 1.3-2.2 times between the
-// largest and the smallest over ten seeds) and the spread of the estimates over the seeds.
+// The std on 300 Hz logs, where the slip reversals leave short runs of samples: the
+// errors-in-variables covariance (the torque noise at every sample, the angle noise through the
+// rate filter into every residual its window holds), raised where the sandwich over blocks of
+// the filter's window is larger. No seed's std falls below the noise's (the block sandwich
+// alone, estimated from the residuals, varied 1.3-2.2 times between the largest and the
+// smallest over ten seeds, and its small ones missed the truth), and they hold the spread of
+// the estimates over the seeds.
 TEST(FourBarIdentify, StdOfShortRunsAtThreeHundredHertzIsTheEstimatesSpread) {
   std::vector<double> value, sd;
   for (int seed = 101; seed <= 110; ++seed) {
@@ -123,7 +125,9 @@ TEST(FourBarIdentify, StdOfShortRunsAtThreeHundredHertzIsTheEstimatesSpread) {
     sd.push_back(res.parameters[0].std);
   }
   const auto [lo, hi] = std::minmax_element(sd.begin(), sd.end());
-  EXPECT_LT(*hi / *lo, 1.25);
+  std::vector<double> sorted = sd;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_GT(*lo, 0.85 * sorted[sorted.size() / 2]);
   double mean = 0, spread = 0, rms_std = 0;
   for (double v : value) mean += v / value.size();
   for (size_t k = 0; k < value.size(); ++k) {
@@ -400,6 +404,38 @@ TorqueLog four_bar_log(const FourBarParams& p, const std::function<FourBarLoads(
   return log;
 }
 
+// A non-Grashof four-bar without gravity (6 s logs, 1 kHz, angles only), whose window rule
+// takes a half-window of about 22 samples: the smoothing error of its estimated accelerations is
+// correlated over the window, which the sensors' noise model counts as white, and the
+// errors-in-variables std alone were half the estimates' spread (seeds 1-15: 5 and 3 truths of
+// 15 inside). Raised to the block sandwich's, they hold the truth (28 of 30).
+TEST(FourBarIdentify, StdHoldTheTruthWhereTheSmoothingErrorIsCorrelated) {
+  FourBarParams p;
+  p.ground_length = 0.2;
+  p.links = {Link<double>{0.15, 0.6, 0.003, 0.07, 0.0}, Link<double>{0.18, 0.7, 0.004, 0.09, 0.0},
+             Link<double>{0.22, 0.7, 0.005, 0.11, 0.0}};
+  p.point_p = 0.1;
+  p.assembly = kElbowDown;
+  p.gravity = 0;
+  p.friction.law = FrictionLaw::kCoulombViscous;
+  p.friction.pin_radius.fill(0.006);
+  p.friction.coulomb.fill(0.2);
+  p.friction.static_coulomb.fill(0.2);
+  p.friction.viscous.fill(0.01);
+  const auto loads = [](double t) { return FourBarLoads{0.3 * std::sin(3 * t), 0.0, 0.5, 0.0}; };
+  int inside = 0;
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    const IdentifyResult res =
+        identify(p, loads, four_bar_log(p, loads, 1.5, 6.0, 0.02, seed), four_bar_options());
+    ASSERT_TRUE(res.status.ok()) << res.status.message;
+    const double truth[2] = {0.2, 0.01};
+    for (int i = 0; i < 2; ++i) {
+      inside += std::abs(res.parameters[i].value - truth[i]) < 1.96 * res.parameters[i].std;
+    }
+  }
+  EXPECT_GE(inside, 9);
+}
+
 // A 3 % model error that the friction absorbs: its move of the friction is judged against the
 // std of the fit with it corrected (the sandwich counts the residual beyond its floor as noise),
 // a move out of the coefficient's interval makes the fit unusable, and so does the five-bar's
@@ -631,8 +667,10 @@ TEST(FourBarExcitation, PredictedWindowAndStdAreIdentifysOnADesign) {
     same += id.sg_half_window == r.sg_half_window ? 1 : 0;
     for (int i = 0; i < 2; ++i) {
       const double ratio = id.parameters[i].std / r.std_dev[i];
+      // (identify's std are at least the block sandwich's, whose spread over seeds is ~15 %:
+      // one seed of three reads 1.38 of the prediction)
       EXPECT_GT(ratio, 0.77) << seed << " " << id.parameters[i].name;
-      EXPECT_LT(ratio, 1.3) << seed << " " << id.parameters[i].name;
+      EXPECT_LT(ratio, 1.45) << seed << " " << id.parameters[i].name;
     }
   }
   EXPECT_GE(same, 2) << "predicted half-window " << r.sg_half_window;
