@@ -250,16 +250,18 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, const 
   double largest = 0;
   const std::string moves = stages::friction_moves(f.layout, *out, fs, false, &largest, &sd);
   const bool bound = friction_at_bound(f, *out);
-  // a delay it names is always said (the refit's warning replaces it when the refit is used)
+  // a cause it names is always said, as the five-bar's check does (a delay's warning is
+  // replaced by the refit's when the refit is used)
   const bool delay = named && id == stages::kCauseDelay;
-  if (moves.empty() && !bound && !delay) return;
+  if (moves.empty() && !bound && !named) return;
   const std::string what = stages::kCauseText[id].what;
   const std::string moved =
       !moves.empty() ? "the friction would move: " + moves + " (std of the fit with them corrected)"
       : bound        ? "a friction coefficient is at its bound, so the fit cannot say how far "
                        "the friction would move"
               : "the friction would move less than " + format_significant(stages::kFreedMove) +
-                    " std (a linearized move: refit a log whose torques are shifted by it)";
+                    " std (a linearized move" +
+                    (delay ? ": refit a log whose torques are shifted by it)" : ")");
   const std::string head = named ? "with " + what + " free (one linearized refit) "
                                  : "the friction estimates absorbed a model error the log cannot "
                                    "attribute: with " +
