@@ -8,13 +8,21 @@
 namespace fivebar::identification::detail {
 namespace {
 
-/// Inverse of a symmetric positive definite matrix; false when it is not (numerically).
+/// Inverse of a symmetric positive definite matrix; false when it is not (numerically). The
+/// test is on A with its diagonal scaled to 1, so that parameters in units far apart (a torque
+/// offset in N m and a gain of a crane's torques of 1e6 N m: 1e12 apart in A) are not taken for
+/// a rank deficiency.
 bool spd_inverse(const Eigen::MatrixXd& A, Eigen::MatrixXd* inv) {
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(A);
-  if (es.info() != Eigen::Success || A.size() == 0) return false;
+  if (A.size() == 0 || !(A.diagonal().minCoeff() > 0)) return false;
+  const Eigen::VectorXd d = A.diagonal().cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd As = d.asDiagonal() * A * d.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(As);
+  if (es.info() != Eigen::Success) return false;
   const Eigen::VectorXd ev = es.eigenvalues();
   if (!(ev.minCoeff() > 1e-12 * ev.maxCoeff()) || !(ev.maxCoeff() > 0)) return false;
-  *inv = es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+  *inv = d.asDiagonal() *
+         (es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose()) *
+         d.asDiagonal();
   return inv->allFinite();
 }
 
