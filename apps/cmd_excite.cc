@@ -1012,9 +1012,9 @@ int run(const Args& given) {
   Scene scene = load_scene(given.scene.scene, given.scene.sets, /*four_bar_ok=*/true);
   for (const std::string& w : scene.warnings) warn(w);
   const Args a = resolved(given, scene);
+  const id::ExcitationOptions o = options_of(a, scene);  // (the options checked first)
   const LoadExpressions loads(scene);
   loads.require_finite(a.design.duration, 1 / a.design.rate_hz);
-  const id::ExcitationOptions o = options_of(a, scene);
   const std::shared_ptr<const id::ExcitationMechanism> mech = mechanism_of(scene, loads, o);
   check_values(scene, mech->parameters());
   check_holding(a, scene, loads, *mech, o);
