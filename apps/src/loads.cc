@@ -181,9 +181,14 @@ void LoadExpressions::require_finite(const std::vector<double>& times) const {
 }
 
 void LoadExpressions::require_finite(double duration, double step) const {
+  // a grid of more than kMaxGrid points (which the commands refuse as too many rows before
+  // they run) is not walked
+  constexpr double kMaxGrid = 1e8;
   std::vector<double> times;
-  const long n = static_cast<long>(std::ceil(duration / step - 1e-9));
-  for (long i = 0; i < n && n < 100000000; ++i) times.push_back(static_cast<double>(i) * step);
+  const double n = std::ceil(duration / step - 1e-9);
+  if (n >= 0 && n < kMaxGrid) {
+    for (long i = 0; i < static_cast<long>(n); ++i) times.push_back(static_cast<double>(i) * step);
+  }
   times.push_back(duration);
   require_finite(times);
 }
