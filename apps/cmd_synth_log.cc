@@ -83,8 +83,8 @@ void write_log(const std::string& path, const identification::TorqueLog& log) {
   }
 }
 
-// The rows of a motion up to `duration` seconds after its first (all of them for infinity); a
-// motion shorter than that by more than half a step is refused, naming its length.
+// The rows of a motion up to `duration` seconds after its first (all of them for infinity; at
+// least two); a motion shorter than that by more than half a step is refused, naming its length.
 std::vector<sim::Row> first_seconds(const std::string& path, std::vector<sim::Row> rows,
                                     double duration) {
   if (!std::isfinite(duration)) return rows;
@@ -95,8 +95,10 @@ std::vector<sim::Row> first_seconds(const std::string& path, std::vector<sim::Ro
         path, "--duration",
         format_double(duration) + " s is longer than the motion (" + format_double(length) + " s)");
   }
+  // the rows up to the duration (rounding of t apart), at least two
   size_t n = 0;
-  while (n < rows.size() && rows[n].t - t0 <= duration + half_step) ++n;
+  while (n < rows.size() && rows[n].t - t0 <= duration + 1e-9 * half_step) ++n;
+  n = std::min(rows.size(), std::max<size_t>(n, 2));
   rows.resize(n);
   return rows;
 }
