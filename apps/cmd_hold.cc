@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "cli_options.h"
+#include "fivebar/identification/degrees.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
@@ -50,14 +51,22 @@ struct Args {
 const std::vector<std::string> kOutputs = {"hold.json", "hold_map.csv", "hold_map.png",
                                            "plots.gnuplot", "summary.json"};
 
-// a pose beyond two turns and within 360 (start_looks_like_degrees): refused on --pose, as the
-// goals of optimize are
+// a pose beyond two turns is refused on --pose: within 360, angles that look like degrees
+// (start_looks_like_degrees, as the goals of optimize), beyond, angles in another unit (a
+// static pose in radians needs no more than a turn)
 void refuse_degrees(const std::string& scene, const std::vector<double>& pose) {
-  const std::string degrees = start_looks_like_degrees(pose);
-  if (degrees.empty()) return;
+  double largest = 0;
   std::string given;
-  for (double a : pose) given += (given.empty() ? "" : ",") + format_double(a);
-  throw InputError(scene, "--pose", given + ": angles look like degrees, expected radians");
+  for (double a : pose) {
+    largest = std::max(largest, std::abs(a));
+    given += (given.empty() ? "" : ",") + format_double(a);
+  }
+  if (!(largest > identification::kDegreesBeyond)) return;
+  throw InputError(scene, "--pose",
+                   given + (start_looks_like_degrees(pose).empty()
+                                ? ": angles beyond two turns, expected radians within a turn "
+                                  "(another unit?)"
+                                : ": angles look like degrees, expected radians"));
 }
 
 // "a,b" -> two finite numbers, else InputError on --pose

@@ -43,6 +43,8 @@ run_fivebar(2 "paper.yaml: --pose: expected THETA1,THETA2" hold ${paper} --pose 
             --out ${WORK_DIR}/bad)
 run_fivebar(2 "paper.yaml: --pose: 103.1,74.5: angles look like degrees, expected radians"
             hold ${paper} --pose 103.1,74.5 --out ${WORK_DIR}/bad)
+run_fivebar(2 "paper.yaml: --pose: 1.8,361: angles beyond two turns, expected radians within a turn"
+            hold ${paper} --pose 1.8,361 --out ${WORK_DIR}/bad)
 run_fivebar(2 "paper.yaml: simulation.rest_rate_threshold: must be >= 0"
             hold ${paper} --set simulation.rest_rate_threshold=-1 --out ${WORK_DIR}/bad)
 if(EXISTS ${WORK_DIR}/bad)
