@@ -388,6 +388,24 @@ TEST(FourBarIdentify, RefusesTheFiveBarsOptions) {
 // The four-bar's design problem: its gradient (one crank's Fourier series; torque, singular and
 // reversal constraints of its one drive and four joints) against central differences.
 /// A log of the scene p with the loads `loads` from theta1 = th0 (synth-log's sensors: 1 kHz).
+/// A four-bar with the Coulomb-viscous law shared by its joints (static Coulomb = kinetic).
+FourBarParams coulomb_viscous_four_bar(double ground, const std::array<Link<double>, 3>& links,
+                                       double point_p, int assembly, double gravity,
+                                       double pin_radius, double coulomb, double viscous) {
+  FourBarParams p;
+  p.ground_length = ground;
+  p.links = links;
+  p.point_p = point_p;
+  p.assembly = assembly;
+  p.gravity = gravity;
+  p.friction.law = FrictionLaw::kCoulombViscous;
+  p.friction.pin_radius.fill(pin_radius);
+  p.friction.coulomb.fill(coulomb);
+  p.friction.static_coulomb.fill(coulomb);
+  p.friction.viscous.fill(viscous);
+  return p;
+}
+
 TorqueLog four_bar_log(const FourBarParams& p, const std::function<FourBarLoads(double)>& loads,
                        double th0, double duration, double torque_noise, std::uint64_t seed) {
   SynthOptions so;
@@ -410,18 +428,11 @@ TorqueLog four_bar_log(const FourBarParams& p, const std::function<FourBarLoads(
 // errors-in-variables std alone were half the estimates' spread (seeds 1-15: 5 and 3 truths of
 // 15 inside). Raised to the block sandwich's, they hold the truth (28 of 30).
 TEST(FourBarIdentify, StdHoldTheTruthWhereTheSmoothingErrorIsCorrelated) {
-  FourBarParams p;
-  p.ground_length = 0.2;
-  p.links = {Link<double>{0.15, 0.6, 0.003, 0.07, 0.0}, Link<double>{0.18, 0.7, 0.004, 0.09, 0.0},
-             Link<double>{0.22, 0.7, 0.005, 0.11, 0.0}};
-  p.point_p = 0.1;
-  p.assembly = kElbowDown;
-  p.gravity = 0;
-  p.friction.law = FrictionLaw::kCoulombViscous;
-  p.friction.pin_radius.fill(0.006);
-  p.friction.coulomb.fill(0.2);
-  p.friction.static_coulomb.fill(0.2);
-  p.friction.viscous.fill(0.01);
+  const FourBarParams p = coulomb_viscous_four_bar(
+      0.2,
+      {Link<double>{0.15, 0.6, 0.003, 0.07, 0.0}, Link<double>{0.18, 0.7, 0.004, 0.09, 0.0},
+       Link<double>{0.22, 0.7, 0.005, 0.11, 0.0}},
+      0.1, kElbowDown, 0.0, 0.006, 0.2, 0.01);
   const auto loads = [](double t) { return FourBarLoads{0.3 * std::sin(3 * t), 0.0, 0.5, 0.0}; };
   int inside = 0;
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
@@ -446,19 +457,11 @@ TEST(FourBarIdentify, StdHoldTheTruthWhereTheSmoothingErrorIsCorrelated) {
 // off: not to be used, naming the readings (and the inertias, as much). The clean logs are used,
 // their check naming nothing.
 TEST(FourBarIdentify, ModelErrorsTheSandwichAbsorbsAreNamed) {
-  FourBarParams drag;
-  drag.ground_length = 0.10;
-  drag.links = {Link<double>{0.25, 0.9, 0.005, 0.12, 0.0},
-                Link<double>{0.30, 1.1, 0.0085, 0.15, 0.05},
-                Link<double>{0.28, 1.0, 0.0065, 0.14, 0.0}};
-  drag.point_p = 0.15;
-  drag.assembly = kElbowUp;
-  drag.gravity = 9.81;
-  drag.friction.law = FrictionLaw::kCoulombViscous;
-  drag.friction.pin_radius.fill(0.012);
-  drag.friction.coulomb.fill(0.1);
-  drag.friction.static_coulomb.fill(0.1);
-  drag.friction.viscous.fill(0.015);
+  const FourBarParams drag = coulomb_viscous_four_bar(
+      0.10,
+      {Link<double>{0.25, 0.9, 0.005, 0.12, 0.0}, Link<double>{0.30, 1.1, 0.0085, 0.15, 0.05},
+       Link<double>{0.28, 1.0, 0.0065, 0.14, 0.0}},
+      0.15, kElbowUp, 9.81, 0.012, 0.1, 0.015);
   const auto drag_loads = [](double t) {
     return FourBarLoads{1.2 * std::sin(1.5 * M_PI * t) + 0.3, 0.1, 3.0, 0.5};
   };

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <string>
 
 #include "../model/four_bar_scenes.h"
@@ -37,6 +38,16 @@ P micro(P p) {
   }
   for (double& r : p.friction.pin_radius) r *= kLength;
   return p;
+}
+
+/// A four-bar scene's loads at micro scale: torques times kTorque, the force times kMass *
+/// kLength.
+std::function<FourBarLoads(double)> micro_four_bar_loads(const testing::ReferenceScene& scene) {
+  return [loads = scene.loads](double t) {
+    FourBarLoads l = loads(t);
+    l.M1 *= kTorque, l.M3 *= kTorque, l.F *= kMass * kLength;
+    return l;
+  };
 }
 
 /// Every estimate within 3 std of the truth and within 0.1 std of the reference scene's.
@@ -75,11 +86,7 @@ TEST(IdentifyScale, MicroFiveBarIdentifiesAsThePaperScene) {
 
 TEST(IdentifyScale, MicroCrankRockerIdentifiesAsTheCrankRocker) {
   const testing::ReferenceScene cr = testing::reference_scenes()[0];
-  const auto micro_loads = [&](double t) {
-    FourBarLoads l = cr.loads(t);
-    l.M1 *= kTorque, l.M3 *= kTorque, l.F *= kMass * kLength;
-    return l;
-  };
+  const auto micro_loads = micro_four_bar_loads(cr);
   SynthOptions so = testing::log_options(3.0, 0.02, 1e-5, 1);
   sim::Initial init;
   init.theta1 = cr.th0;
@@ -101,11 +108,7 @@ TEST(IdentifyScale, MicroCrankRockerIdentifiesAsTheCrankRocker) {
 // named.
 TEST(IdentifyScale, MicroCrankRockersTorqueOffsetIsNamed) {
   const testing::ReferenceScene cr = testing::reference_scenes()[0];
-  const auto micro_loads = [&](double t) {
-    FourBarLoads l = cr.loads(t);
-    l.M1 *= kTorque, l.M3 *= kTorque, l.F *= kMass * kLength;
-    return l;
-  };
+  const auto micro_loads = micro_four_bar_loads(cr);
   SynthOptions so = testing::log_options(3.0, 0.02 * kTorque, 1e-5, 1);
   sim::Initial init;
   init.theta1 = cr.th0;
