@@ -169,13 +169,8 @@ void LoadExpressions::require_finite(const std::vector<double>& times) const {
     const double v[4] = {L.M1, L.M2, L.M3, L.F};
     for (int i = 0; i < 4; ++i) {
       if (std::isfinite(v[i])) continue;
-      const std::string name = kNames[i];
-      throw NumericalError(compiled_->file, "loads." + name,
-                           "load " + name + " = " + format_double(v[i]) +
-                               " at t=" + format_significant(t, 6) +
-                               " s is not finite: check the scene's load "
-                               "expression (loads." +
-                               name + ")");
+      throw NumericalError(compiled_->file, std::string("loads.") + kNames[i],
+                           sim::non_finite_load(kNames[i], v[i], t));
     }
   }
 }

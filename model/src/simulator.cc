@@ -312,13 +312,7 @@ std::pair<const char*, double> first_load(const Ld& L, Bad bad) {
 template <class Ld>
 Status finite_loads(const Ld& L, double t) {
   const auto [name, v] = first_load(L, [](double x) { return !std::isfinite(x); });
-  if (name != nullptr) {
-    std::ostringstream msg;
-    msg.precision(6);
-    msg << "load " << name << " = " << (std::isnan(v) ? "nan" : v > 0 ? "inf" : "-inf") << " at t=" << t
-        << " s is not finite: check the scene's load expression (loads." << name << ")";
-    return Status::Error(StatusCode::kInvalidInput, msg.str());
-  }
+  if (name != nullptr) return Status::Error(StatusCode::kInvalidInput, non_finite_load(name, v, t));
   return Status::Ok();
 }
 
@@ -1669,6 +1663,15 @@ RunChecks check_run(const Params<double>& params, const LoadFunction& loads, con
 RunChecks check_run(const FourBarParams& params, const FourBarLoadFunction& loads,
                     const Result& result, double rtol, double atol) {
   return checks_of<FourBar>(params, loads, result, rtol, atol);
+}
+
+std::string non_finite_load(const char* name, double value, double t) {
+  std::ostringstream msg;
+  msg.precision(6);
+  msg << "load " << name << " = " << (std::isnan(value) ? "nan" : value > 0 ? "inf" : "-inf")
+      << " at t=" << t << " s is not finite: check the scene's load expression (loads." << name
+      << ")";
+  return msg.str();
 }
 
 }  // namespace fivebar::sim

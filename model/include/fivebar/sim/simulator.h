@@ -186,6 +186,10 @@ Result simulate(const Params<double>& params, const LoadFunction& loads, const I
 Result simulate(const FourBarParamsT<double>& params, const FourBarLoadFunction& loads,
                 const Initial& initial, const Options& options);
 
+/// The words of a load that is NaN or infinite at t (a load expression that leaves its domain):
+/// the simulator's run check and the commands' check before their work say it alike.
+std::string non_finite_load(const char* name, double value, double t);
+
 /// Inverse dynamics along a motion: uses t, theta[0..1], omega[0..1], alpha[0..1] of each row and
 /// returns rows with the coupler kinematics, reactions, friction torques, and M1, M2 the torques
 /// that produce the motion under `loads` (whose M1, M2 are ignored). E_diss by the trapezoidal rule.
