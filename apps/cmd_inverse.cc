@@ -293,8 +293,8 @@ Motion read_motion(const std::string& path, const Scene& scene) {
   return m;
 }
 
-// max over the rows of |M - M_file|; for a stuck crank (any torque within its holding range
-// holds it) the distance of the file's torque to that range
+// max over the rows of |M - M_file|; where a joint is stuck (any torque within its holding range
+// gives the motion) the distance of the file's torque to that range
 double torque_error(const std::vector<sim::Row>& rows, const Motion& motion) {
   double worst = 0;
   for (size_t i = 0; motion.has_torques && i < rows.size(); ++i) {
@@ -688,7 +688,7 @@ int run(const Args& args) {
     }
     if (motion.has_torques) {
       std::snprintf(line, sizeof line,
-                    "  max |M - M_file| = %.3e N m (stuck cranks: distance to the holding range)\n",
+                    "  max |M - M_file| = %.3e N m (stuck joints: distance to the holding range)\n",
                     max_error);
       std::cout << line;
     }

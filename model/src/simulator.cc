@@ -1437,12 +1437,46 @@ Result simulate(const FourBarParams& params, const FourBarLoadFunction& loads,
 
 namespace {
 
-/// Row::hold_range of an inverse-dynamics row: the torque itself where the crank moves, M +-
-/// mu_s r N where it is stuck alone, and where both are stuck (the pose at rest) the range of
-/// each over which the mechanism stays locked, the other at its row value (rest.h).
+/// The drive torques' half-widths added by the passive joints (B, C, D) stuck where a crank
+/// moves. Such a joint holds with any friction torque within its capacity C_j (hold_margin_j),
+/// which the motion does not fix: the row (Mf_j = 0) is one of the torques that produce it. Each
+/// joint's torque moves M1, M2 by dM/dMf_j C_j; dM/dMf_j is read from the row evaluated again
+/// with joint j slipping forward (its friction torque Mf_j^+ = phi_j N_j, the reactions and the
+/// other joints' friction following it), as (M^+ - M) / Mf_j^+.
+Status passive_hold_widths(const Params<double>& p, const Loads<double>& L,
+                           const EvalOptions& eval, const Row& r, double width[2]) {
+  width[0] = width[1] = 0.0;
+  for (int j = 1; j <= 3; ++j) {
+    if (r.mode[j] != kStuck || !(r.hold_margin[j] > 0.0)) continue;
+    JointModes slip = r.mode;
+    slip[j] = JointMode::kSlipPositive;
+    Evaluation<double> ev;
+    const Status st = mech::inverse<FiveBar, double>(
+        p, L, Vec2<double>(r.theta[0], r.theta[1]), Vec2<double>(r.omega[0], r.omega[1]),
+        Vec2<double>(r.alpha[0], r.alpha[1]), &slip, eval, &ev);
+    if (!st.ok()) return st;
+    if (!(std::abs(ev.Mf[j]) > 0.0)) continue;
+    const double scale = r.hold_margin[j] / std::abs(ev.Mf[j]);
+    width[0] += std::abs(ev.M1 - r.M1) * scale;
+    width[1] += std::abs(ev.M2 - r.M2) * scale;
+  }
+  return Status::Ok();
+}
+
+/// Row::hold_range of an inverse-dynamics row: the torque itself where the cranks move and every
+/// joint slips, M +- mu_s r N where a crank is stuck alone, widened by the passive joints stuck
+/// (passive_hold_widths), and where both cranks are stuck (the pose at rest) the range of each
+/// over which the mechanism stays locked, the other at its row value (rest.h).
 Status Sim<FiveBar>::hold_range(const P& p, const Ld& L, const EvalOptions& eval, Row* r) {
   const bool o = r->mode[0] == kStuck, d0 = r->mode[4] == kStuck;
-  const double m1 = o ? r->hold_margin[0] : 0.0, m2 = d0 ? r->hold_margin[4] : 0.0;
+  double m1 = o ? r->hold_margin[0] : 0.0, m2 = d0 ? r->hold_margin[4] : 0.0;
+  if (!(o && d0) && p.friction.active()) {
+    double width[2];
+    const Status st = passive_hold_widths(p, L, eval, *r, width);
+    if (!st.ok()) return st;
+    m1 += width[0];
+    m2 += width[1];
+  }
   r->hold_range = {r->M1 - m1, r->M1 + m1, r->M2 - m2, r->M2 + m2};
   if (!(o && d0 && p.friction.active())) return Status::Ok();
   Holding<double> h;

@@ -241,6 +241,41 @@ TEST(Rest, StribeckStaticCoefficientSetsTheRange) {
   EXPECT_GT(max_displacement(out), kBreakaway);
 }
 
+// A passive joint stuck where a crank moves holds with any torque within its capacity, so the
+// motion does not fix the drive torques: inverse dynamics of a simulated run gives ranges that
+// hold the torques that made it (the row's own torques take that joint's friction torque as 0).
+TEST(Rest, PassiveJointStuckWhereACrankMovesWidensTheTorqueRange) {
+  Params<double> p = paper_params();
+  p.friction.law = FrictionLaw::kStribeck;
+  p.friction.static_coulomb.fill(0.2);
+  const Holding<double> h = paper_holding(p);
+  sim::Options opt;
+  opt.duration = 0.3;
+  opt.output_step = 1e-3;
+  // crank 2 driven out of its range from rest, crank 1 at its holding torque
+  const double M2 = h.M2_max + 0.5;
+  const sim::LoadFunction loads = [=](double) { return testing::paper_static_loads(h.M1, M2); };
+  const sim::Result run = sim::simulate(p, loads, testing::paper_initial(), opt);
+  ASSERT_TRUE(run.status.ok()) << run.status.message;
+  std::vector<sim::Row> rows;
+  ASSERT_TRUE(sim::inverse_rows(p, loads, run.rows, &rows).ok());
+  int passive = 0;
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const sim::Row& r = rows[i];
+    const auto& g = r.hold_range;
+    EXPECT_GE(h.M1, g[0] - kTorqueTol) << "t = " << r.t;
+    EXPECT_LE(h.M1, g[1] + kTorqueTol) << "t = " << r.t;
+    EXPECT_GE(M2, g[2] - kTorqueTol) << "t = " << r.t;
+    EXPECT_LE(M2, g[3] + kTorqueTol) << "t = " << r.t;
+    const bool moving = r.mode[0] != kStuck || r.mode[4] != kStuck;
+    if (moving && (r.mode[1] == kStuck || r.mode[2] == kStuck || r.mode[3] == kStuck)) {
+      ++passive;
+      EXPECT_GT(g[1] - g[0], 1e-3) << "t = " << r.t;  // the joint's capacity moves the torques
+    }
+  }
+  EXPECT_GT(passive, 0);
+}
+
 TEST(Rest, PosesThatCannotAssembleOrAreSingularFail) {
   Params<double> p = paper_params();
   Holding<double> h;
