@@ -1443,8 +1443,8 @@ namespace {
 /// joint's torque moves M1, M2 by dM/dMf_j C_j; dM/dMf_j is read from the row evaluated again
 /// with joint j slipping forward (its friction torque Mf_j^+ = phi_j N_j, the reactions and the
 /// other joints' friction following it), as (M^+ - M) / Mf_j^+.
-Status passive_hold_widths(const Params<double>& p, const Loads<double>& L,
-                           const EvalOptions& eval, const Row& r, double width[2]) {
+Status passive_hold_widths(const Params<double>& p, const Loads<double>& L, const EvalOptions& eval,
+                           const Row& r, double width[2]) {
   width[0] = width[1] = 0.0;
   for (int j = 1; j <= 3; ++j) {
     if (r.mode[j] != kStuck || !(r.hold_margin[j] > 0.0)) continue;
