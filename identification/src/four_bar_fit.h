@@ -102,6 +102,28 @@ stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out);
 /// slowly; either makes the fit not to be used (out->unusable, naming the cause).
 void model_check(const FourBarFit& f, IdentifyResult* out);
 
+/// The inverse-dynamics solver settings: the fit's and its profiles' re-fits.
+ceres::Solver::Options solver_options(const FourBarFit& f);
+
+/// The solver's record in out (iterations, message, costs unweighted by cost_weight, converged,
+/// a warning when it stopped before converging); false (out->status) when it failed.
+bool record_solve(const ceres::Solver::Summary& summary, double cost_weight, IdentifyResult* out);
+
+/// Estimates, correlation and Wald intervals of the public parameters at f.x, from
+/// out->covariance (internal parameters); x0: the public start values.
+void estimates(const FourBarFit& f, const std::vector<double>& x0, IdentifyResult* out);
+
+/// The fitted scene, and its inverse dynamics at every sample of the log (predicted_tau1).
+void predictions(const FourBarFit& f, IdentifyResult* out);
+
+// ---- four_bar_output_error.cc ----
+
+/// The output-error fit on f->x from its start values, after the rates (f->w gives each
+/// window's starting rate): the windows of out->window_s over [f->first, f->last], the solve,
+/// the angle residual's levels and the window sandwich (out->covariance); false (out->status)
+/// when a window's simulation fails at the start values, or the solver fails.
+bool output_error_fit(FourBarFit* f, IdentifyResult* out);
+
 // ---- four_bar_refits.cc ----
 
 /// The sign check, then the per-joint check of a shared law (stages::torques_fit_negated,

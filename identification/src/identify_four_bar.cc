@@ -410,10 +410,14 @@ bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
   out->rms_torque_residual_initial[0] = rms(r);
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options(*f), problem, &summary);
+  return record_solve(summary, f->cost_weight, out);
+}
+
+bool record_solve(const ceres::Solver::Summary& summary, double cost_weight, IdentifyResult* out) {
   out->iterations = static_cast<int>(summary.iterations.size()) - 1;
   out->solver_message = summary.message;
   for (const ceres::IterationSummary& it : summary.iterations) {
-    out->iteration_costs.push_back(it.cost / f->cost_weight);
+    out->iteration_costs.push_back(it.cost / cost_weight);
   }
   out->converged = summary.termination_type == ceres::CONVERGENCE;
   if (summary.termination_type == ceres::FAILURE ||
@@ -641,15 +645,32 @@ void predictions(const FourBarFit& f, IdentifyResult* out) {
   for (int i = 0; i < L.size(); ++i) out->predicted_tau1[i] = rows[i].M1;
 }
 
+/// identify() by output error after the rates (output_error_fit): the estimates, the fitted
+/// scene's torques and their residual's levels.
+IdentifyResult output_error(FourBarFit& f, IdentifyResult out,
+                            std::chrono::steady_clock::time_point start) {
+  // every sample the rates reach is in a window (slip reversals and joints at rest too)
+  out.used.assign(f.cond.log.size(), 0);
+  std::fill(out.used.begin() + f.first, out.used.begin() + f.last + 1, 1);
+  out.samples_used = f.last - f.first + 1;
+  if (out.accels_estimated && out.window_choice.empty()) {
+    out.window_choice = "given: half-window " + std::to_string(out.sg_half_window) + " samples";
+  }
+  if (output_error_fit(&f, &out)) {
+    estimates(f, f.opt->initial.empty() ? stages::default_start(f.layout) : f.opt->initial, &out);
+    predictions(f, &out);
+    stages::output_error_levels(f.cond.log, f.first, f.last, &out);
+  }
+  out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
 }  // namespace four_bar
 
 using namespace four_bar;
 
 std::string four_bar_unsupported(const IdentifyOptions& opt) {
   const std::string tail = " runs five-bars only (mechanism.type five_bar)";
-  if (opt.method != Method::kInverseDynamics) {
-    return "--method " + std::string(method_name(opt.method)) + tail;
-  }
   if (opt.layout.inertia) return "--estimate inertia" + tail;
   if (opt.layout.actuator) return "--estimate actuator" + tail;
   if (opt.smoothing_velocity > 0) return "--smooth-sign" + tail;
@@ -684,6 +705,7 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   if (!start_values(&f, &out)) return out;
   f.sg = filter_options(f.cond.log, opt, &out.window_choice);
   rates(&f, &out);
+  if (opt.method == Method::kOutputError) return output_error(f, std::move(out), start);
   select_samples(&f, &out);
   require_usable_samples(f.cond.log, out.samples_used, f.layout.size(), opt.min_rate);
   if (data_driven_window(f.cond.log, opt) && out.samples_used >= f.layout.size() + 1) {

@@ -110,9 +110,6 @@ struct TorqueColumns {
 
 // ---- residual_blocks.cc ----
 
-/// Linear interpolation of y(t) on the sorted grid ts (clamped at the ends).
-double interp(const std::vector<double>& ts, const std::vector<double>& y, double t);
-
 /// The inverse-dynamics residual blocks, one per sample: from the sample's structure
 /// (residual.h: the Jets carry only the P active parameters through a five-number loop), or the
 /// full model where the structure cannot be read off; each block's loss make_loss(loss,
@@ -128,18 +125,11 @@ bool sample_residual(const Params<double>& scene, const ParameterLayout& layout,
                      const EvalOptions& eval, const double* x, Eigen::Vector2d* r,
                      Eigen::MatrixXd* J);
 
-/// Consecutive windows [i0, i1] of about window_s over the samples [first, last].
-std::vector<std::pair<int, int>> make_windows(const TorqueLog& log, int first, int last,
-                                              double window_s);
-
-/// The simulator options of an output-error window and of validate(): CVODE Adams at rtol.
-sim::Options window_sim_options(double rtol);
-
 /// Group inertia: the prior and consistency residuals (inertia.h) on the parameter block x, at
 /// the fit's cost weight.
 void add_inertial_prior(Fit* f, double* x, ceres::Problem* problem);
 
-/// Output error: the window [i0, i1] (WindowResidual) on f->x, rates w1, w2 at its start;
+/// Output error: the window [i0, i1] (add_window_block) on f->x, rates w1, w2 at its start;
 /// returns its residual count.
 int add_window_residual(Fit* f, const std::vector<double>& w1, const std::vector<double>& w2,
                         int i0, int i1, const sim::Options& so, ceres::Problem* problem);
@@ -350,19 +340,11 @@ void covariance(const Fit& f, const Eigen::MatrixXd& Hp, Analysis* an, IdentifyR
 /// Inverse dynamics: the errors-in-variables sandwich over the free parameters.
 Eigen::MatrixXd score_sandwich(const Fit& f, const FreeSet& fs, const Analysis& an,
                                IdentifyResult* out);
-/// Output error: the block sandwich over the windows (covariance.h), whose residuals are
-/// correlated within a window (they integrate the torque noise from the logged start) and
-/// independent between windows. Empty when too few windows carry residuals (a warning).
-Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
-                                  const std::vector<double>& r, IdentifyResult* out);
 
 // ---- stage_predictions.cc ----
 
 /// Predicted torques at every sample of the (conditioned) log, at the fit.
 void predictions(const Fit& f, IdentifyResult* out);
-
-/// Output error: the torque residual of the fitted scene and its white-noise level.
-void output_error_levels(const Fit& f, IdentifyResult* out);
 
 /// A friction coefficient at its bound while the residual is far above the noise floor (as from
 /// two adjacent bad samples, an acceleration spike or a step in an angle, which can put Coulomb at

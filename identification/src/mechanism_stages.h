@@ -14,10 +14,12 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/rates.h"
+#include "fivebar/sim/simulator.h"
 #include "smoothing_bias.h"
 #include "window_misfit.h"
 
@@ -199,6 +201,47 @@ bool solve_preliminary(const ParameterLayout& layout, double* x, ceres::Problem*
 /// cost times `weight` (torque_cost_weight); nullptr for Loss::kNone at weight 1. The problem
 /// owns it.
 ceres::LossFunction* make_loss(Loss loss, double scale, double weight = 1);
+
+/// Linear interpolation of y(t) on the sorted grid ts (clamped at the ends).
+double interp(const std::vector<double>& ts, const std::vector<double>& y, double t);
+
+/// Consecutive windows [i0, i1] of about window_s over the samples [first, last].
+std::vector<std::pair<int, int>> make_windows(const TorqueLog& log, int first, int last,
+                                              double window_s);
+
+/// The simulator options of an output-error window and of validate(): CVODE Adams at rtol.
+sim::Options window_sim_options(double rtol);
+
+/// The robust loss's default scale under output error [rad]: the residuals are angles, of the
+/// same order at any scale of the mechanism.
+inline constexpr double kOutputErrorLossScale = 0.1;
+
+/// An output-error window's run: the mechanism at the parameters x (internal, ParameterLayout)
+/// from the logged state at the window's start under the logged torques, over `options`.
+using WindowSimulation = std::function<sim::Result(const double* x, const sim::Options& options)>;
+
+/// Output error: the window [i0, i1] of the log as one residual block on the parameter block x
+/// (the `dof` driven angles of `run` minus the logged ones at samples i0+1..i1, differentiated
+/// by central differences of `relative_step`), under `loss` (the problem owns it); returns its
+/// residual count.
+int add_window_block(const TorqueLog& log, int dof, WindowSimulation run, int i0, int i1,
+                     const sim::Options& so, double relative_step, ceres::LossFunction* loss,
+                     std::vector<double>* x, ceres::Problem* problem);
+
+// ---- stage_analysis.cc ----
+
+/// Output error: the block sandwich over the windows (covariance.h) of `sizes` residuals each,
+/// correlated within a window (they integrate the torque noise from the logged start) and
+/// independent between windows; sets the std method, its detail and the intervals' Student t.
+/// Empty when too few windows carry residuals (a warning).
+Eigen::MatrixXd window_covariance(const std::vector<int>& sizes, const Eigen::MatrixXd& Jf,
+                                  const std::vector<double>& r, IdentifyResult* out);
+
+// ---- stage_predictions.cc ----
+
+/// Output error: the torque residual of the fitted scene (out->predicted_tau1, and tau2 when it
+/// has one) over the log samples [first, last], and its white-noise level.
+void output_error_levels(const TorqueLog& log, int first, int last, IdentifyResult* out);
 
 // ---- stage_solve.cc ----
 

@@ -124,8 +124,9 @@ class OutputErrorMethod final : public MethodStrategy {
     return Status::Ok();
   }
 
-  /// 0.1 rad.
-  double default_loss_scale(const Fit&, IdentifyResult*) const override { return 0.1; }
+  double default_loss_scale(const Fit&, IdentifyResult*) const override {
+    return kOutputErrorLossScale;
+  }
 
   void initial_levels(ceres::Problem*, IdentifyResult*) const override {}
 
@@ -146,7 +147,7 @@ class OutputErrorMethod final : public MethodStrategy {
 
   Eigen::MatrixXd errors_in_variables(const Fit& f, const FreeSet& fs, const Analysis& an,
                                       IdentifyResult* out) const override {
-    return window_covariance(f, fs.J, an.r, out);
+    return window_covariance(f.window_sizes, fs.J, an.r, out);
   }
 
   ModelVerdict check_model(const Fit&, const Analysis&, IdentifyResult*) const override {
@@ -154,7 +155,7 @@ class OutputErrorMethod final : public MethodStrategy {
   }
 
   void prediction_levels(const Fit& f, IdentifyResult* out) const override {
-    output_error_levels(f, out);
+    output_error_levels(f.cond.log, f.first, f.last, out);
   }
 
   bool fits_groups() const override { return false; }

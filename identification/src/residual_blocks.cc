@@ -86,48 +86,42 @@ bool with_size(int P, F&& f) {
   }
 }
 
-/// Output error over one window [i0, i1]: simulated minus logged angles at samples i0+1..i1.
+/// Output error over one window [i0, i1]: the driven angles of a run from the logged state at i0
+/// under the logged torques (`run`, at the parameters x) minus the logged ones at samples
+/// i0+1..i1.
 class WindowResidual {
  public:
-  WindowResidual(const Params<double>& scene, const ParameterLayout& layout, const TorqueLog& log,
-                 const sim::LoadFunction& loads, const std::vector<double>& w1,
-                 const std::vector<double>& w2, int i0, int i1, const sim::Options& sim)
-      : scene_(scene), layout_(layout), log_(log), i0_(i0), i1_(i1), sim_(sim) {
-    loads_ = logged_loads(log, loads, log.t[i0], scene.actuators.offset);
-    initial_ = {log.theta1[i0], log.theta2[i0], w1[i0], w2[i0]};
+  WindowResidual(const TorqueLog& log, int dof, WindowSimulation run, int i0, int i1,
+                 const sim::Options& sim)
+      : log_(log), dof_(dof), run_(std::move(run)), i0_(i0), i1_(i1), sim_(sim) {
     sim_.duration = log.t[i1] - log.t[i0];
     sim_.output_step = sim_.duration / (i1 - i0);
   }
-  int residuals() const { return 2 * (i1_ - i0_); }
+  int residuals() const { return dof_ * (i1_ - i0_); }
 
   bool operator()(double const* const* x, double* r) const {
-    Params<double> p = scene_;
-    layout_.apply(x[0], &p);
-    const sim::Result res = sim::simulate(p, loads_, initial_, sim_);
+    const sim::Result res = run_(x[0], sim_);
     if (!res.status.ok() || res.rows.size() < 2) return false;
-    std::vector<double> ts, a, b;
+    std::vector<double> ts, angle[2];
     for (const sim::Row& row : res.rows) {
       ts.push_back(row.t);
-      a.push_back(row.theta[0]);
-      b.push_back(row.theta[1]);
+      for (int j = 0; j < dof_; ++j) angle[j].push_back(row.theta[j]);
     }
+    const std::vector<double>* logged[2] = {&log_.theta1, &log_.theta2};
     for (int i = i0_ + 1, k = 0; i <= i1_; ++i, ++k) {
       const double tt = log_.t[i] - log_.t[i0_];
       if (tt > ts.back() + 1e-9) return false;
-      r[2 * k] = interp(ts, a, tt) - log_.theta1[i];
-      r[2 * k + 1] = interp(ts, b, tt) - log_.theta2[i];
+      for (int j = 0; j < dof_; ++j) r[dof_ * k + j] = interp(ts, angle[j], tt) - (*logged[j])[i];
     }
     return true;
   }
 
  private:
-  const Params<double>& scene_;
-  ParameterLayout layout_;
   const TorqueLog& log_;
+  int dof_;
+  WindowSimulation run_;
   int i0_, i1_;
   sim::Options sim_;
-  sim::LoadFunction loads_;
-  sim::Initial initial_;
 };
 
 }  // namespace
@@ -151,18 +145,33 @@ std::vector<std::pair<int, int>> make_windows(const TorqueLog& log, int first, i
   return out;
 }
 
-int add_window_residual(Fit* f, const std::vector<double>& w1, const std::vector<double>& w2,
-                        int i0, int i1, const sim::Options& so, ceres::Problem* problem) {
-  auto* w = new WindowResidual(f->scene, f->layout, f->cond.log, f->loads, w1, w2, i0, i1, so);
+int add_window_block(const TorqueLog& log, int dof, WindowSimulation run, int i0, int i1,
+                     const sim::Options& so, double relative_step, ceres::LossFunction* loss,
+                     std::vector<double>* x, ceres::Problem* problem) {
+  auto* w = new WindowResidual(log, dof, std::move(run), i0, i1, so);
   ceres::NumericDiffOptions nd;
-  nd.relative_step_size = f->opt->relative_step;
+  nd.relative_step_size = relative_step;
   auto* cost = new ceres::DynamicNumericDiffCostFunction<WindowResidual, ceres::CENTRAL>(
       w, ceres::TAKE_OWNERSHIP, nd);
-  cost->AddParameterBlock(f->layout.size());
+  cost->AddParameterBlock(static_cast<int>(x->size()));
   cost->SetNumResiduals(w->residuals());
-  problem->AddResidualBlock(cost, make_loss(f->opt->loss, f->loss_scale, f->cost_weight),
-                            f->x.data());
+  problem->AddResidualBlock(cost, loss, x->data());
   return w->residuals();
+}
+
+int add_window_residual(Fit* f, const std::vector<double>& w1, const std::vector<double>& w2,
+                        int i0, int i1, const sim::Options& so, ceres::Problem* problem) {
+  const TorqueLog& log = f->cond.log;
+  const sim::LoadFunction loads = logged_loads(log, f->loads, log.t[i0], f->scene.actuators.offset);
+  const sim::Initial initial = {log.theta1[i0], log.theta2[i0], w1[i0], w2[i0]};
+  WindowSimulation run = [scene = f->scene, layout = f->layout, loads, initial](
+                             const double* x, const sim::Options& o) {
+    Params<double> p = scene;
+    layout.apply(x, &p);
+    return sim::simulate(p, loads, initial, o);
+  };
+  return add_window_block(log, 2, std::move(run), i0, i1, so, f->opt->relative_step,
+                          make_loss(f->opt->loss, f->loss_scale, f->cost_weight), &f->x, problem);
 }
 
 sim::Options window_sim_options(double rtol) {

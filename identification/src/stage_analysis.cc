@@ -322,12 +322,8 @@ void analyse(const Fit& f, const std::vector<double>& x0_public,
   if (f.layout.inertia) inertial_stage(f, an->J, out);
 }
 
-/// Output error: the block sandwich over the windows (covariance.h), whose residuals are
-/// correlated within a window (they integrate the torque noise from the logged start) and
-/// independent between windows. Empty when too few windows carry residuals (a warning).
-Eigen::MatrixXd window_covariance(const Fit& f, const Eigen::MatrixXd& Jf,
+Eigen::MatrixXd window_covariance(const std::vector<int>& sizes, const Eigen::MatrixXd& Jf,
                                   const std::vector<double>& r, IdentifyResult* out) {
-  const std::vector<int>& sizes = f.window_sizes;
   const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
   const detail::BlockCovariance bc = detail::block_sandwich(Jf, rv, sizes);
   if (bc.covariance.size() == 0) {

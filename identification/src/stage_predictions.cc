@@ -23,26 +23,23 @@ void predictions(const Fit& f, IdentifyResult* out) {
   }
 }
 
-void output_error_levels(const Fit& f, IdentifyResult* out) {
-  const TorqueLog& log = f.cond.log;
-  double s[2] = {0, 0};
-  int c = 0;
-  for (int i = f.first; i <= f.last; ++i) {
-    if (std::isnan(out->predicted_tau1[i])) continue;
-    s[0] += std::pow(log.tau1[i] - out->predicted_tau1[i], 2);
-    s[1] += std::pow(log.tau2[i] - out->predicted_tau2[i], 2);
-    ++c;
-  }
-  for (int j = 0; j < kActuators; ++j)
-    out->rms_torque_residual[j] = std::sqrt(s[j] / std::max(1, c));
-  for (int j = 0; j < kActuators; ++j) {
-    const std::vector<double>& tau = j == 0 ? log.tau1 : log.tau2;
-    const std::vector<double>& pred = j == 0 ? out->predicted_tau1 : out->predicted_tau2;
+void output_error_levels(const TorqueLog& log, int first, int last, IdentifyResult* out) {
+  const int channels = out->predicted_tau2.empty() ? 1 : 2;
+  const std::vector<double>* tau[2] = {&log.tau1, &log.tau2};
+  const std::vector<double>* pred[2] = {&out->predicted_tau1, &out->predicted_tau2};
+  for (int j = 0; j < channels; ++j) {
+    double s = 0;
+    int c = 0;
     std::vector<double> d;
-    for (int i = f.first + 1; i <= f.last; ++i) {
-      const double e = (tau[i] - pred[i]) - (tau[i - 1] - pred[i - 1]);
-      if (std::isfinite(e)) d.push_back(e);
+    for (int i = first; i <= last; ++i) {
+      const double e = (*tau[j])[i] - (*pred[j])[i];
+      if (!std::isfinite(e)) continue;
+      s += e * e;
+      ++c;
+      const double e0 = i > first ? (*tau[j])[i - 1] - (*pred[j])[i - 1] : kNaN;
+      if (std::isfinite(e0)) d.push_back(e - e0);
     }
+    out->rms_torque_residual[j] = std::sqrt(s / std::max(1, c));
     out->residual_noise_floor[j] = robust_std(d) / std::sqrt(2.0);
   }
 }

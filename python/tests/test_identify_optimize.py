@@ -144,5 +144,5 @@ def test_identify_a_four_bar_log(root, cli, tmp_path):
     assert len(validation["windowed_rms_angle_error"]) == 1
     assert validation["windowed_theta1"].shape == result["omega1"].shape
     assert "windowed_theta2" not in validation
-    with pytest.raises(ValueError, match="four_bar: --method output-error runs five-bars only"):
-        fivebar.identify(scene, log, method="output-error")
+    with pytest.raises(ValueError, match="four_bar: --estimate inertia runs five-bars only"):
+        fivebar.identify(scene, log, estimate="friction,inertia")

@@ -360,8 +360,6 @@ else:
                         os.path.join(WORK, "fitted_run"), "--set", "simulation.duration=0.2"])
     if code != 0:
         failures.append("simulate of the fitted four-bar: exit %d: %s" % (code, err))
-expect_error(2, "mechanism.type: four_bar: --method output-error runs five-bars only",
-             ["identify", scene, "--log", id_log, "--method", "output-error", "--out", bad])
 expect_error(2, "mechanism.type: four_bar: --estimate inertia runs five-bars only",
              ["identify", scene, "--log", id_log, "--estimate", "friction,inertia", "--out", bad])
 expect_error(2, "mechanism.type: four_bar: --smooth-sign runs five-bars only",

@@ -1,0 +1,110 @@
+// The four-bar's output-error fit (identify --method output-error): the crank angle simulated
+// over windows of the log, each from its logged angle and rate under the logged torque, against
+// the logged angle (the five-bar's windows, add_window_block), and the std from the block
+// sandwich over the windows (window_covariance).
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <utility>
+
+#include "covariance.h"
+#include "four_bar_fit.h"
+#include "mechanism_stages.h"
+
+namespace fivebar::identification::four_bar {
+
+namespace {
+
+/// The windows as residual blocks on f->x; the residual counts of each, in order.
+std::vector<int> add_windows(FourBarFit* f, IdentifyResult* out, ceres::Problem* problem) {
+  const IdentifyOptions& opt = *f->opt;
+  const TorqueLog& log = f->cond.log;
+  const sim::Options so = stages::window_sim_options(opt.sim_rtol);
+  std::vector<int> sizes;
+  for (auto [i0, i1] : stages::make_windows(log, f->first, f->last, out->window_s)) {
+    sim::Initial initial;
+    initial.theta1 = log.theta1[i0];
+    initial.omega1 = f->w[i0];
+    stages::WindowSimulation run = [scene = f->scene, layout = f->layout,
+                                    loads = logged_loads(log, f->loads, log.t[i0]),
+                                    initial](const double* x, const sim::Options& o) {
+      FourBarParams p = scene;
+      layout.apply(x, &p.friction);
+      return sim::simulate(p, loads, initial, o);
+    };
+    sizes.push_back(stages::add_window_block(log, 1, std::move(run), i0, i1, so, opt.relative_step,
+                                             stages::make_loss(opt.loss, f->loss_scale), &f->x,
+                                             problem));
+    out->residuals += sizes.back();
+  }
+  return sizes;
+}
+
+/// The output-error solver settings: the simulated residual carries the integrator's noise
+/// (~rtol, a relative cost noise ~1e-4), so less is asked of it than of inverse dynamics.
+ceres::Solver::Options output_error_options(const FourBarFit& f) {
+  ceres::Solver::Options so = solver_options(f);
+  so.function_tolerance = 1e-3;
+  so.gradient_tolerance = 1e-10;
+  so.parameter_tolerance = 1e-7;
+  return so;
+}
+
+/// The residuals, their Jacobian's singular values (columns scaled to 1) and the window
+/// sandwich at the fit (out->covariance NaN where it cannot be formed).
+void window_analysis(const std::vector<int>& sizes, int P, ceres::Problem* problem,
+                     IdentifyResult* out) {
+  out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
+  std::vector<double> r;
+  ceres::CRSMatrix crs;
+  if (!stages::raw_residuals(problem, &r, &crs)) return;
+  const Eigen::MatrixXd J = stages::dense(crs, P);
+  const int m = static_cast<int>(r.size());
+  double s2 = 0;
+  for (double v : r) s2 += v * v;
+  out->rms_angle_residual[0] = std::sqrt(s2 / std::max(1, m));
+  out->residual_sigma = std::sqrt(s2 / std::max(1, m - P));
+  Eigen::MatrixXd Js = J;
+  for (int i = 0; i < P; ++i) Js.col(i) /= std::max(1e-300, J.col(i).norm());
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js);
+  for (int i = 0; i < svd.singularValues().size(); ++i) {
+    out->singular_values.push_back(svd.singularValues()(i));
+  }
+  if (!out->converged) return;
+  const Eigen::MatrixXd C = stages::window_covariance(sizes, J, r, out);
+  if (C.size() > 0) out->covariance = C;
+}
+
+}  // namespace
+
+bool output_error_fit(FourBarFit* f, IdentifyResult* out) {
+  const IdentifyOptions& opt = *f->opt;
+  if (opt.loss != Loss::kNone) {
+    f->loss_scale = opt.loss_scale > 0 ? opt.loss_scale : stages::kOutputErrorLossScale;
+    out->loss_scale = f->loss_scale;
+  }
+  ceres::Problem problem;
+  const std::vector<int> sizes = add_windows(f, out, &problem);
+  if (sizes.empty()) {
+    out->status = Status::Error(StatusCode::kInvalidInput, "no output-error window in the log");
+    return false;
+  }
+  for (int i = 0; i < f->layout.size(); ++i) {
+    problem.SetParameterLowerBound(f->x.data(), i, f->layout.lower_bound(i));
+  }
+  std::vector<double> r;
+  if (!stages::raw_residuals(&problem, &r)) {
+    out->status =
+        Status::Error(StatusCode::kSolverFailed,
+                      "the four-bar's simulation over a window fails at the start values");
+    return false;
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(output_error_options(*f), &problem, &summary);
+  if (!record_solve(summary, 1.0, out)) return false;
+  window_analysis(sizes, f->layout.size(), &problem, out);
+  return true;
+}
+
+}  // namespace fivebar::identification::four_bar
