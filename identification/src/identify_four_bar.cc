@@ -673,7 +673,6 @@ std::string four_bar_unsupported(const IdentifyOptions& opt) {
   const std::string tail = " runs five-bars only (mechanism.type five_bar)";
   if (opt.layout.inertia) return "--estimate inertia" + tail;
   if (opt.layout.actuator) return "--estimate actuator" + tail;
-  if (opt.smoothing_velocity > 0) return "--smooth-sign" + tail;
   return "";
 }
 

@@ -362,8 +362,8 @@ else:
         failures.append("simulate of the fitted four-bar: exit %d: %s" % (code, err))
 expect_error(2, "mechanism.type: four_bar: --estimate inertia runs five-bars only",
              ["identify", scene, "--log", id_log, "--estimate", "friction,inertia", "--out", bad])
-expect_error(2, "mechanism.type: four_bar: --smooth-sign runs five-bars only",
-             ["identify", scene, "--log", id_log, "--smooth-sign", "0.05", "--out", bad])
+expect_error(2, "mechanism.type: four_bar: --estimate actuator runs five-bars only",
+             ["identify", scene, "--log", id_log, "--estimate", "friction,actuator", "--out", bad])
 # the validation window as the five-bar's: within the log, at least 2 samples
 expect_error(2, "--window: 100 s is longer than the log",
              ["identify", scene, "--log", id_log, "--window", "100", "--out", bad])

@@ -373,15 +373,35 @@ TEST(FourBarIdentify, RobustLossTakesOutSpikesKeptInTheFit) {
 TEST(FourBarIdentify, RefusesTheFiveBarsOptions) {
   const TorqueLog log = crank_rocker_log(crank_rocker().p, 0.5, 0, 0, 1, false);
   IdentifyOptions opt = four_bar_options();
-  opt.smoothing_velocity = 0.05;
+  opt.layout.actuator = true;
   IdentifyResult res = identify(crank_rocker().p, crank_rocker().loads, log, opt);
   EXPECT_EQ(res.status.code, StatusCode::kInvalidInput);
-  EXPECT_NE(res.status.message.find("--smooth-sign runs five-bars only"), std::string::npos);
+  EXPECT_NE(res.status.message.find("--estimate actuator runs five-bars only"), std::string::npos);
   opt = four_bar_options();
   opt.layout.inertia = true;
   EXPECT_EQ(four_bar_unsupported(opt),
             "--estimate inertia runs five-bars only (mechanism.type "
             "five_bar)");
+}
+
+// --smooth-sign on the four-bar: the Coulomb sign smoothed to tanh(w / w_s) in the fitted law,
+// the model of a scene with friction.smoothing_velocity w_s. A noise-free log of that model
+// gives its coefficients back with the same w_s, and not with the exact sign.
+TEST(FourBarIdentify, SmoothSignFitsTheSmoothModel) {
+  FourBarParams truth = crank_rocker().p;
+  truth.friction.smoothing_velocity = 0.5;
+  const TorqueLog log = crank_rocker_log(truth, 2.0, 0, 0, 1, /*with_rates=*/true);
+  IdentifyOptions opt = four_bar_options();
+  opt.smoothing_velocity = 0.5;
+  const IdentifyResult smooth = identify(crank_rocker().p, crank_rocker().loads, log, opt);
+  ASSERT_TRUE(smooth.status.ok()) << smooth.status.message;
+  EXPECT_NEAR(smooth.parameters[0].value, 0.12, 1e-6);
+  EXPECT_NEAR(smooth.parameters[1].value, 0.02, 1e-7);
+  EXPECT_EQ(smooth.fitted_four_bar.friction.smoothing_velocity, 0.5);
+  const IdentifyResult exact =
+      identify(crank_rocker().p, crank_rocker().loads, log, four_bar_options());
+  ASSERT_TRUE(exact.status.ok()) << exact.status.message;
+  EXPECT_GT(std::abs(exact.parameters[0].value - 0.12), 1e-4);
 }
 
 // Output error on the four-bar: the crank angle simulated over windows of the log from its
