@@ -206,6 +206,7 @@ class FiveBarExcitation : public ExcitationMechanism {
     so.angle_noise = angle_noise;
     SynthResult log;
     sample_log(scene_, rows, so, &log);
+    log.log.path = "the log along the motion";
     IdentifyOptions opt;
     opt.layout = dp_.layout;
     try {

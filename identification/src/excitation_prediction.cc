@@ -396,7 +396,9 @@ Status choose_window(const EivPredictor* predictor, const ExcitationMechanism& m
   std::string choice;
   if (!mech.identify_window(*r, torque_noise, angle_noise, &sg, &choice)) {
     return Status::Error(StatusCode::kSolverFailed,
-                         "identify stops a log along the motion before its window: " + choice);
+                         "identify stops before its window on a log along the motion (the samples "
+                         "it keeps, away from the slip reversals and not at rest, are too few): " +
+                             choice);
   }
   const int m = sg_half_window(sg, predictor->dt());
   const EivPredictor& eiv = *predictor;

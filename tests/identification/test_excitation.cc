@@ -496,12 +496,13 @@ sim::LoadFunction heavy_loads() {
   return [](double) { return Loads<double>{0.0, 0.0, 0.5, 20.0, 1.0}; };
 }
 
-// The predicted window and std are identify's on a heavy five-bar, where identify's window
-// stages choose a window far below the largest without smoothing bias: the first SECONDS s of
-// its per-joint design (`excite --per-joint --torque-limit 8 --duration 10 --family fourier`:
-// 5 harmonics, 4 periods, a 1 s ramp), three seeded logs of synth-log's sensors along it.
-constexpr double kHeavySeconds = 4.0;
-
+// The predicted window and std are identify's on a heavy five-bar, whose window identify's stages
+// choose far below the largest without smoothing bias on the exact motion (10 samples against
+// 33: its preliminary fit's error shows in the larger windows' residual): its per-joint design
+// (`excite --per-joint --torque-limit 8 --duration 10 --family fourier`: 5 harmonics, 4 periods,
+// a 1 s ramp), two seeded logs of synth-log's sensors along it other than the prediction's own
+// (seed 1). Predicted at 33 samples over the samples identify keeps there, the std were 0.29-0.57
+// of identify's; identify's over seeds 1-3 read 1.005-1.07 of the prediction.
 TEST(Excitation, PredictedWindowAndStdAreIdentifysOnAHeavyDesign) {
   const Params<double> p = heavy_params();
   const std::vector<double> x = {-0.0487866, 0.193429, 0.0231193, -0.00581921, -0.0449203, -0.0549707, 0.495189, 0.163332, 0.0608077, -0.0741435, -0.0735834, 0.144947, -0.794372, -0.172706, 0.185495, -0.0931461, -0.0970744, -0.447261, 0.384231, -0.14066, -0.175664, -0.0883463};
@@ -509,7 +510,7 @@ TEST(Excitation, PredictedWindowAndStdAreIdentifysOnAHeavyDesign) {
   std::vector<double> t;
   std::vector<MotionState> states;
   std::vector<sim::Row> path, rows;
-  for (int i = 0; i <= static_cast<int>(std::lround(kHeavySeconds * 1e3)); ++i) {
+  for (int i = 0; i <= static_cast<int>(10000); ++i) {
     t.push_back(i * 1e-3);
     states.push_back(motion.state(x, t.back()));
     const MotionState& q = states.back();
@@ -530,8 +531,7 @@ TEST(Excitation, PredictedWindowAndStdAreIdentifysOnAHeavyDesign) {
   ASSERT_TRUE(st.ok()) << st.message;
   IdentifyOptions opt;
   opt.layout.per_joint = true;
-  int same = 0;
-  for (const std::uint64_t seed : {1, 2, 3}) {
+  for (const std::uint64_t seed : {2, 3}) {
     SynthOptions so;
     so.torque_noise = 0.02;
     so.angle_noise = 1e-5;
@@ -540,14 +540,13 @@ TEST(Excitation, PredictedWindowAndStdAreIdentifysOnAHeavyDesign) {
     sample_log(p, rows, so, &log);
     const IdentifyResult id = identify(p, heavy_loads(), log.log, opt);
     ASSERT_TRUE(id.status.ok()) << id.status.message;
-    same += id.sg_half_window == r.sg_half_window ? 1 : 0;
+    EXPECT_EQ(id.sg_half_window, r.sg_half_window) << seed << ": " << r.window_choice;
     for (int i = 0; i < dp.size(); ++i) {
       const double ratio = id.parameters[i].std / r.std_dev[i];
-      EXPECT_GT(ratio, 0.8) << seed << " " << id.parameters[i].name;
-      EXPECT_LT(ratio, 1.25) << seed << " " << id.parameters[i].name;
+      EXPECT_GT(ratio, 0.85) << seed << " " << id.parameters[i].name;
+      EXPECT_LT(ratio, 1.2) << seed << " " << id.parameters[i].name;
     }
   }
-  EXPECT_GE(same, 2) << "predicted half-window " << r.sg_half_window << ": " << r.window_choice;
 }
 
 }  // namespace
