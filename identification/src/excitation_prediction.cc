@@ -389,8 +389,9 @@ namespace {
 /// identify_window); the prediction there, over the samples identify's fit keeps (stage_samples.cc:
 /// a raised order keeps those near the slip reversals), into *chosen; the half-window into
 /// r->sg_half_window, the choice's text into r->window_choice.
-Status choose_window(const EivPredictor* predictor, const ExcitationMechanism& mech, double torque_noise,
-                     double angle_noise, ExcitationReport* r, WindowPrediction* chosen) {
+Status choose_window(const EivPredictor* predictor, const ExcitationMechanism& mech,
+                     double torque_noise, double angle_noise, ExcitationReport* r,
+                     WindowPrediction* chosen) {
   const SgOptions first;  // identify's filter before its choice
   SgOptions sg = first;
   std::string choice;

@@ -505,7 +505,10 @@ sim::LoadFunction heavy_loads() {
 // of identify's; identify's over seeds 1-3 read 1.005-1.07 of the prediction.
 TEST(Excitation, PredictedWindowAndStdAreIdentifysOnAHeavyDesign) {
   const Params<double> p = heavy_params();
-  const std::vector<double> x = {-0.0487866, 0.193429, 0.0231193, -0.00581921, -0.0449203, -0.0549707, 0.495189, 0.163332, 0.0608077, -0.0741435, -0.0735834, 0.144947, -0.794372, -0.172706, 0.185495, -0.0931461, -0.0970744, -0.447261, 0.384231, -0.14066, -0.175664, -0.0883463};
+  const std::vector<double> x = {
+      -0.0487866, 0.193429,   0.0231193,  -0.00581921, -0.0449203, -0.0549707, 0.495189, 0.163332,
+      0.0608077,  -0.0741435, -0.0735834, 0.144947,    -0.794372,  -0.172706,  0.185495, -0.0931461,
+      -0.0970744, -0.447261,  0.384231,   -0.14066,    -0.175664,  -0.0883463};
   const FourierMotion motion(5, 2.5, 1.0, {1.6, 1.4});
   std::vector<double> t;
   std::vector<MotionState> states;
