@@ -11,7 +11,9 @@
 #include <ceres/jet.h>
 #include <Eigen/Dense>
 
+#include "fivebar/identification/identify.h"
 #include "fivebar/identification/rates.h"
+#include "fivebar/identification/synth.h"
 #include "fivebar/model/inertial.h"
 #include "fivebar/model/rest_rule.h"
 #include "jet_dynamics.h"
@@ -187,6 +189,33 @@ class FiveBarExcitation : public ExcitationMechanism {
     return Status::Ok();
   }
   bool window_by_bias(SgOptions*) const override { return false; }
+  /// identify (identify_window) on the log synth-log's sensors (sample_log) write along the
+  /// motion, its layout the design's
+  bool identify_window(const ExcitationReport& r, double torque_noise, double angle_noise,
+                       SgOptions* sg, std::string* choice) const override {
+    std::vector<sim::Row> rows(r.t.size());
+    for (size_t i = 0; i < rows.size(); ++i) {
+      const MotionState& q = r.states[i];
+      rows[i].t = r.t[i];
+      rows[i].theta[0] = q.th1, rows[i].theta[1] = q.th2;
+      rows[i].omega[0] = q.w1, rows[i].omega[1] = q.w2;
+      rows[i].M1 = r.M1[i], rows[i].M2 = r.M2[i];
+    }
+    SynthOptions so;
+    so.torque_noise = torque_noise;
+    so.angle_noise = angle_noise;
+    SynthResult log;
+    sample_log(scene_, rows, so, &log);
+    log.log.path = "the log along the motion";
+    IdentifyOptions opt;
+    opt.layout = dp_.layout;
+    try {
+      return fivebar::identification::identify_window(scene_, loads_, log.log, opt, sg, choice);
+    } catch (const LogError& e) {
+      *choice = e.what();
+      return false;
+    }
+  }
   /// identify's rule (stage_samples.cc: rest_rule, held_sample): thresholds kRestSigmas std of
   /// the filtered rates and accelerations, the angle noise through the joint rates' dependence
   /// on the pose

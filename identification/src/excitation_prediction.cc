@@ -11,6 +11,7 @@
 #include <Eigen/Dense>
 
 #include "fivebar/identification/rates.h"
+#include "mechanism_stages.h"
 #include "excitation_shared.h"
 #include "noise_model.h"
 #include "setup_shared.h"
@@ -112,7 +113,6 @@ Status evaluate_motion(const ExcitationMechanism& mech, const std::vector<double
 namespace {
 
 using stages::kBiasFraction;  // identify's window rules (noise_model.h)
-using stages::kWindowExcess;
 
 /// What one sample of the motion gives the prediction: J (2 x P), the kinematic Jacobian D of
 /// the torques (noise_model.h) and the joints' relative rates.
@@ -194,65 +194,67 @@ class EivPredictor {
   }
 
   /// the noise gains of the filter of half-window m, as identify's rest rule takes them
-  void gains(int m, double* g1, double* g2) const {
+  void gains(int m, double* g1, double* g2, int order = -1) const {
     SgOptions filter;
     filter.half_window_s = m * dt_;
-    filter.order = order_;
+    filter.order = order < 0 ? order_ : order;
     stages::sg_noise_gains(r_.t, filter, g1, g2);
   }
 
-  /// the filter of half-window m at a centred sample: the same at every one (uniform grid)
-  Taps taps(int m) const {
+  /// the filter of half-window m at a centred sample: the same at every one (uniform grid); of
+  /// the predictor's order unless given
+  Taps taps(int m, int order = -1) const {
     Taps out;
     out.m = m;
     SgOptions sg;
     sg.half_window_s = m * dt_;
-    sg.order = order_;
+    sg.order = order < 0 ? order_ : order;
     int lo = 0;
     savitzky_golay_taps(r_.t, m, sg, &lo, &out.d1, &out.d2);
     return out;
   }
 
-  /// the expected torque residual over identify's noise level at half-window m (its residual
-  /// rule: noise and bias add in quadrature), over about 2000 samples with a centred window
-  double residual_ratio(int m) const {
-    const Taps sg = taps(m);
-    const int n = size(), step = std::max(1, (n - 2 * m) / 2000);
-    Eigen::Vector2d b2 = Eigen::Vector2d::Zero(), v = b2;
-    int count = 0;
-    for (int i = m; i < n - m; i += step, ++count) {
-      Eigen::Vector2d dM;
-      detail::Sensitivity sens;
-      at(i, sg, &dM, &sens);
-      b2 += dM.cwiseAbs2();
-      v += detail::propagated_variance(sens);
-    }
-    double ratio = 1;
-    for (int j = 0; j < mech_.dof() && count > 0; ++j) {
-      const double floor2 = noise_.torque[j] * noise_.torque[j] + v(j) / count;
-      ratio = std::max(ratio, std::sqrt(1 + b2(j) / count / floor2));
-    }
-    return ratio;
-  }
-
-  /// covariance and bias of the coefficients over the samples whose window of half-width
-  /// `exclude` spans no slip reversal and that identify's rest rule at half-window rest_m keeps
-  /// (-1: m), with rates from half-window m
-  WindowPrediction predict(int m, int exclude, int rest_m = -1) const {
-    const Taps sg = taps(m);
-    WindowPrediction out;
-    const int n = size(), P = static_cast<int>(s_.front().J.cols());
+  /// The samples identify's fit keeps with rates from half-window m: centred, whose window of
+  /// half-width `exclude` spans no slip reversal, not at rest by identify's rule at half-window
+  /// rest_m (-1: m), of the filter's order (-1: the predictor's)
+  std::vector<int> kept(int m, int exclude, int rest_m = -1, int order = -1) const {
+    const int n = size();
     double g1 = 0, g2 = 0;
-    gains(rest_m < 0 ? m : rest_m, &g1, &g2);
+    gains(rest_m < 0 ? m : rest_m, &g1, &g2, order);
     std::vector<int> used;
     const int edge = std::max(m, exclude);
     for (int i = edge; i < n - edge; ++i) {
-      const int a = std::max(0, i - exclude), b = std::min(n - 1, i + exclude);
-      if (reversals_[b] - reversals_[a] != 0) continue;
-      const bool maybe = maybe_rest_.empty() || maybe_rest_[i];
+      if (stages::window_spans_reversal(reversals_, i, exclude)) continue;
+      const bool maybe = maybe_rest_.empty() || maybe_rest_[i] || (order >= 0 && order != order_);
       if (maybe && mech_.at_rest(r_.t[i], r_.states[i], g1, g2, angle_noise_)) continue;
       used.push_back(i);
     }
+    return used;
+  }
+
+  /// The half-width identify's fit keeps clear of slip reversals with rates from half-window m
+  /// (its rule: none where that would leave out more than half of the centred samples)
+  int reversal_window(int m) const {
+    const int n = size();
+    int near = 0, total = 0;
+    for (int i = m; i <= n - 1 - m; ++i, ++total) {
+      near += stages::window_spans_reversal(reversals_, i, m) ? 1 : 0;
+    }
+    return stages::leaves_out_reversals(near, total) ? m : 0;
+  }
+
+  /// covariance and bias of the coefficients over the samples kept (kept) with rates from
+  /// half-window m
+  WindowPrediction predict(int m, int exclude, int rest_m = -1) const {
+    return predict_over(kept(m, exclude, rest_m), m);
+  }
+
+  /// covariance and bias of the coefficients over the samples `used`, with rates from half-window
+  /// m of the filter's order (-1: the predictor's)
+  WindowPrediction predict_over(const std::vector<int>& used, int m, int order = -1) const {
+    const Taps sg = taps(m, order);
+    WindowPrediction out;
+    const int n = size(), P = static_cast<int>(s_.front().J.cols());
     if (static_cast<int>(used.size()) <= P) return out;
     Eigen::MatrixXd J(2 * used.size(), P);
     Eigen::VectorXd g = Eigen::VectorXd::Zero(P);
@@ -382,49 +384,30 @@ Status eiv_samples(const ExcitationMechanism& mech, const ExcitationReport& r,
 
 namespace {
 
-/// The window identify's rules choose on the five-bar (predict_identified_std): the prediction
-/// there into *chosen, the half-window into r->sg_half_window and r->window_choice.
-void choose_window(EivPredictor* predictor, const DesignParameters& dp, ExcitationReport* r,
-                   WindowPrediction* chosen) {
-  const int n = static_cast<int>(r->t.size());
-  const std::vector<int> cand = stages::window_candidates(n, predictor->dt(), SgOptions{}.order);
-  predictor->bound_rest(
-      cand.front());  // the candidates grow: the first's thresholds are the largest
+/// The window identify chooses on the five-bar (predict_identified_std): its window stages
+/// themselves on a log of synth-log's sensors along the motion (ExcitationMechanism::
+/// identify_window); the prediction there, over the samples identify's fit keeps (stage_samples.cc:
+/// a raised order keeps those near the slip reversals), into *chosen; the half-window into
+/// r->sg_half_window, the choice's text into r->window_choice.
+Status choose_window(const EivPredictor* predictor, const ExcitationMechanism& mech,
+                     double torque_noise, double angle_noise, ExcitationReport* r,
+                     WindowPrediction* chosen) {
+  const SgOptions first;  // identify's filter before its choice
+  SgOptions sg = first;
+  std::string choice;
+  if (!mech.identify_window(*r, torque_noise, angle_noise, &sg, &choice)) {
+    return Status::Error(StatusCode::kSolverFailed,
+                         "identify stops before its window on a log along the motion (the samples "
+                         "it keeps, away from the slip reversals and not at rest, are too few): " +
+                             choice);
+  }
+  const int m = sg_half_window(sg, predictor->dt());
   const EivPredictor& eiv = *predictor;
-  // the residual rule: the largest candidate within the excess (scanned until the bias clearly
-  // dominates), one below it past the second
-  std::vector<double> ratio;
-  for (size_t k = 0; k < cand.size(); ++k) {
-    ratio.push_back(eiv.residual_ratio(cand[k]));
-    if (k >= 2 && ratio[k] > 1.5 * *std::min_element(ratio.begin(), ratio.begin() + k)) break;
-  }
-  const double best = std::max(1.0, *std::min_element(ratio.begin(), ratio.end()));
-  int rule = 0;
-  for (size_t k = 0; k < ratio.size(); ++k) {
-    if (ratio[k] <= best * (1 + kWindowExcess)) rule = static_cast<int>(k);
-  }
-  if (rule > 1) --rule;
-  // the bias rule: from the residual rule's window down, the first within kBiasFraction std
-  // (none: the residual rule's)
-  int pick = rule;
-  *chosen = eiv.predict(cand[rule], cand[rule]);
-  std::string table;
-  for (int k = rule; k >= 1 && chosen->ok; --k) {
-    WindowPrediction p = k == rule ? *chosen : eiv.predict(cand[k], cand[k]);
-    if (!p.ok) break;
-    const double b = bias_in_std(p, dp.friction);
-    table += (table.empty() ? "" : ", ") + std::to_string(cand[k]) + ": " + digits3(b);
-    if (b <= kBiasFraction) {
-      pick = k;
-      *chosen = std::move(p);
-      break;
-    }
-  }
-  r->sg_half_window = cand[pick];
-  r->window_choice = "half-window " + std::to_string(cand[rule]) +
-                     " samples by the residual rule (expected ratio " + digits3(ratio[rule]) +
-                     "), " + std::to_string(cand[pick]) +
-                     " by the bias rule (|bias| / std: " + table + ")";
+  const int exclude = sg.order > first.order ? 0 : eiv.reversal_window(m);
+  *chosen = eiv.predict_over(eiv.kept(m, exclude, m, sg.order), m, sg.order);
+  r->sg_half_window = m;
+  r->window_choice = "identify's on a log along the motion (seed 1): " + choice;
+  return Status::Ok();
 }
 
 /// The window identify's walk by predicted bias chooses (a mechanism of window_by_bias; its
@@ -493,15 +476,17 @@ Status predict_identified_std(const ExcitationMechanism& mech, double torque_noi
   EivPredictor eiv(mech, *r, std::move(samples), torque_noise, {angle_noise, angle_noise},
                    by_bias ? start.order : SgOptions{}.order, by_bias);
   WindowPrediction chosen;
+  Status window = Status::Ok();
   if (by_bias) {
     walk_window(&eiv, dp, start, r, &chosen);
   } else {
-    choose_window(&eiv, dp, r, &chosen);
+    window = choose_window(&eiv, mech, torque_noise, angle_noise, r, &chosen);
   }
-  if (!chosen.ok) {  // no std identify could report: none predicted
+  if (!window.ok() || !chosen.ok) {  // no std identify could report: none predicted
     r->sg_half_window = 0;
     r->std_dev.assign(dp.size(), kNaN);
     r->relative_std.assign(dp.size(), kNaN);
+    if (!window.ok()) return window;
     return Status::Error(StatusCode::kSolverFailed,
                          "the errors-in-variables covariance could not be formed (the samples "
                          "identify keeps, away from the slip reversals and not at rest, do not "

@@ -210,6 +210,22 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
   return identify_fit(scene_in, loads, log, opt, true);
 }
 
+bool identify_window(const Params<double>& scene, const sim::LoadFunction& loads,
+                     const TorqueLog& log, const IdentifyOptions& options, SgOptions* sg,
+                     std::string* choice) {
+  quiet_solver_logging();
+  IdentifyResult out;
+  Fit f;
+  std::vector<double> x0_public;
+  if (!prepare_fit(scene, loads, log, options, &f, &x0_public, &out)) {
+    *choice = out.status.message;
+    return false;
+  }
+  *sg = f.sg;
+  *choice = out.window_choice;
+  return true;
+}
+
 IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunction& loads,
                             const TorqueLog& log, const IdentifyOptions& opt, bool full) {
   quiet_solver_logging();

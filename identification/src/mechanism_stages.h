@@ -35,6 +35,11 @@ inline bool window_spans_reversal(const std::vector<int>& reversals, int i, int 
   return reversals[b] - reversals[a] > 0;
 }
 
+/// Whether a fit leaves out the samples whose filter window spans a slip reversal, `near` of its
+/// `total` centred samples: not where that would leave out more than half of them (the
+/// accelerations near the reversals are then smoothed across them, and a warning says so)
+inline bool leaves_out_reversals(int near, int total) { return 2 * near <= total; }
+
 /// What a mechanism's model check leaves for the refits after it (the sign and per-joint checks,
 /// the delay)
 struct ModelVerdict {

@@ -153,7 +153,7 @@ int reversal_half_window(Fit* f, IdentifyResult* out) {
   const int hw = out->sg_half_window;
   int near = 0, total = 0;
   for (int i = f->first; i <= f->last; ++i, ++total) near += spans_reversal(*f, i, hw) ? 1 : 0;
-  if (2 * near <= total) return hw;
+  if (leaves_out_reversals(near, total)) return hw;
   f->reversals.clear();
   return 0;
 }

@@ -82,6 +82,8 @@ Status sample_terms(const Params<double>& scene, const DesignParameters& dp, con
 /// The Fisher information sum_i J_i^T J_i / sigma^2 of a motion, with its sample terms.
 Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians, double sigma);
 
+struct ExcitationReport;
+
 /// What the design and its prediction need of a mechanism, at the scene's constants and loads:
 /// per sample the terms above and the torques' kinematic Jacobian, and identify's rules for the
 /// mechanism (its rate filter, its rest rule). The five-bar (five_bar_excitation) and the
@@ -107,6 +109,16 @@ class ExcitationMechanism {
   /// filter *sg (the four-bar: choose_window_by_bias, the noise's bias through the reactions
   /// included); false where it takes its residual rule, then the bias limit (the five-bar)
   virtual bool window_by_bias(SgOptions* sg) const = 0;
+  /// identify's window stages themselves where its window is not walked by predicted bias (the
+  /// five-bar): the filter identify chooses for a log of synth-log's sensors along the motion
+  /// `r` (its times, states and torques; torque and angle noise of these std, seed 1) into *sg,
+  /// the choice's text into *choice; false where identify stops before its choice (*choice:
+  /// why) or the mechanism has no such stages
+  virtual bool identify_window(const ExcitationReport& r, double torque_noise, double angle_noise,
+                               SgOptions* sg, std::string* choice) const {
+    (void)r, (void)torque_noise, (void)angle_noise, (void)sg, (void)choice;
+    return false;
+  }
   /// identify's rest rule at a sample of the exact motion: true where identify would leave the
   /// sample out as at rest, its rates estimated by a filter whose rate and acceleration noise
   /// gains are g1, g2 from angles of noise std `angle_noise` [rad]

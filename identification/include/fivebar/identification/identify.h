@@ -283,6 +283,14 @@ struct IdentifyResult {
 IdentifyResult identify(const Params<double>& scene, const sim::LoadFunction& loads,
                         const TorqueLog& log, const IdentifyOptions& options);
 
+/// The Savitzky-Golay filter identify's five-bar chooses for `log` (conditioning, rates and, with
+/// options.auto_window, its data-driven window stages: the steps of identify before its fit)
+/// into *sg, and the text of the choice into *choice; false where the log stops identify before
+/// its choice (*choice then says why). Throws as identify.
+bool identify_window(const Params<double>& scene, const sim::LoadFunction& loads,
+                     const TorqueLog& log, const IdentifyOptions& options, SgOptions* sg,
+                     std::string* choice);
+
 /// Identifies the joint friction of a four-bar (one crank: a log of dof 1, t, theta1, tau1 and
 /// optionally omega1, alpha1) by inverse dynamics over the mechanism (four_bar.h): the same
 /// conditioning, rate estimation, fit, covariance, model check and Wald intervals as the
