@@ -1,5 +1,6 @@
-// Excitation design: Fisher information by Jets, the Fourier motion, the design problem (a
-// motion's evaluation and the std identify would report: excitation_prediction.cc).
+// Excitation design over any mechanism: the Fisher information, the Fourier motion, the design
+// problem (a motion's evaluation; the std identify would report: excitation_prediction.cc; the
+// five-bar's information columns: excitation_five_bar.cc).
 #include "fivebar/identification/excitation.h"
 
 #include <algorithm>
@@ -25,49 +26,6 @@ namespace fivebar::identification {
 
 namespace {
 
-using detail::kNaN;
-
-/// The Jet part of sample_terms: friction and inertial columns of dM/dparameter.
-template <int N>
-Status jet_columns(const Params<double>& scene, const DesignParameters& dp, const Loads<double>& L,
-                   const MotionState& s, const JointModes* slip, SampleTerms* out) {
-  using J = ceres::Jet<double, N>;
-  Params<J> p = scene.template cast<J>();
-  std::vector<J> x(std::max(1, dp.jet_size()));
-  for (int i = 0; i < dp.jet_size(); ++i) x[i] = J(dp.nominal[i], i);
-  if (dp.friction > 0) dp.layout.apply(x.data(), &p.friction);
-  if (dp.inertial > 0) set_standard_inertial(x.data() + dp.friction, &p);
-  EvalOptions eo;
-  eo.want_angles = false;
-  Evaluation<J> ev;
-  const Status st = inverse_dynamics(p, L.template cast<J>(), J(s.th1), J(s.th2), J(s.w1), J(s.w2),
-                                     J(s.a1), J(s.a2), slip, eo, &ev);
-  if (!st.ok()) return st;
-  out->M1 = ev.M1.a;
-  out->M2 = ev.M2.a;
-  for (int c = 0; c < dp.jet_size(); ++c) {
-    out->J(0, c) = ev.M1.v[c];
-    out->J(1, c) = ev.M2.v[c];
-  }
-  out->sine = std::abs(ev.kin.sin43.a);
-  for (int k = 0; k < kJoints; ++k) out->w[k] = ev.w[k].a;
-  out->slip = ev.slip;
-  return Status::Ok();
-}
-
-/// Actuator columns in closed form: tau_j = M_j + offset_j + Fc_j sign(w_j) + Fv_j w_j.
-void actuator_columns(const DesignParameters& dp, const MotionState& s, SampleTerms* out) {
-  if (dp.actuator == 0) return;
-  const int c0 = dp.friction + dp.inertial;
-  const double w[2] = {s.w1, s.w2};
-  for (int j = 0; j < kActuators; ++j) {
-    const int c = c0 + kActuatorPerMotor * j;
-    out->J(j, c) = 1.0;
-    out->J(j, c + 1) = (w[j] > 0) - (w[j] < 0);
-    out->J(j, c + 2) = w[j];
-  }
-}
-
 /// Smooth lower bound of max_i v_i: the log-mean-exp (never above the maximum).
 double soft_max(const std::vector<double>& v, double rho, std::vector<double>* weights) {
   const double m = *std::max_element(v.begin(), v.end());
@@ -89,157 +47,12 @@ bool parse_groups(const std::string& list, DesignGroups* g, std::string* bad) {
   return true;
 }
 
-DesignParameters design_parameters(const Params<double>& scene, const DesignGroups& g) {
-  DesignParameters dp;
-  dp.layout.law = FrictionLaw::kCoulombViscous;
-  dp.layout.per_joint = g.per_joint;
-  auto add = [&](const std::string& name, double nominal, double typical) {
-    dp.names.push_back(name);
-    dp.nominal.push_back(nominal);
-    dp.scale.push_back(std::abs(nominal) > 0 ? std::abs(nominal) : typical);
-  };
-  if (g.friction) {
-    const std::vector<std::string> names = dp.layout.names();
-    const std::vector<double> x = dp.layout.extract(scene.friction);
-    for (size_t i = 0; i < names.size(); ++i) add(names[i], x[i], 1e-3);
-    dp.friction = static_cast<int>(names.size());
-  }
-  if (g.inertia) {
-    const std::array<double, kInertialParams> pi = standard_inertial(scene);
-    for (int i = 0; i < kInertialParams; ++i) add(inertial_name(i), pi[i], 1e-3);
-    dp.inertial = kInertialParams;
-  }
-  if (g.actuator) {
-    // the scene's values (`actuators:`), a typical scale where it has none
-    const ActuatorParams<double>& a = scene.actuators;
-    for (int j = 0; j < kActuators; ++j) {
-      const std::string n = std::to_string(j + 1);
-      add("offset_" + n, a.offset[j], 0.1);
-      add("actuator_coulomb_" + n, a.coulomb[j], 0.1);
-      add("actuator_viscous_" + n, a.viscous[j], 0.01);
-    }
-    dp.actuator = 2 * kActuatorPerMotor;
-  }
-  return dp;
-}
-
-Status sample_terms(const Params<double>& scene, const DesignParameters& dp, const Loads<double>& L,
-                    const MotionState& s, const JointModes* slip, SampleTerms* out) {
-  out->J = Eigen::MatrixXd::Zero(2, dp.size());
-  // the Jet widths instantiated: the active parameters of each group combination (the actuator
-  // terms alone, 0 Jet parameters, take the narrowest: their columns are in closed form)
-  using Columns = Status (*)(const Params<double>&, const DesignParameters&, const Loads<double>&,
-                             const MotionState&, const JointModes*, SampleTerms*);
-  static const std::pair<int, Columns> kWidths[] = {
-      {2, &jet_columns<2>},   {10, &jet_columns<10>}, {16, &jet_columns<16>},
-      {18, &jet_columns<18>}, {26, &jet_columns<26>}};
-  Columns columns = &jet_columns<26>;  // the widest: every group
-  for (const auto& [width, fn] : kWidths) {
-    if (dp.jet_size() <= width) {
-      columns = fn;
-      break;
-    }
-  }
-  const Status st = columns(scene, dp, L, s, slip, out);
-  if (!st.ok()) return st;
-  actuator_columns(dp, s, out);
-  return Status::Ok();
-}
-
 Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians, double sigma) {
   if (jacobians.empty()) return {};
   const int P = static_cast<int>(jacobians.front().cols());
   Eigen::MatrixXd F = Eigen::MatrixXd::Zero(P, P);
   for (const Eigen::MatrixXd& J : jacobians) F.noalias() += J.transpose() * J;
   return F / (sigma * sigma);
-}
-
-// ---------------------------------------------------------------------------------------------
-// The five-bar as an ExcitationMechanism
-
-namespace {
-
-class FiveBarExcitation : public ExcitationMechanism {
- public:
-  FiveBarExcitation(const Params<double>& scene, DesignParameters dp,
-                    std::function<Loads<double>(double)> loads)
-      : scene_(scene), dp_(std::move(dp)), loads_(std::move(loads)) {}
-  int dof() const override { return kDof; }
-  int joints() const override { return kJoints; }
-  std::string joint_name(int k) const override {
-    static const char* const kNames[] = {"O", "B", "C", "D", "D0"};
-    return kNames[k];
-  }
-  std::string type() const override { return "five_bar"; }
-  const DesignParameters& parameters() const override { return dp_; }
-  Status terms(double t, const MotionState& s, const JointModes* slip,
-               SampleTerms* out) const override {
-    return sample_terms(scene_, dp_, loads_(t), s, slip, out);
-  }
-  Status kinematic_jacobian(double t, const MotionState& q,
-                            Eigen::Matrix<double, 2, 6>* D) const override {
-    Sample s;
-    s.t = t, s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
-    s.loads = loads_(t);
-    const std::vector<double> x = dp_.layout.extract(scene_.friction);
-    if (!detail::kinematic_jacobian(scene_, dp_.layout, x.data(), s, EvalOptions{}, D)) {
-      return Status::Error(StatusCode::kSolverFailed,
-                           "the torques' derivative along the motion failed");
-    }
-    return Status::Ok();
-  }
-  bool window_by_bias(SgOptions*) const override { return false; }
-  /// identify (identify_window) on the log synth-log's sensors (sample_log) write along the
-  /// motion, its layout the design's
-  bool identify_window(const ExcitationReport& r, double torque_noise, double angle_noise,
-                       SgOptions* sg, std::string* choice) const override {
-    std::vector<sim::Row> rows(r.t.size());
-    for (size_t i = 0; i < rows.size(); ++i) {
-      const MotionState& q = r.states[i];
-      rows[i].t = r.t[i];
-      rows[i].theta[0] = q.th1, rows[i].theta[1] = q.th2;
-      rows[i].omega[0] = q.w1, rows[i].omega[1] = q.w2;
-      rows[i].M1 = r.M1[i], rows[i].M2 = r.M2[i];
-    }
-    SynthOptions so;
-    so.torque_noise = torque_noise;
-    so.angle_noise = angle_noise;
-    SynthResult log;
-    sample_log(scene_, rows, so, &log);
-    log.log.path = "the log along the motion";
-    IdentifyOptions opt;
-    opt.layout = dp_.layout;
-    try {
-      return fivebar::identification::identify_window(scene_, loads_, log.log, opt, sg, choice);
-    } catch (const LogError& e) {
-      *choice = e.what();
-      return false;
-    }
-  }
-  /// identify's rule (stage_samples.cc: rest_rule, held_sample): thresholds kRestSigmas std of
-  /// the filtered rates and accelerations, the angle noise through the joint rates' dependence
-  /// on the pose
-  bool at_rest(double t, const MotionState& q, double g1, double g2,
-               double angle_noise) const override {
-    if (!(angle_noise > 0)) return false;
-    Sample s;
-    s.t = t, s.th1 = q.th1, s.th2 = q.th2, s.w1 = q.w1, s.w2 = q.w2, s.a1 = q.a1, s.a2 = q.a2;
-    return stages::held_sample(scene_, s, rest_thresholds(g1 * angle_noise, g2 * angle_noise),
-                               angle_noise);
-  }
-
- private:
-  Params<double> scene_;
-  DesignParameters dp_;
-  std::function<Loads<double>(double)> loads_;
-};
-
-}  // namespace
-
-std::shared_ptr<const ExcitationMechanism> five_bar_excitation(
-    const Params<double>& scene, const DesignParameters& dp,
-    std::function<Loads<double>(double)> loads) {
-  return std::make_shared<FiveBarExcitation>(scene, dp, std::move(loads));
 }
 
 // ---------------------------------------------------------------------------------------------
