@@ -589,9 +589,9 @@ Loads<double> light_gravity_loads(double t) {
 
 /// A 3 s log of light_gravity_params, its torques `lag` samples behind the angles
 TorqueLog light_gravity_log(int lag, std::uint64_t seed) {
-  const SynthResult r = synthesize_log(light_gravity_params(), light_gravity_loads,
-                                       {1.6, 1.4, 0.5, -0.3},
-                                       testing::log_options(3.0, 0.0009375, 1e-5, seed));
+  const SynthResult r =
+      synthesize_log(light_gravity_params(), light_gravity_loads, {1.6, 1.4, 0.5, -0.3},
+                     testing::log_options(3.0, 0.0009375, 1e-5, seed));
   EXPECT_TRUE(r.status.ok()) << r.status.message;
   TorqueLog log = r.log;
   log.path = "log.csv";
