@@ -192,8 +192,10 @@ bool delay_stage(const Params<double>& scene_in, const sim::LoadFunction& loads,
     }
   }
   out->warnings.push_back(delay_seen(*out) + ", but " + why +
-                          (verdict.delay == Delay::kExplainsMost
-                               ? std::string("; not corrected")
+                          (verdict.delay == Delay::kExplainsMost ? std::string("; not corrected")
+                           : verdict.delay_tied
+                               ? std::string(": a delay or a model error, the log cannot tell "
+                                             "which; not corrected")
                                : std::string(": a model error, not a delay; not corrected")));
   out->delay_unexplained = true;
   return false;

@@ -56,9 +56,12 @@ struct ModelVerdict {
   std::string unattributed;
   /// the torque-to-angle delay as one more candidate cause (model_check; docs 9): kUnchecked
   /// when the check did not run, else whether its fall is evidenced (kCauseZ) and clearly
-  /// beyond every other cause's; delay_falls: the falls of each cause, for the delay's warning
+  /// beyond every other cause's; delay_falls: the falls of each cause, for the delay's warning;
+  /// delay_tied: kNotMost for a delay whose fall is the largest but not clearly (a delay or a
+  /// model error, the log cannot tell which)
   enum class Delay { kUnchecked, kNotEvidenced, kNotMost, kExplainsMost } delay = Delay::kUnchecked;
   std::string delay_falls;
+  bool delay_tied = false;
   /// why the check did not run ("" when it ran); `short_log`: only because the log has too few
   /// samples for its columns (kCheckRowsPerColumn), the one case a delay may still be judged
   /// without it (delay_stage)
