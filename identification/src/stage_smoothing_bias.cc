@@ -1,9 +1,9 @@
 // Smoothing bias of the data-driven window, for any mechanism (mechanism_stages.h): the window
 // limited by its predicted bias, and the bias taken off the estimates; the five-bar's inputs of
 // the prediction.
-#include "identify_stages.h"
-
 #include <map>
+
+#include "identify_stages.h"
 
 namespace fivebar::identification::stages {
 
@@ -56,8 +56,7 @@ detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int or
     std::array<Eigen::VectorXd, kDof> terms;
     std::array<Eigen::MatrixXd, kDof> weights;
     int lo = 0;
-    motion_terms(f, f.index[u], reach, min_half, order, detail::kReconExtra, &terms, &weights,
-                 &lo);
+    motion_terms(f, f.index[u], reach, min_half, order, detail::kReconExtra, &terms, &weights, &lo);
     in.terms[0].push_back(terms[0]);
     in.terms[1].push_back(terms[1]);
     in.weights[0].push_back(std::move(weights[0]));
@@ -208,8 +207,7 @@ class WindowBias {
     const int reach = std::lround(detail::kReconSpan * std::max(reach_half_, cand_[k]));
     auto it = inputs_.find(reach);
     if (it == inputs_.end()) {
-      it = inputs_
-               .emplace(reach, w_.bias_inputs(reach, cand_.size() > 1 ? cand_[1] : 1, sg_.order))
+      it = inputs_.emplace(reach, w_.bias_inputs(reach, cand_.size() > 1 ? cand_[1] : 1, sg_.order))
                .first;
     }
     const bool ok = it->second.J.rows() == 2 * static_cast<int>(w_.index().size());
@@ -513,10 +511,9 @@ void correct_smoothing_bias(const ParameterLayout& layout, const Eigen::VectorXd
     }
   }
   if (list.empty()) return;
-  out->window_choice += "; the predicted bias at it taken off the estimates (" + list +
-                         (spread.size() > 0 ? "; +- its std from the angle noise, added to the std"
-                                            : "") +
-                         ")";
+  out->window_choice +=
+      "; the predicted bias at it taken off the estimates (" + list +
+      (spread.size() > 0 ? "; +- its std from the angle noise, added to the std" : "") + ")";
 }
 
 }  // namespace fivebar::identification::stages
