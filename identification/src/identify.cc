@@ -253,7 +253,7 @@ IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunct
   if (!full) return finish(out);
   const ModelVerdict verdict = f.method->check_model(f, an, &out);
   intervals(f, &problem, an, &out);
-  correct_smoothing_bias(f.layout, f.smoothing_bias, &f.x, &out);
+  correct_smoothing_bias(f.layout, f.smoothing_bias, &f.x, &out, f.smoothing_bias_spread);
   out.fitted = scene_in;
   f.layout.apply(f.x.data(), &out.fitted);
   follow_static_coulomb(f.layout, scene_in, &out.fitted);

@@ -80,6 +80,9 @@ struct Fit {
   /// predicted smoothing bias of the public friction coefficients at the chosen window
   /// (limit_smoothing_bias; empty when not predicted), taken off the estimates
   Eigen::VectorXd smoothing_bias;
+  /// the std of that prediction from the angle noise (limit_smoothing_bias; empty when not
+  /// predicted), added to the std of the estimates it is taken off
+  Eigen::VectorXd smoothing_bias_spread;
   /// the largest predicted |bias| / std of a friction coefficient at the chosen window where no
   /// window keeps it within kBiasFraction (limit_smoothing_bias; 0 otherwise)
   double window_bias_left = 0;
@@ -226,9 +229,11 @@ class FiveBarWindowFit : public WindowFit {
 /// The motion's terms above the filter's order (high_order_terms, `extra` of them) of both
 /// cranks' angles at log sample i over +-reach samples, cut short where they would span one of
 /// f's slip reversals (the motion is not smooth across it), though never to fewer than min_half
-/// samples each side.
+/// samples each side. With `weights`: the terms as weights of the angles from log sample *lo
+/// (high_order_weights).
 void motion_terms(const Fit& f, int i, int reach, int min_half, int order, int extra,
-                  std::array<Eigen::VectorXd, kDof>* terms);
+                  std::array<Eigen::VectorXd, kDof>* terms,
+                  std::array<Eigen::MatrixXd, kDof>* weights = nullptr, int* lo = nullptr);
 
 // ---- stage_check_window.cc ----
 

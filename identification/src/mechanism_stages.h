@@ -128,9 +128,12 @@ void choose_window(const WindowFit& w, SgOptions* sg, bool* rates_biased, std::s
 /// kBiasFraction, or when `rates_biased`; else the windows of the given order are searched as
 /// above, from the second smallest up. Angles only. *bias: the prediction at the window kept
 /// (left empty when not predicted); *choice gets its text appended; *left: the largest predicted
-/// |bias| / std at the window kept when no window searched is within kBiasFraction (0 otherwise).
+/// |bias| / std at the window kept when no window searched is within kBiasFraction (0 otherwise);
+/// *spread: the std of the prediction kept from the angle noise (smoothing_bias.h), which the
+/// search counts with the bias.
 void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased, SgOptions* sg,
-                          Eigen::VectorXd* bias, std::string* choice, double* left);
+                          Eigen::VectorXd* bias, std::string* choice, double* left,
+                          Eigen::VectorXd* spread);
 
 /// The window of a mechanism that predicts the noise's bias (WindowFit::noise_bias), in place of
 /// choose_window and limit_smoothing_bias: the noise's bias through the reactions falls as the
@@ -149,11 +152,13 @@ void choose_window_by_bias(const WindowFit& w, SgOptions* sg, Eigen::VectorXd* b
 /// Coefficients at a bound, or whose std the log does not determine, are left as fitted, and no
 /// correction takes a coefficient past its bound (a Stribeck static_coulomb stays >= coulomb):
 /// the correction is limited there, and says so. Its own error, from the angle noise through
-/// the reconstruction, is a small part of the bias (over two noisy paper logs at half-window 8:
-/// 0.078 and 0.136 std predicted for 0.088 measured), so a few hundredths of the std, and is not
-/// added to the std.
+/// the reconstruction (`spread`, the std of each coefficient's prediction; empty: none), is added
+/// to the std in quadrature and widens the interval as much: a few hundredths of the std on the
+/// paper scene's logs, up to several std where the angle noise dominates the residual (a light
+/// mechanism's clean logs).
 void correct_smoothing_bias(const ParameterLayout& layout, const Eigen::VectorXd& bias,
-                            std::vector<double>* x, IdentifyResult* out);
+                            std::vector<double>* x, IdentifyResult* out,
+                            const Eigen::VectorXd& spread = Eigen::VectorXd());
 
 /// A refit of the sign check: the fit of `log` with `opt` into *fit (its residual levels at
 /// least); false or a LogError when the log cannot be fitted (no evidence either way).

@@ -29,6 +29,27 @@ Eigen::VectorXd high_order_terms(const std::vector<double>& t, const std::vector
   return out;
 }
 
+Eigen::MatrixXd high_order_weights(const std::vector<double>& t, int i, int a, int b, double dt,
+                                   int order, int extra) {
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(extra, b - a + 1);
+  const int deg = std::min(order + extra, b - a);
+  if (deg <= order) return W;
+  // as high_order_terms: the rows of the least-squares pseudo-inverse of its terms
+  const double reach = std::max({i - a, b - i, 1}) * dt;
+  Eigen::MatrixXd V(b - a + 1, deg + 1);
+  for (int r = 0; r <= b - a; ++r) {
+    const double u = (t[a + r] - t[i]) / reach;
+    double p = 1.0;
+    for (int c = 0; c <= deg; ++c, p *= u) V(r, c) = p;
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(V.transpose() * V);
+  for (int k = order + 1; k <= deg; ++k) {
+    const Eigen::VectorXd z = ldlt.solve(Eigen::VectorXd::Unit(deg + 1, k));
+    W.row(k - order - 1) = (V * z).transpose() * std::pow(dt / reach, k);
+  }
+  return W;
+}
+
 void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen::VectorXd* r2,
                      int extra) {
   const int m = sg_half_window(sg, dt);
@@ -50,6 +71,36 @@ void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen:
 }
 
 namespace {
+
+/// The std of the smoothing's prediction (public friction coefficients) from the angle noise
+/// through the reconstruction: the prediction is linear in the angles (weights W of each sample's
+/// terms, through the filter's response r1, r2 and the kinematic Jacobian), so its score's
+/// covariance is that of the errors in variables (score_covariance) with these sensitivities.
+Eigen::VectorXd prediction_spread(const std::vector<double>& t, const BiasInputs& in,
+                                  const std::vector<char>& keep, const Eigen::MatrixXd& J,
+                                  const Eigen::MatrixXd& Hinv, const Eigen::VectorXd& r1,
+                                  const Eigen::VectorXd& r2) {
+  std::vector<Sensitivity> sens;
+  for (size_t u = 0; u < keep.size(); ++u) {
+    if (!keep[u]) continue;
+    Sensitivity s;
+    for (int c = 0; c < kDof; ++c) {
+      const Eigen::MatrixXd& W = in.weights[c][u];
+      const Eigen::RowVectorXd w1 = r1.transpose() * W, w2 = r2.transpose() * W;
+      s.lo[c] = in.recon_lo[u];
+      s.sigma[c] = in.noise.angle[c];
+      for (int r = 0; r < W.cols(); ++r) {
+        s.coef[c].push_back(in.D[u].col(2 + c) * w1(r) + in.D[u].col(4 + c) * w2(r));
+      }
+    }
+    sens.push_back(std::move(s));
+  }
+  SensorNoise angles = in.noise;
+  angles.torque[0] = angles.torque[1] = 0;
+  const Eigen::MatrixXd S = score_covariance(J, sens, angles, static_cast<int>(t.size()));
+  const Eigen::MatrixXd C = in.T * Hinv * S * Hinv * in.T.transpose();
+  return C.diagonal().head(in.friction_size).cwiseMax(0.0).cwiseSqrt();
+}
 
 /// The 3-point Gauss-Hermite points along the principal axes of the covariance C:
 /// sqrt(3 lambda_k) v_k for each eigenpair (weights 1/6 at +-, 2/3 at 0)
@@ -103,7 +154,7 @@ std::array<Eigen::Vector3d, 3> noise_axes(const std::vector<double>& t, const Sg
 
 bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
                     const std::vector<char>& keep, const SgOptions& sg, Eigen::VectorXd* bias,
-                    Eigen::VectorXd* std, const NoiseBias* noise) {
+                    Eigen::VectorXd* std, const NoiseBias* noise, Eigen::VectorXd* spread) {
   if (in.source != RateSource::kFromAngles || t.size() < 2) return false;
   const int P = static_cast<int>(in.J.cols());
   const int kept = static_cast<int>(std::count(keep.begin(), keep.end(), 1));
@@ -147,6 +198,13 @@ bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
   const Eigen::MatrixXd C = in.T * Hinv * S * Hinv * in.T.transpose();
   *bias = b.head(in.friction_size);
   *std = C.diagonal().head(in.friction_size).cwiseMax(0.0).cwiseSqrt();
+  if (spread) {
+    const size_t n = keep.size();
+    const bool weighed = in.recon_lo.size() == n && in.weights[0].size() == n &&
+                         in.weights[1].size() == n && in.D.size() == n;
+    *spread = weighed ? prediction_spread(t, in, keep, J, Hinv, r1, r2)
+                      : Eigen::VectorXd::Zero(in.friction_size);
+  }
   return bias->allFinite() && std->allFinite();
 }
 

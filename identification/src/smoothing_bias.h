@@ -6,7 +6,10 @@
 // the reconstruction minus the reconstruction's exact derivatives), and the rate and acceleration
 // errors are propagated through the inverse dynamics to the coefficients (one Gauss-Newton step
 // from the truth). Nothing is refitted, so the prediction has no window-to-window noise; its own
-// noise comes from the angle noise through the reconstruction, small against the std.
+// noise comes from the angle noise through the reconstruction: small against the std where the
+// torques are large (the paper scene), but not where the angle noise dominates the residual (a
+// light mechanism's clean logs: 1-14 std at half-windows 10-15). It is linear in the angles, so
+// its std is propagated exactly (smoothing_bias's `spread`).
 #pragma once
 
 #include <Eigen/Core>
@@ -41,6 +44,11 @@ constexpr double kReconSpan = 2.0;
 Eigen::VectorXd high_order_terms(const std::vector<double>& t, const std::vector<double>& x, int i,
                                  int a, int b, double dt, int order, int extra = kReconExtra);
 
+/// high_order_terms as weights of the samples: terms = W x[a..b] (extra x (b - a + 1); rows of
+/// zeros where b - a is too short for a term).
+Eigen::MatrixXd high_order_weights(const std::vector<double>& t, int i, int a, int b, double dt,
+                                   int order, int extra = kReconExtra);
+
 /// The filter's rate (r1) and acceleration (r2) response to ((t - t_i) / dt)^k for k = order + 1
 /// .. order + extra, on a uniform grid of step dt (it reproduces lower degrees exactly).
 void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen::VectorXd* r2,
@@ -52,6 +60,10 @@ struct BiasInputs {
   Eigen::MatrixXd J;       ///< d residual / d x (internal layout), 2 rows per sample
   std::vector<Eigen::Matrix<double, 2, 6>> D;  ///< kinematic Jacobians (noise_model.h)
   std::vector<Eigen::VectorXd> terms[2];       ///< high_order_terms of each crank's angle
+  /// the same as weights of the angles (high_order_weights) from log sample recon_lo[u] (empty:
+  /// the prediction's own noise is not propagated)
+  std::vector<Eigen::MatrixXd> weights[2];
+  std::vector<int> recon_lo;
   Eigen::MatrixXd Hp;  ///< prior information (J^T J units) and its score scale s2
   double s2 = 0;
   Eigen::MatrixXd T;  ///< internal to public parameters
@@ -103,9 +115,12 @@ std::array<Eigen::Vector3d, 3> noise_axes(const std::vector<double>& t, const Sg
 
 /// Predicted smoothing bias and errors-in-variables std of the public friction coefficients for
 /// the filter `sg`, over the samples u with keep[u] (false when too few or singular). With
-/// `noise` (NoiseBias at sg), the bias is that of the smoothing and of the noise.
+/// `noise` (NoiseBias at sg), the bias is that of the smoothing and of the noise. With `spread`
+/// and in.weights: the std of the smoothing's prediction from the angle noise through the
+/// reconstruction (0 without weights).
 bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
                     const std::vector<char>& keep, const SgOptions& sg, Eigen::VectorXd* bias,
-                    Eigen::VectorXd* std, const NoiseBias* noise = nullptr);
+                    Eigen::VectorXd* std, const NoiseBias* noise = nullptr,
+                    Eigen::VectorXd* spread = nullptr);
 
 }  // namespace fivebar::identification::detail

@@ -305,7 +305,7 @@ bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out)
     const FiveBarWindowFit w(*f, *out);
     choose_window(w, &f->sg, &f->rates_biased, &out->window_choice);
     limit_smoothing_bias(w, opt.sg.order, f->rates_biased, &f->sg, &f->smoothing_bias,
-                         &out->window_choice, &f->window_bias_left);
+                         &out->window_choice, &f->window_bias_left, &f->smoothing_bias_spread);
     f->x = x_start;
     if (!rates_and_samples()) return false;
   } else if (out->accels_estimated) {

@@ -1,6 +1,8 @@
 // Smoothing bias of the data-driven window, for any mechanism (mechanism_stages.h): the window
 // limited by its predicted bias, and the bias taken off the estimates; the five-bar's inputs of
 // the prediction.
+#include <map>
+
 #include "identify_stages.h"
 
 namespace fivebar::identification::stages {
@@ -15,7 +17,8 @@ constexpr int kNoiseBiasSamples = 800;
 }  // namespace
 
 void motion_terms(const Fit& f, int i, int reach, int min_half, int order, int extra,
-                  std::array<Eigen::VectorXd, kDof>* terms) {
+                  std::array<Eigen::VectorXd, kDof>* terms,
+                  std::array<Eigen::MatrixXd, kDof>* weights, int* lo) {
   const TorqueLog& log = f.cond.log;
   const int n = log.size();
   const double dt = log.duration() / std::max(1, n - 1);
@@ -24,6 +27,10 @@ void motion_terms(const Fit& f, int i, int reach, int min_half, int order, int e
   while (!f.reversals.empty() && b > i + min_half && f.reversals[b] - f.reversals[i] > 0) --b;
   (*terms)[0] = detail::high_order_terms(log.t, log.theta1, i, a, b, dt, order, extra);
   (*terms)[1] = detail::high_order_terms(log.t, log.theta2, i, a, b, dt, order, extra);
+  if (weights) {
+    (*weights)[0] = (*weights)[1] = detail::high_order_weights(log.t, i, a, b, dt, order, extra);
+    *lo = a;
+  }
 }
 
 /// At the preliminary fit (f.x, f.samples): the residual's and the kinematic Jacobians, the
@@ -47,9 +54,14 @@ detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int or
     }
     in.D.push_back(D);
     std::array<Eigen::VectorXd, kDof> terms;
-    motion_terms(f, f.index[u], reach, min_half, order, detail::kReconExtra, &terms);
+    std::array<Eigen::MatrixXd, kDof> weights;
+    int lo = 0;
+    motion_terms(f, f.index[u], reach, min_half, order, detail::kReconExtra, &terms, &weights, &lo);
     in.terms[0].push_back(terms[0]);
     in.terms[1].push_back(terms[1]);
+    in.weights[0].push_back(std::move(weights[0]));
+    in.weights[1].push_back(std::move(weights[1]));
+    in.recon_lo.push_back(lo);
   }
   in.Hp = prior_information(f);
   in.s2 = f.prior_scale * f.prior_scale;
@@ -105,11 +117,15 @@ detail::NoiseBias FiveBarWindowFit::noise_bias(const SgOptions& sg) const {
 
 namespace {
 
-/// The largest predicted |bias| / std over the coefficients (0 where the std is not > 0).
-double worst_ratio(const Eigen::VectorXd& bias, const Eigen::VectorXd& std) {
+/// The largest predicted |bias| / std over the coefficients (0 where the std is not > 0); with
+/// `spread` (the prediction's own std), the bias and its spread in quadrature: a prediction that
+/// the angle noise makes uncertain counts as a bias of that size.
+double worst_ratio(const Eigen::VectorXd& bias, const Eigen::VectorXd& std,
+                   const Eigen::VectorXd& spread = Eigen::VectorXd()) {
   double worst = 0;
   for (int p = 0; p < bias.size(); ++p) {
-    if (std(p) > 0) worst = std::max(worst, std::abs(bias(p)) / std(p));
+    const double b = p < spread.size() ? std::hypot(bias(p), spread(p)) : std::abs(bias(p));
+    if (std(p) > 0) worst = std::max(worst, b / std(p));
   }
   return worst;
 }
@@ -135,7 +151,8 @@ namespace {
 /// filters of one order over the window candidates, each evaluated once, on demand.
 class WindowBias {
  public:
-  /// the motion's higher terms over +-kReconSpan times the half-window `reach_half`
+  /// the motion's higher terms over +-kReconSpan times the half-window `reach_half`, or the
+  /// candidate's where it is larger
   WindowBias(const WindowFit& w, const SgOptions& sg, const std::vector<int>& cand, int reach_half)
       : w_(w),
         sg_(sg),
@@ -144,12 +161,11 @@ class WindowBias {
         smooth_(cand.size(), -1),
         bias_(cand.size()),
         smooth_bias_(cand.size()),
+        spread_(cand.size()),
         done_(cand.size(), 0) {
     const int n = w.log().size();
     dt_ = w.log().duration() / std::max(1, n - 1);
-    in_ = w.bias_inputs(std::lround(detail::kReconSpan * reach_half), cand.size() > 1 ? cand[1] : 1,
-                        sg.order);
-    ok_ = in_.J.rows() == 2 * static_cast<int>(w.index().size());
+    reach_half_ = reach_half;
   }
   /// candidate k's largest predicted |bias| / std, the noise's included; -1: not predicted
   double worst(int k) {
@@ -164,6 +180,8 @@ class WindowBias {
   bool within(int k) { return worst(k) >= 0 && worst(k) <= kBiasFraction; }
   const Eigen::VectorXd& bias(int k) const { return bias_[k]; }
   const Eigen::VectorXd& smoothing_bias(int k) const { return smooth_bias_[k]; }
+  /// the std of candidate k's prediction from the angle noise through the reconstruction
+  const Eigen::VectorXd& spread(int k) const { return spread_[k]; }
   SgOptions filter(int k) const {
     SgOptions sg = sg_;
     sg.half_window_s = cand_[k] * dt_;
@@ -181,15 +199,33 @@ class WindowBias {
   }
 
  private:
+  /// the inputs of candidate k: the motion's higher terms over +-kReconSpan times the larger of
+  /// its half-window and the rule's. Read over a span narrower than the filter's, the terms are
+  /// noise the filter's response multiplies (a light mechanism's clean logs, rule at 7 samples:
+  /// the smoothing's bias predicted at 14-16 std at 15-18 samples, where it is below 0.5)
+  const detail::BiasInputs* inputs(int k) {
+    const int reach = std::lround(detail::kReconSpan * std::max(reach_half_, cand_[k]));
+    auto it = inputs_.find(reach);
+    if (it == inputs_.end()) {
+      it = inputs_.emplace(reach, w_.bias_inputs(reach, cand_.size() > 1 ? cand_[1] : 1, sg_.order))
+               .first;
+    }
+    const bool ok = it->second.J.rows() == 2 * static_cast<int>(w_.index().size());
+    return ok ? &it->second : nullptr;
+  }
   void evaluate(int k) {
-    if (!ok_ || done_[k]) return;
+    if (done_[k]) return;
     done_[k] = true;
+    const detail::BiasInputs* given = inputs(k);
+    if (!given) return;
+    const detail::BiasInputs& in = *given;
     const SgOptions sg = filter(k);
     const std::vector<char> keep = centred_samples(w_, cand_[k]);
     Eigen::VectorXd& b = smooth_bias_[k];
     Eigen::VectorXd std;
-    if (!detail::smoothing_bias(w_.log().t, in_, keep, sg, &b, &std)) return;
-    smooth_[k] = worst_ratio(b, std);
+    Eigen::VectorXd& spread = spread_[k];
+    if (!detail::smoothing_bias(w_.log().t, in, keep, sg, &b, &std, nullptr, &spread)) return;
+    smooth_[k] = worst_ratio(b, std, spread);
     // the noise's bias is one Gauss-Newton step from the fit: where a shared friction
     // coefficient's std exceeds its value (a light mechanism's log at 0.02 N m of torque noise),
     // it predicts nothing (4.5 std at half-window 10 there, on a coulomb std of 0.097). Per joint
@@ -197,26 +233,26 @@ class WindowBias {
     // fast design's order-7 window carried 13 std of it, unseen; light per-joint logs keep
     // exit 0)
     bool determined = true;
-    for (int p = 0; !in_.per_joint && p < in_.friction.size() && p < std.size(); ++p) {
-      determined = determined && std(p) < std::abs(in_.friction(p));
+    for (int p = 0; !in.per_joint && p < in.friction.size() && p < std.size(); ++p) {
+      determined = determined && std(p) < std::abs(in.friction(p));
     }
     const detail::NoiseBias noise = determined ? w_.noise_bias(sg) : detail::NoiseBias{};
     const size_t m = w_.index().size();
     if (noise.shift.size() != m || noise.score.size() != m) {
       bias_[k] = b, worst_[k] = smooth_[k];
-    } else if (detail::smoothing_bias(w_.log().t, in_, keep, sg, &bias_[k], &std, &noise)) {
-      worst_[k] = worst_ratio(bias_[k], std);
+    } else if (detail::smoothing_bias(w_.log().t, in, keep, sg, &bias_[k], &std, &noise)) {
+      worst_[k] = worst_ratio(bias_[k], std, spread);
     }
   }
   const WindowFit& w_;
   SgOptions sg_;
   std::vector<int> cand_;
   std::vector<double> worst_, smooth_;
-  std::vector<Eigen::VectorXd> bias_, smooth_bias_;
+  std::vector<Eigen::VectorXd> bias_, smooth_bias_, spread_;
   std::vector<char> done_;
-  detail::BiasInputs in_;
+  std::map<int, detail::BiasInputs> inputs_;  ///< by reach
+  int reach_half_ = 1;
   double dt_ = 1;
-  bool ok_ = false;
 };
 
 /// The candidate of least predicted bias from `from` up, while the bias falls (-1: none)
@@ -231,7 +267,8 @@ int least_bias_up(WindowBias* wb, int from, int K) {
 }  // namespace
 
 void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased, SgOptions* sg_fit,
-                          Eigen::VectorXd* bias_kept, std::string* choice, double* left) {
+                          Eigen::VectorXd* bias_kept, std::string* choice, double* left,
+                          Eigen::VectorXd* spread) {
   *left = 0;
   const TorqueLog& log = w.log();
   const int n = log.size();
@@ -278,6 +315,7 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
   if (raised_bias && raised_bias->worst(1) <= wb.worst(pick)) {
     *left = raised_bias->worst(1);
     *bias_kept = raised_bias->bias(1);
+    *spread = raised_bias->spread(1);
     *choice +=
         "; the raised order's predicted bias the least (predicted |bias| / std, the "
         "smoothing's and the noise's through the reactions: " +
@@ -289,6 +327,7 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
   // within kBiasFraction at the window the smoothing's bias chose, the smoothing's alone is taken
   // off, as without the noise's prediction (the shipped paper log's estimates stay as they were)
   *bias_kept = pick == base ? wb.smoothing_bias(pick) : wb.bias(pick);
+  *spread = wb.spread(pick);
   *choice +=
       "; then half-window " + std::to_string(cand[pick]) + " samples" +
       (raised ? " of order " + std::to_string(given_order) : std::string()) + ", " +
@@ -427,7 +466,8 @@ void unbiased_window_check(const Fit& f, const ModelVerdict& verdict, IdentifyRe
 }
 
 void correct_smoothing_bias(const ParameterLayout& layout, const Eigen::VectorXd& b,
-                            std::vector<double>* x, IdentifyResult* out) {
+                            std::vector<double>* x, IdentifyResult* out,
+                            const Eigen::VectorXd& spread) {
   const int P = layout.size();
   if (b.size() == 0 || static_cast<int>(out->parameters.size()) < b.size()) return;
   Eigen::VectorXd shift = Eigen::VectorXd::Zero(P);
@@ -455,18 +495,25 @@ void correct_smoothing_bias(const ParameterLayout& layout, const Eigen::VectorXd
     // within the threshold) stays there, whichever way the estimate moves
     const double lb = layout.lower_bound(p);
     const bool within_bound = e.ci_low >= lb, at_bound = e.ci_low == lb;
-    e.ci_low -= applied(p);
+    // the prediction's own std in quadrature, the interval widened by as many quantiles
+    const double s = p < spread.size() && std::isfinite(spread(p)) ? spread(p) : 0.0;
+    const double widen = out->ci_quantile * (std::hypot(e.std, s) - e.std);
+    e.std = std::hypot(e.std, s);
+    e.ci_low -= applied(p) + widen;
     if (within_bound) e.ci_low = std::max(e.ci_low, lb);
     if (at_bound) e.ci_low = lb;
-    e.ci_high -= applied(p);
+    e.ci_high += widen - applied(p);
     list += (list.empty() ? "" : ", ") + e.name + " " + format_significant(-applied(p));
+    if (s > 0) list += " +- " + format_significant(s, 2);
     // the shift's rounding in x - dx is eps |x|, far above eps |shift| for a small shift
     if (std::abs(applied(p) - shift(p)) > 1e-6 * std::abs(shift(p))) {
       list += " (limited by its bound: predicted " + format_significant(-shift(p)) + ")";
     }
   }
   if (list.empty()) return;
-  out->window_choice += "; the predicted bias at it taken off the estimates (" + list + ")";
+  out->window_choice +=
+      "; the predicted bias at it taken off the estimates (" + list +
+      (spread.size() > 0 ? "; +- its std from the angle noise, added to the std" : "") + ")";
 }
 
 }  // namespace fivebar::identification::stages
