@@ -16,8 +16,8 @@
 #include "fivebar/sim/simulator.h"
 #include "four_bar_rules.h"
 #include "inertia.h"
-#include "mechanism_stages.h"
 #include "mechanism_residual.h"
+#include "mechanism_stages.h"
 #include "noise_model.h"
 
 namespace fivebar::identification::four_bar {

@@ -352,7 +352,8 @@ double rms(const std::vector<double>& r) {
 /// The public start values: the options' or the neutral friction ones, the other groups (given
 /// the friction's values alone) at the scene's: its links' standard inertial parameters.
 std::vector<double> public_start(const FourBarFit& f) {
-  std::vector<double> x0 = f.opt->initial.empty() ? stages::default_start(f.layout) : f.opt->initial;
+  std::vector<double> x0 =
+      f.opt->initial.empty() ? stages::default_start(f.layout) : f.opt->initial;
   if (f.layout.inertia && static_cast<int>(x0.size()) == f.layout.friction_size()) {
     std::vector<double> pi(f.layout.inertial_size());
     standard_inertial_links(f.scene.links.data(), f.layout.links, pi.data());

@@ -28,11 +28,12 @@ InertialPrior inertial_prior(const Params<double>& scene, double relative);
 /// The prior of the n links `links` (the four-bar's three).
 InertialPrior inertial_prior(const Link<double>* links, int n, double relative);
 
-/// Residuals (4 prior per link + 1 consistency per link: 16 + 4 for the five-bar) on the inertial part of the parameter vector (size P,
-/// inertial parameters from `offset`): r_i = s (pi_i - centre_i) / sigma_i, s = *noise_scale
-/// (the torque residual's noise level, so the prior weighs as 1/sigma^2 against the data), and
-/// per link a stiff hinge that is 0 while the inertia about the COM stays above its minimum.
-/// `noise_scale` is read at every evaluation: identify() refines it after a first solve.
+/// Residuals (4 prior per link + 1 consistency per link: 16 + 4 for the five-bar) on the inertial
+/// part of the parameter vector (size P, inertial parameters from `offset`): r_i = s (pi_i -
+/// centre_i) / sigma_i, s = *noise_scale (the torque residual's noise level, so the prior weighs as
+/// 1/sigma^2 against the data), and per link a stiff hinge that is 0 while the inertia about the
+/// COM stays above its minimum. `noise_scale` is read at every evaluation: identify() refines it
+/// after a first solve.
 ceres::CostFunction* inertial_prior_cost(const InertialPrior& prior, int P, int offset,
                                          const double* noise_scale);
 

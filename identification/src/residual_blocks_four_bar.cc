@@ -17,8 +17,8 @@ mech::Vec<1, T> drive_torques(const FourBarEvaluationT<T>& ev) {
 }
 
 /// r = tau - the drive torques of mech::inverse<M> at the sample's motion, the parameters x[0]
-/// laid out by `layout` into the scene (its friction; with the inertia group, its links). Coulomb signs are those of
-/// the sample's relative rates: data, so r is smooth in x.
+/// laid out by `layout` into the scene (its friction; with the inertia group, its links). Coulomb
+/// signs are those of the sample's relative rates: data, so r is smooth in x.
 template <class M>
 class MechanismResidual {
  public:

@@ -421,8 +421,7 @@ FourBarParams perturbed_crank_rocker(const std::array<double, 3>& dm,
 // residual reaches its noise floor, and the fit is usable; the friction alone is not to be used
 // or misses the coulomb truth beyond 2 std.
 TEST(FourBarIdentify, InertiaGroupRecoversPerturbedLinks) {
-  const FourBarParams truth =
-      perturbed_crank_rocker({-0.05, -0.04, -0.06}, {-0.06, -0.05, -0.04});
+  const FourBarParams truth = perturbed_crank_rocker({-0.05, -0.04, -0.06}, {-0.06, -0.05, -0.04});
   std::array<double, 12> pi{};
   standard_inertial_links(truth.links.data(), kFourBarLinks, pi.data());
   IdentifyOptions with = four_bar_options();
@@ -445,8 +444,8 @@ TEST(FourBarIdentify, InertiaGroupRecoversPerturbedLinks) {
     const IdentifyResult alone =
         identify(crank_rocker().p, crank_rocker().loads, log, four_bar_options());
     ASSERT_TRUE(alone.status.ok()) << alone.status.message;
-    friction_out_alone += !alone.unusable.empty() ||
-                          !(std::abs(alone.parameters[0].value - 0.12) < 2 * alone.parameters[0].std);
+    friction_out_alone += !alone.unusable.empty() || !(std::abs(alone.parameters[0].value - 0.12) <
+                                                       2 * alone.parameters[0].std);
   }
   EXPECT_EQ(friction_out_alone, 1);
 }
