@@ -212,8 +212,8 @@ void print_summary(const Args& a, const id::TorqueLog& log, const id::IdentifyRe
     }
   }
   if (res.inertial.estimated) {
-    std::printf("  inertial: the log determines %d of 16 directions; base combinations:\n",
-                res.inertial.rank);
+    std::printf("  inertial: the log determines %d of %d directions; base combinations:\n",
+                res.inertial.rank, res.layout.inertial_size());
     for (const id::InertialReport::Combination& c : res.inertial.base) {
       std::printf("    %-60s = %.6g +- %.2g\n", c.text.c_str(), c.value, c.std);
     }
@@ -356,7 +356,8 @@ RunFunction setup(CLI::App* app) {
       ->required();
   app->add_option("--estimate", args->settings.estimate,
                   "parameter groups to estimate, comma-separated: friction (always), inertia "
-                  "(the links' 16 standard inertial parameters), actuator (per motor the "
+                  "(the links' standard inertial parameters: a five-bar's 16, a four-bar's 12), "
+                  "actuator (per motor the "
                   "torque-sensor offset and the load-independent Coulomb + viscous friction)");
   app->add_option("--inertia-prior", args->settings.inertia_prior,
                   "relative std of the prior holding the inertial parameters the log cannot "

@@ -44,6 +44,9 @@ void law_truth(const FrictionParams<double>& fp, size_t joints, std::vector<std:
 
 std::vector<std::string> truth_lines(const FourBarParams& params) {
   std::vector<std::string> out = friction_truth(params.friction, kFourBarJoints);
+  std::array<double, kInertialPerLink * kFourBarLinks> pi{};
+  standard_inertial_links(params.links.data(), kFourBarLinks, pi.data());
+  out.push_back(" true.inertial = " + joined(pi));
   law_truth(params.friction, kFourBarJoints, &out);
   return out;
 }
@@ -81,7 +84,7 @@ LogTruth read_truth(const std::vector<std::string>& comments) {
       }
     }
     if (v.size() == kJoints || v.size() == kFourBarJoints || v.size() == kInertialParams ||
-        v.size() == kActuators) {
+        v.size() == kInertialPerLink * kFourBarLinks || v.size() == kActuators) {
       truth[key] = v;
     }
   }
@@ -99,7 +102,7 @@ bool true_value(const LogTruth& truth, const id::ParameterLayout& layout, int i,
   }
   if (layout.is_inertial(i)) {
     auto it = truth.find("inertial");
-    if (it == truth.end()) return false;
+    if (it == truth.end() || it->second.size() != size_t(layout.inertial_size())) return false;
     *value = it->second[i - layout.inertia_offset()];
     return true;
   }

@@ -15,8 +15,9 @@
 #include "fivebar/model/four_bar.h"
 #include "fivebar/sim/simulator.h"
 #include "four_bar_rules.h"
-#include "mechanism_stages.h"
+#include "inertia.h"
 #include "mechanism_residual.h"
+#include "mechanism_stages.h"
 #include "noise_model.h"
 
 namespace fivebar::identification::four_bar {
@@ -34,6 +35,10 @@ struct FourBarFit {
   sim::FourBarLoadFunction loads;
   ParameterLayout layout;
   EvalOptions eval;
+  /// group inertia: the prior on the links' standard parameters (the scene's, relative std
+  /// --inertia-prior) and its noise level (the residual's noise floor at the scene)
+  detail::InertialPrior prior;
+  double prior_scale = 1;
   ConditionedLog cond;        ///< conditioning
   /// the weight of every residual block's cost in the problems solved (torque_cost_weight of
   /// the conditioned log)

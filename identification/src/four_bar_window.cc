@@ -147,18 +147,29 @@ class FourBarWindowFit : public stages::WindowFit {
 }  // namespace
 
 void window_stage(FourBarFit* f, IdentifyResult* out) {
-  const std::vector<double> x_start = f->x;
+  // the window is the friction's: with the inertia group, chosen on a fit of the friction alone
+  // (the links at the scene's values, which the preliminary fit, without the prior, could not
+  // hold where the log does not determine them)
+  FourBarFit friction_only;
+  FourBarFit* w = f;
+  if (f->layout.inertia) {
+    friction_only = *f;
+    friction_only.layout.inertia = false;
+    friction_only.x.resize(friction_only.layout.size());
+    w = &friction_only;
+  }
+  const std::vector<double> x_start = w->x;
   std::vector<Sample> some;
-  const size_t step = std::max<size_t>(1, f->samples.size() / 1500);
-  for (size_t u = 0; u < f->samples.size(); u += step) some.push_back(f->samples[u]);
+  const size_t step = std::max<size_t>(1, w->samples.size() / 1500);
+  for (size_t u = 0; u < w->samples.size(); u += step) some.push_back(w->samples[u]);
   ceres::Problem problem;
-  std::vector<double> x = f->x;
-  stages::add_mechanism_terms<FourBar>(f->scene, f->layout, some, f->eval, x.data(), &problem,
-                                       Loss::kNone, 1, f->cost_weight);
-  if (stages::solve_preliminary(f->layout, x.data(), &problem)) f->x = x;
-  stages::choose_window_by_bias(FourBarWindowFit(*f), &f->sg, &f->smoothing_bias,
+  std::vector<double> x = w->x;
+  stages::add_mechanism_terms<FourBar>(w->scene, w->layout, some, w->eval, x.data(), &problem,
+                                       Loss::kNone, 1, w->cost_weight);
+  if (stages::solve_preliminary(w->layout, x.data(), &problem)) w->x = x;
+  stages::choose_window_by_bias(FourBarWindowFit(*w), &f->sg, &f->smoothing_bias,
                                 &out->window_choice);
-  f->x = x_start;
+  w->x = x_start;
   rates(f, out);
   select_samples(f, out);
 }

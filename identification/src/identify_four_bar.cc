@@ -349,13 +349,25 @@ double rms(const std::vector<double>& r) {
   return r.empty() ? 0.0 : std::sqrt(s / r.size());
 }
 
+/// The public start values: the options' or the neutral friction ones, the other groups (given
+/// the friction's values alone) at the scene's: its links' standard inertial parameters.
+std::vector<double> public_start(const FourBarFit& f) {
+  std::vector<double> x0 =
+      f.opt->initial.empty() ? stages::default_start(f.layout) : f.opt->initial;
+  if (f.layout.inertia && static_cast<int>(x0.size()) == f.layout.friction_size()) {
+    std::vector<double> pi(f.layout.inertial_size());
+    standard_inertial_links(f.scene.links.data(), f.layout.links, pi.data());
+    x0.insert(x0.end(), pi.begin(), pi.end());
+  }
+  return x0;
+}
+
 /// Start values in the internal layout (Stribeck: static_coulomb as its excess over coulomb),
-/// from the options' or the neutral ones, inside the bounds; false (out->status) when malformed.
+/// from public_start, inside the bounds; false (out->status) when malformed.
 bool start_values(FourBarFit* f, IdentifyResult* out) {
   const ParameterLayout& lay = f->layout;
   const int P = lay.size();
-  const std::vector<double> x0 =
-      f->opt->initial.empty() ? stages::default_start(lay) : f->opt->initial;
+  const std::vector<double> x0 = public_start(*f);
   if (static_cast<int>(x0.size()) != P) {
     out->status = Status::Error(StatusCode::kInvalidInput,
                                 "initial values: expected " + std::to_string(P) + " numbers");
@@ -399,6 +411,11 @@ bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
   const int P = lay.size();
   stages::add_mechanism_terms<FourBar>(f->scene, lay, f->samples, f->eval, f->x.data(), problem,
                                        f->opt->loss, f->loss_scale, f->cost_weight);
+  if (lay.inertia) {  // the prior's rows follow the samples'
+    problem->AddResidualBlock(
+        detail::inertial_prior_cost(f->prior, P, lay.inertia_offset(), &f->prior_scale),
+        stages::make_loss(Loss::kNone, 0, f->cost_weight), f->x.data());
+  }
   for (int i = 0; i < P; ++i) problem->SetParameterLowerBound(f->x.data(), i, lay.lower_bound(i));
   out->residuals = static_cast<int>(f->samples.size());
   std::vector<double> r;
@@ -407,6 +424,7 @@ bool solve(FourBarFit* f, ceres::Problem* problem, IdentifyResult* out) {
                                 "the four-bar's inverse dynamics fails at the start values");
     return false;
   }
+  r.resize(f->samples.size());
   out->rms_torque_residual_initial[0] = rms(r);
   ceres::Solver::Summary summary;
   ceres::Solve(solver_options(*f), problem, &summary);
@@ -493,8 +511,8 @@ Eigen::MatrixXd score_covariance(const FourBarFit& f, const Eigen::MatrixXd& J,
 
 /// The block sizes of a sandwich: samples whose filter windows overlap share their rate errors,
 /// so consecutive runs of 2 hw + 1 log samples form a block (one sample each when the
-/// accelerations are logged).
-std::vector<int> block_sizes(const FourBarFit& f) {
+/// accelerations are logged); the rows after the samples' (the inertial prior's) one each.
+std::vector<int> block_sizes(const FourBarFit& f, int rows) {
   std::vector<int> sizes;
   const int span = 2 * f.hw + 1;
   int start = -1;
@@ -505,6 +523,7 @@ std::vector<int> block_sizes(const FourBarFit& f) {
     }
     ++sizes.back();
   }
+  sizes.resize(sizes.size() + std::max(0, rows - static_cast<int>(f.index.size())), 1);
   return sizes;
 }
 
@@ -518,7 +537,8 @@ std::vector<int> block_sizes(const FourBarFit& f) {
 Eigen::MatrixXd at_least_block_sandwich(const FourBarFit& f, const Eigen::MatrixXd& J,
                                         const std::vector<double>& r, Eigen::MatrixXd C) {
   const Eigen::VectorXd rv = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
-  const Eigen::MatrixXd Cb = detail::block_sandwich(J, rv, block_sizes(f)).covariance;
+  const Eigen::MatrixXd Cb =
+      detail::block_sandwich(J, rv, block_sizes(f, static_cast<int>(J.rows()))).covariance;
   if (Cb.rows() != C.rows() || !Cb.allFinite()) return C;
   Eigen::VectorXd d(C.rows());
   for (int i = 0; i < C.rows(); ++i) {
@@ -546,11 +566,15 @@ void covariance(FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
   ceres::CRSMatrix crs;
   if (!stages::raw_residuals(problem, &r, &crs)) return;
   J = stages::dense(crs, P);
-  const int m = static_cast<int>(r.size());
-  out->rms_torque_residual[0] = rms(r);
-  out->residual_sigma = std::sqrt(rms(r) * rms(r) * m / std::max(1, m - P));
-  Eigen::MatrixXd Js = J;
-  for (int i = 0; i < P; ++i) Js.col(i) /= std::max(1e-300, J.col(i).norm());
+  // the samples' rows, then (group inertia) the prior's: pseudo-observations of noise level
+  // prior_scale, in the information and, as that noise, in the score
+  const int m = static_cast<int>(f.samples.size());
+  const Eigen::MatrixXd Jd = J.topRows(m), Jp = J.bottomRows(J.rows() - m);
+  const std::vector<double> rd(r.begin(), r.begin() + m);
+  out->rms_torque_residual[0] = rms(rd);
+  out->residual_sigma = std::sqrt(rms(rd) * rms(rd) * m / std::max(1, m - P));
+  Eigen::MatrixXd Js = Jd;
+  for (int i = 0; i < P; ++i) Js.col(i) /= std::max(1e-300, Jd.col(i).norm());
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js);
   for (int i = 0; i < svd.singularValues().size(); ++i) {
     out->singular_values.push_back(svd.singularValues()(i));
@@ -560,8 +584,9 @@ void covariance(FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
   const Eigen::MatrixXd H = J.transpose() * J;
   const Eigen::MatrixXd Hf = H.ldlt().solve(Eigen::MatrixXd::Identity(H.rows(), H.cols()));
   if (f.opt->errors_in_variables) {
-    const Eigen::MatrixXd S = score_covariance(f, J, *out);
+    Eigen::MatrixXd S = score_covariance(f, Jd, *out);
     if (S.size() > 0) {
+      if (Jp.rows() > 0) S += f.prior_scale * f.prior_scale * Jp.transpose() * Jp;
       f.noise_covariance = Hf * S * Hf;
       C = at_least_block_sandwich(f, J, r, f.noise_covariance);
       out->std_method = "errors-in-variables";
@@ -576,6 +601,12 @@ void covariance(FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
   }
   out->covariance = C;
   *Hinv = Hf;
+  if (f.layout.inertia) {
+    const int off = f.layout.inertia_offset(), n = f.layout.inertial_size();
+    const std::vector<double> pi(f.x.begin() + off, f.x.begin() + off + n);
+    detail::inertial_stage(Jd.middleCols(off, n), f.prior, f.prior_scale, pi,
+                           C.block(off, off, n, n), f.opt->inertia_prior, out);
+  }
 }
 
 /// Estimates, correlation and Wald intervals (value +- ci_quantile std) of the public parameters
@@ -626,7 +657,7 @@ void estimates(const FourBarFit& f, const std::vector<double>& x0, IdentifyResul
 /// fails, which it names in a warning).
 void predictions(const FourBarFit& f, IdentifyResult* out) {
   out->fitted_four_bar = f.scene;
-  f.layout.apply(f.x.data(), &out->fitted_four_bar.friction);
+  f.layout.apply(f.x.data(), &out->fitted_four_bar);
   const TorqueLog& L = f.cond.log;
   std::vector<sim::Row> motion(L.size()), rows;
   for (int i = 0; i < L.size(); ++i) {
@@ -657,7 +688,7 @@ IdentifyResult output_error(FourBarFit& f, IdentifyResult out,
     out.window_choice = "given: half-window " + std::to_string(out.sg_half_window) + " samples";
   }
   if (output_error_fit(&f, &out)) {
-    estimates(f, f.opt->initial.empty() ? stages::default_start(f.layout) : f.opt->initial, &out);
+    estimates(f, public_start(f), &out);
     predictions(f, &out);
     stages::output_error_levels(f.cond.log, f.first, f.last, &out);
   }
@@ -671,7 +702,9 @@ using namespace four_bar;
 
 std::string four_bar_unsupported(const IdentifyOptions& opt) {
   const std::string tail = " runs five-bars only (mechanism.type five_bar)";
-  if (opt.layout.inertia) return "--estimate inertia" + tail;
+  if (opt.layout.inertia && opt.method != Method::kInverseDynamics) {
+    return "--estimate inertia needs --method inverse-dynamics";
+  }
   if (opt.layout.actuator) return "--estimate actuator" + tail;
   return "";
 }
@@ -682,6 +715,8 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   IdentifyResult out;
   out.layout = opt.layout;
   out.layout.joints = kFourBarJoints;
+  out.layout.links = kFourBarLinks;
+  out.layout.actuators = 1;
   out.layout.static_as_excess = false;
   out.method = opt.method;
   out.samples = log.size();
@@ -718,11 +753,14 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   }
   bool from_noise = true;
   out.residual_noise_floor[0] = noise_floor(f, &from_noise);
+  if (f.layout.inertia) {
+    f.prior = detail::inertial_prior(scene.links.data(), kFourBarLinks, opt.inertia_prior);
+    f.prior_scale = out.residual_noise_floor[0];
+  }
   choose_loss_scale(&f, &out);
   ceres::Problem problem;
   if (!solve(&f, &problem, &out)) return out;
-  const std::vector<double> x0 =
-      opt.initial.empty() ? stages::default_start(f.layout) : opt.initial;
+  const std::vector<double> x0 = public_start(f);
   Eigen::MatrixXd Hinv;
   covariance(f, &problem, &out, &Hinv);
   const std::string structure = stages::structure_warning(

@@ -6,19 +6,26 @@
 #include <cmath>
 #include <sstream>
 
+#include "fivebar/model/format.h"
+
 namespace fivebar::identification::detail {
 
 InertialPrior inertial_prior(const Params<double>& scene, double relative) {
+  return inertial_prior(scene.links.data(), kLinks, relative);
+}
+
+InertialPrior inertial_prior(const Link<double>* links, int n, double relative) {
   InertialPrior p;
-  p.centre = standard_inertial(scene);
-  for (int l = 0; l < kLinks; ++l) {
-    const double m = scene.links[l].mass, len = scene.links[l].length;
+  p.links = n;
+  standard_inertial_links(links, n, p.centre.data());
+  for (int l = 0; l < n; ++l) {
+    const double m = links[l].mass, len = links[l].length;
     const double* c = &p.centre[kInertialPerLink * l];
     double* s = &p.sigma[kInertialPerLink * l];
     s[0] = relative * m;
     s[1] = s[2] = relative * m * len;
     s[3] = relative * std::abs(c[3]);
-    p.min_com_inertia[l] = 1e-3 * scene.links[l].inertia;
+    p.min_com_inertia[l] = 1e-3 * links[l].inertia;
   }
   return p;
 }
@@ -40,7 +47,7 @@ class InertialPriorCost : public ceres::CostFunction {
  public:
   InertialPriorCost(const InertialPrior& prior, int P, int offset, const double* s)
       : prior_(prior), P_(P), offset_(offset), s_(s) {
-    set_num_residuals(kInertialParams + kLinks);
+    set_num_residuals((kInertialPerLink + 1) * prior.links);
     mutable_parameter_block_sizes()->push_back(P);
   }
 
@@ -48,13 +55,14 @@ class InertialPriorCost : public ceres::CostFunction {
     const double* pi = x[0] + offset_;
     double* J = jac != nullptr ? jac[0] : nullptr;
     if (J != nullptr) std::fill(J, J + num_residuals() * P_, 0.0);
-    for (int i = 0; i < kInertialParams; ++i) {
+    const int N = kInertialPerLink * prior_.links;
+    for (int i = 0; i < N; ++i) {
       const double w = *s_ / prior_.sigma[i];
       r[i] = w * (pi[i] - prior_.centre[i]);
       if (J != nullptr) J[i * P_ + offset_ + i] = w;
     }
-    for (int l = 0; l < kLinks; ++l) {
-      const int row = kInertialParams + l, k = kInertialPerLink * l;
+    for (int l = 0; l < prior_.links; ++l) {
+      const int row = N + l, k = kInertialPerLink * l;
       double grad[4];
       const double gap = prior_.min_com_inertia[l] - com_inertia(pi + k, grad);
       // stiff: a gap of 1 % of the minimum costs as much as 100 prior std of J
@@ -96,7 +104,7 @@ ceres::CostFunction* inertial_prior_cost(const InertialPrior& prior, int P, int 
 void inertial_report(const Eigen::MatrixXd& W, const InertialPrior& prior, double s,
                      const std::vector<double>& pi, const Eigen::MatrixXd& covariance,
                      InertialReport* out) {
-  constexpr int N = kInertialParams;
+  const int N = kInertialPerLink * prior.links;
   Eigen::VectorXd sig(N);
   for (int i = 0; i < N; ++i) sig(i) = prior.sigma[i];
   const Eigen::MatrixXd Ws = W * sig.asDiagonal() / s;
@@ -143,9 +151,31 @@ void inertial_report(const Eigen::MatrixXd& W, const InertialPrior& prior, doubl
     const double post = std::sqrt(covariance(i, i));
     if (!(post < 0.5 * sig(i))) out->at_prior.push_back(inertial_name(i));
   }
-  std::array<double, N> p{};
-  std::copy(pi.begin(), pi.end(), p.begin());
-  out->consistent = inertial_consistent(p);
+  out->consistent = inertial_consistent(pi.data(), prior.links);
+}
+
+void inertial_stage(const Eigen::MatrixXd& W, const InertialPrior& prior, double s,
+                    const std::vector<double>& pi, const Eigen::MatrixXd& C, double prior_relative,
+                    IdentifyResult* out) {
+  InertialReport& rep = out->inertial;
+  rep.estimated = true;
+  rep.prior_relative = prior_relative;
+  if (!C.allFinite()) return;
+  inertial_report(W, prior, s, pi, C, &rep);
+  if (!rep.at_prior.empty()) {
+    std::string list;
+    for (const std::string& n : rep.at_prior) list += (list.empty() ? "" : ", ") + n;
+    out->warnings.push_back("the log determines " + std::to_string(rep.rank) + " of the " +
+                            std::to_string(kInertialPerLink * prior.links) +
+                            " inertial directions; " +
+                            "left at their prior (the scene's values, relative std " +
+                            format_significant(rep.prior_relative) + "): " + list);
+  }
+  if (!rep.consistent) {
+    out->warnings.push_back(
+        "the fitted inertial parameters are not physically consistent (some link has m <= 0 or "
+        "an inertia about its COM <= 0)");
+  }
 }
 
 }  // namespace fivebar::identification::detail

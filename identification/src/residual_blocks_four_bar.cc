@@ -16,9 +16,9 @@ mech::Vec<1, T> drive_torques(const FourBarEvaluationT<T>& ev) {
   return mech::Vec<1, T>(ev.M1);
 }
 
-/// r = tau - the drive torques of mech::inverse<M> at the sample's motion, the friction
-/// coefficients x[0] laid out by `layout` into the scene's friction. Coulomb signs are those of
-/// the sample's relative rates: data, so r is smooth in x.
+/// r = tau - the drive torques of mech::inverse<M> at the sample's motion, the parameters x[0]
+/// laid out by `layout` into the scene (its friction; with the inertia group, its links). Coulomb
+/// signs are those of the sample's relative rates: data, so r is smooth in x.
 template <class M>
 class MechanismResidual {
  public:
@@ -29,7 +29,7 @@ class MechanismResidual {
   template <typename T>
   bool operator()(T const* const* x, T* r) const {
     typename M::template Params<T> p = scene_.template cast<T>();
-    layout_.apply(x[0], &p.friction);
+    layout_.apply(x[0], &p);
     typename M::template Evaluation<T> ev;
     const Status st =
         mech::inverse<M, T>(p, s_.loads.template cast<T>(), s_.q.template cast<T>(),

@@ -30,29 +30,12 @@ Eigen::MatrixXd prior_information(const Fit& f) {
 
 namespace {
 
-/// Group inertia: base combinations, the parameters left at their prior (a warning), consistency.
+/// Group inertia: detail::inertial_stage at the fit.
 void inertial_stage(const Fit& f, const Eigen::MatrixXd& J, IdentifyResult* out) {
-  const int off = f.layout.inertia_offset();
-  InertialReport& rep = out->inertial;
-  rep.estimated = true;
-  rep.prior_relative = f.opt->inertia_prior;
-  const Eigen::MatrixXd C = out->covariance.block(off, off, kInertialParams, kInertialParams);
-  if (!C.allFinite()) return;
-  const std::vector<double> pi(f.x.begin() + off, f.x.end());
-  detail::inertial_report(J.middleCols(off, kInertialParams), f.prior, f.prior_scale, pi, C, &rep);
-  if (!rep.at_prior.empty()) {
-    std::string list;
-    for (const std::string& n : rep.at_prior) list += (list.empty() ? "" : ", ") + n;
-    out->warnings.push_back("the log determines " + std::to_string(rep.rank) +
-                            " of the 16 inertial directions; " +
-                            "left at their prior (the scene's values, relative std " +
-                            format_significant(rep.prior_relative) + "): " + list);
-  }
-  if (!rep.consistent) {
-    out->warnings.push_back(
-        "the fitted inertial parameters are not physically consistent (some link has m <= 0 or "
-        "an inertia about its COM <= 0)");
-  }
+  const int off = f.layout.inertia_offset(), n = f.layout.inertial_size();
+  const std::vector<double> pi(f.x.begin() + off, f.x.begin() + off + n);
+  detail::inertial_stage(J.middleCols(off, n), f.prior, f.prior_scale, pi,
+                         out->covariance.block(off, off, n, n), f.opt->inertia_prior, out);
 }
 
 /// The parameters of the covariance: those with an effect on the residuals, and of them those

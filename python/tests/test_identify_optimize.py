@@ -144,5 +144,12 @@ def test_identify_a_four_bar_log(root, cli, tmp_path):
     assert len(validation["windowed_rms_angle_error"]) == 1
     assert validation["windowed_theta1"].shape == result["omega1"].shape
     assert "windowed_theta2" not in validation
-    with pytest.raises(ValueError, match="four_bar: --estimate inertia runs five-bars only"):
-        fivebar.identify(scene, log, estimate="friction,inertia")
+    # the inertial group passes through: the three links' 12 standard parameters after the
+    # friction, the truth of each (the log's true.inertial) inside its interval (the CLI's fit of
+    # this log, tests/apps/cli_four_bar.py: every |z| below 1)
+    with_links = fivebar.identify(scene, log, estimate="friction,inertia")
+    names = [p["name"] for p in with_links["parameters"]]
+    assert names[:3] == ["coulomb", "viscous", "m_1"] and names[-1] == "J_3" and len(names) == 14
+    assert with_links["inertial"]["prior_relative_std"] == 0.2
+    for p in with_links["parameters"]:
+        assert p["ci95_low"] <= p["true"] <= p["ci95_high"], p["name"]

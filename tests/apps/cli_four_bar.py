@@ -360,10 +360,29 @@ else:
                         os.path.join(WORK, "fitted_run"), "--set", "simulation.duration=0.2"])
     if code != 0:
         failures.append("simulate of the fitted four-bar: exit %d: %s" % (code, err))
-expect_error(2, "mechanism.type: four_bar: --estimate inertia runs five-bars only",
-             ["identify", scene, "--log", id_log, "--estimate", "friction,inertia", "--out", bad])
 expect_error(2, "mechanism.type: four_bar: --estimate actuator runs five-bars only",
              ["identify", scene, "--log", id_log, "--estimate", "friction,actuator", "--out", bad])
+# the inertial group: the three links' 12 standard parameters after the friction, each truth
+# (synth-log's true.inertial) inside its interval on this log; the fitted links simulate
+inert = os.path.join(WORK, "fit_inertia")
+code, _, err = run(["identify", scene, "--log", id_log, "--estimate", "friction,inertia",
+                    "--out", inert, "--no-plots"])
+if code != 0:
+    failures.append("identify --estimate friction,inertia of the four-bar: exit %d: %s" % (code, err))
+else:
+    with open(os.path.join(inert, "identification.json")) as f:
+        params = json.load(f)["parameters"]
+    names = [p["name"] for p in params]
+    if len(names) != 14 or names[2] != "m_1" or names[-1] != "J_3":
+        failures.append("identify --estimate friction,inertia of the four-bar: names %r" % names)
+    for p in params:
+        if not p["ci95_low"] <= p.get("true", math.nan) <= p["ci95_high"]:
+            failures.append("four-bar inertia: %s's truth outside its interval" % p["name"])
+    code, _, err = run(["simulate", os.path.join(inert, "scene_fitted.yaml"), "--out",
+                        os.path.join(WORK, "fitted_inertia_run"), "--set",
+                        "simulation.duration=0.2"])
+    if code != 0:
+        failures.append("simulate of the four-bar's fitted links: exit %d: %s" % (code, err))
 # the validation window as the five-bar's: within the log, at least 2 samples
 expect_error(2, "--window: 100 s is longer than the log",
              ["identify", scene, "--log", id_log, "--window", "100", "--out", bad])

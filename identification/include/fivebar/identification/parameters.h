@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fivebar/model/four_bar_params.h"
 #include "fivebar/model/friction.h"
 #include "fivebar/model/inertial.h"
 #include "fivebar/model/params.h"
@@ -18,11 +19,12 @@ namespace fivebar::identification {
 /// The actuator group: offset, Coulomb and viscous friction of each of the two actuators.
 inline constexpr int kActuatorTerms = 3 * kActuators;
 
-/// Name of actuator term i (0..5): offset_1, offset_2, actuator_coulomb_1, actuator_coulomb_2,
-/// actuator_viscous_1, actuator_viscous_2 (1: tau1 / M1 at O, 2: tau2 / M2 at D0).
-inline std::string actuator_term_name(int i) {
+/// Name of actuator term i of `actuators` actuators (the five-bar's two: 0..5 offset_1, offset_2,
+/// actuator_coulomb_1, actuator_coulomb_2, actuator_viscous_1, actuator_viscous_2, 1: tau1 / M1 at
+/// O, 2: tau2 / M2 at D0; the four-bar's one: offset_1, actuator_coulomb_1, actuator_viscous_1).
+inline std::string actuator_term_name(int i, int actuators = kActuators) {
   static const char* kStem[] = {"offset_", "actuator_coulomb_", "actuator_viscous_"};
-  return kStem[i / kActuators] + std::to_string(i % kActuators + 1);
+  return kStem[i / actuators] + std::to_string(i % actuators + 1);
 }
 
 /// Which coefficients are free: the identifiable coefficients of the law's descriptor
@@ -49,6 +51,11 @@ struct ParameterLayout {
   /// joints with friction (the five-bar's 5, the four-bar's 4: slots 0..joints-1 of the friction
   /// arrays; per joint, one coefficient each; shared, one value written to every slot)
   int joints = kJoints;
+  /// moving links of the inertia group (the five-bar's 4; the four-bar's 3: crank, coupler,
+  /// rocker, whose standard parameters are m_1 .. J_3) and actuators of the actuator group (the
+  /// five-bar's 2; the four-bar's 1, its crank's: offset_1, actuator_coulomb_1, actuator_viscous_1)
+  int links = kLinks;
+  int actuators = kActuators;
 
   /// The coefficient of friction group g (0 <= g < groups()).
   Coefficient group(int g) const {
@@ -74,8 +81,10 @@ struct ParameterLayout {
   int per_group() const { return per_joint ? joints : 1; }
   int friction_size() const { return groups() * per_group(); }
   int inertia_offset() const { return friction_size(); }
-  int actuator_offset() const { return inertia_offset() + (inertia ? kInertialParams : 0); }
-  int size() const { return actuator_offset() + (actuator ? kActuatorTerms : 0); }
+  int inertial_size() const { return kInertialPerLink * links; }
+  int actuator_size() const { return 3 * actuators; }
+  int actuator_offset() const { return inertia_offset() + (inertia ? inertial_size() : 0); }
+  int size() const { return actuator_offset() + (actuator ? actuator_size() : 0); }
   bool is_inertial(int i) const {
     return inertia && i >= inertia_offset() && i < actuator_offset();
   }
@@ -91,10 +100,10 @@ struct ParameterLayout {
       }
     }
     if (inertia) {
-      for (int i = 0; i < kInertialParams; ++i) out.push_back(inertial_name(i));
+      for (int i = 0; i < inertial_size(); ++i) out.push_back(inertial_name(i));
     }
     if (actuator) {
-      for (int i = 0; i < kActuatorTerms; ++i) out.push_back(actuator_term_name(i));
+      for (int i = 0; i < actuator_size(); ++i) out.push_back(actuator_term_name(i, actuators));
     }
     return out;
   }
@@ -102,7 +111,7 @@ struct ParameterLayout {
   /// Unit of parameter i.
   std::string unit(int i) const {
     if (is_inertial(i)) return inertial_unit(i - inertia_offset());
-    if (is_actuator(i)) return (i - actuator_offset()) / kActuators == 2 ? "N m s/rad" : "N m";
+    if (is_actuator(i)) return (i - actuator_offset()) / actuators == 2 ? "N m s/rad" : "N m";
     const std::string u = coefficient_info(group(i / per_group())).unit;
     // f multiplies r_k N_k: a coefficient is per N m of load torque
     return u == "rad/s" ? u : (u == "-" ? "1" : "N m " + u) + " (per N m of load)";
@@ -113,7 +122,7 @@ struct ParameterLayout {
   /// inertia about the COM is kept > 0 by identify()'s consistency term).
   double lower_bound(int i) const {
     if (is_actuator(i)) {  // offsets are signed; friction coefficients >= 0
-      return i - actuator_offset() < kActuators ? -std::numeric_limits<double>::max() : 0.0;
+      return i - actuator_offset() < actuators ? -std::numeric_limits<double>::max() : 0.0;
     }
     if (is_inertial(i)) {
       return (i - inertia_offset()) % kInertialPerLink == 0 ? 1e-6
@@ -130,6 +139,15 @@ struct ParameterLayout {
     apply(x, &p->friction);
     if (inertia) set_standard_inertial(x + inertia_offset(), p);
     if (actuator) apply_actuators(x + actuator_offset(), &p->actuators);
+  }
+
+  /// Writes the parameter vector x into the four-bar `p`: its friction (law set to `law`) and,
+  /// with the inertia group, its three links' mass, COM and inertia (the actuator group is the
+  /// caller's: the four-bar's model has no actuator terms).
+  template <typename T>
+  void apply(const T* x, FourBarParamsT<T>* p) const {
+    apply(x, &p->friction);
+    if (inertia) set_standard_inertial_links(x + inertia_offset(), links, p->links.data());
   }
 
   /// Writes the 6 actuator terms (offsets, Coulomb, viscous; kActuatorTerms order) into `a`.

@@ -27,14 +27,14 @@ inline const char* inertial_unit(int i) {
   return kUnits[i % kInertialPerLink];
 }
 
-/// The 16 standard parameters of `p`.
+/// The standard parameters of the n links `links` into pi[0 .. 4 n) (the five-bar's four, the
+/// four-bar's three: crank, coupler, rocker).
 template <typename T>
-std::array<T, kInertialParams> standard_inertial(const Params<T>& p) {
+void standard_inertial_links(const Link<T>* links, int n, T* pi) {
   using std::cos;
   using std::sin;
-  std::array<T, kInertialParams> pi{};
-  for (int i = 0; i < kLinks; ++i) {
-    const Link<T>& L = p.links[i];
+  for (int i = 0; i < n; ++i) {
+    const Link<T>& L = links[i];
     const T cx = L.com_offset * cos(L.com_angle);
     const T cy = L.com_offset * sin(L.com_angle);
     pi[kInertialPerLink * i + 0] = L.mass;
@@ -42,18 +42,26 @@ std::array<T, kInertialParams> standard_inertial(const Params<T>& p) {
     pi[kInertialPerLink * i + 2] = L.mass * cy;
     pi[kInertialPerLink * i + 3] = L.inertia + L.mass * (cx * cx + cy * cy);
   }
+}
+
+/// The 16 standard parameters of `p`.
+template <typename T>
+std::array<T, kInertialParams> standard_inertial(const Params<T>& p) {
+  std::array<T, kInertialParams> pi{};
+  standard_inertial_links(p.links.data(), kLinks, pi.data());
   return pi;
 }
 
-/// Writes 16 standard parameters into the links of `p` (mass, com_offset, com_angle, inertia about
-/// the COM). Physically consistent only when m > 0 and J_O - (mx^2 + my^2) / m > 0: check with
-/// inertial_consistent(). A COM at the joint (mx = my = 0) keeps com_angle at 0.
+/// Writes the standard parameters pi[0 .. 4 n) into the n links `links` (mass, com_offset,
+/// com_angle, inertia about the COM). Physically consistent only when m > 0 and
+/// J_O - (mx^2 + my^2) / m > 0: check with inertial_consistent(). A COM at the joint
+/// (mx = my = 0) keeps com_angle at 0.
 template <typename T>
-void set_standard_inertial(const T* pi, Params<T>* p) {
+void set_standard_inertial_links(const T* pi, int n, Link<T>* links) {
   using std::atan2;
   using std::sqrt;
-  for (int i = 0; i < kLinks; ++i) {
-    Link<T>& L = p->links[i];
+  for (int i = 0; i < n; ++i) {
+    Link<T>& L = links[i];
     const T& m = pi[kInertialPerLink * i + 0];
     const T& mx = pi[kInertialPerLink * i + 1];
     const T& my = pi[kInertialPerLink * i + 2];
@@ -71,14 +79,25 @@ void set_standard_inertial(const T* pi, Params<T>* p) {
   }
 }
 
-/// True when every link has m > 0 and an inertia about its COM > 0.
-inline bool inertial_consistent(const std::array<double, kInertialParams>& pi) {
-  for (int i = 0; i < kLinks; ++i) {
+/// Writes 16 standard parameters into the links of `p` (set_standard_inertial_links).
+template <typename T>
+void set_standard_inertial(const T* pi, Params<T>* p) {
+  set_standard_inertial_links(pi, kLinks, p->links.data());
+}
+
+/// True when each of the n links of pi[0 .. 4 n) has m > 0 and an inertia about its COM > 0.
+inline bool inertial_consistent(const double* pi, int n) {
+  for (int i = 0; i < n; ++i) {
     const double m = pi[kInertialPerLink * i], mx = pi[kInertialPerLink * i + 1],
                  my = pi[kInertialPerLink * i + 2], jo = pi[kInertialPerLink * i + 3];
     if (!(m > 0) || !(jo - (mx * mx + my * my) / m > 0)) return false;
   }
   return true;
+}
+
+/// True when every link has m > 0 and an inertia about its COM > 0.
+inline bool inertial_consistent(const std::array<double, kInertialParams>& pi) {
+  return inertial_consistent(pi.data(), kLinks);
 }
 
 }  // namespace fivebar
