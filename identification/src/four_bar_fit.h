@@ -114,6 +114,19 @@ ceres::Solver::Options solver_options(const FourBarFit& f);
 /// a warning when it stopped before converging); false (out->status) when it failed.
 bool record_solve(const ceres::Solver::Summary& summary, double cost_weight, IdentifyResult* out);
 
+/// The root mean square of r (0 when empty).
+double rms(const std::vector<double>& r);
+
+// ---- four_bar_covariance.cc ----
+
+/// The singular values of J with its columns scaled to unit norm (out->singular_values).
+void scaled_singular_values(const Eigen::MatrixXd& J, IdentifyResult* out);
+
+/// The covariance of the internal parameters at the fit (out->covariance, NaN where it cannot
+/// be formed), the torque residual's levels, the singular values and, with group inertia, the
+/// inertial report; *Hinv the inverse information (J^T J)^-1 (the profiles' scale).
+void covariance(FourBarFit& f, ceres::Problem* problem, IdentifyResult* out, Eigen::MatrixXd* Hinv);
+
 /// Estimates, correlation and Wald intervals of the public parameters at f.x, from
 /// out->covariance (internal parameters); x0: the public start values.
 void estimates(const FourBarFit& f, const std::vector<double>& x0, IdentifyResult* out);

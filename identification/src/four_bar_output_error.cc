@@ -61,16 +61,9 @@ void window_analysis(const std::vector<int>& sizes, int P, ceres::Problem* probl
   if (!stages::raw_residuals(problem, &r, &crs)) return;
   const Eigen::MatrixXd J = stages::dense(crs, P);
   const int m = static_cast<int>(r.size());
-  double s2 = 0;
-  for (double v : r) s2 += v * v;
-  out->rms_angle_residual[0] = std::sqrt(s2 / std::max(1, m));
-  out->residual_sigma = std::sqrt(s2 / std::max(1, m - P));
-  Eigen::MatrixXd Js = J;
-  for (int i = 0; i < P; ++i) Js.col(i) /= std::max(1e-300, J.col(i).norm());
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js);
-  for (int i = 0; i < svd.singularValues().size(); ++i) {
-    out->singular_values.push_back(svd.singularValues()(i));
-  }
+  out->rms_angle_residual[0] = rms(r);
+  out->residual_sigma = std::sqrt(rms(r) * rms(r) * m / std::max(1, m - P));
+  scaled_singular_values(J, out);
   if (!out->converged) return;
   const Eigen::MatrixXd C = stages::window_covariance(sizes, J, r, out);
   if (C.size() > 0) out->covariance = C;

@@ -466,6 +466,19 @@ bool model_error_evidenced(const CauseSteps& cs) {
 
 }  // namespace
 
+/// The delay's verdict (delay_verdict) and, where another cause explains as much, the words
+/// naming it (ModelVerdict::delay_falls).
+void judge_delay(const CauseSteps& cs, ModelVerdict* verdict) {
+  int rival = kCauseCount;
+  verdict->delay = delay_verdict(cs, &rival, &verdict->delay_tied);
+  if (verdict->delay != ModelVerdict::Delay::kNotMost) return;
+  verdict->delay_falls = std::string(verdict->delay_tied ? "it explains the most of the misfit, "
+                                                           "though not clearly more than "
+                                                         : "it does not explain clearly more "
+                                                           "of the misfit than ") +
+                         kCauseText[rival].what + " (" + falls_clause(cs, rival) + ")";
+}
+
 /// model_check on the fit f, its residual whitened by the noise floors fl (an: its own data
 /// residuals and Jacobian, check_inputs; nullptr for a fit other than the solved one);
 /// *evidenced: model_error_evidenced.
@@ -495,15 +508,7 @@ ModelVerdict check_at(const Fit& fit, const double fl[2], const Analysis* an, Id
   }
   const CauseSteps cs = cause_steps(J, r, idx, info, bias, !f.rates_biased);
   *evidenced = model_error_evidenced(cs);
-  int rival = kCauseCount;
-  verdict.delay = delay_verdict(cs, &rival, &verdict.delay_tied);
-  if (verdict.delay == ModelVerdict::Delay::kNotMost) {
-    verdict.delay_falls = std::string(verdict.delay_tied ? "it explains the most of the misfit, "
-                                                           "though not clearly more than "
-                                                         : "it does not explain clearly more "
-                                                           "of the misfit than ") +
-                          kCauseText[rival].what + " (" + falls_clause(cs, rival) + ")";
-  }
+  judge_delay(cs, &verdict);
   out->model_check = cs.report;
   if (cs.slot[kCauseDelay] >= 0) {
     out->model_check[cs.slot[kCauseDelay]].evidenced =
