@@ -167,6 +167,11 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
         kFlags, "--smooth-sign",
         "must be >= 0 [rad/s] (0: the exact sign), got " + format_shortest(a.smooth_sign));
   }
+  // the fitted scene carries it: a value its reader refuses is refused here
+  if (a.smooth_sign > 0) {
+    const std::string why = limit_problem("friction.smoothing_velocity", a.smooth_sign);
+    if (!why.empty()) throw InputError(kFlags, "--smooth-sign", why + " (0: the exact sign)");
+  }
   if (!(a.min_rate >= 0) || !std::isfinite(a.min_rate)) {
     // the command line's shared rule words it the same (command.cc, nonnegative_number)
     throw InputError(kFlags, "--min-rate", "must be >= 0, got " + format_shortest(a.min_rate));
@@ -275,6 +280,7 @@ id::IdentifyResult identify_four_bar_scene(const Scene& scene, const id::TorqueL
                                            const id::IdentifyOptions& options) {
   check_sg_window(options, log);
   check_window(options, log);
+  check_smooth_sign(options, log);
   if (options.check_degrees && log.has_rates) {
     const std::string why = id::rates_look_like_degrees(log.t, log.theta1, log.omega1);
     if (!why.empty()) {

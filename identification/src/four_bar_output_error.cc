@@ -52,9 +52,10 @@ ceres::Solver::Options output_error_options(const FourBarFit& f) {
 }
 
 /// The residuals, their Jacobian's singular values (columns scaled to 1) and the window
-/// sandwich at the fit (out->covariance NaN where it cannot be formed).
-void window_analysis(const std::vector<int>& sizes, int P, ceres::Problem* problem,
-                     IdentifyResult* out) {
+/// sandwich at the fit, or with `errors_in_variables` off the residual variance's covariance
+/// (out->covariance NaN where it cannot be formed).
+void window_analysis(const std::vector<int>& sizes, int P, bool errors_in_variables,
+                     ceres::Problem* problem, IdentifyResult* out) {
   out->covariance = Eigen::MatrixXd::Constant(P, P, kNaN);
   std::vector<double> r;
   ceres::CRSMatrix crs;
@@ -65,6 +66,14 @@ void window_analysis(const std::vector<int>& sizes, int P, ceres::Problem* probl
   out->residual_sigma = std::sqrt(rms(r) * rms(r) * m / std::max(1, m - P));
   scaled_singular_values(J, out);
   if (!out->converged) return;
+  if (!errors_in_variables) {  // --classical-std: the residual variance, the five-bar's warning
+    const Eigen::MatrixXd H = J.transpose() * J;
+    out->covariance =
+        out->residual_sigma * out->residual_sigma * H.ldlt().solve(Eigen::MatrixXd::Identity(P, P));
+    out->std_method = "residual-variance";
+    out->warnings.push_back(stages::kIndependentWindowResiduals);
+    return;
+  }
   const Eigen::MatrixXd C = stages::window_covariance(sizes, J, r, out);
   if (C.size() > 0) out->covariance = C;
 }
@@ -96,7 +105,7 @@ bool output_error_fit(FourBarFit* f, IdentifyResult* out) {
   ceres::Solver::Summary summary;
   ceres::Solve(output_error_options(*f), &problem, &summary);
   if (!record_solve(summary, 1.0, out)) return false;
-  window_analysis(sizes, f->layout.size(), &problem, out);
+  window_analysis(sizes, f->layout.size(), opt.errors_in_variables, &problem, out);
   return true;
 }
 

@@ -477,16 +477,21 @@ void predictions(const FourBarFit& f, IdentifyResult* out) {
 IdentifyResult output_error(FourBarFit& f, IdentifyResult out,
                             std::chrono::steady_clock::time_point start) {
   // every sample the rates reach is in a window (slip reversals and joints at rest too)
+  const int P = f.layout.size();
+  require_samples(f.cond.log, P + 1 + 2 * f.hw,
+                  std::to_string(P) + " parameters + 1 + the Savitzky-Golay window");
   out.used.assign(f.cond.log.size(), 0);
   std::fill(out.used.begin() + f.first, out.used.begin() + f.last + 1, 1);
   out.samples_used = f.last - f.first + 1;
   if (out.accels_estimated && out.window_choice.empty()) {
-    out.window_choice = "given: half-window " + std::to_string(out.sg_half_window) + " samples";
+    out.window_choice = std::string(f.opt->auto_window ? "default" : "given") + ": half-window " +
+                        std::to_string(out.sg_half_window) + " samples";
   }
   if (output_error_fit(&f, &out)) {
     estimates(f, public_start(f), &out);
     predictions(f, &out);
     stages::output_error_levels(f.cond.log, f.first, f.last, &out);
+    stages::output_error_misfit(&out);
   }
   out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
@@ -500,6 +505,11 @@ std::string four_bar_unsupported(const IdentifyOptions& opt) {
   const std::string tail = " runs five-bars only (mechanism.type five_bar)";
   if (opt.layout.inertia && opt.method != Method::kInverseDynamics) {
     return "--estimate inertia needs --method inverse-dynamics";
+  }
+  if (opt.layout.per_joint && opt.method != Method::kInverseDynamics) {
+    return "--per-joint with --method output-error: the crank angle does not tell the joints' "
+           "coefficients apart (a drag link's clean 10 s log read coulomb_3 3499 std off); use "
+           "--method inverse-dynamics";
   }
   if (opt.layout.actuator) return "--estimate actuator" + tail;
   return "";

@@ -229,6 +229,12 @@ sim::Options window_sim_options(double rtol);
 /// same order at any scale of the mechanism.
 inline constexpr double kOutputErrorLossScale = 0.1;
 
+/// Output error's warning under --classical-std (the residual variance's std).
+inline constexpr const char* kIndependentWindowResiduals =
+    "output-error standard deviations treat the angle residuals as independent; within a window "
+    "they are correlated (they integrate the torque noise), so the reported std understate the "
+    "uncertainty";
+
 /// An output-error window's run: the mechanism at the parameters x (internal, ParameterLayout)
 /// from the logged state at the window's start under the logged torques, over `options`.
 using WindowSimulation = std::function<sim::Result(const double* x, const sim::Options& options)>;
@@ -255,6 +261,13 @@ Eigen::MatrixXd window_covariance(const std::vector<int>& sizes, const Eigen::Ma
 /// Output error: the torque residual of the fitted scene (out->predicted_tau1, and tau2 when it
 /// has one) over the log samples [first, last], and its white-noise level.
 void output_error_levels(const TorqueLog& log, int first, int last, IdentifyResult* out);
+
+/// Output error's residual rule (it has no model check): a torque residual (output_error_levels)
+/// more than kMisfitRatio times its noise floor makes the fit unusable, with a warning saying
+/// why. Clean logs read 1.0-2.0 (the rates' smoothing in the predicted torques: 2.0 on a light
+/// five-bar from angles); a torque gain of 1.1, an offset, an encoder zero, a link 15 % lighter
+/// or negated torques read 4.5-97 on a four-bar's.
+void output_error_misfit(IdentifyResult* out);
 
 // ---- stage_solve.cc ----
 

@@ -136,12 +136,7 @@ class OutputErrorMethod final : public MethodStrategy {
   }
 
   void residual_levels(const Fit& f, const Analysis& an, IdentifyResult* out) const override {
-    if (!f.opt->errors_in_variables) {
-      out->warnings.push_back(
-          "output-error standard deviations treat the angle residuals as independent; within a "
-          "window they are correlated (they integrate the torque noise), so the reported std "
-          "understate the uncertainty");
-    }
+    if (!f.opt->errors_in_variables) out->warnings.push_back(kIndependentWindowResiduals);
     rms_pair(an.r, out->rms_angle_residual);
   }
 
@@ -156,6 +151,7 @@ class OutputErrorMethod final : public MethodStrategy {
 
   void prediction_levels(const Fit& f, IdentifyResult* out) const override {
     output_error_levels(f.cond.log, f.first, f.last, out);
+    output_error_misfit(out);
   }
 
   bool fits_groups() const override { return false; }

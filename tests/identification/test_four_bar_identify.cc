@@ -370,6 +370,16 @@ TEST(FourBarIdentify, RobustLossTakesOutSpikesKeptInTheFit) {
   EXPECT_EQ(plain.loss_scale, 0.0);
 }
 
+TEST(FourBarIdentify, RefusesPerJointOutputError) {
+  IdentifyOptions opt = four_bar_options();
+  opt.method = Method::kOutputError;
+  opt.layout.per_joint = true;
+  EXPECT_NE(four_bar_unsupported(opt).find("--per-joint with --method output-error"),
+            std::string::npos);
+  opt.layout.per_joint = false;
+  EXPECT_EQ(four_bar_unsupported(opt), "");
+}
+
 TEST(FourBarIdentify, RefusesTheFiveBarsOptions) {
   const TorqueLog log = crank_rocker_log(crank_rocker().p, 0.5, 0, 0, 1, false);
   IdentifyOptions opt = four_bar_options();
@@ -430,6 +440,14 @@ TEST(FourBarIdentify, OutputErrorRecoversTheFriction) {
       EXPECT_GE(e.ci_high, truth) << e.name << " seed " << seed;
     }
     EXPECT_NEAR(res.fitted_four_bar.friction.viscous[2], res.parameters[1].value, 1e-15);
+    EXPECT_TRUE(res.unusable.empty()) << res.unusable;
+    // the torque sensor's gain 10 % off: output error has no model check, and its residual
+    // rule makes the fit unusable
+    TorqueLog gained = log;
+    for (double& v : gained.tau1) v *= 1.1;
+    const IdentifyResult off = identify(crank_rocker().p, crank_rocker().loads, gained, opt);
+    ASSERT_TRUE(off.status.ok()) << off.status.message;
+    EXPECT_NE(off.unusable.find("times its noise floor"), std::string::npos) << seed;
   }
 }
 
