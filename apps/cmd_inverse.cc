@@ -238,6 +238,11 @@ void estimate_noise(const CrankSeries& c, Motion* m) {
 /// 0.26-3 times the peak rate and held every row; at 50 Hz from angles, 0.22; from 100 Hz on,
 /// and the five-bar at 25 Hz and finer, below 0.07 (not capped).
 constexpr double kRestResolution = 0.1;
+/// The rate threshold derived from the noise is at least this fraction of the largest rate: a
+/// simulated run holds a stuck joint within its tolerance (2.6e-10 rad/s at the default rtol on a
+/// Stribeck five-bar), above the rounding-level noise such a smooth file reads (a threshold of
+/// 3.2e-11 read 478 held rows as slipping, their torques 0.29 N m off)
+constexpr double kHeldRateFloor = 1e-8;
 
 /// A crank's angles move when they span more than this many deviations of their noise: angles at
 /// rest span about 9 over 1e5 samples of Gaussian noise (a noisy hold, whose largest rates are
@@ -333,11 +338,15 @@ RestRule rest_rule(const Scene& scene, const Motion& motion) {
                " rad/s (sample finer, or set simulation.rest_rate_threshold)";
     derived.rate = motion.rest_rate_cap;
   }
+  const double floor = kHeldRateFloor * motion.rest_rate_cap / kRestResolution;
+  const bool floored = !rate_set && derived.rate < floor;
+  if (floored) derived.rate = floor;
   r.thresholds = scene.rest_thresholds(derived);
   const std::string noise = format_double(kRestSigmas) + " x the estimated noise";
   const std::string rate_derived =
-      r.capped.empty() ? noise
-                       : "capped at " + format_double(kRestResolution) + " x the largest rate";
+      !r.capped.empty() ? "capped at " + format_double(kRestResolution) + " x the largest rate"
+      : floored         ? "at least " + format_double(kHeldRateFloor) + " x the largest rate"
+                        : noise;
   r.source = std::string("rate: ") + (rate_set ? "scene" : rate_derived) +
              "; acceleration: " + (accel_set ? "scene" : noise);
   return r;

@@ -167,10 +167,15 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
         kFlags, "--smooth-sign",
         "must be >= 0 [rad/s] (0: the exact sign), got " + format_shortest(a.smooth_sign));
   }
-  // the fitted scene carries it: a value its reader refuses is refused here
-  if (a.smooth_sign > 0) {
-    const std::string why = limit_problem("friction.smoothing_velocity", a.smooth_sign);
-    if (!why.empty()) throw InputError(kFlags, "--smooth-sign", why + " (0: the exact sign)");
+  // the fitted scene carries it: a value below its reader's range is refused here (one above
+  // the log's largest rate is refused once the log is read: check_smooth_sign)
+  const SceneLimit* smooth = scene_limit("friction.smoothing_velocity");
+  if (a.smooth_sign > 0 && smooth != nullptr && a.smooth_sign < smooth->low) {
+    throw InputError(kFlags, "--smooth-sign",
+                     "must be at least " + format_double(smooth->low) +
+                         " rad/s (the plausible range of a machine, docs/scene.md; 0: the exact "
+                         "sign), got " +
+                         format_double(a.smooth_sign));
   }
   if (!(a.min_rate >= 0) || !std::isfinite(a.min_rate)) {
     // the command line's shared rule words it the same (command.cc, nonnegative_number)
