@@ -1007,12 +1007,23 @@ void write_design(const Args& a, const Scene& scene, const id::ExcitationOptions
   print_written(out->dir(), out->commit());
 }
 
+// the design is for identify's default law: a scene of another law is told what its std are
+void warn_other_law(const Scene& scene) {
+  const FrictionLaw law = friction_of(scene).law;
+  if (law == FrictionLaw::kCoulombViscous || law == FrictionLaw::kNone) return;
+  warn(std::string("the design and its predicted std are those of a coulomb_viscous fit "
+                   "(identify's default law); the scene's law is ") +
+       id::law_name(law) + ": a fit with --law " + id::law_name(law) +
+       " reports other std (a power_viscous scene's viscous read 0.23 times the prediction)");
+}
+
 int run(const Args& given) {
   OutputDir::remove_previous(given.scene.out, kOutputs);  // a refused run leaves none of them
   Scene scene = load_scene(given.scene.scene, given.scene.sets, /*four_bar_ok=*/true);
   for (const std::string& w : scene.warnings) warn(w);
   const Args a = resolved(given, scene);
   const id::ExcitationOptions o = options_of(a, scene);  // (the options checked first)
+  warn_other_law(scene);
   const LoadExpressions loads(scene);
   loads.require_finite(a.design.duration, 1 / a.design.rate_hz);
   const std::shared_ptr<const id::ExcitationMechanism> mech = mechanism_of(scene, loads, o);
