@@ -97,6 +97,25 @@ void check_smooth_sign(const id::IdentifyOptions& options, const id::TorqueLog& 
                        "fit); use at most a fraction of it (0: the exact sign)");
 }
 
+/// --smooth-sign's value before the log is read: >= 0, and where positive not below the scene
+/// reader's range (the fitted scene carries it; a value above the log's largest rate is refused
+/// once the log is read: check_smooth_sign). The default's -1 (the scene's) is not for users:
+/// the command line rejects negative values.
+void check_smooth_sign_value(double v) {
+  if (!std::isfinite(v) || (v < 0 && v != -1)) {
+    throw InputError(kFlags, "--smooth-sign",
+                     "must be >= 0 [rad/s] (0: the exact sign), got " + format_shortest(v));
+  }
+  const SceneLimit* smooth = scene_limit("friction.smoothing_velocity");
+  if (v > 0 && smooth != nullptr && v < smooth->low) {
+    throw InputError(kFlags, "--smooth-sign",
+                     "must be at least " + format_double(smooth->low) +
+                         " rad/s (the plausible range of a machine, docs/scene.md; 0: the exact "
+                         "sign), got " +
+                         format_double(v));
+  }
+}
+
 /// The scene's friction as the start of a fit of `law`: the coefficients the scene's law
 /// identifies or requires keep their values (a LuGre scene identifies none, and requires its
 /// coulomb); of the others, one that defaults to another takes its value (static_coulomb:
@@ -161,22 +180,7 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   if (!(a.window >= 0) || !std::isfinite(a.window)) {
     throw InputError(kFlags, "--window", "must be > 0 (0: the default)");
   }
-  // the default's -1 (the scene's) is not for users: the command line rejects negative values
-  if (!std::isfinite(a.smooth_sign) || (a.smooth_sign < 0 && a.smooth_sign != -1)) {
-    throw InputError(
-        kFlags, "--smooth-sign",
-        "must be >= 0 [rad/s] (0: the exact sign), got " + format_shortest(a.smooth_sign));
-  }
-  // the fitted scene carries it: a value below its reader's range is refused here (one above
-  // the log's largest rate is refused once the log is read: check_smooth_sign)
-  const SceneLimit* smooth = scene_limit("friction.smoothing_velocity");
-  if (a.smooth_sign > 0 && smooth != nullptr && a.smooth_sign < smooth->low) {
-    throw InputError(kFlags, "--smooth-sign",
-                     "must be at least " + format_double(smooth->low) +
-                         " rad/s (the plausible range of a machine, docs/scene.md; 0: the exact "
-                         "sign), got " +
-                         format_double(a.smooth_sign));
-  }
+  check_smooth_sign_value(a.smooth_sign);
   if (!(a.min_rate >= 0) || !std::isfinite(a.min_rate)) {
     // the command line's shared rule words it the same (command.cc, nonnegative_number)
     throw InputError(kFlags, "--min-rate", "must be >= 0, got " + format_shortest(a.min_rate));
