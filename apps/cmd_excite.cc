@@ -1011,10 +1011,17 @@ void write_design(const Args& a, const Scene& scene, const id::ExcitationOptions
 void warn_other_law(const Scene& scene) {
   const FrictionLaw law = friction_of(scene).law;
   if (law == FrictionLaw::kCoulombViscous || law == FrictionLaw::kNone) return;
-  warn(std::string("the design and its predicted std are those of a coulomb_viscous fit "
-                   "(identify's default law); the scene's law is ") +
-       id::law_name(law) + ": a fit with --law " + id::law_name(law) +
-       " reports other std (a power_viscous scene's viscous read 0.23 times the prediction)");
+  const std::string name = id::law_name(law);
+  const std::string other =
+      id::law_is_identifiable(law_descriptor(law))
+          ? ": a fit with --law " + name +
+                " reports other std (a power_viscous scene's viscous read 0.23 times the "
+                "prediction)"
+          : " (identify fits it as coulomb_viscous or stribeck only)";
+  warn(
+      "the design and its predicted std are those of a coulomb_viscous fit (identify's default "
+      "law); the scene's law is " +
+      name + other);
 }
 
 int run(const Args& given) {

@@ -338,7 +338,10 @@ RestRule rest_rule(const Scene& scene, const Motion& motion) {
                " rad/s (sample finer, or set simulation.rest_rate_threshold)";
     derived.rate = motion.rest_rate_cap;
   }
-  const double floor = kHeldRateFloor * motion.rest_rate_cap / kRestResolution;
+  // (a file whose angles do not move has no cap, and no floor)
+  const double floor = std::isfinite(motion.rest_rate_cap)
+                           ? kHeldRateFloor * motion.rest_rate_cap / kRestResolution
+                           : 0.0;
   const bool floored = !rate_set && derived.rate < floor;
   if (floored) derived.rate = floor;
   r.thresholds = scene.rest_thresholds(derived);

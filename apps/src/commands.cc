@@ -84,17 +84,22 @@ double largest_rate(const id::TorqueLog& log) {
   return w;
 }
 
-/// A --smooth-sign beyond the log's largest rate is bad input: tanh(w / w_s) is then nearly
+/// A smoothing velocity beyond the log's largest rate is bad input: tanh(w / w_s) is then nearly
 /// linear over the whole log, so Coulomb friction cannot be told from viscous friction (1e19
-/// left coulomb at its start, with no std)
-void check_smooth_sign(const id::IdentifyOptions& options, const id::TorqueLog& log) {
+/// left coulomb at its start, with no std). The fit's: --smooth-sign, else the scene's
+/// friction.smoothing_velocity (named as the key it came from).
+void check_smooth_sign(const id::IdentifyOptions& options, const Scene& scene,
+                       const id::TorqueLog& log) {
+  const bool given = options.smoothing_velocity >= 0;
+  const double ws = given ? options.smoothing_velocity : friction_of(scene).smoothing_velocity;
   const double w = largest_rate(log);
-  if (!(options.smoothing_velocity > 0) || !(w > 0) || options.smoothing_velocity <= w) return;
-  throw InputError(kFlags, "--smooth-sign",
-                   format_shortest(options.smoothing_velocity) +
-                       " rad/s is beyond the log's largest rate, " + format_significant(w, 3) +
-                       " rad/s: the sign would be linear in the rate (no Coulomb friction to "
-                       "fit); use at most a fraction of it (0: the exact sign)");
+  if (!(ws > 0) || !(w > 0) || ws <= w) return;
+  const std::string why = format_shortest(ws) + " rad/s is beyond the log's largest rate, " +
+                          format_significant(w, 3) +
+                          " rad/s: the sign would be linear in the rate (no Coulomb friction to "
+                          "fit); use at most a fraction of it (0: the exact sign)";
+  if (given) throw InputError(kFlags, "--smooth-sign", why);
+  throw InputError(scene.path, "friction.smoothing_velocity", why + " or --smooth-sign 0");
 }
 
 /// --smooth-sign's value before the log is read: >= 0, and where positive not below the scene
@@ -262,7 +267,7 @@ id::IdentifyResult identify_scene(const Scene& scene, const sim::LoadFunction& l
                                   const id::TorqueLog& log, const id::IdentifyOptions& options) {
   check_sg_window(options, log);
   check_window(options, log);
-  check_smooth_sign(options, log);
+  check_smooth_sign(options, scene, log);
   LoadExpressions(scene).require_finite(log.t);
   id::IdentifyResult res;
   try {
@@ -289,7 +294,7 @@ id::IdentifyResult identify_four_bar_scene(const Scene& scene, const id::TorqueL
                                            const id::IdentifyOptions& options) {
   check_sg_window(options, log);
   check_window(options, log);
-  check_smooth_sign(options, log);
+  check_smooth_sign(options, scene, log);
   if (options.check_degrees && log.has_rates) {
     const std::string why = id::rates_look_like_degrees(log.t, log.theta1, log.omega1);
     if (!why.empty()) {

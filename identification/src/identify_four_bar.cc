@@ -576,8 +576,9 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   // per joint, a log rarely determines every joint's coefficients, and each undetermined one
   // costs its re-fits (five of eight on a 3 s crank-rocker log: 26 re-fits, 20 s of CPU against
   // the fit's 0.5 s): a per-joint fit keeps its Wald intervals; so does a robust fit, whose
-  // cost is not the likelihood the profile reads
-  if (!f.layout.per_joint && opt.loss == Loss::kNone) {
+  // cost is not the likelihood the profile reads, and one with the inertial group (a drag
+  // link's log with a torque offset: its profile re-fits ran past a minute)
+  if (!f.layout.per_joint && !f.layout.inertia && opt.loss == Loss::kNone) {
     stages::profile_intervals({f.layout, f.x, &problem, Hinv, solver_options(f), f.cost_weight},
                               &out);
   }

@@ -46,9 +46,10 @@ void output_error_levels(const TorqueLog& log, int first, int last, IdentifyResu
 
 void output_error_misfit(IdentifyResult* out) {
   const double ratio = misfit_ratio(*out);
-  if (!(ratio > kMisfitRatio) || !out->unusable.empty()) return;
+  if (!(ratio > kOutputErrorMisfitRatio) || !out->unusable.empty()) return;
   out->unusable = "the fitted scene's torque residual is " + format_significant(ratio, 3) +
-                  " times its noise floor (more than " + format_significant(kMisfitRatio) +
+                  " times its noise floor (more than " +
+                  format_significant(kOutputErrorMisfitRatio) +
                   "): the scene, the law or the log's sensors miss what the log shows, and output "
                   "error names no cause (the default method, inverse dynamics, runs the model "
                   "check that does)";

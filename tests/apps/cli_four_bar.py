@@ -366,6 +366,9 @@ expect_error(2, "--smooth-sign: must be at least 1e-09 rad/s",
              ["identify", scene, "--log", id_log, "--smooth-sign", "1e-10", "--out", bad])
 expect_error(2, "--smooth-sign: 500 rad/s is beyond the log's largest rate",
              ["identify", scene, "--log", id_log, "--smooth-sign", "500", "--out", bad])
+expect_error(2, "friction.smoothing_velocity: 500 rad/s is beyond the log's largest rate",
+             ["identify", scene, "--log", id_log, "--set", "friction.smoothing_velocity=500",
+              "--out", bad])
 # the inertial group: the three links' 12 standard parameters after the friction, each truth
 # (synth-log's true.inertial) inside its interval on this log; the fitted links simulate
 inert = os.path.join(WORK, "fit_inertia")
