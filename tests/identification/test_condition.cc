@@ -11,7 +11,7 @@
 #include "fivebar/identification/condition.h"
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/synth.h"
-
+#include "light_scene.h"
 #include "paper.h"
 #include "synthetic_log.h"
 
@@ -564,34 +564,11 @@ TEST(Delay, TwentyMillisecondLagIsFoundByIteratingTheEstimate) {
       << "delay " << res.delay_s;
 }
 
-/// A light five-bar under weak gravity whose torques are a few tenths of a N m, logged with
-/// torque noise under a thousandth of a N m: a delay of a few ms is mostly absorbed by the links'
-/// inertial parameters in the model check.
-Params<double> light_gravity_params() {
-  Params<double> p = paper_params();
-  p.ground_length = 0.4;
-  p.links[0] = {0.15, 3.0, 0.025, 0.07, 0.0};
-  p.links[1] = {0.12, 2.5, 0.02, 0.06, 0.0};
-  p.links[2] = {0.35, 2.0, 0.03, 0.2, 0.1};
-  p.links[3] = {0.3, 2.0, 0.025, 0.12, 0.0};
-  p.point_p = 0.3;
-  p.gravity = 0.4905;
-  p.friction.pin_radius.fill(0.015);
-  p.friction.coulomb.fill(0.2);
-  p.friction.static_coulomb.fill(0.2);
-  p.friction.viscous.fill(0.05);
-  return p;
-}
-
-Loads<double> light_gravity_loads(double t) {
-  return {0.05 + 0.4 * std::sin(3 * t), -0.05 + 0.4 * std::cos(2 * t), 0.025, 1.0, 1.0};
-}
-
-/// A 3 s log of light_gravity_params, its torques `lag` samples behind the angles
+/// A 3 s log of testing::slow_light_params, its torques `lag` samples behind the angles
 TorqueLog light_gravity_log(int lag, std::uint64_t seed) {
   const SynthResult r =
-      synthesize_log(light_gravity_params(), light_gravity_loads, {1.6, 1.4, 0.5, -0.3},
-                     testing::log_options(3.0, 0.0009375, 1e-5, seed));
+      synthesize_log(testing::slow_light_params(), testing::slow_light_loads,
+                     testing::slow_light_start(), testing::log_options(3.0, 0.0009375, 1e-5, seed));
   EXPECT_TRUE(r.status.ok()) << r.status.message;
   TorqueLog log = r.log;
   log.path = "log.csv";
@@ -606,25 +583,26 @@ TorqueLog light_gravity_log(int lag, std::uint64_t seed) {
 // but is nothing beyond the model causes: it is corrected first, and the model causes judged on
 // the corrected log; the masses 3 % off the scene are not read as a delay
 TEST(Delay, ALagTheInertiasAbsorbIsCorrectedWhenItExplainsClearlyMost) {
-  const IdentifyResult res =
-      identify(light_gravity_params(), light_gravity_loads, light_gravity_log(4, 2), {});
+  const IdentifyResult res = identify(testing::slow_light_params(), testing::slow_light_loads,
+                                      light_gravity_log(4, 2), {});
   ASSERT_TRUE(res.status.ok()) << res.status.message;
   EXPECT_TRUE(res.delay_corrected) << res.delay_s << " +- " << res.delay_std_s;
   EXPECT_LT(std::abs(res.delay_s - 4e-3), kStdBound * res.delay_std_s) << res.delay_s;
   EXPECT_THAT(res.warnings, Contains(HasSubstr("torques lag the angles")));
   // a 2 ms lag explains the most, but not clearly more than the inertias (falls 304 and 268):
   // named, not corrected
-  const IdentifyResult tie =
-      identify(light_gravity_params(), light_gravity_loads, light_gravity_log(2, 2), {});
+  const IdentifyResult tie = identify(testing::slow_light_params(), testing::slow_light_loads,
+                                      light_gravity_log(2, 2), {});
   EXPECT_FALSE(tie.delay_corrected) << tie.delay_s << " +- " << tie.delay_std_s;
   EXPECT_TRUE(tie.delay_unexplained);
   EXPECT_THAT(tie.warnings, Contains(HasSubstr("a delay or a model error")));
-  Params<double> light = light_gravity_params();
+  Params<double> light = testing::slow_light_params();
   for (auto& l : light.links) {
     l.mass /= 1.03;
     l.inertia /= 1.03;
   }
-  const IdentifyResult heavy = identify(light, light_gravity_loads, light_gravity_log(0, 2), {});
+  const IdentifyResult heavy =
+      identify(light, testing::slow_light_loads, light_gravity_log(0, 2), {});
   EXPECT_FALSE(heavy.delay_corrected) << heavy.delay_s << " +- " << heavy.delay_std_s;
 }
 

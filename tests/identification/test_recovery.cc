@@ -11,7 +11,7 @@
 
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/synth.h"
-
+#include "light_scene.h"
 #include "paper.h"
 #include "synthetic_log.h"
 
@@ -321,36 +321,16 @@ TEST(Recovery, AStdKeepsTheUncertaintyOfACoefficientAtItsBound) {
 // noisy as the estimates. Over seeds 1-6 (3 s at 1 kHz, torque noise 9.4e-4 N m, angle noise
 // 1e-5 rad) each coefficient's 95 % interval holds the truth at least 5 times, and none is
 // beyond 3 std without a warning (with the prediction read over the rule's span at every window
-// and its own noise left out of the std: coulomb 3 of 6, viscous 4, seed 1's viscous +3.4 std
-// unwarned; now 5 and 5, within 2.03 std).
-Params<double> slow_light_params() {
-  Params<double> p = paper_params();
-  p.ground_length = 0.4;
-  p.links[0] = {0.15, 3.0, 0.025, 0.07, 0.0};
-  p.links[1] = {0.12, 2.5, 0.02, 0.06, 0.0};
-  p.links[2] = {0.35, 2.0, 0.03, 0.2, 0.1};
-  p.links[3] = {0.3, 2.0, 0.025, 0.12, 0.0};
-  p.point_p = 0.3;
-  p.gravity = 0.4905;
-  p.friction.law = FrictionLaw::kCoulombViscous;
-  p.friction.pin_radius.fill(0.015);
-  p.friction.coulomb.fill(0.2);
-  p.friction.static_coulomb.fill(0.2);
-  p.friction.viscous.fill(0.05);
-  return p;
-}
-
+// and its own noise left out of the std, coulomb held it 3 times of 6 and viscous 4, seed 1's
+// viscous +3.4 std unwarned; read over the candidate's span, 5 and 5, within 2.03 std).
 TEST(Recovery, LightSlowFiveBarCleanLogsCoverTheTruth) {
-  const Params<double> truth = slow_light_params();
-  const sim::LoadFunction loads = [](double t) {
-    return Loads<double>{0.05 + 0.4 * std::sin(3 * t), -0.05 + 0.4 * std::cos(2 * t), 0.025, 1.0,
-                         1.0};
-  };
+  const Params<double> truth = testing::slow_light_params();
+  const sim::LoadFunction loads = testing::slow_light_loads;
   const double truths[2] = {0.2, 0.05};
   int covered[2] = {0, 0};
   for (std::uint64_t seed = 1; seed <= 6; ++seed) {
     SynthOptions so = testing::log_options(3.0, 9.375e-4, kAngleNoise, seed);
-    const SynthResult r = synthesize_log(truth, loads, {1.6, 1.4, 0.5, -0.3}, so);
+    const SynthResult r = synthesize_log(truth, loads, testing::slow_light_start(), so);
     ASSERT_TRUE(r.status.ok()) << r.status.message;
     const IdentifyResult res = identify(truth, loads, r.log, IdentifyOptions{});
     ASSERT_TRUE(res.status.ok()) << res.status.message;
