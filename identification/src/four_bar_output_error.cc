@@ -11,6 +11,7 @@
 #include "covariance.h"
 #include "four_bar_fit.h"
 #include "mechanism_stages.h"
+#include "method.h"
 
 namespace fivebar::identification::four_bar {
 
@@ -41,13 +42,11 @@ std::vector<int> add_windows(FourBarFit* f, IdentifyResult* out, ceres::Problem*
   return sizes;
 }
 
-/// The output-error solver settings: the simulated residual carries the integrator's noise
-/// (~rtol, a relative cost noise ~1e-4), so less is asked of it than of inverse dynamics.
+/// The output-error solver settings: the four-bar's with output error's tolerances (the method
+/// strategy's: its simulated residual carries the integrator's noise).
 ceres::Solver::Options output_error_options(const FourBarFit& f) {
   ceres::Solver::Options so = solver_options(f);
-  so.function_tolerance = 1e-3;
-  so.gradient_tolerance = 1e-10;
-  so.parameter_tolerance = 1e-7;
+  stages::method_strategy(Method::kOutputError).set_tolerances(&so);
   return so;
 }
 

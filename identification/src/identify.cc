@@ -160,13 +160,13 @@ std::string shift_unexplained(const IdentifyResult& unshifted, const IdentifyRes
 /// light five-bar's torques 8 ms early: 8.58 +- 0.83 ms by its own estimate, 2.5 std in the
 /// check at a half-window of 6 samples). Clean logs' estimates stay within 3 std; a model
 /// error that the delay's column fits is evidenced itself, and its warning names it.
-void unevidenced_delay(const IdentifyResult& fit, IdentifyResult* out) {
-  if (!(std::abs(fit.delay_s) > kDelayNamedZ * fit.delay_std_s)) return;
-  for (const IdentifyResult::MisfitCause& c : fit.model_check) {
+void unevidenced_delay(IdentifyResult* out) {
+  if (!(std::abs(out->delay_s) > kDelayNamedZ * out->delay_std_s)) return;
+  for (const IdentifyResult::MisfitCause& c : out->model_check) {
     if (c.name != "delay" && c.name != "any" && c.checked && c.z > detail::kCauseZ) return;
   }
-  out->warnings.push_back(delay_seen(fit) + " (" +
-                          format_significant(std::abs(fit.delay_s) / fit.delay_std_s, 2) +
+  out->warnings.push_back(delay_seen(*out) + " (" +
+                          format_significant(std::abs(out->delay_s) / out->delay_std_s, 2) +
                           " std), but the model check at this window does not evidence it beyond "
                           "the noise; not corrected (a logger's known lag can be taken out of the "
                           "torques' times, or the rates logged)");
@@ -191,7 +191,7 @@ bool delay_stage(const Params<double>& scene_in, const sim::LoadFunction& loads,
   const double dt = log.duration() / std::max(1, log.size() - 1);
   const bool checked = verdict.delay != Delay::kUnchecked;
   if (checked && verdict.delay == Delay::kNotEvidenced) {
-    unevidenced_delay(*out, out);
+    unevidenced_delay(out);
     return false;
   }
   if (!(std::abs(out->delay_s) > 0.1 * dt) ||

@@ -25,6 +25,7 @@
 #include "glitches.h"
 #include "mechanism_residual.h"
 #include "mechanism_stages.h"
+#include "method.h"
 #include "setup_shared.h"
 
 namespace fivebar::identification {
@@ -388,9 +389,7 @@ ceres::Solver::Options solver_options(const FourBarFit& f) {
   so.linear_solver_type = ceres::DENSE_QR;
   so.max_num_iterations = f.opt->max_iterations;
   so.num_threads = f.opt->num_threads;
-  so.function_tolerance = 1e-12;
-  so.gradient_tolerance = 1e-14;
-  so.parameter_tolerance = 1e-10;
+  stages::method_strategy(Method::kInverseDynamics).set_tolerances(&so);
   so.logging_type = ceres::SILENT;
   return so;
 }

@@ -476,19 +476,11 @@ TEST(Excitation, NoPredictionWhereIdentifyKeepsNoSample) {
 /// A heavy five-bar: cranks of 2.5-3 kg on a 0.4 m ground, pins of 0.015 m, coulomb 0.2,
 /// viscous 0.05, M3 0.5 N m and F 20 N at 1 rad (its motor torques of about 8 N m); its angle
 /// noise through the rates and the reactions sets most of its std.
+/// (testing::slow_light_params' geometry and friction, its inertias doubled, full gravity)
 Params<double> heavy_params() {
-  Params<double> p = paper_params();
-  p.ground_length = 0.4;
-  p.links[0] = {0.15, 3.0, 0.05, 0.07, 0.0};
-  p.links[1] = {0.12, 2.5, 0.04, 0.06, 0.0};
-  p.links[2] = {0.35, 2.0, 0.06, 0.2, 0.1};
-  p.links[3] = {0.30, 2.0, 0.05, 0.12, 0.0};
-  p.point_p = 0.3;
+  Params<double> p = testing::slow_light_params();
+  for (Link<double>& l : p.links) l.inertia *= 2;
   p.gravity = 9.81;
-  p.friction.pin_radius.fill(0.015);
-  p.friction.coulomb.fill(0.2);
-  p.friction.static_coulomb.fill(0.2);
-  p.friction.viscous.fill(0.05);
   return p;
 }
 
