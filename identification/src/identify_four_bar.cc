@@ -483,8 +483,7 @@ IdentifyResult output_error(FourBarFit& f, IdentifyResult out,
   std::fill(out.used.begin() + f.first, out.used.begin() + f.last + 1, 1);
   out.samples_used = f.last - f.first + 1;
   if (out.accels_estimated && out.window_choice.empty()) {
-    out.window_choice = std::string(f.opt->auto_window ? "default" : "given") + ": half-window " +
-                        std::to_string(out.sg_half_window) + " samples";
+    out.window_choice = stages::fixed_window_choice(*f.opt, out.sg_half_window);
   }
   if (output_error_fit(&f, &out)) {
     estimates(f, public_start(f), &out);

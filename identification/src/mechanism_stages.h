@@ -229,6 +229,13 @@ sim::Options window_sim_options(double rtol);
 /// same order at any scale of the mechanism.
 inline constexpr double kOutputErrorLossScale = 0.1;
 
+/// The text of a window no data-driven stage chose (rate_source.window_choice): "given" with
+/// --sg-window, else "default".
+inline std::string fixed_window_choice(const IdentifyOptions& opt, int half_window) {
+  return std::string(opt.auto_window ? "default" : "given") + ": half-window " +
+         std::to_string(half_window) + " samples";
+}
+
 /// Output error's warning under --classical-std (the residual variance's std).
 inline constexpr const char* kIndependentWindowResiduals =
     "output-error standard deviations treat the angle residuals as independent; within a window "

@@ -309,8 +309,7 @@ bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out)
     f->x = x_start;
     if (!rates_and_samples()) return false;
   } else if (out->accels_estimated) {
-    out->window_choice = std::string(opt.auto_window ? "default" : "given") + ": half-window " +
-                         std::to_string(out->sg_half_window) + " samples";
+    out->window_choice = fixed_window_choice(opt, out->sg_half_window);
   }
   reversal_note(*f, out);
   return true;
