@@ -53,7 +53,8 @@ class FourBarExcitation : public ExcitationMechanism {
     std::vector<Jet> x(dp_.size());
     for (int i = 0; i < dp_.size(); ++i) x[i] = Jet(dp_.nominal[i], i);
     dp_.layout.apply(x.data(), &p.friction);
-    if (dp_.inertial > 0) set_standard_inertial_links(x.data() + dp_.friction, kFourBarLinks, p.links.data());
+    if (dp_.inertial > 0)
+      set_standard_inertial_links(x.data() + dp_.friction, kFourBarLinks, p.links.data());
     FourBarEvaluationT<Jet> ev;
     const Status st = four_bar_inverse(p, loads_(t).cast<Jet>(), Jet(s.th1), Jet(s.w1), Jet(s.a1),
                                        EvalOptions{}, &ev, slip);
@@ -119,8 +120,8 @@ DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per
   dp.friction = static_cast<int>(dp.names.size());
   dp.prior_std.assign(dp.friction, 0.0);
   if (inertia) {  // identify's prior (--inertia-prior at its default) holds them
-    const detail::InertialPrior prior = detail::inertial_prior(
-        scene.links.data(), kFourBarLinks, IdentifyOptions{}.inertia_prior);
+    const detail::InertialPrior prior =
+        detail::inertial_prior(scene.links.data(), kFourBarLinks, IdentifyOptions{}.inertia_prior);
     for (int i = 0; i < kFourBarInertial; ++i) {
       dp.names.push_back(inertial_name(i));
       dp.nominal.push_back(prior.centre[i]);
@@ -141,12 +142,12 @@ std::shared_ptr<const ExcitationMechanism> four_bar_excitation(
     const FourBarParams& scene, std::function<FourBarLoads(double)> loads, bool per_joint,
     bool inertia) {
   if (per_joint && inertia) {
-    return std::make_shared<FourBarExcitation<kPerJointWidth + kFourBarInertial>>(
-        scene, true, true, std::move(loads));
+    return std::make_shared<FourBarExcitation<kPerJointWidth + kFourBarInertial>>(scene, true, true,
+                                                                                  std::move(loads));
   }
   if (inertia) {
     return std::make_shared<FourBarExcitation<2 + kFourBarInertial>>(scene, false, true,
-                                                                    std::move(loads));
+                                                                     std::move(loads));
   }
   if (per_joint) {
     return std::make_shared<FourBarExcitation<kPerJointWidth>>(scene, true, false,

@@ -133,9 +133,9 @@ class FourBarWindowFit : public stages::WindowFit {
       in.D.push_back(D);
     }
     const ParameterLayout& lay = f_.layout;
-    in.Hp = lay.inertia ? detail::prior_information(f_.prior, f_.prior_scale, P,
-                                                    lay.inertia_offset())
-                        : Eigen::MatrixXd::Zero(P, P);
+    in.Hp = lay.inertia
+                ? detail::prior_information(f_.prior, f_.prior_scale, P, lay.inertia_offset())
+                : Eigen::MatrixXd::Zero(P, P);
     in.s2 = f_.prior_scale * f_.prior_scale;
     in.T = stages::to_public(lay);
     in.friction_size = lay.friction_size();
@@ -169,10 +169,10 @@ void window_stage(FourBarFit* f, IdentifyResult* out) {
   stages::add_mechanism_terms<FourBar>(f->scene, f->layout, some, f->eval, x.data(), &problem,
                                        Loss::kNone, 1, f->cost_weight);
   if (f->layout.inertia) {
-    problem.AddResidualBlock(detail::inertial_prior_cost(f->prior, f->layout.size(),
-                                                         f->layout.inertia_offset(),
-                                                         &f->prior_scale),
-                             stages::make_loss(Loss::kNone, 0, f->cost_weight), x.data());
+    problem.AddResidualBlock(
+        detail::inertial_prior_cost(f->prior, f->layout.size(), f->layout.inertia_offset(),
+                                    &f->prior_scale),
+        stages::make_loss(Loss::kNone, 0, f->cost_weight), x.data());
   }
   if (stages::solve_preliminary(f->layout, x.data(), &problem)) f->x = x;
   stages::choose_window_by_bias(FourBarWindowFit(*f), &f->sg, &f->smoothing_bias,

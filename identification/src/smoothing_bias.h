@@ -117,12 +117,11 @@ bool noise_bias_at(const Eigen::Matrix3d& C, const PerturbedTorques& torques,
 /// through zero (its norm's kink) as a Taylor term is not.
 std::array<Eigen::Vector3d, 3> noise_axes(const std::vector<double>& t, const SgOptions& sg);
 
-/// Predicted smoothing bias and errors-in-variables std of the public parameters judged (BiasInputs::
-/// judged: by default the friction coefficients) for
-/// the filter `sg`, over the samples u with keep[u] (false when too few or singular). With
-/// `noise` (NoiseBias at sg), the bias is that of the smoothing and of the noise. With `spread`
-/// and in.weights: the std of the smoothing's prediction from the angle noise through the
-/// reconstruction (0 without weights).
+/// Predicted smoothing bias and errors-in-variables std of the public parameters judged
+/// (BiasInputs:: judged: by default the friction coefficients) for the filter `sg`, over the
+/// samples u with keep[u] (false when too few or singular). With `noise` (NoiseBias at sg), the
+/// bias is that of the smoothing and of the noise. With `spread` and in.weights: the std of the
+/// smoothing's prediction from the angle noise through the reconstruction (0 without weights).
 bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
                     const std::vector<char>& keep, const SgOptions& sg, Eigen::VectorXd* bias,
                     Eigen::VectorXd* std, const NoiseBias* noise = nullptr,
