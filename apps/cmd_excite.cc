@@ -205,12 +205,12 @@ void refuse_four_bar_options(const Args& a, const id::ExcitationOptions& o) {
   }
   const std::string group = id::four_bar_design_unsupported(o.groups);
   if (!group.empty()) {
-    const size_t space = group.find(' ');  // "--estimate inertia": the option and its value
+    const size_t space = group.find(' ');  // "--estimate actuator": the option and its value
     throw InputError(kFlags, group.substr(0, space),
                      (space == std::string::npos ? "" : group.substr(space + 1) + ": ") +
                          "the four-bar's design estimates its friction coefficients (coulomb, "
-                         "viscous), shared by its joints or --per-joint, as identify does on "
-                         "four-bars" +
+                         "viscous), shared by its joints or --per-joint, and its links' inertial "
+                         "parameters (inertia), as identify does on four-bars" +
                          type);
   }
   if (!a.theta2_range.empty()) {
@@ -923,7 +923,8 @@ std::shared_ptr<const id::ExcitationMechanism> mechanism_of(const Scene& scene,
                                                             const LoadExpressions& loads,
                                                             const id::ExcitationOptions& o) {
   if (scene.type == MechanismType::kFourBar) {
-    return id::four_bar_excitation(scene.four_bar, loads.four_bar_function(), o.groups.per_joint);
+    return id::four_bar_excitation(scene.four_bar, loads.four_bar_function(), o.groups.per_joint,
+                                   o.groups.inertia);
   }
   return id::five_bar_excitation(scene.params, id::design_parameters(scene.params, o.groups),
                                  loads);

@@ -385,7 +385,8 @@ Status ExcitationProblem::evaluate(const std::vector<double>& x, bool grad, Desi
   const double weight = opt_.rate_hz * opt_.duration / N0;
   std::vector<Eigen::MatrixXd> Js(N0);
   for (int i = 0; i < N0; ++i) Js[i] = all[i].v.J;
-  const Eigen::MatrixXd F = weight * fisher_information(Js, opt_.torque_noise);
+  const Eigen::MatrixXd F = weight * fisher_information(Js, opt_.torque_noise) +
+                            detail::prior_fisher(mech_->parameters());
   Eigen::MatrixXd G;
   out->objective = criterion_value(F, grad ? &G : nullptr);
   out->constraints.assign(m, 0.0);

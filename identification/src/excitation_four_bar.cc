@@ -1,6 +1,7 @@
 // The four-bar as an ExcitationMechanism (excitation.h): the crank's torque M1 and its
 // derivatives by Jets of the four-bar's inverse dynamics (mech::inverse<FourBar>, one Jet width
-// for both the parameter and the motion derivatives), and identify's rules on four-bars
+// for both the parameter and the motion derivatives), its friction and its links' standard
+// inertial parameters (with identify's prior on them), and identify's rules on four-bars
 // (identify_four_bar.cc): its window walked by predicted bias from its filter, and its rest rule.
 #include <ceres/jet.h>
 
@@ -8,16 +9,20 @@
 #include <cmath>
 
 #include "fivebar/identification/excitation.h"
+#include "fivebar/identification/identify.h"
 #include "fivebar/model/four_bar.h"
+#include "fivebar/model/inertial.h"
 #include "four_bar_rules.h"
+#include "inertia.h"
 
 namespace fivebar::identification {
 namespace {
 
 /// One Jet width W for every derivative of a design: its friction coefficients (2 shared, 8 per
-/// joint), or the crank's angle, rate and acceleration (3): one instantiation of the four-bar's
-/// inverse dynamics per layout
+/// joint) and inertial parameters (12), or the crank's angle, rate and acceleration (3): one
+/// instantiation of the four-bar's inverse dynamics per layout
 constexpr int kSharedWidth = 3, kPerJointWidth = 2 * kFourBarJoints;
+constexpr int kFourBarInertial = kInertialPerLink * kFourBarLinks;
 
 /// identify_four_bar.cc's rate filter order and rest rule (four_bar_rules.h)
 using four_bar_rules::kRestSigmas;
@@ -28,10 +33,10 @@ class FourBarExcitation : public ExcitationMechanism {
   using Jet = ceres::Jet<double, W>;
 
  public:
-  FourBarExcitation(const FourBarParams& scene, bool per_joint,
+  FourBarExcitation(const FourBarParams& scene, bool per_joint, bool inertia,
                     std::function<FourBarLoads(double)> loads)
       : scene_(scene),
-        dp_(four_bar_design_parameters(scene, per_joint)),
+        dp_(four_bar_design_parameters(scene, per_joint, inertia)),
         loads_(std::move(loads)) {}
   int dof() const override { return FourBar::kDof; }
   int joints() const override { return kFourBarJoints; }
@@ -48,6 +53,8 @@ class FourBarExcitation : public ExcitationMechanism {
     std::vector<Jet> x(dp_.size());
     for (int i = 0; i < dp_.size(); ++i) x[i] = Jet(dp_.nominal[i], i);
     dp_.layout.apply(x.data(), &p.friction);
+    if (dp_.inertial > 0)
+      set_standard_inertial_links(x.data() + dp_.friction, kFourBarLinks, p.links.data());
     FourBarEvaluationT<Jet> ev;
     const Status st = four_bar_inverse(p, loads_(t).cast<Jet>(), Jet(s.th1), Jet(s.w1), Jet(s.a1),
                                        EvalOptions{}, &ev, slip);
@@ -102,30 +109,51 @@ class FourBarExcitation : public ExcitationMechanism {
 
 }  // namespace
 
-DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per_joint) {
+DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per_joint,
+                                            bool inertia) {
   DesignParameters dp;
   dp.layout.law = FrictionLaw::kCoulombViscous;
   dp.layout.per_joint = per_joint;
   dp.layout.joints = kFourBarJoints;
   dp.names = dp.layout.names();
   dp.nominal = dp.layout.extract(scene.friction);
-  for (double v : dp.nominal) dp.scale.push_back(std::abs(v) > 0 ? std::abs(v) : 1e-3);
   dp.friction = static_cast<int>(dp.names.size());
+  dp.prior_std.assign(dp.friction, 0.0);
+  if (inertia) {  // identify's prior (--inertia-prior at its default) holds them
+    const detail::InertialPrior prior =
+        detail::inertial_prior(scene.links.data(), kFourBarLinks, IdentifyOptions{}.inertia_prior);
+    for (int i = 0; i < kFourBarInertial; ++i) {
+      dp.names.push_back(inertial_name(i));
+      dp.nominal.push_back(prior.centre[i]);
+      dp.prior_std.push_back(prior.sigma[i]);
+    }
+    dp.inertial = kFourBarInertial;
+  }
+  for (double v : dp.nominal) dp.scale.push_back(std::abs(v) > 0 ? std::abs(v) : 1e-3);
   return dp;
 }
 
 std::string four_bar_design_unsupported(const DesignGroups& groups) {
-  if (groups.inertia) return "--estimate inertia";
   if (groups.actuator) return "--estimate actuator";
   return "";
 }
 
 std::shared_ptr<const ExcitationMechanism> four_bar_excitation(
-    const FourBarParams& scene, std::function<FourBarLoads(double)> loads, bool per_joint) {
-  if (per_joint) {
-    return std::make_shared<FourBarExcitation<kPerJointWidth>>(scene, true, std::move(loads));
+    const FourBarParams& scene, std::function<FourBarLoads(double)> loads, bool per_joint,
+    bool inertia) {
+  if (per_joint && inertia) {
+    return std::make_shared<FourBarExcitation<kPerJointWidth + kFourBarInertial>>(scene, true, true,
+                                                                                  std::move(loads));
   }
-  return std::make_shared<FourBarExcitation<kSharedWidth>>(scene, false, std::move(loads));
+  if (inertia) {
+    return std::make_shared<FourBarExcitation<2 + kFourBarInertial>>(scene, false, true,
+                                                                     std::move(loads));
+  }
+  if (per_joint) {
+    return std::make_shared<FourBarExcitation<kPerJointWidth>>(scene, true, false,
+                                                               std::move(loads));
+  }
+  return std::make_shared<FourBarExcitation<kSharedWidth>>(scene, false, false, std::move(loads));
 }
 
 }  // namespace fivebar::identification

@@ -79,7 +79,7 @@ Status evaluate_motion(const ExcitationMechanism& mech, const std::vector<double
     }
   }
   out->reversals = count_reversals(rates);
-  out->fisher = fisher_information(Js, torque_noise);
+  out->fisher = fisher_information(Js, torque_noise) + detail::prior_fisher(dp);
   const int P = dp.size();
   const Eigen::VectorXd scale = Eigen::Map<const Eigen::VectorXd>(dp.scale.data(), P);
   const Eigen::MatrixXd Fs = scale.asDiagonal() * out->fisher * scale.asDiagonal();
@@ -147,7 +147,8 @@ class EivPredictor {
         s_(std::move(samples)),
         order_(order),
         noise_bias_(noise_bias),
-        angle_noise_(std::max(angle_noise[0], angle_noise[1])) {
+        angle_noise_(std::max(angle_noise[0], angle_noise[1])),
+        prior_(detail::prior_fisher(mech.parameters()).diagonal()) {
     const int n = static_cast<int>(r.t.size());
     dt_ = (r.t.back() - r.t.front()) / std::max(1, n - 1);
     for (int c = 0; c < mech.dof(); ++c) {
@@ -245,13 +246,31 @@ class EivPredictor {
 
   /// covariance and bias of the coefficients over the samples kept (kept) with rates from
   /// half-window m
-  WindowPrediction predict(int m, int exclude, int rest_m = -1) const {
-    return predict_over(kept(m, exclude, rest_m), m);
+  WindowPrediction predict(int m, int exclude, int rest_m = -1, int scale_m = -1) const {
+    return predict_over(kept(m, exclude, rest_m), m, -1, scale_m);
+  }
+
+  /// identify's noise level of the prior (the four-bar's residual floor): the torque noise and
+  /// the noise of the accelerations of the filter of half-window m through the crank's effective
+  /// inertia over the samples `used`, at least kAbsoluteFloor of the torques' rms
+  double prior_scale(const std::vector<int>& used, int m, int order = -1) const {
+    double g1 = 0, g2 = 0;
+    gains(m, &g1, &g2, order);
+    double s2 = 0, tau2 = 0;
+    for (int i : used) {
+      const double accel = s_[i].D(0, 4) * g2 * angle_noise_;
+      s2 += noise_.torque[0] * noise_.torque[0] + accel * accel;
+      tau2 += r_.M1[i] * r_.M1[i];
+    }
+    const double count = std::max<double>(1, used.size());
+    return std::max(std::sqrt(s2 / count), stages::kAbsoluteFloor * std::sqrt(tau2 / count));
   }
 
   /// covariance and bias of the coefficients over the samples `used`, with rates from half-window
-  /// m of the filter's order (-1: the predictor's)
-  WindowPrediction predict_over(const std::vector<int>& used, int m, int order = -1) const {
+  /// m of the filter's order (-1: the predictor's); with a prior (DesignParameters::prior_std), its
+  /// pseudo-observations weighed at prior_scale of the window scale_m (-1: m), as identify's
+  WindowPrediction predict_over(const std::vector<int>& used, int m, int order = -1,
+                                int scale_m = -1) const {
     const Taps sg = taps(m, order);
     WindowPrediction out;
     const int n = size(), P = static_cast<int>(s_.front().J.cols());
@@ -273,7 +292,13 @@ class EivPredictor {
         g += s_[used[u]].J.transpose() * dM;  // one Gauss-Newton step: the residual moves by -dM
       }
     }
-    const Eigen::MatrixXd H = J.transpose() * J;
+    Eigen::MatrixXd H = J.transpose() * J;
+    Eigen::MatrixXd S_prior = Eigen::MatrixXd::Zero(P, P);
+    if (prior_.any()) {  // rows s / sigma_i, each a pseudo-observation of noise s
+      const double s = prior_scale(used, scale_m < 0 ? m : scale_m, order), s2 = s * s;
+      H.diagonal() += s2 * prior_;
+      S_prior.diagonal() = s2 * s2 * prior_;
+    }
     if (!H.allFinite()) return out;
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
     const Eigen::VectorXd ev = es.eigenvalues();
@@ -281,7 +306,7 @@ class EivPredictor {
     const Eigen::MatrixXd Hinv =
         es.eigenvectors() * ev.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
     out.bias = -Hinv * g;
-    out.covariance = Hinv * detail::score_covariance(J, sens, noise_, n) * Hinv;
+    out.covariance = Hinv * (detail::score_covariance(J, sens, noise_, n) + S_prior) * Hinv;
     out.ok = out.covariance.allFinite();
     return out;
   }
@@ -323,16 +348,17 @@ class EivPredictor {
   bool noise_bias_;  ///< the noise's bias in the prediction (the mechanisms of window_by_bias)
   double angle_noise_;
   detail::SensorNoise noise_;
+  Eigen::VectorXd prior_;  ///< the prior's information per parameter (prior_fisher; 0: none)
   std::vector<int> reversals_;
   std::vector<char> maybe_rest_;  ///< bound_rest's (empty: test every sample)
   double dt_ = 1;
 };
 
-/// The largest |bias| / std over the friction coefficients of a prediction (its errors-in-variables
-/// std, as identify's bias rules take it).
-double bias_in_std(const WindowPrediction& p, int friction) {
+/// The largest |bias| / std over the first `judged` parameters of a prediction (its
+/// errors-in-variables std, as identify's bias rules take it).
+double bias_in_std(const WindowPrediction& p, int judged) {
   double worst = 0;
-  for (int i = 0; i < friction; ++i) {
+  for (int i = 0; i < judged; ++i) {
     const double sd = std::sqrt(std::max(0.0, p.covariance(i, i)));
     if (sd > 0) worst = std::max(worst, std::abs(p.bias(i)) / sd);
   }
@@ -424,9 +450,11 @@ void walk_window(EivPredictor* predictor, const DesignParameters& dp, const SgOp
   const int K = static_cast<int>(cand.size()), m0 = sg_half_window(start, predictor->dt());
   predictor->bound_rest(std::min(cand.front(), m0));  // the largest thresholds
   const EivPredictor& eiv = *predictor;
+  // identify's walk judges every fitted parameter where the links' inertias are fitted
+  const int judged = dp.inertial > 0 ? dp.size() : dp.friction;
   const auto worst = [&](int k, double* ratio) {
-    const WindowPrediction p = eiv.predict(cand[k], std::max(cand[k], m0), m0);
-    *ratio = p.ok ? bias_in_std(p, dp.friction) : kNaN;
+    const WindowPrediction p = eiv.predict(cand[k], std::max(cand[k], m0), m0, m0);
+    *ratio = p.ok ? bias_in_std(p, judged) : kNaN;
     return true;
   };
   const int first = static_cast<int>(std::lower_bound(cand.begin(), cand.end(), m0) - cand.begin());

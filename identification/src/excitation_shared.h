@@ -2,15 +2,28 @@
 // (excitation_prediction.cc) share (identify's rest rule of a sample: setup_shared.h).
 #pragma once
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <limits>
 #include <thread>
+
+#include "fivebar/identification/excitation.h"
 
 namespace fivebar::identification {
 
 namespace detail {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// The prior's information on the parameters of dp (DesignParameters::prior_std: 1 / std^2 on
+/// the diagonal, 0 where there is none), in the units of the Fisher information.
+inline Eigen::MatrixXd prior_fisher(const DesignParameters& dp) {
+  Eigen::MatrixXd F = Eigen::MatrixXd::Zero(dp.size(), dp.size());
+  for (int i = 0; i < static_cast<int>(dp.prior_std.size()); ++i) {
+    if (dp.prior_std[i] > 0) F(i, i) = 1.0 / (dp.prior_std[i] * dp.prior_std[i]);
+  }
+  return F;
+}
 
 /// Runs f(i) for i in [0, n) on up to two threads (the machine's budget), in contiguous chunks.
 template <typename F>

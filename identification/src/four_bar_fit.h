@@ -86,9 +86,15 @@ bool held(const FourBarFit& f, const std::array<double, 4>& row, double w, doubl
 bool kinematic_jacobian(const FourBarFit& f, const double* x, const Sample& s,
                         Eigen::Matrix<double, 2, 6>* D, double* M1);
 
+/// The residual's noise floor at the samples and filter of f: the torque noise and the
+/// acceleration noise through the crank's effective inertia, at least kAbsoluteFloor of the
+/// torques' rms; *from_noise whether the noise sets it (identify_four_bar.cc).
+double noise_floor(const FourBarFit& f, bool* from_noise);
+
 /// The window chosen by its predicted bias (choose_window_by_bias, mechanism_stages.h) after a
 /// preliminary fit on at most ~1500 of the samples, then the rates and samples again at the
-/// window chosen; f->x back at its start (four_bar_window.cc).
+/// window chosen; f->x back at its start. With the inertia group: on the full layout, with the
+/// prior (f->prior, and f->prior_scale the noise floor before the choice) (four_bar_window.cc).
 void window_stage(FourBarFit* f, IdentifyResult* out);
 
 /// The model check's candidate causes at the fit: the five-bar's that exist for one crank (the

@@ -132,9 +132,14 @@ class FourBarWindowFit : public stages::WindowFit {
       if (!kinematic_jacobian(f_, f_.x.data(), f_.samples[u], &D, &M1)) D.setZero();
       in.D.push_back(D);
     }
-    in.Hp = Eigen::MatrixXd::Zero(P, P);
-    in.T = stages::to_public(f_.layout);
-    in.friction_size = f_.layout.friction_size();
+    const ParameterLayout& lay = f_.layout;
+    in.Hp = lay.inertia
+                ? detail::prior_information(f_.prior, f_.prior_scale, P, lay.inertia_offset())
+                : Eigen::MatrixXd::Zero(P, P);
+    in.s2 = f_.prior_scale * f_.prior_scale;
+    in.T = stages::to_public(lay);
+    in.friction_size = lay.friction_size();
+    in.judged = lay.inertia ? P : 0;
     in.source = source();
     in.noise = f_.noise;
     in.index = f_.index;
@@ -147,29 +152,32 @@ class FourBarWindowFit : public stages::WindowFit {
 }  // namespace
 
 void window_stage(FourBarFit* f, IdentifyResult* out) {
-  // the window is the friction's: with the inertia group, chosen on a fit of the friction alone
-  // (the links at the scene's values, which the preliminary fit, without the prior, could not
-  // hold where the log does not determine them)
-  FourBarFit friction_only;
-  FourBarFit* w = f;
+  // with the inertia group the window is chosen on the full layout (the prior on the links, its
+  // noise level the residual's floor at the filter before the choice): the freed inertias take
+  // up the noise of the estimated accelerations, whose bias the walk weighs in every parameter
   if (f->layout.inertia) {
-    friction_only = *f;
-    friction_only.layout.inertia = false;
-    friction_only.x.resize(friction_only.layout.size());
-    w = &friction_only;
+    bool from_noise = true;
+    f->prior = detail::inertial_prior(f->scene.links.data(), kFourBarLinks, f->opt->inertia_prior);
+    f->prior_scale = noise_floor(*f, &from_noise);
   }
-  const std::vector<double> x_start = w->x;
+  const std::vector<double> x_start = f->x;
   std::vector<Sample> some;
-  const size_t step = std::max<size_t>(1, w->samples.size() / 1500);
-  for (size_t u = 0; u < w->samples.size(); u += step) some.push_back(w->samples[u]);
+  const size_t step = std::max<size_t>(1, f->samples.size() / 1500);
+  for (size_t u = 0; u < f->samples.size(); u += step) some.push_back(f->samples[u]);
   ceres::Problem problem;
-  std::vector<double> x = w->x;
-  stages::add_mechanism_terms<FourBar>(w->scene, w->layout, some, w->eval, x.data(), &problem,
-                                       Loss::kNone, 1, w->cost_weight);
-  if (stages::solve_preliminary(w->layout, x.data(), &problem)) w->x = x;
-  stages::choose_window_by_bias(FourBarWindowFit(*w), &f->sg, &f->smoothing_bias,
+  std::vector<double> x = f->x;
+  stages::add_mechanism_terms<FourBar>(f->scene, f->layout, some, f->eval, x.data(), &problem,
+                                       Loss::kNone, 1, f->cost_weight);
+  if (f->layout.inertia) {
+    problem.AddResidualBlock(
+        detail::inertial_prior_cost(f->prior, f->layout.size(), f->layout.inertia_offset(),
+                                    &f->prior_scale),
+        stages::make_loss(Loss::kNone, 0, f->cost_weight), x.data());
+  }
+  if (stages::solve_preliminary(f->layout, x.data(), &problem)) f->x = x;
+  stages::choose_window_by_bias(FourBarWindowFit(*f), &f->sg, &f->smoothing_bias,
                                 &out->window_choice);
-  w->x = x_start;
+  f->x = x_start;
   rates(f, out);
   select_samples(f, out);
 }

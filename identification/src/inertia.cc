@@ -30,6 +30,14 @@ InertialPrior inertial_prior(const Link<double>* links, int n, double relative) 
   return p;
 }
 
+Eigen::MatrixXd prior_information(const InertialPrior& prior, double s, int P, int offset) {
+  Eigen::MatrixXd Hp = Eigen::MatrixXd::Zero(P, P);
+  for (int i = 0; i < kInertialPerLink * prior.links; ++i) {
+    Hp(offset + i, offset + i) = std::pow(s / prior.sigma[i], 2);
+  }
+  return Hp;
+}
+
 namespace {
 
 /// inertia about the COM of link l from the standard parameters, and its gradient

@@ -28,6 +28,11 @@ InertialPrior inertial_prior(const Params<double>& scene, double relative);
 /// The prior of the n links `links` (the four-bar's three).
 InertialPrior inertial_prior(const Link<double>* links, int n, double relative);
 
+/// The prior's information in J^T J units over a parameter vector of size P whose inertial
+/// parameters start at `offset`: s^2 / sigma_i^2 on their diagonal (s the prior's noise level,
+/// as inertial_prior_cost weighs it), zero elsewhere.
+Eigen::MatrixXd prior_information(const InertialPrior& prior, double s, int P, int offset);
+
 /// Residuals (4 prior per link + 1 consistency per link: 16 + 4 for the five-bar) on the inertial
 /// part of the parameter vector (size P, inertial parameters from `offset`): r_i = s (pi_i -
 /// centre_i) / sigma_i, s = *noise_scale (the torque residual's noise level, so the prior weighs as

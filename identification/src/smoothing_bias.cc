@@ -72,6 +72,9 @@ void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen:
 
 namespace {
 
+/// the public parameters the prediction gives (BiasInputs::judged)
+int judged_size(const BiasInputs& in) { return in.judged > 0 ? in.judged : in.friction_size; }
+
 /// The std of the smoothing's prediction (public friction coefficients) from the angle noise
 /// through the reconstruction: the prediction is linear in the angles (weights W of each sample's
 /// terms, through the filter's response r1, r2 and the kinematic Jacobian), so its score's
@@ -99,7 +102,7 @@ Eigen::VectorXd prediction_spread(const std::vector<double>& t, const BiasInputs
   angles.torque[0] = angles.torque[1] = 0;
   const Eigen::MatrixXd S = score_covariance(J, sens, angles, static_cast<int>(t.size()));
   const Eigen::MatrixXd C = in.T * Hinv * S * Hinv * in.T.transpose();
-  return C.diagonal().head(in.friction_size).cwiseMax(0.0).cwiseSqrt();
+  return C.diagonal().head(judged_size(in)).cwiseMax(0.0).cwiseSqrt();
 }
 
 /// The 3-point Gauss-Hermite points along the principal axes of the covariance C:
@@ -196,14 +199,14 @@ bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
   const Eigen::MatrixXd S = score_covariance(J, sens, in.noise, static_cast<int>(t.size())) +
                             in.s2 * in.Hp;
   const Eigen::MatrixXd C = in.T * Hinv * S * Hinv * in.T.transpose();
-  *bias = b.head(in.friction_size);
-  *std = C.diagonal().head(in.friction_size).cwiseMax(0.0).cwiseSqrt();
+  *bias = b.head(judged_size(in));
+  *std = C.diagonal().head(judged_size(in)).cwiseMax(0.0).cwiseSqrt();
   if (spread) {
     const size_t n = keep.size();
     const bool weighed = in.recon_lo.size() == n && in.weights[0].size() == n &&
                          in.weights[1].size() == n && in.D.size() == n;
     *spread = weighed ? prediction_spread(t, in, keep, J, Hinv, r1, r2)
-                      : Eigen::VectorXd::Zero(in.friction_size);
+                      : Eigen::VectorXd::Zero(judged_size(in));
   }
   return bias->allFinite() && std->allFinite();
 }

@@ -68,6 +68,10 @@ struct BiasInputs {
   double s2 = 0;
   Eigen::MatrixXd T;  ///< internal to public parameters
   int friction_size = 0;
+  /// the public parameters, from the first, whose bias smoothing_bias predicts and the window
+  /// rules judge (0: the friction coefficients; the four-bar with its links' inertial parameters
+  /// judges them all)
+  int judged = 0;
   /// one coefficient of each group per joint (ParameterLayout::per_joint)
   bool per_joint = false;
   /// the public friction coefficients at the fit (empty: not given)
@@ -113,11 +117,11 @@ bool noise_bias_at(const Eigen::Matrix3d& C, const PerturbedTorques& torques,
 /// through zero (its norm's kink) as a Taylor term is not.
 std::array<Eigen::Vector3d, 3> noise_axes(const std::vector<double>& t, const SgOptions& sg);
 
-/// Predicted smoothing bias and errors-in-variables std of the public friction coefficients for
-/// the filter `sg`, over the samples u with keep[u] (false when too few or singular). With
-/// `noise` (NoiseBias at sg), the bias is that of the smoothing and of the noise. With `spread`
-/// and in.weights: the std of the smoothing's prediction from the angle noise through the
-/// reconstruction (0 without weights).
+/// Predicted smoothing bias and errors-in-variables std of the public parameters judged
+/// (BiasInputs:: judged: by default the friction coefficients) for the filter `sg`, over the
+/// samples u with keep[u] (false when too few or singular). With `noise` (NoiseBias at sg), the
+/// bias is that of the smoothing and of the noise. With `spread` and in.weights: the std of the
+/// smoothing's prediction from the angle noise through the reconstruction (0 without weights).
 bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
                     const std::vector<char>& keep, const SgOptions& sg, Eigen::VectorXd* bias,
                     Eigen::VectorXd* std, const NoiseBias* noise = nullptr,

@@ -19,13 +19,8 @@ constexpr int kFewWindows = 10;
 
 Eigen::MatrixXd prior_information(const Fit& f) {
   const int P = f.layout.size();
-  Eigen::MatrixXd Hp = Eigen::MatrixXd::Zero(P, P);
-  if (!f.layout.inertia) return Hp;
-  for (int i = 0; i < kInertialParams; ++i) {
-    const int k = f.layout.inertia_offset() + i;
-    Hp(k, k) = std::pow(f.prior_scale / f.prior.sigma[i], 2);
-  }
-  return Hp;
+  if (!f.layout.inertia) return Eigen::MatrixXd::Zero(P, P);
+  return detail::prior_information(f.prior, f.prior_scale, P, f.layout.inertia_offset());
 }
 
 namespace {

@@ -397,11 +397,13 @@ void choose_window_by_bias(const WindowFit& w, SgOptions* sg_fit, Eigen::VectorX
             " samples (no window's bias could be predicted)";
   if (w.source() != detail::RateSource::kFromAngles || n < 2 || K < 2) return;
   std::vector<Eigen::VectorXd> biases(K);
+  bool judged_all = false;  ///< the bias judged in every fitted parameter (BiasInputs::judged)
   // candidate k's predicted |bias| / std; false when the inputs cannot be formed
   const auto evaluate = [&](int k, double* worst) {
     const detail::BiasInputs in =
         w.bias_inputs(std::lround(detail::kReconSpan * cand[k]), cand[1], sg_fit->order);
     if (in.J.rows() != 2 * static_cast<int>(w.index().size())) return false;
+    judged_all = in.judged > in.friction_size;
     SgOptions sg = *sg_fit;
     sg.half_window_s = cand[k] * dt;
     const detail::NoiseBias noise = w.noise_bias(sg);
@@ -433,7 +435,8 @@ void choose_window_by_bias(const WindowFit& w, SgOptions* sg_fit, Eigen::VectorX
            ? "the one of least predicted bias (none keeps it within " +
                  format_significant(kBiasFraction) + " std)"
            : "the smallest whose predicted bias is within " + format_significant(kBiasFraction) +
-                 " std of every friction coefficient") +
+                 (judged_all ? " std of every fitted parameter"
+                             : " std of every friction coefficient")) +
       " (the smoothing bias and the noise's through the reactions, errors in variables; "
       "predicted |bias| / std by half-window, the motion's higher terms from local polynomials of "
       "degree " +

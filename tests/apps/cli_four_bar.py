@@ -221,8 +221,8 @@ expect_error(2, "friction.coulomb: expected 1 or 4 numbers (O, B, C, D0), got 5"
 expect_error(2, "initial: four-bar cannot assemble",
              ["simulate", scene, "--set", "mechanism.links.2.length=0.01", "--out", bad])
 # excite: a small Fourier design of the crank (exit 0, the four-bar's columns, within its limit,
-# every joint reversing); synth-log --motion along it gives back its M1; the five-bar's options
-# refused naming the option and the mechanism type
+# every joint reversing); synth-log --motion along it gives back its M1; with the inertial group
+# its 14 parameters; the five-bar's options refused naming the option and the mechanism type
 design = os.path.join(WORK, "excite")
 code, _, err = run(["excite", scene, "--duration", "4", "--torque-limit", "2", "--design-samples",
                     "100", "--harmonics", "3", "--periods", "2", "--max-evaluations", "30",
@@ -251,8 +251,24 @@ else:
     if worst > 1e-9:
         failures.append("excite: synth-log --motion along the design differs by %g N m (exit %d %s)"
                         % (worst, code, err))
+# with the links' inertial parameters: their 12 columns after the friction's, each std finite
+# (identify's prior holds what the motion does not determine) and at most the prior's
+design = os.path.join(WORK, "excite_inertia")
+code, _, err = run(["excite", scene, "--duration", "4", "--torque-limit", "2", "--design-samples",
+                    "100", "--harmonics", "3", "--periods", "2", "--max-evaluations", "30",
+                    "--starts", "1", "--min-reversals", "2", "--estimate", "friction,inertia",
+                    "--no-plots", "--out", design])
+if code not in (0, 3):
+    failures.append("excite --estimate friction,inertia: exit %d: %s" % (code, err))
+else:
+    std = {r["name"]: float(r["std"]) for r in read_csv(os.path.join(design, "predicted_std.csv"))}
+    expected = ["coulomb", "viscous"] + ["%s_%d" % (n, l) for l in (1, 2, 3)
+                                         for n in ("m", "mx", "my", "J")]
+    if list(std) != expected or not all(0 < v < float("inf") for v in std.values()) \
+            or not std["m_1"] <= 0.2 * 0.5:
+        failures.append("excite --estimate friction,inertia: predicted std %s" % std)
 for option, args in (("--family: torque drives the five-bar's two motors", ["--family", "torque"]),
-                     ("--estimate: inertia: the four-bar's design", ["--estimate", "friction,inertia"]),
+                     ("--estimate: actuator: the four-bar's design", ["--estimate", "friction,actuator"]),
                      ("--theta2-range: a four-bar has one crank", ["--theta2-range", "0:1"]),
                      ("--start: multisine", ["--start", "multisine"])):
     for pattern in (option, "(mechanism.type four_bar)"):

@@ -49,6 +49,10 @@ struct DesignParameters {
   /// the scale of each parameter in the objective: |nominal|, or for a zero nominal a typical
   /// size (actuator offset and Coulomb 0.1 N m, viscous 0.01 N m s/rad; inertial 1e-3 in SI)
   std::vector<double> scale;
+  /// the std of identify's prior on each parameter (its inertial prior on the four-bar's links,
+  /// which identify weighs at the residual's noise floor; 0: none), empty where it has none (the
+  /// five-bar's design); counted in the Fisher information and in the predicted std
+  std::vector<double> prior_std;
   int size() const { return static_cast<int>(names.size()); }
   int jet_size() const { return friction + inertial; }
 };
@@ -133,15 +137,18 @@ std::shared_ptr<const ExcitationMechanism> five_bar_excitation(
 
 /// The four-bar's design parameters: its friction, coulomb and viscous shared by its four joints
 /// (identify's default on four-bars) or, per_joint, one of each per joint (coulomb_1..4,
-/// viscous_1..4); the groups it does not have, "" when it has them all, else the option that
-/// asks for one (--estimate inertia, --estimate actuator).
-DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per_joint = false);
+/// viscous_1..4), and with `inertia` its three links' 12 standard inertial parameters (m_1 ..
+/// J_3) under identify's prior (prior_std); the groups it does not have, "" when it has them
+/// all, else the option that asks for one (--estimate actuator).
+DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per_joint = false,
+                                            bool inertia = false);
 std::string four_bar_design_unsupported(const DesignGroups& groups);
 
-/// The four-bar of `scene` for the friction of four_bar_design_parameters (identify_four_bar.cc's
+/// The four-bar of `scene` for the parameters of four_bar_design_parameters (identify_four_bar.cc's
 /// rate filter and rest rule).
 std::shared_ptr<const ExcitationMechanism> four_bar_excitation(
-    const FourBarParams& scene, std::function<FourBarLoads(double)> loads, bool per_joint = false);
+    const FourBarParams& scene, std::function<FourBarLoads(double)> loads, bool per_joint = false,
+    bool inertia = false);
 
 /// The designed motion of each crank: a drift (a steady rotation) plus a finite Fourier series,
 /// faded in from rest at the start pose by a ramp r(t) (quintic smoothstep over `ramp` seconds,
