@@ -33,12 +33,13 @@ void motion_terms(const Fit& f, int i, int reach, int min_half, int order, int e
   }
 }
 
-/// At the preliminary fit (f.x, f.samples): the residual's and the kinematic Jacobians, the
-/// motion's higher terms (motion_terms).
-detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int order) const {
+/// At the preliminary fit (f.x, f.samples): the residual's and the kinematic Jacobians.
+const detail::BiasInputs& FiveBarWindowFit::fit_inputs() const {
+  if (fit_inputs_) return *fit_inputs_;
   const Fit& f = f_;
   const int P = f.layout.size();
-  detail::BiasInputs in;
+  fit_inputs_ = std::make_unique<detail::BiasInputs>();
+  detail::BiasInputs& in = *fit_inputs_;
   in.index = f.index;
   ceres::Problem problem;
   std::vector<double> x = f.x;
@@ -53,6 +54,23 @@ detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int or
       D.setZero();
     }
     in.D.push_back(D);
+  }
+  in.Hp = prior_information(f);
+  in.s2 = f.prior_scale * f.prior_scale;
+  in.T = to_public(f.layout);
+  in.friction_size = f.layout.friction_size();
+  in.per_joint = f.layout.per_joint;
+  in.friction = (in.T * Eigen::Map<const Eigen::VectorXd>(f.x.data(), P)).head(in.friction_size);
+  in.source = f.source;
+  in.noise = f.noise;
+  return in;
+}
+
+/// fit_inputs with the motion's higher terms (motion_terms).
+detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int order) const {
+  const Fit& f = f_;
+  detail::BiasInputs in = fit_inputs();
+  for (size_t u = 0; u < f.samples.size(); ++u) {
     std::array<Eigen::VectorXd, kDof> terms;
     std::array<Eigen::MatrixXd, kDof> weights;
     int lo = 0;
@@ -63,14 +81,6 @@ detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int or
     in.weights[1].push_back(std::move(weights[1]));
     in.recon_lo.push_back(lo);
   }
-  in.Hp = prior_information(f);
-  in.s2 = f.prior_scale * f.prior_scale;
-  in.T = to_public(f.layout);
-  in.friction_size = f.layout.friction_size();
-  in.per_joint = f.layout.per_joint;
-  in.friction = (in.T * Eigen::Map<const Eigen::VectorXd>(f.x.data(), P)).head(in.friction_size);
-  in.source = f.source;
-  in.noise = f.noise;
   return in;
 }
 
@@ -221,10 +231,12 @@ class WindowBias {
     const detail::BiasInputs& in = *given;
     const SgOptions sg = filter(k);
     const std::vector<char> keep = centred_samples(w_, cand_[k]);
-    Eigen::VectorXd& b = smooth_bias_[k];
-    Eigen::VectorXd std;
-    Eigen::VectorXd& spread = spread_[k];
-    if (!detail::smoothing_bias(w_.log().t, in, keep, sg, &b, &std, nullptr, &spread)) return;
+    // the smoothing's prediction, whose solve the noise's bias shares
+    detail::BiasPrediction pred;
+    if (!detail::predict_smoothing_bias(w_.log().t, in, keep, sg, true, &pred)) return;
+    const Eigen::VectorXd& b = smooth_bias_[k] = pred.bias;
+    const Eigen::VectorXd& std = pred.std;
+    const Eigen::VectorXd& spread = spread_[k] = pred.spread;
     smooth_[k] = worst_ratio(b, std, spread);
     // the noise's bias is one Gauss-Newton step from the fit: where a shared friction
     // coefficient's std exceeds its value (a light mechanism's log at 0.02 N m of torque noise),
@@ -240,7 +252,7 @@ class WindowBias {
     const size_t m = w_.index().size();
     if (noise.shift.size() != m || noise.score.size() != m) {
       bias_[k] = b, worst_[k] = smooth_[k];
-    } else if (detail::smoothing_bias(w_.log().t, in, keep, sg, &bias_[k], &std, &noise)) {
+    } else if (detail::noisy_bias(in, keep, noise, pred, &bias_[k])) {
       worst_[k] = worst_ratio(bias_[k], std, spread);
     }
   }
