@@ -120,11 +120,11 @@ std::array<Eigen::Vector3d, 3> noise_axes(const std::vector<double>& t, const Sg
 /// smoothing_bias's prediction for one filter over the samples kept, before the noise's bias:
 /// what the bias with the noise's (noisy_bias) shares with it.
 struct BiasPrediction {
-  Eigen::MatrixXd J;     ///< the kept samples' rows of BiasInputs::J
-  Eigen::VectorXd dM;    ///< the smoothing's torque error at them (2 per sample)
-  Eigen::MatrixXd Hinv;  ///< (J^T J + Hp)^-1
-  Eigen::VectorXd bias;  ///< the smoothing's (public parameters judged)
-  Eigen::VectorXd std;   ///< errors in variables (public parameters judged)
+  Eigen::MatrixXd J;       ///< the kept samples' rows of BiasInputs::J
+  Eigen::VectorXd dM;      ///< the smoothing's torque error at them (2 per sample)
+  Eigen::MatrixXd Hinv;    ///< (J^T J + Hp)^-1
+  Eigen::VectorXd bias;    ///< the smoothing's (public parameters judged)
+  Eigen::VectorXd std;     ///< errors in variables (public parameters judged)
   Eigen::VectorXd spread;  ///< with_spread: as smoothing_bias's `spread`
 };
 
