@@ -20,6 +20,7 @@ import csv
 import json
 import os
 import re
+import resource
 import statistics
 import subprocess
 import sys
@@ -39,18 +40,26 @@ TASKS = os.path.join(ROOT, "datasets", "tasks", "paper_tasks.yaml")
 OUT = os.path.join(ROOT, "docs", "benchmarks.md")
 
 
+def cpu_children():
+    """User + system CPU time [s] of the finished children so far."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
 def run(cmd):
-    """Runs cmd; returns its wall time [s] (raises on failure)."""
-    start = time.perf_counter()
+    """Runs cmd; returns its wall time and its CPU time (user + system, every thread) [s] (raises
+    on failure)."""
+    start, cpu = time.perf_counter(), cpu_children()
     done = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     elapsed = time.perf_counter() - start
     if done.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} exited {done.returncode}: {done.stderr.strip()[-400:]}")
-    return elapsed
+    return elapsed, cpu_children() - cpu
 
 
 def commands(out):
-    """(name, arguments after the binary, function reading the time [s] from `out`)."""
+    """(name, arguments after the binary, function reading the time [s] from `out`, or None: the
+    command's wall time, or "cpu": its CPU time, user + system over its threads)."""
     def summary_time(key, name="summary.json"):
         return lambda: json.load(open(os.path.join(out, name)))[key]
 
@@ -63,13 +72,16 @@ def commands(out):
                  ["simulate", SCENE, "--set", "simulation.integrator=arkode_erk45", "--set",
                   "simulation.rtol=1e-10", "--set", "simulation.atol=1e-10", "--no-plots",
                   "--out", out], summary_time("wall_time_s")))
+    identify = ["identify", SCENE, "--log", LOG, "--per-joint", "--estimate", "friction,inertia",
+                "--no-plots", "--out", out]
+    excite = ["excite", SCENE, "--per-joint", "--criterion", "worst-std", "--duration", "10",
+              "--torque-limit", "13.4", "--no-plots", "--out", out]
     return sims + [
-        ("identify --per-joint --estimate friction,inertia (fit)",
-         ["identify", SCENE, "--log", LOG, "--per-joint", "--estimate", "friction,inertia",
-          "--out", out], summary_time("identification_wall_time_s", "identification.json")),
-        ("excite --per-joint --criterion worst-std, 10 s (whole command)",
-         ["excite", SCENE, "--per-joint", "--criterion", "worst-std", "--duration", "10",
-          "--torque-limit", "13.4", "--out", out], None),
+        ("identify --per-joint --estimate friction,inertia (fit)", identify,
+         summary_time("identification_wall_time_s", "identification.json")),
+        ("identify --per-joint --estimate friction,inertia (whole command, CPU)", identify, "cpu"),
+        ("excite --per-joint --criterion worst-std, 10 s (whole command)", excite, None),
+        ("excite --per-joint --criterion worst-std, 10 s (whole command, CPU)", excite, "cpu"),
     ]
 
 
@@ -81,8 +93,8 @@ def measure(binaries, repeats, skip_optimize):
             times = [[] for _ in binaries]
             for _ in range(repeats):
                 for i, binary in enumerate(binaries):
-                    wall = run([binary] + args)
-                    times[i].append(read() if read else wall)
+                    wall, cpu = run([binary] + args)
+                    times[i].append(cpu if read == "cpu" else read() if read else wall)
             rows.append((name, [statistics.median(t) for t in times]))
         if not skip_optimize:
             per_task = [{} for _ in binaries]

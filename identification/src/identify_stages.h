@@ -216,14 +216,18 @@ class FiveBarWindowFit : public WindowFit {
   /// over the probes, the rest rule (held_sample) at the thresholds of the window `sg`
   void levels(const std::vector<int>& probe, const SgOptions& sg, double rms[2],
               double floor[2]) const override;
+  /// (the Jacobians, which do not depend on the reach, evaluated once: fit_inputs)
   detail::BiasInputs bias_inputs(int reach, int min_half, int order) const override;
   /// each crank's angle noise and its filtered rate and acceleration, by a 3-point Gauss-Hermite
   /// rule along the principal axes of their covariance (the two cranks' noises independent)
   detail::NoiseBias noise_bias(const SgOptions& sg) const override;
 
  private:
+  /// bias_inputs without the motion's terms, at the preliminary fit (on the first call)
+  const detail::BiasInputs& fit_inputs() const;
   const Fit& f_;
   const IdentifyResult& out_;
+  mutable std::unique_ptr<detail::BiasInputs> fit_inputs_;
 };
 
 /// The motion's terms above the filter's order (high_order_terms, `extra` of them) of both

@@ -155,9 +155,9 @@ std::array<Eigen::Vector3d, 3> noise_axes(const std::vector<double>& t, const Sg
   return gauss_hermite_axes(filtered_noise_covariance(mid, lo, d1, d2, 1.0));
 }
 
-bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
-                    const std::vector<char>& keep, const SgOptions& sg, Eigen::VectorXd* bias,
-                    Eigen::VectorXd* std, const NoiseBias* noise, Eigen::VectorXd* spread) {
+bool predict_smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
+                            const std::vector<char>& keep, const SgOptions& sg, bool with_spread,
+                            BiasPrediction* out) {
   if (in.source != RateSource::kFromAngles || t.size() < 2) return false;
   const int P = static_cast<int>(in.J.cols());
   const int kept = static_cast<int>(std::count(keep.begin(), keep.end(), 1));
@@ -165,8 +165,9 @@ bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
   const double dt = (t.back() - t.front()) / (static_cast<double>(t.size()) - 1);
   Eigen::VectorXd r1, r2;
   filter_response(sg, dt, &r1, &r2);
-  Eigen::MatrixXd J(2 * kept, P);
-  Eigen::VectorXd dM(2 * kept);
+  Eigen::MatrixXd& J = out->J;
+  J.resize(2 * kept, P);
+  out->dM.resize(2 * kept);
   std::vector<Sensitivity> sens;
   sens.reserve(kept);
   for (size_t u = 0, k = 0; u < keep.size(); ++u) {
@@ -175,8 +176,7 @@ bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
     for (int c = 0; c < kDof; ++c) {
       m += in.D[u].col(2 + c) * in.terms[c][u].dot(r1) + in.D[u].col(4 + c) * in.terms[c][u].dot(r2);
     }
-    if (noise) m += noise->shift[u];
-    dM.segment<2>(2 * k) = m;
+    out->dM.segment<2>(2 * k) = m;
     J.middleRows(2 * k, 2) = in.J.middleRows(2 * u, 2);
     sens.push_back(sensitivity(t, in.index[u], in.source, sg, in.noise, in.D[u]));
     ++k;
@@ -188,27 +188,56 @@ bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
   // log) makes H singular to rounding: its solve would be a bias of millions, not a prediction
   const Eigen::VectorXd d = ldlt.vectorD().cwiseAbs();
   if (!(d.minCoeff() > 1e-12 * d.maxCoeff())) return false;
-  const Eigen::MatrixXd Hinv = ldlt.solve(Eigen::MatrixXd::Identity(P, P));
+  out->Hinv = ldlt.solve(Eigen::MatrixXd::Identity(P, P));
+  const Eigen::MatrixXd& Hinv = out->Hinv;
   // the model's torque M is off by dM where the residual r = tau - M is evaluated with biased
   // rates; the Gauss-Newton step from the truth moves x by (J^T J)^-1 J^T dM (J = d r / d x)
-  Eigen::VectorXd score = J.transpose() * dM;
-  for (size_t u = 0; noise && u < keep.size(); ++u) {
-    if (keep[u]) score -= noise->score[u];
-  }
+  const Eigen::VectorXd score = J.transpose() * out->dM;
   const Eigen::VectorXd b = in.T * (Hinv * score);
   const Eigen::MatrixXd S = score_covariance(J, sens, in.noise, static_cast<int>(t.size())) +
                             in.s2 * in.Hp;
   const Eigen::MatrixXd C = in.T * Hinv * S * Hinv * in.T.transpose();
-  *bias = b.head(judged_size(in));
-  *std = C.diagonal().head(judged_size(in)).cwiseMax(0.0).cwiseSqrt();
-  if (spread) {
+  out->bias = b.head(judged_size(in));
+  out->std = C.diagonal().head(judged_size(in)).cwiseMax(0.0).cwiseSqrt();
+  if (with_spread) {
     const size_t n = keep.size();
     const bool weighed = in.recon_lo.size() == n && in.weights[0].size() == n &&
                          in.weights[1].size() == n && in.D.size() == n;
-    *spread = weighed ? prediction_spread(t, in, keep, J, Hinv, r1, r2)
-                      : Eigen::VectorXd::Zero(judged_size(in));
+    out->spread = weighed ? prediction_spread(t, in, keep, J, Hinv, r1, r2)
+                          : Eigen::VectorXd::Zero(judged_size(in));
   }
-  return bias->allFinite() && std->allFinite();
+  return out->bias.allFinite() && out->std.allFinite();
+}
+
+bool noisy_bias(const BiasInputs& in, const std::vector<char>& keep, const NoiseBias& noise,
+                const BiasPrediction& p, Eigen::VectorXd* bias) {
+  Eigen::VectorXd dM = p.dM;
+  for (size_t u = 0, k = 0; u < keep.size(); ++u) {
+    if (!keep[u]) continue;
+    dM.segment<2>(2 * k) += noise.shift[u];
+    ++k;
+  }
+  Eigen::VectorXd score = p.J.transpose() * dM;
+  for (size_t u = 0; u < keep.size(); ++u) {
+    if (keep[u]) score -= noise.score[u];
+  }
+  const Eigen::VectorXd b = in.T * (p.Hinv * score);
+  *bias = b.head(judged_size(in));
+  return bias->allFinite() && p.std.allFinite();
+}
+
+bool smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
+                    const std::vector<char>& keep, const SgOptions& sg, Eigen::VectorXd* bias,
+                    Eigen::VectorXd* std, const NoiseBias* noise, Eigen::VectorXd* spread) {
+  BiasPrediction p;
+  if (!predict_smoothing_bias(t, in, keep, sg, spread != nullptr, &p)) return false;
+  *std = p.std;
+  if (spread) *spread = p.spread;
+  if (!noise) {
+    *bias = p.bias;
+    return true;
+  }
+  return noisy_bias(in, keep, *noise, p, bias);
 }
 
 }  // namespace fivebar::identification::detail

@@ -117,6 +117,28 @@ bool noise_bias_at(const Eigen::Matrix3d& C, const PerturbedTorques& torques,
 /// through zero (its norm's kink) as a Taylor term is not.
 std::array<Eigen::Vector3d, 3> noise_axes(const std::vector<double>& t, const SgOptions& sg);
 
+/// smoothing_bias's prediction for one filter over the samples kept, before the noise's bias:
+/// what the bias with the noise's (noisy_bias) shares with it.
+struct BiasPrediction {
+  Eigen::MatrixXd J;       ///< the kept samples' rows of BiasInputs::J
+  Eigen::VectorXd dM;      ///< the smoothing's torque error at them (2 per sample)
+  Eigen::MatrixXd Hinv;    ///< (J^T J + Hp)^-1
+  Eigen::VectorXd bias;    ///< the smoothing's (public parameters judged)
+  Eigen::VectorXd std;     ///< errors in variables (public parameters judged)
+  Eigen::VectorXd spread;  ///< with_spread: as smoothing_bias's `spread`
+};
+
+/// smoothing_bias without the noise's bias, into *out (false when too few samples or singular;
+/// spread only `with_spread`).
+bool predict_smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
+                            const std::vector<char>& keep, const SgOptions& sg, bool with_spread,
+                            BiasPrediction* out);
+
+/// The bias of the smoothing and of the noise (NoiseBias of the same filter) from the prediction
+/// p of the same samples: the same as smoothing_bias with `noise` (false where not finite).
+bool noisy_bias(const BiasInputs& in, const std::vector<char>& keep, const NoiseBias& noise,
+                const BiasPrediction& p, Eigen::VectorXd* bias);
+
 /// Predicted smoothing bias and errors-in-variables std of the public parameters judged
 /// (BiasInputs:: judged: by default the friction coefficients) for the filter `sg`, over the
 /// samples u with keep[u] (false when too few or singular). With `noise` (NoiseBias at sg), the

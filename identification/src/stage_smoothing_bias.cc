@@ -33,12 +33,13 @@ void motion_terms(const Fit& f, int i, int reach, int min_half, int order, int e
   }
 }
 
-/// At the preliminary fit (f.x, f.samples): the residual's and the kinematic Jacobians, the
-/// motion's higher terms (motion_terms).
-detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int order) const {
+/// At the preliminary fit (f.x, f.samples): the residual's and the kinematic Jacobians.
+const detail::BiasInputs& FiveBarWindowFit::fit_inputs() const {
+  if (fit_inputs_) return *fit_inputs_;
   const Fit& f = f_;
   const int P = f.layout.size();
-  detail::BiasInputs in;
+  fit_inputs_ = std::make_unique<detail::BiasInputs>();
+  detail::BiasInputs& in = *fit_inputs_;
   in.index = f.index;
   ceres::Problem problem;
   std::vector<double> x = f.x;
@@ -53,6 +54,23 @@ detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int or
       D.setZero();
     }
     in.D.push_back(D);
+  }
+  in.Hp = prior_information(f);
+  in.s2 = f.prior_scale * f.prior_scale;
+  in.T = to_public(f.layout);
+  in.friction_size = f.layout.friction_size();
+  in.per_joint = f.layout.per_joint;
+  in.friction = (in.T * Eigen::Map<const Eigen::VectorXd>(f.x.data(), P)).head(in.friction_size);
+  in.source = f.source;
+  in.noise = f.noise;
+  return in;
+}
+
+/// fit_inputs with the motion's higher terms (motion_terms).
+detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int order) const {
+  const Fit& f = f_;
+  detail::BiasInputs in = fit_inputs();
+  for (size_t u = 0; u < f.samples.size(); ++u) {
     std::array<Eigen::VectorXd, kDof> terms;
     std::array<Eigen::MatrixXd, kDof> weights;
     int lo = 0;
@@ -63,14 +81,6 @@ detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int or
     in.weights[1].push_back(std::move(weights[1]));
     in.recon_lo.push_back(lo);
   }
-  in.Hp = prior_information(f);
-  in.s2 = f.prior_scale * f.prior_scale;
-  in.T = to_public(f.layout);
-  in.friction_size = f.layout.friction_size();
-  in.per_joint = f.layout.per_joint;
-  in.friction = (in.T * Eigen::Map<const Eigen::VectorXd>(f.x.data(), P)).head(in.friction_size);
-  in.source = f.source;
-  in.noise = f.noise;
   return in;
 }
 
@@ -148,7 +158,8 @@ std::vector<char> centred_samples(const WindowFit& w, int m) {
 namespace {
 
 /// The predicted bias (the smoothing's, and the noise's where the mechanism predicts it) of the
-/// filters of one order over the window candidates, each evaluated once, on demand.
+/// filters of one order over the window candidates, each evaluated once, on demand: the
+/// smoothing's where it is asked for, the noise's (the costlier) only where the bias with it is.
 class WindowBias {
  public:
   /// the motion's higher terms over +-kReconSpan times the half-window `reach_half`, or the
@@ -162,7 +173,11 @@ class WindowBias {
         bias_(cand.size()),
         smooth_bias_(cand.size()),
         spread_(cand.size()),
-        done_(cand.size(), 0) {
+        done_(cand.size(), 0),
+        noise_done_(cand.size(), 0),
+        pred_(cand.size()),
+        keep_(cand.size()),
+        in_(cand.size(), nullptr) {
     const int n = w.log().size();
     dt_ = w.log().duration() / std::max(1, n - 1);
     reach_half_ = reach_half;
@@ -170,6 +185,7 @@ class WindowBias {
   /// candidate k's largest predicted |bias| / std, the noise's included; -1: not predicted
   double worst(int k) {
     evaluate(k);
+    add_noise(k);
     return worst_[k];
   }
   /// the same of the smoothing's bias alone
@@ -187,13 +203,15 @@ class WindowBias {
     sg.half_window_s = cand_[k] * dt_;
     return sg;
   }
-  /// "h: ratio (smoothing's ratio), ..." over the candidates evaluated
+  /// "h: ratio (smoothing's ratio), ..." over the candidates evaluated ("h: - (smoothing's
+  /// ratio)" where only the smoothing's was needed)
   std::string table() const {
     std::string t;
     for (size_t k = 0; k < cand_.size(); ++k) {
-      if (worst_[k] < 0) continue;
+      if (smooth_[k] < 0 || (noise_done_[k] && worst_[k] < 0)) continue;
       t += (t.empty() ? "" : ", ") + std::to_string(cand_[k]) + ": " +
-           format_significant(worst_[k]) + " (" + format_significant(smooth_[k]) + ")";
+           (noise_done_[k] ? format_significant(worst_[k]) : std::string("-")) + " (" +
+           format_significant(smooth_[k]) + ")";
     }
     return t;
   }
@@ -213,19 +231,27 @@ class WindowBias {
     const bool ok = it->second.J.rows() == 2 * static_cast<int>(w_.index().size());
     return ok ? &it->second : nullptr;
   }
+  /// candidate k's smoothing bias
   void evaluate(int k) {
     if (done_[k]) return;
     done_[k] = true;
-    const detail::BiasInputs* given = inputs(k);
-    if (!given) return;
-    const detail::BiasInputs& in = *given;
-    const SgOptions sg = filter(k);
-    const std::vector<char> keep = centred_samples(w_, cand_[k]);
-    Eigen::VectorXd& b = smooth_bias_[k];
-    Eigen::VectorXd std;
-    Eigen::VectorXd& spread = spread_[k];
-    if (!detail::smoothing_bias(w_.log().t, in, keep, sg, &b, &std, nullptr, &spread)) return;
-    smooth_[k] = worst_ratio(b, std, spread);
+    in_[k] = inputs(k);
+    if (!in_[k]) return;
+    const detail::BiasInputs& in = *in_[k];
+    keep_[k] = centred_samples(w_, cand_[k]);
+    // the smoothing's prediction, whose solve the noise's bias shares
+    detail::BiasPrediction& pred = pred_[k];
+    if (!detail::predict_smoothing_bias(w_.log().t, in, keep_[k], filter(k), true, &pred)) return;
+    smooth_bias_[k] = pred.bias;
+    spread_[k] = pred.spread;
+    smooth_[k] = worst_ratio(pred.bias, pred.std, pred.spread);
+  }
+  /// candidate k's bias with the noise's, after its smoothing's (evaluate)
+  void add_noise(int k) {
+    if (noise_done_[k] || smooth_[k] < 0) return;
+    noise_done_[k] = true;
+    const detail::BiasInputs& in = *in_[k];
+    const Eigen::VectorXd& std = pred_[k].std;
     // the noise's bias is one Gauss-Newton step from the fit: where a shared friction
     // coefficient's std exceeds its value (a light mechanism's log at 0.02 N m of torque noise),
     // it predicts nothing (4.5 std at half-window 10 there, on a coulomb std of 0.097). Per joint
@@ -236,20 +262,24 @@ class WindowBias {
     for (int p = 0; !in.per_joint && p < in.friction.size() && p < std.size(); ++p) {
       determined = determined && std(p) < std::abs(in.friction(p));
     }
-    const detail::NoiseBias noise = determined ? w_.noise_bias(sg) : detail::NoiseBias{};
+    const detail::NoiseBias noise = determined ? w_.noise_bias(filter(k)) : detail::NoiseBias{};
     const size_t m = w_.index().size();
     if (noise.shift.size() != m || noise.score.size() != m) {
-      bias_[k] = b, worst_[k] = smooth_[k];
-    } else if (detail::smoothing_bias(w_.log().t, in, keep, sg, &bias_[k], &std, &noise)) {
-      worst_[k] = worst_ratio(bias_[k], std, spread);
+      bias_[k] = smooth_bias_[k], worst_[k] = smooth_[k];
+    } else if (detail::noisy_bias(in, keep_[k], noise, pred_[k], &bias_[k])) {
+      worst_[k] = worst_ratio(bias_[k], std, spread_[k]);
     }
+    pred_[k] = detail::BiasPrediction();
   }
   const WindowFit& w_;
   SgOptions sg_;
   std::vector<int> cand_;
   std::vector<double> worst_, smooth_;
   std::vector<Eigen::VectorXd> bias_, smooth_bias_, spread_;
-  std::vector<char> done_;
+  std::vector<char> done_, noise_done_;
+  std::vector<detail::BiasPrediction> pred_;  ///< until the noise's bias is added
+  std::vector<std::vector<char>> keep_;
+  std::vector<const detail::BiasInputs*> in_;
   std::map<int, detail::BiasInputs> inputs_;  ///< by reach
   int reach_half_ = 1;
   double dt_ = 1;
@@ -318,7 +348,8 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
     *spread = raised_bias->spread(1);
     *choice +=
         "; the raised order's predicted bias the least (predicted |bias| / std, the "
-        "smoothing's and the noise's through the reactions: " +
+        "smoothing's and the noise's through the reactions (-: the smoothing's alone was "
+        "needed): " +
         table + wb.table() + ")";
     return;
   }
@@ -337,7 +368,8 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
            : "the one of least predicted bias up from the largest whose smoothing bias is within " +
                  format_significant(kBiasFraction) + " std") +
       " (predicted |bias| / std by half-window, the smoothing's and the noise's through "
-      "the reactions (the smoothing's alone), the motion's higher terms from local "
+      "the reactions (the smoothing's alone; -: the smoothing's alone was needed), the motion's "
+      "higher terms from local "
       "polynomials of degree " +
       std::to_string(given_order + detail::kReconExtra) + " over +-" +
       format_significant(detail::kReconSpan) + " times the rule's half-window: " + table +

@@ -57,7 +57,11 @@ void FiveBarWindowFit::levels(const std::vector<int>& probe, const SgOptions& sg
     const auto& o = p.actuators.offset;  // measured = motor + offset
     r2 += Eigen::Vector2d(std::pow(s.tau1 - o[0] - ev.M1, 2), std::pow(s.tau2 - o[1] - ev.M2, 2));
     t2 += Eigen::Vector2d(s.tau1 * s.tau1, s.tau2 * s.tau2);
-    v += detail::propagated_variance(detail::sensitivity(log.t, i, f.source, sg, f.noise, D));
+    // the filter's taps above, where the rates or accelerations are estimated
+    v +=
+        detail::propagated_variance(f.source == detail::RateSource::kLogged
+                                        ? detail::sensitivity(log.t, i, f.source, sg, f.noise, D)
+                                        : detail::sensitivity(i, lo, d1, d2, f.source, f.noise, D));
     ++count;
   }
   for (int j = 0; j < kActuators; ++j) {

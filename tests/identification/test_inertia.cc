@@ -102,6 +102,42 @@ TEST(StructuredResidual, MatchesTheFullModelWithActuators) {
   check_structured<16>({FrictionLaw::kCoulombViscous, true, false, true});
 }
 
+// Jets whose derivative parts are not the parameters' own (every part set): the structured
+// residual's products with the inertial parameters read all of them
+TEST(StructuredResidual, MatchesTheFullModelAlongAnyDirections) {
+  const ParameterLayout layout{FrictionLaw::kCoulombViscous, true, true};
+  constexpr int P = 26;
+  ASSERT_EQ(layout.size(), P);
+  const Params<double> scene = paper_params();
+  std::vector<double> x = layout.extract(cad_truth());
+  for (int i = 0; i < layout.friction_size(); ++i) x[i] = 0.05 + 0.01 * i;
+  EvalOptions eval;
+  eval.friction_tol = 1e-14;
+  eval.friction_max_iter = 200;
+  using J = ceres::Jet<double, 3>;
+  std::vector<J> xj(P);
+  for (int i = 0; i < P; ++i) {
+    xj[i] = J(x[i]);
+    for (int k = 0; k < 3; ++k) xj[i].v[k] = std::sin(1.0 + i + 7.0 * k);  // dense, seeded
+  }
+  for (const Sample& s : testing::random_samples(cad_truth(), 6, 5)) {
+    SampleStructure st;
+    ASSERT_TRUE(sample_structure(scene, s, eval, &st));
+    const StructuredResidual fast(scene, layout, st, s, eval);
+    const InverseDynamicsResidual full(scene, layout, s, eval);
+    J a[2], b[2];
+    ASSERT_TRUE(fast(xj.data(), a));
+    ASSERT_TRUE(full(xj.data(), b));
+    for (int k = 0; k < 2; ++k) {
+      EXPECT_NEAR(a[k].a, b[k].a, 1e-9) << "residual " << k;
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(a[k].v[i], b[k].v[i], 1e-7 * (1 + std::abs(b[k].v[i])))
+            << "direction " << i << ", residual " << k;
+      }
+    }
+  }
+}
+
 TEST(InertialPrior, ZeroAtTheSceneAndAHingeOnTheComInertia) {
   const Params<double> scene = paper_params();
   const detail::InertialPrior prior = detail::inertial_prior(scene, 0.2);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "fivebar/identification/identify.h"
 #include "fivebar/model/format.h"
@@ -12,6 +13,7 @@
 #include "mechanism_stages.h"
 #include "paper.h"
 #include "setup_shared.h"
+#include "smoothing_bias.h"
 #include "synthetic_log.h"
 #include "window_misfit.h"
 
@@ -531,6 +533,66 @@ TEST(SmoothingBias, CorrectionKeepsALowerEndAtItsBound) {
   EXPECT_NEAR(out.parameters[0].ci_high, 0.196, 1e-15);
   EXPECT_NEAR(out.parameters[1].ci_low, 0.009, 1e-15);  // away from the bound: moved
   EXPECT_NEAR(x[0], 0.096, 1e-15);
+}
+
+// The bias with the noise's (noisy_bias) is the smoothing's prediction moved by one Gauss-Newton
+// step on the noise's shift and score over the samples kept, with the prediction's own
+// factorisation and std (smoothing_bias with the noise gives the same)
+TEST(SmoothingBias, TheNoisesBiasIsAStepFromTheSmoothingsPrediction) {
+  const int n = 200, P = 3;
+  std::vector<double> t(n);
+  for (int i = 0; i < n; ++i) t[i] = 1e-3 * i;
+  detail::BiasInputs in;
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const auto random = [&](int r, int c) {
+    Eigen::MatrixXd m(r, c);
+    for (int i = 0; i < r; ++i)
+      for (int j = 0; j < c; ++j) m(i, j) = g(rng);
+    return m;
+  };
+  for (int i = 20; i < 180; ++i) in.index.push_back(i);
+  const int m = static_cast<int>(in.index.size());
+  in.J = random(2 * m, P);
+  for (int u = 0; u < m; ++u) {
+    in.D.push_back(random(2, 6));
+    for (int c = 0; c < 2; ++c) in.terms[c].push_back(1e-6 * random(1, 1).col(0));
+  }
+  in.Hp = Eigen::MatrixXd::Identity(P, P);
+  in.T = random(P, P) + 3 * Eigen::MatrixXd::Identity(P, P);
+  in.friction_size = P;
+  in.noise.angle[0] = in.noise.angle[1] = 1e-5;
+  in.noise.torque[0] = in.noise.torque[1] = 0.02;
+  std::vector<char> keep(m, 1);
+  for (int u = 0; u < m; u += 7) keep[u] = 0;
+  detail::NoiseBias noise;
+  for (int u = 0; u < m; ++u) {
+    noise.shift.push_back(1e-3 * random(2, 1).col(0));
+    noise.score.push_back(1e-3 * random(P, 1).col(0));
+  }
+  SgOptions sg;
+  sg.half_window_s = 5e-3;
+  detail::BiasPrediction p;
+  ASSERT_TRUE(detail::predict_smoothing_bias(t, in, keep, sg, false, &p));
+  Eigen::VectorXd with_noise, both, std;
+  ASSERT_TRUE(detail::noisy_bias(in, keep, noise, p, &with_noise));
+  ASSERT_TRUE(detail::smoothing_bias(t, in, keep, sg, &both, &std, &noise));
+  EXPECT_EQ(both, with_noise);
+  EXPECT_EQ(std, p.std);
+  // the step: T (J^T J + Hp)^-1 (J^T shift - score) over the kept samples
+  Eigen::MatrixXd H = in.Hp;
+  Eigen::VectorXd score = Eigen::VectorXd::Zero(P);
+  for (int u = 0; u < m; ++u) {
+    if (!keep[u]) continue;
+    const Eigen::MatrixXd Ju = in.J.middleRows(2 * u, 2);
+    H += Ju.transpose() * Ju;
+    score += Ju.transpose() * noise.shift[u] - noise.score[u];
+  }
+  const Eigen::VectorXd step = in.T * H.ldlt().solve(score);
+  // (the difference of two predictions: rounding of their size)
+  const double tol = 1e-9 * (step.norm() + with_noise.norm() + p.bias.norm());
+  for (int k = 0; k < P; ++k) EXPECT_NEAR(with_noise(k) - p.bias(k), step(k), tol) << k;
+  EXPECT_GT(step.norm(), 0.0);
 }
 
 }  // namespace
