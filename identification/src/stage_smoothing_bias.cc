@@ -226,17 +226,7 @@ class WindowBias {
     Eigen::VectorXd& spread = spread_[k];
     if (!detail::smoothing_bias(w_.log().t, in, keep, sg, &b, &std, nullptr, &spread)) return;
     smooth_[k] = worst_ratio(b, std, spread);
-    // the noise's bias is one Gauss-Newton step from the fit: where a shared friction
-    // coefficient's std exceeds its value (a light mechanism's log at 0.02 N m of torque noise),
-    // it predicts nothing (4.5 std at half-window 10 there, on a coulomb std of 0.097). Per joint
-    // it is always predicted: some coefficient is at its bound or undetermined on most logs (a
-    // fast design's order-7 window carried 13 std of it, unseen; light per-joint logs keep
-    // exit 0)
-    bool determined = true;
-    for (int p = 0; !in.per_joint && p < in.friction.size() && p < std.size(); ++p) {
-      determined = determined && std(p) < std::abs(in.friction(p));
-    }
-    const detail::NoiseBias noise = determined ? w_.noise_bias(sg) : detail::NoiseBias{};
+    const detail::NoiseBias noise = w_.noise_bias(sg);
     const size_t m = w_.index().size();
     if (noise.shift.size() != m || noise.score.size() != m) {
       bias_[k] = b, worst_[k] = smooth_[k];
