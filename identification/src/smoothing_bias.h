@@ -68,10 +68,6 @@ struct BiasInputs {
   double s2 = 0;
   Eigen::MatrixXd T;  ///< internal to public parameters
   int friction_size = 0;
-  /// one coefficient of each group per joint (ParameterLayout::per_joint)
-  bool per_joint = false;
-  /// the public friction coefficients at the fit (empty: not given)
-  Eigen::VectorXd friction;
   RateSource source = RateSource::kFromAngles;
   SensorNoise noise;
 };

@@ -67,8 +67,6 @@ detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int or
   in.s2 = f.prior_scale * f.prior_scale;
   in.T = to_public(f.layout);
   in.friction_size = f.layout.friction_size();
-  in.per_joint = f.layout.per_joint;
-  in.friction = (in.T * Eigen::Map<const Eigen::VectorXd>(f.x.data(), P)).head(in.friction_size);
   in.source = f.source;
   in.noise = f.noise;
   return in;
