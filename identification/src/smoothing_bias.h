@@ -72,10 +72,6 @@ struct BiasInputs {
   /// rules judge (0: the friction coefficients; the four-bar with its links' inertial parameters
   /// judges them all)
   int judged = 0;
-  /// one coefficient of each group per joint (ParameterLayout::per_joint)
-  bool per_joint = false;
-  /// the public friction coefficients at the fit (empty: not given)
-  Eigen::VectorXd friction;
   RateSource source = RateSource::kFromAngles;
   SensorNoise noise;
 };

@@ -59,8 +59,6 @@ const detail::BiasInputs& FiveBarWindowFit::fit_inputs() const {
   in.s2 = f.prior_scale * f.prior_scale;
   in.T = to_public(f.layout);
   in.friction_size = f.layout.friction_size();
-  in.per_joint = f.layout.per_joint;
-  in.friction = (in.T * Eigen::Map<const Eigen::VectorXd>(f.x.data(), P)).head(in.friction_size);
   in.source = f.source;
   in.noise = f.noise;
   return in;
@@ -252,17 +250,7 @@ class WindowBias {
     noise_done_[k] = true;
     const detail::BiasInputs& in = *in_[k];
     const Eigen::VectorXd& std = pred_[k].std;
-    // the noise's bias is one Gauss-Newton step from the fit: where a shared friction
-    // coefficient's std exceeds its value (a light mechanism's log at 0.02 N m of torque noise),
-    // it predicts nothing (4.5 std at half-window 10 there, on a coulomb std of 0.097). Per joint
-    // it is always predicted: some coefficient is at its bound or undetermined on most logs (a
-    // fast design's order-7 window carried 13 std of it, unseen; light per-joint logs keep
-    // exit 0)
-    bool determined = true;
-    for (int p = 0; !in.per_joint && p < in.friction.size() && p < std.size(); ++p) {
-      determined = determined && std(p) < std::abs(in.friction(p));
-    }
-    const detail::NoiseBias noise = determined ? w_.noise_bias(filter(k)) : detail::NoiseBias{};
+    const detail::NoiseBias noise = w_.noise_bias(filter(k));
     const size_t m = w_.index().size();
     if (noise.shift.size() != m || noise.score.size() != m) {
       bias_[k] = smooth_bias_[k], worst_[k] = smooth_[k];

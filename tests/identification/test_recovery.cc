@@ -346,5 +346,30 @@ TEST(Recovery, LightSlowFiveBarCleanLogsCoverTheTruth) {
   EXPECT_GE(covered[1], 5);
 }
 
+// The slow light five-bar under the multi-sine with coarse encoders (angle noise 1e-4 rad, torque
+// noise 0.02 N m, 6 s at 1 kHz): the angle noise through the estimated accelerations is most of
+// the residual, and the friction regressors (the reactions' norms) carry the same noise, so the
+// fit at the residual rule's window reads coulomb near 0 and viscous 2-5 std high. That bias is
+// predicted (errors in variables through the reactions) and the window moved up until it is
+// small: each coefficient's 95 % interval holds its truth (with that bias unpredicted, coulomb
+// read 0.053 +- 0.049 and viscous 0.067 +- 0.0077, 2.2 std high).
+TEST(Recovery, LightSlowFiveBarNoisyEncodersCoverTheTruth) {
+  const Params<double> truth = testing::slow_light_params();
+  const double truths[2] = {0.2, 0.05};
+  SynthOptions so = testing::log_options(6.0, kTorqueNoise, 1e-4, 3);
+  so.multisine = true;
+  const SynthResult r =
+      synthesize_log(truth, testing::slow_light_loads, testing::slow_light_start(), so);
+  ASSERT_TRUE(r.status.ok()) << r.status.message;
+  const IdentifyResult res = identify(truth, testing::slow_light_loads, r.log, IdentifyOptions{});
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  for (int p = 0; p < 2; ++p) {
+    const ParameterEstimate& e = res.parameters[p];
+    EXPECT_TRUE(e.ci_low <= truths[p] && truths[p] <= e.ci_high)
+        << e.name << " " << e.value << " +- " << e.std << " [" << e.ci_low << ", " << e.ci_high
+        << "]";
+  }
+}
+
 }  // namespace
 }  // namespace fivebar::identification

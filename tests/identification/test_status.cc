@@ -269,14 +269,18 @@ TEST(IdentifyStatus, ALightMechanismsScaledTorqueIsNamedOnDecisiveEvidence) {
 
 // both torques at 0.9 of the model's on the light mechanism's angles-only log (no gravity: a
 // common scale of the torques reads as the masses' scale): unusable, the torque readings and the
-// inertias named with their falls (43.1 with the inertias free, 37 with the readings'), never the
+// inertias named, either as the two gains off alike or the masses by that scale (tau1 0.899,
+// tau2 0.904 times the model, evidenced at 480 and 430 std) or with their falls, never the
 // encoders' zeros (without the acceleration noise's share in their score, they read 2.4, 1.3 rad
 // off and raised every fall with them free, which singled out the readings)
 TEST(IdentifyStatus, BothTorqueGainsOffAreNamedWithTheInertias) {
+  using ::testing::AnyOf;
   const IdentifyResult res = fit_light(light_log(0.9));
   ASSERT_TRUE(res.status.ok()) << res.status.message;
-  EXPECT_THAT(res.unusable, HasSubstr("torque sensors' offsets and gains"));
-  EXPECT_THAT(res.unusable, HasSubstr("inertial parameters"));
+  EXPECT_THAT(res.unusable, AnyOf(HasSubstr("both logged torques' gains are off alike"),
+                                  HasSubstr("torque sensors' offsets and gains")));
+  EXPECT_THAT(res.unusable, AnyOf(HasSubstr("the links' masses and inertias are by that scale"),
+                                  HasSubstr("inertial parameters")));
   EXPECT_THAT(res.unusable, ::testing::Not(HasSubstr("angles' zeros")));
 }
 
