@@ -152,7 +152,12 @@ void covariance(FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
   const std::vector<double> rd(r.begin(), r.begin() + m);
   out->rms_torque_residual[0] = rms(rd);
   out->residual_sigma = std::sqrt(rms(rd) * rms(rd) * m / std::max(1, m - P));
-  scaled_singular_values(Jd, out);
+  if (f.layout.actuator) {  // the five-bar's report: which actuator terms the log cannot separate
+    const Eigen::MatrixXd Jpub = J * stages::to_public(f.layout).inverse();
+    stages::identifiability(Jpub.transpose() * Jpub, f.layout, out);
+  } else {
+    scaled_singular_values(Jd, out);
+  }
   if (!out->converged) return;
   Eigen::MatrixXd C;
   const Eigen::MatrixXd H = J.transpose() * J;

@@ -28,7 +28,8 @@ std::vector<int> add_windows(FourBarFit* f, IdentifyResult* out, ceres::Problem*
     initial.theta1 = log.theta1[i0];
     initial.omega1 = f->w[i0];
     stages::WindowSimulation run = [scene = f->scene, layout = f->layout,
-                                    loads = logged_loads(log, f->loads, log.t[i0]),
+                                    loads = logged_loads(log, f->loads, log.t[i0],
+                                                         f->scene.actuators.offset[0]),
                                     initial](const double* x, const sim::Options& o) {
       FourBarParams p = scene;
       layout.apply(x, &p.friction);
