@@ -1,7 +1,7 @@
 // fivebar synth-log SCENE --out LOG.csv [--rate HZ] [--duration S] [--torque-noise NM]
 //   [--angle-noise RAD] [--seed N] [--quantization RAD] [--excitation scene|multisine]
 //   [--with-rates] [--law coulomb_viscous|stribeck] [--motion MOTION.csv] [--set KEY=VALUE]...
-//   [--torque-offset A,B] [--actuator-coulomb A,B] [--actuator-viscous A,B]
+//   [--torque-offset A,B] [--actuator-coulomb A,B] [--actuator-viscous A,B] (a four-bar: A)
 // A synthetic torque log (interfaces.md, "Torque log CSV") for testing identification: the scene
 // simulated, sampled, with seeded Gaussian sensor noise and optional encoder quantization. The
 // `#` header of the log holds the true friction values and the command that made it. With
@@ -431,10 +431,11 @@ std::string command_line(const Args& a) {
   if (a.so.quantization > 0) cmd += " --quantization " + format_double(a.so.quantization);
   if (a.so.with_rates) cmd += " --with-rates";
   if (std::isfinite(a.so.torque_limit)) cmd += " --torque-limit " + format_double(a.so.torque_limit);
-  for (const ActuatorOption& o : kActuatorOptions) {
+  for (const ActuatorOption& o : kActuatorOptions) {  // as given (set_actuators checks the count)
     const std::vector<double>& v = a.*o.values;
-    if (v.size() == 2)
-      cmd += " " + std::string(o.flag) + " " + format_double(v[0]) + "," + format_double(v[1]);
+    for (size_t i = 0; i < v.size(); ++i) {
+      cmd += (i ? "," : " " + std::string(o.flag) + " ") + format_double(v[i]);
+    }
   }
   if (!a.law.empty()) cmd += " --law " + a.law;
   if (a.law == "stribeck") {
