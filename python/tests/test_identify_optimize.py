@@ -132,7 +132,7 @@ def test_identify_a_four_bar_motor(root, cli, tmp_path):
     scene_path = root / "datasets/reference/four_bar/double_rocker.yaml"
     log = tmp_path / "motor.csv"
     subprocess.run([cli, "synth-log", str(scene_path), "--out", str(log), "--duration", "4",
-                    "--seed", "2", "--torque-offset", "0.03", "--actuator-coulomb", "0.04",
+                    "--seed", "1", "--torque-offset", "0.03", "--actuator-coulomb", "0.04",
                     "--actuator-viscous", "0.005"], check=True, capture_output=True)
     result = fivebar.identify(fivebar.load_scene(scene_path), log, estimate="friction,actuator")
     assert result["status"] == "ok"
