@@ -250,8 +250,7 @@ void set_actuators(const Args& a, int motors, FrictionLaw law, ActuatorParams<do
     }
     for (double x : v) {
       if (!std::isfinite(x)) {
-        throw InputError("command line", kActuatorOptions[g].flag,
-                         "values must be finite numbers");
+        throw InputError("command line", kActuatorOptions[g].flag, "values must be finite numbers");
       }
       if (g > 0 && !(x >= 0)) {
         throw InputError("command line", kActuatorOptions[g].flag, "must be >= 0");

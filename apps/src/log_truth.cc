@@ -92,8 +92,7 @@ LogTruth read_truth(const std::vector<std::string>& comments) {
       }
     }
     if (v.size() == kJoints || v.size() == kFourBarJoints || v.size() == kInertialParams ||
-        v.size() == kInertialPerLink * kFourBarLinks || v.size() == kActuators ||
-        v.size() == 1) {
+        v.size() == kInertialPerLink * kFourBarLinks || v.size() == kActuators || v.size() == 1) {
       truth[key] = v;
     }
   }

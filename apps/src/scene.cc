@@ -921,8 +921,10 @@ MechanismType read_type(const SceneReader& r, bool four_bar_ok) {
     const bool five_bar_key = key == "loads.M2" || key == "initial.theta2" ||
                               key == "initial.omega2" || key.rfind("actuators.M2", 0) == 0;
     if (five_bar_key) {
-      r.fail(key, "is a five-bar key, not one of mechanism.type four_bar (one crank: loads M1, M3, "
-                  "F, F_angle; initial theta1, omega1; actuators.M1 only)" + r.origin(key));
+      r.fail(key,
+             "is a five-bar key, not one of mechanism.type four_bar (one crank: loads M1, M3, "
+             "F, F_angle; initial theta1, omega1; actuators.M1 only)" +
+                 r.origin(key));
     }
   }
   return MechanismType::kFourBar;

@@ -175,8 +175,9 @@ void covariance(FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
   if (f.layout.actuator && rank_deficient(H)) {  // as the five-bar's fit: no std, not to be used
     out->warnings.push_back("covariance could not be computed (Jacobian rank deficient)");
     if (out->unusable.empty()) {
-      out->unusable = "the covariance could not be computed (the log does not determine the "
-                      "free coefficients apart): the estimates have no std";
+      out->unusable =
+          "the covariance could not be computed (the log does not determine the "
+          "free coefficients apart): the estimates have no std";
     }
     return;
   }

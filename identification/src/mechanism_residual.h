@@ -1,10 +1,11 @@
 // The inverse-dynamics residual over a mechanism M (model/mechanism.h): one sample's measured
 // drive torques minus those of mech::inverse<M> (plus the torque sensors' offsets) with the
-// parameters x laid out by a ParameterLayout. add_mechanism_terms<M> is declared here and instantiated per mechanism in a
-// unit of its own (residual_blocks_four_bar.cc), with one Jet width: the cost is a
-// ceres::DynamicAutoDiffCostFunction of stride kMechanismStride, so every parameter count runs
-// through the same compiled evaluation. The five-bar's residual blocks (residual_blocks.cc)
-// read each sample's structure instead (residual.h), which is faster for its five joints.
+// parameters x laid out by a ParameterLayout. add_mechanism_terms<M> is declared here and
+// instantiated per mechanism in a unit of its own (residual_blocks_four_bar.cc), with one Jet
+// width: the cost is a ceres::DynamicAutoDiffCostFunction of stride kMechanismStride, so every
+// parameter count runs through the same compiled evaluation. The five-bar's residual blocks
+// (residual_blocks.cc) read each sample's structure instead (residual.h), which is faster for its
+// five joints.
 #pragma once
 
 #include <ceres/ceres.h>

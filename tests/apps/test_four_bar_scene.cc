@@ -83,10 +83,10 @@ TEST(FourBarScene, FiveBarKeysFailNamingTheKeyAndTheType) {
                "is a five-bar key, not one of mechanism.type four_bar");
   // the crank's motor M1 is the four-bar's: its friction and sensor offset (entry 0 of the
   // actuators), written back by scene_to_yaml
-  const Scene m = parse_scene(kFourBar, "ok.yaml",
-                              {"actuators.M1.coulomb=0.04", "actuators.M1.viscous=0.005",
-                               "actuators.M1.offset=0.03"},
-                              /*four_bar_ok=*/true);
+  const Scene m = parse_scene(
+      kFourBar, "ok.yaml",
+      {"actuators.M1.coulomb=0.04", "actuators.M1.viscous=0.005", "actuators.M1.offset=0.03"},
+      /*four_bar_ok=*/true);
   EXPECT_EQ(m.four_bar.actuators.coulomb[0], 0.04);
   EXPECT_EQ(m.four_bar.actuators.viscous[0], 0.005);
   EXPECT_EQ(m.four_bar.actuators.offset[0], 0.03);

@@ -214,7 +214,8 @@ TEST(FourBarSimulation, MotorFrictionBalancesEnergyAndHoldsTheCrank) {
         const double w = row.omega[0];
         return (0.04 * ((w > 0) - (w < 0)) + 0.005 * w) * w;
       };
-      motor_energy += 0.5 * (r.rows[i].t - r.rows[i - 1].t) * (power(r.rows[i]) + power(r.rows[i - 1]));
+      motor_energy +=
+          0.5 * (r.rows[i].t - r.rows[i - 1].t) * (power(r.rows[i]) + power(r.rows[i - 1]));
     }
     EXPECT_GT(motor_energy, 0.01 * r.rows.back().E_diss) << sc.file;
     EXPECT_GT(motor_energy, 1e4 * checks.energy_balance_relative * checks.energy_scale) << sc.file;
@@ -228,10 +229,9 @@ TEST(FourBarSimulation, MotorFrictionBalancesEnergyAndHoldsTheCrank) {
     EXPECT_GT(h.M1_max, h0.M1_max);
     EXPECT_LT(h.M1_min, h0.M1_min);
     const double width = h.M1_max - h.M1_min;
-    for (const auto& [drive, held] : {std::pair{h.M1_max - 1e-3 * width, true},
-                                      std::pair{h.M1_min + 1e-3 * width, true},
-                                      std::pair{h.M1_max + 1e-3 * width, false},
-                                      std::pair{h.M1_min - 1e-3 * width, false}}) {
+    for (const auto& [drive, held] :
+         {std::pair{h.M1_max - 1e-3 * width, true}, std::pair{h.M1_min + 1e-3 * width, true},
+          std::pair{h.M1_max + 1e-3 * width, false}, std::pair{h.M1_min - 1e-3 * width, false}}) {
       FourBarLoads at = L;
       at.M1 = drive;
       const auto loads = [at](double) { return at; };
@@ -247,8 +247,8 @@ TEST(FourBarSimulation, MotorFrictionBalancesEnergyAndHoldsTheCrank) {
     // a drive the bare joints let move, inside the motor's range
     FourBarLoads past = L;
     past.M1 = 0.5 * (h0.M1_max + h.M1_max);
-    const sim::Result free =
-        sim::simulate(sc.p, [past](double) { return past; }, crank_at(sc.th0), options(0.05, 1e-10));
+    const sim::Result free = sim::simulate(
+        sc.p, [past](double) { return past; }, crank_at(sc.th0), options(0.05, 1e-10));
     ASSERT_TRUE(free.status.ok()) << free.status.message;
     EXPECT_GT(free.rows.back().theta[0] - sc.th0, 0.0) << sc.file;
   }

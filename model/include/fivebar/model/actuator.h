@@ -50,8 +50,8 @@ bool actuator_friction_active(const ActuatorParams<T>& a) {
 /// c_a sign + v_a w of actuator a at the rate w of its joint, the Coulomb direction taken as the
 /// joint law's (coulomb_direction: `slip`, or smoothed).
 template <typename T>
-T actuator_friction_of(const FrictionParams<T>& fp, const ActuatorParams<T>& act, int a,
-                       const T& w, int slip) {
+T actuator_friction_of(const FrictionParams<T>& fp, const ActuatorParams<T>& act, int a, const T& w,
+                       int slip) {
   return act.coulomb[a] * coulomb_direction(fp, w, slip) + act.viscous[a] * w;
 }
 
