@@ -1,8 +1,9 @@
 // The planar four-bar (4R) with load-dependent joint friction, in reduced coordinates (one degree
 // of freedom, the crank angle th1): position, rate and acceleration closure, the mass and bias
 // terms M(q) qdd + bias = tau - friction, Newton-Euler reactions, the mechanism FourBar (forward
-// and inverse dynamics from mechanism_dynamics.h: the friction loop, stuck joints, the rest rule
-// and LuGre as the five-bar's), and its joint table for the general planar chain.
+// and inverse dynamics from mechanism_dynamics.h: the friction loop, stuck joints, the rest rule,
+// LuGre and the crank motor's friction as the five-bar's), and its joint table for the general
+// planar chain.
 //
 // Geometry: O at the origin, D0 = (l0, 0). Link 1 (crank) O->B at th1, link 2 (coupler) B->C at
 // th2, link 3 (rocker) D0->C at th3, all from +x. Joints in order O (ground-crank), B
