@@ -1,7 +1,7 @@
 // fivebar synth-log SCENE --out LOG.csv [--rate HZ] [--duration S] [--torque-noise NM]
 //   [--angle-noise RAD] [--seed N] [--quantization RAD] [--excitation scene|multisine]
 //   [--with-rates] [--law coulomb_viscous|stribeck] [--motion MOTION.csv] [--set KEY=VALUE]...
-//   [--torque-offset A,B] [--actuator-coulomb A,B] [--actuator-viscous A,B]
+//   [--torque-offset A,B] [--actuator-coulomb A,B] [--actuator-viscous A,B] (a four-bar: A)
 // A synthetic torque log (interfaces.md, "Torque log CSV") for testing identification: the scene
 // simulated, sampled, with seeded Gaussian sensor noise and optional encoder quantization. The
 // `#` header of the log holds the true friction values and the command that made it. With
@@ -220,7 +220,8 @@ std::string shell_word(const std::string& s) {
   return out + "'";
 }
 
-/// The actuator options: two values (tau1, tau2) each, in the order of set_actuators' targets.
+/// The actuator options: one value per actuator each (a five-bar's tau1, tau2; a four-bar's tau1),
+/// in the order of set_actuators' targets.
 struct ActuatorOption {
   const char* flag;
   std::vector<double> Args::*values;
@@ -228,32 +229,36 @@ struct ActuatorOption {
 };
 const ActuatorOption kActuatorOptions[] = {
     {"--torque-offset", &Args::torque_offset,
-     "torque-sensor offsets of tau1, tau2 [N m] (measured = motor + offset)"},
+     "torque-sensor offsets of tau1, tau2 [N m] (measured = motor + offset; a four_bar: tau1)"},
     {"--actuator-coulomb", &Args::actuator_coulomb,
-     "load-independent Coulomb friction of the motors at O, D0 [N m]"},
+     "load-independent Coulomb friction of the motors at O, D0 [N m] (a four_bar: at O)"},
     {"--actuator-viscous", &Args::actuator_viscous,
-     "viscous friction of the motors at O, D0 [N m s/rad]"}};
+     "viscous friction of the motors at O, D0 [N m s/rad] (a four_bar: at O)"}};
 
-// the scene's actuator terms overridden by the options given
-void set_actuators(const Args& a, Scene* scene) {
-  ActuatorParams<double>& act = scene->params.actuators;
-  std::array<double, kActuators>* dst[] = {&act.offset, &act.coulomb, &act.viscous};
+// the scene's actuator terms (`motors` of them: the five-bar's two, the four-bar's one)
+// overridden by the options given
+void set_actuators(const Args& a, int motors, FrictionLaw law, ActuatorParams<double>* act) {
+  std::array<double, kActuators>* dst[] = {&act->offset, &act->coulomb, &act->viscous};
+  const std::string expected = motors == 1 ? "one value (tau1)" : "two values A,B (tau1, tau2)";
   for (int g = 0; g < 3; ++g) {
     const std::vector<double>& v = a.*kActuatorOptions[g].values;
     if (v.empty()) continue;
-    if (v.size() != kActuators) {
+    if (v.size() != size_t(motors)) {
       throw InputError("command line", kActuatorOptions[g].flag,
-                       "expected two values A,B (tau1, tau2), got " + std::to_string(v.size()));
+                       "expected " + expected + ", got " + std::to_string(v.size()) +
+                           (motors == 1 ? " (a four_bar scene has one motor, M1 at O)" : ""));
     }
-    if (!std::isfinite(v[0]) || !std::isfinite(v[1])) {
-      throw InputError("command line", kActuatorOptions[g].flag, "values must be finite numbers");
+    for (double x : v) {
+      if (!std::isfinite(x)) {
+        throw InputError("command line", kActuatorOptions[g].flag, "values must be finite numbers");
+      }
+      if (g > 0 && !(x >= 0)) {
+        throw InputError("command line", kActuatorOptions[g].flag, "must be >= 0");
+      }
     }
-    if (g > 0 && !(v[0] >= 0 && v[1] >= 0)) {
-      throw InputError("command line", kActuatorOptions[g].flag, "must be >= 0");
-    }
-    *dst[g] = {v[0], v[1]};
+    for (int m = 0; m < motors; ++m) (*dst[g])[m] = v[m];
   }
-  if (actuator_friction_active(act) && !law_descriptor(scene->params.friction.law).coulomb_sign) {
+  if (actuator_friction_active(*act) && !law_descriptor(law).coulomb_sign) {
     throw InputError("command line", "--actuator-coulomb/--actuator-viscous",
                      "actuator friction needs a friction law with a Coulomb sign");
   }
@@ -342,19 +347,14 @@ void set_law(const Args& a, FrictionParams<double>* fp) {
   fp->stribeck_exponent.fill(a.stribeck_exponent);
 }
 
-// the four-bar's log: its scene's loads or a motion; the options only a five-bar has refused
+// the four-bar's log: its scene's loads or a motion; the multisine, which only a five-bar has,
+// refused
 identification::SynthResult four_bar_log(const Args& a, const Scene& scene,
                                          const identification::SynthOptions& so) {
   if (a.excitation == "multisine") {
     throw InputError("command line", "--excitation",
                      "multisine drives the five-bar's two cranks; a four_bar scene's log follows "
                      "its loads.M1 (--excitation scene) or --motion");
-  }
-  for (const ActuatorOption& o : kActuatorOptions) {
-    if (!(a.*o.values).empty()) {
-      throw InputError("command line", o.flag,
-                       "actuator terms are the five-bar's; not available for a four_bar scene");
-    }
   }
   const LoadExpressions expressions(scene);
   if (a.motion.empty()) {
@@ -378,9 +378,10 @@ int run(const Args& a) {
   so.sim = scene.options;
   identification::SynthResult res;
   if (four_bar) {
+    set_actuators(a, 1, scene.four_bar.friction.law, &scene.four_bar.actuators);
     res = four_bar_log(a, scene, so);
   } else {
-    set_actuators(a, &scene);
+    set_actuators(a, kActuators, scene.params.friction.law, &scene.params.actuators);
     const LoadExpressions expressions(scene);
     if (a.motion.empty()) {
       expressions.require_finite(so.duration, 1 / so.rate_hz);
@@ -429,10 +430,11 @@ std::string command_line(const Args& a) {
   if (a.so.quantization > 0) cmd += " --quantization " + format_double(a.so.quantization);
   if (a.so.with_rates) cmd += " --with-rates";
   if (std::isfinite(a.so.torque_limit)) cmd += " --torque-limit " + format_double(a.so.torque_limit);
-  for (const ActuatorOption& o : kActuatorOptions) {
+  for (const ActuatorOption& o : kActuatorOptions) {  // as given (set_actuators checks the count)
     const std::vector<double>& v = a.*o.values;
-    if (v.size() == 2)
-      cmd += " " + std::string(o.flag) + " " + format_double(v[0]) + "," + format_double(v[1]);
+    for (size_t i = 0; i < v.size(); ++i) {
+      cmd += (i ? "," : " " + std::string(o.flag) + " ") + format_double(v[i]);
+    }
   }
   if (!a.law.empty()) cmd += " --law " + a.law;
   if (a.law == "stribeck") {

@@ -40,6 +40,18 @@ void law_truth(const FrictionParams<double>& fp, size_t joints, std::vector<std:
   }
 }
 
+// true.offset, true.actuator_coulomb, true.actuator_viscous of the first `actuators` actuators,
+// appended to out
+void actuator_truth(const ActuatorParams<double>& act, size_t actuators,
+                    std::vector<std::string>* out) {
+  const std::array<double, kActuators>* terms[] = {&act.offset, &act.coulomb, &act.viscous};
+  for (int g = 0; g < 3; ++g) {
+    const std::string name = id::actuator_term_name(g * kActuators);
+    out->push_back(" true." + name.substr(0, name.size() - 2) + " = " +
+                   joined(*terms[g], actuators));
+  }
+}
+
 }  // namespace
 
 std::vector<std::string> truth_lines(const FourBarParams& params) {
@@ -47,6 +59,7 @@ std::vector<std::string> truth_lines(const FourBarParams& params) {
   std::array<double, kInertialPerLink * kFourBarLinks> pi{};
   standard_inertial_links(params.links.data(), kFourBarLinks, pi.data());
   out.push_back(" true.inertial = " + joined(pi));
+  actuator_truth(params.actuators, 1, &out);
   law_truth(params.friction, kFourBarJoints, &out);
   return out;
 }
@@ -54,12 +67,7 @@ std::vector<std::string> truth_lines(const FourBarParams& params) {
 std::vector<std::string> truth_lines(const Params<double>& params) {
   std::vector<std::string> out = friction_truth(params.friction, kJoints);
   out.push_back(" true.inertial = " + joined(standard_inertial(params)));
-  const ActuatorParams<double>& act = params.actuators;
-  const std::array<double, kActuators>* terms[] = {&act.offset, &act.coulomb, &act.viscous};
-  for (int g = 0; g < 3; ++g) {  // true.offset, true.actuator_coulomb, true.actuator_viscous
-    const std::string name = id::actuator_term_name(g * kActuators);
-    out.push_back(" true." + name.substr(0, name.size() - 2) + " = " + joined(*terms[g]));
-  }
+  actuator_truth(params.actuators, kActuators, &out);
   law_truth(params.friction, kJoints, &out);
   return out;
 }
@@ -84,7 +92,7 @@ LogTruth read_truth(const std::vector<std::string>& comments) {
       }
     }
     if (v.size() == kJoints || v.size() == kFourBarJoints || v.size() == kInertialParams ||
-        v.size() == kInertialPerLink * kFourBarLinks || v.size() == kActuators) {
+        v.size() == kInertialPerLink * kFourBarLinks || v.size() == kActuators || v.size() == 1) {
       truth[key] = v;
     }
   }
@@ -93,10 +101,10 @@ LogTruth read_truth(const std::vector<std::string>& comments) {
 
 bool true_value(const LogTruth& truth, const id::ParameterLayout& layout, int i,
                 const std::string& name, double* value) {
-  if (layout.is_actuator(i)) {  // true.offset = A,B; true.actuator_coulomb = ...
+  if (layout.is_actuator(i)) {  // true.offset = A,B (a four-bar's: A); true.actuator_coulomb = ...
     const size_t cut = name.rfind('_');
     auto it = truth.find(name.substr(0, cut));
-    if (it == truth.end() || it->second.size() != size_t(kActuators)) return false;
+    if (it == truth.end() || it->second.size() != size_t(layout.actuators)) return false;
     *value = it->second[std::stoi(name.substr(cut + 1)) - 1];
     return true;
   }

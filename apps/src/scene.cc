@@ -746,10 +746,12 @@ void read_windings(const SceneReader& r, int motors, MotorWindings* out) {
   }
 }
 
-// actuators: per motor (M1 at O, M2 at D0) a sensor offset and a load-independent friction,
-// which needs a joint friction law with a Coulomb sign (the stick-slip logic is the joint's)
-void read_actuators(const SceneReader& r, FrictionLaw law, ActuatorParams<double>* out) {
-  for (int a = 0; a < kActuators; ++a) {
+// actuators: per motor (the five-bar's M1 at O, M2 at D0; the four-bar's M1 at O: `motors` of
+// them) a sensor offset and a load-independent friction, which needs a joint friction law with a
+// Coulomb sign (the stick-slip logic is the joint's)
+void read_actuators(const SceneReader& r, FrictionLaw law, int motors,
+                    ActuatorParams<double>* out) {
+  for (int a = 0; a < motors; ++a) {
     const std::string k = std::string("actuators.M") + std::to_string(a + 1) + ".";
     out->offset[a] = r.number(k + "offset", 0.0);
     out->coulomb[a] = r.number(k + "coulomb", 0.0);
@@ -915,18 +917,14 @@ MechanismType read_type(const SceneReader& r, bool four_bar_ok) {
                r.origin("mechanism.type"));
   }
   for (const std::string& key : r.keys()) {
-    // the four-bar's motor has winding data only (no actuator friction)
-    const bool winding = key == "actuators" || key == "actuators.M1" ||
-                         key == "actuators.M1.winding_resistance" ||
-                         key == "actuators.M1.torque_constant" ||
-                         key == "actuators.M1.gear_ratio";
+    // the four-bar has one motor, M1 at O (the crank)
     const bool five_bar_key = key == "loads.M2" || key == "initial.theta2" ||
-                              key == "initial.omega2" ||
-                              (key.rfind("actuators", 0) == 0 && !winding);
+                              key == "initial.omega2" || key.rfind("actuators.M2", 0) == 0;
     if (five_bar_key) {
-      r.fail(key, "is a five-bar key, not one of mechanism.type four_bar (one crank: loads M1, M3, "
-                  "F, F_angle; initial theta1, omega1; actuators.M1 winding_resistance, "
-                  "torque_constant, gear_ratio only)" + r.origin(key));
+      r.fail(key,
+             "is a five-bar key, not one of mechanism.type four_bar (one crank: loads M1, M3, "
+             "F, F_angle; initial theta1, omega1; actuators.M1 only)" +
+                 r.origin(key));
     }
   }
   return MechanismType::kFourBar;
@@ -944,7 +942,8 @@ Scene build_scene(const SceneReader& r, bool four_bar_ok) {
     read_mechanism(r, &s.four_bar);
   }
   read_friction(r, &friction);
-  if (five) read_actuators(r, friction.law, &s.params.actuators);
+  read_actuators(r, friction.law, five ? kActuators : 1,
+                 five ? &s.params.actuators : &s.four_bar.actuators);
   read_windings(r, five ? kActuators : 1, &s.windings);
   read_loads_and_initial(r, &s);
   read_integration(r, friction.law, &s.options);
@@ -1159,16 +1158,26 @@ void actuators_yaml(const Scene& s, std::ostringstream& y) {
   }
 }
 
-// actuators: the four-bar's one motor's winding data, when given
-void four_bar_windings_yaml(const MotorWindings& wd, std::ostringstream& y) {
+// actuators: the four-bar's one motor's terms and winding data, when any is given
+void four_bar_actuators_yaml(const ActuatorParams<double>& act, const MotorWindings& wd,
+                             std::ostringstream& y) {
   const bool geared = wd.gear_ratio[0] != MotorWindings().gear_ratio[0];
-  if (!wd.present(1) && !geared) return;
+  const bool terms = act.offset[0] != 0.0 || actuator_friction_active(act);
+  if (!terms && !wd.present(1) && !geared) return;
   y << "actuators:\n  M1: {";
-  if (wd.present(1)) {
-    y << "winding_resistance: " << num(wd.resistance[0])
-      << ", torque_constant: " << num(wd.torque_constant[0]) << ", ";
+  const char* sep = "";
+  if (terms) {
+    y << "offset: " << num(act.offset[0]) << ", coulomb: " << num(act.coulomb[0])
+      << ", viscous: " << num(act.viscous[0]);
+    sep = ", ";
   }
-  y << "gear_ratio: " << num(wd.gear_ratio[0]) << "}\n";
+  if (wd.present(1)) {
+    y << sep << "winding_resistance: " << num(wd.resistance[0])
+      << ", torque_constant: " << num(wd.torque_constant[0]);
+    sep = ", ";
+  }
+  if (wd.present(1) || geared) y << sep << "gear_ratio: " << num(wd.gear_ratio[0]);
+  y << "}\n";
 }
 
 }  // namespace
@@ -1180,7 +1189,7 @@ std::string scene_to_yaml(const Scene& s) {
   if (four_bar) {
     mechanism_yaml(s, s.four_bar, y);
     friction_yaml(s.four_bar.friction, kFourBarJoints, y);
-    four_bar_windings_yaml(s.windings, y);
+    four_bar_actuators_yaml(s.four_bar.actuators, s.windings, y);
   } else {
     mechanism_yaml(s, s.params, y);
     friction_yaml(s.params.friction, kJoints, y);

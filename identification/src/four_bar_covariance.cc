@@ -126,11 +126,22 @@ Eigen::MatrixXd at_least_block_sandwich(const FourBarFit& f, const Eigen::Matrix
   return d.asDiagonal() * C * d.asDiagonal();
 }
 
+/// Whether the information H is numerically singular (the five-bar's rank test, well_conditioned):
+/// a direction the log does not determine at all, as the sensor offset and the motor's Coulomb
+/// friction of a crank that turns one way.
+bool rank_deficient(const Eigen::MatrixXd& H) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(H);
+  const double emax = es.eigenvalues().maxCoeff(), emin = es.eigenvalues().minCoeff();
+  return !(emax > 0 && emin > 1e-14 * emax && H.allFinite());
+}
+
 /// The covariance of the parameters, those at a bound included (the direction a bound holds keeps
 /// its uncertainty in the others' std; a parameter at its bound reports none, estimates): the
 /// errors-in-variables sandwich (score_covariance: the rates' noise enters the reactions and the
 /// friction's sign terms), or s^2 (J^T J)^-1 with --classical-std; the singular values of the
-/// scaled Jacobian. *Hinv: (J^T J)^-1, the profile intervals' noise scale. Per-joint
+/// scaled Jacobian. *Hinv: (J^T J)^-1, the profile intervals' noise scale. With the actuator group
+/// a rank-deficient information leaves every std undetermined and the fit not to be used (the
+/// five-bar's rule). Per-joint
 /// crank-rocker logs (10 s, angles only, seeds 1-10): the intervals hold 74 of 80 truths. The
 /// sandwich's meat is the noise model's, not the residuals' (a sandwich over blocks of one filter
 /// window: the same std on average at 300 Hz, but varying 15 % from log to log where the slip
@@ -152,10 +163,24 @@ void covariance(FourBarFit& f, ceres::Problem* problem, IdentifyResult* out,
   const std::vector<double> rd(r.begin(), r.begin() + m);
   out->rms_torque_residual[0] = rms(rd);
   out->residual_sigma = std::sqrt(rms(rd) * rms(rd) * m / std::max(1, m - P));
-  scaled_singular_values(Jd, out);
+  if (f.layout.actuator) {  // the five-bar's report: which actuator terms the log cannot separate
+    const Eigen::MatrixXd Jpub = J * stages::to_public(f.layout).inverse();
+    stages::identifiability(Jpub.transpose() * Jpub, f.layout, out);
+  } else {
+    scaled_singular_values(Jd, out);
+  }
   if (!out->converged) return;
   Eigen::MatrixXd C;
   const Eigen::MatrixXd H = J.transpose() * J;
+  if (f.layout.actuator && rank_deficient(H)) {  // as the five-bar's fit: no std, not to be used
+    out->warnings.push_back("covariance could not be computed (Jacobian rank deficient)");
+    if (out->unusable.empty()) {
+      out->unusable =
+          "the covariance could not be computed (the log does not determine the "
+          "free coefficients apart): the estimates have no std";
+    }
+    return;
+  }
   const Eigen::MatrixXd Hf = H.ldlt().solve(Eigen::MatrixXd::Identity(H.rows(), H.cols()));
   if (f.opt->errors_in_variables) {
     Eigen::MatrixXd S = score_covariance(f, Jd, *out);

@@ -1,10 +1,10 @@
 // The four-bar's model checks (identify_four_bar.cc): its residual against the noise floor, and
 // the five-bar's candidate causes that exist for one crank, freed on the four-bar's Jacobian,
 // judged by the five-bar's comparison (model_check_causes.h). Columns, rows whitened by the noise
-// floor: the fitted friction coefficients (the residual's Jets), the links' masses, inertias and
-// centres of mass (relative, with the prior --inertia-prior), the crank encoder's zero, tau1's
-// offset and gain, and the delay (the logged torque's rate), each by central differences where not
-// linear.
+// floor: the fitted parameters (the residual's Jets), the links' masses, inertias and centres of
+// mass (relative, with the prior --inertia-prior), the crank encoder's zero, tau1's offset (unless
+// the fit has it, --estimate actuator) and gain, and the delay (the logged torque's rate), each
+// by central differences where not linear.
 #include <Eigen/Dense>
 #include <cmath>
 #include <string>
@@ -71,7 +71,9 @@ bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::Matri
   for (int u = 0; u < n; ++u) tau(u) = f.samples[u].tau[0];
   const int ni = kFourBarLinks * kPerLink;
   const bool delay = f.opt->estimate_delay;
-  J->setZero(n, P + ni + 3 + (delay ? 1 : 0));
+  // the fit's own offset (--estimate actuator) is not freed again by the torque readings' cause
+  const bool fitted_offset = f.layout.actuator;
+  J->setZero(n, P + ni + (fitted_offset ? 2 : 3) + (delay ? 1 : 0));
   J->leftCols(P) = -dx;  // dx: the torques' derivatives
   for (int i = 0; i < P; ++i) idx[0].push_back(i);
   int c = P;
@@ -89,10 +91,13 @@ bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::Matri
   if (!model_torques(f, f.scene, h, &Mp) || !model_torques(f, f.scene, -h, &Mm)) return false;
   J->col(c) = -(Mp - Mm) / (2 * h);
   idx[2].push_back(c++);
-  // tau1 = (1 + g) M + o
-  J->col(c).setConstant(-1.0);
-  idx[3].push_back(c++);
-  J->col(c) = -M;
+  // tau1 = (1 + g) M + o, M the model's torque (less the fitted offset)
+  if (!fitted_offset) {
+    J->col(c).setConstant(-1.0);
+    idx[3].push_back(c++);
+  }
+  const double o = fitted_offset ? f.x[f.layout.actuator_offset()] : 0.0;
+  J->col(c) = -(M.array() - o).matrix();
   idx[3].push_back(c++);
   if (delay) {  // tau1 lagging by d reads the torque of t + d: its rate (the delay's regressor)
     const TorqueLog& log = f.cond.log;
@@ -195,6 +200,11 @@ std::string reading(int id, const detail::FreedStep& fs) {
              " more than the scene's angle: the encoder's zero may be off; subtract the offset "
              "from the logged angles";
     case stages::kCauseTorque:
+      if (fs.extra_step.size() == 1) {  // the offset fitted (--estimate actuator): the gain alone
+        return "tau1 reads " + pm(0, 100.0, " %") +
+               " more than the model: the torque sensor's gain may be off (check its torque "
+               "constant)";
+      }
       return "tau1 reads " + pm(1, 100.0, " %") + " more than the model and " + pm(0, 1.0, " N m") +
              " above it: the torque sensor's gain or zero may be off (check its torque constant)";
     case stages::kCauseDelay:
@@ -283,7 +293,7 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, const 
 }  // namespace
 
 stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
-  if (!out->converged || f.layout.inertia || f.layout.actuator) return {};
+  if (!out->converged || f.layout.inertia) return {};
   Eigen::MatrixXd J;
   Eigen::VectorXd r;
   std::vector<int> idx[5];

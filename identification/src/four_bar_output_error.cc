@@ -27,13 +27,14 @@ std::vector<int> add_windows(FourBarFit* f, IdentifyResult* out, ceres::Problem*
     sim::Initial initial;
     initial.theta1 = log.theta1[i0];
     initial.omega1 = f->w[i0];
-    stages::WindowSimulation run = [scene = f->scene, layout = f->layout,
-                                    loads = logged_loads(log, f->loads, log.t[i0]),
-                                    initial](const double* x, const sim::Options& o) {
-      FourBarParams p = scene;
-      layout.apply(x, &p.friction);
-      return sim::simulate(p, loads, initial, o);
-    };
+    stages::WindowSimulation run =
+        [scene = f->scene, layout = f->layout,
+         loads = logged_loads(log, f->loads, log.t[i0], f->scene.actuators.offset[0]),
+         initial](const double* x, const sim::Options& o) {
+          FourBarParams p = scene;
+          layout.apply(x, &p.friction);
+          return sim::simulate(p, loads, initial, o);
+        };
     sizes.push_back(stages::add_window_block(log, 1, std::move(run), i0, i1, so, opt.relative_step,
                                              stages::make_loss(opt.loss, f->loss_scale), &f->x,
                                              problem));

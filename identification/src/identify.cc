@@ -42,12 +42,13 @@ sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& sc
 }
 
 sim::FourBarLoadFunction logged_loads(const TorqueLog& log,
-                                      const sim::FourBarLoadFunction& scene_loads, double t0) {
+                                      const sim::FourBarLoadFunction& scene_loads, double t0,
+                                      double offset) {
   const std::vector<double>* t = &log.t;
   const std::vector<double>* tau1 = &log.tau1;
-  return [t, tau1, scene_loads, t0](double s) {
+  return [t, tau1, scene_loads, t0, offset](double s) {
     FourBarLoads L = scene_loads(t0 + s);
-    L.M1 = interp(*t, *tau1, t0 + s);
+    L.M1 = interp(*t, *tau1, t0 + s) - offset;
     return L;
   };
 }

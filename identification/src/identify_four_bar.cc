@@ -351,14 +351,20 @@ double rms(const std::vector<double>& r) {
 }
 
 /// The public start values: the options' or the neutral friction ones, the other groups (given
-/// the friction's values alone) at the scene's: its links' standard inertial parameters.
+/// the friction's values alone) at the scene's: its links' standard inertial parameters, its
+/// crank motor's actuator terms.
 std::vector<double> public_start(const FourBarFit& f) {
   std::vector<double> x0 =
       f.opt->initial.empty() ? stages::default_start(f.layout) : f.opt->initial;
-  if (f.layout.inertia && static_cast<int>(x0.size()) == f.layout.friction_size()) {
+  if (static_cast<int>(x0.size()) != f.layout.friction_size()) return x0;
+  if (f.layout.inertia) {
     std::vector<double> pi(f.layout.inertial_size());
     standard_inertial_links(f.scene.links.data(), f.layout.links, pi.data());
     x0.insert(x0.end(), pi.begin(), pi.end());
+  }
+  if (f.layout.actuator) {
+    const std::vector<double> a = f.layout.extract_actuators(f.scene.actuators);
+    x0.insert(x0.end(), a.begin(), a.end());
   }
   return x0;
 }
@@ -468,7 +474,8 @@ void predictions(const FourBarFit& f, IdentifyResult* out) {
                             st.message);
     return;
   }
-  for (int i = 0; i < L.size(); ++i) out->predicted_tau1[i] = rows[i].M1;
+  const double offset = out->fitted_four_bar.actuators.offset[0];  // as the sensor reads it
+  for (int i = 0; i < L.size(); ++i) out->predicted_tau1[i] = rows[i].M1 + offset;
 }
 
 /// identify() by output error after the rates (output_error_fit): the estimates, the fitted
@@ -500,7 +507,6 @@ IdentifyResult output_error(FourBarFit& f, IdentifyResult out,
 using namespace four_bar;
 
 std::string four_bar_unsupported(const IdentifyOptions& opt) {
-  const std::string tail = " runs five-bars only (mechanism.type five_bar)";
   if (opt.layout.inertia && opt.method != Method::kInverseDynamics) {
     return "--estimate inertia needs --method inverse-dynamics";
   }
@@ -509,7 +515,9 @@ std::string four_bar_unsupported(const IdentifyOptions& opt) {
            "coefficients apart (a drag link's clean 10 s log read coulomb_3 3499 std off); use "
            "--method inverse-dynamics";
   }
-  if (opt.layout.actuator) return "--estimate actuator" + tail;
+  if (opt.layout.actuator && opt.method != Method::kInverseDynamics) {
+    return "--estimate actuator needs --method inverse-dynamics";
+  }
   return "";
 }
 

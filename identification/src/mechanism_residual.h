@@ -1,10 +1,11 @@
 // The inverse-dynamics residual over a mechanism M (model/mechanism.h): one sample's measured
-// drive torques minus those of mech::inverse<M> with the friction coefficients x laid out by a
-// ParameterLayout. add_mechanism_terms<M> is declared here and instantiated per mechanism in a
-// unit of its own (residual_blocks_four_bar.cc), with one Jet width: the cost is a
-// ceres::DynamicAutoDiffCostFunction of stride kMechanismStride, so every parameter count runs
-// through the same compiled evaluation. The five-bar's residual blocks (residual_blocks.cc)
-// read each sample's structure instead (residual.h), which is faster for its five joints.
+// drive torques minus those of mech::inverse<M> (plus the torque sensors' offsets) with the
+// parameters x laid out by a ParameterLayout. add_mechanism_terms<M> is declared here and
+// instantiated per mechanism in a unit of its own (residual_blocks_four_bar.cc), with one Jet
+// width: the cost is a ceres::DynamicAutoDiffCostFunction of stride kMechanismStride, so every
+// parameter count runs through the same compiled evaluation. The five-bar's residual blocks
+// (residual_blocks.cc) read each sample's structure instead (residual.h), which is faster for its
+// five joints.
 #pragma once
 
 #include <ceres/ceres.h>
@@ -41,9 +42,10 @@ void add_mechanism_terms(const typename M::template Params<double>& scene,
                          double* x, ceres::Problem* problem, Loss loss = Loss::kNone,
                          double loss_scale = 1.0, double weight = 1.0);
 
-/// The drive torques of mech::inverse<M> at the sample's motion, the friction coefficients x laid
-/// out by `layout` (the residual's own evaluation), and with `dx` their derivatives in x (M::kDof
-/// rows, the residual's Jets); false where the model fails.
+/// The drive torques of mech::inverse<M> at the sample's motion as the sensors read them (plus
+/// their offsets), the parameters x laid out by `layout` (the residual's own evaluation), and
+/// with `dx` their derivatives in x (M::kDof rows, the residual's Jets); false where the model
+/// fails.
 template <class M>
 bool mechanism_drive_torques(const typename M::template Params<double>& scene,
                              const ParameterLayout& layout, const double* x,

@@ -10,15 +10,17 @@ namespace fivebar::identification::stages {
 
 namespace {
 
-/// The drive torques of an evaluation of M.
+/// The drive torques of an evaluation of M as its torque sensors read them (plus their offsets,
+/// ActuatorParams).
 template <typename T>
-mech::Vec<1, T> drive_torques(const FourBarEvaluationT<T>& ev) {
-  return mech::Vec<1, T>(ev.M1);
+mech::Vec<1, T> measured_torques(const FourBarParamsT<T>& p, const FourBarEvaluationT<T>& ev) {
+  return mech::Vec<1, T>(ev.M1 + p.actuators.offset[0]);
 }
 
-/// r = tau - the drive torques of mech::inverse<M> at the sample's motion, the parameters x[0]
-/// laid out by `layout` into the scene (its friction; with the inertia group, its links). Coulomb
-/// signs are those of the sample's relative rates: data, so r is smooth in x.
+/// r = tau - the drive torques of mech::inverse<M> at the sample's motion as the sensors read
+/// them, the parameters x[0] laid out by `layout` into the scene (its friction; with the inertia
+/// group, its links; with the actuator group, its motors' friction and offsets). Coulomb signs
+/// are those of the sample's relative rates: data, so r is smooth in x.
 template <class M>
 class MechanismResidual {
  public:
@@ -35,7 +37,7 @@ class MechanismResidual {
         mech::inverse<M, T>(p, s_.loads.template cast<T>(), s_.q.template cast<T>(),
                             s_.v.template cast<T>(), s_.a.template cast<T>(), nullptr, eval_, &ev);
     if (!st.ok()) return false;  // Ceres rejects the step
-    const mech::Vec<M::kDof, T> d = drive_torques(ev);
+    const mech::Vec<M::kDof, T> d = measured_torques(p, ev);
     for (int j = 0; j < M::kDof; ++j) r[j] = T(s_.tau[j]) - d[j];
     return true;
   }

@@ -35,6 +35,13 @@ double misfit_ratio(const IdentifyResult& r);
 std::string structure_warning(int j, double rms, double floor, double torque_noise,
                               bool from_noise);
 
+/// The singular values of the public Jacobian with unit-norm columns (out->singular_values, from
+/// its information JtJ) and the warnings they imply: a parameter with no effect; the smallest
+/// direction with a condition above 100 when it involves a friction or actuator term, the others
+/// when they involve an actuator term ("the log cannot separate offset_1, actuator_coulomb_1").
+void identifiability(const Eigen::MatrixXd& JtJ, const ParameterLayout& layout,
+                     IdentifyResult* out);
+
 /// The last check, where no stage named a cause: a solver stopped before converging with no
 /// friction coefficient determined, or every friction coefficient at its bound with the residual
 /// above kAllAtBoundMisfitRatio floors, makes the fit unusable (out->unusable)

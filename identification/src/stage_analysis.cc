@@ -157,9 +157,6 @@ Eigen::MatrixXd score_sandwich(const Fit& f, const FreeSet& fs, const Analysis& 
   return fs.Hinv * S * fs.Hinv;
 }
 
-namespace {
-
-/// Singular values of the (public) Jacobian with unit-norm columns, and the warnings they imply.
 void identifiability(const Eigen::MatrixXd& JtJ, const ParameterLayout& layout,
                      IdentifyResult* out) {
   const std::vector<std::string> names = layout.names();
@@ -202,8 +199,6 @@ void identifiability(const Eigen::MatrixXd& JtJ, const ParameterLayout& layout,
     }
   }
 }
-
-}  // namespace
 
 void estimates(const Fit& f, const std::vector<double>& x0_public, IdentifyResult* out) {
   const int P = f.layout.size();

@@ -99,9 +99,9 @@ void sample_log(const Params<double>& params, const std::vector<sim::Row>& rows,
   }, out);
 }
 
-void sample_log(const FourBarParams&, const std::vector<sim::Row>& rows, const SynthOptions& opt,
-                SynthResult* out) {
-  sample_rows(1, {}, rows, opt, [](const sim::Row& r) {
+void sample_log(const FourBarParams& params, const std::vector<sim::Row>& rows,
+                const SynthOptions& opt, SynthResult* out) {
+  sample_rows(1, params.actuators.offset, rows, opt, [](const sim::Row& r) {
     std::array<double, kJoints> w{};
     for (int k = 0; k < kFourBarJoints; ++k) w[k] = sim::four_bar_omega_rel(r, k);
     return w;

@@ -106,7 +106,8 @@ Validation validate(const FourBarParams& params, const sim::FourBarLoadFunction&
     sim::Initial initial;
     initial.theta1 = log.theta1[i0];
     initial.omega1 = omega1[i0];
-    return sim::simulate(params, logged_loads(log, loads, log.t[i0]), initial, o);
+    return sim::simulate(params, logged_loads(log, loads, log.t[i0], params.actuators.offset[0]),
+                         initial, o);
   };
   return validate_runs(log, 1, from, window_s, rtol, budget_s);
 }

@@ -190,7 +190,9 @@ struct Sim<FourBar> {
     return four_bar_kinetic(p, k, v[0]);
   }
   static double potential(const P& p, const K& k) { return four_bar_potential(p, k); }
-  static bool can_hold(const P& p, int k) { return holding_bound(p.friction, k) > 0.0; }
+  static bool can_hold(const P& p, int k) {
+    return fivebar::can_hold(p.friction, p.actuators, kFourBarActuators, k);
+  }
 };
 
 template <class M>

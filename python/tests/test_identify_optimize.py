@@ -121,6 +121,27 @@ def test_optimize_a_four_bar_task_from_a_list(root):
         fivebar.optimize(scene, [bad], threads=1)
 
 
+def test_identify_a_four_bar_motor(root, cli, tmp_path):
+    # the crank motor's terms through the module: a double-rocker log (its crank reverses) made
+    # with synth-log's actuator options, identify's actuator group after the friction, each truth
+    # (the log's true.offset, ...) inside its interval
+    import subprocess
+    import pytest
+    if not cli:
+        pytest.skip("no fivebar executable")
+    scene_path = root / "datasets/reference/four_bar/double_rocker.yaml"
+    log = tmp_path / "motor.csv"
+    subprocess.run([cli, "synth-log", str(scene_path), "--out", str(log), "--duration", "4",
+                    "--seed", "1", "--torque-offset", "0.03", "--actuator-coulomb", "0.04",
+                    "--actuator-viscous", "0.005"], check=True, capture_output=True)
+    result = fivebar.identify(fivebar.load_scene(scene_path), log, estimate="friction,actuator")
+    assert result["status"] == "ok"
+    names = [p["name"] for p in result["parameters"]]
+    assert names == ["coulomb", "viscous", "offset_1", "actuator_coulomb_1", "actuator_viscous_1"]
+    for p in result["parameters"]:
+        assert p["ci95_low"] <= p["true"] <= p["ci95_high"], p["name"]
+
+
 def test_identify_a_four_bar_log(root, cli, tmp_path):
     # a synthetic crank-rocker log (the CLI's synth-log): the truths inside the 95 % intervals,
     # one torque channel; the validation run of its crank angle

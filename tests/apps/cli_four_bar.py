@@ -10,7 +10,9 @@ key and the mechanism type. accuracy's work-precision study runs on a four-bar, 
 within 1e-9 rad of the independent one.
 synth-log writes a four-bar log of one crank; following the simulated motion it gives back M1.
 identify fits a four-bar's log end to end (the true coefficients inside its intervals) and
-refuses the five-bar's options and logs naming them. A log whose torque has the opposite sign
+refuses the five-bar's options and logs naming them; with the crank motor's terms (synth-log's
+actuator options) it fits them with --estimate friction,actuator and does not use a fit
+without them. A log whose torque has the opposite sign
 gets the five-bar's sign check: exit 3 advising --flip-torque-sign 1, which then fits it; the
 flip on a log that did not need it is advised away. excite designs a crank motion within its
 limit that synth-log --motion follows, and refuses the five-bar's options naming them.
@@ -148,7 +150,7 @@ expect_error(2, "--pose: expected THETA1 (a four-bar has one crank angle",
 bad = os.path.join(WORK, "bad")
 expect_error(2, "--excitation: multisine drives the five-bar's two cranks",
              ["synth-log", scene, "--out", bad, "--excitation", "multisine"])
-expect_error(2, "--torque-offset: actuator terms are the five-bar's",
+expect_error(2, "--torque-offset: expected one value (tau1), got 2 (a four_bar scene has one motor",
              ["synth-log", scene, "--out", bad, "--torque-offset", "0.1,0.1"])
 simulated = os.path.join(WORK, "crank_rocker", "trajectory.csv")
 inv = os.path.join(WORK, "inverse")
@@ -376,8 +378,46 @@ else:
                         os.path.join(WORK, "fitted_run"), "--set", "simulation.duration=0.2"])
     if code != 0:
         failures.append("simulate of the fitted four-bar: exit %d: %s" % (code, err))
-expect_error(2, "mechanism.type: four_bar: --estimate actuator runs five-bars only",
-             ["identify", scene, "--log", id_log, "--estimate", "friction,actuator", "--out", bad])
+expect_error(2, "--estimate: group actuator needs --method inverse-dynamics",
+             ["identify", scene, "--log", id_log, "--estimate", "friction,actuator", "--method",
+              "output-error", "--out", bad])
+# the crank motor's terms: synth-log's options (one value each) and header truth, identify's
+# actuator group on the double rocker (its crank reverses), the fitted scene's actuators.M1, and
+# the log fitted without the group not used (exit 3)
+rocker = os.path.join(REFERENCE, "double_rocker.yaml")
+motor_log = os.path.join(WORK, "double_rocker_motor.csv")
+code, _, err = run(["synth-log", rocker, "--out", motor_log, "--duration", "4", "--seed", "1",
+                    "--torque-offset", "0.03", "--actuator-coulomb", "0.04",
+                    "--actuator-viscous", "0.005"])
+with open(motor_log) as f:
+    header = f.read(4000)
+if code != 0 or "# true.offset = 0.03\n" not in header or \
+        "# true.actuator_coulomb = 0.04\n" not in header:
+    failures.append("synth-log with the motor's terms: exit %d: %s" % (code, err))
+motor_fit = os.path.join(WORK, "identify_motor")
+code, _, err = run(["identify", rocker, "--log", motor_log, "--estimate", "friction,actuator",
+                    "--no-plots", "--out", motor_fit])
+if code != 0:
+    failures.append("identify --estimate friction,actuator of the four-bar: exit %d: %s"
+                    % (code, err))
+else:
+    with open(os.path.join(motor_fit, "identification.json")) as f:
+        result = json.load(f)
+    names = [p["name"] for p in result["parameters"]]
+    if names[2:] != ["offset_1", "actuator_coulomb_1", "actuator_viscous_1"]:
+        failures.append("identify of the four-bar's motor: parameters %s" % names)
+    for p in result["parameters"]:
+        if not abs(p.get("error_in_std", 99)) < 3:
+            failures.append("identify of the four-bar's motor: %s %s" % (p["name"], p))
+    with open(os.path.join(motor_fit, "scene_fitted.yaml")) as f:
+        fitted = f.read()
+    if not re.search(r"actuators:\n  M1: \{offset: 0\.0", fitted):
+        failures.append("identify of the four-bar's motor: scene_fitted.yaml %r" % fitted)
+code, _, err = run(["identify", rocker, "--log", motor_log, "--no-plots", "--out",
+                    os.path.join(WORK, "identify_no_motor")])
+if code != 3:
+    failures.append("identify of a log with the motor's terms, without the group: exit %d "
+                    "(expected 3): %s" % (code, err))
 expect_error(2, "--smooth-sign: must be at least 1e-09 rad/s",
              ["identify", scene, "--log", id_log, "--smooth-sign", "1e-10", "--out", bad])
 expect_error(2, "--smooth-sign: 500 rad/s is beyond the log's largest rate",

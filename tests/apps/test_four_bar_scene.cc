@@ -77,10 +77,23 @@ TEST(FourBarScene, FiveBarKeysFailNamingTheKeyAndTheType) {
                "is a five-bar key, not one of mechanism.type four_bar");
   expect_error(with("{theta1: 1.5707963267948966}", "{theta1: 1.57, theta2: 1.0}"), {},
                "initial.theta2", "mechanism.type four_bar");
-  expect_error(kFourBar, {"actuators.M1.coulomb=0.1"}, "actuators.M1.coulomb",
-               "mechanism.type four_bar");
   expect_error(kFourBar + "actuators: {M2: {winding_resistance: 1}}\n", {},
                "actuators.M2", "mechanism.type four_bar");
+  expect_error(kFourBar, {"actuators.M2.coulomb=0.1"}, "actuators.M2.coulomb",
+               "is a five-bar key, not one of mechanism.type four_bar");
+  // the crank's motor M1 is the four-bar's: its friction and sensor offset (entry 0 of the
+  // actuators), written back by scene_to_yaml
+  const Scene m = parse_scene(
+      kFourBar, "ok.yaml",
+      {"actuators.M1.coulomb=0.04", "actuators.M1.viscous=0.005", "actuators.M1.offset=0.03"},
+      /*four_bar_ok=*/true);
+  EXPECT_EQ(m.four_bar.actuators.coulomb[0], 0.04);
+  EXPECT_EQ(m.four_bar.actuators.viscous[0], 0.005);
+  EXPECT_EQ(m.four_bar.actuators.offset[0], 0.03);
+  EXPECT_EQ(m.four_bar.actuators.coulomb[1], 0.0);
+  const Scene back = parse_scene(scene_to_yaml(m), "back.yaml", {}, /*four_bar_ok=*/true);
+  EXPECT_EQ(back.four_bar.actuators.coulomb[0], 0.04);
+  EXPECT_EQ(back.four_bar.actuators.offset[0], 0.03);
   // the one motor's winding data is the four-bar's (the optimizer's winding heat)
   const Scene s = parse_scene(kFourBar, "ok.yaml",
                               {"actuators.M1.winding_resistance=2",

@@ -2,9 +2,10 @@
 // accelerations; forward and inverse dynamics and reactions against the general planar chain;
 // and on seeded random four-bars (Grashof and not) energy balance, inverse of forward (the torque,
 // or a report where the inverse problem has several solutions), friction power and the holding
-// torque against the virtual work of gravity; stuck joints, the rest rule and LuGre from the
-// dynamics written once over the mechanism; and two scenes against trajectories made by an
-// independent program (datasets/reference/four_bar/).
+// torque against the virtual work of gravity; the crank motor's friction (actuator.h: inverse of
+// forward, power, its torque, the stuck crank's capacity); stuck joints, the rest rule and LuGre
+// from the dynamics written once over the mechanism; and two scenes against trajectories made by
+// an independent program (datasets/reference/four_bar/).
 #include <ceres/jet.h>
 #include <gtest/gtest.h>
 
@@ -611,6 +612,113 @@ TEST(FourBar, TheRestRuleHoldsThePoseWithTheDrive) {
                     1e-12 * (1 + held.N[k]));
       }
       EXPECT_EQ(held.slip[kFourBarJoints], JointMode::kRest);  // the unused slot
+    }
+  }
+}
+
+/// The mechanisms of mechanisms(true) with the crank motor's friction (actuator.h): c_a and v_a
+/// drawn from `seed`, and a sensor offset (no effect on the dynamics).
+std::vector<FourBarParams> motor_mechanisms(uint64_t seed = 23) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> c(0.02, 0.3), v(0.002, 0.02);
+  std::vector<FourBarParams> out = mechanisms(true);
+  for (FourBarParams& p : out) {
+    p.actuators.coulomb[0] = c(rng);
+    p.actuators.viscous[0] = v(rng);
+    p.actuators.offset[0] = 0.03;
+  }
+  return out;
+}
+
+// The crank motor's friction c_a sign(w1) + v_a w1 at O on seeded random four-bars: the inverse of
+// the forward dynamics (in the forward's modes) returns the crank torque, or reports that the
+// inverse problem has several consistent reactions (rare, as without the motor).
+TEST(FourBar, MotorFrictionInverseOfForwardReturnsTheTorque) {
+  double worst = 0.0;
+  int m = 0, returned = 0, reported = 0;
+  for (const FourBarParams& p : motor_mechanisms()) {
+    for (const State& s : random_states(p, 50, 1000 + m++)) {
+      FourBarEvaluation fwd, inv;
+      ASSERT_TRUE(four_bar_forward(p, s.loads, s.th1, s.w1, EvalOptions{}, &fwd).ok());
+      const Status st = mech::inverse<FourBar, double>(p, s.loads, FourBar::Q<double>(s.th1),
+                                                       FourBar::Q<double>(s.w1), fwd.thdd,
+                                                       &fwd.slip, EvalOptions{}, &inv);
+      if (!st.ok()) {
+        ++reported;
+        EXPECT_TRUE(several_solutions(st)) << st.message;
+        continue;
+      }
+      ++returned;
+      worst = std::max(worst, std::abs(inv.M1 - s.loads.M1));
+    }
+  }
+  EXPECT_LT(worst, 1e-9);  // N m
+  EXPECT_LE(reported, returned / 100);
+  RecordProperty("inverse_of_forward_Nm", sci(worst));
+  RecordProperty("several_solutions", reported);
+}
+
+// Joint and motor friction never supply power: every joint's Mf_k w_k >= 0, O carrying at least
+// the motor's share c_a + v_a |w1| (the joint friction there has the same sign), and the
+// dissipated power counts the motor's.
+TEST(FourBar, MotorFrictionNeverSuppliesPower) {
+  int m = 0;
+  for (const FourBarParams& p : motor_mechanisms()) {
+    const double c = p.actuators.coulomb[0], v = p.actuators.viscous[0];
+    for (const State& s : random_states(p, 50, 1100 + m++)) {
+      FourBarEvaluation ev;
+      ASSERT_TRUE(four_bar_forward(p, s.loads, s.th1, s.w1, EvalOptions{}, &ev).ok());
+      double power = 0.0;
+      for (int k = 0; k < kFourBarJoints; ++k) {
+        EXPECT_GE(ev.Mf[k] * ev.w[k], 0.0) << "joint " << k;
+        power += ev.Mf[k] * ev.w[k];
+      }
+      EXPECT_GE(std::abs(ev.Mf[0]), c + v * std::abs(s.w1) - 1e-12);
+      EXPECT_NEAR(ev.P_diss, power, 1e-12 * (1 + power));
+      EXPECT_GE(ev.P_diss, (c + v * std::abs(s.w1)) * std::abs(s.w1) * (1 - 1e-12));
+    }
+  }
+}
+
+// With no joint friction arm (pin radii 0, the law on) the crank torque of a motion grows by
+// exactly the motor's c_a sign(w1) + v_a w1, its dissipated power by that times w1; the sensor
+// offset changes nothing.
+TEST(FourBar, MotorFrictionAddsItsTorqueAtTheCrank) {
+  int m = 0;
+  for (FourBarParams bare : mechanisms(true)) {
+    bare.friction.pin_radius.fill(0.0);
+    FourBarParams motor = bare;
+    motor.actuators.coulomb[0] = 0.05;
+    motor.actuators.viscous[0] = 0.004;
+    motor.actuators.offset[0] = 0.3;
+    for (const State& s : random_states(bare, 20, 1200 + m++)) {
+      FourBarEvaluation a, b;
+      ASSERT_TRUE(four_bar_inverse(bare, s.loads, s.th1, s.w1, 3.0, EvalOptions{}, &a).ok());
+      ASSERT_TRUE(four_bar_inverse(motor, s.loads, s.th1, s.w1, 3.0, EvalOptions{}, &b).ok());
+      const double friction = 0.05 * (s.w1 > 0 ? 1.0 : -1.0) + 0.004 * s.w1;
+      EXPECT_NEAR(b.M1 - a.M1, friction, 1e-12);
+      EXPECT_NEAR(b.P_diss - a.P_diss, friction * s.w1, 1e-10);
+    }
+  }
+}
+
+// A stuck crank (joint O held) holds up to its capacity mu_s r N_O plus the motor's c_a; the
+// other joints' capacities have no motor share.
+TEST(FourBar, AStuckCrankHoldsWithinItsCapacityWithTheMotor) {
+  int m = 0;
+  for (const FourBarParams& p : motor_mechanisms()) {
+    for (const State& s : random_states(p, 5, 1300 + m++)) {
+      JointModes slip{};
+      slip[0] = kStuck;
+      FourBarEvaluation ev;
+      ASSERT_TRUE(four_bar_forward(p, s.loads, s.th1, 0.0, EvalOptions{}, &ev, &slip).ok());
+      EXPECT_EQ(ev.thdd[0], 0.0);
+      const double capacity = holding_bound(p.friction, 0) * ev.N[0] + p.actuators.coulomb[0];
+      EXPECT_NEAR(FourBar::holding_capacity(p, 0, ev.N[0]), capacity, 1e-15 * (1 + capacity));
+      EXPECT_NEAR(ev.hold_margin[0], capacity - std::abs(ev.Mf[0]), 1e-12 * (1 + ev.N[0]));
+      for (int k = 1; k < kFourBarJoints; ++k) {
+        EXPECT_EQ(FourBar::holding_capacity(p, k, ev.N[k]), holding_bound(p.friction, k) * ev.N[k]);
+      }
     }
   }
 }

@@ -13,6 +13,7 @@
 #include "agreement.h"
 #include "fivebar/model/four_bar.h"
 #include "fivebar/model/four_bar_rest.h"
+#include "fivebar/sim/estimate.h"
 #include "fivebar/sim/simulator.h"
 #include "four_bar_scenes.h"
 #include "paper.h"
@@ -187,6 +188,70 @@ TEST(FourBarSimulation, TheHoldingRangeIsWhereTheLockHolds) {
     }
   }
   EXPECT_EQ(poses, 6);
+}
+
+// The crank motor's friction (actuator.h) in runs of both reference scenes: the energy balance
+// closes with the motor's dissipation counted (more is dissipated than without it), and at rest
+// the crank's holding capacity grows by c_a: the holding range is where the lock holds, as
+// without the motor, and it holds a drive the bare joints let move.
+TEST(FourBarSimulation, MotorFrictionBalancesEnergyAndHoldsTheCrank) {
+  for (testing::ReferenceScene sc : testing::reference_scenes()) {
+    FourBarParams motor = sc.p;
+    motor.actuators.coulomb[0] = 0.04;
+    motor.actuators.viscous[0] = 0.005;
+    motor.actuators.offset[0] = 0.03;
+    const sim::Result bare = sim::simulate(sc.p, sc.loads, crank_at(sc.th0), options(1.0, 1e-10));
+    const sim::Result r = sim::simulate(motor, sc.loads, crank_at(sc.th0), options(1.0, 1e-10));
+    ASSERT_TRUE(bare.status.ok() && r.status.ok()) << r.status.message;
+    const sim::RunChecks checks = sim::check_run(motor, sc.loads, r, 1e-10);
+    EXPECT_TRUE(checks.verdict.ok()) << checks.verdict.message;
+    EXPECT_LT(checks.energy_balance_relative, 1e-7) << sc.file;
+    // the motor's dissipated energy (trapezoidal), far above what the balance leaves open: the
+    // balance counts it
+    double motor_energy = 0.0;
+    for (size_t i = 1; i < r.rows.size(); ++i) {
+      const auto power = [](const sim::Row& row) {
+        const double w = row.omega[0];
+        return (0.04 * ((w > 0) - (w < 0)) + 0.005 * w) * w;
+      };
+      motor_energy +=
+          0.5 * (r.rows[i].t - r.rows[i - 1].t) * (power(r.rows[i]) + power(r.rows[i - 1]));
+    }
+    EXPECT_GT(motor_energy, 0.01 * r.rows.back().E_diss) << sc.file;
+    EXPECT_GT(motor_energy, 1e4 * checks.energy_balance_relative * checks.energy_scale) << sc.file;
+    EXPECT_GT(sim::max_angle_difference(r.rows, bare.rows), 1e-3) << sc.file;
+    // holding: the range with the motor, its ends 0.1 % inside held and outside moving
+    const FourBarLoads L{0.0, 0.05, 2.0, 0.3};
+    FourBarHolding h, h0;
+    ASSERT_TRUE(four_bar_holding(motor, L, sc.th0, EvalOptions{}, &h).ok());
+    ASSERT_TRUE(four_bar_holding(sc.p, L, sc.th0, EvalOptions{}, &h0).ok());
+    EXPECT_NEAR(h.bound[0], h0.bound[0] + 0.04, 1e-12);
+    EXPECT_GT(h.M1_max, h0.M1_max);
+    EXPECT_LT(h.M1_min, h0.M1_min);
+    const double width = h.M1_max - h.M1_min;
+    for (const auto& [drive, held] :
+         {std::pair{h.M1_max - 1e-3 * width, true}, std::pair{h.M1_min + 1e-3 * width, true},
+          std::pair{h.M1_max + 1e-3 * width, false}, std::pair{h.M1_min - 1e-3 * width, false}}) {
+      FourBarLoads at = L;
+      at.M1 = drive;
+      const auto loads = [at](double) { return at; };
+      const sim::Result run = sim::simulate(motor, loads, crank_at(sc.th0), options(0.05, 1e-10));
+      ASSERT_TRUE(run.status.ok()) << run.status.message;
+      const double moved = run.rows.back().theta[0] - sc.th0;
+      if (held) {
+        EXPECT_EQ(moved, 0.0) << sc.file << " M1 " << drive;
+      } else {
+        EXPECT_GT(moved * (drive - h.M1), 0.0) << sc.file << " M1 " << drive;
+      }
+    }
+    // a drive the bare joints let move, inside the motor's range
+    FourBarLoads past = L;
+    past.M1 = 0.5 * (h0.M1_max + h.M1_max);
+    const sim::Result free = sim::simulate(
+        sc.p, [past](double) { return past; }, crank_at(sc.th0), options(0.05, 1e-10));
+    ASSERT_TRUE(free.status.ok()) << free.status.message;
+    EXPECT_GT(free.rows.back().theta[0] - sc.th0, 0.0) << sc.file;
+  }
 }
 
 // theta1 = pi puts B on the ground line: coupler and rocker turn alike there, so joint C neither

@@ -14,14 +14,16 @@
 namespace fivebar::io {
 
 /// The `true.*` values by name: the law's coefficients (five per joint), `inertial` (the 16
-/// standard inertial parameters), `offset`, `actuator_coulomb`, `actuator_viscous` (two each).
+/// standard inertial parameters), `offset`, `actuator_coulomb`, `actuator_viscous` (two each; a
+/// four-bar's log one each).
 using LogTruth = std::map<std::string, std::vector<double>>;
 
 /// The header lines (without the leading '#') that state the truth of `params`: the law, pin
 /// radii, every coefficient of its law (from its descriptor, friction.h), the links' standard
 /// inertial parameters (model/inertial.h) and the actuator terms.
 std::vector<std::string> truth_lines(const Params<double>& params);
-/// The four-bar's: the law, pin radii and coefficients of its four joints (O, B, C, D0).
+/// The four-bar's: the law, pin radii and coefficients of its four joints (O, B, C, D0), its
+/// links' standard inertial parameters and its crank motor's actuator terms (one value each).
 std::vector<std::string> truth_lines(const FourBarParams& params);
 
 /// The `true.*` values of a log's comment lines; lines that do not parse are skipped.

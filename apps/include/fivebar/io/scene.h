@@ -79,10 +79,11 @@ inline const FrictionParams<double>& friction_of(const Scene& s) {
 ///     rest_rate_threshold, rest_acceleration_threshold (>= 0; [derived], see Scene)
 ///
 /// Four-bars (mechanism.type four_bar): mechanism.links has 3 links, per-joint lists 4 numbers
-/// (O, B, C, D0); loads.M2, initial.theta2, initial.omega2 and actuators are five-bar keys and
-/// fail. Only callers that pass `four_bar_ok` get four-bar scenes: for the others a four-bar scene
-/// fails on mechanism.type (the commands that run four-bars: simulate, inverse, synth-log, hold,
-/// animate, identify, excite, optimize, study, design).
+/// (O, B, C, D0); actuators.M1 is the crank's motor (Scene::four_bar.actuators, entry 0);
+/// loads.M2, initial.theta2, initial.omega2 and actuators.M2 are five-bar keys and fail. Only
+/// callers that pass `four_bar_ok` get four-bar scenes: for the others a four-bar scene fails on
+/// mechanism.type (the commands that run four-bars: simulate, inverse, synth-log, hold, animate,
+/// identify, excite, optimize, study, design).
 Scene load_scene(const std::string& path, const std::vector<std::string>& sets = {},
                  bool four_bar_ok = false);
 

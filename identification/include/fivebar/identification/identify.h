@@ -358,8 +358,9 @@ Validation validate(const FourBarParams& params, const sim::FourBarLoadFunction&
 /// and the scene's M3, F, F_angle, shifted by t0 (the simulator starts at t = 0).
 sim::LoadFunction logged_loads(const TorqueLog& log, const sim::LoadFunction& scene_loads,
                                double t0, std::array<double, kActuators> offset = {0.0, 0.0});
-/// The four-bar's: logged tau1 as M1, the scene's M3, F, F_angle.
+/// The four-bar's: logged tau1 less its sensor's `offset` as M1, the scene's M3, F, F_angle.
 sim::FourBarLoadFunction logged_loads(const TorqueLog& log,
-                                      const sim::FourBarLoadFunction& scene_loads, double t0);
+                                      const sim::FourBarLoadFunction& scene_loads, double t0,
+                                      double offset = 0.0);
 
 }  // namespace fivebar::identification

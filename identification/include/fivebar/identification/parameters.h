@@ -16,7 +16,8 @@
 
 namespace fivebar::identification {
 
-/// The actuator group: offset, Coulomb and viscous friction of each of the two actuators.
+/// The actuator group of the five-bar: offset, Coulomb and viscous friction of each of its two
+/// actuators (a four-bar's: 3, ParameterLayout::actuator_size).
 inline constexpr int kActuatorTerms = 3 * kActuators;
 
 /// Name of actuator term i of `actuators` actuators (the five-bar's two: 0..5 offset_1, offset_2,
@@ -141,23 +142,35 @@ struct ParameterLayout {
     if (actuator) apply_actuators(x + actuator_offset(), &p->actuators);
   }
 
-  /// Writes the parameter vector x into the four-bar `p`: its friction (law set to `law`) and,
-  /// with the inertia group, its three links' mass, COM and inertia (the actuator group is the
-  /// caller's: the four-bar's model has no actuator terms).
+  /// Writes the parameter vector x into the four-bar `p`: its friction (law set to `law`), with
+  /// the inertia group its three links' mass, COM and inertia, with the actuator group its crank
+  /// motor's terms (entry 0 of its actuators).
   template <typename T>
   void apply(const T* x, FourBarParamsT<T>* p) const {
     apply(x, &p->friction);
     if (inertia) set_standard_inertial_links(x + inertia_offset(), links, p->links.data());
+    if (actuator) apply_actuators(x + actuator_offset(), &p->actuators, actuators);
   }
 
-  /// Writes the 6 actuator terms (offsets, Coulomb, viscous; kActuatorTerms order) into `a`.
+  /// Writes the 3 count actuator terms (offsets, Coulomb, viscous, count of each; the five-bar's
+  /// kActuatorTerms order) into the first `count` actuators of `a`.
   template <typename T>
-  static void apply_actuators(const T* x, ActuatorParams<T>* a) {
-    for (int k = 0; k < kActuators; ++k) {
+  static void apply_actuators(const T* x, ActuatorParams<T>* a, int count = kActuators) {
+    for (int k = 0; k < count; ++k) {
       a->offset[k] = x[k];
-      a->coulomb[k] = x[kActuators + k];
-      a->viscous[k] = x[2 * kActuators + k];
+      a->coulomb[k] = x[count + k];
+      a->viscous[k] = x[2 * count + k];
     }
+  }
+
+  /// The actuator group's part of the parameter vector: the terms of the first `actuators`
+  /// actuators of `a` (offsets, Coulomb, viscous).
+  std::vector<double> extract_actuators(const ActuatorParams<double>& a) const {
+    std::vector<double> x;
+    for (const auto* terms : {&a.offset, &a.coulomb, &a.viscous}) {
+      x.insert(x.end(), terms->begin(), terms->begin() + actuators);
+    }
+    return x;
   }
 
   /// The parameter vector of `p` (friction as extract(p.friction), then its inertial parameters).
@@ -168,10 +181,8 @@ struct ParameterLayout {
       x.insert(x.end(), pi.begin(), pi.end());
     }
     if (actuator) {
-      const ActuatorParams<double>& a = p.actuators;
-      x.insert(x.end(), a.offset.begin(), a.offset.end());
-      x.insert(x.end(), a.coulomb.begin(), a.coulomb.end());
-      x.insert(x.end(), a.viscous.begin(), a.viscous.end());
+      const std::vector<double> a = extract_actuators(p.actuators);
+      x.insert(x.end(), a.begin(), a.end());
     }
     return x;
   }

@@ -1,8 +1,9 @@
 // The planar four-bar (4R) with load-dependent joint friction, in reduced coordinates (one degree
 // of freedom, the crank angle th1): position, rate and acceleration closure, the mass and bias
 // terms M(q) qdd + bias = tau - friction, Newton-Euler reactions, the mechanism FourBar (forward
-// and inverse dynamics from mechanism_dynamics.h: the friction loop, stuck joints, the rest rule
-// and LuGre as the five-bar's), and its joint table for the general planar chain.
+// and inverse dynamics from mechanism_dynamics.h: the friction loop, stuck joints, the rest rule,
+// LuGre and the crank motor's friction as the five-bar's), and its joint table for the general
+// planar chain.
 //
 // Geometry: O at the origin, D0 = (l0, 0). Link 1 (crank) O->B at th1, link 2 (coupler) B->C at
 // th2, link 3 (rocker) D0->C at th3, all from +x. Joints in order O (ground-crank), B
@@ -18,6 +19,7 @@
 #include <sstream>
 #include <vector>
 
+#include "fivebar/model/actuator.h"
 #include "fivebar/model/evaluation.h"
 #include "fivebar/model/five_bar_chain.h"
 #include "fivebar/model/four_bar_params.h"
@@ -368,14 +370,16 @@ struct FourBar {
                           const Vec2<T>& Fv, const Q<T>& v) {
     return L.M3 * b.w2 + Fv.dot(k.GP * v[0]);
   }
-  /// No actuator friction model for the four-bar's drive.
+  /// The crank motor's friction at O (actuator.h, kFourBarActuators).
   template <typename T>
-  static bool actuator_torques(const Params<T>&, const Slots<T>&, const JointModes&, Slots<T>*) {
-    return false;
+  static bool actuator_torques(const Params<T>& p, const Slots<T>& w, const JointModes& slip,
+                               Slots<T>* out) {
+    return fivebar::actuator_torques(p.friction, p.actuators, kFourBarActuators, w, slip, out);
   }
+  /// mu_s,k r_k N_k, plus the motor's Coulomb friction c_a at the crank's joint O.
   template <typename T>
   static T holding_capacity(const Params<T>& p, int j, const T& N) {
-    return holding_bound(p.friction, j) * N;
+    return fivebar::holding_capacity(p.friction, p.actuators, kFourBarActuators, j, N);
   }
 };
 

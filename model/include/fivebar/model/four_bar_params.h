@@ -22,6 +22,8 @@ struct FourBarParamsT {
   int assembly = kElbowUp;     ///< kElbowUp: C left of the directed line B->D0
   T gravity{};                 ///< along -y [m/s^2]
   FrictionParams<T> friction;  ///< slots 0..3: joints O, B, C, D0
+  /// the crank's motor at O (entry 0: M1, kFourBarActuators); entry 1 stays zero
+  ActuatorParams<T> actuators;
 
   template <typename U>
   FourBarParamsT<U> cast() const {
@@ -32,6 +34,7 @@ struct FourBarParamsT {
     out.assembly = assembly;
     out.gravity = scalar_cast<U>(gravity);
     out.friction = friction.template cast<U>();
+    out.actuators = actuators.template cast<U>();
     return out;
   }
 };
