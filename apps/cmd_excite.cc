@@ -203,16 +203,6 @@ void refuse_four_bar_options(const Args& a, const id::ExcitationOptions& o) {
                      "is --family fourier" +
                          type);
   }
-  const std::string group = id::four_bar_design_unsupported(o.groups);
-  if (!group.empty()) {
-    const size_t space = group.find(' ');  // "--estimate actuator": the option and its value
-    throw InputError(kFlags, group.substr(0, space),
-                     (space == std::string::npos ? "" : group.substr(space + 1) + ": ") +
-                         "the four-bar's design estimates its friction coefficients (coulomb, "
-                         "viscous), shared by its joints or --per-joint, and its links' inertial "
-                         "parameters (inertia), as identify does on four-bars" +
-                         type);
-  }
   if (!a.theta2_range.empty()) {
     throw InputError(kFlags, "--theta2-range", "a four-bar has one crank, theta1" + type);
   }
@@ -924,7 +914,7 @@ std::shared_ptr<const id::ExcitationMechanism> mechanism_of(const Scene& scene,
                                                             const id::ExcitationOptions& o) {
   if (scene.type == MechanismType::kFourBar) {
     return id::four_bar_excitation(scene.four_bar, loads.four_bar_function(), o.groups.per_joint,
-                                   o.groups.inertia);
+                                   o.groups.inertia, o.groups.actuator);
   }
   return id::five_bar_excitation(scene.params, id::design_parameters(scene.params, o.groups),
                                  loads);

@@ -33,10 +33,10 @@ class FourBarExcitation : public ExcitationMechanism {
   using Jet = ceres::Jet<double, W>;
 
  public:
-  FourBarExcitation(const FourBarParams& scene, bool per_joint, bool inertia,
+  FourBarExcitation(const FourBarParams& scene, bool per_joint, bool inertia, bool actuator,
                     std::function<FourBarLoads(double)> loads)
       : scene_(scene),
-        dp_(four_bar_design_parameters(scene, per_joint, inertia)),
+        dp_(four_bar_design_parameters(scene, per_joint, inertia, actuator)),
         loads_(std::move(loads)) {}
   int dof() const override { return FourBar::kDof; }
   int joints() const override { return kFourBarJoints; }
@@ -50,8 +50,8 @@ class FourBarExcitation : public ExcitationMechanism {
   Status terms(double t, const MotionState& s, const JointModes* slip,
                SampleTerms* out) const override {
     FourBarParamsT<Jet> p = scene_.cast<Jet>();
-    std::vector<Jet> x(dp_.size());
-    for (int i = 0; i < dp_.size(); ++i) x[i] = Jet(dp_.nominal[i], i);
+    std::vector<Jet> x(dp_.jet_size());
+    for (int i = 0; i < dp_.jet_size(); ++i) x[i] = Jet(dp_.nominal[i], i);
     dp_.layout.apply(x.data(), &p.friction);
     if (dp_.inertial > 0)
       set_standard_inertial_links(x.data() + dp_.friction, kFourBarLinks, p.links.data());
@@ -60,7 +60,13 @@ class FourBarExcitation : public ExcitationMechanism {
                                        EvalOptions{}, &ev, slip);
     if (!st.ok()) return st;
     out->J = Eigen::MatrixXd::Zero(2, dp_.size());
-    for (int c = 0; c < dp_.size(); ++c) out->J(0, c) = ev.M1.v[c];
+    for (int c = 0; c < dp_.jet_size(); ++c) out->J(0, c) = ev.M1.v[c];
+    if (dp_.actuator > 0) {  // tau1 = M1 + offset + c sign(w1) + v w1 (the motor at O)
+      const int c = dp_.jet_size();
+      out->J(0, c) = 1.0;
+      out->J(0, c + 1) = (s.w1 > 0) - (s.w1 < 0);
+      out->J(0, c + 2) = s.w1;
+    }
     out->M1 = ev.M1.a;
     out->M2 = 0;
     out->sine = std::abs(ev.kin.sin32.a);
@@ -110,7 +116,7 @@ class FourBarExcitation : public ExcitationMechanism {
 }  // namespace
 
 DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per_joint,
-                                            bool inertia) {
+                                            bool inertia, bool actuator) {
   DesignParameters dp;
   dp.layout.law = FrictionLaw::kCoulombViscous;
   dp.layout.per_joint = per_joint;
@@ -130,30 +136,40 @@ DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per
     dp.inertial = kFourBarInertial;
   }
   for (double v : dp.nominal) dp.scale.push_back(std::abs(v) > 0 ? std::abs(v) : 1e-3);
+  if (actuator) {  // the crank's motor (actuators.M1), a typical scale where the scene has none
+    const ActuatorParams<double>& a = scene.actuators;
+    const std::pair<const char*, double> terms[] = {
+        {"offset_1", a.offset[0]}, {"actuator_coulomb_1", a.coulomb[0]},
+        {"actuator_viscous_1", a.viscous[0]}};
+    const double typical[] = {0.1, 0.1, 0.01};
+    for (int i = 0; i < 3; ++i) {
+      dp.names.push_back(terms[i].first);
+      dp.nominal.push_back(terms[i].second);
+      dp.scale.push_back(std::abs(terms[i].second) > 0 ? std::abs(terms[i].second) : typical[i]);
+      dp.prior_std.push_back(0.0);
+    }
+    dp.actuator = 3;
+  }
   return dp;
-}
-
-std::string four_bar_design_unsupported(const DesignGroups& groups) {
-  if (groups.actuator) return "--estimate actuator";
-  return "";
 }
 
 std::shared_ptr<const ExcitationMechanism> four_bar_excitation(
     const FourBarParams& scene, std::function<FourBarLoads(double)> loads, bool per_joint,
-    bool inertia) {
+    bool inertia, bool actuator) {
   if (per_joint && inertia) {
-    return std::make_shared<FourBarExcitation<kPerJointWidth + kFourBarInertial>>(scene, true, true,
-                                                                                  std::move(loads));
+    return std::make_shared<FourBarExcitation<kPerJointWidth + kFourBarInertial>>(
+        scene, true, true, actuator, std::move(loads));
   }
   if (inertia) {
-    return std::make_shared<FourBarExcitation<2 + kFourBarInertial>>(scene, false, true,
+    return std::make_shared<FourBarExcitation<2 + kFourBarInertial>>(scene, false, true, actuator,
                                                                      std::move(loads));
   }
   if (per_joint) {
-    return std::make_shared<FourBarExcitation<kPerJointWidth>>(scene, true, false,
+    return std::make_shared<FourBarExcitation<kPerJointWidth>>(scene, true, false, actuator,
                                                                std::move(loads));
   }
-  return std::make_shared<FourBarExcitation<kSharedWidth>>(scene, false, false, std::move(loads));
+  return std::make_shared<FourBarExcitation<kSharedWidth>>(scene, false, false, actuator,
+                                                           std::move(loads));
 }
 
 }  // namespace fivebar::identification

@@ -269,8 +269,21 @@ else:
     if list(std) != expected or not all(0 < v < float("inf") for v in std.values()) \
             or not std["m_1"] <= 0.2 * 0.5:
         failures.append("excite --estimate friction,inertia: predicted std %s" % std)
+# with the crank motor's terms: offset_1, actuator_coulomb_1, actuator_viscous_1 after the
+# friction's, each std finite where the design reverses the crank
+design = os.path.join(WORK, "excite_actuator")
+code, _, err = run(["excite", scene, "--duration", "4", "--torque-limit", "2", "--design-samples",
+                    "100", "--harmonics", "3", "--periods", "2", "--max-evaluations", "30",
+                    "--starts", "1", "--min-reversals", "2", "--estimate", "friction,actuator",
+                    "--no-plots", "--out", design])
+if code not in (0, 3):
+    failures.append("excite --estimate friction,actuator: exit %d: %s" % (code, err))
+else:
+    std = {r["name"]: float(r["std"]) for r in read_csv(os.path.join(design, "predicted_std.csv"))}
+    expected = ["coulomb", "viscous", "offset_1", "actuator_coulomb_1", "actuator_viscous_1"]
+    if list(std) != expected or not all(0 < v < float("inf") for v in std.values()):
+        failures.append("excite --estimate friction,actuator: predicted std %s" % std)
 for option, args in (("--family: torque drives the five-bar's two motors", ["--family", "torque"]),
-                     ("--estimate: actuator: the four-bar's design", ["--estimate", "friction,actuator"]),
                      ("--theta2-range: a four-bar has one crank", ["--theta2-range", "0:1"]),
                      ("--start: multisine", ["--start", "multisine"])):
     for pattern in (option, "(mechanism.type four_bar)"):

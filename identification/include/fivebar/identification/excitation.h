@@ -138,17 +138,16 @@ std::shared_ptr<const ExcitationMechanism> five_bar_excitation(
 /// The four-bar's design parameters: its friction, coulomb and viscous shared by its four joints
 /// (identify's default on four-bars) or, per_joint, one of each per joint (coulomb_1..4,
 /// viscous_1..4), and with `inertia` its three links' 12 standard inertial parameters (m_1 ..
-/// J_3) under identify's prior (prior_std); the groups it does not have, "" when it has them
-/// all, else the option that asks for one (--estimate actuator).
+/// J_3) under identify's prior (prior_std), and with `actuator` the crank motor's offset_1,
+/// actuator_coulomb_1 and actuator_viscous_1 (columns in closed form).
 DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per_joint = false,
-                                            bool inertia = false);
-std::string four_bar_design_unsupported(const DesignGroups& groups);
+                                            bool inertia = false, bool actuator = false);
 
 /// The four-bar of `scene` for the parameters of four_bar_design_parameters (identify_four_bar.cc's
 /// rate filter and rest rule).
 std::shared_ptr<const ExcitationMechanism> four_bar_excitation(
     const FourBarParams& scene, std::function<FourBarLoads(double)> loads, bool per_joint = false,
-    bool inertia = false);
+    bool inertia = false, bool actuator = false);
 
 /// The designed motion of each crank: a drift (a steady rotation) plus a finite Fourier series,
 /// faded in from rest at the start pose by a ramp r(t) (quintic smoothstep over `ramp` seconds,
