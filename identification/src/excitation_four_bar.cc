@@ -138,9 +138,9 @@ DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per
   for (double v : dp.nominal) dp.scale.push_back(std::abs(v) > 0 ? std::abs(v) : 1e-3);
   if (actuator) {  // the crank's motor (actuators.M1), a typical scale where the scene has none
     const ActuatorParams<double>& a = scene.actuators;
-    const std::pair<const char*, double> terms[] = {
-        {"offset_1", a.offset[0]}, {"actuator_coulomb_1", a.coulomb[0]},
-        {"actuator_viscous_1", a.viscous[0]}};
+    const std::pair<const char*, double> terms[] = {{"offset_1", a.offset[0]},
+                                                    {"actuator_coulomb_1", a.coulomb[0]},
+                                                    {"actuator_viscous_1", a.viscous[0]}};
     const double typical[] = {0.1, 0.1, 0.01};
     for (int i = 0; i < 3; ++i) {
       dp.names.push_back(terms[i].first);

@@ -101,11 +101,14 @@ void sample_log(const Params<double>& params, const std::vector<sim::Row>& rows,
 
 void sample_log(const FourBarParams& params, const std::vector<sim::Row>& rows,
                 const SynthOptions& opt, SynthResult* out) {
-  sample_rows(1, params.actuators.offset, rows, opt, [](const sim::Row& r) {
-    std::array<double, kJoints> w{};
-    for (int k = 0; k < kFourBarJoints; ++k) w[k] = sim::four_bar_omega_rel(r, k);
-    return w;
-  }, out);
+  sample_rows(
+      1, params.actuators.offset, rows, opt,
+      [](const sim::Row& r) {
+        std::array<double, kJoints> w{};
+        for (int k = 0; k < kFourBarJoints; ++k) w[k] = sim::four_bar_omega_rel(r, k);
+        return w;
+      },
+      out);
 }
 
 SynthResult synthesize_log(const FourBarParams& params, const sim::FourBarLoadFunction& loads,

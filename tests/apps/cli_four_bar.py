@@ -253,36 +253,37 @@ else:
     if worst > 1e-9:
         failures.append("excite: synth-log --motion along the design differs by %g N m (exit %d %s)"
                         % (worst, code, err))
+def small_design(groups):
+    """excite's predicted std by name of a short design for `groups`, or None (a failure noted)"""
+    design = os.path.join(WORK, "excite_" + groups.replace(",", "_"))
+    code, _, err = run(["excite", scene, "--duration", "4", "--torque-limit", "2",
+                        "--design-samples", "100", "--harmonics", "3", "--periods", "2",
+                        "--max-evaluations", "30", "--starts", "1", "--min-reversals", "2",
+                        "--estimate", groups, "--no-plots", "--out", design])
+    if code not in (0, 3):
+        failures.append("excite --estimate %s: exit %d: %s" % (groups, code, err))
+        return None
+    return {r["name"]: float(r["std"]) for r in read_csv(os.path.join(design, "predicted_std.csv"))}
+
+
+def all_finite(std):
+    return all(0 < v < float("inf") for v in std.values())
+
+
 # with the links' inertial parameters: their 12 columns after the friction's, each std finite
 # (identify's prior holds what the motion does not determine) and at most the prior's
-design = os.path.join(WORK, "excite_inertia")
-code, _, err = run(["excite", scene, "--duration", "4", "--torque-limit", "2", "--design-samples",
-                    "100", "--harmonics", "3", "--periods", "2", "--max-evaluations", "30",
-                    "--starts", "1", "--min-reversals", "2", "--estimate", "friction,inertia",
-                    "--no-plots", "--out", design])
-if code not in (0, 3):
-    failures.append("excite --estimate friction,inertia: exit %d: %s" % (code, err))
-else:
-    std = {r["name"]: float(r["std"]) for r in read_csv(os.path.join(design, "predicted_std.csv"))}
-    expected = ["coulomb", "viscous"] + ["%s_%d" % (n, l) for l in (1, 2, 3)
-                                         for n in ("m", "mx", "my", "J")]
-    if list(std) != expected or not all(0 < v < float("inf") for v in std.values()) \
-            or not std["m_1"] <= 0.2 * 0.5:
-        failures.append("excite --estimate friction,inertia: predicted std %s" % std)
+std = small_design("friction,inertia")
+expected = ["coulomb", "viscous"] + ["%s_%d" % (n, l) for l in (1, 2, 3)
+                                     for n in ("m", "mx", "my", "J")]
+if std is not None and (list(std) != expected or not all_finite(std)
+                        or not std["m_1"] <= 0.2 * 0.5):
+    failures.append("excite --estimate friction,inertia: predicted std %s" % std)
 # with the crank motor's terms: offset_1, actuator_coulomb_1, actuator_viscous_1 after the
 # friction's, each std finite where the design reverses the crank
-design = os.path.join(WORK, "excite_actuator")
-code, _, err = run(["excite", scene, "--duration", "4", "--torque-limit", "2", "--design-samples",
-                    "100", "--harmonics", "3", "--periods", "2", "--max-evaluations", "30",
-                    "--starts", "1", "--min-reversals", "2", "--estimate", "friction,actuator",
-                    "--no-plots", "--out", design])
-if code not in (0, 3):
-    failures.append("excite --estimate friction,actuator: exit %d: %s" % (code, err))
-else:
-    std = {r["name"]: float(r["std"]) for r in read_csv(os.path.join(design, "predicted_std.csv"))}
-    expected = ["coulomb", "viscous", "offset_1", "actuator_coulomb_1", "actuator_viscous_1"]
-    if list(std) != expected or not all(0 < v < float("inf") for v in std.values()):
-        failures.append("excite --estimate friction,actuator: predicted std %s" % std)
+std = small_design("friction,actuator")
+expected = ["coulomb", "viscous", "offset_1", "actuator_coulomb_1", "actuator_viscous_1"]
+if std is not None and (list(std) != expected or not all_finite(std)):
+    failures.append("excite --estimate friction,actuator: predicted std %s" % std)
 for option, args in (("--family: torque drives the five-bar's two motors", ["--family", "torque"]),
                      ("--theta2-range: a four-bar has one crank", ["--theta2-range", "0:1"]),
                      ("--start: multisine", ["--start", "multisine"])):
