@@ -1,7 +1,8 @@
 // The four-bar as an ExcitationMechanism (excitation.h): the crank's torque M1 and its
 // derivatives by Jets of the four-bar's inverse dynamics (mech::inverse<FourBar>, one Jet width
 // for both the parameter and the motion derivatives), its friction and its links' standard
-// inertial parameters (with identify's prior on them), and identify's rules on four-bars
+// inertial parameters (with identify's prior on them), its crank motor's offset and friction (in
+// closed form), and identify's rules on four-bars
 // (identify_four_bar.cc): its window walked by predicted bias from its filter, and its rest rule.
 #include <ceres/jet.h>
 
