@@ -51,7 +51,11 @@ Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians
   if (jacobians.empty()) return {};
   const int P = static_cast<int>(jacobians.front().cols());
   Eigen::MatrixXd F = Eigen::MatrixXd::Zero(P, P);
-  for (const Eigen::MatrixXd& J : jacobians) F.noalias() += J.transpose() * J;
+  // a sample whose reactions vanish (a mechanism at rest without gravity or loads) has no
+  // derivative of their norms: it carries no information, and identify's rest rule leaves it out
+  for (const Eigen::MatrixXd& J : jacobians) {
+    if (J.allFinite()) F.noalias() += J.transpose() * J;
+  }
   return F / (sigma * sigma);
 }
 

@@ -1009,5 +1009,31 @@ TEST(FourBarExcitation, RestRuleIsIdentifys) {
   EXPECT_FALSE(four->at_rest(0, {cr.th0, 0, 0.9 * w, 0, 0, 0}, g1, g2, 0));
 }
 
+// A motion that starts at rest on a four-bar without gravity or loads: its first sample's
+// reactions vanish and their norms have no derivative there. That sample carries no information
+// (identify's rest rule leaves it out); the torque noise's std of the motion stays finite and
+// positive (it read 0 for every parameter, from a Fisher information of NaN).
+TEST(FourBarExcitation, ASampleAtRestWithoutLoadsLeavesTheInformationFinite) {
+  FourBarParams p = crank_rocker().p;
+  p.gravity = 0;
+  const auto mech = four_bar_excitation(p, [](double) { return FourBarLoads{}; });
+  std::vector<double> t;
+  std::vector<MotionState> states;
+  for (int i = 0; i <= 400; ++i) {  // at rest at t = 0, then a swing of the crank
+    const double ti = 0.005 * i, w = 2.0;
+    MotionState s;
+    s.th1 = crank_rocker().th0 + 0.4 * (1 - std::cos(w * ti));
+    s.w1 = 0.4 * w * std::sin(w * ti);
+    s.a1 = 0.4 * w * w * std::cos(w * ti) * (i > 0);
+    t.push_back(ti);
+    states.push_back(s);
+  }
+  ExcitationReport r;
+  ASSERT_TRUE(evaluate_motion(*mech, t, states, 0.02, &r).ok());
+  ASSERT_EQ(r.std_dev.size(), 2u);
+  for (double sd : r.std_dev) EXPECT_TRUE(std::isfinite(sd) && sd > 0) << sd;
+  EXPECT_TRUE(std::isfinite(r.log_det_scaled));
+}
+
 }  // namespace
 }  // namespace fivebar::identification
