@@ -157,7 +157,6 @@ void window_stage(FourBarFit* f, IdentifyResult* out) {
   // up the noise of the estimated accelerations, whose bias the walk weighs in every parameter
   if (f->layout.inertia) {
     bool from_noise = true;
-    f->prior = detail::inertial_prior(f->scene.links.data(), kFourBarLinks, f->opt->inertia_prior);
     f->prior_scale = noise_floor(*f, &from_noise);
   }
   const std::vector<double> x_start = f->x;

@@ -456,6 +456,9 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   if (opt.method == Method::kOutputError) return output_error(f, std::move(out), start);
   select_samples(&f, &out);
   require_usable_samples(f.cond.log, out.samples_used, f.layout.size(), opt.min_rate);
+  if (f.layout.inertia) {  // the prior on the links (the window stage weighs it too)
+    f.prior = detail::inertial_prior(scene.links.data(), kFourBarLinks, opt.inertia_prior);
+  }
   if (data_driven_window(f.cond.log, opt) && out.samples_used >= f.layout.size() + 1) {
     window_stage(&f, &out);
   }
@@ -467,10 +470,7 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   }
   bool from_noise = true;
   out.residual_noise_floor[0] = noise_floor(f, &from_noise);
-  if (f.layout.inertia) {
-    f.prior = detail::inertial_prior(scene.links.data(), kFourBarLinks, opt.inertia_prior);
-    f.prior_scale = out.residual_noise_floor[0];
-  }
+  if (f.layout.inertia) f.prior_scale = out.residual_noise_floor[0];
   choose_loss_scale(&f, &out);
   ceres::Problem problem;
   if (!solve(&f, &problem, &out)) return out;
