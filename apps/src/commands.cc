@@ -206,11 +206,7 @@ id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& sce
   opt.estimate_delay = !a.no_delay;
   opt.num_threads = std::max(1, a.threads);
   opt.window_s = a.window;
-  if (scene.type == MechanismType::kFourBar) {
-    opt.layout.joints = kFourBarJoints;
-    opt.layout.links = kFourBarLinks;
-    opt.layout.actuators = 1;
-  }
+  if (scene.type == MechanismType::kFourBar) opt.layout.set_four_bar();
   if (a.start_from_scene) {
     opt.initial = opt.layout.extract(start_from(friction_of(scene), opt.layout.law));
   }

@@ -121,7 +121,7 @@ DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per
   DesignParameters dp;
   dp.layout.law = FrictionLaw::kCoulombViscous;
   dp.layout.per_joint = per_joint;
-  dp.layout.joints = kFourBarJoints;
+  dp.layout.set_four_bar();
   dp.names = dp.layout.names();
   dp.nominal = dp.layout.extract(scene.friction);
   dp.friction = static_cast<int>(dp.names.size());

@@ -428,9 +428,7 @@ IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFuncti
   const auto start = std::chrono::steady_clock::now();
   IdentifyResult out;
   out.layout = opt.layout;
-  out.layout.joints = kFourBarJoints;
-  out.layout.links = kFourBarLinks;
-  out.layout.actuators = 1;
+  out.layout.set_four_bar();
   out.layout.static_as_excess = false;
   out.method = opt.method;
   out.samples = log.size();

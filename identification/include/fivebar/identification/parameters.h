@@ -58,6 +58,13 @@ struct ParameterLayout {
   int links = kLinks;
   int actuators = kActuators;
 
+  /// The four-bar's counts: its 4 joints, 3 links and 1 actuator (the crank's motor).
+  void set_four_bar() {
+    joints = kFourBarJoints;
+    links = kFourBarLinks;
+    actuators = 1;
+  }
+
   /// The coefficient of friction group g (0 <= g < groups()).
   Coefficient group(int g) const {
     const LawDescriptor& d = law_descriptor(law);
