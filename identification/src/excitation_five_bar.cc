@@ -52,19 +52,6 @@ Status jet_columns(const Params<double>& scene, const DesignParameters& dp, cons
   return Status::Ok();
 }
 
-/// Actuator columns in closed form: tau_j = M_j + offset_j + Fc_j sign(w_j) + Fv_j w_j.
-void actuator_columns(const DesignParameters& dp, const MotionState& s, SampleTerms* out) {
-  if (dp.actuator == 0) return;
-  const int c0 = dp.friction + dp.inertial;
-  const double w[2] = {s.w1, s.w2};
-  for (int j = 0; j < kActuators; ++j) {
-    const int c = c0 + kActuatorPerMotor * j;
-    out->J(j, c) = 1.0;
-    out->J(j, c + 1) = (w[j] > 0) - (w[j] < 0);
-    out->J(j, c + 2) = w[j];
-  }
-}
-
 }  // namespace
 
 DesignParameters design_parameters(const Params<double>& scene, const DesignGroups& g) {
@@ -122,7 +109,7 @@ Status sample_terms(const Params<double>& scene, const DesignParameters& dp, con
   }
   const Status st = columns(scene, dp, L, s, slip, out);
   if (!st.ok()) return st;
-  actuator_columns(dp, s, out);
+  detail::actuator_columns(dp, s, out);
   return Status::Ok();
 }
 

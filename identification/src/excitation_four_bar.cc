@@ -13,6 +13,7 @@
 #include "fivebar/identification/identify.h"
 #include "fivebar/model/four_bar.h"
 #include "fivebar/model/inertial.h"
+#include "excitation_shared.h"
 #include "four_bar_rules.h"
 #include "inertia.h"
 
@@ -62,12 +63,7 @@ class FourBarExcitation : public ExcitationMechanism {
     if (!st.ok()) return st;
     out->J = Eigen::MatrixXd::Zero(2, dp_.size());
     for (int c = 0; c < dp_.jet_size(); ++c) out->J(0, c) = ev.M1.v[c];
-    if (dp_.actuator > 0) {  // tau1 = M1 + offset + c sign(w1) + v w1 (the motor at O)
-      const int c = dp_.jet_size();
-      out->J(0, c) = 1.0;
-      out->J(0, c + 1) = (s.w1 > 0) - (s.w1 < 0);
-      out->J(0, c + 2) = s.w1;
-    }
+    detail::actuator_columns(dp_, s, out);  // the crank's motor at O
     out->M1 = ev.M1.a;
     out->M2 = 0;
     out->sine = std::abs(ev.kin.sin32.a);
@@ -149,7 +145,7 @@ DesignParameters four_bar_design_parameters(const FourBarParams& scene, bool per
       dp.scale.push_back(std::abs(terms[i].second) > 0 ? std::abs(terms[i].second) : typical[i]);
       dp.prior_std.push_back(0.0);
     }
-    dp.actuator = 3;
+    dp.actuator = kActuatorPerMotor;
   }
   return dp;
 }

@@ -25,6 +25,20 @@ inline Eigen::MatrixXd prior_fisher(const DesignParameters& dp) {
   return F;
 }
 
+/// The actuator columns in closed form, after the Jet parameters: tau_j = M_j + offset_j +
+/// Fc_j sign(w_j) + Fv_j w_j for the dp.actuator / kActuatorPerMotor motors (the five-bar's two,
+/// the four-bar's crank).
+inline void actuator_columns(const DesignParameters& dp, const MotionState& s, SampleTerms* out) {
+  const int c0 = dp.friction + dp.inertial;
+  const double w[2] = {s.w1, s.w2};
+  for (int j = 0; j < dp.actuator / kActuatorPerMotor; ++j) {
+    const int c = c0 + kActuatorPerMotor * j;
+    out->J(j, c) = 1.0;
+    out->J(j, c + 1) = (w[j] > 0) - (w[j] < 0);
+    out->J(j, c + 2) = w[j];
+  }
+}
+
 /// Runs f(i) for i in [0, n) on up to two threads (the machine's budget), in contiguous chunks.
 template <typename F>
 void parallel_for(int n, F&& f) {
