@@ -24,6 +24,7 @@
 #include "fivebar/io/identify_json.h"
 #include "fivebar/io/json.h"
 #include "fivebar/io/loads.h"
+#include "fivebar/io/log_truth.h"
 #include "fivebar/io/output.h"
 #include "fivebar/io/plots.h"
 #include "fivebar/io/scene.h"
@@ -249,6 +250,9 @@ void print_summary(const Args& a, const id::TorqueLog& log, const id::IdentifyRe
               per_crank(res.residual_noise_floor, log.dof, 4).c_str());
   if (!a.no_validation) print_validation(val);
   for (const std::string& w : res.warnings) warn(w);
+  std::vector<std::string> unread;
+  read_truth(log.comments, &unread);
+  for (const std::string& u : unread) warn(a.log + ": " + u + " (not read: no truth compared)");
   std::fflush(stdout);
 }
 

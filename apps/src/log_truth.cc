@@ -72,29 +72,47 @@ std::vector<std::string> truth_lines(const Params<double>& params) {
   return out;
 }
 
-LogTruth read_truth(const std::vector<std::string>& comments) {
+namespace {
+
+// the values of one `true.<key> = v1,v2,...` line; empty with *reason set when they do not read
+std::vector<double> truth_values(const std::string& text, std::string* reason) {
+  std::stringstream ss(text);
+  std::string cell;
+  std::vector<double> v;
+  while (std::getline(ss, cell, ',')) {
+    double x = 0;
+    if (!parse_finite(cell, &x)) {
+      *reason = "'" + trim(cell) + "' is not a finite number";
+      return {};
+    }
+    v.push_back(x);
+  }
+  if (!text.empty() && text.back() == ',') *reason = "a trailing comma";
+  const size_t n = v.size();
+  if (reason->empty() && !(n == kJoints || n == kFourBarJoints || n == kInertialParams ||
+                           n == kInertialPerLink * kFourBarLinks || n == kActuators || n == 1)) {
+    *reason = std::to_string(n) + " values (1, 2, 4, 5, 12 or 16 are read)";
+  }
+  return reason->empty() ? v : std::vector<double>{};
+}
+
+}  // namespace
+
+LogTruth read_truth(const std::vector<std::string>& comments, std::vector<std::string>* unread) {
   LogTruth truth;
   for (const std::string& c : comments) {
     const std::string line = trim(c);
     if (line.rfind("true.", 0) != 0) continue;
     const size_t eq = line.find('=');
-    if (eq == std::string::npos) continue;
-    const std::string key = trim(line.substr(5, eq - 5));
-    std::stringstream ss(line.substr(eq + 1));
-    std::string cell;
-    std::vector<double> v;
-    while (std::getline(ss, cell, ',')) {
-      try {
-        v.push_back(std::stod(cell));
-      } catch (...) {
-        v.clear();
-        break;
-      }
+    const std::string key = trim(line.substr(0, eq));
+    std::string reason = eq == std::string::npos ? "no '='" : "";
+    const std::vector<double> v =
+        reason.empty() ? truth_values(trim(line.substr(eq + 1)), &reason) : std::vector<double>{};
+    if (!reason.empty()) {
+      if (unread && key != "true.law") unread->push_back(key + ": " + reason);
+      continue;
     }
-    if (v.size() == kJoints || v.size() == kFourBarJoints || v.size() == kInertialParams ||
-        v.size() == kInertialPerLink * kFourBarLinks || v.size() == kActuators || v.size() == 1) {
-      truth[key] = v;
-    }
+    truth[key.substr(5)] = v;
   }
   return truth;
 }

@@ -18,8 +18,10 @@ TEST(LogTruth, EveryWrittenValueReadsBackUnderItsParameterName) {
   p.actuators.coulomb = {0.03, 0.02};
   std::vector<std::string> comments = {" command: fivebar synth-log ...", " true.broken = a,b"};
   for (const std::string& line : truth_lines(p)) comments.push_back(line);
-  const LogTruth truth = read_truth(comments);
+  std::vector<std::string> unread;
+  const LogTruth truth = read_truth(comments, &unread);
   EXPECT_EQ(truth.count("broken"), 0u);
+  EXPECT_EQ(unread, std::vector<std::string>{"true.broken: 'a' is not a finite number"});
   ASSERT_EQ(truth.at("coulomb").size(), size_t(kJoints));
   EXPECT_EQ(truth.at("coulomb")[3], 0.14);
   EXPECT_EQ(truth.at("static_coulomb")[0], 0.2);
@@ -54,6 +56,32 @@ TEST(LogTruth, EveryWrittenValueReadsBackUnderItsParameterName) {
   EXPECT_FALSE(true_value(truth, layout, 0, "coulomb", &shared));
   ASSERT_TRUE(true_value(truth, layout, 2, "static_coulomb", &shared));  // 0.2 at every joint
   EXPECT_EQ(shared, 0.2);
+}
+
+TEST(LogTruth, AFourBarsTruthReadsBackWhole) {
+  FourBarParams p;
+  p.friction.law = FrictionLaw::kStribeck;
+  p.actuators.offset[0] = 0.03;
+  std::vector<std::string> unread;
+  const LogTruth truth = read_truth(truth_lines(p), &unread);
+  EXPECT_TRUE(unread.empty()) << unread.front();
+  EXPECT_EQ(truth.at("inertial").size(), size_t(kInertialPerLink * kFourBarLinks));
+  EXPECT_EQ(truth.at("offset"), std::vector<double>{0.03});
+}
+
+TEST(LogTruth, LinesThatDoNotReadAreNamedWithTheirReason) {
+  const std::vector<std::string> comments = {
+      " true.law = coulomb_viscous",          " true.coulomb = 0.1,0.1,0.12x,0.1,0.1",
+      " true.viscous = 0.02,0.02,0.02,0.02,", " true.pin_radius = 0.01,0.01,0.01",
+      " true.offset",                         " true.actuator_viscous = 0.001,0.002"};
+  std::vector<std::string> unread;
+  const LogTruth truth = read_truth(comments, &unread);
+  EXPECT_EQ(truth.size(), 1u);
+  EXPECT_EQ(truth.at("actuator_viscous")[1], 0.002);
+  const std::vector<std::string> expected = {
+      "true.coulomb: '0.12x' is not a finite number", "true.viscous: a trailing comma",
+      "true.pin_radius: 3 values (1, 2, 4, 5, 12 or 16 are read)", "true.offset: no '='"};
+  EXPECT_EQ(unread, expected);
 }
 
 }  // namespace

@@ -26,8 +26,10 @@ std::vector<std::string> truth_lines(const Params<double>& params);
 /// links' standard inertial parameters and its crank motor's actuator terms (one value each).
 std::vector<std::string> truth_lines(const FourBarParams& params);
 
-/// The `true.*` values of a log's comment lines; lines that do not parse are skipped.
-LogTruth read_truth(const std::vector<std::string>& comments);
+/// The `true.*` values of a log's comment lines. Lines that do not read are skipped; with
+/// `unread`, each of them (but `true.law`, a name) is appended to it as "true.<key>: <reason>".
+LogTruth read_truth(const std::vector<std::string>& comments,
+                    std::vector<std::string>* unread = nullptr);
 
 /// The true value of parameter i (named `name`) of `layout`, when `truth` states it (a shared
 /// friction coefficient: only when the five joints' true values are equal); false otherwise.
