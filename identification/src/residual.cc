@@ -18,10 +18,12 @@ namespace {
 /// mass enter: the same numbers as inverse_dynamics with the friction law kNone.
 class Frictionless {
  public:
-  Frictionless(const Params<double>& scene, const Sample& s, const EvalOptions& eval)
-      : scene_(scene), s_(s) {
+  Frictionless(const Params<double>& scene, const Sample& s, const EvalOptions& eval,
+               const std::array<double, kInertialParams>& pi0)
+      : scene_(scene), s_(s), pi0_(pi0) {
     scene_.friction.law = FrictionLaw::kNone;
     scene_.actuators = ActuatorParams<double>();  // StructuredResidual adds the actuator terms
+    set_standard_inertial(pi0.data(), &scene_);
     ok_ = close_loop(scene_, s.th1, s.th2, &closed_, eval.singular_margin, false).ok();
     v_ = Vec2<double>(s.w1, s.w2);
     a_ = Vec2<double>(s.a1, s.a2);
@@ -30,13 +32,18 @@ class Frictionless {
     }
   }
 
-  /// Reactions (10) and actuator torques (2) at the inertial parameters pi; false where the
-  /// inverse dynamics fails.
-  bool operator()(const std::array<double, kInertialParams>& pi,
-                  Eigen::Matrix<double, 12, 1>* out) const {
+  /// Reactions (10) and actuator torques (2) at pi0, or with its parameter i (>= 0) moved by h
+  /// (only that link's parameters set again); false where the inverse dynamics fails.
+  bool operator()(int i, double h, Eigen::Matrix<double, 12, 1>* out) const {
     if (!ok_) return false;
     Params<double> p = scene_;
-    set_standard_inertial(pi.data(), &p);
+    if (i >= 0) {
+      const int l = i / kInertialPerLink;
+      std::array<double, kInertialPerLink> link;
+      for (int c = 0; c < kInertialPerLink; ++c) link[c] = pi0_[kInertialPerLink * l + c];
+      link[i % kInertialPerLink] += h;
+      set_standard_inertial_links(link.data(), 1, &p.links[l]);
+    }
     Evaluation<double> ev;
     ev.kin = closed_;
     place_points(p, &ev.kin);
@@ -56,8 +63,9 @@ class Frictionless {
   }
 
  private:
-  Params<double> scene_;
+  Params<double> scene_;  ///< frictionless, at pi0
   const Sample& s_;
+  const std::array<double, kInertialParams>& pi0_;
   Kinematics<double> closed_;
   Vec2<double> v_, a_;
   bool ok_ = false;
@@ -70,16 +78,14 @@ bool sample_structure(const Params<double>& scene, const Sample& s, const EvalOp
   // inertial part: friction-free reactions and torques are affine in pi (forward differences
   // are exact up to rounding; Jets would be singular at a COM on the joint)
   const std::array<double, kInertialParams> pi0 = standard_inertial(scene);
-  const Frictionless frictionless(scene, s, eval);
+  const Frictionless frictionless(scene, s, eval, pi0);
   Eigen::Matrix<double, 12, 1> v0, v1;
-  if (!frictionless(pi0, &v0)) return false;
+  if (!frictionless(-1, 0.0, &v0)) return false;
   Eigen::Matrix<double, 12, kInertialParams> D;
   for (int i = 0; i < kInertialParams; ++i) {
     const int l = i / kInertialPerLink;
     const double h = 1e-3 * std::max(std::abs(pi0[i]), scene.links[l].mass * scene.links[l].length);
-    std::array<double, kInertialParams> pi = pi0;
-    pi[i] += h;
-    if (!frictionless(pi, &v1)) return false;
+    if (!frictionless(i, h, &v1)) return false;
     D.col(i) = (v1 - v0) / h;
   }
   const Eigen::Map<const Eigen::Matrix<double, kInertialParams, 1>> pv(pi0.data());
