@@ -50,8 +50,8 @@ class Frictionless {
     first_order_coefficients(p, &ev.kin);
     FiveBar::bias(p, ev.kin, v_, &ev.bias);
     ev.Mf.fill(0.0);
-    FiveBar::reactions(p, ev.kin, ev.bias, s_.loads, FiveBar::applied(ev.kin, s_.loads), a_,
-                       ev.Mf, &ev.F, &ev);
+    FiveBar::reactions(p, ev.kin, ev.bias, s_.loads, FiveBar::applied(ev.kin, s_.loads), a_, ev.Mf,
+                       &ev.F, &ev);
     FiveBar::drive_torques(p, ev.kin, a_, &ev);
     for (int k = 0; k < kJoints; ++k) {
       (*out)(2 * k) = ev.F[k].x();
@@ -108,8 +108,8 @@ bool sample_structure(const Params<double>& scene, const Sample& s, const EvalOp
   EvalOptions eo = eval;
   eo.want_angles = false;  // the coupler angles themselves enter no reaction
   Evaluation<J5> ev;
-  if (!inverse_dynamics(p, s.loads.cast<J5>(), J5(s.th1), J5(s.th2), J5(s.w1), J5(s.w2),
-                        J5(s.a1), J5(s.a2), nullptr, eo, &ev)
+  if (!inverse_dynamics(p, s.loads.cast<J5>(), J5(s.th1), J5(s.th2), J5(s.w1), J5(s.w2), J5(s.a1),
+                        J5(s.a2), nullptr, eo, &ev)
            .ok()) {
     return false;
   }

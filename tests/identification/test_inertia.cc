@@ -121,8 +121,9 @@ TEST(SampleStructure, InertialColumnsAreTheModelsForwardDifferences) {
     p.actuators = ActuatorParams<double>();
     set_standard_inertial(pi.data(), &p);
     Evaluation<double> ev;
-    EXPECT_TRUE(inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr, eval,
-                                 &ev).ok());
+    EXPECT_TRUE(
+        inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr, eval, &ev)
+            .ok());
     Eigen::Matrix<double, 12, 1> v;
     for (int k = 0; k < kJoints; ++k) v(2 * k) = ev.F[k].x(), v(2 * k + 1) = ev.F[k].y();
     v(10) = ev.M1, v(11) = ev.M2;
