@@ -12,27 +12,64 @@ namespace fivebar::identification {
 
 namespace {
 
-/// Friction-free reactions (10) and actuator torques (2) of sample s for the inertial
-/// parameters pi; false where the inverse dynamics fails.
-bool frictionless(const Params<double>& scene, const Sample& s, const EvalOptions& eval,
-                  const std::array<double, kInertialParams>& pi, Eigen::Matrix<double, 12, 1>* out) {
-  Params<double> p = scene;
-  p.friction.law = FrictionLaw::kNone;
-  p.actuators = ActuatorParams<double>();  // StructuredResidual adds the actuator terms
-  set_standard_inertial(pi.data(), &p);
-  Evaluation<double> ev;
-  if (!inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr, eval, &ev)
-           .ok()) {
-    return false;
+/// The friction-free inverse dynamics of one sample at any standard inertial parameters: its
+/// loop closure (close_loop: the lengths and crank angles only) once, then per parameter vector
+/// the rest of the model's frictionless pass (mech::detail::inverse_pass), which the centres of
+/// mass enter: the same numbers as inverse_dynamics with the friction law kNone.
+class Frictionless {
+ public:
+  Frictionless(const Params<double>& scene, const Sample& s, const EvalOptions& eval,
+               const std::array<double, kInertialParams>& pi0)
+      : scene_(scene), s_(s), pi0_(pi0) {
+    scene_.friction.law = FrictionLaw::kNone;
+    scene_.actuators = ActuatorParams<double>();  // StructuredResidual adds the actuator terms
+    set_standard_inertial(pi0.data(), &scene_);
+    ok_ = close_loop(scene_, s.th1, s.th2, &closed_, eval.singular_margin, false).ok();
+    v_ = Vec2<double>(s.w1, s.w2);
+    a_ = Vec2<double>(s.a1, s.a2);
+    if (eval.rest_acceleration >= 0.0) {  // the rest rule of a driven coordinate
+      for (int i = 0; i < kDof; ++i) mech::detail::still_drive(eval, &v_[i], &a_[i]);
+    }
   }
-  for (int k = 0; k < kJoints; ++k) {
-    (*out)(2 * k) = ev.F[k].x();
-    (*out)(2 * k + 1) = ev.F[k].y();
+
+  /// Reactions (10) and actuator torques (2) at pi0, or with its parameter i (>= 0) moved by h
+  /// (only that link's parameters set again); false where the inverse dynamics fails.
+  bool operator()(int i, double h, Eigen::Matrix<double, 12, 1>* out) const {
+    if (!ok_) return false;
+    Params<double> p = scene_;
+    if (i >= 0) {
+      const int l = i / kInertialPerLink;
+      std::array<double, kInertialPerLink> link;
+      for (int c = 0; c < kInertialPerLink; ++c) link[c] = pi0_[kInertialPerLink * l + c];
+      link[i % kInertialPerLink] += h;
+      set_standard_inertial_links(link.data(), 1, &p.links[l]);
+    }
+    Evaluation<double> ev;
+    ev.kin = closed_;
+    place_points(p, &ev.kin);
+    first_order_coefficients(p, &ev.kin);
+    FiveBar::bias(p, ev.kin, v_, &ev.bias);
+    ev.Mf.fill(0.0);
+    FiveBar::reactions(p, ev.kin, ev.bias, s_.loads, FiveBar::applied(ev.kin, s_.loads), a_, ev.Mf,
+                       &ev.F, &ev);
+    FiveBar::drive_torques(p, ev.kin, a_, &ev);
+    for (int k = 0; k < kJoints; ++k) {
+      (*out)(2 * k) = ev.F[k].x();
+      (*out)(2 * k + 1) = ev.F[k].y();
+    }
+    (*out)(10) = ev.M1;
+    (*out)(11) = ev.M2;
+    return out->allFinite();
   }
-  (*out)(10) = ev.M1;
-  (*out)(11) = ev.M2;
-  return out->allFinite();
-}
+
+ private:
+  Params<double> scene_;  ///< frictionless, at pi0
+  const Sample& s_;
+  const std::array<double, kInertialParams>& pi0_;
+  Kinematics<double> closed_;
+  Vec2<double> v_, a_;
+  bool ok_ = false;
+};
 
 }  // namespace
 
@@ -41,15 +78,14 @@ bool sample_structure(const Params<double>& scene, const Sample& s, const EvalOp
   // inertial part: friction-free reactions and torques are affine in pi (forward differences
   // are exact up to rounding; Jets would be singular at a COM on the joint)
   const std::array<double, kInertialParams> pi0 = standard_inertial(scene);
+  const Frictionless frictionless(scene, s, eval, pi0);
   Eigen::Matrix<double, 12, 1> v0, v1;
-  if (!frictionless(scene, s, eval, pi0, &v0)) return false;
+  if (!frictionless(-1, 0.0, &v0)) return false;
   Eigen::Matrix<double, 12, kInertialParams> D;
   for (int i = 0; i < kInertialParams; ++i) {
     const int l = i / kInertialPerLink;
     const double h = 1e-3 * std::max(std::abs(pi0[i]), scene.links[l].mass * scene.links[l].length);
-    std::array<double, kInertialParams> pi = pi0;
-    pi[i] += h;
-    if (!frictionless(scene, s, eval, pi, &v1)) return false;
+    if (!frictionless(i, h, &v1)) return false;
     D.col(i) = (v1 - v0) / h;
   }
   const Eigen::Map<const Eigen::Matrix<double, kInertialParams, 1>> pv(pi0.data());
@@ -69,9 +105,11 @@ bool sample_structure(const Params<double>& scene, const Sample& s, const EvalOp
     p.friction.viscous[j] = J5(0);
     p.friction.pin_radius[j] = J5(0, j);
   }
+  EvalOptions eo = eval;
+  eo.want_angles = false;  // the coupler angles themselves enter no reaction
   Evaluation<J5> ev;
-  if (!inverse_dynamics(p, s.loads.cast<J5>(), J5(s.th1), J5(s.th2), J5(s.w1), J5(s.w2),
-                        J5(s.a1), J5(s.a2), nullptr, eval, &ev)
+  if (!inverse_dynamics(p, s.loads.cast<J5>(), J5(s.th1), J5(s.th2), J5(s.w1), J5(s.w2), J5(s.a1),
+                        J5(s.a2), nullptr, eo, &ev)
            .ok()) {
     return false;
   }

@@ -102,6 +102,54 @@ TEST(StructuredResidual, MatchesTheFullModelWithActuators) {
   check_structured<16>({FrictionLaw::kCoulombViscous, true, false, true});
 }
 
+/// The structure's inertial columns are the forward differences of the model's own frictionless
+/// inverse dynamics (inverse_dynamics with the friction law kNone), bit for bit: the loop closure
+/// shared between its passes changes no number. Samples with rest-rule joints and a COM off the
+/// link's line (a rotated centre of mass) included.
+TEST(SampleStructure, InertialColumnsAreTheModelsForwardDifferences) {
+  Params<double> scene = cad_truth();
+  scene.links[2].com_angle = 0.3;
+  EvalOptions eval;
+  eval.rest_rate = 1e-3;
+  eval.rest_acceleration = 1e-2;
+  std::vector<Sample> samples = testing::random_samples(scene, 6, 3);
+  samples[0].w1 = 5e-4, samples[0].a1 = -5e-3;  // within the rest rule's: held still
+  const std::array<double, kInertialParams> pi0 = standard_inertial(scene);
+  auto full = [&](const Sample& s, const std::array<double, kInertialParams>& pi) {
+    Params<double> p = scene;
+    p.friction.law = FrictionLaw::kNone;
+    p.actuators = ActuatorParams<double>();
+    set_standard_inertial(pi.data(), &p);
+    Evaluation<double> ev;
+    EXPECT_TRUE(
+        inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr, eval, &ev)
+            .ok());
+    Eigen::Matrix<double, 12, 1> v;
+    for (int k = 0; k < kJoints; ++k) v(2 * k) = ev.F[k].x(), v(2 * k + 1) = ev.F[k].y();
+    v(10) = ev.M1, v(11) = ev.M2;
+    return v;
+  };
+  for (const Sample& s : samples) {
+    SampleStructure st;
+    ASSERT_TRUE(sample_structure(scene, s, eval, &st));
+    const Eigen::Matrix<double, 12, 1> v0 = full(s, pi0);
+    Eigen::Matrix<double, 12, kInertialParams> D;
+    for (int i = 0; i < kInertialParams; ++i) {
+      const int l = i / kInertialPerLink;
+      const double h =
+          1e-3 * std::max(std::abs(pi0[i]), scene.links[l].mass * scene.links[l].length);
+      std::array<double, kInertialParams> pi = pi0;
+      pi[i] += h;
+      D.col(i) = (full(s, pi) - v0) / h;
+    }
+    const Eigen::Map<const Eigen::Matrix<double, kInertialParams, 1>> pv(pi0.data());
+    EXPECT_EQ(st.A, D.topRows(10));
+    EXPECT_EQ(st.Y, D.bottomRows(2));
+    EXPECT_EQ(st.b, v0.head(10) - st.A * pv);
+    EXPECT_EQ(st.c, v0.tail(2) - st.Y * pv);
+  }
+}
+
 // Jets whose derivative parts are not the parameters' own (every part set): the structured
 // residual's products with the inertial parameters read all of them
 TEST(StructuredResidual, MatchesTheFullModelAlongAnyDirections) {
