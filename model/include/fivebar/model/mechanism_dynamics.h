@@ -347,7 +347,8 @@ Status forward_pass(const ParamsOf<M, T>& p, const LoadsOf<M, T>& L, const State
     M::reactions(p, k, ev->bias, L, applied, ev->thdd, Mf_all, F, ev);
   };
   if (p.friction.active()) {
-    Status st = forward_friction<M>(p, opt, Ainv, stuck, hold, solve, slip, bristle, ev, loop, warm);
+    Status st =
+        forward_friction<M>(p, opt, Ainv, stuck, hold, solve, slip, bristle, ev, loop, warm);
     if (!st.ok()) return st;
     if (!opt.want_reactions && stuck.count == 0) {
       // the accelerations of the converged friction torques; F and N stay the loop's (consistent
