@@ -73,7 +73,10 @@ constexpr double kSlackTorque = 1e-9;
 /// angle continued from the previous row's value (no 2 pi jumps in the output)
 double continued(double angle, const Row* previous, int k) {
   if (!previous) return angle;
-  return previous->theta[k] + std::remainder(angle - previous->theta[k], 2 * M_PI);
+  // remainder(d, 2 pi) is d itself for |d| <= pi (the quotient rounds to 0): the common case,
+  // consecutive rows, without the library call
+  const double d = angle - previous->theta[k];
+  return previous->theta[k] + (std::abs(d) <= M_PI ? d : std::remainder(d, 2 * M_PI));
 }
 
 /// What the simulator needs of a mechanism beyond the dynamics (mechanism.h): its types, where

@@ -315,8 +315,8 @@ Status forward_pass(const ParamsOf<M, T>& p, const LoadsOf<M, T>& L, const State
                     EvaluationOf<M, T>* ev, const Joints<T>* bristle, LoopSolution* loop,
                     FrictionWarmStart* warm = nullptr) {
   constexpr int n = M::kDof;
-  Status st = M::close(p, q, &ev->kin, opt);
-  if (!st.ok()) return st;
+  // (each step's status its own object: no string moves on the common path)
+  if (Status st = M::close(p, q, &ev->kin, opt); !st.ok()) return st;
   const auto& k = ev->kin;
   M::bias(p, k, v, &ev->bias);
   const auto applied = M::applied(k, L);
@@ -330,8 +330,7 @@ Status forward_pass(const ParamsOf<M, T>& p, const LoadsOf<M, T>& L, const State
   ev->Mf.fill(T(0));
   ev->P_diss = T(0);
   StuckJoints<n, T> stuck;
-  st = stuck_joints<M>(k, ev->bias, slip, &stuck);
-  if (!st.ok()) return st;
+  if (Status st = stuck_joints<M>(k, ev->bias, slip, &stuck); !st.ok()) return st;
   Joints<T> hold{};  // holding torques of the stuck joints
   // accelerations and reactions for the friction torques Mf of the slipping joints
   auto solve = [&](const Joints<T>& Mf, std::array<Vec2<T>, kJoints>* F) {
@@ -348,7 +347,8 @@ Status forward_pass(const ParamsOf<M, T>& p, const LoadsOf<M, T>& L, const State
     M::reactions(p, k, ev->bias, L, applied, ev->thdd, Mf_all, F, ev);
   };
   if (p.friction.active()) {
-    st = forward_friction<M>(p, opt, Ainv, stuck, hold, solve, slip, bristle, ev, loop, warm);
+    Status st =
+        forward_friction<M>(p, opt, Ainv, stuck, hold, solve, slip, bristle, ev, loop, warm);
     if (!st.ok()) return st;
     if (!opt.want_reactions && stuck.count == 0) {
       // the accelerations of the converged friction torques; F and N stay the loop's (consistent

@@ -142,37 +142,46 @@ struct ReducedMap {
     }
   }
   /// The Newton matrix at F, N = |F|: I - H diag(phi) dN/dz, where dN_k/dz = g_k^T = u_k^T G_k
-  /// with u_k = F_k / N_k (0 where N_k = 0), returned in u.
-  Mat newton_matrix(const Forces& F, const double N[kJoints], Forces* u) const {
-    double g[kJoints][n];  // g_k
+  /// with u_k = F_k / N_k (0 where N_k = 0), returned in u. n = 4: in its 2 x 2 blocks
+  /// J = [P Q; U V] (NewtonBlocks: the coupler sums first, the crank accelerations last), each
+  /// entry the same sum as in the 4 x 4 form, formed two entries at a time; n = 2: P alone.
+  struct Blocks {
+    Mat2<double> P, Q, U, V;
+  };
+  Blocks newton_matrix(const Forces& F, const double N[kJoints], Forces* u) const {
+    // g_k in halves: a_k = (dN_k/ds3, dN_k/ds4) = sigma_k (f3 . u_k, f4 . u_k), b_k = R_k^T u_k
+    Mat2<double> C;  // rows f3^T, f4^T
+    C.row(0) = r.f3.transpose();
+    C.row(1) = r.f4.transpose();
+    Forces a, b;
     for (int k = 0; k < kJoints; ++k) {
       const double inv = N[k] > 0.0 ? 1.0 / N[k] : 0.0;
-      const double ux = F[k].x() * inv, uy = F[k].y() * inv;
-      (*u)[k] = Vec2<double>(ux, uy);
-      const double sigma = k < kJoints - 1 ? 1.0 : -1.0;
-      g[k][0] = sigma * (ux * r.f3.x() + uy * r.f3.y());
-      g[k][1] = sigma * (ux * r.f4.x() + uy * r.f4.y());
-      if constexpr (n == 4) {
-        const Mat2<double>& R = r.R[k];
-        g[k][2] = ux * R(0, 0) + uy * R(1, 0);
-        g[k][3] = ux * R(0, 1) + uy * R(1, 1);
-      }
+      const Vec2<double> uk = F[k] * inv;
+      (*u)[k] = uk;
+      a[k] = C * uk;
+      if (k == kJoints - 1) a[k] = -a[k];
+      if constexpr (n == 4) b[k] = r.R[k].transpose() * uk;
     }
     // H diag(phi): columns (c3_j phi_j, c4_j phi_j, m_j phi_j) with c3 = (0, 1, -1, 0, 0),
     // c4 = (0, 0, -1, 1, 0): two nonzeros in each coupler row, five in each crank row
-    Mat J;
-    for (int c = 0; c < n; ++c) {
-      const double mc = phi[2] * g[2][c];
-      J(0, c) = mc - phi[1] * g[1][c];
-      J(1, c) = mc - phi[3] * g[3][c];
-      if constexpr (n == 4) {
-        J(2, c) = -(m_phi[0].x() * g[0][c] + m_phi[1].x() * g[1][c] + m_phi[2].x() * g[2][c] +
-                    m_phi[3].x() * g[3][c] + m_phi[4].x() * g[4][c]);
-        J(3, c) = -(m_phi[0].y() * g[0][c] + m_phi[1].y() * g[1][c] + m_phi[2].y() * g[2][c] +
-                    m_phi[3].y() * g[3][c] + m_phi[4].y() * g[4][c]);
-      }
+    Blocks J;
+    const Vec2<double> pa = a[2] * phi[2];
+    J.P.row(0) = (pa - a[1] * phi[1]).transpose();
+    J.P.row(1) = (pa - a[3] * phi[3]).transpose();
+    J.P.diagonal().array() += 1.0;
+    if constexpr (n == 4) {
+      const Vec2<double> pb = b[2] * phi[2];
+      J.Q.row(0) = (pb - b[1] * phi[1]).transpose();
+      J.Q.row(1) = (pb - b[3] * phi[3]).transpose();
+      // (the crank rows' sums over k in the order k = 0..4, negated)
+      J.U = -(m_phi[0] * a[0].transpose() + m_phi[1] * a[1].transpose() +
+              m_phi[2] * a[2].transpose() + m_phi[3] * a[3].transpose() +
+              m_phi[4] * a[4].transpose());
+      J.V = -(m_phi[0] * b[0].transpose() + m_phi[1] * b[1].transpose() +
+              m_phi[2] * b[2].transpose() + m_phi[3] * b[3].transpose() +
+              m_phi[4] * b[4].transpose());
+      J.V.diagonal().array() += 1.0;
     }
-    J.diagonal().array() += 1.0;
     return J;
   }
 };
@@ -189,15 +198,16 @@ struct NewtonFactors {
   using Mat = Eigen::Matrix<double, n, n>;
   Mat2<double> P_inv, W, U, C_inv;  ///< n = 4: P^-1, W, U, (V - U W)^-1; n = 2: P_inv = J^-1
 
-  /// from J (in place: no copies of the factors)
-  void factor(const Mat& J) {
+  /// from J's blocks (ReducedMap::Blocks)
+  template <class Blocks>
+  void factor(const Blocks& J) {
     if constexpr (n == 2) {
-      P_inv = J.inverse();
+      P_inv = J.P.inverse();
     } else {
-      P_inv = inverse2(Mat2<double>(J.template topLeftCorner<2, 2>()));
-      W = P_inv * J.template topRightCorner<2, 2>();
-      U = J.template bottomLeftCorner<2, 2>();
-      C_inv = inverse2(Mat2<double>(J.template bottomRightCorner<2, 2>() - U * W));
+      P_inv = inverse2(J.P);
+      W = P_inv * J.Q;
+      U = J.U;
+      C_inv = inverse2(Mat2<double>(J.V - U * W));
     }
   }
   /// J^-1 r
