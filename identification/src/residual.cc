@@ -188,9 +188,13 @@ bool StructuredResidual::evaluate(const double* x, double* r, double* jacobian) 
   // dr = -(d offset + (Y + W U A) dpi + G (N dphi + dmotor) + W U dF (N* dphi + dmotor))
   const Eigen::Map<const Eigen::Matrix<double, kJoints, 1>> Nv(N.data()), Nsv(N_star.data()),
       phiv(phi.data());
-  const Eigen::Matrix<double, kActuators, kJoints> W =
-      st_.G * phiv.asDiagonal() * H.partialPivLu().inverse();
-  const Eigen::Matrix<double, kActuators, kJoints> WUdF = W * (U * st_.dF);
+  std::array<Eigen::Vector2d, kJoints> Wt;  // W's columns: H^T W^T = (G phi)^T
+  for (int k = 0; k < kJoints; ++k) Wt[k] = st_.G.col(k) * phi[k];
+  Wt = fivebar::detail::solve_with_double_matrix(H.transpose().eval(), Wt);
+  Eigen::Matrix<double, kActuators, kJoints> W;
+  for (int k = 0; k < kJoints; ++k) W.col(k) = Wt[k];
+  const Eigen::Matrix<double, kActuators, 10> WU = W.lazyProduct(U);
+  const Eigen::Matrix<double, kActuators, kJoints> WUdF = WU.lazyProduct(st_.dF);
   Eigen::Map<Eigen::Matrix<double, kActuators, Eigen::Dynamic, Eigen::RowMajor>> dr(jacobian,
                                                                                     kActuators, P);
   for (int q = 0; q < n_seeded; ++q) {
@@ -200,7 +204,8 @@ bool StructuredResidual::evaluate(const double* x, double* r, double* jacobian) 
                   WUdF * (Nsv.cwiseProduct(dphi) + dmotor));
   }
   if (layout_.inertia) {
-    dr.middleCols(layout_.inertia_offset(), kInertialParams) = -(st_.Y + (W * U) * st_.A);
+    const Eigen::Matrix<double, kActuators, kInertialParams> dpi = st_.Y + WU.lazyProduct(st_.A);
+    dr.middleCols(layout_.inertia_offset(), kInertialParams) = -dpi;
   }
   return true;
 }
