@@ -110,7 +110,8 @@ constexpr int kMaxParams = 40;
 
 }  // namespace
 
-bool StructuredResidual::evaluate(const double* x, double* r, double* jacobian) const {
+bool StructuredResidual::evaluate(const double* x, double* r, double* jacobian,
+                                  double* r_loop) const {
   if (jacobian == nullptr) return (*this)(x, r);
   const int P = layout_.size();
   if (P > kMaxParams) return false;
@@ -174,15 +175,10 @@ bool StructuredResidual::evaluate(const double* x, double* r, double* jacobian) 
     }
   }
   const std::array<double, kJoints> dN = fivebar::detail::solve_with_double_matrix(H, step);
-  std::array<double, kJoints> N, Mf;
+  std::array<double, kJoints> N;
   for (int k = 0; k < kJoints; ++k) N[k] = dN[k] + N_star[k];
-  for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j] + motor[j];
-  for (int a = 0; a < kActuators; ++a) {
-    double m = st_.c(a) + offset[a];
-    for (int i = 0; i < kInertialParams; ++i) m += st_.Y(a, i) * pi[i];
-    for (int j = 0; j < kJoints; ++j) m += st_.G(a, j) * Mf[j];
-    r[a] = tau_[a] - m;
-  }
+  residual_at(phi, motor, offset, pi, N, r);
+  if (r_loop != nullptr) residual_at(phi, motor, offset, pi, N_star, r_loop);
   // dr/dx = -(d offset + Y dpi + G dMf), dMf_j = N_j dphi_j + phi_j dN_j + dmotor_j, where
   // dN = H^-1 d|F(N*)| and d|F(N*)| = U (A dpi + dF (N* dphi + dmotor)): with W = G phi H^-1,
   // dr = -(d offset + (Y + W U A) dpi + G (N dphi + dmotor) + W U dF (N* dphi + dmotor))

@@ -53,10 +53,7 @@ class StructuredCost : public ceres::SizedCostFunction<2, P> {
     if (!(known_ && std::equal(x[0], x[0] + P, x_.begin()))) {
       if (jac == nullptr) return residual_.evaluate(x[0], r, nullptr);
       known_ = false;
-      if (!residual_.evaluate(x[0], r_jacobian_.data(), jacobian_.data()) ||
-          !residual_.evaluate(x[0], r_.data(), nullptr)) {
-        return false;
-      }
+      if (!residual_.evaluate(x[0], r_jacobian_.data(), jacobian_.data(), r_.data())) return false;
       std::copy(x[0], x[0] + P, x_.begin());
       known_ = true;
     }

@@ -110,7 +110,7 @@ class StructuredResidual {
       F0[a] = T(st_.b(a));
       for (int i = 0; i < kInertialParams; ++i) F0[a] += st_.A(a, i) * pi[i];
     }
-    std::array<T, kJoints> N, Mf;
+    std::array<T, kJoints> N;
     if constexpr (std::is_same_v<T, double>) {
       if (!loop(phi, motor, F0, &N)) return false;
     } else {
@@ -126,13 +126,7 @@ class StructuredResidual {
       if (!loop(phi_v, motor_v, F0_v, &N_v)) return false;
       implicit_step(phi, motor, F0, N_v, &N);
     }
-    for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j] + motor[j];
-    for (int a = 0; a < kActuators; ++a) {
-      T m = T(st_.c(a)) + offset[a];
-      for (int i = 0; i < kInertialParams; ++i) m += st_.Y(a, i) * pi[i];
-      for (int j = 0; j < kJoints; ++j) m += st_.G(a, j) * Mf[j];
-      r[a] = T(tau_[a]) - m;
-    }
+    residual_at(phi, motor, offset, pi, N, r);
     return true;
   }
 
@@ -140,8 +134,10 @@ class StructuredResidual {
   /// major, P = layout.size()): the value as operator() with ceres::Jet gives it (the loop, then
   /// one implicit step), the derivatives in closed form from the implicit function theorem
   /// through the loop (Jets only through the friction laws, over the friction and actuator
-  /// parameters). Without `jacobian`, operator()<double>.
-  bool evaluate(const double* x, double* r, double* jacobian) const;
+  /// parameters). Without `jacobian`, operator()<double>. With `jacobian`, `r_loop` (if not
+  /// null) receives the residual as operator()<double> gives it (from the loop's end, before
+  /// the implicit step).
+  bool evaluate(const double* x, double* r, double* jacobian, double* r_loop = nullptr) const;
 
  private:
   /// The friction law's part phi_k = r_k f_k(w_k) of each joint's friction torque, the
@@ -166,6 +162,21 @@ class StructuredResidual {
                                                                           coulomb_sign(st_.slip[j]));
     }
     for (int a = 0; a < kActuators; ++a) (*offset)[a] = act.offset[a];
+  }
+  /// r = tau - (c + offset + Y pi + G Mf), Mf = phi N + motor.
+  template <typename T>
+  void residual_at(const std::array<T, kJoints>& phi, const std::array<T, kJoints>& motor,
+                   const std::array<T, kActuators>& offset,
+                   const std::array<T, kInertialParams>& pi, const std::array<T, kJoints>& N,
+                   T* r) const {
+    std::array<T, kJoints> Mf;
+    for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j] + motor[j];
+    for (int a = 0; a < kActuators; ++a) {
+      T m = T(st_.c(a)) + offset[a];
+      for (int i = 0; i < kInertialParams; ++i) m += st_.Y(a, i) * pi[i];
+      for (int j = 0; j < kJoints; ++j) m += st_.G(a, j) * Mf[j];
+      r[a] = T(tau_[a]) - m;
+    }
   }
   /// F = F0 + dF Mf with Mf = phi N + motor (stacked F_1x, F_1y, ..., F_5x, F_5y).
   template <typename T>
