@@ -90,7 +90,6 @@ void check_log_time(const CsvTable& table) {
                      " after " + format_shortest(table.rows[n - 2][t]) + ")");
 }
 
-
 // The angles' own rate and acceleration (unwrapped, Savitzky-Golay at the default filter).
 void angle_derivatives(const TorqueLog& log, std::vector<double> theta, std::vector<double>* w,
                        std::vector<double>* a) {

@@ -4,7 +4,6 @@
 #include <ceres/jet.h>
 
 #include <Eigen/LU>
-
 #include <algorithm>
 #include <cmath>
 
@@ -107,7 +106,6 @@ constexpr int kFrictionStride = 10;
 /// Largest parameter count of the structured residual (per-joint Stribeck with inertia)
 constexpr int kMaxParams = 40;
 
-
 }  // namespace
 
 bool StructuredResidual::evaluate(const double* x, double* r, double* jacobian,
@@ -197,7 +195,7 @@ bool StructuredResidual::evaluate(const double* x, double* r, double* jacobian,
     const Eigen::Matrix<double, kJoints, 1> dphi = D.col(q).head<kJoints>();
     const Eigen::Matrix<double, kJoints, 1> dmotor = D.col(q).segment<kJoints>(kJoints);
     dr.col(seeded[q]) = -(D.col(q).tail<kActuators>() + st_.G * (Nv.cwiseProduct(dphi) + dmotor) +
-                  WUdF * (Nsv.cwiseProduct(dphi) + dmotor));
+                          WUdF * (Nsv.cwiseProduct(dphi) + dmotor));
   }
   if (layout_.inertia) {
     const Eigen::Matrix<double, kActuators, kInertialParams> dpi = st_.Y + WU.lazyProduct(st_.A);

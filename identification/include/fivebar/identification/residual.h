@@ -157,9 +157,10 @@ class StructuredResidual {
       (*motor)[k] = actuator_friction(fp, act, k, T(st_.w[k]), coulomb_sign(st_.slip[k]));
     }
     for (int j = 0; j < kJoints; ++j) {
-      (*phi)[j] = st_.slip[j] == kStuck ? T(0)
-                                        : fp.pin_radius[j] * friction_law(fp, j, T(st_.w[j]),
-                                                                          coulomb_sign(st_.slip[j]));
+      (*phi)[j] =
+          st_.slip[j] == kStuck
+              ? T(0)
+              : fp.pin_radius[j] * friction_law(fp, j, T(st_.w[j]), coulomb_sign(st_.slip[j]));
     }
     for (int a = 0; a < kActuators; ++a) (*offset)[a] = act.offset[a];
   }
