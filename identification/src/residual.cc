@@ -106,6 +106,38 @@ constexpr int kFrictionStride = 10;
 /// Largest parameter count of the structured residual (per-joint Stribeck with inertia)
 constexpr int kMaxParams = 40;
 
+using FrictionJet = ceres::Jet<double, kFrictionStride>;
+
+/// The friction terms (`terms`: phi, motor, offsets) at x and their derivatives in the
+/// parameters `seeded` (rows 0-4, 5-9, 10-11 of column q of D: parameter seeded[q]), by Jet
+/// passes of kFrictionStride seeded parameters each.
+template <typename Terms>
+void friction_jacobian(const double* x, int P, const std::array<int, kMaxParams>& seeded,
+                       int n_seeded, const Terms& terms, Eigen::Matrix<double, 12, kMaxParams>* D,
+                       std::array<double, kJoints>* phi, std::array<double, kJoints>* motor,
+                       std::array<double, kActuators>* offset) {
+  using J = FrictionJet;
+  std::array<J, kMaxParams> xj;
+  for (int i = 0; i < P; ++i) xj[i] = J(x[i]);
+  for (int first = 0; first < std::max(n_seeded, 1); first += kFrictionStride) {
+    const int last = std::min(n_seeded, first + kFrictionStride);
+    for (int q = first; q < last; ++q) xj[seeded[q]].v[q - first] = 1;
+    std::array<J, kJoints> phi_j, motor_j;
+    std::array<J, kActuators> offset_j;
+    terms(xj.data(), &phi_j, &motor_j, &offset_j);
+    for (int q = first; q < last; ++q) {
+      xj[seeded[q]].v[q - first] = 0;
+      for (int j = 0; j < kJoints; ++j) {
+        (*D)(j, q) = phi_j[j].v[q - first];
+        (*D)(kJoints + j, q) = motor_j[j].v[q - first];
+      }
+      for (int a = 0; a < kActuators; ++a) (*D)(2 * kJoints + a, q) = offset_j[a].v[q - first];
+    }
+    for (int j = 0; j < kJoints; ++j) (*phi)[j] = phi_j[j].a, (*motor)[j] = motor_j[j].a;
+    for (int a = 0; a < kActuators; ++a) (*offset)[a] = offset_j[a].a;
+  }
+}
+
 }  // namespace
 
 bool StructuredResidual::evaluate(const double* x, double* r, double* jacobian,
@@ -113,36 +145,21 @@ bool StructuredResidual::evaluate(const double* x, double* r, double* jacobian,
   if (jacobian == nullptr) return (*this)(x, r);
   const int P = layout_.size();
   if (P > kMaxParams) return false;
-  // phi, motor, offsets and their derivatives (rows 0-4, 5-9, 10-11) in the parameters that
-  // are not inertial, by Jet passes of kFrictionStride seeded parameters each
+  // phi, motor, offsets and their derivatives in the parameters that are not inertial
   std::array<int, kMaxParams> seeded;
   int n_seeded = 0;
   for (int i = 0; i < P; ++i) {
     if (!layout_.is_inertial(i)) seeded[n_seeded++] = i;
   }
-  using J = ceres::Jet<double, kFrictionStride>;
-  std::array<J, kMaxParams> xj;
-  for (int i = 0; i < P; ++i) xj[i] = J(x[i]);
-  Eigen::Matrix<double, 12, kMaxParams> D;  // column q: parameter seeded[q]
+  Eigen::Matrix<double, 12, kMaxParams> D;
   std::array<double, kJoints> phi, motor;
   std::array<double, kActuators> offset;
-  for (int first = 0; first < std::max(n_seeded, 1); first += kFrictionStride) {
-    const int last = std::min(n_seeded, first + kFrictionStride);
-    for (int q = first; q < last; ++q) xj[seeded[q]].v[q - first] = 1;
-    std::array<J, kJoints> phi_j, motor_j;
-    std::array<J, kActuators> offset_j;
-    friction_terms(xj.data(), &phi_j, &motor_j, &offset_j);
-    for (int q = first; q < last; ++q) {
-      xj[seeded[q]].v[q - first] = 0;
-      for (int j = 0; j < kJoints; ++j) {
-        D(j, q) = phi_j[j].v[q - first];
-        D(kJoints + j, q) = motor_j[j].v[q - first];
-      }
-      for (int a = 0; a < kActuators; ++a) D(2 * kJoints + a, q) = offset_j[a].v[q - first];
-    }
-    for (int j = 0; j < kJoints; ++j) phi[j] = phi_j[j].a, motor[j] = motor_j[j].a;
-    for (int a = 0; a < kActuators; ++a) offset[a] = offset_j[a].a;
-  }
+  const auto terms = [this](const FrictionJet* xj, std::array<FrictionJet, kJoints>* phi_j,
+                            std::array<FrictionJet, kJoints>* motor_j,
+                            std::array<FrictionJet, kActuators>* offset_j) {
+    friction_terms(xj, phi_j, motor_j, offset_j);
+  };
+  friction_jacobian(x, P, seeded, n_seeded, terms, &D, &phi, &motor, &offset);
   std::array<double, kInertialParams> pi;
   for (int i = 0; i < kInertialParams; ++i) {
     pi[i] = layout_.inertia ? x[layout_.inertia_offset() + i] : pi0_[i];
