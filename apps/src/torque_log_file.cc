@@ -90,22 +90,24 @@ void check_log_time(const CsvTable& table) {
                      " after " + format_shortest(table.rows[n - 2][t]) + ")");
 }
 
+// The angles' own rate and acceleration (unwrapped, Savitzky-Golay at the default filter).
+void angle_derivatives(const TorqueLog& log, std::vector<double> theta, std::vector<double>* w,
+                       std::vector<double>* a) {
+  identification::unwrap_angles(&theta);
+  identification::savitzky_golay(log.t, theta, identification::SgOptions(), w, a);
+}
 
-// A logged rate (order 1) or acceleration (order 2) against the angles' own (unwrapped,
-// Savitzky-Golay, the one-sided edges left out): for accelerations, their median ratio where
+// A logged rate (order 1) or acceleration (order 2) against the angles' own (`own`,
+// angle_derivatives; the one-sided edges left out): for accelerations, their median ratio where
 // the crank accelerates (deg/s^2 reads 0.0175); for both, a median offset over a stretch of a
 // tenth of the log (at least 100 samples) beyond 5 % of the column's median size and 8 std
 // of that median (alpha1 + 50 or omega1 + 1 rad/s from mid-log would otherwise be fitted, with a
 // spurious delay). Empty when they agree.
-std::string derivative_mismatch(const TorqueLog& log, std::vector<double> theta,
+std::string derivative_mismatch(const TorqueLog& log, const std::vector<double>& own,
                                 const std::vector<double>& logged, int order) {
-  const int n = static_cast<int>(theta.size());
+  const int n = static_cast<int>(own.size());
   if (n < 20) return "";
-  identification::unwrap_angles(&theta);
-  std::vector<double> w, a;
   const identification::SgOptions sg;
-  identification::savitzky_golay(log.t, theta, sg, &w, &a);
-  const std::vector<double>& own = order == 1 ? w : a;
   const int edge = identification::sg_half_window(sg, log.duration() / (n - 1));
   std::vector<double> size;
   for (int i = edge; i < n - edge; ++i) size.push_back(std::abs(logged[i]));
@@ -195,13 +197,18 @@ void check_log_units(const TorqueLog& log) {
                      "rates do not match the angles: " + off +
                          "; expected rad/s of the same crank, positive counter-clockwise");
     }
-    const std::string w_off = om ? derivative_mismatch(log, th, *om, 1) : "";
+    std::vector<double> own_w, own_a;  // the angles' own, for the logged rates and accelerations
+    if (om != nullptr && th.size() >= 20) angle_derivatives(log, th, &own_w, &own_a);
+    const std::string w_off = om ? derivative_mismatch(log, own_w, *om, 1) : "";
     if (!w_off.empty()) {
       throw LogError(log.path, std::string("column omega") + char('1' + j),
                      "rates do not match the angles: " + w_off);
     }
     const std::vector<double>* al = log.has_accels ? &log.alpha(j) : nullptr;
-    const std::string a_off = al ? derivative_mismatch(log, th, *al, 2) : "";
+    if (al != nullptr && own_a.empty() && th.size() >= 20) {
+      angle_derivatives(log, th, &own_w, &own_a);
+    }
+    const std::string a_off = al ? derivative_mismatch(log, own_a, *al, 2) : "";
     if (!a_off.empty()) {
       throw LogError(log.path, std::string("column alpha") + char('1' + j),
                      "accelerations do not match the angles: " + a_off +

@@ -3,6 +3,7 @@
 
 #include <ceres/jet.h>
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 
@@ -133,6 +134,129 @@ bool sample_structure(const Params<double>& scene, const Sample& s, const EvalOp
     out->G(1, j) = acts ? ev.M2.v[j] / scale : 0.0;
   }
   return out->A.allFinite() && out->dF.allFinite() && out->G.allFinite();
+}
+
+namespace {
+
+/// Jet width of the passes through the friction laws in StructuredResidual::evaluate (the
+/// per-joint Coulomb-viscous layout's 10 parameters in one pass)
+constexpr int kFrictionStride = 10;
+/// Largest parameter count of the structured residual (per-joint Stribeck with inertia)
+constexpr int kMaxParams = 40;
+
+using FrictionJet = ceres::Jet<double, kFrictionStride>;
+
+/// The friction terms (`terms`: phi, motor, offsets) at x and their derivatives in the
+/// parameters `seeded` (rows 0-4, 5-9, 10-11 of column q of D: parameter seeded[q]), by Jet
+/// passes of kFrictionStride seeded parameters each.
+template <typename Terms>
+void friction_jacobian(const double* x, int P, const std::array<int, kMaxParams>& seeded,
+                       int n_seeded, const Terms& terms, Eigen::Matrix<double, 12, kMaxParams>* D,
+                       std::array<double, kJoints>* phi, std::array<double, kJoints>* motor,
+                       std::array<double, kActuators>* offset) {
+  using J = FrictionJet;
+  std::array<J, kMaxParams> xj;
+  for (int i = 0; i < P; ++i) xj[i] = J(x[i]);
+  for (int first = 0; first < std::max(n_seeded, 1); first += kFrictionStride) {
+    const int last = std::min(n_seeded, first + kFrictionStride);
+    for (int q = first; q < last; ++q) xj[seeded[q]].v[q - first] = 1;
+    std::array<J, kJoints> phi_j, motor_j;
+    std::array<J, kActuators> offset_j;
+    terms(xj.data(), &phi_j, &motor_j, &offset_j);
+    for (int q = first; q < last; ++q) {
+      xj[seeded[q]].v[q - first] = 0;
+      for (int j = 0; j < kJoints; ++j) {
+        (*D)(j, q) = phi_j[j].v[q - first];
+        (*D)(kJoints + j, q) = motor_j[j].v[q - first];
+      }
+      for (int a = 0; a < kActuators; ++a) (*D)(2 * kJoints + a, q) = offset_j[a].v[q - first];
+    }
+    for (int j = 0; j < kJoints; ++j) (*phi)[j] = phi_j[j].a, (*motor)[j] = motor_j[j].a;
+    for (int a = 0; a < kActuators; ++a) (*offset)[a] = offset_j[a].a;
+  }
+}
+
+}  // namespace
+
+bool StructuredResidual::evaluate(const double* x, double* r, double* jacobian,
+                                  double* r_loop) const {
+  if (jacobian == nullptr) return (*this)(x, r);
+  const int P = layout_.size();
+  if (P > kMaxParams) return false;
+  // phi, motor, offsets and their derivatives in the parameters that are not inertial
+  std::array<int, kMaxParams> seeded;
+  int n_seeded = 0;
+  for (int i = 0; i < P; ++i) {
+    if (!layout_.is_inertial(i)) seeded[n_seeded++] = i;
+  }
+  Eigen::Matrix<double, 12, kMaxParams> D;
+  std::array<double, kJoints> phi, motor;
+  std::array<double, kActuators> offset;
+  const auto terms = [this](const FrictionJet* xj, std::array<FrictionJet, kJoints>* phi_j,
+                            std::array<FrictionJet, kJoints>* motor_j,
+                            std::array<FrictionJet, kActuators>* offset_j) {
+    friction_terms(xj, phi_j, motor_j, offset_j);
+  };
+  friction_jacobian(x, P, seeded, n_seeded, terms, &D, &phi, &motor, &offset);
+  std::array<double, kInertialParams> pi;
+  for (int i = 0; i < kInertialParams; ++i) {
+    pi[i] = layout_.inertia ? x[layout_.inertia_offset() + i] : pi0_[i];
+  }
+  std::array<double, 10> F0;
+  for (int a = 0; a < 10; ++a) {
+    F0[a] = st_.b(a);
+    for (int i = 0; i < kInertialParams; ++i) F0[a] += st_.A(a, i) * pi[i];
+  }
+  std::array<double, kJoints> N_star;
+  if (!loop(phi, motor, F0, &N_star)) return false;
+  // the implicit step of operator() with Jets: N = N* + H^-1 (|F(N*)| - N*), H = I - G_N,
+  // and dN/dx = H^-1 d|F(N*)|/dx
+  std::array<double, 10> F;
+  reactions_of(phi, motor, F0, N_star, &F);
+  Eigen::Matrix<double, kJoints, kJoints> H = Eigen::Matrix<double, kJoints, kJoints>::Identity();
+  Eigen::Matrix<double, kJoints, 10> U = Eigen::Matrix<double, kJoints, 10>::Zero();
+  std::array<double, kJoints> step;
+  for (int k = 0; k < kJoints; ++k) {
+    const double n = std::sqrt(F[2 * k] * F[2 * k] + F[2 * k + 1] * F[2 * k + 1]);
+    step[k] = n - N_star[k];
+    if (!(n > 0.0)) continue;
+    const double fx = F[2 * k] / n, fy = F[2 * k + 1] / n;
+    U(k, 2 * k) = fx;
+    U(k, 2 * k + 1) = fy;
+    for (int j = 0; j < kJoints; ++j) {
+      H(k, j) -= (fx * st_.dF(2 * k, j) + fy * st_.dF(2 * k + 1, j)) * phi[j];
+    }
+  }
+  const std::array<double, kJoints> dN = fivebar::detail::solve_with_double_matrix(H, step);
+  std::array<double, kJoints> N;
+  for (int k = 0; k < kJoints; ++k) N[k] = dN[k] + N_star[k];
+  residual_at(phi, motor, offset, pi, N, r);
+  if (r_loop != nullptr) residual_at(phi, motor, offset, pi, N_star, r_loop);
+  // dr/dx = -(d offset + Y dpi + G dMf), dMf_j = N_j dphi_j + phi_j dN_j + dmotor_j, where
+  // dN = H^-1 d|F(N*)| and d|F(N*)| = U (A dpi + dF (N* dphi + dmotor)): with W = G phi H^-1,
+  // dr = -(d offset + (Y + W U A) dpi + G (N dphi + dmotor) + W U dF (N* dphi + dmotor))
+  const Eigen::Map<const Eigen::Matrix<double, kJoints, 1>> Nv(N.data()), Nsv(N_star.data()),
+      phiv(phi.data());
+  std::array<Eigen::Vector2d, kJoints> Wt;  // W's columns: H^T W^T = (G phi)^T
+  for (int k = 0; k < kJoints; ++k) Wt[k] = st_.G.col(k) * phi[k];
+  Wt = fivebar::detail::solve_with_double_matrix(H.transpose().eval(), Wt);
+  Eigen::Matrix<double, kActuators, kJoints> W;
+  for (int k = 0; k < kJoints; ++k) W.col(k) = Wt[k];
+  const Eigen::Matrix<double, kActuators, 10> WU = W.lazyProduct(U);
+  const Eigen::Matrix<double, kActuators, kJoints> WUdF = WU.lazyProduct(st_.dF);
+  Eigen::Map<Eigen::Matrix<double, kActuators, Eigen::Dynamic, Eigen::RowMajor>> dr(jacobian,
+                                                                                    kActuators, P);
+  for (int q = 0; q < n_seeded; ++q) {
+    const Eigen::Matrix<double, kJoints, 1> dphi = D.col(q).head<kJoints>();
+    const Eigen::Matrix<double, kJoints, 1> dmotor = D.col(q).segment<kJoints>(kJoints);
+    dr.col(seeded[q]) = -(D.col(q).tail<kActuators>() + st_.G * (Nv.cwiseProduct(dphi) + dmotor) +
+                          WUdF * (Nsv.cwiseProduct(dphi) + dmotor));
+  }
+  if (layout_.inertia) {
+    const Eigen::Matrix<double, kActuators, kInertialParams> dpi = st_.Y + WU.lazyProduct(st_.A);
+    dr.middleCols(layout_.inertia_offset(), kInertialParams) = -dpi;
+  }
+  return true;
 }
 
 }  // namespace fivebar::identification

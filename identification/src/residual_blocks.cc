@@ -37,16 +37,49 @@ ceres::LossFunction* make_loss(Loss loss, double scale, double weight) {
 
 namespace {
 
+/// A sample's structured residual on P parameters, its Jacobian in closed form
+/// (StructuredResidual::evaluate). With bounds on the parameters, Ceres's trust-region minimizer
+/// evaluates each new point three times: with the gradient in its projected line search, for the
+/// cost alone, and with the Jacobian once the step is accepted. The block keeps its last
+/// evaluation with the Jacobian and answers a request at the same parameters from it (the
+/// residual alone as StructuredResidual evaluates it without derivatives): the same numbers,
+/// computed once.
+template <int P>
+class StructuredCost : public ceres::SizedCostFunction<2, P> {
+ public:
+  explicit StructuredCost(const StructuredResidual& residual) : residual_(residual) {}
+  bool Evaluate(double const* const* x, double* r, double** jacobians) const override {
+    double* jac = jacobians != nullptr ? jacobians[0] : nullptr;
+    if (!(known_ && std::equal(x[0], x[0] + P, x_.begin()))) {
+      if (jac == nullptr) return residual_.evaluate(x[0], r, nullptr);
+      known_ = false;
+      if (!residual_.evaluate(x[0], r_jacobian_.data(), jacobian_.data(), r_.data())) return false;
+      std::copy(x[0], x[0] + P, x_.begin());
+      known_ = true;
+    }
+    std::copy(jac == nullptr ? r_.begin() : r_jacobian_.begin(),
+              jac == nullptr ? r_.end() : r_jacobian_.end(), r);
+    if (jac != nullptr) std::copy(jacobian_.begin(), jacobian_.end(), jac);
+    return true;
+  }
+
+ private:
+  StructuredResidual residual_;
+  mutable bool known_ = false;
+  mutable std::array<double, P> x_{};
+  mutable std::array<double, 2> r_{}, r_jacobian_{};  // without and with the derivatives
+  mutable std::array<double, 2 * P> jacobian_{};
+};
+
 /// The inverse-dynamics residual blocks, one per sample, on P parameters: from the sample's
-/// structure (residual.h: the Jets carry only the P active parameters through a five-number
-/// loop), or the full model where the structure cannot be read off (fallback_cost.h).
+/// structure (residual.h: a five-number loop, its derivatives in closed form), or the full model
+/// where the structure cannot be read off (fallback_cost.h).
 template <int P>
 ceres::CostFunction* sample_cost(const Params<double>& scene, const ParameterLayout& layout,
                                  const Sample& s, const EvalOptions& eval) {
   SampleStructure st;
   if (sample_structure(scene, s, eval, &st)) {
-    return new ceres::AutoDiffCostFunction<StructuredResidual, 2, P>(
-        new StructuredResidual(scene, layout, st, s, eval));
+    return new StructuredCost<P>(StructuredResidual(scene, layout, st, s, eval));
   }
   return new FallbackCost<P>(InverseDynamicsResidual(scene, layout, s, eval));
 }

@@ -186,6 +186,48 @@ TEST(StructuredResidual, MatchesTheFullModelAlongAnyDirections) {
   }
 }
 
+/// StructuredResidual::evaluate: the residual as the Jets' value, the loop's residual as
+/// operator()<double>, and the closed-form Jacobian as the Jets' derivatives.
+template <int P>
+void check_closed_form(const ParameterLayout& layout) {
+  ASSERT_EQ(layout.size(), P);
+  const Params<double> scene = paper_params();
+  std::vector<double> x = layout.extract(cad_truth());
+  for (int i = 0; i < layout.friction_size(); ++i) x[i] = 0.05 + 0.03 * i;
+  for (int i = 0; layout.actuator && i < kActuatorTerms; ++i) {
+    x[layout.actuator_offset() + i] = 0.01 * (i + 1);
+  }
+  const EvalOptions eval;
+  using J = ceres::Jet<double, P>;
+  std::vector<J> xj(P);
+  for (int i = 0; i < P; ++i) xj[i] = J(x[i], i);
+  for (const Sample& s : testing::random_samples(cad_truth(), 8, 17)) {
+    SampleStructure st;
+    ASSERT_TRUE(sample_structure(scene, s, eval, &st));
+    const StructuredResidual res(scene, layout, st, s, eval);
+    J a[2];
+    double plain[2], r[2], r_loop[2], jac[2 * P];
+    ASSERT_TRUE(res(xj.data(), a));
+    ASSERT_TRUE(res(x.data(), plain));
+    ASSERT_TRUE(res.evaluate(x.data(), r, jac, r_loop));
+    for (int k = 0; k < 2; ++k) {
+      EXPECT_NEAR(r[k], a[k].a, 1e-12 * (1 + std::abs(a[k].a))) << "residual " << k;
+      EXPECT_EQ(r_loop[k], plain[k]) << "residual " << k;
+      for (int i = 0; i < P; ++i) {
+        EXPECT_NEAR(jac[k * P + i], a[k].v[i], 1e-10 * (1 + std::abs(a[k].v[i])))
+            << layout.names()[i] << ", residual " << k;
+      }
+    }
+  }
+}
+
+TEST(StructuredResidual, ClosedFormJacobianIsTheJets) {
+  check_closed_form<26>({FrictionLaw::kCoulombViscous, true, true});
+  check_closed_form<24>({FrictionLaw::kCoulombViscous, false, true, true});
+  check_closed_form<16>({FrictionLaw::kCoulombViscous, true, false, true});
+  check_closed_form<36>({FrictionLaw::kStribeck, true, true});
+}
+
 TEST(InertialPrior, ZeroAtTheSceneAndAHingeOnTheComInertia) {
   const Params<double> scene = paper_params();
   const detail::InertialPrior prior = detail::inertial_prior(scene, 0.2);

@@ -98,33 +98,19 @@ class StructuredResidual {
 
   template <typename T>
   bool operator()(const T* x, T* r) const {
-    using std::sqrt;
-    FrictionParams<T> fp = friction_.template cast<T>();
-    layout_.apply(x, &fp);
-    ActuatorParams<T> act = actuators_.template cast<T>();
-    if (layout_.actuator) ParameterLayout::apply_actuators(x + layout_.actuator_offset(), &act);
-    std::array<T, kJoints> motor{};  // actuator friction: a load-independent Mf term
-    for (int a = 0; a < kActuators; ++a) {  // as actuator_torques (actuator.h)
-      const int k = actuator_joint(a);
-      if (st_.slip[k] == kStuck) continue;
-      motor[k] = actuator_friction(fp, act, k, T(st_.w[k]), coulomb_sign(st_.slip[k]));
-    }
+    std::array<T, kJoints> phi, motor;
+    std::array<T, kActuators> offset;
+    friction_terms(x, &phi, &motor, &offset);
     std::array<T, kInertialParams> pi;
     for (int i = 0; i < kInertialParams; ++i) {
       pi[i] = layout_.inertia ? x[layout_.inertia_offset() + i] : T(pi0_[i]);
-    }
-    std::array<T, kJoints> phi;
-    for (int j = 0; j < kJoints; ++j) {
-      phi[j] = st_.slip[j] == kStuck
-                   ? T(0)
-                   : fp.pin_radius[j] * friction_law(fp, j, T(st_.w[j]), coulomb_sign(st_.slip[j]));
     }
     std::array<T, 10> F0;
     for (int a = 0; a < 10; ++a) {
       F0[a] = T(st_.b(a));
       for (int i = 0; i < kInertialParams; ++i) F0[a] += st_.A(a, i) * pi[i];
     }
-    std::array<T, kJoints> N, Mf;
+    std::array<T, kJoints> N;
     if constexpr (std::is_same_v<T, double>) {
       if (!loop(phi, motor, F0, &N)) return false;
     } else {
@@ -140,17 +126,59 @@ class StructuredResidual {
       if (!loop(phi_v, motor_v, F0_v, &N_v)) return false;
       implicit_step(phi, motor, F0, N_v, &N);
     }
+    residual_at(phi, motor, offset, pi, N, r);
+    return true;
+  }
+
+  /// The residual r (2) at x and, where `jacobian` is not null, its derivatives (2 x P, row
+  /// major, P = layout.size()): the value as operator() with ceres::Jet gives it (the loop, then
+  /// one implicit step), the derivatives in closed form from the implicit function theorem
+  /// through the loop (Jets only through the friction laws, over the friction and actuator
+  /// parameters). Without `jacobian`, operator()<double>. With `jacobian`, `r_loop` (if not
+  /// null) receives the residual as operator()<double> gives it (from the loop's end, before
+  /// the implicit step).
+  bool evaluate(const double* x, double* r, double* jacobian, double* r_loop = nullptr) const;
+
+ private:
+  /// The friction law's part phi_k = r_k f_k(w_k) of each joint's friction torque, the
+  /// actuators' friction at their joints (load-independent) and the torque sensors' offsets, at
+  /// the parameters x.
+  template <typename T>
+  void friction_terms(const T* x, std::array<T, kJoints>* phi, std::array<T, kJoints>* motor,
+                      std::array<T, kActuators>* offset) const {
+    FrictionParams<T> fp = friction_.template cast<T>();
+    layout_.apply(x, &fp);
+    ActuatorParams<T> act = actuators_.template cast<T>();
+    if (layout_.actuator) ParameterLayout::apply_actuators(x + layout_.actuator_offset(), &act);
+    motor->fill(T(0));
+    for (int a = 0; a < kActuators; ++a) {  // as actuator_torques (actuator.h)
+      const int k = actuator_joint(a);
+      if (st_.slip[k] == kStuck) continue;
+      (*motor)[k] = actuator_friction(fp, act, k, T(st_.w[k]), coulomb_sign(st_.slip[k]));
+    }
+    for (int j = 0; j < kJoints; ++j) {
+      (*phi)[j] =
+          st_.slip[j] == kStuck
+              ? T(0)
+              : fp.pin_radius[j] * friction_law(fp, j, T(st_.w[j]), coulomb_sign(st_.slip[j]));
+    }
+    for (int a = 0; a < kActuators; ++a) (*offset)[a] = act.offset[a];
+  }
+  /// r = tau - (c + offset + Y pi + G Mf), Mf = phi N + motor.
+  template <typename T>
+  void residual_at(const std::array<T, kJoints>& phi, const std::array<T, kJoints>& motor,
+                   const std::array<T, kActuators>& offset,
+                   const std::array<T, kInertialParams>& pi, const std::array<T, kJoints>& N,
+                   T* r) const {
+    std::array<T, kJoints> Mf;
     for (int j = 0; j < kJoints; ++j) Mf[j] = phi[j] * N[j] + motor[j];
     for (int a = 0; a < kActuators; ++a) {
-      T m = T(st_.c(a)) + act.offset[a];
+      T m = T(st_.c(a)) + offset[a];
       for (int i = 0; i < kInertialParams; ++i) m += st_.Y(a, i) * pi[i];
       for (int j = 0; j < kJoints; ++j) m += st_.G(a, j) * Mf[j];
       r[a] = T(tau_[a]) - m;
     }
-    return true;
   }
-
- private:
   /// F = F0 + dF Mf with Mf = phi N + motor (stacked F_1x, F_1y, ..., F_5x, F_5y).
   template <typename T>
   void reactions_of(const std::array<T, kJoints>& phi, const std::array<T, kJoints>& motor,
