@@ -1078,8 +1078,8 @@ Status make_row(Context<M>& c, double t, const double* y, const Row* previous, R
   std::array<double, kJoints> z{};
   if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, z.begin());
   JointModes signs;  // the modes the right-hand side uses
-  if (Status st = forward_at<M>(*c.params, L, y, rhs_modes(c, y, &signs), eval, &ev, &z,
-                                &c.row_warm);
+  if (Status st =
+          forward_at<M>(*c.params, L, y, rhs_modes(c, y, &signs), eval, &ev, &z, &c.row_warm);
       !st.ok()) {
     return at_time<M>(st, t, y);
   }

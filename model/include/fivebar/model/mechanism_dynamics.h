@@ -339,7 +339,7 @@ Status forward_pass(const ParamsOf<M, T>& p, const LoadsOf<M, T>& L, const State
   M::set_drives(L, ev);
   ev->w = M::joint_rates(k, ev->bias, v);
   const Mat<n, T> Ainv = inverse_small(ev->A);  // A is symmetric positive definite
-  const Vec<n, T> thdd0 = Ainv * rhs0;  // the accelerations without friction
+  const Vec<n, T> thdd0 = Ainv * rhs0;          // the accelerations without friction
   ev->thdd = thdd0;
   ev->iterations = 0;
   ev->Mf.fill(T(0));
