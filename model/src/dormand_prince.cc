@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <utility>
 
 namespace fivebar::sim::detail {
 namespace {
@@ -107,7 +108,6 @@ void DopriDense::set(double t_end, double step, const std::vector<double>& y0,
   t_new = t_end;
   h = step;
   const size_t n = y0.size();
-  y_old = y0;
   for (size_t i = 0; i < n; ++i) {
     ydiff[i] = y1[i] - y0[i];
     bspl[i] = h * k[0][i] - ydiff[i];
@@ -336,8 +336,12 @@ void DormandPrince::complete_step(double dsm) {
     tcur_ = tstop_;
   }
   dense_.set(tcur_, h_, yn_, ycur_, F_);
-  F_[0] = F_[kStages - 1];  // c = 1 at the last stage: f(t_new, y_new) is its slope
-  yn_ = ycur_;
+  // the step's start moves into the interpolant, its end into yn and its last slope into F[0]
+  // (c = 1 at the last stage: f(t_new, y_new)); ycur and F[6], left with the old contents, are
+  // written before they are read
+  std::swap(dense_.y_old, yn_);
+  std::swap(yn_, ycur_);
+  std::swap(F_[0], F_[kStages - 1]);
   ehist_[1] = ehist_[0];
   ehist_[0] = dsm * kBias;
   ++nst_;

@@ -24,7 +24,8 @@ struct DopriDense {
   double t_new = 0.0, h = 0.0;
   std::vector<double> y_old, ydiff, bspl, r4, r5;
 
-  /// From the step's start y_old, end y_new and stage slopes k[0..6] (k[6] = f(t_new, y_new)).
+  /// From the step's start y0, end y1 and stage slopes k[0..6] (k[6] = f(t_new, y_new)); y_old
+  /// is the caller's to set to y0 (DormandPrince moves its vector in).
   void set(double t_end, double step, const std::vector<double>& y0, const std::vector<double>& y1,
            const std::vector<double> (&k)[7]);
   void at(double t, double* y) const;

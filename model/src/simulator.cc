@@ -321,6 +321,16 @@ Status finite_loads(const Ld& L, double t) {
   return Status::Ok();
 }
 
+/// Whether every load of L is finite, as one test: x * 0 is +-0 for a finite x and NaN for an
+/// infinite or NaN one, and so is their sum.
+template <class Ld>
+bool all_finite(const Ld& L) {
+  using M = std::conditional_t<std::is_same_v<Ld, Loads<double>>, FiveBar, FourBar>;
+  double zero = 0.0;
+  for (const auto& named : Sim<M>::load_values(L)) zero += named.second * 0.0;
+  return zero == 0.0;
+}
+
 /// The loads at t, from the last evaluation when it was at the same time (a load function is a
 /// function of t: Dormand-Prince's last two stages share their time); c.loads_status whether
 /// they are finite (finite_loads), checked once per evaluation.
@@ -330,7 +340,7 @@ const LoadsOf<M>& loads_at(Context<M>& c, double t) {
     c.loads_then = (*c.loads)(t);
     c.loads_time = t;
     // (the status worded only for a load that is not finite: the common case costs no message)
-    if (first_load(c.loads_then, [](double x) { return !std::isfinite(x); }).first != nullptr) {
+    if (!all_finite(c.loads_then)) {
       c.loads_status = finite_loads(c.loads_then, t);
     } else if (!c.loads_status.ok()) {
       c.loads_status = Status::Ok();
@@ -394,15 +404,15 @@ const JointModes* rhs_modes(const Context<M>& c, const double* y, JointModes* bu
   return c.use_slip ? &c.slip : nullptr;
 }
 
-/// Keeps the point of a right-hand side and, from its evaluation, the joint rates (as
-/// joint_rates computes them from the kinematics), their rates of change and the singular
-/// measure.
+/// Keeps the point of a right-hand side and, from its evaluation, the joint rates (the
+/// evaluation's, the same products and sums as joint_rates from the kinematics), their rates of
+/// change and the singular measure.
 template <class M>
 void remember_evaluation(Context<M>& c, double t, const double* y, const EvalOf<M>& ev) {
   c.last.ok = true;
   c.last.t = t;
   std::copy(y, y + c.n, c.last.y);
-  c.last.w = joint_rates<M>(ev.kin, y);
+  c.last.w = ev.w;
   c.last.wdot = Sim<M>::joint_accelerations(ev);
   c.last.singular = std::abs(M::singular_measure(ev.kin));
 }
@@ -998,53 +1008,46 @@ Status decide_at(Context<M>& c, double t, double* y, const Fired& fired_now, Sta
   return Status::Ok();
 }
 
-/// Angles-only row: the closure, the dependent links' rates and the energy quadratures.
+/// Angles-only row into `row` (value-initialized): the closure, the dependent links' rates and the
+/// energy quadratures.
 template <class M>
-Row make_angle_row(const Context<M>& c, double t, const double* y, const Row* previous,
-                   Status* st) {
+Status make_angle_row(const Context<M>& c, double t, const double* y, const Row* previous,
+                      Row* row) {
   constexpr int n = M::kDof, kBristle = base_states(n);
-  Row row;
-  row.t = t;
+  row->t = t;
   KinOf<M> k;
-  *st = close_at<M>(*c.params, y, &k);
-  if (!st->ok()) {
-    *st = at_time<M>(*st, t, y);
-    return row;
-  }
+  if (Status st = close_at<M>(*c.params, y, &k); !st.ok()) return at_time<M>(st, t, y);
   for (int i = 0; i < n; ++i) {
-    row.theta[i] = y[i];
-    row.omega[i] = y[n + i];
+    row->theta[i] = y[i];
+    row->omega[i] = y[n + i];
   }
-  Sim<M>::dependent_links(k, y, previous, &row);
-  row.E_diss = y[2 * n];
-  row.W_in = y[2 * n + 1];
-  row.W_ext = y[2 * n + 2];
-  row.mode = c.slip;
-  if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, row.bristle.begin());
-  row.has_bristle = c.law_states;
-  return row;
+  Sim<M>::dependent_links(k, y, previous, row);
+  row->E_diss = y[2 * n];
+  row->W_in = y[2 * n + 1];
+  row->W_ext = y[2 * n + 2];
+  row->mode = c.slip;
+  if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, row->bristle.begin());
+  row->has_bristle = c.law_states;
+  return Status::Ok();
 }
 
 /// Row of a locked mechanism: at rest, its friction torques the holding torques of lock_analysis.
 template <class M>
-Row make_locked_row(const Context<M>& c, double t, const double* y, const Row* previous,
-                    Status* st) {
-  Row row = make_angle_row(c, t, y, previous, st);
-  if (!st->ok()) return row;
+Status make_locked_row(const Context<M>& c, double t, const double* y, const Row* previous,
+                       Row* row) {
+  Status st = make_angle_row(c, t, y, previous, row);
+  if (!st.ok()) return st;
   const LoadsOf<M> L = (*c.loads)(t);
   LockAnalysis lock;
   KinOf<M> k;
-  *st = lock_analysis<M>(*c.params, L, q_of<M>(y), c.eval, &lock);
-  if (st->ok()) *st = close_at<M>(*c.params, y, &k);
-  if (!st->ok()) {
-    *st = at_time<M>(*st, t, y);
-    return row;
-  }
-  Sim<M>::drives(L, &row);
-  row.N = lock.N;
-  row.Mf = lock.hold;
-  row.potential = Sim<M>::potential(*c.params, k);
-  return row;
+  st = lock_analysis<M>(*c.params, L, q_of<M>(y), c.eval, &lock);
+  if (st.ok()) st = close_at<M>(*c.params, y, &k);
+  if (!st.ok()) return at_time<M>(st, t, y);
+  Sim<M>::drives(L, row);
+  row->N = lock.N;
+  row->Mf = lock.hold;
+  row->potential = Sim<M>::potential(*c.params, k);
+  return Status::Ok();
 }
 
 /// The dependent links' angles (continued from the previous row), rates and accelerations, the
@@ -1059,13 +1062,13 @@ void set_evaluated(const EvalOf<M>& ev, const Row* previous, Row* row) {
   row->P_diss = ev.P_diss;
 }
 
+/// The output row at (t, y) into `row` (value-initialized, written in place: a row is large).
 template <class M>
-Row make_row(Context<M>& c, double t, const double* y, const Row* previous, Status* st) {
+Status make_row(Context<M>& c, double t, const double* y, const Row* previous, Row* row) {
   constexpr int n = M::kDof, kBristle = base_states(n);
-  if (!c.full_rows) return make_angle_row(c, t, y, previous, st);
-  if (c.locked) return make_locked_row(c, t, y, previous, st);
-  Row row;
-  row.t = t;
+  if (!c.full_rows) return make_angle_row(c, t, y, previous, row);
+  if (c.locked) return make_locked_row(c, t, y, previous, row);
+  row->t = t;
   EvalOptions eval = c.eval;
   eval.want_reactions = true;
   eval.want_angles = true;
@@ -1075,27 +1078,36 @@ Row make_row(Context<M>& c, double t, const double* y, const Row* previous, Stat
   std::array<double, kJoints> z{};
   if (c.law_states) std::copy(y + kBristle, y + kBristle + kJoints, z.begin());
   JointModes signs;  // the modes the right-hand side uses
-  *st = forward_at<M>(*c.params, L, y, rhs_modes(c, y, &signs), eval, &ev, &z, &c.row_warm);
-  if (!st->ok()) {
-    *st = at_time<M>(*st, t, y);
-    return row;
+  if (Status st =
+          forward_at<M>(*c.params, L, y, rhs_modes(c, y, &signs), eval, &ev, &z, &c.row_warm);
+      !st.ok()) {
+    return at_time<M>(st, t, y);
   }
   for (int i = 0; i < n; ++i) {
-    row.theta[i] = y[i];
-    row.omega[i] = y[n + i];
-    row.alpha[i] = ev.thdd[i];
+    row->theta[i] = y[i];
+    row->omega[i] = y[n + i];
+    row->alpha[i] = ev.thdd[i];
   }
-  set_evaluated<M>(ev, previous, &row);
-  Sim<M>::drives(L, &row);
-  row.E_diss = y[2 * n];
-  row.W_in = y[2 * n + 1];
-  row.W_ext = y[2 * n + 2];
-  row.kinetic = Sim<M>::kinetic(*c.params, ev.kin, y + n);
-  row.potential = Sim<M>::potential(*c.params, ev.kin);
-  row.mode = c.use_slip ? c.slip : ev.slip;
-  row.bristle = z;
-  row.has_bristle = c.law_states;
-  return row;
+  set_evaluated<M>(ev, previous, row);
+  Sim<M>::drives(L, row);
+  row->E_diss = y[2 * n];
+  row->W_in = y[2 * n + 1];
+  row->W_ext = y[2 * n + 2];
+  row->kinetic = Sim<M>::kinetic(*c.params, ev.kin, y + n);
+  row->potential = Sim<M>::potential(*c.params, ev.kin);
+  row->mode = c.use_slip ? c.slip : ev.slip;
+  row->bristle = z;
+  row->has_bristle = c.law_states;
+  return Status::Ok();
+}
+
+/// Appends the output row at (t, y), continued from the last row (if any). A row that fails is
+/// kept, partly written: the caller stops at its status.
+template <class M>
+Status append_row(Context<M>& c, double t, const double* y, std::vector<Row>* rows) {
+  rows->emplace_back();
+  const size_t i = rows->size() - 1;
+  return make_row(c, t, y, i > 0 ? &(*rows)[i - 1] : nullptr, &(*rows)[i]);
 }
 
 /// The event loop's state: integrator, switch watch, output grid and counters.
@@ -1142,9 +1154,7 @@ Status emit_rows(Loop<M>& L, Result* result, double t_end, const double* y_end) 
     } else if (!L.integ->dense(tout, y)) {
       return at_time<M>(Status::Error(StatusCode::kSolverFailed, L.integ->error()), tout, y);
     }
-    Status st;
-    result->rows.push_back(make_row(L.c, tout, y, &result->rows.back(), &st));
-    if (!st.ok()) return st;
+    if (Status st = append_row(L.c, tout, y, &result->rows); !st.ok()) return st;
     ++L.next;
     L.steps_since_row = 0;
     L.c.recovered_since_row = 0;
@@ -1390,8 +1400,7 @@ Result run(const ParamsOf<M>& params, const LoadFnOf<M>& loads, const Initial& i
   }
   L.integ = detail::make_integrator(prob, options, options.duration);
   result.rows.reserve(L.grid.size());
-  Status st;
-  result.rows.push_back(make_row(L.c, 0.0, L.y, nullptr, &st));
+  Status st = append_row(L.c, 0.0, L.y, &result.rows);
   if (st.ok()) st = restart(L, options);
   while (st.ok() && L.next < L.grid.size()) {
     st = advance(L, &result, options);

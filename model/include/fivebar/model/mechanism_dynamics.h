@@ -307,6 +307,20 @@ Status forward_friction(const ParamsOf<M, T>& p, const EvalOptions& opt, const M
   return Status::Ok();
 }
 
+/// Whether every torque is exactly zero, in double evaluations (a Jet's zero value may carry
+/// derivatives: false).
+template <typename T>
+bool no_torque(const Joints<T>& Mf) {
+  if constexpr (std::is_same_v<T, double>) {
+    for (const double m : Mf) {
+      if (m != 0.0) return false;
+    }
+    return true;
+  } else {
+    return false;
+  }
+}
+
 /// forward below; `loop` as in friction_loop (records the double solution, or differentiates it
 /// in Jets); `warm` as in LoopAids.
 template <class M, typename T>
@@ -325,7 +339,8 @@ Status forward_pass(const ParamsOf<M, T>& p, const LoadsOf<M, T>& L, const State
   M::set_drives(L, ev);
   ev->w = M::joint_rates(k, ev->bias, v);
   const Mat<n, T> Ainv = inverse_small(ev->A);  // A is symmetric positive definite
-  ev->thdd = Ainv * rhs0;
+  const Vec<n, T> thdd0 = Ainv * rhs0;          // the accelerations without friction
+  ev->thdd = thdd0;
   ev->iterations = 0;
   ev->Mf.fill(T(0));
   ev->P_diss = T(0);
@@ -335,7 +350,8 @@ Status forward_pass(const ParamsOf<M, T>& p, const LoadsOf<M, T>& L, const State
   // accelerations and reactions for the friction torques Mf of the slipping joints
   auto solve = [&](const Joints<T>& Mf, std::array<Vec2<T>, kJoints>* F) {
     if (stuck.count == 0) {  // every joint slips or rests: no holding torque (the common case)
-      ev->thdd = Ainv * (rhs0 - M::friction_transpose(k, Mf));
+      // (no friction torque: rhs0 - J_w^T 0 is rhs0 itself, J_w^T 0 being +0)
+      ev->thdd = no_torque(Mf) ? thdd0 : Vec<n, T>(Ainv * (rhs0 - M::friction_transpose(k, Mf)));
       M::reactions(p, k, ev->bias, L, applied, ev->thdd, Mf, F, ev);
       return;
     }
