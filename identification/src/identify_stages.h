@@ -87,6 +87,10 @@ struct Fit {
   /// window keeps it within kBiasFraction (limit_smoothing_bias; 0 otherwise)
   double window_bias_left = 0;
 
+  /// why the fit is not to be used when the window check against wider windows (widen_window)
+  /// found a bias no window up to its last explains ("" otherwise)
+  std::string window_unusable;
+
   // the fit (choose_loss_scale, build_problem, solve_stage)
   double loss_scale = 0;  ///< the robust loss's scale as applied (choose_loss_scale)
   std::vector<int> window_sizes;  ///< output error: residuals of each window, in problem order
@@ -289,6 +293,46 @@ void preliminary_fit(Fit* f);
 /// (Fit::window_bias_left): the motion is too fast for accelerations estimated from its angles
 /// at the log's rate.
 void unbiased_window_check(const Fit& f, const ModelVerdict& verdict, IdentifyResult* out);
+
+// ---- stage_wider_window.cc ----
+
+/// The chosen window checked against a wider one (wider_window).
+struct WiderWindow {
+  bool checked = false;  ///< false: no wider window fits in the log, or no prediction
+  bool moves = false;    ///< the move is beyond kWindowMoveZ: the wider window is to be taken
+  SgOptions sg;          ///< the wider window
+  double z = 0;          ///< the largest move beyond the predicted biases' change [std]
+  int worst = -1;        ///< the public coefficient that moves most
+  /// the predicted bias of the public friction coefficients at the wider window, and its spread
+  Eigen::VectorXd bias, spread;
+  /// the same at the checked window (f.sg)
+  Eigen::VectorXd bias_here, spread_here;
+  /// the worst coefficient's move "M against a predicted P +- S"
+  std::string detail;
+  std::string text;  ///< "Z std at half-window W samples against H (detail)"
+};
+
+/// The friction refitted (one Gauss-Newton step each from f.x, on the samples both windows keep)
+/// at f.sg and at kWiderFactor times its half-window: the move of each public friction
+/// coefficient against what the change of the predicted bias (the smoothing's and the angle
+/// noise's through the reactions, predicted_biases; the motion's terms over +-kReconSpan times
+/// the larger of the window and `reach_half`) explains, in the std of the move from the sensor
+/// noise (the torque noise enters both refits alike; the angle noise through both filters) and
+/// of the two predictions. The noise's bias is predicted to second order, which falls short
+/// where the acceleration noise is comparable to a slow motion's accelerations.
+WiderWindow wider_window(const Fit& f, const IdentifyResult& out, int reach_half);
+
+/// After the window choice (angles only, a friction-only fit): while the friction refitted at a
+/// wider window moves beyond its predicted biases (wider_window, at a preliminary fit at each
+/// window), the wider window is taken (f->sg, f->smoothing_bias and its spread) and the rates
+/// and samples estimated again (`rates_and_samples`, false: stop); after kWiderSteps such moves
+/// f->window_unusable says why the fit is not to be used. The check's figures are appended to
+/// out->window_choice. False when `rates_and_samples` fails.
+bool widen_window(Fit* f, IdentifyResult* out, const std::function<bool()>& rates_and_samples);
+
+/// The fit is not to be used (out->unusable, unless a reason is already there) when
+/// widen_window found a bias no window it tried explains (Fit::window_unusable).
+void wider_window_check(const Fit& f, IdentifyResult* out);
 
 // ---- stage_solve.cc ----
 

@@ -307,7 +307,7 @@ bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out)
     limit_smoothing_bias(w, opt.sg.order, f->rates_biased, &f->sg, &f->smoothing_bias,
                          &out->window_choice, &f->window_bias_left, &f->smoothing_bias_spread);
     f->x = x_start;
-    if (!rates_and_samples()) return false;
+    if (!rates_and_samples() || !widen_window(f, out, rates_and_samples)) return false;
   } else if (out->accels_estimated) {
     out->window_choice = fixed_window_choice(opt, out->sg_half_window);
   }
