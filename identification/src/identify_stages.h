@@ -87,8 +87,8 @@ struct Fit {
   /// window keeps it within kBiasFraction (limit_smoothing_bias; 0 otherwise)
   double window_bias_left = 0;
 
-  /// why the fit is not to be used when the window check against wider windows (widen_window)
-  /// found a bias no window up to its last explains ("" otherwise)
+  /// why the fit is not to be used when the window check (widen_window) found the angle noise's
+  /// bias at every window it tried ("" otherwise)
   std::string window_unusable;
 
   // the fit (choose_loss_scale, build_problem, solve_stage)
@@ -299,39 +299,42 @@ void unbiased_window_check(const Fit& f, const ModelVerdict& verdict, IdentifyRe
 /// The chosen window checked against a wider one (wider_window).
 struct WiderWindow {
   bool checked = false;  ///< false: no wider window fits in the log, or no prediction
-  bool moves = false;    ///< the move is beyond kWindowMoveZ: the wider window is to be taken
+  bool moves = false;    ///< the wider window is to be taken
   SgOptions sg;          ///< the wider window
-  double z = 0;          ///< the largest move beyond the predicted biases' change [std]
-  int worst = -1;        ///< the public coefficient that moves most
+  double z = 0;          ///< the predicted bias of coefficient `worst` at f.sg [its std]
+  int worst = -1;        ///< the public coefficient that moves the window (-1: none)
   /// the predicted bias of the public friction coefficients at the wider window, and its spread
   Eigen::VectorXd bias, spread;
   /// the same at the checked window (f.sg)
   Eigen::VectorXd bias_here, spread_here;
-  /// the worst coefficient's move "M against a predicted P +- S"
-  std::string detail;
-  std::string text;  ///< "Z std at half-window W samples against H (detail)"
+  std::string text;  ///< the check's figures, for window_choice
 };
 
-/// The friction refitted (one Gauss-Newton step each from f.x, on the samples both windows keep)
-/// at f.sg and at kWiderFactor times its half-window: the move of each public friction
-/// coefficient against what the change of the predicted bias (the smoothing's and the angle
-/// noise's through the reactions, predicted_biases; the motion's terms over +-kReconSpan times
-/// the larger of the window and `reach_half`) explains, in the std of the move from the sensor
-/// noise (the torque noise enters both refits alike; the angle noise through both filters) and
-/// of the two predictions. The noise's bias is predicted to second order, which falls short
-/// where the acceleration noise is comparable to a slow motion's accelerations.
-WiderWindow wider_window(const Fit& f, const IdentifyResult& out, int reach_half);
+/// The chosen window f.sg checked at the preliminary fit f.x: the bias of the public friction
+/// coefficients predicted (predicted_biases: the smoothing's and the angle noise's through the
+/// reactions) from the rates of f.sg itself, not those of the window the walk read (the rule's
+/// small window, whose noisy rates the second-order prediction expands about: on a light, slow
+/// five-bar's 3 s logs at 1e-4-3e-4 rad it read 0.17 std at 33 samples where the fit was 3-5 std
+/// off, and read again here 1.4-5.5 std), and the friction refitted (one Gauss-Newton step each
+/// from f.x, on the samples both windows keep) at f.sg and at kWiderFactor times its
+/// half-window. The wider window is to be taken (`moves`) when a coefficient's predicted bias
+/// is beyond kWindowBias of the refit's std and the refit at the wider window moves it against
+/// that bias by more than kWindowMoveZ std of the move's noise (the torque noise enters both
+/// refits alike, the angle noise through both filters' taps).
+WiderWindow wider_window(const Fit& f, const IdentifyResult& out);
 
-/// After the window choice (angles only, a friction-only fit): while the friction refitted at a
-/// wider window moves beyond its predicted biases (wider_window, at a preliminary fit at each
-/// window), the wider window is taken (f->sg, f->smoothing_bias and its spread) and the rates
-/// and samples estimated again (`rates_and_samples`, false: stop); after kWiderSteps such moves
-/// f->window_unusable says why the fit is not to be used. The check's figures are appended to
-/// out->window_choice. False when `rates_and_samples` fails.
+/// After the window choice (angles only, a friction-only fit of the Coulomb-viscous law, whose
+/// coefficients one Gauss-Newton step refits): while wider_window, at a
+/// preliminary fit at each window, moves the window, the wider window is taken (f->sg,
+/// f->smoothing_bias and its spread) and the rates and samples estimated again
+/// (`rates_and_samples`, false: stop); the bias taken off at the window kept is the one
+/// predicted from its own rates. After kWiderSteps such moves, f->window_unusable says why the
+/// fit is not to be used. The check's figures are appended to out->window_choice. False when
+/// `rates_and_samples` fails.
 bool widen_window(Fit* f, IdentifyResult* out, const std::function<bool()>& rates_and_samples);
 
 /// The fit is not to be used (out->unusable, unless a reason is already there) when
-/// widen_window found a bias no window it tried explains (Fit::window_unusable).
+/// widen_window found the angle noise's bias at every window it tried (Fit::window_unusable).
 void wider_window_check(const Fit& f, IdentifyResult* out);
 
 // ---- stage_solve.cc ----

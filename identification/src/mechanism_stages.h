@@ -142,8 +142,7 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
 /// when a prediction cannot be formed (or the rates are not estimated from the angles).
 bool predicted_biases(const WindowFit& w, const SgOptions& sg, const std::vector<int>& halves,
                       int reach_half, std::vector<Eigen::VectorXd>* bias,
-                      std::vector<Eigen::VectorXd>* spread,
-                      std::vector<Eigen::VectorXd>* smooth = nullptr);
+                      std::vector<Eigen::VectorXd>* spread);
 
 /// The window of a mechanism that predicts the noise's bias (WindowFit::noise_bias), in place of
 /// choose_window and limit_smoothing_bias: the noise's bias through the reactions falls as the

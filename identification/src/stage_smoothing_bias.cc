@@ -286,7 +286,7 @@ int least_bias_up(WindowBias* wb, int from, int K) {
 
 bool predicted_biases(const WindowFit& w, const SgOptions& sg, const std::vector<int>& halves,
                       int reach_half, std::vector<Eigen::VectorXd>* bias,
-                      std::vector<Eigen::VectorXd>* spread, std::vector<Eigen::VectorXd>* smooth) {
+                      std::vector<Eigen::VectorXd>* spread) {
   const int n = w.log().size();
   if (w.source() != detail::RateSource::kFromAngles || n < 2) return false;
   const double dt = w.log().duration() / (n - 1);
@@ -299,11 +299,9 @@ bool predicted_biases(const WindowFit& w, const SgOptions& sg, const std::vector
   WindowBias wb(w, sg, cand, reach_half);
   bias->clear();
   spread->clear();
-  if (smooth) smooth->clear();
   for (size_t k = 2; k < cand.size(); ++k) {
     if (wb.worst(static_cast<int>(k)) < 0) return false;
     bias->push_back(wb.bias(static_cast<int>(k)));
-    if (smooth) smooth->push_back(wb.smoothing_bias(static_cast<int>(k)));
     spread->push_back(wb.spread(static_cast<int>(k)));
   }
   return true;

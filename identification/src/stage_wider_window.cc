@@ -1,7 +1,8 @@
-// The data-driven window's check against a wider one (angles-only logs): the friction refitted,
-// linearized, on the log re-filtered at kWiderFactor times the chosen half-window; where the
-// estimates move beyond what the two windows' predicted biases explain, the wider window is
-// taken (or, with none wider left, the fit is not to be used).
+// The data-driven window checked (angles-only logs): the angle noise's bias predicted again from
+// the rates of the chosen window, and the friction refitted, linearized, on the log re-filtered
+// at kWiderFactor times its half-window; where the bias is beyond kWindowBias of the fit's std
+// and the refit moves against it beyond its noise, the wider window is taken (after kWiderSteps
+// such moves, the fit is not to be used).
 #include "identify_stages.h"
 
 namespace fivebar::identification::stages {
@@ -11,13 +12,16 @@ namespace {
 /// The wider window of the check, in the chosen half-window's
 constexpr double kWiderFactor = 1.5;
 
-/// A move of a friction coefficient beyond this many of its own std (the noise of the
-/// difference of the two linearized refits, with the two predictions' spreads) is a bias the
-/// prediction misses
+/// The refit at the wider window confirms a predicted bias when it moves the coefficient against
+/// it by more than this many std of the move's own noise (the difference of the two linearized
+/// refits from the sensor noise)
 constexpr double kWindowMoveZ = 1.5;
 
-/// The predicted bias at the chosen window beyond which it is checked, in the fit's std
-constexpr double kWindowBias = 1.0;
+/// A predicted bias at the chosen window beyond this many std of the fit (the linearized refit's
+/// errors-in-variables std) moves the window up when the refit confirms it: a correction's own
+/// error grows with it (kUnusableBias). Measured: light, slow five-bars' logs whose fits hold
+/// their truths read up to 1.2 (3 s, angle noise 1e-5 and 3e-4 rad), those 3-5 std off 1.7-5.6.
+constexpr double kWindowBias = 1.3;
 
 /// The check moves the window up at most this many times; a move still unexplained after them
 /// makes the fit unusable
@@ -110,7 +114,8 @@ bool window_move(const Fit& f, const IdentifyResult& out, const SgOptions& wide,
   C += detail::score_covariance(K, sens, angles, f.cond.log.size());
   // the refit's own covariance at the fit's window (errors in variables, as the fit's std)
   std::vector<detail::Sensitivity> sa(sens.begin(), sens.begin() + m);
-  const Eigen::MatrixXd Ca = detail::score_covariance(K.topRows(2 * m), sa, f.noise, f.cond.log.size());
+  const Eigen::MatrixXd Ca =
+      detail::score_covariance(K.topRows(2 * m), sa, f.noise, f.cond.log.size());
   const Eigen::MatrixXd T = to_public(f.layout);
   *move = T * step;
   *cov = T * C * T.transpose();
@@ -120,7 +125,7 @@ bool window_move(const Fit& f, const IdentifyResult& out, const SgOptions& wide,
 
 }  // namespace
 
-WiderWindow wider_window(const Fit& f, const IdentifyResult& out, int reach_half) {
+WiderWindow wider_window(const Fit& f, const IdentifyResult& out) {
   WiderWindow w;
   const TorqueLog& log = f.cond.log;
   const int n = log.size();
@@ -133,46 +138,51 @@ WiderWindow wider_window(const Fit& f, const IdentifyResult& out, int reach_half
   w.sg.half_window_s = wide * dt;
   Eigen::VectorXd move;
   Eigen::MatrixXd cov, cov_fit;
-  std::vector<Eigen::VectorXd> bias, spread, smooth;
+  std::vector<Eigen::VectorXd> bias, spread;
+  // both predictions read the motion's terms over the wider window's span (one set of inputs)
   if (!window_move(f, out, w.sg, &move, &cov, &cov_fit) ||
-      !predicted_biases(FiveBarWindowFit(f, out), f.sg, {h, wide}, reach_half, &bias, &spread, &smooth)) {
+      !predicted_biases(FiveBarWindowFit(f, out), f.sg, {h, wide}, wide, &bias, &spread)) {
     return w;
   }
-  const int F = std::min<int>(static_cast<int>(bias[0].size()), f.layout.friction_size());
   w.checked = true;
   w.bias = bias[1];
   w.spread = spread[1];
   w.bias_here = bias[0];
   w.spread_here = spread[0];
   const std::vector<std::string> names = f.layout.names();
+  std::string predicted, moved;
+  const int F = std::min<int>(static_cast<int>(bias[0].size()), f.layout.friction_size());
   for (int p = 0; p < F; ++p) {
     const double ratio = bias[0](p) / std::sqrt(cov_fit(p, p));
-    const double toward = -move(p) * (bias[0](p) < 0 ? -1 : 1) / std::sqrt(cov(p, p));
-    const double unexplained = (move(p) - (bias[1](p) - bias[0](p))) /
-                               std::sqrt(cov(p, p) + std::pow(spread[0](p), 2) + std::pow(spread[1](p), 2));
-    w.detail += (w.detail.empty() ? "" : ", ") + names[p] + " " + format_significant(ratio, 2) +
-                " std, moving " + format_significant(toward, 2) + " toward (unexpl " + format_significant(unexplained, 2) + " bB " + format_significant(bias[1](p) / std::sqrt(cov_fit(p, p)), 2) + ")";
-    if (std::isfinite(ratio) && std::isfinite(toward) && std::abs(ratio) > kWindowBias &&
-        toward > kWindowMoveZ && std::abs(ratio) > std::abs(w.z)) {
+    // the refit's move against the predicted bias, in the std of the move from the noise
+    const double undoes = -move(p) * (bias[0](p) < 0 ? -1 : 1) / std::sqrt(cov(p, p));
+    predicted += (p ? ", " : "") + names[p] + " " + format_significant(ratio, 2);
+    moved += (p ? ", " : "") + format_significant(undoes, 2);
+    if (std::isfinite(ratio) && std::isfinite(undoes) && std::abs(ratio) > kWindowBias &&
+        undoes > kWindowMoveZ && std::abs(ratio) > std::abs(w.z)) {
       w.z = ratio, w.worst = p;
     }
   }
   w.moves = w.worst >= 0;
-  w.text = "at half-window " + std::to_string(h) + " samples, against " + std::to_string(wide) + ": " + w.detail;
+  w.text = "checked at " + std::to_string(h) + " samples from its own rates: predicted bias " +
+           predicted + " std; the friction refitted at " + std::to_string(wide) +
+           " samples moves against it by " + moved + " std of the move's noise";
   return w;
 }
 
 bool widen_window(Fit* f, IdentifyResult* out, const std::function<bool()>& rates_and_samples) {
-  if (f->layout.inertia || f->layout.actuator || f->source != detail::RateSource::kFromAngles) {
+  // the law's coefficients enter the torques linearly (but through the reactions), so one
+  // Gauss-Newton step is the refit (a Stribeck log at 4 samples: its velocity's step was not)
+  if (f->layout.inertia || f->layout.actuator || f->source != detail::RateSource::kFromAngles ||
+      f->scene.friction.law != FrictionLaw::kCoulombViscous) {
     return true;
   }
   const TorqueLog& log = f->cond.log;
   const double dt = log.duration() / std::max(1, log.size() - 1);
-  const int reach = sg_half_window(f->sg, dt);
   for (int step = 0;; ++step) {
     const std::vector<double> x_start = f->x;
     preliminary_fit(f);
-    const WiderWindow w = wider_window(*f, *out, reach);
+    const WiderWindow w = wider_window(*f, *out);
     f->x = x_start;
     if (!w.checked) return true;
     if (step > 0 && !w.moves) {
@@ -181,19 +191,20 @@ bool widen_window(Fit* f, IdentifyResult* out, const std::function<bool()>& rate
       f->smoothing_bias_spread = w.spread_here;
     }
     const std::string coefficient = w.worst >= 0 ? f->layout.names()[w.worst] : "";
-    out->window_choice += "; checked: " + w.text;
+    out->window_choice += "; " + w.text;
     if (!w.moves) return true;
     if (step == kWiderSteps) {
       f->window_unusable =
-          "the friction refitted at a Savitzky-Golay half-window of " +
-          std::to_string(sg_half_window(w.sg, dt)) + " samples moves " + coefficient + " by " +
-          format_significant(std::abs(w.z), 2) + " std beyond what the two windows' predicted " +
-          "biases explain, after " + std::to_string(kWiderSteps) +
-          " wider windows did too: the encoders' noise (" +
+          "the angle noise biases the friction at every Savitzky-Golay window tried: at a "
+          "half-window of " +
+          std::to_string(sg_half_window(f->sg, dt)) + " samples, " + std::to_string(kWiderSteps) +
+          " above the chosen one, the predicted bias of " + coefficient + " is still " +
+          format_significant(std::abs(w.z), 2) + " std, and the friction refitted at " +
+          std::to_string(sg_half_window(w.sg, dt)) +
+          " samples moves against it: the encoders' noise (" +
           format_significant(std::max(f->noise.angle[0], f->noise.angle[1]), 2) +
-          " rad) biases the friction through the accelerations estimated from the angles "
-          "beyond its prediction on this motion; log the rates (omega1, omega2), or give a "
-          "wide --sg-window";
+          " rad) is too coarse for accelerations estimated from the angles of this motion; log "
+          "the rates (omega1, omega2), or give a wide --sg-window";
       return true;
     }
     f->sg = w.sg;
