@@ -323,7 +323,8 @@ struct WiderWindow {
 /// refits alike, the angle noise through both filters' taps).
 WiderWindow wider_window(const Fit& f, const IdentifyResult& out);
 
-/// After the window choice (angles only, a friction-only fit of the Coulomb-viscous law, whose
+/// After the window choice (angles only, an order the rule did not raise, a friction-only fit
+/// of one Coulomb-viscous law, whose
 /// coefficients one Gauss-Newton step refits): while wider_window, at a
 /// preliminary fit at each window, moves the window, the wider window is taken (f->sg,
 /// f->smoothing_bias and its spread) and the rates and samples estimated again

@@ -173,7 +173,9 @@ WiderWindow wider_window(const Fit& f, const IdentifyResult& out) {
 bool widen_window(Fit* f, IdentifyResult* out, const std::function<bool()>& rates_and_samples) {
   // the law's coefficients enter the torques linearly (but through the reactions), so one
   // Gauss-Newton step is the refit (a Stribeck log at 4 samples: its velocity's step was not)
-  if (f->layout.inertia || f->layout.actuator || f->source != detail::RateSource::kFromAngles ||
+  // a shared law's: a per-joint fit's window has its own check (unbiased_window_check)
+  if (f->layout.inertia || f->layout.actuator || f->layout.per_joint ||
+      f->source != detail::RateSource::kFromAngles ||
       f->scene.friction.law != FrictionLaw::kCoulombViscous) {
     return true;
   }
