@@ -298,6 +298,7 @@ IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunct
   unexplained_misfit(f.layout, &out);
   // last: a model error the checks above name inflates the predicted bias too
   unbiased_window_check(f, verdict, &out);
+  wider_window_check(f, &out);
   return finish(out);
 }
 

@@ -87,6 +87,10 @@ struct Fit {
   /// window keeps it within kBiasFraction (limit_smoothing_bias; 0 otherwise)
   double window_bias_left = 0;
 
+  /// why the fit is not to be used when the window check (widen_window) found the angle noise's
+  /// bias at every window it tried ("" otherwise)
+  std::string window_unusable;
+
   // the fit (choose_loss_scale, build_problem, solve_stage)
   double loss_scale = 0;  ///< the robust loss's scale as applied (choose_loss_scale)
   std::vector<int> window_sizes;  ///< output error: residuals of each window, in problem order
@@ -289,6 +293,50 @@ void preliminary_fit(Fit* f);
 /// (Fit::window_bias_left): the motion is too fast for accelerations estimated from its angles
 /// at the log's rate.
 void unbiased_window_check(const Fit& f, const ModelVerdict& verdict, IdentifyResult* out);
+
+// ---- stage_wider_window.cc ----
+
+/// The chosen window checked against a wider one (wider_window).
+struct WiderWindow {
+  bool checked = false;  ///< false: no wider window fits in the log, or no prediction
+  bool moves = false;    ///< the wider window is to be taken
+  SgOptions sg;          ///< the wider window
+  double z = 0;          ///< the predicted bias of coefficient `worst` at f.sg [its std]
+  int worst = -1;        ///< the public coefficient that moves the window (-1: none)
+  /// the predicted bias of the public friction coefficients at the wider window, and its spread
+  Eigen::VectorXd bias, spread;
+  /// the same at the checked window (f.sg)
+  Eigen::VectorXd bias_here, spread_here;
+  std::string text;  ///< the check's figures, for window_choice
+};
+
+/// The chosen window f.sg checked at the preliminary fit f.x: the bias of the public friction
+/// coefficients predicted (predicted_biases: the smoothing's and the angle noise's through the
+/// reactions) from the rates of f.sg itself, not those of the window the walk read (the rule's
+/// small window, whose noisy rates the second-order prediction expands about: on a light, slow
+/// five-bar's 3 s logs at 1e-4-3e-4 rad it read 0.17 std at 33 samples where the fit was 3-5 std
+/// off, and read again here 1.4-5.5 std), and the friction refitted (one Gauss-Newton step each
+/// from f.x, on the samples both windows keep) at f.sg and at kWiderFactor times its
+/// half-window. The wider window is to be taken (`moves`) when a coefficient's predicted bias
+/// is beyond kWindowBias of the refit's std and the refit at the wider window moves it against
+/// that bias by more than kWindowMoveZ std of the move's noise (the torque noise enters both
+/// refits alike, the angle noise through both filters' taps).
+WiderWindow wider_window(const Fit& f, const IdentifyResult& out);
+
+/// After the window choice (angles only, an order the rule did not raise, a friction-only fit
+/// of one Coulomb-viscous law, whose
+/// coefficients one Gauss-Newton step refits): while wider_window, at a
+/// preliminary fit at each window, moves the window, the wider window is taken (f->sg,
+/// f->smoothing_bias and its spread) and the rates and samples estimated again
+/// (`rates_and_samples`, false: stop); the bias taken off at the window kept is the one
+/// predicted from its own rates. After kWiderSteps such moves, f->window_unusable says why the
+/// fit is not to be used. The check's figures are appended to out->window_choice. False when
+/// `rates_and_samples` fails.
+bool widen_window(Fit* f, IdentifyResult* out, const std::function<bool()>& rates_and_samples);
+
+/// The fit is not to be used (out->unusable, unless a reason is already there) when
+/// widen_window found the angle noise's bias at every window it tried (Fit::window_unusable).
+void wider_window_check(const Fit& f, IdentifyResult* out);
 
 // ---- stage_solve.cc ----
 

@@ -135,6 +135,15 @@ void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased
                           Eigen::VectorXd* bias, std::string* choice, double* left,
                           Eigen::VectorXd* spread);
 
+/// The predicted bias of the public friction coefficients, the smoothing's and the noise's
+/// through the reactions (as limit_smoothing_bias predicts it), at each half-window of `halves`
+/// [samples] of sg's order, the motion's higher terms over +-kReconSpan times the larger of the
+/// half-window and `reach_half`; *spread: each prediction's own std from the angle noise. False
+/// when a prediction cannot be formed (or the rates are not estimated from the angles).
+bool predicted_biases(const WindowFit& w, const SgOptions& sg, const std::vector<int>& halves,
+                      int reach_half, std::vector<Eigen::VectorXd>* bias,
+                      std::vector<Eigen::VectorXd>* spread);
+
 /// The window of a mechanism that predicts the noise's bias (WindowFit::noise_bias), in place of
 /// choose_window and limit_smoothing_bias: the noise's bias through the reactions falls as the
 /// window grows while the smoothing bias grows, and the search runs up from the second smallest

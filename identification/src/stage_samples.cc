@@ -304,10 +304,14 @@ bool rates_window_and_samples(const TorqueLog& log, Fit* f, IdentifyResult* out)
     preliminary_fit(f);
     const FiveBarWindowFit w(*f, *out);
     choose_window(w, &f->sg, &f->rates_biased, &out->window_choice);
+    // a log sampled too slowly for its motion (the rule raised the order): not the slow motion
+    // the window check is for (a misfit of the masses there read as the angle noise's bias)
+    const bool raised = f->sg.order != opt.sg.order;
     limit_smoothing_bias(w, opt.sg.order, f->rates_biased, &f->sg, &f->smoothing_bias,
                          &out->window_choice, &f->window_bias_left, &f->smoothing_bias_spread);
     f->x = x_start;
     if (!rates_and_samples()) return false;
+    if (!raised && !widen_window(f, out, rates_and_samples)) return false;
   } else if (out->accels_estimated) {
     out->window_choice = fixed_window_choice(opt, out->sg_half_window);
   }

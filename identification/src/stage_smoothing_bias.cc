@@ -284,6 +284,29 @@ int least_bias_up(WindowBias* wb, int from, int K) {
 
 }  // namespace
 
+bool predicted_biases(const WindowFit& w, const SgOptions& sg, const std::vector<int>& halves,
+                      int reach_half, std::vector<Eigen::VectorXd>* bias,
+                      std::vector<Eigen::VectorXd>* spread) {
+  const int n = w.log().size();
+  if (w.source() != detail::RateSource::kFromAngles || n < 2) return false;
+  const double dt = w.log().duration() / (n - 1);
+  // the walk's two smallest candidates first: the motion's terms are cut at slip reversals to
+  // no fewer than the second's samples each side, as in the walk
+  std::vector<int> cand = window_candidates(n, dt, sg.order);
+  if (cand.size() < 2) return false;
+  cand.resize(2);
+  cand.insert(cand.end(), halves.begin(), halves.end());
+  WindowBias wb(w, sg, cand, reach_half);
+  bias->clear();
+  spread->clear();
+  for (size_t k = 2; k < cand.size(); ++k) {
+    if (wb.worst(static_cast<int>(k)) < 0) return false;
+    bias->push_back(wb.bias(static_cast<int>(k)));
+    spread->push_back(wb.spread(static_cast<int>(k)));
+  }
+  return true;
+}
+
 void limit_smoothing_bias(const WindowFit& w, int given_order, bool rates_biased, SgOptions* sg_fit,
                           Eigen::VectorXd* bias_kept, std::string* choice, double* left,
                           Eigen::VectorXd* spread) {

@@ -371,5 +371,31 @@ TEST(Recovery, LightSlowFiveBarNoisyEncodersCoverTheTruth) {
   }
 }
 
+// The slow light five-bar under its own slow loads for 3 s with coarse encoders (angle noise
+// 1e-4 rad, torque noise 0.02 N m): the window walk stopped at a half-window of 33 samples,
+// where the angle noise's bias it predicted was 0.17 std, and the fit exited 0 with coulomb 3.3
+// std low and viscous 3 std high (seed 1; seed 5: 3.2, 3.1). The bias predicted again from that
+// window's own rates is 1.4-1.8 std and the friction refitted at 50 samples moves against it,
+// so the window moves up: the fit is either not to be used or within 2.5 std of the truth.
+TEST(Window, CoarseEncodersOnASlowMotionMoveTheWindowUp) {
+  const Params<double> truth = testing::slow_light_params();
+  const double truths[2] = {0.2, 0.05};
+  for (std::uint64_t seed : {1, 5}) {
+    const SynthOptions so = testing::log_options(3.0, kTorqueNoise, 1e-4, seed);
+    const SynthResult r =
+        synthesize_log(truth, testing::slow_light_loads, testing::slow_light_start(), so);
+    ASSERT_TRUE(r.status.ok()) << r.status.message;
+    const IdentifyResult res = identify(truth, testing::slow_light_loads, r.log, IdentifyOptions{});
+    ASSERT_TRUE(res.status.ok()) << res.status.message;
+    if (!res.unusable.empty()) continue;
+    for (int p = 0; p < 2; ++p) {
+      const ParameterEstimate& e = res.parameters[p];
+      EXPECT_LE(std::abs(e.value - truths[p]), 2.5 * e.std)
+          << "seed " << seed << ": " << e.name << " " << e.value << " +- " << e.std
+          << ", half-window " << res.sg_half_window << " samples";
+    }
+  }
+}
+
 }  // namespace
 }  // namespace fivebar::identification
