@@ -35,7 +35,8 @@ void motion_terms(const Fit& f, int i, int reach, int min_half, int order, int e
   }
   if (weights) {
     (*weights)[0] = (*weights)[1] =
-        cache ? cache->weights(i, a, b) : detail::high_order_weights(log.t, i, a, b, dt, order, extra);
+        cache ? cache->weights(i, a, b)
+              : detail::high_order_weights(log.t, i, a, b, dt, order, extra);
     *lo = a;
   }
 }
