@@ -229,19 +229,27 @@ class FiveBarWindowFit : public WindowFit {
  private:
   /// bias_inputs without the motion's terms, at the preliminary fit (on the first call)
   const detail::BiasInputs& fit_inputs() const;
+  /// the residual and its Jacobian at sample u of the preliminary fit, unperturbed (noise_bias;
+  /// evaluated once, false where the model fails)
+  bool base_residual(int u, Eigen::Vector2d* r, Eigen::MatrixXd* J) const;
   const Fit& f_;
   const IdentifyResult& out_;
   mutable std::unique_ptr<detail::BiasInputs> fit_inputs_;
+  mutable std::vector<Eigen::Vector2d> base_r_;  ///< base_residual's, by sample
+  mutable std::vector<Eigen::MatrixXd> base_J_;
+  mutable std::vector<signed char> base_ok_;  ///< -1: not evaluated, 0: failed, 1: evaluated
 };
 
 /// The motion's terms above the filter's order (high_order_terms, `extra` of them) of both
 /// cranks' angles at log sample i over +-reach samples, cut short where they would span one of
 /// f's slip reversals (the motion is not smooth across it), though never to fewer than min_half
 /// samples each side. With `weights`: the terms as weights of the angles from log sample *lo
-/// (high_order_weights).
+/// (high_order_weights). With `cache` (of f's log, order and extra): the windows' factorizations
+/// shared between the samples.
 void motion_terms(const Fit& f, int i, int reach, int min_half, int order, int extra,
                   std::array<Eigen::VectorXd, kDof>* terms,
-                  std::array<Eigen::MatrixXd, kDof>* weights = nullptr, int* lo = nullptr);
+                  std::array<Eigen::MatrixXd, kDof>* weights = nullptr, int* lo = nullptr,
+                  detail::HighOrderCache* cache = nullptr);
 
 // ---- stage_check_window.cc ----
 

@@ -86,7 +86,8 @@ Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sen
   Eigen::MatrixXd S = Eigen::MatrixXd::Zero(P, P);
   // g[c](l) = sum over residuals i of J_i^T d r_i / d n_{c,l}: the score's response to one
   // noise sample, which enters every residual whose window holds it
-  std::vector<Eigen::MatrixXd> g(4, Eigen::MatrixXd::Zero(n, P));
+  // (allocated for the channels some sample has: the angles' alone where the rates are estimated)
+  std::vector<Eigen::MatrixXd> g(4);
   for (size_t u = 0; u < sens.size(); ++u) {
     const Eigen::Matrix<double, 2, Eigen::Dynamic> Ji = J.middleRows(2 * u, 2);
     for (int j = 0; j < kActuators; ++j) {
@@ -95,6 +96,7 @@ Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sen
     }
     for (int c = 0; c < 4; ++c) {
       const Sensitivity& s = sens[u];
+      if (!s.coef[c].empty() && g[c].size() == 0) g[c] = Eigen::MatrixXd::Zero(n, P);
       for (size_t r = 0; r < s.coef[c].size(); ++r) {
         g[c].row(s.lo[c] + r) += s.coef[c][r].transpose() * Ji;
       }
@@ -102,7 +104,7 @@ Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sen
   }
   for (int c = 0; c < 4; ++c) {
     const double sigma = sens.empty() ? 0.0 : sens.front().sigma[c];
-    if (sigma > 0) S += sigma * sigma * g[c].transpose() * g[c];
+    if (sigma > 0 && g[c].size() > 0) S += sigma * sigma * g[c].transpose() * g[c];
   }
   return S;
 }

@@ -4,50 +4,122 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace fivebar::identification::detail {
 
-Eigen::VectorXd high_order_terms(const std::vector<double>& t, const std::vector<double>& x, int i,
-                                 int a, int b, double dt, int order, int extra) {
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(extra);
-  const int deg = std::min(order + extra, b - a);
-  if (deg <= order) return out;
+/// The least-squares basis of high_order_terms: the powers of the offsets (t - t_i) / reach of
+/// the samples [a, b] up to degree deg (V empty where deg <= order: no term is read)
+struct ReconBasis {
+  int deg = 0;
+  double reach = 1;
+  Eigen::MatrixXd V;
+};
+
+namespace {
+
+ReconBasis recon_basis(const std::vector<double>& t, int i, int a, int b, double dt, int order,
+                       int extra) {
+  ReconBasis B;
+  B.deg = std::min(order + extra, b - a);
   // the offsets scaled by the window's reach keep the powers near 1 (conditioning)
-  const double reach = std::max({i - a, b - i, 1}) * dt;
-  Eigen::MatrixXd V(b - a + 1, deg + 1);
-  Eigen::VectorXd y(b - a + 1);
+  B.reach = std::max({i - a, b - i, 1}) * dt;
+  if (B.deg <= order) return B;
+  B.V.resize(b - a + 1, B.deg + 1);
   for (int r = 0; r <= b - a; ++r) {
-    const double u = (t[a + r] - t[i]) / reach;
+    const double u = (t[a + r] - t[i]) / B.reach;
     double p = 1.0;
-    for (int c = 0; c <= deg; ++c, p *= u) V(r, c) = p;
-    y(r) = x[a + r];
+    for (int c = 0; c <= B.deg; ++c, p *= u) B.V(r, c) = p;
   }
-  const Eigen::VectorXd coef = V.colPivHouseholderQr().solve(y);
-  for (int k = order + 1; k <= deg; ++k) {
-    out(k - order - 1) = coef(k) * std::pow(dt / reach, k);  // per ((t - t_i) / dt)^k
+  return B;
+}
+
+/// The terms from the factorized basis and the samples y
+Eigen::VectorXd terms_of(const ReconBasis& B, const Eigen::ColPivHouseholderQR<Eigen::MatrixXd>& qr,
+                         const Eigen::VectorXd& y, double dt, int order, int extra) {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(extra);
+  if (B.deg <= order) return out;
+  const Eigen::VectorXd coef = qr.solve(y);
+  for (int k = order + 1; k <= B.deg; ++k) {
+    out(k - order - 1) = coef(k) * std::pow(dt / B.reach, k);  // per ((t - t_i) / dt)^k
   }
   return out;
 }
 
-Eigen::MatrixXd high_order_weights(const std::vector<double>& t, int i, int a, int b, double dt,
-                                   int order, int extra) {
+/// high_order_weights from the basis
+Eigen::MatrixXd weights_of(const ReconBasis& B, int a, int b, double dt, int order, int extra) {
   Eigen::MatrixXd W = Eigen::MatrixXd::Zero(extra, b - a + 1);
-  const int deg = std::min(order + extra, b - a);
-  if (deg <= order) return W;
+  if (B.deg <= order) return W;
   // as high_order_terms: the rows of the least-squares pseudo-inverse of its terms
-  const double reach = std::max({i - a, b - i, 1}) * dt;
-  Eigen::MatrixXd V(b - a + 1, deg + 1);
-  for (int r = 0; r <= b - a; ++r) {
-    const double u = (t[a + r] - t[i]) / reach;
-    double p = 1.0;
-    for (int c = 0; c <= deg; ++c, p *= u) V(r, c) = p;
-  }
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(V.transpose() * V);
-  for (int k = order + 1; k <= deg; ++k) {
-    const Eigen::VectorXd z = ldlt.solve(Eigen::VectorXd::Unit(deg + 1, k));
-    W.row(k - order - 1) = (V * z).transpose() * std::pow(dt / reach, k);
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(B.V.transpose() * B.V);
+  for (int k = order + 1; k <= B.deg; ++k) {
+    const Eigen::VectorXd z = ldlt.solve(Eigen::VectorXd::Unit(B.deg + 1, k));
+    W.row(k - order - 1) = (B.V * z).transpose() * std::pow(dt / B.reach, k);
   }
   return W;
+}
+
+Eigen::VectorXd window_samples(const std::vector<double>& x, int a, int b) {
+  Eigen::VectorXd y(b - a + 1);
+  for (int r = 0; r <= b - a; ++r) y(r) = x[a + r];
+  return y;
+}
+
+}  // namespace
+
+Eigen::VectorXd high_order_terms(const std::vector<double>& t, const std::vector<double>& x, int i,
+                                 int a, int b, double dt, int order, int extra) {
+  const ReconBasis B = recon_basis(t, i, a, b, dt, order, extra);
+  if (B.deg <= order) return Eigen::VectorXd::Zero(extra);
+  return terms_of(B, B.V.colPivHouseholderQr(), window_samples(x, a, b), dt, order, extra);
+}
+
+Eigen::MatrixXd high_order_weights(const std::vector<double>& t, int i, int a, int b, double dt,
+                                   int order, int extra) {
+  return weights_of(recon_basis(t, i, a, b, dt, order, extra), a, b, dt, order, extra);
+}
+
+struct HighOrderCache::Window {
+  ReconBasis basis;
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
+  Eigen::MatrixXd W;
+  bool weighed = false;
+};
+
+HighOrderCache::HighOrderCache(const std::vector<double>& t, double dt, int order, int extra)
+    : t_(t), dt_(dt), order_(order), extra_(extra) {}
+
+HighOrderCache::~HighOrderCache() = default;
+
+HighOrderCache::Window& HighOrderCache::window(int i, int a, int b) {
+  // the basis is a function of these offsets and of the reach each side alone
+  const double reach = std::max({i - a, b - i, 1}) * dt_;
+  key_.assign({static_cast<std::uint64_t>(i - a), static_cast<std::uint64_t>(b - i)});
+  for (int r = 0; r <= b - a; ++r) {
+    const double u = (t_[a + r] - t_[i]) / reach;
+    std::uint64_t bits = 0;
+    std::memcpy(&bits, &u, sizeof bits);
+    key_.push_back(bits);
+  }
+  std::unique_ptr<Window>& w = memo_[key_];
+  if (!w) {
+    w = std::make_unique<Window>();
+    w->basis = recon_basis(t_, i, a, b, dt_, order_, extra_);
+    if (w->basis.deg > order_) w->qr.compute(w->basis.V);
+  }
+  return *w;
+}
+
+Eigen::VectorXd HighOrderCache::terms(const std::vector<double>& x, int i, int a, int b) {
+  const Window& w = window(i, a, b);
+  if (w.basis.deg <= order_) return Eigen::VectorXd::Zero(extra_);
+  return terms_of(w.basis, w.qr, window_samples(x, a, b), dt_, order_, extra_);
+}
+
+const Eigen::MatrixXd& HighOrderCache::weights(int i, int a, int b) {
+  Window& w = window(i, a, b);
+  if (!w.weighed) w.W = weights_of(w.basis, a, b, dt_, order_, extra_), w.weighed = true;
+  return w.W;
 }
 
 void filter_response(const SgOptions& sg, double dt, Eigen::VectorXd* r1, Eigen::VectorXd* r2,
@@ -170,6 +242,7 @@ bool predict_smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
   out->dM.resize(2 * kept);
   std::vector<Sensitivity> sens;
   sens.reserve(kept);
+  SgTapCache taps(t, sg);
   for (size_t u = 0, k = 0; u < keep.size(); ++u) {
     if (!keep[u]) continue;
     Eigen::Vector2d m = Eigen::Vector2d::Zero();
@@ -178,7 +251,10 @@ bool predict_smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
     }
     out->dM.segment<2>(2 * k) = m;
     J.middleRows(2 * k, 2) = in.J.middleRows(2 * u, 2);
-    sens.push_back(sensitivity(t, in.index[u], in.source, sg, in.noise, in.D[u]));
+    int lo = 0;
+    const std::vector<double>*d1 = nullptr, *d2 = nullptr;
+    taps.taps(in.index[u], &lo, &d1, &d2);
+    sens.push_back(sensitivity(in.index[u], lo, *d1, *d2, in.source, in.noise, in.D[u]));
     ++k;
   }
   const Eigen::MatrixXd H = J.transpose() * J + in.Hp;

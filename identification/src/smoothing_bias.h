@@ -14,7 +14,10 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
 #include <functional>
+#include <map>
+#include <memory>
 #include <vector>
 
 #include "fivebar/identification/rates.h"
@@ -48,6 +51,30 @@ Eigen::VectorXd high_order_terms(const std::vector<double>& t, const std::vector
 /// zeros where b - a is too short for a term).
 Eigen::MatrixXd high_order_weights(const std::vector<double>& t, int i, int a, int b, double dt,
                                    int order, int extra = kReconExtra);
+
+/// high_order_terms and high_order_weights at many samples of one grid t: each distinct window
+/// (its offsets (t - t_i) / reach, bit for bit, and its reach each side) factorized once, the
+/// factorization shared by the terms of every angle and the weights (the centred windows of a
+/// uniform grid repeat up to the rounding of t); the same results bit for bit.
+class HighOrderCache {
+ public:
+  /// t must outlive the cache
+  HighOrderCache(const std::vector<double>& t, double dt, int order, int extra = kReconExtra);
+  ~HighOrderCache();
+  /// high_order_terms(t, x, i, a, b, dt, order, extra)
+  Eigen::VectorXd terms(const std::vector<double>& x, int i, int a, int b);
+  /// high_order_weights(t, i, a, b, dt, order, extra)
+  const Eigen::MatrixXd& weights(int i, int a, int b);
+
+ private:
+  struct Window;
+  Window& window(int i, int a, int b);
+  const std::vector<double>& t_;
+  double dt_;
+  int order_, extra_;
+  std::map<std::vector<std::uint64_t>, std::unique_ptr<Window>> memo_;
+  std::vector<std::uint64_t> key_;
+};
 
 /// The filter's rate (r1) and acceleration (r2) response to ((t - t_i) / dt)^k for k = order + 1
 /// .. order + extra, on a uniform grid of step dt (it reproduces lower degrees exactly).

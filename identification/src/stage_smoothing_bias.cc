@@ -18,17 +18,25 @@ constexpr int kNoiseBiasSamples = 800;
 
 void motion_terms(const Fit& f, int i, int reach, int min_half, int order, int extra,
                   std::array<Eigen::VectorXd, kDof>* terms,
-                  std::array<Eigen::MatrixXd, kDof>* weights, int* lo) {
+                  std::array<Eigen::MatrixXd, kDof>* weights, int* lo,
+                  detail::HighOrderCache* cache) {
   const TorqueLog& log = f.cond.log;
   const int n = log.size();
   const double dt = log.duration() / std::max(1, n - 1);
   int a = std::max(0, i - reach), b = std::min(n - 1, i + reach);
   while (!f.reversals.empty() && a < i - min_half && f.reversals[i] - f.reversals[a] > 0) ++a;
   while (!f.reversals.empty() && b > i + min_half && f.reversals[b] - f.reversals[i] > 0) --b;
-  (*terms)[0] = detail::high_order_terms(log.t, log.theta1, i, a, b, dt, order, extra);
-  (*terms)[1] = detail::high_order_terms(log.t, log.theta2, i, a, b, dt, order, extra);
+  if (cache) {
+    (*terms)[0] = cache->terms(log.theta1, i, a, b);
+    (*terms)[1] = cache->terms(log.theta2, i, a, b);
+  } else {
+    (*terms)[0] = detail::high_order_terms(log.t, log.theta1, i, a, b, dt, order, extra);
+    (*terms)[1] = detail::high_order_terms(log.t, log.theta2, i, a, b, dt, order, extra);
+  }
   if (weights) {
-    (*weights)[0] = (*weights)[1] = detail::high_order_weights(log.t, i, a, b, dt, order, extra);
+    (*weights)[0] = (*weights)[1] =
+        cache ? cache->weights(i, a, b)
+              : detail::high_order_weights(log.t, i, a, b, dt, order, extra);
     *lo = a;
   }
 }
@@ -68,11 +76,14 @@ const detail::BiasInputs& FiveBarWindowFit::fit_inputs() const {
 detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int order) const {
   const Fit& f = f_;
   detail::BiasInputs in = fit_inputs();
+  const TorqueLog& log = f.cond.log;
+  detail::HighOrderCache cache(log.t, log.duration() / std::max(1, log.size() - 1), order);
   for (size_t u = 0; u < f.samples.size(); ++u) {
     std::array<Eigen::VectorXd, kDof> terms;
     std::array<Eigen::MatrixXd, kDof> weights;
     int lo = 0;
-    motion_terms(f, f.index[u], reach, min_half, order, detail::kReconExtra, &terms, &weights, &lo);
+    motion_terms(f, f.index[u], reach, min_half, order, detail::kReconExtra, &terms, &weights, &lo,
+                 &cache);
     in.terms[0].push_back(terms[0]);
     in.terms[1].push_back(terms[1]);
     in.weights[0].push_back(std::move(weights[0]));
@@ -80,6 +91,22 @@ detail::BiasInputs FiveBarWindowFit::bias_inputs(int reach, int min_half, int or
     in.recon_lo.push_back(lo);
   }
   return in;
+}
+
+bool FiveBarWindowFit::base_residual(int u, Eigen::Vector2d* r, Eigen::MatrixXd* J) const {
+  const Fit& f = f_;
+  if (base_ok_.size() != f.samples.size()) {
+    base_ok_.assign(f.samples.size(), -1);
+    base_r_.assign(f.samples.size(), Eigen::Vector2d::Zero());
+    base_J_.assign(f.samples.size(), Eigen::MatrixXd());
+  }
+  if (base_ok_[u] < 0) {
+    base_ok_[u] = sample_residual(f.scene, f.layout, f.samples[u], f.eval, f.x.data(), &base_r_[u],
+                                  &base_J_[u]);
+  }
+  *r = base_r_[u];
+  *J = base_J_[u];
+  return base_ok_[u] == 1;
 }
 
 detail::NoiseBias FiveBarWindowFit::noise_bias(const SgOptions& sg) const {
@@ -97,7 +124,7 @@ detail::NoiseBias FiveBarWindowFit::noise_bias(const SgOptions& sg) const {
     const Sample& s = f.samples[u0];
     Eigen::Vector2d r0, r1;
     Eigen::MatrixXd J0, J1;
-    if (!sample_residual(f.scene, f.layout, s, f.eval, f.x.data(), &r0, &J0)) continue;
+    if (!base_residual(u0, &r0, &J0)) continue;
     Eigen::Vector2d shift = Eigen::Vector2d::Zero();
     Eigen::VectorXd score = Eigen::VectorXd::Zero(P);
     bool ok = true;

@@ -24,11 +24,13 @@ void FiveBarWindowFit::levels(const std::vector<int>& probe, const SgOptions& sg
   f.layout.apply(f.x.data(), &p);
   Eigen::Vector2d r2 = Eigen::Vector2d::Zero(), v = Eigen::Vector2d::Zero(), t2 = v;
   int count = 0;
+  SgTapCache taps(log.t, sg);
   for (int i : probe) {
     Sample s = logged_sample(f, i);
     int lo = 0;
-    std::vector<double> d1, d2;
-    savitzky_golay_taps(log.t, i, sg, &lo, &d1, &d2);
+    const std::vector<double>*p1 = nullptr, *p2 = nullptr;
+    taps.taps(i, &lo, &p1, &p2);
+    const std::vector<double>&d1 = *p1, &d2 = *p2;
     const std::vector<double>& x1 =
         f.source == detail::RateSource::kFromAngles ? log.theta1 : log.omega1;
     const std::vector<double>& x2 =

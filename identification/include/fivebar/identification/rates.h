@@ -1,6 +1,8 @@
 // Rates and accelerations from sampled angles: local polynomial least squares (Savitzky-Golay).
 #pragma once
 
+#include <cstdint>
+#include <map>
 #include <vector>
 
 namespace fivebar::identification {
@@ -37,5 +39,27 @@ void savitzky_golay(const std::vector<double>& t, const std::vector<double>& x,
 /// ddx[i] = sum_r d2[r] x[lo + r] (the filter is linear in x; used to propagate sensor noise).
 void savitzky_golay_taps(const std::vector<double>& t, int i, const SgOptions& options, int* lo,
                          std::vector<double>* d1, std::vector<double>* d2);
+
+/// savitzky_golay_taps of one filter over one grid t, each computed once per distinct window:
+/// the taps are a function of the window's scaled offsets (t[lo + r] - t[i]) / dt alone, so the
+/// windows met again (the centred windows of a uniform grid, whose offsets repeat bit for bit up
+/// to the rounding of t) get the same taps bit for bit, without another factorization.
+class SgTapCache {
+ public:
+  /// t must outlive the cache
+  SgTapCache(const std::vector<double>& t, const SgOptions& options);
+  /// savitzky_golay_taps(t, i, options, lo, ...), the taps owned by the cache
+  void taps(int i, int* lo, const std::vector<double>** d1, const std::vector<double>** d2);
+
+ private:
+  struct Taps {
+    std::vector<double> d1, d2;
+  };
+  const std::vector<double>& t_;
+  SgOptions options_;
+  std::map<std::vector<std::uint64_t>, Taps> memo_;  ///< by the offsets' bit patterns
+  std::vector<double> offsets_;
+  std::vector<std::uint64_t> key_;
+};
 
 }  // namespace fivebar::identification
