@@ -311,6 +311,7 @@ struct WiderWindow {
   SgOptions sg;          ///< the wider window
   double z = 0;          ///< the predicted bias of coefficient `worst` at f.sg [its std]
   int worst = -1;        ///< the public coefficient that moves the window (-1: none)
+  double largest = 0;    ///< the largest predicted bias at f.sg of a public coefficient [its std]
   /// the predicted bias of the public friction coefficients at the wider window, and its spread
   Eigen::VectorXd bias, spread;
   /// the same at the checked window (f.sg)
