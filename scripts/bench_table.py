@@ -38,6 +38,7 @@ SCENE = os.path.join(ROOT, "datasets", "scenes", "paper.yaml")
 LOG = os.path.join(ROOT, "datasets", "logs", "per_joint_multisine.csv")
 TASKS = os.path.join(ROOT, "datasets", "tasks", "paper_tasks.yaml")
 OUT = os.path.join(ROOT, "docs", "benchmarks.md")
+OTHER = "another build"  # the other binaries' name on the page (--baseline-name)
 
 
 def cpu_children():
@@ -171,7 +172,8 @@ def instruction_lines(counts):
              "the totals of N = 2000 and N = 1000 calls, apart; `friction_warm`: consecutive "
              "states 1e-5 s apart, the loop warm-started as in the simulator):", ""]
     if len(counts) == 2:
-        lines += ["| evaluation | this build | other | other / this |", "|---|---|---|---|"]
+        lines += [f"Other: {OTHER}'s rhs_calls.", "",
+                  "| evaluation | this build | other | other / this |", "|---|---|---|---|"]
         for m in RHS_MODES:
             lines.append(f"| {m} | {counts[0][m]:.0f} | {counts[1][m]:.0f} | "
                          f"{counts[1][m] / counts[0][m]:.2f} |")
@@ -218,7 +220,8 @@ def write(rows, rhs, counts, binaries, benches, repeats, load):
         lines += ["CPU time of one evaluation (`bench_model --benchmark_filter=RightHandSide`, median of "
                   "5 repetitions per run):", ""]
         if len(rhs) == 2:
-            lines += ["This build against another bench_model (`--baseline-bench`), run alternately.", "",
+            lines += [f"This build against {OTHER}'s bench_model (`--baseline-bench`), run "
+                      "alternately.", "",
                       "| evaluation | this build [ns] | other [ns] | other / this |",
                       "|---|---|---|---|"]
             for k, v in rhs[0].items():
@@ -242,7 +245,7 @@ def write(rows, rhs, counts, binaries, benches, repeats, load):
         lines.append(f"Not measured: `{os.path.relpath(FIVEBAR, ROOT)}` was not built when the "
                      "table was written (`scripts/build.sh`, then run the script again).")
     elif len(binaries) == 2:
-        lines += ["This build against another fivebar binary (`--baseline`), run alternately.", "",
+        lines += [f"This build against {OTHER}'s fivebar (`--baseline`), run alternately.", "",
                   "| what | this build | other | other / this |", "|---|---|---|---|"]
         for name, t in rows:
             lines.append(f"| {name} | {seconds(t[0])} | {seconds(t[1])} | {t[1] / t[0]:.2f} |")
@@ -258,6 +261,8 @@ def write(rows, rhs, counts, binaries, benches, repeats, load):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--baseline", help="another fivebar binary to run alternately with this one")
+    ap.add_argument("--baseline-name", default="another build",
+                    help="what the page calls the other binaries (e.g. their commit)")
     ap.add_argument("--baseline-bench",
                     help="another bench_model binary to run alternately with this one")
     ap.add_argument("--baseline-rhs-calls",
@@ -265,6 +270,8 @@ def main():
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--skip-optimize", action="store_true", help="leave out optimize (minutes)")
     a = ap.parse_args()
+    global OTHER
+    OTHER = a.baseline_name
     binaries = [FIVEBAR] + ([a.baseline] if a.baseline else [])
     benches = [BENCH_MODEL] + ([a.baseline_bench] if a.baseline_bench else [])
     load_start = os.getloadavg()[0]
