@@ -251,7 +251,9 @@ void print_summary(const Args& a, const id::TorqueLog& log, const id::IdentifyRe
   if (!a.no_validation) print_validation(val);
   for (const std::string& w : res.warnings) warn(w);
   std::vector<std::string> unread;
-  read_truth(log.comments, &unread);
+  for (const std::string& u : truth_not_compared(read_truth(log.comments, &unread), res.layout)) {
+    warn(a.log + ": " + u + " (no truth compared)");
+  }
   for (const std::string& u : unread) warn(a.log + ": " + u + " (not read: no truth compared)");
   std::fflush(stdout);
 }

@@ -112,9 +112,36 @@ LogTruth read_truth(const std::vector<std::string>& comments, std::vector<std::s
       if (unread && key != "true.law") unread->push_back(key + ": " + reason);
       continue;
     }
-    truth[key.substr(5)] = v;
+    if (!truth.emplace(key.substr(5), v).second && unread) {
+      unread->push_back(key + ": given again (the first line is read)");
+    }
   }
   return truth;
+}
+
+std::vector<std::string> truth_not_compared(const LogTruth& truth,
+                                            const identification::ParameterLayout& layout) {
+  std::map<std::string, int> counts = {{"pin_radius", layout.joints},
+                                       {"inertial", layout.inertial_size()},
+                                       {"offset", layout.actuators},
+                                       {"actuator_coulomb", layout.actuators},
+                                       {"actuator_viscous", layout.actuators}};
+  for (int c = 0; c < kCoefficients; ++c) {
+    counts[coefficient_info(static_cast<Coefficient>(c)).key] = layout.joints;
+  }
+  std::vector<std::string> out;
+  for (const auto& [key, v] : truth) {
+    auto it = counts.find(key);
+    if (it == counts.end()) {
+      out.push_back("true." + key + ": no such parameter");
+    } else if (v.size() != size_t(it->second)) {
+      out.push_back("true." + key + ": " + std::to_string(v.size()) +
+                    (v.size() == 1 ? " value" : " values") + ", where this " +
+                    (layout.joints == kFourBarJoints ? "four_bar" : "five-bar") + " has " +
+                    std::to_string(it->second));
+    }
+  }
+  return out;
 }
 
 bool true_value(const LogTruth& truth, const id::ParameterLayout& layout, int i,

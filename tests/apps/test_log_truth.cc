@@ -22,6 +22,7 @@ TEST(LogTruth, EveryWrittenValueReadsBackUnderItsParameterName) {
   const LogTruth truth = read_truth(comments, &unread);
   EXPECT_EQ(truth.count("broken"), 0u);
   EXPECT_EQ(unread, std::vector<std::string>{"true.broken: 'a' is not a finite number"});
+  EXPECT_TRUE(truth_not_compared(truth, identification::ParameterLayout()).empty());
   ASSERT_EQ(truth.at("coulomb").size(), size_t(kJoints));
   EXPECT_EQ(truth.at("coulomb")[3], 0.14);
   EXPECT_EQ(truth.at("static_coulomb")[0], 0.2);
@@ -65,6 +66,9 @@ TEST(LogTruth, AFourBarsTruthReadsBackWhole) {
   std::vector<std::string> unread;
   const LogTruth truth = read_truth(truth_lines(p), &unread);
   EXPECT_TRUE(unread.empty()) << unread.front();
+  identification::ParameterLayout layout;
+  layout.set_four_bar();
+  EXPECT_TRUE(truth_not_compared(truth, layout).empty());
   EXPECT_EQ(truth.at("inertial").size(), size_t(kInertialPerLink * kFourBarLinks));
   EXPECT_EQ(truth.at("offset"), std::vector<double>{0.03});
 }
@@ -82,6 +86,26 @@ TEST(LogTruth, LinesThatDoNotReadAreNamedWithTheirReason) {
       "true.coulomb: '0.12x' is not a finite number", "true.viscous: a trailing comma",
       "true.pin_radius: 3 values (1, 2, 4, 5, 12 or 16 are read)", "true.offset: no '='"};
   EXPECT_EQ(unread, expected);
+}
+
+TEST(LogTruth, ValuesNoParameterCanBeComparedWithAreNamed) {
+  const std::vector<std::string> comments = {
+      " true.coulomb = 0.1,0.1,0.1,0.1", " true.cowlomb = 0.3", " true.viscous = 0.02,0.02,0.02,0.02,0.02",
+      " true.viscous = 0.9,0.9,0.9,0.9,0.9", " true.offset = 0.01,0.02"};
+  std::vector<std::string> unread;
+  const LogTruth truth = read_truth(comments, &unread);
+  EXPECT_EQ(unread, std::vector<std::string>{"true.viscous: given again (the first line is read)"});
+  EXPECT_EQ(truth.at("viscous")[0], 0.02);
+  identification::ParameterLayout five;
+  const std::vector<std::string> expected = {"true.coulomb: 4 values, where this five-bar has 5",
+                                             "true.cowlomb: no such parameter"};
+  EXPECT_EQ(truth_not_compared(truth, five), expected);
+  identification::ParameterLayout four;
+  four.set_four_bar();
+  const std::vector<std::string> expected4 = {
+      "true.cowlomb: no such parameter", "true.offset: 2 values, where this four_bar has 1",
+      "true.viscous: 5 values, where this four_bar has 4"};
+  EXPECT_EQ(truth_not_compared(truth, four), expected4);
 }
 
 }  // namespace

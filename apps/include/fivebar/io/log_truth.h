@@ -31,6 +31,12 @@ std::vector<std::string> truth_lines(const FourBarParams& params);
 LogTruth read_truth(const std::vector<std::string>& comments,
                     std::vector<std::string>* unread = nullptr);
 
+/// The `true.*` values that no parameter of a fit with `layout`'s mechanism can be compared
+/// with, as "true.<key>: <reason>": an unknown name, or a count that is not the mechanism's
+/// (joints, standard inertial parameters, actuators).
+std::vector<std::string> truth_not_compared(const LogTruth& truth,
+                                            const identification::ParameterLayout& layout);
+
 /// The true value of parameter i (named `name`) of `layout`, when `truth` states it (a shared
 /// friction coefficient: only when the five joints' true values are equal); false otherwise.
 bool true_value(const LogTruth& truth, const identification::ParameterLayout& layout, int i,
