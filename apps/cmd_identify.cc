@@ -13,10 +13,10 @@
 #include <memory>
 #include <sstream>
 
+#include "cli_options.h"
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/parameters.h"
 #include "fivebar/identification/torque_log.h"
-#include "cli_options.h"
 #include "fivebar/io/command.h"
 #include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"

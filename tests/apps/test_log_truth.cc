@@ -74,10 +74,12 @@ TEST(LogTruth, AFourBarsTruthReadsBackWhole) {
 }
 
 TEST(LogTruth, LinesThatDoNotReadAreNamedWithTheirReason) {
-  const std::vector<std::string> comments = {
-      " true.law = coulomb_viscous",          " true.coulomb = 0.1,0.1,0.12x,0.1,0.1",
-      " true.viscous = 0.02,0.02,0.02,0.02,", " true.pin_radius = 0.01,0.01,0.01",
-      " true.offset",                         " true.actuator_viscous = 0.001,0.002"};
+  const std::vector<std::string> comments = {" true.law = coulomb_viscous",
+                                             " true.coulomb = 0.1,0.1,0.12x,0.1,0.1",
+                                             " true.viscous = 0.02,0.02,0.02,0.02,",
+                                             " true.pin_radius = 0.01,0.01,0.01",
+                                             " true.offset",
+                                             " true.actuator_viscous = 0.001,0.002"};
   std::vector<std::string> unread;
   const LogTruth truth = read_truth(comments, &unread);
   EXPECT_EQ(truth.size(), 1u);
@@ -90,8 +92,9 @@ TEST(LogTruth, LinesThatDoNotReadAreNamedWithTheirReason) {
 
 TEST(LogTruth, ValuesNoParameterCanBeComparedWithAreNamed) {
   const std::vector<std::string> comments = {
-      " true.coulomb = 0.1,0.1,0.1,0.1", " true.cowlomb = 0.3", " true.viscous = 0.02,0.02,0.02,0.02,0.02",
-      " true.viscous = 0.9,0.9,0.9,0.9,0.9", " true.offset = 0.01,0.02"};
+      " true.coulomb = 0.1,0.1,0.1,0.1", " true.cowlomb = 0.3",
+      " true.viscous = 0.02,0.02,0.02,0.02,0.02", " true.viscous = 0.9,0.9,0.9,0.9,0.9",
+      " true.offset = 0.01,0.02"};
   std::vector<std::string> unread;
   const LogTruth truth = read_truth(comments, &unread);
   EXPECT_EQ(unread, std::vector<std::string>{"true.viscous: given again (the first line is read)"});
@@ -102,9 +105,9 @@ TEST(LogTruth, ValuesNoParameterCanBeComparedWithAreNamed) {
   EXPECT_EQ(truth_not_compared(truth, five), expected);
   identification::ParameterLayout four;
   four.set_four_bar();
-  const std::vector<std::string> expected4 = {
-      "true.cowlomb: no such parameter", "true.offset: 2 values, where this four_bar has 1",
-      "true.viscous: 5 values, where this four_bar has 4"};
+  const std::vector<std::string> expected4 = {"true.cowlomb: no such parameter",
+                                              "true.offset: 2 values, where this four_bar has 1",
+                                              "true.viscous: 5 values, where this four_bar has 4"};
   EXPECT_EQ(truth_not_compared(truth, four), expected4);
 }
 
