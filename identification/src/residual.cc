@@ -199,37 +199,16 @@ bool StructuredResidual::evaluate(const double* x, double* r, double* jacobian,
   };
   friction_jacobian(x, P, seeded, n_seeded, terms, &D, &phi, &motor, &offset);
   std::array<double, kInertialParams> pi;
-  for (int i = 0; i < kInertialParams; ++i) {
-    pi[i] = layout_.inertia ? x[layout_.inertia_offset() + i] : pi0_[i];
-  }
   std::array<double, 10> F0;
-  for (int a = 0; a < 10; ++a) {
-    F0[a] = st_.b(a);
-    for (int i = 0; i < kInertialParams; ++i) F0[a] += st_.A(a, i) * pi[i];
-  }
+  frictionless_reactions(x, &pi, &F0);
   std::array<double, kJoints> N_star;
   if (!loop(phi, motor, F0, &N_star)) return false;
-  // the implicit step of operator() with Jets: N = N* + H^-1 (|F(N*)| - N*), H = I - G_N,
-  // and dN/dx = H^-1 d|F(N*)|/dx
-  std::array<double, 10> F;
-  reactions_of(phi, motor, F0, N_star, &F);
-  Eigen::Matrix<double, kJoints, kJoints> H = Eigen::Matrix<double, kJoints, kJoints>::Identity();
-  Eigen::Matrix<double, kJoints, 10> U = Eigen::Matrix<double, kJoints, 10>::Zero();
-  std::array<double, kJoints> step;
-  for (int k = 0; k < kJoints; ++k) {
-    const double n = std::sqrt(F[2 * k] * F[2 * k] + F[2 * k + 1] * F[2 * k + 1]);
-    step[k] = n - N_star[k];
-    if (!(n > 0.0)) continue;
-    const double fx = F[2 * k] / n, fy = F[2 * k + 1] / n;
-    U(k, 2 * k) = fx;
-    U(k, 2 * k + 1) = fy;
-    for (int j = 0; j < kJoints; ++j) {
-      H(k, j) -= (fx * st_.dF(2 * k, j) + fy * st_.dF(2 * k + 1, j)) * phi[j];
-    }
-  }
-  const std::array<double, kJoints> dN = fivebar::detail::solve_with_double_matrix(H, step);
+  // the implicit step of operator() with Jets, N = N* + H^-1 (|F(N*)| - N*) with H = I - G_N,
+  // its H and the reactions' unit directions U for dN/dx = H^-1 d|F(N*)|/dx
   std::array<double, kJoints> N;
-  for (int k = 0; k < kJoints; ++k) N[k] = dN[k] + N_star[k];
+  Eigen::Matrix<double, kJoints, kJoints> H;
+  Eigen::Matrix<double, kJoints, 10> U;
+  implicit_step(phi, motor, F0, N_star, &N, &H, &U);
   residual_at(phi, motor, offset, pi, N, r);
   if (r_loop != nullptr) residual_at(phi, motor, offset, pi, N_star, r_loop);
   // dr/dx = -(d offset + Y dpi + G dMf), dMf_j = N_j dphi_j + phi_j dN_j + dmotor_j, where

@@ -323,9 +323,8 @@ Status finite_loads(const Ld& L, double t) {
 
 /// Whether every load of L is finite, as one test: x * 0 is +-0 for a finite x and NaN for an
 /// infinite or NaN one, and so is their sum.
-template <class Ld>
-bool all_finite(const Ld& L) {
-  using M = std::conditional_t<std::is_same_v<Ld, Loads<double>>, FiveBar, FourBar>;
+template <class M>
+bool all_finite(const LoadsOf<M>& L) {
   double zero = 0.0;
   for (const auto& named : Sim<M>::load_values(L)) zero += named.second * 0.0;
   return zero == 0.0;
@@ -340,7 +339,7 @@ const LoadsOf<M>& loads_at(Context<M>& c, double t) {
     c.loads_then = (*c.loads)(t);
     c.loads_time = t;
     // (the status worded only for a load that is not finite: the common case costs no message)
-    if (!all_finite(c.loads_then)) {
+    if (!all_finite<M>(c.loads_then)) {
       c.loads_status = finite_loads(c.loads_then, t);
     } else if (!c.loads_status.ok()) {
       c.loads_status = Status::Ok();

@@ -102,14 +102,8 @@ class StructuredResidual {
     std::array<T, kActuators> offset;
     friction_terms(x, &phi, &motor, &offset);
     std::array<T, kInertialParams> pi;
-    for (int i = 0; i < kInertialParams; ++i) {
-      pi[i] = layout_.inertia ? x[layout_.inertia_offset() + i] : T(pi0_[i]);
-    }
     std::array<T, 10> F0;
-    for (int a = 0; a < 10; ++a) {
-      F0[a] = T(st_.b(a));
-      for (int i = 0; i < kInertialParams; ++i) F0[a] += st_.A(a, i) * pi[i];
-    }
+    frictionless_reactions(x, &pi, &F0);
     std::array<T, kJoints> N;
     if constexpr (std::is_same_v<T, double>) {
       if (!loop(phi, motor, F0, &N)) return false;
@@ -163,6 +157,19 @@ class StructuredResidual {
               : fp.pin_radius[j] * friction_law(fp, j, T(st_.w[j]), coulomb_sign(st_.slip[j]));
     }
     for (int a = 0; a < kActuators; ++a) (*offset)[a] = act.offset[a];
+  }
+  /// The standard inertial parameters pi at x (the scene's where they are not fitted) and the
+  /// reactions without friction torques, F0 = A pi + b.
+  template <typename T>
+  void frictionless_reactions(const T* x, std::array<T, kInertialParams>* pi,
+                              std::array<T, 10>* F0) const {
+    for (int i = 0; i < kInertialParams; ++i) {
+      (*pi)[i] = layout_.inertia ? x[layout_.inertia_offset() + i] : T(pi0_[i]);
+    }
+    for (int a = 0; a < 10; ++a) {
+      (*F0)[a] = T(st_.b(a));
+      for (int i = 0; i < kInertialParams; ++i) (*F0)[a] += st_.A(a, i) * (*pi)[i];
+    }
   }
   /// r = tau - (c + offset + Y pi + G Mf), Mf = phi N + motor.
   template <typename T>
@@ -220,25 +227,30 @@ class StructuredResidual {
   template <typename T>
   void implicit_step(const std::array<T, kJoints>& phi, const std::array<T, kJoints>& motor,
                      const std::array<T, 10>& F0, const std::array<double, kJoints>& N_star,
-                     std::array<T, kJoints>* N) const {
+                     std::array<T, kJoints>* N,
+                     Eigen::Matrix<double, kJoints, kJoints>* H_out = nullptr,
+                     Eigen::Matrix<double, kJoints, 10>* U = nullptr) const {
     using std::sqrt;
     std::array<T, kJoints> Ns;
     for (int k = 0; k < kJoints; ++k) Ns[k] = T(N_star[k]);
     std::array<T, 10> F;
     reactions_of(phi, motor, F0, Ns, &F);
     Eigen::Matrix<double, kJoints, kJoints> J = Eigen::Matrix<double, kJoints, kJoints>::Identity();
+    if (U) U->setZero();
     std::array<T, kJoints> r;
     for (int k = 0; k < kJoints; ++k) {
       const T n = sqrt(F[2 * k] * F[2 * k] + F[2 * k + 1] * F[2 * k + 1]);
       r[k] = n - N_star[k];
       if (!(value_of(n) > 0.0)) continue;
       const double fx = value_of(F[2 * k]) / value_of(n), fy = value_of(F[2 * k + 1]) / value_of(n);
+      if (U) (*U)(k, 2 * k) = fx, (*U)(k, 2 * k + 1) = fy;
       for (int j = 0; j < kJoints; ++j) {
         J(k, j) -= (fx * st_.dF(2 * k, j) + fy * st_.dF(2 * k + 1, j)) * value_of(phi[j]);
       }
     }
     const std::array<T, kJoints> dN = fivebar::detail::solve_with_double_matrix(J, r);
     for (int k = 0; k < kJoints; ++k) (*N)[k] = dN[k] + N_star[k];
+    if (H_out) *H_out = J;
   }
 
   FrictionParams<double> friction_;
