@@ -54,6 +54,27 @@ void check_numbers(const CLI::App& app) {
   }
 }
 
+void check_list_fields(const CLI::App& sub, int argc, const char* const* argv) {
+  const CLI::Option* list = nullptr;  // the list option whose values follow, if any
+  for (int i = 2; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (arg.rfind("--", 0) == 0) {
+      const size_t eq = arg.find('=');
+      const CLI::Option* o = sub.get_option_no_throw(arg.substr(0, eq));
+      list = o && o->get_delimiter() == ',' ? o : nullptr;
+      if (!list || eq == std::string::npos) continue;
+      arg = arg.substr(eq + 1);
+    }
+    if (!list) continue;
+    const bool empty_field = arg.empty() || arg.front() == ',' || arg.back() == ',' ||
+                             arg.find(",,") != std::string::npos;
+    if (empty_field) {
+      throw InputError("command line", list->get_name(),
+                       "an empty value in '" + arg + "' (a list is values separated by commas)");
+    }
+  }
+}
+
 CLI::Validator positive_number() {
   return range_check([](double v) { return v > 0; }, "> 0");
 }

@@ -19,6 +19,14 @@ namespace fivebar::io {
 /// the option's default is inf (no limit), inf and huge values are accepted.
 void check_numbers(const CLI::App& app);
 
+/// The rule for comma-separated list options (those declared with `->delimiter(',')`), run on
+/// the command line before parsing, because the parser drops empty fields: a value of such an
+/// option with an empty field (`0.1,,0.2`, a leading or trailing comma) throws
+/// InputError(`command line: --opt: an empty value in '0.1,,0.2' ...`) instead of being read as
+/// fewer values. `sub`: the subcommand named by argv[1]; its options' values are the text after
+/// `--opt=` or the arguments after `--opt` up to the next one starting with `--`.
+void check_list_fields(const CLI::App& sub, int argc, const char* const* argv);
+
 /// The plausibility limit of scene key `key` (scene_limit, docs/scene.md) for an option that
 /// stands for that key's quantity: the same bound and message as the scene's.
 CLI::Validator within_scene_limit(const std::string& key);

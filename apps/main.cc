@@ -67,6 +67,11 @@ int main(int argc, char** argv) {
       return fail(kUsageError, std::string("command line: ") + argv[1] +
                                    ": unknown subcommand (known:" + known + ")");
     }
+    try {  // before parsing: the parser drops a list's empty fields
+      fivebar::io::check_list_fields(*app.get_subcommand(argv[1]), argc, argv);
+    } catch (const fivebar::InputError& e) {
+      return fail(kInputError, e.what());
+    }
   }
 
   try {

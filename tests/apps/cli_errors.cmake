@@ -82,6 +82,14 @@ run_fivebar(2 "command line: --stribeck-velocity: must be > 0, got 0"
             --stribeck-velocity 0)
 run_fivebar(2 "command line: --window: must be > 0, got 0"
             identify ${paper} --log ${log} --window 0 --out ${WORK_DIR}/out_bad)
+# comma-separated lists: an empty field is refused, not read as fewer values (and no output)
+run_fivebar(2 "command line: --actuator-coulomb: an empty value in '0.1,,0.2'"
+            synth-log ${paper} --out ${WORK_DIR}/out_bad/list.csv --actuator-coulomb 0.1,,0.2)
+run_fivebar(2 "command line: --tolerances: an empty value in '1e-3,'"
+            accuracy ${paper} --tolerances=1e-3, --out ${WORK_DIR}/out_bad)
+if(EXISTS ${WORK_DIR}/out_bad/list.csv)
+  message(FATAL_ERROR "synth-log wrote list.csv although its --actuator-coulomb was refused")
+endif()
 run_fivebar(2 "command line: --min-rate: must be >= 0, got -1"
             identify ${paper} --log ${log} --min-rate -1 --out ${WORK_DIR}/out_bad)
 # a load time before the start, a --window longer than the 10 s log (it was run with exit 0),
