@@ -25,8 +25,8 @@ int main(int argc, char** argv) {
   for (int m = 0; m < 6 && argc == 3; ++m) mode = std::strcmp(argv[1], modes[m]) == 0 ? m : mode;
   const long n = argc == 3 ? std::atol(argv[2]) : 0;
   if (mode < 0 || n < 1) {
-    std::fprintf(
-        stderr, "usage: rhs_calls friction|frictionless|actuators|friction_warm|friction_path|"
+    std::fprintf(stderr,
+                 "usage: rhs_calls friction|frictionless|actuators|friction_warm|friction_path|"
                  "frictionless_path N\n");
     return 2;
   }
@@ -47,10 +47,9 @@ int main(int argc, char** argv) {
     const double dt = mode >= 3 ? 1e-5 * static_cast<double>(i % 200) : 0.0;
     Evaluation<double> ev;
     const Loads<double> L = testing::paper_loads(0.31 + dt);
-    const Status st = forward_dynamics(p, L, 1.3 + 23.0 * dt, 2.0 - 31.0 * dt, 23.0, -31.0,
-                                       frictionless ? nullptr : &slip, opt, &ev,
-                                       static_cast<const std::array<double, kJoints>*>(nullptr),
-                                       mode == 3 ? &warm : nullptr);
+    const Status st = forward_dynamics(
+        p, L, 1.3 + 23.0 * dt, 2.0 - 31.0 * dt, 23.0, -31.0, frictionless ? nullptr : &slip, opt,
+        &ev, static_cast<const std::array<double, kJoints>*>(nullptr), mode == 3 ? &warm : nullptr);
     sum += st.ok() ? ev.thdd[0] + ev.thdd[1] : 0.0;
   }
   std::printf("%.17g\n", sum / static_cast<double>(n));  // (keeps the evaluations)
