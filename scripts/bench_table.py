@@ -32,7 +32,8 @@ BUILD = os.path.join(ROOT, "build", "release")
 FIVEBAR = os.path.join(BUILD, "apps", "fivebar")
 BENCH_MODEL = os.path.join(BUILD, "tests", "bench", "bench_model")
 RHS_CALLS = os.path.join(BUILD, "tests", "bench", "rhs_calls")
-RHS_MODES = ("friction", "frictionless", "actuators", "friction_warm")
+RHS_MODES = ("friction", "frictionless", "actuators", "friction_warm", "friction_path",
+             "frictionless_path")
 PEERS = os.path.join(BUILD, "tests", "bench", "peers")
 SCENE = os.path.join(ROOT, "datasets", "scenes", "paper.yaml")
 LOG = os.path.join(ROOT, "datasets", "logs", "per_joint_multisine.csv")
@@ -148,13 +149,17 @@ def right_hand_side(benches, repeats):
 
 
 def instructions(rhs_calls, mode):
-    """Instructions of one right-hand side: callgrind's totals of 2000 and 1000 calls, apart."""
+    """Instructions of one right-hand side: callgrind's totals of 2000 and 1000 calls, apart
+    (None where the binary has no such mode: an older rhs_calls)."""
     totals = []
     for n in (1000, 2000):
         done = subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
                                rhs_calls, mode, str(n)], stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True, check=True)
-        totals.append(int(re.search(r"Collected : (\d+)", done.stderr).group(1)))
+                              stderr=subprocess.PIPE, text=True)
+        found = re.search(r"Collected : (\d+)", done.stderr)
+        if done.returncode != 0 or not found:
+            return None
+        totals.append(int(found.group(1)))
     return (totals[1] - totals[0]) / 1000
 
 
@@ -170,21 +175,31 @@ def instruction_lines(counts):
     """The table of right_hand_side_instructions."""
     lines = ["", "Instructions of one evaluation (`valgrind --tool=callgrind`, `rhs_calls MODE N`: "
              "the totals of N = 2000 and N = 1000 calls, apart; `friction_warm`: consecutive "
-             "states 1e-5 s apart, the loop warm-started as in the simulator):", ""]
+             "states 1e-5 s apart, the loop warm-started as in the simulator; `friction_path`: "
+             "the same states and loads started cold; `frictionless_path`: the same states and "
+             "loads without friction):", ""]
+
+    def fmt(x):  # (None: a mode the binary lacks)
+        return "n/a" if x is None else f"{x:.0f}"
+
     if len(counts) == 2:
         lines += [f"Other: {OTHER}'s rhs_calls.", "",
                   "| evaluation | this build | other | other / this |", "|---|---|---|---|"]
         for m in RHS_MODES:
-            lines.append(f"| {m} | {counts[0][m]:.0f} | {counts[1][m]:.0f} | "
-                         f"{counts[1][m] / counts[0][m]:.2f} |")
+            this, other = counts[0][m], counts[1][m]
+            ratio = "n/a" if this is None or other is None else f"{other / this:.2f}"
+            lines.append(f"| {m} | {fmt(this)} | {fmt(other)} | {ratio} |")
     else:
         lines += ["| evaluation | instructions |", "|---|---|"]
         for m in RHS_MODES:
-            lines.append(f"| {m} | {counts[0][m]:.0f} |")
+            lines.append(f"| {m} | {fmt(counts[0][m])} |")
     c = counts[0]
     lines += ["", f"In instructions, with friction the right-hand side costs "
               f"{c['friction'] / c['frictionless']:.2f} times the frictionless one "
-              f"({c['friction_warm'] / c['frictionless']:.2f} warm-started)."]
+              f"({c['friction_warm'] / c['frictionless']:.2f} warm-started)"
+              + (f"; in the simulator's conditions (`friction_warm` against `frictionless_path`, "
+                 f"the same states and loads) {c['friction_warm'] / c['frictionless_path']:.2f} "
+                 f"times." if c["frictionless_path"] else ".")]
     return lines
 
 

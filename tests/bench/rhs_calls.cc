@@ -5,9 +5,11 @@
 //   friction 1000
 // Modes: friction, frictionless, actuators (the benchmark's state, the loop started cold), and
 // friction_warm (states 1e-5 s apart along the benchmark's velocities, 200 in a cycle, the loop
-// warm-started from the previous evaluation as in the simulator), and friction_path (the same
+// warm-started from the previous evaluation as in the simulator), friction_path (the same
 // states and loads, the loop started cold: what friction_warm saves is the difference; the other
-// modes' loads are at one time, which the compiler evaluates once).
+// modes' loads are at one time, which the compiler evaluates once), and frictionless_path (the
+// same states and loads without friction: friction_warm / frictionless_path is the ratio in the
+// simulator's conditions).
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -17,17 +19,20 @@
 
 int main(int argc, char** argv) {
   using namespace fivebar;
-  const char* modes[] = {"friction", "frictionless", "actuators", "friction_warm", "friction_path"};
+  const char* modes[] = {"friction",      "frictionless",  "actuators",
+                         "friction_warm", "friction_path", "frictionless_path"};
   int mode = -1;
-  for (int m = 0; m < 5 && argc == 3; ++m) mode = std::strcmp(argv[1], modes[m]) == 0 ? m : mode;
+  for (int m = 0; m < 6 && argc == 3; ++m) mode = std::strcmp(argv[1], modes[m]) == 0 ? m : mode;
   const long n = argc == 3 ? std::atol(argv[2]) : 0;
   if (mode < 0 || n < 1) {
-    std::fprintf(
-        stderr, "usage: rhs_calls friction|frictionless|actuators|friction_warm|friction_path N\n");
+    std::fprintf(stderr,
+                 "usage: rhs_calls friction|frictionless|actuators|friction_warm|friction_path|"
+                 "frictionless_path N\n");
     return 2;
   }
   Params<double> p = paper_params();
-  if (mode == 1) p.friction.law = FrictionLaw::kNone;
+  const bool frictionless = mode == 1 || mode == 5;
+  if (frictionless) p.friction.law = FrictionLaw::kNone;
   if (mode == 2) p.actuators.coulomb = p.actuators.viscous = {0.03, 0.002};
   EvalOptions opt;
   opt.want_reactions = false;
@@ -42,10 +47,9 @@ int main(int argc, char** argv) {
     const double dt = mode >= 3 ? 1e-5 * static_cast<double>(i % 200) : 0.0;
     Evaluation<double> ev;
     const Loads<double> L = testing::paper_loads(0.31 + dt);
-    const Status st = forward_dynamics(p, L, 1.3 + 23.0 * dt, 2.0 - 31.0 * dt, 23.0, -31.0,
-                                       mode == 1 ? nullptr : &slip, opt, &ev,
-                                       static_cast<const std::array<double, kJoints>*>(nullptr),
-                                       mode == 3 ? &warm : nullptr);
+    const Status st = forward_dynamics(
+        p, L, 1.3 + 23.0 * dt, 2.0 - 31.0 * dt, 23.0, -31.0, frictionless ? nullptr : &slip, opt,
+        &ev, static_cast<const std::array<double, kJoints>*>(nullptr), mode == 3 ? &warm : nullptr);
     sum += st.ok() ? ev.thdd[0] + ev.thdd[1] : 0.0;
   }
   std::printf("%.17g\n", sum / static_cast<double>(n));  // (keeps the evaluations)
