@@ -48,15 +48,14 @@ void link_wrench(int l, const Vec2<double>& e, double w, double alpha, const Vec
 /// contributes (its inertial wrench, link_wrench): the couplers' force balances F2 - F3 = R3,
 /// F3 - F4 = R4 and moment sums about C, F2 = f3 S3 + f4 S4 (FiveBar::inverse_response); the
 /// cranks' forces into F1 and F5, their moments about O and D0 into M1 and M2. Link 3 (about B)
-/// gives R3 = f, S3 = n + (B - C) x f; link 4 (about D) R4 = f and S4 = -n, its (D - C) x f
-/// cancelling in S4; the loads R3 = -Fvec, S3 = -(P - C) x Fvec - M3; both couplers' R3 the
-/// term (D - C) x R3 of S4; a friction torque its unit in S3 (+B, -C), S4 (-C, +D), M1 (+O, -B)
-/// and M2 (+D, +D0).
+/// gives R3 = f and S3 = n + (B - C) x f; link 4 (about D) R4 = f and S4 = -n (the (D - C) x f
+/// of its moment about C cancels against S4's (D - C) x R4); the loads R3 = -Fvec and
+/// S3 = -(P - C) x Fvec - M3; every column's R3 adds (D - C) x R3 to its S4; a friction torque
+/// enters with a unit in S3 (+B, -C), S4 (-C, +D), M1 (+O, -B) and M2 (+D, +D0).
 Eigen::Matrix<double, 12, kColumns> structure_columns(const Params<double>& p,
                                                       const Kinematics<double>& k,
                                                       const Bias<double>& bias,
-                                                      const Vec2<double>& v,
-                                                      const Vec2<double>& a,
+                                                      const Vec2<double>& v, const Vec2<double>& a,
                                                       const Loads<double>& L) {
   ColumnForces f1 = ColumnForces::Zero(), f2 = f1, R3 = f1, R4 = f1;
   ColumnRow n1 = ColumnRow::Zero(), n2 = n1, n3 = n1, n4 = n1;
@@ -133,8 +132,8 @@ bool sample_structure(const Params<double>& scene, const Sample& s, const EvalOp
     if (acts && N[j] < 1e-9 * nmax) return false;
     out->dF.col(j) = acts ? Eigen::Matrix<double, 10, 1>(D.col(kTorqueColumn + j).head<10>())
                           : Eigen::Matrix<double, 10, 1>::Zero();
-    out->G.col(j) = acts ? Eigen::Vector2d(D.col(kTorqueColumn + j).tail<2>())
-                         : Eigen::Vector2d::Zero();
+    out->G.col(j) =
+        acts ? Eigen::Vector2d(D.col(kTorqueColumn + j).tail<2>()) : Eigen::Vector2d::Zero();
   }
   return true;
 }

@@ -92,7 +92,8 @@ bool reference_structure(const Params<double>& scene, const Sample& s, const Eva
     out->slip[j] = ev.slip[j];
     out->w[j] = ev.w[j].a;
     const bool acts = ev.slip[j] != kStuck && ev.slip[j] != JointMode::kRest;
-    if (!acts && ev.slip[j] == JointMode::kRest && out->w[j] != 0 && scene.friction.pin_radius[j] != 0) {
+    if (!acts && ev.slip[j] == JointMode::kRest && out->w[j] != 0 &&
+        scene.friction.pin_radius[j] != 0) {
       return false;
     }
     const double scale = acts ? coulomb_sign(ev.slip[j]) * ev.N[j].a : 0.0;
