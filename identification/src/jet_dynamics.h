@@ -1,10 +1,9 @@
 // inverse_dynamics for the ceres::Jet widths that identification differentiates through
-// (excitation's group widths, the residual's 5 pin radii, and identify's fallback residual padded
-// to one of them). Each width takes ~7 s to compile (-O2), so they are compiled once, in
-// src/jet_dynamics_*.cc (explicit instantiations split over several units that build in
-// parallel), instead of again in every unit that calls them: this header declares them `extern
-// template`. Including it is enough; a width not listed is instantiated as usual (the noise
-// model's 6 motion variables, in noise_model.cc).
+// (excitation's group widths, and identify's fallback residual padded to one of them). Each width
+// takes ~7 s to compile (-O2), so they are compiled once, in src/jet_dynamics_*.cc (explicit
+// instantiations split over several units that build in parallel), instead of again in every unit
+// that calls them: this header declares them `extern template`. Including it is enough; a width not
+// listed is instantiated as usual (the noise model's 6 motion variables, in noise_model.cc).
 #pragma once
 
 #include <array>
@@ -25,8 +24,9 @@
 
 // the widths, each in one group; a group is compiled by one unit (jet_dynamics_<group>.cc):
 // excitation's group widths (2, 10, 16, 18, 26; a design of the actuator terms alone, which
-// need no derivative of the model, runs at width 2), the residual's 5 pin radii, and nothing
-// else. Identify's fallback residual (fallback_cost.h) pads its parameter count to one of them
+// need no derivative of the model, runs at width 2), 5 (the fallback's 4 parameters; the five
+// pin radii the tests differentiate sample_structure's reference through), and nothing else.
+// Identify's fallback residual (fallback_cost.h) pads its parameter count to one of them
 // (compiled_jet_width); each further width would cost ~7 s of compilation for no gain.
 // Width 6 is left out: the trajectory problem's node Jets have it, and through the explicit
 // instantiation here its evaluations took 15% more instructions and 20% more time than through

@@ -7,133 +7,135 @@
 #include <algorithm>
 #include <cmath>
 
-#include "jet_dynamics.h"
-
 namespace fivebar::identification {
 
 namespace {
 
-/// The friction-free inverse dynamics of one sample at any standard inertial parameters: its
-/// loop closure (close_loop: the lengths and crank angles only) once, then per parameter vector
-/// the rest of the model's frictionless pass (mech::detail::inverse_pass), which the centres of
-/// mass enter: the same numbers as inverse_dynamics with the friction law kNone.
-class Frictionless {
- public:
-  Frictionless(const Params<double>& scene, const Sample& s, const EvalOptions& eval,
-               const std::array<double, kInertialParams>& pi0)
-      : scene_(scene), s_(s), pi0_(pi0) {
-    scene_.friction.law = FrictionLaw::kNone;
-    scene_.actuators = ActuatorParams<double>();  // StructuredResidual adds the actuator terms
-    set_standard_inertial(pi0.data(), &scene_);
-    ok_ = close_loop(scene_, s.th1, s.th2, &closed_, eval.singular_margin, false).ok();
-    v_ = Vec2<double>(s.w1, s.w2);
-    a_ = Vec2<double>(s.a1, s.a2);
-    if (eval.rest_acceleration >= 0.0) {  // the rest rule of a driven coordinate
-      for (int i = 0; i < kDof; ++i) mech::detail::still_drive(eval, &v_[i], &a_[i]);
-    }
-  }
+/// Columns of the five-bar's sample structure: the 16 standard inertial parameters, the loads
+/// (M3 and the force at P), the five friction torques (O, B, C, D, D0).
+constexpr int kLoadColumn = kInertialParams;
+constexpr int kTorqueColumn = kLoadColumn + 1;
+constexpr int kColumns = kTorqueColumn + kJoints;
 
-  /// Reactions (10) and actuator torques (2) at pi0, or with its parameter i (>= 0) moved by h
-  /// (only that link's parameters set again); false where the inverse dynamics fails.
-  bool operator()(int i, double h, Eigen::Matrix<double, 12, 1>* out) const {
-    if (!ok_) return false;
-    Params<double> p = scene_;
-    if (i >= 0) {
-      const int l = i / kInertialPerLink;
-      std::array<double, kInertialPerLink> link;
-      for (int c = 0; c < kInertialPerLink; ++c) link[c] = pi0_[kInertialPerLink * l + c];
-      link[i % kInertialPerLink] += h;
-      set_standard_inertial_links(link.data(), 1, &p.links[l]);
-    }
-    Evaluation<double> ev;
-    ev.kin = closed_;
-    place_points(p, &ev.kin);
-    first_order_coefficients(p, &ev.kin);
-    FiveBar::bias(p, ev.kin, v_, &ev.bias);
-    ev.Mf.fill(0.0);
-    FiveBar::reactions(p, ev.kin, ev.bias, s_.loads, FiveBar::applied(ev.kin, s_.loads), a_, ev.Mf,
-                       &ev.F, &ev);
-    FiveBar::drive_torques(p, ev.kin, a_, &ev);
-    for (int k = 0; k < kJoints; ++k) {
-      (*out)(2 * k) = ev.F[k].x();
-      (*out)(2 * k + 1) = ev.F[k].y();
-    }
-    (*out)(10) = ev.M1;
-    (*out)(11) = ev.M2;
-    return out->allFinite();
-  }
+using ColumnForces = Eigen::Matrix<double, 2, kColumns>;
+using ColumnRow = Eigen::Matrix<double, 1, kColumns>;
 
- private:
-  Params<double> scene_;  ///< frictionless, at pi0
-  const Sample& s_;
-  const std::array<double, kInertialParams>& pi0_;
-  Kinematics<double> closed_;
-  Vec2<double> v_, a_;
-  bool ok_ = false;
-};
+/// q x (each column of A)
+ColumnRow cross_columns(const Vec2<double>& q, const ColumnForces& A) {
+  return q.x() * A.row(1) - q.y() * A.row(0);
+}
+
+/// Link l's inertial wrench per unit standard parameter (m, mx, my, J_O: columns 4 l .. 4 l + 3
+/// of `force` and `moment`): the force m (a_c - g) and its moment about the link's proximal
+/// joint P, J_c alpha + (c - P) x m (a_c - g) = J_O alpha + m r x (a_P - g), where
+/// m r = mx e + my perp(e) (e: the link's direction) and a_c = a_P + alpha perp(r) - w^2 r.
+/// `ag` = a_P - g.
+void link_wrench(int l, const Vec2<double>& e, double w, double alpha, const Vec2<double>& ag,
+                 ColumnForces* force, ColumnRow* moment) {
+  const Vec2<double> n = perp(e);
+  const int c = kInertialPerLink * l;
+  force->col(c) = ag;
+  force->col(c + 1) = alpha * n - w * w * e;
+  force->col(c + 2) = -alpha * e - w * w * n;
+  (*moment)(c + 1) = cross(e, ag);
+  (*moment)(c + 2) = cross(n, ag);
+  (*moment)(c + 3) = alpha;
+}
+
+/// The reactions (rows 0-9: F_k's x and y) and drive torques (rows 10, 11) per unit of each
+/// column's cause at the rates v and accelerations a, by the steps of
+/// detail::reactions_of_accelerations and FiveBar::drive_torques written in what each link
+/// contributes (its inertial wrench, link_wrench): the couplers' force balances F2 - F3 = R3,
+/// F3 - F4 = R4 and moment sums about C, F2 = f3 S3 + f4 S4 (FiveBar::inverse_response); the
+/// cranks' forces into F1 and F5, their moments about O and D0 into M1 and M2. Link 3 (about B)
+/// gives R3 = f and S3 = n + (B - C) x f; link 4 (about D) R4 = f and S4 = -n (the (D - C) x f
+/// of its moment about C cancels against S4's (D - C) x R4); the loads R3 = -Fvec and
+/// S3 = -(P - C) x Fvec - M3; every column's R3 adds (D - C) x R3 to its S4; a friction torque
+/// enters with a unit in S3 (+B, -C), S4 (-C, +D), M1 (+O, -B) and M2 (+D, +D0).
+Eigen::Matrix<double, 12, kColumns> structure_columns(const Params<double>& p,
+                                                      const Kinematics<double>& k,
+                                                      const Bias<double>& bias,
+                                                      const Vec2<double>& v, const Vec2<double>& a,
+                                                      const Loads<double>& L) {
+  ColumnForces f1 = ColumnForces::Zero(), f2 = f1, R3 = f1, R4 = f1;
+  ColumnRow n1 = ColumnRow::Zero(), n2 = n1, n3 = n1, n4 = n1;
+  const Vec2<double> g(0.0, -p.gravity), D0(p.ground_length, 0.0);
+  const Vec2<double> aB = p.links[0].length * (a[0] * perp(k.e1) - v[0] * v[0] * k.e1);
+  const Vec2<double> aD = p.links[1].length * (a[1] * perp(k.e2) - v[1] * v[1] * k.e2);
+  link_wrench(0, k.e1, v[0], a[0], Vec2<double>(-g), &f1, &n1);
+  link_wrench(1, k.e2, v[1], a[1], Vec2<double>(-g), &f2, &n2);
+  link_wrench(2, k.e3, bias.w3, k.G3.dot(a) + bias.h3, Vec2<double>(aB - g), &R3, &n3);
+  link_wrench(3, k.e4, bias.w4, k.G4.dot(a) + bias.h4, Vec2<double>(aD - g), &R4, &n4);
+  const Vec2<double> u3 = k.B - k.C, u4 = k.D - k.C;
+  ColumnRow S3 = n3 + cross_columns(u3, R3);
+  const Vec2<double> Fvec = FiveBar::applied(k, L);
+  R3.col(kLoadColumn) = -Fvec;
+  S3(kLoadColumn) = -cross(Vec2<double>(k.P - k.C), Fvec) - L.M3;
+  ColumnRow S4 = cross_columns(u4, R3) - n4;
+  const int t = kTorqueColumn;
+  S3(t + 1) = 1, S3(t + 2) = -1;
+  S4(t + 2) = -1, S4(t + 3) = 1;
+  n1(t) = 1, n1(t + 1) = -1;
+  n2(t + 3) = 1, n2(t + 4) = 1;
+  const CouplerResponse<double> response = FiveBar::inverse_response(k);
+  const ColumnForces F2 = response.f3 * S3 + response.f4 * S4;
+  const ColumnForces F3 = F2 - R3;
+  const ColumnForces F4 = F3 - R4;
+  Eigen::Matrix<double, 12, kColumns> out;
+  out << f1 + F2, F2, F3, F4, f2 - F4, n1 + cross_columns(k.B, F2),
+      n2 - cross_columns(Vec2<double>(k.D - D0), F4);
+  return out;
+}
 
 }  // namespace
 
 bool sample_structure(const Params<double>& scene, const Sample& s, const EvalOptions& eval,
                       SampleStructure* out) {
-  // inertial part: friction-free reactions and torques are affine in pi (forward differences
-  // are exact up to rounding; Jets would be singular at a COM on the joint)
+  Kinematics<double> k;
+  if (!solve_kinematics(scene, s.th1, s.th2, &k, eval.singular_margin, false).ok()) return false;
+  Vec2<double> v(s.w1, s.w2), a(s.a1, s.a2);
+  if (eval.rest_acceleration >= 0.0) {  // the rest rule of a driven coordinate
+    for (int i = 0; i < kDof; ++i) mech::detail::still_drive(eval, &v[i], &a[i]);
+  }
+  Bias<double> bias;
+  FiveBar::bias(scene, k, v, &bias);
+  const Eigen::Matrix<double, 12, kColumns> D = structure_columns(scene, k, bias, v, a, s.loads);
+  if (!D.allFinite()) return false;
+  out->A = D.topLeftCorner<10, kInertialParams>();
+  out->b = D.col(kLoadColumn).head<10>();
+  out->Y = D.bottomLeftCorner<2, kInertialParams>();
+  out->c = D.col(kLoadColumn).tail<2>();
+  // friction part: the inverse dynamics' modes (the rest rule's) and the friction-free
+  // reactions' norms N at the scene, dF and G the response per unit friction torque of the
+  // joints with a Coulomb sign
   const std::array<double, kInertialParams> pi0 = standard_inertial(scene);
-  const Frictionless frictionless(scene, s, eval, pi0);
-  Eigen::Matrix<double, 12, 1> v0, v1;
-  if (!frictionless(-1, 0.0, &v0)) return false;
-  Eigen::Matrix<double, 12, kInertialParams> D;
-  for (int i = 0; i < kInertialParams; ++i) {
-    const int l = i / kInertialPerLink;
-    const double h = 1e-3 * std::max(std::abs(pi0[i]), scene.links[l].mass * scene.links[l].length);
-    if (!frictionless(i, h, &v1)) return false;
-    D.col(i) = (v1 - v0) / h;
-  }
   const Eigen::Map<const Eigen::Matrix<double, kInertialParams, 1>> pv(pi0.data());
-  out->A = D.topRows(10);
-  out->b = v0.head(10) - out->A * pv;
-  out->Y = D.bottomRows(2);
-  out->c = v0.tail(2) - out->Y * pv;
-  // friction part: Jets over the pin radii at 0 with unit Coulomb coefficients, so that
-  // phi_j = r_j slip_j and d(F, M) / d r_j = (dF_j, G_j) slip_j N0_j
-  using J5 = ceres::Jet<double, kJoints>;
-  Params<J5> p = scene.cast<J5>();
-  p.friction.law = FrictionLaw::kCoulombViscous;
-  p.friction.smoothing_velocity = J5(0);
-  p.actuators = ActuatorParams<J5>();
-  for (int j = 0; j < kJoints; ++j) {
-    p.friction.coulomb[j] = J5(1);
-    p.friction.viscous[j] = J5(0);
-    p.friction.pin_radius[j] = J5(0, j);
-  }
-  EvalOptions eo = eval;
-  eo.want_angles = false;  // the coupler angles themselves enter no reaction
-  Evaluation<J5> ev;
-  if (!inverse_dynamics(p, s.loads.cast<J5>(), J5(s.th1), J5(s.th2), J5(s.w1), J5(s.w2), J5(s.a1),
-                        J5(s.a2), nullptr, eo, &ev)
-           .ok()) {
-    return false;
-  }
+  const Eigen::Matrix<double, 10, 1> F0 = out->A * pv + out->b;
+  std::array<double, kJoints> N;
   double nmax = 1e-300;
-  for (int k = 0; k < kJoints; ++k) nmax = std::max(nmax, ev.N[k].a);
   for (int j = 0; j < kJoints; ++j) {
-    out->slip[j] = ev.slip[j];
-    out->w[j] = ev.w[j].a;
-    const bool acts = ev.slip[j] != kStuck && ev.slip[j] != JointMode::kRest;
+    N[j] = F0.segment<2>(2 * j).norm();
+    nmax = std::max(nmax, N[j]);
+  }
+  const FiveBar::Joints<double> w = FiveBar::joint_rates(k, bias, v);
+  const FiveBar::Joints<double> wdot = FiveBar::joint_accelerations(k, bias, a);
+  for (int j = 0; j < kJoints; ++j) {
+    out->slip[j] = mech::detail::inverse_slip(eval, w[j], wdot[j]);
+    out->w[j] = w[j];
+    const bool acts = out->slip[j] != kStuck && out->slip[j] != JointMode::kRest;
     // a joint without a Coulomb sign but moving: its viscous torque needs the full model
-    if (!acts && ev.slip[j] == JointMode::kRest && out->w[j] != 0 && scene.friction.pin_radius[j] != 0) {
+    if (!acts && out->slip[j] == JointMode::kRest && w[j] != 0 &&
+        scene.friction.pin_radius[j] != 0) {
       return false;
     }
-    const double scale = acts ? coulomb_sign(ev.slip[j]) * ev.N[j].a : 0.0;
-    if (acts && std::abs(scale) < 1e-9 * nmax) return false;
-    for (int k = 0; k < kJoints; ++k) {
-      out->dF(2 * k, j) = acts ? ev.F[k].x().v[j] / scale : 0.0;
-      out->dF(2 * k + 1, j) = acts ? ev.F[k].y().v[j] / scale : 0.0;
-    }
-    out->G(0, j) = acts ? ev.M1.v[j] / scale : 0.0;
-    out->G(1, j) = acts ? ev.M2.v[j] / scale : 0.0;
+    // a reaction that nearly vanishes: the friction torque's direction is not reliable
+    if (acts && N[j] < 1e-9 * nmax) return false;
+    out->dF.col(j) = acts ? Eigen::Matrix<double, 10, 1>(D.col(kTorqueColumn + j).head<10>())
+                          : Eigen::Matrix<double, 10, 1>::Zero();
+    out->G.col(j) =
+        acts ? Eigen::Vector2d(D.col(kTorqueColumn + j).tail<2>()) : Eigen::Vector2d::Zero();
   }
-  return out->A.allFinite() && out->dF.allFinite() && out->G.allFinite();
+  return true;
 }
 
 namespace {

@@ -75,8 +75,12 @@ struct SampleStructure {
 };
 
 /// The structure of sample s in `scene` (its pin radii, smoothing, geometry and loads; pi and
-/// the coefficients free). False where it cannot be read off reliably (a joint whose
-/// friction-free reaction nearly vanishes, or an evaluation failure): use
+/// the coefficients free), in closed form from the sample's kinematics: A, Y (and b, c) from each
+/// link's inertial wrench, linear in its standard parameters; dF, G the response per unit
+/// friction torque (FiveBar::inverse_response) of the joints with a Coulomb sign (the rest
+/// rule's modes, mech::detail::inverse_slip), zero for the others. False where it cannot be read
+/// off reliably (a slipping joint whose friction-free reaction nearly vanishes, a moving joint
+/// with friction but no Coulomb sign, a pose that does not close, a value not finite): use
 /// InverseDynamicsResidual there.
 bool sample_structure(const Params<double>& scene, const Sample& s, const EvalOptions& eval,
                       SampleStructure* out);
