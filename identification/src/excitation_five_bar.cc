@@ -1,5 +1,5 @@
-// The five-bar's excitation design: its information columns (sample_terms: the friction and
-// inertial columns by Jets, the actuators' in closed form), its design parameters and the
+// The five-bar's excitation design: its information columns (sample_terms: the friction columns
+// in closed form, the inertial ones by Jets, the actuators' in closed form), its design parameters and the
 // five-bar as an ExcitationMechanism (five_bar_excitation).
 #include <ceres/jet.h>
 
@@ -52,7 +52,115 @@ Status jet_columns(const Params<double>& scene, const DesignParameters& dp, cons
   return Status::Ok();
 }
 
+/// Jet width of the closed-form friction columns: the per-joint Coulomb-viscous layout's 10
+/// coefficients (design_parameters lays friction out so, per joint or lumped).
+constexpr int kFrictionWidth = 10;
+
+/// The friction columns in closed form, from one double inverse dynamics: the friction loop
+/// N = |F0 + dF Mf|, Mf = phi(x) N + motor(x), differentiated by the implicit function theorem
+/// at its solution (what the Jets' implicit loop derivative gives):
+///   (I - B diag(phi)) dN = B dMf0,  dMf = dMf0 + diag(phi) dN,  dM = G dMf,
+/// with dMf0 = N dphi + dmotor (Jets through the friction laws only), B(k, j) = u_k . dF_j[k]
+/// (u_k: F_k's direction), dF the reactions' and G the motor torques' response to unit friction
+/// torques at the given accelerations (reaction_torque_response, drive_torques). The
+/// reactions and torques without friction do not depend on the coefficients. False (nothing
+/// written) where this form does not apply: inertial parameters, the LuGre law, a layout wider
+/// than kFrictionWidth.
+bool closed_form_applies(const Params<double>& scene, const DesignParameters& dp) {
+  return dp.inertial == 0 && dp.friction <= kFrictionWidth &&
+         scene.friction.law != FrictionLaw::kLuGre;
+}
+
+Status closed_form_columns(const Params<double>& scene, const DesignParameters& dp,
+                           const Loads<double>& L, const MotionState& s, const JointModes* slip,
+                           SampleTerms* out) {
+  // the scene at the design's nominal coefficients (a lumped layout takes one value per kind)
+  Params<double> p = scene;
+  if (dp.friction > 0) dp.layout.apply(dp.nominal.data(), &p.friction);
+  EvalOptions eo;
+  eo.want_angles = false;
+  Evaluation<double> ev;
+  const Status st = inverse_dynamics(p, L, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, slip, eo, &ev);
+  if (!st.ok()) return st;
+  out->M1 = ev.M1;
+  out->M2 = ev.M2;
+  out->sine = std::abs(ev.kin.sin43);
+  out->w = ev.w;
+  out->slip = ev.slip;
+  const int P = dp.friction;
+  if (P == 0) return Status::Ok();
+  using J = ceres::Jet<double, kFrictionWidth>;
+  std::array<J, kFrictionWidth> x;
+  for (int i = 0; i < P; ++i) x[i] = J(dp.nominal[i], i);
+  FrictionParams<J> fp = scene.friction.template cast<J>();
+  dp.layout.apply(x.data(), &fp);
+  const ActuatorParams<J> act = p.actuators.template cast<J>();
+  using Joints5 = Eigen::Matrix<double, kJoints, kJoints>;
+  using Columns = Eigen::Matrix<double, kJoints, kFrictionWidth>;
+  Columns dMf0 = Columns::Zero();
+  Eigen::Matrix<double, kJoints, 1> phi = Eigen::Matrix<double, kJoints, 1>::Zero();
+  for (int j = 0; j < kJoints; ++j) {
+    if (ev.slip[j] == kStuck) continue;  // no friction torque: the motors hold the joint
+    const int sign = coulomb_sign(ev.slip[j]);
+    const J f = fp.pin_radius[j] * friction_law(fp, j, J(ev.w[j]), sign);
+    const J m = actuator_friction(fp, act, j, J(ev.w[j]), sign);
+    phi(j) = f.a;
+    dMf0.row(j) = ev.N[j] * f.v.transpose() + m.v.transpose();
+  }
+  const ReactionResponse<double> dF = reaction_torque_response(ev.kin);
+  Joints5 B;
+  for (int k = 0; k < kJoints; ++k) {
+    const Vec2<double> u = ev.N[k] > 0 ? Vec2<double>(ev.F[k] / ev.N[k]) : Vec2<double>::Zero();
+    for (int j = 0; j < kJoints; ++j) B(k, j) = u.dot(dF[j][k]);
+  }
+  const Joints5 H = Joints5::Identity() - B * phi.asDiagonal();
+  const Columns dN = H.partialPivLu().solve(B * dMf0);
+  const Columns dMf = dMf0 + phi.asDiagonal() * dN;
+  // G: the motor torques' change per unit friction torque (affine in F and Mf)
+  Evaluation<double> e;
+  e.F.fill(Vec2<double>::Zero());
+  e.Mf.fill(0.0);
+  FiveBar::drive_torques(p, ev.kin, ev.thdd, &e);
+  const Vec2<double> base(e.M1, e.M2);
+  Eigen::Matrix<double, 2, kJoints> G;
+  for (int j = 0; j < kJoints; ++j) {
+    e.F = dF[j];
+    e.Mf.fill(0.0);
+    e.Mf[j] = 1.0;
+    FiveBar::drive_torques(p, ev.kin, ev.thdd, &e);
+    G.col(j) = Vec2<double>(e.M1, e.M2) - base;
+  }
+  out->J.leftCols(P) = (G * dMf).leftCols(P);
+  return Status::Ok();
+}
+
 }  // namespace
+
+Status detail::jet_sample_terms(const Params<double>& scene, const DesignParameters& dp,
+                                const Loads<double>& L, const MotionState& s,
+                                const JointModes* slip, SampleTerms* out) {
+  out->J = Eigen::MatrixXd::Zero(2, dp.size());
+  // the Jet widths instantiated: the active parameters of each group combination (the actuator
+  // terms alone, 0 Jet parameters, take the narrowest: their columns are in closed form)
+  using Columns = Status (*)(const Params<double>&, const DesignParameters&, const Loads<double>&,
+                             const MotionState&, const JointModes*, SampleTerms*);
+  static const std::pair<int, Columns> kWidths[] = {{2, &jet_columns<2>},
+                                                    {10, &jet_columns<10>},
+                                                    {16, &jet_columns<16>},
+                                                    {18, &jet_columns<18>},
+                                                    {26, &jet_columns<26>}};
+  Columns columns = &jet_columns<26>;  // the widest: every group
+  for (const auto& [width, fn] : kWidths) {
+    if (dp.jet_size() <= width) {
+      columns = fn;
+      break;
+    }
+  }
+  const Status st = columns(scene, dp, L, s, slip, out);
+  if (!st.ok()) return st;
+  detail::actuator_columns(dp, s, out);
+  return Status::Ok();
+}
 
 DesignParameters design_parameters(const Params<double>& scene, const DesignGroups& g) {
   DesignParameters dp;
@@ -90,24 +198,9 @@ DesignParameters design_parameters(const Params<double>& scene, const DesignGrou
 
 Status sample_terms(const Params<double>& scene, const DesignParameters& dp, const Loads<double>& L,
                     const MotionState& s, const JointModes* slip, SampleTerms* out) {
+  if (!closed_form_applies(scene, dp)) return detail::jet_sample_terms(scene, dp, L, s, slip, out);
   out->J = Eigen::MatrixXd::Zero(2, dp.size());
-  // the Jet widths instantiated: the active parameters of each group combination (the actuator
-  // terms alone, 0 Jet parameters, take the narrowest: their columns are in closed form)
-  using Columns = Status (*)(const Params<double>&, const DesignParameters&, const Loads<double>&,
-                             const MotionState&, const JointModes*, SampleTerms*);
-  static const std::pair<int, Columns> kWidths[] = {{2, &jet_columns<2>},
-                                                    {10, &jet_columns<10>},
-                                                    {16, &jet_columns<16>},
-                                                    {18, &jet_columns<18>},
-                                                    {26, &jet_columns<26>}};
-  Columns columns = &jet_columns<26>;  // the widest: every group
-  for (const auto& [width, fn] : kWidths) {
-    if (dp.jet_size() <= width) {
-      columns = fn;
-      break;
-    }
-  }
-  const Status st = columns(scene, dp, L, s, slip, out);
+  const Status st = closed_form_columns(scene, dp, L, s, slip, out);
   if (!st.ok()) return st;
   detail::actuator_columns(dp, s, out);
   return Status::Ok();
