@@ -1,6 +1,6 @@
 // The five-bar's excitation design: its information columns (sample_terms: the friction columns
-// in closed form, the inertial ones by Jets, the actuators' in closed form), its design parameters and the
-// five-bar as an ExcitationMechanism (five_bar_excitation).
+// in closed form, the inertial ones by Jets, the actuators' in closed form), its design parameters
+// and the five-bar as an ExcitationMechanism (five_bar_excitation).
 #include <ceres/jet.h>
 
 #include <Eigen/Dense>
@@ -133,8 +133,8 @@ class FrictionColumns {
   /// solved alone and the cranks' follow.
   static void loop_derivative(const Square& B, const Joints& phi, Columns* dMf) {
     if (B.col(0).isZero(0) && B.col(kJoints - 1).isZero(0)) {
-      const Eigen::Matrix3d C = Eigen::Matrix3d::Identity() -
-                                phi.segment<3>(1).asDiagonal() * B.block<3, 3>(1, 1);
+      const Eigen::Matrix3d C =
+          Eigen::Matrix3d::Identity() - phi.segment<3>(1).asDiagonal() * B.block<3, 3>(1, 1);
       dMf->middleRows<3>(1) = C.inverse() * dMf->middleRows<3>(1);
       const Columns dN = B.middleCols<3>(1) * dMf->middleRows<3>(1);
       dMf->row(0) += phi(0) * dN.row(0);

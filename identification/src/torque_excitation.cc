@@ -113,7 +113,8 @@ sim::LoadFunction ToneTorques::loads(const std::vector<double>& x, const sim::Lo
     const double* v = x.data() + j * per_motor();
     motors[j].bias = v[0];
     for (int k = 0; k < k_; ++k) {
-      if (v[1 + k] != 0) motors[j].tones.push_back({v[1 + k], 2 * M_PI * v[1 + k_ + k], v[1 + 2 * k_ + k]});
+      if (v[1 + k] != 0)
+        motors[j].tones.push_back({v[1 + k], 2 * M_PI * v[1 + k_ + k], v[1 + 2 * k_ + k]});
     }
   }
   return [motors, limit = limit_, scene](double t) {

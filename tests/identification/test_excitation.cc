@@ -106,9 +106,9 @@ TEST(Excitation, ClosedFormColumnsMatchTheJets) {
   actuated.actuators.viscous = {0.01, 0.004};
   const Params<double> scenes[] = {
       paper_params(), per_joint_scene(), actuated,
-      fivebar::testing::with_law(per_joint_scene(), FrictionLaw::kStribeck,
-                                 {{Coefficient::kStaticCoulomb, 0.2},
-                                  {Coefficient::kStribeckVelocity, 0.5}})};
+      fivebar::testing::with_law(
+          per_joint_scene(), FrictionLaw::kStribeck,
+          {{Coefficient::kStaticCoulomb, 0.2}, {Coefficient::kStribeckVelocity, 0.5}})};
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> acc(-60, 60);
   int compared = 0;
@@ -137,18 +137,19 @@ TEST(Excitation, ClosedFormColumnsMatchTheJets) {
             EXPECT_NEAR(got.M2, want.M2, 1e-12 * m);
             EXPECT_NEAR(got.sine, want.sine, 1e-14);
             EXPECT_EQ(got.slip, want.slip);
-            for (int k = 0; k < kJoints; ++k) EXPECT_NEAR(got.w[k], want.w[k], 1e-12 * (1 + std::abs(want.w[k])));
+            for (int k = 0; k < kJoints; ++k)
+              EXPECT_NEAR(got.w[k], want.w[k], 1e-12 * (1 + std::abs(want.w[k])));
             ASSERT_EQ(got.J.cols(), want.J.cols());
             for (int c = 0; c < dp.size(); ++c) {
               const double scale = want.J.col(c).cwiseAbs().maxCoeff();
               for (int row = 0; row < kDof; ++row) {
                 EXPECT_NEAR(got.J(row, c), want.J(row, c), 1e-9 * scale + 1e-300)
-                    << dp.names[c] << " row " << row << " law " << static_cast<int>(scene.friction.law)
-                    << " given " << given << " state " << s.th1 << " " << s.th2 << " " << s.w1
-                    << " " << s.w2 << " " << s.a1 << " " << s.a2 << " slip "
-                    << static_cast<int>(want.slip[0]) << static_cast<int>(want.slip[1])
-                    << static_cast<int>(want.slip[2]) << static_cast<int>(want.slip[3])
-                    << static_cast<int>(want.slip[4]);
+                    << dp.names[c] << " row " << row << " law "
+                    << static_cast<int>(scene.friction.law) << " given " << given << " state "
+                    << s.th1 << " " << s.th2 << " " << s.w1 << " " << s.w2 << " " << s.a1 << " "
+                    << s.a2 << " slip " << static_cast<int>(want.slip[0])
+                    << static_cast<int>(want.slip[1]) << static_cast<int>(want.slip[2])
+                    << static_cast<int>(want.slip[3]) << static_cast<int>(want.slip[4]);
               }
             }
           }

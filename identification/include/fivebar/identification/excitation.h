@@ -65,9 +65,9 @@ struct MotionState {
 };
 
 /// What one sample gives: the Jacobian of the measured torques (M1, M2) with respect to the
-/// design parameters (2 x P: the friction and actuator columns in closed form, the inertial ones
-/// by Jets; a mechanism with one
-/// crank leaves row 2 and M2 at 0), the torques themselves (actuator terms at their nominal 0),
+/// design parameters (2 x P; the five-bar's friction and actuator columns in closed form, its
+/// inertial ones by Jets; a mechanism with one crank leaves row 2 and M2 at 0), the torques
+/// themselves (actuator terms at their nominal 0),
 /// the singular measure (the five-bar's coupler sine |sin(th4 - th3)|, the four-bar's
 /// |sin(th3 - th2)|) and the relative rates of the joints (slots from the mechanism's joints on:
 /// 0).
