@@ -94,10 +94,33 @@ double ToneTorques::torque(const std::vector<double>& x, int j, double t) const 
 }
 
 sim::LoadFunction ToneTorques::loads(const std::vector<double>& x, const sim::LoadFunction& scene) const {
-  return [self = *this, x, scene](double t) {
+  // the sounding tones of each motor with their angular frequencies formed once: the same sums
+  // as raw (a silent tone adds an exact zero)
+  struct Tone {
+    double a, w, phi;
+  };
+  struct Motor {
+    double bias = 0;
+    std::vector<Tone> tones;
+    double raw(double t) const {
+      double m = 0;
+      for (const Tone& k : tones) m += k.a * std::sin(k.w * t + k.phi);
+      return bias + m;
+    }
+  };
+  std::array<Motor, kActuators> motors;
+  for (int j = 0; j < kActuators; ++j) {
+    const double* v = x.data() + j * per_motor();
+    motors[j].bias = v[0];
+    for (int k = 0; k < k_; ++k) {
+      if (v[1 + k] != 0)
+        motors[j].tones.push_back({v[1 + k], 2 * M_PI * v[1 + k_ + k], v[1 + 2 * k_ + k]});
+    }
+  }
+  return [motors, limit = limit_, scene](double t) {
     Loads<double> L = scene(t);
-    L.M1 = self.torque(x, 0, t);
-    L.M2 = self.torque(x, 1, t);
+    L.M1 = std::clamp(motors[0].raw(t), -limit, limit);
+    L.M2 = std::clamp(motors[1].raw(t), -limit, limit);
     return L;
   };
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <random>
 
 #include "design_gradients.h"
 #include "fivebar/identification/excitation.h"
@@ -94,6 +95,69 @@ TEST(Excitation, JetJacobianMatchesFiniteDifferences) {
   // the Fisher matrix is J^T J / sigma^2 summed
   const Eigen::MatrixXd F = fisher_information({t.J, t.J}, 0.5);
   EXPECT_NEAR(F(3, 7), 2 * 4 * t.J.col(3).dot(t.J.col(7)), 1e-12 * (1 + std::abs(F(3, 7))));
+}
+
+// The friction columns in closed form (implicit function theorem through the friction loop)
+// against the Jets through the whole inverse dynamics, on the paper scene and on seeded random
+// states of scenes with other laws, actuator friction and given slip modes.
+TEST(Excitation, ClosedFormColumnsMatchTheJets) {
+  Params<double> actuated = per_joint_scene();
+  actuated.actuators.coulomb = {0.05, 0.03};
+  actuated.actuators.viscous = {0.01, 0.004};
+  const Params<double> scenes[] = {
+      paper_params(), per_joint_scene(), actuated,
+      fivebar::testing::with_law(
+          per_joint_scene(), FrictionLaw::kStribeck,
+          {{Coefficient::kStaticCoulomb, 0.2}, {Coefficient::kStribeckVelocity, 0.5}})};
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> acc(-60, 60);
+  int compared = 0;
+  for (const Params<double>& scene : scenes) {
+    for (bool per_joint : {false, true}) {
+      for (bool actuator : {false, true}) {
+        DesignGroups g;
+        g.per_joint = per_joint;
+        g.actuator = actuator;
+        const DesignParameters dp = design_parameters(scene, g);
+        for (const auto& r : fivebar::testing::random_states(scene, 40, 5 + compared)) {
+          const MotionState s{r.th1, r.th2, r.w1, r.w2, acc(rng), acc(rng)};
+          for (int given = 0; given < 2; ++given) {
+            SampleTerms want, got;
+            const Status ref = detail::jet_sample_terms(scene, dp, r.loads, s, nullptr, &want);
+            const JointModes* slip = given ? &want.slip : nullptr;
+            if (given) {
+              ASSERT_TRUE(detail::jet_sample_terms(scene, dp, r.loads, s, slip, &want).ok());
+            }
+            const Status st = sample_terms(scene, dp, r.loads, s, slip, &got);
+            ASSERT_EQ(st.ok(), ref.ok()) << st.message << " / " << ref.message;
+            if (!ref.ok()) continue;
+            ++compared;
+            const double m = std::max({1.0, std::abs(want.M1), std::abs(want.M2)});
+            EXPECT_NEAR(got.M1, want.M1, 1e-12 * m);
+            EXPECT_NEAR(got.M2, want.M2, 1e-12 * m);
+            EXPECT_NEAR(got.sine, want.sine, 1e-14);
+            EXPECT_EQ(got.slip, want.slip);
+            for (int k = 0; k < kJoints; ++k)
+              EXPECT_NEAR(got.w[k], want.w[k], 1e-12 * (1 + std::abs(want.w[k])));
+            ASSERT_EQ(got.J.cols(), want.J.cols());
+            for (int c = 0; c < dp.size(); ++c) {
+              const double scale = want.J.col(c).cwiseAbs().maxCoeff();
+              for (int row = 0; row < kDof; ++row) {
+                EXPECT_NEAR(got.J(row, c), want.J(row, c), 1e-9 * scale + 1e-300)
+                    << dp.names[c] << " row " << row << " law "
+                    << static_cast<int>(scene.friction.law) << " given " << given << " state "
+                    << s.th1 << " " << s.th2 << " " << s.w1 << " " << s.w2 << " " << s.a1 << " "
+                    << s.a2 << " slip " << static_cast<int>(want.slip[0])
+                    << static_cast<int>(want.slip[1]) << static_cast<int>(want.slip[2])
+                    << static_cast<int>(want.slip[3]) << static_cast<int>(want.slip[4]);
+              }
+            }
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(compared, 500);
 }
 
 TEST(Excitation, FourierMotionIsConsistentAndStartsAtRest) {

@@ -65,8 +65,9 @@ struct MotionState {
 };
 
 /// What one sample gives: the Jacobian of the measured torques (M1, M2) with respect to the
-/// design parameters (2 x P, by Jets; the actuator columns in closed form; a mechanism with one
-/// crank leaves row 2 and M2 at 0), the torques themselves (actuator terms at their nominal 0),
+/// design parameters (2 x P; the five-bar's friction and actuator columns in closed form, its
+/// inertial ones by Jets; a mechanism with one crank leaves row 2 and M2 at 0), the torques
+/// themselves (actuator terms at their nominal 0),
 /// the singular measure (the five-bar's coupler sine |sin(th4 - th3)|, the four-bar's
 /// |sin(th3 - th2)|) and the relative rates of the joints (slots from the mechanism's joints on:
 /// 0).
@@ -82,6 +83,15 @@ struct SampleTerms {
 /// assemble or the friction loop has no solution.
 Status sample_terms(const Params<double>& scene, const DesignParameters& dp, const Loads<double>& loads,
                     const MotionState& s, const JointModes* slip, SampleTerms* out);
+
+namespace detail {
+/// sample_terms with the friction and inertial columns by Jets through the whole inverse
+/// dynamics (the reference of the closed form sample_terms takes where it applies: no inertial
+/// parameters, a friction law without internal states).
+Status jet_sample_terms(const Params<double>& scene, const DesignParameters& dp,
+                        const Loads<double>& loads, const MotionState& s, const JointModes* slip,
+                        SampleTerms* out);
+}  // namespace detail
 
 /// The Fisher information sum_i J_i^T J_i / sigma^2 of a motion, with its sample terms.
 Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians, double sigma);
