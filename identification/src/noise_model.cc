@@ -3,6 +3,8 @@
 
 #include <ceres/jet.h>
 
+#include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 
 namespace fivebar::identification::detail {
@@ -80,31 +82,47 @@ Eigen::Vector2d propagated_variance(const Sensitivity& s) {
   return v;
 }
 
+void add_channel_covariance(const Eigen::MatrixXd& G, int first, int last, double sigma,
+                            Eigen::MatrixXd* S) {
+  if (!(sigma > 0) || last < first) return;
+  const auto used = G.middleCols(first, last - first + 1);
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(S->rows(), S->cols());
+  C.selfadjointView<Eigen::Lower>().rankUpdate(used, sigma * sigma);
+  *S += C.selfadjointView<Eigen::Lower>();
+}
+
 Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sensitivity>& sens,
                                  const SensorNoise& noise, int n) {
-  const int P = static_cast<int>(J.cols());
+  const int P = static_cast<int>(J.cols()), m = static_cast<int>(sens.size());
   Eigen::MatrixXd S = Eigen::MatrixXd::Zero(P, P);
-  // g[c](l) = sum over residuals i of J_i^T d r_i / d n_{c,l}: the score's response to one
-  // noise sample, which enters every residual whose window holds it
-  // (allocated for the channels some sample has: the angles' alone where the rates are estimated)
-  std::vector<Eigen::MatrixXd> g(4);
-  for (size_t u = 0; u < sens.size(); ++u) {
-    const Eigen::Matrix<double, 2, Eigen::Dynamic> Ji = J.middleRows(2 * u, 2);
-    for (int j = 0; j < kActuators; ++j) {
-      const double s2 = noise.torque[j] * noise.torque[j];
-      S += s2 * Ji.row(j).transpose() * Ji.row(j);
+  // each sample's J_i^T as two contiguous columns
+  const Eigen::MatrixXd Jt = J.topRows(2 * m).transpose();
+  // the torque noise at every sample: J^T diag(torque noise^2) J
+  if (noise.torque[0] != 0 || noise.torque[1] != 0) {
+    Eigen::MatrixXd Jw = Jt;
+    for (int u = 0; u < m; ++u) {
+      for (int j = 0; j < kActuators; ++j) Jw.col(2 * u + j) *= noise.torque[j];
     }
-    for (int c = 0; c < 4; ++c) {
+    S.selfadjointView<Eigen::Lower>().rankUpdate(Jw);
+    S = S.selfadjointView<Eigen::Lower>();
+  }
+  // G's column l = sum over residuals i of J_i^T d r_i / d n_{c,l}: the score's response to one
+  // noise sample, which enters every residual whose window holds it
+  Eigen::MatrixXd G;
+  for (int c = 0; c < 4; ++c) {
+    int first = n, last = -1;
+    for (int u = 0; u < m; ++u) {
       const Sensitivity& s = sens[u];
-      if (!s.coef[c].empty() && g[c].size() == 0) g[c] = Eigen::MatrixXd::Zero(n, P);
+      if (s.coef[c].empty()) continue;
+      if (last < 0) G.setZero(P, n);
+      first = std::min(first, s.lo[c]);
+      last = std::max(last, s.lo[c] + static_cast<int>(s.coef[c].size()) - 1);
       for (size_t r = 0; r < s.coef[c].size(); ++r) {
-        g[c].row(s.lo[c] + r) += s.coef[c][r].transpose() * Ji;
+        const Eigen::Vector2d& a = s.coef[c][r];
+        G.col(s.lo[c] + r) += a(0) * Jt.col(2 * u) + a(1) * Jt.col(2 * u + 1);
       }
     }
-  }
-  for (int c = 0; c < 4; ++c) {
-    const double sigma = sens.empty() ? 0.0 : sens.front().sigma[c];
-    if (sigma > 0 && g[c].size() > 0) S += sigma * sigma * g[c].transpose() * g[c];
+    add_channel_covariance(G, first, last, sens.empty() ? 0.0 : sens.front().sigma[c], &S);
   }
   return S;
 }

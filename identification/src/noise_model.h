@@ -57,6 +57,12 @@ Eigen::Vector2d propagated_variance(const Sensitivity& s);
 Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sensitivity>& sens,
                                  const SensorNoise& noise, int n);
 
+/// One noise channel's share of the score covariance: S += sigma^2 G G^T over G's columns
+/// [first, last] (G: P x n, column l the score's response to noise sample l; the columns outside
+/// the range are zero). Nothing where sigma is not > 0 or the range is empty.
+void add_channel_covariance(const Eigen::MatrixXd& G, int first, int last, double sigma,
+                            Eigen::MatrixXd* S);
+
 }  // namespace fivebar::identification::detail
 
 namespace fivebar::identification::stages {

@@ -155,24 +155,31 @@ Eigen::VectorXd prediction_spread(const std::vector<double>& t, const BiasInputs
                                   const std::vector<char>& keep, const Eigen::MatrixXd& J,
                                   const Eigen::MatrixXd& Hinv, const Eigen::VectorXd& r1,
                                   const Eigen::VectorXd& r2) {
-  std::vector<Sensitivity> sens;
-  for (size_t u = 0; u < keep.size(); ++u) {
-    if (!keep[u]) continue;
-    Sensitivity s;
-    for (int c = 0; c < kDof; ++c) {
+  const int P = static_cast<int>(J.cols()), n = static_cast<int>(t.size());
+  const Eigen::MatrixXd Jt = J.transpose();  // the kept samples' J_u^T as column pairs
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(P, P), G, V(P, r1.size());
+  for (int c = 0; c < kDof; ++c) {
+    // G's column l: the predicted score's response to the angle sample l through every kept
+    // sample's terms: the torque error d dM_u / d theta_l = sum over the terms e of
+    // W_u(e, l - lo_u) (D_omega r1(e) + D_alpha r2(e)), through J_u^T: W_u(e, l - lo_u) V(:, e)
+    G.setZero(P, n);
+    int first = n, last = -1;
+    for (size_t u = 0, k = 0; u < keep.size(); ++u) {
+      if (!keep[u]) continue;
       const Eigen::MatrixXd& W = in.weights[c][u];
-      const Eigen::RowVectorXd w1 = r1.transpose() * W, w2 = r2.transpose() * W;
-      s.lo[c] = in.recon_lo[u];
-      s.sigma[c] = in.noise.angle[c];
-      for (int r = 0; r < W.cols(); ++r) {
-        s.coef[c].push_back(in.D[u].col(2 + c) * w1(r) + in.D[u].col(4 + c) * w2(r));
+      for (int e = 0; e < W.rows(); ++e) {
+        const Eigen::Vector2d d = in.D[u].col(2 + c) * r1(e) + in.D[u].col(4 + c) * r2(e);
+        V.col(e) = Jt.col(2 * k) * d(0) + Jt.col(2 * k + 1) * d(1);
       }
+      const int lo = in.recon_lo[u];
+      for (int r = 0; r < W.cols(); ++r) {
+        for (int e = 0; e < W.rows(); ++e) G.col(lo + r) += W(e, r) * V.col(e);
+      }
+      if (W.cols() > 0) first = std::min(first, lo), last = std::max(last, lo + int(W.cols()) - 1);
+      ++k;
     }
-    sens.push_back(std::move(s));
+    add_channel_covariance(G, first, last, in.noise.angle[c], &S);
   }
-  SensorNoise angles = in.noise;
-  angles.torque[0] = angles.torque[1] = 0;
-  const Eigen::MatrixXd S = score_covariance(J, sens, angles, static_cast<int>(t.size()));
   const Eigen::MatrixXd C = in.T * Hinv * S * Hinv * in.T.transpose();
   return C.diagonal().head(judged_size(in)).cwiseMax(0.0).cwiseSqrt();
 }
