@@ -36,6 +36,15 @@ Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source, 
   return sensitivity(i, lo, d1, d2, source, noise, D);
 }
 
+Sensitivity sensitivity(SgTapCache* taps, int i, RateSource source, const SensorNoise& noise,
+                        const Eigen::Matrix<double, 2, 6>& D) {
+  int lo = i;
+  static const std::vector<double> none;
+  const std::vector<double>*d1 = &none, *d2 = &none;
+  if (source != RateSource::kLogged) taps->taps(i, &lo, &d1, &d2);
+  return sensitivity(i, lo, *d1, *d2, source, noise, D);
+}
+
 Sensitivity sensitivity(int i, int lo, const std::vector<double>& d1, const std::vector<double>& d2,
                         RateSource source, const SensorNoise& noise,
                         const Eigen::Matrix<double, 2, 6>& D) {

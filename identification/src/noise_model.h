@@ -48,6 +48,10 @@ Sensitivity sensitivity(int i, int lo, const std::vector<double>& d1, const std:
                         RateSource source, const SensorNoise& noise,
                         const Eigen::Matrix<double, 2, 6>& D);
 
+/// The same with the filter's taps at i from `taps` (a cache over the log's t and the filter).
+Sensitivity sensitivity(SgTapCache* taps, int i, RateSource source, const SensorNoise& noise,
+                        const Eigen::Matrix<double, 2, 6>& D);
+
 /// Variance of the residual of each actuator that the noise in `s` produces.
 Eigen::Vector2d propagated_variance(const Sensitivity& s);
 

@@ -45,8 +45,9 @@ SmoothingInputs smoothing_inputs(const Fit& f, int m) {
 void floors_at(const Fit& f, const SmoothingInputs& in, const SgOptions& sg, double floor[2]) {
   std::vector<detail::Sensitivity> sens;
   sens.reserve(in.D.size());
+  SgTapCache taps(f.cond.log.t, sg);
   for (size_t u = 0; u < in.D.size(); ++u) {
-    sens.push_back(detail::sensitivity(f.cond.log.t, f.index[u], f.source, sg, f.noise, in.D[u]));
+    sens.push_back(detail::sensitivity(&taps, f.index[u], f.source, f.noise, in.D[u]));
   }
   noise_floor(f, sens, floor);
 }
