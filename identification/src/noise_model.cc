@@ -100,11 +100,39 @@ void add_channel_covariance(const Eigen::MatrixXd& G, int first, int last, doubl
   *S += C.selfadjointView<Eigen::Lower>();
 }
 
+namespace {
+
+/// G's column l = sum over the samples u of Jt_u d r_u / d n_{c,l} (Jt: each sample's J_u^T, or a
+/// projection Q J_u^T, as a pair of columns): the response to one sample l of the noise channel c,
+/// which enters every residual whose window holds it. [first, last]: the columns reached
+/// (last < first: none, G untouched).
+void channel_response(const Eigen::MatrixXd& Jt, const std::vector<Sensitivity>& sens, int c,
+                      int n, Eigen::MatrixXd* G, int* first, int* last) {
+  *first = n, *last = -1;
+  for (size_t u = 0; u < sens.size(); ++u) {
+    const Sensitivity& s = sens[u];
+    if (s.coef[c].empty()) continue;
+    if (*last < 0) G->setZero(Jt.rows(), n);
+    *first = std::min(*first, s.lo[c]);
+    *last = std::max(*last, s.lo[c] + static_cast<int>(s.coef[c].size()) - 1);
+    for (size_t r = 0; r < s.coef[c].size(); ++r) {
+      const Eigen::Vector2d& a = s.coef[c][r];
+      G->col(s.lo[c] + r) += a(0) * Jt.col(2 * u) + a(1) * Jt.col(2 * u + 1);
+    }
+  }
+}
+
+/// the channels' std (the first sample's: every sample's are the same)
+double channel_sigma(const std::vector<Sensitivity>& sens, int c) {
+  return sens.empty() ? 0.0 : sens.front().sigma[c];
+}
+
+}  // namespace
+
 Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sensitivity>& sens,
                                  const SensorNoise& noise, int n) {
   const int P = static_cast<int>(J.cols()), m = static_cast<int>(sens.size());
   Eigen::MatrixXd S = Eigen::MatrixXd::Zero(P, P);
-  // each sample's J_i^T as two contiguous columns
   const Eigen::MatrixXd Jt = J.topRows(2 * m).transpose();
   // the torque noise at every sample: J^T diag(torque noise^2) J
   if (noise.torque[0] != 0 || noise.torque[1] != 0) {
@@ -115,25 +143,36 @@ Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sen
     S.selfadjointView<Eigen::Lower>().rankUpdate(Jw);
     S = S.selfadjointView<Eigen::Lower>();
   }
-  // G's column l = sum over residuals i of J_i^T d r_i / d n_{c,l}: the score's response to one
-  // noise sample, which enters every residual whose window holds it
   Eigen::MatrixXd G;
   for (int c = 0; c < 4; ++c) {
-    int first = n, last = -1;
-    for (int u = 0; u < m; ++u) {
-      const Sensitivity& s = sens[u];
-      if (s.coef[c].empty()) continue;
-      if (last < 0) G.setZero(P, n);
-      first = std::min(first, s.lo[c]);
-      last = std::max(last, s.lo[c] + static_cast<int>(s.coef[c].size()) - 1);
-      for (size_t r = 0; r < s.coef[c].size(); ++r) {
-        const Eigen::Vector2d& a = s.coef[c][r];
-        G.col(s.lo[c] + r) += a(0) * Jt.col(2 * u) + a(1) * Jt.col(2 * u + 1);
-      }
-    }
-    add_channel_covariance(G, first, last, sens.empty() ? 0.0 : sens.front().sigma[c], &S);
+    int first = 0, last = -1;
+    channel_response(Jt, sens, c, n, &G, &first, &last);
+    add_channel_covariance(G, first, last, channel_sigma(sens, c), &S);
   }
   return S;
+}
+
+Eigen::VectorXd projected_score_variance(const Eigen::MatrixXd& Q, const Eigen::MatrixXd& J,
+                                         const std::vector<Sensitivity>& sens,
+                                         const SensorNoise& noise, int n) {
+  const int m = static_cast<int>(sens.size());
+  const Eigen::MatrixXd Jq = Q * J.topRows(2 * m).transpose();
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(Q.rows());
+  for (int u = 0; u < m; ++u) {
+    for (int j = 0; j < kActuators; ++j) {
+      v += noise.torque[j] * noise.torque[j] * Jq.col(2 * u + j).cwiseAbs2();
+    }
+  }
+  Eigen::MatrixXd G;
+  for (int c = 0; c < 4; ++c) {
+    int first = 0, last = -1;
+    channel_response(Jq, sens, c, n, &G, &first, &last);
+    const double sigma = channel_sigma(sens, c);
+    if (sigma > 0 && last >= first) {
+      v += sigma * sigma * G.middleCols(first, last - first + 1).rowwise().squaredNorm();
+    }
+  }
+  return v;
 }
 
 }  // namespace fivebar::identification::detail

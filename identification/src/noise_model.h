@@ -61,6 +61,12 @@ Eigen::Vector2d propagated_variance(const Sensitivity& s);
 Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sensitivity>& sens,
                                  const SensorNoise& noise, int n);
 
+/// diag(Q S Q^T) for S = score_covariance(J, sens, noise, n) and Q (k x P), without forming S:
+/// the variances of k combinations of the score (the same up to rounding).
+Eigen::VectorXd projected_score_variance(const Eigen::MatrixXd& Q, const Eigen::MatrixXd& J,
+                                         const std::vector<Sensitivity>& sens,
+                                         const SensorNoise& noise, int n);
+
 /// One noise channel's share of the score covariance: S += sigma^2 G G^T over G's columns
 /// [first, last] (G: P x n, column l the score's response to noise sample l; the columns outside
 /// the range are zero). Nothing where sigma is not > 0 or the range is empty.
