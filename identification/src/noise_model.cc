@@ -115,9 +115,11 @@ void channel_response(const Eigen::MatrixXd& Jt, const std::vector<Sensitivity>&
     if (*last < 0) G->setZero(Jt.rows(), n);
     *first = std::min(*first, s.lo[c]);
     *last = std::max(*last, s.lo[c] + static_cast<int>(s.coef[c].size()) - 1);
+    const double *j0 = Jt.col(2 * u).data(), *j1 = Jt.col(2 * u + 1).data();
     for (size_t r = 0; r < s.coef[c].size(); ++r) {
-      const Eigen::Vector2d& a = s.coef[c][r];
-      G->col(s.lo[c] + r) += a(0) * Jt.col(2 * u) + a(1) * Jt.col(2 * u + 1);
+      const double a0 = s.coef[c][r](0), a1 = s.coef[c][r](1);
+      double* g = G->col(s.lo[c] + r).data();
+      for (Eigen::Index p = 0; p < Jt.rows(); ++p) g[p] += a0 * j0[p] + a1 * j1[p];
     }
   }
 }

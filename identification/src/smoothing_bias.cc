@@ -175,7 +175,11 @@ Eigen::VectorXd prediction_spread(const std::vector<double>& t, const BiasInputs
       }
       const int lo = in.recon_lo[u];
       for (int r = 0; r < W.cols(); ++r) {
-        for (int e = 0; e < W.rows(); ++e) G.col(lo + r) += W(e, r) * V.col(e);
+        double* g = G.col(lo + r).data();
+        for (int e = 0; e < W.rows(); ++e) {
+          const double w = W(e, r), *v = V.col(e).data();
+          for (int p = 0; p < k_out; ++p) g[p] += w * v[p];
+        }
       }
       if (W.cols() > 0) first = std::min(first, lo), last = std::max(last, lo + int(W.cols()) - 1);
       ++k;
