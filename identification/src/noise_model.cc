@@ -9,23 +9,31 @@
 
 namespace fivebar::identification::detail {
 
-bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layout, const double* x,
-                        const Sample& s, const EvalOptions& eval, Eigen::Matrix<double, 2, 6>* D) {
-  using J6 = ceres::Jet<double, 6>;
-  Params<J6> p = scene.template cast<J6>();
+KinematicJacobians::KinematicJacobians(const Params<double>& scene, const ParameterLayout& layout,
+                                       const double* x)
+    : p_(scene.template cast<J6>()) {
   std::vector<J6> xj(layout.size());
   for (int i = 0; i < layout.size(); ++i) xj[i] = J6(x[i]);
-  layout.apply(xj.data(), &p);
+  layout.apply(xj.data(), &p_);
+}
+
+bool KinematicJacobians::operator()(const Sample& s, const EvalOptions& eval,
+                                    Eigen::Matrix<double, 2, 6>* D) const {
   const double v[6] = {s.th1, s.th2, s.w1, s.w2, s.a1, s.a2};
   J6 in[6];
   for (int k = 0; k < 6; ++k) in[k] = J6(v[k], k);
   Evaluation<J6> ev;
-  const Status st = inverse_dynamics(p, s.loads.template cast<J6>(), in[0], in[1], in[2], in[3],
+  const Status st = inverse_dynamics(p_, s.loads.template cast<J6>(), in[0], in[1], in[2], in[3],
                                      in[4], in[5], nullptr, eval, &ev);
   if (!st.ok()) return false;
   D->row(0) = ev.M1.v.transpose();
   D->row(1) = ev.M2.v.transpose();
   return D->allFinite();
+}
+
+bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layout, const double* x,
+                        const Sample& s, const EvalOptions& eval, Eigen::Matrix<double, 2, 6>* D) {
+  return KinematicJacobians(scene, layout, x)(s, eval, D);
 }
 
 Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source, const SgOptions& sg,

@@ -29,6 +29,18 @@ struct SensorNoise {
 bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layout, const double* x,
                         const Sample& s, const EvalOptions& eval, Eigen::Matrix<double, 2, 6>* D);
 
+/// kinematic_jacobian at many samples of one parameter vector: the scene's Jet parameters at x
+/// formed once (the same Jacobians bit for bit).
+class KinematicJacobians {
+ public:
+  KinematicJacobians(const Params<double>& scene, const ParameterLayout& layout, const double* x);
+  bool operator()(const Sample& s, const EvalOptions& eval, Eigen::Matrix<double, 2, 6>* D) const;
+
+ private:
+  using J6 = ceres::Jet<double, 6>;
+  Params<J6> p_;
+};
+
 /// One sample's noise sensitivities: for each noise channel (0, 1: the differentiated or direct
 /// angle or rate of crank 1, 2; 2, 3: the direct angle when rates are logged) the samples it
 /// comes from and d r / d n (2 rows, one per actuator) for each.

@@ -29,9 +29,10 @@ struct SmoothingInputs {
 SmoothingInputs smoothing_inputs(const Fit& f, int m) {
   SmoothingInputs in;
   const int reach = static_cast<int>(std::lround(detail::kReconSpan * m));
+  const detail::KinematicJacobians jacobian(f.scene, f.layout, f.x.data());
   for (size_t u = 0; u < f.samples.size(); ++u) {
     Eigen::Matrix<double, 2, 6> D;
-    if (!detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), f.samples[u], f.eval, &D)) {
+    if (!jacobian(f.samples[u], f.eval, &D)) {
       D.setZero();
     }
     in.D.push_back(D);

@@ -52,6 +52,7 @@ std::vector<PairedSample> paired_samples(const Fit& f, const IdentifyResult& out
   for (int i = 0; i < n; ++i) rejected[i + 1] = rejected[i] + f.cond.rejected[i];
   std::vector<PairedSample> ps;
   SgTapCache taps_a(log.t, f.sg), taps_b(log.t, wide);
+  const detail::KinematicJacobians jacobian(f.scene, f.layout, f.x.data());
   size_t v = 0;
   for (size_t u = 0; u < f.samples.size(); ++u) {
     const int i = f.index[u];
@@ -65,7 +66,7 @@ std::vector<PairedSample> paired_samples(const Fit& f, const IdentifyResult& out
     Eigen::Matrix<double, 2, 6> D;
     if (!sample_residual(f.scene, f.layout, f.samples[u], f.eval, f.x.data(), &p.ra, &p.Ja) ||
         !sample_residual(f.scene, f.layout, g.samples[v], f.eval, f.x.data(), &p.rb, &p.Jb) ||
-        !detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), f.samples[u], f.eval, &D)) {
+        !jacobian(f.samples[u], f.eval, &D)) {
       continue;
     }
     p.sa = detail::sensitivity(&taps_a, i, f.source, f.noise, D);
