@@ -114,8 +114,8 @@ namespace {
 /// projection Q J_u^T, as a pair of columns): the response to one sample l of the noise channel c,
 /// which enters every residual whose window holds it. [first, last]: the columns reached
 /// (last < first: none, G untouched).
-void channel_response(const Eigen::MatrixXd& Jt, const std::vector<Sensitivity>& sens, int c,
-                      int n, Eigen::MatrixXd* G, int* first, int* last) {
+void channel_response(const Eigen::MatrixXd& Jt, const std::vector<Sensitivity>& sens, int c, int n,
+                      Eigen::MatrixXd* G, int* first, int* last) {
   *first = n, *last = -1;
   for (size_t u = 0; u < sens.size(); ++u) {
     const Sensitivity& s = sens[u];

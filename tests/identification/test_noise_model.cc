@@ -109,9 +109,9 @@ TEST(NoiseModel, SensitivitiesFromTheTapCacheAreTheDirectOnesBitForBit) {
   const Eigen::Matrix<double, 2, 6> D = random_matrix(2, 6, &rng);
   detail::SensorNoise noise;
   noise.angle[0] = 1e-5, noise.angle[1] = 2e-5, noise.rate[0] = 1e-3, noise.rate[1] = 3e-3;
-  for (detail::RateSource source : {detail::RateSource::kFromAngles,
-                                    detail::RateSource::kAccelsFromRates,
-                                    detail::RateSource::kLogged}) {
+  for (detail::RateSource source :
+       {detail::RateSource::kFromAngles, detail::RateSource::kAccelsFromRates,
+        detail::RateSource::kLogged}) {
     for (int i : {0, 3, 40, kLog - 1}) {
       const detail::Sensitivity a = detail::sensitivity(&taps, i, source, noise, D);
       const detail::Sensitivity b = detail::sensitivity(t, i, source, sg, noise, D);
@@ -179,8 +179,7 @@ TEST(SmoothingBias, StdAndSpreadAreThoseOfTheFullScoreCovariance) {
   }
   ASSERT_EQ(p.J.rows(), 2 * static_cast<int>(filtered.size()));
   const Eigen::MatrixXd Hinv = (p.J.transpose() * p.J + in.Hp).inverse();
-  const Eigen::MatrixXd S =
-      covariance_by_definition(p.J, filtered, in.noise) + in.s2 * in.Hp;
+  const Eigen::MatrixXd S = covariance_by_definition(p.J, filtered, in.noise) + in.s2 * in.Hp;
   detail::SensorNoise angles = in.noise;
   angles.torque[0] = angles.torque[1] = 0;
   const Eigen::MatrixXd S2 = covariance_by_definition(p.J, weighed, angles);
