@@ -3,27 +3,37 @@
 
 #include <ceres/jet.h>
 
+#include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 
 namespace fivebar::identification::detail {
 
-bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layout, const double* x,
-                        const Sample& s, const EvalOptions& eval, Eigen::Matrix<double, 2, 6>* D) {
-  using J6 = ceres::Jet<double, 6>;
-  Params<J6> p = scene.template cast<J6>();
+KinematicJacobians::KinematicJacobians(const Params<double>& scene, const ParameterLayout& layout,
+                                       const double* x)
+    : p_(scene.template cast<J6>()) {
   std::vector<J6> xj(layout.size());
   for (int i = 0; i < layout.size(); ++i) xj[i] = J6(x[i]);
-  layout.apply(xj.data(), &p);
+  layout.apply(xj.data(), &p_);
+}
+
+bool KinematicJacobians::operator()(const Sample& s, const EvalOptions& eval,
+                                    Eigen::Matrix<double, 2, 6>* D) const {
   const double v[6] = {s.th1, s.th2, s.w1, s.w2, s.a1, s.a2};
   J6 in[6];
   for (int k = 0; k < 6; ++k) in[k] = J6(v[k], k);
   Evaluation<J6> ev;
-  const Status st = inverse_dynamics(p, s.loads.template cast<J6>(), in[0], in[1], in[2], in[3],
+  const Status st = inverse_dynamics(p_, s.loads.template cast<J6>(), in[0], in[1], in[2], in[3],
                                      in[4], in[5], nullptr, eval, &ev);
   if (!st.ok()) return false;
   D->row(0) = ev.M1.v.transpose();
   D->row(1) = ev.M2.v.transpose();
   return D->allFinite();
+}
+
+bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layout, const double* x,
+                        const Sample& s, const EvalOptions& eval, Eigen::Matrix<double, 2, 6>* D) {
+  return KinematicJacobians(scene, layout, x)(s, eval, D);
 }
 
 Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source, const SgOptions& sg,
@@ -32,6 +42,15 @@ Sensitivity sensitivity(const std::vector<double>& t, int i, RateSource source, 
   std::vector<double> d1, d2;
   if (source != RateSource::kLogged) savitzky_golay_taps(t, i, sg, &lo, &d1, &d2);
   return sensitivity(i, lo, d1, d2, source, noise, D);
+}
+
+Sensitivity sensitivity(SgTapCache* taps, int i, RateSource source, const SensorNoise& noise,
+                        const Eigen::Matrix<double, 2, 6>& D) {
+  int lo = i;
+  static const std::vector<double> none;
+  const std::vector<double>*d1 = &none, *d2 = &none;
+  if (source != RateSource::kLogged) taps->taps(i, &lo, &d1, &d2);
+  return sensitivity(i, lo, *d1, *d2, source, noise, D);
 }
 
 Sensitivity sensitivity(int i, int lo, const std::vector<double>& d1, const std::vector<double>& d2,
@@ -80,33 +99,90 @@ Eigen::Vector2d propagated_variance(const Sensitivity& s) {
   return v;
 }
 
+void add_channel_covariance(const Eigen::MatrixXd& G, int first, int last, double sigma,
+                            Eigen::MatrixXd* S) {
+  if (!(sigma > 0) || last < first) return;
+  const auto used = G.middleCols(first, last - first + 1);
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(S->rows(), S->cols());
+  C.selfadjointView<Eigen::Lower>().rankUpdate(used, sigma * sigma);
+  *S += C.selfadjointView<Eigen::Lower>();
+}
+
+namespace {
+
+/// G's column l = sum over the samples u of Jt_u d r_u / d n_{c,l} (Jt: each sample's J_u^T, or a
+/// projection Q J_u^T, as a pair of columns): the response to one sample l of the noise channel c,
+/// which enters every residual whose window holds it. [first, last]: the columns reached
+/// (last < first: none, G untouched).
+void channel_response(const Eigen::MatrixXd& Jt, const std::vector<Sensitivity>& sens, int c, int n,
+                      Eigen::MatrixXd* G, int* first, int* last) {
+  *first = n, *last = -1;
+  for (size_t u = 0; u < sens.size(); ++u) {
+    const Sensitivity& s = sens[u];
+    if (s.coef[c].empty()) continue;
+    if (*last < 0) G->setZero(Jt.rows(), n);
+    *first = std::min(*first, s.lo[c]);
+    *last = std::max(*last, s.lo[c] + static_cast<int>(s.coef[c].size()) - 1);
+    const double *j0 = Jt.col(2 * u).data(), *j1 = Jt.col(2 * u + 1).data();
+    for (size_t r = 0; r < s.coef[c].size(); ++r) {
+      const double a0 = s.coef[c][r](0), a1 = s.coef[c][r](1);
+      double* g = G->col(s.lo[c] + r).data();
+      for (Eigen::Index p = 0; p < Jt.rows(); ++p) g[p] += a0 * j0[p] + a1 * j1[p];
+    }
+  }
+}
+
+/// the channels' std (the first sample's: every sample's are the same)
+double channel_sigma(const std::vector<Sensitivity>& sens, int c) {
+  return sens.empty() ? 0.0 : sens.front().sigma[c];
+}
+
+}  // namespace
+
 Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sensitivity>& sens,
                                  const SensorNoise& noise, int n) {
-  const int P = static_cast<int>(J.cols());
+  const int P = static_cast<int>(J.cols()), m = static_cast<int>(sens.size());
   Eigen::MatrixXd S = Eigen::MatrixXd::Zero(P, P);
-  // g[c](l) = sum over residuals i of J_i^T d r_i / d n_{c,l}: the score's response to one
-  // noise sample, which enters every residual whose window holds it
-  // (allocated for the channels some sample has: the angles' alone where the rates are estimated)
-  std::vector<Eigen::MatrixXd> g(4);
-  for (size_t u = 0; u < sens.size(); ++u) {
-    const Eigen::Matrix<double, 2, Eigen::Dynamic> Ji = J.middleRows(2 * u, 2);
-    for (int j = 0; j < kActuators; ++j) {
-      const double s2 = noise.torque[j] * noise.torque[j];
-      S += s2 * Ji.row(j).transpose() * Ji.row(j);
+  const Eigen::MatrixXd Jt = J.topRows(2 * m).transpose();
+  // the torque noise at every sample: J^T diag(torque noise^2) J
+  if (noise.torque[0] != 0 || noise.torque[1] != 0) {
+    Eigen::MatrixXd Jw = Jt;
+    for (int u = 0; u < m; ++u) {
+      for (int j = 0; j < kActuators; ++j) Jw.col(2 * u + j) *= noise.torque[j];
     }
-    for (int c = 0; c < 4; ++c) {
-      const Sensitivity& s = sens[u];
-      if (!s.coef[c].empty() && g[c].size() == 0) g[c] = Eigen::MatrixXd::Zero(n, P);
-      for (size_t r = 0; r < s.coef[c].size(); ++r) {
-        g[c].row(s.lo[c] + r) += s.coef[c][r].transpose() * Ji;
-      }
-    }
+    S.selfadjointView<Eigen::Lower>().rankUpdate(Jw);
+    S = S.selfadjointView<Eigen::Lower>();
   }
+  Eigen::MatrixXd G;
   for (int c = 0; c < 4; ++c) {
-    const double sigma = sens.empty() ? 0.0 : sens.front().sigma[c];
-    if (sigma > 0 && g[c].size() > 0) S += sigma * sigma * g[c].transpose() * g[c];
+    int first = 0, last = -1;
+    channel_response(Jt, sens, c, n, &G, &first, &last);
+    add_channel_covariance(G, first, last, channel_sigma(sens, c), &S);
   }
   return S;
+}
+
+Eigen::VectorXd projected_score_variance(const Eigen::MatrixXd& Q, const Eigen::MatrixXd& J,
+                                         const std::vector<Sensitivity>& sens,
+                                         const SensorNoise& noise, int n) {
+  const int m = static_cast<int>(sens.size());
+  const Eigen::MatrixXd Jq = Q * J.topRows(2 * m).transpose();
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(Q.rows());
+  for (int u = 0; u < m; ++u) {
+    for (int j = 0; j < kActuators; ++j) {
+      v += noise.torque[j] * noise.torque[j] * Jq.col(2 * u + j).cwiseAbs2();
+    }
+  }
+  Eigen::MatrixXd G;
+  for (int c = 0; c < 4; ++c) {
+    int first = 0, last = -1;
+    channel_response(Jq, sens, c, n, &G, &first, &last);
+    const double sigma = channel_sigma(sens, c);
+    if (sigma > 0 && last >= first) {
+      v += sigma * sigma * G.middleCols(first, last - first + 1).rowwise().squaredNorm();
+    }
+  }
+  return v;
 }
 
 }  // namespace fivebar::identification::detail

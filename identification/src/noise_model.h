@@ -29,6 +29,18 @@ struct SensorNoise {
 bool kinematic_jacobian(const Params<double>& scene, const ParameterLayout& layout, const double* x,
                         const Sample& s, const EvalOptions& eval, Eigen::Matrix<double, 2, 6>* D);
 
+/// kinematic_jacobian at many samples of one parameter vector: the scene's Jet parameters at x
+/// formed once (the same Jacobians bit for bit).
+class KinematicJacobians {
+ public:
+  KinematicJacobians(const Params<double>& scene, const ParameterLayout& layout, const double* x);
+  bool operator()(const Sample& s, const EvalOptions& eval, Eigen::Matrix<double, 2, 6>* D) const;
+
+ private:
+  using J6 = ceres::Jet<double, 6>;
+  Params<J6> p_;
+};
+
 /// One sample's noise sensitivities: for each noise channel (0, 1: the differentiated or direct
 /// angle or rate of crank 1, 2; 2, 3: the direct angle when rates are logged) the samples it
 /// comes from and d r / d n (2 rows, one per actuator) for each.
@@ -48,6 +60,10 @@ Sensitivity sensitivity(int i, int lo, const std::vector<double>& d1, const std:
                         RateSource source, const SensorNoise& noise,
                         const Eigen::Matrix<double, 2, 6>& D);
 
+/// The same with the filter's taps at i from `taps` (a cache over the log's t and the filter).
+Sensitivity sensitivity(SgTapCache* taps, int i, RateSource source, const SensorNoise& noise,
+                        const Eigen::Matrix<double, 2, 6>& D);
+
 /// Variance of the residual of each actuator that the noise in `s` produces.
 Eigen::Vector2d propagated_variance(const Sensitivity& s);
 
@@ -56,6 +72,18 @@ Eigen::Vector2d propagated_variance(const Sensitivity& s);
 /// sample (log index `index[u]`), `sens[u]` the sensitivities of used sample u, `n` the log size.
 Eigen::MatrixXd score_covariance(const Eigen::MatrixXd& J, const std::vector<Sensitivity>& sens,
                                  const SensorNoise& noise, int n);
+
+/// diag(Q S Q^T) for S = score_covariance(J, sens, noise, n) and Q (k x P), without forming S:
+/// the variances of k combinations of the score (the same up to rounding).
+Eigen::VectorXd projected_score_variance(const Eigen::MatrixXd& Q, const Eigen::MatrixXd& J,
+                                         const std::vector<Sensitivity>& sens,
+                                         const SensorNoise& noise, int n);
+
+/// One noise channel's share of the score covariance: S += sigma^2 G G^T over G's columns
+/// [first, last] (G: P x n, column l the score's response to noise sample l; the columns outside
+/// the range are zero). Nothing where sigma is not > 0 or the range is empty.
+void add_channel_covariance(const Eigen::MatrixXd& G, int first, int last, double sigma,
+                            Eigen::MatrixXd* S);
 
 }  // namespace fivebar::identification::detail
 

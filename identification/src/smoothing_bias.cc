@@ -150,31 +150,46 @@ int judged_size(const BiasInputs& in) { return in.judged > 0 ? in.judged : in.fr
 /// The std of the smoothing's prediction (public friction coefficients) from the angle noise
 /// through the reconstruction: the prediction is linear in the angles (weights W of each sample's
 /// terms, through the filter's response r1, r2 and the kinematic Jacobian), so its score's
-/// covariance is that of the errors in variables (score_covariance) with these sensitivities.
+/// covariance is that of the errors in variables (score_covariance) with these sensitivities;
+/// the std of the public parameters judged: Q = (T (J^T J + Hp)^-1)'s first rows, diag(Q S Q^T).
 Eigen::VectorXd prediction_spread(const std::vector<double>& t, const BiasInputs& in,
                                   const std::vector<char>& keep, const Eigen::MatrixXd& J,
-                                  const Eigen::MatrixXd& Hinv, const Eigen::VectorXd& r1,
+                                  const Eigen::MatrixXd& Q, const Eigen::VectorXd& r1,
                                   const Eigen::VectorXd& r2) {
-  std::vector<Sensitivity> sens;
-  for (size_t u = 0; u < keep.size(); ++u) {
-    if (!keep[u]) continue;
-    Sensitivity s;
-    for (int c = 0; c < kDof; ++c) {
+  const int k_out = static_cast<int>(Q.rows()), n = static_cast<int>(t.size());
+  const Eigen::MatrixXd QJt = Q * J.transpose();  // the kept samples' Q J_u^T as column pairs
+  Eigen::VectorXd var = Eigen::VectorXd::Zero(k_out);
+  Eigen::MatrixXd G, V(k_out, r1.size());
+  for (int c = 0; c < kDof; ++c) {
+    // G's column l: the prediction's response to the angle sample l through every kept sample's
+    // terms: the torque error d dM_u / d theta_l = sum over the terms e of W_u(e, l - lo_u)
+    // (D_omega r1(e) + D_alpha r2(e)), through Q J_u^T: sum over e of W_u(e, l - lo_u) V(:, e)
+    G.setZero(k_out, n);
+    int first = n, last = -1;
+    for (size_t u = 0, k = 0; u < keep.size(); ++u) {
+      if (!keep[u]) continue;
       const Eigen::MatrixXd& W = in.weights[c][u];
-      const Eigen::RowVectorXd w1 = r1.transpose() * W, w2 = r2.transpose() * W;
-      s.lo[c] = in.recon_lo[u];
-      s.sigma[c] = in.noise.angle[c];
-      for (int r = 0; r < W.cols(); ++r) {
-        s.coef[c].push_back(in.D[u].col(2 + c) * w1(r) + in.D[u].col(4 + c) * w2(r));
+      for (int e = 0; e < W.rows(); ++e) {
+        const Eigen::Vector2d d = in.D[u].col(2 + c) * r1(e) + in.D[u].col(4 + c) * r2(e);
+        V.col(e) = QJt.col(2 * k) * d(0) + QJt.col(2 * k + 1) * d(1);
       }
+      const int lo = in.recon_lo[u];
+      for (int r = 0; r < W.cols(); ++r) {
+        double* g = G.col(lo + r).data();
+        for (int e = 0; e < W.rows(); ++e) {
+          const double w = W(e, r), *v = V.col(e).data();
+          for (int p = 0; p < k_out; ++p) g[p] += w * v[p];
+        }
+      }
+      if (W.cols() > 0) first = std::min(first, lo), last = std::max(last, lo + int(W.cols()) - 1);
+      ++k;
     }
-    sens.push_back(std::move(s));
+    const double sigma = in.noise.angle[c];
+    if (sigma > 0 && last >= first) {
+      var += sigma * sigma * G.middleCols(first, last - first + 1).rowwise().squaredNorm();
+    }
   }
-  SensorNoise angles = in.noise;
-  angles.torque[0] = angles.torque[1] = 0;
-  const Eigen::MatrixXd S = score_covariance(J, sens, angles, static_cast<int>(t.size()));
-  const Eigen::MatrixXd C = in.T * Hinv * S * Hinv * in.T.transpose();
-  return C.diagonal().head(judged_size(in)).cwiseMax(0.0).cwiseSqrt();
+  return var.cwiseMax(0.0).cwiseSqrt();
 }
 
 /// The 3-point Gauss-Hermite points along the principal axes of the covariance C:
@@ -270,16 +285,19 @@ bool predict_smoothing_bias(const std::vector<double>& t, const BiasInputs& in,
   // rates; the Gauss-Newton step from the truth moves x by (J^T J)^-1 J^T dM (J = d r / d x)
   const Eigen::VectorXd score = J.transpose() * out->dM;
   const Eigen::VectorXd b = in.T * (Hinv * score);
-  const Eigen::MatrixXd S = score_covariance(J, sens, in.noise, static_cast<int>(t.size())) +
-                            in.s2 * in.Hp;
-  const Eigen::MatrixXd C = in.T * Hinv * S * Hinv * in.T.transpose();
+  // the std's covariance T Hinv (S + s2 Hp) Hinv T^T is needed on its diagonal alone, for the
+  // public parameters judged: the rows Q of T Hinv (Hinv symmetric) through the score's
+  const Eigen::MatrixXd Q = (in.T * Hinv).topRows(judged_size(in));
+  const Eigen::VectorXd var =
+      projected_score_variance(Q, J, sens, in.noise, static_cast<int>(t.size())) +
+      in.s2 * (Q * in.Hp).cwiseProduct(Q).rowwise().sum();
   out->bias = b.head(judged_size(in));
-  out->std = C.diagonal().head(judged_size(in)).cwiseMax(0.0).cwiseSqrt();
+  out->std = var.cwiseMax(0.0).cwiseSqrt();
   if (with_spread) {
     const size_t n = keep.size();
     const bool weighed = in.recon_lo.size() == n && in.weights[0].size() == n &&
                          in.weights[1].size() == n && in.D.size() == n;
-    out->spread = weighed ? prediction_spread(t, in, keep, J, Hinv, r1, r2)
+    out->spread = weighed ? prediction_spread(t, in, keep, J, Q, r1, r2)
                           : Eigen::VectorXd::Zero(judged_size(in));
   }
   return out->bias.allFinite() && out->std.allFinite();

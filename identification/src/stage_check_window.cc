@@ -29,9 +29,10 @@ struct SmoothingInputs {
 SmoothingInputs smoothing_inputs(const Fit& f, int m) {
   SmoothingInputs in;
   const int reach = static_cast<int>(std::lround(detail::kReconSpan * m));
+  const detail::KinematicJacobians jacobian(f.scene, f.layout, f.x.data());
   for (size_t u = 0; u < f.samples.size(); ++u) {
     Eigen::Matrix<double, 2, 6> D;
-    if (!detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), f.samples[u], f.eval, &D)) {
+    if (!jacobian(f.samples[u], f.eval, &D)) {
       D.setZero();
     }
     in.D.push_back(D);
@@ -45,8 +46,9 @@ SmoothingInputs smoothing_inputs(const Fit& f, int m) {
 void floors_at(const Fit& f, const SmoothingInputs& in, const SgOptions& sg, double floor[2]) {
   std::vector<detail::Sensitivity> sens;
   sens.reserve(in.D.size());
+  SgTapCache taps(f.cond.log.t, sg);
   for (size_t u = 0; u < in.D.size(); ++u) {
-    sens.push_back(detail::sensitivity(f.cond.log.t, f.index[u], f.source, sg, f.noise, in.D[u]));
+    sens.push_back(detail::sensitivity(&taps, f.index[u], f.source, f.noise, in.D[u]));
   }
   noise_floor(f, sens, floor);
 }

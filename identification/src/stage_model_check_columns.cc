@@ -161,14 +161,15 @@ namespace {
 
 /// The sum of the squared taps through which a noise channel (an angle, or a logged rate) reaches
 /// the estimated acceleration at log sample i (noise of std s on the channel: s^2 times it on the
-/// acceleration): the Savitzky-Golay d2 of the angles, or d1 of logged rates; 0 when the
-/// accelerations are logged (their own noise is not modelled).
-double accel_tap_power(const Fit& f, int i) {
+/// acceleration): the Savitzky-Golay d2 of the angles, or d1 of logged rates (the filter's taps
+/// from `taps`, over the log's t and f.sg); 0 when the accelerations are logged (their own noise
+/// is not modelled).
+double accel_tap_power(const Fit& f, SgTapCache* taps, int i) {
   if (f.source == detail::RateSource::kLogged) return 0.0;
   int lo = i;
-  std::vector<double> d1, d2;
-  savitzky_golay_taps(f.cond.log.t, i, f.sg, &lo, &d1, &d2);
-  const std::vector<double>& d = f.source == detail::RateSource::kFromAngles ? d2 : d1;
+  const std::vector<double>*d1 = nullptr, *d2 = nullptr;
+  taps->taps(i, &lo, &d1, &d2);
+  const std::vector<double>& d = f.source == detail::RateSource::kFromAngles ? *d2 : *d1;
   double power = 0;
   for (double w : d) power += w * w;
   return power;
@@ -222,9 +223,10 @@ bool score_bias(const Fit& f, const double fl[2], const Eigen::MatrixXd& J,
   // the torque gains' columns (the last of J, torque_columns) hold minus the model's torque,
   // whose derivative in the accelerations is the residual's: dr_c on their crank's rows
   const Eigen::Index first = J.cols() - tc.J.cols();
+  SgTapCache taps(f.cond.log.t, f.sg);
   for (size_t u = 0; u < f.samples.size(); ++u) {
     const Eigen::Index row = 2 * static_cast<Eigen::Index>(u);
-    const double m = accel_tap_power(f, f.index[u]);
+    const double m = accel_tap_power(f, &taps, f.index[u]);
     for (int c = 0; c < kDof; ++c) {
       const double v = sigma[c] * sigma[c] * m;
       b->head(dJ[c].cols()) += v * dJ[c].middleRows(row, 2).transpose() * dr[c].segment(row, 2);

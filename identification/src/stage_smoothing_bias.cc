@@ -56,9 +56,10 @@ const detail::BiasInputs& FiveBarWindowFit::fit_inputs() const {
   ceres::CRSMatrix crs;
   std::vector<double> r;
   if (problem.NumResidualBlocks() > 0 && raw_residuals(&problem, &r, &crs)) in.J = dense(crs, P);
+  const detail::KinematicJacobians jacobian(f.scene, f.layout, f.x.data());
   for (size_t u = 0; u < f.samples.size(); ++u) {
     Eigen::Matrix<double, 2, 6> D;
-    if (!detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), f.samples[u], f.eval, &D)) {
+    if (!jacobian(f.samples[u], f.eval, &D)) {
       D.setZero();
     }
     in.D.push_back(D);

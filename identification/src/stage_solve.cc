@@ -154,12 +154,14 @@ bool solve_stage(Fit* f, ceres::Problem* problem, IdentifyResult* out,
 std::vector<detail::Sensitivity> noise_sensitivities(const Fit& f) {
   std::vector<detail::Sensitivity> sens;
   sens.reserve(f.samples.size());
+  SgTapCache taps(f.cond.log.t, f.sg);  // the filter's taps, the same at every centred sample
+  const detail::KinematicJacobians jacobian(f.scene, f.layout, f.x.data());
   for (size_t u = 0; u < f.samples.size(); ++u) {
     Eigen::Matrix<double, 2, 6> D;
-    if (!detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), f.samples[u], f.eval, &D)) {
+    if (!jacobian(f.samples[u], f.eval, &D)) {
       D.setZero();
     }
-    sens.push_back(detail::sensitivity(f.cond.log.t, f.index[u], f.source, f.sg, f.noise, D));
+    sens.push_back(detail::sensitivity(&taps, f.index[u], f.source, f.noise, D));
   }
   return sens;
 }

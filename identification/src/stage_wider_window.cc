@@ -51,6 +51,8 @@ std::vector<PairedSample> paired_samples(const Fit& f, const IdentifyResult& out
   std::vector<int> rejected(n + 1, 0);
   for (int i = 0; i < n; ++i) rejected[i + 1] = rejected[i] + f.cond.rejected[i];
   std::vector<PairedSample> ps;
+  SgTapCache taps_a(log.t, f.sg), taps_b(log.t, wide);
+  const detail::KinematicJacobians jacobian(f.scene, f.layout, f.x.data());
   size_t v = 0;
   for (size_t u = 0; u < f.samples.size(); ++u) {
     const int i = f.index[u];
@@ -64,11 +66,11 @@ std::vector<PairedSample> paired_samples(const Fit& f, const IdentifyResult& out
     Eigen::Matrix<double, 2, 6> D;
     if (!sample_residual(f.scene, f.layout, f.samples[u], f.eval, f.x.data(), &p.ra, &p.Ja) ||
         !sample_residual(f.scene, f.layout, g.samples[v], f.eval, f.x.data(), &p.rb, &p.Jb) ||
-        !detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), f.samples[u], f.eval, &D)) {
+        !jacobian(f.samples[u], f.eval, &D)) {
       continue;
     }
-    p.sa = detail::sensitivity(log.t, i, f.source, f.sg, f.noise, D);
-    p.sb = detail::sensitivity(log.t, i, f.source, wide, f.noise, D);
+    p.sa = detail::sensitivity(&taps_a, i, f.source, f.noise, D);
+    p.sb = detail::sensitivity(&taps_b, i, f.source, f.noise, D);
     ps.push_back(std::move(p));
   }
   return ps;

@@ -25,6 +25,7 @@ void FiveBarWindowFit::levels(const std::vector<int>& probe, const SgOptions& sg
   Eigen::Vector2d r2 = Eigen::Vector2d::Zero(), v = Eigen::Vector2d::Zero(), t2 = v;
   int count = 0;
   SgTapCache taps(log.t, sg);
+  const detail::KinematicJacobians jacobian(f.scene, f.layout, f.x.data());
   for (int i : probe) {
     Sample s = logged_sample(f, i);
     int lo = 0;
@@ -53,7 +54,7 @@ void FiveBarWindowFit::levels(const std::vector<int>& probe, const SgOptions& sg
     Eigen::Matrix<double, 2, 6> D;
     if (!inverse_dynamics(p, s.loads, s.th1, s.th2, s.w1, s.w2, s.a1, s.a2, nullptr, f.eval, &ev)
              .ok() ||
-        !detail::kinematic_jacobian(f.scene, f.layout, f.x.data(), s, f.eval, &D)) {
+        !jacobian(s, f.eval, &D)) {
       continue;
     }
     const auto& o = p.actuators.offset;  // measured = motor + offset
