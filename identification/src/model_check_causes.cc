@@ -32,11 +32,45 @@ std::string friction_moves(const ParameterLayout& layout, const IdentifyResult& 
   return moved;
 }
 
+bool unlike_an_offset(const Eigen::Ref<const Eigen::VectorXd>& v) {
+  const double mean = v.mean();
+  const double spread = std::sqrt((v.array() - mean).square().mean());
+  return spread > 0 && spread >= kOffsetSpread * std::abs(mean);
+}
+
+std::vector<int> motor_terms(const Eigen::MatrixXd& D, int actuators) {
+  std::vector<int> terms;
+  for (int c = 0; c < D.cols(); ++c) {
+    if (unlike_an_offset(D.col(c))) terms.push_back(actuators + c);
+  }
+  return terms;
+}
+
+std::string motor_reading(const detail::FreedStep& fs, const std::vector<int>& terms,
+                          int actuators) {
+  std::string out;
+  for (size_t k = 0; k < terms.size() && static_cast<Eigen::Index>(k) < fs.extra_step.size(); ++k) {
+    const bool viscous = terms[k] >= 2 * actuators;
+    out += (out.empty() ? "" : ", ") + actuator_term_name(terms[k], actuators) + " " +
+           format_significant(fs.extra_step(k), 3) + " +- " +
+           format_significant(fs.extra_std(k), 2) + (viscous ? " N m s/rad" : " N m");
+  }
+  return out;
+}
+
+Eigen::Vector2d motor_friction_columns(const FrictionParams<double>& fp, const EvalOptions& eval,
+                                       double w, double a) {
+  if (eval.rest_acceleration >= 0.0) mech::detail::still_drive(eval, &w, &a);
+  const JointMode mode = mech::detail::inverse_slip(eval, w, a);
+  if (mode == kStuck) return Eigen::Vector2d::Zero();
+  return -Eigen::Vector2d(coulomb_direction(fp, w, coulomb_sign(mode)), w);
+}
+
 namespace {
 
 /// The freed step with the columns of every cause in `mask` (bit id: CauseId) freed together.
 detail::FreedStep freed_set(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
-                            const std::vector<int> idx[5], const Eigen::VectorXd& info,
+                            const CauseColumns& idx, const Eigen::VectorXd& info,
                             const Eigen::VectorXd& bias, unsigned mask) {
   std::vector<int> cols;
   std::vector<double> prior;
@@ -82,9 +116,9 @@ IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedSt
 
 }  // namespace
 
-CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
-                       const std::vector<int> idx[5], const Eigen::VectorXd& info,
-                       const Eigen::VectorXd& bias, bool attributable) {
+CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r, const CauseColumns& idx,
+                       const Eigen::VectorXd& info, const Eigen::VectorXd& bias,
+                       bool attributable) {
   const double excess = r.squaredNorm() - static_cast<double>(r.size());
   unsigned present = 0;
   std::vector<int> ids;
