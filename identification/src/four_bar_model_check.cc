@@ -106,13 +106,13 @@ bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::Matri
         return false;
       }
       J->col(c) = -(Mp - Mm) / (2 * h);
-      idx[1].push_back(c);
+      idx[stages::kCauseInertia + 1].push_back(c);
     }
   }
   // theta1 reads d more than the scene's angle: the model at theta1 - d
   if (!model_torques(f, f.scene, h, &Mp) || !model_torques(f, f.scene, -h, &Mm)) return false;
   J->col(c) = -(Mp - Mm) / (2 * h);
-  idx[2].push_back(c++);
+  idx[stages::kCauseAngles + 1].push_back(c++);
   for (Eigen::Index k = 0; k < Jm.cols(); ++k) {
     J->col(c) = Jm.col(k);
     idx[stages::kCauseMotors + 1].push_back(c++);
@@ -120,17 +120,17 @@ bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::Matri
   // tau1 = (1 + g) M + o, M the model's torque (less the fitted offset)
   if (!fitted_offset) {
     J->col(c).setConstant(-1.0);
-    idx[3].push_back(c++);
+    idx[stages::kCauseTorque + 1].push_back(c++);
   }
   const double o = fitted_offset ? f.x[f.layout.actuator_offset()] : 0.0;
   J->col(c) = -(M.array() - o).matrix();
-  idx[3].push_back(c++);
+  idx[stages::kCauseTorque + 1].push_back(c++);
   if (delay) {  // tau1 lagging by d reads the torque of t + d: its rate (the delay's regressor)
     const TorqueLog& log = f.cond.log;
     std::vector<std::vector<double>> rate;
     stages::delay_regressor(log.t, {&log.tau1}, f.noise.torque, f.index, f.sg.half_window_s, &rate);
     for (int u = 0; u < n; ++u) (*J)(u, c) = rate[0][f.index[u]];
-    idx[4].push_back(c++);
+    idx[stages::kCauseDelay + 1].push_back(c++);
   }
   *J /= fl;
   *r = (tau - M) / fl;
@@ -333,8 +333,9 @@ stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
   if (!check_jacobian(f, *out, &J, &r, idx) || J.rows() < stages::kCheckRowsPerColumn * J.cols()) {
     return {};
   }
-  const Eigen::VectorXd info = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(idx[1].size()),
-                                                         1.0 / std::pow(f.opt->inertia_prior, 2));
+  const Eigen::VectorXd info =
+      Eigen::VectorXd::Constant(static_cast<Eigen::Index>(idx[stages::kCauseInertia + 1].size()),
+                                1.0 / std::pow(f.opt->inertia_prior, 2));
   Eigen::VectorXd bias;
   if (!score_bias(f, *out, &bias)) return {};
   CauseSteps cs = stages::cause_steps(J, r, idx, info, bias, true);

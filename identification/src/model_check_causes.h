@@ -115,10 +115,12 @@ std::string friction_moves(const ParameterLayout& layout, const IdentifyResult& 
                            const detail::FreedStep& fs, bool own, double* largest = nullptr,
                            const Eigen::VectorXd* judged = nullptr);
 
-/// The freed steps of the causes whose columns idx[1..4] holds (idx[0]: the fitted parameters;
-/// info: the inertial columns' prior information; bias: the score's expectation, empty: none),
-/// alone, together and beyond each other; `attributable`: a cause may be named below
-/// kExplainsAll of the excess.
+/// The freed steps of the causes whose columns idx[1..5] holds (idx[0]: the fitted parameters;
+/// info: the inertial columns' prior information; bias: the score's expectation, empty: none):
+/// the model causes (inertia, angle offsets, torque readings) alone, together and beyond each
+/// other; the motors' friction and the delay alone and beyond the model causes, whose evidence
+/// they do not enter (the motors' friction named by motors_named in model_check_causes.cc);
+/// `attributable`: a cause may be named below kExplainsAll of the excess.
 CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r, const CauseColumns& idx,
                        const Eigen::VectorXd& info, const Eigen::VectorXd& bias, bool attributable);
 
@@ -127,6 +129,18 @@ std::string drop_clause(const detail::FreedStep& fs);
 
 /// "B with <other>, C with <other>": the falls of the other candidates checked than `best`
 std::string other_falls(const CauseSteps& cs, int best);
+
+/// Whether cause id competes in the comparisons of falls (most_explaining_cause,
+/// cause_explaining_most, the delay's verdict, decisive_model_error): checked, its step ok and
+/// evidenced alone (z above kCauseZ); the motors' friction (judged alone and beyond the model
+/// causes, as the delay: cause_steps) only where also evidenced beyond them and read as a
+/// friction (no coefficient below 0 beyond kFreedMove std)
+bool competes(const CauseSteps& cs, int id);
+
+/// Whether an entry of a check's report (IdentifyResult::model_check) is a model cause that
+/// counts by its evidence alone: not the delay, not "any", and the motors' friction only where
+/// named
+bool counts_alone(const IdentifyResult::MisfitCause& c);
 
 /// Whether candidate k, evidenced alone (z above kCauseZ), lowers the cost clearly more than
 /// candidate id (cause_explaining_most's "clearly")

@@ -172,10 +172,10 @@ bool check_jacobian(const Fit& f, const double fl[2], Eigen::MatrixXd* J, Eigen:
   for (int i = 0; i < l2.size(); ++i) {
     idx[l2.is_inertial(i) && !f.layout.inertia ? 1 : 0].push_back(i);
   }
-  idx[2] = {l2.size(), l2.size() + 1};
+  idx[kCauseAngles + 1] = {l2.size(), l2.size() + 1};
   int c = l2.size() + 2;
   for (Eigen::Index k = 0; k < Jm.cols(); ++k) idx[kCauseMotors + 1].push_back(c++);
-  for (Eigen::Index k = 0; k < Jt.cols(); ++k) idx[3].push_back(c++);
+  for (Eigen::Index k = 0; k < Jt.cols(); ++k) idx[kCauseTorque + 1].push_back(c++);
   const detail::InertialPrior prior = detail::inertial_prior(f.scene, f.opt->inertia_prior);
   info->resize(kInertialParams);
   for (int k = 0; k < kInertialParams; ++k) (*info)(k) = 1.0 / std::pow(prior.sigma[k], 2);
