@@ -54,25 +54,45 @@ void check_numbers(const CLI::App& app) {
   }
 }
 
+namespace {
+/// Whether a list's text has an empty field: a leading or trailing comma, or two in a row
+bool empty_field(const std::string& list) {
+  return list.empty() || list.front() == ',' || list.back() == ',' ||
+         list.find(",,") != std::string::npos;
+}
+}  // namespace
+
 void check_list_fields(const CLI::App& sub, int argc, const char* const* argv) {
   const CLI::Option* list = nullptr;  // the list option whose values follow, if any
+  std::string joined;                 // its values so far, as one list
+  const auto check = [&] {
+    if (list && empty_field(joined)) {
+      throw InputError("command line", list->get_name(),
+                       "an empty value in '" + joined + "' (a list is values separated by commas)");
+    }
+  };
   for (int i = 2; i < argc; ++i) {
     std::string arg = argv[i];
     if (arg.rfind("--", 0) == 0) {
+      check();
       const size_t eq = arg.find('=');
       const CLI::Option* o = sub.get_option_no_throw(arg.substr(0, eq));
       list = o && o->get_delimiter() == ',' ? o : nullptr;
+      joined.clear();
       if (!list || eq == std::string::npos) continue;
       arg = arg.substr(eq + 1);
+    } else if (!list) {
+      continue;
     }
-    if (!list) continue;
-    const bool empty_field = arg.empty() || arg.front() == ',' || arg.back() == ',' ||
-                             arg.find(",,") != std::string::npos;
-    if (empty_field) {
-      throw InputError("command line", list->get_name(),
-                       "an empty value in '" + arg + "' (a list is values separated by commas)");
+    if (arg.empty()) {
+      joined += ",";  // an empty argument: an empty field wherever it stands
+      arg = ",";
     }
+    // values given as separate arguments are one list ("0.1," "0.2" is 0.1,0.2)
+    const bool joins = joined.empty() || joined.back() == ',' || arg.front() == ',';
+    joined += (joins ? "" : ",") + arg;
   }
+  check();
 }
 
 CLI::Validator positive_number() {

@@ -23,8 +23,9 @@ void check_numbers(const CLI::App& app);
 /// the command line before parsing, because the parser drops empty fields: a value of such an
 /// option with an empty field (`0.1,,0.2`, a leading or trailing comma) throws
 /// InputError(`command line: --opt: an empty value in '0.1,,0.2' ...`) instead of being read as
-/// fewer values. `sub`: the subcommand named by argv[1]; its options' values are the text after
-/// `--opt=` or the arguments after `--opt` up to the next one starting with `--`.
+/// fewer values. `sub`: the subcommand named by argv[1]; an option's values are the text after
+/// `--opt=` or the arguments after `--opt` up to the next one starting with `--`, joined into one
+/// list (`--opt 0.1, 0.2`, as a shell splits it, is the list 0.1,0.2).
 void check_list_fields(const CLI::App& sub, int argc, const char* const* argv);
 
 /// The plausibility limit of scene key `key` (scene_limit, docs/scene.md) for an option that

@@ -58,10 +58,29 @@ FourBarParams moved(const FourBarParams& p, int k, int j, double h) {
   return q;
 }
 
+/// The motor's Coulomb and viscous friction columns (stages::motor_friction_columns) when the
+/// fit leaves them out (--estimate actuator fits them), those unlike an offset
+/// (stages::motor_terms: not a crank that turns one way only); `terms`: their actuator terms.
+Eigen::MatrixXd motor_columns(const FourBarFit& f, std::vector<int>* terms) {
+  const Eigen::Index n = static_cast<Eigen::Index>(f.samples.size());
+  terms->clear();
+  if (f.layout.actuator) return Eigen::MatrixXd(n, 0);
+  Eigen::MatrixXd D(n, 2);
+  for (Eigen::Index u = 0; u < n; ++u) {
+    const Sample& s = f.samples[u];
+    D.row(u) = stages::motor_friction_columns(f.scene.friction, f.eval, s.v[0], s.a[0]).transpose();
+  }
+  *terms = stages::motor_terms(D, 1);
+  Eigen::MatrixXd Jm(n, static_cast<Eigen::Index>(terms->size()));
+  for (size_t k = 0; k < terms->size(); ++k) Jm.col(k) = D.col((*terms)[k] - 1);
+  return Jm;
+}
+
 /// The check's whitened Jacobian J and residual r, and its index sets (fitted, inertial, angle
-/// offset, torque readings, delay: model_check_causes.h); false where an evaluation fails.
+/// offset, torque readings, the motor's friction where the fit leaves it out, delay:
+/// model_check_causes.h); false where an evaluation fails.
 bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
-                    Eigen::VectorXd* r, std::vector<int> idx[5]) {
+                    Eigen::VectorXd* r, stages::CauseColumns& idx) {
   constexpr double h = 1e-6;
   const double fl = out.residual_noise_floor[0];
   const int n = static_cast<int>(f.samples.size()), P = f.layout.size();
@@ -71,9 +90,12 @@ bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::Matri
   for (int u = 0; u < n; ++u) tau(u) = f.samples[u].tau[0];
   const int ni = kFourBarLinks * kPerLink;
   const bool delay = f.opt->estimate_delay;
-  // the fit's own offset (--estimate actuator) is not freed again by the torque readings' cause
+  // the fit's own offset and motor friction (--estimate actuator) are not freed again by the
+  // torque readings' and the motors' causes
   const bool fitted_offset = f.layout.actuator;
-  J->setZero(n, P + ni + (fitted_offset ? 2 : 3) + (delay ? 1 : 0));
+  std::vector<int> terms;
+  const Eigen::MatrixXd Jm = motor_columns(f, &terms);
+  J->setZero(n, P + ni + (fitted_offset ? 2 : 3) + Jm.cols() + (delay ? 1 : 0));
   J->leftCols(P) = -dx;  // dx: the torques' derivatives
   for (int i = 0; i < P; ++i) idx[0].push_back(i);
   int c = P;
@@ -84,27 +106,31 @@ bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::Matri
         return false;
       }
       J->col(c) = -(Mp - Mm) / (2 * h);
-      idx[1].push_back(c);
+      idx[stages::kCauseInertia + 1].push_back(c);
     }
   }
   // theta1 reads d more than the scene's angle: the model at theta1 - d
   if (!model_torques(f, f.scene, h, &Mp) || !model_torques(f, f.scene, -h, &Mm)) return false;
   J->col(c) = -(Mp - Mm) / (2 * h);
-  idx[2].push_back(c++);
+  idx[stages::kCauseAngles + 1].push_back(c++);
+  for (Eigen::Index k = 0; k < Jm.cols(); ++k) {
+    J->col(c) = Jm.col(k);
+    idx[stages::kCauseMotors + 1].push_back(c++);
+  }
   // tau1 = (1 + g) M + o, M the model's torque (less the fitted offset)
   if (!fitted_offset) {
     J->col(c).setConstant(-1.0);
-    idx[3].push_back(c++);
+    idx[stages::kCauseTorque + 1].push_back(c++);
   }
   const double o = fitted_offset ? f.x[f.layout.actuator_offset()] : 0.0;
   J->col(c) = -(M.array() - o).matrix();
-  idx[3].push_back(c++);
+  idx[stages::kCauseTorque + 1].push_back(c++);
   if (delay) {  // tau1 lagging by d reads the torque of t + d: its rate (the delay's regressor)
     const TorqueLog& log = f.cond.log;
     std::vector<std::vector<double>> rate;
     stages::delay_regressor(log.t, {&log.tau1}, f.noise.torque, f.index, f.sg.half_window_s, &rate);
     for (int u = 0; u < n; ++u) (*J)(u, c) = rate[0][f.index[u]];
-    idx[4].push_back(c++);
+    idx[stages::kCauseDelay + 1].push_back(c++);
   }
   *J /= fl;
   *r = (tau - M) / fl;
@@ -123,7 +149,7 @@ bool score_bias(const FourBarFit& f, const IdentifyResult& out, Eigen::VectorXd*
   const double h = f.accel_noise;
   Eigen::MatrixXd Jp, Jm;
   Eigen::VectorXd rp, rm;
-  std::vector<int> unused[2][5];
+  stages::CauseColumns unused[2];
   FourBarFit g = f;
   for (Sample& s : g.samples) s.a[0] += h;
   if (!check_jacobian(g, out, &Jp, &rp, unused[0])) return false;
@@ -158,7 +184,7 @@ Eigen::VectorXd noise_std(const FourBarFit& f, const IdentifyResult& out) {
 /// read coulomb 0.126 +- 0.0049 (the clean log's std 0.0022), the gain's move 0.0054 read as
 /// within kFreedMove std. J, r: the check's (whitened by the floor).
 Eigen::VectorXd corrected_std(const FourBarFit& f, const Eigen::MatrixXd& J,
-                              const Eigen::VectorXd& r, const std::vector<int> idx[5], int id,
+                              const Eigen::VectorXd& r, const stages::CauseColumns& idx, int id,
                               const detail::FreedStep& fs, const IdentifyResult& out) {
   const int nf = f.layout.friction_size(), P = f.layout.size();
   const int n = static_cast<int>(r.size());
@@ -189,7 +215,7 @@ Eigen::VectorXd corrected_std(const FourBarFit& f, const Eigen::MatrixXd& J,
 
 /// What a named cause reads, in the log's terms: "theta1 reads 0.01 +- 0.001 rad more than the
 /// scene's angle", the gain and offset of tau1, the delay in ms.
-std::string reading(int id, const detail::FreedStep& fs) {
+std::string reading(const FourBarFit& f, int id, const detail::FreedStep& fs) {
   const auto pm = [&](int k, double scale, const char* unit) {
     return format_significant(scale * fs.extra_step(k), 3) + " +- " +
            format_significant(scale * fs.extra_std(k), 2) + unit;
@@ -207,6 +233,13 @@ std::string reading(int id, const detail::FreedStep& fs) {
       }
       return "tau1 reads " + pm(1, 100.0, " %") + " more than the model and " + pm(0, 1.0, " N m") +
              " above it: the torque sensor's gain or zero may be off (check its torque constant)";
+    case stages::kCauseMotors: {
+      std::vector<int> terms;  // (the check's columns: motor_columns)
+      motor_columns(f, &terms);
+      return "the motor's friction reads " + stages::motor_reading(fs, terms, 1) +
+             " more than the scene's: the motor (gearbox) has friction the fit leaves out; fit "
+             "it with --estimate friction,actuator";
+    }
     case stages::kCauseDelay:
       return "the torques seem to lag the angles by " + pm(0, 1e3, " ms") +
              " (negative: lead): a delay of the torque readings";
@@ -277,7 +310,7 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, const 
                                    "attribute: with " +
                                        what + " free, the most of the causes, ";
   out->warnings.push_back(head + stages::drop_clause(fs) + " and " + moved + "; " +
-                          (named ? reading(id, fs) : "no cause stands out from the others"));
+                          (named ? reading(f, id, fs) : "no cause stands out from the others"));
   // the first reason stays; a delay's move within kFreedMove makes nothing unusable
   if (!out->unusable.empty() || (moves.empty() && !bound)) return;
   const std::string cause =
@@ -296,18 +329,19 @@ stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
   if (!out->converged || f.layout.inertia) return {};
   Eigen::MatrixXd J;
   Eigen::VectorXd r;
-  std::vector<int> idx[5];
+  stages::CauseColumns idx;
   if (!check_jacobian(f, *out, &J, &r, idx) || J.rows() < stages::kCheckRowsPerColumn * J.cols()) {
     return {};
   }
-  const Eigen::VectorXd info = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(idx[1].size()),
-                                                         1.0 / std::pow(f.opt->inertia_prior, 2));
+  const Eigen::VectorXd info =
+      Eigen::VectorXd::Constant(static_cast<Eigen::Index>(idx[stages::kCauseInertia + 1].size()),
+                                1.0 / std::pow(f.opt->inertia_prior, 2));
   Eigen::VectorXd bias;
   if (!score_bias(f, *out, &bias)) return {};
   CauseSteps cs = stages::cause_steps(J, r, idx, info, bias, true);
   // the delay's estimate: its step freed alone with the friction (the five-bar's estimate_delay)
   const detail::FreedStep& ds = cs.alone[stages::kCauseDelay];
-  if (!idx[4].empty() && ds.ok && ds.extra_step.size() == 1) {
+  if (!idx[stages::kCauseDelay + 1].empty() && ds.ok && ds.extra_step.size() == 1) {
     out->delay_s = ds.extra_step(0);
     out->delay_std_s = ds.extra_std(0);
   }
@@ -323,8 +357,8 @@ stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
   const bool open = out->unusable.empty();  // a reason given before (the misfit) stays first
   bool any = false;
   const auto sd = [&](int id) { return corrected_std(f, J, r, idx, id, cs.alone[id], *out); };
-  for (int id :
-       {stages::kCauseTorque, stages::kCauseAngles, stages::kCauseInertia, stages::kCauseDelay}) {
+  for (int id : {stages::kCauseTorque, stages::kCauseMotors, stages::kCauseAngles,
+                 stages::kCauseInertia, stages::kCauseDelay}) {
     if (!cs.named(id)) continue;
     any = true;
     judge(f, cs, id, true, sd(id), out);

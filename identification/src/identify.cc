@@ -164,7 +164,7 @@ std::string shift_unexplained(const IdentifyResult& unshifted, const IdentifyRes
 void unevidenced_delay(IdentifyResult* out) {
   if (!(std::abs(out->delay_s) > kDelayNamedZ * out->delay_std_s)) return;
   for (const IdentifyResult::MisfitCause& c : out->model_check) {
-    if (c.name != "delay" && c.name != "any" && c.checked && c.z > detail::kCauseZ) return;
+    if (stages::counts_alone(c) && c.checked && c.z > detail::kCauseZ) return;
   }
   out->warnings.push_back(delay_seen(*out) + " (" +
                           format_significant(std::abs(out->delay_s) / out->delay_std_s, 2) +

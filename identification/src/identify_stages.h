@@ -25,6 +25,7 @@
 #include "mechanism_stages.h"
 #include "method.h"
 #include "misfit.h"
+#include "model_check_causes.h"
 #include "noise_model.h"
 #include "profile.h"
 #include "setup_shared.h"
@@ -113,6 +114,9 @@ struct TorqueColumns {
   Eigen::MatrixXd J;
   /// column of channel c's offset and gain in J (-1: left out)
   std::array<int, 2> offset{-1, -1}, gain{-1, -1};
+  /// the actuator term (actuator_term_name) of each of the motors' columns beside them
+  /// (check_jacobian's idx[4]: the drives' friction, where the fit leaves it out)
+  std::vector<int> motor_terms;
 };
 
 // ---- residual_blocks.cc ----
@@ -436,12 +440,13 @@ IdentifyResult refit_with_delay(const Params<double>& scene_in, const sim::LoadF
 // ---- stage_model_check_columns.cc ----
 
 /// The residual's Jacobian at the fit, whitened by the noise floors, with the links' 16 inertial
-/// parameters (columns idx[1], prior information in `info`), the two angle offsets (idx[2])
-/// and the torque readings' offsets and gains (idx[3], `tc`) added to the fitted ones (idx[0]);
+/// parameters (columns idx[1], prior information in `info`), the two angle offsets (idx[2]),
+/// the torque readings' offsets and gains (idx[3], `tc`) and, where the fit leaves them out,
+/// the motors' friction coefficients (idx[4], motor_columns) added to the fitted ones (idx[0]);
 /// false if an evaluation fails. `at_fit`: the data residuals and Jacobian of f's own problem at
 /// f.x (solve_stage), taken as they are when f fits the inertial parameters itself.
 bool check_jacobian(const Fit& f, const double fl[2], Eigen::MatrixXd* J, Eigen::VectorXd* r,
-                    std::vector<int> idx[4], Eigen::VectorXd* info, TorqueColumns* tc,
+                    CauseColumns& idx, Eigen::VectorXd* info, TorqueColumns* tc,
                     const Analysis* at_fit = nullptr);
 
 /// The expectation of the check's score J' r (J: check_jacobian's columns, b: one entry each)
@@ -477,7 +482,7 @@ std::vector<int> check_failures(const Fit& f);
 /// for a fit other than the solved one).
 const Fit* check_inputs(const Fit& fit, const double fl[2], const Analysis* an, Fit* spare,
                         IdentifyResult* out, Eigen::MatrixXd* J, Eigen::VectorXd* r,
-                        std::vector<int> idx[5], Eigen::VectorXd* info, TorqueColumns* tc,
+                        CauseColumns& idx, Eigen::VectorXd* info, TorqueColumns* tc,
                         Eigen::VectorXd* bias, ModelVerdict* verdict);
 
 // ---- stage_model_check.cc ----

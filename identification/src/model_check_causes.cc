@@ -32,11 +32,45 @@ std::string friction_moves(const ParameterLayout& layout, const IdentifyResult& 
   return moved;
 }
 
+bool unlike_an_offset(const Eigen::Ref<const Eigen::VectorXd>& v) {
+  const double mean = v.mean();
+  const double spread = std::sqrt((v.array() - mean).square().mean());
+  return spread > 0 && spread >= kOffsetSpread * std::abs(mean);
+}
+
+std::vector<int> motor_terms(const Eigen::MatrixXd& D, int actuators) {
+  std::vector<int> terms;
+  for (int c = 0; c < D.cols(); ++c) {
+    if (unlike_an_offset(D.col(c))) terms.push_back(actuators + c);
+  }
+  return terms;
+}
+
+std::string motor_reading(const detail::FreedStep& fs, const std::vector<int>& terms,
+                          int actuators) {
+  std::string out;
+  for (size_t k = 0; k < terms.size() && static_cast<Eigen::Index>(k) < fs.extra_step.size(); ++k) {
+    const bool viscous = terms[k] >= 2 * actuators;
+    out += (out.empty() ? "" : ", ") + actuator_term_name(terms[k], actuators) + " " +
+           format_significant(fs.extra_step(k), 3) + " +- " +
+           format_significant(fs.extra_std(k), 2) + (viscous ? " N m s/rad" : " N m");
+  }
+  return out;
+}
+
+Eigen::Vector2d motor_friction_columns(const FrictionParams<double>& fp, const EvalOptions& eval,
+                                       double w, double a) {
+  if (eval.rest_acceleration >= 0.0) mech::detail::still_drive(eval, &w, &a);
+  const JointMode mode = mech::detail::inverse_slip(eval, w, a);
+  if (mode == kStuck) return Eigen::Vector2d::Zero();
+  return -Eigen::Vector2d(coulomb_direction(fp, w, coulomb_sign(mode)), w);
+}
+
 namespace {
 
 /// The freed step with the columns of every cause in `mask` (bit id: CauseId) freed together.
 detail::FreedStep freed_set(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
-                            const std::vector<int> idx[5], const Eigen::VectorXd& info,
+                            const CauseColumns& idx, const Eigen::VectorXd& info,
                             const Eigen::VectorXd& bias, unsigned mask) {
   std::vector<int> cols;
   std::vector<double> prior;
@@ -80,17 +114,60 @@ IdentifyResult::MisfitCause misfit_cause(const char* name, const detail::FreedSt
   return m;
 }
 
+/// Whether the motors' friction (its step cs.alone[kCauseMotors], its report entry m) reads as a
+/// cause: evidenced alone and beyond the model causes (kCauseZ), and read as a friction, no
+/// coefficient below 0 by more than kFreedMove of its std. Its columns are nearly the crank
+/// joints' own friction and the torque offsets: without these bars a Stribeck law fitted as
+/// Coulomb-viscous read as motors' friction of 0.05 N m with a viscous one of -0.002 +- 0.0003,
+/// and per-joint friction fitted with the shared law as motors too.
+bool motors_plausible(const CauseSteps& cs, const IdentifyResult::MisfitCause& m) {
+  const detail::FreedStep& fs = cs.alone[kCauseMotors];
+  if (!fs.ok || !(m.z > detail::kCauseZ) || !(m.z_given > detail::kCauseZ)) return false;
+  for (Eigen::Index k = 0; k < fs.extra_step.size(); ++k) {
+    if (fs.extra_step(k) < -kFreedMove * fs.extra_std(k)) return false;
+  }
+  return true;
+}
+
+/// Whether the motors' friction is named: plausible (motors_plausible), removing
+/// kExplainedExcess of the residual's excess where that shows (`shows`; with rates biased at
+/// every window, kExplainsAll: `attributable`), and its fall clearly beyond every model cause's
+/// evidenced alone (clearly_more)
+bool motors_named(const CauseSteps& cs, const IdentifyResult::MisfitCause& m, bool shows,
+                  bool attributable) {
+  if (!motors_plausible(cs, m)) return false;
+  if ((shows && m.explained < kExplainedExcess) || (!attributable && m.explained < kExplainsAll)) {
+    return false;
+  }
+  for (int id = 0; id < kCauseDelay; ++id) {
+    if (id != kCauseMotors && competes(cs, id) && !clearly_more(cs, kCauseMotors, id)) {
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
-CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
-                       const std::vector<int> idx[5], const Eigen::VectorXd& info,
-                       const Eigen::VectorXd& bias, bool attributable) {
+bool counts_alone(const IdentifyResult::MisfitCause& c) {
+  if (c.name == kCauseText[kCauseMotors].name) return c.evidenced;
+  return c.name != kCauseText[kCauseDelay].name && c.name != "any";
+}
+
+bool competes(const CauseSteps& cs, int id) {
+  if (cs.slot[id] < 0 || !cs.alone[id].ok || !(cs.z(id) > detail::kCauseZ)) return false;
+  return id != kCauseMotors || motors_plausible(cs, cs.report[cs.slot[id]]);
+}
+
+CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r, const CauseColumns& idx,
+                       const Eigen::VectorXd& info, const Eigen::VectorXd& bias,
+                       bool attributable) {
   const double excess = r.squaredNorm() - static_cast<double>(r.size());
   unsigned present = 0;
   std::vector<int> ids;
   std::vector<detail::FreedStep> alone, all_but;
   for (int id = 0; id < kCauseDelay; ++id) {
-    if (idx[id + 1].empty()) continue;
+    if (id == kCauseMotors || idx[id + 1].empty()) continue;
     present |= 1u << id;
     ids.push_back(id);
     alone.push_back(freed_set(J, r, idx, info, bias, 1u << id));
@@ -109,15 +186,22 @@ CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
     cs.slot[ids[k]] = static_cast<int>(cs.report.size());
     cs.report.push_back(m);
   }
-  if (!idx[kCauseDelay + 1].empty()) {  // the delay: alone, and beyond the model causes
-    const detail::FreedStep fd = freed_set(J, r, idx, info, bias, 1u << kCauseDelay);
-    const detail::FreedStep with = freed_set(J, r, idx, info, bias, present | 1u << kCauseDelay);
+  // the motors' friction and the delay: alone, and beyond the model causes, which they do not
+  // enter (the motors' columns are nearly the crank joints' own friction and the torque offsets)
+  for (int id : {kCauseMotors, kCauseDelay}) {
+    if (idx[id + 1].empty()) continue;
+    const detail::FreedStep fd = freed_set(J, r, idx, info, bias, 1u << id);
+    const detail::FreedStep with = freed_set(J, r, idx, info, bias, present | 1u << id);
     const double z_given =
         cs.all.ok && with.ok ? detail::evidence(fd, with.drop - cs.all.drop) : 0.0;
-    cs.alone[kCauseDelay] = fd;
-    cs.slot[kCauseDelay] = static_cast<int>(cs.report.size());
-    cs.report.push_back(misfit_cause(kCauseText[kCauseDelay].name, fd,
-                                     detail::evidence(fd, fd.drop), z_given, excess));
+    cs.alone[id] = fd;
+    cs.slot[id] = static_cast<int>(cs.report.size());
+    cs.report.push_back(
+        misfit_cause(kCauseText[id].name, fd, detail::evidence(fd, fd.drop), z_given, excess));
+  }
+  if (cs.slot[kCauseMotors] >= 0) {
+    IdentifyResult::MisfitCause& m = cs.report[cs.slot[kCauseMotors]];
+    m.evidenced = motors_named(cs, m, excess > kExcessShows * r.size(), attributable);
   }
   const double z_all = detail::evidence(cs.all, cs.all.drop);
   cs.report.push_back(misfit_cause("any", cs.all, z_all, z_all, excess));
@@ -142,7 +226,7 @@ int most_explaining_cause(const CauseSteps& cs) {
   int best = kCauseCount;
   const auto drop = [&](int id) { return cs.report[cs.slot[id]].drop; };
   for (int id = 0; id < kCauseCount; ++id) {
-    if (cs.slot[id] < 0 || !cs.alone[id].ok || !(cs.z(id) > detail::kCauseZ)) continue;
+    if (!competes(cs, id)) continue;
     if (best == kCauseCount || drop(id) > drop(best)) best = id;
   }
   return best;
@@ -192,8 +276,7 @@ std::string cause_explaining_most(const CauseSteps& cs, int id, unsigned others,
   const auto drop = [&](int k) { return cs.report[cs.slot[k]].drop; };
   int most = id, tie = kCauseCount;
   for (int k = 0; k < kCauseCount; ++k) {
-    if (!(others & (1u << k)) || k == id || cs.slot[k] < 0 || !cs.alone[k].ok ||
-        !(cs.z(k) > detail::kCauseZ)) {
+    if (!(others & (1u << k)) || k == id || !competes(cs, k)) {
       continue;
     }
     const double margin = detail::kCauseZ * std::max(cs.alone[k].drop_sd, cs.alone[most].drop_sd);
@@ -243,7 +326,7 @@ void decisive_model_error(const CauseSteps& cs, bool moves, double largest, Iden
   }
   bool decisive = false;
   for (int id = 0; id < kCauseDelay; ++id) {
-    decisive = decisive || (cs.slot[id] >= 0 && cs.alone[id].ok && cs.z(id) > kDecisiveCauseZ);
+    decisive = decisive || (competes(cs, id) && cs.z(id) > kDecisiveCauseZ);
   }
   int top = most_explaining_cause(cs);
   // (a delay that explains most is the delay stage's to correct)

@@ -11,19 +11,52 @@
 
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/parameters.h"
+#include "fivebar/model/evaluation.h"
+#include "fivebar/model/params.h"
 #include "misfit.h"
 
 namespace fivebar::identification::stages {
 
+/// The columns of a drive's residual r = tau - M on its motor's friction coefficients (Coulomb,
+/// viscous: d r / d c, d r / d v) at its crank's rate w and acceleration a: the motor's friction
+/// torque c s + v w (s the joint law's Coulomb direction, actuator.h) acts between the ground and
+/// the crank, so that at given accelerations it adds to that drive's torque alone (the reactions
+/// do not see it): -(s, w), and 0 where the crank is held (the rest rule of inverse dynamics,
+/// EvalOptions::rest_rate and rest_acceleration).
+Eigen::Vector2d motor_friction_columns(const FrictionParams<double>& fp, const EvalOptions& eval,
+                                       double w, double a);
+
+/// Whether a column of the check varies over the samples by at least kOffsetSpread of its mean
+/// (rms about the mean): else it is nearly an offset, which the torque readings' cause frees
+/// (with both free, constant drive torques of 40 N m read back an offset of -170 N m and a gain
+/// of 424 %; a crank that never reverses makes its motor's Coulomb column an offset exactly)
+constexpr double kOffsetSpread = 0.1;
+bool unlike_an_offset(const Eigen::Ref<const Eigen::VectorXd>& v);
+
+/// The motors' friction columns of a check that has `actuators` drives: from D, one candidate
+/// column per drive's Coulomb then viscous coefficient (actuator_coulomb_1, .., actuator_viscous_1,
+/// .., as motor_friction_columns gives them per sample), those unlike an offset. `terms`: each
+/// kept column's actuator term (actuator_term_name).
+std::vector<int> motor_terms(const Eigen::MatrixXd& D, int actuators);
+
+/// What a freed step of the motors' cause reads: "actuator_coulomb_1 0.05 +- 0.01 N m, ..." of
+/// its extras, the actuator terms `terms` (motor_terms)
+std::string motor_reading(const detail::FreedStep& fs, const std::vector<int>& terms,
+                          int actuators);
+
 /// model_check: a friction move beyond this many std (its own, or the move's) is a warning
 constexpr double kFreedMove = 3.0;
 
-/// The candidate causes of model_check, in the order of check_jacobian's idx[1..3], then the
-/// torque-to-angle delay (idx[4]: one column, the logged torques' rates). The delay competes in
+/// The candidate causes of model_check, in the order of check_jacobian's idx[1..4] (the motors'
+/// friction only where the fit leaves it out: motor_columns), then the torque-to-angle delay
+/// (idx[5]: one column, the logged torques' rates). The delay competes in
 /// the falls of one cost (most_explaining_cause, cause_explaining_most, delay_verdict) but not in
 /// the model causes' evidence beyond each other (detail::model_causes), which a delay does not
 /// explain: a cause of the model stays named as it was without the delay's column.
-enum CauseId { kCauseInertia, kCauseAngles, kCauseTorque, kCauseDelay, kCauseCount };
+enum CauseId { kCauseInertia, kCauseAngles, kCauseTorque, kCauseMotors, kCauseDelay, kCauseCount };
+
+/// The index sets of a check's columns: the fitted parameters', then each cause's (CauseId + 1)
+using CauseColumns = std::array<std::vector<int>, kCauseCount + 1>;
 
 /// Every cause's bit
 constexpr unsigned kAllCauses = (1u << kCauseCount) - 1;
@@ -40,11 +73,17 @@ struct CauseSteps {
   std::array<detail::FreedStep, kCauseCount> alone;  ///< not ok: no candidate
   detail::FreedStep all;
   std::vector<IdentifyResult::MisfitCause> report;    ///< IdentifyResult::model_check ("any" last)
-  std::array<int, kCauseCount> slot{-1, -1, -1, -1};  ///< each cause's entry in `report`
+  std::array<int, kCauseCount> slot{-1, -1, -1, -1, -1};  ///< each cause's entry in `report`
   bool named(int id) const { return slot[id] >= 0 && report[slot[id]].evidenced; }
   /// evidence alone [std of noise's]
   double z(int id) const { return slot[id] >= 0 ? report[slot[id]].z : 0.0; }
-  bool any() const { return named(0) || named(1) || named(2); }
+  /// a model cause (any but the delay) named
+  bool any() const {
+    for (int id = 0; id < kCauseDelay; ++id) {
+      if (named(id)) return true;
+    }
+    return false;
+  }
 };
 
 /// model_check's candidate causes by CauseId: the name in identification.json, the words, and
@@ -64,6 +103,8 @@ constexpr CauseText kCauseText[kCauseCount] = {
      "angles)"},
     {"torque_readings", "the torque sensors' offsets and gains",
      "the logged torques' zeros or gains are off"},
+    {"motor_friction", "the motors' friction coefficients",
+     "the motors' (gearboxes') friction is not the scene's (fit it: --estimate friction,actuator)"},
     {"delay", "the torque readings' times (a delay)", "the logged torques are delayed"}};
 
 /// The friction coefficients a freed step moves beyond kFreedMove std, as "name from a to b
@@ -74,19 +115,32 @@ std::string friction_moves(const ParameterLayout& layout, const IdentifyResult& 
                            const detail::FreedStep& fs, bool own, double* largest = nullptr,
                            const Eigen::VectorXd* judged = nullptr);
 
-/// The freed steps of the causes whose columns idx[1..4] holds (idx[0]: the fitted parameters;
-/// info: the inertial columns' prior information; bias: the score's expectation, empty: none),
-/// alone, together and beyond each other; `attributable`: a cause may be named below
-/// kExplainsAll of the excess.
-CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r,
-                       const std::vector<int> idx[5], const Eigen::VectorXd& info,
-                       const Eigen::VectorXd& bias, bool attributable);
+/// The freed steps of the causes whose columns idx[1..5] holds (idx[0]: the fitted parameters;
+/// info: the inertial columns' prior information; bias: the score's expectation, empty: none):
+/// the model causes (inertia, angle offsets, torque readings) alone, together and beyond each
+/// other; the motors' friction and the delay alone and beyond the model causes, whose evidence
+/// they do not enter (the motors' friction named by motors_named in model_check_causes.cc);
+/// `attributable`: a cause may be named below kExplainsAll of the excess.
+CauseSteps cause_steps(const Eigen::MatrixXd& J, const Eigen::VectorXd& r, const CauseColumns& idx,
+                       const Eigen::VectorXd& info, const Eigen::VectorXd& bias, bool attributable);
 
 /// "the residual falls by D (noise alone: m +- s)" of a freed step
 std::string drop_clause(const detail::FreedStep& fs);
 
 /// "B with <other>, C with <other>": the falls of the other candidates checked than `best`
 std::string other_falls(const CauseSteps& cs, int best);
+
+/// Whether cause id competes in the comparisons of falls (most_explaining_cause,
+/// cause_explaining_most, the delay's verdict, decisive_model_error): checked, its step ok and
+/// evidenced alone (z above kCauseZ); the motors' friction (judged alone and beyond the model
+/// causes, as the delay: cause_steps) only where also evidenced beyond them and read as a
+/// friction (no coefficient below 0 beyond kFreedMove std)
+bool competes(const CauseSteps& cs, int id);
+
+/// Whether an entry of a check's report (IdentifyResult::model_check) is a model cause that
+/// counts by its evidence alone: not the delay, not "any", and the motors' friction only where
+/// named
+bool counts_alone(const IdentifyResult::MisfitCause& c);
 
 /// Whether candidate k, evidenced alone (z above kCauseZ), lowers the cost clearly more than
 /// candidate id (cause_explaining_most's "clearly")

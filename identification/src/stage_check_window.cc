@@ -119,7 +119,7 @@ std::string half_window_text(const Fit& f, const SgOptions& sg) {
 std::string evidence_text(const std::vector<IdentifyResult::MisfitCause>& causes) {
   std::string read;
   for (const IdentifyResult::MisfitCause& c : causes) {
-    if (c.name == "delay" || c.name == "any" || !c.checked || !(c.z > detail::kCauseZ)) continue;
+    if (!counts_alone(c) || !c.checked || !(c.z > detail::kCauseZ)) continue;
     read += (read.empty() ? "" : ", ") + c.name + " " + format_significant(c.z, 2);
   }
   return read.empty() ? "all of them together" : read;
@@ -130,7 +130,7 @@ std::string evidence_text(const std::vector<IdentifyResult::MisfitCause>& causes
 double largest_evidence(const std::vector<IdentifyResult::MisfitCause>& causes) {
   double z = 0;
   for (const IdentifyResult::MisfitCause& c : causes) {
-    if (c.name != "delay" && c.checked && c.z > z) z = c.z;
+    if (counts_alone(c) && c.checked && c.z > z) z = c.z;
   }
   return z;
 }

@@ -84,14 +84,10 @@ bool offset_columns(const Fit& f, const double fl[2], Eigen::MatrixXd* Jo) {
   return Jo->allFinite();
 }
 
-/// A gain is left out when the model's torque of its channel varies by less than this fraction
-/// of its mean: then it is nearly an offset (with both free, constant drive torques of 40 N m
-/// read back an offset of -170 N m and a gain of 424 %)
-constexpr double kGainSpread = 0.1;
-
 /// The columns (r: the whitened residual at the fit, fl: the noise floors) on errors of the
 /// torque readings, tau_c = (1 + g_c) M_c + o_c: the offsets o1, o2 (left out when the fit has
-/// them, --estimate actuator) then the gains g1, g2 (kGainSpread), with M_c the fitted model's
+/// them, --estimate actuator) then the gains g1, g2 (unless nearly an offset: unlike_an_offset),
+/// with M_c the fitted model's
 /// torque (tau_c - o_c - r_c).
 TorqueColumns torque_columns(const Fit& f, const Eigen::VectorXd& r, const double fl[2]) {
   const double* o = f.layout.actuator ? &f.x[f.layout.actuator_offset()] : nullptr;
@@ -107,9 +103,7 @@ TorqueColumns torque_columns(const Fit& f, const Eigen::VectorXd& r, const doubl
   int k = 0;
   for (int c = 0; c < kDof && !o; ++c) tc.offset[c] = k++;
   for (int c = 0; c < kDof; ++c) {
-    const double mean = model.col(c).mean();
-    const double spread = std::sqrt((model.col(c).array() - mean).square().mean());
-    if (spread >= kGainSpread * std::abs(mean)) tc.gain[c] = k++;
+    if (unlike_an_offset(model.col(c))) tc.gain[c] = k++;
   }
   tc.J = Eigen::MatrixXd::Zero(r.size(), k);
   for (Eigen::Index u = 0; u < n; ++u) {
@@ -121,10 +115,38 @@ TorqueColumns torque_columns(const Fit& f, const Eigen::VectorXd& r, const doubl
   return tc;
 }
 
+/// The columns on the motors' friction coefficients, when the fit leaves them out (--estimate
+/// actuator fits them; no columns then): of actuator_coulomb_1, _2, actuator_viscous_1, _2 of the
+/// drives' residuals (motor_friction_columns), those unlike an offset (motor_terms: not a crank
+/// that never reverses, or turns at a steady rate, which the torque readings' offsets cover),
+/// rows whitened by the floors `fl`; `terms`: their actuator terms.
+Eigen::MatrixXd motor_columns(const Fit& f, const double fl[2], std::vector<int>* terms) {
+  const Eigen::Index n = static_cast<Eigen::Index>(f.samples.size());
+  terms->clear();
+  if (f.layout.actuator) return Eigen::MatrixXd(2 * n, 0);
+  Eigen::MatrixXd D(n, 2 * kActuators);  // per sample: coulomb_1, _2, viscous_1, _2 of its drive
+  for (Eigen::Index u = 0; u < n; ++u) {
+    const Sample& s = f.samples[u];
+    const double w[kActuators] = {s.w1, s.w2}, a[kActuators] = {s.a1, s.a2};
+    for (int c = 0; c < kActuators; ++c) {
+      const Eigen::Vector2d d = motor_friction_columns(f.scene.friction, f.eval, w[c], a[c]);
+      D(u, c) = d(0);
+      D(u, kActuators + c) = d(1);
+    }
+  }
+  *terms = motor_terms(D, kActuators);
+  Eigen::MatrixXd Jm = Eigen::MatrixXd::Zero(2 * n, static_cast<Eigen::Index>(terms->size()));
+  for (size_t k = 0; k < terms->size(); ++k) {
+    const int col = (*terms)[k] - kActuators, c = col % kActuators;  // c: the drive's channel
+    for (Eigen::Index u = 0; u < n; ++u) Jm(2 * u + c, k) = D(u, col) / fl[c];
+  }
+  return Jm;
+}
+
 }  // namespace
 
 bool check_jacobian(const Fit& f, const double fl[2], Eigen::MatrixXd* J, Eigen::VectorXd* r,
-                    std::vector<int> idx[4], Eigen::VectorXd* info, TorqueColumns* tc,
+                    CauseColumns& idx, Eigen::VectorXd* info, TorqueColumns* tc,
                     const Analysis* at_fit) {
   const int nf = f.layout.friction_size();
   ParameterLayout l2 = f.layout;
@@ -143,14 +165,17 @@ bool check_jacobian(const Fit& f, const double fl[2], Eigen::MatrixXd* J, Eigen:
   }
   if (!offset_columns(f, fl, &Jo) || Jo.rows() != Ji.rows()) return false;
   *tc = torque_columns(f, *r, fl);
-  const Eigen::MatrixXd& Jt = tc->J;
-  J->resize(Ji.rows(), Ji.cols() + 2 + Jt.cols());
-  *J << Ji, Jo, Jt;
+  const Eigen::MatrixXd Jm = motor_columns(f, fl, &tc->motor_terms);
+  const Eigen::MatrixXd& Jt = tc->J;  // (last: score_bias)
+  J->resize(Ji.rows(), Ji.cols() + 2 + Jm.cols() + Jt.cols());
+  *J << Ji, Jo, Jm, Jt;
   for (int i = 0; i < l2.size(); ++i) {
     idx[l2.is_inertial(i) && !f.layout.inertia ? 1 : 0].push_back(i);
   }
-  idx[2] = {l2.size(), l2.size() + 1};
-  for (Eigen::Index k = 0; k < Jt.cols(); ++k) idx[3].push_back(l2.size() + 2 + k);
+  idx[kCauseAngles + 1] = {l2.size(), l2.size() + 1};
+  int c = l2.size() + 2;
+  for (Eigen::Index k = 0; k < Jm.cols(); ++k) idx[kCauseMotors + 1].push_back(c++);
+  for (Eigen::Index k = 0; k < Jt.cols(); ++k) idx[kCauseTorque + 1].push_back(c++);
   const detail::InertialPrior prior = detail::inertial_prior(f.scene, f.opt->inertia_prior);
   info->resize(kInertialParams);
   for (int k = 0; k < kInertialParams; ++k) (*info)(k) = 1.0 / std::pow(prior.sigma[k], 2);
@@ -296,7 +321,7 @@ std::vector<int> check_failures(const Fit& f) {
 /// or nullptr with verdict->unchecked (and short_log) saying why it cannot run.
 const Fit* check_inputs(const Fit& fit, const double fl[2], const Analysis* an, Fit* spare,
                         IdentifyResult* out, Eigen::MatrixXd* J, Eigen::VectorXd* r,
-                        std::vector<int> idx[5], Eigen::VectorXd* info, TorqueColumns* tc,
+                        CauseColumns& idx, Eigen::VectorXd* info, TorqueColumns* tc,
                         Eigen::VectorXd* bias, ModelVerdict* verdict) {
   const auto run = [&](const Fit& f) {
     return check_jacobian(f, fl, J, r, idx, info, tc, &f == &fit ? an : nullptr) &&
@@ -324,7 +349,7 @@ const Fit* check_inputs(const Fit& fit, const double fl[2], const Analysis* an, 
     const std::string where = std::to_string(bad.size()) + " sample" +
                               (bad.size() == 1 ? "" : "s") + " (first " +
                               sample_name(fit.cond.log, fit.index[bad[0]]) + ")";
-    for (int k = 0; k < 5; ++k) idx[k].clear();
+    for (std::vector<int>& columns : idx) columns.clear();
     if (!run(*spare)) {
       verdict->unchecked =
           "the model cannot be evaluated under the check's small changes, even "

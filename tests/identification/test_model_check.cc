@@ -120,7 +120,8 @@ TEST(ModelCheck, ATorqueGainOnAShortAnglesOnlyLogIsNamedWhereTheWindowShowsIt) {
   EXPECT_TRUE(has_warning(res, kTorqueGain));
   EXPECT_FALSE(has_warning(res, kMassWarning));
   EXPECT_THAT(res.unusable, ::testing::HasSubstr("tau1 reads 1.03 times the model"));
-  ASSERT_EQ(res.model_check.size(), 4u);
+  // inertia, angle_offsets, torque_readings, motor_friction, any
+  ASSERT_EQ(res.model_check.size(), 5u);
   EXPECT_EQ(res.model_check.back().name, "any");
 }
 
