@@ -272,7 +272,8 @@ struct CheckWindow {
 /// where it is least), with the noise floors of that window. Angles-only logs only.
 CheckWindow check_window(const Fit& f, const IdentifyResult& out);
 
-/// The largest evidence alone [std] of a check's report (the delay's left out).
+/// The largest evidence alone [std] of a check's report's model causes (the delay's and the
+/// motors' friction's left out).
 double largest_evidence(const std::vector<IdentifyResult::MisfitCause>& causes);
 
 /// The mean over the torque channels of (the fit's floor / cw's floor)^2: what a model error's

@@ -232,11 +232,13 @@ int most_explaining_cause(const CauseSteps& cs) {
   return best;
 }
 
-/// "B with <other>, C with <other>": the falls of the other candidates checked than `best`
+/// "B with <other>, C with <other>": the falls of the other candidates checked than `best` (the
+/// motors' friction only where it competes)
 std::string other_falls(const CauseSteps& cs, int best) {
   std::string others;
   for (int id = 0; id < kCauseCount; ++id) {
     if (id == best || cs.slot[id] < 0 || !cs.alone[id].ok) continue;
+    if (id == kCauseMotors && !competes(cs, id)) continue;  // (not read as a cause)
     others += (others.empty() ? "" : ", ") + format_significant(cs.report[cs.slot[id]].drop, 3) +
               " with " + kCauseText[id].what;
   }

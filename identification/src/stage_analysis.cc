@@ -40,7 +40,10 @@ FreeSet free_set(const Fit& f, const Eigen::MatrixXd& J, const Eigen::MatrixXd& 
   FreeSet fs;
   for (int i = 0; i < f.layout.size(); ++i) {
     const bool off_bound = f.x[i] > f.layout.lower_bound(i) + 1e-12;
-    if ((with_bound || off_bound) && J.col(i).squaredNorm() > 0) fs.index.push_back(i);
+    // (a parameter with prior information is informed by it: the crank masses' columns are
+    // exactly 0 without gravity, and their posterior is their prior)
+    const bool informed = J.col(i).squaredNorm() > 0 || Hp(i, i) > 0;
+    if ((with_bound || off_bound) && informed) fs.index.push_back(i);
   }
   const int n = static_cast<int>(fs.index.size());
   fs.J.resize(J.rows(), n);

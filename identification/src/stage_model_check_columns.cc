@@ -170,7 +170,11 @@ bool check_jacobian(const Fit& f, const double fl[2], Eigen::MatrixXd* J, Eigen:
   J->resize(Ji.rows(), Ji.cols() + 2 + Jm.cols() + Jt.cols());
   *J << Ji, Jo, Jm, Jt;
   for (int i = 0; i < l2.size(); ++i) {
-    idx[l2.is_inertial(i) && !f.layout.inertia ? 1 : 0].push_back(i);
+    const bool candidate = l2.is_inertial(i) && !f.layout.inertia;
+    // a fitted parameter without effect on the residual (a crank's mass without gravity: its
+    // column is exactly 0) cannot be refitted, and would make every refit singular
+    if (!candidate && !(J->col(i).squaredNorm() > 0)) continue;
+    idx[candidate ? 1 : 0].push_back(i);
   }
   idx[kCauseAngles + 1] = {l2.size(), l2.size() + 1};
   int c = l2.size() + 2;

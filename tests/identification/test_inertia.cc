@@ -355,5 +355,34 @@ TEST(InertiaCheck, LinksOffTheSceneAreToldAndALogOfTheSceneIsNot) {
   }
 }
 
+// Without gravity a crank's mass has no effect on the torques (it turns about a fixed pivot):
+// its column is exactly 0, and its posterior is its prior. The fit keeps the crank masses at
+// their prior std, reports the others, and the model check runs (it was left out: no std, no
+// inertial report and no model check, so that a torque offset passed with exit 0)
+TEST(InertialPrior, ACranksMassWithoutGravityKeepsItsPriorAndTheCheckRuns) {
+  Params<double> scene = paper_params();
+  scene.gravity = 0;
+  const TorqueLog log = testing::rated_log(scene, 2.0, 5, "no_gravity.csv", true);
+  ASSERT_GT(log.size(), 1000);
+  IdentifyOptions opt;
+  opt.estimate_delay = false;
+  opt.layout.inertia = true;
+  const IdentifyResult res = identify(scene, paper_loads, log, opt);
+  ASSERT_TRUE(res.status.ok()) << res.status.message;
+  EXPECT_TRUE(res.unusable.empty()) << res.unusable;
+  for (const char* name : {"m_1", "m_2"}) {
+    bool found = false;
+    for (const ParameterEstimate& e : res.parameters) {
+      if (e.name != name) continue;
+      found = true;
+      EXPECT_NEAR(e.std, opt.inertia_prior * e.value, 1e-6 * e.value) << name;
+    }
+    EXPECT_TRUE(found) << name;
+  }
+  EXPECT_GT(res.inertial.rank, 0);
+  ASSERT_FALSE(res.model_check.empty());
+  for (const IdentifyResult::MisfitCause& c : res.model_check) EXPECT_TRUE(c.checked) << c.name;
+}
+
 }  // namespace
 }  // namespace fivebar::identification
