@@ -117,6 +117,20 @@ bool friction_at_bound(const Fit& f, const IdentifyResult& out) {
   return false;
 }
 
+/// A named cause's warning clause when the friction moves within kFreedMove std
+std::string moves_little() {
+  return "the friction moves less than " + format_significant(kFreedMove) + " std";
+}
+
+/// A named cause `id` whose refit would move the friction by `largest` std makes the fit unusable
+/// by unusable_move (0 where a coefficient is at its bound), the reason naming it or the cause
+/// that explains clearly more (cause_explaining_most)
+void unusable_by_named(const Fit& f, const CauseSteps& cs, int id, double largest,
+                       IdentifyResult* out) {
+  unusable_move(friction_at_bound(f, *out) ? 0 : largest,
+                cause_explaining_most(cs, id, kAllCauses & ~(1u << id), kCauseText[id].off), out);
+}
+
 /// model_check's warning when a candidate cause alone is evidenced and would move the friction
 /// (`top`: the one that explains most, most_explaining_cause), but no cause stands out beyond
 /// the others' parameters or explains the misfit (with per-joint friction fitted by the shared
@@ -202,7 +216,7 @@ void angles_check(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
     for (int k = 0; k < kCauseCount; ++k) {
       if (k != kCauseAngles && clearly_more(cs, k, kCauseAngles)) return;  // not the zeros
     }
-    moved = "the friction moves less than " + format_significant(kFreedMove) + " std";
+    moved = moves_little();
     largest = -1;  // no move to judge
   }
   out->warnings.push_back(
@@ -214,10 +228,7 @@ void angles_check(const Fit& f, const CauseSteps& cs, IdentifyResult* out) {
   // evidenced zeros that hold a coefficient at its bound make the fit unusable, whatever the
   // other coefficients' move (theta1 0.02 rad off on the light mechanism: viscous at 0, coulomb
   // 4 std)
-  unusable_move(friction_at_bound(f, *out) ? 0 : largest,
-                cause_explaining_most(cs, kCauseAngles, kAllCauses & ~(1u << kCauseAngles),
-                                      kCauseText[kCauseAngles].off),
-                out);
+  unusable_by_named(f, cs, kCauseAngles, largest, out);
 }
 
 /// model_check on the motors' friction, which the fit leaves out (--estimate actuator fits it),
@@ -232,7 +243,7 @@ void motors_check(const Fit& f, const CauseSteps& cs, const std::vector<int>& te
   double largest = 0;
   std::string moved = friction_clause(f, *out, fm, false, true, &largest);
   if (moved.empty()) {
-    moved = "the friction moves less than " + format_significant(kFreedMove) + " std";
+    moved = moves_little();
     largest = -1;  // no move to judge
   }
   out->warnings.push_back(
@@ -241,10 +252,7 @@ void motors_check(const Fit& f, const CauseSteps& cs, const std::vector<int>& te
       " more than the scene's: the motors (gearboxes) have friction the fit leaves out; fit it "
       "with --estimate friction,actuator");
   if (largest < 0) return;
-  unusable_move(friction_at_bound(f, *out) ? 0 : largest,
-                cause_explaining_most(cs, kCauseMotors, kAllCauses & ~(1u << kCauseMotors),
-                                      kCauseText[kCauseMotors].off),
-                out);
+  unusable_by_named(f, cs, kCauseMotors, largest, out);
 }
 
 /// The torque readings' step of model_check and the indices of its offsets and gains
@@ -277,8 +285,7 @@ void torque_check(const Fit& f, const CauseSteps& cs, const ReadingStep& rs,
   out->warnings.push_back(torque_warning(tc, ft,
                                          !moved.empty() ? moved
                                          : scaled ? "the friction estimates scale with the gains"
-                                                  : "the friction moves less than " +
-                                                        format_significant(kFreedMove) + " std"));
+                                                  : moves_little()));
   // a common gain also reads as the encoders' zeros (model_check): only the inertias, which
   // scale the torques alike too, may explain more then
   const bool common = common_gain(tc, ft);
@@ -351,10 +358,7 @@ void inertia_check(const Fit& f, const CauseSteps& cs, bool candidate, IdentifyR
       ". The scene's masses or inertias may not match the mechanism; try --estimate "
       "friction,inertia");
   if (!masses) return;
-  unusable_move(friction_at_bound(f, *out) ? 0 : largest,
-                cause_explaining_most(cs, kCauseInertia, kAllCauses & ~(1u << kCauseInertia),
-                                      kCauseText[kCauseInertia].off),
-                out);
+  unusable_by_named(f, cs, kCauseInertia, largest, out);
 }
 
 /// The delay's column (the logged torques' rates at the fit's samples, rows whitened by the
