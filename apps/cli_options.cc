@@ -55,12 +55,26 @@ void check_numbers(const CLI::App& app) {
 }
 
 namespace {
-/// Whether a list's text has an empty field: a leading or trailing comma, or two in a row
+/// `text` without its leading and trailing spaces and tabs
+std::string trimmed(std::string text) { return CLI::detail::trim(text, " \t"); }
+
+/// Whether a list's text has an empty field: a leading or trailing comma, two in a row, or
+/// only spaces between two
 bool empty_field(const std::string& list) {
-  return list.empty() || list.front() == ',' || list.back() == ',' ||
-         list.find(",,") != std::string::npos;
+  std::stringstream fields(list + ",");  // (getline drops a last empty field)
+  std::string field;
+  while (std::getline(fields, field, ',')) {
+    if (trimmed(field).empty()) return true;
+  }
+  return list.empty();
 }
 }  // namespace
+
+void trim_list_values(CLI::App* sub) {
+  for (CLI::Option* o : sub->get_options()) {
+    if (o->get_delimiter() == ',') o->transform(trimmed);
+  }
+}
 
 void check_list_fields(const CLI::App& sub, int argc, const char* const* argv) {
   const CLI::Option* list = nullptr;  // the list option whose values follow, if any

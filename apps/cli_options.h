@@ -28,6 +28,10 @@ void check_numbers(const CLI::App& app);
 /// list (`--opt 0.1, 0.2`, as a shell splits it, is the list 0.1,0.2).
 void check_list_fields(const CLI::App& sub, int argc, const char* const* argv);
 
+/// Each value of a comma-separated list option is read without its leading and trailing spaces
+/// (`--methods 'cvode_adams, arkode_erk45'` names two integrators).
+void trim_list_values(CLI::App* sub);
+
 /// The plausibility limit of scene key `key` (scene_limit, docs/scene.md) for an option that
 /// stands for that key's quantity: the same bound and message as the scene's.
 CLI::Validator within_scene_limit(const std::string& key);

@@ -69,6 +69,7 @@ int main(int argc, char** argv) {
     }
     try {  // before parsing: the parser drops a list's empty fields
       fivebar::io::check_list_fields(*app.get_subcommand(argv[1]), argc, argv);
+      fivebar::io::trim_list_values(app.get_subcommand(argv[1]));
     } catch (const fivebar::InputError& e) {
       return fail(kInputError, e.what());
     }

@@ -10,6 +10,16 @@
 
 namespace fivebar::identification {
 
+void stages::quiet_solver_logging() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (!google::IsGoogleLoggingInitialized()) google::InitGoogleLogging("fivebar");
+    FLAGS_minloglevel = google::GLOG_FATAL;
+    FLAGS_stderrthreshold = google::GLOG_FATAL;
+    FLAGS_logtostderr = false;
+  });
+}
+
 using namespace stages;
 
 namespace {
@@ -57,18 +67,6 @@ namespace {
 
 /// a torque-to-angle delay beyond this many std is corrected
 constexpr double kDelaySignificance = 3.0;
-
-/// Ceres reports through glog on stderr ("Terminating: ..."); library code never prints: the
-/// outcome is in the summary we return. Once per process, glog is told to keep quiet.
-void quiet_solver_logging() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    if (!google::IsGoogleLoggingInitialized()) google::InitGoogleLogging("fivebar");
-    FLAGS_minloglevel = google::GLOG_FATAL;
-    FLAGS_stderrthreshold = google::GLOG_FATAL;
-    FLAGS_logtostderr = false;
-  });
-}
 
 /// A law fitted without static friction: the fitted scene's static Coulomb coefficient (the
 /// holding bound) follows the fitted Coulomb where the scene's followed its own (its default),
@@ -243,7 +241,7 @@ IdentifyResult identify(const Params<double>& scene_in, const sim::LoadFunction&
 bool identify_window(const Params<double>& scene, const sim::LoadFunction& loads,
                      const TorqueLog& log, const IdentifyOptions& options, SgOptions* sg,
                      std::string* choice) {
-  quiet_solver_logging();
+  stages::quiet_solver_logging();
   IdentifyResult out;
   Fit f;
   std::vector<double> x0_public;
@@ -258,7 +256,7 @@ bool identify_window(const Params<double>& scene, const sim::LoadFunction& loads
 
 IdentifyResult identify_fit(const Params<double>& scene_in, const sim::LoadFunction& loads,
                             const TorqueLog& log, const IdentifyOptions& opt, bool full) {
-  quiet_solver_logging();
+  stages::quiet_solver_logging();
   const auto start = Clock::now();
   const auto finish = [&](IdentifyResult r) {
     r.wall_time_s = std::chrono::duration<double>(Clock::now() - start).count();

@@ -425,6 +425,7 @@ std::string four_bar_unsupported(const IdentifyOptions& opt) {
 
 IdentifyResult identify(const FourBarParams& scene, const sim::FourBarLoadFunction& loads,
                         const TorqueLog& log, const IdentifyOptions& opt) {
+  stages::quiet_solver_logging();
   const auto start = std::chrono::steady_clock::now();
   IdentifyResult out;
   out.layout = opt.layout;

@@ -16,6 +16,11 @@
 
 namespace fivebar::identification::stages {
 
+/// Ceres reports through glog on stderr ("Terminating: ..."); library code never prints: the
+/// outcome is in the summary the fits return. Once per process, glog is told to keep quiet
+/// (every identify entry point calls this before its first solve).
+void quiet_solver_logging();
+
 /// noise-free logs: residual levels below this fraction of the rms logged torque are what a good
 /// torque sensor resolves (0.1 %), not structure
 constexpr double kAbsoluteFloor = 1e-3;

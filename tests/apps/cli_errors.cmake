@@ -87,6 +87,13 @@ run_fivebar(2 "command line: --actuator-coulomb: an empty value in '0.1,,0.2'"
             synth-log ${paper} --out ${WORK_DIR}/out_bad/list.csv --actuator-coulomb 0.1,,0.2)
 run_fivebar(2 "command line: --tolerances: an empty value in '1e-3,'"
             accuracy ${paper} --tolerances=1e-3, --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --actuator-coulomb: an empty value in '0.1, ,0.2'"
+            synth-log ${paper} --out ${WORK_DIR}/out_bad/list.csv --actuator-coulomb "0.1, ,0.2")
+# spaces around a list's values are no part of them: the bad value is named without them
+run_fivebar(2 "--methods: unknown integrator 'nope'"
+            accuracy ${paper} --methods "cvode_adams, nope" --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --estimate: 'inertias' is not a group"
+            identify ${paper} --log ${log} --estimate "friction, inertias" --out ${WORK_DIR}/out_bad)
 if(EXISTS ${WORK_DIR}/out_bad/list.csv)
   message(FATAL_ERROR "synth-log wrote list.csv although its --actuator-coulomb was refused")
 endif()

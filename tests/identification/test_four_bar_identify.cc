@@ -4,6 +4,7 @@
 // docs/identification.md, "Four-bar"), and bad input is refused naming what is wrong. The
 // excitation design over the four-bar (excitation.h): its gradient, its rest rule and its
 // predicted std against identify's.
+#include <glog/logging.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -66,6 +67,18 @@ TEST(FourBarIdentify, RecoversTheFrictionOfANoiseFreeLog) {
   EXPECT_TRUE(res.unusable.empty()) << res.unusable;
   EXPECT_GT(res.slip_reversals, 20);  // C and D0 reverse about twice a turn
   EXPECT_NEAR(res.fitted_four_bar.friction.coulomb[3], 0.12, 1e-6);
+}
+
+// Ceres reports a failed evaluation through glog on stderr ("Terminating: ..."); the four-bar's
+// identify, like the five-bar's, keeps glog quiet from its start (the test runs alone in its
+// process, so nothing before it did).
+TEST(FourBarIdentify, KeepsTheSolversLogOffStderr) {
+  const FourBarParams& truth = crank_rocker().p;
+  const TorqueLog log = crank_rocker_log(truth, 0.5, 0, 0, 1, /*with_rates=*/true);
+  identify(truth, crank_rocker().loads, log, four_bar_options());
+  ::testing::internal::CaptureStderr();
+  LOG(ERROR) << "Terminating: a report Ceres would print";
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
 }
 
 // A small coulomb (0.005 against viscous 0.02) whose Wald interval reaches below its bound 0:

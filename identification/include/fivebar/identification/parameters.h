@@ -3,6 +3,7 @@
 // links (model/inertial.h). `fivebar excite` designs excitations for the same groups.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -248,7 +249,9 @@ inline bool parse_group_list(const std::string& list, std::array<bool, 3>* frict
   size_t pos = 0;
   while (true) {
     const size_t comma = list.find(',', pos);
-    const std::string g = list.substr(pos, comma == std::string::npos ? comma : comma - pos);
+    std::string g = list.substr(pos, comma == std::string::npos ? comma : comma - pos);
+    g.erase(g.find_last_not_of(" \t") + 1);  // (spaces around a name are no part of it)
+    g.erase(0, std::min(g.size(), g.find_first_not_of(" \t")));
     int k = 0;
     while (k < 3 && g != kNames[k]) ++k;
     if (k == 3 || on[k]) {
