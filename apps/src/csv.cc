@@ -45,7 +45,7 @@ std::vector<double> parse_row(const CsvTable& table, const std::vector<std::stri
     char* end = nullptr;
     row[j] = std::strtod(f.c_str(), &end);
     const bool number = !f.empty() && end == f.c_str() + f.size();
-    if (!number || !std::isfinite(row[j])) {
+    if (!number || !(rules.non_finite || std::isfinite(row[j]))) {
       throw LogError(table.path, line_key(line_no) + ", column " + table.columns[j],
                      rules.bad_number ? rules.bad_number(f, number)
                                       : "'" + f + "' is not a finite number");
