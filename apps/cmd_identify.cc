@@ -283,7 +283,8 @@ int finish(const Args& a, const Scene& scene, const id::TorqueLog& log,
         g.available ? run_gnuplot(out->staging(), "plots.gnuplot",
                                   residual_plot_script(
                                       g.terminal, std::filesystem::path(a.log).filename().string(),
-                                      !a.no_validation, log.dof, data))
+                                      !a.no_validation, log.dof, data),
+                                  Figures::kStandAlone)
                     : "gnuplot not found on PATH: no figures drawn";
     if (!warning.empty()) warn(warning);
   }

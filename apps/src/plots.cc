@@ -213,7 +213,7 @@ std::string friction_figure(const PlotData& d, const std::string& trajectory,
                             "(d) joint D0: ground / rocker D0-C, w4 = omega3"};
   const char* const* joints = layout.joints == kJoints ? five_bar : four_bar;
   const char panel_letter = static_cast<char>('a' + layout.joints);
-  s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
+  s += "unset key\nset offsets 0, 0, graph 0.08, graph 0.08\n";
   for (int k = 1; k <= layout.joints; ++k) {
     const std::string column = "Mf" + std::to_string(k);
     s += y_range_stats(d, {trajectory}, column) + panel(joints[k - 1], column + " [N m]") +
@@ -390,15 +390,29 @@ const Gnuplot& gnuplot() {
 
 namespace {
 
-// removes the figures of `script` (its `set output 'NAME'` lines) that gnuplot left empty in
-// `dir` (it creates the file before it plots): "" or "; removed the empty NAME, ..."
+// the figures of `script`: the file of each line `set output 'NAME'` (or "NAME") and the line
+// (1-based) it is on
+std::vector<std::pair<int, std::string>> figure_files(const std::string& script) {
+  static const std::string kSet = "set output ";
+  std::vector<std::pair<int, std::string>> out;
+  std::istringstream lines(script);
+  std::string line;
+  for (int n = 1; std::getline(lines, line); ++n) {
+    if (line.rfind(kSet, 0) != 0 || line.size() <= kSet.size()) continue;
+    const char q = line[kSet.size()];
+    const size_t end = line.find(q, kSet.size() + 1);
+    if ((q != '\'' && q != '"') || end == std::string::npos) continue;
+    out.emplace_back(n, line.substr(kSet.size() + 1, end - kSet.size() - 1));
+  }
+  return out;
+}
+
+// removes the figures of `script` that gnuplot left empty in `dir` (it creates the file before
+// it plots): "" or "; removed the empty NAME, ..."
 std::string remove_empty_figures(const std::string& dir, const std::string& script) {
-  static const std::string kSet = "set output '";
   std::string removed;
-  for (size_t at = script.find(kSet); at != std::string::npos; at = script.find(kSet, at + 1)) {
-    const size_t begin = at + kSet.size(), end = script.find('\'', begin);
-    if (end == std::string::npos) break;
-    const std::filesystem::path figure = std::filesystem::path(dir) / script.substr(begin, end - begin);
+  for (const auto& [line, name] : figure_files(script)) {
+    const std::filesystem::path figure = std::filesystem::path(dir) / name;
     std::error_code ec;
     if (std::filesystem::is_regular_file(figure, ec) && std::filesystem::file_size(figure, ec) == 0 &&
         !ec && std::filesystem::remove(figure, ec)) {
@@ -406,6 +420,27 @@ std::string remove_empty_figures(const std::string& dir, const std::string& scri
     }
   }
   return removed;
+}
+
+// removes the figure of `script` that gnuplot was drawing when it stopped at the line the last
+// of its messages `output` names ("plots.gnuplot" line N: ...; warnings before it name others):
+// a multiplot keeps the panels drawn before the error. "" or "; removed the unfinished NAME"
+std::string remove_unfinished_figure(const std::string& dir, const std::string& script,
+                                     const std::string& output) {
+  const size_t at = output.rfind("\" line ");
+  if (at == std::string::npos) return "";
+  const int line = std::atoi(output.c_str() + at + 7);
+  std::string name;
+  for (const auto& [start, file] : figure_files(script)) {
+    if (start <= line) name = file;
+  }
+  std::error_code ec;
+  const std::filesystem::path figure = std::filesystem::path(dir) / name;
+  if (name.empty() || !std::filesystem::is_regular_file(figure, ec) ||
+      std::filesystem::file_size(figure, ec) == 0 || ec || !std::filesystem::remove(figure, ec)) {
+    return "";  // none, or empty (remove_empty_figures names it)
+  }
+  return "; removed the unfinished " + name;
 }
 
 // The number of gnuplot processes that draw a script at once: 2 on a machine of 2 or more cores.
@@ -441,11 +476,11 @@ std::string in_parts(const std::string& script, int* parts) {
 }  // namespace
 
 std::string run_gnuplot(const std::string& dir, const std::string& script_name,
-                        const std::string& script) {
+                        const std::string& script, Figures figures) {
   const Gnuplot& g = gnuplot();
   if (!g.available) return kNoGnuplot;
   int parts = 1;
-  const std::string drawn = in_parts(script, &parts);
+  const std::string drawn = figures == Figures::kStandAlone ? in_parts(script, &parts) : script;
   const std::string script_path = (std::filesystem::path(dir) / script_name).string();
   {
     std::ofstream out(script_path);
@@ -464,13 +499,18 @@ std::string run_gnuplot(const std::string& dir, const std::string& script_name,
   for (int p = 1; p < parts; ++p) others.emplace_back(draw, p);
   draw(0);
   for (std::thread& t : others) t.join();
-  const std::string empty = remove_empty_figures(dir, script);
+  bool failed = false;
+  std::string why, removed;  // why: the first error of the first part that failed
   for (int p = 0; p < parts; ++p) {
     if (status[p] == 0) continue;
-    const std::string why = first_error_line(outputs[p]);
-    return "gnuplot failed on " + script_name + (why.empty() ? "" : ": " + why) + empty;
+    const std::string error = first_error_line(outputs[p]);
+    if (!failed) why = error;
+    failed = true;
+    removed += remove_unfinished_figure(dir, drawn, outputs[p]);
   }
-  return empty.empty() ? "" : "gnuplot drew nothing" + empty;
+  removed += remove_empty_figures(dir, script);
+  if (failed) return "gnuplot failed on " + script_name + (why.empty() ? "" : ": " + why) + removed;
+  return removed.empty() ? "" : "gnuplot drew nothing" + removed;
 }
 
 std::string plot_copy_name(const std::string& csv) {
@@ -578,8 +618,6 @@ std::string simulation_plot_script(const SimulationFigures& f, const std::string
     s += torque_check_figure(f.data, f.trajectory, "M%", "M%_inverse", "input", figure, f.title,
                              f.layout.drives);
   }
-  s += "unset key\nset ytics autofreq\nset offsets 0, 0, 0, 0\n";
-
   return s + friction_figure(f.data, f.trajectory, f.title, f.layout);
 }
 
@@ -588,7 +626,8 @@ std::string plot_simulation(const std::string& dir, const SimulationFigures& fig
   SimulationFigures f = figures;
   f.data.convert(dir, f.trajectory);
   if (!f.frictionless.empty()) f.data.convert(dir, f.frictionless);
-  return run_gnuplot(dir, "plots.gnuplot", simulation_plot_script(f, gnuplot().terminal));
+  return run_gnuplot(dir, "plots.gnuplot", simulation_plot_script(f, gnuplot().terminal),
+                     Figures::kStandAlone);
 }
 
 std::string inverse_plot_script(const std::string& trajectory, bool has_input,
@@ -621,7 +660,8 @@ std::string plot_inverse(const std::string& dir, const std::string& trajectory, 
   PlotData data;
   data.convert(dir, trajectory);
   return run_gnuplot(dir, "plots.gnuplot",
-                     inverse_plot_script(trajectory, has_input, title, gnuplot().terminal, data));
+                     inverse_plot_script(trajectory, has_input, title, gnuplot().terminal, data),
+                     Figures::kStandAlone);
 }
 
 std::string hold_map_plot_script(const std::string& map_csv, double torque_limit,
@@ -838,7 +878,8 @@ std::string plot_excitation(const std::string& dir, const ExcitationFigures& fig
   if (!gnuplot().available) return kNoGnuplot;
   ExcitationFigures f = figures;
   f.data.convert(dir, f.excitation);
-  return run_gnuplot(dir, "plots.gnuplot", excitation_plot_script(f, gnuplot().terminal));
+  return run_gnuplot(dir, "plots.gnuplot", excitation_plot_script(f, gnuplot().terminal),
+                     Figures::kStandAlone);
 }
 
 }  // namespace fivebar::io

@@ -20,15 +20,22 @@ struct Gnuplot {
 };
 const Gnuplot& gnuplot();
 
+/// How run_gnuplot draws a script of several figures (each from a `set output` line to the next).
+enum class Figures {
+  kInOrder,     ///< one gnuplot process, in the order of the script
+  /// each figure sets, after its `set output` line, whatever it draws with beyond what precedes
+  /// the first figure: two gnuplot processes draw them at once, the first half of the figures
+  /// part 1, the rest part 2 (the script written holds each figure in a block
+  /// `if (!exists("part") || part == P) { ... }`, so that `gnuplot SCRIPT` draws them all)
+  kStandAlone,
+};
+
 /// Writes `script` to dir/`script_name` and runs gnuplot on it with `dir` as working directory,
-/// so the script reads and writes files by their names in `dir`. A script of several figures
-/// (each from a `set output` line to the next) is drawn by two gnuplot processes at once: the
-/// script written holds each figure in a block `if (!exists("part") || part == P) { ... }` (the
-/// first half of the figures part 1, the rest part 2), so that `gnuplot SCRIPT` draws them all.
-/// Returns "" on success, else a one-line warning (gnuplot missing, or the first error line of
-/// the first part that failed); figures a failure left empty are removed and named.
+/// so the script reads and writes files by their names in `dir`. Returns "" on success, else a
+/// one-line warning (gnuplot missing, or the first error line of the first part that failed);
+/// figures a failure left empty or unfinished are removed and named.
 std::string run_gnuplot(const std::string& dir, const std::string& script_name,
-                        const std::string& script);
+                        const std::string& script, Figures figures = Figures::kInOrder);
 
 /// The numeric CSV files a script draws, read by gnuplot from binary copies: NAME.bin beside
 /// NAME.csv holds the same rows and columns as float64 numbers (native byte order). A script
