@@ -1,6 +1,7 @@
 #include "fivebar/io/csv.h"
 
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -31,6 +32,23 @@ std::vector<std::string> split(const std::string& line) {
 
 std::string line_key(int line) { return "line " + std::to_string(line); }
 
+// `f` as a number (strtod's syntax, all of `f`): *number false when it is not one. The common
+// decimal fields go through from_chars (correctly rounded like strtod, several times faster on
+// 17 digits); the rest (a sign '+', hexadecimal, out of range) through strtod.
+double parse_number(const std::string& f, bool* number) {
+  double v = 0;
+  const char* end = f.data() + f.size();
+  const auto [ptr, ec] = std::from_chars(f.data(), end, v);
+  if (ec == std::errc() && ptr == end) {
+    *number = true;
+    return v;
+  }
+  char* stop = nullptr;
+  v = std::strtod(f.c_str(), &stop);
+  *number = !f.empty() && stop == f.c_str() + f.size();
+  return v;
+}
+
 // one data row of a CSV: every field a finite number
 std::vector<double> parse_row(const CsvTable& table, const std::vector<std::string>& fields,
                               int line_no, const CsvRules& rules) {
@@ -42,9 +60,8 @@ std::vector<double> parse_row(const CsvTable& table, const std::vector<std::stri
   std::vector<double> row(fields.size());
   for (size_t j = 0; j < fields.size(); ++j) {
     const std::string& f = fields[j];
-    char* end = nullptr;
-    row[j] = std::strtod(f.c_str(), &end);
-    const bool number = !f.empty() && end == f.c_str() + f.size();
+    bool number = false;
+    row[j] = parse_number(f, &number);
     if (!number || !(rules.non_finite || std::isfinite(row[j]))) {
       throw LogError(table.path, line_key(line_no) + ", column " + table.columns[j],
                      rules.bad_number ? rules.bad_number(f, number)
