@@ -52,6 +52,36 @@ const std::vector<std::string> kOutputs = {
     "fig_residuals.png",   "fig_residual_vs_rate.png", "fig_validation.png", "plots.gnuplot",
     "residuals.bin"};
 
+// fig_validation.png of identify's figures (residual_plot_script): the windowed runs
+// (restarted from the logged state) are the meaningful check on chaotic motion: their error sets
+// the y range; the full run, which leaves the log once errors have grown, is drawn thin and may
+// leave the panel
+std::string validation_figure(const std::string& title, int dof, const PlotData& d) {
+  const std::string csv = "residuals.csv", file = d.file(csv);
+  auto val = [&](const std::string& name) { return d.value(csv, name); };
+  std::ostringstream s;
+  s << "set output \"fig_validation.png\"\nset xlabel \"t [s]\"\nset multiplot layout " << dof
+    << ",1 "
+       "title \"validation: angle error of the fitted scene under the logged torques, red: "
+       "restarted from the log every window, grey: one run over the log   "
+    << title << "\" noenhanced\n";
+  for (int i = 1; i <= dof; ++i) {
+    const std::string n = std::to_string(i);
+    const std::string windowed = "(" + val("windowed_theta" + n) + " - " + val("theta" + n) + ")";
+    s << "set autoscale y\nstats " << file << " using " << windowed << " nooutput\n"
+      << "r = (STATS_max - STATS_min > 0 ? STATS_max - STATS_min : 1e-9)\n"
+      << "set yrange [STATS_min - 0.1 * r:STATS_max + 0.35 * r]\n"  // room for the key
+      << "set ylabel \"theta" << n << " error [rad]\"\nplot " << file << " using "
+      << d.column(csv, "t") << ":" << windowed
+      << " with lines ls 2 title \"fitted scene, windowed - log\", " << file << " using "
+      << d.column(csv, "t") << ":(" << val("simulated_theta" + n) << " - " << val("theta" + n)
+      << ") with lines lc rgb \"#999999\" lw 0.6 title \"full run - log\"\n";
+  }
+  s << "set autoscale y\n";
+  s << "unset multiplot\n";
+  return s.str();
+}
+
 // the figures of identify from residuals.csv, whose columns `d` names (by number once it has
 // its binary copy)
 std::string residual_plot_script(const std::string& terminal, const std::string& title,
@@ -114,29 +144,7 @@ std::string residual_plot_script(const std::string& terminal, const std::string&
       << "notitle\n";
   }
   s << "unset multiplot\n";
-  if (validation) {
-    // the windowed runs (restarted from the logged state) are the meaningful check on chaotic
-    // motion: their error sets the y range; the full run, which leaves the log once errors have
-    // grown, is drawn thin and may leave the panel
-    s << "set output \"fig_validation.png\"\nset xlabel \"t [s]\"\nset multiplot layout " << dof
-      << ",1 "
-         "title \"validation: angle error of the fitted scene under the logged torques, red: "
-         "restarted from the log every window, grey: one run over the log   "
-      << title << "\" noenhanced\n";
-    for (int i = 1; i <= dof; ++i) {
-      const std::string n = std::to_string(i);
-      const std::string windowed = "(" + val("windowed_theta" + n) + " - " + val("theta" + n) + ")";
-      s << "set autoscale y\nstats " << file << " using " << windowed << " nooutput\n"
-        << "r = (STATS_max - STATS_min > 0 ? STATS_max - STATS_min : 1e-9)\n"
-        << "set yrange [STATS_min - 0.1 * r:STATS_max + 0.35 * r]\n"  // room for the key
-        << "set ylabel \"theta" << n << " error [rad]\"\nplot " << file << " using " << col("t")
-        << ":" << windowed << " with lines ls 2 title \"fitted scene, windowed - log\", " << file
-        << " using " << col("t") << ":(" << val("simulated_theta" + n) << " - "
-        << val("theta" + n) << ") with lines lc rgb \"#999999\" lw 0.6 title \"full run - log\"\n";
-    }
-    s << "set autoscale y\n";
-    s << "unset multiplot\n";
-  }
+  if (validation) s << validation_figure(title, dof, d);
   return s.str();
 }
 
