@@ -443,24 +443,18 @@ std::string remove_unfinished_figure(const std::string& dir, const std::string& 
   return "; removed the unfinished " + name;
 }
 
-// The number of gnuplot processes that draw a script at once: 2 on a machine of 2 or more cores.
-int drawing_processes() { return std::thread::hardware_concurrency() >= 2 ? 2 : 1; }
-
-// `script` drawn in *parts: each figure (from a line `set output ...` to the next) in a block
+// `script` in two parts: each figure (from a line `set output ...` to the next) in a block
 // `if (!exists("part") || part == P) { ... }`, the first half of the figures in part 1, the rest
-// in part 2; what precedes the first figure is run by every part. A script of one figure, or a
-// machine of one core, gives the script as it is and *parts = 1.
+// in part 2; what precedes the first figure is run by both. *parts = 2; a script of one figure
+// comes back as it is, *parts = 1.
 std::string in_parts(const std::string& script, int* parts) {
   std::vector<size_t> starts;
   for (size_t at = script.find("set output "); at != std::string::npos;
        at = script.find("set output ", at + 1)) {
     if (at == 0 || script[at - 1] == '\n') starts.push_back(at);
   }
-  *parts = std::min<int>(drawing_processes(), static_cast<int>(starts.size()));
-  if (*parts < 2) {
-    *parts = 1;
-    return script;
-  }
+  *parts = starts.size() < 2 ? 1 : 2;
+  if (*parts == 1) return script;
   const size_t first_of_part2 = (starts.size() + 1) / 2;
   std::string s = script.substr(0, starts[0]);
   starts.push_back(script.size());
@@ -487,6 +481,8 @@ std::string run_gnuplot(const std::string& dir, const std::string& script_name,
     out << drawn;
     if (!out) return "cannot write " + script_path + ": no figures drawn";
   }
+  // one process per part on a machine of two or more cores; else one for all (no `part`)
+  if (std::thread::hardware_concurrency() < 2) parts = 1;
   std::vector<std::string> outputs(parts);
   std::vector<int> status(parts);
   auto draw = [&](int p) {
@@ -519,9 +515,9 @@ std::string plot_copy_name(const std::string& csv) {
 
 bool PlotData::convert(const std::string& dir, const std::string& csv) {
   std::ifstream in(std::filesystem::path(dir) / csv);
+  if (!in) return false;
   std::stringstream text;
   text << in.rdbuf();
-  if (!in) return false;
   CsvRules rules;
   rules.non_finite = true;
   CsvTable table;

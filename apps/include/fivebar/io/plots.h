@@ -24,9 +24,10 @@ const Gnuplot& gnuplot();
 enum class Figures {
   kInOrder,     ///< one gnuplot process, in the order of the script
   /// each figure sets, after its `set output` line, whatever it draws with beyond what precedes
-  /// the first figure: two gnuplot processes draw them at once, the first half of the figures
-  /// part 1, the rest part 2 (the script written holds each figure in a block
-  /// `if (!exists("part") || part == P) { ... }`, so that `gnuplot SCRIPT` draws them all)
+  /// the first figure: the script written holds each figure in a block
+  /// `if (!exists("part") || part == P) { ... }`, the first half of the figures part 1, the rest
+  /// part 2, and two gnuplot processes draw the parts at once (one process draws all on a
+  /// machine of one core, as `gnuplot SCRIPT` does)
   kStandAlone,
 };
 
