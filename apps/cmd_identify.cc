@@ -48,9 +48,9 @@ struct Args {
 };
 
 const std::vector<std::string> kOutputs = {
-    "identification.json", "scene_fitted.yaml",        "residuals.csv",      "fig_torques.png",
-    "fig_residuals.png",   "fig_residual_vs_rate.png", "fig_validation.png", "plots.gnuplot",
-    "residuals.bin"};
+    "identification.json", "scene_fitted.yaml", "residuals.csv",
+    "fig_torques.png",     "fig_residuals.png", "fig_residual_vs_rate.png",
+    "fig_validation.png",  "plots.gnuplot",     "residuals.bin"};
 
 // fig_validation.png of identify's figures (residual_plot_script): the windowed runs
 // (restarted from the logged state) are the meaningful check on chaotic motion: their error sets

@@ -111,8 +111,11 @@ std::string plot_script(const std::string& task, double limit, const std::string
                   " size 900,600 noenhanced\nset key autotitle columnhead\nset grid\n";
   // the path in true proportions, in a square box around it (a short path along one axis would
   // otherwise be squeezed into a strip)
-  s += "set output 'path_" + point + ".png'\n"
-       "stats 'trajectory.csv' using " + xp + ":" + yp + " nooutput\n"
+  s += "set output 'path_" + point +
+       ".png'\n"
+       "stats 'trajectory.csv' using " +
+       xp + ":" + yp +
+       " nooutput\n"
        "span = 0.6 * (STATS_max_x - STATS_min_x > STATS_max_y - STATS_min_y ? "
        "STATS_max_x - STATS_min_x : STATS_max_y - STATS_min_y) + 1e-3\n"
        "cx = (STATS_max_x + STATS_min_x) / 2\ncy = (STATS_max_y + STATS_min_y) / 2\n"
@@ -122,19 +125,23 @@ std::string plot_script(const std::string& task, double limit, const std::string
        "'\nset size ratio -1\n"
        "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
        "set key outside right top\n"
-       "plot 'trajectory.csv' using " + xp + ":" + yp +
-       " with lines lw 2 lc rgb '#1f5fa8' title 'optimal'" +
+       "plot 'trajectory.csv' using " +
+       xp + ":" + yp + " with lines lw 2 lc rgb '#1f5fa8' title 'optimal'" +
        with_baseline(xp + ":" + yp, "minimum jerk", "#777777") +
        // the ends: the first and the last row
        ", 'trajectory.csv' using ($0 == 0 ? column(" + xp + ") : NaN):" + yp +
        " with points pt 7 ps 2.5 lc 'dark-green' title 'start', 'trajectory.csv' using ($0 == "
-       "last ? column(" + xp + ") : NaN):" + yp + " with points pt 5 ps 2.5 lc 'black' title "
+       "last ? column(" +
+       xp + ") : NaN):" + yp +
+       " with points pt 5 ps 2.5 lc 'black' title "
        "'goal'"
        "\nset size noratio\nset autoscale xy\n";
   // the key beside the plot: the torques fill the band between the limits; room above and below,
   // so that the torque limit lines are not drawn on the border
   s += "set output 'torques.png'\nset offsets 0, 0, graph 0.08, graph 0.08\n"
-       "set title '" + task + ": motor torques'\n"
+       "set title '" +
+       task +
+       ": motor torques'\n"
        "set xlabel 't [s]'\nset ylabel 'torque [N m]'\nset key outside right top\n"
        "plot 'trajectory.csv' using 't':'M1' with lines lw 2 lc rgb '#1f5fa8' title 'M1'" +
        (drives > 1 ? std::string(", 'trajectory.csv' using 't':'M2' with lines lw 2 lc rgb "

@@ -230,10 +230,9 @@ std::string friction_figure(const PlotData& d, const std::string& trajectory,
 // of `computed` (dashed, on top), large, and their difference computed - reference in small
 // panels below; `%` in a column pattern stands for 1 or 2
 std::string torque_check_figure(const PlotData& d, const std::string& trajectory,
-                                const std::string& reference,
-                                const std::string& computed, const std::string& reference_name,
-                                const std::string& figure, const std::string& title,
-                                int drives = 2) {
+                                const std::string& reference, const std::string& computed,
+                                const std::string& reference_name, const std::string& figure,
+                                const std::string& title, int drives = 2) {
   auto column = [](std::string pattern, int i) {
     return pattern.replace(pattern.find('%'), 1, std::to_string(i));
   };
@@ -251,8 +250,7 @@ std::string torque_check_figure(const PlotData& d, const std::string& trajectory
          panel(std::string(i == 1 ? "(a)" : "(b)") + " driving torque M" + std::to_string(i),
                "M" + std::to_string(i) + " [N m]") +
          "plot " + curve(d, trajectory, ref, 4) + " title " + quote(reference_name) +
-         ", \\\n     " + curve(d, trajectory, comp, 2) +
-         " title \"inverse dynamics\"\n";
+         ", \\\n     " + curve(d, trajectory, comp, 2) + " title \"inverse dynamics\"\n";
   }
   s += "unset key\nset offsets 0, 0, graph 0.1, graph 0.1\nset format y \"%.0e\"\n";
   for (int i = 1; i <= drives; ++i) {
@@ -593,9 +591,9 @@ std::string simulation_plot_script(const SimulationFigures& f, const std::string
     for (int i = 1; i <= f.layout.links; ++i) {
       const std::string column = q.column + std::to_string(i);
       s += y_range_stats(f.data,
-                         clip ? std::vector<std::string>{f.trajectory}
-                              : twin ? std::vector<std::string>{f.trajectory, f.frictionless}
-                                     : std::vector<std::string>{f.trajectory},
+                         clip   ? std::vector<std::string>{f.trajectory}
+                         : twin ? std::vector<std::string>{f.trajectory, f.frictionless}
+                                : std::vector<std::string>{f.trajectory},
                          column);
       if (clip) s += "set yrange [lo - 0.08 * (hi - lo):hi + 0.4 * (hi - lo)]\n";
       s += panel(links[i - 1], column + " [" + q.unit + "]") + "plot " +

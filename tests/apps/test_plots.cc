@@ -2,20 +2,19 @@
 // the binary copies gnuplot reads, and run_gnuplot's two processes and failures.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-
-#include "fivebar/io/plots.h"
-
 #include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <cstring>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
+
+#include "fivebar/io/plots.h"
 
 namespace fivebar::io {
 namespace {
@@ -110,7 +109,6 @@ TEST(ExcitationFigures, AFigureGnuplotCannotDrawIsRemovedNotLeftEmpty) {
   std::filesystem::remove_all(dir);
 }
 
-
 // a fresh directory of its own for one test
 std::filesystem::path test_dir(const std::string& name) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() /
@@ -185,9 +183,11 @@ TEST(PlotData, SimulationFiguresReadTheCopyOfTheTrajectory) {
 // a script of three small figures a.png, b.png, c.png; `broken`: a's second panel reads a file
 // that does not exist (gnuplot stops with its first panel drawn)
 std::string three_figures(bool broken) {
-  return "set terminal " + gnuplot().terminal + " size 200,150\nset samples 50\nunset key\n"
+  return "set terminal " + gnuplot().terminal +
+         " size 200,150\nset samples 50\nunset key\n"
          "set output 'a.png'\nset multiplot layout 2,1\nplot sin(x)\nplot " +
-         std::string(broken ? "'missing.csv' using 1:2" : "cos(x)") + "\nunset multiplot\n"
+         std::string(broken ? "'missing.csv' using 1:2" : "cos(x)") +
+         "\nunset multiplot\n"
          "set output 'b.png'\nplot x\nset output 'c.png'\nplot x**2\n";
 }
 
@@ -220,8 +220,8 @@ TEST(RunGnuplot, AFigureLeftUnfinishedByAnErrorIsRemovedAndTheOtherPartStillDraw
   if (!gnuplot().available) GTEST_SKIP() << "gnuplot not found";
   for (Figures figures : {Figures::kStandAlone, Figures::kInOrder}) {
     const std::filesystem::path dir = test_dir("plot_failure");
-    const std::string warning = run_gnuplot(dir.string(), "plots.gnuplot", three_figures(true),
-                                            figures);
+    const std::string warning =
+        run_gnuplot(dir.string(), "plots.gnuplot", three_figures(true), figures);
     EXPECT_THAT(warning, HasSubstr("gnuplot failed on plots.gnuplot: "));
     EXPECT_THAT(warning, HasSubstr("missing.csv"));
     EXPECT_THAT(warning, HasSubstr("removed the unfinished a.png"));

@@ -22,7 +22,7 @@ const Gnuplot& gnuplot();
 
 /// How run_gnuplot draws a script of several figures (each from a `set output` line to the next).
 enum class Figures {
-  kInOrder,     ///< one gnuplot process, in the order of the script
+  kInOrder,  ///< one gnuplot process, in the order of the script
   /// each figure sets, after its `set output` line, whatever it draws with beyond what precedes
   /// the first figure: the script written holds each figure in a block
   /// `if (!exists("part") || part == P) { ... }`, the first half of the figures part 1, the rest
