@@ -525,12 +525,18 @@ bool PlotData::convert(const std::string& dir, const std::string& csv) {
     return false;  // a field that is not a number: gnuplot reads the CSV
   }
   if (table.columns.empty()) return false;
-  std::ofstream out(std::filesystem::path(dir) / plot_copy_name(csv), std::ios::binary);
+  const std::filesystem::path copy = std::filesystem::path(dir) / plot_copy_name(csv);
+  std::ofstream out(copy, std::ios::binary);
   for (const std::vector<double>& row : table.rows) {
     out.write(reinterpret_cast<const char*>(row.data()),
               static_cast<std::streamsize>(row.size() * sizeof(double)));
   }
-  if (!out) return false;
+  out.close();
+  if (!out) {  // no half-written copy left behind: the script reads the CSV
+    std::error_code ec;
+    std::filesystem::remove(copy, ec);
+    return false;
+  }
   headers_[csv] = table.columns;
   return true;
 }
