@@ -210,8 +210,17 @@ TEST(Csv, OneParserKeepsCommentsLinesAndHeader) {
 
 TEST(Csv, FieldsReadAsStrtodReadsThem) {
   // every syntax strtod takes, with its value to the last bit; nan and inf only when asked
-  const char* fields[] = {"0.1", "-2.5e-3", "+1", "0x1p-3", "1e-320", "1.", ".5", "7", "-0",
-                          "0.47600000000000003", "1.5707963267948966"};
+  const char* fields[] = {"0.1",
+                          "-2.5e-3",
+                          "+1",
+                          "0x1p-3",
+                          "1e-320",
+                          "1.",
+                          ".5",
+                          "7",
+                          "-0",
+                          "0.47600000000000003",
+                          "1.5707963267948966"};
   std::string text = "x\n";
   for (const char* f : fields) text += std::string(f) + "\n";
   const CsvTable t = parse_csv(text, "m.csv");
