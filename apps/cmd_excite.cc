@@ -72,8 +72,8 @@ struct Args {
 };
 
 const std::vector<std::string> kOutputs = {"excitation.csv", "predicted_std.csv", "excitation.json",
-                                           "fig_motion.png", "fig_torques.png", "fig_std.png",
-                                           "plots.gnuplot"};
+                                           "fig_motion.png", "fig_torques.png",   "fig_std.png",
+                                           "plots.gnuplot",  "excitation.bin"};
 const char* const kFlags = "command line";
 
 // "LO:HI" -> (lo, hi), bad input otherwise

@@ -46,9 +46,9 @@ struct Args {
   bool no_plots = false;
 };
 
-const std::vector<std::string> kOutputs = {"trajectory.csv", "summary.json",
-                                           "fig5_inverse_torques.png", "fig6_friction_torques.png",
-                                           "plots.gnuplot"};
+const std::vector<std::string> kOutputs = {
+    "trajectory.csv", "summary.json",  "fig5_inverse_torques.png", "fig6_friction_torques.png",
+    "plots.gnuplot",  "trajectory.bin"};
 
 // minimum number of samples for the 5-point differences
 constexpr size_t kMinSamplesForDifferences = 5;

@@ -105,34 +105,44 @@ std::string plot_script(const std::string& task, double limit, const std::string
                           "' title '" + title + "'"
                     : std::string();
   };
+  // each figure sets its title, labels, key and ranges after its `set output` (the figures are
+  // drawn at once by two gnuplot processes, see run_gnuplot)
   std::string s = "set datafile separator ','\nset terminal " + terminal +
                   " size 900,600 noenhanced\nset key autotitle columnhead\nset grid\n";
   // the path in true proportions, in a square box around it (a short path along one axis would
   // otherwise be squeezed into a strip)
-  s += "stats 'trajectory.csv' using " + xp + ":" + yp + " nooutput\n"
+  s += "set output 'path_" + point +
+       ".png'\n"
+       "stats 'trajectory.csv' using " +
+       xp + ":" + yp +
+       " nooutput\n"
        "span = 0.6 * (STATS_max_x - STATS_min_x > STATS_max_y - STATS_min_y ? "
        "STATS_max_x - STATS_min_x : STATS_max_y - STATS_min_y) + 1e-3\n"
        "cx = (STATS_max_x + STATS_min_x) / 2\ncy = (STATS_max_y + STATS_min_y) / 2\n"
        "last = STATS_records - 1\n"
        "set xrange [cx - span:cx + span]\nset yrange [cy - span:cy + span]\n";
-  s += "set output 'path_" + point + ".png'\nset title '" + task + ": path of " + point +
+  s += "set title '" + task + ": path of " + point +
        "'\nset size ratio -1\n"
        "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
        "set key outside right top\n"
-       "plot 'trajectory.csv' using " + xp + ":" + yp +
-       " with lines lw 2 lc rgb '#1f5fa8' title 'optimal'" +
+       "plot 'trajectory.csv' using " +
+       xp + ":" + yp + " with lines lw 2 lc rgb '#1f5fa8' title 'optimal'" +
        with_baseline(xp + ":" + yp, "minimum jerk", "#777777") +
        // the ends: the first and the last row
        ", 'trajectory.csv' using ($0 == 0 ? column(" + xp + ") : NaN):" + yp +
        " with points pt 7 ps 2.5 lc 'dark-green' title 'start', 'trajectory.csv' using ($0 == "
-       "last ? column(" + xp + ") : NaN):" + yp + " with points pt 5 ps 2.5 lc 'black' title "
+       "last ? column(" +
+       xp + ") : NaN):" + yp +
+       " with points pt 5 ps 2.5 lc 'black' title "
        "'goal'"
        "\nset size noratio\nset autoscale xy\n";
-  // room above and below, so that the torque limit lines are not drawn on the border
-  s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
-  // the key beside the plot: the torques fill the band between the limits
-  s += "set output 'torques.png'\nset title '" + task + ": motor torques'\n"
-       "set xlabel 't [s]'\nset ylabel 'torque [N m]'\n"
+  // the key beside the plot: the torques fill the band between the limits; room above and below,
+  // so that the torque limit lines are not drawn on the border
+  s += "set output 'torques.png'\nset offsets 0, 0, graph 0.08, graph 0.08\n"
+       "set title '" +
+       task +
+       ": motor torques'\n"
+       "set xlabel 't [s]'\nset ylabel 'torque [N m]'\nset key outside right top\n"
        "plot 'trajectory.csv' using 't':'M1' with lines lw 2 lc rgb '#1f5fa8' title 'M1'" +
        (drives > 1 ? std::string(", 'trajectory.csv' using 't':'M2' with lines lw 2 lc rgb "
                                  "'#d62728' title 'M2'")
@@ -145,8 +155,9 @@ std::string plot_script(const std::string& task, double limit, const std::string
     s += std::string(", ") + buf + " dt 3 lc 'black' title 'limit', -" + buf +
          " dt 3 lc 'black' notitle";
   }
-  s += "\nset offsets 0, 0, 0, 0\nset output 'energy.png'\nset title '" + task +
-       ": dissipated energy'\nset ylabel 'E_diss [J]'\n"
+  s += "\nset output 'energy.png'\nset offsets 0, 0, 0, 0\nset title '" + task +
+       ": dissipated energy'\nset xlabel 't [s]'\nset ylabel 'E_diss [J]'\n"
+       "set key outside right top\n"
        "plot 'trajectory.csv' using 't':'E_diss' with lines lw 2 lc rgb '#1f5fa8' title 'optimal'" +
        with_baseline("'t':'E_diss'", "minimum jerk", "#777777") + "\n";
   return s;
@@ -186,7 +197,8 @@ std::string write_task(const fs::path& dir, const Scene& scene, const TaskResult
   if (!plots) return "";
   return run_gnuplot(dir.string(), "plots.gnuplot",
                      plot_script(r.task, r.torque_limit, gnuplot().terminal, baseline,
-                                 point_name(scene), layout.drives));
+                                 point_name(scene), layout.drives),
+                     Figures::kStandAlone);
 }
 
 // one line per task on stdout; under it, the reason when the task did not end ok, and a note

@@ -1,12 +1,14 @@
 #include "fivebar/io/csv.h"
 
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <string_view>
 
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
@@ -16,14 +18,23 @@ namespace {
 
 using identification::LogError;
 
-// the fields of a line, blanks trimmed; a trailing comma gives a last, empty field
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> fields;
-  std::string::size_type start = 0;
+// `s` without the blanks trim() removes at its ends
+std::string_view trimmed(std::string_view s) {
+  const char* blanks = " \t\r\n";
+  const auto first = s.find_first_not_of(blanks);
+  if (first == std::string_view::npos) return {};
+  return s.substr(first, s.find_last_not_of(blanks) - first + 1);
+}
+
+// the fields of a line, blanks trimmed, as views into it; a trailing comma gives a last, empty
+// field
+std::vector<std::string_view> split(std::string_view line) {
+  std::vector<std::string_view> fields;
+  std::string_view::size_type start = 0;
   while (true) {
     const auto pos = line.find(',', start);
-    fields.push_back(trim(line.substr(start, pos - start)));
-    if (pos == std::string::npos) break;
+    fields.push_back(trimmed(line.substr(start, pos - start)));
+    if (pos == std::string_view::npos) break;
     start = pos + 1;
   }
   return fields;
@@ -31,8 +42,26 @@ std::vector<std::string> split(const std::string& line) {
 
 std::string line_key(int line) { return "line " + std::to_string(line); }
 
+// `f` as a number (strtod's syntax, all of `f`): *number false when it is not one. The common
+// decimal fields go through from_chars (correctly rounded like strtod, several times faster on
+// 17 digits); the rest (a sign '+', hexadecimal, out of range) through strtod.
+double parse_number(std::string_view f, bool* number) {
+  double v = 0;
+  const char* end = f.data() + f.size();
+  const auto [ptr, ec] = std::from_chars(f.data(), end, v);
+  if (ec == std::errc() && ptr == end) {
+    *number = true;
+    return v;
+  }
+  const std::string text(f);  // strtod reads up to a terminating zero
+  char* stop = nullptr;
+  v = std::strtod(text.c_str(), &stop);
+  *number = !text.empty() && stop == text.c_str() + text.size();
+  return v;
+}
+
 // one data row of a CSV: every field a finite number
-std::vector<double> parse_row(const CsvTable& table, const std::vector<std::string>& fields,
+std::vector<double> parse_row(const CsvTable& table, const std::vector<std::string_view>& fields,
                               int line_no, const CsvRules& rules) {
   if (fields.size() != table.columns.size()) {
     throw LogError(table.path, line_key(line_no),
@@ -41,11 +70,10 @@ std::vector<double> parse_row(const CsvTable& table, const std::vector<std::stri
   }
   std::vector<double> row(fields.size());
   for (size_t j = 0; j < fields.size(); ++j) {
-    const std::string& f = fields[j];
-    char* end = nullptr;
-    row[j] = std::strtod(f.c_str(), &end);
-    const bool number = !f.empty() && end == f.c_str() + f.size();
-    if (!number || !std::isfinite(row[j])) {
+    bool number = false;
+    row[j] = parse_number(fields[j], &number);
+    if (!number || !(rules.non_finite || std::isfinite(row[j]))) {
+      const std::string f(fields[j]);
       throw LogError(table.path, line_key(line_no) + ", column " + table.columns[j],
                      rules.bad_number ? rules.bad_number(f, number)
                                       : "'" + f + "' is not a finite number");
@@ -73,16 +101,17 @@ CsvTable parse_csv(const std::string& text, const std::string& path, const CsvRu
   int line_no = 0;
   while (std::getline(in, raw)) {
     ++line_no;
-    const std::string line = trim(raw);
+    const std::string_view line = trimmed(raw);
     if (line.empty()) continue;
     if (line[0] == '#') {
-      table.comments.push_back(line.substr(1));
+      table.comments.emplace_back(line.substr(1));
       continue;
     }
-    std::vector<std::string> fields = split(line);
+    const std::vector<std::string_view> fields = split(line);
     if (table.header_line == 0) {
-      if (rules.header) rules.header(fields, line_no);
-      table.columns = std::move(fields);
+      std::vector<std::string> names(fields.begin(), fields.end());
+      if (rules.header) rules.header(names, line_no);
+      table.columns = std::move(names);
       table.header_line = line_no;
       continue;
     }

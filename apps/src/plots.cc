@@ -14,13 +14,17 @@
 #include <fstream>
 #include <mutex>
 #include <sstream>
+#include <thread>
 #include <utility>
 #include <vector>
 
+#include "fivebar/io/csv.h"
 #include "fivebar/io/format.h"
 
 namespace fivebar::io {
 namespace {
+
+constexpr char kNoGnuplot[] = "gnuplot not found on PATH: no figures drawn";
 
 // Runs `argv` with working directory `cwd` (or the current one when empty), stdin from
 // /dev/null, stdout and stderr captured into *output. Returns the exit status, or -1 when the
@@ -30,7 +34,9 @@ int run_process(const std::vector<std::string>& argv, const std::string& cwd, st
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
   int pipe_fds[2];
-  if (::pipe(pipe_fds) != 0) return -1;
+  // close-on-exec: a process started at the same time from another thread keeps no copy of the
+  // write end (which would hold this read open until that process ends)
+  if (::pipe2(pipe_fds, O_CLOEXEC) != 0) return -1;
   const pid_t pid = ::fork();
   if (pid < 0) {
     ::close(pipe_fds[0]);
@@ -134,10 +140,11 @@ std::string preamble(const std::string& terminal, const char* what) {
 
 // the range lo..hi of column `column` over `files` (gnuplot variables), and y tics of about 4
 // steps over it
-std::string y_range_stats(const std::vector<std::string>& files, const std::string& column) {
+std::string y_range_stats(const PlotData& d, const std::vector<std::string>& files,
+                          const std::string& column) {
   std::string s = "set autoscale y\n";  // stats skips the points outside a set range
   for (size_t i = 0; i < files.size(); ++i) {
-    s += "stats " + quote(files[i]) + " using " + quote(column) + " nooutput\n";
+    s += "stats " + d.file(files[i]) + " using " + d.column(files[i], column) + " nooutput\n";
     s += i == 0 ? "lo = STATS_min; hi = STATS_max\n"
                 : "lo = (STATS_min < lo ? STATS_min : lo); "
                   "hi = (STATS_max > hi ? STATS_max : hi)\n";
@@ -167,21 +174,29 @@ std::string panel(const std::string& title, const std::string& ylabel) {
 }
 
 // `using "t":"column"` for one curve
-std::string curve(const std::string& file, const std::string& column, int style) {
-  return quote(file) + " using \"t\":" + quote(column) + " with lines ls " + std::to_string(style);
+std::string curve(const PlotData& d, const std::string& file, const std::string& column,
+                  int style) {
+  return d.file(file) + " using " + d.column(file, "t") + ":" + d.column(file, column) +
+         " with lines ls " + std::to_string(style);
+}
+
+// the values of column a - column b of `file`, a `using` expression
+std::string difference_of(const PlotData& d, const std::string& file, const std::string& a,
+                          const std::string& b) {
+  return "(" + d.value(file, a) + " - " + d.value(file, b) + ")";
 }
 
 // a curve of the difference of two columns
-std::string difference(const std::string& file, const std::string& a, const std::string& b,
-                       int style) {
-  return quote(file) + " using \"t\":(column(" + quote(a) + ") - column(" + quote(b) +
-         ")) with lines ls " + std::to_string(style);
+std::string difference(const PlotData& d, const std::string& file, const std::string& a,
+                       const std::string& b, int style) {
+  return d.file(file) + " using " + d.column(file, "t") + ":" + difference_of(d, file, a, b) +
+         " with lines ls " + std::to_string(style);
 }
 
 // figure 6: friction torque of each joint, one panel per joint (paper Fig. 6), and the total
 // dissipated power; the joints of the five-bar or (layout.joints 4) of the four-bar
-std::string friction_figure(const std::string& trajectory, const std::string& title,
-                            const TrajectoryLayout& layout = {}) {
+std::string friction_figure(const PlotData& d, const std::string& trajectory,
+                            const std::string& title, const TrajectoryLayout& layout = {}) {
   std::string s = begin_figure(
       "fig6_friction_torques.png", "3,2", "Fig. 6  Friction torque of each joint",
       "Mf_k has the sign of the joint's relative rate w_k (friction opposes it; it acts on the "
@@ -198,26 +213,26 @@ std::string friction_figure(const std::string& trajectory, const std::string& ti
                             "(d) joint D0: ground / rocker D0-C, w4 = omega3"};
   const char* const* joints = layout.joints == kJoints ? five_bar : four_bar;
   const char panel_letter = static_cast<char>('a' + layout.joints);
-  s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
+  s += "unset key\nset offsets 0, 0, graph 0.08, graph 0.08\n";
   for (int k = 1; k <= layout.joints; ++k) {
     const std::string column = "Mf" + std::to_string(k);
-    s += y_range_stats({trajectory}, column) + panel(joints[k - 1], column + " [N m]") + "plot " +
-         curve(trajectory, column, 1) + "\n";
+    s += y_range_stats(d, {trajectory}, column) + panel(joints[k - 1], column + " [N m]") +
+         "plot " + curve(d, trajectory, column, 1) + "\n";
   }
-  s += y_range_stats({trajectory}, "P_diss") +
+  s += y_range_stats(d, {trajectory}, "P_diss") +
        panel(std::string("(") + panel_letter + ") total dissipated power P_diss = sum_k Mf_k w_k",
              "P_diss [W]") +
-       "plot " + curve(trajectory, "P_diss", 3) + "\n";
+       "plot " + curve(d, trajectory, "P_diss", 3) + "\n";
   return s + "set ytics autofreq\nset offsets 0, 0, 0, 0\nunset multiplot\n";
 }
 
 // figure 5: torques M1, M2 (the first `drives` of them) of `reference` (thick, light) under those
 // of `computed` (dashed, on top), large, and their difference computed - reference in small
 // panels below; `%` in a column pattern stands for 1 or 2
-std::string torque_check_figure(const std::string& trajectory, const std::string& reference,
-                                const std::string& computed, const std::string& reference_name,
-                                const std::string& figure, const std::string& title,
-                                int drives = 2) {
+std::string torque_check_figure(const PlotData& d, const std::string& trajectory,
+                                const std::string& reference, const std::string& computed,
+                                const std::string& reference_name, const std::string& figure,
+                                const std::string& title, int drives = 2) {
   auto column = [](std::string pattern, int i) {
     return pattern.replace(pattern.find('%'), 1, std::to_string(i));
   };
@@ -231,22 +246,21 @@ std::string torque_check_figure(const std::string& trajectory, const std::string
   for (int i = 1; i <= drives; ++i) {
     const std::string ref = column(reference, i), comp = column(computed, i);
     s += "set size " + width + ", 0.6\nset origin " + origin(i) + ", 0.32\n" +
-         y_range_stats({trajectory}, ref) +
+         y_range_stats(d, {trajectory}, ref) +
          panel(std::string(i == 1 ? "(a)" : "(b)") + " driving torque M" + std::to_string(i),
                "M" + std::to_string(i) + " [N m]") +
-         "plot " + quote(trajectory) + " using \"t\":" + quote(ref) + " with lines ls 4 title " +
-         quote(reference_name) + ", \\\n     " + curve(trajectory, comp, 2) +
-         " title \"inverse dynamics\"\n";
+         "plot " + curve(d, trajectory, ref, 4) + " title " + quote(reference_name) +
+         ", \\\n     " + curve(d, trajectory, comp, 2) + " title \"inverse dynamics\"\n";
   }
   s += "unset key\nset offsets 0, 0, graph 0.1, graph 0.1\nset format y \"%.0e\"\n";
   for (int i = 1; i <= drives; ++i) {
     const std::string n = std::to_string(i);
-    s += "set autoscale y\nstats " + quote(trajectory) + " using (column(" +
-         quote(column(computed, i)) + ") - column(" + quote(column(reference, i)) +
-         ")) nooutput\nset ytics nicetic(STATS_max - STATS_min)\n";
+    s += "set autoscale y\nstats " + d.file(trajectory) + " using " +
+         difference_of(d, trajectory, column(computed, i), column(reference, i)) +
+         " nooutput\nset ytics nicetic(STATS_max - STATS_min)\n";
     s += "set size " + width + ", 0.3\nset origin " + origin(i) + ", 0\n" +
          panel(std::string(i == 1 ? "(c)" : "(d)") + " difference, M" + n, "dM" + n + " [N m]") +
-         "plot " + difference(trajectory, column(computed, i), column(reference, i), 3) + "\n";
+         "plot " + difference(d, trajectory, column(computed, i), column(reference, i), 3) + "\n";
   }
   return s + "set format y \"%g\"\nset ytics autofreq\nset size 1, 1\nset origin 0, 0\n"
              "unset multiplot\n";
@@ -374,15 +388,29 @@ const Gnuplot& gnuplot() {
 
 namespace {
 
-// removes the figures of `script` (its `set output 'NAME'` lines) that gnuplot left empty in
-// `dir` (it creates the file before it plots): "" or "; removed the empty NAME, ..."
+// the figures of `script`: the file of each line `set output 'NAME'` (or "NAME") and the line
+// (1-based) it is on
+std::vector<std::pair<int, std::string>> figure_files(const std::string& script) {
+  static const std::string kSet = "set output ";
+  std::vector<std::pair<int, std::string>> out;
+  std::istringstream lines(script);
+  std::string line;
+  for (int n = 1; std::getline(lines, line); ++n) {
+    if (line.rfind(kSet, 0) != 0 || line.size() <= kSet.size()) continue;
+    const char q = line[kSet.size()];
+    const size_t end = line.find(q, kSet.size() + 1);
+    if ((q != '\'' && q != '"') || end == std::string::npos) continue;
+    out.emplace_back(n, line.substr(kSet.size() + 1, end - kSet.size() - 1));
+  }
+  return out;
+}
+
+// removes the figures of `script` that gnuplot left empty in `dir` (it creates the file before
+// it plots): "" or "; removed the empty NAME, ..."
 std::string remove_empty_figures(const std::string& dir, const std::string& script) {
-  static const std::string kSet = "set output '";
   std::string removed;
-  for (size_t at = script.find(kSet); at != std::string::npos; at = script.find(kSet, at + 1)) {
-    const size_t begin = at + kSet.size(), end = script.find('\'', begin);
-    if (end == std::string::npos) break;
-    const std::filesystem::path figure = std::filesystem::path(dir) / script.substr(begin, end - begin);
+  for (const auto& [line, name] : figure_files(script)) {
+    const std::filesystem::path figure = std::filesystem::path(dir) / name;
     std::error_code ec;
     if (std::filesystem::is_regular_file(figure, ec) && std::filesystem::file_size(figure, ec) == 0 &&
         !ec && std::filesystem::remove(figure, ec)) {
@@ -392,26 +420,145 @@ std::string remove_empty_figures(const std::string& dir, const std::string& scri
   return removed;
 }
 
+// removes the figure of `script` that gnuplot was drawing when it stopped at the line the last
+// of its messages `output` names ("plots.gnuplot" line N: ...; warnings before it name others):
+// a multiplot keeps the panels drawn before the error. "" or "; removed the unfinished NAME"
+std::string remove_unfinished_figure(const std::string& dir, const std::string& script,
+                                     const std::string& output) {
+  const size_t at = output.rfind("\" line ");
+  if (at == std::string::npos) return "";
+  const int line = std::atoi(output.c_str() + at + 7);
+  std::string name;
+  for (const auto& [start, file] : figure_files(script)) {
+    if (start <= line) name = file;
+  }
+  std::error_code ec;
+  const std::filesystem::path figure = std::filesystem::path(dir) / name;
+  if (name.empty() || !std::filesystem::is_regular_file(figure, ec) ||
+      std::filesystem::file_size(figure, ec) == 0 || ec || !std::filesystem::remove(figure, ec)) {
+    return "";  // none, or empty (remove_empty_figures names it)
+  }
+  return "; removed the unfinished " + name;
+}
+
+// `script` in two parts: each figure (from a line `set output ...` to the next) in a block
+// `if (!exists("part") || part == P) { ... }`, the first half of the figures in part 1, the rest
+// in part 2; what precedes the first figure is run by both. *parts = 2; a script of one figure
+// comes back as it is, *parts = 1.
+std::string in_parts(const std::string& script, int* parts) {
+  std::vector<size_t> starts;
+  for (size_t at = script.find("set output "); at != std::string::npos;
+       at = script.find("set output ", at + 1)) {
+    if (at == 0 || script[at - 1] == '\n') starts.push_back(at);
+  }
+  *parts = starts.size() < 2 ? 1 : 2;
+  if (*parts == 1) return script;
+  const size_t first_of_part2 = (starts.size() + 1) / 2;
+  std::string s = script.substr(0, starts[0]);
+  starts.push_back(script.size());
+  for (size_t i = 0; i + 1 < starts.size(); ++i) {
+    std::string figure = script.substr(starts[i], starts[i + 1] - starts[i]);
+    if (figure.back() != '\n') figure += '\n';
+    s += "if (!exists(\"part\") || part == " + std::string(i < first_of_part2 ? "1" : "2") +
+         ") {\n" + figure + "}\n";
+  }
+  return s;
+}
+
 }  // namespace
 
 std::string run_gnuplot(const std::string& dir, const std::string& script_name,
-                        const std::string& script) {
+                        const std::string& script, Figures figures) {
   const Gnuplot& g = gnuplot();
-  if (!g.available) return "gnuplot not found on PATH: no figures drawn";
+  if (!g.available) return kNoGnuplot;
+  int parts = 1;
+  const std::string drawn = figures == Figures::kStandAlone ? in_parts(script, &parts) : script;
   const std::string script_path = (std::filesystem::path(dir) / script_name).string();
   {
     std::ofstream out(script_path);
-    out << script;
+    out << drawn;
     if (!out) return "cannot write " + script_path + ": no figures drawn";
   }
-  std::string output;
-  const int status = run_process({g.executable, script_name}, dir, &output);
-  const std::string empty = remove_empty_figures(dir, script);
-  if (status != 0) {
-    const std::string why = first_error_line(output);
-    return "gnuplot failed on " + script_name + (why.empty() ? "" : ": " + why) + empty;
+  // one process per part on a machine of two or more cores; else one for all (no `part`)
+  if (std::thread::hardware_concurrency() < 2) parts = 1;
+  std::vector<std::string> outputs(parts);
+  std::vector<int> status(parts);
+  auto draw = [&](int p) {
+    std::vector<std::string> argv = {g.executable};
+    if (parts > 1) argv.insert(argv.end(), {"-e", "part = " + std::to_string(p + 1)});
+    argv.push_back(script_name);
+    status[p] = run_process(argv, dir, &outputs[p]);
+  };
+  std::vector<std::thread> others;
+  for (int p = 1; p < parts; ++p) others.emplace_back(draw, p);
+  draw(0);
+  for (std::thread& t : others) t.join();
+  bool failed = false;
+  std::string why, removed;  // why: the first error of the first part that failed
+  for (int p = 0; p < parts; ++p) {
+    if (status[p] == 0) continue;
+    const std::string error = first_error_line(outputs[p]);
+    if (!failed) why = error;
+    failed = true;
+    removed += remove_unfinished_figure(dir, drawn, outputs[p]);
   }
-  return empty.empty() ? "" : "gnuplot drew nothing" + empty;
+  removed += remove_empty_figures(dir, script);
+  if (failed) return "gnuplot failed on " + script_name + (why.empty() ? "" : ": " + why) + removed;
+  return removed.empty() ? "" : "gnuplot drew nothing" + removed;
+}
+
+std::string plot_copy_name(const std::string& csv) {
+  return std::filesystem::path(csv).replace_extension(".bin").string();
+}
+
+bool PlotData::convert(const std::string& dir, const std::string& csv) {
+  std::ifstream in(std::filesystem::path(dir) / csv);
+  if (!in) return false;
+  std::stringstream text;
+  text << in.rdbuf();
+  CsvRules rules;
+  rules.non_finite = true;
+  CsvTable table;
+  try {
+    table = parse_csv(text.str(), csv, rules);
+  } catch (const std::exception&) {
+    return false;  // a field that is not a number: gnuplot reads the CSV
+  }
+  if (table.columns.empty()) return false;
+  const std::filesystem::path copy = std::filesystem::path(dir) / plot_copy_name(csv);
+  std::ofstream out(copy, std::ios::binary);
+  for (const std::vector<double>& row : table.rows) {
+    out.write(reinterpret_cast<const char*>(row.data()),
+              static_cast<std::streamsize>(row.size() * sizeof(double)));
+  }
+  out.close();
+  if (!out) {  // no half-written copy left behind: the script reads the CSV
+    std::error_code ec;
+    std::filesystem::remove(copy, ec);
+    return false;
+  }
+  headers_[csv] = table.columns;
+  return true;
+}
+
+std::string PlotData::file(const std::string& csv) const {
+  const auto it = headers_.find(csv);
+  if (it == headers_.end()) return quote(csv);
+  return quote(plot_copy_name(csv)) + " binary format=\"%" + std::to_string(it->second.size()) +
+         "float64\"";
+}
+
+std::string PlotData::column(const std::string& csv, const std::string& name) const {
+  const auto it = headers_.find(csv);
+  if (it == headers_.end()) return quote(name);
+  const auto at = std::find(it->second.begin(), it->second.end(), name);
+  // a name the file lacks stays a name: gnuplot says which column it did not find
+  return at == it->second.end() ? quote(name) : std::to_string(at - it->second.begin() + 1);
+}
+
+std::string PlotData::value(const std::string& csv, const std::string& name) const {
+  const std::string c = column(csv, name);
+  return c[0] == '"' ? "column(" + c + ")" : "$" + c;
 }
 
 std::string simulation_plot_script(const SimulationFigures& f, const std::string& terminal) {
@@ -449,14 +596,17 @@ std::string simulation_plot_script(const SimulationFigures& f, const std::string
     s += kKeyRoom;
     for (int i = 1; i <= f.layout.links; ++i) {
       const std::string column = q.column + std::to_string(i);
-      s += y_range_stats(clip ? std::vector<std::string>{f.trajectory}
-                              : twin ? std::vector<std::string>{f.trajectory, f.frictionless}
-                                     : std::vector<std::string>{f.trajectory},
+      s += y_range_stats(f.data,
+                         clip   ? std::vector<std::string>{f.trajectory}
+                         : twin ? std::vector<std::string>{f.trajectory, f.frictionless}
+                                : std::vector<std::string>{f.trajectory},
                          column);
       if (clip) s += "set yrange [lo - 0.08 * (hi - lo):hi + 0.4 * (hi - lo)]\n";
       s += panel(links[i - 1], column + " [" + q.unit + "]") + "plot " +
-           curve(f.trajectory, column, 1) + " title \"with joint friction\"";
-      if (twin) s += ", \\\n     " + curve(f.frictionless, column, 2) + " title \"frictionless\"";
+           curve(f.data, f.trajectory, column, 1) + " title \"with joint friction\"";
+      if (twin) {
+        s += ", \\\n     " + curve(f.data, f.frictionless, column, 2) + " title \"frictionless\"";
+      }
       s += "\n";
     }
     s += "set autoscale y\nunset multiplot\n";
@@ -465,45 +615,53 @@ std::string simulation_plot_script(const SimulationFigures& f, const std::string
   // figure 5: input torques against the inverse dynamics of the computed motion (paper Fig. 5)
   if (f.inverse) {
     const char* figure = "Fig. 5  Inverse dynamics: the input torques recomputed from the motion";
-    s += torque_check_figure(f.trajectory, "M%", "M%_inverse", "input", figure, f.title,
+    s += torque_check_figure(f.data, f.trajectory, "M%", "M%_inverse", "input", figure, f.title,
                              f.layout.drives);
   }
-  s += "unset key\nset ytics autofreq\nset offsets 0, 0, 0, 0\n";
-
-  return s + friction_figure(f.trajectory, f.title, f.layout);
+  return s + friction_figure(f.data, f.trajectory, f.title, f.layout);
 }
 
 std::string plot_simulation(const std::string& dir, const SimulationFigures& figures) {
-  // run_gnuplot says so when gnuplot is missing (the terminal is "" then)
-  return run_gnuplot(dir, "plots.gnuplot", simulation_plot_script(figures, gnuplot().terminal));
+  if (!gnuplot().available) return kNoGnuplot;
+  SimulationFigures f = figures;
+  f.data.convert(dir, f.trajectory);
+  if (!f.frictionless.empty()) f.data.convert(dir, f.frictionless);
+  return run_gnuplot(dir, "plots.gnuplot", simulation_plot_script(f, gnuplot().terminal),
+                     Figures::kStandAlone);
 }
 
 std::string inverse_plot_script(const std::string& trajectory, bool has_input,
-                                const std::string& title, const std::string& terminal) {
+                                const std::string& title, const std::string& terminal,
+                                const PlotData& d) {
   std::string s = preamble(terminal, "figures of `fivebar inverse`");
 
   // figure 5: the inverse-dynamics torques, against the motion file's torques when it has them
   const std::string figure = "Fig. 5  Inverse dynamics: the torques that produce the given motion";
-  if (has_input) return s + torque_check_figure(trajectory, "M%_input", "M%", "motion file",
-                                                figure, title) + friction_figure(trajectory, title);
+  if (has_input) {
+    return s + torque_check_figure(d, trajectory, "M%_input", "M%", "motion file", figure, title) +
+           friction_figure(d, trajectory, title);
+  }
   s += begin_figure("fig5_inverse_torques.png", "2,1", figure, "", title);
   s += "set offsets 0, 0, graph 0.08, graph 0.08\n";
   for (int i = 1; i <= 2; ++i) {
     const std::string n = std::to_string(i);
-    s += y_range_stats({trajectory}, "M" + n) +
+    s += y_range_stats(d, {trajectory}, "M" + n) +
          panel(std::string(i == 1 ? "(a)" : "(b)") + " driving torque M" + n, "M" + n + " [N m]") +
-         "plot " + curve(trajectory, "M" + n, 1) + "\n";
+         "plot " + curve(d, trajectory, "M" + n, 1) + "\n";
   }
   s += "set ytics autofreq\nset offsets 0, 0, 0, 0\nunset multiplot\n";
 
-  return s + friction_figure(trajectory, title);
+  return s + friction_figure(d, trajectory, title);
 }
 
 std::string plot_inverse(const std::string& dir, const std::string& trajectory, bool has_input,
                          const std::string& title) {
-  // run_gnuplot says so when gnuplot is missing (the terminal is "" then)
+  if (!gnuplot().available) return kNoGnuplot;
+  PlotData data;
+  data.convert(dir, trajectory);
   return run_gnuplot(dir, "plots.gnuplot",
-                     inverse_plot_script(trajectory, has_input, title, gnuplot().terminal));
+                     inverse_plot_script(trajectory, has_input, title, gnuplot().terminal, data),
+                     Figures::kStandAlone);
 }
 
 std::string hold_map_plot_script(const std::string& map_csv, double torque_limit,
@@ -682,8 +840,10 @@ std::string excitation_plot_script(const ExcitationFigures& f, const std::string
                             {"(b) crank rates", "omega [rad/s]", "omega"},
                             {"(c) crank accelerations", "alpha [rad/s^2]", "alpha"}};
   for (const auto& r : rows) {
-    s += panel(r[0], r[1]) + "plot " + curve(f.excitation, std::string(r[2]) + "1", 1);
-    if (f.cranks > 1) s += ", \\\n     " + curve(f.excitation, std::string(r[2]) + "2", 2);
+    s += panel(r[0], r[1]) + "plot " + curve(f.data, f.excitation, std::string(r[2]) + "1", 1);
+    if (f.cranks > 1) {
+      s += ", \\\n     " + curve(f.data, f.excitation, std::string(r[2]) + "2", 2);
+    }
     s += "\n";
   }
   s += "unset multiplot\n";
@@ -696,7 +856,7 @@ std::string excitation_plot_script(const ExcitationFigures& f, const std::string
   for (int i = 1; i <= f.cranks; ++i) {
     const std::string n = std::to_string(i);
     s += panel("(" + std::string(i == 1 ? "a" : "b") + ") M" + n, "M" + n + " [N m]") + "plot " +
-         curve(f.excitation, "M" + n, 1) + ", " + limit + " with lines ls 3, -" + limit +
+         curve(f.data, f.excitation, "M" + n, 1) + ", " + limit + " with lines ls 3, -" + limit +
          " with lines ls 3\n";
   }
   s += "unset multiplot\nunset offsets\n";
@@ -715,8 +875,11 @@ std::string excitation_plot_script(const ExcitationFigures& f, const std::string
 }
 
 std::string plot_excitation(const std::string& dir, const ExcitationFigures& figures) {
-  // run_gnuplot says so when gnuplot is missing (the terminal is "" then)
-  return run_gnuplot(dir, "plots.gnuplot", excitation_plot_script(figures, gnuplot().terminal));
+  if (!gnuplot().available) return kNoGnuplot;
+  ExcitationFigures f = figures;
+  f.data.convert(dir, f.excitation);
+  return run_gnuplot(dir, "plots.gnuplot", excitation_plot_script(f, gnuplot().terminal),
+                     Figures::kStandAlone);
 }
 
 }  // namespace fivebar::io

@@ -1,14 +1,20 @@
-// Tests of the figure helpers of fivebar::io (plots.h): axis labels, heatmap, excitation figures.
+// Tests of the figure helpers of fivebar::io (plots.h): axis labels, heatmap, excitation figures,
+// the binary copies gnuplot reads, and run_gnuplot's two processes and failures.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-
-#include "fivebar/io/plots.h"
-
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
+#include <thread>
+#include <vector>
+
+#include "fivebar/io/plots.h"
 
 namespace fivebar::io {
 namespace {
@@ -101,6 +107,131 @@ TEST(ExcitationFigures, AFigureGnuplotCannotDrawIsRemovedNotLeftEmpty) {
     EXPECT_GT(std::filesystem::file_size(dir / "fig_motion.png"), 0u);
   }
   std::filesystem::remove_all(dir);
+}
+
+// a fresh directory of its own for one test
+std::filesystem::path test_dir(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("fivebar_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::string file_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+TEST(PlotData, TheBinaryCopyHoldsTheRowsOfTheCsvAndTheScriptNamesColumnsByNumber) {
+  const std::filesystem::path dir = test_dir("plot_data");
+  std::ofstream(dir / "run.csv") << "t,a,b\n0,1.5,nan\n0.5,-2,3e-3\n";
+  std::ofstream(dir / "names.csv") << "name,value\noffset_1,2\n";
+  PlotData d;
+  ASSERT_TRUE(d.convert(dir.string(), "run.csv"));
+  EXPECT_FALSE(d.convert(dir.string(), "names.csv"));  // a text field: gnuplot reads the CSV
+  EXPECT_FALSE(d.convert(dir.string(), "missing.csv"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "names.bin"));
+
+  const std::string bin = file_text(dir / "run.bin");
+  ASSERT_EQ(bin.size(), 6 * sizeof(double));
+  std::vector<double> v(6);
+  std::memcpy(v.data(), bin.data(), bin.size());
+  EXPECT_EQ(v[0], 0.0);
+  EXPECT_EQ(v[1], 1.5);
+  EXPECT_TRUE(std::isnan(v[2]));
+  EXPECT_EQ(v[3], 0.5);
+  EXPECT_EQ(v[4], -2.0);
+  EXPECT_EQ(v[5], 3e-3);
+
+  EXPECT_EQ(d.file("run.csv"), "\"run.bin\" binary format=\"%3float64\"");
+  EXPECT_EQ(d.column("run.csv", "b"), "3");
+  EXPECT_EQ(d.value("run.csv", "a"), "$2");
+  EXPECT_EQ(d.column("run.csv", "c"), "\"c\"");  // not in the file: gnuplot names it
+  EXPECT_EQ(d.file("names.csv"), "\"names.csv\"");
+  EXPECT_EQ(d.column("names.csv", "value"), "\"value\"");
+  EXPECT_EQ(d.value("names.csv", "value"), "column(\"value\")");
+  std::filesystem::remove_all(dir);
+}
+
+TEST(PlotData, SimulationFiguresReadTheCopyOfTheTrajectory) {
+  const std::filesystem::path dir = test_dir("plot_simulation_data");
+  {
+    std::ofstream csv(dir / "trajectory.csv");
+    const std::vector<std::string> columns = trajectory_columns({});
+    for (size_t j = 0; j < columns.size(); ++j) csv << (j ? "," : "") << columns[j];
+    csv << "\n";
+    for (int i = 0; i < 3; ++i) {
+      for (size_t j = 0; j < columns.size(); ++j) csv << (j ? "," : "") << i + 0.25 * j;
+      csv << "\n";
+    }
+  }
+  SimulationFigures f;
+  f.inverse = false;
+  ASSERT_TRUE(f.data.convert(dir.string(), f.trajectory));
+  const std::string s = simulation_plot_script(f, "pngcairo");
+  EXPECT_THAT(s, HasSubstr("plot \"trajectory.bin\" binary format=\"%" +
+                           std::to_string(trajectory_columns({}).size()) +
+                           "float64\" using 1:2 with lines ls 1"));
+  EXPECT_THAT(s, HasSubstr("stats \"trajectory.bin\""));
+  EXPECT_THAT(s, Not(HasSubstr("trajectory.csv")));
+  std::filesystem::remove_all(dir);
+}
+
+// a script of three small figures a.png, b.png, c.png; `broken`: a's second panel reads a file
+// that does not exist (gnuplot stops with its first panel drawn)
+std::string three_figures(bool broken) {
+  return "set terminal " + gnuplot().terminal +
+         " size 200,150\nset samples 50\nunset key\n"
+         "set output 'a.png'\nset multiplot layout 2,1\nplot sin(x)\nplot " +
+         std::string(broken ? "'missing.csv' using 1:2" : "cos(x)") +
+         "\nunset multiplot\n"
+         "set output 'b.png'\nplot x\nset output 'c.png'\nplot x**2\n";
+}
+
+TEST(RunGnuplot, StandAloneFiguresAreDrawnInTwoPartsAndTheScriptRedrawsThemAll) {
+  if (!gnuplot().available) GTEST_SKIP() << "gnuplot not found";
+  const std::filesystem::path dir = test_dir("plot_parts");
+  EXPECT_EQ(run_gnuplot(dir.string(), "plots.gnuplot", three_figures(false), Figures::kStandAlone),
+            "");
+  const std::string script = file_text(dir / "plots.gnuplot");
+  EXPECT_THAT(script, HasSubstr("if (!exists(\"part\") || part == 1) {\nset output 'a.png'"));
+  EXPECT_THAT(script, HasSubstr("if (!exists(\"part\") || part == 1) {\nset output 'b.png'"));
+  EXPECT_THAT(script, HasSubstr("if (!exists(\"part\") || part == 2) {\nset output 'c.png'"));
+  std::vector<std::string> drawn;
+  for (const char* name : {"a.png", "b.png", "c.png"}) {
+    drawn.push_back(file_text(dir / name));
+    EXPECT_GT(drawn.back().size(), 0u) << name;
+    std::filesystem::remove(dir / name);
+  }
+  // the user's redraw: one gnuplot without `part` draws every figure, the same
+  const std::string redraw =
+      "cd '" + dir.string() + "' && '" + gnuplot().executable + "' plots.gnuplot 2>/dev/null";
+  ASSERT_EQ(std::system(redraw.c_str()), 0);
+  EXPECT_EQ(file_text(dir / "a.png"), drawn[0]);
+  EXPECT_EQ(file_text(dir / "b.png"), drawn[1]);
+  EXPECT_EQ(file_text(dir / "c.png"), drawn[2]);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(RunGnuplot, AFigureLeftUnfinishedByAnErrorIsRemovedAndTheOtherPartStillDraws) {
+  if (!gnuplot().available) GTEST_SKIP() << "gnuplot not found";
+  for (Figures figures : {Figures::kStandAlone, Figures::kInOrder}) {
+    const std::filesystem::path dir = test_dir("plot_failure");
+    const std::string warning =
+        run_gnuplot(dir.string(), "plots.gnuplot", three_figures(true), figures);
+    EXPECT_THAT(warning, HasSubstr("gnuplot failed on plots.gnuplot: "));
+    EXPECT_THAT(warning, HasSubstr("missing.csv"));
+    EXPECT_THAT(warning, HasSubstr("removed the unfinished a.png"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "a.png"));  // half drawn: not left behind
+    // drawn by the second process; in order, gnuplot stopped before them
+    const bool parts = figures == Figures::kStandAlone && std::thread::hardware_concurrency() >= 2;
+    EXPECT_EQ(std::filesystem::exists(dir / "c.png"), parts);
+    EXPECT_FALSE(std::filesystem::exists(dir / "b.png"));  // part 1, after the error
+    std::filesystem::remove_all(dir);
+  }
 }
 
 }  // namespace

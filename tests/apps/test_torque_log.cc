@@ -4,6 +4,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -203,6 +206,38 @@ TEST(Csv, OneParserKeepsCommentsLinesAndHeader) {
               ThrowsMessage<LogError>(HasSubstr("m.csv: line 2, column theta1: '' is not a")));
   EXPECT_THAT([&] { parse_csv("t,theta1\n0,1,\n", "m.csv"); },
               ThrowsMessage<LogError>(HasSubstr("m.csv: line 2: expected 2 fields, got 3")));
+}
+
+TEST(Csv, FieldsReadAsStrtodReadsThem) {
+  // every syntax strtod takes, with its value to the last bit; nan and inf only when asked
+  const char* fields[] = {"0.1",
+                          "-2.5e-3",
+                          "+1",
+                          "0x1p-3",
+                          "1e-320",
+                          "1.",
+                          ".5",
+                          "7",
+                          "-0",
+                          "0.47600000000000003",
+                          "1.5707963267948966"};
+  std::string text = "x\n";
+  for (const char* f : fields) text += std::string(f) + "\n";
+  const CsvTable t = parse_csv(text, "m.csv");
+  ASSERT_EQ(t.rows.size(), std::size(fields));
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    const double expected = std::strtod(fields[i], nullptr);
+    EXPECT_EQ(std::memcmp(&t.rows[i][0], &expected, sizeof expected), 0) << fields[i];
+  }
+  EXPECT_THAT([&] { parse_csv("x\n1e999\n", "m.csv"); },
+              ThrowsMessage<LogError>(HasSubstr("'1e999' is not a finite number")));
+  EXPECT_THAT([&] { parse_csv("x\n1e\n", "m.csv"); },
+              ThrowsMessage<LogError>(HasSubstr("'1e' is not a finite number")));
+  io::CsvRules rules;
+  rules.non_finite = true;
+  const CsvTable n = parse_csv("x\nnan\n-inf\n", "m.csv", rules);
+  EXPECT_TRUE(std::isnan(n.rows[0][0]));
+  EXPECT_EQ(n.rows[1][0], -HUGE_VAL);
 }
 
 TEST(TorqueLog, MissingFile) {

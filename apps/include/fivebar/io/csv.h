@@ -39,6 +39,8 @@ struct CsvRules {
   std::function<std::string(const std::string& field, bool number)> bad_number;
   /// Checks the table each time a row has been added (e.g. time increasing).
   std::function<void(const CsvTable& table)> row;
+  /// nan and inf read as numbers (a run's own outputs, where nan marks a value not computed)
+  bool non_finite = false;
 };
 
 /// Parses CSV text (`path` only names it in messages). Throws identification::LogError(`<path>: line N: expected

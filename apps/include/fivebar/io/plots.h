@@ -3,6 +3,7 @@
 // strings) and never throws.
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -19,11 +20,48 @@ struct Gnuplot {
 };
 const Gnuplot& gnuplot();
 
+/// How run_gnuplot draws a script of several figures (each from a `set output` line to the next).
+enum class Figures {
+  kInOrder,  ///< one gnuplot process, in the order of the script
+  /// each figure sets, after its `set output` line, whatever it draws with beyond what precedes
+  /// the first figure: the script written holds each figure in a block
+  /// `if (!exists("part") || part == P) { ... }`, the first half of the figures part 1, the rest
+  /// part 2, and two gnuplot processes draw the parts at once (one process draws all on a
+  /// machine of one core, as `gnuplot SCRIPT` does)
+  kStandAlone,
+};
+
 /// Writes `script` to dir/`script_name` and runs gnuplot on it with `dir` as working directory,
 /// so the script reads and writes files by their names in `dir`. Returns "" on success, else a
-/// one-line warning (gnuplot missing, or its first error line).
+/// one-line warning (gnuplot missing, or the first error line of the first part that failed);
+/// figures a failure left empty or unfinished are removed and named.
 std::string run_gnuplot(const std::string& dir, const std::string& script_name,
-                        const std::string& script);
+                        const std::string& script, Figures figures = Figures::kInOrder);
+
+/// The numeric CSV files a script draws, read by gnuplot from binary copies: NAME.bin beside
+/// NAME.csv holds the same rows and columns as float64 numbers (native byte order). A script
+/// reads a file many times (a stats pass for each panel's range, then the plot), and gnuplot
+/// reads binary numbers many times faster than it parses text. A file without a copy (not
+/// converted, or not all numbers) is read as CSV, its columns by name.
+class PlotData {
+ public:
+  /// Writes dir/NAME.bin (plot_copy_name) from dir/`csv`; false, and the CSV is read, when `csv`
+  /// cannot be read or holds a field that is not a number (nan and inf are numbers), or the copy
+  /// cannot be written.
+  bool convert(const std::string& dir, const std::string& csv);
+  /// The data of a plot or stats command: "\"x.csv\"", or
+  /// "\"x.bin\" binary format=\"%31float64\"" once converted.
+  std::string file(const std::string& csv) const;
+  /// Column `name` of `csv` in a `using` list: "\"theta1\"", or its number "2" once converted.
+  std::string column(const std::string& csv, const std::string& name) const;
+  /// The value of column `name` in a `using` expression: "column(\"theta1\")", or "$2".
+  std::string value(const std::string& csv, const std::string& name) const;
+
+ private:
+  std::map<std::string, std::vector<std::string>> headers_;  ///< the converted files' columns
+};
+/// The binary copy of a CSV for the figures: "trajectory.csv" -> "trajectory.bin".
+std::string plot_copy_name(const std::string& csv);
 
 /// The figures of `simulate`, from the files in one directory.
 struct SimulationFigures {
@@ -34,6 +72,7 @@ struct SimulationFigures {
   /// the mechanism's columns: the five-bar's (default) or four_bar_layout() (links crank,
   /// coupler, rocker; drive M1; joints O, B, C, D0)
   TrajectoryLayout layout;
+  PlotData data;  ///< the binary copies of the trajectories (plot_simulation makes them)
 };
 
 /// gnuplot script drawing fig2_angles.png, fig3_rates.png, fig4_accelerations.png (theta,
@@ -48,9 +87,11 @@ std::string plot_simulation(const std::string& dir, const SimulationFigures& fig
 
 /// The figures of `inverse`: fig5_inverse_torques.png (M1, M2 of `trajectory`; against the
 /// columns M1_input, M2_input and their difference when `has_input`) and
-/// fig6_friction_torques.png. Returns "" or a warning.
+/// fig6_friction_torques.png. plot_inverse draws them from the binary copy of `trajectory`.
+/// Returns "" or a warning.
 std::string inverse_plot_script(const std::string& trajectory, bool has_input,
-                                const std::string& title, const std::string& terminal);
+                                const std::string& title, const std::string& terminal,
+                                const PlotData& data = {});
 std::string plot_inverse(const std::string& dir, const std::string& trajectory, bool has_input,
                          const std::string& title);
 
@@ -106,6 +147,7 @@ struct ExcitationFigures {
   std::string title;
   bool baseline = true;  ///< the std csv's multisine columns hold values (false: all nan, not drawn)
   int cranks = 2;        ///< the excitation's cranks: 2 (theta1, theta2, M1, M2) or 1 (theta1, M1)
+  PlotData data;         ///< the binary copy of the excitation (plot_excitation makes it)
 };
 std::string excitation_plot_script(const ExcitationFigures& figures, const std::string& terminal);
 /// Draws them in `dir` (script kept as dir/plots.gnuplot). Returns "" or a warning.
