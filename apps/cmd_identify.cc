@@ -94,7 +94,8 @@ std::string residual_plot_script(const std::string& terminal, const std::string&
     << "set datafile separator \",\"\nset terminal " << terminal << " size 1400,1000 noenhanced"
     << (terminal == "pngcairo" ? " font \"sans,11\"" : "") << "\nset grid\nset key top right\n"
     << "set xlabel \"t [s]\"\n"
-    << "set style line 1 lc rgb \"#1f5fa8\" lw 1.2\nset style line 2 lc rgb \"#d62728\" lw 1.2\n";
+    << "set style line 1 lc rgb \"#1f5fa8\" lw 1.2\nset style line 2 lc rgb \"#d62728\" lw 1.2\n"
+    << d.key();
   // the first 2 s only: a long log's periods would overlay into one band
   s << "stats " << file << " using " << col("t") << " nooutput\n"
     << "t_lo = STATS_min; t_hi = (STATS_max < STATS_min + 2 ? STATS_max : STATS_min + 2)\n"

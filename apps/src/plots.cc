@@ -561,8 +561,27 @@ std::string PlotData::value(const std::string& csv, const std::string& name) con
   return c[0] == '"' ? "column(" + c + ")" : "$" + c;
 }
 
+std::string PlotData::key() const {
+  std::string out;
+  for (const auto& [csv, columns] : headers_) {
+    std::string line = "# " + plot_copy_name(csv) + ": " + csv + " as float64, columns";
+    for (size_t k = 0; k < columns.size(); ++k) {
+      const std::string item = " " + std::to_string(k + 1) + " " + columns[k] +
+                               (k + 1 < columns.size() ? "," : "");
+      if (line.size() + item.size() > 99) {
+        out += line + "\n";
+        line = "#  ";
+      }
+      line += item;
+    }
+    out += line + "\n";
+  }
+  return out;
+}
+
 std::string simulation_plot_script(const SimulationFigures& f, const std::string& terminal) {
   std::string s = preamble(terminal, "figures of `fivebar simulate`");
+  s += f.data.key();
   const bool twin = !f.frictionless.empty();
   const char* five_bar[] = {"(a) link 1: crank O-B", "(b) link 2: crank D0-D",
                             "(c) link 3: coupler B-C", "(d) link 4: coupler D-C"};
@@ -634,6 +653,7 @@ std::string inverse_plot_script(const std::string& trajectory, bool has_input,
                                 const std::string& title, const std::string& terminal,
                                 const PlotData& d) {
   std::string s = preamble(terminal, "figures of `fivebar inverse`");
+  s += d.key();
 
   // figure 5: the inverse-dynamics torques, against the motion file's torques when it has them
   const std::string figure = "Fig. 5  Inverse dynamics: the torques that produce the given motion";
@@ -829,6 +849,7 @@ namespace fivebar::io {
 
 std::string excitation_plot_script(const ExcitationFigures& f, const std::string& terminal) {
   std::string s = preamble(terminal, "figures of `fivebar excite`");
+  s += f.data.key();
   char limit[32];
   std::snprintf(limit, sizeof limit, "%g", f.torque_limit);
   s += begin_figure("fig_motion.png", "3,1",

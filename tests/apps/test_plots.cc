@@ -153,6 +153,8 @@ TEST(PlotData, TheBinaryCopyHoldsTheRowsOfTheCsvAndTheScriptNamesColumnsByNumber
   EXPECT_EQ(d.file("names.csv"), "\"names.csv\"");
   EXPECT_EQ(d.column("names.csv", "value"), "\"value\"");
   EXPECT_EQ(d.value("names.csv", "value"), "column(\"value\")");
+  // the script's reader is told what the numbers stand for
+  EXPECT_EQ(d.key(), "# run.bin: run.csv as float64, columns 1 t, 2 a, 3 b\n");
   std::filesystem::remove_all(dir);
 }
 

@@ -56,6 +56,9 @@ class PlotData {
   std::string column(const std::string& csv, const std::string& name) const;
   /// The value of column `name` in a `using` expression: "column(\"theta1\")", or "$2".
   std::string value(const std::string& csv, const std::string& name) const;
+  /// Comment lines for a script's reader: each binary copy, the CSV it copies and its columns'
+  /// numbers ("# trajectory.bin: trajectory.csv as float64, columns 1 t, 2 theta1, ...").
+  std::string key() const;
 
  private:
   std::map<std::string, std::vector<std::string>> headers_;  ///< the converted files' columns
