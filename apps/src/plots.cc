@@ -566,8 +566,8 @@ std::string PlotData::key() const {
   for (const auto& [csv, columns] : headers_) {
     std::string line = "# " + plot_copy_name(csv) + ": " + csv + " as float64, columns";
     for (size_t k = 0; k < columns.size(); ++k) {
-      const std::string item = " " + std::to_string(k + 1) + " " + columns[k] +
-                               (k + 1 < columns.size() ? "," : "");
+      const std::string item =
+          " " + std::to_string(k + 1) + " " + columns[k] + (k + 1 < columns.size() ? "," : "");
       if (line.size() + item.size() > 99) {
         out += line + "\n";
         line = "#  ";
