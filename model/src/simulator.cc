@@ -519,12 +519,13 @@ Status switch_values(Context<M>& c, double t, const double* y, Switches* g,
     (*g)[kLockSlot] = 1.0 - lock.ratio;
     return Status::Ok();
   }
-  std::array<double, kJoints> w;
-  EvalOf<M> ev;
-  if (any_stuck(c.slip)) {
+  std::array<double, kJoints> w, hold{};
+  if (any_stuck(c.slip)) {  // an evaluation only here: slipping joints need the rates alone
+    EvalOf<M> ev;
     const Status st = forward_in_modes(c, t, y, c.slip, &ev);
     if (!st.ok()) return at_time<M>(st, t, y);
     w = ev.w;
+    hold = ev.hold_margin;
   } else if (rates) {
     w = *rates;
   } else if (!joint_rates<M>(*c.params, y, &w)) {
@@ -532,7 +533,7 @@ Status switch_values(Context<M>& c, double t, const double* y, Switches* g,
   }
   for (int k = 0; k < kJoints; ++k) {
     if (!c.watched[k]) continue;
-    (*g)[k] = c.slip[k] == kStuck ? ev.hold_margin[k] : coulomb_sign(c.slip[k]) * w[k];
+    (*g)[k] = c.slip[k] == kStuck ? hold[k] : coulomb_sign(c.slip[k]) * w[k];
   }
   return Status::Ok();
 }
