@@ -56,12 +56,15 @@ Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians
   for (const Eigen::MatrixXd& J : jacobians) {
     if (J.rows() == 0 || !J.allFinite()) continue;
     // F += J^T J: each entry plus the sum of its products over J's rows in order (the
-    // product's own sums, bit for bit), the lower triangle mirrored
+    // product's own sums, bit for bit), the lower triangle mirrored; columns as J's storage
+    const Eigen::Index R = J.rows();
+    const double* j = J.data();
+    double* f = F.data();
     for (Eigen::Index b = 0; b < P; ++b) {
       for (Eigen::Index a = b; a < P; ++a) {
-        double sum = J(0, a) * J(0, b);
-        for (Eigen::Index r = 1; r < J.rows(); ++r) sum += J(r, a) * J(r, b);
-        F(a, b) += sum;
+        double sum = j[a * R] * j[b * R];
+        for (Eigen::Index r = 1; r < R; ++r) sum += j[a * R + r] * j[b * R + r];
+        f[b * P + a] += sum;
       }
     }
   }
