@@ -54,7 +54,22 @@ Eigen::MatrixXd fisher_information(const std::vector<Eigen::MatrixXd>& jacobians
   // a sample whose reactions vanish (a mechanism at rest without gravity or loads) has no
   // derivative of their norms: it carries no information, and identify's rest rule leaves it out
   for (const Eigen::MatrixXd& J : jacobians) {
-    if (J.allFinite()) F.noalias() += J.transpose() * J;
+    if (J.rows() == 0 || !J.allFinite()) continue;
+    // F += J^T J: each entry plus the sum of its products over J's rows in order (the
+    // product's own sums, bit for bit), the lower triangle mirrored; columns as J's storage
+    const Eigen::Index R = J.rows();
+    const double* j = J.data();
+    double* f = F.data();
+    for (Eigen::Index b = 0; b < P; ++b) {
+      for (Eigen::Index a = b; a < P; ++a) {
+        double sum = j[a * R] * j[b * R];
+        for (Eigen::Index r = 1; r < R; ++r) sum += j[a * R + r] * j[b * R + r];
+        f[b * P + a] += sum;
+      }
+    }
+  }
+  for (Eigen::Index b = 0; b < P; ++b) {
+    for (Eigen::Index a = b + 1; a < P; ++a) F(b, a) = F(a, b);
   }
   return F / (sigma * sigma);
 }

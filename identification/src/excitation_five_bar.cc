@@ -286,7 +286,7 @@ class FiveBarExcitation : public ExcitationMechanism {
   }
   bool window_by_bias(SgOptions*) const override { return false; }
   /// identify (identify_window) on the log synth-log's sensors (sample_log) write along the
-  /// motion, its layout the design's
+  /// motion, its layout the design's (the angles' unit is not checked: they are radians)
   bool identify_window(const ExcitationReport& r, double torque_noise, double angle_noise,
                        SgOptions* sg, std::string* choice) const override {
     std::vector<sim::Row> rows(r.t.size());
@@ -305,6 +305,7 @@ class FiveBarExcitation : public ExcitationMechanism {
     log.log.path = "the log along the motion";
     IdentifyOptions opt;
     opt.layout = dp_.layout;
+    opt.check_degrees = false;  // sample_log writes the motion's angles in radians
     try {
       return fivebar::identification::identify_window(scene_, loads_, log.log, opt, sg, choice);
     } catch (const LogError& e) {

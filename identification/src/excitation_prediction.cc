@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 #include <Eigen/Dense>
 
@@ -70,7 +71,7 @@ Status evaluate_motion(const ExcitationMechanism& mech, const std::vector<double
       out->peak_time = t[i];
     }
     out->min_sine = std::min(out->min_sine, terms[i].sine);
-    Js[i] = terms[i].J;
+    Js[i] = std::move(terms[i].J);
     rates[i] = terms[i].w;
     const double th[2] = {states[i].th1, states[i].th2};
     for (int j = 0; j < mech.dof(); ++j) {

@@ -64,6 +64,7 @@ Sensitivity sensitivity(int i, int lo, const std::vector<double>& d1, const std:
       // the angle noise of the window: through omega (d1), alpha (d2) and, at i, theta itself
       out.lo[c] = lo;
       out.sigma[c] = noise.angle[c];
+      out.coef[c].reserve(d1.size());
       for (size_t r = 0; r < d1.size(); ++r) {
         Eigen::Vector2d a = col(2 + c) * d1[r] + col(4 + c) * d2[r];
         if (lo + static_cast<int>(r) == i) a += col(c);
@@ -74,6 +75,7 @@ Sensitivity sensitivity(int i, int lo, const std::vector<double>& d1, const std:
       out.lo[c] = source == RateSource::kAccelsFromRates ? lo : i;
       out.sigma[c] = noise.rate[c];
       if (source == RateSource::kAccelsFromRates) {
+        out.coef[c].reserve(d1.size());
         for (size_t r = 0; r < d1.size(); ++r) {
           Eigen::Vector2d a = col(4 + c) * d1[r];
           if (lo + static_cast<int>(r) == i) a += col(2 + c);

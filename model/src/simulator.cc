@@ -9,6 +9,7 @@
 #include <limits>
 #include <sstream>
 #include <utility>
+#include <vector>
 
 #include "fivebar/model/dynamics.h"
 #include "fivebar/model/five_bar_mechanism.h"
@@ -286,6 +287,16 @@ struct Context {
   double loads_time = std::numeric_limits<double>::quiet_NaN();
   LoadsOf<M> loads_then{};
   Status loads_status;
+  /// the forward dynamics at one point (t, q, v) in each set of joint modes tried there
+  /// (forward_in_modes): a mode decision evaluates the same modes several times (the candidates,
+  /// the sign rule, the consistency checks)
+  struct PointEvaluations {
+    double t = std::numeric_limits<double>::quiet_NaN();
+    double qv[2 * M::kDof] = {};
+    std::vector<JointModes> slip;
+    std::vector<Status> status;
+    std::vector<EvalOf<M>> ev;
+  } at_point;
 };
 
 /// The status with the time and the driven angles first (theta1 .. theta_dof of `q`).
@@ -359,6 +370,33 @@ std::string overflow_reason(const Ld& L) {
   msg << "non-finite acceleration: load " << name << " = " << v
       << " overflows the dynamics: check the scene's load expression (loads." << name << ")";
   return msg.str();
+}
+
+/// Forward dynamics at (t, y) in the joint modes `slip` (no warm start, no internal states): a
+/// function of t, q, v and the modes alone, so each set of modes is evaluated once at a point
+/// (Context::at_point) and read back when tried again there.
+template <class M>
+Status forward_in_modes(Context<M>& c, double t, const double* y, const JointModes& slip,
+                        EvalOf<M>* ev) {
+  auto& a = c.at_point;
+  constexpr size_t kBytes = sizeof(a.qv);
+  if (!(t == a.t) || std::memcmp(y, a.qv, kBytes) != 0) {
+    a.t = t;
+    std::memcpy(a.qv, y, kBytes);
+    a.slip.clear();
+    a.status.clear();
+    a.ev.clear();
+  }
+  for (size_t i = 0; i < a.slip.size(); ++i) {
+    if (a.slip[i] != slip) continue;
+    *ev = a.ev[i];
+    return a.status[i];
+  }
+  const Status st = forward_at<M>(*c.params, loads_at(c, t), y, &slip, c.eval, ev);
+  a.slip.push_back(slip);
+  a.status.push_back(st);
+  a.ev.push_back(*ev);
+  return st;
 }
 
 /// Relative joint rates at a state from its first-order kinematics `k`.
@@ -476,17 +514,18 @@ Status switch_values(Context<M>& c, double t, const double* y, Switches* g,
   g->fill(1.0);
   if (c.locked) {
     LockAnalysis lock;
-    const Status st = lock_analysis<M>(*c.params, (*c.loads)(t), q_of<M>(y), c.eval, &lock);
+    const Status st = lock_analysis<M>(*c.params, loads_at(c, t), q_of<M>(y), c.eval, &lock);
     if (!st.ok()) return at_time<M>(st, t, y);
     (*g)[kLockSlot] = 1.0 - lock.ratio;
     return Status::Ok();
   }
-  std::array<double, kJoints> w;
-  EvalOf<M> ev;
-  if (any_stuck(c.slip)) {
-    const Status st = forward_at<M>(*c.params, (*c.loads)(t), y, &c.slip, c.eval, &ev);
+  std::array<double, kJoints> w, hold{};
+  if (any_stuck(c.slip)) {  // an evaluation only here: slipping joints need the rates alone
+    EvalOf<M> ev;
+    const Status st = forward_in_modes(c, t, y, c.slip, &ev);
     if (!st.ok()) return at_time<M>(st, t, y);
     w = ev.w;
+    hold = ev.hold_margin;
   } else if (rates) {
     w = *rates;
   } else if (!joint_rates<M>(*c.params, y, &w)) {
@@ -494,7 +533,7 @@ Status switch_values(Context<M>& c, double t, const double* y, Switches* g,
   }
   for (int k = 0; k < kJoints; ++k) {
     if (!c.watched[k]) continue;
-    (*g)[k] = c.slip[k] == kStuck ? ev.hold_margin[k] : coulomb_sign(c.slip[k]) * w[k];
+    (*g)[k] = c.slip[k] == kStuck ? hold[k] : coulomb_sign(c.slip[k]) * w[k];
   }
   return Status::Ok();
 }
@@ -745,7 +784,7 @@ bool consistent(Context<M>& c, double t, const double* y, const JointModes& slip
                 const std::array<bool, kJoints>& rest, double slack_accel, double slack_torque,
                 VecOf<M>* thdd, Status* failure) {
   EvalOf<M> ev;
-  const Status st = forward_at<M>(*c.params, (*c.loads)(t), y, &slip, c.eval, &ev);
+  const Status st = forward_in_modes(c, t, y, slip, &ev);
   if (!st.ok()) {
     if (failure->ok()) *failure = st;
     return false;
@@ -860,7 +899,7 @@ Status decide_modes(Context<M>& c, double t, const double* y, const std::array<b
   bool lock = false;
   if (all_rest && may_lock && c.stick) {
     LockAnalysis la;
-    lock = lock_analysis<M>(*c.params, (*c.loads)(t), q_of<M>(y), c.eval, &la).ok() &&
+    lock = lock_analysis<M>(*c.params, loads_at(c, t), q_of<M>(y), c.eval, &la).ok() &&
            la.ratio <= 1.0;
   }
   const auto candidates = candidate_modes(c, rest, no_stick);
@@ -915,7 +954,7 @@ Status decide_slip_only(Context<M>& c, double t, const double* y,
   }
   for (int pass = 0; pass < 6; ++pass) {
     EvalOf<M> ev;
-    const Status st = forward_at<M>(*c.params, (*c.loads)(t), y, &c.slip, c.eval, &ev);
+    const Status st = forward_in_modes(c, t, y, c.slip, &ev);
     if (!st.ok()) return at_time<M>(st, t, y);
     const auto wdot = Sim<M>::joint_accelerations(ev);
     bool changed = false;

@@ -97,6 +97,38 @@ TEST(Excitation, JetJacobianMatchesFiniteDifferences) {
   EXPECT_NEAR(F(3, 7), 2 * 4 * t.J.col(3).dot(t.J.col(7)), 1e-12 * (1 + std::abs(F(3, 7))));
 }
 
+// fisher_information sums J^T J entry by entry: the same sums as Eigen's product bit for bit, for
+// two torque rows (the five-bar) and one (the four-bar), at the sizes of every layout, skipping
+// a sample whose Jacobian is not finite; symmetric.
+TEST(Excitation, FisherInformationIsTheProductBitForBit) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-3, 3);
+  for (int rows : {1, 2}) {
+    for (int P : {2, 4, 8, 10, 16, 20, 36}) {
+      std::vector<Eigen::MatrixXd> Js;
+      Eigen::MatrixXd want = Eigen::MatrixXd::Zero(P, P);
+      for (int i = 0; i < 50; ++i) {
+        Eigen::MatrixXd J(rows, P);
+        for (int r = 0; r < rows; ++r) {
+          for (int c = 0; c < P; ++c) J(r, c) = u(rng) * std::pow(10.0, u(rng));
+        }
+        if (i == 7) J(0, P - 1) = std::numeric_limits<double>::quiet_NaN();
+        if (J.allFinite()) want.noalias() += J.transpose() * J;
+        Js.push_back(J);
+      }
+      want /= 0.3 * 0.3;
+      const Eigen::MatrixXd F = fisher_information(Js, 0.3);
+      ASSERT_EQ(F.rows(), P);
+      for (int a = 0; a < P; ++a) {
+        for (int b = 0; b < P; ++b) {
+          EXPECT_EQ(F(a, b), want(a, b)) << rows << " rows, P " << P << " at " << a << ", " << b;
+          EXPECT_EQ(F(a, b), F(b, a));
+        }
+      }
+    }
+  }
+}
+
 // The friction columns in closed form (implicit function theorem through the friction loop)
 // against the Jets through the whole inverse dynamics, on the paper scene and on seeded random
 // states of scenes with other laws, actuator friction and given slip modes.

@@ -45,6 +45,13 @@ sim::LoadFunction drive(double dM1, double dM2, double omega) {
 
 double max_displacement(const sim::Result& r) { return testing::max_displacement(r, 4); }
 
+bool any_stuck(const JointModes& modes) {
+  for (JointMode m : modes) {
+    if (m == kStuck) return true;
+  }
+  return false;
+}
+
 TEST(Stick, DriveBelowBreakawayDoesNotMove) {
   sim::Options opt;
   opt.duration = 1.0;
@@ -86,6 +93,39 @@ TEST(Stick, SlowDriveSticksAndSlipsAgain) {
   }
   std::printf("[ info ] sticks=%ld breakaways=%ld events=%ld balance=%.2e\n", r.stats.stick_events,
               r.stats.breakaway_events, r.stats.friction_events, checks.energy_balance_relative);
+}
+
+// The modes decided at every switch hold along the motion: at each output row with a stuck
+// joint (not the whole mechanism at rest), the forward dynamics in the row's modes holds every
+// stuck joint (margin >= 0) and every slipping joint moves its slip's way. The decisions try
+// several modes at one point (the candidates, the sign rule, the consistency checks), each
+// evaluated once there: an evaluation read back for the wrong modes or point would decide
+// modes that do not hold.
+TEST(Stick, DecidedModesHoldAtEveryRow) {
+  const sim::LoadFunction loads = drive(0.3, 0.0, 2 * M_PI);
+  sim::Options opt;
+  opt.duration = 2.0;
+  const sim::Result r = sim::simulate(weightless(), loads, testing::paper_initial(), opt);
+  ASSERT_TRUE(r.status.ok()) << r.status.message;
+  ASSERT_GT(r.stats.stick_events, 0);
+  int checked = 0;
+  for (const sim::Row& row : r.rows) {
+    if (row.at_rest(2) || !any_stuck(row.mode)) continue;
+    Evaluation<double> ev;
+    ASSERT_TRUE(forward_dynamics(weightless(), loads(row.t), row.theta[0], row.theta[1],
+                                 row.omega[0], row.omega[1], &row.mode, EvalOptions{}, &ev)
+                    .ok());
+    for (int k = 0; k < kJoints; ++k) {
+      if (row.mode[k] == kStuck) {
+        EXPECT_GE(ev.hold_margin[k], -1e-9) << "joint " << k << " at t=" << row.t;
+      } else if (row.mode[k] != JointMode::kRest) {
+        EXPECT_GE(coulomb_sign(row.mode[k]) * row.omega_rel(k), -1e-6)
+            << "joint " << k << " at t=" << row.t;
+      }
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 10);
 }
 
 }  // namespace
