@@ -5,8 +5,8 @@
         [--baseline-rhs-calls OTHER_RHS_CALLS] [--repeats 3] [--skip-optimize]
 
 Rows: the right-hand side with and without friction (bench_model), the paper scene simulated to
-1e-6 and 1e-8 rad and with arkode_erk45 at rtol = atol = 1e-10, identify (per joint, friction and
-inertia), excite (per joint, worst std, 10 s) and optimize per task of
+1e-6 and 1e-8 rad and with arkode_erk45 at rtol = atol = 1e-10, and with its figures, identify
+(per joint, friction and inertia; also with its figures), excite (per joint, worst std, 10 s) and optimize per task of
 datasets/tasks/paper_tasks.yaml; the peers' five-bar benchmarks (MuJoCo, Simbody) when they are
 built. With --baseline, every command runs alternately with this build's binary and the other
 one, and the table gives both medians and their ratio; --baseline-bench does the same for the
@@ -74,6 +74,9 @@ def commands(out):
                  ["simulate", SCENE, "--set", "simulation.integrator=arkode_erk45", "--set",
                   "simulation.rtol=1e-10", "--set", "simulation.atol=1e-10", "--no-plots",
                   "--out", out], summary_time("wall_time_s")))
+    # what a user waits for at the first command: the run, its checks and its five figures
+    sims.append(("simulate paper scene with its figures (whole command, CPU with gnuplot's)",
+                 ["simulate", SCENE, "--out", out], "cpu"))
     identify = ["identify", SCENE, "--log", LOG, "--per-joint", "--estimate", "friction,inertia",
                 "--no-plots", "--out", out]
     # a 10 s angle log of the paper mechanism with its link inertias 3-6 % off, identified with
@@ -90,6 +93,8 @@ def commands(out):
         ("identify --per-joint --estimate friction,inertia (fit)", identify,
          summary_time("identification_wall_time_s", "identification.json")),
         ("identify --per-joint --estimate friction,inertia (whole command, CPU)", identify, "cpu"),
+        ("the same identify with its figures (whole command, CPU with gnuplot's)",
+         [a for a in identify if a != "--no-plots"], "cpu"),
         ("the same identify, 10 s log from angles of link inertias x 1.03, 0.96, 1.05, 0.94 "
          "(whole command, CPU)", identify_off, "cpu"),
         ("excite --per-joint --criterion worst-std, 10 s (whole command)", excite, None),
