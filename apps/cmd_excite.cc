@@ -25,6 +25,7 @@
 #include "fivebar/identification/synth.h"
 #include "fivebar/identification/torque_excitation.h"
 #include "fivebar/io/command.h"
+#include "fivebar/io/commands.h"
 #include "fivebar/io/errors.h"
 #include "fivebar/io/format.h"
 #include "fivebar/io/json.h"
@@ -214,11 +215,7 @@ void refuse_four_bar_options(const Args& a, const id::ExcitationOptions& o) {
 
 id::ExcitationOptions options_of(const Args& a, const Scene& scene) {
   id::ExcitationOptions o = a.design;
-  std::string bad;
-  if (!id::parse_groups(a.estimate, &o.groups, &bad)) {
-    throw InputError(kFlags, "--estimate",
-                     "expected a list of friction, inertia, actuator (each once), got '" + bad + "'");
-  }
+  parse_estimate(a.estimate, &o.groups);
   o.groups.per_joint = a.per_joint;
   if (a.start != "multisine" && a.start != "rest" && a.start != "swing") {
     throw InputError(kFlags, "--start", "expected swing, multisine or rest, got " + a.start);

@@ -114,7 +114,8 @@ std::string residual_plot_script(const std::string& terminal, const std::string&
       << "stats " << file << " using ($0 >= 5 && $0 < n_rows - 5 ? " << val("predicted_tau" + n)
       << " : NaN) nooutput\nlo = (STATS_min < lo ? STATS_min : lo); "
          "hi = (STATS_max > hi ? STATS_max : hi)\n"
-      << "set yrange [lo - 0.08 * (hi - lo):hi + 0.3 * (hi - lo)]\n";  // room for the key
+      << "pad = (hi > lo ? hi - lo : abs(lo) + 1)\n"  // (a constant torque: a range around it)
+      << "set yrange [lo - 0.08 * pad:hi + 0.3 * pad]\n";  // room for the key
     s << "set ylabel \"tau" << n << " [N m]\"\nplot " << file << " using " << col("t") << ":"
       << col("predicted_tau" + n)
       << " with lines lc rgb \"#e37b7b\" lw 1.5 title \"predicted (fitted model)\", " << file

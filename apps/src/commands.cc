@@ -141,18 +141,33 @@ FrictionParams<double> start_from(FrictionParams<double> fp, FrictionLaw law) {
 }
 }  // namespace
 
+namespace {
+template <class Groups>
+void parse_estimate_into(const std::string& list, Groups* groups) {
+  std::string bad;
+  if (id::parse_groups(list, groups, &bad)) return;
+  throw InputError(kFlags, "--estimate",
+                   bad.empty() ? "an empty value in '" + list +
+                                     "' (a list is values separated by commas)"
+                               : "'" + bad + "' is not a group or is given twice (expected "
+                                 "friction, inertia, actuator, each at most once, comma-separated)");
+}
+}  // namespace
+
+void parse_estimate(const std::string& list, id::ParameterLayout* layout) {
+  parse_estimate_into(list, layout);
+}
+void parse_estimate(const std::string& list, id::DesignGroups* groups) {
+  parse_estimate_into(list, groups);
+}
+
 id::IdentifyOptions identify_options(const IdentifySettings& a, const Scene& scene) {
   id::IdentifyOptions opt;
   if (!id::parse_law(a.law, &opt.layout.law)) {
     throw InputError(kFlags, "--law", "expected " + id::identifiable_law_names() + ", got " + a.law);
   }
   opt.layout.per_joint = a.per_joint;
-  std::string bad;
-  if (!id::parse_groups(a.estimate, &opt.layout, &bad)) {
-    throw InputError(kFlags, "--estimate",
-                     "'" + bad + "' is not a group or is given twice (expected friction, inertia, " +
-                         "actuator, each at most once, comma-separated)");
-  }
+  parse_estimate(a.estimate, &opt.layout);
   // a relative std below 1e-6 holds the inertias at the scene's values (--estimate friction
   // does that); above 1e3 it is no prior
   if (!(a.inertia_prior >= 1e-6 && a.inertia_prior <= 1e3)) {

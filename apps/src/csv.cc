@@ -91,37 +91,43 @@ int CsvTable::find(const std::string& name) const {
   return -1;
 }
 
-CsvTable parse_csv(const std::string& text, const std::string& path, const CsvRules& rules) {
-  CsvTable table;
-  table.path = path;
-  // a UTF-8 byte-order mark (as spreadsheet programs write) is not part of the first line
-  const bool bom = text.rfind("\xEF\xBB\xBF", 0) == 0;
-  std::istringstream in(bom ? text.substr(3) : text);
+void stream_csv(std::istream& in, const std::string& path, const CsvRules& rules, CsvTable* table,
+                const std::function<void(std::vector<double>&& row, int line)>& sink) {
+  table->path = path;
   std::string raw;
   int line_no = 0;
   while (std::getline(in, raw)) {
     ++line_no;
-    const std::string_view line = trimmed(raw);
+    std::string_view line = trimmed(raw);
+    // a UTF-8 byte-order mark (as spreadsheet programs write) is not part of the first line
+    if (line_no == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line = trimmed(line.substr(3));
     if (line.empty()) continue;
     if (line[0] == '#') {
-      table.comments.emplace_back(line.substr(1));
+      table->comments.emplace_back(line.substr(1));
       continue;
     }
     const std::vector<std::string_view> fields = split(line);
-    if (table.header_line == 0) {
+    if (table->header_line == 0) {
       std::vector<std::string> names(fields.begin(), fields.end());
       if (rules.header) rules.header(names, line_no);
-      table.columns = std::move(names);
-      table.header_line = line_no;
+      table->columns = std::move(names);
+      table->header_line = line_no;
       continue;
     }
-    table.rows.push_back(parse_row(table, fields, line_no, rules));
-    table.lines.push_back(line_no);
-    if (rules.row) rules.row(table);
+    sink(parse_row(*table, fields, line_no, rules), line_no);
   }
-  return table;
 }
 
+CsvTable parse_csv(const std::string& text, const std::string& path, const CsvRules& rules) {
+  CsvTable table;
+  std::istringstream in(text);
+  stream_csv(in, path, rules, &table, [&](std::vector<double>&& row, int line) {
+    table.rows.push_back(std::move(row));
+    table.lines.push_back(line);
+    if (rules.row) rules.row(table);
+  });
+  return table;
+}
 
 int CsvTable::require(const std::string& name) const {
   const int j = find(name);

@@ -420,25 +420,68 @@ std::string remove_empty_figures(const std::string& dir, const std::string& scri
   return removed;
 }
 
-// removes the figure of `script` that gnuplot was drawing when it stopped at the line the last
-// of its messages `output` names ("plots.gnuplot" line N: ...; warnings before it name others):
-// a multiplot keeps the panels drawn before the error. "" or "; removed the unfinished NAME"
-std::string remove_unfinished_figure(const std::string& dir, const std::string& script,
-                                     const std::string& output) {
-  const size_t at = output.rfind("\" line ");
+// the figure of `script` that gnuplot was drawing at the line a message of `output` names
+// ("plots.gnuplot" line N: ..., the last such message, or with `first` the first): its file, or
+// "" (*message: the message's text after the line number). Inside the blocks of in_parts gnuplot
+// counts lines past the one it stopped at, never past the block's end: the figure is right, the
+// number is not, so messages are worded with the figure instead.
+std::string figure_at(const std::string& script, const std::string& output, bool first,
+                      std::string* message = nullptr) {
+  const size_t at = first ? output.find("\" line ") : output.rfind("\" line ");
   if (at == std::string::npos) return "";
   const int line = std::atoi(output.c_str() + at + 7);
   std::string name;
   for (const auto& [start, file] : figure_files(script)) {
     if (start <= line) name = file;
   }
-  std::error_code ec;
-  const std::filesystem::path figure = std::filesystem::path(dir) / name;
-  if (name.empty() || !std::filesystem::is_regular_file(figure, ec) ||
-      std::filesystem::file_size(figure, ec) == 0 || ec || !std::filesystem::remove(figure, ec)) {
-    return "";  // none, or empty (remove_empty_figures names it)
+  if (message) {
+    const size_t colon = output.find(": ", at);
+    const size_t end = output.find('\n', at);
+    *message = colon < end ? output.substr(colon + 2, end - colon - 2) : "";
   }
-  return "; removed the unfinished " + name;
+  return name;
+}
+
+// whether `figure` is a PNG whose last chunk (IEND) is written: a gnuplot killed while writing it
+// leaves it cut short
+bool complete_png(const std::filesystem::path& figure) {
+  static const unsigned char kEnd[12] = {0, 0, 0, 0, 'I', 'E', 'N', 'D', 0xAE, 0x42, 0x60, 0x82};
+  std::ifstream in(figure, std::ios::binary);
+  char tail[12];
+  in.seekg(-12, std::ios::end);
+  return in.read(tail, 12) && std::memcmp(tail, kEnd, 12) == 0;
+}
+
+// removes the figures a failed gnuplot left unfinished in `dir`: the one it was drawing when it
+// stopped at the error its messages `output` name last (a multiplot keeps the panels drawn
+// before the error), and any PNG of `script` cut short (gnuplot killed). "" or "; removed the
+// unfinished NAME, ..." (an empty figure is left to remove_empty_figures, which names it)
+std::string remove_unfinished_figures(const std::string& dir, const std::string& script,
+                                      const std::string& output) {
+  const std::string stopped = figure_at(script, output, false);
+  std::string removed;
+  for (const auto& [line, name] : figure_files(script)) {
+    const std::filesystem::path figure = std::filesystem::path(dir) / name;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(figure, ec) || std::filesystem::file_size(figure, ec) == 0 ||
+        ec) {
+      continue;
+    }
+    const bool cut = figure.extension() == ".png" && !complete_png(figure);
+    if ((name == stopped || cut) && std::filesystem::remove(figure, ec)) {
+      removed += (removed.empty() ? "; removed the unfinished " : ", ") + name;
+    }
+  }
+  return removed;
+}
+
+// gnuplot's first error in `output` worded with the figure it was drawing ("Can't plot with an
+// empty y range! (drawing fig4_accelerations.png)"), or its first error line as it is
+std::string first_error(const std::string& script, const std::string& output) {
+  std::string message;
+  const std::string figure = figure_at(script, output, true, &message);
+  if (figure.empty() || message.empty()) return first_error_line(output);
+  return message + " (drawing " + figure + ")";
 }
 
 // `script` in two parts: each figure (from a line `set output ...` to the next) in a block
@@ -497,10 +540,9 @@ std::string run_gnuplot(const std::string& dir, const std::string& script_name,
   std::string why, removed;  // why: the first error of the first part that failed
   for (int p = 0; p < parts; ++p) {
     if (status[p] == 0) continue;
-    const std::string error = first_error_line(outputs[p]);
-    if (!failed) why = error;
+    if (!failed) why = first_error(drawn, outputs[p]);
     failed = true;
-    removed += remove_unfinished_figure(dir, drawn, outputs[p]);
+    removed += remove_unfinished_figures(dir, drawn, outputs[p]);
   }
   removed += remove_empty_figures(dir, script);
   if (failed) return "gnuplot failed on " + script_name + (why.empty() ? "" : ": " + why) + removed;
@@ -514,25 +556,22 @@ std::string plot_copy_name(const std::string& csv) {
 bool PlotData::convert(const std::string& dir, const std::string& csv) {
   std::ifstream in(std::filesystem::path(dir) / csv);
   if (!in) return false;
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::filesystem::path copy = std::filesystem::path(dir) / plot_copy_name(csv);
+  std::ofstream out(copy, std::ios::binary);
   CsvRules rules;
   rules.non_finite = true;
   CsvTable table;
-  try {
-    table = parse_csv(text.str(), csv, rules);
+  bool read = true;
+  try {  // row by row: a long run's table is not held in memory
+    stream_csv(in, csv, rules, &table, [&](std::vector<double>&& row, int) {
+      out.write(reinterpret_cast<const char*>(row.data()),
+                static_cast<std::streamsize>(row.size() * sizeof(double)));
+    });
   } catch (const std::exception&) {
-    return false;  // a field that is not a number: gnuplot reads the CSV
-  }
-  if (table.columns.empty()) return false;
-  const std::filesystem::path copy = std::filesystem::path(dir) / plot_copy_name(csv);
-  std::ofstream out(copy, std::ios::binary);
-  for (const std::vector<double>& row : table.rows) {
-    out.write(reinterpret_cast<const char*>(row.data()),
-              static_cast<std::streamsize>(row.size() * sizeof(double)));
+    read = false;  // a field that is not a number: gnuplot reads the CSV
   }
   out.close();
-  if (!out) {  // no half-written copy left behind: the script reads the CSV
+  if (!read || table.columns.empty() || !out) {  // no copy left behind: the script reads the CSV
     std::error_code ec;
     std::filesystem::remove(copy, ec);
     return false;
@@ -608,9 +647,7 @@ std::string simulation_plot_script(const SimulationFigures& f, const std::string
                       std::string(twin ? "blue solid: with joint friction, red dashed: "
                                          "frictionless twin"
                                        : "") +
-                          (clip ? "; y range of the run with friction (the twin's larger swings "
-                                  "leave the panels)"
-                                : ""),
+                          (clip ? "; y range of the run with friction" : ""),
                       f.title);
     s += kKeyRoom;
     for (int i = 1; i <= f.layout.links; ++i) {
@@ -620,7 +657,8 @@ std::string simulation_plot_script(const SimulationFigures& f, const std::string
                          : twin ? std::vector<std::string>{f.trajectory, f.frictionless}
                                 : std::vector<std::string>{f.trajectory},
                          column);
-      if (clip) s += "set yrange [lo - 0.08 * (hi - lo):hi + 0.4 * (hi - lo)]\n";
+      // (a quantity that never changes, all joints held: a range around it)
+      if (clip) s += "pad = (hi > lo ? hi - lo : abs(lo) + 1)\nset yrange [lo - 0.08 * pad:hi + 0.4 * pad]\n";
       s += panel(links[i - 1], column + " [" + q.unit + "]") + "plot " +
            curve(f.data, f.trajectory, column, 1) + " title \"with joint friction\"";
       if (twin) {

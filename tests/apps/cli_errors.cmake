@@ -94,6 +94,8 @@ run_fivebar(2 "--methods: unknown integrator 'nope'"
             accuracy ${paper} --methods "cvode_adams, nope" --out ${WORK_DIR}/out_bad)
 run_fivebar(2 "command line: --estimate: 'inertias' is not a group"
             identify ${paper} --log ${log} --estimate "friction, inertias" --out ${WORK_DIR}/out_bad)
+run_fivebar(2 "command line: --estimate: an empty value in 'friction, '"
+            identify ${paper} --log ${log} --estimate "friction, " --out ${WORK_DIR}/out_bad)
 if(EXISTS ${WORK_DIR}/out_bad/list.csv)
   message(FATAL_ERROR "synth-log wrote list.csv although its --actuator-coulomb was refused")
 endif()

@@ -236,5 +236,22 @@ TEST(RunGnuplot, AFigureLeftUnfinishedByAnErrorIsRemovedAndTheOtherPartStillDraw
   }
 }
 
+// A gnuplot killed while writing a PNG leaves it cut short (no IEND chunk): after a failure, a
+// figure of the script in that state is removed and named (here one left before the run, where
+// the failing gnuplot never reaches it); the error is worded with the figure gnuplot was drawing,
+// not with its line number (off inside the parts' blocks).
+TEST(RunGnuplot, AFigureCutShortIsRemovedAndTheErrorNamesTheFigureBeingDrawn) {
+  if (!gnuplot().available) GTEST_SKIP() << "gnuplot not found";
+  const std::filesystem::path dir = test_dir("plot_cut");
+  std::ofstream(dir / "c.png", std::ios::binary) << "\x89PNG\r\n\x1a\n\0\0\0\rIHDR";
+  const std::string warning =
+      run_gnuplot(dir.string(), "plots.gnuplot", three_figures(true), Figures::kInOrder);
+  EXPECT_THAT(warning, HasSubstr("(drawing a.png)"));
+  EXPECT_THAT(warning, Not(HasSubstr("\" line ")));
+  EXPECT_THAT(warning, HasSubstr("removed the unfinished a.png, c.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "c.png"));
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace fivebar::io

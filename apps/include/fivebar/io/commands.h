@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "fivebar/identification/excitation.h"
 #include "fivebar/identification/identify.h"
 #include "fivebar/identification/torque_log.h"
 #include "fivebar/io/scene.h"
@@ -50,6 +51,11 @@ struct IdentifySettings {
 /// InputError(`command line: --law: ...`) and the like for a value the command line refuses.
 identification::IdentifyOptions identify_options(const IdentifySettings& settings,
                                                  const Scene& scene);
+
+/// The groups of `--estimate` (identification::parse_group_list); throws
+/// InputError(`command line: --estimate: ...`) naming the group that is unknown, repeated or empty.
+void parse_estimate(const std::string& list, identification::ParameterLayout* layout);
+void parse_estimate(const std::string& list, identification::DesignGroups* groups);
 
 /// Reads a torque log of `dof` cranks (torque_log_file.h); a log that cannot be used throws
 /// InputError (the LogError's message).

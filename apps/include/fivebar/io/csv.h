@@ -2,6 +2,7 @@
 #pragma once
 
 #include <functional>
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,12 @@ struct CsvRules {
 /// <bad_number>`) for a field that is not a finite number (strtod syntax), besides whatever the
 /// rules' hooks throw. Text without a header row gives a table with header_line = 0.
 CsvTable parse_csv(const std::string& text, const std::string& path, const CsvRules& rules = {});
+
+/// The same from a stream, row by row: each row goes to `sink` (with its line number) instead of
+/// into the table, which holds the header and comments (its rows stay empty; rules.row is not
+/// called). For files too large to hold twice.
+void stream_csv(std::istream& in, const std::string& path, const CsvRules& rules, CsvTable* table,
+                const std::function<void(std::vector<double>&& row, int line)>& sink);
 
 /// Reads a CSV of finite numbers under a header row. Blank lines and lines starting with '#'
 /// are skipped. Throws InputError naming the file, the line and column and the reason for a
