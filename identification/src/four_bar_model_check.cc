@@ -7,6 +7,7 @@
 // by central differences where not linear.
 #include <Eigen/Dense>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -76,54 +77,83 @@ Eigen::MatrixXd motor_columns(const FourBarFit& f, std::vector<int>* terms) {
   return Jm;
 }
 
+/// The fit's prior rows on the fitted inertial parameters (the inertial group: the residual
+/// blocks of detail::inertial_prior_cost at f.x, weighed as in the fit by f.prior_scale), rp and
+/// their Jacobian Jp on the P fitted parameters; empty without the group; false where the
+/// evaluation fails.
+bool prior_rows(const FourBarFit& f, Eigen::MatrixXd* Jp, Eigen::VectorXd* rp) {
+  const int P = f.layout.size();
+  if (!f.layout.inertia) {
+    Jp->resize(0, P);
+    rp->resize(0);
+    return true;
+  }
+  const std::unique_ptr<ceres::CostFunction> cost(
+      detail::inertial_prior_cost(f.prior, P, f.layout.inertia_offset(), &f.prior_scale));
+  const int m = cost->num_residuals();
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jac(m, P);
+  rp->resize(m);
+  const double* x = f.x.data();
+  double* jacobians[] = {jac.data()};
+  if (!cost->Evaluate(&x, rp->data(), jacobians)) return false;
+  *Jp = jac;
+  return Jp->allFinite() && rp->allFinite();
+}
+
 /// The check's whitened Jacobian J and residual r, and its index sets (fitted, inertial, angle
 /// offset, torque readings, the motor's friction where the fit leaves it out, delay:
-/// model_check_causes.h); false where an evaluation fails.
+/// model_check_causes.h); false where an evaluation fails. With the inertial group fitted its
+/// parameters are among the fitted columns, and the fit's prior rows (prior_rows) follow the
+/// samples' (zero in the causes' columns): without them the directions the log leaves to the
+/// prior make every refit singular. The inertial cause then has no columns (it would free the
+/// fitted parameters twice).
 bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
                     Eigen::VectorXd* r, stages::CauseColumns& idx) {
   constexpr double h = 1e-6;
   const double fl = out.residual_noise_floor[0];
   const int n = static_cast<int>(f.samples.size()), P = f.layout.size();
-  Eigen::VectorXd M, Mp, Mm, tau(n);
-  Eigen::MatrixXd dx;
-  if (!model_torques(f, f.scene, 0, &M, &dx)) return false;
+  Eigen::VectorXd M, Mp, Mm, tau(n), rp;
+  Eigen::MatrixXd dx, Jp;
+  if (!model_torques(f, f.scene, 0, &M, &dx) || !prior_rows(f, &Jp, &rp)) return false;
   for (int u = 0; u < n; ++u) tau(u) = f.samples[u].tau[0];
-  const int ni = kFourBarLinks * kPerLink;
+  const int ni = f.layout.inertia ? 0 : kFourBarLinks * kPerLink;
   const bool delay = f.opt->estimate_delay;
   // the fit's own offset and motor friction (--estimate actuator) are not freed again by the
   // torque readings' and the motors' causes
   const bool fitted_offset = f.layout.actuator;
   std::vector<int> terms;
   const Eigen::MatrixXd Jm = motor_columns(f, &terms);
-  J->setZero(n, P + ni + (fitted_offset ? 2 : 3) + Jm.cols() + (delay ? 1 : 0));
-  J->leftCols(P) = -dx;  // dx: the torques' derivatives
+  const Eigen::Index rows = n + rp.size();
+  J->setZero(rows, P + ni + (fitted_offset ? 2 : 3) + Jm.cols() + (delay ? 1 : 0));
+  J->topLeftCorner(n, P) = -dx;  // dx: the torques' derivatives
+  J->bottomLeftCorner(rp.size(), P) = Jp;
   for (int i = 0; i < P; ++i) idx[0].push_back(i);
   int c = P;
-  for (int k = 0; k < kFourBarLinks; ++k) {
+  for (int k = 0; k < ni / kPerLink; ++k) {
     for (int j = 0; j < kPerLink; ++j, ++c) {
       if (!model_torques(f, moved(f.scene, k, j, h), 0, &Mp) ||
           !model_torques(f, moved(f.scene, k, j, -h), 0, &Mm)) {
         return false;
       }
-      J->col(c) = -(Mp - Mm) / (2 * h);
+      J->col(c).head(n) = -(Mp - Mm) / (2 * h);
       idx[stages::kCauseInertia + 1].push_back(c);
     }
   }
   // theta1 reads d more than the scene's angle: the model at theta1 - d
   if (!model_torques(f, f.scene, h, &Mp) || !model_torques(f, f.scene, -h, &Mm)) return false;
-  J->col(c) = -(Mp - Mm) / (2 * h);
+  J->col(c).head(n) = -(Mp - Mm) / (2 * h);
   idx[stages::kCauseAngles + 1].push_back(c++);
   for (Eigen::Index k = 0; k < Jm.cols(); ++k) {
-    J->col(c) = Jm.col(k);
+    J->col(c).head(n) = Jm.col(k);
     idx[stages::kCauseMotors + 1].push_back(c++);
   }
   // tau1 = (1 + g) M + o, M the model's torque (less the fitted offset)
   if (!fitted_offset) {
-    J->col(c).setConstant(-1.0);
+    J->col(c).head(n).setConstant(-1.0);
     idx[stages::kCauseTorque + 1].push_back(c++);
   }
   const double o = fitted_offset ? f.x[f.layout.actuator_offset()] : 0.0;
-  J->col(c) = -(M.array() - o).matrix();
+  J->col(c).head(n) = -(M.array() - o).matrix();
   idx[stages::kCauseTorque + 1].push_back(c++);
   if (delay) {  // tau1 lagging by d reads the torque of t + d: its rate (the delay's regressor)
     const TorqueLog& log = f.cond.log;
@@ -133,7 +163,8 @@ bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::Matri
     idx[stages::kCauseDelay + 1].push_back(c++);
   }
   *J /= fl;
-  *r = (tau - M) / fl;
+  r->resize(rows);
+  *r << (tau - M) / fl, rp / fl;
   return J->allFinite() && r->allFinite();
 }
 
@@ -326,7 +357,7 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, const 
 }  // namespace
 
 stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
-  if (!out->converged || f.layout.inertia) return {};
+  if (!out->converged) return {};
   Eigen::MatrixXd J;
   Eigen::VectorXd r;
   stages::CauseColumns idx;
