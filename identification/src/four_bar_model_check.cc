@@ -354,6 +354,74 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, const 
   if (!delay) leaves_interval(f, fs, sd, cause, out);
 }
 
+/// A cause's column that the fitted inertias take up all but this fraction of (its std with them
+/// fitted over its std with the other fitted parameters alone) is one the log cannot tell from
+/// them
+constexpr double kHiddenStdRatio = 10.0;
+
+/// The information that the whitened column o keeps beyond the columns `cols` of J (its
+/// squared norm off their span), and in *absorb the refit of those columns that takes it up
+double information_beyond(const Eigen::MatrixXd& J, const std::vector<int>& cols,
+                          const Eigen::VectorXd& o, Eigen::VectorXd* absorb = nullptr) {
+  Eigen::MatrixXd X(J.rows(), static_cast<Eigen::Index>(cols.size()));
+  for (size_t k = 0; k < cols.size(); ++k) X.col(k) = J.col(cols[k]);
+  const Eigen::VectorXd b = (X.transpose() * X).ldlt().solve(X.transpose() * o);
+  if (absorb) *absorb = b;
+  return (o - X * b).squaredNorm();
+}
+
+/// With the inertias fitted: a warning for each column of tau1's offset and gain and the crank
+/// encoder's zero that the log cannot tell from them (kHiddenStdRatio) while its 95 % bound
+/// with them fitted would move a friction coefficient beyond kFreedMove std (sd): the check
+/// cannot see such an error, which the inertias absorb. (The double rocker's 10 s logs: the
+/// offset read to +- 0.14 N m with the inertias, 0.00025 without, its bound moving the friction
+/// by 0.26 std at most; the crank-rocker's gain +- 2 % against 0.058 %, 2.1 std at most.)
+void hidden_by_inertias(const FourBarFit& f, const Eigen::MatrixXd& J,
+                        const stages::CauseColumns& idx, const Eigen::VectorXd& sd,
+                        IdentifyResult* out) {
+  if (!f.layout.inertia) return;
+  std::vector<int> others;  // the fitted parameters but the inertias
+  for (int i : idx[0]) {
+    if (!f.layout.is_inertial(i)) others.push_back(i);
+  }
+  struct Column {
+    int c;
+    const char* what;
+    double scale;
+    const char* unit;
+  };
+  std::vector<Column> cols;
+  const std::vector<int>& t = idx[stages::kCauseTorque + 1];
+  if (t.size() == 2) cols.push_back({t[0], "tau1's offset", 1.0, " N m"});
+  if (!t.empty()) cols.push_back({t.back(), "tau1's gain", 100.0, " %"});
+  for (int c : idx[stages::kCauseAngles + 1]) cols.push_back({c, "theta1's zero", 1.0, " rad"});
+  const int nf = f.layout.friction_size();
+  const Eigen::MatrixXd T = stages::to_public(f.layout).topLeftCorner(nf, nf);
+  for (const Column& col : cols) {
+    Eigen::VectorXd absorb;
+    const double with = information_beyond(J, idx[0], J.col(col.c), &absorb);
+    const double without = information_beyond(J, others, J.col(col.c));
+    if (!(with > 0) || !(with * kHiddenStdRatio * kHiddenStdRatio < without)) continue;
+    const double bound = out->ci_quantile / std::sqrt(with);
+    const Eigen::VectorXd move = T * absorb.head(nf) * bound;
+    std::string moves;
+    for (int i = 0; i < nf; ++i) {
+      if (!(std::abs(move(i)) > stages::kFreedMove * sd(i))) continue;
+      moves += (moves.empty() ? "" : ", ") + out->parameters[i].name + " by " +
+               format_significant(std::abs(move(i)) / sd(i), 2) + " std";
+    }
+    if (moves.empty()) continue;
+    out->warnings.push_back(
+        std::string("the log cannot tell ") + col.what +
+        " from the links' inertial parameters, which absorb it (read to +- " +
+        format_significant(col.scale / std::sqrt(with), 2) + col.unit + " with them fitted, +- " +
+        format_significant(col.scale / std::sqrt(without), 2) + col.unit +
+        " without): the model check cannot see its error, and one of " +
+        format_significant(col.scale * bound, 2) + col.unit + " (its 95 % bound) would move " +
+        moves + "; check the sensor, or fit without the inertias");
+  }
+}
+
 }  // namespace
 
 stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
@@ -395,6 +463,7 @@ stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
     judge(f, cs, id, true, sd(id), out);
   }
   if (!any && top < stages::kCauseCount) judge(f, cs, top, false, sd(top), out);
+  hidden_by_inertias(f, J, idx, noise_std(f, *out), out);
   // the five-bar's decisive evidence, its named cause's move judged as judge's
   const int nc = stages::named_cause(cs);
   double largest = 0;
