@@ -98,9 +98,10 @@ double noise_floor(const FourBarFit& f, bool* from_noise);
 void window_stage(FourBarFit* f, IdentifyResult* out);
 
 /// The model check's candidate causes at the fit: the five-bar's that exist for one crank (the
-/// links' inertial parameters, the crank encoder's zero, tau1's offset and gain (the gain alone
-/// when the fit has the offset, --estimate actuator), the delay)
-/// freed on the four-bar's Jacobian; a warning when a cause would move the friction beyond
+/// links' inertial parameters unless the fit has them, the crank encoder's zero, tau1's offset
+/// and gain (the gain alone when the fit has the offset, --estimate actuator), the delay)
+/// freed on the four-bar's Jacobian (with the inertias fitted, refitted with each cause under the
+/// fit's prior; a warning where the log cannot tell a sensor's error from them); a warning when a cause would move the friction beyond
 /// kFreedMove std of the fit with the cause corrected, out->unusable beyond kUnusableMove of them,
 /// out of the coefficient's interval or at a bound, and on the five-bar's decisive evidence
 /// (stages::decisive_model_error; four_bar_model_check.cc).

@@ -2,9 +2,10 @@
 // the five-bar's candidate causes that exist for one crank, freed on the four-bar's Jacobian,
 // judged by the five-bar's comparison (model_check_causes.h). Columns, rows whitened by the noise
 // floor: the fitted parameters (the residual's Jets), the links' masses, inertias and centres of
-// mass (relative, with the prior --inertia-prior), the crank encoder's zero, tau1's offset (unless
-// the fit has it, --estimate actuator) and gain, and the delay (the logged torque's rate), each
-// by central differences where not linear.
+// mass (relative, with the prior --inertia-prior; with the inertias fitted, --estimate inertia,
+// they are fitted columns and the fit's prior rows follow the samples' instead), the crank
+// encoder's zero, tau1's offset (unless the fit has it, --estimate actuator) and gain, and the
+// delay (the logged torque's rate), each by central differences where not linear.
 #include <Eigen/Dense>
 #include <cmath>
 #include <memory>
