@@ -98,15 +98,16 @@ double noise_floor(const FourBarFit& f, bool* from_noise);
 void window_stage(FourBarFit* f, IdentifyResult* out);
 
 /// The model check's candidate causes at the fit: the five-bar's that exist for one crank (the
-/// links' inertial parameters, the crank encoder's zero, tau1's offset and gain (the gain alone
-/// when the fit has the offset, --estimate actuator), the delay)
-/// freed on the four-bar's Jacobian; a warning when a cause would move the friction beyond
-/// kFreedMove std of the fit with the cause corrected, out->unusable beyond kUnusableMove of them,
-/// out of the coefficient's interval or at a bound, and on the five-bar's decisive evidence
-/// (stages::decisive_model_error; four_bar_model_check.cc).
-/// The delay's estimate in out->delay_s and delay_std_s (its column freed alone with the
-/// friction) where the check has the column. Its verdict: cause_decided, and the delay
-/// kExplainsMost when it names the delay (identify then refits with the torques shifted by it).
+/// links' inertial parameters unless the fit has them, the crank encoder's zero, tau1's offset
+/// and gain (the gain alone when the fit has the offset, --estimate actuator), the delay)
+/// freed on the four-bar's Jacobian (with the inertias fitted, refitted with each cause under the
+/// fit's prior; a warning where the log cannot tell a sensor's error from them); a warning when a
+/// cause would move the friction beyond kFreedMove std of the fit with the cause corrected,
+/// out->unusable beyond kUnusableMove of them, out of the coefficient's interval or at a bound, and
+/// on the five-bar's decisive evidence (stages::decisive_model_error; four_bar_model_check.cc). The
+/// delay's estimate in out->delay_s and delay_std_s (its column freed alone with the friction)
+/// where the check has the column. Its verdict: cause_decided, and the delay kExplainsMost when it
+/// names the delay (identify then refits with the torques shifted by it).
 stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out);
 
 /// The residual rule: a residual more than kMisfitRatio times its noise floor is structure the

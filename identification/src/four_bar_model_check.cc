@@ -2,11 +2,13 @@
 // the five-bar's candidate causes that exist for one crank, freed on the four-bar's Jacobian,
 // judged by the five-bar's comparison (model_check_causes.h). Columns, rows whitened by the noise
 // floor: the fitted parameters (the residual's Jets), the links' masses, inertias and centres of
-// mass (relative, with the prior --inertia-prior), the crank encoder's zero, tau1's offset (unless
-// the fit has it, --estimate actuator) and gain, and the delay (the logged torque's rate), each
-// by central differences where not linear.
+// mass (relative, with the prior --inertia-prior; with the inertias fitted, --estimate inertia,
+// they are fitted columns and the fit's prior rows follow the samples' instead), the crank
+// encoder's zero, tau1's offset (unless the fit has it, --estimate actuator) and gain, and the
+// delay (the logged torque's rate), each by central differences where not linear.
 #include <Eigen/Dense>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -76,54 +78,83 @@ Eigen::MatrixXd motor_columns(const FourBarFit& f, std::vector<int>* terms) {
   return Jm;
 }
 
+/// The fit's prior rows on the fitted inertial parameters (the inertial group: the residual
+/// blocks of detail::inertial_prior_cost at f.x, weighed as in the fit by f.prior_scale), rp and
+/// their Jacobian Jp on the P fitted parameters; empty without the group; false where the
+/// evaluation fails.
+bool prior_rows(const FourBarFit& f, Eigen::MatrixXd* Jp, Eigen::VectorXd* rp) {
+  const int P = f.layout.size();
+  if (!f.layout.inertia) {
+    Jp->resize(0, P);
+    rp->resize(0);
+    return true;
+  }
+  const std::unique_ptr<ceres::CostFunction> cost(
+      detail::inertial_prior_cost(f.prior, P, f.layout.inertia_offset(), &f.prior_scale));
+  const int m = cost->num_residuals();
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> jac(m, P);
+  rp->resize(m);
+  const double* x = f.x.data();
+  double* jacobians[] = {jac.data()};
+  if (!cost->Evaluate(&x, rp->data(), jacobians)) return false;
+  *Jp = jac;
+  return Jp->allFinite() && rp->allFinite();
+}
+
 /// The check's whitened Jacobian J and residual r, and its index sets (fitted, inertial, angle
 /// offset, torque readings, the motor's friction where the fit leaves it out, delay:
-/// model_check_causes.h); false where an evaluation fails.
+/// model_check_causes.h); false where an evaluation fails. With the inertial group fitted its
+/// parameters are among the fitted columns, and the fit's prior rows (prior_rows) follow the
+/// samples' (zero in the causes' columns): without them the directions the log leaves to the
+/// prior make every refit singular. The inertial cause then has no columns (it would free the
+/// fitted parameters twice).
 bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::MatrixXd* J,
                     Eigen::VectorXd* r, stages::CauseColumns& idx) {
   constexpr double h = 1e-6;
   const double fl = out.residual_noise_floor[0];
   const int n = static_cast<int>(f.samples.size()), P = f.layout.size();
-  Eigen::VectorXd M, Mp, Mm, tau(n);
-  Eigen::MatrixXd dx;
-  if (!model_torques(f, f.scene, 0, &M, &dx)) return false;
+  Eigen::VectorXd M, Mp, Mm, tau(n), rp;
+  Eigen::MatrixXd dx, Jp;
+  if (!model_torques(f, f.scene, 0, &M, &dx) || !prior_rows(f, &Jp, &rp)) return false;
   for (int u = 0; u < n; ++u) tau(u) = f.samples[u].tau[0];
-  const int ni = kFourBarLinks * kPerLink;
+  const int ni = f.layout.inertia ? 0 : kFourBarLinks * kPerLink;
   const bool delay = f.opt->estimate_delay;
   // the fit's own offset and motor friction (--estimate actuator) are not freed again by the
   // torque readings' and the motors' causes
   const bool fitted_offset = f.layout.actuator;
   std::vector<int> terms;
   const Eigen::MatrixXd Jm = motor_columns(f, &terms);
-  J->setZero(n, P + ni + (fitted_offset ? 2 : 3) + Jm.cols() + (delay ? 1 : 0));
-  J->leftCols(P) = -dx;  // dx: the torques' derivatives
+  const Eigen::Index rows = n + rp.size();
+  J->setZero(rows, P + ni + (fitted_offset ? 2 : 3) + Jm.cols() + (delay ? 1 : 0));
+  J->topLeftCorner(n, P) = -dx;  // dx: the torques' derivatives
+  J->bottomLeftCorner(rp.size(), P) = Jp;
   for (int i = 0; i < P; ++i) idx[0].push_back(i);
   int c = P;
-  for (int k = 0; k < kFourBarLinks; ++k) {
+  for (int k = 0; k < ni / kPerLink; ++k) {
     for (int j = 0; j < kPerLink; ++j, ++c) {
       if (!model_torques(f, moved(f.scene, k, j, h), 0, &Mp) ||
           !model_torques(f, moved(f.scene, k, j, -h), 0, &Mm)) {
         return false;
       }
-      J->col(c) = -(Mp - Mm) / (2 * h);
+      J->col(c).head(n) = -(Mp - Mm) / (2 * h);
       idx[stages::kCauseInertia + 1].push_back(c);
     }
   }
   // theta1 reads d more than the scene's angle: the model at theta1 - d
   if (!model_torques(f, f.scene, h, &Mp) || !model_torques(f, f.scene, -h, &Mm)) return false;
-  J->col(c) = -(Mp - Mm) / (2 * h);
+  J->col(c).head(n) = -(Mp - Mm) / (2 * h);
   idx[stages::kCauseAngles + 1].push_back(c++);
   for (Eigen::Index k = 0; k < Jm.cols(); ++k) {
-    J->col(c) = Jm.col(k);
+    J->col(c).head(n) = Jm.col(k);
     idx[stages::kCauseMotors + 1].push_back(c++);
   }
   // tau1 = (1 + g) M + o, M the model's torque (less the fitted offset)
   if (!fitted_offset) {
-    J->col(c).setConstant(-1.0);
+    J->col(c).head(n).setConstant(-1.0);
     idx[stages::kCauseTorque + 1].push_back(c++);
   }
   const double o = fitted_offset ? f.x[f.layout.actuator_offset()] : 0.0;
-  J->col(c) = -(M.array() - o).matrix();
+  J->col(c).head(n) = -(M.array() - o).matrix();
   idx[stages::kCauseTorque + 1].push_back(c++);
   if (delay) {  // tau1 lagging by d reads the torque of t + d: its rate (the delay's regressor)
     const TorqueLog& log = f.cond.log;
@@ -133,7 +164,8 @@ bool check_jacobian(const FourBarFit& f, const IdentifyResult& out, Eigen::Matri
     idx[stages::kCauseDelay + 1].push_back(c++);
   }
   *J /= fl;
-  *r = (tau - M) / fl;
+  r->resize(rows);
+  *r << (tau - M) / fl, rp / fl;
   return J->allFinite() && r->allFinite();
 }
 
@@ -323,10 +355,78 @@ void judge(const FourBarFit& f, const CauseSteps& cs, int id, bool named, const 
   if (!delay) leaves_interval(f, fs, sd, cause, out);
 }
 
+/// A cause's column that the fitted inertias take up all but this fraction of (its std with them
+/// fitted over its std with the other fitted parameters alone) is one the log cannot tell from
+/// them
+constexpr double kHiddenStdRatio = 10.0;
+
+/// The information that the whitened column o keeps beyond the columns `cols` of J (its
+/// squared norm off their span), and in *absorb the refit of those columns that takes it up
+double information_beyond(const Eigen::MatrixXd& J, const std::vector<int>& cols,
+                          const Eigen::VectorXd& o, Eigen::VectorXd* absorb = nullptr) {
+  Eigen::MatrixXd X(J.rows(), static_cast<Eigen::Index>(cols.size()));
+  for (size_t k = 0; k < cols.size(); ++k) X.col(k) = J.col(cols[k]);
+  const Eigen::VectorXd b = (X.transpose() * X).ldlt().solve(X.transpose() * o);
+  if (absorb) *absorb = b;
+  return (o - X * b).squaredNorm();
+}
+
+/// With the inertias fitted: a warning for each column of tau1's offset and gain and the crank
+/// encoder's zero that the log cannot tell from them (kHiddenStdRatio) while its 95 % bound
+/// with them fitted would move a friction coefficient beyond kFreedMove std (sd): the check
+/// cannot see such an error, which the inertias absorb. (The double rocker's 10 s logs: the
+/// offset read to +- 0.14 N m with the inertias, 0.00025 without, its bound moving the friction
+/// by 0.26 std at most; the crank-rocker's gain +- 2 % against 0.058 %, 2.1 std at most.)
+void hidden_by_inertias(const FourBarFit& f, const Eigen::MatrixXd& J,
+                        const stages::CauseColumns& idx, const Eigen::VectorXd& sd,
+                        IdentifyResult* out) {
+  if (!f.layout.inertia) return;
+  std::vector<int> others;  // the fitted parameters but the inertias
+  for (int i : idx[0]) {
+    if (!f.layout.is_inertial(i)) others.push_back(i);
+  }
+  struct Column {
+    int c;
+    const char* what;
+    double scale;
+    const char* unit;
+  };
+  std::vector<Column> cols;
+  const std::vector<int>& t = idx[stages::kCauseTorque + 1];
+  if (t.size() == 2) cols.push_back({t[0], "tau1's offset", 1.0, " N m"});
+  if (!t.empty()) cols.push_back({t.back(), "tau1's gain", 100.0, " %"});
+  for (int c : idx[stages::kCauseAngles + 1]) cols.push_back({c, "theta1's zero", 1.0, " rad"});
+  const int nf = f.layout.friction_size();
+  const Eigen::MatrixXd T = stages::to_public(f.layout).topLeftCorner(nf, nf);
+  for (const Column& col : cols) {
+    Eigen::VectorXd absorb;
+    const double with = information_beyond(J, idx[0], J.col(col.c), &absorb);
+    const double without = information_beyond(J, others, J.col(col.c));
+    if (!(with > 0) || !(with * kHiddenStdRatio * kHiddenStdRatio < without)) continue;
+    const double bound = out->ci_quantile / std::sqrt(with);
+    const Eigen::VectorXd move = T * absorb.head(nf) * bound;
+    std::string moves;
+    for (int i = 0; i < nf; ++i) {
+      if (!(std::abs(move(i)) > stages::kFreedMove * sd(i))) continue;
+      moves += (moves.empty() ? "" : ", ") + out->parameters[i].name + " by " +
+               format_significant(std::abs(move(i)) / sd(i), 2) + " std";
+    }
+    if (moves.empty()) continue;
+    out->warnings.push_back(
+        std::string("the log cannot tell ") + col.what +
+        " from the links' inertial parameters, which absorb it (read to +- " +
+        format_significant(col.scale / std::sqrt(with), 2) + col.unit + " with them fitted, +- " +
+        format_significant(col.scale / std::sqrt(without), 2) + col.unit +
+        " without): the model check cannot see its error, and one of " +
+        format_significant(col.scale * bound, 2) + col.unit + " (its 95 % bound) would move " +
+        moves + "; check the sensor, or fit without the inertias");
+  }
+}
+
 }  // namespace
 
 stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
-  if (!out->converged || f.layout.inertia) return {};
+  if (!out->converged) return {};
   Eigen::MatrixXd J;
   Eigen::VectorXd r;
   stages::CauseColumns idx;
@@ -364,6 +464,7 @@ stages::ModelVerdict cause_check(const FourBarFit& f, IdentifyResult* out) {
     judge(f, cs, id, true, sd(id), out);
   }
   if (!any && top < stages::kCauseCount) judge(f, cs, top, false, sd(top), out);
+  hidden_by_inertias(f, J, idx, noise_std(f, *out), out);
   // the five-bar's decisive evidence, its named cause's move judged as judge's
   const int nc = stages::named_cause(cs);
   double largest = 0;
