@@ -306,10 +306,15 @@ void leaves_interval(const FourBarFit& f, const detail::FreedStep& fs, const Eig
     // the interval of the sensors' noise alone (a model error widens the reported one)
     const double bar = std::max(out->ci_quantile * noise(i), stages::kFreedMove * sd(i));
     if (e.at_bound || !(std::abs(move(i)) > bar)) continue;
-    out->unusable = cause + ": it would move " + e.name + " to " +
-                    format_significant(e.value + move(i)) + ", out of its interval of the "
-                    "sensors' noise [" + format_significant(e.value - bar) + ", " +
-                    format_significant(e.value + bar) + "] (see the warnings)";
+    // digits enough to show the moved value beyond the bound it passes (0.0199 out of [0.0199, ...
+    // at three)
+    const double to = e.value + move(i), passed = e.value + (move(i) > 0 ? bar : -bar);
+    int d = 3;
+    while (d < 8 && format_significant(to, d) == format_significant(passed, d)) ++d;
+    out->unusable = cause + ": it would move " + e.name + " to " + format_significant(to, d) +
+                    ", out of its interval of the sensors' noise [" +
+                    format_significant(e.value - bar, d) + ", " +
+                    format_significant(e.value + bar, d) + "] (see the warnings)";
     return;
   }
 }
