@@ -55,16 +55,13 @@ void check_numbers(const CLI::App& app) {
 }
 
 namespace {
-/// `text` without its leading and trailing spaces and tabs
-std::string trimmed(std::string text) { return CLI::detail::trim(text, " \t"); }
-
 /// Whether a list's text has an empty field: a leading or trailing comma, two in a row, or
 /// only spaces between two
 bool empty_field(const std::string& list) {
   std::stringstream fields(list + ",");  // (getline drops a last empty field)
   std::string field;
   while (std::getline(fields, field, ',')) {
-    if (trimmed(field).empty()) return true;
+    if (trim(field).empty()) return true;
   }
   return list.empty();
 }
@@ -72,7 +69,7 @@ bool empty_field(const std::string& list) {
 
 void trim_list_values(CLI::App* sub) {
   for (CLI::Option* o : sub->get_options()) {
-    if (o->get_delimiter() == ',') o->transform(trimmed);
+    if (o->get_delimiter() == ',') o->transform([](const std::string& v) { return trim(v); });
   }
 }
 

@@ -18,14 +18,6 @@ namespace {
 
 using identification::LogError;
 
-// `s` without the blanks trim() removes at its ends
-std::string_view trimmed(std::string_view s) {
-  const char* blanks = " \t\r\n";
-  const auto first = s.find_first_not_of(blanks);
-  if (first == std::string_view::npos) return {};
-  return s.substr(first, s.find_last_not_of(blanks) - first + 1);
-}
-
 // the fields of a line, blanks trimmed, as views into it; a trailing comma gives a last, empty
 // field
 std::vector<std::string_view> split(std::string_view line) {

@@ -31,12 +31,14 @@ std::string format_printf(double x, const char* format) {
   return buf;
 }
 
-std::string trim(const std::string& s) {
+std::string_view trimmed(std::string_view s) {
   const char* blanks = " \t\r\n";
   const auto first = s.find_first_not_of(blanks);
-  if (first == std::string::npos) return "";
+  if (first == std::string_view::npos) return {};
   return s.substr(first, s.find_last_not_of(blanks) - first + 1);
 }
+
+std::string trim(const std::string& s) { return std::string(trimmed(s)); }
 
 bool parse_finite(const std::string& text, double* v) {
   const std::string s = trim(text);

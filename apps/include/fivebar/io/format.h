@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include "fivebar/model/format.h"  // format_significant, format_number
 
@@ -25,6 +26,8 @@ std::string format_printf(double x, const char* format);
 
 /// `s` without leading and trailing blanks (space, tab, CR, LF).
 std::string trim(const std::string& s);
+/// The same as a view into `s` (no copy).
+std::string_view trimmed(std::string_view s);
 
 /// The whole of `text` (blanks trimmed) as a finite number: true and *v set, else false.
 bool parse_finite(const std::string& text, double* v);
