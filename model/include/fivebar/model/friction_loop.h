@@ -539,7 +539,10 @@ void friction_loop_implicit(const std::array<T, kJoints>& phi, const LoopSolutio
   for (int j = 0; j < kJoints; ++j) {
     if (!sol.map.active[j]) continue;
     const T dM = phi[j] * dN[j];
-    for (int k = 0; k < kJoints; ++k) (*F)[k] += sol.map.dF[j][k] * dM;
+    for (int k = 0; k < kJoints; ++k) {
+      add_scaled(&(*F)[k].x(), sol.map.dF[j][k].x(), dM);
+      add_scaled(&(*F)[k].y(), sol.map.dF[j][k].y(), dM);
+    }
   }
   *iterations = sol.iterations;
 }
