@@ -2,7 +2,8 @@
 """Measures what users wait for, side by side in one run, and writes docs/benchmarks.md.
 
     python3 scripts/bench_table.py [--baseline OTHER_FIVEBAR] [--baseline-bench OTHER_BENCH_MODEL]
-        [--baseline-rhs-calls OTHER_RHS_CALLS] [--repeats 3] [--skip-optimize]
+        [--baseline-rhs-calls OTHER_RHS_CALLS] [--baseline-name NAME] [--baseline-about TEXT]
+        [--repeats 3] [--skip-optimize]
 
 Rows: the right-hand side with and without friction (bench_model), the paper scene simulated to
 1e-6 and 1e-8 rad and with arkode_erk45 at rtol = atol = 1e-10, and with its figures, identify
@@ -40,6 +41,7 @@ LOG = os.path.join(ROOT, "datasets", "logs", "per_joint_multisine.csv")
 TASKS = os.path.join(ROOT, "datasets", "tasks", "paper_tasks.yaml")
 OUT = os.path.join(ROOT, "docs", "benchmarks.md")
 OTHER = "another build"  # the other binaries' name on the page (--baseline-name)
+ABOUT = ""  # what they are (--baseline-about)
 
 
 def cpu_children():
@@ -223,6 +225,21 @@ def peers():
     return lines
 
 
+def about_other():
+    """A sentence on what OTHER is: its commit's date where it names a commit of this repository,
+    and --baseline-about."""
+    done = subprocess.run(["git", "-C", ROOT, "log", "-1", "--format=%cd",
+                           "--date=format-local:%Y-%m-%d %H:%M UTC", OTHER + "^{commit}", "--"],
+                          stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                          env=dict(os.environ, TZ="UTC"))
+    parts = []
+    if done.returncode == 0 and done.stdout.strip():
+        parts.append(f"{OTHER} is the commit of {done.stdout.strip()}")
+    if ABOUT:
+        parts.append(ABOUT if parts else f"{OTHER}: {ABOUT}")
+    return [", ".join(parts) + "."] if parts else []
+
+
 def seconds(x):
     return f"{x * 1e3:.1f} ms" if x < 1 else f"{x:.2f} s"
 
@@ -235,7 +252,10 @@ def write(rows, rhs, counts, binaries, benches, repeats, load):
              "in the same run rather than absolute times.", "",
              f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} on "
              f"{os.cpu_count()} cores, load average {load[0]:.1f} at the start and "
-             f"{load[1]:.1f} at the end.", "", "## Right-hand side", ""]
+             f"{load[1]:.1f} at the end."]
+    if len(binaries) == 2 or len(benches) == 2:
+        lines += [""] + about_other()
+    lines += ["", "## Right-hand side", ""]
     if rhs:
         lines += ["CPU time of one evaluation (`bench_model --benchmark_filter=RightHandSide`, median of "
                   "5 repetitions per run):", ""]
@@ -283,6 +303,8 @@ def main():
     ap.add_argument("--baseline", help="another fivebar binary to run alternately with this one")
     ap.add_argument("--baseline-name", default="another build",
                     help="what the page calls the other binaries (e.g. their commit)")
+    ap.add_argument("--baseline-about", default="",
+                    help="what the other binaries are, in a few words (for the page)")
     ap.add_argument("--baseline-bench",
                     help="another bench_model binary to run alternately with this one")
     ap.add_argument("--baseline-rhs-calls",
@@ -290,8 +312,8 @@ def main():
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--skip-optimize", action="store_true", help="leave out optimize (minutes)")
     a = ap.parse_args()
-    global OTHER
-    OTHER = a.baseline_name
+    global OTHER, ABOUT
+    OTHER, ABOUT = a.baseline_name, a.baseline_about
     binaries = [FIVEBAR] + ([a.baseline] if a.baseline else [])
     benches = [BENCH_MODEL] + ([a.baseline_bench] if a.baseline_bench else [])
     load_start = os.getloadavg()[0]
