@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "fivebar/model/dynamics.h"
 #include "paper.h"
@@ -97,6 +98,23 @@ TEST(Jet, ForwardDynamicsParameterDerivativesMatchCentralDifferences) {
         EXPECT_NEAR(ev.thdd[a].v[m], fd, kDifferenceTol * (1 + std::abs(fd)));
       }
     }
+  }
+}
+
+// add_scaled (the Jet pass's update of the reactions) is x + c y of Jets bit for bit: the same
+// products and sums, the value and every derivative
+TEST(Jet, AddScaledIsTheJetsSumBitForBit) {
+  using Jet6 = ceres::Jet<double, 6>;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    Jet6 x(u(rng)), y(u(rng));
+    for (int i = 0; i < 6; ++i) x.v[i] = u(rng), y.v[i] = u(rng);
+    const double c = u(rng) * std::pow(10.0, u(rng));
+    const Jet6 expected = x + c * y;
+    add_scaled(&x, c, y);
+    EXPECT_EQ(x.a, expected.a);
+    for (int i = 0; i < 6; ++i) EXPECT_EQ(x.v[i], expected.v[i]) << "derivative " << i;
   }
 }
 
