@@ -39,10 +39,9 @@ Mat2<T> inverse2(const Mat2<T>& m) {
   return out;
 }
 
-/// Exact zero including derivative parts: a term is skipped only if it cannot contribute.
 /// *x += c y for a double c. For a Jet: its value and each derivative in turn, the same products
-/// and sums as *x += c * y, in scalars (Eigen's sum of the two derivative vectors is a call
-/// where the compiler does not inline it, in a loop of the Jet pass several times slower).
+/// and sums as *x += c * y, in scalars (the compiler may leave Eigen's sum of two derivative
+/// vectors a call, which in a hot loop costs more than the sum).
 inline void add_scaled(double* x, double c, double y) { *x += c * y; }
 template <typename J>
 auto add_scaled(J* x, double c, const J& y) -> decltype(x->v[0], void()) {
@@ -50,6 +49,7 @@ auto add_scaled(J* x, double c, const J& y) -> decltype(x->v[0], void()) {
   for (int i = 0; i < x->v.size(); ++i) add_scaled(&x->v[i], c, y.v[i]);
 }
 
+/// Exact zero including derivative parts: a term is skipped only if it cannot contribute.
 inline bool is_exact_zero(double x) { return x == 0.0; }
 template <typename J>
 auto is_exact_zero(const J& x) -> decltype(x.v.isZero(), bool()) {
