@@ -22,8 +22,14 @@ struct TapWindow {
   double dt = 1;
 };
 
+/// Offsets within this of whole steps are whole steps: the rounding of a uniform grid's stamps
+/// (t up to 1e4 s carries about 1e-12 s, 1e-9 of a 1 ms step), not a sampling jitter.
+constexpr double kWholeStep = 1e-9;
+
 /// The window at sample i, its scaled offsets (t[lo + r] - t[i]) / dt into s (empty when t has
-/// fewer than 2 samples).
+/// fewer than 2 samples). Where every offset is within kWholeStep of a whole number of steps,
+/// the offsets are those whole numbers, so that the windows of a uniform grid repeat bit for bit
+/// (the callers factor each distinct window once).
 TapWindow tap_window(const std::vector<double>& t, int i, const SgOptions& options,
                      std::vector<double>* s) {
   TapWindow w;
@@ -37,7 +43,15 @@ TapWindow tap_window(const std::vector<double>& t, int i, const SgOptions& optio
   w.deg = std::min(order, width - 1);
   w.lo = std::clamp(i - width / 2, 0, n - width);
   s->resize(width);
-  for (int r = 0; r < width; ++r) (*s)[r] = (t[w.lo + r] - t[i]) / w.dt;
+  bool whole = true;
+  for (int r = 0; r < width; ++r) {
+    const double offset = (t[w.lo + r] - t[i]) / w.dt;
+    whole = whole && std::abs(offset - std::nearbyint(offset)) <= kWholeStep;
+    (*s)[r] = offset;
+  }
+  if (whole) {
+    for (double& offset : *s) offset = std::nearbyint(offset);
+  }
   return w;
 }
 
