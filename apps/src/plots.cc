@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -405,19 +406,30 @@ std::vector<std::pair<int, std::string>> figure_files(const std::string& script)
   return out;
 }
 
-// removes the figures of `script` that gnuplot left empty in `dir` (it creates the file before
-// it plots): "" or "; removed the empty NAME, ..."
-std::string remove_empty_figures(const std::string& dir, const std::string& script) {
+// removes the figures of `script` in `dir` that exist and that pick(name, path, size) picks:
+// "" or "; removed the WHAT NAME, ..."
+template <class Pick>
+std::string remove_figures(const std::string& dir, const std::string& script, const char* what,
+                           Pick pick) {
   std::string removed;
   for (const auto& [line, name] : figure_files(script)) {
     const std::filesystem::path figure = std::filesystem::path(dir) / name;
     std::error_code ec;
-    if (std::filesystem::is_regular_file(figure, ec) && std::filesystem::file_size(figure, ec) == 0 &&
-        !ec && std::filesystem::remove(figure, ec)) {
-      removed += (removed.empty() ? "; removed the empty " : ", ") + figure.filename().string();
-    }
+    if (!std::filesystem::is_regular_file(figure, ec)) continue;
+    const auto size = std::filesystem::file_size(figure, ec);
+    if (ec || !pick(name, figure, size) || !std::filesystem::remove(figure, ec)) continue;
+    removed += (removed.empty() ? std::string("; removed the ") + what + " " : ", ") + name;
   }
   return removed;
+}
+
+// removes the figures of `script` that gnuplot left empty in `dir` (it creates the file before
+// it plots): "" or "; removed the empty NAME, ..."
+std::string remove_empty_figures(const std::string& dir, const std::string& script) {
+  return remove_figures(dir, script, "empty",
+                        [](const std::string&, const std::filesystem::path&, std::uintmax_t size) {
+                          return size == 0;
+                        });
 }
 
 // the figure of `script` that gnuplot was drawing at the line a message of `output` names
@@ -459,20 +471,12 @@ bool complete_png(const std::filesystem::path& figure) {
 std::string remove_unfinished_figures(const std::string& dir, const std::string& script,
                                       const std::string& output) {
   const std::string stopped = figure_at(script, output, false);
-  std::string removed;
-  for (const auto& [line, name] : figure_files(script)) {
-    const std::filesystem::path figure = std::filesystem::path(dir) / name;
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(figure, ec) || std::filesystem::file_size(figure, ec) == 0 ||
-        ec) {
-      continue;
-    }
-    const bool cut = figure.extension() == ".png" && !complete_png(figure);
-    if ((name == stopped || cut) && std::filesystem::remove(figure, ec)) {
-      removed += (removed.empty() ? "; removed the unfinished " : ", ") + name;
-    }
-  }
-  return removed;
+  return remove_figures(
+      dir, script, "unfinished",
+      [&](const std::string& name, const std::filesystem::path& figure, std::uintmax_t size) {
+        const bool cut = figure.extension() == ".png" && !complete_png(figure);
+        return size > 0 && (name == stopped || cut);
+      });
 }
 
 // gnuplot's first error in `output` worded with the figure it was drawing ("Can't plot with an

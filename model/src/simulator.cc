@@ -291,11 +291,14 @@ struct Context {
   /// (forward_in_modes): a mode decision evaluates the same modes several times (the candidates,
   /// the sign rule, the consistency checks)
   struct PointEvaluations {
+    struct InModes {
+      JointModes slip;
+      Status status;
+      EvalOf<M> ev;
+    };
     double t = std::numeric_limits<double>::quiet_NaN();
     double qv[2 * M::kDof] = {};
-    std::vector<JointModes> slip;
-    std::vector<Status> status;
-    std::vector<EvalOf<M>> ev;
+    std::vector<InModes> tried;
   } at_point;
 };
 
@@ -383,19 +386,15 @@ Status forward_in_modes(Context<M>& c, double t, const double* y, const JointMod
   if (!(t == a.t) || std::memcmp(y, a.qv, kBytes) != 0) {
     a.t = t;
     std::memcpy(a.qv, y, kBytes);
-    a.slip.clear();
-    a.status.clear();
-    a.ev.clear();
+    a.tried.clear();
   }
-  for (size_t i = 0; i < a.slip.size(); ++i) {
-    if (a.slip[i] != slip) continue;
-    *ev = a.ev[i];
-    return a.status[i];
+  for (const auto& m : a.tried) {
+    if (m.slip != slip) continue;
+    *ev = m.ev;
+    return m.status;
   }
   const Status st = forward_at<M>(*c.params, loads_at(c, t), y, &slip, c.eval, ev);
-  a.slip.push_back(slip);
-  a.status.push_back(st);
-  a.ev.push_back(*ev);
+  a.tried.push_back({slip, st, *ev});
   return st;
 }
 
